@@ -1,0 +1,134 @@
+"""C99 backend: printer, precision table and the context of ``c_header.h.j2``/``c_source.c.j2``.
+
+Emitted functions take caller-owned arrays (row-major), allocate nothing and use
+no globals. Sines and cosines are evaluated in one loop over small arrays; on
+GCC with glibc (x86-64) ``sin``/``cos`` are declared with the ``simd`` attribute
+so that loop calls glibc's vector math (libmvec, found through plain ``-lm``).
+Other compilers get the same loop with plain calls.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+
+from ..program import Program
+from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, pad, render_template, storage_names
+
+LANGUAGE = "c"
+FILE_SUFFIXES = (".h", ".c")
+SIMD_LANES = 8
+"""Trigonometric arrays are padded to a multiple of this (AVX-512 doubles) so loops vectorise whole."""
+BLOCK_ANGLES = 512
+"""Batch functions evaluate the trigonometry of up to this many angles (several configurations) at once."""
+
+
+@dataclass(frozen=True)
+class CPrecision:
+    """Everything that changes between ``double`` and ``float`` code."""
+
+    ctype: str
+    suffix: str
+    sin: str
+    cos: str
+    sqrt: str
+    fabs: str
+
+    def literal(self, value: float) -> str:
+        """A C literal of this precision for ``value``."""
+        text = repr(float(value)) if self.ctype == "double" else str(np.float32(value))
+        if not any(ch in text for ch in ".en"):
+            text += ".0"
+        return text + self.suffix
+
+
+PRECISIONS = {
+    "double": CPrecision("double", "", "sin", "cos", "sqrt", "fabs"),
+    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf", "fabsf"),
+}
+
+
+class CArrayPrinter(ArrayPrinterMixin, C99CodePrinter):
+    """C99 printer that writes each symbol as its array element or local, in one precision."""
+
+    def __init__(self, names: dict[sp.Symbol, str], precision: CPrecision) -> None:
+        super().__init__(names)
+        self._precision = precision
+        self.sqrt_name = precision.sqrt
+
+    def literal(self, value: float) -> str:
+        return self._precision.literal(value)
+
+
+def _params(args, ctype: str, const: bool) -> list[str]:
+    qualifier = "const " if const else ""
+    return [f"{qualifier}{ctype} {a.name}[{a.size}]" for a in args]
+
+
+def function_context(program: Program, precision: CPrecision, prefix: str, shared: frozenset[str]) -> dict:
+    """What the templates need to lay out one program as C functions."""
+    names = storage_names(program)
+    printer = CArrayPrinter(names, precision)
+    ctype = precision.ctype
+    angle_set = set(program.angles)
+
+    def statement(symbol: sp.Symbol, expr: sp.Expr) -> str:
+        target = names[symbol]
+        code = printer.doprint(expr)
+        return f"{target} = {code};" if symbol in angle_set else f"const {ctype} {target} = {code};"
+
+    def used_inputs(statements_exprs) -> list:
+        free = set().union(*(e.free_symbols for e in statements_exprs)) if statements_exprs else set()
+        return [a for a in program.inputs if free & set(a.elements)]
+
+    pre_exprs = [rhs for _, rhs in program.pre]
+    post_exprs = [rhs for _, rhs in program.post] + [e for o in program.outputs for e in o.elements]
+    post_free = set().union(*(e.free_symbols for e in post_exprs)) if post_exprs else set()
+    count = len(program.angles)
+    padded = pad(count, SIMD_LANES) if count else 0
+    block = max(1, BLOCK_ANGLES // padded) if count else 1
+    return {
+        "name": f"{prefix}_{program.name}",
+        "summary": program.summary,
+        "inputs": [{"name": a.name, "size": a.size, "shared": a.name in shared} for a in program.inputs],
+        "outputs": [{"name": o.name, "size": len(o.elements), "shape": o.shape} for o in program.outputs],
+        "params": _params(program.inputs, ctype, True) + _params(program.outputs, ctype, False),
+        "pre_inputs": [a.name for a in used_inputs(pre_exprs)],
+        "post_inputs": [a.name for a in used_inputs(post_exprs)],
+        "post_uses": {
+            "ang": bool(post_free & angle_set),
+            "cs": bool(post_free & set(program.cos)),
+            "sn": bool(post_free & set(program.sin)),
+        },
+        "pre": [statement(s, e) for s, e in program.pre],
+        "post": [statement(s, e) for s, e in program.post],
+        "stores": [f"{o.name}[{i}] = {printer.doprint(e)};" for o in program.outputs for i, e in enumerate(o.elements)],
+        "angle_count": count,
+        "padded": padded,
+        "block": block,
+        "ops": program.ops.as_dict(),
+    }
+
+
+def render(derivation, programs: list[Program], options) -> dict[str, str]:
+    """Header and source text for ``programs``; keys are the file suffixes."""
+    precision = PRECISIONS[options.precision]
+    shared = frozenset(derivation.parameters)
+    functions = [function_context(p, precision, options.prefix, shared) for p in programs]
+    trig_sizes = sorted({f["padded"] for f in functions if f["padded"]} | {f["padded"] * f["block"] for f in functions if f["padded"]})
+    context = {
+        "prefix": options.prefix,
+        "guard": options.prefix.upper() + "_H",
+        "header_lines": options.header_lines,
+        "precision": precision,
+        "functions": functions,
+        "trig_sizes": trig_sizes,
+        "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
+    }
+    return {
+        ".h": render_template("c_header.h.j2", **context),
+        ".c": render_template("c_source.c.j2", **context),
+    }

@@ -1,0 +1,111 @@
+"""What every backend shares: storage names for a program's symbols, printer behaviour, templates."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+
+from ..program import Program
+
+ANGLES, COSINES, SINES = "ang", "cs", "sn"
+"""Array names of the trigonometric block inside emitted functions."""
+
+
+def storage_names(program: Program, element: str = "{name}[{index}]", temporary: str = "t{index}") -> dict[sp.Symbol, str]:
+    """Map each symbol of ``program`` to the text that names it in emitted code.
+
+    Inputs become array elements (``q[2]``), angles and their cosines/sines
+    elements of the trigonometric arrays, every other temporary a numbered local.
+    """
+    names: dict[sp.Symbol, str] = {}
+    for arg in program.inputs:
+        for i, symbol in enumerate(arg.elements):
+            names[symbol] = element.format(name=arg.name, index=i)
+    for array, symbols in ((ANGLES, program.angles), (COSINES, program.cos), (SINES, program.sin)):
+        for k, symbol in enumerate(symbols):
+            names[symbol] = element.format(name=array, index=k)
+    count = 0
+    for symbol in program.temporaries:
+        names[symbol] = temporary.format(index=count)
+        count += 1
+    return names
+
+
+class ArrayPrinterMixin:
+    """Printer behaviour shared by the backends; subclasses set ``literal`` and the ``pow_forms`` table.
+
+    * symbols print as their storage (``q[2]``, ``t7``) from the ``names`` table;
+    * numbers print as literals of the target precision;
+    * sums print positive terms first (``z - x*y``, not ``-x*y + z``);
+    * powers with small exponents print by table (``x*x``, ``1/x``, ``sqrt(x)``).
+    """
+
+    pow_forms: dict[sp.Expr, str] = {
+        sp.Integer(2): "{base}*{base}",
+        sp.Integer(-1): "{one}/{base}",
+        sp.Rational(1, 2): "{sqrt}({base})",
+        sp.Rational(-1, 2): "{one}/{sqrt}({base})",
+    }
+    sqrt_name = "sqrt"
+
+    def __init__(self, names: dict[sp.Symbol, str], **settings) -> None:
+        super().__init__(settings)
+        self._names = names
+
+    def literal(self, value: float) -> str:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def _print_Symbol(self, expr: sp.Symbol) -> str:
+        try:
+            return self._names[expr]
+        except KeyError:
+            raise ValueError(f"internal error: symbol {expr} has no storage") from None
+
+    def _print_Integer(self, expr: sp.Integer) -> str:
+        return self.literal(float(expr))
+
+    _print_Float = _print_Rational = _print_Integer
+    _print_One = _print_Zero = _print_NegativeOne = _print_Half = _print_Integer
+
+    def _as_ordered_terms(self, expr, order=None):
+        terms = list(expr.args)
+        terms.sort(key=lambda t: (t.could_extract_minus_sign(), sp.default_sort_key(t)))
+        return terms
+
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        base, exp = expr.args
+        form = self.pow_forms.get(exp)
+        if form is None:
+            raise ValueError(f"internal error: no form for power {exp}")
+        base_text = self.parenthesize(base, sp.printing.precedence.PRECEDENCE["Mul"], strict=True)
+        return form.format(base=base_text, one=self.literal(1.0), sqrt=self.sqrt_name)
+
+
+@lru_cache(maxsize=1)
+def _environment() -> jinja2.Environment:
+    try:
+        folder = Path(str(resources.files("skelarm_sym.templates")))
+    except ModuleNotFoundError:  # running from a source checkout: templates/ beside the package
+        folder = Path(__file__).resolve().parents[2] / "templates"
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(folder)),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+
+
+def render_template(name: str, **context) -> str:
+    """Render template ``name`` from ``templates/`` with ``context``."""
+    return _environment().get_template(name).render(**context)
+
+
+def pad(count: int, lanes: int) -> int:
+    """``count`` rounded up to a multiple of ``lanes`` (at least ``lanes``)."""
+    return max(lanes, -(-count // lanes) * lanes)

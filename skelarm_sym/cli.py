@@ -1,0 +1,139 @@
+"""Command line: ``skelarm-sym generate | show | check``. Parse, call, print; one-line errors.
+
+Bad input prints ``skelarm-sym: error: <message>`` on standard error and exits
+with status 2; a failed check exits with status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Sequence
+
+from . import __version__
+from .errors import InputError
+from .models.planar import validate_links
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2, no usage dump
+        raise InputError(message)
+
+
+def _links(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+    try:
+        return validate_links(value)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _lengths(text: str):
+    from .generate import parse_lengths
+
+    try:
+        return parse_lengths(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (exposed for documentation and tests)."""
+    parser = _Parser(prog="skelarm-sym", description="Closed-form differential kinematics of serial arms as checked C and NumPy code.")
+    parser.add_argument("--version", action="version", version=f"skelarm-sym {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    gen = sub.add_parser("generate", help="emit C and/or Python for an arm")
+    gen.add_argument("--links", "-n", type=_links, required=True, help="number of links N (1..1000)")
+    gen.add_argument("--lengths", type=_lengths, help="comma-separated link lengths baked in as constants (default: run-time argument l)")
+    gen.add_argument("--lang", default="c,python", help="c, python or c,python (default)")
+    gen.add_argument("--prefix", help="file name and C function prefix (default arm{N})")
+    gen.add_argument("--precision", default="double", help="double (default) or float")
+    gen.add_argument("--out", default="generated", help="output folder (default ./generated)")
+    gen.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
+
+    show = sub.add_parser("show", help="print closed forms")
+    show.add_argument("--links", "-n", type=_links, required=True)
+    show.add_argument("--lengths", type=_lengths)
+    show.add_argument("--what", default="J", help="p, phi, J, J3, H, v, a, det or all (default J)")
+    show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
+
+    chk = sub.add_parser("check", help="generate, compile and compare with the recursive reference")
+    chk.add_argument("--links", "-n", type=_links, required=True)
+    chk.add_argument("--lengths", type=_lengths)
+    chk.add_argument("--precision", default="double", help="double (default) or float")
+    chk.add_argument("--lang", default="c,python")
+    chk.add_argument("--cases", type=int, default=100, help="random configurations (default 100), plus singular and zero-velocity poses")
+    chk.add_argument("--seed", type=int, default=0)
+    return parser
+
+
+def _generate(args) -> int:
+    from .build import compile_arm
+    from .generate import generate
+
+    result = generate(args.links, lengths=args.lengths, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out)
+    for path in result.paths:
+        print(f"wrote {path}")
+    kin = next((p for p in result.programs if p.name == "kinematics"), None)
+    if kin is not None:
+        o = kin.ops
+        print(f"kinematics: {o.sin} sin, {o.cos} cos, {o.arithmetic} add/sub/mul/neg")
+    if args.compile and any(name.endswith(".c") for name in result.sources):
+        arm = compile_arm(result)
+        print(f"compiled {arm.path}")
+    return 0
+
+
+def _show(args) -> int:
+    from .derive import derive
+    from .display import FORMATS, WHAT, show
+
+    if args.what not in WHAT + ("all",):
+        raise InputError(f"unknown --what {args.what!r}; choose from {', '.join(WHAT + ('all',))}")
+    if args.format not in FORMATS:
+        raise InputError(f"unknown --format {args.format!r}; choose from {', '.join(FORMATS)}")
+    sys.stdout.write(show(derive(args.links, args.lengths), args.what, args.format))
+    return 0
+
+
+def _check(args) -> int:
+    from .check import run_check
+    from .generate import validate_langs, validate_precision
+
+    validate_precision(args.precision)
+    langs = validate_langs(args.lang)
+    if args.cases < 1:
+        raise InputError(f"--cases must be at least 1, got {args.cases}")
+    results = run_check(args.links, args.lengths, args.precision, args.cases, args.seed, langs)
+    width = max(len(r.implementation) for r in results)
+    print(f"{'function':<{width}}  output  {'max abs':>10}  {'max rel':>10}  tolerance  result")
+    for r in results:
+        print(f"{r.implementation:<{width}}  {r.output:<6}  {r.max_abs:10.2e}  {r.max_rel:10.2e}  {r.tolerance:9.0e}  {'ok' if r.ok else 'FAIL'}")
+    failed = [r for r in results if not r.ok]
+    print(f"{len(results) - len(failed)} passed, {len(failed)} failed")
+    return 1 if failed else 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``skelarm-sym`` command; returns the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        handler = {"generate": _generate, "show": _show, "check": _check}[args.command]
+        return handler(args)
+    except InputError as exc:
+        print(f"skelarm-sym: error: {exc}", file=sys.stderr)
+        return 2
+    except RuntimeError as exc:  # compiler failures: the first line says what failed
+        print(f"skelarm-sym: error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,260 @@
+"""Closed-form differential kinematics derived from the chain's structure.
+
+The derivation never differentiates one large expression. It writes the
+kinematics as a short chain of named intermediate quantities (*steps*), each a
+small expression of inputs and earlier steps:
+
+* absolute angles as prefix sums ``theta_k = theta_{k-1} + q_k`` and their sines and cosines;
+* link vectors ``X_k = l_k cos theta_k``, ``Y_k = l_k sin theta_k``;
+* Jacobian columns as suffix sums ``j_yk = X_k + j_y(k+1)``, ``j_xk = j_x(k+1) - Y_k``;
+  the endpoint is ``p = (j_y1, -j_x1)``;
+* absolute angular rates ``w_k = w_{k-1} + dq_k`` and the columns of ``H = dJ/dt`` as
+  suffix sums ``h_xk = h_x(k+1) - X_k w_k``, ``h_yk = h_y(k+1) - Y_k w_k``;
+  the endpoint velocity is ``v = J dq = (h_y1, -h_x1)``;
+* ``a = J ddq + H dq``.
+
+Those steps are what :mod:`skelarm_sym.program` turns into code (they are linear
+in ``n``). The closed forms users see (``Derivation.J`` and friends) are the same
+steps substituted into each other, built on first access.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Iterable, Sequence
+
+import sympy as sp
+
+from .models.planar import PlanarArm
+
+Step = tuple[sp.Symbol, sp.Expr]
+
+
+@dataclass(frozen=True)
+class FunctionSpec:
+    """One emitted function: its name suffix, argument names in order, output names in order."""
+
+    name: str
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    summary: str
+
+
+class StepRecorder:
+    """Collects named intermediate quantities; trivial ones (atoms) are not given a name."""
+
+    def __init__(self, tag: str) -> None:
+        self._tag = tag
+        self.steps: list[Step] = []
+
+    def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
+        if expr.is_Atom:
+            return expr
+        symbol = sp.Symbol(f"_{self._tag}_{label}", real=True)
+        self.steps.append((symbol, expr))
+        return symbol
+
+
+def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
+    """Substitute the steps into ``exprs`` (in order), giving closed forms in the inputs only."""
+    closed: dict[sp.Symbol, sp.Expr] = {}
+    for symbol, expr in steps:
+        closed[symbol] = expr.xreplace(closed)
+    return [sp.sympify(e).xreplace(closed) for e in exprs]
+
+
+@dataclass(frozen=True, eq=False)
+class Derivation:
+    """The differential kinematics of one model, as steps plus compact outputs.
+
+    Attributes:
+        model: the arm model derived from.
+        inputs: ordered mapping of input array name to its symbols (``q``, ``dq``,
+            ``ddq``, and ``l`` when lengths are symbolic).
+        steps: ordered ``(symbol, expr)`` definitions; each uses inputs and earlier steps.
+        compact: output name -> SymPy matrix written with step symbols.
+        shapes: output name -> array shape in emitted code (``(2,)`` for a vector, ``(2, n)`` ...).
+        functions: the functions a backend emits, in order.
+        parameters: inputs that describe the mechanism rather than its state; batch
+            functions share them across configurations.
+        notes: lines for the headers of emitted files (model, conventions, layout).
+    """
+
+    model: PlanarArm
+    inputs: dict[str, tuple[sp.Symbol, ...]]
+    lengths: tuple[sp.Expr, ...]
+    steps: tuple[Step, ...]
+    compact: dict[str, sp.Matrix]
+    shapes: dict[str, tuple[int, ...]]
+    functions: tuple[FunctionSpec, ...]
+    parameters: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    # -- symbols --------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of links (and joints)."""
+        return self.model.n
+
+    @property
+    def q(self) -> tuple[sp.Symbol, ...]:
+        """Relative joint angles ``q1..qn`` (radians)."""
+        return self.inputs["q"]
+
+    @property
+    def dq(self) -> tuple[sp.Symbol, ...]:
+        """Joint rates ``dq1..dqn``."""
+        return self.inputs["dq"]
+
+    @property
+    def ddq(self) -> tuple[sp.Symbol, ...]:
+        """Joint accelerations ``ddq1..ddqn``."""
+        return self.inputs["ddq"]
+
+    @property
+    def l(self) -> tuple[sp.Expr, ...]:  # noqa: E743 - the seeds' name
+        """Link lengths: symbols ``l1..ln`` or the numbers given."""
+        return self.lengths
+
+    # -- closed forms ---------------------------------------------------------
+    def closed_form(self, name: str) -> sp.Matrix:
+        """Output ``name`` as a matrix of closed-form expressions in the inputs only."""
+        if name not in self._cache:
+            matrix = self.compact[name]
+            values = expand_steps(self.steps, list(matrix))
+            self._cache[name] = sp.Matrix(matrix.rows, matrix.cols, values)
+        return self._cache[name]
+
+    @property
+    def p(self) -> sp.Matrix:
+        """Endpoint position, 2 x 1."""
+        return self.closed_form("p")
+
+    @property
+    def phi(self) -> sp.Expr:
+        """Endpoint orientation ``q1 + ... + qn``."""
+        return self.closed_form("phi")[0]
+
+    @property
+    def J(self) -> sp.Matrix:
+        """Endpoint Jacobian ``dp/dq``, 2 x n (row 0: ``j_x``, row 1: ``j_y``)."""
+        return self.closed_form("J")
+
+    @property
+    def J3(self) -> sp.Matrix:
+        """Planar Jacobian with the orientation row ``dphi/dq`` (all ones), 3 x n."""
+        return self.closed_form("J3")
+
+    @property
+    def H(self) -> sp.Matrix:
+        """``H = dJ/dt``, 2 x n, the centripetal/Coriolis basis."""
+        return self.closed_form("H")
+
+    @property
+    def v(self) -> sp.Matrix:
+        """Endpoint velocity ``J dq``, 2 x 1."""
+        return self.closed_form("v")
+
+    @property
+    def a(self) -> sp.Matrix:
+        """Endpoint acceleration ``J ddq + H dq``, 2 x 1."""
+        return self.closed_form("a")
+
+
+PLANAR_FUNCTIONS = (
+    FunctionSpec("position", ("q", "l"), ("p",), "endpoint position p (2)"),
+    FunctionSpec("jacobian", ("q", "l"), ("J",), "Jacobian J (2 x N, row-major)"),
+    FunctionSpec("coriolis", ("q", "dq", "l"), ("H",), "H = dJ/dt (2 x N, row-major)"),
+    FunctionSpec("velocity", ("q", "dq", "l"), ("v",), "endpoint velocity v = J dq (2)"),
+    FunctionSpec("acceleration", ("q", "dq", "ddq", "l"), ("a",), "endpoint acceleration a = J ddq + H dq (2)"),
+    FunctionSpec("kinematics", ("q", "dq", "ddq", "l"), ("p", "J", "H", "v", "a"), "p, J, H, v and a at once"),
+)
+
+
+def _length_value(x: float) -> sp.Expr:
+    return sp.Integer(int(x)) if float(x).is_integer() else sp.Float(x)
+
+
+def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Derivation:
+    """Derive the planar chain's ``p, phi, J, J3, H, v, a`` for ``n`` links.
+
+    ``lengths``: ``None`` for symbolic lengths ``l1..ln``, or ``n`` finite positive numbers.
+    Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input.
+    Cost is linear in ``n``; closed forms are built on first access.
+    """
+    model = n if isinstance(n, PlanarArm) else PlanarArm(n, None if lengths is None else tuple(lengths) if not isinstance(lengths, (str, bytes)) else lengths)
+    n = model.n
+    q = sp.symbols(f"q1:{n + 1}", real=True)
+    dq = sp.symbols(f"dq1:{n + 1}", real=True)
+    ddq = sp.symbols(f"ddq1:{n + 1}", real=True)
+    if model.lengths is None:
+        l_syms = sp.symbols(f"l1:{n + 1}", positive=True)
+        inputs = {"q": q, "dq": dq, "ddq": ddq, "l": l_syms}
+    else:
+        l_syms = tuple(_length_value(x) for x in model.lengths)
+        inputs = {"q": q, "dq": dq, "ddq": ddq}
+    step = StepRecorder("planar")
+
+    theta, cos_t, sin_t = [], [], []
+    for k in range(n):
+        th = q[k] if k == 0 else step(f"theta{k + 1}", theta[-1] + q[k])
+        theta.append(th)
+        cos_t.append(step(f"c{k + 1}", sp.cos(th)))
+        sin_t.append(step(f"s{k + 1}", sp.sin(th)))
+    X = [step(f"X{k + 1}", l_syms[k] * cos_t[k]) for k in range(n)]
+    Y = [step(f"Y{k + 1}", l_syms[k] * sin_t[k]) for k in range(n)]
+
+    jx, jy = [None] * n, [None] * n
+    for k in reversed(range(n)):
+        if k == n - 1:
+            jx[k] = step(f"jx{k + 1}", -Y[k])
+            jy[k] = X[k]
+        else:
+            jx[k] = step(f"jx{k + 1}", jx[k + 1] - Y[k])
+            jy[k] = step(f"jy{k + 1}", jy[k + 1] + X[k])
+
+    w = []
+    for k in range(n):
+        w.append(dq[0] if k == 0 else step(f"w{k + 1}", w[-1] + dq[k]))
+    XW = [step(f"XW{k + 1}", X[k] * w[k]) for k in range(n)]
+    YW = [step(f"YW{k + 1}", Y[k] * w[k]) for k in range(n)]
+    hx, hy = [None] * n, [None] * n
+    for k in reversed(range(n)):
+        if k == n - 1:
+            hx[k] = step(f"hx{k + 1}", -XW[k])
+            hy[k] = step(f"hy{k + 1}", -YW[k])
+        else:
+            hx[k] = step(f"hx{k + 1}", hx[k + 1] - XW[k])
+            hy[k] = step(f"hy{k + 1}", hy[k + 1] - YW[k])
+
+    a_x = sp.Add(*[jx[k] * ddq[k] for k in range(n)], *[hx[k] * dq[k] for k in range(n)])
+    a_y = sp.Add(*[jy[k] * ddq[k] for k in range(n)], *[hy[k] * dq[k] for k in range(n)])
+    J = sp.Matrix([jx, jy])
+    compact = {
+        "p": sp.Matrix([jy[0], -jx[0]]),
+        "phi": sp.Matrix([theta[-1]]),
+        "J": J,
+        "J3": J.col_join(sp.ones(1, n)),
+        "H": sp.Matrix([hx, hy]),
+        "v": sp.Matrix([hy[0], -hx[0]]),
+        "a": sp.Matrix([a_x, a_y]),
+    }
+    return Derivation(
+        model=model,
+        inputs=inputs,
+        lengths=tuple(l_syms),
+        steps=tuple(step.steps),
+        compact=compact,
+        shapes={"p": (2,), "phi": (1,), "J": (2, n), "J3": (3, n), "H": (2, n), "v": (2,), "a": (2,)},
+        functions=PLANAR_FUNCTIONS,
+        parameters=("l",),
+        notes=(
+            f"Model: {model.describe()}.",
+            "Angles: q[i] is the angle of joint i relative to the previous link, in radians",
+            "(counter-clockwise); dq, ddq are its first and second time derivatives.",
+            f"Layout: row-major. J[i] = j_x(i), J[{n} + i] = j_y(i) for joint i = 0..{n - 1}; H likewise.",
+            "p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.",
+        ),
+    )

@@ -1,0 +1,56 @@
+"""Symbolic inspection: closed forms as pretty text, LaTeX or plain SymPy text."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from .derive import Derivation
+
+WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det")
+FORMATS = ("pretty", "latex", "text")
+_SIMPLIFY_UP_TO = 3
+"""Up to this many links the shown forms are simplified (cheap there; never in generation)."""
+
+
+def determinant(derivation: Derivation) -> sp.Expr | None:
+    """``det J`` where the Jacobian is square: J for n = 2, J3 for n = 3; else ``None``."""
+    n = derivation.n
+    if n == 2:
+        return sp.trigsimp(sp.expand_trig(derivation.J.det()).expand())
+    if n == 3:
+        return sp.trigsimp(sp.expand_trig(derivation.J3.det()).expand())
+    return None
+
+
+def closed_form(derivation: Derivation, what: str) -> sp.Expr | sp.Matrix | None:
+    """The object shown for ``what`` (see ``WHAT``)."""
+    if what == "det":
+        return determinant(derivation)
+    value = derivation.phi if what == "phi" else getattr(derivation, what)
+    if derivation.n <= _SIMPLIFY_UP_TO and what in ("H", "a"):
+        value = value.applyfunc(lambda e: sp.factor_terms(sp.collect(sp.expand(e), list(derivation.dq) + list(derivation.ddq))))
+    return value
+
+
+def render(expr, fmt: str) -> str:
+    """``expr`` in format ``fmt``."""
+    if fmt == "latex":
+        return sp.latex(expr)
+    if fmt == "text":
+        return sp.sstr(expr)
+    return sp.pretty(expr, use_unicode=True, wrap_line=False)
+
+
+def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
+    """Text for ``skelarm-sym show``: one block per requested output."""
+    names = WHAT if what == "all" else (what,)
+    blocks = []
+    for name in names:
+        value = closed_form(derivation, name)
+        if value is None:
+            text = f"(det J is defined only where J is square: n = 2 for J, n = 3 for J3; n = {derivation.n})"
+            if what != "all":
+                blocks.append(f"{name} =\n{text}")
+            continue
+        blocks.append(f"{name} =\n{render(value, fmt)}")
+    return "\n\n".join(blocks) + "\n"

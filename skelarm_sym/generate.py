@@ -1,0 +1,200 @@
+"""Model + options -> emitted files: the one entry point for code emission.
+
+``generate(n, lengths=None, langs=("c", "python"), prefix=None, precision="double", out="generated")``
+derives the model, builds one optimised program per function, renders each
+backend's templates and writes ``{out}/{prefix}.h``, ``{prefix}.c`` and
+``{prefix}.py`` atomically (each file goes to a temporary name first and is
+renamed into place only after every file rendered). With ``out=None`` it writes
+nothing and returns the sources.
+"""
+
+from __future__ import annotations
+
+import keyword
+import os
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+from . import __version__
+from .backends import BACKENDS
+from .derive import Derivation, derive
+from .errors import InputError
+from .models.planar import PlanarArm
+from .program import Program, build_programs
+
+PRECISIONS = ("double", "float")
+
+C_RESERVED = frozenset(
+    """auto break case char const continue default do double else enum extern float for goto if inline int long
+    register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while
+    _Bool _Complex _Imaginary _Alignas _Alignof _Atomic _Generic _Noreturn _Static_assert _Thread_local
+    alignas alignof and bool catch class compl constexpr decltype delete explicit export false friend mutable
+    namespace new noexcept not nullptr operator or private protected public template this throw true try typeid
+    typename using virtual wchar_t xor asm main errno math sin cos sqrt""".split()
+)
+"""Words a prefix may not be: C99 and C++ keywords, and names the emitted code itself relies on."""
+_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,47}")
+
+
+def validate_prefix(prefix: object) -> str:
+    """Return ``prefix`` if it is a safe C identifier and Python module name, else raise InputError."""
+    if not isinstance(prefix, str) or not _IDENTIFIER.fullmatch(prefix):
+        raise InputError(
+            f"prefix must be a C identifier (a letter, then letters, digits or _; at most 48 characters), got {prefix!r}"
+        )
+    if prefix in C_RESERVED or keyword.iskeyword(prefix) or prefix.lower() in {"numpy", "np"}:
+        raise InputError(f"prefix {prefix!r} is a reserved word; choose another")
+    return prefix
+
+
+def validate_langs(langs: str | Iterable[str]) -> tuple[str, ...]:
+    """Languages as a tuple in canonical order; raise InputError on an unknown one."""
+    items = [x.strip() for x in langs.split(",")] if isinstance(langs, str) else [str(x).strip() for x in langs]
+    items = [x for x in items if x]
+    if not items:
+        raise InputError(f"choose at least one language from {', '.join(BACKENDS)}")
+    unknown = [x for x in items if x not in BACKENDS]
+    if unknown:
+        raise InputError(f"unknown language {unknown[0]!r}; choose from {', '.join(BACKENDS)}")
+    return tuple(name for name in BACKENDS if name in items)
+
+
+def validate_precision(precision: object) -> str:
+    """``precision`` if it is ``double`` or ``float``, else raise InputError."""
+    if precision not in PRECISIONS:
+        raise InputError(f"unknown precision {precision!r}; choose double or float")
+    return precision
+
+
+@dataclass(frozen=True)
+class Options:
+    """Validated generation options; ``header_lines`` open every emitted file."""
+
+    prefix: str
+    precision: str
+    langs: tuple[str, ...]
+    header_lines: tuple[str, ...]
+
+
+def regenerate_command(model: PlanarArm, options_prefix: str, precision: str, langs: Sequence[str]) -> str:
+    """The command line that emits the same files again (no output folder: it varies)."""
+    parts = ["skelarm-sym generate", f"--links {model.n}"]
+    if model.lengths is not None:
+        parts.append("--lengths " + ",".join(repr(x) for x in model.lengths))
+    parts += [f"--lang {','.join(langs)}", f"--prefix {options_prefix}", f"--precision {precision}"]
+    return " ".join(parts)
+
+
+@dataclass(frozen=True)
+class Generated:
+    """Result of :func:`generate`: file name -> text, the programs, and where files went (if written)."""
+
+    sources: dict[str, str]
+    programs: tuple[Program, ...]
+    derivation: Derivation
+    paths: tuple[Path, ...] = ()
+
+
+def generate(
+    n: int | PlanarArm,
+    lengths: Sequence[float] | None = None,
+    langs: str | Iterable[str] = ("c", "python"),
+    prefix: str | None = None,
+    precision: str = "double",
+    out: str | os.PathLike | None = "generated",
+) -> Generated:
+    """Emit specialised code for an arm of ``n`` links.
+
+    Args:
+        n: number of links, or a :class:`PlanarArm`.
+        lengths: ``None`` (lengths are a run-time argument ``l``) or ``n`` numbers baked in as constants.
+        langs: ``"c"``, ``"python"`` or both (a comma-separated string or a sequence).
+        prefix: name of the files and prefix of C functions; default ``arm{n}``.
+        precision: ``"double"`` or ``"float"``.
+        out: folder to write to (created if missing), or ``None`` to only return the sources.
+
+    Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input;
+    on any error no file is left behind.
+    """
+    model = n if isinstance(n, PlanarArm) else PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
+    prefix = validate_prefix(f"arm{model.n}" if prefix is None else prefix)
+    precision = validate_precision(precision)
+    langs = validate_langs(langs)
+    target = _check_output_folder(out) if out is not None else None
+
+    derivation = derive(model)
+    programs = tuple(build_programs(derivation))
+    header = (
+        f"{prefix}: differential kinematics generated by skelarm-sym {__version__}. Do not edit;",
+        f"regenerate with: {regenerate_command(model, prefix, precision, langs)}",
+        "",
+        *derivation.notes,
+        f"Precision: {precision}.",
+    )
+    options = Options(prefix, precision, langs, header)
+    sources: dict[str, str] = {}
+    for lang in langs:
+        for suffix, text in BACKENDS[lang].render(derivation, list(programs), options).items():
+            sources[prefix + suffix] = text
+    paths: tuple[Path, ...] = ()
+    if target is not None:
+        paths = write_atomically(target, sources)
+    return Generated(sources, programs, derivation, paths)
+
+
+def _lengths_tuple(lengths: object) -> object:
+    if isinstance(lengths, str):
+        return parse_lengths(lengths)
+    try:
+        return tuple(lengths)  # type: ignore[arg-type]
+    except TypeError:
+        raise InputError(f"link lengths must be a sequence of numbers, got {lengths!r}") from None
+
+
+def parse_lengths(text: str) -> tuple[float, ...]:
+    """``"1.0,0.8,0.5"`` -> ``(1.0, 0.8, 0.5)``; raise InputError on anything else."""
+    values = []
+    for item in text.split(","):
+        try:
+            values.append(float(item))
+        except ValueError:
+            raise InputError(f"link lengths must be comma-separated numbers, got {item.strip()!r}") from None
+    return tuple(values)
+
+
+def _check_output_folder(out: str | os.PathLike) -> Path:
+    target = Path(out)
+    if target.exists() and not target.is_dir():
+        raise InputError(f"output folder {str(target)!r} exists and is not a folder")
+    return target
+
+
+def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
+    """Write every file to a temporary name in ``folder``, then rename all into place.
+
+    If anything fails, the temporary files are removed and no target file is touched.
+    """
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create output folder {str(folder)!r}: {exc.strerror or exc}") from None
+    staged: list[tuple[str, Path]] = []
+    try:
+        for name, text in sources.items():
+            fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
+            staged.append((tmp, folder / name))
+            with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
+                handle.write(text)
+        for tmp, final in staged:
+            os.replace(tmp, final)
+    except OSError as exc:
+        for tmp, _ in staged:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        raise InputError(f"cannot write to output folder {str(folder)!r}: {exc.strerror or exc}") from None
+    return tuple(final for _, final in staged)

@@ -1,0 +1,60 @@
+"""The command line: output, exit codes, one-line errors."""
+
+import subprocess
+import sys
+
+import pytest
+
+from skelarm_sym.cli import main
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "skelarm_sym", *args], capture_output=True, text=True)
+
+
+def test_show_two_link_jacobian_is_the_seeds():
+    r = run("show", "--links", "2", "--what", "J", "--format", "text")
+    assert r.returncode == 0
+    assert "-l1*sin(q1) - l2*sin(q1 + q2)" in r.stdout and "l2*cos(q1 + q2)" in r.stdout
+
+
+def test_show_determinant_simplified(capsys):
+    assert main(["show", "--links", "2", "--what", "det", "--format", "text"]) == 0
+    assert capsys.readouterr().out.strip().endswith("l1*l2*sin(q2)")
+    assert main(["show", "--links", "2", "--what", "J", "--format", "latex"]) == 0
+    assert "\\sin" in capsys.readouterr().out
+
+
+def test_generate_writes_and_check_passes(tmp_path, capsys):
+    assert main(["generate", "--links", "3", "--lengths", "1,0.8,0.5", "--out", str(tmp_path), "--prefix", "demo", "--compile"]) == 0
+    out = capsys.readouterr().out
+    assert "compiled" in out and "kinematics: 3 sin, 3 cos" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.c", "demo.h", "demo.py"]
+    assert main(["check", "--links", "4", "--cases", "10", "--precision", "float"]) == 0
+    assert "20 passed, 0 failed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["generate", "--links", "0"], "at least 1"),
+        (["generate", "--links", "-2"], "at least 1"),
+        (["generate", "--links", "2.5"], "whole number"),
+        (["generate", "--links", "5000"], "at most 1000"),
+        (["generate", "--links", "3", "--lengths", "1,2"], "expected 3 link lengths, got 2"),
+        (["generate", "--links", "2", "--lengths", "1,-2"], "finite and positive"),
+        (["generate", "--links", "2", "--prefix", "x;y"], "C identifier"),
+        (["generate", "--links", "2", "--lang", "fortran"], "unknown language"),
+        (["generate", "--links", "2", "--precision", "half"], "unknown precision"),
+        (["show", "--links", "2", "--what", "Q"], "unknown --what"),
+        (["check", "--links", "2", "--cases", "0"], "at least 1"),
+        ([], "required"),
+    ],
+)
+def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):
+    r = run(*args, *(["--out", str(tmp_path / "o")] if args[:1] == ["generate"] else []))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("skelarm-sym: error:") and message in lines[0], r.stderr
+    assert "Traceback" not in r.stderr
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,179 @@
+"""Emitted C and Python: strict compilation, values against the reference, layout, determinism."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skelarm_sym import InputError, reference
+from skelarm_sym.build import STRICT_FLAGS, compile_arm, load_python
+from skelarm_sym.check import compare
+from skelarm_sym.generate import generate
+from skelarm_sym.program import build_programs
+from skelarm_sym.derive import derive
+
+ROOT = Path(__file__).resolve().parents[1]
+COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
+
+
+@pytest.mark.parametrize("n", range(1, 13))
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_emitted_code_matches_reference(n, precision):
+    results = compare(generate(n, precision=precision, out=None), cases=30, seed=n, precision=precision)
+    assert len(results) == 2 * 10
+    bad = [r for r in results if not r.ok]
+    assert not bad, bad
+
+
+@pytest.mark.parametrize("compiler", COMPILERS)
+@pytest.mark.parametrize("n, lengths, precision", [(1, None, "double"), (4, None, "float"), (5, (1.0, 0.8, 0.5, 2.0, 1.0), "double"), (3, (1.0, 0.5, 0.25), "float")])
+def test_compiles_with_strict_flags(tmp_path, compiler, n, lengths, precision):
+    g = generate(n, lengths=lengths, precision=precision, langs="c", out=tmp_path)
+    for flags in (["-O2"], ["-O0"], ["-O2", "-march=native"], ["-O2", "-DSKELARM_NO_SIMD"]):
+        cmd = [compiler, *STRICT_FLAGS, *flags, "-c", str(tmp_path / f"arm{n}.c"), "-o", str(tmp_path / "x.o")]
+        result = subprocess.run(cmd, capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        assert result.stderr == ""
+    # the header alone is valid C++ too (extern "C")
+    if shutil.which("g++"):
+        (tmp_path / "use.cpp").write_text(f'#include "arm{n}.h"\nint main() {{ return 0; }}\n')
+        r = subprocess.run(["g++", "-Wall", "-Werror", "-c", str(tmp_path / "use.cpp"), "-o", str(tmp_path / "u.o")], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+    src = g.sources[f"arm{n}.c"]
+    assert [line for line in src.splitlines() if line.startswith("#include")] == ["#include <math.h>", f'#include "arm{n}.h"']
+    assert "malloc" not in src and "static double" not in src
+
+
+def test_float_code_has_no_double(tmp_path):
+    src = generate(3, lengths=(1.0, 0.8, 0.5), precision="float", langs="c", out=None).sources["arm3.c"]
+    code = "\n".join(line for line in src.splitlines() if not line.lstrip().startswith(("*", "/*")))
+    assert "double" not in code
+    assert "sinf(" in code and "cosf(" in code
+    import re
+
+    literals = re.findall(r"(?<![\w.])(\d+\.\d*(?:e[-+]?\d+)?)(f?)", code)
+    assert literals and all(suffix == "f" for _, suffix in literals)
+
+
+def test_numeric_lengths_drop_the_l_argument(rng):
+    lengths = (1.0, 0.8, 0.5)
+    g = generate(3, lengths=lengths, out=None)
+    assert "const double l[3]" not in g.sources["arm3.h"]
+    arm = compile_arm(g)
+    py = load_python(g.sources["arm3.py"], "arm3")
+    q = rng.uniform(-np.pi, np.pi, 3)
+    expected = reference.kinematics(q, lengths=lengths).J
+    np.testing.assert_allclose(arm.jacobian(q), expected, atol=1e-14)
+    np.testing.assert_allclose(py.jacobian(q), expected, atol=1e-14)
+
+
+def test_batches_equal_single_calls_and_shapes(rng):
+    g = generate(6, out=None)
+    arm = compile_arm(g)
+    py = load_python(g.sources["arm6.py"], "arm6")
+    m = 203  # not a multiple of the block size
+    q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, m, 6))
+    l = rng.uniform(0.5, 1.5, 6)
+    batch = arm.kinematics(q, dq, ddq, l)
+    for j in (0, 57, m - 1):
+        single = arm.kinematics(q[j], dq[j], ddq[j], l)
+        for b, s in zip(batch, single):
+            np.testing.assert_array_equal(b[j], s)
+    assert [x.shape for x in batch] == [(m, 2), (m, 2, 6), (m, 2, 6), (m, 2), (m, 2)]
+    q4 = q[:200].reshape(4, 50, 6)
+    assert py.jacobian(q4, l).shape == (4, 50, 2, 6)
+    np.testing.assert_allclose(py.jacobian(q4, l).reshape(200, 2, 6), batch[1][:200], atol=1e-14)
+    assert arm.jacobian(q4, l).shape == (4, 50, 2, 6)
+
+
+def test_wrong_shapes_are_clear_errors():
+    g = generate(3, out=None)
+    arm = compile_arm(g)
+    py = load_python(g.sources["arm3.py"], "arm3")
+    with pytest.raises(InputError, match=r"q must have shape \(\.\.\., 3\)"):
+        arm.jacobian(np.zeros(4), np.ones(3))
+    with pytest.raises(InputError, match=r"l must have shape \(3,\)"):
+        arm.jacobian(np.zeros(3), np.ones((2, 3)))
+    with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 3\)"):
+        py.jacobian(np.zeros((5, 2)), np.ones(3))
+    with pytest.raises(ValueError, match="do not broadcast"):
+        py.velocity(np.zeros((5, 3)), np.zeros((4, 3)), np.ones(3))
+
+
+def test_compile_cache_is_reused():
+    g = generate(2, langs="c", out=None)
+    first = compile_arm(g).path
+    mtime = first.stat().st_mtime_ns
+    assert compile_arm(g).path == first and first.stat().st_mtime_ns == mtime
+
+
+@pytest.mark.parametrize("prefix", ["9arm", "a-b", "x;int y", "int", "static", "class", "", "a" * 49, "arm\n"])
+def test_unsafe_prefix_rejected(prefix, tmp_path):
+    with pytest.raises(InputError):
+        generate(2, prefix=prefix, out=tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unwritable_output_leaves_nothing(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    with pytest.raises(InputError, match="not a folder"):
+        generate(2, out=blocker)
+    with pytest.raises(InputError, match="cannot create output folder"):
+        generate(2, out=blocker / "sub")
+    assert blocker.read_text() == "not a folder"
+
+
+def test_failed_write_removes_temporary_files(tmp_path, monkeypatch):
+    import skelarm_sym.generate as gen
+
+    real_replace = os.replace
+    calls = []
+
+    def failing_replace(src, dst):
+        calls.append(dst)
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(gen.os, "replace", failing_replace)
+    with pytest.raises(InputError, match="No space left"):
+        generate(2, out=tmp_path)
+    monkeypatch.setattr(gen.os, "replace", real_replace)
+    assert calls and list(tmp_path.iterdir()) == []
+
+
+def _regenerate_committed(out: Path):
+    for n in range(2, 7):
+        generate(n, out=out)
+    generate(3, lengths=(1.0, 0.8, 0.5), precision="float", prefix="arm3f", out=out)
+
+
+def test_generated_folder_is_up_to_date(tmp_path):
+    _regenerate_committed(tmp_path)
+    committed = ROOT / "generated"
+    fresh = sorted(p.name for p in tmp_path.iterdir())
+    assert fresh == sorted(p.name for p in committed.iterdir() if p.suffix in (".c", ".h", ".py"))
+    for name in fresh:
+        assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), f"generated/{name} is stale: run scripts/regenerate.py"
+
+
+def test_output_is_independent_of_hash_seed(tmp_path):
+    code = "import sys; from skelarm_sym.generate import generate; generate(5, out=sys.argv[1]); generate(3, lengths=(1.0, 0.5, 0.25), precision='float', out=sys.argv[1], prefix='f3')"
+    for seed in ("1", "987"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        subprocess.run([sys.executable, "-c", code, str(tmp_path / seed)], check=True, env=env)
+    for name in ("arm5.c", "arm5.h", "arm5.py", "f3.c", "f3.h", "f3.py"):
+        assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "987" / name).read_bytes()
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 24, 48, 64])
+def test_operation_counts(n):
+    programs = {p.name: p for p in build_programs(derive(n))}
+    ops = programs["kinematics"].ops
+    assert ops.sin == n and ops.cos == n
+    assert ops.arithmetic == 18 * n - 3 <= 24 * n + 10
+    assert ops.div == 0 and ops.sqrt == 0
+    assert programs["jacobian"].ops.arithmetic == 5 * n - 2
