@@ -24,14 +24,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM2_VECTORIZE
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM2_VECTORIZE void arm2_trig8(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 2. */
+static void arm2_trig2(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 8; ++k) {
+    for (k = 0; k < 2; ++k) {
         cs[k] = cos(ang[k]);
-    }
-    for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -59,26 +57,22 @@ static void arm2_position_angles(const double q[2], double *restrict ang)
 
 static void arm2_position_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = -t3;
-    const double t5 = t4 - t2;
-    const double t6 = t0 + t1;
-    p[0] = t6;
-    p[1] = -t5;
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    p[0] = t7;
+    p[1] = -t6;
 }
 
 void arm2_position(const double q[2], const double l[2], double p[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_position_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_position_finish(l, cs, sn, p);
 }
 
@@ -90,14 +84,14 @@ void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_position_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_position_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm2_position_finish(l, cs + b * 2, sn + b * 2, p + (i + b) * 2);
         }
     }
 }
@@ -113,28 +107,24 @@ static void arm2_jacobian_angles(const double q[2], double *restrict ang)
 
 static void arm2_jacobian_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict J)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = -t3;
-    const double t5 = t4 - t2;
-    const double t6 = t0 + t1;
-    J[0] = t5;
-    J[1] = t4;
-    J[2] = t6;
-    J[3] = t1;
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    J[0] = t6;
+    J[1] = t5;
+    J[2] = t7;
+    J[3] = t2;
 }
 
 void arm2_jacobian(const double q[2], const double l[2], double J[4])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_jacobian_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_jacobian_finish(l, cs, sn, J);
 }
 
@@ -146,14 +136,14 @@ void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 4);
+            arm2_jacobian_finish(l, cs + b * 2, sn + b * 2, J + (i + b) * 4);
         }
     }
 }
@@ -169,34 +159,30 @@ static void arm2_coriolis_angles(const double q[2], double *restrict ang)
 
 static void arm2_coriolis_finish(const double dq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict H)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = dq[0] + dq[1];
-    const double t5 = t0*dq[0];
-    const double t6 = t1*t4;
-    const double t7 = t2*dq[0];
-    const double t8 = t3*t4;
-    const double t9 = -t6;
-    const double t10 = -t8;
-    const double t11 = t9 - t5;
-    const double t12 = t10 - t7;
-    H[0] = t11;
-    H[1] = t9;
-    H[2] = t12;
-    H[3] = t10;
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t8 = dq[0] + dq[1];
+    const double t9 = t1*dq[0];
+    const double t10 = t2*t8;
+    const double t11 = t3*dq[0];
+    const double t12 = t4*t8;
+    const double t13 = -t10;
+    const double t14 = -t12;
+    const double t15 = t13 - t9;
+    const double t16 = t14 - t11;
+    H[0] = t15;
+    H[1] = t13;
+    H[2] = t16;
+    H[3] = t14;
 }
 
 void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_coriolis_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -208,14 +194,14 @@ void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 8, sn + b * 8, H + (i + b) * 4);
+            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 2, sn + b * 2, H + (i + b) * 4);
         }
     }
 }
@@ -231,32 +217,28 @@ static void arm2_velocity_angles(const double q[2], double *restrict ang)
 
 static void arm2_velocity_finish(const double dq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict v)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = dq[0] + dq[1];
-    const double t5 = t0*dq[0];
-    const double t6 = t1*t4;
-    const double t7 = t2*dq[0];
-    const double t8 = t3*t4;
-    const double t9 = -t6;
-    const double t10 = -t8;
-    const double t11 = t9 - t5;
-    const double t12 = t10 - t7;
-    v[0] = t12;
-    v[1] = -t11;
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t8 = dq[0] + dq[1];
+    const double t9 = t1*dq[0];
+    const double t10 = t2*t8;
+    const double t11 = t3*dq[0];
+    const double t12 = t4*t8;
+    const double t13 = -t10;
+    const double t14 = -t12;
+    const double t15 = t13 - t9;
+    const double t16 = t14 - t11;
+    v[0] = t16;
+    v[1] = -t15;
 }
 
 void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_velocity_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -268,14 +250,14 @@ void arm2_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_velocity_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_velocity_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 2, sn + b * 2, v + (i + b) * 2);
         }
     }
 }
@@ -291,35 +273,31 @@ static void arm2_acceleration_angles(const double q[2], double *restrict ang)
 
 static void arm2_acceleration_finish(const double dq[2], const double ddq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict a)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = -t3;
-    const double t5 = t4 - t2;
-    const double t6 = t0 + t1;
-    const double t7 = dq[0] + dq[1];
-    const double t8 = t0*dq[0];
-    const double t9 = t1*t7;
-    const double t10 = t2*dq[0];
-    const double t11 = t3*t7;
-    const double t12 = -t9;
-    const double t13 = -t11;
-    const double t14 = t12 - t8;
-    const double t15 = t13 - t10;
-    a[0] = t14*dq[0] + t12*dq[1] + t5*ddq[0] + t4*ddq[1];
-    a[1] = t1*ddq[1] + t15*dq[0] + t13*dq[1] + t6*ddq[0];
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    const double t8 = dq[0] + dq[1];
+    const double t9 = t1*dq[0];
+    const double t10 = t2*t8;
+    const double t11 = t3*dq[0];
+    const double t12 = t4*t8;
+    const double t13 = -t10;
+    const double t14 = -t12;
+    const double t15 = t13 - t9;
+    const double t16 = t14 - t11;
+    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
+    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
 }
 
 void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_acceleration_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -331,14 +309,14 @@ void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 2, sn + b * 2, a + (i + b) * 2);
         }
     }
 }
@@ -354,47 +332,43 @@ static void arm2_kinematics_angles(const double q[2], double *restrict ang)
 
 static void arm2_kinematics_finish(const double dq[2], const double ddq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = sn[0]*l[0];
-    const double t3 = sn[1]*l[1];
-    const double t4 = -t3;
-    const double t5 = t4 - t2;
-    const double t6 = t0 + t1;
-    const double t7 = dq[0] + dq[1];
-    const double t8 = t0*dq[0];
-    const double t9 = t1*t7;
-    const double t10 = t2*dq[0];
-    const double t11 = t3*t7;
-    const double t12 = -t9;
-    const double t13 = -t11;
-    const double t14 = t12 - t8;
-    const double t15 = t13 - t10;
-    p[0] = t6;
-    p[1] = -t5;
-    J[0] = t5;
-    J[1] = t4;
-    J[2] = t6;
-    J[3] = t1;
-    H[0] = t14;
-    H[1] = t12;
-    H[2] = t15;
-    H[3] = t13;
-    v[0] = t15;
-    v[1] = -t14;
-    a[0] = t14*dq[0] + t12*dq[1] + t5*ddq[0] + t4*ddq[1];
-    a[1] = t1*ddq[1] + t15*dq[0] + t13*dq[1] + t6*ddq[0];
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    const double t8 = dq[0] + dq[1];
+    const double t9 = t1*dq[0];
+    const double t10 = t2*t8;
+    const double t11 = t3*dq[0];
+    const double t12 = t4*t8;
+    const double t13 = -t10;
+    const double t14 = -t12;
+    const double t15 = t13 - t9;
+    const double t16 = t14 - t11;
+    p[0] = t7;
+    p[1] = -t6;
+    J[0] = t6;
+    J[1] = t5;
+    J[2] = t7;
+    J[3] = t2;
+    H[0] = t15;
+    H[1] = t13;
+    H[2] = t16;
+    H[3] = t14;
+    v[0] = t16;
+    v[1] = -t15;
+    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
+    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
 }
 
 void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 2; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[2], cs[2], sn[2];
     arm2_kinematics_angles(q, ang);
-    arm2_trig8(ang, cs, sn);
+    arm2_trig2(ang, cs, sn);
     arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -406,14 +380,14 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (k = 0; k < 512; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
         for (b = 0; b < count; ++b) {
-            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 8);
+            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 2);
         }
         arm2_trig512(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
+            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 2, sn + b * 2, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
 }

@@ -30,7 +30,7 @@ def _inputs(values, names, sizes):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.moveaxis(a, -1, 0) for a in arrays]
+    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
 
 
 def _output(flat, shape):
@@ -52,16 +52,16 @@ def position(q, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t6
-    p[1] = -t5
+    p[0] = t7
+    p[1] = -t6
     return _output(p, (2,))
 
 
@@ -79,18 +79,18 @@ def jacobian(q, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
     J = np.empty((4,) + batch, dtype=DTYPE)
-    J[0] = t5
-    J[1] = t4
-    J[2] = t6
-    J[3] = t1
+    J[0] = t6
+    J[1] = t5
+    J[2] = t7
+    J[3] = t2
     return _output(J, (2, 2,))
 
 
@@ -109,24 +109,24 @@ def coriolis(q, dq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = dq[0] + dq[1]
-    t5 = t0*dq[0]
-    t6 = t1*t4
-    t7 = t2*dq[0]
-    t8 = t3*t4
-    t9 = -t6
-    t10 = -t8
-    t11 = t9 - t5
-    t12 = t10 - t7
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t8 = dq[0] + dq[1]
+    t9 = t1*dq[0]
+    t10 = t2*t8
+    t11 = t3*dq[0]
+    t12 = t4*t8
+    t13 = -t10
+    t14 = -t12
+    t15 = t13 - t9
+    t16 = t14 - t11
     H = np.empty((4,) + batch, dtype=DTYPE)
-    H[0] = t11
-    H[1] = t9
-    H[2] = t12
-    H[3] = t10
+    H[0] = t15
+    H[1] = t13
+    H[2] = t16
+    H[3] = t14
     return _output(H, (2, 2,))
 
 
@@ -145,22 +145,22 @@ def velocity(q, dq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = dq[0] + dq[1]
-    t5 = t0*dq[0]
-    t6 = t1*t4
-    t7 = t2*dq[0]
-    t8 = t3*t4
-    t9 = -t6
-    t10 = -t8
-    t11 = t9 - t5
-    t12 = t10 - t7
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t8 = dq[0] + dq[1]
+    t9 = t1*dq[0]
+    t10 = t2*t8
+    t11 = t3*dq[0]
+    t12 = t4*t8
+    t13 = -t10
+    t14 = -t12
+    t15 = t13 - t9
+    t16 = t14 - t11
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t12
-    v[1] = -t11
+    v[0] = t16
+    v[1] = -t15
     return _output(v, (2,))
 
 
@@ -180,25 +180,25 @@ def acceleration(q, dq, ddq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = dq[0] + dq[1]
-    t8 = t0*dq[0]
-    t9 = t1*t7
-    t10 = t2*dq[0]
-    t11 = t3*t7
-    t12 = -t9
-    t13 = -t11
-    t14 = t12 - t8
-    t15 = t13 - t10
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t8 = dq[0] + dq[1]
+    t9 = t1*dq[0]
+    t10 = t2*t8
+    t11 = t3*dq[0]
+    t12 = t4*t8
+    t13 = -t10
+    t14 = -t12
+    t15 = t13 - t9
+    t16 = t14 - t11
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t14*dq[0] + t12*dq[1] + t5*ddq[0] + t4*ddq[1]
-    a[1] = t1*ddq[1] + t15*dq[0] + t13*dq[1] + t6*ddq[0]
+    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1]
+    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0]
     return _output(a, (2,))
 
 
@@ -218,39 +218,39 @@ def kinematics(q, dq, ddq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = sn[0]*l[0]
-    t3 = sn[1]*l[1]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = dq[0] + dq[1]
-    t8 = t0*dq[0]
-    t9 = t1*t7
-    t10 = t2*dq[0]
-    t11 = t3*t7
-    t12 = -t9
-    t13 = -t11
-    t14 = t12 - t8
-    t15 = t13 - t10
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t8 = dq[0] + dq[1]
+    t9 = t1*dq[0]
+    t10 = t2*t8
+    t11 = t3*dq[0]
+    t12 = t4*t8
+    t13 = -t10
+    t14 = -t12
+    t15 = t13 - t9
+    t16 = t14 - t11
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t6
-    p[1] = -t5
+    p[0] = t7
+    p[1] = -t6
     J = np.empty((4,) + batch, dtype=DTYPE)
-    J[0] = t5
-    J[1] = t4
-    J[2] = t6
-    J[3] = t1
+    J[0] = t6
+    J[1] = t5
+    J[2] = t7
+    J[3] = t2
     H = np.empty((4,) + batch, dtype=DTYPE)
-    H[0] = t14
-    H[1] = t12
-    H[2] = t15
-    H[3] = t13
+    H[0] = t15
+    H[1] = t13
+    H[2] = t16
+    H[3] = t14
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t15
-    v[1] = -t14
+    v[0] = t16
+    v[1] = -t15
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t14*dq[0] + t12*dq[1] + t5*ddq[0] + t4*ddq[1]
-    a[1] = t1*ddq[1] + t15*dq[0] + t13*dq[1] + t6*ddq[0]
+    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1]
+    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0]
     return _output(p, (2,)), _output(J, (2, 2,)), _output(H, (2, 2,)), _output(v, (2,)), _output(a, (2,))

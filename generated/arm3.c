@@ -24,26 +24,24 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM3_VECTORIZE
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM3_VECTORIZE void arm3_trig8(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 3. */
+static void arm3_trig3(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 8; ++k) {
+    for (k = 0; k < 3; ++k) {
         cs[k] = cos(ang[k]);
-    }
-    for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM3_VECTORIZE void arm3_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 510. */
+static ARM3_VECTORIZE void arm3_trig510(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -60,49 +58,45 @@ static void arm3_position_angles(const double q[3], double *restrict ang)
 
 static void arm3_position_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = -t5;
-    const double t7 = t6 - t4;
-    const double t8 = t1 + t2;
-    const double t9 = t7 - t3;
-    const double t10 = t0 + t8;
-    p[0] = t10;
-    p[1] = -t9;
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    p[0] = t12;
+    p[1] = -t11;
 }
 
 void arm3_position(const double q[3], const double l[3], double p[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_position_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_position_finish(l, cs, sn, p);
 }
 
 void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_position_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_position_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm3_position_finish(l, cs + b * 3, sn + b * 3, p + (i + b) * 2);
         }
     }
 }
@@ -119,53 +113,49 @@ static void arm3_jacobian_angles(const double q[3], double *restrict ang)
 
 static void arm3_jacobian_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict J)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = -t5;
-    const double t7 = t6 - t4;
-    const double t8 = t1 + t2;
-    const double t9 = t7 - t3;
-    const double t10 = t0 + t8;
-    J[0] = t9;
-    J[1] = t7;
-    J[2] = t6;
-    J[3] = t10;
-    J[4] = t8;
-    J[5] = t2;
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    J[0] = t11;
+    J[1] = t9;
+    J[2] = t8;
+    J[3] = t12;
+    J[4] = t10;
+    J[5] = t4;
 }
 
 void arm3_jacobian(const double q[3], const double l[3], double J[6])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_jacobian_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_jacobian_finish(l, cs, sn, J);
 }
 
 void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 6);
+            arm3_jacobian_finish(l, cs + b * 3, sn + b * 3, J + (i + b) * 6);
         }
     }
 }
@@ -182,62 +172,58 @@ static void arm3_coriolis_angles(const double q[3], double *restrict ang)
 
 static void arm3_coriolis_finish(const double dq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict H)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = dq[0] + dq[1];
-    const double t7 = t6 + dq[2];
-    const double t8 = t0*dq[0];
-    const double t9 = t1*t6;
-    const double t10 = t2*t7;
-    const double t11 = t3*dq[0];
-    const double t12 = t4*t6;
-    const double t13 = t5*t7;
-    const double t14 = -t10;
-    const double t15 = -t13;
-    const double t16 = t14 - t9;
-    const double t17 = t15 - t12;
-    const double t18 = t16 - t8;
-    const double t19 = t17 - t11;
-    H[0] = t18;
-    H[1] = t16;
-    H[2] = t14;
-    H[3] = t19;
-    H[4] = t17;
-    H[5] = t15;
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t13 = dq[0] + dq[1];
+    const double t14 = t13 + dq[2];
+    const double t15 = t2*dq[0];
+    const double t16 = t3*t13;
+    const double t17 = t4*t14;
+    const double t18 = t5*dq[0];
+    const double t19 = t6*t13;
+    const double t20 = t7*t14;
+    const double t21 = -t17;
+    const double t22 = -t20;
+    const double t23 = t21 - t16;
+    const double t24 = t22 - t19;
+    const double t25 = t23 - t15;
+    const double t26 = t24 - t18;
+    H[0] = t25;
+    H[1] = t23;
+    H[2] = t21;
+    H[3] = t26;
+    H[4] = t24;
+    H[5] = t22;
 }
 
 void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_coriolis_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_coriolis_finish(dq, l, cs, sn, H);
 }
 
 void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 8, sn + b * 8, H + (i + b) * 6);
+            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 3, sn + b * 3, H + (i + b) * 6);
         }
     }
 }
@@ -254,58 +240,54 @@ static void arm3_velocity_angles(const double q[3], double *restrict ang)
 
 static void arm3_velocity_finish(const double dq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict v)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = dq[0] + dq[1];
-    const double t7 = t6 + dq[2];
-    const double t8 = t0*dq[0];
-    const double t9 = t1*t6;
-    const double t10 = t2*t7;
-    const double t11 = t3*dq[0];
-    const double t12 = t4*t6;
-    const double t13 = t5*t7;
-    const double t14 = -t10;
-    const double t15 = -t13;
-    const double t16 = t14 - t9;
-    const double t17 = t15 - t12;
-    const double t18 = t16 - t8;
-    const double t19 = t17 - t11;
-    v[0] = t19;
-    v[1] = -t18;
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t13 = dq[0] + dq[1];
+    const double t14 = t13 + dq[2];
+    const double t15 = t2*dq[0];
+    const double t16 = t3*t13;
+    const double t17 = t4*t14;
+    const double t18 = t5*dq[0];
+    const double t19 = t6*t13;
+    const double t20 = t7*t14;
+    const double t21 = -t17;
+    const double t22 = -t20;
+    const double t23 = t21 - t16;
+    const double t24 = t22 - t19;
+    const double t25 = t23 - t15;
+    const double t26 = t24 - t18;
+    v[0] = t26;
+    v[1] = -t25;
 }
 
 void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_velocity_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_velocity_finish(dq, l, cs, sn, v);
 }
 
 void arm3_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_velocity_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_velocity_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 3, sn + b * 3, v + (i + b) * 2);
         }
     }
 }
@@ -322,63 +304,59 @@ static void arm3_acceleration_angles(const double q[3], double *restrict ang)
 
 static void arm3_acceleration_finish(const double dq[3], const double ddq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict a)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = -t5;
-    const double t7 = t6 - t4;
-    const double t8 = t1 + t2;
-    const double t9 = t7 - t3;
-    const double t10 = t0 + t8;
-    const double t11 = dq[0] + dq[1];
-    const double t12 = t11 + dq[2];
-    const double t13 = t0*dq[0];
-    const double t14 = t1*t11;
-    const double t15 = t2*t12;
-    const double t16 = t3*dq[0];
-    const double t17 = t4*t11;
-    const double t18 = t5*t12;
-    const double t19 = -t15;
-    const double t20 = -t18;
-    const double t21 = t19 - t14;
-    const double t22 = t20 - t17;
-    const double t23 = t21 - t13;
-    const double t24 = t22 - t16;
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-    a[1] = t2*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t13 = dq[0] + dq[1];
+    const double t14 = t13 + dq[2];
+    const double t15 = t2*dq[0];
+    const double t16 = t3*t13;
+    const double t17 = t4*t14;
+    const double t18 = t5*dq[0];
+    const double t19 = t6*t13;
+    const double t20 = t7*t14;
+    const double t21 = -t17;
+    const double t22 = -t20;
+    const double t23 = t21 - t16;
+    const double t24 = t22 - t19;
+    const double t25 = t23 - t15;
+    const double t26 = t24 - t18;
+    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
+    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
 }
 
 void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_acceleration_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
 void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 3, sn + b * 3, a + (i + b) * 2);
         }
     }
 }
@@ -395,79 +373,75 @@ static void arm3_kinematics_angles(const double q[3], double *restrict ang)
 
 static void arm3_kinematics_finish(const double dq[3], const double ddq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
 {
-    const double t0 = cs[0]*l[0];
-    const double t1 = cs[1]*l[1];
-    const double t2 = cs[2]*l[2];
-    const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = sn[2]*l[2];
-    const double t6 = -t5;
-    const double t7 = t6 - t4;
-    const double t8 = t1 + t2;
-    const double t9 = t7 - t3;
-    const double t10 = t0 + t8;
-    const double t11 = dq[0] + dq[1];
-    const double t12 = t11 + dq[2];
-    const double t13 = t0*dq[0];
-    const double t14 = t1*t11;
-    const double t15 = t2*t12;
-    const double t16 = t3*dq[0];
-    const double t17 = t4*t11;
-    const double t18 = t5*t12;
-    const double t19 = -t15;
-    const double t20 = -t18;
-    const double t21 = t19 - t14;
-    const double t22 = t20 - t17;
-    const double t23 = t21 - t13;
-    const double t24 = t22 - t16;
-    p[0] = t10;
-    p[1] = -t9;
-    J[0] = t9;
-    J[1] = t7;
-    J[2] = t6;
-    J[3] = t10;
-    J[4] = t8;
-    J[5] = t2;
-    H[0] = t23;
-    H[1] = t21;
-    H[2] = t19;
-    H[3] = t24;
-    H[4] = t22;
-    H[5] = t20;
-    v[0] = t24;
-    v[1] = -t23;
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-    a[1] = t2*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t13 = dq[0] + dq[1];
+    const double t14 = t13 + dq[2];
+    const double t15 = t2*dq[0];
+    const double t16 = t3*t13;
+    const double t17 = t4*t14;
+    const double t18 = t5*dq[0];
+    const double t19 = t6*t13;
+    const double t20 = t7*t14;
+    const double t21 = -t17;
+    const double t22 = -t20;
+    const double t23 = t21 - t16;
+    const double t24 = t22 - t19;
+    const double t25 = t23 - t15;
+    const double t26 = t24 - t18;
+    p[0] = t12;
+    p[1] = -t11;
+    J[0] = t11;
+    J[1] = t9;
+    J[2] = t8;
+    J[3] = t12;
+    J[4] = t10;
+    J[5] = t4;
+    H[0] = t25;
+    H[1] = t23;
+    H[2] = t21;
+    H[3] = t26;
+    H[4] = t24;
+    H[5] = t22;
+    v[0] = t26;
+    v[1] = -t25;
+    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
+    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
 }
 
 void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[3], cs[3], sn[3];
     arm3_kinematics_angles(q, ang);
-    arm3_trig8(ang, cs, sn);
+    arm3_trig3(ang, cs, sn);
     arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
 void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
     size_t i;
-    double ang[512], cs[512], sn[512];
+    double ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 8);
+            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3_trig512(ang, cs, sn);
+        arm3_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
 }

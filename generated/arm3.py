@@ -30,7 +30,7 @@ def _inputs(values, names, sizes):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.moveaxis(a, -1, 0) for a in arrays]
+    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
 
 
 def _output(flat, shape):
@@ -53,20 +53,20 @@ def position(q, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t1 + t2
-    t9 = t7 - t3
-    t10 = t0 + t8
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t10
-    p[1] = -t9
+    p[0] = t12
+    p[1] = -t11
     return _output(p, (2,))
 
 
@@ -85,24 +85,24 @@ def jacobian(q, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t1 + t2
-    t9 = t7 - t3
-    t10 = t0 + t8
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
     J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t9
-    J[1] = t7
-    J[2] = t6
-    J[3] = t10
-    J[4] = t8
-    J[5] = t2
+    J[0] = t11
+    J[1] = t9
+    J[2] = t8
+    J[3] = t12
+    J[4] = t10
+    J[5] = t4
     return _output(J, (2, 3,))
 
 
@@ -122,33 +122,33 @@ def coriolis(q, dq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = dq[0] + dq[1]
-    t7 = t6 + dq[2]
-    t8 = t0*dq[0]
-    t9 = t1*t6
-    t10 = t2*t7
-    t11 = t3*dq[0]
-    t12 = t4*t6
-    t13 = t5*t7
-    t14 = -t10
-    t15 = -t13
-    t16 = t14 - t9
-    t17 = t15 - t12
-    t18 = t16 - t8
-    t19 = t17 - t11
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t13 = dq[0] + dq[1]
+    t14 = t13 + dq[2]
+    t15 = t2*dq[0]
+    t16 = t3*t13
+    t17 = t4*t14
+    t18 = t5*dq[0]
+    t19 = t6*t13
+    t20 = t7*t14
+    t21 = -t17
+    t22 = -t20
+    t23 = t21 - t16
+    t24 = t22 - t19
+    t25 = t23 - t15
+    t26 = t24 - t18
     H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t18
-    H[1] = t16
-    H[2] = t14
-    H[3] = t19
-    H[4] = t17
-    H[5] = t15
+    H[0] = t25
+    H[1] = t23
+    H[2] = t21
+    H[3] = t26
+    H[4] = t24
+    H[5] = t22
     return _output(H, (2, 3,))
 
 
@@ -168,29 +168,29 @@ def velocity(q, dq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = dq[0] + dq[1]
-    t7 = t6 + dq[2]
-    t8 = t0*dq[0]
-    t9 = t1*t6
-    t10 = t2*t7
-    t11 = t3*dq[0]
-    t12 = t4*t6
-    t13 = t5*t7
-    t14 = -t10
-    t15 = -t13
-    t16 = t14 - t9
-    t17 = t15 - t12
-    t18 = t16 - t8
-    t19 = t17 - t11
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t13 = dq[0] + dq[1]
+    t14 = t13 + dq[2]
+    t15 = t2*dq[0]
+    t16 = t3*t13
+    t17 = t4*t14
+    t18 = t5*dq[0]
+    t19 = t6*t13
+    t20 = t7*t14
+    t21 = -t17
+    t22 = -t20
+    t23 = t21 - t16
+    t24 = t22 - t19
+    t25 = t23 - t15
+    t26 = t24 - t18
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t19
-    v[1] = -t18
+    v[0] = t26
+    v[1] = -t25
     return _output(v, (2,))
 
 
@@ -211,34 +211,34 @@ def acceleration(q, dq, ddq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t1 + t2
-    t9 = t7 - t3
-    t10 = t0 + t8
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = t0*dq[0]
-    t14 = t1*t11
-    t15 = t2*t12
-    t16 = t3*dq[0]
-    t17 = t4*t11
-    t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
-    t23 = t21 - t13
-    t24 = t22 - t16
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t13 = dq[0] + dq[1]
+    t14 = t13 + dq[2]
+    t15 = t2*dq[0]
+    t16 = t3*t13
+    t17 = t4*t14
+    t18 = t5*dq[0]
+    t19 = t6*t13
+    t20 = t7*t14
+    t21 = -t17
+    t22 = -t20
+    t23 = t21 - t16
+    t24 = t22 - t19
+    t25 = t23 - t15
+    t26 = t24 - t18
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
-    a[1] = t2*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
+    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2]
+    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1]
     return _output(a, (2,))
 
 
@@ -259,52 +259,52 @@ def kinematics(q, dq, ddq, l):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = cs[0]*l[0]
-    t1 = cs[1]*l[1]
-    t2 = cs[2]*l[2]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = sn[2]*l[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t1 + t2
-    t9 = t7 - t3
-    t10 = t0 + t8
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = t0*dq[0]
-    t14 = t1*t11
-    t15 = t2*t12
-    t16 = t3*dq[0]
-    t17 = t4*t11
-    t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
-    t23 = t21 - t13
-    t24 = t22 - t16
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t13 = dq[0] + dq[1]
+    t14 = t13 + dq[2]
+    t15 = t2*dq[0]
+    t16 = t3*t13
+    t17 = t4*t14
+    t18 = t5*dq[0]
+    t19 = t6*t13
+    t20 = t7*t14
+    t21 = -t17
+    t22 = -t20
+    t23 = t21 - t16
+    t24 = t22 - t19
+    t25 = t23 - t15
+    t26 = t24 - t18
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t10
-    p[1] = -t9
+    p[0] = t12
+    p[1] = -t11
     J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t9
-    J[1] = t7
-    J[2] = t6
-    J[3] = t10
-    J[4] = t8
-    J[5] = t2
+    J[0] = t11
+    J[1] = t9
+    J[2] = t8
+    J[3] = t12
+    J[4] = t10
+    J[5] = t4
     H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t23
-    H[1] = t21
-    H[2] = t19
-    H[3] = t24
-    H[4] = t22
-    H[5] = t20
+    H[0] = t25
+    H[1] = t23
+    H[2] = t21
+    H[3] = t26
+    H[4] = t24
+    H[5] = t22
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t24
-    v[1] = -t23
+    v[0] = t26
+    v[1] = -t25
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
-    a[1] = t2*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
+    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2]
+    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1]
     return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))

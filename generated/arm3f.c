@@ -24,26 +24,24 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #define ARM3F_VECTORIZE
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 3. */
+static void arm3f_trig3(const float *restrict ang, float *restrict cs, float *restrict sn)
 {
     int k;
-    for (k = 0; k < 8; ++k) {
+    for (k = 0; k < 3; ++k) {
         cs[k] = cosf(ang[k]);
-    }
-    for (k = 0; k < 8; ++k) {
         sn[k] = sinf(ang[k]);
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 510. */
+static ARM3F_VECTORIZE void arm3f_trig510(const float *restrict ang, float *restrict cs, float *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         cs[k] = cosf(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         sn[k] = sinf(ang[k]);
     }
 }
@@ -60,47 +58,43 @@ static void arm3f_position_angles(const float q[3], float *restrict ang)
 
 static void arm3f_position_finish(const float *restrict cs, const float *restrict sn, float *restrict p)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = -t3;
-    const float t5 = t4 - t2;
-    const float t6 = t0 + t1;
-    const float t7 = t5 - sn[0];
-    const float t8 = cs[0] + t6;
-    p[0] = t8;
-    p[1] = -t7;
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    p[0] = t10;
+    p[1] = -t9;
 }
 
 void arm3f_position(const float q[3], float p[2])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_position_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_position_finish(cs, sn, p);
 }
 
 void arm3f_position_batch(size_t m, const float *q, float *p)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_position_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_position_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_position_finish(cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm3f_position_finish(cs + b * 3, sn + b * 3, p + (i + b) * 2);
         }
     }
 }
@@ -117,51 +111,47 @@ static void arm3f_jacobian_angles(const float q[3], float *restrict ang)
 
 static void arm3f_jacobian_finish(const float *restrict cs, const float *restrict sn, float *restrict J)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = -t3;
-    const float t5 = t4 - t2;
-    const float t6 = t0 + t1;
-    const float t7 = t5 - sn[0];
-    const float t8 = cs[0] + t6;
-    J[0] = t7;
-    J[1] = t5;
-    J[2] = t4;
-    J[3] = t8;
-    J[4] = t6;
-    J[5] = t1;
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    J[0] = t9;
+    J[1] = t7;
+    J[2] = t6;
+    J[3] = t10;
+    J[4] = t8;
+    J[5] = t3;
 }
 
 void arm3f_jacobian(const float q[3], float J[6])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_jacobian_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_jacobian_finish(cs, sn, J);
 }
 
 void arm3f_jacobian_batch(size_t m, const float *q, float *J)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 6);
+            arm3f_jacobian_finish(cs + b * 3, sn + b * 3, J + (i + b) * 6);
         }
     }
 }
@@ -178,60 +168,56 @@ static void arm3f_coriolis_angles(const float q[3], float *restrict ang)
 
 static void arm3f_coriolis_finish(const float dq[3], const float *restrict cs, const float *restrict sn, float *restrict H)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = dq[0] + dq[1];
-    const float t5 = t4 + dq[2];
-    const float t6 = cs[0]*dq[0];
-    const float t7 = t0*t4;
-    const float t8 = t1*t5;
-    const float t9 = sn[0]*dq[0];
-    const float t10 = t2*t4;
-    const float t11 = t3*t5;
-    const float t12 = -t8;
-    const float t13 = -t11;
-    const float t14 = t12 - t7;
-    const float t15 = t13 - t10;
-    const float t16 = t14 - t6;
-    const float t17 = t15 - t9;
-    H[0] = t16;
-    H[1] = t14;
-    H[2] = t12;
-    H[3] = t17;
-    H[4] = t15;
-    H[5] = t13;
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t11 = dq[0] + dq[1];
+    const float t12 = t11 + dq[2];
+    const float t13 = cs[0]*dq[0];
+    const float t14 = t2*t11;
+    const float t15 = t3*t12;
+    const float t16 = sn[0]*dq[0];
+    const float t17 = t4*t11;
+    const float t18 = t5*t12;
+    const float t19 = -t15;
+    const float t20 = -t18;
+    const float t21 = t19 - t14;
+    const float t22 = t20 - t17;
+    const float t23 = t21 - t13;
+    const float t24 = t22 - t16;
+    H[0] = t23;
+    H[1] = t21;
+    H[2] = t19;
+    H[3] = t24;
+    H[4] = t22;
+    H[5] = t20;
 }
 
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_coriolis_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_coriolis_finish(dq, cs, sn, H);
 }
 
 void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, H + (i + b) * 6);
+            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 3, sn + b * 3, H + (i + b) * 6);
         }
     }
 }
@@ -248,56 +234,52 @@ static void arm3f_velocity_angles(const float q[3], float *restrict ang)
 
 static void arm3f_velocity_finish(const float dq[3], const float *restrict cs, const float *restrict sn, float *restrict v)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = dq[0] + dq[1];
-    const float t5 = t4 + dq[2];
-    const float t6 = cs[0]*dq[0];
-    const float t7 = t0*t4;
-    const float t8 = t1*t5;
-    const float t9 = sn[0]*dq[0];
-    const float t10 = t2*t4;
-    const float t11 = t3*t5;
-    const float t12 = -t8;
-    const float t13 = -t11;
-    const float t14 = t12 - t7;
-    const float t15 = t13 - t10;
-    const float t16 = t14 - t6;
-    const float t17 = t15 - t9;
-    v[0] = t17;
-    v[1] = -t16;
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t11 = dq[0] + dq[1];
+    const float t12 = t11 + dq[2];
+    const float t13 = cs[0]*dq[0];
+    const float t14 = t2*t11;
+    const float t15 = t3*t12;
+    const float t16 = sn[0]*dq[0];
+    const float t17 = t4*t11;
+    const float t18 = t5*t12;
+    const float t19 = -t15;
+    const float t20 = -t18;
+    const float t21 = t19 - t14;
+    const float t22 = t20 - t17;
+    const float t23 = t21 - t13;
+    const float t24 = t22 - t16;
+    v[0] = t24;
+    v[1] = -t23;
 }
 
 void arm3f_velocity(const float q[3], const float dq[3], float v[2])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_velocity_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_velocity_finish(dq, cs, sn, v);
 }
 
 void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 3, sn + b * 3, v + (i + b) * 2);
         }
     }
 }
@@ -314,61 +296,57 @@ static void arm3f_acceleration_angles(const float q[3], float *restrict ang)
 
 static void arm3f_acceleration_finish(const float dq[3], const float ddq[3], const float *restrict cs, const float *restrict sn, float *restrict a)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = -t3;
-    const float t5 = t4 - t2;
-    const float t6 = t0 + t1;
-    const float t7 = t5 - sn[0];
-    const float t8 = cs[0] + t6;
-    const float t9 = dq[0] + dq[1];
-    const float t10 = t9 + dq[2];
-    const float t11 = cs[0]*dq[0];
-    const float t12 = t0*t9;
-    const float t13 = t1*t10;
-    const float t14 = sn[0]*dq[0];
-    const float t15 = t2*t9;
-    const float t16 = t3*t10;
-    const float t17 = -t13;
-    const float t18 = -t16;
-    const float t19 = t17 - t12;
-    const float t20 = t18 - t15;
-    const float t21 = t19 - t11;
-    const float t22 = t20 - t14;
-    a[0] = t21*dq[0] + t19*dq[1] + t17*dq[2] + t7*ddq[0] + t5*ddq[1] + t4*ddq[2];
-    a[1] = t1*ddq[2] + t22*dq[0] + t20*dq[1] + t18*dq[2] + t8*ddq[0] + t6*ddq[1];
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t11 = dq[0] + dq[1];
+    const float t12 = t11 + dq[2];
+    const float t13 = cs[0]*dq[0];
+    const float t14 = t2*t11;
+    const float t15 = t3*t12;
+    const float t16 = sn[0]*dq[0];
+    const float t17 = t4*t11;
+    const float t18 = t5*t12;
+    const float t19 = -t15;
+    const float t20 = -t18;
+    const float t21 = t19 - t14;
+    const float t22 = t20 - t17;
+    const float t23 = t21 - t13;
+    const float t24 = t22 - t16;
+    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
+    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
 }
 
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_acceleration_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_acceleration_finish(dq, ddq, cs, sn, a);
 }
 
 void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 3, sn + b * 3, a + (i + b) * 2);
         }
     }
 }
@@ -385,77 +363,73 @@ static void arm3f_kinematics_angles(const float q[3], float *restrict ang)
 
 static void arm3f_kinematics_finish(const float dq[3], const float ddq[3], const float *restrict cs, const float *restrict sn, float *restrict p, float *restrict J, float *restrict H, float *restrict v, float *restrict a)
 {
-    const float t0 = 0.8f*cs[1];
-    const float t1 = 0.5f*cs[2];
-    const float t2 = 0.8f*sn[1];
-    const float t3 = 0.5f*sn[2];
-    const float t4 = -t3;
-    const float t5 = t4 - t2;
-    const float t6 = t0 + t1;
-    const float t7 = t5 - sn[0];
-    const float t8 = cs[0] + t6;
-    const float t9 = dq[0] + dq[1];
-    const float t10 = t9 + dq[2];
-    const float t11 = cs[0]*dq[0];
-    const float t12 = t0*t9;
-    const float t13 = t1*t10;
-    const float t14 = sn[0]*dq[0];
-    const float t15 = t2*t9;
-    const float t16 = t3*t10;
-    const float t17 = -t13;
-    const float t18 = -t16;
-    const float t19 = t17 - t12;
-    const float t20 = t18 - t15;
-    const float t21 = t19 - t11;
-    const float t22 = t20 - t14;
-    p[0] = t8;
-    p[1] = -t7;
-    J[0] = t7;
-    J[1] = t5;
-    J[2] = t4;
-    J[3] = t8;
-    J[4] = t6;
-    J[5] = t1;
-    H[0] = t21;
-    H[1] = t19;
-    H[2] = t17;
-    H[3] = t22;
-    H[4] = t20;
-    H[5] = t18;
-    v[0] = t22;
-    v[1] = -t21;
-    a[0] = t21*dq[0] + t19*dq[1] + t17*dq[2] + t7*ddq[0] + t5*ddq[1] + t4*ddq[2];
-    a[1] = t1*ddq[2] + t22*dq[0] + t20*dq[1] + t18*dq[2] + t8*ddq[0] + t6*ddq[1];
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t11 = dq[0] + dq[1];
+    const float t12 = t11 + dq[2];
+    const float t13 = cs[0]*dq[0];
+    const float t14 = t2*t11;
+    const float t15 = t3*t12;
+    const float t16 = sn[0]*dq[0];
+    const float t17 = t4*t11;
+    const float t18 = t5*t12;
+    const float t19 = -t15;
+    const float t20 = -t18;
+    const float t21 = t19 - t14;
+    const float t22 = t20 - t17;
+    const float t23 = t21 - t13;
+    const float t24 = t22 - t16;
+    p[0] = t10;
+    p[1] = -t9;
+    J[0] = t9;
+    J[1] = t7;
+    J[2] = t6;
+    J[3] = t10;
+    J[4] = t8;
+    J[5] = t3;
+    H[0] = t23;
+    H[1] = t21;
+    H[2] = t19;
+    H[3] = t24;
+    H[4] = t22;
+    H[5] = t20;
+    v[0] = t24;
+    v[1] = -t23;
+    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
+    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
 }
 
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
 {
-    float ang[8], cs[8], sn[8];
-    int k;
-    for (k = 3; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    float ang[3], cs[3], sn[3];
     arm3f_kinematics_angles(q, ang);
-    arm3f_trig8(ang, cs, sn);
+    arm3f_trig3(ang, cs, sn);
     arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
 }
 
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a)
 {
     size_t i;
-    float ang[512], cs[512], sn[512];
+    float ang[510], cs[510], sn[510];
     size_t b, k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 510; ++k) {
         ang[k] = 0;
     }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
         for (b = 0; b < count; ++b) {
-            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 3);
         }
-        arm3f_trig512(ang, cs, sn);
+        arm3f_trig510(ang, cs, sn);
         for (b = 0; b < count; ++b) {
-            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
 }

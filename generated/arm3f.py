@@ -30,7 +30,7 @@ def _inputs(values, names, sizes):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.moveaxis(a, -1, 0) for a in arrays]
+    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
 
 
 def _output(flat, shape):
@@ -52,18 +52,18 @@ def position(q):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = t5 - sn[0]
-    t8 = cs[0] + t6
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t8
-    p[1] = -t7
+    p[0] = t10
+    p[1] = -t9
     return _output(p, (2,))
 
 
@@ -81,22 +81,22 @@ def jacobian(q):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = t5 - sn[0]
-    t8 = cs[0] + t6
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
     J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t7
-    J[1] = t5
-    J[2] = t4
-    J[3] = t8
-    J[4] = t6
-    J[5] = t1
+    J[0] = t9
+    J[1] = t7
+    J[2] = t6
+    J[3] = t10
+    J[4] = t8
+    J[5] = t3
     return _output(J, (2, 3,))
 
 
@@ -115,31 +115,31 @@ def coriolis(q, dq):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = dq[0] + dq[1]
-    t5 = t4 + dq[2]
-    t6 = cs[0]*dq[0]
-    t7 = t0*t4
-    t8 = t1*t5
-    t9 = sn[0]*dq[0]
-    t10 = t2*t4
-    t11 = t3*t5
-    t12 = -t8
-    t13 = -t11
-    t14 = t12 - t7
-    t15 = t13 - t10
-    t16 = t14 - t6
-    t17 = t15 - t9
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t11 = dq[0] + dq[1]
+    t12 = t11 + dq[2]
+    t13 = cs[0]*dq[0]
+    t14 = t2*t11
+    t15 = t3*t12
+    t16 = sn[0]*dq[0]
+    t17 = t4*t11
+    t18 = t5*t12
+    t19 = -t15
+    t20 = -t18
+    t21 = t19 - t14
+    t22 = t20 - t17
+    t23 = t21 - t13
+    t24 = t22 - t16
     H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t16
-    H[1] = t14
-    H[2] = t12
-    H[3] = t17
-    H[4] = t15
-    H[5] = t13
+    H[0] = t23
+    H[1] = t21
+    H[2] = t19
+    H[3] = t24
+    H[4] = t22
+    H[5] = t20
     return _output(H, (2, 3,))
 
 
@@ -158,27 +158,27 @@ def velocity(q, dq):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = dq[0] + dq[1]
-    t5 = t4 + dq[2]
-    t6 = cs[0]*dq[0]
-    t7 = t0*t4
-    t8 = t1*t5
-    t9 = sn[0]*dq[0]
-    t10 = t2*t4
-    t11 = t3*t5
-    t12 = -t8
-    t13 = -t11
-    t14 = t12 - t7
-    t15 = t13 - t10
-    t16 = t14 - t6
-    t17 = t15 - t9
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t11 = dq[0] + dq[1]
+    t12 = t11 + dq[2]
+    t13 = cs[0]*dq[0]
+    t14 = t2*t11
+    t15 = t3*t12
+    t16 = sn[0]*dq[0]
+    t17 = t4*t11
+    t18 = t5*t12
+    t19 = -t15
+    t20 = -t18
+    t21 = t19 - t14
+    t22 = t20 - t17
+    t23 = t21 - t13
+    t24 = t22 - t16
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t17
-    v[1] = -t16
+    v[0] = t24
+    v[1] = -t23
     return _output(v, (2,))
 
 
@@ -198,32 +198,32 @@ def acceleration(q, dq, ddq):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = t5 - sn[0]
-    t8 = cs[0] + t6
-    t9 = dq[0] + dq[1]
-    t10 = t9 + dq[2]
-    t11 = cs[0]*dq[0]
-    t12 = t0*t9
-    t13 = t1*t10
-    t14 = sn[0]*dq[0]
-    t15 = t2*t9
-    t16 = t3*t10
-    t17 = -t13
-    t18 = -t16
-    t19 = t17 - t12
-    t20 = t18 - t15
-    t21 = t19 - t11
-    t22 = t20 - t14
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t11 = dq[0] + dq[1]
+    t12 = t11 + dq[2]
+    t13 = cs[0]*dq[0]
+    t14 = t2*t11
+    t15 = t3*t12
+    t16 = sn[0]*dq[0]
+    t17 = t4*t11
+    t18 = t5*t12
+    t19 = -t15
+    t20 = -t18
+    t21 = t19 - t14
+    t22 = t20 - t17
+    t23 = t21 - t13
+    t24 = t22 - t16
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t21*dq[0] + t19*dq[1] + t17*dq[2] + t7*ddq[0] + t5*ddq[1] + t4*ddq[2]
-    a[1] = t1*ddq[2] + t22*dq[0] + t20*dq[1] + t18*dq[2] + t8*ddq[0] + t6*ddq[1]
+    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
+    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
     return _output(a, (2,))
 
 
@@ -243,50 +243,50 @@ def kinematics(q, dq, ddq):
     ang[0] = q[0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = 0.8*cs[1]
-    t1 = 0.5*cs[2]
-    t2 = 0.8*sn[1]
-    t3 = 0.5*sn[2]
-    t4 = -t3
-    t5 = t4 - t2
-    t6 = t0 + t1
-    t7 = t5 - sn[0]
-    t8 = cs[0] + t6
-    t9 = dq[0] + dq[1]
-    t10 = t9 + dq[2]
-    t11 = cs[0]*dq[0]
-    t12 = t0*t9
-    t13 = t1*t10
-    t14 = sn[0]*dq[0]
-    t15 = t2*t9
-    t16 = t3*t10
-    t17 = -t13
-    t18 = -t16
-    t19 = t17 - t12
-    t20 = t18 - t15
-    t21 = t19 - t11
-    t22 = t20 - t14
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t11 = dq[0] + dq[1]
+    t12 = t11 + dq[2]
+    t13 = cs[0]*dq[0]
+    t14 = t2*t11
+    t15 = t3*t12
+    t16 = sn[0]*dq[0]
+    t17 = t4*t11
+    t18 = t5*t12
+    t19 = -t15
+    t20 = -t18
+    t21 = t19 - t14
+    t22 = t20 - t17
+    t23 = t21 - t13
+    t24 = t22 - t16
     p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t8
-    p[1] = -t7
+    p[0] = t10
+    p[1] = -t9
     J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t7
-    J[1] = t5
-    J[2] = t4
-    J[3] = t8
-    J[4] = t6
-    J[5] = t1
+    J[0] = t9
+    J[1] = t7
+    J[2] = t6
+    J[3] = t10
+    J[4] = t8
+    J[5] = t3
     H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t21
-    H[1] = t19
-    H[2] = t17
-    H[3] = t22
-    H[4] = t20
-    H[5] = t18
+    H[0] = t23
+    H[1] = t21
+    H[2] = t19
+    H[3] = t24
+    H[4] = t22
+    H[5] = t20
     v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t22
-    v[1] = -t21
+    v[0] = t24
+    v[1] = -t23
     a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t21*dq[0] + t19*dq[1] + t17*dq[2] + t7*ddq[0] + t5*ddq[1] + t4*ddq[2]
-    a[1] = t1*ddq[2] + t22*dq[0] + t20*dq[1] + t18*dq[2] + t8*ddq[0] + t6*ddq[1]
+    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
+    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
     return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))

@@ -78,6 +78,9 @@ class Program:
     sin: tuple[sp.Symbol, ...]
     post: tuple[Assignment, ...]
     ops: OpCount
+    numbers: dict[sp.Symbol, int]
+    """Position of each temporary in the derivation-wide program: the same temporary gets the
+    same number (and so the same printed name) in every function."""
 
     @property
     def temporaries(self) -> tuple[sp.Symbol, ...]:
@@ -305,6 +308,7 @@ def build_program(derivation: Derivation, spec: FunctionSpec, optimised: Optimis
     return Program(
         spec.name, spec.summary, inputs, outputs, tuple(pre), angles,
         tuple(opt.cos[k] for k in slots), tuple(opt.sin[k] for k in slots), tuple(post), ops,
+        {symbol: i for i, (symbol, _) in enumerate(opt.assignments)},
     )
 
 

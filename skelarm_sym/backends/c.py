@@ -16,12 +16,15 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from ..program import Program
-from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, pad, render_template, storage_names
+from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, MemoPrinter, pad, render_template, storage_names
 
 LANGUAGE = "c"
 FILE_SUFFIXES = (".h", ".c")
 SIMD_LANES = 8
 """Trigonometric arrays are padded to a multiple of this (AVX-512 doubles) so loops vectorise whole."""
+SCALAR_UP_TO = 3
+"""Single calls with at most this many angles use scalar sin/cos (GCC fuses them into sincos):
+one vector call costs more than a few scalar ones."""
 BLOCK_ANGLES = 512
 """Batch functions evaluate the trigonometry of up to this many angles (several configurations) at once."""
 
@@ -68,16 +71,17 @@ def _params(args, ctype: str, const: bool) -> list[str]:
     return [f"{qualifier}{ctype} {a.name}[{a.size}]" for a in args]
 
 
-def function_context(program: Program, precision: CPrecision, prefix: str, shared: frozenset[str]) -> dict:
+def function_context(program: Program, precision: CPrecision, prefix: str, shared: frozenset[str], memo: MemoPrinter | None = None) -> dict:
     """What the templates need to lay out one program as C functions."""
     names = storage_names(program)
     printer = CArrayPrinter(names, precision)
+    memo = memo or MemoPrinter()
     ctype = precision.ctype
     angle_set = set(program.angles)
 
     def statement(symbol: sp.Symbol, expr: sp.Expr) -> str:
         target = names[symbol]
-        code = printer.doprint(expr)
+        code = memo(printer, names, expr)
         return f"{target} = {code};" if symbol in angle_set else f"const {ctype} {target} = {code};"
 
     def used_inputs(statements_exprs) -> list:
@@ -88,7 +92,7 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     post_exprs = [rhs for _, rhs in program.post] + [e for o in program.outputs for e in o.elements]
     post_free = set().union(*(e.free_symbols for e in post_exprs)) if post_exprs else set()
     count = len(program.angles)
-    padded = pad(count, SIMD_LANES) if count else 0
+    padded = count if count <= SCALAR_UP_TO else pad(count, SIMD_LANES)
     block = max(1, BLOCK_ANGLES // padded) if count else 1
     return {
         "name": f"{prefix}_{program.name}",
@@ -105,7 +109,7 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
         },
         "pre": [statement(s, e) for s, e in program.pre],
         "post": [statement(s, e) for s, e in program.post],
-        "stores": [f"{o.name}[{i}] = {printer.doprint(e)};" for o in program.outputs for i, e in enumerate(o.elements)],
+        "stores": [f"{o.name}[{i}] = {memo(printer, names, e)};" for o in program.outputs for i, e in enumerate(o.elements)],
         "angle_count": count,
         "padded": padded,
         "block": block,
@@ -117,8 +121,10 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     """Header and source text for ``programs``; keys are the file suffixes."""
     precision = PRECISIONS[options.precision]
     shared = frozenset(derivation.parameters)
-    functions = [function_context(p, precision, options.prefix, shared) for p in programs]
-    trig_sizes = sorted({f["padded"] for f in functions if f["padded"]} | {f["padded"] * f["block"] for f in functions if f["padded"]})
+    memo = MemoPrinter()
+    functions = [function_context(p, precision, options.prefix, shared, memo) for p in programs]
+    sizes = {f["padded"] for f in functions if f["padded"]} | {f["padded"] * f["block"] for f in functions if f["padded"]}
+    trig_sizes = [{"size": size, "vector": size > SCALAR_UP_TO} for size in sorted(sizes)]
     context = {
         "prefix": options.prefix,
         "guard": options.prefix.upper() + "_H",

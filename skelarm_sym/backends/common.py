@@ -28,11 +28,27 @@ def storage_names(program: Program, element: str = "{name}[{index}]", temporary:
     for array, symbols in ((ANGLES, program.angles), (COSINES, program.cos), (SINES, program.sin)):
         for k, symbol in enumerate(symbols):
             names[symbol] = element.format(name=array, index=k)
-    count = 0
     for symbol in program.temporaries:
-        names[symbol] = temporary.format(index=count)
-        count += 1
+        names[symbol] = temporary.format(index=program.numbers[symbol])
     return names
+
+
+class MemoPrinter:
+    """Prints expressions through ``printer``, once per distinct (expression, names of its symbols).
+
+    Functions of one derivation share most statements; printing each once keeps
+    generation time linear in n rather than in n times the number of functions.
+    """
+
+    def __init__(self) -> None:
+        self._cache: dict = {}
+
+    def __call__(self, printer, names: dict[sp.Symbol, str], expr: sp.Expr) -> str:
+        key = (type(printer), getattr(printer, "_precision", None), expr, tuple(sorted((s.name, names[s]) for s in expr.free_symbols)))
+        text = self._cache.get(key)
+        if text is None:
+            text = self._cache[key] = printer.doprint(expr)
+        return text
 
 
 class ArrayPrinterMixin:

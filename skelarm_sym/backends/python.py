@@ -12,7 +12,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from ..program import Program
-from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, render_template, storage_names
+from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, MemoPrinter, render_template, storage_names
 
 LANGUAGE = "python"
 FILE_SUFFIXES = (".py",)
@@ -31,19 +31,20 @@ class PythonArrayPrinter(ArrayPrinterMixin, PythonCodePrinter):
         return repr(float(value))
 
 
-def function_context(program: Program) -> dict:
+def function_context(program: Program, memo: MemoPrinter | None = None) -> dict:
     """What the template needs to lay out one program as a NumPy function."""
     names = storage_names(program)
     printer = PythonArrayPrinter(names)
+    memo = memo or MemoPrinter()
     return {
         "name": program.name,
         "summary": program.summary,
         "inputs": [{"name": a.name, "size": a.size} for a in program.inputs],
         "outputs": [{"name": o.name, "size": len(o.elements), "shape": o.shape} for o in program.outputs],
-        "pre": [f"{names[s]} = {printer.doprint(e)}" for s, e in program.pre],
-        "post": [f"{names[s]} = {printer.doprint(e)}" for s, e in program.post],
+        "pre": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.pre],
+        "post": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.post],
         "stores": [
-            [f"{o.name}[{i}] = {printer.doprint(e)}" for i, e in enumerate(o.elements)] for o in program.outputs
+            [f"{o.name}[{i}] = {memo(printer, names, e)}" for i, e in enumerate(o.elements)] for o in program.outputs
         ],
         "angle_count": len(program.angles),
         "ops": program.ops.as_dict(),
@@ -52,11 +53,12 @@ def function_context(program: Program) -> dict:
 
 def render(derivation, programs: list[Program], options) -> dict[str, str]:
     """Module text for ``programs``; the key is the file suffix."""
+    memo = MemoPrinter()
     context = {
         "prefix": options.prefix,
         "header_lines": options.header_lines,
         "dtype": DTYPES[options.precision],
-        "functions": [function_context(p) for p in programs],
+        "functions": [function_context(p, memo) for p in programs],
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
     }
     return {".py": render_template("python_module.py.j2", **context)}

@@ -1,0 +1,122 @@
+"""Benchmark table for skelarm-sym: generation cost, operation counts and run time of emitted code.
+
+Run from the repository root after installing the package:
+
+    python benchmarks/bench.py                      # n = 2, 6, 24, 48, 96 (and generation at 128, 256)
+    python benchmarks/bench.py --links 2,6 --gen-links 128
+
+Columns: n; wall seconds and peak MB of the whole ``skelarm-sym generate --links n`` command
+(C and Python); kinematics operation counts (sin, cos, add/sub/mul/neg); emitted C
+``{prefix}_kinematics`` ns per call; hand-written recursive C (benchmarks/recursive.c, one
+sincos per link) ns per call; their ratio; emitted C batch ns per configuration (m = 100 000);
+emitted NumPy ns per configuration (m = 100 000); recursive NumPy reference ns per configuration.
+Inputs uniform in [-pi, pi] from fixed seeds; medians of several repeats. Both C codes are
+compiled with the same compiler and flags (printed), ``-O2 -march=native`` by default.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from skelarm_sym import reference
+from skelarm_sym.build import find_compiler, load_python
+from skelarm_sym.generate import generate
+
+HERE = Path(__file__).resolve().parent
+
+
+def generation_cost(n: int, work: Path) -> tuple[float, float]:
+    """Wall seconds and peak resident MB of the whole generate command in a fresh process."""
+    code = (
+        "import sys, time\n"
+        "t = time.perf_counter()\n"
+        "from skelarm_sym.cli import main\n"
+        "rc = main(['generate', '--links', sys.argv[1], '--out', sys.argv[2]])\n"
+        "hwm = [l.split()[1] for l in open('/proc/self/status') if l.startswith('VmHWM')][0]\n"
+        "sys.stderr.write(f'{time.perf_counter() - t} {hwm}\\n')\n"
+    )
+    start = time.perf_counter()
+    result = subprocess.run([sys.executable, "-c", code, str(n), str(work / f"gen{n}")], capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - start
+    _, rss_kb = result.stderr.split()
+    return wall, float(rss_kb) / 1024.0
+
+
+def c_timings(n: int, work: Path, cc: str, flags: list[str]) -> tuple[float, float, float]:
+    """(emitted ns/call, recursive ns/call, emitted batch ns/config)."""
+    out = work / f"c{n}"
+    generate(n, langs="c", out=out)
+    exe = out / "bench"
+    cmd = [
+        *cc.split(), *flags, f"-DN={n}", f"-DPREFIX=arm{n}", f'-DHEADER="arm{n}.h"', "-DLARG=l,", f"-I{out}",
+        str(HERE / "harness.c"), str(out / f"arm{n}.c"), str(HERE / "recursive.c"), "-o", str(exe), "-lm",
+    ]
+    subprocess.run(cmd, check=True)
+    values = subprocess.run([str(exe), "100000"], capture_output=True, text=True, check=True).stdout.split()
+    return float(values[0]), float(values[1]), float(values[2])
+
+
+def numpy_timings(n: int, m: int = 100_000, repeats: int = 5) -> tuple[float, float]:
+    """(emitted NumPy ns/config, reference ns/config) for a batch of m."""
+    g = generate(n, langs="python", out=None)
+    module = load_python(g.sources[f"arm{n}.py"], f"arm{n}")
+    rng = np.random.default_rng(n)
+    q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, m, n))
+    l = rng.uniform(0.5, 1.5, n)
+
+    def best(fn):
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t)
+        return statistics.median(times) / m * 1e9
+
+    emitted = best(lambda: module.kinematics(q, dq, ddq, l))
+    ref = best(lambda: reference.kinematics(q, dq, ddq, l)) if n <= 48 else float("nan")
+    return emitted, ref
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--links", default="2,6,24,48,96")
+    parser.add_argument("--gen-links", default="128,256", help="extra n for which only generation is measured")
+    parser.add_argument("--flags", default="-O2 -march=native")
+    args = parser.parse_args()
+    cc = find_compiler()
+    flags = args.flags.split()
+    version = subprocess.run([*cc.split(), "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores; compiler: {version}; flags: {' '.join(flags)}; numpy {np.__version__}")
+    print()
+    header = "| n | gen s | gen MB | sin | cos | arith | C ns/call | recursive C ns/call | ratio | C batch ns/cfg | NumPy ns/cfg | reference ns/cfg |"
+    print(header)
+    print("|" + "---|" * header.count("|")[:-1] if False else "|" + "|".join(["---"] * (header.count("|") - 1)) + "|")
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        links = [int(x) for x in args.links.split(",") if x]
+        gen_only = [int(x) for x in args.gen_links.split(",") if x]
+        for n in links + gen_only:
+            wall, mb = generation_cost(n, work)
+            ops = next(p for p in generate(n, langs="c", out=None).programs if p.name == "kinematics").ops
+            if n in links:
+                single, rec, batch = c_timings(n, work, cc, flags)
+                npy, ref = numpy_timings(n)
+                row = [f"{single:.1f}", f"{rec:.1f}", f"{single / rec:.2f}", f"{batch:.1f}", f"{npy:.0f}", f"{ref:.0f}"]
+            else:
+                row = ["-"] * 6
+            print(f"| {n} | {wall:.2f} | {mb:.0f} | {ops.sin} | {ops.cos} | {ops.arithmetic} | " + " | ".join(row) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Jinja templates of skelarm-sym (layout only), shipped inside the wheel as skelarm_sym.templates."""
