@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import shutil
 import statistics
 import subprocess
 import sys
@@ -101,7 +100,7 @@ def main() -> None:
     print()
     header = "| n | gen s | gen MB | sin | cos | arith | C ns/call | recursive C ns/call | ratio | C batch ns/cfg | NumPy ns/cfg | reference ns/cfg |"
     print(header)
-    print("|" + "---|" * header.count("|")[:-1] if False else "|" + "|".join(["---"] * (header.count("|") - 1)) + "|")
+    print("|" + "---|" * (header.count("|") - 1))
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         links = [int(x) for x in args.links.split(",") if x]

@@ -38,13 +38,15 @@ class MemoPrinter:
 
     Functions of one derivation share most statements; printing each once keeps
     generation time linear in n rather than in n times the number of functions.
+    Use one instance per rendered file: every printer it sees then has the same
+    language and precision, so those need not be part of the key.
     """
 
     def __init__(self) -> None:
         self._cache: dict = {}
 
     def __call__(self, printer, names: dict[sp.Symbol, str], expr: sp.Expr) -> str:
-        key = (type(printer), getattr(printer, "_precision", None), expr, tuple(sorted((s.name, names[s]) for s in expr.free_symbols)))
+        key = (expr, tuple(sorted((s.name, names[s]) for s in expr.free_symbols)))
         text = self._cache.get(key)
         if text is None:
             text = self._cache[key] = printer.doprint(expr)
