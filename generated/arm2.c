@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[2 + i] = j_y(i) for joint i = 0..1; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #include <math.h>
@@ -390,4 +394,279 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
             arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 2, sn + b * 2, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm2_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 2 sin, 2 cos, 9 add/sub, 16 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm2_manipulability_angles(const double q[2], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[0] = q[0];
+}
+
+static void arm2_manipulability_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict w)
+{
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    const double t17 = t6*t6 + t5*t5;
+    const double t18 = t2*t5 + t6*t7;
+    const double t19 = t2*t2 + t7*t7;
+    const int t20 = t17 >= t19;
+    const double t21 = (t20 ? t17 : t19);
+    const double t22 = t18/t21;
+    const double t23 = (t20 ? t7 : t6) - t22*(t20 ? t6 : t7);
+    const double t24 = (t20 ? t2 : t5) - t22*(t20 ? t5 : t2);
+    const double t25 = t23*t23 + t24*t24;
+    w[0] = sqrt(t21*t25);
+}
+
+void arm2_manipulability(const double q[2], const double l[2], double w[1])
+{
+    double ang[2], cs[2], sn[2];
+    arm2_manipulability_angles(q, ang);
+    arm2_trig2(ang, cs, sn);
+    arm2_manipulability_finish(l, cs, sn, w);
+}
+
+void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
+        for (b = 0; b < count; ++b) {
+            arm2_manipulability_angles(q + (i + b) * 2, ang + b * 2);
+        }
+        arm2_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm2_manipulability_finish(l, cs + b * 2, sn + b * 2, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 2 sin, 2 cos, 16 add/sub, 29 mul, 1 neg, 2 div */
+
+static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[0] = q[0];
+}
+
+static void arm2_inverse_velocity_finish(const double l[2], const double v[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+{
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    const double t17 = t6*t6 + t5*t5;
+    const double t18 = t2*t5 + t6*t7;
+    const double t19 = t2*t2 + t7*t7;
+    const double t26 = lambda*lambda;
+    const double t27 = t17 + t26;
+    const double t28 = t19 + t26;
+    const double t29 = t27 + t28;
+    const double t30 = t27*v[0] + t18*v[1];
+    const double t31 = t28*v[1] + t18*v[0];
+    const double t32 = t29*t29;
+    const double t33 = 1.0/t32;
+    const double t34 = t30*t33;
+    const double t35 = t31*t33;
+    const double t36 = t27*t28 - t18*t18;
+    const int t37 = t36 > ARM2_RANK_TOL*t32;
+    const double t38 = 1.0/t36;
+    const double t39 = (t37 ? t38*(t29*v[0] - t30) : t34);
+    const double t40 = (t37 ? t38*(t29*v[1] - t31) : t35);
+    dq[0] = t39*t6 + t40*t7;
+    dq[1] = t2*t40 + t39*t5;
+}
+
+void arm2_inverse_velocity(const double q[2], const double l[2], const double v[2], double lambda, double dq[2])
+{
+    double ang[2], cs[2], sn[2];
+    arm2_inverse_velocity_angles(q, ang);
+    arm2_trig2(ang, cs, sn);
+    arm2_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
+}
+
+void arm2_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
+        for (b = 0; b < count; ++b) {
+            arm2_inverse_velocity_angles(q + (i + b) * 2, ang + b * 2);
+        }
+        arm2_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm2_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 2, sn + b * 2, dq + (i + b) * 2);
+        }
+    }
+}
+
+/* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 2 sin, 2 cos, 20 add/sub, 29 mul, 1 neg, 2 div */
+
+static void arm2_ik_step_angles(const double q[2], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[0] = q[0];
+}
+
+static void arm2_ik_step_finish(const double q[2], const double l[2], const double target[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+{
+    const double t1 = cs[0]*l[0];
+    const double t2 = cs[1]*l[1];
+    const double t3 = sn[0]*l[0];
+    const double t4 = sn[1]*l[1];
+    const double t5 = -t4;
+    const double t6 = t5 - t3;
+    const double t7 = t1 + t2;
+    const double t17 = t6*t6 + t5*t5;
+    const double t18 = t2*t5 + t6*t7;
+    const double t19 = t2*t2 + t7*t7;
+    const double t26 = lambda*lambda;
+    const double t27 = t17 + t26;
+    const double t28 = t19 + t26;
+    const double t29 = t27 + t28;
+    const double t32 = t29*t29;
+    const double t33 = 1.0/t32;
+    const double t36 = t27*t28 - t18*t18;
+    const int t37 = t36 > ARM2_RANK_TOL*t32;
+    const double t38 = 1.0/t36;
+    const double t41 = target[0] - t7;
+    const double t42 = t6 + target[1];
+    const double t43 = t27*t41 + t18*t42;
+    const double t44 = t28*t42 + t18*t41;
+    const double t45 = t43*t33;
+    const double t46 = t44*t33;
+    const double t47 = (t37 ? t38*(t41*t29 - t43) : t45);
+    const double t48 = (t37 ? t38*(t42*t29 - t44) : t46);
+    q_next[0] = q[0] + t47*t6 + t48*t7;
+    q_next[1] = q[1] + t2*t48 + t47*t5;
+}
+
+void arm2_ik_step(const double q[2], const double l[2], const double target[2], double lambda, double q_next[2])
+{
+    double ang[2], cs[2], sn[2];
+    arm2_ik_step_angles(q, ang);
+    arm2_trig2(ang, cs, sn);
+    arm2_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
+}
+
+void arm2_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 256) {
+        const size_t count = m - i < 256 ? m - i : 256;
+        for (b = 0; b < count; ++b) {
+            arm2_ik_step_angles(q + (i + b) * 2, ang + b * 2);
+        }
+        arm2_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm2_ik_step_finish(q + (i + b) * 2, l, target + (i + b) * 2, lambda, cs + b * 2, sn + b * 2, q_next + (i + b) * 2);
+        }
+    }
+}
+
+int arm2_ik_solve(const double q0[2], const double l[2], const double target[2], double lambda, double tol, int max_iter, double q[2], double *error, int *iterations)
+{
+    double p[2], q_next[2], trial[2], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 2; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+        return ARM2_IK_INVALID;
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM2_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM2_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        trial[k] = q[k];
+    }
+    arm2_position(trial, l, p);
+    err = 0.0;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrt(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM2_IK_CONVERGED;
+        }
+        mu = 0.5 * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm2_ik_step(q, l, target, mu, q_next);
+        alpha = 1.0;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 2; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm2_position(trial, l, p);
+            err_trial = 0.0;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrt(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 30) {
+                return ARM2_IK_STALLED;
+            }
+            alpha *= 0.5;
+        }
+        for (k = 0; k < 2; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM2_IK_CONVERGED;
+        }
+        if (d <= 1e-12 * err) {
+            return ARM2_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM2_IK_CONVERGED : ARM2_IK_MAX_ITER;
 }

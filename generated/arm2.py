@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[2 + i] = j_y(i) for joint i = 0..1; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: double.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float64
+RANK_TOL = 2.220446049250313e-14
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -46,7 +71,7 @@ def position(q, l):
     Returns p of shape (..., 2).
     Operations: 2 sin, 2 cos, 9 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -73,7 +98,7 @@ def jacobian(q, l):
     Returns J of shape (..., 2, 2).
     Operations: 2 sin, 2 cos, 8 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -103,7 +128,7 @@ def coriolis(q, dq, l):
     Returns H of shape (..., 2, 2).
     Operations: 2 sin, 2 cos, 14 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("", "", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -139,7 +164,7 @@ def velocity(q, dq, l):
     Returns v of shape (..., 2).
     Operations: 2 sin, 2 cos, 15 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("", "", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -174,7 +199,7 @@ def acceleration(q, dq, ddq, l):
     Returns a of shape (..., 2).
     Operations: 2 sin, 2 cos, 31 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("", "", "", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -212,7 +237,7 @@ def kinematics(q, dq, ddq, l):
     Returns p of shape (..., 2), J of shape (..., 2, 2), H of shape (..., 2, 2), v of shape (..., 2), a of shape (..., 2).
     Operations: 2 sin, 2 cos, 33 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("", "", "", "", ))
     ang = np.empty((2,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[0] = q[0]
@@ -254,3 +279,190 @@ def kinematics(q, dq, ddq, l):
     a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1]
     a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0]
     return _output(p, (2,)), _output(J, (2, 2,)), _output(H, (2, 2,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 2).
+    l: array of shape (..., 2).
+    Returns w of shape (..., 1).
+    Operations: 2 sin, 2 cos, 26 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
+    ang = np.empty((2,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t17 = t6*t6 + t5*t5
+    t18 = t2*t5 + t6*t7
+    t19 = t2*t2 + t7*t7
+    t20 = (t17 >= t19)
+    t21 = np.where(t20, t17, t19)
+    t22 = t18/t21
+    t23 = np.where(t20, t7, t6) - t22*np.where(t20, t6, t7)
+    t24 = np.where(t20, t2, t5) - t22*np.where(t20, t5, t2)
+    t25 = t23*t23 + t24*t24
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t21*t25)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 2).
+    l: array of shape (..., 2).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 2).
+    Operations: 2 sin, 2 cos, 46 add/sub/mul/neg.
+    """
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (2, 2, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((2,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t17 = t6*t6 + t5*t5
+    t18 = t2*t5 + t6*t7
+    t19 = t2*t2 + t7*t7
+    t26 = lambda_*lambda_
+    t27 = t17 + t26
+    t28 = t19 + t26
+    t29 = t27 + t28
+    t30 = t27*v[0] + t18*v[1]
+    t31 = t28*v[1] + t18*v[0]
+    t32 = t29*t29
+    t33 = 1.0/t32
+    t34 = t30*t33
+    t35 = t31*t33
+    t36 = t27*t28 - t18*t18
+    t37 = (t36 > RANK_TOL*t32)
+    t38 = 1.0/t36
+    t39 = np.where(t37, t38*(t29*v[0] - t30), t34)
+    t40 = np.where(t37, t38*(t29*v[1] - t31), t35)
+    dq = np.empty((2,) + batch, dtype=DTYPE)
+    dq[0] = t39*t6 + t40*t7
+    dq[1] = t2*t40 + t39*t5
+    return _output(dq, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 2).
+    l: array of shape (..., 2).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 2).
+    Operations: 2 sin, 2 cos, 50 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (2, 2, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((2,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t1 = cs[0]*l[0]
+    t2 = cs[1]*l[1]
+    t3 = sn[0]*l[0]
+    t4 = sn[1]*l[1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t17 = t6*t6 + t5*t5
+    t18 = t2*t5 + t6*t7
+    t19 = t2*t2 + t7*t7
+    t26 = lambda_*lambda_
+    t27 = t17 + t26
+    t28 = t19 + t26
+    t29 = t27 + t28
+    t32 = t29*t29
+    t33 = 1.0/t32
+    t36 = t27*t28 - t18*t18
+    t37 = (t36 > RANK_TOL*t32)
+    t38 = 1.0/t36
+    t41 = target[0] - t7
+    t42 = t6 + target[1]
+    t43 = t27*t41 + t18*t42
+    t44 = t28*t42 + t18*t41
+    t45 = t43*t33
+    t46 = t44*t33
+    t47 = np.where(t37, t38*(t41*t29 - t43), t45)
+    t48 = np.where(t37, t38*(t42*t29 - t44), t46)
+    q_next = np.empty((2,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t47*t6 + t48*t7
+    q_next[1] = q[1] + t2*t48 + t47*t5
+    return _output(q_next, (2,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, l, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(30 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-12 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

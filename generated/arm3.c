@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #include <math.h>
@@ -444,4 +448,393 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
             arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm3_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 3 sin, 3 cos, 17 add/sub, 23 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm3_manipulability_angles(const double q[3], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
+{
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t27 = t11*t11 + t9*t9 + t8*t8;
+    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t29 = t4*t4 + t12*t12 + t10*t10;
+    const int t30 = t27 >= t29;
+    const double t31 = (t30 ? t27 : t29);
+    const double t32 = t28/t31;
+    const double t33 = (t30 ? t12 : t11) - t32*(t30 ? t11 : t12);
+    const double t34 = (t30 ? t10 : t9) - t32*(t30 ? t9 : t10);
+    const double t35 = (t30 ? t4 : t8) - t32*(t30 ? t8 : t4);
+    const double t36 = t33*t33 + t34*t34 + t35*t35;
+    w[0] = sqrt(t31*t36);
+}
+
+void arm3_manipulability(const double q[3], const double l[3], double w[1])
+{
+    double ang[3], cs[3], sn[3];
+    arm3_manipulability_angles(q, ang);
+    arm3_trig3(ang, cs, sn);
+    arm3_manipulability_finish(l, cs, sn, w);
+}
+
+void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3_manipulability_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3_manipulability_finish(l, cs + b * 3, sn + b * 3, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 3 sin, 3 cos, 23 add/sub, 36 mul, 1 neg, 2 div */
+
+static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3_inverse_velocity_finish(const double l[3], const double v[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+{
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t27 = t11*t11 + t9*t9 + t8*t8;
+    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t29 = t4*t4 + t12*t12 + t10*t10;
+    const double t37 = lambda*lambda;
+    const double t38 = t27 + t37;
+    const double t39 = t29 + t37;
+    const double t40 = t38 + t39;
+    const double t41 = t40;
+    const double t42 = t38*v[0] + t28*v[1];
+    const double t43 = t39*v[1] + t28*v[0];
+    const double t44 = t41*t41;
+    const double t45 = 1.0/t44;
+    const double t46 = t42*t45;
+    const double t47 = t43*t45;
+    const double t48 = t38*t39 - t28*t28;
+    const int t49 = t48 > ARM3_RANK_TOL*t44;
+    const double t50 = 1.0/t48;
+    const double t51 = (t49 ? t50*(t41*v[0] - t42) : t46);
+    const double t52 = (t49 ? t50*(t41*v[1] - t43) : t47);
+    dq[0] = t51*t11 + t52*t12;
+    dq[1] = t51*t9 + t52*t10;
+    dq[2] = t4*t52 + t51*t8;
+}
+
+void arm3_inverse_velocity(const double q[3], const double l[3], const double v[2], double lambda, double dq[3])
+{
+    double ang[3], cs[3], sn[3];
+    arm3_inverse_velocity_angles(q, ang);
+    arm3_trig3(ang, cs, sn);
+    arm3_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
+}
+
+void arm3_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
+{
+    size_t i;
+    double ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, dq + (i + b) * 3);
+        }
+    }
+}
+
+/* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
+/* operations: 3 sin, 3 cos, 59 add/sub, 84 mul, 1 neg, 3 div */
+
+static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3_inverse_velocity3_finish(const double l[3], const double twist[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+{
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t27 = t11*t11 + t9*t9 + t8*t8;
+    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t29 = t4*t4 + t12*t12 + t10*t10;
+    const double t37 = lambda*lambda;
+    const double t38 = t27 + t37;
+    const double t39 = t29 + t37;
+    const double t40 = t38 + t39;
+    const double t48 = t38*t39 - t28*t28;
+    const double t61 = t11 + t9 + t8;
+    const double t62 = t4 + t12 + t10;
+    const double t63 = 3.0 + t37;
+    const double t64 = t40 + t63;
+    const double t65 = t38*twist[0] + t28*twist[1] + t61*twist[2];
+    const double t66 = t39*twist[1] + t28*twist[0] + t62*twist[2];
+    const double t67 = t63*twist[2] + t61*twist[0] + t62*twist[1];
+    const double t68 = t64*t64;
+    const double t69 = 1.0/t68;
+    const double t70 = t65*t69;
+    const double t71 = t66*t69;
+    const double t72 = t67*t69;
+    const double t73 = t39*t63 - t62*t62;
+    const double t74 = t61*t62 - t63*t28;
+    const double t75 = t28*t62 - t39*t61;
+    const double t76 = t38*t63 - t61*t61;
+    const double t77 = t28*t61 - t38*t62;
+    const double t78 = t38*t73 + t28*t74 + t61*t75;
+    const double t79 = t73 + t76 + t48;
+    const int t80 = t78 > ARM3_RANK_TOL*t79*t64;
+    const int t81 = t79 > ARM3_RANK_TOL*t68;
+    const double t82 = 1.0/t78;
+    const double t83 = t38*t65 + t28*t66 + t61*t67;
+    const double t84 = t39*t66 + t28*t65 + t62*t67;
+    const double t85 = t63*t67 + t61*t65 + t62*t66;
+    const double t86 = 1.0/(t79*t79);
+    const double t87 = t68 - t79;
+    const double t88 = (t81 ? (t80 ? t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]) : t86*(t65*t87 - t83*t64)) : t70);
+    const double t89 = (t81 ? (t80 ? t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]) : t86*(t66*t87 - t84*t64)) : t71);
+    const double t90 = (t81 ? (t80 ? t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]) : t86*(t67*t87 - t85*t64)) : t72);
+    dq3[0] = t90 + t88*t11 + t89*t12;
+    dq3[1] = t90 + t88*t9 + t89*t10;
+    dq3[2] = t90 + t4*t89 + t88*t8;
+}
+
+void arm3_inverse_velocity3(const double q[3], const double l[3], const double twist[3], double lambda, double dq3[3])
+{
+    double ang[3], cs[3], sn[3];
+    arm3_inverse_velocity3_angles(q, ang);
+    arm3_trig3(ang, cs, sn);
+    arm3_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
+}
+
+void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 3, sn + b * 3, dq3 + (i + b) * 3);
+        }
+    }
+}
+
+/* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 3 sin, 3 cos, 28 add/sub, 36 mul, 1 neg, 2 div */
+
+static void arm3_ik_step_angles(const double q[3], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3_ik_step_finish(const double q[3], const double l[3], const double target[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+{
+    const double t2 = cs[0]*l[0];
+    const double t3 = cs[1]*l[1];
+    const double t4 = cs[2]*l[2];
+    const double t5 = sn[0]*l[0];
+    const double t6 = sn[1]*l[1];
+    const double t7 = sn[2]*l[2];
+    const double t8 = -t7;
+    const double t9 = t8 - t6;
+    const double t10 = t3 + t4;
+    const double t11 = t9 - t5;
+    const double t12 = t2 + t10;
+    const double t27 = t11*t11 + t9*t9 + t8*t8;
+    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t29 = t4*t4 + t12*t12 + t10*t10;
+    const double t37 = lambda*lambda;
+    const double t38 = t27 + t37;
+    const double t39 = t29 + t37;
+    const double t40 = t38 + t39;
+    const double t41 = t40;
+    const double t44 = t41*t41;
+    const double t45 = 1.0/t44;
+    const double t48 = t38*t39 - t28*t28;
+    const int t49 = t48 > ARM3_RANK_TOL*t44;
+    const double t50 = 1.0/t48;
+    const double t53 = target[0] - t12;
+    const double t54 = t11 + target[1];
+    const double t55 = t38*t53 + t28*t54;
+    const double t56 = t39*t54 + t28*t53;
+    const double t57 = t55*t45;
+    const double t58 = t56*t45;
+    const double t59 = (t49 ? t50*(t53*t41 - t55) : t57);
+    const double t60 = (t49 ? t50*(t54*t41 - t56) : t58);
+    q_next[0] = q[0] + t59*t11 + t60*t12;
+    q_next[1] = q[1] + t59*t9 + t60*t10;
+    q_next[2] = q[2] + t4*t60 + t59*t8;
+}
+
+void arm3_ik_step(const double q[3], const double l[3], const double target[2], double lambda, double q_next[3])
+{
+    double ang[3], cs[3], sn[3];
+    arm3_ik_step_angles(q, ang);
+    arm3_trig3(ang, cs, sn);
+    arm3_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
+}
+
+void arm3_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3_ik_step_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3_ik_step_finish(q + (i + b) * 3, l, target + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, q_next + (i + b) * 3);
+        }
+    }
+}
+
+int arm3_ik_solve(const double q0[3], const double l[3], const double target[2], double lambda, double tol, int max_iter, double q[3], double *error, int *iterations)
+{
+    double p[2], q_next[3], trial[3], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 3; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+        return ARM3_IK_INVALID;
+    }
+    for (k = 0; k < 3; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM3_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM3_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        trial[k] = q[k];
+    }
+    arm3_position(trial, l, p);
+    err = 0.0;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrt(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM3_IK_CONVERGED;
+        }
+        mu = 0.5 * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm3_ik_step(q, l, target, mu, q_next);
+        alpha = 1.0;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 3; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm3_position(trial, l, p);
+            err_trial = 0.0;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrt(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 30) {
+                return ARM3_IK_STALLED;
+            }
+            alpha *= 0.5;
+        }
+        for (k = 0; k < 3; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM3_IK_CONVERGED;
+        }
+        if (d <= 1e-12 * err) {
+            return ARM3_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM3_IK_CONVERGED : ARM3_IK_MAX_ITER;
 }

@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: double.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float64
+RANK_TOL = 2.220446049250313e-14
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "inverse_velocity3", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -46,7 +71,7 @@ def position(q, l):
     Returns p of shape (..., 2).
     Operations: 3 sin, 3 cos, 14 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -78,7 +103,7 @@ def jacobian(q, l):
     Returns J of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 13 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -115,7 +140,7 @@ def coriolis(q, dq, l):
     Returns H of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 22 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -161,7 +186,7 @@ def velocity(q, dq, l):
     Returns v of shape (..., 2).
     Operations: 3 sin, 3 cos, 23 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -204,7 +229,7 @@ def acceleration(q, dq, ddq, l):
     Returns a of shape (..., 2).
     Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ), ("", "", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -252,7 +277,7 @@ def kinematics(q, dq, ddq, l):
     Returns p of shape (..., 2), J of shape (..., 2, 3), H of shape (..., 2, 3), v of shape (..., 2), a of shape (..., 2).
     Operations: 3 sin, 3 cos, 51 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ), ("", "", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -308,3 +333,285 @@ def kinematics(q, dq, ddq, l):
     a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2]
     a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1]
     return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 3).
+    l: array of shape (..., 3).
+    Returns w of shape (..., 1).
+    Operations: 3 sin, 3 cos, 41 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t27 = t11*t11 + t9*t9 + t8*t8
+    t28 = t4*t8 + t11*t12 + t9*t10
+    t29 = t4*t4 + t12*t12 + t10*t10
+    t30 = (t27 >= t29)
+    t31 = np.where(t30, t27, t29)
+    t32 = t28/t31
+    t33 = np.where(t30, t12, t11) - t32*np.where(t30, t11, t12)
+    t34 = np.where(t30, t10, t9) - t32*np.where(t30, t9, t10)
+    t35 = np.where(t30, t4, t8) - t32*np.where(t30, t8, t4)
+    t36 = t33*t33 + t34*t34 + t35*t35
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t31*t36)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 3).
+    l: array of shape (..., 3).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 3).
+    Operations: 3 sin, 3 cos, 60 add/sub/mul/neg.
+    """
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (3, 3, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t27 = t11*t11 + t9*t9 + t8*t8
+    t28 = t4*t8 + t11*t12 + t9*t10
+    t29 = t4*t4 + t12*t12 + t10*t10
+    t37 = lambda_*lambda_
+    t38 = t27 + t37
+    t39 = t29 + t37
+    t40 = t38 + t39
+    t41 = t40
+    t42 = t38*v[0] + t28*v[1]
+    t43 = t39*v[1] + t28*v[0]
+    t44 = t41*t41
+    t45 = 1.0/t44
+    t46 = t42*t45
+    t47 = t43*t45
+    t48 = t38*t39 - t28*t28
+    t49 = (t48 > RANK_TOL*t44)
+    t50 = 1.0/t48
+    t51 = np.where(t49, t50*(t41*v[0] - t42), t46)
+    t52 = np.where(t49, t50*(t41*v[1] - t43), t47)
+    dq = np.empty((3,) + batch, dtype=DTYPE)
+    dq[0] = t51*t11 + t52*t12
+    dq[1] = t51*t9 + t52*t10
+    dq[2] = t4*t52 + t51*t8
+    return _output(dq, (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 3).
+    l: array of shape (..., 3).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 3).
+    Operations: 3 sin, 3 cos, 144 add/sub/mul/neg.
+    """
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (3, 3, 3, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t27 = t11*t11 + t9*t9 + t8*t8
+    t28 = t4*t8 + t11*t12 + t9*t10
+    t29 = t4*t4 + t12*t12 + t10*t10
+    t37 = lambda_*lambda_
+    t38 = t27 + t37
+    t39 = t29 + t37
+    t40 = t38 + t39
+    t48 = t38*t39 - t28*t28
+    t61 = t11 + t9 + t8
+    t62 = t4 + t12 + t10
+    t63 = 3.0 + t37
+    t64 = t40 + t63
+    t65 = t38*twist[0] + t28*twist[1] + t61*twist[2]
+    t66 = t39*twist[1] + t28*twist[0] + t62*twist[2]
+    t67 = t63*twist[2] + t61*twist[0] + t62*twist[1]
+    t68 = t64*t64
+    t69 = 1.0/t68
+    t70 = t65*t69
+    t71 = t66*t69
+    t72 = t67*t69
+    t73 = t39*t63 - t62*t62
+    t74 = t61*t62 - t63*t28
+    t75 = t28*t62 - t39*t61
+    t76 = t38*t63 - t61*t61
+    t77 = t28*t61 - t38*t62
+    t78 = t38*t73 + t28*t74 + t61*t75
+    t79 = t73 + t76 + t48
+    t80 = (t78 > RANK_TOL*t79*t64)
+    t81 = (t79 > RANK_TOL*t68)
+    t82 = 1.0/t78
+    t83 = t38*t65 + t28*t66 + t61*t67
+    t84 = t39*t66 + t28*t65 + t62*t67
+    t85 = t63*t67 + t61*t65 + t62*t66
+    t86 = 1.0/(t79*t79)
+    t87 = t68 - t79
+    t88 = np.where(t81, np.where(t80, t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]), t86*(t65*t87 - t83*t64)), t70)
+    t89 = np.where(t81, np.where(t80, t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]), t86*(t66*t87 - t84*t64)), t71)
+    t90 = np.where(t81, np.where(t80, t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]), t86*(t67*t87 - t85*t64)), t72)
+    dq3 = np.empty((3,) + batch, dtype=DTYPE)
+    dq3[0] = t90 + t88*t11 + t89*t12
+    dq3[1] = t90 + t88*t9 + t89*t10
+    dq3[2] = t90 + t4*t89 + t88*t8
+    return _output(dq3, (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 3).
+    l: array of shape (..., 3).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 3).
+    Operations: 3 sin, 3 cos, 65 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (3, 3, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = cs[0]*l[0]
+    t3 = cs[1]*l[1]
+    t4 = cs[2]*l[2]
+    t5 = sn[0]*l[0]
+    t6 = sn[1]*l[1]
+    t7 = sn[2]*l[2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t27 = t11*t11 + t9*t9 + t8*t8
+    t28 = t4*t8 + t11*t12 + t9*t10
+    t29 = t4*t4 + t12*t12 + t10*t10
+    t37 = lambda_*lambda_
+    t38 = t27 + t37
+    t39 = t29 + t37
+    t40 = t38 + t39
+    t41 = t40
+    t44 = t41*t41
+    t45 = 1.0/t44
+    t48 = t38*t39 - t28*t28
+    t49 = (t48 > RANK_TOL*t44)
+    t50 = 1.0/t48
+    t53 = target[0] - t12
+    t54 = t11 + target[1]
+    t55 = t38*t53 + t28*t54
+    t56 = t39*t54 + t28*t53
+    t57 = t55*t45
+    t58 = t56*t45
+    t59 = np.where(t49, t50*(t53*t41 - t55), t57)
+    t60 = np.where(t49, t50*(t54*t41 - t56), t58)
+    q_next = np.empty((3,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t59*t11 + t60*t12
+    q_next[1] = q[1] + t59*t9 + t60*t10
+    q_next[2] = q[2] + t4*t60 + t59*t8
+    return _output(q_next, (3,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, l, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(30 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-12 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

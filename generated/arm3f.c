@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: float.
  */
 #include <math.h>
@@ -432,4 +436,385 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
             arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm3f_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm3f_manipulability_angles(const float q[3], float *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3f_manipulability_finish(const float *restrict cs, const float *restrict sn, float *restrict w)
+{
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t25 = t9*t9 + t7*t7 + t6*t6;
+    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t27 = t3*t3 + t10*t10 + t8*t8;
+    const int t28 = t25 >= t27;
+    const float t29 = (t28 ? t25 : t27);
+    const float t30 = t26/t29;
+    const float t31 = (t28 ? t10 : t9) - t30*(t28 ? t9 : t10);
+    const float t32 = (t28 ? t8 : t7) - t30*(t28 ? t7 : t8);
+    const float t33 = (t28 ? t3 : t6) - t30*(t28 ? t6 : t3);
+    const float t34 = t31*t31 + t32*t32 + t33*t33;
+    w[0] = sqrtf(t29*t34);
+}
+
+void arm3f_manipulability(const float q[3], float w[1])
+{
+    float ang[3], cs[3], sn[3];
+    arm3f_manipulability_angles(q, ang);
+    arm3f_trig3(ang, cs, sn);
+    arm3f_manipulability_finish(cs, sn, w);
+}
+
+void arm3f_manipulability_batch(size_t m, const float *q, float *w)
+{
+    size_t i;
+    float ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3f_manipulability_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3f_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3f_manipulability_finish(cs + b * 3, sn + b * 3, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 3 sin, 3 cos, 23 add/sub, 34 mul, 1 neg, 2 div */
+
+static void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq)
+{
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t25 = t9*t9 + t7*t7 + t6*t6;
+    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t27 = t3*t3 + t10*t10 + t8*t8;
+    const float t35 = lambda*lambda;
+    const float t36 = t25 + t35;
+    const float t37 = t27 + t35;
+    const float t38 = t36 + t37;
+    const float t39 = t38;
+    const float t40 = t36*v[0] + t26*v[1];
+    const float t41 = t37*v[1] + t26*v[0];
+    const float t42 = t39*t39;
+    const float t43 = 1.0f/t42;
+    const float t44 = t40*t43;
+    const float t45 = t41*t43;
+    const float t46 = t36*t37 - t26*t26;
+    const int t47 = t46 > ARM3F_RANK_TOL*t42;
+    const float t48 = 1.0f/t46;
+    const float t49 = (t47 ? t48*(t39*v[0] - t40) : t44);
+    const float t50 = (t47 ? t48*(t39*v[1] - t41) : t45);
+    dq[0] = t49*t9 + t50*t10;
+    dq[1] = t49*t7 + t50*t8;
+    dq[2] = t3*t50 + t49*t6;
+}
+
+void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
+{
+    float ang[3], cs[3], sn[3];
+    arm3f_inverse_velocity_angles(q, ang);
+    arm3f_trig3(ang, cs, sn);
+    arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
+}
+
+void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq)
+{
+    size_t i;
+    float ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3f_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity_finish(v + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, dq + (i + b) * 3);
+        }
+    }
+}
+
+/* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
+/* operations: 3 sin, 3 cos, 59 add/sub, 82 mul, 1 neg, 3 div */
+
+static void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq3)
+{
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t25 = t9*t9 + t7*t7 + t6*t6;
+    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t27 = t3*t3 + t10*t10 + t8*t8;
+    const float t35 = lambda*lambda;
+    const float t36 = t25 + t35;
+    const float t37 = t27 + t35;
+    const float t38 = t36 + t37;
+    const float t46 = t36*t37 - t26*t26;
+    const float t59 = t9 + t7 + t6;
+    const float t60 = t3 + t10 + t8;
+    const float t61 = 3.0f + t35;
+    const float t62 = t38 + t61;
+    const float t63 = t36*twist[0] + t26*twist[1] + t59*twist[2];
+    const float t64 = t37*twist[1] + t26*twist[0] + t60*twist[2];
+    const float t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
+    const float t66 = t62*t62;
+    const float t67 = 1.0f/t66;
+    const float t68 = t63*t67;
+    const float t69 = t64*t67;
+    const float t70 = t65*t67;
+    const float t71 = t37*t61 - t60*t60;
+    const float t72 = t59*t60 - t61*t26;
+    const float t73 = t26*t60 - t37*t59;
+    const float t74 = t36*t61 - t59*t59;
+    const float t75 = t26*t59 - t36*t60;
+    const float t76 = t36*t71 + t26*t72 + t59*t73;
+    const float t77 = t71 + t74 + t46;
+    const int t78 = t76 > ARM3F_RANK_TOL*t77*t62;
+    const int t79 = t77 > ARM3F_RANK_TOL*t66;
+    const float t80 = 1.0f/t76;
+    const float t81 = t36*t63 + t26*t64 + t59*t65;
+    const float t82 = t37*t64 + t26*t63 + t60*t65;
+    const float t83 = t61*t65 + t59*t63 + t60*t64;
+    const float t84 = 1.0f/(t77*t77);
+    const float t85 = t66 - t77;
+    const float t86 = (t79 ? (t78 ? t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]) : t84*(t63*t85 - t81*t62)) : t68);
+    const float t87 = (t79 ? (t78 ? t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]) : t84*(t64*t85 - t82*t62)) : t69);
+    const float t88 = (t79 ? (t78 ? t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t70);
+    dq3[0] = t88 + t86*t9 + t87*t10;
+    dq3[1] = t88 + t86*t7 + t87*t8;
+    dq3[2] = t88 + t3*t87 + t86*t6;
+}
+
+void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
+{
+    float ang[3], cs[3], sn[3];
+    arm3f_inverse_velocity3_angles(q, ang);
+    arm3f_trig3(ang, cs, sn);
+    arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
+}
+
+void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3)
+{
+    size_t i;
+    float ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3f_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity3_finish(twist + (i + b) * 3, lambda, cs + b * 3, sn + b * 3, dq3 + (i + b) * 3);
+        }
+    }
+}
+
+/* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 3 sin, 3 cos, 28 add/sub, 34 mul, 1 neg, 2 div */
+
+static void arm3f_ik_step_angles(const float q[3], float *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[0] = q[0];
+}
+
+static void arm3f_ik_step_finish(const float q[3], const float target[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict q_next)
+{
+    const float t2 = 0.8f*cs[1];
+    const float t3 = 0.5f*cs[2];
+    const float t4 = 0.8f*sn[1];
+    const float t5 = 0.5f*sn[2];
+    const float t6 = -t5;
+    const float t7 = t6 - t4;
+    const float t8 = t2 + t3;
+    const float t9 = t7 - sn[0];
+    const float t10 = cs[0] + t8;
+    const float t25 = t9*t9 + t7*t7 + t6*t6;
+    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t27 = t3*t3 + t10*t10 + t8*t8;
+    const float t35 = lambda*lambda;
+    const float t36 = t25 + t35;
+    const float t37 = t27 + t35;
+    const float t38 = t36 + t37;
+    const float t39 = t38;
+    const float t42 = t39*t39;
+    const float t43 = 1.0f/t42;
+    const float t46 = t36*t37 - t26*t26;
+    const int t47 = t46 > ARM3F_RANK_TOL*t42;
+    const float t48 = 1.0f/t46;
+    const float t51 = target[0] - t10;
+    const float t52 = t9 + target[1];
+    const float t53 = t36*t51 + t26*t52;
+    const float t54 = t37*t52 + t26*t51;
+    const float t55 = t53*t43;
+    const float t56 = t54*t43;
+    const float t57 = (t47 ? t48*(t51*t39 - t53) : t55);
+    const float t58 = (t47 ? t48*(t52*t39 - t54) : t56);
+    q_next[0] = q[0] + t57*t9 + t58*t10;
+    q_next[1] = q[1] + t57*t7 + t58*t8;
+    q_next[2] = q[2] + t3*t58 + t57*t6;
+}
+
+void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])
+{
+    float ang[3], cs[3], sn[3];
+    arm3f_ik_step_angles(q, ang);
+    arm3f_trig3(ang, cs, sn);
+    arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
+}
+
+void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next)
+{
+    size_t i;
+    float ang[510], cs[510], sn[510];
+    size_t b, k;
+    for (k = 0; k < 510; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 170) {
+        const size_t count = m - i < 170 ? m - i : 170;
+        for (b = 0; b < count; ++b) {
+            arm3f_ik_step_angles(q + (i + b) * 3, ang + b * 3);
+        }
+        arm3f_trig510(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm3f_ik_step_finish(q + (i + b) * 3, target + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, q_next + (i + b) * 3);
+        }
+    }
+}
+
+int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
+{
+    float p[2], q_next[3], trial[3], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 3; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0f) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0f) {
+        return ARM3F_IK_INVALID;
+    }
+    for (k = 0; k < 3; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM3F_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM3F_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        trial[k] = q[k];
+    }
+    arm3f_position(trial, p);
+    err = 0.0f;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrtf(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM3F_IK_CONVERGED;
+        }
+        mu = 0.5f * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm3f_ik_step(q, target, mu, q_next);
+        alpha = 1.0f;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 3; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm3f_position(trial, p);
+            err_trial = 0.0f;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrtf(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 20) {
+                return ARM3F_IK_STALLED;
+            }
+            alpha *= 0.5f;
+        }
+        for (k = 0; k < 3; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM3F_IK_CONVERGED;
+        }
+        if (d <= 1e-06f * err) {
+            return ARM3F_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM3F_IK_CONVERGED : ARM3F_IK_MAX_ITER;
 }

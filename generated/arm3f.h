@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: float.
  */
 #ifndef ARM3F_H
@@ -17,6 +21,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* relative rank tolerance of the closed-form solves: 100 machine epsilons */
+#define ARM3F_RANK_TOL 1.1920929e-05f
 
 /* endpoint position p (2). */
 void arm3f_position(const float q[3], float p[2]);
@@ -59,6 +66,50 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]). */
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a);
+
+/* manipulability w = sqrt(det(J J^T)) (1). */
+void arm3f_manipulability(const float q[3], float w[1]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]). */
+void arm3f_manipulability_batch(size_t m, const float *q, float *w);
+
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). */
+void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: lambda. */
+void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
+
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). */
+void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: lambda. */
+void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
+
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). */
+void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: lambda. */
+void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next);
+
+/* Return codes of arm3f_ik_solve. */
+#define ARM3F_IK_CONVERGED 0
+#define ARM3F_IK_STALLED 1
+#define ARM3F_IK_MAX_ITER 2
+#define ARM3F_IK_INVALID 3
+
+/* Inverse kinematics: damped least-squares steps (arm3f_ik_step) from q0 toward
+ * target with damping mu = max(lambda, 0.5f |target - p|), each step shortened by
+ * halving until the endpoint error |target - p| decreases.
+ * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
+ * error improves by less than a relative 1e-06f (an unreachable target: q is then the
+ * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when
+ * q0, target or lambda is not finite, lambda < 0, tol <= 0 or max_iter < 0.
+ * Writes the final pose to q, its error to *error and the steps taken to *iterations. */
+int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations);
 
 #ifdef __cplusplus
 }

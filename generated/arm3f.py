@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: float.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float32
+RANK_TOL = 1.1920928955078125e-05
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "inverse_velocity3", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -45,7 +70,7 @@ def position(q):
     Returns p of shape (..., 2).
     Operations: 3 sin, 3 cos, 12 add/sub/mul/neg.
     """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ))
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -74,7 +99,7 @@ def jacobian(q):
     Returns J of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 11 add/sub/mul/neg.
     """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ))
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -108,7 +133,7 @@ def coriolis(q, dq):
     Returns H of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 20 add/sub/mul/neg.
     """
-    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ))
+    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -151,7 +176,7 @@ def velocity(q, dq):
     Returns v of shape (..., 2).
     Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
     """
-    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ))
+    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -191,7 +216,7 @@ def acceleration(q, dq, ddq):
     Returns a of shape (..., 2).
     Operations: 3 sin, 3 cos, 47 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ))
+    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -236,7 +261,7 @@ def kinematics(q, dq, ddq):
     Returns p of shape (..., 2), J of shape (..., 2, 3), H of shape (..., 2, 3), v of shape (..., 2), a of shape (..., 2).
     Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ))
+    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
     ang = np.empty((3,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -290,3 +315,273 @@ def kinematics(q, dq, ddq):
     a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
     a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
     return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 3).
+    Returns w of shape (..., 1).
+    Operations: 3 sin, 3 cos, 39 add/sub/mul/neg.
+    """
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t25 = t9*t9 + t7*t7 + t6*t6
+    t26 = t3*t6 + t9*t10 + t7*t8
+    t27 = t3*t3 + t10*t10 + t8*t8
+    t28 = (t25 >= t27)
+    t29 = np.where(t28, t25, t27)
+    t30 = t26/t29
+    t31 = np.where(t28, t10, t9) - t30*np.where(t28, t9, t10)
+    t32 = np.where(t28, t8, t7) - t30*np.where(t28, t7, t8)
+    t33 = np.where(t28, t3, t6) - t30*np.where(t28, t6, t3)
+    t34 = t31*t31 + t32*t32 + t33*t33
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t29*t34)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 3).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 3).
+    Operations: 3 sin, 3 cos, 58 add/sub/mul/neg.
+    """
+    batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t25 = t9*t9 + t7*t7 + t6*t6
+    t26 = t3*t6 + t9*t10 + t7*t8
+    t27 = t3*t3 + t10*t10 + t8*t8
+    t35 = lambda_*lambda_
+    t36 = t25 + t35
+    t37 = t27 + t35
+    t38 = t36 + t37
+    t39 = t38
+    t40 = t36*v[0] + t26*v[1]
+    t41 = t37*v[1] + t26*v[0]
+    t42 = t39*t39
+    t43 = 1.0/t42
+    t44 = t40*t43
+    t45 = t41*t43
+    t46 = t36*t37 - t26*t26
+    t47 = (t46 > RANK_TOL*t42)
+    t48 = 1.0/t46
+    t49 = np.where(t47, t48*(t39*v[0] - t40), t44)
+    t50 = np.where(t47, t48*(t39*v[1] - t41), t45)
+    dq = np.empty((3,) + batch, dtype=DTYPE)
+    dq[0] = t49*t9 + t50*t10
+    dq[1] = t49*t7 + t50*t8
+    dq[2] = t3*t50 + t49*t6
+    return _output(dq, (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity3(q, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 3).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 3).
+    Operations: 3 sin, 3 cos, 142 add/sub/mul/neg.
+    """
+    batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t25 = t9*t9 + t7*t7 + t6*t6
+    t26 = t3*t6 + t9*t10 + t7*t8
+    t27 = t3*t3 + t10*t10 + t8*t8
+    t35 = lambda_*lambda_
+    t36 = t25 + t35
+    t37 = t27 + t35
+    t38 = t36 + t37
+    t46 = t36*t37 - t26*t26
+    t59 = t9 + t7 + t6
+    t60 = t3 + t10 + t8
+    t61 = 3.0 + t35
+    t62 = t38 + t61
+    t63 = t36*twist[0] + t26*twist[1] + t59*twist[2]
+    t64 = t37*twist[1] + t26*twist[0] + t60*twist[2]
+    t65 = t61*twist[2] + t59*twist[0] + t60*twist[1]
+    t66 = t62*t62
+    t67 = 1.0/t66
+    t68 = t63*t67
+    t69 = t64*t67
+    t70 = t65*t67
+    t71 = t37*t61 - t60*t60
+    t72 = t59*t60 - t61*t26
+    t73 = t26*t60 - t37*t59
+    t74 = t36*t61 - t59*t59
+    t75 = t26*t59 - t36*t60
+    t76 = t36*t71 + t26*t72 + t59*t73
+    t77 = t71 + t74 + t46
+    t78 = (t76 > RANK_TOL*t77*t62)
+    t79 = (t77 > RANK_TOL*t66)
+    t80 = 1.0/t76
+    t81 = t36*t63 + t26*t64 + t59*t65
+    t82 = t37*t64 + t26*t63 + t60*t65
+    t83 = t61*t65 + t59*t63 + t60*t64
+    t84 = 1.0/(t77*t77)
+    t85 = t66 - t77
+    t86 = np.where(t79, np.where(t78, t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]), t84*(t63*t85 - t81*t62)), t68)
+    t87 = np.where(t79, np.where(t78, t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]), t84*(t64*t85 - t82*t62)), t69)
+    t88 = np.where(t79, np.where(t78, t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]), t84*(t65*t85 - t83*t62)), t70)
+    dq3 = np.empty((3,) + batch, dtype=DTYPE)
+    dq3[0] = t88 + t86*t9 + t87*t10
+    dq3[1] = t88 + t86*t7 + t87*t8
+    dq3[2] = t88 + t3*t87 + t86*t6
+    return _output(dq3, (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 3).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 3).
+    Operations: 3 sin, 3 cos, 63 add/sub/mul/neg.
+    """
+    batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((3,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[1]
+    t3 = 0.5*cs[2]
+    t4 = 0.8*sn[1]
+    t5 = 0.5*sn[2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[0]
+    t10 = cs[0] + t8
+    t25 = t9*t9 + t7*t7 + t6*t6
+    t26 = t3*t6 + t9*t10 + t7*t8
+    t27 = t3*t3 + t10*t10 + t8*t8
+    t35 = lambda_*lambda_
+    t36 = t25 + t35
+    t37 = t27 + t35
+    t38 = t36 + t37
+    t39 = t38
+    t42 = t39*t39
+    t43 = 1.0/t42
+    t46 = t36*t37 - t26*t26
+    t47 = (t46 > RANK_TOL*t42)
+    t48 = 1.0/t46
+    t51 = target[0] - t10
+    t52 = t9 + target[1]
+    t53 = t36*t51 + t26*t52
+    t54 = t37*t52 + t26*t51
+    t55 = t53*t43
+    t56 = t54*t43
+    t57 = np.where(t47, t48*(t51*t39 - t53), t55)
+    t58 = np.where(t47, t48*(t52*t39 - t54), t56)
+    q_next = np.empty((3,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t57*t9 + t58*t10
+    q_next[1] = q[1] + t57*t7 + t58*t8
+    q_next[2] = q[2] + t3*t58 + t57*t6
+    return _output(q_next, (3,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-06 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(20 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-06 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[4 + i] = j_y(i) for joint i = 0..3; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #include <math.h>
@@ -524,4 +528,433 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm4_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 4 sin, 4 cos, 25 add/sub, 30 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm4_manipulability_angles(const double q[4], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[0] = q[0];
+}
+
+static void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
+{
+    const double t3 = cs[0]*l[0];
+    const double t4 = cs[1]*l[1];
+    const double t5 = cs[2]*l[2];
+    const double t6 = cs[3]*l[3];
+    const double t7 = sn[0]*l[0];
+    const double t8 = sn[1]*l[1];
+    const double t9 = sn[2]*l[2];
+    const double t10 = sn[3]*l[3];
+    const double t11 = -t10;
+    const double t12 = t11 - t9;
+    const double t13 = t5 + t6;
+    const double t14 = t12 - t8;
+    const double t15 = t4 + t13;
+    const double t16 = t14 - t7;
+    const double t17 = t3 + t15;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+    const int t40 = t37 >= t39;
+    const double t41 = (t40 ? t37 : t39);
+    const double t42 = t38/t41;
+    const double t43 = (t40 ? t17 : t16) - t42*(t40 ? t16 : t17);
+    const double t44 = (t40 ? t15 : t14) - t42*(t40 ? t14 : t15);
+    const double t45 = (t40 ? t13 : t12) - t42*(t40 ? t12 : t13);
+    const double t46 = (t40 ? t6 : t11) - t42*(t40 ? t11 : t6);
+    const double t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46;
+    w[0] = sqrt(t41*t47);
+}
+
+void arm4_manipulability(const double q[4], const double l[4], double w[1])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 4; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm4_manipulability_angles(q, ang);
+    arm4_trig8(ang, cs, sn);
+    arm4_manipulability_finish(l, cs, sn, w);
+}
+
+void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm4_manipulability_angles(q + (i + b) * 4, ang + b * 8);
+        }
+        arm4_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm4_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 4 sin, 4 cos, 30 add/sub, 43 mul, 1 neg, 2 div */
+
+static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[0] = q[0];
+}
+
+static void arm4_inverse_velocity_finish(const double l[4], const double v[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+{
+    const double t3 = cs[0]*l[0];
+    const double t4 = cs[1]*l[1];
+    const double t5 = cs[2]*l[2];
+    const double t6 = cs[3]*l[3];
+    const double t7 = sn[0]*l[0];
+    const double t8 = sn[1]*l[1];
+    const double t9 = sn[2]*l[2];
+    const double t10 = sn[3]*l[3];
+    const double t11 = -t10;
+    const double t12 = t11 - t9;
+    const double t13 = t5 + t6;
+    const double t14 = t12 - t8;
+    const double t15 = t4 + t13;
+    const double t16 = t14 - t7;
+    const double t17 = t3 + t15;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = lambda*lambda;
+    const double t49 = t37 + t48;
+    const double t50 = t39 + t48;
+    const double t51 = t49 + t50;
+    const double t52 = t51;
+    const double t53 = t49*v[0] + t38*v[1];
+    const double t54 = t50*v[1] + t38*v[0];
+    const double t55 = t52*t52;
+    const double t56 = 1.0/t55;
+    const double t57 = t53*t56;
+    const double t58 = t54*t56;
+    const double t59 = t49*t50 - t38*t38;
+    const int t60 = t59 > ARM4_RANK_TOL*t55;
+    const double t61 = 1.0/t59;
+    const double t62 = (t60 ? t61*(t52*v[0] - t53) : t57);
+    const double t63 = (t60 ? t61*(t52*v[1] - t54) : t58);
+    dq[0] = t62*t16 + t63*t17;
+    dq[1] = t62*t14 + t63*t15;
+    dq[2] = t62*t12 + t63*t13;
+    dq[3] = t6*t63 + t62*t11;
+}
+
+void arm4_inverse_velocity(const double q[4], const double l[4], const double v[2], double lambda, double dq[4])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 4; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm4_inverse_velocity_angles(q, ang);
+    arm4_trig8(ang, cs, sn);
+    arm4_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
+}
+
+void arm4_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity_angles(q + (i + b) * 4, ang + b * 8);
+        }
+        arm4_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 4);
+        }
+    }
+}
+
+/* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
+/* operations: 4 sin, 4 cos, 69 add/sub, 91 mul, 1 neg, 3 div */
+
+static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[0] = q[0];
+}
+
+static void arm4_inverse_velocity3_finish(const double l[4], const double twist[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+{
+    const double t3 = cs[0]*l[0];
+    const double t4 = cs[1]*l[1];
+    const double t5 = cs[2]*l[2];
+    const double t6 = cs[3]*l[3];
+    const double t7 = sn[0]*l[0];
+    const double t8 = sn[1]*l[1];
+    const double t9 = sn[2]*l[2];
+    const double t10 = sn[3]*l[3];
+    const double t11 = -t10;
+    const double t12 = t11 - t9;
+    const double t13 = t5 + t6;
+    const double t14 = t12 - t8;
+    const double t15 = t4 + t13;
+    const double t16 = t14 - t7;
+    const double t17 = t3 + t15;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = lambda*lambda;
+    const double t49 = t37 + t48;
+    const double t50 = t39 + t48;
+    const double t51 = t49 + t50;
+    const double t59 = t49*t50 - t38*t38;
+    const double t72 = t16 + t14 + t12 + t11;
+    const double t73 = t6 + t17 + t15 + t13;
+    const double t74 = 4.0 + t48;
+    const double t75 = t51 + t74;
+    const double t76 = t49*twist[0] + t38*twist[1] + t72*twist[2];
+    const double t77 = t50*twist[1] + t38*twist[0] + t73*twist[2];
+    const double t78 = t74*twist[2] + t72*twist[0] + t73*twist[1];
+    const double t79 = t75*t75;
+    const double t80 = 1.0/t79;
+    const double t81 = t76*t80;
+    const double t82 = t77*t80;
+    const double t83 = t78*t80;
+    const double t84 = t50*t74 - t73*t73;
+    const double t85 = t72*t73 - t74*t38;
+    const double t86 = t38*t73 - t50*t72;
+    const double t87 = t49*t74 - t72*t72;
+    const double t88 = t38*t72 - t49*t73;
+    const double t89 = t49*t84 + t38*t85 + t72*t86;
+    const double t90 = t84 + t87 + t59;
+    const int t91 = t89 > ARM4_RANK_TOL*t90*t75;
+    const int t92 = t90 > ARM4_RANK_TOL*t79;
+    const double t93 = 1.0/t89;
+    const double t94 = t49*t76 + t38*t77 + t72*t78;
+    const double t95 = t50*t77 + t38*t76 + t73*t78;
+    const double t96 = t74*t78 + t72*t76 + t73*t77;
+    const double t97 = 1.0/(t90*t90);
+    const double t98 = t79 - t90;
+    const double t99 = (t92 ? (t91 ? t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]) : t97*(t76*t98 - t94*t75)) : t81);
+    const double t100 = (t92 ? (t91 ? t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]) : t97*(t77*t98 - t95*t75)) : t82);
+    const double t101 = (t92 ? (t91 ? t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]) : t97*(t78*t98 - t96*t75)) : t83);
+    dq3[0] = t101 + t99*t16 + t100*t17;
+    dq3[1] = t101 + t99*t14 + t100*t15;
+    dq3[2] = t101 + t99*t12 + t100*t13;
+    dq3[3] = t101 + t6*t100 + t99*t11;
+}
+
+void arm4_inverse_velocity3(const double q[4], const double l[4], const double twist[3], double lambda, double dq3[4])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 4; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm4_inverse_velocity3_angles(q, ang);
+    arm4_trig8(ang, cs, sn);
+    arm4_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
+}
+
+void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity3_angles(q + (i + b) * 4, ang + b * 8);
+        }
+        arm4_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 4);
+        }
+    }
+}
+
+/* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 4 sin, 4 cos, 36 add/sub, 43 mul, 1 neg, 2 div */
+
+static void arm4_ik_step_angles(const double q[4], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[0] = q[0];
+}
+
+static void arm4_ik_step_finish(const double q[4], const double l[4], const double target[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+{
+    const double t3 = cs[0]*l[0];
+    const double t4 = cs[1]*l[1];
+    const double t5 = cs[2]*l[2];
+    const double t6 = cs[3]*l[3];
+    const double t7 = sn[0]*l[0];
+    const double t8 = sn[1]*l[1];
+    const double t9 = sn[2]*l[2];
+    const double t10 = sn[3]*l[3];
+    const double t11 = -t10;
+    const double t12 = t11 - t9;
+    const double t13 = t5 + t6;
+    const double t14 = t12 - t8;
+    const double t15 = t4 + t13;
+    const double t16 = t14 - t7;
+    const double t17 = t3 + t15;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = lambda*lambda;
+    const double t49 = t37 + t48;
+    const double t50 = t39 + t48;
+    const double t51 = t49 + t50;
+    const double t52 = t51;
+    const double t55 = t52*t52;
+    const double t56 = 1.0/t55;
+    const double t59 = t49*t50 - t38*t38;
+    const int t60 = t59 > ARM4_RANK_TOL*t55;
+    const double t61 = 1.0/t59;
+    const double t64 = target[0] - t17;
+    const double t65 = t16 + target[1];
+    const double t66 = t49*t64 + t38*t65;
+    const double t67 = t50*t65 + t38*t64;
+    const double t68 = t66*t56;
+    const double t69 = t67*t56;
+    const double t70 = (t60 ? t61*(t64*t52 - t66) : t68);
+    const double t71 = (t60 ? t61*(t65*t52 - t67) : t69);
+    q_next[0] = q[0] + t70*t16 + t71*t17;
+    q_next[1] = q[1] + t70*t14 + t71*t15;
+    q_next[2] = q[2] + t70*t12 + t71*t13;
+    q_next[3] = q[3] + t6*t71 + t70*t11;
+}
+
+void arm4_ik_step(const double q[4], const double l[4], const double target[2], double lambda, double q_next[4])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 4; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm4_ik_step_angles(q, ang);
+    arm4_trig8(ang, cs, sn);
+    arm4_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
+}
+
+void arm4_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm4_ik_step_angles(q + (i + b) * 4, ang + b * 8);
+        }
+        arm4_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm4_ik_step_finish(q + (i + b) * 4, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 4);
+        }
+    }
+}
+
+int arm4_ik_solve(const double q0[4], const double l[4], const double target[2], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
+{
+    double p[2], q_next[4], trial[4], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 4; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+        return ARM4_IK_INVALID;
+    }
+    for (k = 0; k < 4; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM4_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM4_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 4; ++k) {
+        trial[k] = q[k];
+    }
+    arm4_position(trial, l, p);
+    err = 0.0;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrt(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM4_IK_CONVERGED;
+        }
+        mu = 0.5 * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm4_ik_step(q, l, target, mu, q_next);
+        alpha = 1.0;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 4; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm4_position(trial, l, p);
+            err_trial = 0.0;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrt(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 30) {
+                return ARM4_IK_STALLED;
+            }
+            alpha *= 0.5;
+        }
+        for (k = 0; k < 4; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM4_IK_CONVERGED;
+        }
+        if (d <= 1e-12 * err) {
+            return ARM4_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM4_IK_CONVERGED : ARM4_IK_MAX_ITER;
 }

@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[4 + i] = j_y(i) for joint i = 0..3; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: double.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float64
+RANK_TOL = 2.220446049250313e-14
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "inverse_velocity3", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -46,7 +71,7 @@ def position(q, l):
     Returns p of shape (..., 2).
     Operations: 4 sin, 4 cos, 19 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -83,7 +108,7 @@ def jacobian(q, l):
     Returns J of shape (..., 2, 4).
     Operations: 4 sin, 4 cos, 18 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -127,7 +152,7 @@ def coriolis(q, dq, l):
     Returns H of shape (..., 2, 4).
     Operations: 4 sin, 4 cos, 30 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("", "", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -183,7 +208,7 @@ def velocity(q, dq, l):
     Returns v of shape (..., 2).
     Operations: 4 sin, 4 cos, 31 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("", "", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -234,7 +259,7 @@ def acceleration(q, dq, ddq, l):
     Returns a of shape (..., 2).
     Operations: 4 sin, 4 cos, 67 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ), ("", "", "", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -292,7 +317,7 @@ def kinematics(q, dq, ddq, l):
     Returns p of shape (..., 2), J of shape (..., 2, 4), H of shape (..., 2, 4), v of shape (..., 2), a of shape (..., 2).
     Operations: 4 sin, 4 cos, 69 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ), ("", "", "", "", ))
     ang = np.empty((4,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -362,3 +387,309 @@ def kinematics(q, dq, ddq, l):
     a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3]
     a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2]
     return _output(p, (2,)), _output(J, (2, 4,)), _output(H, (2, 4,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 4).
+    l: array of shape (..., 4).
+    Returns w of shape (..., 1).
+    Operations: 4 sin, 4 cos, 56 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
+    ang = np.empty((4,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t3 = cs[0]*l[0]
+    t4 = cs[1]*l[1]
+    t5 = cs[2]*l[2]
+    t6 = cs[3]*l[3]
+    t7 = sn[0]*l[0]
+    t8 = sn[1]*l[1]
+    t9 = sn[2]*l[2]
+    t10 = sn[3]*l[3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
+    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
+    t40 = (t37 >= t39)
+    t41 = np.where(t40, t37, t39)
+    t42 = t38/t41
+    t43 = np.where(t40, t17, t16) - t42*np.where(t40, t16, t17)
+    t44 = np.where(t40, t15, t14) - t42*np.where(t40, t14, t15)
+    t45 = np.where(t40, t13, t12) - t42*np.where(t40, t12, t13)
+    t46 = np.where(t40, t6, t11) - t42*np.where(t40, t11, t6)
+    t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t41*t47)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 4).
+    l: array of shape (..., 4).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 4).
+    Operations: 4 sin, 4 cos, 74 add/sub/mul/neg.
+    """
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (4, 4, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((4,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t3 = cs[0]*l[0]
+    t4 = cs[1]*l[1]
+    t5 = cs[2]*l[2]
+    t6 = cs[3]*l[3]
+    t7 = sn[0]*l[0]
+    t8 = sn[1]*l[1]
+    t9 = sn[2]*l[2]
+    t10 = sn[3]*l[3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
+    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
+    t48 = lambda_*lambda_
+    t49 = t37 + t48
+    t50 = t39 + t48
+    t51 = t49 + t50
+    t52 = t51
+    t53 = t49*v[0] + t38*v[1]
+    t54 = t50*v[1] + t38*v[0]
+    t55 = t52*t52
+    t56 = 1.0/t55
+    t57 = t53*t56
+    t58 = t54*t56
+    t59 = t49*t50 - t38*t38
+    t60 = (t59 > RANK_TOL*t55)
+    t61 = 1.0/t59
+    t62 = np.where(t60, t61*(t52*v[0] - t53), t57)
+    t63 = np.where(t60, t61*(t52*v[1] - t54), t58)
+    dq = np.empty((4,) + batch, dtype=DTYPE)
+    dq[0] = t62*t16 + t63*t17
+    dq[1] = t62*t14 + t63*t15
+    dq[2] = t62*t12 + t63*t13
+    dq[3] = t6*t63 + t62*t11
+    return _output(dq, (4,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 4).
+    l: array of shape (..., 4).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 4).
+    Operations: 4 sin, 4 cos, 161 add/sub/mul/neg.
+    """
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (4, 4, 3, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((4,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t3 = cs[0]*l[0]
+    t4 = cs[1]*l[1]
+    t5 = cs[2]*l[2]
+    t6 = cs[3]*l[3]
+    t7 = sn[0]*l[0]
+    t8 = sn[1]*l[1]
+    t9 = sn[2]*l[2]
+    t10 = sn[3]*l[3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
+    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
+    t48 = lambda_*lambda_
+    t49 = t37 + t48
+    t50 = t39 + t48
+    t51 = t49 + t50
+    t59 = t49*t50 - t38*t38
+    t72 = t16 + t14 + t12 + t11
+    t73 = t6 + t17 + t15 + t13
+    t74 = 4.0 + t48
+    t75 = t51 + t74
+    t76 = t49*twist[0] + t38*twist[1] + t72*twist[2]
+    t77 = t50*twist[1] + t38*twist[0] + t73*twist[2]
+    t78 = t74*twist[2] + t72*twist[0] + t73*twist[1]
+    t79 = t75*t75
+    t80 = 1.0/t79
+    t81 = t76*t80
+    t82 = t77*t80
+    t83 = t78*t80
+    t84 = t50*t74 - t73*t73
+    t85 = t72*t73 - t74*t38
+    t86 = t38*t73 - t50*t72
+    t87 = t49*t74 - t72*t72
+    t88 = t38*t72 - t49*t73
+    t89 = t49*t84 + t38*t85 + t72*t86
+    t90 = t84 + t87 + t59
+    t91 = (t89 > RANK_TOL*t90*t75)
+    t92 = (t90 > RANK_TOL*t79)
+    t93 = 1.0/t89
+    t94 = t49*t76 + t38*t77 + t72*t78
+    t95 = t50*t77 + t38*t76 + t73*t78
+    t96 = t74*t78 + t72*t76 + t73*t77
+    t97 = 1.0/(t90*t90)
+    t98 = t79 - t90
+    t99 = np.where(t92, np.where(t91, t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]), t97*(t76*t98 - t94*t75)), t81)
+    t100 = np.where(t92, np.where(t91, t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]), t97*(t77*t98 - t95*t75)), t82)
+    t101 = np.where(t92, np.where(t91, t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]), t97*(t78*t98 - t96*t75)), t83)
+    dq3 = np.empty((4,) + batch, dtype=DTYPE)
+    dq3[0] = t101 + t99*t16 + t100*t17
+    dq3[1] = t101 + t99*t14 + t100*t15
+    dq3[2] = t101 + t99*t12 + t100*t13
+    dq3[3] = t101 + t6*t100 + t99*t11
+    return _output(dq3, (4,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 4).
+    l: array of shape (..., 4).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 4).
+    Operations: 4 sin, 4 cos, 80 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (4, 4, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((4,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t3 = cs[0]*l[0]
+    t4 = cs[1]*l[1]
+    t5 = cs[2]*l[2]
+    t6 = cs[3]*l[3]
+    t7 = sn[0]*l[0]
+    t8 = sn[1]*l[1]
+    t9 = sn[2]*l[2]
+    t10 = sn[3]*l[3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
+    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
+    t48 = lambda_*lambda_
+    t49 = t37 + t48
+    t50 = t39 + t48
+    t51 = t49 + t50
+    t52 = t51
+    t55 = t52*t52
+    t56 = 1.0/t55
+    t59 = t49*t50 - t38*t38
+    t60 = (t59 > RANK_TOL*t55)
+    t61 = 1.0/t59
+    t64 = target[0] - t17
+    t65 = t16 + target[1]
+    t66 = t49*t64 + t38*t65
+    t67 = t50*t65 + t38*t64
+    t68 = t66*t56
+    t69 = t67*t56
+    t70 = np.where(t60, t61*(t64*t52 - t66), t68)
+    t71 = np.where(t60, t61*(t65*t52 - t67), t69)
+    q_next = np.empty((4,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t70*t16 + t71*t17
+    q_next[1] = q[1] + t70*t14 + t71*t15
+    q_next[2] = q[2] + t70*t12 + t71*t13
+    q_next[3] = q[3] + t6*t71 + t70*t11
+    return _output(q_next, (4,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, l, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(30 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-12 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

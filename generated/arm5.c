@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[5 + i] = j_y(i) for joint i = 0..4; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #include <math.h>
@@ -578,4 +582,457 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
             arm5_kinematics_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 10, H + (i + b) * 10, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm5_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 5 sin, 5 cos, 33 add/sub, 37 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm5_manipulability_angles(const double q[5], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[0] = q[0];
+}
+
+static void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
+{
+    const double t4 = cs[0]*l[0];
+    const double t5 = cs[1]*l[1];
+    const double t6 = cs[2]*l[2];
+    const double t7 = cs[3]*l[3];
+    const double t8 = cs[4]*l[4];
+    const double t9 = sn[0]*l[0];
+    const double t10 = sn[1]*l[1];
+    const double t11 = sn[2]*l[2];
+    const double t12 = sn[3]*l[3];
+    const double t13 = sn[4]*l[4];
+    const double t14 = -t13;
+    const double t15 = t14 - t12;
+    const double t16 = t7 + t8;
+    const double t17 = t15 - t11;
+    const double t18 = t6 + t16;
+    const double t19 = t17 - t10;
+    const double t20 = t5 + t18;
+    const double t21 = t19 - t9;
+    const double t22 = t4 + t20;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const int t50 = t47 >= t49;
+    const double t51 = (t50 ? t47 : t49);
+    const double t52 = t48/t51;
+    const double t53 = (t50 ? t22 : t21) - t52*(t50 ? t21 : t22);
+    const double t54 = (t50 ? t20 : t19) - t52*(t50 ? t19 : t20);
+    const double t55 = (t50 ? t18 : t17) - t52*(t50 ? t17 : t18);
+    const double t56 = (t50 ? t16 : t15) - t52*(t50 ? t15 : t16);
+    const double t57 = (t50 ? t8 : t14) - t52*(t50 ? t14 : t8);
+    const double t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57;
+    w[0] = sqrt(t51*t58);
+}
+
+void arm5_manipulability(const double q[5], const double l[5], double w[1])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 5; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm5_manipulability_angles(q, ang);
+    arm5_trig8(ang, cs, sn);
+    arm5_manipulability_finish(l, cs, sn, w);
+}
+
+void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_manipulability_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm5_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 5 sin, 5 cos, 37 add/sub, 50 mul, 1 neg, 2 div */
+
+static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[0] = q[0];
+}
+
+static void arm5_inverse_velocity_finish(const double l[5], const double v[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+{
+    const double t4 = cs[0]*l[0];
+    const double t5 = cs[1]*l[1];
+    const double t6 = cs[2]*l[2];
+    const double t7 = cs[3]*l[3];
+    const double t8 = cs[4]*l[4];
+    const double t9 = sn[0]*l[0];
+    const double t10 = sn[1]*l[1];
+    const double t11 = sn[2]*l[2];
+    const double t12 = sn[3]*l[3];
+    const double t13 = sn[4]*l[4];
+    const double t14 = -t13;
+    const double t15 = t14 - t12;
+    const double t16 = t7 + t8;
+    const double t17 = t15 - t11;
+    const double t18 = t6 + t16;
+    const double t19 = t17 - t10;
+    const double t20 = t5 + t18;
+    const double t21 = t19 - t9;
+    const double t22 = t4 + t20;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t59 = lambda*lambda;
+    const double t60 = t47 + t59;
+    const double t61 = t49 + t59;
+    const double t62 = t60 + t61;
+    const double t63 = t62;
+    const double t64 = t60*v[0] + t48*v[1];
+    const double t65 = t61*v[1] + t48*v[0];
+    const double t66 = t63*t63;
+    const double t67 = 1.0/t66;
+    const double t68 = t64*t67;
+    const double t69 = t65*t67;
+    const double t70 = t60*t61 - t48*t48;
+    const int t71 = t70 > ARM5_RANK_TOL*t66;
+    const double t72 = 1.0/t70;
+    const double t73 = (t71 ? t72*(t63*v[0] - t64) : t68);
+    const double t74 = (t71 ? t72*(t63*v[1] - t65) : t69);
+    dq[0] = t73*t21 + t74*t22;
+    dq[1] = t73*t19 + t74*t20;
+    dq[2] = t73*t17 + t74*t18;
+    dq[3] = t73*t15 + t74*t16;
+    dq[4] = t8*t74 + t73*t14;
+}
+
+void arm5_inverse_velocity(const double q[5], const double l[5], const double v[2], double lambda, double dq[5])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 5; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm5_inverse_velocity_angles(q, ang);
+    arm5_trig8(ang, cs, sn);
+    arm5_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
+}
+
+void arm5_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 5);
+        }
+    }
+}
+
+/* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
+/* operations: 5 sin, 5 cos, 79 add/sub, 98 mul, 1 neg, 3 div */
+
+static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[0] = q[0];
+}
+
+static void arm5_inverse_velocity3_finish(const double l[5], const double twist[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+{
+    const double t4 = cs[0]*l[0];
+    const double t5 = cs[1]*l[1];
+    const double t6 = cs[2]*l[2];
+    const double t7 = cs[3]*l[3];
+    const double t8 = cs[4]*l[4];
+    const double t9 = sn[0]*l[0];
+    const double t10 = sn[1]*l[1];
+    const double t11 = sn[2]*l[2];
+    const double t12 = sn[3]*l[3];
+    const double t13 = sn[4]*l[4];
+    const double t14 = -t13;
+    const double t15 = t14 - t12;
+    const double t16 = t7 + t8;
+    const double t17 = t15 - t11;
+    const double t18 = t6 + t16;
+    const double t19 = t17 - t10;
+    const double t20 = t5 + t18;
+    const double t21 = t19 - t9;
+    const double t22 = t4 + t20;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t59 = lambda*lambda;
+    const double t60 = t47 + t59;
+    const double t61 = t49 + t59;
+    const double t62 = t60 + t61;
+    const double t70 = t60*t61 - t48*t48;
+    const double t83 = t21 + t19 + t17 + t15 + t14;
+    const double t84 = t8 + t22 + t20 + t18 + t16;
+    const double t85 = 5.0 + t59;
+    const double t86 = t62 + t85;
+    const double t87 = t60*twist[0] + t48*twist[1] + t83*twist[2];
+    const double t88 = t61*twist[1] + t48*twist[0] + t84*twist[2];
+    const double t89 = t85*twist[2] + t83*twist[0] + t84*twist[1];
+    const double t90 = t86*t86;
+    const double t91 = 1.0/t90;
+    const double t92 = t87*t91;
+    const double t93 = t88*t91;
+    const double t94 = t89*t91;
+    const double t95 = t61*t85 - t84*t84;
+    const double t96 = t83*t84 - t85*t48;
+    const double t97 = t48*t84 - t61*t83;
+    const double t98 = t60*t85 - t83*t83;
+    const double t99 = t48*t83 - t60*t84;
+    const double t100 = t60*t95 + t48*t96 + t83*t97;
+    const double t101 = t95 + t98 + t70;
+    const int t102 = t100 > ARM5_RANK_TOL*t101*t86;
+    const int t103 = t101 > ARM5_RANK_TOL*t90;
+    const double t104 = 1.0/t100;
+    const double t105 = t60*t87 + t48*t88 + t83*t89;
+    const double t106 = t61*t88 + t48*t87 + t84*t89;
+    const double t107 = t85*t89 + t83*t87 + t84*t88;
+    const double t108 = 1.0/(t101*t101);
+    const double t109 = t90 - t101;
+    const double t110 = (t103 ? (t102 ? t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]) : t108*(t87*t109 - t105*t86)) : t92);
+    const double t111 = (t103 ? (t102 ? t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]) : t108*(t88*t109 - t106*t86)) : t93);
+    const double t112 = (t103 ? (t102 ? t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]) : t108*(t89*t109 - t107*t86)) : t94);
+    dq3[0] = t112 + t110*t21 + t111*t22;
+    dq3[1] = t112 + t110*t19 + t111*t20;
+    dq3[2] = t112 + t110*t17 + t111*t18;
+    dq3[3] = t112 + t110*t15 + t111*t16;
+    dq3[4] = t112 + t8*t111 + t110*t14;
+}
+
+void arm5_inverse_velocity3(const double q[5], const double l[5], const double twist[3], double lambda, double dq3[5])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 5; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm5_inverse_velocity3_angles(q, ang);
+    arm5_trig8(ang, cs, sn);
+    arm5_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
+}
+
+void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity3_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 5);
+        }
+    }
+}
+
+/* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 5 sin, 5 cos, 44 add/sub, 50 mul, 1 neg, 2 div */
+
+static void arm5_ik_step_angles(const double q[5], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[0] = q[0];
+}
+
+static void arm5_ik_step_finish(const double q[5], const double l[5], const double target[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+{
+    const double t4 = cs[0]*l[0];
+    const double t5 = cs[1]*l[1];
+    const double t6 = cs[2]*l[2];
+    const double t7 = cs[3]*l[3];
+    const double t8 = cs[4]*l[4];
+    const double t9 = sn[0]*l[0];
+    const double t10 = sn[1]*l[1];
+    const double t11 = sn[2]*l[2];
+    const double t12 = sn[3]*l[3];
+    const double t13 = sn[4]*l[4];
+    const double t14 = -t13;
+    const double t15 = t14 - t12;
+    const double t16 = t7 + t8;
+    const double t17 = t15 - t11;
+    const double t18 = t6 + t16;
+    const double t19 = t17 - t10;
+    const double t20 = t5 + t18;
+    const double t21 = t19 - t9;
+    const double t22 = t4 + t20;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t59 = lambda*lambda;
+    const double t60 = t47 + t59;
+    const double t61 = t49 + t59;
+    const double t62 = t60 + t61;
+    const double t63 = t62;
+    const double t66 = t63*t63;
+    const double t67 = 1.0/t66;
+    const double t70 = t60*t61 - t48*t48;
+    const int t71 = t70 > ARM5_RANK_TOL*t66;
+    const double t72 = 1.0/t70;
+    const double t75 = target[0] - t22;
+    const double t76 = t21 + target[1];
+    const double t77 = t60*t75 + t48*t76;
+    const double t78 = t61*t76 + t48*t75;
+    const double t79 = t77*t67;
+    const double t80 = t78*t67;
+    const double t81 = (t71 ? t72*(t75*t63 - t77) : t79);
+    const double t82 = (t71 ? t72*(t76*t63 - t78) : t80);
+    q_next[0] = q[0] + t81*t21 + t82*t22;
+    q_next[1] = q[1] + t81*t19 + t82*t20;
+    q_next[2] = q[2] + t81*t17 + t82*t18;
+    q_next[3] = q[3] + t81*t15 + t82*t16;
+    q_next[4] = q[4] + t8*t82 + t81*t14;
+}
+
+void arm5_ik_step(const double q[5], const double l[5], const double target[2], double lambda, double q_next[5])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 5; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm5_ik_step_angles(q, ang);
+    arm5_trig8(ang, cs, sn);
+    arm5_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
+}
+
+void arm5_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_ik_step_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm5_ik_step_finish(q + (i + b) * 5, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 5);
+        }
+    }
+}
+
+int arm5_ik_solve(const double q0[5], const double l[5], const double target[2], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations)
+{
+    double p[2], q_next[5], trial[5], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 5; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+        return ARM5_IK_INVALID;
+    }
+    for (k = 0; k < 5; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM5_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM5_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 5; ++k) {
+        trial[k] = q[k];
+    }
+    arm5_position(trial, l, p);
+    err = 0.0;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrt(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM5_IK_CONVERGED;
+        }
+        mu = 0.5 * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm5_ik_step(q, l, target, mu, q_next);
+        alpha = 1.0;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 5; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm5_position(trial, l, p);
+            err_trial = 0.0;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrt(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 30) {
+                return ARM5_IK_STALLED;
+            }
+            alpha *= 0.5;
+        }
+        for (k = 0; k < 5; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM5_IK_CONVERGED;
+        }
+        if (d <= 1e-12 * err) {
+            return ARM5_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM5_IK_CONVERGED : ARM5_IK_MAX_ITER;
 }

@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[5 + i] = j_y(i) for joint i = 0..4; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #ifndef ARM5_H
@@ -17,6 +21,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* relative rank tolerance of the closed-form solves: 100 machine epsilons */
+#define ARM5_RANK_TOL 2.220446049250313e-14
 
 /* endpoint position p (2). */
 void arm5_position(const double q[5], const double l[5], double p[2]);
@@ -59,6 +66,50 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l. */
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
+
+/* manipulability w = sqrt(det(J J^T)) (1). */
+void arm5_manipulability(const double q[5], const double l[5], double w[1]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: l. */
+void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
+
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). */
+void arm5_inverse_velocity(const double q[5], const double l[5], const double v[2], double lambda, double dq[5]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: l, lambda. */
+void arm5_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq);
+
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). */
+void arm5_inverse_velocity3(const double q[5], const double l[5], const double twist[3], double lambda, double dq3[5]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: l, lambda. */
+void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3);
+
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). */
+void arm5_ik_step(const double q[5], const double l[5], const double target[2], double lambda, double q_next[5]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]); shared by all: l, lambda. */
+void arm5_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next);
+
+/* Return codes of arm5_ik_solve. */
+#define ARM5_IK_CONVERGED 0
+#define ARM5_IK_STALLED 1
+#define ARM5_IK_MAX_ITER 2
+#define ARM5_IK_INVALID 3
+
+/* Inverse kinematics: damped least-squares steps (arm5_ik_step) from q0 toward
+ * target with damping mu = max(lambda, 0.5 |target - p|), each step shortened by
+ * halving until the endpoint error |target - p| decreases.
+ * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
+ * error improves by less than a relative 1e-12 (an unreachable target: q is then the
+ * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when
+ * q0, target or lambda is not finite, lambda < 0, tol <= 0 or max_iter < 0.
+ * Writes the final pose to q, its error to *error and the steps taken to *iterations. */
+int arm5_ik_solve(const double q0[5], const double l[5], const double target[2], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations);
 
 #ifdef __cplusplus
 }

@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[5 + i] = j_y(i) for joint i = 0..4; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: double.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float64
+RANK_TOL = 2.220446049250313e-14
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "inverse_velocity3", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -46,7 +71,7 @@ def position(q, l):
     Returns p of shape (..., 2).
     Operations: 5 sin, 5 cos, 24 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -88,7 +113,7 @@ def jacobian(q, l):
     Returns J of shape (..., 2, 5).
     Operations: 5 sin, 5 cos, 23 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -139,7 +164,7 @@ def coriolis(q, dq, l):
     Returns H of shape (..., 2, 5).
     Operations: 5 sin, 5 cos, 38 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("", "", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -205,7 +230,7 @@ def velocity(q, dq, l):
     Returns v of shape (..., 2).
     Operations: 5 sin, 5 cos, 39 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("", "", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -264,7 +289,7 @@ def acceleration(q, dq, ddq, l):
     Returns a of shape (..., 2).
     Operations: 5 sin, 5 cos, 85 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("", "", "", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -332,7 +357,7 @@ def kinematics(q, dq, ddq, l):
     Returns p of shape (..., 2), J of shape (..., 2, 5), H of shape (..., 2, 5), v of shape (..., 2), a of shape (..., 2).
     Operations: 5 sin, 5 cos, 87 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("", "", "", "", ))
     ang = np.empty((5,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -416,3 +441,333 @@ def kinematics(q, dq, ddq, l):
     a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4]
     a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3]
     return _output(p, (2,)), _output(J, (2, 5,)), _output(H, (2, 5,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 5).
+    l: array of shape (..., 5).
+    Returns w of shape (..., 1).
+    Operations: 5 sin, 5 cos, 71 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
+    ang = np.empty((5,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t4 = cs[0]*l[0]
+    t5 = cs[1]*l[1]
+    t6 = cs[2]*l[2]
+    t7 = cs[3]*l[3]
+    t8 = cs[4]*l[4]
+    t9 = sn[0]*l[0]
+    t10 = sn[1]*l[1]
+    t11 = sn[2]*l[2]
+    t12 = sn[3]*l[3]
+    t13 = sn[4]*l[4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
+    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t50 = (t47 >= t49)
+    t51 = np.where(t50, t47, t49)
+    t52 = t48/t51
+    t53 = np.where(t50, t22, t21) - t52*np.where(t50, t21, t22)
+    t54 = np.where(t50, t20, t19) - t52*np.where(t50, t19, t20)
+    t55 = np.where(t50, t18, t17) - t52*np.where(t50, t17, t18)
+    t56 = np.where(t50, t16, t15) - t52*np.where(t50, t15, t16)
+    t57 = np.where(t50, t8, t14) - t52*np.where(t50, t14, t8)
+    t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t51*t58)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 5).
+    l: array of shape (..., 5).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 5).
+    Operations: 5 sin, 5 cos, 88 add/sub/mul/neg.
+    """
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (5, 5, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((5,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t4 = cs[0]*l[0]
+    t5 = cs[1]*l[1]
+    t6 = cs[2]*l[2]
+    t7 = cs[3]*l[3]
+    t8 = cs[4]*l[4]
+    t9 = sn[0]*l[0]
+    t10 = sn[1]*l[1]
+    t11 = sn[2]*l[2]
+    t12 = sn[3]*l[3]
+    t13 = sn[4]*l[4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
+    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t59 = lambda_*lambda_
+    t60 = t47 + t59
+    t61 = t49 + t59
+    t62 = t60 + t61
+    t63 = t62
+    t64 = t60*v[0] + t48*v[1]
+    t65 = t61*v[1] + t48*v[0]
+    t66 = t63*t63
+    t67 = 1.0/t66
+    t68 = t64*t67
+    t69 = t65*t67
+    t70 = t60*t61 - t48*t48
+    t71 = (t70 > RANK_TOL*t66)
+    t72 = 1.0/t70
+    t73 = np.where(t71, t72*(t63*v[0] - t64), t68)
+    t74 = np.where(t71, t72*(t63*v[1] - t65), t69)
+    dq = np.empty((5,) + batch, dtype=DTYPE)
+    dq[0] = t73*t21 + t74*t22
+    dq[1] = t73*t19 + t74*t20
+    dq[2] = t73*t17 + t74*t18
+    dq[3] = t73*t15 + t74*t16
+    dq[4] = t8*t74 + t73*t14
+    return _output(dq, (5,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 5).
+    l: array of shape (..., 5).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 5).
+    Operations: 5 sin, 5 cos, 178 add/sub/mul/neg.
+    """
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (5, 5, 3, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((5,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t4 = cs[0]*l[0]
+    t5 = cs[1]*l[1]
+    t6 = cs[2]*l[2]
+    t7 = cs[3]*l[3]
+    t8 = cs[4]*l[4]
+    t9 = sn[0]*l[0]
+    t10 = sn[1]*l[1]
+    t11 = sn[2]*l[2]
+    t12 = sn[3]*l[3]
+    t13 = sn[4]*l[4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
+    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t59 = lambda_*lambda_
+    t60 = t47 + t59
+    t61 = t49 + t59
+    t62 = t60 + t61
+    t70 = t60*t61 - t48*t48
+    t83 = t21 + t19 + t17 + t15 + t14
+    t84 = t8 + t22 + t20 + t18 + t16
+    t85 = 5.0 + t59
+    t86 = t62 + t85
+    t87 = t60*twist[0] + t48*twist[1] + t83*twist[2]
+    t88 = t61*twist[1] + t48*twist[0] + t84*twist[2]
+    t89 = t85*twist[2] + t83*twist[0] + t84*twist[1]
+    t90 = t86*t86
+    t91 = 1.0/t90
+    t92 = t87*t91
+    t93 = t88*t91
+    t94 = t89*t91
+    t95 = t61*t85 - t84*t84
+    t96 = t83*t84 - t85*t48
+    t97 = t48*t84 - t61*t83
+    t98 = t60*t85 - t83*t83
+    t99 = t48*t83 - t60*t84
+    t100 = t60*t95 + t48*t96 + t83*t97
+    t101 = t95 + t98 + t70
+    t102 = (t100 > RANK_TOL*t101*t86)
+    t103 = (t101 > RANK_TOL*t90)
+    t104 = 1.0/t100
+    t105 = t60*t87 + t48*t88 + t83*t89
+    t106 = t61*t88 + t48*t87 + t84*t89
+    t107 = t85*t89 + t83*t87 + t84*t88
+    t108 = 1.0/(t101*t101)
+    t109 = t90 - t101
+    t110 = np.where(t103, np.where(t102, t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]), t108*(t87*t109 - t105*t86)), t92)
+    t111 = np.where(t103, np.where(t102, t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]), t108*(t88*t109 - t106*t86)), t93)
+    t112 = np.where(t103, np.where(t102, t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]), t108*(t89*t109 - t107*t86)), t94)
+    dq3 = np.empty((5,) + batch, dtype=DTYPE)
+    dq3[0] = t112 + t110*t21 + t111*t22
+    dq3[1] = t112 + t110*t19 + t111*t20
+    dq3[2] = t112 + t110*t17 + t111*t18
+    dq3[3] = t112 + t110*t15 + t111*t16
+    dq3[4] = t112 + t8*t111 + t110*t14
+    return _output(dq3, (5,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 5).
+    l: array of shape (..., 5).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 5).
+    Operations: 5 sin, 5 cos, 95 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (5, 5, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((5,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t4 = cs[0]*l[0]
+    t5 = cs[1]*l[1]
+    t6 = cs[2]*l[2]
+    t7 = cs[3]*l[3]
+    t8 = cs[4]*l[4]
+    t9 = sn[0]*l[0]
+    t10 = sn[1]*l[1]
+    t11 = sn[2]*l[2]
+    t12 = sn[3]*l[3]
+    t13 = sn[4]*l[4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
+    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t59 = lambda_*lambda_
+    t60 = t47 + t59
+    t61 = t49 + t59
+    t62 = t60 + t61
+    t63 = t62
+    t66 = t63*t63
+    t67 = 1.0/t66
+    t70 = t60*t61 - t48*t48
+    t71 = (t70 > RANK_TOL*t66)
+    t72 = 1.0/t70
+    t75 = target[0] - t22
+    t76 = t21 + target[1]
+    t77 = t60*t75 + t48*t76
+    t78 = t61*t76 + t48*t75
+    t79 = t77*t67
+    t80 = t78*t67
+    t81 = np.where(t71, t72*(t75*t63 - t77), t79)
+    t82 = np.where(t71, t72*(t76*t63 - t78), t80)
+    q_next = np.empty((5,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t81*t21 + t82*t22
+    q_next[1] = q[1] + t81*t19 + t82*t20
+    q_next[2] = q[2] + t81*t17 + t82*t18
+    q_next[3] = q[3] + t81*t15 + t82*t16
+    q_next[4] = q[4] + t8*t82 + t81*t14
+    return _output(q_next, (5,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, l, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(30 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-12 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

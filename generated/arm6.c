@@ -7,6 +7,10 @@
  * (counter-clockwise); dq, ddq are its first and second time derivatives.
  * Layout: row-major. J[i] = j_x(i), J[6 + i] = j_y(i) for joint i = 0..5; H likewise.
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+ * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+ * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+ * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+ * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * Precision: double.
  */
 #include <math.h>
@@ -632,4 +636,481 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             arm6_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 12, H + (i + b) * 12, v + (i + b) * 2, a + (i + b) * 2);
         }
     }
+}
+
+/* ---- arm6_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
+/* operations: 6 sin, 6 cos, 41 add/sub, 44 mul, 1 neg, 1 div, 1 sqrt */
+
+static void arm6_manipulability_angles(const double q[6], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[5] = ang[4] + q[5];
+    ang[0] = q[0];
+}
+
+static void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
+{
+    const double t5 = cs[0]*l[0];
+    const double t6 = cs[1]*l[1];
+    const double t7 = cs[2]*l[2];
+    const double t8 = cs[3]*l[3];
+    const double t9 = cs[4]*l[4];
+    const double t10 = cs[5]*l[5];
+    const double t11 = sn[0]*l[0];
+    const double t12 = sn[1]*l[1];
+    const double t13 = sn[2]*l[2];
+    const double t14 = sn[3]*l[3];
+    const double t15 = sn[4]*l[4];
+    const double t16 = sn[5]*l[5];
+    const double t17 = -t16;
+    const double t18 = t17 - t15;
+    const double t19 = t9 + t10;
+    const double t20 = t18 - t14;
+    const double t21 = t8 + t19;
+    const double t22 = t20 - t13;
+    const double t23 = t7 + t21;
+    const double t24 = t22 - t12;
+    const double t25 = t6 + t23;
+    const double t26 = t24 - t11;
+    const double t27 = t5 + t25;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+    const int t60 = t57 >= t59;
+    const double t61 = (t60 ? t57 : t59);
+    const double t62 = t58/t61;
+    const double t63 = (t60 ? t27 : t26) - t62*(t60 ? t26 : t27);
+    const double t64 = (t60 ? t25 : t24) - t62*(t60 ? t24 : t25);
+    const double t65 = (t60 ? t23 : t22) - t62*(t60 ? t22 : t23);
+    const double t66 = (t60 ? t21 : t20) - t62*(t60 ? t20 : t21);
+    const double t67 = (t60 ? t19 : t18) - t62*(t60 ? t18 : t19);
+    const double t68 = (t60 ? t10 : t17) - t62*(t60 ? t17 : t10);
+    const double t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68;
+    w[0] = sqrt(t61*t69);
+}
+
+void arm6_manipulability(const double q[6], const double l[6], double w[1])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 6; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm6_manipulability_angles(q, ang);
+    arm6_trig8(ang, cs, sn);
+    arm6_manipulability_finish(l, cs, sn, w);
+}
+
+void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_manipulability_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm6_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+
+/* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
+/* operations: 6 sin, 6 cos, 44 add/sub, 57 mul, 1 neg, 2 div */
+
+static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[5] = ang[4] + q[5];
+    ang[0] = q[0];
+}
+
+static void arm6_inverse_velocity_finish(const double l[6], const double v[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+{
+    const double t5 = cs[0]*l[0];
+    const double t6 = cs[1]*l[1];
+    const double t7 = cs[2]*l[2];
+    const double t8 = cs[3]*l[3];
+    const double t9 = cs[4]*l[4];
+    const double t10 = cs[5]*l[5];
+    const double t11 = sn[0]*l[0];
+    const double t12 = sn[1]*l[1];
+    const double t13 = sn[2]*l[2];
+    const double t14 = sn[3]*l[3];
+    const double t15 = sn[4]*l[4];
+    const double t16 = sn[5]*l[5];
+    const double t17 = -t16;
+    const double t18 = t17 - t15;
+    const double t19 = t9 + t10;
+    const double t20 = t18 - t14;
+    const double t21 = t8 + t19;
+    const double t22 = t20 - t13;
+    const double t23 = t7 + t21;
+    const double t24 = t22 - t12;
+    const double t25 = t6 + t23;
+    const double t26 = t24 - t11;
+    const double t27 = t5 + t25;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+    const double t70 = lambda*lambda;
+    const double t71 = t57 + t70;
+    const double t72 = t59 + t70;
+    const double t73 = t71 + t72;
+    const double t74 = t73;
+    const double t75 = t71*v[0] + t58*v[1];
+    const double t76 = t72*v[1] + t58*v[0];
+    const double t77 = t74*t74;
+    const double t78 = 1.0/t77;
+    const double t79 = t75*t78;
+    const double t80 = t76*t78;
+    const double t81 = t71*t72 - t58*t58;
+    const int t82 = t81 > ARM6_RANK_TOL*t77;
+    const double t83 = 1.0/t81;
+    const double t84 = (t82 ? t83*(t74*v[0] - t75) : t79);
+    const double t85 = (t82 ? t83*(t74*v[1] - t76) : t80);
+    dq[0] = t84*t26 + t85*t27;
+    dq[1] = t84*t24 + t85*t25;
+    dq[2] = t84*t22 + t85*t23;
+    dq[3] = t84*t20 + t85*t21;
+    dq[4] = t84*t18 + t85*t19;
+    dq[5] = t10*t85 + t84*t17;
+}
+
+void arm6_inverse_velocity(const double q[6], const double l[6], const double v[2], double lambda, double dq[6])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 6; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm6_inverse_velocity_angles(q, ang);
+    arm6_trig8(ang, cs, sn);
+    arm6_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
+}
+
+void arm6_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 6);
+        }
+    }
+}
+
+/* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
+/* operations: 6 sin, 6 cos, 89 add/sub, 105 mul, 1 neg, 3 div */
+
+static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[5] = ang[4] + q[5];
+    ang[0] = q[0];
+}
+
+static void arm6_inverse_velocity3_finish(const double l[6], const double twist[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+{
+    const double t5 = cs[0]*l[0];
+    const double t6 = cs[1]*l[1];
+    const double t7 = cs[2]*l[2];
+    const double t8 = cs[3]*l[3];
+    const double t9 = cs[4]*l[4];
+    const double t10 = cs[5]*l[5];
+    const double t11 = sn[0]*l[0];
+    const double t12 = sn[1]*l[1];
+    const double t13 = sn[2]*l[2];
+    const double t14 = sn[3]*l[3];
+    const double t15 = sn[4]*l[4];
+    const double t16 = sn[5]*l[5];
+    const double t17 = -t16;
+    const double t18 = t17 - t15;
+    const double t19 = t9 + t10;
+    const double t20 = t18 - t14;
+    const double t21 = t8 + t19;
+    const double t22 = t20 - t13;
+    const double t23 = t7 + t21;
+    const double t24 = t22 - t12;
+    const double t25 = t6 + t23;
+    const double t26 = t24 - t11;
+    const double t27 = t5 + t25;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+    const double t70 = lambda*lambda;
+    const double t71 = t57 + t70;
+    const double t72 = t59 + t70;
+    const double t73 = t71 + t72;
+    const double t81 = t71*t72 - t58*t58;
+    const double t94 = t26 + t24 + t22 + t20 + t18 + t17;
+    const double t95 = t10 + t27 + t25 + t23 + t21 + t19;
+    const double t96 = 6.0 + t70;
+    const double t97 = t73 + t96;
+    const double t98 = t71*twist[0] + t58*twist[1] + t94*twist[2];
+    const double t99 = t72*twist[1] + t58*twist[0] + t95*twist[2];
+    const double t100 = t96*twist[2] + t94*twist[0] + t95*twist[1];
+    const double t101 = t97*t97;
+    const double t102 = 1.0/t101;
+    const double t103 = t98*t102;
+    const double t104 = t99*t102;
+    const double t105 = t100*t102;
+    const double t106 = t72*t96 - t95*t95;
+    const double t107 = t94*t95 - t96*t58;
+    const double t108 = t58*t95 - t72*t94;
+    const double t109 = t71*t96 - t94*t94;
+    const double t110 = t58*t94 - t71*t95;
+    const double t111 = t71*t106 + t58*t107 + t94*t108;
+    const double t112 = t106 + t109 + t81;
+    const int t113 = t111 > ARM6_RANK_TOL*t112*t97;
+    const int t114 = t112 > ARM6_RANK_TOL*t101;
+    const double t115 = 1.0/t111;
+    const double t116 = t71*t98 + t58*t99 + t94*t100;
+    const double t117 = t72*t99 + t58*t98 + t95*t100;
+    const double t118 = t96*t100 + t94*t98 + t95*t99;
+    const double t119 = 1.0/(t112*t112);
+    const double t120 = t101 - t112;
+    const double t121 = (t114 ? (t113 ? t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]) : t119*(t98*t120 - t116*t97)) : t103);
+    const double t122 = (t114 ? (t113 ? t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]) : t119*(t99*t120 - t117*t97)) : t104);
+    const double t123 = (t114 ? (t113 ? t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]) : t119*(t100*t120 - t118*t97)) : t105);
+    dq3[0] = t123 + t121*t26 + t122*t27;
+    dq3[1] = t123 + t121*t24 + t122*t25;
+    dq3[2] = t123 + t121*t22 + t122*t23;
+    dq3[3] = t123 + t121*t20 + t122*t21;
+    dq3[4] = t123 + t121*t18 + t122*t19;
+    dq3[5] = t123 + t10*t122 + t121*t17;
+}
+
+void arm6_inverse_velocity3(const double q[6], const double l[6], const double twist[3], double lambda, double dq3[6])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 6; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm6_inverse_velocity3_angles(q, ang);
+    arm6_trig8(ang, cs, sn);
+    arm6_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
+}
+
+void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity3_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 6);
+        }
+    }
+}
+
+/* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
+/* operations: 6 sin, 6 cos, 52 add/sub, 57 mul, 1 neg, 2 div */
+
+static void arm6_ik_step_angles(const double q[6], double *restrict ang)
+{
+    ang[1] = q[0] + q[1];
+    ang[2] = ang[1] + q[2];
+    ang[3] = ang[2] + q[3];
+    ang[4] = ang[3] + q[4];
+    ang[5] = ang[4] + q[5];
+    ang[0] = q[0];
+}
+
+static void arm6_ik_step_finish(const double q[6], const double l[6], const double target[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+{
+    const double t5 = cs[0]*l[0];
+    const double t6 = cs[1]*l[1];
+    const double t7 = cs[2]*l[2];
+    const double t8 = cs[3]*l[3];
+    const double t9 = cs[4]*l[4];
+    const double t10 = cs[5]*l[5];
+    const double t11 = sn[0]*l[0];
+    const double t12 = sn[1]*l[1];
+    const double t13 = sn[2]*l[2];
+    const double t14 = sn[3]*l[3];
+    const double t15 = sn[4]*l[4];
+    const double t16 = sn[5]*l[5];
+    const double t17 = -t16;
+    const double t18 = t17 - t15;
+    const double t19 = t9 + t10;
+    const double t20 = t18 - t14;
+    const double t21 = t8 + t19;
+    const double t22 = t20 - t13;
+    const double t23 = t7 + t21;
+    const double t24 = t22 - t12;
+    const double t25 = t6 + t23;
+    const double t26 = t24 - t11;
+    const double t27 = t5 + t25;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+    const double t70 = lambda*lambda;
+    const double t71 = t57 + t70;
+    const double t72 = t59 + t70;
+    const double t73 = t71 + t72;
+    const double t74 = t73;
+    const double t77 = t74*t74;
+    const double t78 = 1.0/t77;
+    const double t81 = t71*t72 - t58*t58;
+    const int t82 = t81 > ARM6_RANK_TOL*t77;
+    const double t83 = 1.0/t81;
+    const double t86 = target[0] - t27;
+    const double t87 = t26 + target[1];
+    const double t88 = t71*t86 + t58*t87;
+    const double t89 = t72*t87 + t58*t86;
+    const double t90 = t88*t78;
+    const double t91 = t89*t78;
+    const double t92 = (t82 ? t83*(t86*t74 - t88) : t90);
+    const double t93 = (t82 ? t83*(t87*t74 - t89) : t91);
+    q_next[0] = q[0] + t92*t26 + t93*t27;
+    q_next[1] = q[1] + t92*t24 + t93*t25;
+    q_next[2] = q[2] + t92*t22 + t93*t23;
+    q_next[3] = q[3] + t92*t20 + t93*t21;
+    q_next[4] = q[4] + t92*t18 + t93*t19;
+    q_next[5] = q[5] + t10*t93 + t92*t17;
+}
+
+void arm6_ik_step(const double q[6], const double l[6], const double target[2], double lambda, double q_next[6])
+{
+    double ang[8], cs[8], sn[8];
+    int k;
+    for (k = 6; k < 8; ++k) {
+        ang[k] = 0;
+    }
+    arm6_ik_step_angles(q, ang);
+    arm6_trig8(ang, cs, sn);
+    arm6_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
+}
+
+void arm6_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_ik_step_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn);
+        for (b = 0; b < count; ++b) {
+            arm6_ik_step_finish(q + (i + b) * 6, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 6);
+        }
+    }
+}
+
+int arm6_ik_solve(const double q0[6], const double l[6], const double target[2], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations)
+{
+    double p[2], q_next[6], trial[6], err, err_trial, alpha, d, mu;
+    int k, it, halving;
+    for (k = 0; k < 6; ++k) {
+        q[k] = q0[k];
+    }
+    *iterations = 0;
+    *error = HUGE_VAL;
+    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+        return ARM6_IK_INVALID;
+    }
+    for (k = 0; k < 6; ++k) {
+        if (!isfinite(q0[k])) {
+            return ARM6_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(target[k])) {
+            return ARM6_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 6; ++k) {
+        trial[k] = q[k];
+    }
+    arm6_position(trial, l, p);
+    err = 0.0;
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        err += d * d;
+    }
+    err = sqrt(err);
+    *error = err;
+    for (it = 0; it < max_iter; ++it) {
+        if (err <= tol) {
+            return ARM6_IK_CONVERGED;
+        }
+        mu = 0.5 * err;
+        if (mu < lambda) {
+            mu = lambda;
+        }
+        arm6_ik_step(q, l, target, mu, q_next);
+        alpha = 1.0;
+        for (halving = 0;; ++halving) {
+            for (k = 0; k < 6; ++k) {
+                trial[k] = q[k] + alpha * (q_next[k] - q[k]);
+            }
+            arm6_position(trial, l, p);
+            err_trial = 0.0;
+            for (k = 0; k < 2; ++k) {
+                d = target[k] - p[k];
+                err_trial += d * d;
+            }
+            err_trial = sqrt(err_trial);
+            if (err_trial < err) {
+                break;
+            }
+            if (halving == 30) {
+                return ARM6_IK_STALLED;
+            }
+            alpha *= 0.5;
+        }
+        for (k = 0; k < 6; ++k) {
+            q[k] = trial[k];
+        }
+        *iterations = it + 1;
+        d = err - err_trial;
+        err = err_trial;
+        *error = err;
+        if (err <= tol) {
+            return ARM6_IK_CONVERGED;
+        }
+        if (d <= 1e-12 * err) {
+            return ARM6_IK_STALLED;
+        }
+    }
+    return err <= tol ? ARM6_IK_CONVERGED : ARM6_IK_MAX_ITER;
 }

@@ -7,23 +7,48 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[6 + i] = j_y(i) for joint i = 0..5; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
+the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
+(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
+so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 Precision: double.
 """
+
+from collections import namedtuple
 
 import numpy as np
 
 DTYPE = np.float64
+RANK_TOL = 2.220446049250313e-14
+"""relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 
-__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics"]
+__all__ = ["position", "jacobian", "coriolis", "velocity", "acceleration", "kinematics", "manipulability", "inverse_velocity", "inverse_velocity3", "ik_step", "ik_solve", "IKResult"]
 
 
-def _inputs(values, names, sizes):
+def _check_domain(array, name, domain):
+    if domain and not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    if domain == "nonnegative" and np.any(array < 0):
+        raise ValueError(f"{name} must be >= 0")
+
+
+def _scalar(value, name, domain):
+    """A number shared by the whole batch."""
+    array = np.asarray(value, dtype=DTYPE)
+    if array.ndim != 0:
+        raise ValueError(f"{name} must be a single number, got shape {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
     arrays = []
-    for value, name, size in zip(values, names, sizes):
+    for value, name, size, domain in zip(values, names, sizes, domains):
         array = np.asarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        _check_domain(array, name, domain)
         arrays.append(array)
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
@@ -46,7 +71,7 @@ def position(q, l):
     Returns p of shape (..., 2).
     Operations: 6 sin, 6 cos, 29 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -93,7 +118,7 @@ def jacobian(q, l):
     Returns J of shape (..., 2, 6).
     Operations: 6 sin, 6 cos, 28 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -151,7 +176,7 @@ def coriolis(q, dq, l):
     Returns H of shape (..., 2, 6).
     Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -227,7 +252,7 @@ def velocity(q, dq, l):
     Returns v of shape (..., 2).
     Operations: 6 sin, 6 cos, 47 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -294,7 +319,7 @@ def acceleration(q, dq, ddq, l):
     Returns a of shape (..., 2).
     Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -372,7 +397,7 @@ def kinematics(q, dq, ddq, l):
     Returns p of shape (..., 2), J of shape (..., 2, 6), H of shape (..., 2, 6), v of shape (..., 2), a of shape (..., 2).
     Operations: 6 sin, 6 cos, 105 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
     ang = np.empty((6,) + batch, dtype=DTYPE)
     ang[1] = q[0] + q[1]
     ang[2] = ang[1] + q[2]
@@ -470,3 +495,357 @@ def kinematics(q, dq, ddq, l):
     a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5]
     a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4]
     return _output(p, (2,)), _output(J, (2, 6,)), _output(H, (2, 6,)), _output(v, (2,)), _output(a, (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 6).
+    l: array of shape (..., 6).
+    Returns w of shape (..., 1).
+    Operations: 6 sin, 6 cos, 86 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
+    ang = np.empty((6,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[5] = ang[4] + q[5]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t5 = cs[0]*l[0]
+    t6 = cs[1]*l[1]
+    t7 = cs[2]*l[2]
+    t8 = cs[3]*l[3]
+    t9 = cs[4]*l[4]
+    t10 = cs[5]*l[5]
+    t11 = sn[0]*l[0]
+    t12 = sn[1]*l[1]
+    t13 = sn[2]*l[2]
+    t14 = sn[3]*l[3]
+    t15 = sn[4]*l[4]
+    t16 = sn[5]*l[5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
+    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
+    t60 = (t57 >= t59)
+    t61 = np.where(t60, t57, t59)
+    t62 = t58/t61
+    t63 = np.where(t60, t27, t26) - t62*np.where(t60, t26, t27)
+    t64 = np.where(t60, t25, t24) - t62*np.where(t60, t24, t25)
+    t65 = np.where(t60, t23, t22) - t62*np.where(t60, t22, t23)
+    t66 = np.where(t60, t21, t20) - t62*np.where(t60, t20, t21)
+    t67 = np.where(t60, t19, t18) - t62*np.where(t60, t18, t19)
+    t68 = np.where(t60, t10, t17) - t62*np.where(t60, t17, t10)
+    t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68
+    w = np.empty((1,) + batch, dtype=DTYPE)
+    w[0] = np.sqrt(t61*t69)
+    return _output(w, (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+
+    q: array of shape (..., 6).
+    l: array of shape (..., 6).
+    v: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq of shape (..., 6).
+    Operations: 6 sin, 6 cos, 102 add/sub/mul/neg.
+    """
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (6, 6, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((6,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[5] = ang[4] + q[5]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t5 = cs[0]*l[0]
+    t6 = cs[1]*l[1]
+    t7 = cs[2]*l[2]
+    t8 = cs[3]*l[3]
+    t9 = cs[4]*l[4]
+    t10 = cs[5]*l[5]
+    t11 = sn[0]*l[0]
+    t12 = sn[1]*l[1]
+    t13 = sn[2]*l[2]
+    t14 = sn[3]*l[3]
+    t15 = sn[4]*l[4]
+    t16 = sn[5]*l[5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
+    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
+    t70 = lambda_*lambda_
+    t71 = t57 + t70
+    t72 = t59 + t70
+    t73 = t71 + t72
+    t74 = t73
+    t75 = t71*v[0] + t58*v[1]
+    t76 = t72*v[1] + t58*v[0]
+    t77 = t74*t74
+    t78 = 1.0/t77
+    t79 = t75*t78
+    t80 = t76*t78
+    t81 = t71*t72 - t58*t58
+    t82 = (t81 > RANK_TOL*t77)
+    t83 = 1.0/t81
+    t84 = np.where(t82, t83*(t74*v[0] - t75), t79)
+    t85 = np.where(t82, t83*(t74*v[1] - t76), t80)
+    dq = np.empty((6,) + batch, dtype=DTYPE)
+    dq[0] = t84*t26 + t85*t27
+    dq[1] = t84*t24 + t85*t25
+    dq[2] = t84*t22 + t85*t23
+    dq[3] = t84*t20 + t85*t21
+    dq[4] = t84*t18 + t85*t19
+    dq[5] = t10*t85 + t84*t17
+    return _output(dq, (6,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 6).
+    l: array of shape (..., 6).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 6).
+    Operations: 6 sin, 6 cos, 195 add/sub/mul/neg.
+    """
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (6, 6, 3, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((6,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[5] = ang[4] + q[5]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t5 = cs[0]*l[0]
+    t6 = cs[1]*l[1]
+    t7 = cs[2]*l[2]
+    t8 = cs[3]*l[3]
+    t9 = cs[4]*l[4]
+    t10 = cs[5]*l[5]
+    t11 = sn[0]*l[0]
+    t12 = sn[1]*l[1]
+    t13 = sn[2]*l[2]
+    t14 = sn[3]*l[3]
+    t15 = sn[4]*l[4]
+    t16 = sn[5]*l[5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
+    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
+    t70 = lambda_*lambda_
+    t71 = t57 + t70
+    t72 = t59 + t70
+    t73 = t71 + t72
+    t81 = t71*t72 - t58*t58
+    t94 = t26 + t24 + t22 + t20 + t18 + t17
+    t95 = t10 + t27 + t25 + t23 + t21 + t19
+    t96 = 6.0 + t70
+    t97 = t73 + t96
+    t98 = t71*twist[0] + t58*twist[1] + t94*twist[2]
+    t99 = t72*twist[1] + t58*twist[0] + t95*twist[2]
+    t100 = t96*twist[2] + t94*twist[0] + t95*twist[1]
+    t101 = t97*t97
+    t102 = 1.0/t101
+    t103 = t98*t102
+    t104 = t99*t102
+    t105 = t100*t102
+    t106 = t72*t96 - t95*t95
+    t107 = t94*t95 - t96*t58
+    t108 = t58*t95 - t72*t94
+    t109 = t71*t96 - t94*t94
+    t110 = t58*t94 - t71*t95
+    t111 = t71*t106 + t58*t107 + t94*t108
+    t112 = t106 + t109 + t81
+    t113 = (t111 > RANK_TOL*t112*t97)
+    t114 = (t112 > RANK_TOL*t101)
+    t115 = 1.0/t111
+    t116 = t71*t98 + t58*t99 + t94*t100
+    t117 = t72*t99 + t58*t98 + t95*t100
+    t118 = t96*t100 + t94*t98 + t95*t99
+    t119 = 1.0/(t112*t112)
+    t120 = t101 - t112
+    t121 = np.where(t114, np.where(t113, t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]), t119*(t98*t120 - t116*t97)), t103)
+    t122 = np.where(t114, np.where(t113, t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]), t119*(t99*t120 - t117*t97)), t104)
+    t123 = np.where(t114, np.where(t113, t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]), t119*(t100*t120 - t118*t97)), t105)
+    dq3 = np.empty((6,) + batch, dtype=DTYPE)
+    dq3[0] = t123 + t121*t26 + t122*t27
+    dq3[1] = t123 + t121*t24 + t122*t25
+    dq3[2] = t123 + t121*t22 + t122*t23
+    dq3[3] = t123 + t121*t20 + t122*t21
+    dq3[4] = t123 + t121*t18 + t122*t19
+    dq3[5] = t123 + t10*t122 + t121*t17
+    return _output(dq3, (6,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 6).
+    l: array of shape (..., 6).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 6).
+    Operations: 6 sin, 6 cos, 110 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (6, 6, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    ang = np.empty((6,) + batch, dtype=DTYPE)
+    ang[1] = q[0] + q[1]
+    ang[2] = ang[1] + q[2]
+    ang[3] = ang[2] + q[3]
+    ang[4] = ang[3] + q[4]
+    ang[5] = ang[4] + q[5]
+    ang[0] = q[0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t5 = cs[0]*l[0]
+    t6 = cs[1]*l[1]
+    t7 = cs[2]*l[2]
+    t8 = cs[3]*l[3]
+    t9 = cs[4]*l[4]
+    t10 = cs[5]*l[5]
+    t11 = sn[0]*l[0]
+    t12 = sn[1]*l[1]
+    t13 = sn[2]*l[2]
+    t14 = sn[3]*l[3]
+    t15 = sn[4]*l[4]
+    t16 = sn[5]*l[5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
+    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
+    t70 = lambda_*lambda_
+    t71 = t57 + t70
+    t72 = t59 + t70
+    t73 = t71 + t72
+    t74 = t73
+    t77 = t74*t74
+    t78 = 1.0/t77
+    t81 = t71*t72 - t58*t58
+    t82 = (t81 > RANK_TOL*t77)
+    t83 = 1.0/t81
+    t86 = target[0] - t27
+    t87 = t26 + target[1]
+    t88 = t71*t86 + t58*t87
+    t89 = t72*t87 + t58*t86
+    t90 = t88*t78
+    t91 = t89*t78
+    t92 = np.where(t82, t83*(t86*t74 - t88), t90)
+    t93 = np.where(t82, t83*(t87*t74 - t89), t91)
+    q_next = np.empty((6,) + batch, dtype=DTYPE)
+    q_next[0] = q[0] + t92*t26 + t93*t27
+    q_next[1] = q[1] + t92*t24 + t93*t25
+    q_next[2] = q[2] + t92*t22 + t93*t23
+    q_next[3] = q[3] + t92*t20 + t93*t21
+    q_next[4] = q[4] + t92*t18 + t93*t19
+    q_next[5] = q[5] + t10*t93 + t92*t17
+    return _output(q_next, (6,))
+
+
+IKResult = namedtuple("IKResult", "q status error iterations")
+IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "stalled", "max_iter"),
+endpoint error |target - p| at q, and the number of steps taken."""
+
+
+def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
+    """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
+
+    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
+    until the endpoint error decreases. Stops "converged" when the
+    error is <= tol, "stalled" when no shorter step helps or the error improves by less
+    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    """
+    q = np.array(q0, dtype=DTYPE)
+    if q.ndim != 1 or not np.all(np.isfinite(q)):
+        raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
+    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
+        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    target = np.asarray(target, dtype=DTYPE)
+    _check_domain(target, "target", "finite")
+    lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+
+    def error_at(trial):
+        return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
+
+    err = error_at(q)
+    for iteration in range(int(max_iter)):
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration)
+        mu = max(lambda_, 0.5 * err)
+        q_next = ik_step(q, l, target, mu)
+        alpha = DTYPE(1.0)
+        for halving in range(30 + 1):
+            trial = q + alpha * (q_next - q)
+            err_trial = error_at(trial)
+            if err_trial < err:
+                break
+            alpha = alpha * DTYPE(0.5)
+        else:
+            return IKResult(q, "stalled", err, iteration)
+        improvement = err - err_trial
+        q, err = trial, err_trial
+        if err <= tol:
+            return IKResult(q, "converged", err, iteration + 1)
+        if improvement <= 1e-12 * err:
+            return IKResult(q, "stalled", err, iteration + 1)
+    return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

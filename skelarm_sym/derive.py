@@ -26,6 +26,7 @@ from typing import Iterable, Sequence
 
 import sympy as sp
 
+from . import linalg
 from .models.planar import PlanarArm
 
 Step = tuple[sp.Symbol, sp.Expr]
@@ -41,18 +42,50 @@ class FunctionSpec:
     summary: str
 
 
+@dataclass(frozen=True, eq=False)
+class Constant:
+    """A named constant the emitted code defines once, with a value per precision."""
+
+    symbol: sp.Symbol
+    values: dict[str, float]
+    doc: str
+
+    @property
+    def name(self) -> str:
+        """Upper-case name; backends prefix it (``ARM3_RANK_TOL`` in C)."""
+        return self.symbol.name
+
+
+RANK_TOL = Constant(
+    sp.Symbol("RANK_TOL", positive=True),
+    {"double": 100 * 2.220446049250313e-16, "float": 100 * 1.1920928955078125e-07},
+    "relative rank tolerance of the closed-form solves: 100 machine epsilons",
+)
+"""A symmetric 2 x 2 ``A`` counts as singular when ``det A <= RANK_TOL * tr(A)**2``; see
+:mod:`skelarm_sym.linalg` for 3 x 3 (both: smallest eigenvalue below about RANK_TOL times the largest)."""
+
+
 class StepRecorder:
-    """Collects named intermediate quantities; trivial ones (atoms) are not given a name."""
+    """Collects named intermediate quantities.
+
+    Trivial ones (atoms) are not given a name, and an expression recorded before
+    returns its first name (two derivations of the same quantity share one step).
+    """
 
     def __init__(self, tag: str) -> None:
         self._tag = tag
         self.steps: list[Step] = []
+        self._known: dict[sp.Expr, sp.Symbol] = {}
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         if expr.is_Atom:
             return expr
+        known = self._known.get(expr)
+        if known is not None:
+            return known
         symbol = sp.Symbol(f"_{self._tag}_{label}", real=True)
         self.steps.append((symbol, expr))
+        self._known[expr] = symbol
         return symbol
 
 
@@ -79,9 +112,14 @@ class Derivation:
         parameters: inputs that describe the mechanism rather than its state; batch
             functions share them across configurations.
         notes: lines for the headers of emitted files (model, conventions, layout).
+        scalars: inputs passed as one number (by value in C) rather than an array;
+            they must be parameters.
+        domains: input name -> ``"finite"`` or ``"nonnegative"`` (finite and >= 0):
+            the Python wrappers reject other values with a ``ValueError``.
+        constants: named constants the emitted code defines (see :class:`Constant`).
     """
 
-    model: PlanarArm
+    model: object
     inputs: dict[str, tuple[sp.Symbol, ...]]
     lengths: tuple[sp.Expr, ...]
     steps: tuple[Step, ...]
@@ -90,6 +128,9 @@ class Derivation:
     functions: tuple[FunctionSpec, ...]
     parameters: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    scalars: tuple[str, ...] = ()
+    domains: dict[str, str] = field(default_factory=dict)
+    constants: tuple[Constant, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
 
     # -- symbols --------------------------------------------------------------
@@ -97,6 +138,13 @@ class Derivation:
     def n(self) -> int:
         """Number of links (and joints)."""
         return self.model.n
+
+    def function(self, name: str) -> FunctionSpec:
+        """The function spec called ``name``; ``KeyError`` if this derivation has none."""
+        for spec in self.functions:
+            if spec.name == name:
+                return spec
+        raise KeyError(name)
 
     @property
     def q(self) -> tuple[sp.Symbol, ...]:
@@ -162,6 +210,11 @@ class Derivation:
         """Endpoint acceleration ``J ddq + H dq``, 2 x 1."""
         return self.closed_form("a")
 
+    @property
+    def w(self) -> sp.Expr:
+        """Manipulability ``sqrt(det(J J^T))``, as emitted (see :func:`skelarm_sym.linalg.gram_root`)."""
+        return self.closed_form("w")[0]
+
 
 PLANAR_FUNCTIONS = (
     FunctionSpec("position", ("q", "l"), ("p",), "endpoint position p (2)"),
@@ -170,7 +223,21 @@ PLANAR_FUNCTIONS = (
     FunctionSpec("velocity", ("q", "dq", "l"), ("v",), "endpoint velocity v = J dq (2)"),
     FunctionSpec("acceleration", ("q", "dq", "ddq", "l"), ("a",), "endpoint acceleration a = J ddq + H dq (2)"),
     FunctionSpec("kinematics", ("q", "dq", "ddq", "l"), ("p", "J", "H", "v", "a"), "p, J, H, v and a at once"),
+    FunctionSpec("manipulability", ("q", "l"), ("w",), "manipulability w = sqrt(det(J J^T)) (1)"),
+    FunctionSpec(
+        "inverse_velocity", ("q", "l", "v", "lambda"), ("dq",),
+        "joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N)",
+    ),
+    FunctionSpec(
+        "inverse_velocity3", ("q", "l", "twist", "lambda"), ("dq3",),
+        "joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N)",
+    ),
+    FunctionSpec(
+        "ik_step", ("q", "l", "target", "lambda"), ("q_next",),
+        "one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N)",
+    ),
 )
+"""Functions of a planar arm; ``inverse_velocity3`` only for n >= 3 (J3 has rank 3 only there)."""
 
 
 def _length_value(x: float) -> sp.Expr:
@@ -229,6 +296,7 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Deriva
             hx[k] = step(f"hx{k + 1}", hx[k + 1] - XW[k])
             hy[k] = step(f"hy{k + 1}", hy[k + 1] - YW[k])
 
+    inverse = _inverse_kinematics(step, q, jx, jy)
     a_x = sp.Add(*[jx[k] * ddq[k] for k in range(n)], *[hx[k] * dq[k] for k in range(n)])
     a_y = sp.Add(*[jy[k] * ddq[k] for k in range(n)], *[hy[k] * dq[k] for k in range(n)])
     J = sp.Matrix([jx, jy])
@@ -240,21 +308,77 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Deriva
         "H": sp.Matrix([hx, hy]),
         "v": sp.Matrix([hy[0], -hx[0]]),
         "a": sp.Matrix([a_x, a_y]),
+        **inverse.outputs,
     }
+    inputs.update(inverse.inputs)
+    shapes = {"p": (2,), "phi": (1,), "J": (2, n), "J3": (3, n), "H": (2, n), "v": (2,), "a": (2,)}
+    shapes.update({name: (len(m),) for name, m in inverse.outputs.items()})
+    functions = tuple(f for f in PLANAR_FUNCTIONS if f.name != "inverse_velocity3" or n >= 3)
     return Derivation(
         model=model,
         inputs=inputs,
         lengths=tuple(l_syms),
         steps=tuple(step.steps),
         compact=compact,
-        shapes={"p": (2,), "phi": (1,), "J": (2, n), "J3": (3, n), "H": (2, n), "v": (2,), "a": (2,)},
-        functions=PLANAR_FUNCTIONS,
-        parameters=("l",),
+        shapes=shapes,
+        functions=functions,
+        parameters=("l", "lambda"),
+        scalars=("lambda",),
+        domains={"lambda": "nonnegative", "v": "finite", "twist": "finite", "target": "finite"},
+        constants=(RANK_TOL,),
         notes=(
             f"Model: {model.describe()}.",
             "Angles: q[i] is the angle of joint i relative to the previous link, in radians",
             "(counter-clockwise); dq, ddq are its first and second time derivatives.",
             f"Layout: row-major. J[i] = j_x(i), J[{n} + i] = j_y(i) for joint i = 0..{n - 1}; H likewise.",
             "p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.",
+            "Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;",
+            "the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest",
+            "(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,",
+            "so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).",
         ),
     )
+
+
+@dataclass(frozen=True)
+class _Inverse:
+    inputs: dict[str, tuple[sp.Symbol, ...]]
+    outputs: dict[str, sp.Matrix]
+
+
+def _inverse_kinematics(step: StepRecorder, q, jx, jy) -> _Inverse:
+    """Manipulability, damped inverse velocity (2 and 3 rows) and the damped IK step, as steps.
+
+    ``J J^T`` is three sums over the columns (linear in n); every solve is the
+    closed form of :func:`skelarm_sym.linalg.sym_solve`.
+    """
+    n = len(q)
+    lam = sp.Symbol("lambda", real=True)
+    v_in = sp.symbols("v_x v_y", real=True)
+    twist = sp.symbols("t_x t_y t_w", real=True)
+    target = sp.symbols("target_x target_y", real=True)
+    tol = RANK_TOL.symbol
+
+    G = linalg.gram(step, [jx, jy], "G")
+    w = linalg.gram_root(step, [jx, jy], G, "w")
+    lam2 = step("lam2", lam**2)
+    A = linalg.add_diagonal(step, G, lam2, "A")
+
+    def back(u):  # J^T u
+        return [jx[i] * u[0] + jy[i] * u[1] for i in range(n)]
+
+    dq = back(linalg.sym_solve(step, A, v_in, tol, "iv"))
+    err = [step("ex", target[0] - jy[0]), step("ey", target[1] + jx[0])]
+    dq_ik = back(linalg.sym_solve(step, A, err, tol, "ik"))
+    q_next = [q[i] + dq_ik[i] for i in range(n)]
+
+    inputs = {"v": v_in, "target": target, "lambda": (lam,)}
+    outputs = {"w": sp.Matrix([w]), "dq": sp.Matrix(dq), "q_next": sp.Matrix(q_next)}
+    if n >= 3:  # with the orientation row (all ones): J3 J3^T + lambda^2 I, 3 x 3
+        sx = step("Gsx", sp.Add(*jx))
+        sy = step("Gsy", sp.Add(*jy))
+        G3 = [[G[0][0], G[0][1], sx], [G[0][1], G[1][1], sy], [sx, sy, sp.Integer(n)]]
+        u3 = linalg.sym_solve(step, linalg.add_diagonal(step, G3, lam2, "A3_"), twist, tol, "iv3")
+        inputs["twist"] = twist
+        outputs["dq3"] = sp.Matrix([jx[i] * u3[0] + jy[i] * u3[1] + u3[2] for i in range(n)])
+    return _Inverse(inputs, outputs)

@@ -39,6 +39,14 @@ class ArrayArg:
         """Number of elements."""
         return len(self.elements)
 
+    @property
+    def is_scalar(self) -> bool:
+        """True for a single number passed by value (shape ``()``)."""
+        return self.shape == ()
+
+
+_COUNTED = ("add", "mul", "neg", "div", "sqrt", "max", "cmp", "select")
+
 
 @dataclass(frozen=True)
 class OpCount:
@@ -49,6 +57,9 @@ class OpCount:
     neg: int = 0
     div: int = 0
     sqrt: int = 0
+    max: int = 0
+    cmp: int = 0
+    select: int = 0
     sin: int = 0
     cos: int = 0
 
@@ -59,7 +70,7 @@ class OpCount:
 
     def as_dict(self) -> dict[str, int]:
         """All counts by name, plus ``arithmetic``."""
-        out = {k: getattr(self, k) for k in ("add", "mul", "neg", "div", "sqrt", "sin", "cos")}
+        out = {k: getattr(self, k) for k in _COUNTED + ("sin", "cos")}
         out["arithmetic"] = self.arithmetic
         return out
 
@@ -81,6 +92,8 @@ class Program:
     numbers: dict[sp.Symbol, int]
     """Position of each temporary in the derivation-wide program: the same temporary gets the
     same number (and so the same printed name) in every function."""
+    constants: tuple = ()
+    """The :class:`~skelarm_sym.derive.Constant` objects the program uses."""
 
     @property
     def temporaries(self) -> tuple[sp.Symbol, ...]:
@@ -100,7 +113,8 @@ def count_ops(expr: sp.Expr) -> Counter:
     subtraction; one negation more when every term is negative). A ``Mul`` of k
     factors is k-1 multiplications; a coefficient -1 is a negation when it
     stands alone. ``x**2`` is one multiplication, ``x**-1`` a division,
-    ``x**(1/2)`` a square root.
+    ``x**(1/2)`` a square root. ``Max`` of k arguments is k-1 ``max``; a
+    comparison is one ``cmp``; a ``Piecewise`` of k pieces is k-1 ``select``.
     """
     counts: Counter = Counter()
     stack = [(sp.sympify(expr), False)]  # (expression, negation already paid for)
@@ -132,6 +146,9 @@ def count_ops(expr: sp.Expr) -> Counter:
                 counts["mul"] += 1
             elif exp == -1:
                 counts["div"] += 1
+            elif exp == -2:
+                counts["div"] += 1
+                counts["mul"] += 1
             elif exp == sp.Rational(1, 2):
                 counts["sqrt"] += 1
             elif exp == sp.Rational(-1, 2):
@@ -142,6 +159,18 @@ def count_ops(expr: sp.Expr) -> Counter:
             else:
                 counts["pow"] += 1
             stack.append((base, False))
+        elif isinstance(e, sp.Piecewise):
+            counts["select"] += len(e.args) - 1
+            for value, condition in e.args:
+                stack.append((value, False))
+                if condition is not sp.true:
+                    stack.append((condition, False))
+        elif e.is_Relational:
+            counts["cmp"] += 1
+            stack.extend((a, False) for a in e.args)
+        elif isinstance(e, sp.Max):
+            counts["max"] += len(e.args) - 1
+            stack.extend((a, False) for a in e.args)
         elif isinstance(e, (sp.sin, sp.cos)):
             counts[type(e).__name__] += 1
             stack.append((e.args[0], False))
@@ -275,7 +304,7 @@ def build_program(derivation: Derivation, spec: FunctionSpec, optimised: Optimis
     """The straight-line program of function ``spec``: what its outputs need, in order, counted."""
     opt = optimised if optimised is not None else optimise(derivation)
     inputs = tuple(
-        ArrayArg(name, (len(derivation.inputs[name]),), tuple(derivation.inputs[name]))
+        ArrayArg(name, () if name in derivation.scalars else (len(derivation.inputs[name]),), tuple(derivation.inputs[name]))
         for name in spec.inputs
         if name in derivation.inputs
     )
@@ -301,7 +330,7 @@ def build_program(derivation: Derivation, spec: FunctionSpec, optimised: Optimis
         total.update(count_ops(rhs))
     for e in out_exprs:
         total.update(count_ops(e))
-    known = {k: total.pop(k, 0) for k in ("add", "mul", "neg", "div", "sqrt")}
+    known = {k: total.pop(k, 0) for k in _COUNTED}
     if total:
         raise ValueError(f"internal error: unsupported operations {dict(total)} in {spec.name}")
     ops = OpCount(**known, sin=len(slots), cos=len(slots))
@@ -309,7 +338,13 @@ def build_program(derivation: Derivation, spec: FunctionSpec, optimised: Optimis
         spec.name, spec.summary, inputs, outputs, tuple(pre), angles,
         tuple(opt.cos[k] for k in slots), tuple(opt.sin[k] for k in slots), tuple(post), ops,
         {symbol: i for i, (symbol, _) in enumerate(opt.assignments)},
+        tuple(c for c in derivation.constants if c.symbol in referenced_all(pre + post, out_exprs)),
     )
+
+
+def referenced_all(assignments: Sequence[Assignment], exprs: Sequence[sp.Expr]) -> set[sp.Symbol]:
+    """Every symbol the right-hand sides of ``assignments`` and ``exprs`` mention."""
+    return {s for _, rhs in assignments for s in rhs.free_symbols} | {s for e in exprs for s in e.free_symbols}
 
 
 def _dependency_order(assignments: Sequence[Assignment]) -> list[Assignment]:

@@ -31,7 +31,7 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
     assert "compiled" in out and "kinematics: 3 sin, 3 cos" in out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.c", "demo.h", "demo.py"]
     assert main(["check", "--links", "4", "--cases", "10", "--precision", "float"]) == 0
-    assert "20 passed, 0 failed" in capsys.readouterr().out
+    assert "34 passed, 0 failed" in capsys.readouterr().out  # 10 forward, w, 3 solves x 2 dampings; C and Python
 
 
 @pytest.mark.parametrize(

@@ -57,7 +57,10 @@ def _evaluate(d, names, q, dq, ddq, l):
         if flat is None:  # larger n: evaluate through the steps themselves
             env = dict(zip(args, values))
             for sym, expr in d.steps:
-                env[sym] = float(expr.xreplace(env)) if expr.free_symbols else float(expr)
+                value = expr.xreplace(env)
+                if value.free_symbols:  # needs inputs not given here (target, lambda, ...)
+                    continue
+                env[sym] = value if isinstance(value, sp.logic.boolalg.BooleanAtom) else float(value)
             vals = [float(e.xreplace(env)) for e in compact]
         else:
             vals = fn(*values)

@@ -16,7 +16,7 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from ..program import Program
-from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, MemoPrinter, pad, render_template, storage_names
+from .common import ANGLES, COSINES, IK_SETTINGS, IK_STATUS, SINES, ArrayPrinterMixin, MemoPrinter, pad, render_template, storage_names
 
 LANGUAGE = "c"
 FILE_SUFFIXES = (".h", ".c")
@@ -39,6 +39,7 @@ class CPrecision:
     cos: str
     sqrt: str
     fabs: str
+    fmax: str
 
     def literal(self, value: float) -> str:
         """A C literal of this precision for ``value``."""
@@ -49,8 +50,8 @@ class CPrecision:
 
 
 PRECISIONS = {
-    "double": CPrecision("double", "", "sin", "cos", "sqrt", "fabs"),
-    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf", "fabsf"),
+    "double": CPrecision("double", "", "sin", "cos", "sqrt", "fabs", "fmax"),
+    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf", "fabsf", "fmaxf"),
 }
 
 
@@ -61,6 +62,7 @@ class CArrayPrinter(ArrayPrinterMixin, C99CodePrinter):
         super().__init__(names)
         self._precision = precision
         self.sqrt_name = precision.sqrt
+        self.max_name = precision.fmax
 
     def literal(self, value: float) -> str:
         return self._precision.literal(value)
@@ -68,12 +70,17 @@ class CArrayPrinter(ArrayPrinterMixin, C99CodePrinter):
 
 def _params(args, ctype: str, const: bool) -> list[str]:
     qualifier = "const " if const else ""
-    return [f"{qualifier}{ctype} {a.name}[{a.size}]" for a in args]
+    return [f"{ctype} {a.name}" if a.is_scalar else f"{qualifier}{ctype} {a.name}[{a.size}]" for a in args]
+
+
+def constant_name(prefix: str, name: str) -> str:
+    """The C macro of constant ``name`` (``ARM3_RANK_TOL``)."""
+    return f"{prefix.upper()}_{name}"
 
 
 def function_context(program: Program, precision: CPrecision, prefix: str, shared: frozenset[str], memo: MemoPrinter | None = None) -> dict:
     """What the templates need to lay out one program as C functions."""
-    names = storage_names(program)
+    names = storage_names(program, constant=constant_name(prefix, "{name}"))
     printer = CArrayPrinter(names, precision)
     memo = memo or MemoPrinter()
     ctype = precision.ctype
@@ -82,7 +89,10 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     def statement(symbol: sp.Symbol, expr: sp.Expr) -> str:
         target = names[symbol]
         code = memo(printer, names, expr)
-        return f"{target} = {code};" if symbol in angle_set else f"const {ctype} {target} = {code};"
+        if symbol in angle_set:
+            return f"{target} = {code};"
+        kind = "int" if isinstance(expr, sp.core.relational.Relational) else ctype
+        return f"const {kind} {target} = {code};"
 
     def used_inputs(statements_exprs) -> list:
         free = set().union(*(e.free_symbols for e in statements_exprs)) if statements_exprs else set()
@@ -97,7 +107,11 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     return {
         "name": f"{prefix}_{program.name}",
         "summary": program.summary,
-        "inputs": [{"name": a.name, "size": a.size, "shared": a.name in shared} for a in program.inputs],
+        "inputs": [
+            {"name": a.name, "size": a.size, "shared": a.name in shared, "scalar": a.is_scalar,
+             "param": _params([a], ctype, True)[0]}
+            for a in program.inputs
+        ],
         "outputs": [{"name": o.name, "size": len(o.elements), "shape": o.shape} for o in program.outputs],
         "params": _params(program.inputs, ctype, True) + _params(program.outputs, ctype, False),
         "pre_inputs": [a.name for a in used_inputs(pre_exprs)],
@@ -125,6 +139,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     functions = [function_context(p, precision, options.prefix, shared, memo) for p in programs]
     sizes = {f["padded"] for f in functions if f["padded"]} | {f["padded"] * f["block"] for f in functions if f["padded"]}
     trig_sizes = [{"size": size, "vector": size > SCALAR_UP_TO} for size in sorted(sizes)]
+    constants = {c.name: c for p in programs for c in p.constants}
     context = {
         "prefix": options.prefix,
         "guard": options.prefix.upper() + "_H",
@@ -132,9 +147,46 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
         "precision": precision,
         "functions": functions,
         "trig_sizes": trig_sizes,
+        "constants": [
+            {"macro": constant_name(options.prefix, c.name), "value": precision.literal(c.values[options.precision]), "doc": c.doc}
+            for c in constants.values()
+        ],
+        "ik": ik_context(programs, precision, options.prefix),
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
     }
     return {
         ".h": render_template("c_header.h.j2", **context),
         ".c": render_template("c_source.c.j2", **context),
+    }
+
+
+def ik_context(programs: list[Program], precision: CPrecision, prefix: str) -> dict | None:
+    """The iterative IK solver's layout, when the programs include ``position`` and ``ik_step``."""
+    by_name = {p.name: p for p in programs}
+    if "position" not in by_name or "ik_step" not in by_name:
+        return None
+    step, position = by_name["ik_step"], by_name["position"]
+    ctype = precision.ctype
+    n = next(a.size for a in step.inputs if a.name == "q")
+    target = next(a for a in step.inputs if a.name == "target")
+    others = [a for a in step.inputs if a.name != "q"]
+    settings = IK_SETTINGS[precision.ctype]
+    return {
+        "name": f"{prefix}_ik_solve",
+        "n": n,
+        "target_size": target.size,
+        "params": [f"const {ctype} q0[{n}]"] + _params(others, ctype, True)
+        + [f"{ctype} tol", "int max_iter", f"{ctype} q[{n}]", f"{ctype} *error", "int *iterations"],
+        "lambda": next((a.name for a in others if a.is_scalar), None),
+        "checks": [a.name for a in others if not a.is_scalar and a.name != "l"],
+        "step_call": f"{prefix}_ik_step(" + ", ".join("mu" if a.is_scalar else a.name for a in step.inputs) + ", q_next)",
+        "position_call": f"{prefix}_position(" + ", ".join("trial" if a.name == "q" else a.name for a in position.inputs) + ", p)",
+        "status": [{"macro": f"{prefix.upper()}_IK_{s}", "value": i} for i, s in enumerate(IK_STATUS)],
+        "halvings": settings["halvings"],
+        "error_damping": precision.literal(settings["error_damping"]),
+        "stall": precision.literal(settings["stall"]),
+        "one": precision.literal(1.0),
+        "half": precision.literal(0.5),
+        "zero": precision.literal(0.0),
+        "sqrt": precision.sqrt,
     }

@@ -5,6 +5,7 @@ from __future__ import annotations
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
+from typing import Callable
 
 import jinja2
 import sympy as sp
@@ -14,17 +15,41 @@ from ..program import Program
 ANGLES, COSINES, SINES = "ang", "cs", "sn"
 """Array names of the trigonometric block inside emitted functions."""
 
+IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
+"""Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
+IK_SETTINGS = {
+    "double": {"halvings": 30, "stall": 1e-12, "error_damping": 0.5},
+    "float": {"halvings": 20, "stall": 1e-6, "error_damping": 0.5},
+}
+"""Per precision: step halvings tried per iteration; the relative error improvement below
+which the solver reports STALLED; and ``c`` of the damping schedule ``mu = max(lambda, c |e|)``
+(damping that shrinks with the error: bounded steps near singular poses, fast convergence
+at reachable targets, and progress to the closest reach of unreachable ones)."""
 
-def storage_names(program: Program, element: str = "{name}[{index}]", temporary: str = "t{index}") -> dict[sp.Symbol, str]:
+
+def storage_names(
+    program: Program,
+    element: str = "{name}[{index}]",
+    temporary: str = "t{index}",
+    identifier: Callable[[str], str] = str,
+    constant: str = "{name}",
+) -> dict[sp.Symbol, str]:
     """Map each symbol of ``program`` to the text that names it in emitted code.
 
-    Inputs become array elements (``q[2]``), angles and their cosines/sines
-    elements of the trigonometric arrays, every other temporary a numbered local.
+    Inputs become array elements (``q[2]``) or, for scalars, the argument itself;
+    angles and their cosines/sines elements of the trigonometric arrays; constants
+    ``constant`` formatted with their name; every other temporary a numbered local.
+    ``identifier`` turns an input name into a legal argument name of the language.
     """
     names: dict[sp.Symbol, str] = {}
     for arg in program.inputs:
+        if arg.is_scalar:
+            names[arg.elements[0]] = identifier(arg.name)
+            continue
         for i, symbol in enumerate(arg.elements):
-            names[symbol] = element.format(name=arg.name, index=i)
+            names[symbol] = element.format(name=identifier(arg.name), index=i)
+    for const in program.constants:
+        names[const.symbol] = constant.format(name=const.name)
     for array, symbols in ((ANGLES, program.angles), (COSINES, program.cos), (SINES, program.sin)):
         for k, symbol in enumerate(symbols):
             names[symbol] = element.format(name=array, index=k)
@@ -49,7 +74,7 @@ class MemoPrinter:
         key = (expr, tuple(sorted((s.name, names[s]) for s in expr.free_symbols)))
         text = self._cache.get(key)
         if text is None:
-            text = self._cache[key] = printer.doprint(expr)
+            text = self._cache[key] = printer._print(expr)
         return text
 
 
@@ -59,16 +84,21 @@ class ArrayPrinterMixin:
     * symbols print as their storage (``q[2]``, ``t7``) from the ``names`` table;
     * numbers print as literals of the target precision;
     * sums print positive terms first (``z - x*y``, not ``-x*y + z``);
-    * powers with small exponents print by table (``x*x``, ``1/x``, ``sqrt(x)``).
+    * powers with small exponents print by table (``x*x``, ``1/x``, ``sqrt(x)``);
+    * ``Piecewise`` prints by ``select_form`` (a C conditional, ``np.where``), ``Max`` by ``max_name``.
     """
 
     pow_forms: dict[sp.Expr, str] = {
         sp.Integer(2): "{base}*{base}",
+        sp.Integer(3): "{base}*{base}*{base}",
         sp.Integer(-1): "{one}/{base}",
+        sp.Integer(-2): "{one}/({base}*{base})",
         sp.Rational(1, 2): "{sqrt}({base})",
         sp.Rational(-1, 2): "{one}/{sqrt}({base})",
     }
     sqrt_name = "sqrt"
+    max_name = "fmax"
+    select_form = "({cond} ? {then} : {otherwise})"
 
     def __init__(self, names: dict[sp.Symbol, str], **settings) -> None:
         super().__init__(settings)
@@ -93,6 +123,22 @@ class ArrayPrinterMixin:
         terms = list(expr.args)
         terms.sort(key=lambda t: (t.could_extract_minus_sign(), sp.default_sort_key(t)))
         return terms
+
+    def _print_Piecewise(self, expr: sp.Piecewise) -> str:
+        *pieces, (last, last_cond) = expr.args
+        if last_cond is not sp.true:
+            raise ValueError("internal error: Piecewise needs a final True branch")
+        text = self._print(last)
+        for value, cond in reversed(pieces):
+            text = self.select_form.format(cond=self._print(cond), then=self._print(value), otherwise=text)
+        return text
+
+    def _print_Max(self, expr: sp.Max) -> str:
+        args = [self._print(a) for a in expr.args]
+        text = args[0]
+        for arg in args[1:]:
+            text = f"{self.max_name}({text}, {arg})"
+        return text
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
         base, exp = expr.args

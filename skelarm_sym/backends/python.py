@@ -8,21 +8,30 @@ the batch) and the trigonometry in one ``np.cos``/``np.sin`` call each.
 
 from __future__ import annotations
 
+import keyword
+
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from ..program import Program
-from .common import ANGLES, COSINES, SINES, ArrayPrinterMixin, MemoPrinter, render_template, storage_names
+from .common import ANGLES, COSINES, IK_SETTINGS, SINES, ArrayPrinterMixin, MemoPrinter, render_template, storage_names
 
 LANGUAGE = "python"
 FILE_SUFFIXES = (".py",)
 DTYPES = {"double": "np.float64", "float": "np.float32"}
 
 
+def identifier(name: str) -> str:
+    """A legal Python argument name for input ``name`` (keywords get a trailing ``_``: ``lambda_``)."""
+    return name + "_" if keyword.iskeyword(name) else name
+
+
 class PythonArrayPrinter(ArrayPrinterMixin, PythonCodePrinter):
     """Python printer that writes each symbol as its array element or local."""
 
     sqrt_name = "np.sqrt"
+    max_name = "np.maximum"
+    select_form = "np.where({cond}, {then}, {otherwise})"
 
     def __init__(self, names: dict[sp.Symbol, str]) -> None:
         super().__init__(names)
@@ -31,15 +40,25 @@ class PythonArrayPrinter(ArrayPrinterMixin, PythonCodePrinter):
         return repr(float(value))
 
 
-def function_context(program: Program, memo: MemoPrinter | None = None) -> dict:
+def function_context(program: Program, domains: dict[str, str], memo: MemoPrinter | None = None) -> dict:
     """What the template needs to lay out one program as a NumPy function."""
-    names = storage_names(program)
+    names = storage_names(program, identifier=identifier)
     printer = PythonArrayPrinter(names)
     memo = memo or MemoPrinter()
+    exprs = [e for _, e in program.pre + program.post] + [e for o in program.outputs for e in o.elements]
     return {
         "name": program.name,
         "summary": program.summary,
-        "inputs": [{"name": a.name, "size": a.size} for a in program.inputs],
+        "args": [identifier(a.name) for a in program.inputs],
+        "inputs": [
+            {"name": a.name, "py": identifier(a.name), "size": a.size, "domain": domains.get(a.name, "")}
+            for a in program.inputs if not a.is_scalar
+        ],
+        "scalars": [
+            {"name": a.name, "py": identifier(a.name), "domain": domains.get(a.name, "")}
+            for a in program.inputs if a.is_scalar
+        ],
+        "quiet": any(e.has(sp.Piecewise) for e in exprs),
         "outputs": [{"name": o.name, "size": len(o.elements), "shape": o.shape} for o in program.outputs],
         "pre": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.pre],
         "post": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.post],
@@ -54,11 +73,34 @@ def function_context(program: Program, memo: MemoPrinter | None = None) -> dict:
 def render(derivation, programs: list[Program], options) -> dict[str, str]:
     """Module text for ``programs``; the key is the file suffix."""
     memo = MemoPrinter()
+    functions = [function_context(p, derivation.domains, memo) for p in programs]
+    constants = {c.name: c for p in programs for c in p.constants}
+    by_name = {f["name"]: f for f in functions}
     context = {
         "prefix": options.prefix,
         "header_lines": options.header_lines,
         "dtype": DTYPES[options.precision],
-        "functions": [function_context(p, memo) for p in programs],
+        "functions": functions,
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
+        "constants": [{"name": c.name, "value": repr(c.values[options.precision]), "doc": c.doc} for c in constants.values()],
+        "ik": _ik_context(by_name, options.precision),
     }
     return {".py": render_template("python_module.py.j2", **context)}
+
+
+def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
+    """The iterative IK solver's layout, when the module has ``position`` and ``ik_step``."""
+    if "position" not in functions or "ik_step" not in functions:
+        return None
+    step = functions["ik_step"]
+    others = [a for a in step["args"] if a != "q"]
+    settings = IK_SETTINGS[precision]
+    return {
+        "params": others,
+        "step_args": ["mu" if a == (step["scalars"][0]["py"] if step["scalars"] else None) else a for a in step["args"]],
+        "position_args": ["trial" if a == "q" else a for a in functions["position"]["args"]],
+        "lambda": step["scalars"][0]["py"] if step["scalars"] else None,
+        "halvings": settings["halvings"],
+        "error_damping": repr(settings["error_damping"]),
+        "stall": repr(settings["stall"]),
+    }
