@@ -664,7 +664,7 @@ int arm2_ik_solve(const double q0[2], const double l[2], const double target[2],
         if (err <= tol) {
             return ARM2_IK_CONVERGED;
         }
-        if (d <= 1e-12 * err) {
+        if (d <= 1e-10 * err) {
             return ARM2_IK_STALLED;
         }
     }

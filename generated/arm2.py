@@ -428,7 +428,7 @@ def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
     Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
     until the endpoint error decreases. Stops "converged" when the
     error is <= tol, "stalled" when no shorter step helps or the error improves by less
-    than a relative 1e-12 (an unreachable target: q is then the closest reach
+    than a relative 1e-10 (an unreachable target: q is then the closest reach
     found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
     """
@@ -463,6 +463,6 @@ def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
         q, err = trial, err_trial
         if err <= tol:
             return IKResult(q, "converged", err, iteration + 1)
-        if improvement <= 1e-12 * err:
+        if improvement <= 1e-10 * err:
             return IKResult(q, "stalled", err, iteration + 1)
     return IKResult(q, "converged" if err <= tol else "max_iter", err, int(max_iter))

@@ -832,7 +832,7 @@ int arm3_ik_solve(const double q0[3], const double l[3], const double target[2],
         if (err <= tol) {
             return ARM3_IK_CONVERGED;
         }
-        if (d <= 1e-12 * err) {
+        if (d <= 1e-10 * err) {
             return ARM3_IK_STALLED;
         }
     }

@@ -952,7 +952,7 @@ int arm4_ik_solve(const double q0[4], const double l[4], const double target[2],
         if (err <= tol) {
             return ARM4_IK_CONVERGED;
         }
-        if (d <= 1e-12 * err) {
+        if (d <= 1e-10 * err) {
             return ARM4_IK_STALLED;
         }
     }

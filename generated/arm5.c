@@ -1030,7 +1030,7 @@ int arm5_ik_solve(const double q0[5], const double l[5], const double target[2],
         if (err <= tol) {
             return ARM5_IK_CONVERGED;
         }
-        if (d <= 1e-12 * err) {
+        if (d <= 1e-10 * err) {
             return ARM5_IK_STALLED;
         }
     }

@@ -1108,7 +1108,7 @@ int arm6_ik_solve(const double q0[6], const double l[6], const double target[2],
         if (err <= tol) {
             return ARM6_IK_CONVERGED;
         }
-        if (d <= 1e-12 * err) {
+        if (d <= 1e-10 * err) {
             return ARM6_IK_STALLED;
         }
     }

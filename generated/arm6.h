@@ -105,7 +105,7 @@ void arm6_ik_step_batch(size_t m, const double *q, const double *l, const double
  * target with damping mu = max(lambda, 0.5 |target - p|), each step shortened by
  * halving until the endpoint error |target - p| decreases.
  * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
- * error improves by less than a relative 1e-12 (an unreachable target: q is then the
+ * error improves by less than a relative 1e-10 (an unreachable target: q is then the
  * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when
  * q0, target or lambda is not finite, lambda < 0, tol <= 0 or max_iter < 0.
  * Writes the final pose to q, its error to *error and the steps taken to *iterations. */

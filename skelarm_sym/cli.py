@@ -40,6 +40,15 @@ def _lengths(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _angles(text: str) -> tuple[float, ...]:
+    from .generate import parse_numbers
+
+    try:
+        return parse_numbers(text, "joint angles")
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = _Parser(prog="skelarm-sym", description="Closed-form differential kinematics of serial arms as checked C and NumPy code.")
@@ -58,8 +67,10 @@ def build_parser() -> argparse.ArgumentParser:
     show = sub.add_parser("show", help="print closed forms")
     show.add_argument("--links", "-n", type=_links, required=True)
     show.add_argument("--lengths", type=_lengths)
-    show.add_argument("--what", default="J", help="p, phi, J, J3, H, v, a, det or all (default J)")
+    show.add_argument("--what", default="J", help="p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J)")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
+    show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
+    show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
 
     chk = sub.add_parser("check", help="generate, compile and compare with the recursive reference")
     chk.add_argument("--links", "-n", type=_links, required=True)
@@ -96,6 +107,21 @@ def _show(args) -> int:
         raise InputError(f"unknown --what {args.what!r}; choose from {', '.join(WHAT + ('all',))}")
     if args.format not in FORMATS:
         raise InputError(f"unknown --format {args.format!r}; choose from {', '.join(FORMATS)}")
+    if args.plot:
+        import math
+
+        from .plot import plot_arm
+
+        lengths = args.lengths or (1.0,) * args.links
+        if len(lengths) != args.links:
+            raise InputError(f"--lengths has {len(lengths)} numbers, expected {args.links}")
+        pose = args.pose if args.pose is not None else (math.pi / 6,) * args.links
+        if len(pose) != args.links:
+            raise InputError(f"--pose has {len(pose)} angles, expected {args.links}")
+        summary = plot_arm(pose, lengths, args.plot)
+        sigma = ", ".join(f"{s:.4g}" for s in summary.singular_values)
+        print(f"wrote {summary.path}: w = {summary.manipulability:.6g}, singular values of J: {sigma}")
+        return 0
     sys.stdout.write(show(derive(args.links, args.lengths), args.what, args.format))
     return 0
 

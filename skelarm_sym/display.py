@@ -4,28 +4,23 @@ from __future__ import annotations
 
 import sympy as sp
 
+from . import singular
 from .derive import Derivation
 
-WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det")
+WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det", "manipulability", "singular")
 FORMATS = ("pretty", "latex", "text")
 _SIMPLIFY_UP_TO = 3
 """Up to this many links the shown forms are simplified (cheap there; never in generation)."""
 
 
-def determinant(derivation: Derivation) -> sp.Expr | None:
-    """``det J`` where the Jacobian is square: J for n = 2, J3 for n = 3; else ``None``."""
-    n = derivation.n
-    if n == 2:
-        return sp.trigsimp(sp.expand_trig(derivation.J.det()).expand())
-    if n == 3:
-        return sp.trigsimp(sp.expand_trig(derivation.J3.det()).expand())
-    return None
-
-
-def closed_form(derivation: Derivation, what: str) -> sp.Expr | sp.Matrix | None:
-    """The object shown for ``what`` (see ``WHAT``)."""
+def closed_form(derivation: Derivation, what: str) -> sp.Expr | sp.Matrix | str | None:
+    """The object shown for ``what`` (see ``WHAT``); text for ``singular``."""
     if what == "det":
-        return determinant(derivation)
+        return singular.determinant(derivation)
+    if what == "manipulability":
+        return singular.manipulability(derivation) if derivation.n > 1 else sp.S.Zero
+    if what == "singular":
+        return singular.singular_configurations(derivation).statement
     value = derivation.phi if what == "phi" else getattr(derivation, what)
     if derivation.n <= _SIMPLIFY_UP_TO and what in ("H", "a"):
         value = value.applyfunc(lambda e: sp.factor_terms(sp.collect(sp.expand(e), list(derivation.dq) + list(derivation.ddq))))
@@ -52,5 +47,9 @@ def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
             if what != "all":
                 blocks.append(f"{name} =\n{text}")
             continue
-        blocks.append(f"{name} =\n{render(value, fmt)}")
+        if isinstance(value, str):
+            blocks.append(f"singular configurations:\n{value}")
+            continue
+        label = "w" if name == "manipulability" else name
+        blocks.append(f"{label} =\n{render(value, fmt)}")
     return "\n\n".join(blocks) + "\n"

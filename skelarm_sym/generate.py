@@ -154,15 +154,20 @@ def _lengths_tuple(lengths: object) -> object:
         raise InputError(f"link lengths must be a sequence of numbers, got {lengths!r}") from None
 
 
-def parse_lengths(text: str) -> tuple[float, ...]:
-    """``"1.0,0.8,0.5"`` -> ``(1.0, 0.8, 0.5)``; raise InputError on anything else."""
+def parse_numbers(text: str, what: str) -> tuple[float, ...]:
+    """``"1.0,0.8,0.5"`` -> ``(1.0, 0.8, 0.5)``; raise InputError (naming ``what``) on anything else."""
     values = []
     for item in text.split(","):
         try:
             values.append(float(item))
         except ValueError:
-            raise InputError(f"link lengths must be comma-separated numbers, got {item.strip()!r}") from None
+            raise InputError(f"{what} must be comma-separated numbers, got {item.strip()!r}") from None
     return tuple(values)
+
+
+def parse_lengths(text: str) -> tuple[float, ...]:
+    """``"1.0,0.8,0.5"`` -> ``(1.0, 0.8, 0.5)``; raise InputError on anything else."""
+    return parse_numbers(text, "link lengths")
 
 
 def _check_output_folder(out: str | os.PathLike) -> Path:

@@ -18,7 +18,7 @@ ANGLES, COSINES, SINES = "ang", "cs", "sn"
 IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 """Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
 IK_SETTINGS = {
-    "double": {"halvings": 30, "stall": 1e-12, "error_damping": 0.5},
+    "double": {"halvings": 30, "stall": 1e-10, "error_damping": 0.5},
     "float": {"halvings": 20, "stall": 1e-6, "error_damping": 0.5},
 }
 """Per precision: step halvings tried per iteration; the relative error improvement below
