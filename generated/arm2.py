@@ -30,6 +30,8 @@ def _check_domain(array, name, domain):
         raise ValueError(f"{name} must be finite")
     if domain == "nonnegative" and np.any(array < 0):
         raise ValueError(f"{name} must be >= 0")
+    if domain == "positive" and np.any(array <= 0):
+        raise ValueError(f"{name} must be > 0")
 
 
 def _scalar(value, name, domain):

@@ -118,6 +118,8 @@ def _check_domain(array: np.ndarray, name: str, domain: str) -> None:
         raise InputError(f"{name} must be finite")
     if domain == "nonnegative" and np.any(array < 0):
         raise InputError(f"{name} must be >= 0")
+    if domain == "positive" and np.any(array <= 0):
+        raise InputError(f"{name} must be > 0")
 
 
 class CompiledArm:

@@ -154,22 +154,37 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
     return results
 
 
+def diffdrive_scenarios(derivation, cases: int, seed: int, precision: str) -> list[Scenario]:
+    """Scenarios for a differential drive: rigid-body reference of :mod:`skelarm_sym.reference`."""
+    dtype = np.float64 if precision == "double" else np.float32
+    rounded = lambda x: np.asarray(x, dtype=dtype).astype(np.float64)  # noqa: E731
+    rng = np.random.default_rng(seed)
+    track = derivation.model.track if derivation.model.track is not None else float(rounded(rng.uniform(0.1, 2.0)))
+    wheels = rounded(np.concatenate([rng.uniform(-2, 2, (cases, 2)), [[1.0, 1.0], [-1.0, 1.0], [0.0, 0.0]]]))
+    rates = rounded(np.concatenate([rng.uniform(-2, 2, (cases, 2)), [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]]))
+    pose = rounded(np.concatenate([rng.uniform(-np.pi, np.pi, (cases, 3)), np.zeros((3, 3))]))
+    expected = {
+        "rates": reference.diffdrive_body_rates(wheels, track),
+        "wheels": reference.diffdrive_wheel_speeds(rates, track),
+        "dpose": reference.diffdrive_pose_rate(pose, wheels, track),
+    }
+    values = {"wheels": wheels, "rates": rates, "pose": pose, "track": track}
+    return [Scenario("", values, expected, {})]
+
+
 def scenarios_for(derivation):
     """The scenario builder of ``derivation``'s model."""
+    from .models.diffdrive import DiffDrive
     from .models.planar import PlanarArm
 
     if isinstance(derivation.model, PlanarArm):
         return planar_scenarios
-    from .models.diffdrive import DiffDrive
-
     if isinstance(derivation.model, DiffDrive):
-        from .models.diffdrive import check_scenarios
-
-        return check_scenarios
+        return diffdrive_scenarios
     raise TypeError(f"no reference for model {derivation.model!r}")
 
 
-def run_check(n: int, lengths: Sequence[float] | None = None, precision: str = "double", cases: int = 100, seed: int = 0, langs=("c", "python")) -> list[OutputError]:
+def run_check(n, lengths: Sequence[float] | None = None, precision: str = "double", cases: int = 100, seed: int = 0, langs=("c", "python")) -> list[OutputError]:
     """Generate (in memory), compile, and compare; see :func:`compare`."""
     generated = generate(n, lengths=lengths, langs=langs, precision=precision, out=None)
     return compare(generated, cases=cases, seed=seed, precision=precision)

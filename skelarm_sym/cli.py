@@ -49,6 +49,41 @@ def _angles(text: str) -> tuple[float, ...]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _track(text: str) -> float:
+    from .models.diffdrive import validate_track
+
+    try:
+        return validate_track(float(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}") from None
+
+
+MODELS = ("planar", "diffdrive")
+
+
+def _add_model_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--model", default="planar", choices=MODELS, help="planar serial arm (default) or diffdrive")
+    parser.add_argument("--links", "-n", type=_links, help="number of links N (1..1000); planar arms only, required there")
+    parser.add_argument("--lengths", type=_lengths, help="comma-separated link lengths baked in as constants (default: run-time argument l)")
+    parser.add_argument("--track", type=_track, help="diffdrive: distance between the wheels baked in as a constant (default: run-time argument)")
+
+
+def model_from_args(args):
+    """The model an invocation describes; InputError when its options do not fit it."""
+    from .models.diffdrive import DiffDrive
+    from .models.planar import PlanarArm
+
+    if args.model == "diffdrive":
+        if args.links is not None or args.lengths is not None:
+            raise InputError("--links and --lengths describe planar arms; a diffdrive takes --track")
+        return DiffDrive(args.track)
+    if args.track is not None:
+        raise InputError("--track is for --model diffdrive")
+    if args.links is None:
+        raise InputError("the following arguments are required: --links/-n")
+    return PlanarArm(args.links, args.lengths)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = _Parser(prog="skelarm-sym", description="Closed-form differential kinematics of serial arms as checked C and NumPy code.")
@@ -56,25 +91,23 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     gen = sub.add_parser("generate", help="emit C and/or Python for an arm")
-    gen.add_argument("--links", "-n", type=_links, required=True, help="number of links N (1..1000)")
-    gen.add_argument("--lengths", type=_lengths, help="comma-separated link lengths baked in as constants (default: run-time argument l)")
+    _add_model_options(gen)
     gen.add_argument("--lang", default="c,python", help="c, python or c,python (default)")
-    gen.add_argument("--prefix", help="file name and C function prefix (default arm{N})")
+    gen.add_argument("--prefix", help="file name and C function prefix (default arm{N}, or diffdrive)")
     gen.add_argument("--precision", default="double", help="double (default) or float")
     gen.add_argument("--out", default="generated", help="output folder (default ./generated)")
     gen.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
 
     show = sub.add_parser("show", help="print closed forms")
-    show.add_argument("--links", "-n", type=_links, required=True)
-    show.add_argument("--lengths", type=_lengths)
-    show.add_argument("--what", default="J", help="p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J)")
+    _add_model_options(show)
+    show.add_argument("--what", help="planar: p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J); "
+                      "diffdrive: matrix, inverse or all (default all)")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
     show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
 
     chk = sub.add_parser("check", help="generate, compile and compare with the recursive reference")
-    chk.add_argument("--links", "-n", type=_links, required=True)
-    chk.add_argument("--lengths", type=_lengths)
+    _add_model_options(chk)
     chk.add_argument("--precision", default="double", help="double (default) or float")
     chk.add_argument("--lang", default="c,python")
     chk.add_argument("--cases", type=int, default=100, help="random configurations (default 100), plus singular and zero-velocity poses")
@@ -86,7 +119,7 @@ def _generate(args) -> int:
     from .build import compile_arm
     from .generate import generate
 
-    result = generate(args.links, lengths=args.lengths, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out)
+    result = generate(model_from_args(args), langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out)
     for path in result.paths:
         print(f"wrote {path}")
     kin = next((p for p in result.programs if p.name == "kinematics"), None)
@@ -100,29 +133,36 @@ def _generate(args) -> int:
 
 
 def _show(args) -> int:
-    from .derive import derive
-    from .display import FORMATS, WHAT, show
+    from .display import FORMATS, WHAT, show, show_diffdrive
+    from .models.diffdrive import DiffDrive
 
-    if args.what not in WHAT + ("all",):
-        raise InputError(f"unknown --what {args.what!r}; choose from {', '.join(WHAT + ('all',))}")
+    model = model_from_args(args)
     if args.format not in FORMATS:
         raise InputError(f"unknown --format {args.format!r}; choose from {', '.join(FORMATS)}")
+    if isinstance(model, DiffDrive):
+        if args.plot:
+            raise InputError("--plot draws planar arms")
+        sys.stdout.write(show_diffdrive(model, args.what or "all", args.format))
+        return 0
+    what = args.what or "J"
+    if what not in WHAT + ("all",):
+        raise InputError(f"unknown --what {what!r}; choose from {', '.join(WHAT + ('all',))}")
     if args.plot:
         import math
 
         from .plot import plot_arm
 
-        lengths = args.lengths or (1.0,) * args.links
-        if len(lengths) != args.links:
-            raise InputError(f"--lengths has {len(lengths)} numbers, expected {args.links}")
-        pose = args.pose if args.pose is not None else (math.pi / 6,) * args.links
-        if len(pose) != args.links:
-            raise InputError(f"--pose has {len(pose)} angles, expected {args.links}")
+        lengths = model.lengths or (1.0,) * model.n
+        pose = args.pose if args.pose is not None else (math.pi / 6,) * model.n
+        if len(pose) != model.n:
+            raise InputError(f"--pose has {len(pose)} angles, expected {model.n}")
         summary = plot_arm(pose, lengths, args.plot)
         sigma = ", ".join(f"{s:.4g}" for s in summary.singular_values)
         print(f"wrote {summary.path}: w = {summary.manipulability:.6g}, singular values of J: {sigma}")
         return 0
-    sys.stdout.write(show(derive(args.links, args.lengths), args.what, args.format))
+    from .derive import derive
+
+    sys.stdout.write(show(derive(model), what, args.format))
     return 0
 
 
@@ -134,7 +174,7 @@ def _check(args) -> int:
     langs = validate_langs(args.lang)
     if args.cases < 1:
         raise InputError(f"--cases must be at least 1, got {args.cases}")
-    results = run_check(args.links, args.lengths, args.precision, args.cases, args.seed, langs)
+    results = run_check(model_from_args(args), None, args.precision, args.cases, args.seed, langs)
     width = max(len(r.implementation) for r in results)
     print(f"{'function':<{width}}  output  {'max abs':>10}  {'max rel':>10}  tolerance  result")
     for r in results:

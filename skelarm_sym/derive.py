@@ -114,7 +114,7 @@ class Derivation:
         notes: lines for the headers of emitted files (model, conventions, layout).
         scalars: inputs passed as one number (by value in C) rather than an array;
             they must be parameters.
-        domains: input name -> ``"finite"`` or ``"nonnegative"`` (finite and >= 0):
+        domains: input name -> ``"finite"``, ``"nonnegative"`` (finite and >= 0) or ``"positive"``:
             the Python wrappers reject other values with a ``ValueError``.
         constants: named constants the emitted code defines (see :class:`Constant`).
     """
@@ -136,7 +136,7 @@ class Derivation:
     # -- symbols --------------------------------------------------------------
     @property
     def n(self) -> int:
-        """Number of links (and joints)."""
+        """Number of links (and joints) of a chain; ``AttributeError`` for other models."""
         return self.model.n
 
     def function(self, name: str) -> FunctionSpec:

@@ -262,7 +262,7 @@ def optimise(derivation: Derivation) -> Optimised:
     names = list(derivation.compact)
     matrices = [derivation.compact[name] for name in names]
     out_exprs = [e for m in matrices for e in m]
-    steps = _needed_steps(derivation.steps, out_exprs)
+    steps, out_exprs = _name_trig(_needed_steps(derivation.steps, out_exprs), out_exprs)
 
     angle_of: dict[sp.Expr, int] = {}
     angle_args: list[sp.Expr] = []
@@ -298,6 +298,20 @@ def optimise(derivation: Derivation) -> Optimised:
         outputs[name] = tuple(reduced[offset:offset + size])
         offset += size
     return Optimised(tuple(ordered), outputs, shapes, angles, cos_syms, sin_syms)
+
+
+def _name_trig(steps: list[Assignment], outputs: list[sp.Expr]) -> tuple[list[Assignment], list[sp.Expr]]:
+    """Give every sin/cos inside a larger expression a step of its own, so all reach the trig block."""
+    named = {rhs: symbol for symbol, rhs in steps if isinstance(rhs, (sp.sin, sp.cos))}
+    inner = set()
+    for expr in [rhs for _, rhs in steps] + outputs:
+        inner |= {t for t in expr.atoms(sp.sin, sp.cos) if t not in named and t is not expr}
+    if not inner:
+        return steps, outputs
+    extra = {t: sp.Symbol(f"_trig_{k}", real=True) for k, t in enumerate(sorted(inner, key=sp.default_sort_key))}
+    swap = {t: s for t, s in extra.items()}
+    new_steps = [(s, t) for t, s in extra.items()] + [(sym, rhs if rhs in named else rhs.xreplace(swap)) for sym, rhs in steps]
+    return new_steps, [e.xreplace(swap) for e in outputs]
 
 
 def build_program(derivation: Derivation, spec: FunctionSpec, optimised: Optimised | None = None) -> Program:

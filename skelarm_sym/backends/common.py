@@ -119,6 +119,11 @@ class ArrayPrinterMixin:
     _print_Float = _print_Rational = _print_Integer
     _print_One = _print_Zero = _print_NegativeOne = _print_Half = _print_Integer
 
+    def parenthesize(self, item, level, strict=False):
+        if isinstance(item, sp.Number) and not item.is_negative:  # a literal never needs parentheses
+            return self._print(item)
+        return super().parenthesize(item, level, strict)
+
     def _as_ordered_terms(self, expr, order=None):
         terms = list(expr.args)
         terms.sort(key=lambda t: (t.could_extract_minus_sign(), sp.default_sort_key(t)))

@@ -82,6 +82,18 @@ class PlanarArm:
         """True when the lengths are symbols (and an input of the generated code)."""
         return self.lengths is None
 
+    @property
+    def default_prefix(self) -> str:
+        """File name and C prefix when none is given."""
+        return f"arm{self.n}"
+
+    def command_args(self) -> list[str]:
+        """The ``skelarm-sym generate`` options that describe this model."""
+        args = [f"--links {self.n}"]
+        if self.lengths is not None:
+            args.append("--lengths " + ",".join(repr(x) for x in self.lengths))
+        return args
+
     def describe(self) -> str:
         """One line for file headers: number of links and lengths."""
         if self.lengths is None:

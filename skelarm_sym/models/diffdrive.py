@@ -1,0 +1,52 @@
+"""The differential-drive robot (seed 002, example 2): two driven wheels on one axle.
+
+Conventions: ``track`` is the distance between the two wheel contact points
+(the usual meaning of ``L``); ``v_L``, ``v_R`` are the wheels' ground speeds
+(wheel radius times wheel rate); ``v`` is the forward speed of the axle's
+midpoint ``C`` and ``omega`` the turning rate (counter-clockwise positive); the
+pose is ``(x, y, heading)`` of ``C`` in the world frame, heading in radians.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+from ..errors import InputError
+
+
+def validate_track(track: object) -> float | None:
+    """Return ``track`` as a float (``None`` stays symbolic) or raise :class:`InputError`."""
+    if track is None:
+        return None
+    if isinstance(track, bool) or not isinstance(track, numbers.Real):
+        raise InputError(f"track width must be a number, got {track!r}")
+    value = float(track)
+    if not math.isfinite(value) or value <= 0.0:
+        raise InputError(f"track width must be finite and positive, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class DiffDrive:
+    """A differential-drive base; ``track`` ``None`` makes it a run-time argument."""
+
+    track: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "track", validate_track(self.track))
+
+    @property
+    def default_prefix(self) -> str:
+        """File name and C prefix when none is given."""
+        return "diffdrive"
+
+    def command_args(self) -> list[str]:
+        """The ``skelarm-sym generate`` options that describe this model."""
+        return ["--model diffdrive"] + ([] if self.track is None else [f"--track {self.track!r}"])
+
+    def describe(self) -> str:
+        """One line for file headers."""
+        width = "passed at run time" if self.track is None else f"fixed at {self.track!r}"
+        return f"differential-drive robot, track width (distance between the wheels) {width}"
