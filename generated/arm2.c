@@ -38,14 +38,14 @@ static void arm2_trig2(const double *restrict ang, double *restrict cs, double *
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM2_VECTORIZE void arm2_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 64. */
+static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 64; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 64; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -80,22 +80,72 @@ void arm2_position(const double q[2], const double l[2], double p[2])
     arm2_position_finish(l, cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_position_block(const double *restrict q_T, const double l[2], double *restrict p_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[2];
+        double sn[2];
+        double p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        p[0] = t7;
+        p[1] = -t6;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_position_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_position_block(q_T, l, p_T);
         for (b = 0; b < count; ++b) {
-            arm2_position_finish(l, cs + b * 2, sn + b * 2, p + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -132,22 +182,78 @@ void arm2_jacobian(const double q[2], const double l[2], double J[4])
     arm2_jacobian_finish(l, cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_jacobian_block(const double *restrict q_T, const double l[2], double *restrict J_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[2];
+        double sn[2];
+        double J[4];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        J[0] = t6;
+        J[1] = t5;
+        J[2] = t7;
+        J[3] = t2;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+    }
+}
+
 void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double J_T[128];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_jacobian_block(q_T, l, J_T);
         for (b = 0; b < count; ++b) {
-            arm2_jacobian_finish(l, cs + b * 2, sn + b * 2, J + (i + b) * 4);
+            double *J_b = J + (i + b) * 4;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
         }
     }
 }
@@ -190,22 +296,94 @@ void arm2_coriolis(const double q[2], const double dq[2], const double l[2], dou
     arm2_coriolis_finish(dq, l, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict H_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[2];
+        double cs[2];
+        double sn[2];
+        double H[4];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t8 = dq[0] + dq[1];
+        const double t9 = t1*dq[0];
+        const double t10 = t2*t8;
+        const double t11 = t3*dq[0];
+        const double t12 = t4*t8;
+        const double t13 = -t10;
+        const double t14 = -t12;
+        const double t15 = t13 - t9;
+        const double t16 = t14 - t11;
+        H[0] = t15;
+        H[1] = t13;
+        H[2] = t16;
+        H[3] = t14;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+    }
+}
+
 void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double dq_T[64];
+    double H_T[128];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *dq_b = dq + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_coriolis_block(q_T, dq_T, l, H_T);
         for (b = 0; b < count; ++b) {
-            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 2, sn + b * 2, H + (i + b) * 4);
+            double *H_b = H + (i + b) * 4;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
         }
     }
 }
@@ -246,22 +424,88 @@ void arm2_velocity(const double q[2], const double dq[2], const double l[2], dou
     arm2_velocity_finish(dq, l, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict v_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[2];
+        double cs[2];
+        double sn[2];
+        double v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t8 = dq[0] + dq[1];
+        const double t9 = t1*dq[0];
+        const double t10 = t2*t8;
+        const double t11 = t3*dq[0];
+        const double t12 = t4*t8;
+        const double t13 = -t10;
+        const double t14 = -t12;
+        const double t15 = t13 - t9;
+        const double t16 = t14 - t11;
+        v[0] = t16;
+        v[1] = -t15;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm2_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_velocity_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double dq_T[64];
+    double v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *dq_b = dq + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_velocity_block(q_T, dq_T, l, v_T);
         for (b = 0; b < count; ++b) {
-            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 2, sn + b * 2, v + (i + b) * 2);
+            double *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -305,22 +549,101 @@ void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2
     arm2_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict a_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[2];
+        double ddq[2];
+        double cs[2];
+        double sn[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        const double t8 = dq[0] + dq[1];
+        const double t9 = t1*dq[0];
+        const double t10 = t2*t8;
+        const double t11 = t3*dq[0];
+        const double t12 = t4*t8;
+        const double t13 = -t10;
+        const double t14 = -t12;
+        const double t15 = t13 - t9;
+        const double t16 = t14 - t11;
+        a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
+        a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double dq_T[64];
+    double ddq_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *dq_b = dq + (i + b) * 2;
+                const double *ddq_b = ddq + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_acceleration_block(q_T, dq_T, ddq_T, l, a_T);
         for (b = 0; b < count; ++b) {
-            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 2, sn + b * 2, a + (i + b) * 2);
+            double *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -376,22 +699,149 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
     arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[2];
+        double ddq[2];
+        double cs[2];
+        double sn[2];
+        double p[2];
+        double J[4];
+        double H[4];
+        double v[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        const double t8 = dq[0] + dq[1];
+        const double t9 = t1*dq[0];
+        const double t10 = t2*t8;
+        const double t11 = t3*dq[0];
+        const double t12 = t4*t8;
+        const double t13 = -t10;
+        const double t14 = -t12;
+        const double t15 = t13 - t9;
+        const double t16 = t14 - t11;
+        p[0] = t7;
+        p[1] = -t6;
+        J[0] = t6;
+        J[1] = t5;
+        J[2] = t7;
+        J[3] = t2;
+        H[0] = t15;
+        H[1] = t13;
+        H[2] = t16;
+        H[3] = t14;
+        v[0] = t16;
+        v[1] = -t15;
+        a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
+        a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double dq_T[64];
+    double ddq_T[64];
+    double p_T[64];
+    double J_T[128];
+    double H_T[128];
+    double v_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *dq_b = dq + (i + b) * 2;
+                const double *ddq_b = ddq + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 2, sn + b * 2, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 4;
+            double *H_b = H + (i + b) * 4;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -434,22 +884,78 @@ void arm2_manipulability(const double q[2], const double l[2], double w[1])
     arm2_manipulability_finish(l, cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T, const double l[2], double *restrict w_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[2];
+        double sn[2];
+        double w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        const double t17 = t6*t6 + t5*t5;
+        const double t18 = t2*t5 + t6*t7;
+        const double t19 = t2*t2 + t7*t7;
+        const int t20 = t17 >= t19;
+        const double t21 = (t20 ? t17 : t19);
+        const double t22 = t18/t21;
+        const double t23 = (t20 ? t7 : t6) - t22*(t20 ? t6 : t7);
+        const double t24 = (t20 ? t2 : t5) - t22*(t20 ? t5 : t2);
+        const double t25 = t23*t23 + t24*t24;
+        w[0] = sqrt(t21*t25);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_manipulability_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_manipulability_block(q_T, l, w_T);
         for (b = 0; b < count; ++b) {
-            arm2_manipulability_finish(l, cs + b * 2, sn + b * 2, w + (i + b) * 1);
+            double *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -502,22 +1008,100 @@ void arm2_inverse_velocity(const double q[2], const double l[2], const double v[
     arm2_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_T, const double l[2], const double *restrict v_T, double lambda, double *restrict dq_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double v[2];
+        double cs[2];
+        double sn[2];
+        double dq[2];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        const double t17 = t6*t6 + t5*t5;
+        const double t18 = t2*t5 + t6*t7;
+        const double t19 = t2*t2 + t7*t7;
+        const double t26 = lambda*lambda;
+        const double t27 = t17 + t26;
+        const double t28 = t19 + t26;
+        const double t29 = t27 + t28;
+        const double t30 = t27*v[0] + t18*v[1];
+        const double t31 = t28*v[1] + t18*v[0];
+        const double t32 = t29*t29;
+        const double t33 = 1.0/t32;
+        const double t34 = t30*t33;
+        const double t35 = t31*t33;
+        const double t36 = t27*t28 - t18*t18;
+        const int t37 = t36 > ARM2_RANK_TOL*t32;
+        const double t38 = 1.0/t36;
+        const double t39 = (t37 ? t38*(t29*v[0] - t30) : t34);
+        const double t40 = (t37 ? t38*(t29*v[1] - t31) : t35);
+        dq[0] = t39*t6 + t40*t7;
+        dq[1] = t2*t40 + t39*t5;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+    }
+}
+
 void arm2_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_inverse_velocity_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double v_T[64];
+    double dq_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_inverse_velocity_block(q_T, l, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm2_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 2, sn + b * 2, dq + (i + b) * 2);
+            double *dq_b = dq + (i + b) * 2;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
         }
     }
 }
@@ -572,22 +1156,105 @@ void arm2_ik_step(const double q[2], const double l[2], const double target[2], 
     arm2_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const double l[2], const double *restrict target_T, double lambda, double *restrict q_next_T)
+{
+    double ang_T[64], cs_T[64], sn_T[64];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double ang[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        ang[1] = q[0] + q[1];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+    }
+    arm2_trig64(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double q[2];
+        double target[2];
+        double cs[2];
+        double sn[2];
+        double q_next[2];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        const double t1 = cs[0]*l[0];
+        const double t2 = cs[1]*l[1];
+        const double t3 = sn[0]*l[0];
+        const double t4 = sn[1]*l[1];
+        const double t5 = -t4;
+        const double t6 = t5 - t3;
+        const double t7 = t1 + t2;
+        const double t17 = t6*t6 + t5*t5;
+        const double t18 = t2*t5 + t6*t7;
+        const double t19 = t2*t2 + t7*t7;
+        const double t26 = lambda*lambda;
+        const double t27 = t17 + t26;
+        const double t28 = t19 + t26;
+        const double t29 = t27 + t28;
+        const double t32 = t29*t29;
+        const double t33 = 1.0/t32;
+        const double t36 = t27*t28 - t18*t18;
+        const int t37 = t36 > ARM2_RANK_TOL*t32;
+        const double t38 = 1.0/t36;
+        const double t41 = target[0] - t7;
+        const double t42 = t6 + target[1];
+        const double t43 = t27*t41 + t18*t42;
+        const double t44 = t28*t42 + t18*t41;
+        const double t45 = t43*t33;
+        const double t46 = t44*t33;
+        const double t47 = (t37 ? t38*(t41*t29 - t43) : t45);
+        const double t48 = (t37 ? t38*(t42*t29 - t44) : t46);
+        q_next[0] = q[0] + t47*t6 + t48*t7;
+        q_next[1] = q[1] + t2*t48 + t47*t5;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+    }
+}
+
 void arm2_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 256) {
-        const size_t count = m - i < 256 ? m - i : 256;
-        for (b = 0; b < count; ++b) {
-            arm2_ik_step_angles(q + (i + b) * 2, ang + b * 2);
+    double q_T[64];
+    double target_T[64];
+    double q_next_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 2;
+                const double *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    q_T[k * 32 + b] = q[src * 2 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm2_trig512(ang, cs, sn);
+        arm2_ik_step_block(q_T, l, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm2_ik_step_finish(q + (i + b) * 2, l, target + (i + b) * 2, lambda, cs + b * 2, sn + b * 2, q_next + (i + b) * 2);
+            double *q_next_b = q_next + (i + b) * 2;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
         }
     }
 }

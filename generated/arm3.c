@@ -38,14 +38,14 @@ static void arm3_trig3(const double *restrict ang, double *restrict cs, double *
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 510. */
-static ARM3_VECTORIZE void arm3_trig510(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
+static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 510; ++k) {
+    for (k = 0; k < 96; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 510; ++k) {
+    for (k = 0; k < 96; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -85,22 +85,82 @@ void arm3_position(const double q[3], const double l[3], double p[2])
     arm3_position_finish(l, cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_position_block(const double *restrict q_T, const double l[3], double *restrict p_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[3];
+        double sn[3];
+        double p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        p[0] = t12;
+        p[1] = -t11;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_position_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_position_block(q_T, l, p_T);
         for (b = 0; b < count; ++b) {
-            arm3_position_finish(l, cs + b * 3, sn + b * 3, p + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -144,22 +204,94 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6])
     arm3_jacobian_finish(l, cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_jacobian_block(const double *restrict q_T, const double l[3], double *restrict J_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[3];
+        double sn[3];
+        double J[6];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        J[0] = t11;
+        J[1] = t9;
+        J[2] = t8;
+        J[3] = t12;
+        J[4] = t10;
+        J[5] = t4;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+    }
+}
+
 void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double J_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_jacobian_block(q_T, l, J_T);
         for (b = 0; b < count; ++b) {
-            arm3_jacobian_finish(l, cs + b * 3, sn + b * 3, J + (i + b) * 6);
+            double *J_b = J + (i + b) * 6;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
         }
     }
 }
@@ -212,22 +344,115 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
     arm3_coriolis_finish(dq, l, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict H_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[3];
+        double cs[3];
+        double sn[3];
+        double H[6];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t13 = dq[0] + dq[1];
+        const double t14 = t13 + dq[2];
+        const double t15 = t2*dq[0];
+        const double t16 = t3*t13;
+        const double t17 = t4*t14;
+        const double t18 = t5*dq[0];
+        const double t19 = t6*t13;
+        const double t20 = t7*t14;
+        const double t21 = -t17;
+        const double t22 = -t20;
+        const double t23 = t21 - t16;
+        const double t24 = t22 - t19;
+        const double t25 = t23 - t15;
+        const double t26 = t24 - t18;
+        H[0] = t25;
+        H[1] = t23;
+        H[2] = t21;
+        H[3] = t26;
+        H[4] = t24;
+        H[5] = t22;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+    }
+}
+
 void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double dq_T[96];
+    double H_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *dq_b = dq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_coriolis_block(q_T, dq_T, l, H_T);
         for (b = 0; b < count; ++b) {
-            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 3, sn + b * 3, H + (i + b) * 6);
+            double *H_b = H + (i + b) * 6;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
         }
     }
 }
@@ -276,22 +501,103 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
     arm3_velocity_finish(dq, l, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict v_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[3];
+        double cs[3];
+        double sn[3];
+        double v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t13 = dq[0] + dq[1];
+        const double t14 = t13 + dq[2];
+        const double t15 = t2*dq[0];
+        const double t16 = t3*t13;
+        const double t17 = t4*t14;
+        const double t18 = t5*dq[0];
+        const double t19 = t6*t13;
+        const double t20 = t7*t14;
+        const double t21 = -t17;
+        const double t22 = -t20;
+        const double t23 = t21 - t16;
+        const double t24 = t22 - t19;
+        const double t25 = t23 - t15;
+        const double t26 = t24 - t18;
+        v[0] = t26;
+        v[1] = -t25;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm3_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_velocity_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double dq_T[96];
+    double v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *dq_b = dq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_velocity_block(q_T, dq_T, l, v_T);
         for (b = 0; b < count; ++b) {
-            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 3, sn + b * 3, v + (i + b) * 2);
+            double *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -345,22 +651,120 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
     arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict a_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[3];
+        double ddq[3];
+        double cs[3];
+        double sn[3];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t13 = dq[0] + dq[1];
+        const double t14 = t13 + dq[2];
+        const double t15 = t2*dq[0];
+        const double t16 = t3*t13;
+        const double t17 = t4*t14;
+        const double t18 = t5*dq[0];
+        const double t19 = t6*t13;
+        const double t20 = t7*t14;
+        const double t21 = -t17;
+        const double t22 = -t20;
+        const double t23 = t21 - t16;
+        const double t24 = t22 - t19;
+        const double t25 = t23 - t15;
+        const double t26 = t24 - t18;
+        a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
+        a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double dq_T[96];
+    double ddq_T[96];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *dq_b = dq + (i + b) * 3;
+                const double *ddq_b = ddq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_acceleration_block(q_T, dq_T, ddq_T, l, a_T);
         for (b = 0; b < count; ++b) {
-            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 3, sn + b * 3, a + (i + b) * 2);
+            double *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -430,22 +834,180 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
     arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[3];
+        double ddq[3];
+        double cs[3];
+        double sn[3];
+        double p[2];
+        double J[6];
+        double H[6];
+        double v[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t13 = dq[0] + dq[1];
+        const double t14 = t13 + dq[2];
+        const double t15 = t2*dq[0];
+        const double t16 = t3*t13;
+        const double t17 = t4*t14;
+        const double t18 = t5*dq[0];
+        const double t19 = t6*t13;
+        const double t20 = t7*t14;
+        const double t21 = -t17;
+        const double t22 = -t20;
+        const double t23 = t21 - t16;
+        const double t24 = t22 - t19;
+        const double t25 = t23 - t15;
+        const double t26 = t24 - t18;
+        p[0] = t12;
+        p[1] = -t11;
+        J[0] = t11;
+        J[1] = t9;
+        J[2] = t8;
+        J[3] = t12;
+        J[4] = t10;
+        J[5] = t4;
+        H[0] = t25;
+        H[1] = t23;
+        H[2] = t21;
+        H[3] = t26;
+        H[4] = t24;
+        H[5] = t22;
+        v[0] = t26;
+        v[1] = -t25;
+        a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
+        a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double dq_T[96];
+    double ddq_T[96];
+    double p_T[64];
+    double J_T[192];
+    double H_T[192];
+    double v_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *dq_b = dq + (i + b) * 3;
+                const double *ddq_b = ddq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 6;
+            double *H_b = H + (i + b) * 6;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -494,22 +1056,89 @@ void arm3_manipulability(const double q[3], const double l[3], double w[1])
     arm3_manipulability_finish(l, cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T, const double l[3], double *restrict w_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[3];
+        double sn[3];
+        double w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t27 = t11*t11 + t9*t9 + t8*t8;
+        const double t28 = t4*t8 + t11*t12 + t9*t10;
+        const double t29 = t4*t4 + t12*t12 + t10*t10;
+        const int t30 = t27 >= t29;
+        const double t31 = (t30 ? t27 : t29);
+        const double t32 = t28/t31;
+        const double t33 = (t30 ? t12 : t11) - t32*(t30 ? t11 : t12);
+        const double t34 = (t30 ? t10 : t9) - t32*(t30 ? t9 : t10);
+        const double t35 = (t30 ? t4 : t8) - t32*(t30 ? t8 : t4);
+        const double t36 = t33*t33 + t34*t34 + t35*t35;
+        w[0] = sqrt(t31*t36);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_manipulability_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_manipulability_block(q_T, l, w_T);
         for (b = 0; b < count; ++b) {
-            arm3_manipulability_finish(l, cs + b * 3, sn + b * 3, w + (i + b) * 1);
+            double *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -569,22 +1198,114 @@ void arm3_inverse_velocity(const double q[3], const double l[3], const double v[
     arm3_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_T, const double l[3], const double *restrict v_T, double lambda, double *restrict dq_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double v[2];
+        double cs[3];
+        double sn[3];
+        double dq[3];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t27 = t11*t11 + t9*t9 + t8*t8;
+        const double t28 = t4*t8 + t11*t12 + t9*t10;
+        const double t29 = t4*t4 + t12*t12 + t10*t10;
+        const double t37 = lambda*lambda;
+        const double t38 = t27 + t37;
+        const double t39 = t29 + t37;
+        const double t40 = t38 + t39;
+        const double t41 = t40;
+        const double t42 = t38*v[0] + t28*v[1];
+        const double t43 = t39*v[1] + t28*v[0];
+        const double t44 = t41*t41;
+        const double t45 = 1.0/t44;
+        const double t46 = t42*t45;
+        const double t47 = t43*t45;
+        const double t48 = t38*t39 - t28*t28;
+        const int t49 = t48 > ARM3_RANK_TOL*t44;
+        const double t50 = 1.0/t48;
+        const double t51 = (t49 ? t50*(t41*v[0] - t42) : t46);
+        const double t52 = (t49 ? t50*(t41*v[1] - t43) : t47);
+        dq[0] = t51*t11 + t52*t12;
+        dq[1] = t51*t9 + t52*t10;
+        dq[2] = t4*t52 + t51*t8;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+        dq_T[64 + b] = dq[2];
+    }
+}
+
 void arm3_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_inverse_velocity_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double v_T[64];
+    double dq_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_inverse_velocity_block(q_T, l, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm3_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, dq + (i + b) * 3);
+            double *dq_b = dq + (i + b) * 3;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
+            dq_b[2] = dq_T[64 + b];
         }
     }
 }
@@ -663,22 +1384,135 @@ void arm3_inverse_velocity3(const double q[3], const double l[3], const double t
     arm3_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q_T, const double l[3], const double *restrict twist_T, double lambda, double *restrict dq3_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double twist[3];
+        double cs[3];
+        double sn[3];
+        double dq3[3];
+        twist[0] = twist_T[0 + b];
+        twist[1] = twist_T[32 + b];
+        twist[2] = twist_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t27 = t11*t11 + t9*t9 + t8*t8;
+        const double t28 = t4*t8 + t11*t12 + t9*t10;
+        const double t29 = t4*t4 + t12*t12 + t10*t10;
+        const double t37 = lambda*lambda;
+        const double t38 = t27 + t37;
+        const double t39 = t29 + t37;
+        const double t40 = t38 + t39;
+        const double t48 = t38*t39 - t28*t28;
+        const double t61 = t11 + t9 + t8;
+        const double t62 = t4 + t12 + t10;
+        const double t63 = 3.0 + t37;
+        const double t64 = t40 + t63;
+        const double t65 = t38*twist[0] + t28*twist[1] + t61*twist[2];
+        const double t66 = t39*twist[1] + t28*twist[0] + t62*twist[2];
+        const double t67 = t63*twist[2] + t61*twist[0] + t62*twist[1];
+        const double t68 = t64*t64;
+        const double t69 = 1.0/t68;
+        const double t70 = t65*t69;
+        const double t71 = t66*t69;
+        const double t72 = t67*t69;
+        const double t73 = t39*t63 - t62*t62;
+        const double t74 = t61*t62 - t63*t28;
+        const double t75 = t28*t62 - t39*t61;
+        const double t76 = t38*t63 - t61*t61;
+        const double t77 = t28*t61 - t38*t62;
+        const double t78 = t38*t73 + t28*t74 + t61*t75;
+        const double t79 = t73 + t76 + t48;
+        const int t80 = t78 > ARM3_RANK_TOL*t79*t64;
+        const int t81 = t79 > ARM3_RANK_TOL*t68;
+        const double t82 = 1.0/t78;
+        const double t83 = t38*t65 + t28*t66 + t61*t67;
+        const double t84 = t39*t66 + t28*t65 + t62*t67;
+        const double t85 = t63*t67 + t61*t65 + t62*t66;
+        const double t86 = 1.0/(t79*t79);
+        const double t87 = t68 - t79;
+        const double t88 = (t81 ? (t80 ? t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]) : t86*(t65*t87 - t83*t64)) : t70);
+        const double t89 = (t81 ? (t80 ? t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]) : t86*(t66*t87 - t84*t64)) : t71);
+        const double t90 = (t81 ? (t80 ? t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]) : t86*(t67*t87 - t85*t64)) : t72);
+        dq3[0] = t90 + t88*t11 + t89*t12;
+        dq3[1] = t90 + t88*t9 + t89*t10;
+        dq3[2] = t90 + t4*t89 + t88*t8;
+        dq3_T[0 + b] = dq3[0];
+        dq3_T[32 + b] = dq3[1];
+        dq3_T[64 + b] = dq3[2];
+    }
+}
+
 void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double twist_T[96];
+    double dq3_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *twist_b = twist + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                twist_T[0 + b] = twist_b[0];
+                twist_T[32 + b] = twist_b[1];
+                twist_T[64 + b] = twist_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    twist_T[k * 32 + b] = twist[src * 3 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_inverse_velocity3_block(q_T, l, twist_T, lambda, dq3_T);
         for (b = 0; b < count; ++b) {
-            arm3_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 3, sn + b * 3, dq3 + (i + b) * 3);
+            double *dq3_b = dq3 + (i + b) * 3;
+            dq3_b[0] = dq3_T[0 + b];
+            dq3_b[1] = dq3_T[32 + b];
+            dq3_b[2] = dq3_T[64 + b];
         }
     }
 }
@@ -740,22 +1574,120 @@ void arm3_ik_step(const double q[3], const double l[3], const double target[2], 
     arm3_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const double l[3], const double *restrict target_T, double lambda, double *restrict q_next_T)
+{
+    double ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double q[3];
+        double target[2];
+        double cs[3];
+        double sn[3];
+        double q_next[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const double t2 = cs[0]*l[0];
+        const double t3 = cs[1]*l[1];
+        const double t4 = cs[2]*l[2];
+        const double t5 = sn[0]*l[0];
+        const double t6 = sn[1]*l[1];
+        const double t7 = sn[2]*l[2];
+        const double t8 = -t7;
+        const double t9 = t8 - t6;
+        const double t10 = t3 + t4;
+        const double t11 = t9 - t5;
+        const double t12 = t2 + t10;
+        const double t27 = t11*t11 + t9*t9 + t8*t8;
+        const double t28 = t4*t8 + t11*t12 + t9*t10;
+        const double t29 = t4*t4 + t12*t12 + t10*t10;
+        const double t37 = lambda*lambda;
+        const double t38 = t27 + t37;
+        const double t39 = t29 + t37;
+        const double t40 = t38 + t39;
+        const double t41 = t40;
+        const double t44 = t41*t41;
+        const double t45 = 1.0/t44;
+        const double t48 = t38*t39 - t28*t28;
+        const int t49 = t48 > ARM3_RANK_TOL*t44;
+        const double t50 = 1.0/t48;
+        const double t53 = target[0] - t12;
+        const double t54 = t11 + target[1];
+        const double t55 = t38*t53 + t28*t54;
+        const double t56 = t39*t54 + t28*t53;
+        const double t57 = t55*t45;
+        const double t58 = t56*t45;
+        const double t59 = (t49 ? t50*(t53*t41 - t55) : t57);
+        const double t60 = (t49 ? t50*(t54*t41 - t56) : t58);
+        q_next[0] = q[0] + t59*t11 + t60*t12;
+        q_next[1] = q[1] + t59*t9 + t60*t10;
+        q_next[2] = q[2] + t4*t60 + t59*t8;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+        q_next_T[64 + b] = q_next[2];
+    }
+}
+
 void arm3_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
 {
-    size_t i;
-    double ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3_ik_step_angles(q + (i + b) * 3, ang + b * 3);
+    double q_T[96];
+    double target_T[64];
+    double q_next_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 3;
+                const double *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm3_trig510(ang, cs, sn);
+        arm3_ik_step_block(q_T, l, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm3_ik_step_finish(q + (i + b) * 3, l, target + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, q_next + (i + b) * 3);
+            double *q_next_b = q_next + (i + b) * 3;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
+            q_next_b[2] = q_next_T[64 + b];
         }
     }
 }

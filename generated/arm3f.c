@@ -38,14 +38,14 @@ static void arm3f_trig3(const float *restrict ang, float *restrict cs, float *re
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 510. */
-static ARM3F_VECTORIZE void arm3f_trig510(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
+static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn)
 {
     int k;
-    for (k = 0; k < 510; ++k) {
+    for (k = 0; k < 96; ++k) {
         cs[k] = cosf(ang[k]);
     }
-    for (k = 0; k < 510; ++k) {
+    for (k = 0; k < 96; ++k) {
         sn[k] = sinf(ang[k]);
     }
 }
@@ -83,22 +83,80 @@ void arm3f_position(const float q[3], float p[2])
     arm3f_position_finish(cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_position_block(const float *restrict q_T, float *restrict p_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float cs[3];
+        float sn[3];
+        float p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        p[0] = t10;
+        p[1] = -t9;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm3f_position_batch(size_t m, const float *q, float *p)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_position_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_position_block(q_T, p_T);
         for (b = 0; b < count; ++b) {
-            arm3f_position_finish(cs + b * 3, sn + b * 3, p + (i + b) * 2);
+            float *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -140,22 +198,92 @@ void arm3f_jacobian(const float q[3], float J[6])
     arm3f_jacobian_finish(cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_jacobian_block(const float *restrict q_T, float *restrict J_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float cs[3];
+        float sn[3];
+        float J[6];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        J[0] = t9;
+        J[1] = t7;
+        J[2] = t6;
+        J[3] = t10;
+        J[4] = t8;
+        J[5] = t3;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+    }
+}
+
 void arm3f_jacobian_batch(size_t m, const float *q, float *J)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float J_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_jacobian_block(q_T, J_T);
         for (b = 0; b < count; ++b) {
-            arm3f_jacobian_finish(cs + b * 3, sn + b * 3, J + (i + b) * 6);
+            float *J_b = J + (i + b) * 6;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
         }
     }
 }
@@ -206,22 +334,113 @@ void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
     arm3f_coriolis_finish(dq, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_coriolis_block(const float *restrict q_T, const float *restrict dq_T, float *restrict H_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float dq[3];
+        float cs[3];
+        float sn[3];
+        float H[6];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t11 = dq[0] + dq[1];
+        const float t12 = t11 + dq[2];
+        const float t13 = cs[0]*dq[0];
+        const float t14 = t2*t11;
+        const float t15 = t3*t12;
+        const float t16 = sn[0]*dq[0];
+        const float t17 = t4*t11;
+        const float t18 = t5*t12;
+        const float t19 = -t15;
+        const float t20 = -t18;
+        const float t21 = t19 - t14;
+        const float t22 = t20 - t17;
+        const float t23 = t21 - t13;
+        const float t24 = t22 - t16;
+        H[0] = t23;
+        H[1] = t21;
+        H[2] = t19;
+        H[3] = t24;
+        H[4] = t22;
+        H[5] = t20;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+    }
+}
+
 void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float dq_T[96];
+    float H_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *dq_b = dq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_coriolis_block(q_T, dq_T, H_T);
         for (b = 0; b < count; ++b) {
-            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 3, sn + b * 3, H + (i + b) * 6);
+            float *H_b = H + (i + b) * 6;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
         }
     }
 }
@@ -268,22 +487,101 @@ void arm3f_velocity(const float q[3], const float dq[3], float v[2])
     arm3f_velocity_finish(dq, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_velocity_block(const float *restrict q_T, const float *restrict dq_T, float *restrict v_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float dq[3];
+        float cs[3];
+        float sn[3];
+        float v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t11 = dq[0] + dq[1];
+        const float t12 = t11 + dq[2];
+        const float t13 = cs[0]*dq[0];
+        const float t14 = t2*t11;
+        const float t15 = t3*t12;
+        const float t16 = sn[0]*dq[0];
+        const float t17 = t4*t11;
+        const float t18 = t5*t12;
+        const float t19 = -t15;
+        const float t20 = -t18;
+        const float t21 = t19 - t14;
+        const float t22 = t20 - t17;
+        const float t23 = t21 - t13;
+        const float t24 = t22 - t16;
+        v[0] = t24;
+        v[1] = -t23;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float dq_T[96];
+    float v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *dq_b = dq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_velocity_block(q_T, dq_T, v_T);
         for (b = 0; b < count; ++b) {
-            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 3, sn + b * 3, v + (i + b) * 2);
+            float *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -335,22 +633,118 @@ void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3],
     arm3f_acceleration_finish(dq, ddq, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_acceleration_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict a_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float dq[3];
+        float ddq[3];
+        float cs[3];
+        float sn[3];
+        float a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t11 = dq[0] + dq[1];
+        const float t12 = t11 + dq[2];
+        const float t13 = cs[0]*dq[0];
+        const float t14 = t2*t11;
+        const float t15 = t3*t12;
+        const float t16 = sn[0]*dq[0];
+        const float t17 = t4*t11;
+        const float t18 = t5*t12;
+        const float t19 = -t15;
+        const float t20 = -t18;
+        const float t21 = t19 - t14;
+        const float t22 = t20 - t17;
+        const float t23 = t21 - t13;
+        const float t24 = t22 - t16;
+        a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
+        a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float dq_T[96];
+    float ddq_T[96];
+    float a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *dq_b = dq + (i + b) * 3;
+                const float *ddq_b = ddq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_acceleration_block(q_T, dq_T, ddq_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 3, sn + b * 3, a + (i + b) * 2);
+            float *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -418,22 +812,178 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
     arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_kinematics_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict p_T, float *restrict J_T, float *restrict H_T, float *restrict v_T, float *restrict a_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float dq[3];
+        float ddq[3];
+        float cs[3];
+        float sn[3];
+        float p[2];
+        float J[6];
+        float H[6];
+        float v[2];
+        float a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t11 = dq[0] + dq[1];
+        const float t12 = t11 + dq[2];
+        const float t13 = cs[0]*dq[0];
+        const float t14 = t2*t11;
+        const float t15 = t3*t12;
+        const float t16 = sn[0]*dq[0];
+        const float t17 = t4*t11;
+        const float t18 = t5*t12;
+        const float t19 = -t15;
+        const float t20 = -t18;
+        const float t21 = t19 - t14;
+        const float t22 = t20 - t17;
+        const float t23 = t21 - t13;
+        const float t24 = t22 - t16;
+        p[0] = t10;
+        p[1] = -t9;
+        J[0] = t9;
+        J[1] = t7;
+        J[2] = t6;
+        J[3] = t10;
+        J[4] = t8;
+        J[5] = t3;
+        H[0] = t23;
+        H[1] = t21;
+        H[2] = t19;
+        H[3] = t24;
+        H[4] = t22;
+        H[5] = t20;
+        v[0] = t24;
+        v[1] = -t23;
+        a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
+        a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float dq_T[96];
+    float ddq_T[96];
+    float p_T[64];
+    float J_T[192];
+    float H_T[192];
+    float v_T[64];
+    float a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *dq_b = dq + (i + b) * 3;
+                const float *ddq_b = ddq + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_kinematics_block(q_T, dq_T, ddq_T, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 3, sn + b * 3, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            float *p_b = p + (i + b) * 2;
+            float *J_b = J + (i + b) * 6;
+            float *H_b = H + (i + b) * 6;
+            float *v_b = v + (i + b) * 2;
+            float *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -480,22 +1030,87 @@ void arm3f_manipulability(const float q[3], float w[1])
     arm3f_manipulability_finish(cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T, float *restrict w_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float cs[3];
+        float sn[3];
+        float w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t25 = t9*t9 + t7*t7 + t6*t6;
+        const float t26 = t3*t6 + t9*t10 + t7*t8;
+        const float t27 = t3*t3 + t10*t10 + t8*t8;
+        const int t28 = t25 >= t27;
+        const float t29 = (t28 ? t25 : t27);
+        const float t30 = t26/t29;
+        const float t31 = (t28 ? t10 : t9) - t30*(t28 ? t9 : t10);
+        const float t32 = (t28 ? t8 : t7) - t30*(t28 ? t7 : t8);
+        const float t33 = (t28 ? t3 : t6) - t30*(t28 ? t6 : t3);
+        const float t34 = t31*t31 + t32*t32 + t33*t33;
+        w[0] = sqrtf(t29*t34);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_manipulability_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_manipulability_block(q_T, w_T);
         for (b = 0; b < count; ++b) {
-            arm3f_manipulability_finish(cs + b * 3, sn + b * 3, w + (i + b) * 1);
+            float *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -553,22 +1168,112 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
     arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q_T, const float *restrict v_T, float lambda, float *restrict dq_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float v[2];
+        float cs[3];
+        float sn[3];
+        float dq[3];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t25 = t9*t9 + t7*t7 + t6*t6;
+        const float t26 = t3*t6 + t9*t10 + t7*t8;
+        const float t27 = t3*t3 + t10*t10 + t8*t8;
+        const float t35 = lambda*lambda;
+        const float t36 = t25 + t35;
+        const float t37 = t27 + t35;
+        const float t38 = t36 + t37;
+        const float t39 = t38;
+        const float t40 = t36*v[0] + t26*v[1];
+        const float t41 = t37*v[1] + t26*v[0];
+        const float t42 = t39*t39;
+        const float t43 = 1.0f/t42;
+        const float t44 = t40*t43;
+        const float t45 = t41*t43;
+        const float t46 = t36*t37 - t26*t26;
+        const int t47 = t46 > ARM3F_RANK_TOL*t42;
+        const float t48 = 1.0f/t46;
+        const float t49 = (t47 ? t48*(t39*v[0] - t40) : t44);
+        const float t50 = (t47 ? t48*(t39*v[1] - t41) : t45);
+        dq[0] = t49*t9 + t50*t10;
+        dq[1] = t49*t7 + t50*t8;
+        dq[2] = t3*t50 + t49*t6;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+        dq_T[64 + b] = dq[2];
+    }
+}
+
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_inverse_velocity_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float v_T[64];
+    float dq_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_inverse_velocity_block(q_T, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm3f_inverse_velocity_finish(v + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, dq + (i + b) * 3);
+            float *dq_b = dq + (i + b) * 3;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
+            dq_b[2] = dq_T[64 + b];
         }
     }
 }
@@ -645,22 +1350,133 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
     arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict q_T, const float *restrict twist_T, float lambda, float *restrict dq3_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float twist[3];
+        float cs[3];
+        float sn[3];
+        float dq3[3];
+        twist[0] = twist_T[0 + b];
+        twist[1] = twist_T[32 + b];
+        twist[2] = twist_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t25 = t9*t9 + t7*t7 + t6*t6;
+        const float t26 = t3*t6 + t9*t10 + t7*t8;
+        const float t27 = t3*t3 + t10*t10 + t8*t8;
+        const float t35 = lambda*lambda;
+        const float t36 = t25 + t35;
+        const float t37 = t27 + t35;
+        const float t38 = t36 + t37;
+        const float t46 = t36*t37 - t26*t26;
+        const float t59 = t9 + t7 + t6;
+        const float t60 = t3 + t10 + t8;
+        const float t61 = 3.0f + t35;
+        const float t62 = t38 + t61;
+        const float t63 = t36*twist[0] + t26*twist[1] + t59*twist[2];
+        const float t64 = t37*twist[1] + t26*twist[0] + t60*twist[2];
+        const float t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
+        const float t66 = t62*t62;
+        const float t67 = 1.0f/t66;
+        const float t68 = t63*t67;
+        const float t69 = t64*t67;
+        const float t70 = t65*t67;
+        const float t71 = t37*t61 - t60*t60;
+        const float t72 = t59*t60 - t61*t26;
+        const float t73 = t26*t60 - t37*t59;
+        const float t74 = t36*t61 - t59*t59;
+        const float t75 = t26*t59 - t36*t60;
+        const float t76 = t36*t71 + t26*t72 + t59*t73;
+        const float t77 = t71 + t74 + t46;
+        const int t78 = t76 > ARM3F_RANK_TOL*t77*t62;
+        const int t79 = t77 > ARM3F_RANK_TOL*t66;
+        const float t80 = 1.0f/t76;
+        const float t81 = t36*t63 + t26*t64 + t59*t65;
+        const float t82 = t37*t64 + t26*t63 + t60*t65;
+        const float t83 = t61*t65 + t59*t63 + t60*t64;
+        const float t84 = 1.0f/(t77*t77);
+        const float t85 = t66 - t77;
+        const float t86 = (t79 ? (t78 ? t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]) : t84*(t63*t85 - t81*t62)) : t68);
+        const float t87 = (t79 ? (t78 ? t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]) : t84*(t64*t85 - t82*t62)) : t69);
+        const float t88 = (t79 ? (t78 ? t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t70);
+        dq3[0] = t88 + t86*t9 + t87*t10;
+        dq3[1] = t88 + t86*t7 + t87*t8;
+        dq3[2] = t88 + t3*t87 + t86*t6;
+        dq3_T[0 + b] = dq3[0];
+        dq3_T[32 + b] = dq3[1];
+        dq3_T[64 + b] = dq3[2];
+    }
+}
+
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float twist_T[96];
+    float dq3_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *twist_b = twist + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                twist_T[0 + b] = twist_b[0];
+                twist_T[32 + b] = twist_b[1];
+                twist_T[64 + b] = twist_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    twist_T[k * 32 + b] = twist[src * 3 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_inverse_velocity3_block(q_T, twist_T, lambda, dq3_T);
         for (b = 0; b < count; ++b) {
-            arm3f_inverse_velocity3_finish(twist + (i + b) * 3, lambda, cs + b * 3, sn + b * 3, dq3 + (i + b) * 3);
+            float *dq3_b = dq3 + (i + b) * 3;
+            dq3_b[0] = dq3_T[0 + b];
+            dq3_b[1] = dq3_T[32 + b];
+            dq3_b[2] = dq3_T[64 + b];
         }
     }
 }
@@ -720,22 +1536,118 @@ void arm3f_ik_step(const float q[3], const float target[2], float lambda, float 
     arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const float *restrict target_T, float lambda, float *restrict q_next_T)
+{
+    float ang_T[96], cs_T[96], sn_T[96];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float ang[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+    }
+    arm3f_trig96(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        float q[3];
+        float target[2];
+        float cs[3];
+        float sn[3];
+        float q_next[3];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        const float t2 = 0.8f*cs[1];
+        const float t3 = 0.5f*cs[2];
+        const float t4 = 0.8f*sn[1];
+        const float t5 = 0.5f*sn[2];
+        const float t6 = -t5;
+        const float t7 = t6 - t4;
+        const float t8 = t2 + t3;
+        const float t9 = t7 - sn[0];
+        const float t10 = cs[0] + t8;
+        const float t25 = t9*t9 + t7*t7 + t6*t6;
+        const float t26 = t3*t6 + t9*t10 + t7*t8;
+        const float t27 = t3*t3 + t10*t10 + t8*t8;
+        const float t35 = lambda*lambda;
+        const float t36 = t25 + t35;
+        const float t37 = t27 + t35;
+        const float t38 = t36 + t37;
+        const float t39 = t38;
+        const float t42 = t39*t39;
+        const float t43 = 1.0f/t42;
+        const float t46 = t36*t37 - t26*t26;
+        const int t47 = t46 > ARM3F_RANK_TOL*t42;
+        const float t48 = 1.0f/t46;
+        const float t51 = target[0] - t10;
+        const float t52 = t9 + target[1];
+        const float t53 = t36*t51 + t26*t52;
+        const float t54 = t37*t52 + t26*t51;
+        const float t55 = t53*t43;
+        const float t56 = t54*t43;
+        const float t57 = (t47 ? t48*(t51*t39 - t53) : t55);
+        const float t58 = (t47 ? t48*(t52*t39 - t54) : t56);
+        q_next[0] = q[0] + t57*t9 + t58*t10;
+        q_next[1] = q[1] + t57*t7 + t58*t8;
+        q_next[2] = q[2] + t3*t58 + t57*t6;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+        q_next_T[64 + b] = q_next[2];
+    }
+}
+
 void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next)
 {
-    size_t i;
-    float ang[510], cs[510], sn[510];
-    size_t b, k;
-    for (k = 0; k < 510; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 170) {
-        const size_t count = m - i < 170 ? m - i : 170;
-        for (b = 0; b < count; ++b) {
-            arm3f_ik_step_angles(q + (i + b) * 3, ang + b * 3);
+    float q_T[96];
+    float target_T[64];
+    float q_next_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const float *q_b = q + (i + b) * 3;
+                const float *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    q_T[k * 32 + b] = q[src * 3 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm3f_trig510(ang, cs, sn);
+        arm3f_ik_step_block(q_T, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm3f_ik_step_finish(q + (i + b) * 3, target + (i + b) * 2, lambda, cs + b * 3, sn + b * 3, q_next + (i + b) * 3);
+            float *q_next_b = q_next + (i + b) * 3;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
+            q_next_b[2] = q_next_T[64 + b];
         }
     }
 }

@@ -40,14 +40,14 @@ static ARM4_VECTORIZE void arm4_trig8(const double *restrict ang, double *restri
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128. */
+static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 128; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 128; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -96,22 +96,92 @@ void arm4_position(const double q[4], const double l[4], double p[2])
     arm4_position_finish(l, cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[4];
+        double sn[4];
+        double p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        p[0] = t17;
+        p[1] = -t16;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_position_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_position_block(q_T, l, p_T);
         for (b = 0; b < count; ++b) {
-            arm4_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -166,22 +236,110 @@ void arm4_jacobian(const double q[4], const double l[4], double J[8])
     arm4_jacobian_finish(l, cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[4];
+        double sn[4];
+        double J[8];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        J[0] = t16;
+        J[1] = t14;
+        J[2] = t12;
+        J[3] = t11;
+        J[4] = t17;
+        J[5] = t15;
+        J[6] = t13;
+        J[7] = t6;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+    }
+}
+
 void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double J_T[256];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_jacobian_block(q_T, l, J_T);
         for (b = 0; b < count; ++b) {
-            arm4_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 8);
+            double *J_b = J + (i + b) * 8;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
         }
     }
 }
@@ -248,22 +406,136 @@ void arm4_coriolis(const double q[4], const double dq[4], const double l[4], dou
     arm4_coriolis_finish(dq, l, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[4];
+        double cs[4];
+        double sn[4];
+        double H[8];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t18 = dq[0] + dq[1];
+        const double t19 = t18 + dq[2];
+        const double t20 = t19 + dq[3];
+        const double t21 = t3*dq[0];
+        const double t22 = t4*t18;
+        const double t23 = t5*t19;
+        const double t24 = t6*t20;
+        const double t25 = t7*dq[0];
+        const double t26 = t8*t18;
+        const double t27 = t9*t19;
+        const double t28 = t10*t20;
+        const double t29 = -t24;
+        const double t30 = -t28;
+        const double t31 = t29 - t23;
+        const double t32 = t30 - t27;
+        const double t33 = t31 - t22;
+        const double t34 = t32 - t26;
+        const double t35 = t33 - t21;
+        const double t36 = t34 - t25;
+        H[0] = t35;
+        H[1] = t33;
+        H[2] = t31;
+        H[3] = t29;
+        H[4] = t36;
+        H[5] = t34;
+        H[6] = t32;
+        H[7] = t30;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+    }
+}
+
 void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double dq_T[128];
+    double H_T[256];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *dq_b = dq + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_coriolis_block(q_T, dq_T, l, H_T);
         for (b = 0; b < count; ++b) {
-            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 8, sn + b * 8, H + (i + b) * 8);
+            double *H_b = H + (i + b) * 8;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
         }
     }
 }
@@ -324,22 +596,118 @@ void arm4_velocity(const double q[4], const double dq[4], const double l[4], dou
     arm4_velocity_finish(dq, l, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[4];
+        double cs[4];
+        double sn[4];
+        double v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t18 = dq[0] + dq[1];
+        const double t19 = t18 + dq[2];
+        const double t20 = t19 + dq[3];
+        const double t21 = t3*dq[0];
+        const double t22 = t4*t18;
+        const double t23 = t5*t19;
+        const double t24 = t6*t20;
+        const double t25 = t7*dq[0];
+        const double t26 = t8*t18;
+        const double t27 = t9*t19;
+        const double t28 = t10*t20;
+        const double t29 = -t24;
+        const double t30 = -t28;
+        const double t31 = t29 - t23;
+        const double t32 = t30 - t27;
+        const double t33 = t31 - t22;
+        const double t34 = t32 - t26;
+        const double t35 = t33 - t21;
+        const double t36 = t34 - t25;
+        v[0] = t36;
+        v[1] = -t35;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm4_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_velocity_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double dq_T[128];
+    double v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *dq_b = dq + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_velocity_block(q_T, dq_T, l, v_T);
         for (b = 0; b < count; ++b) {
-            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            double *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -407,22 +775,139 @@ void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4
     arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[4];
+        double ddq[4];
+        double cs[4];
+        double sn[4];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t18 = dq[0] + dq[1];
+        const double t19 = t18 + dq[2];
+        const double t20 = t19 + dq[3];
+        const double t21 = t3*dq[0];
+        const double t22 = t4*t18;
+        const double t23 = t5*t19;
+        const double t24 = t6*t20;
+        const double t25 = t7*dq[0];
+        const double t26 = t8*t18;
+        const double t27 = t9*t19;
+        const double t28 = t10*t20;
+        const double t29 = -t24;
+        const double t30 = -t28;
+        const double t31 = t29 - t23;
+        const double t32 = t30 - t27;
+        const double t33 = t31 - t22;
+        const double t34 = t32 - t26;
+        const double t35 = t33 - t21;
+        const double t36 = t34 - t25;
+        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
+        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double dq_T[128];
+    double ddq_T[128];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *dq_b = dq + (i + b) * 4;
+                const double *ddq_b = ddq + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_acceleration_block(q_T, dq_T, ddq_T, l, a_T);
         for (b = 0; b < count; ++b) {
-            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            double *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -510,22 +995,211 @@ void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4],
     arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[4];
+        double ddq[4];
+        double cs[4];
+        double sn[4];
+        double p[2];
+        double J[8];
+        double H[8];
+        double v[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t18 = dq[0] + dq[1];
+        const double t19 = t18 + dq[2];
+        const double t20 = t19 + dq[3];
+        const double t21 = t3*dq[0];
+        const double t22 = t4*t18;
+        const double t23 = t5*t19;
+        const double t24 = t6*t20;
+        const double t25 = t7*dq[0];
+        const double t26 = t8*t18;
+        const double t27 = t9*t19;
+        const double t28 = t10*t20;
+        const double t29 = -t24;
+        const double t30 = -t28;
+        const double t31 = t29 - t23;
+        const double t32 = t30 - t27;
+        const double t33 = t31 - t22;
+        const double t34 = t32 - t26;
+        const double t35 = t33 - t21;
+        const double t36 = t34 - t25;
+        p[0] = t17;
+        p[1] = -t16;
+        J[0] = t16;
+        J[1] = t14;
+        J[2] = t12;
+        J[3] = t11;
+        J[4] = t17;
+        J[5] = t15;
+        J[6] = t13;
+        J[7] = t6;
+        H[0] = t35;
+        H[1] = t33;
+        H[2] = t31;
+        H[3] = t29;
+        H[4] = t36;
+        H[5] = t34;
+        H[6] = t32;
+        H[7] = t30;
+        v[0] = t36;
+        v[1] = -t35;
+        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
+        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double dq_T[128];
+    double ddq_T[128];
+    double p_T[64];
+    double J_T[256];
+    double H_T[256];
+    double v_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *dq_b = dq + (i + b) * 4;
+                const double *ddq_b = ddq + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 4 + k];
+                }
+                for (k = 0; k < 4; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 8;
+            double *H_b = H + (i + b) * 8;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -584,22 +1258,100 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1])
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T, const double l[4], double *restrict w_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[4];
+        double sn[4];
+        double w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+        const int t40 = t37 >= t39;
+        const double t41 = (t40 ? t37 : t39);
+        const double t42 = t38/t41;
+        const double t43 = (t40 ? t17 : t16) - t42*(t40 ? t16 : t17);
+        const double t44 = (t40 ? t15 : t14) - t42*(t40 ? t14 : t15);
+        const double t45 = (t40 ? t13 : t12) - t42*(t40 ? t12 : t13);
+        const double t46 = (t40 ? t6 : t11) - t42*(t40 ? t11 : t6);
+        const double t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46;
+        w[0] = sqrt(t41*t47);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_manipulability_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_manipulability_block(q_T, l, w_T);
         for (b = 0; b < count; ++b) {
-            arm4_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+            double *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -669,22 +1421,127 @@ void arm4_inverse_velocity(const double q[4], const double l[4], const double v[
     arm4_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_T, const double l[4], const double *restrict v_T, double lambda, double *restrict dq_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double v[2];
+        double cs[4];
+        double sn[4];
+        double dq[4];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+        const double t48 = lambda*lambda;
+        const double t49 = t37 + t48;
+        const double t50 = t39 + t48;
+        const double t51 = t49 + t50;
+        const double t52 = t51;
+        const double t53 = t49*v[0] + t38*v[1];
+        const double t54 = t50*v[1] + t38*v[0];
+        const double t55 = t52*t52;
+        const double t56 = 1.0/t55;
+        const double t57 = t53*t56;
+        const double t58 = t54*t56;
+        const double t59 = t49*t50 - t38*t38;
+        const int t60 = t59 > ARM4_RANK_TOL*t55;
+        const double t61 = 1.0/t59;
+        const double t62 = (t60 ? t61*(t52*v[0] - t53) : t57);
+        const double t63 = (t60 ? t61*(t52*v[1] - t54) : t58);
+        dq[0] = t62*t16 + t63*t17;
+        dq[1] = t62*t14 + t63*t15;
+        dq[2] = t62*t12 + t63*t13;
+        dq[3] = t6*t63 + t62*t11;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+        dq_T[64 + b] = dq[2];
+        dq_T[96 + b] = dq[3];
+    }
+}
+
 void arm4_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_inverse_velocity_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double v_T[64];
+    double dq_T[128];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_inverse_velocity_block(q_T, l, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm4_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 4);
+            double *dq_b = dq + (i + b) * 4;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
+            dq_b[2] = dq_T[64 + b];
+            dq_b[3] = dq_T[96 + b];
         }
     }
 }
@@ -773,22 +1630,148 @@ void arm4_inverse_velocity3(const double q[4], const double l[4], const double t
     arm4_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q_T, const double l[4], const double *restrict twist_T, double lambda, double *restrict dq3_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double twist[3];
+        double cs[4];
+        double sn[4];
+        double dq3[4];
+        twist[0] = twist_T[0 + b];
+        twist[1] = twist_T[32 + b];
+        twist[2] = twist_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+        const double t48 = lambda*lambda;
+        const double t49 = t37 + t48;
+        const double t50 = t39 + t48;
+        const double t51 = t49 + t50;
+        const double t59 = t49*t50 - t38*t38;
+        const double t72 = t16 + t14 + t12 + t11;
+        const double t73 = t6 + t17 + t15 + t13;
+        const double t74 = 4.0 + t48;
+        const double t75 = t51 + t74;
+        const double t76 = t49*twist[0] + t38*twist[1] + t72*twist[2];
+        const double t77 = t50*twist[1] + t38*twist[0] + t73*twist[2];
+        const double t78 = t74*twist[2] + t72*twist[0] + t73*twist[1];
+        const double t79 = t75*t75;
+        const double t80 = 1.0/t79;
+        const double t81 = t76*t80;
+        const double t82 = t77*t80;
+        const double t83 = t78*t80;
+        const double t84 = t50*t74 - t73*t73;
+        const double t85 = t72*t73 - t74*t38;
+        const double t86 = t38*t73 - t50*t72;
+        const double t87 = t49*t74 - t72*t72;
+        const double t88 = t38*t72 - t49*t73;
+        const double t89 = t49*t84 + t38*t85 + t72*t86;
+        const double t90 = t84 + t87 + t59;
+        const int t91 = t89 > ARM4_RANK_TOL*t90*t75;
+        const int t92 = t90 > ARM4_RANK_TOL*t79;
+        const double t93 = 1.0/t89;
+        const double t94 = t49*t76 + t38*t77 + t72*t78;
+        const double t95 = t50*t77 + t38*t76 + t73*t78;
+        const double t96 = t74*t78 + t72*t76 + t73*t77;
+        const double t97 = 1.0/(t90*t90);
+        const double t98 = t79 - t90;
+        const double t99 = (t92 ? (t91 ? t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]) : t97*(t76*t98 - t94*t75)) : t81);
+        const double t100 = (t92 ? (t91 ? t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]) : t97*(t77*t98 - t95*t75)) : t82);
+        const double t101 = (t92 ? (t91 ? t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]) : t97*(t78*t98 - t96*t75)) : t83);
+        dq3[0] = t101 + t99*t16 + t100*t17;
+        dq3[1] = t101 + t99*t14 + t100*t15;
+        dq3[2] = t101 + t99*t12 + t100*t13;
+        dq3[3] = t101 + t6*t100 + t99*t11;
+        dq3_T[0 + b] = dq3[0];
+        dq3_T[32 + b] = dq3[1];
+        dq3_T[64 + b] = dq3[2];
+        dq3_T[96 + b] = dq3[3];
+    }
+}
+
 void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_inverse_velocity3_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double twist_T[96];
+    double dq3_T[128];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *twist_b = twist + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                twist_T[0 + b] = twist_b[0];
+                twist_T[32 + b] = twist_b[1];
+                twist_T[64 + b] = twist_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    twist_T[k * 32 + b] = twist[src * 3 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_inverse_velocity3_block(q_T, l, twist_T, lambda, dq3_T);
         for (b = 0; b < count; ++b) {
-            arm4_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 4);
+            double *dq3_b = dq3 + (i + b) * 4;
+            dq3_b[0] = dq3_T[0 + b];
+            dq3_b[1] = dq3_T[32 + b];
+            dq3_b[2] = dq3_T[64 + b];
+            dq3_b[3] = dq3_T[96 + b];
         }
     }
 }
@@ -860,22 +1843,134 @@ void arm4_ik_step(const double q[4], const double l[4], const double target[2], 
     arm4_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const double l[4], const double *restrict target_T, double lambda, double *restrict q_next_T)
+{
+    double ang_T[128], cs_T[128], sn_T[128];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double ang[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+    }
+    arm4_trig128(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double q[4];
+        double target[2];
+        double cs[4];
+        double sn[4];
+        double q_next[4];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        const double t3 = cs[0]*l[0];
+        const double t4 = cs[1]*l[1];
+        const double t5 = cs[2]*l[2];
+        const double t6 = cs[3]*l[3];
+        const double t7 = sn[0]*l[0];
+        const double t8 = sn[1]*l[1];
+        const double t9 = sn[2]*l[2];
+        const double t10 = sn[3]*l[3];
+        const double t11 = -t10;
+        const double t12 = t11 - t9;
+        const double t13 = t5 + t6;
+        const double t14 = t12 - t8;
+        const double t15 = t4 + t13;
+        const double t16 = t14 - t7;
+        const double t17 = t3 + t15;
+        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
+        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
+        const double t48 = lambda*lambda;
+        const double t49 = t37 + t48;
+        const double t50 = t39 + t48;
+        const double t51 = t49 + t50;
+        const double t52 = t51;
+        const double t55 = t52*t52;
+        const double t56 = 1.0/t55;
+        const double t59 = t49*t50 - t38*t38;
+        const int t60 = t59 > ARM4_RANK_TOL*t55;
+        const double t61 = 1.0/t59;
+        const double t64 = target[0] - t17;
+        const double t65 = t16 + target[1];
+        const double t66 = t49*t64 + t38*t65;
+        const double t67 = t50*t65 + t38*t64;
+        const double t68 = t66*t56;
+        const double t69 = t67*t56;
+        const double t70 = (t60 ? t61*(t64*t52 - t66) : t68);
+        const double t71 = (t60 ? t61*(t65*t52 - t67) : t69);
+        q_next[0] = q[0] + t70*t16 + t71*t17;
+        q_next[1] = q[1] + t70*t14 + t71*t15;
+        q_next[2] = q[2] + t70*t12 + t71*t13;
+        q_next[3] = q[3] + t6*t71 + t70*t11;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+        q_next_T[64 + b] = q_next[2];
+        q_next_T[96 + b] = q_next[3];
+    }
+}
+
 void arm4_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm4_ik_step_angles(q + (i + b) * 4, ang + b * 8);
+    double q_T[128];
+    double target_T[64];
+    double q_next_T[128];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 4;
+                const double *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 4; ++k) {
+                    q_T[k * 32 + b] = q[src * 4 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm4_trig512(ang, cs, sn);
+        arm4_ik_step_block(q_T, l, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm4_ik_step_finish(q + (i + b) * 4, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 4);
+            double *q_next_b = q_next + (i + b) * 4;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
+            q_next_b[2] = q_next_T[64 + b];
+            q_next_b[3] = q_next_T[96 + b];
         }
     }
 }

@@ -40,14 +40,14 @@ static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restri
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160. */
+static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 160; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 160; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -101,22 +101,102 @@ void arm5_position(const double q[5], const double l[5], double p[2])
     arm5_position_finish(l, cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_position_block(const double *restrict q_T, const double l[5], double *restrict p_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[5];
+        double sn[5];
+        double p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        p[0] = t22;
+        p[1] = -t21;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm5_position_batch(size_t m, const double *q, const double *l, double *p)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_position_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_position_block(q_T, l, p_T);
         for (b = 0; b < count; ++b) {
-            arm5_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -178,22 +258,126 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10])
     arm5_jacobian_finish(l, cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_jacobian_block(const double *restrict q_T, const double l[5], double *restrict J_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[5];
+        double sn[5];
+        double J[10];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        J[0] = t21;
+        J[1] = t19;
+        J[2] = t17;
+        J[3] = t15;
+        J[4] = t14;
+        J[5] = t22;
+        J[6] = t20;
+        J[7] = t18;
+        J[8] = t16;
+        J[9] = t8;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+        J_T[256 + b] = J[8];
+        J_T[288 + b] = J[9];
+    }
+}
+
 void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_jacobian_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double J_T[320];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_jacobian_block(q_T, l, J_T);
         for (b = 0; b < count; ++b) {
-            arm5_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 10);
+            double *J_b = J + (i + b) * 10;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
+            J_b[8] = J_T[256 + b];
+            J_b[9] = J_T[288 + b];
         }
     }
 }
@@ -270,22 +454,157 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
     arm5_coriolis_finish(dq, l, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict H_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[5];
+        double cs[5];
+        double sn[5];
+        double H[10];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t23 = dq[0] + dq[1];
+        const double t24 = t23 + dq[2];
+        const double t25 = t24 + dq[3];
+        const double t26 = t25 + dq[4];
+        const double t27 = t4*dq[0];
+        const double t28 = t5*t23;
+        const double t29 = t6*t24;
+        const double t30 = t7*t25;
+        const double t31 = t8*t26;
+        const double t32 = t9*dq[0];
+        const double t33 = t10*t23;
+        const double t34 = t11*t24;
+        const double t35 = t12*t25;
+        const double t36 = t13*t26;
+        const double t37 = -t31;
+        const double t38 = -t36;
+        const double t39 = t37 - t30;
+        const double t40 = t38 - t35;
+        const double t41 = t39 - t29;
+        const double t42 = t40 - t34;
+        const double t43 = t41 - t28;
+        const double t44 = t42 - t33;
+        const double t45 = t43 - t27;
+        const double t46 = t44 - t32;
+        H[0] = t45;
+        H[1] = t43;
+        H[2] = t41;
+        H[3] = t39;
+        H[4] = t37;
+        H[5] = t46;
+        H[6] = t44;
+        H[7] = t42;
+        H[8] = t40;
+        H[9] = t38;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+        H_T[256 + b] = H[8];
+        H_T[288 + b] = H[9];
+    }
+}
+
 void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_coriolis_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double dq_T[160];
+    double H_T[320];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *dq_b = dq + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_coriolis_block(q_T, dq_T, l, H_T);
         for (b = 0; b < count; ++b) {
-            arm5_coriolis_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, H + (i + b) * 10);
+            double *H_b = H + (i + b) * 10;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
+            H_b[8] = H_T[256 + b];
+            H_b[9] = H_T[288 + b];
         }
     }
 }
@@ -354,22 +673,133 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
     arm5_velocity_finish(dq, l, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict v_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[5];
+        double cs[5];
+        double sn[5];
+        double v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t23 = dq[0] + dq[1];
+        const double t24 = t23 + dq[2];
+        const double t25 = t24 + dq[3];
+        const double t26 = t25 + dq[4];
+        const double t27 = t4*dq[0];
+        const double t28 = t5*t23;
+        const double t29 = t6*t24;
+        const double t30 = t7*t25;
+        const double t31 = t8*t26;
+        const double t32 = t9*dq[0];
+        const double t33 = t10*t23;
+        const double t34 = t11*t24;
+        const double t35 = t12*t25;
+        const double t36 = t13*t26;
+        const double t37 = -t31;
+        const double t38 = -t36;
+        const double t39 = t37 - t30;
+        const double t40 = t38 - t35;
+        const double t41 = t39 - t29;
+        const double t42 = t40 - t34;
+        const double t43 = t41 - t28;
+        const double t44 = t42 - t33;
+        const double t45 = t43 - t27;
+        const double t46 = t44 - t32;
+        v[0] = t46;
+        v[1] = -t45;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm5_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_velocity_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double dq_T[160];
+    double v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *dq_b = dq + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_velocity_block(q_T, dq_T, l, v_T);
         for (b = 0; b < count; ++b) {
-            arm5_velocity_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            double *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -447,22 +877,158 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
     arm5_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict a_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[5];
+        double ddq[5];
+        double cs[5];
+        double sn[5];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        ddq[4] = ddq_T[128 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t23 = dq[0] + dq[1];
+        const double t24 = t23 + dq[2];
+        const double t25 = t24 + dq[3];
+        const double t26 = t25 + dq[4];
+        const double t27 = t4*dq[0];
+        const double t28 = t5*t23;
+        const double t29 = t6*t24;
+        const double t30 = t7*t25;
+        const double t31 = t8*t26;
+        const double t32 = t9*dq[0];
+        const double t33 = t10*t23;
+        const double t34 = t11*t24;
+        const double t35 = t12*t25;
+        const double t36 = t13*t26;
+        const double t37 = -t31;
+        const double t38 = -t36;
+        const double t39 = t37 - t30;
+        const double t40 = t38 - t35;
+        const double t41 = t39 - t29;
+        const double t42 = t40 - t34;
+        const double t43 = t41 - t28;
+        const double t44 = t42 - t33;
+        const double t45 = t43 - t27;
+        const double t46 = t44 - t32;
+        a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
+        a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_acceleration_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double dq_T[160];
+    double ddq_T[160];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *dq_b = dq + (i + b) * 5;
+                const double *ddq_b = ddq + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+                ddq_T[128 + b] = ddq_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_acceleration_block(q_T, dq_T, ddq_T, l, a_T);
         for (b = 0; b < count; ++b) {
-            arm5_acceleration_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            double *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -564,22 +1130,242 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
     arm5_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[5];
+        double ddq[5];
+        double cs[5];
+        double sn[5];
+        double p[2];
+        double J[10];
+        double H[10];
+        double v[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        ddq[4] = ddq_T[128 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t23 = dq[0] + dq[1];
+        const double t24 = t23 + dq[2];
+        const double t25 = t24 + dq[3];
+        const double t26 = t25 + dq[4];
+        const double t27 = t4*dq[0];
+        const double t28 = t5*t23;
+        const double t29 = t6*t24;
+        const double t30 = t7*t25;
+        const double t31 = t8*t26;
+        const double t32 = t9*dq[0];
+        const double t33 = t10*t23;
+        const double t34 = t11*t24;
+        const double t35 = t12*t25;
+        const double t36 = t13*t26;
+        const double t37 = -t31;
+        const double t38 = -t36;
+        const double t39 = t37 - t30;
+        const double t40 = t38 - t35;
+        const double t41 = t39 - t29;
+        const double t42 = t40 - t34;
+        const double t43 = t41 - t28;
+        const double t44 = t42 - t33;
+        const double t45 = t43 - t27;
+        const double t46 = t44 - t32;
+        p[0] = t22;
+        p[1] = -t21;
+        J[0] = t21;
+        J[1] = t19;
+        J[2] = t17;
+        J[3] = t15;
+        J[4] = t14;
+        J[5] = t22;
+        J[6] = t20;
+        J[7] = t18;
+        J[8] = t16;
+        J[9] = t8;
+        H[0] = t45;
+        H[1] = t43;
+        H[2] = t41;
+        H[3] = t39;
+        H[4] = t37;
+        H[5] = t46;
+        H[6] = t44;
+        H[7] = t42;
+        H[8] = t40;
+        H[9] = t38;
+        v[0] = t46;
+        v[1] = -t45;
+        a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
+        a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+        J_T[256 + b] = J[8];
+        J_T[288 + b] = J[9];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+        H_T[256 + b] = H[8];
+        H_T[288 + b] = H[9];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_kinematics_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double dq_T[160];
+    double ddq_T[160];
+    double p_T[64];
+    double J_T[320];
+    double H_T[320];
+    double v_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *dq_b = dq + (i + b) * 5;
+                const double *ddq_b = ddq + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+                ddq_T[128 + b] = ddq_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 5 + k];
+                }
+                for (k = 0; k < 5; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm5_kinematics_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 10, H + (i + b) * 10, v + (i + b) * 2, a + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 10;
+            double *H_b = H + (i + b) * 10;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
+            J_b[8] = J_T[256 + b];
+            J_b[9] = J_T[288 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
+            H_b[8] = H_T[256 + b];
+            H_b[9] = H_T[288 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -644,22 +1430,111 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1])
     arm5_manipulability_finish(l, cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T, const double l[5], double *restrict w_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[5];
+        double sn[5];
+        double w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+        const int t50 = t47 >= t49;
+        const double t51 = (t50 ? t47 : t49);
+        const double t52 = t48/t51;
+        const double t53 = (t50 ? t22 : t21) - t52*(t50 ? t21 : t22);
+        const double t54 = (t50 ? t20 : t19) - t52*(t50 ? t19 : t20);
+        const double t55 = (t50 ? t18 : t17) - t52*(t50 ? t17 : t18);
+        const double t56 = (t50 ? t16 : t15) - t52*(t50 ? t15 : t16);
+        const double t57 = (t50 ? t8 : t14) - t52*(t50 ? t14 : t8);
+        const double t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57;
+        w[0] = sqrt(t51*t58);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_manipulability_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_manipulability_block(q_T, l, w_T);
         for (b = 0; b < count; ++b) {
-            arm5_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+            double *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -735,22 +1610,140 @@ void arm5_inverse_velocity(const double q[5], const double l[5], const double v[
     arm5_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_T, const double l[5], const double *restrict v_T, double lambda, double *restrict dq_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double v[2];
+        double cs[5];
+        double sn[5];
+        double dq[5];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+        const double t59 = lambda*lambda;
+        const double t60 = t47 + t59;
+        const double t61 = t49 + t59;
+        const double t62 = t60 + t61;
+        const double t63 = t62;
+        const double t64 = t60*v[0] + t48*v[1];
+        const double t65 = t61*v[1] + t48*v[0];
+        const double t66 = t63*t63;
+        const double t67 = 1.0/t66;
+        const double t68 = t64*t67;
+        const double t69 = t65*t67;
+        const double t70 = t60*t61 - t48*t48;
+        const int t71 = t70 > ARM5_RANK_TOL*t66;
+        const double t72 = 1.0/t70;
+        const double t73 = (t71 ? t72*(t63*v[0] - t64) : t68);
+        const double t74 = (t71 ? t72*(t63*v[1] - t65) : t69);
+        dq[0] = t73*t21 + t74*t22;
+        dq[1] = t73*t19 + t74*t20;
+        dq[2] = t73*t17 + t74*t18;
+        dq[3] = t73*t15 + t74*t16;
+        dq[4] = t8*t74 + t73*t14;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+        dq_T[64 + b] = dq[2];
+        dq_T[96 + b] = dq[3];
+        dq_T[128 + b] = dq[4];
+    }
+}
+
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_inverse_velocity_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double v_T[64];
+    double dq_T[160];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_inverse_velocity_block(q_T, l, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm5_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 5);
+            double *dq_b = dq + (i + b) * 5;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
+            dq_b[2] = dq_T[64 + b];
+            dq_b[3] = dq_T[96 + b];
+            dq_b[4] = dq_T[128 + b];
         }
     }
 }
@@ -845,22 +1838,161 @@ void arm5_inverse_velocity3(const double q[5], const double l[5], const double t
     arm5_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q_T, const double l[5], const double *restrict twist_T, double lambda, double *restrict dq3_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double twist[3];
+        double cs[5];
+        double sn[5];
+        double dq3[5];
+        twist[0] = twist_T[0 + b];
+        twist[1] = twist_T[32 + b];
+        twist[2] = twist_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+        const double t59 = lambda*lambda;
+        const double t60 = t47 + t59;
+        const double t61 = t49 + t59;
+        const double t62 = t60 + t61;
+        const double t70 = t60*t61 - t48*t48;
+        const double t83 = t21 + t19 + t17 + t15 + t14;
+        const double t84 = t8 + t22 + t20 + t18 + t16;
+        const double t85 = 5.0 + t59;
+        const double t86 = t62 + t85;
+        const double t87 = t60*twist[0] + t48*twist[1] + t83*twist[2];
+        const double t88 = t61*twist[1] + t48*twist[0] + t84*twist[2];
+        const double t89 = t85*twist[2] + t83*twist[0] + t84*twist[1];
+        const double t90 = t86*t86;
+        const double t91 = 1.0/t90;
+        const double t92 = t87*t91;
+        const double t93 = t88*t91;
+        const double t94 = t89*t91;
+        const double t95 = t61*t85 - t84*t84;
+        const double t96 = t83*t84 - t85*t48;
+        const double t97 = t48*t84 - t61*t83;
+        const double t98 = t60*t85 - t83*t83;
+        const double t99 = t48*t83 - t60*t84;
+        const double t100 = t60*t95 + t48*t96 + t83*t97;
+        const double t101 = t95 + t98 + t70;
+        const int t102 = t100 > ARM5_RANK_TOL*t101*t86;
+        const int t103 = t101 > ARM5_RANK_TOL*t90;
+        const double t104 = 1.0/t100;
+        const double t105 = t60*t87 + t48*t88 + t83*t89;
+        const double t106 = t61*t88 + t48*t87 + t84*t89;
+        const double t107 = t85*t89 + t83*t87 + t84*t88;
+        const double t108 = 1.0/(t101*t101);
+        const double t109 = t90 - t101;
+        const double t110 = (t103 ? (t102 ? t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]) : t108*(t87*t109 - t105*t86)) : t92);
+        const double t111 = (t103 ? (t102 ? t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]) : t108*(t88*t109 - t106*t86)) : t93);
+        const double t112 = (t103 ? (t102 ? t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]) : t108*(t89*t109 - t107*t86)) : t94);
+        dq3[0] = t112 + t110*t21 + t111*t22;
+        dq3[1] = t112 + t110*t19 + t111*t20;
+        dq3[2] = t112 + t110*t17 + t111*t18;
+        dq3[3] = t112 + t110*t15 + t111*t16;
+        dq3[4] = t112 + t8*t111 + t110*t14;
+        dq3_T[0 + b] = dq3[0];
+        dq3_T[32 + b] = dq3[1];
+        dq3_T[64 + b] = dq3[2];
+        dq3_T[96 + b] = dq3[3];
+        dq3_T[128 + b] = dq3[4];
+    }
+}
+
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_inverse_velocity3_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double twist_T[96];
+    double dq3_T[160];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *twist_b = twist + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                twist_T[0 + b] = twist_b[0];
+                twist_T[32 + b] = twist_b[1];
+                twist_T[64 + b] = twist_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    twist_T[k * 32 + b] = twist[src * 3 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_inverse_velocity3_block(q_T, l, twist_T, lambda, dq3_T);
         for (b = 0; b < count; ++b) {
-            arm5_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 5);
+            double *dq3_b = dq3 + (i + b) * 5;
+            dq3_b[0] = dq3_T[0 + b];
+            dq3_b[1] = dq3_T[32 + b];
+            dq3_b[2] = dq3_T[64 + b];
+            dq3_b[3] = dq3_T[96 + b];
+            dq3_b[4] = dq3_T[128 + b];
         }
     }
 }
@@ -938,22 +2070,148 @@ void arm5_ik_step(const double q[5], const double l[5], const double target[2], 
     arm5_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const double l[5], const double *restrict target_T, double lambda, double *restrict q_next_T)
+{
+    double ang_T[160], cs_T[160], sn_T[160];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double ang[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+    }
+    arm5_trig160(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double q[5];
+        double target[2];
+        double cs[5];
+        double sn[5];
+        double q_next[5];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        const double t4 = cs[0]*l[0];
+        const double t5 = cs[1]*l[1];
+        const double t6 = cs[2]*l[2];
+        const double t7 = cs[3]*l[3];
+        const double t8 = cs[4]*l[4];
+        const double t9 = sn[0]*l[0];
+        const double t10 = sn[1]*l[1];
+        const double t11 = sn[2]*l[2];
+        const double t12 = sn[3]*l[3];
+        const double t13 = sn[4]*l[4];
+        const double t14 = -t13;
+        const double t15 = t14 - t12;
+        const double t16 = t7 + t8;
+        const double t17 = t15 - t11;
+        const double t18 = t6 + t16;
+        const double t19 = t17 - t10;
+        const double t20 = t5 + t18;
+        const double t21 = t19 - t9;
+        const double t22 = t4 + t20;
+        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
+        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+        const double t59 = lambda*lambda;
+        const double t60 = t47 + t59;
+        const double t61 = t49 + t59;
+        const double t62 = t60 + t61;
+        const double t63 = t62;
+        const double t66 = t63*t63;
+        const double t67 = 1.0/t66;
+        const double t70 = t60*t61 - t48*t48;
+        const int t71 = t70 > ARM5_RANK_TOL*t66;
+        const double t72 = 1.0/t70;
+        const double t75 = target[0] - t22;
+        const double t76 = t21 + target[1];
+        const double t77 = t60*t75 + t48*t76;
+        const double t78 = t61*t76 + t48*t75;
+        const double t79 = t77*t67;
+        const double t80 = t78*t67;
+        const double t81 = (t71 ? t72*(t75*t63 - t77) : t79);
+        const double t82 = (t71 ? t72*(t76*t63 - t78) : t80);
+        q_next[0] = q[0] + t81*t21 + t82*t22;
+        q_next[1] = q[1] + t81*t19 + t82*t20;
+        q_next[2] = q[2] + t81*t17 + t82*t18;
+        q_next[3] = q[3] + t81*t15 + t82*t16;
+        q_next[4] = q[4] + t8*t82 + t81*t14;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+        q_next_T[64 + b] = q_next[2];
+        q_next_T[96 + b] = q_next[3];
+        q_next_T[128 + b] = q_next[4];
+    }
+}
+
 void arm5_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm5_ik_step_angles(q + (i + b) * 5, ang + b * 8);
+    double q_T[160];
+    double target_T[64];
+    double q_next_T[160];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 5;
+                const double *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 5; ++k) {
+                    q_T[k * 32 + b] = q[src * 5 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm5_trig512(ang, cs, sn);
+        arm5_ik_step_block(q_T, l, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm5_ik_step_finish(q + (i + b) * 5, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 5);
+            double *q_next_b = q_next + (i + b) * 5;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
+            q_next_b[2] = q_next_T[64 + b];
+            q_next_b[3] = q_next_T[96 + b];
+            q_next_b[4] = q_next_T[128 + b];
         }
     }
 }

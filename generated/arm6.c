@@ -40,14 +40,14 @@ static ARM6_VECTORIZE void arm6_trig8(const double *restrict ang, double *restri
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static ARM6_VECTORIZE void arm6_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192. */
+static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 192; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 192; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -106,22 +106,112 @@ void arm6_position(const double q[6], const double l[6], double p[2])
     arm6_position_finish(l, cs, sn, p);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_position_block(const double *restrict q_T, const double l[6], double *restrict p_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[6];
+        double sn[6];
+        double p[2];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        p[0] = t27;
+        p[1] = -t26;
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+    }
+}
+
 void arm6_position_batch(size_t m, const double *q, const double *l, double *p)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_position_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double p_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_position_block(q_T, l, p_T);
         for (b = 0; b < count; ++b) {
-            arm6_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
         }
     }
 }
@@ -190,22 +280,142 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12])
     arm6_jacobian_finish(l, cs, sn, J);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_jacobian_block(const double *restrict q_T, const double l[6], double *restrict J_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[6];
+        double sn[6];
+        double J[12];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        J[0] = t26;
+        J[1] = t24;
+        J[2] = t22;
+        J[3] = t20;
+        J[4] = t18;
+        J[5] = t17;
+        J[6] = t27;
+        J[7] = t25;
+        J[8] = t23;
+        J[9] = t21;
+        J[10] = t19;
+        J[11] = t10;
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+        J_T[256 + b] = J[8];
+        J_T[288 + b] = J[9];
+        J_T[320 + b] = J[10];
+        J_T[352 + b] = J[11];
+    }
+}
+
 void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double J_T[384];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_jacobian_block(q_T, l, J_T);
         for (b = 0; b < count; ++b) {
-            arm6_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 12);
+            double *J_b = J + (i + b) * 12;
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
+            J_b[8] = J_T[256 + b];
+            J_b[9] = J_T[288 + b];
+            J_b[10] = J_T[320 + b];
+            J_b[11] = J_T[352 + b];
         }
     }
 }
@@ -292,22 +502,178 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
     arm6_coriolis_finish(dq, l, cs, sn, H);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict H_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[6];
+        double cs[6];
+        double sn[6];
+        double H[12];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        dq[5] = dq_T[160 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t28 = dq[0] + dq[1];
+        const double t29 = t28 + dq[2];
+        const double t30 = t29 + dq[3];
+        const double t31 = t30 + dq[4];
+        const double t32 = t31 + dq[5];
+        const double t33 = t5*dq[0];
+        const double t34 = t6*t28;
+        const double t35 = t7*t29;
+        const double t36 = t8*t30;
+        const double t37 = t9*t31;
+        const double t38 = t10*t32;
+        const double t39 = t11*dq[0];
+        const double t40 = t12*t28;
+        const double t41 = t13*t29;
+        const double t42 = t14*t30;
+        const double t43 = t15*t31;
+        const double t44 = t16*t32;
+        const double t45 = -t38;
+        const double t46 = -t44;
+        const double t47 = t45 - t37;
+        const double t48 = t46 - t43;
+        const double t49 = t47 - t36;
+        const double t50 = t48 - t42;
+        const double t51 = t49 - t35;
+        const double t52 = t50 - t41;
+        const double t53 = t51 - t34;
+        const double t54 = t52 - t40;
+        const double t55 = t53 - t33;
+        const double t56 = t54 - t39;
+        H[0] = t55;
+        H[1] = t53;
+        H[2] = t51;
+        H[3] = t49;
+        H[4] = t47;
+        H[5] = t45;
+        H[6] = t56;
+        H[7] = t54;
+        H[8] = t52;
+        H[9] = t50;
+        H[10] = t48;
+        H[11] = t46;
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+        H_T[256 + b] = H[8];
+        H_T[288 + b] = H[9];
+        H_T[320 + b] = H[10];
+        H_T[352 + b] = H[11];
+    }
+}
+
 void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_coriolis_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double dq_T[192];
+    double H_T[384];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *dq_b = dq + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                dq_T[160 + b] = dq_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_coriolis_block(q_T, dq_T, l, H_T);
         for (b = 0; b < count; ++b) {
-            arm6_coriolis_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, H + (i + b) * 12);
+            double *H_b = H + (i + b) * 12;
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
+            H_b[8] = H_T[256 + b];
+            H_b[9] = H_T[288 + b];
+            H_b[10] = H_T[320 + b];
+            H_b[11] = H_T[352 + b];
         }
     }
 }
@@ -384,22 +750,148 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
     arm6_velocity_finish(dq, l, cs, sn, v);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict v_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[6];
+        double cs[6];
+        double sn[6];
+        double v[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        dq[5] = dq_T[160 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t28 = dq[0] + dq[1];
+        const double t29 = t28 + dq[2];
+        const double t30 = t29 + dq[3];
+        const double t31 = t30 + dq[4];
+        const double t32 = t31 + dq[5];
+        const double t33 = t5*dq[0];
+        const double t34 = t6*t28;
+        const double t35 = t7*t29;
+        const double t36 = t8*t30;
+        const double t37 = t9*t31;
+        const double t38 = t10*t32;
+        const double t39 = t11*dq[0];
+        const double t40 = t12*t28;
+        const double t41 = t13*t29;
+        const double t42 = t14*t30;
+        const double t43 = t15*t31;
+        const double t44 = t16*t32;
+        const double t45 = -t38;
+        const double t46 = -t44;
+        const double t47 = t45 - t37;
+        const double t48 = t46 - t43;
+        const double t49 = t47 - t36;
+        const double t50 = t48 - t42;
+        const double t51 = t49 - t35;
+        const double t52 = t50 - t41;
+        const double t53 = t51 - t34;
+        const double t54 = t52 - t40;
+        const double t55 = t53 - t33;
+        const double t56 = t54 - t39;
+        v[0] = t56;
+        v[1] = -t55;
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+    }
+}
+
 void arm6_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_velocity_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double dq_T[192];
+    double v_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *dq_b = dq + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                dq_T[160 + b] = dq_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_velocity_block(q_T, dq_T, l, v_T);
         for (b = 0; b < count; ++b) {
-            arm6_velocity_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            double *v_b = v + (i + b) * 2;
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
         }
     }
 }
@@ -487,22 +979,177 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
     arm6_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict a_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[6];
+        double ddq[6];
+        double cs[6];
+        double sn[6];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        dq[5] = dq_T[160 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        ddq[4] = ddq_T[128 + b];
+        ddq[5] = ddq_T[160 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t28 = dq[0] + dq[1];
+        const double t29 = t28 + dq[2];
+        const double t30 = t29 + dq[3];
+        const double t31 = t30 + dq[4];
+        const double t32 = t31 + dq[5];
+        const double t33 = t5*dq[0];
+        const double t34 = t6*t28;
+        const double t35 = t7*t29;
+        const double t36 = t8*t30;
+        const double t37 = t9*t31;
+        const double t38 = t10*t32;
+        const double t39 = t11*dq[0];
+        const double t40 = t12*t28;
+        const double t41 = t13*t29;
+        const double t42 = t14*t30;
+        const double t43 = t15*t31;
+        const double t44 = t16*t32;
+        const double t45 = -t38;
+        const double t46 = -t44;
+        const double t47 = t45 - t37;
+        const double t48 = t46 - t43;
+        const double t49 = t47 - t36;
+        const double t50 = t48 - t42;
+        const double t51 = t49 - t35;
+        const double t52 = t50 - t41;
+        const double t53 = t51 - t34;
+        const double t54 = t52 - t40;
+        const double t55 = t53 - t33;
+        const double t56 = t54 - t39;
+        a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
+        a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double dq_T[192];
+    double ddq_T[192];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *dq_b = dq + (i + b) * 6;
+                const double *ddq_b = ddq + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                dq_T[160 + b] = dq_b[5];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+                ddq_T[128 + b] = ddq_b[4];
+                ddq_T[160 + b] = ddq_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_acceleration_block(q_T, dq_T, ddq_T, l, a_T);
         for (b = 0; b < count; ++b) {
-            arm6_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            double *a_b = a + (i + b) * 2;
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -618,22 +1265,273 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
     arm6_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double dq[6];
+        double ddq[6];
+        double cs[6];
+        double sn[6];
+        double p[2];
+        double J[12];
+        double H[12];
+        double v[2];
+        double a[2];
+        dq[0] = dq_T[0 + b];
+        dq[1] = dq_T[32 + b];
+        dq[2] = dq_T[64 + b];
+        dq[3] = dq_T[96 + b];
+        dq[4] = dq_T[128 + b];
+        dq[5] = dq_T[160 + b];
+        ddq[0] = ddq_T[0 + b];
+        ddq[1] = ddq_T[32 + b];
+        ddq[2] = ddq_T[64 + b];
+        ddq[3] = ddq_T[96 + b];
+        ddq[4] = ddq_T[128 + b];
+        ddq[5] = ddq_T[160 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t28 = dq[0] + dq[1];
+        const double t29 = t28 + dq[2];
+        const double t30 = t29 + dq[3];
+        const double t31 = t30 + dq[4];
+        const double t32 = t31 + dq[5];
+        const double t33 = t5*dq[0];
+        const double t34 = t6*t28;
+        const double t35 = t7*t29;
+        const double t36 = t8*t30;
+        const double t37 = t9*t31;
+        const double t38 = t10*t32;
+        const double t39 = t11*dq[0];
+        const double t40 = t12*t28;
+        const double t41 = t13*t29;
+        const double t42 = t14*t30;
+        const double t43 = t15*t31;
+        const double t44 = t16*t32;
+        const double t45 = -t38;
+        const double t46 = -t44;
+        const double t47 = t45 - t37;
+        const double t48 = t46 - t43;
+        const double t49 = t47 - t36;
+        const double t50 = t48 - t42;
+        const double t51 = t49 - t35;
+        const double t52 = t50 - t41;
+        const double t53 = t51 - t34;
+        const double t54 = t52 - t40;
+        const double t55 = t53 - t33;
+        const double t56 = t54 - t39;
+        p[0] = t27;
+        p[1] = -t26;
+        J[0] = t26;
+        J[1] = t24;
+        J[2] = t22;
+        J[3] = t20;
+        J[4] = t18;
+        J[5] = t17;
+        J[6] = t27;
+        J[7] = t25;
+        J[8] = t23;
+        J[9] = t21;
+        J[10] = t19;
+        J[11] = t10;
+        H[0] = t55;
+        H[1] = t53;
+        H[2] = t51;
+        H[3] = t49;
+        H[4] = t47;
+        H[5] = t45;
+        H[6] = t56;
+        H[7] = t54;
+        H[8] = t52;
+        H[9] = t50;
+        H[10] = t48;
+        H[11] = t46;
+        v[0] = t56;
+        v[1] = -t55;
+        a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
+        a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
+        p_T[0 + b] = p[0];
+        p_T[32 + b] = p[1];
+        J_T[0 + b] = J[0];
+        J_T[32 + b] = J[1];
+        J_T[64 + b] = J[2];
+        J_T[96 + b] = J[3];
+        J_T[128 + b] = J[4];
+        J_T[160 + b] = J[5];
+        J_T[192 + b] = J[6];
+        J_T[224 + b] = J[7];
+        J_T[256 + b] = J[8];
+        J_T[288 + b] = J[9];
+        J_T[320 + b] = J[10];
+        J_T[352 + b] = J[11];
+        H_T[0 + b] = H[0];
+        H_T[32 + b] = H[1];
+        H_T[64 + b] = H[2];
+        H_T[96 + b] = H[3];
+        H_T[128 + b] = H[4];
+        H_T[160 + b] = H[5];
+        H_T[192 + b] = H[6];
+        H_T[224 + b] = H[7];
+        H_T[256 + b] = H[8];
+        H_T[288 + b] = H[9];
+        H_T[320 + b] = H[10];
+        H_T[352 + b] = H[11];
+        v_T[0 + b] = v[0];
+        v_T[32 + b] = v[1];
+        a_T[0 + b] = a[0];
+        a_T[32 + b] = a[1];
+    }
+}
+
 void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double dq_T[192];
+    double ddq_T[192];
+    double p_T[64];
+    double J_T[384];
+    double H_T[384];
+    double v_T[64];
+    double a_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *dq_b = dq + (i + b) * 6;
+                const double *ddq_b = ddq + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                dq_T[0 + b] = dq_b[0];
+                dq_T[32 + b] = dq_b[1];
+                dq_T[64 + b] = dq_b[2];
+                dq_T[96 + b] = dq_b[3];
+                dq_T[128 + b] = dq_b[4];
+                dq_T[160 + b] = dq_b[5];
+                ddq_T[0 + b] = ddq_b[0];
+                ddq_T[32 + b] = ddq_b[1];
+                ddq_T[64 + b] = ddq_b[2];
+                ddq_T[96 + b] = ddq_b[3];
+                ddq_T[128 + b] = ddq_b[4];
+                ddq_T[160 + b] = ddq_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    dq_T[k * 32 + b] = dq[src * 6 + k];
+                }
+                for (k = 0; k < 6; ++k) {
+                    ddq_T[k * 32 + b] = ddq[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
         for (b = 0; b < count; ++b) {
-            arm6_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 12, H + (i + b) * 12, v + (i + b) * 2, a + (i + b) * 2);
+            double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 12;
+            double *H_b = H + (i + b) * 12;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
+            p_b[0] = p_T[0 + b];
+            p_b[1] = p_T[32 + b];
+            J_b[0] = J_T[0 + b];
+            J_b[1] = J_T[32 + b];
+            J_b[2] = J_T[64 + b];
+            J_b[3] = J_T[96 + b];
+            J_b[4] = J_T[128 + b];
+            J_b[5] = J_T[160 + b];
+            J_b[6] = J_T[192 + b];
+            J_b[7] = J_T[224 + b];
+            J_b[8] = J_T[256 + b];
+            J_b[9] = J_T[288 + b];
+            J_b[10] = J_T[320 + b];
+            J_b[11] = J_T[352 + b];
+            H_b[0] = H_T[0 + b];
+            H_b[1] = H_T[32 + b];
+            H_b[2] = H_T[64 + b];
+            H_b[3] = H_T[96 + b];
+            H_b[4] = H_T[128 + b];
+            H_b[5] = H_T[160 + b];
+            H_b[6] = H_T[192 + b];
+            H_b[7] = H_T[224 + b];
+            H_b[8] = H_T[256 + b];
+            H_b[9] = H_T[288 + b];
+            H_b[10] = H_T[320 + b];
+            H_b[11] = H_T[352 + b];
+            v_b[0] = v_T[0 + b];
+            v_b[1] = v_T[32 + b];
+            a_b[0] = a_T[0 + b];
+            a_b[1] = a_T[32 + b];
         }
     }
 }
@@ -704,22 +1602,122 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1])
     arm6_manipulability_finish(l, cs, sn, w);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T, const double l[6], double *restrict w_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double cs[6];
+        double sn[6];
+        double w[1];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+        const int t60 = t57 >= t59;
+        const double t61 = (t60 ? t57 : t59);
+        const double t62 = t58/t61;
+        const double t63 = (t60 ? t27 : t26) - t62*(t60 ? t26 : t27);
+        const double t64 = (t60 ? t25 : t24) - t62*(t60 ? t24 : t25);
+        const double t65 = (t60 ? t23 : t22) - t62*(t60 ? t22 : t23);
+        const double t66 = (t60 ? t21 : t20) - t62*(t60 ? t20 : t21);
+        const double t67 = (t60 ? t19 : t18) - t62*(t60 ? t18 : t19);
+        const double t68 = (t60 ? t10 : t17) - t62*(t60 ? t17 : t10);
+        const double t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68;
+        w[0] = sqrt(t61*t69);
+        w_T[0 + b] = w[0];
+    }
+}
+
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_manipulability_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double w_T[32];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_manipulability_block(q_T, l, w_T);
         for (b = 0; b < count; ++b) {
-            arm6_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+            double *w_b = w + (i + b) * 1;
+            w_b[0] = w_T[0 + b];
         }
     }
 }
@@ -801,22 +1799,153 @@ void arm6_inverse_velocity(const double q[6], const double l[6], const double v[
     arm6_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_T, const double l[6], const double *restrict v_T, double lambda, double *restrict dq_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double v[2];
+        double cs[6];
+        double sn[6];
+        double dq[6];
+        v[0] = v_T[0 + b];
+        v[1] = v_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+        const double t70 = lambda*lambda;
+        const double t71 = t57 + t70;
+        const double t72 = t59 + t70;
+        const double t73 = t71 + t72;
+        const double t74 = t73;
+        const double t75 = t71*v[0] + t58*v[1];
+        const double t76 = t72*v[1] + t58*v[0];
+        const double t77 = t74*t74;
+        const double t78 = 1.0/t77;
+        const double t79 = t75*t78;
+        const double t80 = t76*t78;
+        const double t81 = t71*t72 - t58*t58;
+        const int t82 = t81 > ARM6_RANK_TOL*t77;
+        const double t83 = 1.0/t81;
+        const double t84 = (t82 ? t83*(t74*v[0] - t75) : t79);
+        const double t85 = (t82 ? t83*(t74*v[1] - t76) : t80);
+        dq[0] = t84*t26 + t85*t27;
+        dq[1] = t84*t24 + t85*t25;
+        dq[2] = t84*t22 + t85*t23;
+        dq[3] = t84*t20 + t85*t21;
+        dq[4] = t84*t18 + t85*t19;
+        dq[5] = t10*t85 + t84*t17;
+        dq_T[0 + b] = dq[0];
+        dq_T[32 + b] = dq[1];
+        dq_T[64 + b] = dq[2];
+        dq_T[96 + b] = dq[3];
+        dq_T[128 + b] = dq[4];
+        dq_T[160 + b] = dq[5];
+    }
+}
+
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *l, const double *v, double lambda, double *dq)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_inverse_velocity_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double v_T[64];
+    double dq_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *v_b = v + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                v_T[0 + b] = v_b[0];
+                v_T[32 + b] = v_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    v_T[k * 32 + b] = v[src * 2 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_inverse_velocity_block(q_T, l, v_T, lambda, dq_T);
         for (b = 0; b < count; ++b) {
-            arm6_inverse_velocity_finish(l, v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 6);
+            double *dq_b = dq + (i + b) * 6;
+            dq_b[0] = dq_T[0 + b];
+            dq_b[1] = dq_T[32 + b];
+            dq_b[2] = dq_T[64 + b];
+            dq_b[3] = dq_T[96 + b];
+            dq_b[4] = dq_T[128 + b];
+            dq_b[5] = dq_T[160 + b];
         }
     }
 }
@@ -917,22 +2046,174 @@ void arm6_inverse_velocity3(const double q[6], const double l[6], const double t
     arm6_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q_T, const double l[6], const double *restrict twist_T, double lambda, double *restrict dq3_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double twist[3];
+        double cs[6];
+        double sn[6];
+        double dq3[6];
+        twist[0] = twist_T[0 + b];
+        twist[1] = twist_T[32 + b];
+        twist[2] = twist_T[64 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+        const double t70 = lambda*lambda;
+        const double t71 = t57 + t70;
+        const double t72 = t59 + t70;
+        const double t73 = t71 + t72;
+        const double t81 = t71*t72 - t58*t58;
+        const double t94 = t26 + t24 + t22 + t20 + t18 + t17;
+        const double t95 = t10 + t27 + t25 + t23 + t21 + t19;
+        const double t96 = 6.0 + t70;
+        const double t97 = t73 + t96;
+        const double t98 = t71*twist[0] + t58*twist[1] + t94*twist[2];
+        const double t99 = t72*twist[1] + t58*twist[0] + t95*twist[2];
+        const double t100 = t96*twist[2] + t94*twist[0] + t95*twist[1];
+        const double t101 = t97*t97;
+        const double t102 = 1.0/t101;
+        const double t103 = t98*t102;
+        const double t104 = t99*t102;
+        const double t105 = t100*t102;
+        const double t106 = t72*t96 - t95*t95;
+        const double t107 = t94*t95 - t96*t58;
+        const double t108 = t58*t95 - t72*t94;
+        const double t109 = t71*t96 - t94*t94;
+        const double t110 = t58*t94 - t71*t95;
+        const double t111 = t71*t106 + t58*t107 + t94*t108;
+        const double t112 = t106 + t109 + t81;
+        const int t113 = t111 > ARM6_RANK_TOL*t112*t97;
+        const int t114 = t112 > ARM6_RANK_TOL*t101;
+        const double t115 = 1.0/t111;
+        const double t116 = t71*t98 + t58*t99 + t94*t100;
+        const double t117 = t72*t99 + t58*t98 + t95*t100;
+        const double t118 = t96*t100 + t94*t98 + t95*t99;
+        const double t119 = 1.0/(t112*t112);
+        const double t120 = t101 - t112;
+        const double t121 = (t114 ? (t113 ? t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]) : t119*(t98*t120 - t116*t97)) : t103);
+        const double t122 = (t114 ? (t113 ? t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]) : t119*(t99*t120 - t117*t97)) : t104);
+        const double t123 = (t114 ? (t113 ? t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]) : t119*(t100*t120 - t118*t97)) : t105);
+        dq3[0] = t123 + t121*t26 + t122*t27;
+        dq3[1] = t123 + t121*t24 + t122*t25;
+        dq3[2] = t123 + t121*t22 + t122*t23;
+        dq3[3] = t123 + t121*t20 + t122*t21;
+        dq3[4] = t123 + t121*t18 + t122*t19;
+        dq3[5] = t123 + t10*t122 + t121*t17;
+        dq3_T[0 + b] = dq3[0];
+        dq3_T[32 + b] = dq3[1];
+        dq3_T[64 + b] = dq3[2];
+        dq3_T[96 + b] = dq3[3];
+        dq3_T[128 + b] = dq3[4];
+        dq3_T[160 + b] = dq3[5];
+    }
+}
+
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *l, const double *twist, double lambda, double *dq3)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_inverse_velocity3_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double twist_T[96];
+    double dq3_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *twist_b = twist + (i + b) * 3;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                twist_T[0 + b] = twist_b[0];
+                twist_T[32 + b] = twist_b[1];
+                twist_T[64 + b] = twist_b[2];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 3; ++k) {
+                    twist_T[k * 32 + b] = twist[src * 3 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_inverse_velocity3_block(q_T, l, twist_T, lambda, dq3_T);
         for (b = 0; b < count; ++b) {
-            arm6_inverse_velocity3_finish(l, twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 6);
+            double *dq3_b = dq3 + (i + b) * 6;
+            dq3_b[0] = dq3_T[0 + b];
+            dq3_b[1] = dq3_T[32 + b];
+            dq3_b[2] = dq3_T[64 + b];
+            dq3_b[3] = dq3_T[96 + b];
+            dq3_b[4] = dq3_T[128 + b];
+            dq3_b[5] = dq3_T[160 + b];
         }
     }
 }
@@ -1016,22 +2297,162 @@ void arm6_ik_step(const double q[6], const double l[6], const double target[2], 
     arm6_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const double l[6], const double *restrict target_T, double lambda, double *restrict q_next_T)
+{
+    double ang_T[192], cs_T[192], sn_T[192];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double ang[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        ang[1] = q[0] + q[1];
+        ang[2] = ang[1] + q[2];
+        ang[3] = ang[2] + q[3];
+        ang[4] = ang[3] + q[4];
+        ang[5] = ang[4] + q[5];
+        ang[0] = q[0];
+        ang_T[0 + b] = ang[0];
+        ang_T[32 + b] = ang[1];
+        ang_T[64 + b] = ang[2];
+        ang_T[96 + b] = ang[3];
+        ang_T[128 + b] = ang[4];
+        ang_T[160 + b] = ang[5];
+    }
+    arm6_trig192(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double q[6];
+        double target[2];
+        double cs[6];
+        double sn[6];
+        double q_next[6];
+        q[0] = q_T[0 + b];
+        q[1] = q_T[32 + b];
+        q[2] = q_T[64 + b];
+        q[3] = q_T[96 + b];
+        q[4] = q_T[128 + b];
+        q[5] = q_T[160 + b];
+        target[0] = target_T[0 + b];
+        target[1] = target_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        cs[1] = cs_T[32 + b];
+        cs[2] = cs_T[64 + b];
+        cs[3] = cs_T[96 + b];
+        cs[4] = cs_T[128 + b];
+        cs[5] = cs_T[160 + b];
+        sn[0] = sn_T[0 + b];
+        sn[1] = sn_T[32 + b];
+        sn[2] = sn_T[64 + b];
+        sn[3] = sn_T[96 + b];
+        sn[4] = sn_T[128 + b];
+        sn[5] = sn_T[160 + b];
+        const double t5 = cs[0]*l[0];
+        const double t6 = cs[1]*l[1];
+        const double t7 = cs[2]*l[2];
+        const double t8 = cs[3]*l[3];
+        const double t9 = cs[4]*l[4];
+        const double t10 = cs[5]*l[5];
+        const double t11 = sn[0]*l[0];
+        const double t12 = sn[1]*l[1];
+        const double t13 = sn[2]*l[2];
+        const double t14 = sn[3]*l[3];
+        const double t15 = sn[4]*l[4];
+        const double t16 = sn[5]*l[5];
+        const double t17 = -t16;
+        const double t18 = t17 - t15;
+        const double t19 = t9 + t10;
+        const double t20 = t18 - t14;
+        const double t21 = t8 + t19;
+        const double t22 = t20 - t13;
+        const double t23 = t7 + t21;
+        const double t24 = t22 - t12;
+        const double t25 = t6 + t23;
+        const double t26 = t24 - t11;
+        const double t27 = t5 + t25;
+        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
+        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
+        const double t70 = lambda*lambda;
+        const double t71 = t57 + t70;
+        const double t72 = t59 + t70;
+        const double t73 = t71 + t72;
+        const double t74 = t73;
+        const double t77 = t74*t74;
+        const double t78 = 1.0/t77;
+        const double t81 = t71*t72 - t58*t58;
+        const int t82 = t81 > ARM6_RANK_TOL*t77;
+        const double t83 = 1.0/t81;
+        const double t86 = target[0] - t27;
+        const double t87 = t26 + target[1];
+        const double t88 = t71*t86 + t58*t87;
+        const double t89 = t72*t87 + t58*t86;
+        const double t90 = t88*t78;
+        const double t91 = t89*t78;
+        const double t92 = (t82 ? t83*(t86*t74 - t88) : t90);
+        const double t93 = (t82 ? t83*(t87*t74 - t89) : t91);
+        q_next[0] = q[0] + t92*t26 + t93*t27;
+        q_next[1] = q[1] + t92*t24 + t93*t25;
+        q_next[2] = q[2] + t92*t22 + t93*t23;
+        q_next[3] = q[3] + t92*t20 + t93*t21;
+        q_next[4] = q[4] + t92*t18 + t93*t19;
+        q_next[5] = q[5] + t10*t93 + t92*t17;
+        q_next_T[0 + b] = q_next[0];
+        q_next_T[32 + b] = q_next[1];
+        q_next_T[64 + b] = q_next[2];
+        q_next_T[96 + b] = q_next[3];
+        q_next_T[128 + b] = q_next[4];
+        q_next_T[160 + b] = q_next[5];
+    }
+}
+
 void arm6_ik_step_batch(size_t m, const double *q, const double *l, const double *target, double lambda, double *q_next)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 64) {
-        const size_t count = m - i < 64 ? m - i : 64;
-        for (b = 0; b < count; ++b) {
-            arm6_ik_step_angles(q + (i + b) * 6, ang + b * 8);
+    double q_T[192];
+    double target_T[64];
+    double q_next_T[192];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *q_b = q + (i + b) * 6;
+                const double *target_b = target + (i + b) * 2;
+                q_T[0 + b] = q_b[0];
+                q_T[32 + b] = q_b[1];
+                q_T[64 + b] = q_b[2];
+                q_T[96 + b] = q_b[3];
+                q_T[128 + b] = q_b[4];
+                q_T[160 + b] = q_b[5];
+                target_T[0 + b] = target_b[0];
+                target_T[32 + b] = target_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 6; ++k) {
+                    q_T[k * 32 + b] = q[src * 6 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    target_T[k * 32 + b] = target[src * 2 + k];
+                }
+            }
         }
-        arm6_trig512(ang, cs, sn);
+        arm6_ik_step_block(q_T, l, target_T, lambda, q_next_T);
         for (b = 0; b < count; ++b) {
-            arm6_ik_step_finish(q + (i + b) * 6, l, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 6);
+            double *q_next_b = q_next + (i + b) * 6;
+            q_next_b[0] = q_next_T[0 + b];
+            q_next_b[1] = q_next_T[32 + b];
+            q_next_b[2] = q_next_T[64 + b];
+            q_next_b[3] = q_next_T[96 + b];
+            q_next_b[4] = q_next_T[128 + b];
+            q_next_b[5] = q_next_T[160 + b];
         }
     }
 }

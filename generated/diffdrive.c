@@ -33,14 +33,14 @@ static void diffdrive_trig1(const double *restrict ang, double *restrict cs, dou
     }
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512. */
-static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32. */
+static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 32; ++k) {
         cs[k] = cos(ang[k]);
     }
-    for (k = 0; k < 512; ++k) {
+    for (k = 0; k < 32; ++k) {
         sn[k] = sin(ang[k]);
     }
 }
@@ -62,12 +62,54 @@ void diffdrive_body_rates(const double wheels[2], double track, double rates[2])
     diffdrive_body_rates_finish(wheels, track, rates);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static DIFFDRIVE_VECTORIZE void diffdrive_body_rates_block(const double *restrict wheels_T, double track, double *restrict rates_T)
+{
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double wheels[2];
+        double rates[2];
+        wheels[0] = wheels_T[0 + b];
+        wheels[1] = wheels_T[32 + b];
+        const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
+        const double t1 = 1.0/track;
+        const double t2 = t1*wheels[1] - t1*wheels[0];
+        rates[0] = t0;
+        rates[1] = t2;
+        rates_T[0 + b] = rates[0];
+        rates_T[32 + b] = rates[1];
+    }
+}
+
 void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates)
 {
-    size_t i;
-    const size_t b = 0;
-    for (i = 0; i < m; ++i) {
-        diffdrive_body_rates_finish(wheels + (i + b) * 2, track, rates + (i + b) * 2);
+    double wheels_T[64];
+    double rates_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *wheels_b = wheels + (i + b) * 2;
+                wheels_T[0 + b] = wheels_b[0];
+                wheels_T[32 + b] = wheels_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    wheels_T[k * 32 + b] = wheels[src * 2 + k];
+                }
+            }
+        }
+        diffdrive_body_rates_block(wheels_T, track, rates_T);
+        for (b = 0; b < count; ++b) {
+            double *rates_b = rates + (i + b) * 2;
+            rates_b[0] = rates_T[0 + b];
+            rates_b[1] = rates_T[32 + b];
+        }
     }
 }
 
@@ -86,12 +128,52 @@ void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2
     diffdrive_wheel_speeds_finish(rates, track, wheels);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restrict rates_T, double track, double *restrict wheels_T)
+{
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double rates[2];
+        double wheels[2];
+        rates[0] = rates_T[0 + b];
+        rates[1] = rates_T[32 + b];
+        const double t4 = 0.5*track*rates[1];
+        wheels[0] = rates[0] - t4;
+        wheels[1] = t4 + rates[0];
+        wheels_T[0 + b] = wheels[0];
+        wheels_T[32 + b] = wheels[1];
+    }
+}
+
 void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, double *wheels)
 {
-    size_t i;
-    const size_t b = 0;
-    for (i = 0; i < m; ++i) {
-        diffdrive_wheel_speeds_finish(rates + (i + b) * 2, track, wheels + (i + b) * 2);
+    double rates_T[64];
+    double wheels_T[64];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *rates_b = rates + (i + b) * 2;
+                rates_T[0 + b] = rates_b[0];
+                rates_T[32 + b] = rates_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 2; ++k) {
+                    rates_T[k * 32 + b] = rates[src * 2 + k];
+                }
+            }
+        }
+        diffdrive_wheel_speeds_block(rates_T, track, wheels_T);
+        for (b = 0; b < count; ++b) {
+            double *wheels_b = wheels + (i + b) * 2;
+            wheels_b[0] = wheels_T[0 + b];
+            wheels_b[1] = wheels_T[32 + b];
+        }
     }
 }
 
@@ -121,22 +203,79 @@ void diffdrive_pose_rate(const double pose[3], const double wheels[2], double tr
     diffdrive_pose_rate_finish(wheels, track, cs, sn, dpose);
 }
 
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
+ * every statement then runs on whole vectors of configurations. */
+static DIFFDRIVE_VECTORIZE void diffdrive_pose_rate_block(const double *restrict pose_T, const double *restrict wheels_T, double track, double *restrict dpose_T)
+{
+    double ang_T[32], cs_T[32], sn_T[32];
+    int b;
+    for (b = 0; b < 32; ++b) {
+        double pose[3];
+        double ang[1];
+        pose[0] = pose_T[0 + b];
+        pose[1] = pose_T[32 + b];
+        pose[2] = pose_T[64 + b];
+        ang[0] = pose[2];
+        ang_T[0 + b] = ang[0];
+    }
+    diffdrive_trig32(ang_T, cs_T, sn_T);
+    for (b = 0; b < 32; ++b) {
+        double wheels[2];
+        double cs[1];
+        double sn[1];
+        double dpose[3];
+        wheels[0] = wheels_T[0 + b];
+        wheels[1] = wheels_T[32 + b];
+        cs[0] = cs_T[0 + b];
+        sn[0] = sn_T[0 + b];
+        const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
+        const double t1 = 1.0/track;
+        const double t2 = t1*wheels[1] - t1*wheels[0];
+        dpose[0] = cs[0]*t0;
+        dpose[1] = t0*sn[0];
+        dpose[2] = t2;
+        dpose_T[0 + b] = dpose[0];
+        dpose_T[32 + b] = dpose[1];
+        dpose_T[64 + b] = dpose[2];
+    }
+}
+
 void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose)
 {
-    size_t i;
-    double ang[512], cs[512], sn[512];
-    size_t b, k;
-    for (k = 0; k < 512; ++k) {
-        ang[k] = 0;
-    }
-    for (i = 0; i < m; i += 512) {
-        const size_t count = m - i < 512 ? m - i : 512;
-        for (b = 0; b < count; ++b) {
-            diffdrive_pose_rate_angles(pose + (i + b) * 3, ang + b * 1);
+    double pose_T[96];
+    double wheels_T[64];
+    double dpose_T[96];
+    size_t i, b, k, count;
+    for (i = 0; i < m; i += 32) {
+        if (i + 32 <= m) {
+            for (b = 0; b < 32; ++b) {
+                const double *pose_b = pose + (i + b) * 3;
+                const double *wheels_b = wheels + (i + b) * 2;
+                pose_T[0 + b] = pose_b[0];
+                pose_T[32 + b] = pose_b[1];
+                pose_T[64 + b] = pose_b[2];
+                wheels_T[0 + b] = wheels_b[0];
+                wheels_T[32 + b] = wheels_b[1];
+            }
+            count = 32;
+        } else { /* a short last block: pad with its last configuration */
+            count = m - i;
+            for (b = 0; b < 32; ++b) {
+                const size_t src = i + (b < count ? b : count - 1);
+                for (k = 0; k < 3; ++k) {
+                    pose_T[k * 32 + b] = pose[src * 3 + k];
+                }
+                for (k = 0; k < 2; ++k) {
+                    wheels_T[k * 32 + b] = wheels[src * 2 + k];
+                }
+            }
         }
-        diffdrive_trig512(ang, cs, sn);
+        diffdrive_pose_rate_block(pose_T, wheels_T, track, dpose_T);
         for (b = 0; b < count; ++b) {
-            diffdrive_pose_rate_finish(wheels + (i + b) * 2, track, cs + b * 1, sn + b * 1, dpose + (i + b) * 3);
+            double *dpose_b = dpose + (i + b) * 3;
+            dpose_b[0] = dpose_T[0 + b];
+            dpose_b[1] = dpose_T[32 + b];
+            dpose_b[2] = dpose_T[64 + b];
         }
     }
 }

@@ -186,6 +186,12 @@ def _check_output_folder(out: str | os.PathLike) -> Path:
     return target
 
 
+def _umask() -> int:
+    current = os.umask(0)
+    os.umask(current)
+    return current
+
+
 def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
     """Write every file to a temporary name in ``folder``, then rename all into place.
 
@@ -202,6 +208,9 @@ def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
             staged.append((tmp, folder / name))
             with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
                 handle.write(text)
+        mode = 0o666 & ~_umask()  # mkstemp makes 0600 files; emitted code is as readable as any new file
+        for tmp, _ in staged:
+            os.chmod(tmp, mode)
         for tmp, final in staged:
             os.replace(tmp, final)
     except OSError as exc:

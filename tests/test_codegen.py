@@ -72,23 +72,27 @@ def test_numeric_lengths_drop_the_l_argument(rng):
     np.testing.assert_allclose(py.jacobian(q), expected, atol=1e-14)
 
 
-def test_batches_equal_single_calls_and_shapes(rng):
-    g = generate(6, out=None)
+@pytest.mark.parametrize("n", [6, 64])  # the vectorised block path and the per-configuration path
+def test_batches_equal_single_calls_and_shapes(rng, n):
+    g = generate(n, out=None)
     arm = compile_arm(g)
-    py = load_python(g.sources["arm6.py"], "arm6")
+    py = load_python(g.sources[f"arm{n}.py"], f"arm{n}")
     m = 203  # not a multiple of the block size
-    q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, m, 6))
-    l = rng.uniform(0.5, 1.5, 6)
+    q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, m, n))
+    l = rng.uniform(0.5, 1.5, n)
     batch = arm.kinematics(q, dq, ddq, l)
     for j in (0, 57, m - 1):
         single = arm.kinematics(q[j], dq[j], ddq[j], l)
         for b, s in zip(batch, single):
             np.testing.assert_array_equal(b[j], s)
-    assert [x.shape for x in batch] == [(m, 2), (m, 2, 6), (m, 2, 6), (m, 2), (m, 2)]
-    q4 = q[:200].reshape(4, 50, 6)
-    assert py.jacobian(q4, l).shape == (4, 50, 2, 6)
-    np.testing.assert_allclose(py.jacobian(q4, l).reshape(200, 2, 6), batch[1][:200], atol=1e-14)
-    assert arm.jacobian(q4, l).shape == (4, 50, 2, 6)
+    assert [x.shape for x in batch] == [(m, 2), (m, 2, n), (m, 2, n), (m, 2), (m, 2)]
+    v = rng.uniform(-1, 1, (m, 2))
+    dq_batch = arm.inverse_velocity(q, l, v, 0.01)
+    np.testing.assert_array_equal(dq_batch[m - 1], arm.inverse_velocity(q[m - 1], l, v[m - 1], 0.01))
+    q4 = q[:200].reshape(4, 50, n)
+    assert py.jacobian(q4, l).shape == (4, 50, 2, n)
+    np.testing.assert_allclose(py.jacobian(q4, l).reshape(200, 2, n), batch[1][:200], atol=1e-13)
+    assert arm.jacobian(q4, l).shape == (4, 50, 2, n)
 
 
 def test_wrong_shapes_are_clear_errors():
@@ -182,3 +186,13 @@ def test_operation_counts(n):
     assert ops.arithmetic == 18 * n - 3 <= 24 * n + 10
     assert ops.div == 0 and ops.sqrt == 0
     assert programs["jacobian"].ops.arithmetic == 5 * n - 2
+
+
+def test_written_files_follow_the_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        g = generate(2, out=tmp_path)
+    finally:
+        os.umask(old)
+    for path in g.paths:
+        assert path.stat().st_mode & 0o777 == 0o644  # not mkstemp's 0600

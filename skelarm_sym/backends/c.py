@@ -27,6 +27,10 @@ SCALAR_UP_TO = 3
 one vector call costs more than a few scalar ones."""
 BLOCK_ANGLES = 512
 """Batch functions evaluate the trigonometry of up to this many angles (several configurations) at once."""
+SOA_BLOCKS = (32, 16, 8)
+"""Configurations per block of the vectorised batch path, largest first (multiples of the SIMD width)."""
+SOA_BYTES = 32 * 1024
+"""Largest stack a vectorised batch block may use; functions of larger arms use the per-configuration path."""
 
 
 @dataclass(frozen=True)
@@ -104,6 +108,13 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     count = len(program.angles)
     padded = count if count <= SCALAR_UP_TO else pad(count, SIMD_LANES)
     block = max(1, BLOCK_ANGLES // padded) if count else 1
+    per_config = (
+        sum(a.size for a in program.inputs if a.name not in shared)
+        + sum(len(o.elements) for o in program.outputs)
+        + 3 * count
+    )
+    itemsize = 8 if ctype == "double" else 4
+    soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None)
     return {
         "name": f"{prefix}_{program.name}",
         "summary": program.summary,
@@ -127,6 +138,7 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
         "angle_count": count,
         "padded": padded,
         "block": block,
+        "soa": soa,
         "ops": program.ops.as_dict(),
     }
 
@@ -137,7 +149,8 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     shared = frozenset(derivation.parameters)
     memo = MemoPrinter()
     functions = [function_context(p, precision, options.prefix, shared, memo) for p in programs]
-    sizes = {f["padded"] for f in functions if f["padded"]} | {f["padded"] * f["block"] for f in functions if f["padded"]}
+    sizes = {f["padded"] for f in functions if f["padded"]}
+    sizes |= {f["angle_count"] * f["soa"] if f["soa"] else f["padded"] * f["block"] for f in functions if f["padded"]}
     trig_sizes = [{"size": size, "vector": size > SCALAR_UP_TO} for size in sorted(sizes)]
     constants = {c.name: c for p in programs for c in p.constants}
     context = {
