@@ -961,7 +961,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 16 add/sub, 29 mul, 1 neg, 2 div */
+/* operations: 2 sin, 2 cos, 16 add/sub, 30 mul, 1 neg, 2 div */
 
 static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
 {
@@ -987,17 +987,16 @@ static void arm2_inverse_velocity_finish(const double l[2], const double v[2], d
     const double t29 = t27 + t28;
     const double t30 = t27*v[0] + t18*v[1];
     const double t31 = t28*v[1] + t18*v[0];
-    const double t32 = t29*t29;
-    const double t33 = 1.0/t32;
-    const double t34 = t30*t33;
-    const double t35 = t31*t33;
-    const double t36 = t27*t28 - t18*t18;
-    const int t37 = t36 > ARM2_RANK_TOL*t32;
-    const double t38 = 1.0/t36;
-    const double t39 = (t37 ? t38*(t29*v[0] - t30) : t34);
-    const double t40 = (t37 ? t38*(t29*v[1] - t31) : t35);
-    dq[0] = t39*t6 + t40*t7;
-    dq[1] = t2*t40 + t39*t5;
+    const double t32 = 1.0/(t29*t29);
+    const double t33 = t30*t32;
+    const double t34 = t31*t32;
+    const double t35 = t27*t28 - t18*t18;
+    const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
+    const double t37 = 1.0/t35;
+    const double t38 = (t36 ? t37*(t29*v[0] - t30) : t33);
+    const double t39 = (t36 ? t37*(t29*v[1] - t31) : t34);
+    dq[0] = t38*t6 + t39*t7;
+    dq[1] = t2*t39 + t38*t5;
 }
 
 void arm2_inverse_velocity(const double q[2], const double l[2], const double v[2], double lambda, double dq[2])
@@ -1052,17 +1051,16 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         const double t29 = t27 + t28;
         const double t30 = t27*v[0] + t18*v[1];
         const double t31 = t28*v[1] + t18*v[0];
-        const double t32 = t29*t29;
-        const double t33 = 1.0/t32;
-        const double t34 = t30*t33;
-        const double t35 = t31*t33;
-        const double t36 = t27*t28 - t18*t18;
-        const int t37 = t36 > ARM2_RANK_TOL*t32;
-        const double t38 = 1.0/t36;
-        const double t39 = (t37 ? t38*(t29*v[0] - t30) : t34);
-        const double t40 = (t37 ? t38*(t29*v[1] - t31) : t35);
-        dq[0] = t39*t6 + t40*t7;
-        dq[1] = t2*t40 + t39*t5;
+        const double t32 = 1.0/(t29*t29);
+        const double t33 = t30*t32;
+        const double t34 = t31*t32;
+        const double t35 = t27*t28 - t18*t18;
+        const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
+        const double t37 = 1.0/t35;
+        const double t38 = (t36 ? t37*(t29*v[0] - t30) : t33);
+        const double t39 = (t36 ? t37*(t29*v[1] - t31) : t34);
+        dq[0] = t38*t6 + t39*t7;
+        dq[1] = t2*t39 + t38*t5;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
     }
@@ -1107,7 +1105,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *l, con
 }
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 20 add/sub, 29 mul, 1 neg, 2 div */
+/* operations: 2 sin, 2 cos, 20 add/sub, 30 mul, 1 neg, 2 div */
 
 static void arm2_ik_step_angles(const double q[2], double *restrict ang)
 {
@@ -1131,21 +1129,20 @@ static void arm2_ik_step_finish(const double q[2], const double l[2], const doub
     const double t27 = t17 + t26;
     const double t28 = t19 + t26;
     const double t29 = t27 + t28;
-    const double t32 = t29*t29;
-    const double t33 = 1.0/t32;
-    const double t36 = t27*t28 - t18*t18;
-    const int t37 = t36 > ARM2_RANK_TOL*t32;
-    const double t38 = 1.0/t36;
-    const double t41 = target[0] - t7;
-    const double t42 = t6 + target[1];
-    const double t43 = t27*t41 + t18*t42;
-    const double t44 = t28*t42 + t18*t41;
-    const double t45 = t43*t33;
-    const double t46 = t44*t33;
-    const double t47 = (t37 ? t38*(t41*t29 - t43) : t45);
-    const double t48 = (t37 ? t38*(t42*t29 - t44) : t46);
-    q_next[0] = q[0] + t47*t6 + t48*t7;
-    q_next[1] = q[1] + t2*t48 + t47*t5;
+    const double t32 = 1.0/(t29*t29);
+    const double t35 = t27*t28 - t18*t18;
+    const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
+    const double t37 = 1.0/t35;
+    const double t40 = target[0] - t7;
+    const double t41 = t6 + target[1];
+    const double t42 = t27*t40 + t18*t41;
+    const double t43 = t28*t41 + t18*t40;
+    const double t44 = t42*t32;
+    const double t45 = t43*t32;
+    const double t46 = (t36 ? t37*(t40*t29 - t42) : t44);
+    const double t47 = (t36 ? t37*(t41*t29 - t43) : t45);
+    q_next[0] = q[0] + t46*t6 + t47*t7;
+    q_next[1] = q[1] + t2*t47 + t46*t5;
 }
 
 void arm2_ik_step(const double q[2], const double l[2], const double target[2], double lambda, double q_next[2])
@@ -1201,21 +1198,20 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         const double t27 = t17 + t26;
         const double t28 = t19 + t26;
         const double t29 = t27 + t28;
-        const double t32 = t29*t29;
-        const double t33 = 1.0/t32;
-        const double t36 = t27*t28 - t18*t18;
-        const int t37 = t36 > ARM2_RANK_TOL*t32;
-        const double t38 = 1.0/t36;
-        const double t41 = target[0] - t7;
-        const double t42 = t6 + target[1];
-        const double t43 = t27*t41 + t18*t42;
-        const double t44 = t28*t42 + t18*t41;
-        const double t45 = t43*t33;
-        const double t46 = t44*t33;
-        const double t47 = (t37 ? t38*(t41*t29 - t43) : t45);
-        const double t48 = (t37 ? t38*(t42*t29 - t44) : t46);
-        q_next[0] = q[0] + t47*t6 + t48*t7;
-        q_next[1] = q[1] + t2*t48 + t47*t5;
+        const double t32 = 1.0/(t29*t29);
+        const double t35 = t27*t28 - t18*t18;
+        const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
+        const double t37 = 1.0/t35;
+        const double t40 = target[0] - t7;
+        const double t41 = t6 + target[1];
+        const double t42 = t27*t40 + t18*t41;
+        const double t43 = t28*t41 + t18*t40;
+        const double t44 = t42*t32;
+        const double t45 = t43*t32;
+        const double t46 = (t36 ? t37*(t40*t29 - t42) : t44);
+        const double t47 = (t36 ? t37*(t41*t29 - t43) : t45);
+        q_next[0] = q[0] + t46*t6 + t47*t7;
+        q_next[1] = q[1] + t2*t47 + t46*t5;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
     }

@@ -328,7 +328,7 @@ def inverse_velocity(q, l, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 46 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 47 add/sub/mul/neg.
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (2, 2, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -353,18 +353,17 @@ def inverse_velocity(q, l, v, lambda_):
     t29 = t27 + t28
     t30 = t27*v[0] + t18*v[1]
     t31 = t28*v[1] + t18*v[0]
-    t32 = t29*t29
-    t33 = 1.0/t32
-    t34 = t30*t33
-    t35 = t31*t33
-    t36 = t27*t28 - t18*t18
-    t37 = (t36 > RANK_TOL*t32)
-    t38 = 1.0/t36
-    t39 = np.where(t37, t38*(t29*v[0] - t30), t34)
-    t40 = np.where(t37, t38*(t29*v[1] - t31), t35)
+    t32 = 1.0/(t29*t29)
+    t33 = t30*t32
+    t34 = t31*t32
+    t35 = t27*t28 - t18*t18
+    t36 = (t35 > RANK_TOL*t29*t29)
+    t37 = 1.0/t35
+    t38 = np.where(t36, t37*(t29*v[0] - t30), t33)
+    t39 = np.where(t36, t37*(t29*v[1] - t31), t34)
     dq = np.empty((2,) + batch, dtype=DTYPE)
-    dq[0] = t39*t6 + t40*t7
-    dq[1] = t2*t40 + t39*t5
+    dq[0] = t38*t6 + t39*t7
+    dq[1] = t2*t39 + t38*t5
     return _output(dq, (2,))
 
 
@@ -377,7 +376,7 @@ def ik_step(q, l, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 50 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 51 add/sub/mul/neg.
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (2, 2, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -400,22 +399,21 @@ def ik_step(q, l, target, lambda_):
     t27 = t17 + t26
     t28 = t19 + t26
     t29 = t27 + t28
-    t32 = t29*t29
-    t33 = 1.0/t32
-    t36 = t27*t28 - t18*t18
-    t37 = (t36 > RANK_TOL*t32)
-    t38 = 1.0/t36
-    t41 = target[0] - t7
-    t42 = t6 + target[1]
-    t43 = t27*t41 + t18*t42
-    t44 = t28*t42 + t18*t41
-    t45 = t43*t33
-    t46 = t44*t33
-    t47 = np.where(t37, t38*(t41*t29 - t43), t45)
-    t48 = np.where(t37, t38*(t42*t29 - t44), t46)
+    t32 = 1.0/(t29*t29)
+    t35 = t27*t28 - t18*t18
+    t36 = (t35 > RANK_TOL*t29*t29)
+    t37 = 1.0/t35
+    t40 = target[0] - t7
+    t41 = t6 + target[1]
+    t42 = t27*t40 + t18*t41
+    t43 = t28*t41 + t18*t40
+    t44 = t42*t32
+    t45 = t43*t32
+    t46 = np.where(t36, t37*(t40*t29 - t42), t44)
+    t47 = np.where(t36, t37*(t41*t29 - t43), t45)
     q_next = np.empty((2,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t47*t6 + t48*t7
-    q_next[1] = q[1] + t2*t48 + t47*t5
+    q_next[0] = q[0] + t46*t6 + t47*t7
+    q_next[1] = q[1] + t2*t47 + t46*t5
     return _output(q_next, (2,))
 
 

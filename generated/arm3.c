@@ -1144,7 +1144,7 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 23 add/sub, 36 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 23 add/sub, 37 mul, 1 neg, 2 div */
 
 static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
 {
@@ -1173,21 +1173,19 @@ static void arm3_inverse_velocity_finish(const double l[3], const double v[2], d
     const double t38 = t27 + t37;
     const double t39 = t29 + t37;
     const double t40 = t38 + t39;
-    const double t41 = t40;
-    const double t42 = t38*v[0] + t28*v[1];
-    const double t43 = t39*v[1] + t28*v[0];
-    const double t44 = t41*t41;
-    const double t45 = 1.0/t44;
-    const double t46 = t42*t45;
-    const double t47 = t43*t45;
-    const double t48 = t38*t39 - t28*t28;
-    const int t49 = t48 > ARM3_RANK_TOL*t44;
-    const double t50 = 1.0/t48;
-    const double t51 = (t49 ? t50*(t41*v[0] - t42) : t46);
-    const double t52 = (t49 ? t50*(t41*v[1] - t43) : t47);
-    dq[0] = t51*t11 + t52*t12;
-    dq[1] = t51*t9 + t52*t10;
-    dq[2] = t4*t52 + t51*t8;
+    const double t41 = t38*v[0] + t28*v[1];
+    const double t42 = t39*v[1] + t28*v[0];
+    const double t43 = 1.0/(t40*t40);
+    const double t44 = t41*t43;
+    const double t45 = t42*t43;
+    const double t46 = t38*t39 - t28*t28;
+    const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
+    const double t48 = 1.0/t46;
+    const double t49 = (t47 ? t48*(t40*v[0] - t41) : t44);
+    const double t50 = (t47 ? t48*(t40*v[1] - t42) : t45);
+    dq[0] = t49*t11 + t50*t12;
+    dq[1] = t49*t9 + t50*t10;
+    dq[2] = t4*t50 + t49*t8;
 }
 
 void arm3_inverse_velocity(const double q[3], const double l[3], const double v[2], double lambda, double dq[3])
@@ -1249,21 +1247,19 @@ static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_
         const double t38 = t27 + t37;
         const double t39 = t29 + t37;
         const double t40 = t38 + t39;
-        const double t41 = t40;
-        const double t42 = t38*v[0] + t28*v[1];
-        const double t43 = t39*v[1] + t28*v[0];
-        const double t44 = t41*t41;
-        const double t45 = 1.0/t44;
-        const double t46 = t42*t45;
-        const double t47 = t43*t45;
-        const double t48 = t38*t39 - t28*t28;
-        const int t49 = t48 > ARM3_RANK_TOL*t44;
-        const double t50 = 1.0/t48;
-        const double t51 = (t49 ? t50*(t41*v[0] - t42) : t46);
-        const double t52 = (t49 ? t50*(t41*v[1] - t43) : t47);
-        dq[0] = t51*t11 + t52*t12;
-        dq[1] = t51*t9 + t52*t10;
-        dq[2] = t4*t52 + t51*t8;
+        const double t41 = t38*v[0] + t28*v[1];
+        const double t42 = t39*v[1] + t28*v[0];
+        const double t43 = 1.0/(t40*t40);
+        const double t44 = t41*t43;
+        const double t45 = t42*t43;
+        const double t46 = t38*t39 - t28*t28;
+        const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
+        const double t48 = 1.0/t46;
+        const double t49 = (t47 ? t48*(t40*v[0] - t41) : t44);
+        const double t50 = (t47 ? t48*(t40*v[1] - t42) : t45);
+        dq[0] = t49*t11 + t50*t12;
+        dq[1] = t49*t9 + t50*t10;
+        dq[2] = t4*t50 + t49*t8;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1311,7 +1307,7 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *l, con
 }
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 84 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 59 add/sub, 85 mul, 1 neg, 3 div */
 
 static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
 {
@@ -1339,41 +1335,40 @@ static void arm3_inverse_velocity3_finish(const double l[3], const double twist[
     const double t37 = lambda*lambda;
     const double t38 = t27 + t37;
     const double t39 = t29 + t37;
-    const double t40 = t38 + t39;
-    const double t48 = t38*t39 - t28*t28;
-    const double t61 = t11 + t9 + t8;
-    const double t62 = t4 + t12 + t10;
-    const double t63 = 3.0 + t37;
-    const double t64 = t40 + t63;
-    const double t65 = t38*twist[0] + t28*twist[1] + t61*twist[2];
-    const double t66 = t39*twist[1] + t28*twist[0] + t62*twist[2];
-    const double t67 = t63*twist[2] + t61*twist[0] + t62*twist[1];
-    const double t68 = t64*t64;
-    const double t69 = 1.0/t68;
-    const double t70 = t65*t69;
-    const double t71 = t66*t69;
-    const double t72 = t67*t69;
-    const double t73 = t39*t63 - t62*t62;
-    const double t74 = t61*t62 - t63*t28;
-    const double t75 = t28*t62 - t39*t61;
-    const double t76 = t38*t63 - t61*t61;
-    const double t77 = t28*t61 - t38*t62;
-    const double t78 = t38*t73 + t28*t74 + t61*t75;
-    const double t79 = t73 + t76 + t48;
-    const int t80 = t78 > ARM3_RANK_TOL*t79*t64;
-    const int t81 = t79 > ARM3_RANK_TOL*t68;
-    const double t82 = 1.0/t78;
-    const double t83 = t38*t65 + t28*t66 + t61*t67;
-    const double t84 = t39*t66 + t28*t65 + t62*t67;
-    const double t85 = t63*t67 + t61*t65 + t62*t66;
-    const double t86 = 1.0/(t79*t79);
-    const double t87 = t68 - t79;
-    const double t88 = (t81 ? (t80 ? t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]) : t86*(t65*t87 - t83*t64)) : t70);
-    const double t89 = (t81 ? (t80 ? t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]) : t86*(t66*t87 - t84*t64)) : t71);
-    const double t90 = (t81 ? (t80 ? t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]) : t86*(t67*t87 - t85*t64)) : t72);
-    dq3[0] = t90 + t88*t11 + t89*t12;
-    dq3[1] = t90 + t88*t9 + t89*t10;
-    dq3[2] = t90 + t4*t89 + t88*t8;
+    const double t46 = t38*t39 - t28*t28;
+    const double t59 = t11 + t9 + t8;
+    const double t60 = t4 + t12 + t10;
+    const double t61 = 3.0 + t37;
+    const double t62 = t38 + t39 + t61;
+    const double t63 = t38*twist[0] + t28*twist[1] + t59*twist[2];
+    const double t64 = t39*twist[1] + t28*twist[0] + t60*twist[2];
+    const double t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
+    const double t66 = 1.0/(t62*t62);
+    const double t67 = t63*t66;
+    const double t68 = t64*t66;
+    const double t69 = t65*t66;
+    const double t70 = t39*t61 - t60*t60;
+    const double t71 = t59*t60 - t61*t28;
+    const double t72 = t28*t60 - t39*t59;
+    const double t73 = t38*t61 - t59*t59;
+    const double t74 = t28*t59 - t38*t60;
+    const double t75 = t38*t70 + t28*t71 + t59*t72;
+    const double t76 = t70 + t73 + t46;
+    const int t77 = t75 > ARM3_RANK_TOL*t76*t62;
+    const double t78 = t62*t62;
+    const int t79 = t76 > ARM3_RANK_TOL*t78;
+    const double t80 = 1.0/t75;
+    const double t81 = t38*t63 + t28*t64 + t59*t65;
+    const double t82 = t39*t64 + t28*t63 + t60*t65;
+    const double t83 = t61*t65 + t59*t63 + t60*t64;
+    const double t84 = 1.0/(t76*t76);
+    const double t85 = t78 - t76;
+    const double t86 = (t79 ? (t77 ? t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]) : t84*(t63*t85 - t81*t62)) : t67);
+    const double t87 = (t79 ? (t77 ? t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]) : t84*(t64*t85 - t82*t62)) : t68);
+    const double t88 = (t79 ? (t77 ? t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t69);
+    dq3[0] = t88 + t86*t11 + t87*t12;
+    dq3[1] = t88 + t86*t9 + t87*t10;
+    dq3[2] = t88 + t4*t87 + t86*t8;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double l[3], const double twist[3], double lambda, double dq3[3])
@@ -1435,41 +1430,40 @@ static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q
         const double t37 = lambda*lambda;
         const double t38 = t27 + t37;
         const double t39 = t29 + t37;
-        const double t40 = t38 + t39;
-        const double t48 = t38*t39 - t28*t28;
-        const double t61 = t11 + t9 + t8;
-        const double t62 = t4 + t12 + t10;
-        const double t63 = 3.0 + t37;
-        const double t64 = t40 + t63;
-        const double t65 = t38*twist[0] + t28*twist[1] + t61*twist[2];
-        const double t66 = t39*twist[1] + t28*twist[0] + t62*twist[2];
-        const double t67 = t63*twist[2] + t61*twist[0] + t62*twist[1];
-        const double t68 = t64*t64;
-        const double t69 = 1.0/t68;
-        const double t70 = t65*t69;
-        const double t71 = t66*t69;
-        const double t72 = t67*t69;
-        const double t73 = t39*t63 - t62*t62;
-        const double t74 = t61*t62 - t63*t28;
-        const double t75 = t28*t62 - t39*t61;
-        const double t76 = t38*t63 - t61*t61;
-        const double t77 = t28*t61 - t38*t62;
-        const double t78 = t38*t73 + t28*t74 + t61*t75;
-        const double t79 = t73 + t76 + t48;
-        const int t80 = t78 > ARM3_RANK_TOL*t79*t64;
-        const int t81 = t79 > ARM3_RANK_TOL*t68;
-        const double t82 = 1.0/t78;
-        const double t83 = t38*t65 + t28*t66 + t61*t67;
-        const double t84 = t39*t66 + t28*t65 + t62*t67;
-        const double t85 = t63*t67 + t61*t65 + t62*t66;
-        const double t86 = 1.0/(t79*t79);
-        const double t87 = t68 - t79;
-        const double t88 = (t81 ? (t80 ? t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]) : t86*(t65*t87 - t83*t64)) : t70);
-        const double t89 = (t81 ? (t80 ? t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]) : t86*(t66*t87 - t84*t64)) : t71);
-        const double t90 = (t81 ? (t80 ? t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]) : t86*(t67*t87 - t85*t64)) : t72);
-        dq3[0] = t90 + t88*t11 + t89*t12;
-        dq3[1] = t90 + t88*t9 + t89*t10;
-        dq3[2] = t90 + t4*t89 + t88*t8;
+        const double t46 = t38*t39 - t28*t28;
+        const double t59 = t11 + t9 + t8;
+        const double t60 = t4 + t12 + t10;
+        const double t61 = 3.0 + t37;
+        const double t62 = t38 + t39 + t61;
+        const double t63 = t38*twist[0] + t28*twist[1] + t59*twist[2];
+        const double t64 = t39*twist[1] + t28*twist[0] + t60*twist[2];
+        const double t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
+        const double t66 = 1.0/(t62*t62);
+        const double t67 = t63*t66;
+        const double t68 = t64*t66;
+        const double t69 = t65*t66;
+        const double t70 = t39*t61 - t60*t60;
+        const double t71 = t59*t60 - t61*t28;
+        const double t72 = t28*t60 - t39*t59;
+        const double t73 = t38*t61 - t59*t59;
+        const double t74 = t28*t59 - t38*t60;
+        const double t75 = t38*t70 + t28*t71 + t59*t72;
+        const double t76 = t70 + t73 + t46;
+        const int t77 = t75 > ARM3_RANK_TOL*t76*t62;
+        const double t78 = t62*t62;
+        const int t79 = t76 > ARM3_RANK_TOL*t78;
+        const double t80 = 1.0/t75;
+        const double t81 = t38*t63 + t28*t64 + t59*t65;
+        const double t82 = t39*t64 + t28*t63 + t60*t65;
+        const double t83 = t61*t65 + t59*t63 + t60*t64;
+        const double t84 = 1.0/(t76*t76);
+        const double t85 = t78 - t76;
+        const double t86 = (t79 ? (t77 ? t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]) : t84*(t63*t85 - t81*t62)) : t67);
+        const double t87 = (t79 ? (t77 ? t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]) : t84*(t64*t85 - t82*t62)) : t68);
+        const double t88 = (t79 ? (t77 ? t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t69);
+        dq3[0] = t88 + t86*t11 + t87*t12;
+        dq3[1] = t88 + t86*t9 + t87*t10;
+        dq3[2] = t88 + t4*t87 + t86*t8;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1518,7 +1512,7 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *l, co
 }
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 28 add/sub, 36 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 28 add/sub, 37 mul, 1 neg, 2 div */
 
 static void arm3_ik_step_angles(const double q[3], double *restrict ang)
 {
@@ -1547,23 +1541,21 @@ static void arm3_ik_step_finish(const double q[3], const double l[3], const doub
     const double t38 = t27 + t37;
     const double t39 = t29 + t37;
     const double t40 = t38 + t39;
-    const double t41 = t40;
-    const double t44 = t41*t41;
-    const double t45 = 1.0/t44;
-    const double t48 = t38*t39 - t28*t28;
-    const int t49 = t48 > ARM3_RANK_TOL*t44;
-    const double t50 = 1.0/t48;
-    const double t53 = target[0] - t12;
-    const double t54 = t11 + target[1];
-    const double t55 = t38*t53 + t28*t54;
-    const double t56 = t39*t54 + t28*t53;
-    const double t57 = t55*t45;
-    const double t58 = t56*t45;
-    const double t59 = (t49 ? t50*(t53*t41 - t55) : t57);
-    const double t60 = (t49 ? t50*(t54*t41 - t56) : t58);
-    q_next[0] = q[0] + t59*t11 + t60*t12;
-    q_next[1] = q[1] + t59*t9 + t60*t10;
-    q_next[2] = q[2] + t4*t60 + t59*t8;
+    const double t43 = 1.0/(t40*t40);
+    const double t46 = t38*t39 - t28*t28;
+    const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
+    const double t48 = 1.0/t46;
+    const double t51 = target[0] - t12;
+    const double t52 = t11 + target[1];
+    const double t53 = t38*t51 + t28*t52;
+    const double t54 = t39*t52 + t28*t51;
+    const double t55 = t53*t43;
+    const double t56 = t54*t43;
+    const double t57 = (t47 ? t48*(t51*t40 - t53) : t55);
+    const double t58 = (t47 ? t48*(t52*t40 - t54) : t56);
+    q_next[0] = q[0] + t57*t11 + t58*t12;
+    q_next[1] = q[1] + t57*t9 + t58*t10;
+    q_next[2] = q[2] + t4*t58 + t57*t8;
 }
 
 void arm3_ik_step(const double q[3], const double l[3], const double target[2], double lambda, double q_next[3])
@@ -1629,23 +1621,21 @@ static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const 
         const double t38 = t27 + t37;
         const double t39 = t29 + t37;
         const double t40 = t38 + t39;
-        const double t41 = t40;
-        const double t44 = t41*t41;
-        const double t45 = 1.0/t44;
-        const double t48 = t38*t39 - t28*t28;
-        const int t49 = t48 > ARM3_RANK_TOL*t44;
-        const double t50 = 1.0/t48;
-        const double t53 = target[0] - t12;
-        const double t54 = t11 + target[1];
-        const double t55 = t38*t53 + t28*t54;
-        const double t56 = t39*t54 + t28*t53;
-        const double t57 = t55*t45;
-        const double t58 = t56*t45;
-        const double t59 = (t49 ? t50*(t53*t41 - t55) : t57);
-        const double t60 = (t49 ? t50*(t54*t41 - t56) : t58);
-        q_next[0] = q[0] + t59*t11 + t60*t12;
-        q_next[1] = q[1] + t59*t9 + t60*t10;
-        q_next[2] = q[2] + t4*t60 + t59*t8;
+        const double t43 = 1.0/(t40*t40);
+        const double t46 = t38*t39 - t28*t28;
+        const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
+        const double t48 = 1.0/t46;
+        const double t51 = target[0] - t12;
+        const double t52 = t11 + target[1];
+        const double t53 = t38*t51 + t28*t52;
+        const double t54 = t39*t52 + t28*t51;
+        const double t55 = t53*t43;
+        const double t56 = t54*t43;
+        const double t57 = (t47 ? t48*(t51*t40 - t53) : t55);
+        const double t58 = (t47 ? t48*(t52*t40 - t54) : t56);
+        q_next[0] = q[0] + t57*t11 + t58*t12;
+        q_next[1] = q[1] + t57*t9 + t58*t10;
+        q_next[2] = q[2] + t4*t58 + t57*t8;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

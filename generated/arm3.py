@@ -388,7 +388,7 @@ def inverse_velocity(q, l, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 60 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 61 add/sub/mul/neg.
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (3, 3, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -416,22 +416,20 @@ def inverse_velocity(q, l, v, lambda_):
     t38 = t27 + t37
     t39 = t29 + t37
     t40 = t38 + t39
-    t41 = t40
-    t42 = t38*v[0] + t28*v[1]
-    t43 = t39*v[1] + t28*v[0]
-    t44 = t41*t41
-    t45 = 1.0/t44
-    t46 = t42*t45
-    t47 = t43*t45
-    t48 = t38*t39 - t28*t28
-    t49 = (t48 > RANK_TOL*t44)
-    t50 = 1.0/t48
-    t51 = np.where(t49, t50*(t41*v[0] - t42), t46)
-    t52 = np.where(t49, t50*(t41*v[1] - t43), t47)
+    t41 = t38*v[0] + t28*v[1]
+    t42 = t39*v[1] + t28*v[0]
+    t43 = 1.0/(t40*t40)
+    t44 = t41*t43
+    t45 = t42*t43
+    t46 = t38*t39 - t28*t28
+    t47 = (t46 > RANK_TOL*t40*t40)
+    t48 = 1.0/t46
+    t49 = np.where(t47, t48*(t40*v[0] - t41), t44)
+    t50 = np.where(t47, t48*(t40*v[1] - t42), t45)
     dq = np.empty((3,) + batch, dtype=DTYPE)
-    dq[0] = t51*t11 + t52*t12
-    dq[1] = t51*t9 + t52*t10
-    dq[2] = t4*t52 + t51*t8
+    dq[0] = t49*t11 + t50*t12
+    dq[1] = t49*t9 + t50*t10
+    dq[2] = t4*t50 + t49*t8
     return _output(dq, (3,))
 
 
@@ -444,7 +442,7 @@ def inverse_velocity3(q, l, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 144 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 145 add/sub/mul/neg.
     """
     batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (3, 3, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -471,42 +469,41 @@ def inverse_velocity3(q, l, twist, lambda_):
     t37 = lambda_*lambda_
     t38 = t27 + t37
     t39 = t29 + t37
-    t40 = t38 + t39
-    t48 = t38*t39 - t28*t28
-    t61 = t11 + t9 + t8
-    t62 = t4 + t12 + t10
-    t63 = 3.0 + t37
-    t64 = t40 + t63
-    t65 = t38*twist[0] + t28*twist[1] + t61*twist[2]
-    t66 = t39*twist[1] + t28*twist[0] + t62*twist[2]
-    t67 = t63*twist[2] + t61*twist[0] + t62*twist[1]
-    t68 = t64*t64
-    t69 = 1.0/t68
-    t70 = t65*t69
-    t71 = t66*t69
-    t72 = t67*t69
-    t73 = t39*t63 - t62*t62
-    t74 = t61*t62 - t63*t28
-    t75 = t28*t62 - t39*t61
-    t76 = t38*t63 - t61*t61
-    t77 = t28*t61 - t38*t62
-    t78 = t38*t73 + t28*t74 + t61*t75
-    t79 = t73 + t76 + t48
-    t80 = (t78 > RANK_TOL*t79*t64)
-    t81 = (t79 > RANK_TOL*t68)
-    t82 = 1.0/t78
-    t83 = t38*t65 + t28*t66 + t61*t67
-    t84 = t39*t66 + t28*t65 + t62*t67
-    t85 = t63*t67 + t61*t65 + t62*t66
-    t86 = 1.0/(t79*t79)
-    t87 = t68 - t79
-    t88 = np.where(t81, np.where(t80, t82*(t73*twist[0] + t74*twist[1] + t75*twist[2]), t86*(t65*t87 - t83*t64)), t70)
-    t89 = np.where(t81, np.where(t80, t82*(t74*twist[0] + t76*twist[1] + t77*twist[2]), t86*(t66*t87 - t84*t64)), t71)
-    t90 = np.where(t81, np.where(t80, t82*(t75*twist[0] + t77*twist[1] + t48*twist[2]), t86*(t67*t87 - t85*t64)), t72)
+    t46 = t38*t39 - t28*t28
+    t59 = t11 + t9 + t8
+    t60 = t4 + t12 + t10
+    t61 = 3.0 + t37
+    t62 = t38 + t39 + t61
+    t63 = t38*twist[0] + t28*twist[1] + t59*twist[2]
+    t64 = t39*twist[1] + t28*twist[0] + t60*twist[2]
+    t65 = t61*twist[2] + t59*twist[0] + t60*twist[1]
+    t66 = 1.0/(t62*t62)
+    t67 = t63*t66
+    t68 = t64*t66
+    t69 = t65*t66
+    t70 = t39*t61 - t60*t60
+    t71 = t59*t60 - t61*t28
+    t72 = t28*t60 - t39*t59
+    t73 = t38*t61 - t59*t59
+    t74 = t28*t59 - t38*t60
+    t75 = t38*t70 + t28*t71 + t59*t72
+    t76 = t70 + t73 + t46
+    t77 = (t75 > RANK_TOL*t76*t62)
+    t78 = t62*t62
+    t79 = (t76 > RANK_TOL*t78)
+    t80 = 1.0/t75
+    t81 = t38*t63 + t28*t64 + t59*t65
+    t82 = t39*t64 + t28*t63 + t60*t65
+    t83 = t61*t65 + t59*t63 + t60*t64
+    t84 = 1.0/(t76*t76)
+    t85 = t78 - t76
+    t86 = np.where(t79, np.where(t77, t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]), t84*(t63*t85 - t81*t62)), t67)
+    t87 = np.where(t79, np.where(t77, t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]), t84*(t64*t85 - t82*t62)), t68)
+    t88 = np.where(t79, np.where(t77, t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]), t84*(t65*t85 - t83*t62)), t69)
     dq3 = np.empty((3,) + batch, dtype=DTYPE)
-    dq3[0] = t90 + t88*t11 + t89*t12
-    dq3[1] = t90 + t88*t9 + t89*t10
-    dq3[2] = t90 + t4*t89 + t88*t8
+    dq3[0] = t88 + t86*t11 + t87*t12
+    dq3[1] = t88 + t86*t9 + t87*t10
+    dq3[2] = t88 + t4*t87 + t86*t8
     return _output(dq3, (3,))
 
 
@@ -519,7 +516,7 @@ def ik_step(q, l, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 65 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 66 add/sub/mul/neg.
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (3, 3, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -547,24 +544,22 @@ def ik_step(q, l, target, lambda_):
     t38 = t27 + t37
     t39 = t29 + t37
     t40 = t38 + t39
-    t41 = t40
-    t44 = t41*t41
-    t45 = 1.0/t44
-    t48 = t38*t39 - t28*t28
-    t49 = (t48 > RANK_TOL*t44)
-    t50 = 1.0/t48
-    t53 = target[0] - t12
-    t54 = t11 + target[1]
-    t55 = t38*t53 + t28*t54
-    t56 = t39*t54 + t28*t53
-    t57 = t55*t45
-    t58 = t56*t45
-    t59 = np.where(t49, t50*(t53*t41 - t55), t57)
-    t60 = np.where(t49, t50*(t54*t41 - t56), t58)
+    t43 = 1.0/(t40*t40)
+    t46 = t38*t39 - t28*t28
+    t47 = (t46 > RANK_TOL*t40*t40)
+    t48 = 1.0/t46
+    t51 = target[0] - t12
+    t52 = t11 + target[1]
+    t53 = t38*t51 + t28*t52
+    t54 = t39*t52 + t28*t51
+    t55 = t53*t43
+    t56 = t54*t43
+    t57 = np.where(t47, t48*(t51*t40 - t53), t55)
+    t58 = np.where(t47, t48*(t52*t40 - t54), t56)
     q_next = np.empty((3,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t59*t11 + t60*t12
-    q_next[1] = q[1] + t59*t9 + t60*t10
-    q_next[2] = q[2] + t4*t60 + t59*t8
+    q_next[0] = q[0] + t57*t11 + t58*t12
+    q_next[1] = q[1] + t57*t9 + t58*t10
+    q_next[2] = q[2] + t4*t58 + t57*t8
     return _output(q_next, (3,))
 
 

@@ -1116,7 +1116,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 23 add/sub, 34 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 23 add/sub, 35 mul, 1 neg, 2 div */
 
 static void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
 {
@@ -1143,21 +1143,19 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t36 = t25 + t35;
     const float t37 = t27 + t35;
     const float t38 = t36 + t37;
-    const float t39 = t38;
-    const float t40 = t36*v[0] + t26*v[1];
-    const float t41 = t37*v[1] + t26*v[0];
-    const float t42 = t39*t39;
-    const float t43 = 1.0f/t42;
-    const float t44 = t40*t43;
-    const float t45 = t41*t43;
-    const float t46 = t36*t37 - t26*t26;
-    const int t47 = t46 > ARM3F_RANK_TOL*t42;
-    const float t48 = 1.0f/t46;
-    const float t49 = (t47 ? t48*(t39*v[0] - t40) : t44);
-    const float t50 = (t47 ? t48*(t39*v[1] - t41) : t45);
-    dq[0] = t49*t9 + t50*t10;
-    dq[1] = t49*t7 + t50*t8;
-    dq[2] = t3*t50 + t49*t6;
+    const float t39 = t36*v[0] + t26*v[1];
+    const float t40 = t37*v[1] + t26*v[0];
+    const float t41 = 1.0f/(t38*t38);
+    const float t42 = t39*t41;
+    const float t43 = t40*t41;
+    const float t44 = t36*t37 - t26*t26;
+    const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
+    const float t46 = 1.0f/t44;
+    const float t47 = (t45 ? t46*(t38*v[0] - t39) : t42);
+    const float t48 = (t45 ? t46*(t38*v[1] - t40) : t43);
+    dq[0] = t47*t9 + t48*t10;
+    dq[1] = t47*t7 + t48*t8;
+    dq[2] = t3*t48 + t47*t6;
 }
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
@@ -1217,21 +1215,19 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q
         const float t36 = t25 + t35;
         const float t37 = t27 + t35;
         const float t38 = t36 + t37;
-        const float t39 = t38;
-        const float t40 = t36*v[0] + t26*v[1];
-        const float t41 = t37*v[1] + t26*v[0];
-        const float t42 = t39*t39;
-        const float t43 = 1.0f/t42;
-        const float t44 = t40*t43;
-        const float t45 = t41*t43;
-        const float t46 = t36*t37 - t26*t26;
-        const int t47 = t46 > ARM3F_RANK_TOL*t42;
-        const float t48 = 1.0f/t46;
-        const float t49 = (t47 ? t48*(t39*v[0] - t40) : t44);
-        const float t50 = (t47 ? t48*(t39*v[1] - t41) : t45);
-        dq[0] = t49*t9 + t50*t10;
-        dq[1] = t49*t7 + t50*t8;
-        dq[2] = t3*t50 + t49*t6;
+        const float t39 = t36*v[0] + t26*v[1];
+        const float t40 = t37*v[1] + t26*v[0];
+        const float t41 = 1.0f/(t38*t38);
+        const float t42 = t39*t41;
+        const float t43 = t40*t41;
+        const float t44 = t36*t37 - t26*t26;
+        const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
+        const float t46 = 1.0f/t44;
+        const float t47 = (t45 ? t46*(t38*v[0] - t39) : t42);
+        const float t48 = (t45 ? t46*(t38*v[1] - t40) : t43);
+        dq[0] = t47*t9 + t48*t10;
+        dq[1] = t47*t7 + t48*t8;
+        dq[2] = t3*t48 + t47*t6;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1279,7 +1275,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 82 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 59 add/sub, 83 mul, 1 neg, 3 div */
 
 static void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
 {
@@ -1305,41 +1301,40 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t35 = lambda*lambda;
     const float t36 = t25 + t35;
     const float t37 = t27 + t35;
-    const float t38 = t36 + t37;
-    const float t46 = t36*t37 - t26*t26;
-    const float t59 = t9 + t7 + t6;
-    const float t60 = t3 + t10 + t8;
-    const float t61 = 3.0f + t35;
-    const float t62 = t38 + t61;
-    const float t63 = t36*twist[0] + t26*twist[1] + t59*twist[2];
-    const float t64 = t37*twist[1] + t26*twist[0] + t60*twist[2];
-    const float t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
-    const float t66 = t62*t62;
-    const float t67 = 1.0f/t66;
-    const float t68 = t63*t67;
-    const float t69 = t64*t67;
-    const float t70 = t65*t67;
-    const float t71 = t37*t61 - t60*t60;
-    const float t72 = t59*t60 - t61*t26;
-    const float t73 = t26*t60 - t37*t59;
-    const float t74 = t36*t61 - t59*t59;
-    const float t75 = t26*t59 - t36*t60;
-    const float t76 = t36*t71 + t26*t72 + t59*t73;
-    const float t77 = t71 + t74 + t46;
-    const int t78 = t76 > ARM3F_RANK_TOL*t77*t62;
-    const int t79 = t77 > ARM3F_RANK_TOL*t66;
-    const float t80 = 1.0f/t76;
-    const float t81 = t36*t63 + t26*t64 + t59*t65;
-    const float t82 = t37*t64 + t26*t63 + t60*t65;
-    const float t83 = t61*t65 + t59*t63 + t60*t64;
-    const float t84 = 1.0f/(t77*t77);
-    const float t85 = t66 - t77;
-    const float t86 = (t79 ? (t78 ? t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]) : t84*(t63*t85 - t81*t62)) : t68);
-    const float t87 = (t79 ? (t78 ? t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]) : t84*(t64*t85 - t82*t62)) : t69);
-    const float t88 = (t79 ? (t78 ? t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t70);
-    dq3[0] = t88 + t86*t9 + t87*t10;
-    dq3[1] = t88 + t86*t7 + t87*t8;
-    dq3[2] = t88 + t3*t87 + t86*t6;
+    const float t44 = t36*t37 - t26*t26;
+    const float t57 = t9 + t7 + t6;
+    const float t58 = t3 + t10 + t8;
+    const float t59 = 3.0f + t35;
+    const float t60 = t36 + t37 + t59;
+    const float t61 = t36*twist[0] + t26*twist[1] + t57*twist[2];
+    const float t62 = t37*twist[1] + t26*twist[0] + t58*twist[2];
+    const float t63 = t59*twist[2] + t57*twist[0] + t58*twist[1];
+    const float t64 = 1.0f/(t60*t60);
+    const float t65 = t61*t64;
+    const float t66 = t62*t64;
+    const float t67 = t63*t64;
+    const float t68 = t37*t59 - t58*t58;
+    const float t69 = t57*t58 - t59*t26;
+    const float t70 = t26*t58 - t37*t57;
+    const float t71 = t36*t59 - t57*t57;
+    const float t72 = t26*t57 - t36*t58;
+    const float t73 = t36*t68 + t26*t69 + t57*t70;
+    const float t74 = t68 + t71 + t44;
+    const int t75 = t73 > ARM3F_RANK_TOL*t74*t60;
+    const float t76 = t60*t60;
+    const int t77 = t74 > ARM3F_RANK_TOL*t76;
+    const float t78 = 1.0f/t73;
+    const float t79 = t36*t61 + t26*t62 + t57*t63;
+    const float t80 = t37*t62 + t26*t61 + t58*t63;
+    const float t81 = t59*t63 + t57*t61 + t58*t62;
+    const float t82 = 1.0f/(t74*t74);
+    const float t83 = t76 - t74;
+    const float t84 = (t77 ? (t75 ? t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]) : t82*(t61*t83 - t79*t60)) : t65);
+    const float t85 = (t77 ? (t75 ? t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]) : t82*(t62*t83 - t80*t60)) : t66);
+    const float t86 = (t77 ? (t75 ? t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]) : t82*(t63*t83 - t81*t60)) : t67);
+    dq3[0] = t86 + t84*t9 + t85*t10;
+    dq3[1] = t86 + t84*t7 + t85*t8;
+    dq3[2] = t86 + t3*t85 + t84*t6;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1399,41 +1394,40 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         const float t35 = lambda*lambda;
         const float t36 = t25 + t35;
         const float t37 = t27 + t35;
-        const float t38 = t36 + t37;
-        const float t46 = t36*t37 - t26*t26;
-        const float t59 = t9 + t7 + t6;
-        const float t60 = t3 + t10 + t8;
-        const float t61 = 3.0f + t35;
-        const float t62 = t38 + t61;
-        const float t63 = t36*twist[0] + t26*twist[1] + t59*twist[2];
-        const float t64 = t37*twist[1] + t26*twist[0] + t60*twist[2];
-        const float t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
-        const float t66 = t62*t62;
-        const float t67 = 1.0f/t66;
-        const float t68 = t63*t67;
-        const float t69 = t64*t67;
-        const float t70 = t65*t67;
-        const float t71 = t37*t61 - t60*t60;
-        const float t72 = t59*t60 - t61*t26;
-        const float t73 = t26*t60 - t37*t59;
-        const float t74 = t36*t61 - t59*t59;
-        const float t75 = t26*t59 - t36*t60;
-        const float t76 = t36*t71 + t26*t72 + t59*t73;
-        const float t77 = t71 + t74 + t46;
-        const int t78 = t76 > ARM3F_RANK_TOL*t77*t62;
-        const int t79 = t77 > ARM3F_RANK_TOL*t66;
-        const float t80 = 1.0f/t76;
-        const float t81 = t36*t63 + t26*t64 + t59*t65;
-        const float t82 = t37*t64 + t26*t63 + t60*t65;
-        const float t83 = t61*t65 + t59*t63 + t60*t64;
-        const float t84 = 1.0f/(t77*t77);
-        const float t85 = t66 - t77;
-        const float t86 = (t79 ? (t78 ? t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]) : t84*(t63*t85 - t81*t62)) : t68);
-        const float t87 = (t79 ? (t78 ? t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]) : t84*(t64*t85 - t82*t62)) : t69);
-        const float t88 = (t79 ? (t78 ? t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t70);
-        dq3[0] = t88 + t86*t9 + t87*t10;
-        dq3[1] = t88 + t86*t7 + t87*t8;
-        dq3[2] = t88 + t3*t87 + t86*t6;
+        const float t44 = t36*t37 - t26*t26;
+        const float t57 = t9 + t7 + t6;
+        const float t58 = t3 + t10 + t8;
+        const float t59 = 3.0f + t35;
+        const float t60 = t36 + t37 + t59;
+        const float t61 = t36*twist[0] + t26*twist[1] + t57*twist[2];
+        const float t62 = t37*twist[1] + t26*twist[0] + t58*twist[2];
+        const float t63 = t59*twist[2] + t57*twist[0] + t58*twist[1];
+        const float t64 = 1.0f/(t60*t60);
+        const float t65 = t61*t64;
+        const float t66 = t62*t64;
+        const float t67 = t63*t64;
+        const float t68 = t37*t59 - t58*t58;
+        const float t69 = t57*t58 - t59*t26;
+        const float t70 = t26*t58 - t37*t57;
+        const float t71 = t36*t59 - t57*t57;
+        const float t72 = t26*t57 - t36*t58;
+        const float t73 = t36*t68 + t26*t69 + t57*t70;
+        const float t74 = t68 + t71 + t44;
+        const int t75 = t73 > ARM3F_RANK_TOL*t74*t60;
+        const float t76 = t60*t60;
+        const int t77 = t74 > ARM3F_RANK_TOL*t76;
+        const float t78 = 1.0f/t73;
+        const float t79 = t36*t61 + t26*t62 + t57*t63;
+        const float t80 = t37*t62 + t26*t61 + t58*t63;
+        const float t81 = t59*t63 + t57*t61 + t58*t62;
+        const float t82 = 1.0f/(t74*t74);
+        const float t83 = t76 - t74;
+        const float t84 = (t77 ? (t75 ? t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]) : t82*(t61*t83 - t79*t60)) : t65);
+        const float t85 = (t77 ? (t75 ? t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]) : t82*(t62*t83 - t80*t60)) : t66);
+        const float t86 = (t77 ? (t75 ? t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]) : t82*(t63*t83 - t81*t60)) : t67);
+        dq3[0] = t86 + t84*t9 + t85*t10;
+        dq3[1] = t86 + t84*t7 + t85*t8;
+        dq3[2] = t86 + t3*t85 + t84*t6;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1482,7 +1476,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 28 add/sub, 34 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 28 add/sub, 35 mul, 1 neg, 2 div */
 
 static void arm3f_ik_step_angles(const float q[3], float *restrict ang)
 {
@@ -1509,23 +1503,21 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t36 = t25 + t35;
     const float t37 = t27 + t35;
     const float t38 = t36 + t37;
-    const float t39 = t38;
-    const float t42 = t39*t39;
-    const float t43 = 1.0f/t42;
-    const float t46 = t36*t37 - t26*t26;
-    const int t47 = t46 > ARM3F_RANK_TOL*t42;
-    const float t48 = 1.0f/t46;
-    const float t51 = target[0] - t10;
-    const float t52 = t9 + target[1];
-    const float t53 = t36*t51 + t26*t52;
-    const float t54 = t37*t52 + t26*t51;
-    const float t55 = t53*t43;
-    const float t56 = t54*t43;
-    const float t57 = (t47 ? t48*(t51*t39 - t53) : t55);
-    const float t58 = (t47 ? t48*(t52*t39 - t54) : t56);
-    q_next[0] = q[0] + t57*t9 + t58*t10;
-    q_next[1] = q[1] + t57*t7 + t58*t8;
-    q_next[2] = q[2] + t3*t58 + t57*t6;
+    const float t41 = 1.0f/(t38*t38);
+    const float t44 = t36*t37 - t26*t26;
+    const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
+    const float t46 = 1.0f/t44;
+    const float t49 = target[0] - t10;
+    const float t50 = t9 + target[1];
+    const float t51 = t36*t49 + t26*t50;
+    const float t52 = t37*t50 + t26*t49;
+    const float t53 = t51*t41;
+    const float t54 = t52*t41;
+    const float t55 = (t45 ? t46*(t49*t38 - t51) : t53);
+    const float t56 = (t45 ? t46*(t50*t38 - t52) : t54);
+    q_next[0] = q[0] + t55*t9 + t56*t10;
+    q_next[1] = q[1] + t55*t7 + t56*t8;
+    q_next[2] = q[2] + t3*t56 + t55*t6;
 }
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])
@@ -1589,23 +1581,21 @@ static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const
         const float t36 = t25 + t35;
         const float t37 = t27 + t35;
         const float t38 = t36 + t37;
-        const float t39 = t38;
-        const float t42 = t39*t39;
-        const float t43 = 1.0f/t42;
-        const float t46 = t36*t37 - t26*t26;
-        const int t47 = t46 > ARM3F_RANK_TOL*t42;
-        const float t48 = 1.0f/t46;
-        const float t51 = target[0] - t10;
-        const float t52 = t9 + target[1];
-        const float t53 = t36*t51 + t26*t52;
-        const float t54 = t37*t52 + t26*t51;
-        const float t55 = t53*t43;
-        const float t56 = t54*t43;
-        const float t57 = (t47 ? t48*(t51*t39 - t53) : t55);
-        const float t58 = (t47 ? t48*(t52*t39 - t54) : t56);
-        q_next[0] = q[0] + t57*t9 + t58*t10;
-        q_next[1] = q[1] + t57*t7 + t58*t8;
-        q_next[2] = q[2] + t3*t58 + t57*t6;
+        const float t41 = 1.0f/(t38*t38);
+        const float t44 = t36*t37 - t26*t26;
+        const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
+        const float t46 = 1.0f/t44;
+        const float t49 = target[0] - t10;
+        const float t50 = t9 + target[1];
+        const float t51 = t36*t49 + t26*t50;
+        const float t52 = t37*t50 + t26*t49;
+        const float t53 = t51*t41;
+        const float t54 = t52*t41;
+        const float t55 = (t45 ? t46*(t49*t38 - t51) : t53);
+        const float t56 = (t45 ? t46*(t50*t38 - t52) : t54);
+        q_next[0] = q[0] + t55*t9 + t56*t10;
+        q_next[1] = q[1] + t55*t7 + t56*t8;
+        q_next[2] = q[2] + t3*t56 + t55*t6;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

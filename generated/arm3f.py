@@ -366,7 +366,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 58 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 59 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -392,22 +392,20 @@ def inverse_velocity(q, v, lambda_):
     t36 = t25 + t35
     t37 = t27 + t35
     t38 = t36 + t37
-    t39 = t38
-    t40 = t36*v[0] + t26*v[1]
-    t41 = t37*v[1] + t26*v[0]
-    t42 = t39*t39
-    t43 = 1.0/t42
-    t44 = t40*t43
-    t45 = t41*t43
-    t46 = t36*t37 - t26*t26
-    t47 = (t46 > RANK_TOL*t42)
-    t48 = 1.0/t46
-    t49 = np.where(t47, t48*(t39*v[0] - t40), t44)
-    t50 = np.where(t47, t48*(t39*v[1] - t41), t45)
+    t39 = t36*v[0] + t26*v[1]
+    t40 = t37*v[1] + t26*v[0]
+    t41 = 1.0/(t38*t38)
+    t42 = t39*t41
+    t43 = t40*t41
+    t44 = t36*t37 - t26*t26
+    t45 = (t44 > RANK_TOL*t38*t38)
+    t46 = 1.0/t44
+    t47 = np.where(t45, t46*(t38*v[0] - t39), t42)
+    t48 = np.where(t45, t46*(t38*v[1] - t40), t43)
     dq = np.empty((3,) + batch, dtype=DTYPE)
-    dq[0] = t49*t9 + t50*t10
-    dq[1] = t49*t7 + t50*t8
-    dq[2] = t3*t50 + t49*t6
+    dq[0] = t47*t9 + t48*t10
+    dq[1] = t47*t7 + t48*t8
+    dq[2] = t3*t48 + t47*t6
     return _output(dq, (3,))
 
 
@@ -419,7 +417,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 142 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 143 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -444,42 +442,41 @@ def inverse_velocity3(q, twist, lambda_):
     t35 = lambda_*lambda_
     t36 = t25 + t35
     t37 = t27 + t35
-    t38 = t36 + t37
-    t46 = t36*t37 - t26*t26
-    t59 = t9 + t7 + t6
-    t60 = t3 + t10 + t8
-    t61 = 3.0 + t35
-    t62 = t38 + t61
-    t63 = t36*twist[0] + t26*twist[1] + t59*twist[2]
-    t64 = t37*twist[1] + t26*twist[0] + t60*twist[2]
-    t65 = t61*twist[2] + t59*twist[0] + t60*twist[1]
-    t66 = t62*t62
-    t67 = 1.0/t66
-    t68 = t63*t67
-    t69 = t64*t67
-    t70 = t65*t67
-    t71 = t37*t61 - t60*t60
-    t72 = t59*t60 - t61*t26
-    t73 = t26*t60 - t37*t59
-    t74 = t36*t61 - t59*t59
-    t75 = t26*t59 - t36*t60
-    t76 = t36*t71 + t26*t72 + t59*t73
-    t77 = t71 + t74 + t46
-    t78 = (t76 > RANK_TOL*t77*t62)
-    t79 = (t77 > RANK_TOL*t66)
-    t80 = 1.0/t76
-    t81 = t36*t63 + t26*t64 + t59*t65
-    t82 = t37*t64 + t26*t63 + t60*t65
-    t83 = t61*t65 + t59*t63 + t60*t64
-    t84 = 1.0/(t77*t77)
-    t85 = t66 - t77
-    t86 = np.where(t79, np.where(t78, t80*(t71*twist[0] + t72*twist[1] + t73*twist[2]), t84*(t63*t85 - t81*t62)), t68)
-    t87 = np.where(t79, np.where(t78, t80*(t72*twist[0] + t74*twist[1] + t75*twist[2]), t84*(t64*t85 - t82*t62)), t69)
-    t88 = np.where(t79, np.where(t78, t80*(t73*twist[0] + t75*twist[1] + t46*twist[2]), t84*(t65*t85 - t83*t62)), t70)
+    t44 = t36*t37 - t26*t26
+    t57 = t9 + t7 + t6
+    t58 = t3 + t10 + t8
+    t59 = 3.0 + t35
+    t60 = t36 + t37 + t59
+    t61 = t36*twist[0] + t26*twist[1] + t57*twist[2]
+    t62 = t37*twist[1] + t26*twist[0] + t58*twist[2]
+    t63 = t59*twist[2] + t57*twist[0] + t58*twist[1]
+    t64 = 1.0/(t60*t60)
+    t65 = t61*t64
+    t66 = t62*t64
+    t67 = t63*t64
+    t68 = t37*t59 - t58*t58
+    t69 = t57*t58 - t59*t26
+    t70 = t26*t58 - t37*t57
+    t71 = t36*t59 - t57*t57
+    t72 = t26*t57 - t36*t58
+    t73 = t36*t68 + t26*t69 + t57*t70
+    t74 = t68 + t71 + t44
+    t75 = (t73 > RANK_TOL*t74*t60)
+    t76 = t60*t60
+    t77 = (t74 > RANK_TOL*t76)
+    t78 = 1.0/t73
+    t79 = t36*t61 + t26*t62 + t57*t63
+    t80 = t37*t62 + t26*t61 + t58*t63
+    t81 = t59*t63 + t57*t61 + t58*t62
+    t82 = 1.0/(t74*t74)
+    t83 = t76 - t74
+    t84 = np.where(t77, np.where(t75, t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]), t82*(t61*t83 - t79*t60)), t65)
+    t85 = np.where(t77, np.where(t75, t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]), t82*(t62*t83 - t80*t60)), t66)
+    t86 = np.where(t77, np.where(t75, t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]), t82*(t63*t83 - t81*t60)), t67)
     dq3 = np.empty((3,) + batch, dtype=DTYPE)
-    dq3[0] = t88 + t86*t9 + t87*t10
-    dq3[1] = t88 + t86*t7 + t87*t8
-    dq3[2] = t88 + t3*t87 + t86*t6
+    dq3[0] = t86 + t84*t9 + t85*t10
+    dq3[1] = t86 + t84*t7 + t85*t8
+    dq3[2] = t86 + t3*t85 + t84*t6
     return _output(dq3, (3,))
 
 
@@ -491,7 +488,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 63 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 64 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -517,24 +514,22 @@ def ik_step(q, target, lambda_):
     t36 = t25 + t35
     t37 = t27 + t35
     t38 = t36 + t37
-    t39 = t38
-    t42 = t39*t39
-    t43 = 1.0/t42
-    t46 = t36*t37 - t26*t26
-    t47 = (t46 > RANK_TOL*t42)
-    t48 = 1.0/t46
-    t51 = target[0] - t10
-    t52 = t9 + target[1]
-    t53 = t36*t51 + t26*t52
-    t54 = t37*t52 + t26*t51
-    t55 = t53*t43
-    t56 = t54*t43
-    t57 = np.where(t47, t48*(t51*t39 - t53), t55)
-    t58 = np.where(t47, t48*(t52*t39 - t54), t56)
+    t41 = 1.0/(t38*t38)
+    t44 = t36*t37 - t26*t26
+    t45 = (t44 > RANK_TOL*t38*t38)
+    t46 = 1.0/t44
+    t49 = target[0] - t10
+    t50 = t9 + target[1]
+    t51 = t36*t49 + t26*t50
+    t52 = t37*t50 + t26*t49
+    t53 = t51*t41
+    t54 = t52*t41
+    t55 = np.where(t45, t46*(t49*t38 - t51), t53)
+    t56 = np.where(t45, t46*(t50*t38 - t52), t54)
     q_next = np.empty((3,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t57*t9 + t58*t10
-    q_next[1] = q[1] + t57*t7 + t58*t8
-    q_next[2] = q[2] + t3*t58 + t57*t6
+    q_next[0] = q[0] + t55*t9 + t56*t10
+    q_next[1] = q[1] + t55*t7 + t56*t8
+    q_next[2] = q[2] + t3*t56 + t55*t6
     return _output(q_next, (3,))
 
 

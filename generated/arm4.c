@@ -1357,7 +1357,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 30 add/sub, 43 mul, 1 neg, 2 div */
+/* operations: 4 sin, 4 cos, 30 add/sub, 44 mul, 1 neg, 2 div */
 
 static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
@@ -1391,22 +1391,20 @@ static void arm4_inverse_velocity_finish(const double l[4], const double v[2], d
     const double t49 = t37 + t48;
     const double t50 = t39 + t48;
     const double t51 = t49 + t50;
-    const double t52 = t51;
-    const double t53 = t49*v[0] + t38*v[1];
-    const double t54 = t50*v[1] + t38*v[0];
-    const double t55 = t52*t52;
-    const double t56 = 1.0/t55;
-    const double t57 = t53*t56;
-    const double t58 = t54*t56;
-    const double t59 = t49*t50 - t38*t38;
-    const int t60 = t59 > ARM4_RANK_TOL*t55;
-    const double t61 = 1.0/t59;
-    const double t62 = (t60 ? t61*(t52*v[0] - t53) : t57);
-    const double t63 = (t60 ? t61*(t52*v[1] - t54) : t58);
-    dq[0] = t62*t16 + t63*t17;
-    dq[1] = t62*t14 + t63*t15;
-    dq[2] = t62*t12 + t63*t13;
-    dq[3] = t6*t63 + t62*t11;
+    const double t52 = t49*v[0] + t38*v[1];
+    const double t53 = t50*v[1] + t38*v[0];
+    const double t54 = 1.0/(t51*t51);
+    const double t55 = t52*t54;
+    const double t56 = t53*t54;
+    const double t57 = t49*t50 - t38*t38;
+    const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
+    const double t59 = 1.0/t57;
+    const double t60 = (t58 ? t59*(t51*v[0] - t52) : t55);
+    const double t61 = (t58 ? t59*(t51*v[1] - t53) : t56);
+    dq[0] = t60*t16 + t61*t17;
+    dq[1] = t60*t14 + t61*t15;
+    dq[2] = t60*t12 + t61*t13;
+    dq[3] = t6*t61 + t60*t11;
 }
 
 void arm4_inverse_velocity(const double q[4], const double l[4], const double v[2], double lambda, double dq[4])
@@ -1481,22 +1479,20 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         const double t49 = t37 + t48;
         const double t50 = t39 + t48;
         const double t51 = t49 + t50;
-        const double t52 = t51;
-        const double t53 = t49*v[0] + t38*v[1];
-        const double t54 = t50*v[1] + t38*v[0];
-        const double t55 = t52*t52;
-        const double t56 = 1.0/t55;
-        const double t57 = t53*t56;
-        const double t58 = t54*t56;
-        const double t59 = t49*t50 - t38*t38;
-        const int t60 = t59 > ARM4_RANK_TOL*t55;
-        const double t61 = 1.0/t59;
-        const double t62 = (t60 ? t61*(t52*v[0] - t53) : t57);
-        const double t63 = (t60 ? t61*(t52*v[1] - t54) : t58);
-        dq[0] = t62*t16 + t63*t17;
-        dq[1] = t62*t14 + t63*t15;
-        dq[2] = t62*t12 + t63*t13;
-        dq[3] = t6*t63 + t62*t11;
+        const double t52 = t49*v[0] + t38*v[1];
+        const double t53 = t50*v[1] + t38*v[0];
+        const double t54 = 1.0/(t51*t51);
+        const double t55 = t52*t54;
+        const double t56 = t53*t54;
+        const double t57 = t49*t50 - t38*t38;
+        const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
+        const double t59 = 1.0/t57;
+        const double t60 = (t58 ? t59*(t51*v[0] - t52) : t55);
+        const double t61 = (t58 ? t59*(t51*v[1] - t53) : t56);
+        dq[0] = t60*t16 + t61*t17;
+        dq[1] = t60*t14 + t61*t15;
+        dq[2] = t60*t12 + t61*t13;
+        dq[3] = t6*t61 + t60*t11;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1547,7 +1543,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *l, con
 }
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 69 add/sub, 91 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 69 add/sub, 92 mul, 1 neg, 3 div */
 
 static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
@@ -1580,42 +1576,41 @@ static void arm4_inverse_velocity3_finish(const double l[4], const double twist[
     const double t48 = lambda*lambda;
     const double t49 = t37 + t48;
     const double t50 = t39 + t48;
-    const double t51 = t49 + t50;
-    const double t59 = t49*t50 - t38*t38;
-    const double t72 = t16 + t14 + t12 + t11;
-    const double t73 = t6 + t17 + t15 + t13;
-    const double t74 = 4.0 + t48;
-    const double t75 = t51 + t74;
-    const double t76 = t49*twist[0] + t38*twist[1] + t72*twist[2];
-    const double t77 = t50*twist[1] + t38*twist[0] + t73*twist[2];
-    const double t78 = t74*twist[2] + t72*twist[0] + t73*twist[1];
-    const double t79 = t75*t75;
-    const double t80 = 1.0/t79;
-    const double t81 = t76*t80;
-    const double t82 = t77*t80;
-    const double t83 = t78*t80;
-    const double t84 = t50*t74 - t73*t73;
-    const double t85 = t72*t73 - t74*t38;
-    const double t86 = t38*t73 - t50*t72;
-    const double t87 = t49*t74 - t72*t72;
-    const double t88 = t38*t72 - t49*t73;
-    const double t89 = t49*t84 + t38*t85 + t72*t86;
-    const double t90 = t84 + t87 + t59;
-    const int t91 = t89 > ARM4_RANK_TOL*t90*t75;
-    const int t92 = t90 > ARM4_RANK_TOL*t79;
-    const double t93 = 1.0/t89;
-    const double t94 = t49*t76 + t38*t77 + t72*t78;
-    const double t95 = t50*t77 + t38*t76 + t73*t78;
-    const double t96 = t74*t78 + t72*t76 + t73*t77;
-    const double t97 = 1.0/(t90*t90);
-    const double t98 = t79 - t90;
-    const double t99 = (t92 ? (t91 ? t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]) : t97*(t76*t98 - t94*t75)) : t81);
-    const double t100 = (t92 ? (t91 ? t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]) : t97*(t77*t98 - t95*t75)) : t82);
-    const double t101 = (t92 ? (t91 ? t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]) : t97*(t78*t98 - t96*t75)) : t83);
-    dq3[0] = t101 + t99*t16 + t100*t17;
-    dq3[1] = t101 + t99*t14 + t100*t15;
-    dq3[2] = t101 + t99*t12 + t100*t13;
-    dq3[3] = t101 + t6*t100 + t99*t11;
+    const double t57 = t49*t50 - t38*t38;
+    const double t70 = t16 + t14 + t12 + t11;
+    const double t71 = t6 + t17 + t15 + t13;
+    const double t72 = 4.0 + t48;
+    const double t73 = t49 + t50 + t72;
+    const double t74 = t49*twist[0] + t38*twist[1] + t70*twist[2];
+    const double t75 = t50*twist[1] + t38*twist[0] + t71*twist[2];
+    const double t76 = t72*twist[2] + t70*twist[0] + t71*twist[1];
+    const double t77 = 1.0/(t73*t73);
+    const double t78 = t74*t77;
+    const double t79 = t75*t77;
+    const double t80 = t76*t77;
+    const double t81 = t50*t72 - t71*t71;
+    const double t82 = t70*t71 - t72*t38;
+    const double t83 = t38*t71 - t50*t70;
+    const double t84 = t49*t72 - t70*t70;
+    const double t85 = t38*t70 - t49*t71;
+    const double t86 = t49*t81 + t38*t82 + t70*t83;
+    const double t87 = t81 + t84 + t57;
+    const int t88 = t86 > ARM4_RANK_TOL*t87*t73;
+    const double t89 = t73*t73;
+    const int t90 = t87 > ARM4_RANK_TOL*t89;
+    const double t91 = 1.0/t86;
+    const double t92 = t49*t74 + t38*t75 + t70*t76;
+    const double t93 = t50*t75 + t38*t74 + t71*t76;
+    const double t94 = t72*t76 + t70*t74 + t71*t75;
+    const double t95 = 1.0/(t87*t87);
+    const double t96 = t89 - t87;
+    const double t97 = (t90 ? (t88 ? t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]) : t95*(t74*t96 - t92*t73)) : t78);
+    const double t98 = (t90 ? (t88 ? t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]) : t95*(t75*t96 - t93*t73)) : t79);
+    const double t99 = (t90 ? (t88 ? t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]) : t95*(t76*t96 - t94*t73)) : t80);
+    dq3[0] = t99 + t97*t16 + t98*t17;
+    dq3[1] = t99 + t97*t14 + t98*t15;
+    dq3[2] = t99 + t97*t12 + t98*t13;
+    dq3[3] = t99 + t6*t98 + t97*t11;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double l[4], const double twist[3], double lambda, double dq3[4])
@@ -1690,42 +1685,41 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         const double t48 = lambda*lambda;
         const double t49 = t37 + t48;
         const double t50 = t39 + t48;
-        const double t51 = t49 + t50;
-        const double t59 = t49*t50 - t38*t38;
-        const double t72 = t16 + t14 + t12 + t11;
-        const double t73 = t6 + t17 + t15 + t13;
-        const double t74 = 4.0 + t48;
-        const double t75 = t51 + t74;
-        const double t76 = t49*twist[0] + t38*twist[1] + t72*twist[2];
-        const double t77 = t50*twist[1] + t38*twist[0] + t73*twist[2];
-        const double t78 = t74*twist[2] + t72*twist[0] + t73*twist[1];
-        const double t79 = t75*t75;
-        const double t80 = 1.0/t79;
-        const double t81 = t76*t80;
-        const double t82 = t77*t80;
-        const double t83 = t78*t80;
-        const double t84 = t50*t74 - t73*t73;
-        const double t85 = t72*t73 - t74*t38;
-        const double t86 = t38*t73 - t50*t72;
-        const double t87 = t49*t74 - t72*t72;
-        const double t88 = t38*t72 - t49*t73;
-        const double t89 = t49*t84 + t38*t85 + t72*t86;
-        const double t90 = t84 + t87 + t59;
-        const int t91 = t89 > ARM4_RANK_TOL*t90*t75;
-        const int t92 = t90 > ARM4_RANK_TOL*t79;
-        const double t93 = 1.0/t89;
-        const double t94 = t49*t76 + t38*t77 + t72*t78;
-        const double t95 = t50*t77 + t38*t76 + t73*t78;
-        const double t96 = t74*t78 + t72*t76 + t73*t77;
-        const double t97 = 1.0/(t90*t90);
-        const double t98 = t79 - t90;
-        const double t99 = (t92 ? (t91 ? t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]) : t97*(t76*t98 - t94*t75)) : t81);
-        const double t100 = (t92 ? (t91 ? t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]) : t97*(t77*t98 - t95*t75)) : t82);
-        const double t101 = (t92 ? (t91 ? t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]) : t97*(t78*t98 - t96*t75)) : t83);
-        dq3[0] = t101 + t99*t16 + t100*t17;
-        dq3[1] = t101 + t99*t14 + t100*t15;
-        dq3[2] = t101 + t99*t12 + t100*t13;
-        dq3[3] = t101 + t6*t100 + t99*t11;
+        const double t57 = t49*t50 - t38*t38;
+        const double t70 = t16 + t14 + t12 + t11;
+        const double t71 = t6 + t17 + t15 + t13;
+        const double t72 = 4.0 + t48;
+        const double t73 = t49 + t50 + t72;
+        const double t74 = t49*twist[0] + t38*twist[1] + t70*twist[2];
+        const double t75 = t50*twist[1] + t38*twist[0] + t71*twist[2];
+        const double t76 = t72*twist[2] + t70*twist[0] + t71*twist[1];
+        const double t77 = 1.0/(t73*t73);
+        const double t78 = t74*t77;
+        const double t79 = t75*t77;
+        const double t80 = t76*t77;
+        const double t81 = t50*t72 - t71*t71;
+        const double t82 = t70*t71 - t72*t38;
+        const double t83 = t38*t71 - t50*t70;
+        const double t84 = t49*t72 - t70*t70;
+        const double t85 = t38*t70 - t49*t71;
+        const double t86 = t49*t81 + t38*t82 + t70*t83;
+        const double t87 = t81 + t84 + t57;
+        const int t88 = t86 > ARM4_RANK_TOL*t87*t73;
+        const double t89 = t73*t73;
+        const int t90 = t87 > ARM4_RANK_TOL*t89;
+        const double t91 = 1.0/t86;
+        const double t92 = t49*t74 + t38*t75 + t70*t76;
+        const double t93 = t50*t75 + t38*t74 + t71*t76;
+        const double t94 = t72*t76 + t70*t74 + t71*t75;
+        const double t95 = 1.0/(t87*t87);
+        const double t96 = t89 - t87;
+        const double t97 = (t90 ? (t88 ? t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]) : t95*(t74*t96 - t92*t73)) : t78);
+        const double t98 = (t90 ? (t88 ? t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]) : t95*(t75*t96 - t93*t73)) : t79);
+        const double t99 = (t90 ? (t88 ? t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]) : t95*(t76*t96 - t94*t73)) : t80);
+        dq3[0] = t99 + t97*t16 + t98*t17;
+        dq3[1] = t99 + t97*t14 + t98*t15;
+        dq3[2] = t99 + t97*t12 + t98*t13;
+        dq3[3] = t99 + t6*t98 + t97*t11;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1777,7 +1771,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *l, co
 }
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 36 add/sub, 43 mul, 1 neg, 2 div */
+/* operations: 4 sin, 4 cos, 36 add/sub, 44 mul, 1 neg, 2 div */
 
 static void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
@@ -1811,24 +1805,22 @@ static void arm4_ik_step_finish(const double q[4], const double l[4], const doub
     const double t49 = t37 + t48;
     const double t50 = t39 + t48;
     const double t51 = t49 + t50;
-    const double t52 = t51;
-    const double t55 = t52*t52;
-    const double t56 = 1.0/t55;
-    const double t59 = t49*t50 - t38*t38;
-    const int t60 = t59 > ARM4_RANK_TOL*t55;
-    const double t61 = 1.0/t59;
-    const double t64 = target[0] - t17;
-    const double t65 = t16 + target[1];
-    const double t66 = t49*t64 + t38*t65;
-    const double t67 = t50*t65 + t38*t64;
-    const double t68 = t66*t56;
-    const double t69 = t67*t56;
-    const double t70 = (t60 ? t61*(t64*t52 - t66) : t68);
-    const double t71 = (t60 ? t61*(t65*t52 - t67) : t69);
-    q_next[0] = q[0] + t70*t16 + t71*t17;
-    q_next[1] = q[1] + t70*t14 + t71*t15;
-    q_next[2] = q[2] + t70*t12 + t71*t13;
-    q_next[3] = q[3] + t6*t71 + t70*t11;
+    const double t54 = 1.0/(t51*t51);
+    const double t57 = t49*t50 - t38*t38;
+    const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
+    const double t59 = 1.0/t57;
+    const double t62 = target[0] - t17;
+    const double t63 = t16 + target[1];
+    const double t64 = t49*t62 + t38*t63;
+    const double t65 = t50*t63 + t38*t62;
+    const double t66 = t64*t54;
+    const double t67 = t65*t54;
+    const double t68 = (t58 ? t59*(t62*t51 - t64) : t66);
+    const double t69 = (t58 ? t59*(t63*t51 - t65) : t67);
+    q_next[0] = q[0] + t68*t16 + t69*t17;
+    q_next[1] = q[1] + t68*t14 + t69*t15;
+    q_next[2] = q[2] + t68*t12 + t69*t13;
+    q_next[3] = q[3] + t6*t69 + t68*t11;
 }
 
 void arm4_ik_step(const double q[4], const double l[4], const double target[2], double lambda, double q_next[4])
@@ -1908,24 +1900,22 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         const double t49 = t37 + t48;
         const double t50 = t39 + t48;
         const double t51 = t49 + t50;
-        const double t52 = t51;
-        const double t55 = t52*t52;
-        const double t56 = 1.0/t55;
-        const double t59 = t49*t50 - t38*t38;
-        const int t60 = t59 > ARM4_RANK_TOL*t55;
-        const double t61 = 1.0/t59;
-        const double t64 = target[0] - t17;
-        const double t65 = t16 + target[1];
-        const double t66 = t49*t64 + t38*t65;
-        const double t67 = t50*t65 + t38*t64;
-        const double t68 = t66*t56;
-        const double t69 = t67*t56;
-        const double t70 = (t60 ? t61*(t64*t52 - t66) : t68);
-        const double t71 = (t60 ? t61*(t65*t52 - t67) : t69);
-        q_next[0] = q[0] + t70*t16 + t71*t17;
-        q_next[1] = q[1] + t70*t14 + t71*t15;
-        q_next[2] = q[2] + t70*t12 + t71*t13;
-        q_next[3] = q[3] + t6*t71 + t70*t11;
+        const double t54 = 1.0/(t51*t51);
+        const double t57 = t49*t50 - t38*t38;
+        const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
+        const double t59 = 1.0/t57;
+        const double t62 = target[0] - t17;
+        const double t63 = t16 + target[1];
+        const double t64 = t49*t62 + t38*t63;
+        const double t65 = t50*t63 + t38*t62;
+        const double t66 = t64*t54;
+        const double t67 = t65*t54;
+        const double t68 = (t58 ? t59*(t62*t51 - t64) : t66);
+        const double t69 = (t58 ? t59*(t63*t51 - t65) : t67);
+        q_next[0] = q[0] + t68*t16 + t69*t17;
+        q_next[1] = q[1] + t68*t14 + t69*t15;
+        q_next[2] = q[2] + t68*t12 + t69*t13;
+        q_next[3] = q[3] + t6*t69 + t68*t11;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

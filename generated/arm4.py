@@ -448,7 +448,7 @@ def inverse_velocity(q, l, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 74 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 75 add/sub/mul/neg.
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (4, 4, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -481,23 +481,21 @@ def inverse_velocity(q, l, v, lambda_):
     t49 = t37 + t48
     t50 = t39 + t48
     t51 = t49 + t50
-    t52 = t51
-    t53 = t49*v[0] + t38*v[1]
-    t54 = t50*v[1] + t38*v[0]
-    t55 = t52*t52
-    t56 = 1.0/t55
-    t57 = t53*t56
-    t58 = t54*t56
-    t59 = t49*t50 - t38*t38
-    t60 = (t59 > RANK_TOL*t55)
-    t61 = 1.0/t59
-    t62 = np.where(t60, t61*(t52*v[0] - t53), t57)
-    t63 = np.where(t60, t61*(t52*v[1] - t54), t58)
+    t52 = t49*v[0] + t38*v[1]
+    t53 = t50*v[1] + t38*v[0]
+    t54 = 1.0/(t51*t51)
+    t55 = t52*t54
+    t56 = t53*t54
+    t57 = t49*t50 - t38*t38
+    t58 = (t57 > RANK_TOL*t51*t51)
+    t59 = 1.0/t57
+    t60 = np.where(t58, t59*(t51*v[0] - t52), t55)
+    t61 = np.where(t58, t59*(t51*v[1] - t53), t56)
     dq = np.empty((4,) + batch, dtype=DTYPE)
-    dq[0] = t62*t16 + t63*t17
-    dq[1] = t62*t14 + t63*t15
-    dq[2] = t62*t12 + t63*t13
-    dq[3] = t6*t63 + t62*t11
+    dq[0] = t60*t16 + t61*t17
+    dq[1] = t60*t14 + t61*t15
+    dq[2] = t60*t12 + t61*t13
+    dq[3] = t6*t61 + t60*t11
     return _output(dq, (4,))
 
 
@@ -510,7 +508,7 @@ def inverse_velocity3(q, l, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 161 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 162 add/sub/mul/neg.
     """
     batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (4, 4, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -542,43 +540,42 @@ def inverse_velocity3(q, l, twist, lambda_):
     t48 = lambda_*lambda_
     t49 = t37 + t48
     t50 = t39 + t48
-    t51 = t49 + t50
-    t59 = t49*t50 - t38*t38
-    t72 = t16 + t14 + t12 + t11
-    t73 = t6 + t17 + t15 + t13
-    t74 = 4.0 + t48
-    t75 = t51 + t74
-    t76 = t49*twist[0] + t38*twist[1] + t72*twist[2]
-    t77 = t50*twist[1] + t38*twist[0] + t73*twist[2]
-    t78 = t74*twist[2] + t72*twist[0] + t73*twist[1]
-    t79 = t75*t75
-    t80 = 1.0/t79
-    t81 = t76*t80
-    t82 = t77*t80
-    t83 = t78*t80
-    t84 = t50*t74 - t73*t73
-    t85 = t72*t73 - t74*t38
-    t86 = t38*t73 - t50*t72
-    t87 = t49*t74 - t72*t72
-    t88 = t38*t72 - t49*t73
-    t89 = t49*t84 + t38*t85 + t72*t86
-    t90 = t84 + t87 + t59
-    t91 = (t89 > RANK_TOL*t90*t75)
-    t92 = (t90 > RANK_TOL*t79)
-    t93 = 1.0/t89
-    t94 = t49*t76 + t38*t77 + t72*t78
-    t95 = t50*t77 + t38*t76 + t73*t78
-    t96 = t74*t78 + t72*t76 + t73*t77
-    t97 = 1.0/(t90*t90)
-    t98 = t79 - t90
-    t99 = np.where(t92, np.where(t91, t93*(t84*twist[0] + t85*twist[1] + t86*twist[2]), t97*(t76*t98 - t94*t75)), t81)
-    t100 = np.where(t92, np.where(t91, t93*(t85*twist[0] + t87*twist[1] + t88*twist[2]), t97*(t77*t98 - t95*t75)), t82)
-    t101 = np.where(t92, np.where(t91, t93*(t86*twist[0] + t88*twist[1] + t59*twist[2]), t97*(t78*t98 - t96*t75)), t83)
+    t57 = t49*t50 - t38*t38
+    t70 = t16 + t14 + t12 + t11
+    t71 = t6 + t17 + t15 + t13
+    t72 = 4.0 + t48
+    t73 = t49 + t50 + t72
+    t74 = t49*twist[0] + t38*twist[1] + t70*twist[2]
+    t75 = t50*twist[1] + t38*twist[0] + t71*twist[2]
+    t76 = t72*twist[2] + t70*twist[0] + t71*twist[1]
+    t77 = 1.0/(t73*t73)
+    t78 = t74*t77
+    t79 = t75*t77
+    t80 = t76*t77
+    t81 = t50*t72 - t71*t71
+    t82 = t70*t71 - t72*t38
+    t83 = t38*t71 - t50*t70
+    t84 = t49*t72 - t70*t70
+    t85 = t38*t70 - t49*t71
+    t86 = t49*t81 + t38*t82 + t70*t83
+    t87 = t81 + t84 + t57
+    t88 = (t86 > RANK_TOL*t87*t73)
+    t89 = t73*t73
+    t90 = (t87 > RANK_TOL*t89)
+    t91 = 1.0/t86
+    t92 = t49*t74 + t38*t75 + t70*t76
+    t93 = t50*t75 + t38*t74 + t71*t76
+    t94 = t72*t76 + t70*t74 + t71*t75
+    t95 = 1.0/(t87*t87)
+    t96 = t89 - t87
+    t97 = np.where(t90, np.where(t88, t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]), t95*(t74*t96 - t92*t73)), t78)
+    t98 = np.where(t90, np.where(t88, t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]), t95*(t75*t96 - t93*t73)), t79)
+    t99 = np.where(t90, np.where(t88, t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]), t95*(t76*t96 - t94*t73)), t80)
     dq3 = np.empty((4,) + batch, dtype=DTYPE)
-    dq3[0] = t101 + t99*t16 + t100*t17
-    dq3[1] = t101 + t99*t14 + t100*t15
-    dq3[2] = t101 + t99*t12 + t100*t13
-    dq3[3] = t101 + t6*t100 + t99*t11
+    dq3[0] = t99 + t97*t16 + t98*t17
+    dq3[1] = t99 + t97*t14 + t98*t15
+    dq3[2] = t99 + t97*t12 + t98*t13
+    dq3[3] = t99 + t6*t98 + t97*t11
     return _output(dq3, (4,))
 
 
@@ -591,7 +588,7 @@ def ik_step(q, l, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 80 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 81 add/sub/mul/neg.
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (4, 4, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -624,25 +621,23 @@ def ik_step(q, l, target, lambda_):
     t49 = t37 + t48
     t50 = t39 + t48
     t51 = t49 + t50
-    t52 = t51
-    t55 = t52*t52
-    t56 = 1.0/t55
-    t59 = t49*t50 - t38*t38
-    t60 = (t59 > RANK_TOL*t55)
-    t61 = 1.0/t59
-    t64 = target[0] - t17
-    t65 = t16 + target[1]
-    t66 = t49*t64 + t38*t65
-    t67 = t50*t65 + t38*t64
-    t68 = t66*t56
-    t69 = t67*t56
-    t70 = np.where(t60, t61*(t64*t52 - t66), t68)
-    t71 = np.where(t60, t61*(t65*t52 - t67), t69)
+    t54 = 1.0/(t51*t51)
+    t57 = t49*t50 - t38*t38
+    t58 = (t57 > RANK_TOL*t51*t51)
+    t59 = 1.0/t57
+    t62 = target[0] - t17
+    t63 = t16 + target[1]
+    t64 = t49*t62 + t38*t63
+    t65 = t50*t63 + t38*t62
+    t66 = t64*t54
+    t67 = t65*t54
+    t68 = np.where(t58, t59*(t62*t51 - t64), t66)
+    t69 = np.where(t58, t59*(t63*t51 - t65), t67)
     q_next = np.empty((4,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t70*t16 + t71*t17
-    q_next[1] = q[1] + t70*t14 + t71*t15
-    q_next[2] = q[2] + t70*t12 + t71*t13
-    q_next[3] = q[3] + t6*t71 + t70*t11
+    q_next[0] = q[0] + t68*t16 + t69*t17
+    q_next[1] = q[1] + t68*t14 + t69*t15
+    q_next[2] = q[2] + t68*t12 + t69*t13
+    q_next[3] = q[3] + t6*t69 + t68*t11
     return _output(q_next, (4,))
 
 

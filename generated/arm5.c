@@ -1540,7 +1540,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 5 sin, 5 cos, 37 add/sub, 50 mul, 1 neg, 2 div */
+/* operations: 5 sin, 5 cos, 37 add/sub, 51 mul, 1 neg, 2 div */
 
 static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
 {
@@ -1579,23 +1579,21 @@ static void arm5_inverse_velocity_finish(const double l[5], const double v[2], d
     const double t60 = t47 + t59;
     const double t61 = t49 + t59;
     const double t62 = t60 + t61;
-    const double t63 = t62;
-    const double t64 = t60*v[0] + t48*v[1];
-    const double t65 = t61*v[1] + t48*v[0];
-    const double t66 = t63*t63;
-    const double t67 = 1.0/t66;
-    const double t68 = t64*t67;
-    const double t69 = t65*t67;
-    const double t70 = t60*t61 - t48*t48;
-    const int t71 = t70 > ARM5_RANK_TOL*t66;
-    const double t72 = 1.0/t70;
-    const double t73 = (t71 ? t72*(t63*v[0] - t64) : t68);
-    const double t74 = (t71 ? t72*(t63*v[1] - t65) : t69);
-    dq[0] = t73*t21 + t74*t22;
-    dq[1] = t73*t19 + t74*t20;
-    dq[2] = t73*t17 + t74*t18;
-    dq[3] = t73*t15 + t74*t16;
-    dq[4] = t8*t74 + t73*t14;
+    const double t63 = t60*v[0] + t48*v[1];
+    const double t64 = t61*v[1] + t48*v[0];
+    const double t65 = 1.0/(t62*t62);
+    const double t66 = t63*t65;
+    const double t67 = t64*t65;
+    const double t68 = t60*t61 - t48*t48;
+    const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
+    const double t70 = 1.0/t68;
+    const double t71 = (t69 ? t70*(t62*v[0] - t63) : t66);
+    const double t72 = (t69 ? t70*(t62*v[1] - t64) : t67);
+    dq[0] = t71*t21 + t72*t22;
+    dq[1] = t71*t19 + t72*t20;
+    dq[2] = t71*t17 + t72*t18;
+    dq[3] = t71*t15 + t72*t16;
+    dq[4] = t8*t72 + t71*t14;
 }
 
 void arm5_inverse_velocity(const double q[5], const double l[5], const double v[2], double lambda, double dq[5])
@@ -1679,23 +1677,21 @@ static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_
         const double t60 = t47 + t59;
         const double t61 = t49 + t59;
         const double t62 = t60 + t61;
-        const double t63 = t62;
-        const double t64 = t60*v[0] + t48*v[1];
-        const double t65 = t61*v[1] + t48*v[0];
-        const double t66 = t63*t63;
-        const double t67 = 1.0/t66;
-        const double t68 = t64*t67;
-        const double t69 = t65*t67;
-        const double t70 = t60*t61 - t48*t48;
-        const int t71 = t70 > ARM5_RANK_TOL*t66;
-        const double t72 = 1.0/t70;
-        const double t73 = (t71 ? t72*(t63*v[0] - t64) : t68);
-        const double t74 = (t71 ? t72*(t63*v[1] - t65) : t69);
-        dq[0] = t73*t21 + t74*t22;
-        dq[1] = t73*t19 + t74*t20;
-        dq[2] = t73*t17 + t74*t18;
-        dq[3] = t73*t15 + t74*t16;
-        dq[4] = t8*t74 + t73*t14;
+        const double t63 = t60*v[0] + t48*v[1];
+        const double t64 = t61*v[1] + t48*v[0];
+        const double t65 = 1.0/(t62*t62);
+        const double t66 = t63*t65;
+        const double t67 = t64*t65;
+        const double t68 = t60*t61 - t48*t48;
+        const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
+        const double t70 = 1.0/t68;
+        const double t71 = (t69 ? t70*(t62*v[0] - t63) : t66);
+        const double t72 = (t69 ? t70*(t62*v[1] - t64) : t67);
+        dq[0] = t71*t21 + t72*t22;
+        dq[1] = t71*t19 + t72*t20;
+        dq[2] = t71*t17 + t72*t18;
+        dq[3] = t71*t15 + t72*t16;
+        dq[4] = t8*t72 + t71*t14;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1749,7 +1745,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *l, con
 }
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 5 sin, 5 cos, 79 add/sub, 98 mul, 1 neg, 3 div */
+/* operations: 5 sin, 5 cos, 79 add/sub, 99 mul, 1 neg, 3 div */
 
 static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
 {
@@ -1787,43 +1783,42 @@ static void arm5_inverse_velocity3_finish(const double l[5], const double twist[
     const double t59 = lambda*lambda;
     const double t60 = t47 + t59;
     const double t61 = t49 + t59;
-    const double t62 = t60 + t61;
-    const double t70 = t60*t61 - t48*t48;
-    const double t83 = t21 + t19 + t17 + t15 + t14;
-    const double t84 = t8 + t22 + t20 + t18 + t16;
-    const double t85 = 5.0 + t59;
-    const double t86 = t62 + t85;
-    const double t87 = t60*twist[0] + t48*twist[1] + t83*twist[2];
-    const double t88 = t61*twist[1] + t48*twist[0] + t84*twist[2];
-    const double t89 = t85*twist[2] + t83*twist[0] + t84*twist[1];
-    const double t90 = t86*t86;
-    const double t91 = 1.0/t90;
-    const double t92 = t87*t91;
-    const double t93 = t88*t91;
-    const double t94 = t89*t91;
-    const double t95 = t61*t85 - t84*t84;
-    const double t96 = t83*t84 - t85*t48;
-    const double t97 = t48*t84 - t61*t83;
-    const double t98 = t60*t85 - t83*t83;
-    const double t99 = t48*t83 - t60*t84;
-    const double t100 = t60*t95 + t48*t96 + t83*t97;
-    const double t101 = t95 + t98 + t70;
-    const int t102 = t100 > ARM5_RANK_TOL*t101*t86;
-    const int t103 = t101 > ARM5_RANK_TOL*t90;
-    const double t104 = 1.0/t100;
-    const double t105 = t60*t87 + t48*t88 + t83*t89;
-    const double t106 = t61*t88 + t48*t87 + t84*t89;
-    const double t107 = t85*t89 + t83*t87 + t84*t88;
-    const double t108 = 1.0/(t101*t101);
-    const double t109 = t90 - t101;
-    const double t110 = (t103 ? (t102 ? t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]) : t108*(t87*t109 - t105*t86)) : t92);
-    const double t111 = (t103 ? (t102 ? t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]) : t108*(t88*t109 - t106*t86)) : t93);
-    const double t112 = (t103 ? (t102 ? t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]) : t108*(t89*t109 - t107*t86)) : t94);
-    dq3[0] = t112 + t110*t21 + t111*t22;
-    dq3[1] = t112 + t110*t19 + t111*t20;
-    dq3[2] = t112 + t110*t17 + t111*t18;
-    dq3[3] = t112 + t110*t15 + t111*t16;
-    dq3[4] = t112 + t8*t111 + t110*t14;
+    const double t68 = t60*t61 - t48*t48;
+    const double t81 = t21 + t19 + t17 + t15 + t14;
+    const double t82 = t8 + t22 + t20 + t18 + t16;
+    const double t83 = 5.0 + t59;
+    const double t84 = t60 + t61 + t83;
+    const double t85 = t60*twist[0] + t48*twist[1] + t81*twist[2];
+    const double t86 = t61*twist[1] + t48*twist[0] + t82*twist[2];
+    const double t87 = t83*twist[2] + t81*twist[0] + t82*twist[1];
+    const double t88 = 1.0/(t84*t84);
+    const double t89 = t85*t88;
+    const double t90 = t86*t88;
+    const double t91 = t87*t88;
+    const double t92 = t61*t83 - t82*t82;
+    const double t93 = t81*t82 - t83*t48;
+    const double t94 = t48*t82 - t61*t81;
+    const double t95 = t60*t83 - t81*t81;
+    const double t96 = t48*t81 - t60*t82;
+    const double t97 = t60*t92 + t48*t93 + t81*t94;
+    const double t98 = t92 + t95 + t68;
+    const int t99 = t97 > ARM5_RANK_TOL*t98*t84;
+    const double t100 = t84*t84;
+    const int t101 = t98 > ARM5_RANK_TOL*t100;
+    const double t102 = 1.0/t97;
+    const double t103 = t60*t85 + t48*t86 + t81*t87;
+    const double t104 = t61*t86 + t48*t85 + t82*t87;
+    const double t105 = t83*t87 + t81*t85 + t82*t86;
+    const double t106 = 1.0/(t98*t98);
+    const double t107 = t100 - t98;
+    const double t108 = (t101 ? (t99 ? t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]) : t106*(t85*t107 - t103*t84)) : t89);
+    const double t109 = (t101 ? (t99 ? t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]) : t106*(t86*t107 - t104*t84)) : t90);
+    const double t110 = (t101 ? (t99 ? t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]) : t106*(t87*t107 - t105*t84)) : t91);
+    dq3[0] = t110 + t108*t21 + t109*t22;
+    dq3[1] = t110 + t108*t19 + t109*t20;
+    dq3[2] = t110 + t108*t17 + t109*t18;
+    dq3[3] = t110 + t108*t15 + t109*t16;
+    dq3[4] = t110 + t8*t109 + t108*t14;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double l[5], const double twist[3], double lambda, double dq3[5])
@@ -1907,43 +1902,42 @@ static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q
         const double t59 = lambda*lambda;
         const double t60 = t47 + t59;
         const double t61 = t49 + t59;
-        const double t62 = t60 + t61;
-        const double t70 = t60*t61 - t48*t48;
-        const double t83 = t21 + t19 + t17 + t15 + t14;
-        const double t84 = t8 + t22 + t20 + t18 + t16;
-        const double t85 = 5.0 + t59;
-        const double t86 = t62 + t85;
-        const double t87 = t60*twist[0] + t48*twist[1] + t83*twist[2];
-        const double t88 = t61*twist[1] + t48*twist[0] + t84*twist[2];
-        const double t89 = t85*twist[2] + t83*twist[0] + t84*twist[1];
-        const double t90 = t86*t86;
-        const double t91 = 1.0/t90;
-        const double t92 = t87*t91;
-        const double t93 = t88*t91;
-        const double t94 = t89*t91;
-        const double t95 = t61*t85 - t84*t84;
-        const double t96 = t83*t84 - t85*t48;
-        const double t97 = t48*t84 - t61*t83;
-        const double t98 = t60*t85 - t83*t83;
-        const double t99 = t48*t83 - t60*t84;
-        const double t100 = t60*t95 + t48*t96 + t83*t97;
-        const double t101 = t95 + t98 + t70;
-        const int t102 = t100 > ARM5_RANK_TOL*t101*t86;
-        const int t103 = t101 > ARM5_RANK_TOL*t90;
-        const double t104 = 1.0/t100;
-        const double t105 = t60*t87 + t48*t88 + t83*t89;
-        const double t106 = t61*t88 + t48*t87 + t84*t89;
-        const double t107 = t85*t89 + t83*t87 + t84*t88;
-        const double t108 = 1.0/(t101*t101);
-        const double t109 = t90 - t101;
-        const double t110 = (t103 ? (t102 ? t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]) : t108*(t87*t109 - t105*t86)) : t92);
-        const double t111 = (t103 ? (t102 ? t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]) : t108*(t88*t109 - t106*t86)) : t93);
-        const double t112 = (t103 ? (t102 ? t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]) : t108*(t89*t109 - t107*t86)) : t94);
-        dq3[0] = t112 + t110*t21 + t111*t22;
-        dq3[1] = t112 + t110*t19 + t111*t20;
-        dq3[2] = t112 + t110*t17 + t111*t18;
-        dq3[3] = t112 + t110*t15 + t111*t16;
-        dq3[4] = t112 + t8*t111 + t110*t14;
+        const double t68 = t60*t61 - t48*t48;
+        const double t81 = t21 + t19 + t17 + t15 + t14;
+        const double t82 = t8 + t22 + t20 + t18 + t16;
+        const double t83 = 5.0 + t59;
+        const double t84 = t60 + t61 + t83;
+        const double t85 = t60*twist[0] + t48*twist[1] + t81*twist[2];
+        const double t86 = t61*twist[1] + t48*twist[0] + t82*twist[2];
+        const double t87 = t83*twist[2] + t81*twist[0] + t82*twist[1];
+        const double t88 = 1.0/(t84*t84);
+        const double t89 = t85*t88;
+        const double t90 = t86*t88;
+        const double t91 = t87*t88;
+        const double t92 = t61*t83 - t82*t82;
+        const double t93 = t81*t82 - t83*t48;
+        const double t94 = t48*t82 - t61*t81;
+        const double t95 = t60*t83 - t81*t81;
+        const double t96 = t48*t81 - t60*t82;
+        const double t97 = t60*t92 + t48*t93 + t81*t94;
+        const double t98 = t92 + t95 + t68;
+        const int t99 = t97 > ARM5_RANK_TOL*t98*t84;
+        const double t100 = t84*t84;
+        const int t101 = t98 > ARM5_RANK_TOL*t100;
+        const double t102 = 1.0/t97;
+        const double t103 = t60*t85 + t48*t86 + t81*t87;
+        const double t104 = t61*t86 + t48*t85 + t82*t87;
+        const double t105 = t83*t87 + t81*t85 + t82*t86;
+        const double t106 = 1.0/(t98*t98);
+        const double t107 = t100 - t98;
+        const double t108 = (t101 ? (t99 ? t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]) : t106*(t85*t107 - t103*t84)) : t89);
+        const double t109 = (t101 ? (t99 ? t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]) : t106*(t86*t107 - t104*t84)) : t90);
+        const double t110 = (t101 ? (t99 ? t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]) : t106*(t87*t107 - t105*t84)) : t91);
+        dq3[0] = t110 + t108*t21 + t109*t22;
+        dq3[1] = t110 + t108*t19 + t109*t20;
+        dq3[2] = t110 + t108*t17 + t109*t18;
+        dq3[3] = t110 + t108*t15 + t109*t16;
+        dq3[4] = t110 + t8*t109 + t108*t14;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1998,7 +1992,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *l, co
 }
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 5 sin, 5 cos, 44 add/sub, 50 mul, 1 neg, 2 div */
+/* operations: 5 sin, 5 cos, 44 add/sub, 51 mul, 1 neg, 2 div */
 
 static void arm5_ik_step_angles(const double q[5], double *restrict ang)
 {
@@ -2037,25 +2031,23 @@ static void arm5_ik_step_finish(const double q[5], const double l[5], const doub
     const double t60 = t47 + t59;
     const double t61 = t49 + t59;
     const double t62 = t60 + t61;
-    const double t63 = t62;
-    const double t66 = t63*t63;
-    const double t67 = 1.0/t66;
-    const double t70 = t60*t61 - t48*t48;
-    const int t71 = t70 > ARM5_RANK_TOL*t66;
-    const double t72 = 1.0/t70;
-    const double t75 = target[0] - t22;
-    const double t76 = t21 + target[1];
-    const double t77 = t60*t75 + t48*t76;
-    const double t78 = t61*t76 + t48*t75;
-    const double t79 = t77*t67;
-    const double t80 = t78*t67;
-    const double t81 = (t71 ? t72*(t75*t63 - t77) : t79);
-    const double t82 = (t71 ? t72*(t76*t63 - t78) : t80);
-    q_next[0] = q[0] + t81*t21 + t82*t22;
-    q_next[1] = q[1] + t81*t19 + t82*t20;
-    q_next[2] = q[2] + t81*t17 + t82*t18;
-    q_next[3] = q[3] + t81*t15 + t82*t16;
-    q_next[4] = q[4] + t8*t82 + t81*t14;
+    const double t65 = 1.0/(t62*t62);
+    const double t68 = t60*t61 - t48*t48;
+    const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
+    const double t70 = 1.0/t68;
+    const double t73 = target[0] - t22;
+    const double t74 = t21 + target[1];
+    const double t75 = t60*t73 + t48*t74;
+    const double t76 = t61*t74 + t48*t73;
+    const double t77 = t75*t65;
+    const double t78 = t76*t65;
+    const double t79 = (t69 ? t70*(t73*t62 - t75) : t77);
+    const double t80 = (t69 ? t70*(t74*t62 - t76) : t78);
+    q_next[0] = q[0] + t79*t21 + t80*t22;
+    q_next[1] = q[1] + t79*t19 + t80*t20;
+    q_next[2] = q[2] + t79*t17 + t80*t18;
+    q_next[3] = q[3] + t79*t15 + t80*t16;
+    q_next[4] = q[4] + t8*t80 + t79*t14;
 }
 
 void arm5_ik_step(const double q[5], const double l[5], const double target[2], double lambda, double q_next[5])
@@ -2145,25 +2137,23 @@ static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const 
         const double t60 = t47 + t59;
         const double t61 = t49 + t59;
         const double t62 = t60 + t61;
-        const double t63 = t62;
-        const double t66 = t63*t63;
-        const double t67 = 1.0/t66;
-        const double t70 = t60*t61 - t48*t48;
-        const int t71 = t70 > ARM5_RANK_TOL*t66;
-        const double t72 = 1.0/t70;
-        const double t75 = target[0] - t22;
-        const double t76 = t21 + target[1];
-        const double t77 = t60*t75 + t48*t76;
-        const double t78 = t61*t76 + t48*t75;
-        const double t79 = t77*t67;
-        const double t80 = t78*t67;
-        const double t81 = (t71 ? t72*(t75*t63 - t77) : t79);
-        const double t82 = (t71 ? t72*(t76*t63 - t78) : t80);
-        q_next[0] = q[0] + t81*t21 + t82*t22;
-        q_next[1] = q[1] + t81*t19 + t82*t20;
-        q_next[2] = q[2] + t81*t17 + t82*t18;
-        q_next[3] = q[3] + t81*t15 + t82*t16;
-        q_next[4] = q[4] + t8*t82 + t81*t14;
+        const double t65 = 1.0/(t62*t62);
+        const double t68 = t60*t61 - t48*t48;
+        const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
+        const double t70 = 1.0/t68;
+        const double t73 = target[0] - t22;
+        const double t74 = t21 + target[1];
+        const double t75 = t60*t73 + t48*t74;
+        const double t76 = t61*t74 + t48*t73;
+        const double t77 = t75*t65;
+        const double t78 = t76*t65;
+        const double t79 = (t69 ? t70*(t73*t62 - t75) : t77);
+        const double t80 = (t69 ? t70*(t74*t62 - t76) : t78);
+        q_next[0] = q[0] + t79*t21 + t80*t22;
+        q_next[1] = q[1] + t79*t19 + t80*t20;
+        q_next[2] = q[2] + t79*t17 + t80*t18;
+        q_next[3] = q[3] + t79*t15 + t80*t16;
+        q_next[4] = q[4] + t8*t80 + t79*t14;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

@@ -508,7 +508,7 @@ def inverse_velocity(q, l, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 88 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 89 add/sub/mul/neg.
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (5, 5, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -546,24 +546,22 @@ def inverse_velocity(q, l, v, lambda_):
     t60 = t47 + t59
     t61 = t49 + t59
     t62 = t60 + t61
-    t63 = t62
-    t64 = t60*v[0] + t48*v[1]
-    t65 = t61*v[1] + t48*v[0]
-    t66 = t63*t63
-    t67 = 1.0/t66
-    t68 = t64*t67
-    t69 = t65*t67
-    t70 = t60*t61 - t48*t48
-    t71 = (t70 > RANK_TOL*t66)
-    t72 = 1.0/t70
-    t73 = np.where(t71, t72*(t63*v[0] - t64), t68)
-    t74 = np.where(t71, t72*(t63*v[1] - t65), t69)
+    t63 = t60*v[0] + t48*v[1]
+    t64 = t61*v[1] + t48*v[0]
+    t65 = 1.0/(t62*t62)
+    t66 = t63*t65
+    t67 = t64*t65
+    t68 = t60*t61 - t48*t48
+    t69 = (t68 > RANK_TOL*t62*t62)
+    t70 = 1.0/t68
+    t71 = np.where(t69, t70*(t62*v[0] - t63), t66)
+    t72 = np.where(t69, t70*(t62*v[1] - t64), t67)
     dq = np.empty((5,) + batch, dtype=DTYPE)
-    dq[0] = t73*t21 + t74*t22
-    dq[1] = t73*t19 + t74*t20
-    dq[2] = t73*t17 + t74*t18
-    dq[3] = t73*t15 + t74*t16
-    dq[4] = t8*t74 + t73*t14
+    dq[0] = t71*t21 + t72*t22
+    dq[1] = t71*t19 + t72*t20
+    dq[2] = t71*t17 + t72*t18
+    dq[3] = t71*t15 + t72*t16
+    dq[4] = t8*t72 + t71*t14
     return _output(dq, (5,))
 
 
@@ -576,7 +574,7 @@ def inverse_velocity3(q, l, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 178 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 179 add/sub/mul/neg.
     """
     batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (5, 5, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -613,44 +611,43 @@ def inverse_velocity3(q, l, twist, lambda_):
     t59 = lambda_*lambda_
     t60 = t47 + t59
     t61 = t49 + t59
-    t62 = t60 + t61
-    t70 = t60*t61 - t48*t48
-    t83 = t21 + t19 + t17 + t15 + t14
-    t84 = t8 + t22 + t20 + t18 + t16
-    t85 = 5.0 + t59
-    t86 = t62 + t85
-    t87 = t60*twist[0] + t48*twist[1] + t83*twist[2]
-    t88 = t61*twist[1] + t48*twist[0] + t84*twist[2]
-    t89 = t85*twist[2] + t83*twist[0] + t84*twist[1]
-    t90 = t86*t86
-    t91 = 1.0/t90
-    t92 = t87*t91
-    t93 = t88*t91
-    t94 = t89*t91
-    t95 = t61*t85 - t84*t84
-    t96 = t83*t84 - t85*t48
-    t97 = t48*t84 - t61*t83
-    t98 = t60*t85 - t83*t83
-    t99 = t48*t83 - t60*t84
-    t100 = t60*t95 + t48*t96 + t83*t97
-    t101 = t95 + t98 + t70
-    t102 = (t100 > RANK_TOL*t101*t86)
-    t103 = (t101 > RANK_TOL*t90)
-    t104 = 1.0/t100
-    t105 = t60*t87 + t48*t88 + t83*t89
-    t106 = t61*t88 + t48*t87 + t84*t89
-    t107 = t85*t89 + t83*t87 + t84*t88
-    t108 = 1.0/(t101*t101)
-    t109 = t90 - t101
-    t110 = np.where(t103, np.where(t102, t104*(t95*twist[0] + t96*twist[1] + t97*twist[2]), t108*(t87*t109 - t105*t86)), t92)
-    t111 = np.where(t103, np.where(t102, t104*(t96*twist[0] + t98*twist[1] + t99*twist[2]), t108*(t88*t109 - t106*t86)), t93)
-    t112 = np.where(t103, np.where(t102, t104*(t97*twist[0] + t99*twist[1] + t70*twist[2]), t108*(t89*t109 - t107*t86)), t94)
+    t68 = t60*t61 - t48*t48
+    t81 = t21 + t19 + t17 + t15 + t14
+    t82 = t8 + t22 + t20 + t18 + t16
+    t83 = 5.0 + t59
+    t84 = t60 + t61 + t83
+    t85 = t60*twist[0] + t48*twist[1] + t81*twist[2]
+    t86 = t61*twist[1] + t48*twist[0] + t82*twist[2]
+    t87 = t83*twist[2] + t81*twist[0] + t82*twist[1]
+    t88 = 1.0/(t84*t84)
+    t89 = t85*t88
+    t90 = t86*t88
+    t91 = t87*t88
+    t92 = t61*t83 - t82*t82
+    t93 = t81*t82 - t83*t48
+    t94 = t48*t82 - t61*t81
+    t95 = t60*t83 - t81*t81
+    t96 = t48*t81 - t60*t82
+    t97 = t60*t92 + t48*t93 + t81*t94
+    t98 = t92 + t95 + t68
+    t99 = (t97 > RANK_TOL*t98*t84)
+    t100 = t84*t84
+    t101 = (t98 > RANK_TOL*t100)
+    t102 = 1.0/t97
+    t103 = t60*t85 + t48*t86 + t81*t87
+    t104 = t61*t86 + t48*t85 + t82*t87
+    t105 = t83*t87 + t81*t85 + t82*t86
+    t106 = 1.0/(t98*t98)
+    t107 = t100 - t98
+    t108 = np.where(t101, np.where(t99, t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]), t106*(t85*t107 - t103*t84)), t89)
+    t109 = np.where(t101, np.where(t99, t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]), t106*(t86*t107 - t104*t84)), t90)
+    t110 = np.where(t101, np.where(t99, t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]), t106*(t87*t107 - t105*t84)), t91)
     dq3 = np.empty((5,) + batch, dtype=DTYPE)
-    dq3[0] = t112 + t110*t21 + t111*t22
-    dq3[1] = t112 + t110*t19 + t111*t20
-    dq3[2] = t112 + t110*t17 + t111*t18
-    dq3[3] = t112 + t110*t15 + t111*t16
-    dq3[4] = t112 + t8*t111 + t110*t14
+    dq3[0] = t110 + t108*t21 + t109*t22
+    dq3[1] = t110 + t108*t19 + t109*t20
+    dq3[2] = t110 + t108*t17 + t109*t18
+    dq3[3] = t110 + t108*t15 + t109*t16
+    dq3[4] = t110 + t8*t109 + t108*t14
     return _output(dq3, (5,))
 
 
@@ -663,7 +660,7 @@ def ik_step(q, l, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 95 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 96 add/sub/mul/neg.
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (5, 5, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -701,26 +698,24 @@ def ik_step(q, l, target, lambda_):
     t60 = t47 + t59
     t61 = t49 + t59
     t62 = t60 + t61
-    t63 = t62
-    t66 = t63*t63
-    t67 = 1.0/t66
-    t70 = t60*t61 - t48*t48
-    t71 = (t70 > RANK_TOL*t66)
-    t72 = 1.0/t70
-    t75 = target[0] - t22
-    t76 = t21 + target[1]
-    t77 = t60*t75 + t48*t76
-    t78 = t61*t76 + t48*t75
-    t79 = t77*t67
-    t80 = t78*t67
-    t81 = np.where(t71, t72*(t75*t63 - t77), t79)
-    t82 = np.where(t71, t72*(t76*t63 - t78), t80)
+    t65 = 1.0/(t62*t62)
+    t68 = t60*t61 - t48*t48
+    t69 = (t68 > RANK_TOL*t62*t62)
+    t70 = 1.0/t68
+    t73 = target[0] - t22
+    t74 = t21 + target[1]
+    t75 = t60*t73 + t48*t74
+    t76 = t61*t74 + t48*t73
+    t77 = t75*t65
+    t78 = t76*t65
+    t79 = np.where(t69, t70*(t73*t62 - t75), t77)
+    t80 = np.where(t69, t70*(t74*t62 - t76), t78)
     q_next = np.empty((5,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t81*t21 + t82*t22
-    q_next[1] = q[1] + t81*t19 + t82*t20
-    q_next[2] = q[2] + t81*t17 + t82*t18
-    q_next[3] = q[3] + t81*t15 + t82*t16
-    q_next[4] = q[4] + t8*t82 + t81*t14
+    q_next[0] = q[0] + t79*t21 + t80*t22
+    q_next[1] = q[1] + t79*t19 + t80*t20
+    q_next[2] = q[2] + t79*t17 + t80*t18
+    q_next[3] = q[3] + t79*t15 + t80*t16
+    q_next[4] = q[4] + t8*t80 + t79*t14
     return _output(q_next, (5,))
 
 

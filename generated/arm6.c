@@ -1723,7 +1723,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 6 sin, 6 cos, 44 add/sub, 57 mul, 1 neg, 2 div */
+/* operations: 6 sin, 6 cos, 44 add/sub, 58 mul, 1 neg, 2 div */
 
 static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
@@ -1767,24 +1767,22 @@ static void arm6_inverse_velocity_finish(const double l[6], const double v[2], d
     const double t71 = t57 + t70;
     const double t72 = t59 + t70;
     const double t73 = t71 + t72;
-    const double t74 = t73;
-    const double t75 = t71*v[0] + t58*v[1];
-    const double t76 = t72*v[1] + t58*v[0];
-    const double t77 = t74*t74;
-    const double t78 = 1.0/t77;
-    const double t79 = t75*t78;
-    const double t80 = t76*t78;
-    const double t81 = t71*t72 - t58*t58;
-    const int t82 = t81 > ARM6_RANK_TOL*t77;
-    const double t83 = 1.0/t81;
-    const double t84 = (t82 ? t83*(t74*v[0] - t75) : t79);
-    const double t85 = (t82 ? t83*(t74*v[1] - t76) : t80);
-    dq[0] = t84*t26 + t85*t27;
-    dq[1] = t84*t24 + t85*t25;
-    dq[2] = t84*t22 + t85*t23;
-    dq[3] = t84*t20 + t85*t21;
-    dq[4] = t84*t18 + t85*t19;
-    dq[5] = t10*t85 + t84*t17;
+    const double t74 = t71*v[0] + t58*v[1];
+    const double t75 = t72*v[1] + t58*v[0];
+    const double t76 = 1.0/(t73*t73);
+    const double t77 = t74*t76;
+    const double t78 = t75*t76;
+    const double t79 = t71*t72 - t58*t58;
+    const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
+    const double t81 = 1.0/t79;
+    const double t82 = (t80 ? t81*(t73*v[0] - t74) : t77);
+    const double t83 = (t80 ? t81*(t73*v[1] - t75) : t78);
+    dq[0] = t82*t26 + t83*t27;
+    dq[1] = t82*t24 + t83*t25;
+    dq[2] = t82*t22 + t83*t23;
+    dq[3] = t82*t20 + t83*t21;
+    dq[4] = t82*t18 + t83*t19;
+    dq[5] = t10*t83 + t82*t17;
 }
 
 void arm6_inverse_velocity(const double q[6], const double l[6], const double v[2], double lambda, double dq[6])
@@ -1877,24 +1875,22 @@ static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_
         const double t71 = t57 + t70;
         const double t72 = t59 + t70;
         const double t73 = t71 + t72;
-        const double t74 = t73;
-        const double t75 = t71*v[0] + t58*v[1];
-        const double t76 = t72*v[1] + t58*v[0];
-        const double t77 = t74*t74;
-        const double t78 = 1.0/t77;
-        const double t79 = t75*t78;
-        const double t80 = t76*t78;
-        const double t81 = t71*t72 - t58*t58;
-        const int t82 = t81 > ARM6_RANK_TOL*t77;
-        const double t83 = 1.0/t81;
-        const double t84 = (t82 ? t83*(t74*v[0] - t75) : t79);
-        const double t85 = (t82 ? t83*(t74*v[1] - t76) : t80);
-        dq[0] = t84*t26 + t85*t27;
-        dq[1] = t84*t24 + t85*t25;
-        dq[2] = t84*t22 + t85*t23;
-        dq[3] = t84*t20 + t85*t21;
-        dq[4] = t84*t18 + t85*t19;
-        dq[5] = t10*t85 + t84*t17;
+        const double t74 = t71*v[0] + t58*v[1];
+        const double t75 = t72*v[1] + t58*v[0];
+        const double t76 = 1.0/(t73*t73);
+        const double t77 = t74*t76;
+        const double t78 = t75*t76;
+        const double t79 = t71*t72 - t58*t58;
+        const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
+        const double t81 = 1.0/t79;
+        const double t82 = (t80 ? t81*(t73*v[0] - t74) : t77);
+        const double t83 = (t80 ? t81*(t73*v[1] - t75) : t78);
+        dq[0] = t82*t26 + t83*t27;
+        dq[1] = t82*t24 + t83*t25;
+        dq[2] = t82*t22 + t83*t23;
+        dq[3] = t82*t20 + t83*t21;
+        dq[4] = t82*t18 + t83*t19;
+        dq[5] = t10*t83 + t82*t17;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1951,7 +1947,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *l, con
 }
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 6 sin, 6 cos, 89 add/sub, 105 mul, 1 neg, 3 div */
+/* operations: 6 sin, 6 cos, 89 add/sub, 106 mul, 1 neg, 3 div */
 
 static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
 {
@@ -1994,44 +1990,43 @@ static void arm6_inverse_velocity3_finish(const double l[6], const double twist[
     const double t70 = lambda*lambda;
     const double t71 = t57 + t70;
     const double t72 = t59 + t70;
-    const double t73 = t71 + t72;
-    const double t81 = t71*t72 - t58*t58;
-    const double t94 = t26 + t24 + t22 + t20 + t18 + t17;
-    const double t95 = t10 + t27 + t25 + t23 + t21 + t19;
-    const double t96 = 6.0 + t70;
-    const double t97 = t73 + t96;
-    const double t98 = t71*twist[0] + t58*twist[1] + t94*twist[2];
-    const double t99 = t72*twist[1] + t58*twist[0] + t95*twist[2];
-    const double t100 = t96*twist[2] + t94*twist[0] + t95*twist[1];
-    const double t101 = t97*t97;
-    const double t102 = 1.0/t101;
-    const double t103 = t98*t102;
-    const double t104 = t99*t102;
-    const double t105 = t100*t102;
-    const double t106 = t72*t96 - t95*t95;
-    const double t107 = t94*t95 - t96*t58;
-    const double t108 = t58*t95 - t72*t94;
-    const double t109 = t71*t96 - t94*t94;
-    const double t110 = t58*t94 - t71*t95;
-    const double t111 = t71*t106 + t58*t107 + t94*t108;
-    const double t112 = t106 + t109 + t81;
-    const int t113 = t111 > ARM6_RANK_TOL*t112*t97;
-    const int t114 = t112 > ARM6_RANK_TOL*t101;
-    const double t115 = 1.0/t111;
-    const double t116 = t71*t98 + t58*t99 + t94*t100;
-    const double t117 = t72*t99 + t58*t98 + t95*t100;
-    const double t118 = t96*t100 + t94*t98 + t95*t99;
-    const double t119 = 1.0/(t112*t112);
-    const double t120 = t101 - t112;
-    const double t121 = (t114 ? (t113 ? t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]) : t119*(t98*t120 - t116*t97)) : t103);
-    const double t122 = (t114 ? (t113 ? t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]) : t119*(t99*t120 - t117*t97)) : t104);
-    const double t123 = (t114 ? (t113 ? t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]) : t119*(t100*t120 - t118*t97)) : t105);
-    dq3[0] = t123 + t121*t26 + t122*t27;
-    dq3[1] = t123 + t121*t24 + t122*t25;
-    dq3[2] = t123 + t121*t22 + t122*t23;
-    dq3[3] = t123 + t121*t20 + t122*t21;
-    dq3[4] = t123 + t121*t18 + t122*t19;
-    dq3[5] = t123 + t10*t122 + t121*t17;
+    const double t79 = t71*t72 - t58*t58;
+    const double t92 = t26 + t24 + t22 + t20 + t18 + t17;
+    const double t93 = t10 + t27 + t25 + t23 + t21 + t19;
+    const double t94 = 6.0 + t70;
+    const double t95 = t71 + t72 + t94;
+    const double t96 = t71*twist[0] + t58*twist[1] + t92*twist[2];
+    const double t97 = t72*twist[1] + t58*twist[0] + t93*twist[2];
+    const double t98 = t94*twist[2] + t92*twist[0] + t93*twist[1];
+    const double t99 = 1.0/(t95*t95);
+    const double t100 = t96*t99;
+    const double t101 = t97*t99;
+    const double t102 = t98*t99;
+    const double t103 = t72*t94 - t93*t93;
+    const double t104 = t92*t93 - t94*t58;
+    const double t105 = t58*t93 - t72*t92;
+    const double t106 = t71*t94 - t92*t92;
+    const double t107 = t58*t92 - t71*t93;
+    const double t108 = t71*t103 + t58*t104 + t92*t105;
+    const double t109 = t103 + t106 + t79;
+    const int t110 = t108 > ARM6_RANK_TOL*t109*t95;
+    const double t111 = t95*t95;
+    const int t112 = t109 > ARM6_RANK_TOL*t111;
+    const double t113 = 1.0/t108;
+    const double t114 = t71*t96 + t58*t97 + t92*t98;
+    const double t115 = t72*t97 + t58*t96 + t93*t98;
+    const double t116 = t94*t98 + t92*t96 + t93*t97;
+    const double t117 = 1.0/(t109*t109);
+    const double t118 = t111 - t109;
+    const double t119 = (t112 ? (t110 ? t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]) : t117*(t96*t118 - t114*t95)) : t100);
+    const double t120 = (t112 ? (t110 ? t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]) : t117*(t97*t118 - t115*t95)) : t101);
+    const double t121 = (t112 ? (t110 ? t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]) : t117*(t98*t118 - t116*t95)) : t102);
+    dq3[0] = t121 + t119*t26 + t120*t27;
+    dq3[1] = t121 + t119*t24 + t120*t25;
+    dq3[2] = t121 + t119*t22 + t120*t23;
+    dq3[3] = t121 + t119*t20 + t120*t21;
+    dq3[4] = t121 + t119*t18 + t120*t19;
+    dq3[5] = t121 + t10*t120 + t119*t17;
 }
 
 void arm6_inverse_velocity3(const double q[6], const double l[6], const double twist[3], double lambda, double dq3[6])
@@ -2124,44 +2119,43 @@ static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q
         const double t70 = lambda*lambda;
         const double t71 = t57 + t70;
         const double t72 = t59 + t70;
-        const double t73 = t71 + t72;
-        const double t81 = t71*t72 - t58*t58;
-        const double t94 = t26 + t24 + t22 + t20 + t18 + t17;
-        const double t95 = t10 + t27 + t25 + t23 + t21 + t19;
-        const double t96 = 6.0 + t70;
-        const double t97 = t73 + t96;
-        const double t98 = t71*twist[0] + t58*twist[1] + t94*twist[2];
-        const double t99 = t72*twist[1] + t58*twist[0] + t95*twist[2];
-        const double t100 = t96*twist[2] + t94*twist[0] + t95*twist[1];
-        const double t101 = t97*t97;
-        const double t102 = 1.0/t101;
-        const double t103 = t98*t102;
-        const double t104 = t99*t102;
-        const double t105 = t100*t102;
-        const double t106 = t72*t96 - t95*t95;
-        const double t107 = t94*t95 - t96*t58;
-        const double t108 = t58*t95 - t72*t94;
-        const double t109 = t71*t96 - t94*t94;
-        const double t110 = t58*t94 - t71*t95;
-        const double t111 = t71*t106 + t58*t107 + t94*t108;
-        const double t112 = t106 + t109 + t81;
-        const int t113 = t111 > ARM6_RANK_TOL*t112*t97;
-        const int t114 = t112 > ARM6_RANK_TOL*t101;
-        const double t115 = 1.0/t111;
-        const double t116 = t71*t98 + t58*t99 + t94*t100;
-        const double t117 = t72*t99 + t58*t98 + t95*t100;
-        const double t118 = t96*t100 + t94*t98 + t95*t99;
-        const double t119 = 1.0/(t112*t112);
-        const double t120 = t101 - t112;
-        const double t121 = (t114 ? (t113 ? t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]) : t119*(t98*t120 - t116*t97)) : t103);
-        const double t122 = (t114 ? (t113 ? t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]) : t119*(t99*t120 - t117*t97)) : t104);
-        const double t123 = (t114 ? (t113 ? t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]) : t119*(t100*t120 - t118*t97)) : t105);
-        dq3[0] = t123 + t121*t26 + t122*t27;
-        dq3[1] = t123 + t121*t24 + t122*t25;
-        dq3[2] = t123 + t121*t22 + t122*t23;
-        dq3[3] = t123 + t121*t20 + t122*t21;
-        dq3[4] = t123 + t121*t18 + t122*t19;
-        dq3[5] = t123 + t10*t122 + t121*t17;
+        const double t79 = t71*t72 - t58*t58;
+        const double t92 = t26 + t24 + t22 + t20 + t18 + t17;
+        const double t93 = t10 + t27 + t25 + t23 + t21 + t19;
+        const double t94 = 6.0 + t70;
+        const double t95 = t71 + t72 + t94;
+        const double t96 = t71*twist[0] + t58*twist[1] + t92*twist[2];
+        const double t97 = t72*twist[1] + t58*twist[0] + t93*twist[2];
+        const double t98 = t94*twist[2] + t92*twist[0] + t93*twist[1];
+        const double t99 = 1.0/(t95*t95);
+        const double t100 = t96*t99;
+        const double t101 = t97*t99;
+        const double t102 = t98*t99;
+        const double t103 = t72*t94 - t93*t93;
+        const double t104 = t92*t93 - t94*t58;
+        const double t105 = t58*t93 - t72*t92;
+        const double t106 = t71*t94 - t92*t92;
+        const double t107 = t58*t92 - t71*t93;
+        const double t108 = t71*t103 + t58*t104 + t92*t105;
+        const double t109 = t103 + t106 + t79;
+        const int t110 = t108 > ARM6_RANK_TOL*t109*t95;
+        const double t111 = t95*t95;
+        const int t112 = t109 > ARM6_RANK_TOL*t111;
+        const double t113 = 1.0/t108;
+        const double t114 = t71*t96 + t58*t97 + t92*t98;
+        const double t115 = t72*t97 + t58*t96 + t93*t98;
+        const double t116 = t94*t98 + t92*t96 + t93*t97;
+        const double t117 = 1.0/(t109*t109);
+        const double t118 = t111 - t109;
+        const double t119 = (t112 ? (t110 ? t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]) : t117*(t96*t118 - t114*t95)) : t100);
+        const double t120 = (t112 ? (t110 ? t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]) : t117*(t97*t118 - t115*t95)) : t101);
+        const double t121 = (t112 ? (t110 ? t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]) : t117*(t98*t118 - t116*t95)) : t102);
+        dq3[0] = t121 + t119*t26 + t120*t27;
+        dq3[1] = t121 + t119*t24 + t120*t25;
+        dq3[2] = t121 + t119*t22 + t120*t23;
+        dq3[3] = t121 + t119*t20 + t120*t21;
+        dq3[4] = t121 + t119*t18 + t120*t19;
+        dq3[5] = t121 + t10*t120 + t119*t17;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2219,7 +2213,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *l, co
 }
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 6 sin, 6 cos, 52 add/sub, 57 mul, 1 neg, 2 div */
+/* operations: 6 sin, 6 cos, 52 add/sub, 58 mul, 1 neg, 2 div */
 
 static void arm6_ik_step_angles(const double q[6], double *restrict ang)
 {
@@ -2263,26 +2257,24 @@ static void arm6_ik_step_finish(const double q[6], const double l[6], const doub
     const double t71 = t57 + t70;
     const double t72 = t59 + t70;
     const double t73 = t71 + t72;
-    const double t74 = t73;
-    const double t77 = t74*t74;
-    const double t78 = 1.0/t77;
-    const double t81 = t71*t72 - t58*t58;
-    const int t82 = t81 > ARM6_RANK_TOL*t77;
-    const double t83 = 1.0/t81;
-    const double t86 = target[0] - t27;
-    const double t87 = t26 + target[1];
-    const double t88 = t71*t86 + t58*t87;
-    const double t89 = t72*t87 + t58*t86;
-    const double t90 = t88*t78;
-    const double t91 = t89*t78;
-    const double t92 = (t82 ? t83*(t86*t74 - t88) : t90);
-    const double t93 = (t82 ? t83*(t87*t74 - t89) : t91);
-    q_next[0] = q[0] + t92*t26 + t93*t27;
-    q_next[1] = q[1] + t92*t24 + t93*t25;
-    q_next[2] = q[2] + t92*t22 + t93*t23;
-    q_next[3] = q[3] + t92*t20 + t93*t21;
-    q_next[4] = q[4] + t92*t18 + t93*t19;
-    q_next[5] = q[5] + t10*t93 + t92*t17;
+    const double t76 = 1.0/(t73*t73);
+    const double t79 = t71*t72 - t58*t58;
+    const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
+    const double t81 = 1.0/t79;
+    const double t84 = target[0] - t27;
+    const double t85 = t26 + target[1];
+    const double t86 = t71*t84 + t58*t85;
+    const double t87 = t72*t85 + t58*t84;
+    const double t88 = t86*t76;
+    const double t89 = t87*t76;
+    const double t90 = (t80 ? t81*(t84*t73 - t86) : t88);
+    const double t91 = (t80 ? t81*(t85*t73 - t87) : t89);
+    q_next[0] = q[0] + t90*t26 + t91*t27;
+    q_next[1] = q[1] + t90*t24 + t91*t25;
+    q_next[2] = q[2] + t90*t22 + t91*t23;
+    q_next[3] = q[3] + t90*t20 + t91*t21;
+    q_next[4] = q[4] + t90*t18 + t91*t19;
+    q_next[5] = q[5] + t10*t91 + t90*t17;
 }
 
 void arm6_ik_step(const double q[6], const double l[6], const double target[2], double lambda, double q_next[6])
@@ -2382,26 +2374,24 @@ static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const 
         const double t71 = t57 + t70;
         const double t72 = t59 + t70;
         const double t73 = t71 + t72;
-        const double t74 = t73;
-        const double t77 = t74*t74;
-        const double t78 = 1.0/t77;
-        const double t81 = t71*t72 - t58*t58;
-        const int t82 = t81 > ARM6_RANK_TOL*t77;
-        const double t83 = 1.0/t81;
-        const double t86 = target[0] - t27;
-        const double t87 = t26 + target[1];
-        const double t88 = t71*t86 + t58*t87;
-        const double t89 = t72*t87 + t58*t86;
-        const double t90 = t88*t78;
-        const double t91 = t89*t78;
-        const double t92 = (t82 ? t83*(t86*t74 - t88) : t90);
-        const double t93 = (t82 ? t83*(t87*t74 - t89) : t91);
-        q_next[0] = q[0] + t92*t26 + t93*t27;
-        q_next[1] = q[1] + t92*t24 + t93*t25;
-        q_next[2] = q[2] + t92*t22 + t93*t23;
-        q_next[3] = q[3] + t92*t20 + t93*t21;
-        q_next[4] = q[4] + t92*t18 + t93*t19;
-        q_next[5] = q[5] + t10*t93 + t92*t17;
+        const double t76 = 1.0/(t73*t73);
+        const double t79 = t71*t72 - t58*t58;
+        const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
+        const double t81 = 1.0/t79;
+        const double t84 = target[0] - t27;
+        const double t85 = t26 + target[1];
+        const double t86 = t71*t84 + t58*t85;
+        const double t87 = t72*t85 + t58*t84;
+        const double t88 = t86*t76;
+        const double t89 = t87*t76;
+        const double t90 = (t80 ? t81*(t84*t73 - t86) : t88);
+        const double t91 = (t80 ? t81*(t85*t73 - t87) : t89);
+        q_next[0] = q[0] + t90*t26 + t91*t27;
+        q_next[1] = q[1] + t90*t24 + t91*t25;
+        q_next[2] = q[2] + t90*t22 + t91*t23;
+        q_next[3] = q[3] + t90*t20 + t91*t21;
+        q_next[4] = q[4] + t90*t18 + t91*t19;
+        q_next[5] = q[5] + t10*t91 + t90*t17;
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

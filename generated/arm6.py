@@ -568,7 +568,7 @@ def inverse_velocity(q, l, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 6 sin, 6 cos, 102 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (6, 6, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -611,25 +611,23 @@ def inverse_velocity(q, l, v, lambda_):
     t71 = t57 + t70
     t72 = t59 + t70
     t73 = t71 + t72
-    t74 = t73
-    t75 = t71*v[0] + t58*v[1]
-    t76 = t72*v[1] + t58*v[0]
-    t77 = t74*t74
-    t78 = 1.0/t77
-    t79 = t75*t78
-    t80 = t76*t78
-    t81 = t71*t72 - t58*t58
-    t82 = (t81 > RANK_TOL*t77)
-    t83 = 1.0/t81
-    t84 = np.where(t82, t83*(t74*v[0] - t75), t79)
-    t85 = np.where(t82, t83*(t74*v[1] - t76), t80)
+    t74 = t71*v[0] + t58*v[1]
+    t75 = t72*v[1] + t58*v[0]
+    t76 = 1.0/(t73*t73)
+    t77 = t74*t76
+    t78 = t75*t76
+    t79 = t71*t72 - t58*t58
+    t80 = (t79 > RANK_TOL*t73*t73)
+    t81 = 1.0/t79
+    t82 = np.where(t80, t81*(t73*v[0] - t74), t77)
+    t83 = np.where(t80, t81*(t73*v[1] - t75), t78)
     dq = np.empty((6,) + batch, dtype=DTYPE)
-    dq[0] = t84*t26 + t85*t27
-    dq[1] = t84*t24 + t85*t25
-    dq[2] = t84*t22 + t85*t23
-    dq[3] = t84*t20 + t85*t21
-    dq[4] = t84*t18 + t85*t19
-    dq[5] = t10*t85 + t84*t17
+    dq[0] = t82*t26 + t83*t27
+    dq[1] = t82*t24 + t83*t25
+    dq[2] = t82*t22 + t83*t23
+    dq[3] = t82*t20 + t83*t21
+    dq[4] = t82*t18 + t83*t19
+    dq[5] = t10*t83 + t82*t17
     return _output(dq, (6,))
 
 
@@ -642,7 +640,7 @@ def inverse_velocity3(q, l, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 6).
-    Operations: 6 sin, 6 cos, 195 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 196 add/sub/mul/neg.
     """
     batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (6, 6, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -684,45 +682,44 @@ def inverse_velocity3(q, l, twist, lambda_):
     t70 = lambda_*lambda_
     t71 = t57 + t70
     t72 = t59 + t70
-    t73 = t71 + t72
-    t81 = t71*t72 - t58*t58
-    t94 = t26 + t24 + t22 + t20 + t18 + t17
-    t95 = t10 + t27 + t25 + t23 + t21 + t19
-    t96 = 6.0 + t70
-    t97 = t73 + t96
-    t98 = t71*twist[0] + t58*twist[1] + t94*twist[2]
-    t99 = t72*twist[1] + t58*twist[0] + t95*twist[2]
-    t100 = t96*twist[2] + t94*twist[0] + t95*twist[1]
-    t101 = t97*t97
-    t102 = 1.0/t101
-    t103 = t98*t102
-    t104 = t99*t102
-    t105 = t100*t102
-    t106 = t72*t96 - t95*t95
-    t107 = t94*t95 - t96*t58
-    t108 = t58*t95 - t72*t94
-    t109 = t71*t96 - t94*t94
-    t110 = t58*t94 - t71*t95
-    t111 = t71*t106 + t58*t107 + t94*t108
-    t112 = t106 + t109 + t81
-    t113 = (t111 > RANK_TOL*t112*t97)
-    t114 = (t112 > RANK_TOL*t101)
-    t115 = 1.0/t111
-    t116 = t71*t98 + t58*t99 + t94*t100
-    t117 = t72*t99 + t58*t98 + t95*t100
-    t118 = t96*t100 + t94*t98 + t95*t99
-    t119 = 1.0/(t112*t112)
-    t120 = t101 - t112
-    t121 = np.where(t114, np.where(t113, t115*(t106*twist[0] + t107*twist[1] + t108*twist[2]), t119*(t98*t120 - t116*t97)), t103)
-    t122 = np.where(t114, np.where(t113, t115*(t107*twist[0] + t109*twist[1] + t110*twist[2]), t119*(t99*t120 - t117*t97)), t104)
-    t123 = np.where(t114, np.where(t113, t115*(t108*twist[0] + t110*twist[1] + t81*twist[2]), t119*(t100*t120 - t118*t97)), t105)
+    t79 = t71*t72 - t58*t58
+    t92 = t26 + t24 + t22 + t20 + t18 + t17
+    t93 = t10 + t27 + t25 + t23 + t21 + t19
+    t94 = 6.0 + t70
+    t95 = t71 + t72 + t94
+    t96 = t71*twist[0] + t58*twist[1] + t92*twist[2]
+    t97 = t72*twist[1] + t58*twist[0] + t93*twist[2]
+    t98 = t94*twist[2] + t92*twist[0] + t93*twist[1]
+    t99 = 1.0/(t95*t95)
+    t100 = t96*t99
+    t101 = t97*t99
+    t102 = t98*t99
+    t103 = t72*t94 - t93*t93
+    t104 = t92*t93 - t94*t58
+    t105 = t58*t93 - t72*t92
+    t106 = t71*t94 - t92*t92
+    t107 = t58*t92 - t71*t93
+    t108 = t71*t103 + t58*t104 + t92*t105
+    t109 = t103 + t106 + t79
+    t110 = (t108 > RANK_TOL*t109*t95)
+    t111 = t95*t95
+    t112 = (t109 > RANK_TOL*t111)
+    t113 = 1.0/t108
+    t114 = t71*t96 + t58*t97 + t92*t98
+    t115 = t72*t97 + t58*t96 + t93*t98
+    t116 = t94*t98 + t92*t96 + t93*t97
+    t117 = 1.0/(t109*t109)
+    t118 = t111 - t109
+    t119 = np.where(t112, np.where(t110, t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]), t117*(t96*t118 - t114*t95)), t100)
+    t120 = np.where(t112, np.where(t110, t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]), t117*(t97*t118 - t115*t95)), t101)
+    t121 = np.where(t112, np.where(t110, t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]), t117*(t98*t118 - t116*t95)), t102)
     dq3 = np.empty((6,) + batch, dtype=DTYPE)
-    dq3[0] = t123 + t121*t26 + t122*t27
-    dq3[1] = t123 + t121*t24 + t122*t25
-    dq3[2] = t123 + t121*t22 + t122*t23
-    dq3[3] = t123 + t121*t20 + t122*t21
-    dq3[4] = t123 + t121*t18 + t122*t19
-    dq3[5] = t123 + t10*t122 + t121*t17
+    dq3[0] = t121 + t119*t26 + t120*t27
+    dq3[1] = t121 + t119*t24 + t120*t25
+    dq3[2] = t121 + t119*t22 + t120*t23
+    dq3[3] = t121 + t119*t20 + t120*t21
+    dq3[4] = t121 + t119*t18 + t120*t19
+    dq3[5] = t121 + t10*t120 + t119*t17
     return _output(dq3, (6,))
 
 
@@ -735,7 +732,7 @@ def ik_step(q, l, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 6).
-    Operations: 6 sin, 6 cos, 110 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (6, 6, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -778,27 +775,25 @@ def ik_step(q, l, target, lambda_):
     t71 = t57 + t70
     t72 = t59 + t70
     t73 = t71 + t72
-    t74 = t73
-    t77 = t74*t74
-    t78 = 1.0/t77
-    t81 = t71*t72 - t58*t58
-    t82 = (t81 > RANK_TOL*t77)
-    t83 = 1.0/t81
-    t86 = target[0] - t27
-    t87 = t26 + target[1]
-    t88 = t71*t86 + t58*t87
-    t89 = t72*t87 + t58*t86
-    t90 = t88*t78
-    t91 = t89*t78
-    t92 = np.where(t82, t83*(t86*t74 - t88), t90)
-    t93 = np.where(t82, t83*(t87*t74 - t89), t91)
+    t76 = 1.0/(t73*t73)
+    t79 = t71*t72 - t58*t58
+    t80 = (t79 > RANK_TOL*t73*t73)
+    t81 = 1.0/t79
+    t84 = target[0] - t27
+    t85 = t26 + target[1]
+    t86 = t71*t84 + t58*t85
+    t87 = t72*t85 + t58*t84
+    t88 = t86*t76
+    t89 = t87*t76
+    t90 = np.where(t80, t81*(t84*t73 - t86), t88)
+    t91 = np.where(t80, t81*(t85*t73 - t87), t89)
     q_next = np.empty((6,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t92*t26 + t93*t27
-    q_next[1] = q[1] + t92*t24 + t93*t25
-    q_next[2] = q[2] + t92*t22 + t93*t23
-    q_next[3] = q[3] + t92*t20 + t93*t21
-    q_next[4] = q[4] + t92*t18 + t93*t19
-    q_next[5] = q[5] + t10*t93 + t92*t17
+    q_next[0] = q[0] + t90*t26 + t91*t27
+    q_next[1] = q[1] + t90*t24 + t91*t25
+    q_next[2] = q[2] + t90*t22 + t91*t23
+    q_next[3] = q[3] + t90*t20 + t91*t21
+    q_next[4] = q[4] + t90*t18 + t91*t19
+    q_next[5] = q[5] + t10*t91 + t90*t17
     return _output(q_next, (6,))
 
 

@@ -114,13 +114,12 @@ void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, do
 }
 
 /* ---- diffdrive_wheel_speeds: wheel speeds (v_L, v_R) for body rates (v, omega) ---- */
-/* operations: 0 sin, 0 cos, 2 add/sub, 2 mul, 0 neg */
+/* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg */
 
 static void diffdrive_wheel_speeds_finish(const double rates[2], double track, double *restrict wheels)
 {
-    const double t4 = 0.5*track*rates[1];
-    wheels[0] = rates[0] - t4;
-    wheels[1] = t4 + rates[0];
+    wheels[0] = rates[0] - 0.5*track*rates[1];
+    wheels[1] = rates[0] + 0.5*track*rates[1];
 }
 
 void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2])
@@ -138,9 +137,8 @@ static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restr
         double wheels[2];
         rates[0] = rates_T[0 + b];
         rates[1] = rates_T[32 + b];
-        const double t4 = 0.5*track*rates[1];
-        wheels[0] = rates[0] - t4;
-        wheels[1] = t4 + rates[0];
+        wheels[0] = rates[0] - 0.5*track*rates[1];
+        wheels[1] = rates[0] + 0.5*track*rates[1];
         wheels_T[0 + b] = wheels[0];
         wheels_T[32 + b] = wheels[1];
     }

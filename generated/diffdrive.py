@@ -81,14 +81,13 @@ def wheel_speeds(rates, track):
     rates: array of shape (..., 2), finite.
     track: a number, finite and > 0, shared by the batch.
     Returns wheels of shape (..., 2).
-    Operations: 0 sin, 0 cos, 4 add/sub/mul/neg.
+    Operations: 0 sin, 0 cos, 6 add/sub/mul/neg.
     """
     batch, (rates,) = _inputs((rates,), ("rates", ), (2, ), ("finite", ))
     track = _scalar(track, "track", "positive")
-    t4 = 0.5*track*rates[1]
     wheels = np.empty((2,) + batch, dtype=DTYPE)
-    wheels[0] = rates[0] - t4
-    wheels[1] = t4 + rates[0]
+    wheels[0] = rates[0] - 0.5*track*rates[1]
+    wheels[1] = rates[0] + 0.5*track*rates[1]
     return _output(wheels, (2,))
 
 

@@ -23,6 +23,11 @@ import sympy as sp
 
 from .derive import Derivation, FunctionSpec
 
+try:  # the core of sympy.cse without its search for common sub-sums (see _cse)
+    from sympy.simplify.cse_main import tree_cse as _tree_cse
+except ImportError:  # pragma: no cover
+    _tree_cse = None
+
 Assignment = tuple[sp.Symbol, sp.Expr]
 
 
@@ -195,9 +200,21 @@ def _needed_steps(steps: Sequence[Assignment], roots: Iterable[sp.Expr]) -> list
 
 
 def _cse(assignments: Sequence[Assignment], outputs: Sequence[sp.Expr], tag: str) -> tuple[list[Assignment], list[sp.Expr]]:
-    """One ``sympy.cse`` over all right-hand sides and outputs together; returns ordered assignments."""
+    """One CSE pass over all right-hand sides and outputs together; returns ordered assignments.
+
+    The steps arrive already factored (prefix and suffix sums), so only repeated
+    subtrees are worth finding: this calls ``tree_cse``, the core of ``sympy.cse``,
+    without the ``opt_cse`` pre-pass that searches sums and products for common
+    argument subsets. That pre-pass took two thirds of the generation time at
+    n = 128 and saved one operation in two functions there. Falls back to
+    ``sympy.cse`` if a SymPy version lacks ``tree_cse``.
+    """
     exprs = [rhs for _, rhs in assignments] + list(outputs)
-    replacements, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(f"_cse_{tag}_", real=True), order="none")
+    symbols = sp.numbered_symbols(f"_cse_{tag}_", real=True)
+    if _tree_cse is not None:
+        replacements, reduced = _tree_cse(exprs, symbols, opt_subs={}, order="none")
+    else:  # pragma: no cover - a SymPy without cse_main.tree_cse
+        replacements, reduced = sp.cse(exprs, symbols=symbols, order="none")
     rep_index = {symbol: i for i, (symbol, _) in enumerate(replacements)}
     emitted: set[int] = set()
     ordered: list[Assignment] = []
