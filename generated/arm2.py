@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,48 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, l, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    p[..., 0] = t7
+    p[..., 1] = -t6
 
 
 def position(q, l):
@@ -74,22 +110,29 @@ def position(q, l):
     Operations: 2 sin, 2 cos, 9 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, l, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
     t5 = -t4
     t6 = t5 - t3
     t7 = t1 + t2
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t7
-    p[1] = -t6
-    return _output(p, (2,))
+    J[..., 0] = t6
+    J[..., 1] = t5
+    J[..., 2] = t7
+    J[..., 3] = t2
 
 
 def jacobian(q, l):
@@ -101,24 +144,35 @@ def jacobian(q, l):
     Operations: 2 sin, 2 cos, 8 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (4,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 2,))
+
+
+def _coriolis_core(q, dq, l, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = -t4
-    t6 = t5 - t3
-    t7 = t1 + t2
-    J = np.empty((4,) + batch, dtype=DTYPE)
-    J[0] = t6
-    J[1] = t5
-    J[2] = t7
-    J[3] = t2
-    return _output(J, (2, 2,))
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
+    t8 = dq[..., 0] + dq[..., 1]
+    t9 = t1*dq[..., 0]
+    t10 = t2*t8
+    t11 = t3*dq[..., 0]
+    t12 = t4*t8
+    t13 = -t10
+    t14 = -t12
+    t15 = t13 - t9
+    t16 = t14 - t11
+    H[..., 0] = t15
+    H[..., 1] = t13
+    H[..., 2] = t16
+    H[..., 3] = t14
 
 
 def coriolis(q, dq, l):
@@ -131,30 +185,33 @@ def coriolis(q, dq, l):
     Operations: 2 sin, 2 cos, 14 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("", "", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (4,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 2,))
+
+
+def _velocity_core(q, dq, l, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t8 = dq[0] + dq[1]
-    t9 = t1*dq[0]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
+    t8 = dq[..., 0] + dq[..., 1]
+    t9 = t1*dq[..., 0]
     t10 = t2*t8
-    t11 = t3*dq[0]
+    t11 = t3*dq[..., 0]
     t12 = t4*t8
     t13 = -t10
     t14 = -t12
     t15 = t13 - t9
     t16 = t14 - t11
-    H = np.empty((4,) + batch, dtype=DTYPE)
-    H[0] = t15
-    H[1] = t13
-    H[2] = t16
-    H[3] = t14
-    return _output(H, (2, 2,))
+    v[..., 0] = t16
+    v[..., 1] = -t15
 
 
 def velocity(q, dq, l):
@@ -167,28 +224,36 @@ def velocity(q, dq, l):
     Operations: 2 sin, 2 cos, 15 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("", "", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, l, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t8 = dq[0] + dq[1]
-    t9 = t1*dq[0]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t8 = dq[..., 0] + dq[..., 1]
+    t9 = t1*dq[..., 0]
     t10 = t2*t8
-    t11 = t3*dq[0]
+    t11 = t3*dq[..., 0]
     t12 = t4*t8
     t13 = -t10
     t14 = -t12
     t15 = t13 - t9
     t16 = t14 - t11
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t16
-    v[1] = -t15
-    return _output(v, (2,))
+    a[..., 0] = t15*dq[..., 0] + t13*dq[..., 1] + t6*ddq[..., 0] + t5*ddq[..., 1]
+    a[..., 1] = t2*ddq[..., 1] + t16*dq[..., 0] + t14*dq[..., 1] + t7*ddq[..., 0]
 
 
 def acceleration(q, dq, ddq, l):
@@ -202,31 +267,48 @@ def acceleration(q, dq, ddq, l):
     Operations: 2 sin, 2 cos, 31 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("", "", "", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
     t5 = -t4
     t6 = t5 - t3
     t7 = t1 + t2
-    t8 = dq[0] + dq[1]
-    t9 = t1*dq[0]
+    t8 = dq[..., 0] + dq[..., 1]
+    t9 = t1*dq[..., 0]
     t10 = t2*t8
-    t11 = t3*dq[0]
+    t11 = t3*dq[..., 0]
     t12 = t4*t8
     t13 = -t10
     t14 = -t12
     t15 = t13 - t9
     t16 = t14 - t11
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1]
-    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0]
-    return _output(a, (2,))
+    p[..., 0] = t7
+    p[..., 1] = -t6
+    J[..., 0] = t6
+    J[..., 1] = t5
+    J[..., 2] = t7
+    J[..., 3] = t2
+    H[..., 0] = t15
+    H[..., 1] = t13
+    H[..., 2] = t16
+    H[..., 3] = t14
+    v[..., 0] = t16
+    v[..., 1] = -t15
+    a[..., 0] = t15*dq[..., 0] + t13*dq[..., 1] + t6*ddq[..., 0] + t5*ddq[..., 1]
+    a[..., 1] = t2*ddq[..., 1] + t16*dq[..., 0] + t14*dq[..., 1] + t7*ddq[..., 0]
 
 
 def kinematics(q, dq, ddq, l):
@@ -240,68 +322,23 @@ def kinematics(q, dq, ddq, l):
     Operations: 2 sin, 2 cos, 33 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("", "", "", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = -t4
-    t6 = t5 - t3
-    t7 = t1 + t2
-    t8 = dq[0] + dq[1]
-    t9 = t1*dq[0]
-    t10 = t2*t8
-    t11 = t3*dq[0]
-    t12 = t4*t8
-    t13 = -t10
-    t14 = -t12
-    t15 = t13 - t9
-    t16 = t14 - t11
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t7
-    p[1] = -t6
-    J = np.empty((4,) + batch, dtype=DTYPE)
-    J[0] = t6
-    J[1] = t5
-    J[2] = t7
-    J[3] = t2
-    H = np.empty((4,) + batch, dtype=DTYPE)
-    H[0] = t15
-    H[1] = t13
-    H[2] = t16
-    H[3] = t14
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t16
-    v[1] = -t15
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1]
-    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0]
-    return _output(p, (2,)), _output(J, (2, 2,)), _output(H, (2, 2,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (4,), dtype=DTYPE), np.empty(batch + (4,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 2,)), outputs[2].reshape(batch + (2, 2,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q, l):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 2).
-    l: array of shape (..., 2).
-    Returns w of shape (..., 1).
-    Operations: 2 sin, 2 cos, 26 add/sub/mul/neg.
-    """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+def _manipulability_core(q, l, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
     t5 = -t4
     t6 = t5 - t3
     t7 = t1 + t2
@@ -314,12 +351,59 @@ def manipulability(q, l):
     t23 = np.where(t20, t7, t6) - t22*np.where(t20, t6, t7)
     t24 = np.where(t20, t2, t5) - t22*np.where(t20, t5, t2)
     t25 = t23*t23 + t24*t24
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t21*t25)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t21*t25)
+
+
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 2).
+    l: array of shape (..., 2).
+    Returns w of shape (..., 1).
+    Operations: 2 sin, 2 cos, 26 add/sub/mul/neg.
+    """
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("", "", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, l, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
+    t5 = -t4
+    t6 = t5 - t3
+    t7 = t1 + t2
+    t17 = t6*t6 + t5*t5
+    t18 = t2*t5 + t6*t7
+    t19 = t2*t2 + t7*t7
+    t26 = lambda_*lambda_
+    t27 = t17 + t26
+    t28 = t19 + t26
+    t29 = t27 + t28
+    t30 = t27*v[..., 0] + t18*v[..., 1]
+    t31 = t28*v[..., 1] + t18*v[..., 0]
+    t32 = 1.0/(t29*t29)
+    t33 = t30*t32
+    t34 = t31*t32
+    t35 = t27*t28 - t18*t18
+    t36 = (t35 > RANK_TOL*t29*t29)
+    t37 = 1.0/t35
+    t38 = np.where(t36, t37*(t29*v[..., 0] - t30), t33)
+    t39 = np.where(t36, t37*(t29*v[..., 1] - t31), t34)
+    dq[..., 0] = t38*t6 + t39*t7
+    dq[..., 1] = t2*t39 + t38*t5
+
+
 def inverse_velocity(q, l, v, lambda_):
     """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
@@ -332,15 +416,23 @@ def inverse_velocity(q, l, v, lambda_):
     """
     batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (2, 2, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, l, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _ik_step_core(q, l, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (2,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
+    t1 = cs[..., 0]*l[..., 0]
+    t2 = cs[..., 1]*l[..., 1]
+    t3 = sn[..., 0]*l[..., 0]
+    t4 = sn[..., 1]*l[..., 1]
     t5 = -t4
     t6 = t5 - t3
     t7 = t1 + t2
@@ -351,23 +443,22 @@ def inverse_velocity(q, l, v, lambda_):
     t27 = t17 + t26
     t28 = t19 + t26
     t29 = t27 + t28
-    t30 = t27*v[0] + t18*v[1]
-    t31 = t28*v[1] + t18*v[0]
     t32 = 1.0/(t29*t29)
-    t33 = t30*t32
-    t34 = t31*t32
     t35 = t27*t28 - t18*t18
     t36 = (t35 > RANK_TOL*t29*t29)
     t37 = 1.0/t35
-    t38 = np.where(t36, t37*(t29*v[0] - t30), t33)
-    t39 = np.where(t36, t37*(t29*v[1] - t31), t34)
-    dq = np.empty((2,) + batch, dtype=DTYPE)
-    dq[0] = t38*t6 + t39*t7
-    dq[1] = t2*t39 + t38*t5
-    return _output(dq, (2,))
+    t40 = target[..., 0] - t7
+    t41 = t6 + target[..., 1]
+    t42 = t27*t40 + t18*t41
+    t43 = t28*t41 + t18*t40
+    t44 = t42*t32
+    t45 = t43*t32
+    t46 = np.where(t36, t37*(t40*t29 - t42), t44)
+    t47 = np.where(t36, t37*(t41*t29 - t43), t45)
+    q_next[..., 0] = q[..., 0] + t46*t6 + t47*t7
+    q_next[..., 1] = q[..., 1] + t2*t47 + t46*t5
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
 def ik_step(q, l, target, lambda_):
     """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
 
@@ -380,41 +471,9 @@ def ik_step(q, l, target, lambda_):
     """
     batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (2, 2, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((2,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t1 = cs[0]*l[0]
-    t2 = cs[1]*l[1]
-    t3 = sn[0]*l[0]
-    t4 = sn[1]*l[1]
-    t5 = -t4
-    t6 = t5 - t3
-    t7 = t1 + t2
-    t17 = t6*t6 + t5*t5
-    t18 = t2*t5 + t6*t7
-    t19 = t2*t2 + t7*t7
-    t26 = lambda_*lambda_
-    t27 = t17 + t26
-    t28 = t19 + t26
-    t29 = t27 + t28
-    t32 = 1.0/(t29*t29)
-    t35 = t27*t28 - t18*t18
-    t36 = (t35 > RANK_TOL*t29*t29)
-    t37 = 1.0/t35
-    t40 = target[0] - t7
-    t41 = t6 + target[1]
-    t42 = t27*t40 + t18*t41
-    t43 = t28*t41 + t18*t40
-    t44 = t42*t32
-    t45 = t43*t32
-    t46 = np.where(t36, t37*(t40*t29 - t42), t44)
-    t47 = np.where(t36, t37*(t41*t29 - t43), t45)
-    q_next = np.empty((2,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t46*t6 + t47*t7
-    q_next[1] = q[1] + t2*t47 + t46*t5
-    return _output(q_next, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, l, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

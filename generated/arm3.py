@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,53 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, l, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    p[..., 0] = t12
+    p[..., 1] = -t11
 
 
 def position(q, l):
@@ -74,27 +115,36 @@ def position(q, l):
     Operations: 3 sin, 3 cos, 14 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, l, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t12
-    p[1] = -t11
-    return _output(p, (2,))
+    J[..., 0] = t11
+    J[..., 1] = t9
+    J[..., 2] = t8
+    J[..., 3] = t12
+    J[..., 4] = t10
+    J[..., 5] = t4
 
 
 def jacobian(q, l):
@@ -106,31 +156,45 @@ def jacobian(q, l):
     Operations: 3 sin, 3 cos, 13 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 3,))
+
+
+def _coriolis_core(q, dq, l, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
-    t8 = -t7
-    t9 = t8 - t6
-    t10 = t3 + t4
-    t11 = t9 - t5
-    t12 = t2 + t10
-    J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t11
-    J[1] = t9
-    J[2] = t8
-    J[3] = t12
-    J[4] = t10
-    J[5] = t4
-    return _output(J, (2, 3,))
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
+    t13 = dq[..., 0] + dq[..., 1]
+    t14 = t13 + dq[..., 2]
+    t15 = t2*dq[..., 0]
+    t16 = t3*t13
+    t17 = t4*t14
+    t18 = t5*dq[..., 0]
+    t19 = t6*t13
+    t20 = t7*t14
+    t21 = -t17
+    t22 = -t20
+    t23 = t21 - t16
+    t24 = t22 - t19
+    t25 = t23 - t15
+    t26 = t24 - t18
+    H[..., 0] = t25
+    H[..., 1] = t23
+    H[..., 2] = t21
+    H[..., 3] = t26
+    H[..., 4] = t24
+    H[..., 5] = t22
 
 
 def coriolis(q, dq, l):
@@ -143,24 +207,31 @@ def coriolis(q, dq, l):
     Operations: 3 sin, 3 cos, 22 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 3,))
+
+
+def _velocity_core(q, dq, l, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
-    t13 = dq[0] + dq[1]
-    t14 = t13 + dq[2]
-    t15 = t2*dq[0]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
+    t13 = dq[..., 0] + dq[..., 1]
+    t14 = t13 + dq[..., 2]
+    t15 = t2*dq[..., 0]
     t16 = t3*t13
     t17 = t4*t14
-    t18 = t5*dq[0]
+    t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
     t21 = -t17
@@ -169,14 +240,8 @@ def coriolis(q, dq, l):
     t24 = t22 - t19
     t25 = t23 - t15
     t26 = t24 - t18
-    H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t25
-    H[1] = t23
-    H[2] = t21
-    H[3] = t26
-    H[4] = t24
-    H[5] = t22
-    return _output(H, (2, 3,))
+    v[..., 0] = t26
+    v[..., 1] = -t25
 
 
 def velocity(q, dq, l):
@@ -189,24 +254,36 @@ def velocity(q, dq, l):
     Operations: 3 sin, 3 cos, 23 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, l, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
-    t13 = dq[0] + dq[1]
-    t14 = t13 + dq[2]
-    t15 = t2*dq[0]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
+    t8 = -t7
+    t9 = t8 - t6
+    t10 = t3 + t4
+    t11 = t9 - t5
+    t12 = t2 + t10
+    t13 = dq[..., 0] + dq[..., 1]
+    t14 = t13 + dq[..., 2]
+    t15 = t2*dq[..., 0]
     t16 = t3*t13
     t17 = t4*t14
-    t18 = t5*dq[0]
+    t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
     t21 = -t17
@@ -215,10 +292,8 @@ def velocity(q, dq, l):
     t24 = t22 - t19
     t25 = t23 - t15
     t26 = t24 - t18
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t26
-    v[1] = -t25
-    return _output(v, (2,))
+    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] + t21*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] + t8*ddq[..., 2]
+    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] + t22*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
 
 
 def acceleration(q, dq, ddq, l):
@@ -232,29 +307,36 @@ def acceleration(q, dq, ddq, l):
     Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ), ("", "", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t13 = dq[0] + dq[1]
-    t14 = t13 + dq[2]
-    t15 = t2*dq[0]
+    t13 = dq[..., 0] + dq[..., 1]
+    t14 = t13 + dq[..., 2]
+    t15 = t2*dq[..., 0]
     t16 = t3*t13
     t17 = t4*t14
-    t18 = t5*dq[0]
+    t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
     t21 = -t17
@@ -263,10 +345,24 @@ def acceleration(q, dq, ddq, l):
     t24 = t22 - t19
     t25 = t23 - t15
     t26 = t24 - t18
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2]
-    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1]
-    return _output(a, (2,))
+    p[..., 0] = t12
+    p[..., 1] = -t11
+    J[..., 0] = t11
+    J[..., 1] = t9
+    J[..., 2] = t8
+    J[..., 3] = t12
+    J[..., 4] = t10
+    J[..., 5] = t4
+    H[..., 0] = t25
+    H[..., 1] = t23
+    H[..., 2] = t21
+    H[..., 3] = t26
+    H[..., 4] = t24
+    H[..., 5] = t22
+    v[..., 0] = t26
+    v[..., 1] = -t25
+    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] + t21*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] + t8*ddq[..., 2]
+    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] + t22*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
 
 
 def kinematics(q, dq, ddq, l):
@@ -280,85 +376,26 @@ def kinematics(q, dq, ddq, l):
     Operations: 3 sin, 3 cos, 51 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ), ("", "", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
-    t8 = -t7
-    t9 = t8 - t6
-    t10 = t3 + t4
-    t11 = t9 - t5
-    t12 = t2 + t10
-    t13 = dq[0] + dq[1]
-    t14 = t13 + dq[2]
-    t15 = t2*dq[0]
-    t16 = t3*t13
-    t17 = t4*t14
-    t18 = t5*dq[0]
-    t19 = t6*t13
-    t20 = t7*t14
-    t21 = -t17
-    t22 = -t20
-    t23 = t21 - t16
-    t24 = t22 - t19
-    t25 = t23 - t15
-    t26 = t24 - t18
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t12
-    p[1] = -t11
-    J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t11
-    J[1] = t9
-    J[2] = t8
-    J[3] = t12
-    J[4] = t10
-    J[5] = t4
-    H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t25
-    H[1] = t23
-    H[2] = t21
-    H[3] = t26
-    H[4] = t24
-    H[5] = t22
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t26
-    v[1] = -t25
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2]
-    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1]
-    return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 3,)), outputs[2].reshape(batch + (2, 3,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q, l):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 3).
-    l: array of shape (..., 3).
-    Returns w of shape (..., 1).
-    Operations: 3 sin, 3 cos, 41 add/sub/mul/neg.
-    """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+def _manipulability_core(q, l, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
@@ -374,36 +411,38 @@ def manipulability(q, l):
     t34 = np.where(t30, t10, t9) - t32*np.where(t30, t9, t10)
     t35 = np.where(t30, t4, t8) - t32*np.where(t30, t8, t4)
     t36 = t33*t33 + t34*t34 + t35*t35
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t31*t36)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t31*t36)
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity(q, l, v, lambda_):
-    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
 
     q: array of shape (..., 3).
     l: array of shape (..., 3).
-    v: array of shape (..., 2), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 61 add/sub/mul/neg.
+    Returns w of shape (..., 1).
+    Operations: 3 sin, 3 cos, 41 add/sub/mul/neg.
     """
-    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (3, 3, 2, ), ("", "", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("", "", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, l, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
@@ -416,48 +455,53 @@ def inverse_velocity(q, l, v, lambda_):
     t38 = t27 + t37
     t39 = t29 + t37
     t40 = t38 + t39
-    t41 = t38*v[0] + t28*v[1]
-    t42 = t39*v[1] + t28*v[0]
+    t41 = t38*v[..., 0] + t28*v[..., 1]
+    t42 = t39*v[..., 1] + t28*v[..., 0]
     t43 = 1.0/(t40*t40)
     t44 = t41*t43
     t45 = t42*t43
     t46 = t38*t39 - t28*t28
     t47 = (t46 > RANK_TOL*t40*t40)
     t48 = 1.0/t46
-    t49 = np.where(t47, t48*(t40*v[0] - t41), t44)
-    t50 = np.where(t47, t48*(t40*v[1] - t42), t45)
-    dq = np.empty((3,) + batch, dtype=DTYPE)
-    dq[0] = t49*t11 + t50*t12
-    dq[1] = t49*t9 + t50*t10
-    dq[2] = t4*t50 + t49*t8
-    return _output(dq, (3,))
+    t49 = np.where(t47, t48*(t40*v[..., 0] - t41), t44)
+    t50 = np.where(t47, t48*(t40*v[..., 1] - t42), t45)
+    dq[..., 0] = t49*t11 + t50*t12
+    dq[..., 1] = t49*t9 + t50*t10
+    dq[..., 2] = t4*t50 + t49*t8
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity3(q, l, twist, lambda_):
-    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
     q: array of shape (..., 3).
     l: array of shape (..., 3).
-    twist: array of shape (..., 3), finite.
+    v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 145 add/sub/mul/neg.
+    Returns dq of shape (..., 3).
+    Operations: 3 sin, 3 cos, 61 add/sub/mul/neg.
     """
-    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (3, 3, 3, ), ("", "", "finite", ))
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (3, 3, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, l, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity3_core(q, l, twist, lambda_, dq3):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq3.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
@@ -474,9 +518,9 @@ def inverse_velocity3(q, l, twist, lambda_):
     t60 = t4 + t12 + t10
     t61 = 3.0 + t37
     t62 = t38 + t39 + t61
-    t63 = t38*twist[0] + t28*twist[1] + t59*twist[2]
-    t64 = t39*twist[1] + t28*twist[0] + t60*twist[2]
-    t65 = t61*twist[2] + t59*twist[0] + t60*twist[1]
+    t63 = t38*twist[..., 0] + t28*twist[..., 1] + t59*twist[..., 2]
+    t64 = t39*twist[..., 1] + t28*twist[..., 0] + t60*twist[..., 2]
+    t65 = t61*twist[..., 2] + t59*twist[..., 0] + t60*twist[..., 1]
     t66 = 1.0/(t62*t62)
     t67 = t63*t66
     t68 = t64*t66
@@ -497,41 +541,46 @@ def inverse_velocity3(q, l, twist, lambda_):
     t83 = t61*t65 + t59*t63 + t60*t64
     t84 = 1.0/(t76*t76)
     t85 = t78 - t76
-    t86 = np.where(t79, np.where(t77, t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]), t84*(t63*t85 - t81*t62)), t67)
-    t87 = np.where(t79, np.where(t77, t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]), t84*(t64*t85 - t82*t62)), t68)
-    t88 = np.where(t79, np.where(t77, t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]), t84*(t65*t85 - t83*t62)), t69)
-    dq3 = np.empty((3,) + batch, dtype=DTYPE)
-    dq3[0] = t88 + t86*t11 + t87*t12
-    dq3[1] = t88 + t86*t9 + t87*t10
-    dq3[2] = t88 + t4*t87 + t86*t8
-    return _output(dq3, (3,))
+    t86 = np.where(t79, np.where(t77, t80*(t70*twist[..., 0] + t71*twist[..., 1] + t72*twist[..., 2]), t84*(t63*t85 - t81*t62)), t67)
+    t87 = np.where(t79, np.where(t77, t80*(t71*twist[..., 0] + t73*twist[..., 1] + t74*twist[..., 2]), t84*(t64*t85 - t82*t62)), t68)
+    t88 = np.where(t79, np.where(t77, t80*(t72*twist[..., 0] + t74*twist[..., 1] + t46*twist[..., 2]), t84*(t65*t85 - t83*t62)), t69)
+    dq3[..., 0] = t88 + t86*t11 + t87*t12
+    dq3[..., 1] = t88 + t86*t9 + t87*t10
+    dq3[..., 2] = t88 + t4*t87 + t86*t8
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def ik_step(q, l, target, lambda_):
-    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
     q: array of shape (..., 3).
     l: array of shape (..., 3).
-    target: array of shape (..., 2), finite.
+    twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 66 add/sub/mul/neg.
+    Returns dq3 of shape (..., 3).
+    Operations: 3 sin, 3 cos, 145 add/sub/mul/neg.
     """
-    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (3, 3, 2, ), ("", "", "finite", ))
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (3, 3, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_inverse_velocity3_core, (q, l, twist, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _ik_step_core(q, l, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = cs[0]*l[0]
-    t3 = cs[1]*l[1]
-    t4 = cs[2]*l[2]
-    t5 = sn[0]*l[0]
-    t6 = sn[1]*l[1]
-    t7 = sn[2]*l[2]
+    t2 = cs[..., 0]*l[..., 0]
+    t3 = cs[..., 1]*l[..., 1]
+    t4 = cs[..., 2]*l[..., 2]
+    t5 = sn[..., 0]*l[..., 0]
+    t6 = sn[..., 1]*l[..., 1]
+    t7 = sn[..., 2]*l[..., 2]
     t8 = -t7
     t9 = t8 - t6
     t10 = t3 + t4
@@ -548,19 +597,34 @@ def ik_step(q, l, target, lambda_):
     t46 = t38*t39 - t28*t28
     t47 = (t46 > RANK_TOL*t40*t40)
     t48 = 1.0/t46
-    t51 = target[0] - t12
-    t52 = t11 + target[1]
+    t51 = target[..., 0] - t12
+    t52 = t11 + target[..., 1]
     t53 = t38*t51 + t28*t52
     t54 = t39*t52 + t28*t51
     t55 = t53*t43
     t56 = t54*t43
     t57 = np.where(t47, t48*(t51*t40 - t53), t55)
     t58 = np.where(t47, t48*(t52*t40 - t54), t56)
-    q_next = np.empty((3,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t57*t11 + t58*t12
-    q_next[1] = q[1] + t57*t9 + t58*t10
-    q_next[2] = q[2] + t4*t58 + t57*t8
-    return _output(q_next, (3,))
+    q_next[..., 0] = q[..., 0] + t57*t11 + t58*t12
+    q_next[..., 1] = q[..., 1] + t57*t9 + t58*t10
+    q_next[..., 2] = q[..., 2] + t4*t58 + t57*t8
+
+
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 3).
+    l: array of shape (..., 3).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 3).
+    Operations: 3 sin, 3 cos, 66 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (3, 3, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, l, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

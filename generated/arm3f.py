@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,51 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
+    p[..., 0] = t10
+    p[..., 1] = -t9
 
 
 def position(q):
@@ -73,25 +112,34 @@ def position(q):
     Operations: 3 sin, 3 cos, 12 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
     t6 = -t5
     t7 = t6 - t4
     t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t10
-    p[1] = -t9
-    return _output(p, (2,))
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
+    J[..., 0] = t9
+    J[..., 1] = t7
+    J[..., 2] = t6
+    J[..., 3] = t10
+    J[..., 4] = t8
+    J[..., 5] = t3
 
 
 def jacobian(q):
@@ -102,29 +150,43 @@ def jacobian(q):
     Operations: 3 sin, 3 cos, 11 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 3,))
+
+
+def _coriolis_core(q, dq, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
-    J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t9
-    J[1] = t7
-    J[2] = t6
-    J[3] = t10
-    J[4] = t8
-    J[5] = t3
-    return _output(J, (2, 3,))
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
+    t11 = dq[..., 0] + dq[..., 1]
+    t12 = t11 + dq[..., 2]
+    t13 = cs[..., 0]*dq[..., 0]
+    t14 = t2*t11
+    t15 = t3*t12
+    t16 = sn[..., 0]*dq[..., 0]
+    t17 = t4*t11
+    t18 = t5*t12
+    t19 = -t15
+    t20 = -t18
+    t21 = t19 - t14
+    t22 = t20 - t17
+    t23 = t21 - t13
+    t24 = t22 - t16
+    H[..., 0] = t23
+    H[..., 1] = t21
+    H[..., 2] = t19
+    H[..., 3] = t24
+    H[..., 4] = t22
+    H[..., 5] = t20
 
 
 def coriolis(q, dq):
@@ -136,22 +198,29 @@ def coriolis(q, dq):
     Operations: 3 sin, 3 cos, 20 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 3,))
+
+
+def _velocity_core(q, dq, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = cs[0]*dq[0]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
+    t11 = dq[..., 0] + dq[..., 1]
+    t12 = t11 + dq[..., 2]
+    t13 = cs[..., 0]*dq[..., 0]
     t14 = t2*t11
     t15 = t3*t12
-    t16 = sn[0]*dq[0]
+    t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
     t19 = -t15
@@ -160,14 +229,8 @@ def coriolis(q, dq):
     t22 = t20 - t17
     t23 = t21 - t13
     t24 = t22 - t16
-    H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t23
-    H[1] = t21
-    H[2] = t19
-    H[3] = t24
-    H[4] = t22
-    H[5] = t20
-    return _output(H, (2, 3,))
+    v[..., 0] = t24
+    v[..., 1] = -t23
 
 
 def velocity(q, dq):
@@ -179,22 +242,34 @@ def velocity(q, dq):
     Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = cs[0]*dq[0]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
+    t11 = dq[..., 0] + dq[..., 1]
+    t12 = t11 + dq[..., 2]
+    t13 = cs[..., 0]*dq[..., 0]
     t14 = t2*t11
     t15 = t3*t12
-    t16 = sn[0]*dq[0]
+    t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
     t19 = -t15
@@ -203,10 +278,8 @@ def velocity(q, dq):
     t22 = t20 - t17
     t23 = t21 - t13
     t24 = t22 - t16
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t24
-    v[1] = -t23
-    return _output(v, (2,))
+    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] + t19*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] + t6*ddq[..., 2]
+    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
 def acceleration(q, dq, ddq):
@@ -219,27 +292,34 @@ def acceleration(q, dq, ddq):
     Operations: 3 sin, 3 cos, 47 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
     t6 = -t5
     t7 = t6 - t4
     t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = cs[0]*dq[0]
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
+    t11 = dq[..., 0] + dq[..., 1]
+    t12 = t11 + dq[..., 2]
+    t13 = cs[..., 0]*dq[..., 0]
     t14 = t2*t11
     t15 = t3*t12
-    t16 = sn[0]*dq[0]
+    t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
     t19 = -t15
@@ -248,10 +328,24 @@ def acceleration(q, dq, ddq):
     t22 = t20 - t17
     t23 = t21 - t13
     t24 = t22 - t16
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
-    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
-    return _output(a, (2,))
+    p[..., 0] = t10
+    p[..., 1] = -t9
+    J[..., 0] = t9
+    J[..., 1] = t7
+    J[..., 2] = t6
+    J[..., 3] = t10
+    J[..., 4] = t8
+    J[..., 5] = t3
+    H[..., 0] = t23
+    H[..., 1] = t21
+    H[..., 2] = t19
+    H[..., 3] = t24
+    H[..., 4] = t22
+    H[..., 5] = t20
+    v[..., 0] = t24
+    v[..., 1] = -t23
+    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] + t19*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] + t6*ddq[..., 2]
+    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
 def kinematics(q, dq, ddq):
@@ -264,85 +358,29 @@ def kinematics(q, dq, ddq):
     Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
-    t11 = dq[0] + dq[1]
-    t12 = t11 + dq[2]
-    t13 = cs[0]*dq[0]
-    t14 = t2*t11
-    t15 = t3*t12
-    t16 = sn[0]*dq[0]
-    t17 = t4*t11
-    t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
-    t23 = t21 - t13
-    t24 = t22 - t16
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t10
-    p[1] = -t9
-    J = np.empty((6,) + batch, dtype=DTYPE)
-    J[0] = t9
-    J[1] = t7
-    J[2] = t6
-    J[3] = t10
-    J[4] = t8
-    J[5] = t3
-    H = np.empty((6,) + batch, dtype=DTYPE)
-    H[0] = t23
-    H[1] = t21
-    H[2] = t19
-    H[3] = t24
-    H[4] = t22
-    H[5] = t20
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t24
-    v[1] = -t23
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2]
-    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1]
-    return _output(p, (2,)), _output(J, (2, 3,)), _output(H, (2, 3,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 3,)), outputs[2].reshape(batch + (2, 3,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 3).
-    Returns w of shape (..., 1).
-    Operations: 3 sin, 3 cos, 39 add/sub/mul/neg.
-    """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+def _manipulability_core(q, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
     t6 = -t5
     t7 = t6 - t4
     t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
@@ -353,12 +391,62 @@ def manipulability(q):
     t32 = np.where(t28, t8, t7) - t30*np.where(t28, t7, t8)
     t33 = np.where(t28, t3, t6) - t30*np.where(t28, t6, t3)
     t34 = t31*t31 + t32*t32 + t33*t33
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t29*t34)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t29*t34)
+
+
+def manipulability(q):
+    """manipulability w = sqrt(det(J J^T)) (1).
+
+    q: array of shape (..., 3).
+    Returns w of shape (..., 1).
+    Operations: 3 sin, 3 cos, 39 add/sub/mul/neg.
+    """
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
+    t6 = -t5
+    t7 = t6 - t4
+    t8 = t2 + t3
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
+    t25 = t9*t9 + t7*t7 + t6*t6
+    t26 = t3*t6 + t9*t10 + t7*t8
+    t27 = t3*t3 + t10*t10 + t8*t8
+    t35 = lambda_*lambda_
+    t36 = t25 + t35
+    t37 = t27 + t35
+    t38 = t36 + t37
+    t39 = t36*v[..., 0] + t26*v[..., 1]
+    t40 = t37*v[..., 1] + t26*v[..., 0]
+    t41 = 1.0/(t38*t38)
+    t42 = t39*t41
+    t43 = t40*t41
+    t44 = t36*t37 - t26*t26
+    t45 = (t44 > RANK_TOL*t38*t38)
+    t46 = 1.0/t44
+    t47 = np.where(t45, t46*(t38*v[..., 0] - t39), t42)
+    t48 = np.where(t45, t46*(t38*v[..., 1] - t40), t43)
+    dq[..., 0] = t47*t9 + t48*t10
+    dq[..., 1] = t47*t7 + t48*t8
+    dq[..., 2] = t3*t48 + t47*t6
+
+
 def inverse_velocity(q, v, lambda_):
     """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
@@ -370,72 +458,29 @@ def inverse_velocity(q, v, lambda_):
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
-    t6 = -t5
-    t7 = t6 - t4
-    t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
-    t25 = t9*t9 + t7*t7 + t6*t6
-    t26 = t3*t6 + t9*t10 + t7*t8
-    t27 = t3*t3 + t10*t10 + t8*t8
-    t35 = lambda_*lambda_
-    t36 = t25 + t35
-    t37 = t27 + t35
-    t38 = t36 + t37
-    t39 = t36*v[0] + t26*v[1]
-    t40 = t37*v[1] + t26*v[0]
-    t41 = 1.0/(t38*t38)
-    t42 = t39*t41
-    t43 = t40*t41
-    t44 = t36*t37 - t26*t26
-    t45 = (t44 > RANK_TOL*t38*t38)
-    t46 = 1.0/t44
-    t47 = np.where(t45, t46*(t38*v[0] - t39), t42)
-    t48 = np.where(t45, t46*(t38*v[1] - t40), t43)
-    dq = np.empty((3,) + batch, dtype=DTYPE)
-    dq[0] = t47*t9 + t48*t10
-    dq[1] = t47*t7 + t48*t8
-    dq[2] = t3*t48 + t47*t6
-    return _output(dq, (3,))
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity3(q, twist, lambda_):
-    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
-
-    q: array of shape (..., 3).
-    twist: array of shape (..., 3), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 143 add/sub/mul/neg.
-    """
-    batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+def _inverse_velocity3_core(q, twist, lambda_, dq3):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq3.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
     t6 = -t5
     t7 = t6 - t4
     t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
@@ -447,9 +492,9 @@ def inverse_velocity3(q, twist, lambda_):
     t58 = t3 + t10 + t8
     t59 = 3.0 + t35
     t60 = t36 + t37 + t59
-    t61 = t36*twist[0] + t26*twist[1] + t57*twist[2]
-    t62 = t37*twist[1] + t26*twist[0] + t58*twist[2]
-    t63 = t59*twist[2] + t57*twist[0] + t58*twist[1]
+    t61 = t36*twist[..., 0] + t26*twist[..., 1] + t57*twist[..., 2]
+    t62 = t37*twist[..., 1] + t26*twist[..., 0] + t58*twist[..., 2]
+    t63 = t59*twist[..., 2] + t57*twist[..., 0] + t58*twist[..., 1]
     t64 = 1.0/(t60*t60)
     t65 = t61*t64
     t66 = t62*t64
@@ -470,43 +515,48 @@ def inverse_velocity3(q, twist, lambda_):
     t81 = t59*t63 + t57*t61 + t58*t62
     t82 = 1.0/(t74*t74)
     t83 = t76 - t74
-    t84 = np.where(t77, np.where(t75, t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]), t82*(t61*t83 - t79*t60)), t65)
-    t85 = np.where(t77, np.where(t75, t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]), t82*(t62*t83 - t80*t60)), t66)
-    t86 = np.where(t77, np.where(t75, t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]), t82*(t63*t83 - t81*t60)), t67)
-    dq3 = np.empty((3,) + batch, dtype=DTYPE)
-    dq3[0] = t86 + t84*t9 + t85*t10
-    dq3[1] = t86 + t84*t7 + t85*t8
-    dq3[2] = t86 + t3*t85 + t84*t6
-    return _output(dq3, (3,))
+    t84 = np.where(t77, np.where(t75, t78*(t68*twist[..., 0] + t69*twist[..., 1] + t70*twist[..., 2]), t82*(t61*t83 - t79*t60)), t65)
+    t85 = np.where(t77, np.where(t75, t78*(t69*twist[..., 0] + t71*twist[..., 1] + t72*twist[..., 2]), t82*(t62*t83 - t80*t60)), t66)
+    t86 = np.where(t77, np.where(t75, t78*(t70*twist[..., 0] + t72*twist[..., 1] + t44*twist[..., 2]), t82*(t63*t83 - t81*t60)), t67)
+    dq3[..., 0] = t86 + t84*t9 + t85*t10
+    dq3[..., 1] = t86 + t84*t7 + t85*t8
+    dq3[..., 2] = t86 + t3*t85 + t84*t6
+
+
+def inverse_velocity3(q, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+
+    q: array of shape (..., 3).
+    twist: array of shape (..., 3), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns dq3 of shape (..., 3).
+    Operations: 3 sin, 3 cos, 143 add/sub/mul/neg.
+    """
+    batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_inverse_velocity3_core, (q, twist, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def ik_step(q, target, lambda_):
-    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
-
-    q: array of shape (..., 3).
-    target: array of shape (..., 2), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 64 add/sub/mul/neg.
-    """
-    batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((3,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[0] = q[0]
+def _ik_step_core(q, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (3,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t2 = 0.8*cs[1]
-    t3 = 0.5*cs[2]
-    t4 = 0.8*sn[1]
-    t5 = 0.5*sn[2]
+    t2 = 0.8*cs[..., 1]
+    t3 = 0.5*cs[..., 2]
+    t4 = 0.8*sn[..., 1]
+    t5 = 0.5*sn[..., 2]
     t6 = -t5
     t7 = t6 - t4
     t8 = t2 + t3
-    t9 = t7 - sn[0]
-    t10 = cs[0] + t8
+    t9 = t7 - sn[..., 0]
+    t10 = cs[..., 0] + t8
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
@@ -518,19 +568,33 @@ def ik_step(q, target, lambda_):
     t44 = t36*t37 - t26*t26
     t45 = (t44 > RANK_TOL*t38*t38)
     t46 = 1.0/t44
-    t49 = target[0] - t10
-    t50 = t9 + target[1]
+    t49 = target[..., 0] - t10
+    t50 = t9 + target[..., 1]
     t51 = t36*t49 + t26*t50
     t52 = t37*t50 + t26*t49
     t53 = t51*t41
     t54 = t52*t41
     t55 = np.where(t45, t46*(t49*t38 - t51), t53)
     t56 = np.where(t45, t46*(t50*t38 - t52), t54)
-    q_next = np.empty((3,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t55*t9 + t56*t10
-    q_next[1] = q[1] + t55*t7 + t56*t8
-    q_next[2] = q[2] + t3*t56 + t55*t6
-    return _output(q_next, (3,))
+    q_next[..., 0] = q[..., 0] + t55*t9 + t56*t10
+    q_next[..., 1] = q[..., 1] + t55*t7 + t56*t8
+    q_next[..., 2] = q[..., 2] + t3*t56 + t55*t6
+
+
+def ik_step(q, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 3).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 3).
+    Operations: 3 sin, 3 cos, 64 add/sub/mul/neg.
+    """
+    batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

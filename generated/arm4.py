@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,58 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, l, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    p[..., 0] = t17
+    p[..., 1] = -t16
 
 
 def position(q, l):
@@ -74,21 +120,28 @@ def position(q, l):
     Operations: 4 sin, 4 cos, 19 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, l, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -96,10 +149,14 @@ def position(q, l):
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t17
-    p[1] = -t16
-    return _output(p, (2,))
+    J[..., 0] = t16
+    J[..., 1] = t14
+    J[..., 2] = t12
+    J[..., 3] = t11
+    J[..., 4] = t17
+    J[..., 5] = t15
+    J[..., 6] = t13
+    J[..., 7] = t6
 
 
 def jacobian(q, l):
@@ -111,38 +168,55 @@ def jacobian(q, l):
     Operations: 4 sin, 4 cos, 18 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (8,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 4,))
+
+
+def _coriolis_core(q, dq, l, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
-    t11 = -t10
-    t12 = t11 - t9
-    t13 = t5 + t6
-    t14 = t12 - t8
-    t15 = t4 + t13
-    t16 = t14 - t7
-    t17 = t3 + t15
-    J = np.empty((8,) + batch, dtype=DTYPE)
-    J[0] = t16
-    J[1] = t14
-    J[2] = t12
-    J[3] = t11
-    J[4] = t17
-    J[5] = t15
-    J[6] = t13
-    J[7] = t6
-    return _output(J, (2, 4,))
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
+    t18 = dq[..., 0] + dq[..., 1]
+    t19 = t18 + dq[..., 2]
+    t20 = t19 + dq[..., 3]
+    t21 = t3*dq[..., 0]
+    t22 = t4*t18
+    t23 = t5*t19
+    t24 = t6*t20
+    t25 = t7*dq[..., 0]
+    t26 = t8*t18
+    t27 = t9*t19
+    t28 = t10*t20
+    t29 = -t24
+    t30 = -t28
+    t31 = t29 - t23
+    t32 = t30 - t27
+    t33 = t31 - t22
+    t34 = t32 - t26
+    t35 = t33 - t21
+    t36 = t34 - t25
+    H[..., 0] = t35
+    H[..., 1] = t33
+    H[..., 2] = t31
+    H[..., 3] = t29
+    H[..., 4] = t36
+    H[..., 5] = t34
+    H[..., 6] = t32
+    H[..., 7] = t30
 
 
 def coriolis(q, dq, l):
@@ -155,29 +229,36 @@ def coriolis(q, dq, l):
     Operations: 4 sin, 4 cos, 30 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("", "", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (8,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 4,))
+
+
+def _velocity_core(q, dq, l, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
-    t18 = dq[0] + dq[1]
-    t19 = t18 + dq[2]
-    t20 = t19 + dq[3]
-    t21 = t3*dq[0]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
+    t18 = dq[..., 0] + dq[..., 1]
+    t19 = t18 + dq[..., 2]
+    t20 = t19 + dq[..., 3]
+    t21 = t3*dq[..., 0]
     t22 = t4*t18
     t23 = t5*t19
     t24 = t6*t20
-    t25 = t7*dq[0]
+    t25 = t7*dq[..., 0]
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
@@ -189,16 +270,8 @@ def coriolis(q, dq, l):
     t34 = t32 - t26
     t35 = t33 - t21
     t36 = t34 - t25
-    H = np.empty((8,) + batch, dtype=DTYPE)
-    H[0] = t35
-    H[1] = t33
-    H[2] = t31
-    H[3] = t29
-    H[4] = t36
-    H[5] = t34
-    H[6] = t32
-    H[7] = t30
-    return _output(H, (2, 4,))
+    v[..., 0] = t36
+    v[..., 1] = -t35
 
 
 def velocity(q, dq, l):
@@ -211,29 +284,43 @@ def velocity(q, dq, l):
     Operations: 4 sin, 4 cos, 31 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("", "", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, l, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
-    t18 = dq[0] + dq[1]
-    t19 = t18 + dq[2]
-    t20 = t19 + dq[3]
-    t21 = t3*dq[0]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
+    t11 = -t10
+    t12 = t11 - t9
+    t13 = t5 + t6
+    t14 = t12 - t8
+    t15 = t4 + t13
+    t16 = t14 - t7
+    t17 = t3 + t15
+    t18 = dq[..., 0] + dq[..., 1]
+    t19 = t18 + dq[..., 2]
+    t20 = t19 + dq[..., 3]
+    t21 = t3*dq[..., 0]
     t22 = t4*t18
     t23 = t5*t19
     t24 = t6*t20
-    t25 = t7*dq[0]
+    t25 = t7*dq[..., 0]
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
@@ -245,10 +332,8 @@ def velocity(q, dq, l):
     t34 = t32 - t26
     t35 = t33 - t21
     t36 = t34 - t25
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t36
-    v[1] = -t35
-    return _output(v, (2,))
+    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] + t29*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] + t11*ddq[..., 3]
+    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] + t30*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
 
 
 def acceleration(q, dq, ddq, l):
@@ -262,21 +347,28 @@ def acceleration(q, dq, ddq, l):
     Operations: 4 sin, 4 cos, 67 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ), ("", "", "", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -284,14 +376,14 @@ def acceleration(q, dq, ddq, l):
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t18 = dq[0] + dq[1]
-    t19 = t18 + dq[2]
-    t20 = t19 + dq[3]
-    t21 = t3*dq[0]
+    t18 = dq[..., 0] + dq[..., 1]
+    t19 = t18 + dq[..., 2]
+    t20 = t19 + dq[..., 3]
+    t21 = t3*dq[..., 0]
     t22 = t4*t18
     t23 = t5*t19
     t24 = t6*t20
-    t25 = t7*dq[0]
+    t25 = t7*dq[..., 0]
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
@@ -303,10 +395,28 @@ def acceleration(q, dq, ddq, l):
     t34 = t32 - t26
     t35 = t33 - t21
     t36 = t34 - t25
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3]
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2]
-    return _output(a, (2,))
+    p[..., 0] = t17
+    p[..., 1] = -t16
+    J[..., 0] = t16
+    J[..., 1] = t14
+    J[..., 2] = t12
+    J[..., 3] = t11
+    J[..., 4] = t17
+    J[..., 5] = t15
+    J[..., 6] = t13
+    J[..., 7] = t6
+    H[..., 0] = t35
+    H[..., 1] = t33
+    H[..., 2] = t31
+    H[..., 3] = t29
+    H[..., 4] = t36
+    H[..., 5] = t34
+    H[..., 6] = t32
+    H[..., 7] = t30
+    v[..., 0] = t36
+    v[..., 1] = -t35
+    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] + t29*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] + t11*ddq[..., 3]
+    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] + t30*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
 
 
 def kinematics(q, dq, ddq, l):
@@ -320,102 +430,29 @@ def kinematics(q, dq, ddq, l):
     Operations: 4 sin, 4 cos, 69 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ), ("", "", "", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
-    t11 = -t10
-    t12 = t11 - t9
-    t13 = t5 + t6
-    t14 = t12 - t8
-    t15 = t4 + t13
-    t16 = t14 - t7
-    t17 = t3 + t15
-    t18 = dq[0] + dq[1]
-    t19 = t18 + dq[2]
-    t20 = t19 + dq[3]
-    t21 = t3*dq[0]
-    t22 = t4*t18
-    t23 = t5*t19
-    t24 = t6*t20
-    t25 = t7*dq[0]
-    t26 = t8*t18
-    t27 = t9*t19
-    t28 = t10*t20
-    t29 = -t24
-    t30 = -t28
-    t31 = t29 - t23
-    t32 = t30 - t27
-    t33 = t31 - t22
-    t34 = t32 - t26
-    t35 = t33 - t21
-    t36 = t34 - t25
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t17
-    p[1] = -t16
-    J = np.empty((8,) + batch, dtype=DTYPE)
-    J[0] = t16
-    J[1] = t14
-    J[2] = t12
-    J[3] = t11
-    J[4] = t17
-    J[5] = t15
-    J[6] = t13
-    J[7] = t6
-    H = np.empty((8,) + batch, dtype=DTYPE)
-    H[0] = t35
-    H[1] = t33
-    H[2] = t31
-    H[3] = t29
-    H[4] = t36
-    H[5] = t34
-    H[6] = t32
-    H[7] = t30
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t36
-    v[1] = -t35
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3]
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2]
-    return _output(p, (2,)), _output(J, (2, 4,)), _output(H, (2, 4,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 4,)), outputs[2].reshape(batch + (2, 4,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q, l):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 4).
-    l: array of shape (..., 4).
-    Returns w of shape (..., 1).
-    Operations: 4 sin, 4 cos, 56 add/sub/mul/neg.
-    """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+def _manipulability_core(q, l, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -434,39 +471,41 @@ def manipulability(q, l):
     t45 = np.where(t40, t13, t12) - t42*np.where(t40, t12, t13)
     t46 = np.where(t40, t6, t11) - t42*np.where(t40, t11, t6)
     t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t41*t47)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t41*t47)
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity(q, l, v, lambda_):
-    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
 
     q: array of shape (..., 4).
     l: array of shape (..., 4).
-    v: array of shape (..., 2), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 75 add/sub/mul/neg.
+    Returns w of shape (..., 1).
+    Operations: 4 sin, 4 cos, 56 add/sub/mul/neg.
     """
-    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (4, 4, 2, ), ("", "", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("", "", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, l, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -481,52 +520,57 @@ def inverse_velocity(q, l, v, lambda_):
     t49 = t37 + t48
     t50 = t39 + t48
     t51 = t49 + t50
-    t52 = t49*v[0] + t38*v[1]
-    t53 = t50*v[1] + t38*v[0]
+    t52 = t49*v[..., 0] + t38*v[..., 1]
+    t53 = t50*v[..., 1] + t38*v[..., 0]
     t54 = 1.0/(t51*t51)
     t55 = t52*t54
     t56 = t53*t54
     t57 = t49*t50 - t38*t38
     t58 = (t57 > RANK_TOL*t51*t51)
     t59 = 1.0/t57
-    t60 = np.where(t58, t59*(t51*v[0] - t52), t55)
-    t61 = np.where(t58, t59*(t51*v[1] - t53), t56)
-    dq = np.empty((4,) + batch, dtype=DTYPE)
-    dq[0] = t60*t16 + t61*t17
-    dq[1] = t60*t14 + t61*t15
-    dq[2] = t60*t12 + t61*t13
-    dq[3] = t6*t61 + t60*t11
-    return _output(dq, (4,))
+    t60 = np.where(t58, t59*(t51*v[..., 0] - t52), t55)
+    t61 = np.where(t58, t59*(t51*v[..., 1] - t53), t56)
+    dq[..., 0] = t60*t16 + t61*t17
+    dq[..., 1] = t60*t14 + t61*t15
+    dq[..., 2] = t60*t12 + t61*t13
+    dq[..., 3] = t6*t61 + t60*t11
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity3(q, l, twist, lambda_):
-    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
     q: array of shape (..., 4).
     l: array of shape (..., 4).
-    twist: array of shape (..., 3), finite.
+    v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 162 add/sub/mul/neg.
+    Returns dq of shape (..., 4).
+    Operations: 4 sin, 4 cos, 75 add/sub/mul/neg.
     """
-    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (4, 4, 3, ), ("", "", "finite", ))
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (4, 4, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (4,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, l, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (4,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity3_core(q, l, twist, lambda_, dq3):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq3.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -545,9 +589,9 @@ def inverse_velocity3(q, l, twist, lambda_):
     t71 = t6 + t17 + t15 + t13
     t72 = 4.0 + t48
     t73 = t49 + t50 + t72
-    t74 = t49*twist[0] + t38*twist[1] + t70*twist[2]
-    t75 = t50*twist[1] + t38*twist[0] + t71*twist[2]
-    t76 = t72*twist[2] + t70*twist[0] + t71*twist[1]
+    t74 = t49*twist[..., 0] + t38*twist[..., 1] + t70*twist[..., 2]
+    t75 = t50*twist[..., 1] + t38*twist[..., 0] + t71*twist[..., 2]
+    t76 = t72*twist[..., 2] + t70*twist[..., 0] + t71*twist[..., 1]
     t77 = 1.0/(t73*t73)
     t78 = t74*t77
     t79 = t75*t77
@@ -568,45 +612,50 @@ def inverse_velocity3(q, l, twist, lambda_):
     t94 = t72*t76 + t70*t74 + t71*t75
     t95 = 1.0/(t87*t87)
     t96 = t89 - t87
-    t97 = np.where(t90, np.where(t88, t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]), t95*(t74*t96 - t92*t73)), t78)
-    t98 = np.where(t90, np.where(t88, t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]), t95*(t75*t96 - t93*t73)), t79)
-    t99 = np.where(t90, np.where(t88, t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]), t95*(t76*t96 - t94*t73)), t80)
-    dq3 = np.empty((4,) + batch, dtype=DTYPE)
-    dq3[0] = t99 + t97*t16 + t98*t17
-    dq3[1] = t99 + t97*t14 + t98*t15
-    dq3[2] = t99 + t97*t12 + t98*t13
-    dq3[3] = t99 + t6*t98 + t97*t11
-    return _output(dq3, (4,))
+    t97 = np.where(t90, np.where(t88, t91*(t81*twist[..., 0] + t82*twist[..., 1] + t83*twist[..., 2]), t95*(t74*t96 - t92*t73)), t78)
+    t98 = np.where(t90, np.where(t88, t91*(t82*twist[..., 0] + t84*twist[..., 1] + t85*twist[..., 2]), t95*(t75*t96 - t93*t73)), t79)
+    t99 = np.where(t90, np.where(t88, t91*(t83*twist[..., 0] + t85*twist[..., 1] + t57*twist[..., 2]), t95*(t76*t96 - t94*t73)), t80)
+    dq3[..., 0] = t99 + t97*t16 + t98*t17
+    dq3[..., 1] = t99 + t97*t14 + t98*t15
+    dq3[..., 2] = t99 + t97*t12 + t98*t13
+    dq3[..., 3] = t99 + t6*t98 + t97*t11
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def ik_step(q, l, target, lambda_):
-    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
     q: array of shape (..., 4).
     l: array of shape (..., 4).
-    target: array of shape (..., 2), finite.
+    twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 81 add/sub/mul/neg.
+    Returns dq3 of shape (..., 4).
+    Operations: 4 sin, 4 cos, 162 add/sub/mul/neg.
     """
-    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (4, 4, 2, ), ("", "", "finite", ))
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (4, 4, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((4,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (4,), dtype=DTYPE), )
+    _chunked(_inverse_velocity3_core, (q, l, twist, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (4,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _ik_step_core(q, l, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (4,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t3 = cs[0]*l[0]
-    t4 = cs[1]*l[1]
-    t5 = cs[2]*l[2]
-    t6 = cs[3]*l[3]
-    t7 = sn[0]*l[0]
-    t8 = sn[1]*l[1]
-    t9 = sn[2]*l[2]
-    t10 = sn[3]*l[3]
+    t3 = cs[..., 0]*l[..., 0]
+    t4 = cs[..., 1]*l[..., 1]
+    t5 = cs[..., 2]*l[..., 2]
+    t6 = cs[..., 3]*l[..., 3]
+    t7 = sn[..., 0]*l[..., 0]
+    t8 = sn[..., 1]*l[..., 1]
+    t9 = sn[..., 2]*l[..., 2]
+    t10 = sn[..., 3]*l[..., 3]
     t11 = -t10
     t12 = t11 - t9
     t13 = t5 + t6
@@ -625,20 +674,35 @@ def ik_step(q, l, target, lambda_):
     t57 = t49*t50 - t38*t38
     t58 = (t57 > RANK_TOL*t51*t51)
     t59 = 1.0/t57
-    t62 = target[0] - t17
-    t63 = t16 + target[1]
+    t62 = target[..., 0] - t17
+    t63 = t16 + target[..., 1]
     t64 = t49*t62 + t38*t63
     t65 = t50*t63 + t38*t62
     t66 = t64*t54
     t67 = t65*t54
     t68 = np.where(t58, t59*(t62*t51 - t64), t66)
     t69 = np.where(t58, t59*(t63*t51 - t65), t67)
-    q_next = np.empty((4,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t68*t16 + t69*t17
-    q_next[1] = q[1] + t68*t14 + t69*t15
-    q_next[2] = q[2] + t68*t12 + t69*t13
-    q_next[3] = q[3] + t6*t69 + t68*t11
-    return _output(q_next, (4,))
+    q_next[..., 0] = q[..., 0] + t68*t16 + t69*t17
+    q_next[..., 1] = q[..., 1] + t68*t14 + t69*t15
+    q_next[..., 2] = q[..., 2] + t68*t12 + t69*t13
+    q_next[..., 3] = q[..., 3] + t6*t69 + t68*t11
+
+
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 4).
+    l: array of shape (..., 4).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 4).
+    Operations: 4 sin, 4 cos, 81 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (4, 4, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (4,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, l, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (4,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,63 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, l, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    p[..., 0] = t22
+    p[..., 1] = -t21
 
 
 def position(q, l):
@@ -74,24 +125,31 @@ def position(q, l):
     Operations: 5 sin, 5 cos, 24 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, l, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -101,10 +159,16 @@ def position(q, l):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t22
-    p[1] = -t21
-    return _output(p, (2,))
+    J[..., 0] = t21
+    J[..., 1] = t19
+    J[..., 2] = t17
+    J[..., 3] = t15
+    J[..., 4] = t14
+    J[..., 5] = t22
+    J[..., 6] = t20
+    J[..., 7] = t18
+    J[..., 8] = t16
+    J[..., 9] = t8
 
 
 def jacobian(q, l):
@@ -116,45 +180,65 @@ def jacobian(q, l):
     Operations: 5 sin, 5 cos, 23 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (10,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 5,))
+
+
+def _coriolis_core(q, dq, l, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
-    t14 = -t13
-    t15 = t14 - t12
-    t16 = t7 + t8
-    t17 = t15 - t11
-    t18 = t6 + t16
-    t19 = t17 - t10
-    t20 = t5 + t18
-    t21 = t19 - t9
-    t22 = t4 + t20
-    J = np.empty((10,) + batch, dtype=DTYPE)
-    J[0] = t21
-    J[1] = t19
-    J[2] = t17
-    J[3] = t15
-    J[4] = t14
-    J[5] = t22
-    J[6] = t20
-    J[7] = t18
-    J[8] = t16
-    J[9] = t8
-    return _output(J, (2, 5,))
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
+    t23 = dq[..., 0] + dq[..., 1]
+    t24 = t23 + dq[..., 2]
+    t25 = t24 + dq[..., 3]
+    t26 = t25 + dq[..., 4]
+    t27 = t4*dq[..., 0]
+    t28 = t5*t23
+    t29 = t6*t24
+    t30 = t7*t25
+    t31 = t8*t26
+    t32 = t9*dq[..., 0]
+    t33 = t10*t23
+    t34 = t11*t24
+    t35 = t12*t25
+    t36 = t13*t26
+    t37 = -t31
+    t38 = -t36
+    t39 = t37 - t30
+    t40 = t38 - t35
+    t41 = t39 - t29
+    t42 = t40 - t34
+    t43 = t41 - t28
+    t44 = t42 - t33
+    t45 = t43 - t27
+    t46 = t44 - t32
+    H[..., 0] = t45
+    H[..., 1] = t43
+    H[..., 2] = t41
+    H[..., 3] = t39
+    H[..., 4] = t37
+    H[..., 5] = t46
+    H[..., 6] = t44
+    H[..., 7] = t42
+    H[..., 8] = t40
+    H[..., 9] = t38
 
 
 def coriolis(q, dq, l):
@@ -167,34 +251,41 @@ def coriolis(q, dq, l):
     Operations: 5 sin, 5 cos, 38 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("", "", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (10,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 5,))
+
+
+def _velocity_core(q, dq, l, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
-    t23 = dq[0] + dq[1]
-    t24 = t23 + dq[2]
-    t25 = t24 + dq[3]
-    t26 = t25 + dq[4]
-    t27 = t4*dq[0]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
+    t23 = dq[..., 0] + dq[..., 1]
+    t24 = t23 + dq[..., 2]
+    t25 = t24 + dq[..., 3]
+    t26 = t25 + dq[..., 4]
+    t27 = t4*dq[..., 0]
     t28 = t5*t23
     t29 = t6*t24
     t30 = t7*t25
     t31 = t8*t26
-    t32 = t9*dq[0]
+    t32 = t9*dq[..., 0]
     t33 = t10*t23
     t34 = t11*t24
     t35 = t12*t25
@@ -209,18 +300,8 @@ def coriolis(q, dq, l):
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    H = np.empty((10,) + batch, dtype=DTYPE)
-    H[0] = t45
-    H[1] = t43
-    H[2] = t41
-    H[3] = t39
-    H[4] = t37
-    H[5] = t46
-    H[6] = t44
-    H[7] = t42
-    H[8] = t40
-    H[9] = t38
-    return _output(H, (2, 5,))
+    v[..., 0] = t46
+    v[..., 1] = -t45
 
 
 def velocity(q, dq, l):
@@ -233,34 +314,50 @@ def velocity(q, dq, l):
     Operations: 5 sin, 5 cos, 39 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("", "", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, l, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
-    t23 = dq[0] + dq[1]
-    t24 = t23 + dq[2]
-    t25 = t24 + dq[3]
-    t26 = t25 + dq[4]
-    t27 = t4*dq[0]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
+    t14 = -t13
+    t15 = t14 - t12
+    t16 = t7 + t8
+    t17 = t15 - t11
+    t18 = t6 + t16
+    t19 = t17 - t10
+    t20 = t5 + t18
+    t21 = t19 - t9
+    t22 = t4 + t20
+    t23 = dq[..., 0] + dq[..., 1]
+    t24 = t23 + dq[..., 2]
+    t25 = t24 + dq[..., 3]
+    t26 = t25 + dq[..., 4]
+    t27 = t4*dq[..., 0]
     t28 = t5*t23
     t29 = t6*t24
     t30 = t7*t25
     t31 = t8*t26
-    t32 = t9*dq[0]
+    t32 = t9*dq[..., 0]
     t33 = t10*t23
     t34 = t11*t24
     t35 = t12*t25
@@ -275,10 +372,8 @@ def velocity(q, dq, l):
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t46
-    v[1] = -t45
-    return _output(v, (2,))
+    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
+    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
 
 
 def acceleration(q, dq, ddq, l):
@@ -292,24 +387,31 @@ def acceleration(q, dq, ddq, l):
     Operations: 5 sin, 5 cos, 85 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("", "", "", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -319,16 +421,16 @@ def acceleration(q, dq, ddq, l):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t23 = dq[0] + dq[1]
-    t24 = t23 + dq[2]
-    t25 = t24 + dq[3]
-    t26 = t25 + dq[4]
-    t27 = t4*dq[0]
+    t23 = dq[..., 0] + dq[..., 1]
+    t24 = t23 + dq[..., 2]
+    t25 = t24 + dq[..., 3]
+    t26 = t25 + dq[..., 4]
+    t27 = t4*dq[..., 0]
     t28 = t5*t23
     t29 = t6*t24
     t30 = t7*t25
     t31 = t8*t26
-    t32 = t9*dq[0]
+    t32 = t9*dq[..., 0]
     t33 = t10*t23
     t34 = t11*t24
     t35 = t12*t25
@@ -343,10 +445,32 @@ def acceleration(q, dq, ddq, l):
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4]
-    a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3]
-    return _output(a, (2,))
+    p[..., 0] = t22
+    p[..., 1] = -t21
+    J[..., 0] = t21
+    J[..., 1] = t19
+    J[..., 2] = t17
+    J[..., 3] = t15
+    J[..., 4] = t14
+    J[..., 5] = t22
+    J[..., 6] = t20
+    J[..., 7] = t18
+    J[..., 8] = t16
+    J[..., 9] = t8
+    H[..., 0] = t45
+    H[..., 1] = t43
+    H[..., 2] = t41
+    H[..., 3] = t39
+    H[..., 4] = t37
+    H[..., 5] = t46
+    H[..., 6] = t44
+    H[..., 7] = t42
+    H[..., 8] = t40
+    H[..., 9] = t38
+    v[..., 0] = t46
+    v[..., 1] = -t45
+    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
+    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
 
 
 def kinematics(q, dq, ddq, l):
@@ -360,119 +484,32 @@ def kinematics(q, dq, ddq, l):
     Operations: 5 sin, 5 cos, 87 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("", "", "", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
-    t14 = -t13
-    t15 = t14 - t12
-    t16 = t7 + t8
-    t17 = t15 - t11
-    t18 = t6 + t16
-    t19 = t17 - t10
-    t20 = t5 + t18
-    t21 = t19 - t9
-    t22 = t4 + t20
-    t23 = dq[0] + dq[1]
-    t24 = t23 + dq[2]
-    t25 = t24 + dq[3]
-    t26 = t25 + dq[4]
-    t27 = t4*dq[0]
-    t28 = t5*t23
-    t29 = t6*t24
-    t30 = t7*t25
-    t31 = t8*t26
-    t32 = t9*dq[0]
-    t33 = t10*t23
-    t34 = t11*t24
-    t35 = t12*t25
-    t36 = t13*t26
-    t37 = -t31
-    t38 = -t36
-    t39 = t37 - t30
-    t40 = t38 - t35
-    t41 = t39 - t29
-    t42 = t40 - t34
-    t43 = t41 - t28
-    t44 = t42 - t33
-    t45 = t43 - t27
-    t46 = t44 - t32
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t22
-    p[1] = -t21
-    J = np.empty((10,) + batch, dtype=DTYPE)
-    J[0] = t21
-    J[1] = t19
-    J[2] = t17
-    J[3] = t15
-    J[4] = t14
-    J[5] = t22
-    J[6] = t20
-    J[7] = t18
-    J[8] = t16
-    J[9] = t8
-    H = np.empty((10,) + batch, dtype=DTYPE)
-    H[0] = t45
-    H[1] = t43
-    H[2] = t41
-    H[3] = t39
-    H[4] = t37
-    H[5] = t46
-    H[6] = t44
-    H[7] = t42
-    H[8] = t40
-    H[9] = t38
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t46
-    v[1] = -t45
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4]
-    a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3]
-    return _output(p, (2,)), _output(J, (2, 5,)), _output(H, (2, 5,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (10,), dtype=DTYPE), np.empty(batch + (10,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 5,)), outputs[2].reshape(batch + (2, 5,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q, l):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 5).
-    l: array of shape (..., 5).
-    Returns w of shape (..., 1).
-    Operations: 5 sin, 5 cos, 71 add/sub/mul/neg.
-    """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+def _manipulability_core(q, l, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -494,42 +531,44 @@ def manipulability(q, l):
     t56 = np.where(t50, t16, t15) - t52*np.where(t50, t15, t16)
     t57 = np.where(t50, t8, t14) - t52*np.where(t50, t14, t8)
     t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t51*t58)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t51*t58)
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity(q, l, v, lambda_):
-    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
 
     q: array of shape (..., 5).
     l: array of shape (..., 5).
-    v: array of shape (..., 2), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 89 add/sub/mul/neg.
+    Returns w of shape (..., 1).
+    Operations: 5 sin, 5 cos, 71 add/sub/mul/neg.
     """
-    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (5, 5, 2, ), ("", "", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("", "", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, l, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -546,56 +585,61 @@ def inverse_velocity(q, l, v, lambda_):
     t60 = t47 + t59
     t61 = t49 + t59
     t62 = t60 + t61
-    t63 = t60*v[0] + t48*v[1]
-    t64 = t61*v[1] + t48*v[0]
+    t63 = t60*v[..., 0] + t48*v[..., 1]
+    t64 = t61*v[..., 1] + t48*v[..., 0]
     t65 = 1.0/(t62*t62)
     t66 = t63*t65
     t67 = t64*t65
     t68 = t60*t61 - t48*t48
     t69 = (t68 > RANK_TOL*t62*t62)
     t70 = 1.0/t68
-    t71 = np.where(t69, t70*(t62*v[0] - t63), t66)
-    t72 = np.where(t69, t70*(t62*v[1] - t64), t67)
-    dq = np.empty((5,) + batch, dtype=DTYPE)
-    dq[0] = t71*t21 + t72*t22
-    dq[1] = t71*t19 + t72*t20
-    dq[2] = t71*t17 + t72*t18
-    dq[3] = t71*t15 + t72*t16
-    dq[4] = t8*t72 + t71*t14
-    return _output(dq, (5,))
+    t71 = np.where(t69, t70*(t62*v[..., 0] - t63), t66)
+    t72 = np.where(t69, t70*(t62*v[..., 1] - t64), t67)
+    dq[..., 0] = t71*t21 + t72*t22
+    dq[..., 1] = t71*t19 + t72*t20
+    dq[..., 2] = t71*t17 + t72*t18
+    dq[..., 3] = t71*t15 + t72*t16
+    dq[..., 4] = t8*t72 + t71*t14
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity3(q, l, twist, lambda_):
-    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
     q: array of shape (..., 5).
     l: array of shape (..., 5).
-    twist: array of shape (..., 3), finite.
+    v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 179 add/sub/mul/neg.
+    Returns dq of shape (..., 5).
+    Operations: 5 sin, 5 cos, 89 add/sub/mul/neg.
     """
-    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (5, 5, 3, ), ("", "", "finite", ))
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (5, 5, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (5,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, l, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (5,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity3_core(q, l, twist, lambda_, dq3):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq3.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -616,9 +660,9 @@ def inverse_velocity3(q, l, twist, lambda_):
     t82 = t8 + t22 + t20 + t18 + t16
     t83 = 5.0 + t59
     t84 = t60 + t61 + t83
-    t85 = t60*twist[0] + t48*twist[1] + t81*twist[2]
-    t86 = t61*twist[1] + t48*twist[0] + t82*twist[2]
-    t87 = t83*twist[2] + t81*twist[0] + t82*twist[1]
+    t85 = t60*twist[..., 0] + t48*twist[..., 1] + t81*twist[..., 2]
+    t86 = t61*twist[..., 1] + t48*twist[..., 0] + t82*twist[..., 2]
+    t87 = t83*twist[..., 2] + t81*twist[..., 0] + t82*twist[..., 1]
     t88 = 1.0/(t84*t84)
     t89 = t85*t88
     t90 = t86*t88
@@ -639,49 +683,54 @@ def inverse_velocity3(q, l, twist, lambda_):
     t105 = t83*t87 + t81*t85 + t82*t86
     t106 = 1.0/(t98*t98)
     t107 = t100 - t98
-    t108 = np.where(t101, np.where(t99, t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]), t106*(t85*t107 - t103*t84)), t89)
-    t109 = np.where(t101, np.where(t99, t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]), t106*(t86*t107 - t104*t84)), t90)
-    t110 = np.where(t101, np.where(t99, t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]), t106*(t87*t107 - t105*t84)), t91)
-    dq3 = np.empty((5,) + batch, dtype=DTYPE)
-    dq3[0] = t110 + t108*t21 + t109*t22
-    dq3[1] = t110 + t108*t19 + t109*t20
-    dq3[2] = t110 + t108*t17 + t109*t18
-    dq3[3] = t110 + t108*t15 + t109*t16
-    dq3[4] = t110 + t8*t109 + t108*t14
-    return _output(dq3, (5,))
+    t108 = np.where(t101, np.where(t99, t102*(t92*twist[..., 0] + t93*twist[..., 1] + t94*twist[..., 2]), t106*(t85*t107 - t103*t84)), t89)
+    t109 = np.where(t101, np.where(t99, t102*(t93*twist[..., 0] + t95*twist[..., 1] + t96*twist[..., 2]), t106*(t86*t107 - t104*t84)), t90)
+    t110 = np.where(t101, np.where(t99, t102*(t94*twist[..., 0] + t96*twist[..., 1] + t68*twist[..., 2]), t106*(t87*t107 - t105*t84)), t91)
+    dq3[..., 0] = t110 + t108*t21 + t109*t22
+    dq3[..., 1] = t110 + t108*t19 + t109*t20
+    dq3[..., 2] = t110 + t108*t17 + t109*t18
+    dq3[..., 3] = t110 + t108*t15 + t109*t16
+    dq3[..., 4] = t110 + t8*t109 + t108*t14
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def ik_step(q, l, target, lambda_):
-    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
     q: array of shape (..., 5).
     l: array of shape (..., 5).
-    target: array of shape (..., 2), finite.
+    twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 96 add/sub/mul/neg.
+    Returns dq3 of shape (..., 5).
+    Operations: 5 sin, 5 cos, 179 add/sub/mul/neg.
     """
-    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (5, 5, 2, ), ("", "", "finite", ))
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (5, 5, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((5,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (5,), dtype=DTYPE), )
+    _chunked(_inverse_velocity3_core, (q, l, twist, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (5,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _ik_step_core(q, l, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (5,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t4 = cs[0]*l[0]
-    t5 = cs[1]*l[1]
-    t6 = cs[2]*l[2]
-    t7 = cs[3]*l[3]
-    t8 = cs[4]*l[4]
-    t9 = sn[0]*l[0]
-    t10 = sn[1]*l[1]
-    t11 = sn[2]*l[2]
-    t12 = sn[3]*l[3]
-    t13 = sn[4]*l[4]
+    t4 = cs[..., 0]*l[..., 0]
+    t5 = cs[..., 1]*l[..., 1]
+    t6 = cs[..., 2]*l[..., 2]
+    t7 = cs[..., 3]*l[..., 3]
+    t8 = cs[..., 4]*l[..., 4]
+    t9 = sn[..., 0]*l[..., 0]
+    t10 = sn[..., 1]*l[..., 1]
+    t11 = sn[..., 2]*l[..., 2]
+    t12 = sn[..., 3]*l[..., 3]
+    t13 = sn[..., 4]*l[..., 4]
     t14 = -t13
     t15 = t14 - t12
     t16 = t7 + t8
@@ -702,21 +751,36 @@ def ik_step(q, l, target, lambda_):
     t68 = t60*t61 - t48*t48
     t69 = (t68 > RANK_TOL*t62*t62)
     t70 = 1.0/t68
-    t73 = target[0] - t22
-    t74 = t21 + target[1]
+    t73 = target[..., 0] - t22
+    t74 = t21 + target[..., 1]
     t75 = t60*t73 + t48*t74
     t76 = t61*t74 + t48*t73
     t77 = t75*t65
     t78 = t76*t65
     t79 = np.where(t69, t70*(t73*t62 - t75), t77)
     t80 = np.where(t69, t70*(t74*t62 - t76), t78)
-    q_next = np.empty((5,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t79*t21 + t80*t22
-    q_next[1] = q[1] + t79*t19 + t80*t20
-    q_next[2] = q[2] + t79*t17 + t80*t18
-    q_next[3] = q[3] + t79*t15 + t80*t16
-    q_next[4] = q[4] + t8*t80 + t79*t14
-    return _output(q_next, (5,))
+    q_next[..., 0] = q[..., 0] + t79*t21 + t80*t22
+    q_next[..., 1] = q[..., 1] + t79*t19 + t80*t20
+    q_next[..., 2] = q[..., 2] + t79*t17 + t80*t18
+    q_next[..., 3] = q[..., 3] + t79*t15 + t80*t16
+    q_next[..., 4] = q[..., 4] + t8*t80 + t79*t14
+
+
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 5).
+    l: array of shape (..., 5).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 5).
+    Operations: 5 sin, 5 cos, 96 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (5, 5, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (5,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, l, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (5,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

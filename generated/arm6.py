@@ -44,10 +44,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -57,12 +57,68 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _position_core(q, l, p):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    p[..., 0] = t27
+    p[..., 1] = -t26
 
 
 def position(q, l):
@@ -74,27 +130,34 @@ def position(q, l):
     Operations: 6 sin, 6 cos, 29 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_position_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _jacobian_core(q, l, J):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(J.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -106,10 +169,18 @@ def position(q, l):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t27
-    p[1] = -t26
-    return _output(p, (2,))
+    J[..., 0] = t26
+    J[..., 1] = t24
+    J[..., 2] = t22
+    J[..., 3] = t20
+    J[..., 4] = t18
+    J[..., 5] = t17
+    J[..., 6] = t27
+    J[..., 7] = t25
+    J[..., 8] = t23
+    J[..., 9] = t21
+    J[..., 10] = t19
+    J[..., 11] = t10
 
 
 def jacobian(q, l):
@@ -121,52 +192,75 @@ def jacobian(q, l):
     Operations: 6 sin, 6 cos, 28 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (12,), dtype=DTYPE), )
+    _chunked(_jacobian_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 6,))
+
+
+def _coriolis_core(q, dq, l, H):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(H.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
-    t17 = -t16
-    t18 = t17 - t15
-    t19 = t9 + t10
-    t20 = t18 - t14
-    t21 = t8 + t19
-    t22 = t20 - t13
-    t23 = t7 + t21
-    t24 = t22 - t12
-    t25 = t6 + t23
-    t26 = t24 - t11
-    t27 = t5 + t25
-    J = np.empty((12,) + batch, dtype=DTYPE)
-    J[0] = t26
-    J[1] = t24
-    J[2] = t22
-    J[3] = t20
-    J[4] = t18
-    J[5] = t17
-    J[6] = t27
-    J[7] = t25
-    J[8] = t23
-    J[9] = t21
-    J[10] = t19
-    J[11] = t10
-    return _output(J, (2, 6,))
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
+    t28 = dq[..., 0] + dq[..., 1]
+    t29 = t28 + dq[..., 2]
+    t30 = t29 + dq[..., 3]
+    t31 = t30 + dq[..., 4]
+    t32 = t31 + dq[..., 5]
+    t33 = t5*dq[..., 0]
+    t34 = t6*t28
+    t35 = t7*t29
+    t36 = t8*t30
+    t37 = t9*t31
+    t38 = t10*t32
+    t39 = t11*dq[..., 0]
+    t40 = t12*t28
+    t41 = t13*t29
+    t42 = t14*t30
+    t43 = t15*t31
+    t44 = t16*t32
+    t45 = -t38
+    t46 = -t44
+    t47 = t45 - t37
+    t48 = t46 - t43
+    t49 = t47 - t36
+    t50 = t48 - t42
+    t51 = t49 - t35
+    t52 = t50 - t41
+    t53 = t51 - t34
+    t54 = t52 - t40
+    t55 = t53 - t33
+    t56 = t54 - t39
+    H[..., 0] = t55
+    H[..., 1] = t53
+    H[..., 2] = t51
+    H[..., 3] = t49
+    H[..., 4] = t47
+    H[..., 5] = t45
+    H[..., 6] = t56
+    H[..., 7] = t54
+    H[..., 8] = t52
+    H[..., 9] = t50
+    H[..., 10] = t48
+    H[..., 11] = t46
 
 
 def coriolis(q, dq, l):
@@ -179,39 +273,46 @@ def coriolis(q, dq, l):
     Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (12,), dtype=DTYPE), )
+    _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2, 6,))
+
+
+def _velocity_core(q, dq, l, v):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(v.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
-    t28 = dq[0] + dq[1]
-    t29 = t28 + dq[2]
-    t30 = t29 + dq[3]
-    t31 = t30 + dq[4]
-    t32 = t31 + dq[5]
-    t33 = t5*dq[0]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
+    t28 = dq[..., 0] + dq[..., 1]
+    t29 = t28 + dq[..., 2]
+    t30 = t29 + dq[..., 3]
+    t31 = t30 + dq[..., 4]
+    t32 = t31 + dq[..., 5]
+    t33 = t5*dq[..., 0]
     t34 = t6*t28
     t35 = t7*t29
     t36 = t8*t30
     t37 = t9*t31
     t38 = t10*t32
-    t39 = t11*dq[0]
+    t39 = t11*dq[..., 0]
     t40 = t12*t28
     t41 = t13*t29
     t42 = t14*t30
@@ -229,20 +330,8 @@ def coriolis(q, dq, l):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    H = np.empty((12,) + batch, dtype=DTYPE)
-    H[0] = t55
-    H[1] = t53
-    H[2] = t51
-    H[3] = t49
-    H[4] = t47
-    H[5] = t45
-    H[6] = t56
-    H[7] = t54
-    H[8] = t52
-    H[9] = t50
-    H[10] = t48
-    H[11] = t46
-    return _output(H, (2, 6,))
+    v[..., 0] = t56
+    v[..., 1] = -t55
 
 
 def velocity(q, dq, l):
@@ -255,39 +344,57 @@ def velocity(q, dq, l):
     Operations: 6 sin, 6 cos, 47 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _acceleration_core(q, dq, ddq, l, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(a.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
-    t28 = dq[0] + dq[1]
-    t29 = t28 + dq[2]
-    t30 = t29 + dq[3]
-    t31 = t30 + dq[4]
-    t32 = t31 + dq[5]
-    t33 = t5*dq[0]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
+    t17 = -t16
+    t18 = t17 - t15
+    t19 = t9 + t10
+    t20 = t18 - t14
+    t21 = t8 + t19
+    t22 = t20 - t13
+    t23 = t7 + t21
+    t24 = t22 - t12
+    t25 = t6 + t23
+    t26 = t24 - t11
+    t27 = t5 + t25
+    t28 = dq[..., 0] + dq[..., 1]
+    t29 = t28 + dq[..., 2]
+    t30 = t29 + dq[..., 3]
+    t31 = t30 + dq[..., 4]
+    t32 = t31 + dq[..., 5]
+    t33 = t5*dq[..., 0]
     t34 = t6*t28
     t35 = t7*t29
     t36 = t8*t30
     t37 = t9*t31
     t38 = t10*t32
-    t39 = t11*dq[0]
+    t39 = t11*dq[..., 0]
     t40 = t12*t28
     t41 = t13*t29
     t42 = t14*t30
@@ -305,10 +412,8 @@ def velocity(q, dq, l):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t56
-    v[1] = -t55
-    return _output(v, (2,))
+    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
+    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
 
 
 def acceleration(q, dq, ddq, l):
@@ -322,27 +427,34 @@ def acceleration(q, dq, ddq, l):
     Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(p.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -354,18 +466,18 @@ def acceleration(q, dq, ddq, l):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t28 = dq[0] + dq[1]
-    t29 = t28 + dq[2]
-    t30 = t29 + dq[3]
-    t31 = t30 + dq[4]
-    t32 = t31 + dq[5]
-    t33 = t5*dq[0]
+    t28 = dq[..., 0] + dq[..., 1]
+    t29 = t28 + dq[..., 2]
+    t30 = t29 + dq[..., 3]
+    t31 = t30 + dq[..., 4]
+    t32 = t31 + dq[..., 5]
+    t33 = t5*dq[..., 0]
     t34 = t6*t28
     t35 = t7*t29
     t36 = t8*t30
     t37 = t9*t31
     t38 = t10*t32
-    t39 = t11*dq[0]
+    t39 = t11*dq[..., 0]
     t40 = t12*t28
     t41 = t13*t29
     t42 = t14*t30
@@ -383,10 +495,36 @@ def acceleration(q, dq, ddq, l):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5]
-    a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4]
-    return _output(a, (2,))
+    p[..., 0] = t27
+    p[..., 1] = -t26
+    J[..., 0] = t26
+    J[..., 1] = t24
+    J[..., 2] = t22
+    J[..., 3] = t20
+    J[..., 4] = t18
+    J[..., 5] = t17
+    J[..., 6] = t27
+    J[..., 7] = t25
+    J[..., 8] = t23
+    J[..., 9] = t21
+    J[..., 10] = t19
+    J[..., 11] = t10
+    H[..., 0] = t55
+    H[..., 1] = t53
+    H[..., 2] = t51
+    H[..., 3] = t49
+    H[..., 4] = t47
+    H[..., 5] = t45
+    H[..., 6] = t56
+    H[..., 7] = t54
+    H[..., 8] = t52
+    H[..., 9] = t50
+    H[..., 10] = t48
+    H[..., 11] = t46
+    v[..., 0] = t56
+    v[..., 1] = -t55
+    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
+    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
 
 
 def kinematics(q, dq, ddq, l):
@@ -400,136 +538,35 @@ def kinematics(q, dq, ddq, l):
     Operations: 6 sin, 6 cos, 105 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
-    t17 = -t16
-    t18 = t17 - t15
-    t19 = t9 + t10
-    t20 = t18 - t14
-    t21 = t8 + t19
-    t22 = t20 - t13
-    t23 = t7 + t21
-    t24 = t22 - t12
-    t25 = t6 + t23
-    t26 = t24 - t11
-    t27 = t5 + t25
-    t28 = dq[0] + dq[1]
-    t29 = t28 + dq[2]
-    t30 = t29 + dq[3]
-    t31 = t30 + dq[4]
-    t32 = t31 + dq[5]
-    t33 = t5*dq[0]
-    t34 = t6*t28
-    t35 = t7*t29
-    t36 = t8*t30
-    t37 = t9*t31
-    t38 = t10*t32
-    t39 = t11*dq[0]
-    t40 = t12*t28
-    t41 = t13*t29
-    t42 = t14*t30
-    t43 = t15*t31
-    t44 = t16*t32
-    t45 = -t38
-    t46 = -t44
-    t47 = t45 - t37
-    t48 = t46 - t43
-    t49 = t47 - t36
-    t50 = t48 - t42
-    t51 = t49 - t35
-    t52 = t50 - t41
-    t53 = t51 - t34
-    t54 = t52 - t40
-    t55 = t53 - t33
-    t56 = t54 - t39
-    p = np.empty((2,) + batch, dtype=DTYPE)
-    p[0] = t27
-    p[1] = -t26
-    J = np.empty((12,) + batch, dtype=DTYPE)
-    J[0] = t26
-    J[1] = t24
-    J[2] = t22
-    J[3] = t20
-    J[4] = t18
-    J[5] = t17
-    J[6] = t27
-    J[7] = t25
-    J[8] = t23
-    J[9] = t21
-    J[10] = t19
-    J[11] = t10
-    H = np.empty((12,) + batch, dtype=DTYPE)
-    H[0] = t55
-    H[1] = t53
-    H[2] = t51
-    H[3] = t49
-    H[4] = t47
-    H[5] = t45
-    H[6] = t56
-    H[7] = t54
-    H[8] = t52
-    H[9] = t50
-    H[10] = t48
-    H[11] = t46
-    v = np.empty((2,) + batch, dtype=DTYPE)
-    v[0] = t56
-    v[1] = -t55
-    a = np.empty((2,) + batch, dtype=DTYPE)
-    a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5]
-    a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4]
-    return _output(p, (2,)), _output(J, (2, 6,)), _output(H, (2, 6,)), _output(v, (2,)), _output(a, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 6,)), outputs[2].reshape(batch + (2, 6,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
 
 
 @np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def manipulability(q, l):
-    """manipulability w = sqrt(det(J J^T)) (1).
-
-    q: array of shape (..., 6).
-    l: array of shape (..., 6).
-    Returns w of shape (..., 1).
-    Operations: 6 sin, 6 cos, 86 add/sub/mul/neg.
-    """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+def _manipulability_core(q, l, w):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(w.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -554,45 +591,47 @@ def manipulability(q, l):
     t67 = np.where(t60, t19, t18) - t62*np.where(t60, t18, t19)
     t68 = np.where(t60, t10, t17) - t62*np.where(t60, t17, t10)
     t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68
-    w = np.empty((1,) + batch, dtype=DTYPE)
-    w[0] = np.sqrt(t61*t69)
-    return _output(w, (1,))
+    w[..., 0] = np.sqrt(t61*t69)
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity(q, l, v, lambda_):
-    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
+def manipulability(q, l):
+    """manipulability w = sqrt(det(J J^T)) (1).
 
     q: array of shape (..., 6).
     l: array of shape (..., 6).
-    v: array of shape (..., 2), finite.
-    lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq of shape (..., 6).
-    Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
+    Returns w of shape (..., 1).
+    Operations: 6 sin, 6 cos, 86 add/sub/mul/neg.
     """
-    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (6, 6, 2, ), ("", "", "finite", ))
-    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
+    outputs = (np.empty(batch + (1,), dtype=DTYPE), )
+    _chunked(_manipulability_core, (q, l, ), outputs, batch)
+    return outputs[0].reshape(batch + (1,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity_core(q, l, v, lambda_, dq):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -611,60 +650,65 @@ def inverse_velocity(q, l, v, lambda_):
     t71 = t57 + t70
     t72 = t59 + t70
     t73 = t71 + t72
-    t74 = t71*v[0] + t58*v[1]
-    t75 = t72*v[1] + t58*v[0]
+    t74 = t71*v[..., 0] + t58*v[..., 1]
+    t75 = t72*v[..., 1] + t58*v[..., 0]
     t76 = 1.0/(t73*t73)
     t77 = t74*t76
     t78 = t75*t76
     t79 = t71*t72 - t58*t58
     t80 = (t79 > RANK_TOL*t73*t73)
     t81 = 1.0/t79
-    t82 = np.where(t80, t81*(t73*v[0] - t74), t77)
-    t83 = np.where(t80, t81*(t73*v[1] - t75), t78)
-    dq = np.empty((6,) + batch, dtype=DTYPE)
-    dq[0] = t82*t26 + t83*t27
-    dq[1] = t82*t24 + t83*t25
-    dq[2] = t82*t22 + t83*t23
-    dq[3] = t82*t20 + t83*t21
-    dq[4] = t82*t18 + t83*t19
-    dq[5] = t10*t83 + t82*t17
-    return _output(dq, (6,))
+    t82 = np.where(t80, t81*(t73*v[..., 0] - t74), t77)
+    t83 = np.where(t80, t81*(t73*v[..., 1] - t75), t78)
+    dq[..., 0] = t82*t26 + t83*t27
+    dq[..., 1] = t82*t24 + t83*t25
+    dq[..., 2] = t82*t22 + t83*t23
+    dq[..., 3] = t82*t20 + t83*t21
+    dq[..., 4] = t82*t18 + t83*t19
+    dq[..., 5] = t10*t83 + t82*t17
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def inverse_velocity3(q, l, twist, lambda_):
-    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
+def inverse_velocity(q, l, v, lambda_):
+    """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
     q: array of shape (..., 6).
     l: array of shape (..., 6).
-    twist: array of shape (..., 3), finite.
+    v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns dq3 of shape (..., 6).
-    Operations: 6 sin, 6 cos, 196 add/sub/mul/neg.
+    Returns dq of shape (..., 6).
+    Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
-    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (6, 6, 3, ), ("", "", "finite", ))
+    batch, (q, l, v,) = _inputs((q, l, v,), ("q", "l", "v", ), (6, 6, 2, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_inverse_velocity_core, (q, l, v, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (6,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _inverse_velocity3_core(q, l, twist, lambda_, dq3):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dq3.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -687,9 +731,9 @@ def inverse_velocity3(q, l, twist, lambda_):
     t93 = t10 + t27 + t25 + t23 + t21 + t19
     t94 = 6.0 + t70
     t95 = t71 + t72 + t94
-    t96 = t71*twist[0] + t58*twist[1] + t92*twist[2]
-    t97 = t72*twist[1] + t58*twist[0] + t93*twist[2]
-    t98 = t94*twist[2] + t92*twist[0] + t93*twist[1]
+    t96 = t71*twist[..., 0] + t58*twist[..., 1] + t92*twist[..., 2]
+    t97 = t72*twist[..., 1] + t58*twist[..., 0] + t93*twist[..., 2]
+    t98 = t94*twist[..., 2] + t92*twist[..., 0] + t93*twist[..., 1]
     t99 = 1.0/(t95*t95)
     t100 = t96*t99
     t101 = t97*t99
@@ -710,53 +754,58 @@ def inverse_velocity3(q, l, twist, lambda_):
     t116 = t94*t98 + t92*t96 + t93*t97
     t117 = 1.0/(t109*t109)
     t118 = t111 - t109
-    t119 = np.where(t112, np.where(t110, t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]), t117*(t96*t118 - t114*t95)), t100)
-    t120 = np.where(t112, np.where(t110, t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]), t117*(t97*t118 - t115*t95)), t101)
-    t121 = np.where(t112, np.where(t110, t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]), t117*(t98*t118 - t116*t95)), t102)
-    dq3 = np.empty((6,) + batch, dtype=DTYPE)
-    dq3[0] = t121 + t119*t26 + t120*t27
-    dq3[1] = t121 + t119*t24 + t120*t25
-    dq3[2] = t121 + t119*t22 + t120*t23
-    dq3[3] = t121 + t119*t20 + t120*t21
-    dq3[4] = t121 + t119*t18 + t120*t19
-    dq3[5] = t121 + t10*t120 + t119*t17
-    return _output(dq3, (6,))
+    t119 = np.where(t112, np.where(t110, t113*(t103*twist[..., 0] + t104*twist[..., 1] + t105*twist[..., 2]), t117*(t96*t118 - t114*t95)), t100)
+    t120 = np.where(t112, np.where(t110, t113*(t104*twist[..., 0] + t106*twist[..., 1] + t107*twist[..., 2]), t117*(t97*t118 - t115*t95)), t101)
+    t121 = np.where(t112, np.where(t110, t113*(t105*twist[..., 0] + t107*twist[..., 1] + t79*twist[..., 2]), t117*(t98*t118 - t116*t95)), t102)
+    dq3[..., 0] = t121 + t119*t26 + t120*t27
+    dq3[..., 1] = t121 + t119*t24 + t120*t25
+    dq3[..., 2] = t121 + t119*t22 + t120*t23
+    dq3[..., 3] = t121 + t119*t20 + t120*t21
+    dq3[..., 4] = t121 + t119*t18 + t120*t19
+    dq3[..., 5] = t121 + t10*t120 + t119*t17
 
 
-@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
-def ik_step(q, l, target, lambda_):
-    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+def inverse_velocity3(q, l, twist, lambda_):
+    """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
     q: array of shape (..., 6).
     l: array of shape (..., 6).
-    target: array of shape (..., 2), finite.
+    twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
-    Returns q_next of shape (..., 6).
-    Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
+    Returns dq3 of shape (..., 6).
+    Operations: 6 sin, 6 cos, 196 add/sub/mul/neg.
     """
-    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (6, 6, 2, ), ("", "", "finite", ))
+    batch, (q, l, twist,) = _inputs((q, l, twist,), ("q", "l", "twist", ), (6, 6, 3, ), ("", "", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
-    ang = np.empty((6,) + batch, dtype=DTYPE)
-    ang[1] = q[0] + q[1]
-    ang[2] = ang[1] + q[2]
-    ang[3] = ang[2] + q[3]
-    ang[4] = ang[3] + q[4]
-    ang[5] = ang[4] + q[5]
-    ang[0] = q[0]
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_inverse_velocity3_core, (q, l, twist, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (6,))
+
+
+@np.errstate(divide="ignore", invalid="ignore")  # both sides of each np.where are evaluated
+def _ik_step_core(q, l, target, lambda_, q_next):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(q_next.shape[:-1] + (6,), dtype=DTYPE)
+    ang[..., 1] = q[..., 0] + q[..., 1]
+    ang[..., 2] = ang[..., 1] + q[..., 2]
+    ang[..., 3] = ang[..., 2] + q[..., 3]
+    ang[..., 4] = ang[..., 3] + q[..., 4]
+    ang[..., 5] = ang[..., 4] + q[..., 5]
+    ang[..., 0] = q[..., 0]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t5 = cs[0]*l[0]
-    t6 = cs[1]*l[1]
-    t7 = cs[2]*l[2]
-    t8 = cs[3]*l[3]
-    t9 = cs[4]*l[4]
-    t10 = cs[5]*l[5]
-    t11 = sn[0]*l[0]
-    t12 = sn[1]*l[1]
-    t13 = sn[2]*l[2]
-    t14 = sn[3]*l[3]
-    t15 = sn[4]*l[4]
-    t16 = sn[5]*l[5]
+    t5 = cs[..., 0]*l[..., 0]
+    t6 = cs[..., 1]*l[..., 1]
+    t7 = cs[..., 2]*l[..., 2]
+    t8 = cs[..., 3]*l[..., 3]
+    t9 = cs[..., 4]*l[..., 4]
+    t10 = cs[..., 5]*l[..., 5]
+    t11 = sn[..., 0]*l[..., 0]
+    t12 = sn[..., 1]*l[..., 1]
+    t13 = sn[..., 2]*l[..., 2]
+    t14 = sn[..., 3]*l[..., 3]
+    t15 = sn[..., 4]*l[..., 4]
+    t16 = sn[..., 5]*l[..., 5]
     t17 = -t16
     t18 = t17 - t15
     t19 = t9 + t10
@@ -779,22 +828,37 @@ def ik_step(q, l, target, lambda_):
     t79 = t71*t72 - t58*t58
     t80 = (t79 > RANK_TOL*t73*t73)
     t81 = 1.0/t79
-    t84 = target[0] - t27
-    t85 = t26 + target[1]
+    t84 = target[..., 0] - t27
+    t85 = t26 + target[..., 1]
     t86 = t71*t84 + t58*t85
     t87 = t72*t85 + t58*t84
     t88 = t86*t76
     t89 = t87*t76
     t90 = np.where(t80, t81*(t84*t73 - t86), t88)
     t91 = np.where(t80, t81*(t85*t73 - t87), t89)
-    q_next = np.empty((6,) + batch, dtype=DTYPE)
-    q_next[0] = q[0] + t90*t26 + t91*t27
-    q_next[1] = q[1] + t90*t24 + t91*t25
-    q_next[2] = q[2] + t90*t22 + t91*t23
-    q_next[3] = q[3] + t90*t20 + t91*t21
-    q_next[4] = q[4] + t90*t18 + t91*t19
-    q_next[5] = q[5] + t10*t91 + t90*t17
-    return _output(q_next, (6,))
+    q_next[..., 0] = q[..., 0] + t90*t26 + t91*t27
+    q_next[..., 1] = q[..., 1] + t90*t24 + t91*t25
+    q_next[..., 2] = q[..., 2] + t90*t22 + t91*t23
+    q_next[..., 3] = q[..., 3] + t90*t20 + t91*t21
+    q_next[..., 4] = q[..., 4] + t90*t18 + t91*t19
+    q_next[..., 5] = q[..., 5] + t10*t91 + t90*t17
+
+
+def ik_step(q, l, target, lambda_):
+    """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
+
+    q: array of shape (..., 6).
+    l: array of shape (..., 6).
+    target: array of shape (..., 2), finite.
+    lambda_: a number, finite and >= 0, shared by the batch.
+    Returns q_next of shape (..., 6).
+    Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
+    """
+    batch, (q, l, target,) = _inputs((q, l, target,), ("q", "l", "target", ), (6, 6, 2, ), ("", "", "finite", ))
+    lambda_ = _scalar(lambda_, "lambda", "nonnegative")
+    outputs = (np.empty(batch + (6,), dtype=DTYPE), )
+    _chunked(_ik_step_core, (q, l, target, lambda_, ), outputs, batch)
+    return outputs[0].reshape(batch + (6,))
 
 
 IKResult = namedtuple("IKResult", "q status error iterations")

@@ -35,10 +35,10 @@ def _scalar(value, name, domain):
 
 
 def _inputs(values, names, sizes, domains):
-    """Arrays of shape (..., size) -> (batch shape, views with the element axis first)."""
+    """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.asarray(value, dtype=DTYPE)
+        array = np.ascontiguousarray(value, dtype=DTYPE)
         if array.ndim == 0 or array.shape[-1] != size:
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         _check_domain(array, name, domain)
@@ -48,12 +48,39 @@ def _inputs(values, names, sizes, domains):
     except ValueError:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
         raise ValueError(f"batch shapes do not broadcast: {shapes}") from None
-    return batch, [np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in arrays]
+    return batch, arrays
 
 
-def _output(flat, shape):
-    """(size, *batch) -> (*batch, *shape), contiguous."""
-    return np.ascontiguousarray(np.moveaxis(flat, 0, -1)).reshape(flat.shape[1:] + shape)
+CHUNK = 4096
+"""Configurations evaluated together: few enough that a function's temporaries stay in cache."""
+
+
+def _chunked(core, inputs, outputs, batch):
+    """Run core on slices of at most CHUNK configurations; arrays are (..., size), element k at [..., k]."""
+    m = int(np.prod(batch)) if batch else 1
+    if m <= CHUNK:
+        core(*inputs, *outputs)
+        return
+    flat = []
+    for x in inputs:
+        if x.ndim > 1:  # per configuration: expand partial broadcasts, then one batch axis
+            if x.shape[:-1] != batch:
+                x = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]))
+            x = x.reshape(m, x.shape[-1])
+        flat.append(x)
+    flat_out = [o.reshape(m, o.shape[-1]) for o in outputs]
+    for start in range(0, m, CHUNK):
+        part = slice(start, start + CHUNK)
+        core(*[x[part] if x.ndim > 1 else x for x in flat], *[o[part] for o in flat_out])
+
+
+def _body_rates_core(wheels, track, rates):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    t0 = 0.5*wheels[..., 0] + 0.5*wheels[..., 1]
+    t1 = 1.0/track
+    t2 = t1*wheels[..., 1] - t1*wheels[..., 0]
+    rates[..., 0] = t0
+    rates[..., 1] = t2
 
 
 def body_rates(wheels, track):
@@ -66,13 +93,15 @@ def body_rates(wheels, track):
     """
     batch, (wheels,) = _inputs((wheels,), ("wheels", ), (2, ), ("finite", ))
     track = _scalar(track, "track", "positive")
-    t0 = 0.5*wheels[0] + 0.5*wheels[1]
-    t1 = 1.0/track
-    t2 = t1*wheels[1] - t1*wheels[0]
-    rates = np.empty((2,) + batch, dtype=DTYPE)
-    rates[0] = t0
-    rates[1] = t2
-    return _output(rates, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_body_rates_core, (wheels, track, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _wheel_speeds_core(rates, track, wheels):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    wheels[..., 0] = rates[..., 0] - 0.5*track*rates[..., 1]
+    wheels[..., 1] = rates[..., 0] + 0.5*track*rates[..., 1]
 
 
 def wheel_speeds(rates, track):
@@ -85,10 +114,23 @@ def wheel_speeds(rates, track):
     """
     batch, (rates,) = _inputs((rates,), ("rates", ), (2, ), ("finite", ))
     track = _scalar(track, "track", "positive")
-    wheels = np.empty((2,) + batch, dtype=DTYPE)
-    wheels[0] = rates[0] - 0.5*track*rates[1]
-    wheels[1] = rates[0] + 0.5*track*rates[1]
-    return _output(wheels, (2,))
+    outputs = (np.empty(batch + (2,), dtype=DTYPE), )
+    _chunked(_wheel_speeds_core, (rates, track, ), outputs, batch)
+    return outputs[0].reshape(batch + (2,))
+
+
+def _pose_rate_core(pose, wheels, track, dpose):
+    """The straight-line program: fill the outputs (..., size) from the inputs (..., size)."""
+    ang = np.empty(dpose.shape[:-1] + (1,), dtype=DTYPE)
+    ang[..., 0] = pose[..., 2]
+    cs = np.cos(ang)
+    sn = np.sin(ang)
+    t0 = 0.5*wheels[..., 0] + 0.5*wheels[..., 1]
+    t1 = 1.0/track
+    t2 = t1*wheels[..., 1] - t1*wheels[..., 0]
+    dpose[..., 0] = cs[..., 0]*t0
+    dpose[..., 1] = t0*sn[..., 0]
+    dpose[..., 2] = t2
 
 
 def pose_rate(pose, wheels, track):
@@ -102,15 +144,6 @@ def pose_rate(pose, wheels, track):
     """
     batch, (pose, wheels,) = _inputs((pose, wheels,), ("pose", "wheels", ), (3, 2, ), ("finite", "finite", ))
     track = _scalar(track, "track", "positive")
-    ang = np.empty((1,) + batch, dtype=DTYPE)
-    ang[0] = pose[2]
-    cs = np.cos(ang)
-    sn = np.sin(ang)
-    t0 = 0.5*wheels[0] + 0.5*wheels[1]
-    t1 = 1.0/track
-    t2 = t1*wheels[1] - t1*wheels[0]
-    dpose = np.empty((3,) + batch, dtype=DTYPE)
-    dpose[0] = cs[0]*t0
-    dpose[1] = t0*sn[0]
-    dpose[2] = t2
-    return _output(dpose, (3,))
+    outputs = (np.empty(batch + (3,), dtype=DTYPE), )
+    _chunked(_pose_rate_core, (pose, wheels, track, ), outputs, batch)
+    return outputs[0].reshape(batch + (3,))

@@ -196,3 +196,21 @@ def test_written_files_follow_the_umask(tmp_path):
         os.umask(old)
     for path in g.paths:
         assert path.stat().st_mode & 0o777 == 0o644  # not mkstemp's 0600
+
+
+def test_numpy_chunks_give_the_same_values(rng):
+    """Batches larger than CHUNK run in slices; partial broadcasts are expanded first."""
+    g = generate(4, out=None, langs="python")
+    py = load_python(g.sources["arm4.py"], "arm4")
+    q = rng.uniform(-np.pi, np.pi, (3, 1, 7, 4))  # broadcasts with dq's (5, 1, 4)
+    dq = rng.uniform(-1, 1, (5, 1, 4))
+    ddq = rng.uniform(-1, 1, 4)
+    l = rng.uniform(0.5, 1.5, 4)
+    whole = py.kinematics(q, dq, ddq, l)
+    py.CHUNK = 4  # 105 configurations: 27 slices, the last one short
+    sliced = py.kinematics(q, dq, ddq, l)
+    for a, b in zip(whole, sliced):
+        assert a.shape[:3] == (3, 5, 7)
+        np.testing.assert_array_equal(a, b)
+    k = reference.kinematics(np.broadcast_to(q, (3, 5, 7, 4)), np.broadcast_to(dq, (3, 5, 7, 4)), np.broadcast_to(ddq, (3, 5, 7, 4)), l)
+    np.testing.assert_allclose(sliced[4], k.a, atol=1e-12)

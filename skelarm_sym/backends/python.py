@@ -42,7 +42,7 @@ class PythonArrayPrinter(ArrayPrinterMixin, PythonCodePrinter):
 
 def function_context(program: Program, domains: dict[str, str], memo: MemoPrinter | None = None) -> dict:
     """What the template needs to lay out one program as a NumPy function."""
-    names = storage_names(program, identifier=identifier)
+    names = storage_names(program, element="{name}[..., {index}]", identifier=identifier)
     printer = PythonArrayPrinter(names)
     memo = memo or MemoPrinter()
     exprs = [e for _, e in program.pre + program.post] + [e for o in program.outputs for e in o.elements]
@@ -63,7 +63,7 @@ def function_context(program: Program, domains: dict[str, str], memo: MemoPrinte
         "pre": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.pre],
         "post": [f"{names[s]} = {memo(printer, names, e)}" for s, e in program.post],
         "stores": [
-            [f"{o.name}[{i}] = {memo(printer, names, e)}" for i, e in enumerate(o.elements)] for o in program.outputs
+            [f"{o.name}[..., {i}] = {memo(printer, names, e)}" for i, e in enumerate(o.elements)] for o in program.outputs
         ],
         "angle_count": len(program.angles),
         "ops": program.ops.as_dict(),
