@@ -9,7 +9,9 @@ Columns: n; wall seconds and peak MB of the whole ``skelarm-sym generate --links
 (C and Python); kinematics operation counts (sin, cos, add/sub/mul/neg); emitted C
 ``{prefix}_kinematics`` ns per call; hand-written recursive C (benchmarks/recursive.c, one
 sincos per link) ns per call; their ratio; emitted C batch ns per configuration (m = 100 000);
-emitted NumPy ns per configuration (m = 100 000); recursive NumPy reference ns per configuration.
+emitted NumPy ns per configuration (m = 100 000); recursive NumPy reference ns per configuration;
+where CasADi is installed (``pip install '.[bench]'``), its generated C for the same outputs
+(benchmarks/others.py): add/sub/mul/neg count and ns per call in the same harness.
 Inputs uniform in [-pi, pi] from fixed seeds; medians of several repeats. Both C codes are
 compiled with the same compiler and flags (printed), ``-O2 -march=native`` by default.
 """
@@ -29,6 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from skelarm_sym import reference
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import others  # noqa: E402 - beside this script
 from skelarm_sym.build import find_compiler, load_python
 from skelarm_sym.generate import generate
 
@@ -52,8 +57,8 @@ def generation_cost(n: int, work: Path) -> tuple[float, float]:
     return wall, float(rss_kb) / 1024.0
 
 
-def c_timings(n: int, work: Path, cc: str, flags: list[str]) -> tuple[float, float, float]:
-    """(emitted ns/call, recursive ns/call, emitted batch ns/config)."""
+def c_timings(n: int, work: Path, cc: str, flags: list[str], other: Path | None = None) -> tuple[float, float, float, float]:
+    """(emitted ns/call, recursive ns/call, emitted batch ns/config, other tool's ns/call or nan)."""
     out = work / f"c{n}"
     generate(n, langs="c", out=out)
     exe = out / "bench"
@@ -61,9 +66,13 @@ def c_timings(n: int, work: Path, cc: str, flags: list[str]) -> tuple[float, flo
         *cc.split(), *flags, f"-DN={n}", f"-DPREFIX=arm{n}", f'-DHEADER="arm{n}.h"', "-DLARG=l,", f"-I{out}",
         str(HERE / "harness.c"), str(out / f"arm{n}.c"), str(HERE / "recursive.c"), "-o", str(exe), "-lm",
     ]
+    if other is not None:
+        cmd[len(cc.split()) + len(flags):len(cc.split()) + len(flags)] = [f"-DOTHER={other.stem}"]
+        cmd.insert(-3, str(other))
     subprocess.run(cmd, check=True)
     values = subprocess.run([str(exe), "100000"], capture_output=True, text=True, check=True).stdout.split()
-    return float(values[0]), float(values[1]), float(values[2])
+    other_ns = float(values[3]) if other is not None else float("nan")
+    return float(values[0]), float(values[1]), float(values[2]), other_ns
 
 
 def numpy_timings(n: int, m: int = 100_000, repeats: int = 5) -> tuple[float, float]:
@@ -98,7 +107,10 @@ def main() -> None:
     version = subprocess.run([*cc.split(), "--version"], capture_output=True, text=True).stdout.splitlines()[0]
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores; compiler: {version}; flags: {' '.join(flags)}; numpy {np.__version__}")
     print()
-    header = "| n | gen s | gen MB | sin | cos | arith | C ns/call | recursive C ns/call | ratio | C batch ns/cfg | NumPy ns/cfg | reference ns/cfg |"
+    header = (
+        "| n | gen s | gen MB | sin | cos | arith | C ns/call | recursive C ns/call | ratio | C batch ns/cfg "
+        "| NumPy ns/cfg | reference ns/cfg | CasADi arith | CasADi ns/call |"
+    )
     print(header)
     print("|" + "---|" * (header.count("|") - 1))
     with tempfile.TemporaryDirectory() as tmp:
@@ -109,11 +121,13 @@ def main() -> None:
             wall, mb = generation_cost(n, work)
             ops = next(p for p in generate(n, langs="c", out=None).programs if p.name == "kinematics").ops
             if n in links:
-                single, rec, batch = c_timings(n, work, cc, flags)
+                casadi = others.casadi_kinematics(n, work / f"casadi{n}")
+                single, rec, batch, cas = c_timings(n, work, cc, flags, casadi[0] if casadi else None)
                 npy, ref = numpy_timings(n)
                 row = [f"{single:.1f}", f"{rec:.1f}", f"{single / rec:.2f}", f"{batch:.1f}", f"{npy:.0f}", f"{ref:.0f}"]
+                row += [str(casadi[1]["arith"]), f"{cas:.1f}"] if casadi else ["-", "-"]
             else:
-                row = ["-"] * 6
+                row = ["-"] * 8
             print(f"| {n} | {wall:.2f} | {mb:.0f} | {ops.sin} | {ops.cos} | {ops.arithmetic} | " + " | ".join(row) + " |", flush=True)
 
 

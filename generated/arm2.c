@@ -24,18 +24,36 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM2_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define ARM2_VECTOR_MATH 1
 #else
 #define ARM2_VECTORIZE
+#define ARM2_VECTOR_MATH 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 2. */
-static void arm2_trig2(const double *restrict ang, double *restrict cs, double *restrict sn)
+static ARM2_VECTORIZE void arm2_trig2(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
+#if ARM2_VECTOR_MATH
+    /* One 4-wide vector sine over (a + pi/2, a): cos(a) = sin(a + pi/2). */
+    double x[4];
+    x[0] = ang[0] + 1.5707963267948966;
+    x[1] = ang[1] + 1.5707963267948966;
+    x[2] = ang[0];
+    x[3] = ang[1];
+    for (k = 0; k < 4; ++k) {
+        x[k] = sin(x[k]);
+    }
+    cs[0] = x[0];
+    cs[1] = x[1];
+    sn[0] = x[2];
+    sn[1] = x[3];
+#else
     for (k = 0; k < 2; ++k) {
         cs[k] = cos(ang[k]);
         sn[k] = sin(ang[k]);
     }
+#endif
 }
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 64. */

@@ -24,18 +24,34 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM3_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define ARM3_VECTOR_MATH 1
 #else
 #define ARM3_VECTORIZE
+#define ARM3_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 3. */
-static void arm3_trig3(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
+static ARM3_VECTORIZE void arm3_trig4(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 3; ++k) {
+#if ARM3_VECTOR_MATH
+    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
+    double x[4];
+    for (k = 0; k < 4; ++k) {
+        x[k] = ang[k] + 1.5707963267948966;
+    }
+    for (k = 0; k < 4; ++k) {
+        cs[k] = sin(x[k]);
+    }
+    for (k = 0; k < 4; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#else
+    for (k = 0; k < 4; ++k) {
         cs[k] = cos(ang[k]);
         sn[k] = sin(ang[k]);
     }
+#endif
 }
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
@@ -79,9 +95,13 @@ static void arm3_position_finish(const double l[3], const double *restrict cs, c
 
 void arm3_position(const double q[3], const double l[3], double p[2])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_position_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_position_finish(l, cs, sn, p);
 }
 
@@ -198,9 +218,13 @@ static void arm3_jacobian_finish(const double l[3], const double *restrict cs, c
 
 void arm3_jacobian(const double q[3], const double l[3], double J[6])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_jacobian_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_jacobian_finish(l, cs, sn, J);
 }
 
@@ -338,9 +362,13 @@ static void arm3_coriolis_finish(const double dq[3], const double l[3], const do
 
 void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_coriolis_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -495,9 +523,13 @@ static void arm3_velocity_finish(const double dq[3], const double l[3], const do
 
 void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_velocity_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -645,9 +677,13 @@ static void arm3_acceleration_finish(const double dq[3], const double ddq[3], co
 
 void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_acceleration_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -828,9 +864,13 @@ static void arm3_kinematics_finish(const double dq[3], const double ddq[3], cons
 
 void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_kinematics_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -1050,9 +1090,13 @@ static void arm3_manipulability_finish(const double l[3], const double *restrict
 
 void arm3_manipulability(const double q[3], const double l[3], double w[1])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_manipulability_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1190,9 +1234,13 @@ static void arm3_inverse_velocity_finish(const double l[3], const double v[2], d
 
 void arm3_inverse_velocity(const double q[3], const double l[3], const double v[2], double lambda, double dq[3])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_inverse_velocity_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
@@ -1373,9 +1421,13 @@ static void arm3_inverse_velocity3_finish(const double l[3], const double twist[
 
 void arm3_inverse_velocity3(const double q[3], const double l[3], const double twist[3], double lambda, double dq3[3])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_inverse_velocity3_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
@@ -1560,9 +1612,13 @@ static void arm3_ik_step_finish(const double q[3], const double l[3], const doub
 
 void arm3_ik_step(const double q[3], const double l[3], const double target[2], double lambda, double q_next[3])
 {
-    double ang[3], cs[3], sn[3];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3_ik_step_angles(q, ang);
-    arm3_trig3(ang, cs, sn);
+    arm3_trig4(ang, cs, sn);
     arm3_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 

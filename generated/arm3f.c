@@ -24,18 +24,34 @@
 __attribute__((__simd__("notinbranch"))) float sinf(float);
 __attribute__((__simd__("notinbranch"))) float cosf(float);
 #define ARM3F_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define ARM3F_VECTOR_MATH 1
 #else
 #define ARM3F_VECTORIZE
+#define ARM3F_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 3. */
-static void arm3f_trig3(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
+static ARM3F_VECTORIZE void arm3f_trig4(const float *restrict ang, float *restrict cs, float *restrict sn)
 {
     int k;
-    for (k = 0; k < 3; ++k) {
+#if ARM3F_VECTOR_MATH
+    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
+    float x[4];
+    for (k = 0; k < 4; ++k) {
+        x[k] = ang[k] + 1.5707964f;
+    }
+    for (k = 0; k < 4; ++k) {
+        cs[k] = sinf(x[k]);
+    }
+    for (k = 0; k < 4; ++k) {
+        sn[k] = sinf(ang[k]);
+    }
+#else
+    for (k = 0; k < 4; ++k) {
         cs[k] = cosf(ang[k]);
         sn[k] = sinf(ang[k]);
     }
+#endif
 }
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
@@ -77,9 +93,13 @@ static void arm3f_position_finish(const float *restrict cs, const float *restric
 
 void arm3f_position(const float q[3], float p[2])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_position_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_position_finish(cs, sn, p);
 }
 
@@ -192,9 +212,13 @@ static void arm3f_jacobian_finish(const float *restrict cs, const float *restric
 
 void arm3f_jacobian(const float q[3], float J[6])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_jacobian_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_jacobian_finish(cs, sn, J);
 }
 
@@ -328,9 +352,13 @@ static void arm3f_coriolis_finish(const float dq[3], const float *restrict cs, c
 
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_coriolis_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_coriolis_finish(dq, cs, sn, H);
 }
 
@@ -481,9 +509,13 @@ static void arm3f_velocity_finish(const float dq[3], const float *restrict cs, c
 
 void arm3f_velocity(const float q[3], const float dq[3], float v[2])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_velocity_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_velocity_finish(dq, cs, sn, v);
 }
 
@@ -627,9 +659,13 @@ static void arm3f_acceleration_finish(const float dq[3], const float ddq[3], con
 
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_acceleration_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_acceleration_finish(dq, ddq, cs, sn, a);
 }
 
@@ -806,9 +842,13 @@ static void arm3f_kinematics_finish(const float dq[3], const float ddq[3], const
 
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_kinematics_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
 }
 
@@ -1024,9 +1064,13 @@ static void arm3f_manipulability_finish(const float *restrict cs, const float *r
 
 void arm3f_manipulability(const float q[3], float w[1])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_manipulability_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_manipulability_finish(cs, sn, w);
 }
 
@@ -1160,9 +1204,13 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_inverse_velocity_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
 }
 
@@ -1339,9 +1387,13 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_inverse_velocity3_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
 }
 
@@ -1522,9 +1574,13 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])
 {
-    float ang[3], cs[3], sn[3];
+    float ang[4], cs[4], sn[4];
+    int k;
+    for (k = 3; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm3f_ik_step_angles(q, ang);
-    arm3f_trig3(ang, cs, sn);
+    arm3f_trig4(ang, cs, sn);
     arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
 }
 

@@ -24,20 +24,34 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM4_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define ARM4_VECTOR_MATH 1
 #else
 #define ARM4_VECTORIZE
+#define ARM4_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM4_VECTORIZE void arm4_trig8(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
+static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
     int k;
-    for (k = 0; k < 8; ++k) {
-        cs[k] = cos(ang[k]);
+#if ARM4_VECTOR_MATH
+    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
+    double x[4];
+    for (k = 0; k < 4; ++k) {
+        x[k] = ang[k] + 1.5707963267948966;
     }
-    for (k = 0; k < 8; ++k) {
+    for (k = 0; k < 4; ++k) {
+        cs[k] = sin(x[k]);
+    }
+    for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < 4; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128. */
@@ -86,13 +100,9 @@ static void arm4_position_finish(const double l[4], const double *restrict cs, c
 
 void arm4_position(const double q[4], const double l[4], double p[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_position_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_position_finish(l, cs, sn, p);
 }
 
@@ -226,13 +236,9 @@ static void arm4_jacobian_finish(const double l[4], const double *restrict cs, c
 
 void arm4_jacobian(const double q[4], const double l[4], double J[8])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_jacobian_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_jacobian_finish(l, cs, sn, J);
 }
 
@@ -396,13 +402,9 @@ static void arm4_coriolis_finish(const double dq[4], const double l[4], const do
 
 void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_coriolis_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -586,13 +588,9 @@ static void arm4_velocity_finish(const double dq[4], const double l[4], const do
 
 void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_velocity_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -765,13 +763,9 @@ static void arm4_acceleration_finish(const double dq[4], const double ddq[4], co
 
 void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_acceleration_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -985,13 +979,9 @@ static void arm4_kinematics_finish(const double dq[4], const double ddq[4], cons
 
 void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_kinematics_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -1248,13 +1238,9 @@ static void arm4_manipulability_finish(const double l[4], const double *restrict
 
 void arm4_manipulability(const double q[4], const double l[4], double w[1])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_manipulability_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1409,13 +1395,9 @@ static void arm4_inverse_velocity_finish(const double l[4], const double v[2], d
 
 void arm4_inverse_velocity(const double q[4], const double l[4], const double v[2], double lambda, double dq[4])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_inverse_velocity_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_inverse_velocity_finish(l, v, lambda, cs, sn, dq);
 }
 
@@ -1615,13 +1597,9 @@ static void arm4_inverse_velocity3_finish(const double l[4], const double twist[
 
 void arm4_inverse_velocity3(const double q[4], const double l[4], const double twist[3], double lambda, double dq3[4])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_inverse_velocity3_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_inverse_velocity3_finish(l, twist, lambda, cs, sn, dq3);
 }
 
@@ -1825,13 +1803,9 @@ static void arm4_ik_step_finish(const double q[4], const double l[4], const doub
 
 void arm4_ik_step(const double q[4], const double l[4], const double target[2], double lambda, double q_next[4])
 {
-    double ang[8], cs[8], sn[8];
-    int k;
-    for (k = 4; k < 8; ++k) {
-        ang[k] = 0;
-    }
+    double ang[4], cs[4], sn[4];
     arm4_ik_step_angles(q, ang);
-    arm4_trig8(ang, cs, sn);
+    arm4_trig4(ang, cs, sn);
     arm4_ik_step_finish(q, l, target, lambda, cs, sn, q_next);
 }
 

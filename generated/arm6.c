@@ -24,8 +24,10 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM6_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define ARM6_VECTOR_MATH 1
 #else
 #define ARM6_VECTORIZE
+#define ARM6_VECTOR_MATH 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */

@@ -19,18 +19,17 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define DIFFDRIVE_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+#define DIFFDRIVE_VECTOR_MATH 1
 #else
 #define DIFFDRIVE_VECTORIZE
+#define DIFFDRIVE_VECTOR_MATH 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 1. */
-static void diffdrive_trig1(const double *restrict ang, double *restrict cs, double *restrict sn)
+static DIFFDRIVE_VECTORIZE void diffdrive_trig1(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
-    int k;
-    for (k = 0; k < 1; ++k) {
-        cs[k] = cos(ang[k]);
-        sn[k] = sin(ang[k]);
-    }
+    cs[0] = cos(ang[0]);
+    sn[0] = sin(ang[0]);
 }
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32. */

@@ -214,3 +214,18 @@ def test_numpy_chunks_give_the_same_values(rng):
         np.testing.assert_array_equal(a, b)
     k = reference.kinematics(np.broadcast_to(q, (3, 5, 7, 4)), np.broadcast_to(dq, (3, 5, 7, 4)), np.broadcast_to(ddq, (3, 5, 7, 4)), l)
     np.testing.assert_allclose(sliced[4], k.a, atol=1e-12)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
+def test_trig_helpers_with_and_without_vector_math(n, rng):
+    """Each trig strategy (scalar, paired or quad vector sines, vector loops) and its plain fallback."""
+    g = generate(n, out=None, langs="c")
+    q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, 40, n))
+    l = rng.uniform(0.5, 1.5, n)
+    want = reference.kinematics(q, dq, ddq, l)
+    for flags in (("-O2",), ("-O2", "-march=native"), ("-O2", "-DSKELARM_NO_SIMD")):
+        arm = compile_arm(g, flags=flags)
+        p, J, H, v, a = arm.kinematics(q, dq, ddq, l)
+        single = arm.kinematics(q[3], dq[3], ddq[3], l)
+        for got, expected in ((p, want.p), (J, want.J), (H, want.H), (single[4], want.a[3])):
+            np.testing.assert_allclose(got, expected, atol=1e-13)
