@@ -10,8 +10,12 @@ Columns: n; wall seconds and peak MB of the whole ``skelarm-sym generate --links
 ``{prefix}_kinematics`` ns per call; hand-written recursive C (benchmarks/recursive.c, one
 sincos per link) ns per call; their ratio; emitted C batch ns per configuration (m = 100 000);
 emitted NumPy ns per configuration (m = 100 000); recursive NumPy reference ns per configuration;
-where CasADi is installed (``pip install '.[bench]'``), its generated C for the same outputs
-(benchmarks/others.py): add/sub/mul/neg count and ns per call in the same harness.
+where CasADi and SymForce are installed (``pip install '.[bench]'``; SymForce's C++ also needs
+Eigen's headers, Debian ``libeigen3-dev``), their generated code for the same outputs
+(benchmarks/others.py), checked against the reference, then timed in the same harness:
+operation count (CasADi: add, sub, mul, neg, sin, cos instructions; SymForce: its own
+"Total ops") and ns per call. SymForce only up to ``--symforce-links`` (default 48): its
+generation takes minutes beyond.
 Inputs uniform in [-pi, pi] from fixed seeds; medians of several repeats. Both C codes are
 compiled with the same compiler and flags (printed), ``-O2 -march=native`` by default.
 """
@@ -57,19 +61,24 @@ def generation_cost(n: int, work: Path) -> tuple[float, float]:
     return wall, float(rss_kb) / 1024.0
 
 
-def c_timings(n: int, work: Path, cc: str, flags: list[str], other: Path | None = None) -> tuple[float, float, float, float]:
-    """(emitted ns/call, recursive ns/call, emitted batch ns/config, other tool's ns/call or nan)."""
+def c_timings(n: int, work: Path, cc: str, flags: list[str], other: tuple[str, list[Path], list[str]] | None = None
+              ) -> tuple[float, float, float, float]:
+    """(emitted ns/call, recursive ns/call, emitted batch ns/config, other tool's ns/call or nan).
+
+    ``other``: (function name, its source or object files, extra link flags), timed in the same harness.
+    """
     out = work / f"c{n}"
     generate(n, langs="c", out=out)
     exe = out / "bench"
-    cmd = [
-        *cc.split(), *flags, f"-DN={n}", f"-DPREFIX=arm{n}", f'-DHEADER="arm{n}.h"', "-DLARG=l,", f"-I{out}",
-        str(HERE / "harness.c"), str(out / f"arm{n}.c"), str(HERE / "recursive.c"), "-o", str(exe), "-lm",
-    ]
+    cmd = [*cc.split(), *flags, f"-DN={n}", f"-DPREFIX=arm{n}", f'-DHEADER="arm{n}.h"', "-DLARG=l,", f"-I{out}"]
+    files = [str(HERE / "harness.c"), str(out / f"arm{n}.c"), str(HERE / "recursive.c")]
+    link = ["-lm"]
     if other is not None:
-        cmd[len(cc.split()) + len(flags):len(cc.split()) + len(flags)] = [f"-DOTHER={other.stem}"]
-        cmd.insert(-3, str(other))
-    subprocess.run(cmd, check=True)
+        name, extra_files, extra_link = other
+        cmd.append(f"-DOTHER={name}")
+        files += [str(f) for f in extra_files]
+        link = extra_link + link
+    subprocess.run([*cmd, *files, "-o", str(exe), *link], check=True)
     values = subprocess.run([str(exe), "100000"], capture_output=True, text=True, check=True).stdout.split()
     other_ns = float(values[3]) if other is not None else float("nan")
     return float(values[0]), float(values[1]), float(values[2]), other_ns
@@ -101,6 +110,7 @@ def main() -> None:
     parser.add_argument("--links", default="2,6,24,48,96")
     parser.add_argument("--gen-links", default="128,256", help="extra n for which only generation is measured")
     parser.add_argument("--flags", default="-O2 -march=native")
+    parser.add_argument("--symforce-links", type=int, default=48, help="largest n for SymForce (its generation grows fast)")
     args = parser.parse_args()
     cc = find_compiler()
     flags = args.flags.split()
@@ -109,7 +119,7 @@ def main() -> None:
     print()
     header = (
         "| n | gen s | gen MB | sin | cos | arith | C ns/call | recursive C ns/call | ratio | C batch ns/cfg "
-        "| NumPy ns/cfg | reference ns/cfg | CasADi arith | CasADi ns/call |"
+        "| NumPy ns/cfg | reference ns/cfg | CasADi ops | CasADi ns/call | SymForce ops | SymForce ns/call |"
     )
     print(header)
     print("|" + "---|" * (header.count("|") - 1))
@@ -121,13 +131,23 @@ def main() -> None:
             wall, mb = generation_cost(n, work)
             ops = next(p for p in generate(n, langs="c", out=None).programs if p.name == "kinematics").ops
             if n in links:
-                casadi = others.casadi_kinematics(n, work / f"casadi{n}")
-                single, rec, batch, cas = c_timings(n, work, cc, flags, casadi[0] if casadi else None)
+                single, rec, batch, _ = c_timings(n, work, cc, flags)
                 npy, ref = numpy_timings(n)
                 row = [f"{single:.1f}", f"{rec:.1f}", f"{single / rec:.2f}", f"{batch:.1f}", f"{npy:.0f}", f"{ref:.0f}"]
-                row += [str(casadi[1]["arith"]), f"{cas:.1f}"] if casadi else ["-", "-"]
+                casadi = others.casadi_kinematics(n, work / f"casadi{n}")
+                if casadi:
+                    cas = c_timings(n, work, cc, flags, ("casadi_kinematics", [casadi[0]], []))[3]
+                    row += [str(sum(casadi[1].values())), f"{cas:.1f}"]
+                else:
+                    row += ["-", "-"]
+                symforce = others.symforce_kinematics(n, work / f"symforce{n}", flags=tuple(flags)) if n <= args.symforce_links else None
+                if symforce:
+                    sym = c_timings(n, work, cc, flags, ("symforce_kinematics", [symforce[0]], ["-lstdc++"]))[3]
+                    row += [str(symforce[1]["ops"]), f"{sym:.1f}"]
+                else:
+                    row += ["-", "-"]
             else:
-                row = ["-"] * 8
+                row = ["-"] * 10
             print(f"| {n} | {wall:.2f} | {mb:.0f} | {ops.sin} | {ops.cos} | {ops.arithmetic} | " + " | ".join(row) + " |", flush=True)
 
 
