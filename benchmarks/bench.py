@@ -16,6 +16,8 @@ Eigen's headers, Debian ``libeigen3-dev``), their generated code for the same ou
 operation count (CasADi: add, sub, mul, neg, sin, cos instructions; SymForce: its own
 "Total ops") and ns per call. SymForce only up to ``--symforce-links`` (default 48): its
 generation takes minutes beyond.
+A second table times the batch functions against single calls, for batches in cache
+(m = 1000) and out of it (m = 100 000; benchmarks/batch.c).
 Inputs uniform in [-pi, pi] from fixed seeds; medians of several repeats. Both C codes are
 compiled with the same compiler and flags (printed), ``-O2 -march=native`` by default.
 """
@@ -84,6 +86,19 @@ def c_timings(n: int, work: Path, cc: str, flags: list[str], other: tuple[str, l
     return float(values[0]), float(values[1]), float(values[2]), other_ns
 
 
+def batch_timings(n: int, work: Path, cc: str, flags: list[str], function: str) -> tuple[float, float, float]:
+    """(single ns/call, batch ns/config at m = 1000, batch ns/config at m = 100 000) of kinematics or jacobian."""
+    out = work / f"c{n}"
+    generate(n, langs="c", out=out)
+    exe = out / f"batch_{function}"
+    define = ["-DJACOBIAN"] if function == "jacobian" else []
+    cmd = [*cc.split(), *flags, *define, f"-DN={n}", f"-DPREFIX=arm{n}", f'-DHEADER="arm{n}.h"', f"-I{out}",
+           str(HERE / "batch.c"), str(out / f"arm{n}.c"), "-o", str(exe), "-lm"]
+    subprocess.run(cmd, check=True)
+    values = subprocess.run([str(exe), "100000"], capture_output=True, text=True, check=True).stdout.split()
+    return float(values[0]), float(values[1]), float(values[2])
+
+
 def numpy_timings(n: int, m: int = 100_000, repeats: int = 5) -> tuple[float, float]:
     """(emitted NumPy ns/config, reference ns/config) for a batch of m."""
     g = generate(n, langs="python", out=None)
@@ -110,6 +125,7 @@ def main() -> None:
     parser.add_argument("--links", default="2,6,24,48,96")
     parser.add_argument("--gen-links", default="128,256", help="extra n for which only generation is measured")
     parser.add_argument("--flags", default="-O2 -march=native")
+    parser.add_argument("--batch-links", default="2,6", help="n for the batch table")
     parser.add_argument("--symforce-links", type=int, default=48, help="largest n for SymForce (its generation grows fast)")
     args = parser.parse_args()
     cc = find_compiler()
@@ -149,6 +165,13 @@ def main() -> None:
             else:
                 row = ["-"] * 10
             print(f"| {n} | {wall:.2f} | {mb:.0f} | {ops.sin} | {ops.cos} | {ops.arithmetic} | " + " | ".join(row) + " |", flush=True)
+        print()
+        print("| n | function | single ns/call | batch ns/cfg, m = 1000 | ratio | batch ns/cfg, m = 100 000 | ratio |")
+        print("|---|---|---|---|---|---|---|")
+        for n in [int(x) for x in args.batch_links.split(",") if x]:
+            for function in ("kinematics", "jacobian"):
+                single, small, large = batch_timings(n, work, cc, flags, function)
+                print(f"| {n} | {function} | {single:.1f} | {small:.1f} | {small / single:.2f} | {large:.1f} | {large / single:.2f} |", flush=True)
 
 
 if __name__ == "__main__":
