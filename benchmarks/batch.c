@@ -2,31 +2,13 @@
  * otherwise PREFIX_kinematics. Prints: single_ns batch_small_ns batch_large_ns
  * (per configuration; small = 1000 configurations, in cache; large = argv[1], default 100000).
  * Medians over repeats; the configurations of the single calls cycle through 256 in cache. */
-#define _POSIX_C_SOURCE 199309L
+#define REPEATS 15
+#include "timing.h"
 #include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
 #include HEADER
 
-#define CAT2(a, b) a##b
-#define CAT(a, b) CAT2(a, b)
-#define REPEATS 15
 #define CONFIGS 256
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e9 + t.tv_nsec;
-}
-
-static int cmp(const void *x, const void *y)
-{
-    double a = *(const double *)x, b = *(const double *)y;
-    return (a > b) - (a < b);
-}
-
-static double median(double *v) { qsort(v, REPEATS, sizeof *v, cmp); return v[REPEATS / 2]; }
 
 static double *filled(long count)
 {

@@ -2,14 +2,11 @@
  * another tool's code on the same inputs.
  * Prints: single_ns recursive_ns batch_ns other_ns (medians over repeats, per configuration;
  * other_ns is -1 without OTHER). */
-#define _POSIX_C_SOURCE 199309L
+#define REPEATS 21
+#include "timing.h"
 #include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
 #include HEADER
 
-#define CAT2(a, b) a##b
-#define CAT(a, b) CAT2(a, b)
 #define KIN CAT(PREFIX, _kinematics)
 #define KIN_BATCH CAT(PREFIX, _kinematics_batch)
 
@@ -22,22 +19,7 @@ void OTHER(const double *q, const double *dq, const double *ddq, const double *l
 #endif
 
 #define CONFIGS 256
-#define REPEATS 21
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e9 + t.tv_nsec;
-}
-
-static int cmp(const void *x, const void *y)
-{
-    double a = *(const double *)x, b = *(const double *)y;
-    return (a > b) - (a < b);
-}
-
-static double median(double *v) { qsort(v, REPEATS, sizeof *v, cmp); return v[REPEATS / 2]; }
 
 int main(int argc, char **argv)
 {

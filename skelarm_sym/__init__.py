@@ -1,9 +1,10 @@
 """skelarm-sym: closed-form differential kinematics of serial arms as fast, checked code."""
 
 from .derive import Derivation, derive
+from .derive_diffdrive import derive_diffdrive
 from .errors import InputError
-from .models import PlanarArm
+from .models import DiffDrive, PlanarArm
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
-__all__ = ["Derivation", "InputError", "PlanarArm", "__version__", "derive"]
+__all__ = ["Derivation", "DiffDrive", "InputError", "PlanarArm", "__version__", "derive", "derive_diffdrive"]

@@ -211,6 +211,22 @@ class Derivation:
         return self.closed_form("a")
 
     @property
+    def det(self) -> sp.Expr | None:
+        """``det J`` where the Jacobian is square, in closed form: J for n = 2 and J3 for
+        n = 3 (both ``l1*l2*sin(q2)``); ``None`` otherwise. See :mod:`skelarm_sym.singular`."""
+        from .singular import determinant
+
+        return determinant(self)
+
+    @property
+    def manipulability(self) -> sp.Expr:
+        """``sqrt(det(J J^T))`` as a readable closed form (square root of the sum of squared 2 x 2
+        minors); :attr:`w` is the same quantity as the emitted code computes it."""
+        from .singular import manipulability
+
+        return manipulability(self) if self.n > 1 else sp.S.Zero
+
+    @property
     def w(self) -> sp.Expr:
         """Manipulability ``sqrt(det(J J^T))``, as emitted (see :func:`skelarm_sym.linalg.gram_root`)."""
         return self.closed_form("w")[0]

@@ -27,6 +27,8 @@ def test_determinants_are_the_seed_closed_forms():
     assert singular.determinant(derive(2)) == l1 * l2 * sp.sin(q2)  # seed 002
     assert singular.determinant(derive(3)) == l1 * l2 * sp.sin(q2)  # det J3: l3 drops out
     assert singular.determinant(derive(4)) is None
+    assert derive(2).det == l1 * l2 * sp.sin(q2) and derive(5).det is None  # exposed by derive too
+    assert derive(1).manipulability == 0
     # and numerically against NumPy on J3
     rng = np.random.default_rng(4)
     q, l = rng.uniform(-np.pi, np.pi, 3), rng.uniform(0.3, 2, 3)
