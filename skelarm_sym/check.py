@@ -2,11 +2,12 @@
 
 Tolerance: for each configuration and output array, the error is
 ``max |emitted - reference| / (max(1, max |reference|) * condition)`` over that
-array's elements; it must stay below 1e-12 for double and 3e-5 for float (about 250 float epsilons:
-the outputs are sums of up to 2n rounded terms).
-``condition`` is 1 for forward kinematics and, for the damped least-squares
-solves, the condition number of the matrix solved (rounding in it is amplified
-that much by any method). Inputs are rounded to the working precision first; the
+array's elements; it must stay below 1e-12 for double and 3e-5 for float (about 250 float
+epsilons), or 25 n machine epsilons for a longer chain (see :func:`tolerance`).
+``condition`` is, for forward kinematics, the natural size of the terms summed
+over the size of the result (at least 1: sums that cancel keep the rounding of
+their terms), and for the damped least-squares solves the condition number of the
+matrix solved (rounding in it is amplified that much by any method). Inputs are rounded to the working precision first; the
 reference always runs in double.
 """
 
@@ -22,6 +23,18 @@ from .build import compile_arm, load_python
 from .generate import Generated, generate
 
 TOLERANCES = {"double": 1e-12, "float": 3e-5}
+EPSILONS = {"double": 2.220446049250313e-16, "float": 1.1920928955078125e-07}
+CHAIN_FACTOR = 25
+"""Long chains sum n rounded terms: the tolerance is at least CHAIN_FACTOR * n machine epsilons."""
+
+
+def tolerance(precision: str, n: int = 1) -> float:
+    """The check tolerance for a chain of ``n`` links: ``max(TOLERANCES[precision], 25 n eps)``.
+
+    The absolute angles are sums of up to n rounded angles and the endpoint quantities sums
+    of n rounded terms, so their rounding grows with n (float at n = 64: about 5e-5).
+    """
+    return max(TOLERANCES[precision], CHAIN_FACTOR * n * EPSILONS[precision])
 
 
 @dataclass(frozen=True)
@@ -96,13 +109,27 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
     target = rounded(np.where(rng.uniform(size=(m, 1)) < 0.5, reachable, rng.uniform(-1.2 * reach, 1.2 * reach, (m, 2))))
     values = {"q": q, "dq": dq, "ddq": ddq, "l": l, "v": v, "twist": twist, "target": target}
     forward = {"p": k.p, "J": k.J, "H": k.H, "v": k.v, "a": k.a, "w": reference.manipulability(k.J)[:, None]}
-    # w is a product of two lengths of J's rows: its rounding error scales with |J|^2, not with w
-    size = np.sum(k.J**2, axis=(-2, -1))
-    scenarios = [Scenario("", values, forward, {"w": np.maximum(1.0, size / np.maximum(1.0, forward["w"][:, 0]))})]
+    # Rounding in a sum scales with the sum of its terms' sizes, not with the result, which can cancel:
+    # compare each output with the natural size of its terms.
+    rates = np.abs(np.cumsum(dq, axis=-1))
+    accels = np.abs(np.cumsum(ddq, axis=-1))
+    sizes = {
+        "p": np.full(m, l.sum()),
+        "J": np.full(m, l.sum()),
+        "H": (l * rates).sum(axis=-1),
+        "v": (l * rates).sum(axis=-1),
+        "a": (l * (rates**2 + accels)).sum(axis=-1),
+        "w": np.sum(k.J**2, axis=(-2, -1)),  # a product of two lengths of J's rows
+    }
+    condition = {
+        name: np.maximum(1.0, size / np.maximum(1.0, np.abs(forward[name]).reshape(m, -1).max(axis=-1)))
+        for name, size in sizes.items()
+    }
+    scenarios = [Scenario("", values, forward, condition)]
     tol = RANK_TOL.values[precision]
     # In the rank-deficient branch the closed-form pseudo-inverse differs from the truncated one by
     # about (dropped eigenvalue) / (smallest kept one) <= tol * condition.
-    floor = max(1.0, 4 * tol / TOLERANCES[precision])
+    floor = max(1.0, 4 * tol / tolerance(precision, n))
     for lam in DAMPINGS:
         solves = {
             "dq": reference.damped_least_squares(k.J, v, lam, tol),
@@ -131,7 +158,7 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
         implementations.append(("C", compile_arm(generated)))
     if py_files:
         implementations.append(("Python", load_python(generated.sources[py_files[0]], py_files[0][:-3])))
-    tolerance = TOLERANCES[precision]
+    allowed = tolerance(precision, getattr(derivation.model, "n", 1))
     results = []
     for label, impl in implementations:
         for program in generated.programs:
@@ -150,7 +177,7 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
                     abs_err = diff.max(axis=axes) if axes else diff
                     scale = np.maximum(1.0, np.abs(want).max(axis=axes) if axes else np.abs(want))
                     scale = scale * scenario.condition.get(arg.name, 1.0)
-                    results.append(OutputError(name, arg.name, float(abs_err.max()), float((abs_err / scale).max()), tolerance))
+                    results.append(OutputError(name, arg.name, float(abs_err.max()), float((abs_err / scale).max()), allowed))
     return results
 
 

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
 
 
-@pytest.mark.parametrize("n", range(1, 13))
+@pytest.mark.parametrize("n", [*range(1, 13), 64])
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_emitted_code_matches_reference(n, precision):
     results = compare(generate(n, precision=precision, out=None), cases=30, seed=n, precision=precision)
@@ -229,3 +229,27 @@ def test_trig_helpers_with_and_without_vector_math(n, rng):
         single = arm.kinematics(q[3], dq[3], ddq[3], l)
         for got, expected in ((p, want.p), (J, want.J), (H, want.H), (single[4], want.a[3])):
             np.testing.assert_allclose(got, expected, atol=1e-13)
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_check_catches_a_wrong_statement(precision):
+    """A check that cannot fail is worthless: flip one sign in the emitted C and in the Python."""
+    import dataclasses
+    import re
+
+    g = generate(4, precision=precision, out=None)
+    sources = dict(g.sources)
+    anchors = {"arm4.c": ("---- arm4_coriolis:", "---- arm4_velocity:"), "arm4.py": ("def _coriolis_core(", "def coriolis(")}
+    for name, (begin, end) in anchors.items():
+        text = sources[name]
+        start, stop = text.index(begin), text.index(end)
+        region = text[start:stop]
+        # the first temporary defined as a sum: make it a difference (in every copy: single and batch)
+        statement = re.search(r"t\d+ = \S+ \+ \S+", region).group(0)
+        region = region.replace(statement, statement.replace(" + ", " - "))
+        sources[name] = text[:start] + region + text[stop:]
+    broken = dataclasses.replace(g, sources=sources)
+    results = compare(broken, cases=20, seed=1, precision=precision)
+    failed = {(r.implementation.split()[0], r.output) for r in results if not r.ok}
+    assert ("C", "H") in failed and ("Python", "H") in failed
+    assert all(r.ok for r in results if r.output in ("p", "J"))  # the rest still agrees
