@@ -95,8 +95,9 @@ void arm2_ik_step_batch(size_t m, const double *q, const double *l, const double
 #define ARM2_IK_INVALID 3
 
 /* Inverse kinematics: damped least-squares steps (arm2_ik_step) from q0 toward
- * target with damping mu = max(lambda, 0.5 |target - p|), each step shortened by
- * halving until the endpoint error |target - p| decreases.
+ * target with damping mu = max(lambda, c |target - p|), each step shortened by halving until
+ * the endpoint error |target - p| decreases; c starts at 0.5, shrinks after a full
+ * step and doubles per halving (Levenberg-Marquardt).
  * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
  * error improves by less than a relative 1e-10 (an unreachable target: q is then the
  * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when

@@ -484,11 +484,12 @@ endpoint error |target - p| at q, and the number of steps taken."""
 def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
     """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
 
-    Each step uses damping mu = max(lambda, 0.5 |target - p|) and is halved
-    until the endpoint error decreases. Stops "converged" when the
-    error is <= tol, "stalled" when no shorter step helps or the error improves by less
-    than a relative 1e-10 (an unreachable target: q is then the closest reach
-    found), "max_iter" after max_iter steps. Same algorithm as the C ik_solve.
+    Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
+    error decreases; c starts at 0.5, shrinks after a full step and doubles per
+    halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
+    no shorter step helps or the error improves by less than a relative 1e-10 (an
+    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
     """
     q = np.array(q0, dtype=DTYPE)
@@ -504,10 +505,11 @@ def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
         return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))
 
     err = error_at(q)
+    c = 0.5  # damping per unit of error, adapted below
     for iteration in range(int(max_iter)):
         if err <= tol:
             return IKResult(q, "converged", err, iteration)
-        mu = max(lambda_, 0.5 * err)
+        mu = max(lambda_, c * err)
         q_next = ik_step(q, l, target, mu)
         alpha = DTYPE(1.0)
         for halving in range(30 + 1):
@@ -518,6 +520,8 @@ def ik_solve(q0, l, target, lambda_, tol=1e-9, max_iter=200):
             alpha = alpha * DTYPE(0.5)
         else:
             return IKResult(q, "stalled", err, iteration)
+        # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
+        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

@@ -1701,6 +1701,7 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
 int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
 {
     float p[2], q_next[3], trial[3], err, err_trial, alpha, d, mu;
+    float c = 0.5f; /* damping per unit of error, adapted below */
     int k, it, halving;
     for (k = 0; k < 3; ++k) {
         q[k] = q0[k];
@@ -1735,7 +1736,7 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
         if (err <= tol) {
             return ARM3F_IK_CONVERGED;
         }
-        mu = 0.5f * err;
+        mu = c * err;
         if (mu < lambda) {
             mu = lambda;
         }
@@ -1759,6 +1760,14 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
                 return ARM3F_IK_STALLED;
             }
             alpha *= 0.5f;
+        }
+        /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
+        if (halving == 0) {
+            c = c * 0.33333334f < 1e-04f ? 1e-04f : c * 0.33333334f;
+        } else {
+            for (k = 0; k < halving; ++k) {
+                c = c * 2.0f > 10000.0f ? 10000.0f : c * 2.0f;
+            }
         }
         for (k = 0; k < 3; ++k) {
             q[k] = trial[k];

@@ -102,8 +102,9 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
 #define ARM3F_IK_INVALID 3
 
 /* Inverse kinematics: damped least-squares steps (arm3f_ik_step) from q0 toward
- * target with damping mu = max(lambda, 0.5f |target - p|), each step shortened by
- * halving until the endpoint error |target - p| decreases.
+ * target with damping mu = max(lambda, c |target - p|), each step shortened by halving until
+ * the endpoint error |target - p| decreases; c starts at 0.5f, shrinks after a full
+ * step and doubles per halving (Levenberg-Marquardt).
  * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
  * error improves by less than a relative 1e-06f (an unreachable target: q is then the
  * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when

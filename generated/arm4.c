@@ -1942,6 +1942,7 @@ void arm4_ik_step_batch(size_t m, const double *q, const double *l, const double
 int arm4_ik_solve(const double q0[4], const double l[4], const double target[2], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
 {
     double p[2], q_next[4], trial[4], err, err_trial, alpha, d, mu;
+    double c = 0.5; /* damping per unit of error, adapted below */
     int k, it, halving;
     for (k = 0; k < 4; ++k) {
         q[k] = q0[k];
@@ -1976,7 +1977,7 @@ int arm4_ik_solve(const double q0[4], const double l[4], const double target[2],
         if (err <= tol) {
             return ARM4_IK_CONVERGED;
         }
-        mu = 0.5 * err;
+        mu = c * err;
         if (mu < lambda) {
             mu = lambda;
         }
@@ -2000,6 +2001,14 @@ int arm4_ik_solve(const double q0[4], const double l[4], const double target[2],
                 return ARM4_IK_STALLED;
             }
             alpha *= 0.5;
+        }
+        /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
+        if (halving == 0) {
+            c = c * 0.3333333333333333 < 0.0001 ? 0.0001 : c * 0.3333333333333333;
+        } else {
+            for (k = 0; k < halving; ++k) {
+                c = c * 2.0 > 10000.0 ? 10000.0 : c * 2.0;
+            }
         }
         for (k = 0; k < 4; ++k) {
             q[k] = trial[k];

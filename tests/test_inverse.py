@@ -255,3 +255,16 @@ def test_solver_op_counts_grow_linearly():
     counts = {n: {p.name: p.ops.arithmetic for p in build_programs(derive(n))} for n in (8, 16, 32)}
     for name in ("manipulability", "inverse_velocity", "inverse_velocity3", "ik_step"):
         assert counts[32][name] - counts[16][name] == 2 * (counts[16][name] - counts[8][name]), name
+
+
+def test_float_ik_solver_converges(rng):
+    g = generate(4, out=None, precision="float")
+    c, py = compile_arm(g), load_python(g.sources["arm4.py"], "arm4")
+    l = np.array([1.0, 0.8, 0.6, 0.4], dtype=np.float32)
+    for _ in range(5):
+        target = reference.kinematics(rng.uniform(-np.pi, np.pi, 4), lengths=l).p
+        q0 = rng.uniform(-np.pi, np.pi, 4)
+        results = [impl.ik_solve(q0, l, target, 0.0, tol=1e-4) for impl in (c, py)]
+        for result in results:
+            assert result.status == "converged" and result.q.dtype == np.float32, result
+            np.testing.assert_allclose(reference.kinematics(result.q.astype(float), lengths=l).p, target, atol=2e-4)

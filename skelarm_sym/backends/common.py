@@ -18,13 +18,15 @@ ANGLES, COSINES, SINES = "ang", "cs", "sn"
 IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 """Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
 IK_SETTINGS = {
-    "double": {"halvings": 30, "stall": 1e-10, "error_damping": 0.5},
-    "float": {"halvings": 20, "stall": 1e-6, "error_damping": 0.5},
+    "double": {"halvings": 30, "stall": 1e-10, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
+    "float": {"halvings": 20, "stall": 1e-6, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
 }
 """Per precision: step halvings tried per iteration; the relative error improvement below
-which the solver reports STALLED; and ``c`` of the damping schedule ``mu = max(lambda, c |e|)``
-(damping that shrinks with the error: bounded steps near singular poses, fast convergence
-at reachable targets, and progress to the closest reach of unreachable ones)."""
+which the solver reports STALLED; and the damping schedule ``mu = max(lambda, c |e|)``:
+damping that shrinks with the error (bounded steps near singular poses, fast convergence at
+reachable targets, progress to the closest reach of unreachable ones), with ``c`` starting at
+``error_damping``, multiplied by ``shrink`` after a full step and doubled per halving, kept
+in ``[c_min, c_max]`` (Levenberg-Marquardt)."""
 
 
 def storage_names(

@@ -102,5 +102,8 @@ def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
         "lambda": step["scalars"][0]["py"] if step["scalars"] else None,
         "halvings": settings["halvings"],
         "error_damping": repr(settings["error_damping"]),
+        "shrink": repr(settings["shrink"]),
+        "c_min": repr(settings["c_min"]),
+        "c_max": repr(settings["c_max"]),
         "stall": repr(settings["stall"]),
     }
