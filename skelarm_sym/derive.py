@@ -21,7 +21,6 @@ steps substituted into each other, built on first access.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Iterable, Sequence
 
 import sympy as sp
