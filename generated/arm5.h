@@ -11,6 +11,8 @@
  * the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
  * (2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
  * so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
+ * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
+ * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Precision: double.
  */
 #ifndef ARM5_H
