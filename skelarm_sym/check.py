@@ -114,8 +114,8 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
     rates = np.abs(np.cumsum(dq, axis=-1))
     accels = np.abs(np.cumsum(ddq, axis=-1))
     sizes = {
-        "p": np.full(m, l.sum()),
-        "J": np.full(m, l.sum()),
+        "p": np.full(m, reach),
+        "J": np.full(m, reach),
         "H": (l * rates).sum(axis=-1),
         "v": (l * rates).sum(axis=-1),
         "a": (l * (rates**2 + accels)).sum(axis=-1),
@@ -137,11 +137,10 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
         }
         if "twist" in derivation.inputs:
             solves["dq3"] = reference.damped_least_squares(k.J3, twist, lam, tol)
-        M_rows = {"dq": 2, "q_next": 2, "dq3": 3}
         expected = {name: s.x for name, s in solves.items()}
         expected["q_next"] = q + expected["q_next"]
         condition = {
-            name: np.where(s.rank < M_rows[name], s.condition * floor, s.condition) for name, s in solves.items()
+            name: np.where(s.regular, s.condition, s.condition * floor) for name, s in solves.items()
         }
         scenarios.append(Scenario(f"lambda={lam:g}", {**values, "lambda": lam}, expected, condition))
     return scenarios

@@ -255,7 +255,8 @@ PLANAR_FUNCTIONS = (
 """Functions of a planar arm; ``inverse_velocity3`` only for n >= 3 (J3 has rank 3 only there)."""
 
 
-def _length_value(x: float) -> sp.Expr:
+def exact_number(x: float) -> sp.Expr:
+    """A fixed parameter as a SymPy number: an Integer when it is whole, else a Float."""
     return sp.Integer(int(x)) if float(x).is_integer() else sp.Float(x)
 
 
@@ -275,7 +276,7 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Deriva
         l_syms = sp.symbols(f"l1:{n + 1}", positive=True)
         inputs = {"q": q, "dq": dq, "ddq": ddq, "l": l_syms}
     else:
-        l_syms = tuple(_length_value(x) for x in model.lengths)
+        l_syms = tuple(exact_number(x) for x in model.lengths)
         inputs = {"q": q, "dq": dq, "ddq": ddq}
     step = StepRecorder("planar")
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .derive import Derivation, FunctionSpec, StepRecorder
+from .derive import Derivation, FunctionSpec, StepRecorder, exact_number
 from .models.diffdrive import DiffDrive
 
 DIFFDRIVE_FUNCTIONS = (
@@ -65,7 +65,7 @@ def derive_diffdrive(model: DiffDrive | float | None = None) -> Derivation:
         track = sp.Symbol("L", positive=True)
         inputs["track"] = (track,)
     else:
-        track = sp.Float(model.track) if not float(model.track).is_integer() else sp.Integer(int(model.track))
+        track = exact_number(model.track)
     M, M_inv = wheel_to_body(track)
     step = StepRecorder("dd")
     body = M * sp.Matrix(wheels)

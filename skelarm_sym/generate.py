@@ -186,10 +186,11 @@ def _check_output_folder(out: str | os.PathLike) -> Path:
     return target
 
 
-def _umask() -> int:
+def new_file_mode() -> int:
+    """The mode a newly created file gets under the current umask (mkstemp's files are 0600)."""
     current = os.umask(0)
     os.umask(current)
-    return current
+    return 0o666 & ~current
 
 
 def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
@@ -208,7 +209,7 @@ def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
             staged.append((tmp, folder / name))
             with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
                 handle.write(text)
-        mode = 0o666 & ~_umask()  # mkstemp makes 0600 files; emitted code is as readable as any new file
+        mode = new_file_mode()
         for tmp, _ in staged:
             os.chmod(tmp, mode)
         for tmp, final in staged:

@@ -90,9 +90,9 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=dpi, format=(target.suffix[1:] or "png"))
-        from .generate import _umask
+        from .generate import new_file_mode
 
-        os.chmod(tmp, 0o666 & ~_umask())
+        os.chmod(tmp, new_file_mode())
         os.replace(tmp, target)
     except (OSError, ValueError) as exc:
         Path(tmp).unlink(missing_ok=True)

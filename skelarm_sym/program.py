@@ -50,7 +50,7 @@ class ArrayArg:
         return self.shape == ()
 
 
-_COUNTED = ("add", "mul", "neg", "div", "sqrt", "max", "cmp", "select")
+_COUNTED = ("add", "mul", "neg", "div", "sqrt", "cmp", "select")
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,6 @@ class OpCount:
     neg: int = 0
     div: int = 0
     sqrt: int = 0
-    max: int = 0
     cmp: int = 0
     select: int = 0
     sin: int = 0
@@ -118,8 +117,8 @@ def count_ops(expr: sp.Expr) -> Counter:
     subtraction; one negation more when every term is negative). A ``Mul`` of k
     factors is k-1 multiplications; a coefficient -1 is a negation when it
     stands alone. ``x**2`` is one multiplication, ``x**-1`` a division,
-    ``x**(1/2)`` a square root. ``Max`` of k arguments is k-1 ``max``; a
-    comparison is one ``cmp``; a ``Piecewise`` of k pieces is k-1 ``select``.
+    ``x**(1/2)`` a square root. A comparison is one ``cmp``; a ``Piecewise``
+    of k pieces is k-1 ``select``.
     """
     counts: Counter = Counter()
     stack = [(sp.sympify(expr), False)]  # (expression, negation already paid for)
@@ -172,9 +171,6 @@ def count_ops(expr: sp.Expr) -> Counter:
                     stack.append((condition, False))
         elif e.is_Relational:
             counts["cmp"] += 1
-            stack.extend((a, False) for a in e.args)
-        elif isinstance(e, sp.Max):
-            counts["max"] += len(e.args) - 1
             stack.extend((a, False) for a in e.args)
         elif isinstance(e, (sp.sin, sp.cos)):
             counts[type(e).__name__] += 1

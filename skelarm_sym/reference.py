@@ -155,11 +155,18 @@ class Solve:
         rank: rank used for ``A = M M^T + lambda^2 I`` (``r`` when regular), ``(...)``.
         condition: largest over smallest kept eigenvalue of ``A``, ``(...)``: how much
             rounding in ``A`` can be amplified in ``x``.
+        rows: ``r``, the size of ``A``.
     """
 
     x: np.ndarray
     rank: np.ndarray
     condition: np.ndarray
+    rows: int
+
+    @property
+    def regular(self) -> np.ndarray:
+        """True where ``A`` has full rank ``rows`` (the exact inverse was used), ``(...)``."""
+        return self.rank == self.rows
 
 
 def damped_least_squares(M: object, rhs: object, lam: float, rank_tol: float) -> Solve:
@@ -190,7 +197,7 @@ def damped_least_squares(M: object, rhs: object, lam: float, rank_tol: float) ->
     u = np.einsum("...ij,...j->...i", U, coeffs)
     x = np.einsum("...ji,...j->...i", M, u)
     smallest = np.take_along_axis(e, (r - rank)[..., None], axis=-1)[..., 0]
-    return Solve(x, rank, e[..., -1] / smallest)
+    return Solve(x, rank, e[..., -1] / smallest, r)
 
 
 def manipulability(J: object) -> np.ndarray:

@@ -47,8 +47,6 @@ class CPrecision:
     sin: str
     cos: str
     sqrt: str
-    fabs: str
-    fmax: str
 
     def literal(self, value: float) -> str:
         """A C literal of this precision for ``value``."""
@@ -59,8 +57,8 @@ class CPrecision:
 
 
 PRECISIONS = {
-    "double": CPrecision("double", "", "sin", "cos", "sqrt", "fabs", "fmax"),
-    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf", "fabsf", "fmaxf"),
+    "double": CPrecision("double", "", "sin", "cos", "sqrt"),
+    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf"),
 }
 
 
@@ -71,7 +69,6 @@ class CArrayPrinter(ArrayPrinterMixin, C99CodePrinter):
         super().__init__(names)
         self._precision = precision
         self.sqrt_name = precision.sqrt
-        self.max_name = precision.fmax
 
     def literal(self, value: float) -> str:
         return self._precision.literal(value)
@@ -183,7 +180,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
             {"macro": constant_name(options.prefix, c.name), "value": precision.literal(c.values[options.precision]), "doc": c.doc}
             for c in constants.values()
         ],
-        "ik": ik_context(programs, precision, options.prefix),
+        "ik": ik_context(programs, precision, options.prefix, derivation.domains),
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
     }
     return {
@@ -192,7 +189,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     }
 
 
-def ik_context(programs: list[Program], precision: CPrecision, prefix: str) -> dict | None:
+def ik_context(programs: list[Program], precision: CPrecision, prefix: str, domains: dict[str, str]) -> dict | None:
     """The iterative IK solver's layout, when the programs include ``position`` and ``ik_step``."""
     by_name = {p.name: p for p in programs}
     if "position" not in by_name or "ik_step" not in by_name:
@@ -210,7 +207,7 @@ def ik_context(programs: list[Program], precision: CPrecision, prefix: str) -> d
         "params": [f"const {ctype} q0[{n}]"] + _params(others, ctype, True)
         + [f"{ctype} tol", "int max_iter", f"{ctype} q[{n}]", f"{ctype} *error", "int *iterations"],
         "lambda": next((a.name for a in others if a.is_scalar), None),
-        "checks": [a.name for a in others if not a.is_scalar and a.name != "l"],
+        "checks": [{"name": a.name, "size": a.size} for a in others if not a.is_scalar and domains.get(a.name)],
         "step_call": f"{prefix}_ik_step(" + ", ".join("mu" if a.is_scalar else a.name for a in step.inputs) + ", q_next)",
         "position_call": f"{prefix}_position(" + ", ".join("trial" if a.name == "q" else a.name for a in position.inputs) + ", p)",
         "status": [{"macro": f"{prefix.upper()}_IK_{s}", "value": i} for i, s in enumerate(IK_STATUS)],

@@ -87,19 +87,17 @@ class ArrayPrinterMixin:
     * numbers print as literals of the target precision;
     * sums print positive terms first (``z - x*y``, not ``-x*y + z``);
     * powers with small exponents print by table (``x*x``, ``1/x``, ``sqrt(x)``);
-    * ``Piecewise`` prints by ``select_form`` (a C conditional, ``np.where``), ``Max`` by ``max_name``.
+    * ``Piecewise`` prints by ``select_form`` (a C conditional, ``np.where``).
     """
 
     pow_forms: dict[sp.Expr, str] = {
         sp.Integer(2): "{base}*{base}",
-        sp.Integer(3): "{base}*{base}*{base}",
         sp.Integer(-1): "{one}/{base}",
         sp.Integer(-2): "{one}/({base}*{base})",
         sp.Rational(1, 2): "{sqrt}({base})",
         sp.Rational(-1, 2): "{one}/{sqrt}({base})",
     }
     sqrt_name = "sqrt"
-    max_name = "fmax"
     select_form = "({cond} ? {then} : {otherwise})"
 
     def __init__(self, names: dict[sp.Symbol, str], **settings) -> None:
@@ -138,13 +136,6 @@ class ArrayPrinterMixin:
         text = self._print(last)
         for value, cond in reversed(pieces):
             text = self.select_form.format(cond=self._print(cond), then=self._print(value), otherwise=text)
-        return text
-
-    def _print_Max(self, expr: sp.Max) -> str:
-        args = [self._print(a) for a in expr.args]
-        text = args[0]
-        for arg in args[1:]:
-            text = f"{self.max_name}({text}, {arg})"
         return text
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:

@@ -2,8 +2,9 @@
 
 The emitted module depends on NumPy only. Every function broadcasts over
 leading batch dimensions: inputs of shape ``(..., size)``, outputs of shape
-``(..., *shape)``; the arithmetic runs on whole batch arrays (no Python loop over
-the batch) and the trigonometry in one ``np.cos``/``np.sin`` call each.
+``(..., *shape)``, element k read and written as ``x[..., k]`` in the caller's layout.
+The arithmetic runs on whole arrays of configurations, in slices of ``CHUNK`` so that
+temporaries stay in cache, and the trigonometry in one ``np.cos``/``np.sin`` call each.
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ class PythonArrayPrinter(ArrayPrinterMixin, PythonCodePrinter):
     """Python printer that writes each symbol as its array element or local."""
 
     sqrt_name = "np.sqrt"
-    max_name = "np.maximum"
     select_form = "np.where({cond}, {then}, {otherwise})"
 
     def __init__(self, names: dict[sp.Symbol, str]) -> None:
@@ -93,13 +93,13 @@ def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
     if "position" not in functions or "ik_step" not in functions:
         return None
     step = functions["ik_step"]
-    others = [a for a in step["args"] if a != "q"]
+    damping = step["scalars"][0]["py"] if step["scalars"] else None
     settings = IK_SETTINGS[precision]
     return {
-        "params": others,
-        "step_args": ["mu" if a == (step["scalars"][0]["py"] if step["scalars"] else None) else a for a in step["args"]],
+        "params": [a for a in step["args"] if a != "q"],
+        "step_args": ["mu" if a == damping else a for a in step["args"]],
         "position_args": ["trial" if a == "q" else a for a in functions["position"]["args"]],
-        "lambda": step["scalars"][0]["py"] if step["scalars"] else None,
+        "lambda": damping,
         "halvings": settings["halvings"],
         "error_damping": repr(settings["error_damping"]),
         "shrink": repr(settings["shrink"]),
