@@ -1,7 +1,7 @@
 """skelarm-sym: closed-form differential kinematics of serial arms as fast, checked code."""
 
 from .derive import Derivation, derive
-from .derive_diffdrive import derive_diffdrive
+from .derive import derive_diffdrive
 from .errors import InputError
 from .models import DiffDrive, PlanarArm
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from . import singular
+from .derive import singular
 from .derive import Derivation
 
 WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det", "manipulability", "singular")
@@ -60,7 +60,7 @@ DIFFDRIVE_WHAT = ("matrix", "inverse", "all")
 
 def show_diffdrive(model, what: str = "all", fmt: str = "pretty") -> str:
     """The differential drive's wheel-to-body matrix and its inverse, with seed 002's (11) beside them."""
-    from .derive_diffdrive import wheel_to_body
+    from .derive.diffdrive import wheel_to_body
     from .errors import InputError
 
     if what not in DIFFDRIVE_WHAT:

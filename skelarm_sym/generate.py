@@ -20,9 +20,8 @@ from typing import Iterable, Sequence
 
 from . import __version__
 from .backends import BACKENDS
-from .derive import Derivation, derive
+from .derive import Derivation, derive, derive_diffdrive
 from .errors import InputError
-from .derive_diffdrive import derive_diffdrive
 from .models.diffdrive import DiffDrive
 from .models.planar import PlanarArm
 from .program import Program, build_programs

@@ -21,7 +21,7 @@ from typing import Iterable, Sequence
 
 import sympy as sp
 
-from .derive import Derivation, FunctionSpec
+from .derive.core import Derivation, FunctionSpec
 
 try:  # the core of sympy.cse without its search for common sub-sums (see _cse)
     from sympy.simplify.cse_main import tree_cse as _tree_cse

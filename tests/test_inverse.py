@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from skelarm_sym import InputError, linalg, reference
+from skelarm_sym import InputError, reference
+from skelarm_sym.derive import linalg
 from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.derive import StepRecorder, derive, expand_steps
 from skelarm_sym.generate import generate

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from skelarm_sym import reference, singular
+from skelarm_sym import reference
+from skelarm_sym.derive import singular
 from skelarm_sym.cli import main
 from skelarm_sym.derive import derive
 

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .derive import Derivation, FunctionSpec, StepRecorder, exact_number
-from .models.diffdrive import DiffDrive
+from .core import Derivation, FunctionSpec, StepRecorder, exact_number
+from ..models.diffdrive import DiffDrive
 
 DIFFDRIVE_FUNCTIONS = (
     FunctionSpec("body_rates", ("wheels", "track"), ("rates",), "body rates (v, omega) from wheel speeds (v_L, v_R)"),
@@ -79,7 +79,6 @@ def derive_diffdrive(model: DiffDrive | float | None = None) -> Derivation:
     return Derivation(
         model=model,
         inputs=inputs,
-        lengths=(),
         steps=tuple(step.steps),
         compact=compact,
         shapes={"rates": (2,), "wheels": (2,), "dpose": (3,)},

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 
 
 @dataclass(frozen=True)
@@ -144,108 +144,3 @@ def kinematics(q: object, dq: object | None = None, ddq: object | None = None, l
         H[..., 0, i] = -(vel[..., n, 1] - vel[..., i, 1])
         H[..., 1, i] = vel[..., n, 0] - vel[..., i, 0]
     return Kinematics(theta, dtheta, ddtheta, pos, vel, acc, J, H)
-
-
-@dataclass(frozen=True)
-class Solve:
-    """Result of :func:`damped_least_squares`. ``...`` is the batch shape.
-
-    Attributes:
-        x: the solution, ``(..., n)``.
-        rank: rank used for ``A = M M^T + lambda^2 I`` (``r`` when regular), ``(...)``.
-        condition: largest over smallest kept eigenvalue of ``A``, ``(...)``: how much
-            rounding in ``A`` can be amplified in ``x``.
-        rows: ``r``, the size of ``A``.
-    """
-
-    x: np.ndarray
-    rank: np.ndarray
-    condition: np.ndarray
-    rows: int
-
-    @property
-    def regular(self) -> np.ndarray:
-        """True where ``A`` has full rank ``rows`` (the exact inverse was used), ``(...)``."""
-        return self.rank == self.rows
-
-
-def damped_least_squares(M: object, rhs: object, lam: float, rank_tol: float) -> Solve:
-    """``x = M^T (M M^T + lam^2 I)^+ rhs`` by eigen-decomposition (NumPy only).
-
-    ``M`` is ``(..., r, n)`` with ``r`` 2 or 3, ``rhs`` ``(..., r)``. The rank rule is
-    the documented one of the emitted code, applied to the eigenvalues ``e`` of ``A``
-    (``s = sum(e)``, ``c`` the sum of pairwise products): for ``r = 2``, regular when
-    ``prod(e) > rank_tol * s**2``, else rank one; for ``r = 3``, rank one when
-    ``c <= rank_tol * s**2``, else regular when ``prod(e) > rank_tol * s * c``, else rank two. The pseudo-inverse keeps that many largest eigenvalues.
-    """
-    M = np.asarray(M, dtype=float)
-    rhs = np.asarray(rhs, dtype=float)
-    r = M.shape[-2]
-    A = M @ np.swapaxes(M, -1, -2) + lam**2 * np.eye(r)
-    e, U = np.linalg.eigh(A)  # ascending
-    e = np.maximum(e, 0.0)  # A is positive semi-definite; drop rounding below zero
-    s = e.sum(axis=-1)
-    if r == 2:
-        rank = np.where(np.prod(e, axis=-1) > rank_tol * s**2, 2, 1)
-    else:
-        pairs = e[..., 0] * e[..., 1] + e[..., 0] * e[..., 2] + e[..., 1] * e[..., 2]
-        rank = np.where(pairs > rank_tol * s**2, np.where(np.prod(e, axis=-1) > rank_tol * s * pairs, 3, 2), 1)
-    keep = np.arange(r) >= (r - rank[..., None])
-    safe = np.where(keep, e, 1.0)
-    inv_e = np.where(keep, 1.0 / safe, 0.0)
-    coeffs = np.einsum("...ji,...j->...i", U, rhs) * inv_e
-    u = np.einsum("...ij,...j->...i", U, coeffs)
-    x = np.einsum("...ji,...j->...i", M, u)
-    smallest = np.take_along_axis(e, (r - rank)[..., None], axis=-1)[..., 0]
-    return Solve(x, rank, e[..., -1] / smallest, r)
-
-
-def manipulability(J: object) -> np.ndarray:
-    """``sqrt(det(J J^T))`` of Jacobians ``(..., r, n)`` by the Cauchy-Binet formula:
-    ``det(J J^T)`` is the sum of the squared ``r x r`` minors of ``J`` (no cancellation
-    near singular poses; cost grows as n^r, fine for a reference)."""
-    from itertools import combinations
-
-    J = np.asarray(J, dtype=float)
-    r, n = J.shape[-2:]
-    total = np.zeros(J.shape[:-2])
-    for columns in combinations(range(n), r):
-        total = total + np.linalg.det(J[..., list(columns)]) ** 2
-    return np.sqrt(total)
-
-
-# -- differential drive (seed 002), from rigid-body motion ----------------------------------
-
-def diffdrive_wheel_speeds(rates: object, track: float) -> np.ndarray:
-    """Ground speeds ``(v_L, v_R)`` of the wheels for body rates ``(v, omega)``, ``(..., 2)``.
-
-    Rigid-body motion of the base: a point at ``r`` (body frame, x forward, y to the
-    left) moves at ``(v, 0, 0) + (0, 0, omega) x r``; the left wheel touches the ground
-    at ``r = (0, +track/2, 0)``, the right one at ``(0, -track/2, 0)``, and a wheel's
-    ground speed is the forward (x) component of its contact point's velocity.
-    """
-    rates = np.asarray(rates, dtype=float)
-    v, omega = rates[..., 0], rates[..., 1]
-    out = []
-    for side in (+0.5, -0.5):  # left, right
-        r = np.array([0.0, side * track, 0.0])
-        spin = np.stack([np.zeros_like(omega), np.zeros_like(omega), omega], axis=-1)
-        velocity = np.stack([v, np.zeros_like(v), np.zeros_like(v)], axis=-1) + np.cross(spin, r)
-        out.append(velocity[..., 0])
-    return np.stack(out, axis=-1)
-
-
-def diffdrive_body_rates(wheels: object, track: float) -> np.ndarray:
-    """Body rates ``(v, omega)`` for wheel speeds ``(v_L, v_R)``: the wheel map's inverse, by NumPy."""
-    columns = diffdrive_wheel_speeds(np.eye(2), track)  # row k: wheel speeds of the k-th unit twist
-    return np.linalg.solve(columns.T, np.asarray(wheels, dtype=float)[..., None])[..., 0]
-
-
-def diffdrive_pose_rate(pose: object, wheels: object, track: float) -> np.ndarray:
-    """``(dx, dy, dheading)``: the body velocity ``(v, 0)`` turned by the heading, and ``omega``."""
-    pose = np.asarray(pose, dtype=float)
-    v, omega = np.moveaxis(diffdrive_body_rates(wheels, track), -1, 0)
-    c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
-    rotation = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-    world = rotation @ np.stack([v, np.zeros_like(v)], -1)[..., None]
-    return np.concatenate([world[..., 0], omega[..., None]], axis=-1)

@@ -20,159 +20,29 @@ steps substituted into each other, built on first access.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Sequence
 
 import sympy as sp
 
+from ..models.planar import PlanarArm
 from . import linalg
-from .models.planar import PlanarArm
-
-Step = tuple[sp.Symbol, sp.Expr]
-
-
-@dataclass(frozen=True)
-class FunctionSpec:
-    """One emitted function: its name suffix, argument names in order, output names in order."""
-
-    name: str
-    inputs: tuple[str, ...]
-    outputs: tuple[str, ...]
-    summary: str
+from .core import RANK_TOL, Derivation, FunctionSpec, StepRecorder, exact_number
 
 
 @dataclass(frozen=True, eq=False)
-class Constant:
-    """A named constant the emitted code defines once, with a value per precision."""
+class PlanarDerivation(Derivation):
+    """A planar arm's derivation: the generic one plus the planar views (``p``, ``J``, ``H``, ``det`` ...).
 
-    symbol: sp.Symbol
-    values: dict[str, float]
-    doc: str
-
-    @property
-    def name(self) -> str:
-        """Upper-case name; backends prefix it (``ARM3_RANK_TOL`` in C)."""
-        return self.symbol.name
-
-
-RANK_TOL = Constant(
-    sp.Symbol("RANK_TOL", positive=True),
-    {"double": 100 * 2.220446049250313e-16, "float": 100 * 1.1920928955078125e-07},
-    "relative rank tolerance of the closed-form solves: 100 machine epsilons",
-)
-"""A symmetric 2 x 2 ``A`` counts as singular when ``det A <= RANK_TOL * tr(A)**2``; see
-:mod:`skelarm_sym.linalg` for 3 x 3 (both: smallest eigenvalue below about RANK_TOL times the largest)."""
-
-
-class StepRecorder:
-    """Collects named intermediate quantities.
-
-    Trivial ones (atoms) are not given a name, and an expression recorded before
-    returns its first name (two derivations of the same quantity share one step).
+    ``lengths``: the link lengths, symbols ``l1..ln`` or the numbers given.
     """
 
-    def __init__(self, tag: str) -> None:
-        self._tag = tag
-        self.steps: list[Step] = []
-        self._known: dict[sp.Expr, sp.Symbol] = {}
-
-    def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
-        if expr.is_Atom:
-            return expr
-        known = self._known.get(expr)
-        if known is not None:
-            return known
-        symbol = sp.Symbol(f"_{self._tag}_{label}", real=True)
-        self.steps.append((symbol, expr))
-        self._known[expr] = symbol
-        return symbol
-
-
-def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
-    """Substitute the steps into ``exprs`` (in order), giving closed forms in the inputs only."""
-    closed: dict[sp.Symbol, sp.Expr] = {}
-    for symbol, expr in steps:
-        closed[symbol] = expr.xreplace(closed)
-    return [sp.sympify(e).xreplace(closed) for e in exprs]
-
-
-@dataclass(frozen=True, eq=False)
-class Derivation:
-    """The differential kinematics of one model, as steps plus compact outputs.
-
-    Attributes:
-        model: the arm model derived from.
-        inputs: ordered mapping of input array name to its symbols (``q``, ``dq``,
-            ``ddq``, and ``l`` when lengths are symbolic).
-        steps: ordered ``(symbol, expr)`` definitions; each uses inputs and earlier steps.
-        compact: output name -> SymPy matrix written with step symbols.
-        shapes: output name -> array shape in emitted code (``(2,)`` for a vector, ``(2, n)`` ...).
-        functions: the functions a backend emits, in order.
-        parameters: inputs that describe the mechanism rather than its state; batch
-            functions share them across configurations.
-        notes: lines for the headers of emitted files (model, conventions, layout).
-        scalars: inputs passed as one number (by value in C) rather than an array;
-            they must be parameters.
-        domains: input name -> ``"finite"``, ``"nonnegative"`` (finite and >= 0) or ``"positive"``:
-            the Python wrappers reject other values with a ``ValueError``.
-        constants: named constants the emitted code defines (see :class:`Constant`).
-    """
-
-    model: object
-    inputs: dict[str, tuple[sp.Symbol, ...]]
-    lengths: tuple[sp.Expr, ...]
-    steps: tuple[Step, ...]
-    compact: dict[str, sp.Matrix]
-    shapes: dict[str, tuple[int, ...]]
-    functions: tuple[FunctionSpec, ...]
-    parameters: tuple[str, ...] = ()
-    notes: tuple[str, ...] = ()
-    scalars: tuple[str, ...] = ()
-    domains: dict[str, str] = field(default_factory=dict)
-    constants: tuple[Constant, ...] = ()
-    _cache: dict = field(default_factory=dict, repr=False)
-
-    # -- symbols --------------------------------------------------------------
-    @property
-    def n(self) -> int:
-        """Number of links (and joints) of a chain; ``AttributeError`` for other models."""
-        return self.model.n
-
-    def function(self, name: str) -> FunctionSpec:
-        """The function spec called ``name``; ``KeyError`` if this derivation has none."""
-        for spec in self.functions:
-            if spec.name == name:
-                return spec
-        raise KeyError(name)
-
-    @property
-    def q(self) -> tuple[sp.Symbol, ...]:
-        """Relative joint angles ``q1..qn`` (radians)."""
-        return self.inputs["q"]
-
-    @property
-    def dq(self) -> tuple[sp.Symbol, ...]:
-        """Joint rates ``dq1..dqn``."""
-        return self.inputs["dq"]
-
-    @property
-    def ddq(self) -> tuple[sp.Symbol, ...]:
-        """Joint accelerations ``ddq1..ddqn``."""
-        return self.inputs["ddq"]
+    lengths: tuple[sp.Expr, ...] = ()
 
     @property
     def l(self) -> tuple[sp.Expr, ...]:  # noqa: E743 - the seeds' name
         """Link lengths: symbols ``l1..ln`` or the numbers given."""
         return self.lengths
-
-    # -- closed forms ---------------------------------------------------------
-    def closed_form(self, name: str) -> sp.Matrix:
-        """Output ``name`` as a matrix of closed-form expressions in the inputs only."""
-        if name not in self._cache:
-            matrix = self.compact[name]
-            values = expand_steps(self.steps, list(matrix))
-            self._cache[name] = sp.Matrix(matrix.rows, matrix.cols, values)
-        return self._cache[name]
 
     @property
     def p(self) -> sp.Matrix:
@@ -227,7 +97,7 @@ class Derivation:
 
     @property
     def w(self) -> sp.Expr:
-        """Manipulability ``sqrt(det(J J^T))``, as emitted (see :func:`skelarm_sym.linalg.gram_root`)."""
+        """Manipulability ``sqrt(det(J J^T))``, as emitted (see :func:`skelarm_sym.derive.linalg.gram_root`)."""
         return self.closed_form("w")[0]
 
 
@@ -255,12 +125,7 @@ PLANAR_FUNCTIONS = (
 """Functions of a planar arm; ``inverse_velocity3`` only for n >= 3 (J3 has rank 3 only there)."""
 
 
-def exact_number(x: float) -> sp.Expr:
-    """A fixed parameter as a SymPy number: an Integer when it is whole, else a Float."""
-    return sp.Integer(int(x)) if float(x).is_integer() else sp.Float(x)
-
-
-def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Derivation:
+def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> PlanarDerivation:
     """Derive the planar chain's ``p, phi, J, J3, H, v, a`` for ``n`` links.
 
     ``lengths``: ``None`` for symbolic lengths ``l1..ln``, or ``n`` finite positive numbers.
@@ -330,7 +195,7 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Deriva
     shapes = {"p": (2,), "phi": (1,), "J": (2, n), "J3": (3, n), "H": (2, n), "v": (2,), "a": (2,)}
     shapes.update({name: (len(m),) for name, m in inverse.outputs.items()})
     functions = tuple(f for f in PLANAR_FUNCTIONS if f.name != "inverse_velocity3" or n >= 3)
-    return Derivation(
+    return PlanarDerivation(
         model=model,
         inputs=inputs,
         lengths=tuple(l_syms),
@@ -368,7 +233,7 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy) -> _Inverse:
     """Manipulability, damped inverse velocity (2 and 3 rows) and the damped IK step, as steps.
 
     ``J J^T`` is three sums over the columns (linear in n); every solve is the
-    closed form of :func:`skelarm_sym.linalg.sym_solve`.
+    closed form of :func:`skelarm_sym.derive.linalg.sym_solve`.
     """
     n = len(q)
     lam = sp.Symbol("lambda", real=True)

@@ -1,0 +1,159 @@
+"""What every derivation shares: named steps, function specs, constants and the generic Derivation.
+
+A derivation writes a model's kinematics as a short chain of named intermediate
+quantities (*steps*), each a small expression of inputs and earlier steps, plus the
+outputs written with those steps. :mod:`skelarm_sym.program` turns them into a
+straight-line program; nothing after this stage knows which model it prints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+import sympy as sp
+
+Step = tuple[sp.Symbol, sp.Expr]
+
+
+@dataclass(frozen=True)
+class FunctionSpec:
+    """One emitted function: its name suffix, argument names in order, output names in order."""
+
+    name: str
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    summary: str
+
+
+@dataclass(frozen=True, eq=False)
+class Constant:
+    """A named constant the emitted code defines once, with a value per precision."""
+
+    symbol: sp.Symbol
+    values: dict[str, float]
+    doc: str
+
+    @property
+    def name(self) -> str:
+        """Upper-case name; backends prefix it (``ARM3_RANK_TOL`` in C)."""
+        return self.symbol.name
+
+
+RANK_TOL = Constant(
+    sp.Symbol("RANK_TOL", positive=True),
+    {"double": 100 * 2.220446049250313e-16, "float": 100 * 1.1920928955078125e-07},
+    "relative rank tolerance of the closed-form solves: 100 machine epsilons",
+)
+"""A symmetric 2 x 2 ``A`` counts as singular when ``det A <= RANK_TOL * tr(A)**2``; see
+:mod:`skelarm_sym.derive.linalg` for 3 x 3 (both: smallest eigenvalue below about RANK_TOL times the largest)."""
+
+
+class StepRecorder:
+    """Collects named intermediate quantities.
+
+    Trivial ones (atoms) are not given a name, and an expression recorded before
+    returns its first name (two derivations of the same quantity share one step).
+    """
+
+    def __init__(self, tag: str) -> None:
+        self._tag = tag
+        self.steps: list[Step] = []
+        self._known: dict[sp.Expr, sp.Symbol] = {}
+
+    def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
+        if expr.is_Atom:
+            return expr
+        known = self._known.get(expr)
+        if known is not None:
+            return known
+        symbol = sp.Symbol(f"_{self._tag}_{label}", real=True)
+        self.steps.append((symbol, expr))
+        self._known[expr] = symbol
+        return symbol
+
+
+def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
+    """Substitute the steps into ``exprs`` (in order), giving closed forms in the inputs only."""
+    closed: dict[sp.Symbol, sp.Expr] = {}
+    for symbol, expr in steps:
+        closed[symbol] = expr.xreplace(closed)
+    return [sp.sympify(e).xreplace(closed) for e in exprs]
+
+
+@dataclass(frozen=True, eq=False)
+class Derivation:
+    """The differential kinematics of one model, as steps plus compact outputs.
+
+    Attributes:
+        model: the arm model derived from.
+        inputs: ordered mapping of input array name to its symbols (``q``, ``dq``,
+            ``ddq``, and ``l`` when lengths are symbolic).
+        steps: ordered ``(symbol, expr)`` definitions; each uses inputs and earlier steps.
+        compact: output name -> SymPy matrix written with step symbols.
+        shapes: output name -> array shape in emitted code (``(2,)`` for a vector, ``(2, n)`` ...).
+        functions: the functions a backend emits, in order.
+        parameters: inputs that describe the mechanism rather than its state; batch
+            functions share them across configurations.
+        notes: lines for the headers of emitted files (model, conventions, layout).
+        scalars: inputs passed as one number (by value in C) rather than an array;
+            they must be parameters.
+        domains: input name -> ``"finite"``, ``"nonnegative"`` (finite and >= 0) or ``"positive"``:
+            the Python wrappers reject other values with a ``ValueError``.
+        constants: named constants the emitted code defines (see :class:`Constant`).
+    """
+
+    model: object
+    inputs: dict[str, tuple[sp.Symbol, ...]]
+    steps: tuple[Step, ...]
+    compact: dict[str, sp.Matrix]
+    shapes: dict[str, tuple[int, ...]]
+    functions: tuple[FunctionSpec, ...]
+    parameters: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    scalars: tuple[str, ...] = ()
+    domains: dict[str, str] = field(default_factory=dict)
+    constants: tuple[Constant, ...] = ()
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    # -- symbols --------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of joints of a chain; ``AttributeError`` for other models."""
+        return self.model.n
+
+    def function(self, name: str) -> FunctionSpec:
+        """The function spec called ``name``; ``KeyError`` if this derivation has none."""
+        for spec in self.functions:
+            if spec.name == name:
+                return spec
+        raise KeyError(name)
+
+    @property
+    def q(self) -> tuple[sp.Symbol, ...]:
+        """Joint positions ``q1..qn`` (radians for revolute joints, metres for prismatic ones)."""
+        return self.inputs["q"]
+
+    @property
+    def dq(self) -> tuple[sp.Symbol, ...]:
+        """Joint rates ``dq1..dqn``."""
+        return self.inputs["dq"]
+
+    @property
+    def ddq(self) -> tuple[sp.Symbol, ...]:
+        """Joint accelerations ``ddq1..ddqn``."""
+        return self.inputs["ddq"]
+
+    # -- closed forms ---------------------------------------------------------
+    def closed_form(self, name: str) -> sp.Matrix:
+        """Output ``name`` as a matrix of closed-form expressions in the inputs only."""
+        if name not in self._cache:
+            matrix = self.compact[name]
+            values = expand_steps(self.steps, list(matrix))
+            self._cache[name] = sp.Matrix(matrix.rows, matrix.cols, values)
+        return self._cache[name]
+
+
+def exact_number(x: float) -> sp.Expr:
+    """A fixed parameter as a SymPy number: an Integer when it is whole, else a Float."""
+    return sp.Integer(int(x)) if float(x).is_integer() else sp.Float(x)
