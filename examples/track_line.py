@@ -1,7 +1,7 @@
 """A 3-link arm's endpoint tracks a straight line, driven by the emitted inverse velocity.
 
 Resolved-rate control: at each step the joint rates are
-``dq = inverse_velocity(q, l, v_line + gain * (p_line - p), lambda)``, i.e. the damped
+``dq = inverse_velocity(q, v_line + gain * (p_line - p), l, lambda)``, i.e. the damped
 least-squares inverse of J applied to the line's velocity plus a correction of the
 position error; the joints are integrated with explicit Euler steps.
 
@@ -20,7 +20,7 @@ def track_line(start=(1.2, 0.4), end=(0.2, 1.5), seconds=2.0, steps=2000, lam=1e
     """Follow the line; return (times, endpoint path, desired path, joint path)."""
     arm = compile_arm(generate(3, out=None, langs="c"))
     l = np.array([1.0, 0.8, 0.5])
-    q = arm.ik_solve(np.array([0.2, 0.9, 0.6]), l, np.array(start), 0.01).q  # start on the line
+    q = arm.ik_solve(np.array([0.2, 0.9, 0.6]), np.array(start), l, 0.01).q  # start on the line
     start, end = np.asarray(start, float), np.asarray(end, float)
     velocity = (end - start) / seconds
     dt = seconds / steps
@@ -30,7 +30,7 @@ def track_line(start=(1.2, 0.4), end=(0.2, 1.5), seconds=2.0, steps=2000, lam=1e
         goal = start + velocity * t
         p = arm.position(q, l)
         times.append(t), actual.append(p), desired.append(goal), joints.append(q.copy())
-        dq = arm.inverse_velocity(q, l, velocity + gain * (goal - p), lam)
+        dq = arm.inverse_velocity(q, velocity + gain * (goal - p), l, lam)
         q = q + dt * dq
     return np.array(times), np.array(actual), np.array(desired), np.array(joints)
 

@@ -5,6 +5,6 @@ from .derive import derive_diffdrive
 from .errors import InputError
 from .models import DiffDrive, PlanarArm
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 __all__ = ["Derivation", "DiffDrive", "InputError", "PlanarArm", "__version__", "derive", "derive_diffdrive"]

@@ -21,6 +21,7 @@ from typing import Iterable, Sequence
 from . import __version__
 from .backends import BACKENDS
 from .derive import Derivation, derive, derive_diffdrive
+from .derive.core import ARGUMENT_RULE
 from .errors import InputError
 from .models.diffdrive import DiffDrive
 from .models.planar import PlanarArm
@@ -140,6 +141,7 @@ def generate(
         f"regenerate with: {regenerate_command(model, prefix, precision, langs)}",
         "",
         *derivation.notes,
+        *wrap_line(ARGUMENT_RULE),
         f"Precision: {precision}.",
     )
     options = Options(prefix, precision, langs, header)
@@ -151,6 +153,13 @@ def generate(
     if target is not None:
         paths = write_atomically(target, sources)
     return Generated(sources, programs, derivation, paths)
+
+
+def wrap_line(text: str, width: int = 100) -> list[str]:
+    """``text`` broken at spaces into lines of at most ``width`` characters (for file headers)."""
+    import textwrap
+
+    return textwrap.wrap(text, width) or [""]
 
 
 def _lengths_tuple(lengths: object) -> object:

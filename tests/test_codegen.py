@@ -87,8 +87,8 @@ def test_batches_equal_single_calls_and_shapes(rng, n):
             np.testing.assert_array_equal(b[j], s)
     assert [x.shape for x in batch] == [(m, 2), (m, 2, n), (m, 2, n), (m, 2), (m, 2)]
     v = rng.uniform(-1, 1, (m, 2))
-    dq_batch = arm.inverse_velocity(q, l, v, 0.01)
-    np.testing.assert_array_equal(dq_batch[m - 1], arm.inverse_velocity(q[m - 1], l, v[m - 1], 0.01))
+    dq_batch = arm.inverse_velocity(q, v, l, 0.01)
+    np.testing.assert_array_equal(dq_batch[m - 1], arm.inverse_velocity(q[m - 1], v[m - 1], l, 0.01))
     q4 = q[:200].reshape(4, 50, n)
     assert py.jacobian(q4, l).shape == (4, 50, 2, n)
     np.testing.assert_allclose(py.jacobian(q4, l).reshape(200, 2, n), batch[1][:200], atol=1e-13)

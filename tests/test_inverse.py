@@ -91,7 +91,7 @@ def test_inverse_velocity_exact_for_two_links_and_minimum_norm_beyond(impls, rng
     J = reference.kinematics(q, lengths=l).J
     want = np.einsum("kij,kj->ki", np.linalg.pinv(J), v)
     for _, impl in pairs:
-        dq = impl.inverse_velocity(q, l, v, 0.0)
+        dq = impl.inverse_velocity(q, v, l, 0.0)
         np.testing.assert_allclose(np.einsum("kij,kj->ki", J, dq), v, atol=1e-10)  # J dq = v
         np.testing.assert_allclose(dq, want, atol=1e-10)
         if n == 2:
@@ -109,7 +109,7 @@ def test_damped_inverse_velocity_matches_numpy_and_stays_bounded(impls, rng):
     A = J @ np.swapaxes(J, -1, -2) + lam**2 * np.eye(2)
     want = np.einsum("kji,kj->ki", J, np.linalg.solve(A, v[..., None])[..., 0])
     for _, impl in pairs:
-        dq = impl.inverse_velocity(q, l, v, lam)
+        dq = impl.inverse_velocity(q, v, l, lam)
         np.testing.assert_allclose(dq, want, atol=1e-9)
         # |J^T (J J^T + lam^2)^-1 v| <= |v| / (2 lam): singular values s / (s^2 + lam^2) <= 1 / (2 lam)
         assert np.all(np.linalg.norm(dq, axis=1) <= np.linalg.norm(v, axis=1) / (2 * lam) * (1 + 1e-12))
@@ -123,7 +123,7 @@ def test_undamped_inverse_velocity_at_a_singular_pose_is_the_pseudo_inverse(impl
         J = reference.kinematics(q, lengths=l).J
         want = np.linalg.pinv(J) @ v
         for _, impl in pairs:
-            dq = impl.inverse_velocity(q, l, v, 0.0)
+            dq = impl.inverse_velocity(q, v, l, 0.0)
             assert np.all(np.isfinite(dq))
             np.testing.assert_allclose(dq, want, atol=1e-12)
 
@@ -138,9 +138,9 @@ def test_inverse_velocity3_with_orientation_row(rng):
         regular = abs(np.linalg.det(J3)) > 1e-9
         want = np.linalg.solve(J3, twist) if regular else np.linalg.pinv(J3) @ twist
         for impl in (c, py):
-            dq3 = impl.inverse_velocity3(q, l, twist, 0.0)
+            dq3 = impl.inverse_velocity3(q, twist, l, 0.0)
             np.testing.assert_allclose(dq3, want, atol=1e-12)
-            damped = impl.inverse_velocity3(q, l, twist, 0.1)
+            damped = impl.inverse_velocity3(q, twist, l, 0.1)
             np.testing.assert_allclose(damped, J3.T @ np.linalg.solve(J3 @ J3.T + 0.01 * np.eye(3), twist), atol=1e-12)
     assert "inverse_velocity3" not in [p.name for p in build_programs(derive(2))]
 
@@ -150,16 +150,16 @@ def test_bad_lambda_is_refused(impls, bad):
     n, pairs = _both(impls)
     for _, impl in pairs:
         with pytest.raises(ValueError, match="lambda"):
-            impl.inverse_velocity(np.zeros(n), np.ones(n), [1.0, 0.0], bad)
+            impl.inverse_velocity(np.zeros(n), [1.0, 0.0], np.ones(n), bad)
 
 
 def test_non_finite_velocity_or_target_is_refused(impls):
     n, pairs = _both(impls)
     for _, impl in pairs:
         with pytest.raises(ValueError, match="v must be finite"):
-            impl.inverse_velocity(np.zeros(n), np.ones(n), [np.nan, 0.0], 0.1)
+            impl.inverse_velocity(np.zeros(n), [np.nan, 0.0], np.ones(n), 0.1)
         with pytest.raises(ValueError, match="target must be finite"):
-            impl.ik_step(np.zeros(n), np.ones(n), [np.inf, 0.0], 0.1)
+            impl.ik_step(np.zeros(n), [np.inf, 0.0], np.ones(n), 0.1)
     assert issubclass(InputError, ValueError)
 
 
@@ -174,7 +174,7 @@ def test_ik_converges_to_random_reachable_targets(n, rng):
         target = reference.kinematics(rng.uniform(-np.pi, np.pi, n), lengths=l).p
         q0 = rng.uniform(-np.pi, np.pi, n)
         for impl in (c, py):
-            result = impl.ik_solve(q0, l, target, 0.0, tol=1e-9, max_iter=200)
+            result = impl.ik_solve(q0, target, l, 0.0, tol=1e-9, max_iter=200)
             assert result.status == "converged", result
             assert result.error <= 1e-9
             np.testing.assert_allclose(reference.kinematics(result.q, lengths=l).p, target, atol=1e-9)
@@ -188,7 +188,7 @@ def test_ik_step_moves_toward_the_target(rng):
     q = rng.uniform(-1, 1, n)
     for offset in (0.01, 0.001):  # undamped steps are Gauss-Newton: the error roughly squares
         target = reference.kinematics(q + offset, lengths=l).p
-        q_next = py.ik_step(q, l, target, 0.0)
+        q_next = py.ik_step(q, target, l, 0.0)
         before = np.linalg.norm(target - reference.kinematics(q, lengths=l).p)
         after = np.linalg.norm(target - reference.kinematics(q_next, lengths=l).p)
         assert after < 0.5 * before**2
@@ -203,7 +203,7 @@ def test_unreachable_targets_stop_at_the_closest_reach(lengths, target, closest)
     c, py = compile_arm(g), load_python(g.sources["arm3.py"], "arm3")
     for impl in (c, py):
         for lam in (0.0, 0.05):
-            result = impl.ik_solve(np.array([0.3, 0.5, -0.4]), np.array(lengths), np.array(target), lam, max_iter=500)
+            result = impl.ik_solve(np.array([0.3, 0.5, -0.4]), np.array(target), np.array(lengths), lam, max_iter=500)
             assert result.status == "stalled", result
             assert np.all(np.isfinite(result.q))
             assert result.error == pytest.approx(closest, abs=1e-6)
@@ -214,15 +214,15 @@ def test_ik_bad_input():
     c, py = compile_arm(g), load_python(g.sources["arm2.py"], "arm2")
     for impl in (c, py):
         with pytest.raises(ValueError, match="target must be finite"):
-            impl.ik_solve(np.zeros(2), np.ones(2), [np.nan, 1.0], 0.1)
+            impl.ik_solve(np.zeros(2), [np.nan, 1.0], np.ones(2), 0.1)
         with pytest.raises(ValueError, match="lambda"):
-            impl.ik_solve(np.zeros(2), np.ones(2), [1.0, 1.0], -1.0)
+            impl.ik_solve(np.zeros(2), [1.0, 1.0], np.ones(2), -1.0)
         with pytest.raises(ValueError):
-            impl.ik_solve(np.zeros(2), np.ones(2), [1.0, 1.0], 0.1, tol=0.0)
+            impl.ik_solve(np.zeros(2), [1.0, 1.0], np.ones(2), 0.1, tol=0.0)
         with pytest.raises(ValueError):
-            impl.ik_solve(np.zeros(3), np.ones(2), [1.0, 1.0], 0.1)
+            impl.ik_solve(np.zeros(3), [1.0, 1.0], np.ones(2), 0.1)
         # max_iter = 0: nothing moves, the error is that of q0
-        result = impl.ik_solve(np.zeros(2), np.ones(2), [1.0, 1.0], 0.1, max_iter=0)
+        result = impl.ik_solve(np.zeros(2), [1.0, 1.0], np.ones(2), 0.1, max_iter=0)
         assert result.status == "max_iter" and result.iterations == 0
         assert result.error == pytest.approx(np.hypot(1.0, 1.0))
 
@@ -245,7 +245,7 @@ def test_c_ik_solve_reports_invalid_for_nan_target(tmp_path):
     its = ctypes.c_int(5)
     for target, lam in (([np.nan, 1.0], 0.1), ([1.0, 1.0], np.nan), ([1.0, 1.0], -0.5)):
         t = np.array(target)
-        status = fn(q0.ctypes.data_as(P), l.ctypes.data_as(P), t.ctypes.data_as(P), lam, 1e-9, 50,
+        status = fn(q0.ctypes.data_as(P), t.ctypes.data_as(P), l.ctypes.data_as(P), lam, 1e-9, 50,
                     q.ctypes.data_as(P), err.ctypes.data_as(P), ctypes.byref(its))
         assert status == 3  # ARM2_IK_INVALID
         np.testing.assert_array_equal(q, q0)
@@ -265,7 +265,7 @@ def test_float_ik_solver_converges(rng):
     for _ in range(5):
         target = reference.kinematics(rng.uniform(-np.pi, np.pi, 4), lengths=l).p
         q0 = rng.uniform(-np.pi, np.pi, 4)
-        results = [impl.ik_solve(q0, l, target, 0.0, tol=1e-4) for impl in (c, py)]
+        results = [impl.ik_solve(q0, target, l, 0.0, tol=1e-4) for impl in (c, py)]
         for result in results:
             assert result.status == "converged" and result.q.dtype == np.float32, result
             np.testing.assert_allclose(reference.kinematics(result.q.astype(float), lengths=l).p, target, atol=2e-4)

@@ -16,14 +16,45 @@ import sympy as sp
 Step = tuple[sp.Symbol, sp.Expr]
 
 
+ARGUMENT_ROLES: dict[str, int] = {
+    # 0: the joint (or body) state
+    "q": 0, "q0": 0, "dq": 0, "ddq": 0, "pose": 0,
+    # 1: the call's other data
+    "v": 1, "twist": 1, "target": 1, "wheels": 1, "rates": 1,
+    # 2: the mechanism's parameters
+    "l": 2, "params": 2, "track": 2,
+    # 3: scalars
+    "lambda": 3, "tol": 3, "max_iter": 3,
+}
+"""The role of each input name; every emitted function takes its inputs in increasing role,
+then its outputs (see :data:`ARGUMENT_RULE`)."""
+
+ARGUMENT_RULE = (
+    "Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,"
+    " target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs."
+)
+
+
 @dataclass(frozen=True)
 class FunctionSpec:
-    """One emitted function: its name suffix, argument names in order, output names in order."""
+    """One emitted function: its name suffix, argument names in order, output names in order.
+
+    ``inputs`` must follow :data:`ARGUMENT_RULE` (checked on construction: every name needs a role in
+    :data:`ARGUMENT_ROLES`, and roles may not decrease).
+    """
 
     name: str
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
     summary: str
+
+    def __post_init__(self) -> None:
+        unknown = [a for a in self.inputs if a not in ARGUMENT_ROLES]
+        if unknown:
+            raise ValueError(f"internal error: input {unknown[0]!r} of {self.name} has no argument role")
+        roles = [ARGUMENT_ROLES[a] for a in self.inputs]
+        if roles != sorted(roles):
+            raise ValueError(f"internal error: inputs of {self.name} break the argument order: {self.inputs}")
 
 
 @dataclass(frozen=True, eq=False)

@@ -110,15 +110,15 @@ PLANAR_FUNCTIONS = (
     FunctionSpec("kinematics", ("q", "dq", "ddq", "l"), ("p", "J", "H", "v", "a"), "p, J, H, v and a at once"),
     FunctionSpec("manipulability", ("q", "l"), ("w",), "manipulability w = sqrt(det(J J^T)) (1)"),
     FunctionSpec(
-        "inverse_velocity", ("q", "l", "v", "lambda"), ("dq",),
+        "inverse_velocity", ("q", "v", "l", "lambda"), ("dq",),
         "joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N)",
     ),
     FunctionSpec(
-        "inverse_velocity3", ("q", "l", "twist", "lambda"), ("dq3",),
+        "inverse_velocity3", ("q", "twist", "l", "lambda"), ("dq3",),
         "joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N)",
     ),
     FunctionSpec(
-        "ik_step", ("q", "l", "target", "lambda"), ("q_next",),
+        "ik_step", ("q", "target", "l", "lambda"), ("q_next",),
         "one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N)",
     ),
 )

@@ -1,0 +1,54 @@
+"""The argument-order rule, checked on the emitted prototypes and the Python signatures."""
+
+import inspect
+import re
+from pathlib import Path
+
+import pytest
+
+from skelarm_sym.build import load_python
+from skelarm_sym.derive.core import ARGUMENT_ROLES, FunctionSpec
+from skelarm_sym.generate import generate
+from skelarm_sym.models.diffdrive import DiffDrive
+
+GENERATED = Path(__file__).resolve().parents[1] / "generated"
+OUTPUT_ROLE = 4
+PROTOTYPE = re.compile(r"^(?:void|int)\s+\w+\((.*?)\);", re.M | re.S)
+
+
+def _roles(params: list[str]) -> list[int]:
+    roles = []
+    for text in params:
+        text = text.strip()
+        if text == "size_t m":
+            continue
+        name = re.sub(r"\[.*\]", "", text.split()[-1]).lstrip("*")
+        is_output = not text.startswith("const ") and ("[" in text or "*" in text)
+        roles.append(OUTPUT_ROLE if is_output else ARGUMENT_ROLES[name])
+    return roles
+
+
+@pytest.mark.parametrize("header", sorted(GENERATED.glob("*.h")), ids=lambda p: p.name)
+def test_emitted_prototypes_follow_the_argument_order(header):
+    text = header.read_text()
+    assert "Arguments, in every function: the joint state" in text
+    prototypes = PROTOTYPE.findall(text)
+    assert prototypes
+    for params in prototypes:
+        roles = _roles(params.split(","))
+        assert roles == sorted(roles), params
+
+
+def test_a_wrong_order_is_refused_at_derivation_time():
+    with pytest.raises(ValueError, match="argument order"):
+        FunctionSpec("bad", ("q", "l", "v", "lambda"), ("dq",), "")
+
+
+@pytest.mark.parametrize("model", [3, DiffDrive()], ids=["arm3", "diffdrive"])
+def test_python_signatures_follow_the_argument_order(model):
+    generated = generate(model, langs="python", out=None)
+    module = load_python(next(iter(generated.sources.values())), "m")
+    for program in generated.programs:
+        names = [p.rstrip("_") for p in inspect.signature(getattr(module, program.name)).parameters]
+        roles = [ARGUMENT_ROLES[n] for n in names]
+        assert roles == sorted(roles), (program.name, names)
