@@ -13,7 +13,6 @@ from __future__ import annotations
 import keyword
 import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -23,6 +22,7 @@ from .backends import BACKENDS
 from .derive import Derivation, derive, derive_diffdrive
 from .derive.core import ARGUMENT_RULE
 from .errors import InputError
+from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
 from .models.diffdrive import DiffDrive
 from .models.planar import PlanarArm
 from .program import Program, build_programs
@@ -192,41 +192,3 @@ def _check_output_folder(out: str | os.PathLike) -> Path:
     if target.exists() and not target.is_dir():
         raise InputError(f"output folder {str(target)!r} exists and is not a folder")
     return target
-
-
-def new_file_mode() -> int:
-    """The mode a newly created file gets under the current umask (mkstemp's files are 0600)."""
-    current = os.umask(0)
-    os.umask(current)
-    return 0o666 & ~current
-
-
-def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
-    """Write every file to a temporary name in ``folder``, then rename all into place.
-
-    If anything fails, the temporary files are removed and no target file is touched.
-    """
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create output folder {str(folder)!r}: {exc.strerror or exc}") from None
-    staged: list[tuple[str, Path]] = []
-    try:
-        for name, text in sources.items():
-            fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=folder)
-            staged.append((tmp, folder / name))
-            with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
-                handle.write(text)
-        mode = new_file_mode()
-        for tmp, _ in staged:
-            os.chmod(tmp, mode)
-        for tmp, final in staged:
-            os.replace(tmp, final)
-    except OSError as exc:
-        for tmp, _ in staged:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-        raise InputError(f"cannot write to output folder {str(folder)!r}: {exc.strerror or exc}") from None
-    return tuple(final for _, final in staged)

@@ -90,7 +90,7 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=dpi, format=(target.suffix[1:] or "png"))
-        from .generate import new_file_mode
+        from .files import new_file_mode
 
         os.chmod(tmp, new_file_mode())
         os.replace(tmp, target)
