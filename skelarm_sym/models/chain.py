@@ -1,0 +1,387 @@
+"""The general serial chain: constant transforms and joint motions, base to tip.
+
+A :class:`Chain` is what every 3-D robot description compiles into (DH tables in
+:mod:`skelarm_sym.models.robot_file`, URDF in :mod:`skelarm_sym.models.urdf`):
+
+    T(q) = base * prod_k [ before_k * M_k(theta_k) * after_k ] * tool
+
+with, per moving joint ``k``, ``M_k`` a rotation by ``theta_k`` about the unit ``axis_k``
+(revolute) or a translation by ``theta_k`` along it (prismatic), the axis given in the
+joint's own frame (the frame after ``before_k``), and ``theta_k = multiplier_k * q[coordinate_k]
++ offset_k``: every joint follows one input coordinate (a URDF ``mimic`` joint follows
+another joint's coordinate; all others have their own, multiplier 1).
+
+Frames and units: metres and radians; ``base`` places the first joint's parent frame in the
+world (base) frame; ``tool`` places the tool frame in the last joint's frame (after ``after_n``).
+Entries are exact SymPy numbers where the source gave simple numbers (angles within 1e-12
+of a multiple of pi/2 become that multiple, so their sines and cosines are exactly 0 or +-1),
+and named parameters (symbols) where the source named them.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, field
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+import sympy as sp
+
+from ..errors import InputError
+
+MAX_JOINTS = 200
+"""Largest number of moving joints accepted."""
+ANGLE_SNAP = 1e-12
+"""An angle within this of a multiple of pi/2 is taken as that multiple (exact 0, +-1 sines and cosines)."""
+KINDS = ("revolute", "prismatic")
+
+
+# -- exact numbers -----------------------------------------------------------------------------
+
+def exact_number(value: object, what: str = "value") -> sp.Expr:
+    """A finite real as an exact SymPy number: Integer when whole, else Float; SymPy expressions pass."""
+    if isinstance(value, sp.Basic):
+        if value.is_number and not value.is_finite:
+            raise InputError(f"{what} must be finite, got {value}")
+        return value
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InputError(f"{what} must be a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise InputError(f"{what} must be finite, got {x!r}")
+    if x == 0.0:
+        return sp.S.Zero
+    if x.is_integer() and abs(x) < 2**53:
+        return sp.Integer(int(x))
+    return sp.Float(x)
+
+
+def exact_angle(value: object, what: str = "angle") -> sp.Expr:
+    """An angle as an exact SymPy expression; numbers within ``ANGLE_SNAP`` of k pi/2 become k pi/2."""
+    expr = exact_number(value, what)
+    if expr.free_symbols or not expr.is_number:
+        return expr
+    x = float(expr)
+    k = round(x / (math.pi / 2))
+    if abs(x - k * math.pi / 2) <= ANGLE_SNAP:
+        return sp.Integer(k) * sp.pi / 2
+    return expr
+
+
+def trig_constant(func, angle: sp.Expr) -> sp.Expr:
+    """``func(angle)`` (sp.sin or sp.cos): exact where it is rational (0, +-1, +-1/2), else a Float.
+
+    Constants such as ``sqrt(2)/2`` would print as run-time square roots; a Float prints as a literal.
+    """
+    value = func(angle)
+    if value.free_symbols or value.is_Rational:
+        return value
+    return sp.Float(value.evalf(30), 17)
+
+
+def _fold(expr: sp.Expr) -> sp.Expr:
+    """Exact zero for a Float that rounds to zero; numbers stay as they are."""
+    if expr.is_Float and expr == 0:
+        return sp.S.Zero
+    return expr
+
+
+# -- constant transforms --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Transform:
+    """A constant rigid transform ``[R t; 0 1]``: ``rotation`` 3 x 3 and ``translation`` 3 x 1 (SymPy)."""
+
+    rotation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.eye(3)))
+    translation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.zeros(3, 1)))
+
+    @staticmethod
+    def identity() -> "Transform":
+        """The identity transform."""
+        return Transform()
+
+    @staticmethod
+    def translate(x: sp.Expr = 0, y: sp.Expr = 0, z: sp.Expr = 0) -> "Transform":
+        """Translation by ``(x, y, z)``."""
+        return Transform(translation=sp.ImmutableMatrix([x, y, z]))
+
+    @staticmethod
+    def rotate(axis: str, angle: sp.Expr) -> "Transform":
+        """Rotation by ``angle`` about the frame's ``"x"``, ``"y"`` or ``"z"`` axis."""
+        c, s = trig_constant(sp.cos, angle), trig_constant(sp.sin, angle)
+        matrices = {
+            "x": [[1, 0, 0], [0, c, -s], [0, s, c]],
+            "y": [[c, 0, s], [0, 1, 0], [-s, 0, c]],
+            "z": [[c, -s, 0], [s, c, 0], [0, 0, 1]],
+        }
+        return Transform(rotation=sp.ImmutableMatrix(matrices[axis]))
+
+    @staticmethod
+    def from_xyz_rpy(xyz: Sequence[sp.Expr], rpy: Sequence[sp.Expr]) -> "Transform":
+        """URDF origin: translation ``xyz``, rotation ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+        roll, pitch, yaw = rpy
+        rotation = Transform.rotate("z", yaw) @ Transform.rotate("y", pitch) @ Transform.rotate("x", roll)
+        return Transform(rotation.rotation, sp.ImmutableMatrix(list(xyz)))
+
+    def __matmul__(self, other: "Transform") -> "Transform":
+        rotation = (self.rotation * other.rotation).applyfunc(lambda e: _fold(sp.expand(e)))
+        translation = (self.rotation * other.translation + self.translation).applyfunc(lambda e: _fold(sp.expand(e)))
+        return Transform(sp.ImmutableMatrix(rotation), sp.ImmutableMatrix(translation))
+
+    @property
+    def matrix(self) -> sp.Matrix:
+        """The 4 x 4 homogeneous matrix."""
+        top = self.rotation.row_join(self.translation)
+        return top.col_join(sp.Matrix([[0, 0, 0, 1]]))
+
+    @property
+    def is_identity(self) -> bool:
+        """True when the transform is exactly the identity."""
+        return self.rotation == sp.eye(3) and self.translation == sp.zeros(3, 1)
+
+    @property
+    def free_symbols(self) -> set[sp.Symbol]:
+        """Named parameters this transform uses."""
+        return self.rotation.free_symbols | self.translation.free_symbols
+
+    def numeric(self, values: Mapping[sp.Symbol, float] | None = None) -> np.ndarray:
+        """The 4 x 4 matrix as floats, with parameter ``values`` substituted."""
+        matrix = self.matrix.xreplace(dict(values or {}))
+        try:
+            return np.array(matrix.evalf(), dtype=float)
+        except TypeError:
+            missing = sorted(str(s) for s in matrix.free_symbols)
+            raise InputError(f"no value for parameter(s) {', '.join(missing)}") from None
+
+
+# -- joints and chains ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Joint:
+    """One moving joint: ``before * M(theta) * after`` with ``theta = multiplier * q[coordinate] + offset``.
+
+    ``axis`` is a unit vector (exact where possible) in the frame after ``before``. Limits (optional):
+    ``lower``/``upper`` on ``theta`` (rad or m) and ``velocity`` on its rate.
+    """
+
+    name: str
+    kind: str
+    before: Transform
+    axis: tuple[sp.Expr, sp.Expr, sp.Expr]
+    after: Transform
+    coordinate: int
+    offset: sp.Expr = sp.S.Zero
+    multiplier: sp.Expr = sp.S.One
+    lower: float | None = None
+    upper: float | None = None
+    velocity: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise InputError(f"joint {self.name!r}: type must be revolute or prismatic, got {self.kind!r}")
+        object.__setattr__(self, "axis", unit_axis(self.axis, f"joint {self.name!r} axis"))
+
+    @property
+    def free_symbols(self) -> set[sp.Symbol]:
+        """Named parameters this joint uses."""
+        out = self.before.free_symbols | self.after.free_symbols
+        for e in (self.offset, self.multiplier, *self.axis):
+            out |= sp.sympify(e).free_symbols
+        return out
+
+
+def unit_axis(axis: Iterable[object], what: str = "axis") -> tuple[sp.Expr, sp.Expr, sp.Expr]:
+    """``axis`` normalised: exact when it is along x, y or z (either sign), else Floats; length 0 is refused."""
+    values = list(axis)
+    if len(values) != 3:
+        raise InputError(f"{what} must have three components, got {len(values)}")
+    exprs = [exact_number(v, what) for v in values]
+    if any(e.free_symbols for e in exprs):
+        raise InputError(f"{what} must be numbers")
+    floats = [float(e) for e in exprs]
+    length = math.sqrt(sum(x * x for x in floats))
+    if not length > 0.0 or not math.isfinite(length):
+        raise InputError(f"{what} has length zero")
+    nonzero = [i for i, x in enumerate(floats) if x != 0.0]
+    if len(nonzero) == 1:
+        i = nonzero[0]
+        out = [sp.S.Zero] * 3
+        out[i] = sp.Integer(1 if floats[i] > 0 else -1)
+        return tuple(out)  # type: ignore[return-value]
+    return tuple(_fold(sp.Float(x / length)) for x in floats)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class NumericJoint:
+    """A joint with every constant as floats (what the NumPy reference reads)."""
+
+    name: str
+    kind: str
+    before: np.ndarray  # (4, 4)
+    axis: np.ndarray  # (3,)
+    after: np.ndarray  # (4, 4)
+    coordinate: int
+    offset: float
+    multiplier: float
+
+
+@dataclass(frozen=True)
+class NumericChain:
+    """A chain with parameters substituted: ``base`` and ``tool`` (4, 4), ``joints``, ``n`` coordinates."""
+
+    joints: tuple[NumericJoint, ...]
+    base: np.ndarray
+    tool: np.ndarray
+    n: int
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A serial chain (see the module docstring).
+
+    ``coordinates``: names of the input coordinates ``q[0..n-1]`` in order (usually one per
+    joint, base to tip). ``parameters``: named parameters in order of first appearance; the
+    emitted code takes their values as ``params``. ``source``: the file it came from.
+    """
+
+    name: str
+    joints: tuple[Joint, ...]
+    base: Transform = field(default_factory=Transform.identity)
+    tool: Transform = field(default_factory=Transform.identity)
+    coordinates: tuple[str, ...] = ()
+    parameters: tuple[sp.Symbol, ...] = ()
+    source: str | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        joints = tuple(self.joints)
+        object.__setattr__(self, "joints", joints)
+        if not joints:
+            raise InputError("a chain needs at least one moving joint")
+        if len(joints) > MAX_JOINTS:
+            raise InputError(f"a chain may have at most {MAX_JOINTS} moving joints, got {len(joints)}")
+        coordinates = tuple(self.coordinates) or tuple(j.name for j in joints)
+        object.__setattr__(self, "coordinates", coordinates)
+        n = len(coordinates)
+        if len(set(coordinates)) != n:
+            raise InputError("coordinate names must be distinct")
+        for j in joints:
+            if not 0 <= j.coordinate < n:
+                raise InputError(f"joint {j.name!r} follows coordinate {j.coordinate}, but there are {n}")
+        followed = {j.coordinate for j in joints}
+        if followed != set(range(n)):
+            raise InputError(f"coordinate(s) {sorted(set(range(n)) - followed)} move no joint")
+        used: set[sp.Symbol] = self.base.free_symbols | self.tool.free_symbols
+        for j in joints:
+            used |= j.free_symbols
+        params = tuple(self.parameters)
+        missing = used - set(params)
+        if missing:
+            params = params + tuple(sorted(missing, key=str))
+        object.__setattr__(self, "parameters", params)
+
+    @property
+    def n(self) -> int:
+        """Number of input coordinates (the length of ``q``)."""
+        return len(self.coordinates)
+
+    @property
+    def default_prefix(self) -> str:
+        """File name and C prefix when none is given: the robot's name."""
+        return self.name
+
+    def command_args(self) -> list[str]:
+        """The ``skelarm-sym generate`` options that describe this model."""
+        return [f"--robot {self.source}"] if self.source else []
+
+    def describe(self) -> str:
+        """One line for file headers."""
+        kinds = [j.kind for j in self.joints]
+        counts = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS if k in kinds)
+        origin = f" from {self.source}" if self.source else ""
+        text = f"serial chain {self.name!r}{origin}: {self.n} coordinate(s), {len(self.joints)} moving joint(s) ({counts})"
+        return text + (f"; {self.description}" if self.description else "")
+
+    def limits(self) -> dict[str, tuple[float | None, ...]]:
+        """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent."""
+        first = {}
+        for j in self.joints:
+            if j.coordinate not in first and j.multiplier == 1 and j.offset == 0:
+                first[j.coordinate] = j
+        out: dict[str, list] = {"lower": [], "upper": [], "velocity": []}
+        for c in range(self.n):
+            j = first.get(c)
+            for key in out:
+                out[key].append(getattr(j, key) if j is not None else None)
+        return {k: tuple(v) for k, v in out.items()}
+
+    def numeric(self, params: Sequence[float] | Mapping[str, float] | None = None) -> NumericChain:
+        """The chain with parameter values substituted, as floats (for the NumPy reference).
+
+        ``params``: values in the order of :attr:`parameters`, or a mapping by name.
+        """
+        values = self.parameter_values(params)
+
+        def num(e) -> float:
+            return float(sp.sympify(e).xreplace(values).evalf())
+
+        joints = tuple(
+            NumericJoint(
+                j.name, j.kind, j.before.numeric(values), np.array([num(a) for a in j.axis]), j.after.numeric(values),
+                j.coordinate, num(j.offset), num(j.multiplier),
+            )
+            for j in self.joints
+        )
+        return NumericChain(joints, self.base.numeric(values), self.tool.numeric(values), self.n)
+
+    def parameter_values(self, params: Sequence[float] | Mapping[str, float] | None) -> dict[sp.Symbol, float]:
+        """``{symbol: value}`` for every named parameter; InputError when one is missing or not finite."""
+        if not self.parameters:
+            return {}
+        if params is None:
+            raise InputError(f"{self.name} has parameters {', '.join(map(str, self.parameters))}: give their values")
+        if isinstance(params, Mapping):
+            by_name = dict(params)
+            missing = [str(p) for p in self.parameters if str(p) not in by_name]
+            if missing:
+                raise InputError(f"no value for parameter(s) {', '.join(missing)}")
+            values = [by_name[str(p)] for p in self.parameters]
+        else:
+            values = list(np.asarray(params, dtype=float).reshape(-1))
+            if len(values) != len(self.parameters):
+                raise InputError(f"expected {len(self.parameters)} parameter values, got {len(values)}")
+        out = {}
+        for p, v in zip(self.parameters, values):
+            v = float(v)
+            if not math.isfinite(v):
+                raise InputError(f"parameter {p} must be finite")
+            out[p] = v
+        return out
+
+
+# -- Denavit-Hartenberg ---------------------------------------------------------------------------
+
+CONVENTIONS = ("standard", "modified")
+
+
+def dh_joint(name: str, kind: str, convention: str, a, alpha, d, theta, coordinate: int) -> Joint:
+    """One DH row as a :class:`Joint` (see :mod:`skelarm_sym.models.robot_file` for the conventions).
+
+    standard: ``A = Rz(theta) Tz(d) Tx(a) Rx(alpha)``; modified: ``A = Rx(alpha) Tx(a) Rz(theta) Tz(d)``
+    (the row then holds ``a_{i-1}`` and ``alpha_{i-1}``). The joint variable adds to ``theta``
+    (revolute) or ``d`` (prismatic); the other one is constant.
+    """
+    T = Transform
+    z = (sp.S.Zero, sp.S.Zero, sp.S.One)
+    if convention == "standard":
+        tail = T.translate(x=a) @ T.rotate("x", alpha)
+        if kind == "revolute":
+            return Joint(name, kind, T.identity(), z, T.translate(z=d) @ tail, coordinate, offset=theta)
+        return Joint(name, kind, T.rotate("z", theta), z, tail, coordinate, offset=d)
+    if convention == "modified":
+        head = T.rotate("x", alpha) @ T.translate(x=a)
+        if kind == "revolute":
+            return Joint(name, kind, head, z, T.translate(z=d), coordinate, offset=theta)
+        return Joint(name, kind, head @ T.rotate("z", theta), z, T.identity(), coordinate, offset=d)
+    raise InputError(f"convention must be standard or modified, got {convention!r}")
