@@ -18,6 +18,8 @@ target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter)
 Precision: float.
 """
 
+import functools
+import inspect
 from collections import namedtuple
 
 import numpy as np
@@ -36,6 +38,21 @@ def _check_domain(array, name, domain):
         raise ValueError(f"{name} must be >= 0")
     if domain == "positive" and np.any(array <= 0):
         raise ValueError(f"{name} must be > 0")
+
+
+def _signature_errors(function):
+    """A wrong number or name of arguments raises a TypeError that names the signature."""
+
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as exc:
+            if exc.__traceback__ is not None and exc.__traceback__.tb_next is None:  # binding the arguments
+                raise TypeError(f"{function.__name__}{inspect.signature(function)}: {exc}") from None
+            raise
+
+    return call
 
 
 def _scalar(value, name, domain):
@@ -108,14 +125,15 @@ def _position_core(q, p):
     p[..., 1] = -t9
 
 
+@_signature_errors
 def position(q):
     """endpoint position p (2).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     Returns p of shape (..., 2).
     Operations: 3 sin, 3 cos, 12 add/sub/mul/neg.
     """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_position_core, (q, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -146,14 +164,15 @@ def _jacobian_core(q, J):
     J[..., 5] = t3
 
 
+@_signature_errors
 def jacobian(q):
     """Jacobian J (2 x N, row-major).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     Returns J of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 11 add/sub/mul/neg.
     """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
     _chunked(_jacobian_core, (q, ), outputs, batch)
     return outputs[0].reshape(batch + (2, 3,))
@@ -193,15 +212,16 @@ def _coriolis_core(q, dq, H):
     H[..., 5] = t20
 
 
+@_signature_errors
 def coriolis(q, dq):
     """H = dJ/dt (2 x N, row-major).
 
-    q: array of shape (..., 3).
-    dq: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
+    dq: array of shape (..., 3), finite.
     Returns H of shape (..., 2, 3).
     Operations: 3 sin, 3 cos, 20 add/sub/mul/neg.
     """
-    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
+    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
     _chunked(_coriolis_core, (q, dq, ), outputs, batch)
     return outputs[0].reshape(batch + (2, 3,))
@@ -237,15 +257,16 @@ def _velocity_core(q, dq, v):
     v[..., 1] = -t23
 
 
+@_signature_errors
 def velocity(q, dq):
     """endpoint velocity v = J dq (2).
 
-    q: array of shape (..., 3).
-    dq: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
+    dq: array of shape (..., 3), finite.
     Returns v of shape (..., 2).
     Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
     """
-    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("", "", ))
+    batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_velocity_core, (q, dq, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -286,16 +307,17 @@ def _acceleration_core(q, dq, ddq, a):
     a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
+@_signature_errors
 def acceleration(q, dq, ddq):
     """endpoint acceleration a = J ddq + H dq (2).
 
-    q: array of shape (..., 3).
-    dq: array of shape (..., 3).
-    ddq: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
+    dq: array of shape (..., 3), finite.
+    ddq: array of shape (..., 3), finite.
     Returns a of shape (..., 2).
     Operations: 3 sin, 3 cos, 47 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
+    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_acceleration_core, (q, dq, ddq, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -352,16 +374,17 @@ def _kinematics_core(q, dq, ddq, p, J, H, v, a):
     a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
+@_signature_errors
 def kinematics(q, dq, ddq):
     """p, J, H, v and a at once.
 
-    q: array of shape (..., 3).
-    dq: array of shape (..., 3).
-    ddq: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
+    dq: array of shape (..., 3), finite.
+    ddq: array of shape (..., 3), finite.
     Returns p of shape (..., 2), J of shape (..., 2, 3), H of shape (..., 2, 3), v of shape (..., 2), a of shape (..., 2).
     Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("", "", "", ))
+    batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_kinematics_core, (q, dq, ddq, ), outputs, batch)
     return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 3,)), outputs[2].reshape(batch + (2, 3,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
@@ -398,14 +421,15 @@ def _manipulability_core(q, w):
     w[..., 0] = np.sqrt(t29*t34)
 
 
+@_signature_errors
 def manipulability(q):
     """manipulability w = sqrt(det(J J^T)) (1).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     Returns w of shape (..., 1).
     Operations: 3 sin, 3 cos, 39 add/sub/mul/neg.
     """
-    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("", ))
+    batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
     _chunked(_manipulability_core, (q, ), outputs, batch)
     return outputs[0].reshape(batch + (1,))
@@ -451,16 +475,17 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     dq[..., 2] = t3*t48 + t47*t6
 
 
+@_signature_errors
 def inverse_velocity(q, v, lambda_):
     """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
     Operations: 3 sin, 3 cos, 59 add/sub/mul/neg.
     """
-    batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("", "finite", ))
+    batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (3,), dtype=DTYPE), )
     _chunked(_inverse_velocity_core, (q, v, lambda_, ), outputs, batch)
@@ -527,16 +552,17 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     dq3[..., 2] = t86 + t3*t85 + t84*t6
 
 
+@_signature_errors
 def inverse_velocity3(q, twist, lambda_):
     """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
     Operations: 3 sin, 3 cos, 143 add/sub/mul/neg.
     """
-    batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("", "finite", ))
+    batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (3,), dtype=DTYPE), )
     _chunked(_inverse_velocity3_core, (q, twist, lambda_, ), outputs, batch)
@@ -585,16 +611,17 @@ def _ik_step_core(q, target, lambda_, q_next):
     q_next[..., 2] = q[..., 2] + t3*t56 + t55*t6
 
 
+@_signature_errors
 def ik_step(q, target, lambda_):
     """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
 
-    q: array of shape (..., 3).
+    q: array of shape (..., 3), finite.
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
     Operations: 3 sin, 3 cos, 64 add/sub/mul/neg.
     """
-    batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("", "finite", ))
+    batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (3,), dtype=DTYPE), )
     _chunked(_ik_step_core, (q, target, lambda_, ), outputs, batch)
@@ -606,7 +633,8 @@ IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "s
 endpoint error |target - p| at q, and the number of steps taken."""
 
 
-def ik_solve(q0, target, lambda_, tol=1e-9, max_iter=200):
+@_signature_errors
+def ik_solve(q0, target, lambda_, tol=0.0001, max_iter=200):
     """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
 
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
@@ -615,14 +643,23 @@ def ik_solve(q0, target, lambda_, tol=1e-9, max_iter=200):
     no shorter step helps or the error improves by less than a relative 1e-06 (an
     unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
-    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0 or not finite,
+    max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
     """
     q = np.array(q0, dtype=DTYPE)
     if q.ndim != 1 or not np.all(np.isfinite(q)):
         raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
-        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be finite and > 0, got {tol!r}")
+    try:
+        ok = int(max_iter) == max_iter and not isinstance(max_iter, bool) and 0 <= max_iter <= 2**31 - 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"max_iter must be a whole number in 0..{2**31 - 1}, got {max_iter!r}")
     target = np.asarray(target, dtype=DTYPE)
+    if target.shape != (2,):
+        raise ValueError(f"target must have shape (2,), got {target.shape}")
     _check_domain(target, "target", "finite")
     lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
 

@@ -18,6 +18,8 @@ target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter)
 Precision: double.
 """
 
+import functools
+import inspect
 from collections import namedtuple
 
 import numpy as np
@@ -36,6 +38,21 @@ def _check_domain(array, name, domain):
         raise ValueError(f"{name} must be >= 0")
     if domain == "positive" and np.any(array <= 0):
         raise ValueError(f"{name} must be > 0")
+
+
+def _signature_errors(function):
+    """A wrong number or name of arguments raises a TypeError that names the signature."""
+
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as exc:
+            if exc.__traceback__ is not None and exc.__traceback__.tb_next is None:  # binding the arguments
+                raise TypeError(f"{function.__name__}{inspect.signature(function)}: {exc}") from None
+            raise
+
+    return call
 
 
 def _scalar(value, name, domain):
@@ -125,15 +142,16 @@ def _position_core(q, l, p):
     p[..., 1] = -t26
 
 
+@_signature_errors
 def position(q, l):
     """endpoint position p (2).
 
-    q: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns p of shape (..., 2).
     Operations: 6 sin, 6 cos, 29 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_position_core, (q, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -187,15 +205,16 @@ def _jacobian_core(q, l, J):
     J[..., 11] = t10
 
 
+@_signature_errors
 def jacobian(q, l):
     """Jacobian J (2 x N, row-major).
 
-    q: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns J of shape (..., 2, 6).
     Operations: 6 sin, 6 cos, 28 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (12,), dtype=DTYPE), )
     _chunked(_jacobian_core, (q, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2, 6,))
@@ -267,16 +286,17 @@ def _coriolis_core(q, dq, l, H):
     H[..., 11] = t46
 
 
+@_signature_errors
 def coriolis(q, dq, l):
     """H = dJ/dt (2 x N, row-major).
 
-    q: array of shape (..., 6).
-    dq: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    dq: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns H of shape (..., 2, 6).
     Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (12,), dtype=DTYPE), )
     _chunked(_coriolis_core, (q, dq, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2, 6,))
@@ -338,16 +358,17 @@ def _velocity_core(q, dq, l, v):
     v[..., 1] = -t55
 
 
+@_signature_errors
 def velocity(q, dq, l):
     """endpoint velocity v = J dq (2).
 
-    q: array of shape (..., 6).
-    dq: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    dq: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns v of shape (..., 2).
     Operations: 6 sin, 6 cos, 47 add/sub/mul/neg.
     """
-    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("", "", "", ))
+    batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_velocity_core, (q, dq, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -420,17 +441,18 @@ def _acceleration_core(q, dq, ddq, l, a):
     a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
 
 
+@_signature_errors
 def acceleration(q, dq, ddq, l):
     """endpoint acceleration a = J ddq + H dq (2).
 
-    q: array of shape (..., 6).
-    dq: array of shape (..., 6).
-    ddq: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    dq: array of shape (..., 6), finite.
+    ddq: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns a of shape (..., 2).
     Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_acceleration_core, (q, dq, ddq, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2,))
@@ -531,17 +553,18 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
 
 
+@_signature_errors
 def kinematics(q, dq, ddq, l):
     """p, J, H, v and a at once.
 
-    q: array of shape (..., 6).
-    dq: array of shape (..., 6).
-    ddq: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    dq: array of shape (..., 6), finite.
+    ddq: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns p of shape (..., 2), J of shape (..., 2, 6), H of shape (..., 2, 6), v of shape (..., 2), a of shape (..., 2).
     Operations: 6 sin, 6 cos, 105 add/sub/mul/neg.
     """
-    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("", "", "", "", ))
+    batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
     _chunked(_kinematics_core, (q, dq, ddq, l, ), outputs, batch)
     return outputs[0].reshape(batch + (2,)), outputs[1].reshape(batch + (2, 6,)), outputs[2].reshape(batch + (2, 6,)), outputs[3].reshape(batch + (2,)), outputs[4].reshape(batch + (2,))
@@ -598,15 +621,16 @@ def _manipulability_core(q, l, w):
     w[..., 0] = np.sqrt(t61*t69)
 
 
+@_signature_errors
 def manipulability(q, l):
     """manipulability w = sqrt(det(J J^T)) (1).
 
-    q: array of shape (..., 6).
-    l: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
+    l: array of shape (..., 6), finite.
     Returns w of shape (..., 1).
     Operations: 6 sin, 6 cos, 86 add/sub/mul/neg.
     """
-    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("", "", ))
+    batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
     _chunked(_manipulability_core, (q, l, ), outputs, batch)
     return outputs[0].reshape(batch + (1,))
@@ -672,17 +696,18 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     dq[..., 5] = t10*t83 + t82*t17
 
 
+@_signature_errors
 def inverse_velocity(q, v, l, lambda_):
     """joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N).
 
-    q: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
     v: array of shape (..., 2), finite.
-    l: array of shape (..., 6).
+    l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
     Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
     """
-    batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (6, 2, 6, ), ("", "finite", "", ))
+    batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
     _chunked(_inverse_velocity_core, (q, v, l, lambda_, ), outputs, batch)
@@ -769,17 +794,18 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     dq3[..., 5] = t121 + t10*t120 + t119*t17
 
 
+@_signature_errors
 def inverse_velocity3(q, twist, l, lambda_):
     """joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N).
 
-    q: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
     twist: array of shape (..., 3), finite.
-    l: array of shape (..., 6).
+    l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 6).
     Operations: 6 sin, 6 cos, 196 add/sub/mul/neg.
     """
-    batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (6, 3, 6, ), ("", "finite", "", ))
+    batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (6, 3, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
     _chunked(_inverse_velocity3_core, (q, twist, l, lambda_, ), outputs, batch)
@@ -848,17 +874,18 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     q_next[..., 5] = q[..., 5] + t10*t91 + t90*t17
 
 
+@_signature_errors
 def ik_step(q, target, l, lambda_):
     """one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N).
 
-    q: array of shape (..., 6).
+    q: array of shape (..., 6), finite.
     target: array of shape (..., 2), finite.
-    l: array of shape (..., 6).
+    l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 6).
     Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
     """
-    batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (6, 2, 6, ), ("", "finite", "", ))
+    batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
     _chunked(_ik_step_core, (q, target, l, lambda_, ), outputs, batch)
@@ -870,7 +897,8 @@ IKResult.__doc__ = """Outcome of ik_solve: final pose q, status ("converged", "s
 endpoint error |target - p| at q, and the number of steps taken."""
 
 
-def ik_solve(q0, target, l, lambda_, tol=1e-9, max_iter=200):
+@_signature_errors
+def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
 
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
@@ -879,15 +907,28 @@ def ik_solve(q0, target, l, lambda_, tol=1e-9, max_iter=200):
     no shorter step helps or the error improves by less than a relative 1e-10 (an
     unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
-    Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0, max_iter < 0.
+    Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
+    max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
     """
     q = np.array(q0, dtype=DTYPE)
     if q.ndim != 1 or not np.all(np.isfinite(q)):
         raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
-    if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
-        raise ValueError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be finite and > 0, got {tol!r}")
+    try:
+        ok = int(max_iter) == max_iter and not isinstance(max_iter, bool) and 0 <= max_iter <= 2**31 - 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"max_iter must be a whole number in 0..{2**31 - 1}, got {max_iter!r}")
     target = np.asarray(target, dtype=DTYPE)
+    if target.shape != (2,):
+        raise ValueError(f"target must have shape (2,), got {target.shape}")
     _check_domain(target, "target", "finite")
+    l = np.asarray(l, dtype=DTYPE)
+    if l.shape != (6,):
+        raise ValueError(f"l must have shape (6,), got {l.shape}")
+    _check_domain(l, "l", "positive")
     lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
 
     def error_at(trial):

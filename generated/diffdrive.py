@@ -11,6 +11,9 @@ target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter)
 Precision: double.
 """
 
+import functools
+import inspect
+
 import numpy as np
 
 DTYPE = np.float64
@@ -25,6 +28,21 @@ def _check_domain(array, name, domain):
         raise ValueError(f"{name} must be >= 0")
     if domain == "positive" and np.any(array <= 0):
         raise ValueError(f"{name} must be > 0")
+
+
+def _signature_errors(function):
+    """A wrong number or name of arguments raises a TypeError that names the signature."""
+
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as exc:
+            if exc.__traceback__ is not None and exc.__traceback__.tb_next is None:  # binding the arguments
+                raise TypeError(f"{function.__name__}{inspect.signature(function)}: {exc}") from None
+            raise
+
+    return call
 
 
 def _scalar(value, name, domain):
@@ -85,6 +103,7 @@ def _body_rates_core(wheels, track, rates):
     rates[..., 1] = t2
 
 
+@_signature_errors
 def body_rates(wheels, track):
     """body rates (v, omega) from wheel speeds (v_L, v_R).
 
@@ -106,6 +125,7 @@ def _wheel_speeds_core(rates, track, wheels):
     wheels[..., 1] = rates[..., 0] + 0.5*track*rates[..., 1]
 
 
+@_signature_errors
 def wheel_speeds(rates, track):
     """wheel speeds (v_L, v_R) for body rates (v, omega).
 
@@ -135,6 +155,7 @@ def _pose_rate_core(pose, wheels, track, dpose):
     dpose[..., 2] = t2
 
 
+@_signature_errors
 def pose_rate(pose, wheels, track):
     """pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R).
 

@@ -3,18 +3,26 @@
 ``CompiledArm(library, prefix, programs, precision, shared, domains)`` loads a shared library
 built by :mod:`skelarm_sym.build` through ctypes; ``arm.jacobian(q, l)`` with ``q`` of shape
 ``(..., N)`` returns ``(..., 2, N)``; batches go through the ``_batch`` C functions.
+
+Each method has the emitted NumPy module's signature (``inspect.signature(arm.inverse_velocity)``
+is ``(q, v, l, lambda_)``), accepts keywords, and checks what the header promises: shapes,
+finite state and data, positive lengths, ``lambda >= 0``; a wrong number of arguments is a
+``TypeError`` that names the signature, bad values an :class:`InputError` (a ``ValueError``).
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
+import inspect
+import keyword
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-from .backends.common import IK_STATUS
+from .backends.common import IK_SETTINGS, IK_STATUS
 from .errors import InputError
 from .program import Program
 
@@ -41,6 +49,72 @@ class IKResult:
     iterations: int
 
 
+C_INT_MAX = 2**31 - 1
+"""The largest ``max_iter`` the C ``int`` argument holds."""
+
+
+def identifier(name: str) -> str:
+    """The Python argument name of input ``name`` (keywords get a trailing ``_``: ``lambda_``)."""
+    return name + "_" if keyword.iskeyword(name) else name
+
+
+def signature_errors(function):
+    """Wrap ``function`` so that calling it with the wrong arguments raises a ``TypeError`` that
+    names its signature (``jacobian(q, l): ... takes 2 positional arguments but 3 were given``).
+    Errors raised inside ``function`` pass through unchanged."""
+
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as exc:
+            if exc.__traceback__ is not None and exc.__traceback__.tb_next is None:  # binding the arguments
+                raise TypeError(f"{function.__name__}{inspect.signature(function)}: {exc}") from None
+            raise
+
+    return call
+
+
+def iteration_count(max_iter: object) -> int:
+    """``max_iter`` as an int in ``0..2**31 - 1`` (the C ``int`` range), else InputError."""
+    try:
+        whole = int(max_iter)  # type: ignore[call-overload]
+        ok = whole == max_iter and not isinstance(max_iter, bool)
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok or not 0 <= whole <= C_INT_MAX:
+        raise InputError(f"max_iter must be a whole number in 0..{C_INT_MAX}, got {max_iter!r}")
+    return whole
+
+
+def _make_method(name: str, params: Sequence[str], defaults: dict[str, object], doc: str, target) -> object:
+    """A function ``name(params...)`` (real signature, docstring) that calls ``target(args_tuple)``."""
+    text = ", ".join(f"{p}=_defaults[{p!r}]" if p in defaults else p for p in params)
+    source = f"def {name}({text}):\n    return _target(({''.join(p + ', ' for p in params)}))\n"
+    namespace: dict = {"_target": target, "_defaults": defaults}
+    exec(source, namespace)  # noqa: S102 - names are identifiers from the program
+    function = namespace[name]
+    function.__doc__ = doc
+    return signature_errors(function)
+
+
+def _docstring(program: Program, domains: dict[str, str], shared: Sequence[str]) -> str:
+    lines = [f"{program.summary} (the emitted C {{prefix}}_{program.name}).", ""]
+    for a in program.inputs:
+        domain = domains.get(a.name, "")
+        rule = {"finite": ", finite", "nonnegative": ", finite and >= 0", "positive": ", finite and > 0"}.get(domain, "")
+        if a.is_scalar:
+            lines.append(f"{identifier(a.name)}: a number{rule}, shared by the batch.")
+        elif a.name in shared:
+            lines.append(f"{identifier(a.name)}: array of shape ({a.size},){rule}, shared by the batch.")
+        else:
+            lines.append(f"{identifier(a.name)}: array of shape (..., {a.size}){rule}.")
+    outs = ", ".join(f"{o.name} of shape (..., {', '.join(map(str, o.shape))})" for o in program.outputs)
+    lines.append(f"Returns {outs}.")
+    lines.append("Raises TypeError for a wrong number of arguments, InputError (a ValueError) for bad values.")
+    return "\n".join(lines)
+
+
 def _check_domain(array: np.ndarray, name: str, domain: str) -> None:
     if domain and not np.all(np.isfinite(array)):
         raise InputError(f"{name} must be finite")
@@ -65,6 +139,8 @@ class CompiledArm:
         pointer = ctypes.POINTER(ctype)
         self._ctype = ctype
         self._signatures: dict[str, _Signature] = {}
+        self._methods: dict[str, object] = {}
+        self.precision = precision
         domains = domains or {}
         for program in programs:
             sig = _Signature(
@@ -74,6 +150,11 @@ class CompiledArm:
                 {a.name: domains[a.name] for a in program.inputs if a.name in domains},
             )
             self._signatures[program.name] = sig
+            self._methods[program.name] = _make_method(
+                program.name, [identifier(a.name) for a in program.inputs], {},
+                _docstring(program, domains, shared).replace("{prefix}", prefix),
+                functools.partial(self._call, sig),
+            )
             args = [ctype if a.is_scalar else pointer for a in program.inputs] + [pointer] * len(sig.outputs)
             single = getattr(self._lib, f"{prefix}_{program.name}")
             single.argtypes = args
@@ -92,6 +173,10 @@ class CompiledArm:
             )
             solve.restype = ctypes.c_int
             self._ik = solve
+            params = ["q0", *(identifier(name) for name, *_ in step.inputs if name != "q"), "tol", "max_iter"]
+            defaults = {"tol": IK_SETTINGS[precision]["tol"], "max_iter": 200}
+            self._methods["ik_solve"] = _make_method("ik_solve", params, defaults, _IK_DOC.format(
+                prefix=prefix, tol=defaults["tol"]), self._ik_solve)
 
     @property
     def functions(self) -> tuple[str, ...]:
@@ -99,21 +184,20 @@ class CompiledArm:
         return tuple(self._signatures)
 
     def __getattr__(self, name: str):
-        signatures = self.__dict__.get("_signatures", {})
-        if name not in signatures:
+        methods = self.__dict__.get("_methods", {})
+        if name not in methods:
+            if name == "ik_solve":
+                raise AttributeError("this library has no ik_solve (it needs position and ik_step)")
             raise AttributeError(name)
-        sig = signatures[name]
+        return methods[name]
 
-        def call(*args):
-            return self._call(sig, args)
-
-        call.__name__ = name
-        return call
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(self.__dict__.get("_methods", {})))
 
     def _call(self, sig: _Signature, args: tuple) -> np.ndarray | tuple[np.ndarray, ...]:
         if len(args) != len(sig.inputs):
-            names = ", ".join(n for n, _, _ in sig.inputs)
-            raise InputError(f"{sig.name} takes {len(sig.inputs)} arrays ({names}), got {len(args)}")
+            names = ", ".join(identifier(n) for n, *_ in sig.inputs)
+            raise TypeError(f"{sig.name}({names}) takes {len(sig.inputs)} arguments, got {len(args)}")
         arrays = []
         for value, (name, size, shared, scalar) in zip(args, sig.inputs):
             array = np.asarray(value, dtype=self.dtype)
@@ -148,21 +232,19 @@ class CompiledArm:
             getattr(self._lib, f"{self.prefix}_{sig.name}")(*pointers)
         return outputs[0] if len(outputs) == 1 else tuple(outputs)
 
-    def ik_solve(self, q0, *args, tol: float = 1e-9, max_iter: int = 200) -> IKResult:
-        """Run the emitted C ``{prefix}_ik_solve``: ``args`` are ``ik_step``'s inputs after ``q``
-        (``l`` when lengths are symbolic, ``target``, ``lambda``). Bad input raises InputError."""
-        if self._ik is None:
-            raise AttributeError("this library has no ik_solve (it needs position and ik_step)")
+    def _ik_solve(self, args: tuple) -> IKResult:
         step = self._signatures["ik_step"]
         n = step.inputs[0][1]
+        q0, *args, tol, max_iter = args
         q0 = np.ascontiguousarray(np.asarray(q0, dtype=self.dtype))
-        if q0.shape != (n,) or not np.all(np.isfinite(q0)):
-            raise InputError(f"q0 must be {n} finite numbers, got shape {q0.shape}")
+        if q0.shape != (n,):
+            raise InputError(f"q0 must have shape ({n},), got {q0.shape}")
+        _check_domain(q0, "q0", "finite")
         others = [x for x in step.inputs if x[0] != "q"]
-        if len(args) != len(others):
-            raise InputError(f"ik_solve takes q0 and {', '.join(x[0] for x in others)}")
-        if not tol > 0 or int(max_iter) != max_iter or max_iter < 0:
-            raise InputError(f"tol must be > 0 and max_iter a whole number >= 0, got {tol!r}, {max_iter!r}")
+        tol = float(tol)
+        if not (np.isfinite(tol) and tol > 0):
+            raise InputError(f"tol must be finite and > 0, got {tol!r}")
+        max_iter = iteration_count(max_iter)
         c_args = [q0.ctypes.data_as(self._pointer)]
         keep = []
         for value, (name, size, _, scalar) in zip(args, others):
@@ -176,6 +258,17 @@ class CompiledArm:
         q = np.empty(n, dtype=self.dtype)
         error = np.empty(1, dtype=self.dtype)
         iterations = ctypes.c_int(0)
-        status = self._ik(*c_args, self._ctype(tol), int(max_iter), q.ctypes.data_as(self._pointer),
+        status = self._ik(*c_args, self._ctype(tol), max_iter, q.ctypes.data_as(self._pointer),
                           error.ctypes.data_as(self._pointer), ctypes.byref(iterations))
         return IKResult(q, IK_STATUS_NAMES[status], float(error[0]), iterations.value)
+
+
+_IK_DOC = """Inverse kinematics from q0 toward target by damped least-squares steps (the emitted C
+{prefix}_ik_solve; same algorithm as the NumPy module's ik_solve).
+
+q0: (N,) finite start pose; target: (2,) finite endpoint target; l (when lengths are symbolic):
+(N,) lengths > 0; lambda_: damping >= 0; tol: stop when |target - p| <= tol (default {tol:g} for
+this precision); max_iter: at most this many steps, 0..2**31 - 1.
+Returns IKResult(q, status, error, iterations), status one of "converged", "stalled", "max_iter".
+Raises TypeError for a wrong number of arguments, InputError (a ValueError) for bad values.
+"""

@@ -18,8 +18,8 @@ ANGLES, COSINES, SINES = "ang", "cs", "sn"
 IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 """Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
 IK_SETTINGS = {
-    "double": {"halvings": 30, "stall": 1e-10, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
-    "float": {"halvings": 20, "stall": 1e-6, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
+    "double": {"tol": 1e-9, "halvings": 30, "stall": 1e-10, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
+    "float": {"tol": 1e-4, "halvings": 20, "stall": 1e-6, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
 }
 """Per precision: step halvings tried per iteration; the relative error improvement below
 which the solver reports STALLED; and the damping schedule ``mu = max(lambda, c |e|)``:

@@ -97,6 +97,8 @@ def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
     settings = IK_SETTINGS[precision]
     return {
         "params": [a for a in step["args"] if a != "q"],
+        "checks": [a for a in step["inputs"] if a["name"] != "q" and a["domain"]],
+        "tol": repr(settings["tol"]),
         "step_args": ["mu" if a == damping else a for a in step["args"]],
         "position_args": ["trial" if a == "q" else a for a in functions["position"]["args"]],
         "lambda": damping,

@@ -205,7 +205,8 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
         functions=functions,
         parameters=("l", "lambda"),
         scalars=("lambda",),
-        domains={"lambda": "nonnegative", "v": "finite", "twist": "finite", "target": "finite"},
+        domains={"q": "finite", "dq": "finite", "ddq": "finite", "l": "positive", "lambda": "nonnegative",
+                 "v": "finite", "twist": "finite", "target": "finite"},
         constants=(RANK_TOL,),
         notes=(
             f"Model: {model.describe()}.",
