@@ -5,11 +5,12 @@ One module per model (``planar``, ``diffdrive``, ``chain``) plus ``linalg`` for 
 functions (NumPy eigen-decomposition and SVD, never the generator's rank rules).
 """
 
+from .chain import ChainKinematics, chain_kinematics
 from .diffdrive import diffdrive_body_rates, diffdrive_pose_rate, diffdrive_wheel_speeds
 from .linalg import Solve, damped_least_squares, manipulability
 from .planar import Kinematics, kinematics
 
 __all__ = [
-    "Kinematics", "Solve", "damped_least_squares", "diffdrive_body_rates", "diffdrive_pose_rate",
-    "diffdrive_wheel_speeds", "kinematics", "manipulability",
+    "ChainKinematics", "Kinematics", "Solve", "chain_kinematics", "damped_least_squares", "diffdrive_body_rates",
+    "diffdrive_pose_rate", "diffdrive_wheel_speeds", "kinematics", "manipulability",
 ]
