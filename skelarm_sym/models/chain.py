@@ -306,7 +306,7 @@ class Chain:
     def limits(self) -> dict[str, tuple[float | None, ...]]:
         """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent."""
         first = {}
-        for j in self.joints:
+        for j in sorted(self.joints, key=lambda j: j.name != self.coordinates[j.coordinate]):  # own joint first
             if j.coordinate not in first and j.multiplier == 1 and j.offset == 0:
                 first[j.coordinate] = j
         out: dict[str, list] = {"lower": [], "upper": [], "velocity": []}

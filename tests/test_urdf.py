@@ -1,0 +1,524 @@
+"""URDF loader: chains from URDF trees, checked against an independent NumPy walk of the raw XML and Pinocchio.
+
+The independent forward kinematics here (``raw_fk``) reads the XML itself and composes every joint on the
+path (fixed ones included) with its own rpy and Rodrigues code, so it shares nothing with the loader's
+folding of fixed joints, normalisation of axes or mimic resolution. Jacobians are checked against central
+differences of ``raw_fk``.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import skelarm_sym
+from skelarm_sym.errors import InputError
+from skelarm_sym.models.loader import load_robot
+from skelarm_sym.models.urdf import load_urdf
+from skelarm_sym.reference.chain import chain_kinematics
+
+
+# -- an independent forward kinematics from the raw XML -----------------------------------------------
+
+def _rpy(r: float, p: float, y: float) -> np.ndarray:
+    cr, sr, cp, sp_, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    Ry = np.array([[cp, 0, sp_], [0, 1, 0], [-sp_, 0, cp]])
+    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return Rz @ Ry @ Rx
+
+
+def _rot(axis: np.ndarray, angle: float) -> np.ndarray:
+    k = axis / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _vec(element, key, default):
+    if element is None or element.get(key) is None:
+        return np.array(default, dtype=float)
+    return np.array([float(x) for x in element.get(key).split()])
+
+
+def raw_fk(text: str, base: str, tip: str, values: dict[str, float]) -> np.ndarray:
+    """Pose of ``tip`` in ``base`` with joint positions ``values`` by name (mimic joints computed here)."""
+    root = ET.fromstring(text)
+    joints = {j.get("name"): j for j in root.findall("joint")}
+    by_child = {j.find("child").get("link"): j for j in joints.values()}
+
+    def position(j) -> float:
+        mimic = j.find("mimic")
+        if mimic is None:
+            return values[j.get("name")]
+        return float(mimic.get("multiplier", 1)) * position(joints[mimic.get("joint")]) + float(mimic.get("offset", 0))
+
+    path, link = [], tip
+    while link != base:
+        path.append(by_child[link])
+        link = by_child[link].find("parent").get("link")
+    T = np.eye(4)
+    for j in reversed(path):
+        o = j.find("origin")
+        step = np.eye(4)
+        step[:3, :3] = _rpy(*_vec(o, "rpy", (0, 0, 0)))
+        step[:3, 3] = _vec(o, "xyz", (0, 0, 0))
+        motion = np.eye(4)
+        axis = _vec(j.find("axis"), "xyz", (1, 0, 0))
+        if j.get("type") in ("revolute", "continuous"):
+            motion[:3, :3] = _rot(axis, position(j))
+        elif j.get("type") == "prismatic":
+            motion[:3, 3] = axis / np.linalg.norm(axis) * position(j)
+        T = T @ step @ motion
+    return T
+
+
+def fd_jacobian(text, base, tip, names, q, h=1e-6) -> np.ndarray:
+    """Geometric Jacobian (rows v, w; base axes; tip origin) by central differences of ``raw_fk``."""
+    J = np.zeros((6, len(names)))
+    for i in range(len(names)):
+        plus, minus = q.copy(), q.copy()
+        plus[i] += h
+        minus[i] -= h
+        Tp = raw_fk(text, base, tip, dict(zip(names, plus)))
+        Tm = raw_fk(text, base, tip, dict(zip(names, minus)))
+        J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
+        W = (Tp[:3, :3] - Tm[:3, :3]) / (2 * h) @ raw_fk(text, base, tip, dict(zip(names, q)))[:3, :3].T
+        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]
+    return J
+
+
+def pose_by_hand(chain, q) -> np.ndarray:
+    """``base @ prod(before @ M(theta) @ after) @ tool`` from Chain.numeric(), composed here."""
+    nc = chain.numeric()
+    T = nc.base.copy()
+    for j in nc.joints:
+        th = j.multiplier * q[j.coordinate] + j.offset
+        M = np.eye(4)
+        if j.kind == "revolute":
+            M[:3, :3] = _rot(j.axis, th)
+        else:
+            M[:3, 3] = j.axis * th
+        T = T @ j.before @ M @ j.after
+    return T @ nc.tool
+
+
+def write(tmp_path: Path, text: str, name: str = "robot.urdf") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+# -- the edge cases in one arm ---------------------------------------------------------------------------
+
+EDGE = """<?xml version="1.0"?>
+<robot name="edge-arm 1">
+  <link name="world"/> <link name="base"/> <link name="l1"/> <link name="l2"/> <link name="l2b"/>
+  <link name="l3"/> <link name="l4"/> <link name="l5"/> <link name="flange"/> <link name="tool"/>
+  <joint name="mount" type="fixed">
+    <parent link="world"/> <child link="base"/>
+    <origin xyz="0.1 -0.2 0.3" rpy="0.1 0.2 0.3"/>
+  </joint>
+  <joint name="j1" type="revolute">
+    <parent link="base"/> <child link="l1"/>
+    <origin xyz="0 0 0.4" rpy="0.3 -0.2 1.5707963267948966"/>
+    <axis xyz="0 2 2"/>
+    <limit lower="-2.5" upper="2.0" velocity="1.5" effort="10"/>
+  </joint>
+  <joint name="j2" type="continuous">
+    <parent link="l1"/> <child link="l2"/>
+    <origin xyz="0.25  0 0.05" rpy="-0.4 0.5 0.6"/>
+    <axis xyz="-3 0 0"/>
+    <limit velocity="2.5" effort="10"/>
+  </joint>
+  <joint name="middle" type="fixed">
+    <parent link="l2"/> <child link="l2b"/>
+    <origin xyz="0 0.05 0" rpy="0.7 0 -0.1"/>
+  </joint>
+  <joint name="slide" type="prismatic">
+    <parent link="l2b"/> <child link="l3"/>
+    <origin xyz="0.1 0.2 -0.1" rpy="0.2 0.9 -1.1"/>
+    <axis xyz="1 2 -2"/>
+    <limit lower="-0.1" upper="0.35" velocity="0.5" effort="100"/>
+  </joint>
+  <joint name="follow" type="revolute">
+    <parent link="l3"/> <child link="l4"/>
+    <origin xyz="0 0.1 0.2" rpy="3.141592653589793 0.25 -0.35"/>
+    <axis xyz="0.3 -0.4 1.2"/>
+    <limit lower="-1" upper="1" velocity="3" effort="10"/>
+    <mimic joint="j1" multiplier="-0.5" offset="0.3"/>
+  </joint>
+  <joint name="j4" type="revolute">
+    <parent link="l4"/> <child link="l5"/>
+    <origin xyz="0.05 0 0.1" rpy="0.15 -0.25 0.35"/>
+    <limit lower="-3" upper="3" velocity="4" effort="10"/>
+  </joint>
+  <joint name="flange_joint" type="fixed">
+    <parent link="l5"/> <child link="flange"/>
+    <origin xyz="0 0 0.08" rpy="0 0 -0.7853981633974483"/>
+  </joint>
+  <joint name="tcp" type="fixed">
+    <parent link="flange"/> <child link="tool"/>
+    <origin xyz="0.01 0.02 0.1" rpy="-0.2 0.1 0.05"/>
+  </joint>
+</robot>
+"""
+EDGE_COORDS = ("j1", "j2", "slide", "j4")
+
+
+def test_edge_arm_structure(tmp_path):
+    path = write(tmp_path, EDGE)
+    chain = load_urdf(path)
+    assert chain.name == "edge_arm_1"
+    assert chain.coordinates == EDGE_COORDS
+    assert chain.source == str(path)
+    assert chain.description == "URDF, base world, tip tool"
+    assert [j.name for j in chain.joints] == ["j1", "j2", "slide", "follow", "j4"]
+    assert [j.kind for j in chain.joints] == ["revolute", "revolute", "prismatic", "revolute", "revolute"]
+    assert [j.coordinate for j in chain.joints] == [0, 1, 2, 0, 3]
+    follow = chain.joints[3]
+    assert float(follow.multiplier) == -0.5 and float(follow.offset) == pytest.approx(0.3, abs=0)
+    # axes: exact along x (either sign) and for the default; unit otherwise
+    assert chain.joints[1].axis == (-1, 0, 0)
+    assert chain.joints[4].axis == (1, 0, 0)
+    for j, raw in ((chain.joints[0], (0, 2, 2)), (chain.joints[2], (1, 2, -2)), (follow, (0.3, -0.4, 1.2))):
+        a = np.array([float(x) for x in j.axis])
+        np.testing.assert_allclose(a, np.array(raw) / np.linalg.norm(raw), rtol=0, atol=1e-15)
+    # after is identity; the fixed joints are folded: mount is the base, flange and tcp the tool, middle in slide
+    assert all(j.after.is_identity for j in chain.joints)
+    raw = ET.fromstring(EDGE)
+
+    def origin(name):
+        o = raw.find(f"joint[@name='{name}']/origin")
+        T = np.eye(4)
+        T[:3, :3] = _rpy(*_vec(o, "rpy", (0, 0, 0)))
+        T[:3, 3] = _vec(o, "xyz", (0, 0, 0))
+        return T
+
+    nc = chain.numeric()
+    np.testing.assert_allclose(nc.base, origin("mount"), atol=1e-15)
+    np.testing.assert_allclose(nc.tool, origin("flange_joint") @ origin("tcp"), atol=1e-15)
+    np.testing.assert_allclose(nc.joints[2].before, origin("middle") @ origin("slide"), atol=1e-15)
+    np.testing.assert_allclose(nc.joints[0].before, origin("j1"), atol=1e-15)
+    # yaw pi/2 and roll pi snap exactly: j1's rotation has exact entries where cos(pi/2) = 0
+    R1 = chain.joints[0].before.rotation
+    assert R1[0, 0] == 0 and R1[1, 0].is_Float and R1[2, 0].is_Float
+    # roll pi snaps: R[2, 1] = cos(pitch) sin(roll) is exactly 0 (1.2e-16 * cos(0.25) without the snap)
+    assert chain.joints[3].before.rotation[2, 1] is sp.S.Zero
+
+
+def test_edge_arm_limits(tmp_path):
+    chain = load_urdf(write(tmp_path, EDGE))
+    limits = chain.limits()
+    assert limits == {
+        "lower": (-2.5, None, -0.1, -3.0),
+        "upper": (2.0, None, 0.35, 3.0),
+        "velocity": (1.5, 2.5, 0.5, 4.0),
+    }
+    j2 = chain.joints[1]
+    assert (j2.lower, j2.upper, j2.velocity) == (None, None, 2.5)  # continuous: no position limits
+
+
+def test_edge_arm_pose_and_jacobian(tmp_path, rng):
+    chain = load_urdf(write(tmp_path, EDGE))
+    nc = chain.numeric()
+    for _ in range(5):
+        q = rng.uniform(-2, 2, 4)
+        q[2] = rng.uniform(-0.1, 0.35)
+        dq, ddq = rng.normal(size=4), rng.normal(size=4)
+        expected = raw_fk(EDGE, "world", "tool", dict(zip(EDGE_COORDS, q)))
+        k = chain_kinematics(nc, q, dq, ddq)
+        np.testing.assert_allclose(k.T, expected, atol=1e-12)
+        np.testing.assert_allclose(pose_by_hand(chain, q), expected, atol=1e-12)
+        J = fd_jacobian(EDGE, "world", "tool", EDGE_COORDS, q)
+        np.testing.assert_allclose(k.J, J, atol=1e-8)
+        np.testing.assert_allclose(k.twist, J @ dq, atol=1e-8)
+        # dJ against differences of the reference Jacobian along the motion
+        h = 1e-6
+        dJ = (chain_kinematics(nc, q + h * dq).J - chain_kinematics(nc, q - h * dq).J) / (2 * h)
+        np.testing.assert_allclose(k.dJ, dJ, atol=1e-7)
+
+
+def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
+    """A follower may come before the joint it follows; a prismatic mimic; mimic of a mimic."""
+    text = """<robot name="m">
+      <link name="a"/><link name="b"/><link name="c"/><link name="d"/><link name="e"/>
+      <joint name="f1" type="revolute"><parent link="a"/><child link="b"/>
+        <origin xyz="0.1 0 0" rpy="0.2 0 0"/><axis xyz="0 0 1"/>
+        <limit lower="-9" upper="9" velocity="9"/>
+        <mimic joint="lead"/></joint>
+      <joint name="lead" type="revolute"><parent link="b"/><child link="c"/>
+        <origin xyz="0 0.3 0" rpy="0 0.4 0"/><axis xyz="0 1 0"/>
+        <limit lower="-1" upper="1.5" velocity="2"/></joint>
+      <joint name="p" type="prismatic"><parent link="c"/><child link="d"/>
+        <origin xyz="0 0 0.2" rpy="0 0 0.5"/><axis xyz="0 0 -1"/>
+        <limit lower="0" upper="0.2" velocity="0.1"/>
+        <mimic joint="f1" multiplier="0.1" offset="0.02"/></joint>
+      <joint name="r" type="revolute"><parent link="d"/><child link="e"/>
+        <origin xyz="0.1 0.1 0" rpy="0 0 0"/><axis xyz="1 0 0"/>
+        <limit lower="-2" upper="2" velocity="3"/></joint>
+    </robot>"""
+    chain = load_urdf(write(tmp_path, text))
+    assert chain.coordinates == ("lead", "r")
+    assert [j.coordinate for j in chain.joints] == [0, 0, 0, 1]
+    p = chain.joints[2]
+    assert p.kind == "prismatic" and float(p.multiplier) == pytest.approx(0.1) and float(p.offset) == pytest.approx(0.02)
+    # the coordinate's limits are its own joint's, not those of a follower with multiplier 1
+    assert chain.limits() == {"lower": (-1.0, -2.0), "upper": (1.5, 2.0), "velocity": (2.0, 3.0)}
+    nc = chain.numeric()
+    for _ in range(4):
+        q = rng.uniform(-1, 1, 2)
+        expected = raw_fk(text, "a", "e", dict(zip(chain.coordinates, q)))
+        np.testing.assert_allclose(chain_kinematics(nc, q).T, expected, atol=1e-12)
+        np.testing.assert_allclose(chain_kinematics(nc, q).J, fd_jacobian(text, "a", "e", chain.coordinates, q), atol=1e-8)
+
+
+# -- a chain inside a tree -------------------------------------------------------------------------------
+
+TREE = """<robot name="twoarms">
+  <link name="torso"/> <link name="chest"/>
+  <link name="L1"/> <link name="L2"/> <link name="Lhand"/> <link name="Lfinger"/>
+  <link name="R1"/> <link name="R2"/> <link name="Rtool"/>
+  <joint name="waist" type="revolute"><parent link="torso"/><child link="chest"/>
+    <origin xyz="0 0 0.5" rpy="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1"/></joint>
+  <joint name="l1" type="revolute"><parent link="chest"/><child link="L1"/>
+    <origin xyz="0 0.2 0.1" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2"/></joint>
+  <joint name="l2" type="revolute"><parent link="L1"/><child link="L2"/>
+    <origin xyz="0.3 0 0" rpy="0 0.3 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" velocity="2"/></joint>
+  <joint name="lwrist" type="fixed"><parent link="L2"/><child link="Lhand"/>
+    <origin xyz="0.25 0 0" rpy="0.1 0.2 0.3"/></joint>
+  <joint name="lfinger" type="prismatic"><parent link="Lhand"/><child link="Lfinger"/>
+    <origin xyz="0.05 0 0"/><axis xyz="0 1 0"/><limit lower="0" upper="0.04" velocity="0.2"/></joint>
+  <joint name="r1" type="revolute"><parent link="chest"/><child link="R1"/>
+    <origin xyz="0 -0.2 0.1" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/><limit lower="-2" upper="2" velocity="2"/></joint>
+  <joint name="r2" type="continuous"><parent link="R1"/><child link="R2"/>
+    <origin xyz="0.3 0 0" rpy="0 -0.3 0"/><axis xyz="0 1 0"/></joint>
+  <joint name="rtool" type="fixed"><parent link="R2"/><child link="Rtool"/>
+    <origin xyz="0.2 0 0.01"/></joint>
+</robot>"""
+
+
+@pytest.mark.parametrize(
+    "base, tip, coords, chain_base",
+    [
+        (None, "Rtool", ("waist", "r1", "r2"), "torso"),
+        (None, "Lhand", ("waist", "l1", "l2"), "torso"),
+        ("chest", "Lfinger", ("l1", "l2", "lfinger"), "chest"),
+        ("L1", "Lhand", ("l2",), "L1"),
+    ],
+)
+def test_chain_inside_a_tree(tmp_path, rng, base, tip, coords, chain_base):
+    chain = load_urdf(write(tmp_path, TREE), base=base, tip=tip)
+    assert chain.coordinates == coords
+    assert chain.description == f"URDF, base {chain_base}, tip {tip}"
+    nc = chain.numeric()
+    for _ in range(3):
+        q = rng.uniform(-1, 1, len(coords))
+        expected = raw_fk(TREE, chain_base, tip, dict(zip(coords, q)))
+        np.testing.assert_allclose(chain_kinematics(nc, q).T, expected, atol=1e-12)
+        np.testing.assert_allclose(chain_kinematics(nc, q).J, fd_jacobian(TREE, chain_base, tip, coords, q), atol=1e-8)
+
+
+def test_tree_without_tip_lists_the_leaves(tmp_path):
+    path = write(tmp_path, TREE)
+    with pytest.raises(InputError) as info:
+        load_urdf(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: 2 leaf links below 'torso'")
+    assert "'Lfinger'" in message and "'Rtool'" in message and "\n" not in message
+    # below a base with one leaf, the tip is found
+    assert load_urdf(path, base="R1").coordinates == ("r2",)
+    assert load_urdf(path, base="R1").description == "URDF, base R1, tip Rtool"
+
+
+# -- bad input -------------------------------------------------------------------------------------------
+
+def _arm(*joints: str, links=("a", "b", "c"), root="robot") -> str:
+    body = "".join(f'<link name="{n}"/>' for n in links) + "".join(joints)
+    return f'<{root} name="bad">{body}</{root}>'
+
+
+J_AB = '<joint name="ab" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>'
+J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axis xyz="0 0 1"/></joint>'
+
+
+@pytest.mark.parametrize(
+    "text, kwargs, expected",
+    [
+        ("<robot><link name='a'/>", {}, "not valid XML"),
+        (_arm(J_AB, J_BC, root="model"), {}, "root element is <model>, expected <robot>"),
+        (_arm(J_AB, J_BC, '<joint name="ca" type="fixed"><parent link="c"/><child link="a"/></joint>'), {}, "cycle"),
+        (_arm(J_AB, J_BC.replace('"b"/><child', '"a"/><child').replace('link="c"', 'link="b"')), {}, "link 'b' has two parents"),
+        (_arm(J_AB, J_BC), {"tip": "nowhere"}, "no link 'nowhere'"),
+        (_arm(J_AB, J_BC), {"base": "nowhere"}, "no link 'nowhere'"),
+        (_arm(J_AB, J_BC.replace('link="c"', 'link="x"')), {}, "child link 'x' is not a <link>"),
+        (_arm(J_AB, J_BC), {"base": "c", "tip": "a"}, "link 'a' is not below base 'c'"),
+        (_arm(J_AB, J_BC), {"base": "b", "tip": "b"}, "tip and base are the same link 'b'"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="0 nan 0"/><axis'), J_BC), {}, "joint 'ab' origin xyz must be finite"),
+        (_arm(J_AB.replace("<axis", '<origin rpy="0 0 inf"/><axis'), J_BC), {}, "joint 'ab' origin rpy must be finite"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="0 1"/><axis'), J_BC), {}, "joint 'ab' origin xyz must have 3 numbers"),
+        (_arm(J_AB.replace('xyz="0 0 1"', 'xyz="0 0 0"'), J_BC), {}, "joint 'ab' axis has length zero"),
+        (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="bc"/></joint>')), {}, "joint 'bc' mimic refers to itself"),
+        (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="zz"/></joint>')), {}, "refers to joint 'zz', which is not in the file"),
+        (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="ab"/></joint>')), {"base": "b"}, "refers to joint 'ab', which is not on the chain"),
+        (_arm(J_AB, J_BC.replace("<parent link=\"b\"/>", "")), {}, "joint 'bc' has no <parent link=...>"),
+        (_arm(J_AB, J_BC.replace("<child link=\"c\"/>", "<child/>")), {}, "joint 'bc' has no <child link=...>"),
+        (_arm(J_AB, J_BC.replace("revolute", "floating")), {}, "joint 'bc' is floating: floating and planar joints are not supported"),
+        (_arm(J_AB, J_BC.replace("revolute", "planar")), {}, "joint 'bc' is planar"),
+        (_arm(J_AB, J_BC.replace("revolute", "hinge")), {}, "joint 'bc': type must be one of"),
+        (_arm(J_AB, J_BC.replace("<axis", '<limit lower="1" upper="-1"/><axis')), {}, "lower 1.0 is above upper -1.0"),
+        (_arm(J_AB.replace("revolute", "fixed"), J_BC.replace("revolute", "fixed")), {}, "no revolute, continuous or prismatic joint"),
+        (_arm(J_AB), {}, "2 root links ('a', 'c')"),
+        (_arm(J_AB, J_AB), {}, "joint 'ab' is defined twice"),
+        ("<robot/>", {}, "no <link> elements"),
+    ],
+)
+def test_bad_input(tmp_path, text, kwargs, expected):
+    path = write(tmp_path, text)
+    with pytest.raises(InputError) as info:
+        load_urdf(path, **kwargs)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ")
+    assert expected in message
+    assert "\n" not in message
+
+
+def test_missing_file_and_folder(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        load_urdf(tmp_path / "none.urdf")
+    with pytest.raises(InputError, match="is a folder"):
+        load_urdf(tmp_path)
+
+
+def test_valid_arm_from_the_bad_input_template(tmp_path):
+    """The template above is a valid arm, so the errors come from the one change each makes."""
+    chain = load_urdf(write(tmp_path, _arm(J_AB, J_BC)))
+    assert chain.coordinates == ("ab", "bc") and chain.name == "bad"
+    assert chain.limits() == {"lower": (None, None), "upper": (None, None), "velocity": (None, None)}
+
+
+# -- load_robot: one entry for URDF and TOML --------------------------------------------------------------
+
+TOML = """
+name = "two"
+[[joints]]
+type = "revolute"
+a = 0.5
+[[joints]]
+type = "revolute"
+a = 0.25
+"""
+
+
+def test_load_robot_dispatches_on_suffix(tmp_path):
+    assert skelarm_sym.load_robot is load_robot
+    urdf = load_robot(write(tmp_path, TREE, "arms.URDF"), tip="Rtool")
+    assert urdf.coordinates == ("waist", "r1", "r2")
+    toml_path = write(tmp_path, TOML, "two.toml")
+    dh = load_robot(toml_path)
+    assert dh.name == "two"
+    T = pose_by_hand(dh, np.array([0.3, -0.4]))
+    np.testing.assert_allclose(T[:2, 3], [0.5 * math.cos(0.3) + 0.25 * math.cos(-0.1), 0.5 * math.sin(0.3) + 0.25 * math.sin(-0.1)])
+    with pytest.raises(InputError, match=r"two\.toml: tip apply to URDF files only"):
+        load_robot(toml_path, tip="x")
+    with pytest.raises(InputError, match=r"two\.toml: base and tip apply"):
+        load_robot(toml_path, base="a", tip="x")
+    with pytest.raises(InputError, match=r"arm\.xml: unknown kind of robot file '\.xml'"):
+        load_robot(tmp_path / "arm.xml")
+
+
+def test_robot_name_becomes_a_c_identifier(tmp_path):
+    for raw, name in (("ur5", "ur5"), ("my-robot 2", "my_robot_2"), ("2dof", "robot_2dof"), ("double", "double_robot")):
+        assert load_urdf(write(tmp_path, _arm(J_AB, J_BC).replace('"bad"', f'"{raw}"'))).name == name
+    assert load_urdf(write(tmp_path, _arm(J_AB, J_BC).replace(' name="bad"', ""), "arm-x.urdf")).name == "arm_x"
+
+
+# -- real URDFs against Pinocchio --------------------------------------------------------------------------
+
+def _robots_dir() -> Path | None:
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    path = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    return path if path.is_dir() else None
+
+
+ROBOTS = _robots_dir()
+needs_oracle = pytest.mark.skipif(
+    ROBOTS is None or importlib.util.find_spec("pinocchio") is None,
+    reason="the oracle extra (pip install 'skelarm-sym[oracle]': pin, example-robot-data) is not installed",
+)
+
+
+@needs_oracle
+@pytest.mark.parametrize(
+    "file, tip, n",
+    [
+        ("panda_description/urdf/panda.urdf", "panda_hand", 7),
+        ("panda_description/urdf/panda.urdf", "panda_hand_tcp", 7),
+        ("ur_description/urdf/ur5_robot.urdf", "tool0", 6),
+    ],
+)
+def test_against_pinocchio(file, tip, n, rng):
+    import pinocchio as pin
+
+    path = ROBOTS / file
+    chain = load_robot(path, tip=tip)
+    assert chain.n == n
+    full = pin.buildModelFromUrdf(str(path))
+    lock = [full.getJointId(name) for name in full.names[1:] if name not in chain.coordinates]
+    model = pin.buildReducedModel(full, lock, pin.neutral(full)) if lock else full
+    data = model.createData()
+    assert model.nq == model.nv == n
+    # Pinocchio's joint order is ours (both base to tip), and so are its limits
+    assert tuple(model.names[1:]) == chain.coordinates
+    limits = chain.limits()
+    np.testing.assert_allclose(limits["lower"], model.lowerPositionLimit)
+    np.testing.assert_allclose(limits["upper"], model.upperPositionLimit)
+    np.testing.assert_allclose(limits["velocity"], model.velocityLimit)
+    frame = model.getFrameId(tip)
+    nc = chain.numeric()
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    lower, upper = np.maximum(model.lowerPositionLimit, -math.pi), np.minimum(model.upperPositionLimit, math.pi)
+    for _ in range(5):
+        q = rng.uniform(lower, upper)
+        dq, ddq = rng.normal(size=n), rng.normal(size=n)
+        pin.forwardKinematics(model, data, q, dq, ddq)
+        pin.updateFramePlacements(model, data)
+        J = pin.computeFrameJacobian(model, data, q, frame, world)
+        pin.computeJointJacobiansTimeVariation(model, data, q, dq)
+        dJ = pin.getFrameJacobianTimeVariation(model, data, frame, world)
+        twist = pin.getFrameVelocity(model, data, frame, world).vector
+        acc = pin.getFrameClassicalAcceleration(model, data, frame, world).vector
+        k = chain_kinematics(nc, q, dq, ddq)
+        np.testing.assert_allclose(k.T, data.oMf[frame].homogeneous, atol=1e-10)
+        np.testing.assert_allclose(pose_by_hand(chain, q), data.oMf[frame].homogeneous, atol=1e-10)
+        np.testing.assert_allclose(k.J, J, atol=1e-10)
+        np.testing.assert_allclose(k.dJ, dJ, atol=1e-9)
+        np.testing.assert_allclose(k.twist, twist, atol=1e-9)
+        np.testing.assert_allclose(k.acc, acc, atol=1e-9)
+
+
+@needs_oracle
+def test_panda_structure():
+    chain = load_robot(ROBOTS / "panda_description/urdf/panda.urdf", tip="panda_hand_tcp")
+    assert chain.name == "panda"
+    assert chain.description == "URDF, base panda_link0, tip panda_hand_tcp"
+    # rpy of +-pi/2 snap: every joint's before rotation is exact (entries 0, +-1); axes exact z
+    for j in chain.joints:
+        assert j.axis == (0, 0, 1)
+        assert all(e.is_Integer for e in j.before.rotation)
+        assert j.after.is_identity
+    # the three fixed joints to the tcp are one tool transform: z 0.107 + 0.1034, yaw -pi/4
+    tool = chain.numeric().tool
+    c = math.cos(-math.pi / 4)
+    np.testing.assert_allclose(tool, [[c, c, 0, 0], [-c, c, 0, 0], [0, 0, 1, 0.2104], [0, 0, 0, 1]], atol=1e-15)
+    assert chain.base.is_identity
+    assert chain.limits()["upper"][3] == -0.0698
