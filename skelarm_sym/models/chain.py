@@ -323,8 +323,10 @@ class Chain:
         """
         values = self.parameter_values(params)
 
+        exact = {k: sp.Float(v) for k, v in values.items()}
+
         def num(e) -> float:
-            return float(sp.sympify(e).xreplace(values).evalf())
+            return float(sp.sympify(e).xreplace(exact).evalf())
 
         joints = tuple(
             NumericJoint(
