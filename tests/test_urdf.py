@@ -135,7 +135,7 @@ EDGE = """<?xml version="1.0"?>
     <parent link="l1"/> <child link="l2"/>
     <origin xyz="0.25  0 0.05" rpy="-0.4 0.5 0.6"/>
     <axis xyz="-3 0 0"/>
-    <limit velocity="2.5" effort="10"/>
+    <limit lower="-0.5" upper="0.5" velocity="2.5" effort="10"/>
   </joint>
   <joint name="middle" type="fixed">
     <parent link="l2"/> <child link="l2b"/>
@@ -248,7 +248,7 @@ def test_edge_arm_pose_and_jacobian(tmp_path, rng):
 def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
     """A follower may come before the joint it follows; a prismatic mimic; mimic of a mimic."""
     text = """<robot name="m">
-      <link name="a"/><link name="b"/><link name="c"/><link name="d"/><link name="e"/>
+      <link name="a"/><link name="b"/><link name="c"/><link name="c2"/><link name="d"/><link name="e"/>
       <joint name="f1" type="revolute"><parent link="a"/><child link="b"/>
         <origin xyz="0.1 0 0" rpy="0.2 0 0"/><axis xyz="0 0 1"/>
         <limit lower="-9" upper="9" velocity="9"/>
@@ -256,19 +256,23 @@ def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
       <joint name="lead" type="revolute"><parent link="b"/><child link="c"/>
         <origin xyz="0 0.3 0" rpy="0 0.4 0"/><axis xyz="0 1 0"/>
         <limit lower="-1" upper="1.5" velocity="2"/></joint>
-      <joint name="p" type="prismatic"><parent link="c"/><child link="d"/>
+      <joint name="f2" type="revolute"><parent link="c"/><child link="c2"/>
+        <origin xyz="0.05 0 0.1" rpy="0.1 0.2 0.3"/><axis xyz="1 1 0"/>
+        <mimic joint="f1" multiplier="-2" offset="0.3"/></joint>
+      <joint name="p" type="prismatic"><parent link="c2"/><child link="d"/>
         <origin xyz="0 0 0.2" rpy="0 0 0.5"/><axis xyz="0 0 -1"/>
         <limit lower="0" upper="0.2" velocity="0.1"/>
-        <mimic joint="f1" multiplier="0.1" offset="0.02"/></joint>
+        <mimic joint="f2" multiplier="0.1" offset="0.02"/></joint>
       <joint name="r" type="revolute"><parent link="d"/><child link="e"/>
         <origin xyz="0.1 0.1 0" rpy="0 0 0"/><axis xyz="1 0 0"/>
         <limit lower="-2" upper="2" velocity="3"/></joint>
     </robot>"""
     chain = load_urdf(write(tmp_path, text))
     assert chain.coordinates == ("lead", "r")
-    assert [j.coordinate for j in chain.joints] == [0, 0, 0, 1]
-    p = chain.joints[2]
-    assert p.kind == "prismatic" and float(p.multiplier) == pytest.approx(0.1) and float(p.offset) == pytest.approx(0.02)
+    assert [j.coordinate for j in chain.joints] == [0, 0, 0, 0, 1]
+    # p = 0.1 * f2 + 0.02 = 0.1 * (-2 * f1 + 0.3) + 0.02, f1 = lead
+    p = chain.joints[3]
+    assert p.kind == "prismatic" and float(p.multiplier) == pytest.approx(-0.2) and float(p.offset) == pytest.approx(0.05)
     # the coordinate's limits are its own joint's, not those of a follower with multiplier 1
     assert chain.limits() == {"lower": (-1.0, -2.0), "upper": (1.5, 2.0), "velocity": (2.0, 3.0)}
     nc = chain.numeric()
@@ -373,6 +377,8 @@ J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axi
         (_arm(J_AB, J_BC.replace("revolute", "planar")), {}, "joint 'bc' is planar"),
         (_arm(J_AB, J_BC.replace("revolute", "hinge")), {}, "joint 'bc': type must be one of"),
         (_arm(J_AB, J_BC.replace("<axis", '<limit lower="1" upper="-1"/><axis')), {}, "lower 1.0 is above upper -1.0"),
+        (_arm(J_AB, J_BC.replace("<axis", '<limit velocity="-1"/><axis')), {}, "velocity must not be negative"),
+        (_arm(J_AB, J_BC.replace("<axis", '<limit upper="one"/><axis')), {}, "joint 'bc' limit upper must be numbers"),
         (_arm(J_AB.replace("revolute", "fixed"), J_BC.replace("revolute", "fixed")), {}, "no revolute, continuous or prismatic joint"),
         (_arm(J_AB), {}, "2 root links ('a', 'c')"),
         (_arm(J_AB, J_AB), {}, "joint 'ab' is defined twice"),
@@ -401,6 +407,12 @@ def test_valid_arm_from_the_bad_input_template(tmp_path):
     chain = load_urdf(write(tmp_path, _arm(J_AB, J_BC)))
     assert chain.coordinates == ("ab", "bc") and chain.name == "bad"
     assert chain.limits() == {"lower": (None, None), "upper": (None, None), "velocity": (None, None)}
+    # velocity="0" (exporters write it for "not set") is no limit; a prismatic joint keeps its own limits
+    text = _arm(J_AB.replace("<axis", '<limit lower="-1" upper="0.5" velocity="0" effort="0"/><axis'),
+                J_BC.replace("revolute", "prismatic").replace("<axis", '<limit lower="0" upper="0.3" velocity="0.2"/><axis'))
+    chain = load_urdf(write(tmp_path, text))
+    assert [j.kind for j in chain.joints] == ["revolute", "prismatic"]
+    assert chain.limits() == {"lower": (-1.0, 0.0), "upper": (0.5, 0.3), "velocity": (None, 0.2)}
 
 
 # -- load_robot: one entry for URDF and TOML --------------------------------------------------------------
