@@ -534,3 +534,49 @@ def test_panda_structure():
     np.testing.assert_allclose(tool, [[c, c, 0, 0], [-c, c, 0, 0], [0, 0, 1, 0.2104], [0, 0, 0, 1]], atol=1e-15)
     assert chain.base.is_identity
     assert chain.limits()["upper"][3] == -0.0698
+
+
+UR5_DH = """
+name = "ur5dh"
+convention = "standard"
+[[joints]]
+type = "revolute"
+d = 0.089159
+alpha = "pi/2"
+[[joints]]
+type = "revolute"
+a = -0.425
+[[joints]]
+type = "revolute"
+a = -0.39225
+[[joints]]
+type = "revolute"
+d = 0.10915
+alpha = "pi/2"
+[[joints]]
+type = "revolute"
+d = 0.09465
+alpha = "-pi/2"
+[[joints]]
+type = "revolute"
+d = 0.0823
+"""
+
+
+@needs_oracle
+def test_ur5_from_dh_and_from_urdf_agree(tmp_path, rng):
+    """Universal Robots' DH table and ur_description's URDF: base_link is the DH base turned by pi about z,
+    tool0 is the DH tool frame; the URDF's 11-digit pi/2 limits the agreement to about 1e-11."""
+    dh = load_robot(write(tmp_path, UR5_DH, "ur5.toml"))
+    urdf = load_robot(ROBOTS / "ur_description/urdf/ur5_robot.urdf", base="base_link", tip="tool0")
+    assert urdf.coordinates == ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
+    turn = np.diag([-1.0, -1.0, 1.0, 1.0])
+    for _ in range(5):
+        q = rng.uniform(-math.pi, math.pi, 6)
+        dq, ddq = rng.normal(size=6), rng.normal(size=6)
+        a, b = chain_kinematics(dh.numeric(), q, dq, ddq), chain_kinematics(urdf.numeric(), q, dq, ddq)
+        np.testing.assert_allclose(turn @ a.T, b.T, atol=1e-10)
+        rot = np.kron(np.eye(2), turn[:3, :3])
+        np.testing.assert_allclose(rot @ a.J, b.J, atol=1e-10)
+        np.testing.assert_allclose(rot @ a.acc, b.acc, atol=1e-9)
