@@ -34,42 +34,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM2_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 2. */
-static ARM2_VECTORIZE void arm2_trig2(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
+static ARM2_VECTORIZE void arm2_trig4(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
 #if ARM2_VECTOR_MATH
-    /* One 4-wide vector sine over (a + pi/2, a): cos(a) = sin(a + pi/2). */
-    double x[4];
-    x[0] = ang[0] + 1.5707963267948966;
-    x[1] = ang[1] + 1.5707963267948966;
-    x[2] = ang[0];
-    x[3] = ang[1];
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 4; ++k) {
-        x[k] = sin(x[k]);
+        cs[k] = cos(ang[k]);
     }
-    cs[0] = x[0];
-    cs[1] = x[1];
-    sn[0] = x[2];
-    sn[1] = x[3];
+    for (k = 0; k < 4; ++k) {
+        sn[k] = sin(ang[k]);
+    }
 #else
-    for (k = 0; k < 2; ++k) {
+    for (k = 0; k < used; ++k) {
         cs[k] = cos(ang[k]);
         sn[k] = sin(ang[k]);
     }
 #endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 64. */
-static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 64 with vector math, else for k < used. */
+static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM2_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 64; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 64; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm2_position: endpoint position p (2) ---- */
@@ -96,9 +98,13 @@ static void arm2_position_finish(const double l[2], const double *restrict cs, c
 
 void arm2_position(const double q[2], const double l[2], double p[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_position_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_position_finish(l, cs, sn, p);
 }
 
@@ -118,7 +124,7 @@ static ARM2_VECTORIZE void arm2_position_block(const double *restrict q_T, const
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double cs[2];
         double sn[2];
@@ -198,9 +204,13 @@ static void arm2_jacobian_finish(const double l[2], const double *restrict cs, c
 
 void arm2_jacobian(const double q[2], const double l[2], double J[4])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_jacobian_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_jacobian_finish(l, cs, sn, J);
 }
 
@@ -220,7 +230,7 @@ static ARM2_VECTORIZE void arm2_jacobian_block(const double *restrict q_T, const
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double cs[2];
         double sn[2];
@@ -312,9 +322,13 @@ static void arm2_coriolis_finish(const double dq[2], const double l[2], const do
 
 void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_coriolis_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -334,7 +348,7 @@ static ARM2_VECTORIZE void arm2_coriolis_block(const double *restrict q_T, const
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double dq[2];
         double cs[2];
@@ -440,9 +454,13 @@ static void arm2_velocity_finish(const double dq[2], const double l[2], const do
 
 void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_velocity_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -462,7 +480,7 @@ static ARM2_VECTORIZE void arm2_velocity_block(const double *restrict q_T, const
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double dq[2];
         double cs[2];
@@ -565,9 +583,13 @@ static void arm2_acceleration_finish(const double dq[2], const double ddq[2], co
 
 void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_acceleration_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -587,7 +609,7 @@ static ARM2_VECTORIZE void arm2_acceleration_block(const double *restrict q_T, c
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double dq[2];
         double ddq[2];
@@ -715,9 +737,13 @@ static void arm2_kinematics_finish(const double dq[2], const double ddq[2], cons
 
 void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_kinematics_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -737,7 +763,7 @@ static ARM2_VECTORIZE void arm2_kinematics_block(const double *restrict q_T, con
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double dq[2];
         double ddq[2];
@@ -891,18 +917,25 @@ static void arm2_manipulability_finish(const double l[2], const double *restrict
     const double t19 = t2*t2 + t7*t7;
     const int t20 = t17 >= t19;
     const double t21 = (t20 ? t17 : t19);
-    const double t22 = t18/t21;
-    const double t23 = (t20 ? t7 : t6) - t22*(t20 ? t6 : t7);
-    const double t24 = (t20 ? t2 : t5) - t22*(t20 ? t5 : t2);
-    const double t25 = t23*t23 + t24*t24;
-    w[0] = sqrt(t21*t25);
+    const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+    const double t23 = (t20 ? t6 : t7);
+    const double t24 = (t20 ? t5 : t2);
+    const double t25 = (t20 ? t7 : t6) - t23*t22;
+    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t27 = t25*t25 + t26*t26;
+    const double t32 = t21*t27;
+    w[0] = sqrt(t32);
 }
 
 void arm2_manipulability(const double q[2], const double l[2], double w[1])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_manipulability_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_manipulability_finish(l, cs, sn, w);
 }
 
@@ -922,7 +955,7 @@ static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T,
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double cs[2];
         double sn[2];
@@ -943,11 +976,14 @@ static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T,
         const double t19 = t2*t2 + t7*t7;
         const int t20 = t17 >= t19;
         const double t21 = (t20 ? t17 : t19);
-        const double t22 = t18/t21;
-        const double t23 = (t20 ? t7 : t6) - t22*(t20 ? t6 : t7);
-        const double t24 = (t20 ? t2 : t5) - t22*(t20 ? t5 : t2);
-        const double t25 = t23*t23 + t24*t24;
-        w[0] = sqrt(t21*t25);
+        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+        const double t23 = (t20 ? t6 : t7);
+        const double t24 = (t20 ? t5 : t2);
+        const double t25 = (t20 ? t7 : t6) - t23*t22;
+        const double t26 = (t20 ? t2 : t5) - t24*t22;
+        const double t27 = t25*t25 + t26*t26;
+        const double t32 = t21*t27;
+        w[0] = sqrt(t32);
         w_T[0 + b] = w[0];
     }
 }
@@ -983,7 +1019,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 16 add/sub, 30 mul, 1 neg, 2 div */
+/* operations: 2 sin, 2 cos, 21 add/sub, 36 mul, 1 neg, 3 div */
 
 static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
 {
@@ -1003,29 +1039,42 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t17 = t6*t6 + t5*t5;
     const double t18 = t2*t5 + t6*t7;
     const double t19 = t2*t2 + t7*t7;
-    const double t26 = lambda*lambda;
-    const double t27 = t17 + t26;
-    const double t28 = t19 + t26;
-    const double t29 = t27 + t28;
-    const double t30 = t27*v[0] + t18*v[1];
-    const double t31 = t28*v[1] + t18*v[0];
-    const double t32 = 1.0/(t29*t29);
-    const double t33 = t30*t32;
-    const double t34 = t31*t32;
-    const double t35 = t27*t28 - t18*t18;
-    const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
-    const double t37 = 1.0/t35;
-    const double t38 = (t36 ? t37*(t29*v[0] - t30) : t33);
-    const double t39 = (t36 ? t37*(t29*v[1] - t31) : t34);
-    dq[0] = t38*t6 + t39*t7;
-    dq[1] = t2*t39 + t38*t5;
+    const int t20 = t17 >= t19;
+    const double t21 = (t20 ? t17 : t19);
+    const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+    const double t23 = (t20 ? t6 : t7);
+    const double t24 = (t20 ? t5 : t2);
+    const double t25 = (t20 ? t7 : t6) - t23*t22;
+    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t27 = t25*t25 + t26*t26;
+    const double t28 = lambda*lambda;
+    const double t29 = (t20 ? v[0] : v[1]);
+    const double t30 = (t20 ? v[1] : v[0]);
+    const double t31 = t17 + t19;
+    const double t32 = t21*t27;
+    const double t33 = t32 + t28*(t31 + t28);
+    const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
+    const double t35 = t29 + t30*t22;
+    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
+    const double t37 = t28 + t21*(1.0 + t22*t22);
+    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+    const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
+    const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
+    const double t41 = t39*t23 + t40*t25;
+    const double t42 = t39*t24 + t40*t26;
+    dq[0] = t41;
+    dq[1] = t42;
 }
 
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_inverse_velocity_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
@@ -1045,7 +1094,7 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double v[2];
         double cs[2];
@@ -1067,22 +1116,31 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         const double t17 = t6*t6 + t5*t5;
         const double t18 = t2*t5 + t6*t7;
         const double t19 = t2*t2 + t7*t7;
-        const double t26 = lambda*lambda;
-        const double t27 = t17 + t26;
-        const double t28 = t19 + t26;
-        const double t29 = t27 + t28;
-        const double t30 = t27*v[0] + t18*v[1];
-        const double t31 = t28*v[1] + t18*v[0];
-        const double t32 = 1.0/(t29*t29);
-        const double t33 = t30*t32;
-        const double t34 = t31*t32;
-        const double t35 = t27*t28 - t18*t18;
-        const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
-        const double t37 = 1.0/t35;
-        const double t38 = (t36 ? t37*(t29*v[0] - t30) : t33);
-        const double t39 = (t36 ? t37*(t29*v[1] - t31) : t34);
-        dq[0] = t38*t6 + t39*t7;
-        dq[1] = t2*t39 + t38*t5;
+        const int t20 = t17 >= t19;
+        const double t21 = (t20 ? t17 : t19);
+        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+        const double t23 = (t20 ? t6 : t7);
+        const double t24 = (t20 ? t5 : t2);
+        const double t25 = (t20 ? t7 : t6) - t23*t22;
+        const double t26 = (t20 ? t2 : t5) - t24*t22;
+        const double t27 = t25*t25 + t26*t26;
+        const double t28 = lambda*lambda;
+        const double t29 = (t20 ? v[0] : v[1]);
+        const double t30 = (t20 ? v[1] : v[0]);
+        const double t31 = t17 + t19;
+        const double t32 = t21*t27;
+        const double t33 = t32 + t28*(t31 + t28);
+        const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
+        const double t35 = t29 + t30*t22;
+        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
+        const double t37 = t28 + t21*(1.0 + t22*t22);
+        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+        const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
+        const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
+        const double t41 = t39*t23 + t40*t25;
+        const double t42 = t39*t24 + t40*t26;
+        dq[0] = t41;
+        dq[1] = t42;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
     }
@@ -1127,7 +1185,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 20 add/sub, 30 mul, 1 neg, 2 div */
+/* operations: 2 sin, 2 cos, 25 add/sub, 36 mul, 1 neg, 3 div */
 
 static void arm2_ik_step_angles(const double q[2], double *restrict ang)
 {
@@ -1147,31 +1205,44 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t17 = t6*t6 + t5*t5;
     const double t18 = t2*t5 + t6*t7;
     const double t19 = t2*t2 + t7*t7;
-    const double t26 = lambda*lambda;
-    const double t27 = t17 + t26;
-    const double t28 = t19 + t26;
-    const double t29 = t27 + t28;
-    const double t32 = 1.0/(t29*t29);
-    const double t35 = t27*t28 - t18*t18;
-    const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
-    const double t37 = 1.0/t35;
-    const double t40 = target[0] - t7;
-    const double t41 = t6 + target[1];
-    const double t42 = t27*t40 + t18*t41;
-    const double t43 = t28*t41 + t18*t40;
-    const double t44 = t42*t32;
-    const double t45 = t43*t32;
-    const double t46 = (t36 ? t37*(t40*t29 - t42) : t44);
-    const double t47 = (t36 ? t37*(t41*t29 - t43) : t45);
-    q_next[0] = q[0] + t46*t6 + t47*t7;
-    q_next[1] = q[1] + t2*t47 + t46*t5;
+    const int t20 = t17 >= t19;
+    const double t21 = (t20 ? t17 : t19);
+    const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+    const double t23 = (t20 ? t6 : t7);
+    const double t24 = (t20 ? t5 : t2);
+    const double t25 = (t20 ? t7 : t6) - t23*t22;
+    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t27 = t25*t25 + t26*t26;
+    const double t28 = lambda*lambda;
+    const double t31 = t17 + t19;
+    const double t32 = t21*t27;
+    const double t33 = t32 + t28*(t31 + t28);
+    const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
+    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
+    const double t37 = t28 + t21*(1.0 + t22*t22);
+    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+    const double t43 = target[0] - t7;
+    const double t44 = t6 + target[1];
+    const double t45 = (t20 ? t43 : t44);
+    const double t46 = (t20 ? t44 : t43);
+    const double t47 = t45 + t46*t22;
+    const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
+    const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
+    const double t50 = t48*t23 + t49*t25;
+    const double t51 = t48*t24 + t49*t26;
+    q_next[0] = t50 + q[0];
+    q_next[1] = t51 + q[1];
 }
 
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2])
 {
-    double ang[2], cs[2], sn[2];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 2; k < 4; ++k) {
+        ang[k] = 0;
+    }
     arm2_ik_step_angles(q, ang);
-    arm2_trig2(ang, cs, sn);
+    arm2_trig4(ang, cs, sn, 2);
     arm2_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
@@ -1191,7 +1262,7 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         ang_T[0 + b] = ang[0];
         ang_T[32 + b] = ang[1];
     }
-    arm2_trig64(ang_T, cs_T, sn_T);
+    arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
         double q[2];
         double target[2];
@@ -1216,24 +1287,33 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         const double t17 = t6*t6 + t5*t5;
         const double t18 = t2*t5 + t6*t7;
         const double t19 = t2*t2 + t7*t7;
-        const double t26 = lambda*lambda;
-        const double t27 = t17 + t26;
-        const double t28 = t19 + t26;
-        const double t29 = t27 + t28;
-        const double t32 = 1.0/(t29*t29);
-        const double t35 = t27*t28 - t18*t18;
-        const int t36 = t35 > ARM2_RANK_TOL*t29*t29;
-        const double t37 = 1.0/t35;
-        const double t40 = target[0] - t7;
-        const double t41 = t6 + target[1];
-        const double t42 = t27*t40 + t18*t41;
-        const double t43 = t28*t41 + t18*t40;
-        const double t44 = t42*t32;
-        const double t45 = t43*t32;
-        const double t46 = (t36 ? t37*(t40*t29 - t42) : t44);
-        const double t47 = (t36 ? t37*(t41*t29 - t43) : t45);
-        q_next[0] = q[0] + t46*t6 + t47*t7;
-        q_next[1] = q[1] + t2*t47 + t46*t5;
+        const int t20 = t17 >= t19;
+        const double t21 = (t20 ? t17 : t19);
+        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
+        const double t23 = (t20 ? t6 : t7);
+        const double t24 = (t20 ? t5 : t2);
+        const double t25 = (t20 ? t7 : t6) - t23*t22;
+        const double t26 = (t20 ? t2 : t5) - t24*t22;
+        const double t27 = t25*t25 + t26*t26;
+        const double t28 = lambda*lambda;
+        const double t31 = t17 + t19;
+        const double t32 = t21*t27;
+        const double t33 = t32 + t28*(t31 + t28);
+        const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
+        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
+        const double t37 = t28 + t21*(1.0 + t22*t22);
+        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+        const double t43 = target[0] - t7;
+        const double t44 = t6 + target[1];
+        const double t45 = (t20 ? t43 : t44);
+        const double t46 = (t20 ? t44 : t43);
+        const double t47 = t45 + t46*t22;
+        const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
+        const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
+        const double t50 = t48*t23 + t49*t25;
+        const double t51 = t48*t24 + t49*t26;
+        q_next[0] = t50 + q[0];
+        q_next[1] = t51 + q[1];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
     }
@@ -1297,6 +1377,11 @@ int arm2_ik_solve(const double q0[2], const double target[2], const double l[2],
     }
     for (k = 0; k < 2; ++k) {
         if (!isfinite(target[k])) {
+            return ARM2_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 2; ++k) {
+        if (!isfinite(l[k])) {
             return ARM2_IK_INVALID;
         }
     }

@@ -34,40 +34,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM3_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
-static ARM3_VECTORIZE void arm3_trig4(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
+static ARM3_VECTORIZE void arm3_trig4(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
 #if ARM3_VECTOR_MATH
-    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
-    double x[4];
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 4; ++k) {
-        x[k] = ang[k] + 1.5707963267948966;
-    }
-    for (k = 0; k < 4; ++k) {
-        cs[k] = sin(x[k]);
+        cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
     }
 #else
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < used; ++k) {
         cs[k] = cos(ang[k]);
         sn[k] = sin(ang[k]);
     }
 #endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
-static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
+static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM3_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 96; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 96; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm3_position: endpoint position p (2) ---- */
@@ -105,7 +109,7 @@ void arm3_position(const double q[3], const double l[3], double p[2])
         ang[k] = 0;
     }
     arm3_position_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_position_finish(l, cs, sn, p);
 }
 
@@ -128,7 +132,7 @@ static ARM3_VECTORIZE void arm3_position_block(const double *restrict q_T, const
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double cs[3];
         double sn[3];
@@ -228,7 +232,7 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6])
         ang[k] = 0;
     }
     arm3_jacobian_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_jacobian_finish(l, cs, sn, J);
 }
 
@@ -251,7 +255,7 @@ static ARM3_VECTORIZE void arm3_jacobian_block(const double *restrict q_T, const
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double cs[3];
         double sn[3];
@@ -372,7 +376,7 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
         ang[k] = 0;
     }
     arm3_coriolis_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -395,7 +399,7 @@ static ARM3_VECTORIZE void arm3_coriolis_block(const double *restrict q_T, const
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double dq[3];
         double cs[3];
@@ -533,7 +537,7 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
         ang[k] = 0;
     }
     arm3_velocity_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -556,7 +560,7 @@ static ARM3_VECTORIZE void arm3_velocity_block(const double *restrict q_T, const
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double dq[3];
         double cs[3];
@@ -687,7 +691,7 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
         ang[k] = 0;
     }
     arm3_acceleration_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -710,7 +714,7 @@ static ARM3_VECTORIZE void arm3_acceleration_block(const double *restrict q_T, c
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double dq[3];
         double ddq[3];
@@ -874,7 +878,7 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
         ang[k] = 0;
     }
     arm3_kinematics_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -897,7 +901,7 @@ static ARM3_VECTORIZE void arm3_kinematics_block(const double *restrict q_T, con
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double dq[3];
         double ddq[3];
@@ -1084,12 +1088,16 @@ static void arm3_manipulability_finish(const double l[3], const double *restrict
     const double t29 = t4*t4 + t12*t12 + t10*t10;
     const int t30 = t27 >= t29;
     const double t31 = (t30 ? t27 : t29);
-    const double t32 = t28/t31;
-    const double t33 = (t30 ? t12 : t11) - t32*(t30 ? t11 : t12);
-    const double t34 = (t30 ? t10 : t9) - t32*(t30 ? t9 : t10);
-    const double t35 = (t30 ? t4 : t8) - t32*(t30 ? t8 : t4);
-    const double t36 = t33*t33 + t34*t34 + t35*t35;
-    w[0] = sqrt(t31*t36);
+    const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+    const double t33 = (t30 ? t11 : t12);
+    const double t34 = (t30 ? t9 : t10);
+    const double t35 = (t30 ? t8 : t4);
+    const double t36 = (t30 ? t12 : t11) - t33*t32;
+    const double t37 = (t30 ? t10 : t9) - t34*t32;
+    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t39 = t36*t36 + t37*t37 + t38*t38;
+    const double t44 = t31*t39;
+    w[0] = sqrt(t44);
 }
 
 void arm3_manipulability(const double q[3], const double l[3], double w[1])
@@ -1100,7 +1108,7 @@ void arm3_manipulability(const double q[3], const double l[3], double w[1])
         ang[k] = 0;
     }
     arm3_manipulability_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1123,7 +1131,7 @@ static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T,
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double cs[3];
         double sn[3];
@@ -1150,12 +1158,16 @@ static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T,
         const double t29 = t4*t4 + t12*t12 + t10*t10;
         const int t30 = t27 >= t29;
         const double t31 = (t30 ? t27 : t29);
-        const double t32 = t28/t31;
-        const double t33 = (t30 ? t12 : t11) - t32*(t30 ? t11 : t12);
-        const double t34 = (t30 ? t10 : t9) - t32*(t30 ? t9 : t10);
-        const double t35 = (t30 ? t4 : t8) - t32*(t30 ? t8 : t4);
-        const double t36 = t33*t33 + t34*t34 + t35*t35;
-        w[0] = sqrt(t31*t36);
+        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+        const double t33 = (t30 ? t11 : t12);
+        const double t34 = (t30 ? t9 : t10);
+        const double t35 = (t30 ? t8 : t4);
+        const double t36 = (t30 ? t12 : t11) - t33*t32;
+        const double t37 = (t30 ? t10 : t9) - t34*t32;
+        const double t38 = (t30 ? t4 : t8) - t35*t32;
+        const double t39 = t36*t36 + t37*t37 + t38*t38;
+        const double t44 = t31*t39;
+        w[0] = sqrt(t44);
         w_T[0 + b] = w[0];
     }
 }
@@ -1192,7 +1204,7 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 23 add/sub, 37 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 30 add/sub, 45 mul, 1 neg, 3 div */
 
 static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
 {
@@ -1217,23 +1229,35 @@ static void arm3_inverse_velocity_finish(const double v[2], const double l[3], d
     const double t27 = t11*t11 + t9*t9 + t8*t8;
     const double t28 = t4*t8 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
-    const double t37 = lambda*lambda;
-    const double t38 = t27 + t37;
-    const double t39 = t29 + t37;
-    const double t40 = t38 + t39;
-    const double t41 = t38*v[0] + t28*v[1];
-    const double t42 = t39*v[1] + t28*v[0];
-    const double t43 = 1.0/(t40*t40);
-    const double t44 = t41*t43;
-    const double t45 = t42*t43;
-    const double t46 = t38*t39 - t28*t28;
-    const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
-    const double t48 = 1.0/t46;
-    const double t49 = (t47 ? t48*(t40*v[0] - t41) : t44);
-    const double t50 = (t47 ? t48*(t40*v[1] - t42) : t45);
-    dq[0] = t49*t11 + t50*t12;
-    dq[1] = t49*t9 + t50*t10;
-    dq[2] = t4*t50 + t49*t8;
+    const int t30 = t27 >= t29;
+    const double t31 = (t30 ? t27 : t29);
+    const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+    const double t33 = (t30 ? t11 : t12);
+    const double t34 = (t30 ? t9 : t10);
+    const double t35 = (t30 ? t8 : t4);
+    const double t36 = (t30 ? t12 : t11) - t33*t32;
+    const double t37 = (t30 ? t10 : t9) - t34*t32;
+    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t39 = t36*t36 + t37*t37 + t38*t38;
+    const double t40 = lambda*lambda;
+    const double t41 = (t30 ? v[0] : v[1]);
+    const double t42 = (t30 ? v[1] : v[0]);
+    const double t43 = t27 + t29;
+    const double t44 = t31*t39;
+    const double t45 = t44 + t40*(t43 + t40);
+    const int t46 = t45 > ARM3_RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40);
+    const double t47 = t41 + t42*t32;
+    const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
+    const double t49 = t40 + t31*(1.0 + t32*t32);
+    const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
+    const double t51 = (t46 ? t48*(t47*t40 + t41*t39) : t47*t50);
+    const double t52 = (t46 ? t48*(t42*t40 + t31*(t42 - t41*t32)) : 0.0);
+    const double t53 = t51*t33 + t52*t36;
+    const double t54 = t51*t34 + t52*t37;
+    const double t55 = t51*t35 + t52*t38;
+    dq[0] = t53;
+    dq[1] = t54;
+    dq[2] = t55;
 }
 
 void arm3_inverse_velocity(const double q[3], const double v[2], const double l[3], double lambda, double dq[3])
@@ -1244,7 +1268,7 @@ void arm3_inverse_velocity(const double q[3], const double v[2], const double l[
         ang[k] = 0;
     }
     arm3_inverse_velocity_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
@@ -1267,7 +1291,7 @@ static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double v[2];
         double cs[3];
@@ -1295,23 +1319,35 @@ static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_
         const double t27 = t11*t11 + t9*t9 + t8*t8;
         const double t28 = t4*t8 + t11*t12 + t9*t10;
         const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const double t37 = lambda*lambda;
-        const double t38 = t27 + t37;
-        const double t39 = t29 + t37;
-        const double t40 = t38 + t39;
-        const double t41 = t38*v[0] + t28*v[1];
-        const double t42 = t39*v[1] + t28*v[0];
-        const double t43 = 1.0/(t40*t40);
-        const double t44 = t41*t43;
-        const double t45 = t42*t43;
-        const double t46 = t38*t39 - t28*t28;
-        const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
-        const double t48 = 1.0/t46;
-        const double t49 = (t47 ? t48*(t40*v[0] - t41) : t44);
-        const double t50 = (t47 ? t48*(t40*v[1] - t42) : t45);
-        dq[0] = t49*t11 + t50*t12;
-        dq[1] = t49*t9 + t50*t10;
-        dq[2] = t4*t50 + t49*t8;
+        const int t30 = t27 >= t29;
+        const double t31 = (t30 ? t27 : t29);
+        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+        const double t33 = (t30 ? t11 : t12);
+        const double t34 = (t30 ? t9 : t10);
+        const double t35 = (t30 ? t8 : t4);
+        const double t36 = (t30 ? t12 : t11) - t33*t32;
+        const double t37 = (t30 ? t10 : t9) - t34*t32;
+        const double t38 = (t30 ? t4 : t8) - t35*t32;
+        const double t39 = t36*t36 + t37*t37 + t38*t38;
+        const double t40 = lambda*lambda;
+        const double t41 = (t30 ? v[0] : v[1]);
+        const double t42 = (t30 ? v[1] : v[0]);
+        const double t43 = t27 + t29;
+        const double t44 = t31*t39;
+        const double t45 = t44 + t40*(t43 + t40);
+        const int t46 = t45 > ARM3_RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40);
+        const double t47 = t41 + t42*t32;
+        const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
+        const double t49 = t40 + t31*(1.0 + t32*t32);
+        const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
+        const double t51 = (t46 ? t48*(t47*t40 + t41*t39) : t47*t50);
+        const double t52 = (t46 ? t48*(t42*t40 + t31*(t42 - t41*t32)) : 0.0);
+        const double t53 = t51*t33 + t52*t36;
+        const double t54 = t51*t34 + t52*t37;
+        const double t55 = t51*t35 + t52*t38;
+        dq[0] = t53;
+        dq[1] = t54;
+        dq[2] = t55;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1359,7 +1395,7 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 85 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 61 add/sub, 95 mul, 1 neg, 4 div */
 
 static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
 {
@@ -1384,43 +1420,52 @@ static void arm3_inverse_velocity3_finish(const double twist[3], const double l[
     const double t27 = t11*t11 + t9*t9 + t8*t8;
     const double t28 = t4*t8 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
-    const double t37 = lambda*lambda;
-    const double t38 = t27 + t37;
-    const double t39 = t29 + t37;
-    const double t46 = t38*t39 - t28*t28;
-    const double t59 = t11 + t9 + t8;
-    const double t60 = t4 + t12 + t10;
-    const double t61 = 3.0 + t37;
-    const double t62 = t38 + t39 + t61;
-    const double t63 = t38*twist[0] + t28*twist[1] + t59*twist[2];
-    const double t64 = t39*twist[1] + t28*twist[0] + t60*twist[2];
-    const double t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
-    const double t66 = 1.0/(t62*t62);
-    const double t67 = t63*t66;
-    const double t68 = t64*t66;
-    const double t69 = t65*t66;
-    const double t70 = t39*t61 - t60*t60;
-    const double t71 = t59*t60 - t61*t28;
-    const double t72 = t28*t60 - t39*t59;
-    const double t73 = t38*t61 - t59*t59;
-    const double t74 = t28*t59 - t38*t60;
-    const double t75 = t38*t70 + t28*t71 + t59*t72;
-    const double t76 = t70 + t73 + t46;
-    const int t77 = t75 > ARM3_RANK_TOL*t76*t62;
-    const double t78 = t62*t62;
-    const int t79 = t76 > ARM3_RANK_TOL*t78;
-    const double t80 = 1.0/t75;
-    const double t81 = t38*t63 + t28*t64 + t59*t65;
-    const double t82 = t39*t64 + t28*t63 + t60*t65;
-    const double t83 = t61*t65 + t59*t63 + t60*t64;
-    const double t84 = 1.0/(t76*t76);
-    const double t85 = t78 - t76;
-    const double t86 = (t79 ? (t77 ? t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]) : t84*(t63*t85 - t81*t62)) : t67);
-    const double t87 = (t79 ? (t77 ? t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]) : t84*(t64*t85 - t82*t62)) : t68);
-    const double t88 = (t79 ? (t77 ? t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t69);
-    dq3[0] = t88 + t86*t11 + t87*t12;
-    dq3[1] = t88 + t86*t9 + t87*t10;
-    dq3[2] = t88 + t4*t87 + t86*t8;
+    const double t40 = lambda*lambda;
+    const double t66 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+    const double t67 = t66*t66;
+    const double t68 = t11 + t9 + t8;
+    const double t69 = t4 + t12 + t10;
+    const double t70 = t67*(t27 + t40);
+    const double t71 = t28*t67;
+    const double t72 = t68*t66;
+    const double t73 = t67*(t29 + t40);
+    const double t74 = t69*t66;
+    const double t75 = 3.0 + t40;
+    const double t76 = t66*twist[0];
+    const double t77 = t66*twist[1];
+    const double t78 = t70 + t73 + t75;
+    const double t79 = t70*t76 + t71*t77 + t72*twist[2];
+    const double t80 = t71*t76 + t73*t77 + t74*twist[2];
+    const double t81 = t72*t76 + t74*t77 + t75*twist[2];
+    const double t82 = (t78 > 0.0 ? 1.0/(t78*t78 != 0.0 ? t78*t78 : 1.0) : 1.0);
+    const double t83 = t79*t82;
+    const double t84 = t80*t82;
+    const double t85 = t81*t82;
+    const double t86 = t73*t75 - t74*t74;
+    const double t87 = t72*t74 - t71*t75;
+    const double t88 = t71*t74 - t72*t73;
+    const double t89 = t70*t75 - t72*t72;
+    const double t90 = t71*t72 - t70*t74;
+    const double t91 = t70*t73 - t71*t71;
+    const double t92 = t70*t86 + t71*t87 + t72*t88;
+    const double t93 = t86 + t89 + t91;
+    const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
+    const double t95 = t78*t78;
+    const int t96 = t93 > ARM3_RANK_TOL*t95;
+    const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
+    const double t98 = t70*t79 + t71*t80 + t72*t81;
+    const double t99 = t71*t79 + t73*t80 + t74*t81;
+    const double t100 = t72*t79 + t74*t80 + t75*t81;
+    const double t101 = (t93 > 0.0 ? 1.0/(t93*t93 != 0.0 ? t93*t93 : 1.0) : 1.0);
+    const double t102 = t95 - t93;
+    const double t103 = (t96 ? (t94 ? t97*(t86*t76 + t87*t77 + t88*twist[2]) : t101*(t79*t102 - t98*t78)) : t83);
+    const double t104 = (t96 ? (t94 ? t97*(t87*t76 + t89*t77 + t90*twist[2]) : t101*(t80*t102 - t99*t78)) : t84);
+    const double t105 = (t96 ? (t94 ? t97*(t88*t76 + t90*t77 + t91*twist[2]) : t101*(t81*t102 - t100*t78)) : t85);
+    const double t106 = t66*t103;
+    const double t107 = t66*t104;
+    dq3[0] = t105 + t106*t11 + t107*t12;
+    dq3[1] = t105 + t106*t9 + t107*t10;
+    dq3[2] = t105 + t4*t107 + t106*t8;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3])
@@ -1431,7 +1476,7 @@ void arm3_inverse_velocity3(const double q[3], const double twist[3], const doub
         ang[k] = 0;
     }
     arm3_inverse_velocity3_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
@@ -1454,7 +1499,7 @@ static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double twist[3];
         double cs[3];
@@ -1483,43 +1528,52 @@ static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q
         const double t27 = t11*t11 + t9*t9 + t8*t8;
         const double t28 = t4*t8 + t11*t12 + t9*t10;
         const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const double t37 = lambda*lambda;
-        const double t38 = t27 + t37;
-        const double t39 = t29 + t37;
-        const double t46 = t38*t39 - t28*t28;
-        const double t59 = t11 + t9 + t8;
-        const double t60 = t4 + t12 + t10;
-        const double t61 = 3.0 + t37;
-        const double t62 = t38 + t39 + t61;
-        const double t63 = t38*twist[0] + t28*twist[1] + t59*twist[2];
-        const double t64 = t39*twist[1] + t28*twist[0] + t60*twist[2];
-        const double t65 = t61*twist[2] + t59*twist[0] + t60*twist[1];
-        const double t66 = 1.0/(t62*t62);
-        const double t67 = t63*t66;
-        const double t68 = t64*t66;
-        const double t69 = t65*t66;
-        const double t70 = t39*t61 - t60*t60;
-        const double t71 = t59*t60 - t61*t28;
-        const double t72 = t28*t60 - t39*t59;
-        const double t73 = t38*t61 - t59*t59;
-        const double t74 = t28*t59 - t38*t60;
-        const double t75 = t38*t70 + t28*t71 + t59*t72;
-        const double t76 = t70 + t73 + t46;
-        const int t77 = t75 > ARM3_RANK_TOL*t76*t62;
-        const double t78 = t62*t62;
-        const int t79 = t76 > ARM3_RANK_TOL*t78;
-        const double t80 = 1.0/t75;
-        const double t81 = t38*t63 + t28*t64 + t59*t65;
-        const double t82 = t39*t64 + t28*t63 + t60*t65;
-        const double t83 = t61*t65 + t59*t63 + t60*t64;
-        const double t84 = 1.0/(t76*t76);
-        const double t85 = t78 - t76;
-        const double t86 = (t79 ? (t77 ? t80*(t70*twist[0] + t71*twist[1] + t72*twist[2]) : t84*(t63*t85 - t81*t62)) : t67);
-        const double t87 = (t79 ? (t77 ? t80*(t71*twist[0] + t73*twist[1] + t74*twist[2]) : t84*(t64*t85 - t82*t62)) : t68);
-        const double t88 = (t79 ? (t77 ? t80*(t72*twist[0] + t74*twist[1] + t46*twist[2]) : t84*(t65*t85 - t83*t62)) : t69);
-        dq3[0] = t88 + t86*t11 + t87*t12;
-        dq3[1] = t88 + t86*t9 + t87*t10;
-        dq3[2] = t88 + t4*t87 + t86*t8;
+        const double t40 = lambda*lambda;
+        const double t66 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+        const double t67 = t66*t66;
+        const double t68 = t11 + t9 + t8;
+        const double t69 = t4 + t12 + t10;
+        const double t70 = t67*(t27 + t40);
+        const double t71 = t28*t67;
+        const double t72 = t68*t66;
+        const double t73 = t67*(t29 + t40);
+        const double t74 = t69*t66;
+        const double t75 = 3.0 + t40;
+        const double t76 = t66*twist[0];
+        const double t77 = t66*twist[1];
+        const double t78 = t70 + t73 + t75;
+        const double t79 = t70*t76 + t71*t77 + t72*twist[2];
+        const double t80 = t71*t76 + t73*t77 + t74*twist[2];
+        const double t81 = t72*t76 + t74*t77 + t75*twist[2];
+        const double t82 = (t78 > 0.0 ? 1.0/(t78*t78 != 0.0 ? t78*t78 : 1.0) : 1.0);
+        const double t83 = t79*t82;
+        const double t84 = t80*t82;
+        const double t85 = t81*t82;
+        const double t86 = t73*t75 - t74*t74;
+        const double t87 = t72*t74 - t71*t75;
+        const double t88 = t71*t74 - t72*t73;
+        const double t89 = t70*t75 - t72*t72;
+        const double t90 = t71*t72 - t70*t74;
+        const double t91 = t70*t73 - t71*t71;
+        const double t92 = t70*t86 + t71*t87 + t72*t88;
+        const double t93 = t86 + t89 + t91;
+        const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
+        const double t95 = t78*t78;
+        const int t96 = t93 > ARM3_RANK_TOL*t95;
+        const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
+        const double t98 = t70*t79 + t71*t80 + t72*t81;
+        const double t99 = t71*t79 + t73*t80 + t74*t81;
+        const double t100 = t72*t79 + t74*t80 + t75*t81;
+        const double t101 = (t93 > 0.0 ? 1.0/(t93*t93 != 0.0 ? t93*t93 : 1.0) : 1.0);
+        const double t102 = t95 - t93;
+        const double t103 = (t96 ? (t94 ? t97*(t86*t76 + t87*t77 + t88*twist[2]) : t101*(t79*t102 - t98*t78)) : t83);
+        const double t104 = (t96 ? (t94 ? t97*(t87*t76 + t89*t77 + t90*twist[2]) : t101*(t80*t102 - t99*t78)) : t84);
+        const double t105 = (t96 ? (t94 ? t97*(t88*t76 + t90*t77 + t91*twist[2]) : t101*(t81*t102 - t100*t78)) : t85);
+        const double t106 = t66*t103;
+        const double t107 = t66*t104;
+        dq3[0] = t105 + t106*t11 + t107*t12;
+        dq3[1] = t105 + t106*t9 + t107*t10;
+        dq3[2] = t105 + t4*t107 + t106*t8;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1568,7 +1622,7 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 28 add/sub, 37 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 35 add/sub, 45 mul, 1 neg, 3 div */
 
 static void arm3_ik_step_angles(const double q[3], double *restrict ang)
 {
@@ -1593,25 +1647,37 @@ static void arm3_ik_step_finish(const double q[3], const double target[2], const
     const double t27 = t11*t11 + t9*t9 + t8*t8;
     const double t28 = t4*t8 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
-    const double t37 = lambda*lambda;
-    const double t38 = t27 + t37;
-    const double t39 = t29 + t37;
-    const double t40 = t38 + t39;
-    const double t43 = 1.0/(t40*t40);
-    const double t46 = t38*t39 - t28*t28;
-    const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
-    const double t48 = 1.0/t46;
-    const double t51 = target[0] - t12;
-    const double t52 = t11 + target[1];
-    const double t53 = t38*t51 + t28*t52;
-    const double t54 = t39*t52 + t28*t51;
-    const double t55 = t53*t43;
-    const double t56 = t54*t43;
-    const double t57 = (t47 ? t48*(t51*t40 - t53) : t55);
-    const double t58 = (t47 ? t48*(t52*t40 - t54) : t56);
-    q_next[0] = q[0] + t57*t11 + t58*t12;
-    q_next[1] = q[1] + t57*t9 + t58*t10;
-    q_next[2] = q[2] + t4*t58 + t57*t8;
+    const int t30 = t27 >= t29;
+    const double t31 = (t30 ? t27 : t29);
+    const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+    const double t33 = (t30 ? t11 : t12);
+    const double t34 = (t30 ? t9 : t10);
+    const double t35 = (t30 ? t8 : t4);
+    const double t36 = (t30 ? t12 : t11) - t33*t32;
+    const double t37 = (t30 ? t10 : t9) - t34*t32;
+    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t39 = t36*t36 + t37*t37 + t38*t38;
+    const double t40 = lambda*lambda;
+    const double t43 = t27 + t29;
+    const double t44 = t31*t39;
+    const double t45 = t44 + t40*(t43 + t40);
+    const int t46 = t45 > ARM3_RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40);
+    const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
+    const double t49 = t40 + t31*(1.0 + t32*t32);
+    const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
+    const double t56 = target[0] - t12;
+    const double t57 = t11 + target[1];
+    const double t58 = (t30 ? t56 : t57);
+    const double t59 = (t30 ? t57 : t56);
+    const double t60 = t58 + t59*t32;
+    const double t61 = (t46 ? t48*(t60*t40 + t58*t39) : t60*t50);
+    const double t62 = (t46 ? t48*(t59*t40 + t31*(t59 - t58*t32)) : 0.0);
+    const double t63 = t61*t33 + t62*t36;
+    const double t64 = t61*t34 + t62*t37;
+    const double t65 = t61*t35 + t62*t38;
+    q_next[0] = t63 + q[0];
+    q_next[1] = t64 + q[1];
+    q_next[2] = t65 + q[2];
 }
 
 void arm3_ik_step(const double q[3], const double target[2], const double l[3], double lambda, double q_next[3])
@@ -1622,7 +1688,7 @@ void arm3_ik_step(const double q[3], const double target[2], const double l[3], 
         ang[k] = 0;
     }
     arm3_ik_step_angles(q, ang);
-    arm3_trig4(ang, cs, sn);
+    arm3_trig4(ang, cs, sn, 3);
     arm3_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
@@ -1645,7 +1711,7 @@ static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const 
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3_trig96(ang_T, cs_T, sn_T);
+    arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         double q[3];
         double target[2];
@@ -1677,25 +1743,37 @@ static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const 
         const double t27 = t11*t11 + t9*t9 + t8*t8;
         const double t28 = t4*t8 + t11*t12 + t9*t10;
         const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const double t37 = lambda*lambda;
-        const double t38 = t27 + t37;
-        const double t39 = t29 + t37;
-        const double t40 = t38 + t39;
-        const double t43 = 1.0/(t40*t40);
-        const double t46 = t38*t39 - t28*t28;
-        const int t47 = t46 > ARM3_RANK_TOL*t40*t40;
-        const double t48 = 1.0/t46;
-        const double t51 = target[0] - t12;
-        const double t52 = t11 + target[1];
-        const double t53 = t38*t51 + t28*t52;
-        const double t54 = t39*t52 + t28*t51;
-        const double t55 = t53*t43;
-        const double t56 = t54*t43;
-        const double t57 = (t47 ? t48*(t51*t40 - t53) : t55);
-        const double t58 = (t47 ? t48*(t52*t40 - t54) : t56);
-        q_next[0] = q[0] + t57*t11 + t58*t12;
-        q_next[1] = q[1] + t57*t9 + t58*t10;
-        q_next[2] = q[2] + t4*t58 + t57*t8;
+        const int t30 = t27 >= t29;
+        const double t31 = (t30 ? t27 : t29);
+        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
+        const double t33 = (t30 ? t11 : t12);
+        const double t34 = (t30 ? t9 : t10);
+        const double t35 = (t30 ? t8 : t4);
+        const double t36 = (t30 ? t12 : t11) - t33*t32;
+        const double t37 = (t30 ? t10 : t9) - t34*t32;
+        const double t38 = (t30 ? t4 : t8) - t35*t32;
+        const double t39 = t36*t36 + t37*t37 + t38*t38;
+        const double t40 = lambda*lambda;
+        const double t43 = t27 + t29;
+        const double t44 = t31*t39;
+        const double t45 = t44 + t40*(t43 + t40);
+        const int t46 = t45 > ARM3_RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40);
+        const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
+        const double t49 = t40 + t31*(1.0 + t32*t32);
+        const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
+        const double t56 = target[0] - t12;
+        const double t57 = t11 + target[1];
+        const double t58 = (t30 ? t56 : t57);
+        const double t59 = (t30 ? t57 : t56);
+        const double t60 = t58 + t59*t32;
+        const double t61 = (t46 ? t48*(t60*t40 + t58*t39) : t60*t50);
+        const double t62 = (t46 ? t48*(t59*t40 + t31*(t59 - t58*t32)) : 0.0);
+        const double t63 = t61*t33 + t62*t36;
+        const double t64 = t61*t34 + t62*t37;
+        const double t65 = t61*t35 + t62*t38;
+        q_next[0] = t63 + q[0];
+        q_next[1] = t64 + q[1];
+        q_next[2] = t65 + q[2];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];
@@ -1762,6 +1840,11 @@ int arm3_ik_solve(const double q0[3], const double target[2], const double l[3],
     }
     for (k = 0; k < 2; ++k) {
         if (!isfinite(target[k])) {
+            return ARM3_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        if (!isfinite(l[k])) {
             return ARM3_IK_INVALID;
         }
     }

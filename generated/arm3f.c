@@ -34,40 +34,44 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #define ARM3F_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
-static ARM3F_VECTORIZE void arm3f_trig4(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
+static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
 #if ARM3F_VECTOR_MATH
-    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
-    float x[4];
-    for (k = 0; k < 4; ++k) {
-        x[k] = ang[k] + 1.5707964f;
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 8; ++k) {
+        cs[k] = cosf(ang[k]);
     }
-    for (k = 0; k < 4; ++k) {
-        cs[k] = sinf(x[k]);
-    }
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < 8; ++k) {
         sn[k] = sinf(ang[k]);
     }
 #else
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < used; ++k) {
         cs[k] = cosf(ang[k]);
         sn[k] = sinf(ang[k]);
     }
 #endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96. */
-static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
+static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
+#if ARM3F_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 96; ++k) {
         cs[k] = cosf(ang[k]);
     }
     for (k = 0; k < 96; ++k) {
         sn[k] = sinf(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cosf(ang[k]);
+        sn[k] = sinf(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm3f_position: endpoint position p (2) ---- */
@@ -97,13 +101,13 @@ static void arm3f_position_finish(const float *restrict cs, const float *restric
 
 void arm3f_position(const float q[3], float p[2])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_position_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_position_finish(cs, sn, p);
 }
 
@@ -126,7 +130,7 @@ static ARM3F_VECTORIZE void arm3f_position_block(const float *restrict q_T, floa
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float cs[3];
         float sn[3];
@@ -216,13 +220,13 @@ static void arm3f_jacobian_finish(const float *restrict cs, const float *restric
 
 void arm3f_jacobian(const float q[3], float J[6])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_jacobian_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_jacobian_finish(cs, sn, J);
 }
 
@@ -245,7 +249,7 @@ static ARM3F_VECTORIZE void arm3f_jacobian_block(const float *restrict q_T, floa
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float cs[3];
         float sn[3];
@@ -356,13 +360,13 @@ static void arm3f_coriolis_finish(const float dq[3], const float *restrict cs, c
 
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_coriolis_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_coriolis_finish(dq, cs, sn, H);
 }
 
@@ -385,7 +389,7 @@ static ARM3F_VECTORIZE void arm3f_coriolis_block(const float *restrict q_T, cons
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float dq[3];
         float cs[3];
@@ -513,13 +517,13 @@ static void arm3f_velocity_finish(const float dq[3], const float *restrict cs, c
 
 void arm3f_velocity(const float q[3], const float dq[3], float v[2])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_velocity_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_velocity_finish(dq, cs, sn, v);
 }
 
@@ -542,7 +546,7 @@ static ARM3F_VECTORIZE void arm3f_velocity_block(const float *restrict q_T, cons
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float dq[3];
         float cs[3];
@@ -663,13 +667,13 @@ static void arm3f_acceleration_finish(const float dq[3], const float ddq[3], con
 
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_acceleration_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_acceleration_finish(dq, ddq, cs, sn, a);
 }
 
@@ -692,7 +696,7 @@ static ARM3F_VECTORIZE void arm3f_acceleration_block(const float *restrict q_T, 
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float dq[3];
         float ddq[3];
@@ -846,13 +850,13 @@ static void arm3f_kinematics_finish(const float dq[3], const float ddq[3], const
 
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_kinematics_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
 }
 
@@ -875,7 +879,7 @@ static ARM3F_VECTORIZE void arm3f_kinematics_block(const float *restrict q_T, co
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float dq[3];
         float ddq[3];
@@ -1058,23 +1062,27 @@ static void arm3f_manipulability_finish(const float *restrict cs, const float *r
     const float t27 = t3*t3 + t10*t10 + t8*t8;
     const int t28 = t25 >= t27;
     const float t29 = (t28 ? t25 : t27);
-    const float t30 = t26/t29;
-    const float t31 = (t28 ? t10 : t9) - t30*(t28 ? t9 : t10);
-    const float t32 = (t28 ? t8 : t7) - t30*(t28 ? t7 : t8);
-    const float t33 = (t28 ? t3 : t6) - t30*(t28 ? t6 : t3);
-    const float t34 = t31*t31 + t32*t32 + t33*t33;
-    w[0] = sqrtf(t29*t34);
+    const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+    const float t31 = (t28 ? t9 : t10);
+    const float t32 = (t28 ? t7 : t8);
+    const float t33 = (t28 ? t6 : t3);
+    const float t34 = (t28 ? t10 : t9) - t31*t30;
+    const float t35 = (t28 ? t8 : t7) - t32*t30;
+    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t37 = t34*t34 + t35*t35 + t36*t36;
+    const float t42 = t29*t37;
+    w[0] = sqrtf(t42);
 }
 
 void arm3f_manipulability(const float q[3], float w[1])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_manipulability_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_manipulability_finish(cs, sn, w);
 }
 
@@ -1097,7 +1105,7 @@ static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float cs[3];
         float sn[3];
@@ -1122,12 +1130,16 @@ static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T
         const float t27 = t3*t3 + t10*t10 + t8*t8;
         const int t28 = t25 >= t27;
         const float t29 = (t28 ? t25 : t27);
-        const float t30 = t26/t29;
-        const float t31 = (t28 ? t10 : t9) - t30*(t28 ? t9 : t10);
-        const float t32 = (t28 ? t8 : t7) - t30*(t28 ? t7 : t8);
-        const float t33 = (t28 ? t3 : t6) - t30*(t28 ? t6 : t3);
-        const float t34 = t31*t31 + t32*t32 + t33*t33;
-        w[0] = sqrtf(t29*t34);
+        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+        const float t31 = (t28 ? t9 : t10);
+        const float t32 = (t28 ? t7 : t8);
+        const float t33 = (t28 ? t6 : t3);
+        const float t34 = (t28 ? t10 : t9) - t31*t30;
+        const float t35 = (t28 ? t8 : t7) - t32*t30;
+        const float t36 = (t28 ? t3 : t6) - t33*t30;
+        const float t37 = t34*t34 + t35*t35 + t36*t36;
+        const float t42 = t29*t37;
+        w[0] = sqrtf(t42);
         w_T[0 + b] = w[0];
     }
 }
@@ -1164,7 +1176,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 23 add/sub, 35 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 30 add/sub, 43 mul, 1 neg, 3 div */
 
 static void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
 {
@@ -1187,34 +1199,46 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t25 = t9*t9 + t7*t7 + t6*t6;
     const float t26 = t3*t6 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
-    const float t35 = lambda*lambda;
-    const float t36 = t25 + t35;
-    const float t37 = t27 + t35;
-    const float t38 = t36 + t37;
-    const float t39 = t36*v[0] + t26*v[1];
-    const float t40 = t37*v[1] + t26*v[0];
-    const float t41 = 1.0f/(t38*t38);
-    const float t42 = t39*t41;
-    const float t43 = t40*t41;
-    const float t44 = t36*t37 - t26*t26;
-    const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
-    const float t46 = 1.0f/t44;
-    const float t47 = (t45 ? t46*(t38*v[0] - t39) : t42);
-    const float t48 = (t45 ? t46*(t38*v[1] - t40) : t43);
-    dq[0] = t47*t9 + t48*t10;
-    dq[1] = t47*t7 + t48*t8;
-    dq[2] = t3*t48 + t47*t6;
+    const int t28 = t25 >= t27;
+    const float t29 = (t28 ? t25 : t27);
+    const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+    const float t31 = (t28 ? t9 : t10);
+    const float t32 = (t28 ? t7 : t8);
+    const float t33 = (t28 ? t6 : t3);
+    const float t34 = (t28 ? t10 : t9) - t31*t30;
+    const float t35 = (t28 ? t8 : t7) - t32*t30;
+    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t37 = t34*t34 + t35*t35 + t36*t36;
+    const float t38 = lambda*lambda;
+    const float t39 = (t28 ? v[0] : v[1]);
+    const float t40 = (t28 ? v[1] : v[0]);
+    const float t41 = t25 + t27;
+    const float t42 = t29*t37;
+    const float t43 = t42 + t38*(t41 + t38);
+    const int t44 = t43 > ARM3F_RANK_TOL*(t41 + 2.0f*t38)*(t41 + 2.0f*t38);
+    const float t45 = t39 + t40*t30;
+    const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
+    const float t47 = t38 + t29*(1.0f + t30*t30);
+    const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
+    const float t49 = (t44 ? t46*(t45*t38 + t39*t37) : t45*t48);
+    const float t50 = (t44 ? t46*(t40*t38 + t29*(t40 - t39*t30)) : 0.0f);
+    const float t51 = t49*t31 + t50*t34;
+    const float t52 = t49*t32 + t50*t35;
+    const float t53 = t49*t33 + t50*t36;
+    dq[0] = t51;
+    dq[1] = t52;
+    dq[2] = t53;
 }
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_inverse_velocity_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
 }
 
@@ -1237,7 +1261,7 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float v[2];
         float cs[3];
@@ -1263,23 +1287,35 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q
         const float t25 = t9*t9 + t7*t7 + t6*t6;
         const float t26 = t3*t6 + t9*t10 + t7*t8;
         const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const float t35 = lambda*lambda;
-        const float t36 = t25 + t35;
-        const float t37 = t27 + t35;
-        const float t38 = t36 + t37;
-        const float t39 = t36*v[0] + t26*v[1];
-        const float t40 = t37*v[1] + t26*v[0];
-        const float t41 = 1.0f/(t38*t38);
-        const float t42 = t39*t41;
-        const float t43 = t40*t41;
-        const float t44 = t36*t37 - t26*t26;
-        const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
-        const float t46 = 1.0f/t44;
-        const float t47 = (t45 ? t46*(t38*v[0] - t39) : t42);
-        const float t48 = (t45 ? t46*(t38*v[1] - t40) : t43);
-        dq[0] = t47*t9 + t48*t10;
-        dq[1] = t47*t7 + t48*t8;
-        dq[2] = t3*t48 + t47*t6;
+        const int t28 = t25 >= t27;
+        const float t29 = (t28 ? t25 : t27);
+        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+        const float t31 = (t28 ? t9 : t10);
+        const float t32 = (t28 ? t7 : t8);
+        const float t33 = (t28 ? t6 : t3);
+        const float t34 = (t28 ? t10 : t9) - t31*t30;
+        const float t35 = (t28 ? t8 : t7) - t32*t30;
+        const float t36 = (t28 ? t3 : t6) - t33*t30;
+        const float t37 = t34*t34 + t35*t35 + t36*t36;
+        const float t38 = lambda*lambda;
+        const float t39 = (t28 ? v[0] : v[1]);
+        const float t40 = (t28 ? v[1] : v[0]);
+        const float t41 = t25 + t27;
+        const float t42 = t29*t37;
+        const float t43 = t42 + t38*(t41 + t38);
+        const int t44 = t43 > ARM3F_RANK_TOL*(t41 + 2.0f*t38)*(t41 + 2.0f*t38);
+        const float t45 = t39 + t40*t30;
+        const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
+        const float t47 = t38 + t29*(1.0f + t30*t30);
+        const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
+        const float t49 = (t44 ? t46*(t45*t38 + t39*t37) : t45*t48);
+        const float t50 = (t44 ? t46*(t40*t38 + t29*(t40 - t39*t30)) : 0.0f);
+        const float t51 = t49*t31 + t50*t34;
+        const float t52 = t49*t32 + t50*t35;
+        const float t53 = t49*t33 + t50*t36;
+        dq[0] = t51;
+        dq[1] = t52;
+        dq[2] = t53;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1327,7 +1363,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 83 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 59 add/sub, 93 mul, 1 neg, 3 div */
 
 static void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
 {
@@ -1350,54 +1386,62 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t25 = t9*t9 + t7*t7 + t6*t6;
     const float t26 = t3*t6 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
-    const float t35 = lambda*lambda;
-    const float t36 = t25 + t35;
-    const float t37 = t27 + t35;
-    const float t44 = t36*t37 - t26*t26;
-    const float t57 = t9 + t7 + t6;
-    const float t58 = t3 + t10 + t8;
-    const float t59 = 3.0f + t35;
-    const float t60 = t36 + t37 + t59;
-    const float t61 = t36*twist[0] + t26*twist[1] + t57*twist[2];
-    const float t62 = t37*twist[1] + t26*twist[0] + t58*twist[2];
-    const float t63 = t59*twist[2] + t57*twist[0] + t58*twist[1];
-    const float t64 = 1.0f/(t60*t60);
-    const float t65 = t61*t64;
-    const float t66 = t62*t64;
-    const float t67 = t63*t64;
-    const float t68 = t37*t59 - t58*t58;
-    const float t69 = t57*t58 - t59*t26;
-    const float t70 = t26*t58 - t37*t57;
-    const float t71 = t36*t59 - t57*t57;
-    const float t72 = t26*t57 - t36*t58;
-    const float t73 = t36*t68 + t26*t69 + t57*t70;
-    const float t74 = t68 + t71 + t44;
-    const int t75 = t73 > ARM3F_RANK_TOL*t74*t60;
-    const float t76 = t60*t60;
-    const int t77 = t74 > ARM3F_RANK_TOL*t76;
-    const float t78 = 1.0f/t73;
-    const float t79 = t36*t61 + t26*t62 + t57*t63;
-    const float t80 = t37*t62 + t26*t61 + t58*t63;
-    const float t81 = t59*t63 + t57*t61 + t58*t62;
-    const float t82 = 1.0f/(t74*t74);
-    const float t83 = t76 - t74;
-    const float t84 = (t77 ? (t75 ? t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]) : t82*(t61*t83 - t79*t60)) : t65);
-    const float t85 = (t77 ? (t75 ? t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]) : t82*(t62*t83 - t80*t60)) : t66);
-    const float t86 = (t77 ? (t75 ? t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]) : t82*(t63*t83 - t81*t60)) : t67);
-    dq3[0] = t86 + t84*t9 + t85*t10;
-    dq3[1] = t86 + t84*t7 + t85*t8;
-    dq3[2] = t86 + t3*t85 + t84*t6;
+    const float t38 = lambda*lambda;
+    const float t64 = t9 + t7 + t6;
+    const float t65 = t3 + t10 + t8;
+    const float t66 = 0.18903592f*t38;
+    const float t67 = t66 + 0.18903592f*t25;
+    const float t68 = 0.18903592f*t26;
+    const float t69 = 0.4347826f*t64;
+    const float t70 = t66 + 0.18903592f*t27;
+    const float t71 = 0.4347826f*t65;
+    const float t72 = 3.0f + t38;
+    const float t73 = 0.4347826f*twist[0];
+    const float t74 = 0.4347826f*twist[1];
+    const float t75 = t67 + t70 + t72;
+    const float t76 = t67*t73 + t68*t74 + t69*twist[2];
+    const float t77 = t68*t73 + t70*t74 + t71*twist[2];
+    const float t78 = t69*t73 + t71*t74 + t72*twist[2];
+    const float t79 = (t75 > 0.0f ? 1.0f/(t75*t75 != 0.0f ? t75*t75 : 1.0f) : 1.0f);
+    const float t80 = t76*t79;
+    const float t81 = t77*t79;
+    const float t82 = t78*t79;
+    const float t83 = t70*t72 - t71*t71;
+    const float t84 = t69*t71 - t68*t72;
+    const float t85 = t68*t71 - t69*t70;
+    const float t86 = t67*t72 - t69*t69;
+    const float t87 = t68*t69 - t67*t71;
+    const float t88 = t67*t70 - t68*t68;
+    const float t89 = t67*t83 + t68*t84 + t69*t85;
+    const float t90 = t83 + t86 + t88;
+    const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
+    const float t92 = t75*t75;
+    const int t93 = t90 > ARM3F_RANK_TOL*t92;
+    const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
+    const float t95 = t67*t76 + t68*t77 + t69*t78;
+    const float t96 = t68*t76 + t70*t77 + t71*t78;
+    const float t97 = t69*t76 + t71*t77 + t72*t78;
+    const float t98 = (t90 > 0.0f ? 1.0f/(t90*t90 != 0.0f ? t90*t90 : 1.0f) : 1.0f);
+    const float t99 = t92 - t90;
+    const float t100 = (t93 ? (t91 ? t94*(t83*t73 + t84*t74 + t85*twist[2]) : t98*(t76*t99 - t95*t75)) : t80);
+    const float t101 = (t93 ? (t91 ? t94*(t84*t73 + t86*t74 + t87*twist[2]) : t98*(t77*t99 - t96*t75)) : t81);
+    const float t102 = (t93 ? (t91 ? t94*(t85*t73 + t87*t74 + t88*twist[2]) : t98*(t78*t99 - t97*t75)) : t82);
+    const float t103 = 0.4347826f*t100;
+    const float t104 = 0.4347826f*t101;
+    dq3[0] = t102 + t103*t9 + t104*t10;
+    dq3[1] = t102 + t103*t7 + t104*t8;
+    dq3[2] = t102 + t3*t104 + t103*t6;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_inverse_velocity3_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
 }
 
@@ -1420,7 +1464,7 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float twist[3];
         float cs[3];
@@ -1447,43 +1491,51 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         const float t25 = t9*t9 + t7*t7 + t6*t6;
         const float t26 = t3*t6 + t9*t10 + t7*t8;
         const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const float t35 = lambda*lambda;
-        const float t36 = t25 + t35;
-        const float t37 = t27 + t35;
-        const float t44 = t36*t37 - t26*t26;
-        const float t57 = t9 + t7 + t6;
-        const float t58 = t3 + t10 + t8;
-        const float t59 = 3.0f + t35;
-        const float t60 = t36 + t37 + t59;
-        const float t61 = t36*twist[0] + t26*twist[1] + t57*twist[2];
-        const float t62 = t37*twist[1] + t26*twist[0] + t58*twist[2];
-        const float t63 = t59*twist[2] + t57*twist[0] + t58*twist[1];
-        const float t64 = 1.0f/(t60*t60);
-        const float t65 = t61*t64;
-        const float t66 = t62*t64;
-        const float t67 = t63*t64;
-        const float t68 = t37*t59 - t58*t58;
-        const float t69 = t57*t58 - t59*t26;
-        const float t70 = t26*t58 - t37*t57;
-        const float t71 = t36*t59 - t57*t57;
-        const float t72 = t26*t57 - t36*t58;
-        const float t73 = t36*t68 + t26*t69 + t57*t70;
-        const float t74 = t68 + t71 + t44;
-        const int t75 = t73 > ARM3F_RANK_TOL*t74*t60;
-        const float t76 = t60*t60;
-        const int t77 = t74 > ARM3F_RANK_TOL*t76;
-        const float t78 = 1.0f/t73;
-        const float t79 = t36*t61 + t26*t62 + t57*t63;
-        const float t80 = t37*t62 + t26*t61 + t58*t63;
-        const float t81 = t59*t63 + t57*t61 + t58*t62;
-        const float t82 = 1.0f/(t74*t74);
-        const float t83 = t76 - t74;
-        const float t84 = (t77 ? (t75 ? t78*(t68*twist[0] + t69*twist[1] + t70*twist[2]) : t82*(t61*t83 - t79*t60)) : t65);
-        const float t85 = (t77 ? (t75 ? t78*(t69*twist[0] + t71*twist[1] + t72*twist[2]) : t82*(t62*t83 - t80*t60)) : t66);
-        const float t86 = (t77 ? (t75 ? t78*(t70*twist[0] + t72*twist[1] + t44*twist[2]) : t82*(t63*t83 - t81*t60)) : t67);
-        dq3[0] = t86 + t84*t9 + t85*t10;
-        dq3[1] = t86 + t84*t7 + t85*t8;
-        dq3[2] = t86 + t3*t85 + t84*t6;
+        const float t38 = lambda*lambda;
+        const float t64 = t9 + t7 + t6;
+        const float t65 = t3 + t10 + t8;
+        const float t66 = 0.18903592f*t38;
+        const float t67 = t66 + 0.18903592f*t25;
+        const float t68 = 0.18903592f*t26;
+        const float t69 = 0.4347826f*t64;
+        const float t70 = t66 + 0.18903592f*t27;
+        const float t71 = 0.4347826f*t65;
+        const float t72 = 3.0f + t38;
+        const float t73 = 0.4347826f*twist[0];
+        const float t74 = 0.4347826f*twist[1];
+        const float t75 = t67 + t70 + t72;
+        const float t76 = t67*t73 + t68*t74 + t69*twist[2];
+        const float t77 = t68*t73 + t70*t74 + t71*twist[2];
+        const float t78 = t69*t73 + t71*t74 + t72*twist[2];
+        const float t79 = (t75 > 0.0f ? 1.0f/(t75*t75 != 0.0f ? t75*t75 : 1.0f) : 1.0f);
+        const float t80 = t76*t79;
+        const float t81 = t77*t79;
+        const float t82 = t78*t79;
+        const float t83 = t70*t72 - t71*t71;
+        const float t84 = t69*t71 - t68*t72;
+        const float t85 = t68*t71 - t69*t70;
+        const float t86 = t67*t72 - t69*t69;
+        const float t87 = t68*t69 - t67*t71;
+        const float t88 = t67*t70 - t68*t68;
+        const float t89 = t67*t83 + t68*t84 + t69*t85;
+        const float t90 = t83 + t86 + t88;
+        const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
+        const float t92 = t75*t75;
+        const int t93 = t90 > ARM3F_RANK_TOL*t92;
+        const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
+        const float t95 = t67*t76 + t68*t77 + t69*t78;
+        const float t96 = t68*t76 + t70*t77 + t71*t78;
+        const float t97 = t69*t76 + t71*t77 + t72*t78;
+        const float t98 = (t90 > 0.0f ? 1.0f/(t90*t90 != 0.0f ? t90*t90 : 1.0f) : 1.0f);
+        const float t99 = t92 - t90;
+        const float t100 = (t93 ? (t91 ? t94*(t83*t73 + t84*t74 + t85*twist[2]) : t98*(t76*t99 - t95*t75)) : t80);
+        const float t101 = (t93 ? (t91 ? t94*(t84*t73 + t86*t74 + t87*twist[2]) : t98*(t77*t99 - t96*t75)) : t81);
+        const float t102 = (t93 ? (t91 ? t94*(t85*t73 + t87*t74 + t88*twist[2]) : t98*(t78*t99 - t97*t75)) : t82);
+        const float t103 = 0.4347826f*t100;
+        const float t104 = 0.4347826f*t101;
+        dq3[0] = t102 + t103*t9 + t104*t10;
+        dq3[1] = t102 + t103*t7 + t104*t8;
+        dq3[2] = t102 + t3*t104 + t103*t6;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1532,7 +1584,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 28 add/sub, 35 mul, 1 neg, 2 div */
+/* operations: 3 sin, 3 cos, 35 add/sub, 43 mul, 1 neg, 3 div */
 
 static void arm3f_ik_step_angles(const float q[3], float *restrict ang)
 {
@@ -1555,36 +1607,48 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t25 = t9*t9 + t7*t7 + t6*t6;
     const float t26 = t3*t6 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
-    const float t35 = lambda*lambda;
-    const float t36 = t25 + t35;
-    const float t37 = t27 + t35;
-    const float t38 = t36 + t37;
-    const float t41 = 1.0f/(t38*t38);
-    const float t44 = t36*t37 - t26*t26;
-    const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
-    const float t46 = 1.0f/t44;
-    const float t49 = target[0] - t10;
-    const float t50 = t9 + target[1];
-    const float t51 = t36*t49 + t26*t50;
-    const float t52 = t37*t50 + t26*t49;
-    const float t53 = t51*t41;
-    const float t54 = t52*t41;
-    const float t55 = (t45 ? t46*(t49*t38 - t51) : t53);
-    const float t56 = (t45 ? t46*(t50*t38 - t52) : t54);
-    q_next[0] = q[0] + t55*t9 + t56*t10;
-    q_next[1] = q[1] + t55*t7 + t56*t8;
-    q_next[2] = q[2] + t3*t56 + t55*t6;
+    const int t28 = t25 >= t27;
+    const float t29 = (t28 ? t25 : t27);
+    const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+    const float t31 = (t28 ? t9 : t10);
+    const float t32 = (t28 ? t7 : t8);
+    const float t33 = (t28 ? t6 : t3);
+    const float t34 = (t28 ? t10 : t9) - t31*t30;
+    const float t35 = (t28 ? t8 : t7) - t32*t30;
+    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t37 = t34*t34 + t35*t35 + t36*t36;
+    const float t38 = lambda*lambda;
+    const float t41 = t25 + t27;
+    const float t42 = t29*t37;
+    const float t43 = t42 + t38*(t41 + t38);
+    const int t44 = t43 > ARM3F_RANK_TOL*(t41 + 2.0f*t38)*(t41 + 2.0f*t38);
+    const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
+    const float t47 = t38 + t29*(1.0f + t30*t30);
+    const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
+    const float t54 = target[0] - t10;
+    const float t55 = t9 + target[1];
+    const float t56 = (t28 ? t54 : t55);
+    const float t57 = (t28 ? t55 : t54);
+    const float t58 = t56 + t57*t30;
+    const float t59 = (t44 ? t46*(t58*t38 + t56*t37) : t58*t48);
+    const float t60 = (t44 ? t46*(t57*t38 + t29*(t57 - t56*t30)) : 0.0f);
+    const float t61 = t59*t31 + t60*t34;
+    const float t62 = t59*t32 + t60*t35;
+    const float t63 = t59*t33 + t60*t36;
+    q_next[0] = t61 + q[0];
+    q_next[1] = t62 + q[1];
+    q_next[2] = t63 + q[2];
 }
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])
 {
-    float ang[4], cs[4], sn[4];
+    float ang[8], cs[8], sn[8];
     int k;
-    for (k = 3; k < 4; ++k) {
+    for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
     arm3f_ik_step_angles(q, ang);
-    arm3f_trig4(ang, cs, sn);
+    arm3f_trig8(ang, cs, sn, 3);
     arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
 }
 
@@ -1607,7 +1671,7 @@ static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const
         ang_T[32 + b] = ang[1];
         ang_T[64 + b] = ang[2];
     }
-    arm3f_trig96(ang_T, cs_T, sn_T);
+    arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
         float q[3];
         float target[2];
@@ -1637,25 +1701,37 @@ static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const
         const float t25 = t9*t9 + t7*t7 + t6*t6;
         const float t26 = t3*t6 + t9*t10 + t7*t8;
         const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const float t35 = lambda*lambda;
-        const float t36 = t25 + t35;
-        const float t37 = t27 + t35;
-        const float t38 = t36 + t37;
-        const float t41 = 1.0f/(t38*t38);
-        const float t44 = t36*t37 - t26*t26;
-        const int t45 = t44 > ARM3F_RANK_TOL*t38*t38;
-        const float t46 = 1.0f/t44;
-        const float t49 = target[0] - t10;
-        const float t50 = t9 + target[1];
-        const float t51 = t36*t49 + t26*t50;
-        const float t52 = t37*t50 + t26*t49;
-        const float t53 = t51*t41;
-        const float t54 = t52*t41;
-        const float t55 = (t45 ? t46*(t49*t38 - t51) : t53);
-        const float t56 = (t45 ? t46*(t50*t38 - t52) : t54);
-        q_next[0] = q[0] + t55*t9 + t56*t10;
-        q_next[1] = q[1] + t55*t7 + t56*t8;
-        q_next[2] = q[2] + t3*t56 + t55*t6;
+        const int t28 = t25 >= t27;
+        const float t29 = (t28 ? t25 : t27);
+        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
+        const float t31 = (t28 ? t9 : t10);
+        const float t32 = (t28 ? t7 : t8);
+        const float t33 = (t28 ? t6 : t3);
+        const float t34 = (t28 ? t10 : t9) - t31*t30;
+        const float t35 = (t28 ? t8 : t7) - t32*t30;
+        const float t36 = (t28 ? t3 : t6) - t33*t30;
+        const float t37 = t34*t34 + t35*t35 + t36*t36;
+        const float t38 = lambda*lambda;
+        const float t41 = t25 + t27;
+        const float t42 = t29*t37;
+        const float t43 = t42 + t38*(t41 + t38);
+        const int t44 = t43 > ARM3F_RANK_TOL*(t41 + 2.0f*t38)*(t41 + 2.0f*t38);
+        const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
+        const float t47 = t38 + t29*(1.0f + t30*t30);
+        const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
+        const float t54 = target[0] - t10;
+        const float t55 = t9 + target[1];
+        const float t56 = (t28 ? t54 : t55);
+        const float t57 = (t28 ? t55 : t54);
+        const float t58 = t56 + t57*t30;
+        const float t59 = (t44 ? t46*(t58*t38 + t56*t37) : t58*t48);
+        const float t60 = (t44 ? t46*(t57*t38 + t29*(t57 - t56*t30)) : 0.0f);
+        const float t61 = t59*t31 + t60*t34;
+        const float t62 = t59*t32 + t60*t35;
+        const float t63 = t59*t33 + t60*t36;
+        q_next[0] = t61 + q[0];
+        q_next[1] = t62 + q[1];
+        q_next[2] = t63 + q[2];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

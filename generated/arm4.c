@@ -34,40 +34,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM4_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4. */
-static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
+static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
 #if ARM4_VECTOR_MATH
-    /* Two 4-wide vector sines: cos(a) = sin(a + pi/2), then sin(a). */
-    double x[4];
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 4; ++k) {
-        x[k] = ang[k] + 1.5707963267948966;
-    }
-    for (k = 0; k < 4; ++k) {
-        cs[k] = sin(x[k]);
+        cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
     }
 #else
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < used; ++k) {
         cs[k] = cos(ang[k]);
         sn[k] = sin(ang[k]);
     }
 #endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128. */
-static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128 with vector math, else for k < used. */
+static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM4_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 128; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 128; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm4_position: endpoint position p (2) ---- */
@@ -106,7 +110,7 @@ void arm4_position(const double q[4], const double l[4], double p[2])
 {
     double ang[4], cs[4], sn[4];
     arm4_position_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_position_finish(l, cs, sn, p);
 }
 
@@ -132,7 +136,7 @@ static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double cs[4];
         double sn[4];
@@ -242,7 +246,7 @@ void arm4_jacobian(const double q[4], const double l[4], double J[8])
 {
     double ang[4], cs[4], sn[4];
     arm4_jacobian_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_jacobian_finish(l, cs, sn, J);
 }
 
@@ -268,7 +272,7 @@ static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double cs[4];
         double sn[4];
@@ -408,7 +412,7 @@ void arm4_coriolis(const double q[4], const double dq[4], const double l[4], dou
 {
     double ang[4], cs[4], sn[4];
     arm4_coriolis_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -434,7 +438,7 @@ static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double dq[4];
         double cs[4];
@@ -594,7 +598,7 @@ void arm4_velocity(const double q[4], const double dq[4], const double l[4], dou
 {
     double ang[4], cs[4], sn[4];
     arm4_velocity_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -620,7 +624,7 @@ static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double dq[4];
         double cs[4];
@@ -769,7 +773,7 @@ void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4
 {
     double ang[4], cs[4], sn[4];
     arm4_acceleration_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -795,7 +799,7 @@ static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, c
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double dq[4];
         double ddq[4];
@@ -985,7 +989,7 @@ void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4],
 {
     double ang[4], cs[4], sn[4];
     arm4_kinematics_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -1011,7 +1015,7 @@ static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, con
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double dq[4];
         double ddq[4];
@@ -1231,20 +1235,25 @@ static void arm4_manipulability_finish(const double l[4], const double *restrict
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
     const int t40 = t37 >= t39;
     const double t41 = (t40 ? t37 : t39);
-    const double t42 = t38/t41;
-    const double t43 = (t40 ? t17 : t16) - t42*(t40 ? t16 : t17);
-    const double t44 = (t40 ? t15 : t14) - t42*(t40 ? t14 : t15);
-    const double t45 = (t40 ? t13 : t12) - t42*(t40 ? t12 : t13);
-    const double t46 = (t40 ? t6 : t11) - t42*(t40 ? t11 : t6);
-    const double t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46;
-    w[0] = sqrt(t41*t47);
+    const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+    const double t43 = (t40 ? t16 : t17);
+    const double t44 = (t40 ? t14 : t15);
+    const double t45 = (t40 ? t12 : t13);
+    const double t46 = (t40 ? t11 : t6);
+    const double t47 = (t40 ? t17 : t16) - t43*t42;
+    const double t48 = (t40 ? t15 : t14) - t44*t42;
+    const double t49 = (t40 ? t13 : t12) - t45*t42;
+    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+    const double t56 = t41*t51;
+    w[0] = sqrt(t56);
 }
 
 void arm4_manipulability(const double q[4], const double l[4], double w[1])
 {
     double ang[4], cs[4], sn[4];
     arm4_manipulability_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1270,7 +1279,7 @@ static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T,
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double cs[4];
         double sn[4];
@@ -1303,13 +1312,18 @@ static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T,
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
         const int t40 = t37 >= t39;
         const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38/t41;
-        const double t43 = (t40 ? t17 : t16) - t42*(t40 ? t16 : t17);
-        const double t44 = (t40 ? t15 : t14) - t42*(t40 ? t14 : t15);
-        const double t45 = (t40 ? t13 : t12) - t42*(t40 ? t12 : t13);
-        const double t46 = (t40 ? t6 : t11) - t42*(t40 ? t11 : t6);
-        const double t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46;
-        w[0] = sqrt(t41*t47);
+        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+        const double t43 = (t40 ? t16 : t17);
+        const double t44 = (t40 ? t14 : t15);
+        const double t45 = (t40 ? t12 : t13);
+        const double t46 = (t40 ? t11 : t6);
+        const double t47 = (t40 ? t17 : t16) - t43*t42;
+        const double t48 = (t40 ? t15 : t14) - t44*t42;
+        const double t49 = (t40 ? t13 : t12) - t45*t42;
+        const double t50 = (t40 ? t6 : t11) - t46*t42;
+        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+        const double t56 = t41*t51;
+        w[0] = sqrt(t56);
         w_T[0 + b] = w[0];
     }
 }
@@ -1347,7 +1361,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 30 add/sub, 44 mul, 1 neg, 2 div */
+/* operations: 4 sin, 4 cos, 39 add/sub, 54 mul, 1 neg, 3 div */
 
 static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
@@ -1377,31 +1391,46 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
     const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const double t48 = lambda*lambda;
-    const double t49 = t37 + t48;
-    const double t50 = t39 + t48;
-    const double t51 = t49 + t50;
-    const double t52 = t49*v[0] + t38*v[1];
-    const double t53 = t50*v[1] + t38*v[0];
-    const double t54 = 1.0/(t51*t51);
-    const double t55 = t52*t54;
-    const double t56 = t53*t54;
-    const double t57 = t49*t50 - t38*t38;
-    const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
-    const double t59 = 1.0/t57;
-    const double t60 = (t58 ? t59*(t51*v[0] - t52) : t55);
-    const double t61 = (t58 ? t59*(t51*v[1] - t53) : t56);
-    dq[0] = t60*t16 + t61*t17;
-    dq[1] = t60*t14 + t61*t15;
-    dq[2] = t60*t12 + t61*t13;
-    dq[3] = t6*t61 + t60*t11;
+    const int t40 = t37 >= t39;
+    const double t41 = (t40 ? t37 : t39);
+    const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+    const double t43 = (t40 ? t16 : t17);
+    const double t44 = (t40 ? t14 : t15);
+    const double t45 = (t40 ? t12 : t13);
+    const double t46 = (t40 ? t11 : t6);
+    const double t47 = (t40 ? t17 : t16) - t43*t42;
+    const double t48 = (t40 ? t15 : t14) - t44*t42;
+    const double t49 = (t40 ? t13 : t12) - t45*t42;
+    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+    const double t52 = lambda*lambda;
+    const double t53 = (t40 ? v[0] : v[1]);
+    const double t54 = (t40 ? v[1] : v[0]);
+    const double t55 = t37 + t39;
+    const double t56 = t41*t51;
+    const double t57 = t56 + t52*(t55 + t52);
+    const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
+    const double t59 = t53 + t54*t42;
+    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
+    const double t61 = t52 + t41*(1.0 + t42*t42);
+    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
+    const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
+    const double t65 = t63*t43 + t64*t47;
+    const double t66 = t63*t44 + t64*t48;
+    const double t67 = t63*t45 + t64*t49;
+    const double t68 = t63*t46 + t64*t50;
+    dq[0] = t65;
+    dq[1] = t66;
+    dq[2] = t67;
+    dq[3] = t68;
 }
 
 void arm4_inverse_velocity(const double q[4], const double v[2], const double l[4], double lambda, double dq[4])
 {
     double ang[4], cs[4], sn[4];
     arm4_inverse_velocity_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
@@ -1427,7 +1456,7 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double v[2];
         double cs[4];
@@ -1461,24 +1490,39 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
         const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t48 = lambda*lambda;
-        const double t49 = t37 + t48;
-        const double t50 = t39 + t48;
-        const double t51 = t49 + t50;
-        const double t52 = t49*v[0] + t38*v[1];
-        const double t53 = t50*v[1] + t38*v[0];
-        const double t54 = 1.0/(t51*t51);
-        const double t55 = t52*t54;
-        const double t56 = t53*t54;
-        const double t57 = t49*t50 - t38*t38;
-        const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
-        const double t59 = 1.0/t57;
-        const double t60 = (t58 ? t59*(t51*v[0] - t52) : t55);
-        const double t61 = (t58 ? t59*(t51*v[1] - t53) : t56);
-        dq[0] = t60*t16 + t61*t17;
-        dq[1] = t60*t14 + t61*t15;
-        dq[2] = t60*t12 + t61*t13;
-        dq[3] = t6*t61 + t60*t11;
+        const int t40 = t37 >= t39;
+        const double t41 = (t40 ? t37 : t39);
+        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+        const double t43 = (t40 ? t16 : t17);
+        const double t44 = (t40 ? t14 : t15);
+        const double t45 = (t40 ? t12 : t13);
+        const double t46 = (t40 ? t11 : t6);
+        const double t47 = (t40 ? t17 : t16) - t43*t42;
+        const double t48 = (t40 ? t15 : t14) - t44*t42;
+        const double t49 = (t40 ? t13 : t12) - t45*t42;
+        const double t50 = (t40 ? t6 : t11) - t46*t42;
+        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+        const double t52 = lambda*lambda;
+        const double t53 = (t40 ? v[0] : v[1]);
+        const double t54 = (t40 ? v[1] : v[0]);
+        const double t55 = t37 + t39;
+        const double t56 = t41*t51;
+        const double t57 = t56 + t52*(t55 + t52);
+        const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
+        const double t59 = t53 + t54*t42;
+        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
+        const double t61 = t52 + t41*(1.0 + t42*t42);
+        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
+        const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
+        const double t65 = t63*t43 + t64*t47;
+        const double t66 = t63*t44 + t64*t48;
+        const double t67 = t63*t45 + t64*t49;
+        const double t68 = t63*t46 + t64*t50;
+        dq[0] = t65;
+        dq[1] = t66;
+        dq[2] = t67;
+        dq[3] = t68;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1529,7 +1573,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 69 add/sub, 92 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 72 add/sub, 102 mul, 1 neg, 4 div */
 
 static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
@@ -1559,51 +1603,60 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
     const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const double t48 = lambda*lambda;
-    const double t49 = t37 + t48;
-    const double t50 = t39 + t48;
-    const double t57 = t49*t50 - t38*t38;
-    const double t70 = t16 + t14 + t12 + t11;
-    const double t71 = t6 + t17 + t15 + t13;
-    const double t72 = 4.0 + t48;
-    const double t73 = t49 + t50 + t72;
-    const double t74 = t49*twist[0] + t38*twist[1] + t70*twist[2];
-    const double t75 = t50*twist[1] + t38*twist[0] + t71*twist[2];
-    const double t76 = t72*twist[2] + t70*twist[0] + t71*twist[1];
-    const double t77 = 1.0/(t73*t73);
-    const double t78 = t74*t77;
-    const double t79 = t75*t77;
-    const double t80 = t76*t77;
-    const double t81 = t50*t72 - t71*t71;
-    const double t82 = t70*t71 - t72*t38;
-    const double t83 = t38*t71 - t50*t70;
-    const double t84 = t49*t72 - t70*t70;
-    const double t85 = t38*t70 - t49*t71;
-    const double t86 = t49*t81 + t38*t82 + t70*t83;
-    const double t87 = t81 + t84 + t57;
-    const int t88 = t86 > ARM4_RANK_TOL*t87*t73;
-    const double t89 = t73*t73;
-    const int t90 = t87 > ARM4_RANK_TOL*t89;
-    const double t91 = 1.0/t86;
-    const double t92 = t49*t74 + t38*t75 + t70*t76;
-    const double t93 = t50*t75 + t38*t74 + t71*t76;
-    const double t94 = t72*t76 + t70*t74 + t71*t75;
-    const double t95 = 1.0/(t87*t87);
-    const double t96 = t89 - t87;
-    const double t97 = (t90 ? (t88 ? t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]) : t95*(t74*t96 - t92*t73)) : t78);
-    const double t98 = (t90 ? (t88 ? t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]) : t95*(t75*t96 - t93*t73)) : t79);
-    const double t99 = (t90 ? (t88 ? t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]) : t95*(t76*t96 - t94*t73)) : t80);
-    dq3[0] = t99 + t97*t16 + t98*t17;
-    dq3[1] = t99 + t97*t14 + t98*t15;
-    dq3[2] = t99 + t97*t12 + t98*t13;
-    dq3[3] = t99 + t6*t98 + t97*t11;
+    const double t52 = lambda*lambda;
+    const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+    const double t81 = t80*t80;
+    const double t82 = t16 + t14 + t12 + t11;
+    const double t83 = t6 + t17 + t15 + t13;
+    const double t84 = t81*(t37 + t52);
+    const double t85 = t38*t81;
+    const double t86 = t82*t80;
+    const double t87 = t81*(t39 + t52);
+    const double t88 = t83*t80;
+    const double t89 = 4.0 + t52;
+    const double t90 = t80*twist[0];
+    const double t91 = t80*twist[1];
+    const double t92 = t84 + t87 + t89;
+    const double t93 = t84*t90 + t85*t91 + t86*twist[2];
+    const double t94 = t85*t90 + t87*t91 + t88*twist[2];
+    const double t95 = t86*t90 + t88*t91 + t89*twist[2];
+    const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
+    const double t97 = t93*t96;
+    const double t98 = t94*t96;
+    const double t99 = t95*t96;
+    const double t100 = t87*t89 - t88*t88;
+    const double t101 = t86*t88 - t85*t89;
+    const double t102 = t85*t88 - t86*t87;
+    const double t103 = t84*t89 - t86*t86;
+    const double t104 = t85*t86 - t84*t88;
+    const double t105 = t84*t87 - t85*t85;
+    const double t106 = t84*t100 + t85*t101 + t86*t102;
+    const double t107 = t100 + t103 + t105;
+    const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
+    const double t109 = t92*t92;
+    const int t110 = t107 > ARM4_RANK_TOL*t109;
+    const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
+    const double t112 = t84*t93 + t85*t94 + t86*t95;
+    const double t113 = t85*t93 + t87*t94 + t88*t95;
+    const double t114 = t86*t93 + t88*t94 + t89*t95;
+    const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
+    const double t116 = t109 - t107;
+    const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
+    const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
+    const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
+    const double t120 = t80*t117;
+    const double t121 = t80*t118;
+    dq3[0] = t119 + t120*t16 + t121*t17;
+    dq3[1] = t119 + t120*t14 + t121*t15;
+    dq3[2] = t119 + t120*t12 + t121*t13;
+    dq3[3] = t119 + t6*t121 + t120*t11;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
 {
     double ang[4], cs[4], sn[4];
     arm4_inverse_velocity3_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
@@ -1629,7 +1682,7 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double twist[3];
         double cs[4];
@@ -1664,44 +1717,53 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
         const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t48 = lambda*lambda;
-        const double t49 = t37 + t48;
-        const double t50 = t39 + t48;
-        const double t57 = t49*t50 - t38*t38;
-        const double t70 = t16 + t14 + t12 + t11;
-        const double t71 = t6 + t17 + t15 + t13;
-        const double t72 = 4.0 + t48;
-        const double t73 = t49 + t50 + t72;
-        const double t74 = t49*twist[0] + t38*twist[1] + t70*twist[2];
-        const double t75 = t50*twist[1] + t38*twist[0] + t71*twist[2];
-        const double t76 = t72*twist[2] + t70*twist[0] + t71*twist[1];
-        const double t77 = 1.0/(t73*t73);
-        const double t78 = t74*t77;
-        const double t79 = t75*t77;
-        const double t80 = t76*t77;
-        const double t81 = t50*t72 - t71*t71;
-        const double t82 = t70*t71 - t72*t38;
-        const double t83 = t38*t71 - t50*t70;
-        const double t84 = t49*t72 - t70*t70;
-        const double t85 = t38*t70 - t49*t71;
-        const double t86 = t49*t81 + t38*t82 + t70*t83;
-        const double t87 = t81 + t84 + t57;
-        const int t88 = t86 > ARM4_RANK_TOL*t87*t73;
-        const double t89 = t73*t73;
-        const int t90 = t87 > ARM4_RANK_TOL*t89;
-        const double t91 = 1.0/t86;
-        const double t92 = t49*t74 + t38*t75 + t70*t76;
-        const double t93 = t50*t75 + t38*t74 + t71*t76;
-        const double t94 = t72*t76 + t70*t74 + t71*t75;
-        const double t95 = 1.0/(t87*t87);
-        const double t96 = t89 - t87;
-        const double t97 = (t90 ? (t88 ? t91*(t81*twist[0] + t82*twist[1] + t83*twist[2]) : t95*(t74*t96 - t92*t73)) : t78);
-        const double t98 = (t90 ? (t88 ? t91*(t82*twist[0] + t84*twist[1] + t85*twist[2]) : t95*(t75*t96 - t93*t73)) : t79);
-        const double t99 = (t90 ? (t88 ? t91*(t83*twist[0] + t85*twist[1] + t57*twist[2]) : t95*(t76*t96 - t94*t73)) : t80);
-        dq3[0] = t99 + t97*t16 + t98*t17;
-        dq3[1] = t99 + t97*t14 + t98*t15;
-        dq3[2] = t99 + t97*t12 + t98*t13;
-        dq3[3] = t99 + t6*t98 + t97*t11;
+        const double t52 = lambda*lambda;
+        const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+        const double t81 = t80*t80;
+        const double t82 = t16 + t14 + t12 + t11;
+        const double t83 = t6 + t17 + t15 + t13;
+        const double t84 = t81*(t37 + t52);
+        const double t85 = t38*t81;
+        const double t86 = t82*t80;
+        const double t87 = t81*(t39 + t52);
+        const double t88 = t83*t80;
+        const double t89 = 4.0 + t52;
+        const double t90 = t80*twist[0];
+        const double t91 = t80*twist[1];
+        const double t92 = t84 + t87 + t89;
+        const double t93 = t84*t90 + t85*t91 + t86*twist[2];
+        const double t94 = t85*t90 + t87*t91 + t88*twist[2];
+        const double t95 = t86*t90 + t88*t91 + t89*twist[2];
+        const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
+        const double t97 = t93*t96;
+        const double t98 = t94*t96;
+        const double t99 = t95*t96;
+        const double t100 = t87*t89 - t88*t88;
+        const double t101 = t86*t88 - t85*t89;
+        const double t102 = t85*t88 - t86*t87;
+        const double t103 = t84*t89 - t86*t86;
+        const double t104 = t85*t86 - t84*t88;
+        const double t105 = t84*t87 - t85*t85;
+        const double t106 = t84*t100 + t85*t101 + t86*t102;
+        const double t107 = t100 + t103 + t105;
+        const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
+        const double t109 = t92*t92;
+        const int t110 = t107 > ARM4_RANK_TOL*t109;
+        const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
+        const double t112 = t84*t93 + t85*t94 + t86*t95;
+        const double t113 = t85*t93 + t87*t94 + t88*t95;
+        const double t114 = t86*t93 + t88*t94 + t89*t95;
+        const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
+        const double t116 = t109 - t107;
+        const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
+        const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
+        const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
+        const double t120 = t80*t117;
+        const double t121 = t80*t118;
+        dq3[0] = t119 + t120*t16 + t121*t17;
+        dq3[1] = t119 + t120*t14 + t121*t15;
+        dq3[2] = t119 + t120*t12 + t121*t13;
+        dq3[3] = t119 + t6*t121 + t120*t11;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1753,7 +1815,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 36 add/sub, 44 mul, 1 neg, 2 div */
+/* operations: 4 sin, 4 cos, 45 add/sub, 54 mul, 1 neg, 3 div */
 
 static void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
@@ -1783,33 +1845,48 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
     const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const double t48 = lambda*lambda;
-    const double t49 = t37 + t48;
-    const double t50 = t39 + t48;
-    const double t51 = t49 + t50;
-    const double t54 = 1.0/(t51*t51);
-    const double t57 = t49*t50 - t38*t38;
-    const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
-    const double t59 = 1.0/t57;
-    const double t62 = target[0] - t17;
-    const double t63 = t16 + target[1];
-    const double t64 = t49*t62 + t38*t63;
-    const double t65 = t50*t63 + t38*t62;
-    const double t66 = t64*t54;
-    const double t67 = t65*t54;
-    const double t68 = (t58 ? t59*(t62*t51 - t64) : t66);
-    const double t69 = (t58 ? t59*(t63*t51 - t65) : t67);
-    q_next[0] = q[0] + t68*t16 + t69*t17;
-    q_next[1] = q[1] + t68*t14 + t69*t15;
-    q_next[2] = q[2] + t68*t12 + t69*t13;
-    q_next[3] = q[3] + t6*t69 + t68*t11;
+    const int t40 = t37 >= t39;
+    const double t41 = (t40 ? t37 : t39);
+    const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+    const double t43 = (t40 ? t16 : t17);
+    const double t44 = (t40 ? t14 : t15);
+    const double t45 = (t40 ? t12 : t13);
+    const double t46 = (t40 ? t11 : t6);
+    const double t47 = (t40 ? t17 : t16) - t43*t42;
+    const double t48 = (t40 ? t15 : t14) - t44*t42;
+    const double t49 = (t40 ? t13 : t12) - t45*t42;
+    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+    const double t52 = lambda*lambda;
+    const double t55 = t37 + t39;
+    const double t56 = t41*t51;
+    const double t57 = t56 + t52*(t55 + t52);
+    const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
+    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
+    const double t61 = t52 + t41*(1.0 + t42*t42);
+    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t69 = target[0] - t17;
+    const double t70 = t16 + target[1];
+    const double t71 = (t40 ? t69 : t70);
+    const double t72 = (t40 ? t70 : t69);
+    const double t73 = t71 + t72*t42;
+    const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
+    const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
+    const double t76 = t74*t43 + t75*t47;
+    const double t77 = t74*t44 + t75*t48;
+    const double t78 = t74*t45 + t75*t49;
+    const double t79 = t74*t46 + t75*t50;
+    q_next[0] = t76 + q[0];
+    q_next[1] = t77 + q[1];
+    q_next[2] = t78 + q[2];
+    q_next[3] = t79 + q[3];
 }
 
 void arm4_ik_step(const double q[4], const double target[2], const double l[4], double lambda, double q_next[4])
 {
     double ang[4], cs[4], sn[4];
     arm4_ik_step_angles(q, ang);
-    arm4_trig4(ang, cs, sn);
+    arm4_trig4(ang, cs, sn, 4);
     arm4_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
@@ -1835,7 +1912,7 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         ang_T[64 + b] = ang[2];
         ang_T[96 + b] = ang[3];
     }
-    arm4_trig128(ang_T, cs_T, sn_T);
+    arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
         double q[4];
         double target[2];
@@ -1874,26 +1951,41 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
         const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t48 = lambda*lambda;
-        const double t49 = t37 + t48;
-        const double t50 = t39 + t48;
-        const double t51 = t49 + t50;
-        const double t54 = 1.0/(t51*t51);
-        const double t57 = t49*t50 - t38*t38;
-        const int t58 = t57 > ARM4_RANK_TOL*t51*t51;
-        const double t59 = 1.0/t57;
-        const double t62 = target[0] - t17;
-        const double t63 = t16 + target[1];
-        const double t64 = t49*t62 + t38*t63;
-        const double t65 = t50*t63 + t38*t62;
-        const double t66 = t64*t54;
-        const double t67 = t65*t54;
-        const double t68 = (t58 ? t59*(t62*t51 - t64) : t66);
-        const double t69 = (t58 ? t59*(t63*t51 - t65) : t67);
-        q_next[0] = q[0] + t68*t16 + t69*t17;
-        q_next[1] = q[1] + t68*t14 + t69*t15;
-        q_next[2] = q[2] + t68*t12 + t69*t13;
-        q_next[3] = q[3] + t6*t69 + t68*t11;
+        const int t40 = t37 >= t39;
+        const double t41 = (t40 ? t37 : t39);
+        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+        const double t43 = (t40 ? t16 : t17);
+        const double t44 = (t40 ? t14 : t15);
+        const double t45 = (t40 ? t12 : t13);
+        const double t46 = (t40 ? t11 : t6);
+        const double t47 = (t40 ? t17 : t16) - t43*t42;
+        const double t48 = (t40 ? t15 : t14) - t44*t42;
+        const double t49 = (t40 ? t13 : t12) - t45*t42;
+        const double t50 = (t40 ? t6 : t11) - t46*t42;
+        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
+        const double t52 = lambda*lambda;
+        const double t55 = t37 + t39;
+        const double t56 = t41*t51;
+        const double t57 = t56 + t52*(t55 + t52);
+        const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
+        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
+        const double t61 = t52 + t41*(1.0 + t42*t42);
+        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t69 = target[0] - t17;
+        const double t70 = t16 + target[1];
+        const double t71 = (t40 ? t69 : t70);
+        const double t72 = (t40 ? t70 : t69);
+        const double t73 = t71 + t72*t42;
+        const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
+        const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
+        const double t76 = t74*t43 + t75*t47;
+        const double t77 = t74*t44 + t75*t48;
+        const double t78 = t74*t45 + t75*t49;
+        const double t79 = t74*t46 + t75*t50;
+        q_next[0] = t76 + q[0];
+        q_next[1] = t77 + q[1];
+        q_next[2] = t78 + q[2];
+        q_next[3] = t79 + q[3];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];
@@ -1963,6 +2055,11 @@ int arm4_ik_solve(const double q0[4], const double target[2], const double l[4],
     }
     for (k = 0; k < 2; ++k) {
         if (!isfinite(target[k])) {
+            return ARM4_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 4; ++k) {
+        if (!isfinite(l[k])) {
             return ARM4_IK_INVALID;
         }
     }

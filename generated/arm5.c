@@ -34,28 +34,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM5_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
+static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM5_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 8; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160. */
-static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160 with vector math, else for k < used. */
+static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM5_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 160; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 160; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm5_position: endpoint position p (2) ---- */
@@ -103,7 +119,7 @@ void arm5_position(const double q[5], const double l[5], double p[2])
         ang[k] = 0;
     }
     arm5_position_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_position_finish(l, cs, sn, p);
 }
 
@@ -132,7 +148,7 @@ static ARM5_VECTORIZE void arm5_position_block(const double *restrict q_T, const
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double cs[5];
         double sn[5];
@@ -260,7 +276,7 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10])
         ang[k] = 0;
     }
     arm5_jacobian_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_jacobian_finish(l, cs, sn, J);
 }
 
@@ -289,7 +305,7 @@ static ARM5_VECTORIZE void arm5_jacobian_block(const double *restrict q_T, const
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double cs[5];
         double sn[5];
@@ -456,7 +472,7 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
         ang[k] = 0;
     }
     arm5_coriolis_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -485,7 +501,7 @@ static ARM5_VECTORIZE void arm5_coriolis_block(const double *restrict q_T, const
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double dq[5];
         double cs[5];
@@ -675,7 +691,7 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
         ang[k] = 0;
     }
     arm5_velocity_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -704,7 +720,7 @@ static ARM5_VECTORIZE void arm5_velocity_block(const double *restrict q_T, const
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double dq[5];
         double cs[5];
@@ -879,7 +895,7 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
         ang[k] = 0;
     }
     arm5_acceleration_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -908,7 +924,7 @@ static ARM5_VECTORIZE void arm5_acceleration_block(const double *restrict q_T, c
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double dq[5];
         double ddq[5];
@@ -1132,7 +1148,7 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
         ang[k] = 0;
     }
     arm5_kinematics_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -1161,7 +1177,7 @@ static ARM5_VECTORIZE void arm5_kinematics_block(const double *restrict q_T, con
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double dq[5];
         double ddq[5];
@@ -1414,14 +1430,20 @@ static void arm5_manipulability_finish(const double l[5], const double *restrict
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
     const int t50 = t47 >= t49;
     const double t51 = (t50 ? t47 : t49);
-    const double t52 = t48/t51;
-    const double t53 = (t50 ? t22 : t21) - t52*(t50 ? t21 : t22);
-    const double t54 = (t50 ? t20 : t19) - t52*(t50 ? t19 : t20);
-    const double t55 = (t50 ? t18 : t17) - t52*(t50 ? t17 : t18);
-    const double t56 = (t50 ? t16 : t15) - t52*(t50 ? t15 : t16);
-    const double t57 = (t50 ? t8 : t14) - t52*(t50 ? t14 : t8);
-    const double t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57;
-    w[0] = sqrt(t51*t58);
+    const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t53 = (t50 ? t21 : t22);
+    const double t54 = (t50 ? t19 : t20);
+    const double t55 = (t50 ? t17 : t18);
+    const double t56 = (t50 ? t15 : t16);
+    const double t57 = (t50 ? t14 : t8);
+    const double t58 = (t50 ? t22 : t21) - t53*t52;
+    const double t59 = (t50 ? t20 : t19) - t54*t52;
+    const double t60 = (t50 ? t18 : t17) - t55*t52;
+    const double t61 = (t50 ? t16 : t15) - t56*t52;
+    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+    const double t68 = t51*t63;
+    w[0] = sqrt(t68);
 }
 
 void arm5_manipulability(const double q[5], const double l[5], double w[1])
@@ -1432,7 +1454,7 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1])
         ang[k] = 0;
     }
     arm5_manipulability_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1461,7 +1483,7 @@ static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T,
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double cs[5];
         double sn[5];
@@ -1500,14 +1522,20 @@ static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T,
         const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
         const int t50 = t47 >= t49;
         const double t51 = (t50 ? t47 : t49);
-        const double t52 = t48/t51;
-        const double t53 = (t50 ? t22 : t21) - t52*(t50 ? t21 : t22);
-        const double t54 = (t50 ? t20 : t19) - t52*(t50 ? t19 : t20);
-        const double t55 = (t50 ? t18 : t17) - t52*(t50 ? t17 : t18);
-        const double t56 = (t50 ? t16 : t15) - t52*(t50 ? t15 : t16);
-        const double t57 = (t50 ? t8 : t14) - t52*(t50 ? t14 : t8);
-        const double t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57;
-        w[0] = sqrt(t51*t58);
+        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+        const double t53 = (t50 ? t21 : t22);
+        const double t54 = (t50 ? t19 : t20);
+        const double t55 = (t50 ? t17 : t18);
+        const double t56 = (t50 ? t15 : t16);
+        const double t57 = (t50 ? t14 : t8);
+        const double t58 = (t50 ? t22 : t21) - t53*t52;
+        const double t59 = (t50 ? t20 : t19) - t54*t52;
+        const double t60 = (t50 ? t18 : t17) - t55*t52;
+        const double t61 = (t50 ? t16 : t15) - t56*t52;
+        const double t62 = (t50 ? t8 : t14) - t57*t52;
+        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+        const double t68 = t51*t63;
+        w[0] = sqrt(t68);
         w_T[0 + b] = w[0];
     }
 }
@@ -1546,7 +1574,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 5 sin, 5 cos, 37 add/sub, 51 mul, 1 neg, 2 div */
+/* operations: 5 sin, 5 cos, 48 add/sub, 63 mul, 1 neg, 3 div */
 
 static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
 {
@@ -1581,25 +1609,43 @@ static void arm5_inverse_velocity_finish(const double v[2], const double l[5], d
     const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
     const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const double t59 = lambda*lambda;
-    const double t60 = t47 + t59;
-    const double t61 = t49 + t59;
-    const double t62 = t60 + t61;
-    const double t63 = t60*v[0] + t48*v[1];
-    const double t64 = t61*v[1] + t48*v[0];
-    const double t65 = 1.0/(t62*t62);
-    const double t66 = t63*t65;
-    const double t67 = t64*t65;
-    const double t68 = t60*t61 - t48*t48;
-    const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
-    const double t70 = 1.0/t68;
-    const double t71 = (t69 ? t70*(t62*v[0] - t63) : t66);
-    const double t72 = (t69 ? t70*(t62*v[1] - t64) : t67);
-    dq[0] = t71*t21 + t72*t22;
-    dq[1] = t71*t19 + t72*t20;
-    dq[2] = t71*t17 + t72*t18;
-    dq[3] = t71*t15 + t72*t16;
-    dq[4] = t8*t72 + t71*t14;
+    const int t50 = t47 >= t49;
+    const double t51 = (t50 ? t47 : t49);
+    const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t53 = (t50 ? t21 : t22);
+    const double t54 = (t50 ? t19 : t20);
+    const double t55 = (t50 ? t17 : t18);
+    const double t56 = (t50 ? t15 : t16);
+    const double t57 = (t50 ? t14 : t8);
+    const double t58 = (t50 ? t22 : t21) - t53*t52;
+    const double t59 = (t50 ? t20 : t19) - t54*t52;
+    const double t60 = (t50 ? t18 : t17) - t55*t52;
+    const double t61 = (t50 ? t16 : t15) - t56*t52;
+    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+    const double t64 = lambda*lambda;
+    const double t65 = (t50 ? v[0] : v[1]);
+    const double t66 = (t50 ? v[1] : v[0]);
+    const double t67 = t47 + t49;
+    const double t68 = t51*t63;
+    const double t69 = t68 + t64*(t67 + t64);
+    const int t70 = t69 > ARM5_RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64);
+    const double t71 = t65 + t66*t52;
+    const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
+    const double t73 = t64 + t51*(1.0 + t52*t52);
+    const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+    const double t75 = (t70 ? t72*(t71*t64 + t65*t63) : t71*t74);
+    const double t76 = (t70 ? t72*(t66*t64 + t51*(t66 - t65*t52)) : 0.0);
+    const double t77 = t75*t53 + t76*t58;
+    const double t78 = t75*t54 + t76*t59;
+    const double t79 = t75*t55 + t76*t60;
+    const double t80 = t75*t56 + t76*t61;
+    const double t81 = t75*t57 + t76*t62;
+    dq[0] = t77;
+    dq[1] = t78;
+    dq[2] = t79;
+    dq[3] = t80;
+    dq[4] = t81;
 }
 
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5])
@@ -1610,7 +1656,7 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
         ang[k] = 0;
     }
     arm5_inverse_velocity_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
@@ -1639,7 +1685,7 @@ static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double v[2];
         double cs[5];
@@ -1679,25 +1725,43 @@ static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_
         const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
         const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
         const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const double t59 = lambda*lambda;
-        const double t60 = t47 + t59;
-        const double t61 = t49 + t59;
-        const double t62 = t60 + t61;
-        const double t63 = t60*v[0] + t48*v[1];
-        const double t64 = t61*v[1] + t48*v[0];
-        const double t65 = 1.0/(t62*t62);
-        const double t66 = t63*t65;
-        const double t67 = t64*t65;
-        const double t68 = t60*t61 - t48*t48;
-        const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
-        const double t70 = 1.0/t68;
-        const double t71 = (t69 ? t70*(t62*v[0] - t63) : t66);
-        const double t72 = (t69 ? t70*(t62*v[1] - t64) : t67);
-        dq[0] = t71*t21 + t72*t22;
-        dq[1] = t71*t19 + t72*t20;
-        dq[2] = t71*t17 + t72*t18;
-        dq[3] = t71*t15 + t72*t16;
-        dq[4] = t8*t72 + t71*t14;
+        const int t50 = t47 >= t49;
+        const double t51 = (t50 ? t47 : t49);
+        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+        const double t53 = (t50 ? t21 : t22);
+        const double t54 = (t50 ? t19 : t20);
+        const double t55 = (t50 ? t17 : t18);
+        const double t56 = (t50 ? t15 : t16);
+        const double t57 = (t50 ? t14 : t8);
+        const double t58 = (t50 ? t22 : t21) - t53*t52;
+        const double t59 = (t50 ? t20 : t19) - t54*t52;
+        const double t60 = (t50 ? t18 : t17) - t55*t52;
+        const double t61 = (t50 ? t16 : t15) - t56*t52;
+        const double t62 = (t50 ? t8 : t14) - t57*t52;
+        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+        const double t64 = lambda*lambda;
+        const double t65 = (t50 ? v[0] : v[1]);
+        const double t66 = (t50 ? v[1] : v[0]);
+        const double t67 = t47 + t49;
+        const double t68 = t51*t63;
+        const double t69 = t68 + t64*(t67 + t64);
+        const int t70 = t69 > ARM5_RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64);
+        const double t71 = t65 + t66*t52;
+        const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
+        const double t73 = t64 + t51*(1.0 + t52*t52);
+        const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+        const double t75 = (t70 ? t72*(t71*t64 + t65*t63) : t71*t74);
+        const double t76 = (t70 ? t72*(t66*t64 + t51*(t66 - t65*t52)) : 0.0);
+        const double t77 = t75*t53 + t76*t58;
+        const double t78 = t75*t54 + t76*t59;
+        const double t79 = t75*t55 + t76*t60;
+        const double t80 = t75*t56 + t76*t61;
+        const double t81 = t75*t57 + t76*t62;
+        dq[0] = t77;
+        dq[1] = t78;
+        dq[2] = t79;
+        dq[3] = t80;
+        dq[4] = t81;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1751,7 +1815,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 5 sin, 5 cos, 79 add/sub, 99 mul, 1 neg, 3 div */
+/* operations: 5 sin, 5 cos, 83 add/sub, 109 mul, 1 neg, 4 div */
 
 static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
 {
@@ -1786,45 +1850,54 @@ static void arm5_inverse_velocity3_finish(const double twist[3], const double l[
     const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
     const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const double t59 = lambda*lambda;
-    const double t60 = t47 + t59;
-    const double t61 = t49 + t59;
-    const double t68 = t60*t61 - t48*t48;
-    const double t81 = t21 + t19 + t17 + t15 + t14;
-    const double t82 = t8 + t22 + t20 + t18 + t16;
-    const double t83 = 5.0 + t59;
-    const double t84 = t60 + t61 + t83;
-    const double t85 = t60*twist[0] + t48*twist[1] + t81*twist[2];
-    const double t86 = t61*twist[1] + t48*twist[0] + t82*twist[2];
-    const double t87 = t83*twist[2] + t81*twist[0] + t82*twist[1];
-    const double t88 = 1.0/(t84*t84);
-    const double t89 = t85*t88;
-    const double t90 = t86*t88;
-    const double t91 = t87*t88;
-    const double t92 = t61*t83 - t82*t82;
-    const double t93 = t81*t82 - t83*t48;
-    const double t94 = t48*t82 - t61*t81;
-    const double t95 = t60*t83 - t81*t81;
-    const double t96 = t48*t81 - t60*t82;
-    const double t97 = t60*t92 + t48*t93 + t81*t94;
-    const double t98 = t92 + t95 + t68;
-    const int t99 = t97 > ARM5_RANK_TOL*t98*t84;
-    const double t100 = t84*t84;
-    const int t101 = t98 > ARM5_RANK_TOL*t100;
-    const double t102 = 1.0/t97;
-    const double t103 = t60*t85 + t48*t86 + t81*t87;
-    const double t104 = t61*t86 + t48*t85 + t82*t87;
-    const double t105 = t83*t87 + t81*t85 + t82*t86;
-    const double t106 = 1.0/(t98*t98);
-    const double t107 = t100 - t98;
-    const double t108 = (t101 ? (t99 ? t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]) : t106*(t85*t107 - t103*t84)) : t89);
-    const double t109 = (t101 ? (t99 ? t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]) : t106*(t86*t107 - t104*t84)) : t90);
-    const double t110 = (t101 ? (t99 ? t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]) : t106*(t87*t107 - t105*t84)) : t91);
-    dq3[0] = t110 + t108*t21 + t109*t22;
-    dq3[1] = t110 + t108*t19 + t109*t20;
-    dq3[2] = t110 + t108*t17 + t109*t18;
-    dq3[3] = t110 + t108*t15 + t109*t16;
-    dq3[4] = t110 + t8*t109 + t108*t14;
+    const double t64 = lambda*lambda;
+    const double t94 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
+    const double t95 = t94*t94;
+    const double t96 = t21 + t19 + t17 + t15 + t14;
+    const double t97 = t8 + t22 + t20 + t18 + t16;
+    const double t98 = t95*(t47 + t64);
+    const double t99 = t48*t95;
+    const double t100 = t96*t94;
+    const double t101 = t95*(t49 + t64);
+    const double t102 = t97*t94;
+    const double t103 = 5.0 + t64;
+    const double t104 = t94*twist[0];
+    const double t105 = t94*twist[1];
+    const double t106 = t98 + t101 + t103;
+    const double t107 = t98*t104 + t99*t105 + t100*twist[2];
+    const double t108 = t99*t104 + t101*t105 + t102*twist[2];
+    const double t109 = t100*t104 + t102*t105 + t103*twist[2];
+    const double t110 = (t106 > 0.0 ? 1.0/(t106*t106 != 0.0 ? t106*t106 : 1.0) : 1.0);
+    const double t111 = t107*t110;
+    const double t112 = t108*t110;
+    const double t113 = t109*t110;
+    const double t114 = t101*t103 - t102*t102;
+    const double t115 = t100*t102 - t99*t103;
+    const double t116 = t99*t102 - t100*t101;
+    const double t117 = t98*t103 - t100*t100;
+    const double t118 = t99*t100 - t98*t102;
+    const double t119 = t98*t101 - t99*t99;
+    const double t120 = t98*t114 + t99*t115 + t100*t116;
+    const double t121 = t114 + t117 + t119;
+    const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
+    const double t123 = t106*t106;
+    const int t124 = t121 > ARM5_RANK_TOL*t123;
+    const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
+    const double t126 = t98*t107 + t99*t108 + t100*t109;
+    const double t127 = t99*t107 + t101*t108 + t102*t109;
+    const double t128 = t100*t107 + t102*t108 + t103*t109;
+    const double t129 = (t121 > 0.0 ? 1.0/(t121*t121 != 0.0 ? t121*t121 : 1.0) : 1.0);
+    const double t130 = t123 - t121;
+    const double t131 = (t124 ? (t122 ? t125*(t114*t104 + t115*t105 + t116*twist[2]) : t129*(t107*t130 - t126*t106)) : t111);
+    const double t132 = (t124 ? (t122 ? t125*(t115*t104 + t117*t105 + t118*twist[2]) : t129*(t108*t130 - t127*t106)) : t112);
+    const double t133 = (t124 ? (t122 ? t125*(t116*t104 + t118*t105 + t119*twist[2]) : t129*(t109*t130 - t128*t106)) : t113);
+    const double t134 = t94*t131;
+    const double t135 = t94*t132;
+    dq3[0] = t133 + t134*t21 + t135*t22;
+    dq3[1] = t133 + t134*t19 + t135*t20;
+    dq3[2] = t133 + t134*t17 + t135*t18;
+    dq3[3] = t133 + t134*t15 + t135*t16;
+    dq3[4] = t133 + t8*t135 + t134*t14;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5])
@@ -1835,7 +1908,7 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
         ang[k] = 0;
     }
     arm5_inverse_velocity3_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
@@ -1864,7 +1937,7 @@ static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double twist[3];
         double cs[5];
@@ -1905,45 +1978,54 @@ static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q
         const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
         const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
         const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const double t59 = lambda*lambda;
-        const double t60 = t47 + t59;
-        const double t61 = t49 + t59;
-        const double t68 = t60*t61 - t48*t48;
-        const double t81 = t21 + t19 + t17 + t15 + t14;
-        const double t82 = t8 + t22 + t20 + t18 + t16;
-        const double t83 = 5.0 + t59;
-        const double t84 = t60 + t61 + t83;
-        const double t85 = t60*twist[0] + t48*twist[1] + t81*twist[2];
-        const double t86 = t61*twist[1] + t48*twist[0] + t82*twist[2];
-        const double t87 = t83*twist[2] + t81*twist[0] + t82*twist[1];
-        const double t88 = 1.0/(t84*t84);
-        const double t89 = t85*t88;
-        const double t90 = t86*t88;
-        const double t91 = t87*t88;
-        const double t92 = t61*t83 - t82*t82;
-        const double t93 = t81*t82 - t83*t48;
-        const double t94 = t48*t82 - t61*t81;
-        const double t95 = t60*t83 - t81*t81;
-        const double t96 = t48*t81 - t60*t82;
-        const double t97 = t60*t92 + t48*t93 + t81*t94;
-        const double t98 = t92 + t95 + t68;
-        const int t99 = t97 > ARM5_RANK_TOL*t98*t84;
-        const double t100 = t84*t84;
-        const int t101 = t98 > ARM5_RANK_TOL*t100;
-        const double t102 = 1.0/t97;
-        const double t103 = t60*t85 + t48*t86 + t81*t87;
-        const double t104 = t61*t86 + t48*t85 + t82*t87;
-        const double t105 = t83*t87 + t81*t85 + t82*t86;
-        const double t106 = 1.0/(t98*t98);
-        const double t107 = t100 - t98;
-        const double t108 = (t101 ? (t99 ? t102*(t92*twist[0] + t93*twist[1] + t94*twist[2]) : t106*(t85*t107 - t103*t84)) : t89);
-        const double t109 = (t101 ? (t99 ? t102*(t93*twist[0] + t95*twist[1] + t96*twist[2]) : t106*(t86*t107 - t104*t84)) : t90);
-        const double t110 = (t101 ? (t99 ? t102*(t94*twist[0] + t96*twist[1] + t68*twist[2]) : t106*(t87*t107 - t105*t84)) : t91);
-        dq3[0] = t110 + t108*t21 + t109*t22;
-        dq3[1] = t110 + t108*t19 + t109*t20;
-        dq3[2] = t110 + t108*t17 + t109*t18;
-        dq3[3] = t110 + t108*t15 + t109*t16;
-        dq3[4] = t110 + t8*t109 + t108*t14;
+        const double t64 = lambda*lambda;
+        const double t94 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
+        const double t95 = t94*t94;
+        const double t96 = t21 + t19 + t17 + t15 + t14;
+        const double t97 = t8 + t22 + t20 + t18 + t16;
+        const double t98 = t95*(t47 + t64);
+        const double t99 = t48*t95;
+        const double t100 = t96*t94;
+        const double t101 = t95*(t49 + t64);
+        const double t102 = t97*t94;
+        const double t103 = 5.0 + t64;
+        const double t104 = t94*twist[0];
+        const double t105 = t94*twist[1];
+        const double t106 = t98 + t101 + t103;
+        const double t107 = t98*t104 + t99*t105 + t100*twist[2];
+        const double t108 = t99*t104 + t101*t105 + t102*twist[2];
+        const double t109 = t100*t104 + t102*t105 + t103*twist[2];
+        const double t110 = (t106 > 0.0 ? 1.0/(t106*t106 != 0.0 ? t106*t106 : 1.0) : 1.0);
+        const double t111 = t107*t110;
+        const double t112 = t108*t110;
+        const double t113 = t109*t110;
+        const double t114 = t101*t103 - t102*t102;
+        const double t115 = t100*t102 - t99*t103;
+        const double t116 = t99*t102 - t100*t101;
+        const double t117 = t98*t103 - t100*t100;
+        const double t118 = t99*t100 - t98*t102;
+        const double t119 = t98*t101 - t99*t99;
+        const double t120 = t98*t114 + t99*t115 + t100*t116;
+        const double t121 = t114 + t117 + t119;
+        const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
+        const double t123 = t106*t106;
+        const int t124 = t121 > ARM5_RANK_TOL*t123;
+        const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
+        const double t126 = t98*t107 + t99*t108 + t100*t109;
+        const double t127 = t99*t107 + t101*t108 + t102*t109;
+        const double t128 = t100*t107 + t102*t108 + t103*t109;
+        const double t129 = (t121 > 0.0 ? 1.0/(t121*t121 != 0.0 ? t121*t121 : 1.0) : 1.0);
+        const double t130 = t123 - t121;
+        const double t131 = (t124 ? (t122 ? t125*(t114*t104 + t115*t105 + t116*twist[2]) : t129*(t107*t130 - t126*t106)) : t111);
+        const double t132 = (t124 ? (t122 ? t125*(t115*t104 + t117*t105 + t118*twist[2]) : t129*(t108*t130 - t127*t106)) : t112);
+        const double t133 = (t124 ? (t122 ? t125*(t116*t104 + t118*t105 + t119*twist[2]) : t129*(t109*t130 - t128*t106)) : t113);
+        const double t134 = t94*t131;
+        const double t135 = t94*t132;
+        dq3[0] = t133 + t134*t21 + t135*t22;
+        dq3[1] = t133 + t134*t19 + t135*t20;
+        dq3[2] = t133 + t134*t17 + t135*t18;
+        dq3[3] = t133 + t134*t15 + t135*t16;
+        dq3[4] = t133 + t8*t135 + t134*t14;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1998,7 +2080,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 5 sin, 5 cos, 44 add/sub, 51 mul, 1 neg, 2 div */
+/* operations: 5 sin, 5 cos, 55 add/sub, 63 mul, 1 neg, 3 div */
 
 static void arm5_ik_step_angles(const double q[5], double *restrict ang)
 {
@@ -2033,27 +2115,45 @@ static void arm5_ik_step_finish(const double q[5], const double target[2], const
     const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
     const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const double t59 = lambda*lambda;
-    const double t60 = t47 + t59;
-    const double t61 = t49 + t59;
-    const double t62 = t60 + t61;
-    const double t65 = 1.0/(t62*t62);
-    const double t68 = t60*t61 - t48*t48;
-    const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
-    const double t70 = 1.0/t68;
-    const double t73 = target[0] - t22;
-    const double t74 = t21 + target[1];
-    const double t75 = t60*t73 + t48*t74;
-    const double t76 = t61*t74 + t48*t73;
-    const double t77 = t75*t65;
-    const double t78 = t76*t65;
-    const double t79 = (t69 ? t70*(t73*t62 - t75) : t77);
-    const double t80 = (t69 ? t70*(t74*t62 - t76) : t78);
-    q_next[0] = q[0] + t79*t21 + t80*t22;
-    q_next[1] = q[1] + t79*t19 + t80*t20;
-    q_next[2] = q[2] + t79*t17 + t80*t18;
-    q_next[3] = q[3] + t79*t15 + t80*t16;
-    q_next[4] = q[4] + t8*t80 + t79*t14;
+    const int t50 = t47 >= t49;
+    const double t51 = (t50 ? t47 : t49);
+    const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t53 = (t50 ? t21 : t22);
+    const double t54 = (t50 ? t19 : t20);
+    const double t55 = (t50 ? t17 : t18);
+    const double t56 = (t50 ? t15 : t16);
+    const double t57 = (t50 ? t14 : t8);
+    const double t58 = (t50 ? t22 : t21) - t53*t52;
+    const double t59 = (t50 ? t20 : t19) - t54*t52;
+    const double t60 = (t50 ? t18 : t17) - t55*t52;
+    const double t61 = (t50 ? t16 : t15) - t56*t52;
+    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+    const double t64 = lambda*lambda;
+    const double t67 = t47 + t49;
+    const double t68 = t51*t63;
+    const double t69 = t68 + t64*(t67 + t64);
+    const int t70 = t69 > ARM5_RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64);
+    const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
+    const double t73 = t64 + t51*(1.0 + t52*t52);
+    const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+    const double t82 = target[0] - t22;
+    const double t83 = t21 + target[1];
+    const double t84 = (t50 ? t82 : t83);
+    const double t85 = (t50 ? t83 : t82);
+    const double t86 = t84 + t85*t52;
+    const double t87 = (t70 ? t72*(t86*t64 + t84*t63) : t86*t74);
+    const double t88 = (t70 ? t72*(t85*t64 + t51*(t85 - t84*t52)) : 0.0);
+    const double t89 = t87*t53 + t88*t58;
+    const double t90 = t87*t54 + t88*t59;
+    const double t91 = t87*t55 + t88*t60;
+    const double t92 = t87*t56 + t88*t61;
+    const double t93 = t87*t57 + t88*t62;
+    q_next[0] = t89 + q[0];
+    q_next[1] = t90 + q[1];
+    q_next[2] = t91 + q[2];
+    q_next[3] = t92 + q[3];
+    q_next[4] = t93 + q[4];
 }
 
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5])
@@ -2064,7 +2164,7 @@ void arm5_ik_step(const double q[5], const double target[2], const double l[5], 
         ang[k] = 0;
     }
     arm5_ik_step_angles(q, ang);
-    arm5_trig8(ang, cs, sn);
+    arm5_trig8(ang, cs, sn, 5);
     arm5_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
@@ -2093,7 +2193,7 @@ static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const 
         ang_T[96 + b] = ang[3];
         ang_T[128 + b] = ang[4];
     }
-    arm5_trig160(ang_T, cs_T, sn_T);
+    arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
         double q[5];
         double target[2];
@@ -2139,27 +2239,45 @@ static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const 
         const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
         const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
         const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const double t59 = lambda*lambda;
-        const double t60 = t47 + t59;
-        const double t61 = t49 + t59;
-        const double t62 = t60 + t61;
-        const double t65 = 1.0/(t62*t62);
-        const double t68 = t60*t61 - t48*t48;
-        const int t69 = t68 > ARM5_RANK_TOL*t62*t62;
-        const double t70 = 1.0/t68;
-        const double t73 = target[0] - t22;
-        const double t74 = t21 + target[1];
-        const double t75 = t60*t73 + t48*t74;
-        const double t76 = t61*t74 + t48*t73;
-        const double t77 = t75*t65;
-        const double t78 = t76*t65;
-        const double t79 = (t69 ? t70*(t73*t62 - t75) : t77);
-        const double t80 = (t69 ? t70*(t74*t62 - t76) : t78);
-        q_next[0] = q[0] + t79*t21 + t80*t22;
-        q_next[1] = q[1] + t79*t19 + t80*t20;
-        q_next[2] = q[2] + t79*t17 + t80*t18;
-        q_next[3] = q[3] + t79*t15 + t80*t16;
-        q_next[4] = q[4] + t8*t80 + t79*t14;
+        const int t50 = t47 >= t49;
+        const double t51 = (t50 ? t47 : t49);
+        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+        const double t53 = (t50 ? t21 : t22);
+        const double t54 = (t50 ? t19 : t20);
+        const double t55 = (t50 ? t17 : t18);
+        const double t56 = (t50 ? t15 : t16);
+        const double t57 = (t50 ? t14 : t8);
+        const double t58 = (t50 ? t22 : t21) - t53*t52;
+        const double t59 = (t50 ? t20 : t19) - t54*t52;
+        const double t60 = (t50 ? t18 : t17) - t55*t52;
+        const double t61 = (t50 ? t16 : t15) - t56*t52;
+        const double t62 = (t50 ? t8 : t14) - t57*t52;
+        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
+        const double t64 = lambda*lambda;
+        const double t67 = t47 + t49;
+        const double t68 = t51*t63;
+        const double t69 = t68 + t64*(t67 + t64);
+        const int t70 = t69 > ARM5_RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64);
+        const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
+        const double t73 = t64 + t51*(1.0 + t52*t52);
+        const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+        const double t82 = target[0] - t22;
+        const double t83 = t21 + target[1];
+        const double t84 = (t50 ? t82 : t83);
+        const double t85 = (t50 ? t83 : t82);
+        const double t86 = t84 + t85*t52;
+        const double t87 = (t70 ? t72*(t86*t64 + t84*t63) : t86*t74);
+        const double t88 = (t70 ? t72*(t85*t64 + t51*(t85 - t84*t52)) : 0.0);
+        const double t89 = t87*t53 + t88*t58;
+        const double t90 = t87*t54 + t88*t59;
+        const double t91 = t87*t55 + t88*t60;
+        const double t92 = t87*t56 + t88*t61;
+        const double t93 = t87*t57 + t88*t62;
+        q_next[0] = t89 + q[0];
+        q_next[1] = t90 + q[1];
+        q_next[2] = t91 + q[2];
+        q_next[3] = t92 + q[3];
+        q_next[4] = t93 + q[4];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];
@@ -2232,6 +2350,11 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
     }
     for (k = 0; k < 2; ++k) {
         if (!isfinite(target[k])) {
+            return ARM5_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 5; ++k) {
+        if (!isfinite(l[k])) {
             return ARM5_IK_INVALID;
         }
     }

@@ -34,28 +34,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM6_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8. */
-static ARM6_VECTORIZE void arm6_trig8(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
+static ARM6_VECTORIZE void arm6_trig8(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM6_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 8; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192. */
-static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192 with vector math, else for k < used. */
+static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if ARM6_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 192; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 192; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- arm6_position: endpoint position p (2) ---- */
@@ -108,7 +124,7 @@ void arm6_position(const double q[6], const double l[6], double p[2])
         ang[k] = 0;
     }
     arm6_position_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_position_finish(l, cs, sn, p);
 }
 
@@ -140,7 +156,7 @@ static ARM6_VECTORIZE void arm6_position_block(const double *restrict q_T, const
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double cs[6];
         double sn[6];
@@ -282,7 +298,7 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12])
         ang[k] = 0;
     }
     arm6_jacobian_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_jacobian_finish(l, cs, sn, J);
 }
 
@@ -314,7 +330,7 @@ static ARM6_VECTORIZE void arm6_jacobian_block(const double *restrict q_T, const
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double cs[6];
         double sn[6];
@@ -504,7 +520,7 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
         ang[k] = 0;
     }
     arm6_coriolis_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_coriolis_finish(dq, l, cs, sn, H);
 }
 
@@ -536,7 +552,7 @@ static ARM6_VECTORIZE void arm6_coriolis_block(const double *restrict q_T, const
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double dq[6];
         double cs[6];
@@ -752,7 +768,7 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
         ang[k] = 0;
     }
     arm6_velocity_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_velocity_finish(dq, l, cs, sn, v);
 }
 
@@ -784,7 +800,7 @@ static ARM6_VECTORIZE void arm6_velocity_block(const double *restrict q_T, const
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double dq[6];
         double cs[6];
@@ -981,7 +997,7 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
         ang[k] = 0;
     }
     arm6_acceleration_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
@@ -1013,7 +1029,7 @@ static ARM6_VECTORIZE void arm6_acceleration_block(const double *restrict q_T, c
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double dq[6];
         double ddq[6];
@@ -1267,7 +1283,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
         ang[k] = 0;
     }
     arm6_kinematics_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
@@ -1299,7 +1315,7 @@ static ARM6_VECTORIZE void arm6_kinematics_block(const double *restrict q_T, con
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double dq[6];
         double ddq[6];
@@ -1585,15 +1601,22 @@ static void arm6_manipulability_finish(const double l[6], const double *restrict
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
     const int t60 = t57 >= t59;
     const double t61 = (t60 ? t57 : t59);
-    const double t62 = t58/t61;
-    const double t63 = (t60 ? t27 : t26) - t62*(t60 ? t26 : t27);
-    const double t64 = (t60 ? t25 : t24) - t62*(t60 ? t24 : t25);
-    const double t65 = (t60 ? t23 : t22) - t62*(t60 ? t22 : t23);
-    const double t66 = (t60 ? t21 : t20) - t62*(t60 ? t20 : t21);
-    const double t67 = (t60 ? t19 : t18) - t62*(t60 ? t18 : t19);
-    const double t68 = (t60 ? t10 : t17) - t62*(t60 ? t17 : t10);
-    const double t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68;
-    w[0] = sqrt(t61*t69);
+    const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t63 = (t60 ? t26 : t27);
+    const double t64 = (t60 ? t24 : t25);
+    const double t65 = (t60 ? t22 : t23);
+    const double t66 = (t60 ? t20 : t21);
+    const double t67 = (t60 ? t18 : t19);
+    const double t68 = (t60 ? t17 : t10);
+    const double t69 = (t60 ? t27 : t26) - t63*t62;
+    const double t70 = (t60 ? t25 : t24) - t64*t62;
+    const double t71 = (t60 ? t23 : t22) - t65*t62;
+    const double t72 = (t60 ? t21 : t20) - t66*t62;
+    const double t73 = (t60 ? t19 : t18) - t67*t62;
+    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+    const double t80 = t61*t75;
+    w[0] = sqrt(t80);
 }
 
 void arm6_manipulability(const double q[6], const double l[6], double w[1])
@@ -1604,7 +1627,7 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1])
         ang[k] = 0;
     }
     arm6_manipulability_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_manipulability_finish(l, cs, sn, w);
 }
 
@@ -1636,7 +1659,7 @@ static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T,
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double cs[6];
         double sn[6];
@@ -1681,15 +1704,22 @@ static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T,
         const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
         const int t60 = t57 >= t59;
         const double t61 = (t60 ? t57 : t59);
-        const double t62 = t58/t61;
-        const double t63 = (t60 ? t27 : t26) - t62*(t60 ? t26 : t27);
-        const double t64 = (t60 ? t25 : t24) - t62*(t60 ? t24 : t25);
-        const double t65 = (t60 ? t23 : t22) - t62*(t60 ? t22 : t23);
-        const double t66 = (t60 ? t21 : t20) - t62*(t60 ? t20 : t21);
-        const double t67 = (t60 ? t19 : t18) - t62*(t60 ? t18 : t19);
-        const double t68 = (t60 ? t10 : t17) - t62*(t60 ? t17 : t10);
-        const double t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68;
-        w[0] = sqrt(t61*t69);
+        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t63 = (t60 ? t26 : t27);
+        const double t64 = (t60 ? t24 : t25);
+        const double t65 = (t60 ? t22 : t23);
+        const double t66 = (t60 ? t20 : t21);
+        const double t67 = (t60 ? t18 : t19);
+        const double t68 = (t60 ? t17 : t10);
+        const double t69 = (t60 ? t27 : t26) - t63*t62;
+        const double t70 = (t60 ? t25 : t24) - t64*t62;
+        const double t71 = (t60 ? t23 : t22) - t65*t62;
+        const double t72 = (t60 ? t21 : t20) - t66*t62;
+        const double t73 = (t60 ? t19 : t18) - t67*t62;
+        const double t74 = (t60 ? t10 : t17) - t68*t62;
+        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+        const double t80 = t61*t75;
+        w[0] = sqrt(t80);
         w_T[0 + b] = w[0];
     }
 }
@@ -1729,7 +1759,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 6 sin, 6 cos, 44 add/sub, 58 mul, 1 neg, 2 div */
+/* operations: 6 sin, 6 cos, 57 add/sub, 72 mul, 1 neg, 3 div */
 
 static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
@@ -1769,26 +1799,47 @@ static void arm6_inverse_velocity_finish(const double v[2], const double l[6], d
     const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
     const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-    const double t70 = lambda*lambda;
-    const double t71 = t57 + t70;
-    const double t72 = t59 + t70;
-    const double t73 = t71 + t72;
-    const double t74 = t71*v[0] + t58*v[1];
-    const double t75 = t72*v[1] + t58*v[0];
-    const double t76 = 1.0/(t73*t73);
-    const double t77 = t74*t76;
-    const double t78 = t75*t76;
-    const double t79 = t71*t72 - t58*t58;
-    const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
-    const double t81 = 1.0/t79;
-    const double t82 = (t80 ? t81*(t73*v[0] - t74) : t77);
-    const double t83 = (t80 ? t81*(t73*v[1] - t75) : t78);
-    dq[0] = t82*t26 + t83*t27;
-    dq[1] = t82*t24 + t83*t25;
-    dq[2] = t82*t22 + t83*t23;
-    dq[3] = t82*t20 + t83*t21;
-    dq[4] = t82*t18 + t83*t19;
-    dq[5] = t10*t83 + t82*t17;
+    const int t60 = t57 >= t59;
+    const double t61 = (t60 ? t57 : t59);
+    const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t63 = (t60 ? t26 : t27);
+    const double t64 = (t60 ? t24 : t25);
+    const double t65 = (t60 ? t22 : t23);
+    const double t66 = (t60 ? t20 : t21);
+    const double t67 = (t60 ? t18 : t19);
+    const double t68 = (t60 ? t17 : t10);
+    const double t69 = (t60 ? t27 : t26) - t63*t62;
+    const double t70 = (t60 ? t25 : t24) - t64*t62;
+    const double t71 = (t60 ? t23 : t22) - t65*t62;
+    const double t72 = (t60 ? t21 : t20) - t66*t62;
+    const double t73 = (t60 ? t19 : t18) - t67*t62;
+    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+    const double t76 = lambda*lambda;
+    const double t77 = (t60 ? v[0] : v[1]);
+    const double t78 = (t60 ? v[1] : v[0]);
+    const double t79 = t57 + t59;
+    const double t80 = t61*t75;
+    const double t81 = t80 + t76*(t79 + t76);
+    const int t82 = t81 > ARM6_RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76);
+    const double t83 = t77 + t78*t62;
+    const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
+    const double t85 = t76 + t61*(1.0 + t62*t62);
+    const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
+    const double t87 = (t82 ? t84*(t83*t76 + t77*t75) : t83*t86);
+    const double t88 = (t82 ? t84*(t78*t76 + t61*(t78 - t77*t62)) : 0.0);
+    const double t89 = t87*t63 + t88*t69;
+    const double t90 = t87*t64 + t88*t70;
+    const double t91 = t87*t65 + t88*t71;
+    const double t92 = t87*t66 + t88*t72;
+    const double t93 = t87*t67 + t88*t73;
+    const double t94 = t87*t68 + t88*t74;
+    dq[0] = t89;
+    dq[1] = t90;
+    dq[2] = t91;
+    dq[3] = t92;
+    dq[4] = t93;
+    dq[5] = t94;
 }
 
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6])
@@ -1799,7 +1850,7 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
         ang[k] = 0;
     }
     arm6_inverse_velocity_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
@@ -1831,7 +1882,7 @@ static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double v[2];
         double cs[6];
@@ -1877,26 +1928,47 @@ static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_
         const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
         const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
         const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const double t70 = lambda*lambda;
-        const double t71 = t57 + t70;
-        const double t72 = t59 + t70;
-        const double t73 = t71 + t72;
-        const double t74 = t71*v[0] + t58*v[1];
-        const double t75 = t72*v[1] + t58*v[0];
-        const double t76 = 1.0/(t73*t73);
-        const double t77 = t74*t76;
-        const double t78 = t75*t76;
-        const double t79 = t71*t72 - t58*t58;
-        const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
-        const double t81 = 1.0/t79;
-        const double t82 = (t80 ? t81*(t73*v[0] - t74) : t77);
-        const double t83 = (t80 ? t81*(t73*v[1] - t75) : t78);
-        dq[0] = t82*t26 + t83*t27;
-        dq[1] = t82*t24 + t83*t25;
-        dq[2] = t82*t22 + t83*t23;
-        dq[3] = t82*t20 + t83*t21;
-        dq[4] = t82*t18 + t83*t19;
-        dq[5] = t10*t83 + t82*t17;
+        const int t60 = t57 >= t59;
+        const double t61 = (t60 ? t57 : t59);
+        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t63 = (t60 ? t26 : t27);
+        const double t64 = (t60 ? t24 : t25);
+        const double t65 = (t60 ? t22 : t23);
+        const double t66 = (t60 ? t20 : t21);
+        const double t67 = (t60 ? t18 : t19);
+        const double t68 = (t60 ? t17 : t10);
+        const double t69 = (t60 ? t27 : t26) - t63*t62;
+        const double t70 = (t60 ? t25 : t24) - t64*t62;
+        const double t71 = (t60 ? t23 : t22) - t65*t62;
+        const double t72 = (t60 ? t21 : t20) - t66*t62;
+        const double t73 = (t60 ? t19 : t18) - t67*t62;
+        const double t74 = (t60 ? t10 : t17) - t68*t62;
+        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+        const double t76 = lambda*lambda;
+        const double t77 = (t60 ? v[0] : v[1]);
+        const double t78 = (t60 ? v[1] : v[0]);
+        const double t79 = t57 + t59;
+        const double t80 = t61*t75;
+        const double t81 = t80 + t76*(t79 + t76);
+        const int t82 = t81 > ARM6_RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76);
+        const double t83 = t77 + t78*t62;
+        const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
+        const double t85 = t76 + t61*(1.0 + t62*t62);
+        const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
+        const double t87 = (t82 ? t84*(t83*t76 + t77*t75) : t83*t86);
+        const double t88 = (t82 ? t84*(t78*t76 + t61*(t78 - t77*t62)) : 0.0);
+        const double t89 = t87*t63 + t88*t69;
+        const double t90 = t87*t64 + t88*t70;
+        const double t91 = t87*t65 + t88*t71;
+        const double t92 = t87*t66 + t88*t72;
+        const double t93 = t87*t67 + t88*t73;
+        const double t94 = t87*t68 + t88*t74;
+        dq[0] = t89;
+        dq[1] = t90;
+        dq[2] = t91;
+        dq[3] = t92;
+        dq[4] = t93;
+        dq[5] = t94;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1953,7 +2025,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 6 sin, 6 cos, 89 add/sub, 106 mul, 1 neg, 3 div */
+/* operations: 6 sin, 6 cos, 94 add/sub, 116 mul, 1 neg, 4 div */
 
 static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
 {
@@ -1993,46 +2065,55 @@ static void arm6_inverse_velocity3_finish(const double twist[3], const double l[
     const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
     const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-    const double t70 = lambda*lambda;
-    const double t71 = t57 + t70;
-    const double t72 = t59 + t70;
-    const double t79 = t71*t72 - t58*t58;
-    const double t92 = t26 + t24 + t22 + t20 + t18 + t17;
-    const double t93 = t10 + t27 + t25 + t23 + t21 + t19;
-    const double t94 = 6.0 + t70;
-    const double t95 = t71 + t72 + t94;
-    const double t96 = t71*twist[0] + t58*twist[1] + t92*twist[2];
-    const double t97 = t72*twist[1] + t58*twist[0] + t93*twist[2];
-    const double t98 = t94*twist[2] + t92*twist[0] + t93*twist[1];
-    const double t99 = 1.0/(t95*t95);
-    const double t100 = t96*t99;
-    const double t101 = t97*t99;
-    const double t102 = t98*t99;
-    const double t103 = t72*t94 - t93*t93;
-    const double t104 = t92*t93 - t94*t58;
-    const double t105 = t58*t93 - t72*t92;
-    const double t106 = t71*t94 - t92*t92;
-    const double t107 = t58*t92 - t71*t93;
-    const double t108 = t71*t103 + t58*t104 + t92*t105;
-    const double t109 = t103 + t106 + t79;
-    const int t110 = t108 > ARM6_RANK_TOL*t109*t95;
-    const double t111 = t95*t95;
-    const int t112 = t109 > ARM6_RANK_TOL*t111;
-    const double t113 = 1.0/t108;
-    const double t114 = t71*t96 + t58*t97 + t92*t98;
-    const double t115 = t72*t97 + t58*t96 + t93*t98;
-    const double t116 = t94*t98 + t92*t96 + t93*t97;
-    const double t117 = 1.0/(t109*t109);
-    const double t118 = t111 - t109;
-    const double t119 = (t112 ? (t110 ? t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]) : t117*(t96*t118 - t114*t95)) : t100);
-    const double t120 = (t112 ? (t110 ? t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]) : t117*(t97*t118 - t115*t95)) : t101);
-    const double t121 = (t112 ? (t110 ? t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]) : t117*(t98*t118 - t116*t95)) : t102);
-    dq3[0] = t121 + t119*t26 + t120*t27;
-    dq3[1] = t121 + t119*t24 + t120*t25;
-    dq3[2] = t121 + t119*t22 + t120*t23;
-    dq3[3] = t121 + t119*t20 + t120*t21;
-    dq3[4] = t121 + t119*t18 + t120*t19;
-    dq3[5] = t121 + t10*t120 + t119*t17;
+    const double t76 = lambda*lambda;
+    const double t108 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
+    const double t109 = t108*t108;
+    const double t110 = t26 + t24 + t22 + t20 + t18 + t17;
+    const double t111 = t10 + t27 + t25 + t23 + t21 + t19;
+    const double t112 = t109*(t57 + t76);
+    const double t113 = t58*t109;
+    const double t114 = t110*t108;
+    const double t115 = t109*(t59 + t76);
+    const double t116 = t111*t108;
+    const double t117 = 6.0 + t76;
+    const double t118 = t108*twist[0];
+    const double t119 = t108*twist[1];
+    const double t120 = t112 + t115 + t117;
+    const double t121 = t112*t118 + t113*t119 + t114*twist[2];
+    const double t122 = t113*t118 + t115*t119 + t116*twist[2];
+    const double t123 = t114*t118 + t116*t119 + t117*twist[2];
+    const double t124 = (t120 > 0.0 ? 1.0/(t120*t120 != 0.0 ? t120*t120 : 1.0) : 1.0);
+    const double t125 = t121*t124;
+    const double t126 = t122*t124;
+    const double t127 = t123*t124;
+    const double t128 = t115*t117 - t116*t116;
+    const double t129 = t114*t116 - t113*t117;
+    const double t130 = t113*t116 - t114*t115;
+    const double t131 = t112*t117 - t114*t114;
+    const double t132 = t113*t114 - t112*t116;
+    const double t133 = t112*t115 - t113*t113;
+    const double t134 = t112*t128 + t113*t129 + t114*t130;
+    const double t135 = t128 + t131 + t133;
+    const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
+    const double t137 = t120*t120;
+    const int t138 = t135 > ARM6_RANK_TOL*t137;
+    const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
+    const double t140 = t112*t121 + t113*t122 + t114*t123;
+    const double t141 = t113*t121 + t115*t122 + t116*t123;
+    const double t142 = t114*t121 + t116*t122 + t117*t123;
+    const double t143 = (t135 > 0.0 ? 1.0/(t135*t135 != 0.0 ? t135*t135 : 1.0) : 1.0);
+    const double t144 = t137 - t135;
+    const double t145 = (t138 ? (t136 ? t139*(t128*t118 + t129*t119 + t130*twist[2]) : t143*(t121*t144 - t140*t120)) : t125);
+    const double t146 = (t138 ? (t136 ? t139*(t129*t118 + t131*t119 + t132*twist[2]) : t143*(t122*t144 - t141*t120)) : t126);
+    const double t147 = (t138 ? (t136 ? t139*(t130*t118 + t132*t119 + t133*twist[2]) : t143*(t123*t144 - t142*t120)) : t127);
+    const double t148 = t108*t145;
+    const double t149 = t108*t146;
+    dq3[0] = t147 + t148*t26 + t149*t27;
+    dq3[1] = t147 + t148*t24 + t149*t25;
+    dq3[2] = t147 + t148*t22 + t149*t23;
+    dq3[3] = t147 + t148*t20 + t149*t21;
+    dq3[4] = t147 + t148*t18 + t149*t19;
+    dq3[5] = t147 + t10*t149 + t148*t17;
 }
 
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6])
@@ -2043,7 +2124,7 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
         ang[k] = 0;
     }
     arm6_inverse_velocity3_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
@@ -2075,7 +2156,7 @@ static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double twist[3];
         double cs[6];
@@ -2122,46 +2203,55 @@ static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q
         const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
         const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
         const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const double t70 = lambda*lambda;
-        const double t71 = t57 + t70;
-        const double t72 = t59 + t70;
-        const double t79 = t71*t72 - t58*t58;
-        const double t92 = t26 + t24 + t22 + t20 + t18 + t17;
-        const double t93 = t10 + t27 + t25 + t23 + t21 + t19;
-        const double t94 = 6.0 + t70;
-        const double t95 = t71 + t72 + t94;
-        const double t96 = t71*twist[0] + t58*twist[1] + t92*twist[2];
-        const double t97 = t72*twist[1] + t58*twist[0] + t93*twist[2];
-        const double t98 = t94*twist[2] + t92*twist[0] + t93*twist[1];
-        const double t99 = 1.0/(t95*t95);
-        const double t100 = t96*t99;
-        const double t101 = t97*t99;
-        const double t102 = t98*t99;
-        const double t103 = t72*t94 - t93*t93;
-        const double t104 = t92*t93 - t94*t58;
-        const double t105 = t58*t93 - t72*t92;
-        const double t106 = t71*t94 - t92*t92;
-        const double t107 = t58*t92 - t71*t93;
-        const double t108 = t71*t103 + t58*t104 + t92*t105;
-        const double t109 = t103 + t106 + t79;
-        const int t110 = t108 > ARM6_RANK_TOL*t109*t95;
-        const double t111 = t95*t95;
-        const int t112 = t109 > ARM6_RANK_TOL*t111;
-        const double t113 = 1.0/t108;
-        const double t114 = t71*t96 + t58*t97 + t92*t98;
-        const double t115 = t72*t97 + t58*t96 + t93*t98;
-        const double t116 = t94*t98 + t92*t96 + t93*t97;
-        const double t117 = 1.0/(t109*t109);
-        const double t118 = t111 - t109;
-        const double t119 = (t112 ? (t110 ? t113*(t103*twist[0] + t104*twist[1] + t105*twist[2]) : t117*(t96*t118 - t114*t95)) : t100);
-        const double t120 = (t112 ? (t110 ? t113*(t104*twist[0] + t106*twist[1] + t107*twist[2]) : t117*(t97*t118 - t115*t95)) : t101);
-        const double t121 = (t112 ? (t110 ? t113*(t105*twist[0] + t107*twist[1] + t79*twist[2]) : t117*(t98*t118 - t116*t95)) : t102);
-        dq3[0] = t121 + t119*t26 + t120*t27;
-        dq3[1] = t121 + t119*t24 + t120*t25;
-        dq3[2] = t121 + t119*t22 + t120*t23;
-        dq3[3] = t121 + t119*t20 + t120*t21;
-        dq3[4] = t121 + t119*t18 + t120*t19;
-        dq3[5] = t121 + t10*t120 + t119*t17;
+        const double t76 = lambda*lambda;
+        const double t108 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
+        const double t109 = t108*t108;
+        const double t110 = t26 + t24 + t22 + t20 + t18 + t17;
+        const double t111 = t10 + t27 + t25 + t23 + t21 + t19;
+        const double t112 = t109*(t57 + t76);
+        const double t113 = t58*t109;
+        const double t114 = t110*t108;
+        const double t115 = t109*(t59 + t76);
+        const double t116 = t111*t108;
+        const double t117 = 6.0 + t76;
+        const double t118 = t108*twist[0];
+        const double t119 = t108*twist[1];
+        const double t120 = t112 + t115 + t117;
+        const double t121 = t112*t118 + t113*t119 + t114*twist[2];
+        const double t122 = t113*t118 + t115*t119 + t116*twist[2];
+        const double t123 = t114*t118 + t116*t119 + t117*twist[2];
+        const double t124 = (t120 > 0.0 ? 1.0/(t120*t120 != 0.0 ? t120*t120 : 1.0) : 1.0);
+        const double t125 = t121*t124;
+        const double t126 = t122*t124;
+        const double t127 = t123*t124;
+        const double t128 = t115*t117 - t116*t116;
+        const double t129 = t114*t116 - t113*t117;
+        const double t130 = t113*t116 - t114*t115;
+        const double t131 = t112*t117 - t114*t114;
+        const double t132 = t113*t114 - t112*t116;
+        const double t133 = t112*t115 - t113*t113;
+        const double t134 = t112*t128 + t113*t129 + t114*t130;
+        const double t135 = t128 + t131 + t133;
+        const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
+        const double t137 = t120*t120;
+        const int t138 = t135 > ARM6_RANK_TOL*t137;
+        const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
+        const double t140 = t112*t121 + t113*t122 + t114*t123;
+        const double t141 = t113*t121 + t115*t122 + t116*t123;
+        const double t142 = t114*t121 + t116*t122 + t117*t123;
+        const double t143 = (t135 > 0.0 ? 1.0/(t135*t135 != 0.0 ? t135*t135 : 1.0) : 1.0);
+        const double t144 = t137 - t135;
+        const double t145 = (t138 ? (t136 ? t139*(t128*t118 + t129*t119 + t130*twist[2]) : t143*(t121*t144 - t140*t120)) : t125);
+        const double t146 = (t138 ? (t136 ? t139*(t129*t118 + t131*t119 + t132*twist[2]) : t143*(t122*t144 - t141*t120)) : t126);
+        const double t147 = (t138 ? (t136 ? t139*(t130*t118 + t132*t119 + t133*twist[2]) : t143*(t123*t144 - t142*t120)) : t127);
+        const double t148 = t108*t145;
+        const double t149 = t108*t146;
+        dq3[0] = t147 + t148*t26 + t149*t27;
+        dq3[1] = t147 + t148*t24 + t149*t25;
+        dq3[2] = t147 + t148*t22 + t149*t23;
+        dq3[3] = t147 + t148*t20 + t149*t21;
+        dq3[4] = t147 + t148*t18 + t149*t19;
+        dq3[5] = t147 + t10*t149 + t148*t17;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2219,7 +2309,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 6 sin, 6 cos, 52 add/sub, 58 mul, 1 neg, 2 div */
+/* operations: 6 sin, 6 cos, 65 add/sub, 72 mul, 1 neg, 3 div */
 
 static void arm6_ik_step_angles(const double q[6], double *restrict ang)
 {
@@ -2259,28 +2349,49 @@ static void arm6_ik_step_finish(const double q[6], const double target[2], const
     const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
     const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-    const double t70 = lambda*lambda;
-    const double t71 = t57 + t70;
-    const double t72 = t59 + t70;
-    const double t73 = t71 + t72;
-    const double t76 = 1.0/(t73*t73);
-    const double t79 = t71*t72 - t58*t58;
-    const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
-    const double t81 = 1.0/t79;
-    const double t84 = target[0] - t27;
-    const double t85 = t26 + target[1];
-    const double t86 = t71*t84 + t58*t85;
-    const double t87 = t72*t85 + t58*t84;
-    const double t88 = t86*t76;
-    const double t89 = t87*t76;
-    const double t90 = (t80 ? t81*(t84*t73 - t86) : t88);
-    const double t91 = (t80 ? t81*(t85*t73 - t87) : t89);
-    q_next[0] = q[0] + t90*t26 + t91*t27;
-    q_next[1] = q[1] + t90*t24 + t91*t25;
-    q_next[2] = q[2] + t90*t22 + t91*t23;
-    q_next[3] = q[3] + t90*t20 + t91*t21;
-    q_next[4] = q[4] + t90*t18 + t91*t19;
-    q_next[5] = q[5] + t10*t91 + t90*t17;
+    const int t60 = t57 >= t59;
+    const double t61 = (t60 ? t57 : t59);
+    const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t63 = (t60 ? t26 : t27);
+    const double t64 = (t60 ? t24 : t25);
+    const double t65 = (t60 ? t22 : t23);
+    const double t66 = (t60 ? t20 : t21);
+    const double t67 = (t60 ? t18 : t19);
+    const double t68 = (t60 ? t17 : t10);
+    const double t69 = (t60 ? t27 : t26) - t63*t62;
+    const double t70 = (t60 ? t25 : t24) - t64*t62;
+    const double t71 = (t60 ? t23 : t22) - t65*t62;
+    const double t72 = (t60 ? t21 : t20) - t66*t62;
+    const double t73 = (t60 ? t19 : t18) - t67*t62;
+    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+    const double t76 = lambda*lambda;
+    const double t79 = t57 + t59;
+    const double t80 = t61*t75;
+    const double t81 = t80 + t76*(t79 + t76);
+    const int t82 = t81 > ARM6_RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76);
+    const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
+    const double t85 = t76 + t61*(1.0 + t62*t62);
+    const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
+    const double t95 = target[0] - t27;
+    const double t96 = t26 + target[1];
+    const double t97 = (t60 ? t95 : t96);
+    const double t98 = (t60 ? t96 : t95);
+    const double t99 = t97 + t98*t62;
+    const double t100 = (t82 ? t84*(t99*t76 + t97*t75) : t99*t86);
+    const double t101 = (t82 ? t84*(t98*t76 + t61*(t98 - t97*t62)) : 0.0);
+    const double t102 = t100*t63 + t101*t69;
+    const double t103 = t100*t64 + t101*t70;
+    const double t104 = t100*t65 + t101*t71;
+    const double t105 = t100*t66 + t101*t72;
+    const double t106 = t100*t67 + t101*t73;
+    const double t107 = t100*t68 + t101*t74;
+    q_next[0] = t102 + q[0];
+    q_next[1] = t103 + q[1];
+    q_next[2] = t104 + q[2];
+    q_next[3] = t105 + q[3];
+    q_next[4] = t106 + q[4];
+    q_next[5] = t107 + q[5];
 }
 
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6])
@@ -2291,7 +2402,7 @@ void arm6_ik_step(const double q[6], const double target[2], const double l[6], 
         ang[k] = 0;
     }
     arm6_ik_step_angles(q, ang);
-    arm6_trig8(ang, cs, sn);
+    arm6_trig8(ang, cs, sn, 6);
     arm6_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
@@ -2323,7 +2434,7 @@ static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const 
         ang_T[128 + b] = ang[4];
         ang_T[160 + b] = ang[5];
     }
-    arm6_trig192(ang_T, cs_T, sn_T);
+    arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
         double q[6];
         double target[2];
@@ -2376,28 +2487,49 @@ static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const 
         const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
         const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
         const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const double t70 = lambda*lambda;
-        const double t71 = t57 + t70;
-        const double t72 = t59 + t70;
-        const double t73 = t71 + t72;
-        const double t76 = 1.0/(t73*t73);
-        const double t79 = t71*t72 - t58*t58;
-        const int t80 = t79 > ARM6_RANK_TOL*t73*t73;
-        const double t81 = 1.0/t79;
-        const double t84 = target[0] - t27;
-        const double t85 = t26 + target[1];
-        const double t86 = t71*t84 + t58*t85;
-        const double t87 = t72*t85 + t58*t84;
-        const double t88 = t86*t76;
-        const double t89 = t87*t76;
-        const double t90 = (t80 ? t81*(t84*t73 - t86) : t88);
-        const double t91 = (t80 ? t81*(t85*t73 - t87) : t89);
-        q_next[0] = q[0] + t90*t26 + t91*t27;
-        q_next[1] = q[1] + t90*t24 + t91*t25;
-        q_next[2] = q[2] + t90*t22 + t91*t23;
-        q_next[3] = q[3] + t90*t20 + t91*t21;
-        q_next[4] = q[4] + t90*t18 + t91*t19;
-        q_next[5] = q[5] + t10*t91 + t90*t17;
+        const int t60 = t57 >= t59;
+        const double t61 = (t60 ? t57 : t59);
+        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t63 = (t60 ? t26 : t27);
+        const double t64 = (t60 ? t24 : t25);
+        const double t65 = (t60 ? t22 : t23);
+        const double t66 = (t60 ? t20 : t21);
+        const double t67 = (t60 ? t18 : t19);
+        const double t68 = (t60 ? t17 : t10);
+        const double t69 = (t60 ? t27 : t26) - t63*t62;
+        const double t70 = (t60 ? t25 : t24) - t64*t62;
+        const double t71 = (t60 ? t23 : t22) - t65*t62;
+        const double t72 = (t60 ? t21 : t20) - t66*t62;
+        const double t73 = (t60 ? t19 : t18) - t67*t62;
+        const double t74 = (t60 ? t10 : t17) - t68*t62;
+        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
+        const double t76 = lambda*lambda;
+        const double t79 = t57 + t59;
+        const double t80 = t61*t75;
+        const double t81 = t80 + t76*(t79 + t76);
+        const int t82 = t81 > ARM6_RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76);
+        const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
+        const double t85 = t76 + t61*(1.0 + t62*t62);
+        const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
+        const double t95 = target[0] - t27;
+        const double t96 = t26 + target[1];
+        const double t97 = (t60 ? t95 : t96);
+        const double t98 = (t60 ? t96 : t95);
+        const double t99 = t97 + t98*t62;
+        const double t100 = (t82 ? t84*(t99*t76 + t97*t75) : t99*t86);
+        const double t101 = (t82 ? t84*(t98*t76 + t61*(t98 - t97*t62)) : 0.0);
+        const double t102 = t100*t63 + t101*t69;
+        const double t103 = t100*t64 + t101*t70;
+        const double t104 = t100*t65 + t101*t71;
+        const double t105 = t100*t66 + t101*t72;
+        const double t106 = t100*t67 + t101*t73;
+        const double t107 = t100*t68 + t101*t74;
+        q_next[0] = t102 + q[0];
+        q_next[1] = t103 + q[1];
+        q_next[2] = t104 + q[2];
+        q_next[3] = t105 + q[3];
+        q_next[4] = t106 + q[4];
+        q_next[5] = t107 + q[5];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];
@@ -2473,6 +2605,11 @@ int arm6_ik_solve(const double q0[6], const double target[2], const double l[6],
     }
     for (k = 0; k < 2; ++k) {
         if (!isfinite(target[k])) {
+            return ARM6_IK_INVALID;
+        }
+    }
+    for (k = 0; k < 6; ++k) {
+        if (!isfinite(l[k])) {
             return ARM6_IK_INVALID;
         }
     }

@@ -27,23 +27,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define DIFFDRIVE_VECTOR_MATH 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 1. */
-static DIFFDRIVE_VECTORIZE void diffdrive_trig1(const double *restrict ang, double *restrict cs, double *restrict sn)
-{
-    cs[0] = cos(ang[0]);
-    sn[0] = sin(ang[0]);
-}
-
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32. */
-static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, double *restrict cs, double *restrict sn)
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
+static DIFFDRIVE_VECTORIZE void diffdrive_trig4(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
+#if DIFFDRIVE_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 4; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 4; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32 with vector math, else for k < used. */
+static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if DIFFDRIVE_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 32; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 32; ++k) {
         sn[k] = sin(ang[k]);
     }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
 }
 
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
@@ -196,9 +217,13 @@ static void diffdrive_pose_rate_finish(const double wheels[2], double track, con
 
 void diffdrive_pose_rate(const double pose[3], const double wheels[2], double track, double dpose[3])
 {
-    double ang[1], cs[1], sn[1];
+    double ang[4], cs[4], sn[4];
+    int k;
+    for (k = 1; k < 4; ++k) {
+        ang[k] = 0;
+    }
     diffdrive_pose_rate_angles(pose, ang);
-    diffdrive_trig1(ang, cs, sn);
+    diffdrive_trig4(ang, cs, sn, 1);
     diffdrive_pose_rate_finish(wheels, track, cs, sn, dpose);
 }
 
@@ -217,7 +242,7 @@ static DIFFDRIVE_VECTORIZE void diffdrive_pose_rate_block(const double *restrict
         ang[0] = pose[2];
         ang_T[0 + b] = ang[0];
     }
-    diffdrive_trig32(ang_T, cs_T, sn_T);
+    diffdrive_trig32(ang_T, cs_T, sn_T, 32);
     for (b = 0; b < 32; ++b) {
         double wheels[2];
         double cs[1];

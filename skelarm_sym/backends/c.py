@@ -22,14 +22,16 @@ LANGUAGE = "c"
 FILE_SUFFIXES = (".h", ".c")
 SIMD_LANES = 8
 """Trigonometric arrays are padded to a multiple of this (AVX-512 doubles) so loops vectorise whole."""
-FOLD_UP_TO = 4
-"""A single call waits for the latency of each vector math call, not for its width, so few
-angles are evaluated with as few calls as possible: one angle by a scalar (sincos) pair;
-two by one 4-wide ``sin`` over ``(a + pi/2, a)`` (cos(a) = sin(a + pi/2)); three or four
-(padded to four) by two 4-wide ``sin`` calls. Measured here this about halves a 2- or
-4-link kinematics call. The price is the rounding of ``a + pi/2``: an absolute error of
-about ``|a| * 1e-16`` in those cosines. Without vector math the helpers call plain
-``cos``/``sin``."""
+SHORT_LOOP = {"double": 4, "float": 8}
+"""A single call with at most this many angles pads them to this (one 256-bit vector), longer
+ones to a multiple of ``SIMD_LANES`` like the batches, whose loops are multiples of ``SIMD_LANES``
+long. Single calls and batches then evaluate the same ``cos``/``sin`` of the same angles in loops
+that GCC vectorises alike, so with one set of compiler flags both call the same vector routine
+and a single call equals its batch result bit for bit (tested with -O2, -O2 -march=native and
+-O0). Measured with GCC 12: loops of 2 angles are left scalar, and loops of 4 floats get a
+narrower vector routine than the batch's, which breaks that equality. Earlier versions also
+folded ``cos(a) = sin(a + pi/2)`` for few angles: the rounding of ``a + pi/2`` made those cosines
+wrong by about ``|a|`` ulps (3e-5 relative at |a| = 100 in float) and differ from the batch."""
 BLOCK_ANGLES = 512
 """Batch functions evaluate the trigonometry of up to this many angles (several configurations) at once."""
 SOA_BLOCKS = (32, 16, 8)
@@ -63,25 +65,55 @@ PRECISIONS = {
 
 
 class CArrayPrinter(ArrayPrinterMixin, C99CodePrinter):
-    """C99 printer that writes each symbol as its array element or local, in one precision."""
+    """C99 printer that writes each symbol as its array element or local, in one precision.
 
-    def __init__(self, names: dict[sp.Symbol, str], precision: CPrecision) -> None:
+    Every division by a computed value is printed with a safe denominator, ``x/(d != 0 ? d : 1)``:
+    the straight-line program evaluates both sides of each select (``cond ? a : b``), and the
+    quotients of the side not taken must not divide by zero (a trap under
+    ``feenableexcept(FE_DIVBYZERO)``, an infinity times zero giving NaN otherwise). Where ``d`` is a
+    Gram quantity of the Jacobian (a norm, a determinant) that is exactly zero, its numerator is
+    zero too, so the quotient is the pseudo-inverse's zero. Divisions by an input (the track of
+    the differential drive, which the header requires to be positive) print plainly.
+    """
+
+    def __init__(self, names: dict[sp.Symbol, str], precision: CPrecision, inputs: frozenset = frozenset()) -> None:
         super().__init__(names)
         self._precision = precision
+        self._inputs = inputs
         self.sqrt_name = precision.sqrt
 
     def literal(self, value: float) -> str:
         return self._precision.literal(value)
 
+    def _denominator(self, den: sp.Expr) -> str:
+        """``den`` as a divisor: guarded unless it is a positive number or an input."""
+        text = self.parenthesize(den, sp.printing.precedence.PRECEDENCE["Mul"], strict=True)
+        if (den.is_Number and den.is_positive) or den in self._inputs:
+            return text
+        plain = self._print(den)
+        return f"({plain} != {self.literal(0.0)} ? {plain} : {self.literal(1.0)})"
 
-def _folded_size(count: int) -> int:
-    """Angle slots for few angles: 1 (scalar sincos), 2 (one 4-wide call) or 4 (two 4-wide calls)."""
-    return count if count <= 2 else 4
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        base, exp = expr.args
+        if exp.is_Rational and exp.is_negative:
+            return f"{self.literal(1.0)}/{self._denominator(sp.Pow(base, -exp))}"
+        return super()._print_Pow(expr, rational)
+
+    def _print_Mul(self, expr: sp.Mul) -> str:
+        factors = sp.Mul.make_args(expr)
+        den = [f for f in factors if f.is_Pow and f.exp.is_Rational and f.exp.is_negative]
+        if not den:
+            return super()._print_Mul(expr)
+        num = sp.Mul(*[f for f in factors if f not in den])
+        num_text = self.parenthesize(num, sp.printing.precedence.PRECEDENCE["Mul"])
+        return f"{num_text}/{self._denominator(sp.Mul(*[sp.Pow(f.base, -f.exp) for f in den]))}"
 
 
-def trig_mode(size: int) -> str:
-    """How the helper for ``size`` angle slots evaluates them (see ``FOLD_UP_TO``)."""
-    return {1: "scalar", 2: "pair", 4: "quad"}.get(size, "vector") if size <= FOLD_UP_TO else "vector"
+def padded_size(count: int, ctype: str) -> int:
+    """Angle slots of a single call for ``count`` angles (see ``SHORT_LOOP``)."""
+    if not count:
+        return 0
+    return SHORT_LOOP[ctype] if count <= SHORT_LOOP[ctype] else pad(count, SIMD_LANES)
 
 
 def _params(args, ctype: str, const: bool) -> list[str]:
@@ -97,7 +129,7 @@ def constant_name(prefix: str, name: str) -> str:
 def function_context(program: Program, precision: CPrecision, prefix: str, shared: frozenset[str], memo: MemoPrinter | None = None) -> dict:
     """What the templates need to lay out one program as C functions."""
     names = storage_names(program, constant=constant_name(prefix, "{name}"))
-    printer = CArrayPrinter(names, precision)
+    printer = CArrayPrinter(names, precision, frozenset(e for a in program.inputs for e in a.elements))
     memo = memo or MemoPrinter()
     ctype = precision.ctype
     angle_set = set(program.angles)
@@ -118,7 +150,7 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     post_exprs = [rhs for _, rhs in program.post] + [e for o in program.outputs for e in o.elements]
     post_free = set().union(*(e.free_symbols for e in post_exprs)) if post_exprs else set()
     count = len(program.angles)
-    padded = _folded_size(count) if count <= FOLD_UP_TO else pad(count, SIMD_LANES)
+    padded = padded_size(count, ctype)
     block = max(1, BLOCK_ANGLES // padded) if count else 1
     per_config = (
         sum(a.size for a in program.inputs if a.name not in shared)
@@ -163,10 +195,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     functions = [function_context(p, precision, options.prefix, shared, memo) for p in programs]
     sizes = {f["padded"] for f in functions if f["padded"]}
     sizes |= {f["angle_count"] * f["soa"] if f["soa"] else f["padded"] * f["block"] for f in functions if f["padded"]}
-    trig_sizes = [
-        {"size": size, "mode": trig_mode(size)}
-        for size in sorted(sizes)
-    ]
+    trig_sizes = [{"size": size} for size in sorted(sizes)]
     constants = {c.name: c for p in programs for c in p.constants}
     context = {
         "prefix": options.prefix,
@@ -175,7 +204,6 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
         "precision": precision,
         "functions": functions,
         "trig_sizes": trig_sizes,
-        "half_pi": precision.literal(1.5707963267948966),
         "constants": [
             {"macro": constant_name(options.prefix, c.name), "value": precision.literal(c.values[options.precision]), "doc": c.doc}
             for c in constants.values()

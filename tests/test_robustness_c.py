@@ -1,0 +1,127 @@
+"""Numerical robustness of the emitted C (issue 13): trigonometry, floating-point traps, fast-math,
+the contracts the header states. Values are judged against NumPy, never against the generator."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skelarm_sym.build import STRICT_FLAGS, compile_arm
+from skelarm_sym.generate import generate
+
+COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
+needs_cc = pytest.mark.skipif(not COMPILERS, reason="no C compiler (gcc or clang) on PATH")
+
+
+def ulps(got, want, dtype):
+    """Distance of ``got`` from ``want`` in units of the last place of ``want`` (at least of 1e-300/tiny)."""
+    got = np.asarray(got, dtype=np.float64)
+    want = np.asarray(want, dtype=np.float64)
+    spacing = np.spacing(np.maximum(np.abs(want), np.finfo(dtype).tiny).astype(dtype)).astype(np.float64)
+    return np.abs(got - want) / spacing
+
+
+@needs_cc
+@pytest.mark.parametrize("precision, big", [("double", 1e8), ("float", 1e4)])
+@pytest.mark.parametrize("n", [1, 2, 3, 6])
+def test_sines_and_cosines_match_libm_and_batches_bit_for_bit(precision, big, n):
+    """With q = (a, 0, ..., 0) and lengths 1 the last Jacobian column is (-sin a, cos a) exactly."""
+    dtype = np.float64 if precision == "double" else np.float32
+    g = generate(n, out=None, langs="c", precision=precision, lengths=(1.0,) * n)
+    rng = np.random.default_rng(n)
+    a = np.concatenate([rng.uniform(-big, big, 61), rng.uniform(-200, 200, 60), [100.0, -100.0, big, -big, 1e3]])
+    a = a.astype(dtype).astype(np.float64)  # exactly representable in the precision
+    q = np.zeros((len(a), n))
+    q[:, 0] = a
+    want_sin = np.sin(a).astype(dtype)  # float64 libm, rounded: a correctly rounded float reference
+    want_cos = np.cos(a).astype(dtype)
+    dq = rng.uniform(-1, 1, q.shape)
+    for flags in (("-O2",), ("-O2", "-march=native"), ("-O0",), ("-O2", "-DSKELARM_NO_SIMD")):
+        arm = compile_arm(g, flags=flags)
+        J = arm.jacobian(q)  # m = 125: vectorised blocks and a short last block
+        single = np.array([arm.jacobian(row) for row in q])
+        assert np.array_equal(J, single), f"{flags}: a single call differs from its batch"
+        assert ulps(-J[:, 0, n - 1], want_sin, dtype).max() <= 4, flags
+        assert ulps(J[:, 1, n - 1], want_cos, dtype).max() <= 4, flags
+        both = arm.kinematics(q, dq, dq)
+        for k, row in enumerate(q[:7]):
+            for out_batch, out_single in zip(both, arm.kinematics(row, dq[k], dq[k])):
+                assert np.array_equal(out_batch[k], out_single), flags
+
+
+def _driver(folder: Path, prefix: str, body: str, flags=("-O0",), compiler="gcc", extra_c=()):
+    """Compile ``body`` (statements of main, with the header included) with the generated C and run it."""
+    (folder / "main.c").write_text(
+        "#define _GNU_SOURCE\n#include <fenv.h>\n#include <math.h>\n#include <stdio.h>\n"
+        f'#include "{prefix}.h"\nint main(void)\n{{\n{body}\n    return 0;\n}}\n'
+    )
+    exe = folder / "main"
+    cmd = [compiler, "-std=gnu99", *flags, "-o", str(exe), str(folder / "main.c"), str(folder / f"{prefix}.c"), *extra_c, "-lm"]
+    result = subprocess.run(cmd, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    return run
+
+
+def _numbers(text: str) -> dict[str, np.ndarray]:
+    out = {}
+    for line in text.splitlines():
+        name, *values = line.split()
+        out[name] = np.array([float(v) for v in values])
+    return out
+
+
+def _print(name: str, array: str, size: int) -> str:
+    fmt = " ".join(["%.17g"] * size)
+    args = ", ".join(f"(double){array}[{k}]" for k in range(size))
+    return f'    printf("{name} {fmt}\\n", {args});\n'
+
+
+fe_available = pytest.mark.skipif(
+    not sys.platform.startswith("linux") or not shutil.which("gcc"), reason="feenableexcept needs glibc and gcc"
+)
+
+
+@fe_available
+@pytest.mark.parametrize("precision", ["double", "float"])
+@pytest.mark.parametrize("opt", ["-O0", "-O2"])
+def test_no_division_by_zero_at_singular_poses_and_zero_lengths(tmp_path, precision, opt):
+    """Traps on: the stretched pose, the folded pose and an arm of length 0 must not raise
+    FE_DIVBYZERO or FE_INVALID, and give NumPy's pinv results (0 rates and w = 0 for length 0)."""
+    n = 3
+    generate(n, out=tmp_path, langs="c", precision=precision, prefix="arm")
+    T = "double" if precision == "double" else "float"
+    poses = {"stretched": (0.0, 0.0, 0.0), "folded": (0.3, np.pi, 0.0), "regular": (0.3, 0.9, -0.5)}
+    lengths = {"unit": (1.0, 1.0, 1.0), "zero": (0.0, 0.0, 0.0), "tail0": (1.0, 0.0, 0.0)}
+    v, twist = (0.3, -0.2), (0.1, 0.2, 0.3)
+    body = f"    {T} dq[3], w[1], qn[3];\n    feenableexcept(FE_DIVBYZERO | FE_INVALID);\n"
+    for pname, q in poses.items():
+        for lname, l in lengths.items():
+            tag = f"{pname}_{lname}"
+            body += "    {\n"
+            body += f"        const {T} q[3] = {{{', '.join(repr(float(x)) for x in q)}}}, l[3] = {{{', '.join(map(repr, l))}}};\n"
+            body += f"        const {T} v[2] = {{{v[0]}, {v[1]}}}, tw[3] = {{{twist[0]}, {twist[1]}, {twist[2]}}}, target[2] = {{0.0, 0.0}};\n"
+            body += "        arm_inverse_velocity(q, v, l, 0, dq);\n" + _print(f"iv_{tag}", "dq", 3)
+            body += "        arm_inverse_velocity3(q, tw, l, 0, dq);\n" + _print(f"iv3_{tag}", "dq", 3)
+            body += "        arm_manipulability(q, l, w);\n" + _print(f"w_{tag}", "w", 1)
+            body += "        arm_ik_step(q, target, l, 0, qn);\n" + _print(f"step_{tag}", "qn", 3)
+            body += "    }\n"
+    run = _driver(tmp_path, "arm", body, flags=(opt,))
+    assert run.returncode == 0, f"trapped (signal {-run.returncode}): {run.stderr}"
+    got = _numbers(run.stdout)
+    tol = 1e-9 if precision == "double" else 1e-3
+    for pname, q in poses.items():
+        for lname, l in lengths.items():
+            tag = f"{pname}_{lname}"
+            theta = np.cumsum(q)
+            J = np.array([[-np.sum((l * np.sin(theta))[i:]) for i in range(n)], [np.sum((l * np.cos(theta))[i:]) for i in range(n)]])
+            J3 = np.vstack([J, np.ones(n)])
+            np.testing.assert_allclose(got[f"iv_{tag}"], np.linalg.pinv(J, rcond=1e-6) @ v, atol=tol, err_msg=tag)
+            np.testing.assert_allclose(got[f"iv3_{tag}"], np.linalg.pinv(J3, rcond=1e-6) @ twist, atol=tol, err_msg=tag)
+            w = np.prod(np.linalg.svd(J, compute_uv=False))  # sqrt(det(J J^T)) without squaring
+            np.testing.assert_allclose(got[f"w_{tag}"], [w], atol=tol, err_msg=tag)
+            assert np.all(np.isfinite(got[f"step_{tag}"])), tag
+    assert np.array_equal(got["iv_regular_zero"], np.zeros(3)) and got["w_stretched_zero"][0] == 0.0
