@@ -395,6 +395,13 @@ def test_bad_input(tmp_path, text, kwargs, expected):
     assert "\n" not in message
 
 
+def test_a_broken_mimic_off_the_chain_is_left_out(tmp_path):
+    path = write(tmp_path, TREE.replace('<axis xyz="0 1 0"/><limit lower="0"', '<mimic joint="gone"/><axis xyz="0 1 0"/><limit lower="0"'))
+    assert load_urdf(path, tip="Rtool").coordinates == ("waist", "r1", "r2")
+    with pytest.raises(InputError, match="joint 'lfinger' mimic refers to joint 'gone', which is not in the file"):
+        load_urdf(path, tip="Lfinger")
+
+
 def test_missing_file_and_folder(tmp_path):
     with pytest.raises(InputError, match="no such file"):
         load_urdf(tmp_path / "none.urdf")

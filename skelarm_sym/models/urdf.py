@@ -226,8 +226,6 @@ def _read_tree(root: ET.Element) -> tuple[list[str], dict[str, _UrdfJoint], dict
             seen.append(link)
             link = parent_joint[link].parent
         done.update(seen)
-    for joint in joints.values():
-        _mimic(joint, joints)  # a mimic that refers to itself or to no joint is wrong wherever it is
     return links, joints, parent_joint
 
 
@@ -279,7 +277,7 @@ def chain_from_urdf(root: ET.Element, base: str | None = None, tip: str | None =
                 f"joint {joint.name!r} is {joint.type}: floating and planar joints are not supported "
                 "(choose base and tip to leave it out)"
             )
-        mimic = _mimic(joint, joints)
+        mimic = _mimic(joint, joints)  # checked on the chain only: a broken hand elsewhere leaves the arm usable
         if mimic is not None and joint.type in MOVING:
             followed = joints[mimic[0]]
             if followed.name not in on_chain:
