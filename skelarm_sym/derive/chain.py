@@ -353,7 +353,7 @@ def derive_chain(chain: Chain) -> ChainDerivation:
         "twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical",
         "acceleration of the tool origin, angular acceleration), all in base axes.",
     )
-    return ChainDerivation(
+    derivation = ChainDerivation(
         model=chain,
         inputs=inputs,
         steps=tuple(step.steps),
@@ -364,3 +364,6 @@ def derive_chain(chain: Chain) -> ChainDerivation:
         domains={"q": "finite", "dq": "finite", "ddq": "finite", "params": "finite"},
         notes=notes,
     )
+    from .chain_inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
+
+    return extend(derivation, step, joints, axes, linear, angular, tool_rotation)

@@ -1,0 +1,243 @@
+"""Inverse differential kinematics of a 3-D chain as named steps: manipulability and its gradient,
+the kinematic Hessian, damped inverse velocity, the roll-pitch-yaw Jacobian.
+
+Hooked into :func:`skelarm_sym.derive.chain.derive_chain` by :func:`extend`, which adds steps,
+outputs and function specs to the chain's derivation. All functions are straight-line (fixed size,
+no loops, no allocation); the small factorisations are those of :mod:`skelarm_sym.derive.solve6`.
+
+* ``manipulability``: ``w = prod of the singular values of J`` = ``sqrt(det(J J^T))`` for N >= 6,
+  ``sqrt(det(J^T J))`` for N < 6, as ``prod_k R[k][k]`` of a Gram-Schmidt QR with
+  re-orthogonalisation of ``J^T`` (N >= 6: the six rows of J) or of ``J`` (N < 6: its N columns).
+  ``manipulability_position`` likewise for the 3 x N linear rows.
+* ``jacobian_hessian``: ``Hs[(r*N + c)*N + j] = d J[r][c] / d q[j]`` (shape 6 x N x N). Per moving
+  joint pair (``k`` the column's joint, ``i`` the differentiating one, base-to-tip order, ``col_k``
+  its 6-vector ``[Jv_k; Jw_k]``): ``i <= k`` and ``i`` revolute: ``z_i x col_k`` (both halves);
+  ``i > k`` and ``k`` revolute: ``[z_k x Jv_i; 0]``; every other pair (a prismatic ``i <= k``, a
+  prismatic ``k`` with ``i > k``): zero. Mimic joints add up with their multipliers.
+* ``manipulability_gradient``: with ``A = Q R`` the QR above (``A = J^T`` or ``J``),
+  ``dw/dq_j = sum G[x][b] dA[x][b]/dq_j``, ``G = Q adj(R)^T`` (``= w A^+T``): the adjugate of the
+  triangular factor has no division, so the gradient stays finite at singular poses (where ``w``
+  itself is not differentiable, the value is that of this formula).
+* ``inverse_velocity``: ``dq = J^T (J J^T + lambda^2 I)^-1 twist``, the minimiser of
+  ``|J dq - twist|^2 + lambda^2 |dq|^2`` of least norm, in two QR stages:
+  1. Gram-Schmidt on the rows of ``B = S J``, ``S = diag(1/L, 1/L, 1/L, 1, 1, 1)`` with ``L`` the
+     chain's reach (sum of its constant translations; 1 if that is zero), so the rank rule does not
+     depend on the unit of length: ``B^T = Q R``; a row whose residual is at most
+     ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero).
+  2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]``,
+     by a second Gram-Schmidt QR and a guarded back substitution.
+  With ``lambda = 0`` at a singular pose this is the minimum-norm least-squares solution of the
+  Jacobian with the dropped rows' residuals removed (``numpy.linalg.pinv`` with a relative cut-off
+  near RANK_TOL); finite always. ``inverse_velocity_position``: the same for the 3 linear rows and
+  a linear velocity ``v`` (no scaling needed).
+* ``jacobian_rpy``: ``JA = blockdiag(I, E^-1) J`` for the tool's roll, pitch, yaw
+  (``R = Rz(yaw) Ry(pitch) Rx(roll)``), ``omega = E d(rpy)/dt``. With ``c = cos(pitch)`` from
+  ``R``: ``E^-1 = [[cy/c, sy/c, 0], [-sy, cy, 0], [cy tp, sy tp, 1]]``, ``tp = tan(pitch)``. Where
+  ``c^2 <= RANK_TOL`` (pitch within about 1e-7 of +-pi/2 in double; gimbal lock) the roll and yaw
+  rows are set to zero and the pitch row is ``[-sin(yaw), cos(yaw), 0]`` with yaw read from ``R``
+  as ``atan2(-R01, R11)`` (the roll = 0 convention): finite, documented.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Sequence
+
+import sympy as sp
+
+from .core import RANK_TOL, FunctionSpec
+from .solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded
+
+INVERSE_FUNCTIONS = (
+    FunctionSpec("manipulability", ("q", "params"), ("w",), "manipulability w = product of the singular values of J (1)"),
+    FunctionSpec(
+        "manipulability_position", ("q", "params"), ("w_position",),
+        "position manipulability: product of the singular values of the 3 x N linear rows of J (1)",
+    ),
+    FunctionSpec(
+        "jacobian_hessian", ("q", "params"), ("Hs",),
+        "kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N)",
+    ),
+    FunctionSpec("manipulability_gradient", ("q", "params"), ("grad",), "gradient dw/dq of the manipulability (N)"),
+    FunctionSpec(
+        "inverse_velocity", ("q", "twist", "params", "lambda"), ("dq",),
+        "damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N)",
+    ),
+    FunctionSpec(
+        "inverse_velocity_position", ("q", "v", "params", "lambda"), ("dq_position",),
+        "damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N)",
+    ),
+    FunctionSpec(
+        "jacobian_rpy", ("q", "params"), ("JA",),
+        "analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major)",
+    ),
+)
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def characteristic_length(chain) -> sp.Expr:
+    """``L``: the sum of the lengths of the chain's constant translations (base excluded); 1 if zero."""
+    parts = [t.translation for j in chain.joints for t in (j.before, j.after)] + [chain.tool.translation]
+    total = sp.Add(*[sp.sqrt(sp.Add(*[sp.sympify(x) ** 2 for x in v])) for v in parts])
+    if not total.free_symbols:
+        value = float(total)
+        return sp.Float(value, 17) if value > 0 else sp.S.One
+    return total
+
+
+def _hessian(step, joints, axes, linear, angular, n) -> list[list[list[sp.Expr]]]:
+    """``H[r][c][j] = dJ[r][c]/dq_j`` from per-joint cross products (see the module docstring)."""
+    H = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(6)]
+    zero = [sp.S.Zero] * 3
+    for k, jk in enumerate(joints):
+        for i, ji in enumerate(joints):
+            if i <= k:
+                if ji.kind != "revolute":
+                    continue
+                dv, dw = cross(axes[i], linear[k]), cross(axes[i], angular[k])
+            else:
+                if jk.kind != "revolute":
+                    continue
+                dv, dw = cross(axes[k], linear[i]), zero
+            factor = sp.sympify(jk.multiplier) * sp.sympify(ji.multiplier)
+            for r, value in enumerate(list(dv) + list(dw)):
+                if value != 0:
+                    H[r][jk.coordinate][ji.coordinate] += factor * value
+    return [[[step(f"H{r}_{c}_{j}", H[r][c][j]) for j in range(n)] for c in range(n)] for r in range(6)]
+
+
+def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs, lam2, tol, label):
+    """Two-stage QR solve of ``min |M dq - rhs|^2 + lambda^2 |dq|^2``, ``M = rows`` (see the module docstring).
+
+    ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1).
+    """
+    m = len(rows)
+    n = len(rows[0])
+    scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
+    frob = step(f"{label}F", sp.sqrt(sp.Add(*[x**2 for row in scaled for x in row])))
+    first = gram_schmidt(step, scaled, f"{label}A", threshold=tol * frob)
+    lam = step(f"{label}lam", sp.sqrt(lam2))
+    columns = []
+    for k in range(m):
+        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] / scales[r]) for r in range(m)]
+        bottom = [lam if e == k else sp.S.Zero for e in range(m)]
+        columns.append(top + bottom)
+    second = gram_schmidt(step, columns, f"{label}B")
+    c = [step(f"{label}c{k}", sp.Add(*[second.Q[k][r] * rhs[r] for r in range(m)])) for k in range(m)]
+    z = back_substitute(step, second.R, c, f"{label}s")
+    return [step(f"{label}x{j}", sp.Add(*[first.Q[k][j] * z[k] for k in range(m)])) for j in range(n)]
+
+
+def _manipulability(step, rows: Sequence[Sequence[sp.Expr]], label: str):
+    """``(w, qr, by_rows)``: QR of the rows (when there are no more rows than columns) or columns."""
+    m, n = len(rows), len(rows[0])
+    by_rows = n >= m
+    vectors = rows if by_rows else [[rows[r][c] for r in range(m)] for c in range(n)]
+    qr = gram_schmidt(step, vectors, label)
+    w = step(f"{label}w", sp.Mul(*qr.diagonal))
+    return w, qr, by_rows
+
+
+def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
+    """The chain's derivation with the inverse functions added (see the module docstring)."""
+    chain = derivation.model
+    n = chain.n
+    J = derivation.compact["J"]
+    rows = [[step(f"Jc{r}_{c}", J[r, c]) for c in range(n)] for r in range(6)]
+    tol = RANK_TOL.symbol
+    lam = sp.Symbol("lambda", real=True)
+    lam2 = step("lam2", lam**2)
+    twist = sp.symbols("xi_vx xi_vy xi_vz xi_wx xi_wy xi_wz", real=True)
+    velocity = sp.symbols("nu_x nu_y nu_z", real=True)
+
+    w, qr, by_rows = _manipulability(step, rows, "mw")
+    w_position, _, _ = _manipulability(step, rows[:3], "mp")
+
+    H = _hessian(step, joints, axes, linear, angular, n)
+    adj = adjugate_upper(step, qr.R, "madj")
+    count = len(qr.R)
+    length = len(qr.Q[0])
+    # G[x][b] = sum_i Q[i][x] adj[b][i]; A[x][b] = J[b][x] (by rows) or J[x][b] (by columns)
+    G = [[step(f"mG{x}_{b}", sp.Add(*[qr.Q[i][x] * adj[b][i] for i in range(b, count)])) for b in range(count)] for x in range(length)]
+    grad = []
+    for j in range(n):
+        terms = [G[x][b] * (H[b][x][j] if by_rows else H[x][b][j]) for x in range(length) for b in range(count)]
+        grad.append(step(f"mgrad{j}", sp.Add(*terms)))
+
+    reach = characteristic_length(chain)
+    if reach.free_symbols:
+        reach = step("reach", guarded(reach, sp.StrictGreaterThan(reach, 0)))
+    ireach = step("ireach", 1 / reach) if reach.free_symbols else sp.Float(1 / float(reach), 17) if reach != 1 else sp.S.One
+    dq = _least_squares(step, rows, [ireach] * 3 + [sp.S.One] * 3, twist, lam2, tol, "iv")
+    dq_position = _least_squares(step, rows[:3], [sp.S.One] * 3, velocity, lam2, tol, "ip")
+
+    JA = _jacobian_rpy(step, rows, tool_rotation, tol)
+
+    outputs = {
+        "w": sp.Matrix([w]),
+        "w_position": sp.Matrix([w_position]),
+        "Hs": sp.Matrix([H[r][c][j] for r in range(6) for c in range(n) for j in range(n)]),
+        "grad": sp.Matrix(grad),
+        "dq": sp.Matrix(dq),
+        "dq_position": sp.Matrix(dq_position),
+        "JA": sp.Matrix(JA),
+    }
+    shapes = {"w": (1,), "w_position": (1,), "Hs": (6, n, n), "grad": (n,), "dq": (n,), "dq_position": (n,), "JA": (6, n)}
+    notes = (
+        "Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));",
+        f"Hs[(r*{n} + c)*{n} + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR",
+        "stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most",
+        "RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm",
+        "least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
+        "where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).",
+    )
+    domains = dict(derivation.domains)
+    domains.update({"twist": "finite", "v": "finite", "lambda": "nonnegative"})
+    inputs = dict(derivation.inputs)
+    inputs.update({"twist": twist, "v": velocity, "lambda": (lam,)})
+    return dataclasses.replace(
+        derivation,
+        inputs=inputs,
+        steps=tuple(step.steps),
+        compact={**derivation.compact, **outputs},
+        shapes={**derivation.shapes, **shapes},
+        functions=tuple(derivation.functions) + INVERSE_FUNCTIONS,
+        parameters=tuple(derivation.parameters) + ("lambda",),
+        scalars=tuple(derivation.scalars) + ("lambda",),
+        domains=domains,
+        constants=tuple(derivation.constants) + (RANK_TOL,),
+        notes=tuple(derivation.notes) + notes,
+        _cache={},
+    )
+
+
+def _jacobian_rpy(step, rows, R, tol) -> list[sp.Expr]:
+    """``blockdiag(I, E^-1) J`` row-major (see the module docstring)."""
+    n = len(rows[0])
+    c2 = step("rpy_c2", R[0][0] ** 2 + R[1][0] ** 2)
+    regular = step("rpy_regular", sp.StrictGreaterThan(c2, tol))
+    ic2 = step("rpy_ic2", 1 / guarded(c2, regular))
+    c = step("rpy_c", sp.sqrt(c2))
+    ic = step("rpy_ic", 1 / guarded(c, regular))
+    # yaw at gimbal lock (roll = 0): R01 = -sin(yaw), R11 = cos(yaw)
+    g = step("rpy_g", sp.sqrt(R[0][1] ** 2 + R[1][1] ** 2))
+    ig = step("rpy_ig", 1 / guarded(g, sp.StrictGreaterThan(g, 0)))
+    cy = step("rpy_cy", sp.Piecewise((R[0][0] * ic, regular), (R[1][1] * ig, True)))
+    sy = step("rpy_sy", sp.Piecewise((R[1][0] * ic, regular), (-R[0][1] * ig, True)))
+    zero = sp.S.Zero
+    E = [
+        [step("rpy_E00", sp.Piecewise((R[0][0] * ic2, regular), (zero, True))),
+         step("rpy_E01", sp.Piecewise((R[1][0] * ic2, regular), (zero, True))), zero],
+        [-sy, cy, zero],
+        [step("rpy_E20", sp.Piecewise((-R[0][0] * R[2][0] * ic2, regular), (zero, True))),
+         step("rpy_E21", sp.Piecewise((-R[1][0] * R[2][0] * ic2, regular), (zero, True))),
+         sp.Piecewise((sp.S.One, regular), (zero, True))],
+    ]
+    out = [rows[r][c] for r in range(3) for c in range(n)]
+    for i in range(3):
+        for cidx in range(n):
+            out.append(step(f"JA{i}_{cidx}", sp.Add(*[E[i][k] * rows[3 + k][cidx] for k in range(3)])))
+    return out

@@ -1,0 +1,137 @@
+"""Unrolled small factorisations as named steps: Gram-Schmidt QR with re-orthogonalisation,
+adjugates of triangular factors, guarded back substitution.
+
+Everything is straight-line: a fixed number of vectors of fixed length, no loops at run time,
+no allocation. Divisions are only ever by a ``Piecewise`` that is replaced by 1 where the divisor
+would be zero, so no branch evaluates a division outside the case that uses it.
+
+Gram-Schmidt with re-orthogonalisation ("twice is enough", Giraud, Langou and Rozloznik 2005):
+vector ``a_k`` is orthogonalised against the earlier unit vectors twice (modified Gram-Schmidt
+order); the coefficients of both passes add up into ``R[i][k]``. The residual's norm ``R[k][k]``
+then carries an absolute error of about eps |a_k|, whatever the angle between ``a_k`` and the
+span of the earlier vectors: a product of the ``R[k][k]`` (a Gram determinant's square root)
+keeps its digits near rank deficiency, where ``det(A^T A)`` would cancel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import sympy as sp
+
+Recorder = Callable[[str, sp.Expr], sp.Expr]
+
+
+def guarded(value: sp.Expr, keep: sp.Expr) -> sp.Expr:
+    """``value`` where ``keep`` holds, else 1: a divisor that is never evaluated as zero."""
+    return sp.Piecewise((value, keep), (sp.S.One, True))
+
+
+@dataclass(frozen=True)
+class QR:
+    """``A = Q R`` for the columns ``a_0..a_(m-1)`` of ``A`` (each of length ``l``).
+
+    ``Q[k]``: unit vectors (or zero vectors where column ``k`` was dropped or exactly dependent);
+    ``R[i][k]``: upper triangular (``None`` below the diagonal); ``keep[k]``: the condition under
+    which column ``k`` counts as independent (``True`` when no rank rule was given).
+    """
+
+    Q: list[list[sp.Expr]]
+    R: list[list[sp.Expr | None]]
+    keep: list[sp.Expr]
+
+    @property
+    def diagonal(self) -> list[sp.Expr]:
+        return [self.R[k][k] for k in range(len(self.R))]
+
+
+def _dot(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> sp.Expr:
+    return sp.Add(*[x * y for x, y in zip(a, b)])
+
+
+def gram_schmidt(
+    step: Recorder,
+    columns: Sequence[Sequence[sp.Expr]],
+    label: str,
+    threshold: sp.Expr | None = None,
+) -> QR:
+    """Gram-Schmidt QR with re-orthogonalisation of ``columns`` (see the module docstring).
+
+    ``threshold``: ``None``, or a non-negative expression: column ``k`` is dropped (``R[k][k] = 0``,
+    ``Q[k] = 0``, so row ``k`` of ``R`` is zero) when its residual norm is at most ``threshold``.
+    Without a threshold a residual of exactly zero still gives ``Q[k] = 0`` (no division by zero).
+    """
+    m = len(columns)
+    Q: list[list[sp.Expr]] = []
+    R: list[list[sp.Expr | None]] = [[None] * m for _ in range(m)]
+    keep: list[sp.Expr] = []
+    for k, column in enumerate(columns):
+        v = [sp.sympify(x) for x in column]
+        coefficient = [sp.S.Zero] * k
+        for sweep in range(2):
+            for i in range(k):
+                if all(x == 0 for x in Q[i]):
+                    continue
+                c = step(f"{label}c{sweep}_{i}_{k}", _dot(Q[i], v))
+                coefficient[i] = coefficient[i] + c
+                v = [step(f"{label}v{sweep}_{i}_{k}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, Q[i]))]
+        norm = step(f"{label}n{k}", sp.sqrt(sp.Add(*[x**2 for x in v])))
+        if threshold is None:
+            kept = sp.StrictGreaterThan(norm, 0)
+            diag = norm
+        else:
+            kept = step(f"{label}keep{k}", sp.StrictGreaterThan(norm, threshold))
+            diag = step(f"{label}d{k}", sp.Piecewise((norm, kept), (sp.S.Zero, True)))
+        inv = step(f"{label}i{k}", 1 / guarded(norm, kept))
+        if threshold is None:
+            q = [step(f"{label}q{k}_{e}", x * inv) for e, x in enumerate(v)]  # v = 0 exactly where norm = 0
+        else:
+            q = [step(f"{label}q{k}_{e}", sp.Piecewise((x * inv, kept), (sp.S.Zero, True))) for e, x in enumerate(v)]
+        for i in range(k):
+            value = coefficient[i]
+            R[i][k] = step(f"{label}R{i}_{k}", value) if value != 0 else sp.S.Zero
+        R[k][k] = diag
+        Q.append(q)
+        keep.append(kept)
+    return QR(Q, R, keep)
+
+
+def adjugate_upper(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], label: str) -> list[list[sp.Expr]]:
+    """``adj(R) = det(R) R^-1`` of an upper triangular ``R`` without a division (finite when ``R`` is singular).
+
+    With ``Z[i][j] = (R^-1)[i][j] * prod_{l=i..j} R[l][l]`` (a polynomial): ``Z[j][j] = 1``,
+    ``Z[i][j] = -sum_{k=i+1..j} R[i][k] Z[k][j] prod_{l=i+1..k-1} R[l][l]``; then
+    ``adj[i][j] = Z[i][j] prod_{l outside i..j} R[l][l]`` (upper triangular).
+    """
+    m = len(R)
+    d = [R[k][k] for k in range(m)]
+
+    def prod(indices) -> sp.Expr:
+        return sp.Mul(*[d[l] for l in indices])
+
+    Z = [[sp.S.Zero] * m for _ in range(m)]
+    for j in range(m):
+        Z[j][j] = sp.S.One
+        for i in reversed(range(j)):
+            total = sp.Add(*[R[i][k] * Z[k][j] * prod(range(i + 1, k)) for k in range(i + 1, j + 1)])
+            Z[i][j] = step(f"{label}Z{i}_{j}", -total)
+    adj = [[sp.S.Zero] * m for _ in range(m)]
+    for i in range(m):
+        for j in range(i, m):
+            outside = [l for l in range(m) if l < i or l > j]
+            adj[i][j] = step(f"{label}adj{i}_{j}", Z[i][j] * prod(outside))
+    return adj
+
+
+def back_substitute(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], rhs: Sequence[sp.Expr], label: str) -> list[sp.Expr]:
+    """``z`` with ``R z = rhs`` for upper triangular ``R``; ``z[k] = 0`` where ``R[k][k]`` is not positive."""
+    m = len(R)
+    z: list[sp.Expr] = [sp.S.Zero] * m
+    for k in reversed(range(m)):
+        diag = R[k][k]
+        kept = sp.StrictGreaterThan(diag, 0)
+        inv = step(f"{label}i{k}", 1 / guarded(diag, kept))
+        value = rhs[k] - sp.Add(*[R[k][j] * z[j] for j in range(k + 1, m)])
+        z[k] = step(f"{label}z{k}", sp.Piecewise((value * inv, kept), (sp.S.Zero, True)))
+    return z

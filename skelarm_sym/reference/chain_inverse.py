@@ -1,0 +1,116 @@
+"""NumPy judges of the chain's inverse functions: SVD, pinv, the recursion's dJ/dt, finite differences.
+
+NumPy only (and :mod:`skelarm_sym.reference.chain`); nothing from :mod:`skelarm_sym.derive` or the
+program. Batched over leading axes.
+
+* ``manipulability(J)``: product of the singular values (SVD).
+* ``jacobian_hessian(chain, q)``: ``Hs[..., r, c, j] = dJ[r, c]/dq_j`` as the recursion's ``dJ/dt`` at
+  ``dq = e_j`` (propagated velocities, no differencing, and none of the generator's cross products).
+* ``manipulability_gradient(J, Hs)``: ``w tr(J^+ dJ/dq_j)`` with ``w J^+ = V diag(prod_{l != i} s_l) U^T``.
+* ``damped_least_squares(J, rhs, lam, rcond, scales)``: ``lam > 0``: ``V diag(s / (s^2 + lam^2)) U^T rhs``;
+  ``lam = 0``: the minimum-norm least-squares solution of ``J dq = rhs`` within the row space that the
+  SVD of ``S J`` keeps (singular values above ``rcond`` times the largest; ``S = diag(scales)``).
+* ``jacobian_rpy(T, J)``: ``blockdiag(I, E^-1) J`` from roll, pitch, yaw by ``atan2``.
+* ``central_difference(f, q, h)``: for the tests.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .chain import chain_kinematics
+
+__all__ = [
+    "manipulability", "jacobian_hessian", "manipulability_gradient", "damped_least_squares", "jacobian_rpy",
+    "central_difference", "solve_condition",
+]
+
+
+def manipulability(J: np.ndarray) -> np.ndarray:
+    """Product of the singular values of ``J`` (..., m, n), shape (...)."""
+    return np.prod(np.linalg.svd(np.asarray(J, dtype=float), compute_uv=False), axis=-1)
+
+
+def jacobian_hessian(chain, q: np.ndarray) -> np.ndarray:
+    """``(..., 6, n, n)``: ``[..., r, c, j] = dJ[r, c]/dq_j`` (see the module docstring)."""
+    q = np.asarray(q, dtype=float)
+    n = int(chain.n)
+    out = np.empty(q.shape[:-1] + (6, n, n))
+    for j in range(n):
+        dq = np.zeros_like(q)
+        dq[..., j] = 1.0
+        out[..., j] = chain_kinematics(chain, q, dq).dJ
+    return out
+
+
+def manipulability_gradient(J: np.ndarray, Hs: np.ndarray) -> np.ndarray:
+    """``dw/dq`` (..., n) from ``J`` (..., m, n) and ``Hs`` (..., m, n, n) (rows of ``Hs`` as ``J``'s)."""
+    U, s, Vt = np.linalg.svd(np.asarray(J, dtype=float), full_matrices=False)
+    k = s.shape[-1]
+    others = np.stack([np.prod(np.delete(s, i, axis=-1), axis=-1) for i in range(k)], axis=-1)
+    wpinv = np.einsum("...ji,...i,...ki->...jk", np.swapaxes(Vt, -1, -2), others, U)  # (..., n, m)
+    return np.einsum("...cr,...rcj->...j", wpinv, Hs)
+
+
+def damped_least_squares(J, rhs, lam: float, rcond: float, scales=None) -> np.ndarray:
+    """``J^T (J J^T + lam^2 I)^-1 rhs``; ``lam = 0``: minimum-norm least squares in the kept row space."""
+    J = np.asarray(J, dtype=float)
+    rhs = np.asarray(rhs, dtype=float)
+    if lam > 0:
+        U, s, Vt = np.linalg.svd(J, full_matrices=False)
+        f = s / (s**2 + lam**2)
+        return np.einsum("...ji,...i,...ki,...k->...j", np.swapaxes(Vt, -1, -2), f, U, rhs)
+    S = np.ones(J.shape[-2]) if scales is None else np.asarray(scales, dtype=float)
+    _, s, Vt = np.linalg.svd(S[:, None] * J, full_matrices=True)
+    kept = np.zeros(Vt.shape[:-1], dtype=bool)
+    kept[..., : s.shape[-1]] = s > rcond * s[..., :1]
+    V = np.swapaxes(Vt, -1, -2) * kept[..., None, :]  # the kept row space (scaled rank rule)
+    z = np.einsum("...ij,...j->...i", np.linalg.pinv(J @ V), rhs)  # unweighted least squares in it
+    return np.einsum("...ij,...j->...i", V, z)
+
+
+def solve_condition(J, lam: float, rcond: float, scales=None) -> np.ndarray:
+    """``(s_max^2 + lam^2) / (s_min_kept^2 + lam^2)`` of the scaled ``J``: how much rounding the solve amplifies."""
+    J = np.asarray(J, dtype=float)
+    S = np.ones(J.shape[-2]) if scales is None else np.asarray(scales, dtype=float)
+    s = np.linalg.svd(S[:, None] * J, compute_uv=False)
+    top = s[..., :1]
+    kept = np.where(s > rcond * top, s, np.inf)
+    smallest = kept.min(axis=-1)
+    smallest = np.where(np.isfinite(smallest), smallest, top[..., 0])
+    return (top[..., 0] ** 2 + lam**2) / np.maximum(smallest**2 + lam**2, 1e-300)
+
+
+def rpy(R: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (..., 3) of ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    R = np.asarray(R, dtype=float)
+    pitch = np.arctan2(-R[..., 2, 0], np.hypot(R[..., 0, 0], R[..., 1, 0]))
+    yaw = np.arctan2(R[..., 1, 0], R[..., 0, 0])
+    roll = np.arctan2(R[..., 2, 1], R[..., 2, 2])
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def jacobian_rpy(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """``blockdiag(I, E^-1) J`` with ``omega = E d(rpy)/dt`` (regular poses only)."""
+    angles = rpy(np.asarray(T)[..., :3, :3])
+    p, y = angles[..., 1], angles[..., 2]
+    cp, sp_, cy, sy = np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    zero, one = np.zeros_like(p), np.ones_like(p)
+    Einv = np.stack([
+        np.stack([cy / cp, sy / cp, zero], axis=-1),
+        np.stack([-sy, cy, zero], axis=-1),
+        np.stack([cy * sp_ / cp, sy * sp_ / cp, one], axis=-1),
+    ], axis=-2)
+    J = np.asarray(J, dtype=float)
+    return np.concatenate([J[..., :3, :], Einv @ J[..., 3:, :]], axis=-2)
+
+
+def central_difference(f, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
+    """``[..., j] = (f(q + h e_j) - f(q - h e_j)) / 2h`` for ``f`` of one configuration (..., n)."""
+    q = np.asarray(q, dtype=float)
+    cols = []
+    for j in range(q.shape[-1]):
+        e = np.zeros_like(q)
+        e[..., j] = h
+        cols.append((np.asarray(f(q + e)) - np.asarray(f(q - e))) / (2 * h))
+    return np.stack(cols, axis=-1)
