@@ -374,11 +374,14 @@ def _manipulability_core(q, l, w):
     t19 = t2*t2 + t7*t7
     t20 = (t17 >= t19)
     t21 = np.where(t20, t17, t19)
-    t22 = t18/t21
-    t23 = np.where(t20, t7, t6) - t22*np.where(t20, t6, t7)
-    t24 = np.where(t20, t2, t5) - t22*np.where(t20, t5, t2)
-    t25 = t23*t23 + t24*t24
-    w[..., 0] = np.sqrt(t21*t25)
+    t22 = t18*np.where((t21 > 0.0), 1.0/t21, 1.0)
+    t23 = np.where(t20, t6, t7)
+    t24 = np.where(t20, t5, t2)
+    t25 = np.where(t20, t7, t6) - t23*t22
+    t26 = np.where(t20, t2, t5) - t24*t22
+    t27 = t25*t25 + t26*t26
+    t32 = t21*t27
+    w[..., 0] = np.sqrt(t32)
 
 
 @_signature_errors
@@ -414,22 +417,31 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t17 = t6*t6 + t5*t5
     t18 = t2*t5 + t6*t7
     t19 = t2*t2 + t7*t7
-    t26 = lambda_*lambda_
-    t27 = t17 + t26
-    t28 = t19 + t26
-    t29 = t27 + t28
-    t30 = t27*v[..., 0] + t18*v[..., 1]
-    t31 = t28*v[..., 1] + t18*v[..., 0]
-    t32 = 1.0/(t29*t29)
-    t33 = t30*t32
-    t34 = t31*t32
-    t35 = t27*t28 - t18*t18
-    t36 = (t35 > RANK_TOL*t29*t29)
-    t37 = 1.0/t35
-    t38 = np.where(t36, t37*(t29*v[..., 0] - t30), t33)
-    t39 = np.where(t36, t37*(t29*v[..., 1] - t31), t34)
-    dq[..., 0] = t38*t6 + t39*t7
-    dq[..., 1] = t2*t39 + t38*t5
+    t20 = (t17 >= t19)
+    t21 = np.where(t20, t17, t19)
+    t22 = t18*np.where((t21 > 0.0), 1.0/t21, 1.0)
+    t23 = np.where(t20, t6, t7)
+    t24 = np.where(t20, t5, t2)
+    t25 = np.where(t20, t7, t6) - t23*t22
+    t26 = np.where(t20, t2, t5) - t24*t22
+    t27 = t25*t25 + t26*t26
+    t28 = lambda_*lambda_
+    t29 = np.where(t20, v[..., 0], v[..., 1])
+    t30 = np.where(t20, v[..., 1], v[..., 0])
+    t31 = t17 + t19
+    t32 = t21*t27
+    t33 = t32 + t28*(t31 + t28)
+    t34 = (t33 > RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28))
+    t35 = t29 + t30*t22
+    t36 = np.where(t34, 1.0/t33, 1.0)
+    t37 = t28 + t21*(1.0 + t22*t22)
+    t38 = np.where((t37 > 0.0), 1.0/t37, 1.0)
+    t39 = np.where(t34, t36*(t35*t28 + t29*t27), t35*t38)
+    t40 = np.where(t34, t36*(t30*t28 + t21*(t30 - t29*t22)), 0.0)
+    t41 = t39*t23 + t40*t25
+    t42 = t39*t24 + t40*t26
+    dq[..., 0] = t41
+    dq[..., 1] = t42
 
 
 @_signature_errors
@@ -441,7 +453,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 47 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 58 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -468,24 +480,33 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t17 = t6*t6 + t5*t5
     t18 = t2*t5 + t6*t7
     t19 = t2*t2 + t7*t7
-    t26 = lambda_*lambda_
-    t27 = t17 + t26
-    t28 = t19 + t26
-    t29 = t27 + t28
-    t32 = 1.0/(t29*t29)
-    t35 = t27*t28 - t18*t18
-    t36 = (t35 > RANK_TOL*t29*t29)
-    t37 = 1.0/t35
-    t40 = target[..., 0] - t7
-    t41 = t6 + target[..., 1]
-    t42 = t27*t40 + t18*t41
-    t43 = t28*t41 + t18*t40
-    t44 = t42*t32
-    t45 = t43*t32
-    t46 = np.where(t36, t37*(t40*t29 - t42), t44)
-    t47 = np.where(t36, t37*(t41*t29 - t43), t45)
-    q_next[..., 0] = q[..., 0] + t46*t6 + t47*t7
-    q_next[..., 1] = q[..., 1] + t2*t47 + t46*t5
+    t20 = (t17 >= t19)
+    t21 = np.where(t20, t17, t19)
+    t22 = t18*np.where((t21 > 0.0), 1.0/t21, 1.0)
+    t23 = np.where(t20, t6, t7)
+    t24 = np.where(t20, t5, t2)
+    t25 = np.where(t20, t7, t6) - t23*t22
+    t26 = np.where(t20, t2, t5) - t24*t22
+    t27 = t25*t25 + t26*t26
+    t28 = lambda_*lambda_
+    t31 = t17 + t19
+    t32 = t21*t27
+    t33 = t32 + t28*(t31 + t28)
+    t34 = (t33 > RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28))
+    t36 = np.where(t34, 1.0/t33, 1.0)
+    t37 = t28 + t21*(1.0 + t22*t22)
+    t38 = np.where((t37 > 0.0), 1.0/t37, 1.0)
+    t43 = target[..., 0] - t7
+    t44 = t6 + target[..., 1]
+    t45 = np.where(t20, t43, t44)
+    t46 = np.where(t20, t44, t43)
+    t47 = t45 + t46*t22
+    t48 = np.where(t34, t36*(t47*t28 + t45*t27), t47*t38)
+    t49 = np.where(t34, t36*(t46*t28 + t21*(t46 - t45*t22)), 0.0)
+    t50 = t48*t23 + t49*t25
+    t51 = t48*t24 + t49*t26
+    q_next[..., 0] = t50 + q[..., 0]
+    q_next[..., 1] = t51 + q[..., 1]
 
 
 @_signature_errors
@@ -497,7 +518,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 51 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 62 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -518,8 +539,10 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-10 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -563,9 +586,26 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, l, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

@@ -433,12 +433,16 @@ def _manipulability_core(q, l, w):
     t29 = t4*t4 + t12*t12 + t10*t10
     t30 = (t27 >= t29)
     t31 = np.where(t30, t27, t29)
-    t32 = t28/t31
-    t33 = np.where(t30, t12, t11) - t32*np.where(t30, t11, t12)
-    t34 = np.where(t30, t10, t9) - t32*np.where(t30, t9, t10)
-    t35 = np.where(t30, t4, t8) - t32*np.where(t30, t8, t4)
-    t36 = t33*t33 + t34*t34 + t35*t35
-    w[..., 0] = np.sqrt(t31*t36)
+    t32 = t28*np.where((t31 > 0.0), 1.0/t31, 1.0)
+    t33 = np.where(t30, t11, t12)
+    t34 = np.where(t30, t9, t10)
+    t35 = np.where(t30, t8, t4)
+    t36 = np.where(t30, t12, t11) - t33*t32
+    t37 = np.where(t30, t10, t9) - t34*t32
+    t38 = np.where(t30, t4, t8) - t35*t32
+    t39 = t36*t36 + t37*t37 + t38*t38
+    t44 = t31*t39
+    w[..., 0] = np.sqrt(t44)
 
 
 @_signature_errors
@@ -479,23 +483,35 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t27 = t11*t11 + t9*t9 + t8*t8
     t28 = t4*t8 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
-    t37 = lambda_*lambda_
-    t38 = t27 + t37
-    t39 = t29 + t37
-    t40 = t38 + t39
-    t41 = t38*v[..., 0] + t28*v[..., 1]
-    t42 = t39*v[..., 1] + t28*v[..., 0]
-    t43 = 1.0/(t40*t40)
-    t44 = t41*t43
-    t45 = t42*t43
-    t46 = t38*t39 - t28*t28
-    t47 = (t46 > RANK_TOL*t40*t40)
-    t48 = 1.0/t46
-    t49 = np.where(t47, t48*(t40*v[..., 0] - t41), t44)
-    t50 = np.where(t47, t48*(t40*v[..., 1] - t42), t45)
-    dq[..., 0] = t49*t11 + t50*t12
-    dq[..., 1] = t49*t9 + t50*t10
-    dq[..., 2] = t4*t50 + t49*t8
+    t30 = (t27 >= t29)
+    t31 = np.where(t30, t27, t29)
+    t32 = t28*np.where((t31 > 0.0), 1.0/t31, 1.0)
+    t33 = np.where(t30, t11, t12)
+    t34 = np.where(t30, t9, t10)
+    t35 = np.where(t30, t8, t4)
+    t36 = np.where(t30, t12, t11) - t33*t32
+    t37 = np.where(t30, t10, t9) - t34*t32
+    t38 = np.where(t30, t4, t8) - t35*t32
+    t39 = t36*t36 + t37*t37 + t38*t38
+    t40 = lambda_*lambda_
+    t41 = np.where(t30, v[..., 0], v[..., 1])
+    t42 = np.where(t30, v[..., 1], v[..., 0])
+    t43 = t27 + t29
+    t44 = t31*t39
+    t45 = t44 + t40*(t43 + t40)
+    t46 = (t45 > RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40))
+    t47 = t41 + t42*t32
+    t48 = np.where(t46, 1.0/t45, 1.0)
+    t49 = t40 + t31*(1.0 + t32*t32)
+    t50 = np.where((t49 > 0.0), 1.0/t49, 1.0)
+    t51 = np.where(t46, t48*(t47*t40 + t41*t39), t47*t50)
+    t52 = np.where(t46, t48*(t42*t40 + t31*(t42 - t41*t32)), 0.0)
+    t53 = t51*t33 + t52*t36
+    t54 = t51*t34 + t52*t37
+    t55 = t51*t35 + t52*t38
+    dq[..., 0] = t53
+    dq[..., 1] = t54
+    dq[..., 2] = t55
 
 
 @_signature_errors
@@ -507,7 +523,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 61 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 76 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -539,43 +555,52 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t27 = t11*t11 + t9*t9 + t8*t8
     t28 = t4*t8 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
-    t37 = lambda_*lambda_
-    t38 = t27 + t37
-    t39 = t29 + t37
-    t46 = t38*t39 - t28*t28
-    t59 = t11 + t9 + t8
-    t60 = t4 + t12 + t10
-    t61 = 3.0 + t37
-    t62 = t38 + t39 + t61
-    t63 = t38*twist[..., 0] + t28*twist[..., 1] + t59*twist[..., 2]
-    t64 = t39*twist[..., 1] + t28*twist[..., 0] + t60*twist[..., 2]
-    t65 = t61*twist[..., 2] + t59*twist[..., 0] + t60*twist[..., 1]
-    t66 = 1.0/(t62*t62)
-    t67 = t63*t66
-    t68 = t64*t66
-    t69 = t65*t66
-    t70 = t39*t61 - t60*t60
-    t71 = t59*t60 - t61*t28
-    t72 = t28*t60 - t39*t59
-    t73 = t38*t61 - t59*t59
-    t74 = t28*t59 - t38*t60
-    t75 = t38*t70 + t28*t71 + t59*t72
-    t76 = t70 + t73 + t46
-    t77 = (t75 > RANK_TOL*t76*t62)
-    t78 = t62*t62
-    t79 = (t76 > RANK_TOL*t78)
-    t80 = 1.0/t75
-    t81 = t38*t63 + t28*t64 + t59*t65
-    t82 = t39*t64 + t28*t63 + t60*t65
-    t83 = t61*t65 + t59*t63 + t60*t64
-    t84 = 1.0/(t76*t76)
-    t85 = t78 - t76
-    t86 = np.where(t79, np.where(t77, t80*(t70*twist[..., 0] + t71*twist[..., 1] + t72*twist[..., 2]), t84*(t63*t85 - t81*t62)), t67)
-    t87 = np.where(t79, np.where(t77, t80*(t71*twist[..., 0] + t73*twist[..., 1] + t74*twist[..., 2]), t84*(t64*t85 - t82*t62)), t68)
-    t88 = np.where(t79, np.where(t77, t80*(t72*twist[..., 0] + t74*twist[..., 1] + t46*twist[..., 2]), t84*(t65*t85 - t83*t62)), t69)
-    dq3[..., 0] = t88 + t86*t11 + t87*t12
-    dq3[..., 1] = t88 + t86*t9 + t87*t10
-    dq3[..., 2] = t88 + t4*t87 + t86*t8
+    t40 = lambda_*lambda_
+    t66 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
+    t67 = t66*t66
+    t68 = t11 + t9 + t8
+    t69 = t4 + t12 + t10
+    t70 = t67*(t27 + t40)
+    t71 = t28*t67
+    t72 = t68*t66
+    t73 = t67*(t29 + t40)
+    t74 = t69*t66
+    t75 = 3.0 + t40
+    t76 = t66*twist[..., 0]
+    t77 = t66*twist[..., 1]
+    t78 = t70 + t73 + t75
+    t79 = t70*t76 + t71*t77 + t72*twist[..., 2]
+    t80 = t71*t76 + t73*t77 + t74*twist[..., 2]
+    t81 = t72*t76 + t74*t77 + t75*twist[..., 2]
+    t82 = np.where((t78 > 0.0), 1.0/(t78*t78), 1.0)
+    t83 = t79*t82
+    t84 = t80*t82
+    t85 = t81*t82
+    t86 = t73*t75 - t74*t74
+    t87 = t72*t74 - t71*t75
+    t88 = t71*t74 - t72*t73
+    t89 = t70*t75 - t72*t72
+    t90 = t71*t72 - t70*t74
+    t91 = t70*t73 - t71*t71
+    t92 = t70*t86 + t71*t87 + t72*t88
+    t93 = t86 + t89 + t91
+    t94 = (t92 > RANK_TOL*t93*t78)
+    t95 = t78*t78
+    t96 = (t93 > RANK_TOL*t95)
+    t97 = np.where((t92 > 0.0), 1.0/t92, 1.0)
+    t98 = t70*t79 + t71*t80 + t72*t81
+    t99 = t71*t79 + t73*t80 + t74*t81
+    t100 = t72*t79 + t74*t80 + t75*t81
+    t101 = np.where((t93 > 0.0), 1.0/(t93*t93), 1.0)
+    t102 = t95 - t93
+    t103 = np.where(t96, np.where(t94, t97*(t86*t76 + t87*t77 + t88*twist[..., 2]), t101*(t79*t102 - t98*t78)), t83)
+    t104 = np.where(t96, np.where(t94, t97*(t87*t76 + t89*t77 + t90*twist[..., 2]), t101*(t80*t102 - t99*t78)), t84)
+    t105 = np.where(t96, np.where(t94, t97*(t88*t76 + t90*t77 + t91*twist[..., 2]), t101*(t81*t102 - t100*t78)), t85)
+    t106 = t66*t103
+    t107 = t66*t104
+    dq3[..., 0] = t105 + t106*t11 + t107*t12
+    dq3[..., 1] = t105 + t106*t9 + t107*t10
+    dq3[..., 2] = t105 + t4*t107 + t106*t8
 
 
 @_signature_errors
@@ -587,7 +612,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 145 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 157 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -619,25 +644,37 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t27 = t11*t11 + t9*t9 + t8*t8
     t28 = t4*t8 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
-    t37 = lambda_*lambda_
-    t38 = t27 + t37
-    t39 = t29 + t37
-    t40 = t38 + t39
-    t43 = 1.0/(t40*t40)
-    t46 = t38*t39 - t28*t28
-    t47 = (t46 > RANK_TOL*t40*t40)
-    t48 = 1.0/t46
-    t51 = target[..., 0] - t12
-    t52 = t11 + target[..., 1]
-    t53 = t38*t51 + t28*t52
-    t54 = t39*t52 + t28*t51
-    t55 = t53*t43
-    t56 = t54*t43
-    t57 = np.where(t47, t48*(t51*t40 - t53), t55)
-    t58 = np.where(t47, t48*(t52*t40 - t54), t56)
-    q_next[..., 0] = q[..., 0] + t57*t11 + t58*t12
-    q_next[..., 1] = q[..., 1] + t57*t9 + t58*t10
-    q_next[..., 2] = q[..., 2] + t4*t58 + t57*t8
+    t30 = (t27 >= t29)
+    t31 = np.where(t30, t27, t29)
+    t32 = t28*np.where((t31 > 0.0), 1.0/t31, 1.0)
+    t33 = np.where(t30, t11, t12)
+    t34 = np.where(t30, t9, t10)
+    t35 = np.where(t30, t8, t4)
+    t36 = np.where(t30, t12, t11) - t33*t32
+    t37 = np.where(t30, t10, t9) - t34*t32
+    t38 = np.where(t30, t4, t8) - t35*t32
+    t39 = t36*t36 + t37*t37 + t38*t38
+    t40 = lambda_*lambda_
+    t43 = t27 + t29
+    t44 = t31*t39
+    t45 = t44 + t40*(t43 + t40)
+    t46 = (t45 > RANK_TOL*(t43 + 2.0*t40)*(t43 + 2.0*t40))
+    t48 = np.where(t46, 1.0/t45, 1.0)
+    t49 = t40 + t31*(1.0 + t32*t32)
+    t50 = np.where((t49 > 0.0), 1.0/t49, 1.0)
+    t56 = target[..., 0] - t12
+    t57 = t11 + target[..., 1]
+    t58 = np.where(t30, t56, t57)
+    t59 = np.where(t30, t57, t56)
+    t60 = t58 + t59*t32
+    t61 = np.where(t46, t48*(t60*t40 + t58*t39), t60*t50)
+    t62 = np.where(t46, t48*(t59*t40 + t31*(t59 - t58*t32)), 0.0)
+    t63 = t61*t33 + t62*t36
+    t64 = t61*t34 + t62*t37
+    t65 = t61*t35 + t62*t38
+    q_next[..., 0] = t63 + q[..., 0]
+    q_next[..., 1] = t64 + q[..., 1]
+    q_next[..., 2] = t65 + q[..., 2]
 
 
 @_signature_errors
@@ -649,7 +686,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 66 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -670,8 +707,10 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-10 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -715,9 +754,26 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, l, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

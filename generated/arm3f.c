@@ -21,6 +21,10 @@
 
 #include "arm3f.h"
 
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9939c3cfUL
+#error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
+#endif
+
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
  * Any other compiler uses the same loops with plain calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
@@ -1778,9 +1782,36 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
     }
 }
 
-int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
+/* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
+ * so removes isfinite) cannot remove: integer tests on the exponent bits. */
+#ifdef __FAST_MATH__
+static int arm3f_finite(float x)
 {
-    float p[2], q_next[3], trial[3], err, err_trial, alpha, d, mu;
+    union { float f; unsigned int u; } bits;
+    bits.f = x;
+    return (bits.u & 0x7f800000u) != 0x7f800000u;
+}
+#define ARM3F_FINITE(x) arm3f_finite(x)
+#else
+#define ARM3F_FINITE(x) isfinite(x)
+#endif
+
+/* |target - p| at the pose trial. */
+static float arm3f_ik_error(const float trial[3], const float target[2])
+{
+    float p[2], d, sum = 0.0f;
+    int k;
+    arm3f_position(trial, p);
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        sum += d * d;
+    }
+    return sqrtf(sum);
+}
+
+static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
+{
+    float q_next[3], trial[3], probe[3], err, err_trial, alpha, d, mu;
     float c = 0.5f; /* damping per unit of error, adapted below */
     int k, it, halving;
     for (k = 0; k < 3; ++k) {
@@ -1788,29 +1819,20 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
     }
     *iterations = 0;
     *error = HUGE_VAL;
-    if (!(tol > 0.0f) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0f) {
+    if (!ARM3F_FINITE(tol) || tol <= 0.0f || max_iter < 0 || !ARM3F_FINITE(lambda) || lambda < 0.0f) {
         return ARM3F_IK_INVALID;
     }
     for (k = 0; k < 3; ++k) {
-        if (!isfinite(q0[k])) {
+        if (!ARM3F_FINITE(q0[k])) {
             return ARM3F_IK_INVALID;
         }
     }
     for (k = 0; k < 2; ++k) {
-        if (!isfinite(target[k])) {
+        if (!ARM3F_FINITE(target[k])) {
             return ARM3F_IK_INVALID;
         }
     }
-    for (k = 0; k < 3; ++k) {
-        trial[k] = q[k];
-    }
-    arm3f_position(trial, p);
-    err = 0.0f;
-    for (k = 0; k < 2; ++k) {
-        d = target[k] - p[k];
-        err += d * d;
-    }
-    err = sqrtf(err);
+    err = arm3f_ik_error(q, target);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -1822,27 +1844,52 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
         }
         arm3f_ik_step(q, target, mu, q_next);
         alpha = 1.0f;
-        for (halving = 0;; ++halving) {
+        for (halving = 0; halving <= 20; ++halving) {
             for (k = 0; k < 3; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            arm3f_position(trial, p);
-            err_trial = 0.0f;
-            for (k = 0; k < 2; ++k) {
-                d = target[k] - p[k];
-                err_trial += d * d;
-            }
-            err_trial = sqrtf(err_trial);
+            err_trial = arm3f_ik_error(trial, target);
             if (err_trial < err) {
                 break;
             }
-            if (halving == 20) {
-                return ARM3F_IK_STALLED;
-            }
             alpha *= 0.5f;
         }
-        /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
-        if (halving == 0) {
+        if (halving > 20) {
+            /* No step along the damped least-squares direction lowers the error: q is a
+             * stationary point of it (a singular pose facing the target, or the closest reach).
+             * Probe each joint by +-0.01f rad, and a damped step from each probe; move to
+             * the lowest of these poses if it is below the error at q. */
+            int j, found = 0;
+            err_trial = err;
+            for (k = 0; k < 6; ++k) {
+                float e;
+                for (j = 0; j < 3; ++j) {
+                    probe[j] = q[j];
+                }
+                probe[k / 2] += k % 2 ? -0.01f : 0.01f;
+                e = arm3f_ik_error(probe, target);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 3; ++j) {
+                        trial[j] = probe[j];
+                    }
+                }
+                arm3f_ik_step(probe, target, mu, q_next);
+                e = arm3f_ik_error(q_next, target);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 3; ++j) {
+                        trial[j] = q_next[j];
+                    }
+                }
+            }
+            if (!found) {
+                return ARM3F_IK_STALLED;
+            }
+        } else if (halving == 0) {
+            /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
             c = c * 0.33333334f < 1e-04f ? 1e-04f : c * 0.33333334f;
         } else {
             for (k = 0; k < halving; ++k) {
@@ -1864,4 +1911,18 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
         }
     }
     return err <= tol ? ARM3F_IK_CONVERGED : ARM3F_IK_MAX_ITER;
+}
+
+int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
+{
+    float err;
+    int steps;
+    const int status = arm3f_ik_run(q0, target, lambda, tol, max_iter, q, &err, &steps);
+    if (error) {
+        *error = err;
+    }
+    if (iterations) {
+        *iterations = steps;
+    }
+    return status;
 }

@@ -22,6 +22,18 @@
 
 #include <stddef.h> /* size_t only (freestanding header) */
 
+/* Building: link the math library, e.g.  cc app.c arm3f.c -lm
+ * (without -lm GCC's vectorised sin/cos fail to link: undefined reference to _ZGVbN2v_sin).
+ * Outputs must not alias inputs or each other: the functions are compiled with restrict
+ * pointers, so an in-place call such as arm3f_ik_step(q, ..., q) is undefined
+ * (only arm3f_ik_solve's q may be its q0). No function allocates or keeps state;
+ * the stack each needs is stated beside it (its arrays and temporaries, float).
+ * -ffast-math: the finiteness checks of ik_solve test the bits of each number, so they still
+ * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
+ * ARM3F_STAMP identifies this generation: arm3f.c refuses to
+ * compile (#error) with a arm3f.h from another generation. */
+#define ARM3F_STAMP 0x9939c3cfUL
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -29,74 +41,84 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM3F_RANK_TOL 1.1920929e-05f
 
-/* endpoint position p (2). */
+/* endpoint position p (2). Stack: about 144 bytes. */
 void arm3f_position(const float q[3], float p[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 1896 bytes. */
 void arm3f_position_batch(size_t m, const float *q, float *p);
 
-/* Jacobian J (2 x N, row-major). */
+/* Jacobian J (2 x N, row-major). Stack: about 144 bytes. */
 void arm3f_jacobian(const float q[3], float J[6]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 2424 bytes. */
 void arm3f_jacobian_batch(size_t m, const float *q, float *J);
 
-/* H = dJ/dt (2 x N, row-major). */
+/* H = dJ/dt (2 x N, row-major). Stack: about 180 bytes. */
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 2856 bytes. */
 void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H);
 
-/* endpoint velocity v = J dq (2). */
+/* endpoint velocity v = J dq (2). Stack: about 180 bytes. */
 void arm3f_velocity(const float q[3], const float dq[3], float v[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 2328 bytes. */
 void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 200 bytes. */
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 2744 bytes. */
 void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a);
 
-/* p, J, H, v and a at once. */
+/* p, J, H, v and a at once. Stack: about 200 bytes. */
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 5 KB. */
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 200 bytes. */
 void arm3f_manipulability(const float q[3], float w[1]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]). */
+ * configuration j at [j*size + k]).
+ * Stack: about 1820 bytes. */
 void arm3f_manipulability_batch(size_t m, const float *q, float *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 260 bytes. */
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: lambda. */
+ * configuration j at [j*size + k]); shared by all: lambda.
+ * Stack: about 2408 bytes. */
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 324 bytes. */
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: lambda. */
+ * configuration j at [j*size + k]); shared by all: lambda.
+ * Stack: about 2604 bytes. */
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 268 bytes. */
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: lambda. */
+ * configuration j at [j*size + k]); shared by all: lambda.
+ * Stack: about 2416 bytes. */
 void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next);
 
 /* Return codes of arm3f_ik_solve. */
@@ -108,12 +130,18 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
 /* Inverse kinematics: damped least-squares steps (arm3f_ik_step) from q0 toward
  * target with damping mu = max(lambda, c |target - p|), each step shortened by halving until
  * the endpoint error |target - p| decreases; c starts at 0.5f, shrinks after a full
- * step and doubles per halving (Levenberg-Marquardt).
- * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
- * error improves by less than a relative 1e-06f (an unreachable target: q is then the
- * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when
- * q0, target or lambda is not finite, lambda < 0, tol <= 0 or max_iter < 0.
- * Writes the final pose to q, its error to *error and the steps taken to *iterations. */
+ * step and doubles per halving (Levenberg-Marquardt). When no shortened step lowers the error
+ * (a stationary point of it: a singular pose such as the stretched arm facing a target behind
+ * its base, where the damped step is zero), each joint is moved by +-0.01f rad in turn
+ * and the best of these probes is taken if it lowers the error; only when none does is the
+ * pose a local minimum and the solver stops.
+ * Stops with CONVERGED when the error is <= tol, STALLED when neither a step nor a probe lowers
+ * the error or the error improves by less than a relative 1e-06f (an unreachable target: q
+ * is then the closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing
+ * computed) when q0, target or lambda is not finite, lambda < 0, tol <= 0 or not finite or
+ * max_iter < 0. A tol of 0.0001 is reachable in this precision for an arm of unit size.
+ * Writes the final pose to q (which may be q0 itself), its error to *error and the steps
+ * taken to *iterations; error and iterations may be NULL. Stack: about 332 bytes. */
 int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations);
 
 #ifdef __cplusplus

@@ -413,12 +413,16 @@ def _manipulability_core(q, w):
     t27 = t3*t3 + t10*t10 + t8*t8
     t28 = (t25 >= t27)
     t29 = np.where(t28, t25, t27)
-    t30 = t26/t29
-    t31 = np.where(t28, t10, t9) - t30*np.where(t28, t9, t10)
-    t32 = np.where(t28, t8, t7) - t30*np.where(t28, t7, t8)
-    t33 = np.where(t28, t3, t6) - t30*np.where(t28, t6, t3)
-    t34 = t31*t31 + t32*t32 + t33*t33
-    w[..., 0] = np.sqrt(t29*t34)
+    t30 = t26*np.where((t29 > 0.0), 1.0/t29, 1.0)
+    t31 = np.where(t28, t9, t10)
+    t32 = np.where(t28, t7, t8)
+    t33 = np.where(t28, t6, t3)
+    t34 = np.where(t28, t10, t9) - t31*t30
+    t35 = np.where(t28, t8, t7) - t32*t30
+    t36 = np.where(t28, t3, t6) - t33*t30
+    t37 = t34*t34 + t35*t35 + t36*t36
+    t42 = t29*t37
+    w[..., 0] = np.sqrt(t42)
 
 
 @_signature_errors
@@ -456,23 +460,35 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
-    t35 = lambda_*lambda_
-    t36 = t25 + t35
-    t37 = t27 + t35
-    t38 = t36 + t37
-    t39 = t36*v[..., 0] + t26*v[..., 1]
-    t40 = t37*v[..., 1] + t26*v[..., 0]
-    t41 = 1.0/(t38*t38)
-    t42 = t39*t41
-    t43 = t40*t41
-    t44 = t36*t37 - t26*t26
-    t45 = (t44 > RANK_TOL*t38*t38)
-    t46 = 1.0/t44
-    t47 = np.where(t45, t46*(t38*v[..., 0] - t39), t42)
-    t48 = np.where(t45, t46*(t38*v[..., 1] - t40), t43)
-    dq[..., 0] = t47*t9 + t48*t10
-    dq[..., 1] = t47*t7 + t48*t8
-    dq[..., 2] = t3*t48 + t47*t6
+    t28 = (t25 >= t27)
+    t29 = np.where(t28, t25, t27)
+    t30 = t26*np.where((t29 > 0.0), 1.0/t29, 1.0)
+    t31 = np.where(t28, t9, t10)
+    t32 = np.where(t28, t7, t8)
+    t33 = np.where(t28, t6, t3)
+    t34 = np.where(t28, t10, t9) - t31*t30
+    t35 = np.where(t28, t8, t7) - t32*t30
+    t36 = np.where(t28, t3, t6) - t33*t30
+    t37 = t34*t34 + t35*t35 + t36*t36
+    t38 = lambda_*lambda_
+    t39 = np.where(t28, v[..., 0], v[..., 1])
+    t40 = np.where(t28, v[..., 1], v[..., 0])
+    t41 = t25 + t27
+    t42 = t29*t37
+    t43 = t42 + t38*(t41 + t38)
+    t44 = (t43 > RANK_TOL*(t41 + 2.0*t38)*(t41 + 2.0*t38))
+    t45 = t39 + t40*t30
+    t46 = np.where(t44, 1.0/t43, 1.0)
+    t47 = t38 + t29*(1.0 + t30*t30)
+    t48 = np.where((t47 > 0.0), 1.0/t47, 1.0)
+    t49 = np.where(t44, t46*(t45*t38 + t39*t37), t45*t48)
+    t50 = np.where(t44, t46*(t40*t38 + t29*(t40 - t39*t30)), 0.0)
+    t51 = t49*t31 + t50*t34
+    t52 = t49*t32 + t50*t35
+    t53 = t49*t33 + t50*t36
+    dq[..., 0] = t51
+    dq[..., 1] = t52
+    dq[..., 2] = t53
 
 
 @_signature_errors
@@ -483,7 +499,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 59 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 74 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -513,43 +529,51 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
-    t35 = lambda_*lambda_
-    t36 = t25 + t35
-    t37 = t27 + t35
-    t44 = t36*t37 - t26*t26
-    t57 = t9 + t7 + t6
-    t58 = t3 + t10 + t8
-    t59 = 3.0 + t35
-    t60 = t36 + t37 + t59
-    t61 = t36*twist[..., 0] + t26*twist[..., 1] + t57*twist[..., 2]
-    t62 = t37*twist[..., 1] + t26*twist[..., 0] + t58*twist[..., 2]
-    t63 = t59*twist[..., 2] + t57*twist[..., 0] + t58*twist[..., 1]
-    t64 = 1.0/(t60*t60)
-    t65 = t61*t64
-    t66 = t62*t64
-    t67 = t63*t64
-    t68 = t37*t59 - t58*t58
-    t69 = t57*t58 - t59*t26
-    t70 = t26*t58 - t37*t57
-    t71 = t36*t59 - t57*t57
-    t72 = t26*t57 - t36*t58
-    t73 = t36*t68 + t26*t69 + t57*t70
-    t74 = t68 + t71 + t44
-    t75 = (t73 > RANK_TOL*t74*t60)
-    t76 = t60*t60
-    t77 = (t74 > RANK_TOL*t76)
-    t78 = 1.0/t73
-    t79 = t36*t61 + t26*t62 + t57*t63
-    t80 = t37*t62 + t26*t61 + t58*t63
-    t81 = t59*t63 + t57*t61 + t58*t62
-    t82 = 1.0/(t74*t74)
-    t83 = t76 - t74
-    t84 = np.where(t77, np.where(t75, t78*(t68*twist[..., 0] + t69*twist[..., 1] + t70*twist[..., 2]), t82*(t61*t83 - t79*t60)), t65)
-    t85 = np.where(t77, np.where(t75, t78*(t69*twist[..., 0] + t71*twist[..., 1] + t72*twist[..., 2]), t82*(t62*t83 - t80*t60)), t66)
-    t86 = np.where(t77, np.where(t75, t78*(t70*twist[..., 0] + t72*twist[..., 1] + t44*twist[..., 2]), t82*(t63*t83 - t81*t60)), t67)
-    dq3[..., 0] = t86 + t84*t9 + t85*t10
-    dq3[..., 1] = t86 + t84*t7 + t85*t8
-    dq3[..., 2] = t86 + t3*t85 + t84*t6
+    t38 = lambda_*lambda_
+    t64 = t9 + t7 + t6
+    t65 = t3 + t10 + t8
+    t66 = 0.18903591682419663*t38
+    t67 = t66 + 0.18903591682419663*t25
+    t68 = 0.18903591682419663*t26
+    t69 = 0.4347826086956522*t64
+    t70 = t66 + 0.18903591682419663*t27
+    t71 = 0.4347826086956522*t65
+    t72 = 3.0 + t38
+    t73 = 0.4347826086956522*twist[..., 0]
+    t74 = 0.4347826086956522*twist[..., 1]
+    t75 = t67 + t70 + t72
+    t76 = t67*t73 + t68*t74 + t69*twist[..., 2]
+    t77 = t68*t73 + t70*t74 + t71*twist[..., 2]
+    t78 = t69*t73 + t71*t74 + t72*twist[..., 2]
+    t79 = np.where((t75 > 0.0), 1.0/(t75*t75), 1.0)
+    t80 = t76*t79
+    t81 = t77*t79
+    t82 = t78*t79
+    t83 = t70*t72 - t71*t71
+    t84 = t69*t71 - t68*t72
+    t85 = t68*t71 - t69*t70
+    t86 = t67*t72 - t69*t69
+    t87 = t68*t69 - t67*t71
+    t88 = t67*t70 - t68*t68
+    t89 = t67*t83 + t68*t84 + t69*t85
+    t90 = t83 + t86 + t88
+    t91 = (t89 > RANK_TOL*t90*t75)
+    t92 = t75*t75
+    t93 = (t90 > RANK_TOL*t92)
+    t94 = np.where((t89 > 0.0), 1.0/t89, 1.0)
+    t95 = t67*t76 + t68*t77 + t69*t78
+    t96 = t68*t76 + t70*t77 + t71*t78
+    t97 = t69*t76 + t71*t77 + t72*t78
+    t98 = np.where((t90 > 0.0), 1.0/(t90*t90), 1.0)
+    t99 = t92 - t90
+    t100 = np.where(t93, np.where(t91, t94*(t83*t73 + t84*t74 + t85*twist[..., 2]), t98*(t76*t99 - t95*t75)), t80)
+    t101 = np.where(t93, np.where(t91, t94*(t84*t73 + t86*t74 + t87*twist[..., 2]), t98*(t77*t99 - t96*t75)), t81)
+    t102 = np.where(t93, np.where(t91, t94*(t85*t73 + t87*t74 + t88*twist[..., 2]), t98*(t78*t99 - t97*t75)), t82)
+    t103 = 0.4347826086956522*t100
+    t104 = 0.4347826086956522*t101
+    dq3[..., 0] = t102 + t103*t9 + t104*t10
+    dq3[..., 1] = t102 + t103*t7 + t104*t8
+    dq3[..., 2] = t102 + t3*t104 + t103*t6
 
 
 @_signature_errors
@@ -560,7 +584,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 143 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 153 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -590,25 +614,37 @@ def _ik_step_core(q, target, lambda_, q_next):
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
-    t35 = lambda_*lambda_
-    t36 = t25 + t35
-    t37 = t27 + t35
-    t38 = t36 + t37
-    t41 = 1.0/(t38*t38)
-    t44 = t36*t37 - t26*t26
-    t45 = (t44 > RANK_TOL*t38*t38)
-    t46 = 1.0/t44
-    t49 = target[..., 0] - t10
-    t50 = t9 + target[..., 1]
-    t51 = t36*t49 + t26*t50
-    t52 = t37*t50 + t26*t49
-    t53 = t51*t41
-    t54 = t52*t41
-    t55 = np.where(t45, t46*(t49*t38 - t51), t53)
-    t56 = np.where(t45, t46*(t50*t38 - t52), t54)
-    q_next[..., 0] = q[..., 0] + t55*t9 + t56*t10
-    q_next[..., 1] = q[..., 1] + t55*t7 + t56*t8
-    q_next[..., 2] = q[..., 2] + t3*t56 + t55*t6
+    t28 = (t25 >= t27)
+    t29 = np.where(t28, t25, t27)
+    t30 = t26*np.where((t29 > 0.0), 1.0/t29, 1.0)
+    t31 = np.where(t28, t9, t10)
+    t32 = np.where(t28, t7, t8)
+    t33 = np.where(t28, t6, t3)
+    t34 = np.where(t28, t10, t9) - t31*t30
+    t35 = np.where(t28, t8, t7) - t32*t30
+    t36 = np.where(t28, t3, t6) - t33*t30
+    t37 = t34*t34 + t35*t35 + t36*t36
+    t38 = lambda_*lambda_
+    t41 = t25 + t27
+    t42 = t29*t37
+    t43 = t42 + t38*(t41 + t38)
+    t44 = (t43 > RANK_TOL*(t41 + 2.0*t38)*(t41 + 2.0*t38))
+    t46 = np.where(t44, 1.0/t43, 1.0)
+    t47 = t38 + t29*(1.0 + t30*t30)
+    t48 = np.where((t47 > 0.0), 1.0/t47, 1.0)
+    t54 = target[..., 0] - t10
+    t55 = t9 + target[..., 1]
+    t56 = np.where(t28, t54, t55)
+    t57 = np.where(t28, t55, t54)
+    t58 = t56 + t57*t30
+    t59 = np.where(t44, t46*(t58*t38 + t56*t37), t58*t48)
+    t60 = np.where(t44, t46*(t57*t38 + t29*(t57 - t56*t30)), 0.0)
+    t61 = t59*t31 + t60*t34
+    t62 = t59*t32 + t60*t35
+    t63 = t59*t33 + t60*t36
+    q_next[..., 0] = t61 + q[..., 0]
+    q_next[..., 1] = t62 + q[..., 1]
+    q_next[..., 2] = t63 + q[..., 2]
 
 
 @_signature_errors
@@ -619,7 +655,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 64 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 79 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -640,8 +676,10 @@ def ik_solve(q0, target, lambda_, tol=0.0001, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-06 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-06 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -681,9 +719,26 @@ def ik_solve(q0, target, lambda_, tol=0.0001, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

@@ -21,6 +21,10 @@
 
 #include "arm4.h"
 
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xf2d57e51UL
+#error "arm4.h is not the header generated with this arm4.c: regenerate both together"
+#endif
+
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
  * Any other compiler uses the same loops with plain calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
@@ -2035,9 +2039,36 @@ void arm4_ik_step_batch(size_t m, const double *q, const double *target, const d
     }
 }
 
-int arm4_ik_solve(const double q0[4], const double target[2], const double l[4], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
+/* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
+ * so removes isfinite) cannot remove: integer tests on the exponent bits. */
+#ifdef __FAST_MATH__
+static int arm4_finite(double x)
 {
-    double p[2], q_next[4], trial[4], err, err_trial, alpha, d, mu;
+    union { double f; unsigned long long u; } bits;
+    bits.f = x;
+    return (bits.u & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;
+}
+#define ARM4_FINITE(x) arm4_finite(x)
+#else
+#define ARM4_FINITE(x) isfinite(x)
+#endif
+
+/* |target - p| at the pose trial. */
+static double arm4_ik_error(const double trial[4], const double target[2], const double l[4])
+{
+    double p[2], d, sum = 0.0;
+    int k;
+    arm4_position(trial, l, p);
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        sum += d * d;
+    }
+    return sqrt(sum);
+}
+
+static int arm4_ik_run(const double q0[4], const double target[2], const double l[4], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
+{
+    double q_next[4], trial[4], probe[4], err, err_trial, alpha, d, mu;
     double c = 0.5; /* damping per unit of error, adapted below */
     int k, it, halving;
     for (k = 0; k < 4; ++k) {
@@ -2045,34 +2076,25 @@ int arm4_ik_solve(const double q0[4], const double target[2], const double l[4],
     }
     *iterations = 0;
     *error = HUGE_VAL;
-    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+    if (!ARM4_FINITE(tol) || tol <= 0.0 || max_iter < 0 || !ARM4_FINITE(lambda) || lambda < 0.0) {
         return ARM4_IK_INVALID;
     }
     for (k = 0; k < 4; ++k) {
-        if (!isfinite(q0[k])) {
+        if (!ARM4_FINITE(q0[k])) {
             return ARM4_IK_INVALID;
         }
     }
     for (k = 0; k < 2; ++k) {
-        if (!isfinite(target[k])) {
+        if (!ARM4_FINITE(target[k])) {
             return ARM4_IK_INVALID;
         }
     }
     for (k = 0; k < 4; ++k) {
-        if (!isfinite(l[k])) {
+        if (!ARM4_FINITE(l[k])) {
             return ARM4_IK_INVALID;
         }
     }
-    for (k = 0; k < 4; ++k) {
-        trial[k] = q[k];
-    }
-    arm4_position(trial, l, p);
-    err = 0.0;
-    for (k = 0; k < 2; ++k) {
-        d = target[k] - p[k];
-        err += d * d;
-    }
-    err = sqrt(err);
+    err = arm4_ik_error(q, target, l);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -2084,27 +2106,52 @@ int arm4_ik_solve(const double q0[4], const double target[2], const double l[4],
         }
         arm4_ik_step(q, target, l, mu, q_next);
         alpha = 1.0;
-        for (halving = 0;; ++halving) {
+        for (halving = 0; halving <= 30; ++halving) {
             for (k = 0; k < 4; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            arm4_position(trial, l, p);
-            err_trial = 0.0;
-            for (k = 0; k < 2; ++k) {
-                d = target[k] - p[k];
-                err_trial += d * d;
-            }
-            err_trial = sqrt(err_trial);
+            err_trial = arm4_ik_error(trial, target, l);
             if (err_trial < err) {
                 break;
             }
-            if (halving == 30) {
-                return ARM4_IK_STALLED;
-            }
             alpha *= 0.5;
         }
-        /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
-        if (halving == 0) {
+        if (halving > 30) {
+            /* No step along the damped least-squares direction lowers the error: q is a
+             * stationary point of it (a singular pose facing the target, or the closest reach).
+             * Probe each joint by +-0.01 rad, and a damped step from each probe; move to
+             * the lowest of these poses if it is below the error at q. */
+            int j, found = 0;
+            err_trial = err;
+            for (k = 0; k < 8; ++k) {
+                double e;
+                for (j = 0; j < 4; ++j) {
+                    probe[j] = q[j];
+                }
+                probe[k / 2] += k % 2 ? -0.01 : 0.01;
+                e = arm4_ik_error(probe, target, l);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 4; ++j) {
+                        trial[j] = probe[j];
+                    }
+                }
+                arm4_ik_step(probe, target, l, mu, q_next);
+                e = arm4_ik_error(q_next, target, l);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 4; ++j) {
+                        trial[j] = q_next[j];
+                    }
+                }
+            }
+            if (!found) {
+                return ARM4_IK_STALLED;
+            }
+        } else if (halving == 0) {
+            /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
             c = c * 0.3333333333333333 < 0.0001 ? 0.0001 : c * 0.3333333333333333;
         } else {
             for (k = 0; k < halving; ++k) {
@@ -2126,4 +2173,18 @@ int arm4_ik_solve(const double q0[4], const double target[2], const double l[4],
         }
     }
     return err <= tol ? ARM4_IK_CONVERGED : ARM4_IK_MAX_ITER;
+}
+
+int arm4_ik_solve(const double q0[4], const double target[2], const double l[4], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
+{
+    double err;
+    int steps;
+    const int status = arm4_ik_run(q0, target, l, lambda, tol, max_iter, q, &err, &steps);
+    if (error) {
+        *error = err;
+    }
+    if (iterations) {
+        *iterations = steps;
+    }
+    return status;
 }

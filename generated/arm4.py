@@ -492,13 +492,18 @@ def _manipulability_core(q, l, w):
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
     t40 = (t37 >= t39)
     t41 = np.where(t40, t37, t39)
-    t42 = t38/t41
-    t43 = np.where(t40, t17, t16) - t42*np.where(t40, t16, t17)
-    t44 = np.where(t40, t15, t14) - t42*np.where(t40, t14, t15)
-    t45 = np.where(t40, t13, t12) - t42*np.where(t40, t12, t13)
-    t46 = np.where(t40, t6, t11) - t42*np.where(t40, t11, t6)
-    t47 = t43*t43 + t44*t44 + t45*t45 + t46*t46
-    w[..., 0] = np.sqrt(t41*t47)
+    t42 = t38*np.where((t41 > 0.0), 1.0/t41, 1.0)
+    t43 = np.where(t40, t16, t17)
+    t44 = np.where(t40, t14, t15)
+    t45 = np.where(t40, t12, t13)
+    t46 = np.where(t40, t11, t6)
+    t47 = np.where(t40, t17, t16) - t43*t42
+    t48 = np.where(t40, t15, t14) - t44*t42
+    t49 = np.where(t40, t13, t12) - t45*t42
+    t50 = np.where(t40, t6, t11) - t46*t42
+    t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
+    t56 = t41*t51
+    w[..., 0] = np.sqrt(t56)
 
 
 @_signature_errors
@@ -544,24 +549,39 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
     t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t48 = lambda_*lambda_
-    t49 = t37 + t48
-    t50 = t39 + t48
-    t51 = t49 + t50
-    t52 = t49*v[..., 0] + t38*v[..., 1]
-    t53 = t50*v[..., 1] + t38*v[..., 0]
-    t54 = 1.0/(t51*t51)
-    t55 = t52*t54
-    t56 = t53*t54
-    t57 = t49*t50 - t38*t38
-    t58 = (t57 > RANK_TOL*t51*t51)
-    t59 = 1.0/t57
-    t60 = np.where(t58, t59*(t51*v[..., 0] - t52), t55)
-    t61 = np.where(t58, t59*(t51*v[..., 1] - t53), t56)
-    dq[..., 0] = t60*t16 + t61*t17
-    dq[..., 1] = t60*t14 + t61*t15
-    dq[..., 2] = t60*t12 + t61*t13
-    dq[..., 3] = t6*t61 + t60*t11
+    t40 = (t37 >= t39)
+    t41 = np.where(t40, t37, t39)
+    t42 = t38*np.where((t41 > 0.0), 1.0/t41, 1.0)
+    t43 = np.where(t40, t16, t17)
+    t44 = np.where(t40, t14, t15)
+    t45 = np.where(t40, t12, t13)
+    t46 = np.where(t40, t11, t6)
+    t47 = np.where(t40, t17, t16) - t43*t42
+    t48 = np.where(t40, t15, t14) - t44*t42
+    t49 = np.where(t40, t13, t12) - t45*t42
+    t50 = np.where(t40, t6, t11) - t46*t42
+    t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
+    t52 = lambda_*lambda_
+    t53 = np.where(t40, v[..., 0], v[..., 1])
+    t54 = np.where(t40, v[..., 1], v[..., 0])
+    t55 = t37 + t39
+    t56 = t41*t51
+    t57 = t56 + t52*(t55 + t52)
+    t58 = (t57 > RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52))
+    t59 = t53 + t54*t42
+    t60 = np.where(t58, 1.0/t57, 1.0)
+    t61 = t52 + t41*(1.0 + t42*t42)
+    t62 = np.where((t61 > 0.0), 1.0/t61, 1.0)
+    t63 = np.where(t58, t60*(t59*t52 + t53*t51), t59*t62)
+    t64 = np.where(t58, t60*(t54*t52 + t41*(t54 - t53*t42)), 0.0)
+    t65 = t63*t43 + t64*t47
+    t66 = t63*t44 + t64*t48
+    t67 = t63*t45 + t64*t49
+    t68 = t63*t46 + t64*t50
+    dq[..., 0] = t65
+    dq[..., 1] = t66
+    dq[..., 2] = t67
+    dq[..., 3] = t68
 
 
 @_signature_errors
@@ -573,7 +593,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 75 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 94 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -610,44 +630,53 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
     t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t48 = lambda_*lambda_
-    t49 = t37 + t48
-    t50 = t39 + t48
-    t57 = t49*t50 - t38*t38
-    t70 = t16 + t14 + t12 + t11
-    t71 = t6 + t17 + t15 + t13
-    t72 = 4.0 + t48
-    t73 = t49 + t50 + t72
-    t74 = t49*twist[..., 0] + t38*twist[..., 1] + t70*twist[..., 2]
-    t75 = t50*twist[..., 1] + t38*twist[..., 0] + t71*twist[..., 2]
-    t76 = t72*twist[..., 2] + t70*twist[..., 0] + t71*twist[..., 1]
-    t77 = 1.0/(t73*t73)
-    t78 = t74*t77
-    t79 = t75*t77
-    t80 = t76*t77
-    t81 = t50*t72 - t71*t71
-    t82 = t70*t71 - t72*t38
-    t83 = t38*t71 - t50*t70
-    t84 = t49*t72 - t70*t70
-    t85 = t38*t70 - t49*t71
-    t86 = t49*t81 + t38*t82 + t70*t83
-    t87 = t81 + t84 + t57
-    t88 = (t86 > RANK_TOL*t87*t73)
-    t89 = t73*t73
-    t90 = (t87 > RANK_TOL*t89)
-    t91 = 1.0/t86
-    t92 = t49*t74 + t38*t75 + t70*t76
-    t93 = t50*t75 + t38*t74 + t71*t76
-    t94 = t72*t76 + t70*t74 + t71*t75
-    t95 = 1.0/(t87*t87)
-    t96 = t89 - t87
-    t97 = np.where(t90, np.where(t88, t91*(t81*twist[..., 0] + t82*twist[..., 1] + t83*twist[..., 2]), t95*(t74*t96 - t92*t73)), t78)
-    t98 = np.where(t90, np.where(t88, t91*(t82*twist[..., 0] + t84*twist[..., 1] + t85*twist[..., 2]), t95*(t75*t96 - t93*t73)), t79)
-    t99 = np.where(t90, np.where(t88, t91*(t83*twist[..., 0] + t85*twist[..., 1] + t57*twist[..., 2]), t95*(t76*t96 - t94*t73)), t80)
-    dq3[..., 0] = t99 + t97*t16 + t98*t17
-    dq3[..., 1] = t99 + t97*t14 + t98*t15
-    dq3[..., 2] = t99 + t97*t12 + t98*t13
-    dq3[..., 3] = t99 + t6*t98 + t97*t11
+    t52 = lambda_*lambda_
+    t80 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
+    t81 = t80*t80
+    t82 = t16 + t14 + t12 + t11
+    t83 = t6 + t17 + t15 + t13
+    t84 = t81*(t37 + t52)
+    t85 = t38*t81
+    t86 = t82*t80
+    t87 = t81*(t39 + t52)
+    t88 = t83*t80
+    t89 = 4.0 + t52
+    t90 = t80*twist[..., 0]
+    t91 = t80*twist[..., 1]
+    t92 = t84 + t87 + t89
+    t93 = t84*t90 + t85*t91 + t86*twist[..., 2]
+    t94 = t85*t90 + t87*t91 + t88*twist[..., 2]
+    t95 = t86*t90 + t88*t91 + t89*twist[..., 2]
+    t96 = np.where((t92 > 0.0), 1.0/(t92*t92), 1.0)
+    t97 = t93*t96
+    t98 = t94*t96
+    t99 = t95*t96
+    t100 = t87*t89 - t88*t88
+    t101 = t86*t88 - t85*t89
+    t102 = t85*t88 - t86*t87
+    t103 = t84*t89 - t86*t86
+    t104 = t85*t86 - t84*t88
+    t105 = t84*t87 - t85*t85
+    t106 = t84*t100 + t85*t101 + t86*t102
+    t107 = t100 + t103 + t105
+    t108 = (t106 > RANK_TOL*t107*t92)
+    t109 = t92*t92
+    t110 = (t107 > RANK_TOL*t109)
+    t111 = np.where((t106 > 0.0), 1.0/t106, 1.0)
+    t112 = t84*t93 + t85*t94 + t86*t95
+    t113 = t85*t93 + t87*t94 + t88*t95
+    t114 = t86*t93 + t88*t94 + t89*t95
+    t115 = np.where((t107 > 0.0), 1.0/(t107*t107), 1.0)
+    t116 = t109 - t107
+    t117 = np.where(t110, np.where(t108, t111*(t100*t90 + t101*t91 + t102*twist[..., 2]), t115*(t93*t116 - t112*t92)), t97)
+    t118 = np.where(t110, np.where(t108, t111*(t101*t90 + t103*t91 + t104*twist[..., 2]), t115*(t94*t116 - t113*t92)), t98)
+    t119 = np.where(t110, np.where(t108, t111*(t102*t90 + t104*t91 + t105*twist[..., 2]), t115*(t95*t116 - t114*t92)), t99)
+    t120 = t80*t117
+    t121 = t80*t118
+    dq3[..., 0] = t119 + t120*t16 + t121*t17
+    dq3[..., 1] = t119 + t120*t14 + t121*t15
+    dq3[..., 2] = t119 + t120*t12 + t121*t13
+    dq3[..., 3] = t119 + t6*t121 + t120*t11
 
 
 @_signature_errors
@@ -659,7 +688,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 162 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 175 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (4, 3, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -696,26 +725,41 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
     t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t48 = lambda_*lambda_
-    t49 = t37 + t48
-    t50 = t39 + t48
-    t51 = t49 + t50
-    t54 = 1.0/(t51*t51)
-    t57 = t49*t50 - t38*t38
-    t58 = (t57 > RANK_TOL*t51*t51)
-    t59 = 1.0/t57
-    t62 = target[..., 0] - t17
-    t63 = t16 + target[..., 1]
-    t64 = t49*t62 + t38*t63
-    t65 = t50*t63 + t38*t62
-    t66 = t64*t54
-    t67 = t65*t54
-    t68 = np.where(t58, t59*(t62*t51 - t64), t66)
-    t69 = np.where(t58, t59*(t63*t51 - t65), t67)
-    q_next[..., 0] = q[..., 0] + t68*t16 + t69*t17
-    q_next[..., 1] = q[..., 1] + t68*t14 + t69*t15
-    q_next[..., 2] = q[..., 2] + t68*t12 + t69*t13
-    q_next[..., 3] = q[..., 3] + t6*t69 + t68*t11
+    t40 = (t37 >= t39)
+    t41 = np.where(t40, t37, t39)
+    t42 = t38*np.where((t41 > 0.0), 1.0/t41, 1.0)
+    t43 = np.where(t40, t16, t17)
+    t44 = np.where(t40, t14, t15)
+    t45 = np.where(t40, t12, t13)
+    t46 = np.where(t40, t11, t6)
+    t47 = np.where(t40, t17, t16) - t43*t42
+    t48 = np.where(t40, t15, t14) - t44*t42
+    t49 = np.where(t40, t13, t12) - t45*t42
+    t50 = np.where(t40, t6, t11) - t46*t42
+    t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
+    t52 = lambda_*lambda_
+    t55 = t37 + t39
+    t56 = t41*t51
+    t57 = t56 + t52*(t55 + t52)
+    t58 = (t57 > RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52))
+    t60 = np.where(t58, 1.0/t57, 1.0)
+    t61 = t52 + t41*(1.0 + t42*t42)
+    t62 = np.where((t61 > 0.0), 1.0/t61, 1.0)
+    t69 = target[..., 0] - t17
+    t70 = t16 + target[..., 1]
+    t71 = np.where(t40, t69, t70)
+    t72 = np.where(t40, t70, t69)
+    t73 = t71 + t72*t42
+    t74 = np.where(t58, t60*(t73*t52 + t71*t51), t73*t62)
+    t75 = np.where(t58, t60*(t72*t52 + t41*(t72 - t71*t42)), 0.0)
+    t76 = t74*t43 + t75*t47
+    t77 = t74*t44 + t75*t48
+    t78 = t74*t45 + t75*t49
+    t79 = t74*t46 + t75*t50
+    q_next[..., 0] = t76 + q[..., 0]
+    q_next[..., 1] = t77 + q[..., 1]
+    q_next[..., 2] = t78 + q[..., 2]
+    q_next[..., 3] = t79 + q[..., 3]
 
 
 @_signature_errors
@@ -727,7 +771,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 81 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 100 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -748,8 +792,10 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-10 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -793,9 +839,26 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, l, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

@@ -21,6 +21,10 @@
 
 #include "arm5.h"
 
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x032bda9bUL
+#error "arm5.h is not the header generated with this arm5.c: regenerate both together"
+#endif
+
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
  * Any other compiler uses the same loops with plain calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
@@ -2330,9 +2334,36 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
     }
 }
 
-int arm5_ik_solve(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations)
+/* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
+ * so removes isfinite) cannot remove: integer tests on the exponent bits. */
+#ifdef __FAST_MATH__
+static int arm5_finite(double x)
 {
-    double p[2], q_next[5], trial[5], err, err_trial, alpha, d, mu;
+    union { double f; unsigned long long u; } bits;
+    bits.f = x;
+    return (bits.u & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;
+}
+#define ARM5_FINITE(x) arm5_finite(x)
+#else
+#define ARM5_FINITE(x) isfinite(x)
+#endif
+
+/* |target - p| at the pose trial. */
+static double arm5_ik_error(const double trial[5], const double target[2], const double l[5])
+{
+    double p[2], d, sum = 0.0;
+    int k;
+    arm5_position(trial, l, p);
+    for (k = 0; k < 2; ++k) {
+        d = target[k] - p[k];
+        sum += d * d;
+    }
+    return sqrt(sum);
+}
+
+static int arm5_ik_run(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations)
+{
+    double q_next[5], trial[5], probe[5], err, err_trial, alpha, d, mu;
     double c = 0.5; /* damping per unit of error, adapted below */
     int k, it, halving;
     for (k = 0; k < 5; ++k) {
@@ -2340,34 +2371,25 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
     }
     *iterations = 0;
     *error = HUGE_VAL;
-    if (!(tol > 0.0) || max_iter < 0 || !isfinite(lambda) || lambda < 0.0) {
+    if (!ARM5_FINITE(tol) || tol <= 0.0 || max_iter < 0 || !ARM5_FINITE(lambda) || lambda < 0.0) {
         return ARM5_IK_INVALID;
     }
     for (k = 0; k < 5; ++k) {
-        if (!isfinite(q0[k])) {
+        if (!ARM5_FINITE(q0[k])) {
             return ARM5_IK_INVALID;
         }
     }
     for (k = 0; k < 2; ++k) {
-        if (!isfinite(target[k])) {
+        if (!ARM5_FINITE(target[k])) {
             return ARM5_IK_INVALID;
         }
     }
     for (k = 0; k < 5; ++k) {
-        if (!isfinite(l[k])) {
+        if (!ARM5_FINITE(l[k])) {
             return ARM5_IK_INVALID;
         }
     }
-    for (k = 0; k < 5; ++k) {
-        trial[k] = q[k];
-    }
-    arm5_position(trial, l, p);
-    err = 0.0;
-    for (k = 0; k < 2; ++k) {
-        d = target[k] - p[k];
-        err += d * d;
-    }
-    err = sqrt(err);
+    err = arm5_ik_error(q, target, l);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -2379,27 +2401,52 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
         }
         arm5_ik_step(q, target, l, mu, q_next);
         alpha = 1.0;
-        for (halving = 0;; ++halving) {
+        for (halving = 0; halving <= 30; ++halving) {
             for (k = 0; k < 5; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            arm5_position(trial, l, p);
-            err_trial = 0.0;
-            for (k = 0; k < 2; ++k) {
-                d = target[k] - p[k];
-                err_trial += d * d;
-            }
-            err_trial = sqrt(err_trial);
+            err_trial = arm5_ik_error(trial, target, l);
             if (err_trial < err) {
                 break;
             }
-            if (halving == 30) {
-                return ARM5_IK_STALLED;
-            }
             alpha *= 0.5;
         }
-        /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
-        if (halving == 0) {
+        if (halving > 30) {
+            /* No step along the damped least-squares direction lowers the error: q is a
+             * stationary point of it (a singular pose facing the target, or the closest reach).
+             * Probe each joint by +-0.01 rad, and a damped step from each probe; move to
+             * the lowest of these poses if it is below the error at q. */
+            int j, found = 0;
+            err_trial = err;
+            for (k = 0; k < 10; ++k) {
+                double e;
+                for (j = 0; j < 5; ++j) {
+                    probe[j] = q[j];
+                }
+                probe[k / 2] += k % 2 ? -0.01 : 0.01;
+                e = arm5_ik_error(probe, target, l);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 5; ++j) {
+                        trial[j] = probe[j];
+                    }
+                }
+                arm5_ik_step(probe, target, l, mu, q_next);
+                e = arm5_ik_error(q_next, target, l);
+                if (e < err_trial) {
+                    err_trial = e;
+                    found = 1;
+                    for (j = 0; j < 5; ++j) {
+                        trial[j] = q_next[j];
+                    }
+                }
+            }
+            if (!found) {
+                return ARM5_IK_STALLED;
+            }
+        } else if (halving == 0) {
+            /* Levenberg-Marquardt: a full step lowers the damping, each halving doubles it */
             c = c * 0.3333333333333333 < 0.0001 ? 0.0001 : c * 0.3333333333333333;
         } else {
             for (k = 0; k < halving; ++k) {
@@ -2421,4 +2468,18 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
         }
     }
     return err <= tol ? ARM5_IK_CONVERGED : ARM5_IK_MAX_ITER;
+}
+
+int arm5_ik_solve(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations)
+{
+    double err;
+    int steps;
+    const int status = arm5_ik_run(q0, target, l, lambda, tol, max_iter, q, &err, &steps);
+    if (error) {
+        *error = err;
+    }
+    if (iterations) {
+        *iterations = steps;
+    }
+    return status;
 }

@@ -22,6 +22,18 @@
 
 #include <stddef.h> /* size_t only (freestanding header) */
 
+/* Building: link the math library, e.g.  cc app.c arm5.c -lm
+ * (without -lm GCC's vectorised sin/cos fail to link: undefined reference to _ZGVbN2v_sin).
+ * Outputs must not alias inputs or each other: the functions are compiled with restrict
+ * pointers, so an in-place call such as arm5_ik_step(q, ..., q) is undefined
+ * (only arm5_ik_solve's q may be its q0). No function allocates or keeps state;
+ * the stack each needs is stated beside it (its arrays and temporaries, double).
+ * -ffast-math: the finiteness checks of ik_solve test the bits of each number, so they still
+ * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
+ * ARM5_STAMP identifies this generation: arm5.c refuses to
+ * compile (#error) with a arm5.h from another generation. */
+#define ARM5_STAMP 0x032bda9bUL
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -29,74 +41,84 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM5_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). */
+/* endpoint position p (2). Stack: about 384 bytes. */
 void arm5_position(const double q[5], const double l[5], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 6 KB. */
 void arm5_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). */
+/* Jacobian J (2 x N, row-major). Stack: about 384 bytes. */
 void arm5_jacobian(const double q[5], const double l[5], double J[10]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 8 KB. */
 void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). */
+/* H = dJ/dt (2 x N, row-major). Stack: about 504 bytes. */
 void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 10 KB. */
 void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). */
+/* endpoint velocity v = J dq (2). Stack: about 504 bytes. */
 void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 8 KB. */
 void arm5_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 576 bytes. */
 void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 9 KB. */
 void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. */
+/* p, J, H, v and a at once. Stack: about 576 bytes. */
 void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 15 KB. */
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 528 bytes. */
 void arm5_manipulability(const double q[5], const double l[5], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l. */
+ * configuration j at [j*size + k]); shared by all: l.
+ * Stack: about 6 KB. */
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 664 bytes. */
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l, lambda. */
+ * configuration j at [j*size + k]); shared by all: l, lambda.
+ * Stack: about 8 KB. */
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 752 bytes. */
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l, lambda. */
+ * configuration j at [j*size + k]); shared by all: l, lambda.
+ * Stack: about 8 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 680 bytes. */
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: l, lambda. */
+ * configuration j at [j*size + k]); shared by all: l, lambda.
+ * Stack: about 8 KB. */
 void arm5_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of arm5_ik_solve. */
@@ -108,12 +130,18 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
 /* Inverse kinematics: damped least-squares steps (arm5_ik_step) from q0 toward
  * target with damping mu = max(lambda, c |target - p|), each step shortened by halving until
  * the endpoint error |target - p| decreases; c starts at 0.5, shrinks after a full
- * step and doubles per halving (Levenberg-Marquardt).
- * Stops with CONVERGED when the error is <= tol, STALLED when no shorter step helps or the
- * error improves by less than a relative 1e-10 (an unreachable target: q is then the
- * closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing computed) when
- * q0, target or lambda is not finite, lambda < 0, tol <= 0 or max_iter < 0.
- * Writes the final pose to q, its error to *error and the steps taken to *iterations. */
+ * step and doubles per halving (Levenberg-Marquardt). When no shortened step lowers the error
+ * (a stationary point of it: a singular pose such as the stretched arm facing a target behind
+ * its base, where the damped step is zero), each joint is moved by +-0.01 rad in turn
+ * and the best of these probes is taken if it lowers the error; only when none does is the
+ * pose a local minimum and the solver stops.
+ * Stops with CONVERGED when the error is <= tol, STALLED when neither a step nor a probe lowers
+ * the error or the error improves by less than a relative 1e-10 (an unreachable target: q
+ * is then the closest reach found), MAX_ITER after max_iter steps, INVALID (q = q0, nothing
+ * computed) when q0, target or lambda is not finite, lambda < 0, tol <= 0 or not finite or
+ * max_iter < 0. A tol of 1e-09 is reachable in this precision for an arm of unit size.
+ * Writes the final pose to q (which may be q0 itself), its error to *error and the steps
+ * taken to *iterations; error and iterations may be NULL. Stack: about 840 bytes. */
 int arm5_ik_solve(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations);
 
 #ifdef __cplusplus

@@ -551,14 +551,20 @@ def _manipulability_core(q, l, w):
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
     t50 = (t47 >= t49)
     t51 = np.where(t50, t47, t49)
-    t52 = t48/t51
-    t53 = np.where(t50, t22, t21) - t52*np.where(t50, t21, t22)
-    t54 = np.where(t50, t20, t19) - t52*np.where(t50, t19, t20)
-    t55 = np.where(t50, t18, t17) - t52*np.where(t50, t17, t18)
-    t56 = np.where(t50, t16, t15) - t52*np.where(t50, t15, t16)
-    t57 = np.where(t50, t8, t14) - t52*np.where(t50, t14, t8)
-    t58 = t53*t53 + t54*t54 + t55*t55 + t56*t56 + t57*t57
-    w[..., 0] = np.sqrt(t51*t58)
+    t52 = t48*np.where((t51 > 0.0), 1.0/t51, 1.0)
+    t53 = np.where(t50, t21, t22)
+    t54 = np.where(t50, t19, t20)
+    t55 = np.where(t50, t17, t18)
+    t56 = np.where(t50, t15, t16)
+    t57 = np.where(t50, t14, t8)
+    t58 = np.where(t50, t22, t21) - t53*t52
+    t59 = np.where(t50, t20, t19) - t54*t52
+    t60 = np.where(t50, t18, t17) - t55*t52
+    t61 = np.where(t50, t16, t15) - t56*t52
+    t62 = np.where(t50, t8, t14) - t57*t52
+    t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
+    t68 = t51*t63
+    w[..., 0] = np.sqrt(t68)
 
 
 @_signature_errors
@@ -609,25 +615,43 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
     t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t59 = lambda_*lambda_
-    t60 = t47 + t59
-    t61 = t49 + t59
-    t62 = t60 + t61
-    t63 = t60*v[..., 0] + t48*v[..., 1]
-    t64 = t61*v[..., 1] + t48*v[..., 0]
-    t65 = 1.0/(t62*t62)
-    t66 = t63*t65
-    t67 = t64*t65
-    t68 = t60*t61 - t48*t48
-    t69 = (t68 > RANK_TOL*t62*t62)
-    t70 = 1.0/t68
-    t71 = np.where(t69, t70*(t62*v[..., 0] - t63), t66)
-    t72 = np.where(t69, t70*(t62*v[..., 1] - t64), t67)
-    dq[..., 0] = t71*t21 + t72*t22
-    dq[..., 1] = t71*t19 + t72*t20
-    dq[..., 2] = t71*t17 + t72*t18
-    dq[..., 3] = t71*t15 + t72*t16
-    dq[..., 4] = t8*t72 + t71*t14
+    t50 = (t47 >= t49)
+    t51 = np.where(t50, t47, t49)
+    t52 = t48*np.where((t51 > 0.0), 1.0/t51, 1.0)
+    t53 = np.where(t50, t21, t22)
+    t54 = np.where(t50, t19, t20)
+    t55 = np.where(t50, t17, t18)
+    t56 = np.where(t50, t15, t16)
+    t57 = np.where(t50, t14, t8)
+    t58 = np.where(t50, t22, t21) - t53*t52
+    t59 = np.where(t50, t20, t19) - t54*t52
+    t60 = np.where(t50, t18, t17) - t55*t52
+    t61 = np.where(t50, t16, t15) - t56*t52
+    t62 = np.where(t50, t8, t14) - t57*t52
+    t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
+    t64 = lambda_*lambda_
+    t65 = np.where(t50, v[..., 0], v[..., 1])
+    t66 = np.where(t50, v[..., 1], v[..., 0])
+    t67 = t47 + t49
+    t68 = t51*t63
+    t69 = t68 + t64*(t67 + t64)
+    t70 = (t69 > RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64))
+    t71 = t65 + t66*t52
+    t72 = np.where(t70, 1.0/t69, 1.0)
+    t73 = t64 + t51*(1.0 + t52*t52)
+    t74 = np.where((t73 > 0.0), 1.0/t73, 1.0)
+    t75 = np.where(t70, t72*(t71*t64 + t65*t63), t71*t74)
+    t76 = np.where(t70, t72*(t66*t64 + t51*(t66 - t65*t52)), 0.0)
+    t77 = t75*t53 + t76*t58
+    t78 = t75*t54 + t76*t59
+    t79 = t75*t55 + t76*t60
+    t80 = t75*t56 + t76*t61
+    t81 = t75*t57 + t76*t62
+    dq[..., 0] = t77
+    dq[..., 1] = t78
+    dq[..., 2] = t79
+    dq[..., 3] = t80
+    dq[..., 4] = t81
 
 
 @_signature_errors
@@ -639,7 +663,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 89 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 112 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -681,45 +705,54 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
     t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t59 = lambda_*lambda_
-    t60 = t47 + t59
-    t61 = t49 + t59
-    t68 = t60*t61 - t48*t48
-    t81 = t21 + t19 + t17 + t15 + t14
-    t82 = t8 + t22 + t20 + t18 + t16
-    t83 = 5.0 + t59
-    t84 = t60 + t61 + t83
-    t85 = t60*twist[..., 0] + t48*twist[..., 1] + t81*twist[..., 2]
-    t86 = t61*twist[..., 1] + t48*twist[..., 0] + t82*twist[..., 2]
-    t87 = t83*twist[..., 2] + t81*twist[..., 0] + t82*twist[..., 1]
-    t88 = 1.0/(t84*t84)
-    t89 = t85*t88
-    t90 = t86*t88
-    t91 = t87*t88
-    t92 = t61*t83 - t82*t82
-    t93 = t81*t82 - t83*t48
-    t94 = t48*t82 - t61*t81
-    t95 = t60*t83 - t81*t81
-    t96 = t48*t81 - t60*t82
-    t97 = t60*t92 + t48*t93 + t81*t94
-    t98 = t92 + t95 + t68
-    t99 = (t97 > RANK_TOL*t98*t84)
-    t100 = t84*t84
-    t101 = (t98 > RANK_TOL*t100)
-    t102 = 1.0/t97
-    t103 = t60*t85 + t48*t86 + t81*t87
-    t104 = t61*t86 + t48*t85 + t82*t87
-    t105 = t83*t87 + t81*t85 + t82*t86
-    t106 = 1.0/(t98*t98)
-    t107 = t100 - t98
-    t108 = np.where(t101, np.where(t99, t102*(t92*twist[..., 0] + t93*twist[..., 1] + t94*twist[..., 2]), t106*(t85*t107 - t103*t84)), t89)
-    t109 = np.where(t101, np.where(t99, t102*(t93*twist[..., 0] + t95*twist[..., 1] + t96*twist[..., 2]), t106*(t86*t107 - t104*t84)), t90)
-    t110 = np.where(t101, np.where(t99, t102*(t94*twist[..., 0] + t96*twist[..., 1] + t68*twist[..., 2]), t106*(t87*t107 - t105*t84)), t91)
-    dq3[..., 0] = t110 + t108*t21 + t109*t22
-    dq3[..., 1] = t110 + t108*t19 + t109*t20
-    dq3[..., 2] = t110 + t108*t17 + t109*t18
-    dq3[..., 3] = t110 + t108*t15 + t109*t16
-    dq3[..., 4] = t110 + t8*t109 + t108*t14
+    t64 = lambda_*lambda_
+    t94 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
+    t95 = t94*t94
+    t96 = t21 + t19 + t17 + t15 + t14
+    t97 = t8 + t22 + t20 + t18 + t16
+    t98 = t95*(t47 + t64)
+    t99 = t48*t95
+    t100 = t96*t94
+    t101 = t95*(t49 + t64)
+    t102 = t97*t94
+    t103 = 5.0 + t64
+    t104 = t94*twist[..., 0]
+    t105 = t94*twist[..., 1]
+    t106 = t98 + t101 + t103
+    t107 = t98*t104 + t99*t105 + t100*twist[..., 2]
+    t108 = t99*t104 + t101*t105 + t102*twist[..., 2]
+    t109 = t100*t104 + t102*t105 + t103*twist[..., 2]
+    t110 = np.where((t106 > 0.0), 1.0/(t106*t106), 1.0)
+    t111 = t107*t110
+    t112 = t108*t110
+    t113 = t109*t110
+    t114 = t101*t103 - t102*t102
+    t115 = t100*t102 - t99*t103
+    t116 = t99*t102 - t100*t101
+    t117 = t98*t103 - t100*t100
+    t118 = t99*t100 - t98*t102
+    t119 = t98*t101 - t99*t99
+    t120 = t98*t114 + t99*t115 + t100*t116
+    t121 = t114 + t117 + t119
+    t122 = (t120 > RANK_TOL*t121*t106)
+    t123 = t106*t106
+    t124 = (t121 > RANK_TOL*t123)
+    t125 = np.where((t120 > 0.0), 1.0/t120, 1.0)
+    t126 = t98*t107 + t99*t108 + t100*t109
+    t127 = t99*t107 + t101*t108 + t102*t109
+    t128 = t100*t107 + t102*t108 + t103*t109
+    t129 = np.where((t121 > 0.0), 1.0/(t121*t121), 1.0)
+    t130 = t123 - t121
+    t131 = np.where(t124, np.where(t122, t125*(t114*t104 + t115*t105 + t116*twist[..., 2]), t129*(t107*t130 - t126*t106)), t111)
+    t132 = np.where(t124, np.where(t122, t125*(t115*t104 + t117*t105 + t118*twist[..., 2]), t129*(t108*t130 - t127*t106)), t112)
+    t133 = np.where(t124, np.where(t122, t125*(t116*t104 + t118*t105 + t119*twist[..., 2]), t129*(t109*t130 - t128*t106)), t113)
+    t134 = t94*t131
+    t135 = t94*t132
+    dq3[..., 0] = t133 + t134*t21 + t135*t22
+    dq3[..., 1] = t133 + t134*t19 + t135*t20
+    dq3[..., 2] = t133 + t134*t17 + t135*t18
+    dq3[..., 3] = t133 + t134*t15 + t135*t16
+    dq3[..., 4] = t133 + t8*t135 + t134*t14
 
 
 @_signature_errors
@@ -731,7 +764,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 179 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 193 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (5, 3, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -773,27 +806,45 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
     t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t59 = lambda_*lambda_
-    t60 = t47 + t59
-    t61 = t49 + t59
-    t62 = t60 + t61
-    t65 = 1.0/(t62*t62)
-    t68 = t60*t61 - t48*t48
-    t69 = (t68 > RANK_TOL*t62*t62)
-    t70 = 1.0/t68
-    t73 = target[..., 0] - t22
-    t74 = t21 + target[..., 1]
-    t75 = t60*t73 + t48*t74
-    t76 = t61*t74 + t48*t73
-    t77 = t75*t65
-    t78 = t76*t65
-    t79 = np.where(t69, t70*(t73*t62 - t75), t77)
-    t80 = np.where(t69, t70*(t74*t62 - t76), t78)
-    q_next[..., 0] = q[..., 0] + t79*t21 + t80*t22
-    q_next[..., 1] = q[..., 1] + t79*t19 + t80*t20
-    q_next[..., 2] = q[..., 2] + t79*t17 + t80*t18
-    q_next[..., 3] = q[..., 3] + t79*t15 + t80*t16
-    q_next[..., 4] = q[..., 4] + t8*t80 + t79*t14
+    t50 = (t47 >= t49)
+    t51 = np.where(t50, t47, t49)
+    t52 = t48*np.where((t51 > 0.0), 1.0/t51, 1.0)
+    t53 = np.where(t50, t21, t22)
+    t54 = np.where(t50, t19, t20)
+    t55 = np.where(t50, t17, t18)
+    t56 = np.where(t50, t15, t16)
+    t57 = np.where(t50, t14, t8)
+    t58 = np.where(t50, t22, t21) - t53*t52
+    t59 = np.where(t50, t20, t19) - t54*t52
+    t60 = np.where(t50, t18, t17) - t55*t52
+    t61 = np.where(t50, t16, t15) - t56*t52
+    t62 = np.where(t50, t8, t14) - t57*t52
+    t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
+    t64 = lambda_*lambda_
+    t67 = t47 + t49
+    t68 = t51*t63
+    t69 = t68 + t64*(t67 + t64)
+    t70 = (t69 > RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64))
+    t72 = np.where(t70, 1.0/t69, 1.0)
+    t73 = t64 + t51*(1.0 + t52*t52)
+    t74 = np.where((t73 > 0.0), 1.0/t73, 1.0)
+    t82 = target[..., 0] - t22
+    t83 = t21 + target[..., 1]
+    t84 = np.where(t50, t82, t83)
+    t85 = np.where(t50, t83, t82)
+    t86 = t84 + t85*t52
+    t87 = np.where(t70, t72*(t86*t64 + t84*t63), t86*t74)
+    t88 = np.where(t70, t72*(t85*t64 + t51*(t85 - t84*t52)), 0.0)
+    t89 = t87*t53 + t88*t58
+    t90 = t87*t54 + t88*t59
+    t91 = t87*t55 + t88*t60
+    t92 = t87*t56 + t88*t61
+    t93 = t87*t57 + t88*t62
+    q_next[..., 0] = t89 + q[..., 0]
+    q_next[..., 1] = t90 + q[..., 1]
+    q_next[..., 2] = t91 + q[..., 2]
+    q_next[..., 3] = t92 + q[..., 3]
+    q_next[..., 4] = t93 + q[..., 4]
 
 
 @_signature_errors
@@ -805,7 +856,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 96 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 119 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -826,8 +877,10 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-10 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -871,9 +924,26 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, l, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

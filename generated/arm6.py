@@ -610,15 +610,22 @@ def _manipulability_core(q, l, w):
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
     t60 = (t57 >= t59)
     t61 = np.where(t60, t57, t59)
-    t62 = t58/t61
-    t63 = np.where(t60, t27, t26) - t62*np.where(t60, t26, t27)
-    t64 = np.where(t60, t25, t24) - t62*np.where(t60, t24, t25)
-    t65 = np.where(t60, t23, t22) - t62*np.where(t60, t22, t23)
-    t66 = np.where(t60, t21, t20) - t62*np.where(t60, t20, t21)
-    t67 = np.where(t60, t19, t18) - t62*np.where(t60, t18, t19)
-    t68 = np.where(t60, t10, t17) - t62*np.where(t60, t17, t10)
-    t69 = t63*t63 + t64*t64 + t65*t65 + t66*t66 + t67*t67 + t68*t68
-    w[..., 0] = np.sqrt(t61*t69)
+    t62 = t58*np.where((t61 > 0.0), 1.0/t61, 1.0)
+    t63 = np.where(t60, t26, t27)
+    t64 = np.where(t60, t24, t25)
+    t65 = np.where(t60, t22, t23)
+    t66 = np.where(t60, t20, t21)
+    t67 = np.where(t60, t18, t19)
+    t68 = np.where(t60, t17, t10)
+    t69 = np.where(t60, t27, t26) - t63*t62
+    t70 = np.where(t60, t25, t24) - t64*t62
+    t71 = np.where(t60, t23, t22) - t65*t62
+    t72 = np.where(t60, t21, t20) - t66*t62
+    t73 = np.where(t60, t19, t18) - t67*t62
+    t74 = np.where(t60, t10, t17) - t68*t62
+    t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
+    t80 = t61*t75
+    w[..., 0] = np.sqrt(t80)
 
 
 @_signature_errors
@@ -674,26 +681,47 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
     t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
-    t70 = lambda_*lambda_
-    t71 = t57 + t70
-    t72 = t59 + t70
-    t73 = t71 + t72
-    t74 = t71*v[..., 0] + t58*v[..., 1]
-    t75 = t72*v[..., 1] + t58*v[..., 0]
-    t76 = 1.0/(t73*t73)
-    t77 = t74*t76
-    t78 = t75*t76
-    t79 = t71*t72 - t58*t58
-    t80 = (t79 > RANK_TOL*t73*t73)
-    t81 = 1.0/t79
-    t82 = np.where(t80, t81*(t73*v[..., 0] - t74), t77)
-    t83 = np.where(t80, t81*(t73*v[..., 1] - t75), t78)
-    dq[..., 0] = t82*t26 + t83*t27
-    dq[..., 1] = t82*t24 + t83*t25
-    dq[..., 2] = t82*t22 + t83*t23
-    dq[..., 3] = t82*t20 + t83*t21
-    dq[..., 4] = t82*t18 + t83*t19
-    dq[..., 5] = t10*t83 + t82*t17
+    t60 = (t57 >= t59)
+    t61 = np.where(t60, t57, t59)
+    t62 = t58*np.where((t61 > 0.0), 1.0/t61, 1.0)
+    t63 = np.where(t60, t26, t27)
+    t64 = np.where(t60, t24, t25)
+    t65 = np.where(t60, t22, t23)
+    t66 = np.where(t60, t20, t21)
+    t67 = np.where(t60, t18, t19)
+    t68 = np.where(t60, t17, t10)
+    t69 = np.where(t60, t27, t26) - t63*t62
+    t70 = np.where(t60, t25, t24) - t64*t62
+    t71 = np.where(t60, t23, t22) - t65*t62
+    t72 = np.where(t60, t21, t20) - t66*t62
+    t73 = np.where(t60, t19, t18) - t67*t62
+    t74 = np.where(t60, t10, t17) - t68*t62
+    t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
+    t76 = lambda_*lambda_
+    t77 = np.where(t60, v[..., 0], v[..., 1])
+    t78 = np.where(t60, v[..., 1], v[..., 0])
+    t79 = t57 + t59
+    t80 = t61*t75
+    t81 = t80 + t76*(t79 + t76)
+    t82 = (t81 > RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76))
+    t83 = t77 + t78*t62
+    t84 = np.where(t82, 1.0/t81, 1.0)
+    t85 = t76 + t61*(1.0 + t62*t62)
+    t86 = np.where((t85 > 0.0), 1.0/t85, 1.0)
+    t87 = np.where(t82, t84*(t83*t76 + t77*t75), t83*t86)
+    t88 = np.where(t82, t84*(t78*t76 + t61*(t78 - t77*t62)), 0.0)
+    t89 = t87*t63 + t88*t69
+    t90 = t87*t64 + t88*t70
+    t91 = t87*t65 + t88*t71
+    t92 = t87*t66 + t88*t72
+    t93 = t87*t67 + t88*t73
+    t94 = t87*t68 + t88*t74
+    dq[..., 0] = t89
+    dq[..., 1] = t90
+    dq[..., 2] = t91
+    dq[..., 3] = t92
+    dq[..., 4] = t93
+    dq[..., 5] = t94
 
 
 @_signature_errors
@@ -705,7 +733,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 130 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -752,46 +780,55 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
     t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
-    t70 = lambda_*lambda_
-    t71 = t57 + t70
-    t72 = t59 + t70
-    t79 = t71*t72 - t58*t58
-    t92 = t26 + t24 + t22 + t20 + t18 + t17
-    t93 = t10 + t27 + t25 + t23 + t21 + t19
-    t94 = 6.0 + t70
-    t95 = t71 + t72 + t94
-    t96 = t71*twist[..., 0] + t58*twist[..., 1] + t92*twist[..., 2]
-    t97 = t72*twist[..., 1] + t58*twist[..., 0] + t93*twist[..., 2]
-    t98 = t94*twist[..., 2] + t92*twist[..., 0] + t93*twist[..., 1]
-    t99 = 1.0/(t95*t95)
-    t100 = t96*t99
-    t101 = t97*t99
-    t102 = t98*t99
-    t103 = t72*t94 - t93*t93
-    t104 = t92*t93 - t94*t58
-    t105 = t58*t93 - t72*t92
-    t106 = t71*t94 - t92*t92
-    t107 = t58*t92 - t71*t93
-    t108 = t71*t103 + t58*t104 + t92*t105
-    t109 = t103 + t106 + t79
-    t110 = (t108 > RANK_TOL*t109*t95)
-    t111 = t95*t95
-    t112 = (t109 > RANK_TOL*t111)
-    t113 = 1.0/t108
-    t114 = t71*t96 + t58*t97 + t92*t98
-    t115 = t72*t97 + t58*t96 + t93*t98
-    t116 = t94*t98 + t92*t96 + t93*t97
-    t117 = 1.0/(t109*t109)
-    t118 = t111 - t109
-    t119 = np.where(t112, np.where(t110, t113*(t103*twist[..., 0] + t104*twist[..., 1] + t105*twist[..., 2]), t117*(t96*t118 - t114*t95)), t100)
-    t120 = np.where(t112, np.where(t110, t113*(t104*twist[..., 0] + t106*twist[..., 1] + t107*twist[..., 2]), t117*(t97*t118 - t115*t95)), t101)
-    t121 = np.where(t112, np.where(t110, t113*(t105*twist[..., 0] + t107*twist[..., 1] + t79*twist[..., 2]), t117*(t98*t118 - t116*t95)), t102)
-    dq3[..., 0] = t121 + t119*t26 + t120*t27
-    dq3[..., 1] = t121 + t119*t24 + t120*t25
-    dq3[..., 2] = t121 + t119*t22 + t120*t23
-    dq3[..., 3] = t121 + t119*t20 + t120*t21
-    dq3[..., 4] = t121 + t119*t18 + t120*t19
-    dq3[..., 5] = t121 + t10*t120 + t119*t17
+    t76 = lambda_*lambda_
+    t108 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4] + l[..., 5])
+    t109 = t108*t108
+    t110 = t26 + t24 + t22 + t20 + t18 + t17
+    t111 = t10 + t27 + t25 + t23 + t21 + t19
+    t112 = t109*(t57 + t76)
+    t113 = t58*t109
+    t114 = t110*t108
+    t115 = t109*(t59 + t76)
+    t116 = t111*t108
+    t117 = 6.0 + t76
+    t118 = t108*twist[..., 0]
+    t119 = t108*twist[..., 1]
+    t120 = t112 + t115 + t117
+    t121 = t112*t118 + t113*t119 + t114*twist[..., 2]
+    t122 = t113*t118 + t115*t119 + t116*twist[..., 2]
+    t123 = t114*t118 + t116*t119 + t117*twist[..., 2]
+    t124 = np.where((t120 > 0.0), 1.0/(t120*t120), 1.0)
+    t125 = t121*t124
+    t126 = t122*t124
+    t127 = t123*t124
+    t128 = t115*t117 - t116*t116
+    t129 = t114*t116 - t113*t117
+    t130 = t113*t116 - t114*t115
+    t131 = t112*t117 - t114*t114
+    t132 = t113*t114 - t112*t116
+    t133 = t112*t115 - t113*t113
+    t134 = t112*t128 + t113*t129 + t114*t130
+    t135 = t128 + t131 + t133
+    t136 = (t134 > RANK_TOL*t135*t120)
+    t137 = t120*t120
+    t138 = (t135 > RANK_TOL*t137)
+    t139 = np.where((t134 > 0.0), 1.0/t134, 1.0)
+    t140 = t112*t121 + t113*t122 + t114*t123
+    t141 = t113*t121 + t115*t122 + t116*t123
+    t142 = t114*t121 + t116*t122 + t117*t123
+    t143 = np.where((t135 > 0.0), 1.0/(t135*t135), 1.0)
+    t144 = t137 - t135
+    t145 = np.where(t138, np.where(t136, t139*(t128*t118 + t129*t119 + t130*twist[..., 2]), t143*(t121*t144 - t140*t120)), t125)
+    t146 = np.where(t138, np.where(t136, t139*(t129*t118 + t131*t119 + t132*twist[..., 2]), t143*(t122*t144 - t141*t120)), t126)
+    t147 = np.where(t138, np.where(t136, t139*(t130*t118 + t132*t119 + t133*twist[..., 2]), t143*(t123*t144 - t142*t120)), t127)
+    t148 = t108*t145
+    t149 = t108*t146
+    dq3[..., 0] = t147 + t148*t26 + t149*t27
+    dq3[..., 1] = t147 + t148*t24 + t149*t25
+    dq3[..., 2] = t147 + t148*t22 + t149*t23
+    dq3[..., 3] = t147 + t148*t20 + t149*t21
+    dq3[..., 4] = t147 + t148*t18 + t149*t19
+    dq3[..., 5] = t147 + t10*t149 + t148*t17
 
 
 @_signature_errors
@@ -803,7 +840,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 6).
-    Operations: 6 sin, 6 cos, 196 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 211 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (6, 3, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -850,28 +887,49 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
     t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
-    t70 = lambda_*lambda_
-    t71 = t57 + t70
-    t72 = t59 + t70
-    t73 = t71 + t72
-    t76 = 1.0/(t73*t73)
-    t79 = t71*t72 - t58*t58
-    t80 = (t79 > RANK_TOL*t73*t73)
-    t81 = 1.0/t79
-    t84 = target[..., 0] - t27
-    t85 = t26 + target[..., 1]
-    t86 = t71*t84 + t58*t85
-    t87 = t72*t85 + t58*t84
-    t88 = t86*t76
-    t89 = t87*t76
-    t90 = np.where(t80, t81*(t84*t73 - t86), t88)
-    t91 = np.where(t80, t81*(t85*t73 - t87), t89)
-    q_next[..., 0] = q[..., 0] + t90*t26 + t91*t27
-    q_next[..., 1] = q[..., 1] + t90*t24 + t91*t25
-    q_next[..., 2] = q[..., 2] + t90*t22 + t91*t23
-    q_next[..., 3] = q[..., 3] + t90*t20 + t91*t21
-    q_next[..., 4] = q[..., 4] + t90*t18 + t91*t19
-    q_next[..., 5] = q[..., 5] + t10*t91 + t90*t17
+    t60 = (t57 >= t59)
+    t61 = np.where(t60, t57, t59)
+    t62 = t58*np.where((t61 > 0.0), 1.0/t61, 1.0)
+    t63 = np.where(t60, t26, t27)
+    t64 = np.where(t60, t24, t25)
+    t65 = np.where(t60, t22, t23)
+    t66 = np.where(t60, t20, t21)
+    t67 = np.where(t60, t18, t19)
+    t68 = np.where(t60, t17, t10)
+    t69 = np.where(t60, t27, t26) - t63*t62
+    t70 = np.where(t60, t25, t24) - t64*t62
+    t71 = np.where(t60, t23, t22) - t65*t62
+    t72 = np.where(t60, t21, t20) - t66*t62
+    t73 = np.where(t60, t19, t18) - t67*t62
+    t74 = np.where(t60, t10, t17) - t68*t62
+    t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
+    t76 = lambda_*lambda_
+    t79 = t57 + t59
+    t80 = t61*t75
+    t81 = t80 + t76*(t79 + t76)
+    t82 = (t81 > RANK_TOL*(t79 + 2.0*t76)*(t79 + 2.0*t76))
+    t84 = np.where(t82, 1.0/t81, 1.0)
+    t85 = t76 + t61*(1.0 + t62*t62)
+    t86 = np.where((t85 > 0.0), 1.0/t85, 1.0)
+    t95 = target[..., 0] - t27
+    t96 = t26 + target[..., 1]
+    t97 = np.where(t60, t95, t96)
+    t98 = np.where(t60, t96, t95)
+    t99 = t97 + t98*t62
+    t100 = np.where(t82, t84*(t99*t76 + t97*t75), t99*t86)
+    t101 = np.where(t82, t84*(t98*t76 + t61*(t98 - t97*t62)), 0.0)
+    t102 = t100*t63 + t101*t69
+    t103 = t100*t64 + t101*t70
+    t104 = t100*t65 + t101*t71
+    t105 = t100*t66 + t101*t72
+    t106 = t100*t67 + t101*t73
+    t107 = t100*t68 + t101*t74
+    q_next[..., 0] = t102 + q[..., 0]
+    q_next[..., 1] = t103 + q[..., 1]
+    q_next[..., 2] = t104 + q[..., 2]
+    q_next[..., 3] = t105 + q[..., 3]
+    q_next[..., 4] = t106 + q[..., 4]
+    q_next[..., 5] = t107 + q[..., 5]
 
 
 @_signature_errors
@@ -883,7 +941,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 6).
-    Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 138 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -904,8 +962,10 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
     error decreases; c starts at 0.5, shrinks after a full step and doubles per
     halving (Levenberg-Marquardt). Stops "converged" when the error is <= tol, "stalled" when
-    no shorter step helps or the error improves by less than a relative 1e-10 (an
-    unreachable target: q is then the closest reach found), "max_iter" after max_iter steps.
+    neither a shorter step nor a probe (one joint moved by +-0.01 rad, or a damped step
+    from there; tried when no step helps: a stationary point such as the stretched pose facing a
+    target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
+    is then the closest reach found), "max_iter" after max_iter steps.
     Same algorithm as the C ik_solve.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
@@ -949,9 +1009,26 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
                 break
             alpha = alpha * DTYPE(0.5)
         else:
-            return IKResult(q, "stalled", err, iteration)
+            halving = None
+            # No damped step lowers the error: q is a stationary point of it (a singular pose
+            # facing the target, or the closest reach). Probe each joint by +-0.01 rad
+            # (joint 0 +, joint 0 -, joint 1 +, ...), and a damped step from each probe; move to
+            # the lowest of these poses if it is below the error at q.
+            best, err_trial = None, err
+            for k in range(2 * q.size):
+                probe = q.copy()
+                probe[k // 2] += DTYPE(-0.01 if k % 2 else 0.01)
+                stepped = ik_step(probe, target, l, mu)
+                for candidate in (probe, stepped):
+                    e = error_at(candidate)
+                    if e < err_trial:
+                        best, err_trial = candidate, e
+            if best is None:
+                return IKResult(q, "stalled", err, iteration)
+            trial = best
         # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
-        c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
+        if halving is not None:
+            c = max(c * 0.3333333333333333, 0.0001) if halving == 0 else min(c * 2.0**halving, 10000.0)
         improvement = err - err_trial
         q, err = trial, err_trial
         if err <= tol:

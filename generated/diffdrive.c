@@ -14,6 +14,10 @@
 
 #include "diffdrive.h"
 
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x26ba1c02UL
+#error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
+#endif
+
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
  * Any other compiler uses the same loops with plain calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \

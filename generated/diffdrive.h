@@ -15,29 +15,44 @@
 
 #include <stddef.h> /* size_t only (freestanding header) */
 
+/* Building: link the math library, e.g.  cc app.c diffdrive.c -lm
+ * (without -lm GCC's vectorised sin/cos fail to link: undefined reference to _ZGVbN2v_sin).
+ * Outputs must not alias inputs or each other: the functions are compiled with restrict
+ * pointers, so an in-place call such as diffdrive_ik_step(q, ..., q) is undefined
+ * (only diffdrive_ik_solve's q may be its q0). No function allocates or keeps state;
+ * the stack each needs is stated beside it (its arrays and temporaries, double).
+ * -ffast-math: the finiteness checks of ik_solve test the bits of each number, so they still
+ * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
+ * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to
+ * compile (#error) with a diffdrive.h from another generation. */
+#define DIFFDRIVE_STAMP 0x26ba1c02UL
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* body rates (v, omega) from wheel speeds (v_L, v_R). */
+/* body rates (v, omega) from wheel speeds (v_L, v_R). Stack: about 24 bytes. */
 void diffdrive_body_rates(const double wheels[2], double track, double rates[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: track. */
+ * configuration j at [j*size + k]); shared by all: track.
+ * Stack: about 1080 bytes. */
 void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates);
 
-/* wheel speeds (v_L, v_R) for body rates (v, omega). */
+/* wheel speeds (v_L, v_R) for body rates (v, omega). Stack: about 0 bytes. */
 void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: track. */
+ * configuration j at [j*size + k]); shared by all: track.
+ * Stack: about 1056 bytes. */
 void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, double *wheels);
 
-/* pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R). */
+/* pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R). Stack: about 128 bytes. */
 void diffdrive_pose_rate(const double pose[3], const double wheels[2], double track, double dpose[3]);
 
 /* The same for m configurations stored one after another (element k of
- * configuration j at [j*size + k]); shared by all: track. */
+ * configuration j at [j*size + k]); shared by all: track.
+ * Stack: about 2936 bytes. */
 void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose);
 
 #ifdef __cplusplus

@@ -125,3 +125,104 @@ def test_no_division_by_zero_at_singular_poses_and_zero_lengths(tmp_path, precis
             np.testing.assert_allclose(got[f"w_{tag}"], [w], atol=tol, err_msg=tag)
             assert np.all(np.isfinite(got[f"step_{tag}"])), tag
     assert np.array_equal(got["iv_regular_zero"], np.zeros(3)) and got["w_stretched_zero"][0] == 0.0
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_ik_from_the_stretched_pose_reaches_targets_behind_and_in_front(precision):
+    """q = 0 is singular and, for targets on the x axis, a stationary point of the error: the damped
+    step is zero. Reachable targets must still converge (C and NumPy alike); unreachable ones stall."""
+    from skelarm_sym.build import load_python
+
+    g = generate(2, out=None, precision=precision)
+    impls = {"C": compile_arm(g), "NumPy": load_python(g.sources["arm2.py"], "arm2")}
+    l = np.ones(2)
+    for target in [(0.0, 0.0), (-1.0, 0.0), (0.5, 0.0), (-2.0, 0.0), (1.999, 0.0), (-0.3, 0.0)]:
+        for name, impl in impls.items():
+            result = impl.ik_solve(np.zeros(2), np.array(target), l, 0.0)
+            assert result.status == "converged", (name, target, result)
+            theta = np.cumsum(result.q)
+            reach = np.array([np.sum(l * np.cos(theta)), np.sum(l * np.sin(theta))])
+            assert np.linalg.norm(reach - target) <= (1e-9 if precision == "double" else 1e-4), (name, target)
+    for target, closest in [((3.0, 0.0), 1.0), ((-3.0, 0.0), 1.0)]:  # unreachable: the closest reach, then stalled
+        for name, impl in impls.items():
+            result = impl.ik_solve(np.zeros(2), np.array(target), l, 0.0)
+            assert result.status == "stalled" and abs(result.error - closest) < 1e-4, (name, target, result)
+
+
+@needs_cc
+@pytest.mark.parametrize("compiler", COMPILERS)
+def test_ik_solve_accepts_null_outputs_and_keeps_nan_checks_under_fast_math(tmp_path, compiler):
+    generate(2, out=tmp_path, langs="c", prefix="arm")
+    body = """
+    double q[2], err = -1.0;
+    const double zero[2] = {0.0, 0.0}, l[2] = {1.0, 1.0}, target[2] = {-1.0, 0.0};
+    volatile double nan_ = 0.0;
+    double bad[2], bad_l[2] = {1.0, 1.0};
+    int it = -1, st;
+    nan_ = nan_ / nan_;
+    bad[0] = nan_; bad[1] = 0.0;
+    st = arm_ik_solve(zero, target, l, 0.0, 1e-9, 100, q, NULL, NULL);
+    printf("null %d %.17g %.17g\\n", st, q[0], q[1]);
+    st = arm_ik_solve(zero, target, l, 0.0, 1e-9, 100, q, &err, NULL);
+    printf("null_it %d %.17g\\n", st, err);
+    st = arm_ik_solve(zero, target, l, 0.0, 1e-9, 100, q, NULL, &it);
+    printf("null_err %d %d\\n", st, it);
+    printf("nan_q0 %d\\n", arm_ik_solve(bad, target, l, 0.0, 1e-9, 100, q, NULL, NULL));
+    printf("nan_target %d\\n", arm_ik_solve(zero, bad, l, 0.0, 1e-9, 100, q, NULL, NULL));
+    bad_l[1] = nan_;
+    printf("nan_l %d\\n", arm_ik_solve(zero, target, bad_l, 0.0, 1e-9, 100, q, NULL, NULL));
+    printf("nan_lambda %d\\n", arm_ik_solve(zero, target, l, nan_, 1e-9, 100, q, NULL, NULL));
+    printf("nan_tol %d\\n", arm_ik_solve(zero, target, l, 0.0, nan_, 100, q, NULL, NULL));
+    q[0] = 0.0; q[1] = 0.0;
+    printf("inplace %d\\n", arm_ik_solve(q, target, l, 0.0, 1e-9, 100, q, NULL, NULL));
+    """
+    for flags in (("-O2",), ("-O2", "-ffast-math"), ("-O0",)):
+        run = _driver(tmp_path, "arm", body, flags=flags, compiler=compiler)
+        assert run.returncode == 0, (flags, run.returncode, run.stderr)
+        got = {line.split()[0]: line.split()[1:] for line in run.stdout.splitlines()}
+        assert got["null"][0] == "0" and got["null_it"][0] == "0" and got["null_err"][0] == "0", (flags, got)
+        theta = np.cumsum([float(x) for x in got["null"][1:]])
+        assert abs(np.cos(theta).sum() + 1.0) < 1e-8 and abs(np.sin(theta).sum()) < 1e-8
+        assert float(got["null_it"][1]) <= 1e-9 and int(got["null_err"][1]) > 0
+        for key in ("nan_q0", "nan_target", "nan_l", "nan_lambda", "nan_tol"):
+            assert got[key] == ["3"], (flags, key, got[key])  # ARM_IK_INVALID
+        assert got["inplace"] == ["0"]
+
+
+@needs_cc
+@pytest.mark.parametrize("compiler", COMPILERS)
+def test_strict_and_fast_math_compiles_and_a_mismatched_header_is_an_error(tmp_path, compiler):
+    from skelarm_sym.models.diffdrive import DiffDrive
+
+    cases = [
+        generate(3, out=tmp_path, langs="c", precision="float", lengths=(1.0, 0.8, 0.5), prefix="a3f"),
+        generate(7, out=tmp_path, langs="c", prefix="a7"),
+        generate(DiffDrive(), out=tmp_path, langs="c"),
+    ]
+    for g in cases:
+        c_file = next(name for name in g.sources if name.endswith(".c"))
+        header = g.sources[c_file[:-2] + ".h"]
+        assert "-lm" in header and "_ZGVbN2v_sin" in header and "must not alias" in header
+        for flags in (("-O2",), ("-O0",), ("-O2", "-ffast-math"), ("-O2", "-DSKELARM_NO_SIMD")):
+            cmd = [compiler, *STRICT_FLAGS, *flags, "-c", str(tmp_path / c_file), "-o", str(tmp_path / "x.o")]
+            result = subprocess.run(cmd, capture_output=True, text=True)
+            assert result.returncode == 0 and result.stderr == "", (cmd, result.stderr)
+    # an arm3.h of other options beside an arm3.c: compiling must fail loudly, not link wrong code
+    generate(3, out=tmp_path / "a", langs="c", prefix="arm3")
+    generate(3, out=tmp_path / "b", langs="c", prefix="arm3", precision="float")
+    (tmp_path / "a" / "arm3.h").write_text((tmp_path / "b" / "arm3.h").read_text())
+    result = subprocess.run([compiler, "-std=c99", "-c", str(tmp_path / "a" / "arm3.c"), "-o", str(tmp_path / "x.o")], capture_output=True, text=True)
+    assert result.returncode != 0 and "regenerate both together" in result.stderr
+
+
+def test_header_states_the_stack_each_function_needs():
+    import re
+
+    header = generate(24, out=None, langs="c").sources["arm24.h"]
+    stacks = re.findall(r"void arm24_(\w+)\(", header)
+    sizes = re.findall(r"Stack: about (\d+) (bytes|KB)", header)
+    assert len(sizes) >= len(stacks)  # every function (and batch) says it
+    kin = re.search(r"p, J, H, v and a at once\. Stack: about (\d+) (bytes|KB)", header)
+    kb = int(kin.group(1)) / (1024 if kin.group(2) == "bytes" else 1)
+    # 3 arrays of 24 angles (padded to 24) plus about 18 n temporaries of 8 bytes: a few KB
+    assert 1.0 < kb < 8.0, kin.group(0)

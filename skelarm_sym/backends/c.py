@@ -9,6 +9,7 @@ Other compilers get the same loop with plain calls.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,6 +160,12 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
     )
     itemsize = 8 if ctype == "double" else 4
     soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None)
+    temporaries = len(program.pre) + len(program.post)
+    single_stack = itemsize * (3 * padded + temporaries)
+    if soa:
+        batch_stack = itemsize * (soa * per_config + temporaries + per_config)
+    else:
+        batch_stack = itemsize * (3 * padded * block + temporaries)
     return {
         "name": f"{prefix}_{program.name}",
         "summary": program.summary,
@@ -184,7 +191,16 @@ def function_context(program: Program, precision: CPrecision, prefix: str, share
         "block": block,
         "soa": soa,
         "ops": program.ops.as_dict(),
+        "stack_bytes": single_stack,
+        "stack": stack_text(single_stack),
+        "batch_stack": stack_text(batch_stack),
     }
+
+
+def stack_text(size: int) -> str:
+    """A stack size for the header: bytes, or KB above 4 KB (an estimate from the array sizes and
+    the number of temporaries, all of which an unoptimised build keeps on the stack)."""
+    return f"{size} bytes" if size < 4096 else f"{-(-size // 1024)} KB"
 
 
 def render(derivation, programs: list[Program], options) -> dict[str, str]:
@@ -208,32 +224,46 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
             {"macro": constant_name(options.prefix, c.name), "value": precision.literal(c.values[options.precision]), "doc": c.doc}
             for c in constants.values()
         ],
-        "ik": ik_context(programs, precision, options.prefix, derivation.domains),
+        "ik": ik_context(programs, precision, options.prefix, derivation.domains, functions),
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
     }
-    return {
-        ".h": render_template("c_header.h.j2", **context),
-        ".c": render_template("c_source.c.j2", **context),
-    }
+    placeholder = "@STAMP@"
+    texts = {suffix: render_template(name, stamp=placeholder, **context) for suffix, name in ((".h", "c_header.h.j2"), (".c", "c_source.c.j2"))}
+    stamp = "0x" + hashlib.sha256((texts[".h"] + "\0" + texts[".c"]).encode()).hexdigest()[:8] + "UL"
+    return {suffix: text.replace(placeholder, stamp) for suffix, text in texts.items()}
 
 
-def ik_context(programs: list[Program], precision: CPrecision, prefix: str, domains: dict[str, str]) -> dict | None:
+def ik_context(programs: list[Program], precision: CPrecision, prefix: str, domains: dict[str, str], functions: list[dict]) -> dict | None:
     """The iterative IK solver's layout, when the programs include ``position`` and ``ik_step``."""
     by_name = {p.name: p for p in programs}
     if "position" not in by_name or "ik_step" not in by_name:
         return None
     step, position = by_name["ik_step"], by_name["position"]
     ctype = precision.ctype
+    itemsize = 8 if ctype == "double" else 4
     n = next(a.size for a in step.inputs if a.name == "q")
     target = next(a for a in step.inputs if a.name == "target")
     others = [a for a in step.inputs if a.name != "q"]
     settings = IK_SETTINGS[precision.ctype]
+    params = [f"const {ctype} q0[{n}]"] + _params(others, ctype, True) + [f"{ctype} tol", "int max_iter", f"{ctype} q[{n}]"]
+    position_others = [a for a in position.inputs if a.name != "q"]
+    error_args = ["target"] + [a.name for a in position_others]
     return {
         "name": f"{prefix}_ik_solve",
         "n": n,
         "target_size": target.size,
-        "params": [f"const {ctype} q0[{n}]"] + _params(others, ctype, True)
-        + [f"{ctype} tol", "int max_iter", f"{ctype} q[{n}]", f"{ctype} *error", "int *iterations"],
+        "params": params + [f"{ctype} *error", "int *iterations"],
+        "params_nullable": params + [f"{ctype} *error", "int *iterations"],
+        "run_args": ["q0"] + [a.name for a in others] + ["tol", "max_iter", "q"],
+        "error_params": [f"const {ctype} trial[{n}]", f"const {ctype} target[{target.size}]"] + _params(position_others, ctype, True),
+        "error_args": ", ".join(["trial", *error_args]),
+        "error_args_q": ", ".join(["q", *error_args]),
+        "probe": precision.literal(settings["probe"]),
+        "probe_error_args": ", ".join(["probe", *error_args]),
+        "error_args_next": ", ".join(["q_next", *error_args]),
+        "probe_step_call": f"{prefix}_ik_step(" + ", ".join("mu" if a.is_scalar else "probe" if a.name == "q" else a.name for a in step.inputs) + ", q_next)",
+        "tol": repr(settings["tol"]),
+        "stack": stack_text(itemsize * (2 * n + target.size + 8) + max(f["stack_bytes"] for f in functions if f["name"] in (f"{prefix}_ik_step", f"{prefix}_position"))),
         "lambda": next((a.name for a in others if a.is_scalar), None),
         "checks": [{"name": a.name, "size": a.size} for a in others if not a.is_scalar and domains.get(a.name)],
         "step_call": f"{prefix}_ik_step(" + ", ".join("mu" if a.is_scalar else a.name for a in step.inputs) + ", q_next)",

@@ -18,15 +18,18 @@ ANGLES, COSINES, SINES = "ang", "cs", "sn"
 IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 """Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
 IK_SETTINGS = {
-    "double": {"tol": 1e-9, "halvings": 30, "stall": 1e-10, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
-    "float": {"tol": 1e-4, "halvings": 20, "stall": 1e-6, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4},
+    "double": {"tol": 1e-9, "halvings": 30, "stall": 1e-10, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4, "probe": 1e-2},
+    "float": {"tol": 1e-4, "halvings": 20, "stall": 1e-6, "error_damping": 0.5, "shrink": 1 / 3, "c_min": 1e-4, "c_max": 1e4, "probe": 1e-2},
 }
 """Per precision: step halvings tried per iteration; the relative error improvement below
 which the solver reports STALLED; and the damping schedule ``mu = max(lambda, c |e|)``:
 damping that shrinks with the error (bounded steps near singular poses, fast convergence at
 reachable targets, progress to the closest reach of unreachable ones), with ``c`` starting at
 ``error_damping``, multiplied by ``shrink`` after a full step and doubled per halving, kept
-in ``[c_min, c_max]`` (Levenberg-Marquardt)."""
+in ``[c_min, c_max]`` (Levenberg-Marquardt); ``tol``, the default tolerance (one float reaches);
+``probe``, the joint offset (radians) tried one joint at a time, both signs, when no damped
+step lowers the error (a stationary point such as the stretched pose facing a target behind
+it): the best probe is taken if it lowers the error, else the solver reports STALLED."""
 
 
 def storage_names(

@@ -108,4 +108,5 @@ def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
         "c_min": repr(settings["c_min"]),
         "c_max": repr(settings["c_max"]),
         "stall": repr(settings["stall"]),
+        "probe": repr(settings["probe"]),
     }
