@@ -55,4 +55,16 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     values = {"q": q, "dq": dq, "ddq": ddq}
     if chain.parameters:
         values["params"] = params
-    return [Scenario("", values, expected, condition)]
+    from .derive.chain_inverse import characteristic_length  # inverse functions: hook of chain_inverse
+    from .derive.core import RANK_TOL
+    from .reference.chain_inverse import check_expectations
+
+    forward, forward_condition, solves = check_expectations(
+        numeric, q, k, float(characteristic_length(chain).xreplace(dict(zip(chain.parameters, params))) if chain.parameters else characteristic_length(chain)),
+        RANK_TOL.values[precision], np.random.default_rng(seed + 1), rounded,
+    )
+    expected.update(forward)
+    condition.update(forward_condition)
+    return [Scenario("", values, expected, condition)] + [
+        Scenario(label, {**values, **extra}, want, cond) for label, extra, want, cond in solves
+    ]

@@ -78,10 +78,16 @@ def cross(a, b):
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def characteristic_length(chain) -> sp.Expr:
-    """``L``: the sum of the lengths of the chain's constant translations (base excluded); 1 if zero."""
+def characteristic_length(chain, step=None) -> sp.Expr:
+    """``L``: the sum of the lengths of the chain's constant translations (base excluded); 1 if zero.
+
+    With ``step``, symbolic squared lengths are named first (so ``sqrt(a**2)`` prints as a square root,
+    not as ``Abs``)."""
     parts = [t.translation for j in chain.joints for t in (j.before, j.after)] + [chain.tool.translation]
-    total = sp.Add(*[sp.sqrt(sp.Add(*[sp.sympify(x) ** 2 for x in v])) for v in parts])
+    squares = [sp.Add(*[sp.sympify(x) ** 2 for x in v]) for v in parts]
+    if step is not None:
+        squares = [step(f"reach{i}", e) if e.free_symbols else e for i, e in enumerate(squares)]
+    total = sp.Add(*[sp.sqrt(e) for e in squares])
     if not total.free_symbols:
         value = float(total)
         return sp.Float(value, 17) if value > 0 else sp.S.One
@@ -167,7 +173,7 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
         terms = [G[x][b] * (H[b][x][j] if by_rows else H[x][b][j]) for x in range(length) for b in range(count)]
         grad.append(step(f"mgrad{j}", sp.Add(*terms)))
 
-    reach = characteristic_length(chain)
+    reach = characteristic_length(chain, step)
     if reach.free_symbols:
         reach = step("reach", guarded(reach, sp.StrictGreaterThan(reach, 0)))
     ireach = step("ireach", 1 / reach) if reach.free_symbols else sp.Float(1 / float(reach), 17) if reach != 1 else sp.S.One

@@ -114,3 +114,54 @@ def central_difference(f, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
         e[..., j] = h
         cols.append((np.asarray(f(q + e)) - np.asarray(f(q - e))) / (2 * h))
     return np.stack(cols, axis=-1)
+
+
+def check_expectations(chain, q, kinematics, reach_length: float, rank_tol: float, rng, rounded):
+    """Expected values for the check of the inverse functions (NumPy only; used by ``check_chain``).
+
+    Returns ``(forward, forward_condition, solves)``: outputs computable from ``q`` alone with their
+    tolerance scaling, and a list of ``(label, extra_values, expected, condition)`` for the solves
+    (undamped and damped). ``reach_length`` is the rank rule's characteristic length.
+    """
+    J, T = kinematics.J, kinematics.T
+    m, n = len(q), int(chain.n)
+    Hs = jacobian_hessian(chain, q)
+    w = manipulability(J)
+    row_norms = np.linalg.norm(J, axis=-1)
+    hadamard = np.prod(np.maximum(row_norms, 1e-300), axis=-1) if n >= 6 else np.prod(np.linalg.norm(J, axis=-2), axis=-1)
+    grad = manipulability_gradient(J, Hs)
+    R = T[..., :3, :3]
+    regular = R[..., 0, 0] ** 2 + R[..., 1, 0] ** 2 > 1e-6  # far from gimbal lock: compare with atan2 angles
+    JA = np.where(regular[:, None, None], jacobian_rpy(np.where(regular[:, None, None], T, np.eye(4)), J), np.nan)
+    forward = {
+        "w": w[:, None],
+        "w_position": manipulability(J[..., :3, :])[:, None],
+        "Hs": Hs,
+        "grad": grad,
+    }
+    size = lambda x: np.maximum(1.0, np.abs(x).reshape(m, -1).max(axis=-1))  # noqa: E731
+    hmax = np.abs(Hs).reshape(m, -1).max(axis=-1)
+    condition = {
+        "w": np.maximum(1.0, hadamard / size(w)),
+        "w_position": np.maximum(1.0, np.prod(np.linalg.norm(J[..., :3, :], axis=-1), axis=-1) / size(w)),
+        "Hs": np.maximum(1.0, 3 * hmax / size(Hs)),
+        "grad": np.maximum(1.0, n * hadamard * np.maximum(hmax, 1.0) / size(grad)),
+    }
+    # w is not differentiable where J loses rank: no value to compare the gradient with there
+    sv = np.linalg.svd(J, compute_uv=False)
+    condition["grad"] = np.where(sv[..., -1] > 1e-6 * sv[..., 0], condition["grad"], 1e300)
+    if np.all(regular):
+        forward["JA"] = JA
+        condition["JA"] = np.maximum(1.0, np.abs(J).reshape(m, -1).max(axis=-1) / (R[..., 0, 0] ** 2 + R[..., 1, 0] ** 2) / size(JA))
+    twist = rounded(rng.uniform(-1, 1, (m, 6)))
+    scales = np.array([1 / reach_length] * 3 + [1.0] * 3)
+    solves = []
+    for lam in (0.0, 0.1):
+        dq = damped_least_squares(J, twist, lam, rank_tol, scales)
+        dqp = damped_least_squares(J[..., :3, :], twist[..., :3], lam, rank_tol)
+        c6 = solve_condition(J, lam, rank_tol, scales) * np.maximum(1.0, reach_length)
+        c3 = solve_condition(J[..., :3, :], lam, rank_tol)
+        expected = {"dq": dq, "dq_position": dqp}
+        cond = {"dq": c6 * size(dq) / size(dq), "dq_position": c3}
+        solves.append((f"lambda={lam:g}", {"twist": twist, "v": twist[..., :3], "lambda": lam}, expected, cond))
+    return forward, condition, solves
