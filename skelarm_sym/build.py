@@ -8,7 +8,14 @@ returns ``(..., 2, N)``; batches go through the ``_batch`` C functions.
 
 The shared library lives in a cache folder (``$SKELARM_SYM_CACHE``, else
 ``~/.cache/skelarm-sym``) under the SHA-256 of the sources, compiler and flags,
-so a second call with the same inputs reuses it.
+so a second call with the same inputs reuses it. The cache is private (created
+with mode 0700; one owned by another user or writable by group or others is
+refused) and is trusted only as far as it can be checked: beside each library a
+sidecar ``.sha256`` records the cache key and the SHA-256 of the library as
+built, both flushed to disk before their renames. A library whose sidecar is
+missing or does not match its key or its content (truncated by a power cut,
+copied from another arm, planted) is rebuilt, never loaded. Build folders of
+killed compiles (``.build-PID-*``) are removed by later compiles.
 """
 
 from __future__ import annotations
@@ -17,9 +24,11 @@ import hashlib
 import os
 import shlex
 import shutil
+import stat
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Sequence
 
@@ -29,16 +38,38 @@ from .wrapper import CompiledArm, IKResult, IK_STATUS_NAMES  # noqa: F401 - re-e
 
 DEFAULT_FLAGS = ("-O2",)
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
+STALE_BUILD_SECONDS = 3600
+"""A build folder whose process cannot be identified is removed when older than this."""
 
 
 class CompilerNotFound(InputError):
     """No C compiler could be found."""
 
 
+def _split_command(text: str, origin: str) -> list[str]:
+    try:
+        words = shlex.split(text)
+    except ValueError as exc:
+        raise InputError(f"{origin} {text!r} is not a valid command line: {exc}") from None
+    if not words:
+        raise InputError(f"{origin} is empty")
+    return words
+
+
 def find_compiler(preferred: str | None = None) -> str:
-    """The C compiler to use: ``preferred``, ``$CC``, then cc, gcc, clang on PATH."""
-    for candidate in (preferred, os.environ.get("CC"), "cc", "gcc", "clang"):
-        if candidate and shutil.which(shlex.split(candidate)[0]):
+    """The C compiler to use: ``preferred``, else ``$CC``, else cc, gcc, clang on PATH.
+
+    A compiler named by ``preferred`` or ``$CC`` must exist: it is an error naming it, not a
+    silent fall-back to another compiler."""
+    for origin, named in (("compiler", preferred), ("CC", os.environ.get("CC"))):
+        if named is None or (origin == "CC" and not named.strip()):
+            continue
+        program = _split_command(named, origin)[0]
+        if not shutil.which(program):
+            raise CompilerNotFound(f"{origin} {named!r}: {program!r} is not an executable on PATH")
+        return named
+    for candidate in ("cc", "gcc", "clang"):
+        if shutil.which(candidate):
             return candidate
     raise CompilerNotFound(
         "no C compiler found: install gcc or clang (Debian/Ubuntu: apt-get install gcc) or set CC"
@@ -46,9 +77,91 @@ def find_compiler(preferred: str | None = None) -> str:
 
 
 def cache_folder() -> Path:
-    """Where compiled libraries are kept."""
+    """Where compiled libraries are kept: ``$SKELARM_SYM_CACHE``, else ``~/.cache/skelarm-sym``."""
     root = os.environ.get("SKELARM_SYM_CACHE")
     return Path(root) if root else Path.home() / ".cache" / "skelarm-sym"
+
+
+def private_folder(folder: Path) -> Path:
+    """``folder``, created with mode 0700 if missing; refused if another user owns it or group or
+    others may write to it (they could plant a library that the interpreter would load)."""
+    try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        info = folder.stat()
+    except OSError as exc:
+        raise InputError(f"cannot create the compile cache folder {str(folder)!r}: {exc.strerror or exc} (set SKELARM_SYM_CACHE)") from None
+    if not stat.S_ISDIR(info.st_mode):
+        raise InputError(f"compile cache {str(folder)!r} is not a folder (set SKELARM_SYM_CACHE)")
+    if hasattr(os, "getuid"):
+        if info.st_uid != os.getuid():
+            raise InputError(f"compile cache folder {str(folder)!r} belongs to another user (uid {info.st_uid}); set SKELARM_SYM_CACHE to a folder of your own")
+        if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            raise InputError(f"compile cache folder {str(folder)!r} is writable by group or others (mode {stat.S_IMODE(info.st_mode):o}); chmod 700 it or set SKELARM_SYM_CACHE")
+    return folder
+
+
+def file_sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _sidecar(library: Path) -> Path:
+    return library.with_name(library.name + ".sha256")
+
+
+def verified(library: Path, key: str) -> bool:
+    """Whether ``library`` is the one built for ``key``, unchanged since (its sidecar says so)."""
+    try:
+        recorded = _sidecar(library).read_text(encoding="ascii").split()
+        return len(recorded) == 2 and recorded[0] == key and recorded[1] == file_sha256(library)
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def _durable_replace(source: Path, target: Path) -> None:
+    with open(source, "rb") as handle:
+        os.fsync(handle.fileno())
+    os.replace(source, target)
+    try:
+        fd = os.open(target.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def remove_stale_builds(root: Path) -> list[Path]:
+    """Remove ``root/*/.build-PID-*`` folders of compiles whose process is gone or that are old."""
+    removed = []
+    now = time.time()
+    for work in root.glob("*/.build-*"):
+        parts = work.name.split("-")
+        pid = int(parts[1]) if len(parts) > 2 and parts[1].isdigit() else None
+        try:
+            old = now - work.lstat().st_mtime > STALE_BUILD_SECONDS
+        except OSError:
+            continue
+        if pid == os.getpid() and not old:
+            continue
+        if old or (pid is not None and not _pid_alive(pid)):
+            shutil.rmtree(work, ignore_errors=True)
+            removed.append(work)
+    return removed
 
 
 def compile_shared(
@@ -59,31 +172,46 @@ def compile_shared(
 ) -> Path:
     """Compile the ``.c`` file of ``sources`` (with its headers beside it) into a cached shared library."""
     cc = find_compiler(compiler)
+    cc_words = _split_command(cc, "compiler")
     all_flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), *flags, "-fPIC", "-shared"]
     digest = hashlib.sha256()
     for name in sorted(sources):
         digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
     digest.update(" ".join([cc, *all_flags]).encode())
-    key = digest.hexdigest()[:24]
+    full_key = digest.hexdigest()
+    key = full_key[:24]
     c_files = [name for name in sources if name.endswith(".c")]
     if len(c_files) != 1:
         raise InputError("compile needs exactly one generated .c file (generate with lang 'c')")
     stem = c_files[0][:-2]
     suffix = ".dll" if sys.platform == "win32" else ".so"
-    target = cache_folder() / key / f"lib{stem}{suffix}"
-    if target.exists():
+    root = private_folder(cache_folder())
+    target = root / key / f"lib{stem}{suffix}"
+    if target.exists() and verified(target, full_key):
         return target
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=target.parent) as work:
+    private_folder(target.parent)
+    remove_stale_builds(root)
+    work = Path(tempfile.mkdtemp(prefix=f".build-{os.getpid()}-", dir=target.parent))
+    try:
         for name, text in sources.items():
             if name.endswith((".c", ".h")):
                 Path(work, name).write_text(text, encoding="utf-8")
         tmp_lib = Path(work, target.name)
-        command = [*shlex.split(cc), *all_flags, "-o", str(tmp_lib), str(Path(work, c_files[0])), "-lm"]
-        result = subprocess.run(command, capture_output=True, text=True)
+        command = [*cc_words, *all_flags, "-o", str(tmp_lib), str(Path(work, c_files[0])), "-lm"]
+        try:
+            result = subprocess.run(command, capture_output=True, text=True)
+        except OSError as exc:
+            raise CompilerNotFound(f"cannot run the C compiler {cc!r}: {exc.strerror or exc}") from None
         if result.returncode != 0:
             raise RuntimeError(f"compiling {c_files[0]} failed:\n{' '.join(command)}\n{result.stderr}")
-        os.replace(tmp_lib, target)
+        tmp_sidecar = Path(work, "sidecar")
+        tmp_sidecar.write_text(f"{full_key} {file_sha256(tmp_lib)}\n", encoding="ascii")
+        # the library first, then the sidecar that vouches for it: a crash between leaves a
+        # library without a matching sidecar, which is rebuilt
+        _durable_replace(tmp_lib, target)
+        _durable_replace(tmp_sidecar, _sidecar(target))
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     return target
 
 

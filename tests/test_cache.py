@@ -1,0 +1,186 @@
+"""The compile cache (skelarm_sym/build.py) and the atomic writes (skelarm_sym/files.py): damaged,
+foreign or planted libraries are rebuilt, never loaded; the cache is private; files are flushed
+before they are renamed; leftovers of killed runs are removed."""
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import skelarm_sym.build as build
+import skelarm_sym.files as files
+from skelarm_sym import InputError, reference
+from skelarm_sym.generate import generate
+
+needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")), reason="no C compiler on PATH")
+DEAD_PID = 2**22 + 12345  # above the default pid_max of 4194304: never a running process
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("SKELARM_SYM_CACHE", str(folder))
+    return folder
+
+
+def _sources(n, **options):
+    g = generate(n, out=None, langs="c", **options)
+    return g, {k: v for k, v in g.sources.items() if k.endswith((".c", ".h"))}
+
+
+@needs_cc
+def test_cache_is_created_private_and_records_a_hash(cache):
+    _, sources = _sources(2)
+    lib = build.compile_shared(sources)
+    assert (cache.stat().st_mode & 0o777) == 0o700 and (lib.parent.stat().st_mode & 0o777) == 0o700
+    key, digest = lib.with_name(lib.name + ".sha256").read_text().split()
+    assert digest == build.file_sha256(lib) and key.startswith(lib.parent.name)
+    assert build.compile_shared(sources) == lib  # reused
+
+
+@needs_cc
+def test_truncated_library_is_rebuilt_not_loaded(cache, rng):
+    g, sources = _sources(3)
+    lib = build.compile_shared(sources)
+    good = build.file_sha256(lib)
+    with open(lib, "r+b") as handle:  # what a power cut after an un-synced rename leaves
+        handle.truncate(lib.stat().st_size // 3)
+    # in a child interpreter, so that a regression (loading it) cannot kill the test run
+    script = (
+        "import numpy as np\n"
+        "from skelarm_sym.generate import generate\nfrom skelarm_sym.build import compile_arm\n"
+        "arm = compile_arm(generate(3, out=None, langs='c'))\n"
+        "print(repr(arm.jacobian(np.array([0.1, 0.2, 0.3]), np.array([1.0, 0.8, 0.5])).tolist()))\n"
+    )
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}, timeout=300)
+    assert run.returncode == 0, run.stderr
+    expected = reference.kinematics(np.array([0.1, 0.2, 0.3]), lengths=np.array([1.0, 0.8, 0.5])).J
+    np.testing.assert_allclose(np.array(eval(run.stdout)), expected, atol=1e-14)
+    assert build.file_sha256(lib) == good
+
+
+@needs_cc
+def test_library_of_another_arm_under_the_key_is_not_loaded(cache):
+    _, sources2 = _sources(2)
+    g3, sources3 = _sources(3)
+    lib2, lib3 = build.compile_shared(sources2), build.compile_shared(sources3)
+    good3 = build.file_sha256(lib3)
+    for with_sidecar in (False, True):  # the library alone, then with its own (valid) sidecar
+        shutil.copyfile(lib2, lib3)
+        if with_sidecar:
+            shutil.copyfile(lib2.with_name(lib2.name + ".sha256"), lib3.with_name(lib3.name + ".sha256"))
+        assert build.compile_shared(sources3) == lib3
+        assert build.file_sha256(lib3) == good3
+    arm = build.compile_arm(g3)
+    q, l = np.array([0.3, -0.2, 0.9]), np.array([1.0, 0.8, 0.5])
+    np.testing.assert_allclose(arm.position(q, l), reference.kinematics(q, lengths=l).p, atol=1e-14)
+
+
+@needs_cc
+def test_library_is_flushed_before_it_is_renamed(cache, monkeypatch):
+    events = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(build.os, "fsync", lambda fd: (events.append(("fsync", os.readlink(f"/proc/self/fd/{fd}") if os.path.exists(f"/proc/self/fd/{fd}") else fd)), real_fsync(fd))[1])
+    monkeypatch.setattr(build.os, "replace", lambda a, b: (events.append(("replace", str(a))), real_replace(a, b))[1])
+    _, sources = _sources(1)
+    build.compile_shared(sources)
+    replaced = [path for kind, path in events if kind == "replace"]
+    assert len(replaced) == 2
+    for path in replaced:
+        index = events.index(("replace", path))
+        assert ("fsync", path) in events[:index], events
+
+
+def test_shared_or_foreign_cache_folders_are_refused(tmp_path, monkeypatch):
+    _, sources = _sources(1)
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setenv("SKELARM_SYM_CACHE", str(shared))
+    with pytest.raises(InputError, match="writable by group or others"):
+        build.compile_shared(sources)
+    assert list(shared.iterdir()) == []
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    monkeypatch.setenv("SKELARM_SYM_CACHE", str(blocker / "cache"))
+    with pytest.raises(InputError, match="cannot create the compile cache folder") as info:
+        build.compile_shared(sources)
+    assert "\n" not in str(info.value)
+    if hasattr(os, "geteuid") and os.geteuid() == 0:  # only root can make a folder of another user
+        foreign = tmp_path / "foreign"
+        foreign.mkdir(mode=0o700)
+        os.chown(foreign, 65534, 65534)
+        monkeypatch.setenv("SKELARM_SYM_CACHE", str(foreign))
+        with pytest.raises(InputError, match="belongs to another user"):
+            build.compile_shared(sources)
+
+
+@needs_cc
+def test_build_folders_of_killed_compiles_are_removed(cache):
+    _, sources = _sources(1)
+    lib = build.compile_shared(sources)
+    dead = lib.parent / f".build-{DEAD_PID}-abc"
+    old = lib.parent / ".build-x-old"
+    alive = lib.parent / f".build-{os.getppid()}-busy"  # a running process: maybe compiling now
+    for folder in (dead, old, alive):
+        folder.mkdir()
+        (folder / "partial.so").write_bytes(b"\x7fELF")
+    os.utime(old, (time.time() - 2 * build.STALE_BUILD_SECONDS,) * 2)
+    _, other = _sources(2)
+    build.compile_shared(other)
+    assert not dead.exists() and not old.exists() and alive.exists()
+
+
+def test_missing_or_malformed_compilers_are_named(monkeypatch):
+    monkeypatch.delenv("CC", raising=False)
+    with pytest.raises(build.CompilerNotFound, match="no-such-cc-4711"):
+        build.find_compiler("no-such-cc-4711 -O2")
+    monkeypatch.setenv("CC", "no-such-cc-4712")
+    with pytest.raises(build.CompilerNotFound, match="no-such-cc-4712"):
+        build.find_compiler()
+    monkeypatch.setenv("CC", 'gcc "-O2')
+    with pytest.raises(InputError, match="not a valid command line") as info:
+        build.find_compiler()
+    assert "\n" not in str(info.value)
+    if shutil.which("gcc"):
+        monkeypatch.setenv("CC", "gcc")
+        assert build.find_compiler() == "gcc"
+        assert build.find_compiler("gcc -m64") == "gcc -m64"
+
+
+def test_cli_reports_a_missing_compiler_in_one_line(tmp_path):
+    env = {**os.environ, "CC": "no-such-cc-4713", "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    run = subprocess.run([sys.executable, "-m", "skelarm_sym", "generate", "--links", "2", "--out", str(tmp_path), "--compile"],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert run.returncode != 0 and "no-such-cc-4713" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_files_are_flushed_then_renamed_as_a_set(tmp_path, monkeypatch):
+    events = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(files.os, "fsync", lambda fd: (events.append("fsync"), real_fsync(fd))[1])
+    monkeypatch.setattr(files.os, "replace", lambda a, b: (events.append("replace"), real_replace(a, b))[1])
+    generate(2, out=tmp_path)
+    first = events.index("replace")
+    assert events[:first].count("fsync") >= 3 + 1  # arm2.h, arm2.c, arm2.py and the folder
+    assert events[first:first + 3] == ["replace"] * 3 and events[-1] == "fsync"  # the folder after the renames
+
+
+def test_stale_temporaries_of_killed_runs_are_removed(tmp_path):
+    tmp_path.mkdir(exist_ok=True)
+    dead = tmp_path / f".arm2.c.{DEAD_PID}.k3j.tmp"
+    old = tmp_path / ".arm2.h.x8z2.tmp"  # no pid (an older version): removed when old
+    recent = tmp_path / ".arm2.py.q1w2.tmp"
+    alive = tmp_path / f".arm2.h.{os.getppid()}.zz.tmp"  # a running writer
+    other = tmp_path / f".other.c.{DEAD_PID}.k.tmp"  # another prefix: not ours to remove
+    for path in (dead, old, recent, alive, other):
+        path.write_text("partial")
+    os.utime(old, (time.time() - 2 * files.STALE_SECONDS,) * 2)
+    generate(2, out=tmp_path)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted([recent.name, alive.name, other.name, "arm2.c", "arm2.h", "arm2.py"])
