@@ -1,0 +1,184 @@
+"""Chain inverse functions against NumPy (SVD, pinv, lstsq) and finite differences; singular poses; IK."""
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from skelarm_sym.build import load_python
+from skelarm_sym.derive.chain_inverse import characteristic_length
+from skelarm_sym.generate import generate
+from skelarm_sym.ik import solve_pose, solve_position
+from skelarm_sym.reference import chain_inverse as ref
+
+from test_chain import MIMIC, PANDA, PRISMATIC, PUMA, STANFORD, UR5
+
+
+@lru_cache(maxsize=None)
+def module(chain):
+    g = generate(chain, langs="python", out=None)
+    return load_python(g.sources[f"{chain.name}.py"], chain.name)
+
+
+def scales(chain):
+    L = float(characteristic_length(chain))
+    return np.array([1 / L] * 3 + [1.0] * 3)
+
+
+CHAINS = [UR5, PANDA, STANFORD, MIMIC, PRISMATIC]
+
+
+@pytest.mark.parametrize("chain", CHAINS, ids=lambda c: c.name)
+def test_manipulability_hessian_gradient_match_svd_and_differences(chain):
+    m = module(chain)
+    q = np.random.default_rng(2).uniform(-3, 3, (25, chain.n))
+    J = m.jacobian(q)
+    w = m.manipulability(q)[:, 0]
+    np.testing.assert_allclose(w, ref.manipulability(J), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(m.manipulability_position(q)[:, 0], ref.manipulability(J[:, :3]), rtol=0, atol=1e-14)
+    Hs = m.jacobian_hessian(q)
+    np.testing.assert_allclose(Hs, ref.jacobian_hessian(chain.numeric(), q), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(Hs[0], ref.central_difference(m.jacobian, q[0]), rtol=0, atol=1e-8)
+    grad = m.manipulability_gradient(q)
+    fd = ref.central_difference(lambda x: m.manipulability(x)[..., 0], q)
+    regular = np.linalg.svd(J, compute_uv=False)[:, -1] > 1e-3
+    assert regular.sum() >= 5
+    np.testing.assert_allclose(grad[regular], fd[regular], rtol=0, atol=1e-7)
+
+
+def test_manipulability_keeps_its_digits_near_a_singular_pose():
+    m = module(UR5)
+    for eps in (1e-3, 1e-6, 1e-9):
+        q = np.array([0.3, -1.1, 1.4, 0.2, eps, 0.7])  # wrist singularity at q5 = 0
+        J = m.jacobian(q)
+        s = np.linalg.svd(J, compute_uv=False)
+        w = m.manipulability(q)[0]
+        assert abs(w - np.prod(s)) <= 1e-12 * s[0] ** 6, (eps, w, np.prod(s))
+        assert abs(w / np.prod(s) - 1) < 1e-6  # relative, too (the product of det(JJ^T) loses it at eps=1e-9)
+
+
+SINGULAR = [
+    (UR5, [0.3, -1.1, 1.4, 0.2, 0.0, 0.7]),  # wrist: q5 = 0
+    (UR5, [0.3, -1.1, 0.0, 0.2, 0.9, 0.7]),  # elbow: q3 = 0 (stretched)
+    (PANDA, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),  # stretched Panda
+]
+
+
+@pytest.mark.parametrize("chain, q", SINGULAR, ids=["ur5-wrist", "ur5-elbow", "panda-stretched"])
+def test_undamped_inverse_velocity_at_singular_poses_is_the_pseudo_inverse(chain, q):
+    m = module(chain)
+    q = np.array(q)
+    J = m.jacobian(q)
+    s = np.linalg.svd(J, compute_uv=False)
+    assert s[-1] < 1e-12 * s[0] or chain is PANDA  # really singular (Panda: rank 6 lost in the 6 x 7)
+    twist = np.array([0.3, -0.2, 0.5, 0.4, -0.1, 0.2])
+    dq = m.inverse_velocity(q, twist, 0.0)
+    assert np.all(np.isfinite(dq))
+    want = np.linalg.pinv(J, rcond=1e-10) @ twist
+    np.testing.assert_allclose(dq, want, rtol=0, atol=1e-9 * max(1, np.abs(want).max()))
+    lstsq = np.linalg.lstsq(J, twist, rcond=1e-10)[0]
+    np.testing.assert_allclose(dq, lstsq, rtol=0, atol=1e-9 * max(1, np.abs(want).max()))
+    vel = twist[:3]
+    np.testing.assert_allclose(m.inverse_velocity_position(q, vel, 0.0), np.linalg.pinv(J[:3], rcond=1e-10) @ vel, atol=1e-9)
+    for lam in (1e-3, 0.1):
+        want = J.T @ np.linalg.solve(J @ J.T + lam**2 * np.eye(6), twist)
+        np.testing.assert_allclose(m.inverse_velocity(q, twist, lam), want, rtol=0, atol=1e-9 * max(1, np.abs(want).max()))
+
+
+@pytest.mark.parametrize("chain", CHAINS, ids=lambda c: c.name)
+def test_inverse_velocity_regular_and_damped(chain):
+    m = module(chain)
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-3, 3, (20, chain.n))
+    twist = rng.uniform(-1, 1, (20, 6))
+    J = m.jacobian(q)
+    for lam in (0.0, 0.05, 0.5):
+        got = m.inverse_velocity(q, twist, lam)
+        want = ref.damped_least_squares(J, twist, lam, 1e-12, scales(chain))
+        cond = ref.solve_condition(J, lam, 1e-12, scales(chain))
+        err = np.abs(got - want).max(axis=-1) / np.maximum(1, np.abs(want).max(axis=-1))
+        assert np.all(err <= 1e-14 * cond + 1e-12), (lam, err.max())
+        # normal equations of the damped problem hold in every case
+        res = np.einsum("bri,br->bi", J, np.einsum("bri,bi->br", J, got) - twist) + lam**2 * got
+        assert np.all(np.abs(res).max(axis=-1) <= 1e-9 * np.maximum(1, np.abs(got).max(axis=-1)))
+
+
+def test_the_rank_rule_does_not_depend_on_the_unit_of_length():
+    """Same robot in metres and millimetres at a singular pose: the same rates (in their units)."""
+    from test_chain import dh_table
+
+    rows = lambda k: [  # noqa: E731
+        {"type": "revolute", "d": 0.089159 * k, "alpha": "pi/2"}, {"type": "revolute", "a": -0.425 * k},
+        {"type": "revolute", "a": -0.39225 * k}, {"type": "revolute", "d": 0.10915 * k, "alpha": "pi/2"},
+        {"type": "revolute", "d": 0.09465 * k, "alpha": "-pi/2"}, {"type": "revolute", "d": 0.0823 * k},
+    ]
+    metres, mm = module(dh_table("urm", "standard", rows(1.0))), module(dh_table("urmm", "standard", rows(1000.0)))
+    q = np.array([0.3, -1.1, 1.4, 0.2, 0.0, 0.7])
+    # a reachable twist (the least-squares residual itself weighs metres against radians)
+    twist = metres.jacobian(q) @ np.array([0.3, -0.2, 0.5, 0.4, -0.1, 0.2])
+    a = metres.inverse_velocity(q, twist, 0.0)
+    b = mm.inverse_velocity(q, twist * np.array([1000.0] * 3 + [1.0] * 3), 0.0)
+    np.testing.assert_allclose(a, b, atol=1e-9)
+    np.testing.assert_allclose(a, np.linalg.pinv(metres.jacobian(q), rcond=1e-10) @ twist, atol=1e-9)
+
+
+def test_jacobian_rpy_matches_atan2_angles_and_is_finite_at_gimbal_lock():
+    m = module(PUMA)
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-3, 3, (20, 6))
+    np.testing.assert_allclose(m.jacobian_rpy(q), ref.jacobian_rpy(m.pose(q), m.jacobian(q)), atol=1e-10)
+    # rpy rates integrate the orientation: d(rpy)/dt = JA_w dq against differences of atan2 angles
+    dq = rng.uniform(-1, 1, 6)
+    h = 1e-6
+    d = (ref.rpy(m.pose(q[0] + h * dq)[:3, :3]) - ref.rpy(m.pose(q[0] - h * dq)[:3, :3])) / (2 * h)
+    np.testing.assert_allclose(m.jacobian_rpy(q[0])[3:] @ dq, d, atol=1e-6)
+    # gimbal lock: a pose with R20 = -1 (pitch = pi/2) gives a finite JA with zero roll and yaw rows
+    from scipy.optimize import brentq  # noqa: F401 - only to fail early where SciPy is missing
+
+    def r20(x):
+        return m.pose(np.array([0.0, x, 0.0, 0.0, 0.0, 0.0]))[2, 0] + 1.0
+
+    xs = np.linspace(-np.pi, np.pi, 2001)
+    best = xs[np.argmin([abs(r20(x)) for x in xs])]
+    from scipy.optimize import minimize_scalar
+
+    x = minimize_scalar(r20, bracket=(best - 0.01, best, best + 0.01)).x
+    JA = m.jacobian_rpy(np.array([0.0, x, 0.0, 0.0, 0.0, 0.0]))
+    assert np.all(np.isfinite(JA))
+    if r20(x) < 1e-15:
+        np.testing.assert_array_equal(JA[3], 0.0)
+        np.testing.assert_array_equal(JA[5], 0.0)
+
+
+def test_non_finite_inputs_are_refused():
+    m = module(UR5)
+    q = np.zeros(6)
+    with pytest.raises(ValueError):
+        m.manipulability(np.array([np.nan, 0, 0, 0, 0, 0]))
+    with pytest.raises(ValueError):
+        m.inverse_velocity(q, np.array([np.inf, 0, 0, 0, 0, 0]), 0.0)
+    with pytest.raises(ValueError):
+        m.inverse_velocity(q, np.zeros(6), -1.0)
+    with pytest.raises(ValueError):
+        solve_pose(m, q, np.full((4, 4), np.nan))
+
+
+def test_ik_converges_and_out_of_reach_stalls_at_closest_reach():
+    m = module(PUMA)
+    rng = np.random.default_rng(7)
+    converged = 0
+    for _ in range(10):
+        qt, q0 = rng.uniform(-np.pi, np.pi, 6), rng.uniform(-np.pi, np.pi, 6)
+        r = solve_pose(m, q0, m.pose(qt))
+        if r.status == "converged":
+            converged += 1
+            T = m.pose(r.q)
+            assert np.abs(T[:3, 3] - m.pose(qt)[:3, 3]).max() < 1e-10
+            assert np.abs(T[:3, :3] - m.pose(qt)[:3, :3]).max() < 1e-9
+    assert converged >= 9
+    far = solve_position(m, np.zeros(6), np.array([5.0, 0.0, 0.0]))
+    assert far.status in ("stalled", "max_iter")
+    assert np.all(np.isfinite(far.q))
+    assert abs(far.position_error - (5.0 - np.linalg.norm(m.pose(far.q)[:3, 3]) )) < 1e-3 or far.position_error > 4.0
+    limited = solve_position(m, np.zeros(6), m.pose(np.full(6, 0.5))[:3, 3], limits=([-0.2] * 6, [0.2] * 6))
+    assert np.all(np.abs(limited.q) <= 0.2)
