@@ -320,6 +320,36 @@ def test_panda_zero_pose_flange():
     np.testing.assert_allclose(r.T[:3, :3], [[1, 0, 0], [0, -1, 0], [0, 0, -1]], atol=1e-15)
 
 
+def test_puma560_conventions_describe_the_same_arm():
+    """Corke's standard table and Craig's modified one (joint 2 offset pi): T_std(q) = Rz(pi) T_mod(q).
+
+    Same q, same arm: the Jacobians agree after the same base rotation, and the per-joint axes and
+    origins coincide up to it (the joint-2 and joint-3 axes point the same way, not opposite).
+    """
+    std = load_robot_file(ROBOTS / "puma560.toml").numeric()
+    mod = load_robot_file(ROBOTS / "puma560_modified.toml").numeric()
+    Rz = np.diag([-1.0, -1.0, 1.0, 1.0])
+    rng = np.random.default_rng(560)
+    q, dq, ddq = rng.uniform(-3, 3, (20, 6)), rng.uniform(-2, 2, (20, 6)), rng.uniform(-2, 2, (20, 6))
+    s, m = chain_kinematics(std, q, dq, ddq), chain_kinematics(mod, q, dq, ddq)
+    np.testing.assert_allclose(s.T, Rz @ m.T, atol=1e-15)
+    R6 = np.kron(np.eye(2), Rz[:3, :3])
+    np.testing.assert_allclose(s.J, R6 @ m.J, atol=1e-15)
+    np.testing.assert_allclose(s.dJ, R6 @ m.dJ, atol=1e-14)
+    np.testing.assert_allclose(s.J_tool, m.J_tool, atol=1e-15)
+    np.testing.assert_allclose(s.acc, m.acc @ R6.T, atol=1e-14)
+    np.testing.assert_allclose(s.axes, m.axes @ Rz[:3, :3].T, atol=1e-15)
+    # q = 0 (Corke's "qz", an L shape): tool at (a2 + a3, -d3, d4)
+    zero = chain_kinematics(std, np.zeros(6)).T
+    np.testing.assert_allclose(zero[:3, 3], [0.4318 + 0.0203, -0.15005, 0.4318], atol=1e-15)
+    # Craig's table exactly as printed (joint-2 theta = 0) reverses joint 1 instead
+    craig = Chain("craig", tuple(dh_joint(f"q{i}", "revolute", "modified", a, al, d, 0, i) for i, (a, al, d) in enumerate(
+        [(0, 0, 0), (0, -sp.pi / 2, 0), (0.4318, 0, 0.15005), (0.0203, -sp.pi / 2, 0.4318),
+         (0, sp.pi / 2, 0), (0, -sp.pi / 2, 0)]))).numeric()
+    flipped = q * [-1, 1, 1, 1, 1, 1]
+    np.testing.assert_allclose(s.T, np.diag([1.0, -1.0, -1.0, 1.0]) @ chain_kinematics(craig, flipped).T, atol=1e-15)
+
+
 # -- Pinocchio --------------------------------------------------------------------------------------------
 
 def _pinocchio_model(pin, numeric):
