@@ -89,11 +89,17 @@ def _value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]
     if isinstance(raw, str):
         text = raw.strip()
         if _IDENTIFIER.fullmatch(text) and text != "pi":
+            if text.lower() in ("nan", "inf", "infinity"):
+                raise InputError(f"{what}: {raw!r} is not finite")
             if text in _C_WORDS or keyword.iskeyword(text):
                 raise InputError(f"{what}: parameter name {text!r} is a reserved word")
             return parameters.setdefault(text, sp.Symbol(text, real=True))
         value = parse_expression(text, what)
-        if not value.is_finite:
+        try:
+            finite = bool(value.is_finite) and math.isfinite(float(value))
+        except OverflowError:
+            finite = False
+        if not finite:
             raise InputError(f"{what}: {raw!r} is not finite")
         if angle:  # exact as written; a number close to a multiple of pi/2 snaps to it
             snapped = exact_angle(float(value), what)
