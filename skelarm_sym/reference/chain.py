@@ -80,6 +80,13 @@ def rodrigues(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b over the last axis (broadcasting; np.cross is several times slower on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def _array(value: object, name: str, n: int) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.ndim < 1 or array.shape[-1] != n:
@@ -99,7 +106,7 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
     q, dq, ddq = np.broadcast_arrays(q, dq, ddq)
     batch = q.shape[:-1]
 
-    cross = np.cross
+    cross = _cross
     zero3 = np.zeros(batch + (3,))
 
     def rigid(state, transform):
