@@ -419,3 +419,19 @@ def _random_general_chain(seed: int) -> Chain:
         axis = (0, 0, 1) if i % 2 else tuple(rng.uniform(-1, 1, 3).tolist())
         joints.append(Joint(f"j{i}", kind, frame(), axis, frame(), i, offset=sp.Float(float(rng.uniform(-1, 1)))))
     return Chain(f"random{seed}", tuple(joints), frame(), frame())
+
+
+def test_reference_imports_numpy_only():
+    """The judge shares no code with what it judges: its imports are NumPy and the standard library."""
+    import ast
+
+    import skelarm_sym.reference.chain as module
+
+    tree = ast.parse(Path(module.__file__).read_text())
+    imported = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            imported |= {alias.name.split(".")[0] for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            imported.add("." * node.level + (node.module or ""))
+    assert imported == {"__future__", "dataclasses", "numpy"}, imported
