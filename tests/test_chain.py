@@ -230,3 +230,44 @@ def test_generation_stays_linear_and_fast():
     assert time.perf_counter() - start < 30  # a bound against accidental blow-ups, not a benchmark
     assert kin.ops.sin == kin.ops.cos == 24
     assert kin.ops.arithmetic < 24 * 120
+
+
+def test_joint_limits_are_emitted_in_input_order():
+    from skelarm_sym.models.robot_file import load_robot_file
+
+    chain = load_robot_file(ROBOTS / "panda.toml")
+    limits = chain.limits()
+    g = generate(chain, out=None)
+    module = load_python(g.sources["panda.py"], "panda")
+    np.testing.assert_array_equal(module.Q_MIN, np.array(limits["lower"], dtype=float))
+    np.testing.assert_array_equal(module.Q_MAX, np.array(limits["upper"], dtype=float))
+    np.testing.assert_array_equal(module.DQ_MAX, np.array(limits["velocity"], dtype=float))
+    header = g.sources["panda.h"]
+    values = header.split("#define PANDA_Q_MAX {")[1].split("}")[0]
+    np.testing.assert_array_equal([float(v) for v in values.split(",")], limits["upper"])
+    assert "Joint limits (Q_MIN, Q_MAX, DQ_MAX): " + chain.coordinates[0] in header
+    # a C program can use the initialiser
+    import shutil
+    import subprocess
+    import tempfile
+
+    if shutil.which("cc"):
+        with tempfile.TemporaryDirectory() as tmp:
+            Path(tmp, "panda.h").write_text(header)
+            Path(tmp, "use.c").write_text('#include "panda.h"\nint main(void) { static const double hi[7] = PANDA_Q_MAX; return hi[3] < 0.0 ? 0 : 1; }\n')
+            assert subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "use.c", "-o", "use"], cwd=tmp).returncode == 0
+            assert subprocess.run([str(Path(tmp, "use"))]).returncode == 0
+
+
+def test_urdf_angles_written_as_rounded_multiples_of_half_pi_are_exact(tmp_path):
+    from skelarm_sym.models.urdf import load_urdf
+
+    urdf = tmp_path / "r.urdf"
+    urdf.write_text("""<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
+      <joint name="j1" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 0.1" rpy="1.57079632679 0 3.14159265"/>
+        <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+      <joint name="j2" type="revolute"><parent link="b"/><child link="c"/><origin xyz="0.2 0 0" rpy="1.5708 0 0"/>
+        <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>""")
+    chain = load_urdf(urdf)
+    assert all(e.is_Integer for e in chain.joints[0].before.rotation)  # 11 and 8 decimals: snapped
+    assert not all(e.is_Integer for e in chain.joints[1].before.rotation)  # 4 decimals: kept as written

@@ -16,6 +16,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
+from ..derive.core import UNBOUNDED
 from ..program import Program
 from .common import ANGLES, COSINES, IK_SETTINGS, IK_STATUS, SINES, ArrayPrinterMixin, MemoPrinter, pad, render_template, storage_names
 
@@ -226,6 +227,11 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
         ],
         "ik": ik_context(programs, precision, options.prefix, derivation.domains, functions),
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
+        "tables": [
+            {"macro": constant_name(options.prefix, t.name), "doc": t.doc,
+             "values": [precision.literal(v if v is not None else t.sign * UNBOUNDED[options.precision]) for v in t.values]}
+            for t in derivation.tables
+        ],
     }
     placeholder = "@STAMP@"
     texts = {suffix: render_template(name, stamp=placeholder, **context) for suffix, name in ((".h", "c_header.h.j2"), (".c", "c_source.c.j2"))}

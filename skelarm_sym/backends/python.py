@@ -84,6 +84,11 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
         "constants": [{"name": c.name, "value": repr(c.values[options.precision]), "doc": c.doc} for c in constants.values()],
         "ik": _ik_context(by_name, options.precision),
+        "tables": [
+            {"name": t.name, "doc": t.doc,
+             "values": [repr(float(v)) if v is not None else ("np.inf" if t.sign > 0 else "-np.inf") for v in t.values]}
+            for t in derivation.tables
+        ],
     }
     return {".py": render_template("python_module.py.j2", **context)}
 

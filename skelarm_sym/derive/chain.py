@@ -32,13 +32,14 @@ How (the planar derivation's idea in 3-D; Khalil's customised symbolic method):
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass
 from typing import Sequence
 
 import sympy as sp
 
 from ..models.chain import Chain, Joint, Transform
-from .core import Derivation, FunctionSpec, StepRecorder
+from .core import Derivation, FunctionSpec, StepRecorder, Table
 
 Vector = list  # three SymPy expressions
 
@@ -353,6 +354,8 @@ def derive_chain(chain: Chain) -> ChainDerivation:
         "twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical",
         "acceleration of the tool origin, angular acceleration), all in base axes.",
     )
+    tables, limit_notes = _limit_tables(chain)
+    notes = notes + limit_notes
     derivation = ChainDerivation(
         model=chain,
         inputs=inputs,
@@ -363,7 +366,30 @@ def derive_chain(chain: Chain) -> ChainDerivation:
         parameters=("params",),
         domains={"q": "finite", "dq": "finite", "ddq": "finite", "params": "finite"},
         notes=notes,
+        tables=tables,
     )
     from .chain_inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
 
     return extend(derivation, step, joints, axes, linear, angular, tool_rotation)
+
+
+def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
+    """``Q_MIN``, ``Q_MAX`` (and ``DQ_MAX``) per coordinate when the model has limits, and header lines listing them."""
+    limits = chain.limits()
+    tables: list[Table] = []
+    if any(v is not None for v in limits["lower"] + limits["upper"]):
+        tables.append(Table("Q_MIN", limits["lower"], "lower joint limits in input order (rad or m); unbounded: a huge negative number", -1))
+        tables.append(Table("Q_MAX", limits["upper"], "upper joint limits in input order (rad or m); unbounded: a huge number", 1))
+    if any(v is not None for v in limits["velocity"]):
+        tables.append(Table("DQ_MAX", limits["velocity"], "joint speed limits in input order (rad/s or m/s); unbounded: a huge number", 1))
+    if not tables:
+        return (), ()
+
+    def shown(v):
+        return "-" if v is None else f"{v:g}"
+
+    rows = ", ".join(
+        f"{name} [{shown(lo)}, {shown(hi)}]" + (f" |dq| <= {shown(vel)}" if vel is not None else "")
+        for name, lo, hi, vel in zip(chain.coordinates, limits["lower"], limits["upper"], limits["velocity"])
+    )
+    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX): {rows}.", 100))

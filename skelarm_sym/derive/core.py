@@ -80,6 +80,24 @@ RANK_TOL = Constant(
 :mod:`skelarm_sym.derive.linalg` for 3 x 3 (both: smallest eigenvalue below about RANK_TOL times the largest)."""
 
 
+@dataclass(frozen=True)
+class Table:
+    """A named constant array the emitted code defines (joint limits): one number per coordinate.
+
+    ``None`` entries mean "no limit": they print as -/+ ``UNBOUNDED[precision]`` (a huge finite
+    number in C, +-inf in Python) according to ``sign``.
+    """
+
+    name: str
+    values: tuple[float | None, ...]
+    doc: str
+    sign: int = 1
+
+
+UNBOUNDED = {"double": 1e300, "float": 1e30}
+"""What a missing limit prints as in C (a finite number, so comparisons never trap)."""
+
+
 class StepRecorder:
     """Collects named intermediate quantities.
 
@@ -132,6 +150,7 @@ class Derivation:
         domains: input name -> ``"finite"``, ``"nonnegative"`` (finite and >= 0) or ``"positive"``:
             the Python wrappers reject other values with a ``ValueError``.
         constants: named constants the emitted code defines (see :class:`Constant`).
+        tables: named constant arrays (joint limits) the emitted code defines (see :class:`Table`).
     """
 
     model: object
@@ -145,6 +164,7 @@ class Derivation:
     scalars: tuple[str, ...] = ()
     domains: dict[str, str] = field(default_factory=dict)
     constants: tuple[Constant, ...] = ()
+    tables: tuple[Table, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
 
     # -- symbols --------------------------------------------------------------

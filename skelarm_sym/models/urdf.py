@@ -112,9 +112,32 @@ def _origin(joint: _UrdfJoint) -> Transform:
         return Transform.identity()
     xyz = _numbers(element.get("xyz"), 3, f"{what} xyz", (0.0, 0.0, 0.0))
     rpy = _numbers(element.get("rpy"), 3, f"{what} rpy", (0.0, 0.0, 0.0))
+    written = (element.get("rpy") or "").split() or [None] * 3
     return Transform.from_xyz_rpy(
-        [exact_number(v, f"{what} xyz") for v in xyz], [exact_angle(v, f"{what} rpy") for v in rpy]
+        [exact_number(v, f"{what} xyz") for v in xyz],
+        [written_angle(v, text, f"{what} rpy") for v, text in zip(rpy, written)],
     )
+
+
+WRITTEN_DIGITS = 8
+"""An rpy angle written with at least this many decimals that is the correctly rounded decimal of a
+multiple of pi/2 (``1.57079632679`` in ur_description, ``3.14159265``) is that multiple exactly."""
+
+
+def written_angle(value: float, text: str | None, what: str) -> sp.Expr:
+    """``value`` as an exact angle: within 1e-12 of k pi/2 (see ``exact_angle``), or written as the
+    rounded decimal of k pi/2 with ``WRITTEN_DIGITS`` or more decimals."""
+    angle = exact_angle(value, what)
+    if angle.has(sp.pi) or angle == 0 or text is None:
+        return angle
+    mantissa = text.strip().lower().split("e")[0]
+    if "e" in text.lower() or "." not in mantissa:
+        return angle
+    digits = len(mantissa.split(".")[1])
+    k = round(value / (math.pi / 2))
+    if digits >= WRITTEN_DIGITS and k != 0 and abs(value - k * math.pi / 2) <= 0.5 * 10.0**-digits + 1e-15:
+        return sp.Integer(k) * sp.pi / 2
+    return angle
 
 
 def _axis(joint: _UrdfJoint) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
