@@ -1,4 +1,4 @@
-"""Rewrite generated/ with what the generator emits now (symbolic n = 2..6, one float example, the diffdrive).
+"""Rewrite generated/ with what the generator emits now (symbolic n = 2..6, one float example, the diffdrive, UR5 and Panda).
 
 Run from the repository root: ``PYTHONPATH=. python scripts/regenerate.py``. The tests call
 :func:`regenerate` into a temporary folder and compare byte for byte.
@@ -6,10 +6,16 @@ Run from the repository root: ``PYTHONPATH=. python scripts/regenerate.py``. The
 
 from pathlib import Path
 
+import dataclasses
+
 from skelarm_sym.generate import generate
 from skelarm_sym.models.diffdrive import DiffDrive
+from skelarm_sym.models.robot_file import load_robot_file
 
-OUT = Path(__file__).resolve().parents[1] / "generated"
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "generated"
+ROBOTS = ("ur5", "panda")
+"""Example robots kept in generated/ (from examples/robots/, named by their path from the repository root)."""
 
 
 def regenerate(out: Path = OUT) -> None:
@@ -18,6 +24,10 @@ def regenerate(out: Path = OUT) -> None:
         generate(n, out=out)
     generate(3, lengths=(1.0, 0.8, 0.5), precision="float", prefix="arm3f", out=out)
     generate(DiffDrive(), out=out)
+    for name in ROBOTS:
+        relative = f"examples/robots/{name}.toml"
+        chain = dataclasses.replace(load_robot_file(ROOT / relative), source=relative)
+        generate(chain, out=out)
 
 
 if __name__ == "__main__":

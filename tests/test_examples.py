@@ -45,3 +45,41 @@ def test_diffdrive_doc_signatures_are_what_generate_writes():
     documented = _declarations(doc.split("```c\n", 1)[1].split("```", 1)[0])
     header = generate(DiffDrive(), langs="c", out=None).sources["diffdrive.h"]
     assert len(documented) == 3 and documented <= _declarations(header)
+
+
+def test_ur5_resolved_rate_example_tracks_and_avoids_singularities(capsys):
+    example = runpy.run_path(str(ROOT / "examples" / "ur5_resolved_rate.py"))
+    (plain_error, plain_w, _), (avoid_error, avoid_w, q) = example["main"]()
+    assert plain_error < 1e-5 and avoid_error < 1e-5  # the line is followed either way
+    assert avoid_w > 1.1 * plain_w  # the null-space term keeps the manipulability up
+    assert np.all(np.isfinite(q))
+    assert "with null-space term" in capsys.readouterr().out
+
+
+def test_ur5_c_example_prints_the_reference_pose(tmp_path):
+    import shutil
+    import subprocess
+
+    from skelarm_sym import reference
+    from skelarm_sym.models.robot_file import load_robot_file
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    exe = tmp_path / "ur5_demo"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", f"-I{ROOT / 'generated'}",
+                    str(ROOT / "examples" / "ur5_demo.c"), str(ROOT / "generated" / "ur5.c"), "-o", str(exe), "-lm"], check=True)
+    out = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split()
+    values = np.array([float(x) for x in out])
+    q = np.array([0.1, -1.2, 1.5, -1.9, -1.4, 0.3])
+    dq = np.array([0.2, 0.1, -0.3, 0.4, 0.0, 0.5])
+    k = reference.chain_kinematics(load_robot_file(ROOT / "examples" / "robots" / "ur5.toml").numeric(), q, dq, np.zeros(6))
+    np.testing.assert_allclose(values[:3], k.T[:3, 3], atol=1e-12)
+    np.testing.assert_allclose(values[3:9], k.twist, atol=1e-12)
+
+
+def test_readme_robot_signatures_are_what_generate_writes():
+    header = (ROOT / "generated" / "ur5.h").read_text()
+    readme = (ROOT / "README.md").read_text()
+    block = readme.split("## 3-D robots", 1)[1].split("```c\n", 1)[1].split("```", 1)[0]
+    documented = _declarations(block)
+    assert len(documented) >= 13
+    assert documented <= _declarations(header), documented - _declarations(header)
