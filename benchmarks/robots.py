@@ -11,7 +11,8 @@ cached in ``benchmarks/build/``), with the same ``-O2 -march=native`` as the oth
 runs ``computeJointJacobiansTimeVariation``, ``updateFramePlacement``, ``getFrameJacobian`` and
 ``getFrameJacobianTimeVariation`` in LOCAL_WORLD_ALIGNED, then ``J v`` and ``J a + dJ v``. Every
 program's outputs at the first configuration are compared with the NumPy reference before its
-time is reported. Times: median over 15 passes of 2000 random configurations, ns per call.
+time is reported. Times: median over 15 passes of 2000 random configurations, ns per call. The last two columns time
+the emitted ``inverse_velocity`` (lambda = 1e-3) and ``manipulability_gradient`` the same way.
 """
 
 from __future__ import annotations
@@ -61,14 +62,16 @@ def configs_file(n: int, path: Path, seed: int = 0) -> np.ndarray:
     return data
 
 
-def run(command: list[str], n: int, expected: np.ndarray) -> float:
-    """Run a timing program; check its first outputs against ``expected``; return ns per call."""
+def run(command: list[str], n: int, expected: np.ndarray, extra: bool = False):
+    """Run a timing program; check its first outputs against ``expected``; return ns per call
+    (and, with ``extra``, the emitted program's inverse_velocity and manipulability_gradient ns per call)."""
     out = subprocess.run(command, capture_output=True, text=True, check=True).stdout.split("\n")
     values = np.array([float(x) for x in out[0].split()])
     error = np.abs(values - expected).max()
     if not error < 1e-9 * max(1.0, np.abs(expected).max()):
         raise SystemExit(f"{command[0]}: outputs differ from the reference by {error:.3g}")
-    return float(out[1].split()[0])
+    times = out[1].split()
+    return (float(times[0]), float(times[2]), float(times[3])) if extra else float(times[0])
 
 
 def pinocchio_program(work: Path) -> Path | None:
@@ -99,8 +102,9 @@ def main(argv=None) -> None:
     version = subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
     print(f"compiler: {version}; flags: {' '.join(FLAGS)}")
     print()
-    print("| robot | joints | gen s | sin | cos | arith | C ns/call | recursive C ns/call | ratio | Pinocchio ns/call | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| robot | joints | gen s | sin | cos | arith | C ns/call | recursive C ns/call | ratio | Pinocchio ns/call | ratio "
+          "| inverse_velocity ns | manipulability_gradient ns |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         recursive = work / "chain_recursive"
@@ -122,12 +126,12 @@ def main(argv=None) -> None:
             subprocess.run([cc, *FLAGS, "-std=c99", f"-DPREFIX=b_{chain.name}", f'-DHEADER="b_{chain.name}.h"', f"-DN={chain.n}",
                             f"-I{work / chain.name}", f"-I{HERE}", str(HERE / "chain_emitted.c"),
                             str(work / chain.name / f"b_{chain.name}.c"), "-o", str(exe), "-lm"], check=True)
-            ours = run([str(exe), str(work / f"{chain.name}.cfg")], chain.n, expected)
+            ours, inverse_ns, gradient_ns = run([str(exe), str(work / f"{chain.name}.cfg")], chain.n, expected, extra=True)
             loop = run([str(recursive), str(work / f"{chain.name}.chain"), str(work / f"{chain.name}.cfg")], chain.n, expected)
             pin_ns = run([str(pin), str(work / f"{chain.name}.chain"), str(work / f"{chain.name}.cfg")], chain.n, expected) if pin else None
             pin_text = f"{pin_ns:.1f} | {ours / pin_ns:.2f}" if pin_ns else "- | -"
             print(f"| {chain.name} | {chain.n} | {gen_seconds:.2f} | {ops.sin} | {ops.cos} | {ops.arithmetic} | {ours:.1f} | "
-                  f"{loop:.1f} | {ours / loop:.2f} | {pin_text} |", flush=True)
+                  f"{loop:.1f} | {ours / loop:.2f} | {pin_text} | {inverse_ns:.1f} | {gradient_ns:.1f} |", flush=True)
 
 
 if __name__ == "__main__":
