@@ -1,13 +1,27 @@
-"""Pose and position IK for 3-D chains on top of emitted functions (NumPy side; a C version is left to do).
+"""Pose and position IK for 3-D chains on top of emitted functions (the NumPy side of ``X_ik_solve``).
 
 ``solve_pose(module, q0, target, ...)`` takes any module (or object) with ``pose(q)`` and
-``jacobian(q)`` (the emitted NumPy module or the compiled C wrapper) and runs Levenberg-Marquardt:
-error ``e = [p_t - p; log(R_t R^T)]`` (axis-angle of the rotation from the current to the target
-orientation, in base axes), step ``dq = J^T (J J^T + mu I)^-1 e`` with ``mu = lambda^2 + c |e|^2``
-(Levenberg-Marquardt damping that vanishes at the solution), joint limits by clamping, a step is
-accepted only when it lowers ``|e|`` (else ``c`` grows tenfold). Statuses: ``converged`` (position error
-<= tol and rotation error <= tol), ``stalled`` (no accepted step can lower the error: closest reach),
-``max_iter``, ``invalid`` (non-finite input; raises ``ValueError`` in Python unless ``raise_invalid`` is False).
+``jacobian(q)`` (the emitted NumPy module or the compiled C wrapper; ``ik_terms(q)`` returning both
+at once is used when present) and runs the algorithm of the emitted C ``X_ik_solve`` (same
+constants, same random restarts, so both end with the same status on the same input):
+
+* error ``e = [p_t - p; log3(R_t R^T)]`` in base axes (the Jacobian of this project is
+  LOCAL_WORLD_ALIGNED: ``dq = J^+ e`` moves toward the target to first order);
+* Levenberg-Marquardt step ``dq = J^T (J J^T + mu^2 I)^-1 e`` with ``mu = max(lambda, c |e|)``: a step
+  is accepted when it lowers ``|e|`` (then ``c`` shrinks tenfold, down to ``C_MIN``), else ``c`` grows
+  tenfold; damping vanishes at the solution, so the last steps are Gauss-Newton's (quadratic);
+* joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
+  outward are removed from the step (their columns zeroed, the step solved again), so the free
+  joints still make the progress clamping would kill;
+* restarts: an attempt that stalls (``c > C_MAX``, or an accepted step improving ``|e|`` by less than a
+  relative ``STALL``) or runs ``ATTEMPT`` steps restarts from a random configuration within the limits
+  (``[-pi, pi]`` for unbounded joints), drawn by a xorshift64* generator seeded by ``seed``; steps of
+  all attempts count against ``max_iter``.
+
+Statuses: ``converged`` (``|p_t - p| <= tol`` and ``|log3| <= tol``), ``stalled`` (the budget ran out
+and the best pose found is a stationary point of ``|e|``: an unreachable target's closest reach;
+``q`` is that pose), ``max_iter`` (the budget ran out otherwise; ``q`` is the best pose found),
+``invalid`` (non-finite q0/target/lambda, lambda < 0, tol <= 0, max_iter < 0: ``ValueError``).
 """
 
 from __future__ import annotations
@@ -16,89 +30,254 @@ from dataclasses import dataclass
 
 import numpy as np
 
+C_START = 0.1
+"""Initial damping per unit of error."""
+C_MIN, C_MAX = 1e-8, 1e8
+C_UP, C_DOWN = 4.0, 0.25
+STEP_MAX = 1.0
+"""Largest joint move of one step (rad or m): longer steps are scaled down whole (same direction)."""
+ATTEMPT = 25
+"""Steps of one attempt before a restart."""
+WINDOW, PROGRESS = 8, 0.5
+"""An attempt restarts when its error is above PROGRESS times its error WINDOW steps earlier."""
+TWO_PI = 2.0 * np.pi
+STALL = 1e-9
+"""An accepted step improving |e| by less than this relative amount ends the attempt (stationary point)."""
+SEED = 0x5EED5EED
+"""Default restart seed (the emitted C uses this one)."""
+UNBOUNDED_RANGE = np.pi
+"""Restarts draw unbounded joints from [-pi, pi]."""
+DEFAULT_TOL = {"double": 1e-10, "float": 1e-5}
+PIVOT = 1e-13
+"""LDL^T pivots at most this times the largest diagonal entry are dropped (their unknown set to 0)."""
+_MASK64 = (1 << 64) - 1
+
 
 @dataclass(frozen=True)
 class IKResult:
+    """Final pose ``q``, ``status``, ``position_error`` (m), ``rotation_error`` (rad), ``iterations``
+    (steps taken over all attempts) and ``restarts``."""
+
     q: np.ndarray
     status: str
     position_error: float
     rotation_error: float
     iterations: int
+    restarts: int = 0
+
+    @property
+    def error(self) -> tuple[float, float]:
+        return (self.position_error, self.rotation_error)
+
+
+class XorShift:
+    """xorshift64* (Vigna), the generator of the emitted C solver's restarts."""
+
+    def __init__(self, seed: int) -> None:
+        self.state = (int(seed) ^ 0x9E3779B97F4A7C15) & _MASK64 or 0x9E3779B97F4A7C15
+
+    def uniform(self) -> float:
+        """A double in [0, 1) from the top 53 bits."""
+        s = self.state
+        s ^= s >> 12
+        s ^= (s << 25) & _MASK64
+        s ^= s >> 27
+        self.state = s
+        return (((s * 0x2545F4914F6CDD1D) & _MASK64) >> 11) * (1.0 / 9007199254740992.0)
 
 
 def rotation_log(R: np.ndarray) -> np.ndarray:
-    """Axis-angle vector of a rotation matrix (accurate near 0 and near pi)."""
-    c = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
+    """Axis-angle vector of a rotation matrix, accurate near angle 0 and near pi.
+
+    Near 0: ``vee(R - R^T)/2`` times ``angle/sin(angle)`` (series below 1e-4); away from pi: the same with
+    ``angle = atan2(|v|/2, (tr R - 1)/2)``; within 1e-3 of pi the axis comes from the symmetric part
+    ``(R + R^T)/2 - cos(angle) I = (1 - cos) a a^T``: the column of its largest diagonal entry, signed
+    by ``v`` (which is ``2 sin(angle) a``)."""
     v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    s = np.linalg.norm(v) / 2.0
+    c = (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) / 2.0
+    s = np.sqrt(v @ v) / 2.0
     angle = np.arctan2(s, c)
-    if angle < 1e-6:
-        return v / 2.0 * (1.0 + angle**2 / 6.0)
-    if np.pi - angle > 1e-4:
+    if angle < 1e-4:
+        return v * (0.5 + angle * angle / 12.0)
+    if np.pi - angle > 1e-3:
         return v * (angle / (2.0 * s))
-    # near pi: axis from the symmetric part
-    B = (R + R.T) / 2.0 - c * np.eye(3)
+    B = (R + R.T) / 2.0
     i = int(np.argmax(np.diag(B)))
-    axis = B[:, i] / np.sqrt(max(B[i, i], 1e-300))
+    col = B[:, i].copy()
+    col[i] -= c
+    axis = col / np.sqrt(col @ col)
     if axis @ v < 0:
         axis = -axis
     return axis * angle
 
 
-def _error(T: np.ndarray, target: np.ndarray, position_only: bool) -> np.ndarray:
-    dp = target[:3, 3] - T[:3, 3]
-    if position_only:
-        return dp
-    return np.concatenate([dp, rotation_log(target[:3, :3] @ T[:3, :3].T)])
+def solve_damped(J: np.ndarray, e: np.ndarray, mu2: float, free: np.ndarray | None = None) -> np.ndarray:
+    """``dq = J^T (J J^T + mu2 I)^-1 e`` over the ``free`` columns (others 0), by an unpivoted LDL^T of
+    the small symmetric matrix; a pivot at most ``PIVOT`` times the largest diagonal entry is dropped
+    (its unknown set to zero), so a rank-deficient ``J`` with ``mu2 = 0`` gives a finite step. The
+    emitted C does the same operations in the same order."""
+    Jf = J if free is None else np.where(free, J, 0.0)
+    m = Jf.shape[0]
+    A = Jf @ Jf.T
+    A[np.diag_indices(m)] += mu2
+    cut = PIVOT * max(float(np.max(np.diag(A))), 0.0)
+    L = np.zeros((m, m))
+    d = np.zeros(m)
+    for k in range(m):
+        s = A[k, k] - sum(L[k, j] * L[k, j] * d[j] for j in range(k))
+        d[k] = s if s > cut else 0.0
+        for i in range(k + 1, m):
+            t = A[i, k] - sum(L[i, j] * L[k, j] * d[j] for j in range(k))
+            L[i, k] = t / d[k] if d[k] != 0.0 else 0.0
+    y = np.array(e, dtype=float)
+    for i in range(m):
+        y[i] -= sum(L[i, j] * y[j] for j in range(i))
+    for i in range(m):
+        y[i] = y[i] / d[i] if d[i] != 0.0 else 0.0
+    for i in range(m - 1, -1, -1):
+        y[i] -= sum(L[j, i] * y[j] for j in range(i + 1, m))
+    return Jf.T @ y
 
 
-def _solve(module, q0, target, lam, tol, max_iter, lower, upper, position_only) -> IKResult:
+def _bounds(n: int, limits) -> tuple[np.ndarray, np.ndarray]:
+    if limits is None:
+        return np.full(n, -np.inf), np.full(n, np.inf)
+    if isinstance(limits, dict):
+        lower, upper = limits["lower"], limits["upper"]
+    else:
+        lower, upper = limits
+    lo = np.array([-np.inf if x is None else x for x in lower], dtype=float)
+    hi = np.array([np.inf if x is None else x for x in upper], dtype=float)
+    if lo.shape != (n,) or hi.shape != (n,) or np.any(np.isnan(lo)) or np.any(np.isnan(hi)) or np.any(lo > hi):
+        raise ValueError(f"limits must be {n} pairs lower <= upper")
+    return lo, hi
+
+
+def chain_options(chain) -> dict:
+    """``limits`` and ``periodic`` of a :class:`~skelarm_sym.models.chain.Chain` for :func:`solve_pose`:
+    a coordinate is periodic when every joint it drives is revolute with an integer multiplier (moving
+    it by 2 pi leaves the pose unchanged)."""
+    periodic = [True] * chain.n
+    for j in chain.joints:
+        m = float(j.multiplier)
+        if j.kind != "revolute" or m != round(m):
+            periodic[j.coordinate] = False
+    return {"limits": chain.limits(), "periodic": tuple(periodic)}
+
+
+def _terms(module):
+    if hasattr(module, "ik_terms"):
+        return module.ik_terms
+    return lambda q: (module.pose(q), module.jacobian(q))
+
+
+def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, params, periodic) -> IKResult:
     q = np.array(q0, dtype=float)
     target = np.asarray(target, dtype=float)
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(target)) and np.isfinite(lam) and lam >= 0 and tol > 0 and max_iter >= 0):
-        raise ValueError("q0, target, lambda must be finite, lambda >= 0, tol > 0, max_iter >= 0")
-    lo = np.full(q.shape, -np.inf) if lower is None else np.array([-np.inf if x is None else x for x in lower], dtype=float)
-    hi = np.full(q.shape, np.inf) if upper is None else np.array([np.inf if x is None else x for x in upper], dtype=float)
-    q = np.clip(q, lo, hi)
+    if q.ndim != 1:
+        raise ValueError(f"q0 must be a vector, got shape {q.shape}")
+    lam, tol = float(lam), float(tol)
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(target)) and np.isfinite(lam) and lam >= 0
+            and np.isfinite(tol) and tol > 0 and int(max_iter) == max_iter and max_iter >= 0):
+        raise ValueError("q0, target, lambda must be finite, lambda >= 0, tol > 0 and finite, max_iter a whole number >= 0")
+    max_iter = int(max_iter)
+    n = q.size
+    lo, hi = _bounds(n, limits)
+    wrap = np.zeros(n, dtype=bool) if periodic is None else np.array(periodic, dtype=bool)
+    if wrap.shape != (n,):
+        raise ValueError(f"periodic must have {n} entries")
+    wrap &= hi - lo >= TWO_PI  # a move by 2 pi stays within the limits
+    low_draw = np.where(np.isfinite(lo), lo, -UNBOUNDED_RANGE)
+    span_draw = np.where(np.isfinite(hi), hi, UNBOUNDED_RANGE) - low_draw
     rows = 3 if position_only else 6
-    e = _error(module.pose(q), target, position_only)
-    c = 1e-3
-    for it in range(max_iter + 1):
-        pe = float(np.linalg.norm(e[:3]))
-        re = 0.0 if position_only else float(np.linalg.norm(e[3:]))
+    raw = _terms(module)
+    terms = (lambda x: raw(x, *params)) if params else raw
+    pt, Rt = target[:3, 3], target[:3, :3]
+
+    def evaluate(x):
+        T, J = terms(x)
+        dp = pt - T[:3, 3]
+        if position_only:
+            return dp, np.asarray(J)[:3], float(np.sqrt(dp @ dp)), 0.0
+        dr = rotation_log(Rt @ T[:3, :3].T)
+        return np.concatenate([dp, dr]), np.asarray(J), float(np.sqrt(dp @ dp)), float(np.sqrt(dr @ dr))
+
+    rng = XorShift(seed)
+    q = np.clip(q, lo, hi)
+    e, J, pe, re = evaluate(q)
+    en = float(np.sqrt(e @ e))
+    best = (en, q, pe, re, False)
+    c, attempt, restarts, it = C_START, 0, 0, 0
+    checkpoint = en
+    while True:
         if pe <= tol and re <= tol:
-            return IKResult(q, "converged", pe, re, it)
+            return IKResult(q, "converged", pe, re, it, restarts)
         if it == max_iter:
-            return IKResult(q, "max_iter", pe, re, it)
-        J = module.jacobian(q)[:rows]
-        err2 = float(e @ e)
-        while True:
-            mu = lam**2 + c * err2
-            dq = J.T @ np.linalg.solve(J @ J.T + mu * np.eye(rows), e)
-            trial = np.clip(q + dq, lo, hi)
-            et = _error(module.pose(trial), target, position_only)
-            if float(et @ et) < err2:
-                q, e = trial, et
-                c = max(c / 10.0, 1e-12)
-                break
-            c *= 10.0
-            if c > 1e12:
-                return IKResult(q, "stalled", pe, re, it)
-    raise AssertionError("unreachable")
+            break
+        mu = max(lam, c * en)
+        dq = solve_damped(J, e, mu * mu)
+        blocked = (((q <= lo) & (dq < 0)) | ((q >= hi) & (dq > 0))) & ~wrap
+        if blocked.any():
+            dq = solve_damped(J, e, mu * mu, ~blocked)
+        big = float(np.max(np.abs(dq)))
+        if big > STEP_MAX:
+            dq = dq * (STEP_MAX / big)
+        trial = q + dq
+        if wrap.any():
+            trial = np.where(wrap & (trial > hi), trial - TWO_PI, np.where(wrap & (trial < lo), trial + TWO_PI, trial))
+        trial = np.clip(trial, lo, hi)
+        et, Jt, pet, ret = evaluate(trial)
+        ent = float(np.sqrt(et @ et))
+        it += 1
+        attempt += 1
+        stalled = False
+        if ent < en:
+            stalled = en - ent <= STALL * en
+            q, e, J, pe, re, en = trial, et, Jt, pet, ret, ent
+            c = max(c * C_DOWN, C_MIN)
+        else:
+            c *= C_UP
+            stalled = c > C_MAX
+        if en < best[0]:
+            best = (en, q, pe, re, stalled)
+        elif stalled and en == best[0]:
+            best = (en, q, pe, re, True)
+        if pe <= tol and re <= tol:
+            continue
+        slow = False
+        if attempt % WINDOW == 0:
+            slow = en > PROGRESS * checkpoint
+            checkpoint = en
+        if (stalled or slow or attempt >= ATTEMPT) and it < max_iter:
+            q = low_draw + span_draw * np.array([rng.uniform() for _ in range(n)])
+            e, J, pe, re = evaluate(q)
+            en = float(np.sqrt(e @ e))
+            c, attempt = C_START, 0
+            checkpoint = en
+            restarts += 1
+            if en < best[0]:
+                best = (en, q, pe, re, False)
+    en, q, pe, re, stalled = best
+    return IKResult(q, "stalled" if stalled else "max_iter", pe, re, it, restarts)
 
 
-def solve_pose(module, q0, target, lam: float = 0.0, tol: float = 1e-10, max_iter: int = 100, limits=None) -> IKResult:
-    """Pose IK to ``target`` (4 x 4); ``limits``: ``(lower, upper)`` sequences (``None`` entries: none)."""
-    lower, upper = limits if limits is not None else (None, None)
-    return _solve(module, q0, target, lam, tol, max_iter, lower, upper, False)
+def solve_pose(module, q0, target, lam: float = 0.0, tol: float = 1e-10, max_iter: int = 100, limits=None,
+               seed: int = SEED, params=(), periodic=None) -> IKResult:
+    """Pose IK to ``target`` (4 x 4). ``limits``: ``(lower, upper)`` sequences or ``Chain.limits()``
+    (``None`` entries: unbounded); ``params``: extra arguments of ``pose``/``jacobian`` (symbolic
+    parameters). See the module docstring."""
+    target = np.asarray(target, dtype=float)
+    if target.shape != (4, 4):
+        raise ValueError(f"target must have shape (4, 4), got {target.shape}")
+    return _solve(module, q0, target, lam, tol, max_iter, limits, False, seed, tuple(params), periodic)
 
 
-def solve_position(module, q0, target_position, lam: float = 0.0, tol: float = 1e-10, max_iter: int = 100, limits=None) -> IKResult:
-    """Position-only IK of the tool origin to ``target_position`` (3)."""
-    target = np.eye(4)
+def solve_position(module, q0, target_position, lam: float = 0.0, tol: float = 1e-10, max_iter: int = 100,
+                   limits=None, seed: int = SEED, params=(), periodic=None) -> IKResult:
+    """Position-only IK of the tool origin to ``target_position`` (3); the 3 linear rows of J."""
     p = np.asarray(target_position, dtype=float)
     if p.shape != (3,):
-        raise ValueError("target_position must have shape (3,)")
+        raise ValueError(f"target_position must have shape (3,), got {p.shape}")
+    target = np.eye(4)
     target[:3, 3] = p
-    lower, upper = limits if limits is not None else (None, None)
-    return _solve(module, q0, target, lam, tol, max_iter, lower, upper, True)
+    return _solve(module, q0, target, lam, tol, max_iter, limits, True, seed, tuple(params), periodic)
