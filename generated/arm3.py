@@ -7,10 +7,13 @@ Angles: q[i] is the angle of joint i relative to the previous link, in radians
 (counter-clockwise); dq, ddq are its first and second time derivatives.
 Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewise.
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
-Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;
-the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest
-(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,
-so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
+Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
+solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
+lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
+when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
+trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
+the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
+pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,

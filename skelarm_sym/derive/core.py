@@ -124,10 +124,16 @@ class StepRecorder:
 
 def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
     """Substitute the steps into ``exprs`` (in order), giving closed forms in the inputs only."""
+    exprs = [sp.sympify(e) for e in exprs]
+    needed: set[sp.Symbol] = set().union(*(e.free_symbols for e in exprs)) if exprs else set()
+    for symbol, expr in reversed(steps):  # only the steps these expressions use (the solves' are costly to expand)
+        if symbol in needed:
+            needed |= expr.free_symbols
     closed: dict[sp.Symbol, sp.Expr] = {}
     for symbol, expr in steps:
-        closed[symbol] = expr.xreplace(closed)
-    return [sp.sympify(e).xreplace(closed) for e in exprs]
+        if symbol in needed:
+            closed[symbol] = expr.xreplace(closed)
+    return [e.xreplace(closed) for e in exprs]
 
 
 @dataclass(frozen=True, eq=False)

@@ -24,6 +24,7 @@ The tests check each branch against ``numpy.linalg.pinv``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import sympy as sp
@@ -42,26 +43,108 @@ def gram(step: Recorder, rows: Sequence[Sequence[sp.Expr]], label: str) -> list[
     return out
 
 
+def nonzero(value: sp.Expr) -> sp.Expr:
+    """``value`` where it is positive, else 1: a divisor that is never zero, for a quantity that
+    is only used where it is positive (a select keeps both branches finite)."""
+    return sp.Piecewise((value, sp.StrictGreaterThan(value, 0)), (sp.S.One, True))
+
+
+@dataclass(frozen=True)
+class GramSchmidt2:
+    """One Gram-Schmidt step on the two rows ``x, y`` of ``M`` (see :func:`gram_schmidt2`).
+
+    ``p`` is the longer row (``first``: it is ``x``), ``o`` the other one, ``ratio = p.o / |p|^2``,
+    ``r = o - ratio p`` (orthogonal to ``p``), ``pp = |p|^2``, ``rr = |r|^2``. Then
+    ``M' = [p; o] = [[1, 0], [ratio, 1]] [p; r]`` and ``det(M M^T) = pp * rr`` (no cancellation).
+    """
+
+    first: sp.Expr
+    p: list[sp.Expr]
+    ratio: sp.Expr
+    r: list[sp.Expr]
+    pp: sp.Expr
+    rr: sp.Expr
+
+
+def gram_schmidt2(step: Recorder, rows: Sequence[Sequence[sp.Expr]], G: list[list[sp.Expr]], label: str) -> GramSchmidt2:
+    """The Gram-Schmidt step of a two-row ``M`` with Gram matrix ``G``, pivoting on the longer row.
+
+    One column (``n = 1``): the rows are multiples of each other, so ``r = 0`` exactly (rounding
+    would leave a residual of about eps |o| along ``p``, which a damped solve amplifies by 1/lambda^2).
+    """
+    if len(rows) != 2:
+        raise ValueError("gram_schmidt2 handles two-row matrices")
+    x, y = rows
+    first = step(f"{label}first", sp.GreaterThan(G[0][0], G[1][1]))
+    pivot = step(f"{label}pivot", sp.Piecewise((G[0][0], first), (G[1][1], True)))
+    ratio = step(f"{label}ratio", G[0][1] / nonzero(pivot))
+    p = [step(f"{label}p{i}", sp.Piecewise((a, first), (b, True))) for i, (a, b) in enumerate(zip(x, y))]
+    if len(x) == 1:
+        return GramSchmidt2(first, p, ratio, [sp.S.Zero], pivot, sp.S.Zero)
+    residual = [
+        step(f"{label}r{i}", sp.Piecewise((b, first), (a, True)) - ratio * pi)
+        for i, (a, b, pi) in enumerate(zip(x, y, p))
+    ]
+    rr = step(f"{label}rr", sp.Add(*[r**2 for r in residual]))
+    return GramSchmidt2(first, p, ratio, residual, pivot, rr)
+
+
 def gram_root(step: Recorder, rows: Sequence[Sequence[sp.Expr]], G: list[list[sp.Expr]], label: str) -> sp.Expr:
     """``sqrt(det(M M^T))`` for a two-row ``M`` with Gram matrix ``G`` (from :func:`gram`).
 
     ``det = |x|^2 |y|^2 - (x.y)^2`` cancels catastrophically near a singular pose
     (its square root then carries an error of about sqrt(eps) * |M|^2). Instead
     the shorter row is made orthogonal to the longer one first (one Gram-Schmidt
-    step): with ``x`` the longer row, ``det = |x|^2 |y - (x.y/|x|^2) x|^2``, a product of
-    sums of squares that keeps full relative accuracy and is never negative.
+    step, :func:`gram_schmidt2`): with ``x`` the longer row, ``det = |x|^2 |y - (x.y/|x|^2) x|^2``,
+    a product of sums of squares that keeps full relative accuracy and is never negative.
     """
-    if len(rows) != 2:
-        raise ValueError("gram_root handles two-row matrices")
-    x, y = rows
-    first = step(f"{label}first", sp.GreaterThan(G[0][0], G[1][1]))
-    pivot = step(f"{label}pivot", sp.Piecewise((G[0][0], first), (G[1][1], True)))
-    ratio = step(f"{label}ratio", G[0][1] / pivot)
-    residual = [
-        step(f"{label}r{i}", sp.Piecewise((b, first), (a, True)) - ratio * sp.Piecewise((a, first), (b, True)))
-        for i, (a, b) in enumerate(zip(x, y))
-    ]
-    return sp.sqrt(pivot * step(f"{label}rr", sp.Add(*[r**2 for r in residual])))
+    gs = gram_schmidt2(step, rows, G, label)
+    return sp.sqrt(gs.pp * gs.rr)
+
+
+def damped_solve2(
+    step: Recorder,
+    gs: GramSchmidt2,
+    G: list[list[sp.Expr]],
+    lam2: sp.Expr,
+    rhs: Sequence[sp.Expr],
+    tol: sp.Symbol,
+    label: str,
+) -> list[sp.Expr]:
+    """``M^T (M M^T + lam2 I)^+ rhs`` for a two-row ``M`` from its Gram-Schmidt step ``gs`` (n entries).
+
+    In the orthogonal basis ``p, r`` of the row space (``M' = L [p; r]``, ``L`` unit lower
+    triangular, ``rhs' = (v1, v2)`` permuted as the rows) the damped solution is
+
+        dq = (p (rr v1 + lam2 (v1 + ratio v2)) + r (pp (v2 - ratio v1) + lam2 v2)) / det,
+        det = det(M M^T + lam2 I) = pp rr + lam2 tr(M M^T) + lam2^2
+
+    (Cauchy-Binet: every term is non-negative, nothing cancels). Its error follows the
+    conditioning of the problem: ``r`` carries the rounding of ``M`` (about eps |M|), amplified by
+    ``1 / (rr + lam2)``; the normal-equations form ``M^T adj(A) rhs / det A`` loses a further factor
+    ``cond(A)`` to cancellation (``M^T adj(A)`` is nearly zero in the directions that ``det A``
+    makes small). Rank rule (homogeneous in ``M`` and ``lam2``, so independent of the unit of length
+    when lambda has the unit of ``M``): ``A`` counts as rank one when ``det <= tol tr(A)^2``
+    (smallest eigenvalue below about ``tol`` times the largest), and then ``r`` is dropped:
+    ``dq = p (v1 + ratio v2) / (pp (1 + ratio^2) + lam2)``, the damped (lambda = 0: minimum-norm
+    least-squares) solution of ``[p; ratio p] dq = rhs'``. Divisors are never zero: a zero
+    matrix gives ``dq = 0``.
+    """
+    first = gs.first
+    v1 = step(f"{label}v1", sp.Piecewise((rhs[0], first), (rhs[1], True)))
+    v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
+    trace = step(f"{label}tr", G[0][0] + G[1][1])
+    det = step(f"{label}det", gs.pp * gs.rr + lam2 * (trace + lam2))
+    regular = step(f"{label}regular", sp.StrictGreaterThan(det, tol * (trace + 2 * lam2) ** 2))
+    along = step(f"{label}along", v1 + gs.ratio * v2)
+    inv_det = step(f"{label}idet", 1 / sp.Piecewise((det, regular), (sp.S.One, True)))
+    one = step(f"{label}one", gs.pp * (1 + gs.ratio**2) + lam2)
+    inv_one = step(f"{label}ione", 1 / nonzero(one))
+    alpha = step(f"{label}alpha", sp.Piecewise(((gs.rr * v1 + lam2 * along) * inv_det, regular), (along * inv_one, True)))
+    if all(r == 0 for r in gs.r):
+        return [step(f"{label}x{i}", p * alpha) for i, p in enumerate(gs.p)]
+    beta = step(f"{label}beta", sp.Piecewise(((gs.pp * (v2 - gs.ratio * v1) + lam2 * v2) * inv_det, regular), (sp.S.Zero, True)))
+    return [step(f"{label}x{i}", p * alpha + r * beta) for i, (p, r) in enumerate(zip(gs.p, gs.r))]
 
 
 def add_diagonal(step: Recorder, matrix: list[list[sp.Expr]], value: sp.Expr, label: str) -> list[list[sp.Expr]]:
@@ -104,12 +187,12 @@ def sym_solve(
     A = [list(row) for row in matrix]
     s = step(f"{label}tr", sp.Add(*[A[i][i] for i in range(size)]))
     Ar = _matvec(step, A, rhs, f"{label}Ar")
-    inv_s2 = step(f"{label}is2", 1 / s**2)
+    inv_s2 = step(f"{label}is2", 1 / nonzero(s) ** 2)
     rank_one = [step(f"{label}r1_{i}", x * inv_s2) for i, x in enumerate(Ar)]
     if size == 2:
         d = step(f"{label}det", _cofactor_det(A))
         regular = step(f"{label}regular", sp.StrictGreaterThan(d, tol * s**2))
-        inv_d = step(f"{label}idet", 1 / d)
+        inv_d = step(f"{label}idet", 1 / nonzero(d))
         exact = [(s * r - x) * inv_d for r, x in zip(rhs, Ar)]
         return [step(f"{label}x{i}", sp.Piecewise((e, regular), (o, True))) for i, (e, o) in enumerate(zip(exact, rank_one))]
     if size == 3:
@@ -120,10 +203,10 @@ def sym_solve(
         c2 = step(f"{label}c2", adj[0][0] + adj[1][1] + adj[2][2])
         regular = step(f"{label}regular", sp.StrictGreaterThan(d, tol * s * c2))
         rank_two = step(f"{label}rank2", sp.StrictGreaterThan(c2, tol * s**2))
-        inv_d = step(f"{label}idet", 1 / d)
+        inv_d = step(f"{label}idet", 1 / nonzero(d))
         exact = [sp.Add(*[a * r for a, r in zip(row, rhs)]) * inv_d for row in adj]
         AAr = _matvec(step, A, Ar, f"{label}AAr")
-        inv_c2 = step(f"{label}ic2", 1 / c2**2)
+        inv_c2 = step(f"{label}ic2", 1 / nonzero(c2) ** 2)
         k = step(f"{label}k", s**2 - c2)
         two = [(k * x - s * y) * inv_c2 for x, y in zip(Ar, AAr)]
         return [  # regular is only trusted where rank_two holds (rounding can make c2 and d slightly negative)

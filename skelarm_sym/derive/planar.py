@@ -177,7 +177,7 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             hx[k] = step(f"hx{k + 1}", hx[k + 1] - XW[k])
             hy[k] = step(f"hy{k + 1}", hy[k + 1] - YW[k])
 
-    inverse = _inverse_kinematics(step, q, jx, jy)
+    inverse = _inverse_kinematics(step, q, jx, jy, l_syms)
     a_x = sp.Add(*[jx[k] * ddq[k] for k in range(n)], *[hx[k] * dq[k] for k in range(n)])
     a_y = sp.Add(*[jy[k] * ddq[k] for k in range(n)], *[hy[k] * dq[k] for k in range(n)])
     J = sp.Matrix([jx, jy])
@@ -214,10 +214,13 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             "(counter-clockwise); dq, ddq are its first and second time derivatives.",
             f"Layout: row-major. J[i] = j_x(i), J[{n} + i] = j_y(i) for joint i = 0..{n - 1}; H likewise.",
             "p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.",
-            "Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+;",
-            "the matrix counts as singular when its smallest eigenvalue is below about RANK_TOL times its largest",
-            "(2 x 2: det <= RANK_TOL * trace^2), and then its pseudo-inverse is used in closed form,",
-            "so lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).",
+            "Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,",
+            "solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).",
+            "lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular",
+            "when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *",
+            "trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by",
+            "the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular",
+            "pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).",
             "lambda enters squared (its sign does not matter). The C functions do not check their inputs:",
             "a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.",
         ),
@@ -230,7 +233,7 @@ class _Inverse:
     outputs: dict[str, sp.Matrix]
 
 
-def _inverse_kinematics(step: StepRecorder, q, jx, jy) -> _Inverse:
+def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
     """Manipulability, damped inverse velocity (2 and 3 rows) and the damped IK step, as steps.
 
     ``J J^T`` is three sums over the columns (linear in n); every solve is the
@@ -244,25 +247,37 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy) -> _Inverse:
     tol = RANK_TOL.symbol
 
     G = linalg.gram(step, [jx, jy], "G")
-    w = linalg.gram_root(step, [jx, jy], G, "w")
+    gs = linalg.gram_schmidt2(step, [jx, jy], G, "w")
+    w = sp.sqrt(gs.pp * gs.rr)
     lam2 = step("lam2", lam**2)
-    A = linalg.add_diagonal(step, G, lam2, "A")
 
-    def back(u):  # J^T u
-        return [jx[i] * u[0] + jy[i] * u[1] for i in range(n)]
-
-    dq = back(linalg.sym_solve(step, A, v_in, tol, "iv"))
+    dq = linalg.damped_solve2(step, gs, G, lam2, v_in, tol, "iv")
     err = [step("ex", target[0] - jy[0]), step("ey", target[1] + jx[0])]
-    dq_ik = back(linalg.sym_solve(step, A, err, tol, "ik"))
+    dq_ik = linalg.damped_solve2(step, gs, G, lam2, err, tol, "ik")
     q_next = [q[i] + dq_ik[i] for i in range(n)]
 
     inputs = {"v": v_in, "target": target, "lambda": (lam,)}
     outputs = {"w": sp.Matrix([w]), "dq": sp.Matrix(dq), "q_next": sp.Matrix(q_next)}
     if n >= 3:  # with the orientation row (all ones): J3 J3^T + lambda^2 I, 3 x 3
+        # Rows x, y are lengths and the orientation row is a number: solve S y = D twist with
+        # S = D A D, D = diag(1/reach, 1/reach, 1), reach = l1 + ... + ln, so that the rank rule
+        # compares dimensionless eigenvalues (A^-1 = D S^-1 D where A is regular).
+        reach = sp.Add(*lengths)
+        ireach = step("ireach", 1 / linalg.nonzero(reach)) if not reach.is_number else sp.S.One / reach
+        ireach2 = step("ireach2", ireach**2)
         sx = step("Gsx", sp.Add(*jx))
         sy = step("Gsy", sp.Add(*jy))
-        G3 = [[G[0][0], G[0][1], sx], [G[0][1], G[1][1], sy], [sx, sy, sp.Integer(n)]]
-        u3 = linalg.sym_solve(step, linalg.add_diagonal(step, G3, lam2, "A3_"), twist, tol, "iv3")
+        S = [
+            [step("S00", (G[0][0] + lam2) * ireach2), step("S01", G[0][1] * ireach2), step("S02", sx * ireach)],
+            [None, step("S11", (G[1][1] + lam2) * ireach2), step("S12", sy * ireach)],
+            [None, None, step("S22", sp.Integer(n) + lam2)],
+        ]
+        for i in range(3):
+            for j in range(i):
+                S[i][j] = S[j][i]
+        scaled = [step("tsx", twist[0] * ireach), step("tsy", twist[1] * ireach), twist[2]]
+        y = linalg.sym_solve(step, S, scaled, tol, "iv3")
+        u = [step("iv3u0", y[0] * ireach), step("iv3u1", y[1] * ireach), y[2]]
         inputs["twist"] = twist
-        outputs["dq3"] = sp.Matrix([jx[i] * u3[0] + jy[i] * u3[1] + u3[2] for i in range(n)])
+        outputs["dq3"] = sp.Matrix([jx[i] * u[0] + jy[i] * u[1] + u[2] for i in range(n)])
     return _Inverse(inputs, outputs)

@@ -1,0 +1,134 @@
+"""Issue 13 (1): rank decisions independent of the unit of length; the 2 x 2 damped solve as accurate
+as the damped problem allows. Emitted C and NumPy against NumPy's SVD/lstsq in double."""
+
+import numpy as np
+import pytest
+
+from skelarm_sym import reference
+from skelarm_sym.build import compile_arm, load_python
+from skelarm_sym.generate import generate
+
+
+def _impls(n, precision):
+    g = generate(n, out=None, precision=precision)
+    return compile_arm(g), load_python(g.sources[f"arm{n}.py"], f"arm{n}")
+
+
+def _scaled(J3, reach):
+    D = np.array([1 / reach, 1 / reach, 1.0])
+    return D, D[:, None] * J3
+
+
+def _pinv3(J3, twist, reach):
+    """Minimum-norm least squares with position errors measured in units of the reach (scale-free)."""
+    D, S = _scaled(J3, reach)
+    return np.linalg.lstsq(S, D * twist, rcond=1e-12)[0]
+
+
+@pytest.mark.parametrize("precision, length", [("float", 500.0), ("float", 1e-3), ("double", 1e6), ("double", 1e-6)])
+def test_inverse_velocity3_keeps_every_direction_in_any_unit(precision, length, rng):
+    """Before: float with lengths 500 dropped the orientation direction (median relative error 0.84)."""
+    dtype = np.float32 if precision == "float" else np.float64
+    impls = _impls(3, precision)
+    l = np.array([1.0, 0.8, 0.6]) * length
+    reach = l.sum()
+    checked = 0
+    errors = []
+    for _ in range(60):
+        q = rng.uniform(-np.pi, np.pi, 3).astype(dtype)
+        twist = (rng.uniform(-1, 1, 3) * [reach, reach, 1.0]).astype(dtype)
+        J3 = reference.kinematics(q.astype(float), lengths=l.astype(dtype).astype(float)).J3
+        s = np.linalg.svd(_scaled(J3, reach)[1], compute_uv=False)
+        if s[-1] < 0.05 * s[0]:  # well away from the singular poses: every method must keep all directions
+            continue
+        want = np.linalg.solve(J3, twist.astype(float))
+        for impl in impls:
+            got = impl.inverse_velocity3(q, twist, l.astype(dtype), 0.0).astype(float)
+            errors.append(np.linalg.norm(got - want) / np.linalg.norm(want))
+        checked += 1
+    assert checked > 20
+    bound = 2e-4 if precision == "float" else 1e-11
+    assert max(errors) < bound, (np.median(errors), max(errors))
+
+
+@pytest.mark.parametrize("length", [5e4, 1e6, 1e-6])
+def test_inverse_velocity3_at_singular_poses_is_the_scaled_pseudo_inverse(length, rng):
+    """Before: double with lengths >= 5e4 at singular poses was wrong by a factor of 600 (median)."""
+    impls = _impls(3, "double")
+    l = np.array([1.0, 0.7, 0.4]) * length
+    reach = l.sum()
+    for k in range(20):
+        q = np.array([rng.uniform(-np.pi, np.pi), np.pi * (k % 2), np.pi * ((k // 2) % 2)])
+        twist = rng.uniform(-1, 1, 3) * [reach, reach, 1.0]
+        J3 = reference.kinematics(q, lengths=l).J3
+        want = _pinv3(J3, twist, reach)
+        for impl in impls:
+            got = impl.inverse_velocity3(q, twist, l, 0.0)
+            np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.linalg.norm(want))
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_rank_decisions_do_not_depend_on_the_unit_of_length(n, rng):
+    """Scaling every length (and lambda, a length too) by k leaves all joint rates unchanged.
+
+    (inverse_velocity3 only undamped: lambda^2 I adds the same lambda^2 to the length rows and to the
+    orientation row, so the damped 3 x 3 problem itself changes with the unit.)"""
+    c, py = _impls(n, "double")
+    l = rng.uniform(0.3, 1.5, n)
+    poses = [rng.uniform(-np.pi, np.pi, n) for _ in range(10)] + [np.zeros(n), np.r_[0.4, np.full(n - 1, np.pi)]]
+    poses += [np.r_[0.3, 1e-5, np.zeros(n - 2)]]  # near singular: the rule decides between the branches
+    for q in poses:
+        v = rng.uniform(-1, 1, 2)
+        twist = rng.uniform(-1, 1, 3)
+        for lam in (0.0, 1e-3, 0.2):
+            base = [impl.inverse_velocity(q, v, l, lam) for impl in (c, py)]
+            base3 = [impl.inverse_velocity3(q, twist, l, lam) for impl in (c, py)] if n >= 3 and lam == 0 else []
+            for k in (1e-3, 2.0**20 / 3, 1e6):
+                for impl, want in zip((c, py), base):
+                    np.testing.assert_allclose(impl.inverse_velocity(q, k * v, k * l, k * lam), want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+                for impl, want in zip((c, py), base3):
+                    # the 3 x 3 solve keeps about eps cond(S)^2 of its result (S: J3 with rows in reach units);
+                    # a different rank decision would change the result completely
+                    s = np.linalg.svd(_scaled(reference.kinematics(q, lengths=l).J3, l.sum())[1], compute_uv=False)
+                    rtol = 1e-9 + 1e3 * 2.2e-16 * min(1e7, s[0] / max(s[-1], 1e-300)) ** 2
+                    scaled = impl.inverse_velocity3(q, twist * [k, k, 1.0], k * l, k * lam)
+                    np.testing.assert_allclose(scaled, want, rtol=rtol, atol=1e-10 * max(1.0, np.abs(want).max()))
+
+
+def _damped(J, v, lam):
+    n = J.shape[1]
+    return np.linalg.lstsq(np.vstack([J, lam * np.eye(n)]), np.r_[v, np.zeros(n)], rcond=None)[0]
+
+
+@pytest.mark.parametrize("precision, lam, bound", [("float", 0.01, 1e-4), ("double", 1e-4, 1e-12)])
+def test_one_link_damped_solve_follows_the_damped_problem(precision, lam, bound, rng):
+    """n = 1: J J^T is singular but the damped problem is well conditioned.
+    Before: float, lambda = 0.01: 6e-2 relative; double, lambda = 1e-4: 1.3e-6."""
+    dtype = np.float32 if precision == "float" else np.float64
+    for impl in _impls(1, precision):
+        errors = []
+        for _ in range(200):
+            q = rng.uniform(-np.pi, np.pi, 1).astype(dtype)
+            l = np.array([rng.uniform(0.5, 2.0)], dtype=dtype)
+            v = rng.uniform(-1, 1, 2).astype(dtype)
+            J = reference.kinematics(q.astype(float), lengths=l.astype(float)).J
+            want = _damped(J, v.astype(float), lam)
+            got = impl.inverse_velocity(q, v, l, lam).astype(float)
+            # relative to the size of the terms: J^T v / |J|^2 cancels when v is nearly normal to J
+            errors.append(abs(got - want).max() / (np.linalg.norm(v) / np.linalg.norm(J)))
+        assert max(errors) < bound, max(errors)
+
+
+def test_two_link_undamped_solve_error_follows_cond_J_not_its_square(rng):
+    """Near a singular pose (cond(J) about 1e6) the exact inverse keeps about eps cond(J)."""
+    c, py = _impls(2, "double")
+    l = np.array([1.0, 0.8])
+    for q2 in (1e-3, 1e-5, 1e-6):
+        q = np.array([0.7, q2])
+        J = reference.kinematics(q, lengths=l).J
+        v = rng.uniform(-1, 1, 2)
+        want = np.linalg.solve(J, v)
+        s = np.linalg.svd(J, compute_uv=False)
+        for impl in (c, py):
+            got = impl.inverse_velocity(q, v, l, 0.0)
+            assert np.linalg.norm(got - want) / np.linalg.norm(want) < 50 * 2.2e-16 * s[0] / s[1]
