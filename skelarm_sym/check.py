@@ -88,12 +88,25 @@ class Scenario:
 
 
 DAMPINGS = (0.0, 0.1)
-"""The check runs the inverse functions undamped (exact and pseudo-inverses) and damped."""
+"""The check runs the inverse functions undamped (exact and pseudo-inverses) and damped (lambda = 0.1 reach)."""
+
+CUTOFF_FACTOR = 10
+
+
+def solve_cutoff(precision: str, n: int) -> float:
+    """Relative SVD cutoff of the reference solves: ``10 n eps`` of the working precision.
+
+    The emitted code computes ``J`` in that precision; its entries are sums of up to ``n`` rounded terms,
+    so singular values below about ``n eps`` times the largest cannot be told from zero. The cutoff is
+    relative (scale-free) and owes nothing to the generator's rank rule: where the two disagree (the
+    code drops a direction the reference keeps) the reference's condition number, the square of the
+    kept singular-value ratio, is at least ``1 / RANK_TOL`` and the tolerance scales with it.
+    """
+    return CUTOFF_FACTOR * max(n, 2) * EPSILONS[precision]
 
 
 def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[Scenario]:
     """Scenarios for a planar arm: forward outputs from the recursion, solves from NumPy linear algebra."""
-    from .derive import RANK_TOL
 
     n = derivation.n
     dtype = np.float64 if precision == "double" else np.float32
@@ -101,9 +114,10 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
     q, dq, ddq, l = (rounded(x) for x in check_cases(n, cases, seed, derivation.model.lengths))
     m = len(q)
     rng = np.random.default_rng(seed + 1)
-    v = rounded(rng.uniform(-1, 1, (m, 2)))
-    twist = rounded(rng.uniform(-1, 1, (m, 3)))
     reach = float(l.sum())
+    # commanded velocities of the arm's own size (lengths per second), so errors in dq are relative to O(1)
+    v = rounded(rng.uniform(-1, 1, (m, 2)) * reach)
+    twist = rounded(rng.uniform(-1, 1, (m, 3)) * [reach, reach, 1.0])
     k = reference.kinematics(q, dq, ddq, l)
     reachable = reference.kinematics(rng.uniform(-np.pi, np.pi, (m, n)), None, None, l).p
     target = rounded(np.where(rng.uniform(size=(m, 1)) < 0.5, reachable, rng.uniform(-1.2 * reach, 1.2 * reach, (m, 2))))
@@ -126,23 +140,20 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
         for name, size in sizes.items()
     }
     scenarios = [Scenario("", values, forward, condition)]
-    tol = RANK_TOL.values[precision]
-    # In the rank-deficient branch the closed-form pseudo-inverse differs from the truncated one by
-    # about (dropped eigenvalue) / (smallest kept one) <= tol * condition.
-    floor = max(1.0, 4 * tol / tolerance(precision, n))
+    rcond = solve_cutoff(precision, n)
+    D3 = np.array([1.0 / reach, 1.0 / reach, 1.0])  # the orientation row against lengths measured in reaches
     for lam in DAMPINGS:
+        lam_run = float(rounded(lam * reach))  # lambda is a length: damp in proportion to the arm
         solves = {
-            "dq": reference.damped_least_squares(k.J, v, lam, tol),
-            "q_next": reference.damped_least_squares(k.J, target - k.p, lam, tol),
+            "dq": reference.damped_least_squares(k.J, v, lam_run, rcond),
+            "q_next": reference.damped_least_squares(k.J, target - k.p, lam_run, rcond),
         }
         if "twist" in derivation.inputs:
-            solves["dq3"] = reference.damped_least_squares(k.J3, twist, lam, tol)
+            solves["dq3"] = reference.damped_least_squares(k.J3, twist, lam_run, rcond, D3)
         expected = {name: s.x for name, s in solves.items()}
         expected["q_next"] = q + expected["q_next"]
-        condition = {
-            name: np.where(s.regular, s.condition, s.condition * floor) for name, s in solves.items()
-        }
-        scenarios.append(Scenario(f"lambda={lam:g}", {**values, "lambda": lam}, expected, condition))
+        condition = {name: s.condition for name, s in solves.items()}
+        scenarios.append(Scenario(f"lambda={lam:g}*reach", {**values, "lambda": lam_run}, expected, condition))
     return scenarios
 
 
@@ -207,6 +218,12 @@ def scenarios_for(derivation):
         return planar_scenarios
     if isinstance(derivation.model, DiffDrive):
         return diffdrive_scenarios
+    from .models.chain import Chain
+
+    if isinstance(derivation.model, Chain):
+        from .check_chain import chain_scenarios
+
+        return chain_scenarios
     raise TypeError(f"no reference for model {derivation.model!r}")
 
 

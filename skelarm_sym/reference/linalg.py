@@ -1,7 +1,7 @@
 """NumPy linear algebra the inverse functions are judged by: damped least squares, manipulability.
 
 Independent of the symbolic side and of the generator's own rank rules: solutions come
-from NumPy's eigen-decomposition/SVD.
+from NumPy's SVD, with a relative cutoff the caller derives from the working precision.
 """
 
 from __future__ import annotations
@@ -17,10 +17,11 @@ class Solve:
 
     Attributes:
         x: the solution, ``(..., n)``.
-        rank: rank used for ``A = M M^T + lambda^2 I`` (``r`` when regular), ``(...)``.
-        condition: largest over smallest kept eigenvalue of ``A``, ``(...)``: how much
-            rounding in ``A`` can be amplified in ``x``.
-        rows: ``r``, the size of ``A``.
+        rank: number of singular values of the (row-scaled) matrix kept, ``(...)``.
+        condition: condition number of the matrix the normal equations solve, ``D (M M^T + lam^2 I) D``,
+            over its kept eigenvalues, ``(...)``: how much rounding in ``M`` a solve through that
+            matrix may amplify (at most ``cond(D M)^2`` undamped).
+        rows: ``r``, the number of rows of ``M``.
     """
 
     x: np.ndarray
@@ -30,39 +31,44 @@ class Solve:
 
     @property
     def regular(self) -> np.ndarray:
-        """True where ``A`` has full rank ``rows`` (the exact inverse was used), ``(...)``."""
-        return self.rank == self.rows
+        """True where every direction was kept, ``(...)``."""
+        return self.rank == min(self.rows, self.x.shape[-1])
 
 
-def damped_least_squares(M: object, rhs: object, lam: float, rank_tol: float) -> Solve:
-    """``x = M^T (M M^T + lam^2 I)^+ rhs`` by eigen-decomposition (NumPy only).
+def damped_least_squares(M: object, rhs: object, lam: float, rcond: float, row_scale: object = None) -> Solve:
+    """``x = argmin |M x - rhs|^2 + lam^2 |x|^2`` of least norm, from NumPy's SVD (no closed form, no rank rule
+    of the generator).
 
-    ``M`` is ``(..., r, n)`` with ``r`` 2 or 3, ``rhs`` ``(..., r)``. The rank rule is
-    the documented one of the emitted code, applied to the eigenvalues ``e`` of ``A``
-    (``s = sum(e)``, ``c`` the sum of pairwise products): for ``r = 2``, regular when
-    ``prod(e) > rank_tol * s**2``, else rank one; for ``r = 3``, rank one when
-    ``c <= rank_tol * s**2``, else regular when ``prod(e) > rank_tol * s * c``, else rank two. The pseudo-inverse keeps that many largest eigenvalues.
+    ``M`` is ``(..., r, n)``, ``rhs`` ``(..., r)``. ``lam > 0``: ``x = sum_i s_i / (s_i^2 + lam^2) (u_i . rhs) v_i``
+    over the singular triplets of ``M`` (every direction, none dropped: a zero ``s_i`` contributes nothing).
+    ``lam = 0``: the minimum-norm least-squares solution ``pinv(D M) D rhs`` with ``D = diag(row_scale)``
+    (rows of different units measured in one unit, so the answer does not depend on the unit of
+    length), dropping the singular values of ``D M`` below ``rcond`` times the largest (``rcond`` is
+    relative, hence scale-free; :func:`skelarm_sym.check` derives it from the working precision).
+    Where ``D M`` has full row rank the result is ``pinv(M) rhs`` whatever ``D``.
     """
     M = np.asarray(M, dtype=float)
     rhs = np.asarray(rhs, dtype=float)
-    r = M.shape[-2]
-    A = M @ np.swapaxes(M, -1, -2) + lam**2 * np.eye(r)
-    e, U = np.linalg.eigh(A)  # ascending
-    e = np.maximum(e, 0.0)  # A is positive semi-definite; drop rounding below zero
-    s = e.sum(axis=-1)
-    if r == 2:
-        rank = np.where(np.prod(e, axis=-1) > rank_tol * s**2, 2, 1)
-    else:
-        pairs = e[..., 0] * e[..., 1] + e[..., 0] * e[..., 2] + e[..., 1] * e[..., 2]
-        rank = np.where(pairs > rank_tol * s**2, np.where(np.prod(e, axis=-1) > rank_tol * s * pairs, 3, 2), 1)
-    keep = np.arange(r) >= (r - rank[..., None])
-    safe = np.where(keep, e, 1.0)
-    inv_e = np.where(keep, 1.0 / safe, 0.0)
-    coeffs = np.einsum("...ji,...j->...i", U, rhs) * inv_e
-    u = np.einsum("...ij,...j->...i", U, coeffs)
-    x = np.einsum("...ji,...j->...i", M, u)
-    smallest = np.take_along_axis(e, (r - rank)[..., None], axis=-1)[..., 0]
-    return Solve(x, rank, e[..., -1] / smallest, r)
+    r, n = M.shape[-2:]
+    D = np.ones(r) if row_scale is None else np.asarray(row_scale, dtype=float)
+    DM = D[..., :, None] * M
+    if lam > 0:
+        U, s, Vt = np.linalg.svd(M, full_matrices=False)
+        coeffs = np.einsum("...ji,...j->...i", U, rhs) * (s / (s**2 + lam**2))
+        x = np.einsum("...ij,...i->...j", Vt, coeffs)
+        e = np.linalg.eigvalsh(DM @ np.swapaxes(DM, -1, -2) + lam**2 * (D[..., :, None] * D[..., None, :]) * np.eye(r))
+        rank = np.full(M.shape[:-2], min(r, n))
+        return Solve(x, rank, e[..., -1] / e[..., 0], r)
+    U, s, Vt = np.linalg.svd(DM, full_matrices=False)
+    keep = s > rcond * s[..., :1]
+    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    coeffs = np.einsum("...ji,...j->...i", U, D * rhs) * inv
+    x = np.einsum("...ij,...i->...j", Vt, coeffs)
+    rank = keep.sum(axis=-1)
+    smallest = np.take_along_axis(s, np.maximum(rank - 1, 0)[..., None], axis=-1)[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        condition = np.where(rank > 0, (s[..., 0] / np.where(rank > 0, smallest, 1.0)) ** 2, 1.0)
+    return Solve(x, rank, condition, r)
 
 
 def manipulability(J: object) -> np.ndarray:
