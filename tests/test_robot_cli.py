@@ -1,0 +1,76 @@
+"""Robots through the command line: generate, check, show; bad robot files and URDFs fail cleanly."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from skelarm_sym.build import compile_shared
+from skelarm_sym.cli import main
+from skelarm_sym.generate import generate
+from skelarm_sym.models.loader import load_robot
+
+ROOT = Path(__file__).resolve().parents[1]
+ROBOTS = sorted((ROOT / "examples" / "robots").glob("*.toml"))
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+@pytest.mark.parametrize("robot", ROBOTS, ids=lambda p: p.stem)
+def test_every_example_robot_compiles_with_the_strict_flags(robot, precision):
+    g = generate(load_robot(robot), langs="c", precision=precision, out=None)
+    compile_shared({k: v for k, v in g.sources.items()}, flags=("-O0",))  # strict: -std=c99 -Wall -Wextra -Werror -pedantic
+
+
+def test_generate_check_show_a_robot_file(tmp_path, capsys):
+    robot = str(ROOT / "examples" / "robots" / "stanford.toml")
+    assert main(["generate", "--robot", robot, "--out", str(tmp_path), "--lang", "c"]) == 0
+    assert {p.name for p in tmp_path.iterdir()} >= {"stanford.h", "stanford.c"}
+    assert main(["check", "--robot", robot, "--cases", "10", "--lang", "python"]) == 0
+    assert "0 failed" in capsys.readouterr().out
+    assert main(["show", "--robot", robot, "--what", "J", "--format", "text"]) == 0
+    text = capsys.readouterr().out
+    assert "intermediate steps" in text and "J =" in text
+
+
+BAD_FILES = {
+    "not TOML": ("x.toml", "joints = [", "not valid TOML"),
+    "unknown key": ("x.toml", 'nmae = "x"\n[[joints]]\ntype = "revolute"\n', "unknown key 'nmae'"),
+    "no type": ("x.toml", "[[joints]]\na = 1.0\n", "missing type"),
+    "bad expression": ("x.toml", '[[joints]]\ntype = "revolute"\nalpha = "pi/+"\n', "cannot parse"),
+    "no joints": ("x.toml", 'name = "x"\n', "no joints"),
+    "nan": ("x.toml", '[[joints]]\ntype = "revolute"\na = nan\n', "finite"),
+    "malformed urdf": ("x.urdf", "<robot name='r'><link name='a'>", "x.urdf"),
+    "zero axis": ("x.urdf", """<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute">
+        <parent link="a"/><child link="b"/><axis xyz="0 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>""",
+        "length zero"),
+    "floating": ("x.urdf", """<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="floating">
+        <parent link="a"/><child link="b"/></joint></robot>""", "floating"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_robot_files_fail_with_one_line_and_no_files(case, tmp_path):
+    name, text, expected = BAD_FILES[case]
+    path = tmp_path / name
+    path.write_text(text)
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [sys.executable, "-m", "skelarm_sym", "generate", "--robot", str(path), "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT,
+    )
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("skelarm-sym: error: ") and str(path) in lines[0]
+    assert expected in lines[0]
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_tip_that_is_not_a_link_is_refused(tmp_path, capsys):
+    path = tmp_path / "r.urdf"
+    path.write_text("""<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute">
+        <parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>""")
+    assert main(["generate", "--robot", str(path), "--tip", "nowhere", "--out", str(tmp_path / "o")]) == 2
+    assert "nowhere" in capsys.readouterr().err
+    assert main(["generate", "--robot", str(ROOT / "examples" / "robots" / "ur5.toml"), "--tip", "x", "--out", str(tmp_path / "o")]) == 2
+    assert not (tmp_path / "o").exists()
