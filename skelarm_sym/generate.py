@@ -192,3 +192,4 @@ def _check_output_folder(out: str | os.PathLike) -> Path:
     if target.exists() and not target.is_dir():
         raise InputError(f"output folder {str(target)!r} exists and is not a folder")
     return target
+    getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold

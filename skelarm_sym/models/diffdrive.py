@@ -14,6 +14,7 @@ import numbers
 from dataclasses import dataclass
 
 from ..errors import InputError
+from .planar import check_number
 
 
 def validate_track(track: object) -> float | None:
@@ -45,6 +46,14 @@ class DiffDrive:
     def command_args(self) -> list[str]:
         """The ``skelarm-sym generate`` options that describe this model."""
         return ["--model diffdrive"] + ([] if self.track is None else [f"--track {self.track!r}"])
+
+    def check_representable(self, precision: str) -> None:
+        """Raise :class:`InputError` unless a fixed track suits ``precision``: a normal number whose
+        reciprocal (``omega = (v_R - v_L) / track``) is one too."""
+        if self.track is None:
+            return
+        check_number(self.track, "track width", precision)
+        check_number(self.track, "track width", precision, -1, "the code divides by it")
 
     def describe(self) -> str:
         """One line for file headers."""

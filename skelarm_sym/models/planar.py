@@ -15,6 +15,25 @@ from typing import Iterable
 
 from ..errors import InputError
 
+FLOAT_RANGES = {"double": (2.2250738585072014e-308, 1.7976931348623157e308), "float": (1.1754943508222875e-38, 3.4028234663852886e38)}
+"""Smallest normal and largest finite number of each precision."""
+
+
+def check_number(value: float, name: str, precision: str, power: int = 1, what: str = "") -> None:
+    """Raise :class:`InputError` (one line, naming ``name``) unless ``value ** power`` is a normal finite
+    number of ``precision`` (``power`` may be negative: a reciprocal, or a fourth power the code forms)."""
+    tiny, huge = FLOAT_RANGES[precision]
+    magnitude = abs(value)
+    try:
+        ok = magnitude > 0 and tiny <= magnitude**power <= huge
+    except (OverflowError, ZeroDivisionError):
+        ok = False
+    if not ok:
+        low, high = sorted((tiny ** (1 / power), huge ** (1 / power)))
+        low, high = max(low, tiny), min(high, huge)
+        reason = f" ({what})" if what else ""
+        raise InputError(f"{name} = {value!r} is not representable in {precision}: use a value between {low:.3g} and {high:.3g}{reason}")
+
 MAX_LINKS = 1000
 """Largest number of links accepted: beyond it generation is no longer useful."""
 
@@ -93,6 +112,18 @@ class PlanarArm:
         if self.lengths is not None:
             args.append("--lengths " + ",".join(repr(x) for x in self.lengths))
         return args
+
+    def check_representable(self, precision: str) -> None:
+        """Raise :class:`InputError` unless the fixed lengths suit ``precision``: each a normal number, and the
+        reach (their sum) such that its reciprocal and its fourth power (the damped solves form
+        ``det(J J^T + lambda^2 I)``, a product of four lengths) are normal finite numbers too."""
+        if self.lengths is None:
+            return
+        for i, value in enumerate(self.lengths, start=1):
+            check_number(value, f"link length l{i}", precision)
+        reach = math.fsum(self.lengths)
+        check_number(reach, "the sum of the link lengths", precision, 4, "the inverse functions use its fourth power")
+        check_number(reach, "the sum of the link lengths", precision, -1)
 
     def describe(self) -> str:
         """One line for file headers: number of links and lengths."""
