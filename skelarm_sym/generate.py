@@ -131,6 +131,7 @@ def generate(
     model = n if isinstance(n, (PlanarArm, DiffDrive)) else PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
     prefix = validate_prefix(model.default_prefix if prefix is None else prefix)
     precision = validate_precision(precision)
+    getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold
     langs = validate_langs(langs)
     target = _check_output_folder(out) if out is not None else None
 
@@ -192,4 +193,3 @@ def _check_output_folder(out: str | os.PathLike) -> Path:
     if target.exists() and not target.is_dir():
         raise InputError(f"output folder {str(target)!r} exists and is not a folder")
     return target
-    getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold
