@@ -161,7 +161,9 @@ def _show(args) -> int:
         print(f"wrote {summary.path}: w = {summary.manipulability:.6g}, singular values of J: {sigma}")
         return 0
     from .derive import derive
+    from .display import check_show_size
 
+    check_show_size(model.n)  # before deriving: closed forms of long chains take minutes
     sys.stdout.write(show(derive(model), what, args.format))
     return 0
 
@@ -174,6 +176,8 @@ def _check(args) -> int:
     langs = validate_langs(args.lang)
     if args.cases < 1:
         raise InputError(f"--cases must be at least 1, got {args.cases}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     results = run_check(model_from_args(args), None, args.precision, args.cases, args.seed, langs)
     width = max(len(r.implementation) for r in results)
     print(f"{'function':<{width}}  output  {'max abs':>10}  {'max rel':>10}  tolerance  result")
@@ -196,6 +200,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except RuntimeError as exc:  # compiler failures: the first line says what failed
         print(f"skelarm-sym: error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        return 1
+    except OSError as exc:  # the file system refused something not checked before
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"skelarm-sym: error: {exc.strerror or exc}{where}"[:400], file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130

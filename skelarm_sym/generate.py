@@ -13,6 +13,7 @@ from __future__ import annotations
 import keyword
 import os
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -49,6 +50,15 @@ def validate_prefix(prefix: object) -> str:
         )
     if prefix in C_RESERVED or keyword.iskeyword(prefix) or prefix.lower() in {"numpy", "np"}:
         raise InputError(f"prefix {prefix!r} is a reserved word; choose another")
+    return prefix
+
+
+def validate_module_name(prefix: str) -> str:
+    """``prefix`` if ``{prefix}.py`` would not shadow a Python standard module, else InputError."""
+    if prefix in sys.stdlib_module_names:
+        raise InputError(
+            f"prefix {prefix!r} is a Python standard module: {prefix}.py would shadow it; choose another"
+        )
     return prefix
 
 
@@ -133,6 +143,8 @@ def generate(
     precision = validate_precision(precision)
     getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold
     langs = validate_langs(langs)
+    if "python" in langs:
+        validate_module_name(prefix)
     target = _check_output_folder(out) if out is not None else None
 
     derivation = derive_model(model)
@@ -190,6 +202,10 @@ def parse_lengths(text: str) -> tuple[float, ...]:
 
 def _check_output_folder(out: str | os.PathLike) -> Path:
     target = Path(out)
-    if target.exists() and not target.is_dir():
+    try:
+        exists, is_folder = target.exists(), target.is_dir()
+    except OSError as exc:  # ENAMETOOLONG, EACCES on a parent, ...
+        raise InputError(f"cannot use output folder {str(target)!r}: {exc.strerror or exc}") from None
+    if exists and not is_folder:
         raise InputError(f"output folder {str(target)!r} exists and is not a folder")
     return target
