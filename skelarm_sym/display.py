@@ -9,6 +9,10 @@ from .derive import Derivation
 
 WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det", "manipulability", "singular")
 FORMATS = ("pretty", "latex", "text")
+SHOW_MAX_LINKS = 12
+"""``show`` prints closed forms of chains up to this many links (n = 12: all forms in about 8 s).
+They grow as n^2 terms and their printing faster still (n = 32: 11 s for J alone); longer chains
+are refused with a message pointing at ``generate``, whose step form stays linear in n."""
 _SIMPLIFY_UP_TO = 3
 """Up to this many links the shown forms are simplified (cheap there; never in generation)."""
 
@@ -27,6 +31,17 @@ def closed_form(derivation: Derivation, what: str) -> sp.Expr | sp.Matrix | str 
     return value
 
 
+def check_show_size(n: int) -> None:
+    """InputError when closed forms of an ``n``-link chain are too large to show (see SHOW_MAX_LINKS)."""
+    from .errors import InputError
+
+    if n > SHOW_MAX_LINKS:
+        raise InputError(
+            f"show prints closed forms up to {SHOW_MAX_LINKS} links (they grow as n^2 terms), got {n}; "
+            f"use 'skelarm-sym generate --links {n}' for code in step form, or show --plot for a picture"
+        )
+
+
 def render(expr, fmt: str) -> str:
     """``expr`` in format ``fmt``."""
     if fmt == "latex":
@@ -38,6 +53,7 @@ def render(expr, fmt: str) -> str:
 
 def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
     """Text for ``skelarm-sym show``: one block per requested output."""
+    check_show_size(derivation.n)
     names = WHAT if what == "all" else (what,)
     blocks = []
     for name in names:

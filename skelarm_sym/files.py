@@ -93,9 +93,15 @@ def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
     If anything fails before the renames, the temporary files are removed and no target file is
     touched. Temporaries of earlier, killed runs for the same names are removed first.
     """
+    created = [f for f in (folder, *folder.parents) if not os.path.isdir(f)]  # deepest first
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        for made in created:  # leave no half-made folders behind
+            try:
+                os.rmdir(made)
+            except OSError:
+                pass
         raise InputError(f"cannot create output folder {str(folder)!r}: {exc.strerror or exc}") from None
     remove_stale_temporaries(folder, sources)
     staged: list[tuple[str, Path]] = []

@@ -55,7 +55,11 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
         raise InputError("the pose must be finite numbers")
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
+    try:
+        is_folder = folder.is_dir()
+    except OSError as exc:  # e.g. a name too long for the file system
+        raise InputError(f"cannot write plot {str(target)!r}: {exc.strerror or exc}") from None
+    if not is_folder:
         raise InputError(f"cannot write plot: folder {str(folder)!r} does not exist")
     plt = _pyplot()
 
@@ -86,17 +90,20 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
     ax.set_title(f"{l.size}-link arm: w = {w:.4g}, sigma_min/sigma_max = {ratio:.3g}", fontsize=10)
     ax.legend(loc="lower left", fontsize=8)
 
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".png", dir=folder)
-    os.close(fd)
+    tmp = None
     try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".png", dir=folder)
+        os.close(fd)
         fig.savefig(tmp, dpi=dpi, format=(target.suffix[1:] or "png"))
         from .files import new_file_mode
 
         os.chmod(tmp, new_file_mode())
         os.replace(tmp, target)
     except (OSError, ValueError) as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise InputError(f"cannot write plot {str(target)!r}: {exc}") from None
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise InputError(f"cannot write plot {str(target)!r}: {reason}") from None
     finally:
         plt.close(fig)
     return PlotSummary(target, w, tuple(float(s) for s in sigma))

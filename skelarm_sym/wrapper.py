@@ -178,6 +178,44 @@ class CompiledArm:
             self._methods["ik_solve"] = _make_method("ik_solve", params, defaults, _IK_DOC.format(
                 prefix=prefix, tol=defaults["tol"]), self._ik_solve)
 
+        if "ik_terms" in self._signatures and hasattr(self._lib, f"{prefix}_ik_solve_position"):
+            self._chain_ik_setup(prefix, ctype, pointer)
+
+    def _chain_ik_setup(self, prefix, ctype, pointer) -> None:
+        """ik_solve_pose / ik_solve_position: the emitted chain IK (C {prefix}_ik_solve[_position])."""
+        terms = self._signatures["ik_terms"]
+        has_params = any(name == "params" for name, *_ in terms.inputs)
+        n = terms.inputs[0][1]
+        for method, c_name, size in (("ik_solve_pose", "ik_solve", 16), ("ik_solve_position", "ik_solve_position", 3)):
+            solve = getattr(self._lib, f"{prefix}_{c_name}")
+            solve.argtypes = [pointer, pointer] + [pointer] * has_params + [ctype, ctype, ctypes.c_int, pointer, pointer, ctypes.POINTER(ctypes.c_int)]
+            solve.restype = ctypes.c_int
+
+            def call(q0, target, params=None, lambda_=0.0, tol=None, max_iter=100, _solve=solve, _size=size):
+                from .ik import DEFAULT_TOL, IKResult as ChainIKResult
+                q0 = np.ascontiguousarray(np.asarray(q0, dtype=self.dtype))
+                target = np.ascontiguousarray(np.asarray(target, dtype=self.dtype).reshape(-1))
+                if q0.shape != (n,) or target.shape != (_size,):
+                    raise InputError(f"q0 must have shape ({n},) and target {_size} numbers")
+                tol = DEFAULT_TOL[self.precision] if tol is None else tol
+                args = [q0.ctypes.data_as(self._pointer), target.ctypes.data_as(self._pointer)]
+                if has_params:
+                    params = np.ascontiguousarray(np.asarray(params, dtype=self.dtype))
+                    args.append(params.ctypes.data_as(self._pointer))
+                q = np.empty(n, dtype=self.dtype)
+                error = np.zeros(2, dtype=self.dtype)
+                iterations = ctypes.c_int(0)
+                status = _solve(*args, self._ctype(float(lambda_)), self._ctype(float(tol)), iteration_count(max_iter),
+                                q.ctypes.data_as(self._pointer), error.ctypes.data_as(self._pointer), ctypes.byref(iterations))
+                if status == 3:
+                    raise InputError("q0, target, params and lambda must be finite, lambda >= 0, tol > 0")
+                return ChainIKResult(q, IK_STATUS_NAMES[status], float(error[0]), float(error[1]), iterations.value)
+
+            call.__name__ = method
+            call.__doc__ = (f"The emitted C {prefix}_{c_name}: {'pose (4 x 4)' if size == 16 else 'position (3)'} IK from q0; "
+                            "returns skelarm_sym.ik.IKResult (q, status, position_error, rotation_error, iterations).")
+            self._methods[method] = call
+
     @property
     def functions(self) -> tuple[str, ...]:
         """Names of the callable functions."""

@@ -18,6 +18,7 @@ from sympy.printing.c import C99CodePrinter
 
 from ..derive.core import UNBOUNDED
 from ..program import Program
+from . import c_ik
 from .common import ANGLES, COSINES, IK_SETTINGS, IK_STATUS, SINES, ArrayPrinterMixin, MemoPrinter, pad, render_template, storage_names
 
 LANGUAGE = "c"
@@ -226,6 +227,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
             for c in constants.values()
         ],
         "ik": ik_context(programs, precision, options.prefix, derivation.domains, functions),
+        "chain_ik": c_ik.context(derivation, programs, precision, options.prefix),
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
         "tables": [
             {"macro": constant_name(options.prefix, t.name), "doc": t.doc,

@@ -49,6 +49,7 @@ from .core import RANK_TOL, FunctionSpec
 from .solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded
 
 INVERSE_FUNCTIONS = (
+    FunctionSpec("ik_terms", ("q", "params"), ("T", "J"), "tool pose T and Jacobian J at once (the terms of an IK step)"),
     FunctionSpec("manipulability", ("q", "params"), ("w",), "manipulability w = product of the singular values of J (1)"),
     FunctionSpec(
         "manipulability_position", ("q", "params"), ("w_position",),

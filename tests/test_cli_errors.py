@@ -1,0 +1,90 @@
+"""No tracebacks: file-system trouble and bad options end in one line and a non-zero exit (issue 12, part 3)."""
+
+import errno
+import subprocess
+import sys
+import time
+
+import pytest
+
+from skelarm_sym.cli import main
+from skelarm_sym.display import SHOW_MAX_LINKS
+
+
+def one_line_error(capsys, args, status=2):
+    """Run the CLI in-process; assert the status and a single ``skelarm-sym: error:`` line; return it."""
+    assert main(args) == status
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("skelarm-sym: error: "), err
+    return err[0]
+
+
+def test_output_path_too_long_for_the_file_system(tmp_path, capsys):
+    long = tmp_path / ("x" * 300)
+    line = one_line_error(capsys, ["generate", "--links", "2", "--out", str(long)])
+    assert "File name too long" in line
+    nested = tmp_path / "ok" / ("y" * 300) / "z"
+    assert "File name too long" in one_line_error(capsys, ["generate", "--links", "2", "--out", str(nested)])
+    assert list(tmp_path.iterdir()) == []  # nothing left behind (not even tmp_path/ok)
+
+
+def test_plot_into_a_folder_that_cannot_be_written(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    line = one_line_error(capsys, ["show", "--links", "2", "--plot", "/proc/arm.png"])  # not writable even for root
+    assert "cannot write plot '/proc/arm.png'" in line
+    line = one_line_error(capsys, ["show", "--links", "2", "--plot", str(tmp_path / ("x" * 300) / "a.png")])
+    assert "File name too long" in line
+    line = one_line_error(capsys, ["show", "--links", "2", "--plot", str(tmp_path / "missing" / "a.png")])
+    assert "does not exist" in line
+
+
+def test_negative_seed(capsys):
+    assert "--seed must be a whole number >= 0, got -1" in one_line_error(capsys, ["check", "--links", "2", "--seed", "-1"])
+
+
+def test_any_other_os_error_during_generate(monkeypatch, tmp_path, capsys):
+    import skelarm_sym.generate as gen
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "arm2.c"))
+
+    monkeypatch.setattr(gen, "generate", full)
+    line = one_line_error(capsys, ["generate", "--links", "2", "--out", str(tmp_path)], status=1)
+    assert line == f"skelarm-sym: error: No space left on device: {tmp_path / 'arm2.c'}"
+
+
+@pytest.mark.parametrize("prefix", ["os", "sys", "collections", "json", "random"])
+def test_prefix_shadowing_a_standard_module_is_refused_for_python(prefix, tmp_path, capsys):
+    line = one_line_error(capsys, ["generate", "--links", "2", "--prefix", prefix, "--out", str(tmp_path / "o")])
+    assert f"prefix {prefix!r} is a Python standard module" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_prefix_of_a_standard_module_is_fine_for_c_only(tmp_path, capsys):
+    assert main(["generate", "--links", "2", "--prefix", "collections", "--lang", "c", "--out", str(tmp_path)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["collections.c", "collections.h"]
+
+
+def test_python_api_refuses_shadowing_prefix():
+    from skelarm_sym.errors import InputError
+    from skelarm_sym.generate import generate
+
+    with pytest.raises(InputError, match="standard module"):
+        generate(2, prefix="os", out=None)
+
+
+def test_show_of_a_long_chain_is_refused_quickly():
+    start = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "skelarm_sym", "show", "--links", "300"], capture_output=True, text=True, timeout=60)
+    elapsed = time.perf_counter() - start
+    assert r.returncode == 2 and elapsed < 20, (r.returncode, elapsed)
+    assert r.stderr.strip() == (
+        f"skelarm-sym: error: show prints closed forms up to {SHOW_MAX_LINKS} links (they grow as n^2 terms), got 300; "
+        "use 'skelarm-sym generate --links 300' for code in step form, or show --plot for a picture"
+    )
+
+
+def test_show_at_the_limit_still_prints(capsys):
+    assert main(["show", "--links", str(SHOW_MAX_LINKS), "--what", "p", "--format", "text"]) == 0
+    out = capsys.readouterr().out
+    assert f"l{SHOW_MAX_LINKS}*cos(q1 + " in out
