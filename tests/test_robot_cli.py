@@ -74,3 +74,13 @@ def test_tip_that_is_not_a_link_is_refused(tmp_path, capsys):
     assert "nowhere" in capsys.readouterr().err
     assert main(["generate", "--robot", str(ROOT / "examples" / "robots" / "ur5.toml"), "--tip", "x", "--out", str(tmp_path / "o")]) == 2
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("value, precision", [(1e39, "float"), (1e-46, "float"), (1e300, "double")])
+def test_robot_constants_the_precision_cannot_hold_are_refused(tmp_path, capsys, value, precision):
+    path = tmp_path / "big.toml"
+    path.write_text(f'[[joints]]\ntype = "revolute"\na = {value!r}\n[[joints]]\ntype = "prismatic"\nd = 0.5\n')
+    assert main(["generate", "--robot", str(path), "--precision", precision, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "not representable" in err
+    assert not (tmp_path / "o").exists()

@@ -303,6 +303,32 @@ class Chain:
         text = f"serial chain {self.name!r}{origin}: {self.n} coordinate(s), {len(self.joints)} moving joint(s) ({counts})"
         return text + (f"; {self.description}" if self.description else "")
 
+    def check_representable(self, precision: str) -> None:
+        """Raise :class:`InputError` (one line naming the value) unless every nonzero constant of the chain
+        is a normal finite number of ``precision``, and its reach (the sum of the constant translations'
+        lengths) has a normal reciprocal and fourth power (the inverse functions scale by it and form
+        products of four lengths)."""
+        from .planar import check_number
+
+        reach = 0.0
+        named = [("base", self.base), ("tool", self.tool)]
+        named += [(f"joint {j.name!r} {side}", getattr(j, side)) for j in self.joints for side in ("before", "after")]
+        for where, transform in named:
+            for entry in list(transform.rotation) + list(transform.translation):
+                if entry.is_number and entry != 0:
+                    check_number(float(entry), f"a constant of the {where} transform", precision)
+            if not transform.translation.free_symbols:
+                reach += math.hypot(*(float(x) for x in transform.translation))
+        for j in self.joints:
+            for what, value in (("offset", j.offset), ("multiplier", j.multiplier)):
+                value = sp.sympify(value)
+                if value.is_number and value != 0:
+                    check_number(float(value), f"joint {j.name!r} {what}", precision)
+        if reach > 0:
+            check_number(reach, "the robot's reach (sum of its constant translations)", precision, 4,
+                         "the inverse functions use its fourth power")
+            check_number(reach, "the robot's reach (sum of its constant translations)", precision, -1)
+
     def limits(self) -> dict[str, tuple[float | None, ...]]:
         """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent."""
         first = {}
