@@ -21,13 +21,13 @@ ROBOTS = ("ur5", "panda")
 def regenerate(out: Path = OUT) -> None:
     """Emit every committed example into ``out``."""
     for n in range(2, 7):
-        generate(n, out=out)
-    generate(3, lengths=(1.0, 0.8, 0.5), precision="float", prefix="arm3f", out=out)
-    generate(DiffDrive(), out=out)
+        generate(n, out=out, force=True)
+    generate(3, lengths=(1.0, 0.8, 0.5), precision="float", prefix="arm3f", out=out, force=True)
+    generate(DiffDrive(), out=out, force=True)
     for name in ROBOTS:
         relative = f"examples/robots/{name}.toml"
         chain = dataclasses.replace(load_robot_file(ROOT / relative), source=relative)
-        generate(chain, out=out)
+        generate(chain, out=out, force=True)
 
 
 if __name__ == "__main__":

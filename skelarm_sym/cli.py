@@ -97,6 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--precision", default="double", help="double (default) or float")
     gen.add_argument("--out", default="generated", help="output folder (default ./generated)")
     gen.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
+    gen.add_argument("--functions", help="comma-separated functions to emit (default all; ik_solve brings position and ik_step)")
+    gen.add_argument("--cmake", action="store_true", help="also write CMakeLists.txt: a static library target named after the prefix")
+    gen.add_argument("--force", action="store_true", help="replace files generated with other options")
 
     show = sub.add_parser("show", help="print closed forms")
     _add_model_options(show)
@@ -119,7 +122,8 @@ def _generate(args) -> int:
     from .build import compile_arm
     from .generate import generate
 
-    result = generate(model_from_args(args), langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out)
+    result = generate(model_from_args(args), langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
+                      functions=args.functions, cmake=args.cmake, force=args.force)
     for path in result.paths:
         print(f"wrote {path}")
     kin = next((p for p in result.programs if p.name == "kinematics"), None)

@@ -1,0 +1,114 @@
+"""A C user's build (issue 12, part 5): CMakeLists.txt, a plain cc line, --functions, no silent overwrites."""
+
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from skelarm_sym.cli import main
+from skelarm_sym.errors import InputError
+from skelarm_sym.generate import generate
+from skelarm_sym.reference import kinematics
+
+APP = r"""
+#include <stdio.h>
+#include "arm3.h"
+
+int main(void)
+{
+    const double q[3] = {0.3, 1.2, -0.5};
+    double p[2];
+    arm3_position(q, p);
+    printf("%.15f %.15f\n", p[0], p[1]);
+    return 0;
+}
+"""
+EXPECTED = kinematics(np.array([0.3, 1.2, -0.5]), lengths=np.array([1.0, 0.8, 0.5])).p
+
+
+def _printed(text):
+    return np.array([float(x) for x in text.split()])
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake not installed")
+def test_add_subdirectory_and_link_the_prefix_target(tmp_path, capsys):
+    assert main(["generate", "--links", "3", "--lengths", "1.0,0.8,0.5", "--prefix", "arm3", "--lang", "c",
+                 "--out", str(tmp_path / "generated" / "arm3"), "--cmake"]) == 0
+    assert "CMakeLists.txt" in capsys.readouterr().out
+    lists = (tmp_path / "generated" / "arm3" / "CMakeLists.txt").read_text()
+    assert "add_library(arm3 STATIC arm3.c arm3.h)" in lists
+    (tmp_path / "app.c").write_text(APP)
+    (tmp_path / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.10)\nproject(app C)\nadd_subdirectory(generated/arm3)\n"
+        "add_executable(app app.c)\ntarget_link_libraries(app PRIVATE arm3)\n"
+    )
+    build = tmp_path / "build"
+    for command in (["cmake", "-S", str(tmp_path), "-B", str(build)], ["cmake", "--build", str(build)]):
+        r = subprocess.run(command, capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
+    assert list(build.rglob("libarm3.a")), "the library is static by default"
+    run = subprocess.run([str(build / "app")], capture_output=True, text=True, check=True)
+    np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
+
+
+def test_plain_cc_line(tmp_path):
+    from skelarm_sym.build import find_compiler
+
+    cc = find_compiler()
+    generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=tmp_path)
+    (tmp_path / "app.c").write_text(APP)
+    r = subprocess.run(f"{cc} -std=c99 -O2 -o app app.c arm3.c -lm", shell=True, cwd=tmp_path, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    run = subprocess.run([str(tmp_path / "app")], capture_output=True, text=True, check=True)
+    np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
+
+
+def _declared(header):
+    return re.findall(r"^(?:void|int)\s+(\w+)\(", header, re.M)
+
+
+def test_functions_emits_only_the_named_ones():
+    g = generate(3, langs="c,python", out=None, functions="kinematics,jacobian")
+    assert _declared(g.sources["arm3.h"]) == ["arm3_jacobian", "arm3_jacobian_batch", "arm3_kinematics", "arm3_kinematics_batch"]
+    assert 'regenerate with: skelarm-sym generate --links 3 --lang c,python --prefix arm3 --precision double --functions jacobian,kinematics' in g.sources["arm3.h"]
+    assert "def jacobian(" in g.sources["arm3.py"] and "def position(" not in g.sources["arm3.py"]
+    full = generate(3, langs="c", out=None)
+    assert len(g.sources["arm3.c"]) < 0.5 * len(full.sources["arm3.c"])
+
+
+def test_ik_solve_brings_what_it_needs():
+    g = generate(2, langs="c,python", out=None, functions=["ik_solve"])
+    assert _declared(g.sources["arm2.h"]) == ["arm2_position", "arm2_position_batch", "arm2_ik_step", "arm2_ik_step_batch", "arm2_ik_solve"]
+    assert "def ik_solve(" in g.sources["arm2.py"]
+
+
+def test_unknown_function_lists_the_valid_ones(capsys, tmp_path):
+    assert main(["generate", "--links", "2", "--functions", "jacobian,kin", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("skelarm-sym: error: unknown function 'kin'; choose from position, jacobian, coriolis, velocity, "
+                   "acceleration, kinematics, manipulability, inverse_velocity, ik_step, ik_solve")
+    assert not (tmp_path / "o").exists()
+
+
+def test_other_options_do_not_overwrite_silently(tmp_path, capsys):
+    generate(3, prefix="arm3", out=tmp_path)
+    before = (tmp_path / "arm3.c").read_text()
+    with pytest.raises(InputError, match=r"arm3\.\w+ was generated with other options \(skelarm-sym generate --links 3 "):
+        generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", out=tmp_path)
+    assert (tmp_path / "arm3.c").read_text() == before  # nothing replaced
+    assert main(["generate", "--links", "3", "--precision", "float", "--prefix", "arm3", "--out", str(tmp_path)]) == 2
+    assert "--force" in capsys.readouterr().err
+    generate(3, prefix="arm3", out=tmp_path)  # the same options: fine
+    assert main(["generate", "--links", "3", "--precision", "float", "--prefix", "arm3", "--out", str(tmp_path), "--force"]) == 0
+    assert "float" in (tmp_path / "arm3.c").read_text().split("Precision: ", 1)[1][:5]
+
+
+def test_files_not_made_by_skelarm_sym_are_not_replaced(tmp_path):
+    (tmp_path / "arm2.c").write_text("int main(void) { return 0; }\n")
+    with pytest.raises(InputError, match="was not generated by skelarm-sym"):
+        generate(2, out=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm2.c"]
+    generate(2, out=tmp_path, force=True)
+    assert "arm2_jacobian" in (tmp_path / "arm2.c").read_text()
