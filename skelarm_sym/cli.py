@@ -66,6 +66,9 @@ def _add_model_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--links", "-n", type=_links, help="number of links N (1..1000); planar arms only, required there")
     parser.add_argument("--lengths", type=_lengths, help="comma-separated link lengths baked in as constants (default: run-time argument l)")
     parser.add_argument("--track", type=_track, help="diffdrive: distance between the wheels baked in as a constant (default: run-time argument)")
+    parser.add_argument("--robot", metavar="FILE", help="a 3-D serial chain: a TOML DH robot file or a URDF")
+    parser.add_argument("--base", metavar="LINK", help="URDF: the chain's first link (default: the root link)")
+    parser.add_argument("--tip", metavar="LINK", help="URDF: the chain's last link (default: the only leaf below --base)")
 
 
 def model_from_args(args):
@@ -73,6 +76,14 @@ def model_from_args(args):
     from .models.diffdrive import DiffDrive
     from .models.planar import PlanarArm
 
+    if getattr(args, "robot", None) is not None:
+        if args.model != "planar" or args.links is not None or args.lengths is not None or args.track is not None:
+            raise InputError("--robot describes the whole robot: drop --model, --links, --lengths and --track")
+        from .models.loader import load_robot
+
+        return load_robot(args.robot, base=args.base, tip=args.tip)
+    if getattr(args, "base", None) is not None or getattr(args, "tip", None) is not None:
+        raise InputError("--base and --tip choose a chain inside a URDF given with --robot")
     if args.model == "diffdrive":
         if args.links is not None or args.lengths is not None:
             raise InputError("--links and --lengths describe planar arms; a diffdrive takes --track")
@@ -104,8 +115,9 @@ def build_parser() -> argparse.ArgumentParser:
     show = sub.add_parser("show", help="print closed forms")
     _add_model_options(show)
     show.add_argument("--what", help="planar: p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J); "
-                      "diffdrive: matrix, inverse or all (default all)")
+                      "diffdrive: matrix, inverse or all (default all); robots: T, J, J_tool, dJ, twist, acc or all (default J)")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
+    show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
     show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
     show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
 
@@ -139,6 +151,7 @@ def _generate(args) -> int:
 def _show(args) -> int:
     from .display import FORMATS, WHAT, show, show_diffdrive
     from .models.diffdrive import DiffDrive
+    from .models.planar import PlanarArm
 
     model = model_from_args(args)
     if args.format not in FORMATS:
@@ -147,6 +160,14 @@ def _show(args) -> int:
         if args.plot:
             raise InputError("--plot draws planar arms")
         sys.stdout.write(show_diffdrive(model, args.what or "all", args.format))
+        return 0
+    if not isinstance(model, PlanarArm):  # a 3-D chain from --robot
+        if args.plot:
+            raise InputError("--plot draws planar arms")
+        from .derive.chain import derive_chain
+        from .display_chain import show_chain
+
+        sys.stdout.write(show_chain(derive_chain(model), args.what or "J", args.format, True if args.expand else None))
         return 0
     what = args.what or "J"
     if what not in WHAT + ("all",):

@@ -24,6 +24,7 @@ from .derive import Derivation, derive, derive_diffdrive
 from .derive.core import ARGUMENT_RULE
 from .errors import InputError
 from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
+from .models.chain import Chain
 from .models.diffdrive import DiffDrive
 from .models.planar import PlanarArm
 from .program import Program, build_programs
@@ -179,6 +180,10 @@ def derive_model(model) -> Derivation:
         return derive(model)
     if isinstance(model, DiffDrive):
         return derive_diffdrive(model)
+    if isinstance(model, Chain):
+        from .derive.chain import derive_chain
+
+        return derive_chain(model)
     raise InputError(f"unsupported model {model!r}")
 
 
@@ -220,7 +225,7 @@ def generate(
     Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input;
     on any error no file is left behind.
     """
-    model = n if isinstance(n, (PlanarArm, DiffDrive)) else PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
+    model = n if isinstance(n, (PlanarArm, DiffDrive, Chain)) else PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
     prefix = validate_prefix(model.default_prefix if prefix is None else prefix)
     precision = validate_precision(precision)
     getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold
