@@ -8,8 +8,8 @@ constants, same random restarts, so both end with the same status on the same in
 * error ``e = [p_t - p; log3(R_t R^T)]`` in base axes (the Jacobian of this project is
   LOCAL_WORLD_ALIGNED: ``dq = J^+ e`` moves toward the target to first order);
 * Levenberg-Marquardt step ``dq = J^T (J J^T + mu^2 I)^-1 e`` with ``mu = max(lambda, c |e|)``: a step
-  is accepted when it lowers ``|e|`` (then ``c`` shrinks tenfold, down to ``C_MIN``), else ``c`` grows
-  tenfold; damping vanishes at the solution, so the last steps are Gauss-Newton's (quadratic);
+  is accepted when it lowers ``|e|`` (then ``c`` is multiplied by ``C_DOWN``, down to ``C_MIN``), else by ``C_UP``
+  ; damping vanishes at the solution, so the last steps are Gauss-Newton's (quadratic);
 * joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
   outward are removed from the step (their columns zeroed, the step solved again), so the free
   joints still make the progress clamping would kill;
@@ -19,8 +19,8 @@ constants, same random restarts, so both end with the same status on the same in
   all attempts count against ``max_iter``.
 
 Statuses: ``converged`` (``|p_t - p| <= tol`` and ``|log3| <= tol``), ``stalled`` (the budget ran out
-and the best pose found is a stationary point of ``|e|``: an unreachable target's closest reach;
-``q`` is that pose), ``max_iter`` (the budget ran out otherwise; ``q`` is the best pose found),
+and the best pose found ended its attempt at or near a stationary point of ``|e|``: no lowering step,
+or less than halving ``|e|`` in WINDOW steps; an unreachable target's closest reach; ``q`` is that pose), ``max_iter`` (the budget ran out otherwise; ``q`` is the best pose found),
 ``invalid`` (non-finite q0/target/lambda, lambda < 0, tol <= 0, max_iter < 0: ``ValueError``).
 """
 
@@ -33,7 +33,7 @@ import numpy as np
 C_START = 0.1
 """Initial damping per unit of error."""
 C_MIN, C_MAX = 1e-8, 1e8
-C_UP, C_DOWN = 4.0, 0.25
+C_UP, C_DOWN = 2.0, 0.5
 STEP_MAX = 1.0
 """Largest joint move of one step (rad or m): longer steps are scaled down whole (same direction)."""
 ATTEMPT = 25
@@ -209,6 +209,7 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
     best = (en, q, pe, re, False)
     c, attempt, restarts, it = C_START, 0, 0, 0
     checkpoint = en
+    best_here = True
     while True:
         if pe <= tol and re <= tol:
             return IKResult(q, "converged", pe, re, it, restarts)
@@ -239,9 +240,9 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
             c *= C_UP
             stalled = c > C_MAX
         if en < best[0]:
-            best = (en, q, pe, re, stalled)
+            best, best_here = (en, q, pe, re, stalled), True
         elif stalled and en == best[0]:
-            best = (en, q, pe, re, True)
+            best, best_here = (en, q, pe, re, True), True
         if pe <= tol and re <= tol:
             continue
         slow = False
@@ -249,6 +250,9 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
             slow = en > PROGRESS * checkpoint
             checkpoint = en
         if (stalled or slow or attempt >= ATTEMPT) and it < max_iter:
+            if (stalled or slow) and best_here:  # this attempt's best is a stationary point (or near one)
+                best = best[:4] + (True,)
+            best_here = False
             q = low_draw + span_draw * np.array([rng.uniform() for _ in range(n)])
             e, J, pe, re = evaluate(q)
             en = float(np.sqrt(e @ e))
@@ -256,7 +260,7 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
             checkpoint = en
             restarts += 1
             if en < best[0]:
-                best = (en, q, pe, re, False)
+                best, best_here = (en, q, pe, re, False), True
     en, q, pe, re, stalled = best
     return IKResult(q, "stalled" if stalled else "max_iter", pe, re, it, restarts)
 
