@@ -9,6 +9,13 @@ over the size of the result (at least 1: sums that cancel keep the rounding of
 their terms), and for the damped least-squares solves the condition number of the
 matrix solved (rounding in it is amplified that much by any method). Inputs are rounded to the working precision first; the
 reference always runs in double.
+
+Each :class:`OutputError` also records, at the case that decided it (the largest scaled error),
+the absolute error there, its ``size`` (``max(1, max |reference|)``), its ``condition`` and the
+absolute error allowed there, ``allowed_abs = tolerance * size * condition``: the row is ok exactly
+when ``abs_error <= allowed_abs`` (up to rounding of the product), which the ``check`` table shows.
+
+:func:`load_generated` reads files written earlier by ``skelarm-sym generate`` (``check --from``).
 """
 
 from __future__ import annotations
@@ -44,13 +51,51 @@ class OutputError:
     implementation: str
     output: str
     max_abs: float
+    """Largest ``|emitted - reference|`` over all cases (it may come from a case with a larger allowance)."""
     max_rel: float
+    """Largest scaled error ``|emitted - reference| / (size * condition)``: the row is ok when it is <= tolerance."""
     tolerance: float
+    abs_error: float = float("nan")
+    """``max |emitted - reference|`` at the case of ``max_rel`` (the case that decides the row)."""
+    size: float = 1.0
+    """``max(1, max |reference|)`` at that case."""
+    condition: float = 1.0
+    """The condition factor at that case (1 for well-conditioned outputs; see the module docstring)."""
+
+    @property
+    def allowed_abs(self) -> float:
+        """The largest ``|emitted - reference|`` allowed at the deciding case: ``tolerance * size * condition``."""
+        return self.tolerance * self.size * self.condition
 
     @property
     def ok(self) -> bool:
         """True when the scaled error is within tolerance (and finite)."""
         return bool(np.isfinite(self.max_rel) and self.max_rel <= self.tolerance)
+
+
+TABLE_NOTE = (
+    "abs error: max |emitted - reference| at the case that decides the row (largest scaled error); "
+    "allowed abs = tolerance x size x condition at that case, size = max(1, max |reference|), condition = 1 "
+    "unless rounding is amplified (sums that cancel, ill-conditioned solves); rel error = abs error / "
+    "(size x condition), ok when <= tolerance, i.e. abs error <= allowed abs."
+)
+"""The line under the ``check`` table explaining its columns."""
+
+
+def table(results: Sequence[OutputError]) -> list[str]:
+    """The ``check`` table: one self-explaining row per output (see :data:`TABLE_NOTE`)."""
+    width = max([len("function"), *(len(r.implementation) for r in results)])
+    out = max([len("output"), *(len(r.output) for r in results)])
+    lines = [
+        f"{'function':<{width}}  {'output':<{out}}  {'abs error':>10}  {'allowed abs':>11}  {'rel error':>10}  "
+        f"{'tolerance':>9}  {'size':>8}  {'condition':>9}  result"
+    ]
+    for r in results:
+        lines.append(
+            f"{r.implementation:<{width}}  {r.output:<{out}}  {r.abs_error:10.2e}  {r.allowed_abs:11.2e}  {r.max_rel:10.2e}  "
+            f"{r.tolerance:9.0e}  {r.size:8.3g}  {r.condition:9.3g}  {'ok' if r.ok else 'FAIL'}"
+        )
+    return lines
 
 
 def check_cases(n: int, cases: int, seed: int = 0, lengths: Sequence[float] | None = None):
@@ -157,17 +202,32 @@ def planar_scenarios(derivation, cases: int, seed: int, precision: str) -> list[
     return scenarios
 
 
-def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: str = "double") -> list[OutputError]:
-    """Run every emitted function of ``generated`` (C if present, Python if present) against the reference."""
-    derivation = generated.derivation
-    scenarios = scenarios_for(derivation)(derivation, cases, seed, precision)
-    implementations = []
+def load_implementations(generated: Generated) -> list[tuple[str, object]]:
+    """``[("C", CompiledArm), ("Python", module)]`` for the ``.c`` and ``.py`` files of ``generated`` present."""
+    implementations: list[tuple[str, object]] = []
     c_files = [k for k in generated.sources if k.endswith(".c")]
     py_files = [k for k in generated.sources if k.endswith(".py")]
     if c_files:
         implementations.append(("C", compile_arm(generated)))
     if py_files:
-        implementations.append(("Python", load_python(generated.sources[py_files[0]], py_files[0][:-3])))
+        try:
+            module = load_python(generated.sources[py_files[0]], py_files[0][:-3])
+        except SyntaxError as exc:  # a file edited by hand (check --from)
+            from .errors import InputError
+
+            raise InputError(f"{py_files[0]} does not load: {exc.msg} (line {exc.lineno})") from None
+        implementations.append(("Python", module))
+    return implementations
+
+
+def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: str = "double",
+            implementations: Sequence[tuple[str, object]] | None = None) -> list[OutputError]:
+    """Run every emitted function of ``generated`` (C if present, Python if present; or the loaded
+    ``implementations``, ``[(label, module)]``) against the reference."""
+    derivation = generated.derivation
+    scenarios = scenarios_for(derivation)(derivation, cases, seed, precision)
+    if implementations is None:
+        implementations = load_implementations(generated)
     allowed = tolerance(precision, getattr(derivation.model, "n", 1))
     results = []
     for label, impl in implementations:
@@ -185,9 +245,14 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
                     diff = np.abs(np.asarray(got, dtype=np.float64) - want)
                     diff = np.where(np.isnan(diff), np.inf, diff)
                     abs_err = diff.max(axis=axes) if axes else diff
-                    scale = np.maximum(1.0, np.abs(want).max(axis=axes) if axes else np.abs(want))
-                    scale = scale * scenario.condition.get(arg.name, 1.0)
-                    results.append(OutputError(name, arg.name, float(abs_err.max()), float((abs_err / scale).max()), allowed))
+                    size = np.maximum(1.0, np.abs(want).max(axis=axes) if axes else np.abs(want))
+                    condition = np.broadcast_to(np.asarray(scenario.condition.get(arg.name, 1.0), dtype=float), size.shape)
+                    rel = abs_err / (size * condition)
+                    worst = int(np.argmax(np.where(np.isnan(rel), np.inf, rel)))
+                    results.append(OutputError(
+                        name, arg.name, float(abs_err.max()), float(rel.max()), allowed,
+                        float(abs_err[worst]), float(size[worst]), float(condition[worst]),
+                    ))
     return results
 
 
@@ -231,3 +296,93 @@ def run_check(n, lengths: Sequence[float] | None = None, precision: str = "doubl
     """Generate (in memory), compile, and compare; see :func:`compare`."""
     generated = generate(n, lengths=lengths, langs=langs, precision=precision, out=None)
     return compare(generated, cases=cases, seed=seed, precision=precision)
+
+
+GENERATED_SUFFIXES = (".h", ".c", ".py")
+_MARK = "generated by skelarm-sym"
+
+
+@dataclass(frozen=True)
+class LoadedFiles:
+    """Files written earlier (``check --from``): ``generated`` holds the FILES' text with the programs
+    and derivation regenerated from their recorded command; ``precision``, ``command`` (the recorded
+    ``skelarm-sym generate ...``) and ``edited``, the files whose text differs from what this version
+    generates (edited by hand, or generated by another version)."""
+
+    generated: Generated
+    precision: str
+    command: str
+    edited: tuple[str, ...]
+
+
+def _read_head(path) -> str:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            return handle.read(4000)
+    except OSError:
+        return ""
+
+
+def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
+    """Read ``folder/prefix.{h,c,py}`` (those present), rebuild the model and options from the
+    ``regenerate with:`` line of their header, regenerate in memory for the derivation and programs,
+    and return the files' own text to be compiled and compared. ``prefix`` defaults to the only one in
+    ``folder``. Raises InputError (one line) for a missing folder, no generated files, several prefixes
+    and none chosen, or a header without the regenerate line."""
+    import shlex
+    from pathlib import Path
+
+    from .errors import InputError
+    from .generate import _RECORDED
+
+    root = Path(folder)
+    if not root.is_dir():
+        raise InputError(f"--from {str(root)!r}: no such folder")
+    found: dict[str, list[str]] = {}
+    for path in sorted(root.iterdir()):
+        if path.suffix in GENERATED_SUFFIXES and path.is_file() and _MARK in _read_head(path):
+            found.setdefault(path.stem, []).append(path.name)
+    if prefix is None:
+        if not found:
+            raise InputError(f"--from {str(root)!r}: no files generated by skelarm-sym (.h, .c or .py) in it")
+        if len(found) > 1:
+            raise InputError(f"--from {str(root)!r} holds files of several prefixes ({', '.join(sorted(found))}); choose one with --prefix")
+        prefix = next(iter(found))
+    elif prefix not in found:
+        others = f" (it has {', '.join(sorted(found))})" if found else ""
+        raise InputError(f"--from {str(root)!r}: no files generated by skelarm-sym with prefix {prefix!r}{others}")
+    names = [prefix + s for s in GENERATED_SUFFIXES if prefix + s in found[prefix]]
+    sources = {name: (root / name).read_text(encoding="utf-8") for name in names}
+    command = None
+    for name in names:
+        match = _RECORDED.search(sources[name][:4000])
+        if match is not None:
+            command = match.group(1).strip()
+            break
+    if command is None or not command.startswith("skelarm-sym generate"):
+        raise InputError(f"{root / names[0]}: no 'regenerate with: skelarm-sym generate ...' line in its header")
+    if prefix + ".c" in sources and prefix + ".h" not in sources:
+        raise InputError(f"{root / (prefix + '.c')} needs {prefix}.h beside it to compile")
+
+    from .cli import build_parser, model_from_args
+    from .generate import generate
+
+    try:
+        words = shlex.split(command)
+    except ValueError:
+        words = command.split()
+    try:
+        args = build_parser().parse_args(words[1:])
+    except InputError as exc:
+        raise InputError(f"{root / names[0]}: cannot read its recorded command ({command}): {exc}") from None
+    if args.robot is not None and not Path(args.robot).exists() and (root / args.robot).exists():
+        args.robot = str(root / args.robot)  # a robot file recorded relative to the folder of the files
+    model = model_from_args(args)
+    langs = tuple(lang for lang, suffix in (("c", ".c"), ("python", ".py")) if prefix + suffix in sources)
+    if not langs:
+        raise InputError(f"--from {str(root)!r}: only {names[0]} for prefix {prefix!r}; check needs its .c or .py")
+    if args.prefix != prefix:
+        raise InputError(f"{root / names[0]} records --prefix {args.prefix}, not {prefix}; was it renamed?")
+    fresh = generate(model, langs=langs, prefix=args.prefix, precision=args.precision, out=None, functions=args.functions)
+    edited = tuple(name for name in names if fresh.sources.get(name) != sources[name])
+    return LoadedFiles(Generated(sources, fresh.programs, fresh.derivation), args.precision, command, edited)

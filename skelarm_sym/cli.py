@@ -123,8 +123,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     chk = sub.add_parser("check", help="generate, compile and compare with the recursive reference")
     _add_model_options(chk)
-    chk.add_argument("--precision", default="double", help="double (default) or float")
-    chk.add_argument("--lang", default="c,python")
+    chk.add_argument("--precision", help="double (default) or float")
+    chk.add_argument("--lang", help="c, python or c,python (default)")
+    chk.add_argument("--from", dest="source", metavar="DIR",
+                     help="check the files generated earlier in DIR (their header records the model and options)")
+    chk.add_argument("--prefix", help="with --from: the files' prefix (default: the only one in DIR)")
     chk.add_argument("--cases", type=int, default=100, help="random configurations (default 100), plus singular and zero-velocity poses")
     chk.add_argument("--seed", type=int, default=0)
     return parser
@@ -194,23 +197,46 @@ def _show(args) -> int:
 
 
 def _check(args) -> int:
-    from .check import run_check
-    from .generate import validate_langs, validate_precision
+    from .check import TABLE_NOTE, compare, load_generated, load_implementations, table
+    from .check_ik import check_ik
+    from .generate import generate, validate_langs, validate_precision
 
-    validate_precision(args.precision)
-    langs = validate_langs(args.lang)
     if args.cases < 1:
         raise InputError(f"--cases must be at least 1, got {args.cases}")
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
-    results = run_check(model_from_args(args), None, args.precision, args.cases, args.seed, langs)
-    width = max(len(r.implementation) for r in results)
-    print(f"{'function':<{width}}  output  {'max abs':>10}  {'max rel':>10}  tolerance  result")
-    for r in results:
-        print(f"{r.implementation:<{width}}  {r.output:<6}  {r.max_abs:10.2e}  {r.max_rel:10.2e}  {r.tolerance:9.0e}  {'ok' if r.ok else 'FAIL'}")
+    if args.source is not None:
+        given = [f"--{k}" for k in ("links", "lengths", "track", "robot", "base", "tip", "precision", "lang")
+                 if getattr(args, k) is not None] + (["--model"] if args.model != "planar" else [])
+        if given:
+            raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)}")
+        loaded = load_generated(args.source, args.prefix)
+        generated, precision = loaded.generated, loaded.precision
+        print(f"checking {', '.join(generated.sources)} in {args.source} ({loaded.command})")
+        if loaded.edited:
+            verb = "differs" if len(loaded.edited) == 1 else "differ"
+            print(f"note: {', '.join(loaded.edited)} {verb} from what this version generates for that command")
+    else:
+        if args.prefix is not None:
+            raise InputError("--prefix chooses files with --from")
+        precision = validate_precision(args.precision or "double")
+        langs = validate_langs(args.lang or "c,python")
+        generated = generate(model_from_args(args), langs=langs, precision=precision, out=None)
+    implementations = load_implementations(generated)
+    results = compare(generated, args.cases, args.seed, precision, implementations)
+    for line in table(results):
+        print(line)
+    import textwrap
+
+    print("\n".join(textwrap.wrap(TABLE_NOTE, 100)))
+    ik = check_ik(generated, implementations, args.cases, args.seed, precision)
+    for row in ik:
+        print(row.row())
     failed = [r for r in results if not r.ok]
-    print(f"{len(results) - len(failed)} passed, {len(failed)} failed")
-    return 1 if failed else 0
+    ik_failed = [r for r in ik if not r.ok]
+    ik_line = f"; ik: {len(ik) - len(ik_failed)} passed, {len(ik_failed)} failed" if ik else ""
+    print(f"{len(results) - len(failed)} passed, {len(failed)} failed{ik_line}")
+    return 1 if failed or ik_failed else 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
