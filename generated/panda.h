@@ -41,7 +41,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * PANDA_STAMP identifies this generation: panda.c refuses to
  * compile (#error) with a panda.h from another generation. */
-#define PANDA_STAMP 0x21294ca6UL
+#define PANDA_STAMP 0x52f84299UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -118,7 +118,15 @@ void panda_kinematics(const double q[7], const double dq[7], const double ddq[7]
  * Stack: about 22 KB. */
 void panda_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 3264 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 992 bytes. */
+void panda_ik_terms(const double q[7], double T[16], double J[42]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]).
+ * Stack: about 23 KB. */
+void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J);
+
+/* manipulability w = product of the singular values of J (1). Stack: about 3312 bytes. */
 void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -126,7 +134,7 @@ void panda_manipulability(const double q[7], double w[1]);
  * Stack: about 10 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1416 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1440 bytes. */
 void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -158,7 +166,7 @@ void panda_inverse_velocity(const double q[7], const double twist[6], double lam
  * Stack: about 17 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2136 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2192 bytes. */
 void panda_inverse_velocity_position(const double q[7], const double v[3], double lambda, double dq_position[7]);
 
 /* The same for m configurations stored one after another (element k of
@@ -166,13 +174,39 @@ void panda_inverse_velocity_position(const double q[7], const double v[3], doubl
  * Stack: about 11 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1152 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1160 bytes. */
 void panda_jacobian_rpy(const double q[7], double JA[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
  * Stack: about 19 KB. */
 void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
+
+/* Return codes of panda_ik_solve and panda_ik_solve_position. */
+#define PANDA_IK_CONVERGED 0
+#define PANDA_IK_STALLED 1
+#define PANDA_IK_MAX_ITER 2
+#define PANDA_IK_INVALID 3
+
+/* Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step
+ * dq = J^T (J J^T + mu^2 I)^-1 e, mu = max(lambda, c |e|); joint limits (PANDA_Q_MIN/MAX) kept by
+ * clamping, joints a step pushes past a bound removed from it, revolute joints with a range of 2 pi
+ * or more wrapped by 2 pi; random restarts within the limits (xorshift64*, a fixed seed: the same
+ * input gives the same result) when an attempt stalls, progresses slowly or takes 25 steps.
+ * Steps of all attempts count against max_iter. Same algorithm and constants as skelarm_sym.ik.
+ * Returns CONVERGED when |p_target - p| <= tol and |log3| <= tol (q: the solution); STALLED when
+ * max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target:
+ * q is its closest reach found); MAX_ITER when it ran out otherwise (q: the best pose found);
+ * INVALID (q = q0, nothing computed) when q0, target or lambda is not finite,
+ * lambda < 0, tol <= 0 or not finite, or max_iter < 0. A tol of 1e-10 is reachable in this
+ * precision for an arm of unit size. target: 4 x 4 row-major; error[0] = position error (m),
+ * error[1] = rotation error (rad); error and iterations may be NULL; q may be q0.
+ * Stack: about 2192 bytes plus panda_ik_terms'. */
+int panda_ik_solve(const double q0[7], const double target[16], double lambda, double tol, int max_iter, double q[7], double error[2], int *iterations);
+
+/* Position IK of the tool origin to target (3): the same with the 3 linear rows of J; *error is
+ * the position error. */
+int panda_ik_solve_position(const double q0[7], const double target[3], double lambda, double tol, int max_iter, double q[7], double *error, int *iterations);
 
 #ifdef __cplusplus
 }

@@ -266,13 +266,15 @@ class Optimised:
     sin: tuple[sp.Symbol, ...]
 
 
-def optimise(derivation: Derivation) -> Optimised:
-    """One ``sympy.cse`` over every output of ``derivation`` together (deterministic names and order).
+def optimise(derivation: Derivation, outputs: Iterable[str] | None = None) -> Optimised:
+    """One ``sympy.cse`` over every output of ``derivation`` (or those named in ``outputs``) together
+    (deterministic names and order).
 
     Sines and cosines are lifted out first: each distinct argument becomes an
     angle slot, so that backends can evaluate all of them in one loop.
     """
-    names = list(derivation.compact)
+    wanted = None if outputs is None else set(outputs)
+    names = [name for name in derivation.compact if wanted is None or name in wanted]
     matrices = [derivation.compact[name] for name in names]
     out_exprs = [e for m in matrices for e in m]
     steps, out_exprs = _name_trig(_needed_steps(derivation.steps, out_exprs), out_exprs)
@@ -398,5 +400,5 @@ def _dependency_order(assignments: Sequence[Assignment]) -> list[Assignment]:
 def build_programs(derivation: Derivation, names: Sequence[str] | None = None) -> list[Program]:
     """Programs for the derivation's functions (all, or those in ``names``), in declaration order."""
     specs = [f for f in derivation.functions if names is None or f.name in names]
-    opt = optimise(derivation)
+    opt = optimise(derivation, None if names is None else {o for spec in specs for o in spec.outputs})
     return [build_program(derivation, spec, opt) for spec in specs]

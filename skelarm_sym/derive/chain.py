@@ -144,7 +144,7 @@ def _z_alignment(axis: Sequence[sp.Expr]) -> sp.Matrix:
 def _half_pi_multiple(expr: sp.Expr) -> bool:
     """True for exact multiples of pi/2 (0 included)."""
     expr = sp.sympify(expr)
-    return expr == 0 or (not expr.free_symbols and (expr / (sp.pi / 2)).is_Integer)
+    return expr.is_zero or (not expr.free_symbols and (expr / (sp.pi / 2)).is_Integer)
 
 
 def _numeric(expr: sp.Expr) -> sp.Expr:

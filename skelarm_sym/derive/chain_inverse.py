@@ -124,7 +124,7 @@ def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.
     m = len(rows)
     n = len(rows[0])
     scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
-    frob = step(f"{label}F", sp.sqrt(sp.Add(*[x**2 for row in scaled for x in row])))
+    frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
     first = gram_schmidt(step, scaled, f"{label}A", threshold=tol * frob)
     lam = step(f"{label}lam", sp.sqrt(lam2))
     columns = []
@@ -148,10 +148,18 @@ def _manipulability(step, rows: Sequence[Sequence[sp.Expr]], label: str):
     return w, qr, by_rows
 
 
+QUADRATIC_UP_TO = 16
+"""``jacobian_hessian`` (6 N^2 outputs) and ``manipulability_gradient`` (about 36 N^2 operations) are
+emitted for chains of up to this many coordinates; longer chains get the other inverse functions
+(all linear in N), so that generation stays linear."""
+QUADRATIC = ("jacobian_hessian", "manipulability_gradient")
+
+
 def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     """The chain's derivation with the inverse functions added (see the module docstring)."""
     chain = derivation.model
     n = chain.n
+    quadratic = n <= QUADRATIC_UP_TO
     J = derivation.compact["J"]
     rows = [[step(f"Jc{r}_{c}", J[r, c]) for c in range(n)] for r in range(6)]
     tol = RANK_TOL.symbol
@@ -163,16 +171,17 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     w, qr, by_rows = _manipulability(step, rows, "mw")
     w_position, _, _ = _manipulability(step, rows[:3], "mp")
 
-    H = _hessian(step, joints, axes, linear, angular, n)
-    adj = adjugate_upper(step, qr.R, "madj")
-    count = len(qr.R)
-    length = len(qr.Q[0])
-    # G[x][b] = sum_i Q[i][x] adj[b][i]; A[x][b] = J[b][x] (by rows) or J[x][b] (by columns)
-    G = [[step(f"mG{x}_{b}", sp.Add(*[qr.Q[i][x] * adj[b][i] for i in range(b, count)])) for b in range(count)] for x in range(length)]
     grad = []
-    for j in range(n):
-        terms = [G[x][b] * (H[b][x][j] if by_rows else H[x][b][j]) for x in range(length) for b in range(count)]
-        grad.append(step(f"mgrad{j}", sp.Add(*terms)))
+    if quadratic:
+        H = _hessian(step, joints, axes, linear, angular, n)
+        adj = adjugate_upper(step, qr.R, "madj")
+        count = len(qr.R)
+        length = len(qr.Q[0])
+        # G[x][b] = sum_i Q[i][x] adj[b][i]; A[x][b] = J[b][x] (by rows) or J[x][b] (by columns)
+        G = [[step(f"mG{x}_{b}", sp.Add(*[qr.Q[i][x] * adj[b][i] for i in range(b, count)])) for b in range(count)] for x in range(length)]
+        for j in range(n):
+            terms = [G[x][b] * (H[b][x][j] if by_rows else H[x][b][j]) for x in range(length) for b in range(count)]
+            grad.append(step(f"mgrad{j}", sp.Add(*terms)))
 
     reach = characteristic_length(chain, step)
     if reach.free_symbols:
@@ -186,8 +195,8 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     outputs = {
         "w": sp.Matrix([w]),
         "w_position": sp.Matrix([w_position]),
-        "Hs": sp.Matrix([H[r][c][j] for r in range(6) for c in range(n) for j in range(n)]),
-        "grad": sp.Matrix(grad),
+        **({"Hs": sp.Matrix([H[r][c][j] for r in range(6) for c in range(n) for j in range(n)]),
+            "grad": sp.Matrix(grad)} if quadratic else {}),
         "dq": sp.Matrix(dq),
         "dq_position": sp.Matrix(dq_position),
         "JA": sp.Matrix(JA),
@@ -201,6 +210,10 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
         "least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
         "where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).",
     )
+    if not quadratic:
+        notes = notes + (
+            f"jacobian_hessian and manipulability_gradient (quadratic in N) are emitted for N <= {QUADRATIC_UP_TO} only.",
+        )
     domains = dict(derivation.domains)
     domains.update({"twist": "finite", "v": "finite", "lambda": "nonnegative"})
     inputs = dict(derivation.inputs)
@@ -211,7 +224,7 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
         steps=tuple(step.steps),
         compact={**derivation.compact, **outputs},
         shapes={**derivation.shapes, **shapes},
-        functions=tuple(derivation.functions) + INVERSE_FUNCTIONS,
+        functions=tuple(derivation.functions) + tuple(f for f in INVERSE_FUNCTIONS if quadratic or f.name not in QUADRATIC),
         parameters=tuple(derivation.parameters) + ("lambda",),
         scalars=tuple(derivation.scalars) + ("lambda",),
         domains=domains,
@@ -230,7 +243,7 @@ def _jacobian_rpy(step, rows, R, tol) -> list[sp.Expr]:
     c = step("rpy_c", sp.sqrt(c2))
     ic = step("rpy_ic", 1 / guarded(c, regular))
     # yaw at gimbal lock (roll = 0): R01 = -sin(yaw), R11 = cos(yaw)
-    g = step("rpy_g", sp.sqrt(R[0][1] ** 2 + R[1][1] ** 2))
+    g = step("rpy_g", sp.sqrt(step("rpy_gg", R[0][1] ** 2 + R[1][1] ** 2)))
     ig = step("rpy_ig", 1 / guarded(g, sp.StrictGreaterThan(g, 0)))
     cy = step("rpy_cy", sp.Piecewise((R[0][0] * ic, regular), (R[1][1] * ig, True)))
     sy = step("rpy_sy", sp.Piecewise((R[1][0] * ic, regular), (-R[0][1] * ig, True)))

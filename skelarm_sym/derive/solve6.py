@@ -76,7 +76,7 @@ def gram_schmidt(
                 c = step(f"{label}c{sweep}_{i}_{k}", _dot(Q[i], v))
                 coefficient[i] = coefficient[i] + c
                 v = [step(f"{label}v{sweep}_{i}_{k}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, Q[i]))]
-        norm = step(f"{label}n{k}", sp.sqrt(sp.Add(*[x**2 for x in v])))
+        norm = step(f"{label}n{k}", sp.sqrt(step(f"{label}nn{k}", sp.Add(*[x**2 for x in v]))))  # named first: sqrt(x**2) would be Abs(x)
         if threshold is None:
             kept = sp.StrictGreaterThan(norm, 0)
             diag = norm

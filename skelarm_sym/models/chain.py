@@ -81,9 +81,15 @@ def trig_constant(func, angle: sp.Expr) -> sp.Expr:
 
 
 def _fold(expr: sp.Expr) -> sp.Expr:
-    """Exact zero for a Float that rounds to zero; numbers stay as they are."""
-    if expr.is_Float and expr == 0:
-        return sp.S.Zero
+    """Exact zero for a Float that is zero or below any precision's range (products of rounded
+    constants leave such dust, 1e-330 say, where the exact value is 0), an exact integer for a
+    whole Float (``1.0``: SymPy does not count ``Float(1.0) == 1``); other expressions stay."""
+    expr = sp.sympify(expr)
+    if expr.is_Float:
+        if expr.is_zero or abs(expr) < 1e-300:
+            return sp.S.Zero
+        if float(expr).is_integer() and abs(float(expr)) < 2**53:
+            return sp.Integer(int(float(expr)))
     return expr
 
 
@@ -95,6 +101,10 @@ class Transform:
 
     rotation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.eye(3)))
     translation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.zeros(3, 1)))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "rotation", sp.ImmutableMatrix(sp.Matrix(self.rotation).applyfunc(_fold)))
+        object.__setattr__(self, "translation", sp.ImmutableMatrix(sp.Matrix(self.translation).applyfunc(_fold)))
 
     @staticmethod
     def identity() -> "Transform":
@@ -315,14 +325,14 @@ class Chain:
         named += [(f"joint {j.name!r} {side}", getattr(j, side)) for j in self.joints for side in ("before", "after")]
         for where, transform in named:
             for entry in list(transform.rotation) + list(transform.translation):
-                if entry.is_number and entry != 0:
+                if entry.is_number and not entry.is_zero:
                     check_number(float(entry), f"a constant of the {where} transform", precision)
             if not transform.translation.free_symbols:
                 reach += math.hypot(*(float(x) for x in transform.translation))
         for j in self.joints:
             for what, value in (("offset", j.offset), ("multiplier", j.multiplier)):
                 value = sp.sympify(value)
-                if value.is_number and value != 0:
+                if value.is_number and not value.is_zero:
                     check_number(float(value), f"joint {j.name!r} {what}", precision)
         if reach > 0:
             check_number(reach, "the robot's reach (sum of its constant translations)", precision, 4,
@@ -333,7 +343,7 @@ class Chain:
         """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent."""
         first = {}
         for j in sorted(self.joints, key=lambda j: j.name != self.coordinates[j.coordinate]):  # own joint first
-            if j.coordinate not in first and j.multiplier == 1 and j.offset == 0:
+            if j.coordinate not in first and _fold(j.multiplier) == 1 and _fold(j.offset) == 0:
                 first[j.coordinate] = j
         out: dict[str, list] = {"lower": [], "upper": [], "velocity": []}
         for c in range(self.n):
