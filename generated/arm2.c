@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xd6647527UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xd5d744bbUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1378,8 +1378,8 @@ static int arm2_finite(double x)
 #define ARM2_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static double arm2_ik_error(const double trial[2], const double target[2], const double l[2])
+/* *error = |target - p| at the pose trial. */
+static void arm2_ik_error(const double trial[2], const double target[2], const double l[2], double *error)
 {
     double p[2], d, sum = 0.0;
     int k;
@@ -1388,7 +1388,7 @@ static double arm2_ik_error(const double trial[2], const double target[2], const
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrt(sum);
+    *error = sqrt(sum);
 }
 
 static int arm2_ik_run(const double q0[2], const double target[2], const double l[2], double lambda, double tol, int max_iter, double q[2], double *error, int *iterations)
@@ -1419,7 +1419,7 @@ static int arm2_ik_run(const double q0[2], const double target[2], const double 
             return ARM2_IK_INVALID;
         }
     }
-    err = arm2_ik_error(q, target, l);
+    arm2_ik_error(q, target, l, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -1435,7 +1435,7 @@ static int arm2_ik_run(const double q0[2], const double target[2], const double 
             for (k = 0; k < 2; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm2_ik_error(trial, target, l);
+            arm2_ik_error(trial, target, l, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -1454,7 +1454,7 @@ static int arm2_ik_run(const double q0[2], const double target[2], const double 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01 : 0.01;
-                e = arm2_ik_error(probe, target, l);
+                arm2_ik_error(probe, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -1463,7 +1463,7 @@ static int arm2_ik_run(const double q0[2], const double target[2], const double 
                     }
                 }
                 arm2_ik_step(probe, target, l, mu, q_next);
-                e = arm2_ik_error(q_next, target, l);
+                arm2_ik_error(q_next, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

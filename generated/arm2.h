@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM2_STAMP identifies this generation: arm2.c refuses to
  * compile (#error) with a arm2.h from another generation. */
-#define ARM2_STAMP 0xd6647527UL
+#define ARM2_STAMP 0xd5d744bbUL
 
 #ifdef __cplusplus
 extern "C" {

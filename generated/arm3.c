@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xffcd884aUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xf753ad57UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1841,8 +1841,8 @@ static int arm3_finite(double x)
 #define ARM3_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static double arm3_ik_error(const double trial[3], const double target[2], const double l[3])
+/* *error = |target - p| at the pose trial. */
+static void arm3_ik_error(const double trial[3], const double target[2], const double l[3], double *error)
 {
     double p[2], d, sum = 0.0;
     int k;
@@ -1851,7 +1851,7 @@ static double arm3_ik_error(const double trial[3], const double target[2], const
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrt(sum);
+    *error = sqrt(sum);
 }
 
 static int arm3_ik_run(const double q0[3], const double target[2], const double l[3], double lambda, double tol, int max_iter, double q[3], double *error, int *iterations)
@@ -1882,7 +1882,7 @@ static int arm3_ik_run(const double q0[3], const double target[2], const double 
             return ARM3_IK_INVALID;
         }
     }
-    err = arm3_ik_error(q, target, l);
+    arm3_ik_error(q, target, l, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -1898,7 +1898,7 @@ static int arm3_ik_run(const double q0[3], const double target[2], const double 
             for (k = 0; k < 3; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm3_ik_error(trial, target, l);
+            arm3_ik_error(trial, target, l, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -1917,7 +1917,7 @@ static int arm3_ik_run(const double q0[3], const double target[2], const double 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01 : 0.01;
-                e = arm3_ik_error(probe, target, l);
+                arm3_ik_error(probe, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -1926,7 +1926,7 @@ static int arm3_ik_run(const double q0[3], const double target[2], const double 
                     }
                 }
                 arm3_ik_step(probe, target, l, mu, q_next);
-                e = arm3_ik_error(q_next, target, l);
+                arm3_ik_error(q_next, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

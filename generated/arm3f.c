@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x43ea2123UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x0d80ca98UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1799,8 +1799,8 @@ static int arm3f_finite(float x)
 #define ARM3F_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static float arm3f_ik_error(const float trial[3], const float target[2])
+/* *error = |target - p| at the pose trial. */
+static void arm3f_ik_error(const float trial[3], const float target[2], float *error)
 {
     float p[2], d, sum = 0.0f;
     int k;
@@ -1809,7 +1809,7 @@ static float arm3f_ik_error(const float trial[3], const float target[2])
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrtf(sum);
+    *error = sqrtf(sum);
 }
 
 static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations)
@@ -1835,7 +1835,7 @@ static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, 
             return ARM3F_IK_INVALID;
         }
     }
-    err = arm3f_ik_error(q, target);
+    arm3f_ik_error(q, target, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -1851,7 +1851,7 @@ static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, 
             for (k = 0; k < 3; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm3f_ik_error(trial, target);
+            arm3f_ik_error(trial, target, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -1870,7 +1870,7 @@ static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01f : 0.01f;
-                e = arm3f_ik_error(probe, target);
+                arm3f_ik_error(probe, target, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -1879,7 +1879,7 @@ static int arm3f_ik_run(const float q0[3], const float target[2], float lambda, 
                     }
                 }
                 arm3f_ik_step(probe, target, mu, q_next);
-                e = arm3f_ik_error(q_next, target);
+                arm3f_ik_error(q_next, target, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x973c8ffcUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xe7ebcae1UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -2056,8 +2056,8 @@ static int arm4_finite(double x)
 #define ARM4_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static double arm4_ik_error(const double trial[4], const double target[2], const double l[4])
+/* *error = |target - p| at the pose trial. */
+static void arm4_ik_error(const double trial[4], const double target[2], const double l[4], double *error)
 {
     double p[2], d, sum = 0.0;
     int k;
@@ -2066,7 +2066,7 @@ static double arm4_ik_error(const double trial[4], const double target[2], const
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrt(sum);
+    *error = sqrt(sum);
 }
 
 static int arm4_ik_run(const double q0[4], const double target[2], const double l[4], double lambda, double tol, int max_iter, double q[4], double *error, int *iterations)
@@ -2097,7 +2097,7 @@ static int arm4_ik_run(const double q0[4], const double target[2], const double 
             return ARM4_IK_INVALID;
         }
     }
-    err = arm4_ik_error(q, target, l);
+    arm4_ik_error(q, target, l, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -2113,7 +2113,7 @@ static int arm4_ik_run(const double q0[4], const double target[2], const double 
             for (k = 0; k < 4; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm4_ik_error(trial, target, l);
+            arm4_ik_error(trial, target, l, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -2132,7 +2132,7 @@ static int arm4_ik_run(const double q0[4], const double target[2], const double 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01 : 0.01;
-                e = arm4_ik_error(probe, target, l);
+                arm4_ik_error(probe, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -2141,7 +2141,7 @@ static int arm4_ik_run(const double q0[4], const double target[2], const double 
                     }
                 }
                 arm4_ik_step(probe, target, l, mu, q_next);
-                e = arm4_ik_error(q_next, target, l);
+                arm4_ik_error(q_next, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x864a0cf0UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x5fdb5e00UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -2351,8 +2351,8 @@ static int arm5_finite(double x)
 #define ARM5_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static double arm5_ik_error(const double trial[5], const double target[2], const double l[5])
+/* *error = |target - p| at the pose trial. */
+static void arm5_ik_error(const double trial[5], const double target[2], const double l[5], double *error)
 {
     double p[2], d, sum = 0.0;
     int k;
@@ -2361,7 +2361,7 @@ static double arm5_ik_error(const double trial[5], const double target[2], const
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrt(sum);
+    *error = sqrt(sum);
 }
 
 static int arm5_ik_run(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations)
@@ -2392,7 +2392,7 @@ static int arm5_ik_run(const double q0[5], const double target[2], const double 
             return ARM5_IK_INVALID;
         }
     }
-    err = arm5_ik_error(q, target, l);
+    arm5_ik_error(q, target, l, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -2408,7 +2408,7 @@ static int arm5_ik_run(const double q0[5], const double target[2], const double 
             for (k = 0; k < 5; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm5_ik_error(trial, target, l);
+            arm5_ik_error(trial, target, l, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -2427,7 +2427,7 @@ static int arm5_ik_run(const double q0[5], const double target[2], const double 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01 : 0.01;
-                e = arm5_ik_error(probe, target, l);
+                arm5_ik_error(probe, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -2436,7 +2436,7 @@ static int arm5_ik_run(const double q0[5], const double target[2], const double 
                     }
                 }
                 arm5_ik_step(probe, target, l, mu, q_next);
-                e = arm5_ik_error(q_next, target, l);
+                arm5_ik_error(q_next, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

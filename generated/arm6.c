@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x8326a1a1UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x92ab49deUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -2606,8 +2606,8 @@ static int arm6_finite(double x)
 #define ARM6_FINITE(x) isfinite(x)
 #endif
 
-/* |target - p| at the pose trial. */
-static double arm6_ik_error(const double trial[6], const double target[2], const double l[6])
+/* *error = |target - p| at the pose trial. */
+static void arm6_ik_error(const double trial[6], const double target[2], const double l[6], double *error)
 {
     double p[2], d, sum = 0.0;
     int k;
@@ -2616,7 +2616,7 @@ static double arm6_ik_error(const double trial[6], const double target[2], const
         d = target[k] - p[k];
         sum += d * d;
     }
-    return sqrt(sum);
+    *error = sqrt(sum);
 }
 
 static int arm6_ik_run(const double q0[6], const double target[2], const double l[6], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations)
@@ -2647,7 +2647,7 @@ static int arm6_ik_run(const double q0[6], const double target[2], const double 
             return ARM6_IK_INVALID;
         }
     }
-    err = arm6_ik_error(q, target, l);
+    arm6_ik_error(q, target, l, &err);
     *error = err;
     for (it = 0; it < max_iter; ++it) {
         if (err <= tol) {
@@ -2663,7 +2663,7 @@ static int arm6_ik_run(const double q0[6], const double target[2], const double 
             for (k = 0; k < 6; ++k) {
                 trial[k] = q[k] + alpha * (q_next[k] - q[k]);
             }
-            err_trial = arm6_ik_error(trial, target, l);
+            arm6_ik_error(trial, target, l, &err_trial);
             if (err_trial < err) {
                 break;
             }
@@ -2682,7 +2682,7 @@ static int arm6_ik_run(const double q0[6], const double target[2], const double 
                     probe[j] = q[j];
                 }
                 probe[k / 2] += k % 2 ? -0.01 : 0.01;
-                e = arm6_ik_error(probe, target, l);
+                arm6_ik_error(probe, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;
@@ -2691,7 +2691,7 @@ static int arm6_ik_run(const double q0[6], const double target[2], const double 
                     }
                 }
                 arm6_ik_step(probe, target, l, mu, q_next);
-                e = arm6_ik_error(q_next, target, l);
+                arm6_ik_error(q_next, target, l, &e);
                 if (e < err_trial) {
                     err_trial = e;
                     found = 1;

@@ -52,8 +52,6 @@ class IKCheck:
     """Status name -> count, as the solver reported them."""
     worst_rotation: float | None = None
     """Chains: largest rotation error (rad) at the returned poses."""
-    rotation_allowed: float | None = None
-    """Chains: ``tol`` plus the rounding slack of the rotation (rad)."""
 
     @property
     def ok(self) -> bool:
@@ -61,19 +59,18 @@ class IKCheck:
 
     def row(self) -> str:
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
-        rotation = "" if self.worst_rotation is None else (
-            f", rotation {self.worst_rotation:.2e} rad (allowed {self.rotation_allowed:.2e})")
+        rotation = "" if self.worst_rotation is None else f", rotation {self.worst_rotation:.2e} rad"
         return (f"{self.implementation}: converged {self.converged}/{self.targets}; worst error {self.worst_error:.2e}"
-                f" (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding){rotation}; statuses: {statuses}; "
+                f"{rotation} (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding); statuses: {statuses}; "
                 f"{'ok' if self.ok else 'FAIL'}")
 
 
-def _summary(label, outcomes, tol, allowed, rotation=None, rotation_allowed=None) -> IKCheck:
+def _summary(label, outcomes, tol, allowed, rotation=None) -> IKCheck:
     """``outcomes``: ``(status, reference error, converged)`` per target."""
     errors = [e for _, e, _ in outcomes]
     worst = float(np.max(np.where(np.isnan(errors), np.inf, errors))) if errors else float("nan")
     return IKCheck(label, len(outcomes), sum(1 for *_, c in outcomes if c), worst, tol, allowed,
-                   dict(Counter(s for s, _, _ in outcomes)), rotation, rotation_allowed)
+                   dict(Counter(s for s, _, _ in outcomes)), rotation)
 
 
 def planar_ik(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
@@ -163,7 +160,7 @@ def chain_ik(derivation, implementations, cases: int, seed: int, precision: str)
             worst_rotation = max(worst_rotation, rotation)
             good = result.status == "converged" and error <= allowed and rotation <= rotation_allowed
             outcomes.append((str(result.status), error, good))
-        rows.append(_summary(f"{label} ik_solve_pose", outcomes, tol, allowed, worst_rotation, rotation_allowed))
+        rows.append(_summary(f"{label} ik_solve_pose", outcomes, tol, allowed, worst_rotation))
     return rows
 
 
