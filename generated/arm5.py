@@ -874,7 +874,7 @@ endpoint error |target - p| at q, and the number of steps taken."""
 
 
 @_signature_errors
-def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
+def ik_solve(q0, target, l, lambda_, tol=None, max_iter=200):
     """Inverse kinematics by damped least-squares steps (ik_step) from q0 toward target.
 
     Each step uses damping mu = max(lambda, c |target - p|) and is halved until the endpoint
@@ -884,14 +884,15 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
     from there; tried when no step helps: a stationary point such as the stretched pose facing a
     target behind it) lowers the error, or the error improves by less than a relative 1e-10 (an unreachable target: q
     is then the closest reach found), "max_iter" after max_iter steps.
-    Same algorithm as the C ik_solve.
+    Same algorithm as the C ik_solve. tol defaults to 1e-09 times the reach (the sum of the link
+    lengths, at least 1): what this precision can resolve at the endpoint of an arm of that size.
     Raises ValueError for non-finite q0 or target, lengths <= 0, lambda < 0, tol <= 0 or not finite,
     max_iter outside 0..2**31 - 1 (the C int range); TypeError for a wrong number of arguments.
     """
     q = np.array(q0, dtype=DTYPE)
     if q.ndim != 1 or not np.all(np.isfinite(q)):
         raise ValueError(f"q0 must be one finite configuration, got shape {q.shape}")
-    if not (np.isfinite(tol) and tol > 0):
+    if tol is not None and not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be finite and > 0, got {tol!r}")
     try:
         ok = int(max_iter) == max_iter and not isinstance(max_iter, bool) and 0 <= max_iter <= 2**31 - 1
@@ -908,6 +909,8 @@ def ik_solve(q0, target, l, lambda_, tol=1e-09, max_iter=200):
         raise ValueError(f"l must have shape (5,), got {l.shape}")
     _check_domain(l, "l", "positive")
     lambda_ = float(_scalar(lambda_, "lambda", "nonnegative"))
+    if tol is None:
+        tol = 1e-09 * max(1.0, float(np.sum(l)))
 
     def error_at(trial):
         return float(np.sqrt(np.sum((target - position(trial, l)) ** 2)))

@@ -234,4 +234,6 @@ def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str |
     prefix = next(k for k in sources if k.endswith(".c"))[:-2]
     precision = "float" if "Precision: float." in sources[prefix + ".c"] else "double"
     derivation = generated.derivation
-    return CompiledArm(library, prefix, generated.programs, precision, derivation.parameters, derivation.domains)
+    lengths = getattr(derivation.model, "lengths", None)
+    return CompiledArm(library, prefix, generated.programs, precision, derivation.parameters, derivation.domains,
+                       reach=float(sum(lengths)) if lengths else 1.0)

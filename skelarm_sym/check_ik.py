@@ -4,7 +4,7 @@ Planar arms (derivations with ``position`` and ``ik_step``, hence an emitted ``i
 targets are the reference endpoint positions (:func:`skelarm_sym.reference.kinematics`) of random
 configurations, so every one is reachable; starts are random, the first one the stretched pose
 ``q = 0`` (singular). Each solve runs with the per-precision default ``tol``
-(``IK_SETTINGS[precision]["tol"]``), undamped (``lambda = 0``: the solver damps itself), and
+(``default_ik_tol``: the per-precision tolerance times the reach), undamped (``lambda = 0``: the solver damps itself), and
 ``max_iter = 200`` (the default). 3-D chains whose compiled library has the pose IK
 (``CompiledArm.ik_solve_pose``, the emitted C ``{prefix}_ik_solve``): targets are reference poses
 (:func:`skelarm_sym.reference.chain_kinematics`) of random configurations within the joint limits,
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import reference
-from .backends.common import IK_SETTINGS
+from .backends.common import default_ik_tol
 from .check import check_cases, tolerance
 
 IK_TARGETS = 20
@@ -52,6 +52,8 @@ class IKCheck:
     """Status name -> count, as the solver reported them."""
     worst_rotation: float | None = None
     """Chains: largest rotation error (rad) at the returned poses."""
+    rotation_allowed: float | None = None
+    """Chains: ``tol`` plus the rounding slack of the rotation (rad)."""
 
     @property
     def ok(self) -> bool:
@@ -59,18 +61,19 @@ class IKCheck:
 
     def row(self) -> str:
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
-        rotation = "" if self.worst_rotation is None else f", rotation {self.worst_rotation:.2e} rad"
+        rotation = "" if self.worst_rotation is None else (
+            f", rotation {self.worst_rotation:.2e} rad (allowed {self.rotation_allowed:.2e})")
         return (f"{self.implementation}: converged {self.converged}/{self.targets}; worst error {self.worst_error:.2e}"
-                f"{rotation} (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding); statuses: {statuses}; "
+                f" (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding){rotation}; statuses: {statuses}; "
                 f"{'ok' if self.ok else 'FAIL'}")
 
 
-def _summary(label, outcomes, tol, allowed, rotation=None) -> IKCheck:
+def _summary(label, outcomes, tol, allowed, rotation=None, rotation_allowed=None) -> IKCheck:
     """``outcomes``: ``(status, reference error, converged)`` per target."""
     errors = [e for _, e, _ in outcomes]
     worst = float(np.max(np.where(np.isnan(errors), np.inf, errors))) if errors else float("nan")
     return IKCheck(label, len(outcomes), sum(1 for *_, c in outcomes if c), worst, tol, allowed,
-                   dict(Counter(s for s, _, _ in outcomes)), rotation)
+                   dict(Counter(s for s, _, _ in outcomes)), rotation, rotation_allowed)
 
 
 def planar_ik(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
@@ -87,7 +90,7 @@ def planar_ik(derivation, implementations, cases: int, seed: int, precision: str
     targets = rounded(reference.kinematics(rng.uniform(-np.pi, np.pi, (m, n)), None, None, l).p)
     starts = rounded(rng.uniform(-np.pi, np.pi, (m, n)))
     starts[0] = 0.0  # the stretched pose: singular, the case issue 12 (2) was about
-    tol = IK_SETTINGS[precision]["tol"]
+    tol = default_ik_tol(precision, float(l.sum()))
     allowed = tol + tolerance(precision, n) * float(l.sum())
     rows = []
     for label, impl in implementations:
@@ -160,7 +163,7 @@ def chain_ik(derivation, implementations, cases: int, seed: int, precision: str)
             worst_rotation = max(worst_rotation, rotation)
             good = result.status == "converged" and error <= allowed and rotation <= rotation_allowed
             outcomes.append((str(result.status), error, good))
-        rows.append(_summary(f"{label} ik_solve_pose", outcomes, tol, allowed, worst_rotation))
+        rows.append(_summary(f"{label} ik_solve_pose", outcomes, tol, allowed, worst_rotation, rotation_allowed))
     return rows
 
 

@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .backends.common import IK_SETTINGS, IK_STATUS
+from .backends.common import IK_SETTINGS, IK_STATUS, default_ik_tol
 from .errors import InputError
 from .program import Program
 
@@ -129,9 +129,10 @@ class CompiledArm:
 
     def __init__(
         self, library: Path, prefix: str, programs: Sequence[Program], precision: str, shared: Sequence[str],
-        domains: dict[str, str] | None = None,
+        domains: dict[str, str] | None = None, reach: float = 1.0,
     ):
         self.path = library
+        self._fixed_reach = reach  # sum of fixed link lengths: scales the planar IK's default tol
         self.prefix = prefix
         self.dtype = np.float64 if precision == "double" else np.float32
         self._lib = ctypes.CDLL(str(library))
@@ -174,9 +175,9 @@ class CompiledArm:
             solve.restype = ctypes.c_int
             self._ik = solve
             params = ["q0", *(identifier(name) for name, *_ in step.inputs if name != "q"), "tol", "max_iter"]
-            defaults = {"tol": IK_SETTINGS[precision]["tol"], "max_iter": 200}
+            defaults = {"tol": None, "max_iter": 200}
             self._methods["ik_solve"] = _make_method("ik_solve", params, defaults, _IK_DOC.format(
-                prefix=prefix, tol=defaults["tol"]), self._ik_solve)
+                prefix=prefix, tol=IK_SETTINGS[precision]["tol"]), self._ik_solve)
 
         if "ik_terms" in self._signatures and hasattr(self._lib, f"{prefix}_ik_solve_position"):
             self._chain_ik_setup(prefix, ctype, pointer)
@@ -279,6 +280,10 @@ class CompiledArm:
             raise InputError(f"q0 must have shape ({n},), got {q0.shape}")
         _check_domain(q0, "q0", "finite")
         others = [x for x in step.inputs if x[0] != "q"]
+        if tol is None:
+            lengths = dict(zip([x[0] for x in others], args)).get("l", self._fixed_reach)
+            reach = float(np.sum(np.asarray(lengths, dtype=float))) if np.all(np.isfinite(lengths)) else 1.0
+            tol = default_ik_tol(self.precision, reach)
         tol = float(tol)
         if not (np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be finite and > 0, got {tol!r}")
@@ -305,8 +310,8 @@ _IK_DOC = """Inverse kinematics from q0 toward target by damped least-squares st
 {prefix}_ik_solve; same algorithm as the NumPy module's ik_solve).
 
 q0: (N,) finite start pose; target: (2,) finite endpoint target; l (when lengths are symbolic):
-(N,) lengths > 0; lambda_: damping >= 0; tol: stop when |target - p| <= tol (default {tol:g} for
-this precision); max_iter: at most this many steps, 0..2**31 - 1.
+(N,) lengths > 0; lambda_: damping >= 0; tol: stop when |target - p| <= tol (default {tol:g} times
+the reach, the sum of the lengths, at least 1); max_iter: at most this many steps, 0..2**31 - 1.
 Returns IKResult(q, status, error, iterations), status one of "converged", "stalled", "max_iter".
 Raises TypeError for a wrong number of arguments, InputError (a ValueError) for bad values.
 """

@@ -15,6 +15,12 @@ from ..program import Program
 ANGLES, COSINES, SINES = "ang", "cs", "sn"
 """Array names of the trigonometric block inside emitted functions."""
 
+def default_ik_tol(precision: str, reach: float) -> float:
+    """The planar IK's default tolerance: ``IK_SETTINGS[precision]["tol"]`` times the reach (at least 1),
+    since rounding at the endpoint grows with the arm's size (float at a reach of 1500: about 2e-4)."""
+    return IK_SETTINGS[precision]["tol"] * max(1.0, float(reach))
+
+
 IK_STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 """Outcomes of the emitted IK solvers, in order from 0 (C return codes; lower case in Python)."""
 IK_SETTINGS = {

@@ -83,7 +83,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
         "functions": functions,
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
         "constants": [{"name": c.name, "value": repr(c.values[options.precision]), "doc": c.doc} for c in constants.values()],
-        "ik": _ik_context(by_name, options.precision),
+        "ik": _ik_context(by_name, options.precision, getattr(derivation.model, "lengths", None)),
         "tables": [
             {"name": t.name, "doc": t.doc,
              "values": [repr(float(v)) if v is not None else ("np.inf" if t.sign > 0 else "-np.inf") for v in t.values]}
@@ -93,7 +93,7 @@ def render(derivation, programs: list[Program], options) -> dict[str, str]:
     return {".py": render_template("python_module.py.j2", **context)}
 
 
-def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
+def _ik_context(functions: dict[str, dict], precision: str, lengths=None) -> dict | None:
     """The iterative IK solver's layout, when the module has ``position`` and ``ik_step``."""
     if "position" not in functions or "ik_step" not in functions:
         return None
@@ -104,6 +104,7 @@ def _ik_context(functions: dict[str, dict], precision: str) -> dict | None:
         "params": [a for a in step["args"] if a != "q"],
         "checks": [a for a in step["inputs"] if a["name"] != "q" and a["domain"]],
         "tol": repr(settings["tol"]),
+        "reach": repr(float(sum(lengths))) if lengths else "1.0",
         "step_args": ["mu" if a == damping else a for a in step["args"]],
         "position_args": ["trial" if a == "q" else a for a in functions["position"]["args"]],
         "lambda": damping,
