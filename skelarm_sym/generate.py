@@ -174,16 +174,24 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
             )
 
 
-def derive_model(model) -> Derivation:
-    """The derivation of any supported model (the one place that knows them all)."""
+def derive_model(model, functions: str | Iterable[str] | None = None) -> Derivation:
+    """The derivation of any supported model (the one place that knows them all).
+
+    ``functions`` (a ``--functions`` list or ``None``): a chain whose list names none of the inverse
+    functions is derived without them (they take most of the time)."""
     if isinstance(model, PlanarArm):
         return derive(model)
     if isinstance(model, DiffDrive):
         return derive_diffdrive(model)
     if isinstance(model, Chain):
         from .derive.chain import derive_chain
+        from .derive.chain_inverse import INVERSE_FUNCTIONS
 
-        return derive_chain(model)
+        inverse = {f.name for f in INVERSE_FUNCTIONS} | {"ik_solve", "ik_solve_position"}
+        wanted = None if functions is None else (
+            {x.strip() for x in functions.split(",")} if isinstance(functions, str) else {str(x).strip() for x in functions}
+        )
+        return derive_chain(model, inverse=wanted is None or bool(wanted & inverse))
     raise InputError(f"unsupported model {model!r}")
 
 
@@ -237,7 +245,7 @@ def generate(
     if cmake and "c" not in langs:
         raise InputError("--cmake builds the C: generate with lang 'c'")
 
-    derivation = derive_model(model)
+    derivation = derive_model(model, functions)
     selected = select_functions(derivation, functions)
     programs = tuple(build_programs(derivation, selected))
     command = regenerate_command(model, prefix, precision, langs, selected)

@@ -212,8 +212,9 @@ class _Steps(StepRecorder):
         return super().__call__(label, expr)
 
 
-def derive_chain(chain: Chain) -> ChainDerivation:
-    """Derive ``T, J, J_tool, dJ, twist, acc`` of ``chain`` (see the module docstring). Linear in N."""
+def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
+    """Derive ``T, J, J_tool, dJ, twist, acc`` of ``chain`` (see the module docstring), and with ``inverse``
+    the inverse functions of :mod:`skelarm_sym.derive.chain_inverse`. Linear in N (the Hessian aside)."""
     n = chain.n
     q = sp.symbols(f"q1:{n + 1}", real=True)
     dq = sp.symbols(f"dq1:{n + 1}", real=True)
@@ -368,6 +369,8 @@ def derive_chain(chain: Chain) -> ChainDerivation:
         notes=notes,
         tables=tables,
     )
+    if not inverse:
+        return derivation
     from .chain_inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
 
     return extend(derivation, step, joints, axes, linear, angular, tool_rotation)
