@@ -24,12 +24,14 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xd5d744bbUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x9e3a494cUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -39,6 +41,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM2_VECTORIZE
 #define ARM2_VECTOR_MATH 0
+#endif
+#if !ARM2_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define ARM2_SINCOS 1
+#else
+#define ARM2_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
@@ -52,6 +60,10 @@ static ARM2_VECTORIZE void arm2_trig4(const double *restrict ang, double *restri
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM2_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -72,6 +84,10 @@ static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restr
     }
     for (k = 0; k < 64; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM2_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

@@ -24,12 +24,14 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x0d80ca98UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x1e24819bUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) float sinf(float);
@@ -39,6 +41,12 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #else
 #define ARM3F_VECTORIZE
 #define ARM3F_VECTOR_MATH 0
+#endif
+#if !ARM3F_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincosf(float x, float *s, float *c); /* glibc (GNU), not C99 */
+#define ARM3F_SINCOS 1
+#else
+#define ARM3F_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
@@ -52,6 +60,10 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sinf(ang[k]);
+    }
+#elif ARM3F_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincosf(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -72,6 +84,10 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
     }
     for (k = 0; k < 96; ++k) {
         sn[k] = sinf(ang[k]);
+    }
+#elif ARM3F_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincosf(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

@@ -24,12 +24,14 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xe7ebcae1UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x9d5fb54cUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -39,6 +41,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_VECTORIZE
 #define ARM4_VECTOR_MATH 0
+#endif
+#if !ARM4_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define ARM4_SINCOS 1
+#else
+#define ARM4_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
@@ -52,6 +60,10 @@ static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restri
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM4_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -72,6 +84,10 @@ static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *rest
     }
     for (k = 0; k < 128; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM4_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

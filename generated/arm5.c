@@ -24,12 +24,14 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x5fdb5e00UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x84c8c4f3UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -39,6 +41,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM5_VECTORIZE
 #define ARM5_VECTOR_MATH 0
+#endif
+#if !ARM5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define ARM5_SINCOS 1
+#else
+#define ARM5_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
@@ -52,6 +60,10 @@ static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restri
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM5_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -72,6 +84,10 @@ static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *rest
     }
     for (k = 0; k < 160; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM5_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

@@ -24,12 +24,14 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x92ab49deUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x1478553fUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -39,6 +41,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM6_VECTORIZE
 #define ARM6_VECTOR_MATH 0
+#endif
+#if !ARM6_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define ARM6_SINCOS 1
+#else
+#define ARM6_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
@@ -52,6 +60,10 @@ static ARM6_VECTORIZE void arm6_trig8(const double *restrict ang, double *restri
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM6_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -72,6 +84,10 @@ static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *rest
     }
     for (k = 0; k < 192; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif ARM6_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

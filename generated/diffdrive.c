@@ -14,12 +14,14 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x26ba1c02UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x69b282abUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -29,6 +31,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define DIFFDRIVE_VECTORIZE
 #define DIFFDRIVE_VECTOR_MATH 0
+#endif
+#if !DIFFDRIVE_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define DIFFDRIVE_SINCOS 1
+#else
+#define DIFFDRIVE_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used. */
@@ -42,6 +50,10 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig4(const double *restrict ang, doub
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif DIFFDRIVE_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -62,6 +74,10 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, dou
     }
     for (k = 0; k < 32; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif DIFFDRIVE_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {

@@ -52,6 +52,7 @@ class CPrecision:
     sin: str
     cos: str
     sqrt: str
+    sincos: str = "sincos"
 
     def literal(self, value: float) -> str:
         """A C literal of this precision for ``value``."""
@@ -63,7 +64,7 @@ class CPrecision:
 
 PRECISIONS = {
     "double": CPrecision("double", "", "sin", "cos", "sqrt"),
-    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf"),
+    "float": CPrecision("float", "f", "sinf", "cosf", "sqrtf", "sincosf"),
 }
 
 
