@@ -6,8 +6,10 @@
 // (limits repeated per line for simplicity; only the first line's are used);
 // LIBRARY: the emitted C compiled as a shared library with the same flags; PREFIX its function prefix.
 // Both loops: Levenberg-Marquardt on e = [p_t - p; log3(R_t R^T)] (LOCAL_WORLD_ALIGNED J),
-// dq = J^T (J J^T + mu^2 I)^-1 e (Eigen LDLT here), mu = max(lambda, c |e|), the same step cap,
-// clamping, blocked-column removal, 2 pi wraps, restarts (same xorshift64* seed) and constants.
+// dq = J^T (J J^T + mu2 I)^-1 e (Eigen LDLT here), mu2 = max(lambda^2, c |e|), the same step cap,
+// clamping, blocked-column removal, 2 pi wraps, stationary-point test, restarts from the best of
+// CANDIDATES random configurations by tool position (forwardKinematics + updateFramePlacement each;
+// same xorshift64* seed, same alternation of centred and whole-range draws) and constants.
 // Prints per loop: successes, total iterations, mean microseconds per solve (median of 5 passes).
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/algorithm/kinematics.hpp>
@@ -30,8 +32,9 @@ static pinocchio::SE3 read_placement(std::ifstream &in) {
 }
 
 // constants of skelarm_sym.ik (checked by benchmarks/ik_success.py, which passes them on the command line)
-static double C_START = 0.1, C_MIN = 1e-8, C_MAX = 1e8, C_UP = 2.0, C_DOWN = 0.5, STEP_MAX = 1.0, STALL = 1e-9, PROGRESS = 0.5;
-static int ATTEMPT = 25, WINDOW = 8;
+static double C_START = 0.01, C_MIN = 1e-8, C_MAX = 1e8, C_UP = 4.0, C_DOWN = 0.5, STEP_MAX = 1.0, STALL = 1e-9, PROGRESS = 0.6;
+static double STATIONARY = 0.02, SHRINK = 0.5;
+static int ATTEMPT = 25, WINDOW = 3, CANDIDATES = 8;
 static unsigned long long SEED = 0x5EED5EEDULL;
 
 static double uniform(unsigned long long *state) {
@@ -46,7 +49,7 @@ struct Pin {
     pinocchio::Data *data;
     pinocchio::FrameIndex tool;
     int n;
-    Eigen::VectorXd lo, hi, draw_lo, draw_span;
+    Eigen::VectorXd lo, hi, draw_lo, draw_span, near_lo, near_span;
     std::vector<int> periodic;
     pinocchio::Data::Matrix6x J, Jt, Jf;
 
@@ -67,21 +70,28 @@ struct Pin {
               int &iterations) {
         Eigen::VectorXd q = q0.cwiseMax(lo).cwiseMin(hi), trial(n), dq(n), best_q(n);
         Eigen::Matrix<double, 6, 1> e, et;
-        Eigen::Matrix<double, 6, 6> A;
+        Eigen::Matrix<double, 6, 6> A, G, Gf;  // G = J J^T, kept while steps are rejected (as the emitted C)
+        bool gram = false;
         Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt;
         std::vector<int> blocked(n);
         double pe, re, pet, ret;
         unsigned long long state = SEED ^ 0x9E3779B97F4A7C15ULL;
         evaluate(q, target, e, pe, re, J);
-        double en = std::sqrt(pe * pe + re * re), best_en = en, c = C_START, checkpoint = en;
-        int best_stalled = 0, attempt = 0, it = 0, best_here = 1;
+        double en = std::sqrt(pe * pe + re * re), best_en = en, c = C_START, checkpoint = en, window_start = en;
+        int stationary = 0;
+        int best_stalled = 0, attempt = 0, it = 0, best_here = 1, restarts = 0;
+        const double mu2_floor = lambda * lambda;
         best_q = q;
         for (;;) {
             if (pe <= tol && re <= tol) { out = q; iterations = it; return 0; }
-            if (it == max_iter) break;
-            const double mu = std::max(c * en, lambda);
-            A.noalias() = J * J.transpose();
-            A.diagonal().array() += mu * mu;
+            if (it == max_iter) {
+                if (best_here && attempt > 0 && (stationary || en > PROGRESS * (attempt % WINDOW == 0 ? window_start : checkpoint))) best_stalled = 1;
+                break;
+            }
+            const double mu2 = std::max(c * en, mu2_floor);
+            if (!gram) { G.noalias() = J * J.transpose(); gram = true; }
+            A = G;
+            A.diagonal().array() += mu2;
             ldlt.compute(A);
             dq.noalias() = J.transpose() * ldlt.solve(e);
             bool any = false;
@@ -89,14 +99,19 @@ struct Pin {
                 blocked[k] = !periodic[k] && ((q[k] <= lo[k] && dq[k] < 0) || (q[k] >= hi[k] && dq[k] > 0));
                 any = any || blocked[k];
             }
+            const pinocchio::Data::Matrix6x *Jg = &J;
             if (any) {
                 Jf = J;
                 for (int k = 0; k < n; ++k) if (blocked[k]) Jf.col(k).setZero();
-                A.noalias() = Jf * Jf.transpose();
-                A.diagonal().array() += mu * mu;
+                Gf = G;
+                for (int k = 0; k < n; ++k) if (blocked[k]) Gf.noalias() -= J.col(k) * J.col(k).transpose();
+                A = Gf;
+                A.diagonal().array() += mu2;
                 ldlt.compute(A);
                 dq.noalias() = Jf.transpose() * ldlt.solve(e);
+                Jg = &Jf;
             }
+            stationary = (Jg->transpose() * e).squaredNorm() <= STATIONARY * STATIONARY * Jg->squaredNorm() * en * en;
             const double big = dq.cwiseAbs().maxCoeff();
             if (big > STEP_MAX) dq *= STEP_MAX / big;
             trial = q + dq;
@@ -113,7 +128,7 @@ struct Pin {
             int stalled;
             if (ent < en) {
                 stalled = en - ent <= STALL * en;
-                q = trial; e = et; J.swap(Jt); pe = pet; re = ret; en = ent;
+                q = trial; e = et; J.swap(Jt); pe = pet; re = ret; en = ent; gram = false;
                 c = std::max(c * C_DOWN, C_MIN);
             } else {
                 c *= C_UP;
@@ -121,15 +136,23 @@ struct Pin {
             }
             if (en < best_en || (stalled && en == best_en)) { best_en = en; best_q = q; best_stalled = stalled; best_here = 1; }
             if (pe <= tol && re <= tol) continue;
-            int slow = 0;
-            if (attempt % WINDOW == 0) { slow = en > PROGRESS * checkpoint; checkpoint = en; }
+            int slow = stationary;
+            if (attempt % WINDOW == 0) { slow = slow || en > PROGRESS * checkpoint; window_start = checkpoint; checkpoint = en; }
             if ((stalled || slow || attempt >= ATTEMPT) && it < max_iter) {
                 if ((stalled || slow) && best_here) best_stalled = 1;
                 best_here = 0;
-                for (int k = 0; k < n; ++k) q[k] = draw_lo[k] + draw_span[k] * uniform(&state);
+                const Eigen::VectorXd &low = restarts % 2 == 0 ? near_lo : draw_lo, &span = restarts % 2 == 0 ? near_span : draw_span;
+                double nearest = 0;
+                for (int m = 0; m < CANDIDATES; ++m) {
+                    for (int k = 0; k < n; ++k) trial[k] = low[k] + span[k] * uniform(&state);
+                    pinocchio::forwardKinematics(model, *data, trial);
+                    const double d = (target.translation() - pinocchio::updateFramePlacement(model, *data, tool).translation()).norm();
+                    if (m == 0 || d < nearest) { nearest = d; q = trial; }
+                }
+                ++restarts; gram = false;
                 evaluate(q, target, e, pe, re, J);
                 en = std::sqrt(pe * pe + re * re);
-                c = C_START; attempt = 0; checkpoint = en;
+                c = C_START; attempt = 0; checkpoint = window_start = en;
                 if (en < best_en) { best_en = en; best_q = q; best_stalled = 0; best_here = 1; }
             }
         }
@@ -142,11 +165,11 @@ typedef int (*solve_fn)(const double *, const double *, double, double, int, dou
 
 int main(int argc, char **argv) {
     if (argc < 5) { std::fprintf(stderr, "usage: ik_pinocchio CHAIN TARGETS LIBRARY PREFIX [constants...]\n"); return 2; }
-    if (argc >= 16) {
+    if (argc >= 19) {
         C_START = atof(argv[5]); C_MIN = atof(argv[6]); C_MAX = atof(argv[7]); C_UP = atof(argv[8]); C_DOWN = atof(argv[9]);
         STEP_MAX = atof(argv[10]); STALL = atof(argv[11]); PROGRESS = atof(argv[12]); ATTEMPT = atoi(argv[13]); WINDOW = atoi(argv[14]);
-        SEED = std::stoull(argv[15]);
-    }
+        SEED = std::stoull(argv[15]); STATIONARY = atof(argv[16]); CANDIDATES = atoi(argv[17]); SHRINK = atof(argv[18]);
+    } else if (argc > 5) { std::fprintf(stderr, "expected 14 constants after PREFIX\n"); return 2; }
     std::ifstream chain(argv[1]), targets(argv[2]);
     int joints; chain >> joints;
     Pin pin;
@@ -176,6 +199,11 @@ int main(int argc, char **argv) {
         for (int k = 0; k < n; ++k) targets >> pin.draw_lo[k];
         for (int k = 0; k < n; ++k) targets >> pin.draw_span[k];
         for (int k = 0; k < n; ++k) targets >> pin.periodic[k];
+    }
+    pin.near_lo.resize(n); pin.near_span.resize(n);
+    for (int k = 0; k < n; ++k) {  // even restarts: SHRINK times the range around its centre (periodic: all of it)
+        pin.near_lo[k] = pin.periodic[k] ? pin.draw_lo[k] : pin.draw_lo[k] + pin.draw_span[k] * ((1.0 - SHRINK) / 2.0);
+        pin.near_span[k] = pin.periodic[k] ? pin.draw_span[k] : pin.draw_span[k] * SHRINK;
     }
     std::vector<pinocchio::SE3> poses(m);
     for (int i = 0; i < m; ++i) {

@@ -129,7 +129,7 @@ def main(argv=None) -> None:
                 chain_file(chain, work / f"{name}.chain")
                 targets_file(chain, pairs, work / f"{name}.targets")
                 constants = [repr(x) for x in (ik.C_START, ik.C_MIN, ik.C_MAX, ik.C_UP, ik.C_DOWN, ik.STEP_MAX, ik.STALL, ik.PROGRESS)]
-                constants += [str(ik.ATTEMPT), str(ik.WINDOW), str(ik.SEED)]
+                constants += [str(ik.ATTEMPT), str(ik.WINDOW), str(ik.SEED), repr(ik.STATIONARY), str(ik.CANDIDATES), repr(ik.SHRINK)]
                 out = subprocess.run([str(pin), str(work / f"{name}.chain"), str(work / f"{name}.targets"), str(lib), prefix, *constants],
                                      capture_output=True, text=True, check=True).stdout.split("\n")
                 rows = {line.split()[0]: line.split()[1:] for line in out if line.strip()}

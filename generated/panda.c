@@ -30,12 +30,14 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x52f84299UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x699eb819UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
 /* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler uses the same loops with plain calls. */
+ * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
+ * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
+ * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -45,6 +47,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define PANDA_VECTORIZE
 #define PANDA_VECTOR_MATH 0
+#endif
+#if !PANDA_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
+#define PANDA_SINCOS 1
+#else
+#define PANDA_SINCOS 0
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
@@ -58,6 +66,10 @@ static PANDA_VECTORIZE void panda_trig8(const double *restrict ang, double *rest
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -79,6 +91,10 @@ static PANDA_VECTORIZE void panda_trig48(const double *restrict ang, double *res
     for (k = 0; k < 48; ++k) {
         sn[k] = sin(ang[k]);
     }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
 #else
     for (k = 0; k < used; ++k) {
         cs[k] = cos(ang[k]);
@@ -98,6 +114,10 @@ static PANDA_VECTORIZE void panda_trig112(const double *restrict ang, double *re
     }
     for (k = 0; k < 112; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -119,6 +139,10 @@ static PANDA_VECTORIZE void panda_trig192(const double *restrict ang, double *re
     for (k = 0; k < 192; ++k) {
         sn[k] = sin(ang[k]);
     }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
 #else
     for (k = 0; k < used; ++k) {
         cs[k] = cos(ang[k]);
@@ -138,6 +162,10 @@ static PANDA_VECTORIZE void panda_trig224(const double *restrict ang, double *re
     }
     for (k = 0; k < 224; ++k) {
         sn[k] = sin(ang[k]);
+    }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
     }
 #else
     for (k = 0; k < used; ++k) {
@@ -11576,122 +11604,194 @@ static void panda_ik_error_pose(const double Tm[16], const double target[16], do
     *pe = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
-/* dq = J^T (J J^T + mu2 I)^-1 e for J's first 6 rows (the caller zeroes the columns of blocked
- * joints) by an unpivoted LDL^T; a pivot <= 1e-13 times the largest diagonal entry is dropped
- * (its unknown set to 0), so a rank-deficient J with mu2 = 0 gives a finite step. */
-static void panda_ik_damped_pose(const double J[42], const double e[6], double mu2, double dq[7])
+/* G = J J^T for J's first 6 rows, lower triangle packed by rows (G[r (r + 1) / 2 + c], c <= r). */
+static void panda_ik_gram_pose(const double J[42], double G[21])
 {
-    double d0, i0, y0, z0, d1, i1, y1, z1, d2, i2, y2, z2, d3, i3, y3, z3, d4, i4, y4, z4, d5, i5, y5, z5;
+    G[0] = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3] + J[4] * J[4] + J[5] * J[5] + J[6] * J[6];
+    G[1] = J[7] * J[0] + J[8] * J[1] + J[9] * J[2] + J[10] * J[3] + J[11] * J[4] + J[12] * J[5] + J[13] * J[6];
+    G[2] = J[7] * J[7] + J[8] * J[8] + J[9] * J[9] + J[10] * J[10] + J[11] * J[11] + J[12] * J[12] + J[13] * J[13];
+    G[3] = J[14] * J[0] + J[15] * J[1] + J[16] * J[2] + J[17] * J[3] + J[18] * J[4] + J[19] * J[5] + J[20] * J[6];
+    G[4] = J[14] * J[7] + J[15] * J[8] + J[16] * J[9] + J[17] * J[10] + J[18] * J[11] + J[19] * J[12] + J[20] * J[13];
+    G[5] = J[14] * J[14] + J[15] * J[15] + J[16] * J[16] + J[17] * J[17] + J[18] * J[18] + J[19] * J[19] + J[20] * J[20];
+    G[6] = J[21] * J[0] + J[22] * J[1] + J[23] * J[2] + J[24] * J[3] + J[25] * J[4] + J[26] * J[5] + J[27] * J[6];
+    G[7] = J[21] * J[7] + J[22] * J[8] + J[23] * J[9] + J[24] * J[10] + J[25] * J[11] + J[26] * J[12] + J[27] * J[13];
+    G[8] = J[21] * J[14] + J[22] * J[15] + J[23] * J[16] + J[24] * J[17] + J[25] * J[18] + J[26] * J[19] + J[27] * J[20];
+    G[9] = J[21] * J[21] + J[22] * J[22] + J[23] * J[23] + J[24] * J[24] + J[25] * J[25] + J[26] * J[26] + J[27] * J[27];
+    G[10] = J[28] * J[0] + J[29] * J[1] + J[30] * J[2] + J[31] * J[3] + J[32] * J[4] + J[33] * J[5] + J[34] * J[6];
+    G[11] = J[28] * J[7] + J[29] * J[8] + J[30] * J[9] + J[31] * J[10] + J[32] * J[11] + J[33] * J[12] + J[34] * J[13];
+    G[12] = J[28] * J[14] + J[29] * J[15] + J[30] * J[16] + J[31] * J[17] + J[32] * J[18] + J[33] * J[19] + J[34] * J[20];
+    G[13] = J[28] * J[21] + J[29] * J[22] + J[30] * J[23] + J[31] * J[24] + J[32] * J[25] + J[33] * J[26] + J[34] * J[27];
+    G[14] = J[28] * J[28] + J[29] * J[29] + J[30] * J[30] + J[31] * J[31] + J[32] * J[32] + J[33] * J[33] + J[34] * J[34];
+    G[15] = J[35] * J[0] + J[36] * J[1] + J[37] * J[2] + J[38] * J[3] + J[39] * J[4] + J[40] * J[5] + J[41] * J[6];
+    G[16] = J[35] * J[7] + J[36] * J[8] + J[37] * J[9] + J[38] * J[10] + J[39] * J[11] + J[40] * J[12] + J[41] * J[13];
+    G[17] = J[35] * J[14] + J[36] * J[15] + J[37] * J[16] + J[38] * J[17] + J[39] * J[18] + J[40] * J[19] + J[41] * J[20];
+    G[18] = J[35] * J[21] + J[36] * J[22] + J[37] * J[23] + J[38] * J[24] + J[39] * J[25] + J[40] * J[26] + J[41] * J[27];
+    G[19] = J[35] * J[28] + J[36] * J[29] + J[37] * J[30] + J[38] * J[31] + J[39] * J[32] + J[40] * J[33] + J[41] * J[34];
+    G[20] = J[35] * J[35] + J[36] * J[36] + J[37] * J[37] + J[38] * J[38] + J[39] * J[39] + J[40] * J[40] + J[41] * J[41];
+}
+
+/* dq = J^T (G + mu2 I)^-1 e with G = J J^T (the caller zeroes the columns of blocked joints in J and
+ * takes them out of G) by an unpivoted LDL^T; a pivot <= 1e-13 times the largest diagonal entry is
+ * dropped (its unknown set to 0), so a rank-deficient J with mu2 = 0 gives a finite step. */
+static void panda_ik_damped_pose(const double J[42], const double G[21], const double e[6], double mu2, double dq[7])
+{
+    /* sums are paired (shorter dependency chains) and end with the term computed last; ld = l d is
+     * kept as the numerator of l (the same number when the pivot is kept, 0 when it is dropped) */
+    double i0, y0, z0, i1, y1, z1, i2, y2, z2, i3, y3, z3, i4, y4, z4, i5, y5, z5;
     double l10, ld10, l20, ld20, l21, ld21, l30, ld30, l31, ld31, l32, ld32, l40, ld40, l41, ld41, l42, ld42, l43, ld43, l50, ld50, l51, ld51, l52, ld52, l53, ld53, l54, ld54;
     double cut = 0.0;
-    const double a00 = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3] + J[4] * J[4] + J[5] * J[5] + J[6] * J[6] + mu2;
+    const double a00 = G[0] + mu2;
     cut = a00 > cut ? a00 : cut;
-    const double a10 = J[7] * J[0] + J[8] * J[1] + J[9] * J[2] + J[10] * J[3] + J[11] * J[4] + J[12] * J[5] + J[13] * J[6];
-    const double a11 = J[7] * J[7] + J[8] * J[8] + J[9] * J[9] + J[10] * J[10] + J[11] * J[11] + J[12] * J[12] + J[13] * J[13] + mu2;
+    const double a10 = G[1];
+    const double a11 = G[2] + mu2;
     cut = a11 > cut ? a11 : cut;
-    const double a20 = J[14] * J[0] + J[15] * J[1] + J[16] * J[2] + J[17] * J[3] + J[18] * J[4] + J[19] * J[5] + J[20] * J[6];
-    const double a21 = J[14] * J[7] + J[15] * J[8] + J[16] * J[9] + J[17] * J[10] + J[18] * J[11] + J[19] * J[12] + J[20] * J[13];
-    const double a22 = J[14] * J[14] + J[15] * J[15] + J[16] * J[16] + J[17] * J[17] + J[18] * J[18] + J[19] * J[19] + J[20] * J[20] + mu2;
+    const double a20 = G[3];
+    const double a21 = G[4];
+    const double a22 = G[5] + mu2;
     cut = a22 > cut ? a22 : cut;
-    const double a30 = J[21] * J[0] + J[22] * J[1] + J[23] * J[2] + J[24] * J[3] + J[25] * J[4] + J[26] * J[5] + J[27] * J[6];
-    const double a31 = J[21] * J[7] + J[22] * J[8] + J[23] * J[9] + J[24] * J[10] + J[25] * J[11] + J[26] * J[12] + J[27] * J[13];
-    const double a32 = J[21] * J[14] + J[22] * J[15] + J[23] * J[16] + J[24] * J[17] + J[25] * J[18] + J[26] * J[19] + J[27] * J[20];
-    const double a33 = J[21] * J[21] + J[22] * J[22] + J[23] * J[23] + J[24] * J[24] + J[25] * J[25] + J[26] * J[26] + J[27] * J[27] + mu2;
+    const double a30 = G[6];
+    const double a31 = G[7];
+    const double a32 = G[8];
+    const double a33 = G[9] + mu2;
     cut = a33 > cut ? a33 : cut;
-    const double a40 = J[28] * J[0] + J[29] * J[1] + J[30] * J[2] + J[31] * J[3] + J[32] * J[4] + J[33] * J[5] + J[34] * J[6];
-    const double a41 = J[28] * J[7] + J[29] * J[8] + J[30] * J[9] + J[31] * J[10] + J[32] * J[11] + J[33] * J[12] + J[34] * J[13];
-    const double a42 = J[28] * J[14] + J[29] * J[15] + J[30] * J[16] + J[31] * J[17] + J[32] * J[18] + J[33] * J[19] + J[34] * J[20];
-    const double a43 = J[28] * J[21] + J[29] * J[22] + J[30] * J[23] + J[31] * J[24] + J[32] * J[25] + J[33] * J[26] + J[34] * J[27];
-    const double a44 = J[28] * J[28] + J[29] * J[29] + J[30] * J[30] + J[31] * J[31] + J[32] * J[32] + J[33] * J[33] + J[34] * J[34] + mu2;
+    const double a40 = G[10];
+    const double a41 = G[11];
+    const double a42 = G[12];
+    const double a43 = G[13];
+    const double a44 = G[14] + mu2;
     cut = a44 > cut ? a44 : cut;
-    const double a50 = J[35] * J[0] + J[36] * J[1] + J[37] * J[2] + J[38] * J[3] + J[39] * J[4] + J[40] * J[5] + J[41] * J[6];
-    const double a51 = J[35] * J[7] + J[36] * J[8] + J[37] * J[9] + J[38] * J[10] + J[39] * J[11] + J[40] * J[12] + J[41] * J[13];
-    const double a52 = J[35] * J[14] + J[36] * J[15] + J[37] * J[16] + J[38] * J[17] + J[39] * J[18] + J[40] * J[19] + J[41] * J[20];
-    const double a53 = J[35] * J[21] + J[36] * J[22] + J[37] * J[23] + J[38] * J[24] + J[39] * J[25] + J[40] * J[26] + J[41] * J[27];
-    const double a54 = J[35] * J[28] + J[36] * J[29] + J[37] * J[30] + J[38] * J[31] + J[39] * J[32] + J[40] * J[33] + J[41] * J[34];
-    const double a55 = J[35] * J[35] + J[36] * J[36] + J[37] * J[37] + J[38] * J[38] + J[39] * J[39] + J[40] * J[40] + J[41] * J[41] + mu2;
+    const double a50 = G[15];
+    const double a51 = G[16];
+    const double a52 = G[17];
+    const double a53 = G[18];
+    const double a54 = G[19];
+    const double a55 = G[20] + mu2;
     cut = a55 > cut ? a55 : cut;
     cut *= 1e-13;
     {
         const double s = a00;
-        d0 = s > cut ? s : 0.0;
-        i0 = s > cut ? 1.0 / s : 0.0;
+        const int kept = s > cut;
+        i0 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = a10;
+            l10 = t * i0;
+            ld10 = kept ? t : 0.0;
+        }
+        {
+            const double t = a20;
+            l20 = t * i0;
+            ld20 = kept ? t : 0.0;
+        }
+        {
+            const double t = a30;
+            l30 = t * i0;
+            ld30 = kept ? t : 0.0;
+        }
+        {
+            const double t = a40;
+            l40 = t * i0;
+            ld40 = kept ? t : 0.0;
+        }
+        {
+            const double t = a50;
+            l50 = t * i0;
+            ld50 = kept ? t : 0.0;
+        }
     }
-    l10 = (a10) * i0;
-    ld10 = l10 * d0;
-    l20 = (a20) * i0;
-    ld20 = l20 * d0;
-    l30 = (a30) * i0;
-    ld30 = l30 * d0;
-    l40 = (a40) * i0;
-    ld40 = l40 * d0;
-    l50 = (a50) * i0;
-    ld50 = l50 * d0;
     {
         const double s = a11 - l10 * ld10;
-        d1 = s > cut ? s : 0.0;
-        i1 = s > cut ? 1.0 / s : 0.0;
+        const int kept = s > cut;
+        i1 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = a21 - l20 * ld10;
+            l21 = t * i1;
+            ld21 = kept ? t : 0.0;
+        }
+        {
+            const double t = a31 - l30 * ld10;
+            l31 = t * i1;
+            ld31 = kept ? t : 0.0;
+        }
+        {
+            const double t = a41 - l40 * ld10;
+            l41 = t * i1;
+            ld41 = kept ? t : 0.0;
+        }
+        {
+            const double t = a51 - l50 * ld10;
+            l51 = t * i1;
+            ld51 = kept ? t : 0.0;
+        }
     }
-    l21 = (a21 - l20 * ld10) * i1;
-    ld21 = l21 * d1;
-    l31 = (a31 - l30 * ld10) * i1;
-    ld31 = l31 * d1;
-    l41 = (a41 - l40 * ld10) * i1;
-    ld41 = l41 * d1;
-    l51 = (a51 - l50 * ld10) * i1;
-    ld51 = l51 * d1;
     {
-        const double s = a22 - l20 * ld20 - l21 * ld21;
-        d2 = s > cut ? s : 0.0;
-        i2 = s > cut ? 1.0 / s : 0.0;
+        const double s = (a22 - l20 * ld20) - l21 * ld21;
+        const int kept = s > cut;
+        i2 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = (a32 - l30 * ld20) - l31 * ld21;
+            l32 = t * i2;
+            ld32 = kept ? t : 0.0;
+        }
+        {
+            const double t = (a42 - l40 * ld20) - l41 * ld21;
+            l42 = t * i2;
+            ld42 = kept ? t : 0.0;
+        }
+        {
+            const double t = (a52 - l50 * ld20) - l51 * ld21;
+            l52 = t * i2;
+            ld52 = kept ? t : 0.0;
+        }
     }
-    l32 = (a32 - l30 * ld20 - l31 * ld21) * i2;
-    ld32 = l32 * d2;
-    l42 = (a42 - l40 * ld20 - l41 * ld21) * i2;
-    ld42 = l42 * d2;
-    l52 = (a52 - l50 * ld20 - l51 * ld21) * i2;
-    ld52 = l52 * d2;
     {
-        const double s = a33 - l30 * ld30 - l31 * ld31 - l32 * ld32;
-        d3 = s > cut ? s : 0.0;
-        i3 = s > cut ? 1.0 / s : 0.0;
+        const double s = (a33 - (l30 * ld30 + l31 * ld31)) - l32 * ld32;
+        const int kept = s > cut;
+        i3 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = (a43 - (l40 * ld30 + l41 * ld31)) - l42 * ld32;
+            l43 = t * i3;
+            ld43 = kept ? t : 0.0;
+        }
+        {
+            const double t = (a53 - (l50 * ld30 + l51 * ld31)) - l52 * ld32;
+            l53 = t * i3;
+            ld53 = kept ? t : 0.0;
+        }
     }
-    l43 = (a43 - l40 * ld30 - l41 * ld31 - l42 * ld32) * i3;
-    ld43 = l43 * d3;
-    l53 = (a53 - l50 * ld30 - l51 * ld31 - l52 * ld32) * i3;
-    ld53 = l53 * d3;
     {
-        const double s = a44 - l40 * ld40 - l41 * ld41 - l42 * ld42 - l43 * ld43;
-        d4 = s > cut ? s : 0.0;
-        i4 = s > cut ? 1.0 / s : 0.0;
+        const double s = (a44 - (l40 * ld40 + (l41 * ld41 + l42 * ld42))) - l43 * ld43;
+        const int kept = s > cut;
+        i4 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = (a54 - (l50 * ld40 + (l51 * ld41 + l52 * ld42))) - l53 * ld43;
+            l54 = t * i4;
+            ld54 = kept ? t : 0.0;
+        }
     }
-    l54 = (a54 - l50 * ld40 - l51 * ld41 - l52 * ld42 - l53 * ld43) * i4;
-    ld54 = l54 * d4;
     {
-        const double s = a55 - l50 * ld50 - l51 * ld51 - l52 * ld52 - l53 * ld53 - l54 * ld54;
-        d5 = s > cut ? s : 0.0;
-        i5 = s > cut ? 1.0 / s : 0.0;
+        const double s = (a55 - ((l50 * ld50 + l51 * ld51) + (l52 * ld52 + l53 * ld53))) - l54 * ld54;
+        const int kept = s > cut;
+        i5 = kept ? 1.0 / s : 0.0;
     }
-    (void)d5;
     y0 = e[0];
     y1 = e[1] - l10 * y0;
-    y2 = e[2] - l20 * y0 - l21 * y1;
-    y3 = e[3] - l30 * y0 - l31 * y1 - l32 * y2;
-    y4 = e[4] - l40 * y0 - l41 * y1 - l42 * y2 - l43 * y3;
-    y5 = e[5] - l50 * y0 - l51 * y1 - l52 * y2 - l53 * y3 - l54 * y4;
+    y2 = (e[2] - l20 * y0) - l21 * y1;
+    y3 = (e[3] - (l30 * y0 + l31 * y1)) - l32 * y2;
+    y4 = (e[4] - (l40 * y0 + (l41 * y1 + l42 * y2))) - l43 * y3;
+    y5 = (e[5] - ((l50 * y0 + l51 * y1) + (l52 * y2 + l53 * y3))) - l54 * y4;
     z5 = y5 * i5;
     z4 = y4 * i4 - l54 * z5;
-    z3 = y3 * i3 - l43 * z4 - l53 * z5;
-    z2 = y2 * i2 - l32 * z3 - l42 * z4 - l52 * z5;
-    z1 = y1 * i1 - l21 * z2 - l31 * z3 - l41 * z4 - l51 * z5;
-    z0 = y0 * i0 - l10 * z1 - l20 * z2 - l30 * z3 - l40 * z4 - l50 * z5;
-    dq[0] = J[0] * z0 + J[7] * z1 + J[14] * z2 + J[21] * z3 + J[28] * z4 + J[35] * z5;
-    dq[1] = J[1] * z0 + J[8] * z1 + J[15] * z2 + J[22] * z3 + J[29] * z4 + J[36] * z5;
-    dq[2] = J[2] * z0 + J[9] * z1 + J[16] * z2 + J[23] * z3 + J[30] * z4 + J[37] * z5;
-    dq[3] = J[3] * z0 + J[10] * z1 + J[17] * z2 + J[24] * z3 + J[31] * z4 + J[38] * z5;
-    dq[4] = J[4] * z0 + J[11] * z1 + J[18] * z2 + J[25] * z3 + J[32] * z4 + J[39] * z5;
-    dq[5] = J[5] * z0 + J[12] * z1 + J[19] * z2 + J[26] * z3 + J[33] * z4 + J[40] * z5;
-    dq[6] = J[6] * z0 + J[13] * z1 + J[20] * z2 + J[27] * z3 + J[34] * z4 + J[41] * z5;
+    z3 = (y3 * i3 - l53 * z5) - l43 * z4;
+    z2 = (y2 * i2 - (l52 * z5 + l42 * z4)) - l32 * z3;
+    z1 = (y1 * i1 - (l51 * z5 + (l41 * z4 + l31 * z3))) - l21 * z2;
+    z0 = (y0 * i0 - ((l50 * z5 + l40 * z4) + (l30 * z3 + l20 * z2))) - l10 * z1;
+    dq[0] = ((J[0] * z0 + (J[7] * z1 + J[14] * z2)) + (J[21] * z3 + (J[28] * z4 + J[35] * z5)));
+    dq[1] = ((J[1] * z0 + (J[8] * z1 + J[15] * z2)) + (J[22] * z3 + (J[29] * z4 + J[36] * z5)));
+    dq[2] = ((J[2] * z0 + (J[9] * z1 + J[16] * z2)) + (J[23] * z3 + (J[30] * z4 + J[37] * z5)));
+    dq[3] = ((J[3] * z0 + (J[10] * z1 + J[17] * z2)) + (J[24] * z3 + (J[31] * z4 + J[38] * z5)));
+    dq[4] = ((J[4] * z0 + (J[11] * z1 + J[18] * z2)) + (J[25] * z3 + (J[32] * z4 + J[39] * z5)));
+    dq[5] = ((J[5] * z0 + (J[12] * z1 + J[19] * z2)) + (J[26] * z3 + (J[33] * z4 + J[40] * z5)));
+    dq[6] = ((J[6] * z0 + (J[13] * z1 + J[20] * z2)) + (J[27] * z3 + (J[34] * z4 + J[41] * z5)));
 }
 
 static int panda_ik_run_pose(const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double err[2], int *iterations)
@@ -11700,9 +11800,16 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
     const double hi[7] = {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973};
     const double draw_lo[7] = {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973};
     const double draw_span[7] = {5.7946, 3.5256, 5.7946, 3.0020000000000002, 5.7946, 3.77, 5.7946};
-    double Tm[16], J[42], e[6], Tt[16], Jt[42], et[6], trial[7], dq[7], best_q[7], Jf[42];
-    double pe, re, en, pet, ret, ent, mu, big, c, checkpoint, best_en, best_pe, best_re;
-    int blocked[7], any, k, it, attempt, stalled, slow, best_stalled, best_here = 1;
+    const double near_lo[7] = {-1.44865, -0.8814, -1.44865, -2.3213, -1.44865, 0.925, -1.44865};
+    const double near_span[7] = {2.8973, 1.7628, 2.8973, 1.5010000000000001, 2.8973, 1.885, 2.8973};
+    double Tbuf[32], Jbuf[84], ebuf[12], trial[7], dq[7], best_q[7], Jf[42];
+    double *Tm = Tbuf, *Tt = Tbuf + 16, *J = Jbuf, *Jt = Jbuf + 42, *e = ebuf, *et = ebuf + 6, *swap; /* current and trial: an accepted trial swaps */
+    double pe, re, en, pet, ret, ent, mu2, big, c, checkpoint, best_en, best_pe, best_re, gg, ff, scale, window_start;
+    const double mu2_floor = lambda * lambda;
+    const double *Jg;
+    double G[21], Gf[21]; /* J J^T at the current pose (kept while steps are rejected), and without blocked columns */
+    int gram = 0;
+    int blocked[7], any, k, it, attempt, stalled, slow, stationary = 0, restarts = 0, best_stalled, best_here = 1;
     unsigned long long state = 0x5eed5eedULL ^ 0x9E3779B97F4A7C15ULL;
     *iterations = 0;
     err[0] = err[1] = 0.0;
@@ -11732,10 +11839,10 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
     for (k = 0; k < 7; ++k) {
         best_q[k] = q[k];
     }
-    c = 0.1;
+    c = 0.01;
     attempt = 0;
     it = 0;
-    checkpoint = en;
+    checkpoint = window_start = en;
     for (;;) {
         if (pe <= tol && re <= tol) {
             err[0] = pe;
@@ -11744,30 +11851,86 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
             return PANDA_IK_CONVERGED;
         }
         if (it == max_iter) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a
+             * stationary point or no longer lowers |e| geometrically (as a window would judge) */
+            if (best_here && attempt > 0 && (stationary || en > 0.6 * (attempt % 3 == 0 ? window_start : checkpoint))) {
+                best_stalled = 1;
+            }
             break;
         }
-        mu = c * en > lambda ? c * en : lambda;
-        panda_ik_damped_pose(J, e, mu * mu, dq);
+        mu2 = c * en > mu2_floor ? c * en : mu2_floor;
+        if (!gram) {
+            panda_ik_gram_pose(J, G);
+            gram = 1;
+        }
+        panda_ik_damped_pose(J, G, e, mu2, dq);
         for (k = 0; k < 7; ++k) {
-            blocked[k] = (q[k] <= lo[k] && dq[k] < 0.0) || (q[k] >= hi[k] && dq[k] > 0.0);
+            blocked[k] = ((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0));
         }
         any = 0;
         for (k = 0; k < 7; ++k) {
             any |= blocked[k];
         }
+        Jg = J;
+        ff = G[0] + G[2] + G[5] + G[9] + G[14] + G[20]; /* |J|_F^2 */
         if (any) {
-            for (k = 0; k < 42; ++k) {
-                Jf[k] = blocked[k % 7] ? 0.0 : J[k];
+            double keep[7];
+            int r;
+            for (k = 0; k < 7; ++k) {
+                keep[k] = blocked[k] ? 0.0 : 1.0;
             }
-            panda_ik_damped_pose(Jf, e, mu * mu, dq);
+            for (r = 0; r < 6; ++r) {
+                for (k = 0; k < 7; ++k) {
+                    Jf[r * 7 + k] = J[r * 7 + k] * keep[k]; /* blocked columns zeroed */
+                }
+            }
+            for (k = 0; k < 21; ++k) {
+                Gf[k] = G[k];
+            }
+            for (k = 0; k < 7; ++k) { /* G minus the blocked columns' outer products */
+                if (blocked[k]) {
+                    Gf[0] -= J[0 + k] * J[0 + k];
+                    Gf[1] -= J[7 + k] * J[0 + k];
+                    Gf[2] -= J[7 + k] * J[7 + k];
+                    Gf[3] -= J[14 + k] * J[0 + k];
+                    Gf[4] -= J[14 + k] * J[7 + k];
+                    Gf[5] -= J[14 + k] * J[14 + k];
+                    Gf[6] -= J[21 + k] * J[0 + k];
+                    Gf[7] -= J[21 + k] * J[7 + k];
+                    Gf[8] -= J[21 + k] * J[14 + k];
+                    Gf[9] -= J[21 + k] * J[21 + k];
+                    Gf[10] -= J[28 + k] * J[0 + k];
+                    Gf[11] -= J[28 + k] * J[7 + k];
+                    Gf[12] -= J[28 + k] * J[14 + k];
+                    Gf[13] -= J[28 + k] * J[21 + k];
+                    Gf[14] -= J[28 + k] * J[28 + k];
+                    Gf[15] -= J[35 + k] * J[0 + k];
+                    Gf[16] -= J[35 + k] * J[7 + k];
+                    Gf[17] -= J[35 + k] * J[14 + k];
+                    Gf[18] -= J[35 + k] * J[21 + k];
+                    Gf[19] -= J[35 + k] * J[28 + k];
+                    Gf[20] -= J[35 + k] * J[35 + k];
+                }
+            }
+            panda_ik_damped_pose(Jf, Gf, e, mu2, dq);
+            Jg = Jf;
+            ff = Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20];
         }
+        /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
+        gg = 0.0;
+        for (k = 0; k < 7; ++k) {
+            const double g = Jg[0 * 7 + k] * e[0] + Jg[1 * 7 + k] * e[1] + Jg[2 * 7 + k] * e[2] + Jg[3 * 7 + k] * e[3] + Jg[4 * 7 + k] * e[4] + Jg[5 * 7 + k] * e[5];
+            gg += g * g;
+        }
+        stationary = gg <= 0.0004 * ff * en * en;
         big = 0.0;
         for (k = 0; k < 7; ++k) {
             const double a = fabs(dq[k]);
             big = a > big ? a : big;
         }
+        scale = big > 1.0 ? 1.0 / big : 1.0;
         for (k = 0; k < 7; ++k) {
-            trial[k] = q[k] + (big > 1.0 ? dq[k] * (1.0 / big) : dq[k]);
+            trial[k] = q[k] + dq[k] * scale;
         }
         for (k = 0; k < 7; ++k) {
             trial[k] = trial[k] < lo[k] ? lo[k] : trial[k] > hi[k] ? hi[k] : trial[k];
@@ -11782,19 +11945,14 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
             for (k = 0; k < 7; ++k) {
                 q[k] = trial[k];
             }
-            for (k = 0; k < 16; ++k) {
-                Tm[k] = Tt[k];
-            }
-            for (k = 0; k < 42; ++k) {
-                J[k] = Jt[k];
-            }
-            for (k = 0; k < 6; ++k) {
-                e[k] = et[k];
-            }
+            swap = Tm; Tm = Tt; Tt = swap;
+            swap = J; J = Jt; Jt = swap;
+            gram = 0;
+            swap = e; e = et; et = swap;
             pe = pet; re = ret; en = ent;
             c = c * 0.5 > 1e-08 ? c * 0.5 : 1e-08;
         } else {
-            c *= 2.0;
+            c *= 4.0;
             stalled = c > 100000000.0;
         }
         if (en < best_en || (stalled && en == best_en)) {
@@ -11806,9 +11964,10 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
         if (pe <= tol && re <= tol) {
             continue;
         }
-        slow = 0;
-        if (attempt % 8 == 0) {
-            slow = en > 0.5 * checkpoint;
+        slow = stationary;
+        if (attempt % 3 == 0) {
+            slow = slow || en > 0.6 * checkpoint;
+            window_start = checkpoint;
             checkpoint = en;
         }
         if ((stalled || slow || attempt >= 25) && it < max_iter) {
@@ -11816,15 +11975,37 @@ static int panda_ik_run_pose(const double *q0, const double *target, double lamb
                 best_stalled = 1;
             }
             best_here = 0;
-            for (k = 0; k < 7; ++k) {
-                q[k] = draw_lo[k] + draw_span[k] * panda_ik_uniform(&state);
+            { /* the best of 8 random starts by tool position error; even restarts near the centre */
+                const double *low = restarts % 2 == 0 ? near_lo : draw_lo;
+                const double *span = restarts % 2 == 0 ? near_span : draw_span;
+                double nearest = 0.0;
+                int m;
+                for (m = 0; m < 8; ++m) {
+                    double d0, d1, d2, d;
+                    for (k = 0; k < 7; ++k) {
+                        trial[k] = low[k] + span[k] * panda_ik_uniform(&state);
+                    }
+                    panda_ik_terms(trial, Tt, Jt);
+                    d0 = target[3] - Tt[3];
+                    d1 = target[7] - Tt[7];
+                    d2 = target[11] - Tt[11];
+                    d = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+                    if (m == 0 || d < nearest) {
+                        nearest = d;
+                        for (k = 0; k < 7; ++k) {
+                            q[k] = trial[k];
+                        }
+                    }
+                }
             }
+            ++restarts;
+            gram = 0;
             panda_ik_terms(q, Tm, J);
             panda_ik_error_pose(Tm, target, e, &pe, &re);
             en = sqrt(pe * pe + re * re);
-            c = 0.1;
+            c = 0.01;
             attempt = 0;
-            checkpoint = en;
+            checkpoint = window_start = en;
             if (en < best_en) {
                 best_en = en; best_pe = pe; best_re = re; best_stalled = 0; best_here = 1;
                 for (k = 0; k < 7; ++k) {
@@ -11853,59 +12034,80 @@ static void panda_ik_error_position(const double Tm[16], const double target[3],
     *pe = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
-/* dq = J^T (J J^T + mu2 I)^-1 e for J's first 3 rows (the caller zeroes the columns of blocked
- * joints) by an unpivoted LDL^T; a pivot <= 1e-13 times the largest diagonal entry is dropped
- * (its unknown set to 0), so a rank-deficient J with mu2 = 0 gives a finite step. */
-static void panda_ik_damped_position(const double J[42], const double e[3], double mu2, double dq[7])
+/* G = J J^T for J's first 3 rows, lower triangle packed by rows (G[r (r + 1) / 2 + c], c <= r). */
+static void panda_ik_gram_position(const double J[42], double G[6])
 {
-    double d0, i0, y0, z0, d1, i1, y1, z1, d2, i2, y2, z2;
+    G[0] = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3] + J[4] * J[4] + J[5] * J[5] + J[6] * J[6];
+    G[1] = J[7] * J[0] + J[8] * J[1] + J[9] * J[2] + J[10] * J[3] + J[11] * J[4] + J[12] * J[5] + J[13] * J[6];
+    G[2] = J[7] * J[7] + J[8] * J[8] + J[9] * J[9] + J[10] * J[10] + J[11] * J[11] + J[12] * J[12] + J[13] * J[13];
+    G[3] = J[14] * J[0] + J[15] * J[1] + J[16] * J[2] + J[17] * J[3] + J[18] * J[4] + J[19] * J[5] + J[20] * J[6];
+    G[4] = J[14] * J[7] + J[15] * J[8] + J[16] * J[9] + J[17] * J[10] + J[18] * J[11] + J[19] * J[12] + J[20] * J[13];
+    G[5] = J[14] * J[14] + J[15] * J[15] + J[16] * J[16] + J[17] * J[17] + J[18] * J[18] + J[19] * J[19] + J[20] * J[20];
+}
+
+/* dq = J^T (G + mu2 I)^-1 e with G = J J^T (the caller zeroes the columns of blocked joints in J and
+ * takes them out of G) by an unpivoted LDL^T; a pivot <= 1e-13 times the largest diagonal entry is
+ * dropped (its unknown set to 0), so a rank-deficient J with mu2 = 0 gives a finite step. */
+static void panda_ik_damped_position(const double J[42], const double G[6], const double e[3], double mu2, double dq[7])
+{
+    /* sums are paired (shorter dependency chains) and end with the term computed last; ld = l d is
+     * kept as the numerator of l (the same number when the pivot is kept, 0 when it is dropped) */
+    double i0, y0, z0, i1, y1, z1, i2, y2, z2;
     double l10, ld10, l20, ld20, l21, ld21;
     double cut = 0.0;
-    const double a00 = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3] + J[4] * J[4] + J[5] * J[5] + J[6] * J[6] + mu2;
+    const double a00 = G[0] + mu2;
     cut = a00 > cut ? a00 : cut;
-    const double a10 = J[7] * J[0] + J[8] * J[1] + J[9] * J[2] + J[10] * J[3] + J[11] * J[4] + J[12] * J[5] + J[13] * J[6];
-    const double a11 = J[7] * J[7] + J[8] * J[8] + J[9] * J[9] + J[10] * J[10] + J[11] * J[11] + J[12] * J[12] + J[13] * J[13] + mu2;
+    const double a10 = G[1];
+    const double a11 = G[2] + mu2;
     cut = a11 > cut ? a11 : cut;
-    const double a20 = J[14] * J[0] + J[15] * J[1] + J[16] * J[2] + J[17] * J[3] + J[18] * J[4] + J[19] * J[5] + J[20] * J[6];
-    const double a21 = J[14] * J[7] + J[15] * J[8] + J[16] * J[9] + J[17] * J[10] + J[18] * J[11] + J[19] * J[12] + J[20] * J[13];
-    const double a22 = J[14] * J[14] + J[15] * J[15] + J[16] * J[16] + J[17] * J[17] + J[18] * J[18] + J[19] * J[19] + J[20] * J[20] + mu2;
+    const double a20 = G[3];
+    const double a21 = G[4];
+    const double a22 = G[5] + mu2;
     cut = a22 > cut ? a22 : cut;
     cut *= 1e-13;
     {
         const double s = a00;
-        d0 = s > cut ? s : 0.0;
-        i0 = s > cut ? 1.0 / s : 0.0;
+        const int kept = s > cut;
+        i0 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = a10;
+            l10 = t * i0;
+            ld10 = kept ? t : 0.0;
+        }
+        {
+            const double t = a20;
+            l20 = t * i0;
+            ld20 = kept ? t : 0.0;
+        }
     }
-    l10 = (a10) * i0;
-    ld10 = l10 * d0;
-    l20 = (a20) * i0;
-    ld20 = l20 * d0;
     {
         const double s = a11 - l10 * ld10;
-        d1 = s > cut ? s : 0.0;
-        i1 = s > cut ? 1.0 / s : 0.0;
+        const int kept = s > cut;
+        i1 = kept ? 1.0 / s : 0.0;
+        {
+            const double t = a21 - l20 * ld10;
+            l21 = t * i1;
+            ld21 = kept ? t : 0.0;
+        }
     }
-    l21 = (a21 - l20 * ld10) * i1;
-    ld21 = l21 * d1;
     {
-        const double s = a22 - l20 * ld20 - l21 * ld21;
-        d2 = s > cut ? s : 0.0;
-        i2 = s > cut ? 1.0 / s : 0.0;
+        const double s = (a22 - l20 * ld20) - l21 * ld21;
+        const int kept = s > cut;
+        i2 = kept ? 1.0 / s : 0.0;
     }
-    (void)d2;
     y0 = e[0];
     y1 = e[1] - l10 * y0;
-    y2 = e[2] - l20 * y0 - l21 * y1;
+    y2 = (e[2] - l20 * y0) - l21 * y1;
     z2 = y2 * i2;
     z1 = y1 * i1 - l21 * z2;
-    z0 = y0 * i0 - l10 * z1 - l20 * z2;
-    dq[0] = J[0] * z0 + J[7] * z1 + J[14] * z2;
-    dq[1] = J[1] * z0 + J[8] * z1 + J[15] * z2;
-    dq[2] = J[2] * z0 + J[9] * z1 + J[16] * z2;
-    dq[3] = J[3] * z0 + J[10] * z1 + J[17] * z2;
-    dq[4] = J[4] * z0 + J[11] * z1 + J[18] * z2;
-    dq[5] = J[5] * z0 + J[12] * z1 + J[19] * z2;
-    dq[6] = J[6] * z0 + J[13] * z1 + J[20] * z2;
+    z0 = (y0 * i0 - l20 * z2) - l10 * z1;
+    dq[0] = (J[0] * z0 + (J[7] * z1 + J[14] * z2));
+    dq[1] = (J[1] * z0 + (J[8] * z1 + J[15] * z2));
+    dq[2] = (J[2] * z0 + (J[9] * z1 + J[16] * z2));
+    dq[3] = (J[3] * z0 + (J[10] * z1 + J[17] * z2));
+    dq[4] = (J[4] * z0 + (J[11] * z1 + J[18] * z2));
+    dq[5] = (J[5] * z0 + (J[12] * z1 + J[19] * z2));
+    dq[6] = (J[6] * z0 + (J[13] * z1 + J[20] * z2));
 }
 
 static int panda_ik_run_position(const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double err[2], int *iterations)
@@ -11914,9 +12116,16 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
     const double hi[7] = {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973};
     const double draw_lo[7] = {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973};
     const double draw_span[7] = {5.7946, 3.5256, 5.7946, 3.0020000000000002, 5.7946, 3.77, 5.7946};
-    double Tm[16], J[42], e[3], Tt[16], Jt[42], et[3], trial[7], dq[7], best_q[7], Jf[42];
-    double pe, re, en, pet, ret, ent, mu, big, c, checkpoint, best_en, best_pe, best_re;
-    int blocked[7], any, k, it, attempt, stalled, slow, best_stalled, best_here = 1;
+    const double near_lo[7] = {-1.44865, -0.8814, -1.44865, -2.3213, -1.44865, 0.925, -1.44865};
+    const double near_span[7] = {2.8973, 1.7628, 2.8973, 1.5010000000000001, 2.8973, 1.885, 2.8973};
+    double Tbuf[32], Jbuf[84], ebuf[6], trial[7], dq[7], best_q[7], Jf[42];
+    double *Tm = Tbuf, *Tt = Tbuf + 16, *J = Jbuf, *Jt = Jbuf + 42, *e = ebuf, *et = ebuf + 3, *swap; /* current and trial: an accepted trial swaps */
+    double pe, re, en, pet, ret, ent, mu2, big, c, checkpoint, best_en, best_pe, best_re, gg, ff, scale, window_start;
+    const double mu2_floor = lambda * lambda;
+    const double *Jg;
+    double G[6], Gf[6]; /* J J^T at the current pose (kept while steps are rejected), and without blocked columns */
+    int gram = 0;
+    int blocked[7], any, k, it, attempt, stalled, slow, stationary = 0, restarts = 0, best_stalled, best_here = 1;
     unsigned long long state = 0x5eed5eedULL ^ 0x9E3779B97F4A7C15ULL;
     *iterations = 0;
     err[0] = err[1] = 0.0;
@@ -11946,10 +12155,10 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
     for (k = 0; k < 7; ++k) {
         best_q[k] = q[k];
     }
-    c = 0.1;
+    c = 0.01;
     attempt = 0;
     it = 0;
-    checkpoint = en;
+    checkpoint = window_start = en;
     for (;;) {
         if (pe <= tol && re <= tol) {
             err[0] = pe;
@@ -11958,30 +12167,71 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
             return PANDA_IK_CONVERGED;
         }
         if (it == max_iter) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a
+             * stationary point or no longer lowers |e| geometrically (as a window would judge) */
+            if (best_here && attempt > 0 && (stationary || en > 0.6 * (attempt % 3 == 0 ? window_start : checkpoint))) {
+                best_stalled = 1;
+            }
             break;
         }
-        mu = c * en > lambda ? c * en : lambda;
-        panda_ik_damped_position(J, e, mu * mu, dq);
+        mu2 = c * en > mu2_floor ? c * en : mu2_floor;
+        if (!gram) {
+            panda_ik_gram_position(J, G);
+            gram = 1;
+        }
+        panda_ik_damped_position(J, G, e, mu2, dq);
         for (k = 0; k < 7; ++k) {
-            blocked[k] = (q[k] <= lo[k] && dq[k] < 0.0) || (q[k] >= hi[k] && dq[k] > 0.0);
+            blocked[k] = ((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0));
         }
         any = 0;
         for (k = 0; k < 7; ++k) {
             any |= blocked[k];
         }
+        Jg = J;
+        ff = G[0] + G[2] + G[5]; /* |J|_F^2 */
         if (any) {
-            for (k = 0; k < 21; ++k) {
-                Jf[k] = blocked[k % 7] ? 0.0 : J[k];
+            double keep[7];
+            int r;
+            for (k = 0; k < 7; ++k) {
+                keep[k] = blocked[k] ? 0.0 : 1.0;
             }
-            panda_ik_damped_position(Jf, e, mu * mu, dq);
+            for (r = 0; r < 3; ++r) {
+                for (k = 0; k < 7; ++k) {
+                    Jf[r * 7 + k] = J[r * 7 + k] * keep[k]; /* blocked columns zeroed */
+                }
+            }
+            for (k = 0; k < 6; ++k) {
+                Gf[k] = G[k];
+            }
+            for (k = 0; k < 7; ++k) { /* G minus the blocked columns' outer products */
+                if (blocked[k]) {
+                    Gf[0] -= J[0 + k] * J[0 + k];
+                    Gf[1] -= J[7 + k] * J[0 + k];
+                    Gf[2] -= J[7 + k] * J[7 + k];
+                    Gf[3] -= J[14 + k] * J[0 + k];
+                    Gf[4] -= J[14 + k] * J[7 + k];
+                    Gf[5] -= J[14 + k] * J[14 + k];
+                }
+            }
+            panda_ik_damped_position(Jf, Gf, e, mu2, dq);
+            Jg = Jf;
+            ff = Gf[0] + Gf[2] + Gf[5];
         }
+        /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
+        gg = 0.0;
+        for (k = 0; k < 7; ++k) {
+            const double g = Jg[0 * 7 + k] * e[0] + Jg[1 * 7 + k] * e[1] + Jg[2 * 7 + k] * e[2];
+            gg += g * g;
+        }
+        stationary = gg <= 0.0004 * ff * en * en;
         big = 0.0;
         for (k = 0; k < 7; ++k) {
             const double a = fabs(dq[k]);
             big = a > big ? a : big;
         }
+        scale = big > 1.0 ? 1.0 / big : 1.0;
         for (k = 0; k < 7; ++k) {
-            trial[k] = q[k] + (big > 1.0 ? dq[k] * (1.0 / big) : dq[k]);
+            trial[k] = q[k] + dq[k] * scale;
         }
         for (k = 0; k < 7; ++k) {
             trial[k] = trial[k] < lo[k] ? lo[k] : trial[k] > hi[k] ? hi[k] : trial[k];
@@ -11996,19 +12246,14 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
             for (k = 0; k < 7; ++k) {
                 q[k] = trial[k];
             }
-            for (k = 0; k < 16; ++k) {
-                Tm[k] = Tt[k];
-            }
-            for (k = 0; k < 42; ++k) {
-                J[k] = Jt[k];
-            }
-            for (k = 0; k < 3; ++k) {
-                e[k] = et[k];
-            }
+            swap = Tm; Tm = Tt; Tt = swap;
+            swap = J; J = Jt; Jt = swap;
+            gram = 0;
+            swap = e; e = et; et = swap;
             pe = pet; re = ret; en = ent;
             c = c * 0.5 > 1e-08 ? c * 0.5 : 1e-08;
         } else {
-            c *= 2.0;
+            c *= 4.0;
             stalled = c > 100000000.0;
         }
         if (en < best_en || (stalled && en == best_en)) {
@@ -12020,9 +12265,10 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
         if (pe <= tol && re <= tol) {
             continue;
         }
-        slow = 0;
-        if (attempt % 8 == 0) {
-            slow = en > 0.5 * checkpoint;
+        slow = stationary;
+        if (attempt % 3 == 0) {
+            slow = slow || en > 0.6 * checkpoint;
+            window_start = checkpoint;
             checkpoint = en;
         }
         if ((stalled || slow || attempt >= 25) && it < max_iter) {
@@ -12030,15 +12276,37 @@ static int panda_ik_run_position(const double *q0, const double *target, double 
                 best_stalled = 1;
             }
             best_here = 0;
-            for (k = 0; k < 7; ++k) {
-                q[k] = draw_lo[k] + draw_span[k] * panda_ik_uniform(&state);
+            { /* the best of 8 random starts by tool position error; even restarts near the centre */
+                const double *low = restarts % 2 == 0 ? near_lo : draw_lo;
+                const double *span = restarts % 2 == 0 ? near_span : draw_span;
+                double nearest = 0.0;
+                int m;
+                for (m = 0; m < 8; ++m) {
+                    double d0, d1, d2, d;
+                    for (k = 0; k < 7; ++k) {
+                        trial[k] = low[k] + span[k] * panda_ik_uniform(&state);
+                    }
+                    panda_ik_terms(trial, Tt, Jt);
+                    d0 = target[0] - Tt[3];
+                    d1 = target[1] - Tt[7];
+                    d2 = target[2] - Tt[11];
+                    d = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+                    if (m == 0 || d < nearest) {
+                        nearest = d;
+                        for (k = 0; k < 7; ++k) {
+                            q[k] = trial[k];
+                        }
+                    }
+                }
             }
+            ++restarts;
+            gram = 0;
             panda_ik_terms(q, Tm, J);
             panda_ik_error_position(Tm, target, e, &pe, &re);
             en = sqrt(pe * pe + re * re);
-            c = 0.1;
+            c = 0.01;
             attempt = 0;
-            checkpoint = en;
+            checkpoint = window_start = en;
             if (en < best_en) {
                 best_en = en; best_pe = pe; best_re = re; best_stalled = 0; best_here = 1;
                 for (k = 0; k < 7; ++k) {

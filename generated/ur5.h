@@ -41,7 +41,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * UR5_STAMP identifies this generation: ur5.c refuses to
  * compile (#error) with a ur5.h from another generation. */
-#define UR5_STAMP 0x19a1e049UL
+#define UR5_STAMP 0x0179cfa8UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -201,7 +201,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA);
  * lambda < 0, tol <= 0 or not finite, or max_iter < 0. A tol of 1e-10 is reachable in this
  * precision for an arm of unit size. target: 4 x 4 row-major; error[0] = position error (m),
  * error[1] = rotation error (rad); error and iterations may be NULL; q may be q0.
- * Stack: about 1984 bytes plus ur5_ik_terms'. */
+ * Stack: about 2144 bytes plus ur5_ik_terms'. */
 int ur5_ik_solve(const double q0[6], const double target[16], double lambda, double tol, int max_iter, double q[6], double error[2], int *iterations);
 
 /* Position IK of the tool origin to target (3): the same with the 3 linear rows of J; *error is

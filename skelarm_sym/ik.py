@@ -7,20 +7,30 @@ constants, same random restarts, so both end with the same status on the same in
 
 * error ``e = [p_t - p; log3(R_t R^T)]`` in base axes (the Jacobian of this project is
   LOCAL_WORLD_ALIGNED: ``dq = J^+ e`` moves toward the target to first order);
-* Levenberg-Marquardt step ``dq = J^T (J J^T + mu^2 I)^-1 e`` with ``mu = max(lambda, c |e|)``: a step
-  is accepted when it lowers ``|e|`` (then ``c`` is multiplied by ``C_DOWN``, down to ``C_MIN``), else by ``C_UP``
-  ; damping vanishes at the solution, so the last steps are Gauss-Newton's (quadratic);
+* Levenberg-Marquardt step ``dq = J^T (J J^T + mu2 I)^-1 e`` with ``mu2 = max(lambda^2, c |e|)`` (damping
+  proportional to the error, Fan and Yuan's delta = 1: it vanishes at the solution, so the last steps
+  are Gauss-Newton's and converge quadratically, yet stays large enough near singular poses, where
+  ``(c |e|)^2`` collapses): a step is accepted when it lowers ``|e|`` (then ``c`` is multiplied by
+  ``C_DOWN``, down to ``C_MIN``), else ``c`` is multiplied by ``C_UP``;
 * joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
   outward are removed from the step (their columns zeroed, the step solved again), so the free
   joints still make the progress clamping would kill;
-* restarts: an attempt that stalls (``c > C_MAX``, or an accepted step improving ``|e|`` by less than a
-  relative ``STALL``) or runs ``ATTEMPT`` steps restarts from a random configuration within the limits
-  (``[-pi, pi]`` for unbounded joints), drawn by a xorshift64* generator seeded by ``seed``; steps of
-  all attempts count against ``max_iter``.
+* restarts: an attempt ends when it stalls (``c > C_MAX``, or an accepted step improving ``|e|`` by
+  less than a relative ``STALL``), when it starts a step at a (near) stationary point of ``|e|`` over
+  the free joints (``|J_f^T e| <= STATIONARY |J_f|_F |e|``: a local minimum, typically against a
+  limit), when its error is above ``PROGRESS`` times its error ``WINDOW`` steps earlier, or after
+  ``ATTEMPT`` steps. The next attempt starts from the best of ``CANDIDATES`` random configurations
+  by tool position error (a start whose tool is already near the target's usually lies in the basin
+  of a solution within the limits); they are drawn uniformly from ``SHRINK`` times the limits' range
+  around its centre on even restarts (0, 2, ...) and from the whole range on odd ones (periodic
+  joints: always the whole range; unbounded joints: ``[-pi, pi]``), by a xorshift64* generator
+  seeded by ``seed``; steps of all attempts count against ``max_iter`` (candidates do not: they
+  cost a pose each, not a step).
 
 Statuses: ``converged`` (``|p_t - p| <= tol`` and ``|log3| <= tol``), ``stalled`` (the budget ran out
 and the best pose found ended its attempt at or near a stationary point of ``|e|``: no lowering step,
-or less than halving ``|e|`` in WINDOW steps; an unreachable target's closest reach; ``q`` is that pose), ``max_iter`` (the budget ran out otherwise; ``q`` is the best pose found),
+a small gradient, or ``|e|`` not multiplied by PROGRESS in WINDOW steps (an attempt the budget ends is
+judged by its last window); an unreachable target's closest reach; ``q`` is that pose), ``max_iter`` (the budget ran out otherwise; ``q`` is the best pose found),
 ``invalid`` (non-finite q0/target/lambda, lambda < 0, tol <= 0, max_iter < 0: ``ValueError``).
 """
 
@@ -30,21 +40,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-C_START = 0.1
-"""Initial damping per unit of error."""
+C_START = 0.01
+"""Initial damping ``mu2`` per unit of error."""
 C_MIN, C_MAX = 1e-8, 1e8
-C_UP, C_DOWN = 2.0, 0.5
+C_UP, C_DOWN = 4.0, 0.5
 STEP_MAX = 1.0
 """Largest joint move of one step (rad or m): longer steps are scaled down whole (same direction)."""
 ATTEMPT = 25
 """Steps of one attempt before a restart."""
-WINDOW, PROGRESS = 8, 0.5
+WINDOW, PROGRESS = 3, 0.6
 """An attempt restarts when its error is above PROGRESS times its error WINDOW steps earlier."""
 TWO_PI = 2.0 * np.pi
 STALL = 1e-9
 """An accepted step improving |e| by less than this relative amount ends the attempt (stationary point)."""
 SEED = 0x5EED5EED
 """Default restart seed (the emitted C uses this one)."""
+STATIONARY = 0.02
+"""A step starting where ``|J_f^T e| <= STATIONARY |J_f|_F |e|`` (a stationary point) ends the attempt."""
+CANDIDATES = 8
+"""Random configurations drawn per restart; the attempt starts from the one whose tool is nearest the target."""
+SHRINK = 0.5
+"""Even restarts draw bounded joints from this fraction of their range around its centre."""
 UNBOUNDED_RANGE = np.pi
 """Restarts draw unbounded joints from [-pi, pi]."""
 DEFAULT_TOL = {"double": 1e-10, "float": 1e-5}
@@ -111,14 +127,27 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
     return axis * angle
 
 
-def solve_damped(J: np.ndarray, e: np.ndarray, mu2: float, free: np.ndarray | None = None) -> np.ndarray:
+def gram(J: np.ndarray, free: np.ndarray | None = None) -> np.ndarray:
+    """``J_f J_f^T`` for the ``free`` columns of ``J``: ``J J^T`` minus the other columns' outer products
+    (as the emitted C computes it: the Gram matrix is kept while steps are rejected and downdated
+    when joints are blocked)."""
+    G = J @ J.T
+    if free is not None and not free.all():
+        Jb = J[:, ~free]
+        G = G - Jb @ Jb.T
+    return G
+
+
+def solve_damped(J: np.ndarray, e: np.ndarray, mu2: float, free: np.ndarray | None = None,
+                 G: np.ndarray | None = None) -> np.ndarray:
     """``dq = J^T (J J^T + mu2 I)^-1 e`` over the ``free`` columns (others 0), by an unpivoted LDL^T of
-    the small symmetric matrix; a pivot at most ``PIVOT`` times the largest diagonal entry is dropped
-    (its unknown set to zero), so a rank-deficient ``J`` with ``mu2 = 0`` gives a finite step. The
-    emitted C does the same operations in the same order."""
+    the small symmetric matrix (``G``: its ``J_f J_f^T`` part, from :func:`gram` when not given); a
+    pivot at most ``PIVOT`` times the largest diagonal entry is dropped (its unknown set to zero), so
+    a rank-deficient ``J`` with ``mu2 = 0`` gives a finite step. The emitted C does the same
+    operations in the same order."""
     Jf = J if free is None else np.where(free, J, 0.0)
     m = Jf.shape[0]
-    A = Jf @ Jf.T
+    A = np.array(gram(J, free) if G is None else G, dtype=float)
     A[np.diag_indices(m)] += mu2
     cut = PIVOT * max(float(np.max(np.diag(A))), 0.0)
     L = np.zeros((m, m))
@@ -189,10 +218,14 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
     wrap &= hi - lo >= TWO_PI  # a move by 2 pi stays within the limits
     low_draw = np.where(np.isfinite(lo), lo, -UNBOUNDED_RANGE)
     span_draw = np.where(np.isfinite(hi), hi, UNBOUNDED_RANGE) - low_draw
+    # even restarts: SHRINK times the range around its centre (periodic joints: the whole range)
+    low_near = np.where(wrap, low_draw, low_draw + span_draw * ((1.0 - SHRINK) / 2.0))
+    span_near = np.where(wrap, span_draw, span_draw * SHRINK)
     rows = 3 if position_only else 6
     raw = _terms(module)
     terms = (lambda x: raw(x, *params)) if params else raw
     pt, Rt = target[:3, 3], target[:3, :3]
+    mu2_floor = lam * lam
 
     def evaluate(x):
         T, J = terms(x)
@@ -202,24 +235,38 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
         dr = rotation_log(Rt @ T[:3, :3].T)
         return np.concatenate([dp, dr]), np.asarray(J), float(np.sqrt(dp @ dp)), float(np.sqrt(dr @ dr))
 
+    def position_error(x):
+        dp = pt - np.asarray(terms(x)[0])[:3, 3]
+        return float(np.sqrt(dp @ dp))
+
     rng = XorShift(seed)
     q = np.clip(q, lo, hi)
     e, J, pe, re = evaluate(q)
     en = float(np.sqrt(e @ e))
     best = (en, q, pe, re, False)
     c, attempt, restarts, it = C_START, 0, 0, 0
-    checkpoint = en
-    best_here = True
+    checkpoint = window_start = en
+    best_here, stationary = True, False
     while True:
         if pe <= tol and re <= tol:
             return IKResult(q, "converged", pe, re, it, restarts)
         if it == max_iter:
+            # the budget ends inside the attempt holding the best pose: stalled when that attempt
+            # is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
+            if best_here and attempt > 0 and (stationary or en > PROGRESS * (window_start if attempt % WINDOW == 0 else checkpoint)):
+                best = best[:4] + (True,)
             break
-        mu = max(lam, c * en)
-        dq = solve_damped(J, e, mu * mu)
+        mu2 = max(mu2_floor, c * en)
+        G = gram(J)
+        dq = solve_damped(J, e, mu2, G=G)
         blocked = (((q <= lo) & (dq < 0)) | ((q >= hi) & (dq > 0))) & ~wrap
+        Jf = J
         if blocked.any():
-            dq = solve_damped(J, e, mu * mu, ~blocked)
+            G = gram(J, ~blocked)
+            dq = solve_damped(J, e, mu2, ~blocked, G)
+            Jf = np.where(blocked, 0.0, J)
+        g = Jf.T @ e
+        stationary = float(g @ g) <= STATIONARY * STATIONARY * float(np.trace(G)) * en * en  # trace = |J_f|_F^2
         big = float(np.max(np.abs(dq)))
         if big > STEP_MAX:
             dq = dq * (STEP_MAX / big)
@@ -245,19 +292,25 @@ def _solve(module, q0, target, lam, tol, max_iter, limits, position_only, seed, 
             best, best_here = (en, q, pe, re, True), True
         if pe <= tol and re <= tol:
             continue
-        slow = False
+        slow = stationary
         if attempt % WINDOW == 0:
-            slow = en > PROGRESS * checkpoint
-            checkpoint = en
+            slow = slow or en > PROGRESS * checkpoint
+            window_start, checkpoint = checkpoint, en
         if (stalled or slow or attempt >= ATTEMPT) and it < max_iter:
             if (stalled or slow) and best_here:  # this attempt's best is a stationary point (or near one)
                 best = best[:4] + (True,)
             best_here = False
-            q = low_draw + span_draw * np.array([rng.uniform() for _ in range(n)])
+            low, span = (low_near, span_near) if restarts % 2 == 0 else (low_draw, span_draw)
+            near = np.inf
+            for _ in range(CANDIDATES):
+                x = low + span * np.array([rng.uniform() for _ in range(n)])
+                d = position_error(x)
+                if d < near:
+                    near, q = d, x
             e, J, pe, re = evaluate(q)
             en = float(np.sqrt(e @ e))
             c, attempt = C_START, 0
-            checkpoint = en
+            checkpoint = window_start = en
             restarts += 1
             if en < best[0]:
                 best, best_here = (en, q, pe, re, False), True

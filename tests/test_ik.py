@@ -43,7 +43,7 @@ def test_reachable_targets_converge_in_c_and_python(robot):
     chain, arm, lo, hi = robot
     rng = np.random.default_rng(11)
     opts = ik.chain_options(chain)
-    count, converged = 10, {"c": 0, "py": 0}
+    count, converged = 20, {"c": 0, "py": 0}
     for _ in range(count):
         target = reference_pose(chain, rng.uniform(lo, hi))
         q0 = rng.uniform(lo, hi)
@@ -57,10 +57,12 @@ def test_reachable_targets_converge_in_c_and_python(robot):
                 assert r.position_error <= 1e-10 and r.rotation_error <= 1e-10
                 assert dp < 1e-9 and dr < 1e-9  # judged by the reference, not the emitted pose
             else:
-                assert r.status == "max_iter"
+                assert r.status in ("max_iter", "stalled")
                 assert abs(dp - r.position_error) < 1e-9  # the reported error is the returned pose's
-    assert converged["c"] >= count - 2, converged
-    assert converged["py"] >= count - 2, converged
+                assert abs(dr - r.rotation_error) < 1e-9
+    # measured (benchmarks/ik_success.py, 1000 targets): at least 99 % converge on each robot
+    assert converged["c"] >= count - 1, converged
+    assert converged["py"] >= count - 1, converged
 
 
 def test_position_only_converges(robot):
@@ -101,18 +103,52 @@ def test_unreachable_target_stalls_at_closest_reach(robot):
 
 
 def test_c_and_python_agree_on_status(robot):
+    """Same algorithm, constants and restart draws: same status and step count (the NumPy side's sums
+    may differ from C's in the last bit, so a rare tie could part them; none in these cases)."""
     chain, arm, lo, hi = robot
     rng = np.random.default_rng(21)
     opts = ik.chain_options(chain)
-    agree, total = 0, 10
+    agree, total = 0, 12
     for k in range(total):
         target = reference_pose(chain, rng.uniform(lo, hi))
         if k % 3 == 2:
             target[:3, 3] *= 3.0  # out of reach
         q0 = rng.uniform(lo, hi)
         c, py = arm.ik_solve_pose(q0, target, max_iter=40), ik.solve_pose(arm, q0, target, max_iter=40, **opts)
-        agree += c.status == py.status
+        agree += c.status == py.status and c.iterations == py.iterations
+        for r in (c, py):  # reported errors are the returned pose's, by the reference
+            dp, dr = pose_errors(reference_pose(chain, r.q), target)
+            assert abs(dp - r.position_error) < 1e-9 and abs(dr - r.rotation_error) < 1e-9
+        if c.status == py.status == "converged":
+            assert np.linalg.norm(c.q - py.q) < 1e-6  # the same solution, not merely one
     assert agree >= total - 1
+
+
+def test_restarts_reach_targets_a_single_attempt_misses(robot):
+    """Targets whose first attempt (from q0) ends at a local minimum against a limit or a stationary
+    point: the restarts (best of CANDIDATES draws by tool position) still converge, in C and NumPy,
+    within 100 steps, and the final pose is within the limits and on the target per the reference."""
+    chain, arm, lo, hi = robot
+    rng = np.random.default_rng(41)
+    opts = ik.chain_options(chain)
+    found = converged = 0
+    for _ in range(60):
+        target = reference_pose(chain, rng.uniform(lo, hi))
+        q0 = rng.uniform(lo, hi)
+        single = ik.solve_pose(arm, q0, target, max_iter=ik.ATTEMPT, **opts)
+        if single.restarts == 0 and single.status == "converged":
+            continue
+        found += 1
+        for r in (arm.ik_solve_pose(q0, target), ik.solve_pose(arm, q0, target, **opts)):
+            if r.status == "converged":
+                converged += 1
+                dp, dr = pose_errors(reference_pose(chain, r.q), target)
+                assert dp < 1e-9 and dr < 1e-9
+                assert np.all(r.q >= lo) and np.all(r.q <= hi)
+        if found == 6:
+            break
+    assert found >= 3
+    assert converged >= 2 * found - 1, (converged, found)
 
 
 def test_non_finite_and_bad_inputs_are_refused(robot):

@@ -38,6 +38,9 @@ def context(derivation, programs, precision, prefix: str) -> dict | None:
     draw_low = [-math.pi if x is None else float(x) for x in limits["lower"]]
     draw_span = [(math.pi if u is None else float(u)) - d for u, d in zip(limits["upper"], draw_low)]
     periodic = [k for k, p in enumerate(options["periodic"]) if p and upper[k] - lower[k] >= 2 * math.pi]
+    # even restarts: ik.SHRINK times the range around its centre (periodic joints: the whole range)
+    near_low = [d if k in periodic else d + s * ((1.0 - ik.SHRINK) / 2.0) for k, (d, s) in enumerate(zip(draw_low, draw_span))]
+    near_span = [s if k in periodic else s * ik.SHRINK for k, s in enumerate(draw_span)]
     settings = SETTINGS[ctype]
     f = "" if ctype == "double" else "f"
     itemsize = 8 if ctype == "double" else 4
@@ -49,6 +52,8 @@ def context(derivation, programs, precision, prefix: str) -> dict | None:
         "upper": [lit(x) for x in upper],
         "draw_low": [lit(x) for x in draw_low],
         "draw_span": [lit(x) for x in draw_span],
+        "near_low": [lit(x) for x in near_low],
+        "near_span": [lit(x) for x in near_span],
         "periodic": periodic,
         "status": [{"macro": f"{prefix.upper()}_IK_{s}", "value": i} for i, s in enumerate(STATUS)],
         "c": {
@@ -56,12 +61,14 @@ def context(derivation, programs, precision, prefix: str) -> dict | None:
             "down": lit(ik.C_DOWN), "step_max": lit(ik.STEP_MAX), "progress": lit(ik.PROGRESS),
             "pivot": lit(settings["pivot"]), "stall": lit(settings["stall"]), "two_pi": lit(2 * math.pi),
             "pi": lit(math.pi), "zero": lit(0.0), "one": lit(1.0), "half": lit(0.5), "twelfth": lit(1 / 12),
-            "small_angle": lit(1e-4), "near_pi": lit(1e-3),
+            "small_angle": lit(1e-4), "near_pi": lit(1e-3), "stationary": lit(ik.STATIONARY),
+            "stationary2": lit(ik.STATIONARY * ik.STATIONARY),
         },
+        "candidates": ik.CANDIDATES,
         "attempt": ik.ATTEMPT,
         "window": ik.WINDOW,
         "seed": f"{ik.SEED:#x}ULL",
         "tol": repr(settings["tol"]),
         "fn": {"sqrt": "sqrt" + f, "atan2": "atan2" + f, "fabs": "fabs" + f},
-        "stack": f"about {itemsize * (16 + 6 * n * 3 + 36 + 8 * n + 40)} bytes plus {prefix}_ik_terms'",
+        "stack": f"about {itemsize * (16 + 6 * n * 3 + 36 + 10 * n + 48)} bytes plus {prefix}_ik_terms'",
     }
