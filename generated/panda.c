@@ -30,7 +30,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x699eb819UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x2fba189aUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

@@ -41,7 +41,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * PANDA_STAMP identifies this generation: panda.c refuses to
  * compile (#error) with a panda.h from another generation. */
-#define PANDA_STAMP 0x699eb819UL
+#define PANDA_STAMP 0x2fba189aUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -189,10 +189,13 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 #define PANDA_IK_INVALID 3
 
 /* Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step
- * dq = J^T (J J^T + mu^2 I)^-1 e, mu = max(lambda, c |e|); joint limits (PANDA_Q_MIN/MAX) kept by
+ * dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(lambda^2, c |e|), c starting at 0.01, times 4.0 after a
+ * rejected step and 0.5 after an accepted one; joint limits (PANDA_Q_MIN/MAX) kept by
  * clamping, joints a step pushes past a bound removed from it, revolute joints with a range of 2 pi
- * or more wrapped by 2 pi; random restarts within the limits (xorshift64*, a fixed seed: the same
- * input gives the same result) when an attempt stalls, progresses slowly or takes 25 steps.
+ * or more wrapped by 2 pi. An attempt ends when it stalls at a stationary point of |e|, makes too
+ * little progress or takes 25 steps; the next starts from the best of several configurations
+ * within the limits (xorshift64*, a fixed seed: the same input gives the same result), drawn
+ * alternately from the middle of each joint's range and from all of it.
  * Steps of all attempts count against max_iter. Same algorithm and constants as skelarm_sym.ik.
  * Returns CONVERGED when |p_target - p| <= tol and |log3| <= tol (q: the solution); STALLED when
  * max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target:

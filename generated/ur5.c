@@ -30,7 +30,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x0179cfa8UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x17e55448UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
