@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x9e3a494cUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xf5f51988UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM2_VECTORIZE void arm2_trig4(const double *restrict ang, double *restri
 #endif
 }
 
+#if ARM2_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 64 with vector math, else for k < used. */
 static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restr
     }
 #endif
 }
+#endif
+
+#if !ARM2_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM2_VECTORIZE void arm2_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if ARM2_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif ARM2_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm2_position: endpoint position p (2) ---- */
 /* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 2 neg */
@@ -131,6 +159,7 @@ void arm2_position(const double q[2], const double l[2], double p[2])
     arm2_position_finish(l, cs, sn, p);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_position_block(const double *restrict q_T, const double l[2], double *restrict p_T)
@@ -200,6 +229,27 @@ void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
         }
     }
 }
+#else
+void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_position_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 1 neg */
@@ -237,6 +287,7 @@ void arm2_jacobian(const double q[2], const double l[2], double J[4])
     arm2_jacobian_finish(l, cs, sn, J);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_jacobian_block(const double *restrict q_T, const double l[2], double *restrict J_T)
@@ -312,6 +363,27 @@ void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
         }
     }
 }
+#else
+void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 4);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 2 neg */
@@ -355,6 +427,7 @@ void arm2_coriolis(const double q[2], const double dq[2], const double l[2], dou
     arm2_coriolis_finish(dq, l, cs, sn, H);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict H_T)
@@ -446,6 +519,27 @@ void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, H + (i + b) * 4);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 3 neg */
@@ -487,6 +581,7 @@ void arm2_velocity(const double q[2], const double dq[2], const double l[2], dou
     arm2_velocity_finish(dq, l, cs, sn, v);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict v_T)
@@ -572,6 +667,27 @@ void arm2_velocity_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm2_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_velocity_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 3 neg */
@@ -616,6 +732,7 @@ void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2
     arm2_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict a_T)
@@ -714,6 +831,27 @@ void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const 
         }
     }
 }
+#else
+void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_kinematics: p, J, H, v and a at once ---- */
 /* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 5 neg */
@@ -770,6 +908,7 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
     arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
@@ -916,6 +1055,27 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
         }
     }
 }
+#else
+void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 2 sin, 2 cos, 9 add/sub, 16 mul, 1 neg, 1 div, 1 sqrt */
@@ -962,6 +1122,7 @@ void arm2_manipulability(const double q[2], const double l[2], double w[1])
     arm2_manipulability_finish(l, cs, sn, w);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T, const double l[2], double *restrict w_T)
@@ -1040,6 +1201,27 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
+#else
+void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_manipulability_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_manipulability_finish(l, cs + b * 4, sn + b * 4, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 2 sin, 2 cos, 21 add/sub, 36 mul, 1 neg, 3 div */
@@ -1101,6 +1283,7 @@ void arm2_inverse_velocity(const double q[2], const double v[2], const double l[
     arm2_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[2], double lambda, double *restrict dq_T)
@@ -1206,6 +1389,27 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
+#else
+void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_inverse_velocity_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_inverse_velocity_finish(v + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, dq + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 2 sin, 2 cos, 25 add/sub, 36 mul, 1 neg, 3 div */
@@ -1269,6 +1473,7 @@ void arm2_ik_step(const double q[2], const double target[2], const double l[2], 
     arm2_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
+#if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[2], double lambda, double *restrict q_next_T)
@@ -1379,6 +1584,27 @@ void arm2_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
+#else
+void arm2_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm2_ik_step_angles(q + (i + b) * 2, ang + b * 4);
+        }
+        arm2_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm2_ik_step_finish(q + (i + b) * 2, target + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, q_next + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

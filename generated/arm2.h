@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM2_STAMP identifies this generation: arm2.c refuses to
  * compile (#error) with a arm2.h from another generation. */
-#define ARM2_STAMP 0x9e3a494cUL
+#define ARM2_STAMP 0xf5f51988UL
 
 #ifdef __cplusplus
 extern "C" {

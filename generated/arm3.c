@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xda696d6dUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xd4e87b33UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM3_VECTORIZE void arm3_trig4(const double *restrict ang, double *restri
 #endif
 }
 
+#if ARM3_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
 static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restr
     }
 #endif
 }
+#endif
+
+#if !ARM3_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM3_VECTORIZE void arm3_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if ARM3_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif ARM3_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm3_position: endpoint position p (2) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 2 neg */
@@ -136,6 +164,7 @@ void arm3_position(const double q[3], const double l[3], double p[2])
     arm3_position_finish(l, cs, sn, p);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_position_block(const double *restrict q_T, const double l[3], double *restrict p_T)
@@ -215,6 +244,27 @@ void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
         }
     }
 }
+#else
+void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_position_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 1 neg */
@@ -259,6 +309,7 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6])
     arm3_jacobian_finish(l, cs, sn, J);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_jacobian_block(const double *restrict q_T, const double l[3], double *restrict J_T)
@@ -350,6 +401,27 @@ void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
         }
     }
 }
+#else
+void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 2 neg */
@@ -403,6 +475,7 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
     arm3_coriolis_finish(dq, l, cs, sn, H);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict H_T)
@@ -515,6 +588,27 @@ void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, H + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 3 neg */
@@ -564,6 +658,7 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
     arm3_velocity_finish(dq, l, cs, sn, v);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict v_T)
@@ -664,6 +759,27 @@ void arm3_velocity_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm3_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_velocity_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 3 neg */
@@ -718,6 +834,7 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
     arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict a_T)
@@ -835,6 +952,27 @@ void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const 
         }
     }
 }
+#else
+void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_kinematics: p, J, H, v and a at once ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 5 neg */
@@ -905,6 +1043,7 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
     arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
@@ -1082,6 +1221,27 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
         }
     }
 }
+#else
+void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 23 mul, 1 neg, 1 div, 1 sqrt */
@@ -1135,6 +1295,7 @@ void arm3_manipulability(const double q[3], const double l[3], double w[1])
     arm3_manipulability_finish(l, cs, sn, w);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T, const double l[3], double *restrict w_T)
@@ -1225,6 +1386,27 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
+#else
+void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_manipulability_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_manipulability_finish(l, cs + b * 4, sn + b * 4, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 30 add/sub, 45 mul, 1 neg, 3 div */
@@ -1295,6 +1477,7 @@ void arm3_inverse_velocity(const double q[3], const double v[2], const double l[
     arm3_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[3], double lambda, double *restrict dq_T)
@@ -1416,6 +1599,27 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
+#else
+void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity_finish(v + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, dq + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 61 add/sub, 95 mul, 1 neg, 4 div */
@@ -1503,6 +1707,7 @@ void arm3_inverse_velocity3(const double q[3], const double twist[3], const doub
     arm3_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[3], double lambda, double *restrict dq3_T)
@@ -1643,6 +1848,27 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
+#else
+void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_inverse_velocity3_finish(twist + (i + b) * 3, l, lambda, cs + b * 4, sn + b * 4, dq3 + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 35 add/sub, 45 mul, 1 neg, 3 div */
@@ -1715,6 +1941,7 @@ void arm3_ik_step(const double q[3], const double target[2], const double l[3], 
     arm3_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
+#if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[3], double lambda, double *restrict q_next_T)
@@ -1842,6 +2069,27 @@ void arm3_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
+#else
+void arm3_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm3_ik_step_angles(q + (i + b) * 3, ang + b * 4);
+        }
+        arm3_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3_ik_step_finish(q + (i + b) * 3, target + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, q_next + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

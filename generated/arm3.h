@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM3_STAMP identifies this generation: arm3.c refuses to
  * compile (#error) with a arm3.h from another generation. */
-#define ARM3_STAMP 0xda696d6dUL
+#define ARM3_STAMP 0xd4e87b33UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x1e24819bUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x06d07d66UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
 #endif
 }
 
+#if ARM3F_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
 static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
     }
 #endif
 }
+#endif
+
+#if !ARM3F_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
+{
+    int k;
+#if ARM3F_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cosf(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sinf(ang[k]);
+    }
+#elif ARM3F_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincosf(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cosf(ang[k]);
+        sn[k] = sinf(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm3f_position: endpoint position p (2) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 2 neg */
@@ -134,6 +162,7 @@ void arm3f_position(const float q[3], float p[2])
     arm3f_position_finish(cs, sn, p);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_position_block(const float *restrict q_T, float *restrict p_T)
@@ -211,6 +240,27 @@ void arm3f_position_batch(size_t m, const float *q, float *p)
         }
     }
 }
+#else
+void arm3f_position_batch(size_t m, const float *q, float *p)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_position_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_position_finish(cs + b * 8, sn + b * 8, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 1 neg */
@@ -253,6 +303,7 @@ void arm3f_jacobian(const float q[3], float J[6])
     arm3f_jacobian_finish(cs, sn, J);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_jacobian_block(const float *restrict q_T, float *restrict J_T)
@@ -342,6 +393,27 @@ void arm3f_jacobian_batch(size_t m, const float *q, float *J)
         }
     }
 }
+#else
+void arm3f_jacobian_batch(size_t m, const float *q, float *J)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 2 neg */
@@ -393,6 +465,7 @@ void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
     arm3f_coriolis_finish(dq, cs, sn, H);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_coriolis_block(const float *restrict q_T, const float *restrict dq_T, float *restrict H_T)
@@ -503,6 +576,27 @@ void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
         }
     }
 }
+#else
+void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, H + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 3 neg */
@@ -550,6 +644,7 @@ void arm3f_velocity(const float q[3], const float dq[3], float v[2])
     arm3f_velocity_finish(dq, cs, sn, v);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_velocity_block(const float *restrict q_T, const float *restrict dq_T, float *restrict v_T)
@@ -648,6 +743,27 @@ void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
         }
     }
 }
+#else
+void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 3 neg */
@@ -700,6 +816,7 @@ void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3],
     arm3f_acceleration_finish(dq, ddq, cs, sn, a);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_acceleration_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict a_T)
@@ -815,6 +932,27 @@ void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const f
         }
     }
 }
+#else
+void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_kinematics: p, J, H, v and a at once ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 5 neg */
@@ -883,6 +1021,7 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
     arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_kinematics_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict p_T, float *restrict J_T, float *restrict H_T, float *restrict v_T, float *restrict a_T)
@@ -1058,6 +1197,27 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
         }
     }
 }
+#else
+void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 1 neg, 1 div, 1 sqrt */
@@ -1109,6 +1269,7 @@ void arm3f_manipulability(const float q[3], float w[1])
     arm3f_manipulability_finish(cs, sn, w);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T, float *restrict w_T)
@@ -1197,6 +1358,27 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
         }
     }
 }
+#else
+void arm3f_manipulability_batch(size_t m, const float *q, float *w)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_manipulability_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_manipulability_finish(cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 30 add/sub, 43 mul, 1 neg, 3 div */
@@ -1265,6 +1447,7 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
     arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q_T, const float *restrict v_T, float lambda, float *restrict dq_T)
@@ -1384,6 +1567,27 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
         }
     }
 }
+#else
+void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity_finish(v + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 59 add/sub, 93 mul, 1 neg, 3 div */
@@ -1468,6 +1672,7 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
     arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict q_T, const float *restrict twist_T, float lambda, float *restrict dq3_T)
@@ -1605,6 +1810,27 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
         }
     }
 }
+#else
+void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity3_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_inverse_velocity3_finish(twist + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 35 add/sub, 43 mul, 1 neg, 3 div */
@@ -1675,6 +1901,7 @@ void arm3f_ik_step(const float q[3], const float target[2], float lambda, float 
     arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
 }
 
+#if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const float *restrict target_T, float lambda, float *restrict q_next_T)
@@ -1800,6 +2027,27 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
         }
     }
 }
+#else
+void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next)
+{
+    size_t i;
+    float ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm3f_ik_step_angles(q + (i + b) * 3, ang + b * 8);
+        }
+        arm3f_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm3f_ik_step_finish(q + (i + b) * 3, target + (i + b) * 2, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 3);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to
  * compile (#error) with a arm3f.h from another generation. */
-#define ARM3F_STAMP 0x1e24819bUL
+#define ARM3F_STAMP 0x06d07d66UL
 
 #ifdef __cplusplus
 extern "C" {

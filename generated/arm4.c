@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x9d5fb54cUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x4b60238eUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restri
 #endif
 }
 
+#if ARM4_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128 with vector math, else for k < used. */
 static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *rest
     }
 #endif
 }
+#endif
+
+#if !ARM4_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if ARM4_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif ARM4_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm4_position: endpoint position p (2) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 2 neg */
@@ -137,6 +165,7 @@ void arm4_position(const double q[4], const double l[4], double p[2])
     arm4_position_finish(l, cs, sn, p);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
@@ -226,6 +255,27 @@ void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
         }
     }
 }
+#else
+void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_position_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 1 neg */
@@ -273,6 +323,7 @@ void arm4_jacobian(const double q[4], const double l[4], double J[8])
     arm4_jacobian_finish(l, cs, sn, J);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
@@ -380,6 +431,27 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
         }
     }
 }
+#else
+void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 8);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 2 neg */
@@ -439,6 +511,7 @@ void arm4_coriolis(const double q[4], const double dq[4], const double l[4], dou
     arm4_coriolis_finish(dq, l, cs, sn, H);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
@@ -572,6 +645,27 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, H + (i + b) * 8);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 3 neg */
@@ -625,6 +719,7 @@ void arm4_velocity(const double q[4], const double dq[4], const double l[4], dou
     arm4_velocity_finish(dq, l, cs, sn, v);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
@@ -740,6 +835,27 @@ void arm4_velocity_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm4_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_velocity_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 3 neg */
@@ -800,6 +916,7 @@ void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4
     arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
@@ -936,6 +1053,27 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
         }
     }
 }
+#else
+void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_kinematics: p, J, H, v and a at once ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 5 neg */
@@ -1016,6 +1154,7 @@ void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4],
     arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
@@ -1224,6 +1363,27 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
         }
     }
 }
+#else
+void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 4 sin, 4 cos, 25 add/sub, 30 mul, 1 neg, 1 div, 1 sqrt */
@@ -1280,6 +1440,7 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1])
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T, const double l[4], double *restrict w_T)
@@ -1382,6 +1543,27 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
+#else
+void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_manipulability_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_manipulability_finish(l, cs + b * 4, sn + b * 4, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 39 add/sub, 54 mul, 1 neg, 3 div */
@@ -1457,6 +1639,7 @@ void arm4_inverse_velocity(const double q[4], const double v[2], const double l[
     arm4_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[4], double lambda, double *restrict dq_T)
@@ -1594,6 +1777,27 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
+#else
+void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity_finish(v + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, dq + (i + b) * 4);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 102 mul, 1 neg, 4 div */
@@ -1683,6 +1887,7 @@ void arm4_inverse_velocity3(const double q[4], const double twist[3], const doub
     arm4_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[4], double lambda, double *restrict dq3_T)
@@ -1836,6 +2041,27 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
+#else
+void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity3_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_inverse_velocity3_finish(twist + (i + b) * 3, l, lambda, cs + b * 4, sn + b * 4, dq3 + (i + b) * 4);
+        }
+    }
+}
+#endif
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 45 add/sub, 54 mul, 1 neg, 3 div */
@@ -1913,6 +2139,7 @@ void arm4_ik_step(const double q[4], const double target[2], const double l[4], 
     arm4_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
+#if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[4], double lambda, double *restrict q_next_T)
@@ -2057,6 +2284,27 @@ void arm4_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
+#else
+void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            arm4_ik_step_angles(q + (i + b) * 4, ang + b * 4);
+        }
+        arm4_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm4_ik_step_finish(q + (i + b) * 4, target + (i + b) * 2, l, lambda, cs + b * 4, sn + b * 4, q_next + (i + b) * 4);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM4_STAMP identifies this generation: arm4.c refuses to
  * compile (#error) with a arm4.h from another generation. */
-#define ARM4_STAMP 0x9d5fb54cUL
+#define ARM4_STAMP 0x4b60238eUL
 
 #ifdef __cplusplus
 extern "C" {

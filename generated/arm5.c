@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x84c8c4f3UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x6e356dc8UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restri
 #endif
 }
 
+#if ARM5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160 with vector math, else for k < used. */
 static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *rest
     }
 #endif
 }
+#endif
+
+#if !ARM5_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if ARM5_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif ARM5_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm5_position: endpoint position p (2) ---- */
 /* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 2 neg */
@@ -146,6 +174,7 @@ void arm5_position(const double q[5], const double l[5], double p[2])
     arm5_position_finish(l, cs, sn, p);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_position_block(const double *restrict q_T, const double l[5], double *restrict p_T)
@@ -245,6 +274,27 @@ void arm5_position_batch(size_t m, const double *q, const double *l, double *p)
         }
     }
 }
+#else
+void arm5_position_batch(size_t m, const double *q, const double *l, double *p)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_position_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 1 neg */
@@ -303,6 +353,7 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10])
     arm5_jacobian_finish(l, cs, sn, J);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_jacobian_block(const double *restrict q_T, const double l[5], double *restrict J_T)
@@ -426,6 +477,27 @@ void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
         }
     }
 }
+#else
+void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_jacobian_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 10);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 2 neg */
@@ -499,6 +571,7 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
     arm5_coriolis_finish(dq, l, cs, sn, H);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict H_T)
@@ -653,6 +726,27 @@ void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_coriolis_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_coriolis_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, H + (i + b) * 10);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 3 neg */
@@ -718,6 +812,7 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
     arm5_velocity_finish(dq, l, cs, sn, v);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict v_T)
@@ -848,6 +943,27 @@ void arm5_velocity_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm5_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_velocity_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_velocity_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 3 neg */
@@ -922,6 +1038,7 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
     arm5_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict a_T)
@@ -1077,6 +1194,27 @@ void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const 
         }
     }
 }
+#else
+void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_acceleration_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_acceleration_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_kinematics: p, J, H, v and a at once ---- */
 /* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 5 neg */
@@ -1175,6 +1313,7 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
     arm5_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
@@ -1414,6 +1553,27 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
         }
     }
 }
+#else
+void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_kinematics_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_kinematics_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 10, H + (i + b) * 10, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 5 sin, 5 cos, 33 add/sub, 37 mul, 1 neg, 1 div, 1 sqrt */
@@ -1481,6 +1641,7 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1])
     arm5_manipulability_finish(l, cs, sn, w);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T, const double l[5], double *restrict w_T)
@@ -1595,6 +1756,27 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
+#else
+void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_manipulability_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 5 sin, 5 cos, 48 add/sub, 63 mul, 1 neg, 3 div */
@@ -1683,6 +1865,7 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
     arm5_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[5], double lambda, double *restrict dq_T)
@@ -1836,6 +2019,27 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
+#else
+void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity_finish(v + (i + b) * 2, l, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 5);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 5 sin, 5 cos, 83 add/sub, 109 mul, 1 neg, 4 div */
@@ -1935,6 +2139,7 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
     arm5_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[5], double lambda, double *restrict dq3_T)
@@ -2101,6 +2306,27 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
+#else
+void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity3_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_inverse_velocity3_finish(twist + (i + b) * 3, l, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 5);
+        }
+    }
+}
+#endif
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 5 sin, 5 cos, 55 add/sub, 63 mul, 1 neg, 3 div */
@@ -2191,6 +2417,7 @@ void arm5_ik_step(const double q[5], const double target[2], const double l[5], 
     arm5_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
+#if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[5], double lambda, double *restrict q_next_T)
@@ -2352,6 +2579,27 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
+#else
+void arm5_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm5_ik_step_angles(q + (i + b) * 5, ang + b * 8);
+        }
+        arm5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm5_ik_step_finish(q + (i + b) * 5, target + (i + b) * 2, l, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 5);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM5_STAMP identifies this generation: arm5.c refuses to
  * compile (#error) with a arm5.h from another generation. */
-#define ARM5_STAMP 0x84c8c4f3UL
+#define ARM5_STAMP 0x6e356dc8UL
 
 #ifdef __cplusplus
 extern "C" {

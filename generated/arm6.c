@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x1478553fUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xa533d83aUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -73,6 +73,7 @@ static ARM6_VECTORIZE void arm6_trig8(const double *restrict ang, double *restri
 #endif
 }
 
+#if ARM6_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192 with vector math, else for k < used. */
 static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -96,6 +97,33 @@ static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *rest
     }
 #endif
 }
+#endif
+
+#if !ARM6_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static ARM6_VECTORIZE void arm6_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if ARM6_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif ARM6_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- arm6_position: endpoint position p (2) ---- */
 /* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 2 neg */
@@ -151,6 +179,7 @@ void arm6_position(const double q[6], const double l[6], double p[2])
     arm6_position_finish(l, cs, sn, p);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_position_block(const double *restrict q_T, const double l[6], double *restrict p_T)
@@ -260,6 +289,27 @@ void arm6_position_batch(size_t m, const double *q, const double *l, double *p)
         }
     }
 }
+#else
+void arm6_position_batch(size_t m, const double *q, const double *l, double *p)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_position_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 1 neg */
@@ -325,6 +375,7 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12])
     arm6_jacobian_finish(l, cs, sn, J);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_jacobian_block(const double *restrict q_T, const double l[6], double *restrict J_T)
@@ -464,6 +515,27 @@ void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
         }
     }
 }
+#else
+void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 12);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 2 neg */
@@ -547,6 +619,7 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
     arm6_coriolis_finish(dq, l, cs, sn, H);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict H_T)
@@ -722,6 +795,27 @@ void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_coriolis_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_coriolis_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, H + (i + b) * 12);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 3 neg */
@@ -795,6 +889,7 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
     arm6_velocity_finish(dq, l, cs, sn, v);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict v_T)
@@ -940,6 +1035,27 @@ void arm6_velocity_batch(size_t m, const double *q, const double *dq, const doub
         }
     }
 }
+#else
+void arm6_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_velocity_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_velocity_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 3 neg */
@@ -1024,6 +1140,7 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
     arm6_acceleration_finish(dq, ddq, l, cs, sn, a);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict a_T)
@@ -1198,6 +1315,27 @@ void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const 
         }
     }
 }
+#else
+void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_kinematics: p, J, H, v and a at once ---- */
 /* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 5 neg */
@@ -1310,6 +1448,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
     arm6_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
@@ -1580,6 +1719,27 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
         }
     }
 }
+#else
+void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 12, H + (i + b) * 12, v + (i + b) * 2, a + (i + b) * 2);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 6 sin, 6 cos, 41 add/sub, 44 mul, 1 neg, 1 div, 1 sqrt */
@@ -1654,6 +1814,7 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1])
     arm6_manipulability_finish(l, cs, sn, w);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T, const double l[6], double *restrict w_T)
@@ -1780,6 +1941,27 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
+#else
+void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_manipulability_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_manipulability_finish(l, cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 6 sin, 6 cos, 57 add/sub, 72 mul, 1 neg, 3 div */
@@ -1877,6 +2059,7 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
     arm6_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[6], double lambda, double *restrict dq_T)
@@ -2046,6 +2229,27 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
+#else
+void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity_finish(v + (i + b) * 2, l, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 6 sin, 6 cos, 94 add/sub, 116 mul, 1 neg, 4 div */
@@ -2151,6 +2355,7 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
     arm6_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[6], double lambda, double *restrict dq3_T)
@@ -2330,6 +2535,27 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
+#else
+void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity3_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_inverse_velocity3_finish(twist + (i + b) * 3, l, lambda, cs + b * 8, sn + b * 8, dq3 + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 6 sin, 6 cos, 65 add/sub, 72 mul, 1 neg, 3 div */
@@ -2429,6 +2655,7 @@ void arm6_ik_step(const double q[6], const double target[2], const double l[6], 
     arm6_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
+#if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[6], double lambda, double *restrict q_next_T)
@@ -2607,6 +2834,27 @@ void arm6_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
+#else
+void arm6_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            arm6_ik_step_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        arm6_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            arm6_ik_step_finish(q + (i + b) * 6, target + (i + b) * 2, l, lambda, cs + b * 8, sn + b * 8, q_next + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and
  * so removes isfinite) cannot remove: integer tests on the exponent bits. */

@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM6_STAMP identifies this generation: arm6.c refuses to
  * compile (#error) with a arm6.h from another generation. */
-#define ARM6_STAMP 0x1478553fUL
+#define ARM6_STAMP 0xa533d83aUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -14,7 +14,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x69b282abUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xb33971baUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -63,6 +63,7 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig4(const double *restrict ang, doub
 #endif
 }
 
+#if DIFFDRIVE_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32 with vector math, else for k < used. */
 static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -86,6 +87,33 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, dou
     }
 #endif
 }
+#endif
+
+#if !DIFFDRIVE_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if DIFFDRIVE_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif DIFFDRIVE_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
@@ -104,6 +132,7 @@ void diffdrive_body_rates(const double wheels[2], double track, double rates[2])
     diffdrive_body_rates_finish(wheels, track, rates);
 }
 
+#if DIFFDRIVE_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static DIFFDRIVE_VECTORIZE void diffdrive_body_rates_block(const double *restrict wheels_T, double track, double *restrict rates_T)
@@ -154,6 +183,16 @@ void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, do
         }
     }
 }
+#else
+void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates)
+{
+    size_t i;
+    const size_t b = 0;
+    for (i = 0; i < m; ++i) {
+        diffdrive_body_rates_finish(wheels + (i + b) * 2, track, rates + (i + b) * 2);
+    }
+}
+#endif
 
 /* ---- diffdrive_wheel_speeds: wheel speeds (v_L, v_R) for body rates (v, omega) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg */
@@ -169,6 +208,7 @@ void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2
     diffdrive_wheel_speeds_finish(rates, track, wheels);
 }
 
+#if DIFFDRIVE_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restrict rates_T, double track, double *restrict wheels_T)
@@ -216,6 +256,16 @@ void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, d
         }
     }
 }
+#else
+void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, double *wheels)
+{
+    size_t i;
+    const size_t b = 0;
+    for (i = 0; i < m; ++i) {
+        diffdrive_wheel_speeds_finish(rates + (i + b) * 2, track, wheels + (i + b) * 2);
+    }
+}
+#endif
 
 /* ---- diffdrive_pose_rate: pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R) ---- */
 /* operations: 1 sin, 1 cos, 2 add/sub, 6 mul, 0 neg, 1 div */
@@ -247,6 +297,7 @@ void diffdrive_pose_rate(const double pose[3], const double wheels[2], double tr
     diffdrive_pose_rate_finish(wheels, track, cs, sn, dpose);
 }
 
+#if DIFFDRIVE_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static DIFFDRIVE_VECTORIZE void diffdrive_pose_rate_block(const double *restrict pose_T, const double *restrict wheels_T, double track, double *restrict dpose_T)
@@ -323,3 +374,24 @@ void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheel
         }
     }
 }
+#else
+void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 128) {
+        const size_t count = m - i < 128 ? m - i : 128;
+        for (b = 0; b < count; ++b) {
+            diffdrive_pose_rate_angles(pose + (i + b) * 3, ang + b * 4);
+        }
+        diffdrive_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            diffdrive_pose_rate_finish(wheels + (i + b) * 2, track, cs + b * 4, sn + b * 4, dpose + (i + b) * 3);
+        }
+    }
+}
+#endif

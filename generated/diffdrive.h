@@ -25,7 +25,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to
  * compile (#error) with a diffdrive.h from another generation. */
-#define DIFFDRIVE_STAMP 0x69b282abUL
+#define DIFFDRIVE_STAMP 0xb33971baUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -30,7 +30,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x2fba189aUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x6463437eUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -79,6 +79,7 @@ static PANDA_VECTORIZE void panda_trig8(const double *restrict ang, double *rest
 #endif
 }
 
+#if PANDA_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 48 with vector math, else for k < used. */
 static PANDA_VECTORIZE void panda_trig48(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -102,7 +103,9 @@ static PANDA_VECTORIZE void panda_trig48(const double *restrict ang, double *res
     }
 #endif
 }
+#endif
 
+#if PANDA_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 112 with vector math, else for k < used. */
 static PANDA_VECTORIZE void panda_trig112(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -126,7 +129,9 @@ static PANDA_VECTORIZE void panda_trig112(const double *restrict ang, double *re
     }
 #endif
 }
+#endif
 
+#if PANDA_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192 with vector math, else for k < used. */
 static PANDA_VECTORIZE void panda_trig192(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -150,7 +155,9 @@ static PANDA_VECTORIZE void panda_trig192(const double *restrict ang, double *re
     }
 #endif
 }
+#endif
 
+#if PANDA_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 224 with vector math, else for k < used. */
 static PANDA_VECTORIZE void panda_trig224(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -174,6 +181,33 @@ static PANDA_VECTORIZE void panda_trig224(const double *restrict ang, double *re
     }
 #endif
 }
+#endif
+
+#if !PANDA_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static PANDA_VECTORIZE void panda_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if PANDA_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif PANDA_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- panda_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 7 sin, 7 cos, 52 add/sub, 105 mul, 12 neg */
@@ -273,6 +307,7 @@ void panda_pose(const double q[7], double T[16])
     panda_pose_finish(cs, sn, T);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_pose_block(const double *restrict q_T, double *restrict T_T)
@@ -459,6 +494,27 @@ void panda_pose_batch(size_t m, const double *q, double *T)
         }
     }
 }
+#else
+void panda_pose_batch(size_t m, const double *q, double *T)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_pose_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16);
+        }
+    }
+}
+#endif
 
 /* ---- panda_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
 /* operations: 6 sin, 6 cos, 72 add/sub, 121 mul, 21 neg */
@@ -615,6 +671,7 @@ void panda_jacobian(const double q[7], double J[42])
     panda_jacobian_finish(cs, sn, J);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_jacobian_block(const double *restrict q_T, double *restrict J_T)
@@ -907,6 +964,27 @@ void panda_jacobian_batch(size_t m, const double *q, double *J)
         }
     }
 }
+#else
+void panda_jacobian_batch(size_t m, const double *q, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 42);
+        }
+    }
+}
+#endif
 
 /* ---- panda_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
 /* operations: 7 sin, 7 cos, 153 add/sub, 250 mul, 25 neg */
@@ -1064,6 +1142,7 @@ void panda_jacobian_tool(const double q[7], double J_tool[42])
     panda_jacobian_tool_finish(cs, sn, J_tool);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
@@ -1360,6 +1439,27 @@ void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
         }
     }
 }
+#else
+void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_tool_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 42);
+        }
+    }
+}
+#endif
 
 /* ---- panda_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
 /* operations: 6 sin, 6 cos, 164 add/sub, 253 mul, 13 neg */
@@ -1574,6 +1674,7 @@ void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42])
     panda_jacobian_dot_finish(dq, cs, sn, dJ);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
@@ -1944,6 +2045,27 @@ void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, doubl
         }
     }
 }
+#else
+void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_dot_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_dot_finish(dq + (i + b) * 7, cs + b * 8, sn + b * 8, dJ + (i + b) * 42);
+        }
+    }
+}
+#endif
 
 /* ---- panda_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
 /* operations: 6 sin, 6 cos, 104 add/sub, 158 mul, 9 neg */
@@ -2088,6 +2210,7 @@ void panda_twist(const double q[7], const double dq[7], double twist[6])
     panda_twist_finish(dq, cs, sn, twist);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
@@ -2316,6 +2439,27 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
         }
     }
 }
+#else
+void panda_twist_batch(size_t m, const double *q, const double *dq, double *twist)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_twist_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_twist_finish(dq + (i + b) * 7, cs + b * 8, sn + b * 8, twist + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
 /* operations: 6 sin, 6 cos, 233 add/sub, 327 mul, 13 neg */
@@ -2494,6 +2638,7 @@ void panda_acceleration(const double q[7], const double dq[7], const double ddq[
     panda_acceleration_finish(dq, ddq, cs, sn, acc);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
@@ -2776,6 +2921,27 @@ void panda_acceleration_batch(size_t m, const double *q, const double *dq, const
         }
     }
 }
+#else
+void panda_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_acceleration_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_acceleration_finish(dq + (i + b) * 7, ddq + (i + b) * 7, cs + b * 8, sn + b * 8, acc + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- panda_kinematics: T, J, dJ, twist and acc at once ---- */
 /* operations: 7 sin, 7 cos, 244 add/sub, 347 mul, 29 neg */
@@ -3085,6 +3251,7 @@ void panda_kinematics(const double q[7], const double dq[7], const double ddq[7]
     panda_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc);
 }
 
+#if PANDA_VECTOR_MATH
 /* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
@@ -3725,6 +3892,27 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
         }
     }
 }
+#else
+void panda_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_kinematics_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_kinematics_finish(dq + (i + b) * 7, ddq + (i + b) * 7, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 42, dJ + (i + b) * 42, twist + (i + b) * 6, acc + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- panda_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
 /* operations: 7 sin, 7 cos, 81 add/sub, 139 mul, 24 neg */
@@ -3907,6 +4095,7 @@ void panda_ik_terms(const double q[7], double T[16], double J[42])
     panda_ik_terms_finish(cs, sn, T, J);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
@@ -4263,6 +4452,27 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
         }
     }
 }
+#else
+void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_ik_terms_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 42);
+        }
+    }
+}
+#endif
 
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 6 sin, 6 cos, 490 add/sub, 618 mul, 25 neg, 5 div, 6 sqrt */
@@ -4678,6 +4888,7 @@ void panda_manipulability(const double q[7], double w[1])
     panda_manipulability_finish(cs, sn, w);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_manipulability_block(const double *restrict q_T, double *restrict w_T)
@@ -5147,6 +5358,27 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
         }
     }
 }
+#else
+void panda_manipulability_batch(size_t m, const double *q, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_finish(cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 6 sin, 6 cos, 166 add/sub, 241 mul, 10 neg, 2 div, 3 sqrt */
@@ -5328,6 +5560,7 @@ void panda_manipulability_position(const double q[7], double w_position[1])
     panda_manipulability_position_finish(cs, sn, w_position);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_manipulability_position_block(const double *restrict q_T, double *restrict w_position_T)
@@ -5563,6 +5796,27 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
         }
     }
 }
+#else
+void panda_manipulability_position_batch(size_t m, const double *q, double *w_position)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_position_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_position_finish(cs + b * 8, sn + b * 8, w_position + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 6 sin, 6 cos, 158 add/sub, 313 mul, 45 neg */
@@ -6076,6 +6330,7 @@ void panda_jacobian_hessian(const double q[7], double Hs[294])
     panda_jacobian_hessian_finish(cs, sn, Hs);
 }
 
+#if PANDA_VECTOR_MATH
 /* 8 configurations at once, stored transposed (element k of configuration b at [k*8 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_jacobian_hessian_block(const double *restrict q_T, double *restrict Hs_T)
@@ -7229,6 +7484,27 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
         }
     }
 }
+#else
+void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_hessian_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_hessian_finish(cs + b * 8, sn + b * 8, Hs + (i + b) * 294);
+        }
+    }
+}
+#endif
 
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 6 sin, 6 cos, 894 add/sub, 1258 mul, 52 neg, 6 div, 6 sqrt */
@@ -7852,6 +8128,7 @@ void panda_manipulability_gradient(const double q[7], double grad[7])
     panda_manipulability_gradient_finish(cs, sn, grad);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_manipulability_gradient_block(const double *restrict q_T, double *restrict grad_T)
@@ -8541,6 +8818,27 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
         }
     }
 }
+#else
+void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_gradient_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_manipulability_gradient_finish(cs + b * 8, sn + b * 8, grad + (i + b) * 7);
+        }
+    }
+}
+#endif
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 6 sin, 6 cos, 1098 add/sub, 1350 mul, 55 neg, 12 div, 14 sqrt */
@@ -9419,6 +9717,7 @@ void panda_inverse_velocity(const double q[7], const double twist[6], double lam
     panda_inverse_velocity_finish(twist, lambda, cs, sn, dq);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_inverse_velocity_block(const double *restrict q_T, const double *restrict twist_T, double lambda, double *restrict dq_T)
@@ -10381,6 +10680,27 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
         }
     }
 }
+#else
+void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_inverse_velocity_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_inverse_velocity_finish(twist + (i + b) * 6, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 7);
+        }
+    }
+}
+#endif
 
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 6 sin, 6 cos, 260 add/sub, 368 mul, 16 neg, 6 div, 8 sqrt */
@@ -10662,6 +10982,7 @@ void panda_inverse_velocity_position(const double q[7], const double v[3], doubl
     panda_inverse_velocity_position_finish(v, lambda, cs, sn, dq_position);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_inverse_velocity_position_block(const double *restrict q_T, const double *restrict v_T, double lambda, double *restrict dq_position_T)
@@ -11021,6 +11342,27 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
         }
     }
 }
+#else
+void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_inverse_velocity_position_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_inverse_velocity_position_finish(v + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq_position + (i + b) * 7);
+        }
+    }
+}
+#endif
 
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 7 sin, 7 cos, 105 add/sub, 192 mul, 21 neg, 3 div, 2 sqrt */
@@ -11208,6 +11550,7 @@ void panda_jacobian_rpy(const double q[7], double JA[42])
     panda_jacobian_rpy_finish(cs, sn, JA);
 }
 
+#if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static PANDA_VECTORIZE void panda_jacobian_rpy_block(const double *restrict q_T, double *restrict JA_T)
@@ -11534,6 +11877,27 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA)
         }
     }
 }
+#else
+void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_rpy_angles(q + (i + b) * 7, ang + b * 8);
+        }
+        panda_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            panda_jacobian_rpy_finish(cs + b * 8, sn + b * 8, JA + (i + b) * 42);
+        }
+    }
+}
+#endif
 
 /* ---- chain IK: panda_ik_solve, panda_ik_solve_position (see the header) ---- */
 

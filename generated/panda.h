@@ -41,7 +41,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * PANDA_STAMP identifies this generation: panda.c refuses to
  * compile (#error) with a panda.h from another generation. */
-#define PANDA_STAMP 0x2fba189aUL
+#define PANDA_STAMP 0x6463437eUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -30,7 +30,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x17e55448UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x4138306fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -79,6 +79,7 @@ static UR5_VECTORIZE void ur5_trig8(const double *restrict ang, double *restrict
 #endif
 }
 
+#if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 80 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig80(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -102,7 +103,9 @@ static UR5_VECTORIZE void ur5_trig80(const double *restrict ang, double *restric
     }
 #endif
 }
+#endif
 
+#if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig96(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -126,7 +129,9 @@ static UR5_VECTORIZE void ur5_trig96(const double *restrict ang, double *restric
     }
 #endif
 }
+#endif
 
+#if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -150,7 +155,9 @@ static UR5_VECTORIZE void ur5_trig160(const double *restrict ang, double *restri
     }
 #endif
 }
+#endif
 
+#if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 192 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig192(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -174,6 +181,33 @@ static UR5_VECTORIZE void ur5_trig192(const double *restrict ang, double *restri
     }
 #endif
 }
+#endif
+
+#if !UR5_VECTOR_MATH
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
+{
+    int k;
+#if UR5_VECTOR_MATH
+    (void)used; /* whole vectors: the padding lanes cost nothing */
+    for (k = 0; k < 512; ++k) {
+        cs[k] = cos(ang[k]);
+    }
+    for (k = 0; k < 512; ++k) {
+        sn[k] = sin(ang[k]);
+    }
+#elif UR5_SINCOS
+    for (k = 0; k < used; ++k) {
+        sincos(ang[k], &sn[k], &cs[k]);
+    }
+#else
+    for (k = 0; k < used; ++k) {
+        cs[k] = cos(ang[k]);
+        sn[k] = sin(ang[k]);
+    }
+#endif
+}
+#endif
 
 /* ---- ur5_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 6 sin, 6 cos, 24 add/sub, 44 mul, 6 neg */
@@ -250,6 +284,7 @@ void ur5_pose(const double q[6], double T[16])
     ur5_pose_finish(cs, sn, T);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_pose_block(const double *restrict q_T, double *restrict T_T)
@@ -408,6 +443,27 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
         }
     }
 }
+#else
+void ur5_pose_batch(size_t m, const double *q, double *T)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_pose_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
 /* operations: 5 sin, 5 cos, 37 add/sub, 51 mul, 17 neg */
@@ -526,6 +582,7 @@ void ur5_jacobian(const double q[6], double J[36])
     ur5_jacobian_finish(cs, sn, J);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_block(const double *restrict q_T, double *restrict J_T)
@@ -763,6 +820,27 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
         }
     }
 }
+#else
+void ur5_jacobian_batch(size_t m, const double *q, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 36);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 93 add/sub, 143 mul, 15 neg */
@@ -892,6 +970,7 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36])
     ur5_jacobian_tool_finish(cs, sn, J_tool);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
@@ -1143,6 +1222,27 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
         }
     }
 }
+#else
+void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_tool_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 36);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
 /* operations: 5 sin, 5 cos, 101 add/sub, 145 mul, 16 neg */
@@ -1309,6 +1409,7 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
     ur5_jacobian_dot_finish(dq, cs, sn, dJ);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
@@ -1612,6 +1713,27 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
         }
     }
 }
+#else
+void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_dot_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_dot_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, dJ + (i + b) * 36);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
 /* operations: 5 sin, 5 cos, 61 add/sub, 80 mul, 13 neg */
@@ -1724,6 +1846,7 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6])
     ur5_twist_finish(dq, cs, sn, twist);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
@@ -1913,6 +2036,27 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
         }
     }
 }
+#else
+void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_twist_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_twist_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, twist + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
 /* operations: 5 sin, 5 cos, 156 add/sub, 205 mul, 16 neg */
@@ -2049,6 +2193,7 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
     ur5_acceleration_finish(dq, ddq, cs, sn, acc);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
@@ -2280,6 +2425,27 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
         }
     }
 }
+#else
+void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, acc + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_kinematics: T, J, dJ, twist and acc at once ---- */
 /* operations: 6 sin, 6 cos, 166 add/sub, 224 mul, 21 neg */
@@ -2527,6 +2693,7 @@ void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], 
     ur5_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc);
 }
 
+#if UR5_VECTOR_MATH
 /* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
@@ -3072,6 +3239,27 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
         }
     }
 }
+#else
+void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, dJ + (i + b) * 36, twist + (i + b) * 6, acc + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
 /* operations: 6 sin, 6 cos, 45 add/sub, 68 mul, 17 neg */
@@ -3216,6 +3404,7 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36])
     ur5_ik_terms_finish(cs, sn, T, J);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
@@ -3517,6 +3706,27 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
         }
     }
 }
+#else
+void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_ik_terms_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 5 sin, 5 cos, 385 add/sub, 475 mul, 23 neg, 5 div, 6 sqrt */
@@ -3864,6 +4074,7 @@ void ur5_manipulability(const double q[6], double w[1])
     ur5_manipulability_finish(cs, sn, w);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_manipulability_block(const double *restrict q_T, double *restrict w_T)
@@ -4260,6 +4471,27 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
         }
     }
 }
+#else
+void ur5_manipulability_batch(size_t m, const double *q, double *w)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_finish(cs + b * 8, sn + b * 8, w + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 116 add/sub, 154 mul, 14 neg, 2 div, 3 sqrt */
@@ -4408,6 +4640,7 @@ void ur5_manipulability_position(const double q[6], double w_position[1])
     ur5_manipulability_position_finish(cs, sn, w_position);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_manipulability_position_block(const double *restrict q_T, double *restrict w_position_T)
@@ -4605,6 +4838,27 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
         }
     }
 }
+#else
+void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_position_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_position_finish(cs + b * 8, sn + b * 8, w_position + (i + b) * 1);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 101 mul, 34 neg */
@@ -4936,6 +5190,7 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216])
     ur5_jacobian_hessian_finish(cs, sn, Hs);
 }
 
+#if UR5_VECTOR_MATH
 /* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_hessian_block(const double *restrict q_T, double *restrict Hs_T)
@@ -5746,6 +6001,27 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
         }
     }
 }
+#else
+void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_hessian_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_hessian_finish(cs + b * 8, sn + b * 8, Hs + (i + b) * 216);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 645 add/sub, 853 mul, 41 neg, 6 div, 6 sqrt */
@@ -6233,6 +6509,7 @@ void ur5_manipulability_gradient(const double q[6], double grad[6])
     ur5_manipulability_gradient_finish(cs, sn, grad);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_manipulability_gradient_block(const double *restrict q_T, double *restrict grad_T)
@@ -6779,6 +7056,27 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
         }
     }
 }
+#else
+void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_gradient_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_manipulability_gradient_finish(cs + b * 8, sn + b * 8, grad + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 976 add/sub, 1188 mul, 53 neg, 12 div, 14 sqrt */
@@ -7583,6 +7881,7 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
     ur5_inverse_velocity_finish(twist, lambda, cs, sn, dq);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_inverse_velocity_block(const double *restrict q_T, const double *restrict twist_T, double lambda, double *restrict dq_T)
@@ -8464,6 +8763,27 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
         }
     }
 }
+#else
+void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_inverse_velocity_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_inverse_velocity_finish(twist + (i + b) * 6, lambda, cs + b * 8, sn + b * 8, dq + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 205 add/sub, 275 mul, 20 neg, 6 div, 8 sqrt */
@@ -8709,6 +9029,7 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
     ur5_inverse_velocity_position_finish(v, lambda, cs, sn, dq_position);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_inverse_velocity_position_block(const double *restrict q_T, const double *restrict v_T, double lambda, double *restrict dq_position_T)
@@ -9025,6 +9346,27 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
         }
     }
 }
+#else
+void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_inverse_velocity_position_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_inverse_velocity_position_finish(v + (i + b) * 3, lambda, cs + b * 8, sn + b * 8, dq_position + (i + b) * 6);
+        }
+    }
+}
+#endif
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 57 add/sub, 100 mul, 19 neg, 3 div, 2 sqrt */
@@ -9173,6 +9515,7 @@ void ur5_jacobian_rpy(const double q[6], double JA[36])
     ur5_jacobian_rpy_finish(cs, sn, JA);
 }
 
+#if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
  * every statement then runs on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_rpy_block(const double *restrict q_T, double *restrict JA_T)
@@ -9443,6 +9786,27 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
         }
     }
 }
+#else
+void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
+{
+    size_t i;
+    double ang[512], cs[512], sn[512];
+    size_t b, k;
+    for (k = 0; k < 512; ++k) {
+        ang[k] = 0;
+    }
+    for (i = 0; i < m; i += 64) {
+        const size_t count = m - i < 64 ? m - i : 64;
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_rpy_angles(q + (i + b) * 6, ang + b * 8);
+        }
+        ur5_trig512(ang, cs, sn, 512);
+        for (b = 0; b < count; ++b) {
+            ur5_jacobian_rpy_finish(cs + b * 8, sn + b * 8, JA + (i + b) * 36);
+        }
+    }
+}
+#endif
 
 /* ---- chain IK: ur5_ik_solve, ur5_ik_solve_position (see the header) ---- */
 

@@ -41,7 +41,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * UR5_STAMP identifies this generation: ur5.c refuses to
  * compile (#error) with a ur5.h from another generation. */
-#define UR5_STAMP 0x17e55448UL
+#define UR5_STAMP 0x4138306fUL
 
 #ifdef __cplusplus
 extern "C" {

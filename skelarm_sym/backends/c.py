@@ -206,15 +206,36 @@ def stack_text(size: int) -> str:
     return f"{size} bytes" if size < 4096 else f"{-(-size // 1024)} KB"
 
 
+def trig_helpers(functions: list[dict]) -> list[dict]:
+    """The trigonometry helpers the functions call, by size, each with the condition under which it is
+    used: single calls and per-configuration batches always; the transposed block path of a batch
+    (``soa``) only with GCC's vector math, its per-configuration fallback only without. ``guard`` is
+    ``""`` (always), ``"vector"`` or ``"scalar"``, so that no static helper is left unused."""
+    always, vector, scalar = set(), set(), set()
+    for f in functions:
+        if not f["padded"]:
+            continue
+        always.add(f["padded"])
+        plain = f["padded"] * f["block"]
+        if f["soa"]:
+            vector.add(f["angle_count"] * f["soa"])
+            scalar.add(plain)
+        else:
+            always.add(plain)
+    helpers = []
+    for size in sorted(always | vector | scalar):
+        guard = "" if size in always or (size in vector and size in scalar) else ("vector" if size in vector else "scalar")
+        helpers.append({"size": size, "guard": guard})
+    return helpers
+
+
 def render(derivation, programs: list[Program], options) -> dict[str, str]:
     """Header and source text for ``programs``; keys are the file suffixes."""
     precision = PRECISIONS[options.precision]
     shared = frozenset(derivation.parameters)
     memo = MemoPrinter()
     functions = [function_context(p, precision, options.prefix, shared, memo) for p in programs]
-    sizes = {f["padded"] for f in functions if f["padded"]}
-    sizes |= {f["angle_count"] * f["soa"] if f["soa"] else f["padded"] * f["block"] for f in functions if f["padded"]}
-    trig_sizes = [{"size": size} for size in sorted(sizes)]
+    trig_sizes = trig_helpers(functions)
     constants = {c.name: c for p in programs for c in p.constants}
     context = {
         "prefix": options.prefix,
