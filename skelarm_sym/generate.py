@@ -27,19 +27,11 @@ from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
 from .models.chain import Chain
 from .models.diffdrive import DiffDrive
 from .models.planar import PlanarArm
+from .names import C_RESERVED  # noqa: F401 - re-exported
 from .program import Program, build_programs
 
 PRECISIONS = ("double", "float")
 
-C_RESERVED = frozenset(
-    """auto break case char const continue default do double else enum extern float for goto if inline int long
-    register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while
-    _Bool _Complex _Imaginary _Alignas _Alignof _Atomic _Generic _Noreturn _Static_assert _Thread_local
-    alignas alignof and bool catch class compl constexpr decltype delete explicit export false friend mutable
-    namespace new noexcept not nullptr operator or private protected public template this throw true try typeid
-    typename using virtual wchar_t xor asm main errno math sin cos sqrt""".split()
-)
-"""Words a prefix may not be: C99 and C++ keywords, and names the emitted code itself relies on."""
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,47}")
 
 

@@ -84,3 +84,23 @@ def test_robot_constants_the_precision_cannot_hold_are_refused(tmp_path, capsys,
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "not representable" in err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name", ["q1", "dq2", "ddq", "params", "lambda", "xi_vx", "sin", "main"])
+def test_parameter_names_that_collide_with_inputs_or_keywords_are_refused(tmp_path, name):
+    """A parameter named q1 was the joint input's own symbol: the code silently used q[0] for it."""
+    from skelarm_sym.errors import InputError
+
+    path = tmp_path / "p.toml"
+    path.write_text(f'[[joints]]\ntype = "revolute"\na = "{name}"\n')
+    with pytest.raises(InputError, match=f"parameter name '{name}' is a reserved word"):
+        load_robot(path)
+
+
+def test_urdf_robot_named_after_a_reserved_word_gets_a_usable_prefix(tmp_path):
+    path = tmp_path / "r.urdf"
+    path.write_text("""<robot name="main"><link name="a"/><link name="b"/><joint name="j" type="revolute">
+        <parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>""")
+    chain = load_robot(path)
+    assert chain.name != "main"
+    generate(chain, langs="c", out=None)  # the prefix is accepted

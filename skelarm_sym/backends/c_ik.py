@@ -10,13 +10,13 @@ from __future__ import annotations
 import math
 
 from .. import ik
+from .common import IK_STATUS as STATUS
 
 SETTINGS = {
-    "double": {"tol": 1e-10, "pivot": ik.PIVOT, "stall": ik.STALL},
-    "float": {"tol": 1e-5, "pivot": 1e-6, "stall": 1e-6},
+    "double": {"tol": ik.DEFAULT_TOL["double"], "pivot": ik.PIVOT, "stall": ik.STALL},
+    "float": {"tol": ik.DEFAULT_TOL["float"], "pivot": 1e-6, "stall": 1e-6},
 }
 """Per precision: default tolerance (documented; callers pass tol), LDL^T pivot cut-off, relative stall."""
-STATUS = ("CONVERGED", "STALLED", "MAX_ITER", "INVALID")
 
 
 def context(derivation, programs, precision, prefix: str) -> dict | None:

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-import keyword
 import math
 import operator
 import os
@@ -40,6 +39,7 @@ from pathlib import Path
 import sympy as sp
 
 from ..errors import InputError
+from ..names import reserved_name
 from .chain import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -47,11 +47,6 @@ JOINT_KEYS = {"type", "a", "alpha", "d", "theta", "name", "lower", "upper", "vel
 FRAME_KEYS = {"xyz", "rpy"}
 ANGLE_KEYS = {"alpha", "theta"}
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-_C_WORDS = frozenset(
-    "auto break case char const continue default do double else enum extern float for goto if inline int long "
-    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while "
-    "params q dq ddq".split()
-)
 _BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
 
 
@@ -91,7 +86,7 @@ def _value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]
         if _IDENTIFIER.fullmatch(text) and text != "pi":
             if text.lower() in ("nan", "inf", "infinity"):
                 raise InputError(f"{what}: {raw!r} is not finite")
-            if text in _C_WORDS or keyword.iskeyword(text):
+            if reserved_name(text):
                 raise InputError(f"{what}: parameter name {text!r} is a reserved word")
             return parameters.setdefault(text, sp.Symbol(text, real=True))
         value = parse_expression(text, what)
@@ -187,18 +182,24 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
     )
 
 
-def load_robot_file(path: str | os.PathLike) -> Chain:
-    """Read a TOML robot file; InputError naming the file and the problem on any bad input."""
-    path = Path(path)
+def read_robot_bytes(path: Path, what: str) -> bytes:
+    """The bytes of a robot description; InputError naming the file when it cannot be read."""
     try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
+        return path.read_bytes()
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a robot file") from None
+        raise InputError(f"{path}: is a folder, not a {what}") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+
+def load_robot_file(path: str | os.PathLike) -> Chain:
+    """Read a TOML robot file; InputError naming the file and the problem on any bad input."""
+    path = Path(path)
+    text = read_robot_bytes(path, "robot file")
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not valid TOML: {str(exc).splitlines()[0]}") from None
     try:

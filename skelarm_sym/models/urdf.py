@@ -24,7 +24,6 @@ names the file and the problem.
 
 from __future__ import annotations
 
-import keyword
 import math
 import os
 import re
@@ -35,16 +34,13 @@ from pathlib import Path
 import sympy as sp
 
 from ..errors import InputError
+from ..names import reserved_name
 from .chain import Chain, Joint, Transform, exact_angle, exact_number, unit_axis
+from .robot_file import read_robot_bytes
 
 MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
 REFUSED = ("floating", "planar")
 TYPES = (*MOVING, "fixed", *REFUSED)
-_C_WORDS = frozenset(
-    "auto break case char const continue default do double else enum extern float for goto if inline int long "
-    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while "
-    "params q dq ddq".split()
-)
 _LISTED = 12  # names listed in an error message before "..."
 
 
@@ -190,7 +186,7 @@ def _c_name(text: str | None, fallback: str) -> str:
     if not name[0].isalpha():
         name = "robot_" + name
     name = name[:48]
-    if name in _C_WORDS or keyword.iskeyword(name):
+    if reserved_name(name):
         name = name[:42] + "_robot"
     return name
 
@@ -356,15 +352,7 @@ def chain_from_urdf(root: ET.Element, base: str | None = None, tip: str | None =
 def load_urdf(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
     """Read a URDF file as the chain from link ``base`` to link ``tip``; InputError naming the file and the problem."""
     path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            text = handle.read()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a URDF file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    text = read_robot_bytes(path, "URDF file")
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
