@@ -11,19 +11,12 @@ from __future__ import annotations
 import sympy as sp
 
 from .derive.chain import ChainDerivation
+from .display import FORMATS
+from .display import render as _render
 from .errors import InputError
 
 WHAT = ("T", "J", "J_tool", "dJ", "twist", "acc")
 EXPAND_UP_TO = 2
-FORMATS = ("pretty", "latex", "text")
-
-
-def _render(expr, fmt: str) -> str:
-    if fmt == "latex":
-        return sp.latex(expr)
-    if fmt == "text":
-        return str(expr)
-    return sp.pretty(expr, use_unicode=True, wrap_line=False)
 
 
 def _readable(steps, outputs) -> tuple[list[tuple[sp.Symbol, sp.Expr]], dict]:
