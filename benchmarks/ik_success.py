@@ -36,7 +36,7 @@ from robots import FLAGS, chain_file  # noqa: E402
 from skelarm_sym import ik  # noqa: E402
 from skelarm_sym.build import compile_arm, find_compiler  # noqa: E402
 from skelarm_sym.generate import generate  # noqa: E402
-from skelarm_sym.models.robot_file import load_robot_file  # noqa: E402
+from skelarm_sym.models.chain.dh_file import load_robot_file  # noqa: E402
 
 ROBOTS = ("ur5", "panda", "puma560")
 TOL, MAX_ITER = 1e-10, 100

@@ -29,9 +29,9 @@ import numpy as np
 
 from skelarm_sym import reference
 from skelarm_sym.build import find_compiler
-from skelarm_sym.derive.chain import canonical_joints
+from skelarm_sym.models.chain.derive import canonical_joints
 from skelarm_sym.generate import generate
-from skelarm_sym.models.loader import load_robot
+from skelarm_sym.models.chain.loader import load_robot
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent

@@ -22,7 +22,7 @@ import numpy as np
 
 from skelarm_sym.build import compile_arm
 from skelarm_sym.generate import generate
-from skelarm_sym.models.robot_file import load_robot_file
+from skelarm_sym.models.chain.dh_file import load_robot_file
 
 ROBOT = Path(__file__).resolve().parent / "robots" / "ur5.toml"
 

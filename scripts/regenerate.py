@@ -10,7 +10,7 @@ import dataclasses
 
 from skelarm_sym.generate import generate
 from skelarm_sym.models.diffdrive import DiffDrive
-from skelarm_sym.models.robot_file import load_robot_file
+from skelarm_sym.models.chain.dh_file import load_robot_file
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "generated"

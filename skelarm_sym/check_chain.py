@@ -3,7 +3,7 @@
 Configurations: random joint values (revolute in [-pi, pi], prismatic in [-0.5, 0.5] m), rates
 and accelerations in [-2, 2], plus the zero configuration at rest and a configuration with rates
 but no accelerations. Named parameters get random values in [0.2, 1.2]. Expected outputs come
-from :func:`skelarm_sym.reference.chain.chain_kinematics` (seed 001's forward recursion and seed
+from :func:`skelarm_sym.models.chain.reference.chain_kinematics` (seed 001's forward recursion and seed
 003's columns), never from the derivation.
 
 Tolerance scaling (``condition``): rounding in a sum scales with its terms, not with the result;
@@ -55,9 +55,9 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     values = {"q": q, "dq": dq, "ddq": ddq}
     if chain.parameters:
         values["params"] = params
-    from .derive.chain_inverse import characteristic_length  # inverse functions: hook of chain_inverse
+    from .models.chain.inverse import characteristic_length  # inverse functions: hook of chain_inverse
     from .derive.core import RANK_TOL
-    from .reference.chain_inverse import check_expectations
+    from .models.chain.reference_inverse import check_expectations
 
     forward, forward_condition, solves = check_expectations(
         numeric, q, k, float(characteristic_length(chain).xreplace(dict(zip(chain.parameters, params))) if chain.parameters else characteristic_length(chain)),

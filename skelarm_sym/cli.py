@@ -79,7 +79,7 @@ def model_from_args(args):
     if getattr(args, "robot", None) is not None:
         if args.model != "planar" or args.links is not None or args.lengths is not None or args.track is not None:
             raise InputError("--robot describes the whole robot: drop --model, --links, --lengths and --track")
-        from .models.loader import load_robot
+        from .models.chain.loader import load_robot
 
         return load_robot(args.robot, base=args.base, tip=args.tip)
     if getattr(args, "base", None) is not None or getattr(args, "tip", None) is not None:
@@ -167,7 +167,7 @@ def _show(args) -> int:
     if not isinstance(model, PlanarArm):  # a 3-D chain from --robot
         if args.plot:
             raise InputError("--plot draws planar arms")
-        from .derive.chain import derive_chain
+        from .models.chain.derive import derive_chain
         from .display_chain import show_chain
 
         sys.stdout.write(show_chain(derive_chain(model), args.what or "J", args.format, True if args.expand else None))
@@ -188,7 +188,7 @@ def _show(args) -> int:
         sigma = ", ".join(f"{s:.4g}" for s in summary.singular_values)
         print(f"wrote {summary.path}: w = {summary.manipulability:.6g}, singular values of J: {sigma}")
         return 0
-    from .derive import derive
+    from . import derive
     from .display import check_show_size
 
     check_show_size(model.n)  # before deriving: closed forms of long chains take minutes

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .derive import singular
+from .models.planar import singular
 from .derive import Derivation
 
 WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det", "manipulability", "singular")
@@ -76,7 +76,7 @@ DIFFDRIVE_WHAT = ("matrix", "inverse", "all")
 
 def show_diffdrive(model, what: str = "all", fmt: str = "pretty") -> str:
     """The differential drive's wheel-to-body matrix and its inverse, with seed 002's (11) beside them."""
-    from .derive.diffdrive import wheel_to_body
+    from .models.diffdrive.derive import wheel_to_body
     from .errors import InputError
 
     if what not in DIFFDRIVE_WHAT:

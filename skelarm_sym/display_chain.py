@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .derive.chain import ChainDerivation
+from .models.chain.derive import ChainDerivation
 from .display import FORMATS
 from .display import render as _render
 from .errors import InputError

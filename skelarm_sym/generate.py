@@ -20,7 +20,7 @@ from typing import Iterable, Sequence
 
 from . import __version__
 from .backends import BACKENDS
-from .derive import Derivation, derive, derive_diffdrive
+from .derive import Derivation
 from .derive.core import ARGUMENT_RULE
 from .errors import InputError
 from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
@@ -167,24 +167,14 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
 
 
 def derive_model(model, functions: str | Iterable[str] | None = None) -> Derivation:
-    """The derivation of any supported model (the one place that knows them all).
+    """The derivation of any supported model, through the model registry. ``functions`` (a
+    ``--functions`` list or ``None``): the kind may leave out what none of them needs."""
+    from .models.registry import derive
 
-    ``functions`` (a ``--functions`` list or ``None``): a chain whose list names none of the inverse
-    functions is derived without them (they take most of the time)."""
-    if isinstance(model, PlanarArm):
-        return derive(model)
-    if isinstance(model, DiffDrive):
-        return derive_diffdrive(model)
-    if isinstance(model, Chain):
-        from .derive.chain import derive_chain
-        from .derive.chain_inverse import INVERSE_FUNCTIONS
-
-        inverse = {f.name for f in INVERSE_FUNCTIONS} | {"ik_solve", "ik_solve_position"}
-        wanted = None if functions is None else (
-            {x.strip() for x in functions.split(",")} if isinstance(functions, str) else {str(x).strip() for x in functions}
-        )
-        return derive_chain(model, inverse=wanted is None or bool(wanted & inverse))
-    raise InputError(f"unsupported model {model!r}")
+    wanted = None if functions is None else (
+        [x.strip() for x in functions.split(",")] if isinstance(functions, str) else [str(x).strip() for x in functions]
+    )
+    return derive(model, wanted)
 
 
 @dataclass(frozen=True)

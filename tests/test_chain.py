@@ -11,10 +11,10 @@ from hypothesis import strategies as st
 from skelarm_sym import reference
 from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.check import compare
-from skelarm_sym.derive.chain import derive_chain
+from skelarm_sym.models.chain.derive import derive_chain
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import Chain, Joint, Transform, dh_joint
-from skelarm_sym.models.robot_file import chain_from_table
+from skelarm_sym.models.chain.dh_file import chain_from_table
 
 ROBOTS = Path(__file__).resolve().parents[1] / "examples" / "robots"
 HALF_PI = "pi/2"
@@ -233,7 +233,7 @@ def test_generation_stays_linear_and_fast():
 
 
 def test_joint_limits_are_emitted_in_input_order():
-    from skelarm_sym.models.robot_file import load_robot_file
+    from skelarm_sym.models.chain.dh_file import load_robot_file
 
     chain = load_robot_file(ROBOTS / "panda.toml")
     limits = chain.limits()
@@ -260,7 +260,7 @@ def test_joint_limits_are_emitted_in_input_order():
 
 
 def test_urdf_angles_written_as_rounded_multiples_of_half_pi_are_exact(tmp_path):
-    from skelarm_sym.models.urdf import load_urdf
+    from skelarm_sym.models.chain.urdf import load_urdf
 
     urdf = tmp_path / "r.urdf"
     urdf.write_text("""<robot name="r"><link name="a"/><link name="b"/><link name="c"/>

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from skelarm_sym.build import load_python
-from skelarm_sym.derive.chain_inverse import characteristic_length
+from skelarm_sym.models.chain.inverse import characteristic_length
 from skelarm_sym.generate import generate
 from skelarm_sym.ik import solve_pose, solve_position
-from skelarm_sym.reference import chain_inverse as ref
+from skelarm_sym.models.chain import reference_inverse as ref
 
 from test_chain import MIMIC, PANDA, PRISMATIC, PUMA, STANFORD, UR5
 

@@ -1,4 +1,4 @@
-"""The chain reference (skelarm_sym.reference.chain) against finite differences, the planar
+"""The chain reference (skelarm_sym.models.chain.reference) against finite differences, the planar
 reference and, when it imports, Pinocchio.
 
 The pose used for finite differences is computed HERE, independently of the reference: a plain
@@ -18,9 +18,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from skelarm_sym.models.chain import Chain, Joint, Transform, dh_joint
-from skelarm_sym.models.robot_file import load_robot_file
+from skelarm_sym.models.chain.dh_file import load_robot_file
 from skelarm_sym.reference import chain_kinematics
-from skelarm_sym.reference.planar import kinematics as planar_kinematics
+from skelarm_sym.models.planar.reference import kinematics as planar_kinematics
 
 ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"
 
@@ -425,7 +425,7 @@ def test_reference_imports_numpy_only():
     """The judge shares no code with what it judges: its imports are NumPy and the standard library."""
     import ast
 
-    import skelarm_sym.reference.chain as module
+    import skelarm_sym.models.chain.reference as module
 
     tree = ast.parse(Path(module.__file__).read_text())
     imported = set()

@@ -145,7 +145,7 @@ def test_no_ik_row_for_a_diffdrive(capsys):
 
 
 def test_chain_pose_ik_row_when_the_library_has_it():
-    from skelarm_sym.models.loader import load_robot
+    from skelarm_sym.models.chain.loader import load_robot
 
     generated = generate(load_robot(str(ROOT / "examples" / "robots" / "ur5.toml")), out=None)
     impls = load_implementations(generated)

@@ -8,7 +8,7 @@ from skelarm_sym import InputError, reference
 from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.check import compare
 from skelarm_sym.cli import main
-from skelarm_sym.derive.diffdrive import constraint_equations, wheel_to_body
+from skelarm_sym.models.diffdrive.derive import constraint_equations, wheel_to_body
 from skelarm_sym.generate import generate
 from skelarm_sym.models.diffdrive import DiffDrive
 

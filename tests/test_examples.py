@@ -61,7 +61,7 @@ def test_ur5_c_example_prints_the_reference_pose(tmp_path):
     import subprocess
 
     from skelarm_sym import reference
-    from skelarm_sym.models.robot_file import load_robot_file
+    from skelarm_sym.models.chain.dh_file import load_robot_file
 
     cc = shutil.which("cc") or shutil.which("gcc")
     exe = tmp_path / "ur5_demo"

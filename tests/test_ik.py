@@ -13,7 +13,7 @@ from skelarm_sym import ik, reference
 from skelarm_sym.build import compile_arm
 from skelarm_sym.errors import InputError
 from skelarm_sym.generate import generate
-from skelarm_sym.models.robot_file import load_robot_file
+from skelarm_sym.models.chain.dh_file import load_robot_file
 
 ROBOTS = Path(__file__).resolve().parents[1] / "examples" / "robots"
 STATUS = {"converged": 0, "stalled": 1, "max_iter": 2, "invalid": 3}

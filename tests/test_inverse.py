@@ -7,7 +7,8 @@ import sympy as sp
 from skelarm_sym import InputError, reference
 from skelarm_sym.derive import linalg
 from skelarm_sym.build import compile_arm, load_python
-from skelarm_sym.derive import StepRecorder, derive, expand_steps
+from skelarm_sym import derive
+from skelarm_sym.derive import StepRecorder, expand_steps
 from skelarm_sym.generate import generate
 from skelarm_sym.program import build_programs
 

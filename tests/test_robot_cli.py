@@ -9,7 +9,7 @@ import pytest
 from skelarm_sym.build import compile_shared
 from skelarm_sym.cli import main
 from skelarm_sym.generate import generate
-from skelarm_sym.models.loader import load_robot
+from skelarm_sym.models.chain.loader import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = sorted((ROOT / "examples" / "robots").glob("*.toml"))

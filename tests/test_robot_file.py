@@ -1,4 +1,4 @@
-"""TOML robot files (skelarm_sym.models.robot_file): bad input, named parameters, exact angles,
+"""TOML robot files (skelarm_sym.models.chain.dh_file): bad input, named parameters, exact angles,
 and the example robots."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 import sympy as sp
 
 from skelarm_sym.errors import InputError
-from skelarm_sym.models.robot_file import load_robot_file
+from skelarm_sym.models.chain.dh_file import load_robot_file
 from skelarm_sym.reference import chain_kinematics
 
 ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"

@@ -5,9 +5,9 @@ import pytest
 import sympy as sp
 
 from skelarm_sym import reference
-from skelarm_sym.derive import singular
+from skelarm_sym.models.planar import singular
 from skelarm_sym.cli import main
-from skelarm_sym.derive import derive
+from skelarm_sym import derive
 
 
 @pytest.mark.parametrize("n", [2, 3, 4])

@@ -20,9 +20,9 @@ import sympy as sp
 
 import skelarm_sym
 from skelarm_sym.errors import InputError
-from skelarm_sym.models.loader import load_robot
-from skelarm_sym.models.urdf import load_urdf
-from skelarm_sym.reference.chain import chain_kinematics
+from skelarm_sym.models.chain.loader import load_robot
+from skelarm_sym.models.chain.urdf import load_urdf
+from skelarm_sym.models.chain.reference import chain_kinematics
 
 
 # -- an independent forward kinematics from the raw XML -----------------------------------------------

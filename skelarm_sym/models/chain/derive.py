@@ -38,8 +38,8 @@ from typing import Sequence
 
 import sympy as sp
 
-from ..models.chain import Chain, Joint, Transform
-from .core import Derivation, FunctionSpec, StepRecorder, Table
+from .model import Chain, Joint, Transform
+from ...derive.core import Derivation, FunctionSpec, StepRecorder, Table
 
 Vector = list  # three SymPy expressions
 
@@ -214,7 +214,7 @@ class _Steps(StepRecorder):
 
 def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     """Derive ``T, J, J_tool, dJ, twist, acc`` of ``chain`` (see the module docstring), and with ``inverse``
-    the inverse functions of :mod:`skelarm_sym.derive.chain_inverse`. Linear in N (the Hessian aside)."""
+    the inverse functions of :mod:`skelarm_sym.models.chain.inverse`. Linear in N (the Hessian aside)."""
     n = chain.n
     q = sp.symbols(f"q1:{n + 1}", real=True)
     dq = sp.symbols(f"dq1:{n + 1}", real=True)
@@ -371,7 +371,7 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     )
     if not inverse:
         return derivation
-    from .chain_inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
+    from .inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
 
     return extend(derivation, step, joints, axes, linear, angular, tool_rotation)
 

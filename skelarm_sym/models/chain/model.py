@@ -28,7 +28,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ..errors import InputError
+from ...errors import InputError
 
 MAX_JOINTS = 200
 """Largest number of moving joints accepted."""
@@ -318,7 +318,7 @@ class Chain:
         is a normal finite number of ``precision``, and its reach (the sum of the constant translations'
         lengths) has a normal reciprocal and fourth power (the inverse functions scale by it and form
         products of four lengths)."""
-        from .planar import check_number
+        from ..numbers import check_number
 
         reach = 0.0
         named = [("base", self.base), ("tool", self.tool)]

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .core import Derivation, FunctionSpec, StepRecorder, exact_number
-from ..models.diffdrive import DiffDrive
+from ...derive.core import Derivation, FunctionSpec, StepRecorder, exact_number
+from .model import DiffDrive
 
 DIFFDRIVE_FUNCTIONS = (
     FunctionSpec("body_rates", ("wheels", "track"), ("rates",), "body rates (v, omega) from wheel speeds (v_L, v_R)"),

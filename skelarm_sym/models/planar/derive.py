@@ -25,9 +25,9 @@ from typing import Sequence
 
 import sympy as sp
 
-from ..models.planar import PlanarArm
-from . import linalg
-from .core import RANK_TOL, Derivation, FunctionSpec, StepRecorder, exact_number
+from .model import PlanarArm
+from ...derive import linalg
+from ...derive.core import RANK_TOL, Derivation, FunctionSpec, StepRecorder, exact_number
 
 
 @dataclass(frozen=True, eq=False)

@@ -33,10 +33,10 @@ from pathlib import Path
 
 import sympy as sp
 
-from ..errors import InputError
-from ..names import reserved_name
-from .chain import Chain, Joint, Transform, exact_angle, exact_number, unit_axis
-from .robot_file import read_robot_bytes
+from ...errors import InputError
+from ...names import reserved_name
+from .model import Chain, Joint, Transform, exact_angle, exact_number, unit_axis
+from .dh_file import read_robot_bytes
 
 MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
 REFUSED = ("floating", "planar")

@@ -1,7 +1,7 @@
 """Inverse differential kinematics of a 3-D chain as named steps: manipulability and its gradient,
 the kinematic Hessian, damped inverse velocity, the roll-pitch-yaw Jacobian.
 
-Hooked into :func:`skelarm_sym.derive.chain.derive_chain` by :func:`extend`, which adds steps,
+Hooked into :func:`skelarm_sym.models.chain.derive.derive_chain` by :func:`extend`, which adds steps,
 outputs and function specs to the chain's derivation. All functions are straight-line (fixed size,
 no loops, no allocation); the small factorisations are those of :mod:`skelarm_sym.derive.solve6`.
 
@@ -45,8 +45,8 @@ from typing import Sequence
 
 import sympy as sp
 
-from .core import RANK_TOL, FunctionSpec
-from .solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded
+from ...derive.core import RANK_TOL, FunctionSpec
+from ...derive.solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded
 
 INVERSE_FUNCTIONS = (
     FunctionSpec("ik_terms", ("q", "params"), ("T", "J"), "tool pose T and Jacobian J at once (the terms of an IK step)"),

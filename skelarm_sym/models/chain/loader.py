@@ -5,9 +5,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..errors import InputError
-from .chain import Chain
-from .robot_file import load_robot_file
+from ...errors import InputError
+from .model import Chain
+from .dh_file import load_robot_file
 from .urdf import load_urdf
 
 SUFFIXES = (".urdf", ".toml")

@@ -1,6 +1,6 @@
 """NumPy judges of the chain's inverse functions: SVD, pinv, the recursion's dJ/dt, finite differences.
 
-NumPy only (and :mod:`skelarm_sym.reference.chain`); nothing from :mod:`skelarm_sym.derive` or the
+NumPy only (and :mod:`skelarm_sym.models.chain.reference`); nothing from :mod:`skelarm_sym.derive` or the
 program. Batched over leading axes.
 
 * ``manipulability(J)``: product of the singular values (SVD).
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .chain import chain_kinematics
+from .reference import chain_kinematics
 
 __all__ = [
     "manipulability", "jacobian_hessian", "manipulability_gradient", "damped_least_squares", "jacobian_rpy",

@@ -38,9 +38,9 @@ from pathlib import Path
 
 import sympy as sp
 
-from ..errors import InputError
-from ..names import reserved_name
-from .chain import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
+from ...errors import InputError
+from ...names import reserved_name
+from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
 JOINT_KEYS = {"type", "a", "alpha", "d", "theta", "name", "lower", "upper", "velocity"}

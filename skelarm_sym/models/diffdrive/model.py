@@ -13,8 +13,8 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from ..errors import InputError
-from .planar import check_number
+from ...errors import InputError
+from ..numbers import check_number
 
 
 def validate_track(track: object) -> float | None:
