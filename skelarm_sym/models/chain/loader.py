@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
@@ -21,7 +22,9 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".urdf":
-        return load_urdf(path, base=base, tip=tip)
+        chain = load_urdf(path, base=base, tip=tip)
+        options = tuple((flag, value) for flag, value in (("--base", base), ("--tip", tip)) if value is not None)
+        return dataclasses.replace(chain, load_options=options) if options else chain
     if suffix == ".toml":
         given = [k for k, v in (("base", base), ("tip", tip)) if v is not None]
         if given:

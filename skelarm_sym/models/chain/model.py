@@ -21,6 +21,7 @@ and named parameters (symbols) where the source named them.
 from __future__ import annotations
 
 import math
+import os
 import numbers
 from dataclasses import dataclass, field
 from typing import Iterable, Mapping, Sequence
@@ -263,6 +264,8 @@ class Chain:
     parameters: tuple[sp.Symbol, ...] = ()
     source: str | None = None
     description: str = ""
+    load_options: tuple[tuple[str, str], ...] = ()
+    """The loader's options besides the file (``(("--base", "world"), ("--tip", "tool0"))`` for a URDF chain)."""
 
     def __post_init__(self) -> None:
         joints = tuple(self.joints)
@@ -301,15 +304,27 @@ class Chain:
         """File name and C prefix when none is given: the robot's name."""
         return self.name
 
-    def command_args(self) -> list[str]:
-        """The ``skelarm-sym generate`` options that describe this model."""
-        return [f"--robot {self.source}"] if self.source else []
+    def command_args(self, folder: str | None = None) -> list[str]:
+        """The ``skelarm-sym generate`` options (words) that describe this model: the robot file (relative
+        to ``folder`` when given, where the emitted files go, so the record holds no machine path) and the
+        loader's options."""
+        if not self.source:
+            return []
+        import os
+
+        path = self.source
+        if folder is not None:
+            try:
+                path = os.path.relpath(os.path.abspath(self.source), os.path.abspath(folder))
+            except ValueError:  # another drive (Windows)
+                path = os.path.abspath(self.source)
+        return ["--robot", path] + [word for option in self.load_options for word in option]
 
     def describe(self) -> str:
         """One line for file headers."""
         kinds = [j.kind for j in self.joints]
         counts = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS if k in kinds)
-        origin = f" from {self.source}" if self.source else ""
+        origin = f" from {os.path.basename(self.source)}" if self.source else ""
         text = f"serial chain {self.name!r}{origin}: {self.n} coordinate(s), {len(self.joints)} moving joint(s) ({counts})"
         return text + (f"; {self.description}" if self.description else "")
 

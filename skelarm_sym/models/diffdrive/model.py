@@ -43,9 +43,9 @@ class DiffDrive:
         """File name and C prefix when none is given."""
         return "diffdrive"
 
-    def command_args(self) -> list[str]:
-        """The ``skelarm-sym generate`` options that describe this model."""
-        return ["--model diffdrive"] + ([] if self.track is None else [f"--track {self.track!r}"])
+    def command_args(self, folder: str | None = None) -> list[str]:
+        """The ``skelarm-sym generate`` options (words) that describe this model."""
+        return ["--model", "diffdrive"] + ([] if self.track is None else ["--track", repr(self.track)])
 
     def check_representable(self, precision: str) -> None:
         """Raise :class:`InputError` unless a fixed track suits ``precision``: a normal number whose

@@ -89,11 +89,11 @@ class PlanarArm:
         """File name and C prefix when none is given."""
         return f"arm{self.n}"
 
-    def command_args(self) -> list[str]:
-        """The ``skelarm-sym generate`` options that describe this model."""
-        args = [f"--links {self.n}"]
+    def command_args(self, folder: str | None = None) -> list[str]:
+        """The ``skelarm-sym generate`` options (words) that describe this model."""
+        args = ["--links", str(self.n)]
         if self.lengths is not None:
-            args.append("--lengths " + ",".join(repr(x) for x in self.lengths))
+            args += ["--lengths", ",".join(repr(x) for x in self.lengths)]
         return args
 
     def check_representable(self, precision: str) -> None:
