@@ -6,8 +6,6 @@ Run from the repository root: ``PYTHONPATH=. python scripts/regenerate.py``. The
 
 from pathlib import Path
 
-import dataclasses
-
 from skelarm_sym.generate import generate
 from skelarm_sym.models.diffdrive import DiffDrive
 from skelarm_sym.models.chain.dh_file import load_robot_file
@@ -25,9 +23,7 @@ def regenerate(out: Path = OUT) -> None:
     generate(3, lengths=(1.0, 0.8, 0.5), precision="float", prefix="arm3f", out=out, force=True)
     generate(DiffDrive(), out=out, force=True)
     for name in ROBOTS:
-        relative = f"examples/robots/{name}.toml"
-        chain = dataclasses.replace(load_robot_file(ROOT / relative), source=relative)
-        generate(chain, out=out, force=True)
+        generate(load_robot_file(ROOT / f"examples/robots/{name}.toml"), out=out, force=True, recorded_folder=OUT)
 
 
 if __name__ == "__main__":

@@ -34,7 +34,7 @@ from typing import Sequence
 
 
 from .errors import InputError
-from .wrapper import CompiledArm, IKResult, IK_STATUS_NAMES  # noqa: F401 - re-exported
+from .wrapper import CompiledArm  # noqa: F401 - re-exported
 
 DEFAULT_FLAGS = ("-O2",)
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
@@ -231,9 +231,4 @@ def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str |
     if not sources:
         raise InputError("nothing to compile: generate with lang 'c'")
     library = compile_shared(sources, flags=flags, compiler=compiler)
-    prefix = next(k for k in sources if k.endswith(".c"))[:-2]
-    precision = "float" if "Precision: float." in sources[prefix + ".c"] else "double"
-    derivation = generated.derivation
-    lengths = getattr(derivation.model, "lengths", None)
-    return CompiledArm(library, prefix, generated.programs, precision, derivation.parameters, derivation.domains,
-                       reach=float(sum(lengths)) if lengths else 1.0)
+    return CompiledArm(library, generated.module)

@@ -1,130 +1,55 @@
 """Command line: ``skelarm-sym generate | show | check``. Parse, call, print; one-line errors.
 
-Bad input prints ``skelarm-sym: error: <message>`` on standard error and exits
-with status 2; a failed check exits with status 1.
+Bad input prints ``skelarm-sym: error: <message>`` on standard error and exits with status 2; a failed
+check exits with status 1. Nothing in the library imports this module.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 from typing import Sequence
 
 from . import __version__
 from .errors import InputError
-from .models.planar import validate_links
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, status 2, no usage dump
-        raise InputError(message)
-
-
-def _links(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    try:
-        return validate_links(value)
-    except InputError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _lengths(text: str):
-    from .generate import parse_lengths
-
-    try:
-        return parse_lengths(text)
-    except InputError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+from .options import Parser, add_generate_options, add_model_options, model_from_args, model_given
 
 
 def _angles(text: str) -> tuple[float, ...]:
-    from .generate import parse_numbers
-
-    try:
-        return parse_numbers(text, "joint angles")
-    except InputError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _track(text: str) -> float:
-    from .models.diffdrive import validate_track
-
-    try:
-        return validate_track(float(text))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}") from None
-
-
-MODELS = ("planar", "diffdrive")
-
-
-def _add_model_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", default="planar", choices=MODELS, help="planar serial arm (default) or diffdrive")
-    parser.add_argument("--links", "-n", type=_links, help="number of links N (1..1000); planar arms only, required there")
-    parser.add_argument("--lengths", type=_lengths, help="comma-separated link lengths baked in as constants (default: run-time argument l)")
-    parser.add_argument("--track", type=_track, help="diffdrive: distance between the wheels baked in as a constant (default: run-time argument)")
-    parser.add_argument("--robot", metavar="FILE", help="a 3-D serial chain: a TOML DH robot file or a URDF")
-    parser.add_argument("--base", metavar="LINK", help="URDF: the chain's first link (default: the root link)")
-    parser.add_argument("--tip", metavar="LINK", help="URDF: the chain's last link (default: the only leaf below --base)")
-
-
-def model_from_args(args):
-    """The model an invocation describes; InputError when its options do not fit it."""
-    from .models.diffdrive import DiffDrive
-    from .models.planar import PlanarArm
-
-    if getattr(args, "robot", None) is not None:
-        if args.model != "planar" or args.links is not None or args.lengths is not None or args.track is not None:
-            raise InputError("--robot describes the whole robot: drop --model, --links, --lengths and --track")
-        from .models.chain.loader import load_robot
-
-        return load_robot(args.robot, base=args.base, tip=args.tip)
-    if getattr(args, "base", None) is not None or getattr(args, "tip", None) is not None:
-        raise InputError("--base and --tip choose a chain inside a URDF given with --robot")
-    if args.model == "diffdrive":
-        if args.links is not None or args.lengths is not None:
-            raise InputError("--links and --lengths describe planar arms; a diffdrive takes --track")
-        return DiffDrive(args.track)
-    if args.track is not None:
-        raise InputError("--track is for --model diffdrive")
-    if args.links is None:
-        raise InputError("the following arguments are required: --links/-n")
-    return PlanarArm(args.links, args.lengths)
+    values = []
+    for item in text.split(","):
+        try:
+            values.append(float(item))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"joint angles must be comma-separated numbers, got {item.strip()!r}") from None
+    return tuple(values)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
-    parser = _Parser(prog="skelarm-sym", description="Closed-form differential kinematics of serial arms as checked C and NumPy code.")
+    parser = Parser(prog="skelarm-sym", description="Closed-form kinematics of robot arms as checked C and NumPy code.")
     parser.add_argument("--version", action="version", version=f"skelarm-sym {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
-    gen = sub.add_parser("generate", help="emit C and/or Python for an arm")
-    _add_model_options(gen)
-    gen.add_argument("--lang", default="c,python", help="c, python or c,python (default)")
-    gen.add_argument("--prefix", help="file name and C function prefix (default arm{N}, or diffdrive)")
-    gen.add_argument("--precision", default="double", help="double (default) or float")
-    gen.add_argument("--out", default="generated", help="output folder (default ./generated)")
-    gen.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
-    gen.add_argument("--functions", help="comma-separated functions to emit (default all; ik_solve brings position and ik_step)")
-    gen.add_argument("--cmake", action="store_true", help="also write CMakeLists.txt: a static library target named after the prefix")
-    gen.add_argument("--force", action="store_true", help="replace files generated with other options")
+    gen = sub.add_parser("generate", help="emit C and/or Python for a model")
+    add_model_options(gen)
+    add_generate_options(gen)
 
-    show = sub.add_parser("show", help="print closed forms")
-    _add_model_options(show)
+    show = sub.add_parser("show", help="print closed forms (or, for a URDF, its links)")
+    add_model_options(show)
     show.add_argument("--what", help="planar: p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J); "
-                      "diffdrive: matrix, inverse or all (default all); robots: T, J, J_tool, dJ, twist, acc or all (default J)")
+                      "diffdrive: matrix, inverse or all (default all); robots: T, J, J_tool, dJ, twist, acc or all "
+                      "(default J), or links: the link tree of a URDF, to choose --base and --tip")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
     show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
     show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
 
-    chk = sub.add_parser("check", help="generate, compile and compare with the recursive reference")
-    _add_model_options(chk)
+    chk = sub.add_parser("check", help="generate, compile and compare with the independent reference")
+    add_model_options(chk)
     chk.add_argument("--precision", help="double (default) or float")
-    chk.add_argument("--lang", help="c, python or c,python (default)")
+    chk.add_argument("--lang", help="comma-separated languages (default c,python)")
     chk.add_argument("--from", dest="source", metavar="DIR",
                      help="check the files generated earlier in DIR (their header records the model and options)")
     chk.add_argument("--prefix", help="with --from: the files' prefix (default: the only one in DIR)")
@@ -137,11 +62,14 @@ def _generate(args) -> int:
     from .build import compile_arm
     from .generate import generate
 
-    result = generate(model_from_args(args), langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
+    model = model_from_args(args)
+    result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
                       functions=args.functions, cmake=args.cmake, force=args.force)
+    for line in model.summary():
+        print(line)
     for path in result.paths:
         print(f"wrote {path}")
-    kin = next((p for p in result.programs if p.name == "kinematics"), None)
+    kin = next((f for f in result.programs if f.name == "kinematics"), None)
     if kin is not None:
         o = kin.ops
         print(f"kinematics: {o.sin} sin, {o.cos} cos, {o.arithmetic} add/sub/mul/neg")
@@ -152,53 +80,23 @@ def _generate(args) -> int:
 
 
 def _show(args) -> int:
-    from .display import FORMATS, WHAT, show, show_diffdrive
-    from .models.diffdrive import DiffDrive
-    from .models.planar import PlanarArm
+    from .models.registry import kind_of, kinds
+    from .show import FORMATS
 
-    model = model_from_args(args)
     if args.format not in FORMATS:
         raise InputError(f"unknown --format {args.format!r}; choose from {', '.join(FORMATS)}")
-    if isinstance(model, DiffDrive):
-        if args.plot:
-            raise InputError("--plot draws planar arms")
-        sys.stdout.write(show_diffdrive(model, args.what or "all", args.format))
-        return 0
-    if not isinstance(model, PlanarArm):  # a 3-D chain from --robot
-        if args.plot:
-            raise InputError("--plot draws planar arms")
-        from .models.chain.derive import derive_chain
-        from .display_chain import show_chain
-
-        sys.stdout.write(show_chain(derive_chain(model), args.what or "J", args.format, True if args.expand else None))
-        return 0
-    what = args.what or "J"
-    if what not in WHAT + ("all",):
-        raise InputError(f"unknown --what {what!r}; choose from {', '.join(WHAT + ('all',))}")
-    if args.plot:
-        import math
-
-        from .plot import plot_arm
-
-        lengths = model.lengths or (1.0,) * model.n
-        pose = args.pose if args.pose is not None else (math.pi / 6,) * model.n
-        if len(pose) != model.n:
-            raise InputError(f"--pose has {len(pose)} angles, expected {model.n}")
-        summary = plot_arm(pose, lengths, args.plot)
-        sigma = ", ".join(f"{s:.4g}" for s in summary.singular_values)
-        print(f"wrote {summary.path}: w = {summary.manipulability:.6g}, singular values of J: {sigma}")
-        return 0
-    from . import derive
-    from .display import check_show_size
-
-    check_show_size(model.n)  # before deriving: closed forms of long chains take minutes
-    sys.stdout.write(show(derive(model), what, args.format))
+    for kind in kinds():
+        text = kind.preview(args) if kind.preview is not None else None
+        if text is not None:
+            sys.stdout.write(text)
+            return 0
+    model = model_from_args(args)
+    sys.stdout.write(kind_of(model).show(model, args))
     return 0
 
 
 def _check(args) -> int:
-    from .check import TABLE_NOTE, compare, load_generated, load_implementations, table
-    from .check_ik import check_ik
+    from .check import TABLE_NOTE, check_solvers, compare, load_generated, load_implementations, table
     from .generate import generate, validate_langs, validate_precision
 
     if args.cases < 1:
@@ -206,8 +104,8 @@ def _check(args) -> int:
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.source is not None:
-        given = [f"--{k}" for k in ("links", "lengths", "track", "robot", "base", "tip", "precision", "lang")
-                 if getattr(args, k) is not None] + (["--model"] if args.model != "planar" else [])
+        given = model_given(args) + [flag for flag, dest in (("--precision", "precision"), ("--lang", "lang"))
+                                     if getattr(args, dest, None) is not None]
         if given:
             raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)}")
         loaded = load_generated(args.source, args.prefix)
@@ -226,17 +124,15 @@ def _check(args) -> int:
     results = compare(generated, args.cases, args.seed, precision, implementations)
     for line in table(results):
         print(line)
-    import textwrap
-
     print("\n".join(textwrap.wrap(TABLE_NOTE, 100)))
-    ik = check_ik(generated, implementations, args.cases, args.seed, precision)
-    for row in ik:
+    solver_rows = check_solvers(generated, implementations, args.cases, args.seed, precision)
+    for row in solver_rows:
         print(row.row())
     failed = [r for r in results if not r.ok]
-    ik_failed = [r for r in ik if not r.ok]
-    ik_line = f"; ik: {len(ik) - len(ik_failed)} passed, {len(ik_failed)} failed" if ik else ""
-    print(f"{len(results) - len(failed)} passed, {len(failed)} failed{ik_line}")
-    return 1 if failed or ik_failed else 0
+    solver_failed = [r for r in solver_rows if not r.ok]
+    solver_line = f"; ik: {len(solver_rows) - len(solver_failed)} passed, {len(solver_failed)} failed" if solver_rows else ""
+    print(f"{len(results) - len(failed)} passed, {len(failed)} failed{solver_line}")
+    return 1 if failed or solver_failed else 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,36 +1,40 @@
 """Model + options -> emitted files: the one entry point for code emission.
 
-``generate(n, lengths=None, langs=("c", "python"), prefix=None, precision="double", out="generated")``
-derives the model, builds one optimised program per function, renders each
-backend's templates and writes ``{out}/{prefix}.h``, ``{prefix}.c`` and
-``{prefix}.py`` atomically (each file goes to a temporary name first and is
-renamed into place only after every file rendered). With ``out=None`` it writes
-nothing and returns the sources.
+``generate(model, langs=("c", "python"), prefix=None, precision="double", out="generated", ...)`` derives
+the model (through its kind in :mod:`skelarm_sym.models.registry`), builds one IR module
+(:func:`skelarm_sym.assemble.build_module`), renders every chosen backend, stamps the set and writes
+``{out}/{prefix}.h``, ``{prefix}.c``, ``{prefix}.py`` (and ``CMakeLists.txt`` with ``cmake``) atomically:
+each file goes to a temporary name first and is renamed into place only after every file rendered. With
+``out=None`` it writes nothing and returns the sources.
 """
 
 from __future__ import annotations
 
+import hashlib
 import keyword
 import os
 import re
+import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
-from . import __version__
+from .assemble import build_module, select_functions
 from .backends import BACKENDS
+from .backends.templating import render_template
+from .backends.text import unescape
 from .derive import Derivation
-from .derive.core import ARGUMENT_RULE
 from .errors import InputError
 from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
-from .models.chain import Chain
-from .models.diffdrive import DiffDrive
+from .ir.nodes import Function, Module
 from .models.planar import PlanarArm
+from .models.registry import kind_of
 from .names import C_RESERVED  # noqa: F401 - re-exported
-from .program import Program, build_programs
 
 PRECISIONS = ("double", "float")
+LANGUAGE_ALIASES = {"numpy": "python"}
+"""Other names of a language (``--lang numpy`` is ``python``)."""
 
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,47}")
 
@@ -58,7 +62,7 @@ def validate_module_name(prefix: str) -> str:
 def validate_langs(langs: str | Iterable[str]) -> tuple[str, ...]:
     """Languages as a tuple in canonical order; raise InputError on an unknown one."""
     items = [x.strip() for x in langs.split(",")] if isinstance(langs, str) else [str(x).strip() for x in langs]
-    items = [x for x in items if x]
+    items = [LANGUAGE_ALIASES.get(x, x) for x in items if x]
     if not items:
         raise InputError(f"choose at least one language from {', '.join(BACKENDS)}")
     unknown = [x for x in items if x not in BACKENDS]
@@ -74,76 +78,28 @@ def validate_precision(precision: object) -> str:
     return precision
 
 
-@dataclass(frozen=True)
-class Options:
-    """Validated generation options; ``header_lines`` open every emitted file."""
-
-    prefix: str
-    precision: str
-    langs: tuple[str, ...]
-    header_lines: tuple[str, ...]
-
-
-def regenerate_command(
-    model, options_prefix: str, precision: str, langs: Sequence[str], functions: Sequence[str] | None = None
-) -> str:
-    """The command line that emits the same files again (no output folder: it varies; no --cmake: it
-    adds a file without changing the others)."""
-    parts = ["skelarm-sym generate", *model.command_args()]
-    parts += [f"--lang {','.join(langs)}", f"--prefix {options_prefix}", f"--precision {precision}"]
+def regenerate_command(model, prefix: str, precision: str, langs: Sequence[str], functions: Sequence[str] | None = None,
+                       folder: str | os.PathLike | None = None) -> str:
+    """The command line that emits the same files again when run in ``folder`` (where they are written):
+    every option that shapes them, the robot file relative to that folder, ``--out .``."""
+    words = ["skelarm-sym", "generate", *model.command_args(None if folder is None else str(folder))]
+    words += ["--lang", ",".join(langs), "--prefix", prefix, "--precision", precision]
     if functions is not None:
-        parts.append(f"--functions {','.join(functions)}")
-    return " ".join(parts)
+        words += ["--functions", ",".join(functions)]
+    if folder is not None:
+        words += ["--out", "."]
+    return shlex.join(words)
 
 
-IK_SOLVE_NEEDS = ("position", "ik_step")
-"""``ik_solve`` is emitted whenever these two are (it calls them)."""
+_RECORDED = re.compile(r"regenerate with \(in this folder\): (.*?)\s*$", re.M)
 
 
-def select_functions(derivation: Derivation, functions: str | Iterable[str] | None) -> tuple[str, ...] | None:
-    """The derivation's function names to emit, in declaration order, for a ``--functions`` list
-    (``None``: all). ``ik_solve`` brings ``position`` and ``ik_step``. InputError names the valid ones."""
-    if functions is None:
+def recorded_command(text: str) -> str | None:
+    """The command recorded in the header of an emitted file (unescaped), or ``None``."""
+    match = _RECORDED.search(text[:6000])
+    if match is None:
         return None
-    items = [x.strip() for x in functions.split(",")] if isinstance(functions, str) else [str(x).strip() for x in functions]
-    items = [x for x in items if x]
-    names = [f.name for f in derivation.functions]
-    valid = names + (["ik_solve"] if all(n in names for n in IK_SOLVE_NEEDS) else [])
-    unknown = [x for x in items if x not in valid]
-    if unknown or not items:
-        what = f"unknown function {unknown[0]!r}" if unknown else "no function named"
-        raise InputError(f"{what}; choose from {', '.join(valid)}")
-    wanted = set(items) | (set(IK_SOLVE_NEEDS) if "ik_solve" in items else set())
-    return tuple(n for n in names if n in wanted)
-
-
-def cmake_lists(prefix: str, command: str) -> str:
-    """``CMakeLists.txt`` for the emitted C: a library target ``prefix`` (static unless
-    ``{PREFIX}_SHARED`` or ``BUILD_SHARED_LIBS``), C99, linking the math library, exporting its folder."""
-    upper = prefix.upper()
-    return f"""# {prefix}: CMake target generated by skelarm-sym {__version__}. Do not edit;
-# regenerate with: {command} --cmake
-#
-# add_subdirectory({prefix})  then  target_link_libraries(app PRIVATE {prefix})
-cmake_minimum_required(VERSION 3.10)
-project({prefix} LANGUAGES C)
-
-option({upper}_SHARED "build {prefix} as a shared library (default: static)" ${{BUILD_SHARED_LIBS}})
-if({upper}_SHARED)
-  add_library({prefix} SHARED {prefix}.c {prefix}.h)
-else()
-  add_library({prefix} STATIC {prefix}.c {prefix}.h)
-endif()
-set_target_properties({prefix} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON POSITION_INDEPENDENT_CODE ON)
-target_include_directories({prefix} PUBLIC ${{CMAKE_CURRENT_SOURCE_DIR}})
-find_library({upper}_MATH_LIBRARY m)
-if({upper}_MATH_LIBRARY)
-  target_link_libraries({prefix} PUBLIC ${{{upper}_MATH_LIBRARY}})  # sin, cos, sqrt (glibc's vector math too)
-endif()
-"""
-
-
-_RECORDED = re.compile(r"regenerate with: (.*?)(?: --cmake)?\s*$", re.M)
+    return unescape(match.group(1).strip())
 
 
 def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
@@ -153,15 +109,15 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
         try:
             if not path.is_file():
                 continue
-            old = path.read_text(encoding="utf-8", errors="replace")[:4000]
+            old = path.read_text(encoding="utf-8", errors="replace")[:6000]
         except OSError:
             continue
-        before, after = _RECORDED.search(old), _RECORDED.search(text)
+        before, after = recorded_command(old), recorded_command(text)
         if before is None:
             raise InputError(f"{path} exists and was not generated by skelarm-sym; pass --force (force=True) to replace it")
-        if after is not None and before.group(1).strip() != after.group(1).strip():
+        if after is not None and before != after:
             raise InputError(
-                f"{path} was generated with other options ({before.group(1).strip()}); "
+                f"{path} was generated with other options ({before}); "
                 "choose another --prefix or --out, or pass --force (force=True) to replace it"
             )
 
@@ -179,16 +135,67 @@ def derive_model(model, functions: str | Iterable[str] | None = None) -> Derivat
 
 @dataclass(frozen=True)
 class Generated:
-    """Result of :func:`generate`: file name -> text, the programs, and where files went (if written)."""
+    """Result of :func:`generate`: file name -> text, the IR module, the derivation, and where files went."""
 
     sources: dict[str, str]
-    programs: tuple[Program, ...]
+    module: Module
     derivation: Derivation
     paths: tuple[Path, ...] = ()
 
+    @property
+    def model(self):
+        return self.derivation.model
+
+    @property
+    def programs(self) -> tuple[Function, ...]:
+        """The straight-line functions (each also has a batch variant)."""
+        return tuple(f for f in self.module.functions if f.kind == "straight")
+
+    @property
+    def functions(self) -> tuple[Function, ...]:
+        """Every public function: straight-line ones and solvers."""
+        return self.module.public
+
+    @property
+    def stamp(self) -> str:
+        """The generation stamp every file of the set carries."""
+        return file_stamp(next(iter(self.sources.values()))) or ""
+
+
+STAMP_PLACEHOLDER = "@SKELARM_STAMP@"
+_STAMP = re.compile(r"STAMP(?: != | = | )(0x[0-9a-f]{8})")
+
+
+def file_stamp(text: str) -> str | None:
+    """The generation stamp written in an emitted file (C: ``X_STAMP 0x...UL``, Python: ``STAMP = 0x...``), or ``None``."""
+    match = _STAMP.search(text)
+    return match.group(1) if match else None
+
+
+def render_all(module: Module, langs: Sequence[str], cmake: bool) -> dict[str, str]:
+    """Every file of the set, stamped: the stamp is a hash of all their texts, so each file names the
+    set it belongs to (C refuses to compile a mismatched pair; ``check --from`` refuses a mixed set;
+    the CMake target checks the header)."""
+    texts: dict[str, str] = {}
+    for lang in langs:
+        for suffix, text in BACKENDS[lang].render(module, STAMP_PLACEHOLDER).items():
+            texts[module.prefix + suffix] = text
+    if cmake:
+        texts["CMakeLists.txt"] = render_template("cmake/CMakeLists.txt.j2", prefix=module.prefix, P=module.prefix.upper(),
+                                                  command=module.command, stamp=STAMP_PLACEHOLDER)
+    digest = hashlib.sha256()
+    for name in sorted(texts):
+        digest.update(name.encode() + b"\0" + texts[name].encode() + b"\0")
+    stamp = "0x" + digest.hexdigest()[:8]
+    out = {}
+    for name, text in texts.items():
+        suffix_c = name.endswith((".h", ".c"))
+        out[name] = text.replace(STAMP_PLACEHOLDER, stamp + ("UL" if suffix_c else ""))
+    return out
+
 
 def generate(
-    n: int | PlanarArm | DiffDrive,
+    n: int | object,
     lengths: Sequence[float] | None = None,
     langs: str | Iterable[str] = ("c", "python"),
     prefix: str | None = None,
@@ -197,68 +204,59 @@ def generate(
     functions: str | Iterable[str] | None = None,
     cmake: bool = False,
     force: bool = False,
+    recorded_folder: str | os.PathLike | None = None,
 ) -> Generated:
-    """Emit specialised code for an arm of ``n`` links.
+    """Emit specialised code for a model.
 
     Args:
-        n: number of links, or a model (:class:`PlanarArm`, :class:`DiffDrive`).
-        lengths: ``None`` (lengths are a run-time argument ``l``) or ``n`` numbers baked in as constants.
-        langs: ``"c"``, ``"python"`` or both (a comma-separated string or a sequence).
-        prefix: name of the files and prefix of C functions; default ``arm{n}`` (``diffdrive``).
+        n: a model (:class:`PlanarArm`, :class:`DiffDrive`, a chain from :func:`skelarm_sym.load_robot`) or a
+            number of planar links.
+        lengths: planar links only: ``None`` (lengths are a run-time argument ``l``) or ``n`` numbers baked in.
+        langs: languages of :data:`skelarm_sym.backends.BACKENDS` (``"c"``, ``"python"``): a comma-separated
+            string or a sequence.
+        prefix: name of the files and prefix of C functions; default the model's (``arm{n}``, ``diffdrive``,
+            the robot's name).
         precision: ``"double"`` or ``"float"``.
         out: folder to write to (created if missing), or ``None`` to only return the sources.
-        functions: names of the functions to emit (a comma-separated string or a sequence; default all);
-            ``ik_solve`` brings ``position`` and ``ik_step``, and comes whenever both are emitted.
+        functions: names of the functions to emit (a comma-separated string or a sequence; default all); a
+            solver (``ik_solve``) brings the functions it calls.
         cmake: also write ``CMakeLists.txt`` (a library target named ``prefix``; needs lang ``c``).
         force: replace files that were generated with other options (by default that is refused).
+        recorded_folder: the folder the header's ``regenerate with`` line is written for (its robot path is
+            relative to it); default ``out`` (files staged elsewhere before they move to their place).
 
-    Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input;
-    on any error no file is left behind.
+    Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input; on any error no file
+    is left behind.
     """
-    model = n if isinstance(n, (PlanarArm, DiffDrive, Chain)) else PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
+    model = n
+    if isinstance(n, (int, float)) and not isinstance(n, bool):
+        model = PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
+    elif lengths is not None:
+        raise InputError("lengths describe a planar arm given by its number of links; the model has its own")
+    kind = kind_of(model)
     prefix = validate_prefix(model.default_prefix if prefix is None else prefix)
     precision = validate_precision(precision)
-    getattr(model, "check_representable", lambda precision: None)(precision)  # parameters the precision cannot hold
+    model.check_representable(precision)  # parameters the precision cannot hold
     langs = validate_langs(langs)
     if "python" in langs:
         validate_module_name(prefix)
     target = _check_output_folder(out) if out is not None else None
-
     if cmake and "c" not in langs:
         raise InputError("--cmake builds the C: generate with lang 'c'")
 
-    derivation = derive_model(model, functions)
-    selected = select_functions(derivation, functions)
-    programs = tuple(build_programs(derivation, selected))
-    command = regenerate_command(model, prefix, precision, langs, selected)
-    header = (
-        f"{prefix}: differential kinematics generated by skelarm-sym {__version__}. Do not edit;",
-        f"regenerate with: {command}",
-        "",
-        *derivation.notes,
-        *wrap_line(ARGUMENT_RULE),
-        f"Precision: {precision}.",
-    )
-    options = Options(prefix, precision, langs, header)
-    sources: dict[str, str] = {}
-    for lang in langs:
-        for suffix, text in BACKENDS[lang].render(derivation, list(programs), options).items():
-            sources[prefix + suffix] = text
-    if cmake:
-        sources["CMakeLists.txt"] = cmake_lists(prefix, command)
+    derivation = kind.derive(model, None if functions is None else frozenset(
+        x.strip() for x in (functions.split(",") if isinstance(functions, str) else map(str, functions))))
+    derived, solvers = select_functions(kind, derivation, functions)
+    chosen = None if functions is None else derived + solvers
+    command = regenerate_command(model, prefix, precision, langs, chosen, recorded_folder if recorded_folder is not None else target)
+    module = build_module(kind, derivation, derived, solvers, prefix, precision, command)
+    sources = render_all(module, langs, cmake)
     paths: tuple[Path, ...] = ()
     if target is not None:
         if not force:
             refuse_other_options(target, sources)
         paths = write_atomically(target, sources)
-    return Generated(sources, programs, derivation, paths)
-
-
-def wrap_line(text: str, width: int = 100) -> list[str]:
-    """``text`` broken at spaces into lines of at most ``width`` characters (for file headers)."""
-    import textwrap
-
-    return textwrap.wrap(text, width) or [""]
+    return Generated(sources, module, derivation, paths)
 
 
 def _lengths_tuple(lengths: object) -> object:

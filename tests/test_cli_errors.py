@@ -8,7 +8,7 @@ import time
 import pytest
 
 from skelarm_sym.cli import main
-from skelarm_sym.display import SHOW_MAX_LINKS
+from skelarm_sym.models.planar.show import SHOW_MAX_LINKS
 
 
 def one_line_error(capsys, args, status=2):

@@ -72,7 +72,7 @@ def _declared(header):
 def test_functions_emits_only_the_named_ones():
     g = generate(3, langs="c,python", out=None, functions="kinematics,jacobian")
     assert _declared(g.sources["arm3.h"]) == ["arm3_jacobian", "arm3_jacobian_batch", "arm3_kinematics", "arm3_kinematics_batch"]
-    assert 'regenerate with: skelarm-sym generate --links 3 --lang c,python --prefix arm3 --precision double --functions jacobian,kinematics' in g.sources["arm3.h"]
+    assert 'regenerate with (in this folder): skelarm-sym generate --links 3 --lang c,python --prefix arm3 --precision double --functions jacobian,kinematics' in g.sources["arm3.h"]
     assert "def jacobian(" in g.sources["arm3.py"] and "def position(" not in g.sources["arm3.py"]
     full = generate(3, langs="c", out=None)
     assert len(g.sources["arm3.c"]) < 0.5 * len(full.sources["arm3.c"])

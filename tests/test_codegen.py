@@ -13,7 +13,7 @@ from skelarm_sym import InputError, reference
 from skelarm_sym.build import STRICT_FLAGS, compile_arm, load_python
 from skelarm_sym.check import compare
 from skelarm_sym.generate import generate
-from skelarm_sym.program import build_programs
+from skelarm_sym.ir.lower import lower as build_programs
 from skelarm_sym import derive
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -88,7 +88,7 @@ def test_wrong_argument_count_is_type_error_naming_the_signature(arms, impl):
         arm.jacobian(Q, L, Q)
     with pytest.raises(TypeError, match=r"inverse_velocity\(q, v, l, lambda_\)"):
         arm.inverse_velocity(Q, [1.0, 0.0], L)
-    with pytest.raises(TypeError, match=r"ik_solve\(q0, target, l, lambda_, tol=None, max_iter=200\)"):
+    with pytest.raises(TypeError, match=r"ik_solve\(q0, target, l, lambda_=0.0, tol=None, max_iter=200\)"):
         arm.ik_solve(Q, [1.0, 0.0], L, 0.1, 1e-9, 10, 3)
     with pytest.raises(TypeError, match=r"velocity\(q, dq, l\)"):
         arm.velocity(Q, dq=Q, length=L)

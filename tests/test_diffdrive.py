@@ -92,7 +92,7 @@ def test_bad_input():
 def test_cli(tmp_path, capsys):
     assert main(["generate", "--model", "diffdrive", "--track", "0.4", "--out", str(tmp_path), "--compile"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["diffdrive.c", "diffdrive.h", "diffdrive.py"]
-    assert "regenerate with: skelarm-sym generate --model diffdrive --track 0.4" in (tmp_path / "diffdrive.c").read_text()
+    assert "regenerate with (in this folder): skelarm-sym generate --model diffdrive --track 0.4 --lang c,python --prefix diffdrive --precision double --out ." in (tmp_path / "diffdrive.c").read_text()
     capsys.readouterr()
     assert main(["show", "--model", "diffdrive", "--what", "matrix", "--format", "text"]) == 0
     assert "[-1/L, 1/L]]" in capsys.readouterr().out

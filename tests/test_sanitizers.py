@@ -72,7 +72,7 @@ def _driver(g, prefix: str, ctype: str) -> str:
             args_batch.append(a.name)
             args_single.append(a.name if a.name in shared else f"{a.name} + j * {a.size}")
         for o in program.outputs:
-            size = len(o.elements)
+            size = o.size
             lines.append(f"        {ctype} *{o.name} = ({ctype} *)malloc(sizeof({ctype}) * (m * {size} ? m * {size} : 1));")
             lines.append(f"        {ctype} *{o.name}_1 = ({ctype} *)malloc(sizeof({ctype}) * {size});")
             args_batch.append(o.name)
@@ -80,7 +80,7 @@ def _driver(g, prefix: str, ctype: str) -> str:
         lines.append("        for (j = 0; j < m; ++j) {")
         lines.append(f"            {name}({', '.join(args_single + [o.name + '_1' for o in program.outputs])});")
         for o in program.outputs:
-            size = len(o.elements)
+            size = o.size
             lines.append(f"            if (memcmp({o.name}_1, {o.name} + j * {size}, sizeof({ctype}) * {size}) != 0) ++mismatches;")
         lines.append("        }")
         for a in program.inputs:

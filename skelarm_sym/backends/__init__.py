@@ -1,12 +1,5 @@
-"""Code backends: a SymPy printer subclass and the context a Jinja template needs, per language.
+"""Code backends: one folder per language (printer, context, templates), registered in :mod:`.registry`."""
 
-Each backend module exposes ``LANGUAGE``, ``FILE_SUFFIXES`` and
-``render(derivation, programs, options) -> dict[suffix, text]``.
-"""
-
-from . import c, python
-
-BACKENDS = {c.LANGUAGE: c, python.LANGUAGE: python}
-"""Language name -> backend module, in the order files are written."""
+from .registry import BACKENDS
 
 __all__ = ["BACKENDS"]

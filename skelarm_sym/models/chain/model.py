@@ -320,6 +320,11 @@ class Chain:
                 path = os.path.abspath(self.source)
         return ["--robot", path] + [word for option in self.load_options for word in option]
 
+    def summary(self) -> list[str]:
+        """What ``generate`` prints about the model: the chain and the joints it holds, base to tip."""
+        joints = ", ".join(f"{j.name} ({j.kind}{', mimic' if self.coordinates[j.coordinate] != j.name else ''})" for j in self.joints)
+        return [self.describe(), f"joints, base to tip: {joints}"]
+
     def describe(self) -> str:
         """One line for file headers."""
         kinds = [j.kind for j in self.joints]

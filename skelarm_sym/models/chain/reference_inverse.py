@@ -116,29 +116,67 @@ def central_difference(f, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
     return np.stack(cols, axis=-1)
 
 
-def check_expectations(chain, q, kinematics, reach_length: float, rank_tol: float, rng, rounded):
-    """Expected values for the check of the inverse functions (NumPy only; used by ``check_chain``).
+def reach_length(chain) -> float:
+    """The judge's own length scale of the rank rule: the sum of the lengths of the chain's constant
+    translations after the base (1 when there are none), from the numeric chain."""
+    total = sum(float(np.linalg.norm(m[:3, 3])) for j in chain.joints for m in (j.before, j.after))
+    total += float(np.linalg.norm(np.asarray(chain.tool)[:3, 3]))
+    return total if total > 0 else 1.0
 
-    Returns ``(forward, forward_condition, solves)``: outputs computable from ``q`` alone with their
-    tolerance scaling, and a list of ``(label, extra_values, expected, condition)`` for the solves
-    (undamped and damped). ``reach_length`` is the rank rule's characteristic length.
+
+def jacobian_rpy_locked(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """The documented value of the roll-pitch-yaw Jacobian at gimbal lock (pitch = +-pi/2): the roll and
+    yaw rows zero, the pitch row ``[-sin(yaw), cos(yaw), 0]`` with yaw read from R as ``atan2(-R01, R11)``
+    (the roll = 0 convention)."""
+    R = np.asarray(T, dtype=float)[..., :3, :3]
+    yaw = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
+    zero = np.zeros_like(yaw)
+    Einv = np.stack([
+        np.stack([zero, zero, zero], axis=-1),
+        np.stack([-np.sin(yaw), np.cos(yaw), zero], axis=-1),
+        np.stack([zero, zero, zero], axis=-1),
+    ], axis=-2)
+    J = np.asarray(J, dtype=float)
+    return np.concatenate([J[..., :3, :], Einv @ J[..., 3:, :]], axis=-2)
+
+
+REGULAR, LOCKED = 1e-6, 1e-20
+"""The judge's gimbal-lock bands for cos(pitch)^2: above REGULAR a pose is regular (atan2 angles), below
+LOCKED it is locked (the documented value); between, where the emitted code's own switch lies, either
+answer is right and the check accepts the one the code gave."""
+
+
+def check_expectations(chain, q, kinematics, rcond: float, rng, rounded):
+    """Expected values for the check of the inverse functions (NumPy only; used by the chain's check).
+
+    Returns ``(forward, forward_condition, alternatives, solves)``: outputs computable from ``q`` alone
+    with their tolerance scaling, second documented answers near a switch, and a list of
+    ``(label, extra_values, expected, condition)`` for the solves (undamped and damped). ``rcond`` is the
+    judge's relative SVD cut-off (from the working precision, not the generator's rank rule); the rows
+    of the 6-row solve are scaled by the judge's own :func:`reach_length`.
     """
     J, T = kinematics.J, kinematics.T
     m, n = len(q), int(chain.n)
+    length = reach_length(chain)
     Hs = jacobian_hessian(chain, q)
     w = manipulability(J)
     row_norms = np.linalg.norm(J, axis=-1)
     hadamard = np.prod(np.maximum(row_norms, 1e-300), axis=-1) if n >= 6 else np.prod(np.linalg.norm(J, axis=-2), axis=-1)
     grad = manipulability_gradient(J, Hs)
     R = T[..., :3, :3]
-    regular = R[..., 0, 0] ** 2 + R[..., 1, 0] ** 2 > 1e-6  # far from gimbal lock: compare with atan2 angles
-    JA = np.where(regular[:, None, None], jacobian_rpy(np.where(regular[:, None, None], T, np.eye(4)), J), np.nan)
+    c2 = R[..., 0, 0] ** 2 + R[..., 1, 0] ** 2
+    locked = c2 < LOCKED
+    safe = np.where(locked[:, None, None], np.eye(4), T)
+    JA_regular = jacobian_rpy(safe, J)
+    JA_locked = jacobian_rpy_locked(T, J)
     forward = {
         "w": w[:, None],
         "w_position": manipulability(J[..., :3, :])[:, None],
         "Hs": Hs,
         "grad": grad,
+        "JA": np.where(locked[:, None, None], JA_locked, JA_regular),
     }
+    alternatives = {"JA": np.where((c2 <= REGULAR)[:, None, None], JA_locked, forward["JA"])}
     size = lambda x: np.maximum(1.0, np.abs(x).reshape(m, -1).max(axis=-1))  # noqa: E731
     hmax = np.abs(Hs).reshape(m, -1).max(axis=-1)
     condition = {
@@ -146,22 +184,20 @@ def check_expectations(chain, q, kinematics, reach_length: float, rank_tol: floa
         "w_position": np.maximum(1.0, np.prod(np.linalg.norm(J[..., :3, :], axis=-1), axis=-1) / size(w)),
         "Hs": np.maximum(1.0, 3 * hmax / size(Hs)),
         "grad": np.maximum(1.0, n * hadamard * np.maximum(hmax, 1.0) / size(grad)),
+        "JA": np.where(locked, 1.0, np.maximum(1.0, np.abs(J).reshape(m, -1).max(axis=-1) / np.maximum(c2, LOCKED) / size(forward["JA"]))),
     }
     # w is not differentiable where J loses rank: no value to compare the gradient with there
     sv = np.linalg.svd(J, compute_uv=False)
     condition["grad"] = np.where(sv[..., -1] > 1e-6 * sv[..., 0], condition["grad"], 1e300)
-    if np.all(regular):
-        forward["JA"] = JA
-        condition["JA"] = np.maximum(1.0, np.abs(J).reshape(m, -1).max(axis=-1) / (R[..., 0, 0] ** 2 + R[..., 1, 0] ** 2) / size(JA))
     twist = rounded(rng.uniform(-1, 1, (m, 6)))
-    scales = np.array([1 / reach_length] * 3 + [1.0] * 3)
+    scales = np.array([1 / length] * 3 + [1.0] * 3)
     solves = []
     for lam in (0.0, 0.1):
-        dq = damped_least_squares(J, twist, lam, rank_tol, scales)
-        dqp = damped_least_squares(J[..., :3, :], twist[..., :3], lam, rank_tol)
-        c6 = solve_condition(J, lam, rank_tol, scales) * np.maximum(1.0, reach_length)
-        c3 = solve_condition(J[..., :3, :], lam, rank_tol)
+        dq = damped_least_squares(J, twist, lam, rcond, scales)
+        dqp = damped_least_squares(J[..., :3, :], twist[..., :3], lam, rcond)
+        c6 = solve_condition(J, lam, rcond, scales) * np.maximum(1.0, length)
+        c3 = solve_condition(J[..., :3, :], lam, rcond)
         expected = {"dq": dq, "dq_position": dqp}
-        cond = {"dq": c6 * size(dq) / size(dq), "dq_position": c3}
+        cond = {"dq": c6, "dq_position": c3}
         solves.append((f"lambda={lam:g}", {"twist": twist, "v": twist[..., :3], "lambda": lam}, expected, cond))
-    return forward, condition, solves
+    return forward, condition, alternatives, solves

@@ -55,6 +55,10 @@ class DiffDrive:
         check_number(self.track, "track width", precision)
         check_number(self.track, "track width", precision, -1, "the code divides by it")
 
+    def summary(self) -> list[str]:
+        """What ``generate`` prints about the model."""
+        return [self.describe()]
+
     def describe(self) -> str:
         """One line for file headers."""
         width = "passed at run time" if self.track is None else f"fixed at {self.track!r}"

@@ -108,6 +108,10 @@ class PlanarArm:
         check_number(reach, "the sum of the link lengths", precision, 4, "the inverse functions use its fourth power")
         check_number(reach, "the sum of the link lengths", precision, -1)
 
+    def summary(self) -> list[str]:
+        """What ``generate`` prints about the model."""
+        return [self.describe()]
+
     def describe(self) -> str:
         """One line for file headers: number of links and lengths."""
         if self.lengths is None:

@@ -22,7 +22,7 @@ from itertools import product
 
 import sympy as sp
 
-from .derive import PlanarDerivation as Derivation
+from ...derive.core import Derivation
 
 
 def minor(derivation: Derivation, i: int, j: int) -> sp.Expr:

@@ -187,5 +187,6 @@ def planar_solvers(derivation, names, precision: str) -> list[Function]:
         f"A tol of {s['tol']:g} times the reach is reachable in this precision. q may be q0 itself.",
     )
     solver = Function("ik_solve", "inverse kinematics of the endpoint by damped least squares", arguments, b.statements,
-                      kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc)
+                      kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc,
+                      result="IKResult")
     return [helper, solver]

@@ -17,8 +17,8 @@ from typing import Sequence
 
 import numpy as np
 
-from . import reference
-from .errors import InputError
+from ... import reference
+from ...errors import InputError
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".png", dir=folder)
         os.close(fd)
         fig.savefig(tmp, dpi=dpi, format=(target.suffix[1:] or "png"))
-        from .files import new_file_mode
+        from ...files import new_file_mode
 
         os.chmod(tmp, new_file_mode())
         os.replace(tmp, target)

@@ -1,14 +1,15 @@
-"""Symbolic inspection: closed forms as pretty text, LaTeX or plain SymPy text."""
+"""``show`` for planar arms: closed forms as pretty text, LaTeX or plain SymPy text."""
 
 from __future__ import annotations
 
 import sympy as sp
 
-from .models.planar import singular
-from .derive import Derivation
+from ...derive import Derivation
+from ...errors import InputError
+from ...show import FORMATS, render  # noqa: F401 - FORMATS re-exported
+from . import singular
 
 WHAT = ("p", "phi", "J", "J3", "H", "v", "a", "det", "manipulability", "singular")
-FORMATS = ("pretty", "latex", "text")
 SHOW_MAX_LINKS = 12
 """``show`` prints closed forms of chains up to this many links (n = 12: all forms in about 8 s).
 They grow as n^2 terms and their printing faster still (n = 32: 11 s for J alone); longer chains
@@ -33,22 +34,11 @@ def closed_form(derivation: Derivation, what: str) -> sp.Expr | sp.Matrix | str 
 
 def check_show_size(n: int) -> None:
     """InputError when closed forms of an ``n``-link chain are too large to show (see SHOW_MAX_LINKS)."""
-    from .errors import InputError
-
     if n > SHOW_MAX_LINKS:
         raise InputError(
             f"show prints closed forms up to {SHOW_MAX_LINKS} links (they grow as n^2 terms), got {n}; "
             f"use 'skelarm-sym generate --links {n}' for code in step form, or show --plot for a picture"
         )
-
-
-def render(expr, fmt: str) -> str:
-    """``expr`` in format ``fmt``."""
-    if fmt == "latex":
-        return sp.latex(expr)
-    if fmt == "text":
-        return sp.sstr(expr)
-    return sp.pretty(expr, use_unicode=True, wrap_line=False)
 
 
 def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
@@ -68,29 +58,4 @@ def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
             continue
         label = "w" if name == "manipulability" else name
         blocks.append(f"{label} =\n{render(value, fmt)}")
-    return "\n\n".join(blocks) + "\n"
-
-
-DIFFDRIVE_WHAT = ("matrix", "inverse", "all")
-
-
-def show_diffdrive(model, what: str = "all", fmt: str = "pretty") -> str:
-    """The differential drive's wheel-to-body matrix and its inverse, with seed 002's (11) beside them."""
-    from .models.diffdrive.derive import wheel_to_body
-    from .errors import InputError
-
-    if what not in DIFFDRIVE_WHAT:
-        raise InputError(f"unknown --what {what!r} for a diffdrive; choose from {', '.join(DIFFDRIVE_WHAT)}")
-    track = sp.Symbol("L", positive=True) if model.track is None else sp.nsimplify(model.track)
-    M, M_inv = wheel_to_body(track)
-    blocks = []
-    if what in ("matrix", "all"):
-        blocks.append(f"[v, omega] = M [v_L, v_R], M =\n{render(M, fmt)}")
-    if what in ("inverse", "all"):
-        blocks.append(f"[v_L, v_R] = M^-1 [v, omega], M^-1 =\n{render(M_inv, fmt)}")
-    if what == "all":
-        blocks.append(
-            "Derived from the rolling constraints (9)-(10) of seed 002 with L the distance between the wheels.\n"
-            "The seed's printed (11) has -2/L, 2/L (inverse: L/4); that would need L to be half that distance."
-        )
     return "\n\n".join(blocks) + "\n"

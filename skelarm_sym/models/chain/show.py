@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .models.chain.derive import ChainDerivation
-from .display import FORMATS
-from .display import render as _render
-from .errors import InputError
+from ...errors import InputError
+from ...show import FORMATS
+from ...show import render as _render
+from .derive import ChainDerivation
 
 WHAT = ("T", "J", "J_tool", "dJ", "twist", "acc")
 EXPAND_UP_TO = 2

@@ -1,0 +1,5 @@
+"""The NumPy backend (see :mod:`.backend`)."""
+
+from .backend import FILE_SUFFIXES, LANGUAGE, render
+
+__all__ = ["FILE_SUFFIXES", "LANGUAGE", "render"]

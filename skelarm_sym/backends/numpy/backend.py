@@ -1,0 +1,137 @@
+"""NumPy backend: the context of ``templates/numpy/module.py.j2`` from an IR module.
+
+The emitted module depends on NumPy only. Straight-line functions broadcast over leading batch
+dimensions: inputs of shape ``(..., size)``, outputs ``(..., *shape)``, element k read and written as
+``x[..., k]``; the arithmetic runs on whole arrays of configurations in slices of ``CHUNK`` so that
+temporaries stay in cache, and each trigonometric block is one ``np.cos``/``np.sin`` call. Procedures
+(the iterative solvers) run one problem per call, statement by statement, calling the straight-line
+functions on single configurations; each gets a public wrapper that checks its inputs, fills in the
+defaults and returns a named tuple.
+"""
+
+from __future__ import annotations
+
+from ...ir.nodes import Function, Let, Module, Store, TrigBlock, Type
+from ..text import py_string
+from .printer import PythonPrinter, identifier
+
+LANGUAGE = "python"
+FILE_SUFFIXES = (".py",)
+DTYPES = {"double": "np.float64", "float": "np.float32"}
+
+
+def _function_names(module: Module) -> dict[str, str]:
+    return {f.name: (f"_{f.name}_core" if f.kind == "straight" else f"_{f.name}") for f in module.functions}
+
+
+def straight_context(f: Function, calls: dict[str, str]) -> dict:
+    """A straight-line function as vectorised NumPy: its core (statements) and public signature."""
+    storage: dict[str, str] = {}
+    blocks = [s for s in f.body if type(s) is TrigBlock]
+    suffix = (lambda b: "") if len(blocks) == 1 else (lambda b: str(b))
+    for b, block in enumerate(blocks):
+        for k, (a, c, s) in enumerate(zip(block.angles, block.cos, block.sin)):
+            storage[a.name] = f"ang{suffix(b)}[..., {k}]"
+            storage[c.name] = f"cs{suffix(b)}[..., {k}]"
+            storage[s.name] = f"sn{suffix(b)}[..., {k}]"
+    printer = PythonPrinter(True, storage, constant=lambda name: name, function_name=calls.get)
+    first_output = f.outputs[0].name
+    lines: list[str] = []
+    b = 0
+    for s in f.body:
+        t = type(s)
+        if t is TrigBlock:
+            lines.append(f"cs{suffix(b)} = np.cos(ang{suffix(b)})")
+            lines.append(f"sn{suffix(b)} = np.sin(ang{suffix(b)})")
+            b += 1
+            if b < len(blocks):
+                lines.append(f"ang{suffix(b)} = np.empty({first_output}.shape[:-1] + ({len(blocks[b].angles)},), dtype=DTYPE)")
+        elif t is Let:
+            lines.append(f"{printer.name(s.var.name)} = {printer.expr(s.value)}")
+        elif t is Store:
+            lines.append(f"{s.output}[..., {s.index}] = {printer.expr(s.value)}")
+    if blocks:
+        lines.insert(0, f"ang{suffix(0)} = np.empty({first_output}.shape[:-1] + ({len(blocks[0].angles)},), dtype=DTYPE)")
+    return {
+        "name": f.name,
+        "summary": f.summary,
+        "args": [identifier(a.name) for a in f.inputs],
+        "inputs": [{"name": a.name, "py": identifier(a.name), "size": a.size, "domain": a.domain} for a in f.inputs if not a.is_scalar],
+        "scalars": [{"name": a.name, "py": identifier(a.name), "domain": a.domain} for a in f.inputs if a.is_scalar],
+        "quiet": any("np.where" in line for line in lines),
+        "outputs": [{"name": o.name, "size": o.size, "shape": o.shape} for o in f.outputs],
+        "lines": lines,
+        "ops": f.ops.as_dict(),
+    }
+
+
+def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, str]) -> dict:
+    """A procedure or helper in scalar Python, plus (public procedures) its wrapper's checks and defaults."""
+    printer = PythonPrinter(False, constant=lambda name: name, function_name=calls.get)
+    body = printer.statements(f.body)
+    defaults = PythonPrinter(False, constant=lambda name: name)
+    inputs = []
+    for a in f.inputs:
+        default = None
+        if a.default is not None:
+            default = defaults.expr(a.default)
+        inputs.append({
+            "name": a.name, "py": identifier(a.name), "size": a.size, "shape": a.shape, "scalar": a.is_scalar,
+            "int": a.type is Type.INT, "domain": a.domain, "default": default,
+            "literal": default is not None and a.default.__class__.__name__ == "Const", "doc": py_string(a.doc),
+        })
+    outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "int": o.type is Type.INT,
+                "fields": list(o.fields), "doc": py_string(o.doc)} for o in f.outputs]
+    invalid = next((meaning for name, _, meaning in f.statuses if name.endswith("INVALID")), None)
+    return {
+        "name": f.name,
+        "core": calls[f.name],
+        "helper": f.kind == "helper",
+        "summary": py_string(f.summary),
+        "doc": [py_string(line) for line in f.doc],
+        "params": [identifier(a.name) for a in f.arguments],
+        "body": body,
+        "inputs": inputs,
+        "outputs": outputs,
+        "result": f.result or f"{_camel(f.name)}Result",
+        "fields": list(f.result_fields),
+        "invalid": py_string(invalid) if invalid else None,
+        "invalid_value": next((value for name, value, _ in f.statuses if name.endswith("INVALID")), None),
+        "statuses": [{"name": name, "label": name.lower().removeprefix("ik_"), "value": value, "meaning": py_string(meaning)}
+                     for name, value, meaning in f.statuses],
+    }
+
+
+def _camel(name: str) -> str:
+    return "".join(part.capitalize() for part in name.split("_"))
+
+
+def context(module: Module) -> dict:
+    calls = _function_names(module)
+    straight = [straight_context(f, calls) for f in module.functions if f.kind == "straight"]
+    procedures = [procedure_context(f, calls, {}) for f in module.functions if f.kind != "straight"]
+    statuses: dict[str, dict] = {}
+    for p in procedures:
+        for s in p["statuses"]:
+            statuses.setdefault(s["name"], s)
+    return {
+        "prefix": module.prefix,
+        "notes": [py_string(line) for line in module.notes],
+        "dtype": DTYPES[module.precision],
+        "functions": straight,
+        "procedures": procedures,
+        "statuses": list(statuses.values()),
+        "constants": [{"name": c.name, "value": repr(float(c.value)), "doc": py_string(c.doc)} for c in module.constants],
+        "tables": [
+            {"name": t.name, "doc": py_string(t.doc),
+             "values": [repr(float(v)) if v is not None else ("np.inf" if t.sign > 0 else "-np.inf") for v in t.values]}
+            for t in module.tables
+        ],
+    }
+
+
+def render(module: Module, stamp: str) -> dict[str, str]:
+    """``{".py": text}``."""
+    from ..templating import render_template
+
+    return {".py": render_template("numpy/module.py.j2", stamp=stamp, **context(module))}

@@ -1,0 +1,172 @@
+"""Questions printers ask of IR bodies: which names an expression or a body reads, and the
+statements a set of names needs."""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from .nodes import (
+    Add, ArrayArg, Assign, Bits, Call1, Call2, CallFunction, Cast, Compare, Declare, Div, Elem, For, If, Let, Logic,
+    Mul, Neg, Not, Return, Select, Store, TrigBlock, Var, While,
+)
+
+
+def expr_names(e, out: set[str]) -> set[str]:
+    """Add to ``out`` the variable and array names ``e`` reads; returns ``out``."""
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        t = type(x)
+        if t is Var:
+            out.add(x.name)
+        elif t is Elem:
+            out.add(x.array)
+            stack.append(x.index)
+        elif t is Add:
+            stack.extend(x.terms)
+        elif t is Mul:
+            stack.extend(x.factors)
+        elif t in (Neg, Not, Call1):
+            stack.append(x.x)
+        elif t is Div:
+            stack.extend((x.num, x.den))
+        elif t in (Call2, Compare, Bits):
+            stack.extend((x.a, x.b))
+        elif t is Logic:
+            stack.extend(x.terms)
+        elif t is Select:
+            stack.extend((x.cond, x.then, x.otherwise))
+        elif t is Cast:
+            stack.append(x.x)
+        elif t is ArrayArg:
+            out.add(x.name)
+            if not isinstance(x.offset, int):
+                stack.append(x.offset)
+    return out
+
+
+def body_names(body: Iterable, out: set[str] | None = None) -> set[str]:
+    """Every variable and array name ``body`` reads or writes (arguments included)."""
+    out = set() if out is None else out
+    for s in body:
+        t = type(s)
+        if t in (Let, Declare):
+            if s.value is not None:
+                expr_names(s.value, out)
+        elif t is Assign:
+            expr_names(s.target, out)
+            expr_names(s.value, out)
+        elif t is Store:
+            out.add(s.output)
+            expr_names(s.value, out)
+        elif t is TrigBlock:
+            for a in s.angles:
+                expr_names(a, out)
+        elif t is If:
+            expr_names(s.cond, out)
+            body_names(s.then, out)
+            body_names(s.otherwise, out)
+        elif t is For:
+            expr_names(s.start, out)
+            expr_names(s.stop, out)
+            body_names(s.body, out)
+        elif t is While:
+            expr_names(s.cond, out)
+            body_names(s.body, out)
+        elif t is Return and s.value is not None:
+            expr_names(s.value, out)
+        elif t is CallFunction:
+            for a in s.args:
+                expr_names(a, out)
+            if s.result is not None:
+                out.add(s.result.name)
+    return out
+
+
+def called(body: Iterable, out: set[str] | None = None) -> set[str]:
+    """Names of the module functions ``body`` calls."""
+    out = set() if out is None else out
+    for s in body:
+        t = type(s)
+        if t is CallFunction:
+            out.add(s.function)
+        elif t is If:
+            called(s.then, out)
+            called(s.otherwise, out)
+        elif t in (For, While):
+            called(s.body, out)
+    return out
+
+
+def needed_lets(lets: list[Let], roots: set[str]) -> list[Let]:
+    """The :class:`Let` statements among ``lets`` that names ``roots`` need, directly or through each
+    other, in their order."""
+    by_name = {s.var.name: s for s in lets}
+    keep: set[str] = set()
+    todo = [r for r in roots if r in by_name]
+    while todo:
+        name = todo.pop()
+        if name in keep:
+            continue
+        keep.add(name)
+        todo.extend(n for n in expr_names(by_name[name].value, set()) if n in by_name and n not in keep)
+    return [s for s in lets if s.var.name in keep]
+
+
+def _expressions(body: Iterable):
+    """Every top-level expression of ``body`` (statement values, conditions, bounds, arguments)."""
+    for s in body:
+        t = type(s)
+        if t in (Let, Declare, Assign, Store, Return):
+            if s.value is not None:
+                yield s.value
+        elif t is TrigBlock:
+            yield from s.angles
+        elif t is If:
+            yield s.cond
+            yield from _expressions(s.then)
+            yield from _expressions(s.otherwise)
+        elif t is For:
+            yield s.start
+            yield s.stop
+            yield from _expressions(s.body)
+        elif t is While:
+            yield s.cond
+            yield from _expressions(s.body)
+        elif t is CallFunction:
+            yield from (a for a in s.args if type(a) is not ArrayArg)
+
+
+def named_constants(body: Iterable) -> set[str]:
+    """Names of the module constants (:class:`NamedConst` of real type) ``body`` refers to."""
+    from .nodes import NamedConst, Type
+
+    found: set[str] = set()
+    seen: set[int] = set()
+    stack = list(_expressions(body))
+    while stack:
+        x = stack.pop()
+        if id(x) in seen:
+            continue
+        seen.add(id(x))
+        t = type(x)
+        if t is NamedConst:
+            if x.type is Type.REAL:
+                found.add(x.name)
+        elif t is Add:
+            stack.extend(x.terms)
+        elif t is Mul:
+            stack.extend(x.factors)
+        elif t in (Neg, Not, Call1, Cast):
+            stack.append(x.x)
+        elif t is Div:
+            stack.extend((x.num, x.den))
+        elif t in (Call2, Compare, Bits):
+            stack.extend((x.a, x.b))
+        elif t is Logic:
+            stack.extend(x.terms)
+        elif t is Select:
+            stack.extend((x.cond, x.then, x.otherwise))
+        elif t is Elem:
+            stack.append(x.index)
+    return found

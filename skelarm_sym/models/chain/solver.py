@@ -1,0 +1,557 @@
+"""The chains' pose and position IK, described once in the IR and printed by every backend.
+
+``ik_solve(q0, target, [params], lambda, tol, max_iter, q, error, iterations)`` (pose, ``target`` the
+4 x 4 tool pose, row-major) and ``ik_solve_position`` (``target`` the tool origin, 3), on top of the
+derived ``ik_terms`` (tool pose T and Jacobian J at once):
+
+* error ``e = [p_t - p; log3(R_t R^T)]`` in base axes (J is LOCAL_WORLD_ALIGNED, so ``dq = J^+ e``
+  moves toward the target to first order);
+* Levenberg-Marquardt step ``dq = J^T (J J^T + mu2 I)^-1 e`` with ``mu2 = max(c |e|, lambda^2 min(1, |e|))``:
+  damping proportional to the error (Fan and Yuan's delta = 1), which vanishes at the solution so the
+  last steps are Gauss-Newton's and converge quadratically, yet is large near singular poses; the user's
+  ``lambda`` is a floor on it only while the error is large (above 1 m or 1 rad it applies fully, and it
+  fades in proportion to the error below), so a usual damped-least-squares ``lambda`` shapes the path
+  near singular poses but never stops the final convergence. A step is accepted when it lowers
+  ``|e|`` (then ``c *= C_DOWN``, down to ``C_MIN``), else ``c *= C_UP``;
+* joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
+  outward are removed from it (their columns zeroed, the step solved again), so the free joints still
+  make the progress clamping would kill; revolute joints whose range spans 2 pi or more wrap by 2 pi;
+* restarts: an attempt ends when it stalls (``c > C_MAX``, or an accepted step improving ``|e|`` by less
+  than a relative ``STALL``), when a step starts at a (near) stationary point of ``|e|`` over the free
+  joints (``|J_f^T e| <= STATIONARY |J_f|_F |e|``), when its error is above ``PROGRESS`` times its error
+  ``WINDOW`` steps earlier, or after ``ATTEMPT`` steps. The next attempt starts from the best of
+  ``CANDIDATES`` random configurations by tool position error, drawn from ``SHRINK`` times the limits'
+  range around its centre on even restarts and from the whole range on odd ones (periodic joints: the
+  whole range; unbounded ones: [-pi, pi]) by xorshift64* with a fixed seed: the same input gives the
+  same result in every backend. Steps of all attempts count against ``max_iter``.
+
+Statuses: CONVERGED (``|p_t - p| <= tol`` and ``|log3| <= tol``), STALLED (the budget ran out and the best
+pose found ended its attempt at or near a stationary point of ``|e|``: an unreachable target's closest
+reach), MAX_ITER (the budget ran out otherwise; ``q`` is the best pose found), INVALID.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ...ir.build import Array, Body, atan2, fabs, select, sqrt, total
+from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq
+
+C_START = 0.01
+"""Initial damping ``mu2`` per unit of error."""
+C_MIN, C_MAX = 1e-8, 1e8
+C_UP, C_DOWN = 4.0, 0.5
+STEP_MAX = 1.0
+"""Largest joint move of one step (rad or m): longer steps are scaled down whole (same direction)."""
+ATTEMPT = 25
+"""Steps of one attempt before a restart."""
+WINDOW, PROGRESS = 3, 0.6
+"""An attempt restarts when its error is above PROGRESS times its error WINDOW steps earlier."""
+STATIONARY = 0.02
+"""A step starting where ``|J_f^T e| <= STATIONARY |J_f|_F |e|`` (a stationary point) ends the attempt."""
+CANDIDATES = 8
+"""Random configurations drawn per restart; the attempt starts from the one whose tool is nearest the target."""
+SHRINK = 0.5
+"""Even restarts draw bounded joints from this fraction of their range around its centre."""
+SEED = 0x5EED5EED
+"""The restarts' seed (xorshift64*)."""
+FLOOR_ERROR = 1.0
+"""The error norm (m or rad) above which ``lambda^2`` floors the damping fully; below, the floor fades in
+proportion to the error."""
+SETTINGS = {
+    "double": {"tol": 1e-10, "pivot": 1e-13, "stall": 1e-9, "big": 1e300},
+    "float": {"tol": 1e-5, "pivot": 1e-6, "stall": 1e-6, "big": 1e30},
+}
+"""Per precision: default tolerance (Python callers; C callers pass tol), LDL^T pivot cut-off (a pivot at
+most this times the largest diagonal entry is dropped), relative stall, what an absent limit is."""
+
+STATUSES = (
+    ("IK_CONVERGED", 0, "position error and rotation error are both <= tol"),
+    ("IK_STALLED", 1, "max_iter ran out and the best pose found is a stationary point of |e| (an unreachable "
+                      "target: q is its closest reach found)"),
+    ("IK_MAX_ITER", 2, "max_iter ran out otherwise (q: the best pose found)"),
+    ("IK_INVALID", 3, "q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or "
+                      "max_iter < 0 (q = q0, nothing computed)"),
+)
+
+
+def _status(name: str) -> NamedConst:
+    return NamedConst(name, Type.INT)
+
+
+def _tree(terms: list) -> object:
+    """A sum of ``terms`` paired into a balanced tree (shorter dependency chains)."""
+    if len(terms) == 1:
+        return terms[0]
+    half = len(terms) // 2
+    return _tree(terms[:half]) + _tree(terms[half:])
+
+
+def _less(head, terms: list) -> object:
+    """``head - sum(terms)`` with the sum paired and the last term subtracted last."""
+    if not terms:
+        return head
+    if len(terms) == 1:
+        return head - terms[0]
+    return (head - _tree(terms[:-1])) - terms[-1]
+
+
+def limits_of(chain, precision: str) -> dict:
+    """Bounds, restart ranges and periodic coordinates of ``chain`` (see the module docstring)."""
+    limits = chain.limits()
+    big = SETTINGS[precision]["big"]
+    lower = [-big if x is None else float(x) for x in limits["lower"]]
+    upper = [big if x is None else float(x) for x in limits["upper"]]
+    draw_low = [-math.pi if x is None else float(x) for x in limits["lower"]]
+    draw_span = [(math.pi if u is None else float(u)) - d for u, d in zip(limits["upper"], draw_low)]
+    periodic = [True] * chain.n
+    for j in chain.joints:
+        m = float(j.multiplier)
+        if j.kind != "revolute" or m != round(m):
+            periodic[j.coordinate] = False
+    wrapped = [k for k in range(chain.n) if periodic[k] and upper[k] - lower[k] >= 2 * math.pi]
+    near_low = [d if k in wrapped else d + s * ((1.0 - SHRINK) / 2.0) for k, (d, s) in enumerate(zip(draw_low, draw_span))]
+    near_span = [s if k in wrapped else s * SHRINK for k, s in enumerate(draw_span)]
+    return {"lower": lower, "upper": upper, "draw_low": draw_low, "draw_span": draw_span, "near_low": near_low,
+            "near_span": near_span, "wrapped": wrapped}
+
+
+# -- helpers ------------------------------------------------------------------------------------------------
+
+def uniform_helper() -> Function:
+    """``ik_uniform(state)``: xorshift64* (Vigna), a number in [0, 1) from the top 53 bits; the state lives
+    with the caller."""
+    b = Body()
+    state = Array("state", 1, Type.UINT64)
+    s = b.var("s", state[0], Type.UINT64)
+    b.set(s, Bits("^", s, Bits(">>", s, Const(12, Type.INT))))
+    b.set(s, Bits("^", s, Bits("<<", s, Const(25, Type.INT))))
+    b.set(s, Bits("^", s, Bits(">>", s, Const(27, Type.INT))))
+    b.set(state[0], s)
+    b.return_(Cast(Type.REAL, Bits(">>", Bits("*", s, Const(0x2545F4914F6CDD1D, Type.UINT64)), Const(11, Type.INT)))
+              * (1.0 / 9007199254740992.0))
+    return Function("ik_uniform", "a number in [0, 1) from xorshift64*", (Argument("state", Role.OUTPUT, (1,), Type.UINT64),),
+                    b.statements, kind="helper", returns=Type.REAL)
+
+
+def log3_helper() -> Function:
+    """``ik_log3(M, w)``: the axis-angle vector of the rotation ``M`` (row-major), accurate near 0 and pi."""
+    b = Body()
+    M, w = Array("M", 9), Array("w", 3)
+    v0 = b.let("v0", M[7] - M[5])
+    v1 = b.let("v1", M[2] - M[6])
+    v2 = b.let("v2", M[3] - M[1])
+    c = b.let("c", (M[0] + M[4] + M[8] - 1.0) * 0.5)
+    s = b.let("s", sqrt(v0 * v0 + v1 * v1 + v2 * v2) * 0.5)
+    angle = b.let("angle", atan2(s, c))
+    k = b.var("k")
+    with b.if_(angle < 1e-4):
+        b.set(k, 0.5 + angle * angle * (1.0 / 12.0))
+        for i, v in enumerate((v0, v1, v2)):
+            b.set(w[i], v * k)
+        b.return_()
+    with b.if_(math.pi - angle > 1e-3):
+        b.set(k, angle / (s + s))
+        for i, v in enumerate((v0, v1, v2)):
+            b.set(w[i], v * k)
+        b.return_()
+    b.comment("near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry")
+    col = b.array("col", 3)
+    i = b.var("i", select(M[0] >= M[4], select(M[0] >= M[8], Const(0, Type.INT), Const(2, Type.INT)),
+                          select(M[4] >= M[8], Const(1, Type.INT), Const(2, Type.INT))), Type.INT)
+    three = Const(3, Type.INT)
+    b.set(col[0], (M[i] + M[three * i]) * 0.5)
+    b.set(col[1], (M[three + i] + M[three * i + Const(1, Type.INT)]) * 0.5)
+    b.set(col[2], (M[Const(6, Type.INT) + i] + M[three * i + Const(2, Type.INT)]) * 0.5)
+    b.set(col[i], col[i] - c)
+    norm = b.let("norm", sqrt(col[0] * col[0] + col[1] * col[1] + col[2] * col[2]))
+    b.set(k, select(col[0] * v0 + col[1] * v1 + col[2] * v2 < 0.0, -angle, angle) / norm)
+    for j in range(3):
+        b.set(w[j], col[j] * k)
+    return Function("ik_log3", "w = log3(M), the axis-angle vector of the rotation M (row-major)",
+                    (Argument("M", Role.DATA, (9,)), Argument("w", Role.OUTPUT, (3,))), b.statements, kind="helper")
+
+
+def error_helper(rows: int, suffix: str) -> Function:
+    """``ik_error{suffix}(Tm, target, e, norms)``: e = [target - p; log3(R_target R^T)] at the pose Tm and its
+    position and rotation norms."""
+    b = Body()
+    tsize = 16 if rows == 6 else 3
+    Tm, target, e, norms = Array("Tm", 16), Array("target", tsize), Array("e", rows), Array("norms", 2)
+    if rows == 6:
+        M = b.array("M", 9)
+        for i in range(3):
+            b.set(e[i], target[4 * i + 3] - Tm[4 * i + 3])
+        for i in range(3):
+            for j in range(3):
+                b.set(M[3 * i + j], target[4 * i] * Tm[4 * j] + target[4 * i + 1] * Tm[4 * j + 1] + target[4 * i + 2] * Tm[4 * j + 2])
+        b.call("ik_log3", M, e.at(3))
+        b.set(norms[1], sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
+    else:
+        for i in range(3):
+            b.set(e[i], target[i] - Tm[4 * i + 3])
+        b.set(norms[1], 0.0)
+    b.set(norms[0], sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]))
+    what = "[target - p; log3(R_target R^T)]" if rows == 6 else "target - p"
+    return Function(f"ik_error{suffix}", f"e = {what} at the pose Tm; norms = its position and rotation norms",
+                    (Argument("Tm", Role.STATE, (16,)), Argument("target", Role.DATA, (tsize,)),
+                     Argument("e", Role.OUTPUT, (rows,)), Argument("norms", Role.OUTPUT, (2,))),
+                    b.statements, kind="helper")
+
+
+def gram_helper(rows: int, n: int, suffix: str) -> Function:
+    """``ik_gram{suffix}(J, G)``: G = J J^T for J's first rows, lower triangle packed by rows."""
+    b = Body()
+    J, G = Array("J", 6 * n), Array("G", rows * (rows + 1) // 2)
+    for r in range(rows):
+        for c in range(r + 1):
+            b.set(G[r * (r + 1) // 2 + c], total([J[r * n + j] * J[c * n + j] for j in range(n)]))
+    return Function(f"ik_gram{suffix}", f"G = J J^T for the first {rows} rows of J (lower triangle, packed by rows)",
+                    (Argument("J", Role.STATE, (6 * n,)), Argument("G", Role.OUTPUT, (rows * (rows + 1) // 2,))),
+                    b.statements, kind="helper")
+
+
+def damped_helper(rows: int, n: int, suffix: str, precision: str) -> Function:
+    """``ik_damped{suffix}(J, G, e, mu2, dq)``: dq = J^T (G + mu2 I)^-1 e by an unpivoted LDL^T; a pivot at
+    most ``pivot`` times the largest diagonal entry is dropped (its unknown set to 0), so a rank-deficient J
+    with mu2 = 0 gives a finite step. Straight-line: every loop unrolls here."""
+    b = Body()
+    J, G, e, dq = Array("J", 6 * n), Array("G", rows * (rows + 1) // 2), Array("e", rows), Array("dq", n)
+    mu2 = Var("mu2")
+    a = {}
+    for r in range(rows):
+        for c in range(r):
+            a[r, c] = b.let(f"a{r}{c}", G[r * (r + 1) // 2 + c])
+        a[r, r] = b.let(f"a{r}{r}", G[r * (r + 1) // 2 + r] + mu2)
+    cut = b.let("cut", _max_tree([a[r, r] for r in range(rows)]) * SETTINGS[precision]["pivot"])
+    inv, lower, scaled = {}, {}, {}
+    for c in range(rows):
+        s = b.let(f"s{c}", _less(a[c, c], [lower[c, j] * scaled[c, j] for j in range(c)]))
+        kept = b.let(f"kept{c}", s > cut, Type.BOOL)
+        inv[c] = b.let(f"i{c}", select(kept, 1.0 / s, 0.0))
+        for r in range(c + 1, rows):
+            t = b.let(f"t{r}{c}", _less(a[r, c], [lower[r, j] * scaled[c, j] for j in range(c)]))
+            lower[r, c] = b.let(f"l{r}{c}", t * inv[c])
+            scaled[r, c] = b.let(f"ld{r}{c}", select(kept, t, 0.0))
+    y = {}
+    for r in range(rows):
+        y[r] = b.let(f"y{r}", _less(e[r], [lower[r, j] * y[j] for j in range(r)]))
+    z = {}
+    for r in range(rows - 1, -1, -1):
+        z[r] = b.let(f"z{r}", _less(y[r] * inv[r], [lower[j, r] * z[j] for j in range(rows - 1, r, -1)]))
+    for j in range(n):
+        b.set(dq[j], _tree([J[r * n + j] * z[r] for r in range(rows)]))
+    return Function(f"ik_damped{suffix}", "dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped",
+                    (Argument("J", Role.STATE, (6 * n,)), Argument("G", Role.DATA, (rows * (rows + 1) // 2,)),
+                     Argument("e", Role.DATA, (rows,)), Argument("mu2", Role.SCALAR, ()), Argument("dq", Role.OUTPUT, (n,))),
+                    b.statements, kind="helper")
+
+
+def _max_tree(values: list) -> object:
+    out = values[0]
+    for v in values[1:]:
+        out = select(v > out, v, out)
+    return out
+
+
+# -- the solver ---------------------------------------------------------------------------------------------
+
+def solver(chain, rows: int, params: int, precision: str) -> Function:
+    """``ik_solve`` (rows 6: pose) or ``ik_solve_position`` (rows 3), see the module docstring."""
+    n = chain.n
+    tsize = 16 if rows == 6 else 3
+    suffix = "_pose" if rows == 6 else "_position"
+    gsize = rows * (rows + 1) // 2
+    s = SETTINGS[precision]
+    lim = limits_of(chain, precision)
+    b = Body()
+    q0, target, q = Array("q0", n), Array("target", tsize), Array("q", n)
+    err_out, iters = Array("error", 2 if rows == 6 else 1), Array("iterations", 1, Type.INT)
+    lam, tol, max_iter = Var("lambda"), Var("tol"), Var("max_iter", Type.INT)
+    param_args = [Array("params", params)] if params else []
+
+    lo = b.array("lo", n, values=lim["lower"], const=True)
+    hi = b.array("hi", n, values=lim["upper"], const=True)
+    draw_lo = b.array("draw_lo", n, values=lim["draw_low"], const=True)
+    draw_span = b.array("draw_span", n, values=lim["draw_span"], const=True)
+    near_lo = b.array("near_lo", n, values=lim["near_low"], const=True)
+    near_span = b.array("near_span", n, values=lim["near_span"], const=True)
+    Tm, Tt = b.array("Tm", 16), b.array("Tt", 16)
+    J, Jt, Jf = b.array("J", 6 * n), b.array("Jt", 6 * n), b.array("Jf", 6 * n)
+    e, et = b.array("e", rows), b.array("et", rows)
+    trial, dq, best_q = b.array("trial", n), b.array("dq", n), b.array("best_q", n)
+    G, Gf = b.array("G", gsize), b.array("Gf", gsize)
+    norms = b.array("norms", 2)
+    blocked = b.array("blocked", n, Type.INT)
+    state = b.array("state", 1, Type.UINT64, values=[Const(SEED ^ 0x9E3779B97F4A7C15, Type.UINT64)])
+    pe, re, en = b.var("pe", 0.0), b.var("re", 0.0), b.var("en", 0.0)
+    pet, ret, ent = b.var("pet", 0.0), b.var("ret", 0.0), b.var("ent", 0.0)
+    mu2, big, scale, gg, ff = b.var("mu2", 0.0), b.var("big", 0.0), b.var("scale", 0.0), b.var("gg", 0.0), b.var("ff", 0.0)
+    c = b.var("c", C_START)
+    checkpoint, window_start = b.var("checkpoint", 0.0), b.var("window_start", 0.0)
+    best_en, best_pe = b.var("best_en", 0.0), b.var("best_pe", 0.0)
+    best_re = b.var("best_re", 0.0) if rows == 6 else None
+    integers = {name: b.var(name, value, Type.INT) for name, value in (
+        ("gram_ready", 0), ("any", 0), ("it", 0), ("attempt", 0), ("stalled", 0), ("slow", 0), ("stationary", 0),
+        ("restarts", 0), ("best_stalled", 0), ("best_here", 1))}
+    gram_ready, any_, it, attempt = (integers[k] for k in ("gram_ready", "any", "it", "attempt"))
+    stalled, slow, stationary, restarts = (integers[k] for k in ("stalled", "slow", "stationary", "restarts"))
+    best_stalled, best_here = integers["best_stalled"], integers["best_here"]
+    scratch = (b.var("nearest", 0.0), b.var("u", 0.0), b.var("d", 0.0))
+    mu2_floor = b.let("mu2_floor", lam * lam)
+    zero, one = Const(0, Type.INT), Const(1, Type.INT)
+
+    def copy(dst: Array, src: Array, size: int) -> None:
+        with b.for_("k", 0, size) as k:
+            b.set(dst[k], src[k])
+
+    def evaluate(x: Array, T: Array, JJ: Array, ee: Array) -> None:
+        """T, J, e and the norms at the pose x."""
+        b.call("ik_terms", x, *param_args, T, JJ)
+        b.call(f"ik_error{suffix}", T, target, ee, norms)
+
+    # -- checks and start --------------------------------------------------------------------------
+    copy(q, q0, n)
+    b.set(iters[0], 0)
+    for k in range(2 if rows == 6 else 1):
+        b.set(err_out[k], Const(math.inf))
+    with b.if_(~Call1("isfinite", lam) | (lam < 0.0) | ~Call1("isfinite", tol) | ~(tol > 0.0) | (max_iter < 0)):
+        b.return_(_status("IK_INVALID"))
+    for name, size in (("q0", n), ("target", tsize)) + ((("params", params),) if params else ()):
+        with b.for_("k", 0, size) as k:
+            with b.if_(~Call1("isfinite", Array(name, size)[k])):
+                b.return_(_status("IK_INVALID"))
+    with b.for_("k", 0, n) as k:
+        b.set(q[k], select(q[k] < lo[k], lo[k], select(q[k] > hi[k], hi[k], q[k])))
+    evaluate(q, Tm, J, e)
+    b.set(pe, norms[0])
+    b.set(re, norms[1])
+    b.set(en, sqrt(pe * pe + re * re))
+    b.set(best_en, en)
+    b.set(best_pe, pe)
+    if best_re is not None:
+        b.set(best_re, re)
+    copy(best_q, q, n)
+    b.set(checkpoint, en)
+    b.set(window_start, en)
+
+    with b.while_(True):
+        with b.if_((pe <= tol) & (re <= tol)):
+            b.set(err_out[0], pe)
+            if rows == 6:
+                b.set(err_out[1], re)
+            b.set(iters[0], it)
+            b.return_(_status("IK_CONVERGED"))
+        with b.if_(eq(it, max_iter)):
+            b.comment("the budget ends inside the attempt holding the best pose: stalled when that attempt is at a "
+                      "stationary point or no longer lowers |e| geometrically (as a window would judge)")
+            previous = select(eq(_mod(attempt, WINDOW), 0), window_start, checkpoint)
+            with b.if_((best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > previous * PROGRESS))):
+                b.set(best_stalled, one)
+            b.break_()
+        floor = mu2_floor * select(en < FLOOR_ERROR, en * (1.0 / FLOOR_ERROR), 1.0)
+        b.set(mu2, select(c * en > floor, c * en, floor))
+        with b.if_(eq(gram_ready, 0)):
+            b.call(f"ik_gram{suffix}", J, G)
+            b.set(gram_ready, one)
+        b.call(f"ik_damped{suffix}", J, G, e, mu2, dq)
+        with b.for_("k", 0, n) as k:
+            b.set(blocked[k], select(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), one, zero))
+        for p in lim["wrapped"]:
+            b.set(blocked[p], zero)  # periodic: wraps by 2 pi instead
+        b.set(any_, zero)
+        with b.for_("k", 0, n) as k:
+            with b.if_(blocked[k] > 0):
+                b.set(any_, one)
+
+        def gradient(JJ: Array, GG: Array) -> None:
+            """gg = |J^T e|^2 and ff = |J|_F^2 (the trace of G) over the free joints."""
+            b.set(ff, total([GG[r * (r + 1) // 2 + r] for r in range(rows)]))
+            b.set(gg, 0.0)
+            with b.for_("k", 0, n) as k:
+                g = total([JJ[Const(r * n, Type.INT) + k] * e[r] for r in range(rows)])
+                b.set(gg, gg + g * g)
+
+        with b.if_(any_ > 0):
+            b.comment("blocked columns zeroed, their outer products taken out of G, the step solved again")
+            with b.for_("r", 0, rows) as r:
+                with b.for_("k", 0, n) as k:
+                    index = r * Const(n, Type.INT) + k
+                    b.set(Jf[index], select(blocked[k] > 0, 0.0, J[index]))
+            copy(Gf, G, gsize)
+            with b.for_("k", 0, n) as k:
+                with b.if_(blocked[k] > 0):
+                    for r in range(rows):
+                        for cc in range(r + 1):
+                            b.set(Gf[r * (r + 1) // 2 + cc],
+                                  Gf[r * (r + 1) // 2 + cc] - J[Const(r * n, Type.INT) + k] * J[Const(cc * n, Type.INT) + k])
+            b.call(f"ik_damped{suffix}", Jf, Gf, e, mu2, dq)
+            gradient(Jf, Gf)
+        with b.else_():
+            gradient(J, G)
+        b.comment(f"stationary point of |e| over the free joints: |J_f^T e| <= {STATIONARY} |J_f|_F |e|")
+        b.set(stationary, select(gg <= ff * en * en * (STATIONARY * STATIONARY), one, zero))
+        b.set(big, 0.0)
+        with b.for_("k", 0, n) as k:
+            b.set(big, select(fabs(dq[k]) > big, fabs(dq[k]), big))
+        b.set(scale, select(big > STEP_MAX, STEP_MAX / big, 1.0))
+        with b.for_("k", 0, n) as k:
+            b.set(trial[k], q[k] + dq[k] * scale)
+        for p in lim["wrapped"]:
+            with b.if_(trial[p] > hi[p]):
+                b.set(trial[p], trial[p] - 2 * math.pi)
+            with b.else_():
+                with b.if_(trial[p] < lo[p]):
+                    b.set(trial[p], trial[p] + 2 * math.pi)
+        with b.for_("k", 0, n) as k:
+            b.set(trial[k], select(trial[k] < lo[k], lo[k], select(trial[k] > hi[k], hi[k], trial[k])))
+        evaluate(trial, Tt, Jt, et)
+        b.set(pet, norms[0])
+        b.set(ret, norms[1])
+        b.set(ent, sqrt(pet * pet + ret * ret))
+        b.set(it, it + one)
+        b.set(attempt, attempt + one)
+        with b.if_(ent < en):
+            b.set(stalled, select(en - ent <= en * s["stall"], one, zero))
+            copy(q, trial, n)
+            copy(Tm, Tt, 16)
+            copy(J, Jt, 6 * n)
+            copy(e, et, rows)
+            b.set(gram_ready, zero)
+            b.set(pe, pet)
+            b.set(re, ret)
+            b.set(en, ent)
+            b.set(c, select(c * C_DOWN > C_MIN, c * C_DOWN, C_MIN))
+        with b.else_():
+            b.set(c, c * C_UP)
+            b.set(stalled, select(c > C_MAX, one, zero))
+        with b.if_((en < best_en) | ((stalled > 0) & eq(en, best_en))):
+            b.set(best_en, en)
+            b.set(best_pe, pe)
+            if best_re is not None:
+                b.set(best_re, re)
+            b.set(best_stalled, stalled)
+            b.set(best_here, one)
+            copy(best_q, q, n)
+        with b.if_(~((pe <= tol) & (re <= tol))):
+            b.set(slow, stationary)
+            with b.if_(eq(_mod(attempt, WINDOW), 0)):
+                with b.if_(en > checkpoint * PROGRESS):
+                    b.set(slow, one)
+                b.set(window_start, checkpoint)
+                b.set(checkpoint, en)
+            with b.if_(((stalled > 0) | (slow > 0) | (attempt >= ATTEMPT)) & (it < max_iter)):
+                with b.if_(((stalled > 0) | (slow > 0)) & (best_here > 0)):
+                    b.comment("this attempt's best is (near) a stationary point")
+                    b.set(best_stalled, one)
+                b.set(best_here, zero)
+                _restart(b, n, rows, q, trial, Tt, Jt, target, param_args, restarts,
+                         (near_lo, near_span), (draw_lo, draw_span), scratch)
+                b.set(restarts, restarts + one)
+                b.set(gram_ready, zero)
+                evaluate(q, Tm, J, e)
+                b.set(pe, norms[0])
+                b.set(re, norms[1])
+                b.set(en, sqrt(pe * pe + re * re))
+                b.set(c, C_START)
+                b.set(attempt, zero)
+                b.set(checkpoint, en)
+                b.set(window_start, en)
+                with b.if_(en < best_en):
+                    b.set(best_en, en)
+                    b.set(best_pe, pe)
+                    if best_re is not None:
+                        b.set(best_re, re)
+                    b.set(best_stalled, zero)
+                    b.set(best_here, one)
+                    copy(best_q, q, n)
+    copy(q, best_q, n)
+    b.set(err_out[0], best_pe)
+    if rows == 6:
+        b.set(err_out[1], best_re)
+    b.set(iters[0], it)
+    b.return_(select(best_stalled > 0, _status("IK_STALLED"), _status("IK_MAX_ITER")))
+
+    default_tol = s["tol"]
+    arguments = (
+        Argument("q0", Role.STATE, (n,), domain="finite", batched=False, doc="start pose (rad or m)"),
+        Argument("target", Role.DATA, (4, 4) if rows == 6 else (3,), domain="finite", batched=False,
+                 doc="tool pose (4 x 4, row-major)" if rows == 6 else "tool origin (3)"),
+        *([Argument("params", Role.PARAMETER, (params,), domain="finite", batched=False, doc="named parameters")] if params else []),
+        Argument("lambda", Role.SCALAR, (), domain="nonnegative", batched=False, default=Const(0.0),
+                 doc="damping floor while the error is large (>= 0)"),
+        Argument("tol", Role.SCALAR, (), domain="positive", batched=False, default=Const(default_tol),
+                 doc="stop when the position (m) and rotation (rad) errors are <= tol"),
+        Argument("max_iter", Role.SCALAR, (), Type.INT, batched=False, default=Const(100, Type.INT),
+                 doc="at most this many steps over all attempts"),
+        Argument("q", Role.OUTPUT, (n,), doc="the solution, or the best pose found"),
+        Argument("error", Role.OUTPUT, (2 if rows == 6 else 1,), optional=True,
+                 fields=("position_error", "rotation_error") if rows == 6 else ("error",),
+                 doc="position error (m) and rotation error (rad) at q" if rows == 6 else "position error (m) at q"),
+        Argument("iterations", Role.OUTPUT, (1,), Type.INT, optional=True, fields=("iterations",), doc="steps taken"),
+    )
+    doc = (
+        ("Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step" if rows == 6 else
+         "Position IK of the tool origin: Levenberg-Marquardt on e = p_target - p with the 3 linear rows of J, step"),
+        f"dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(c |e|, lambda^2 min(1, |e|/{FLOOR_ERROR:g})), c starting at {C_START:g},",
+        f"times {C_UP:g} after a rejected step and {C_DOWN:g} after an accepted one: lambda damps while the error is large",
+        "and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.",
+        "Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
+        "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
+        f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
+        "random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).",
+        f"Steps of all attempts count against max_iter. A tol of {default_tol:g} is reachable in this precision for an",
+        "arm of unit size. target: " + ("4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad)."
+                                          if rows == 6 else "3 numbers; error[0] = position error (m)."),
+        "On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.",
+    )
+    name = "ik_solve" if rows == 6 else "ik_solve_position"
+    summary = "pose IK of the tool frame" if rows == 6 else "position IK of the tool origin"
+    return Function(name, summary, arguments, b.statements, kind="procedure", returns=Type.INT, statuses=STATUSES,
+                    doc=doc, result="IKResult" if rows == 6 else "IKPositionResult")
+
+
+def _mod(x, m: int) -> Bits:
+    """``x mod m`` for a non-negative int ``x``."""
+    return Bits("%", x, Const(m, Type.INT))
+
+
+def _restart(b: Body, n, rows, q, trial, Tt, Jt, target, param_args, restarts, near, whole, scratch) -> None:
+    """The best of CANDIDATES random starts by tool position error; even restarts near the centre."""
+    nearest, u, d = scratch
+    b.set(nearest, 0.0)
+    with b.for_("m", 0, CANDIDATES) as m:
+        with b.for_("k", 0, n) as k:
+            b.call("ik_uniform", Array("state", 1, Type.UINT64), result=u)
+            even = eq(_mod(restarts, 2), 0)
+            low = select(even, near[0][k], whole[0][k])
+            span = select(even, near[1][k], whole[1][k])
+            b.set(trial[k], low + span * u)
+        b.call("ik_terms", trial, *param_args, Tt, Jt)
+        ds = []
+        for i in range(3):
+            ds.append(target[4 * i + 3] - Tt[4 * i + 3] if rows == 6 else target[i] - Tt[4 * i + 3])
+        b.set(d, sqrt(ds[0] * ds[0] + ds[1] * ds[1] + ds[2] * ds[2]))
+        with b.if_(eq(m, 0) | (d < nearest)):
+            b.set(nearest, d)
+            with b.for_("k", 0, n) as k:
+                b.set(q[k], trial[k])
+
+
+def chain_solvers(derivation, names, precision: str) -> list[Function]:
+    """The helpers and the solvers named in ``names`` (``ik_solve``, ``ik_solve_position``)."""
+    chain = derivation.model
+    n = chain.n
+    params = len(derivation.inputs.get("params", ()))
+    wanted = [(6, "ik_solve"), (3, "ik_solve_position")]
+    out: list[Function] = [uniform_helper()]
+    if "ik_solve" in names:
+        out.append(log3_helper())
+    for rows, name in wanted:
+        if name in names:
+            suffix = "_pose" if rows == 6 else "_position"
+            out += [error_helper(rows, suffix), gram_helper(rows, n, suffix), damped_helper(rows, n, suffix, precision)]
+    for rows, name in wanted:
+        if name in names:
+            out.append(solver(chain, rows, params, precision))
+    return out

@@ -1,0 +1,77 @@
+"""Command-line options shared by the ``skelarm-sym`` commands and by ``check --from`` (which reads a
+recorded ``generate`` command back): the model options each kind registers, and the generation options.
+
+:func:`model_from_args` is the one place that turns parsed options into a model: it asks each registered
+kind in turn (:data:`skelarm_sym.models.registry.ModelKind.from_args`) and refuses options that belong to
+another kind.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from .errors import InputError
+from .models.registry import kinds
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one-line :class:`InputError` (status 2, no usage dump)."""
+
+    def error(self, message: str) -> None:
+        raise InputError(message)
+
+
+def add_model_options(parser: argparse.ArgumentParser) -> None:
+    """``--model`` and every kind's own options."""
+    named = [k.name for k in kinds() if k.model_option]
+    parser.add_argument("--model", choices=named, help=f"the kind of model when no --robot is given: {' or '.join(named)} "
+                        f"(default {named[-1]})")
+    for kind in kinds():
+        if kind.add_options is not None:
+            kind.add_options(parser)
+
+
+def model_given(args) -> list[str]:
+    """The model options given on the command line (flags)."""
+    flags = [flag for kind in kinds() for flag, dest in kind.options if getattr(args, dest, None) is not None]
+    return flags + (["--model"] if getattr(args, "model", None) is not None else [])
+
+
+def model_from_args(args, folder=None):
+    """The model an invocation describes (files named relative to ``folder`` when given: a recorded
+    command); InputError when its options do not fit it."""
+    for kind in kinds():
+        model = kind.from_args(args, folder) if kind.from_args is not None else None
+        if model is None:
+            continue
+        others = [flag for other in kinds() if other is not kind for flag, dest in other.options
+                  if getattr(args, dest, None) is not None]
+        if others:
+            raise InputError(f"{', '.join(others)} {'does' if len(others) == 1 else 'do'} not apply to {kind.title}; "
+                             f"{kind.title} takes {', '.join(flag for flag, _ in kind.options) or 'no options'}")
+        return model
+    raise InputError("the following arguments are required: --links/-n (a planar arm), --model diffdrive or --robot FILE")
+
+
+def add_generate_options(parser: argparse.ArgumentParser) -> None:
+    """The options of ``generate`` besides the model's."""
+    from .backends import BACKENDS
+
+    parser.add_argument("--lang", default="c,python", help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python)")
+    parser.add_argument("--prefix", help="file name and C function prefix (default: the model's: arm{N}, diffdrive, or the "
+                        "robot's name: a TOML file's name key, a URDF file's name without .urdf)")
+    parser.add_argument("--precision", default="double", help="double (default) or float")
+    parser.add_argument("--out", default="generated", help="output folder (default ./generated)")
+    parser.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
+    parser.add_argument("--functions", help="comma-separated functions to emit (default all; a solver such as ik_solve "
+                        "brings the functions it calls)")
+    parser.add_argument("--cmake", action="store_true", help="also write CMakeLists.txt: a static library target named after the prefix")
+    parser.add_argument("--force", action="store_true", help="replace files generated with other options")
+
+
+def generate_parser(prog: str = "skelarm-sym generate") -> Parser:
+    """The parser of ``generate``'s options (model and generation)."""
+    parser = Parser(prog=prog, description="emit C and/or Python for a model")
+    add_model_options(parser)
+    add_generate_options(parser)
+    return parser
