@@ -625,3 +625,32 @@ def test_edge_arm_against_pinocchio_mimic(tmp_path, rng):
         np.testing.assert_allclose(k.J, jacobian(q), atol=1e-12)
         h = 1e-6
         np.testing.assert_allclose(k.dJ, (jacobian(q + h * dq) - jacobian(q - h * dq)) / (2 * h), atol=1e-8)
+
+
+# -- axes of any finite size -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(
+    "written, expected",
+    [
+        ("1e300 0 0", (1, 0, 0)),
+        ("0 -1e308 0", (0, -1, 0)),
+        ("1e-310 0 0", (1, 0, 0)),  # subnormal
+        ("0 0 -5e-324", (0, 0, -1)),  # the smallest subnormal
+        ("1e300 1e300 0", (math.sqrt(0.5), math.sqrt(0.5), 0)),
+        ("1e-310 -1e-310 1e-310", (1 / math.sqrt(3), -1 / math.sqrt(3), 1 / math.sqrt(3))),
+        ("1.7e308 1.7e308 1.7e308", (1 / math.sqrt(3),) * 3),
+        ("3e-200 4e-200 0", (0.6, 0.8, 0)),
+    ],
+)
+def test_huge_and_subnormal_axes_are_normalised(tmp_path, written, expected):
+    chain = load_urdf(write(tmp_path, _arm(J_AB.replace('xyz="0 0 1"', f'xyz="{written}"'), J_BC)))
+    axis = chain.joints[0].axis
+    np.testing.assert_allclose([float(x) for x in axis], expected, rtol=0, atol=2e-16)
+    if sum(x != 0 for x in expected) == 1:
+        assert axis == tuple(sp.Integer(int(x)) for x in expected)  # along x, y or z: exact
+
+
+def test_only_the_zero_axis_has_length_zero(tmp_path):
+    for written in ("0 0 0", "0.0 -0.0 0e-5"):
+        with pytest.raises(InputError, match="joint 'ab' axis has length zero"):
+            load_urdf(write(tmp_path, _arm(J_AB.replace('xyz="0 0 1"', f'xyz="{written}"'), J_BC)))
