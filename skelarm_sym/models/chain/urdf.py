@@ -69,11 +69,22 @@ class _UrdfJoint:
 
 def _tag(element: ET.Element) -> str:
     """The tag without an XML namespace."""
-    return element.tag.rsplit("}", 1)[-1] if isinstance(element.tag, str) else ""
+    tag = element.tag
+    if not isinstance(tag, str):  # a comment or processing instruction
+        return ""
+    return tag if "}" not in tag else tag.rsplit("}", 1)[-1]
 
 
 def _children(element: ET.Element, tag: str) -> list[ET.Element]:
     return [e for e in element if _tag(e) == tag]
+
+
+def _by_tag(element: ET.Element) -> dict[str, list[ET.Element]]:
+    """The children of ``element`` grouped by tag, in one pass."""
+    out: dict[str, list[ET.Element]] = {}
+    for child in element:
+        out.setdefault(_tag(child), []).append(child)
+    return out
 
 
 def _one(element: ET.Element, tag: str, what: str) -> ET.Element | None:
@@ -226,7 +237,8 @@ def _read_tree(root: ET.Element) -> _Tree:
         raise InputError(f"the root element is <{_tag(root)}>, expected <robot>")
     if root.get("name") is not None:
         check_printable(root.get("name"), "robot name")
-    link_elements, joint_elements = _children(root, "link"), _children(root, "joint")
+    grouped = _by_tag(root)
+    link_elements, joint_elements = grouped.get("link", []), grouped.get("joint", [])
     for tag, found in (("link", link_elements), ("joint", joint_elements)):
         if len(found) > MAX_URDF_ELEMENTS:
             raise InputError(f"{len(found)} <{tag}> elements: at most {MAX_URDF_ELEMENTS} are read")
@@ -248,10 +260,12 @@ def _read_tree(root: ET.Element) -> _Tree:
         kind = element.get("type")
         if kind not in TYPES:
             raise InputError(f"joint {quoted(name)}: type must be one of {', '.join(TYPES)}, got {'no type' if kind is None else quoted(kind)}")
-        ends = {}
+        ends, parts = {}, _by_tag(element)
         for end in ("parent", "child"):
-            tag = _one(element, end, f"joint {quoted(name)}")
-            link = None if tag is None else tag.get("link")
+            found = parts.get(end, ())
+            if len(found) > 1:
+                raise InputError(f"joint {quoted(name)} has {len(found)} <{end}> elements, expected at most one")
+            link = found[0].get("link") if found else None
             if not link:
                 raise InputError(f"joint {quoted(name)} has no <{end} link=...>")
             if link not in links:
