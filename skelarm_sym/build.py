@@ -9,19 +9,25 @@ returns ``(..., 2, N)``; batches go through the ``_batch`` C functions.
 The shared library lives in a cache folder (``$SKELARM_SYM_CACHE``, else
 ``~/.cache/skelarm-sym``) under the SHA-256 of the sources, compiler and flags,
 so a second call with the same inputs reuses it. The cache is private (created
-with mode 0700; one owned by another user or writable by group or others is
-refused) and is trusted only as far as it can be checked: beside each library a
-sidecar ``.sha256`` records the cache key and the SHA-256 of the library as
-built, both flushed to disk before their renames. A library whose sidecar is
-missing or does not match its key or its content (truncated by a power cut,
-copied from another arm, planted) is rebuilt, never loaded. Build folders of
-killed compiles (``.build-PID-*``) are removed by later compiles.
+with mode 0700; the cache folder and the key folder are refused when another
+user owns them or group or others may write to them, before a cached library is
+used as well as before a build) and is trusted only as far as it can be checked:
+beside each library a sidecar ``.sha256`` records the cache key and the SHA-256
+of the library as built, both flushed to disk before their renames. A library
+whose sidecar is missing or does not match its key or its content (truncated by
+a power cut, copied from another arm, planted) is rebuilt, never loaded. Build
+folders of killed compiles (``.build-PID-*``) are removed by later compiles.
+
+A compiler that refuses the sources raises :class:`CompileError`: its first line
+names the file and the compiler's first error, the next lines give the command
+and the first ``COMPILER_LINES`` lines of the compiler's output.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shlex
 import shutil
 import stat
@@ -44,6 +50,46 @@ STALE_BUILD_SECONDS = 3600
 
 class CompilerNotFound(InputError):
     """No C compiler could be found."""
+
+
+class CompileError(RuntimeError):
+    """The compiler refused the sources. The message's first line says which file and the first error
+    the compiler reported (``compiling ur10.c failed: ur10.c:123:5: error: 'M_PI_2' undeclared ...``);
+    the next lines give the command and up to ``COMPILER_LINES`` lines of the compiler's output.
+    ``command`` and ``output`` hold them whole."""
+
+    def __init__(self, message: str, command: Sequence[str] = (), output: str = "") -> None:
+        super().__init__(message)
+        self.command = list(command)
+        self.output = output
+
+
+COMPILER_LINES = 20
+"""Lines of the compiler's output a :class:`CompileError` message shows after the command."""
+_ERROR_LINE = re.compile(r"(?:^|:\s*)(?:fatal )?error\b|undefined reference|\bld returned", re.IGNORECASE)
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+
+
+def compile_failure(c_file: str, command: Sequence[str], returncode: int, output: str, work: str | None = None) -> CompileError:
+    """The :class:`CompileError` for a compile of ``c_file`` that exited with ``returncode`` and printed
+    ``output``: its first line is ``compiling {c_file} failed: {the first error line}`` (paths inside the
+    build folder ``work`` shortened to the file's name, colour codes removed, at most 300 characters);
+    then ``command: ...`` and up to ``COMPILER_LINES`` lines of the output."""
+    text = _ANSI.sub("", output)
+    if work:
+        text = text.replace(str(work).rstrip(os.sep) + os.sep, "")
+    lines = [line.rstrip() for line in text.splitlines() if line.strip()]
+    first = next((line for line in lines if _ERROR_LINE.search(line)), lines[0] if lines else "")
+    if not first:
+        first = f"the compiler exited with status {returncode} and printed nothing"
+    first = "".join(ch if ch.isprintable() else " " for ch in first.strip())
+    if len(first) > 300:
+        first = first[:297] + "..."
+    shown = lines[:COMPILER_LINES]
+    if len(lines) > COMPILER_LINES:
+        shown.append(f"... ({len(lines) - COMPILER_LINES} more lines)")
+    message = "\n".join([f"compiling {c_file} failed: {first}", f"command: {shlex.join(command)}", *shown])
+    return CompileError(message, command, output)
 
 
 def _split_command(text: str, origin: str) -> list[str]:
@@ -170,7 +216,13 @@ def compile_shared(
     compiler: str | None = None,
     strict: bool = True,
 ) -> Path:
-    """Compile the ``.c`` file of ``sources`` (with its headers beside it) into a cached shared library."""
+    """Compile the ``.c`` file of ``sources`` (with its headers beside it) into a cached shared library.
+
+    Returns the library's path in the cache. The cache folder and the key folder are checked
+    (:func:`private_folder`) before a cached library is returned, and a library is returned only when
+    its sidecar vouches for it (:func:`verified`). A compiler that refuses the sources raises
+    :class:`CompileError` (a ``RuntimeError``) whose first line names the file and the first error;
+    nothing is left behind."""
     cc = find_compiler(compiler)
     cc_words = _split_command(cc, "compiler")
     all_flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), *flags, "-fPIC", "-shared"]
@@ -187,9 +239,11 @@ def compile_shared(
     suffix = ".dll" if sys.platform == "win32" else ".so"
     root = private_folder(cache_folder())
     target = root / key / f"lib{stem}{suffix}"
+    # the key folder is checked before anything in it is trusted: made group-writable after the
+    # build, the library beside the sidecar could have been swapped between the check and the load
+    private_folder(target.parent)
     if target.exists() and verified(target, full_key):
         return target
-    private_folder(target.parent)
     remove_stale_builds(root)
     work = Path(tempfile.mkdtemp(prefix=f".build-{os.getpid()}-", dir=target.parent))
     try:
@@ -203,7 +257,7 @@ def compile_shared(
         except OSError as exc:
             raise CompilerNotFound(f"cannot run the C compiler {cc!r}: {exc.strerror or exc}") from None
         if result.returncode != 0:
-            raise RuntimeError(f"compiling {c_files[0]} failed:\n{' '.join(command)}\n{result.stderr}")
+            raise compile_failure(c_files[0], command, result.returncode, result.stderr + result.stdout, str(work))
         tmp_sidecar = Path(work, "sidecar")
         tmp_sidecar.write_text(f"{full_key} {file_sha256(tmp_lib)}\n", encoding="ascii")
         # the library first, then the sidecar that vouches for it: a crash between leaves a

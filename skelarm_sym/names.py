@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import keyword
 import re
+import sys
+import unicodedata
+
+from .errors import InputError
 
 C_RESERVED = frozenset(
     """auto break case char const continue default do double else enum extern float for goto if inline int long
@@ -28,3 +32,72 @@ def reserved_name(name: str) -> bool:
     """True when ``name`` may not name a robot or a parameter: a keyword (C, C++ or Python), a name the
     emitted code relies on, or the name of an input's symbol (``q``, ``q1``, ``params``, ``lambda``, ...)."""
     return name in C_RESERVED or keyword.iskeyword(name) or bool(_INPUT.fullmatch(name))
+
+
+REFUSED_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
+"""Unicode categories refused in robot-file text: controls (Cc: newline, tab, NUL, DEL...), format
+characters (Cf: the bidi controls U+202A-202E and U+2066-2069, U+200E/F, zero-width characters, the
+BOM...), surrogates (Cs) and the line and paragraph separators U+2028/9 (Zl, Zp). Everything else is
+printable data."""
+
+QUOTED_LENGTH = 80
+"""Foreign text longer than this is shortened (with its length) when an error message quotes it."""
+
+
+def quoted(text: str, limit: int = QUOTED_LENGTH) -> str:
+    """``repr(text)`` for a one-line error message: every control character escaped, and text longer
+    than ``limit`` characters cut to its first ``limit`` with ``... (N characters)`` after it."""
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}... ({len(text)} characters)"
+
+
+def check_printable(text: str, what: str, kind: str = "names") -> str:
+    """``text`` unchanged when it holds no character of :data:`REFUSED_CATEGORIES`, else InputError.
+
+    The one rule for foreign text that reaches emitted code or a terminal (URDF robot, link and joint
+    names, a TOML file's ``name``, ``description`` and joint names, the ``--base``/``--tip`` link names):
+    such text is data, escaped by the printers, but a newline, a NUL or a bidi override is refused here,
+    where the error can name it. Quotes, ``*/``, ``\"\"\"``, ``#``, ``$``, backslashes, ``??/`` and
+    non-ASCII letters pass. The message is one line: ``{what} {text!r} holds the control character
+    U+XXXX (ITS NAME); robot-file {kind} must be printable text`` (the text quoted by :func:`quoted`,
+    which escapes every refused character). The caller adds the file.
+    """
+    if text.isprintable():  # the usual case, at C speed: no character of the refused categories
+        return text
+    for position, char in enumerate(text):
+        if unicodedata.category(char) in REFUSED_CATEGORIES:
+            label = unicodedata.name(char, "")
+            named = f" ({label})" if label else ""
+            at = f" at character {position + 1}" if len(text) > QUOTED_LENGTH else ""
+            raise InputError(
+                f"{what} {quoted(text)} holds the control character U+{ord(char):04X}{named}{at}; "
+                f"robot-file {kind} must be printable text"
+            )
+    return text
+
+
+IDENTIFIER_LENGTH = 48
+"""Longest prefix or robot name (the emitted C names add at most ``_manipulability_gradient`` to it)."""
+
+
+def identifier_from(text: str | None) -> str | None:
+    """A readable C identifier and Python module name made from ``text`` (a file name's stem, a robot
+    name), or None when ``text`` has no ASCII letter or digit.
+
+    Case is kept as written; every run of characters other than ASCII letters and digits (``_``, ``-``,
+    spaces, dots, non-ASCII letters) becomes one ``_``, and ``_`` at either end is dropped; a name that starts with a digit gets
+    ``robot_`` before it; the result is cut to :data:`IDENTIFIER_LENGTH` characters; a reserved word
+    (:func:`reserved_name`), a Python standard module (``test``, ``code``) or ``numpy``/``np`` gets
+    ``_robot`` after it. ``"xarm7"`` -> ``xarm7``, ``"ur5 (copy)"`` -> ``ur5_copy``,
+    ``"2dof"`` -> ``robot_2dof``, ``"double"`` -> ``double_robot``.
+    """
+    name = re.sub(r"[^A-Za-z0-9]+", "_", text or "").strip("_")
+    if not name:
+        return None
+    if name[0].isdigit():
+        name = "robot_" + name
+    name = name[:IDENTIFIER_LENGTH].rstrip("_")
+    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in ("numpy", "np"):
+        name = name[: IDENTIFIER_LENGTH - len("_robot")].rstrip("_") + "_robot"
+    return name

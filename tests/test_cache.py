@@ -3,6 +3,7 @@ foreign or planted libraries are rebuilt, never loaded; the cache is private; fi
 before they are renamed; leftovers of killed runs are removed."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -184,3 +185,76 @@ def test_stale_temporaries_of_killed_runs_are_removed(tmp_path):
     generate(2, out=tmp_path)
     left = sorted(p.name for p in tmp_path.iterdir())
     assert left == sorted([recent.name, alive.name, other.name, "arm2.c", "arm2.h", "arm2.py"])
+
+
+# -- a refused compile says why on its first line --------------------------------------------------------
+
+@needs_cc
+def test_a_failed_compile_names_the_file_and_the_first_error(cache):
+    """The CLI prints only the first line of the exception: it was 'compiling ur10.c failed:' and nothing."""
+    source = "#include <math.h>\ndouble half_pi(void)\n{\n    return M_PI_2;\n}\n"
+    with pytest.raises(build.CompileError) as info:
+        build.compile_shared({"ur10.c": source, "ur10.h": "/* header */\n"})
+    assert isinstance(info.value, RuntimeError)
+    lines = str(info.value).splitlines()
+    first = lines[0]
+    assert first.startswith("compiling ur10.c failed: ur10.c:4:"), first  # the build folder's path is left out
+    assert "error" in first and "M_PI_2" in first and "undeclared" in first, first
+    assert lines[1].startswith("command: ") and "-std=c99" in lines[1] and "-Werror" in lines[1] and "ur10.c" in lines[1]
+    assert any("M_PI_2" in line for line in lines[2:])
+    assert info.value.command[-1] == "-lm" and "M_PI_2" in info.value.output
+    assert [p.name for p in cache.glob("*/.build-*")] == []  # the build folder is removed
+    assert list(cache.glob("*/libur10.so")) == []
+
+
+@needs_cc
+def test_a_long_compiler_output_is_cut_to_twenty_lines(cache):
+    source = "".join(f"int f{i}(void) {{ return undeclared_{i}; }}\n" for i in range(40))
+    with pytest.raises(build.CompileError) as info:
+        build.compile_shared({"many.c": source})
+    lines = str(info.value).splitlines()
+    assert lines[0].startswith("compiling many.c failed: many.c:1:") and "undeclared_0" in lines[0]
+    assert len(lines) == 2 + build.COMPILER_LINES + 1
+    assert re.fullmatch(r"\.\.\. \(\d+ more lines\)", lines[-1]), lines[-1]
+    assert "undeclared_39" in info.value.output  # all of it kept on the exception
+
+
+def test_compile_failure_messages():
+    work = "/cache/key/.build-1-x"
+    output = (f"{work}/arm.c: In function 'arm_f':\n{work}/arm.c:12:5: error: 'M_PI_2' undeclared\n"
+              "\x1b[01;31mnote\x1b[m: each undeclared identifier is reported only once\n")
+    error = build.compile_failure("arm.c", ["cc", "-c", f"{work}/arm.c"], 1, output, work)
+    assert str(error).splitlines() == [
+        "compiling arm.c failed: arm.c:12:5: error: 'M_PI_2' undeclared",
+        f"command: cc -c {work}/arm.c",
+        "arm.c: In function 'arm_f':",
+        "arm.c:12:5: error: 'M_PI_2' undeclared",
+        "note: each undeclared identifier is reported only once",
+    ]
+    linker = "/usr/bin/ld: arm.o: in function `f':\narm.c:(.text+0x5): undefined reference to `g'\ncollect2: error: ld returned 1 exit status\n"
+    assert str(build.compile_failure("arm.c", ["cc"], 1, linker)).splitlines()[0] == (
+        "compiling arm.c failed: arm.c:(.text+0x5): undefined reference to `g'"
+    )
+    assert str(build.compile_failure("arm.c", ["cc"], 139, "")).splitlines()[0] == (
+        "compiling arm.c failed: the compiler exited with status 139 and printed nothing"
+    )
+    assert str(build.compile_failure("arm.c", ["cc"], 1, "x" * 1000)).splitlines()[0] == "compiling arm.c failed: " + "x" * 297 + "..."
+
+
+# -- the key folder is checked before a cached library is used ------------------------------------------------
+
+@needs_cc
+def test_a_key_folder_opened_after_the_build_is_refused_before_loading(cache, monkeypatch):
+    g, sources = _sources(2)
+    lib = build.compile_shared(sources)
+    lib.parent.chmod(0o770)  # group-writable after the build: the library could be swapped before dlopen
+    loaded = []
+    monkeypatch.setattr(build, "CompiledArm", lambda *args, **kwargs: loaded.append(args))
+    with pytest.raises(InputError, match="writable by group or others") as info:
+        build.compile_shared(sources)
+    assert str(lib.parent) in str(info.value) and "\n" not in str(info.value)
+    with pytest.raises(InputError, match="writable by group or others"):
+        build.compile_arm(g)
+    assert loaded == []
+    lib.parent.chmod(0o700)
+    assert build.compile_shared(sources) == lib  # private again: used as before

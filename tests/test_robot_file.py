@@ -63,6 +63,33 @@ BAD = {
     "duplicate_joint_names": ('[[joints]]\ntype = "revolute"\nname = "j"\n' * 2, r"joint names must be distinct"),
     "lower_above_upper": (REV + "lower = 1.0\nupper = -1.0\n", r"lower limit 1\.0 is above upper limit -1\.0"),
     "negative_velocity": (REV + "velocity = -2.0\n", r"joints\[0\]\.velocity must be positive"),
+    # long or deep values (issue 16): one line naming the key, whatever the size
+    "expression_too_long": (REV + 'theta = "' + "+".join(["1"] * 200) + '"\n',
+                            r"joints\[0\]\.theta: the expression '(1\+){20}'\.\.\. \(399 characters\) is longer than 256 characters"),
+    "expression_too_deep": (REV + 'theta = "' + "-" * 100 + '1"\n',
+                            r"joints\[0\]\.theta: the expression '-+'\.\.\. \(101 characters\) nests operators and parentheses more than 64 levels deep"),
+    "parameter_name_too_long": (REV + 'a = "' + "p" * 49 + '"\n', r"joints\[0\]\.a: parameter name 'p{40}'\.\.\. \(49 characters\) is longer than 48 characters"),
+    "integer_beyond_double": (REV + "a = " + "9" * 400 + "\n", r"joints\[0\]\.a must be finite, got an integer of 400 digits"),
+    "integer_of_5000_digits": (REV + "a = " + "9" * 5000 + "\n", r"not valid TOML: Exceeds the limit \(4300 digits\)"),
+    "deep_array": ("x = " + "[" * 600 + "]" * 600 + "\n" + REV, r"line 1: key 'x' nests arrays or inline tables more than 32 deep"),
+    "deep_array_in_joint": (REV + "a = 1\n" + REV + "d = " + "[" * 600 + "]" * 600 + "\n",
+                            r"line 6: key 'joints\[1\]\.d' nests arrays or inline tables more than 32 deep"),
+    "deep_inline_table": (REV + "[tool]\nxyz = " + "{a = " * 600 + "1" + "}" * 600 + "\n",
+                          r"line 4: key 'tool\.xyz' nests arrays or inline tables more than 32 deep"),
+    # joint limits: numbers or expressions of numbers and pi, not parameters
+    "limit_names_a_parameter": (REV + 'lower = "qmin"\n', r"joints\[0\]\.lower must be a number or an expression of numbers and pi \(\"-155\*pi/180\"\), not the name 'qmin'"),
+    "limit_expression_bad": (REV + 'upper = "pi/"\n', r"joints\[0\]\.upper: cannot parse 'pi/'"),
+    "limit_expression_not_finite": (REV + 'velocity = "1e308*10"\n', r"joints\[0\]\.velocity: '1e308\*10' is not finite"),
+    "limit_expression_too_long": (REV + 'lower = "' + "-1" * 200 + '"\n', r"joints\[0\]\.lower: the expression .* is longer than 256 characters"),
+    "limit_expressions_reversed": (REV + 'lower = "pi/2"\nupper = "-pi/2"\n', r"lower limit 1\.5707963267948966 is above upper limit -1\.5707963267948966"),
+    "limit_expression_velocity_zero": (REV + 'velocity = "pi-pi"\n', r"joints\[0\]\.velocity must be positive"),
+    # text: printable only
+    "name_with_newline": ('name = "arm\\nx"\n' + REV, r"name 'arm\\nx' holds the control character U\+000A; robot-file names must be printable text"),
+    "description_with_bidi": ('description = "a\\u202Eb"\n' + REV, r"description 'a\\u202eb' holds the control character U\+202E \(RIGHT-TO-LEFT OVERRIDE\); robot-file descriptions"),
+    "description_with_line_separator": ('description = "a\\u2028b"\n' + REV, r"description 'a\\u2028b' holds the control character U\+2028 \(LINE SEPARATOR\)"),
+    "joint_name_with_tab": (REV + 'name = "pan\\tx"\n', r"joints\[0\]\.name 'pan\\tx' holds the control character U\+0009"),
+    "joint_name_with_zero_width_joiner": (REV + 'name = "pan\\u200Dx"\n', r"joints\[0\]\.name 'pan\\u200dx' holds the control character U\+200D"),
+    "unknown_key_with_newline": ('"a\\nb" = 1\n' + REV, r"unknown key 'a\\nb'"),
 }
 
 
@@ -77,6 +104,58 @@ def test_bad_input_is_one_line_naming_file_and_problem(tmp_path, case):
     assert message.startswith(f"{path}: "), message
     assert len(message) < 300
     assert re.search(pattern, message), message
+
+
+HUGE = {  # issue 16's cases, each 100 000 deep or long: exit 1 without a file name, or a traceback, before
+    "nested_arrays": ("x = " + "[" * 100_000 + "]" * 100_000 + "\n" + REV, "line 1: key 'x' nests arrays or inline tables more than 32 deep"),
+    "nested_arrays_in_a_joint": (REV + "a = " + "[" * 100_000 + "]" * 100_000 + "\n",
+                                 "line 3: key 'joints[0].a' nests arrays or inline tables more than 32 deep"),
+    "sum_of_ones": (REV + 'theta = "' + "+".join(["1"] * 100_000) + '"\n',
+                    "joints[0].theta: the expression '" + "1+" * 20 + "'... (199999 characters) is longer than 256 characters"),
+    "unary_minus": (REV + 'theta = "' + "-" * 100_000 + '1"\n',
+                    "joints[0].theta: the expression '" + "-" * 40 + "'... (100001 characters) is longer than 256 characters"),
+    "unary_minus_limit": (REV + 'lower = "' + "-" * 100_000 + '1"\n',
+                          "joints[0].lower: the expression '" + "-" * 40 + "'... (100001 characters) is longer than 256 characters"),
+    "long_description": ('description = "' + "x" * 100_000 + '\\n"\n' + REV,
+                         "description '" + "x" * 80 + "'... (100001 characters) holds the control character U+000A at character 100001;"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HUGE))
+def test_deep_or_long_values_are_one_line_naming_file_and_key(tmp_path, case):
+    text, expected = HUGE[case]
+    path = write(tmp_path, text, f"{case}.toml")
+    with pytest.raises(InputError) as info:
+        load_robot_file(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: {expected}"), message
+    assert "\n" not in message and len(message) < 400
+
+
+def test_files_over_the_size_limit_are_refused_unread(tmp_path):
+    from skelarm_sym.models.chain import dh_file
+
+    assert dh_file.MAX_TOML_BYTES == 1024 * 1024
+    text = REV + "# " + "x" * dh_file.MAX_TOML_BYTES + "\n"
+    path = write(tmp_path, text, "big.toml")
+    with pytest.raises(InputError) as info:
+        load_robot_file(path)
+    assert str(info.value) == f"{path}: larger than 1 MiB: a robot file is read only up to that size"
+    path.write_text(REV + "# " + "x" * (dh_file.MAX_TOML_BYTES - 100) + "\n")  # just below: read
+    assert load_robot_file(path).n == 1
+
+
+def test_limits_accept_expressions_like_angles(tmp_path):
+    text = (REV + 'lower = "-155*pi/180"\nupper = "pi"\nvelocity = "pi/2"\n'
+            + '[[joints]]\ntype = "prismatic"\nlower = "-0.5/2"\nupper = "1/4"\nvelocity = 0.5\n'
+            + REV + "lower = -1\nupper = 2.5\n")
+    chain = load_robot_file(write(tmp_path, text))
+    assert chain.limits() == {
+        "lower": (-155 * math.pi / 180, -0.25, -1.0),
+        "upper": (math.pi, 0.25, 2.5),
+        "velocity": (math.pi / 2, 0.5, None),
+    }
+    assert all(type(v) is float for values in chain.limits().values() for v in values if v is not None)
 
 
 def test_missing_file_and_folder(tmp_path):

@@ -625,3 +625,188 @@ def test_edge_arm_against_pinocchio_mimic(tmp_path, rng):
         np.testing.assert_allclose(k.J, jacobian(q), atol=1e-12)
         h = 1e-6
         np.testing.assert_allclose(k.dJ, (jacobian(q + h * dq) - jacobian(q - h * dq)) / (2 * h), atol=1e-8)
+
+
+# -- axes of any finite size -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(
+    "written, expected",
+    [
+        ("1e300 0 0", (1, 0, 0)),
+        ("0 -1e308 0", (0, -1, 0)),
+        ("1e-310 0 0", (1, 0, 0)),  # subnormal
+        ("0 0 -5e-324", (0, 0, -1)),  # the smallest subnormal
+        ("1e300 1e300 0", (math.sqrt(0.5), math.sqrt(0.5), 0)),
+        ("1e-310 -1e-310 1e-310", (1 / math.sqrt(3), -1 / math.sqrt(3), 1 / math.sqrt(3))),
+        ("1.7e308 1.7e308 1.7e308", (1 / math.sqrt(3),) * 3),
+        ("3e-200 4e-200 0", (0.6, 0.8, 0)),
+    ],
+)
+def test_huge_and_subnormal_axes_are_normalised(tmp_path, written, expected):
+    chain = load_urdf(write(tmp_path, _arm(J_AB.replace('xyz="0 0 1"', f'xyz="{written}"'), J_BC)))
+    axis = chain.joints[0].axis
+    np.testing.assert_allclose([float(x) for x in axis], expected, rtol=0, atol=2e-16)
+    if sum(x != 0 for x in expected) == 1:
+        assert axis == tuple(sp.Integer(int(x)) for x in expected)  # along x, y or z: exact
+
+
+def test_only_the_zero_axis_has_length_zero(tmp_path):
+    for written in ("0 0 0", "0.0 -0.0 0e-5"):
+        with pytest.raises(InputError, match="joint 'ab' axis has length zero"):
+            load_urdf(write(tmp_path, _arm(J_AB.replace('xyz="0 0 1"', f'xyz="{written}"'), J_BC)))
+
+
+# -- large files: linear, and limited ------------------------------------------------------------------
+
+def _big_urdf(off_chain: int) -> str:
+    """A 3-joint arm with ``off_chain`` more links off its path: half hang from the base by fixed joints
+    (a wide tree), half form one long branch of fixed joints (a deep tree)."""
+    arm = ('<link name="base"/><link name="l1"/><link name="l2"/><link name="tool"/>'
+           '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>'
+           '<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.5 0 0"/><axis xyz="0 1 0"/></joint>'
+           '<joint name="j3" type="fixed"><parent link="l2"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>')
+    wide, deep = off_chain // 2, off_chain - off_chain // 2
+    parts = [arm]
+    parts += [f'<link name="w{i}"/><joint name="jw{i}" type="fixed"><parent link="base"/><child link="w{i}"/></joint>' for i in range(wide)]
+    parts += [f'<link name="d{i}"/><joint name="jd{i}" type="fixed"><parent link="{"base" if i == 0 else f"d{i - 1}"}"/>'
+              f'<child link="d{i}"/></joint>' for i in range(deep)]
+    return f'<robot name="big">{"".join(parts)}</robot>'
+
+
+def test_loading_is_linear_in_the_number_of_links(tmp_path):
+    """20 000 off-chain links took 5.4 s of CPU (the duplicate check scanned a list, and so did the cycle
+    check along a deep branch); now the time grows in proportion to the file."""
+    import time
+
+    paths = {n: write(tmp_path, _big_urdf(n), f"big{n}.urdf") for n in (5_000, 20_000)}
+    seconds = {}
+    for n, path in paths.items():
+        runs = []
+        for _ in range(3):  # the fastest of three: CPU time, so other processes do not count
+            start = time.process_time()
+            chain = load_urdf(path, tip="tool")
+            runs.append(time.process_time() - start)
+        assert chain.coordinates == ("j1", "j2")
+        seconds[n] = min(runs)
+    assert seconds[20_000] < 8 * seconds[5_000], seconds  # 4 when linear, 16 when quadratic
+    assert seconds[20_000] < 3.0, seconds
+    # without a tip the 10 002 leaves (tool, the wide half, the end of the deep branch) are counted, quickly
+    with pytest.raises(InputError, match=r"10002 leaf links below 'base' \('tool', 'w0', .*\(10002 in all\)\): choose one as tip"):
+        load_urdf(paths[20_000])
+
+
+def test_element_and_size_limits(tmp_path, monkeypatch):
+    from skelarm_sym.models.chain import urdf
+
+    assert urdf.MAX_URDF_BYTES == 16 * 1024 * 1024 and urdf.MAX_URDF_ELEMENTS == 100_000
+    assert "16 MiB" in urdf.__doc__ and "100 000" in urdf.__doc__  # stated where users read them
+    path = write(tmp_path, _big_urdf(400))
+    monkeypatch.setattr(urdf, "MAX_URDF_ELEMENTS", 300)
+    with pytest.raises(InputError) as info:
+        load_urdf(path, tip="tool")
+    assert str(info.value) == f"{path}: 404 <link> elements: at most 300 are read"
+    monkeypatch.setattr(urdf, "MAX_URDF_ELEMENTS", 404)
+    assert load_urdf(path, tip="tool").n == 2  # 404 links and 403 joints: within
+    big = write(tmp_path, _arm(J_AB, J_BC) + "<!--" + "x" * urdf.MAX_URDF_BYTES + "-->", "big.urdf")
+    with pytest.raises(InputError) as info:
+        load_urdf(big)
+    assert str(info.value) == f"{big}: larger than 16 MiB: a URDF file is read only up to that size"
+
+
+def test_a_cycle_is_named_in_one_pass(tmp_path):
+    # a -> b -> c -> a, with d below b: every link has one parent and none is a root
+    cycle = ('<joint name="ca" type="fixed"><parent link="c"/><child link="a"/></joint>'
+             '<joint name="bd" type="fixed"><parent link="b"/><child link="d"/></joint>')
+    path = write(tmp_path, _arm(J_AB, J_BC, cycle, links=("d", "a", "b", "c")))
+    with pytest.raises(InputError) as info:
+        load_urdf(path, base="a", tip="c")
+    assert str(info.value) == f"{path}: the joints form a cycle through links 'b', 'a', 'c'"
+
+
+# -- the default prefix ------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(
+    "file, robot, prefix, name",
+    [
+        ("xarm7.urdf", "UF_ROBOT", "xarm7", "UF_ROBOT"),  # was UF_ROBOT
+        ("UR5e.urdf", "ur5e_robot", "UR5e", "ur5e_robot"),
+        ("panda arm (copy).urdf", "panda", "panda_arm_copy", "panda"),
+        ("2-link.urdf", "planar", "robot_2_link", "planar"),
+        ("code.urdf", "x", "code_robot", "x"),
+        ("ロボット.urdf", "UF_ROBOT", "UF_ROBOT", "UF_ROBOT"),  # no ASCII letter in the stem: the robot's name
+        ("ロボット.urdf", "ロボット", "robot", "robot"),
+    ],
+)
+def test_default_prefix_is_the_file_name(tmp_path, file, robot, prefix, name):
+    chain = load_robot(write(tmp_path, _arm(J_AB, J_BC).replace('"bad"', f'"{robot}"'), file))
+    assert chain.default_prefix == prefix
+    assert chain.name == name  # the robot's own name, made a C identifier, still describes it
+
+
+def test_toml_default_prefix_stays_its_name_key(tmp_path):
+    assert load_robot(write(tmp_path, TOML, "other-file.toml")).default_prefix == "two"
+    assert load_robot(write(tmp_path, TOML.replace('name = "two"', ""), "other-file.toml")).default_prefix == "other_file"
+
+
+def test_prefix_rule_is_stated_for_the_cli():
+    from skelarm_sym.models.chain import loader
+
+    assert "xarm7.urdf: xarm7" in loader.PREFIX_RULE and "name key" in loader.PREFIX_RULE
+    assert "\n" not in loader.PREFIX_RULE
+    assert "the file name's stem made an identifier, else the ``<robot name>``" in loader.__doc__
+
+
+# -- listing the links to choose a tip -----------------------------------------------------------------------
+
+def test_urdf_tree_lists_links_joints_and_leaves(tmp_path):
+    from skelarm_sym.models.chain.loader import UrdfLink, urdf_links, urdf_tree
+
+    path = write(tmp_path, TREE.replace("</robot>", '<link name="spare"/></robot>'))
+    assert urdf_tree(path) == [
+        "torso",
+        "  chest  <- waist (revolute)",
+        "    L1  <- l1 (revolute)",
+        "      L2  <- l2 (revolute)",
+        "        Lhand  <- lwrist (fixed)",
+        "          Lfinger  <- lfinger (prismatic)  [leaf: 4 coordinates from torso]",
+        "    R1  <- r1 (revolute)",
+        "      R2  <- r2 (continuous)",
+        "        Rtool  <- rtool (fixed)  [leaf: 3 coordinates from torso]",
+        "spare  [no joints]",
+    ]
+    links = urdf_links(path)
+    assert links[5] == UrdfLink("Lfinger", 5, "Lhand", "lfinger", "prismatic", 4, True)
+    assert links[0] == UrdfLink("torso", 0, None, None, None, 0, False)
+    # every leaf the tree marks is a tip that loads, with the coordinates it announced
+    for link in links:
+        if link.leaf and link.depth:
+            assert load_urdf(path, base="torso", tip=link.name).n == link.coordinates
+
+
+def test_urdf_tree_counts_mimic_joints_out_and_stays_flat_when_deep(tmp_path):
+    from skelarm_sym.models.chain.loader import urdf_tree
+
+    path = write(tmp_path, EDGE)
+    assert urdf_tree(path)[-1] == "  " * 9 + "tool  <- tcp (fixed)  [leaf: 4 coordinates from world]"
+    lines = urdf_tree(write(tmp_path, _big_urdf(60), "deep.urdf"))
+    assert len(lines) == 64
+    assert lines[-1] == "  " * 24 + "[depth 30] d29  <- jd29 (fixed)  [leaf: 0 coordinates from base]"
+    with pytest.raises(InputError, match="not valid XML"):
+        urdf_tree(write(tmp_path, "<robot>", "broken.urdf"))
+
+
+def test_unknown_links_suggest_close_matches(tmp_path):
+    path = write(tmp_path, TREE)
+    with pytest.raises(InputError) as info:
+        load_urdf(path, tip="Rtol")
+    assert str(info.value) == (
+        f"{path}: no link 'Rtol' (tip); did you mean 'Rtool'? (links: 'torso', 'chest', 'L1', 'L2', 'Lhand', "
+        "'Lfinger', 'R1', 'R2', 'Rtool')"
+    )
+    with pytest.raises(InputError, match=r"no link 'lhand' \(base\); did you mean 'Lhand'\? \(links: "):
+        load_urdf(path, base="lhand")
+    with pytest.raises(InputError, match=r"no link 'L' \(tip\); did you mean 'L2' or 'L1'\? \(links: "):
+        load_urdf(path, tip="L")
+    with pytest.raises(InputError) as info:
+        load_urdf(path, tip="gripper")
+    assert "did you mean" not in str(info.value) and "(links: 'torso'," in str(info.value)

@@ -39,7 +39,7 @@ from pathlib import Path
 import sympy as sp
 
 from ...errors import InputError
-from ...names import reserved_name
+from ...names import IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -48,21 +48,47 @@ FRAME_KEYS = {"xyz", "rpy"}
 ANGLE_KEYS = {"alpha", "theta"}
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
+MAX_TOML_BYTES = 1024 * 1024
+"""Largest robot file read (1 MiB; a DH table of 200 joints has about 30 KiB)."""
+MAX_EXPRESSION_LENGTH = 256
+"""Longest expression string (``"-155*pi/180"``) read as a value."""
+MAX_EXPRESSION_DEPTH = 64
+"""Deepest nesting of operators and parentheses in an expression (``"1+1+...+1"`` nests once per ``+``)."""
 
 
 def parse_expression(text: str, what: str) -> sp.Expr:
-    """An arithmetic expression of numbers and ``pi`` (``"-pi/2"``, ``"3*pi/4"``) as an exact SymPy number."""
+    """An arithmetic expression of numbers and ``pi`` (``"-pi/2"``, ``"3*pi/4"``) as an exact SymPy number.
+
+    At most ``MAX_EXPRESSION_LENGTH`` characters and ``MAX_EXPRESSION_DEPTH`` levels of operators and
+    parentheses; anything else is an InputError naming ``what``."""
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise InputError(
+            f"{what}: the expression {quoted(text, 40)} is longer than {MAX_EXPRESSION_LENGTH} characters"
+        )
+    cannot = f"{what}: cannot parse {quoted(text)} (numbers, pi, + - * / and parentheses)"
     try:
         tree = ast.parse(text.strip(), mode="eval")
-    except SyntaxError:
-        raise InputError(f"{what}: cannot parse {text!r} (numbers, pi, + - * / and parentheses)") from None
+    except (SyntaxError, ValueError):  # ValueError: a NUL byte
+        raise InputError(cannot) from None
+    except (RecursionError, MemoryError):
+        raise InputError(f"{what}: the expression {quoted(text, 40)} is nested too deeply") from None
+    depth, stack = 0, [(tree, 0)]
+    while stack:  # iterative: the depth is checked before anything recurses
+        node, level = stack.pop()
+        depth = max(depth, level)
+        stack.extend((child, level + 1) for child in ast.iter_child_nodes(node))
+    if depth > MAX_EXPRESSION_DEPTH + 1:  # + 1: the Expression node around the body
+        raise InputError(
+            f"{what}: the expression {quoted(text, 40)} nests operators and parentheses more than "
+            f"{MAX_EXPRESSION_DEPTH} levels deep"
+        )
 
     def build(node: ast.AST) -> sp.Expr:
         if isinstance(node, ast.Expression):
             return build(node.body)
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
             if not math.isfinite(float(node.value)):
-                raise InputError(f"{what}: {text!r} is not finite")
+                raise InputError(f"{what}: {quoted(text)} is not finite")
             return sp.Rational(str(node.value)) if isinstance(node.value, float) else sp.Integer(node.value)
         if isinstance(node, ast.Name) and node.id == "pi":
             return sp.pi
@@ -72,11 +98,14 @@ def parse_expression(text: str, what: str) -> sp.Expr:
         if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
             left, right = build(node.left), build(node.right)
             if isinstance(node.op, ast.Div) and right == 0:
-                raise InputError(f"{what}: division by zero in {text!r}")
+                raise InputError(f"{what}: division by zero in {quoted(text)}")
             return _BINARY[type(node.op)](left, right)
-        raise InputError(f"{what}: cannot parse {text!r} (numbers, pi, + - * / and parentheses)")
+        raise InputError(cannot)
 
-    return build(tree)
+    try:
+        return build(tree)
+    except OverflowError:
+        raise InputError(f"{what}: {quoted(text)} is not finite") from None
 
 
 def _value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]) -> sp.Expr:
@@ -85,24 +114,31 @@ def _value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]
         text = raw.strip()
         if _IDENTIFIER.fullmatch(text) and text != "pi":
             if text.lower() in ("nan", "inf", "infinity"):
-                raise InputError(f"{what}: {raw!r} is not finite")
+                raise InputError(f"{what}: {quoted(raw)} is not finite")
+            if len(text) > IDENTIFIER_LENGTH:
+                raise InputError(f"{what}: parameter name {quoted(text, 40)} is longer than {IDENTIFIER_LENGTH} characters")
             if reserved_name(text):
                 raise InputError(f"{what}: parameter name {text!r} is a reserved word")
             return parameters.setdefault(text, sp.Symbol(text, real=True))
-        value = parse_expression(text, what)
-        try:
-            finite = bool(value.is_finite) and math.isfinite(float(value))
-        except OverflowError:
-            finite = False
-        if not finite:
-            raise InputError(f"{what}: {raw!r} is not finite")
-        if angle:  # exact as written; a number close to a multiple of pi/2 snaps to it
-            snapped = exact_angle(float(value), what)
-            return snapped if snapped.has(sp.pi) or snapped == 0 else value
-        return value if value.is_Rational else exact_number(float(value), what)
+        return _expression_value(text, what, angle)
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):
         raise InputError(f"{what} must be a number or a string expression, got {type(raw).__name__}")
     return exact_angle(raw, what) if angle else exact_number(raw, what)
+
+
+def _expression_value(text: str, what: str, angle: bool) -> sp.Expr:
+    """A finite expression string as an exact value (an angle close to k pi/2 snaps to it)."""
+    value = parse_expression(text, what)
+    try:
+        finite = bool(value.is_finite) and math.isfinite(float(value))
+    except OverflowError:
+        finite = False
+    if not finite:
+        raise InputError(f"{what}: {quoted(text)} is not finite")
+    if angle:  # exact as written; a number close to a multiple of pi/2 snaps to it
+        snapped = exact_angle(float(value), what)
+        return snapped if snapped.has(sp.pi) or snapped == 0 else value
+    return value if value.is_Rational else exact_number(float(value), what)
 
 
 def _frame(raw: object, what: str, parameters: dict[str, sp.Symbol]) -> Transform:
@@ -110,7 +146,7 @@ def _frame(raw: object, what: str, parameters: dict[str, sp.Symbol]) -> Transfor
         raise InputError(f"{what} must be a table with xyz and rpy")
     unknown = sorted(set(raw) - FRAME_KEYS)
     if unknown:
-        raise InputError(f"{what}: unknown key {unknown[0]!r} (expected xyz, rpy)")
+        raise InputError(f"{what}: unknown key {quoted(unknown[0])} (expected xyz, rpy)")
     values = {}
     for key in ("xyz", "rpy"):
         items = raw.get(key, [0.0, 0.0, 0.0])
@@ -121,8 +157,17 @@ def _frame(raw: object, what: str, parameters: dict[str, sp.Symbol]) -> Transfor
 
 
 def _limit(raw: object, what: str) -> float | None:
+    """A joint limit (rad, m, rad/s or m/s): a number, or an expression of numbers and pi as for angles
+    (``"-155*pi/180"``, ``"pi/2"``); None when absent. Parameters are not allowed here."""
     if raw is None:
         return None
+    if isinstance(raw, str):
+        text = raw.strip()
+        if _IDENTIFIER.fullmatch(text) and text != "pi":
+            raise InputError(
+                f"{what} must be a number or an expression of numbers and pi (\"-155*pi/180\"), not the name {quoted(text, 40)}"
+            )
+        return float(_expression_value(text, what, angle=False))
     if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(float(raw)):
         raise InputError(f"{what} must be a finite number")
     return float(raw)
@@ -132,10 +177,12 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
     """Build a :class:`Chain` from a parsed robot-file table (see the module docstring)."""
     unknown = sorted(set(data) - TOP_KEYS)
     if unknown:
-        raise InputError(f"unknown key {unknown[0]!r} (expected {', '.join(sorted(TOP_KEYS))})")
+        raise InputError(f"unknown key {quoted(unknown[0])} (expected {', '.join(sorted(TOP_KEYS))})")
     name = data.get("name", default_name)
+    if isinstance(name, str):
+        check_printable(name, "name")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,47}", name):
-        raise InputError(f"name must be a C identifier (a letter, then letters, digits or _), got {name!r}")
+        raise InputError(f"name must be a C identifier (a letter, then letters, digits or _; at most 48), got {quoted(name) if isinstance(name, str) else name!r}")
     convention = data.get("convention", "standard")
     if convention not in CONVENTIONS:
         raise InputError(f"convention must be standard or modified, got {convention!r}")
@@ -152,7 +199,7 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
             raise InputError(f"{where} must be a table")
         unknown = sorted(set(row) - JOINT_KEYS)
         if unknown:
-            raise InputError(f"{where}: unknown key {unknown[0]!r} (expected {', '.join(sorted(JOINT_KEYS))})")
+            raise InputError(f"{where}: unknown key {quoted(unknown[0])} (expected {', '.join(sorted(JOINT_KEYS))})")
         if "type" not in row:
             raise InputError(f"{where}: missing type (revolute or prismatic)")
         kind = row["type"]
@@ -162,6 +209,7 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
         joint_name = row.get("name", f"q{i + 1}")
         if not isinstance(joint_name, str) or not joint_name:
             raise InputError(f"{where}.name must be a non-empty string")
+        check_printable(joint_name, f"{where}.name")
         names.append(joint_name)
         joint = dh_joint(joint_name, kind, convention, values["a"], values["alpha"], values["d"], values["theta"], i)
         limits = {k: _limit(row.get(k), f"{where}.{k}") for k in ("lower", "upper", "velocity")}
@@ -176,38 +224,98 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
     description = data.get("description", f"{convention} DH")
     if not isinstance(description, str):
         raise InputError("description must be a string")
+    check_printable(description, "description", "descriptions")
     return Chain(
         name, tuple(joints), base, tool, tuple(names), tuple(parameters.values()), source,
         description=f"{convention} DH" if description == f"{convention} DH" else description,
     )
 
 
-def read_robot_bytes(path: Path, what: str) -> bytes:
-    """The bytes of a robot description; InputError naming the file when it cannot be read."""
+def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> bytes:
+    """The bytes of a robot description of at most ``max_bytes``; InputError naming the file when it
+    cannot be read or is larger."""
     try:
-        return path.read_bytes()
+        with open(path, "rb") as handle:
+            data = handle.read(max_bytes + 1)
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise InputError(f"{path}: is a folder, not a {what}") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if len(data) > max_bytes:
+        raise InputError(f"{path}: larger than {_size(max_bytes)}: a {what} is read only up to that size")
+    return data
+
+
+def _size(count: int) -> str:
+    return f"{count // (1024 * 1024)} MiB" if count % (1024 * 1024) == 0 else f"{count} bytes"
 
 
 def load_robot_file(path: str | os.PathLike) -> Chain:
-    """Read a TOML robot file; InputError naming the file and the problem on any bad input."""
+    """Read a TOML robot file (at most ``MAX_TOML_BYTES``); InputError naming the file and the problem
+    (and the key, where there is one) on any bad input, too large or too deeply nested values included."""
     path = Path(path)
-    text = read_robot_bytes(path, "robot file")
+    raw = read_robot_bytes(path, "robot file", MAX_TOML_BYTES)
     try:
-        data = tomllib.loads(text.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not valid TOML: {str(exc).splitlines()[0]}") from None
+        text = raw.decode("utf-8")
+        data = tomllib.loads(text)
+    except (ValueError, UnicodeDecodeError) as exc:  # TOMLDecodeError; ValueError: an integer of over 4300 digits
+        reason = (str(exc).splitlines() or [""])[0].split("; use sys.set_int_max_str_digits")[0]
+        raise InputError(f"{path}: not valid TOML: {reason[:200]}") from None
+    except (RecursionError, MemoryError):
+        raise InputError(f"{path}: {_too_deep(text)}") from None
     try:
         return chain_from_table(data, source=str(path), default_name=_default_name(path))
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    except (RecursionError, MemoryError):  # a safety net: no value above should get here
+        raise InputError(f"{path}: a value is too large or too deeply nested to read") from None
+
+
+MAX_TOML_DEPTH = 32
+"""Arrays and inline tables nested deeper than this are named as the cause when tomllib gives up."""
+
+
+def _too_deep(text: str) -> str:
+    """Where ``text`` nests arrays or inline tables too deeply (tomllib ran out of stack): the line
+    and key of the first value nested deeper than ``MAX_TOML_DEPTH``, found by a scan that skips
+    strings and comments on each line."""
+    depth, key, table, counts = 0, None, "", {}
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.strip()
+        if depth == 0:
+            header = re.match(r"\[\[\s*([^\]]+?)\s*\]\]|\[\s*([^\]]+?)\s*\]", stripped)
+            if header:
+                if header.group(1):
+                    table = header.group(1)
+                    counts[table] = counts.get(table, 0) + 1
+                    table = f"{table}[{counts[table] - 1}]"
+                else:
+                    table = header.group(2)
+                continue
+            assignment = re.match(r"([A-Za-z0-9_\-.\"' ]+?)\s*=", stripped)
+            if assignment:
+                key = f"{table}.{assignment.group(1).strip()}" if table else assignment.group(1).strip()
+        quote = None
+        for char in line:
+            if quote:
+                quote = None if char == quote else quote
+            elif char in "\"'":
+                quote = char
+            elif char == "#":
+                break
+            elif char in "[{":
+                depth += 1
+                if depth > MAX_TOML_DEPTH:
+                    where = f"key {quoted(key, 40)}" if key else "a value"
+                    return f"line {number}: {where} nests arrays or inline tables more than {MAX_TOML_DEPTH} deep"
+            elif char in "]}":
+                depth = max(depth - 1, 0)
+    return f"a value nests arrays or inline tables more than {MAX_TOML_DEPTH} deep, or is too large to read"
 
 
 def _default_name(path: Path) -> str:
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", path.stem) or "robot"
-    return stem if stem[0].isalpha() else "robot_" + stem
+    """The robot's name when its file has no ``name`` key: the file name's stem made an identifier
+    (:func:`~skelarm_sym.names.identifier_from`), else ``robot``."""
+    return identifier_from(path.stem) or "robot"

@@ -1,4 +1,21 @@
-"""One entry point for robot description files: URDF (``.urdf``) or a TOML DH table (``.toml``)."""
+"""One entry point for robot description files: URDF (``.urdf``) or a TOML DH table (``.toml``).
+
+The default prefix (the emitted files' names and the C prefix when ``--prefix`` is not given):
+
+* URDF: the file name's stem made an identifier, else the ``<robot name>`` made one, else ``robot``;
+* TOML: the ``name`` key, else the file name's stem made an identifier, else ``robot``.
+
+"Made an identifier" (:func:`~skelarm_sym.names.identifier_from`): case kept as written, every run of
+characters other than ASCII letters and digits becomes one ``_`` (none at either end), ``robot_``
+before a leading digit, at most 48 characters, ``_robot`` after a reserved word or a Python standard
+module name: ``xarm7.urdf`` gives ``xarm7``, ``ur5 (copy).urdf`` ``ur5_copy``, ``2dof.urdf``
+``robot_2dof``. :data:`PREFIX_RULE` says it in one sentence for ``--help``.
+
+Robot-file text (names, descriptions, the ``base`` and ``tip`` link names) must be printable: a control,
+format (bidi, zero-width) or line-separator character is refused with one line naming the file, the
+element or key and the code point (:func:`~skelarm_sym.names.check_printable`). Every error is an
+:class:`~skelarm_sym.errors.InputError` of one line that starts with the file's path.
+"""
 
 from __future__ import annotations
 
@@ -8,16 +25,27 @@ from pathlib import Path
 
 from ...errors import InputError
 from .model import Chain
-from .dh_file import load_robot_file
-from .urdf import load_urdf
+from .dh_file import MAX_TOML_BYTES, load_robot_file
+from .urdf import MAX_URDF_BYTES, MAX_URDF_ELEMENTS, UrdfLink, load_urdf, urdf_links, urdf_tree
 
 SUFFIXES = (".urdf", ".toml")
+PREFIX_RULE = (
+    "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7), for a TOML file its name key; "
+    "characters other than letters and digits become _, a leading digit gets robot_ before it"
+)
+"""The default-prefix rule in one sentence (for ``generate --help``)."""
+
+__all__ = [
+    "MAX_TOML_BYTES", "MAX_URDF_BYTES", "MAX_URDF_ELEMENTS", "PREFIX_RULE", "SUFFIXES", "UrdfLink",
+    "load_robot", "urdf_links", "urdf_tree",
+]
 
 
 def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
     """The chain described by ``path``: a URDF file (from link ``base`` to link ``tip``) or a TOML robot file.
 
     ``base`` and ``tip`` pick a path in a URDF tree; a TOML file is one chain already, so they are refused there.
+    The chain's ``default_prefix`` follows the rule in the module docstring.
     """
     path = Path(path)
     suffix = path.suffix.lower()

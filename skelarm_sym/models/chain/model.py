@@ -48,7 +48,10 @@ def exact_number(value: object, what: str = "value") -> sp.Expr:
         return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{what} must be a number, got {value!r}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond the double range
+        raise InputError(f"{what} must be finite, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(x):
         raise InputError(f"{what} must be finite, got {x!r}")
     if x == 0.0:
@@ -203,7 +206,12 @@ class Joint:
 
 
 def unit_axis(axis: Iterable[object], what: str = "axis") -> tuple[sp.Expr, sp.Expr, sp.Expr]:
-    """``axis`` normalised: exact when it is along x, y or z (either sign), else Floats; length 0 is refused."""
+    """``axis`` normalised: exact when it is along x, y or z (either sign), else Floats; length 0 is refused.
+
+    Components whose squares would overflow or underflow (magnitudes beyond 1e150 or below 1e-150) are
+    divided by the largest magnitude before the length is formed, so huge (``1e300 1e300 0``) and
+    subnormal (``1e-310 0 0``) axes normalise like ``1 1 0`` and ``1 0 0``; only the zero vector has
+    length zero."""
     values = list(axis)
     if len(values) != 3:
         raise InputError(f"{what} must have three components, got {len(values)}")
@@ -211,15 +219,20 @@ def unit_axis(axis: Iterable[object], what: str = "axis") -> tuple[sp.Expr, sp.E
     if any(e.free_symbols for e in exprs):
         raise InputError(f"{what} must be numbers")
     floats = [float(e) for e in exprs]
-    length = math.sqrt(sum(x * x for x in floats))
-    if not length > 0.0 or not math.isfinite(length):
+    largest = max(abs(x) for x in floats)
+    if not largest > 0.0:
         raise InputError(f"{what} has length zero")
+    if not math.isfinite(largest):
+        raise InputError(f"{what} must be finite")
     nonzero = [i for i, x in enumerate(floats) if x != 0.0]
     if len(nonzero) == 1:
         i = nonzero[0]
         out = [sp.S.Zero] * 3
         out[i] = sp.Integer(1 if floats[i] > 0 else -1)
         return tuple(out)  # type: ignore[return-value]
+    if not 1e-150 < largest < 1e150:  # squares would overflow or lose digits: scale first
+        floats = [x / largest for x in floats]  # the largest becomes +-1, the others stay in [-1, 1]
+    length = math.sqrt(sum(x * x for x in floats))
     return tuple(_fold(sp.Float(x / length)) for x in floats)  # type: ignore[return-value]
 
 
@@ -254,6 +267,10 @@ class Chain:
     ``coordinates``: names of the input coordinates ``q[0..n-1]`` in order (usually one per
     joint, base to tip). ``parameters``: named parameters in order of first appearance; the
     emitted code takes their values as ``params``. ``source``: the file it came from.
+    ``prefix``: the default prefix of the emitted files (empty: ``name``; a URDF's file name).
+    ``name``, ``description`` and the joint names are text from the robot file: printable (checked by
+    the loaders with :func:`~skelarm_sym.names.check_printable`) but otherwise any characters, data
+    that printers escape.
     """
 
     name: str
@@ -266,6 +283,7 @@ class Chain:
     description: str = ""
     load_options: tuple[tuple[str, str], ...] = ()
     """The loader's options besides the file (``(("--base", "world"), ("--tip", "tool0"))`` for a URDF chain)."""
+    prefix: str = ""
 
     def __post_init__(self) -> None:
         joints = tuple(self.joints)
@@ -301,8 +319,8 @@ class Chain:
 
     @property
     def default_prefix(self) -> str:
-        """File name and C prefix when none is given: the robot's name."""
-        return self.name
+        """File name and C prefix when none is given: ``prefix``, else the robot's name."""
+        return self.prefix or self.name
 
     def command_args(self, folder: str | None = None) -> list[str]:
         """The ``skelarm-sym generate`` options (words) that describe this model: the robot file (relative

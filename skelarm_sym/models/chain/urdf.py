@@ -20,13 +20,20 @@ Joints on the path:
 are exactly that multiple, and whole numbers are exact. Position limits (``lower``/``upper``; none
 for ``continuous``) and the ``velocity`` limit are kept on the joints. Every error is one line that
 names the file and the problem.
+
+Names (robot, links, joints; ``base`` and ``tip``) are text, kept as written: any printable
+characters, but a control, format (bidi, zero-width) or line-separator character anywhere in the
+file's names is refused (:func:`~skelarm_sym.names.check_printable`). Limits: a file of at most
+16 MiB (``MAX_URDF_BYTES``) with at most 100 000 ``<link>`` and 100 000 ``<joint>`` elements
+(``MAX_URDF_ELEMENTS``); reading is linear in the file's size. :func:`urdf_tree` lists the link
+tree with its joints and leaves, to choose ``tip``.
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
-import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +41,7 @@ from pathlib import Path
 import sympy as sp
 
 from ...errors import InputError
-from ...names import reserved_name
+from ...names import check_printable, identifier_from, quoted
 from .model import Chain, Joint, Transform, exact_angle, exact_number, unit_axis
 from .dh_file import read_robot_bytes
 
@@ -42,6 +49,11 @@ MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prisma
 REFUSED = ("floating", "planar")
 TYPES = (*MOVING, "fixed", *REFUSED)
 _LISTED = 12  # names listed in an error message before "..."
+_SUGGESTED = 20_000  # close matches are looked for among at most this many links (difflib is slow)
+MAX_URDF_BYTES = 16 * 1024 * 1024
+"""Largest URDF file read (16 MiB; the largest robot of example-robot-data has 0.2 MiB)."""
+MAX_URDF_ELEMENTS = 100_000
+"""Most ``<link>`` elements, and most ``<joint>`` elements, a URDF may have."""
 
 
 @dataclass(frozen=True)
@@ -57,11 +69,22 @@ class _UrdfJoint:
 
 def _tag(element: ET.Element) -> str:
     """The tag without an XML namespace."""
-    return element.tag.rsplit("}", 1)[-1] if isinstance(element.tag, str) else ""
+    tag = element.tag
+    if not isinstance(tag, str):  # a comment or processing instruction
+        return ""
+    return tag if "}" not in tag else tag.rsplit("}", 1)[-1]
 
 
 def _children(element: ET.Element, tag: str) -> list[ET.Element]:
     return [e for e in element if _tag(e) == tag]
+
+
+def _by_tag(element: ET.Element) -> dict[str, list[ET.Element]]:
+    """The children of ``element`` grouped by tag, in one pass."""
+    out: dict[str, list[ET.Element]] = {}
+    for child in element:
+        out.setdefault(_tag(child), []).append(child)
+    return out
 
 
 def _one(element: ET.Element, tag: str, what: str) -> ET.Element | None:
@@ -73,7 +96,7 @@ def _one(element: ET.Element, tag: str, what: str) -> ET.Element | None:
 
 def _listing(names) -> str:
     names = list(names)
-    shown = ", ".join(repr(n) for n in names[:_LISTED])
+    shown = ", ".join(quoted(n, 40) for n in names[:_LISTED])
     return shown + (f", ... ({len(names)} in all)" if len(names) > _LISTED else "")
 
 
@@ -83,14 +106,14 @@ def _numbers(text: str | None, count: int, what: str, default: tuple[float, ...]
         return list(default)
     parts = text.split()
     if len(parts) != count:
-        raise InputError(f"{what} must have {count} numbers, got {text.strip()!r}")
+        raise InputError(f"{what} must have {count} numbers, got {quoted(text.strip())}")
     try:
         values = [float(p) for p in parts]
     except ValueError:
-        raise InputError(f"{what} must be numbers, got {text.strip()!r}") from None
+        raise InputError(f"{what} must be numbers, got {quoted(text.strip())}") from None
     for v in values:
         if not math.isfinite(v):
-            raise InputError(f"{what} must be finite, got {text.strip()!r}")
+            raise InputError(f"{what} must be finite, got {quoted(text.strip())}")
     return values
 
 
@@ -174,116 +197,159 @@ def _mimic(joint: _UrdfJoint, joints: dict[str, _UrdfJoint]) -> tuple[str, float
     if followed == joint.name:
         raise InputError(f"{what} refers to itself")
     if followed not in joints:
-        raise InputError(f"{what} refers to joint {followed!r}, which is not in the file")
+        raise InputError(f"{what} refers to joint {quoted(followed)}, which is not in the file")
     multiplier = _scalar(element, "multiplier", what)
     offset = _scalar(element, "offset", what)
     return followed, 1.0 if multiplier is None else multiplier, 0.0 if offset is None else offset
 
 
 def _c_name(text: str | None, fallback: str) -> str:
-    """A C identifier (letter first, at most 48 characters) from a robot name."""
-    name = re.sub(r"[^A-Za-z0-9_]", "_", (text or "").strip()) or re.sub(r"[^A-Za-z0-9_]", "_", fallback) or "robot"
-    if not name[0].isalpha():
-        name = "robot_" + name
-    name = name[:48]
-    if reserved_name(name):
-        name = name[:42] + "_robot"
-    return name
+    """A C identifier from a robot name (see :func:`~skelarm_sym.names.identifier_from`), else from ``fallback``."""
+    return identifier_from(text) or identifier_from(fallback) or "robot"
 
 
-def _read_tree(root: ET.Element) -> tuple[list[str], dict[str, _UrdfJoint], dict[str, _UrdfJoint]]:
-    """Links in file order, joints by name, and each child link's joint; checks names, types and the tree."""
+@dataclass
+class _Tree:
+    """A URDF's link tree as read, with the indexes every step below needs (each built in one pass).
+
+    ``links``: link names in file order; ``joints``: joints by name, in file order; ``parent_joint``:
+    each child link's joint; ``children``: each parent link's joints, in file order; ``roots``: the links
+    without a parent, in file order."""
+
+    links: dict[str, None]
+    joints: dict[str, _UrdfJoint]
+    parent_joint: dict[str, _UrdfJoint]
+    children: dict[str, list[_UrdfJoint]]
+    roots: list[str]
+
+
+def _name(element: ET.Element, what: str) -> str:
+    name = element.get("name")
+    if not name:
+        raise InputError(f"a <{what}> has no name")
+    return check_printable(name, f"{what} name")
+
+
+def _read_tree(root: ET.Element) -> _Tree:
+    """The link tree of a ``<robot>``; checks names (printable, unique), types, the ends of joints, the
+    limits on element counts and that the joints form a tree. Linear in the number of elements."""
     if _tag(root) != "robot":
         raise InputError(f"the root element is <{_tag(root)}>, expected <robot>")
-    links: list[str] = []
-    for element in _children(root, "link"):
-        name = element.get("name")
-        if not name:
-            raise InputError("a <link> has no name")
+    if root.get("name") is not None:
+        check_printable(root.get("name"), "robot name")
+    grouped = _by_tag(root)
+    link_elements, joint_elements = grouped.get("link", []), grouped.get("joint", [])
+    for tag, found in (("link", link_elements), ("joint", joint_elements)):
+        if len(found) > MAX_URDF_ELEMENTS:
+            raise InputError(f"{len(found)} <{tag}> elements: at most {MAX_URDF_ELEMENTS} are read")
+    links: dict[str, None] = {}
+    for element in link_elements:
+        name = _name(element, "link")
         if name in links:
-            raise InputError(f"link {name!r} is defined twice")
-        links.append(name)
+            raise InputError(f"link {quoted(name)} is defined twice")
+        links[name] = None
     if not links:
         raise InputError("no <link> elements")
-    known = set(links)
     joints: dict[str, _UrdfJoint] = {}
     parent_joint: dict[str, _UrdfJoint] = {}
-    for element in _children(root, "joint"):
-        name = element.get("name")
-        if not name:
-            raise InputError("a <joint> has no name")
+    children: dict[str, list[_UrdfJoint]] = {}
+    for element in joint_elements:
+        name = _name(element, "joint")
         if name in joints:
-            raise InputError(f"joint {name!r} is defined twice")
+            raise InputError(f"joint {quoted(name)} is defined twice")
         kind = element.get("type")
         if kind not in TYPES:
-            raise InputError(f"joint {name!r}: type must be one of {', '.join(TYPES)}, got {kind!r}")
-        ends = {}
+            raise InputError(f"joint {quoted(name)}: type must be one of {', '.join(TYPES)}, got {'no type' if kind is None else quoted(kind)}")
+        ends, parts = {}, _by_tag(element)
         for end in ("parent", "child"):
-            tag = _one(element, end, f"joint {name!r}")
-            link = None if tag is None else tag.get("link")
+            found = parts.get(end, ())
+            if len(found) > 1:
+                raise InputError(f"joint {quoted(name)} has {len(found)} <{end}> elements, expected at most one")
+            link = found[0].get("link") if found else None
             if not link:
-                raise InputError(f"joint {name!r} has no <{end} link=...>")
-            if link not in known:
-                raise InputError(f"joint {name!r}: {end} link {link!r} is not a <link> in the file")
+                raise InputError(f"joint {quoted(name)} has no <{end} link=...>")
+            if link not in links:
+                raise InputError(f"joint {quoted(name)}: {end} link {quoted(link)} is not a <link> in the file")
             ends[end] = link
         if ends["parent"] == ends["child"]:
-            raise InputError(f"joint {name!r} connects link {ends['child']!r} to itself")
+            raise InputError(f"joint {quoted(name)} connects link {quoted(ends['child'])} to itself")
         joint = _UrdfJoint(name, kind, ends["parent"], ends["child"], element)
         if joint.child in parent_joint:
             other = parent_joint[joint.child]
-            raise InputError(f"link {joint.child!r} has two parents: joints {other.name!r} and {name!r}")
+            raise InputError(f"link {quoted(joint.child)} has two parents: joints {quoted(other.name)} and {quoted(name)}")
         joints[name] = joint
         parent_joint[joint.child] = joint
-    # every link has at most one parent: a cycle is a loop of parent pointers
-    done: set[str] = set()
-    for link in links:
-        seen: list[str] = []
-        while link not in done and link in parent_joint:
-            if link in seen:
-                loop = seen[seen.index(link):]
-                raise InputError(f"the joints form a cycle through links {', '.join(repr(x) for x in loop)}")
-            seen.append(link)
+        children.setdefault(joint.parent, []).append(joint)
+    roots = [link for link in links if link not in parent_joint]
+    # every link has at most one parent: the links not reached from a root lie on or below a cycle
+    reached, stack = set(roots), list(roots)
+    while stack:
+        for joint in children.get(stack.pop(), ()):
+            reached.add(joint.child)
+            stack.append(joint.child)
+    if len(reached) < len(links):
+        link = next(link for link in links if link not in reached)
+        seen: dict[str, None] = {}
+        while link not in seen:  # up the parents of an unreached link: they end in the cycle
+            seen[link] = None
             link = parent_joint[link].parent
-        done.update(seen)
-    return links, joints, parent_joint
+        loop = list(seen)[list(seen).index(link):]
+        raise InputError(f"the joints form a cycle through links {_listing(loop)}")
+    return _Tree(links, joints, parent_joint, children, roots)
+
+
+def _unknown_link(name: str, what: str, links: dict[str, None]) -> InputError:
+    """The error for a ``base`` or ``tip`` that names no link: close matches first, then the links."""
+    close = difflib.get_close_matches(name, links, n=3, cutoff=0.6) if len(links) <= _SUGGESTED else []
+    hint = f"; did you mean {' or '.join(quoted(c) for c in close)}?" if close else ""
+    return InputError(f"no link {quoted(name)} ({what}){hint} (links: {_listing(links)})")
+
+
+def _leaves(tree: _Tree, base: str) -> list[str]:
+    """The leaf links below ``base`` (depth first, in file order)."""
+    leaves, stack = [], [base]
+    while stack:
+        link = stack.pop()
+        below = tree.children.get(link, [])
+        if not below:
+            leaves.append(link)
+        stack.extend(joint.child for joint in reversed(below))
+    return leaves
 
 
 def chain_from_urdf(root: ET.Element, base: str | None = None, tip: str | None = None, source: str | None = None,
-                    default_name: str = "robot") -> Chain:
-    """Build a :class:`Chain` from a parsed URDF ``<robot>`` element (see the module docstring)."""
-    links, joints, parent_joint = _read_tree(root)
+                    default_name: str = "robot", prefix: str = "") -> Chain:
+    """Build a :class:`Chain` from a parsed URDF ``<robot>`` element (see the module docstring).
+
+    ``default_name`` names the robot when its ``<robot>`` has no usable name; ``prefix`` is the chain's
+    default prefix (empty: its name)."""
+    for given, what in ((base, "base"), (tip, "tip")):
+        if given is not None:
+            check_printable(given, f"{what} link")
+    tree = _read_tree(root)
+    links, joints, parent_joint = tree.links, tree.joints, tree.parent_joint
     if base is None:
-        roots = [link for link in links if link not in parent_joint]
-        if len(roots) != 1:
-            raise InputError(f"{len(roots)} root links ({_listing(roots)}): choose one as base")
-        base = roots[0]
+        if len(tree.roots) != 1:
+            raise InputError(f"{len(tree.roots)} root links ({_listing(tree.roots)}): choose one as base")
+        base = tree.roots[0]
     elif base not in links:
-        raise InputError(f"no link {base!r} (links: {_listing(links)})")
+        raise _unknown_link(base, "base", links)
     if tip is None:
-        children: dict[str, list[str]] = {}
-        for joint in joints.values():
-            children.setdefault(joint.parent, []).append(joint.child)
-        leaves, stack = [], [base]
-        while stack:
-            link = stack.pop()
-            below = children.get(link, [])
-            if not below:
-                leaves.append(link)
-            stack.extend(reversed(below))
+        leaves = _leaves(tree, base)
         if leaves == [base]:
-            raise InputError(f"base {base!r} has no links below it")
+            raise InputError(f"base {quoted(base)} has no links below it")
         if len(leaves) > 1:
-            raise InputError(f"{len(leaves)} leaf links below {base!r} ({_listing(leaves)}): choose one as tip")
+            raise InputError(f"{len(leaves)} leaf links below {quoted(base)} ({_listing(leaves)}): choose one as tip")
         tip = leaves[0]
     elif tip not in links:
-        raise InputError(f"no link {tip!r} (links: {_listing(links)})")
+        raise _unknown_link(tip, "tip", links)
     if tip == base:
-        raise InputError(f"tip and base are the same link {base!r}")
+        raise InputError(f"tip and base are the same link {quoted(base)}")
     path: list[_UrdfJoint] = []
     link = tip
     while link != base:
         if link not in parent_joint:
-            raise InputError(f"link {tip!r} is not below base {base!r}")
+            raise InputError(f"link {quoted(tip)} is not below base {quoted(base)}")
         path.append(parent_joint[link])
         link = parent_joint[link].parent
     path.reverse()
@@ -345,19 +411,108 @@ def chain_from_urdf(root: ET.Element, base: str | None = None, tip: str | None =
         raise InputError(f"no revolute, continuous or prismatic joint between {base!r} and {tip!r}")
     return Chain(
         _c_name(root.get("name"), default_name), tuple(moving), chain_base, pending, tuple(coordinates), (),
-        source, description=f"URDF, base {base}, tip {tip}",
+        source, description=f"URDF, base {base}, tip {tip}", prefix=prefix,
     )
 
 
-def load_urdf(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
-    """Read a URDF file as the chain from link ``base`` to link ``tip``; InputError naming the file and the problem."""
+@dataclass(frozen=True)
+class UrdfLink:
+    """One link of a URDF's link tree, as :func:`urdf_links` lists them (depth first, in file order).
+
+    ``depth``: joints between its root and it (0 for a root); ``parent``, ``joint``, ``joint_type``: the
+    link above it, the joint from there and its type (None for a root); ``coordinates``: moving joints
+    that are not mimic joints between its root and it (the length of ``q`` of a chain ending here);
+    ``leaf``: no joint below it (a candidate ``tip``)."""
+
+    name: str
+    depth: int
+    parent: str | None
+    joint: str | None
+    joint_type: str | None
+    coordinates: int
+    leaf: bool
+
+
+TREE_INDENT_LIMIT = 24
+""":func:`urdf_tree` indents by depth up to this many levels; deeper lines say their depth instead."""
+
+
+def urdf_links(path: str | os.PathLike) -> list[UrdfLink]:
+    """Every link of the URDF file ``path`` in depth-first order from its roots (file order among
+    siblings), with the joint above it; InputError (one line naming the file) on a bad file. Linear in
+    the number of elements."""
     path = Path(path)
-    text = read_robot_bytes(path, "URDF file")
+    root = _parse(path)
     try:
-        root = ET.fromstring(text)
+        tree = _read_tree(root)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    out: list[UrdfLink] = []
+    stack: list[tuple[str, int, _UrdfJoint | None, int]] = [(r, 0, None, 0) for r in reversed(tree.roots)]
+    while stack:
+        link, depth, joint, coordinates = stack.pop()
+        if joint is not None and joint.type in MOVING and not _children(joint.element, "mimic"):
+            coordinates += 1
+        below = tree.children.get(link, [])
+        out.append(UrdfLink(link, depth, None if joint is None else joint.parent, None if joint is None else joint.name,
+                            None if joint is None else joint.type, coordinates, not below))
+        stack.extend((j.child, depth + 1, j, coordinates) for j in reversed(below))
+    return out
+
+
+def urdf_tree(path: str | os.PathLike) -> list[str]:
+    """The link tree of the URDF file ``path`` as lines to print, one per link, depth first: the link
+    name indented two spaces per level, the joint above it and its type, and for a leaf (a ``tip``
+    candidate) how many coordinates a chain from its root to it has::
+
+        world
+          base_link  <- world_joint (fixed)
+            shoulder_link  <- shoulder_pan_joint (revolute)
+            ...
+                      tool0  <- wrist_3-tool0 (fixed)  [leaf: 6 coordinates from world]
+
+    Names are printed as written (the loader refuses control characters in them). Beyond
+    ``TREE_INDENT_LIMIT`` levels a line starts with ``[depth N]`` instead of more spaces."""
+    lines, root = [], ""
+    for entry in urdf_links(path):
+        if entry.depth == 0:
+            root = entry.name
+        indent = "  " * min(entry.depth, TREE_INDENT_LIMIT)
+        if entry.depth > TREE_INDENT_LIMIT:
+            indent += f"[depth {entry.depth}] "
+        text = indent + entry.name
+        if entry.joint is not None:
+            text += f"  <- {entry.joint} ({entry.joint_type})"
+        if entry.leaf and entry.depth > 0:
+            plural = "" if entry.coordinates == 1 else "s"
+            text += f"  [leaf: {entry.coordinates} coordinate{plural} from {root}]"
+        elif entry.leaf:
+            text += "  [no joints]"
+        lines.append(text)
+    return lines
+
+
+def _parse(path: Path) -> ET.Element:
+    """The ``<robot>`` element of the URDF file ``path`` (at most ``MAX_URDF_BYTES``); InputError naming the file."""
+    text = read_robot_bytes(path, "URDF file", MAX_URDF_BYTES)
+    try:
+        return ET.fromstring(text)
     except ET.ParseError as exc:
         raise InputError(f"{path}: not valid XML: {str(exc).splitlines()[0]}") from None
+    except (RecursionError, MemoryError):
+        raise InputError(f"{path}: not valid XML: too deeply nested or too large to read") from None
+
+
+def load_urdf(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
+    """Read a URDF file as the chain from link ``base`` to link ``tip``; InputError naming the file and the problem.
+
+    The chain's default prefix is :func:`~skelarm_sym.models.chain.loader.default_prefix` of the path
+    (the file name's stem made an identifier, else the robot's name)."""
+    path = Path(path)
+    root = _parse(path)
     try:
-        return chain_from_urdf(root, base, tip, source=str(path), default_name=path.stem)
+        robot = root.get("name") if _tag(root) == "robot" else None
+        prefix = identifier_from(path.stem) or identifier_from(robot) or "robot"
+        return chain_from_urdf(root, base, tip, source=str(path), default_name=path.stem, prefix=prefix)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None

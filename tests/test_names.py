@@ -1,0 +1,103 @@
+"""skelarm_sym.names: the one rule for foreign text (check_printable), error quoting and the
+identifier made from a file name or robot name (identifier_from)."""
+
+from __future__ import annotations
+
+import pytest
+
+from skelarm_sym.errors import InputError
+from skelarm_sym.names import IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name
+
+PRINTABLE = [
+    'x */ __attribute__((constructor)) void f(void){} /*',
+    '"""; __import__("os").system("touch pwned"); """',
+    "#[[ bracket ]] ${CMAKE_COMMAND} $(id) `id`",
+    "back\\slash \\\\ ??/ ??= ??' %s %n {0}",
+    "Gelenk_ä θ₂ 関節 'single' \"double\"",
+    "no-break\u00a0space and ideographic\u3000space",  # Zs: printable spacing, escaped as data
+]
+
+
+@pytest.mark.parametrize("text", PRINTABLE)
+def test_printable_hostile_text_is_data(text):
+    assert check_printable(text, "link name") is text
+
+
+@pytest.mark.parametrize(
+    "text, code, label",
+    [
+        ("a\nb", "U+000A", ""),
+        ("a\rb", "U+000D", ""),
+        ("a\tb", "U+0009", ""),
+        ("a\x00b", "U+0000", ""),
+        ("a\x7fb", "U+007F", ""),
+        ("a\x85b", "U+0085", ""),  # NEL: a line break to some readers
+        ("a\u202eb", "U+202E", " (RIGHT-TO-LEFT OVERRIDE)"),
+        ("a\u202ab", "U+202A", " (LEFT-TO-RIGHT EMBEDDING)"),
+        ("a\u2066b", "U+2066", " (LEFT-TO-RIGHT ISOLATE)"),
+        ("a\u2069b", "U+2069", " (POP DIRECTIONAL ISOLATE)"),
+        ("a\u200eb", "U+200E", " (LEFT-TO-RIGHT MARK)"),
+        ("a\u200fb", "U+200F", " (RIGHT-TO-LEFT MARK)"),
+        ("a\u200bb", "U+200B", " (ZERO WIDTH SPACE)"),
+        ("a\u200db", "U+200D", " (ZERO WIDTH JOINER)"),
+        ("\ufeffab", "U+FEFF", " (ZERO WIDTH NO-BREAK SPACE)"),
+        ("a\u2028b", "U+2028", " (LINE SEPARATOR)"),
+        ("a\u2029b", "U+2029", " (PARAGRAPH SEPARATOR)"),
+        ("a\ud800b", "U+D800", ""),  # a lone surrogate cannot even be written as UTF-8
+    ],
+)
+def test_control_format_and_separator_characters_are_refused(text, code, label):
+    with pytest.raises(InputError) as info:
+        check_printable(text, "link name")
+    message = str(info.value)
+    assert message == f"link name {text!r} holds the control character {code}{label}; robot-file names must be printable text"
+    assert message.isprintable()  # one line, and no refused character reaches the terminal
+
+
+def test_the_kind_of_text_ends_the_message_and_long_text_is_shortened():
+    text = "d" * 300 + "\n" + "import os"
+    with pytest.raises(InputError) as info:
+        check_printable(text, "description", "descriptions")
+    message = str(info.value)
+    assert message == (
+        f"description {'d' * 80!r}... (310 characters) holds the control character U+000A at character 301; "
+        "robot-file descriptions must be printable text"
+    )
+
+
+def test_quoted():
+    assert quoted("a\nb") == "'a\\nb'"
+    assert quoted("x" * 80) == repr("x" * 80)
+    assert quoted("x" * 81) == repr("x" * 80) + "... (81 characters)"
+    assert quoted("abcdef", 3) == "'abc'... (6 characters)"
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("xarm7", "xarm7"),
+        ("UR5e", "UR5e"),  # case kept as written
+        ("UF_ROBOT", "UF_ROBOT"),
+        ("ur5 (copy)", "ur5_copy"),
+        ("my-robot 2", "my_robot_2"),
+        ("panda_arm_hand.urdf", "panda_arm_hand_urdf"),
+        ("__x__y__", "x_y"),
+        ("2dof", "robot_2dof"),
+        ("Gelenk-ä-arm", "Gelenk_arm"),
+        ("double", "double_robot"),  # a C keyword
+        ("class", "class_robot"),  # a C++ and Python keyword
+        ("q1", "q1_robot"),  # the name of an input
+        ("code", "code_robot"),  # a Python standard module: code.py would shadow it
+        ("numpy", "numpy_robot"),
+        ("a" * 60, "a" * IDENTIFIER_LENGTH),
+        ("ロボット", None),
+        ("", None),
+        ("---", None),
+        (None, None),
+    ],
+)
+def test_identifier_from(text, expected):
+    got = identifier_from(text)
+    assert got == expected
+    if got is not None:
+        assert got.isidentifier() and got[0].isalpha() and len(got) <= IDENTIFIER_LENGTH and not reserved_name(got)
