@@ -37,7 +37,7 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, rotate, sub
-from .subproblems import Angle, Steps, sp1, sp2, sp3, sp4, sp_line
+from .subproblems import Angle, Steps, sp1, sp2, sp3, sp4, sp_line, unit_disc
 
 
 @dataclass(frozen=True)
@@ -140,7 +140,8 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str) -> list[Branch]:
     for a, (q1, q2, q3) in enumerate(arms):
         u = steps.vec(f"u{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], g6, True), True), True))
         w = steps.vec(f"w{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], gx, True), True), True))
-        for b, q5 in enumerate(sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u))):
+        for b, q5 in enumerate(sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u),
+                                   unit_disc(H[3], H[5], H[4], u))):
             r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
             q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
             y = steps.vec(f"y{a}{b}", _rot(q5, H[4], _rot(q4, H[3], w, True), True))
@@ -161,7 +162,8 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
         g = steps.vec(f"g{i}", _rot(q1, H[0], g6, True))
         a = steps.vec(f"a{i}", tmatvec(RG, _rot(q1, H[0], H[1])))
         V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), True), P[0]))
-        for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g))):
+        for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
+                                   unit_disc(H[1], H[5], H[4], g))):
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
             q6 = sp1(steps, f"q6_{i}{j}", H[5], a, b)
             y = _rot(q1, H[0], matvec(RG, _rot(q6, H[5], _rot(q5, H[4], x, True), True)), True)
