@@ -219,31 +219,22 @@ def _names(idx: Sequence[int], numbers: Sequence[int]) -> str:
     return ", ".join(str(numbers[i]) for i in idx)
 
 
-def _detect(kinds, H, P, tol, numbers) -> tuple[str | None, str | None, str]:
-    """The family of a 6-joint problem (problem order), or ``(None, None, reasons)``.
-
-    ``numbers``: the 1-based chain joint numbers for messages. Returns ``(family, position, "")``.
-    """
+def _detect(kinds, H, P, tol, numbers) -> tuple[list[tuple[str, str | None]], str]:
+    """Every family of a 6-joint problem (problem order) that applies, in order of preference, and the
+    reasons of those that do not (one line). ``numbers``: the 1-based chain joint numbers for messages."""
     reasons = []
-    rev = [k == "revolute" for k in kinds]
-
-    def parallel(i, j):
-        return _sine(H[i], H[j]) <= ANGLE_TOL
-
-    def meet(i, j):
-        return not parallel(i, j) and _line_distance(P[i], H[i], P[j], H[j]) <= tol
 
     # spherical wrist (joints 4, 5, 6 = indices 3, 4, 5)
-    def wrist(offset_kinds, Hh, Pp, nums, label) -> tuple[str | None, str]:
+    def wrist(offset_kinds, Hh, Pp, nums, label) -> tuple[list[str], str]:
         w = [3, 4, 5]
         if not all(offset_kinds[i] == "revolute" for i in w):
-            return None, f"{label}: joints {_names(w, nums)} are not all revolute"
+            return [], f"{label}: joints {_names(w, nums)} are not all revolute"
         for i, j in ((3, 4), (4, 5)):
             if _sine(Hh[i], Hh[j]) <= ANGLE_TOL:
-                return None, f"{label}: axes {nums[i]}, {nums[j]} are parallel"
+                return [], f"{label}: axes {nums[i]}, {nums[j]} are parallel"
         c = _concurrency(Pp[w], Hh[w])
         if c > tol:
-            return None, f"{label}: axes {_names(w, nums)} do not meet: closest distance {c:.4g} m"
+            return [], f"{label}: axes {_names(w, nums)} do not meet: closest distance {c:.4g} m"
         r = [offset_kinds[i] == "revolute" for i in range(3)]
 
         def par(i, j):
@@ -254,15 +245,18 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[str | None, str | None, str]:
 
         # the wrist centre (for the degenerate test of SP3)
         wc = _closest_point(Pp[3], Hh[3], Pp[4], Hh[4])
+        found = []
         if all(r) and par(1, 2) and not par(0, 1):
-            return "parallel_23", ""
+            found.append("parallel_23")
         if r[0] and r[1] and mt(0, 1):
             if r[2] and _sine(wc - Pp[2], Hh[2]) * np.linalg.norm(wc - Pp[2]) > tol:
-                return "intersect_12", ""
+                found.append("intersect_12")
             if not r[2]:
-                return "prismatic_3", ""
+                found.append("prismatic_3")
         if all(r) and mt(1, 2):
-            return "intersect_23", ""
+            found.append("intersect_23")
+        if found:
+            return found, ""
         why = []
         if not par(1, 2):
             why.append(f"axes {nums[1]}, {nums[2]} not parallel (sine {_sine(Hh[1], Hh[2]):.3g})")
@@ -270,7 +264,7 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[str | None, str | None, str]:
             why.append(f"axes {nums[0]}, {nums[1]} do not meet (distance {_line_distance(Pp[0], Hh[0], Pp[1], Hh[1]):.4g} m)")
         if not mt(1, 2):
             why.append(f"axes {nums[1]}, {nums[2]} do not meet (distance {_line_distance(Pp[1], Hh[1], Pp[2], Hh[2]):.4g} m)")
-        return None, f"{label}: no solved positioning structure for joints {_names(range(3), nums)}: " + ", ".join(why or ["joint kinds"])
+        return [], f"{label}: no solved positioning structure for joints {_names(range(3), nums)}: " + ", ".join(why or ["joint kinds"])
 
     def three_parallel(kk, Hh, Pp, nums, label) -> tuple[bool, str]:
         if not all(k == "revolute" for k in kk):
@@ -286,25 +280,23 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[str | None, str | None, str]:
             return False, f"{label}: axes {nums[4]}, {nums[5]} do not meet: closest distance {d:.4g} m (offset wrist: needs SP6, not in phase 1)"
         return True, ""
 
-    fam, why = wrist(kinds, H, P, numbers, "spherical wrist")
-    if fam:
-        return "spherical_wrist", fam, ""
+    found: list[tuple[str, str | None]] = []
+    fams, why = wrist(kinds, H, P, numbers, "spherical wrist")
+    found += [("spherical_wrist", f) for f in fams]
     reasons.append(why)
     rk, rH, rP, rn = kinds[::-1], H[::-1], P[::-1], numbers[::-1]
-    fam, why = wrist(rk, rH, rP, rn, "spherical shoulder")
-    if fam:
-        return "spherical_shoulder", fam, ""
+    fams, why = wrist(rk, rH, rP, rn, "spherical shoulder")
+    found += [("spherical_shoulder", f) for f in fams]
     reasons.append(why)
     ok, why = three_parallel(kinds, H, P, numbers, "three parallel")
     if ok:
-        return "three_parallel", None, ""
+        found.append(("three_parallel", None))
     reasons.append(why)
     ok, why = three_parallel(rk, rH, rP, rn, "three parallel (reversed)")
     if ok:
-        return "three_parallel_reversed", None, ""
+        found.append(("three_parallel_reversed", None))
     reasons.append(why)
-    del rev, parallel, meet
-    return None, None, "; ".join(reasons)
+    return found, "; ".join(r for r in reasons if r)
 
 
 def _closest_point(pa, ha, pb, hb) -> np.ndarray:
@@ -392,16 +384,17 @@ def classify(chain: Chain, lock: int | None = None) -> Family:
     tol = LENGTH_TOL * geom.reach()
     numbers = [j + 1 for j in geom.joints]
     samples = LOCK_SAMPLES if lock is not None else (0.0,)
-    found = None
+    common = None
     for value in samples:
         kinds, H, P = geom.numeric(_lock_subs(geom, value))
-        name, position, reasons = _detect(kinds, H, P, tol, numbers)
+        found, reasons = _detect(kinds, H, P, tol, numbers)
         lockinfo = f" (joint {lock + 1} locked at {value:g})" if lock is not None else ""
-        if name is None:
+        if not found:
             raise ClosedFormError(f"{chain.name}{lockinfo}: no closed-form family: {reasons}")
-        if found is not None and found != (name, position):
-            raise ClosedFormError(f"{chain.name}: the family changes with the locked joint's value ({found} vs {(name, position)})")
-        found = (name, position)
+        common = found if common is None else [f for f in common if f in found]
+        if not common:
+            raise ClosedFormError(f"{chain.name}: no family holds at every value of the locked joint {lock + 1}")
+    found = common[0]
     name, position = found
     rev = name in ("spherical_shoulder", "three_parallel_reversed")
     base_name = {"spherical_shoulder": "spherical_wrist", "three_parallel_reversed": "three_parallel"}.get(name, name)
