@@ -37,7 +37,7 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, rotate, sub
-from .subproblems import Angle, Steps, sp1, sp2, sp3, sp4, sp_line, unit_disc
+from .subproblems import Angle, Steps, any_of, sp1, sp2, sp3, sp4, sp_line, unit_disc
 
 
 @dataclass(frozen=True)
@@ -49,12 +49,12 @@ class Branch:
     @property
     def ls(self) -> sp.Expr:
         """1 when any subproblem of the branch fell back to least squares."""
-        return sp.Max(*[a.ls for a in self.angles])
+        return any_of(*[a.ls for a in self.angles])
 
     @property
     def singular(self) -> sp.Expr:
         """1 when any subproblem of the branch met a continuum or a double root."""
-        return sp.Max(*[a.singular for a in self.angles])
+        return any_of(*[a.singular for a in self.angles])
 
 
 @dataclass(frozen=True)

@@ -71,6 +71,21 @@ class Steps(StepRecorder):
         return [self(f"{label}{'xyz'[i]}", v[i]) for i in range(3)]
 
 
+def any_of(*flags: sp.Expr) -> sp.Expr:
+    """The largest of 0/1 flags (1 when any is set): ``Max`` of the distinct non-zero ones, unevaluated (SymPy's
+    pairwise comparison of symbols costs seconds and decides nothing here)."""
+    args = []
+    for f in flags:
+        f = sp.sympify(f)
+        if f != 0 and f not in args:
+            args.append(f)
+    if not args:
+        return sp.S.Zero
+    if any(a == 1 for a in args):
+        return sp.S.One
+    return args[0] if len(args) == 1 else sp.Max(*args, evaluate=False)
+
+
 def indicator(cond) -> sp.Expr:
     """1 where ``cond`` holds, else 0 (a select)."""
     return sp.Piecewise((sp.S.One, cond), (sp.S.Zero, True))
@@ -126,12 +141,12 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
     C = steps(f"{label}_C", d - hk * kp)
     r2 = steps(f"{label}_r2", A * A + B * B)
     disc = steps(f"{label}_disc", r2 - C * C if disc is None else disc)
-    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0)))
+    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * r2))
     scale2 = steps(f"{label}_n2", dot(h, h) * dot(p, p))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * r2, disc >= -LS_TOL * r2)))
     flat = steps(f"{label}_flat", indicator(r2 <= SING_TOL**2 * scale2))
-    singular = steps(f"{label}_sg", sp.Max(double, flat))
+    singular = steps(f"{label}_sg", any_of(double, flat))
     out = []
     for b, sign in enumerate((1, -1)):
         x = A * C - sign * B * root
@@ -168,7 +183,7 @@ def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: 
     beta = steps(f"{label}_be", (a2 - k12 * a1) * inv)
     norm2 = steps(f"{label}_m2", (dot(p1, p1) + dot(p2, p2)) / 2)
     disc = steps(f"{label}_disc", norm2 - (alpha * alpha + beta * beta + 2 * alpha * beta * k12))
-    gamma = steps(f"{label}_g", sp.sqrt(sp.Max(disc, 0) * inv))
+    gamma = steps(f"{label}_g", sp.sqrt(sp.Max(disc, 0, evaluate=False) * inv))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * norm2))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * norm2, disc >= -LS_TOL * norm2)))
     n = cross(k1, k2)
@@ -177,7 +192,7 @@ def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: 
         c = steps.vec(f"{label}{b}_c", add(add(scale(alpha, k1), scale(beta, k2)), scale(sign * gamma, n)))
         t1 = sp1(steps, f"{label}{b}_t1", k1, p1, c)
         t2 = sp1(steps, f"{label}{b}_t2", k2, p2, c)
-        sg = steps(f"{label}{b}_sg", sp.Max(double, t1.singular, t2.singular))
+        sg = steps(f"{label}{b}_sg", any_of(double, t1.singular, t2.singular))
         out.append((Angle(t1.theta, t1.c, t1.s, ls, sg), Angle(t2.theta, t2.c, t2.s, ls, sg)))
     return out[0], out[1]
 
@@ -188,7 +203,7 @@ def sp_line(steps: Steps, label: str, h: Sequence, x0: Sequence, o: Sequence, d2
     b = steps(f"{label}_b", dot(h, r))
     c = steps(f"{label}_c", dot(r, r) - d2)
     disc = steps(f"{label}_disc", b * b - c)
-    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0)))
+    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
     scale2 = steps(f"{label}_n2", dot(r, r) + sp.Abs(d2))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * scale2))
     singular = steps(f"{label}_sg", indicator(sp.And(disc <= LS_TOL * scale2, disc >= -LS_TOL * scale2)))
