@@ -12,6 +12,7 @@ from typing import Callable
 
 import numpy as np
 import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
 
 from .derive import ClosedIK, derive_ik_all
 from .postprocess import IKAll, nearest, postprocess
@@ -22,7 +23,9 @@ def lambdify_ik(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     args = list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
     outs = list(ik.Q) + list(ik.flags)
     steps = list(ik.steps)
-    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs))
+    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+                            "user_functions": {}, "order": "none"})  # "none": no term sorting (3x faster printing)
+    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
     S, N = ik.Q.shape
 
     def evaluate(target, lock=None):

@@ -19,7 +19,8 @@ vectors are lists of three SymPy expressions (any frame, the same for all argume
   ``c = |x0 - o|^2 - d2``.
 
 Every solved angle comes with ``cos`` and ``sin`` computed algebraically (``x / rho``, ``y / rho`` with
-``rho = sqrt(x^2 + y^2)``, ``(1, 0)`` when ``rho = 0``: the same representative as ``atan2(0, 0)``), and
+``rho = sqrt(x^2 + y^2)``; angle 0 and ``(1, 0)`` when ``rho = 0``, by a select, so no backend's ``atan2(0, 0)``
+matters), and
 two 0/1 flags: ``ls`` (least squares: a clamped discriminant below ``-LS_TOL`` times its scale) and
 ``singular`` (a continuum -- ``rho`` at most ``SING_TOL`` times its scale -- or a double root,
 ``|disc| <= LS_TOL`` times its scale). Special cases are ``Piecewise`` selects; there are no loops, no
@@ -113,7 +114,7 @@ def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr
     x, y = steps(f"{label}_x", x), steps(f"{label}_y", y)
     rho2 = steps(f"{label}_r2", x * x + y * y)
     rho = steps(f"{label}_r", sp.sqrt(rho2))
-    theta = steps(f"{label}", sp.atan2(y, x))
+    theta = steps(f"{label}", sp.Piecewise((sp.atan2(y, x), rho > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 on every backend
     c = steps(f"{label}_c", sp.Piecewise((x / rho, rho > 0), (sp.S.One, True)))
     s = steps(f"{label}_s", sp.Piecewise((y / rho, rho > 0), (sp.S.Zero, True)))
     singular = steps(f"{label}_sg", indicator(rho2 <= SING_TOL**2 * scale2))
