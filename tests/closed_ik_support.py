@@ -74,10 +74,16 @@ def solver(name: str):
     return chain, lock, ClosedFormIK(chain, lock)
 
 
-def random_configurations(chain: Chain, m: int, rng: np.random.Generator) -> np.ndarray:
-    """``m`` configurations: revolute joints uniform in [-pi, pi], prismatic ones within their limits (or [0.2, 1])."""
+def random_configurations(chain: Chain, m: int, rng: np.random.Generator, within_limits: bool = False) -> np.ndarray:
+    """``m`` configurations: revolute joints uniform in [-pi, pi] (``within_limits``: in their limits where
+    finite), prismatic ones within their limits (or [0.2, 1])."""
     q = rng.uniform(-np.pi, np.pi, (m, chain.n))
     limits = chain.limits()
+    if within_limits:
+        for c in range(chain.n):
+            lo, hi = limits["lower"][c], limits["upper"][c]
+            if lo is not None and hi is not None:
+                q[:, c] = rng.uniform(lo, hi, m)
     for j in chain.joints:
         if j.kind == "prismatic":
             c = j.coordinate

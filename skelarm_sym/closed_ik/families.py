@@ -27,6 +27,9 @@ Three parallel axes (h2 || h3 || h4, h5 meets h6 at ``Q0``; the UR family): ``W 
 ``R(h6, q6) (RG^T R1 h2) = R5^T h2`` (SP1 q6); ``phi = q2 + q3 + q4`` from
 ``R(h2, phi) x = R1^T RG R6^T R5^T x``, ``x = h2 x h5`` (SP1); ``P4 = e2 e3 p4 = V - R(h2, phi)(Q0 - p4)``;
 ``|R(h3, q3)(p4 - p3) - (p2 - p3)|^2 = |P4 - p2|^2`` (SP3 q3); SP1 q2; ``q4 = phi - q2 - q3``. 8 branches.
+At the wrist singularity (h6 turned by q5 parallel to h2: q6's SP1 is a continuum) only ``sigma = phi +- q6`` is
+fixed; the representative takes ``phi`` from an SP3 that puts joint 4's point at the distance from p2 nearest the
+middle of the 2R arm's range (so the arm reaches it whenever the target is reachable), and ``q6 = +-(sigma - phi)``.
 """
 
 from __future__ import annotations
@@ -157,17 +160,44 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
     W = steps.vec("W", add(matvec(RG, Q0), tG))
     g6 = steps.vec("g6", matvec(RG, H[5]))
     x = steps.vec("x2", cross(H[1], H[4]))
+    v = steps.vec("v4", sub(Q0, P[3]))
+    o, pv = sub(P[2], P[1]), sub(P[3], P[2])  # the 2R arm: |R(h3, q3) pv + o|^2 over q3
+    o_perp = sub(o, [dot(o, H[2]) * c for c in H[2]])
+    p_perp = sub(pv, [dot(pv, H[2]) * c for c in H[2]])
+    middle = _sq(o) + _sq(pv) + 2 * dot(o, H[2]) * dot(H[2], pv)
+    spread = 2 * sp.sqrt(_sq(o_perp) * _sq(p_perp))
+    dmin2, dmax2 = steps("dmin2", middle - spread), steps("dmax2", middle + spread)
     out = []
     for i, q1 in enumerate(sp4(steps, "q1", sub(W, P[0]), H[1], H[0], dot(H[1], sub(Q0, P[0])))):
         g = steps.vec(f"g{i}", _rot(q1, H[0], g6, True))
         a = steps.vec(f"a{i}", tmatvec(RG, _rot(q1, H[0], H[1])))
         V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), True), P[0]))
+        u = steps.vec(f"u{i}", sub(V, P[1]))
+        m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * dot(u, H[1]) * dot(H[1], v))
+        dstar = steps(f"dstar{i}", sp.Min(sp.Max(m, dmin2, evaluate=False), dmax2, evaluate=False))
         for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
                                    unit_disc(H[1], H[5], H[4], g))):
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
-            q6 = sp1(steps, f"q6_{i}{j}", H[5], a, b)
-            y = _rot(q1, H[0], matvec(RG, _rot(q6, H[5], _rot(q5, H[4], x, True), True)), True)
-            phi = sp1(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
+            q6r = sp1(steps, f"q6_{i}{j}", H[5], a, b)
+            y = _rot(q1, H[0], matvec(RG, _rot(q6r, H[5], _rot(q5, H[4], x, True), True)), True)
+            phir = sp1(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
+            # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
+            # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
+            # middle of both its range over phi and the 2R arm's range [dmin, dmax], so the 2R arm reaches it.
+            sel = q6r.singular
+            z = _rot(q1, H[0], matvec(RG, _rot(q5, H[4], x, True)), True)
+            sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
+            phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
+            r5h6 = _rot(q5, H[4], H[5])
+            sgn = steps(f"sgn{i}{j}", sp.Piecewise((sp.S.One, dot(H[1], r5h6) >= 0), (-sp.S.One, True)))
+            pick = sel > 0
+
+            def choose(label, singular_value, regular_value):
+                return steps(label, sp.Piecewise((singular_value, pick), (regular_value, True)))
+
+            phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
+                        choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), sel)
+            q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls, sel)
             P4 = steps.vec(f"P4_{i}{j}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
             for k, q3 in enumerate(sp3(steps, f"q3_{i}{j}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
                 X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])
