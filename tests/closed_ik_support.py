@@ -41,7 +41,7 @@ URDF_ARMS = {
 def example_robot_data_dir() -> Path | None:
     """The robots/ folder of the ``example-robot-data`` pip package, or ``None``."""
     try:
-        import example_robot_data  # noqa: F401
+        import example_robot_data  # noqa: F401  (a cmeel package: it only puts its files on the path)
     except ImportError:
         pass
     import sys

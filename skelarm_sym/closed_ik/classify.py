@@ -209,12 +209,6 @@ def _concurrency(P: np.ndarray, H: np.ndarray) -> float:
     return float(max(np.linalg.norm((np.eye(3) - np.outer(h, h)) @ (x - p)) for p, h in zip(P, H)))
 
 
-@dataclass(frozen=True)
-class _Check:
-    ok: bool
-    reason: str = ""
-
-
 def _names(idx: Sequence[int], numbers: Sequence[int]) -> str:
     return ", ".join(str(numbers[i]) for i in idx)
 

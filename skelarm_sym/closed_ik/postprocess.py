@@ -118,13 +118,11 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
     exact = (flags & 1) == 0
     keep = exact if exact.any() else np.ones(S, bool)
     count = 0
-    found_exact = False
     for i in range(S):
         if not keep[i]:
             continue
         q = shift(Q[i], lower, upper, revolute)
         if np.any(q < lower - limit_tol) or np.any(q > upper + limit_tol):
-            found_exact |= bool(exact[i])
             continue
         q = np.clip(q, lower, upper)
         dup = False
@@ -143,7 +141,6 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
         status = STATUS["out_of_limits"]
     else:
         status = STATUS["ok"]
-    del found_exact
     return IKAll(out_q, out_f, out_b, count, status)
 
 
