@@ -40,7 +40,13 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, rotate, sub
-from .subproblems import Angle, Steps, any_of, sp1, sp2, sp3, sp4, sp_line, unit_disc
+from .subproblems import Angle, Steps, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
+
+
+SPLIT_TOL = 1e-12
+"""UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
+(its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
+1e-16 over the sine in q6, stays within the reach of the 2R arm except at the workspace's edge)."""
 
 
 @dataclass(frozen=True)
@@ -184,7 +190,10 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
             # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
             # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
             # middle of both its range over phi and the 2R arm's range [dmin, dmax], so the 2R arm reaches it.
-            sel = q6r.singular
+            # the split is taken where h6 and R5^T h2 are within SPLIT_TOL (sine): below it q6's SP1 is noise
+            # (q5 = 1e-16 from an exactly aligned target); above it the regular path is exact to rounding
+            bb = cross(H[5], b)
+            sel = steps(f"split{i}{j}", indicator(dot(bb, bb) <= SPLIT_TOL**2 * dot(b, b)))
             z = _rot(q1, H[0], matvec(RG, _rot(q5, H[4], x, True)), True)
             sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
             phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
@@ -196,8 +205,9 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
                 return steps(label, sp.Piecewise((singular_value, pick), (regular_value, True)))
 
             phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
-                        choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), sel)
-            q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls, sel)
+                        choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), q6r.singular)
+            q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls,
+                       any_of(sel, q6r.singular))
             P4 = steps.vec(f"P4_{i}{j}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
             for k, q3 in enumerate(sp3(steps, f"q3_{i}{j}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
                 X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])

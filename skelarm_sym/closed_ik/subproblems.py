@@ -3,7 +3,8 @@
 Notation: ``R(k, theta)`` is the rotation by ``theta`` about the unit vector ``k`` (right hand);
 vectors are lists of three SymPy expressions (any frame, the same for all arguments of a call).
 
-* SP1 ``R(k, theta) p = q``: ``theta = atan2(k . (p x q), p . q - (k . p)(k . q))`` -- exact when ``p``, ``q``
+* SP1 ``R(k, theta) p = q``: ``theta = atan2(k . (u x w), u . w)`` with ``u = k x p``, ``w = k x q`` (the
+  perpendicular parts turned by 90 degrees; ``u . w = p . q - (k . p)(k . q)`` without its cancellation) -- exact when ``p``, ``q``
   have equal components along ``k`` and equal lengths, else the least-squares angle. Singular (any angle)
   when ``p`` or ``q`` lies on the axis: ``atan2(0, 0) = 0`` is the representative.
 * SP4 ``h . R(k, theta) p = d``: with ``A = h . p_perp``, ``B = h . (k x p)``, ``C = d - (h . k)(k . p)`` the
@@ -13,8 +14,9 @@ vectors are lists of three SymPy expressions (any frame, the same for all argume
 * SP3 ``|R(k, theta) p1 - p2|^2 = d2``: SP4 with ``h = p2``, ``p = p1``, ``d = (|p1|^2 + |p2|^2 - d2) / 2``
   (least squares in ``|.|^2 - d2``).
 * SP2 ``R(k1, theta1) p1 = R(k2, theta2) p2`` (``k1`` not parallel to ``k2``): the common image
-  ``c = alpha k1 + beta k2 +- gamma (k1 x k2)`` from ``k1 . c = k1 . p1``, ``k2 . c = k2 . p2``,
-  ``|c|^2 = (|p1|^2 + |p2|^2) / 2``; then SP1 twice. ``gamma^2 < 0`` is clamped to 0 (least squares).
+  ``c = alpha k1 + beta k2 +- gamma (k1 x k2)`` from ``k1 . c = k1 . p1``, ``k2 . c = k2 . p2`` and ``c`` on the
+  smaller of the two circles (``gamma^2 |k1 x k2|^2 = |k2 x p2|^2 - alpha^2 |k1 x k2|^2`` or the same with 1);
+  then SP1 twice. ``gamma^2 < 0`` is clamped to 0 (least squares).
 * SPL (prismatic) ``|x0 + t h - o|^2 = d2`` for ``t``: ``t = -b +- sqrt(max(b^2 - c, 0))``, ``b = h . (x0 - o)``,
   ``c = |x0 - o|^2 - d2``.
 
@@ -122,11 +124,17 @@ def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr
 
 
 def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angle:
-    """SP1: ``theta`` with ``R(k, theta) p = q`` (least squares when inconsistent); ``k`` unit."""
-    kp, kq = steps(f"{label}_kp", dot(k, p)), steps(f"{label}_kq", dot(k, q))
-    x = dot(p, q) - kp * kq
-    y = dot(k, cross(p, q))
-    return angle_from(steps, label, x, y, steps(f"{label}_n2", dot(p, p) * dot(q, q)))
+    """SP1: ``theta`` with ``R(k, theta) p = q`` (least squares when inconsistent); ``k`` unit. Singular (a
+    continuum) when ``p`` or ``q`` is within ``SING_TOL`` (sine of the angle) of the axis."""
+    # perpendicular parts as k x p, k x q: p . q - (k . p)(k . q) cancels when p and q lie near the axis
+    # (a circle of radius 1e-7 m at 0.4 m from its centre: 3e-3 rad error in theta), k x p does not
+    u = steps.vec(f"{label}_u", cross(k, p))
+    w = steps.vec(f"{label}_w", cross(k, q))
+    x = dot(u, w)
+    y = dot(k, cross(u, w))
+    a = angle_from(steps, label, x, y, sp.S.Zero)
+    flat = sp.Or(dot(u, u) <= SING_TOL**2 * dot(p, p), dot(w, w) <= SING_TOL**2 * dot(q, q))
+    return Angle(a.theta, a.c, a.s, sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
 
 
 def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
@@ -137,7 +145,7 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
     form (see :func:`unit_disc`); by default it is computed as written, which loses digits near a double root.
     """
     hk, kp = steps(f"{label}_hk", dot(h, k)), steps(f"{label}_kp", dot(k, p))
-    A = steps(f"{label}_A", dot(h, p) - hk * kp)
+    A = steps(f"{label}_A", dot(cross(k, h), cross(k, p)))  # h . p - (h . k)(k . p), without its cancellation
     B = steps(f"{label}_B", dot(h, cross(k, p)))
     C = steps(f"{label}_C", d - hk * kp)
     r2 = steps(f"{label}_r2", A * A + B * B)
@@ -183,7 +191,13 @@ def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: 
     alpha = steps(f"{label}_al", (a1 - k12 * a2) * inv)
     beta = steps(f"{label}_be", (a2 - k12 * a1) * inv)
     norm2 = steps(f"{label}_m2", (dot(p1, p1) + dot(p2, p2)) / 2)
-    disc = steps(f"{label}_disc", norm2 - (alpha * alpha + beta * beta + 2 * alpha * beta * k12))
+    # gamma^2 |k1 x k2|^2 = r2^2 - alpha^2 nn = r1^2 - beta^2 nn (r_i: the circles' radii, |k_i x p_i|): the form
+    # with the smaller circle cancels least (a circle of radius 1e-11 m next to a 0.4 m one: |c|^2 - |proj c|^2
+    # left gamma 3e-9 m wrong, and the SP1 on that small circle turned that into the pose).
+    c1, c2 = cross(k1, p1), cross(k2, p2)
+    r1 = steps(f"{label}_r1", dot(c1, c1))
+    r2 = steps(f"{label}_r2", dot(c2, c2))
+    disc = steps(f"{label}_disc", sp.Piecewise((r2 - alpha * alpha * nn, r2 <= r1), (r1 - beta * beta * nn, True)))
     gamma = steps(f"{label}_g", sp.sqrt(sp.Max(disc, 0, evaluate=False) * inv))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * norm2))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * norm2, disc >= -LS_TOL * norm2)))
