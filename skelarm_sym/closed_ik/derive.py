@@ -13,7 +13,7 @@ case (a continuum, represented by one member, or a double root); ``0``: an exact
 Every output is finite for finite input (no NaN: discriminants are clamped, divisions guarded by selects).
 
 Operations in the steps and outputs (what the code generator lowers): Add, Mul, Pow (integer exponents
-and 1/2), sin, cos (of the lock only), atan2, Max, Min, Piecewise, relationals ``<``, ``<=``, ``>``, ``>=``, And
+and 1/2), sin, cos (of the lock only), atan2, Max, Min, Piecewise, relationals ``<``, ``<=``, ``>``, ``>=``, And, Or
 (``Abs`` can appear in the prismatic quadratic's scale).
 :func:`operations` lists them for a derivation.
 """
