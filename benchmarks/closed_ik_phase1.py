@@ -7,7 +7,7 @@ uniform in [-pi, pi], the prismatic stroke within limits): distinct exact soluti
 mean, min, max), solutions within the joint limits (mean), the worst pose error of any exact candidate
 (position / reach and max |R - R_t|, by the NumPy reference), the share of targets whose source
 configuration is among the candidates, EAIK's sets (both directions, 1e-7 rad) when installed; over
-``--numeric`` targets: solutions the 200-start numeric IK of ``skelarm_sym.reference.ik_all`` finds that
+``--numeric`` targets: solutions the 200-start numeric IK of ``skelarm_sym.models.chain.reference_ik_all`` finds that
 the closed form lacks (1e-5). No timing: lambdify is not the emitted code.
 """
 
@@ -22,7 +22,7 @@ from closed_ik_support import TOML_ARMS, URDF_ARMS, load_arm, random_configurati
 from skelarm_sym.closed_ik import derive_ik_all
 from skelarm_sym.closed_ik.evaluate import ClosedFormIK
 from skelarm_sym.closed_ik.postprocess import postprocess
-from skelarm_sym.reference import ik_all as judge
+from skelarm_sym.models.chain import reference_ik_all as judge
 
 
 def distinct(rows, rev, tol=1e-9):

@@ -11,8 +11,8 @@ import pytest
 import sympy as sp
 
 from skelarm_sym.models.chain import Chain, Transform, dh_joint
-from skelarm_sym.models.loader import load_robot
-from skelarm_sym.reference.chain import chain_kinematics
+from skelarm_sym.models.chain import load_robot
+from skelarm_sym.models.chain.reference import chain_kinematics
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "examples" / "robots"

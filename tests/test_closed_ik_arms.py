@@ -9,7 +9,7 @@ import pytest
 
 from skelarm_sym.closed_ik import classify
 from skelarm_sym.closed_ik.derive import operations
-from skelarm_sym.reference import ik_all as judge
+from skelarm_sym.models.chain import reference_ik_all as judge
 
 from closed_ik_support import TOML_ARMS, URDF_ARMS, load_arm, random_configurations, solver, targets_of, wrapped_distance
 

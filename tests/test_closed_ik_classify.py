@@ -11,8 +11,8 @@ import sympy as sp
 
 from skelarm_sym.closed_ik import ClosedFormError, classify, derive_ik_all, explain
 from skelarm_sym.closed_ik.classify import chain_geometry
-from skelarm_sym.models.robot_file import load_robot_file
-from skelarm_sym.models.loader import load_robot
+from skelarm_sym.models.chain import load_robot_file
+from skelarm_sym.models.chain import load_robot
 
 from closed_ik_support import ROBOTS
 
@@ -41,7 +41,7 @@ def test_family_is_frozen_and_exact():
 
 
 def test_geometry_matches_the_reference_at_zero():
-    from skelarm_sym.reference.chain import chain_kinematics
+    from skelarm_sym.models.chain.reference import chain_kinematics
 
     for file in ("puma560.toml", "ur5.toml", "stanford.toml", "panda.toml"):
         chain = load_robot(ROBOTS / file)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from skelarm_sym.closed_ik import classify
 from skelarm_sym.closed_ik.evaluate import ClosedFormIK
-from skelarm_sym.reference import ik_all as judge
+from skelarm_sym.models.chain import reference_ik_all as judge
 
 from closed_ik_support import FAMILY_CONSTRAINTS, random_configurations, random_family_chain, targets_of, wrapped_distance
 

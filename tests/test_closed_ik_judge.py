@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skelarm_sym.reference import ik_all as judge
+from skelarm_sym.models.chain import reference_ik_all as judge
 
 from closed_ik_support import solver, targets_of
 
@@ -20,7 +20,7 @@ def test_judge_imports_numpy_and_the_reference_only():
             modules |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom):
             modules.add(("." * node.level) + (node.module or ""))
-    assert modules <= {"__future__", "numpy", ".chain", "eaik.IK_HP"}, modules
+    assert modules <= {"__future__", "numpy", ".reference", "eaik.IK_HP"}, modules
 
 
 def test_judge_sees_a_missing_and_a_wrong_solution():

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from skelarm_sym.closed_ik.postprocess import STATUS, nearest, postprocess, shift
-from skelarm_sym.reference import ik_all as judge
+from skelarm_sym.models.chain import reference_ik_all as judge
 
 from closed_ik_support import random_configurations, solver, targets_of
 

@@ -12,7 +12,7 @@ One job per module:
   status, nearest);
 * :mod:`.evaluate` -- the derivation evaluated with ``sympy.lambdify`` (until the IR emits it).
 
-Judge: :mod:`skelarm_sym.reference.ik_all` (NumPy only, imports nothing from here).
+Judge: :mod:`skelarm_sym.models.chain.reference_ik_all` (NumPy only, imports nothing from here).
 """
 
 from .classify import ClosedFormError, Family, classify, explain

@@ -39,7 +39,7 @@ from typing import Sequence
 import numpy as np
 import sympy as sp
 
-from ..derive.chain import canonical_joints
+from ..models.chain.derive import canonical_joints
 from ..errors import InputError
 from ..models.chain import Chain, Transform
 

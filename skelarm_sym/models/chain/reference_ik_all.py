@@ -1,6 +1,6 @@
 """Judge of "all IK solutions": pose reproduction, completeness against a numeric multi-start IK, EAIK.
 
-NumPy only, on top of this package's forward recursion (:func:`.chain.chain_kinematics`); it imports
+NumPy only, on top of this package's forward recursion (:func:`.reference.chain_kinematics`); it imports
 nothing from :mod:`skelarm_sym.closed_ik` (a test reads the imports). It reads a *numeric* chain (what
 ``Chain.numeric()`` returns) and solutions as arrays ``(k, n)``.
 
@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .chain import chain_kinematics
+from .reference import chain_kinematics
 
 __all__ = ["reach", "pose_error", "multistart_ik", "same", "missing", "hp_data", "eaik_solutions", "revolute_mask"]
 
