@@ -1,0 +1,156 @@
+"""``derive_ik_all``: every closed-form IK candidate of a chain as named steps plus outputs.
+
+Inputs (SymPy symbols): ``target`` (16): the tool pose ``T`` (4 x 4, row-major, base frame; the frame
+conventions of the chain's ``pose``: base and tool transforms included; the last row is not read), and
+with a lock ``lock`` (1): the locked coordinate's value (rad or m).
+
+Outputs: ``Q`` (S x N, S = the family's bound, 8; N = the chain's coordinates): one candidate per row,
+in branch order (fixed by the derivation, see :mod:`.families`), revolute angles unwrapped (any real:
+post-processing shifts them by multiples of 2 pi into the limits), the locked coordinate equal to
+``lock``; ``flags`` (S): ``1`` if the branch used a least-squares answer (the target is out of its reach;
+the candidate is the closest the subproblems give, not an exact solution), ``+2`` if it met a singular
+case (a continuum, represented by one member, or a double root); ``0``: an exact regular solution.
+Every output is finite for finite input (no NaN: discriminants are clamped, divisions guarded by selects).
+
+Operations in the steps and outputs (what the code generator lowers): Add, Mul, Pow (integer exponents
+and 1/2), sin, cos (of the lock only), atan2, Max, Min, Piecewise, relationals ``<``, ``<=``, ``>``, ``>=``, And, Or
+(``Abs`` can appear in the prismatic quadratic's scale).
+:func:`operations` lists them for a derivation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from ..models.chain import Chain
+from .classify import (LOCK_C, LOCK_S, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
+from .families import Problem, spherical_wrist, three_parallel
+from .subproblems import Steps
+
+Step = tuple[sp.Symbol, sp.Expr]
+
+FLAG_LS = 1
+"""Bit of ``flags``: a least-squares (unreachable) candidate."""
+FLAG_SINGULAR = 2
+"""Bit of ``flags``: a singular candidate (a continuum represented by one member, or a double root)."""
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedIK:
+    """A chain's closed-form IK: ``inputs`` (``target``: 16 symbols; ``lock``: 1, when locked), ``steps``
+    (ordered ``(symbol, expr)``), ``Q`` (S x N) and ``flags`` (S x 1) written with the steps, and what
+    post-processing needs: ``revolute`` (per coordinate), ``lower``/``upper`` (per coordinate, ``None`` when
+    absent), ``lock`` (the locked coordinate or ``None``)."""
+
+    chain: Chain
+    family: Family
+    inputs: dict[str, tuple[sp.Symbol, ...]]
+    steps: tuple[Step, ...]
+    Q: sp.Matrix
+    flags: sp.Matrix
+    revolute: tuple[bool, ...]
+    lower: tuple[float | None, ...]
+    upper: tuple[float | None, ...]
+    lock: int | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def max_solutions(self) -> int:
+        """S, the number of candidate rows."""
+        return self.Q.rows
+
+
+def lock_index(chain: Chain, lock: int | str | None) -> int | None:
+    """The locked joint as a 0-based index: ``lock`` is that index, or a joint or coordinate name."""
+    if lock is None:
+        return None
+    if isinstance(lock, str):
+        names = [j.name for j in chain.joints]
+        if lock in names:
+            return names.index(lock)
+        if lock in chain.coordinates:
+            return list(chain.coordinates).index(lock)
+        raise ClosedFormError(f"{chain.name}: no joint named {lock!r} to lock (joints: {', '.join(names)})")
+    if isinstance(lock, bool) or not isinstance(lock, int) or not 0 <= lock < len(chain.joints):
+        raise ClosedFormError(f"{chain.name}: lock must be a joint index 0..{len(chain.joints) - 1} or a joint name, got {lock!r}")
+    return lock
+
+
+def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
+    """All closed-form IK candidates of ``chain`` (see the module docstring); ``lock``: the joint held at a
+    run-time value (0-based index or name) for 7-joint chains. :class:`ClosedFormError` (one line) when the
+    chain is in no family."""
+    lock_idx = lock_index(chain, lock)
+    family = classify(chain, lock_idx)
+    geom = problem_geometry(chain, lock_idx)
+    steps = Steps("ik")
+    target = sp.symbols("target0:16", real=True)
+    inputs: dict[str, tuple[sp.Symbol, ...]] = {"target": target}
+    subs: dict = {}
+    if lock_idx is not None:
+        lam = sp.Symbol("lock", real=True)
+        inputs["lock"] = (lam,)
+        if chain_geometry(chain).kinds[lock_idx] == "revolute":
+            subs = {LOCK_C: steps("lock_c", sp.cos(lam)), LOCK_S: steps("lock_s", sp.sin(lam))}
+        else:
+            subs = {LOCK_C: sp.S.One, LOCK_S: lam}
+
+    def put(label, v):
+        return steps.vec(label, [sp.sympify(x).xreplace(subs) for x in v])
+
+    H = tuple(put(f"h{k}", h) for k, h in enumerate(geom.axes))
+    P = tuple(put(f"p{k}", p) for k, p in enumerate(geom.points))
+    RM = [put(f"M{i}", row) for i, row in enumerate(geom.home_rotation)]
+    pM = put("pM", geom.home_position)
+    Rt = [[target[4 * i + j] for j in range(3)] for i in range(3)]
+    pt = [target[3], target[7], target[11]]
+    RG = tuple(tuple(steps(f"RG{i}{j}", sum(Rt[i][k] * RM[j][k] for k in range(3))) for j in range(3)) for i in range(3))
+    tG = steps.vec("tG", [pt[i] - sum(RG[i][k] * pM[k] for k in range(3)) for i in range(3)])
+    prob = Problem(geom.kinds, H, P, RG, tG)
+    if family.reversed:
+        prob = prob.reversed(steps)
+    if family.name in ("spherical_wrist", "spherical_shoulder"):
+        branches = spherical_wrist(steps, prob, family.position)
+    else:
+        branches = three_parallel(steps, prob)
+
+    n = chain.n
+    rows, flags = [], []
+    for b in branches:
+        thetas = [a.theta for a in b.angles]
+        if family.reversed:
+            thetas = [-t for t in thetas[::-1]]
+        row = [sp.S.Zero] * n
+        for k, t in enumerate(thetas):
+            row[geom.coordinates[k]] = t
+        if lock_idx is not None:
+            row[chain.joints[lock_idx].coordinate] = inputs["lock"][0]
+        rows.append(row)
+        flags.append(FLAG_LS * b.ls + FLAG_SINGULAR * b.singular)
+    limits = chain.limits()
+    return ClosedIK(
+        chain, family, inputs, tuple(steps.steps), sp.Matrix(rows), sp.Matrix(flags),
+        tuple(j.kind == "revolute" for j in sorted(chain.joints, key=lambda j: j.coordinate)),
+        limits["lower"], limits["upper"],
+        None if lock_idx is None else chain.joints[lock_idx].coordinate,
+        (family.describe(),),
+    )
+
+
+def operations(ik: ClosedIK) -> set[str]:
+    """The SymPy node types (class names, with ``Pow`` split by exponent) used by the steps and outputs."""
+    seen: set[str] = set()
+    exprs = [e for _, e in ik.steps] + list(ik.Q) + list(ik.flags)
+    for expr in exprs:
+        for node in sp.preorder_traversal(expr):
+            if node.is_Atom or isinstance(node, sp.functions.elementary.piecewise.ExprCondPair):
+                continue
+            name = type(node).__name__
+            if isinstance(node, sp.Pow):
+                e = node.exp
+                name = "Pow(1/2)" if e == sp.S.Half else "Pow(-1/2)" if e == -sp.S.Half else (
+                    "Pow(int)" if e.is_Integer else f"Pow({e})")
+            seen.add(name)
+    return seen

@@ -1,0 +1,75 @@
+"""The closed-form IK evaluated in NumPy through ``sympy.lambdify`` (until the IR emits it).
+
+:func:`lambdify_ik` turns a :class:`~.derive.ClosedIK` into ``f(target, lock=None) -> (Q, flags)`` with
+``target`` of shape ``(..., 16)`` (or ``(..., 4, 4)``), ``Q`` ``(..., S, N)`` and ``flags`` ``(..., S)`` (ints):
+the raw candidates, before post-processing. The steps are printed in order (straight-line code).
+:class:`ClosedFormIK` adds the post-processing: ``all(target)`` and ``nearest(q_ref, target)``.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+
+from .derive import ClosedIK, derive_ik_all
+from .postprocess import IKAll, nearest, postprocess
+
+
+def lambdify_ik(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+    """``f(target, lock=None) -> (Q (..., S, N), flags (..., S))`` for ``ik`` (see the module docstring)."""
+    args = list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
+    outs = list(ik.Q) + list(ik.flags)
+    steps = list(ik.steps)
+    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+                            "user_functions": {}, "order": "none"})  # "none": no term sorting (3x faster printing)
+    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
+    S, N = ik.Q.shape
+
+    def evaluate(target, lock=None):
+        t = np.asarray(target, dtype=float)
+        t = t.reshape(t.shape[:-2] + (16,)) if t.shape[-2:] == (4, 4) else t
+        if t.shape[-1] != 16:
+            raise ValueError(f"target must have shape (..., 16) or (..., 4, 4), got {np.shape(target)}")
+        batch = t.shape[:-1]
+        extra = []
+        if "lock" in ik.inputs:
+            if lock is None:
+                raise ValueError("this IK has a locked joint: give lock=VALUE")
+            extra = [np.broadcast_to(np.asarray(lock, dtype=float), batch)]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            values = fn(*[t[..., i] for i in range(16)], *extra)
+        values = [np.broadcast_to(np.asarray(v, dtype=float), batch) for v in values]
+        Q = np.stack(values[: S * N], axis=-1).reshape(batch + (S, N))
+        flags = np.stack(values[S * N:], axis=-1).astype(int)
+        return Q, flags
+
+    return evaluate
+
+
+class ClosedFormIK:
+    """A chain's closed-form IK in NumPy: raw candidates (``candidates``), ``all`` and ``nearest``.
+
+    ``chain``: a :class:`~skelarm_sym.models.chain.Chain`; ``lock``: see :func:`~.derive.derive_ik_all`.
+    """
+
+    def __init__(self, chain, lock=None, ik: ClosedIK | None = None) -> None:
+        self.ik = ik if ik is not None else derive_ik_all(chain, lock)
+        self.candidates = lambdify_ik(self.ik)
+        self.lower = np.array([-np.inf if v is None else v for v in self.ik.lower])
+        self.upper = np.array([np.inf if v is None else v for v in self.ik.upper])
+        self.revolute = np.array(self.ik.revolute)
+
+    def all(self, target, lock=None, **kwargs) -> IKAll:
+        """Every solution of one target (4 x 4 or 16), post-processed (see :func:`~.postprocess.postprocess`)."""
+        target = np.asarray(target, dtype=float).reshape(16)
+        if not np.all(np.isfinite(target)) or (lock is not None and not np.isfinite(lock)):
+            return postprocess(None, None, self.lower, self.upper, self.revolute, target=target)
+        Q, flags = self.candidates(target, lock)
+        return postprocess(Q, flags, self.lower, self.upper, self.revolute, target=target, **kwargs)
+
+    def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
+        """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
+        return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights)

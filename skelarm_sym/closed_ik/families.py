@@ -1,0 +1,217 @@
+"""Each family's chain of subproblems, as straight-line steps with all branches side by side.
+
+A *problem* is six joints in product-of-exponentials form (see :mod:`.classify`): kinds, unit axes
+``H[k]`` and points ``P[k]`` (base frame, q = 0; indices 0..5 here, joints 1..6 in the docs), and the
+target motion ``G = T_target M^-1`` as ``RG`` (3 x 3, rows) and ``tG`` (3): a point ``x0`` of the last link
+at ``q = 0`` is at ``RG x0 + tG`` in the target pose, and ``RG = R_1 ... R_6`` (prismatic joints rotate
+nothing). Solvers return :class:`Branch` es: the six joint variables in problem order with their flags.
+
+Spherical wrist (``H[3..5]`` through the wrist centre ``W0``): ``W = RG W0 + tG`` depends on joints 1-3
+only (joints 4-6 fix ``W0``). Positioning, by structure:
+
+* ``parallel_23`` (h2 || h3): rotations about h2, h3 keep the component along h2, so
+  ``(W - p1) . R(h1, q1) h2 = h2 . (W0 - p1)`` (SP4, 2 branches); ``V = e1^-1 W``;
+  ``|R(h3, q3)(W0 - p3) - (p2 - p3)|^2 = |V - p2|^2`` (SP3, 2); ``R(h2, q2)(e3 W0 - p2) = V - p2`` (SP1).
+* ``intersect_12`` (h1, h2 meet at ``O``): ``|e3 W0 - O| = |W - O|`` (SP3 for q3, 2), then
+  ``R(h1, -q1)(W - O) = R(h2, q2)(e3 W0 - O)`` (SP2, 2); ``prismatic_3``: the same with
+  ``e3 W0 = W0 + d3 h3`` (a quadratic in d3).
+* ``intersect_23`` (h2, h3 meet at ``O``): ``|R(h1, -q1)(W - p1) + p1 - O| = |W0 - O|`` (SP3, 2), then
+  ``R(h2, -q2)(V - O) = R(h3, q3)(W0 - O)`` (SP2, 2).
+
+Orientation: ``Rw = R3^T R2^T R1^T RG = R4 R5 R6``: ``h4 . R(h5, q5) h6 = h4 . Rw h6`` (SP4, 2);
+``R(h4, q4) R(h5, q5) h6 = Rw h6`` (SP1); ``R(h6, q6) x = R5^T R4^T Rw x`` with ``x = h6 x h5`` (SP1:
+finite when the wrist is aligned, where q4 takes the representative 0 and q6 the rest). 8 branches.
+
+Three parallel axes (h2 || h3 || h4, h5 meets h6 at ``Q0``; the UR family): ``W = RG Q0 + tG``;
+``(W - p1) . R(h1, q1) h2 = h2 . (Q0 - p1)`` (SP4 q1); ``h2 . R(h5, q5) h6 = h2 . R1^T RG h6`` (SP4 q5);
+``R(h6, q6) (RG^T R1 h2) = R5^T h2`` (SP1 q6); ``phi = q2 + q3 + q4`` from
+``R(h2, phi) x = R1^T RG R6^T R5^T x``, ``x = h2 x h5`` (SP1); ``P4 = e2 e3 p4 = V - R(h2, phi)(Q0 - p4)``;
+``|R(h3, q3)(p4 - p3) - (p2 - p3)|^2 = |P4 - p2|^2`` (SP3 q3); SP1 q2; ``q4 = phi - q2 - q3``. 8 branches.
+At the wrist singularity (h6 turned by q5 parallel to h2: q6's SP1 is a continuum) only ``sigma = phi +- q6`` is
+fixed; the representative takes ``phi`` from an SP3 that puts joint 4's point at the distance from p2 nearest the
+middle of the 2R arm's range (so the arm reaches it whenever the target is reachable), and ``q6 = +-(sigma - phi)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import sympy as sp
+
+from .classify import add, closest_point, cross, dot, rotate, sub
+from .subproblems import Angle, Steps, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
+
+
+SPLIT_TOL = 1e-12
+"""UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
+(its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
+1e-16 over the sine in q6, stays within the reach of the 2R arm except at the workspace's edge)."""
+
+
+@dataclass(frozen=True)
+class Branch:
+    """One candidate: ``angles[k]`` the joint variables of problem joints 0..5 (rad or m)."""
+
+    angles: tuple[Angle, ...]
+
+    @property
+    def ls(self) -> sp.Expr:
+        """1 when any subproblem of the branch fell back to least squares."""
+        return any_of(*[a.ls for a in self.angles])
+
+    @property
+    def singular(self) -> sp.Expr:
+        """1 when any subproblem of the branch met a continuum or a double root."""
+        return any_of(*[a.singular for a in self.angles])
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Six joints and a target motion (see the module docstring); entries are SymPy expressions or steps."""
+
+    kinds: tuple[str, ...]
+    H: tuple[Sequence[sp.Expr], ...]
+    P: tuple[Sequence[sp.Expr], ...]
+    RG: tuple[Sequence[sp.Expr], ...]
+    tG: Sequence[sp.Expr]
+
+    def reversed(self, steps: Steps) -> "Problem":
+        """The inverse chain: joints 6..1 with negated variables, target ``G^-1``."""
+        RT = tuple(tuple(self.RG[j][i] for j in range(3)) for i in range(3))
+        t = steps.vec("tGr", [-x for x in matvec(RT, self.tG)])
+        return Problem(self.kinds[::-1], self.H[::-1], self.P[::-1], RT, t)
+
+
+def matvec(m: Sequence[Sequence[sp.Expr]], v: Sequence[sp.Expr]) -> list:
+    """``m v`` for a 3 x 3 ``m`` given by rows."""
+    return [m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2] for i in range(3)]
+
+
+def tmatvec(m: Sequence[Sequence[sp.Expr]], v: Sequence[sp.Expr]) -> list:
+    """``m^T v`` for a 3 x 3 ``m`` given by rows."""
+    return [m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2] for i in range(3)]
+
+
+def _rot(a: Angle, k, v, inverse: bool = False) -> list:
+    if a.c is None:  # prismatic joint: no rotation
+        return list(v)
+    return rotate(k, a.c, -a.s if inverse else a.s, v)
+
+
+def _sq(v) -> sp.Expr:
+    return dot(v, v)
+
+
+def spherical_wrist(steps: Steps, prob: Problem, position: str) -> list[Branch]:
+    """The eight candidates of a spherical-wrist problem with positioning structure ``position``."""
+    H, P, RG, tG = prob.H, prob.P, prob.RG, prob.tG
+    W0 = steps.vec("W0", closest_point(P[3], H[3], P[4], H[4]))
+    W = steps.vec("W", add(matvec(RG, W0), tG))
+    arms: list[tuple[Angle, Angle, Angle]] = []
+    if position == "parallel_23":
+        q1s = sp4(steps, "q1", sub(W, P[0]), H[1], H[0], dot(H[1], sub(W0, P[0])))
+        for i, q1 in enumerate(q1s):
+            V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), inverse=True), P[0]))
+            q3s = sp3(steps, f"q3_{i}", H[2], sub(W0, P[2]), sub(P[1], P[2]), _sq(sub(V, P[1])))
+            for j, q3 in enumerate(q3s):
+                X = steps.vec(f"X{i}{j}", add(_rot(q3, H[2], sub(W0, P[2])), P[2]))
+                q2 = sp1(steps, f"q2_{i}{j}", H[1], sub(X, P[1]), sub(V, P[1]))
+                arms.append((q1, q2, q3))
+    elif position in ("intersect_12", "prismatic_3"):
+        O = steps.vec("O12", closest_point(P[0], H[0], P[1], H[1]))
+        WO = steps.vec("WO", sub(W, O))
+        if position == "intersect_12":
+            q3s = sp3(steps, "q3", H[2], sub(W0, P[2]), sub(O, P[2]), _sq(WO))
+        else:
+            q3s = sp_line(steps, "d3", H[2], W0, O, _sq(WO))
+        for j, q3 in enumerate(q3s):
+            if q3.c is None:
+                X = steps.vec(f"X{j}", [W0[i] + q3.theta * H[2][i] for i in range(3)])
+            else:
+                X = steps.vec(f"X{j}", add(_rot(q3, H[2], sub(W0, P[2])), P[2]))
+            for k, (m1, q2) in enumerate(sp2(steps, f"q12_{j}", H[0], WO, H[1], sub(X, O))):
+                arms.append((m1.negated(), q2, q3))
+    elif position == "intersect_23":
+        O = steps.vec("O23", closest_point(P[1], H[1], P[2], H[2]))
+        m1s = sp3(steps, "q1", H[0], sub(W, P[0]), sub(O, P[0]), _sq(sub(W0, O)))
+        for i, m1 in enumerate(m1s):
+            V = steps.vec(f"V{i}", add(_rot(m1, H[0], sub(W, P[0])), P[0]))
+            for k, (m2, q3) in enumerate(sp2(steps, f"q23_{i}", H[1], sub(V, O), H[2], sub(W0, O))):
+                arms.append((m1.negated(), m2.negated(), q3))
+    else:
+        raise ValueError(f"unknown positioning structure {position!r}")
+
+    x6 = steps.vec("x6", cross(H[5], H[4]))
+    g6 = steps.vec("g6", matvec(RG, H[5]))
+    gx = steps.vec("gx", matvec(RG, x6))
+    out = []
+    for a, (q1, q2, q3) in enumerate(arms):
+        u = steps.vec(f"u{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], g6, True), True), True))
+        w = steps.vec(f"w{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], gx, True), True), True))
+        for b, q5 in enumerate(sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u),
+                                   unit_disc(H[3], H[5], H[4], u))):
+            r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
+            q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
+            y = steps.vec(f"y{a}{b}", _rot(q5, H[4], _rot(q4, H[3], w, True), True))
+            q6 = sp1(steps, f"q6_{a}{b}", H[5], x6, y)
+            out.append(Branch((q1, q2, q3, q4, q5, q6)))
+    return out
+
+
+def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
+    """The eight candidates of a three-parallel-axes problem (h2 || h3 || h4, h5 meets h6)."""
+    H, P, RG, tG = prob.H, prob.P, prob.RG, prob.tG
+    Q0 = steps.vec("Q0", closest_point(P[4], H[4], P[5], H[5]))
+    W = steps.vec("W", add(matvec(RG, Q0), tG))
+    g6 = steps.vec("g6", matvec(RG, H[5]))
+    x = steps.vec("x2", cross(H[1], H[4]))
+    v = steps.vec("v4", sub(Q0, P[3]))
+    o, pv = sub(P[2], P[1]), sub(P[3], P[2])  # the 2R arm: |R(h3, q3) pv + o|^2 over q3
+    o_perp = sub(o, [dot(o, H[2]) * c for c in H[2]])
+    p_perp = sub(pv, [dot(pv, H[2]) * c for c in H[2]])
+    middle = _sq(o) + _sq(pv) + 2 * dot(o, H[2]) * dot(H[2], pv)
+    spread = 2 * sp.sqrt(_sq(o_perp) * _sq(p_perp))
+    dmin2, dmax2 = steps("dmin2", middle - spread), steps("dmax2", middle + spread)
+    out = []
+    for i, q1 in enumerate(sp4(steps, "q1", sub(W, P[0]), H[1], H[0], dot(H[1], sub(Q0, P[0])))):
+        g = steps.vec(f"g{i}", _rot(q1, H[0], g6, True))
+        a = steps.vec(f"a{i}", tmatvec(RG, _rot(q1, H[0], H[1])))
+        V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), True), P[0]))
+        u = steps.vec(f"u{i}", sub(V, P[1]))
+        m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * dot(u, H[1]) * dot(H[1], v))
+        dstar = steps(f"dstar{i}", sp.Min(sp.Max(m, dmin2, evaluate=False), dmax2, evaluate=False))
+        for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
+                                   unit_disc(H[1], H[5], H[4], g))):
+            b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
+            q6r = sp1(steps, f"q6_{i}{j}", H[5], a, b)
+            y = _rot(q1, H[0], matvec(RG, _rot(q6r, H[5], _rot(q5, H[4], x, True), True)), True)
+            phir = sp1(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
+            # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
+            # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
+            # middle of both its range over phi and the 2R arm's range [dmin, dmax], so the 2R arm reaches it.
+            # the split is taken where h6 and R5^T h2 are within SPLIT_TOL (sine): below it q6's SP1 is noise
+            # (q5 = 1e-16 from an exactly aligned target); above it the regular path is exact to rounding
+            bb = cross(H[5], b)
+            sel = steps(f"split{i}{j}", indicator(dot(bb, bb) <= SPLIT_TOL**2 * dot(b, b)))
+            z = _rot(q1, H[0], matvec(RG, _rot(q5, H[4], x, True)), True)
+            sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
+            phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
+            r5h6 = _rot(q5, H[4], H[5])
+            sgn = steps(f"sgn{i}{j}", sp.Piecewise((sp.S.One, dot(H[1], r5h6) >= 0), (-sp.S.One, True)))
+            pick = sel > 0
+
+            def choose(label, singular_value, regular_value):
+                return steps(label, sp.Piecewise((singular_value, pick), (regular_value, True)))
+
+            phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
+                        choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), q6r.singular)
+            q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls,
+                       any_of(sel, q6r.singular))
+            P4 = steps.vec(f"P4_{i}{j}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
+            for k, q3 in enumerate(sp3(steps, f"q3_{i}{j}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
+                X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])
+                q2 = sp1(steps, f"q2_{i}{j}{k}", H[1], steps.vec(f"X{i}{j}{k}", sub(X, P[1])), sub(P4, P[1]))
+                q4 = Angle(steps(f"q4_{i}{j}{k}", phi.theta - q2.theta - q3.theta), None, None, phi.ls, phi.singular)
+                out.append(Branch((q1, q2, q3, q4, q5, q6)))
+    return out

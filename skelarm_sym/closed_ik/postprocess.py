@@ -1,0 +1,167 @@
+"""Post-processing of the raw candidates: the spec the emitted ``X_ik_all``/``X_ik_nearest`` follow, in NumPy.
+
+Input: ``Q`` (S, N) raw candidates in branch order and ``flags`` (S) from :func:`~.derive.derive_ik_all`
+(bit 1: least squares, bit 2: singular), the joint limits ``lower``/``upper`` (N, rad or m; +-inf where
+absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and N joints):
+
+1. **Invalid input** (``STATUS["invalid"]``, count 0): a non-finite target entry (or lock value), or a
+   rotation part that is not a rotation: ``max |R^T R - I| > ORTHO_TOL`` or ``det R < 0``.
+2. **Exact or least squares**: if any candidate has flag bit 1 clear, only those (exact) candidates are
+   kept; otherwise every candidate is kept and the status becomes ``unreachable`` (least-squares poses;
+   every returned row has bit 1 set).
+3. **2 pi shifts** (revolute joints only): ``q + 2 pi k`` with ``k = round((c - q) / 2 pi)`` (NumPy rounding,
+   half to even), ``c`` the centre of the joint's range: ``(lower + upper) / 2``; ``lower + pi`` when only
+   the lower limit is finite, ``upper - pi`` when only the upper one is, 0 when none (then the result lies
+   in ``[-pi, pi]``). This is the copy nearest the middle of the range; when several copies fit (a range
+   wider than 2 pi) it is the one returned.
+4. **Limits**: a candidate with any joint below ``lower - LIMIT_TOL`` or above ``upper + LIMIT_TOL`` is dropped;
+   joints within ``LIMIT_TOL`` outside are clipped onto the limit.
+5. **Duplicates**: a candidate within ``DUP_TOL`` (max over joints; revolute differences taken modulo
+   2 pi) of an earlier kept one is dropped (the earlier one stays, its flags OR-ed with the duplicate's
+   singular bit). Double roots and repeated branches of singular cases collapse here.
+6. **Order**: the kept rows in branch order (deterministic; a branch keeps its index as the target moves,
+   ``branch`` reports it). ``count`` = their number; rows past ``count`` are NaN.
+7. **Status**: ``ok`` (at least one exact solution within limits, all of them returned), ``unreachable``
+   (least-squares rows, possibly 0 of them), ``out_of_limits`` (exact solutions exist, none within the
+   limits; count 0), ``invalid``.
+
+:func:`nearest` then picks, among the returned rows, the one nearest ``q_ref`` in the (weighted) Euclidean
+norm, each revolute joint taking the copy ``q + 2 pi k`` within limits nearest ``q_ref``; ties go to the
+lower row.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+STATUS = {"ok": 0, "unreachable": 1, "invalid": 2, "out_of_limits": 3}
+"""Status codes (the emitted ``X_ik_all`` returns these numbers)."""
+ORTHO_TOL = 1e-6
+"""Largest ``|R^T R - I|`` entry accepted as a rotation."""
+LIMIT_TOL = 1e-12
+"""Joints this far (rad or m) outside a limit are clipped onto it; further out, the candidate is dropped."""
+DUP_TOL = 1e-9
+"""Candidates closer than this (max over joints, rad or m) are one solution."""
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class IKAll:
+    """Result of :func:`postprocess`: ``q`` (S, N), rows past ``count`` NaN; ``flags`` (S) per row (-1 past
+    count); ``branch`` (S) each row's branch index (-1 past count); ``count``; ``status`` (a :data:`STATUS` value)."""
+
+    q: np.ndarray
+    flags: np.ndarray
+    branch: np.ndarray
+    count: int
+    status: int
+
+    @property
+    def solutions(self) -> np.ndarray:
+        """The ``count`` returned rows, (count, N)."""
+        return self.q[: self.count]
+
+
+def is_valid_target(target: np.ndarray) -> bool:
+    """Step 1: finite, rotation part orthonormal within ``ORTHO_TOL`` with determinant > 0."""
+    T = np.asarray(target, dtype=float).reshape(4, 4)
+    if not np.all(np.isfinite(T)):
+        return False
+    R = T[:3, :3]
+    return bool(np.max(np.abs(R.T @ R - np.eye(3))) <= ORTHO_TOL and np.linalg.det(R) > 0)
+
+
+def centres(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Step 3's centre of each joint's range."""
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    lo_f, hi_f = np.isfinite(lower), np.isfinite(upper)
+    c = np.zeros(lower.shape)
+    both = lo_f & hi_f
+    c[both] = 0.5 * (lower[both] + upper[both])
+    c[lo_f & ~hi_f] = lower[lo_f & ~hi_f] + np.pi
+    c[hi_f & ~lo_f] = upper[hi_f & ~lo_f] - np.pi
+    return c
+
+
+def shift(q: np.ndarray, lower, upper, revolute) -> np.ndarray:
+    """Step 3: revolute joints of ``q`` (..., N) shifted by multiples of 2 pi to the copy nearest their range's centre."""
+    q = np.array(q, dtype=float)
+    c = centres(lower, upper)
+    rev = np.asarray(revolute, bool)
+    k = np.round((c - q) / TWO_PI)
+    return np.where(rev, q + TWO_PI * k, q)
+
+
+def _difference(a: np.ndarray, b: np.ndarray, revolute) -> np.ndarray:
+    d = a - b
+    return np.where(revolute, (d + np.pi) % TWO_PI - np.pi, d)
+
+
+def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = DUP_TOL,
+                limit_tol: float = LIMIT_TOL) -> IKAll:
+    """Steps 1-7 of the module docstring for one target. ``Q`` (S, N), ``flags`` (S); ``Q = None`` means the
+    caller found the input invalid; ``target`` (16) enables step 1's rotation check."""
+    lower = np.asarray(lower, float)
+    upper = np.asarray(upper, float)
+    revolute = np.asarray(revolute, bool)
+    N = lower.shape[0]
+    S = 0 if Q is None else np.asarray(Q).shape[0]
+    out_q = np.full((max(S, 1), N), np.nan)
+    out_f = np.full(max(S, 1), -1, dtype=int)
+    out_b = np.full(max(S, 1), -1, dtype=int)
+    if Q is None or (target is not None and not is_valid_target(target)) or not np.all(np.isfinite(Q)):
+        return IKAll(out_q[:S] if S else out_q, out_f[:S] if S else out_f, out_b[:S] if S else out_b, 0, STATUS["invalid"])
+    Q = np.asarray(Q, float)
+    flags = np.asarray(flags, int)
+    exact = (flags & 1) == 0
+    keep = exact if exact.any() else np.ones(S, bool)
+    count = 0
+    for i in range(S):
+        if not keep[i]:
+            continue
+        q = shift(Q[i], lower, upper, revolute)
+        if np.any(q < lower - limit_tol) or np.any(q > upper + limit_tol):
+            continue
+        q = np.clip(q, lower, upper)
+        dup = False
+        for r in range(count):
+            if np.max(np.abs(_difference(q, out_q[r], revolute))) <= dup_tol:
+                out_f[r] |= flags[i] & 2
+                dup = True
+                break
+        if dup:
+            continue
+        out_q[count], out_f[count], out_b[count] = q, flags[i], i
+        count += 1
+    if not exact.any():
+        status = STATUS["unreachable"]
+    elif count == 0:
+        status = STATUS["out_of_limits"]
+    else:
+        status = STATUS["ok"]
+    return IKAll(out_q, out_f, out_b, count, status)
+
+
+def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None) -> tuple[np.ndarray | None, int]:
+    """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
+    nearest ``q_ref``; ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric weights (default 1)."""
+    if result.count == 0:
+        return None, -1
+    q_ref = np.asarray(q_ref, float)
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    rev = np.asarray(revolute, bool)
+    w = np.ones_like(q_ref) if weights is None else np.asarray(weights, float)
+    best, best_d, best_i = None, np.inf, -1
+    for i in range(result.count):
+        q = result.q[i].copy()
+        k = np.round((q_ref - q) / TWO_PI)
+        for j in np.nonzero(rev)[0]:
+            options = [q[j] + TWO_PI * (k[j] + m) for m in (0, -1, 1)]
+            options = [x for x in options if lower[j] <= x <= upper[j]] or [q[j]]
+            q[j] = min(options, key=lambda x: abs(x - q_ref[j]))
+        d = float(np.sum(w * (q - q_ref) ** 2))
+        if d < best_d:
+            best, best_d, best_i = q, d, i
+    return best, best_i

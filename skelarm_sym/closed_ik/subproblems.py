@@ -1,0 +1,226 @@
+"""Geometric subproblems (Paden-Kahan 1-3, IK-Geo's 4) as straight-line SymPy steps.
+
+Notation: ``R(k, theta)`` is the rotation by ``theta`` about the unit vector ``k`` (right hand);
+vectors are lists of three SymPy expressions (any frame, the same for all arguments of a call).
+
+* SP1 ``R(k, theta) p = q``: ``theta = atan2(k . (u x w), u . w)`` with ``u = k x p``, ``w = k x q`` (the
+  perpendicular parts turned by 90 degrees; ``u . w = p . q - (k . p)(k . q)`` without its cancellation) -- exact when ``p``, ``q``
+  have equal components along ``k`` and equal lengths, else the least-squares angle. Singular (any angle)
+  when ``p`` or ``q`` lies on the axis: ``atan2(0, 0) = 0`` is the representative.
+* SP4 ``h . R(k, theta) p = d``: with ``A = h . p_perp``, ``B = h . (k x p)``, ``C = d - (h . k)(k . p)`` the
+  equation is ``A cos + B sin = C``; ``disc = A^2 + B^2 - C^2``; ``s = sqrt(max(disc, 0))``;
+  ``(cos, sin) ~ (A C -+ B s, B C +- A s)`` -- two branches, one double root at ``disc = 0``, the
+  least-squares angle (``s = 0``) when ``disc < 0``.
+* SP3 ``|R(k, theta) p1 - p2|^2 = d2``: SP4 with ``h = p2``, ``p = p1``, ``d = (|p1|^2 + |p2|^2 - d2) / 2``
+  (least squares in ``|.|^2 - d2``).
+* SP2 ``R(k1, theta1) p1 = R(k2, theta2) p2`` (``k1`` not parallel to ``k2``): the common image
+  ``c = alpha k1 + beta k2 +- gamma (k1 x k2)`` from ``k1 . c = k1 . p1``, ``k2 . c = k2 . p2`` and ``c`` on the
+  smaller of the two circles (``gamma^2 |k1 x k2|^2 = |k2 x p2|^2 - alpha^2 |k1 x k2|^2`` or the same with 1);
+  then SP1 twice. ``gamma^2 < 0`` is clamped to 0 (least squares).
+* SPL (prismatic) ``|x0 + t h - o|^2 = d2`` for ``t``: ``t = -b +- sqrt(max(b^2 - c, 0))``, ``b = h . (x0 - o)``,
+  ``c = |x0 - o|^2 - d2``.
+
+Every solved angle comes with ``cos`` and ``sin`` computed algebraically (``x / rho``, ``y / rho`` with
+``rho = sqrt(x^2 + y^2)``; angle 0 and ``(1, 0)`` when ``rho = 0``, by a select, so no backend's ``atan2(0, 0)``
+matters), and
+two 0/1 flags: ``ls`` (least squares: a clamped discriminant below ``-LS_TOL`` times its scale) and
+``singular`` (a continuum -- ``rho`` at most ``SING_TOL`` times its scale -- or a double root,
+``|disc| <= LS_TOL`` times its scale). Special cases are ``Piecewise`` selects; there are no loops, no
+simplification and no numeric iteration. Operations emitted: Add, Mul, Pow (integer exponents, 1/2),
+atan2, Max, Piecewise, ``<``/``<=``/``>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import sympy as sp
+
+from ..derive.core import StepRecorder
+from .classify import add, cross, dot, scale, sub
+
+LS_TOL = 1e-10
+"""A discriminant below ``-LS_TOL`` times its scale marks a least-squares answer; within ``+-LS_TOL`` a double root."""
+SING_TOL = 1e-9
+"""An SP1/SP4 whose ``rho`` (or ``sqrt(A^2 + B^2)``) is at most this times its scale is a continuum (singular)."""
+
+
+def _floaty(expr: sp.Expr) -> sp.Expr:
+    """Irrational number subexpressions (``sqrt(2)``, ``pi``) as Floats: the emitted code has only literals."""
+    expr = sp.sympify(expr)
+    if expr.is_number and not expr.is_Rational and not expr.is_Float:
+        return sp.Float(expr.evalf(30), 17) if expr.is_real is not False else expr
+    if expr.is_Atom:
+        return expr
+    return expr.replace(
+        lambda e: e.is_number and not e.is_Atom and not e.is_Rational and not e.is_Float and e.is_real is not False
+        and not isinstance(e, sp.logic.boolalg.Boolean),
+        lambda e: sp.Float(e.evalf(30), 17),
+    )
+
+
+class Steps(StepRecorder):
+    """A :class:`StepRecorder` that turns irrational constants into Floats and names vectors."""
+
+    def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
+        expr = _floaty(sp.sympify(expr))
+        if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom:
+            return expr  # -x costs nothing where it is used
+        return super().__call__(label, expr)
+
+    def vec(self, label: str, v: Sequence) -> list:
+        """Name each component of a 3-vector."""
+        return [self(f"{label}{'xyz'[i]}", v[i]) for i in range(3)]
+
+
+def any_of(*flags: sp.Expr) -> sp.Expr:
+    """The largest of 0/1 flags (1 when any is set): ``Max`` of the distinct non-zero ones, unevaluated (SymPy's
+    pairwise comparison of symbols costs seconds and decides nothing here)."""
+    args = []
+    for f in flags:
+        f = sp.sympify(f)
+        if f != 0 and f not in args:
+            args.append(f)
+    if not args:
+        return sp.S.Zero
+    if any(a == 1 for a in args):
+        return sp.S.One
+    return args[0] if len(args) == 1 else sp.Max(*args, evaluate=False)
+
+
+def indicator(cond) -> sp.Expr:
+    """1 where ``cond`` holds, else 0 (a select)."""
+    return sp.Piecewise((sp.S.One, cond), (sp.S.Zero, True))
+
+
+@dataclass(frozen=True)
+class Angle:
+    """A solved joint variable: ``theta`` (rad, or m for a prismatic one), ``c``/``s`` its cosine and sine
+    (``None`` for a prismatic one), and 0/1 flags ``ls`` and ``singular``."""
+
+    theta: sp.Expr
+    c: sp.Expr | None
+    s: sp.Expr | None
+    ls: sp.Expr = sp.S.Zero
+    singular: sp.Expr = sp.S.Zero
+
+    def negated(self) -> "Angle":
+        """``-theta`` (cos unchanged, sin negated)."""
+        return Angle(-self.theta, self.c, None if self.s is None else -self.s, self.ls, self.singular)
+
+
+def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr) -> Angle:
+    """``theta = atan2(y, x)`` with ``cos = x / rho``, ``sin = y / rho`` (``(1, 0)`` when ``rho = 0``); singular
+    when ``rho^2 <= SING_TOL^2 scale2``."""
+    x, y = steps(f"{label}_x", x), steps(f"{label}_y", y)
+    rho2 = steps(f"{label}_r2", x * x + y * y)
+    rho = steps(f"{label}_r", sp.sqrt(rho2))
+    theta = steps(f"{label}", sp.Piecewise((sp.atan2(y, x), rho > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 on every backend
+    c = steps(f"{label}_c", sp.Piecewise((x / rho, rho > 0), (sp.S.One, True)))
+    s = steps(f"{label}_s", sp.Piecewise((y / rho, rho > 0), (sp.S.Zero, True)))
+    singular = steps(f"{label}_sg", indicator(rho2 <= SING_TOL**2 * scale2))
+    return Angle(theta, c, s, sp.S.Zero, singular)
+
+
+def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angle:
+    """SP1: ``theta`` with ``R(k, theta) p = q`` (least squares when inconsistent); ``k`` unit. Singular (a
+    continuum) when ``p`` or ``q`` is within ``SING_TOL`` (sine of the angle) of the axis."""
+    # perpendicular parts as k x p, k x q: p . q - (k . p)(k . q) cancels when p and q lie near the axis
+    # (a circle of radius 1e-7 m at 0.4 m from its centre: 3e-3 rad error in theta), k x p does not
+    u = steps.vec(f"{label}_u", cross(k, p))
+    w = steps.vec(f"{label}_w", cross(k, q))
+    x = dot(u, w)
+    y = dot(k, cross(u, w))
+    a = angle_from(steps, label, x, y, sp.S.Zero)
+    flat = sp.Or(dot(u, u) <= SING_TOL**2 * dot(p, p), dot(w, w) <= SING_TOL**2 * dot(q, q))
+    return Angle(a.theta, a.c, a.s, sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
+
+
+def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
+        disc: sp.Expr | None = None) -> tuple[Angle, Angle]:
+    """SP4: both ``theta`` with ``h . R(k, theta) p = d`` (``k`` unit; ``h`` any length). Branch 0 takes ``+s``.
+
+    ``disc``: the discriminant ``A^2 + B^2 - C^2`` written without cancellation, when the caller has such a
+    form (see :func:`unit_disc`); by default it is computed as written, which loses digits near a double root.
+    """
+    hk, kp = steps(f"{label}_hk", dot(h, k)), steps(f"{label}_kp", dot(k, p))
+    A = steps(f"{label}_A", dot(cross(k, h), cross(k, p)))  # h . p - (h . k)(k . p), without its cancellation
+    B = steps(f"{label}_B", dot(h, cross(k, p)))
+    C = steps(f"{label}_C", d - hk * kp)
+    r2 = steps(f"{label}_r2", A * A + B * B)
+    disc = steps(f"{label}_disc", r2 - C * C if disc is None else disc)
+    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * r2))
+    scale2 = steps(f"{label}_n2", dot(h, h) * dot(p, p))
+    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * r2, disc >= -LS_TOL * r2)))
+    flat = steps(f"{label}_flat", indicator(r2 <= SING_TOL**2 * scale2))
+    singular = steps(f"{label}_sg", any_of(double, flat))
+    out = []
+    for b, sign in enumerate((1, -1)):
+        x = A * C - sign * B * root
+        y = B * C + sign * A * root
+        a = angle_from(steps, f"{label}{b}", x, y, r2 * r2)
+        out.append(Angle(a.theta, a.c, a.s, ls, singular))
+    return out[0], out[1]
+
+
+def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
+    """SP4's discriminant for ``h . R(k, theta) p = h . g`` with unit ``h``, ``p``, ``k`` and a unit target direction
+    ``g``: ``|h x g|^2 - (hk^2 + pk^2 - 2 (h . g) hk pk)`` (``hk = h . k``, ``pk = p . k``). Where ``h`` and ``p`` are
+    perpendicular to ``k`` (every wrist with right-angle twists: exact zeros) it is ``|h x g|^2``, a sum of squares
+    that keeps its digits as ``theta`` nears the double root (the wrist singularity), where ``1 - (h . g)^2`` loses
+    them (measured: q5 = 1.7e-4 rad gave a 1.3e-12 rad error in q5 before, 1e-16 after)."""
+    hk, pk, d = dot(h, k), dot(p, k), dot(h, g)
+    hg = cross(h, g)
+    return dot(hg, hg) - (hk * hk + pk * pk - 2 * d * hk * pk)
+
+
+def sp3(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[Angle, Angle]:
+    """SP3: both ``theta`` with ``|R(k, theta) p1 - p2|^2 = d2`` (``d2`` a squared distance)."""
+    d = (dot(p1, p1) + dot(p2, p2) - d2) / 2
+    return sp4(steps, label, p2, p1, k, d)
+
+
+def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: Sequence) -> tuple[tuple[Angle, Angle], tuple[Angle, Angle]]:
+    """SP2: both ``(theta1, theta2)`` with ``R(k1, theta1) p1 = R(k2, theta2) p2`` (unit, non-parallel ``k1``, ``k2``)."""
+    k12 = steps(f"{label}_k12", dot(k1, k2))
+    a1, a2 = steps(f"{label}_a1", dot(k1, p1)), steps(f"{label}_a2", dot(k2, p2))
+    nn = steps(f"{label}_nn", 1 - k12 * k12)
+    inv = steps(f"{label}_inv", 1 / nn)
+    alpha = steps(f"{label}_al", (a1 - k12 * a2) * inv)
+    beta = steps(f"{label}_be", (a2 - k12 * a1) * inv)
+    norm2 = steps(f"{label}_m2", (dot(p1, p1) + dot(p2, p2)) / 2)
+    # gamma^2 |k1 x k2|^2 = r2^2 - alpha^2 nn = r1^2 - beta^2 nn (r_i: the circles' radii, |k_i x p_i|): the form
+    # with the smaller circle cancels least (a circle of radius 1e-11 m next to a 0.4 m one: |c|^2 - |proj c|^2
+    # left gamma 3e-9 m wrong, and the SP1 on that small circle turned that into the pose).
+    c1, c2 = cross(k1, p1), cross(k2, p2)
+    r1 = steps(f"{label}_r1", dot(c1, c1))
+    r2 = steps(f"{label}_r2", dot(c2, c2))
+    disc = steps(f"{label}_disc", sp.Piecewise((r2 - alpha * alpha * nn, r2 <= r1), (r1 - beta * beta * nn, True)))
+    gamma = steps(f"{label}_g", sp.sqrt(sp.Max(disc, 0, evaluate=False) * inv))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * norm2))
+    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * norm2, disc >= -LS_TOL * norm2)))
+    n = cross(k1, k2)
+    out = []
+    for b, sign in enumerate((1, -1)):
+        c = steps.vec(f"{label}{b}_c", add(add(scale(alpha, k1), scale(beta, k2)), scale(sign * gamma, n)))
+        t1 = sp1(steps, f"{label}{b}_t1", k1, p1, c)
+        t2 = sp1(steps, f"{label}{b}_t2", k2, p2, c)
+        sg = steps(f"{label}{b}_sg", any_of(double, t1.singular, t2.singular))
+        out.append((Angle(t1.theta, t1.c, t1.s, ls, sg), Angle(t2.theta, t2.c, t2.s, ls, sg)))
+    return out[0], out[1]
+
+
+def sp_line(steps: Steps, label: str, h: Sequence, x0: Sequence, o: Sequence, d2: sp.Expr) -> tuple[Angle, Angle]:
+    """Prismatic SP3: both ``t`` with ``|x0 + t h - o|^2 = d2`` (unit ``h``): a quadratic. Branch 0 is the larger root."""
+    r = sub(x0, o)
+    b = steps(f"{label}_b", dot(h, r))
+    c = steps(f"{label}_c", dot(r, r) - d2)
+    disc = steps(f"{label}_disc", b * b - c)
+    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
+    scale2 = steps(f"{label}_n2", dot(r, r) + sp.Abs(d2))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * scale2))
+    singular = steps(f"{label}_sg", indicator(sp.And(disc <= LS_TOL * scale2, disc >= -LS_TOL * scale2)))
+    return (Angle(steps(f"{label}0", -b + root), None, None, ls, singular),
+            Angle(steps(f"{label}1", -b - root), None, None, ls, singular))

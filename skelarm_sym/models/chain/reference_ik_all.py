@@ -1,0 +1,164 @@
+"""Judge of "all IK solutions": pose reproduction, completeness against a numeric multi-start IK, EAIK.
+
+NumPy only, on top of this package's forward recursion (:func:`.reference.chain_kinematics`); it imports
+nothing from :mod:`skelarm_sym.closed_ik` (a test reads the imports). It reads a *numeric* chain (what
+``Chain.numeric()`` returns) and solutions as arrays ``(k, n)``.
+
+* :func:`pose_error`: ``|p(q) - p_t| / reach`` and ``max |R(q) - R_t|`` (both dimensionless), with
+  ``reach`` the sum of the lengths of the chain's constant translations (:func:`reach`).
+* :func:`multistart_ik`: Levenberg-Marquardt from ``starts`` random configurations (uniform in
+  ``[-pi, pi]`` for revolute joints, in ``[-reach, reach]`` for prismatic ones; unconstrained), batched over
+  the starts: error ``[p_t - p; log(R_t R^T)]`` in base axes with the geometric Jacobian of the reference
+  (LOCAL_WORLD_ALIGNED); damping ``mu`` per start, divided by 3 after a successful step and multiplied by 4
+  otherwise. Converged: both errors of :func:`pose_error` at most ``tol``. Coordinates in ``fixed`` (a dict
+  ``{coordinate: value}``, the locked joint) do not move. Returns the distinct converged configurations.
+* :func:`same`: two configurations equal within ``tol`` (revolute joints modulo 2 pi).
+* :func:`missing`: the rows of one set that have no equal in another.
+* :func:`eaik_solutions`: EAIK's solutions (``pip install eaik``; ``None`` when it is not installed) from
+  the product-of-exponentials data of :func:`hp_data` (EAIK's layout) for the pose ``[R_t R_0^T, p_t]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .reference import chain_kinematics
+
+__all__ = ["reach", "pose_error", "multistart_ik", "same", "missing", "hp_data", "eaik_solutions", "revolute_mask"]
+
+
+def revolute_mask(chain) -> np.ndarray:
+    """(n,) bool: coordinate ``c`` is revolute (moves a revolute joint)."""
+    mask = np.zeros(int(chain.n), bool)
+    for j in chain.joints:
+        if j.kind == "revolute":
+            mask[int(j.coordinate)] = True
+    return mask
+
+
+def reach(chain) -> float:
+    """Sum of the lengths of the chain's constant translations (m): the length scale of relative errors."""
+    total = float(np.linalg.norm(np.asarray(chain.base)[:3, 3]) + np.linalg.norm(np.asarray(chain.tool)[:3, 3]))
+    for j in chain.joints:
+        total += float(np.linalg.norm(np.asarray(j.before)[:3, 3]) + np.linalg.norm(np.asarray(j.after)[:3, 3]))
+    return max(total, 1e-300)
+
+
+def pose_error(chain, q, target) -> tuple[np.ndarray, np.ndarray]:
+    """``(position error / reach, max |R - R_t|)`` of configurations ``q`` (..., n) against ``target`` (4, 4)."""
+    T = chain_kinematics(chain, q).T
+    target = np.asarray(target, float).reshape(4, 4)
+    pos = np.linalg.norm(T[..., :3, 3] - target[:3, 3], axis=-1) / reach(chain)
+    rot = np.max(np.abs(T[..., :3, :3] - target[:3, :3]), axis=(-1, -2))
+    return pos, rot
+
+
+def _log3(R: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3) of rotations (..., 3, 3) (the angle in [0, pi])."""
+    v = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
+    s = np.linalg.norm(v, axis=-1)
+    c = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
+    theta = np.arctan2(s, c)
+    scale = np.where(s > 1e-12, theta / np.maximum(s, 1e-300), 1.0)
+    out = v * scale[..., None]
+    # near pi: the axis from the symmetric part
+    near_pi = (s <= 1e-6) & (c < 0)
+    if np.any(near_pi):
+        B = 0.5 * (R[near_pi] + np.swapaxes(R[near_pi], -1, -2)) - c[near_pi, None, None] * np.eye(3)
+        idx = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), axis=-1)
+        axis = B[np.arange(len(idx)), idx]
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        out[near_pi] = axis * theta[near_pi, None]
+    return out
+
+
+def _errors(chain, q, target):
+    kin = chain_kinematics(chain, q)
+    T = kin.T
+    e = np.concatenate([target[:3, 3] - T[..., :3, 3], _log3(target[:3, :3] @ np.swapaxes(T[..., :3, :3], -1, -2))], -1)
+    return e, kin.J
+
+
+def multistart_ik(chain, target, starts: int = 200, seed: int = 0, iterations: int = 60, tol: float = 1e-10,
+                  fixed: dict[int, float] | None = None, dup_tol: float = 1e-6) -> np.ndarray:
+    """Distinct converged configurations (k, n) of an unconstrained multi-start Levenberg-Marquardt IK (see the module docstring)."""
+    n = int(chain.n)
+    target = np.asarray(target, float).reshape(4, 4)
+    rng = np.random.default_rng(seed)
+    rev = revolute_mask(chain)
+    L = reach(chain)
+    q = np.where(rev, rng.uniform(-np.pi, np.pi, (starts, n)), rng.uniform(-L, L, (starts, n)))
+    free = np.ones(n, bool)
+    for c, v in (fixed or {}).items():
+        q[:, c] = v
+        free[c] = False
+    W = np.concatenate([np.full(3, 1.0 / L), np.ones(3)])  # position in reaches, rotation in radians
+    e, J = _errors(chain, q, target)
+    cost = np.sum((W * e) ** 2, -1)
+    mu = np.full(starts, 1e-3)
+    for _ in range(iterations):
+        A = (W[:, None] * J) * free
+        g = np.einsum("kij,ki->kj", A, W * e)
+        H = np.einsum("kij,kil->kjl", A, A) + mu[:, None, None] * np.eye(n)
+        dq = np.linalg.solve(H, g[..., None])[..., 0]
+        step = np.linalg.norm(dq, axis=-1, keepdims=True)
+        dq = dq * np.minimum(1.0, 1.0 / np.maximum(step, 1e-300))
+        e2, J2 = _errors(chain, q + dq, target)
+        cost2 = np.sum((W * e2) ** 2, -1)
+        better = cost2 < cost
+        q = np.where(better[:, None], q + dq, q)
+        e = np.where(better[:, None], e2, e)
+        J = np.where(better[:, None, None], J2, J)
+        cost = np.where(better, cost2, cost)
+        mu = np.where(better, np.maximum(mu / 3.0, 1e-12), np.minimum(mu * 4.0, 1e8))
+    pos, rot = pose_error(chain, q, target)
+    done = q[(pos <= tol) & (rot <= tol)]
+    out: list[np.ndarray] = []
+    for x in done:
+        x = np.where(rev, (x + np.pi) % (2 * np.pi) - np.pi, x)
+        if not any(same(x, y, rev, dup_tol) for y in out):
+            out.append(x)
+    return np.array(out).reshape(-1, n)
+
+
+def same(a: np.ndarray, b: np.ndarray, revolute: np.ndarray, tol: float) -> bool:
+    """``max |a - b| <= tol``, revolute differences taken modulo 2 pi."""
+    d = np.asarray(a, float) - np.asarray(b, float)
+    d = np.where(revolute, (d + np.pi) % (2 * np.pi) - np.pi, d)
+    return bool(np.max(np.abs(d)) <= tol)
+
+
+def missing(found: np.ndarray, reference: np.ndarray, revolute: np.ndarray, tol: float) -> np.ndarray:
+    """Rows of ``reference`` with no row of ``found`` equal to them (see :func:`same`)."""
+    rows = [r for r in np.asarray(reference).reshape(-1, len(revolute))
+            if not any(same(f, r, revolute, tol) for f in np.asarray(found).reshape(-1, len(revolute)))]
+    return np.array(rows).reshape(-1, len(revolute))
+
+
+def hp_data(chain) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """EAIK's product-of-exponentials data from the forward recursion at ``q = 0``: ``H`` (m, 3) unit axes,
+    ``P`` (m + 1, 3) offsets (``P[0]`` base origin to joint 1's point, ``P[i]`` joint i's point to joint i+1's,
+    ``P[m]`` to the tool origin), and ``R0`` (3, 3) the tool rotation at ``q = 0``."""
+    kin = chain_kinematics(chain, np.zeros(int(chain.n)))
+    H, O = kin.axes, kin.origins
+    P = np.vstack([O[:1], np.diff(O, axis=0), kin.T[:3, 3][None] - O[-1:]])
+    return H, P, kin.T[:3, :3]
+
+
+def eaik_solutions(chain, target, fixed: dict[int, float] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """EAIK's ``(Q (k, n), is_LS (k,))`` for ``target`` (4, 4), from :func:`hp_data` (revolute chains without
+    mimic joints); ``fixed``: ``{joint index: value}`` locked joints (EAIK's ``fixed_axes``). ``None`` when EAIK
+    is not installed."""
+    try:
+        from eaik.IK_HP import HPRobot
+    except ImportError:
+        return None
+    H, P, R0 = hp_data(chain)
+    robot = HPRobot(H, P, fixed_axes=sorted((fixed or {}).items()))
+    target = np.asarray(target, float).reshape(4, 4)
+    pose = np.eye(4)
+    pose[:3, :3] = target[:3, :3] @ R0.T
+    pose[:3, 3] = target[:3, 3]
+    sol = robot.IK(pose)
+    Q = np.asarray(sol.Q, float)
+    return Q.reshape(len(Q), -1) if Q.size else Q.reshape(0, len(H)), np.asarray(sol.is_LS, bool).reshape(-1)

@@ -1,0 +1,102 @@
+"""Classification: the families, exact geometry, and one-line reasons with the failing measure."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from skelarm_sym.closed_ik import ClosedFormError, classify, derive_ik_all, explain
+from skelarm_sym.closed_ik.classify import chain_geometry
+from skelarm_sym.models.chain import load_robot_file
+from skelarm_sym.models.chain import load_robot
+
+from closed_ik_support import ROBOTS
+
+
+def write(tmp_path, text, name="arm.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return load_robot_file(path)
+
+
+UR5_BODY = (ROBOTS / "ur5.toml").read_text()
+
+
+def test_family_is_frozen_and_exact():
+    family = classify(load_robot(ROBOTS / "puma560.toml"))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        family.name = "x"
+    centre = dict(family.special_points)["wrist centre"]
+    # PUMA 560 at q = 0: wrist centre at (a2 + a3, d3, d4)... in Corke's frames: x = a2 + a3, y = d3, z = -d4 style;
+    # exact means: built from the table's numbers only, no rounding noise in the zero entries
+    assert all(isinstance(x, (sp.Float, sp.Integer, sp.Rational)) or x == 0 for x in centre)
+    assert sorted(abs(float(x)) for x in centre) == pytest.approx(sorted([0.4318 + 0.0203, 0.15005, 0.4318]))
+    axes = family.axes
+    assert all(x in (-1, 0, 1) for h in axes for x in h)  # pi/2 twists: exact unit axes
+    assert "SP4 q1" in family.describe()
+
+
+def test_geometry_matches_the_reference_at_zero():
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    for file in ("puma560.toml", "ur5.toml", "stanford.toml", "panda.toml"):
+        chain = load_robot(ROBOTS / file)
+        geom = chain_geometry(chain)
+        kin = chain_kinematics(chain.numeric(), np.zeros(chain.n))
+        _, H, P = geom.numeric()
+        assert np.allclose(H, kin.axes, atol=1e-15)
+        # points may differ along the axis; the lines must coincide
+        d = P - kin.origins
+        assert np.allclose(d - np.sum(d * H, axis=1)[:, None] * H, 0, atol=1e-15)
+        M = np.array([[float(x) for x in r] for r in geom.home_rotation])
+        assert np.allclose(M, kin.T[:3, :3], atol=1e-15)
+        assert np.allclose([float(x) for x in geom.home_position], kin.T[:3, 3], atol=1e-15)
+
+
+def test_offset_wrist_is_explained_with_its_distance(tmp_path):
+    # UR5 with a 5 cm offset between axes 5 and 6 (a5 = 0.05): no family, and the message says by how much
+    text = UR5_BODY.replace('d = 0.09465\nalpha = "-pi/2"', 'd = 0.09465\na = 0.05\nalpha = "-pi/2"')
+    chain = write(tmp_path, text)
+    with pytest.raises(ClosedFormError) as err:
+        classify(chain)
+    msg = str(err.value)
+    assert "\n" not in msg
+    assert "axes 5, 6 do not meet: closest distance 0.05 m" in msg
+    assert "axes 4, 5, 6 do not meet" in msg
+    assert explain(chain) == msg
+
+
+def test_puma_with_offset_wrist_names_the_wrist(tmp_path):
+    text = (ROBOTS / "puma560.toml").read_text().replace('name = "wrist_2"\ntype = "revolute"', 'name = "wrist_2"\ntype = "revolute"\nd = 0.0823')
+    msg = explain(write(tmp_path, text))
+    assert re.search(r"spherical wrist: axes 4, 5, 6 do not meet: closest distance 0\.0\d+ m", msg), msg
+
+
+@pytest.mark.parametrize("file,message", [
+    ("scara.toml", "closed-form families here need 6 moving joints, this chain has 4"),
+    ("panda.toml", "give lock=JOINT for a 7-joint arm"),
+])
+def test_joint_counts(file, message):
+    assert message in explain(load_robot(ROBOTS / file))
+
+
+def test_locks():
+    panda = load_robot(ROBOTS / "panda.toml")
+    assert classify(panda, 6).lock == 6
+    with pytest.raises(ClosedFormError, match="no joint named"):
+        derive_ik_all(panda, "nope")
+    assert derive_ik_all(panda, "panda_joint7").lock == 6
+    # Panda with joint 1 locked: joints 2-7 have neither wrist nor shoulder nor three parallel axes
+    assert "no closed-form family" in explain(panda, 0)
+    with pytest.raises(ClosedFormError, match="reduces a 7-joint chain"):
+        classify(load_robot(ROBOTS / "puma560.toml"), 2)
+
+
+def test_parameters_are_refused(tmp_path):
+    text = UR5_BODY.replace("a = -0.425", 'a = "a2"')
+    with pytest.raises(ClosedFormError, match="named parameters"):
+        classify(write(tmp_path, text))
