@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skelarm_sym.build import CompileError
 from skelarm_sym.errors import InputError
 from skelarm_sym.models.chain.loader import load_robot, urdf_links
 from skelarm_sym.models.chain.reference import chain_kinematics
@@ -103,18 +102,8 @@ def _generated_chains(rel):
     return [(tip, chains[tip])]
 
 
-PRINTER_FAILURES = {  # issue 16 item 2: the printers emit M_PI_2 (not C99) and math.pi (not imported)
-    f"ur_description/urdf/{name}.urdf": "the C uses M_PI_2, undeclared under -std=c99 (the printers' part of issue 16)"
-    for name in ("ur3_robot", "ur3_joint_limited_robot", "ur5_robot", "ur5_joint_limited_robot", "ur10_robot", "ur10_joint_limited_robot")
-}
-"""Strict: once the printers emit numeric literals these pass, and the entries must go."""
-
-
 @needs_cc
-@pytest.mark.parametrize("rel", [
-    pytest.param(r, marks=pytest.mark.xfail(r in PRINTER_FAILURES, reason=PRINTER_FAILURES.get(r, ""), strict=True, raises=CompileError))
-    for r in URDFS if r not in NO_CHAIN
-])
+@pytest.mark.parametrize("rel", [r for r in URDFS if r not in NO_CHAIN])
 def test_emitted_code_compiles_strictly_and_runs(rel, rng):
     from skelarm_sym.build import compile_shared, load_python
     from skelarm_sym.generate import generate

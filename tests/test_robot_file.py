@@ -279,6 +279,9 @@ EXAMPLES = {
     "panda.toml": (7, "modified", "RRRRRRR"),
     "stanford.toml": (6, "standard", "RRPRRR"),
     "scara.toml": (4, "standard", "RRPR"),
+    "kuka_kr6.toml": (6, "standard", "RRRRRR"),
+    "abb_irb140.toml": (6, "standard", "RRRRRR"),
+    "iiwa14.toml": (7, "standard", "RRRRRRR"),
 }
 
 
