@@ -25,7 +25,6 @@ from typing import Sequence
 
 import numpy as np
 
-from ..build import compile_arm, load_python
 from ..errors import InputError
 from ..generate import Generated, generate
 from ..models.registry import kind_of
@@ -86,19 +85,13 @@ def table(results: Sequence[OutputError]) -> list[str]:
 
 
 def load_implementations(generated: Generated) -> list[tuple[str, object]]:
-    """``[("C", CompiledArm), ("Python", module)]`` for the ``.c`` and ``.py`` files of ``generated`` present."""
-    implementations: list[tuple[str, object]] = []
-    c_files = [k for k in generated.sources if k.endswith(".c")]
-    py_files = [k for k in generated.sources if k.endswith(".py")]
-    if c_files:
-        implementations.append(("C", compile_arm(generated)))
-    if py_files:
-        try:
-            module = load_python(generated.sources[py_files[0]], py_files[0][:-3])
-        except SyntaxError as exc:  # a file edited by hand (check --from)
-            raise InputError(f"{py_files[0]} does not load: {exc.msg} (line {exc.lineno})") from None
-        implementations.append(("Python", module))
-    return implementations
+    """``[(label, implementation)]`` for every registered backend whose files ``generated`` holds, in the
+    registry's order (``[("C", CompiledArm), ("Python", module)]`` for the default languages)."""
+    from ..backends import BACKENDS
+
+    prefix = generated.module.prefix
+    return [(backend.LABEL, backend.load(generated)) for backend in BACKENDS.values()
+            if all(prefix + suffix in generated.sources for suffix in backend.FILE_SUFFIXES)]
 
 
 def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: str = "double",
