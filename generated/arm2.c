@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x7513930bUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xc12bfb1bUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1627,7 +1627,13 @@ static void arm2_ik_error(const double trial[2], const double target[2], const d
     arm2_position(trial, l, p);
     const double d0 = target[0] - p[0];
     const double d1 = target[1] - p[1];
-    error[0] = sqrt(d0*d0 + d1*d1);
+    double distance_squares = d0*d0 + d1*d1;
+    double distance = sqrt(distance_squares);
+    if (!ARM2_FINITE(distance_squares)) {
+        double distance_top = (fabs(d1) > fabs(d0) ? fabs(d1) : fabs(d0));
+        distance = distance_top*sqrt((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm2_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x1f5beaceUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xaefc194fUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -2112,7 +2112,13 @@ static void arm3_ik_error(const double trial[3], const double target[2], const d
     arm3_position(trial, l, p);
     const double d0 = target[0] - p[0];
     const double d1 = target[1] - p[1];
-    error[0] = sqrt(d0*d0 + d1*d1);
+    double distance_squares = d0*d0 + d1*d1;
+    double distance = sqrt(distance_squares);
+    if (!ARM3_FINITE(distance_squares)) {
+        double distance_top = (fabs(d1) > fabs(d0) ? fabs(d1) : fabs(d0));
+        distance = distance_top*sqrt((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm3_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x3e54c75bUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9316935bUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -2070,7 +2070,13 @@ static void arm3f_ik_error(const float trial[3], const float target[2], float er
     arm3f_position(trial, p);
     const float d0 = target[0] - p[0];
     const float d1 = target[1] - p[1];
-    error[0] = sqrtf(d0*d0 + d1*d1);
+    float distance_squares = d0*d0 + d1*d1;
+    float distance = sqrtf(distance_squares);
+    if (!ARM3F_FINITE(distance_squares)) {
+        float distance_top = (fabsf(d1) > fabsf(d0) ? fabsf(d1) : fabsf(d0));
+        distance = distance_top*sqrtf((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm3f_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2d06b6ecUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xb3d8f4a5UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -2327,7 +2327,13 @@ static void arm4_ik_error(const double trial[4], const double target[2], const d
     arm4_position(trial, l, p);
     const double d0 = target[0] - p[0];
     const double d1 = target[1] - p[1];
-    error[0] = sqrt(d0*d0 + d1*d1);
+    double distance_squares = d0*d0 + d1*d1;
+    double distance = sqrt(distance_squares);
+    if (!ARM4_FINITE(distance_squares)) {
+        double distance_top = (fabs(d1) > fabs(d0) ? fabs(d1) : fabs(d0));
+        distance = distance_top*sqrt((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm4_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xce059d6bUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xebf11f00UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -2622,7 +2622,13 @@ static void arm5_ik_error(const double trial[5], const double target[2], const d
     arm5_position(trial, l, p);
     const double d0 = target[0] - p[0];
     const double d1 = target[1] - p[1];
-    error[0] = sqrt(d0*d0 + d1*d1);
+    double distance_squares = d0*d0 + d1*d1;
+    double distance = sqrt(distance_squares);
+    if (!ARM5_FINITE(distance_squares)) {
+        double distance_top = (fabs(d1) > fabs(d0) ? fabs(d1) : fabs(d0));
+        distance = distance_top*sqrt((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm5_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xc1093253UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xcc8c0120UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -2877,7 +2877,13 @@ static void arm6_ik_error(const double trial[6], const double target[2], const d
     arm6_position(trial, l, p);
     const double d0 = target[0] - p[0];
     const double d1 = target[1] - p[1];
-    error[0] = sqrt(d0*d0 + d1*d1);
+    double distance_squares = d0*d0 + d1*d1;
+    double distance = sqrt(distance_squares);
+    if (!ARM6_FINITE(distance_squares)) {
+        double distance_top = (fabs(d1) > fabs(d0) ? fabs(d1) : fabs(d0));
+        distance = distance_top*sqrt((d0/distance_top)*(d0/distance_top) + (d1/distance_top)*(d1/distance_top));
+    }
+    error[0] = distance;
 }
 
 /* ---- arm6_ik_solve: inverse kinematics of the endpoint by damped least squares ---- */

@@ -30,7 +30,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x37cccde5UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xcd966185UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -11962,8 +11962,8 @@ static void panda_ik_log3(const double M[9], double w[3])
     w[2] = col[2]*k;
 }
 
-/* ---- panda_ik_error_pose: e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position and rotation norms ---- */
-static void panda_ik_error_pose(const double Tm[16], const double target[16], double e[6], double norms[2])
+/* ---- panda_ik_error_pose: e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position, rotation and whole norms ---- */
+static void panda_ik_error_pose(const double Tm[16], const double target[16], double e[6], double norms[3])
 {
     double M[9];
     e[0] = target[3] - Tm[3];
@@ -11979,8 +11979,27 @@ static void panda_ik_error_pose(const double Tm[16], const double target[16], do
     M[7] = (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6];
     M[8] = (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10];
     panda_ik_log3(M, e + 3);
-    norms[1] = sqrt((e[3]*e[3] + e[4]*e[4]) + e[5]*e[5]);
-    norms[0] = sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2]);
+    double rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5];
+    double rotation = sqrt(rotation_squares);
+    if (!PANDA_FINITE(rotation_squares)) {
+        double rotation_top = (fabs(e[5]) > (fabs(e[4]) > fabs(e[3]) ? fabs(e[4]) : fabs(e[3])) ? fabs(e[5]) : (fabs(e[4]) > fabs(e[3]) ? fabs(e[4]) : fabs(e[3])));
+        rotation = rotation_top*sqrt((e[3]/rotation_top)*(e[3]/rotation_top) + (e[4]/rotation_top)*(e[4]/rotation_top) + (e[5]/rotation_top)*(e[5]/rotation_top));
+    }
+    norms[1] = rotation;
+    double position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2];
+    double position = sqrt(position_squares);
+    if (!PANDA_FINITE(position_squares)) {
+        double position_top = (fabs(e[2]) > (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])) ? fabs(e[2]) : (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])));
+        position = position_top*sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top));
+    }
+    norms[0] = position;
+    double whole_squares = norms[0]*norms[0] + norms[1]*norms[1];
+    double whole = sqrt(whole_squares);
+    if (!PANDA_FINITE(whole_squares)) {
+        double whole_top = (fabs(norms[1]) > fabs(norms[0]) ? fabs(norms[1]) : fabs(norms[0]));
+        whole = whole_top*sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top));
+    }
+    norms[2] = whole;
 }
 
 /* ---- panda_ik_gram_pose: G = J J^T for the first 6 rows of J (lower triangle, packed by rows) ---- */
@@ -12118,14 +12137,27 @@ static void panda_ik_damped_pose(const double J[42], const double G[21], const d
     dq[6] = (J[6]*z0 + (J[13]*z1 + J[20]*z2)) + (J[27]*z3 + (J[34]*z4 + J[41]*z5));
 }
 
-/* ---- panda_ik_error_position: e = target - p at the pose Tm; norms = its position and rotation norms ---- */
-static void panda_ik_error_position(const double Tm[16], const double target[3], double e[3], double norms[2])
+/* ---- panda_ik_error_position: e = target - p at the pose Tm; norms = its position, rotation and whole norms ---- */
+static void panda_ik_error_position(const double Tm[16], const double target[3], double e[3], double norms[3])
 {
     e[0] = target[0] - Tm[3];
     e[1] = target[1] - Tm[7];
     e[2] = target[2] - Tm[11];
     norms[1] = 0.0;
-    norms[0] = sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2]);
+    double position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2];
+    double position = sqrt(position_squares);
+    if (!PANDA_FINITE(position_squares)) {
+        double position_top = (fabs(e[2]) > (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])) ? fabs(e[2]) : (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])));
+        position = position_top*sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top));
+    }
+    norms[0] = position;
+    double whole_squares = norms[0]*norms[0] + norms[1]*norms[1];
+    double whole = sqrt(whole_squares);
+    if (!PANDA_FINITE(whole_squares)) {
+        double whole_top = (fabs(norms[1]) > fabs(norms[0]) ? fabs(norms[1]) : fabs(norms[0]));
+        whole = whole_top*sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top));
+    }
+    norms[2] = whole;
 }
 
 /* ---- panda_ik_gram_position: G = J J^T for the first 3 rows of J (lower triangle, packed by rows) ---- */
@@ -12203,7 +12235,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
     double best_q[7];
     double G[21];
     double Gf[21];
-    double norms[2];
+    double norms[3];
     int blocked[7];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -12263,7 +12295,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
     panda_ik_error_pose(Tm, target, e, norms);
     pe = norms[0];
     re = norms[1];
-    en = sqrt(pe*pe + re*re);
+    en = norms[2];
     best_en = en;
     best_pe = pe;
     best_re = re;
@@ -12366,7 +12398,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         panda_ik_error_pose(Tt, target, et, norms);
         pet = norms[0];
         ret = norms[1];
-        ent = sqrt(pet*pet + ret*ret);
+        ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
@@ -12438,7 +12470,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
                 panda_ik_error_pose(Tm, target, e, norms);
                 pe = norms[0];
                 re = norms[1];
-                en = sqrt(pe*pe + re*re);
+                en = norms[2];
                 c = 0.01;
                 attempt = 0;
                 checkpoint = en;
@@ -12493,7 +12525,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
     double best_q[7];
     double G[6];
     double Gf[6];
-    double norms[2];
+    double norms[3];
     int blocked[7];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -12551,7 +12583,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
     panda_ik_error_position(Tm, target, e, norms);
     pe = norms[0];
     re = norms[1];
-    en = sqrt(pe*pe + re*re);
+    en = norms[2];
     best_en = en;
     best_pe = pe;
     for (int k = 0; k < 7; ++k) {
@@ -12637,7 +12669,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         panda_ik_error_position(Tt, target, et, norms);
         pet = norms[0];
         ret = norms[1];
-        ent = sqrt(pet*pet + ret*ret);
+        ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
@@ -12708,7 +12740,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
                 panda_ik_error_position(Tm, target, e, norms);
                 pe = norms[0];
                 re = norms[1];
-                en = sqrt(pe*pe + re*re);
+                en = norms[2];
                 c = 0.01;
                 attempt = 0;
                 checkpoint = en;

@@ -34,7 +34,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x37cccde5
+STAMP = 0xcd966185
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -4648,6 +4648,7 @@ def jacobian_rpy(q):
     return outputs[0].reshape(batch + (6, 7,))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_uniform(state):
     """a number in [0, 1) from xorshift64* (one problem; arrays are 1-D)."""
     s = state[0]
@@ -4658,6 +4659,7 @@ def _ik_uniform(state):
     return DTYPE(((s * 0x2545f4914f6cdd1d) & 0xFFFFFFFFFFFFFFFF) >> 11)*1.1102230246251565e-16
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_log3(M, w):
     """w = log3(M), the axis-angle vector of the rotation M (row-major) (one problem; arrays are 1-D)."""
     v0 = M[7] - M[5]
@@ -4693,8 +4695,9 @@ def _ik_log3(M, w):
     w[2] = col[2]*k
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_error_pose(Tm, target, e, norms):
-    """e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position and rotation norms (one problem; arrays are 1-D)."""
+    """e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position, rotation and whole norms (one problem; arrays are 1-D)."""
     M = np.zeros(9, dtype=DTYPE)
     e[0] = target[3] - Tm[3]
     e[1] = target[7] - Tm[7]
@@ -4709,10 +4712,27 @@ def _ik_error_pose(Tm, target, e, norms):
     M[7] = (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6]
     M[8] = (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10]
     _ik_log3(M, e[3:])
-    norms[1] = np.sqrt((e[3]*e[3] + e[4]*e[4]) + e[5]*e[5])
-    norms[0] = np.sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2])
+    rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+    rotation = np.sqrt(rotation_squares)
+    if not np.isfinite(rotation_squares):
+        rotation_top = np.abs(e[5]) if np.abs(e[5]) > (np.abs(e[4]) if np.abs(e[4]) > np.abs(e[3]) else np.abs(e[3])) else np.abs(e[4]) if np.abs(e[4]) > np.abs(e[3]) else np.abs(e[3])
+        rotation = rotation_top*np.sqrt((e[3]/rotation_top)*(e[3]/rotation_top) + (e[4]/rotation_top)*(e[4]/rotation_top) + (e[5]/rotation_top)*(e[5]/rotation_top))
+    norms[1] = rotation
+    position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    position = np.sqrt(position_squares)
+    if not np.isfinite(position_squares):
+        position_top = np.abs(e[2]) if np.abs(e[2]) > (np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])) else np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])
+        position = position_top*np.sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top))
+    norms[0] = position
+    whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    whole = np.sqrt(whole_squares)
+    if not np.isfinite(whole_squares):
+        whole_top = np.abs(norms[1]) if np.abs(norms[1]) > np.abs(norms[0]) else np.abs(norms[0])
+        whole = whole_top*np.sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top))
+    norms[2] = whole
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_gram_pose(J, G):
     """G = J J^T for the first 6 rows of J (lower triangle, packed by rows) (one problem; arrays are 1-D)."""
     G[0] = J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5] + J[6]*J[6]
@@ -4738,6 +4758,7 @@ def _ik_gram_pose(J, G):
     G[20] = J[35]*J[35] + J[36]*J[36] + J[37]*J[37] + J[38]*J[38] + J[39]*J[39] + J[40]*J[40] + J[41]*J[41]
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_damped_pose(J, G, e, mu2, dq):
     """dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped (one problem; arrays are 1-D)."""
     a00 = G[0] + mu2
@@ -4846,15 +4867,28 @@ def _ik_damped_pose(J, G, e, mu2, dq):
     dq[6] = (J[6]*z0 + (J[13]*z1 + J[20]*z2)) + (J[27]*z3 + (J[34]*z4 + J[41]*z5))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_error_position(Tm, target, e, norms):
-    """e = target - p at the pose Tm; norms = its position and rotation norms (one problem; arrays are 1-D)."""
+    """e = target - p at the pose Tm; norms = its position, rotation and whole norms (one problem; arrays are 1-D)."""
     e[0] = target[0] - Tm[3]
     e[1] = target[1] - Tm[7]
     e[2] = target[2] - Tm[11]
     norms[1] = DTYPE(0.0)
-    norms[0] = np.sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2])
+    position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    position = np.sqrt(position_squares)
+    if not np.isfinite(position_squares):
+        position_top = np.abs(e[2]) if np.abs(e[2]) > (np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])) else np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])
+        position = position_top*np.sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top))
+    norms[0] = position
+    whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    whole = np.sqrt(whole_squares)
+    if not np.isfinite(whole_squares):
+        whole_top = np.abs(norms[1]) if np.abs(norms[1]) > np.abs(norms[0]) else np.abs(norms[0])
+        whole = whole_top*np.sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top))
+    norms[2] = whole
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_gram_position(J, G):
     """G = J J^T for the first 3 rows of J (lower triangle, packed by rows) (one problem; arrays are 1-D)."""
     G[0] = J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5] + J[6]*J[6]
@@ -4865,6 +4899,7 @@ def _ik_gram_position(J, G):
     G[5] = J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17] + J[18]*J[18] + J[19]*J[19] + J[20]*J[20]
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_damped_position(J, G, e, mu2, dq):
     """dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped (one problem; arrays are 1-D)."""
     a00 = G[0] + mu2
@@ -4907,6 +4942,7 @@ def _ik_damped_position(J, G, e, mu2, dq):
     dq[6] = J[6]*z0 + (J[13]*z1 + J[20]*z2)
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     """pose IK of the tool frame (one problem; arrays are 1-D)."""
     lo = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973], dtype=DTYPE)
@@ -4927,7 +4963,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     best_q = np.zeros(7, dtype=DTYPE)
     G = np.zeros(21, dtype=DTYPE)
     Gf = np.zeros(21, dtype=DTYPE)
-    norms = np.zeros(2, dtype=DTYPE)
+    norms = np.zeros(3, dtype=DTYPE)
     blocked = np.zeros(7, dtype=np.int64)
     state = [0x9e3779b921a722f8]
     pe = DTYPE(0.0)
@@ -4980,7 +5016,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     _ik_error_pose(Tm, target, e, norms)
     pe = norms[0]
     re = norms[1]
-    en = np.sqrt(pe*pe + re*re)
+    en = norms[2]
     best_en = en
     best_pe = pe
     best_re = re
@@ -5064,7 +5100,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         _ik_error_pose(Tt, target, et, norms)
         pet = norms[0]
         ret = norms[1]
-        ent = np.sqrt(pet*pet + ret*ret)
+        ent = norms[2]
         it = it + 1
         attempt = attempt + 1
         if ent < en:
@@ -5122,7 +5158,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 _ik_error_pose(Tm, target, e, norms)
                 pe = norms[0]
                 re = norms[1]
-                en = np.sqrt(pe*pe + re*re)
+                en = norms[2]
                 c = DTYPE(0.01)
                 attempt = 0
                 checkpoint = en
@@ -5186,6 +5222,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations):
     """position IK of the tool origin (one problem; arrays are 1-D)."""
     lo = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973], dtype=DTYPE)
@@ -5206,7 +5243,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     best_q = np.zeros(7, dtype=DTYPE)
     G = np.zeros(6, dtype=DTYPE)
     Gf = np.zeros(6, dtype=DTYPE)
-    norms = np.zeros(2, dtype=DTYPE)
+    norms = np.zeros(3, dtype=DTYPE)
     blocked = np.zeros(7, dtype=np.int64)
     state = [0x9e3779b921a722f8]
     pe = DTYPE(0.0)
@@ -5257,7 +5294,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     _ik_error_position(Tm, target, e, norms)
     pe = norms[0]
     re = norms[1]
-    en = np.sqrt(pe*pe + re*re)
+    en = norms[2]
     best_en = en
     best_pe = pe
     for k in range(0, 7):
@@ -5324,7 +5361,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         _ik_error_position(Tt, target, et, norms)
         pet = norms[0]
         ret = norms[1]
-        ent = np.sqrt(pet*pet + ret*ret)
+        ent = norms[2]
         it = it + 1
         attempt = attempt + 1
         if ent < en:
@@ -5381,7 +5418,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 _ik_error_position(Tm, target, e, norms)
                 pe = norms[0]
                 re = norms[1]
-                en = np.sqrt(pe*pe + re*re)
+                en = norms[2]
                 c = DTYPE(0.01)
                 attempt = 0
                 checkpoint = en

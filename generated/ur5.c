@@ -30,7 +30,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x1b626d76UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xd527a68fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -9871,8 +9871,8 @@ static void ur5_ik_log3(const double M[9], double w[3])
     w[2] = col[2]*k;
 }
 
-/* ---- ur5_ik_error_pose: e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position and rotation norms ---- */
-static void ur5_ik_error_pose(const double Tm[16], const double target[16], double e[6], double norms[2])
+/* ---- ur5_ik_error_pose: e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position, rotation and whole norms ---- */
+static void ur5_ik_error_pose(const double Tm[16], const double target[16], double e[6], double norms[3])
 {
     double M[9];
     e[0] = target[3] - Tm[3];
@@ -9888,8 +9888,27 @@ static void ur5_ik_error_pose(const double Tm[16], const double target[16], doub
     M[7] = (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6];
     M[8] = (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10];
     ur5_ik_log3(M, e + 3);
-    norms[1] = sqrt((e[3]*e[3] + e[4]*e[4]) + e[5]*e[5]);
-    norms[0] = sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2]);
+    double rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5];
+    double rotation = sqrt(rotation_squares);
+    if (!UR5_FINITE(rotation_squares)) {
+        double rotation_top = (fabs(e[5]) > (fabs(e[4]) > fabs(e[3]) ? fabs(e[4]) : fabs(e[3])) ? fabs(e[5]) : (fabs(e[4]) > fabs(e[3]) ? fabs(e[4]) : fabs(e[3])));
+        rotation = rotation_top*sqrt((e[3]/rotation_top)*(e[3]/rotation_top) + (e[4]/rotation_top)*(e[4]/rotation_top) + (e[5]/rotation_top)*(e[5]/rotation_top));
+    }
+    norms[1] = rotation;
+    double position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2];
+    double position = sqrt(position_squares);
+    if (!UR5_FINITE(position_squares)) {
+        double position_top = (fabs(e[2]) > (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])) ? fabs(e[2]) : (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])));
+        position = position_top*sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top));
+    }
+    norms[0] = position;
+    double whole_squares = norms[0]*norms[0] + norms[1]*norms[1];
+    double whole = sqrt(whole_squares);
+    if (!UR5_FINITE(whole_squares)) {
+        double whole_top = (fabs(norms[1]) > fabs(norms[0]) ? fabs(norms[1]) : fabs(norms[0]));
+        whole = whole_top*sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top));
+    }
+    norms[2] = whole;
 }
 
 /* ---- ur5_ik_gram_pose: G = J J^T for the first 6 rows of J (lower triangle, packed by rows) ---- */
@@ -10026,14 +10045,27 @@ static void ur5_ik_damped_pose(const double J[36], const double G[21], const dou
     dq[5] = (J[5]*z0 + (J[11]*z1 + J[17]*z2)) + (J[23]*z3 + (J[29]*z4 + J[35]*z5));
 }
 
-/* ---- ur5_ik_error_position: e = target - p at the pose Tm; norms = its position and rotation norms ---- */
-static void ur5_ik_error_position(const double Tm[16], const double target[3], double e[3], double norms[2])
+/* ---- ur5_ik_error_position: e = target - p at the pose Tm; norms = its position, rotation and whole norms ---- */
+static void ur5_ik_error_position(const double Tm[16], const double target[3], double e[3], double norms[3])
 {
     e[0] = target[0] - Tm[3];
     e[1] = target[1] - Tm[7];
     e[2] = target[2] - Tm[11];
     norms[1] = 0.0;
-    norms[0] = sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2]);
+    double position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2];
+    double position = sqrt(position_squares);
+    if (!UR5_FINITE(position_squares)) {
+        double position_top = (fabs(e[2]) > (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])) ? fabs(e[2]) : (fabs(e[1]) > fabs(e[0]) ? fabs(e[1]) : fabs(e[0])));
+        position = position_top*sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top));
+    }
+    norms[0] = position;
+    double whole_squares = norms[0]*norms[0] + norms[1]*norms[1];
+    double whole = sqrt(whole_squares);
+    if (!UR5_FINITE(whole_squares)) {
+        double whole_top = (fabs(norms[1]) > fabs(norms[0]) ? fabs(norms[1]) : fabs(norms[0]));
+        whole = whole_top*sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top));
+    }
+    norms[2] = whole;
 }
 
 /* ---- ur5_ik_gram_position: G = J J^T for the first 3 rows of J (lower triangle, packed by rows) ---- */
@@ -10110,7 +10142,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     double best_q[6];
     double G[21];
     double Gf[21];
-    double norms[2];
+    double norms[3];
     int blocked[6];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -10170,7 +10202,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     ur5_ik_error_pose(Tm, target, e, norms);
     pe = norms[0];
     re = norms[1];
-    en = sqrt(pe*pe + re*re);
+    en = norms[2];
     best_en = en;
     best_pe = pe;
     best_re = re;
@@ -10309,7 +10341,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         ur5_ik_error_pose(Tt, target, et, norms);
         pet = norms[0];
         ret = norms[1];
-        ent = sqrt(pet*pet + ret*ret);
+        ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
@@ -10381,7 +10413,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
                 ur5_ik_error_pose(Tm, target, e, norms);
                 pe = norms[0];
                 re = norms[1];
-                en = sqrt(pe*pe + re*re);
+                en = norms[2];
                 c = 0.01;
                 attempt = 0;
                 checkpoint = en;
@@ -10436,7 +10468,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     double best_q[6];
     double G[6];
     double Gf[6];
-    double norms[2];
+    double norms[3];
     int blocked[6];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -10494,7 +10526,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     ur5_ik_error_position(Tm, target, e, norms);
     pe = norms[0];
     re = norms[1];
-    en = sqrt(pe*pe + re*re);
+    en = norms[2];
     best_en = en;
     best_pe = pe;
     for (int k = 0; k < 6; ++k) {
@@ -10616,7 +10648,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         ur5_ik_error_position(Tt, target, et, norms);
         pet = norms[0];
         ret = norms[1];
-        ent = sqrt(pet*pet + ret*ret);
+        ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
@@ -10687,7 +10719,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
                 ur5_ik_error_position(Tm, target, e, norms);
                 pe = norms[0];
                 re = norms[1];
-                en = sqrt(pe*pe + re*re);
+                en = norms[2];
                 c = 0.01;
                 attempt = 0;
                 checkpoint = en;

@@ -34,7 +34,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1b626d76
+STAMP = 0xd527a68f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -3769,6 +3769,7 @@ def jacobian_rpy(q):
     return outputs[0].reshape(batch + (6, 6,))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_uniform(state):
     """a number in [0, 1) from xorshift64* (one problem; arrays are 1-D)."""
     s = state[0]
@@ -3779,6 +3780,7 @@ def _ik_uniform(state):
     return DTYPE(((s * 0x2545f4914f6cdd1d) & 0xFFFFFFFFFFFFFFFF) >> 11)*1.1102230246251565e-16
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_log3(M, w):
     """w = log3(M), the axis-angle vector of the rotation M (row-major) (one problem; arrays are 1-D)."""
     v0 = M[7] - M[5]
@@ -3814,8 +3816,9 @@ def _ik_log3(M, w):
     w[2] = col[2]*k
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_error_pose(Tm, target, e, norms):
-    """e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position and rotation norms (one problem; arrays are 1-D)."""
+    """e = [target - p; log3(R_target R^T)] at the pose Tm; norms = its position, rotation and whole norms (one problem; arrays are 1-D)."""
     M = np.zeros(9, dtype=DTYPE)
     e[0] = target[3] - Tm[3]
     e[1] = target[7] - Tm[7]
@@ -3830,10 +3833,27 @@ def _ik_error_pose(Tm, target, e, norms):
     M[7] = (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6]
     M[8] = (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10]
     _ik_log3(M, e[3:])
-    norms[1] = np.sqrt((e[3]*e[3] + e[4]*e[4]) + e[5]*e[5])
-    norms[0] = np.sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2])
+    rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+    rotation = np.sqrt(rotation_squares)
+    if not np.isfinite(rotation_squares):
+        rotation_top = np.abs(e[5]) if np.abs(e[5]) > (np.abs(e[4]) if np.abs(e[4]) > np.abs(e[3]) else np.abs(e[3])) else np.abs(e[4]) if np.abs(e[4]) > np.abs(e[3]) else np.abs(e[3])
+        rotation = rotation_top*np.sqrt((e[3]/rotation_top)*(e[3]/rotation_top) + (e[4]/rotation_top)*(e[4]/rotation_top) + (e[5]/rotation_top)*(e[5]/rotation_top))
+    norms[1] = rotation
+    position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    position = np.sqrt(position_squares)
+    if not np.isfinite(position_squares):
+        position_top = np.abs(e[2]) if np.abs(e[2]) > (np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])) else np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])
+        position = position_top*np.sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top))
+    norms[0] = position
+    whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    whole = np.sqrt(whole_squares)
+    if not np.isfinite(whole_squares):
+        whole_top = np.abs(norms[1]) if np.abs(norms[1]) > np.abs(norms[0]) else np.abs(norms[0])
+        whole = whole_top*np.sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top))
+    norms[2] = whole
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_gram_pose(J, G):
     """G = J J^T for the first 6 rows of J (lower triangle, packed by rows) (one problem; arrays are 1-D)."""
     G[0] = J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5]
@@ -3859,6 +3879,7 @@ def _ik_gram_pose(J, G):
     G[20] = J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34] + J[35]*J[35]
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_damped_pose(J, G, e, mu2, dq):
     """dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped (one problem; arrays are 1-D)."""
     a00 = G[0] + mu2
@@ -3966,15 +3987,28 @@ def _ik_damped_pose(J, G, e, mu2, dq):
     dq[5] = (J[5]*z0 + (J[11]*z1 + J[17]*z2)) + (J[23]*z3 + (J[29]*z4 + J[35]*z5))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_error_position(Tm, target, e, norms):
-    """e = target - p at the pose Tm; norms = its position and rotation norms (one problem; arrays are 1-D)."""
+    """e = target - p at the pose Tm; norms = its position, rotation and whole norms (one problem; arrays are 1-D)."""
     e[0] = target[0] - Tm[3]
     e[1] = target[1] - Tm[7]
     e[2] = target[2] - Tm[11]
     norms[1] = DTYPE(0.0)
-    norms[0] = np.sqrt((e[0]*e[0] + e[1]*e[1]) + e[2]*e[2])
+    position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    position = np.sqrt(position_squares)
+    if not np.isfinite(position_squares):
+        position_top = np.abs(e[2]) if np.abs(e[2]) > (np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])) else np.abs(e[1]) if np.abs(e[1]) > np.abs(e[0]) else np.abs(e[0])
+        position = position_top*np.sqrt((e[0]/position_top)*(e[0]/position_top) + (e[1]/position_top)*(e[1]/position_top) + (e[2]/position_top)*(e[2]/position_top))
+    norms[0] = position
+    whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    whole = np.sqrt(whole_squares)
+    if not np.isfinite(whole_squares):
+        whole_top = np.abs(norms[1]) if np.abs(norms[1]) > np.abs(norms[0]) else np.abs(norms[0])
+        whole = whole_top*np.sqrt((norms[0]/whole_top)*(norms[0]/whole_top) + (norms[1]/whole_top)*(norms[1]/whole_top))
+    norms[2] = whole
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_gram_position(J, G):
     """G = J J^T for the first 3 rows of J (lower triangle, packed by rows) (one problem; arrays are 1-D)."""
     G[0] = J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5]
@@ -3985,6 +4019,7 @@ def _ik_gram_position(J, G):
     G[5] = J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17]
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_damped_position(J, G, e, mu2, dq):
     """dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped (one problem; arrays are 1-D)."""
     a00 = G[0] + mu2
@@ -4026,6 +4061,7 @@ def _ik_damped_position(J, G, e, mu2, dq):
     dq[5] = J[5]*z0 + (J[11]*z1 + J[17]*z2)
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     """pose IK of the tool frame (one problem; arrays are 1-D)."""
     lo = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
@@ -4046,7 +4082,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     best_q = np.zeros(6, dtype=DTYPE)
     G = np.zeros(21, dtype=DTYPE)
     Gf = np.zeros(21, dtype=DTYPE)
-    norms = np.zeros(2, dtype=DTYPE)
+    norms = np.zeros(3, dtype=DTYPE)
     blocked = np.zeros(6, dtype=np.int64)
     state = [0x9e3779b921a722f8]
     pe = DTYPE(0.0)
@@ -4099,7 +4135,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     _ik_error_pose(Tm, target, e, norms)
     pe = norms[0]
     re = norms[1]
-    en = np.sqrt(pe*pe + re*re)
+    en = norms[2]
     best_en = en
     best_pe = pe
     best_re = re
@@ -4213,7 +4249,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         _ik_error_pose(Tt, target, et, norms)
         pet = norms[0]
         ret = norms[1]
-        ent = np.sqrt(pet*pet + ret*ret)
+        ent = norms[2]
         it = it + 1
         attempt = attempt + 1
         if ent < en:
@@ -4271,7 +4307,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 _ik_error_pose(Tm, target, e, norms)
                 pe = norms[0]
                 re = norms[1]
-                en = np.sqrt(pe*pe + re*re)
+                en = norms[2]
                 c = DTYPE(0.01)
                 attempt = 0
                 checkpoint = en
@@ -4335,6 +4371,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations):
     """position IK of the tool origin (one problem; arrays are 1-D)."""
     lo = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
@@ -4355,7 +4392,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     best_q = np.zeros(6, dtype=DTYPE)
     G = np.zeros(6, dtype=DTYPE)
     Gf = np.zeros(6, dtype=DTYPE)
-    norms = np.zeros(2, dtype=DTYPE)
+    norms = np.zeros(3, dtype=DTYPE)
     blocked = np.zeros(6, dtype=np.int64)
     state = [0x9e3779b921a722f8]
     pe = DTYPE(0.0)
@@ -4406,7 +4443,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     _ik_error_position(Tm, target, e, norms)
     pe = norms[0]
     re = norms[1]
-    en = np.sqrt(pe*pe + re*re)
+    en = norms[2]
     best_en = en
     best_pe = pe
     for k in range(0, 6):
@@ -4503,7 +4540,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         _ik_error_position(Tt, target, et, norms)
         pet = norms[0]
         ret = norms[1]
-        ent = np.sqrt(pet*pet + ret*ret)
+        ent = norms[2]
         it = it + 1
         attempt = attempt + 1
         if ent < en:
@@ -4560,7 +4597,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 _ik_error_position(Tm, target, e, norms)
                 pe = norms[0]
                 re = norms[1]
-                en = np.sqrt(pe*pe + re*re)
+                en = norms[2]
                 c = DTYPE(0.01)
                 attempt = 0
                 checkpoint = en

@@ -58,8 +58,8 @@ def add_generate_options(parser: argparse.ArgumentParser) -> None:
     from .backends import BACKENDS
 
     parser.add_argument("--lang", default="c,python", help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python)")
-    parser.add_argument("--prefix", help="file name and C function prefix (default: the model's: arm{N}, diffdrive, or the "
-                        "robot's name: a TOML file's name key, a URDF file's name without .urdf)")
+    rules = "; ".join(kind.prefix_rule for kind in kinds() if kind.prefix_rule)
+    parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules})")
     parser.add_argument("--precision", default="double", help="double (default) or float")
     parser.add_argument("--out", default="generated", help="output folder (default ./generated)")
     parser.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")

@@ -127,3 +127,25 @@ def test_float_modules_default_tol_is_reachable(float_arms, impl):
             result = arm.ik_solve(rng.uniform(-np.pi, np.pi, 2), target, lengths, 0.0)
             assert result.status == "converged", result
             assert result.error <= 1e-4 * max(1.0, float(np.sum(lengths)))
+
+
+def test_compiled_chain_refuses_params_it_does_not_take_and_non_real_arrays():
+    """Issue 16 (15): a robot without named parameters takes no params (an extra argument is a TypeError
+    naming the signature, never silently ignored); complex and string arrays are refused, not cast."""
+    from pathlib import Path
+
+    from skelarm_sym.models.chain.dh_file import load_robot_file
+
+    chain = load_robot_file(Path(__file__).resolve().parents[1] / "examples" / "robots" / "ur5.toml")
+    arm = compile_arm(generate(chain, langs="c", out=None, prefix="ur5_contract", functions="pose,ik_solve"))
+    q = np.zeros(6)
+    with pytest.raises(TypeError, match=r"pose\(q\)"):
+        arm.pose(q, np.ones(2))
+    with pytest.raises(TypeError, match="ik_solve"):
+        arm.ik_solve(q, np.eye(4), params=np.ones(2))
+    with pytest.raises(ValueError, match="real numbers"):
+        arm.pose(q.astype(complex))
+    with pytest.raises(ValueError, match="real numbers"):
+        arm.pose(np.array(["0"] * 6))
+    with pytest.raises(ValueError, match="real numbers"):
+        arm.ik_solve(q, np.eye(4).astype(complex))

@@ -272,3 +272,21 @@ def test_usual_damping_does_not_stop_convergence(robot):
                 assert dp < 1e-9 and dr < 1e-9
     assert rates[1e-2] >= rates[0.0] - 1 and rates[1e-1] >= rates[0.0] - 2, rates
     assert rates[0.0] >= 29, rates
+
+
+@pytest.mark.parametrize("precision", ["float", "double"])
+def test_a_far_finite_target_gives_a_finite_error(precision, recwarn):
+    """Issue 16 (11): a target 1e20 m away (beyond float's square root of its largest number) reports its
+    distance, not infinity, in C and NumPy, and NumPy warns about nothing."""
+    chain = load_robot_file(ROBOTS / "ur5.toml")
+    generated = generate(chain, langs="c,python", out=None, precision=precision, prefix=f"far_{precision}",
+                         functions="ik_solve,ik_solve_position")
+    target = np.eye(4)
+    target[:3, 3] = [1e20, 0.0, 0.0]
+    for impl in (compile_arm(generated), load_python(generated.sources[f"far_{precision}.py"], "far")):
+        r = impl.ik_solve(np.zeros(6), target, max_iter=10)
+        assert r.status == "stalled" and np.isfinite(r.position_error) and np.isfinite(r.rotation_error)
+        assert abs(r.position_error - 1e20) <= 1e20 * 1e-6
+        p = impl.ik_solve_position(np.zeros(6), target[:3, 3], max_iter=10)
+        assert np.isfinite(p.error) and abs(p.error - 1e20) <= 1e20 * 1e-6
+    assert not [w for w in recwarn.list if issubclass(w.category, RuntimeWarning)]

@@ -104,3 +104,28 @@ def test_urdf_robot_named_after_a_reserved_word_gets_a_usable_prefix(tmp_path):
     chain = load_robot(path)
     assert chain.name != "main"
     generate(chain, langs="c", out=None)  # the prefix is accepted
+
+
+def test_newcomer_path_functions_links_joints_and_prefix_rule(tmp_path, capsys):
+    """Issue 16 (17): --functions takes the header's solver names and lists one consistent set; show --what
+    links prints a URDF's link tree to choose --tip; generate names the joints the chain holds; --help
+    states the default-prefix rule."""
+    from skelarm_sym.cli import main
+
+    robot = str(Path(__file__).resolve().parent / "fixtures" / "robots" / "ur_like.urdf")
+    assert main(["generate", "--robot", robot, "--functions", "ik_solve,ik_solve_position", "--out", str(tmp_path / "a")]) == 0
+    out = capsys.readouterr().out
+    assert "joints, base to tip:" in out and "shoulder_pan_joint (revolute)" in out
+    header = (tmp_path / "a" / "ur_like.h").read_text()
+    assert "int ur_like_ik_solve(" in header and "int ur_like_ik_solve_position(" in header
+    assert "void ur_like_ik_terms(" in header  # what the solvers call comes with them
+    assert main(["generate", "--robot", robot, "--functions", "nope", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("skelarm-sym: error: unknown function 'nope'; choose from pose, ")
+    assert err.endswith("ik_solve, ik_solve_position") and not (tmp_path / "b").exists()
+    assert main(["show", "--robot", robot, "--what", "links"]) == 0
+    tree = capsys.readouterr().out
+    assert "tool0" in tree and "leaf" in tree and "(fixed)" in tree
+    with pytest.raises(SystemExit):
+        main(["generate", "--help"])
+    assert "xarm7.urdf: xarm7" in " ".join(capsys.readouterr().out.split())

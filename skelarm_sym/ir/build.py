@@ -102,6 +102,20 @@ class Body:
     def comment(self, text: str) -> None:
         self.emit(Comment(text))
 
+    def norm(self, name: str, values: Sequence) -> Var:
+        """``name = sqrt(sum of squares of values)``, without overflow: when the plain sum overflows (a
+        far finite target in float), the values are scaled by their largest magnitude first."""
+        values = [_wrap(v) for v in values]
+        squares = self.var(f"{name}_squares", total([v * v for v in values]))
+        out = self.var(name, sqrt(squares))
+        with self.if_(~Call1("isfinite", squares)):
+            largest = fabs(values[0])
+            for v in values[1:]:
+                largest = select(fabs(v) > largest, fabs(v), largest)
+            top = self.var(f"{name}_top", largest)
+            self.set(out, top * sqrt(total([(v / top) * (v / top) for v in values])))
+        return out
+
     # -- blocks -----------------------------------------------------------------------------------------
     @contextmanager
     def _block(self) -> Iterator[list[Stmt]]:

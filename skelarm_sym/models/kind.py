@@ -36,5 +36,7 @@ class ModelKind:
     """How messages name the kind (``a planar arm``)."""
     model_option: bool = False
     """Chosen by ``--model NAME`` (otherwise by options of its own, such as ``--robot``)."""
+    prefix_rule: str = ""
+    """How the default prefix (file name, C prefix) of this kind's models is chosen, for ``--help``."""
     preview: Callable[[Any], str | None] | None = None
     """``show``'s answer that needs no model (a URDF's link tree, to choose the chain), or ``None``."""

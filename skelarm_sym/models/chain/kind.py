@@ -6,19 +6,17 @@ import os
 
 from ...errors import InputError
 from ..kind import ModelKind
+from .loader import PREFIX_RULE
 from .model import Chain
 
-SOLVERS = ("ik_solve", "ik_solve_position")
-
-
 def _derive(model: Chain, wanted):
-    """A chain whose wanted functions name none of the inverse functions is derived without them
-    (they take most of the generation time)."""
-    from .derive import derive_chain
-    from .inverse import INVERSE_FUNCTIONS
+    """A chain whose wanted functions are all forward ones is derived without the inverse functions
+    (they take most of the generation time); any other name (an inverse function, a solver, or an
+    unknown one, which the error then lists among all) needs the whole derivation."""
+    from .derive import CHAIN_FUNCTIONS, derive_chain
 
-    inverse = {f.name for f in INVERSE_FUNCTIONS} | set(SOLVERS)
-    return derive_chain(model, inverse=wanted is None or bool(set(wanted) & inverse))
+    forward = {f.name for f in CHAIN_FUNCTIONS}
+    return derive_chain(model, inverse=wanted is None or not set(wanted) <= forward)
 
 
 def _solvers(derivation, names, precision):
@@ -79,4 +77,5 @@ KIND = ModelKind(
     solver_names={"ik_solve": ("ik_terms",), "ik_solve_position": ("ik_terms",)}, solver_checks=_solver_checks,
     show=_show, add_options=_add_options, from_args=_from_args,
     options=(("--robot", "robot"), ("--base", "base"), ("--tip", "tip")), title="a robot file's chain", preview=_preview,
+    prefix_rule="for a robot file: " + PREFIX_RULE.removeprefix("default prefix: "),
 )

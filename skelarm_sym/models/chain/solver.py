@@ -173,11 +173,11 @@ def log3_helper() -> Function:
 
 
 def error_helper(rows: int, suffix: str) -> Function:
-    """``ik_error{suffix}(Tm, target, e, norms)``: e = [target - p; log3(R_target R^T)] at the pose Tm and its
-    position and rotation norms."""
+    """``ik_error{suffix}(Tm, target, e, norms)``: e = [target - p; log3(R_target R^T)] at the pose Tm, and its
+    position, rotation and whole norms (finite for any finite target: sums that overflow are rescaled)."""
     b = Body()
     tsize = 16 if rows == 6 else 3
-    Tm, target, e, norms = Array("Tm", 16), Array("target", tsize), Array("e", rows), Array("norms", 2)
+    Tm, target, e, norms = Array("Tm", 16), Array("target", tsize), Array("e", rows), Array("norms", 3)
     if rows == 6:
         M = b.array("M", 9)
         for i in range(3):
@@ -186,16 +186,17 @@ def error_helper(rows: int, suffix: str) -> Function:
             for j in range(3):
                 b.set(M[3 * i + j], target[4 * i] * Tm[4 * j] + target[4 * i + 1] * Tm[4 * j + 1] + target[4 * i + 2] * Tm[4 * j + 2])
         b.call("ik_log3", M, e.at(3))
-        b.set(norms[1], sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
+        b.set(norms[1], b.norm("rotation", [e[3], e[4], e[5]]))
     else:
         for i in range(3):
             b.set(e[i], target[i] - Tm[4 * i + 3])
         b.set(norms[1], 0.0)
-    b.set(norms[0], sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]))
+    b.set(norms[0], b.norm("position", [e[0], e[1], e[2]]))
+    b.set(norms[2], b.norm("whole", [norms[0], norms[1]]))
     what = "[target - p; log3(R_target R^T)]" if rows == 6 else "target - p"
-    return Function(f"ik_error{suffix}", f"e = {what} at the pose Tm; norms = its position and rotation norms",
+    return Function(f"ik_error{suffix}", f"e = {what} at the pose Tm; norms = its position, rotation and whole norms",
                     (Argument("Tm", Role.STATE, (16,)), Argument("target", Role.DATA, (tsize,)),
-                     Argument("e", Role.OUTPUT, (rows,)), Argument("norms", Role.OUTPUT, (2,))),
+                     Argument("e", Role.OUTPUT, (rows,)), Argument("norms", Role.OUTPUT, (3,))),
                     b.statements, kind="helper")
 
 
@@ -256,148 +257,176 @@ def _max_tree(values: list) -> object:
 
 # -- the solver ---------------------------------------------------------------------------------------------
 
-def solver(chain, rows: int, params: int, precision: str) -> Function:
-    """``ik_solve`` (rows 6: pose) or ``ik_solve_position`` (rows 3), see the module docstring."""
-    n = chain.n
-    tsize = 16 if rows == 6 else 3
-    suffix = "_pose" if rows == 6 else "_position"
-    gsize = rows * (rows + 1) // 2
-    s = SETTINGS[precision]
-    lim = limits_of(chain, precision)
-    b = Body()
-    q0, target, q = Array("q0", n), Array("target", tsize), Array("q", n)
-    err_out, iters = Array("error", 2 if rows == 6 else 1), Array("iterations", 1, Type.INT)
-    lam, tol, max_iter = Var("lambda"), Var("tol"), Var("max_iter", Type.INT)
-    param_args = [Array("params", params)] if params else []
+class _PoseIK:
+    """Writes one solver (rows 6: pose, 3: position) into a :class:`Body`, part by part: the locals, the
+    checks and start, one Levenberg-Marquardt step (with blocked joints), its acceptance, the windowed
+    progress test with its restart, and the end. Each method is one part of the algorithm of the module
+    docstring; the attributes are the solver's locals."""
 
-    lo = b.array("lo", n, values=lim["lower"], const=True)
-    hi = b.array("hi", n, values=lim["upper"], const=True)
-    draw_lo = b.array("draw_lo", n, values=lim["draw_low"], const=True)
-    draw_span = b.array("draw_span", n, values=lim["draw_span"], const=True)
-    near_lo = b.array("near_lo", n, values=lim["near_low"], const=True)
-    near_span = b.array("near_span", n, values=lim["near_span"], const=True)
-    Tm, Tt = b.array("Tm", 16), b.array("Tt", 16)
-    J, Jt, Jf = b.array("J", 6 * n), b.array("Jt", 6 * n), b.array("Jf", 6 * n)
-    e, et = b.array("e", rows), b.array("et", rows)
-    trial, dq, best_q = b.array("trial", n), b.array("dq", n), b.array("best_q", n)
-    G, Gf = b.array("G", gsize), b.array("Gf", gsize)
-    norms = b.array("norms", 2)
-    blocked = b.array("blocked", n, Type.INT)
-    state = b.array("state", 1, Type.UINT64, values=[Const(SEED ^ 0x9E3779B97F4A7C15, Type.UINT64)])
-    pe, re, en = b.var("pe", 0.0), b.var("re", 0.0), b.var("en", 0.0)
-    pet, ret, ent = b.var("pet", 0.0), b.var("ret", 0.0), b.var("ent", 0.0)
-    mu2, big, scale, gg, ff = b.var("mu2", 0.0), b.var("big", 0.0), b.var("scale", 0.0), b.var("gg", 0.0), b.var("ff", 0.0)
-    c = b.var("c", C_START)
-    checkpoint, window_start = b.var("checkpoint", 0.0), b.var("window_start", 0.0)
-    best_en, best_pe = b.var("best_en", 0.0), b.var("best_pe", 0.0)
-    best_re = b.var("best_re", 0.0) if rows == 6 else None
-    integers = {name: b.var(name, value, Type.INT) for name, value in (
-        ("gram_ready", 0), ("any", 0), ("it", 0), ("attempt", 0), ("stalled", 0), ("slow", 0), ("stationary", 0),
-        ("restarts", 0), ("best_stalled", 0), ("best_here", 1))}
-    gram_ready, any_, it, attempt = (integers[k] for k in ("gram_ready", "any", "it", "attempt"))
-    stalled, slow, stationary, restarts = (integers[k] for k in ("stalled", "slow", "stationary", "restarts"))
-    best_stalled, best_here = integers["best_stalled"], integers["best_here"]
-    scratch = (b.var("nearest", 0.0), b.var("u", 0.0), b.var("d", 0.0))
-    mu2_floor = b.let("mu2_floor", lam * lam)
-    zero, one = Const(0, Type.INT), Const(1, Type.INT)
+    def __init__(self, chain, rows: int, params: int, precision: str) -> None:
+        self.n, self.rows, self.params, self.s = chain.n, rows, params, SETTINGS[precision]
+        self.tsize = 16 if rows == 6 else 3
+        self.suffix = "_pose" if rows == 6 else "_position"
+        self.gsize = rows * (rows + 1) // 2
+        self.lim = limits_of(chain, precision)
+        self.b = Body()
+        self.q0, self.target, self.q = Array("q0", self.n), Array("target", self.tsize), Array("q", self.n)
+        self.err_out, self.iters = Array("error", 2 if rows == 6 else 1), Array("iterations", 1, Type.INT)
+        self.lam, self.tol, self.max_iter = Var("lambda"), Var("tol"), Var("max_iter", Type.INT)
+        self.param_args = [Array("params", params)] if params else []
+        self.zero, self.one = Const(0, Type.INT), Const(1, Type.INT)
+        self._declare()
 
-    def copy(dst: Array, src: Array, size: int) -> None:
-        with b.for_("k", 0, size) as k:
-            b.set(dst[k], src[k])
+    def _declare(self) -> None:
+        b, n, rows, lim = self.b, self.n, self.rows, self.lim
+        for name in ("lo", "hi", "draw_lo", "draw_span", "near_lo", "near_span"):
+            key = {"lo": "lower", "hi": "upper", "draw_lo": "draw_low", "near_lo": "near_low"}.get(name, name)
+            setattr(self, name, b.array(name, n, values=lim[key], const=True))
+        self.Tm, self.Tt = b.array("Tm", 16), b.array("Tt", 16)
+        self.J, self.Jt, self.Jf = b.array("J", 6 * n), b.array("Jt", 6 * n), b.array("Jf", 6 * n)
+        self.e, self.et = b.array("e", rows), b.array("et", rows)
+        self.trial, self.dq, self.best_q = b.array("trial", n), b.array("dq", n), b.array("best_q", n)
+        self.G, self.Gf = b.array("G", self.gsize), b.array("Gf", self.gsize)
+        self.norms = b.array("norms", 3)
+        self.blocked = b.array("blocked", n, Type.INT)
+        self.state = b.array("state", 1, Type.UINT64, values=[Const(SEED ^ 0x9E3779B97F4A7C15, Type.UINT64)])
+        for name in ("pe", "re", "en", "pet", "ret", "ent", "mu2", "big", "scale", "gg", "ff"):
+            setattr(self, name, b.var(name, 0.0))
+        self.c = b.var("c", C_START)
+        self.checkpoint, self.window_start = b.var("checkpoint", 0.0), b.var("window_start", 0.0)
+        self.best_en, self.best_pe = b.var("best_en", 0.0), b.var("best_pe", 0.0)
+        self.best_re = b.var("best_re", 0.0) if rows == 6 else None
+        for name, value in (("gram_ready", 0), ("any_", 0), ("it", 0), ("attempt", 0), ("stalled", 0), ("slow", 0),
+                            ("stationary", 0), ("restarts", 0), ("best_stalled", 0), ("best_here", 1)):
+            setattr(self, name, b.var(name.rstrip("_"), value, Type.INT))
+        self.scratch = (b.var("nearest", 0.0), b.var("u", 0.0), b.var("d", 0.0))
+        self.mu2_floor = b.let("mu2_floor", self.lam * self.lam)
 
-    def evaluate(x: Array, T: Array, JJ: Array, ee: Array) -> None:
+    # -- small pieces -----------------------------------------------------------------------------------
+    def copy(self, dst: Array, src: Array, size: int) -> None:
+        with self.b.for_("k", 0, size) as k:
+            self.b.set(dst[k], src[k])
+
+    def evaluate(self, x: Array, T: Array, JJ: Array, ee: Array) -> None:
         """T, J, e and the norms at the pose x."""
-        b.call("ik_terms", x, *param_args, T, JJ)
-        b.call(f"ik_error{suffix}", T, target, ee, norms)
+        self.b.call("ik_terms", x, *self.param_args, T, JJ)
+        self.b.call(f"ik_error{self.suffix}", T, self.target, ee, self.norms)
 
-    # -- checks and start --------------------------------------------------------------------------
-    copy(q, q0, n)
-    b.set(iters[0], 0)
-    for k in range(2 if rows == 6 else 1):
-        b.set(err_out[k], Const(math.inf))
-    with b.if_(~Call1("isfinite", lam) | (lam < 0.0) | ~Call1("isfinite", tol) | ~(tol > 0.0) | (max_iter < 0)):
-        b.return_(_status("IK_INVALID"))
-    for name, size in (("q0", n), ("target", tsize)) + ((("params", params),) if params else ()):
-        with b.for_("k", 0, size) as k:
-            with b.if_(~Call1("isfinite", Array(name, size)[k])):
-                b.return_(_status("IK_INVALID"))
-    with b.for_("k", 0, n) as k:
-        b.set(q[k], select(q[k] < lo[k], lo[k], select(q[k] > hi[k], hi[k], q[k])))
-    evaluate(q, Tm, J, e)
-    b.set(pe, norms[0])
-    b.set(re, norms[1])
-    b.set(en, sqrt(pe * pe + re * re))
-    b.set(best_en, en)
-    b.set(best_pe, pe)
-    if best_re is not None:
-        b.set(best_re, re)
-    copy(best_q, q, n)
-    b.set(checkpoint, en)
-    b.set(window_start, en)
+    def take_norms(self, pe: Var, re: Var, en: Var) -> None:
+        self.b.set(pe, self.norms[0])
+        self.b.set(re, self.norms[1])
+        self.b.set(en, self.norms[2])
 
-    with b.while_(True):
-        with b.if_((pe <= tol) & (re <= tol)):
-            b.set(err_out[0], pe)
-            if rows == 6:
-                b.set(err_out[1], re)
-            b.set(iters[0], it)
+    def remember_best(self, stalled) -> None:
+        b = self.b
+        b.set(self.best_en, self.en)
+        b.set(self.best_pe, self.pe)
+        if self.best_re is not None:
+            b.set(self.best_re, self.re)
+        if stalled is not None:
+            b.set(self.best_stalled, stalled)
+            b.set(self.best_here, self.one)
+        self.copy(self.best_q, self.q, self.n)
+
+    # -- the parts -------------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Checks (INVALID), q0 clamped into the limits, the first error."""
+        b, n = self.b, self.n
+        self.copy(self.q, self.q0, n)
+        b.set(self.iters[0], 0)
+        for k in range(2 if self.rows == 6 else 1):
+            b.set(self.err_out[k], Const(math.inf))
+        lam, tol = self.lam, self.tol
+        with b.if_(~Call1("isfinite", lam) | (lam < 0.0) | ~Call1("isfinite", tol) | ~(tol > 0.0) | (self.max_iter < 0)):
+            b.return_(_status("IK_INVALID"))
+        for name, size in (("q0", n), ("target", self.tsize)) + ((("params", self.params),) if self.params else ()):
+            with b.for_("k", 0, size) as k:
+                with b.if_(~Call1("isfinite", Array(name, size)[k])):
+                    b.return_(_status("IK_INVALID"))
+        q, lo, hi = self.q, self.lo, self.hi
+        with b.for_("k", 0, n) as k:
+            b.set(q[k], select(q[k] < lo[k], lo[k], select(q[k] > hi[k], hi[k], q[k])))
+        self.evaluate(q, self.Tm, self.J, self.e)
+        self.take_norms(self.pe, self.re, self.en)
+        self.remember_best(None)
+        b.set(self.checkpoint, self.en)
+        b.set(self.window_start, self.en)
+
+    def converged_or_out_of_budget(self) -> None:
+        """At the top of each step: CONVERGED, or (budget spent) the judgement of the last attempt."""
+        b = self.b
+        with b.if_((self.pe <= self.tol) & (self.re <= self.tol)):
+            b.set(self.err_out[0], self.pe)
+            if self.rows == 6:
+                b.set(self.err_out[1], self.re)
+            b.set(self.iters[0], self.it)
             b.return_(_status("IK_CONVERGED"))
-        with b.if_(eq(it, max_iter)):
+        with b.if_(eq(self.it, self.max_iter)):
             b.comment("the budget ends inside the attempt holding the best pose: stalled when that attempt is at a "
                       "stationary point or no longer lowers |e| geometrically (as a window would judge)")
-            previous = select(eq(_mod(attempt, WINDOW), 0), window_start, checkpoint)
-            with b.if_((best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > previous * PROGRESS))):
-                b.set(best_stalled, one)
+            previous = select(eq(_mod(self.attempt, WINDOW), 0), self.window_start, self.checkpoint)
+            with b.if_((self.best_here > 0) & (self.attempt > 0) & ((self.stationary > 0) | (self.en > previous * PROGRESS))):
+                b.set(self.best_stalled, self.one)
             b.break_()
-        floor = mu2_floor * select(en < FLOOR_ERROR, en * (1.0 / FLOOR_ERROR), 1.0)
-        b.set(mu2, select(c * en > floor, c * en, floor))
-        with b.if_(eq(gram_ready, 0)):
-            b.call(f"ik_gram{suffix}", J, G)
-            b.set(gram_ready, one)
-        b.call(f"ik_damped{suffix}", J, G, e, mu2, dq)
+
+    def damped_step(self) -> None:
+        """dq by the damped least squares, solved again without the joints it pushes past a bound; the
+        stationarity test on the free joints."""
+        b, n, rows = self.b, self.n, self.rows
+        floor = self.mu2_floor * select(self.en < FLOOR_ERROR, self.en * (1.0 / FLOOR_ERROR), 1.0)
+        b.set(self.mu2, select(self.c * self.en > floor, self.c * self.en, floor))
+        with b.if_(eq(self.gram_ready, 0)):
+            b.call(f"ik_gram{self.suffix}", self.J, self.G)
+            b.set(self.gram_ready, self.one)
+        b.call(f"ik_damped{self.suffix}", self.J, self.G, self.e, self.mu2, self.dq)
+        q, dq, lo, hi, blocked = self.q, self.dq, self.lo, self.hi, self.blocked
         with b.for_("k", 0, n) as k:
-            b.set(blocked[k], select(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), one, zero))
-        for p in lim["wrapped"]:
-            b.set(blocked[p], zero)  # periodic: wraps by 2 pi instead
-        b.set(any_, zero)
+            b.set(blocked[k], select(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), self.one, self.zero))
+        for p in self.lim["wrapped"]:
+            b.set(blocked[p], self.zero)  # periodic: wraps by 2 pi instead
+        b.set(self.any_, self.zero)
         with b.for_("k", 0, n) as k:
             with b.if_(blocked[k] > 0):
-                b.set(any_, one)
-
-        def gradient(JJ: Array, GG: Array) -> None:
-            """gg = |J^T e|^2 and ff = |J|_F^2 (the trace of G) over the free joints."""
-            b.set(ff, total([GG[r * (r + 1) // 2 + r] for r in range(rows)]))
-            b.set(gg, 0.0)
-            with b.for_("k", 0, n) as k:
-                g = total([JJ[Const(r * n, Type.INT) + k] * e[r] for r in range(rows)])
-                b.set(gg, gg + g * g)
-
-        with b.if_(any_ > 0):
+                b.set(self.any_, self.one)
+        with b.if_(self.any_ > 0):
             b.comment("blocked columns zeroed, their outer products taken out of G, the step solved again")
             with b.for_("r", 0, rows) as r:
                 with b.for_("k", 0, n) as k:
                     index = r * Const(n, Type.INT) + k
-                    b.set(Jf[index], select(blocked[k] > 0, 0.0, J[index]))
-            copy(Gf, G, gsize)
+                    b.set(self.Jf[index], select(blocked[k] > 0, 0.0, self.J[index]))
+            self.copy(self.Gf, self.G, self.gsize)
             with b.for_("k", 0, n) as k:
                 with b.if_(blocked[k] > 0):
                     for r in range(rows):
                         for cc in range(r + 1):
-                            b.set(Gf[r * (r + 1) // 2 + cc],
-                                  Gf[r * (r + 1) // 2 + cc] - J[Const(r * n, Type.INT) + k] * J[Const(cc * n, Type.INT) + k])
-            b.call(f"ik_damped{suffix}", Jf, Gf, e, mu2, dq)
-            gradient(Jf, Gf)
+                            g = self.Gf[r * (r + 1) // 2 + cc]
+                            b.set(g, g - self.J[Const(r * n, Type.INT) + k] * self.J[Const(cc * n, Type.INT) + k])
+            b.call(f"ik_damped{self.suffix}", self.Jf, self.Gf, self.e, self.mu2, dq)
+            self.gradient(self.Jf, self.Gf)
         with b.else_():
-            gradient(J, G)
+            self.gradient(self.J, self.G)
         b.comment(f"stationary point of |e| over the free joints: |J_f^T e| <= {STATIONARY} |J_f|_F |e|")
-        b.set(stationary, select(gg <= ff * en * en * (STATIONARY * STATIONARY), one, zero))
-        b.set(big, 0.0)
+        b.set(self.stationary, select(self.gg <= self.ff * self.en * self.en * (STATIONARY * STATIONARY), self.one, self.zero))
+
+    def gradient(self, JJ: Array, GG: Array) -> None:
+        """gg = |J^T e|^2 and ff = |J|_F^2 (the trace of G) over the free joints."""
+        b, n, rows = self.b, self.n, self.rows
+        b.set(self.ff, total([GG[r * (r + 1) // 2 + r] for r in range(rows)]))
+        b.set(self.gg, 0.0)
         with b.for_("k", 0, n) as k:
-            b.set(big, select(fabs(dq[k]) > big, fabs(dq[k]), big))
-        b.set(scale, select(big > STEP_MAX, STEP_MAX / big, 1.0))
+            g = total([JJ[Const(r * n, Type.INT) + k] * self.e[r] for r in range(rows)])
+            b.set(self.gg, self.gg + g * g)
+
+    def trial_step(self) -> None:
+        """The trial pose: the step scaled to at most STEP_MAX, wrapped by 2 pi where periodic, clamped."""
+        b, n, trial, lo, hi = self.b, self.n, self.trial, self.lo, self.hi
+        b.set(self.big, 0.0)
         with b.for_("k", 0, n) as k:
-            b.set(trial[k], q[k] + dq[k] * scale)
-        for p in lim["wrapped"]:
+            b.set(self.big, select(fabs(self.dq[k]) > self.big, fabs(self.dq[k]), self.big))
+        b.set(self.scale, select(self.big > STEP_MAX, STEP_MAX / self.big, 1.0))
+        with b.for_("k", 0, n) as k:
+            b.set(trial[k], self.q[k] + self.dq[k] * self.scale)
+        for p in self.lim["wrapped"]:
             with b.if_(trial[p] > hi[p]):
                 b.set(trial[p], trial[p] - 2 * math.pi)
             with b.else_():
@@ -405,77 +434,86 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
                     b.set(trial[p], trial[p] + 2 * math.pi)
         with b.for_("k", 0, n) as k:
             b.set(trial[k], select(trial[k] < lo[k], lo[k], select(trial[k] > hi[k], hi[k], trial[k])))
-        evaluate(trial, Tt, Jt, et)
-        b.set(pet, norms[0])
-        b.set(ret, norms[1])
-        b.set(ent, sqrt(pet * pet + ret * ret))
-        b.set(it, it + one)
-        b.set(attempt, attempt + one)
-        with b.if_(ent < en):
-            b.set(stalled, select(en - ent <= en * s["stall"], one, zero))
-            copy(q, trial, n)
-            copy(Tm, Tt, 16)
-            copy(J, Jt, 6 * n)
-            copy(e, et, rows)
-            b.set(gram_ready, zero)
-            b.set(pe, pet)
-            b.set(re, ret)
-            b.set(en, ent)
-            b.set(c, select(c * C_DOWN > C_MIN, c * C_DOWN, C_MIN))
-        with b.else_():
-            b.set(c, c * C_UP)
-            b.set(stalled, select(c > C_MAX, one, zero))
-        with b.if_((en < best_en) | ((stalled > 0) & eq(en, best_en))):
-            b.set(best_en, en)
-            b.set(best_pe, pe)
-            if best_re is not None:
-                b.set(best_re, re)
-            b.set(best_stalled, stalled)
-            b.set(best_here, one)
-            copy(best_q, q, n)
-        with b.if_(~((pe <= tol) & (re <= tol))):
-            b.set(slow, stationary)
-            with b.if_(eq(_mod(attempt, WINDOW), 0)):
-                with b.if_(en > checkpoint * PROGRESS):
-                    b.set(slow, one)
-                b.set(window_start, checkpoint)
-                b.set(checkpoint, en)
-            with b.if_(((stalled > 0) | (slow > 0) | (attempt >= ATTEMPT)) & (it < max_iter)):
-                with b.if_(((stalled > 0) | (slow > 0)) & (best_here > 0)):
-                    b.comment("this attempt's best is (near) a stationary point")
-                    b.set(best_stalled, one)
-                b.set(best_here, zero)
-                _restart(b, n, rows, q, trial, Tt, Jt, target, param_args, restarts,
-                         (near_lo, near_span), (draw_lo, draw_span), scratch)
-                b.set(restarts, restarts + one)
-                b.set(gram_ready, zero)
-                evaluate(q, Tm, J, e)
-                b.set(pe, norms[0])
-                b.set(re, norms[1])
-                b.set(en, sqrt(pe * pe + re * re))
-                b.set(c, C_START)
-                b.set(attempt, zero)
-                b.set(checkpoint, en)
-                b.set(window_start, en)
-                with b.if_(en < best_en):
-                    b.set(best_en, en)
-                    b.set(best_pe, pe)
-                    if best_re is not None:
-                        b.set(best_re, re)
-                    b.set(best_stalled, zero)
-                    b.set(best_here, one)
-                    copy(best_q, q, n)
-    copy(q, best_q, n)
-    b.set(err_out[0], best_pe)
-    if rows == 6:
-        b.set(err_out[1], best_re)
-    b.set(iters[0], it)
-    b.return_(select(best_stalled > 0, _status("IK_STALLED"), _status("IK_MAX_ITER")))
+        self.evaluate(trial, self.Tt, self.Jt, self.et)
+        self.take_norms(self.pet, self.ret, self.ent)
+        b.set(self.it, self.it + self.one)
+        b.set(self.attempt, self.attempt + self.one)
 
-    default_tol = s["tol"]
-    arguments = (
+    def accept_or_reject(self) -> None:
+        """Levenberg-Marquardt: a lower error is taken and lowers the damping; else the damping grows."""
+        b, one, zero = self.b, self.one, self.zero
+        with b.if_(self.ent < self.en):
+            b.set(self.stalled, select(self.en - self.ent <= self.en * self.s["stall"], one, zero))
+            self.copy(self.q, self.trial, self.n)
+            self.copy(self.Tm, self.Tt, 16)
+            self.copy(self.J, self.Jt, 6 * self.n)
+            self.copy(self.e, self.et, self.rows)
+            b.set(self.gram_ready, zero)
+            b.set(self.pe, self.pet)
+            b.set(self.re, self.ret)
+            b.set(self.en, self.ent)
+            b.set(self.c, select(self.c * C_DOWN > C_MIN, self.c * C_DOWN, C_MIN))
+        with b.else_():
+            b.set(self.c, self.c * C_UP)
+            b.set(self.stalled, select(self.c > C_MAX, one, zero))
+        with b.if_((self.en < self.best_en) | ((self.stalled > 0) & eq(self.en, self.best_en))):
+            self.remember_best(self.stalled)
+
+    def progress_and_restart(self) -> None:
+        """The windowed progress test; an attempt that stalls, is slow or is long ends in a restart."""
+        b, one, zero = self.b, self.one, self.zero
+        with b.if_(~((self.pe <= self.tol) & (self.re <= self.tol))):
+            b.set(self.slow, self.stationary)
+            with b.if_(eq(_mod(self.attempt, WINDOW), 0)):
+                with b.if_(self.en > self.checkpoint * PROGRESS):
+                    b.set(self.slow, one)
+                b.set(self.window_start, self.checkpoint)
+                b.set(self.checkpoint, self.en)
+            with b.if_(((self.stalled > 0) | (self.slow > 0) | (self.attempt >= ATTEMPT)) & (self.it < self.max_iter)):
+                with b.if_(((self.stalled > 0) | (self.slow > 0)) & (self.best_here > 0)):
+                    b.comment("this attempt's best is (near) a stationary point")
+                    b.set(self.best_stalled, one)
+                b.set(self.best_here, zero)
+                _restart(b, self.n, self.rows, self.q, self.trial, self.Tt, self.Jt, self.target, self.param_args,
+                         self.restarts, (self.near_lo, self.near_span), (self.draw_lo, self.draw_span), self.scratch)
+                b.set(self.restarts, self.restarts + one)
+                b.set(self.gram_ready, zero)
+                self.evaluate(self.q, self.Tm, self.J, self.e)
+                self.take_norms(self.pe, self.re, self.en)
+                b.set(self.c, C_START)
+                b.set(self.attempt, zero)
+                b.set(self.checkpoint, self.en)
+                b.set(self.window_start, self.en)
+                with b.if_(self.en < self.best_en):
+                    self.remember_best(zero)
+
+    def finish(self) -> None:
+        """Out of budget: the best pose found, STALLED or MAX_ITER."""
+        b = self.b
+        self.copy(self.q, self.best_q, self.n)
+        b.set(self.err_out[0], self.best_pe)
+        if self.best_re is not None:
+            b.set(self.err_out[1], self.best_re)
+        b.set(self.iters[0], self.it)
+        b.return_(select(self.best_stalled > 0, _status("IK_STALLED"), _status("IK_MAX_ITER")))
+
+    def body(self):
+        self.start()
+        with self.b.while_(True):
+            self.converged_or_out_of_budget()
+            self.damped_step()
+            self.trial_step()
+            self.accept_or_reject()
+            self.progress_and_restart()
+        self.finish()
+        return self.b.statements
+
+
+def _solver_arguments(rows: int, n: int, params: int, default_tol: float) -> tuple[Argument, ...]:
+    tsize_shape = (4, 4) if rows == 6 else (3,)
+    return (
         Argument("q0", Role.STATE, (n,), domain="finite", batched=False, doc="start pose (rad or m)"),
-        Argument("target", Role.DATA, (4, 4) if rows == 6 else (3,), domain="finite", batched=False,
+        Argument("target", Role.DATA, tsize_shape, domain="finite", batched=False,
                  doc="tool pose (4 x 4, row-major)" if rows == 6 else "tool origin (3)"),
         *([Argument("params", Role.PARAMETER, (params,), domain="finite", batched=False, doc="named parameters")] if params else []),
         Argument("lambda", Role.SCALAR, (), domain="nonnegative", batched=False, default=Const(0.0),
@@ -490,7 +528,10 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
                  doc="position error (m) and rotation error (rad) at q" if rows == 6 else "position error (m) at q"),
         Argument("iterations", Role.OUTPUT, (1,), Type.INT, optional=True, fields=("iterations",), doc="steps taken"),
     )
-    doc = (
+
+
+def _solver_doc(rows: int, default_tol: float) -> tuple[str, ...]:
+    return (
         ("Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step" if rows == 6 else
          "Position IK of the tool origin: Levenberg-Marquardt on e = p_target - p with the 3 linear rows of J, step"),
         f"dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(c |e|, lambda^2 min(1, |e|/{FLOOR_ERROR:g})), c starting at {C_START:g},",
@@ -505,10 +546,17 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
                                           if rows == 6 else "3 numbers; error[0] = position error (m)."),
         "On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.",
     )
+
+
+def solver(chain, rows: int, params: int, precision: str) -> Function:
+    """``ik_solve`` (rows 6: pose) or ``ik_solve_position`` (rows 3), see the module docstring."""
+    default_tol = SETTINGS[precision]["tol"]
+    body = _PoseIK(chain, rows, params, precision).body()
     name = "ik_solve" if rows == 6 else "ik_solve_position"
     summary = "pose IK of the tool frame" if rows == 6 else "position IK of the tool origin"
-    return Function(name, summary, arguments, b.statements, kind="procedure", returns=Type.INT, statuses=STATUSES,
-                    doc=doc, result="IKResult" if rows == 6 else "IKPositionResult")
+    return Function(name, summary, _solver_arguments(rows, chain.n, params, default_tol), body, kind="procedure",
+                    returns=Type.INT, statuses=STATUSES, doc=_solver_doc(rows, default_tol),
+                    result="IKResult" if rows == 6 else "IKPositionResult")
 
 
 def _mod(x, m: int) -> Bits:

@@ -47,4 +47,5 @@ def _show(model: DiffDrive, args) -> str:
 KIND = ModelKind(
     "diffdrive", DiffDrive, _derive, scenarios=_scenarios, show=_show, add_options=_add_options, from_args=_from_args,
     options=(("--track", "track"),), title="a differential drive", model_option=True,
+    prefix_rule="diffdrive for the differential drive",
 )

@@ -96,4 +96,5 @@ KIND = ModelKind(
     "planar", PlanarArm, _derive, scenarios=_scenarios, solvers=_solvers, solver_names={"ik_solve": ("position", "ik_step")},
     solver_checks=_solver_checks, show=_show, add_options=_add_options, from_args=_from_args,
     options=(("--links", "links"), ("--lengths", "lengths")), title="a planar arm", model_option=True,
+    prefix_rule="arm{N} for a planar arm of N links",
 )
