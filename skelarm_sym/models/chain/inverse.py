@@ -75,10 +75,6 @@ INVERSE_FUNCTIONS = (
 )
 
 
-def cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def characteristic_length(chain, step=None) -> sp.Expr:
     """``L``: the sum of the lengths of the chain's constant translations (base excluded); 1 if zero.
 
@@ -96,21 +92,22 @@ def characteristic_length(chain, step=None) -> sp.Expr:
 
 
 def _hessian(step, joints, axes, linear, angular, n) -> list[list[list[sp.Expr]]]:
-    """``H[r][c][j] = dJ[r][c]/dq_j`` from per-joint cross products (see the module docstring)."""
+    """``H[r][c][j] = dJ[r][c]/dq_j`` from per-joint cross products (see the module docstring): for ``i <= k``
+    joint ``i`` turns column ``k`` (``turns_columns``), for ``i > k`` column ``k`` follows the tool point,
+    which joint ``i`` moves by ``Jv_i`` (``follows_tool``); each joint type says what it contributes."""
     H = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(6)]
     zero = [sp.S.Zero] * 3
     for k, jk in enumerate(joints):
         for i, ji in enumerate(joints):
             if i <= k:
-                if ji.kind != "revolute":
-                    continue
-                dv, dw = cross(axes[i], linear[k]), cross(axes[i], angular[k])
+                term = ji.motion.turns_columns(axes[i], linear[k], angular[k])
             else:
-                if jk.kind != "revolute":
-                    continue
-                dv, dw = cross(axes[k], linear[i]), zero
+                follow = jk.motion.follows_tool(axes[k], linear[i])
+                term = None if follow is None else (follow, zero)
+            if term is None:
+                continue
             factor = sp.sympify(jk.multiplier) * sp.sympify(ji.multiplier)
-            for r, value in enumerate(list(dv) + list(dw)):
+            for r, value in enumerate(list(term[0]) + list(term[1])):
                 if value != 0:
                     H[r][jk.coordinate][ji.coordinate] += factor * value
     return [[[step(f"H{r}_{c}_{j}", H[r][c][j]) for j in range(n)] for c in range(n)] for r in range(6)]
