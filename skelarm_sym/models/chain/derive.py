@@ -269,26 +269,123 @@ def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
 
 
 class _Steps(StepRecorder):
-    """A StepRecorder that names quantities up to their sign: ``-x`` for an atom stays unnamed, and a
-    negative expression is recorded positive and returned negated, so the sign becomes a subtraction
-    where it is used instead of a negation where it is defined."""
+    """A StepRecorder that leaves a negated atom unnamed (``-x`` costs nothing where it is used), keeps
+    groups of steps that belong together (for :func:`_normalise_signs`) and names vectors and matrices."""
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         expr = sp.sympify(expr)
-        if expr.is_Atom or (expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom):
+        if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom:
             return expr
-        if isinstance(expr, sp.Expr) and not isinstance(expr, sp.Piecewise) and expr.could_extract_minus_sign():
-            return -super().__call__(label, -expr)
         return super().__call__(label, expr)
 
+    groups: list[tuple[sp.Symbol, ...]]
+    """Steps that belong together (a vector; a row or a column of a matrix): candidates for one sign flip."""
+
+    def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
+        """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
+        self.steps = list(steps)
+        self._known = {}
+        for symbol, rhs in self.steps:
+            self._known.setdefault(rhs, symbol)
+
+    def _group(self, entries: Sequence[sp.Expr]) -> None:
+        symbols = tuple(e for e in entries if isinstance(e, sp.Symbol) and e.name.startswith(f"_{self._tag}_"))
+        if len(symbols) > 1:
+            self.__dict__.setdefault("groups", []).append(symbols)
+
     def vec(self, label: str, v: Sequence[sp.Expr]) -> Vector:
-        return [self(f"{label}{'xyz'[i]}", sp.sympify(v[i])) for i in range(3)]
+        out = [self(f"{label}{'xyz'[i]}", sp.sympify(v[i])) for i in range(3)]
+        self._group(out)
+        return out
 
     def mat(self, label: str, m: Sequence[Sequence[sp.Expr]]) -> Rows:
-        return [[self(f"{label}{i}{j}", sp.sympify(m[i][j])) for j in range(3)] for i in range(3)]
+        out = [[self(f"{label}{i}{j}", sp.sympify(m[i][j])) for j in range(3)] for i in range(3)]
+        for i in range(3):
+            self._group(out[i])
+            self._group([row[i] for row in out])
+        return out
 
 
 # -- the derivation, stage by stage (see the module docstring) -------------------------------------
+
+def _negations(expr: sp.Expr) -> int:
+    """Negations in ``expr`` as printed: a sum whose terms are all negative, a product with coefficient -1
+    that is not a subtracted term (the rule of the operation counts)."""
+    count = 0
+    stack = [(sp.sympify(expr), False)]
+    while stack:
+        e, paid = stack.pop()
+        if e.is_Atom:
+            continue
+        if e.is_Add:
+            negative = [t.could_extract_minus_sign() for t in e.args]
+            count += all(negative)
+            stack.extend(zip(e.args, negative))
+        elif e.is_Mul:
+            coeff, factors = e.as_coeff_mul()
+            count += coeff == -1 and not paid
+            stack.extend((f, False) for f in factors)
+        else:
+            stack.extend((a, False) for a in e.args)
+    return count
+
+
+def _live_steps(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr]) -> list[tuple[sp.Symbol, sp.Expr]]:
+    """The steps ``outputs`` need, in order (candidates that lost, such as the pose's other rows, go)."""
+    rhs = dict(steps)
+    needed: set[sp.Symbol] = set()
+    todo = [x for e in outputs for x in sp.sympify(e).free_symbols if x in rhs]
+    while todo:
+        x = todo.pop()
+        if x not in needed:
+            needed.add(x)
+            todo.extend(y for y in rhs[x].free_symbols if y in rhs)
+    return [(x, e) for x, e in steps if x in needed]
+
+
+def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr],
+                     groups: Sequence[tuple[sp.Symbol, ...]] = ()) -> dict[sp.Symbol, sp.Expr]:
+    """Signs of the steps that leave the fewest negations: ``{s: -s}`` for each step to store negated.
+
+    Every quantity can be stored with either sign: a sum with a negative term is a subtraction either way,
+    and a sign on a factor moves to wherever the product is used. A negation is paid only where a value
+    arrives with the wrong sign at an output, or where every term of a sum is negative. Greedy: flip a step
+    (its right-hand side negated, its uses given ``-s``) when that lowers the negations of it and its users;
+    passes repeat until none does."""
+    rhs = dict(steps)
+    order = [s for s, _ in steps]
+    users: dict[sp.Symbol, list] = {s: [] for s in order}
+    exprs = {("out", i): sp.sympify(e) for i, e in enumerate(outputs)}
+    exprs.update({("step", s): rhs[s] for s in order})
+    for key, e in exprs.items():
+        for x in e.free_symbols:
+            if x in users:
+                users[x].append(key)
+    negs = {key: _negations(e) for key, e in exprs.items()}
+    flips: dict[sp.Symbol, sp.Expr] = {}
+    moves = [(s,) for s in reversed(order)] + [g for g in groups if all(s in users for s in g)]
+    for _ in range(4):
+        changed = False
+        for move in moves:
+            keys = list(dict.fromkeys([("step", s) for s in move] + [k for s in move for k in users[s]]))
+            if not any(negs[k] for k in keys):
+                continue
+            swap = {s: -s for s in move}
+            new = {k: (-exprs[k] if k[0] == "step" and k[1] in swap else sp.S.One * exprs[k]).xreplace(swap) for k in keys}
+            new_negs = {k: _negations(e) for k, e in new.items()}
+            if sum(new_negs.values()) < sum(negs[k] for k in keys):
+                exprs.update(new)
+                negs.update(new_negs)
+                for s in move:
+                    if s in flips:
+                        del flips[s]
+                    else:
+                        flips[s] = -s
+                changed = True
+        if not changed:
+            break
+    return flips
+
 
 @dataclass
 class _Frames:
@@ -326,8 +423,9 @@ def _frames(step: _Steps, joints: Sequence[_Canonical], q: Sequence[sp.Symbol]) 
             if k == 0:
                 f.rotation.append(_rows(joint.before.rotation))
             else:
-                turned = _times_rz(f.rotation[-1], f.trig[k - 1])
-                f.rotation.append(step.mat(f"F{len(f.rotation) + 1}_", matmul(turned, _rows(joint.before.rotation))))
+                s = len(f.rotation) + 1
+                turned = step.mat(f"G{s}_", _times_rz(f.rotation[-1], f.trig[k - 1]))  # named before any constant multiplies it
+                f.rotation.append(step.mat(f"F{s}_", matmul(turned, _rows(joint.before.rotation))))
             angle, beta = None, sp.S.Zero
         if turn is not None:
             angle = step(f"th{k + 1}", (angle if angle is not None else 0) + _numeric(beta) + turn)
@@ -389,7 +487,7 @@ def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transfor
     cross product (``r_0 = r_1 x r_2`` cyclically), whichever needs the fewest operations: carrying two
     rows down the chain instead of three saves six operations per dense step.
     """
-    full = matmul(_times_rz(f.rotation[-1], f.trig[-1]), _rows(tool.rotation))
+    full = matmul(step.mat("Ge_", _times_rz(f.rotation[-1], f.trig[-1])), _rows(tool.rotation))
     rows = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
     best, best_ops = rows, None
     for d in (None, 0, 1, 2):
@@ -483,6 +581,18 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     rotation, tip = _pose(step, joints, frames, tool, W)
     rates = _velocities(step, joints, frames.axes, linear, angular, dq, ddq)
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
+    outputs = (rotation, [tip], linear, angular, rates.d_linear, rates.d_angular, [rates.twist, rates.acc], tool_linear, tool_angular)
+    values = [e for group in outputs for v in group for e in v]
+    step.replace_steps(_live_steps(step.steps, values))
+    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()))
+    if flips:
+        step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
+        (rotation, (tip,), linear, angular, d_linear, d_angular, motion, tool_linear, tool_angular) = [
+            [[sp.sympify(e).xreplace(flips) for e in v] for v in group] for group in outputs]
+        rates = _Rates(d_linear, d_angular, *motion)
+        axes = [[e.xreplace(flips) for e in z] for z in frames.axes]
+    else:
+        axes = frames.axes
     compact = {
         "T": sp.Matrix(rotation).row_join(sp.Matrix(tip)).col_join(sp.Matrix([[0, 0, 0, 1]])),
         "J": _by_coordinate(joints, n, linear, angular),
@@ -509,7 +619,7 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
         return derivation
     from .inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
 
-    return extend(derivation, step, joints, frames.axes, linear, angular, rotation)
+    return extend(derivation, step, joints, axes, linear, angular, rotation)
 
 
 def _named_trig_constants(step: _Steps, joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
