@@ -308,26 +308,81 @@ class _Steps(StepRecorder):
 
 # -- the derivation, stage by stage (see the module docstring) -------------------------------------
 
-def _negations(expr: sp.Expr) -> int:
-    """Negations in ``expr`` as printed: a sum whose terms are all negative, a product with coefficient -1
-    that is not a subtracted term (the rule of the operation counts)."""
-    count = 0
-    stack = [(sp.sympify(expr), False)]
+def _skeleton(e: sp.Expr) -> tuple:
+    """``e`` reduced to what decides its negations: sums, products (with their coefficient), symbols, signs."""
+    if e.is_Symbol:
+        return ("sym", e)
+    if e.is_Number:
+        return ("num", -1 if e.is_negative else 1)
+    if e.is_Add:
+        return ("add", tuple(_skeleton(a) for a in e.args))
+    if e.is_Mul:
+        coeff, factors = e.as_coeff_mul()
+        return ("mul", -1 if coeff.is_negative else 1, abs(coeff) == 1, tuple(_skeleton(f) for f in factors))
+    return ("other", tuple(_skeleton(a) for a in e.args))
+
+
+def _sign(node: tuple, flips: set) -> int:
+    """-1 where SymPy would see a minus sign in front of ``node`` once the symbols in ``flips`` are negated."""
+    kind = node[0]
+    if kind == "sym":
+        return -1 if node[1] in flips else 1
+    if kind == "num":
+        return node[1]
+    if kind == "mul":
+        sign = node[1]
+        for f in node[3]:
+            if f[0] == "sym" and f[1] in flips:
+                sign = -sign
+        return sign
+    return 1
+
+
+def _negated_atom(node: tuple, sign: int) -> sp.Symbol | None:
+    if node[0] == "sym" and sign < 0:
+        return node[1]
+    if node[0] == "mul" and node[2] and len(node[3]) == 1 and node[3][0][0] == "sym" and sign < 0:
+        return node[3][0][1]
+    return None
+
+
+def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tuple[sp.Symbol, bool], ...]]:
+    """Negations the expression with skeleton ``node`` pays as printed (times ``outer``, with the symbols in
+    ``flips`` negated), and the atoms it uses negated on their own.
+
+    Paid: a sum whose terms are all negative, a product with coefficient -1 that is not a subtracted term
+    (the rule of the operation counts). Returned apart: each ``-x`` for an atom ``x`` that is a term of a
+    sum (``(x, False)``: a subtraction, free once) or the whole expression (``(x, True)``), because CSE
+    shares a repeated ``-x`` as one negated temporary (see :func:`_hoisted`)."""
+    alone = _negated_atom(node, outer * _sign(node, flips))
+    if alone is not None:
+        return 0, ((alone, True),)
+    count, atoms = 0, []
+    stack = [(node, outer, False)]
     while stack:
-        e, paid = stack.pop()
-        if e.is_Atom:
-            continue
-        if e.is_Add:
-            negative = [t.could_extract_minus_sign() for t in e.args]
-            count += all(negative)
-            stack.extend(zip(e.args, negative))
-        elif e.is_Mul:
-            coeff, factors = e.as_coeff_mul()
-            count += coeff == -1 and not paid
-            stack.extend((f, False) for f in factors)
-        else:
-            stack.extend((a, False) for a in e.args)
-    return count
+        e, out, paid = stack.pop()
+        kind = e[0]
+        if kind == "add":
+            signs = [out * _sign(t, flips) for t in e[1]]
+            count += all(x < 0 for x in signs)
+            for t, sign in zip(e[1], signs):
+                atom = _negated_atom(t, sign)
+                if atom is not None:
+                    atoms.append((atom, False))
+                else:
+                    stack.append((t, sign * _sign(t, flips), sign < 0))
+        elif kind == "mul":
+            count += e[2] and out * _sign(e, flips) < 0 and not paid
+            stack.extend((f, 1, False) for f in e[3] if f[0] not in ("sym", "num"))
+        elif kind == "other":
+            stack.extend((a, 1, False) for a in e[1])
+    return count, tuple(atoms)
+
+
+def _hoisted(uses: int, alone: int) -> int:
+    """Negations a negated atom costs: one when it is used twice or more (CSE makes it a temporary) or
+    stands alone (an output ``-x``), none when it is subtracted once."""
+    return int(uses >= 2 or alone >= 1)
 
 
 def _live_steps(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr]) -> list[tuple[sp.Symbol, sp.Expr]]:
@@ -357,34 +412,57 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
     users: dict[sp.Symbol, list] = {s: [] for s in order}
     exprs = {("out", i): sp.sympify(e) for i, e in enumerate(outputs)}
     exprs.update({("step", s): rhs[s] for s in order})
+    exprs = {k: e for k, e in exprs.items() if not (e.is_Add and len(e.args) > 6)}  # a long sum (acc) pays nothing
+    skeletons = {k: _skeleton(e) for k, e in exprs.items()}
     for key, e in exprs.items():
         for x in e.free_symbols:
             if x in users:
                 users[x].append(key)
-    negs = {key: _negations(e) for key, e in exprs.items()}
-    flips: dict[sp.Symbol, sp.Expr] = {}
-    moves = [(s,) for s in reversed(order)] + [g for g in groups if all(s in users for s in g)]
+    flips: set[sp.Symbol] = set()
+
+    def profile_of(key):
+        return _negations(skeletons[key], flips, -1 if key[0] == "step" and key[1] in flips else 1)
+
+    profile = {key: profile_of(key) for key in exprs}
+    uses: dict[sp.Symbol, list[int]] = {}  # atom -> [negated uses, negated alone]
+    for _, atoms in profile.values():
+        for atom, alone in atoms:
+            entry = uses.setdefault(atom, [0, 0])
+            entry[0] += 1
+            entry[1] += alone
+    flippable = {s for s in order if rhs[s].is_Add or rhs[s].is_Mul}  # a sine or cosine stays what the trig block computes
+    moves = [(s,) for s in reversed(order) if s in flippable] + [g for g in groups if all(s in flippable for s in g)]
     for _ in range(4):
         changed = False
         for move in moves:
-            keys = list(dict.fromkeys([("step", s) for s in move] + [k for s in move for k in users[s]]))
-            if not any(negs[k] for k in keys):
+            keys = list(dict.fromkeys([("step", s) for s in move if ("step", s) in exprs] + [k for s in move for k in users[s]]))
+            if not any(profile[k][0] or profile[k][1] for k in keys):
                 continue
-            swap = {s: -s for s in move}
-            new = {k: (-exprs[k] if k[0] == "step" and k[1] in swap else sp.S.One * exprs[k]).xreplace(swap) for k in keys}
-            new_negs = {k: _negations(e) for k, e in new.items()}
-            if sum(new_negs.values()) < sum(negs[k] for k in keys):
-                exprs.update(new)
-                negs.update(new_negs)
-                for s in move:
-                    if s in flips:
-                        del flips[s]
-                    else:
-                        flips[s] = -s
+            flips.symmetric_difference_update(move)
+            new_profile = {k: profile_of(k) for k in keys}
+            delta = sum(new_profile[k][0] - profile[k][0] for k in keys)
+            change: dict[sp.Symbol, list[int]] = {}
+            for sign, table in ((-1, profile), (1, new_profile)):
+                for k in keys:
+                    for atom, alone in table[k][1]:
+                        entry = change.setdefault(atom, [0, 0])
+                        entry[0] += sign
+                        entry[1] += sign * alone
+            for atom, (d_uses, d_alone) in change.items():
+                old = uses.get(atom, [0, 0])
+                delta += _hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old)
+            if delta < 0:
+                profile.update(new_profile)
+                for atom, (d_uses, d_alone) in change.items():
+                    entry = uses.setdefault(atom, [0, 0])
+                    entry[0] += d_uses
+                    entry[1] += d_alone
                 changed = True
+            else:
+                flips.symmetric_difference_update(move)
         if not changed:
             break
-    return flips
+    return {s: -s for s in flips}
 
 
 @dataclass
