@@ -274,6 +274,21 @@ def arithmetic(counts: dict[str, int]) -> int:
 
 # -- building and timing --------------------------------------------------------------------------
 
+def check_ours(chain, rng) -> None:
+    """Our NumPy module's values against the reference at random configurations (the C is checked when timed)."""
+    from skelarm_sym.build import load_python
+
+    g = generate(chain, langs="python", out=None, prefix="ours", functions=",".join(FUNCTIONS))
+    module = load_python(g.sources["ours.py"], "ours")
+    n = chain.n
+    q, dq, ddq = rng.uniform(-np.pi, np.pi, (5, n)), rng.uniform(-1, 1, (5, n)), rng.uniform(-1, 1, (5, n))
+    ref = reference.chain_kinematics(chain.numeric(), q, dq, ddq)
+    got = {"T": module.pose(q), "J": module.jacobian(q), "J_tool": module.jacobian_tool(q), "dJ": module.jacobian_dot(q, dq)}
+    for name, value in got.items():
+        if not np.allclose(value, getattr(ref, name), atol=1e-10, rtol=1e-10):
+            raise SystemExit(f"{chain.name}: our {name} differs from the reference")
+
+
 def ours_sources(chain, work: Path) -> tuple[str, float]:
     """Generate our C (prefix ``ours``) into ``work``; returns its text and the generation time."""
     start = time.perf_counter()
@@ -399,6 +414,7 @@ def main(argv=None) -> None:
             work.mkdir()
             functions = casadi_functions(chain)
             check_casadi(chain, functions, rng)
+            check_ours(chain, rng)
             ours_c, gen_seconds = ours_sources(chain, work)
             casadi_c = casadi_sources(functions, work)
             times = {} if args.no_time else time_robot(chain, functions, work, cc)

@@ -207,7 +207,7 @@ def _split_z(rotation: sp.Matrix) -> tuple[sp.Matrix, sp.Expr] | None:
     if abs(beta / (math.pi / 2) - round(beta / (math.pi / 2))) < 1e-12:
         return None
     c, s = math.cos(beta), math.sin(beta)
-    turned = [[float(rotation[i, 0]) * c + float(rotation[i, 1]) * s, float(rotation[i, 1]) * c - float(rotation[i, 0]) * s,
+    turned = [[float(rotation[i, 0]) * c - float(rotation[i, 1]) * s, float(rotation[i, 0]) * s + float(rotation[i, 1]) * c,
                float(rotation[i, 2])] for i in range(3)]  # rotation Rz(-beta)
     P = [[round(x) for x in row] for row in turned]
     if any(abs(x - y) > 1e-9 for row, prow in zip(turned, P) for x, y in zip(row, prow)):
@@ -379,6 +379,25 @@ def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tupl
     return count, tuple(atoms)
 
 
+def _function_weights(rhs: dict, outputs: Sequence[sp.Expr], functions: Sequence[Sequence[int]]) -> dict[tuple, int]:
+    """For every output and step, the number of functions whose program contains it (1 without ``functions``)."""
+    weight: dict[tuple, int] = {}
+    for indices in functions:
+        seen: set[sp.Symbol] = set()
+        todo = []
+        for i in indices:
+            weight[("out", i)] = weight.get(("out", i), 0) + 1
+            todo.extend(x for x in sp.sympify(outputs[i]).free_symbols if x in rhs)
+        while todo:
+            x = todo.pop()
+            if x not in seen:
+                seen.add(x)
+                todo.extend(y for y in rhs[x].free_symbols if y in rhs)
+        for x in seen:
+            weight[("step", x)] = weight.get(("step", x), 0) + 1
+    return weight
+
+
 def _hoisted(uses: int, alone: int) -> int:
     """Negations a negated atom costs: one when it is used twice or more (CSE makes it a temporary) or
     stands alone (an output ``-x``), none when it is subtracted once."""
@@ -399,14 +418,16 @@ def _live_steps(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp
 
 
 def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr],
-                     groups: Sequence[tuple[sp.Symbol, ...]] = ()) -> dict[sp.Symbol, sp.Expr]:
+                     groups: Sequence[tuple[sp.Symbol, ...]] = (),
+                     functions: Sequence[Sequence[int]] = ()) -> dict[sp.Symbol, sp.Expr]:
     """Signs of the steps that leave the fewest negations: ``{s: -s}`` for each step to store negated.
 
     Every quantity can be stored with either sign: a sum with a negative term is a subtraction either way,
     and a sign on a factor moves to wherever the product is used. A negation is paid only where a value
     arrives with the wrong sign at an output, or where every term of a sum is negative. Greedy: flip a step
     (its right-hand side negated, its uses given ``-s``) when that lowers the negations of it and its users;
-    passes repeat until none does."""
+    passes repeat until none does. ``functions``: the outputs (indices) of each emitted function; a negation
+    counts once for every function whose program contains it."""
     rhs = dict(steps)
     order = [s for s, _ in steps]
     users: dict[sp.Symbol, list] = {s: [] for s in order}
@@ -418,6 +439,7 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
         for x in e.free_symbols:
             if x in users:
                 users[x].append(key)
+    weight = _function_weights(rhs, outputs, functions)
     flips: set[sp.Symbol] = set()
 
     def profile_of(key):
@@ -440,7 +462,7 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
                 continue
             flips.symmetric_difference_update(move)
             new_profile = {k: profile_of(k) for k in keys}
-            delta = sum(new_profile[k][0] - profile[k][0] for k in keys)
+            delta = sum(weight.get(k, 1) * (new_profile[k][0] - profile[k][0]) for k in keys)
             change: dict[sp.Symbol, list[int]] = {}
             for sign, table in ((-1, profile), (1, new_profile)):
                 for k in keys:
@@ -450,7 +472,7 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
                         entry[1] += sign * alone
             for atom, (d_uses, d_alone) in change.items():
                 old = uses.get(atom, [0, 0])
-                delta += _hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old)
+                delta += weight.get(("step", atom), 1) * (_hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old))
             if delta < 0:
                 profile.update(new_profile)
                 for atom, (d_uses, d_alone) in change.items():
@@ -660,9 +682,15 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     rates = _velocities(step, joints, frames.axes, linear, angular, dq, ddq)
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
     outputs = (rotation, [tip], linear, angular, rates.d_linear, rates.d_angular, [rates.twist, rates.acc], tool_linear, tool_angular)
-    values = [e for group in outputs for v in group for e in v]
+    values, where, at = [], {}, 0
+    for name, group in zip(("T", "T", "J", "J", "dJ", "dJ", "rates", "J_tool", "J_tool"), outputs):
+        flat = [e for v in group for e in v]
+        where.setdefault(name, []).extend(range(at, at + len(flat)))
+        values.extend(flat)
+        at += len(flat)
+    functions = [where[f] for f in ("T", "J", "dJ", "rates", "J_tool")] + [where["T"] + where["J"] + where["dJ"] + where["rates"]]
     step.replace_steps(_live_steps(step.steps, values))
-    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()))
+    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), functions)
     if flips:
         step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
         (rotation, (tip,), linear, angular, d_linear, d_angular, motion, tool_linear, tool_angular) = [
