@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xf5f51988UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x32ad337cUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1106,8 +1106,7 @@ static void arm2_manipulability_finish(const double l[2], const double *restrict
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t32 = t21*t27;
-    w[0] = sqrt(t32);
+    w[0] = sqrt(t21*t27);
 }
 
 void arm2_manipulability(const double q[2], const double l[2], double w[1])
@@ -1166,8 +1165,7 @@ static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T,
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t32 = t21*t27;
-        w[0] = sqrt(t32);
+        w[0] = sqrt(t21*t27);
         w_T[0 + b] = w[0];
     }
 }
@@ -1224,7 +1222,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 21 add/sub, 36 mul, 1 neg, 3 div */
+/* operations: 2 sin, 2 cos, 21 add/sub, 43 mul, 1 neg, 4 div */
 
 static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
 {
@@ -1252,23 +1250,27 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t28 = lambda*lambda;
-    const double t29 = (t20 ? v[0] : v[1]);
-    const double t30 = (t20 ? v[1] : v[0]);
-    const double t31 = t17 + t19;
-    const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
-    const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
-    const double t35 = t29 + t30*t22;
-    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-    const double t37 = t28 + t21*(1.0 + t22*t22);
-    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-    const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
-    const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
-    const double t41 = t39*t23 + t40*t25;
-    const double t42 = t39*t24 + t40*t26;
-    dq[0] = t41;
-    dq[1] = t42;
+    const double t28 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+    const double t29 = t28*t28;
+    const double t30 = t29*lambda*lambda;
+    const double t31 = t29;
+    const double t32 = t31*t21;
+    const double t33 = t31*t27;
+    const double t34 = (t20 ? v[0] : v[1]);
+    const double t35 = (t20 ? v[1] : v[0]);
+    const double t36 = t31*(t17 + t19);
+    const double t37 = t32*t33 + t30*(t36 + t30);
+    const int t38 = t37 > ARM2_RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30);
+    const double t39 = t34 + t35*t22;
+    const double t40 = t31*(t38 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+    const double t41 = t30 + t32*(1.0 + t22*t22);
+    const double t42 = t31*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+    const double t43 = (t38 ? t40*(t39*t30 + t33*t34) : t39*t42);
+    const double t44 = (t38 ? t40*(t32*(t35 - t34*t22) + t35*t30) : 0.0);
+    const double t45 = t43*t23 + t44*t25;
+    const double t46 = t43*t24 + t44*t26;
+    dq[0] = t45;
+    dq[1] = t46;
 }
 
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2])
@@ -1330,23 +1332,27 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t28 = lambda*lambda;
-        const double t29 = (t20 ? v[0] : v[1]);
-        const double t30 = (t20 ? v[1] : v[0]);
-        const double t31 = t17 + t19;
-        const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
-        const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
-        const double t35 = t29 + t30*t22;
-        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-        const double t37 = t28 + t21*(1.0 + t22*t22);
-        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-        const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
-        const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
-        const double t41 = t39*t23 + t40*t25;
-        const double t42 = t39*t24 + t40*t26;
-        dq[0] = t41;
-        dq[1] = t42;
+        const double t28 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+        const double t29 = t28*t28;
+        const double t30 = t29*lambda*lambda;
+        const double t31 = t29;
+        const double t32 = t31*t21;
+        const double t33 = t31*t27;
+        const double t34 = (t20 ? v[0] : v[1]);
+        const double t35 = (t20 ? v[1] : v[0]);
+        const double t36 = t31*(t17 + t19);
+        const double t37 = t32*t33 + t30*(t36 + t30);
+        const int t38 = t37 > ARM2_RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30);
+        const double t39 = t34 + t35*t22;
+        const double t40 = t31*(t38 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+        const double t41 = t30 + t32*(1.0 + t22*t22);
+        const double t42 = t31*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+        const double t43 = (t38 ? t40*(t39*t30 + t33*t34) : t39*t42);
+        const double t44 = (t38 ? t40*(t32*(t35 - t34*t22) + t35*t30) : 0.0);
+        const double t45 = t43*t23 + t44*t25;
+        const double t46 = t43*t24 + t44*t26;
+        dq[0] = t45;
+        dq[1] = t46;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
     }
@@ -1412,7 +1418,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 25 add/sub, 36 mul, 1 neg, 3 div */
+/* operations: 2 sin, 2 cos, 25 add/sub, 43 mul, 1 neg, 4 div */
 
 static void arm2_ik_step_angles(const double q[2], double *restrict ang)
 {
@@ -1440,25 +1446,29 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t28 = lambda*lambda;
-    const double t31 = t17 + t19;
-    const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
-    const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
-    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-    const double t37 = t28 + t21*(1.0 + t22*t22);
-    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-    const double t43 = target[0] - t7;
-    const double t44 = t6 + target[1];
-    const double t45 = (t20 ? t43 : t44);
-    const double t46 = (t20 ? t44 : t43);
-    const double t47 = t45 + t46*t22;
-    const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
-    const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
-    const double t50 = t48*t23 + t49*t25;
-    const double t51 = t48*t24 + t49*t26;
-    q_next[0] = t50 + q[0];
-    q_next[1] = t51 + q[1];
+    const double t28 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+    const double t29 = t28*t28;
+    const double t30 = t29*lambda*lambda;
+    const double t31 = t29;
+    const double t32 = t31*t21;
+    const double t33 = t31*t27;
+    const double t36 = t31*(t17 + t19);
+    const double t37 = t32*t33 + t30*(t36 + t30);
+    const int t38 = t37 > ARM2_RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30);
+    const double t40 = t31*(t38 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+    const double t41 = t30 + t32*(1.0 + t22*t22);
+    const double t42 = t31*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+    const double t47 = target[0] - t7;
+    const double t48 = t6 + target[1];
+    const double t49 = (t20 ? t47 : t48);
+    const double t50 = (t20 ? t48 : t47);
+    const double t51 = t49 + t50*t22;
+    const double t52 = (t38 ? t40*(t51*t30 + t49*t33) : t51*t42);
+    const double t53 = (t38 ? t40*(t50*t30 + t32*(t50 - t49*t22)) : 0.0);
+    const double t54 = t52*t23 + t53*t25;
+    const double t55 = t52*t24 + t53*t26;
+    q_next[0] = t54 + q[0];
+    q_next[1] = t55 + q[1];
 }
 
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2])
@@ -1523,25 +1533,29 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t28 = lambda*lambda;
-        const double t31 = t17 + t19;
-        const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
-        const int t34 = t33 > ARM2_RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28);
-        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-        const double t37 = t28 + t21*(1.0 + t22*t22);
-        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-        const double t43 = target[0] - t7;
-        const double t44 = t6 + target[1];
-        const double t45 = (t20 ? t43 : t44);
-        const double t46 = (t20 ? t44 : t43);
-        const double t47 = t45 + t46*t22;
-        const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
-        const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
-        const double t50 = t48*t23 + t49*t25;
-        const double t51 = t48*t24 + t49*t26;
-        q_next[0] = t50 + q[0];
-        q_next[1] = t51 + q[1];
+        const double t28 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+        const double t29 = t28*t28;
+        const double t30 = t29*lambda*lambda;
+        const double t31 = t29;
+        const double t32 = t31*t21;
+        const double t33 = t31*t27;
+        const double t36 = t31*(t17 + t19);
+        const double t37 = t32*t33 + t30*(t36 + t30);
+        const int t38 = t37 > ARM2_RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30);
+        const double t40 = t31*(t38 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
+        const double t41 = t30 + t32*(1.0 + t22*t22);
+        const double t42 = t31*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
+        const double t47 = target[0] - t7;
+        const double t48 = t6 + target[1];
+        const double t49 = (t20 ? t47 : t48);
+        const double t50 = (t20 ? t48 : t47);
+        const double t51 = t49 + t50*t22;
+        const double t52 = (t38 ? t40*(t51*t30 + t49*t33) : t51*t42);
+        const double t53 = (t38 ? t40*(t50*t30 + t32*(t50 - t49*t22)) : 0.0);
+        const double t54 = t52*t23 + t53*t25;
+        const double t55 = t52*t24 + t53*t26;
+        q_next[0] = t54 + q[0];
+        q_next[1] = t55 + q[1];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
     }

@@ -383,8 +383,7 @@ def _manipulability_core(q, l, w):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t32 = t21*t27
-    w[..., 0] = np.sqrt(t32)
+    w[..., 0] = np.sqrt(t21*t27)
 
 
 @_signature_errors
@@ -428,23 +427,27 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t28 = lambda_*lambda_
-    t29 = np.where(t20, v[..., 0], v[..., 1])
-    t30 = np.where(t20, v[..., 1], v[..., 0])
-    t31 = t17 + t19
-    t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
-    t34 = (t33 > RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28))
-    t35 = t29 + t30*t22
-    t36 = np.where(t34, 1.0/t33, 1.0)
-    t37 = t28 + t21*(1.0 + t22*t22)
-    t38 = np.where((t37 > 0.0), 1.0/t37, 1.0)
-    t39 = np.where(t34, t36*(t35*t28 + t29*t27), t35*t38)
-    t40 = np.where(t34, t36*(t30*t28 + t21*(t30 - t29*t22)), 0.0)
-    t41 = t39*t23 + t40*t25
-    t42 = t39*t24 + t40*t26
-    dq[..., 0] = t41
-    dq[..., 1] = t42
+    t28 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t29 = t28*t28
+    t30 = t29*lambda_*lambda_
+    t31 = t29
+    t32 = t31*t21
+    t33 = t31*t27
+    t34 = np.where(t20, v[..., 0], v[..., 1])
+    t35 = np.where(t20, v[..., 1], v[..., 0])
+    t36 = t31*(t17 + t19)
+    t37 = t32*t33 + t30*(t36 + t30)
+    t38 = (t37 > RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30))
+    t39 = t34 + t35*t22
+    t40 = t31*np.where(t38, 1.0/t37, 1.0)
+    t41 = t30 + t32*(1.0 + t22*t22)
+    t42 = t31*np.where((t41 > 0.0), 1.0/t41, 1.0)
+    t43 = np.where(t38, t40*(t39*t30 + t33*t34), t39*t42)
+    t44 = np.where(t38, t40*(t32*(t35 - t34*t22) + t35*t30), 0.0)
+    t45 = t43*t23 + t44*t25
+    t46 = t43*t24 + t44*t26
+    dq[..., 0] = t45
+    dq[..., 1] = t46
 
 
 @_signature_errors
@@ -456,7 +459,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 58 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 65 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -491,25 +494,29 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t28 = lambda_*lambda_
-    t31 = t17 + t19
-    t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
-    t34 = (t33 > RANK_TOL*(t31 + 2.0*t28)*(t31 + 2.0*t28))
-    t36 = np.where(t34, 1.0/t33, 1.0)
-    t37 = t28 + t21*(1.0 + t22*t22)
-    t38 = np.where((t37 > 0.0), 1.0/t37, 1.0)
-    t43 = target[..., 0] - t7
-    t44 = t6 + target[..., 1]
-    t45 = np.where(t20, t43, t44)
-    t46 = np.where(t20, t44, t43)
-    t47 = t45 + t46*t22
-    t48 = np.where(t34, t36*(t47*t28 + t45*t27), t47*t38)
-    t49 = np.where(t34, t36*(t46*t28 + t21*(t46 - t45*t22)), 0.0)
-    t50 = t48*t23 + t49*t25
-    t51 = t48*t24 + t49*t26
-    q_next[..., 0] = t50 + q[..., 0]
-    q_next[..., 1] = t51 + q[..., 1]
+    t28 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t29 = t28*t28
+    t30 = t29*lambda_*lambda_
+    t31 = t29
+    t32 = t31*t21
+    t33 = t31*t27
+    t36 = t31*(t17 + t19)
+    t37 = t32*t33 + t30*(t36 + t30)
+    t38 = (t37 > RANK_TOL*(t36 + 2.0*t30)*(t36 + 2.0*t30))
+    t40 = t31*np.where(t38, 1.0/t37, 1.0)
+    t41 = t30 + t32*(1.0 + t22*t22)
+    t42 = t31*np.where((t41 > 0.0), 1.0/t41, 1.0)
+    t47 = target[..., 0] - t7
+    t48 = t6 + target[..., 1]
+    t49 = np.where(t20, t47, t48)
+    t50 = np.where(t20, t48, t47)
+    t51 = t49 + t50*t22
+    t52 = np.where(t38, t40*(t51*t30 + t49*t33), t51*t42)
+    t53 = np.where(t38, t40*(t50*t30 + t32*(t50 - t49*t22)), 0.0)
+    t54 = t52*t23 + t53*t25
+    t55 = t52*t24 + t53*t26
+    q_next[..., 0] = t54 + q[..., 0]
+    q_next[..., 1] = t55 + q[..., 1]
 
 
 @_signature_errors
@@ -521,7 +528,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 62 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 69 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

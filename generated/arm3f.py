@@ -424,8 +424,7 @@ def _manipulability_core(q, w):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t42 = t29*t37
-    w[..., 0] = np.sqrt(t42)
+    w[..., 0] = np.sqrt(t29*t37)
 
 
 @_signature_errors
@@ -473,25 +472,29 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t38 = lambda_*lambda_
-    t39 = np.where(t28, v[..., 0], v[..., 1])
-    t40 = np.where(t28, v[..., 1], v[..., 0])
-    t41 = t25 + t27
-    t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
-    t44 = (t43 > RANK_TOL*(t41 + 2.0*t38)*(t41 + 2.0*t38))
-    t45 = t39 + t40*t30
-    t46 = np.where(t44, 1.0/t43, 1.0)
-    t47 = t38 + t29*(1.0 + t30*t30)
-    t48 = np.where((t47 > 0.0), 1.0/t47, 1.0)
-    t49 = np.where(t44, t46*(t45*t38 + t39*t37), t45*t48)
-    t50 = np.where(t44, t46*(t40*t38 + t29*(t40 - t39*t30)), 0.0)
-    t51 = t49*t31 + t50*t34
-    t52 = t49*t32 + t50*t35
-    t53 = t49*t33 + t50*t36
-    dq[..., 0] = t51
-    dq[..., 1] = t52
-    dq[..., 2] = t53
+    t38 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t39 = t38*t38
+    t40 = t39*lambda_*lambda_
+    t41 = t39
+    t42 = t41*t29
+    t43 = t41*t37
+    t44 = np.where(t28, v[..., 0], v[..., 1])
+    t45 = np.where(t28, v[..., 1], v[..., 0])
+    t46 = t41*(t25 + t27)
+    t47 = t42*t43 + t40*(t46 + t40)
+    t48 = (t47 > RANK_TOL*(t46 + 2.0*t40)*(t46 + 2.0*t40))
+    t49 = t44 + t45*t30
+    t50 = t41*np.where(t48, 1.0/t47, 1.0)
+    t51 = t40 + t42*(1.0 + t30*t30)
+    t52 = t41*np.where((t51 > 0.0), 1.0/t51, 1.0)
+    t53 = np.where(t48, t50*(t49*t40 + t43*t44), t49*t52)
+    t54 = np.where(t48, t50*(t42*(t45 - t44*t30) + t45*t40), 0.0)
+    t55 = t53*t31 + t54*t34
+    t56 = t53*t32 + t54*t35
+    t57 = t53*t33 + t54*t36
+    dq[..., 0] = t55
+    dq[..., 1] = t56
+    dq[..., 2] = t57
 
 
 @_signature_errors
@@ -502,7 +505,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 74 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -532,51 +535,57 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
-    t38 = lambda_*lambda_
-    t64 = t9 + t7 + t6
-    t65 = t3 + t10 + t8
-    t66 = 0.18903591682419663*t38
-    t67 = t66 + 0.18903591682419663*t25
-    t68 = 0.18903591682419663*t26
-    t69 = 0.4347826086956522*t64
-    t70 = t66 + 0.18903591682419663*t27
-    t71 = 0.4347826086956522*t65
-    t72 = 3.0 + t38
-    t73 = 0.4347826086956522*twist[..., 0]
-    t74 = 0.4347826086956522*twist[..., 1]
-    t75 = t67 + t70 + t72
-    t76 = t67*t73 + t68*t74 + t69*twist[..., 2]
-    t77 = t68*t73 + t70*t74 + t71*twist[..., 2]
-    t78 = t69*t73 + t71*t74 + t72*twist[..., 2]
-    t79 = np.where((t75 > 0.0), 1.0/(t75*t75), 1.0)
-    t80 = t76*t79
-    t81 = t77*t79
-    t82 = t78*t79
-    t83 = t70*t72 - t71*t71
-    t84 = t69*t71 - t68*t72
-    t85 = t68*t71 - t69*t70
-    t86 = t67*t72 - t69*t69
-    t87 = t68*t69 - t67*t71
-    t88 = t67*t70 - t68*t68
-    t89 = t67*t83 + t68*t84 + t69*t85
-    t90 = t83 + t86 + t88
-    t91 = (t89 > RANK_TOL*t90*t75)
-    t92 = t75*t75
-    t93 = (t90 > RANK_TOL*t92)
-    t94 = np.where((t89 > 0.0), 1.0/t89, 1.0)
-    t95 = t67*t76 + t68*t77 + t69*t78
-    t96 = t68*t76 + t70*t77 + t71*t78
-    t97 = t69*t76 + t71*t77 + t72*t78
-    t98 = np.where((t90 > 0.0), 1.0/(t90*t90), 1.0)
-    t99 = t92 - t90
-    t100 = np.where(t93, np.where(t91, t94*(t83*t73 + t84*t74 + t85*twist[..., 2]), t98*(t76*t99 - t95*t75)), t80)
-    t101 = np.where(t93, np.where(t91, t94*(t84*t73 + t86*t74 + t87*twist[..., 2]), t98*(t77*t99 - t96*t75)), t81)
-    t102 = np.where(t93, np.where(t91, t94*(t85*t73 + t87*t74 + t88*twist[..., 2]), t98*(t78*t99 - t97*t75)), t82)
-    t103 = 0.4347826086956522*t100
-    t104 = 0.4347826086956522*t101
-    dq3[..., 0] = t102 + t103*t9 + t104*t10
-    dq3[..., 1] = t102 + t103*t7 + t104*t8
-    dq3[..., 2] = t102 + t3*t104 + t103*t6
+    t38 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t39 = t38*t38
+    t40 = t39*lambda_*lambda_
+    t41 = t39
+    t68 = t9 + t7 + t6
+    t69 = t3 + t10 + t8
+    t70 = 0.18903591682419663*t41
+    t71 = 0.4347826086956522*t41
+    t72 = 0.18903591682419663*t40
+    t73 = t72 + t25*t70
+    t74 = t26*t70
+    t75 = t68*t71
+    t76 = t72 + t27*t70
+    t77 = t69*t71
+    t78 = 3.0*t41 + t40
+    t79 = t71*twist[..., 0]
+    t80 = t71*twist[..., 1]
+    t81 = t41*twist[..., 2]
+    t82 = t73 + t76 + t78
+    t83 = t73*t79 + t74*t80 + t75*t81
+    t84 = t74*t79 + t76*t80 + t77*t81
+    t85 = t75*t79 + t77*t80 + t78*t81
+    t86 = np.where((t82 > 0.0), 1.0/(t82*t82), 1.0)
+    t87 = t83*t86
+    t88 = t84*t86
+    t89 = t85*t86
+    t90 = t76*t78 - t77*t77
+    t91 = t75*t77 - t74*t78
+    t92 = t74*t77 - t75*t76
+    t93 = t73*t78 - t75*t75
+    t94 = t74*t75 - t73*t77
+    t95 = t73*t76 - t74*t74
+    t96 = t73*t90 + t74*t91 + t75*t92
+    t97 = t90 + t93 + t95
+    t98 = (t96 > RANK_TOL*t97*t82)
+    t99 = t82*t82
+    t100 = (t97 > RANK_TOL*t99)
+    t101 = np.where((t96 > 0.0), 1.0/t96, 1.0)
+    t102 = t73*t83 + t74*t84 + t75*t85
+    t103 = t74*t83 + t76*t84 + t77*t85
+    t104 = t75*t83 + t77*t84 + t78*t85
+    t105 = np.where((t97 > 0.0), 1.0/(t97*t97), 1.0)
+    t106 = t99 - t97
+    t107 = np.where(t100, np.where(t98, t101*(t90*t79 + t91*t80 + t92*t81), t105*(t83*t106 - t102*t82)), t87)
+    t108 = np.where(t100, np.where(t98, t101*(t91*t79 + t93*t80 + t94*t81), t105*(t84*t106 - t103*t82)), t88)
+    t109 = np.where(t100, np.where(t98, t101*(t92*t79 + t94*t80 + t95*t81), t105*(t85*t106 - t104*t82)), t89)
+    t110 = 0.4347826086956522*t107
+    t111 = 0.4347826086956522*t108
+    dq3[..., 0] = t109 + t110*t9 + t111*t10
+    dq3[..., 1] = t109 + t110*t7 + t111*t8
+    dq3[..., 2] = t109 + t3*t111 + t110*t6
 
 
 @_signature_errors
@@ -587,7 +596,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 153 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 159 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -627,27 +636,31 @@ def _ik_step_core(q, target, lambda_, q_next):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t38 = lambda_*lambda_
-    t41 = t25 + t27
-    t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
-    t44 = (t43 > RANK_TOL*(t41 + 2.0*t38)*(t41 + 2.0*t38))
-    t46 = np.where(t44, 1.0/t43, 1.0)
-    t47 = t38 + t29*(1.0 + t30*t30)
-    t48 = np.where((t47 > 0.0), 1.0/t47, 1.0)
-    t54 = target[..., 0] - t10
-    t55 = t9 + target[..., 1]
-    t56 = np.where(t28, t54, t55)
-    t57 = np.where(t28, t55, t54)
-    t58 = t56 + t57*t30
-    t59 = np.where(t44, t46*(t58*t38 + t56*t37), t58*t48)
-    t60 = np.where(t44, t46*(t57*t38 + t29*(t57 - t56*t30)), 0.0)
-    t61 = t59*t31 + t60*t34
-    t62 = t59*t32 + t60*t35
-    t63 = t59*t33 + t60*t36
-    q_next[..., 0] = t61 + q[..., 0]
-    q_next[..., 1] = t62 + q[..., 1]
-    q_next[..., 2] = t63 + q[..., 2]
+    t38 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t39 = t38*t38
+    t40 = t39*lambda_*lambda_
+    t41 = t39
+    t42 = t41*t29
+    t43 = t41*t37
+    t46 = t41*(t25 + t27)
+    t47 = t42*t43 + t40*(t46 + t40)
+    t48 = (t47 > RANK_TOL*(t46 + 2.0*t40)*(t46 + 2.0*t40))
+    t50 = t41*np.where(t48, 1.0/t47, 1.0)
+    t51 = t40 + t42*(1.0 + t30*t30)
+    t52 = t41*np.where((t51 > 0.0), 1.0/t51, 1.0)
+    t58 = target[..., 0] - t10
+    t59 = t9 + target[..., 1]
+    t60 = np.where(t28, t58, t59)
+    t61 = np.where(t28, t59, t58)
+    t62 = t60 + t61*t30
+    t63 = np.where(t48, t50*(t62*t40 + t60*t43), t62*t52)
+    t64 = np.where(t48, t50*(t61*t40 + t42*(t61 - t60*t30)), 0.0)
+    t65 = t63*t31 + t64*t34
+    t66 = t63*t32 + t64*t35
+    t67 = t63*t33 + t64*t36
+    q_next[..., 0] = t65 + q[..., 0]
+    q_next[..., 1] = t66 + q[..., 1]
+    q_next[..., 2] = t67 + q[..., 2]
 
 
 @_signature_errors
@@ -658,7 +671,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 79 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 86 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x4b60238eUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc1d82a27UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1428,8 +1428,7 @@ static void arm4_manipulability_finish(const double l[4], const double *restrict
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t56 = t41*t51;
-    w[0] = sqrt(t56);
+    w[0] = sqrt(t41*t51);
 }
 
 void arm4_manipulability(const double q[4], const double l[4], double w[1])
@@ -1506,8 +1505,7 @@ static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T,
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t56 = t41*t51;
-        w[0] = sqrt(t56);
+        w[0] = sqrt(t41*t51);
         w_T[0 + b] = w[0];
     }
 }
@@ -1566,7 +1564,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 39 add/sub, 54 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 39 add/sub, 61 mul, 1 neg, 4 div */
 
 static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
@@ -1608,27 +1606,31 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t52 = lambda*lambda;
-    const double t53 = (t40 ? v[0] : v[1]);
-    const double t54 = (t40 ? v[1] : v[0]);
-    const double t55 = t37 + t39;
-    const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
-    const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
-    const double t59 = t53 + t54*t42;
-    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t61 = t52 + t41*(1.0 + t42*t42);
-    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-    const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
-    const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
-    const double t65 = t63*t43 + t64*t47;
-    const double t66 = t63*t44 + t64*t48;
-    const double t67 = t63*t45 + t64*t49;
-    const double t68 = t63*t46 + t64*t50;
-    dq[0] = t65;
-    dq[1] = t66;
-    dq[2] = t67;
-    dq[3] = t68;
+    const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+    const double t53 = t52*t52;
+    const double t54 = t53*lambda*lambda;
+    const double t55 = t53;
+    const double t56 = t55*t41;
+    const double t57 = t55*t51;
+    const double t58 = (t40 ? v[0] : v[1]);
+    const double t59 = (t40 ? v[1] : v[0]);
+    const double t60 = t55*(t37 + t39);
+    const double t61 = t56*t57 + t54*(t60 + t54);
+    const int t62 = t61 > ARM4_RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54);
+    const double t63 = t58 + t59*t42;
+    const double t64 = t55*(t62 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t65 = t54 + t56*(1.0 + t42*t42);
+    const double t66 = t55*(t65 > 0.0 ? 1.0/(t65 != 0.0 ? t65 : 1.0) : 1.0);
+    const double t67 = (t62 ? t64*(t63*t54 + t57*t58) : t63*t66);
+    const double t68 = (t62 ? t64*(t56*(t59 - t58*t42) + t59*t54) : 0.0);
+    const double t69 = t67*t43 + t68*t47;
+    const double t70 = t67*t44 + t68*t48;
+    const double t71 = t67*t45 + t68*t49;
+    const double t72 = t67*t46 + t68*t50;
+    dq[0] = t69;
+    dq[1] = t70;
+    dq[2] = t71;
+    dq[3] = t72;
 }
 
 void arm4_inverse_velocity(const double q[4], const double v[2], const double l[4], double lambda, double dq[4])
@@ -1708,27 +1710,31 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t53 = (t40 ? v[0] : v[1]);
-        const double t54 = (t40 ? v[1] : v[0]);
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
-        const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
-        const double t59 = t53 + t54*t42;
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
-        const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
-        const double t65 = t63*t43 + t64*t47;
-        const double t66 = t63*t44 + t64*t48;
-        const double t67 = t63*t45 + t64*t49;
-        const double t68 = t63*t46 + t64*t50;
-        dq[0] = t65;
-        dq[1] = t66;
-        dq[2] = t67;
-        dq[3] = t68;
+        const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+        const double t53 = t52*t52;
+        const double t54 = t53*lambda*lambda;
+        const double t55 = t53;
+        const double t56 = t55*t41;
+        const double t57 = t55*t51;
+        const double t58 = (t40 ? v[0] : v[1]);
+        const double t59 = (t40 ? v[1] : v[0]);
+        const double t60 = t55*(t37 + t39);
+        const double t61 = t56*t57 + t54*(t60 + t54);
+        const int t62 = t61 > ARM4_RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54);
+        const double t63 = t58 + t59*t42;
+        const double t64 = t55*(t62 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t65 = t54 + t56*(1.0 + t42*t42);
+        const double t66 = t55*(t65 > 0.0 ? 1.0/(t65 != 0.0 ? t65 : 1.0) : 1.0);
+        const double t67 = (t62 ? t64*(t63*t54 + t57*t58) : t63*t66);
+        const double t68 = (t62 ? t64*(t56*(t59 - t58*t42) + t59*t54) : 0.0);
+        const double t69 = t67*t43 + t68*t47;
+        const double t70 = t67*t44 + t68*t48;
+        const double t71 = t67*t45 + t68*t49;
+        const double t72 = t67*t46 + t68*t50;
+        dq[0] = t69;
+        dq[1] = t70;
+        dq[2] = t71;
+        dq[3] = t72;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1800,7 +1806,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 72 add/sub, 102 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 72 add/sub, 109 mul, 1 neg, 5 div */
 
 static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
@@ -1830,53 +1836,60 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
     const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const double t52 = lambda*lambda;
-    const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-    const double t81 = t80*t80;
-    const double t82 = t16 + t14 + t12 + t11;
-    const double t83 = t6 + t17 + t15 + t13;
-    const double t84 = t81*(t37 + t52);
-    const double t85 = t38*t81;
-    const double t86 = t82*t80;
-    const double t87 = t81*(t39 + t52);
-    const double t88 = t83*t80;
-    const double t89 = 4.0 + t52;
-    const double t90 = t80*twist[0];
-    const double t91 = t80*twist[1];
-    const double t92 = t84 + t87 + t89;
-    const double t93 = t84*t90 + t85*t91 + t86*twist[2];
-    const double t94 = t85*t90 + t87*t91 + t88*twist[2];
-    const double t95 = t86*t90 + t88*t91 + t89*twist[2];
-    const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
-    const double t97 = t93*t96;
-    const double t98 = t94*t96;
-    const double t99 = t95*t96;
-    const double t100 = t87*t89 - t88*t88;
-    const double t101 = t86*t88 - t85*t89;
-    const double t102 = t85*t88 - t86*t87;
-    const double t103 = t84*t89 - t86*t86;
-    const double t104 = t85*t86 - t84*t88;
-    const double t105 = t84*t87 - t85*t85;
-    const double t106 = t84*t100 + t85*t101 + t86*t102;
-    const double t107 = t100 + t103 + t105;
-    const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
-    const double t109 = t92*t92;
-    const int t110 = t107 > ARM4_RANK_TOL*t109;
-    const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
-    const double t112 = t84*t93 + t85*t94 + t86*t95;
-    const double t113 = t85*t93 + t87*t94 + t88*t95;
-    const double t114 = t86*t93 + t88*t94 + t89*t95;
-    const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
-    const double t116 = t109 - t107;
-    const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
-    const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
-    const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
-    const double t120 = t80*t117;
-    const double t121 = t80*t118;
-    dq3[0] = t119 + t120*t16 + t121*t17;
-    dq3[1] = t119 + t120*t14 + t121*t15;
-    dq3[2] = t119 + t120*t12 + t121*t13;
-    dq3[3] = t119 + t6*t121 + t120*t11;
+    const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+    const double t53 = t52*t52;
+    const double t54 = t53*lambda*lambda;
+    const double t55 = t53;
+    const double t84 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+    const double t85 = t84*t84;
+    const double t86 = t16 + t14 + t12 + t11;
+    const double t87 = t6 + t17 + t15 + t13;
+    const double t88 = t85*t55;
+    const double t89 = t84*t55;
+    const double t90 = t85*t54;
+    const double t91 = t90 + t37*t88;
+    const double t92 = t38*t88;
+    const double t93 = t86*t89;
+    const double t94 = t90 + t39*t88;
+    const double t95 = t87*t89;
+    const double t96 = 4.0*t55 + t54;
+    const double t97 = t89*twist[0];
+    const double t98 = t89*twist[1];
+    const double t99 = t55*twist[2];
+    const double t100 = t91 + t94 + t96;
+    const double t101 = t91*t97 + t92*t98 + t93*t99;
+    const double t102 = t92*t97 + t94*t98 + t95*t99;
+    const double t103 = t93*t97 + t95*t98 + t96*t99;
+    const double t104 = (t100 > 0.0 ? 1.0/(t100*t100 != 0.0 ? t100*t100 : 1.0) : 1.0);
+    const double t105 = t101*t104;
+    const double t106 = t102*t104;
+    const double t107 = t103*t104;
+    const double t108 = t94*t96 - t95*t95;
+    const double t109 = t93*t95 - t92*t96;
+    const double t110 = t92*t95 - t93*t94;
+    const double t111 = t91*t96 - t93*t93;
+    const double t112 = t92*t93 - t91*t95;
+    const double t113 = t91*t94 - t92*t92;
+    const double t114 = t91*t108 + t92*t109 + t93*t110;
+    const double t115 = t108 + t111 + t113;
+    const int t116 = t114 > ARM4_RANK_TOL*t115*t100;
+    const double t117 = t100*t100;
+    const int t118 = t115 > ARM4_RANK_TOL*t117;
+    const double t119 = (t114 > 0.0 ? 1.0/(t114 != 0.0 ? t114 : 1.0) : 1.0);
+    const double t120 = t91*t101 + t92*t102 + t93*t103;
+    const double t121 = t92*t101 + t94*t102 + t95*t103;
+    const double t122 = t93*t101 + t95*t102 + t96*t103;
+    const double t123 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
+    const double t124 = t117 - t115;
+    const double t125 = (t118 ? (t116 ? t119*(t108*t97 + t109*t98 + t110*t99) : t123*(t101*t124 - t120*t100)) : t105);
+    const double t126 = (t118 ? (t116 ? t119*(t109*t97 + t111*t98 + t112*t99) : t123*(t102*t124 - t121*t100)) : t106);
+    const double t127 = (t118 ? (t116 ? t119*(t110*t97 + t112*t98 + t113*t99) : t123*(t103*t124 - t122*t100)) : t107);
+    const double t128 = t84*t125;
+    const double t129 = t84*t126;
+    dq3[0] = t127 + t128*t16 + t129*t17;
+    dq3[1] = t127 + t128*t14 + t129*t15;
+    dq3[2] = t127 + t128*t12 + t129*t13;
+    dq3[3] = t127 + t6*t129 + t128*t11;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
@@ -1945,53 +1958,60 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
         const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t52 = lambda*lambda;
-        const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-        const double t81 = t80*t80;
-        const double t82 = t16 + t14 + t12 + t11;
-        const double t83 = t6 + t17 + t15 + t13;
-        const double t84 = t81*(t37 + t52);
-        const double t85 = t38*t81;
-        const double t86 = t82*t80;
-        const double t87 = t81*(t39 + t52);
-        const double t88 = t83*t80;
-        const double t89 = 4.0 + t52;
-        const double t90 = t80*twist[0];
-        const double t91 = t80*twist[1];
-        const double t92 = t84 + t87 + t89;
-        const double t93 = t84*t90 + t85*t91 + t86*twist[2];
-        const double t94 = t85*t90 + t87*t91 + t88*twist[2];
-        const double t95 = t86*t90 + t88*t91 + t89*twist[2];
-        const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
-        const double t97 = t93*t96;
-        const double t98 = t94*t96;
-        const double t99 = t95*t96;
-        const double t100 = t87*t89 - t88*t88;
-        const double t101 = t86*t88 - t85*t89;
-        const double t102 = t85*t88 - t86*t87;
-        const double t103 = t84*t89 - t86*t86;
-        const double t104 = t85*t86 - t84*t88;
-        const double t105 = t84*t87 - t85*t85;
-        const double t106 = t84*t100 + t85*t101 + t86*t102;
-        const double t107 = t100 + t103 + t105;
-        const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
-        const double t109 = t92*t92;
-        const int t110 = t107 > ARM4_RANK_TOL*t109;
-        const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
-        const double t112 = t84*t93 + t85*t94 + t86*t95;
-        const double t113 = t85*t93 + t87*t94 + t88*t95;
-        const double t114 = t86*t93 + t88*t94 + t89*t95;
-        const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
-        const double t116 = t109 - t107;
-        const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
-        const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
-        const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
-        const double t120 = t80*t117;
-        const double t121 = t80*t118;
-        dq3[0] = t119 + t120*t16 + t121*t17;
-        dq3[1] = t119 + t120*t14 + t121*t15;
-        dq3[2] = t119 + t120*t12 + t121*t13;
-        dq3[3] = t119 + t6*t121 + t120*t11;
+        const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+        const double t53 = t52*t52;
+        const double t54 = t53*lambda*lambda;
+        const double t55 = t53;
+        const double t84 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+        const double t85 = t84*t84;
+        const double t86 = t16 + t14 + t12 + t11;
+        const double t87 = t6 + t17 + t15 + t13;
+        const double t88 = t85*t55;
+        const double t89 = t84*t55;
+        const double t90 = t85*t54;
+        const double t91 = t90 + t37*t88;
+        const double t92 = t38*t88;
+        const double t93 = t86*t89;
+        const double t94 = t90 + t39*t88;
+        const double t95 = t87*t89;
+        const double t96 = 4.0*t55 + t54;
+        const double t97 = t89*twist[0];
+        const double t98 = t89*twist[1];
+        const double t99 = t55*twist[2];
+        const double t100 = t91 + t94 + t96;
+        const double t101 = t91*t97 + t92*t98 + t93*t99;
+        const double t102 = t92*t97 + t94*t98 + t95*t99;
+        const double t103 = t93*t97 + t95*t98 + t96*t99;
+        const double t104 = (t100 > 0.0 ? 1.0/(t100*t100 != 0.0 ? t100*t100 : 1.0) : 1.0);
+        const double t105 = t101*t104;
+        const double t106 = t102*t104;
+        const double t107 = t103*t104;
+        const double t108 = t94*t96 - t95*t95;
+        const double t109 = t93*t95 - t92*t96;
+        const double t110 = t92*t95 - t93*t94;
+        const double t111 = t91*t96 - t93*t93;
+        const double t112 = t92*t93 - t91*t95;
+        const double t113 = t91*t94 - t92*t92;
+        const double t114 = t91*t108 + t92*t109 + t93*t110;
+        const double t115 = t108 + t111 + t113;
+        const int t116 = t114 > ARM4_RANK_TOL*t115*t100;
+        const double t117 = t100*t100;
+        const int t118 = t115 > ARM4_RANK_TOL*t117;
+        const double t119 = (t114 > 0.0 ? 1.0/(t114 != 0.0 ? t114 : 1.0) : 1.0);
+        const double t120 = t91*t101 + t92*t102 + t93*t103;
+        const double t121 = t92*t101 + t94*t102 + t95*t103;
+        const double t122 = t93*t101 + t95*t102 + t96*t103;
+        const double t123 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
+        const double t124 = t117 - t115;
+        const double t125 = (t118 ? (t116 ? t119*(t108*t97 + t109*t98 + t110*t99) : t123*(t101*t124 - t120*t100)) : t105);
+        const double t126 = (t118 ? (t116 ? t119*(t109*t97 + t111*t98 + t112*t99) : t123*(t102*t124 - t121*t100)) : t106);
+        const double t127 = (t118 ? (t116 ? t119*(t110*t97 + t112*t98 + t113*t99) : t123*(t103*t124 - t122*t100)) : t107);
+        const double t128 = t84*t125;
+        const double t129 = t84*t126;
+        dq3[0] = t127 + t128*t16 + t129*t17;
+        dq3[1] = t127 + t128*t14 + t129*t15;
+        dq3[2] = t127 + t128*t12 + t129*t13;
+        dq3[3] = t127 + t6*t129 + t128*t11;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2064,7 +2084,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 #endif
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 45 add/sub, 54 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 45 add/sub, 61 mul, 1 neg, 4 div */
 
 static void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
@@ -2106,29 +2126,33 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t52 = lambda*lambda;
-    const double t55 = t37 + t39;
-    const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
-    const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
-    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t61 = t52 + t41*(1.0 + t42*t42);
-    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-    const double t69 = target[0] - t17;
-    const double t70 = t16 + target[1];
-    const double t71 = (t40 ? t69 : t70);
-    const double t72 = (t40 ? t70 : t69);
-    const double t73 = t71 + t72*t42;
-    const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
-    const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
-    const double t76 = t74*t43 + t75*t47;
-    const double t77 = t74*t44 + t75*t48;
-    const double t78 = t74*t45 + t75*t49;
-    const double t79 = t74*t46 + t75*t50;
-    q_next[0] = t76 + q[0];
-    q_next[1] = t77 + q[1];
-    q_next[2] = t78 + q[2];
-    q_next[3] = t79 + q[3];
+    const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+    const double t53 = t52*t52;
+    const double t54 = t53*lambda*lambda;
+    const double t55 = t53;
+    const double t56 = t55*t41;
+    const double t57 = t55*t51;
+    const double t60 = t55*(t37 + t39);
+    const double t61 = t56*t57 + t54*(t60 + t54);
+    const int t62 = t61 > ARM4_RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54);
+    const double t64 = t55*(t62 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+    const double t65 = t54 + t56*(1.0 + t42*t42);
+    const double t66 = t55*(t65 > 0.0 ? 1.0/(t65 != 0.0 ? t65 : 1.0) : 1.0);
+    const double t73 = target[0] - t17;
+    const double t74 = t16 + target[1];
+    const double t75 = (t40 ? t73 : t74);
+    const double t76 = (t40 ? t74 : t73);
+    const double t77 = t75 + t76*t42;
+    const double t78 = (t62 ? t64*(t77*t54 + t75*t57) : t77*t66);
+    const double t79 = (t62 ? t64*(t76*t54 + t56*(t76 - t75*t42)) : 0.0);
+    const double t80 = t78*t43 + t79*t47;
+    const double t81 = t78*t44 + t79*t48;
+    const double t82 = t78*t45 + t79*t49;
+    const double t83 = t78*t46 + t79*t50;
+    q_next[0] = t80 + q[0];
+    q_next[1] = t81 + q[1];
+    q_next[2] = t82 + q[2];
+    q_next[3] = t83 + q[3];
 }
 
 void arm4_ik_step(const double q[4], const double target[2], const double l[4], double lambda, double q_next[4])
@@ -2213,29 +2237,33 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
-        const int t58 = t57 > ARM4_RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52);
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t69 = target[0] - t17;
-        const double t70 = t16 + target[1];
-        const double t71 = (t40 ? t69 : t70);
-        const double t72 = (t40 ? t70 : t69);
-        const double t73 = t71 + t72*t42;
-        const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
-        const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
-        const double t76 = t74*t43 + t75*t47;
-        const double t77 = t74*t44 + t75*t48;
-        const double t78 = t74*t45 + t75*t49;
-        const double t79 = t74*t46 + t75*t50;
-        q_next[0] = t76 + q[0];
-        q_next[1] = t77 + q[1];
-        q_next[2] = t78 + q[2];
-        q_next[3] = t79 + q[3];
+        const double t52 = (lambda > 1.0 ? 1.0/lambda : 1.0);
+        const double t53 = t52*t52;
+        const double t54 = t53*lambda*lambda;
+        const double t55 = t53;
+        const double t56 = t55*t41;
+        const double t57 = t55*t51;
+        const double t60 = t55*(t37 + t39);
+        const double t61 = t56*t57 + t54*(t60 + t54);
+        const int t62 = t61 > ARM4_RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54);
+        const double t64 = t55*(t62 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
+        const double t65 = t54 + t56*(1.0 + t42*t42);
+        const double t66 = t55*(t65 > 0.0 ? 1.0/(t65 != 0.0 ? t65 : 1.0) : 1.0);
+        const double t73 = target[0] - t17;
+        const double t74 = t16 + target[1];
+        const double t75 = (t40 ? t73 : t74);
+        const double t76 = (t40 ? t74 : t73);
+        const double t77 = t75 + t76*t42;
+        const double t78 = (t62 ? t64*(t77*t54 + t75*t57) : t77*t66);
+        const double t79 = (t62 ? t64*(t76*t54 + t56*(t76 - t75*t42)) : 0.0);
+        const double t80 = t78*t43 + t79*t47;
+        const double t81 = t78*t44 + t79*t48;
+        const double t82 = t78*t45 + t79*t49;
+        const double t83 = t78*t46 + t79*t50;
+        q_next[0] = t80 + q[0];
+        q_next[1] = t81 + q[1];
+        q_next[2] = t82 + q[2];
+        q_next[3] = t83 + q[3];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

@@ -505,8 +505,7 @@ def _manipulability_core(q, l, w):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t56 = t41*t51
-    w[..., 0] = np.sqrt(t56)
+    w[..., 0] = np.sqrt(t41*t51)
 
 
 @_signature_errors
@@ -564,27 +563,31 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t52 = lambda_*lambda_
-    t53 = np.where(t40, v[..., 0], v[..., 1])
-    t54 = np.where(t40, v[..., 1], v[..., 0])
-    t55 = t37 + t39
-    t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
-    t58 = (t57 > RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52))
-    t59 = t53 + t54*t42
-    t60 = np.where(t58, 1.0/t57, 1.0)
-    t61 = t52 + t41*(1.0 + t42*t42)
-    t62 = np.where((t61 > 0.0), 1.0/t61, 1.0)
-    t63 = np.where(t58, t60*(t59*t52 + t53*t51), t59*t62)
-    t64 = np.where(t58, t60*(t54*t52 + t41*(t54 - t53*t42)), 0.0)
-    t65 = t63*t43 + t64*t47
-    t66 = t63*t44 + t64*t48
-    t67 = t63*t45 + t64*t49
-    t68 = t63*t46 + t64*t50
-    dq[..., 0] = t65
-    dq[..., 1] = t66
-    dq[..., 2] = t67
-    dq[..., 3] = t68
+    t52 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t53 = t52*t52
+    t54 = t53*lambda_*lambda_
+    t55 = t53
+    t56 = t55*t41
+    t57 = t55*t51
+    t58 = np.where(t40, v[..., 0], v[..., 1])
+    t59 = np.where(t40, v[..., 1], v[..., 0])
+    t60 = t55*(t37 + t39)
+    t61 = t56*t57 + t54*(t60 + t54)
+    t62 = (t61 > RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54))
+    t63 = t58 + t59*t42
+    t64 = t55*np.where(t62, 1.0/t61, 1.0)
+    t65 = t54 + t56*(1.0 + t42*t42)
+    t66 = t55*np.where((t65 > 0.0), 1.0/t65, 1.0)
+    t67 = np.where(t62, t64*(t63*t54 + t57*t58), t63*t66)
+    t68 = np.where(t62, t64*(t56*(t59 - t58*t42) + t59*t54), 0.0)
+    t69 = t67*t43 + t68*t47
+    t70 = t67*t44 + t68*t48
+    t71 = t67*t45 + t68*t49
+    t72 = t67*t46 + t68*t50
+    dq[..., 0] = t69
+    dq[..., 1] = t70
+    dq[..., 2] = t71
+    dq[..., 3] = t72
 
 
 @_signature_errors
@@ -596,7 +599,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 94 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 101 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -633,53 +636,60 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
     t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t52 = lambda_*lambda_
-    t80 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
-    t81 = t80*t80
-    t82 = t16 + t14 + t12 + t11
-    t83 = t6 + t17 + t15 + t13
-    t84 = t81*(t37 + t52)
-    t85 = t38*t81
-    t86 = t82*t80
-    t87 = t81*(t39 + t52)
-    t88 = t83*t80
-    t89 = 4.0 + t52
-    t90 = t80*twist[..., 0]
-    t91 = t80*twist[..., 1]
-    t92 = t84 + t87 + t89
-    t93 = t84*t90 + t85*t91 + t86*twist[..., 2]
-    t94 = t85*t90 + t87*t91 + t88*twist[..., 2]
-    t95 = t86*t90 + t88*t91 + t89*twist[..., 2]
-    t96 = np.where((t92 > 0.0), 1.0/(t92*t92), 1.0)
-    t97 = t93*t96
-    t98 = t94*t96
-    t99 = t95*t96
-    t100 = t87*t89 - t88*t88
-    t101 = t86*t88 - t85*t89
-    t102 = t85*t88 - t86*t87
-    t103 = t84*t89 - t86*t86
-    t104 = t85*t86 - t84*t88
-    t105 = t84*t87 - t85*t85
-    t106 = t84*t100 + t85*t101 + t86*t102
-    t107 = t100 + t103 + t105
-    t108 = (t106 > RANK_TOL*t107*t92)
-    t109 = t92*t92
-    t110 = (t107 > RANK_TOL*t109)
-    t111 = np.where((t106 > 0.0), 1.0/t106, 1.0)
-    t112 = t84*t93 + t85*t94 + t86*t95
-    t113 = t85*t93 + t87*t94 + t88*t95
-    t114 = t86*t93 + t88*t94 + t89*t95
-    t115 = np.where((t107 > 0.0), 1.0/(t107*t107), 1.0)
-    t116 = t109 - t107
-    t117 = np.where(t110, np.where(t108, t111*(t100*t90 + t101*t91 + t102*twist[..., 2]), t115*(t93*t116 - t112*t92)), t97)
-    t118 = np.where(t110, np.where(t108, t111*(t101*t90 + t103*t91 + t104*twist[..., 2]), t115*(t94*t116 - t113*t92)), t98)
-    t119 = np.where(t110, np.where(t108, t111*(t102*t90 + t104*t91 + t105*twist[..., 2]), t115*(t95*t116 - t114*t92)), t99)
-    t120 = t80*t117
-    t121 = t80*t118
-    dq3[..., 0] = t119 + t120*t16 + t121*t17
-    dq3[..., 1] = t119 + t120*t14 + t121*t15
-    dq3[..., 2] = t119 + t120*t12 + t121*t13
-    dq3[..., 3] = t119 + t6*t121 + t120*t11
+    t52 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t53 = t52*t52
+    t54 = t53*lambda_*lambda_
+    t55 = t53
+    t84 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
+    t85 = t84*t84
+    t86 = t16 + t14 + t12 + t11
+    t87 = t6 + t17 + t15 + t13
+    t88 = t85*t55
+    t89 = t84*t55
+    t90 = t85*t54
+    t91 = t90 + t37*t88
+    t92 = t38*t88
+    t93 = t86*t89
+    t94 = t90 + t39*t88
+    t95 = t87*t89
+    t96 = 4.0*t55 + t54
+    t97 = t89*twist[..., 0]
+    t98 = t89*twist[..., 1]
+    t99 = t55*twist[..., 2]
+    t100 = t91 + t94 + t96
+    t101 = t91*t97 + t92*t98 + t93*t99
+    t102 = t92*t97 + t94*t98 + t95*t99
+    t103 = t93*t97 + t95*t98 + t96*t99
+    t104 = np.where((t100 > 0.0), 1.0/(t100*t100), 1.0)
+    t105 = t101*t104
+    t106 = t102*t104
+    t107 = t103*t104
+    t108 = t94*t96 - t95*t95
+    t109 = t93*t95 - t92*t96
+    t110 = t92*t95 - t93*t94
+    t111 = t91*t96 - t93*t93
+    t112 = t92*t93 - t91*t95
+    t113 = t91*t94 - t92*t92
+    t114 = t91*t108 + t92*t109 + t93*t110
+    t115 = t108 + t111 + t113
+    t116 = (t114 > RANK_TOL*t115*t100)
+    t117 = t100*t100
+    t118 = (t115 > RANK_TOL*t117)
+    t119 = np.where((t114 > 0.0), 1.0/t114, 1.0)
+    t120 = t91*t101 + t92*t102 + t93*t103
+    t121 = t92*t101 + t94*t102 + t95*t103
+    t122 = t93*t101 + t95*t102 + t96*t103
+    t123 = np.where((t115 > 0.0), 1.0/(t115*t115), 1.0)
+    t124 = t117 - t115
+    t125 = np.where(t118, np.where(t116, t119*(t108*t97 + t109*t98 + t110*t99), t123*(t101*t124 - t120*t100)), t105)
+    t126 = np.where(t118, np.where(t116, t119*(t109*t97 + t111*t98 + t112*t99), t123*(t102*t124 - t121*t100)), t106)
+    t127 = np.where(t118, np.where(t116, t119*(t110*t97 + t112*t98 + t113*t99), t123*(t103*t124 - t122*t100)), t107)
+    t128 = t84*t125
+    t129 = t84*t126
+    dq3[..., 0] = t127 + t128*t16 + t129*t17
+    dq3[..., 1] = t127 + t128*t14 + t129*t15
+    dq3[..., 2] = t127 + t128*t12 + t129*t13
+    dq3[..., 3] = t127 + t6*t129 + t128*t11
 
 
 @_signature_errors
@@ -691,7 +701,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 175 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 182 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (4, 3, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -740,29 +750,33 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t52 = lambda_*lambda_
-    t55 = t37 + t39
-    t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
-    t58 = (t57 > RANK_TOL*(t55 + 2.0*t52)*(t55 + 2.0*t52))
-    t60 = np.where(t58, 1.0/t57, 1.0)
-    t61 = t52 + t41*(1.0 + t42*t42)
-    t62 = np.where((t61 > 0.0), 1.0/t61, 1.0)
-    t69 = target[..., 0] - t17
-    t70 = t16 + target[..., 1]
-    t71 = np.where(t40, t69, t70)
-    t72 = np.where(t40, t70, t69)
-    t73 = t71 + t72*t42
-    t74 = np.where(t58, t60*(t73*t52 + t71*t51), t73*t62)
-    t75 = np.where(t58, t60*(t72*t52 + t41*(t72 - t71*t42)), 0.0)
-    t76 = t74*t43 + t75*t47
-    t77 = t74*t44 + t75*t48
-    t78 = t74*t45 + t75*t49
-    t79 = t74*t46 + t75*t50
-    q_next[..., 0] = t76 + q[..., 0]
-    q_next[..., 1] = t77 + q[..., 1]
-    q_next[..., 2] = t78 + q[..., 2]
-    q_next[..., 3] = t79 + q[..., 3]
+    t52 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t53 = t52*t52
+    t54 = t53*lambda_*lambda_
+    t55 = t53
+    t56 = t55*t41
+    t57 = t55*t51
+    t60 = t55*(t37 + t39)
+    t61 = t56*t57 + t54*(t60 + t54)
+    t62 = (t61 > RANK_TOL*(t60 + 2.0*t54)*(t60 + 2.0*t54))
+    t64 = t55*np.where(t62, 1.0/t61, 1.0)
+    t65 = t54 + t56*(1.0 + t42*t42)
+    t66 = t55*np.where((t65 > 0.0), 1.0/t65, 1.0)
+    t73 = target[..., 0] - t17
+    t74 = t16 + target[..., 1]
+    t75 = np.where(t40, t73, t74)
+    t76 = np.where(t40, t74, t73)
+    t77 = t75 + t76*t42
+    t78 = np.where(t62, t64*(t77*t54 + t75*t57), t77*t66)
+    t79 = np.where(t62, t64*(t76*t54 + t56*(t76 - t75*t42)), 0.0)
+    t80 = t78*t43 + t79*t47
+    t81 = t78*t44 + t79*t48
+    t82 = t78*t45 + t79*t49
+    t83 = t78*t46 + t79*t50
+    q_next[..., 0] = t80 + q[..., 0]
+    q_next[..., 1] = t81 + q[..., 1]
+    q_next[..., 2] = t82 + q[..., 2]
+    q_next[..., 3] = t83 + q[..., 3]
 
 
 @_signature_errors
@@ -774,7 +788,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 4), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 100 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 107 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -566,8 +566,7 @@ def _manipulability_core(q, l, w):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t68 = t51*t63
-    w[..., 0] = np.sqrt(t68)
+    w[..., 0] = np.sqrt(t51*t63)
 
 
 @_signature_errors
@@ -632,29 +631,33 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t64 = lambda_*lambda_
-    t65 = np.where(t50, v[..., 0], v[..., 1])
-    t66 = np.where(t50, v[..., 1], v[..., 0])
-    t67 = t47 + t49
-    t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
-    t70 = (t69 > RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64))
-    t71 = t65 + t66*t52
-    t72 = np.where(t70, 1.0/t69, 1.0)
-    t73 = t64 + t51*(1.0 + t52*t52)
-    t74 = np.where((t73 > 0.0), 1.0/t73, 1.0)
-    t75 = np.where(t70, t72*(t71*t64 + t65*t63), t71*t74)
-    t76 = np.where(t70, t72*(t66*t64 + t51*(t66 - t65*t52)), 0.0)
-    t77 = t75*t53 + t76*t58
-    t78 = t75*t54 + t76*t59
-    t79 = t75*t55 + t76*t60
-    t80 = t75*t56 + t76*t61
-    t81 = t75*t57 + t76*t62
-    dq[..., 0] = t77
-    dq[..., 1] = t78
-    dq[..., 2] = t79
-    dq[..., 3] = t80
-    dq[..., 4] = t81
+    t64 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t65 = t64*t64
+    t66 = t65*lambda_*lambda_
+    t67 = t65
+    t68 = t67*t51
+    t69 = t67*t63
+    t70 = np.where(t50, v[..., 0], v[..., 1])
+    t71 = np.where(t50, v[..., 1], v[..., 0])
+    t72 = t67*(t47 + t49)
+    t73 = t68*t69 + t66*(t72 + t66)
+    t74 = (t73 > RANK_TOL*(t72 + 2.0*t66)*(t72 + 2.0*t66))
+    t75 = t70 + t71*t52
+    t76 = t67*np.where(t74, 1.0/t73, 1.0)
+    t77 = t66 + t68*(1.0 + t52*t52)
+    t78 = t67*np.where((t77 > 0.0), 1.0/t77, 1.0)
+    t79 = np.where(t74, t76*(t75*t66 + t69*t70), t75*t78)
+    t80 = np.where(t74, t76*(t68*(t71 - t70*t52) + t71*t66), 0.0)
+    t81 = t79*t53 + t80*t58
+    t82 = t79*t54 + t80*t59
+    t83 = t79*t55 + t80*t60
+    t84 = t79*t56 + t80*t61
+    t85 = t79*t57 + t80*t62
+    dq[..., 0] = t81
+    dq[..., 1] = t82
+    dq[..., 2] = t83
+    dq[..., 3] = t84
+    dq[..., 4] = t85
 
 
 @_signature_errors
@@ -666,7 +669,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 112 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 119 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -708,54 +711,61 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
     t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t64 = lambda_*lambda_
-    t94 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
-    t95 = t94*t94
-    t96 = t21 + t19 + t17 + t15 + t14
-    t97 = t8 + t22 + t20 + t18 + t16
-    t98 = t95*(t47 + t64)
-    t99 = t48*t95
-    t100 = t96*t94
-    t101 = t95*(t49 + t64)
-    t102 = t97*t94
-    t103 = 5.0 + t64
-    t104 = t94*twist[..., 0]
-    t105 = t94*twist[..., 1]
-    t106 = t98 + t101 + t103
-    t107 = t98*t104 + t99*t105 + t100*twist[..., 2]
-    t108 = t99*t104 + t101*t105 + t102*twist[..., 2]
-    t109 = t100*t104 + t102*t105 + t103*twist[..., 2]
-    t110 = np.where((t106 > 0.0), 1.0/(t106*t106), 1.0)
-    t111 = t107*t110
-    t112 = t108*t110
-    t113 = t109*t110
-    t114 = t101*t103 - t102*t102
-    t115 = t100*t102 - t99*t103
-    t116 = t99*t102 - t100*t101
-    t117 = t98*t103 - t100*t100
-    t118 = t99*t100 - t98*t102
-    t119 = t98*t101 - t99*t99
-    t120 = t98*t114 + t99*t115 + t100*t116
-    t121 = t114 + t117 + t119
-    t122 = (t120 > RANK_TOL*t121*t106)
-    t123 = t106*t106
-    t124 = (t121 > RANK_TOL*t123)
-    t125 = np.where((t120 > 0.0), 1.0/t120, 1.0)
-    t126 = t98*t107 + t99*t108 + t100*t109
-    t127 = t99*t107 + t101*t108 + t102*t109
-    t128 = t100*t107 + t102*t108 + t103*t109
-    t129 = np.where((t121 > 0.0), 1.0/(t121*t121), 1.0)
-    t130 = t123 - t121
-    t131 = np.where(t124, np.where(t122, t125*(t114*t104 + t115*t105 + t116*twist[..., 2]), t129*(t107*t130 - t126*t106)), t111)
-    t132 = np.where(t124, np.where(t122, t125*(t115*t104 + t117*t105 + t118*twist[..., 2]), t129*(t108*t130 - t127*t106)), t112)
-    t133 = np.where(t124, np.where(t122, t125*(t116*t104 + t118*t105 + t119*twist[..., 2]), t129*(t109*t130 - t128*t106)), t113)
-    t134 = t94*t131
-    t135 = t94*t132
-    dq3[..., 0] = t133 + t134*t21 + t135*t22
-    dq3[..., 1] = t133 + t134*t19 + t135*t20
-    dq3[..., 2] = t133 + t134*t17 + t135*t18
-    dq3[..., 3] = t133 + t134*t15 + t135*t16
-    dq3[..., 4] = t133 + t8*t135 + t134*t14
+    t64 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t65 = t64*t64
+    t66 = t65*lambda_*lambda_
+    t67 = t65
+    t98 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
+    t99 = t98*t98
+    t100 = t21 + t19 + t17 + t15 + t14
+    t101 = t8 + t22 + t20 + t18 + t16
+    t102 = t99*t67
+    t103 = t98*t67
+    t104 = t99*t66
+    t105 = t104 + t47*t102
+    t106 = t48*t102
+    t107 = t100*t103
+    t108 = t104 + t49*t102
+    t109 = t101*t103
+    t110 = 5.0*t67 + t66
+    t111 = t103*twist[..., 0]
+    t112 = t103*twist[..., 1]
+    t113 = t67*twist[..., 2]
+    t114 = t105 + t108 + t110
+    t115 = t105*t111 + t106*t112 + t107*t113
+    t116 = t106*t111 + t108*t112 + t109*t113
+    t117 = t107*t111 + t109*t112 + t110*t113
+    t118 = np.where((t114 > 0.0), 1.0/(t114*t114), 1.0)
+    t119 = t115*t118
+    t120 = t116*t118
+    t121 = t117*t118
+    t122 = t108*t110 - t109*t109
+    t123 = t107*t109 - t106*t110
+    t124 = t106*t109 - t107*t108
+    t125 = t105*t110 - t107*t107
+    t126 = t106*t107 - t105*t109
+    t127 = t105*t108 - t106*t106
+    t128 = t105*t122 + t106*t123 + t107*t124
+    t129 = t122 + t125 + t127
+    t130 = (t128 > RANK_TOL*t129*t114)
+    t131 = t114*t114
+    t132 = (t129 > RANK_TOL*t131)
+    t133 = np.where((t128 > 0.0), 1.0/t128, 1.0)
+    t134 = t105*t115 + t106*t116 + t107*t117
+    t135 = t106*t115 + t108*t116 + t109*t117
+    t136 = t107*t115 + t109*t116 + t110*t117
+    t137 = np.where((t129 > 0.0), 1.0/(t129*t129), 1.0)
+    t138 = t131 - t129
+    t139 = np.where(t132, np.where(t130, t133*(t122*t111 + t123*t112 + t124*t113), t137*(t115*t138 - t134*t114)), t119)
+    t140 = np.where(t132, np.where(t130, t133*(t123*t111 + t125*t112 + t126*t113), t137*(t116*t138 - t135*t114)), t120)
+    t141 = np.where(t132, np.where(t130, t133*(t124*t111 + t126*t112 + t127*t113), t137*(t117*t138 - t136*t114)), t121)
+    t142 = t98*t139
+    t143 = t98*t140
+    dq3[..., 0] = t141 + t142*t21 + t143*t22
+    dq3[..., 1] = t141 + t142*t19 + t143*t20
+    dq3[..., 2] = t141 + t142*t17 + t143*t18
+    dq3[..., 3] = t141 + t142*t15 + t143*t16
+    dq3[..., 4] = t141 + t8*t143 + t142*t14
 
 
 @_signature_errors
@@ -767,7 +777,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 193 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 200 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (5, 3, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -823,31 +833,35 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t64 = lambda_*lambda_
-    t67 = t47 + t49
-    t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
-    t70 = (t69 > RANK_TOL*(t67 + 2.0*t64)*(t67 + 2.0*t64))
-    t72 = np.where(t70, 1.0/t69, 1.0)
-    t73 = t64 + t51*(1.0 + t52*t52)
-    t74 = np.where((t73 > 0.0), 1.0/t73, 1.0)
-    t82 = target[..., 0] - t22
-    t83 = t21 + target[..., 1]
-    t84 = np.where(t50, t82, t83)
-    t85 = np.where(t50, t83, t82)
-    t86 = t84 + t85*t52
-    t87 = np.where(t70, t72*(t86*t64 + t84*t63), t86*t74)
-    t88 = np.where(t70, t72*(t85*t64 + t51*(t85 - t84*t52)), 0.0)
-    t89 = t87*t53 + t88*t58
-    t90 = t87*t54 + t88*t59
-    t91 = t87*t55 + t88*t60
-    t92 = t87*t56 + t88*t61
-    t93 = t87*t57 + t88*t62
-    q_next[..., 0] = t89 + q[..., 0]
-    q_next[..., 1] = t90 + q[..., 1]
-    q_next[..., 2] = t91 + q[..., 2]
-    q_next[..., 3] = t92 + q[..., 3]
-    q_next[..., 4] = t93 + q[..., 4]
+    t64 = np.where((lambda_ > 1.0), 1.0/lambda_, 1.0)
+    t65 = t64*t64
+    t66 = t65*lambda_*lambda_
+    t67 = t65
+    t68 = t67*t51
+    t69 = t67*t63
+    t72 = t67*(t47 + t49)
+    t73 = t68*t69 + t66*(t72 + t66)
+    t74 = (t73 > RANK_TOL*(t72 + 2.0*t66)*(t72 + 2.0*t66))
+    t76 = t67*np.where(t74, 1.0/t73, 1.0)
+    t77 = t66 + t68*(1.0 + t52*t52)
+    t78 = t67*np.where((t77 > 0.0), 1.0/t77, 1.0)
+    t86 = target[..., 0] - t22
+    t87 = t21 + target[..., 1]
+    t88 = np.where(t50, t86, t87)
+    t89 = np.where(t50, t87, t86)
+    t90 = t88 + t89*t52
+    t91 = np.where(t74, t76*(t90*t66 + t88*t69), t90*t78)
+    t92 = np.where(t74, t76*(t89*t66 + t68*(t89 - t88*t52)), 0.0)
+    t93 = t91*t53 + t92*t58
+    t94 = t91*t54 + t92*t59
+    t95 = t91*t55 + t92*t60
+    t96 = t91*t56 + t92*t61
+    t97 = t91*t57 + t92*t62
+    q_next[..., 0] = t93 + q[..., 0]
+    q_next[..., 1] = t94 + q[..., 1]
+    q_next[..., 2] = t95 + q[..., 2]
+    q_next[..., 3] = t96 + q[..., 3]
+    q_next[..., 4] = t97 + q[..., 4]
 
 
 @_signature_errors
@@ -859,7 +873,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 5), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 119 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 126 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -35,7 +35,7 @@
  * work; the other functions check nothing in any mode. -DSKELARM_NO_SIMD: plain sin/cos calls.
  * ARM6_STAMP identifies this generation: arm6.c refuses to
  * compile (#error) with a arm6.h from another generation. */
-#define ARM6_STAMP 0xa533d83aUL
+#define ARM6_STAMP 0xeac2135aUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -92,7 +92,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
  * Stack: about 18 KB. */
 void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 584 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 576 bytes. */
 void arm6_manipulability(const double q[6], const double l[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -100,7 +100,7 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1]);
  * Stack: about 7 KB. */
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 728 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 760 bytes. */
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -108,7 +108,7 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
  * Stack: about 9 KB. */
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 792 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 848 bytes. */
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -116,7 +116,7 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
  * Stack: about 10 KB. */
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 744 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 776 bytes. */
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -144,7 +144,7 @@ void arm6_ik_step_batch(size_t m, const double *q, const double *target, const d
  * computed) when q0, target or lambda is not finite, lambda < 0, tol <= 0 or not finite or
  * max_iter < 0. A tol of 1e-09 is reachable in this precision for an arm of unit size.
  * Writes the final pose to q (which may be q0 itself), its error to *error and the steps
- * taken to *iterations; error and iterations may be NULL. Stack: about 920 bytes. */
+ * taken to *iterations; error and iterations may be NULL. Stack: about 952 bytes. */
 int arm6_ik_solve(const double q0[6], const double target[2], const double l[6], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
 #ifdef __cplusplus
