@@ -80,9 +80,12 @@ def test_joint_types_give_their_columns_and_offsets():
     with pytest.raises(KeyError, match="known: revolute, prismatic"):
         joint_type("spherical")
     w = sp.symbols("wx wy wz", real=True)
-    linear, angular = Revolute().column(w)
+    linear, angular = Revolute().column([0, 0, 1], w)
     assert linear == [-w[1], w[0], 0] and angular == [0, 0, 1]  # e_z x w, e_z
-    assert Prismatic().column(w) == ([0, 0, 1], [0, 0, 0])
+    z = sp.symbols("zx zy zz", real=True)
+    linear, angular = Revolute().column(z, w)
+    assert sp.Matrix(linear) == sp.Matrix(z).cross(sp.Matrix(w)) and angular == list(z)
+    assert Prismatic().column(z, w) == (list(z), [0, 0, 0])
     fold, rest = Revolute().fold_offset(sp.pi / 2)
     assert rest == 0 and fold.rotation == sp.Matrix([[0, -1, 0], [1, 0, 0], [0, 0, 1]])
     fold, rest = Revolute().fold_offset(sp.Float(0.3))

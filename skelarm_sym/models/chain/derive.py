@@ -560,10 +560,77 @@ def _columns(step: _Steps, joints: Sequence[_Canonical], f: _Frames, W: Sequence
     linear, angular = [], []
     for k, joint in enumerate(joints):
         F = f.rotation[f.segment[k]]
-        lin, ang = joint.motion.column(W[k])
+        lin, ang = joint.motion.column(E_Z, W[k])
         linear.append(step.vec(f"Jv{k + 1}", matvec(F, lin)))
         angular.append(step.vec(f"Jw{k + 1}", matvec(F, ang)))
     return linear, angular
+
+
+def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform) -> list[Vector]:
+    """``r_k = p_e - o_k`` in base axes, tip to base: ``r_k = r_(k+1) + G_k t_(k+1)`` plus the joint's own
+    advance along ``z_k``, with ``G_k = F_s Rz(psi_k)`` the rotation after joint ``k`` (suffix sums of the
+    links in base axes: no rotation of a whole vector, only the columns of ``G_k`` a translation uses)."""
+    n = len(joints)
+    r: list[Vector] = [None] * n
+    below = [sp.S.Zero] * 3
+    for k in reversed(range(n)):
+        t = list((joints[k + 1].before if k + 1 < n else tool).translation)
+        G = step.mat(f"H{k + 1}_", _times_rz(f.rotation[f.segment[k]], f.trig[k]))
+        v = add(below, matvec(G, t))
+        advance = joints[k].motion.advance(f.theta[k])
+        r[k] = below = step.vec(f"r{k + 1}", [v[i] + f.axes[k][i] * advance for i in range(3)])
+    return r
+
+
+def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
+    """True when some segment starts with a constant rotation that is not a signed permutation (URDF angles
+    written with few decimals: xArm7's 1.5708): there, rotating each column costs more than its cross product."""
+    return any(x not in (-1, 0, 1) for k in f.starts[1:] for x in joints[k].before.rotation)
+
+
+def _choose_columns(step: _Steps, joints, f: _Frames, tool: Transform, segment_columns, tip, angular, rotation, dq, ddq):
+    """``(linear columns, p_e, rates)``: the columns in segment axes rotated by ``F_s`` with ``p_e`` by Horner's
+    rule, or, where constant rotations are dense, the columns in base axes ``z_k x r_k`` (:func:`_base_offsets`)
+    with ``p_e`` from either; whichever needs the fewest operations for pose, jacobian, jacobian_dot and
+    kinematics together."""
+    candidates = [(segment_columns, tip, "")]
+    if _dense_constants(joints, f):
+        r = _base_offsets(step, joints, f, tool)
+        base = [step.vec(f"Jb{k + 1}", joint.motion.column(f.axes[k], r[k])[0]) for k, joint in enumerate(joints)]
+        suffix_tip = step.vec("pb", add(list(joints[0].before.translation), r[0]))
+        candidates += [(base, tip, "a"), (base, suffix_tip, "b")]
+    best, best_cost = None, None
+    for linear, p, tag in candidates:
+        rates = _velocities(step, joints, f.axes, linear, angular, dq, ddq, tag)
+        if len(candidates) == 1:
+            return linear, p, rates
+        T = [e for row in rotation for e in row] + list(p)
+        J = [e for v in list(linear) + list(angular) for e in v]
+        dJ = [e for v in rates.d_linear + rates.d_angular for e in v]
+        steps = dict(step.steps)
+        cost = sum(_closure_ops(steps, x) for x in (T, J, dJ, T + J + dJ + rates.twist + rates.acc))
+        if best_cost is None or cost < best_cost:
+            best, best_cost = (linear, p, rates), cost
+    return best
+
+
+def _settle_signs(step: _Steps, outputs: tuple, axes: list[Vector]) -> tuple[tuple, list[Vector]]:
+    """Drop dead steps, choose the signs of the rest (:func:`_normalise_signs`) and return ``outputs``
+    (groups of vectors: rotation, tip, J, dJ, rates, J_tool parts) and ``axes`` written with the flipped steps."""
+    values, where, at = [], {}, 0
+    for name, group in zip(("T", "T", "J", "J", "dJ", "dJ", "rates", "J_tool", "J_tool"), outputs):
+        flat = [e for v in group for e in v]
+        where.setdefault(name, []).extend(range(at, at + len(flat)))
+        values.extend(flat)
+        at += len(flat)
+    functions = [where[f] for f in ("T", "J", "dJ", "rates", "J_tool")] + [where["T"] + where["J"] + where["dJ"] + where["rates"]]
+    step.replace_steps(_live_steps(step.steps, values))
+    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), functions)
+    if not flips:
+        return outputs, axes
+    step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
+    rewrite = [[[sp.sympify(e).xreplace(flips) for e in v] for v in group] for group in outputs + (axes,)]
+    return tuple(rewrite[:-1]), rewrite[-1]
 
 
 def _closure_ops(steps: dict, exprs: Sequence[sp.Expr]) -> int:
@@ -611,8 +678,9 @@ class _Rates:
     acc: Vector
 
 
-def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq) -> _Rates:
-    """``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j dtheta_j`` and the columns' derivatives."""
+def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq, tag: str = "") -> _Rates:
+    """``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j dtheta_j`` and the columns' derivatives
+    (``tag`` tells apart the names of the steps of one set of columns from another's)."""
     count = len(joints)
     rates = [j.multiplier * dq[j.coordinate] for j in joints]
     accels = [j.multiplier * ddq[j.coordinate] for j in joints]
@@ -625,12 +693,12 @@ def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq) -> _Rates:
     u = [sp.S.Zero] * 3
     for k in reversed(range(count)):
         suffix[k] = u
-        u = step.vec(f"u{k + 1}", [u[i] + linear[k][i] * rates[k] for i in range(3)])
+        u = step.vec(f"u{tag}{k + 1}", [u[i] + linear[k][i] * rates[k] for i in range(3)])
     d_linear, d_angular = [], []
     for k, joint in enumerate(joints):
         dv, dw = joint.motion.column_rate(omega_before[k], omega_after[k], axes[k], linear[k], angular[k], suffix[k])
-        d_linear.append(step.vec(f"dJv{k + 1}", dv))
-        d_angular.append(step.vec(f"dJw{k + 1}", dw))
+        d_linear.append(step.vec(f"dJv{tag}{k + 1}", dv))
+        d_angular.append(step.vec(f"dJw{tag}{k + 1}", dw))
     acc = [sp.Add(*[part[k][i] * accels[k] + d_part[k][i] * rates[k] for k in range(count)])
            for part, d_part in ((linear, d_linear), (angular, d_angular)) for i in range(3)]
     return _Rates(d_linear, d_angular, u + omega, acc)
@@ -648,7 +716,7 @@ def _tool_jacobian(step: _Steps, joints, f: _Frames, tool: Transform, W) -> tupl
     linear, angular = [], []
     for k, joint in enumerate(joints):
         Bt = [[B[f.segment[k]][j][i] for j in range(3)] for i in range(3)]
-        lin, ang = joint.motion.column(W[k])
+        lin, ang = joint.motion.column(E_Z, W[k])
         linear.append(step.vec(f"Jtv{k + 1}", matvec(Bt, lin)))
         angular.append(step.vec(f"Jtw{k + 1}", matvec(Bt, ang)))
     return linear, angular
@@ -679,33 +747,18 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)
     rotation, tip = _pose(step, joints, frames, tool, W)
-    rates = _velocities(step, joints, frames.axes, linear, angular, dq, ddq)
+    linear, tip, rates = _choose_columns(step, joints, frames, tool, linear, tip, angular, rotation, dq, ddq)
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
     outputs = (rotation, [tip], linear, angular, rates.d_linear, rates.d_angular, [rates.twist, rates.acc], tool_linear, tool_angular)
-    values, where, at = [], {}, 0
-    for name, group in zip(("T", "T", "J", "J", "dJ", "dJ", "rates", "J_tool", "J_tool"), outputs):
-        flat = [e for v in group for e in v]
-        where.setdefault(name, []).extend(range(at, at + len(flat)))
-        values.extend(flat)
-        at += len(flat)
-    functions = [where[f] for f in ("T", "J", "dJ", "rates", "J_tool")] + [where["T"] + where["J"] + where["dJ"] + where["rates"]]
-    step.replace_steps(_live_steps(step.steps, values))
-    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), functions)
-    if flips:
-        step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
-        (rotation, (tip,), linear, angular, d_linear, d_angular, motion, tool_linear, tool_angular) = [
-            [[sp.sympify(e).xreplace(flips) for e in v] for v in group] for group in outputs]
-        rates = _Rates(d_linear, d_angular, *motion)
-        axes = [[e.xreplace(flips) for e in z] for z in frames.axes]
-    else:
-        axes = frames.axes
+    (rotation, (tip,), linear, angular, d_linear, d_angular, (twist, acc), tool_linear, tool_angular), axes = \
+        _settle_signs(step, outputs, frames.axes)
     compact = {
         "T": sp.Matrix(rotation).row_join(sp.Matrix(tip)).col_join(sp.Matrix([[0, 0, 0, 1]])),
         "J": _by_coordinate(joints, n, linear, angular),
         "J_tool": _by_coordinate(joints, n, tool_linear, tool_angular),
-        "dJ": _by_coordinate(joints, n, rates.d_linear, rates.d_angular),
-        "twist": sp.Matrix(rates.twist),
-        "acc": sp.Matrix(rates.acc),
+        "dJ": _by_coordinate(joints, n, d_linear, d_angular),
+        "twist": sp.Matrix(twist),
+        "acc": sp.Matrix(acc),
     }
     shapes = {"T": (4, 4), "J": (6, n), "J_tool": (6, n), "dJ": (6, n), "twist": (6,), "acc": (6,)}
     tables, limit_notes = _limit_tables(chain)

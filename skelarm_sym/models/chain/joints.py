@@ -7,9 +7,10 @@ asks the joint's :class:`JointType` (Pinocchio's joint models are the example) f
 * its **motion**: the angle it turns the frames after it about ``z`` (:meth:`~JointType.turn`) and
   the distance it moves them along ``z`` (:meth:`~JointType.advance`), and where a constant
   offset of its coordinate goes (:meth:`~JointType.fold_offset`);
-* its **Jacobian column** in axes whose ``z`` is the joint axis (:meth:`~JointType.column`), given
-  ``w``, the tool origin relative to a point of the axis in those axes; the derivation rotates it
-  into base (or tool) axes;
+* its **Jacobian column** (:meth:`~JointType.column`) from its axis ``z`` and ``w``, the tool origin
+  relative to a point of the axis, both in one set of axes: the derivation uses the joint's segment
+  axes (``z = e_z``: the column is nearly free) and rotates the result into base or tool axes, or
+  base axes directly, whichever costs less;
 * its **velocity terms**: its share of the angular velocity (:meth:`~JointType.angular_rate`),
   and the time derivative of its column (:meth:`~JointType.column_rate`);
 * its **Hessian terms**: how its motion turns the columns of the joints after it
@@ -75,9 +76,9 @@ class JointType(Protocol):
         """The distance the joint moves the frames after it along its ``z`` axis."""
         ...
 
-    def column(self, w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
-        """``(linear, angular)`` Jacobian column in axes whose ``z`` is the joint axis; ``w``: the tool
-        origin minus a point of the axis, in the same axes."""
+    def column(self, z: Sequence[sp.Expr], w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
+        """``(linear, angular)`` Jacobian column from the joint axis ``z`` and ``w``, the tool origin minus a
+        point of the axis (both in the same axes, and so is the column)."""
         ...
 
     def angular_rate(self, z: Vector, rate: sp.Expr) -> Vector:
@@ -116,8 +117,8 @@ class Revolute:
     def advance(self, theta: sp.Expr) -> sp.Expr:
         return sp.S.Zero
 
-    def column(self, w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
-        return [-w[1], w[0], sp.S.Zero], list(E_Z)  # e_z x w, e_z
+    def column(self, z: Sequence[sp.Expr], w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
+        return cross(z, w), list(z)  # with z = e_z: (-w_y, w_x, 0), e_z
 
     def angular_rate(self, z: Vector, rate: sp.Expr) -> Vector:
         return scale(z, rate)
@@ -148,8 +149,8 @@ class Prismatic:
     def advance(self, theta: sp.Expr) -> sp.Expr:
         return theta
 
-    def column(self, w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
-        return list(E_Z), list(ZERO)
+    def column(self, z: Sequence[sp.Expr], w: Sequence[sp.Expr]) -> tuple[Vector, Vector]:
+        return list(z), list(ZERO)
 
     def angular_rate(self, z: Vector, rate: sp.Expr) -> Vector:
         return list(ZERO)
