@@ -58,7 +58,7 @@ OUTPUTS = {
     "kinematics": ("T", "J", "dJ", "twist", "acc"),
 }
 INPUTS = {"pose": 1, "jacobian": 1, "jacobian_tool": 1, "jacobian_dot": 2, "kinematics": 3}
-FLAGS = ["-O2", "-std=c99", "-D_DEFAULT_SOURCE"]
+FLAGS = ["-O2", "-std=c99"]
 CONFIGS = 2000
 
 

@@ -324,12 +324,12 @@ def _skeleton(e: sp.Expr) -> tuple:
 
 def _sign(node: tuple, flips: set) -> int:
     """-1 where SymPy would see a minus sign in front of ``node`` once the symbols in ``flips`` are negated."""
-    kind = node[0]
-    if kind == "sym":
+    op = node[0]
+    if op == "sym":
         return -1 if node[1] in flips else 1
-    if kind == "num":
+    if op == "num":
         return node[1]
-    if kind == "mul":
+    if op == "mul":
         sign = node[1]
         for f in node[3]:
             if f[0] == "sym" and f[1] in flips:
@@ -361,8 +361,8 @@ def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tupl
     stack = [(node, outer, False)]
     while stack:
         e, out, paid = stack.pop()
-        kind = e[0]
-        if kind == "add":
+        op = e[0]
+        if op == "add":
             signs = [out * _sign(t, flips) for t in e[1]]
             count += all(x < 0 for x in signs)
             for t, sign in zip(e[1], signs):
@@ -371,10 +371,10 @@ def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tupl
                     atoms.append((atom, False))
                 else:
                     stack.append((t, sign * _sign(t, flips), sign < 0))
-        elif kind == "mul":
+        elif op == "mul":
             count += e[2] and out * _sign(e, flips) < 0 and not paid
             stack.extend((f, 1, False) for f in e[3] if f[0] not in ("sym", "num"))
-        elif kind == "other":
+        elif op == "other":
             stack.extend((a, 1, False) for a in e[1])
     return count, tuple(atoms)
 
