@@ -17,8 +17,8 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 
 1. **Canonical joints** (:func:`canonical_joints`): every joint becomes a motion about or along
    ``z`` after a constant transform; offsets that are multiples of pi/2 (revolute) and all
-   prismatic offsets fold into the constants, and so does a rotation about the joint axis
-   (into the angle) and a rotation about the last axis in the tool transform.
+   prismatic offsets fold into the constants, and a constant rotation about a joint's axis (or
+   about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`).
 2. **Segments** (:func:`_frames`): consecutive joints whose axes are parallel (the constant
    rotation between them is about ``z``: UR5's joints 2-4, every planar arm) share one frame
    ``F_s``; their angles add up (``psi_k = psi_(k-1) + beta_k + theta_k``), one sine and one
@@ -241,9 +241,8 @@ def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
     """The chain as z motions separated by constant transforms; returns the joints and the tool transform.
 
     ``before`` of the first joint includes the base; the tool transform includes the last ``after``.
-    A constant rotation about a joint's axis right before a turning joint goes into its angle offset
-    (``[P Rz(beta), t] Rz(theta) = [P, t] Rz(theta + beta)``), and so does one about the last axis at the
-    start of the tool transform (``Rz(theta) [Rz(beta) P, t] = Rz(theta + beta) [P, Rz(-beta) t]``).
+    Offsets that are multiples of pi/2 (revolute) and all prismatic offsets are in the constants
+    (:meth:`JointType.fold_offset`); other revolute offsets stay in the angle.
     """
     out = []
     carry = chain.base
@@ -252,12 +251,24 @@ def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
         Q = _z_alignment(joint.axis)
         fold, offset = motion.fold_offset(sp.sympify(joint.offset))
         before = carry @ joint.before @ Transform(rotation=sp.ImmutableMatrix(Q)) @ fold
-        split = _split_z(before.rotation) if _turns(motion) else None
-        if split is not None:
-            before, offset = Transform(sp.ImmutableMatrix(split[0]), before.translation), offset + split[1]
         out.append(_Canonical(before, motion, joint.coordinate, sp.sympify(joint.multiplier), _numeric(offset)))
         carry = Transform(rotation=sp.ImmutableMatrix(Q.T)) @ joint.after
-    tool = carry @ chain.tool
+    return out, carry @ chain.tool
+
+
+def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
+    """The canonical chain with constant rotations about joint axes moved into the angles (free at run time):
+    one about a turning joint's axis right before it (``[P Rz(beta), t] Rz(theta) = [P, t] Rz(theta + beta)``)
+    and one about the last axis at the start of the tool transform
+    (``Rz(theta) [Rz(beta) P, t] = Rz(theta + beta) [P, Rz(-beta) t]``), ``P`` a signed permutation
+    (:func:`_split_z`). Panda's TCP, turned by -pi/4 about the flange axis, costs one addition so."""
+    out = []
+    for joint in joints:
+        split = _split_z(joint.before.rotation) if _turns(joint.motion) else None
+        if split is not None:
+            joint = _Canonical(Transform(sp.ImmutableMatrix(split[0]), joint.before.translation), joint.motion,
+                               joint.coordinate, joint.multiplier, _numeric(joint.offset + split[1]))
+        out.append(joint)
     split = _split_z(tool.rotation.T) if _turns(out[-1].motion) else None
     if split is not None:  # tool rotation = Rz(beta) P with beta = -split[1], P = split[0]^T
         beta = -split[1]
@@ -742,7 +753,7 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     if chain.parameters:
         inputs["params"] = tuple(chain.parameters)
     step = _Steps("ch")
-    joints, tool = _named_trig_constants(step, *canonical_joints(chain))
+    joints, tool = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
     frames = _frames(step, joints, q)
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)
