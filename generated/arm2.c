@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xc12bfb1bUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x50e17a03UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1120,8 +1120,7 @@ static void arm2_manipulability_finish(const double l[2], const double *restrict
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t32 = t21*t27;
-    w[0] = sqrt(t32);
+    w[0] = sqrt(t21*t27);
 }
 
 void arm2_manipulability(const double q[2], const double l[2], double w[1])
@@ -1180,8 +1179,7 @@ static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T,
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t32 = t21*t27;
-        w[0] = sqrt(t32);
+        w[0] = sqrt(t21*t27);
         w_T[0 + b] = w[0];
     }
 }
@@ -1238,7 +1236,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 22 add/sub, 37 mul, 1 neg, 3 div */
+/* operations: 2 sin, 2 cos, 22 add/sub, 43 mul, 1 neg, 4 div */
 
 static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
 {
@@ -1266,23 +1264,28 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t28 = lambda*lambda;
-    const double t29 = (t20 ? v[0] : v[1]);
-    const double t30 = (t20 ? v[1] : v[0]);
-    const double t31 = t17 + t19;
-    const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
-    const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
-    const double t35 = t29 + t30*t22;
-    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-    const double t37 = t28 + t21*(1.0 + t22*t22);
-    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-    const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
-    const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
-    const double t41 = t39*t23 + t40*t25;
-    const double t42 = t39*t24 + t40*t26;
-    dq[0] = t41;
-    dq[1] = t42;
+    const int t28 = lambda > 1.0;
+    const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t30 = (t28 ? 1.0 : lambda);
+    const double t31 = t30*t30;
+    const double t32 = t29*t29;
+    const double t33 = t32*t21;
+    const double t34 = t32*t27;
+    const double t35 = (t20 ? v[0] : v[1]);
+    const double t36 = (t20 ? v[1] : v[0]);
+    const double t37 = t32*(t17 + t19);
+    const double t38 = t33*t34 + t31*(t37 + t31);
+    const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+    const double t40 = t35 + t36*t22;
+    const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
+    const double t42 = t31 + t33*(1.0 + t22*t22);
+    const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
+    const double t44 = (t39 ? t41*(t40*t31 + t34*t35) : t40*t43);
+    const double t45 = (t39 ? t41*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
+    const double t46 = t44*t23 + t45*t25;
+    const double t47 = t44*t24 + t45*t26;
+    dq[0] = t46;
+    dq[1] = t47;
 }
 
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2])
@@ -1344,23 +1347,28 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t28 = lambda*lambda;
-        const double t29 = (t20 ? v[0] : v[1]);
-        const double t30 = (t20 ? v[1] : v[0]);
-        const double t31 = t17 + t19;
-        const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
-        const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
-        const double t35 = t29 + t30*t22;
-        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-        const double t37 = t28 + t21*(1.0 + t22*t22);
-        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-        const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
-        const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
-        const double t41 = t39*t23 + t40*t25;
-        const double t42 = t39*t24 + t40*t26;
-        dq[0] = t41;
-        dq[1] = t42;
+        const int t28 = lambda > 1.0;
+        const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t30 = (t28 ? 1.0 : lambda);
+        const double t31 = t30*t30;
+        const double t32 = t29*t29;
+        const double t33 = t32*t21;
+        const double t34 = t32*t27;
+        const double t35 = (t20 ? v[0] : v[1]);
+        const double t36 = (t20 ? v[1] : v[0]);
+        const double t37 = t32*(t17 + t19);
+        const double t38 = t33*t34 + t31*(t37 + t31);
+        const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+        const double t40 = t35 + t36*t22;
+        const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
+        const double t42 = t31 + t33*(1.0 + t22*t22);
+        const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
+        const double t44 = (t39 ? t41*(t40*t31 + t34*t35) : t40*t43);
+        const double t45 = (t39 ? t41*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
+        const double t46 = t44*t23 + t45*t25;
+        const double t47 = t44*t24 + t45*t26;
+        dq[0] = t46;
+        dq[1] = t47;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
     }
@@ -1426,7 +1434,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 26 add/sub, 37 mul, 1 neg, 3 div */
+/* operations: 2 sin, 2 cos, 26 add/sub, 43 mul, 1 neg, 4 div */
 
 static void arm2_ik_step_angles(const double q[2], double *restrict ang)
 {
@@ -1454,25 +1462,30 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t25 = (t20 ? t7 : t6) - t23*t22;
     const double t26 = (t20 ? t2 : t5) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
-    const double t28 = lambda*lambda;
-    const double t31 = t17 + t19;
-    const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
-    const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
-    const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-    const double t37 = t28 + t21*(1.0 + t22*t22);
-    const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-    const double t43 = target[0] - t7;
-    const double t44 = t6 + target[1];
-    const double t45 = (t20 ? t43 : t44);
-    const double t46 = (t20 ? t44 : t43);
-    const double t47 = t45 + t46*t22;
-    const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
-    const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
-    const double t50 = t48*t23 + t49*t25;
-    const double t51 = t48*t24 + t49*t26;
-    q_next[0] = t50 + q[0];
-    q_next[1] = t51 + q[1];
+    const int t28 = lambda > 1.0;
+    const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t30 = (t28 ? 1.0 : lambda);
+    const double t31 = t30*t30;
+    const double t32 = t29*t29;
+    const double t33 = t32*t21;
+    const double t34 = t32*t27;
+    const double t37 = t32*(t17 + t19);
+    const double t38 = t33*t34 + t31*(t37 + t31);
+    const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+    const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
+    const double t42 = t31 + t33*(1.0 + t22*t22);
+    const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
+    const double t48 = target[0] - t7;
+    const double t49 = t6 + target[1];
+    const double t50 = (t20 ? t48 : t49);
+    const double t51 = (t20 ? t49 : t48);
+    const double t52 = t50 + t51*t22;
+    const double t53 = (t39 ? t41*(t52*t31 + t50*t34) : t52*t43);
+    const double t54 = (t39 ? t41*(t51*t31 + t33*(t51 - t50*t22)) : 0.0);
+    const double t55 = t53*t23 + t54*t25;
+    const double t56 = t53*t24 + t54*t26;
+    q_next[0] = t55 + q[0];
+    q_next[1] = t56 + q[1];
 }
 
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2])
@@ -1537,25 +1550,30 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         const double t25 = (t20 ? t7 : t6) - t23*t22;
         const double t26 = (t20 ? t2 : t5) - t24*t22;
         const double t27 = t25*t25 + t26*t26;
-        const double t28 = lambda*lambda;
-        const double t31 = t17 + t19;
-        const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
-        const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
-        const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
-        const double t37 = t28 + t21*(1.0 + t22*t22);
-        const double t38 = (t37 > 0.0 ? 1.0/(t37 != 0.0 ? t37 : 1.0) : 1.0);
-        const double t43 = target[0] - t7;
-        const double t44 = t6 + target[1];
-        const double t45 = (t20 ? t43 : t44);
-        const double t46 = (t20 ? t44 : t43);
-        const double t47 = t45 + t46*t22;
-        const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
-        const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
-        const double t50 = t48*t23 + t49*t25;
-        const double t51 = t48*t24 + t49*t26;
-        q_next[0] = t50 + q[0];
-        q_next[1] = t51 + q[1];
+        const int t28 = lambda > 1.0;
+        const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t30 = (t28 ? 1.0 : lambda);
+        const double t31 = t30*t30;
+        const double t32 = t29*t29;
+        const double t33 = t32*t21;
+        const double t34 = t32*t27;
+        const double t37 = t32*(t17 + t19);
+        const double t38 = t33*t34 + t31*(t37 + t31);
+        const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+        const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
+        const double t42 = t31 + t33*(1.0 + t22*t22);
+        const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
+        const double t48 = target[0] - t7;
+        const double t49 = t6 + target[1];
+        const double t50 = (t20 ? t48 : t49);
+        const double t51 = (t20 ? t49 : t48);
+        const double t52 = t50 + t51*t22;
+        const double t53 = (t39 ? t41*(t52*t31 + t50*t34) : t52*t43);
+        const double t54 = (t39 ? t41*(t51*t31 + t33*(t51 - t50*t22)) : 0.0);
+        const double t55 = t53*t23 + t54*t25;
+        const double t56 = t53*t24 + t54*t26;
+        q_next[0] = t55 + q[0];
+        q_next[1] = t56 + q[1];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
     }

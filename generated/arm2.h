@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0xc12bfb1bUL
+#define ARM2_STAMP 0x50e17a03UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -97,28 +97,28 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
  * Stack: about 7 KB. */
 void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 264 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 256 bytes. */
 void arm2_manipulability(const double q[2], const double l[2], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 2544 bytes. */
+ * Stack: about 2536 bytes. */
 void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 376 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 416 bytes. */
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 3448 bytes. */
+ * Stack: about 3488 bytes. */
 void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 392 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 432 bytes. */
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 3464 bytes. */
+ * Stack: about 3504 bytes. */
 void arm2_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of the solvers. */

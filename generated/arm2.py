@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc12bfb1b
+STAMP = 0x50e17a03
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -422,8 +422,7 @@ def _manipulability_core(q, l, w):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t32 = t21*t27
-    w[..., 0] = np.sqrt(t32)
+    w[..., 0] = np.sqrt(t21*t27)
 
 
 @_signature_errors
@@ -467,23 +466,28 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t28 = lambda_*lambda_
-    t29 = np.where(t20, v[..., 0], v[..., 1])
-    t30 = np.where(t20, v[..., 1], v[..., 0])
-    t31 = t17 + t19
-    t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
-    t34 = t33 > RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28))
-    t35 = t29 + t30*t22
-    t36 = np.where(t34, 1.0/t33, 1.0)
-    t37 = t28 + t21*(1.0 + t22*t22)
-    t38 = np.where(t37 > 0.0, 1.0/t37, 1.0)
-    t39 = np.where(t34, t36*(t35*t28 + t29*t27), t35*t38)
-    t40 = np.where(t34, t36*(t30*t28 + t21*(t30 - t29*t22)), 0.0)
-    t41 = t39*t23 + t40*t25
-    t42 = t39*t24 + t40*t26
-    dq[..., 0] = t41
-    dq[..., 1] = t42
+    t28 = lambda_ > 1.0
+    t29 = np.where(t28, 1.0/lambda_, 1.0)
+    t30 = np.where(t28, 1.0, lambda_)
+    t31 = t30*t30
+    t32 = t29*t29
+    t33 = t32*t21
+    t34 = t32*t27
+    t35 = np.where(t20, v[..., 0], v[..., 1])
+    t36 = np.where(t20, v[..., 1], v[..., 0])
+    t37 = t32*(t17 + t19)
+    t38 = t33*t34 + t31*(t37 + t31)
+    t39 = t38 > RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31))
+    t40 = t35 + t36*t22
+    t41 = t32*np.where(t39, 1.0/t38, 1.0)
+    t42 = t31 + t33*(1.0 + t22*t22)
+    t43 = t32*np.where(t42 > 0.0, 1.0/t42, 1.0)
+    t44 = np.where(t39, t41*(t40*t31 + t34*t35), t40*t43)
+    t45 = np.where(t39, t41*(t33*(t36 - t35*t22) + t36*t31), 0.0)
+    t46 = t44*t23 + t45*t25
+    t47 = t44*t24 + t45*t26
+    dq[..., 0] = t46
+    dq[..., 1] = t47
 
 
 @_signature_errors
@@ -495,7 +499,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 60 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 66 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -530,25 +534,30 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t25 = np.where(t20, t7, t6) - t23*t22
     t26 = np.where(t20, t2, t5) - t24*t22
     t27 = t25*t25 + t26*t26
-    t28 = lambda_*lambda_
-    t31 = t17 + t19
-    t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
-    t34 = t33 > RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28))
-    t36 = np.where(t34, 1.0/t33, 1.0)
-    t37 = t28 + t21*(1.0 + t22*t22)
-    t38 = np.where(t37 > 0.0, 1.0/t37, 1.0)
-    t43 = target[..., 0] - t7
-    t44 = t6 + target[..., 1]
-    t45 = np.where(t20, t43, t44)
-    t46 = np.where(t20, t44, t43)
-    t47 = t45 + t46*t22
-    t48 = np.where(t34, t36*(t47*t28 + t45*t27), t47*t38)
-    t49 = np.where(t34, t36*(t46*t28 + t21*(t46 - t45*t22)), 0.0)
-    t50 = t48*t23 + t49*t25
-    t51 = t48*t24 + t49*t26
-    q_next[..., 0] = t50 + q[..., 0]
-    q_next[..., 1] = t51 + q[..., 1]
+    t28 = lambda_ > 1.0
+    t29 = np.where(t28, 1.0/lambda_, 1.0)
+    t30 = np.where(t28, 1.0, lambda_)
+    t31 = t30*t30
+    t32 = t29*t29
+    t33 = t32*t21
+    t34 = t32*t27
+    t37 = t32*(t17 + t19)
+    t38 = t33*t34 + t31*(t37 + t31)
+    t39 = t38 > RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31))
+    t41 = t32*np.where(t39, 1.0/t38, 1.0)
+    t42 = t31 + t33*(1.0 + t22*t22)
+    t43 = t32*np.where(t42 > 0.0, 1.0/t42, 1.0)
+    t48 = target[..., 0] - t7
+    t49 = t6 + target[..., 1]
+    t50 = np.where(t20, t48, t49)
+    t51 = np.where(t20, t49, t48)
+    t52 = t50 + t51*t22
+    t53 = np.where(t39, t41*(t52*t31 + t50*t34), t52*t43)
+    t54 = np.where(t39, t41*(t51*t31 + t33*(t51 - t50*t22)), 0.0)
+    t55 = t53*t23 + t54*t25
+    t56 = t53*t24 + t54*t26
+    q_next[..., 0] = t55 + q[..., 0]
+    q_next[..., 1] = t56 + q[..., 1]
 
 
 @_signature_errors
@@ -560,7 +569,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 64 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 70 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xaefc194fUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x39264076UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1293,8 +1293,7 @@ static void arm3_manipulability_finish(const double l[3], const double *restrict
     const double t37 = (t30 ? t10 : t9) - t34*t32;
     const double t38 = (t30 ? t4 : t8) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
-    const double t44 = t31*t39;
-    w[0] = sqrt(t44);
+    w[0] = sqrt(t31*t39);
 }
 
 void arm3_manipulability(const double q[3], const double l[3], double w[1])
@@ -1364,8 +1363,7 @@ static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T,
         const double t37 = (t30 ? t10 : t9) - t34*t32;
         const double t38 = (t30 ? t4 : t8) - t35*t32;
         const double t39 = t36*t36 + t37*t37 + t38*t38;
-        const double t44 = t31*t39;
-        w[0] = sqrt(t44);
+        w[0] = sqrt(t31*t39);
         w_T[0 + b] = w[0];
     }
 }
@@ -1423,7 +1421,7 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 46 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 31 add/sub, 52 mul, 1 neg, 4 div */
 
 static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
 {
@@ -1458,25 +1456,30 @@ static void arm3_inverse_velocity_finish(const double v[2], const double l[3], d
     const double t37 = (t30 ? t10 : t9) - t34*t32;
     const double t38 = (t30 ? t4 : t8) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
-    const double t40 = lambda*lambda;
-    const double t41 = (t30 ? v[0] : v[1]);
-    const double t42 = (t30 ? v[1] : v[0]);
-    const double t43 = t27 + t29;
-    const double t44 = t31*t39;
-    const double t45 = t44 + t40*(t43 + t40);
-    const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
-    const double t47 = t41 + t42*t32;
-    const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-    const double t49 = t40 + t31*(1.0 + t32*t32);
-    const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
-    const double t51 = (t46 ? t48*(t47*t40 + t41*t39) : t47*t50);
-    const double t52 = (t46 ? t48*(t42*t40 + t31*(t42 - t41*t32)) : 0.0);
-    const double t53 = t51*t33 + t52*t36;
-    const double t54 = t51*t34 + t52*t37;
-    const double t55 = t51*t35 + t52*t38;
-    dq[0] = t53;
-    dq[1] = t54;
-    dq[2] = t55;
+    const int t40 = lambda > 1.0;
+    const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t42 = (t40 ? 1.0 : lambda);
+    const double t43 = t42*t42;
+    const double t44 = t41*t41;
+    const double t45 = t44*t31;
+    const double t46 = t44*t39;
+    const double t47 = (t30 ? v[0] : v[1]);
+    const double t48 = (t30 ? v[1] : v[0]);
+    const double t49 = t44*(t27 + t29);
+    const double t50 = t45*t46 + t43*(t49 + t43);
+    const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
+    const double t52 = t47 + t48*t32;
+    const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
+    const double t54 = t43 + t45*(1.0 + t32*t32);
+    const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
+    const double t56 = (t51 ? t53*(t52*t43 + t46*t47) : t52*t55);
+    const double t57 = (t51 ? t53*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
+    const double t58 = t56*t33 + t57*t36;
+    const double t59 = t56*t34 + t57*t37;
+    const double t60 = t56*t35 + t57*t38;
+    dq[0] = t58;
+    dq[1] = t59;
+    dq[2] = t60;
 }
 
 void arm3_inverse_velocity(const double q[3], const double v[2], const double l[3], double lambda, double dq[3])
@@ -1549,25 +1552,30 @@ static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_
         const double t37 = (t30 ? t10 : t9) - t34*t32;
         const double t38 = (t30 ? t4 : t8) - t35*t32;
         const double t39 = t36*t36 + t37*t37 + t38*t38;
-        const double t40 = lambda*lambda;
-        const double t41 = (t30 ? v[0] : v[1]);
-        const double t42 = (t30 ? v[1] : v[0]);
-        const double t43 = t27 + t29;
-        const double t44 = t31*t39;
-        const double t45 = t44 + t40*(t43 + t40);
-        const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
-        const double t47 = t41 + t42*t32;
-        const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-        const double t49 = t40 + t31*(1.0 + t32*t32);
-        const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
-        const double t51 = (t46 ? t48*(t47*t40 + t41*t39) : t47*t50);
-        const double t52 = (t46 ? t48*(t42*t40 + t31*(t42 - t41*t32)) : 0.0);
-        const double t53 = t51*t33 + t52*t36;
-        const double t54 = t51*t34 + t52*t37;
-        const double t55 = t51*t35 + t52*t38;
-        dq[0] = t53;
-        dq[1] = t54;
-        dq[2] = t55;
+        const int t40 = lambda > 1.0;
+        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t42 = (t40 ? 1.0 : lambda);
+        const double t43 = t42*t42;
+        const double t44 = t41*t41;
+        const double t45 = t44*t31;
+        const double t46 = t44*t39;
+        const double t47 = (t30 ? v[0] : v[1]);
+        const double t48 = (t30 ? v[1] : v[0]);
+        const double t49 = t44*(t27 + t29);
+        const double t50 = t45*t46 + t43*(t49 + t43);
+        const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
+        const double t52 = t47 + t48*t32;
+        const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
+        const double t54 = t43 + t45*(1.0 + t32*t32);
+        const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
+        const double t56 = (t51 ? t53*(t52*t43 + t46*t47) : t52*t55);
+        const double t57 = (t51 ? t53*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
+        const double t58 = t56*t33 + t57*t36;
+        const double t59 = t56*t34 + t57*t37;
+        const double t60 = t56*t35 + t57*t38;
+        dq[0] = t58;
+        dq[1] = t59;
+        dq[2] = t60;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1636,7 +1644,7 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 61 add/sub, 95 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 61 add/sub, 101 mul, 1 neg, 5 div */
 
 static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
 {
@@ -1661,52 +1669,60 @@ static void arm3_inverse_velocity3_finish(const double twist[3], const double l[
     const double t27 = t11*t11 + t9*t9 + t8*t8;
     const double t28 = t4*t8 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
-    const double t40 = lambda*lambda;
-    const double t66 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
-    const double t67 = t66*t66;
-    const double t68 = t11 + t9 + t8;
-    const double t69 = t4 + t12 + t10;
-    const double t70 = t67*(t27 + t40);
-    const double t71 = t28*t67;
-    const double t72 = t68*t66;
-    const double t73 = t67*(t29 + t40);
-    const double t74 = t69*t66;
-    const double t75 = 3.0 + t40;
-    const double t76 = t66*twist[0];
-    const double t77 = t66*twist[1];
-    const double t78 = t70 + t73 + t75;
-    const double t79 = t70*t76 + t71*t77 + t72*twist[2];
-    const double t80 = t71*t76 + t73*t77 + t74*twist[2];
-    const double t81 = t72*t76 + t74*t77 + t75*twist[2];
-    const double t82 = (t78 > 0.0 ? 1.0/(t78*t78 != 0.0 ? t78*t78 : 1.0) : 1.0);
-    const double t83 = t79*t82;
-    const double t84 = t80*t82;
-    const double t85 = t81*t82;
-    const double t86 = t73*t75 - t74*t74;
-    const double t87 = t72*t74 - t71*t75;
-    const double t88 = t71*t74 - t72*t73;
-    const double t89 = t70*t75 - t72*t72;
-    const double t90 = t71*t72 - t70*t74;
-    const double t91 = t70*t73 - t71*t71;
-    const double t92 = t70*t86 + t71*t87 + t72*t88;
-    const double t93 = t86 + t89 + t91;
-    const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
-    const double t95 = t78*t78;
-    const int t96 = t93 > ARM3_RANK_TOL*t95;
-    const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
-    const double t98 = t70*t79 + t71*t80 + t72*t81;
-    const double t99 = t71*t79 + t73*t80 + t74*t81;
-    const double t100 = t72*t79 + t74*t80 + t75*t81;
-    const double t101 = (t93 > 0.0 ? 1.0/(t93*t93 != 0.0 ? t93*t93 : 1.0) : 1.0);
-    const double t102 = t95 - t93;
-    const double t103 = (t96 ? (t94 ? t97*(t86*t76 + t87*t77 + t88*twist[2]) : t101*(t79*t102 - t98*t78)) : t83);
-    const double t104 = (t96 ? (t94 ? t97*(t87*t76 + t89*t77 + t90*twist[2]) : t101*(t80*t102 - t99*t78)) : t84);
-    const double t105 = (t96 ? (t94 ? t97*(t88*t76 + t90*t77 + t91*twist[2]) : t101*(t81*t102 - t100*t78)) : t85);
-    const double t106 = t66*t103;
-    const double t107 = t66*t104;
-    dq3[0] = t105 + t106*t11 + t107*t12;
-    dq3[1] = t105 + t106*t9 + t107*t10;
-    dq3[2] = t105 + t4*t107 + t106*t8;
+    const int t40 = lambda > 1.0;
+    const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t42 = (t40 ? 1.0 : lambda);
+    const double t43 = t42*t42;
+    const double t44 = t41*t41;
+    const double t71 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+    const double t72 = t71*t71;
+    const double t73 = t11 + t9 + t8;
+    const double t74 = t4 + t12 + t10;
+    const double t75 = t72*t44;
+    const double t76 = t71*t44;
+    const double t77 = t72*t43;
+    const double t78 = t77 + t27*t75;
+    const double t79 = t28*t75;
+    const double t80 = t73*t76;
+    const double t81 = t77 + t29*t75;
+    const double t82 = t74*t76;
+    const double t83 = 3.0*t44 + t43;
+    const double t84 = t76*twist[0];
+    const double t85 = t76*twist[1];
+    const double t86 = t44*twist[2];
+    const double t87 = t78 + t81 + t83;
+    const double t88 = t78*t84 + t79*t85 + t80*t86;
+    const double t89 = t79*t84 + t81*t85 + t82*t86;
+    const double t90 = t80*t84 + t82*t85 + t83*t86;
+    const double t91 = (t87 > 0.0 ? 1.0/(t87*t87 != 0.0 ? t87*t87 : 1.0) : 1.0);
+    const double t92 = t88*t91;
+    const double t93 = t89*t91;
+    const double t94 = t90*t91;
+    const double t95 = t81*t83 - t82*t82;
+    const double t96 = t80*t82 - t79*t83;
+    const double t97 = t79*t82 - t80*t81;
+    const double t98 = t78*t83 - t80*t80;
+    const double t99 = t79*t80 - t78*t82;
+    const double t100 = t78*t81 - t79*t79;
+    const double t101 = t78*t95 + t79*t96 + t80*t97;
+    const double t102 = t95 + t98 + t100;
+    const int t103 = t101 > ARM3_RANK_TOL*t102*t87;
+    const double t104 = t87*t87;
+    const int t105 = t102 > ARM3_RANK_TOL*t104;
+    const double t106 = (t101 > 0.0 ? 1.0/(t101 != 0.0 ? t101 : 1.0) : 1.0);
+    const double t107 = t78*t88 + t79*t89 + t80*t90;
+    const double t108 = t79*t88 + t81*t89 + t82*t90;
+    const double t109 = t80*t88 + t82*t89 + t83*t90;
+    const double t110 = (t102 > 0.0 ? 1.0/(t102*t102 != 0.0 ? t102*t102 : 1.0) : 1.0);
+    const double t111 = t104 - t102;
+    const double t112 = (t105 ? (t103 ? t106*(t95*t84 + t96*t85 + t97*t86) : t110*(t88*t111 - t107*t87)) : t92);
+    const double t113 = (t105 ? (t103 ? t106*(t96*t84 + t98*t85 + t99*t86) : t110*(t89*t111 - t108*t87)) : t93);
+    const double t114 = (t105 ? (t103 ? t106*(t97*t84 + t99*t85 + t100*t86) : t110*(t90*t111 - t109*t87)) : t94);
+    const double t115 = t71*t112;
+    const double t116 = t71*t113;
+    dq3[0] = t114 + t115*t11 + t116*t12;
+    dq3[1] = t114 + t115*t9 + t116*t10;
+    dq3[2] = t114 + t4*t116 + t115*t8;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3])
@@ -1770,52 +1786,60 @@ static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q
         const double t27 = t11*t11 + t9*t9 + t8*t8;
         const double t28 = t4*t8 + t11*t12 + t9*t10;
         const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const double t40 = lambda*lambda;
-        const double t66 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
-        const double t67 = t66*t66;
-        const double t68 = t11 + t9 + t8;
-        const double t69 = t4 + t12 + t10;
-        const double t70 = t67*(t27 + t40);
-        const double t71 = t28*t67;
-        const double t72 = t68*t66;
-        const double t73 = t67*(t29 + t40);
-        const double t74 = t69*t66;
-        const double t75 = 3.0 + t40;
-        const double t76 = t66*twist[0];
-        const double t77 = t66*twist[1];
-        const double t78 = t70 + t73 + t75;
-        const double t79 = t70*t76 + t71*t77 + t72*twist[2];
-        const double t80 = t71*t76 + t73*t77 + t74*twist[2];
-        const double t81 = t72*t76 + t74*t77 + t75*twist[2];
-        const double t82 = (t78 > 0.0 ? 1.0/(t78*t78 != 0.0 ? t78*t78 : 1.0) : 1.0);
-        const double t83 = t79*t82;
-        const double t84 = t80*t82;
-        const double t85 = t81*t82;
-        const double t86 = t73*t75 - t74*t74;
-        const double t87 = t72*t74 - t71*t75;
-        const double t88 = t71*t74 - t72*t73;
-        const double t89 = t70*t75 - t72*t72;
-        const double t90 = t71*t72 - t70*t74;
-        const double t91 = t70*t73 - t71*t71;
-        const double t92 = t70*t86 + t71*t87 + t72*t88;
-        const double t93 = t86 + t89 + t91;
-        const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
-        const double t95 = t78*t78;
-        const int t96 = t93 > ARM3_RANK_TOL*t95;
-        const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
-        const double t98 = t70*t79 + t71*t80 + t72*t81;
-        const double t99 = t71*t79 + t73*t80 + t74*t81;
-        const double t100 = t72*t79 + t74*t80 + t75*t81;
-        const double t101 = (t93 > 0.0 ? 1.0/(t93*t93 != 0.0 ? t93*t93 : 1.0) : 1.0);
-        const double t102 = t95 - t93;
-        const double t103 = (t96 ? (t94 ? t97*(t86*t76 + t87*t77 + t88*twist[2]) : t101*(t79*t102 - t98*t78)) : t83);
-        const double t104 = (t96 ? (t94 ? t97*(t87*t76 + t89*t77 + t90*twist[2]) : t101*(t80*t102 - t99*t78)) : t84);
-        const double t105 = (t96 ? (t94 ? t97*(t88*t76 + t90*t77 + t91*twist[2]) : t101*(t81*t102 - t100*t78)) : t85);
-        const double t106 = t66*t103;
-        const double t107 = t66*t104;
-        dq3[0] = t105 + t106*t11 + t107*t12;
-        dq3[1] = t105 + t106*t9 + t107*t10;
-        dq3[2] = t105 + t4*t107 + t106*t8;
+        const int t40 = lambda > 1.0;
+        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t42 = (t40 ? 1.0 : lambda);
+        const double t43 = t42*t42;
+        const double t44 = t41*t41;
+        const double t71 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+        const double t72 = t71*t71;
+        const double t73 = t11 + t9 + t8;
+        const double t74 = t4 + t12 + t10;
+        const double t75 = t72*t44;
+        const double t76 = t71*t44;
+        const double t77 = t72*t43;
+        const double t78 = t77 + t27*t75;
+        const double t79 = t28*t75;
+        const double t80 = t73*t76;
+        const double t81 = t77 + t29*t75;
+        const double t82 = t74*t76;
+        const double t83 = 3.0*t44 + t43;
+        const double t84 = t76*twist[0];
+        const double t85 = t76*twist[1];
+        const double t86 = t44*twist[2];
+        const double t87 = t78 + t81 + t83;
+        const double t88 = t78*t84 + t79*t85 + t80*t86;
+        const double t89 = t79*t84 + t81*t85 + t82*t86;
+        const double t90 = t80*t84 + t82*t85 + t83*t86;
+        const double t91 = (t87 > 0.0 ? 1.0/(t87*t87 != 0.0 ? t87*t87 : 1.0) : 1.0);
+        const double t92 = t88*t91;
+        const double t93 = t89*t91;
+        const double t94 = t90*t91;
+        const double t95 = t81*t83 - t82*t82;
+        const double t96 = t80*t82 - t79*t83;
+        const double t97 = t79*t82 - t80*t81;
+        const double t98 = t78*t83 - t80*t80;
+        const double t99 = t79*t80 - t78*t82;
+        const double t100 = t78*t81 - t79*t79;
+        const double t101 = t78*t95 + t79*t96 + t80*t97;
+        const double t102 = t95 + t98 + t100;
+        const int t103 = t101 > ARM3_RANK_TOL*t102*t87;
+        const double t104 = t87*t87;
+        const int t105 = t102 > ARM3_RANK_TOL*t104;
+        const double t106 = (t101 > 0.0 ? 1.0/(t101 != 0.0 ? t101 : 1.0) : 1.0);
+        const double t107 = t78*t88 + t79*t89 + t80*t90;
+        const double t108 = t79*t88 + t81*t89 + t82*t90;
+        const double t109 = t80*t88 + t82*t89 + t83*t90;
+        const double t110 = (t102 > 0.0 ? 1.0/(t102*t102 != 0.0 ? t102*t102 : 1.0) : 1.0);
+        const double t111 = t104 - t102;
+        const double t112 = (t105 ? (t103 ? t106*(t95*t84 + t96*t85 + t97*t86) : t110*(t88*t111 - t107*t87)) : t92);
+        const double t113 = (t105 ? (t103 ? t106*(t96*t84 + t98*t85 + t99*t86) : t110*(t89*t111 - t108*t87)) : t93);
+        const double t114 = (t105 ? (t103 ? t106*(t97*t84 + t99*t85 + t100*t86) : t110*(t90*t111 - t109*t87)) : t94);
+        const double t115 = t71*t112;
+        const double t116 = t71*t113;
+        dq3[0] = t114 + t115*t11 + t116*t12;
+        dq3[1] = t114 + t115*t9 + t116*t10;
+        dq3[2] = t114 + t4*t116 + t115*t8;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1885,7 +1909,7 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 #endif
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 46 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 36 add/sub, 52 mul, 1 neg, 4 div */
 
 static void arm3_ik_step_angles(const double q[3], double *restrict ang)
 {
@@ -1920,27 +1944,32 @@ static void arm3_ik_step_finish(const double q[3], const double target[2], const
     const double t37 = (t30 ? t10 : t9) - t34*t32;
     const double t38 = (t30 ? t4 : t8) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
-    const double t40 = lambda*lambda;
-    const double t43 = t27 + t29;
-    const double t44 = t31*t39;
-    const double t45 = t44 + t40*(t43 + t40);
-    const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
-    const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-    const double t49 = t40 + t31*(1.0 + t32*t32);
-    const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
-    const double t56 = target[0] - t12;
-    const double t57 = t11 + target[1];
-    const double t58 = (t30 ? t56 : t57);
-    const double t59 = (t30 ? t57 : t56);
-    const double t60 = t58 + t59*t32;
-    const double t61 = (t46 ? t48*(t60*t40 + t58*t39) : t60*t50);
-    const double t62 = (t46 ? t48*(t59*t40 + t31*(t59 - t58*t32)) : 0.0);
-    const double t63 = t61*t33 + t62*t36;
-    const double t64 = t61*t34 + t62*t37;
-    const double t65 = t61*t35 + t62*t38;
-    q_next[0] = t63 + q[0];
-    q_next[1] = t64 + q[1];
-    q_next[2] = t65 + q[2];
+    const int t40 = lambda > 1.0;
+    const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t42 = (t40 ? 1.0 : lambda);
+    const double t43 = t42*t42;
+    const double t44 = t41*t41;
+    const double t45 = t44*t31;
+    const double t46 = t44*t39;
+    const double t49 = t44*(t27 + t29);
+    const double t50 = t45*t46 + t43*(t49 + t43);
+    const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
+    const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
+    const double t54 = t43 + t45*(1.0 + t32*t32);
+    const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
+    const double t61 = target[0] - t12;
+    const double t62 = t11 + target[1];
+    const double t63 = (t30 ? t61 : t62);
+    const double t64 = (t30 ? t62 : t61);
+    const double t65 = t63 + t64*t32;
+    const double t66 = (t51 ? t53*(t65*t43 + t63*t46) : t65*t55);
+    const double t67 = (t51 ? t53*(t64*t43 + t45*(t64 - t63*t32)) : 0.0);
+    const double t68 = t66*t33 + t67*t36;
+    const double t69 = t66*t34 + t67*t37;
+    const double t70 = t66*t35 + t67*t38;
+    q_next[0] = t68 + q[0];
+    q_next[1] = t69 + q[1];
+    q_next[2] = t70 + q[2];
 }
 
 void arm3_ik_step(const double q[3], const double target[2], const double l[3], double lambda, double q_next[3])
@@ -2017,27 +2046,32 @@ static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const 
         const double t37 = (t30 ? t10 : t9) - t34*t32;
         const double t38 = (t30 ? t4 : t8) - t35*t32;
         const double t39 = t36*t36 + t37*t37 + t38*t38;
-        const double t40 = lambda*lambda;
-        const double t43 = t27 + t29;
-        const double t44 = t31*t39;
-        const double t45 = t44 + t40*(t43 + t40);
-        const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
-        const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-        const double t49 = t40 + t31*(1.0 + t32*t32);
-        const double t50 = (t49 > 0.0 ? 1.0/(t49 != 0.0 ? t49 : 1.0) : 1.0);
-        const double t56 = target[0] - t12;
-        const double t57 = t11 + target[1];
-        const double t58 = (t30 ? t56 : t57);
-        const double t59 = (t30 ? t57 : t56);
-        const double t60 = t58 + t59*t32;
-        const double t61 = (t46 ? t48*(t60*t40 + t58*t39) : t60*t50);
-        const double t62 = (t46 ? t48*(t59*t40 + t31*(t59 - t58*t32)) : 0.0);
-        const double t63 = t61*t33 + t62*t36;
-        const double t64 = t61*t34 + t62*t37;
-        const double t65 = t61*t35 + t62*t38;
-        q_next[0] = t63 + q[0];
-        q_next[1] = t64 + q[1];
-        q_next[2] = t65 + q[2];
+        const int t40 = lambda > 1.0;
+        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t42 = (t40 ? 1.0 : lambda);
+        const double t43 = t42*t42;
+        const double t44 = t41*t41;
+        const double t45 = t44*t31;
+        const double t46 = t44*t39;
+        const double t49 = t44*(t27 + t29);
+        const double t50 = t45*t46 + t43*(t49 + t43);
+        const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
+        const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
+        const double t54 = t43 + t45*(1.0 + t32*t32);
+        const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
+        const double t61 = target[0] - t12;
+        const double t62 = t11 + target[1];
+        const double t63 = (t30 ? t61 : t62);
+        const double t64 = (t30 ? t62 : t61);
+        const double t65 = t63 + t64*t32;
+        const double t66 = (t51 ? t53*(t65*t43 + t63*t46) : t65*t55);
+        const double t67 = (t51 ? t53*(t64*t43 + t45*(t64 - t63*t32)) : 0.0);
+        const double t68 = t66*t33 + t67*t36;
+        const double t69 = t66*t34 + t67*t37;
+        const double t70 = t66*t35 + t67*t38;
+        q_next[0] = t68 + q[0];
+        q_next[1] = t69 + q[1];
+        q_next[2] = t70 + q[2];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

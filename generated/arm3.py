@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xaefc194f
+STAMP = 0x39264076
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -483,8 +483,7 @@ def _manipulability_core(q, l, w):
     t37 = np.where(t30, t10, t9) - t34*t32
     t38 = np.where(t30, t4, t8) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
-    t44 = t31*t39
-    w[..., 0] = np.sqrt(t44)
+    w[..., 0] = np.sqrt(t31*t39)
 
 
 @_signature_errors
@@ -535,25 +534,30 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t37 = np.where(t30, t10, t9) - t34*t32
     t38 = np.where(t30, t4, t8) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
-    t40 = lambda_*lambda_
-    t41 = np.where(t30, v[..., 0], v[..., 1])
-    t42 = np.where(t30, v[..., 1], v[..., 0])
-    t43 = t27 + t29
-    t44 = t31*t39
-    t45 = t44 + t40*(t43 + t40)
-    t46 = t45 > RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40))
-    t47 = t41 + t42*t32
-    t48 = np.where(t46, 1.0/t45, 1.0)
-    t49 = t40 + t31*(1.0 + t32*t32)
-    t50 = np.where(t49 > 0.0, 1.0/t49, 1.0)
-    t51 = np.where(t46, t48*(t47*t40 + t41*t39), t47*t50)
-    t52 = np.where(t46, t48*(t42*t40 + t31*(t42 - t41*t32)), 0.0)
-    t53 = t51*t33 + t52*t36
-    t54 = t51*t34 + t52*t37
-    t55 = t51*t35 + t52*t38
-    dq[..., 0] = t53
-    dq[..., 1] = t54
-    dq[..., 2] = t55
+    t40 = lambda_ > 1.0
+    t41 = np.where(t40, 1.0/lambda_, 1.0)
+    t42 = np.where(t40, 1.0, lambda_)
+    t43 = t42*t42
+    t44 = t41*t41
+    t45 = t44*t31
+    t46 = t44*t39
+    t47 = np.where(t30, v[..., 0], v[..., 1])
+    t48 = np.where(t30, v[..., 1], v[..., 0])
+    t49 = t44*(t27 + t29)
+    t50 = t45*t46 + t43*(t49 + t43)
+    t51 = t50 > RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43))
+    t52 = t47 + t48*t32
+    t53 = t44*np.where(t51, 1.0/t50, 1.0)
+    t54 = t43 + t45*(1.0 + t32*t32)
+    t55 = t44*np.where(t54 > 0.0, 1.0/t54, 1.0)
+    t56 = np.where(t51, t53*(t52*t43 + t46*t47), t52*t55)
+    t57 = np.where(t51, t53*(t45*(t48 - t47*t32) + t48*t43), 0.0)
+    t58 = t56*t33 + t57*t36
+    t59 = t56*t34 + t57*t37
+    t60 = t56*t35 + t57*t38
+    dq[..., 0] = t58
+    dq[..., 1] = t59
+    dq[..., 2] = t60
 
 
 @_signature_errors
@@ -565,7 +569,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 78 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 84 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -597,52 +601,60 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t27 = t11*t11 + t9*t9 + t8*t8
     t28 = t4*t8 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
-    t40 = lambda_*lambda_
-    t66 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
-    t67 = t66*t66
-    t68 = t11 + t9 + t8
-    t69 = t4 + t12 + t10
-    t70 = t67*(t27 + t40)
-    t71 = t28*t67
-    t72 = t68*t66
-    t73 = t67*(t29 + t40)
-    t74 = t69*t66
-    t75 = 3.0 + t40
-    t76 = t66*twist[..., 0]
-    t77 = t66*twist[..., 1]
-    t78 = t70 + t73 + t75
-    t79 = t70*t76 + t71*t77 + t72*twist[..., 2]
-    t80 = t71*t76 + t73*t77 + t74*twist[..., 2]
-    t81 = t72*t76 + t74*t77 + t75*twist[..., 2]
-    t82 = np.where(t78 > 0.0, 1.0/(t78*t78), 1.0)
-    t83 = t79*t82
-    t84 = t80*t82
-    t85 = t81*t82
-    t86 = t73*t75 - t74*t74
-    t87 = t72*t74 - t71*t75
-    t88 = t71*t74 - t72*t73
-    t89 = t70*t75 - t72*t72
-    t90 = t71*t72 - t70*t74
-    t91 = t70*t73 - t71*t71
-    t92 = t70*t86 + t71*t87 + t72*t88
-    t93 = t86 + t89 + t91
-    t94 = t92 > RANK_TOL*t93*t78
-    t95 = t78*t78
-    t96 = t93 > RANK_TOL*t95
-    t97 = np.where(t92 > 0.0, 1.0/t92, 1.0)
-    t98 = t70*t79 + t71*t80 + t72*t81
-    t99 = t71*t79 + t73*t80 + t74*t81
-    t100 = t72*t79 + t74*t80 + t75*t81
-    t101 = np.where(t93 > 0.0, 1.0/(t93*t93), 1.0)
-    t102 = t95 - t93
-    t103 = np.where(t96, np.where(t94, t97*(t86*t76 + t87*t77 + t88*twist[..., 2]), t101*(t79*t102 - t98*t78)), t83)
-    t104 = np.where(t96, np.where(t94, t97*(t87*t76 + t89*t77 + t90*twist[..., 2]), t101*(t80*t102 - t99*t78)), t84)
-    t105 = np.where(t96, np.where(t94, t97*(t88*t76 + t90*t77 + t91*twist[..., 2]), t101*(t81*t102 - t100*t78)), t85)
-    t106 = t66*t103
-    t107 = t66*t104
-    dq3[..., 0] = t105 + t106*t11 + t107*t12
-    dq3[..., 1] = t105 + t106*t9 + t107*t10
-    dq3[..., 2] = t105 + t4*t107 + t106*t8
+    t40 = lambda_ > 1.0
+    t41 = np.where(t40, 1.0/lambda_, 1.0)
+    t42 = np.where(t40, 1.0, lambda_)
+    t43 = t42*t42
+    t44 = t41*t41
+    t71 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
+    t72 = t71*t71
+    t73 = t11 + t9 + t8
+    t74 = t4 + t12 + t10
+    t75 = t72*t44
+    t76 = t71*t44
+    t77 = t72*t43
+    t78 = t77 + t27*t75
+    t79 = t28*t75
+    t80 = t73*t76
+    t81 = t77 + t29*t75
+    t82 = t74*t76
+    t83 = 3.0*t44 + t43
+    t84 = t76*twist[..., 0]
+    t85 = t76*twist[..., 1]
+    t86 = t44*twist[..., 2]
+    t87 = t78 + t81 + t83
+    t88 = t78*t84 + t79*t85 + t80*t86
+    t89 = t79*t84 + t81*t85 + t82*t86
+    t90 = t80*t84 + t82*t85 + t83*t86
+    t91 = np.where(t87 > 0.0, 1.0/(t87*t87), 1.0)
+    t92 = t88*t91
+    t93 = t89*t91
+    t94 = t90*t91
+    t95 = t81*t83 - t82*t82
+    t96 = t80*t82 - t79*t83
+    t97 = t79*t82 - t80*t81
+    t98 = t78*t83 - t80*t80
+    t99 = t79*t80 - t78*t82
+    t100 = t78*t81 - t79*t79
+    t101 = t78*t95 + t79*t96 + t80*t97
+    t102 = t95 + t98 + t100
+    t103 = t101 > RANK_TOL*t102*t87
+    t104 = t87*t87
+    t105 = t102 > RANK_TOL*t104
+    t106 = np.where(t101 > 0.0, 1.0/t101, 1.0)
+    t107 = t78*t88 + t79*t89 + t80*t90
+    t108 = t79*t88 + t81*t89 + t82*t90
+    t109 = t80*t88 + t82*t89 + t83*t90
+    t110 = np.where(t102 > 0.0, 1.0/(t102*t102), 1.0)
+    t111 = t104 - t102
+    t112 = np.where(t105, np.where(t103, t106*(t95*t84 + t96*t85 + t97*t86), t110*(t88*t111 - t107*t87)), t92)
+    t113 = np.where(t105, np.where(t103, t106*(t96*t84 + t98*t85 + t99*t86), t110*(t89*t111 - t108*t87)), t93)
+    t114 = np.where(t105, np.where(t103, t106*(t97*t84 + t99*t85 + t100*t86), t110*(t90*t111 - t109*t87)), t94)
+    t115 = t71*t112
+    t116 = t71*t113
+    dq3[..., 0] = t114 + t115*t11 + t116*t12
+    dq3[..., 1] = t114 + t115*t9 + t116*t10
+    dq3[..., 2] = t114 + t4*t116 + t115*t8
 
 
 @_signature_errors
@@ -654,7 +666,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 157 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 163 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -696,27 +708,32 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t37 = np.where(t30, t10, t9) - t34*t32
     t38 = np.where(t30, t4, t8) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
-    t40 = lambda_*lambda_
-    t43 = t27 + t29
-    t44 = t31*t39
-    t45 = t44 + t40*(t43 + t40)
-    t46 = t45 > RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40))
-    t48 = np.where(t46, 1.0/t45, 1.0)
-    t49 = t40 + t31*(1.0 + t32*t32)
-    t50 = np.where(t49 > 0.0, 1.0/t49, 1.0)
-    t56 = target[..., 0] - t12
-    t57 = t11 + target[..., 1]
-    t58 = np.where(t30, t56, t57)
-    t59 = np.where(t30, t57, t56)
-    t60 = t58 + t59*t32
-    t61 = np.where(t46, t48*(t60*t40 + t58*t39), t60*t50)
-    t62 = np.where(t46, t48*(t59*t40 + t31*(t59 - t58*t32)), 0.0)
-    t63 = t61*t33 + t62*t36
-    t64 = t61*t34 + t62*t37
-    t65 = t61*t35 + t62*t38
-    q_next[..., 0] = t63 + q[..., 0]
-    q_next[..., 1] = t64 + q[..., 1]
-    q_next[..., 2] = t65 + q[..., 2]
+    t40 = lambda_ > 1.0
+    t41 = np.where(t40, 1.0/lambda_, 1.0)
+    t42 = np.where(t40, 1.0, lambda_)
+    t43 = t42*t42
+    t44 = t41*t41
+    t45 = t44*t31
+    t46 = t44*t39
+    t49 = t44*(t27 + t29)
+    t50 = t45*t46 + t43*(t49 + t43)
+    t51 = t50 > RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43))
+    t53 = t44*np.where(t51, 1.0/t50, 1.0)
+    t54 = t43 + t45*(1.0 + t32*t32)
+    t55 = t44*np.where(t54 > 0.0, 1.0/t54, 1.0)
+    t61 = target[..., 0] - t12
+    t62 = t11 + target[..., 1]
+    t63 = np.where(t30, t61, t62)
+    t64 = np.where(t30, t62, t61)
+    t65 = t63 + t64*t32
+    t66 = np.where(t51, t53*(t65*t43 + t63*t46), t65*t55)
+    t67 = np.where(t51, t53*(t64*t43 + t45*(t64 - t63*t32)), 0.0)
+    t68 = t66*t33 + t67*t36
+    t69 = t66*t34 + t67*t37
+    t70 = t66*t35 + t67*t38
+    q_next[..., 0] = t68 + q[..., 0]
+    q_next[..., 1] = t69 + q[..., 1]
+    q_next[..., 2] = t70 + q[..., 2]
 
 
 @_signature_errors
@@ -728,7 +745,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 83 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 89 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9316935bUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x3ce1ea5cUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1267,8 +1267,7 @@ static void arm3f_manipulability_finish(const float *restrict cs, const float *r
     const float t35 = (t28 ? t8 : t7) - t32*t30;
     const float t36 = (t28 ? t3 : t6) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
-    const float t42 = t29*t37;
-    w[0] = sqrtf(t42);
+    w[0] = sqrtf(t29*t37);
 }
 
 void arm3f_manipulability(const float q[3], float w[1])
@@ -1336,8 +1335,7 @@ static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T
         const float t35 = (t28 ? t8 : t7) - t32*t30;
         const float t36 = (t28 ? t3 : t6) - t33*t30;
         const float t37 = t34*t34 + t35*t35 + t36*t36;
-        const float t42 = t29*t37;
-        w[0] = sqrtf(t42);
+        w[0] = sqrtf(t29*t37);
         w_T[0 + b] = w[0];
     }
 }
@@ -1395,7 +1393,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 #endif
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 44 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 1 neg, 4 div */
 
 static void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
 {
@@ -1428,25 +1426,30 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t35 = (t28 ? t8 : t7) - t32*t30;
     const float t36 = (t28 ? t3 : t6) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
-    const float t38 = lambda*lambda;
-    const float t39 = (t28 ? v[0] : v[1]);
-    const float t40 = (t28 ? v[1] : v[0]);
-    const float t41 = t25 + t27;
-    const float t42 = t29*t37;
-    const float t43 = t42 + t38*(t41 + t38);
-    const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
-    const float t45 = t39 + t40*t30;
-    const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
-    const float t47 = t38 + t29*(1.0f + t30*t30);
-    const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
-    const float t49 = (t44 ? t46*(t45*t38 + t39*t37) : t45*t48);
-    const float t50 = (t44 ? t46*(t40*t38 + t29*(t40 - t39*t30)) : 0.0f);
-    const float t51 = t49*t31 + t50*t34;
-    const float t52 = t49*t32 + t50*t35;
-    const float t53 = t49*t33 + t50*t36;
-    dq[0] = t51;
-    dq[1] = t52;
-    dq[2] = t53;
+    const int t38 = lambda > 1.0f;
+    const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+    const float t40 = (t38 ? 1.0f : lambda);
+    const float t41 = t40*t40;
+    const float t42 = t39*t39;
+    const float t43 = t42*t29;
+    const float t44 = t42*t37;
+    const float t45 = (t28 ? v[0] : v[1]);
+    const float t46 = (t28 ? v[1] : v[0]);
+    const float t47 = t42*(t25 + t27);
+    const float t48 = t43*t44 + t41*(t47 + t41);
+    const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+    const float t50 = t45 + t46*t30;
+    const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
+    const float t52 = t41 + t43*(1.0f + t30*t30);
+    const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
+    const float t54 = (t49 ? t51*(t50*t41 + t44*t45) : t50*t53);
+    const float t55 = (t49 ? t51*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
+    const float t56 = t54*t31 + t55*t34;
+    const float t57 = t54*t32 + t55*t35;
+    const float t58 = t54*t33 + t55*t36;
+    dq[0] = t56;
+    dq[1] = t57;
+    dq[2] = t58;
 }
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
@@ -1517,25 +1520,30 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q
         const float t35 = (t28 ? t8 : t7) - t32*t30;
         const float t36 = (t28 ? t3 : t6) - t33*t30;
         const float t37 = t34*t34 + t35*t35 + t36*t36;
-        const float t38 = lambda*lambda;
-        const float t39 = (t28 ? v[0] : v[1]);
-        const float t40 = (t28 ? v[1] : v[0]);
-        const float t41 = t25 + t27;
-        const float t42 = t29*t37;
-        const float t43 = t42 + t38*(t41 + t38);
-        const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
-        const float t45 = t39 + t40*t30;
-        const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
-        const float t47 = t38 + t29*(1.0f + t30*t30);
-        const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
-        const float t49 = (t44 ? t46*(t45*t38 + t39*t37) : t45*t48);
-        const float t50 = (t44 ? t46*(t40*t38 + t29*(t40 - t39*t30)) : 0.0f);
-        const float t51 = t49*t31 + t50*t34;
-        const float t52 = t49*t32 + t50*t35;
-        const float t53 = t49*t33 + t50*t36;
-        dq[0] = t51;
-        dq[1] = t52;
-        dq[2] = t53;
+        const int t38 = lambda > 1.0f;
+        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+        const float t40 = (t38 ? 1.0f : lambda);
+        const float t41 = t40*t40;
+        const float t42 = t39*t39;
+        const float t43 = t42*t29;
+        const float t44 = t42*t37;
+        const float t45 = (t28 ? v[0] : v[1]);
+        const float t46 = (t28 ? v[1] : v[0]);
+        const float t47 = t42*(t25 + t27);
+        const float t48 = t43*t44 + t41*(t47 + t41);
+        const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+        const float t50 = t45 + t46*t30;
+        const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
+        const float t52 = t41 + t43*(1.0f + t30*t30);
+        const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
+        const float t54 = (t49 ? t51*(t50*t41 + t44*t45) : t50*t53);
+        const float t55 = (t49 ? t51*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
+        const float t56 = t54*t31 + t55*t34;
+        const float t57 = t54*t32 + t55*t35;
+        const float t58 = t54*t33 + t55*t36;
+        dq[0] = t56;
+        dq[1] = t57;
+        dq[2] = t58;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1604,7 +1612,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 #endif
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 93 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 1 neg, 4 div */
 
 static void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
 {
@@ -1627,51 +1635,58 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t25 = t9*t9 + t7*t7 + t6*t6;
     const float t26 = t3*t6 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
-    const float t38 = lambda*lambda;
-    const float t64 = t9 + t7 + t6;
-    const float t65 = t3 + t10 + t8;
-    const float t66 = 0.18903592f*t38;
-    const float t67 = t66 + 0.18903592f*t25;
-    const float t68 = 0.18903592f*t26;
-    const float t69 = 0.4347826f*t64;
-    const float t70 = t66 + 0.18903592f*t27;
-    const float t71 = 0.4347826f*t65;
-    const float t72 = 3.0f + t38;
-    const float t73 = 0.4347826f*twist[0];
-    const float t74 = 0.4347826f*twist[1];
-    const float t75 = t67 + t70 + t72;
-    const float t76 = t67*t73 + t68*t74 + t69*twist[2];
-    const float t77 = t68*t73 + t70*t74 + t71*twist[2];
-    const float t78 = t69*t73 + t71*t74 + t72*twist[2];
-    const float t79 = (t75 > 0.0f ? 1.0f/(t75*t75 != 0.0f ? t75*t75 : 1.0f) : 1.0f);
-    const float t80 = t76*t79;
-    const float t81 = t77*t79;
-    const float t82 = t78*t79;
-    const float t83 = t70*t72 - t71*t71;
-    const float t84 = t69*t71 - t68*t72;
-    const float t85 = t68*t71 - t69*t70;
-    const float t86 = t67*t72 - t69*t69;
-    const float t87 = t68*t69 - t67*t71;
-    const float t88 = t67*t70 - t68*t68;
-    const float t89 = t67*t83 + t68*t84 + t69*t85;
-    const float t90 = t83 + t86 + t88;
-    const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
-    const float t92 = t75*t75;
-    const int t93 = t90 > ARM3F_RANK_TOL*t92;
-    const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
-    const float t95 = t67*t76 + t68*t77 + t69*t78;
-    const float t96 = t68*t76 + t70*t77 + t71*t78;
-    const float t97 = t69*t76 + t71*t77 + t72*t78;
-    const float t98 = (t90 > 0.0f ? 1.0f/(t90*t90 != 0.0f ? t90*t90 : 1.0f) : 1.0f);
-    const float t99 = t92 - t90;
-    const float t100 = (t93 ? (t91 ? t94*(t83*t73 + t84*t74 + t85*twist[2]) : t98*(t76*t99 - t95*t75)) : t80);
-    const float t101 = (t93 ? (t91 ? t94*(t84*t73 + t86*t74 + t87*twist[2]) : t98*(t77*t99 - t96*t75)) : t81);
-    const float t102 = (t93 ? (t91 ? t94*(t85*t73 + t87*t74 + t88*twist[2]) : t98*(t78*t99 - t97*t75)) : t82);
-    const float t103 = 0.4347826f*t100;
-    const float t104 = 0.4347826f*t101;
-    dq3[0] = t102 + t103*t9 + t104*t10;
-    dq3[1] = t102 + t103*t7 + t104*t8;
-    dq3[2] = t102 + t3*t104 + t103*t6;
+    const int t38 = lambda > 1.0f;
+    const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+    const float t40 = (t38 ? 1.0f : lambda);
+    const float t41 = t40*t40;
+    const float t42 = t39*t39;
+    const float t69 = t9 + t7 + t6;
+    const float t70 = t3 + t10 + t8;
+    const float t71 = 0.18903592f*t42;
+    const float t72 = 0.4347826f*t42;
+    const float t73 = 0.18903592f*t41;
+    const float t74 = t73 + t25*t71;
+    const float t75 = t26*t71;
+    const float t76 = t69*t72;
+    const float t77 = t73 + t27*t71;
+    const float t78 = t70*t72;
+    const float t79 = 3.0f*t42 + t41;
+    const float t80 = t72*twist[0];
+    const float t81 = t72*twist[1];
+    const float t82 = t42*twist[2];
+    const float t83 = t74 + t77 + t79;
+    const float t84 = t74*t80 + t75*t81 + t76*t82;
+    const float t85 = t75*t80 + t77*t81 + t78*t82;
+    const float t86 = t76*t80 + t78*t81 + t79*t82;
+    const float t87 = (t83 > 0.0f ? 1.0f/(t83*t83 != 0.0f ? t83*t83 : 1.0f) : 1.0f);
+    const float t88 = t84*t87;
+    const float t89 = t85*t87;
+    const float t90 = t86*t87;
+    const float t91 = t77*t79 - t78*t78;
+    const float t92 = t76*t78 - t75*t79;
+    const float t93 = t75*t78 - t76*t77;
+    const float t94 = t74*t79 - t76*t76;
+    const float t95 = t75*t76 - t74*t78;
+    const float t96 = t74*t77 - t75*t75;
+    const float t97 = t74*t91 + t75*t92 + t76*t93;
+    const float t98 = t91 + t94 + t96;
+    const int t99 = t97 > ARM3F_RANK_TOL*t98*t83;
+    const float t100 = t83*t83;
+    const int t101 = t98 > ARM3F_RANK_TOL*t100;
+    const float t102 = (t97 > 0.0f ? 1.0f/(t97 != 0.0f ? t97 : 1.0f) : 1.0f);
+    const float t103 = t74*t84 + t75*t85 + t76*t86;
+    const float t104 = t75*t84 + t77*t85 + t78*t86;
+    const float t105 = t76*t84 + t78*t85 + t79*t86;
+    const float t106 = (t98 > 0.0f ? 1.0f/(t98*t98 != 0.0f ? t98*t98 : 1.0f) : 1.0f);
+    const float t107 = t100 - t98;
+    const float t108 = (t101 ? (t99 ? t102*(t91*t80 + t92*t81 + t93*t82) : t106*(t84*t107 - t103*t83)) : t88);
+    const float t109 = (t101 ? (t99 ? t102*(t92*t80 + t94*t81 + t95*t82) : t106*(t85*t107 - t104*t83)) : t89);
+    const float t110 = (t101 ? (t99 ? t102*(t93*t80 + t95*t81 + t96*t82) : t106*(t86*t107 - t105*t83)) : t90);
+    const float t111 = 0.4347826f*t108;
+    const float t112 = 0.4347826f*t109;
+    dq3[0] = t110 + t111*t9 + t112*t10;
+    dq3[1] = t110 + t111*t7 + t112*t8;
+    dq3[2] = t110 + t3*t112 + t111*t6;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1733,51 +1748,58 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         const float t25 = t9*t9 + t7*t7 + t6*t6;
         const float t26 = t3*t6 + t9*t10 + t7*t8;
         const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const float t38 = lambda*lambda;
-        const float t64 = t9 + t7 + t6;
-        const float t65 = t3 + t10 + t8;
-        const float t66 = 0.18903592f*t38;
-        const float t67 = t66 + 0.18903592f*t25;
-        const float t68 = 0.18903592f*t26;
-        const float t69 = 0.4347826f*t64;
-        const float t70 = t66 + 0.18903592f*t27;
-        const float t71 = 0.4347826f*t65;
-        const float t72 = 3.0f + t38;
-        const float t73 = 0.4347826f*twist[0];
-        const float t74 = 0.4347826f*twist[1];
-        const float t75 = t67 + t70 + t72;
-        const float t76 = t67*t73 + t68*t74 + t69*twist[2];
-        const float t77 = t68*t73 + t70*t74 + t71*twist[2];
-        const float t78 = t69*t73 + t71*t74 + t72*twist[2];
-        const float t79 = (t75 > 0.0f ? 1.0f/(t75*t75 != 0.0f ? t75*t75 : 1.0f) : 1.0f);
-        const float t80 = t76*t79;
-        const float t81 = t77*t79;
-        const float t82 = t78*t79;
-        const float t83 = t70*t72 - t71*t71;
-        const float t84 = t69*t71 - t68*t72;
-        const float t85 = t68*t71 - t69*t70;
-        const float t86 = t67*t72 - t69*t69;
-        const float t87 = t68*t69 - t67*t71;
-        const float t88 = t67*t70 - t68*t68;
-        const float t89 = t67*t83 + t68*t84 + t69*t85;
-        const float t90 = t83 + t86 + t88;
-        const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
-        const float t92 = t75*t75;
-        const int t93 = t90 > ARM3F_RANK_TOL*t92;
-        const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
-        const float t95 = t67*t76 + t68*t77 + t69*t78;
-        const float t96 = t68*t76 + t70*t77 + t71*t78;
-        const float t97 = t69*t76 + t71*t77 + t72*t78;
-        const float t98 = (t90 > 0.0f ? 1.0f/(t90*t90 != 0.0f ? t90*t90 : 1.0f) : 1.0f);
-        const float t99 = t92 - t90;
-        const float t100 = (t93 ? (t91 ? t94*(t83*t73 + t84*t74 + t85*twist[2]) : t98*(t76*t99 - t95*t75)) : t80);
-        const float t101 = (t93 ? (t91 ? t94*(t84*t73 + t86*t74 + t87*twist[2]) : t98*(t77*t99 - t96*t75)) : t81);
-        const float t102 = (t93 ? (t91 ? t94*(t85*t73 + t87*t74 + t88*twist[2]) : t98*(t78*t99 - t97*t75)) : t82);
-        const float t103 = 0.4347826f*t100;
-        const float t104 = 0.4347826f*t101;
-        dq3[0] = t102 + t103*t9 + t104*t10;
-        dq3[1] = t102 + t103*t7 + t104*t8;
-        dq3[2] = t102 + t3*t104 + t103*t6;
+        const int t38 = lambda > 1.0f;
+        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+        const float t40 = (t38 ? 1.0f : lambda);
+        const float t41 = t40*t40;
+        const float t42 = t39*t39;
+        const float t69 = t9 + t7 + t6;
+        const float t70 = t3 + t10 + t8;
+        const float t71 = 0.18903592f*t42;
+        const float t72 = 0.4347826f*t42;
+        const float t73 = 0.18903592f*t41;
+        const float t74 = t73 + t25*t71;
+        const float t75 = t26*t71;
+        const float t76 = t69*t72;
+        const float t77 = t73 + t27*t71;
+        const float t78 = t70*t72;
+        const float t79 = 3.0f*t42 + t41;
+        const float t80 = t72*twist[0];
+        const float t81 = t72*twist[1];
+        const float t82 = t42*twist[2];
+        const float t83 = t74 + t77 + t79;
+        const float t84 = t74*t80 + t75*t81 + t76*t82;
+        const float t85 = t75*t80 + t77*t81 + t78*t82;
+        const float t86 = t76*t80 + t78*t81 + t79*t82;
+        const float t87 = (t83 > 0.0f ? 1.0f/(t83*t83 != 0.0f ? t83*t83 : 1.0f) : 1.0f);
+        const float t88 = t84*t87;
+        const float t89 = t85*t87;
+        const float t90 = t86*t87;
+        const float t91 = t77*t79 - t78*t78;
+        const float t92 = t76*t78 - t75*t79;
+        const float t93 = t75*t78 - t76*t77;
+        const float t94 = t74*t79 - t76*t76;
+        const float t95 = t75*t76 - t74*t78;
+        const float t96 = t74*t77 - t75*t75;
+        const float t97 = t74*t91 + t75*t92 + t76*t93;
+        const float t98 = t91 + t94 + t96;
+        const int t99 = t97 > ARM3F_RANK_TOL*t98*t83;
+        const float t100 = t83*t83;
+        const int t101 = t98 > ARM3F_RANK_TOL*t100;
+        const float t102 = (t97 > 0.0f ? 1.0f/(t97 != 0.0f ? t97 : 1.0f) : 1.0f);
+        const float t103 = t74*t84 + t75*t85 + t76*t86;
+        const float t104 = t75*t84 + t77*t85 + t78*t86;
+        const float t105 = t76*t84 + t78*t85 + t79*t86;
+        const float t106 = (t98 > 0.0f ? 1.0f/(t98*t98 != 0.0f ? t98*t98 : 1.0f) : 1.0f);
+        const float t107 = t100 - t98;
+        const float t108 = (t101 ? (t99 ? t102*(t91*t80 + t92*t81 + t93*t82) : t106*(t84*t107 - t103*t83)) : t88);
+        const float t109 = (t101 ? (t99 ? t102*(t92*t80 + t94*t81 + t95*t82) : t106*(t85*t107 - t104*t83)) : t89);
+        const float t110 = (t101 ? (t99 ? t102*(t93*t80 + t95*t81 + t96*t82) : t106*(t86*t107 - t105*t83)) : t90);
+        const float t111 = 0.4347826f*t108;
+        const float t112 = 0.4347826f*t109;
+        dq3[0] = t110 + t111*t9 + t112*t10;
+        dq3[1] = t110 + t111*t7 + t112*t8;
+        dq3[2] = t110 + t3*t112 + t111*t6;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -1847,7 +1869,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 #endif
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 44 mul, 1 neg, 3 div */
+/* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 1 neg, 4 div */
 
 static void arm3f_ik_step_angles(const float q[3], float *restrict ang)
 {
@@ -1880,27 +1902,32 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t35 = (t28 ? t8 : t7) - t32*t30;
     const float t36 = (t28 ? t3 : t6) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
-    const float t38 = lambda*lambda;
-    const float t41 = t25 + t27;
-    const float t42 = t29*t37;
-    const float t43 = t42 + t38*(t41 + t38);
-    const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
-    const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
-    const float t47 = t38 + t29*(1.0f + t30*t30);
-    const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
-    const float t54 = target[0] - t10;
-    const float t55 = t9 + target[1];
-    const float t56 = (t28 ? t54 : t55);
-    const float t57 = (t28 ? t55 : t54);
-    const float t58 = t56 + t57*t30;
-    const float t59 = (t44 ? t46*(t58*t38 + t56*t37) : t58*t48);
-    const float t60 = (t44 ? t46*(t57*t38 + t29*(t57 - t56*t30)) : 0.0f);
-    const float t61 = t59*t31 + t60*t34;
-    const float t62 = t59*t32 + t60*t35;
-    const float t63 = t59*t33 + t60*t36;
-    q_next[0] = t61 + q[0];
-    q_next[1] = t62 + q[1];
-    q_next[2] = t63 + q[2];
+    const int t38 = lambda > 1.0f;
+    const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+    const float t40 = (t38 ? 1.0f : lambda);
+    const float t41 = t40*t40;
+    const float t42 = t39*t39;
+    const float t43 = t42*t29;
+    const float t44 = t42*t37;
+    const float t47 = t42*(t25 + t27);
+    const float t48 = t43*t44 + t41*(t47 + t41);
+    const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+    const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
+    const float t52 = t41 + t43*(1.0f + t30*t30);
+    const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
+    const float t59 = target[0] - t10;
+    const float t60 = t9 + target[1];
+    const float t61 = (t28 ? t59 : t60);
+    const float t62 = (t28 ? t60 : t59);
+    const float t63 = t61 + t62*t30;
+    const float t64 = (t49 ? t51*(t63*t41 + t61*t44) : t63*t53);
+    const float t65 = (t49 ? t51*(t62*t41 + t43*(t62 - t61*t30)) : 0.0f);
+    const float t66 = t64*t31 + t65*t34;
+    const float t67 = t64*t32 + t65*t35;
+    const float t68 = t64*t33 + t65*t36;
+    q_next[0] = t66 + q[0];
+    q_next[1] = t67 + q[1];
+    q_next[2] = t68 + q[2];
 }
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])
@@ -1975,27 +2002,32 @@ static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const
         const float t35 = (t28 ? t8 : t7) - t32*t30;
         const float t36 = (t28 ? t3 : t6) - t33*t30;
         const float t37 = t34*t34 + t35*t35 + t36*t36;
-        const float t38 = lambda*lambda;
-        const float t41 = t25 + t27;
-        const float t42 = t29*t37;
-        const float t43 = t42 + t38*(t41 + t38);
-        const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
-        const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
-        const float t47 = t38 + t29*(1.0f + t30*t30);
-        const float t48 = (t47 > 0.0f ? 1.0f/(t47 != 0.0f ? t47 : 1.0f) : 1.0f);
-        const float t54 = target[0] - t10;
-        const float t55 = t9 + target[1];
-        const float t56 = (t28 ? t54 : t55);
-        const float t57 = (t28 ? t55 : t54);
-        const float t58 = t56 + t57*t30;
-        const float t59 = (t44 ? t46*(t58*t38 + t56*t37) : t58*t48);
-        const float t60 = (t44 ? t46*(t57*t38 + t29*(t57 - t56*t30)) : 0.0f);
-        const float t61 = t59*t31 + t60*t34;
-        const float t62 = t59*t32 + t60*t35;
-        const float t63 = t59*t33 + t60*t36;
-        q_next[0] = t61 + q[0];
-        q_next[1] = t62 + q[1];
-        q_next[2] = t63 + q[2];
+        const int t38 = lambda > 1.0f;
+        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
+        const float t40 = (t38 ? 1.0f : lambda);
+        const float t41 = t40*t40;
+        const float t42 = t39*t39;
+        const float t43 = t42*t29;
+        const float t44 = t42*t37;
+        const float t47 = t42*(t25 + t27);
+        const float t48 = t43*t44 + t41*(t47 + t41);
+        const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+        const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
+        const float t52 = t41 + t43*(1.0f + t30*t30);
+        const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
+        const float t59 = target[0] - t10;
+        const float t60 = t9 + target[1];
+        const float t61 = (t28 ? t59 : t60);
+        const float t62 = (t28 ? t60 : t59);
+        const float t63 = t61 + t62*t30;
+        const float t64 = (t49 ? t51*(t63*t41 + t61*t44) : t63*t53);
+        const float t65 = (t49 ? t51*(t62*t41 + t43*(t62 - t61*t30)) : 0.0f);
+        const float t66 = t64*t31 + t65*t34;
+        const float t67 = t64*t32 + t65*t35;
+        const float t68 = t64*t33 + t65*t36;
+        q_next[0] = t66 + q[0];
+        q_next[1] = t67 + q[1];
+        q_next[2] = t68 + q[2];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

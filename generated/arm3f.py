@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0x9316935b
+STAMP = 0x3ce1ea5c
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -463,8 +463,7 @@ def _manipulability_core(q, w):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t42 = t29*t37
-    w[..., 0] = np.sqrt(t42)
+    w[..., 0] = np.sqrt(t29*t37)
 
 
 @_signature_errors
@@ -512,25 +511,30 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t38 = lambda_*lambda_
-    t39 = np.where(t28, v[..., 0], v[..., 1])
-    t40 = np.where(t28, v[..., 1], v[..., 0])
-    t41 = t25 + t27
-    t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
-    t44 = t43 > RANK_TOL*((t41 + 2.0*t38)*(t41 + 2.0*t38))
-    t45 = t39 + t40*t30
-    t46 = np.where(t44, 1.0/t43, 1.0)
-    t47 = t38 + t29*(1.0 + t30*t30)
-    t48 = np.where(t47 > 0.0, 1.0/t47, 1.0)
-    t49 = np.where(t44, t46*(t45*t38 + t39*t37), t45*t48)
-    t50 = np.where(t44, t46*(t40*t38 + t29*(t40 - t39*t30)), 0.0)
-    t51 = t49*t31 + t50*t34
-    t52 = t49*t32 + t50*t35
-    t53 = t49*t33 + t50*t36
-    dq[..., 0] = t51
-    dq[..., 1] = t52
-    dq[..., 2] = t53
+    t38 = lambda_ > 1.0
+    t39 = np.where(t38, 1.0/lambda_, 1.0)
+    t40 = np.where(t38, 1.0, lambda_)
+    t41 = t40*t40
+    t42 = t39*t39
+    t43 = t42*t29
+    t44 = t42*t37
+    t45 = np.where(t28, v[..., 0], v[..., 1])
+    t46 = np.where(t28, v[..., 1], v[..., 0])
+    t47 = t42*(t25 + t27)
+    t48 = t43*t44 + t41*(t47 + t41)
+    t49 = t48 > RANK_TOL*((t47 + 2.0*t41)*(t47 + 2.0*t41))
+    t50 = t45 + t46*t30
+    t51 = t42*np.where(t49, 1.0/t48, 1.0)
+    t52 = t41 + t43*(1.0 + t30*t30)
+    t53 = t42*np.where(t52 > 0.0, 1.0/t52, 1.0)
+    t54 = np.where(t49, t51*(t50*t41 + t44*t45), t50*t53)
+    t55 = np.where(t49, t51*(t43*(t46 - t45*t30) + t46*t41), 0.0)
+    t56 = t54*t31 + t55*t34
+    t57 = t54*t32 + t55*t35
+    t58 = t54*t33 + t55*t36
+    dq[..., 0] = t56
+    dq[..., 1] = t57
+    dq[..., 2] = t58
 
 
 @_signature_errors
@@ -541,7 +545,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 76 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 82 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -571,51 +575,58 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t25 = t9*t9 + t7*t7 + t6*t6
     t26 = t3*t6 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
-    t38 = lambda_*lambda_
-    t64 = t9 + t7 + t6
-    t65 = t3 + t10 + t8
-    t66 = 0.18903591682419663*t38
-    t67 = t66 + 0.18903591682419663*t25
-    t68 = 0.18903591682419663*t26
-    t69 = 0.4347826086956522*t64
-    t70 = t66 + 0.18903591682419663*t27
-    t71 = 0.4347826086956522*t65
-    t72 = 3.0 + t38
-    t73 = 0.4347826086956522*twist[..., 0]
-    t74 = 0.4347826086956522*twist[..., 1]
-    t75 = t67 + t70 + t72
-    t76 = t67*t73 + t68*t74 + t69*twist[..., 2]
-    t77 = t68*t73 + t70*t74 + t71*twist[..., 2]
-    t78 = t69*t73 + t71*t74 + t72*twist[..., 2]
-    t79 = np.where(t75 > 0.0, 1.0/(t75*t75), 1.0)
-    t80 = t76*t79
-    t81 = t77*t79
-    t82 = t78*t79
-    t83 = t70*t72 - t71*t71
-    t84 = t69*t71 - t68*t72
-    t85 = t68*t71 - t69*t70
-    t86 = t67*t72 - t69*t69
-    t87 = t68*t69 - t67*t71
-    t88 = t67*t70 - t68*t68
-    t89 = t67*t83 + t68*t84 + t69*t85
-    t90 = t83 + t86 + t88
-    t91 = t89 > RANK_TOL*t90*t75
-    t92 = t75*t75
-    t93 = t90 > RANK_TOL*t92
-    t94 = np.where(t89 > 0.0, 1.0/t89, 1.0)
-    t95 = t67*t76 + t68*t77 + t69*t78
-    t96 = t68*t76 + t70*t77 + t71*t78
-    t97 = t69*t76 + t71*t77 + t72*t78
-    t98 = np.where(t90 > 0.0, 1.0/(t90*t90), 1.0)
-    t99 = t92 - t90
-    t100 = np.where(t93, np.where(t91, t94*(t83*t73 + t84*t74 + t85*twist[..., 2]), t98*(t76*t99 - t95*t75)), t80)
-    t101 = np.where(t93, np.where(t91, t94*(t84*t73 + t86*t74 + t87*twist[..., 2]), t98*(t77*t99 - t96*t75)), t81)
-    t102 = np.where(t93, np.where(t91, t94*(t85*t73 + t87*t74 + t88*twist[..., 2]), t98*(t78*t99 - t97*t75)), t82)
-    t103 = 0.4347826086956522*t100
-    t104 = 0.4347826086956522*t101
-    dq3[..., 0] = t102 + t103*t9 + t104*t10
-    dq3[..., 1] = t102 + t103*t7 + t104*t8
-    dq3[..., 2] = t102 + t3*t104 + t103*t6
+    t38 = lambda_ > 1.0
+    t39 = np.where(t38, 1.0/lambda_, 1.0)
+    t40 = np.where(t38, 1.0, lambda_)
+    t41 = t40*t40
+    t42 = t39*t39
+    t69 = t9 + t7 + t6
+    t70 = t3 + t10 + t8
+    t71 = 0.18903591682419663*t42
+    t72 = 0.4347826086956522*t42
+    t73 = 0.18903591682419663*t41
+    t74 = t73 + t25*t71
+    t75 = t26*t71
+    t76 = t69*t72
+    t77 = t73 + t27*t71
+    t78 = t70*t72
+    t79 = 3.0*t42 + t41
+    t80 = t72*twist[..., 0]
+    t81 = t72*twist[..., 1]
+    t82 = t42*twist[..., 2]
+    t83 = t74 + t77 + t79
+    t84 = t74*t80 + t75*t81 + t76*t82
+    t85 = t75*t80 + t77*t81 + t78*t82
+    t86 = t76*t80 + t78*t81 + t79*t82
+    t87 = np.where(t83 > 0.0, 1.0/(t83*t83), 1.0)
+    t88 = t84*t87
+    t89 = t85*t87
+    t90 = t86*t87
+    t91 = t77*t79 - t78*t78
+    t92 = t76*t78 - t75*t79
+    t93 = t75*t78 - t76*t77
+    t94 = t74*t79 - t76*t76
+    t95 = t75*t76 - t74*t78
+    t96 = t74*t77 - t75*t75
+    t97 = t74*t91 + t75*t92 + t76*t93
+    t98 = t91 + t94 + t96
+    t99 = t97 > RANK_TOL*t98*t83
+    t100 = t83*t83
+    t101 = t98 > RANK_TOL*t100
+    t102 = np.where(t97 > 0.0, 1.0/t97, 1.0)
+    t103 = t74*t84 + t75*t85 + t76*t86
+    t104 = t75*t84 + t77*t85 + t78*t86
+    t105 = t76*t84 + t78*t85 + t79*t86
+    t106 = np.where(t98 > 0.0, 1.0/(t98*t98), 1.0)
+    t107 = t100 - t98
+    t108 = np.where(t101, np.where(t99, t102*(t91*t80 + t92*t81 + t93*t82), t106*(t84*t107 - t103*t83)), t88)
+    t109 = np.where(t101, np.where(t99, t102*(t92*t80 + t94*t81 + t95*t82), t106*(t85*t107 - t104*t83)), t89)
+    t110 = np.where(t101, np.where(t99, t102*(t93*t80 + t95*t81 + t96*t82), t106*(t86*t107 - t105*t83)), t90)
+    t111 = 0.4347826086956522*t108
+    t112 = 0.4347826086956522*t109
+    dq3[..., 0] = t110 + t111*t9 + t112*t10
+    dq3[..., 1] = t110 + t111*t7 + t112*t8
+    dq3[..., 2] = t110 + t3*t112 + t111*t6
 
 
 @_signature_errors
@@ -626,7 +637,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 153 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 158 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -666,27 +677,32 @@ def _ik_step_core(q, target, lambda_, q_next):
     t35 = np.where(t28, t8, t7) - t32*t30
     t36 = np.where(t28, t3, t6) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
-    t38 = lambda_*lambda_
-    t41 = t25 + t27
-    t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
-    t44 = t43 > RANK_TOL*((t41 + 2.0*t38)*(t41 + 2.0*t38))
-    t46 = np.where(t44, 1.0/t43, 1.0)
-    t47 = t38 + t29*(1.0 + t30*t30)
-    t48 = np.where(t47 > 0.0, 1.0/t47, 1.0)
-    t54 = target[..., 0] - t10
-    t55 = t9 + target[..., 1]
-    t56 = np.where(t28, t54, t55)
-    t57 = np.where(t28, t55, t54)
-    t58 = t56 + t57*t30
-    t59 = np.where(t44, t46*(t58*t38 + t56*t37), t58*t48)
-    t60 = np.where(t44, t46*(t57*t38 + t29*(t57 - t56*t30)), 0.0)
-    t61 = t59*t31 + t60*t34
-    t62 = t59*t32 + t60*t35
-    t63 = t59*t33 + t60*t36
-    q_next[..., 0] = t61 + q[..., 0]
-    q_next[..., 1] = t62 + q[..., 1]
-    q_next[..., 2] = t63 + q[..., 2]
+    t38 = lambda_ > 1.0
+    t39 = np.where(t38, 1.0/lambda_, 1.0)
+    t40 = np.where(t38, 1.0, lambda_)
+    t41 = t40*t40
+    t42 = t39*t39
+    t43 = t42*t29
+    t44 = t42*t37
+    t47 = t42*(t25 + t27)
+    t48 = t43*t44 + t41*(t47 + t41)
+    t49 = t48 > RANK_TOL*((t47 + 2.0*t41)*(t47 + 2.0*t41))
+    t51 = t42*np.where(t49, 1.0/t48, 1.0)
+    t52 = t41 + t43*(1.0 + t30*t30)
+    t53 = t42*np.where(t52 > 0.0, 1.0/t52, 1.0)
+    t59 = target[..., 0] - t10
+    t60 = t9 + target[..., 1]
+    t61 = np.where(t28, t59, t60)
+    t62 = np.where(t28, t60, t59)
+    t63 = t61 + t62*t30
+    t64 = np.where(t49, t51*(t63*t41 + t61*t44), t63*t53)
+    t65 = np.where(t49, t51*(t62*t41 + t43*(t62 - t61*t30)), 0.0)
+    t66 = t64*t31 + t65*t34
+    t67 = t64*t32 + t65*t35
+    t68 = t64*t33 + t65*t36
+    q_next[..., 0] = t66 + q[..., 0]
+    q_next[..., 1] = t67 + q[..., 1]
+    q_next[..., 2] = t68 + q[..., 2]
 
 
 @_signature_errors
@@ -697,7 +713,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 87 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xb3d8f4a5UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xa438f88eUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1442,8 +1442,7 @@ static void arm4_manipulability_finish(const double l[4], const double *restrict
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t56 = t41*t51;
-    w[0] = sqrt(t56);
+    w[0] = sqrt(t41*t51);
 }
 
 void arm4_manipulability(const double q[4], const double l[4], double w[1])
@@ -1520,8 +1519,7 @@ static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T,
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t56 = t41*t51;
-        w[0] = sqrt(t56);
+        w[0] = sqrt(t41*t51);
         w_T[0 + b] = w[0];
     }
 }
@@ -1580,7 +1578,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 40 add/sub, 55 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
 
 static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
@@ -1622,27 +1620,32 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t52 = lambda*lambda;
-    const double t53 = (t40 ? v[0] : v[1]);
-    const double t54 = (t40 ? v[1] : v[0]);
-    const double t55 = t37 + t39;
-    const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
-    const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-    const double t59 = t53 + t54*t42;
-    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t61 = t52 + t41*(1.0 + t42*t42);
-    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-    const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
-    const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
-    const double t65 = t63*t43 + t64*t47;
-    const double t66 = t63*t44 + t64*t48;
-    const double t67 = t63*t45 + t64*t49;
-    const double t68 = t63*t46 + t64*t50;
-    dq[0] = t65;
-    dq[1] = t66;
-    dq[2] = t67;
-    dq[3] = t68;
+    const int t52 = lambda > 1.0;
+    const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t54 = (t52 ? 1.0 : lambda);
+    const double t55 = t54*t54;
+    const double t56 = t53*t53;
+    const double t57 = t56*t41;
+    const double t58 = t56*t51;
+    const double t59 = (t40 ? v[0] : v[1]);
+    const double t60 = (t40 ? v[1] : v[0]);
+    const double t61 = t56*(t37 + t39);
+    const double t62 = t57*t58 + t55*(t61 + t55);
+    const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+    const double t64 = t59 + t60*t42;
+    const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
+    const double t66 = t55 + t57*(1.0 + t42*t42);
+    const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
+    const double t68 = (t63 ? t65*(t64*t55 + t58*t59) : t64*t67);
+    const double t69 = (t63 ? t65*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
+    const double t70 = t68*t43 + t69*t47;
+    const double t71 = t68*t44 + t69*t48;
+    const double t72 = t68*t45 + t69*t49;
+    const double t73 = t68*t46 + t69*t50;
+    dq[0] = t70;
+    dq[1] = t71;
+    dq[2] = t72;
+    dq[3] = t73;
 }
 
 void arm4_inverse_velocity(const double q[4], const double v[2], const double l[4], double lambda, double dq[4])
@@ -1722,27 +1725,32 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t53 = (t40 ? v[0] : v[1]);
-        const double t54 = (t40 ? v[1] : v[0]);
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
-        const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-        const double t59 = t53 + t54*t42;
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
-        const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
-        const double t65 = t63*t43 + t64*t47;
-        const double t66 = t63*t44 + t64*t48;
-        const double t67 = t63*t45 + t64*t49;
-        const double t68 = t63*t46 + t64*t50;
-        dq[0] = t65;
-        dq[1] = t66;
-        dq[2] = t67;
-        dq[3] = t68;
+        const int t52 = lambda > 1.0;
+        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t54 = (t52 ? 1.0 : lambda);
+        const double t55 = t54*t54;
+        const double t56 = t53*t53;
+        const double t57 = t56*t41;
+        const double t58 = t56*t51;
+        const double t59 = (t40 ? v[0] : v[1]);
+        const double t60 = (t40 ? v[1] : v[0]);
+        const double t61 = t56*(t37 + t39);
+        const double t62 = t57*t58 + t55*(t61 + t55);
+        const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+        const double t64 = t59 + t60*t42;
+        const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
+        const double t66 = t55 + t57*(1.0 + t42*t42);
+        const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
+        const double t68 = (t63 ? t65*(t64*t55 + t58*t59) : t64*t67);
+        const double t69 = (t63 ? t65*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
+        const double t70 = t68*t43 + t69*t47;
+        const double t71 = t68*t44 + t69*t48;
+        const double t72 = t68*t45 + t69*t49;
+        const double t73 = t68*t46 + t69*t50;
+        dq[0] = t70;
+        dq[1] = t71;
+        dq[2] = t72;
+        dq[3] = t73;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -1814,7 +1822,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 72 add/sub, 102 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
 
 static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
@@ -1844,53 +1852,61 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
     const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const double t52 = lambda*lambda;
-    const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-    const double t81 = t80*t80;
-    const double t82 = t16 + t14 + t12 + t11;
-    const double t83 = t6 + t17 + t15 + t13;
-    const double t84 = t81*(t37 + t52);
-    const double t85 = t38*t81;
-    const double t86 = t82*t80;
-    const double t87 = t81*(t39 + t52);
-    const double t88 = t83*t80;
-    const double t89 = 4.0 + t52;
-    const double t90 = t80*twist[0];
-    const double t91 = t80*twist[1];
-    const double t92 = t84 + t87 + t89;
-    const double t93 = t84*t90 + t85*t91 + t86*twist[2];
-    const double t94 = t85*t90 + t87*t91 + t88*twist[2];
-    const double t95 = t86*t90 + t88*t91 + t89*twist[2];
-    const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
-    const double t97 = t93*t96;
-    const double t98 = t94*t96;
-    const double t99 = t95*t96;
-    const double t100 = t87*t89 - t88*t88;
-    const double t101 = t86*t88 - t85*t89;
-    const double t102 = t85*t88 - t86*t87;
-    const double t103 = t84*t89 - t86*t86;
-    const double t104 = t85*t86 - t84*t88;
-    const double t105 = t84*t87 - t85*t85;
-    const double t106 = t84*t100 + t85*t101 + t86*t102;
-    const double t107 = t100 + t103 + t105;
-    const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
-    const double t109 = t92*t92;
-    const int t110 = t107 > ARM4_RANK_TOL*t109;
-    const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
-    const double t112 = t84*t93 + t85*t94 + t86*t95;
-    const double t113 = t85*t93 + t87*t94 + t88*t95;
-    const double t114 = t86*t93 + t88*t94 + t89*t95;
-    const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
-    const double t116 = t109 - t107;
-    const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
-    const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
-    const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
-    const double t120 = t80*t117;
-    const double t121 = t80*t118;
-    dq3[0] = t119 + t120*t16 + t121*t17;
-    dq3[1] = t119 + t120*t14 + t121*t15;
-    dq3[2] = t119 + t120*t12 + t121*t13;
-    dq3[3] = t119 + t6*t121 + t120*t11;
+    const int t52 = lambda > 1.0;
+    const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t54 = (t52 ? 1.0 : lambda);
+    const double t55 = t54*t54;
+    const double t56 = t53*t53;
+    const double t85 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+    const double t86 = t85*t85;
+    const double t87 = t16 + t14 + t12 + t11;
+    const double t88 = t6 + t17 + t15 + t13;
+    const double t89 = t86*t56;
+    const double t90 = t85*t56;
+    const double t91 = t86*t55;
+    const double t92 = t91 + t37*t89;
+    const double t93 = t38*t89;
+    const double t94 = t87*t90;
+    const double t95 = t91 + t39*t89;
+    const double t96 = t88*t90;
+    const double t97 = 4.0*t56 + t55;
+    const double t98 = t90*twist[0];
+    const double t99 = t90*twist[1];
+    const double t100 = t56*twist[2];
+    const double t101 = t92 + t95 + t97;
+    const double t102 = t92*t98 + t93*t99 + t94*t100;
+    const double t103 = t93*t98 + t95*t99 + t96*t100;
+    const double t104 = t94*t98 + t96*t99 + t97*t100;
+    const double t105 = (t101 > 0.0 ? 1.0/(t101*t101 != 0.0 ? t101*t101 : 1.0) : 1.0);
+    const double t106 = t102*t105;
+    const double t107 = t103*t105;
+    const double t108 = t104*t105;
+    const double t109 = t95*t97 - t96*t96;
+    const double t110 = t94*t96 - t93*t97;
+    const double t111 = t93*t96 - t94*t95;
+    const double t112 = t92*t97 - t94*t94;
+    const double t113 = t93*t94 - t92*t96;
+    const double t114 = t92*t95 - t93*t93;
+    const double t115 = t92*t109 + t93*t110 + t94*t111;
+    const double t116 = t109 + t112 + t114;
+    const int t117 = t115 > ARM4_RANK_TOL*t116*t101;
+    const double t118 = t101*t101;
+    const int t119 = t116 > ARM4_RANK_TOL*t118;
+    const double t120 = (t115 > 0.0 ? 1.0/(t115 != 0.0 ? t115 : 1.0) : 1.0);
+    const double t121 = t92*t102 + t93*t103 + t94*t104;
+    const double t122 = t93*t102 + t95*t103 + t96*t104;
+    const double t123 = t94*t102 + t96*t103 + t97*t104;
+    const double t124 = (t116 > 0.0 ? 1.0/(t116*t116 != 0.0 ? t116*t116 : 1.0) : 1.0);
+    const double t125 = t118 - t116;
+    const double t126 = (t119 ? (t117 ? t120*(t109*t98 + t110*t99 + t111*t100) : t124*(t102*t125 - t121*t101)) : t106);
+    const double t127 = (t119 ? (t117 ? t120*(t110*t98 + t112*t99 + t113*t100) : t124*(t103*t125 - t122*t101)) : t107);
+    const double t128 = (t119 ? (t117 ? t120*(t111*t98 + t113*t99 + t114*t100) : t124*(t104*t125 - t123*t101)) : t108);
+    const double t129 = t85*t126;
+    const double t130 = t85*t127;
+    dq3[0] = t128 + t129*t16 + t130*t17;
+    dq3[1] = t128 + t129*t14 + t130*t15;
+    dq3[2] = t128 + t129*t12 + t130*t13;
+    dq3[3] = t128 + t6*t130 + t129*t11;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
@@ -1959,53 +1975,61 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
         const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
         const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t52 = lambda*lambda;
-        const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-        const double t81 = t80*t80;
-        const double t82 = t16 + t14 + t12 + t11;
-        const double t83 = t6 + t17 + t15 + t13;
-        const double t84 = t81*(t37 + t52);
-        const double t85 = t38*t81;
-        const double t86 = t82*t80;
-        const double t87 = t81*(t39 + t52);
-        const double t88 = t83*t80;
-        const double t89 = 4.0 + t52;
-        const double t90 = t80*twist[0];
-        const double t91 = t80*twist[1];
-        const double t92 = t84 + t87 + t89;
-        const double t93 = t84*t90 + t85*t91 + t86*twist[2];
-        const double t94 = t85*t90 + t87*t91 + t88*twist[2];
-        const double t95 = t86*t90 + t88*t91 + t89*twist[2];
-        const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
-        const double t97 = t93*t96;
-        const double t98 = t94*t96;
-        const double t99 = t95*t96;
-        const double t100 = t87*t89 - t88*t88;
-        const double t101 = t86*t88 - t85*t89;
-        const double t102 = t85*t88 - t86*t87;
-        const double t103 = t84*t89 - t86*t86;
-        const double t104 = t85*t86 - t84*t88;
-        const double t105 = t84*t87 - t85*t85;
-        const double t106 = t84*t100 + t85*t101 + t86*t102;
-        const double t107 = t100 + t103 + t105;
-        const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
-        const double t109 = t92*t92;
-        const int t110 = t107 > ARM4_RANK_TOL*t109;
-        const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
-        const double t112 = t84*t93 + t85*t94 + t86*t95;
-        const double t113 = t85*t93 + t87*t94 + t88*t95;
-        const double t114 = t86*t93 + t88*t94 + t89*t95;
-        const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
-        const double t116 = t109 - t107;
-        const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
-        const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
-        const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
-        const double t120 = t80*t117;
-        const double t121 = t80*t118;
-        dq3[0] = t119 + t120*t16 + t121*t17;
-        dq3[1] = t119 + t120*t14 + t121*t15;
-        dq3[2] = t119 + t120*t12 + t121*t13;
-        dq3[3] = t119 + t6*t121 + t120*t11;
+        const int t52 = lambda > 1.0;
+        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t54 = (t52 ? 1.0 : lambda);
+        const double t55 = t54*t54;
+        const double t56 = t53*t53;
+        const double t85 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+        const double t86 = t85*t85;
+        const double t87 = t16 + t14 + t12 + t11;
+        const double t88 = t6 + t17 + t15 + t13;
+        const double t89 = t86*t56;
+        const double t90 = t85*t56;
+        const double t91 = t86*t55;
+        const double t92 = t91 + t37*t89;
+        const double t93 = t38*t89;
+        const double t94 = t87*t90;
+        const double t95 = t91 + t39*t89;
+        const double t96 = t88*t90;
+        const double t97 = 4.0*t56 + t55;
+        const double t98 = t90*twist[0];
+        const double t99 = t90*twist[1];
+        const double t100 = t56*twist[2];
+        const double t101 = t92 + t95 + t97;
+        const double t102 = t92*t98 + t93*t99 + t94*t100;
+        const double t103 = t93*t98 + t95*t99 + t96*t100;
+        const double t104 = t94*t98 + t96*t99 + t97*t100;
+        const double t105 = (t101 > 0.0 ? 1.0/(t101*t101 != 0.0 ? t101*t101 : 1.0) : 1.0);
+        const double t106 = t102*t105;
+        const double t107 = t103*t105;
+        const double t108 = t104*t105;
+        const double t109 = t95*t97 - t96*t96;
+        const double t110 = t94*t96 - t93*t97;
+        const double t111 = t93*t96 - t94*t95;
+        const double t112 = t92*t97 - t94*t94;
+        const double t113 = t93*t94 - t92*t96;
+        const double t114 = t92*t95 - t93*t93;
+        const double t115 = t92*t109 + t93*t110 + t94*t111;
+        const double t116 = t109 + t112 + t114;
+        const int t117 = t115 > ARM4_RANK_TOL*t116*t101;
+        const double t118 = t101*t101;
+        const int t119 = t116 > ARM4_RANK_TOL*t118;
+        const double t120 = (t115 > 0.0 ? 1.0/(t115 != 0.0 ? t115 : 1.0) : 1.0);
+        const double t121 = t92*t102 + t93*t103 + t94*t104;
+        const double t122 = t93*t102 + t95*t103 + t96*t104;
+        const double t123 = t94*t102 + t96*t103 + t97*t104;
+        const double t124 = (t116 > 0.0 ? 1.0/(t116*t116 != 0.0 ? t116*t116 : 1.0) : 1.0);
+        const double t125 = t118 - t116;
+        const double t126 = (t119 ? (t117 ? t120*(t109*t98 + t110*t99 + t111*t100) : t124*(t102*t125 - t121*t101)) : t106);
+        const double t127 = (t119 ? (t117 ? t120*(t110*t98 + t112*t99 + t113*t100) : t124*(t103*t125 - t122*t101)) : t107);
+        const double t128 = (t119 ? (t117 ? t120*(t111*t98 + t113*t99 + t114*t100) : t124*(t104*t125 - t123*t101)) : t108);
+        const double t129 = t85*t126;
+        const double t130 = t85*t127;
+        dq3[0] = t128 + t129*t16 + t130*t17;
+        dq3[1] = t128 + t129*t14 + t130*t15;
+        dq3[2] = t128 + t129*t12 + t130*t13;
+        dq3[3] = t128 + t6*t130 + t129*t11;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2078,7 +2102,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 #endif
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 46 add/sub, 55 mul, 1 neg, 3 div */
+/* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
 
 static void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
@@ -2120,29 +2144,34 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t49 = (t40 ? t13 : t12) - t45*t42;
     const double t50 = (t40 ? t6 : t11) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-    const double t52 = lambda*lambda;
-    const double t55 = t37 + t39;
-    const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
-    const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-    const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t61 = t52 + t41*(1.0 + t42*t42);
-    const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-    const double t69 = target[0] - t17;
-    const double t70 = t16 + target[1];
-    const double t71 = (t40 ? t69 : t70);
-    const double t72 = (t40 ? t70 : t69);
-    const double t73 = t71 + t72*t42;
-    const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
-    const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
-    const double t76 = t74*t43 + t75*t47;
-    const double t77 = t74*t44 + t75*t48;
-    const double t78 = t74*t45 + t75*t49;
-    const double t79 = t74*t46 + t75*t50;
-    q_next[0] = t76 + q[0];
-    q_next[1] = t77 + q[1];
-    q_next[2] = t78 + q[2];
-    q_next[3] = t79 + q[3];
+    const int t52 = lambda > 1.0;
+    const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t54 = (t52 ? 1.0 : lambda);
+    const double t55 = t54*t54;
+    const double t56 = t53*t53;
+    const double t57 = t56*t41;
+    const double t58 = t56*t51;
+    const double t61 = t56*(t37 + t39);
+    const double t62 = t57*t58 + t55*(t61 + t55);
+    const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+    const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
+    const double t66 = t55 + t57*(1.0 + t42*t42);
+    const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
+    const double t74 = target[0] - t17;
+    const double t75 = t16 + target[1];
+    const double t76 = (t40 ? t74 : t75);
+    const double t77 = (t40 ? t75 : t74);
+    const double t78 = t76 + t77*t42;
+    const double t79 = (t63 ? t65*(t78*t55 + t76*t58) : t78*t67);
+    const double t80 = (t63 ? t65*(t77*t55 + t57*(t77 - t76*t42)) : 0.0);
+    const double t81 = t79*t43 + t80*t47;
+    const double t82 = t79*t44 + t80*t48;
+    const double t83 = t79*t45 + t80*t49;
+    const double t84 = t79*t46 + t80*t50;
+    q_next[0] = t81 + q[0];
+    q_next[1] = t82 + q[1];
+    q_next[2] = t83 + q[2];
+    q_next[3] = t84 + q[3];
 }
 
 void arm4_ik_step(const double q[4], const double target[2], const double l[4], double lambda, double q_next[4])
@@ -2227,29 +2256,34 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         const double t49 = (t40 ? t13 : t12) - t45*t42;
         const double t50 = (t40 ? t6 : t11) - t46*t42;
         const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
-        const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t69 = target[0] - t17;
-        const double t70 = t16 + target[1];
-        const double t71 = (t40 ? t69 : t70);
-        const double t72 = (t40 ? t70 : t69);
-        const double t73 = t71 + t72*t42;
-        const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
-        const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
-        const double t76 = t74*t43 + t75*t47;
-        const double t77 = t74*t44 + t75*t48;
-        const double t78 = t74*t45 + t75*t49;
-        const double t79 = t74*t46 + t75*t50;
-        q_next[0] = t76 + q[0];
-        q_next[1] = t77 + q[1];
-        q_next[2] = t78 + q[2];
-        q_next[3] = t79 + q[3];
+        const int t52 = lambda > 1.0;
+        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t54 = (t52 ? 1.0 : lambda);
+        const double t55 = t54*t54;
+        const double t56 = t53*t53;
+        const double t57 = t56*t41;
+        const double t58 = t56*t51;
+        const double t61 = t56*(t37 + t39);
+        const double t62 = t57*t58 + t55*(t61 + t55);
+        const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+        const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
+        const double t66 = t55 + t57*(1.0 + t42*t42);
+        const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
+        const double t74 = target[0] - t17;
+        const double t75 = t16 + target[1];
+        const double t76 = (t40 ? t74 : t75);
+        const double t77 = (t40 ? t75 : t74);
+        const double t78 = t76 + t77*t42;
+        const double t79 = (t63 ? t65*(t78*t55 + t76*t58) : t78*t67);
+        const double t80 = (t63 ? t65*(t77*t55 + t57*(t77 - t76*t42)) : 0.0);
+        const double t81 = t79*t43 + t80*t47;
+        const double t82 = t79*t44 + t80*t48;
+        const double t83 = t79*t45 + t80*t49;
+        const double t84 = t79*t46 + t80*t50;
+        q_next[0] = t81 + q[0];
+        q_next[1] = t82 + q[1];
+        q_next[2] = t83 + q[2];
+        q_next[3] = t84 + q[3];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0xb3d8f4a5UL
+#define ARM4_STAMP 0xa438f88eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -97,7 +97,7 @@ void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4],
  * Stack: about 13 KB. */
 void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 376 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 368 bytes. */
 void arm4_manipulability(const double q[4], const double l[4], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -105,7 +105,7 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1]);
  * Stack: about 5 KB. */
 void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 504 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 544 bytes. */
 void arm4_inverse_velocity(const double q[4], const double v[2], const double l[4], double lambda, double dq[4]);
 
 /* The same for m configurations stored one after another (element k of
@@ -113,7 +113,7 @@ void arm4_inverse_velocity(const double q[4], const double v[2], const double l[
  * Stack: about 7 KB. */
 void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 616 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 680 bytes. */
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4]);
 
 /* The same for m configurations stored one after another (element k of
@@ -121,7 +121,7 @@ void arm4_inverse_velocity3(const double q[4], const double twist[3], const doub
  * Stack: about 7 KB. */
 void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 520 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 560 bytes. */
 void arm4_ik_step(const double q[4], const double target[2], const double l[4], double lambda, double q_next[4]);
 
 /* The same for m configurations stored one after another (element k of

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xb3d8f4a5
+STAMP = 0xa438f88e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -544,8 +544,7 @@ def _manipulability_core(q, l, w):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t56 = t41*t51
-    w[..., 0] = np.sqrt(t56)
+    w[..., 0] = np.sqrt(t41*t51)
 
 
 @_signature_errors
@@ -603,27 +602,32 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t52 = lambda_*lambda_
-    t53 = np.where(t40, v[..., 0], v[..., 1])
-    t54 = np.where(t40, v[..., 1], v[..., 0])
-    t55 = t37 + t39
-    t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
-    t58 = t57 > RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52))
-    t59 = t53 + t54*t42
-    t60 = np.where(t58, 1.0/t57, 1.0)
-    t61 = t52 + t41*(1.0 + t42*t42)
-    t62 = np.where(t61 > 0.0, 1.0/t61, 1.0)
-    t63 = np.where(t58, t60*(t59*t52 + t53*t51), t59*t62)
-    t64 = np.where(t58, t60*(t54*t52 + t41*(t54 - t53*t42)), 0.0)
-    t65 = t63*t43 + t64*t47
-    t66 = t63*t44 + t64*t48
-    t67 = t63*t45 + t64*t49
-    t68 = t63*t46 + t64*t50
-    dq[..., 0] = t65
-    dq[..., 1] = t66
-    dq[..., 2] = t67
-    dq[..., 3] = t68
+    t52 = lambda_ > 1.0
+    t53 = np.where(t52, 1.0/lambda_, 1.0)
+    t54 = np.where(t52, 1.0, lambda_)
+    t55 = t54*t54
+    t56 = t53*t53
+    t57 = t56*t41
+    t58 = t56*t51
+    t59 = np.where(t40, v[..., 0], v[..., 1])
+    t60 = np.where(t40, v[..., 1], v[..., 0])
+    t61 = t56*(t37 + t39)
+    t62 = t57*t58 + t55*(t61 + t55)
+    t63 = t62 > RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55))
+    t64 = t59 + t60*t42
+    t65 = t56*np.where(t63, 1.0/t62, 1.0)
+    t66 = t55 + t57*(1.0 + t42*t42)
+    t67 = t56*np.where(t66 > 0.0, 1.0/t66, 1.0)
+    t68 = np.where(t63, t65*(t64*t55 + t58*t59), t64*t67)
+    t69 = np.where(t63, t65*(t57*(t60 - t59*t42) + t60*t55), 0.0)
+    t70 = t68*t43 + t69*t47
+    t71 = t68*t44 + t69*t48
+    t72 = t68*t45 + t69*t49
+    t73 = t68*t46 + t69*t50
+    dq[..., 0] = t70
+    dq[..., 1] = t71
+    dq[..., 2] = t72
+    dq[..., 3] = t73
 
 
 @_signature_errors
@@ -635,7 +639,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 96 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 102 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -672,53 +676,61 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
     t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t52 = lambda_*lambda_
-    t80 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
-    t81 = t80*t80
-    t82 = t16 + t14 + t12 + t11
-    t83 = t6 + t17 + t15 + t13
-    t84 = t81*(t37 + t52)
-    t85 = t38*t81
-    t86 = t82*t80
-    t87 = t81*(t39 + t52)
-    t88 = t83*t80
-    t89 = 4.0 + t52
-    t90 = t80*twist[..., 0]
-    t91 = t80*twist[..., 1]
-    t92 = t84 + t87 + t89
-    t93 = t84*t90 + t85*t91 + t86*twist[..., 2]
-    t94 = t85*t90 + t87*t91 + t88*twist[..., 2]
-    t95 = t86*t90 + t88*t91 + t89*twist[..., 2]
-    t96 = np.where(t92 > 0.0, 1.0/(t92*t92), 1.0)
-    t97 = t93*t96
-    t98 = t94*t96
-    t99 = t95*t96
-    t100 = t87*t89 - t88*t88
-    t101 = t86*t88 - t85*t89
-    t102 = t85*t88 - t86*t87
-    t103 = t84*t89 - t86*t86
-    t104 = t85*t86 - t84*t88
-    t105 = t84*t87 - t85*t85
-    t106 = t84*t100 + t85*t101 + t86*t102
-    t107 = t100 + t103 + t105
-    t108 = t106 > RANK_TOL*t107*t92
-    t109 = t92*t92
-    t110 = t107 > RANK_TOL*t109
-    t111 = np.where(t106 > 0.0, 1.0/t106, 1.0)
-    t112 = t84*t93 + t85*t94 + t86*t95
-    t113 = t85*t93 + t87*t94 + t88*t95
-    t114 = t86*t93 + t88*t94 + t89*t95
-    t115 = np.where(t107 > 0.0, 1.0/(t107*t107), 1.0)
-    t116 = t109 - t107
-    t117 = np.where(t110, np.where(t108, t111*(t100*t90 + t101*t91 + t102*twist[..., 2]), t115*(t93*t116 - t112*t92)), t97)
-    t118 = np.where(t110, np.where(t108, t111*(t101*t90 + t103*t91 + t104*twist[..., 2]), t115*(t94*t116 - t113*t92)), t98)
-    t119 = np.where(t110, np.where(t108, t111*(t102*t90 + t104*t91 + t105*twist[..., 2]), t115*(t95*t116 - t114*t92)), t99)
-    t120 = t80*t117
-    t121 = t80*t118
-    dq3[..., 0] = t119 + t120*t16 + t121*t17
-    dq3[..., 1] = t119 + t120*t14 + t121*t15
-    dq3[..., 2] = t119 + t120*t12 + t121*t13
-    dq3[..., 3] = t119 + t6*t121 + t120*t11
+    t52 = lambda_ > 1.0
+    t53 = np.where(t52, 1.0/lambda_, 1.0)
+    t54 = np.where(t52, 1.0, lambda_)
+    t55 = t54*t54
+    t56 = t53*t53
+    t85 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
+    t86 = t85*t85
+    t87 = t16 + t14 + t12 + t11
+    t88 = t6 + t17 + t15 + t13
+    t89 = t86*t56
+    t90 = t85*t56
+    t91 = t86*t55
+    t92 = t91 + t37*t89
+    t93 = t38*t89
+    t94 = t87*t90
+    t95 = t91 + t39*t89
+    t96 = t88*t90
+    t97 = 4.0*t56 + t55
+    t98 = t90*twist[..., 0]
+    t99 = t90*twist[..., 1]
+    t100 = t56*twist[..., 2]
+    t101 = t92 + t95 + t97
+    t102 = t92*t98 + t93*t99 + t94*t100
+    t103 = t93*t98 + t95*t99 + t96*t100
+    t104 = t94*t98 + t96*t99 + t97*t100
+    t105 = np.where(t101 > 0.0, 1.0/(t101*t101), 1.0)
+    t106 = t102*t105
+    t107 = t103*t105
+    t108 = t104*t105
+    t109 = t95*t97 - t96*t96
+    t110 = t94*t96 - t93*t97
+    t111 = t93*t96 - t94*t95
+    t112 = t92*t97 - t94*t94
+    t113 = t93*t94 - t92*t96
+    t114 = t92*t95 - t93*t93
+    t115 = t92*t109 + t93*t110 + t94*t111
+    t116 = t109 + t112 + t114
+    t117 = t115 > RANK_TOL*t116*t101
+    t118 = t101*t101
+    t119 = t116 > RANK_TOL*t118
+    t120 = np.where(t115 > 0.0, 1.0/t115, 1.0)
+    t121 = t92*t102 + t93*t103 + t94*t104
+    t122 = t93*t102 + t95*t103 + t96*t104
+    t123 = t94*t102 + t96*t103 + t97*t104
+    t124 = np.where(t116 > 0.0, 1.0/(t116*t116), 1.0)
+    t125 = t118 - t116
+    t126 = np.where(t119, np.where(t117, t120*(t109*t98 + t110*t99 + t111*t100), t124*(t102*t125 - t121*t101)), t106)
+    t127 = np.where(t119, np.where(t117, t120*(t110*t98 + t112*t99 + t113*t100), t124*(t103*t125 - t122*t101)), t107)
+    t128 = np.where(t119, np.where(t117, t120*(t111*t98 + t113*t99 + t114*t100), t124*(t104*t125 - t123*t101)), t108)
+    t129 = t85*t126
+    t130 = t85*t127
+    dq3[..., 0] = t128 + t129*t16 + t130*t17
+    dq3[..., 1] = t128 + t129*t14 + t130*t15
+    dq3[..., 2] = t128 + t129*t12 + t130*t13
+    dq3[..., 3] = t128 + t6*t130 + t129*t11
 
 
 @_signature_errors
@@ -730,7 +742,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 175 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 181 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (4, 3, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -779,29 +791,34 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t49 = np.where(t40, t13, t12) - t45*t42
     t50 = np.where(t40, t6, t11) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
-    t52 = lambda_*lambda_
-    t55 = t37 + t39
-    t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
-    t58 = t57 > RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52))
-    t60 = np.where(t58, 1.0/t57, 1.0)
-    t61 = t52 + t41*(1.0 + t42*t42)
-    t62 = np.where(t61 > 0.0, 1.0/t61, 1.0)
-    t69 = target[..., 0] - t17
-    t70 = t16 + target[..., 1]
-    t71 = np.where(t40, t69, t70)
-    t72 = np.where(t40, t70, t69)
-    t73 = t71 + t72*t42
-    t74 = np.where(t58, t60*(t73*t52 + t71*t51), t73*t62)
-    t75 = np.where(t58, t60*(t72*t52 + t41*(t72 - t71*t42)), 0.0)
-    t76 = t74*t43 + t75*t47
-    t77 = t74*t44 + t75*t48
-    t78 = t74*t45 + t75*t49
-    t79 = t74*t46 + t75*t50
-    q_next[..., 0] = t76 + q[..., 0]
-    q_next[..., 1] = t77 + q[..., 1]
-    q_next[..., 2] = t78 + q[..., 2]
-    q_next[..., 3] = t79 + q[..., 3]
+    t52 = lambda_ > 1.0
+    t53 = np.where(t52, 1.0/lambda_, 1.0)
+    t54 = np.where(t52, 1.0, lambda_)
+    t55 = t54*t54
+    t56 = t53*t53
+    t57 = t56*t41
+    t58 = t56*t51
+    t61 = t56*(t37 + t39)
+    t62 = t57*t58 + t55*(t61 + t55)
+    t63 = t62 > RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55))
+    t65 = t56*np.where(t63, 1.0/t62, 1.0)
+    t66 = t55 + t57*(1.0 + t42*t42)
+    t67 = t56*np.where(t66 > 0.0, 1.0/t66, 1.0)
+    t74 = target[..., 0] - t17
+    t75 = t16 + target[..., 1]
+    t76 = np.where(t40, t74, t75)
+    t77 = np.where(t40, t75, t74)
+    t78 = t76 + t77*t42
+    t79 = np.where(t63, t65*(t78*t55 + t76*t58), t78*t67)
+    t80 = np.where(t63, t65*(t77*t55 + t57*(t77 - t76*t42)), 0.0)
+    t81 = t79*t43 + t80*t47
+    t82 = t79*t44 + t80*t48
+    t83 = t79*t45 + t80*t49
+    t84 = t79*t46 + t80*t50
+    q_next[..., 0] = t81 + q[..., 0]
+    q_next[..., 1] = t82 + q[..., 1]
+    q_next[..., 2] = t83 + q[..., 2]
+    q_next[..., 3] = t84 + q[..., 3]
 
 
 @_signature_errors
@@ -813,7 +830,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 102 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 108 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xebf11f00UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x5428498fUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -1639,8 +1639,7 @@ static void arm5_manipulability_finish(const double l[5], const double *restrict
     const double t61 = (t50 ? t16 : t15) - t56*t52;
     const double t62 = (t50 ? t8 : t14) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-    const double t68 = t51*t63;
-    w[0] = sqrt(t68);
+    w[0] = sqrt(t51*t63);
 }
 
 void arm5_manipulability(const double q[5], const double l[5], double w[1])
@@ -1732,8 +1731,7 @@ static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T,
         const double t61 = (t50 ? t16 : t15) - t56*t52;
         const double t62 = (t50 ? t8 : t14) - t57*t52;
         const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        const double t68 = t51*t63;
-        w[0] = sqrt(t68);
+        w[0] = sqrt(t51*t63);
         w_T[0 + b] = w[0];
     }
 }
@@ -1793,7 +1791,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 5 sin, 5 cos, 49 add/sub, 64 mul, 1 neg, 3 div */
+/* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
 
 static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
 {
@@ -1842,29 +1840,34 @@ static void arm5_inverse_velocity_finish(const double v[2], const double l[5], d
     const double t61 = (t50 ? t16 : t15) - t56*t52;
     const double t62 = (t50 ? t8 : t14) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-    const double t64 = lambda*lambda;
-    const double t65 = (t50 ? v[0] : v[1]);
-    const double t66 = (t50 ? v[1] : v[0]);
-    const double t67 = t47 + t49;
-    const double t68 = t51*t63;
-    const double t69 = t68 + t64*(t67 + t64);
-    const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
-    const double t71 = t65 + t66*t52;
-    const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-    const double t73 = t64 + t51*(1.0 + t52*t52);
-    const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
-    const double t75 = (t70 ? t72*(t71*t64 + t65*t63) : t71*t74);
-    const double t76 = (t70 ? t72*(t66*t64 + t51*(t66 - t65*t52)) : 0.0);
-    const double t77 = t75*t53 + t76*t58;
-    const double t78 = t75*t54 + t76*t59;
-    const double t79 = t75*t55 + t76*t60;
-    const double t80 = t75*t56 + t76*t61;
-    const double t81 = t75*t57 + t76*t62;
-    dq[0] = t77;
-    dq[1] = t78;
-    dq[2] = t79;
-    dq[3] = t80;
-    dq[4] = t81;
+    const int t64 = lambda > 1.0;
+    const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t66 = (t64 ? 1.0 : lambda);
+    const double t67 = t66*t66;
+    const double t68 = t65*t65;
+    const double t69 = t68*t51;
+    const double t70 = t68*t63;
+    const double t71 = (t50 ? v[0] : v[1]);
+    const double t72 = (t50 ? v[1] : v[0]);
+    const double t73 = t68*(t47 + t49);
+    const double t74 = t69*t70 + t67*(t73 + t67);
+    const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+    const double t76 = t71 + t72*t52;
+    const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
+    const double t78 = t67 + t69*(1.0 + t52*t52);
+    const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
+    const double t80 = (t75 ? t77*(t76*t67 + t70*t71) : t76*t79);
+    const double t81 = (t75 ? t77*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
+    const double t82 = t80*t53 + t81*t58;
+    const double t83 = t80*t54 + t81*t59;
+    const double t84 = t80*t55 + t81*t60;
+    const double t85 = t80*t56 + t81*t61;
+    const double t86 = t80*t57 + t81*t62;
+    dq[0] = t82;
+    dq[1] = t83;
+    dq[2] = t84;
+    dq[3] = t85;
+    dq[4] = t86;
 }
 
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5])
@@ -1959,29 +1962,34 @@ static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_
         const double t61 = (t50 ? t16 : t15) - t56*t52;
         const double t62 = (t50 ? t8 : t14) - t57*t52;
         const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        const double t64 = lambda*lambda;
-        const double t65 = (t50 ? v[0] : v[1]);
-        const double t66 = (t50 ? v[1] : v[0]);
-        const double t67 = t47 + t49;
-        const double t68 = t51*t63;
-        const double t69 = t68 + t64*(t67 + t64);
-        const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
-        const double t71 = t65 + t66*t52;
-        const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-        const double t73 = t64 + t51*(1.0 + t52*t52);
-        const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
-        const double t75 = (t70 ? t72*(t71*t64 + t65*t63) : t71*t74);
-        const double t76 = (t70 ? t72*(t66*t64 + t51*(t66 - t65*t52)) : 0.0);
-        const double t77 = t75*t53 + t76*t58;
-        const double t78 = t75*t54 + t76*t59;
-        const double t79 = t75*t55 + t76*t60;
-        const double t80 = t75*t56 + t76*t61;
-        const double t81 = t75*t57 + t76*t62;
-        dq[0] = t77;
-        dq[1] = t78;
-        dq[2] = t79;
-        dq[3] = t80;
-        dq[4] = t81;
+        const int t64 = lambda > 1.0;
+        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t66 = (t64 ? 1.0 : lambda);
+        const double t67 = t66*t66;
+        const double t68 = t65*t65;
+        const double t69 = t68*t51;
+        const double t70 = t68*t63;
+        const double t71 = (t50 ? v[0] : v[1]);
+        const double t72 = (t50 ? v[1] : v[0]);
+        const double t73 = t68*(t47 + t49);
+        const double t74 = t69*t70 + t67*(t73 + t67);
+        const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+        const double t76 = t71 + t72*t52;
+        const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
+        const double t78 = t67 + t69*(1.0 + t52*t52);
+        const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
+        const double t80 = (t75 ? t77*(t76*t67 + t70*t71) : t76*t79);
+        const double t81 = (t75 ? t77*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
+        const double t82 = t80*t53 + t81*t58;
+        const double t83 = t80*t54 + t81*t59;
+        const double t84 = t80*t55 + t81*t60;
+        const double t85 = t80*t56 + t81*t61;
+        const double t86 = t80*t57 + t81*t62;
+        dq[0] = t82;
+        dq[1] = t83;
+        dq[2] = t84;
+        dq[3] = t85;
+        dq[4] = t86;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -2056,7 +2064,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 5 sin, 5 cos, 83 add/sub, 109 mul, 1 neg, 4 div */
+/* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
 
 static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
 {
@@ -2091,54 +2099,62 @@ static void arm5_inverse_velocity3_finish(const double twist[3], const double l[
     const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
     const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const double t64 = lambda*lambda;
-    const double t94 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
-    const double t95 = t94*t94;
-    const double t96 = t21 + t19 + t17 + t15 + t14;
-    const double t97 = t8 + t22 + t20 + t18 + t16;
-    const double t98 = t95*(t47 + t64);
-    const double t99 = t48*t95;
-    const double t100 = t96*t94;
-    const double t101 = t95*(t49 + t64);
-    const double t102 = t97*t94;
-    const double t103 = 5.0 + t64;
-    const double t104 = t94*twist[0];
-    const double t105 = t94*twist[1];
-    const double t106 = t98 + t101 + t103;
-    const double t107 = t98*t104 + t99*t105 + t100*twist[2];
-    const double t108 = t99*t104 + t101*t105 + t102*twist[2];
-    const double t109 = t100*t104 + t102*t105 + t103*twist[2];
-    const double t110 = (t106 > 0.0 ? 1.0/(t106*t106 != 0.0 ? t106*t106 : 1.0) : 1.0);
-    const double t111 = t107*t110;
-    const double t112 = t108*t110;
-    const double t113 = t109*t110;
-    const double t114 = t101*t103 - t102*t102;
-    const double t115 = t100*t102 - t99*t103;
-    const double t116 = t99*t102 - t100*t101;
-    const double t117 = t98*t103 - t100*t100;
-    const double t118 = t99*t100 - t98*t102;
-    const double t119 = t98*t101 - t99*t99;
-    const double t120 = t98*t114 + t99*t115 + t100*t116;
-    const double t121 = t114 + t117 + t119;
-    const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
-    const double t123 = t106*t106;
-    const int t124 = t121 > ARM5_RANK_TOL*t123;
-    const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
-    const double t126 = t98*t107 + t99*t108 + t100*t109;
-    const double t127 = t99*t107 + t101*t108 + t102*t109;
-    const double t128 = t100*t107 + t102*t108 + t103*t109;
-    const double t129 = (t121 > 0.0 ? 1.0/(t121*t121 != 0.0 ? t121*t121 : 1.0) : 1.0);
-    const double t130 = t123 - t121;
-    const double t131 = (t124 ? (t122 ? t125*(t114*t104 + t115*t105 + t116*twist[2]) : t129*(t107*t130 - t126*t106)) : t111);
-    const double t132 = (t124 ? (t122 ? t125*(t115*t104 + t117*t105 + t118*twist[2]) : t129*(t108*t130 - t127*t106)) : t112);
-    const double t133 = (t124 ? (t122 ? t125*(t116*t104 + t118*t105 + t119*twist[2]) : t129*(t109*t130 - t128*t106)) : t113);
-    const double t134 = t94*t131;
-    const double t135 = t94*t132;
-    dq3[0] = t133 + t134*t21 + t135*t22;
-    dq3[1] = t133 + t134*t19 + t135*t20;
-    dq3[2] = t133 + t134*t17 + t135*t18;
-    dq3[3] = t133 + t134*t15 + t135*t16;
-    dq3[4] = t133 + t8*t135 + t134*t14;
+    const int t64 = lambda > 1.0;
+    const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t66 = (t64 ? 1.0 : lambda);
+    const double t67 = t66*t66;
+    const double t68 = t65*t65;
+    const double t99 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
+    const double t100 = t99*t99;
+    const double t101 = t21 + t19 + t17 + t15 + t14;
+    const double t102 = t8 + t22 + t20 + t18 + t16;
+    const double t103 = t100*t68;
+    const double t104 = t99*t68;
+    const double t105 = t100*t67;
+    const double t106 = t105 + t47*t103;
+    const double t107 = t48*t103;
+    const double t108 = t101*t104;
+    const double t109 = t105 + t49*t103;
+    const double t110 = t102*t104;
+    const double t111 = 5.0*t68 + t67;
+    const double t112 = t104*twist[0];
+    const double t113 = t104*twist[1];
+    const double t114 = t68*twist[2];
+    const double t115 = t106 + t109 + t111;
+    const double t116 = t106*t112 + t107*t113 + t108*t114;
+    const double t117 = t107*t112 + t109*t113 + t110*t114;
+    const double t118 = t108*t112 + t110*t113 + t111*t114;
+    const double t119 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
+    const double t120 = t116*t119;
+    const double t121 = t117*t119;
+    const double t122 = t118*t119;
+    const double t123 = t109*t111 - t110*t110;
+    const double t124 = t108*t110 - t107*t111;
+    const double t125 = t107*t110 - t108*t109;
+    const double t126 = t106*t111 - t108*t108;
+    const double t127 = t107*t108 - t106*t110;
+    const double t128 = t106*t109 - t107*t107;
+    const double t129 = t106*t123 + t107*t124 + t108*t125;
+    const double t130 = t123 + t126 + t128;
+    const int t131 = t129 > ARM5_RANK_TOL*t130*t115;
+    const double t132 = t115*t115;
+    const int t133 = t130 > ARM5_RANK_TOL*t132;
+    const double t134 = (t129 > 0.0 ? 1.0/(t129 != 0.0 ? t129 : 1.0) : 1.0);
+    const double t135 = t106*t116 + t107*t117 + t108*t118;
+    const double t136 = t107*t116 + t109*t117 + t110*t118;
+    const double t137 = t108*t116 + t110*t117 + t111*t118;
+    const double t138 = (t130 > 0.0 ? 1.0/(t130*t130 != 0.0 ? t130*t130 : 1.0) : 1.0);
+    const double t139 = t132 - t130;
+    const double t140 = (t133 ? (t131 ? t134*(t123*t112 + t124*t113 + t125*t114) : t138*(t116*t139 - t135*t115)) : t120);
+    const double t141 = (t133 ? (t131 ? t134*(t124*t112 + t126*t113 + t127*t114) : t138*(t117*t139 - t136*t115)) : t121);
+    const double t142 = (t133 ? (t131 ? t134*(t125*t112 + t127*t113 + t128*t114) : t138*(t118*t139 - t137*t115)) : t122);
+    const double t143 = t99*t140;
+    const double t144 = t99*t141;
+    dq3[0] = t142 + t143*t21 + t144*t22;
+    dq3[1] = t142 + t143*t19 + t144*t20;
+    dq3[2] = t142 + t143*t17 + t144*t18;
+    dq3[3] = t142 + t143*t15 + t144*t16;
+    dq3[4] = t142 + t8*t144 + t143*t14;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5])
@@ -2220,54 +2236,62 @@ static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q
         const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
         const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
         const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const double t64 = lambda*lambda;
-        const double t94 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
-        const double t95 = t94*t94;
-        const double t96 = t21 + t19 + t17 + t15 + t14;
-        const double t97 = t8 + t22 + t20 + t18 + t16;
-        const double t98 = t95*(t47 + t64);
-        const double t99 = t48*t95;
-        const double t100 = t96*t94;
-        const double t101 = t95*(t49 + t64);
-        const double t102 = t97*t94;
-        const double t103 = 5.0 + t64;
-        const double t104 = t94*twist[0];
-        const double t105 = t94*twist[1];
-        const double t106 = t98 + t101 + t103;
-        const double t107 = t98*t104 + t99*t105 + t100*twist[2];
-        const double t108 = t99*t104 + t101*t105 + t102*twist[2];
-        const double t109 = t100*t104 + t102*t105 + t103*twist[2];
-        const double t110 = (t106 > 0.0 ? 1.0/(t106*t106 != 0.0 ? t106*t106 : 1.0) : 1.0);
-        const double t111 = t107*t110;
-        const double t112 = t108*t110;
-        const double t113 = t109*t110;
-        const double t114 = t101*t103 - t102*t102;
-        const double t115 = t100*t102 - t99*t103;
-        const double t116 = t99*t102 - t100*t101;
-        const double t117 = t98*t103 - t100*t100;
-        const double t118 = t99*t100 - t98*t102;
-        const double t119 = t98*t101 - t99*t99;
-        const double t120 = t98*t114 + t99*t115 + t100*t116;
-        const double t121 = t114 + t117 + t119;
-        const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
-        const double t123 = t106*t106;
-        const int t124 = t121 > ARM5_RANK_TOL*t123;
-        const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
-        const double t126 = t98*t107 + t99*t108 + t100*t109;
-        const double t127 = t99*t107 + t101*t108 + t102*t109;
-        const double t128 = t100*t107 + t102*t108 + t103*t109;
-        const double t129 = (t121 > 0.0 ? 1.0/(t121*t121 != 0.0 ? t121*t121 : 1.0) : 1.0);
-        const double t130 = t123 - t121;
-        const double t131 = (t124 ? (t122 ? t125*(t114*t104 + t115*t105 + t116*twist[2]) : t129*(t107*t130 - t126*t106)) : t111);
-        const double t132 = (t124 ? (t122 ? t125*(t115*t104 + t117*t105 + t118*twist[2]) : t129*(t108*t130 - t127*t106)) : t112);
-        const double t133 = (t124 ? (t122 ? t125*(t116*t104 + t118*t105 + t119*twist[2]) : t129*(t109*t130 - t128*t106)) : t113);
-        const double t134 = t94*t131;
-        const double t135 = t94*t132;
-        dq3[0] = t133 + t134*t21 + t135*t22;
-        dq3[1] = t133 + t134*t19 + t135*t20;
-        dq3[2] = t133 + t134*t17 + t135*t18;
-        dq3[3] = t133 + t134*t15 + t135*t16;
-        dq3[4] = t133 + t8*t135 + t134*t14;
+        const int t64 = lambda > 1.0;
+        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t66 = (t64 ? 1.0 : lambda);
+        const double t67 = t66*t66;
+        const double t68 = t65*t65;
+        const double t99 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
+        const double t100 = t99*t99;
+        const double t101 = t21 + t19 + t17 + t15 + t14;
+        const double t102 = t8 + t22 + t20 + t18 + t16;
+        const double t103 = t100*t68;
+        const double t104 = t99*t68;
+        const double t105 = t100*t67;
+        const double t106 = t105 + t47*t103;
+        const double t107 = t48*t103;
+        const double t108 = t101*t104;
+        const double t109 = t105 + t49*t103;
+        const double t110 = t102*t104;
+        const double t111 = 5.0*t68 + t67;
+        const double t112 = t104*twist[0];
+        const double t113 = t104*twist[1];
+        const double t114 = t68*twist[2];
+        const double t115 = t106 + t109 + t111;
+        const double t116 = t106*t112 + t107*t113 + t108*t114;
+        const double t117 = t107*t112 + t109*t113 + t110*t114;
+        const double t118 = t108*t112 + t110*t113 + t111*t114;
+        const double t119 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
+        const double t120 = t116*t119;
+        const double t121 = t117*t119;
+        const double t122 = t118*t119;
+        const double t123 = t109*t111 - t110*t110;
+        const double t124 = t108*t110 - t107*t111;
+        const double t125 = t107*t110 - t108*t109;
+        const double t126 = t106*t111 - t108*t108;
+        const double t127 = t107*t108 - t106*t110;
+        const double t128 = t106*t109 - t107*t107;
+        const double t129 = t106*t123 + t107*t124 + t108*t125;
+        const double t130 = t123 + t126 + t128;
+        const int t131 = t129 > ARM5_RANK_TOL*t130*t115;
+        const double t132 = t115*t115;
+        const int t133 = t130 > ARM5_RANK_TOL*t132;
+        const double t134 = (t129 > 0.0 ? 1.0/(t129 != 0.0 ? t129 : 1.0) : 1.0);
+        const double t135 = t106*t116 + t107*t117 + t108*t118;
+        const double t136 = t107*t116 + t109*t117 + t110*t118;
+        const double t137 = t108*t116 + t110*t117 + t111*t118;
+        const double t138 = (t130 > 0.0 ? 1.0/(t130*t130 != 0.0 ? t130*t130 : 1.0) : 1.0);
+        const double t139 = t132 - t130;
+        const double t140 = (t133 ? (t131 ? t134*(t123*t112 + t124*t113 + t125*t114) : t138*(t116*t139 - t135*t115)) : t120);
+        const double t141 = (t133 ? (t131 ? t134*(t124*t112 + t126*t113 + t127*t114) : t138*(t117*t139 - t136*t115)) : t121);
+        const double t142 = (t133 ? (t131 ? t134*(t125*t112 + t127*t113 + t128*t114) : t138*(t118*t139 - t137*t115)) : t122);
+        const double t143 = t99*t140;
+        const double t144 = t99*t141;
+        dq3[0] = t142 + t143*t21 + t144*t22;
+        dq3[1] = t142 + t143*t19 + t144*t20;
+        dq3[2] = t142 + t143*t17 + t144*t18;
+        dq3[3] = t142 + t143*t15 + t144*t16;
+        dq3[4] = t142 + t8*t144 + t143*t14;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2343,7 +2367,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 #endif
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 5 sin, 5 cos, 56 add/sub, 64 mul, 1 neg, 3 div */
+/* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
 
 static void arm5_ik_step_angles(const double q[5], double *restrict ang)
 {
@@ -2392,31 +2416,36 @@ static void arm5_ik_step_finish(const double q[5], const double target[2], const
     const double t61 = (t50 ? t16 : t15) - t56*t52;
     const double t62 = (t50 ? t8 : t14) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-    const double t64 = lambda*lambda;
-    const double t67 = t47 + t49;
-    const double t68 = t51*t63;
-    const double t69 = t68 + t64*(t67 + t64);
-    const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
-    const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-    const double t73 = t64 + t51*(1.0 + t52*t52);
-    const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
-    const double t82 = target[0] - t22;
-    const double t83 = t21 + target[1];
-    const double t84 = (t50 ? t82 : t83);
-    const double t85 = (t50 ? t83 : t82);
-    const double t86 = t84 + t85*t52;
-    const double t87 = (t70 ? t72*(t86*t64 + t84*t63) : t86*t74);
-    const double t88 = (t70 ? t72*(t85*t64 + t51*(t85 - t84*t52)) : 0.0);
-    const double t89 = t87*t53 + t88*t58;
-    const double t90 = t87*t54 + t88*t59;
-    const double t91 = t87*t55 + t88*t60;
-    const double t92 = t87*t56 + t88*t61;
-    const double t93 = t87*t57 + t88*t62;
-    q_next[0] = t89 + q[0];
-    q_next[1] = t90 + q[1];
-    q_next[2] = t91 + q[2];
-    q_next[3] = t92 + q[3];
-    q_next[4] = t93 + q[4];
+    const int t64 = lambda > 1.0;
+    const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t66 = (t64 ? 1.0 : lambda);
+    const double t67 = t66*t66;
+    const double t68 = t65*t65;
+    const double t69 = t68*t51;
+    const double t70 = t68*t63;
+    const double t73 = t68*(t47 + t49);
+    const double t74 = t69*t70 + t67*(t73 + t67);
+    const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+    const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
+    const double t78 = t67 + t69*(1.0 + t52*t52);
+    const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
+    const double t87 = target[0] - t22;
+    const double t88 = t21 + target[1];
+    const double t89 = (t50 ? t87 : t88);
+    const double t90 = (t50 ? t88 : t87);
+    const double t91 = t89 + t90*t52;
+    const double t92 = (t75 ? t77*(t91*t67 + t89*t70) : t91*t79);
+    const double t93 = (t75 ? t77*(t90*t67 + t69*(t90 - t89*t52)) : 0.0);
+    const double t94 = t92*t53 + t93*t58;
+    const double t95 = t92*t54 + t93*t59;
+    const double t96 = t92*t55 + t93*t60;
+    const double t97 = t92*t56 + t93*t61;
+    const double t98 = t92*t57 + t93*t62;
+    q_next[0] = t94 + q[0];
+    q_next[1] = t95 + q[1];
+    q_next[2] = t96 + q[2];
+    q_next[3] = t97 + q[3];
+    q_next[4] = t98 + q[4];
 }
 
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5])
@@ -2517,31 +2546,36 @@ static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const 
         const double t61 = (t50 ? t16 : t15) - t56*t52;
         const double t62 = (t50 ? t8 : t14) - t57*t52;
         const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        const double t64 = lambda*lambda;
-        const double t67 = t47 + t49;
-        const double t68 = t51*t63;
-        const double t69 = t68 + t64*(t67 + t64);
-        const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
-        const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-        const double t73 = t64 + t51*(1.0 + t52*t52);
-        const double t74 = (t73 > 0.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
-        const double t82 = target[0] - t22;
-        const double t83 = t21 + target[1];
-        const double t84 = (t50 ? t82 : t83);
-        const double t85 = (t50 ? t83 : t82);
-        const double t86 = t84 + t85*t52;
-        const double t87 = (t70 ? t72*(t86*t64 + t84*t63) : t86*t74);
-        const double t88 = (t70 ? t72*(t85*t64 + t51*(t85 - t84*t52)) : 0.0);
-        const double t89 = t87*t53 + t88*t58;
-        const double t90 = t87*t54 + t88*t59;
-        const double t91 = t87*t55 + t88*t60;
-        const double t92 = t87*t56 + t88*t61;
-        const double t93 = t87*t57 + t88*t62;
-        q_next[0] = t89 + q[0];
-        q_next[1] = t90 + q[1];
-        q_next[2] = t91 + q[2];
-        q_next[3] = t92 + q[3];
-        q_next[4] = t93 + q[4];
+        const int t64 = lambda > 1.0;
+        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t66 = (t64 ? 1.0 : lambda);
+        const double t67 = t66*t66;
+        const double t68 = t65*t65;
+        const double t69 = t68*t51;
+        const double t70 = t68*t63;
+        const double t73 = t68*(t47 + t49);
+        const double t74 = t69*t70 + t67*(t73 + t67);
+        const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+        const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
+        const double t78 = t67 + t69*(1.0 + t52*t52);
+        const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
+        const double t87 = target[0] - t22;
+        const double t88 = t21 + target[1];
+        const double t89 = (t50 ? t87 : t88);
+        const double t90 = (t50 ? t88 : t87);
+        const double t91 = t89 + t90*t52;
+        const double t92 = (t75 ? t77*(t91*t67 + t89*t70) : t91*t79);
+        const double t93 = (t75 ? t77*(t90*t67 + t69*(t90 - t89*t52)) : 0.0);
+        const double t94 = t92*t53 + t93*t58;
+        const double t95 = t92*t54 + t93*t59;
+        const double t96 = t92*t55 + t93*t60;
+        const double t97 = t92*t56 + t93*t61;
+        const double t98 = t92*t57 + t93*t62;
+        q_next[0] = t94 + q[0];
+        q_next[1] = t95 + q[1];
+        q_next[2] = t96 + q[2];
+        q_next[3] = t97 + q[3];
+        q_next[4] = t98 + q[4];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

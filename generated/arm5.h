@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0xebf11f00UL
+#define ARM5_STAMP 0x5428498fUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -97,7 +97,7 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
  * Stack: about 15 KB. */
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 528 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 520 bytes. */
 void arm5_manipulability(const double q[5], const double l[5], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -105,7 +105,7 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1]);
  * Stack: about 6 KB. */
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 664 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 704 bytes. */
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -113,7 +113,7 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
  * Stack: about 8 KB. */
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 752 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 816 bytes. */
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -121,7 +121,7 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
  * Stack: about 8 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 680 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 720 bytes. */
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5]);
 
 /* The same for m configurations stored one after another (element k of

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xebf11f00
+STAMP = 0x5428498f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -605,8 +605,7 @@ def _manipulability_core(q, l, w):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t68 = t51*t63
-    w[..., 0] = np.sqrt(t68)
+    w[..., 0] = np.sqrt(t51*t63)
 
 
 @_signature_errors
@@ -671,29 +670,34 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t64 = lambda_*lambda_
-    t65 = np.where(t50, v[..., 0], v[..., 1])
-    t66 = np.where(t50, v[..., 1], v[..., 0])
-    t67 = t47 + t49
-    t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
-    t70 = t69 > RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64))
-    t71 = t65 + t66*t52
-    t72 = np.where(t70, 1.0/t69, 1.0)
-    t73 = t64 + t51*(1.0 + t52*t52)
-    t74 = np.where(t73 > 0.0, 1.0/t73, 1.0)
-    t75 = np.where(t70, t72*(t71*t64 + t65*t63), t71*t74)
-    t76 = np.where(t70, t72*(t66*t64 + t51*(t66 - t65*t52)), 0.0)
-    t77 = t75*t53 + t76*t58
-    t78 = t75*t54 + t76*t59
-    t79 = t75*t55 + t76*t60
-    t80 = t75*t56 + t76*t61
-    t81 = t75*t57 + t76*t62
-    dq[..., 0] = t77
-    dq[..., 1] = t78
-    dq[..., 2] = t79
-    dq[..., 3] = t80
-    dq[..., 4] = t81
+    t64 = lambda_ > 1.0
+    t65 = np.where(t64, 1.0/lambda_, 1.0)
+    t66 = np.where(t64, 1.0, lambda_)
+    t67 = t66*t66
+    t68 = t65*t65
+    t69 = t68*t51
+    t70 = t68*t63
+    t71 = np.where(t50, v[..., 0], v[..., 1])
+    t72 = np.where(t50, v[..., 1], v[..., 0])
+    t73 = t68*(t47 + t49)
+    t74 = t69*t70 + t67*(t73 + t67)
+    t75 = t74 > RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67))
+    t76 = t71 + t72*t52
+    t77 = t68*np.where(t75, 1.0/t74, 1.0)
+    t78 = t67 + t69*(1.0 + t52*t52)
+    t79 = t68*np.where(t78 > 0.0, 1.0/t78, 1.0)
+    t80 = np.where(t75, t77*(t76*t67 + t70*t71), t76*t79)
+    t81 = np.where(t75, t77*(t69*(t72 - t71*t52) + t72*t67), 0.0)
+    t82 = t80*t53 + t81*t58
+    t83 = t80*t54 + t81*t59
+    t84 = t80*t55 + t81*t60
+    t85 = t80*t56 + t81*t61
+    t86 = t80*t57 + t81*t62
+    dq[..., 0] = t82
+    dq[..., 1] = t83
+    dq[..., 2] = t84
+    dq[..., 3] = t85
+    dq[..., 4] = t86
 
 
 @_signature_errors
@@ -705,7 +709,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 114 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 120 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -747,54 +751,62 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
     t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t64 = lambda_*lambda_
-    t94 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
-    t95 = t94*t94
-    t96 = t21 + t19 + t17 + t15 + t14
-    t97 = t8 + t22 + t20 + t18 + t16
-    t98 = t95*(t47 + t64)
-    t99 = t48*t95
-    t100 = t96*t94
-    t101 = t95*(t49 + t64)
-    t102 = t97*t94
-    t103 = 5.0 + t64
-    t104 = t94*twist[..., 0]
-    t105 = t94*twist[..., 1]
-    t106 = t98 + t101 + t103
-    t107 = t98*t104 + t99*t105 + t100*twist[..., 2]
-    t108 = t99*t104 + t101*t105 + t102*twist[..., 2]
-    t109 = t100*t104 + t102*t105 + t103*twist[..., 2]
-    t110 = np.where(t106 > 0.0, 1.0/(t106*t106), 1.0)
-    t111 = t107*t110
-    t112 = t108*t110
-    t113 = t109*t110
-    t114 = t101*t103 - t102*t102
-    t115 = t100*t102 - t99*t103
-    t116 = t99*t102 - t100*t101
-    t117 = t98*t103 - t100*t100
-    t118 = t99*t100 - t98*t102
-    t119 = t98*t101 - t99*t99
-    t120 = t98*t114 + t99*t115 + t100*t116
-    t121 = t114 + t117 + t119
-    t122 = t120 > RANK_TOL*t121*t106
-    t123 = t106*t106
-    t124 = t121 > RANK_TOL*t123
-    t125 = np.where(t120 > 0.0, 1.0/t120, 1.0)
-    t126 = t98*t107 + t99*t108 + t100*t109
-    t127 = t99*t107 + t101*t108 + t102*t109
-    t128 = t100*t107 + t102*t108 + t103*t109
-    t129 = np.where(t121 > 0.0, 1.0/(t121*t121), 1.0)
-    t130 = t123 - t121
-    t131 = np.where(t124, np.where(t122, t125*(t114*t104 + t115*t105 + t116*twist[..., 2]), t129*(t107*t130 - t126*t106)), t111)
-    t132 = np.where(t124, np.where(t122, t125*(t115*t104 + t117*t105 + t118*twist[..., 2]), t129*(t108*t130 - t127*t106)), t112)
-    t133 = np.where(t124, np.where(t122, t125*(t116*t104 + t118*t105 + t119*twist[..., 2]), t129*(t109*t130 - t128*t106)), t113)
-    t134 = t94*t131
-    t135 = t94*t132
-    dq3[..., 0] = t133 + t134*t21 + t135*t22
-    dq3[..., 1] = t133 + t134*t19 + t135*t20
-    dq3[..., 2] = t133 + t134*t17 + t135*t18
-    dq3[..., 3] = t133 + t134*t15 + t135*t16
-    dq3[..., 4] = t133 + t8*t135 + t134*t14
+    t64 = lambda_ > 1.0
+    t65 = np.where(t64, 1.0/lambda_, 1.0)
+    t66 = np.where(t64, 1.0, lambda_)
+    t67 = t66*t66
+    t68 = t65*t65
+    t99 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
+    t100 = t99*t99
+    t101 = t21 + t19 + t17 + t15 + t14
+    t102 = t8 + t22 + t20 + t18 + t16
+    t103 = t100*t68
+    t104 = t99*t68
+    t105 = t100*t67
+    t106 = t105 + t47*t103
+    t107 = t48*t103
+    t108 = t101*t104
+    t109 = t105 + t49*t103
+    t110 = t102*t104
+    t111 = 5.0*t68 + t67
+    t112 = t104*twist[..., 0]
+    t113 = t104*twist[..., 1]
+    t114 = t68*twist[..., 2]
+    t115 = t106 + t109 + t111
+    t116 = t106*t112 + t107*t113 + t108*t114
+    t117 = t107*t112 + t109*t113 + t110*t114
+    t118 = t108*t112 + t110*t113 + t111*t114
+    t119 = np.where(t115 > 0.0, 1.0/(t115*t115), 1.0)
+    t120 = t116*t119
+    t121 = t117*t119
+    t122 = t118*t119
+    t123 = t109*t111 - t110*t110
+    t124 = t108*t110 - t107*t111
+    t125 = t107*t110 - t108*t109
+    t126 = t106*t111 - t108*t108
+    t127 = t107*t108 - t106*t110
+    t128 = t106*t109 - t107*t107
+    t129 = t106*t123 + t107*t124 + t108*t125
+    t130 = t123 + t126 + t128
+    t131 = t129 > RANK_TOL*t130*t115
+    t132 = t115*t115
+    t133 = t130 > RANK_TOL*t132
+    t134 = np.where(t129 > 0.0, 1.0/t129, 1.0)
+    t135 = t106*t116 + t107*t117 + t108*t118
+    t136 = t107*t116 + t109*t117 + t110*t118
+    t137 = t108*t116 + t110*t117 + t111*t118
+    t138 = np.where(t130 > 0.0, 1.0/(t130*t130), 1.0)
+    t139 = t132 - t130
+    t140 = np.where(t133, np.where(t131, t134*(t123*t112 + t124*t113 + t125*t114), t138*(t116*t139 - t135*t115)), t120)
+    t141 = np.where(t133, np.where(t131, t134*(t124*t112 + t126*t113 + t127*t114), t138*(t117*t139 - t136*t115)), t121)
+    t142 = np.where(t133, np.where(t131, t134*(t125*t112 + t127*t113 + t128*t114), t138*(t118*t139 - t137*t115)), t122)
+    t143 = t99*t140
+    t144 = t99*t141
+    dq3[..., 0] = t142 + t143*t21 + t144*t22
+    dq3[..., 1] = t142 + t143*t19 + t144*t20
+    dq3[..., 2] = t142 + t143*t17 + t144*t18
+    dq3[..., 3] = t142 + t143*t15 + t144*t16
+    dq3[..., 4] = t142 + t8*t144 + t143*t14
 
 
 @_signature_errors
@@ -806,7 +818,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 193 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 199 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (5, 3, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -862,31 +874,36 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t61 = np.where(t50, t16, t15) - t56*t52
     t62 = np.where(t50, t8, t14) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
-    t64 = lambda_*lambda_
-    t67 = t47 + t49
-    t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
-    t70 = t69 > RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64))
-    t72 = np.where(t70, 1.0/t69, 1.0)
-    t73 = t64 + t51*(1.0 + t52*t52)
-    t74 = np.where(t73 > 0.0, 1.0/t73, 1.0)
-    t82 = target[..., 0] - t22
-    t83 = t21 + target[..., 1]
-    t84 = np.where(t50, t82, t83)
-    t85 = np.where(t50, t83, t82)
-    t86 = t84 + t85*t52
-    t87 = np.where(t70, t72*(t86*t64 + t84*t63), t86*t74)
-    t88 = np.where(t70, t72*(t85*t64 + t51*(t85 - t84*t52)), 0.0)
-    t89 = t87*t53 + t88*t58
-    t90 = t87*t54 + t88*t59
-    t91 = t87*t55 + t88*t60
-    t92 = t87*t56 + t88*t61
-    t93 = t87*t57 + t88*t62
-    q_next[..., 0] = t89 + q[..., 0]
-    q_next[..., 1] = t90 + q[..., 1]
-    q_next[..., 2] = t91 + q[..., 2]
-    q_next[..., 3] = t92 + q[..., 3]
-    q_next[..., 4] = t93 + q[..., 4]
+    t64 = lambda_ > 1.0
+    t65 = np.where(t64, 1.0/lambda_, 1.0)
+    t66 = np.where(t64, 1.0, lambda_)
+    t67 = t66*t66
+    t68 = t65*t65
+    t69 = t68*t51
+    t70 = t68*t63
+    t73 = t68*(t47 + t49)
+    t74 = t69*t70 + t67*(t73 + t67)
+    t75 = t74 > RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67))
+    t77 = t68*np.where(t75, 1.0/t74, 1.0)
+    t78 = t67 + t69*(1.0 + t52*t52)
+    t79 = t68*np.where(t78 > 0.0, 1.0/t78, 1.0)
+    t87 = target[..., 0] - t22
+    t88 = t21 + target[..., 1]
+    t89 = np.where(t50, t87, t88)
+    t90 = np.where(t50, t88, t87)
+    t91 = t89 + t90*t52
+    t92 = np.where(t75, t77*(t91*t67 + t89*t70), t91*t79)
+    t93 = np.where(t75, t77*(t90*t67 + t69*(t90 - t89*t52)), 0.0)
+    t94 = t92*t53 + t93*t58
+    t95 = t92*t54 + t93*t59
+    t96 = t92*t55 + t93*t60
+    t97 = t92*t56 + t93*t61
+    t98 = t92*t57 + t93*t62
+    q_next[..., 0] = t94 + q[..., 0]
+    q_next[..., 1] = t95 + q[..., 1]
+    q_next[..., 2] = t96 + q[..., 2]
+    q_next[..., 3] = t97 + q[..., 3]
+    q_next[..., 4] = t98 + q[..., 4]
 
 
 @_signature_errors
@@ -898,7 +915,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 121 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 127 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xcc8c0120UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x0f46620eUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -1812,8 +1812,7 @@ static void arm6_manipulability_finish(const double l[6], const double *restrict
     const double t73 = (t60 ? t19 : t18) - t67*t62;
     const double t74 = (t60 ? t10 : t17) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-    const double t80 = t61*t75;
-    w[0] = sqrt(t80);
+    w[0] = sqrt(t61*t75);
 }
 
 void arm6_manipulability(const double q[6], const double l[6], double w[1])
@@ -1916,8 +1915,7 @@ static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T,
         const double t73 = (t60 ? t19 : t18) - t67*t62;
         const double t74 = (t60 ? t10 : t17) - t68*t62;
         const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        const double t80 = t61*t75;
-        w[0] = sqrt(t80);
+        w[0] = sqrt(t61*t75);
         w_T[0 + b] = w[0];
     }
 }
@@ -1978,7 +1976,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 #endif
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 6 sin, 6 cos, 58 add/sub, 73 mul, 1 neg, 3 div */
+/* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
 
 static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
@@ -2034,31 +2032,36 @@ static void arm6_inverse_velocity_finish(const double v[2], const double l[6], d
     const double t73 = (t60 ? t19 : t18) - t67*t62;
     const double t74 = (t60 ? t10 : t17) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-    const double t76 = lambda*lambda;
-    const double t77 = (t60 ? v[0] : v[1]);
-    const double t78 = (t60 ? v[1] : v[0]);
-    const double t79 = t57 + t59;
-    const double t80 = t61*t75;
-    const double t81 = t80 + t76*(t79 + t76);
-    const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
-    const double t83 = t77 + t78*t62;
-    const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-    const double t85 = t76 + t61*(1.0 + t62*t62);
-    const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
-    const double t87 = (t82 ? t84*(t83*t76 + t77*t75) : t83*t86);
-    const double t88 = (t82 ? t84*(t78*t76 + t61*(t78 - t77*t62)) : 0.0);
-    const double t89 = t87*t63 + t88*t69;
-    const double t90 = t87*t64 + t88*t70;
-    const double t91 = t87*t65 + t88*t71;
-    const double t92 = t87*t66 + t88*t72;
-    const double t93 = t87*t67 + t88*t73;
-    const double t94 = t87*t68 + t88*t74;
-    dq[0] = t89;
-    dq[1] = t90;
-    dq[2] = t91;
-    dq[3] = t92;
-    dq[4] = t93;
-    dq[5] = t94;
+    const int t76 = lambda > 1.0;
+    const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t78 = (t76 ? 1.0 : lambda);
+    const double t79 = t78*t78;
+    const double t80 = t77*t77;
+    const double t81 = t80*t61;
+    const double t82 = t80*t75;
+    const double t83 = (t60 ? v[0] : v[1]);
+    const double t84 = (t60 ? v[1] : v[0]);
+    const double t85 = t80*(t57 + t59);
+    const double t86 = t81*t82 + t79*(t85 + t79);
+    const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+    const double t88 = t83 + t84*t62;
+    const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
+    const double t90 = t79 + t81*(1.0 + t62*t62);
+    const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
+    const double t92 = (t87 ? t89*(t88*t79 + t82*t83) : t88*t91);
+    const double t93 = (t87 ? t89*(t81*(t84 - t83*t62) + t84*t79) : 0.0);
+    const double t94 = t92*t63 + t93*t69;
+    const double t95 = t92*t64 + t93*t70;
+    const double t96 = t92*t65 + t93*t71;
+    const double t97 = t92*t66 + t93*t72;
+    const double t98 = t92*t67 + t93*t73;
+    const double t99 = t92*t68 + t93*t74;
+    dq[0] = t94;
+    dq[1] = t95;
+    dq[2] = t96;
+    dq[3] = t97;
+    dq[4] = t98;
+    dq[5] = t99;
 }
 
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6])
@@ -2164,31 +2167,36 @@ static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_
         const double t73 = (t60 ? t19 : t18) - t67*t62;
         const double t74 = (t60 ? t10 : t17) - t68*t62;
         const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        const double t76 = lambda*lambda;
-        const double t77 = (t60 ? v[0] : v[1]);
-        const double t78 = (t60 ? v[1] : v[0]);
-        const double t79 = t57 + t59;
-        const double t80 = t61*t75;
-        const double t81 = t80 + t76*(t79 + t76);
-        const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
-        const double t83 = t77 + t78*t62;
-        const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-        const double t85 = t76 + t61*(1.0 + t62*t62);
-        const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
-        const double t87 = (t82 ? t84*(t83*t76 + t77*t75) : t83*t86);
-        const double t88 = (t82 ? t84*(t78*t76 + t61*(t78 - t77*t62)) : 0.0);
-        const double t89 = t87*t63 + t88*t69;
-        const double t90 = t87*t64 + t88*t70;
-        const double t91 = t87*t65 + t88*t71;
-        const double t92 = t87*t66 + t88*t72;
-        const double t93 = t87*t67 + t88*t73;
-        const double t94 = t87*t68 + t88*t74;
-        dq[0] = t89;
-        dq[1] = t90;
-        dq[2] = t91;
-        dq[3] = t92;
-        dq[4] = t93;
-        dq[5] = t94;
+        const int t76 = lambda > 1.0;
+        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t78 = (t76 ? 1.0 : lambda);
+        const double t79 = t78*t78;
+        const double t80 = t77*t77;
+        const double t81 = t80*t61;
+        const double t82 = t80*t75;
+        const double t83 = (t60 ? v[0] : v[1]);
+        const double t84 = (t60 ? v[1] : v[0]);
+        const double t85 = t80*(t57 + t59);
+        const double t86 = t81*t82 + t79*(t85 + t79);
+        const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+        const double t88 = t83 + t84*t62;
+        const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
+        const double t90 = t79 + t81*(1.0 + t62*t62);
+        const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
+        const double t92 = (t87 ? t89*(t88*t79 + t82*t83) : t88*t91);
+        const double t93 = (t87 ? t89*(t81*(t84 - t83*t62) + t84*t79) : 0.0);
+        const double t94 = t92*t63 + t93*t69;
+        const double t95 = t92*t64 + t93*t70;
+        const double t96 = t92*t65 + t93*t71;
+        const double t97 = t92*t66 + t93*t72;
+        const double t98 = t92*t67 + t93*t73;
+        const double t99 = t92*t68 + t93*t74;
+        dq[0] = t94;
+        dq[1] = t95;
+        dq[2] = t96;
+        dq[3] = t97;
+        dq[4] = t98;
+        dq[5] = t99;
         dq_T[0 + b] = dq[0];
         dq_T[32 + b] = dq[1];
         dq_T[64 + b] = dq[2];
@@ -2266,7 +2274,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 #endif
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 6 sin, 6 cos, 94 add/sub, 116 mul, 1 neg, 4 div */
+/* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
 
 static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
 {
@@ -2306,55 +2314,63 @@ static void arm6_inverse_velocity3_finish(const double twist[3], const double l[
     const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
     const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-    const double t76 = lambda*lambda;
-    const double t108 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
-    const double t109 = t108*t108;
-    const double t110 = t26 + t24 + t22 + t20 + t18 + t17;
-    const double t111 = t10 + t27 + t25 + t23 + t21 + t19;
-    const double t112 = t109*(t57 + t76);
-    const double t113 = t58*t109;
-    const double t114 = t110*t108;
-    const double t115 = t109*(t59 + t76);
-    const double t116 = t111*t108;
-    const double t117 = 6.0 + t76;
-    const double t118 = t108*twist[0];
-    const double t119 = t108*twist[1];
-    const double t120 = t112 + t115 + t117;
-    const double t121 = t112*t118 + t113*t119 + t114*twist[2];
-    const double t122 = t113*t118 + t115*t119 + t116*twist[2];
-    const double t123 = t114*t118 + t116*t119 + t117*twist[2];
-    const double t124 = (t120 > 0.0 ? 1.0/(t120*t120 != 0.0 ? t120*t120 : 1.0) : 1.0);
-    const double t125 = t121*t124;
-    const double t126 = t122*t124;
-    const double t127 = t123*t124;
-    const double t128 = t115*t117 - t116*t116;
-    const double t129 = t114*t116 - t113*t117;
-    const double t130 = t113*t116 - t114*t115;
-    const double t131 = t112*t117 - t114*t114;
-    const double t132 = t113*t114 - t112*t116;
-    const double t133 = t112*t115 - t113*t113;
-    const double t134 = t112*t128 + t113*t129 + t114*t130;
-    const double t135 = t128 + t131 + t133;
-    const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
-    const double t137 = t120*t120;
-    const int t138 = t135 > ARM6_RANK_TOL*t137;
-    const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
-    const double t140 = t112*t121 + t113*t122 + t114*t123;
-    const double t141 = t113*t121 + t115*t122 + t116*t123;
-    const double t142 = t114*t121 + t116*t122 + t117*t123;
-    const double t143 = (t135 > 0.0 ? 1.0/(t135*t135 != 0.0 ? t135*t135 : 1.0) : 1.0);
-    const double t144 = t137 - t135;
-    const double t145 = (t138 ? (t136 ? t139*(t128*t118 + t129*t119 + t130*twist[2]) : t143*(t121*t144 - t140*t120)) : t125);
-    const double t146 = (t138 ? (t136 ? t139*(t129*t118 + t131*t119 + t132*twist[2]) : t143*(t122*t144 - t141*t120)) : t126);
-    const double t147 = (t138 ? (t136 ? t139*(t130*t118 + t132*t119 + t133*twist[2]) : t143*(t123*t144 - t142*t120)) : t127);
-    const double t148 = t108*t145;
-    const double t149 = t108*t146;
-    dq3[0] = t147 + t148*t26 + t149*t27;
-    dq3[1] = t147 + t148*t24 + t149*t25;
-    dq3[2] = t147 + t148*t22 + t149*t23;
-    dq3[3] = t147 + t148*t20 + t149*t21;
-    dq3[4] = t147 + t148*t18 + t149*t19;
-    dq3[5] = t147 + t10*t149 + t148*t17;
+    const int t76 = lambda > 1.0;
+    const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t78 = (t76 ? 1.0 : lambda);
+    const double t79 = t78*t78;
+    const double t80 = t77*t77;
+    const double t113 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
+    const double t114 = t113*t113;
+    const double t115 = t26 + t24 + t22 + t20 + t18 + t17;
+    const double t116 = t10 + t27 + t25 + t23 + t21 + t19;
+    const double t117 = t114*t80;
+    const double t118 = t113*t80;
+    const double t119 = t114*t79;
+    const double t120 = t119 + t57*t117;
+    const double t121 = t58*t117;
+    const double t122 = t115*t118;
+    const double t123 = t119 + t59*t117;
+    const double t124 = t116*t118;
+    const double t125 = 6.0*t80 + t79;
+    const double t126 = t118*twist[0];
+    const double t127 = t118*twist[1];
+    const double t128 = t80*twist[2];
+    const double t129 = t120 + t123 + t125;
+    const double t130 = t120*t126 + t121*t127 + t122*t128;
+    const double t131 = t121*t126 + t123*t127 + t124*t128;
+    const double t132 = t122*t126 + t124*t127 + t125*t128;
+    const double t133 = (t129 > 0.0 ? 1.0/(t129*t129 != 0.0 ? t129*t129 : 1.0) : 1.0);
+    const double t134 = t130*t133;
+    const double t135 = t131*t133;
+    const double t136 = t132*t133;
+    const double t137 = t123*t125 - t124*t124;
+    const double t138 = t122*t124 - t121*t125;
+    const double t139 = t121*t124 - t122*t123;
+    const double t140 = t120*t125 - t122*t122;
+    const double t141 = t121*t122 - t120*t124;
+    const double t142 = t120*t123 - t121*t121;
+    const double t143 = t120*t137 + t121*t138 + t122*t139;
+    const double t144 = t137 + t140 + t142;
+    const int t145 = t143 > ARM6_RANK_TOL*t144*t129;
+    const double t146 = t129*t129;
+    const int t147 = t144 > ARM6_RANK_TOL*t146;
+    const double t148 = (t143 > 0.0 ? 1.0/(t143 != 0.0 ? t143 : 1.0) : 1.0);
+    const double t149 = t120*t130 + t121*t131 + t122*t132;
+    const double t150 = t121*t130 + t123*t131 + t124*t132;
+    const double t151 = t122*t130 + t124*t131 + t125*t132;
+    const double t152 = (t144 > 0.0 ? 1.0/(t144*t144 != 0.0 ? t144*t144 : 1.0) : 1.0);
+    const double t153 = t146 - t144;
+    const double t154 = (t147 ? (t145 ? t148*(t137*t126 + t138*t127 + t139*t128) : t152*(t130*t153 - t149*t129)) : t134);
+    const double t155 = (t147 ? (t145 ? t148*(t138*t126 + t140*t127 + t141*t128) : t152*(t131*t153 - t150*t129)) : t135);
+    const double t156 = (t147 ? (t145 ? t148*(t139*t126 + t141*t127 + t142*t128) : t152*(t132*t153 - t151*t129)) : t136);
+    const double t157 = t113*t154;
+    const double t158 = t113*t155;
+    dq3[0] = t156 + t157*t26 + t158*t27;
+    dq3[1] = t156 + t157*t24 + t158*t25;
+    dq3[2] = t156 + t157*t22 + t158*t23;
+    dq3[3] = t156 + t157*t20 + t158*t21;
+    dq3[4] = t156 + t157*t18 + t158*t19;
+    dq3[5] = t156 + t10*t158 + t157*t17;
 }
 
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6])
@@ -2445,55 +2461,63 @@ static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q
         const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
         const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
         const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const double t76 = lambda*lambda;
-        const double t108 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
-        const double t109 = t108*t108;
-        const double t110 = t26 + t24 + t22 + t20 + t18 + t17;
-        const double t111 = t10 + t27 + t25 + t23 + t21 + t19;
-        const double t112 = t109*(t57 + t76);
-        const double t113 = t58*t109;
-        const double t114 = t110*t108;
-        const double t115 = t109*(t59 + t76);
-        const double t116 = t111*t108;
-        const double t117 = 6.0 + t76;
-        const double t118 = t108*twist[0];
-        const double t119 = t108*twist[1];
-        const double t120 = t112 + t115 + t117;
-        const double t121 = t112*t118 + t113*t119 + t114*twist[2];
-        const double t122 = t113*t118 + t115*t119 + t116*twist[2];
-        const double t123 = t114*t118 + t116*t119 + t117*twist[2];
-        const double t124 = (t120 > 0.0 ? 1.0/(t120*t120 != 0.0 ? t120*t120 : 1.0) : 1.0);
-        const double t125 = t121*t124;
-        const double t126 = t122*t124;
-        const double t127 = t123*t124;
-        const double t128 = t115*t117 - t116*t116;
-        const double t129 = t114*t116 - t113*t117;
-        const double t130 = t113*t116 - t114*t115;
-        const double t131 = t112*t117 - t114*t114;
-        const double t132 = t113*t114 - t112*t116;
-        const double t133 = t112*t115 - t113*t113;
-        const double t134 = t112*t128 + t113*t129 + t114*t130;
-        const double t135 = t128 + t131 + t133;
-        const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
-        const double t137 = t120*t120;
-        const int t138 = t135 > ARM6_RANK_TOL*t137;
-        const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
-        const double t140 = t112*t121 + t113*t122 + t114*t123;
-        const double t141 = t113*t121 + t115*t122 + t116*t123;
-        const double t142 = t114*t121 + t116*t122 + t117*t123;
-        const double t143 = (t135 > 0.0 ? 1.0/(t135*t135 != 0.0 ? t135*t135 : 1.0) : 1.0);
-        const double t144 = t137 - t135;
-        const double t145 = (t138 ? (t136 ? t139*(t128*t118 + t129*t119 + t130*twist[2]) : t143*(t121*t144 - t140*t120)) : t125);
-        const double t146 = (t138 ? (t136 ? t139*(t129*t118 + t131*t119 + t132*twist[2]) : t143*(t122*t144 - t141*t120)) : t126);
-        const double t147 = (t138 ? (t136 ? t139*(t130*t118 + t132*t119 + t133*twist[2]) : t143*(t123*t144 - t142*t120)) : t127);
-        const double t148 = t108*t145;
-        const double t149 = t108*t146;
-        dq3[0] = t147 + t148*t26 + t149*t27;
-        dq3[1] = t147 + t148*t24 + t149*t25;
-        dq3[2] = t147 + t148*t22 + t149*t23;
-        dq3[3] = t147 + t148*t20 + t149*t21;
-        dq3[4] = t147 + t148*t18 + t149*t19;
-        dq3[5] = t147 + t10*t149 + t148*t17;
+        const int t76 = lambda > 1.0;
+        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t78 = (t76 ? 1.0 : lambda);
+        const double t79 = t78*t78;
+        const double t80 = t77*t77;
+        const double t113 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
+        const double t114 = t113*t113;
+        const double t115 = t26 + t24 + t22 + t20 + t18 + t17;
+        const double t116 = t10 + t27 + t25 + t23 + t21 + t19;
+        const double t117 = t114*t80;
+        const double t118 = t113*t80;
+        const double t119 = t114*t79;
+        const double t120 = t119 + t57*t117;
+        const double t121 = t58*t117;
+        const double t122 = t115*t118;
+        const double t123 = t119 + t59*t117;
+        const double t124 = t116*t118;
+        const double t125 = 6.0*t80 + t79;
+        const double t126 = t118*twist[0];
+        const double t127 = t118*twist[1];
+        const double t128 = t80*twist[2];
+        const double t129 = t120 + t123 + t125;
+        const double t130 = t120*t126 + t121*t127 + t122*t128;
+        const double t131 = t121*t126 + t123*t127 + t124*t128;
+        const double t132 = t122*t126 + t124*t127 + t125*t128;
+        const double t133 = (t129 > 0.0 ? 1.0/(t129*t129 != 0.0 ? t129*t129 : 1.0) : 1.0);
+        const double t134 = t130*t133;
+        const double t135 = t131*t133;
+        const double t136 = t132*t133;
+        const double t137 = t123*t125 - t124*t124;
+        const double t138 = t122*t124 - t121*t125;
+        const double t139 = t121*t124 - t122*t123;
+        const double t140 = t120*t125 - t122*t122;
+        const double t141 = t121*t122 - t120*t124;
+        const double t142 = t120*t123 - t121*t121;
+        const double t143 = t120*t137 + t121*t138 + t122*t139;
+        const double t144 = t137 + t140 + t142;
+        const int t145 = t143 > ARM6_RANK_TOL*t144*t129;
+        const double t146 = t129*t129;
+        const int t147 = t144 > ARM6_RANK_TOL*t146;
+        const double t148 = (t143 > 0.0 ? 1.0/(t143 != 0.0 ? t143 : 1.0) : 1.0);
+        const double t149 = t120*t130 + t121*t131 + t122*t132;
+        const double t150 = t121*t130 + t123*t131 + t124*t132;
+        const double t151 = t122*t130 + t124*t131 + t125*t132;
+        const double t152 = (t144 > 0.0 ? 1.0/(t144*t144 != 0.0 ? t144*t144 : 1.0) : 1.0);
+        const double t153 = t146 - t144;
+        const double t154 = (t147 ? (t145 ? t148*(t137*t126 + t138*t127 + t139*t128) : t152*(t130*t153 - t149*t129)) : t134);
+        const double t155 = (t147 ? (t145 ? t148*(t138*t126 + t140*t127 + t141*t128) : t152*(t131*t153 - t150*t129)) : t135);
+        const double t156 = (t147 ? (t145 ? t148*(t139*t126 + t141*t127 + t142*t128) : t152*(t132*t153 - t151*t129)) : t136);
+        const double t157 = t113*t154;
+        const double t158 = t113*t155;
+        dq3[0] = t156 + t157*t26 + t158*t27;
+        dq3[1] = t156 + t157*t24 + t158*t25;
+        dq3[2] = t156 + t157*t22 + t158*t23;
+        dq3[3] = t156 + t157*t20 + t158*t21;
+        dq3[4] = t156 + t157*t18 + t158*t19;
+        dq3[5] = t156 + t10*t158 + t157*t17;
         dq3_T[0 + b] = dq3[0];
         dq3_T[32 + b] = dq3[1];
         dq3_T[64 + b] = dq3[2];
@@ -2572,7 +2596,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 #endif
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 6 sin, 6 cos, 66 add/sub, 73 mul, 1 neg, 3 div */
+/* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
 
 static void arm6_ik_step_angles(const double q[6], double *restrict ang)
 {
@@ -2628,33 +2652,38 @@ static void arm6_ik_step_finish(const double q[6], const double target[2], const
     const double t73 = (t60 ? t19 : t18) - t67*t62;
     const double t74 = (t60 ? t10 : t17) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-    const double t76 = lambda*lambda;
-    const double t79 = t57 + t59;
-    const double t80 = t61*t75;
-    const double t81 = t80 + t76*(t79 + t76);
-    const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
-    const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-    const double t85 = t76 + t61*(1.0 + t62*t62);
-    const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
-    const double t95 = target[0] - t27;
-    const double t96 = t26 + target[1];
-    const double t97 = (t60 ? t95 : t96);
-    const double t98 = (t60 ? t96 : t95);
-    const double t99 = t97 + t98*t62;
-    const double t100 = (t82 ? t84*(t99*t76 + t97*t75) : t99*t86);
-    const double t101 = (t82 ? t84*(t98*t76 + t61*(t98 - t97*t62)) : 0.0);
-    const double t102 = t100*t63 + t101*t69;
-    const double t103 = t100*t64 + t101*t70;
-    const double t104 = t100*t65 + t101*t71;
-    const double t105 = t100*t66 + t101*t72;
-    const double t106 = t100*t67 + t101*t73;
-    const double t107 = t100*t68 + t101*t74;
-    q_next[0] = t102 + q[0];
-    q_next[1] = t103 + q[1];
-    q_next[2] = t104 + q[2];
-    q_next[3] = t105 + q[3];
-    q_next[4] = t106 + q[4];
-    q_next[5] = t107 + q[5];
+    const int t76 = lambda > 1.0;
+    const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+    const double t78 = (t76 ? 1.0 : lambda);
+    const double t79 = t78*t78;
+    const double t80 = t77*t77;
+    const double t81 = t80*t61;
+    const double t82 = t80*t75;
+    const double t85 = t80*(t57 + t59);
+    const double t86 = t81*t82 + t79*(t85 + t79);
+    const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+    const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
+    const double t90 = t79 + t81*(1.0 + t62*t62);
+    const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
+    const double t100 = target[0] - t27;
+    const double t101 = t26 + target[1];
+    const double t102 = (t60 ? t100 : t101);
+    const double t103 = (t60 ? t101 : t100);
+    const double t104 = t102 + t103*t62;
+    const double t105 = (t87 ? t89*(t104*t79 + t102*t82) : t104*t91);
+    const double t106 = (t87 ? t89*(t103*t79 + t81*(t103 - t102*t62)) : 0.0);
+    const double t107 = t105*t63 + t106*t69;
+    const double t108 = t105*t64 + t106*t70;
+    const double t109 = t105*t65 + t106*t71;
+    const double t110 = t105*t66 + t106*t72;
+    const double t111 = t105*t67 + t106*t73;
+    const double t112 = t105*t68 + t106*t74;
+    q_next[0] = t107 + q[0];
+    q_next[1] = t108 + q[1];
+    q_next[2] = t109 + q[2];
+    q_next[3] = t110 + q[3];
+    q_next[4] = t111 + q[4];
+    q_next[5] = t112 + q[5];
 }
 
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6])
@@ -2767,33 +2796,38 @@ static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const 
         const double t73 = (t60 ? t19 : t18) - t67*t62;
         const double t74 = (t60 ? t10 : t17) - t68*t62;
         const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        const double t76 = lambda*lambda;
-        const double t79 = t57 + t59;
-        const double t80 = t61*t75;
-        const double t81 = t80 + t76*(t79 + t76);
-        const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
-        const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-        const double t85 = t76 + t61*(1.0 + t62*t62);
-        const double t86 = (t85 > 0.0 ? 1.0/(t85 != 0.0 ? t85 : 1.0) : 1.0);
-        const double t95 = target[0] - t27;
-        const double t96 = t26 + target[1];
-        const double t97 = (t60 ? t95 : t96);
-        const double t98 = (t60 ? t96 : t95);
-        const double t99 = t97 + t98*t62;
-        const double t100 = (t82 ? t84*(t99*t76 + t97*t75) : t99*t86);
-        const double t101 = (t82 ? t84*(t98*t76 + t61*(t98 - t97*t62)) : 0.0);
-        const double t102 = t100*t63 + t101*t69;
-        const double t103 = t100*t64 + t101*t70;
-        const double t104 = t100*t65 + t101*t71;
-        const double t105 = t100*t66 + t101*t72;
-        const double t106 = t100*t67 + t101*t73;
-        const double t107 = t100*t68 + t101*t74;
-        q_next[0] = t102 + q[0];
-        q_next[1] = t103 + q[1];
-        q_next[2] = t104 + q[2];
-        q_next[3] = t105 + q[3];
-        q_next[4] = t106 + q[4];
-        q_next[5] = t107 + q[5];
+        const int t76 = lambda > 1.0;
+        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
+        const double t78 = (t76 ? 1.0 : lambda);
+        const double t79 = t78*t78;
+        const double t80 = t77*t77;
+        const double t81 = t80*t61;
+        const double t82 = t80*t75;
+        const double t85 = t80*(t57 + t59);
+        const double t86 = t81*t82 + t79*(t85 + t79);
+        const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+        const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
+        const double t90 = t79 + t81*(1.0 + t62*t62);
+        const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
+        const double t100 = target[0] - t27;
+        const double t101 = t26 + target[1];
+        const double t102 = (t60 ? t100 : t101);
+        const double t103 = (t60 ? t101 : t100);
+        const double t104 = t102 + t103*t62;
+        const double t105 = (t87 ? t89*(t104*t79 + t102*t82) : t104*t91);
+        const double t106 = (t87 ? t89*(t103*t79 + t81*(t103 - t102*t62)) : 0.0);
+        const double t107 = t105*t63 + t106*t69;
+        const double t108 = t105*t64 + t106*t70;
+        const double t109 = t105*t65 + t106*t71;
+        const double t110 = t105*t66 + t106*t72;
+        const double t111 = t105*t67 + t106*t73;
+        const double t112 = t105*t68 + t106*t74;
+        q_next[0] = t107 + q[0];
+        q_next[1] = t108 + q[1];
+        q_next[2] = t109 + q[2];
+        q_next[3] = t110 + q[3];
+        q_next[4] = t111 + q[4];
+        q_next[5] = t112 + q[5];
         q_next_T[0 + b] = q_next[0];
         q_next_T[32 + b] = q_next[1];
         q_next_T[64 + b] = q_next[2];

@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0xcc8c0120UL
+#define ARM6_STAMP 0x0f46620eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -97,7 +97,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
  * Stack: about 18 KB. */
 void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 584 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 576 bytes. */
 void arm6_manipulability(const double q[6], const double l[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -105,7 +105,7 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1]);
  * Stack: about 7 KB. */
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 728 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 768 bytes. */
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -113,7 +113,7 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
  * Stack: about 9 KB. */
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 792 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 856 bytes. */
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -121,7 +121,7 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
  * Stack: about 10 KB. */
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 744 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 784 bytes. */
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6]);
 
 /* The same for m configurations stored one after another (element k of

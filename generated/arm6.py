@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xcc8c0120
+STAMP = 0x0f46620e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -666,8 +666,7 @@ def _manipulability_core(q, l, w):
     t73 = np.where(t60, t19, t18) - t67*t62
     t74 = np.where(t60, t10, t17) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
-    t80 = t61*t75
-    w[..., 0] = np.sqrt(t80)
+    w[..., 0] = np.sqrt(t61*t75)
 
 
 @_signature_errors
@@ -739,31 +738,36 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t73 = np.where(t60, t19, t18) - t67*t62
     t74 = np.where(t60, t10, t17) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
-    t76 = lambda_*lambda_
-    t77 = np.where(t60, v[..., 0], v[..., 1])
-    t78 = np.where(t60, v[..., 1], v[..., 0])
-    t79 = t57 + t59
-    t80 = t61*t75
-    t81 = t80 + t76*(t79 + t76)
-    t82 = t81 > RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76))
-    t83 = t77 + t78*t62
-    t84 = np.where(t82, 1.0/t81, 1.0)
-    t85 = t76 + t61*(1.0 + t62*t62)
-    t86 = np.where(t85 > 0.0, 1.0/t85, 1.0)
-    t87 = np.where(t82, t84*(t83*t76 + t77*t75), t83*t86)
-    t88 = np.where(t82, t84*(t78*t76 + t61*(t78 - t77*t62)), 0.0)
-    t89 = t87*t63 + t88*t69
-    t90 = t87*t64 + t88*t70
-    t91 = t87*t65 + t88*t71
-    t92 = t87*t66 + t88*t72
-    t93 = t87*t67 + t88*t73
-    t94 = t87*t68 + t88*t74
-    dq[..., 0] = t89
-    dq[..., 1] = t90
-    dq[..., 2] = t91
-    dq[..., 3] = t92
-    dq[..., 4] = t93
-    dq[..., 5] = t94
+    t76 = lambda_ > 1.0
+    t77 = np.where(t76, 1.0/lambda_, 1.0)
+    t78 = np.where(t76, 1.0, lambda_)
+    t79 = t78*t78
+    t80 = t77*t77
+    t81 = t80*t61
+    t82 = t80*t75
+    t83 = np.where(t60, v[..., 0], v[..., 1])
+    t84 = np.where(t60, v[..., 1], v[..., 0])
+    t85 = t80*(t57 + t59)
+    t86 = t81*t82 + t79*(t85 + t79)
+    t87 = t86 > RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79))
+    t88 = t83 + t84*t62
+    t89 = t80*np.where(t87, 1.0/t86, 1.0)
+    t90 = t79 + t81*(1.0 + t62*t62)
+    t91 = t80*np.where(t90 > 0.0, 1.0/t90, 1.0)
+    t92 = np.where(t87, t89*(t88*t79 + t82*t83), t88*t91)
+    t93 = np.where(t87, t89*(t81*(t84 - t83*t62) + t84*t79), 0.0)
+    t94 = t92*t63 + t93*t69
+    t95 = t92*t64 + t93*t70
+    t96 = t92*t65 + t93*t71
+    t97 = t92*t66 + t93*t72
+    t98 = t92*t67 + t93*t73
+    t99 = t92*t68 + t93*t74
+    dq[..., 0] = t94
+    dq[..., 1] = t95
+    dq[..., 2] = t96
+    dq[..., 3] = t97
+    dq[..., 4] = t98
+    dq[..., 5] = t99
 
 
 @_signature_errors
@@ -775,7 +779,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 6 sin, 6 cos, 132 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 138 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -822,55 +826,63 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
     t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
-    t76 = lambda_*lambda_
-    t108 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4] + l[..., 5])
-    t109 = t108*t108
-    t110 = t26 + t24 + t22 + t20 + t18 + t17
-    t111 = t10 + t27 + t25 + t23 + t21 + t19
-    t112 = t109*(t57 + t76)
-    t113 = t58*t109
-    t114 = t110*t108
-    t115 = t109*(t59 + t76)
-    t116 = t111*t108
-    t117 = 6.0 + t76
-    t118 = t108*twist[..., 0]
-    t119 = t108*twist[..., 1]
-    t120 = t112 + t115 + t117
-    t121 = t112*t118 + t113*t119 + t114*twist[..., 2]
-    t122 = t113*t118 + t115*t119 + t116*twist[..., 2]
-    t123 = t114*t118 + t116*t119 + t117*twist[..., 2]
-    t124 = np.where(t120 > 0.0, 1.0/(t120*t120), 1.0)
-    t125 = t121*t124
-    t126 = t122*t124
-    t127 = t123*t124
-    t128 = t115*t117 - t116*t116
-    t129 = t114*t116 - t113*t117
-    t130 = t113*t116 - t114*t115
-    t131 = t112*t117 - t114*t114
-    t132 = t113*t114 - t112*t116
-    t133 = t112*t115 - t113*t113
-    t134 = t112*t128 + t113*t129 + t114*t130
-    t135 = t128 + t131 + t133
-    t136 = t134 > RANK_TOL*t135*t120
-    t137 = t120*t120
-    t138 = t135 > RANK_TOL*t137
-    t139 = np.where(t134 > 0.0, 1.0/t134, 1.0)
-    t140 = t112*t121 + t113*t122 + t114*t123
-    t141 = t113*t121 + t115*t122 + t116*t123
-    t142 = t114*t121 + t116*t122 + t117*t123
-    t143 = np.where(t135 > 0.0, 1.0/(t135*t135), 1.0)
-    t144 = t137 - t135
-    t145 = np.where(t138, np.where(t136, t139*(t128*t118 + t129*t119 + t130*twist[..., 2]), t143*(t121*t144 - t140*t120)), t125)
-    t146 = np.where(t138, np.where(t136, t139*(t129*t118 + t131*t119 + t132*twist[..., 2]), t143*(t122*t144 - t141*t120)), t126)
-    t147 = np.where(t138, np.where(t136, t139*(t130*t118 + t132*t119 + t133*twist[..., 2]), t143*(t123*t144 - t142*t120)), t127)
-    t148 = t108*t145
-    t149 = t108*t146
-    dq3[..., 0] = t147 + t148*t26 + t149*t27
-    dq3[..., 1] = t147 + t148*t24 + t149*t25
-    dq3[..., 2] = t147 + t148*t22 + t149*t23
-    dq3[..., 3] = t147 + t148*t20 + t149*t21
-    dq3[..., 4] = t147 + t148*t18 + t149*t19
-    dq3[..., 5] = t147 + t10*t149 + t148*t17
+    t76 = lambda_ > 1.0
+    t77 = np.where(t76, 1.0/lambda_, 1.0)
+    t78 = np.where(t76, 1.0, lambda_)
+    t79 = t78*t78
+    t80 = t77*t77
+    t113 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4] + l[..., 5])
+    t114 = t113*t113
+    t115 = t26 + t24 + t22 + t20 + t18 + t17
+    t116 = t10 + t27 + t25 + t23 + t21 + t19
+    t117 = t114*t80
+    t118 = t113*t80
+    t119 = t114*t79
+    t120 = t119 + t57*t117
+    t121 = t58*t117
+    t122 = t115*t118
+    t123 = t119 + t59*t117
+    t124 = t116*t118
+    t125 = 6.0*t80 + t79
+    t126 = t118*twist[..., 0]
+    t127 = t118*twist[..., 1]
+    t128 = t80*twist[..., 2]
+    t129 = t120 + t123 + t125
+    t130 = t120*t126 + t121*t127 + t122*t128
+    t131 = t121*t126 + t123*t127 + t124*t128
+    t132 = t122*t126 + t124*t127 + t125*t128
+    t133 = np.where(t129 > 0.0, 1.0/(t129*t129), 1.0)
+    t134 = t130*t133
+    t135 = t131*t133
+    t136 = t132*t133
+    t137 = t123*t125 - t124*t124
+    t138 = t122*t124 - t121*t125
+    t139 = t121*t124 - t122*t123
+    t140 = t120*t125 - t122*t122
+    t141 = t121*t122 - t120*t124
+    t142 = t120*t123 - t121*t121
+    t143 = t120*t137 + t121*t138 + t122*t139
+    t144 = t137 + t140 + t142
+    t145 = t143 > RANK_TOL*t144*t129
+    t146 = t129*t129
+    t147 = t144 > RANK_TOL*t146
+    t148 = np.where(t143 > 0.0, 1.0/t143, 1.0)
+    t149 = t120*t130 + t121*t131 + t122*t132
+    t150 = t121*t130 + t123*t131 + t124*t132
+    t151 = t122*t130 + t124*t131 + t125*t132
+    t152 = np.where(t144 > 0.0, 1.0/(t144*t144), 1.0)
+    t153 = t146 - t144
+    t154 = np.where(t147, np.where(t145, t148*(t137*t126 + t138*t127 + t139*t128), t152*(t130*t153 - t149*t129)), t134)
+    t155 = np.where(t147, np.where(t145, t148*(t138*t126 + t140*t127 + t141*t128), t152*(t131*t153 - t150*t129)), t135)
+    t156 = np.where(t147, np.where(t145, t148*(t139*t126 + t141*t127 + t142*t128), t152*(t132*t153 - t151*t129)), t136)
+    t157 = t113*t154
+    t158 = t113*t155
+    dq3[..., 0] = t156 + t157*t26 + t158*t27
+    dq3[..., 1] = t156 + t157*t24 + t158*t25
+    dq3[..., 2] = t156 + t157*t22 + t158*t23
+    dq3[..., 3] = t156 + t157*t20 + t158*t21
+    dq3[..., 4] = t156 + t157*t18 + t158*t19
+    dq3[..., 5] = t156 + t10*t158 + t157*t17
 
 
 @_signature_errors
@@ -882,7 +894,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 6).
-    Operations: 6 sin, 6 cos, 211 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 217 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (6, 3, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -945,33 +957,38 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t73 = np.where(t60, t19, t18) - t67*t62
     t74 = np.where(t60, t10, t17) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
-    t76 = lambda_*lambda_
-    t79 = t57 + t59
-    t80 = t61*t75
-    t81 = t80 + t76*(t79 + t76)
-    t82 = t81 > RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76))
-    t84 = np.where(t82, 1.0/t81, 1.0)
-    t85 = t76 + t61*(1.0 + t62*t62)
-    t86 = np.where(t85 > 0.0, 1.0/t85, 1.0)
-    t95 = target[..., 0] - t27
-    t96 = t26 + target[..., 1]
-    t97 = np.where(t60, t95, t96)
-    t98 = np.where(t60, t96, t95)
-    t99 = t97 + t98*t62
-    t100 = np.where(t82, t84*(t99*t76 + t97*t75), t99*t86)
-    t101 = np.where(t82, t84*(t98*t76 + t61*(t98 - t97*t62)), 0.0)
-    t102 = t100*t63 + t101*t69
-    t103 = t100*t64 + t101*t70
-    t104 = t100*t65 + t101*t71
-    t105 = t100*t66 + t101*t72
-    t106 = t100*t67 + t101*t73
-    t107 = t100*t68 + t101*t74
-    q_next[..., 0] = t102 + q[..., 0]
-    q_next[..., 1] = t103 + q[..., 1]
-    q_next[..., 2] = t104 + q[..., 2]
-    q_next[..., 3] = t105 + q[..., 3]
-    q_next[..., 4] = t106 + q[..., 4]
-    q_next[..., 5] = t107 + q[..., 5]
+    t76 = lambda_ > 1.0
+    t77 = np.where(t76, 1.0/lambda_, 1.0)
+    t78 = np.where(t76, 1.0, lambda_)
+    t79 = t78*t78
+    t80 = t77*t77
+    t81 = t80*t61
+    t82 = t80*t75
+    t85 = t80*(t57 + t59)
+    t86 = t81*t82 + t79*(t85 + t79)
+    t87 = t86 > RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79))
+    t89 = t80*np.where(t87, 1.0/t86, 1.0)
+    t90 = t79 + t81*(1.0 + t62*t62)
+    t91 = t80*np.where(t90 > 0.0, 1.0/t90, 1.0)
+    t100 = target[..., 0] - t27
+    t101 = t26 + target[..., 1]
+    t102 = np.where(t60, t100, t101)
+    t103 = np.where(t60, t101, t100)
+    t104 = t102 + t103*t62
+    t105 = np.where(t87, t89*(t104*t79 + t102*t82), t104*t91)
+    t106 = np.where(t87, t89*(t103*t79 + t81*(t103 - t102*t62)), 0.0)
+    t107 = t105*t63 + t106*t69
+    t108 = t105*t64 + t106*t70
+    t109 = t105*t65 + t106*t71
+    t110 = t105*t66 + t106*t72
+    t111 = t105*t67 + t106*t73
+    t112 = t105*t68 + t106*t74
+    q_next[..., 0] = t107 + q[..., 0]
+    q_next[..., 1] = t108 + q[..., 1]
+    q_next[..., 2] = t109 + q[..., 2]
+    q_next[..., 3] = t110 + q[..., 3]
+    q_next[..., 4] = t111 + q[..., 4]
+    q_next[..., 5] = t112 + q[..., 5]
 
 
 @_signature_errors
@@ -983,7 +1000,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 6).
-    Operations: 6 sin, 6 cos, 140 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 146 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -46,7 +46,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xcd966185UL
+#define PANDA_STAMP 0x7d0c2a2aUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -67,7 +67,7 @@ extern "C" {
  * An initializer: static const double x[7] = PANDA_DQ_MAX; */
 #define PANDA_DQ_MAX {2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61}
 
-/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 664 bytes. */
+/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 584 bytes. */
 void panda_pose(const double q[7], double T[16]);
 
 /* The same for m configurations stored one after another (element k of
@@ -75,7 +75,7 @@ void panda_pose(const double q[7], double T[16]);
  * Stack: about 12 KB. */
 void panda_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 912 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 704 bytes. */
 void panda_jacobian(const double q[7], double J[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -83,7 +83,7 @@ void panda_jacobian(const double q[7], double J[42]);
  * Stack: about 18 KB. */
 void panda_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 920 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 792 bytes. */
 void panda_jacobian_tool(const double q[7], double J_tool[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -91,7 +91,7 @@ void panda_jacobian_tool(const double q[7], double J_tool[42]);
  * Stack: about 19 KB. */
 void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1376 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1176 bytes. */
 void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -99,7 +99,7 @@ void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
  * Stack: about 21 KB. */
 void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 1104 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 952 bytes. */
 void panda_twist(const double q[7], const double dq[7], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -107,7 +107,7 @@ void panda_twist(const double q[7], const double dq[7], double twist[6]);
  * Stack: about 11 KB. */
 void panda_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1376 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1176 bytes. */
 void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -115,7 +115,7 @@ void panda_acceleration(const double q[7], const double dq[7], const double ddq[
  * Stack: about 13 KB. */
 void panda_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 1576 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: about 1328 bytes. */
 void panda_kinematics(const double q[7], const double dq[7], const double ddq[7], double T[16], double J[42], double dJ[42], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -123,7 +123,7 @@ void panda_kinematics(const double q[7], const double dq[7], const double ddq[7]
  * Stack: about 22 KB. */
 void panda_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 992 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 792 bytes. */
 void panda_ik_terms(const double q[7], double T[16], double J[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -131,7 +131,7 @@ void panda_ik_terms(const double q[7], double T[16], double J[42]);
  * Stack: about 23 KB. */
 void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 3312 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2888 bytes. */
 void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -139,7 +139,7 @@ void panda_manipulability(const double q[7], double w[1]);
  * Stack: about 10 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1440 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1200 bytes. */
 void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -147,7 +147,7 @@ void panda_manipulability_position(const double q[7], double w_position[1]);
  * Stack: about 8 KB. */
 void panda_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1752 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1440 bytes. */
 void panda_jacobian_hessian(const double q[7], double Hs[294]);
 
 /* The same for m configurations stored one after another (element k of
@@ -171,7 +171,7 @@ void panda_inverse_velocity(const double q[7], const double twist[6], double lam
  * Stack: about 17 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2192 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1984 bytes. */
 void panda_inverse_velocity_position(const double q[7], const double v[3], double lambda, double dq_position[7]);
 
 /* The same for m configurations stored one after another (element k of
@@ -179,7 +179,7 @@ void panda_inverse_velocity_position(const double q[7], const double v[3], doubl
  * Stack: about 11 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1160 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1040 bytes. */
 void panda_jacobian_rpy(const double q[7], double JA[42]);
 
 /* The same for m configurations stored one after another (element k of

@@ -46,7 +46,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xd527a68fUL
+#define UR5_STAMP 0xfdb2b121UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -67,7 +67,7 @@ extern "C" {
  * An initializer: static const double x[6] = UR5_DQ_MAX; */
 #define UR5_DQ_MAX {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793}
 
-/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 480 bytes. */
+/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 464 bytes. */
 void ur5_pose(const double q[6], double T[16]);
 
 /* The same for m configurations stored one after another (element k of
@@ -75,39 +75,39 @@ void ur5_pose(const double q[6], double T[16]);
  * Stack: about 11 KB. */
 void ur5_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 656 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 488 bytes. */
 void ur5_jacobian(const double q[6], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 16 KB. */
+ * Stack: about 15 KB. */
 void ur5_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 744 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 608 bytes. */
 void ur5_jacobian_tool(const double q[6], double J_tool[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 17 KB. */
+ * Stack: about 16 KB. */
 void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1040 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: about 816 bytes. */
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 18 KB. */
+ * Stack: about 17 KB. */
 void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 848 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 672 bytes. */
 void ur5_twist(const double q[6], const double dq[6], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 10 KB. */
+ * Stack: about 9 KB. */
 void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1040 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 816 bytes. */
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -115,31 +115,31 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
  * Stack: about 11 KB. */
 void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 1176 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: about 984 bytes. */
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 20 KB. */
+ * Stack: about 19 KB. */
 void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 736 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 592 bytes. */
 void ur5_ik_terms(const double q[6], double T[16], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 21 KB. */
+ * Stack: about 20 KB. */
 void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2768 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2384 bytes. */
 void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 9 KB. */
+ * Stack: about 8 KB. */
 void ur5_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1176 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 896 bytes. */
 void ur5_manipulability_position(const double q[6], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -147,15 +147,15 @@ void ur5_manipulability_position(const double q[6], double w_position[1]);
  * Stack: about 7 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 920 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 680 bytes. */
 void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 33 KB. */
+ * Stack: about 32 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 3848 bytes. */
+/* gradient dw/dq of the manipulability (N). Stack: about 3336 bytes. */
 void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -163,7 +163,7 @@ void ur5_manipulability_gradient(const double q[6], double grad[6]);
  * Stack: about 11 KB. */
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
-/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 7 KB. */
+/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 6 KB. */
 void ur5_inverse_velocity(const double q[6], const double twist[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -171,7 +171,7 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
  * Stack: about 15 KB. */
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1912 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1664 bytes. */
 void ur5_inverse_velocity_position(const double q[6], const double v[3], double lambda, double dq_position[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -179,7 +179,7 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
  * Stack: about 10 KB. */
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 896 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 760 bytes. */
 void ur5_jacobian_rpy(const double q[6], double JA[36]);
 
 /* The same for m configurations stored one after another (element k of

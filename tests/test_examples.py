@@ -1,4 +1,4 @@
-"""The README's examples run and do what they say."""
+"""The examples of the README and docs/ run and do what they say; their C declarations are what generate writes."""
 
 import runpy
 from pathlib import Path
@@ -26,11 +26,11 @@ def _declarations(text):
     return {" ".join(d.split()) for d in re.findall(r"(?:void|int)\s+\w+\([^;{]*\);", text)}
 
 
-def test_readme_c_signatures_are_what_generate_writes():
+def test_planar_doc_c_signatures_are_what_generate_writes():
     from skelarm_sym.generate import generate
 
-    readme = (ROOT / "README.md").read_text()
-    block = readme.split("```c\n", 1)[1].split("```", 1)[0]
+    doc = (ROOT / "docs" / "planar.md").read_text()
+    block = doc.split("```c\n", 1)[1].split("```", 1)[0]
     documented = _declarations(block)
     header = generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=None).sources["arm3.h"]
     assert len(documented) >= 10
@@ -76,10 +76,38 @@ def test_ur5_c_example_prints_the_reference_pose(tmp_path):
     np.testing.assert_allclose(values[3:9], k.twist, atol=1e-12)
 
 
-def test_readme_robot_signatures_are_what_generate_writes():
+def test_robot_doc_signatures_are_what_generate_writes():
     header = (ROOT / "generated" / "ur5.h").read_text()
-    readme = (ROOT / "README.md").read_text()
-    block = readme.split("## 3-D robots", 1)[1].split("```c\n", 1)[1].split("```", 1)[0]
+    doc = (ROOT / "docs" / "robots.md").read_text()
+    block = doc.split("## The emitted functions", 1)[1].split("```c\n", 1)[1].split("```", 1)[0]
     documented = _declarations(block)
     assert len(documented) >= 13
     assert documented <= _declarations(header), documented - _declarations(header)
+
+
+def test_readme_quickstart_builds_runs_and_matches_the_reference(tmp_path):
+    """The README's four steps: the URDF's chain generated, examples/quickstart.c built with the strict
+    flags and run; its printed pose and velocity are the reference's, its IK converges."""
+    import shutil
+    import subprocess
+
+    from skelarm_sym import reference
+    from skelarm_sym.cli import main
+    from skelarm_sym.models.chain.loader import load_robot
+
+    robot = ROOT / "examples" / "robots" / "ur5.urdf"
+    assert main(["generate", "--robot", str(robot), "--tip", "tool0", "--lang", "c", "--out", str(tmp_path / "build")]) == 0
+    cc = shutil.which("cc") or shutil.which("gcc")
+    exe = tmp_path / "quickstart"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", f"-I{tmp_path / 'build'}",
+                    str(ROOT / "examples" / "quickstart.c"), str(tmp_path / "build" / "ur5.c"), "-o", str(exe), "-lm"], check=True)
+    run = subprocess.run([str(exe)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    first, second = run.stdout.splitlines()
+    numbers = [float(x) for x in first.replace("tool at", "").replace("m, moving at", "").replace("m/s", "").split()]
+    q = np.array([0.1, -1.2, 1.5, -1.9, -1.4, 0.3])
+    dq = np.array([0.2, 0.1, -0.3, 0.4, 0.0, 0.5])
+    k = reference.chain_kinematics(load_robot(robot, tip="tool0").numeric(), q, dq, np.zeros(6))
+    np.testing.assert_allclose(numbers[:3], k.T[:3, 3], atol=1e-6)
+    np.testing.assert_allclose(numbers[3:6], k.twist[:3], atol=1e-6)
+    assert "status 0 (converged)" in second

@@ -89,17 +89,15 @@ def gram_schmidt2(step: Recorder, rows: Sequence[Sequence[sp.Expr]], G: list[lis
     return GramSchmidt2(first, p, ratio, residual, pivot, rr)
 
 
-def gram_root(step: Recorder, rows: Sequence[Sequence[sp.Expr]], G: list[list[sp.Expr]], label: str) -> sp.Expr:
-    """``sqrt(det(M M^T))`` for a two-row ``M`` with Gram matrix ``G`` (from :func:`gram`).
-
-    ``det = |x|^2 |y|^2 - (x.y)^2`` cancels catastrophically near a singular pose
-    (its square root then carries an error of about sqrt(eps) * |M|^2). Instead
-    the shorter row is made orthogonal to the longer one first (one Gram-Schmidt
-    step, :func:`gram_schmidt2`): with ``x`` the longer row, ``det = |x|^2 |y - (x.y/|x|^2) x|^2``,
-    a product of sums of squares that keeps full relative accuracy and is never negative.
-    """
-    gs = gram_schmidt2(step, rows, G, label)
-    return sp.sqrt(gs.pp * gs.rr)
+def damping_scale(step: Recorder, lam: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
+    """``(lam2, kappa)`` for a damping ``lam >= 0``: ``kappa = 1 / max(1, lam)^2`` and ``lam2 = kappa lam^2
+    = min(lam, 1)^2``. A damped system ``A + lam^2 I`` solved as ``kappa A + lam2 I`` has the same solution
+    and entries no larger than ``A``'s and 1, so nothing overflows for any finite ``lam`` (``lam^2`` does
+    from 1.8e154 in double, 1.8e19 in float; ``lam^4`` from 1.3e77 and 4.3e9)."""
+    big = sp.StrictGreaterThan(lam, 1)
+    mu = step("mu", 1 / sp.Piecewise((lam, big), (sp.S.One, True)))
+    clipped = step("lamclip", sp.Piecewise((sp.S.One, big), (lam, True)))  # min(lam, 1): (lam mu)**2 would expand to lam**2 mu**2
+    return step("lam2", clipped**2), step("kappa", mu**2)
 
 
 def damped_solve2(
@@ -110,8 +108,13 @@ def damped_solve2(
     rhs: Sequence[sp.Expr],
     tol: sp.Symbol,
     label: str,
+    kappa: sp.Expr = sp.S.One,
 ) -> list[sp.Expr]:
-    """``M^T (M M^T + lam2 I)^+ rhs`` for a two-row ``M`` from its Gram-Schmidt step ``gs`` (n entries).
+    """``M^T (M M^T + lambda^2 I)^+ rhs`` for a two-row ``M`` from its Gram-Schmidt step ``gs`` (n entries).
+
+    ``lam2 = kappa lambda^2`` and ``kappa`` (see :func:`damping_scale`; ``kappa = 1``: ``lam2`` is ``lambda^2``):
+    everything below is computed for ``kappa (M M^T) + lam2 I``, whose solution is the same, so no product
+    overflows for a huge lambda and the answer tends to 0 (exactly 0 once ``kappa`` underflows).
 
     In the orthogonal basis ``p, r`` of the row space (``M' = L [p; r]``, ``L`` unit lower
     triangular, ``rhs' = (v1, v2)`` permuted as the rows) the damped solution is
@@ -119,7 +122,8 @@ def damped_solve2(
         dq = (p (rr v1 + lam2 (v1 + ratio v2)) + r (pp (v2 - ratio v1) + lam2 v2)) / det,
         det = det(M M^T + lam2 I) = pp rr + lam2 tr(M M^T) + lam2^2
 
-    (Cauchy-Binet: every term is non-negative, nothing cancels). Its error follows the
+    (Cauchy-Binet: every term is non-negative, nothing cancels; with ``kappa``, ``pp``, ``rr`` and ``tr`` are
+    multiplied by it, and so are both coefficients). Its error follows the
     conditioning of the problem: ``r`` carries the rounding of ``M`` (about eps |M|), amplified by
     ``1 / (rr + lam2)``; the normal-equations form ``M^T adj(A) rhs / det A`` loses a further factor
     ``cond(A)`` to cancellation (``M^T adj(A)`` is nearly zero in the directions that ``det A``
@@ -131,28 +135,23 @@ def damped_solve2(
     matrix gives ``dq = 0``.
     """
     first = gs.first
+    scaled = kappa != 1
+    pp = step(f"{label}ppk", gs.pp * kappa) if scaled else gs.pp
+    rr = step(f"{label}rrk", gs.rr * kappa) if scaled else gs.rr
     v1 = step(f"{label}v1", sp.Piecewise((rhs[0], first), (rhs[1], True)))
     v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
-    trace = step(f"{label}tr", G[0][0] + G[1][1])
-    det = step(f"{label}det", gs.pp * gs.rr + lam2 * (trace + lam2))
+    trace = step(f"{label}tr", (G[0][0] + G[1][1]) * kappa)
+    det = step(f"{label}det", pp * rr + lam2 * (trace + lam2))
     regular = step(f"{label}regular", sp.StrictGreaterThan(det, tol * (trace + 2 * lam2) ** 2))
     along = step(f"{label}along", v1 + gs.ratio * v2)
-    inv_det = step(f"{label}idet", 1 / sp.Piecewise((det, regular), (sp.S.One, True)))
-    one = step(f"{label}one", gs.pp * (1 + gs.ratio**2) + lam2)
-    inv_one = step(f"{label}ione", 1 / nonzero(one))
-    alpha = step(f"{label}alpha", sp.Piecewise(((gs.rr * v1 + lam2 * along) * inv_det, regular), (along * inv_one, True)))
+    inv_det = step(f"{label}idet", kappa / sp.Piecewise((det, regular), (sp.S.One, True)))
+    one = step(f"{label}one", pp * (1 + gs.ratio**2) + lam2)
+    inv_one = step(f"{label}ione", kappa / nonzero(one))
+    alpha = step(f"{label}alpha", sp.Piecewise(((rr * v1 + lam2 * along) * inv_det, regular), (along * inv_one, True)))
     if all(r == 0 for r in gs.r):
         return [step(f"{label}x{i}", p * alpha) for i, p in enumerate(gs.p)]
-    beta = step(f"{label}beta", sp.Piecewise(((gs.pp * (v2 - gs.ratio * v1) + lam2 * v2) * inv_det, regular), (sp.S.Zero, True)))
+    beta = step(f"{label}beta", sp.Piecewise(((pp * (v2 - gs.ratio * v1) + lam2 * v2) * inv_det, regular), (sp.S.Zero, True)))
     return [step(f"{label}x{i}", p * alpha + r * beta) for i, (p, r) in enumerate(zip(gs.p, gs.r))]
-
-
-def add_diagonal(step: Recorder, matrix: list[list[sp.Expr]], value: sp.Expr, label: str) -> list[list[sp.Expr]]:
-    """``matrix + value * I`` (new list; diagonal entries named by ``step``)."""
-    out = [list(row) for row in matrix]
-    for i in range(len(out)):
-        out[i][i] = step(f"{label}{i}{i}", out[i][i] + value)
-    return out
 
 
 def _cofactor_det(m: Sequence[Sequence[sp.Expr]]) -> sp.Expr:

@@ -11,22 +11,34 @@ Frames and outputs (the convention of every emitted header):
 * ``dJ``: ``dJ/dt`` in the frame of ``J``; ``twist = J dq`` (tool-origin velocity, angular
   velocity); ``acc = J ddq + dJ dq`` (classical acceleration of the tool origin, angular acceleration).
 
-How (the planar derivation's idea in 3-D; Khalil's customised symbolic method):
+How (Khalil's customised symbolic method: one name per non-trivial intermediate, each quantity
+projected into the axes where it is cheapest and rotated once; what a joint contributes comes
+from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 
-1. Every joint is made a motion about or along ``z``: a constant rotation ``Q`` with ``Q z = axis``
-   is folded into the constant transforms around it, and so are offsets that are multiples of pi/2
-   (revolute) and all prismatic offsets. The constant transforms between two motions are
-   multiplied out exactly once, so DH zeros and ones cost nothing.
-2. Forward pass, base to tip: the world rotation is kept as ``R_fixed Rz(Theta)``; while the
-   constant rotation between consecutive revolute joints is a rotation about ``z`` (parallel
-   axes: UR5's joints 2-4, every planar arm) the angles add up (``Theta += beta + theta_k``) and
-   ``R_fixed`` is not multiplied again. Each joint gets its axis ``z_k`` (a column of ``R_fixed``)
-   and origin ``o_k``; one sine and one cosine per revolute joint.
-3. ``r_k = p_e - o_k``; revolute columns ``z_k x r_k``.
-4. Velocities: ``w_k = w_(k-1) + z_k dtheta_k`` (revolute), ``u_k = sum_(j>k) Jv_j dtheta_j`` (a suffix
-   sum; ``u_0 = J_v dq`` is the tool velocity). With the Jacobi identity,
-   ``d/dt (z_k x r_k) = (w x z_k) x r_k + z_k x (w_k x r_k + u_k) = w_k x Jv_k + z_k x u_k``,
-   and ``d/dt z_k = w_(k-1) x z_k``: no differentiation of large expressions anywhere.
+1. **Canonical joints** (:func:`canonical_joints`): every joint becomes a motion about or along
+   ``z`` after a constant transform; offsets that are multiples of pi/2 (revolute) and all
+   prismatic offsets fold into the constants, and a constant rotation about a joint's axis (or
+   about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`).
+2. **Segments** (:func:`_frames`): consecutive joints whose axes are parallel (the constant
+   rotation between them is about ``z``: UR5's joints 2-4, every planar arm) share one frame
+   ``F_s``; their angles add up (``psi_k = psi_(k-1) + beta_k + theta_k``), one sine and one
+   cosine per revolute joint. Frame ``F_(s+1) = F_s Rz(psi) C`` is multiplied out entry by entry
+   (only the entries some output uses are emitted).
+3. **Tool offsets** (:func:`_tool_offsets`), tip to base, Horner's rule: ``W_k = p_e - o_k`` in the
+   axes of ``F_s``. Within a segment ``W_k = W_(k+1) + Rz(psi_k) t_(k+1)`` (planar-arm cost);
+   across segments ``W_k = Rz(psi_k) (t + C W_(k+1))``. ``p_e = o_1 + F_1 W_1``.
+4. **Columns** (:func:`_columns`): ``[Jv_k; Jw_k] = F_s column_k(W_k)``; for a revolute joint
+   ``F_s [e_z x W_k; e_z] = [-W_y f_0 + W_x f_1; f_2]``: two columns of ``F_s``, shared by the
+   segment, six multiplications.
+5. **Pose** (:func:`_pose`): ``R = F_last Rz(psi_n) C_tool``; two of its rows are multiplied out and
+   the third is their cross product (the cheapest choice is taken): the rotation chain carries
+   two rows, not three.
+6. **Velocities** (:func:`_velocities`): ``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j
+   dtheta_j`` (a suffix sum; ``u_0`` is the tool velocity); each joint type gives ``d/dt`` of its
+   column from them (for a revolute joint ``[w_k x Jv_k + z_k x u_k; w_(k-1) x z_k]``, Jacobi's
+   identity): no differentiation of large expressions anywhere.
+7. **Tool axes** (:func:`_tool_jacobian`): ``B_s = F_s^T R`` tip to base
+   (``B_s = Rz(psi) C B_(s+1)``) and ``J_tool`` columns ``B_s^T column_k(W_k)``: never ``R^T J``.
 """
 
 from __future__ import annotations
@@ -38,11 +50,12 @@ from typing import Sequence
 
 import sympy as sp
 
-from .model import Chain, Joint, Transform
+from .model import Chain, Transform
+from .joints import E_Z, JointType, add, cross, half_pi_multiple, joint_type
 from ...derive.core import Derivation, FunctionSpec, StepRecorder, Table
 
 Vector = list  # three SymPy expressions
-
+Rows = list  # 3 x 3 as rows of SymPy expressions
 CHAIN_FUNCTIONS = (
     FunctionSpec("pose", ("q", "params"), ("T",), "tool pose T (4 x 4 homogeneous, row-major)"),
     FunctionSpec("jacobian", ("q", "params"), ("J",), "geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin)"),
@@ -97,25 +110,44 @@ class ChainDerivation(Derivation):
         return self.closed_form("acc")
 
 
-# -- small vector algebra on expression lists (exact zeros fold by themselves) -----------------------
+# -- small algebra on expression lists (exact zeros fold by themselves) -----------------------------
 
-def cross(a: Vector, b: Vector) -> Vector:
-    """``a x b``."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def matvec(m: Sequence[Sequence[sp.Expr]], v: Vector) -> Vector:
+def matvec(m: Sequence[Sequence[sp.Expr]], v: Sequence[sp.Expr]) -> Vector:
     """``m v`` for a 3 x 3 ``m``."""
     return [sp.Add(*[m[i][j] * v[j] for j in range(3)]) for i in range(3)]
 
 
-def matmul(a: Sequence[Sequence[sp.Expr]], b: Sequence[Sequence[sp.Expr]]) -> list[list[sp.Expr]]:
+def matmul(a: Sequence[Sequence[sp.Expr]], b: Sequence[Sequence[sp.Expr]]) -> Rows:
     """``a b`` for 3 x 3 matrices."""
     return [[sp.Add(*[a[i][k] * b[k][j] for k in range(3)]) for j in range(3)] for i in range(3)]
 
 
-def _rows(matrix: sp.Matrix) -> list[list[sp.Expr]]:
+def _rows(matrix: sp.Matrix) -> Rows:
     return [[matrix[i, j] for j in range(matrix.cols)] for i in range(matrix.rows)]
+
+
+def _rz(trig: tuple[sp.Expr, sp.Expr] | None, v: Sequence[sp.Expr]) -> Vector:
+    """``Rz(psi) v`` for ``trig = (cos psi, sin psi)``; ``v`` itself when ``trig`` is ``None``."""
+    if trig is None:
+        return list(v)
+    c, s = trig
+    return [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
+
+
+def _times_rz(m: Sequence[Sequence[sp.Expr]], trig) -> Rows:
+    """``m Rz(psi)``: the first two columns of ``m`` mixed."""
+    if trig is None:
+        return [list(r) for r in m]
+    c, s = trig
+    return [[c * r[0] + s * r[1], c * r[1] - s * r[0], r[2]] for r in m]
+
+
+def _rz_times(trig, m: Sequence[Sequence[sp.Expr]]) -> Rows:
+    """``Rz(psi) m``: the first two rows of ``m`` mixed."""
+    if trig is None:
+        return [list(r) for r in m]
+    c, s = trig
+    return [[c * a - s * b for a, b in zip(m[0], m[1])], [s * a + c * b for a, b in zip(m[0], m[1])], list(m[2])]
 
 
 def _z_alignment(axis: Sequence[sp.Expr]) -> sp.Matrix:
@@ -141,52 +173,12 @@ def _z_alignment(axis: Sequence[sp.Expr]) -> sp.Matrix:
     return sp.Matrix([[sp.Float(u[i]), sp.Float(w[i]), sp.Float(v[i])] for i in range(3)])
 
 
-def _half_pi_multiple(expr: sp.Expr) -> bool:
-    """True for exact multiples of pi/2 (0 included)."""
-    expr = sp.sympify(expr)
-    return expr.is_zero or (not expr.free_symbols and (expr / (sp.pi / 2)).is_Integer)
-
-
 def _numeric(expr: sp.Expr) -> sp.Expr:
     """A constant with pi or radicals as a Float (so it prints as a literal); exact 0 and rationals stay."""
     expr = sp.sympify(expr)
     if expr.free_symbols or expr.is_Rational or expr.is_Float:
         return expr
     return sp.Float(expr.evalf(30), 17)
-
-
-@dataclass(frozen=True)
-class _Canonical:
-    """A joint as a z motion: constant transform before it, kind, coordinate, multiplier, angle offset."""
-
-    before: Transform
-    kind: str
-    coordinate: int
-    multiplier: sp.Expr
-    offset: sp.Expr
-
-
-def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
-    """The chain as z motions separated by constant transforms; returns the joints and the tool transform.
-
-    ``before`` of the first joint includes the base; the tool transform includes the last ``after``.
-    """
-    out = []
-    carry = chain.base
-    for joint in chain.joints:
-        Q = _z_alignment(joint.axis)
-        align = Transform(rotation=sp.ImmutableMatrix(Q))
-        before = carry @ joint.before @ align
-        offset = sp.sympify(joint.offset)
-        if joint.kind == "prismatic":
-            before = before @ Transform.translate(z=offset)
-            offset = sp.S.Zero
-        elif _half_pi_multiple(offset):
-            before = before @ Transform.rotate("z", offset)
-            offset = sp.S.Zero
-        out.append(_Canonical(before, joint.kind, joint.coordinate, sp.sympify(joint.multiplier), _numeric(offset)))
-        carry = Transform(rotation=sp.ImmutableMatrix(Q.T)) @ joint.after
-    return out, carry @ chain.tool
 
 
 def _z_rotation_angle(rotation: sp.Matrix) -> sp.Expr | None:
@@ -202,14 +194,552 @@ def _z_rotation_angle(rotation: sp.Matrix) -> sp.Expr | None:
     return sp.Float(math.atan2(float(s), float(c)))
 
 
+def _split_z(rotation: sp.Matrix) -> tuple[sp.Matrix, sp.Expr] | None:
+    """``(P, beta)`` with ``rotation = P Rz(beta)`` and ``P`` a signed permutation, when ``rotation`` takes
+    ``z`` exactly to a base axis and ``beta`` is not a multiple of pi/2 (else ``None``: nothing to gain)."""
+    if rotation.free_symbols:
+        return None
+    column = [rotation[i, 2] for i in range(3)]
+    if not all(x.is_Integer for x in column) or sorted(abs(int(x)) for x in column) != [0, 0, 1]:
+        return None
+    j = (next(i for i in range(3) if column[i] != 0) + 1) % 3
+    beta = math.atan2(-float(rotation[j, 1]), float(rotation[j, 0]))
+    if abs(beta / (math.pi / 2) - round(beta / (math.pi / 2))) < 1e-12:
+        return None
+    c, s = math.cos(beta), math.sin(beta)
+    turned = [[float(rotation[i, 0]) * c - float(rotation[i, 1]) * s, float(rotation[i, 0]) * s + float(rotation[i, 1]) * c,
+               float(rotation[i, 2])] for i in range(3)]  # rotation Rz(-beta)
+    P = [[round(x) for x in row] for row in turned]
+    if any(abs(x - y) > 1e-9 for row, prow in zip(turned, P) for x, y in zip(row, prow)):
+        return None
+    return sp.Matrix(P), sp.Float(beta)
+
+
+# -- canonical joints ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Canonical:
+    """A joint as a z motion: constant transform before it, joint type, coordinate, multiplier, angle offset."""
+
+    before: Transform
+    motion: JointType
+    coordinate: int
+    multiplier: sp.Expr
+    offset: sp.Expr
+
+    @property
+    def kind(self) -> str:
+        """The joint type's name (``revolute``, ``prismatic``)."""
+        return self.motion.kind
+
+
+def _turns(motion: JointType) -> bool:
+    return motion.turn(sp.S.One) is not None
+
+
+def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
+    """The chain as z motions separated by constant transforms; returns the joints and the tool transform.
+
+    ``before`` of the first joint includes the base; the tool transform includes the last ``after``.
+    Offsets that are multiples of pi/2 (revolute) and all prismatic offsets are in the constants
+    (:meth:`JointType.fold_offset`); other revolute offsets stay in the angle.
+    """
+    out = []
+    carry = chain.base
+    for joint in chain.joints:
+        motion = joint_type(joint.kind)
+        Q = _z_alignment(joint.axis)
+        fold, offset = motion.fold_offset(sp.sympify(joint.offset))
+        before = carry @ joint.before @ Transform(rotation=sp.ImmutableMatrix(Q)) @ fold
+        out.append(_Canonical(before, motion, joint.coordinate, sp.sympify(joint.multiplier), _numeric(offset)))
+        carry = Transform(rotation=sp.ImmutableMatrix(Q.T)) @ joint.after
+    return out, carry @ chain.tool
+
+
+def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
+    """The canonical chain with constant rotations about joint axes moved into the angles (free at run time):
+    one about a turning joint's axis right before it (``[P Rz(beta), t] Rz(theta) = [P, t] Rz(theta + beta)``)
+    and one about the last axis at the start of the tool transform
+    (``Rz(theta) [Rz(beta) P, t] = Rz(theta + beta) [P, Rz(-beta) t]``), ``P`` a signed permutation
+    (:func:`_split_z`). Panda's TCP, turned by -pi/4 about the flange axis, costs one addition so."""
+    out = []
+    for joint in joints:
+        split = _split_z(joint.before.rotation) if _turns(joint.motion) else None
+        if split is not None:
+            joint = _Canonical(Transform(sp.ImmutableMatrix(split[0]), joint.before.translation), joint.motion,
+                               joint.coordinate, joint.multiplier, _numeric(joint.offset + split[1]))
+        out.append(joint)
+    split = _split_z(tool.rotation.T) if _turns(out[-1].motion) else None
+    if split is not None:  # tool rotation = Rz(beta) P with beta = -split[1], P = split[0]^T
+        beta = -split[1]
+        shift = Transform.rotate("z", -beta).rotation * tool.translation
+        tool = Transform(sp.ImmutableMatrix(split[0].T), sp.ImmutableMatrix(shift))
+        last = out[-1]
+        out[-1] = _Canonical(last.before, last.motion, last.coordinate, last.multiplier, _numeric(last.offset + beta))
+    return out, tool
+
+
 class _Steps(StepRecorder):
-    """A StepRecorder that also leaves a negated atom unnamed (``-x`` costs nothing where it is used)."""
+    """A StepRecorder that leaves a negated atom unnamed (``-x`` costs nothing where it is used), keeps
+    groups of steps that belong together (for :func:`_normalise_signs`) and names vectors and matrices."""
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         expr = sp.sympify(expr)
         if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom:
             return expr
         return super().__call__(label, expr)
+
+    groups: list[tuple[sp.Symbol, ...]]
+    """Steps that belong together (a vector; a row or a column of a matrix): candidates for one sign flip."""
+
+    def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
+        """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
+        self.steps = list(steps)
+        self._known = {}
+        for symbol, rhs in self.steps:
+            self._known.setdefault(rhs, symbol)
+
+    def _group(self, entries: Sequence[sp.Expr]) -> None:
+        symbols = tuple(e for e in entries if isinstance(e, sp.Symbol) and e.name.startswith(f"_{self._tag}_"))
+        if len(symbols) > 1:
+            self.__dict__.setdefault("groups", []).append(symbols)
+
+    def vec(self, label: str, v: Sequence[sp.Expr]) -> Vector:
+        out = [self(f"{label}{'xyz'[i]}", sp.sympify(v[i])) for i in range(3)]
+        self._group(out)
+        return out
+
+    def mat(self, label: str, m: Sequence[Sequence[sp.Expr]]) -> Rows:
+        out = [[self(f"{label}{i}{j}", sp.sympify(m[i][j])) for j in range(3)] for i in range(3)]
+        for i in range(3):
+            self._group(out[i])
+            self._group([row[i] for row in out])
+        return out
+
+
+# -- the derivation, stage by stage (see the module docstring) -------------------------------------
+
+def _skeleton(e: sp.Expr) -> tuple:
+    """``e`` reduced to what decides its negations: sums, products (with their coefficient), symbols, signs."""
+    if e.is_Symbol:
+        return ("sym", e)
+    if e.is_Number:
+        return ("num", -1 if e.is_negative else 1)
+    if e.is_Add:
+        return ("add", tuple(_skeleton(a) for a in e.args))
+    if e.is_Mul:
+        coeff, factors = e.as_coeff_mul()
+        return ("mul", -1 if coeff.is_negative else 1, abs(coeff) == 1, tuple(_skeleton(f) for f in factors))
+    return ("other", tuple(_skeleton(a) for a in e.args))
+
+
+def _sign(node: tuple, flips: set) -> int:
+    """-1 where SymPy would see a minus sign in front of ``node`` once the symbols in ``flips`` are negated."""
+    op = node[0]
+    if op == "sym":
+        return -1 if node[1] in flips else 1
+    if op == "num":
+        return node[1]
+    if op == "mul":
+        sign = node[1]
+        for f in node[3]:
+            if f[0] == "sym" and f[1] in flips:
+                sign = -sign
+        return sign
+    return 1
+
+
+def _negated_atom(node: tuple, sign: int) -> sp.Symbol | None:
+    if node[0] == "sym" and sign < 0:
+        return node[1]
+    if node[0] == "mul" and node[2] and len(node[3]) == 1 and node[3][0][0] == "sym" and sign < 0:
+        return node[3][0][1]
+    return None
+
+
+def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tuple[sp.Symbol, bool], ...]]:
+    """Negations the expression with skeleton ``node`` pays as printed (times ``outer``, with the symbols in
+    ``flips`` negated), and the atoms it uses negated on their own.
+
+    Paid: a sum whose terms are all negative, a product with coefficient -1 that is not a subtracted term
+    (the rule of the operation counts). Returned apart: each ``-x`` for an atom ``x`` that is a term of a
+    sum (``(x, False)``: a subtraction, free once) or the whole expression (``(x, True)``), because CSE
+    shares a repeated ``-x`` as one negated temporary (see :func:`_hoisted`)."""
+    alone = _negated_atom(node, outer * _sign(node, flips))
+    if alone is not None:
+        return 0, ((alone, True),)
+    count, atoms = 0, []
+    stack = [(node, outer, False)]
+    while stack:
+        e, out, paid = stack.pop()
+        op = e[0]
+        if op == "add":
+            signs = [out * _sign(t, flips) for t in e[1]]
+            count += all(x < 0 for x in signs)
+            for t, sign in zip(e[1], signs):
+                atom = _negated_atom(t, sign)
+                if atom is not None:
+                    atoms.append((atom, False))
+                else:
+                    stack.append((t, sign * _sign(t, flips), sign < 0))
+        elif op == "mul":
+            count += e[2] and out * _sign(e, flips) < 0 and not paid
+            stack.extend((f, 1, False) for f in e[3] if f[0] not in ("sym", "num"))
+        elif op == "other":
+            stack.extend((a, 1, False) for a in e[1])
+    return count, tuple(atoms)
+
+
+def _function_weights(rhs: dict, outputs: Sequence[sp.Expr], functions: Sequence[Sequence[int]]) -> dict[tuple, int]:
+    """For every output and step, the number of functions whose program contains it (1 without ``functions``)."""
+    weight: dict[tuple, int] = {}
+    for indices in functions:
+        seen: set[sp.Symbol] = set()
+        todo = []
+        for i in indices:
+            weight[("out", i)] = weight.get(("out", i), 0) + 1
+            todo.extend(x for x in sp.sympify(outputs[i]).free_symbols if x in rhs)
+        while todo:
+            x = todo.pop()
+            if x not in seen:
+                seen.add(x)
+                todo.extend(y for y in rhs[x].free_symbols if y in rhs)
+        for x in seen:
+            weight[("step", x)] = weight.get(("step", x), 0) + 1
+    return weight
+
+
+def _hoisted(uses: int, alone: int) -> int:
+    """Negations a negated atom costs: one when it is used twice or more (CSE makes it a temporary) or
+    stands alone (an output ``-x``), none when it is subtracted once."""
+    return int(uses >= 2 or alone >= 1)
+
+
+def _live_steps(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr]) -> list[tuple[sp.Symbol, sp.Expr]]:
+    """The steps ``outputs`` need, in order (candidates that lost, such as the pose's other rows, go)."""
+    rhs = dict(steps)
+    needed: set[sp.Symbol] = set()
+    todo = [x for e in outputs for x in sp.sympify(e).free_symbols if x in rhs]
+    while todo:
+        x = todo.pop()
+        if x not in needed:
+            needed.add(x)
+            todo.extend(y for y in rhs[x].free_symbols if y in rhs)
+    return [(x, e) for x, e in steps if x in needed]
+
+
+def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequence[sp.Expr],
+                     groups: Sequence[tuple[sp.Symbol, ...]] = (),
+                     functions: Sequence[Sequence[int]] = ()) -> dict[sp.Symbol, sp.Expr]:
+    """Signs of the steps that leave the fewest negations: ``{s: -s}`` for each step to store negated.
+
+    Every quantity can be stored with either sign: a sum with a negative term is a subtraction either way,
+    and a sign on a factor moves to wherever the product is used. A negation is paid only where a value
+    arrives with the wrong sign at an output, or where every term of a sum is negative. Greedy: flip a step
+    (its right-hand side negated, its uses given ``-s``) when that lowers the negations of it and its users;
+    passes repeat until none does. ``functions``: the outputs (indices) of each emitted function; a negation
+    counts once for every function whose program contains it."""
+    rhs = dict(steps)
+    order = [s for s, _ in steps]
+    users: dict[sp.Symbol, list] = {s: [] for s in order}
+    exprs = {("out", i): sp.sympify(e) for i, e in enumerate(outputs)}
+    exprs.update({("step", s): rhs[s] for s in order})
+    exprs = {k: e for k, e in exprs.items() if not (e.is_Add and len(e.args) > 6)}  # a long sum (acc) pays nothing
+    skeletons = {k: _skeleton(e) for k, e in exprs.items()}
+    for key, e in exprs.items():
+        for x in e.free_symbols:
+            if x in users:
+                users[x].append(key)
+    weight = _function_weights(rhs, outputs, functions)
+    flips: set[sp.Symbol] = set()
+
+    def profile_of(key):
+        return _negations(skeletons[key], flips, -1 if key[0] == "step" and key[1] in flips else 1)
+
+    profile = {key: profile_of(key) for key in exprs}
+    uses: dict[sp.Symbol, list[int]] = {}  # atom -> [negated uses, negated alone]
+    for _, atoms in profile.values():
+        for atom, alone in atoms:
+            entry = uses.setdefault(atom, [0, 0])
+            entry[0] += 1
+            entry[1] += alone
+    flippable = {s for s in order if rhs[s].is_Add or rhs[s].is_Mul}  # a sine or cosine stays what the trig block computes
+    moves = [(s,) for s in reversed(order) if s in flippable] + [g for g in groups if all(s in flippable for s in g)]
+    for _ in range(4):
+        changed = False
+        for move in moves:
+            keys = list(dict.fromkeys([("step", s) for s in move if ("step", s) in exprs] + [k for s in move for k in users[s]]))
+            if not any(profile[k][0] or profile[k][1] for k in keys):
+                continue
+            flips.symmetric_difference_update(move)
+            new_profile = {k: profile_of(k) for k in keys}
+            delta = sum(weight.get(k, 1) * (new_profile[k][0] - profile[k][0]) for k in keys)
+            change: dict[sp.Symbol, list[int]] = {}
+            for sign, table in ((-1, profile), (1, new_profile)):
+                for k in keys:
+                    for atom, alone in table[k][1]:
+                        entry = change.setdefault(atom, [0, 0])
+                        entry[0] += sign
+                        entry[1] += sign * alone
+            for atom, (d_uses, d_alone) in change.items():
+                old = uses.get(atom, [0, 0])
+                delta += weight.get(("step", atom), 1) * (_hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old))
+            if delta < 0:
+                profile.update(new_profile)
+                for atom, (d_uses, d_alone) in change.items():
+                    entry = uses.setdefault(atom, [0, 0])
+                    entry[0] += d_uses
+                    entry[1] += d_alone
+                changed = True
+            else:
+                flips.symmetric_difference_update(move)
+        if not changed:
+            break
+    return {s: -s for s in flips}
+
+
+@dataclass
+class _Frames:
+    """Forward pass: segments of parallel axes and the angles within them.
+
+    ``segment[k]``: the segment of joint ``k``; ``rotation[s]``: ``F_s``, the rotation of the frame of its
+    first joint in base axes (rows); ``starts``/``ends``: first and last joint of each segment;
+    ``trig[k]``: ``(cos, sin)`` of ``psi_k``, the angle of the frames after joint ``k`` about the segment's
+    ``z`` (``None`` while nothing in the segment turned); ``theta[k]``: the joint variable;
+    ``axes[k]``: ``z_k`` in base axes.
+    """
+
+    segment: list[int]
+    rotation: list[Rows]
+    starts: list[int]
+    ends: list[int]
+    trig: list[tuple[sp.Expr, sp.Expr] | None]
+    theta: list[sp.Expr]
+    axes: list[Vector]
+
+
+def _frames(step: _Steps, joints: Sequence[_Canonical], q: Sequence[sp.Symbol]) -> _Frames:
+    """Segments, their frames ``F_s`` (multiplied out entry by entry) and one angle per turning joint."""
+    f = _Frames([], [], [], [], [], [], [])
+    angle: sp.Expr | None = None  # psi of the previous joint
+    for k, joint in enumerate(joints):
+        theta = joint.multiplier * q[joint.coordinate] + joint.offset
+        turn = joint.motion.turn(theta)
+        beta = _z_rotation_angle(joint.before.rotation) if k else None
+        if beta is not None and (turn is not None or beta == 0):  # parallel axes: the same segment
+            f.ends[-1] = k
+        else:
+            f.starts.append(k)
+            f.ends.append(k)
+            if k == 0:
+                f.rotation.append(_rows(joint.before.rotation))
+            else:
+                s = len(f.rotation) + 1
+                turned = step.mat(f"G{s}_", _times_rz(f.rotation[-1], f.trig[k - 1]))  # named before any constant multiplies it
+                f.rotation.append(step.mat(f"F{s}_", matmul(turned, _rows(joint.before.rotation))))
+            angle, beta = None, sp.S.Zero
+        if turn is not None:
+            angle = step(f"th{k + 1}", (angle if angle is not None else 0) + _numeric(beta) + turn)
+            f.trig.append((step(f"c{k + 1}", sp.cos(angle)), step(f"s{k + 1}", sp.sin(angle))))
+        else:
+            f.trig.append(f.trig[k - 1] if f.starts[-1] != k else None)
+        f.segment.append(len(f.rotation) - 1)
+        f.theta.append(theta)
+        f.axes.append([row[2] for row in f.rotation[-1]])
+    return f
+
+
+def _tool_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform) -> list[Vector]:
+    """``W_k = p_e - o_k`` in the axes of joint ``k``'s segment frame, tip to base (Horner's rule)."""
+    n = len(joints)
+    W: list[Vector] = [None] * n
+    for k in reversed(range(n)):
+        nxt = joints[k + 1].before if k + 1 < n else tool
+        t = list(nxt.translation)
+        if k + 1 < n and f.segment[k + 1] == f.segment[k]:
+            v = add(_rz(f.trig[k], t), W[k + 1])  # same axes: the planar arm's sum
+        else:
+            inner = add(t, matvec(_rows(nxt.rotation), W[k + 1])) if k + 1 < n else t
+            v = _rz(f.trig[k], inner)
+        v[2] = v[2] + joints[k].motion.advance(f.theta[k])
+        W[k] = step.vec(f"W{k + 1}", v)
+    return W
+
+
+def _columns(step: _Steps, joints: Sequence[_Canonical], f: _Frames, W: Sequence[Vector]) -> tuple[list[Vector], list[Vector]]:
+    """Per joint, ``(Jv_k, Jw_k)`` in base axes: its type's column in segment axes, rotated by ``F_s``."""
+    linear, angular = [], []
+    for k, joint in enumerate(joints):
+        F = f.rotation[f.segment[k]]
+        lin, ang = joint.motion.column(E_Z, W[k])
+        linear.append(step.vec(f"Jv{k + 1}", matvec(F, lin)))
+        angular.append(step.vec(f"Jw{k + 1}", matvec(F, ang)))
+    return linear, angular
+
+
+def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform) -> list[Vector]:
+    """``r_k = p_e - o_k`` in base axes, tip to base: ``r_k = r_(k+1) + G_k t_(k+1)`` plus the joint's own
+    advance along ``z_k``, with ``G_k = F_s Rz(psi_k)`` the rotation after joint ``k`` (suffix sums of the
+    links in base axes: no rotation of a whole vector, only the columns of ``G_k`` a translation uses)."""
+    n = len(joints)
+    r: list[Vector] = [None] * n
+    below = [sp.S.Zero] * 3
+    for k in reversed(range(n)):
+        t = list((joints[k + 1].before if k + 1 < n else tool).translation)
+        G = step.mat(f"H{k + 1}_", _times_rz(f.rotation[f.segment[k]], f.trig[k]))
+        v = add(below, matvec(G, t))
+        advance = joints[k].motion.advance(f.theta[k])
+        r[k] = below = step.vec(f"r{k + 1}", [v[i] + f.axes[k][i] * advance for i in range(3)])
+    return r
+
+
+def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
+    """True when some segment starts with a constant rotation that is not a signed permutation (URDF angles
+    written with few decimals: xArm7's 1.5708): there, rotating each column costs more than its cross product."""
+    return any(x not in (-1, 0, 1) for k in f.starts[1:] for x in joints[k].before.rotation)
+
+
+def _choose_columns(step: _Steps, joints, f: _Frames, tool: Transform, segment_columns, tip, angular, rotation, dq, ddq):
+    """``(linear columns, p_e, rates)``: the columns in segment axes rotated by ``F_s`` with ``p_e`` by Horner's
+    rule, or, where constant rotations are dense, the columns in base axes ``z_k x r_k`` (:func:`_base_offsets`)
+    with ``p_e`` from either; whichever needs the fewest operations for pose, jacobian, jacobian_dot and
+    kinematics together."""
+    candidates = [(segment_columns, tip, "")]
+    if _dense_constants(joints, f):
+        r = _base_offsets(step, joints, f, tool)
+        base = [step.vec(f"Jb{k + 1}", joint.motion.column(f.axes[k], r[k])[0]) for k, joint in enumerate(joints)]
+        suffix_tip = step.vec("pb", add(list(joints[0].before.translation), r[0]))
+        candidates += [(base, tip, "a"), (base, suffix_tip, "b")]
+    best, best_cost = None, None
+    for linear, p, tag in candidates:
+        rates = _velocities(step, joints, f.axes, linear, angular, dq, ddq, tag)
+        if len(candidates) == 1:
+            return linear, p, rates
+        T = [e for row in rotation for e in row] + list(p)
+        J = [e for v in list(linear) + list(angular) for e in v]
+        dJ = [e for v in rates.d_linear + rates.d_angular for e in v]
+        steps = dict(step.steps)
+        cost = sum(_closure_ops(steps, x) for x in (T, J, dJ, T + J + dJ + rates.twist + rates.acc))
+        if best_cost is None or cost < best_cost:
+            best, best_cost = (linear, p, rates), cost
+    return best
+
+
+def _settle_signs(step: _Steps, outputs: tuple, axes: list[Vector]) -> tuple[tuple, list[Vector]]:
+    """Drop dead steps, choose the signs of the rest (:func:`_normalise_signs`) and return ``outputs``
+    (groups of vectors: rotation, tip, J, dJ, rates, J_tool parts) and ``axes`` written with the flipped steps."""
+    values, where, at = [], {}, 0
+    for name, group in zip(("T", "T", "J", "J", "dJ", "dJ", "rates", "J_tool", "J_tool"), outputs):
+        flat = [e for v in group for e in v]
+        where.setdefault(name, []).extend(range(at, at + len(flat)))
+        values.extend(flat)
+        at += len(flat)
+    functions = [where[f] for f in ("T", "J", "dJ", "rates", "J_tool")] + [where["T"] + where["J"] + where["dJ"] + where["rates"]]
+    step.replace_steps(_live_steps(step.steps, values))
+    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), functions)
+    if not flips:
+        return outputs, axes
+    step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
+    rewrite = [[[sp.sympify(e).xreplace(flips) for e in v] for v in group] for group in outputs + (axes,)]
+    return tuple(rewrite[:-1]), rewrite[-1]
+
+
+def _closure_ops(steps: dict, exprs: Sequence[sp.Expr]) -> int:
+    """Operations (SymPy's count) of ``exprs`` and of every step they need."""
+    seen: set[sp.Symbol] = set()
+    todo = [s for e in exprs for s in sp.sympify(e).free_symbols if s in steps]
+    total = sum(sp.count_ops(e) for e in exprs)
+    while todo:
+        s = todo.pop()
+        if s not in seen:
+            seen.add(s)
+            total += sp.count_ops(steps[s])
+            todo.extend(x for x in steps[s].free_symbols if x in steps)
+    return total
+
+
+def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, W: Sequence[Vector]) -> tuple[Rows, Vector]:
+    """Tool rotation ``R`` (rows) and position ``p_e = o_1 + F_1 W_1``.
+
+    ``R = F_last Rz(psi_n) C_tool``: either all rows multiplied out, or two of them and the third as their
+    cross product (``r_0 = r_1 x r_2`` cyclically), whichever needs the fewest operations: carrying two
+    rows down the chain instead of three saves six operations per dense step.
+    """
+    full = matmul(step.mat("Ge_", _times_rz(f.rotation[-1], f.trig[-1])), _rows(tool.rotation))
+    rows = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
+    best, best_ops = rows, None
+    for d in (None, 0, 1, 2):
+        candidate = [list(r) for r in rows]
+        if d is not None:
+            candidate[d] = step.vec(f"Rx{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
+        ops = _closure_ops(dict(step.steps), [e for r in candidate for e in r])
+        if best_ops is None or ops < best_ops:
+            best, best_ops = candidate, ops
+    origin = add(list(joints[0].before.translation), matvec(f.rotation[0], W[0]))
+    return best, step.vec("pe", origin)
+
+
+@dataclass
+class _Rates:
+    """Velocity terms: per joint ``omega`` after it, ``d/dt`` of its column; the tool twist and acceleration."""
+
+    d_linear: list[Vector]
+    d_angular: list[Vector]
+    twist: Vector
+    acc: Vector
+
+
+def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq, tag: str = "") -> _Rates:
+    """``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j dtheta_j`` and the columns' derivatives
+    (``tag`` tells apart the names of the steps of one set of columns from another's)."""
+    count = len(joints)
+    rates = [j.multiplier * dq[j.coordinate] for j in joints]
+    accels = [j.multiplier * ddq[j.coordinate] for j in joints]
+    omega_before, omega = [], [sp.S.Zero] * 3
+    for k, joint in enumerate(joints):
+        omega_before.append(omega)
+        omega = step.vec(f"w{k + 1}", add(omega, joint.motion.angular_rate(axes[k], rates[k])))
+    omega_after = omega_before[1:] + [omega]
+    suffix: list[Vector] = [None] * count
+    u = [sp.S.Zero] * 3
+    for k in reversed(range(count)):
+        suffix[k] = u
+        u = step.vec(f"u{tag}{k + 1}", [u[i] + linear[k][i] * rates[k] for i in range(3)])
+    d_linear, d_angular = [], []
+    for k, joint in enumerate(joints):
+        dv, dw = joint.motion.column_rate(omega_before[k], omega_after[k], axes[k], linear[k], angular[k], suffix[k])
+        d_linear.append(step.vec(f"dJv{tag}{k + 1}", dv))
+        d_angular.append(step.vec(f"dJw{tag}{k + 1}", dw))
+    acc = [sp.Add(*[part[k][i] * accels[k] + d_part[k][i] * rates[k] for k in range(count)])
+           for part, d_part in ((linear, d_linear), (angular, d_angular)) for i in range(3)]
+    return _Rates(d_linear, d_angular, u + omega, acc)
+
+
+def _tool_jacobian(step: _Steps, joints, f: _Frames, tool: Transform, W) -> tuple[list[Vector], list[Vector]]:
+    """Per joint, its column in tool axes: ``B_s^T column_k(W_k)`` with ``B_s = F_s^T R`` built tip to base,
+    ``B_s = Rz(psi_end) C B_(s+1)`` (``B_last = Rz(psi_n) C_tool``)."""
+    B: list[Rows] = [None] * len(f.rotation)
+    below = _rows(tool.rotation)
+    for s in reversed(range(len(f.rotation))):
+        B[s] = step.mat(f"B{s + 1}_", _rz_times(f.trig[f.ends[s]], below))
+        if s:
+            below = matmul(_rows(joints[f.starts[s]].before.rotation), B[s])
+    linear, angular = [], []
+    for k, joint in enumerate(joints):
+        Bt = [[B[f.segment[k]][j][i] for j in range(3)] for i in range(3)]
+        lin, ang = joint.motion.column(E_Z, W[k])
+        linear.append(step.vec(f"Jtv{k + 1}", matvec(Bt, lin)))
+        angular.append(step.vec(f"Jtw{k + 1}", matvec(Bt, ang)))
+    return linear, angular
+
+
+def _by_coordinate(joints: Sequence[_Canonical], n: int, linear: Sequence[Vector], angular: Sequence[Vector]) -> sp.Matrix:
+    """The 6 x n matrix whose column ``c`` sums ``m_k [linear_k; angular_k]`` over the joints moved by ``c``."""
+    columns = [[sp.S.Zero] * 6 for _ in range(n)]
+    for k, joint in enumerate(joints):
+        for i, value in enumerate(list(linear[k]) + list(angular[k])):
+            columns[joint.coordinate][i] += joint.multiplier * value
+    return sp.Matrix([[columns[c][i] for c in range(n)] for i in range(6)])
 
 
 def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
@@ -223,126 +753,66 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     if chain.parameters:
         inputs["params"] = tuple(chain.parameters)
     step = _Steps("ch")
-    joints, tool = canonical_joints(chain)
-    count = len(joints)
-
-    def vec(label: str, v: Vector) -> Vector:
-        return [step(f"{label}{'xyz'[i]}", sp.sympify(v[i])) for i in range(3)]
-
-    def mat(label: str, m) -> list[list[sp.Expr]]:
-        return [[step(f"{label}{i}{j}", sp.sympify(m[i][j])) for j in range(3)] for i in range(3)]
-
-    # -- forward pass: axes, origins, rotations -------------------------------------------------------
-    fixed = [[sp.S.One if i == j else sp.S.Zero for j in range(3)] for i in range(3)]
-    angle: sp.Expr | None = None  # pending rotation Rz(angle) after `fixed`
-    trig: tuple[sp.Expr, sp.Expr] | None = None
-    position: Vector = [sp.S.Zero] * 3
-    axes, origins, rates, accels = [], [], [], []
-
-    def rotate_pending(v: Vector) -> Vector:  # Rz(angle) v
-        c, s = trig
-        return [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
-
-    def current_rotation(k: int) -> list[list[sp.Expr]]:
-        if angle is None:
-            return fixed
-        c, s = trig
-        x = [c * fixed[i][0] + s * fixed[i][1] for i in range(3)]
-        y = [c * fixed[i][1] - s * fixed[i][0] for i in range(3)]
-        return [[step(f"R{k}_{i}0", x[i]), step(f"R{k}_{i}1", y[i]), fixed[i][2]] for i in range(3)]
-
-    for k, joint in enumerate(joints, start=1):
-        c_rot, c_pos = _rows(joint.before.rotation), list(joint.before.translation)
-        theta = joint.multiplier * q[joint.coordinate] + joint.offset
-        beta = _z_rotation_angle(joint.before.rotation)
-        local = rotate_pending(c_pos) if angle is not None else c_pos
-        origin = vec(f"o{k}", [position[i] + matvec(fixed, local)[i] for i in range(3)])
-        if angle is not None and joint.kind == "revolute" and beta is not None:
-            angle = step(f"th{k}", angle + beta + theta)  # parallel axes: angles add up
-        else:
-            rotation = current_rotation(k - 1)
-            fixed = mat(f"F{k}_", matmul(rotation, c_rot))
-            angle = step(f"th{k}", theta) if joint.kind == "revolute" else None
-        if angle is not None:
-            trig = (step(f"c{k}", sp.cos(angle)), step(f"s{k}", sp.sin(angle)))
-        axis = [fixed[i][2] for i in range(3)]
-        position = origin if joint.kind == "revolute" else vec(f"p{k}", [origin[i] + axis[i] * theta for i in range(3)])
-        axes.append(axis)
-        origins.append(origin)
-        rates.append(joint.multiplier * dq[joint.coordinate])
-        accels.append(joint.multiplier * ddq[joint.coordinate])
-
-    last = current_rotation(count)
-    t_rot, t_pos = _rows(tool.rotation), list(tool.translation)
-    tip = vec("pe", [position[i] + matvec(last, t_pos)[i] for i in range(3)])
-    tool_rotation = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(matmul(last, t_rot))]
-
-    # -- Jacobian columns --------------------------------------------------------------------------
-    linear, angular = [], []
-    for k, joint in enumerate(joints, start=1):
-        z = axes[k - 1]
-        if joint.kind == "revolute":
-            r = vec(f"r{k}", [tip[i] - origins[k - 1][i] for i in range(3)])
-            linear.append(vec(f"Jv{k}", cross(z, r)))
-            angular.append(z)
-        else:
-            linear.append(z)
-            angular.append([sp.S.Zero] * 3)
-
-    # -- velocities and dJ/dt --------------------------------------------------------------------------
-    omega_before, omega = [], [sp.S.Zero] * 3
-    for k, joint in enumerate(joints, start=1):
-        omega_before.append(omega)
-        if joint.kind == "revolute":
-            omega = vec(f"w{k}", [omega[i] + axes[k - 1][i] * rates[k - 1] for i in range(3)])
-    omega_after = omega_before[1:] + [omega]
-    suffix: list[Vector] = [None] * count  # u_k = sum_{j>k} Jv_j dtheta_j
-    u = [sp.S.Zero] * 3
-    for k in reversed(range(count)):
-        suffix[k] = u
-        u = vec(f"u{k + 1}", [u[i] + linear[k][i] * rates[k] for i in range(3)])
-    velocity = u
-    d_linear, d_angular = [], []
-    for k, joint in enumerate(joints):
-        z = axes[k]
-        dz = vec(f"dz{k + 1}", cross(omega_before[k], z))
-        if joint.kind == "revolute":
-            a = cross(omega_after[k], linear[k])
-            b = cross(z, suffix[k])
-            d_linear.append(vec(f"dJv{k + 1}", [a[i] + b[i] for i in range(3)]))
-            d_angular.append(dz)
-        else:
-            d_linear.append(dz)
-            d_angular.append([sp.S.Zero] * 3)
-
-    # -- columns by coordinate (mimic joints add to their leader's column) ------------------------------
-    def by_coordinate(per_joint: list[Vector], label: str) -> list[Vector]:
-        columns: list[list[sp.Expr]] = [[sp.S.Zero] * 3 for _ in range(n)]
-        for k, joint in enumerate(joints):
-            for i in range(3):
-                columns[joint.coordinate][i] += joint.multiplier * per_joint[k][i]
-        return columns
-
-    Jv, Jw = by_coordinate(linear, "Jv"), by_coordinate(angular, "Jw")
-    dJv, dJw = by_coordinate(d_linear, "dJv"), by_coordinate(d_angular, "dJw")
-    J = sp.Matrix([[Jv[c][i] for c in range(n)] for i in range(3)] + [[Jw[c][i] for c in range(n)] for i in range(3)])
-    dJ = sp.Matrix([[dJv[c][i] for c in range(n)] for i in range(3)] + [[dJw[c][i] for c in range(n)] for i in range(3)])
-    acc_lin = [sp.Add(*[linear[k][i] * accels[k] + d_linear[k][i] * rates[k] for k in range(count)]) for i in range(3)]
-    acc_ang = [sp.Add(*[angular[k][i] * accels[k] + d_angular[k][i] * rates[k] for k in range(count)]) for i in range(3)]
-    RT = sp.Matrix(tool_rotation).T
-    J_tool = (RT * J[:3, :]).col_join(RT * J[3:, :])
-    T = sp.Matrix(tool_rotation).row_join(sp.Matrix(tip)).col_join(sp.Matrix([[0, 0, 0, 1]]))
+    joints, tool = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
+    frames = _frames(step, joints, q)
+    W = _tool_offsets(step, joints, frames, tool)
+    linear, angular = _columns(step, joints, frames, W)
+    rotation, tip = _pose(step, joints, frames, tool, W)
+    linear, tip, rates = _choose_columns(step, joints, frames, tool, linear, tip, angular, rotation, dq, ddq)
+    tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
+    outputs = (rotation, [tip], linear, angular, rates.d_linear, rates.d_angular, [rates.twist, rates.acc], tool_linear, tool_angular)
+    (rotation, (tip,), linear, angular, d_linear, d_angular, (twist, acc), tool_linear, tool_angular), axes = \
+        _settle_signs(step, outputs, frames.axes)
     compact = {
-        "T": T,
-        "J": J,
-        "J_tool": J_tool,
-        "dJ": dJ,
-        "twist": sp.Matrix(velocity + omega),
-        "acc": sp.Matrix(acc_lin + acc_ang),
+        "T": sp.Matrix(rotation).row_join(sp.Matrix(tip)).col_join(sp.Matrix([[0, 0, 0, 1]])),
+        "J": _by_coordinate(joints, n, linear, angular),
+        "J_tool": _by_coordinate(joints, n, tool_linear, tool_angular),
+        "dJ": _by_coordinate(joints, n, d_linear, d_angular),
+        "twist": sp.Matrix(twist),
+        "acc": sp.Matrix(acc),
     }
     shapes = {"T": (4, 4), "J": (6, n), "J_tool": (6, n), "dJ": (6, n), "twist": (6,), "acc": (6,)}
+    tables, limit_notes = _limit_tables(chain)
+    derivation = ChainDerivation(
+        model=chain,
+        inputs=inputs,
+        steps=tuple(step.steps),
+        compact=compact,
+        shapes=shapes,
+        functions=CHAIN_FUNCTIONS,
+        parameters=("params",),
+        domains={"q": "finite", "dq": "finite", "ddq": "finite", "params": "finite"},
+        notes=_notes(chain) + limit_notes,
+        tables=tables,
+    )
+    if not inverse:
+        return derivation
+    from .inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
+
+    return extend(derivation, step, joints, axes, linear, angular, rotation)
+
+
+def _named_trig_constants(step: _Steps, joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
+    """Every sine and cosine of a named parameter in the constant transforms (``cos(alpha)`` for a
+    parameter ``alpha``) as a step of its own, used everywhere by that name (the trigonometric block
+    evaluates it once)."""
+    transforms = [j.before for j in joints] + [tool]
+    atoms = set().union(*[m.atoms(sp.sin, sp.cos) for t in transforms for m in (t.rotation, t.translation)])
+    if not atoms:
+        return joints, tool
+    names = {a: step(f"k{i}", a) for i, a in enumerate(sorted(atoms, key=sp.default_sort_key))}
+
+    def named(t: Transform) -> Transform:
+        return Transform(t.rotation.xreplace(names), t.translation.xreplace(names))
+
+    return [_Canonical(named(j.before), j.motion, j.coordinate, j.multiplier, j.offset) for j in joints], named(tool)
+
+
+def _notes(chain: Chain) -> tuple[str, ...]:
+    """Header lines: the model, its coordinates and the frames of every output."""
+    n = chain.n
     kinds = ", ".join(f"{j.name}: {j.kind}" for j in chain.joints)
-    notes = (
+    return (
         f"Model: {chain.describe()}.",
         f"Joints (base to tip): {kinds}.",
         f"Coordinates q[0..{n - 1}]: {', '.join(chain.coordinates)}; radians (revolute) or metres (prismatic);",
@@ -355,26 +825,6 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
         "twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical",
         "acceleration of the tool origin, angular acceleration), all in base axes.",
     )
-    tables, limit_notes = _limit_tables(chain)
-    notes = notes + limit_notes
-    derivation = ChainDerivation(
-        model=chain,
-        inputs=inputs,
-        steps=tuple(step.steps),
-        compact=compact,
-        shapes=shapes,
-        functions=CHAIN_FUNCTIONS,
-        parameters=("params",),
-        domains={"q": "finite", "dq": "finite", "ddq": "finite", "params": "finite"},
-        notes=notes,
-        tables=tables,
-    )
-    if not inverse:
-        return derivation
-    from .inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
-
-    return extend(derivation, step, joints, axes, linear, angular, tool_rotation)
-
 
 def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
     """``Q_MIN``, ``Q_MAX`` (and ``DQ_MAX``) per coordinate when the model has limits, and header lines listing them."""

@@ -25,7 +25,9 @@ no loops, no allocation); the small factorisations are those of :mod:`skelarm_sy
      depend on the unit of length: ``B^T = Q R``; a row whose residual is at most
      ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero).
   2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]``,
-     by a second Gram-Schmidt QR and a guarded back substitution.
+     by a second Gram-Schmidt QR and a guarded back substitution; every row divided by ``max(1, lambda)``
+     first (the same solution), so no entry overflows for any finite lambda and the answer tends to 0,
+     the limit, as lambda grows.
   With ``lambda = 0`` at a singular pose this is the minimum-norm least-squares solution of the
   Jacobian with the dropped rows' residuals removed (``numpy.linalg.pinv`` with a relative cut-off
   near RANK_TOL); finite always. ``inverse_velocity_position``: the same for the 3 linear rows and
@@ -75,10 +77,6 @@ INVERSE_FUNCTIONS = (
 )
 
 
-def cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def characteristic_length(chain, step=None) -> sp.Expr:
     """``L``: the sum of the lengths of the chain's constant translations (base excluded); 1 if zero.
 
@@ -96,44 +94,50 @@ def characteristic_length(chain, step=None) -> sp.Expr:
 
 
 def _hessian(step, joints, axes, linear, angular, n) -> list[list[list[sp.Expr]]]:
-    """``H[r][c][j] = dJ[r][c]/dq_j`` from per-joint cross products (see the module docstring)."""
+    """``H[r][c][j] = dJ[r][c]/dq_j`` from per-joint cross products (see the module docstring): for ``i <= k``
+    joint ``i`` turns column ``k`` (``turns_columns``), for ``i > k`` column ``k`` follows the tool point,
+    which joint ``i`` moves by ``Jv_i`` (``follows_tool``); each joint type says what it contributes."""
     H = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(6)]
     zero = [sp.S.Zero] * 3
     for k, jk in enumerate(joints):
         for i, ji in enumerate(joints):
             if i <= k:
-                if ji.kind != "revolute":
-                    continue
-                dv, dw = cross(axes[i], linear[k]), cross(axes[i], angular[k])
+                term = ji.motion.turns_columns(axes[i], linear[k], angular[k])
             else:
-                if jk.kind != "revolute":
-                    continue
-                dv, dw = cross(axes[k], linear[i]), zero
+                follow = jk.motion.follows_tool(axes[k], linear[i])
+                term = None if follow is None else (follow, zero)
+            if term is None:
+                continue
             factor = sp.sympify(jk.multiplier) * sp.sympify(ji.multiplier)
-            for r, value in enumerate(list(dv) + list(dw)):
+            for r, value in enumerate(list(term[0]) + list(term[1])):
                 if value != 0:
                     H[r][jk.coordinate][ji.coordinate] += factor * value
     return [[[step(f"H{r}_{c}_{j}", H[r][c][j]) for j in range(n)] for c in range(n)] for r in range(6)]
 
 
-def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs, lam2, tol, label):
+def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs, lam, mu, tol, label):
     """Two-stage QR solve of ``min |M dq - rhs|^2 + lambda^2 |dq|^2``, ``M = rows`` (see the module docstring).
 
-    ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1).
+    ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1). ``mu = 1/max(1, lambda)``:
+    the second stage solves the same least-squares problem with every row divided by ``max(1, lambda)``,
+    ``min |mu M dq - mu rhs|^2 + (mu lambda)^2 |dq|^2``, whose entries stay below ``|M|`` and 1 for every
+    finite lambda (``lambda^2`` overflows from 1.8e154 in double, 1.8e19 in float), and whose solution tends
+    to 0 as lambda grows (exactly 0 once ``mu`` underflows).
     """
     m = len(rows)
     n = len(rows[0])
     scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
     frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
     first = gram_schmidt(step, scaled, f"{label}A", threshold=tol * frob)
-    lam = step(f"{label}lam", sp.sqrt(lam2))
+    damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
+    factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
     columns = []
     for k in range(m):
-        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] / scales[r]) for r in range(m)]
-        bottom = [lam if e == k else sp.S.Zero for e in range(m)]
+        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] * factor[r]) for r in range(m)]
+        bottom = [damping if e == k else sp.S.Zero for e in range(m)]
         columns.append(top + bottom)
     second = gram_schmidt(step, columns, f"{label}B")
-    c = [step(f"{label}c{k}", sp.Add(*[second.Q[k][r] * rhs[r] for r in range(m)])) for k in range(m)]
+    c = [step(f"{label}c{k}", mu * sp.Add(*[second.Q[k][r] * rhs[r] for r in range(m)])) for k in range(m)]
     z = back_substitute(step, second.R, c, f"{label}s")
     return [step(f"{label}x{j}", sp.Add(*[first.Q[k][j] * z[k] for k in range(m)])) for j in range(n)]
 
@@ -164,7 +168,7 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     rows = [[step(f"Jc{r}_{c}", J[r, c]) for c in range(n)] for r in range(6)]
     tol = RANK_TOL.symbol
     lam = sp.Symbol("lambda", real=True)
-    lam2 = step("lam2", lam**2)
+    mu = step("mu", 1 / guarded(lam, sp.StrictGreaterThan(lam, 1)))  # 1 / max(1, lambda)
     twist = sp.symbols("xi_vx xi_vy xi_vz xi_wx xi_wy xi_wz", real=True)
     velocity = sp.symbols("nu_x nu_y nu_z", real=True)
 
@@ -187,8 +191,8 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     if reach.free_symbols:
         reach = step("reach", guarded(reach, sp.StrictGreaterThan(reach, 0)))
     ireach = step("ireach", 1 / reach) if reach.free_symbols else sp.Float(1 / float(reach), 17) if reach != 1 else sp.S.One
-    dq = _least_squares(step, rows, [ireach] * 3 + [sp.S.One] * 3, twist, lam2, tol, "iv")
-    dq_position = _least_squares(step, rows[:3], [sp.S.One] * 3, velocity, lam2, tol, "ip")
+    dq = _least_squares(step, rows, [ireach] * 3 + [sp.S.One] * 3, twist, lam, mu, tol, "iv")
+    dq_position = _least_squares(step, rows[:3], [sp.S.One] * 3, velocity, lam, mu, tol, "ip")
 
     JA = _jacobian_rpy(step, rows, tool_rotation, tol)
 

@@ -13,7 +13,7 @@ small expression of inputs and earlier steps:
   the endpoint velocity is ``v = J dq = (h_y1, -h_x1)``;
 * ``a = J ddq + H dq``.
 
-Those steps are what :mod:`skelarm_sym.program` turns into code (they are linear
+Those steps are what :mod:`skelarm_sym.ir.lower` turns into code (they are linear
 in ``n``). The closed forms users see (``Derivation.J`` and friends) are the same
 steps substituted into each other, built on first access.
 """
@@ -97,7 +97,7 @@ class PlanarDerivation(Derivation):
 
     @property
     def w(self) -> sp.Expr:
-        """Manipulability ``sqrt(det(J J^T))``, as emitted (see :func:`skelarm_sym.derive.linalg.gram_root`)."""
+        """Manipulability ``sqrt(det(J J^T)) = sqrt(pp rr)``, as emitted (see :func:`skelarm_sym.derive.linalg.gram_schmidt2`)."""
         return self.closed_form("w")[0]
 
 
@@ -249,11 +249,11 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
     G = linalg.gram(step, [jx, jy], "G")
     gs = linalg.gram_schmidt2(step, [jx, jy], G, "w")
     w = sp.sqrt(gs.pp * gs.rr)
-    lam2 = step("lam2", lam**2)
+    lam2, kappa = linalg.damping_scale(step, lam)  # kappa (J J^T) + lam2 I: finite for every finite lambda
 
-    dq = linalg.damped_solve2(step, gs, G, lam2, v_in, tol, "iv")
+    dq = linalg.damped_solve2(step, gs, G, lam2, v_in, tol, "iv", kappa)
     err = [step("ex", target[0] - jy[0]), step("ey", target[1] + jx[0])]
-    dq_ik = linalg.damped_solve2(step, gs, G, lam2, err, tol, "ik")
+    dq_ik = linalg.damped_solve2(step, gs, G, lam2, err, tol, "ik", kappa)
     q_next = [q[i] + dq_ik[i] for i in range(n)]
 
     inputs = {"v": v_in, "target": target, "lambda": (lam,)}
@@ -267,15 +267,18 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
         ireach2 = step("ireach2", ireach**2)
         sx = step("Gsx", sp.Add(*jx))
         sy = step("Gsy", sp.Add(*jy))
+        # kappa S y = kappa D twist (see linalg.damping_scale): the same y, no overflow for a huge lambda
+        k2 = step("kireach2", kappa * ireach2)
+        k1 = step("kireach", kappa * ireach)
         S = [
-            [step("S00", (G[0][0] + lam2) * ireach2), step("S01", G[0][1] * ireach2), step("S02", sx * ireach)],
-            [None, step("S11", (G[1][1] + lam2) * ireach2), step("S12", sy * ireach)],
-            [None, None, step("S22", sp.Integer(n) + lam2)],
+            [step("S00", G[0][0] * k2 + lam2 * ireach2), step("S01", G[0][1] * k2), step("S02", sx * k1)],
+            [None, step("S11", G[1][1] * k2 + lam2 * ireach2), step("S12", sy * k1)],
+            [None, None, step("S22", sp.Integer(n) * kappa + lam2)],
         ]
         for i in range(3):
             for j in range(i):
                 S[i][j] = S[j][i]
-        scaled = [step("tsx", twist[0] * ireach), step("tsy", twist[1] * ireach), twist[2]]
+        scaled = [step("tsx", twist[0] * k1), step("tsy", twist[1] * k1), step("tsw", twist[2] * kappa)]
         y = linalg.sym_solve(step, S, scaled, tol, "iv3")
         u = [step("iv3u0", y[0] * ireach), step("iv3u1", y[1] * ireach), y[2]]
         inputs["twist"] = twist

@@ -1,0 +1,184 @@
+"""Operation counts of the chain derivation, its joint types, its folds of constant rotations, and damped
+solves that stay finite for any finite damping."""
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from skelarm_sym import reference
+from skelarm_sym.build import compile_arm, load_python
+from skelarm_sym.generate import generate
+from skelarm_sym.models.chain import Chain, Joint, Transform
+from skelarm_sym.models.chain import derive as chain_derive
+from skelarm_sym.models.chain.dh_file import load_robot_file
+from skelarm_sym.models.chain.joints import JOINT_TYPES, Prismatic, Revolute, joint_type
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ("pose", "jacobian", "jacobian_tool", "jacobian_dot", "kinematics")
+
+CASADI = {  # arith of CasADi 3.8.2's generated C (SX, cse): python benchmarks/casadi_compare.py --no-time
+    "ur5": (102, 130, 268, 334, 571),
+    "panda": (129, 181, 380, 478, 772),
+    "puma560": (95, 100, 226, 255, 468),
+    "puma560_modified": (95, 100, 229, 256, 466),
+    "stanford": (68, 48, 150, 135, 291),
+    "scara": (25, 14, 37, 28, 83),
+}
+BUDGET = {  # ours (additions, multiplications, negations) when these were measured: a regression guard
+    "ur5": (60, 55, 115, 182, 325),
+    "panda": (106, 141, 184, 333, 505),
+    "puma560": (65, 53, 106, 141, 264),
+    "puma560_modified": (64, 53, 105, 142, 264),
+    "stanford": (53, 41, 82, 113, 225),
+    "scara": (15, 9, 29, 19, 51),
+}
+SHORT_OF_TARGET = {("panda", "pose"), ("stanford", "jacobian"), ("stanford", "jacobian_dot")}
+"""Where 0.8 x CasADi is not reached (docs/performance.md says by how much and why)."""
+
+
+@pytest.mark.parametrize("name", sorted(BUDGET))
+def test_forward_functions_stay_within_budget_and_under_casadi(name):
+    chain = load_robot_file(ROOT / "examples" / "robots" / f"{name}.toml")
+    programs = {p.name: p for p in generate(chain, langs="c", out=None, functions=",".join(FORWARD)).programs}
+    turning = sum(j.kind == "revolute" for j in chain.joints)
+    for function, budget, casadi in zip(FORWARD, BUDGET[name], CASADI[name]):
+        ops = programs[function].ops
+        assert ops.sin == ops.cos <= turning, (function, ops)
+        assert ops.div == ops.sqrt == 0
+        assert ops.arithmetic <= budget, (function, ops.arithmetic, budget)
+        if (name, function) not in SHORT_OF_TARGET:
+            assert ops.arithmetic <= 0.8 * casadi, (function, ops.arithmetic, casadi)
+
+
+def test_operations_grow_linearly_with_the_joints():
+    def kinematics_ops(n):
+        rows = [{"type": "revolute", "a": 0.1 * (1 + i % 3), "alpha": ["pi/2", "0", "-pi/2"][i % 3], "d": 0.05} for i in range(n)]
+        from skelarm_sym.models.chain.dh_file import chain_from_table
+
+        chain = chain_from_table({"name": f"c{n}", "convention": "standard", "joints": rows})
+        return next(p for p in generate(chain, langs="c", out=None, functions="kinematics").programs).ops.arithmetic
+
+    a, b, c = kinematics_ops(12), kinematics_ops(24), kinematics_ops(36)
+    assert abs((c - b) - (b - a)) <= 0.05 * (b - a), (a, b, c)  # the same cost per joint added: linear
+    assert (b - a) / 12 <= 100, (a, b, c)
+
+
+# -- joint types ------------------------------------------------------------------------------------
+
+def test_the_derivation_reads_joint_kinds_only_through_joint_types():
+    for name in ("derive.py", "inverse.py"):
+        text = (ROOT / "skelarm_sym" / "models" / "chain" / name).read_text()
+        assert not re.search(r"""["'](revolute|prismatic)["']""", text), name
+
+
+def test_joint_types_give_their_columns_and_offsets():
+    assert set(JOINT_TYPES) == {"revolute", "prismatic"} and isinstance(joint_type("revolute"), Revolute)
+    with pytest.raises(KeyError, match="known: revolute, prismatic"):
+        joint_type("spherical")
+    w = sp.symbols("wx wy wz", real=True)
+    linear, angular = Revolute().column([0, 0, 1], w)
+    assert linear == [-w[1], w[0], 0] and angular == [0, 0, 1]  # e_z x w, e_z
+    z = sp.symbols("zx zy zz", real=True)
+    linear, angular = Revolute().column(z, w)
+    assert sp.Matrix(linear) == sp.Matrix(z).cross(sp.Matrix(w)) and angular == list(z)
+    assert Prismatic().column(z, w) == (list(z), [0, 0, 0])
+    fold, rest = Revolute().fold_offset(sp.pi / 2)
+    assert rest == 0 and fold.rotation == sp.Matrix([[0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    fold, rest = Revolute().fold_offset(sp.Float(0.3))
+    assert rest == sp.Float(0.3) and fold.is_identity
+    fold, rest = Prismatic().fold_offset(sp.Float(0.3))
+    assert rest == 0 and fold.translation == sp.Matrix([0, 0, sp.Float(0.3)])
+    assert Prismatic().turn(sp.Symbol("q")) is None and Prismatic().advance(sp.Symbol("q")) == sp.Symbol("q")
+
+
+def test_column_rates_are_time_derivatives_of_the_columns():
+    """Both joint types' d/dt of their base-axes column against a central difference along a trajectory."""
+    chain = Chain("rpr", (
+        Joint("a", "revolute", Transform.identity(), (0, 0, 1), Transform.from_xyz_rpy([0.3, 0.1, 0.2], [0.4, 0.2, 0.1]), 0),
+        Joint("b", "prismatic", Transform.identity(), (0.2, 0.5, 1.0), Transform.from_xyz_rpy([0.1, 0.0, 0.1], [-0.3, 0.5, 0.2]), 1),
+        Joint("c", "revolute", Transform.identity(), (1, 0, 0), Transform.translate(x=0.25), 2),
+    ))
+    module = load_python(generate(chain, langs="python", out=None, functions="jacobian,jacobian_dot").sources["rpr.py"], "rpr")
+    q, dq, h = np.array([0.3, 0.2, -0.5]), np.array([0.7, -0.4, 1.1]), 1e-6
+    fd = (module.jacobian(q + h * dq) - module.jacobian(q - h * dq)) / (2 * h)
+    np.testing.assert_allclose(module.jacobian_dot(q, dq), fd, atol=1e-8)
+
+
+# -- constant rotations folded into angles ----------------------------------------------------------
+
+def test_split_z_writes_a_rotation_as_a_permutation_times_a_turn_about_z():
+    rotation = Transform.rotate("x", sp.pi / 2).rotation @ Transform.rotate("y", sp.pi).rotation @ Transform.rotate("z", sp.Float(0.45)).rotation
+    P, beta = chain_derive._split_z(sp.Matrix(rotation))
+    assert all(x in (-1, 0, 1) for x in P)
+    np.testing.assert_allclose(np.array(P * Transform.rotate("z", beta).rotation, dtype=float), np.array(rotation, dtype=float), atol=1e-15)
+    assert chain_derive._split_z(sp.Matrix(Transform.rotate("x", sp.Float(0.3)).rotation)) is None  # z does not stay an axis
+    assert chain_derive._split_z(sp.eye(3)) is None  # nothing to fold
+
+
+def _yawed(tool_yaw):
+    z = (0, 0, 1)
+    joints = tuple(
+        Joint(f"j{i}", "revolute", Transform.from_xyz_rpy([0.1 * i, 0.0, 0.2], [sp.pi / 2 * (i % 2), 0, 0]), z, Transform.identity(), i)
+        for i in range(4)
+    )
+    return Chain("yawed", joints, tool=Transform.from_xyz_rpy([0.05, 0.02, 0.1], [0, 0, tool_yaw]))
+
+
+def test_a_tool_turned_about_the_last_axis_costs_one_addition():
+    plain = next(p for p in generate(_yawed(0), langs="c", out=None, functions="pose").programs)
+    turned_chain = _yawed(sp.Float(0.6))
+    g = generate(turned_chain, langs="python", out=None, functions="pose,kinematics")
+    turned = next(p for p in g.programs if p.name == "pose")
+    assert turned.ops.sin == plain.ops.sin == 4
+    assert turned.ops.arithmetic <= plain.ops.arithmetic + 1  # the angle offset, not a constant 3 x 3 product
+    module = load_python(g.sources["yawed.py"], "yawed")
+    q = np.random.default_rng(4).uniform(-3, 3, (10, 4))
+    ref = reference.chain_kinematics(turned_chain.numeric(), q)
+    np.testing.assert_allclose(module.pose(q), ref.T, atol=1e-14)
+
+
+# -- damping: finite for every finite lambda --------------------------------------------------------
+
+HUGE = (1e154, 1e160, 1e300, 1.7e308)
+
+
+@pytest.mark.parametrize("function, size", [("inverse_velocity", 6), ("inverse_velocity_position", 3)])
+def test_chain_damped_solves_tend_to_zero_for_huge_lambda(function, size):
+    chain = load_robot_file(ROOT / "examples" / "robots" / "ur5.toml")
+    g = generate(chain, langs="c,python", out=None, functions=function)
+    module = load_python(g.sources["ur5.py"], "ur5")
+    arm = compile_arm(g)
+    q = np.array([0.3, -1.1, 1.4, 0.2, 0.5, 0.7])
+    v = np.array([0.1, -0.2, 0.3, 0.2, 0.1, -0.3])[:size]
+    J = reference.chain_kinematics(chain.numeric(), q).J[:size]
+    for lam in (0.5, 3.0, 1e3):  # ordinary values: unchanged, against NumPy's SVD
+        want = reference.damped_least_squares(J, v, lam, 1e-12).x
+        for got in (getattr(module, function)(q, v, lam), getattr(arm, function)(q, v, lam)):
+            np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-14)
+    for lam in HUGE:  # before: lambda**2 overflowed and the result was NaN
+        for got in (getattr(module, function)(q, v, lam), getattr(arm, function)(q, v, lam)):
+            assert np.all(np.isfinite(got)), (lam, got)
+            assert np.linalg.norm(got) <= np.linalg.norm(v) / (2 * lam) * (1 + 1e-9)  # |dq| <= |v| / (2 lambda)
+
+
+@pytest.mark.parametrize("precision, huge", [("double", HUGE), ("float", (1e10, 1e20, 1e30, 3e38))])
+def test_planar_damped_solves_tend_to_zero_for_huge_lambda(precision, huge):
+    g = generate(3, langs="python", out=None, functions="inverse_velocity,inverse_velocity3", precision=precision)
+    module = load_python(g.sources["arm3.py"], f"arm3{precision}")
+    q, l = np.array([0.1, 0.7, -0.4]), np.array([1.0, 0.8, 0.5])
+    v, twist = np.array([0.1, 0.2]), np.array([0.1, 0.2, 0.3])
+    for lam in huge:  # before: lambda**4 overflowed from 1.3e77 (4.3e9 in float): NaN
+        dq, dq3 = module.inverse_velocity(q, v, l, lam), module.inverse_velocity3(q, twist, l, lam)
+        assert np.all(np.isfinite(dq)) and np.all(np.isfinite(dq3)), (lam, dq, dq3)
+        assert np.linalg.norm(dq) <= np.linalg.norm(v) / (2 * lam) * 1.001
+        assert np.linalg.norm(dq3) <= np.linalg.norm(twist) / (2 * lam) * 1.001
+    J = reference.kinematics(q, None, None, l).J
+    for lam in (0.5, 2.0, 40.0):  # ordinary values: unchanged
+        want = reference.damped_least_squares(J, v, lam, 1e-12).x
+        tol = 1e-12 if precision == "double" else 1e-5
+        np.testing.assert_allclose(module.inverse_velocity(q, v, l, lam), want, rtol=0, atol=tol * max(1, np.abs(want).max()))
+    assert math.isfinite(float(module.inverse_velocity(q, v, l, 0.0)[0]))
