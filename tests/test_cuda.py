@@ -3,7 +3,7 @@ references for every model kind: the kernels' per-thread body against the single
 structure-of-arrays layout, the solver's kernel), float precision, the three ways the .cu compiles (host
 C++ under g++ and clang++, nvcc, NVRTC: each skipped with its reason where the tool is missing), the
 Python entry's layout handling and checks (through a stand-in for CuPy that runs the host build, so it is
-exercised without a GPU), and the text rules (deterministic, ASCII, robot-file text escaped)."""
+exercised without a GPU), benchmarks/gpu.py on that stand-in, and the text rules (deterministic, ASCII, robot-file text escaped)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ import re
 import shutil
 import subprocess
 import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +28,8 @@ from skelarm_sym.check import compare
 from skelarm_sym.generate import file_stamp, generate
 from skelarm_sym.models import PlanarArm
 from skelarm_sym.models.chain.loader import load_robot
+
+import cupy_standin
 
 ROOT = Path(__file__).resolve().parents[1]
 PANDA = ROOT / "examples" / "robots" / "panda.toml"
@@ -244,7 +245,8 @@ def test_nvrtc_compiles_what_the_python_entry_hands_to_cupy(panda):
     code = entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"])
     program = ctypes.c_void_p()
     assert lib.nvrtcCreateProgram(ctypes.byref(program), code.encode(), b"panda.cu", 0, None, None) == 0
-    options = [b"--gpu-architecture=compute_90", b"--std=c++14"]
+    # what CuPy's RawModule adds (its include path aside) for an H100/H200, and the default device space
+    options = [b"--gpu-architecture=compute_90", b"-ftz=true", b"--device-as-default-execution-space"]
     status = lib.nvrtcCompileProgram(program, len(options), (ctypes.c_char_p * len(options))(*options))
     size = ctypes.c_size_t()
     lib.nvrtcGetProgramLogSize(program, ctypes.byref(size))
@@ -256,47 +258,14 @@ def test_nvrtc_compiles_what_the_python_entry_hands_to_cupy(panda):
 
 # -- the Python entry ---------------------------------------------------------------------------------
 
-class _FakeKernel:
-    def __init__(self, arm: HostArm, name: str):
-        self.arm, self.name = arm, name
-        self.launches = []
-
-    def __call__(self, grid, block, args):
-        m = int(args[0])
-        assert grid[0] * block[0] >= m and (grid[0] - 1) * block[0] < m  # one configuration per thread
-        self.launches.append(m)
-        self.arm.host_batch(self.name, m, *args[1:])
-
-
-def fake_cupy(arm: HostArm, kernels: dict) -> types.ModuleType:
-    """A stand-in for CuPy on NumPy whose RawModule runs the host build's per-thread loops: the Python
-    entry's layout handling and checks run as on a GPU."""
-    cp = types.ModuleType("cupy")
-    for name in ("ndarray", "asarray", "ascontiguousarray", "broadcast_to", "empty", "isfinite", "float64", "float32", "int32"):
-        setattr(cp, name, getattr(np, name))
-
-    class RawModule:
-        def __init__(self, code, options=()):
-            assert "extern \"C\" __global__" in code and code.index("_CUDA_STAMP") < code.index("__global__")
-            self.options = options
-
-        def get_function(self, name):
-            assert name.startswith(arm.prefix + "_") and name.endswith("_kernel")
-            return kernels.setdefault(name, _FakeKernel(arm, name[len(arm.prefix) + 1:-len("_kernel")]))
-
-    cp.RawModule = RawModule
-    cp.cuda = types.SimpleNamespace(runtime=types.SimpleNamespace(getDeviceCount=lambda: 1))
-    return cp
-
-
 @pytest.fixture
 def gpu(panda, monkeypatch):
+    """The Python entry of Panda on the CuPy stand-in (tests/cupy_standin.py): kernels run as host loops."""
     chain, generated, arm = panda
-    kernels: dict = {}
-    monkeypatch.setitem(sys.modules, "cupy", fake_cupy(arm, kernels))
+    monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
     entry = load_python(generated.sources["panda_cuda.py"], "panda_cuda")
-    code = entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"])
-    return chain, entry.load(code=code), kernels
+    kernels = entry.load(code=entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"]))
+    return chain, kernels, kernels.module.kernels
 
 
 def test_the_entry_takes_batch_first_arrays_and_returns_batch_first_views(gpu, rng):
@@ -395,3 +364,43 @@ def test_the_output_is_deterministic_ascii_and_escapes_robot_text():
     stripped = re.sub(r"/\*.*?\*/", "", c_text, flags=re.S)
     assert "*/" not in stripped and "/*" not in stripped and "??" not in c_text
     compile(first.sources["hostile_cuda.py"], "hostile_cuda.py", "exec")  # the docstring holds
+
+
+# -- benchmarks/gpu.py ---------------------------------------------------------------------------------
+
+def _benchmark():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("gpu_benchmark", ROOT / "benchmarks" / "gpu.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_benchmark_without_cupy_says_so_and_exits_0(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "cupy", None)
+    with pytest.raises(SystemExit) as stop:
+        _benchmark().main([])
+    assert stop.value.code == 0
+    assert "no GPU run: CuPy is not installed" in capsys.readouterr().out
+
+
+def test_the_benchmark_runs_end_to_end_on_the_standin(monkeypatch, capsys, tmp_path):
+    """Every section of benchmarks/gpu.py (compile, checks, sweeps, variants, calls, IK) on the CuPy stand-in at
+    small sizes: the script a GPU session will run has run here, its checks against the reference included."""
+    monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
+    bench = _benchmark()
+    status = bench.main(["--max-size", "300", "--json", str(tmp_path / "gpu.json")])
+    out = capsys.readouterr().out
+    assert status == 0, out[-3000:]
+    assert "checks: all passed" in out and "CHECK FAILED" not in out
+    import json
+
+    results = json.loads((tmp_path / "gpu.json").read_text())
+    rows = results["kinematics"]
+    assert {(r["precision"], r["m"]) for r in rows} == {("double", 300), ("float", 300)}
+    assert all(r["bytes_per_config"] == (21 + 112) * (8 if r["precision"] == "double" else 4) for r in rows)
+    assert max(r["max_abs_error"] for r in rows if r["precision"] == "double") < 1e-11
+    assert {r["function"] for r in results["kernels"]} == {"pose", "jacobian", "jacobian_dot"}
+    (solve,) = results["ik"]
+    assert solve["m"] == 300 and solve["converged"] > 0.9 and solve["pose_error_checked"] < 1e-9
