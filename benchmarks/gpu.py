@@ -369,9 +369,9 @@ def ik(cp, chain, arm: Arm, m: int) -> None:
 def urdf_of(chain) -> str:
     """A URDF of a plain numeric chain (revolute joints about z after constant placements, a fixed tool)."""
     def origin(M):
-        R, p = M[:3, :3], M[:3, 3]
-        pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
-        roll, yaw = math.atan2(R[2, 1], R[2, 2]), math.atan2(R[1, 0], R[0, 0])
+        R, p = M[:3, :3], [float(x) for x in M[:3, 3]]
+        pitch = math.asin(max(-1.0, min(1.0, -float(R[2, 0]))))
+        roll, yaw = math.atan2(float(R[2, 1]), float(R[2, 2])), math.atan2(float(R[1, 0]), float(R[0, 0]))
         return f'<origin xyz="{p[0]!r} {p[1]!r} {p[2]!r}" rpy="{roll!r} {pitch!r} {yaw!r}"/>'
 
     links = ['<link name="link0"/>']

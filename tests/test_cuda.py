@@ -404,3 +404,16 @@ def test_the_benchmark_runs_end_to_end_on_the_standin(monkeypatch, capsys, tmp_p
     assert {r["function"] for r in results["kernels"]} == {"pose", "jacobian", "jacobian_dot"}
     (solve,) = results["ik"]
     assert solve["m"] == 300 and solve["converged"] > 0.9 and solve["pose_error_checked"] < 1e-9
+
+
+def test_the_benchmarks_urdf_for_pytorch_kinematics_is_the_same_arm(tmp_path, rng):
+    """pytorch_kinematics reads a URDF that benchmarks/gpu.py writes from the chain: read back by this project's
+    URDF loader, it has the TOML's kinematics (so the two libraries time the same arm)."""
+    chain = load_robot(PANDA).numeric()
+    path = tmp_path / "panda.urdf"
+    path.write_text(_benchmark().urdf_of(chain))
+    again = load_robot(path, tip="tool").numeric()
+    q = rng.uniform(-2.5, 2.5, (40, 7))
+    a, b = reference.chain_kinematics(chain, q), reference.chain_kinematics(again, q)
+    np.testing.assert_allclose(b.T, a.T, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(b.J, a.J, rtol=0, atol=1e-14)
