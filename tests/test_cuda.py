@@ -155,6 +155,7 @@ def _write(generated, folder: Path) -> Path:
 
 
 @needs_nvcc
+@pytest.mark.slow
 def test_nvcc_compiles_the_kernels_warning_free_without_spills(panda, tmp_path):
     chain, generated, arm = panda
     cu = _write(generated, tmp_path)
@@ -304,6 +305,31 @@ def test_the_entry_solves_a_batch_of_targets(gpu, panda, rng):
                (single.position_error, single.rotation_error, single.iterations)
 
 
+def test_the_entry_shares_parameters_and_computes_the_solvers_defaults(monkeypatch, rng):
+    """A planar arm: the lengths l are one array for the batch, and ik_solve's tol defaults to 1e-9 times the
+    reach, computed from l as in the NumPy module."""
+    generated = generate(PlanarArm(3), langs="cuda,python", out=None, prefix="arm3")
+    host = cuda.load(generated)
+    monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
+    entry = load_python(generated.sources["arm3_cuda.py"], "arm3_cuda")
+    gpu = entry.load(code=entry.source_text(generated.sources["arm3.cuh"], generated.sources["arm3.cu"]))
+    numpy_module = load_python(generated.sources["arm3.py"], "arm3")
+    q = rng.uniform(-2, 2, (6, 3))
+    l = np.array([1.0, 0.8, 0.5])
+    np.testing.assert_allclose(gpu.position(q, l), reference.kinematics(q, lengths=l).p, rtol=0, atol=1e-15)
+    with pytest.raises(ValueError, match="l must have shape"):
+        gpu.position(q, np.ones(4))
+    with pytest.raises(ValueError, match="l must be > 0"):
+        gpu.position(q, np.array([1.0, 0.0, 0.5]))
+    targets = reference.kinematics(rng.uniform(-2, 2, (6, 3)), lengths=l).p
+    result = gpu.ik_solve(q, targets, l)
+    for i in range(6):
+        single = numpy_module.ik_solve(q[i], targets[i], l)  # the same defaults, another backend
+        assert result.status[i] == entry.IK_CONVERGED and single.status == "converged"
+        np.testing.assert_allclose(result.q[i], single.q, rtol=0, atol=1e-12)
+        assert result.iterations[i] == single.iterations
+
+
 def test_the_entry_refuses_bad_input_by_name(gpu, rng):
     chain, kernels_obj, launched = gpu
     q = rng.uniform(-1, 1, (4, 7))
@@ -385,6 +411,7 @@ def test_the_benchmark_without_cupy_says_so_and_exits_0(monkeypatch, capsys):
     assert "no GPU run: CuPy is not installed" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_the_benchmark_runs_end_to_end_on_the_standin(monkeypatch, capsys, tmp_path):
     """Every section of benchmarks/gpu.py (compile, checks, sweeps, variants, calls, IK) on the CuPy stand-in at
     small sizes: the script a GPU session will run has run here, its checks against the reference included."""
