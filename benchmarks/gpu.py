@@ -214,13 +214,14 @@ def soa_outputs(cp, arm: Arm, name: str, m: int):
 
 def reference_error(cp, chain, arm: Arm, name: str, inputs, outputs, columns) -> float:
     """Max abs error of ``outputs`` (SoA, on the GPU) at ``columns`` against the NumPy reference."""
-    host_in = [cp.asnumpy(x[:, columns]).T.astype(np.float64) for x in inputs]
+    index = cp.asarray(columns)
+    host_in = [cp.asnumpy(x[:, index]).T.astype(np.float64) for x in inputs]
     ref = reference.chain_kinematics(chain, *host_in)
     expected = {"T": ref.T, "J": ref.J, "dJ": ref.dJ, "twist": ref.twist, "acc": ref.acc}
     names = [arg for arg, how, size, shape, output, *_ in arm.spec(name) if output]
     worst = 0.0
     for arg, out in zip(names, outputs):
-        got = cp.asnumpy(out[:, columns]).T.reshape(expected[arg].shape)
+        got = cp.asnumpy(out[:, index]).T.reshape(expected[arg].shape)
         worst = max(worst, float(np.abs(got - expected[arg]).max()))
     return worst
 

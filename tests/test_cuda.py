@@ -444,3 +444,44 @@ def test_the_benchmarks_urdf_for_pytorch_kinematics_is_the_same_arm(tmp_path, rn
     a, b = reference.chain_kinematics(chain, q), reference.chain_kinematics(again, q)
     np.testing.assert_allclose(b.T, a.T, rtol=0, atol=1e-14)
     np.testing.assert_allclose(b.J, a.J, rtol=0, atol=1e-14)
+
+
+def _real_cupy():
+    try:
+        import cupy
+    except ImportError:
+        return None
+    try:
+        return cupy if cupy.cuda.runtime.getDeviceCount() > 0 else None
+    except Exception:  # no driver
+        return None
+
+
+def test_on_a_real_gpu_every_kernel_agrees_with_the_host_build(panda, rng):
+    """The device check (runs where CuPy finds a GPU): every kernel of Panda through the Python entry against
+    the host build of the same .cu, which the conformance test holds to the references. Not bit for bit:
+    nvcc contracts a*b + c into fused multiply-adds."""
+    cp = _real_cupy()
+    if cp is None:
+        pytest.skip("no GPU: CuPy is not installed or finds no CUDA device")
+    chain, generated, arm = panda
+    entry = load_python(generated.sources["panda_cuda.py"], "panda_cuda")
+    gpu = entry.load(code=entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"]))
+    for f in generated.programs:
+        args = []
+        for a in f.inputs:
+            if a.is_scalar:
+                args.append(0.05)
+            else:
+                args.append(rng.uniform(-2.0, 2.0, (257, a.size)) if a.batched else rng.uniform(0.5, 1.5, a.size))
+        want = getattr(arm, f.name)(*args)
+        got = getattr(gpu, f.name)(*[cp.asarray(x) if isinstance(x, np.ndarray) else x for x in args])
+        for w, g in zip(want if isinstance(want, tuple) else (want,), got if isinstance(got, tuple) else (got,)):
+            scale = max(1.0, float(np.abs(w).max()))
+            assert float(np.abs(cp.asnumpy(g) - w).max()) <= 1e-11 * scale, f.name
+    q_true = rng.uniform(-1, 1, (64, 7)) * 0.5 + np.array([0, 0, 0, -1.5, 0, 1.8, 0])
+    targets = reference.chain_kinematics(chain, q_true).T
+    result = gpu.ik_solve(cp.asarray(q_true + 0.2), cp.asarray(targets))
+    status, q = cp.asnumpy(result.status), cp.asnumpy(result.q)
+    assert (status == entry.IK_CONVERGED).all()
+    np.testing.assert_allclose(reference.chain_kinematics(chain, q).T, targets, rtol=0, atol=1e-9)
