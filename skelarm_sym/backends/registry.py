@@ -7,7 +7,7 @@ for an IR :class:`~skelarm_sym.ir.nodes.Module`. Adding a language is a new fold
 
 from __future__ import annotations
 
-from . import c, numpy, torch
+from . import c, jax, numpy, torch
 
-BACKENDS = {c.LANGUAGE: c, numpy.LANGUAGE: numpy, torch.LANGUAGE: torch}
+BACKENDS = {c.LANGUAGE: c, numpy.LANGUAGE: numpy, torch.LANGUAGE: torch, jax.LANGUAGE: jax}
 """Language name -> backend, in the order files are written."""

@@ -41,6 +41,8 @@ class Dialect:
     calls: dict
     int_dtype: str
     bool_dtype: str
+    cast: str
+    """``cast.format(x=..., dtype=...)``: an array converted to another dtype."""
 
 
 TORCH = Dialect(
@@ -49,6 +51,7 @@ TORCH = Dialect(
            "isfinite": "torch.isfinite", "atan2": "torch.atan2", "fmin": "torch.minimum", "fmax": "torch.maximum"},
     int_dtype="torch.int64",
     bool_dtype="torch.bool",
+    cast="{x}.to({dtype})",
 )
 
 
@@ -178,9 +181,8 @@ class TensorPrinter:
                 return f"_u64_real({self.expr(e.x)}, {self.real_cast})", _ATOM
             if self.static(e.x):
                 return f"{'float' if e.type is Type.REAL else 'int'}({self.expr(e.x)})", _ATOM
-            if e.type is Type.REAL:
-                return f"{self._wrap(e.x, _ATOM - 1)}.to({self.real_cast})", _ATOM
-            return f"{self._wrap(e.x, _ATOM - 1)}.to({self.d.int_dtype})", _ATOM
+            dtype = self.real_cast if e.type is Type.REAL else self.d.int_dtype
+            return self.d.cast.format(x=self._wrap(e.x, _ATOM - 1), dtype=dtype), _ATOM
         raise TypeError(f"internal error: no array code for {t.__name__}")
 
 
