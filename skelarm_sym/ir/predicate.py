@@ -97,9 +97,9 @@ class PCall:
 
 @dataclass(frozen=True)
 class PFor:
-    """``for var in range(start, stop)`` with bounds known here. ``rollable``: ``var`` is used only as a
-    number (never as an index) and the body is costly, so a printer may keep it a run-time loop whose
-    counter is a value (``carried``: what the body assigns)."""
+    """``for var in range(start, stop)`` with bounds known here. ``rollable``: the body is costly and ``var``
+    reaches no call's array offset, so a printer may keep it a run-time loop whose counter is a value
+    (indexing with it then picks among an array's elements; ``carried``: what the body assigns)."""
 
     var: Var
     start: int
@@ -564,7 +564,7 @@ class _Pass:
             if run is not None:
                 scope.loops.pop()
                 scope.guards.pop()
-            rollable = _costly(body) and not _indexes(s.body, s.var.name)
+            rollable = _costly(body) and not _offsets(s.body, s.var.name)
             if rollable:
                 self.rollable.add(var.name)
             self.emit(PFor(var, start, stop, body, rollable, _carried(body) if rollable else ()))
@@ -646,16 +646,15 @@ class _Pass:
         self.block(callee.body, mask, inner)
 
 
-def _indexes(body, name: str) -> bool:
-    """Whether loop counter ``name`` appears in an index or an array offset in ``body``."""
+def _offsets(body, name: str) -> bool:
+    """Whether loop counter ``name`` reaches an array offset of a call in ``body`` (or a helper's number,
+    which it might index with): the loop must then unroll, each pass with its own offsets."""
     found = False
 
     def look(e) -> None:
         nonlocal found
         t = type(e)
         if t is Elem:
-            if name in _names(e.index, set()):
-                found = True
             look(e.index)
         elif t is ArrayArg:
             if not isinstance(e.offset, int) and name in _names(e.offset, set()):

@@ -60,6 +60,10 @@ class JaxProcedurePrinter:
             return identifier(target.name), target.type
         return f"{identifier(target.array)}[{self.printer.expr(target.index)}]", target.type
 
+    def dynamic(self, target) -> bool:
+        """An element whose index is a counter of a rolled loop (a traced number)."""
+        return type(target) is not Var_ and not self.printer.static(target.index)
+
     def _state(self, carried) -> tuple[str, list[str]]:
         """The state tuple's text and the lines that unpack it inside a body function."""
         names = [identifier(n) for n in carried]
@@ -96,7 +100,11 @@ class JaxProcedurePrinter:
                 lines.append(f"{pad}{name} = [{', '.join(self.value(v, s.type, True) for v in s.values)}]")
         elif t is PSet:
             target, type_ = self.target(s.target)
-            if s.mask is None:
+            if self.dynamic(s.target):
+                name = identifier(s.target.array)
+                mask = "None" if s.mask is None else identifier(s.mask.name)
+                lines.append(f"{pad}{name} = _put({name}, {pr.expr(s.target.index)}, {pr.tensor(s.value, type_)}, {mask})")
+            elif s.mask is None:
                 lines.append(f"{pad}{target} = {self.value(s.value, type_, True)}")
             else:
                 new = pr.expr(s.value)

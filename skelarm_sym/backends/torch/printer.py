@@ -114,6 +114,8 @@ class TensorPrinter:
             index = self.expr(e.index)
             if self.elements == "last":
                 return f"{identifier(e.array)}[..., {index}]", _ATOM
+            if not self.static(e.index):  # a counter of a loop kept rolled (JAX): pick among the elements
+                return f"_pick({identifier(e.array)}, {index})", _ATOM
             return f"{identifier(e.array)}[{index}]", _ATOM
         if t is Add:
             parts = []
