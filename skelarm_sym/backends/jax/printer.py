@@ -23,6 +23,7 @@ JAX = Dialect(
     int_dtype="jnp.int32",
     bool_dtype="jnp.bool_",
     cast="{x}.astype({dtype})",
+    shared="_shared",
 )
 
 

@@ -47,6 +47,9 @@ def straight_lines(f: Function, printer: TensorPrinter, calls: dict[str, str]) -
                 x = printer.tensor(a)
                 lines.append(f"{identifier(c.name)} = {printer.d.calls['cos']}({x})")
                 lines.append(f"{identifier(sn.name)} = {printer.d.calls['sin']}({x})")
+            if printer.d.shared:
+                names = ", ".join(identifier(v.name) for pair in zip(s.cos, s.sin) for v in pair)
+                lines.append(f"{names}, = {printer.d.shared}({names})")
         elif t is Store:
             stores[s.output][s.index] = printer.expr(s.value)
         elif type(s).__name__ == "Comment":

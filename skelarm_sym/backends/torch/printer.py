@@ -43,6 +43,9 @@ class Dialect:
     bool_dtype: str
     cast: str
     """``cast.format(x=..., dtype=...)``: an array converted to another dtype."""
+    shared: str | None = None
+    """A helper of the emitted module that computes values several outputs read once (``None``: plain
+    assignments are enough)."""
 
 
 TORCH = Dialect(
