@@ -10,8 +10,8 @@ Every implementation computes the tool pose T (4 x 4) and the 6 x n Jacobian J (
 point the tool origin, rows v then w) in float64; the emitted modules run ``ik_terms`` (T and J at
 once), pytorch_kinematics ``forward_kinematics`` and ``jacobian``. Before anything is timed, each result
 on 1000 configurations is compared with the emitted NumPy module (pytorch_kinematics to 1e-6: it parses
-URDF numbers in float32). Times: the best of ``--repeats`` runs after one warm-up (compile times are
-reported apart). ``--threads`` sets PyTorch's and XLA's threads (NumPy's ufuncs use one).
+URDF numbers in float32). Times: the best of ``--repeats`` rounds after one warm-up, the implementations
+interleaved round-robin in each round (compile times are reported apart). ``--threads`` sets PyTorch's and XLA's threads (NumPy's ufuncs use one).
 """
 
 from __future__ import annotations
@@ -37,14 +37,18 @@ def urdf_folder() -> Path:
     sys.exit("example-robot-data is not installed: pip install example-robot-data")
 
 
-def best(run, repeats: int) -> float:
-    run()  # warm-up
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
+def best_of(runs: dict, repeats: int) -> dict:
+    """The best time of each run over ``repeats`` rounds, the runs interleaved round-robin after one
+    warm-up each: other jobs on the machine then slow every implementation alike."""
+    for run in runs.values():
         run()
-        times.append(time.perf_counter() - start)
-    return min(times)
+    times = {label: float("inf") for label in runs}
+    for _ in range(repeats):
+        for label, run in runs.items():
+            start = time.perf_counter()
+            run()
+            times[label] = min(times[label], time.perf_counter() - start)
+    return times
 
 
 def main() -> None:
@@ -121,7 +125,7 @@ def main() -> None:
             if max(errors) > allowed:
                 sys.exit(f"{name} {label}: T off by {errors[0]:.2e}, J by {errors[1]:.2e} (allowed {allowed:g})")
             rows.append((name, label, "check", errors))
-        times = {label: best(run, args.repeats) for label, run in implementations.items()}
+        times = best_of(implementations, args.repeats)
         for label, seconds in times.items():
             rows.append((name, label, "time", seconds, times["pytorch_kinematics"] / seconds, times["NumPy module"] / seconds))
         rows.append((name, "compile", "once", torch_compile_s, jax_compile_s))
