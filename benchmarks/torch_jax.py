@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from importlib import metadata
 import sys
 import time
 from pathlib import Path
@@ -131,9 +132,9 @@ def main() -> None:
         rows.append((name, "compile", "once", torch_compile_s, jax_compile_s))
 
     print(f"pose + J (float64) on {args.configs} configurations, CPU, {args.threads} thread(s); "
-          f"torch {torch.__version__}, jax {jax.__version__}, pytorch_kinematics {getattr(pk, '__version__', '?')}")
+          f"torch {torch.__version__}, jax {jax.__version__}, pytorch_kinematics {metadata.version('pytorch-kinematics')}")
     print()
-    print(f"| robot | implementation | ms | configurations/s | vs pytorch_kinematics | vs NumPy module | max error T, J vs NumPy |")
+    print("| robot | implementation | ms | configurations/s | vs pytorch_kinematics | vs NumPy module | max error T, J vs NumPy |")
     print("|---|---|---:|---:|---:|---:|---|")
     checks = {(r[0], r[1]): r[3] for r in rows if r[2] == "check"}
     for r in rows:

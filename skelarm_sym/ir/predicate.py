@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from typing import Union
 
 from .nodes import (
-    Add, ArrayArg, Argument, Assign, Bits, Break, Call1, Call2, CallFunction, Cast, Comment, Compare, Const, Declare,
+    Add, ArrayArg, Assign, Bits, Break, Call1, Call2, CallFunction, Cast, Comment, Compare, Const, Declare,
     DeclareArray, Div, Elem, Expr, For, Function, If, Let, Logic, Module, Mul, NamedConst, Neg, Not, Return, Select, Store,
     TrigBlock, Type, Var, While,
 )
@@ -679,6 +679,7 @@ def _offsets(body, name: str) -> bool:
             look(e.otherwise)
 
     def walk(stmts) -> None:
+        nonlocal found
         for s in stmts:
             t = type(s)
             if t in (Let, Declare):

@@ -20,7 +20,7 @@ form by :mod:`skelarm_sym.ir.predicate` and printed by :class:`.printer.Procedur
 
 from __future__ import annotations
 
-from ...ir.nodes import Function, Let, Module, Store, TrigBlock, Type
+from ...ir.nodes import Comment, Function, Let, Module, Store, TrigBlock, Type
 from ...ir.predicate import predicate
 from ..text import py_string
 from .printer import TORCH, Dialect, ProcedurePrinter, TensorPrinter, identifier
@@ -34,7 +34,7 @@ def core_name(f: Function) -> str:
     return f"_{f.name}_core"
 
 
-def straight_lines(f: Function, printer: TensorPrinter, calls: dict[str, str]) -> tuple[list[str], list[list[str]]]:
+def straight_lines(f: Function, printer: TensorPrinter) -> tuple[list[str], list[list[str]]]:
     """The body of a straight-line core (statements) and its outputs' element texts."""
     lines: list[str] = []
     stores: dict[str, dict[int, str]] = {o.name: {} for o in f.outputs}
@@ -52,7 +52,7 @@ def straight_lines(f: Function, printer: TensorPrinter, calls: dict[str, str]) -
                 lines.append(f"{names}, = {printer.d.shared}({names})")
         elif t is Store:
             stores[s.output][s.index] = printer.expr(s.value)
-        elif type(s).__name__ == "Comment":
+        elif t is Comment:
             continue
         else:
             raise TypeError(f"internal error: {f.name}: a straight-line function holds a {t.__name__}")
@@ -67,7 +67,7 @@ def argument_context(a) -> dict:
 
 def straight_context(f: Function, dialect: Dialect = TORCH) -> dict:
     printer = TensorPrinter(dialect)
-    lines, outputs = straight_lines(f, printer, {})
+    lines, outputs = straight_lines(f, printer)
     arrays = [a for a in f.inputs if not a.is_scalar]
     return {
         "name": f.name,
