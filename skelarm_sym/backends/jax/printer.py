@@ -1,0 +1,155 @@
+"""IR as Python over ``jax.numpy``: the expression printer of the PyTorch backend with JAX's names, and
+masked procedures (:mod:`skelarm_sym.ir.predicate`) as functional control flow.
+
+A loop over data (:class:`~skelarm_sym.ir.predicate.PLoop`) is ``lax.while_loop`` whose state is the
+tuple of the names the loop assigns (its ``carried``: numbers per lane, lists of them for arrays, pairs
+of 32-bit halves for 64-bit words), ending when no lane runs; a guard (:class:`PGuard`) is ``lax.cond``
+on ``any(mask)``; a loop over a constant range whose counter is only a value and whose body is costly
+(``rollable``) is ``lax.fori_loop``; other constant loops unroll while tracing. Every variable a loop
+carries is an array over the whole batch (``_lanes``), so the state keeps its shape and dtype.
+"""
+
+from __future__ import annotations
+
+from ...ir.nodes import Type, Var as Var_
+from ...ir.predicate import PArray, PCall, PComment, PDef, PFor, PGuard, PLoop, PSet, Predicated, Slice
+from ..text import line_comment
+from ..torch.printer import FULL, Dialect, TensorPrinter, identifier
+
+JAX = Dialect(
+    where="jnp.where",
+    calls={"sqrt": "jnp.sqrt", "sin": "jnp.sin", "cos": "jnp.cos", "fabs": "jnp.abs", "floor": "jnp.floor",
+           "isfinite": "jnp.isfinite", "atan2": "jnp.arctan2", "fmin": "jnp.minimum", "fmax": "jnp.maximum"},
+    int_dtype="jnp.int32",
+    bool_dtype="jnp.bool_",
+    cast="{x}.astype({dtype})",
+    shared="_shared",
+)
+
+
+class JaxProcedurePrinter:
+    """A :class:`~skelarm_sym.ir.predicate.Predicated` procedure as JAX statements (module docstring)."""
+
+    def __init__(self, p: Predicated, calls: dict[str, str], indent: str = "    ") -> None:
+        self.p = p
+        self.calls = calls
+        self.indent = indent
+        self.count = 0
+        self.printer = TensorPrinter(JAX, p.statics - p.rollable, p.consts, constant=self._full)
+
+    def _full(self, text: str, type_: Type) -> str:
+        return f"{FULL[type_]}({text})"
+
+    def value(self, e, type_: Type, lanes: bool) -> str:
+        if self.printer.static(e):
+            return self._full(self.printer.expr(e), type_)
+        text = self.printer.expr(e)
+        if lanes:
+            return f"_lu({text})" if type_ is Type.UINT64 else f"_lanes({text})"
+        return text
+
+    def statements(self, body, depth: int) -> list[str]:
+        lines: list[str] = []
+        for s in body:
+            self.statement(s, depth, lines)
+        if not lines:
+            lines.append(self.indent * depth + "pass")
+        return lines
+
+    def target(self, target) -> tuple[str, Type]:
+        if type(target) is Var_:
+            return identifier(target.name), target.type
+        return f"{identifier(target.array)}[{self.printer.expr(target.index)}]", target.type
+
+    def dynamic(self, target) -> bool:
+        """An element whose index is a counter of a rolled loop (a traced number)."""
+        return type(target) is not Var_ and not self.printer.static(target.index)
+
+    def _state(self, carried) -> tuple[str, list[str]]:
+        """The state tuple's text and the lines that unpack it inside a body function."""
+        names = [identifier(n) for n in carried]
+        pack = "(" + "".join(f"{n}, " for n in names) + ")"
+        unpack = []
+        for i, (raw, n) in enumerate(zip(carried, names)):
+            unpack.append(f"{n} = list(_s[{i}])" if raw in self.p.arrays else f"{n} = _s[{i}]")
+        return pack, unpack
+
+    def _function(self, header: str, carried, body, depth: int, lines: list[str]) -> str:
+        """``def header:`` that unpacks the state, runs ``body`` and returns the state; returns the pack text."""
+        pad = self.indent * depth
+        inner = self.indent * (depth + 1)
+        pack, unpack = self._state(carried)
+        lines.append(f"{pad}def {header}:")
+        lines.extend(inner + line for line in unpack)
+        lines.extend(self.statements(body, depth + 1))
+        lines.append(f"{inner}return {pack}")
+        return pack
+
+    def statement(self, s, depth: int, lines: list[str]) -> None:  # noqa: C901
+        pad = self.indent * depth
+        pr = self.printer
+        t = type(s)
+        if t is PDef:
+            lines.append(f"{pad}{identifier(s.var.name)} = {self.value(s.value, s.var.type, s.lanes)}")
+        elif t is PArray:
+            name = identifier(s.name)
+            if s.const:
+                lines.append(f"{pad}{name} = [{', '.join(pr.expr(v) for v in s.values)}]")
+            elif s.values is None:
+                lines.append(f"{pad}{name} = [{self._full('0' if s.type is not Type.REAL else '0.0', s.type)}] * {s.size}")
+            else:
+                lines.append(f"{pad}{name} = [{', '.join(self.value(v, s.type, True) for v in s.values)}]")
+        elif t is PSet:
+            target, type_ = self.target(s.target)
+            if self.dynamic(s.target):
+                name = identifier(s.target.array)
+                mask = "None" if s.mask is None else identifier(s.mask.name)
+                lines.append(f"{pad}{name} = _put({name}, {pr.expr(s.target.index)}, {pr.tensor(s.value, type_)}, {mask})")
+            elif s.mask is None:
+                lines.append(f"{pad}{target} = {self.value(s.value, type_, True)}")
+            else:
+                new = pr.expr(s.value)
+                if type_ is Type.UINT64:
+                    if pr.static(s.value):
+                        new = self._full(new, type_)
+                    lines.append(f"{pad}{target} = _u64_where({identifier(s.mask.name)}, {new}, {target})")
+                else:
+                    lines.append(f"{pad}{target} = jnp.where({identifier(s.mask.name)}, {new}, {target})")
+        elif t is PCall:
+            args = ", ".join(f"{identifier(a.name)}[{a.offset}:{a.offset + a.size}]" if type(a) is Slice else pr.tensor(a)
+                             for a in s.args)
+            lines.append(f"{pad}_o = {self.calls[s.function]}(_c, {args})")
+            mask = "None" if s.mask is None else identifier(s.mask.name)
+            for i, o in enumerate(s.outputs):
+                lines.append(f"{pad}_merge({mask}, _o[{i}], {identifier(o.name)}, {o.offset}, _fr)")
+        elif t is PFor:
+            if s.rollable and s.carried:
+                self.count += 1
+                name = f"_for{self.count}"
+                pack = self._function(f"{name}({identifier(s.var.name)}, _s)", s.carried, s.body, depth, lines)
+                lines.append(f"{pad}{pack} = lax.fori_loop({s.start}, {s.stop}, {name}, {pack})")
+            else:
+                if s.rollable:  # a counter the printer knows after all: unroll
+                    pr.statics.add(s.var.name)
+                lines.append(f"{pad}for {identifier(s.var.name)} in range({s.start}, {s.stop}):")
+                lines.extend(self.statements(s.body, depth + 1))
+        elif t is PLoop:
+            self.count += 1
+            name = f"_loop{self.count}"
+            index = list(s.carried).index(s.run.name)
+            lines.append(f"{pad}def {name}_test(_s):")
+            lines.append(f"{pad}{self.indent}return jnp.any(_s[{index}])")
+            pack = self._function(f"{name}(_s)", s.carried, s.body, depth, lines)
+            lines.append(f"{pad}{pack} = lax.while_loop({name}_test, {name}, {pack})")
+        elif t is PGuard:
+            if not s.carried:
+                return
+            self.count += 1
+            name = f"_branch{self.count}"
+            pack = self._function(f"{name}(_s)", s.carried, s.body, depth, lines)
+            lines.append(f"{pad}{pack} = lax.cond(jnp.any({identifier(s.mask.name)}), {name}, _same, {pack})")
+        elif t is PComment:
+            lines.append(f"{pad}# {line_comment(s.text)}")
+        else:
+            raise TypeError(f"internal error: no JAX for {t.__name__}")
+
