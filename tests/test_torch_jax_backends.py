@@ -174,11 +174,12 @@ def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     np.testing.assert_allclose(np.asarray(batch.position_error), [r.position_error for r in singles], rtol=0, atol=1e-9)
 
 
-def test_the_documented_pytorch_example_runs(tmp_path):
+@pytest.mark.parametrize("document", ["README.md", "docs/gpu-and-autodiff.md"])
+def test_the_documented_pytorch_example_runs(tmp_path, document):
     _torch()
-    text = (ROOT / "docs" / "gpu-and-autodiff.md").read_text()
+    text = (ROOT / document).read_text()
     block = re.search(r"<!-- example: pytorch -->\n<!-- not run -->\n```python\n(.*?)```", text, re.S)
-    assert block is not None, "docs/gpu-and-autodiff.md lost its PyTorch example"
+    assert block is not None, f"{document} lost its PyTorch example"
     code = block.group(1)
     assert len(code.strip().splitlines()) <= 12
     script = tmp_path / "example.py"
