@@ -122,17 +122,6 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
             )
 
 
-def derive_model(model, functions: str | Iterable[str] | None = None) -> Derivation:
-    """The derivation of any supported model, through the model registry. ``functions`` (a
-    ``--functions`` list or ``None``): the kind may leave out what none of them needs."""
-    from .models.registry import derive
-
-    wanted = None if functions is None else (
-        [x.strip() for x in functions.split(",")] if isinstance(functions, str) else [str(x).strip() for x in functions]
-    )
-    return derive(model, wanted)
-
-
 @dataclass(frozen=True)
 class Generated:
     """Result of :func:`generate`: file name -> text, the IR module, the derivation, and where files went."""
