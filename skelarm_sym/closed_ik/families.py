@@ -193,12 +193,14 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
             # the split is taken where h6 and R5^T h2 are within SPLIT_TOL (sine): below it q6's SP1 is noise
             # (q5 = 1e-16 from an exactly aligned target); above it the regular path is exact to rounding
             bb = cross(H[5], b)
-            sel = steps(f"split{i}{j}", indicator(dot(bb, bb) <= SPLIT_TOL**2 * dot(b, b)))
+            bb2, b2 = steps(f"bb{i}{j}", dot(bb, bb)), steps(f"b2{i}{j}", dot(b, b))  # named: cheap relational
+            sel = steps(f"split{i}{j}", indicator(bb2 <= SPLIT_TOL**2 * b2))
             z = _rot(q1, H[0], matvec(RG, _rot(q5, H[4], x, True)), True)
             sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
             phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
             r5h6 = _rot(q5, H[4], H[5])
-            sgn = steps(f"sgn{i}{j}", sp.Piecewise((sp.S.One, dot(H[1], r5h6) >= 0), (-sp.S.One, True)))
+            h2r = steps(f"h2r{i}{j}", dot(H[1], r5h6))
+            sgn = steps(f"sgn{i}{j}", sp.Piecewise((sp.S.One, h2r >= 0), (-sp.S.One, True)))
             pick = sel > 0
 
             def choose(label, singular_value, regular_value):

@@ -75,8 +75,10 @@ class Steps(StepRecorder):
 
 
 def any_of(*flags: sp.Expr) -> sp.Expr:
-    """The largest of 0/1 flags (1 when any is set): ``Max`` of the distinct non-zero ones, unevaluated (SymPy's
-    pairwise comparison of symbols costs seconds and decides nothing here)."""
+    """1 when any of the 0/1 flags is set, else 0: ``1 - (1 - f1)(1 - f2)...`` over the distinct non-zero ones
+    (exact for 0/1 in floating point). Not a ``Max``: SymPy evaluates a ``Max`` of symbols by comparing every
+    pair through the assumptions system (56 ms for six flags), and the lowering's CSE rebuilds every node it
+    passes, so an unevaluated ``Max`` here cost about 1.3 s of each arm's generation."""
     args = []
     for f in flags:
         f = sp.sympify(f)
@@ -86,7 +88,7 @@ def any_of(*flags: sp.Expr) -> sp.Expr:
         return sp.S.Zero
     if any(a == 1 for a in args):
         return sp.S.One
-    return args[0] if len(args) == 1 else sp.Max(*args, evaluate=False)
+    return args[0] if len(args) == 1 else 1 - sp.Mul(*[1 - a for a in args])
 
 
 def indicator(cond) -> sp.Expr:
@@ -133,7 +135,11 @@ def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angl
     x = dot(u, w)
     y = dot(k, cross(u, w))
     a = angle_from(steps, label, x, y, sp.S.Zero)
-    flat = sp.Or(dot(u, u) <= SING_TOL**2 * dot(p, p), dot(w, w) <= SING_TOL**2 * dot(q, q))
+    # comparisons of named quantities: SymPy evaluates a relational through the assumptions system, which
+    # costs milliseconds on a large expression (and the lowering's CSE builds every relational again)
+    uu, pp = steps(f"{label}_uu", dot(u, u)), steps(f"{label}_pp", dot(p, p))
+    ww, qq = steps(f"{label}_ww", dot(w, w)), steps(f"{label}_qq", dot(q, q))
+    flat = sp.Or(uu <= SING_TOL**2 * pp, ww <= SING_TOL**2 * qq)
     return Angle(a.theta, a.c, a.s, sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
 
 
