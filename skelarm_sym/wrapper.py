@@ -242,9 +242,9 @@ class CompiledArm:
         for i, o in enumerate(f.outputs):
             out = outputs[o.name]
             if i == 0:
-                fields += [out.astype(self.dtype, copy=False), labels.get(status, str(status))]
+                fields += [out.astype(self.dtype, copy=False).reshape(o.shape), labels.get(status, str(status))]
             elif o.fields:
                 fields += [int(out[k]) if o.type is Type.INT else float(out[k]) for k in range(len(o.fields))]
             else:
-                fields.append(out)
+                fields.append(out.reshape(o.shape))
         return self._results[f.name](*fields)

@@ -20,12 +20,15 @@ and 1/2), sin, cos (of the lock only), atan2, Max, Min, Piecewise, relationals `
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import sympy as sp
 
+from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
-from .classify import (LOCK_C, LOCK_S, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
+from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
+from .postprocess import DUP_TOL, DUP_TOL_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT
 from .families import Problem, spherical_wrist, three_parallel
 from .subproblems import Steps
 
@@ -154,3 +157,64 @@ def operations(ik: ClosedIK) -> set[str]:
                     "Pow(int)" if e.is_Integer else f"Pow({e})")
             seen.add(name)
     return seen
+
+
+# -- as a derivation the code generator emits ----------------------------------------------------------
+
+CANDIDATES = FunctionSpec(
+    "ik_candidates", ("target", "lock"), ("Q", "flags"),
+    "every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S)",
+)
+"""The straight-line function of the candidates (``lock`` only when the chain has a locked joint)."""
+
+EMITTED_CONSTANTS = (
+    Constant(sp.Symbol("IK_MAX_SOLUTIONS"), {"double": MAX_SOLUTIONS, "float": MAX_SOLUTIONS},
+             "rows of q in ik_all: the most solutions of this arm's closed-form family"),
+    Constant(sp.Symbol("IK_FLAG_LEAST_SQUARES"), {"double": FLAG_LS, "float": FLAG_LS},
+             "bit of an ik_all flag: a least-squares row (the target is out of reach)"),
+    Constant(sp.Symbol("IK_FLAG_SINGULAR"), {"double": FLAG_SINGULAR, "float": FLAG_SINGULAR},
+             "bit of an ik_all flag: a singular row (one member of a continuum, or a double root)"),
+    Constant(sp.Symbol("IK_ORTHO_TOL"), {"double": ORTHO_TOL, "float": ORTHO_TOL_FLOAT},
+             "ik_all refuses a target whose |R^T R - I| exceeds this anywhere"),
+    Constant(sp.Symbol("IK_LIMIT_TOL"), {"double": LIMIT_TOL, "float": LIMIT_TOL_FLOAT},
+             "ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped"),
+    Constant(sp.Symbol("IK_DUP_TOL"), {"double": DUP_TOL, "float": DUP_TOL_FLOAT},
+             "ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"),
+)
+"""The module constants the emitted ``ik_all`` and ``ik_nearest`` use (integers print as such)."""
+
+
+def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
+    """``derivation`` (a chain's) with the closed-form candidates added: inputs ``target`` (and ``lock``), the
+    steps, outputs ``Q`` and ``flags``, the function :data:`CANDIDATES`, header notes and the constants of
+    :data:`EMITTED_CONSTANTS`. Nothing is simplified or expanded: the steps go to the lowering as derived."""
+    S, N = ik.Q.shape
+    locked = "lock" in ik.inputs
+    clash = [name for name in ik.inputs if name in derivation.inputs]
+    if clash:
+        raise ValueError(f"internal error: the derivation already has inputs {clash}")
+    lock_line = ()
+    if locked:
+        joint = ik.chain.joints[ik.family.lock]
+        lock_line = (f"lock: the value of joint {ik.family.lock + 1} ({joint.name}), held fixed (rad or m); "
+                     f"it is q[{ik.lock}] of every row.",)
+    notes = (
+        f"Closed-form IK: {ik.family.describe()}.",
+        f"target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: {S} x {N} candidates",
+        "(one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.",
+        *lock_line,
+    )
+    return dataclasses.replace(
+        derivation,
+        inputs={**derivation.inputs, **ik.inputs},
+        steps=tuple(derivation.steps) + tuple(ik.steps),
+        compact={**derivation.compact, "Q": ik.Q, "flags": ik.flags},
+        shapes={**derivation.shapes, "Q": (S, N), "flags": (S,)},
+        functions=tuple(derivation.functions) + (CANDIDATES,),
+        parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
+        scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
+        domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {})},
+        constants=tuple(derivation.constants) + EMITTED_CONSTANTS,
+        notes=tuple(derivation.notes) + notes,
+        _cache={},
+    )

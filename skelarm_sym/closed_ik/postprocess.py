@@ -36,14 +36,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-STATUS = {"ok": 0, "unreachable": 1, "invalid": 2, "out_of_limits": 3}
-"""Status codes (the emitted ``X_ik_all`` returns these numbers)."""
+STATUS = {"ok": 0, "unreachable": 1, "out_of_limits": 2, "invalid": 3}
+"""Status codes (the emitted ``X_ik_all`` returns these numbers: ``X_IK_OK``, ``X_IK_UNREACHABLE``,
+``X_IK_OUT_OF_LIMITS``, ``X_IK_INVALID``; invalid is 3 as for ``X_ik_solve``, so one ``X_IK_INVALID`` serves both)."""
 ORTHO_TOL = 1e-6
 """Largest ``|R^T R - I|`` entry accepted as a rotation."""
 LIMIT_TOL = 1e-12
 """Joints this far (rad or m) outside a limit are clipped onto it; further out, the candidate is dropped."""
 DUP_TOL = 1e-9
 """Candidates closer than this (max over joints, rad or m) are one solution."""
+ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT = 1e-4, 1e-5, 1e-4
+"""The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
+about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9."""
 TWO_PI = 2.0 * np.pi
 
 

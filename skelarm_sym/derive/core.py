@@ -24,7 +24,7 @@ ARGUMENT_ROLES: dict[str, int] = {
     # 2: the mechanism's parameters
     "l": 2, "params": 2, "track": 2,
     # 3: scalars
-    "lambda": 3, "tol": 3, "max_iter": 3,
+    "lambda": 3, "tol": 3, "max_iter": 3, "lock": 3,
 }
 """The role of each input name; every emitted function takes its inputs in increasing role,
 then its outputs (see :data:`ARGUMENT_RULE`)."""

@@ -7,7 +7,8 @@ import numpy as np
 
 from .nodes import Add, Call1, Call2, Compare, Const, Div, Elem, Logic, Mul, NamedConst, Neg, Not, Select, Var
 
-_CALLS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "fabs": np.abs, "floor": np.floor, "isfinite": np.isfinite,
+_CALLS = {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "fabs": np.abs, "floor": np.floor, "nearbyint": np.rint,
+          "isfinite": np.isfinite,
           "atan2": np.arctan2, "fmin": np.minimum, "fmax": np.maximum}
 _COMPARE = {"<": np.less, "<=": np.less_equal, ">": np.greater, ">=": np.greater_equal, "==": np.equal, "!=": np.not_equal}
 

@@ -13,8 +13,8 @@ Expressions (all immutable and hashable):
   (a module constant), :class:`Var` (a scalar local or argument), :class:`Elem` (an array element);
 * :class:`Add` and :class:`Mul` (n-ary), :class:`Neg`, :class:`Div` (``guarded``: the printer writes
   ``den != 0 ? den : 1`` so that the branch of a select that is not taken never divides by zero),
-  :class:`Call1` (``sqrt``, ``sin``, ``cos``, ``fabs``, ``floor``), :class:`Call2` (``atan2``,
-  ``fmin``, ``fmax``);
+  :class:`Call1` (``sqrt``, ``sin``, ``cos``, ``fabs``, ``floor``, ``nearbyint``, ``isfinite``),
+  :class:`Call2` (``atan2``, ``fmin``, ``fmax``);
 * :class:`Compare` (``<``, ``<=``, ``>``, ``>=``, ``==``, ``!=``), :class:`Logic` (``and``, ``or``),
   :class:`Not`, :class:`Select` (``cond ? a : b``).
 
@@ -174,14 +174,15 @@ class Div(ExprOps):
     guarded: bool = False
 
 
-UNARY = ("sqrt", "sin", "cos", "fabs", "floor", "isfinite")
+UNARY = ("sqrt", "sin", "cos", "fabs", "floor", "nearbyint", "isfinite")
 BINARY = ("atan2", "fmin", "fmax")
 
 
 @dataclass(frozen=True, slots=True)
 class Call1(ExprOps):
     """A math function of one real: one of :data:`UNARY` (``isfinite`` is a ``bool`` that -ffast-math
-    cannot remove in C)."""
+    cannot remove in C; ``nearbyint`` rounds to the nearest whole number, halves to even: C99's
+    ``nearbyint`` in the default rounding mode, NumPy's ``rint``)."""
 
     function: str
     x: "Expr"
@@ -496,10 +497,11 @@ class Function:
 
 @dataclass(frozen=True)
 class ConstantDef:
-    """A named constant of the module: value in the module's precision, and what it means."""
+    """A named constant of the module: value in the module's precision, and what it means. A Python ``int``
+    value is an integer constant (printed without a decimal point: an array size, a count, a bit)."""
 
     name: str
-    value: float
+    value: float | int
     doc: str
 
 

@@ -138,8 +138,9 @@ def _expressions(body: Iterable):
 
 
 def named_constants(body: Iterable) -> set[str]:
-    """Names of the module constants (:class:`NamedConst` of real type) ``body`` refers to."""
-    from .nodes import NamedConst, Type
+    """Names of the :class:`NamedConst` ``body`` refers to: module constants (real or integer) and statuses
+    (the caller keeps those it defines as constants)."""
+    from .nodes import NamedConst
 
     found: set[str] = set()
     seen: set[int] = set()
@@ -151,8 +152,7 @@ def named_constants(body: Iterable) -> set[str]:
         seen.add(id(x))
         t = type(x)
         if t is NamedConst:
-            if x.type is Type.REAL:
-                found.add(x.name)
+            found.add(x.name)
         elif t is Add:
             stack.extend(x.terms)
         elif t is Mul:

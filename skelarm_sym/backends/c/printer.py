@@ -4,6 +4,8 @@ Parentheses follow C precedence and keep the IR's evaluation order: a nested sum
 parenthesised, never reassociated. Reals print as literals of the module's precision (``0.5``,
 ``0.5f``), so no macro such as ``M_PI`` (not C99) and no constant of the standard library reaches
 the output. A guarded division prints as ``x/(d != 0 ? d : 1)`` (see :class:`~skelarm_sym.ir.nodes.Div`).
+Two values have no literal: an infinity prints as ``HUGE_VAL`` and a NaN as C99's ``NAN`` (both from
+``<math.h>``); a Python ``int`` (an integer module constant) prints as a whole number.
 """
 
 from __future__ import annotations
@@ -31,12 +33,15 @@ class CPrecision:
     ctype: str
     suffix: str
 
-    def literal(self, value: float) -> str:
-        """A C literal of this precision for ``value`` (an infinity prints as ``HUGE_VAL``/``HUGE_VALF``)."""
+    def literal(self, value: float | int) -> str:
+        """A C literal of this precision for ``value`` (an infinity prints as ``HUGE_VAL``/``HUGE_VALF``, a NaN
+        as ``NAN``, a Python ``int`` as a whole number)."""
+        if type(value) is int:
+            return str(value)
         if math.isinf(value):
             return ("-" if value < 0 else "") + "HUGE_VAL" + ("F" if self.suffix else "")
         if math.isnan(value):
-            raise ValueError("internal error: NaN literal")
+            return "NAN"
         text = repr(float(value)) if self.ctype == "double" else str(np.float32(value))
         if not any(ch in text for ch in ".en"):
             text += ".0"
@@ -106,7 +111,7 @@ class CPrinter:
         t = type(e)
         if t is Const:
             if e.type is Type.REAL:
-                text = self.precision.literal(e.value)
+                text = self.precision.literal(float(e.value))  # a whole-number literal only for module constants
                 return text, (_UNARY if text.startswith("-") else _ATOM)
             if e.type is Type.BOOL:
                 return ("1" if e.value else "0"), _ATOM

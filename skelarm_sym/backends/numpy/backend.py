@@ -81,7 +81,8 @@ def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, st
             "literal": default is not None and a.default.__class__.__name__ == "Const", "doc": py_string(a.doc),
         })
     outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "int": o.type is Type.INT,
-                "fields": list(o.fields), "doc": py_string(o.doc)} for o in f.outputs]
+                "fields": list(o.fields), "doc": py_string(o.doc),
+                "reshape": f".reshape({', '.join(map(str, o.shape))})" if len(o.shape) > 1 else ""} for o in f.outputs]
     invalid = next((meaning for name, _, meaning in f.statuses if name.endswith("INVALID")), None)
     return {
         "name": f.name,
@@ -121,7 +122,8 @@ def context(module: Module) -> dict:
         "functions": straight,
         "procedures": procedures,
         "statuses": list(statuses.values()),
-        "constants": [{"name": c.name, "value": repr(float(c.value)), "doc": py_string(c.doc)} for c in module.constants],
+        "constants": [{"name": c.name, "value": repr(c.value if type(c.value) is int else float(c.value)), "doc": py_string(c.doc)}
+                      for c in module.constants],
         "tables": [
             {"name": t.name, "doc": py_string(t.doc),
              "values": [repr(float(v)) if v is not None else ("np.inf" if t.sign > 0 else "-np.inf") for v in t.values]}

@@ -21,7 +21,7 @@ from ...ir.nodes import (
 _ATOM, _UNARY, _MUL, _ADD, _SHIFT, _BITAND, _BITXOR, _BITOR, _REL, _NOT, _AND, _OR, _COND = (
     100, 90, 80, 70, 65, 62, 61, 60, 50, 45, 40, 30, 20)
 
-VECTOR_CALLS = {"sqrt": "np.sqrt", "sin": "np.sin", "cos": "np.cos", "fabs": "np.abs", "floor": "np.floor",
+VECTOR_CALLS = {"sqrt": "np.sqrt", "sin": "np.sin", "cos": "np.cos", "fabs": "np.abs", "floor": "np.floor", "nearbyint": "np.rint",
                 "atan2": "np.arctan2", "fmin": "np.minimum", "fmax": "np.maximum", "isfinite": "np.isfinite"}
 
 

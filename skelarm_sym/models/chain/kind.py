@@ -9,20 +9,79 @@ from ..kind import ModelKind
 from .loader import PREFIX_RULE
 from .model import Chain
 
+SOLVERS = ("ik_solve", "ik_solve_position")
+CLOSED = ("ik_candidates", "ik_all", "ik_nearest")
+"""The closed-form IK functions: emitted when the chain is in a closed-form family (docs/closed-form-ik.md)."""
+LOCK_OPTION = "--ik-lock"
+
+
+def ik_lock(model: Chain) -> str | None:
+    """The joint ``--ik-lock`` holds (as given: a joint number 1..N or a joint name), or ``None``."""
+    return dict(model.load_options).get(LOCK_OPTION)
+
+
+def lock_index(model: Chain, joint: str | int | None) -> int | None:
+    """The 0-based index of the locked joint: ``joint`` is a joint number 1..N (base to tip) or a joint name;
+    InputError (one line) for anything else."""
+    from ...closed_ik.derive import lock_index as by_index
+
+    if joint is None:
+        return None
+    text = str(joint).strip()
+    names = [j.name for j in model.joints]
+    if text in names:
+        return names.index(text)
+    if text.isdigit():
+        number = int(text)
+        if not 1 <= number <= len(names):
+            raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
+        return number - 1
+    return by_index(model, text)  # a coordinate name, else a one-line error naming the joints
+
+
+def with_ik_lock(model: Chain, joint: str | int | None) -> Chain:
+    """``model`` with its closed-form IK's locked joint set (``joint``: a number 1..N or a name; ``None``: no
+    lock): recorded in the model's loader options, so the files' ``regenerate with`` line carries it."""
+    import dataclasses
+
+    options = tuple(o for o in model.load_options if o[0] != LOCK_OPTION)
+    if joint is not None:
+        lock_index(model, joint)
+        options += ((LOCK_OPTION, str(joint).strip()),)
+    return dataclasses.replace(model, load_options=options)
+
+
 def _derive(model: Chain, wanted):
-    """A chain whose wanted functions are all forward ones is derived without the inverse functions
-    (they take most of the generation time); any other name (an inverse function, a solver, or an
-    unknown one, which the error then lists among all) needs the whole derivation."""
+    """A chain whose wanted functions are all forward or closed-form ones is derived without the inverse
+    functions (they take most of the generation time); any other name (an inverse function, a solver, or an
+    unknown one, which the error then lists among all) needs the whole derivation. The closed-form IK is added
+    when the chain is in a closed-form family; asked for by name (or with a lock) on a chain in none, the
+    one-line reason is the error."""
     from .derive import CHAIN_FUNCTIONS, derive_chain
 
-    forward = {f.name for f in CHAIN_FUNCTIONS}
-    return derive_chain(model, inverse=wanted is None or not set(wanted) <= forward)
+    forward = {f.name for f in CHAIN_FUNCTIONS} | set(CLOSED)
+    derivation = derive_chain(model, inverse=wanted is None or not set(wanted) <= forward)
+    if wanted is not None and not set(wanted) & set(CLOSED):
+        return derivation
+    from ...closed_ik.classify import ClosedFormError
+    from ...closed_ik.derive import derive_ik_all, with_candidates
+
+    lock = lock_index(model, ik_lock(model))
+    try:
+        ik = derive_ik_all(model, lock)
+    except ClosedFormError:
+        if wanted is None and lock is None:
+            return derivation  # no family: no closed-form functions (X_ik_solve remains the arm's IK)
+        raise
+    return with_candidates(derivation, ik)
 
 
 def _solvers(derivation, names, precision):
     from .solver import chain_solvers
+    from .solver_closed import closed_solvers
 
-    return chain_solvers(derivation, names, precision)
+    iterative = chain_solvers(derivation, names, precision) if set(names) & set(SOLVERS) else []
+    return iterative + closed_solvers(derivation, names, precision)
 
 
 def _scenarios(derivation, cases, seed, precision):
@@ -41,6 +100,9 @@ def _add_options(parser) -> None:
     parser.add_argument("--robot", metavar="FILE", help="a 3-D serial chain: a TOML DH robot file or a URDF")
     parser.add_argument("--base", metavar="LINK", help="URDF: the chain's first link (default: the root link)")
     parser.add_argument("--tip", metavar="LINK", help="URDF: the chain's last link (default: the only leaf below --base)")
+    parser.add_argument(LOCK_OPTION, dest="ik_lock", metavar="JOINT",
+                        help="7-joint robots: the joint (number 1..N, base to tip, or name) the closed-form IK holds at a "
+                        "value given at run time (ik_all's scalar lock), e.g. 3 for a KUKA iiwa, 7 for a Panda")
 
 
 def _from_args(args, folder=None):
@@ -51,7 +113,9 @@ def _from_args(args, folder=None):
     from .loader import load_robot
 
     path = args.robot if folder is None or os.path.isabs(args.robot) else os.path.join(folder, args.robot)
-    return load_robot(path, base=args.base, tip=args.tip)
+    chain = load_robot(path, base=args.base, tip=args.tip)
+    lock = getattr(args, "ik_lock", None)
+    return chain if lock is None else with_ik_lock(chain, lock)
 
 
 def _preview(args) -> str | None:
@@ -69,13 +133,18 @@ def _show(model: Chain, args) -> str:
 
     if args.plot:
         raise InputError("--plot draws planar arms")
+    if args.what == "ik":
+        from .show import show_ik
+
+        return show_ik(model, lock_index(model, ik_lock(model)), args.format)
     return show_chain(derive_chain(model, inverse=False), args.what or "J", args.format, True if args.expand else None)
 
 
 KIND = ModelKind(
     "chain", Chain, _derive, scenarios=_scenarios, solvers=_solvers,
-    solver_names={"ik_solve": ("ik_terms",), "ik_solve_position": ("ik_terms",)}, solver_checks=_solver_checks,
-    show=_show, add_options=_add_options, from_args=_from_args,
-    options=(("--robot", "robot"), ("--base", "base"), ("--tip", "tip")), title="a robot file's chain", preview=_preview,
-    prefix_rule="for a robot file: " + PREFIX_RULE.removeprefix("default prefix: "),
+    solver_names={"ik_solve": ("ik_terms",), "ik_solve_position": ("ik_terms",), "ik_all": ("ik_candidates",),
+                  "ik_nearest": ("ik_candidates",)},
+    solver_checks=_solver_checks, show=_show, add_options=_add_options, from_args=_from_args,
+    options=(("--robot", "robot"), ("--base", "base"), ("--tip", "tip"), (LOCK_OPTION, "ik_lock")), title="a robot file's chain",
+    preview=_preview, prefix_rule="for a robot file: " + PREFIX_RULE.removeprefix("default prefix: "),
 )

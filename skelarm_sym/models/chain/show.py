@@ -16,6 +16,7 @@ from ...show import render as _render
 from .derive import ChainDerivation
 
 WHAT = ("T", "J", "J_tool", "dJ", "twist", "acc")
+"""Outputs of the derivation ``show`` prints; ``ik`` (:func:`show_ik`) is the closed-form IK."""
 EXPAND_UP_TO = 2
 
 
@@ -40,7 +41,7 @@ def show_chain(derivation: ChainDerivation, what: str = "J", fmt: str = "pretty"
     names = WHAT if what == "all" else (what,)
     unknown = [w for w in names if w not in WHAT]
     if unknown:
-        raise InputError(f"unknown --what {unknown[0]!r} for a robot; choose from {', '.join(WHAT + ('all',))}")
+        raise InputError(f"unknown --what {unknown[0]!r} for a robot; choose from {', '.join(WHAT + ('all', 'ik'))}")
     expand = derivation.n <= EXPAND_UP_TO if expand is None else expand
     lines: list[str] = []
     if expand:
@@ -55,4 +56,39 @@ def show_chain(derivation: ChainDerivation, what: str = "J", fmt: str = "pretty"
     lines.append("")
     for name, matrix in matrices.items():
         lines += [f"{name} =", _render(matrix.xreplace(rename), fmt), ""]
+    return "\n".join(lines)
+
+
+def show_ik(chain, lock: int | None = None, fmt: str = "pretty") -> str:
+    """The closed-form IK of ``chain`` (``lock``: the 0-based index of a held joint): its family and chain of
+    subproblems, the special points, then every step in order and the candidates ``Q`` and ``flags`` in their
+    terms (the code ``ik_candidates`` is lowered from). InputError (the classifier's one line) when the chain
+    is in no closed-form family."""
+    from ...closed_ik import classify, derive_ik_all
+
+    if fmt not in FORMATS:
+        raise InputError(f"unknown --format {fmt!r}; choose from {', '.join(FORMATS)}")
+    family = classify(chain, lock)
+    ik = derive_ik_all(chain, lock)
+    S, N = ik.Q.shape
+    step_fmt = "text" if fmt == "pretty" else fmt
+    lines = [f"# {chain.name}: {family.describe()}", "# subproblems, in order (solver joint numbering):"]
+    lines += [f"#   {k + 1}. {sub}" for k, sub in enumerate(family.subproblems)]
+    for name, point in family.special_points:
+        lines.append(f"# {name} (base frame, q = 0): ({', '.join(sp.sstr(x) for x in point)})")
+    if lock is not None:
+        lines.append(f"# joint {lock + 1} ({chain.joints[lock].name}) is held at the input lock; lock_c, lock_s: its cosine and sine")
+    lines.append("# target0..target15: the tool pose T, row-major; RG, tG: the motion T M^-1 the joints make (M = T(0));")
+    lines.append("# NAME_x, NAME_y: the atan2 arguments of angle NAME; _disc: a discriminant (clamped at 0);")
+    lines.append("# _ls, _sg: its least-squares and singular flags (0/1)")
+    steps, rename = _readable(ik.steps, list(ik.Q) + list(ik.flags))
+    lines.append(f"# {len(steps)} steps, in order:")
+    for symbol, expr in steps:
+        lines.append(f"{_render(symbol, step_fmt)} = {_render(expr, step_fmt)}")
+    lines.append("")
+    lines.append(f"# Q: {S} candidates (rows) x {N} joints ({', '.join(chain.coordinates)}); flags: 1 least squares + 2 singular")
+    for r in range(S):
+        row = ", ".join(_render(ik.Q[r, c].xreplace(rename), step_fmt) for c in range(N))
+        lines.append(f"Q[{r}] = ({row});  flags[{r}] = {_render(ik.flags[r].xreplace(rename), step_fmt)}")
+    lines.append("")
     return "\n".join(lines)
