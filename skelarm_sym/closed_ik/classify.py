@@ -130,6 +130,17 @@ def rotate(k: Sequence, c, s, v: Sequence) -> list:
     return [c * v[i] + s * kxv[i] + (1 - c) * kv * k[i] for i in range(3)]
 
 
+def turn(k: Sequence, c, s, v: Sequence) -> list:
+    """``R(k, theta) v`` as ``(k.v) k + c (v - (k.v) k) + s (k x v)``: Rodrigues' formula split into the part
+    along ``k`` (unchanged) and the part across it, so that an axis with exact zero components costs nothing
+    for them (about ``k = z``: ``(c vx - s vy, s vx + c vy, vz)``; :func:`rotate`'s ``(1 - c)(k.v) k`` term leaves
+    ``c vz + (1 - c) vz`` to compute). The same rotation; the emitted candidates use this form."""
+    kv = dot(k, v)
+    kxv = cross(k, v)
+    along = [kv * k[i] for i in range(3)]
+    return [along[i] + c * (v[i] - along[i]) + s * kxv[i] for i in range(3)]
+
+
 def _clean(v: Sequence) -> Vec:
     return tuple(sp.expand(sp.sympify(x)) for x in v)  # type: ignore[return-value]
 

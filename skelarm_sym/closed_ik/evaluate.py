@@ -73,3 +73,38 @@ class ClosedFormIK:
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
         """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
         return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights)
+
+
+def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+    """``f(target (m, 16), lock=None) -> (Q (m, S, N), flags (m, S))`` from a derivation that has the function
+    ``ik_candidates`` (:func:`~.derive.with_candidates`): its steps evaluated by ``sympy.lambdify`` in double, the
+    check's expectation for the emitted ``ik_candidates`` (the emission against SymPy's own evaluation; whether
+    the candidates solve the IK is judged by the reference in the ``ik_all`` rows)."""
+    Q, flags = derivation.compact["Q"], derivation.compact["flags"]
+    S, N = Q.shape
+    outs = list(Q) + list(flags)
+    index = {symbol: i for i, (symbol, _) in enumerate(derivation.steps)}
+    keep: set[int] = set()
+    todo = [s for e in outs for s in e.free_symbols if s in index]
+    while todo:
+        i = index[todo.pop()]
+        if i not in keep:
+            keep.add(i)
+            todo.extend(s for s in derivation.steps[i][1].free_symbols if s in index)
+    steps = [derivation.steps[i] for i in sorted(keep)]
+    args = list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
+    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+                            "user_functions": {}, "order": "none"})
+    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
+    locked = "lock" in derivation.inputs
+
+    def evaluate(target, lock=None):
+        t = np.asarray(target, dtype=float).reshape(-1, 16)
+        extra = [np.full(len(t), float(lock))] if locked else []
+        with np.errstate(all="ignore"):
+            values = fn(*[t[:, i] for i in range(16)], *extra)
+        values = [np.broadcast_to(np.asarray(v, dtype=float), (len(t),)) for v in values]
+        return (np.stack(values[: S * N], axis=-1).reshape(len(t), S, N),
+                np.stack(values[S * N:], axis=-1).reshape(len(t), S))
+
+    return evaluate

@@ -39,8 +39,8 @@ from typing import Sequence
 
 import sympy as sp
 
-from .classify import add, closest_point, cross, dot, rotate, sub
-from .subproblems import Angle, Steps, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
+from .classify import add, closest_point, cross, dot, sub, turn
+from .subproblems import Angle, Steps, _select, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
 
 
 SPLIT_TOL = 1e-12
@@ -96,7 +96,7 @@ def tmatvec(m: Sequence[Sequence[sp.Expr]], v: Sequence[sp.Expr]) -> list:
 def _rot(a: Angle, k, v, inverse: bool = False) -> list:
     if a.c is None:  # prismatic joint: no rotation
         return list(v)
-    return rotate(k, a.c, -a.s if inverse else a.s, v)
+    return turn(k, a.c, -a.s if inverse else a.s, v)
 
 
 def _sq(v) -> sp.Expr:
@@ -200,11 +200,11 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
             phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
             r5h6 = _rot(q5, H[4], H[5])
             h2r = steps(f"h2r{i}{j}", dot(H[1], r5h6))
-            sgn = steps(f"sgn{i}{j}", sp.Piecewise((sp.S.One, h2r >= 0), (-sp.S.One, True)))
+            sgn = steps(f"sgn{i}{j}", _select((sp.S.One, h2r >= 0), (-sp.S.One, True)))
             pick = sel > 0
 
             def choose(label, singular_value, regular_value):
-                return steps(label, sp.Piecewise((singular_value, pick), (regular_value, True)))
+                return steps(label, _select((singular_value, pick), (regular_value, True)))
 
             phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
                         choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), q6r.singular)

@@ -18,8 +18,22 @@ import numpy as np
 from ... import reference
 from ...check.scenario import EPSILONS, Scenario, solve_cutoff, tolerance
 from ...check.solver_rows import CHAIN_MAX_ITER, IK_TARGETS, IKCheck, rotation_error, summary
+from .reference_ik_all import missing, multistart_ik, pose_error, revolute_mask, same
 from .reference_inverse import check_expectations
 from .solver import SETTINGS
+
+CANDIDATE_CASES = 50
+"""At most this many targets for ``ik_candidates`` (its scenario)."""
+CLOSED_TARGETS = 20
+"""At most this many targets for the ``ik_all`` / ``ik_nearest`` rows."""
+COMPLETE_TARGETS = 3
+"""Targets on which the returned set is compared with the judge's 200-start numeric IK (0.3 s each)."""
+LOCK_VALUE = 0.3
+"""The locked joint's value in the candidates' scenario (rad or m); the rows use each target's own."""
+FOUND_TOL = {"double": 1e-6, "float": 3e-3}
+"""A known solution (the configuration a target was made from, the judge's) counts as returned when a row is
+this close (rad or m, revolute modulo 2 pi): far below the distance between distinct solutions, far above the
+rounding of an ill-conditioned one."""
 
 
 def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[Scenario]:
@@ -63,12 +77,19 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     )
     expected.update(forward)
     condition.update(forward_condition)
+    closed = [candidates_scenario(derivation, cases, seed, precision)] if "Q" in derivation.compact else []
     return [Scenario("", values, expected, condition, alternatives, size=n)] + [
         Scenario(label, {**values, **extra}, want, cond, size=n) for label, extra, want, cond in solves
-    ]
+    ] + closed
 
 
-def chain_ik(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
+def chain_ik(derivation, implementations, cases: int, seed: int, precision: str) -> list:
+    """Solver rows of a 3-D chain: ``ik_solve`` (:func:`pose_rows`) and the closed-form IK (:func:`closed_rows`)."""
+    return (pose_rows(derivation, implementations, cases, seed, precision)
+            + closed_rows(derivation, implementations, cases, seed, precision))
+
+
+def pose_rows(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
     """Pose-IK rows of a 3-D chain: for the implementations that have ``ik_solve``."""
     solvers = [(label, getattr(impl, "ik_solve", None)) for label, impl in implementations]
     solvers = [(label, s) for label, s in solvers if s is not None]
@@ -115,3 +136,196 @@ def chain_ik(derivation, implementations, cases: int, seed: int, precision: str)
             outcomes.append((str(result.status), error, good))
         rows.append(summary(f"{label} ik_solve", outcomes, tol, allowed, worst_rotation, rotation_allowed))
     return rows
+
+
+# -- closed-form IK ---------------------------------------------------------------------------------------------
+
+def _lock_coordinate(chain) -> int | None:
+    from .kind import ik_lock, lock_index
+
+    index = lock_index(chain, ik_lock(chain))
+    return None if index is None else chain.joints[index].coordinate
+
+
+def _limits(chain) -> tuple[np.ndarray, np.ndarray]:
+    limits = chain.limits()
+    lower = np.array([-np.inf if v is None else v for v in limits["lower"]], dtype=float)
+    upper = np.array([np.inf if v is None else v for v in limits["upper"]], dtype=float)
+    return lower, upper
+
+
+def _condition(numeric, rows: np.ndarray, free: np.ndarray, length: float) -> float:
+    """The largest condition number of the 6 x 6 Jacobians (linear rows in reaches) at ``rows``: rounding of the
+    target reaches the joints amplified this much."""
+    if not len(rows):
+        return 1.0
+    J = reference.chain_kinematics(numeric, rows).J[..., :, free]
+    J = np.concatenate([J[..., :3, :] / length, J[..., 3:, :]], axis=-2)
+    s = np.linalg.svd(J, compute_uv=False)
+    return float(np.max(s[..., 0] / np.maximum(s[..., -1], 1e-300)))
+
+
+def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
+    """``ik_candidates`` on poses of random configurations (revolute joints in [-pi, pi], prismatic in [-0.5, 0.5]
+    m; a locked joint at :data:`LOCK_VALUE`), expected: the same steps evaluated by SymPy (lambdify, double). Its
+    condition per case: the largest Jacobian condition number over the exact rows (:func:`_condition`)."""
+    from ...closed_ik.evaluate import lambdify_candidates
+
+    chain = derivation.model
+    n = chain.n
+    dtype = np.float64 if precision == "double" else np.float32
+    rng = np.random.default_rng(seed + 3)
+    m = max(1, min(cases, CANDIDATE_CASES))
+    rev = revolute_mask(chain)
+    q = np.where(rev, rng.uniform(-np.pi, np.pi, (m, n)), rng.uniform(-0.5, 0.5, (m, n)))
+    lock = _lock_coordinate(chain)
+    values: dict = {}
+    lock_value = None
+    if lock is not None:
+        lock_value = float(np.asarray(LOCK_VALUE, dtype=dtype))
+        q[:, lock] = lock_value
+        values["lock"] = lock_value
+    numeric = chain.numeric()
+    targets = np.asarray(reference.chain_kinematics(numeric, q).T.reshape(m, 16), dtype=dtype).astype(np.float64)
+    values["target"] = targets
+    Q, flags = lambdify_candidates(derivation)(targets, lock_value)
+    free = np.ones(n, bool)
+    if lock is not None:
+        free[lock] = False
+    length = float(np.abs(targets[:, [3, 7, 11]]).max()) + 1.0
+    condition = np.array([_condition(numeric, Q[i][flags[i] == 0], free, length) for i in range(m)])
+    return Scenario("ik candidates", values, {"Q": Q, "flags": flags},
+                    {"Q": np.maximum(1.0, condition), "flags": np.ones(m)}, size=n)
+
+
+class ClosedCheck:
+    """One implementation's ``ik_all`` and ``ik_nearest`` on reachable targets, judged by the reference: every
+    row reproduces the target (pose error of :func:`~.reference_ik_all.pose_error` at most ``allowed``), lies
+    within the limits, is no duplicate; the configuration the target was made from is among the rows, and
+    ``ik_nearest`` from it returns it; on a few targets every solution of the judge's 200-start numeric IK that
+    fits the limits is among the rows."""
+
+    def __init__(self, implementation: str, targets: int, allowed: float) -> None:
+        self.implementation = implementation
+        self.targets = targets
+        self.allowed = allowed
+        self.solutions: list[int] = []
+        self.worst = 0.0
+        self.failures: list[str] = []
+        self.statuses: dict[str, int] = {}
+        self.found = 0
+        self.nearest = 0
+        self.complete = 0
+        self.compared = 0
+
+    def fail(self, text: str) -> None:
+        if len(self.failures) < 3:
+            self.failures.append(text)
+        else:
+            self.failures[-1] = "..."
+
+    @property
+    def ok(self) -> bool:
+        return (self.targets > 0 and not self.failures and self.found == self.targets and self.nearest == self.targets
+                and self.complete == self.compared)
+
+    def row(self) -> str:
+        count = f"{np.mean(self.solutions):.2f} ({min(self.solutions)}-{max(self.solutions)})" if self.solutions else "-"
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
+        problems = "; " + "; ".join(self.failures) if self.failures else ""
+        return (f"{self.implementation} ik_all/ik_nearest: {self.targets} targets, solutions per target {count}; worst "
+                f"pose error {self.worst:.2e} (allowed {self.allowed:.2e}); source configuration among them "
+                f"{self.found}/{self.targets}, ik_nearest from it returns it {self.nearest}/{self.targets}; complete "
+                f"against the 200-start numeric IK {self.complete}/{self.compared}; statuses: {statuses}{problems}; "
+                f"{'ok' if self.ok else 'FAIL'}")
+
+
+def closed_rows(derivation, implementations, cases: int, seed: int, precision: str) -> list[ClosedCheck]:
+    """``ik_all`` / ``ik_nearest`` rows (see :class:`ClosedCheck`) for the implementations that have them."""
+    solvers = [(label, impl) for label, impl in implementations if getattr(impl, "ik_all", None) is not None
+               or getattr(impl, "ik_nearest", None) is not None]
+    if not solvers:
+        return []
+    chain = derivation.model
+    n = chain.n
+    dtype = np.float64 if precision == "double" else np.float32
+    rounded = lambda x: np.asarray(x, dtype=dtype).astype(np.float64)  # noqa: E731
+    rng = np.random.default_rng(seed + 4)
+    numeric = chain.numeric()
+    rev = revolute_mask(chain)
+    lower, upper = _limits(chain)
+    span = np.where(rev, np.pi, 0.5)
+    lo = np.where(np.isfinite(lower), lower, -span)
+    hi = np.where(np.isfinite(upper), upper, span)
+    m = max(1, min(cases, CLOSED_TARGETS))
+    q_gen = rounded(lo + (0.05 + 0.9 * rng.uniform(size=(m, n))) * (hi - lo))
+    targets = rounded(reference.chain_kinematics(numeric, q_gen).T)
+    lock = _lock_coordinate(chain)
+    allowed = tolerance(precision, n)
+    found_tol = FOUND_TOL[precision]
+    judged = []
+    for k in range(min(m, COMPLETE_TARGETS)):
+        fixed = {lock: float(q_gen[k, lock])} if lock is not None else None
+        sols = multistart_ik(numeric, targets[k], starts=200, seed=seed + k, fixed=fixed)
+        judged.append(np.array([s for s in sols if _fits(s, lower, upper, rev)]).reshape(-1, n))
+    rows = []
+    for label, impl in solvers:
+        check = ClosedCheck(f"{label}", m, allowed)
+        for k in range(m):
+            extra = (float(q_gen[k, lock]),) if lock is not None else ()
+            if getattr(impl, "ik_all", None) is not None:
+                r = impl.ik_all(targets[k], *extra)
+                check.statuses[str(r.status)] = check.statuses.get(str(r.status), 0) + 1
+                q = np.asarray(r.q, dtype=np.float64).reshape(-1, n)
+                count = int(r.count)
+                sols = q[:count]
+                check.solutions.append(count)
+                if r.status != "ok":
+                    check.fail(f"target {k}: status {r.status}")
+                if not np.all(np.isfinite(sols)) or not np.all(np.isnan(q[count:])):
+                    check.fail(f"target {k}: rows not finite, or rows past count not NaN")
+                    continue
+                if np.any(sols < lower) or np.any(sols > upper):
+                    check.fail(f"target {k}: a row outside the limits")
+                if count:
+                    pos, rot = pose_error(numeric, sols, targets[k])
+                    worst = float(max(pos.max(), rot.max()))
+                    check.worst = max(check.worst, worst)
+                    if not worst <= allowed:
+                        check.fail(f"target {k}: pose error {worst:.2e}")
+                for a in range(count):
+                    for b in range(a):
+                        if same(sols[a], sols[b], rev, 1e-9 if precision == "double" else 1e-4):
+                            check.fail(f"target {k}: rows {b} and {a} are one solution")
+                if len(missing(sols, q_gen[k:k + 1], rev, found_tol)) == 0:
+                    check.found += 1
+                if k < len(judged):
+                    check.compared += 1
+                    lost = missing(sols, judged[k], rev, found_tol)
+                    if len(lost) == 0:
+                        check.complete += 1
+                    else:
+                        check.fail(f"target {k}: {len(lost)} of the numeric IK's {len(judged[k])} solutions missing")
+            else:
+                check.found += 1
+            if getattr(impl, "ik_nearest", None) is not None:
+                r = impl.ik_nearest(q_gen[k], targets[k], *extra)
+                if r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), found_tol):
+                    check.nearest += 1
+                else:
+                    check.fail(f"target {k}: ik_nearest from the source configuration: {r.status}")
+            else:
+                check.nearest += 1
+        rows.append(check)
+    return rows
+
+
+def _fits(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, revolute: np.ndarray) -> bool:
+    """Some copy of ``q`` (revolute joints shifted by multiples of 2 pi) lies within the limits."""
+    for x, lo, hi, r in zip(q, lower, upper, revolute):
+        if r:
+            k = np.ceil((lo - x) / (2 * np.pi)) if np.isfinite(lo) else np.floor((hi - x) / (2 * np.pi)) if np.isfinite(hi) else 0.0
+            x = x + 2 * np.pi * k
+        if not lo <= x <= hi:
+            return False
+    return True

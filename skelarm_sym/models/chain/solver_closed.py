@@ -85,13 +85,29 @@ def _inputs(arm: _Arm) -> tuple[list[Argument], list]:
 
 
 def _shifted(x, centre: float):
-    """``x + 2 pi k`` with ``k = nearbyint((centre - x) / 2 pi)``: the copy of a revolute angle nearest ``centre``."""
-    return x + TWO_PI * Call1("nearbyint", (centre - x) * INV_TWO_PI)
+    """``x + 2 pi k`` with ``k = nearbyint((centre - x) / 2 pi)``: the copy of a revolute angle nearest ``centre``
+    (``k = 0``, no call, when ``|centre - x| <= pi``: most candidates are atan2 values already)."""
+    return select(fabs(centre - x) <= math.pi, x, x + TWO_PI * Call1("nearbyint", (centre - x) * INV_TWO_PI))
 
 
-def _wrapped(d):
-    """``d - 2 pi nearbyint(d / 2 pi)``: a difference of angles in [-pi, pi]."""
-    return d - TWO_PI * Call1("nearbyint", d * INV_TWO_PI)
+def _close(d, revolute: bool):
+    """``|d| <= IK_DUP_TOL``, modulo 2 pi for a revolute joint: ``d`` is the difference of two angles shifted
+    toward the same centre (``|d| <= 2 pi`` up to the clipping), so ``|d|`` or ``|2 pi - |d||`` (no call)."""
+    tol = NamedConst("IK_DUP_TOL")
+    if not revolute:
+        return fabs(d) <= tol
+    return (fabs(d) <= tol) | (fabs(TWO_PI - fabs(d)) <= tol)
+
+
+def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var, j: int) -> None:
+    """Joint ``j`` and on of ``cand`` against kept row ``r``: a nest of tests ending in ``dup = r; break``."""
+    b.set(diff, cand[j] - q[_at(arm.n, r, j)])
+    with b.if_(_close(diff, arm.revolute[j])):
+        if j + 1 < arm.n:
+            _same_row(b, arm, cand, q, r, diff, dup, j + 1)
+        else:
+            b.set(dup, r)
+            b.break_()
 
 
 def rows_helper(arm: _Arm) -> Function:
@@ -143,7 +159,6 @@ def rows_helper(arm: _Arm) -> Function:
     flag = b.var("flag", zero, Type.INT)
     inside = b.var("inside", zero, Type.INT)
     dup = b.var("dup", zero, Type.INT)
-    dist = b.var("dist", 0.0)
     diff = b.var("diff", 0.0)
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
@@ -160,8 +175,7 @@ def rows_helper(arm: _Arm) -> Function:
                 if hi is not None:
                     tests.append(cand[j] > hi + NamedConst("IK_LIMIT_TOL"))
                 if tests:
-                    with b.if_(tests[0] if len(tests) == 1 else tests[0] | tests[1]):
-                        b.set(inside, zero)
+                    b.set(inside, select(tests[0] if len(tests) == 1 else tests[0] | tests[1], zero, inside))
                 clipped = cand[j]
                 if hi is not None:
                     clipped = select(cand[j] > hi, hi, clipped)
@@ -173,14 +187,9 @@ def rows_helper(arm: _Arm) -> Function:
                 b.comment("5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped")
                 b.set(dup, _int(-1))
                 with b.for_("r", 0, kept) as r:
-                    b.set(dist, 0.0)
-                    for j in range(N):
-                        d = cand[j] - q[_at(N, r, j)]
-                        b.set(diff, fabs(_wrapped(d) if arm.revolute[j] else d))
-                        b.set(dist, select(diff > dist, diff, dist))
-                    with b.if_(dist <= NamedConst("IK_DUP_TOL")):
-                        b.set(dup, r)
-                        b.break_()
+                    b.comment("the same row when every joint is within IK_DUP_TOL: nested, so a row that differs "
+                              "in its first joint costs one test")
+                    _same_row(b, arm, cand, q, r, diff, dup, 0)
                 with b.if_(dup >= 0):
                     b.comment("the kept row takes the duplicate's singular bit")
                     singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
