@@ -175,9 +175,9 @@ def atan2_steps(steps: Steps, label: str, y: sp.Expr, x: sp.Expr) -> sp.Expr:
     u = steps(f"{label}_u", _select((lo - hi, reduced), (lo, True)) / den)  # put 1/den inside both branches)
     z = steps(f"{label}_z", u * u)
     q = steps(f"{label}_Q", _horner(z, ATAN_Q, True))
-    r = steps(f"{label}_t", _select((sp.Float(PI[0]), reduced), (sp.S.Zero, True)) + (u + u * z * _horner(z, ATAN_P) / q))
-    r = steps(f"{label}_t2", _select((sp.Float(PI[1]) - r, swap), (r, True)))
-    r = steps(f"{label}_t1", _select((sp.Float(PI[2]) - r, x < 0), (r, True)))
+    r = steps(f"{label}_t", _select((sp.Float(PI[0], 17), reduced), (sp.S.Zero, True)) + (u + u * z * _horner(z, ATAN_P) / q))
+    r = steps(f"{label}_t2", _select((sp.Float(PI[1], 17) - r, swap), (r, True)))
+    r = steps(f"{label}_t1", _select((sp.Float(PI[2], 17) - r, x < 0), (r, True)))
     return _select((-r, y < 0), (r, True))
 
 

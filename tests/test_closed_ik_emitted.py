@@ -1,0 +1,487 @@
+"""The emitted closed-form IK (``ik_candidates``, ``ik_all``, ``ik_nearest``) in C and NumPy, judged by the
+reference (``models/chain/reference_ik_all.py``: forward recursion, multi-start numeric IK, EAIK) and by the NumPy
+post-processing spec (``closed_ik/postprocess.py``): the real arms, random arms of every family, singular poses,
+limits and 2 pi shifts, unreachable and invalid targets, float precision, strict compilation under gcc and clang,
+the command line (``--ik-lock``, ``--functions``, ``show --what ik``, ``check --from``)."""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import math
+import shutil
+
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from skelarm_sym.build import compile_arm, compile_shared, load_python
+from skelarm_sym.cli import main
+from skelarm_sym.closed_ik.evaluate import lambdify_candidates
+from skelarm_sym.closed_ik.postprocess import STATUS, nearest, postprocess
+from skelarm_sym.closed_ik.subproblems import Steps, atan2_steps
+from skelarm_sym.errors import InputError
+from skelarm_sym.generate import generate
+from skelarm_sym.models.chain import reference_ik_all as judge
+from skelarm_sym.models.chain.kind import with_ik_lock
+
+from closed_ik_support import (FAMILY_CONSTRAINTS, ROBOTS, TOML_ARMS, URDF_ARMS, load_arm, random_configurations,
+                               random_family_chain, targets_of, wrapped_distance)
+
+LABELS = {v: k for k, v in STATUS.items()}
+FUNCTIONS = "ik_all,ik_nearest"
+POSE_TOL = {"double": 1e-12, "float": 3e-5}
+FOUND_TOL = {"double": 1e-7, "float": 3e-3}
+
+
+class Built:
+    """One arm's emitted IK: the chain (lock recorded), the lock coordinate, C and NumPy, and the spec's answer."""
+
+    def __init__(self, chain, lock: int | None, precision: str = "double") -> None:
+        if lock is not None:
+            chain = with_ik_lock(chain, lock + 1)
+        self.chain = chain
+        self.lock = None if lock is None else chain.joints[lock].coordinate
+        self.precision = precision
+        self.generated = generate(chain, out=None, functions=FUNCTIONS, precision=precision)
+        self.c = compile_arm(self.generated)
+        prefix = self.generated.module.prefix
+        self.py = load_python(self.generated.sources[f"{prefix}.py"], prefix)
+        self.raw = lambdify_candidates(self.generated.derivation)
+        self.numeric = chain.numeric()
+        self.revolute = judge.revolute_mask(self.numeric)
+        limits = chain.limits()
+        self.lower = np.array([-np.inf if v is None else v for v in limits["lower"]])
+        self.upper = np.array([np.inf if v is None else v for v in limits["upper"]])
+
+    def extra(self, q) -> tuple:
+        return () if self.lock is None else (float(q[self.lock]),)
+
+    def spec(self, target, q) -> object:
+        """The NumPy post-processing of SymPy's candidates (the spec) for one target."""
+        Q, flags = self.raw(np.asarray(target).reshape(1, 16), *self.extra(q))
+        return postprocess(Q[0], flags[0].astype(int), self.lower, self.upper, self.revolute, target=np.asarray(target).reshape(16))
+
+
+@functools.lru_cache(maxsize=None)
+def built(name: str, precision: str = "double") -> Built:
+    chain, lock = load_arm(name)
+    return Built(chain, lock, precision)
+
+
+def inner_configurations(b: Built, m: int, rng) -> np.ndarray:
+    """Configurations strictly inside the limits (5 % to 95 % of each range; [-pi, pi] or [-0.5, 0.5] m where unbounded)."""
+    span = np.where(b.revolute, np.pi, 0.5)
+    lo = np.where(np.isfinite(b.lower), b.lower, -span)
+    hi = np.where(np.isfinite(b.upper), b.upper, span)
+    return lo + (0.05 + 0.9 * rng.uniform(size=(m, b.chain.n))) * (hi - lo)
+
+
+def check_rows(b: Built, result, target, source=None, tol=None) -> np.ndarray:
+    """The returned rows of ``result``: finite, NaN past count, within limits, reproducing ``target``, distinct."""
+    tol = POSE_TOL[b.precision] if tol is None else tol
+    q = np.asarray(result.q, dtype=float)
+    assert q.shape == (8, b.chain.n)
+    rows = q[: result.count]
+    assert np.all(np.isfinite(rows)) and np.all(np.isnan(q[result.count:]))
+    assert np.all(rows >= b.lower) and np.all(rows <= b.upper)
+    if result.count:
+        pos, rot = judge.pose_error(b.numeric, rows, target)
+        assert max(pos.max(), rot.max()) <= tol, (pos, rot)
+    for i in range(result.count):
+        for j in range(i):
+            assert not judge.same(rows[i], rows[j], b.revolute, 1e-9 if b.precision == "double" else 1e-4)
+    if source is not None:
+        assert np.min(wrapped_distance(rows, source, b.revolute)) <= FOUND_TOL[b.precision]
+    return rows
+
+
+# -- the real arms -------------------------------------------------------------------------------------------------
+
+FAST = ["puma560", "ur5"]
+SLOW = ["stanford", "kuka_kr6", "abb_irb140", "iiwa14_lock3", "panda_lock7", "puma560_modified"]
+ARMS = FAST + [pytest.param(n, marks=pytest.mark.slow) for n in SLOW] + [
+    pytest.param(n, marks=pytest.mark.slow) for n in URDF_ARMS]
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_arm_every_solution_in_c_and_numpy(name):
+    """30 targets made from configurations within the limits: status ok; every row reproduces the target to 1e-12,
+    lies within the limits, none twice; the source configuration is among the rows and ik_nearest from it returns
+    it; C and NumPy return the same rows, flags and count as the NumPy spec on SymPy's candidates."""
+    b = built(name)
+    rng = np.random.default_rng(18)
+    q = inner_configurations(b, 30, rng)
+    T = targets_of(b.chain, q)
+    for i in range(len(q)):
+        spec = b.spec(T[i], q[i])
+        assert spec.status == STATUS["ok"]
+        for impl in (b.c, b.py):
+            r = impl.ik_all(T[i], *b.extra(q[i]))
+            assert r.status == "ok" and r.count == spec.count
+            rows = check_rows(b, r, T[i], q[i])
+            np.testing.assert_allclose(rows, spec.solutions, atol=1e-9)
+            assert list(np.asarray(r.flags)[: r.count]) == list(spec.flags[: spec.count])
+            assert list(np.asarray(r.flags)[r.count:]) == [-1] * (8 - r.count)
+            near = impl.ik_nearest(q[i], T[i], *b.extra(q[i]))
+            assert near.status == "ok"
+            np.testing.assert_allclose(near.q, q[i], atol=FOUND_TOL["double"])
+        # nearest from a far reference: the spec's nearest over the same rows
+        q_ref = q[i] + rng.uniform(-2.5, 2.5, b.chain.n) * b.revolute
+        if b.lock is not None:
+            q_ref[b.lock] = q[i][b.lock]
+        want, _ = nearest(spec, q_ref, b.lower, b.upper, b.revolute)
+        for impl in (b.c, b.py):
+            got = impl.ik_nearest(q_ref, T[i], *b.extra(q[i]))
+            assert np.sum((got.q - q_ref) ** 2) <= np.sum((want - q_ref) ** 2) + 1e-12
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["puma560", "ur5", "kuka_kr6", "abb_irb140", "iiwa14_lock3", "panda_lock7"])
+def test_complete_against_numeric_ik_and_eaik(name):
+    """The rows are every solution within the limits: the judge's 200-start numeric IK finds none that is missing,
+    and EAIK's exact solutions that fit the limits are exactly the rows (when eaik is installed)."""
+    b = built(name)
+    rng = np.random.default_rng(7)
+    q = inner_configurations(b, 5, rng)
+    T = targets_of(b.chain, q)
+    fixed_joint = None if b.lock is None else next(k for k, j in enumerate(b.chain.joints) if j.coordinate == b.lock)
+    for i in range(len(q)):
+        r = b.c.ik_all(T[i], *b.extra(q[i]))
+        rows = r.q[: r.count]
+        fixed = None if b.lock is None else {b.lock: float(q[i][b.lock])}
+        numeric = judge.multistart_ik(b.numeric, T[i], starts=200, seed=i, fixed=fixed)
+        inside = [s for s in numeric if fits(s, b)]
+        assert len(judge.missing(rows, np.array(inside).reshape(-1, b.chain.n), b.revolute, 1e-6)) == 0
+        eaik = judge.eaik_solutions(b.numeric, T[i], None if fixed is None else {fixed_joint: fixed[b.lock]})
+        if eaik is not None:
+            Q, ls = eaik
+            exact = [s for s in Q[~ls] if fits(s, b)]
+            exact = np.array(exact).reshape(-1, b.chain.n)
+            assert len(judge.missing(rows, exact, b.revolute, 1e-7)) == 0
+            assert len(judge.missing(exact, rows, b.revolute, 1e-7)) == 0
+
+
+def fits(q, b: Built) -> bool:
+    """Some 2 pi copy of ``q`` lies within the limits."""
+    for x, lo, hi, rev in zip(q, b.lower, b.upper, b.revolute):
+        if rev and np.isfinite(lo):
+            x = x + 2 * np.pi * np.ceil((lo - x) / (2 * np.pi))
+        elif rev and np.isfinite(hi):
+            x = x + 2 * np.pi * np.floor((hi - x) / (2 * np.pi))
+        if not lo <= x <= hi:
+            return False
+    return True
+
+
+# -- random arms of every family ------------------------------------------------------------------------------------
+
+FAMILIES = list(FAMILY_CONSTRAINTS)
+
+
+def check_random_family(family, seed, targets=20):
+    rng = np.random.default_rng(seed)
+    chain = random_family_chain(family, rng)
+    g = generate(chain, out=None, functions="ik_all", langs="c")
+    c = compile_arm(g)
+    num = chain.numeric()
+    rev = judge.revolute_mask(num)
+    q = random_configurations(chain, targets, rng)
+    T = targets_of(chain, q)
+    for i in range(targets):
+        r = c.ik_all(T[i])
+        assert r.status == "ok"
+        rows = r.q[: r.count]
+        pos, rot = judge.pose_error(num, rows, T[i])
+        assert max(pos.max(), rot.max()) <= 1e-11, (seed, i)
+        assert np.min(wrapped_distance(rows, q[i], rev)) < 1e-6, (seed, i)
+
+
+@pytest.mark.parametrize("family", FAMILIES[:1] + [pytest.param(f, marks=pytest.mark.slow) for f in FAMILIES[1:]],
+                         ids=[f"{a}-{b}" for a, b in FAMILIES])
+@settings(max_examples=1, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 2**32 - 1))
+def test_random_arm_of_each_family_emitted(family, seed):
+    """A random DH arm of each family (the shared generator of tests/closed_ik_support.py), emitted in C: every row
+    reproduces its target and the source configuration is among them."""
+    check_random_family(family, seed)
+
+
+# -- special cases ---------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name, joint, values", [
+    ("puma560", 4, (0.0, 1e-9, 1e-5)),       # wrist aligned: q4 and q6 share one rotation
+    ("puma560", 2, (-math.pi / 2 + 0.0470, )),  # near the elbow stretched (its exact value depends on a3, d4)
+    ("ur5", 4, (0.0, 1e-12, 1e-7)),          # UR wrist aligned: q6 and q2 + q3 + q4 share one rotation
+    ("ur5", 2, (0.0,)),                      # UR elbow stretched
+])
+def test_singular_poses_are_finite_flagged_and_exact(name, joint, values):
+    """At and near singular values: status ok, every row finite and reproducing the target; at the exact value some
+    row carries the singular bit (IK_FLAG_SINGULAR); C and NumPy agree."""
+    b = built(name)
+    rng = np.random.default_rng(3)
+    for value in values:
+        q = inner_configurations(b, 5, rng)
+        q[:, joint] = value
+        T = targets_of(b.chain, q)
+        for i in range(len(q)):
+            r = b.c.ik_all(T[i])
+            p = b.py.ik_all(T[i])
+            assert r.status == p.status == "ok" and r.count == p.count >= 1
+            check_rows(b, r, T[i], tol=1e-11)
+            check_rows(b, p, T[i], tol=1e-11)
+            if value == 0.0 and name == "puma560" and joint == 4:
+                assert np.any(np.asarray(r.flags)[: r.count] & 2)
+
+
+def test_wrist_aligned_exactly_is_flagged():
+    """PUMA with q5 = 0 exactly (the target built exactly aligned): a continuum, one representative, flagged."""
+    b = built("puma560")
+    q = np.array([0.3, 0.5, -1.0, 0.4, 0.0, -0.2])
+    T = targets_of(b.chain, q[None])[0]
+    r = b.c.ik_all(T)
+    assert r.status == "ok"
+    rows = check_rows(b, r, T)
+    flags = np.asarray(r.flags)[: r.count]
+    aligned = np.abs(rows[:, 4]) < 1e-6
+    assert aligned.any() and np.all(flags[aligned] & 2)
+
+
+def test_limits_and_two_pi_shifts():
+    """Joint 1 of the PUMA limited to [pi/2, 5pi/2] (centre 3pi/2): every row's q1 is in that range, the copy of
+    the spec's; a joint limited to a range that the target's solutions miss gives out_of_limits, count 0."""
+    chain, _ = load_arm("puma560")
+    joints = list(chain.joints)
+    import dataclasses
+
+    joints[0] = dataclasses.replace(joints[0], lower=math.pi / 2, upper=5 * math.pi / 2)
+    shifted = dataclasses.replace(chain, joints=tuple(joints))
+    b = Built(shifted, None)
+    rng = np.random.default_rng(5)
+    q = inner_configurations(built("puma560"), 10, rng)
+    T = targets_of(chain, q)
+    seen_shift = False
+    for i in range(len(q)):
+        r = b.c.ik_all(T[i])
+        rows = check_rows(b, r, T[i])
+        spec = b.spec(T[i], q[i])
+        np.testing.assert_allclose(rows, spec.solutions, atol=1e-9)
+        assert np.all(rows[:, 0] >= math.pi / 2) and np.all(rows[:, 0] <= 5 * math.pi / 2)
+        seen_shift |= bool(np.any(rows[:, 0] > math.pi))
+    assert seen_shift
+    joints[4] = dataclasses.replace(joints[4], lower=1.0, upper=1.2)  # q5 in [1.0, 1.2] rad only
+    narrow = Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+    q5 = np.array([0.2, 0.3, -0.5, 0.1, -0.4, 0.3])  # q5 = -0.4: no solution has |q5| in [1.0, 1.2]
+    T5 = targets_of(chain, q5[None])[0]
+    r = narrow.c.ik_all(T5)
+    assert (r.status, r.count) == ("out_of_limits", 0) and np.all(np.isnan(r.q))
+    n = narrow.c.ik_nearest(q5, T5)
+    assert n.status == "out_of_limits" and np.all(np.isnan(n.q))
+
+
+def test_ur5_rows_lie_within_pi_of_the_centre():
+    """UR5 joints are limited to [-2 pi, 2 pi]: several copies fit; the one nearest the centre (0) is returned."""
+    b = built("ur5")
+    q = inner_configurations(b, 10, np.random.default_rng(9))
+    T = targets_of(b.chain, q)
+    for i in range(len(q)):
+        r = b.c.ik_all(T[i])
+        assert np.all(np.abs(r.q[: r.count]) <= math.pi + 1e-12)
+
+
+@pytest.mark.parametrize("name", ["puma560", "ur5"])
+def test_unreachable_targets(name):
+    """A target beyond the reach: status unreachable, every row a least-squares candidate (flag bit 1) within the
+    limits, finite, the same in C, NumPy and the spec."""
+    b = built(name)
+    q = inner_configurations(b, 5, np.random.default_rng(11))
+    T = targets_of(b.chain, q)
+    T[:, :3, 3] *= 10.0
+    for i in range(len(q)):
+        spec = b.spec(T[i], q[i])
+        assert spec.status == STATUS["unreachable"]
+        for impl in (b.c, b.py):
+            r = impl.ik_all(T[i])
+            assert r.status == "unreachable" and r.count == spec.count
+            rows = np.asarray(r.q)[: r.count]
+            assert np.all(np.isfinite(rows)) and np.all(np.asarray(r.flags)[: r.count] & 1)
+            np.testing.assert_allclose(rows, spec.solutions, atol=1e-9)
+
+
+def raw_call(b: Built, name: str, *args):
+    """Call the C function directly (no wrapper checks): status and outputs."""
+    f = getattr(b.c._lib, f"{b.generated.module.prefix}_{name}")
+    return f(*args)
+
+
+@pytest.mark.parametrize("name", ["puma560", "iiwa14_lock3"])
+def test_invalid_input(name):
+    """A non-finite target (or lock), a rotation part that is not orthonormal, or a mirror: the C returns
+    IK_INVALID with count 0 and NaN rows; the Python wrappers (ctypes and NumPy) raise a ValueError."""
+    b = built(name)
+    q = inner_configurations(b, 1, np.random.default_rng(1))[0]
+    good = targets_of(b.chain, q[None])[0]
+    nan, scaled, mirror = good.copy(), good.copy(), good.copy()
+    nan[1, 3] = np.nan
+    scaled[:3, :3] *= 1.001
+    mirror[:3, 0] *= -1.0
+    dp = ctypes.POINTER(ctypes.c_double)
+    lock = b.extra(q)
+    for bad in (nan, scaled, mirror):
+        out = np.zeros(8 * b.chain.n)
+        count = ctypes.c_int(5)
+        flags = np.zeros(8, dtype=np.intc)
+        status = raw_call(b, "ik_all", np.ascontiguousarray(bad.reshape(16)).ctypes.data_as(dp), *[ctypes.c_double(x) for x in lock],
+                          out.ctypes.data_as(dp), ctypes.byref(count), flags.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+        assert status == STATUS["invalid"] and count.value == 0 and np.all(np.isnan(out)) and np.all(flags == -1)
+        for impl in (b.c, b.py):
+            with pytest.raises(ValueError):
+                impl.ik_all(bad, *lock)
+            with pytest.raises(ValueError):
+                impl.ik_nearest(q, bad, *lock)
+    if b.lock is not None:
+        out = np.zeros(8 * b.chain.n)
+        count = ctypes.c_int(5)
+        status = raw_call(b, "ik_all", np.ascontiguousarray(good.reshape(16)).ctypes.data_as(dp), ctypes.c_double(np.nan),
+                          out.ctypes.data_as(dp), ctypes.byref(count), None)
+        assert status == STATUS["invalid"] and count.value == 0
+    # NULL count and flags are allowed
+    out = np.zeros(8 * b.chain.n)
+    status = raw_call(b, "ik_all", np.ascontiguousarray(good.reshape(16)).ctypes.data_as(dp), *[ctypes.c_double(x) for x in lock],
+                      out.ctypes.data_as(dp), None, None)
+    assert status == STATUS["ok"] and np.isfinite(out[0])
+
+
+@pytest.mark.parametrize("name", ["puma560", pytest.param("ur5", marks=pytest.mark.slow),
+                                  pytest.param("iiwa14_lock3", marks=pytest.mark.slow)])
+def test_float_precision(name):
+    """Generated in float: the rows reproduce the target to 3e-5, the source configuration is among them (3e-3),
+    C and NumPy agree."""
+    b = built(name, "float")
+    q = inner_configurations(b, 20, np.random.default_rng(4))
+    T = np.asarray(targets_of(b.chain, q), dtype=np.float32).astype(np.float64)
+    for i in range(len(q)):
+        r = b.c.ik_all(T[i], *b.extra(np.float32(q[i])))
+        p = b.py.ik_all(T[i], *b.extra(np.float32(q[i])))
+        assert r.status == p.status == "ok" and r.count == p.count
+        check_rows(b, r, T[i], q[i])
+        np.testing.assert_allclose(r.q[: r.count], p.q[: p.count], atol=1e-4)
+
+
+# -- strict compilation, NumPy batch, the IR additions -----------------------------------------------------------
+
+@pytest.mark.parametrize("compiler", [cc for cc in ("gcc", "clang") if shutil.which(cc)])
+@pytest.mark.parametrize("name, precision", [("puma560", "double"), ("iiwa14_lock3", "float")])
+def test_strict_compile(compiler, name, precision):
+    """-std=c99 -Wall -Wextra -Werror -pedantic, both compilers, both precisions, with and without a lock."""
+    chain, lock = load_arm(name)
+    if lock is not None:
+        chain = with_ik_lock(chain, lock + 1)
+    g = generate(chain, out=None, functions=FUNCTIONS, langs="c", precision=precision)
+    compile_shared({k: v for k, v in g.sources.items() if k.endswith((".c", ".h"))}, compiler=compiler)
+    header = g.sources[f"{g.module.prefix}.h"]
+    P = g.module.prefix.upper()
+    assert f"#define {P}_IK_MAX_SOLUTIONS 8\n" in header
+    assert f"int {g.module.prefix}_ik_all(const {'double' if precision == 'double' else 'float'} target[16]" in header
+
+
+def test_candidates_batch_in_numpy_and_c():
+    """ik_candidates (the straight-line part) broadcasts in NumPy and has a C batch; both equal SymPy's evaluation."""
+    b = built("ur5")
+    q = inner_configurations(b, 50, np.random.default_rng(2))
+    T = targets_of(b.chain, q).reshape(-1, 16)
+    Q, flags = b.raw(T)
+    for impl in (b.c, b.py):
+        got_Q, got_flags = impl.ik_candidates(T)
+        assert got_Q.shape == (50, 8, 6) and got_flags.shape == (50, 8)
+        np.testing.assert_allclose(got_Q, Q, atol=1e-11)
+        np.testing.assert_array_equal(got_flags, flags)
+
+
+def test_atan2_in_arithmetic_within_two_ulp():
+    """The candidates' atan2 (Cephes' rational atan with range reduction, no libm call) against numpy.arctan2 on
+    points of every size and quadrant, the axes included: at most 2 ulp."""
+    x, y = sp.symbols("x y")
+    steps = Steps("t")
+    out = atan2_steps(steps, "a", y, x)
+    f = sp.lambdify((y, x), out, modules="numpy", cse=lambda exprs: (list(steps.steps), exprs))
+    rng = np.random.default_rng(0)
+    n = 200000
+    xs = rng.uniform(-1, 1, n) * 10.0 ** rng.integers(-8, 8, n)
+    ys = rng.uniform(-1, 1, n) * 10.0 ** rng.integers(-8, 8, n)
+    xs[:8] = [1.0, -1.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0]
+    ys[:8] = [0.0, 0.5, 1.0, -1.0, 1.0, 1.0, -1.0, -1.0]
+    with np.errstate(all="ignore"):
+        got = np.array(f(ys, xs), dtype=float)
+    want = np.arctan2(ys, xs)
+    ulp = np.spacing(np.abs(want))
+    assert np.max(np.abs(got - want) / ulp) <= 2.0
+
+
+def test_ir_additions_print():
+    """nearbyint (C nearbyint/nearbyintf, NumPy rint), a NaN literal (C99 NAN), integer module constants."""
+    from skelarm_sym.backends.c.printer import PRECISIONS, CPrinter
+    from skelarm_sym.backends.numpy.printer import PythonPrinter
+    from skelarm_sym.ir.evaluate import evaluate
+    from skelarm_sym.ir.nodes import Call1, Const, Var
+
+    e = Call1("nearbyint", Var("x"))
+    assert CPrinter(PRECISIONS["double"]).expr(e) == "nearbyint(x)"
+    assert CPrinter(PRECISIONS["float"]).expr(e) == "nearbyintf(x)"
+    assert PythonPrinter(False).expr(e) == "np.rint(x)"
+    assert evaluate(e, {"x": 2.5}) == 2.0 and evaluate(e, {"x": -3.5}) == -4.0
+    assert CPrinter(PRECISIONS["double"]).expr(Const(math.nan)) == "NAN"
+    assert PRECISIONS["double"].literal(8) == "8" and PRECISIONS["double"].literal(8.0) == "8.0"
+    g = built("puma560").generated
+    assert "\nIK_MAX_SOLUTIONS = 8\n" in g.sources["puma560.py"]
+    assert "\nIK_FLAG_SINGULAR = 2\n" in g.sources["puma560.py"]
+
+
+# -- model options and the command line -----------------------------------------------------------------------------
+
+def test_no_family_explains_in_one_line(tmp_path, capsys):
+    """A UR5 whose wrist axes 5 and 6 miss by 5 cm (a5 = 0.05: the offset wrist, SP6): generate --functions ik_all
+    fails with the classifier's line (exit 2); without --functions the arm simply has no closed-form functions."""
+    path = tmp_path / "ur5_offset.toml"
+    path.write_text((ROBOTS / "ur5.toml").read_text().replace('d = 0.09465\nalpha = "-pi/2"', 'd = 0.09465\na = 0.05\nalpha = "-pi/2"'))
+    assert main(["generate", "--robot", str(path), "--functions", "ik_all", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "axes 5, 6 do not meet: closest distance 0.05 m" in err
+    from skelarm_sym.models.chain import load_robot
+
+    g = generate(load_robot(path), out=None, functions="pose,ik_solve")
+    assert "ik_all" not in {f.name for f in g.module.functions}
+
+
+def test_ik_lock_option(tmp_path, capsys):
+    """--ik-lock JOINT: recorded in the header's regenerate line; check --from regenerates with it; bad values
+    are one-line errors (exit 2); on a 6-joint arm it is refused."""
+    out = tmp_path / "iiwa"
+    assert main(["generate", "--robot", str(ROBOTS / "iiwa14.toml"), "--ik-lock", "3", "--functions", "ik_all",
+                 "--out", str(out), "--lang", "python"]) == 0
+    header = (out / "iiwa14.py").read_text()
+    assert "--ik-lock 3" in header and "def ik_all(target, lock)" in header
+    from skelarm_sym.check import load_generated
+
+    loaded = load_generated(out)
+    assert "lock" in loaded.generated.derivation.inputs and not loaded.edited
+    capsys.readouterr()
+    for args in (["--ik-lock", "9"], ["--ik-lock", "nosuchjoint"]):
+        assert main(["generate", "--robot", str(ROBOTS / "iiwa14.toml"), *args, "--functions", "ik_all", "--out",
+                     str(tmp_path / "x")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "error" in err
+    assert main(["generate", "--robot", str(ROBOTS / "puma560.toml"), "--ik-lock", "3", "--out", str(tmp_path / "y")]) == 2
+    assert "7-joint" in capsys.readouterr().err
+    assert main(["generate", "--links", "3", "--ik-lock", "3", "--out", str(tmp_path / "z")]) == 2
+
+
+def test_show_ik(capsys):
+    """show --what ik: the family, the chain of subproblems, the steps and the candidates in their terms."""
+    assert main(["show", "--robot", str(ROBOTS / "puma560.toml"), "--what", "ik"]) == 0
+    text = capsys.readouterr().out
+    assert "spherical_wrist (parallel_23)" in text and "SP3 q3" in text and "Q[7] = (" in text
+    assert main(["show", "--robot", str(ROBOTS / "scara.toml"), "--what", "ik"]) == 2
+    assert "6 moving joints" in capsys.readouterr().err
