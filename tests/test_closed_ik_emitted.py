@@ -135,7 +135,7 @@ def test_arm_every_solution_in_c_and_numpy(name):
         want, _ = nearest(spec, q_ref, b.lower, b.upper, b.revolute)
         for impl in (b.c, b.py):
             got = impl.ik_nearest(q_ref, T[i], *b.extra(q[i]))
-            assert np.sum((got.q - q_ref) ** 2) <= np.sum((want - q_ref) ** 2) + 1e-12
+            assert np.sum((got.q - q_ref) ** 2) <= np.sum((want - q_ref) ** 2) * (1 + 1e-12) + 1e-12
 
 
 @pytest.mark.slow
@@ -367,7 +367,20 @@ def test_float_precision(name):
         p = b.py.ik_all(T[i], *b.extra(np.float32(q[i])))
         assert r.status == p.status == "ok" and r.count == p.count
         check_rows(b, r, T[i], q[i])
-        np.testing.assert_allclose(r.q[: r.count], p.q[: p.count], atol=1e-4)
+        # the same rows, to the float rounding of each amplified by its Jacobian's condition number (a joint
+        # pair near the wrist singularity is ill-conditioned: only its sum is fixed by the pose)
+        kappa = condition(b, r.q[: r.count])
+        assert np.all(np.max(np.abs(r.q[: r.count] - p.q[: p.count]), axis=-1) <= 1e-5 * kappa)
+
+
+def condition(b: Built, rows: np.ndarray) -> np.ndarray:
+    """The condition number of each row's Jacobian (the free joints; linear rows in units of the reach)."""
+    J = judge.chain_kinematics(b.numeric, rows).J
+    if b.lock is not None:
+        J = np.delete(J, b.lock, axis=-1)
+    J = np.concatenate([J[..., :3, :] / judge.reach(b.numeric), J[..., 3:, :]], axis=-2)
+    s = np.linalg.svd(J, compute_uv=False)
+    return s[..., 0] / s[..., -1]
 
 
 # -- strict compilation, NumPy batch, the IR additions -----------------------------------------------------------

@@ -32,6 +32,7 @@ axes) or ``LENGTH_TOL`` times the chain's reach (distances); exact constants giv
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -147,6 +148,7 @@ def _clean(v: Sequence) -> Vec:
 
 # -- geometry of a chain -------------------------------------------------------------------------------
 
+@functools.lru_cache(maxsize=16)
 def chain_geometry(chain: Chain) -> Geometry:
     """The chain's screw geometry at ``q = 0`` (exact), one entry per moving joint; refuses what it cannot solve."""
     if chain.parameters:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+import numpy as np
 import sympy as sp
 
 from ..derive.core import Constant, Derivation, FunctionSpec
@@ -81,6 +82,26 @@ def lock_index(chain: Chain, lock: int | str | None) -> int | None:
     return lock
 
 
+FLIP_TOL = 1e-15
+"""The wrist flip (:func:`~.families.spherical_wrist`) is used when its conditions hold to this (cosines, sines):
+exact zeros from pi/2 angles, or a URDF's rounding of them (6e-17), not a wrist that is merely near one."""
+
+
+def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int] = (3, 4, 5)) -> bool:
+    """Whether problem axes ``joints`` (a, b, c; 0-based) have ``a . b = 0``, ``b . c = 0`` and ``a || c`` within
+    :data:`FLIP_TOL` at every sampled lock value: the wrist flip of :mod:`.families` (joints 4, 5, 6 of a spherical
+    wrist; 2, 5, 6 of three parallel axes)."""
+    from .classify import LOCK_SAMPLES, _lock_subs
+
+    for value in (LOCK_SAMPLES if locked else (0.0,)):
+        _, H, _ = geom.numeric(_lock_subs(geom, value))
+        H = H[::-1] if reversed_ else H
+        h4, h5, h6 = H[joints[0]], H[joints[1]], H[joints[2]]
+        if abs(h4 @ h5) > FLIP_TOL or abs(h5 @ h6) > FLIP_TOL or np.linalg.norm(np.cross(h4, h6)) > FLIP_TOL:
+            return False
+    return True
+
+
 def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
     """All closed-form IK candidates of ``chain`` (see the module docstring); ``lock``: the joint held at a
     run-time value (0-based index or name) for 7-joint chains. :class:`ClosedFormError` (one line) when the
@@ -115,9 +136,9 @@ def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
     if family.reversed:
         prob = prob.reversed(steps)
     if family.name in ("spherical_wrist", "spherical_shoulder"):
-        branches = spherical_wrist(steps, prob, family.position)
+        branches = spherical_wrist(steps, prob, family.position, wrist_flips(geom, family.reversed, lock_idx is not None))
     else:
-        branches = three_parallel(steps, prob)
+        branches = three_parallel(steps, prob, wrist_flips(geom, family.reversed, lock_idx is not None, (1, 4, 5)))
 
     n = chain.n
     rows, flags = [], []

@@ -34,6 +34,7 @@ middle of the 2R arm's range (so the arm reaches it whenever the target is reach
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -103,8 +104,21 @@ def _sq(v) -> sp.Expr:
     return dot(v, v)
 
 
-def spherical_wrist(steps: Steps, prob: Problem, position: str) -> list[Branch]:
-    """The eight candidates of a spherical-wrist problem with positioning structure ``position``."""
+def _half_turn(steps: Steps, label: str, a: Angle, same: sp.Expr) -> Angle:
+    """``a + pi`` wrapped into [-pi, pi] (``a`` itself where ``same`` is 1): the wrist flip's angle, no atan2."""
+    turned = _select((a.theta - sp.Float(math.pi, 17), a.theta > 0), (a.theta + sp.Float(math.pi, 17), True))
+    return Angle(steps(label, _select((a.theta, same > 0), (turned, True))), None, None, a.ls, a.singular)
+
+
+def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = False) -> list[Branch]:
+    """The eight candidates of a spherical-wrist problem with positioning structure ``position``.
+
+    ``flip``: the wrist's axes satisfy ``h4 . h5 = 0``, ``h5 . h6 = 0`` and ``h4 || h6`` (every arm here), so the
+    second root of q5 is ``-q5`` and its branch is ``(q4 + pi, -q5, q6 + pi)``: ``R(h4, q4 + pi) R(h5, -q5)
+    R(h6, q6 + pi) = R(h4, q4) R(h5, q5) R(h6, q6)`` (``R(h4, pi)`` turns ``h5`` to ``-h5``, and ``R(h4, pi) R(h6, pi)``
+    is the identity), about one point; so half the wrist's subproblems (and 12 of an arm's 34 angles) are
+    additions. Where q4 is a continuum's representative (the wrist aligned) the second branch is the first: one
+    representative, as when both were solved."""
     H, P, RG, tG = prob.H, prob.P, prob.RG, prob.tG
     W0 = steps.vec("W0", closest_point(P[3], H[3], P[4], H[4]))
     W = steps.vec("W", add(matvec(RG, W0), tG))
@@ -147,20 +161,38 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str) -> list[Branch]:
     gx = steps.vec("gx", matvec(RG, x6))
     out = []
     for a, (q1, q2, q3) in enumerate(arms):
-        u = steps.vec(f"u{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], g6, True), True), True))
-        w = steps.vec(f"w{a}", _rot(q3, H[2], _rot(q2, H[1], _rot(q1, H[0], gx, True), True), True))
-        for b, q5 in enumerate(sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u),
-                                   unit_disc(H[3], H[5], H[4], u))):
+        # each rotation's result named: nested, SymPy builds products of large sums (seconds for a locked arm),
+        # and the lowering's CSE finds the same shared terms anyway
+        g1 = steps.vec(f"g1_{a}", _rot(q1, H[0], g6, True))
+        x1 = steps.vec(f"x1_{a}", _rot(q1, H[0], gx, True))
+        u = steps.vec(f"u{a}", _rot(q3, H[2], steps.vec(f"g2_{a}", _rot(q2, H[1], g1, True)), True))
+        w = steps.vec(f"w{a}", _rot(q3, H[2], steps.vec(f"x2_{a}", _rot(q2, H[1], x1, True)), True))
+        q5s = sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u), unit_disc(H[3], H[5], H[4], u))
+        for b, q5 in enumerate(q5s):
+            if flip and b == 1:
+                first = out[-1].angles
+                same = first[3].singular  # q4 a continuum's representative: the original branches coincide
+                q5f = Angle(steps(f"q5f_{a}", _select((first[4].theta, same > 0), (-first[4].theta, True))), None, None,
+                            q5.ls, q5.singular)
+                out.append(Branch((q1, q2, q3, _half_turn(steps, f"q4f_{a}", first[3], same), q5f,
+                                   _half_turn(steps, f"q6f_{a}", first[5], same))))
+                continue
             r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
             q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
-            y = steps.vec(f"y{a}{b}", _rot(q5, H[4], _rot(q4, H[3], w, True), True))
+            y = steps.vec(f"y{a}{b}", _rot(q5, H[4], steps.vec(f"w4_{a}{b}", _rot(q4, H[3], w, True)), True))
             q6 = sp1(steps, f"q6_{a}{b}", H[5], x6, y)
             out.append(Branch((q1, q2, q3, q4, q5, q6)))
     return out
 
 
-def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
-    """The eight candidates of a three-parallel-axes problem (h2 || h3 || h4, h5 meets h6)."""
+def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Branch]:
+    """The eight candidates of a three-parallel-axes problem (h2 || h3 || h4, h5 meets h6).
+
+    ``flip``: ``h2 . h5 = 0``, ``h5 . h6 = 0`` and ``h2 || h6`` (UR arms), so the second root of q5 is ``-q5`` and
+    ``R(h2, phi + pi) R(h5, -q5) R(h6, q6 + pi) = R(h2, phi) R(h5, q5) R(h6, q6)`` (as for the spherical wrist): q6
+    and phi = q2 + q3 + q4 of the second root are half turns of the first's, no subproblem; q3, q2 are solved
+    for its own wrist point. Where q6 is a continuum's representative (the wrist aligned) the second root's
+    branches are the first's."""
     H, P, RG, tG = prob.H, prob.P, prob.RG, prob.tG
     Q0 = steps.vec("Q0", closest_point(P[4], H[4], P[5], H[5]))
     W = steps.vec("W", add(matvec(RG, Q0), tG))
@@ -181,11 +213,24 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
         u = steps.vec(f"u{i}", sub(V, P[1]))
         m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * dot(u, H[1]) * dot(H[1], v))
         dstar = steps(f"dstar{i}", sp.Min(sp.Max(m, dmin2, evaluate=False), dmax2, evaluate=False))
+        firsts: tuple = ()
         for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
                                    unit_disc(H[1], H[5], H[4], g))):
+            if flip and j == 1:
+                q5_0, q6_0, phi_0 = firsts
+                same = steps(f"same{i}", q6_0.singular)
+                q5 = Angle(steps(f"q5f_{i}", _select((q5_0.theta, same > 0), (-q5_0.theta, True))), None, None,
+                           q5.ls, q5.singular)
+                q6 = _half_turn(steps, f"q6f_{i}", q6_0, same)
+                turned = _half_turn(steps, f"phif_{i}", phi_0, same)
+                phi = Angle(turned.theta, steps(f"phifc_{i}", _select((phi_0.c, same > 0), (-phi_0.c, True))),
+                            steps(f"phifs_{i}", _select((phi_0.s, same > 0), (-phi_0.s, True))), phi_0.ls, phi_0.singular)
+                out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
+                continue
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
             q6r = sp1(steps, f"q6_{i}{j}", H[5], a, b)
-            y = _rot(q1, H[0], matvec(RG, _rot(q6r, H[5], _rot(q5, H[4], x, True), True)), True)
+            x5 = steps.vec(f"x5_{i}{j}", _rot(q5, H[4], x, True))
+            y = _rot(q1, H[0], steps.vec(f"Rx6_{i}{j}", matvec(RG, steps.vec(f"x6_{i}{j}", _rot(q6r, H[5], x5, True)))), True)
             phir = sp1(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
             # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
             # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
@@ -195,7 +240,7 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
             bb = cross(H[5], b)
             bb2, b2 = steps(f"bb{i}{j}", dot(bb, bb)), steps(f"b2{i}{j}", dot(b, b))  # named: cheap relational
             sel = steps(f"split{i}{j}", indicator(bb2 <= SPLIT_TOL**2 * b2))
-            z = _rot(q1, H[0], matvec(RG, _rot(q5, H[4], x, True)), True)
+            z = _rot(q1, H[0], steps.vec(f"Rx5_{i}{j}", matvec(RG, x5)), True)
             sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
             phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
             r5h6 = _rot(q5, H[4], H[5])
@@ -209,11 +254,19 @@ def three_parallel(steps: Steps, prob: Problem) -> list[Branch]:
             phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
                         choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), q6r.singular)
             q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls,
-                       any_of(sel, q6r.singular))
-            P4 = steps.vec(f"P4_{i}{j}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
-            for k, q3 in enumerate(sp3(steps, f"q3_{i}{j}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
-                X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])
-                q2 = sp1(steps, f"q2_{i}{j}{k}", H[1], steps.vec(f"X{i}{j}{k}", sub(X, P[1])), sub(P4, P[1]))
-                q4 = Angle(steps(f"q4_{i}{j}{k}", phi.theta - q2.theta - q3.theta), None, None, phi.ls, phi.singular)
-                out.append(Branch((q1, q2, q3, q4, q5, q6)))
+                       steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
+            firsts = (q5, q6, phi)
+            out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
+    return out
+
+
+def _three_parallel_arm(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, label: str) -> list[Branch]:
+    """The two branches of the 2R arm (q2, q3; q4 = phi - q2 - q3) for the wrist angles q1, q5, q6, phi."""
+    out = []
+    P4 = steps.vec(f"P4_{label}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
+    for k, q3 in enumerate(sp3(steps, f"q3_{label}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
+        X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])
+        q2 = sp1(steps, f"q2_{label}{k}", H[1], steps.vec(f"X{label}{k}", sub(X, P[1])), sub(P4, P[1]))
+        q4 = Angle(steps(f"q4_{label}{k}", phi.theta - q2.theta - q3.theta), None, None, phi.ls, phi.singular)
+        out.append(Branch((q1, q2, q3, q4, q5, q6)))
     return out
