@@ -44,6 +44,9 @@ from .classify import add, closest_point, cross, dot, sub, turn
 from .subproblems import Angle, Steps, _select, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
 
 
+ALIGNED_TOL = 1e-14
+"""Spherical wrist: with ``|q5|`` at most this (rad) and q4's SP1 a continuum, q4 is the representative 0 (the
+orientation error of doing so is at most ``|q5|``)."""
 SPLIT_TOL = 1e-12
 """UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
 (its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
@@ -179,6 +182,13 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
                 continue
             r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
             q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
+            # the wrist aligned to rounding (|q5| <= ALIGNED_TOL and q4's SP1 a continuum): q4 = 0 and q6 takes the
+            # whole rotation (off by at most |q5| there, below rounding; the SP1 would return an angle of rounding
+            # noise, pi as often as 0, which may miss the joint's limits while q4 = 0 fits)
+            aligned = sp.And(steps(f"q5a_{a}{b}", sp.Abs(q5.theta)) <= ALIGNED_TOL, q4.singular > 0)
+            q4 = Angle(steps(f"q4r_{a}{b}", _select((sp.S.Zero, aligned), (q4.theta, True))),
+                       steps(f"q4rc_{a}{b}", _select((sp.S.One, aligned), (q4.c, True))),
+                       steps(f"q4rs_{a}{b}", _select((sp.S.Zero, aligned), (q4.s, True))), q4.ls, q4.singular)
             y = steps.vec(f"y{a}{b}", _rot(q5, H[4], steps.vec(f"w4_{a}{b}", _rot(q4, H[3], w, True)), True))
             q6 = sp1(steps, f"q6_{a}{b}", H[5], x6, y)
             out.append(Branch((q1, q2, q3, q4, q5, q6)))
