@@ -21,7 +21,7 @@ import math
 
 from ...closed_ik.postprocess import STATUS, centres
 from ...ir.build import Array, Body, fabs, select
-from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq
+from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
 
 TWO_PI = 2.0 * math.pi
 INV_TWO_PI = 1.0 / TWO_PI
@@ -151,8 +151,9 @@ def rows_helper(arm: _Arm) -> Function:
     b.comment("the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable")
     b.call("ik_candidates", *data, raw, raw_flags)
     exact = b.var("exact", zero, Type.INT)
+    least_squares = NamedConst("IK_FLAG_LEAST_SQUARES", Type.INT)
     with b.for_("i", 0, rows) as i:
-        with b.if_(eq(Bits("%", Cast(Type.INT, raw_flags[i]), _int(2)), 0)):
+        with b.if_(ne(Bits("%", Cast(Type.INT, raw_flags[i]), _int(2)), least_squares)):
             b.set(exact, one)
 
     kept = b.var("kept", zero, Type.INT)
@@ -162,7 +163,7 @@ def rows_helper(arm: _Arm) -> Function:
     diff = b.var("diff", 0.0)
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
-        with b.if_(eq(exact, 0) | eq(Bits("%", flag, _int(2)), 0)):
+        with b.if_(eq(exact, 0) | ne(Bits("%", flag, _int(2)), least_squares)):
             b.comment("3. revolute joints to the copy nearest their range's centre; 4. limits")
             b.set(inside, one)
             for j in range(N):
@@ -237,7 +238,7 @@ def all_solver(arm: _Arm) -> Function:
         f"({_doc_limits(arm)}) dropped (within IK_LIMIT_TOL: clipped), duplicates (IK_DUP_TOL) dropped, in the",
         "derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are",
         "NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),",
-        "IK_FLAG_SINGULAR (one member of a continuum, or a double root). " + lock + "count and flags may be NULL.",
+        "IK_FLAG_SINGULAR (one member of a continuum, or a double root)." + (" " + lock.strip() if lock else ""),
         "No iteration: the same time for every target.",
     )
     return Function("ik_all", "every closed-form IK solution within the joint limits", arguments, b.statements,
