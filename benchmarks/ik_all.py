@@ -15,7 +15,8 @@ ABB IRB 140, Stanford arm, iiwa 14 with joint 3 locked, Panda with joint 7 locke
   EAIK's exact solutions that fit the limits (either direction, 1e-7), when eaik is installed;
 * ``ik_all ns``, ``ik_solve ns``: C, one harness (benchmarks/ik_all_harness.c) compiled with ``cc -O2`` with the
   generated file holding both; median over 15 sweeps of all targets, per call, this thread's CPU time (a shared
-  machine's other processes do not inflate it; the wall-clock median is printed below the table); ik_solve from a
+  machine's other processes do not inflate it; the wall-clock median is printed below the table), the least of
+  5 runs of the harness; ik_solve from a
   random start within the limits, tol 1e-10, at most 100 steps (not for locked arms: it moves every joint);
 * ``EAIK ns``: EAIK's ``IK`` called in-process from Python on the same targets (its Python binding included);
 * ``generate s``: ``skelarm-sym generate --robot FILE [--ik-lock J] --functions ik_all`` as a fresh process, wall
@@ -44,6 +45,9 @@ from skelarm_sym.models.chain import reference_ik_all as judge
 from skelarm_sym.models.chain.kind import with_ik_lock
 
 HERE = Path(__file__).resolve().parent
+RUNS = 5
+"""The harness runs this many times; each column is the least of its medians (the machine is shared: a run that
+other processes slowed is not the code's time)."""
 ROBOT_LIST = ["ur5_urdf", "ur10_urdf", "puma560", "kuka_kr6", "abb_irb140", "kinova_j2s6", "stanford", "iiwa14_lock3",
               "panda_lock7", "ur5"]
 URDF_FILES = {"ur5_urdf": "ur_description/urdf/ur5_robot.urdf", "ur10_urdf": "ur_description/urdf/ur10_robot.urdf",
@@ -119,8 +123,9 @@ def time_c(generated, chain, targets, locks, starts, locked: bool) -> list[float
         flags = [f"-DPREFIX={prefix}", f"-DN={chain.n}"] + (["-DLOCKED"] if locked else [])
         subprocess.run([cc, "-O2", "-std=c99", *flags, f"-I{work}", str(HERE / "ik_all_harness.c"), str(work / f"{prefix}.c"),
                         "-lm", "-o", str(exe)], check=True, capture_output=True)
-        out = subprocess.run([str(exe), str(data), str(len(targets))], check=True, capture_output=True, text=True).stdout
-        return [float(x) for x in out.split()]
+        runs = [[float(x) for x in subprocess.run([str(exe), str(data), str(len(targets))], check=True, capture_output=True,
+                                                   text=True).stdout.split()] for _ in range(RUNS)]
+        return [min(column) for column in zip(*runs)]
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

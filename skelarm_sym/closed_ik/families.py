@@ -222,7 +222,8 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
         V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), True), P[0]))
         u = steps.vec(f"u{i}", sub(V, P[1]))
         m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * dot(u, H[1]) * dot(H[1], v))
-        dstar = steps(f"dstar{i}", sp.Min(sp.Max(m, dmin2, evaluate=False), dmax2, evaluate=False))
+        # min(max(m, dmin2), dmax2) by selects (fmin and fmax are calls in C: see subproblems.positive)
+        dstar = steps(f"dstar{i}", _select((dmax2, m > dmax2), (dmin2, m < dmin2), (m, True)))
         firsts: tuple = ()
         for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
                                    unit_disc(H[1], H[5], H[4], g))):

@@ -118,6 +118,13 @@ def _select(*pieces) -> sp.Expr:
     return sp.Piecewise(*pieces, evaluate=False)
 
 
+def positive(x: sp.Expr) -> sp.Expr:
+    """``max(x, 0)`` as a select, not ``Max``: C's ``fmax`` is a call into the math library (it must treat NaN
+    specially), and each call makes the compiler store every live value around it (all SSE registers are the
+    caller's): 13 of them doubled the instructions of UR5's candidates."""
+    return _select((x, x > 0), (sp.S.Zero, True))
+
+
 def indicator(cond) -> sp.Expr:
     """1 where ``cond`` holds, else 0 (a select)."""
     return _select((sp.S.One, cond), (sp.S.Zero, True))
@@ -227,7 +234,7 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
     C = steps(f"{label}_C", d - hk * kp)
     r2 = steps(f"{label}_r2", A * A + B * B)
     disc = steps(f"{label}_disc", r2 - C * C if disc is None else disc)
-    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
+    root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * r2))
     scale2 = steps(f"{label}_n2", dot(h, h) * dot(p, p))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * r2, disc >= -LS_TOL * r2)))
@@ -275,7 +282,7 @@ def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: 
     r1 = steps(f"{label}_r1", dot(c1, c1))
     r2 = steps(f"{label}_r2", dot(c2, c2))
     disc = steps(f"{label}_disc", _select((r2 - alpha * alpha * nn, r2 <= r1), (r1 - beta * beta * nn, True)))
-    gamma = steps(f"{label}_g", sp.sqrt(sp.Max(disc, 0, evaluate=False) * inv))
+    gamma = steps(f"{label}_g", sp.sqrt(positive(disc) * inv))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * norm2))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * norm2, disc >= -LS_TOL * norm2)))
     n = cross(k1, k2)
@@ -295,7 +302,7 @@ def sp_line(steps: Steps, label: str, h: Sequence, x0: Sequence, o: Sequence, d2
     b = steps(f"{label}_b", dot(h, r))
     c = steps(f"{label}_c", dot(r, r) - d2)
     disc = steps(f"{label}_disc", b * b - c)
-    root = steps(f"{label}_sq", sp.sqrt(sp.Max(disc, 0, evaluate=False)))
+    root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
     scale2 = steps(f"{label}_n2", dot(r, r) + sp.Abs(d2))
     ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * scale2))
     singular = steps(f"{label}_sg", indicator(sp.And(disc <= LS_TOL * scale2, disc >= -LS_TOL * scale2)))

@@ -84,10 +84,16 @@ def _inputs(arm: _Arm) -> tuple[list[Argument], list]:
     return args, names
 
 
-def _shifted(x, centre: float):
-    """``x + 2 pi k`` with ``k = nearbyint((centre - x) / 2 pi)``: the copy of a revolute angle nearest ``centre``
-    (``k = 0``, no call, when ``|centre - x| <= pi``: most candidates are atan2 values already)."""
-    return select(fabs(centre - x) <= math.pi, x, x + TWO_PI * Call1("nearbyint", (centre - x) * INV_TWO_PI))
+def _shifted(b: Body, x, centre: float, out) -> None:
+    """``out = x + 2 pi k`` with ``k = nearbyint((centre - x) / 2 pi)``: the copy of a revolute angle nearest
+    ``centre``. One turn toward the centre by selects (no branch, no call: the candidates are atan2 values, or sums
+    of three, and centres within pi of 0, so this is the copy for every one here), then ``nearbyint`` only for what
+    is still more than pi away (a branch not taken here). Where ``|centre - x|`` is an odd multiple of pi the copy
+    may differ from ``nearbyint``'s by a turn: both are equally near."""
+    d = centre - x
+    b.set(out, x + select(d > math.pi, TWO_PI, select(d < -math.pi, -TWO_PI, 0.0)))
+    with b.if_(fabs(centre - out) > math.pi):
+        b.set(out, out + TWO_PI * Call1("nearbyint", (centre - out) * INV_TWO_PI))
 
 
 def _close(d, revolute: bool):
@@ -168,7 +174,10 @@ def rows_helper(arm: _Arm) -> Function:
             b.set(inside, one)
             for j in range(N):
                 x = raw[_at(N, i, j)]
-                b.set(cand[j], _shifted(x, arm.centre[j]) if arm.revolute[j] else x)
+                if arm.revolute[j]:
+                    _shifted(b, x, arm.centre[j], cand[j])
+                else:
+                    b.set(cand[j], x)
                 lo, hi = arm.lower[j], arm.upper[j]
                 tests = []
                 if lo is not None:
