@@ -19,7 +19,8 @@ from ..torch.printer import FULL, Dialect, TensorPrinter, identifier
 JAX = Dialect(
     where="jnp.where",
     calls={"sqrt": "jnp.sqrt", "sin": "jnp.sin", "cos": "jnp.cos", "fabs": "jnp.abs", "floor": "jnp.floor",
-           "isfinite": "jnp.isfinite", "atan2": "jnp.arctan2", "fmin": "jnp.minimum", "fmax": "jnp.maximum"},
+           "nearbyint": "jnp.rint", "isfinite": "jnp.isfinite", "atan2": "jnp.arctan2", "fmin": "jnp.minimum",
+           "fmax": "jnp.maximum"},
     int_dtype="jnp.int32",
     bool_dtype="jnp.bool_",
     cast="{x}.astype({dtype})",

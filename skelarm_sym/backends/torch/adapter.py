@@ -33,12 +33,12 @@ class ArrayAdapter:
     def __init__(self, module, ir_module, to_numpy) -> None:
         self.module = module
         self._to_numpy = to_numpy
-        names = getattr(module, "STATUS_NAMES", {})
         for f in ir_module.public:
             function = getattr(module, f.name)
             if f.kind == "straight":
                 setattr(self, f.name, self._straight(function))
-            else:
+            else:  # each solver's own names (two solvers may give one code different names)
+                names = {value: name.lower().removeprefix("ik_") for name, value, _ in f.statuses}
                 setattr(self, f.name, self._procedure(function, names))
 
     def _numpy(self, x):

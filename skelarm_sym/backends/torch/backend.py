@@ -119,10 +119,13 @@ def context(module: Module, dialect: Dialect = TORCH, printer_class=ProcedurePri
     straight = [straight_context(f, dialect) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(module, f, dialect, printer_class) for f in module.functions if f.kind == "procedure"]
     statuses: dict[str, dict] = {}
+    names: dict[int, dict] = {}  # STATUS_NAMES: a code -> the name the first solver using it gives it
     for p in procedures:
         for s in p["statuses"]:
             statuses.setdefault(s["name"], s)
+            names.setdefault(s["value"], s)
     return {
+        "status_names": list(names.values()),
         "prefix": module.prefix,
         "notes": [py_string(line) for line in module.notes],
         "dtype": dtypes[module.precision],
@@ -130,7 +133,8 @@ def context(module: Module, dialect: Dialect = TORCH, printer_class=ProcedurePri
         "functions": straight,
         "procedures": procedures,
         "statuses": list(statuses.values()),
-        "constants": [{"name": c.name, "value": repr(float(c.value)), "doc": py_string(c.doc)} for c in module.constants],
+        "constants": [{"name": c.name, "value": repr(c.value if type(c.value) is int else float(c.value)), "doc": py_string(c.doc)}
+                      for c in module.constants],
         "tables": [
             {"name": t.name, "doc": py_string(t.doc),
              "values": [repr(float(v)) if v is not None else ("_INF" if t.sign > 0 else "-_INF") for v in t.values]}

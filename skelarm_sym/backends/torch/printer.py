@@ -51,7 +51,8 @@ class Dialect:
 TORCH = Dialect(
     where="torch.where",
     calls={"sqrt": "torch.sqrt", "sin": "torch.sin", "cos": "torch.cos", "fabs": "torch.abs", "floor": "torch.floor",
-           "isfinite": "torch.isfinite", "atan2": "torch.atan2", "fmin": "torch.minimum", "fmax": "torch.maximum"},
+           "nearbyint": "torch.round", "isfinite": "torch.isfinite", "atan2": "torch.atan2", "fmin": "torch.minimum",
+           "fmax": "torch.maximum"},
     int_dtype="torch.int64",
     bool_dtype="torch.bool",
     cast="{x}.to({dtype})",
