@@ -42,7 +42,7 @@ from skelarm_sym.build import compile_arm, find_compiler
 from skelarm_sym.closed_ik import classify
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import reference_ik_all as judge
-from skelarm_sym.models.chain.kind import with_ik_lock
+from skelarm_sym.models.chain.lock import with_ik_lock
 
 HERE = Path(__file__).resolve().parent
 RUNS = 5

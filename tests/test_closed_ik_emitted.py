@@ -22,12 +22,11 @@ from skelarm_sym.cli import main
 from skelarm_sym.closed_ik.evaluate import lambdify_candidates
 from skelarm_sym.closed_ik.postprocess import STATUS, nearest, postprocess
 from skelarm_sym.closed_ik.subproblems import Steps, atan2_steps
-from skelarm_sym.errors import InputError
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import reference_ik_all as judge
-from skelarm_sym.models.chain.kind import with_ik_lock
+from skelarm_sym.models.chain.lock import with_ik_lock
 
-from closed_ik_support import (FAMILY_CONSTRAINTS, ROBOTS, TOML_ARMS, URDF_ARMS, load_arm, random_configurations,
+from closed_ik_support import (FAMILY_CONSTRAINTS, ROBOTS, URDF_ARMS, load_arm, random_configurations,
                                random_family_chain, targets_of, wrapped_distance)
 
 LABELS = {v: k for k, v in STATUS.items()}

@@ -141,7 +141,7 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
 # -- closed-form IK ---------------------------------------------------------------------------------------------
 
 def _lock_coordinate(chain) -> int | None:
-    from .kind import ik_lock, lock_index
+    from .lock import ik_lock, lock_index
 
     index = lock_index(chain, ik_lock(chain))
     return None if index is None else chain.joints[index].coordinate

@@ -7,50 +7,12 @@ import os
 from ...errors import InputError
 from ..kind import ModelKind
 from .loader import PREFIX_RULE
+from .lock import LOCK_OPTION, ik_lock, lock_index, with_ik_lock
 from .model import Chain
 
 SOLVERS = ("ik_solve", "ik_solve_position")
 CLOSED = ("ik_candidates", "ik_all", "ik_nearest")
 """The closed-form IK functions: emitted when the chain is in a closed-form family (docs/closed-form-ik.md)."""
-LOCK_OPTION = "--ik-lock"
-
-
-def ik_lock(model: Chain) -> str | None:
-    """The joint ``--ik-lock`` holds (as given: a joint number 1..N or a joint name), or ``None``."""
-    return dict(model.load_options).get(LOCK_OPTION)
-
-
-def lock_index(model: Chain, joint: str | int | None) -> int | None:
-    """The 0-based index of the locked joint: ``joint`` is a joint number 1..N (base to tip) or a joint name;
-    InputError (one line) for anything else."""
-    from ...closed_ik.derive import lock_index as by_index
-
-    if joint is None:
-        return None
-    text = str(joint).strip()
-    names = [j.name for j in model.joints]
-    if text in names:
-        return names.index(text)
-    if text.isdigit():
-        number = int(text)
-        if not 1 <= number <= len(names):
-            raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
-        return number - 1
-    return by_index(model, text)  # a coordinate name, else a one-line error naming the joints
-
-
-def with_ik_lock(model: Chain, joint: str | int | None) -> Chain:
-    """``model`` with its closed-form IK's locked joint set (``joint``: a number 1..N or a name; ``None``: no
-    lock): recorded in the model's loader options, so the files' ``regenerate with`` line carries it."""
-    import dataclasses
-
-    options = tuple(o for o in model.load_options if o[0] != LOCK_OPTION)
-    if joint is not None:
-        lock_index(model, joint)
-        options += ((LOCK_OPTION, str(joint).strip()),)
-    return dataclasses.replace(model, load_options=options)
-
-
 def _derive(model: Chain, wanted):
     """A chain whose wanted functions are all forward or closed-form ones is derived without the inverse
     functions (they take most of the generation time); any other name (an inverse function, a solver, or an

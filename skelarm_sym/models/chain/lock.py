@@ -1,0 +1,45 @@
+"""The joint a 7-joint chain's closed-form IK holds at a run-time value (``--ik-lock JOINT``), kept in the chain's
+loader options so that the files' ``regenerate with`` line (and ``check --from``) carries it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from ...errors import InputError
+from .model import Chain
+
+LOCK_OPTION = "--ik-lock"
+
+
+def ik_lock(model: Chain) -> str | None:
+    """The joint ``--ik-lock`` holds (as given: a joint number 1..N or a joint name), or ``None``."""
+    return dict(model.load_options).get(LOCK_OPTION)
+
+
+def lock_index(model: Chain, joint: str | int | None) -> int | None:
+    """The 0-based index of the locked joint: ``joint`` is a joint number 1..N (base to tip) or a joint name;
+    InputError (one line) for anything else."""
+    from ...closed_ik.derive import lock_index as by_index
+
+    if joint is None:
+        return None
+    text = str(joint).strip()
+    names = [j.name for j in model.joints]
+    if text in names:
+        return names.index(text)
+    if text.isdigit():
+        number = int(text)
+        if not 1 <= number <= len(names):
+            raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
+        return number - 1
+    return by_index(model, text)  # a coordinate name, else a one-line error naming the joints
+
+
+def with_ik_lock(model: Chain, joint: str | int | None) -> Chain:
+    """``model`` with its closed-form IK's locked joint set (``joint``: a number 1..N or a name; ``None``: no
+    lock): recorded in the model's loader options, so the files' ``regenerate with`` line carries it."""
+    options = tuple(o for o in model.load_options if o[0] != LOCK_OPTION)
+    if joint is not None:
+        lock_index(model, joint)
+        options += ((LOCK_OPTION, str(joint).strip()),)
+    return dataclasses.replace(model, load_options=options)
