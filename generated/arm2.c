@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x7513930bUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x0588e3a3UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1271,7 +1271,7 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t30 = (t20 ? v[1] : v[0]);
     const double t31 = t17 + t19;
     const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
+    const double t33 = t28*(t31 + t28) + t32;
     const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
     const double t35 = t29 + t30*t22;
     const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
@@ -1349,7 +1349,7 @@ static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_
         const double t30 = (t20 ? v[1] : v[0]);
         const double t31 = t17 + t19;
         const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
+        const double t33 = t28*(t31 + t28) + t32;
         const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
         const double t35 = t29 + t30*t22;
         const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
@@ -1457,7 +1457,7 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t28 = lambda*lambda;
     const double t31 = t17 + t19;
     const double t32 = t21*t27;
-    const double t33 = t32 + t28*(t31 + t28);
+    const double t33 = t28*(t31 + t28) + t32;
     const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
     const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
     const double t37 = t28 + t21*(1.0 + t22*t22);
@@ -1540,7 +1540,7 @@ static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const 
         const double t28 = lambda*lambda;
         const double t31 = t17 + t19;
         const double t32 = t21*t27;
-        const double t33 = t32 + t28*(t31 + t28);
+        const double t33 = t28*(t31 + t28) + t32;
         const int t34 = t33 > ARM2_RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28));
         const double t36 = (t34 ? 1.0/(t33 != 0.0 ? t33 : 1.0) : 1.0);
         const double t37 = t28 + t21*(1.0 + t22*t22);

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x7513930b
+STAMP = 0x0588e3a3
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -472,7 +472,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t30 = np.where(t20, v[..., 1], v[..., 0])
     t31 = t17 + t19
     t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
+    t33 = t28*(t31 + t28) + t32
     t34 = t33 > RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28))
     t35 = t29 + t30*t22
     t36 = np.where(t34, 1.0/t33, 1.0)
@@ -533,7 +533,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t28 = lambda_*lambda_
     t31 = t17 + t19
     t32 = t21*t27
-    t33 = t32 + t28*(t31 + t28)
+    t33 = t28*(t31 + t28) + t32
     t34 = t33 > RANK_TOL*((t31 + 2.0*t28)*(t31 + 2.0*t28))
     t36 = np.where(t34, 1.0/t33, 1.0)
     t37 = t28 + t21*(1.0 + t22*t22)

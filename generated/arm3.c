@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x1f5beaceUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x43076476UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1463,7 +1463,7 @@ static void arm3_inverse_velocity_finish(const double v[2], const double l[3], d
     const double t42 = (t30 ? v[1] : v[0]);
     const double t43 = t27 + t29;
     const double t44 = t31*t39;
-    const double t45 = t44 + t40*(t43 + t40);
+    const double t45 = t40*(t43 + t40) + t44;
     const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
     const double t47 = t41 + t42*t32;
     const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
@@ -1554,7 +1554,7 @@ static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_
         const double t42 = (t30 ? v[1] : v[0]);
         const double t43 = t27 + t29;
         const double t44 = t31*t39;
-        const double t45 = t44 + t40*(t43 + t40);
+        const double t45 = t40*(t43 + t40) + t44;
         const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
         const double t47 = t41 + t42*t32;
         const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
@@ -1690,7 +1690,7 @@ static void arm3_inverse_velocity3_finish(const double twist[3], const double l[
     const double t91 = t70*t73 - t71*t71;
     const double t92 = t70*t86 + t71*t87 + t72*t88;
     const double t93 = t86 + t89 + t91;
-    const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
+    const int t94 = t92 > t93*t78*ARM3_RANK_TOL;
     const double t95 = t78*t78;
     const int t96 = t93 > ARM3_RANK_TOL*t95;
     const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
@@ -1799,7 +1799,7 @@ static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q
         const double t91 = t70*t73 - t71*t71;
         const double t92 = t70*t86 + t71*t87 + t72*t88;
         const double t93 = t86 + t89 + t91;
-        const int t94 = t92 > ARM3_RANK_TOL*t93*t78;
+        const int t94 = t92 > t93*t78*ARM3_RANK_TOL;
         const double t95 = t78*t78;
         const int t96 = t93 > ARM3_RANK_TOL*t95;
         const double t97 = (t92 > 0.0 ? 1.0/(t92 != 0.0 ? t92 : 1.0) : 1.0);
@@ -1923,7 +1923,7 @@ static void arm3_ik_step_finish(const double q[3], const double target[2], const
     const double t40 = lambda*lambda;
     const double t43 = t27 + t29;
     const double t44 = t31*t39;
-    const double t45 = t44 + t40*(t43 + t40);
+    const double t45 = t40*(t43 + t40) + t44;
     const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
     const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
     const double t49 = t40 + t31*(1.0 + t32*t32);
@@ -2020,7 +2020,7 @@ static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const 
         const double t40 = lambda*lambda;
         const double t43 = t27 + t29;
         const double t44 = t31*t39;
-        const double t45 = t44 + t40*(t43 + t40);
+        const double t45 = t40*(t43 + t40) + t44;
         const int t46 = t45 > ARM3_RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40));
         const double t48 = (t46 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
         const double t49 = t40 + t31*(1.0 + t32*t32);

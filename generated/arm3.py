@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1f5beace
+STAMP = 0x43076476
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -540,7 +540,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t42 = np.where(t30, v[..., 1], v[..., 0])
     t43 = t27 + t29
     t44 = t31*t39
-    t45 = t44 + t40*(t43 + t40)
+    t45 = t40*(t43 + t40) + t44
     t46 = t45 > RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40))
     t47 = t41 + t42*t32
     t48 = np.where(t46, 1.0/t45, 1.0)
@@ -626,7 +626,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t91 = t70*t73 - t71*t71
     t92 = t70*t86 + t71*t87 + t72*t88
     t93 = t86 + t89 + t91
-    t94 = t92 > RANK_TOL*t93*t78
+    t94 = t92 > t93*t78*RANK_TOL
     t95 = t78*t78
     t96 = t93 > RANK_TOL*t95
     t97 = np.where(t92 > 0.0, 1.0/t92, 1.0)
@@ -699,7 +699,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t40 = lambda_*lambda_
     t43 = t27 + t29
     t44 = t31*t39
-    t45 = t44 + t40*(t43 + t40)
+    t45 = t40*(t43 + t40) + t44
     t46 = t45 > RANK_TOL*((t43 + 2.0*t40)*(t43 + 2.0*t40))
     t48 = np.where(t46, 1.0/t45, 1.0)
     t49 = t40 + t31*(1.0 + t32*t32)

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x3e54c75bUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x706d0b29UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1433,7 +1433,7 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t40 = (t28 ? v[1] : v[0]);
     const float t41 = t25 + t27;
     const float t42 = t29*t37;
-    const float t43 = t42 + t38*(t41 + t38);
+    const float t43 = t38*(t41 + t38) + t42;
     const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
     const float t45 = t39 + t40*t30;
     const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
@@ -1522,7 +1522,7 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q
         const float t40 = (t28 ? v[1] : v[0]);
         const float t41 = t25 + t27;
         const float t42 = t29*t37;
-        const float t43 = t42 + t38*(t41 + t38);
+        const float t43 = t38*(t41 + t38) + t42;
         const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
         const float t45 = t39 + t40*t30;
         const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
@@ -1631,10 +1631,10 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t64 = t9 + t7 + t6;
     const float t65 = t3 + t10 + t8;
     const float t66 = 0.18903592f*t38;
-    const float t67 = t66 + 0.18903592f*t25;
+    const float t67 = 0.18903592f*t25 + t66;
     const float t68 = 0.18903592f*t26;
     const float t69 = 0.4347826f*t64;
-    const float t70 = t66 + 0.18903592f*t27;
+    const float t70 = 0.18903592f*t27 + t66;
     const float t71 = 0.4347826f*t65;
     const float t72 = 3.0f + t38;
     const float t73 = 0.4347826f*twist[0];
@@ -1655,7 +1655,7 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t88 = t67*t70 - t68*t68;
     const float t89 = t67*t83 + t68*t84 + t69*t85;
     const float t90 = t83 + t86 + t88;
-    const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
+    const int t91 = t89 > t90*t75*ARM3F_RANK_TOL;
     const float t92 = t75*t75;
     const int t93 = t90 > ARM3F_RANK_TOL*t92;
     const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
@@ -1737,10 +1737,10 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         const float t64 = t9 + t7 + t6;
         const float t65 = t3 + t10 + t8;
         const float t66 = 0.18903592f*t38;
-        const float t67 = t66 + 0.18903592f*t25;
+        const float t67 = 0.18903592f*t25 + t66;
         const float t68 = 0.18903592f*t26;
         const float t69 = 0.4347826f*t64;
-        const float t70 = t66 + 0.18903592f*t27;
+        const float t70 = 0.18903592f*t27 + t66;
         const float t71 = 0.4347826f*t65;
         const float t72 = 3.0f + t38;
         const float t73 = 0.4347826f*twist[0];
@@ -1761,7 +1761,7 @@ static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict 
         const float t88 = t67*t70 - t68*t68;
         const float t89 = t67*t83 + t68*t84 + t69*t85;
         const float t90 = t83 + t86 + t88;
-        const int t91 = t89 > ARM3F_RANK_TOL*t90*t75;
+        const int t91 = t89 > t90*t75*ARM3F_RANK_TOL;
         const float t92 = t75*t75;
         const int t93 = t90 > ARM3F_RANK_TOL*t92;
         const float t94 = (t89 > 0.0f ? 1.0f/(t89 != 0.0f ? t89 : 1.0f) : 1.0f);
@@ -1883,7 +1883,7 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t38 = lambda*lambda;
     const float t41 = t25 + t27;
     const float t42 = t29*t37;
-    const float t43 = t42 + t38*(t41 + t38);
+    const float t43 = t38*(t41 + t38) + t42;
     const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
     const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
     const float t47 = t38 + t29*(1.0f + t30*t30);
@@ -1978,7 +1978,7 @@ static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const
         const float t38 = lambda*lambda;
         const float t41 = t25 + t27;
         const float t42 = t29*t37;
-        const float t43 = t42 + t38*(t41 + t38);
+        const float t43 = t38*(t41 + t38) + t42;
         const int t44 = t43 > ARM3F_RANK_TOL*((t41 + 2.0f*t38)*(t41 + 2.0f*t38));
         const float t46 = (t44 ? 1.0f/(t43 != 0.0f ? t43 : 1.0f) : 1.0f);
         const float t47 = t38 + t29*(1.0f + t30*t30);

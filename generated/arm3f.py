@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0x3e54c75b
+STAMP = 0x706d0b29
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -517,7 +517,7 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t40 = np.where(t28, v[..., 1], v[..., 0])
     t41 = t25 + t27
     t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
+    t43 = t38*(t41 + t38) + t42
     t44 = t43 > RANK_TOL*((t41 + 2.0*t38)*(t41 + 2.0*t38))
     t45 = t39 + t40*t30
     t46 = np.where(t44, 1.0/t43, 1.0)
@@ -575,10 +575,10 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t64 = t9 + t7 + t6
     t65 = t3 + t10 + t8
     t66 = 0.18903591682419663*t38
-    t67 = t66 + 0.18903591682419663*t25
+    t67 = 0.18903591682419663*t25 + t66
     t68 = 0.18903591682419663*t26
     t69 = 0.4347826086956522*t64
-    t70 = t66 + 0.18903591682419663*t27
+    t70 = 0.18903591682419663*t27 + t66
     t71 = 0.4347826086956522*t65
     t72 = 3.0 + t38
     t73 = 0.4347826086956522*twist[..., 0]
@@ -599,7 +599,7 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t88 = t67*t70 - t68*t68
     t89 = t67*t83 + t68*t84 + t69*t85
     t90 = t83 + t86 + t88
-    t91 = t89 > RANK_TOL*t90*t75
+    t91 = t89 > t90*t75*RANK_TOL
     t92 = t75*t75
     t93 = t90 > RANK_TOL*t92
     t94 = np.where(t89 > 0.0, 1.0/t89, 1.0)
@@ -669,7 +669,7 @@ def _ik_step_core(q, target, lambda_, q_next):
     t38 = lambda_*lambda_
     t41 = t25 + t27
     t42 = t29*t37
-    t43 = t42 + t38*(t41 + t38)
+    t43 = t38*(t41 + t38) + t42
     t44 = t43 > RANK_TOL*((t41 + 2.0*t38)*(t41 + 2.0*t38))
     t46 = np.where(t44, 1.0/t43, 1.0)
     t47 = t38 + t29*(1.0 + t30*t30)

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2d06b6ecUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xbc763714UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1627,7 +1627,7 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t54 = (t40 ? v[1] : v[0]);
     const double t55 = t37 + t39;
     const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
+    const double t57 = t52*(t55 + t52) + t56;
     const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
     const double t59 = t53 + t54*t42;
     const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
@@ -1727,7 +1727,7 @@ static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_
         const double t54 = (t40 ? v[1] : v[0]);
         const double t55 = t37 + t39;
         const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
+        const double t57 = t52*(t55 + t52) + t56;
         const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
         const double t59 = t53 + t54*t42;
         const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
@@ -1873,7 +1873,7 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t105 = t84*t87 - t85*t85;
     const double t106 = t84*t100 + t85*t101 + t86*t102;
     const double t107 = t100 + t103 + t105;
-    const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
+    const int t108 = t106 > t107*t92*ARM4_RANK_TOL;
     const double t109 = t92*t92;
     const int t110 = t107 > ARM4_RANK_TOL*t109;
     const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
@@ -1988,7 +1988,7 @@ static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q
         const double t105 = t84*t87 - t85*t85;
         const double t106 = t84*t100 + t85*t101 + t86*t102;
         const double t107 = t100 + t103 + t105;
-        const int t108 = t106 > ARM4_RANK_TOL*t107*t92;
+        const int t108 = t106 > t107*t92*ARM4_RANK_TOL;
         const double t109 = t92*t92;
         const int t110 = t107 > ARM4_RANK_TOL*t109;
         const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
@@ -2123,7 +2123,7 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t52 = lambda*lambda;
     const double t55 = t37 + t39;
     const double t56 = t41*t51;
-    const double t57 = t56 + t52*(t55 + t52);
+    const double t57 = t52*(t55 + t52) + t56;
     const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
     const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
     const double t61 = t52 + t41*(1.0 + t42*t42);
@@ -2230,7 +2230,7 @@ static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const 
         const double t52 = lambda*lambda;
         const double t55 = t37 + t39;
         const double t56 = t41*t51;
-        const double t57 = t56 + t52*(t55 + t52);
+        const double t57 = t52*(t55 + t52) + t56;
         const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
         const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
         const double t61 = t52 + t41*(1.0 + t42*t42);

@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x2d06b6ecUL
+#define ARM4_STAMP 0xbc763714UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x2d06b6ec
+STAMP = 0xbc763714
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -608,7 +608,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t54 = np.where(t40, v[..., 1], v[..., 0])
     t55 = t37 + t39
     t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
+    t57 = t52*(t55 + t52) + t56
     t58 = t57 > RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52))
     t59 = t53 + t54*t42
     t60 = np.where(t58, 1.0/t57, 1.0)
@@ -701,7 +701,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t105 = t84*t87 - t85*t85
     t106 = t84*t100 + t85*t101 + t86*t102
     t107 = t100 + t103 + t105
-    t108 = t106 > RANK_TOL*t107*t92
+    t108 = t106 > t107*t92*RANK_TOL
     t109 = t92*t92
     t110 = t107 > RANK_TOL*t109
     t111 = np.where(t106 > 0.0, 1.0/t106, 1.0)
@@ -782,7 +782,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t52 = lambda_*lambda_
     t55 = t37 + t39
     t56 = t41*t51
-    t57 = t56 + t52*(t55 + t52)
+    t57 = t52*(t55 + t52) + t56
     t58 = t57 > RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52))
     t60 = np.where(t58, 1.0/t57, 1.0)
     t61 = t52 + t41*(1.0 + t42*t42)

@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xce059d6bUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x521535c3UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -1847,7 +1847,7 @@ static void arm5_inverse_velocity_finish(const double v[2], const double l[5], d
     const double t66 = (t50 ? v[1] : v[0]);
     const double t67 = t47 + t49;
     const double t68 = t51*t63;
-    const double t69 = t68 + t64*(t67 + t64);
+    const double t69 = t64*(t67 + t64) + t68;
     const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
     const double t71 = t65 + t66*t52;
     const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
@@ -1964,7 +1964,7 @@ static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_
         const double t66 = (t50 ? v[1] : v[0]);
         const double t67 = t47 + t49;
         const double t68 = t51*t63;
-        const double t69 = t68 + t64*(t67 + t64);
+        const double t69 = t64*(t67 + t64) + t68;
         const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
         const double t71 = t65 + t66*t52;
         const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
@@ -2120,7 +2120,7 @@ static void arm5_inverse_velocity3_finish(const double twist[3], const double l[
     const double t119 = t98*t101 - t99*t99;
     const double t120 = t98*t114 + t99*t115 + t100*t116;
     const double t121 = t114 + t117 + t119;
-    const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
+    const int t122 = t120 > t121*t106*ARM5_RANK_TOL;
     const double t123 = t106*t106;
     const int t124 = t121 > ARM5_RANK_TOL*t123;
     const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
@@ -2249,7 +2249,7 @@ static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q
         const double t119 = t98*t101 - t99*t99;
         const double t120 = t98*t114 + t99*t115 + t100*t116;
         const double t121 = t114 + t117 + t119;
-        const int t122 = t120 > ARM5_RANK_TOL*t121*t106;
+        const int t122 = t120 > t121*t106*ARM5_RANK_TOL;
         const double t123 = t106*t106;
         const int t124 = t121 > ARM5_RANK_TOL*t123;
         const double t125 = (t120 > 0.0 ? 1.0/(t120 != 0.0 ? t120 : 1.0) : 1.0);
@@ -2395,7 +2395,7 @@ static void arm5_ik_step_finish(const double q[5], const double target[2], const
     const double t64 = lambda*lambda;
     const double t67 = t47 + t49;
     const double t68 = t51*t63;
-    const double t69 = t68 + t64*(t67 + t64);
+    const double t69 = t64*(t67 + t64) + t68;
     const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
     const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
     const double t73 = t64 + t51*(1.0 + t52*t52);
@@ -2520,7 +2520,7 @@ static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const 
         const double t64 = lambda*lambda;
         const double t67 = t47 + t49;
         const double t68 = t51*t63;
-        const double t69 = t68 + t64*(t67 + t64);
+        const double t69 = t64*(t67 + t64) + t68;
         const int t70 = t69 > ARM5_RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64));
         const double t72 = (t70 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
         const double t73 = t64 + t51*(1.0 + t52*t52);

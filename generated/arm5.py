@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xce059d6b
+STAMP = 0x521535c3
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -676,7 +676,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t66 = np.where(t50, v[..., 1], v[..., 0])
     t67 = t47 + t49
     t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
+    t69 = t64*(t67 + t64) + t68
     t70 = t69 > RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64))
     t71 = t65 + t66*t52
     t72 = np.where(t70, 1.0/t69, 1.0)
@@ -776,7 +776,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t119 = t98*t101 - t99*t99
     t120 = t98*t114 + t99*t115 + t100*t116
     t121 = t114 + t117 + t119
-    t122 = t120 > RANK_TOL*t121*t106
+    t122 = t120 > t121*t106*RANK_TOL
     t123 = t106*t106
     t124 = t121 > RANK_TOL*t123
     t125 = np.where(t120 > 0.0, 1.0/t120, 1.0)
@@ -865,7 +865,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t64 = lambda_*lambda_
     t67 = t47 + t49
     t68 = t51*t63
-    t69 = t68 + t64*(t67 + t64)
+    t69 = t64*(t67 + t64) + t68
     t70 = t69 > RANK_TOL*((t67 + 2.0*t64)*(t67 + 2.0*t64))
     t72 = np.where(t70, 1.0/t69, 1.0)
     t73 = t64 + t51*(1.0 + t52*t52)

@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xc1093253UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x4e5a6946UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -2039,7 +2039,7 @@ static void arm6_inverse_velocity_finish(const double v[2], const double l[6], d
     const double t78 = (t60 ? v[1] : v[0]);
     const double t79 = t57 + t59;
     const double t80 = t61*t75;
-    const double t81 = t80 + t76*(t79 + t76);
+    const double t81 = t76*(t79 + t76) + t80;
     const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
     const double t83 = t77 + t78*t62;
     const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
@@ -2169,7 +2169,7 @@ static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_
         const double t78 = (t60 ? v[1] : v[0]);
         const double t79 = t57 + t59;
         const double t80 = t61*t75;
-        const double t81 = t80 + t76*(t79 + t76);
+        const double t81 = t76*(t79 + t76) + t80;
         const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
         const double t83 = t77 + t78*t62;
         const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
@@ -2335,7 +2335,7 @@ static void arm6_inverse_velocity3_finish(const double twist[3], const double l[
     const double t133 = t112*t115 - t113*t113;
     const double t134 = t112*t128 + t113*t129 + t114*t130;
     const double t135 = t128 + t131 + t133;
-    const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
+    const int t136 = t134 > t135*t120*ARM6_RANK_TOL;
     const double t137 = t120*t120;
     const int t138 = t135 > ARM6_RANK_TOL*t137;
     const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
@@ -2474,7 +2474,7 @@ static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q
         const double t133 = t112*t115 - t113*t113;
         const double t134 = t112*t128 + t113*t129 + t114*t130;
         const double t135 = t128 + t131 + t133;
-        const int t136 = t134 > ARM6_RANK_TOL*t135*t120;
+        const int t136 = t134 > t135*t120*ARM6_RANK_TOL;
         const double t137 = t120*t120;
         const int t138 = t135 > ARM6_RANK_TOL*t137;
         const double t139 = (t134 > 0.0 ? 1.0/(t134 != 0.0 ? t134 : 1.0) : 1.0);
@@ -2631,7 +2631,7 @@ static void arm6_ik_step_finish(const double q[6], const double target[2], const
     const double t76 = lambda*lambda;
     const double t79 = t57 + t59;
     const double t80 = t61*t75;
-    const double t81 = t80 + t76*(t79 + t76);
+    const double t81 = t76*(t79 + t76) + t80;
     const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
     const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
     const double t85 = t76 + t61*(1.0 + t62*t62);
@@ -2770,7 +2770,7 @@ static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const 
         const double t76 = lambda*lambda;
         const double t79 = t57 + t59;
         const double t80 = t61*t75;
-        const double t81 = t80 + t76*(t79 + t76);
+        const double t81 = t76*(t79 + t76) + t80;
         const int t82 = t81 > ARM6_RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76));
         const double t84 = (t82 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
         const double t85 = t76 + t61*(1.0 + t62*t62);

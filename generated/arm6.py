@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc1093253
+STAMP = 0x4e5a6946
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -744,7 +744,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t78 = np.where(t60, v[..., 1], v[..., 0])
     t79 = t57 + t59
     t80 = t61*t75
-    t81 = t80 + t76*(t79 + t76)
+    t81 = t76*(t79 + t76) + t80
     t82 = t81 > RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76))
     t83 = t77 + t78*t62
     t84 = np.where(t82, 1.0/t81, 1.0)
@@ -851,7 +851,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t133 = t112*t115 - t113*t113
     t134 = t112*t128 + t113*t129 + t114*t130
     t135 = t128 + t131 + t133
-    t136 = t134 > RANK_TOL*t135*t120
+    t136 = t134 > t135*t120*RANK_TOL
     t137 = t120*t120
     t138 = t135 > RANK_TOL*t137
     t139 = np.where(t134 > 0.0, 1.0/t134, 1.0)
@@ -948,7 +948,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t76 = lambda_*lambda_
     t79 = t57 + t59
     t80 = t61*t75
-    t81 = t80 + t76*(t79 + t76)
+    t81 = t76*(t79 + t76) + t80
     t82 = t81 > RANK_TOL*((t79 + 2.0*t76)*(t79 + 2.0*t76))
     t84 = np.where(t82, 1.0/t81, 1.0)
     t85 = t76 + t61*(1.0 + t62*t62)

@@ -14,7 +14,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x99632b11UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x827c3541UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -122,7 +122,7 @@ static void diffdrive_body_rates_finish(const double wheels[2], double track, do
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     const double t1 = 1.0/track;
-    const double t2 = t1*wheels[1] - t1*wheels[0];
+    const double t2 = wheels[1]*t1 - wheels[0]*t1;
     rates[0] = t0;
     rates[1] = t2;
 }
@@ -145,7 +145,7 @@ static DIFFDRIVE_VECTORIZE void diffdrive_body_rates_block(const double *restric
         wheels[1] = wheels_T[32 + b];
         const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
         const double t1 = 1.0/track;
-        const double t2 = t1*wheels[1] - t1*wheels[0];
+        const double t2 = wheels[1]*t1 - wheels[0]*t1;
         rates[0] = t0;
         rates[1] = t2;
         rates_T[0 + b] = rates[0];
@@ -199,8 +199,8 @@ void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, do
 
 static void diffdrive_wheel_speeds_finish(const double rates[2], double track, double *restrict wheels)
 {
-    wheels[0] = rates[0] - 0.5*track*rates[1];
-    wheels[1] = rates[0] + 0.5*track*rates[1];
+    wheels[0] = rates[0] - 0.5*rates[1]*track;
+    wheels[1] = rates[0] + 0.5*rates[1]*track;
 }
 
 void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2])
@@ -219,8 +219,8 @@ static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restr
         double wheels[2];
         rates[0] = rates_T[0 + b];
         rates[1] = rates_T[32 + b];
-        wheels[0] = rates[0] - 0.5*track*rates[1];
-        wheels[1] = rates[0] + 0.5*track*rates[1];
+        wheels[0] = rates[0] - 0.5*rates[1]*track;
+        wheels[1] = rates[0] + 0.5*rates[1]*track;
         wheels_T[0 + b] = wheels[0];
         wheels_T[32 + b] = wheels[1];
     }
@@ -279,8 +279,8 @@ static void diffdrive_pose_rate_finish(const double wheels[2], double track, con
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     const double t1 = 1.0/track;
-    const double t2 = t1*wheels[1] - t1*wheels[0];
-    dpose[0] = cs[0]*t0;
+    const double t2 = wheels[1]*t1 - wheels[0]*t1;
+    dpose[0] = t0*cs[0];
     dpose[1] = t0*sn[0];
     dpose[2] = t2;
 }
@@ -325,8 +325,8 @@ static DIFFDRIVE_VECTORIZE void diffdrive_pose_rate_block(const double *restrict
         sn[0] = sn_T[0 + b];
         const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
         const double t1 = 1.0/track;
-        const double t2 = t1*wheels[1] - t1*wheels[0];
-        dpose[0] = cs[0]*t0;
+        const double t2 = wheels[1]*t1 - wheels[0]*t1;
+        dpose[0] = t0*cs[0];
         dpose[1] = t0*sn[0];
         dpose[2] = t2;
         dpose_T[0 + b] = dpose[0];
