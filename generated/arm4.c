@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xbc763714UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc03b5e48UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_VECTORIZE
 #define ARM4_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM4_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM4_VECTOR_MATH
+#define ARM4_BODY static inline __attribute__((__always_inline__))
+#define ARM4_STRIDE stride
+#else
+#define ARM4_BODY static
+#define ARM4_STRIDE 1
 #endif
 #if !ARM4_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *rest
 }
 #endif
 
-#if !ARM4_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,24 +152,26 @@ static int arm4_finite(double x)
 /* ---- arm4_position: endpoint position p (2) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 2 neg */
 
-static void arm4_position_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_position_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
@@ -168,72 +180,30 @@ static void arm4_position_finish(const double l[4], const double *restrict cs, c
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
     p[0] = t17;
-    p[1] = -t16;
+    p[1*ARM4_STRIDE] = -t16;
 }
 
 void arm4_position(const double q[4], const double l[4], double p[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_position_angles(q, ang);
+    arm4_position_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_position_finish(l, cs, sn, p);
+    arm4_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_position_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        p[0] = t17;
-        p[1] = -t16;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm4_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -281,11 +251,11 @@ void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_position_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_position_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+            arm4_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2, 1);
         }
     }
 }
@@ -294,24 +264,26 @@ void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm4_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 1 neg */
 
-static void arm4_jacobian_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_jacobian_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
@@ -320,90 +292,36 @@ static void arm4_jacobian_finish(const double l[4], const double *restrict cs, c
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
     J[0] = t16;
-    J[1] = t14;
-    J[2] = t12;
-    J[3] = t11;
-    J[4] = t17;
-    J[5] = t15;
-    J[6] = t13;
-    J[7] = t6;
+    J[1*ARM4_STRIDE] = t14;
+    J[2*ARM4_STRIDE] = t12;
+    J[3*ARM4_STRIDE] = t11;
+    J[4*ARM4_STRIDE] = t17;
+    J[5*ARM4_STRIDE] = t15;
+    J[6*ARM4_STRIDE] = t13;
+    J[7*ARM4_STRIDE] = t6;
 }
 
 void arm4_jacobian(const double q[4], const double l[4], double J[8])
 {
     double ang[4], cs[4], sn[4];
-    arm4_jacobian_angles(q, ang);
+    arm4_jacobian_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_jacobian_finish(l, cs, sn, J);
+    arm4_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double J[8];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        J[0] = t16;
-        J[1] = t14;
-        J[2] = t12;
-        J[3] = t11;
-        J[4] = t17;
-        J[5] = t15;
-        J[6] = t13;
-        J[7] = t6;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
+        arm4_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -457,11 +375,11 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 8);
+            arm4_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 8, 1);
         }
     }
 }
@@ -470,27 +388,29 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm4_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 2 neg */
 
-static void arm4_coriolis_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_coriolis_finish(const double dq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -508,107 +428,36 @@ static void arm4_coriolis_finish(const double dq[4], const double l[4], const do
     const double t35 = t33 - t21;
     const double t36 = t34 - t25;
     H[0] = t35;
-    H[1] = t33;
-    H[2] = t31;
-    H[3] = t29;
-    H[4] = t36;
-    H[5] = t34;
-    H[6] = t32;
-    H[7] = t30;
+    H[1*ARM4_STRIDE] = t33;
+    H[2*ARM4_STRIDE] = t31;
+    H[3*ARM4_STRIDE] = t29;
+    H[4*ARM4_STRIDE] = t36;
+    H[5*ARM4_STRIDE] = t34;
+    H[6*ARM4_STRIDE] = t32;
+    H[7*ARM4_STRIDE] = t30;
 }
 
 void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
 {
     double ang[4], cs[4], sn[4];
-    arm4_coriolis_angles(q, ang);
+    arm4_coriolis_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_coriolis_finish(dq, l, cs, sn, H);
+    arm4_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double cs[4];
-        double sn[4];
-        double H[8];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        H[0] = t35;
-        H[1] = t33;
-        H[2] = t31;
-        H[3] = t29;
-        H[4] = t36;
-        H[5] = t34;
-        H[6] = t32;
-        H[7] = t30;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
+        arm4_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -671,11 +520,11 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, H + (i + b) * 8);
+            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, H + (i + b) * 8, 1);
         }
     }
 }
@@ -684,27 +533,29 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm4_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 3 neg */
 
-static void arm4_velocity_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_velocity_finish(const double dq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -722,89 +573,30 @@ static void arm4_velocity_finish(const double dq[4], const double l[4], const do
     const double t35 = t33 - t21;
     const double t36 = t34 - t25;
     v[0] = t36;
-    v[1] = -t35;
+    v[1*ARM4_STRIDE] = -t35;
 }
 
 void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_velocity_angles(q, ang);
+    arm4_velocity_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_velocity_finish(dq, l, cs, sn, v);
+    arm4_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double cs[4];
-        double sn[4];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        v[0] = t36;
-        v[1] = -t35;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm4_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -861,11 +653,11 @@ void arm4_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_velocity_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_velocity_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, v + (i + b) * 2, 1);
         }
     }
 }
@@ -874,24 +666,26 @@ void arm4_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm4_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 3 neg */
 
-static void arm4_acceleration_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_acceleration_finish(const double dq[4], const double ddq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
@@ -899,9 +693,9 @@ static void arm4_acceleration_finish(const double dq[4], const double ddq[4], co
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -918,102 +712,31 @@ static void arm4_acceleration_finish(const double dq[4], const double ddq[4], co
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
     const double t36 = t34 - t25;
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_acceleration_angles(q, ang);
+    arm4_acceleration_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm4_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double ddq[4];
-        double cs[4];
-        double sn[4];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm4_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -1079,11 +802,11 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1092,24 +815,26 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm4_kinematics: p, J, H, v and a at once ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 5 neg */
 
-static void arm4_kinematics_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_kinematics_finish(const double dq[4], const double ddq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
@@ -1117,9 +842,9 @@ static void arm4_kinematics_finish(const double dq[4], const double ddq[4], cons
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -1137,165 +862,50 @@ static void arm4_kinematics_finish(const double dq[4], const double ddq[4], cons
     const double t35 = t33 - t21;
     const double t36 = t34 - t25;
     p[0] = t17;
-    p[1] = -t16;
+    p[1*ARM4_STRIDE] = -t16;
     J[0] = t16;
-    J[1] = t14;
-    J[2] = t12;
-    J[3] = t11;
-    J[4] = t17;
-    J[5] = t15;
-    J[6] = t13;
-    J[7] = t6;
+    J[1*ARM4_STRIDE] = t14;
+    J[2*ARM4_STRIDE] = t12;
+    J[3*ARM4_STRIDE] = t11;
+    J[4*ARM4_STRIDE] = t17;
+    J[5*ARM4_STRIDE] = t15;
+    J[6*ARM4_STRIDE] = t13;
+    J[7*ARM4_STRIDE] = t6;
     H[0] = t35;
-    H[1] = t33;
-    H[2] = t31;
-    H[3] = t29;
-    H[4] = t36;
-    H[5] = t34;
-    H[6] = t32;
-    H[7] = t30;
+    H[1*ARM4_STRIDE] = t33;
+    H[2*ARM4_STRIDE] = t31;
+    H[3*ARM4_STRIDE] = t29;
+    H[4*ARM4_STRIDE] = t36;
+    H[5*ARM4_STRIDE] = t34;
+    H[6*ARM4_STRIDE] = t32;
+    H[7*ARM4_STRIDE] = t30;
     v[0] = t36;
-    v[1] = -t35;
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+    v[1*ARM4_STRIDE] = -t35;
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_kinematics_angles(q, ang);
+    arm4_kinematics_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double ddq[4];
-        double cs[4];
-        double sn[4];
-        double p[2];
-        double J[8];
-        double H[8];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        p[0] = t17;
-        p[1] = -t16;
-        J[0] = t16;
-        J[1] = t14;
-        J[2] = t12;
-        J[3] = t11;
-        J[4] = t17;
-        J[5] = t15;
-        J[6] = t13;
-        J[7] = t6;
-        H[0] = t35;
-        H[1] = t33;
-        H[2] = t31;
-        H[3] = t29;
-        H[4] = t36;
-        H[5] = t34;
-        H[6] = t32;
-        H[7] = t30;
-        v[0] = t36;
-        v[1] = -t35;
-        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm4_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1389,11 +999,11 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2);
+            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1454,110 +1064,6 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1])
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T, const double l[4], double *restrict w_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t56 = t41*t51;
-        w[0] = sqrt(t56);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[128];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-            }
-        }
-        arm4_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1577,7 +1083,6 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 40 add/sub, 55 mul, 1 neg, 3 div */
@@ -1653,145 +1158,6 @@ void arm4_inverse_velocity(const double q[4], const double v[2], const double l[
     arm4_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[4], double lambda, double *restrict dq_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[4];
-        double sn[4];
-        double dq[4];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t53 = (t40 ? v[0] : v[1]);
-        const double t54 = (t40 ? v[1] : v[0]);
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t52*(t55 + t52) + t56;
-        const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-        const double t59 = t53 + t54*t42;
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
-        const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
-        const double t65 = t63*t43 + t64*t47;
-        const double t66 = t63*t44 + t64*t48;
-        const double t67 = t63*t45 + t64*t49;
-        const double t68 = t63*t46 + t64*t50;
-        dq[0] = t65;
-        dq[1] = t66;
-        dq[2] = t67;
-        dq[3] = t68;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-    }
-}
-
-void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[128];
-    double v_T[64];
-    double dq_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm4_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 4;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -1811,7 +1177,6 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 102 mul, 1 neg, 4 div */
@@ -1901,161 +1266,6 @@ void arm4_inverse_velocity3(const double q[4], const double twist[3], const doub
     arm4_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[4], double lambda, double *restrict dq3_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double twist[3];
-        double cs[4];
-        double sn[4];
-        double dq3[4];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const double t52 = lambda*lambda;
-        const double t80 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-        const double t81 = t80*t80;
-        const double t82 = t16 + t14 + t12 + t11;
-        const double t83 = t6 + t17 + t15 + t13;
-        const double t84 = t81*(t37 + t52);
-        const double t85 = t38*t81;
-        const double t86 = t82*t80;
-        const double t87 = t81*(t39 + t52);
-        const double t88 = t83*t80;
-        const double t89 = 4.0 + t52;
-        const double t90 = t80*twist[0];
-        const double t91 = t80*twist[1];
-        const double t92 = t84 + t87 + t89;
-        const double t93 = t84*t90 + t85*t91 + t86*twist[2];
-        const double t94 = t85*t90 + t87*t91 + t88*twist[2];
-        const double t95 = t86*t90 + t88*t91 + t89*twist[2];
-        const double t96 = (t92 > 0.0 ? 1.0/(t92*t92 != 0.0 ? t92*t92 : 1.0) : 1.0);
-        const double t97 = t93*t96;
-        const double t98 = t94*t96;
-        const double t99 = t95*t96;
-        const double t100 = t87*t89 - t88*t88;
-        const double t101 = t86*t88 - t85*t89;
-        const double t102 = t85*t88 - t86*t87;
-        const double t103 = t84*t89 - t86*t86;
-        const double t104 = t85*t86 - t84*t88;
-        const double t105 = t84*t87 - t85*t85;
-        const double t106 = t84*t100 + t85*t101 + t86*t102;
-        const double t107 = t100 + t103 + t105;
-        const int t108 = t106 > t107*t92*ARM4_RANK_TOL;
-        const double t109 = t92*t92;
-        const int t110 = t107 > ARM4_RANK_TOL*t109;
-        const double t111 = (t106 > 0.0 ? 1.0/(t106 != 0.0 ? t106 : 1.0) : 1.0);
-        const double t112 = t84*t93 + t85*t94 + t86*t95;
-        const double t113 = t85*t93 + t87*t94 + t88*t95;
-        const double t114 = t86*t93 + t88*t94 + t89*t95;
-        const double t115 = (t107 > 0.0 ? 1.0/(t107*t107 != 0.0 ? t107*t107 : 1.0) : 1.0);
-        const double t116 = t109 - t107;
-        const double t117 = (t110 ? (t108 ? t111*(t100*t90 + t101*t91 + t102*twist[2]) : t115*(t93*t116 - t112*t92)) : t97);
-        const double t118 = (t110 ? (t108 ? t111*(t101*t90 + t103*t91 + t104*twist[2]) : t115*(t94*t116 - t113*t92)) : t98);
-        const double t119 = (t110 ? (t108 ? t111*(t102*t90 + t104*t91 + t105*twist[2]) : t115*(t95*t116 - t114*t92)) : t99);
-        const double t120 = t80*t117;
-        const double t121 = t80*t118;
-        dq3[0] = t119 + t120*t16 + t121*t17;
-        dq3[1] = t119 + t120*t14 + t121*t15;
-        dq3[2] = t119 + t120*t12 + t121*t13;
-        dq3[3] = t119 + t6*t121 + t120*t11;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-        dq3_T[96 + b] = dq3[3];
-    }
-}
-
-void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
-{
-    double q_T[128];
-    double twist_T[96];
-    double dq3_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm4_inverse_velocity3_block(q_T, twist_T, l, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            double *dq3_b = dq3 + (i + b) * 4;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-            dq3_b[3] = dq3_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
 {
     size_t i;
@@ -2075,7 +1285,6 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
-#endif
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 46 add/sub, 55 mul, 1 neg, 3 div */
@@ -2153,152 +1362,6 @@ void arm4_ik_step(const double q[4], const double target[2], const double l[4], 
     arm4_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[4], double lambda, double *restrict q_next_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double target[2];
-        double cs[4];
-        double sn[4];
-        double q_next[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const double t52 = lambda*lambda;
-        const double t55 = t37 + t39;
-        const double t56 = t41*t51;
-        const double t57 = t52*(t55 + t52) + t56;
-        const int t58 = t57 > ARM4_RANK_TOL*((t55 + 2.0*t52)*(t55 + 2.0*t52));
-        const double t60 = (t58 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-        const double t61 = t52 + t41*(1.0 + t42*t42);
-        const double t62 = (t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t69 = target[0] - t17;
-        const double t70 = t16 + target[1];
-        const double t71 = (t40 ? t69 : t70);
-        const double t72 = (t40 ? t70 : t69);
-        const double t73 = t71 + t72*t42;
-        const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
-        const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
-        const double t76 = t74*t43 + t75*t47;
-        const double t77 = t74*t44 + t75*t48;
-        const double t78 = t74*t45 + t75*t49;
-        const double t79 = t74*t46 + t75*t50;
-        q_next[0] = t76 + q[0];
-        q_next[1] = t77 + q[1];
-        q_next[2] = t78 + q[2];
-        q_next[3] = t79 + q[3];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-        q_next_T[96 + b] = q_next[3];
-    }
-}
-
-void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[128];
-    double target_T[64];
-    double q_next_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm4_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 4;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-            q_next_b[3] = q_next_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -2318,7 +1381,6 @@ void arm4_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm4_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm4_ik_error(const double trial[4], const double target[2], const double l[4], double error[1])

@@ -30,7 +30,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xae82f320UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xebe68b56UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -47,6 +47,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define UR5_VECTORIZE
 #define UR5_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*UR5_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if UR5_VECTOR_MATH
+#define UR5_BODY static inline __attribute__((__always_inline__))
+#define UR5_STRIDE stride
+#else
+#define UR5_BODY static
+#define UR5_STRIDE 1
 #endif
 #if !UR5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -78,32 +90,6 @@ static UR5_VECTORIZE void ur5_trig8(const double *restrict ang, double *restrict
     }
 #endif
 }
-
-#if UR5_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 80 with vector math, else for k < used. */
-static UR5_VECTORIZE void ur5_trig80(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
-{
-    int k;
-#if UR5_VECTOR_MATH
-    (void)used; /* whole vectors: the padding lanes cost nothing */
-    for (k = 0; k < 80; ++k) {
-        cs[k] = cos(ang[k]);
-    }
-    for (k = 0; k < 80; ++k) {
-        sn[k] = sin(ang[k]);
-    }
-#elif UR5_SINCOS
-    for (k = 0; k < used; ++k) {
-        sincos(ang[k], &sn[k], &cs[k]);
-    }
-#else
-    for (k = 0; k < used; ++k) {
-        cs[k] = cos(ang[k]);
-        sn[k] = sin(ang[k]);
-    }
-#endif
-}
-#endif
 
 #if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
@@ -183,7 +169,6 @@ static UR5_VECTORIZE void ur5_trig192(const double *restrict ang, double *restri
 }
 #endif
 
-#if !UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -207,7 +192,6 @@ static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restri
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -226,64 +210,66 @@ static int ur5_finite(double x)
 /* ---- ur5_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 6 sin, 6 cos, 24 add/sub, 44 mul, 6 neg */
 
-static void ur5_pose_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_pose_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_pose_finish(const double *restrict cs, const double *restrict sn, double *restrict T)
+UR5_BODY void ur5_pose_finish(const double *restrict cs, const double *restrict sn, double *restrict T, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t17 = t10*cs[4] + sn[0]*sn[4];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t19 = t12*cs[4] - cs[0]*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t21 = cs[4]*sn[3];
-    const double t22 = -sn[3]*sn[4];
-    const double t23 = t11*sn[5] + t17*cs[5];
-    const double t24 = t11*cs[5] - t17*sn[5];
-    const double t25 = t13*sn[5] + t19*cs[5];
-    const double t26 = t13*cs[5] - t19*sn[5];
-    const double t27 = t21*cs[5] + cs[3]*sn[5];
-    const double t28 = cs[3]*cs[5] - t21*sn[5];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t17 = t10*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t19 = t12*cs[4*UR5_STRIDE] - cs[0]*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t21 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t23 = t11*sn[5*UR5_STRIDE] + t17*cs[5*UR5_STRIDE];
+    const double t24 = t11*cs[5*UR5_STRIDE] - t17*sn[5*UR5_STRIDE];
+    const double t25 = t13*sn[5*UR5_STRIDE] + t19*cs[5*UR5_STRIDE];
+    const double t26 = t13*cs[5*UR5_STRIDE] - t19*sn[5*UR5_STRIDE];
+    const double t27 = t21*cs[5*UR5_STRIDE] + cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t28 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE] - t21*sn[5*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
     T[0] = t23;
-    T[1] = t24;
-    T[2] = t18;
-    T[3] = t29;
-    T[4] = t25;
-    T[5] = t26;
-    T[6] = t20;
-    T[7] = t30;
-    T[8] = t27;
-    T[9] = t28;
-    T[10] = t22;
-    T[11] = t31;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
+    T[1*UR5_STRIDE] = t24;
+    T[2*UR5_STRIDE] = t18;
+    T[3*UR5_STRIDE] = t29;
+    T[4*UR5_STRIDE] = t25;
+    T[5*UR5_STRIDE] = t26;
+    T[6*UR5_STRIDE] = t20;
+    T[7*UR5_STRIDE] = t30;
+    T[8*UR5_STRIDE] = t27;
+    T[9*UR5_STRIDE] = t28;
+    T[10*UR5_STRIDE] = t22;
+    T[11*UR5_STRIDE] = t31;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
 }
 
 void ur5_pose(const double q[6], double T[16])
@@ -293,119 +279,24 @@ void ur5_pose(const double q[6], double T[16])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_pose_angles(q, ang);
+    ur5_pose_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_pose_finish(cs, sn, T);
+    ur5_pose_finish(cs, sn, T, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_pose_block(const double *restrict q_T, double *restrict T_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_pose_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double T[16];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t17 = t10*cs[4] + sn[0]*sn[4];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t19 = t12*cs[4] - cs[0]*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t21 = cs[4]*sn[3];
-        const double t22 = -sn[3]*sn[4];
-        const double t23 = t11*sn[5] + t17*cs[5];
-        const double t24 = t11*cs[5] - t17*sn[5];
-        const double t25 = t13*sn[5] + t19*cs[5];
-        const double t26 = t13*cs[5] - t19*sn[5];
-        const double t27 = t21*cs[5] + cs[3]*sn[5];
-        const double t28 = cs[3]*cs[5] - t21*sn[5];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        T[0] = t23;
-        T[1] = t24;
-        T[2] = t18;
-        T[3] = t29;
-        T[4] = t25;
-        T[5] = t26;
-        T[6] = t20;
-        T[7] = t30;
-        T[8] = t27;
-        T[9] = t28;
-        T[10] = t22;
-        T[11] = t31;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        T_T[0 + b] = T[0];
-        T_T[32 + b] = T[1];
-        T_T[64 + b] = T[2];
-        T_T[96 + b] = T[3];
-        T_T[128 + b] = T[4];
-        T_T[160 + b] = T[5];
-        T_T[192 + b] = T[6];
-        T_T[224 + b] = T[7];
-        T_T[256 + b] = T[8];
-        T_T[288 + b] = T[9];
-        T_T[320 + b] = T[10];
-        T_T[352 + b] = T[11];
-        T_T[384 + b] = T[12];
-        T_T[416 + b] = T[13];
-        T_T[448 + b] = T[14];
-        T_T[480 + b] = T[15];
+        ur5_pose_finish(cs_T + b, sn_T + b, T_T + b, 32);
     }
 }
 
@@ -469,11 +360,11 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_pose_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_pose_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16);
+            ur5_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, 1);
         }
     }
 }
@@ -482,35 +373,37 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
 /* ---- ur5_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
 /* operations: 5 sin, 5 cos, 37 add/sub, 51 mul, 17 neg */
 
-static void ur5_jacobian_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_jacobian_finish(const double *restrict cs, const double *restrict sn, double *restrict J)
+UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t22 = -sn[3]*sn[4];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -532,8 +425,8 @@ static void ur5_jacobian_finish(const double *restrict cs, const double *restric
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -544,44 +437,44 @@ static void ur5_jacobian_finish(const double *restrict cs, const double *restric
     const double t199 = -t11;
     const double t251 = -cs[0];
     const double t255 = -t13;
-    const double t325 = -cs[3];
+    const double t325 = -cs[3*UR5_STRIDE];
     const double t1416 = -t30;
     J[0] = t1416;
-    J[1] = t33;
-    J[2] = t39;
-    J[3] = t45;
-    J[4] = t50;
-    J[5] = t56;
-    J[6] = t29;
-    J[7] = t34;
-    J[8] = t40;
-    J[9] = t46;
-    J[10] = t51;
-    J[11] = t57;
-    J[12] = 0.0;
-    J[13] = t35;
-    J[14] = t41;
-    J[15] = t47;
-    J[16] = t52;
-    J[17] = t58;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t199;
-    J[23] = t18;
-    J[24] = 0.0;
-    J[25] = t251;
-    J[26] = t251;
-    J[27] = t251;
-    J[28] = t255;
-    J[29] = t20;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t325;
-    J[35] = t22;
+    J[1*UR5_STRIDE] = t33;
+    J[2*UR5_STRIDE] = t39;
+    J[3*UR5_STRIDE] = t45;
+    J[4*UR5_STRIDE] = t50;
+    J[5*UR5_STRIDE] = t56;
+    J[6*UR5_STRIDE] = t29;
+    J[7*UR5_STRIDE] = t34;
+    J[8*UR5_STRIDE] = t40;
+    J[9*UR5_STRIDE] = t46;
+    J[10*UR5_STRIDE] = t51;
+    J[11*UR5_STRIDE] = t57;
+    J[12*UR5_STRIDE] = 0.0;
+    J[13*UR5_STRIDE] = t35;
+    J[14*UR5_STRIDE] = t41;
+    J[15*UR5_STRIDE] = t47;
+    J[16*UR5_STRIDE] = t52;
+    J[17*UR5_STRIDE] = t58;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[22*UR5_STRIDE] = t199;
+    J[23*UR5_STRIDE] = t18;
+    J[24*UR5_STRIDE] = 0.0;
+    J[25*UR5_STRIDE] = t251;
+    J[26*UR5_STRIDE] = t251;
+    J[27*UR5_STRIDE] = t251;
+    J[28*UR5_STRIDE] = t255;
+    J[29*UR5_STRIDE] = t20;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    J[34*UR5_STRIDE] = t325;
+    J[35*UR5_STRIDE] = t22;
 }
 
 void ur5_jacobian(const double q[6], double J[36])
@@ -591,178 +484,24 @@ void ur5_jacobian(const double q[6], double J[36])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_angles(q, ang);
+    ur5_jacobian_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_jacobian_finish(cs, sn, J);
+    ur5_jacobian_finish(cs, sn, J, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_block(const double *restrict q_T, double *restrict J_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double J[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t199 = -t11;
-        const double t251 = -cs[0];
-        const double t255 = -t13;
-        const double t325 = -cs[3];
-        const double t1416 = -t30;
-        J[0] = t1416;
-        J[1] = t33;
-        J[2] = t39;
-        J[3] = t45;
-        J[4] = t50;
-        J[5] = t56;
-        J[6] = t29;
-        J[7] = t34;
-        J[8] = t40;
-        J[9] = t46;
-        J[10] = t51;
-        J[11] = t57;
-        J[12] = 0.0;
-        J[13] = t35;
-        J[14] = t41;
-        J[15] = t47;
-        J[16] = t52;
-        J[17] = t58;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t199;
-        J[23] = t18;
-        J[24] = 0.0;
-        J[25] = t251;
-        J[26] = t251;
-        J[27] = t251;
-        J[28] = t255;
-        J[29] = t20;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t325;
-        J[35] = t22;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
-        J_T[384 + b] = J[12];
-        J_T[416 + b] = J[13];
-        J_T[448 + b] = J[14];
-        J_T[480 + b] = J[15];
-        J_T[512 + b] = J[16];
-        J_T[544 + b] = J[17];
-        J_T[576 + b] = J[18];
-        J_T[608 + b] = J[19];
-        J_T[640 + b] = J[20];
-        J_T[672 + b] = J[21];
-        J_T[704 + b] = J[22];
-        J_T[736 + b] = J[23];
-        J_T[768 + b] = J[24];
-        J_T[800 + b] = J[25];
-        J_T[832 + b] = J[26];
-        J_T[864 + b] = J[27];
-        J_T[896 + b] = J[28];
-        J_T[928 + b] = J[29];
-        J_T[960 + b] = J[30];
-        J_T[992 + b] = J[31];
-        J_T[1024 + b] = J[32];
-        J_T[1056 + b] = J[33];
-        J_T[1088 + b] = J[34];
-        J_T[1120 + b] = J[35];
+        ur5_jacobian_finish(cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -846,11 +585,11 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 36);
+            ur5_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 36, 1);
         }
     }
 }
@@ -859,45 +598,47 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 93 add/sub, 143 mul, 15 neg */
 
-static void ur5_jacobian_tool_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_tool_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_jacobian_tool_finish(const double *restrict cs, const double *restrict sn, double *restrict J_tool)
+UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *restrict sn, double *restrict J_tool, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t17 = t10*cs[4] + sn[0]*sn[4];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t19 = t12*cs[4] - cs[0]*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t21 = cs[4]*sn[3];
-    const double t22 = -sn[3]*sn[4];
-    const double t23 = t11*sn[5] + t17*cs[5];
-    const double t24 = t11*cs[5] - t17*sn[5];
-    const double t25 = t13*sn[5] + t19*cs[5];
-    const double t26 = t13*cs[5] - t19*sn[5];
-    const double t27 = t21*cs[5] + cs[3]*sn[5];
-    const double t28 = cs[3]*cs[5] - t21*sn[5];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t17 = t10*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t19 = t12*cs[4*UR5_STRIDE] - cs[0]*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t21 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t23 = t11*sn[5*UR5_STRIDE] + t17*cs[5*UR5_STRIDE];
+    const double t24 = t11*cs[5*UR5_STRIDE] - t17*sn[5*UR5_STRIDE];
+    const double t25 = t13*sn[5*UR5_STRIDE] + t19*cs[5*UR5_STRIDE];
+    const double t26 = t13*cs[5*UR5_STRIDE] - t19*sn[5*UR5_STRIDE];
+    const double t27 = t21*cs[5*UR5_STRIDE] + cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t28 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE] - t21*sn[5*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -919,8 +660,8 @@ static void ur5_jacobian_tool_finish(const double *restrict cs, const double *re
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -935,41 +676,41 @@ static void ur5_jacobian_tool_finish(const double *restrict cs, const double *re
     const double t1418 = t24*sn[0] - t26*cs[0];
     const double t1419 = t18*sn[0] - t20*cs[0];
     J_tool[0] = t25*t29 - t23*t30;
-    J_tool[1] = t33*t23 + t34*t25 + t35*t27;
-    J_tool[2] = t39*t23 + t40*t25 + t41*t27;
-    J_tool[3] = t45*t23 + t46*t25 + t47*t27;
-    J_tool[4] = t50*t23 + t51*t25 + t52*t27;
-    J_tool[5] = t56*t23 + t57*t25 + t58*t27;
-    J_tool[6] = t26*t29 - t24*t30;
-    J_tool[7] = t33*t24 + t34*t26 + t35*t28;
-    J_tool[8] = t39*t24 + t40*t26 + t41*t28;
-    J_tool[9] = t45*t24 + t46*t26 + t47*t28;
-    J_tool[10] = t50*t24 + t51*t26 + t52*t28;
-    J_tool[11] = t56*t24 + t57*t26 + t58*t28;
-    J_tool[12] = t20*t29 - t18*t30;
-    J_tool[13] = t33*t18 + t34*t20 + t35*t22;
-    J_tool[14] = t39*t18 + t40*t20 + t41*t22;
-    J_tool[15] = t45*t18 + t46*t20 + t47*t22;
-    J_tool[16] = t50*t18 + t51*t20 + t52*t22;
-    J_tool[17] = t56*t18 + t57*t20 + t58*t22;
-    J_tool[18] = t27;
-    J_tool[19] = t1417;
-    J_tool[20] = t1417;
-    J_tool[21] = t1417;
-    J_tool[22] = -t11*t23 - t13*t25 - t27*cs[3];
-    J_tool[23] = t18*t23 + t20*t25 + t22*t27;
-    J_tool[24] = t28;
-    J_tool[25] = t1418;
-    J_tool[26] = t1418;
-    J_tool[27] = t1418;
-    J_tool[28] = -t11*t24 - t13*t26 - t28*cs[3];
-    J_tool[29] = t18*t24 + t20*t26 + t22*t28;
-    J_tool[30] = t22;
-    J_tool[31] = t1419;
-    J_tool[32] = t1419;
-    J_tool[33] = t1419;
-    J_tool[34] = -t11*t18 - t13*t20 - t22*cs[3];
-    J_tool[35] = t538 + t539 + t540;
+    J_tool[1*UR5_STRIDE] = t33*t23 + t34*t25 + t35*t27;
+    J_tool[2*UR5_STRIDE] = t39*t23 + t40*t25 + t41*t27;
+    J_tool[3*UR5_STRIDE] = t45*t23 + t46*t25 + t47*t27;
+    J_tool[4*UR5_STRIDE] = t50*t23 + t51*t25 + t52*t27;
+    J_tool[5*UR5_STRIDE] = t56*t23 + t57*t25 + t58*t27;
+    J_tool[6*UR5_STRIDE] = t26*t29 - t24*t30;
+    J_tool[7*UR5_STRIDE] = t33*t24 + t34*t26 + t35*t28;
+    J_tool[8*UR5_STRIDE] = t39*t24 + t40*t26 + t41*t28;
+    J_tool[9*UR5_STRIDE] = t45*t24 + t46*t26 + t47*t28;
+    J_tool[10*UR5_STRIDE] = t50*t24 + t51*t26 + t52*t28;
+    J_tool[11*UR5_STRIDE] = t56*t24 + t57*t26 + t58*t28;
+    J_tool[12*UR5_STRIDE] = t20*t29 - t18*t30;
+    J_tool[13*UR5_STRIDE] = t33*t18 + t34*t20 + t35*t22;
+    J_tool[14*UR5_STRIDE] = t39*t18 + t40*t20 + t41*t22;
+    J_tool[15*UR5_STRIDE] = t45*t18 + t46*t20 + t47*t22;
+    J_tool[16*UR5_STRIDE] = t50*t18 + t51*t20 + t52*t22;
+    J_tool[17*UR5_STRIDE] = t56*t18 + t57*t20 + t58*t22;
+    J_tool[18*UR5_STRIDE] = t27;
+    J_tool[19*UR5_STRIDE] = t1417;
+    J_tool[20*UR5_STRIDE] = t1417;
+    J_tool[21*UR5_STRIDE] = t1417;
+    J_tool[22*UR5_STRIDE] = -t11*t23 - t13*t25 - t27*cs[3*UR5_STRIDE];
+    J_tool[23*UR5_STRIDE] = t18*t23 + t20*t25 + t22*t27;
+    J_tool[24*UR5_STRIDE] = t28;
+    J_tool[25*UR5_STRIDE] = t1418;
+    J_tool[26*UR5_STRIDE] = t1418;
+    J_tool[27*UR5_STRIDE] = t1418;
+    J_tool[28*UR5_STRIDE] = -t11*t24 - t13*t26 - t28*cs[3*UR5_STRIDE];
+    J_tool[29*UR5_STRIDE] = t18*t24 + t20*t26 + t22*t28;
+    J_tool[30*UR5_STRIDE] = t22;
+    J_tool[31*UR5_STRIDE] = t1419;
+    J_tool[32*UR5_STRIDE] = t1419;
+    J_tool[33*UR5_STRIDE] = t1419;
+    J_tool[34*UR5_STRIDE] = -t11*t18 - t13*t20 - t22*cs[3*UR5_STRIDE];
+    J_tool[35*UR5_STRIDE] = t538 + t539 + t540;
 }
 
 void ur5_jacobian_tool(const double q[6], double J_tool[36])
@@ -979,192 +720,24 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_tool_angles(q, ang);
+    ur5_jacobian_tool_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_jacobian_tool_finish(cs, sn, J_tool);
+    ur5_jacobian_tool_finish(cs, sn, J_tool, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_jacobian_tool_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double J_tool[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t17 = t10*cs[4] + sn[0]*sn[4];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t19 = t12*cs[4] - cs[0]*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t21 = cs[4]*sn[3];
-        const double t22 = -sn[3]*sn[4];
-        const double t23 = t11*sn[5] + t17*cs[5];
-        const double t24 = t11*cs[5] - t17*sn[5];
-        const double t25 = t13*sn[5] + t19*cs[5];
-        const double t26 = t13*cs[5] - t19*sn[5];
-        const double t27 = t21*cs[5] + cs[3]*sn[5];
-        const double t28 = cs[3]*cs[5] - t21*sn[5];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t538 = t18*t18;
-        const double t539 = t20*t20;
-        const double t540 = t22*t22;
-        const double t1417 = t23*sn[0] - t25*cs[0];
-        const double t1418 = t24*sn[0] - t26*cs[0];
-        const double t1419 = t18*sn[0] - t20*cs[0];
-        J_tool[0] = t25*t29 - t23*t30;
-        J_tool[1] = t33*t23 + t34*t25 + t35*t27;
-        J_tool[2] = t39*t23 + t40*t25 + t41*t27;
-        J_tool[3] = t45*t23 + t46*t25 + t47*t27;
-        J_tool[4] = t50*t23 + t51*t25 + t52*t27;
-        J_tool[5] = t56*t23 + t57*t25 + t58*t27;
-        J_tool[6] = t26*t29 - t24*t30;
-        J_tool[7] = t33*t24 + t34*t26 + t35*t28;
-        J_tool[8] = t39*t24 + t40*t26 + t41*t28;
-        J_tool[9] = t45*t24 + t46*t26 + t47*t28;
-        J_tool[10] = t50*t24 + t51*t26 + t52*t28;
-        J_tool[11] = t56*t24 + t57*t26 + t58*t28;
-        J_tool[12] = t20*t29 - t18*t30;
-        J_tool[13] = t33*t18 + t34*t20 + t35*t22;
-        J_tool[14] = t39*t18 + t40*t20 + t41*t22;
-        J_tool[15] = t45*t18 + t46*t20 + t47*t22;
-        J_tool[16] = t50*t18 + t51*t20 + t52*t22;
-        J_tool[17] = t56*t18 + t57*t20 + t58*t22;
-        J_tool[18] = t27;
-        J_tool[19] = t1417;
-        J_tool[20] = t1417;
-        J_tool[21] = t1417;
-        J_tool[22] = -t11*t23 - t13*t25 - t27*cs[3];
-        J_tool[23] = t18*t23 + t20*t25 + t22*t27;
-        J_tool[24] = t28;
-        J_tool[25] = t1418;
-        J_tool[26] = t1418;
-        J_tool[27] = t1418;
-        J_tool[28] = -t11*t24 - t13*t26 - t28*cs[3];
-        J_tool[29] = t18*t24 + t20*t26 + t22*t28;
-        J_tool[30] = t22;
-        J_tool[31] = t1419;
-        J_tool[32] = t1419;
-        J_tool[33] = t1419;
-        J_tool[34] = -t11*t18 - t13*t20 - t22*cs[3];
-        J_tool[35] = t538 + t539 + t540;
-        J_tool_T[0 + b] = J_tool[0];
-        J_tool_T[32 + b] = J_tool[1];
-        J_tool_T[64 + b] = J_tool[2];
-        J_tool_T[96 + b] = J_tool[3];
-        J_tool_T[128 + b] = J_tool[4];
-        J_tool_T[160 + b] = J_tool[5];
-        J_tool_T[192 + b] = J_tool[6];
-        J_tool_T[224 + b] = J_tool[7];
-        J_tool_T[256 + b] = J_tool[8];
-        J_tool_T[288 + b] = J_tool[9];
-        J_tool_T[320 + b] = J_tool[10];
-        J_tool_T[352 + b] = J_tool[11];
-        J_tool_T[384 + b] = J_tool[12];
-        J_tool_T[416 + b] = J_tool[13];
-        J_tool_T[448 + b] = J_tool[14];
-        J_tool_T[480 + b] = J_tool[15];
-        J_tool_T[512 + b] = J_tool[16];
-        J_tool_T[544 + b] = J_tool[17];
-        J_tool_T[576 + b] = J_tool[18];
-        J_tool_T[608 + b] = J_tool[19];
-        J_tool_T[640 + b] = J_tool[20];
-        J_tool_T[672 + b] = J_tool[21];
-        J_tool_T[704 + b] = J_tool[22];
-        J_tool_T[736 + b] = J_tool[23];
-        J_tool_T[768 + b] = J_tool[24];
-        J_tool_T[800 + b] = J_tool[25];
-        J_tool_T[832 + b] = J_tool[26];
-        J_tool_T[864 + b] = J_tool[27];
-        J_tool_T[896 + b] = J_tool[28];
-        J_tool_T[928 + b] = J_tool[29];
-        J_tool_T[960 + b] = J_tool[30];
-        J_tool_T[992 + b] = J_tool[31];
-        J_tool_T[1024 + b] = J_tool[32];
-        J_tool_T[1056 + b] = J_tool[33];
-        J_tool_T[1088 + b] = J_tool[34];
-        J_tool_T[1120 + b] = J_tool[35];
+        ur5_jacobian_tool_finish(cs_T + b, sn_T + b, J_tool_T + b, 32);
     }
 }
 
@@ -1248,11 +821,11 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_tool_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_tool_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 36);
+            ur5_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 36, 1);
         }
     }
 }
@@ -1261,35 +834,37 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 /* ---- ur5_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
 /* operations: 5 sin, 5 cos, 101 add/sub, 145 mul, 16 neg */
 
-static void ur5_jacobian_dot_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict cs, const double *restrict sn, double *restrict dJ)
+UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *restrict cs, const double *restrict sn, double *restrict dJ, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t22 = -sn[3]*sn[4];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -1311,8 +886,8 @@ static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict c
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -1320,32 +895,32 @@ static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict c
     const double t56 = t20*t55 - t22*t54;
     const double t57 = t22*t53 - t18*t55;
     const double t58 = t18*t54 - t20*t53;
-    const double t59 = sn[0]*dq[1];
-    const double t60 = -cs[0]*dq[1];
-    const double t61 = t59 + sn[0]*dq[2];
-    const double t62 = t60 - cs[0]*dq[2];
-    const double t63 = t61 + sn[0]*dq[3];
-    const double t64 = t62 - cs[0]*dq[3];
-    const double t65 = t63 - t11*dq[4];
-    const double t66 = t64 - t13*dq[4];
-    const double t67 = dq[0] - cs[3]*dq[4];
-    const double t68 = t65 + t18*dq[5];
-    const double t69 = t66 + t20*dq[5];
-    const double t70 = t67 + t22*dq[5];
-    const double t71 = t56*dq[5];
-    const double t72 = t57*dq[5];
-    const double t73 = t58*dq[5];
-    const double t74 = t71 + t50*dq[4];
-    const double t75 = t72 + t51*dq[4];
-    const double t76 = t73 + t52*dq[4];
-    const double t77 = t74 + t45*dq[3];
-    const double t78 = t75 + t46*dq[3];
-    const double t79 = t76 + t47*dq[3];
-    const double t80 = t77 + t39*dq[2];
-    const double t81 = t78 + t40*dq[2];
-    const double t82 = t79 + t41*dq[2];
-    const double t83 = t80 + t33*dq[1];
-    const double t84 = t81 + t34*dq[1];
+    const double t59 = sn[0]*dq[1*UR5_STRIDE];
+    const double t60 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t61 = t59 + sn[0]*dq[2*UR5_STRIDE];
+    const double t62 = t60 - cs[0]*dq[2*UR5_STRIDE];
+    const double t63 = t61 + sn[0]*dq[3*UR5_STRIDE];
+    const double t64 = t62 - cs[0]*dq[3*UR5_STRIDE];
+    const double t65 = t63 - t11*dq[4*UR5_STRIDE];
+    const double t66 = t64 - t13*dq[4*UR5_STRIDE];
+    const double t67 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t68 = t65 + t18*dq[5*UR5_STRIDE];
+    const double t69 = t66 + t20*dq[5*UR5_STRIDE];
+    const double t70 = t67 + t22*dq[5*UR5_STRIDE];
+    const double t71 = t56*dq[5*UR5_STRIDE];
+    const double t72 = t57*dq[5*UR5_STRIDE];
+    const double t73 = t58*dq[5*UR5_STRIDE];
+    const double t74 = t71 + t50*dq[4*UR5_STRIDE];
+    const double t75 = t72 + t51*dq[4*UR5_STRIDE];
+    const double t76 = t73 + t52*dq[4*UR5_STRIDE];
+    const double t77 = t74 + t45*dq[3*UR5_STRIDE];
+    const double t78 = t75 + t46*dq[3*UR5_STRIDE];
+    const double t79 = t76 + t47*dq[3*UR5_STRIDE];
+    const double t80 = t77 + t39*dq[2*UR5_STRIDE];
+    const double t81 = t78 + t40*dq[2*UR5_STRIDE];
+    const double t82 = t79 + t41*dq[2*UR5_STRIDE];
+    const double t83 = t80 + t33*dq[1*UR5_STRIDE];
+    const double t84 = t81 + t34*dq[1*UR5_STRIDE];
     const double t86 = t83 - t30*dq[0];
     const double t88 = -t84 - t29*dq[0];
     const double t89 = cs[0]*dq[0];
@@ -1361,11 +936,11 @@ static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict c
     const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
     const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
     const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-    const double t102 = t13*dq[0] - cs[3]*t64;
-    const double t103 = cs[3]*t63 - t11*dq[0];
+    const double t102 = t13*dq[0] - cs[3*UR5_STRIDE]*t64;
+    const double t103 = cs[3*UR5_STRIDE]*t63 - t11*dq[0];
     const double t104 = t11*t64 - t13*t63;
-    const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
+    const double t105 = t52*t66 + cs[3*UR5_STRIDE]*t72 - t51*t67 - t13*t73;
+    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3*UR5_STRIDE]*t71;
     const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
     const double t108 = t22*t66 - t20*t67;
     const double t109 = t18*t67 - t22*t65;
@@ -1374,41 +949,41 @@ static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict c
     const double t112 = t56*t70 - t58*t68;
     const double t113 = t57*t68 - t56*t69;
     dJ[0] = t88;
-    dJ[1] = t91;
-    dJ[2] = t95;
-    dJ[3] = t99;
-    dJ[4] = t105;
-    dJ[5] = t111;
-    dJ[6] = t86;
-    dJ[7] = t92;
-    dJ[8] = t96;
-    dJ[9] = t100;
-    dJ[10] = t106;
-    dJ[11] = t112;
-    dJ[12] = 0.0;
-    dJ[13] = t93;
-    dJ[14] = t97;
-    dJ[15] = t101;
-    dJ[16] = t107;
-    dJ[17] = t113;
-    dJ[18] = 0.0;
-    dJ[19] = t89;
-    dJ[20] = t89;
-    dJ[21] = t89;
-    dJ[22] = t102;
-    dJ[23] = t108;
-    dJ[24] = 0.0;
-    dJ[25] = t90;
-    dJ[26] = t90;
-    dJ[27] = t90;
-    dJ[28] = t103;
-    dJ[29] = t109;
-    dJ[30] = 0.0;
-    dJ[31] = 0.0;
-    dJ[32] = t94;
-    dJ[33] = t98;
-    dJ[34] = t104;
-    dJ[35] = t110;
+    dJ[1*UR5_STRIDE] = t91;
+    dJ[2*UR5_STRIDE] = t95;
+    dJ[3*UR5_STRIDE] = t99;
+    dJ[4*UR5_STRIDE] = t105;
+    dJ[5*UR5_STRIDE] = t111;
+    dJ[6*UR5_STRIDE] = t86;
+    dJ[7*UR5_STRIDE] = t92;
+    dJ[8*UR5_STRIDE] = t96;
+    dJ[9*UR5_STRIDE] = t100;
+    dJ[10*UR5_STRIDE] = t106;
+    dJ[11*UR5_STRIDE] = t112;
+    dJ[12*UR5_STRIDE] = 0.0;
+    dJ[13*UR5_STRIDE] = t93;
+    dJ[14*UR5_STRIDE] = t97;
+    dJ[15*UR5_STRIDE] = t101;
+    dJ[16*UR5_STRIDE] = t107;
+    dJ[17*UR5_STRIDE] = t113;
+    dJ[18*UR5_STRIDE] = 0.0;
+    dJ[19*UR5_STRIDE] = t89;
+    dJ[20*UR5_STRIDE] = t89;
+    dJ[21*UR5_STRIDE] = t89;
+    dJ[22*UR5_STRIDE] = t102;
+    dJ[23*UR5_STRIDE] = t108;
+    dJ[24*UR5_STRIDE] = 0.0;
+    dJ[25*UR5_STRIDE] = t90;
+    dJ[26*UR5_STRIDE] = t90;
+    dJ[27*UR5_STRIDE] = t90;
+    dJ[28*UR5_STRIDE] = t103;
+    dJ[29*UR5_STRIDE] = t109;
+    dJ[30*UR5_STRIDE] = 0.0;
+    dJ[31*UR5_STRIDE] = 0.0;
+    dJ[32*UR5_STRIDE] = t94;
+    dJ[33*UR5_STRIDE] = t98;
+    dJ[34*UR5_STRIDE] = t104;
+    dJ[35*UR5_STRIDE] = t110;
 }
 
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
@@ -1418,233 +993,24 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_dot_angles(q, ang);
+    ur5_jacobian_dot_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_jacobian_dot_finish(dq, cs, sn, dJ);
+    ur5_jacobian_dot_finish(dq, cs, sn, dJ, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_jacobian_dot_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[5];
-        double sn[5];
-        double dJ[36];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t59 = sn[0]*dq[1];
-        const double t60 = -cs[0]*dq[1];
-        const double t61 = t59 + sn[0]*dq[2];
-        const double t62 = t60 - cs[0]*dq[2];
-        const double t63 = t61 + sn[0]*dq[3];
-        const double t64 = t62 - cs[0]*dq[3];
-        const double t65 = t63 - t11*dq[4];
-        const double t66 = t64 - t13*dq[4];
-        const double t67 = dq[0] - cs[3]*dq[4];
-        const double t68 = t65 + t18*dq[5];
-        const double t69 = t66 + t20*dq[5];
-        const double t70 = t67 + t22*dq[5];
-        const double t71 = t56*dq[5];
-        const double t72 = t57*dq[5];
-        const double t73 = t58*dq[5];
-        const double t74 = t71 + t50*dq[4];
-        const double t75 = t72 + t51*dq[4];
-        const double t76 = t73 + t52*dq[4];
-        const double t77 = t74 + t45*dq[3];
-        const double t78 = t75 + t46*dq[3];
-        const double t79 = t76 + t47*dq[3];
-        const double t80 = t77 + t39*dq[2];
-        const double t81 = t78 + t40*dq[2];
-        const double t82 = t79 + t41*dq[2];
-        const double t83 = t80 + t33*dq[1];
-        const double t84 = t81 + t34*dq[1];
-        const double t86 = t83 - t30*dq[0];
-        const double t88 = -t84 - t29*dq[0];
-        const double t89 = cs[0]*dq[0];
-        const double t90 = sn[0]*dq[0];
-        const double t91 = t35*t60 - t34*dq[0] - cs[0]*t82;
-        const double t92 = t33*dq[0] - t35*t59 - sn[0]*t82;
-        const double t93 = t34*t59 + cs[0]*t80 + sn[0]*t81 - t33*t60;
-        const double t94 = -cs[0]*t59 - sn[0]*t60;
-        const double t95 = t41*t62 - t40*dq[0] - cs[0]*t79;
-        const double t96 = t39*dq[0] - t41*t61 - sn[0]*t79;
-        const double t97 = t40*t61 + cs[0]*t77 + sn[0]*t78 - t39*t62;
-        const double t98 = -cs[0]*t61 - sn[0]*t62;
-        const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
-        const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
-        const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-        const double t102 = t13*dq[0] - cs[3]*t64;
-        const double t103 = cs[3]*t63 - t11*dq[0];
-        const double t104 = t11*t64 - t13*t63;
-        const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-        const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
-        const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
-        const double t108 = t22*t66 - t20*t67;
-        const double t109 = t18*t67 - t22*t65;
-        const double t110 = t20*t65 - t18*t66;
-        const double t111 = t58*t69 - t57*t70;
-        const double t112 = t56*t70 - t58*t68;
-        const double t113 = t57*t68 - t56*t69;
-        dJ[0] = t88;
-        dJ[1] = t91;
-        dJ[2] = t95;
-        dJ[3] = t99;
-        dJ[4] = t105;
-        dJ[5] = t111;
-        dJ[6] = t86;
-        dJ[7] = t92;
-        dJ[8] = t96;
-        dJ[9] = t100;
-        dJ[10] = t106;
-        dJ[11] = t112;
-        dJ[12] = 0.0;
-        dJ[13] = t93;
-        dJ[14] = t97;
-        dJ[15] = t101;
-        dJ[16] = t107;
-        dJ[17] = t113;
-        dJ[18] = 0.0;
-        dJ[19] = t89;
-        dJ[20] = t89;
-        dJ[21] = t89;
-        dJ[22] = t102;
-        dJ[23] = t108;
-        dJ[24] = 0.0;
-        dJ[25] = t90;
-        dJ[26] = t90;
-        dJ[27] = t90;
-        dJ[28] = t103;
-        dJ[29] = t109;
-        dJ[30] = 0.0;
-        dJ[31] = 0.0;
-        dJ[32] = t94;
-        dJ[33] = t98;
-        dJ[34] = t104;
-        dJ[35] = t110;
-        dJ_T[0 + b] = dJ[0];
-        dJ_T[32 + b] = dJ[1];
-        dJ_T[64 + b] = dJ[2];
-        dJ_T[96 + b] = dJ[3];
-        dJ_T[128 + b] = dJ[4];
-        dJ_T[160 + b] = dJ[5];
-        dJ_T[192 + b] = dJ[6];
-        dJ_T[224 + b] = dJ[7];
-        dJ_T[256 + b] = dJ[8];
-        dJ_T[288 + b] = dJ[9];
-        dJ_T[320 + b] = dJ[10];
-        dJ_T[352 + b] = dJ[11];
-        dJ_T[384 + b] = dJ[12];
-        dJ_T[416 + b] = dJ[13];
-        dJ_T[448 + b] = dJ[14];
-        dJ_T[480 + b] = dJ[15];
-        dJ_T[512 + b] = dJ[16];
-        dJ_T[544 + b] = dJ[17];
-        dJ_T[576 + b] = dJ[18];
-        dJ_T[608 + b] = dJ[19];
-        dJ_T[640 + b] = dJ[20];
-        dJ_T[672 + b] = dJ[21];
-        dJ_T[704 + b] = dJ[22];
-        dJ_T[736 + b] = dJ[23];
-        dJ_T[768 + b] = dJ[24];
-        dJ_T[800 + b] = dJ[25];
-        dJ_T[832 + b] = dJ[26];
-        dJ_T[864 + b] = dJ[27];
-        dJ_T[896 + b] = dJ[28];
-        dJ_T[928 + b] = dJ[29];
-        dJ_T[960 + b] = dJ[30];
-        dJ_T[992 + b] = dJ[31];
-        dJ_T[1024 + b] = dJ[32];
-        dJ_T[1056 + b] = dJ[33];
-        dJ_T[1088 + b] = dJ[34];
-        dJ_T[1120 + b] = dJ[35];
+        ur5_jacobian_dot_finish(dq_T + b, cs_T + b, sn_T + b, dJ_T + b, 32);
     }
 }
 
@@ -1739,11 +1105,11 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_dot_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_dot_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_dot_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, dJ + (i + b) * 36);
+            ur5_jacobian_dot_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, dJ + (i + b) * 36, 1);
         }
     }
 }
@@ -1752,35 +1118,37 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
 /* operations: 5 sin, 5 cos, 61 add/sub, 80 mul, 13 neg */
 
-static void ur5_twist_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_twist_finish(const double dq[6], const double *restrict cs, const double *restrict sn, double *restrict twist)
+UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict cs, const double *restrict sn, double *restrict twist, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t22 = -sn[3]*sn[4];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -1802,8 +1170,8 @@ static void ur5_twist_finish(const double dq[6], const double *restrict cs, cons
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -1811,41 +1179,41 @@ static void ur5_twist_finish(const double dq[6], const double *restrict cs, cons
     const double t56 = t20*t55 - t22*t54;
     const double t57 = t22*t53 - t18*t55;
     const double t58 = t18*t54 - t20*t53;
-    const double t59 = sn[0]*dq[1];
-    const double t60 = -cs[0]*dq[1];
-    const double t61 = t59 + sn[0]*dq[2];
-    const double t62 = t60 - cs[0]*dq[2];
-    const double t63 = t61 + sn[0]*dq[3];
-    const double t64 = t62 - cs[0]*dq[3];
-    const double t65 = t63 - t11*dq[4];
-    const double t66 = t64 - t13*dq[4];
-    const double t67 = dq[0] - cs[3]*dq[4];
-    const double t68 = t65 + t18*dq[5];
-    const double t69 = t66 + t20*dq[5];
-    const double t70 = t67 + t22*dq[5];
-    const double t71 = t56*dq[5];
-    const double t72 = t57*dq[5];
-    const double t73 = t58*dq[5];
-    const double t74 = t71 + t50*dq[4];
-    const double t75 = t72 + t51*dq[4];
-    const double t76 = t73 + t52*dq[4];
-    const double t77 = t74 + t45*dq[3];
-    const double t78 = t75 + t46*dq[3];
-    const double t79 = t76 + t47*dq[3];
-    const double t80 = t77 + t39*dq[2];
-    const double t81 = t78 + t40*dq[2];
-    const double t82 = t79 + t41*dq[2];
-    const double t83 = t80 + t33*dq[1];
-    const double t84 = t81 + t34*dq[1];
-    const double t85 = t82 + t35*dq[1];
+    const double t59 = sn[0]*dq[1*UR5_STRIDE];
+    const double t60 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t61 = t59 + sn[0]*dq[2*UR5_STRIDE];
+    const double t62 = t60 - cs[0]*dq[2*UR5_STRIDE];
+    const double t63 = t61 + sn[0]*dq[3*UR5_STRIDE];
+    const double t64 = t62 - cs[0]*dq[3*UR5_STRIDE];
+    const double t65 = t63 - t11*dq[4*UR5_STRIDE];
+    const double t66 = t64 - t13*dq[4*UR5_STRIDE];
+    const double t67 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t68 = t65 + t18*dq[5*UR5_STRIDE];
+    const double t69 = t66 + t20*dq[5*UR5_STRIDE];
+    const double t70 = t67 + t22*dq[5*UR5_STRIDE];
+    const double t71 = t56*dq[5*UR5_STRIDE];
+    const double t72 = t57*dq[5*UR5_STRIDE];
+    const double t73 = t58*dq[5*UR5_STRIDE];
+    const double t74 = t71 + t50*dq[4*UR5_STRIDE];
+    const double t75 = t72 + t51*dq[4*UR5_STRIDE];
+    const double t76 = t73 + t52*dq[4*UR5_STRIDE];
+    const double t77 = t74 + t45*dq[3*UR5_STRIDE];
+    const double t78 = t75 + t46*dq[3*UR5_STRIDE];
+    const double t79 = t76 + t47*dq[3*UR5_STRIDE];
+    const double t80 = t77 + t39*dq[2*UR5_STRIDE];
+    const double t81 = t78 + t40*dq[2*UR5_STRIDE];
+    const double t82 = t79 + t41*dq[2*UR5_STRIDE];
+    const double t83 = t80 + t33*dq[1*UR5_STRIDE];
+    const double t84 = t81 + t34*dq[1*UR5_STRIDE];
+    const double t85 = t82 + t35*dq[1*UR5_STRIDE];
     const double t86 = t83 - t30*dq[0];
     const double t87 = t84 + t29*dq[0];
     twist[0] = t86;
-    twist[1] = t87;
-    twist[2] = t85;
-    twist[3] = t68;
-    twist[4] = t69;
-    twist[5] = t70;
+    twist[1*UR5_STRIDE] = t87;
+    twist[2*UR5_STRIDE] = t85;
+    twist[3*UR5_STRIDE] = t68;
+    twist[4*UR5_STRIDE] = t69;
+    twist[5*UR5_STRIDE] = t70;
 }
 
 void ur5_twist(const double q[6], const double dq[6], double twist[6])
@@ -1855,149 +1223,24 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_twist_angles(q, ang);
+    ur5_twist_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_twist_finish(dq, cs, sn, twist);
+    ur5_twist_finish(dq, cs, sn, twist, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_twist_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[5];
-        double sn[5];
-        double twist[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t59 = sn[0]*dq[1];
-        const double t60 = -cs[0]*dq[1];
-        const double t61 = t59 + sn[0]*dq[2];
-        const double t62 = t60 - cs[0]*dq[2];
-        const double t63 = t61 + sn[0]*dq[3];
-        const double t64 = t62 - cs[0]*dq[3];
-        const double t65 = t63 - t11*dq[4];
-        const double t66 = t64 - t13*dq[4];
-        const double t67 = dq[0] - cs[3]*dq[4];
-        const double t68 = t65 + t18*dq[5];
-        const double t69 = t66 + t20*dq[5];
-        const double t70 = t67 + t22*dq[5];
-        const double t71 = t56*dq[5];
-        const double t72 = t57*dq[5];
-        const double t73 = t58*dq[5];
-        const double t74 = t71 + t50*dq[4];
-        const double t75 = t72 + t51*dq[4];
-        const double t76 = t73 + t52*dq[4];
-        const double t77 = t74 + t45*dq[3];
-        const double t78 = t75 + t46*dq[3];
-        const double t79 = t76 + t47*dq[3];
-        const double t80 = t77 + t39*dq[2];
-        const double t81 = t78 + t40*dq[2];
-        const double t82 = t79 + t41*dq[2];
-        const double t83 = t80 + t33*dq[1];
-        const double t84 = t81 + t34*dq[1];
-        const double t85 = t82 + t35*dq[1];
-        const double t86 = t83 - t30*dq[0];
-        const double t87 = t84 + t29*dq[0];
-        twist[0] = t86;
-        twist[1] = t87;
-        twist[2] = t85;
-        twist[3] = t68;
-        twist[4] = t69;
-        twist[5] = t70;
-        twist_T[0 + b] = twist[0];
-        twist_T[32 + b] = twist[1];
-        twist_T[64 + b] = twist[2];
-        twist_T[96 + b] = twist[3];
-        twist_T[128 + b] = twist[4];
-        twist_T[160 + b] = twist[5];
+        ur5_twist_finish(dq_T + b, cs_T + b, sn_T + b, twist_T + b, 32);
     }
 }
 
@@ -2062,11 +1305,11 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_twist_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_twist_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_twist_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, twist + (i + b) * 6);
+            ur5_twist_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, twist + (i + b) * 6, 1);
         }
     }
 }
@@ -2075,35 +1318,37 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
 /* operations: 5 sin, 5 cos, 156 add/sub, 205 mul, 16 neg */
 
-static void ur5_acceleration_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_acceleration_finish(const double dq[6], const double ddq[6], const double *restrict cs, const double *restrict sn, double *restrict acc)
+UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict cs, const double *restrict sn, double *restrict acc, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t22 = -sn[3]*sn[4];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -2125,8 +1370,8 @@ static void ur5_acceleration_finish(const double dq[6], const double ddq[6], con
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -2134,32 +1379,32 @@ static void ur5_acceleration_finish(const double dq[6], const double ddq[6], con
     const double t56 = t20*t55 - t22*t54;
     const double t57 = t22*t53 - t18*t55;
     const double t58 = t18*t54 - t20*t53;
-    const double t59 = sn[0]*dq[1];
-    const double t60 = -cs[0]*dq[1];
-    const double t61 = t59 + sn[0]*dq[2];
-    const double t62 = t60 - cs[0]*dq[2];
-    const double t63 = t61 + sn[0]*dq[3];
-    const double t64 = t62 - cs[0]*dq[3];
-    const double t65 = t63 - t11*dq[4];
-    const double t66 = t64 - t13*dq[4];
-    const double t67 = dq[0] - cs[3]*dq[4];
-    const double t68 = t65 + t18*dq[5];
-    const double t69 = t66 + t20*dq[5];
-    const double t70 = t67 + t22*dq[5];
-    const double t71 = t56*dq[5];
-    const double t72 = t57*dq[5];
-    const double t73 = t58*dq[5];
-    const double t74 = t71 + t50*dq[4];
-    const double t75 = t72 + t51*dq[4];
-    const double t76 = t73 + t52*dq[4];
-    const double t77 = t74 + t45*dq[3];
-    const double t78 = t75 + t46*dq[3];
-    const double t79 = t76 + t47*dq[3];
-    const double t80 = t77 + t39*dq[2];
-    const double t81 = t78 + t40*dq[2];
-    const double t82 = t79 + t41*dq[2];
-    const double t83 = t80 + t33*dq[1];
-    const double t84 = t81 + t34*dq[1];
+    const double t59 = sn[0]*dq[1*UR5_STRIDE];
+    const double t60 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t61 = t59 + sn[0]*dq[2*UR5_STRIDE];
+    const double t62 = t60 - cs[0]*dq[2*UR5_STRIDE];
+    const double t63 = t61 + sn[0]*dq[3*UR5_STRIDE];
+    const double t64 = t62 - cs[0]*dq[3*UR5_STRIDE];
+    const double t65 = t63 - t11*dq[4*UR5_STRIDE];
+    const double t66 = t64 - t13*dq[4*UR5_STRIDE];
+    const double t67 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t68 = t65 + t18*dq[5*UR5_STRIDE];
+    const double t69 = t66 + t20*dq[5*UR5_STRIDE];
+    const double t70 = t67 + t22*dq[5*UR5_STRIDE];
+    const double t71 = t56*dq[5*UR5_STRIDE];
+    const double t72 = t57*dq[5*UR5_STRIDE];
+    const double t73 = t58*dq[5*UR5_STRIDE];
+    const double t74 = t71 + t50*dq[4*UR5_STRIDE];
+    const double t75 = t72 + t51*dq[4*UR5_STRIDE];
+    const double t76 = t73 + t52*dq[4*UR5_STRIDE];
+    const double t77 = t74 + t45*dq[3*UR5_STRIDE];
+    const double t78 = t75 + t46*dq[3*UR5_STRIDE];
+    const double t79 = t76 + t47*dq[3*UR5_STRIDE];
+    const double t80 = t77 + t39*dq[2*UR5_STRIDE];
+    const double t81 = t78 + t40*dq[2*UR5_STRIDE];
+    const double t82 = t79 + t41*dq[2*UR5_STRIDE];
+    const double t83 = t80 + t33*dq[1*UR5_STRIDE];
+    const double t84 = t81 + t34*dq[1*UR5_STRIDE];
     const double t86 = t83 - t30*dq[0];
     const double t88 = -t84 - t29*dq[0];
     const double t89 = cs[0]*dq[0];
@@ -2175,11 +1420,11 @@ static void ur5_acceleration_finish(const double dq[6], const double ddq[6], con
     const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
     const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
     const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-    const double t102 = t13*dq[0] - cs[3]*t64;
-    const double t103 = cs[3]*t63 - t11*dq[0];
+    const double t102 = t13*dq[0] - cs[3*UR5_STRIDE]*t64;
+    const double t103 = cs[3*UR5_STRIDE]*t63 - t11*dq[0];
     const double t104 = t11*t64 - t13*t63;
-    const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
+    const double t105 = t52*t66 + cs[3*UR5_STRIDE]*t72 - t51*t67 - t13*t73;
+    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3*UR5_STRIDE]*t71;
     const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
     const double t108 = t22*t66 - t20*t67;
     const double t109 = t18*t67 - t22*t65;
@@ -2187,12 +1432,12 @@ static void ur5_acceleration_finish(const double dq[6], const double ddq[6], con
     const double t111 = t58*t69 - t57*t70;
     const double t112 = t56*t70 - t58*t68;
     const double t113 = t57*t68 - t56*t69;
-    acc[0] = t33*ddq[1] + t39*ddq[2] + t45*ddq[3] + t50*ddq[4] + t56*ddq[5] + t88*dq[0] + t91*dq[1] + t95*dq[2] + t99*dq[3] + t105*dq[4] + t111*dq[5] - t30*ddq[0];
-    acc[1] = t34*ddq[1] + t40*ddq[2] + t46*ddq[3] + t51*ddq[4] + t57*ddq[5] + t92*dq[1] + t96*dq[2] + t100*dq[3] + t106*dq[4] + t112*dq[5] + t29*ddq[0] + t86*dq[0];
-    acc[2] = t35*ddq[1] + t41*ddq[2] + t47*ddq[3] + t52*ddq[4] + t58*ddq[5] + t93*dq[1] + t97*dq[2] + t101*dq[3] + t107*dq[4] + t113*dq[5];
-    acc[3] = t18*ddq[5] + t89*dq[1] + t89*dq[2] + t89*dq[3] + t102*dq[4] + t108*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3] - t11*ddq[4];
-    acc[4] = t20*ddq[5] + t90*dq[1] + t90*dq[2] + t90*dq[3] + t103*dq[4] + t109*dq[5] - t13*ddq[4] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-    acc[5] = ddq[0] + t22*ddq[5] + t94*dq[2] + t98*dq[3] + t104*dq[4] + t110*dq[5] - cs[3]*ddq[4];
+    acc[0] = t33*ddq[1*UR5_STRIDE] + t39*ddq[2*UR5_STRIDE] + t45*ddq[3*UR5_STRIDE] + t50*ddq[4*UR5_STRIDE] + t56*ddq[5*UR5_STRIDE] + t88*dq[0] + t91*dq[1*UR5_STRIDE] + t95*dq[2*UR5_STRIDE] + t99*dq[3*UR5_STRIDE] + t105*dq[4*UR5_STRIDE] + t111*dq[5*UR5_STRIDE] - t30*ddq[0];
+    acc[1*UR5_STRIDE] = t34*ddq[1*UR5_STRIDE] + t40*ddq[2*UR5_STRIDE] + t46*ddq[3*UR5_STRIDE] + t51*ddq[4*UR5_STRIDE] + t57*ddq[5*UR5_STRIDE] + t92*dq[1*UR5_STRIDE] + t96*dq[2*UR5_STRIDE] + t100*dq[3*UR5_STRIDE] + t106*dq[4*UR5_STRIDE] + t112*dq[5*UR5_STRIDE] + t29*ddq[0] + t86*dq[0];
+    acc[2*UR5_STRIDE] = t35*ddq[1*UR5_STRIDE] + t41*ddq[2*UR5_STRIDE] + t47*ddq[3*UR5_STRIDE] + t52*ddq[4*UR5_STRIDE] + t58*ddq[5*UR5_STRIDE] + t93*dq[1*UR5_STRIDE] + t97*dq[2*UR5_STRIDE] + t101*dq[3*UR5_STRIDE] + t107*dq[4*UR5_STRIDE] + t113*dq[5*UR5_STRIDE];
+    acc[3*UR5_STRIDE] = t18*ddq[5*UR5_STRIDE] + t89*dq[1*UR5_STRIDE] + t89*dq[2*UR5_STRIDE] + t89*dq[3*UR5_STRIDE] + t102*dq[4*UR5_STRIDE] + t108*dq[5*UR5_STRIDE] + sn[0]*ddq[1*UR5_STRIDE] + sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE] - t11*ddq[4*UR5_STRIDE];
+    acc[4*UR5_STRIDE] = t20*ddq[5*UR5_STRIDE] + t90*dq[1*UR5_STRIDE] + t90*dq[2*UR5_STRIDE] + t90*dq[3*UR5_STRIDE] + t103*dq[4*UR5_STRIDE] + t109*dq[5*UR5_STRIDE] - t13*ddq[4*UR5_STRIDE] - cs[0]*ddq[1*UR5_STRIDE] - cs[0]*ddq[2*UR5_STRIDE] - cs[0]*ddq[3*UR5_STRIDE];
+    acc[5*UR5_STRIDE] = ddq[0] + t22*ddq[5*UR5_STRIDE] + t94*dq[2*UR5_STRIDE] + t98*dq[3*UR5_STRIDE] + t104*dq[4*UR5_STRIDE] + t110*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
 }
 
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6])
@@ -2202,180 +1447,24 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_acceleration_angles(q, ang);
+    ur5_acceleration_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_acceleration_finish(dq, ddq, cs, sn, acc);
+    ur5_acceleration_finish(dq, ddq, cs, sn, acc, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[5];
-        double sn[5];
-        double acc[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        ddq[5] = ddq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t59 = sn[0]*dq[1];
-        const double t60 = -cs[0]*dq[1];
-        const double t61 = t59 + sn[0]*dq[2];
-        const double t62 = t60 - cs[0]*dq[2];
-        const double t63 = t61 + sn[0]*dq[3];
-        const double t64 = t62 - cs[0]*dq[3];
-        const double t65 = t63 - t11*dq[4];
-        const double t66 = t64 - t13*dq[4];
-        const double t67 = dq[0] - cs[3]*dq[4];
-        const double t68 = t65 + t18*dq[5];
-        const double t69 = t66 + t20*dq[5];
-        const double t70 = t67 + t22*dq[5];
-        const double t71 = t56*dq[5];
-        const double t72 = t57*dq[5];
-        const double t73 = t58*dq[5];
-        const double t74 = t71 + t50*dq[4];
-        const double t75 = t72 + t51*dq[4];
-        const double t76 = t73 + t52*dq[4];
-        const double t77 = t74 + t45*dq[3];
-        const double t78 = t75 + t46*dq[3];
-        const double t79 = t76 + t47*dq[3];
-        const double t80 = t77 + t39*dq[2];
-        const double t81 = t78 + t40*dq[2];
-        const double t82 = t79 + t41*dq[2];
-        const double t83 = t80 + t33*dq[1];
-        const double t84 = t81 + t34*dq[1];
-        const double t86 = t83 - t30*dq[0];
-        const double t88 = -t84 - t29*dq[0];
-        const double t89 = cs[0]*dq[0];
-        const double t90 = sn[0]*dq[0];
-        const double t91 = t35*t60 - t34*dq[0] - cs[0]*t82;
-        const double t92 = t33*dq[0] - t35*t59 - sn[0]*t82;
-        const double t93 = t34*t59 + cs[0]*t80 + sn[0]*t81 - t33*t60;
-        const double t94 = -cs[0]*t59 - sn[0]*t60;
-        const double t95 = t41*t62 - t40*dq[0] - cs[0]*t79;
-        const double t96 = t39*dq[0] - t41*t61 - sn[0]*t79;
-        const double t97 = t40*t61 + cs[0]*t77 + sn[0]*t78 - t39*t62;
-        const double t98 = -cs[0]*t61 - sn[0]*t62;
-        const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
-        const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
-        const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-        const double t102 = t13*dq[0] - cs[3]*t64;
-        const double t103 = cs[3]*t63 - t11*dq[0];
-        const double t104 = t11*t64 - t13*t63;
-        const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-        const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
-        const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
-        const double t108 = t22*t66 - t20*t67;
-        const double t109 = t18*t67 - t22*t65;
-        const double t110 = t20*t65 - t18*t66;
-        const double t111 = t58*t69 - t57*t70;
-        const double t112 = t56*t70 - t58*t68;
-        const double t113 = t57*t68 - t56*t69;
-        acc[0] = t33*ddq[1] + t39*ddq[2] + t45*ddq[3] + t50*ddq[4] + t56*ddq[5] + t88*dq[0] + t91*dq[1] + t95*dq[2] + t99*dq[3] + t105*dq[4] + t111*dq[5] - t30*ddq[0];
-        acc[1] = t34*ddq[1] + t40*ddq[2] + t46*ddq[3] + t51*ddq[4] + t57*ddq[5] + t92*dq[1] + t96*dq[2] + t100*dq[3] + t106*dq[4] + t112*dq[5] + t29*ddq[0] + t86*dq[0];
-        acc[2] = t35*ddq[1] + t41*ddq[2] + t47*ddq[3] + t52*ddq[4] + t58*ddq[5] + t93*dq[1] + t97*dq[2] + t101*dq[3] + t107*dq[4] + t113*dq[5];
-        acc[3] = t18*ddq[5] + t89*dq[1] + t89*dq[2] + t89*dq[3] + t102*dq[4] + t108*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3] - t11*ddq[4];
-        acc[4] = t20*ddq[5] + t90*dq[1] + t90*dq[2] + t90*dq[3] + t103*dq[4] + t109*dq[5] - t13*ddq[4] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-        acc[5] = ddq[0] + t22*ddq[5] + t94*dq[2] + t98*dq[3] + t104*dq[4] + t110*dq[5] - cs[3]*ddq[4];
-        acc_T[0 + b] = acc[0];
-        acc_T[32 + b] = acc[1];
-        acc_T[64 + b] = acc[2];
-        acc_T[96 + b] = acc[3];
-        acc_T[128 + b] = acc[4];
-        acc_T[160 + b] = acc[5];
+        ur5_acceleration_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, acc_T + b, 32);
     }
 }
 
@@ -2451,11 +1540,11 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_acceleration_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, acc + (i + b) * 6);
+            ur5_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, acc + (i + b) * 6, 1);
         }
     }
 }
@@ -2464,45 +1553,47 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
 /* ---- ur5_kinematics: T, J, dJ, twist and acc at once ---- */
 /* operations: 6 sin, 6 cos, 166 add/sub, 224 mul, 21 neg */
 
-static void ur5_kinematics_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, double *restrict dJ, double *restrict twist, double *restrict acc)
+UR5_BODY void ur5_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, double *restrict dJ, double *restrict twist, double *restrict acc, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t17 = t10*cs[4] + sn[0]*sn[4];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t19 = t12*cs[4] - cs[0]*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t21 = cs[4]*sn[3];
-    const double t22 = -sn[3]*sn[4];
-    const double t23 = t11*sn[5] + t17*cs[5];
-    const double t24 = t11*cs[5] - t17*sn[5];
-    const double t25 = t13*sn[5] + t19*cs[5];
-    const double t26 = t13*cs[5] - t19*sn[5];
-    const double t27 = t21*cs[5] + cs[3]*sn[5];
-    const double t28 = cs[3]*cs[5] - t21*sn[5];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t17 = t10*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t19 = t12*cs[4*UR5_STRIDE] - cs[0]*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t21 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t23 = t11*sn[5*UR5_STRIDE] + t17*cs[5*UR5_STRIDE];
+    const double t24 = t11*cs[5*UR5_STRIDE] - t17*sn[5*UR5_STRIDE];
+    const double t25 = t13*sn[5*UR5_STRIDE] + t19*cs[5*UR5_STRIDE];
+    const double t26 = t13*cs[5*UR5_STRIDE] - t19*sn[5*UR5_STRIDE];
+    const double t27 = t21*cs[5*UR5_STRIDE] + cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t28 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE] - t21*sn[5*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -2524,8 +1615,8 @@ static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -2533,33 +1624,33 @@ static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const
     const double t56 = t20*t55 - t22*t54;
     const double t57 = t22*t53 - t18*t55;
     const double t58 = t18*t54 - t20*t53;
-    const double t59 = sn[0]*dq[1];
-    const double t60 = -cs[0]*dq[1];
-    const double t61 = t59 + sn[0]*dq[2];
-    const double t62 = t60 - cs[0]*dq[2];
-    const double t63 = t61 + sn[0]*dq[3];
-    const double t64 = t62 - cs[0]*dq[3];
-    const double t65 = t63 - t11*dq[4];
-    const double t66 = t64 - t13*dq[4];
-    const double t67 = dq[0] - cs[3]*dq[4];
-    const double t68 = t65 + t18*dq[5];
-    const double t69 = t66 + t20*dq[5];
-    const double t70 = t67 + t22*dq[5];
-    const double t71 = t56*dq[5];
-    const double t72 = t57*dq[5];
-    const double t73 = t58*dq[5];
-    const double t74 = t71 + t50*dq[4];
-    const double t75 = t72 + t51*dq[4];
-    const double t76 = t73 + t52*dq[4];
-    const double t77 = t74 + t45*dq[3];
-    const double t78 = t75 + t46*dq[3];
-    const double t79 = t76 + t47*dq[3];
-    const double t80 = t77 + t39*dq[2];
-    const double t81 = t78 + t40*dq[2];
-    const double t82 = t79 + t41*dq[2];
-    const double t83 = t80 + t33*dq[1];
-    const double t84 = t81 + t34*dq[1];
-    const double t85 = t82 + t35*dq[1];
+    const double t59 = sn[0]*dq[1*UR5_STRIDE];
+    const double t60 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t61 = t59 + sn[0]*dq[2*UR5_STRIDE];
+    const double t62 = t60 - cs[0]*dq[2*UR5_STRIDE];
+    const double t63 = t61 + sn[0]*dq[3*UR5_STRIDE];
+    const double t64 = t62 - cs[0]*dq[3*UR5_STRIDE];
+    const double t65 = t63 - t11*dq[4*UR5_STRIDE];
+    const double t66 = t64 - t13*dq[4*UR5_STRIDE];
+    const double t67 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t68 = t65 + t18*dq[5*UR5_STRIDE];
+    const double t69 = t66 + t20*dq[5*UR5_STRIDE];
+    const double t70 = t67 + t22*dq[5*UR5_STRIDE];
+    const double t71 = t56*dq[5*UR5_STRIDE];
+    const double t72 = t57*dq[5*UR5_STRIDE];
+    const double t73 = t58*dq[5*UR5_STRIDE];
+    const double t74 = t71 + t50*dq[4*UR5_STRIDE];
+    const double t75 = t72 + t51*dq[4*UR5_STRIDE];
+    const double t76 = t73 + t52*dq[4*UR5_STRIDE];
+    const double t77 = t74 + t45*dq[3*UR5_STRIDE];
+    const double t78 = t75 + t46*dq[3*UR5_STRIDE];
+    const double t79 = t76 + t47*dq[3*UR5_STRIDE];
+    const double t80 = t77 + t39*dq[2*UR5_STRIDE];
+    const double t81 = t78 + t40*dq[2*UR5_STRIDE];
+    const double t82 = t79 + t41*dq[2*UR5_STRIDE];
+    const double t83 = t80 + t33*dq[1*UR5_STRIDE];
+    const double t84 = t81 + t34*dq[1*UR5_STRIDE];
+    const double t85 = t82 + t35*dq[1*UR5_STRIDE];
     const double t86 = t83 - t30*dq[0];
     const double t87 = t84 + t29*dq[0];
     const double t88 = -t84 - t29*dq[0];
@@ -2576,11 +1667,11 @@ static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const
     const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
     const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
     const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-    const double t102 = t13*dq[0] - cs[3]*t64;
-    const double t103 = cs[3]*t63 - t11*dq[0];
+    const double t102 = t13*dq[0] - cs[3*UR5_STRIDE]*t64;
+    const double t103 = cs[3*UR5_STRIDE]*t63 - t11*dq[0];
     const double t104 = t11*t64 - t13*t63;
-    const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
+    const double t105 = t52*t66 + cs[3*UR5_STRIDE]*t72 - t51*t67 - t13*t73;
+    const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3*UR5_STRIDE]*t71;
     const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
     const double t108 = t22*t66 - t20*t67;
     const double t109 = t18*t67 - t22*t65;
@@ -2591,108 +1682,108 @@ static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const
     const double t199 = -t11;
     const double t251 = -cs[0];
     const double t255 = -t13;
-    const double t325 = -cs[3];
+    const double t325 = -cs[3*UR5_STRIDE];
     const double t1416 = -t30;
     T[0] = t23;
-    T[1] = t24;
-    T[2] = t18;
-    T[3] = t29;
-    T[4] = t25;
-    T[5] = t26;
-    T[6] = t20;
-    T[7] = t30;
-    T[8] = t27;
-    T[9] = t28;
-    T[10] = t22;
-    T[11] = t31;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
+    T[1*UR5_STRIDE] = t24;
+    T[2*UR5_STRIDE] = t18;
+    T[3*UR5_STRIDE] = t29;
+    T[4*UR5_STRIDE] = t25;
+    T[5*UR5_STRIDE] = t26;
+    T[6*UR5_STRIDE] = t20;
+    T[7*UR5_STRIDE] = t30;
+    T[8*UR5_STRIDE] = t27;
+    T[9*UR5_STRIDE] = t28;
+    T[10*UR5_STRIDE] = t22;
+    T[11*UR5_STRIDE] = t31;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
     J[0] = t1416;
-    J[1] = t33;
-    J[2] = t39;
-    J[3] = t45;
-    J[4] = t50;
-    J[5] = t56;
-    J[6] = t29;
-    J[7] = t34;
-    J[8] = t40;
-    J[9] = t46;
-    J[10] = t51;
-    J[11] = t57;
-    J[12] = 0.0;
-    J[13] = t35;
-    J[14] = t41;
-    J[15] = t47;
-    J[16] = t52;
-    J[17] = t58;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t199;
-    J[23] = t18;
-    J[24] = 0.0;
-    J[25] = t251;
-    J[26] = t251;
-    J[27] = t251;
-    J[28] = t255;
-    J[29] = t20;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t325;
-    J[35] = t22;
+    J[1*UR5_STRIDE] = t33;
+    J[2*UR5_STRIDE] = t39;
+    J[3*UR5_STRIDE] = t45;
+    J[4*UR5_STRIDE] = t50;
+    J[5*UR5_STRIDE] = t56;
+    J[6*UR5_STRIDE] = t29;
+    J[7*UR5_STRIDE] = t34;
+    J[8*UR5_STRIDE] = t40;
+    J[9*UR5_STRIDE] = t46;
+    J[10*UR5_STRIDE] = t51;
+    J[11*UR5_STRIDE] = t57;
+    J[12*UR5_STRIDE] = 0.0;
+    J[13*UR5_STRIDE] = t35;
+    J[14*UR5_STRIDE] = t41;
+    J[15*UR5_STRIDE] = t47;
+    J[16*UR5_STRIDE] = t52;
+    J[17*UR5_STRIDE] = t58;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[22*UR5_STRIDE] = t199;
+    J[23*UR5_STRIDE] = t18;
+    J[24*UR5_STRIDE] = 0.0;
+    J[25*UR5_STRIDE] = t251;
+    J[26*UR5_STRIDE] = t251;
+    J[27*UR5_STRIDE] = t251;
+    J[28*UR5_STRIDE] = t255;
+    J[29*UR5_STRIDE] = t20;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    J[34*UR5_STRIDE] = t325;
+    J[35*UR5_STRIDE] = t22;
     dJ[0] = t88;
-    dJ[1] = t91;
-    dJ[2] = t95;
-    dJ[3] = t99;
-    dJ[4] = t105;
-    dJ[5] = t111;
-    dJ[6] = t86;
-    dJ[7] = t92;
-    dJ[8] = t96;
-    dJ[9] = t100;
-    dJ[10] = t106;
-    dJ[11] = t112;
-    dJ[12] = 0.0;
-    dJ[13] = t93;
-    dJ[14] = t97;
-    dJ[15] = t101;
-    dJ[16] = t107;
-    dJ[17] = t113;
-    dJ[18] = 0.0;
-    dJ[19] = t89;
-    dJ[20] = t89;
-    dJ[21] = t89;
-    dJ[22] = t102;
-    dJ[23] = t108;
-    dJ[24] = 0.0;
-    dJ[25] = t90;
-    dJ[26] = t90;
-    dJ[27] = t90;
-    dJ[28] = t103;
-    dJ[29] = t109;
-    dJ[30] = 0.0;
-    dJ[31] = 0.0;
-    dJ[32] = t94;
-    dJ[33] = t98;
-    dJ[34] = t104;
-    dJ[35] = t110;
+    dJ[1*UR5_STRIDE] = t91;
+    dJ[2*UR5_STRIDE] = t95;
+    dJ[3*UR5_STRIDE] = t99;
+    dJ[4*UR5_STRIDE] = t105;
+    dJ[5*UR5_STRIDE] = t111;
+    dJ[6*UR5_STRIDE] = t86;
+    dJ[7*UR5_STRIDE] = t92;
+    dJ[8*UR5_STRIDE] = t96;
+    dJ[9*UR5_STRIDE] = t100;
+    dJ[10*UR5_STRIDE] = t106;
+    dJ[11*UR5_STRIDE] = t112;
+    dJ[12*UR5_STRIDE] = 0.0;
+    dJ[13*UR5_STRIDE] = t93;
+    dJ[14*UR5_STRIDE] = t97;
+    dJ[15*UR5_STRIDE] = t101;
+    dJ[16*UR5_STRIDE] = t107;
+    dJ[17*UR5_STRIDE] = t113;
+    dJ[18*UR5_STRIDE] = 0.0;
+    dJ[19*UR5_STRIDE] = t89;
+    dJ[20*UR5_STRIDE] = t89;
+    dJ[21*UR5_STRIDE] = t89;
+    dJ[22*UR5_STRIDE] = t102;
+    dJ[23*UR5_STRIDE] = t108;
+    dJ[24*UR5_STRIDE] = 0.0;
+    dJ[25*UR5_STRIDE] = t90;
+    dJ[26*UR5_STRIDE] = t90;
+    dJ[27*UR5_STRIDE] = t90;
+    dJ[28*UR5_STRIDE] = t103;
+    dJ[29*UR5_STRIDE] = t109;
+    dJ[30*UR5_STRIDE] = 0.0;
+    dJ[31*UR5_STRIDE] = 0.0;
+    dJ[32*UR5_STRIDE] = t94;
+    dJ[33*UR5_STRIDE] = t98;
+    dJ[34*UR5_STRIDE] = t104;
+    dJ[35*UR5_STRIDE] = t110;
     twist[0] = t86;
-    twist[1] = t87;
-    twist[2] = t85;
-    twist[3] = t68;
-    twist[4] = t69;
-    twist[5] = t70;
-    acc[0] = t33*ddq[1] + t39*ddq[2] + t45*ddq[3] + t50*ddq[4] + t56*ddq[5] + t88*dq[0] + t91*dq[1] + t95*dq[2] + t99*dq[3] + t105*dq[4] + t111*dq[5] - t30*ddq[0];
-    acc[1] = t34*ddq[1] + t40*ddq[2] + t46*ddq[3] + t51*ddq[4] + t57*ddq[5] + t92*dq[1] + t96*dq[2] + t100*dq[3] + t106*dq[4] + t112*dq[5] + t29*ddq[0] + t86*dq[0];
-    acc[2] = t35*ddq[1] + t41*ddq[2] + t47*ddq[3] + t52*ddq[4] + t58*ddq[5] + t93*dq[1] + t97*dq[2] + t101*dq[3] + t107*dq[4] + t113*dq[5];
-    acc[3] = t18*ddq[5] + t89*dq[1] + t89*dq[2] + t89*dq[3] + t102*dq[4] + t108*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3] - t11*ddq[4];
-    acc[4] = t20*ddq[5] + t90*dq[1] + t90*dq[2] + t90*dq[3] + t103*dq[4] + t109*dq[5] - t13*ddq[4] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-    acc[5] = ddq[0] + t22*ddq[5] + t94*dq[2] + t98*dq[3] + t104*dq[4] + t110*dq[5] - cs[3]*ddq[4];
+    twist[1*UR5_STRIDE] = t87;
+    twist[2*UR5_STRIDE] = t85;
+    twist[3*UR5_STRIDE] = t68;
+    twist[4*UR5_STRIDE] = t69;
+    twist[5*UR5_STRIDE] = t70;
+    acc[0] = t33*ddq[1*UR5_STRIDE] + t39*ddq[2*UR5_STRIDE] + t45*ddq[3*UR5_STRIDE] + t50*ddq[4*UR5_STRIDE] + t56*ddq[5*UR5_STRIDE] + t88*dq[0] + t91*dq[1*UR5_STRIDE] + t95*dq[2*UR5_STRIDE] + t99*dq[3*UR5_STRIDE] + t105*dq[4*UR5_STRIDE] + t111*dq[5*UR5_STRIDE] - t30*ddq[0];
+    acc[1*UR5_STRIDE] = t34*ddq[1*UR5_STRIDE] + t40*ddq[2*UR5_STRIDE] + t46*ddq[3*UR5_STRIDE] + t51*ddq[4*UR5_STRIDE] + t57*ddq[5*UR5_STRIDE] + t92*dq[1*UR5_STRIDE] + t96*dq[2*UR5_STRIDE] + t100*dq[3*UR5_STRIDE] + t106*dq[4*UR5_STRIDE] + t112*dq[5*UR5_STRIDE] + t29*ddq[0] + t86*dq[0];
+    acc[2*UR5_STRIDE] = t35*ddq[1*UR5_STRIDE] + t41*ddq[2*UR5_STRIDE] + t47*ddq[3*UR5_STRIDE] + t52*ddq[4*UR5_STRIDE] + t58*ddq[5*UR5_STRIDE] + t93*dq[1*UR5_STRIDE] + t97*dq[2*UR5_STRIDE] + t101*dq[3*UR5_STRIDE] + t107*dq[4*UR5_STRIDE] + t113*dq[5*UR5_STRIDE];
+    acc[3*UR5_STRIDE] = t18*ddq[5*UR5_STRIDE] + t89*dq[1*UR5_STRIDE] + t89*dq[2*UR5_STRIDE] + t89*dq[3*UR5_STRIDE] + t102*dq[4*UR5_STRIDE] + t108*dq[5*UR5_STRIDE] + sn[0]*ddq[1*UR5_STRIDE] + sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE] - t11*ddq[4*UR5_STRIDE];
+    acc[4*UR5_STRIDE] = t20*ddq[5*UR5_STRIDE] + t90*dq[1*UR5_STRIDE] + t90*dq[2*UR5_STRIDE] + t90*dq[3*UR5_STRIDE] + t103*dq[4*UR5_STRIDE] + t109*dq[5*UR5_STRIDE] - t13*ddq[4*UR5_STRIDE] - cs[0]*ddq[1*UR5_STRIDE] - cs[0]*ddq[2*UR5_STRIDE] - cs[0]*ddq[3*UR5_STRIDE];
+    acc[5*UR5_STRIDE] = ddq[0] + t22*ddq[5*UR5_STRIDE] + t94*dq[2*UR5_STRIDE] + t98*dq[3*UR5_STRIDE] + t104*dq[4*UR5_STRIDE] + t110*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
 }
 
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6])
@@ -2702,392 +1793,24 @@ void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], 
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_kinematics_angles(q, ang);
+    ur5_kinematics_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc);
+    ur5_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 16; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[16 + b];
-        q[2] = q_T[32 + b];
-        q[3] = q_T[48 + b];
-        q[4] = q_T[64 + b];
-        q[5] = q_T[80 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[16 + b] = ang[1];
-        ang_T[32 + b] = ang[2];
-        ang_T[48 + b] = ang[3];
-        ang_T[64 + b] = ang[4];
-        ang_T[80 + b] = ang[5];
+        ur5_kinematics_angles(q_T + b, ang_T + b, 16);
     }
     ur5_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 16; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[6];
-        double sn[6];
-        double T[16];
-        double J[36];
-        double dJ[36];
-        double twist[6];
-        double acc[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[16 + b];
-        dq[2] = dq_T[32 + b];
-        dq[3] = dq_T[48 + b];
-        dq[4] = dq_T[64 + b];
-        dq[5] = dq_T[80 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[16 + b];
-        ddq[2] = ddq_T[32 + b];
-        ddq[3] = ddq_T[48 + b];
-        ddq[4] = ddq_T[64 + b];
-        ddq[5] = ddq_T[80 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[16 + b];
-        cs[2] = cs_T[32 + b];
-        cs[3] = cs_T[48 + b];
-        cs[4] = cs_T[64 + b];
-        cs[5] = cs_T[80 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[16 + b];
-        sn[2] = sn_T[32 + b];
-        sn[3] = sn_T[48 + b];
-        sn[4] = sn_T[64 + b];
-        sn[5] = sn_T[80 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t17 = t10*cs[4] + sn[0]*sn[4];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t19 = t12*cs[4] - cs[0]*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t21 = cs[4]*sn[3];
-        const double t22 = -sn[3]*sn[4];
-        const double t23 = t11*sn[5] + t17*cs[5];
-        const double t24 = t11*cs[5] - t17*sn[5];
-        const double t25 = t13*sn[5] + t19*cs[5];
-        const double t26 = t13*cs[5] - t19*sn[5];
-        const double t27 = t21*cs[5] + cs[3]*sn[5];
-        const double t28 = cs[3]*cs[5] - t21*sn[5];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t59 = sn[0]*dq[1];
-        const double t60 = -cs[0]*dq[1];
-        const double t61 = t59 + sn[0]*dq[2];
-        const double t62 = t60 - cs[0]*dq[2];
-        const double t63 = t61 + sn[0]*dq[3];
-        const double t64 = t62 - cs[0]*dq[3];
-        const double t65 = t63 - t11*dq[4];
-        const double t66 = t64 - t13*dq[4];
-        const double t67 = dq[0] - cs[3]*dq[4];
-        const double t68 = t65 + t18*dq[5];
-        const double t69 = t66 + t20*dq[5];
-        const double t70 = t67 + t22*dq[5];
-        const double t71 = t56*dq[5];
-        const double t72 = t57*dq[5];
-        const double t73 = t58*dq[5];
-        const double t74 = t71 + t50*dq[4];
-        const double t75 = t72 + t51*dq[4];
-        const double t76 = t73 + t52*dq[4];
-        const double t77 = t74 + t45*dq[3];
-        const double t78 = t75 + t46*dq[3];
-        const double t79 = t76 + t47*dq[3];
-        const double t80 = t77 + t39*dq[2];
-        const double t81 = t78 + t40*dq[2];
-        const double t82 = t79 + t41*dq[2];
-        const double t83 = t80 + t33*dq[1];
-        const double t84 = t81 + t34*dq[1];
-        const double t85 = t82 + t35*dq[1];
-        const double t86 = t83 - t30*dq[0];
-        const double t87 = t84 + t29*dq[0];
-        const double t88 = -t84 - t29*dq[0];
-        const double t89 = cs[0]*dq[0];
-        const double t90 = sn[0]*dq[0];
-        const double t91 = t35*t60 - t34*dq[0] - cs[0]*t82;
-        const double t92 = t33*dq[0] - t35*t59 - sn[0]*t82;
-        const double t93 = t34*t59 + cs[0]*t80 + sn[0]*t81 - t33*t60;
-        const double t94 = -cs[0]*t59 - sn[0]*t60;
-        const double t95 = t41*t62 - t40*dq[0] - cs[0]*t79;
-        const double t96 = t39*dq[0] - t41*t61 - sn[0]*t79;
-        const double t97 = t40*t61 + cs[0]*t77 + sn[0]*t78 - t39*t62;
-        const double t98 = -cs[0]*t61 - sn[0]*t62;
-        const double t99 = t47*t64 - t46*dq[0] - cs[0]*t76;
-        const double t100 = t45*dq[0] - t47*t63 - sn[0]*t76;
-        const double t101 = t46*t63 + cs[0]*t74 + sn[0]*t75 - t45*t64;
-        const double t102 = t13*dq[0] - cs[3]*t64;
-        const double t103 = cs[3]*t63 - t11*dq[0];
-        const double t104 = t11*t64 - t13*t63;
-        const double t105 = t52*t66 + cs[3]*t72 - t51*t67 - t13*t73;
-        const double t106 = t50*t67 + t11*t73 - t52*t65 - cs[3]*t71;
-        const double t107 = t51*t65 + t13*t71 - t50*t66 - t11*t72;
-        const double t108 = t22*t66 - t20*t67;
-        const double t109 = t18*t67 - t22*t65;
-        const double t110 = t20*t65 - t18*t66;
-        const double t111 = t58*t69 - t57*t70;
-        const double t112 = t56*t70 - t58*t68;
-        const double t113 = t57*t68 - t56*t69;
-        const double t199 = -t11;
-        const double t251 = -cs[0];
-        const double t255 = -t13;
-        const double t325 = -cs[3];
-        const double t1416 = -t30;
-        T[0] = t23;
-        T[1] = t24;
-        T[2] = t18;
-        T[3] = t29;
-        T[4] = t25;
-        T[5] = t26;
-        T[6] = t20;
-        T[7] = t30;
-        T[8] = t27;
-        T[9] = t28;
-        T[10] = t22;
-        T[11] = t31;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        J[0] = t1416;
-        J[1] = t33;
-        J[2] = t39;
-        J[3] = t45;
-        J[4] = t50;
-        J[5] = t56;
-        J[6] = t29;
-        J[7] = t34;
-        J[8] = t40;
-        J[9] = t46;
-        J[10] = t51;
-        J[11] = t57;
-        J[12] = 0.0;
-        J[13] = t35;
-        J[14] = t41;
-        J[15] = t47;
-        J[16] = t52;
-        J[17] = t58;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t199;
-        J[23] = t18;
-        J[24] = 0.0;
-        J[25] = t251;
-        J[26] = t251;
-        J[27] = t251;
-        J[28] = t255;
-        J[29] = t20;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t325;
-        J[35] = t22;
-        dJ[0] = t88;
-        dJ[1] = t91;
-        dJ[2] = t95;
-        dJ[3] = t99;
-        dJ[4] = t105;
-        dJ[5] = t111;
-        dJ[6] = t86;
-        dJ[7] = t92;
-        dJ[8] = t96;
-        dJ[9] = t100;
-        dJ[10] = t106;
-        dJ[11] = t112;
-        dJ[12] = 0.0;
-        dJ[13] = t93;
-        dJ[14] = t97;
-        dJ[15] = t101;
-        dJ[16] = t107;
-        dJ[17] = t113;
-        dJ[18] = 0.0;
-        dJ[19] = t89;
-        dJ[20] = t89;
-        dJ[21] = t89;
-        dJ[22] = t102;
-        dJ[23] = t108;
-        dJ[24] = 0.0;
-        dJ[25] = t90;
-        dJ[26] = t90;
-        dJ[27] = t90;
-        dJ[28] = t103;
-        dJ[29] = t109;
-        dJ[30] = 0.0;
-        dJ[31] = 0.0;
-        dJ[32] = t94;
-        dJ[33] = t98;
-        dJ[34] = t104;
-        dJ[35] = t110;
-        twist[0] = t86;
-        twist[1] = t87;
-        twist[2] = t85;
-        twist[3] = t68;
-        twist[4] = t69;
-        twist[5] = t70;
-        acc[0] = t33*ddq[1] + t39*ddq[2] + t45*ddq[3] + t50*ddq[4] + t56*ddq[5] + t88*dq[0] + t91*dq[1] + t95*dq[2] + t99*dq[3] + t105*dq[4] + t111*dq[5] - t30*ddq[0];
-        acc[1] = t34*ddq[1] + t40*ddq[2] + t46*ddq[3] + t51*ddq[4] + t57*ddq[5] + t92*dq[1] + t96*dq[2] + t100*dq[3] + t106*dq[4] + t112*dq[5] + t29*ddq[0] + t86*dq[0];
-        acc[2] = t35*ddq[1] + t41*ddq[2] + t47*ddq[3] + t52*ddq[4] + t58*ddq[5] + t93*dq[1] + t97*dq[2] + t101*dq[3] + t107*dq[4] + t113*dq[5];
-        acc[3] = t18*ddq[5] + t89*dq[1] + t89*dq[2] + t89*dq[3] + t102*dq[4] + t108*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3] - t11*ddq[4];
-        acc[4] = t20*ddq[5] + t90*dq[1] + t90*dq[2] + t90*dq[3] + t103*dq[4] + t109*dq[5] - t13*ddq[4] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-        acc[5] = ddq[0] + t22*ddq[5] + t94*dq[2] + t98*dq[3] + t104*dq[4] + t110*dq[5] - cs[3]*ddq[4];
-        T_T[0 + b] = T[0];
-        T_T[16 + b] = T[1];
-        T_T[32 + b] = T[2];
-        T_T[48 + b] = T[3];
-        T_T[64 + b] = T[4];
-        T_T[80 + b] = T[5];
-        T_T[96 + b] = T[6];
-        T_T[112 + b] = T[7];
-        T_T[128 + b] = T[8];
-        T_T[144 + b] = T[9];
-        T_T[160 + b] = T[10];
-        T_T[176 + b] = T[11];
-        T_T[192 + b] = T[12];
-        T_T[208 + b] = T[13];
-        T_T[224 + b] = T[14];
-        T_T[240 + b] = T[15];
-        J_T[0 + b] = J[0];
-        J_T[16 + b] = J[1];
-        J_T[32 + b] = J[2];
-        J_T[48 + b] = J[3];
-        J_T[64 + b] = J[4];
-        J_T[80 + b] = J[5];
-        J_T[96 + b] = J[6];
-        J_T[112 + b] = J[7];
-        J_T[128 + b] = J[8];
-        J_T[144 + b] = J[9];
-        J_T[160 + b] = J[10];
-        J_T[176 + b] = J[11];
-        J_T[192 + b] = J[12];
-        J_T[208 + b] = J[13];
-        J_T[224 + b] = J[14];
-        J_T[240 + b] = J[15];
-        J_T[256 + b] = J[16];
-        J_T[272 + b] = J[17];
-        J_T[288 + b] = J[18];
-        J_T[304 + b] = J[19];
-        J_T[320 + b] = J[20];
-        J_T[336 + b] = J[21];
-        J_T[352 + b] = J[22];
-        J_T[368 + b] = J[23];
-        J_T[384 + b] = J[24];
-        J_T[400 + b] = J[25];
-        J_T[416 + b] = J[26];
-        J_T[432 + b] = J[27];
-        J_T[448 + b] = J[28];
-        J_T[464 + b] = J[29];
-        J_T[480 + b] = J[30];
-        J_T[496 + b] = J[31];
-        J_T[512 + b] = J[32];
-        J_T[528 + b] = J[33];
-        J_T[544 + b] = J[34];
-        J_T[560 + b] = J[35];
-        dJ_T[0 + b] = dJ[0];
-        dJ_T[16 + b] = dJ[1];
-        dJ_T[32 + b] = dJ[2];
-        dJ_T[48 + b] = dJ[3];
-        dJ_T[64 + b] = dJ[4];
-        dJ_T[80 + b] = dJ[5];
-        dJ_T[96 + b] = dJ[6];
-        dJ_T[112 + b] = dJ[7];
-        dJ_T[128 + b] = dJ[8];
-        dJ_T[144 + b] = dJ[9];
-        dJ_T[160 + b] = dJ[10];
-        dJ_T[176 + b] = dJ[11];
-        dJ_T[192 + b] = dJ[12];
-        dJ_T[208 + b] = dJ[13];
-        dJ_T[224 + b] = dJ[14];
-        dJ_T[240 + b] = dJ[15];
-        dJ_T[256 + b] = dJ[16];
-        dJ_T[272 + b] = dJ[17];
-        dJ_T[288 + b] = dJ[18];
-        dJ_T[304 + b] = dJ[19];
-        dJ_T[320 + b] = dJ[20];
-        dJ_T[336 + b] = dJ[21];
-        dJ_T[352 + b] = dJ[22];
-        dJ_T[368 + b] = dJ[23];
-        dJ_T[384 + b] = dJ[24];
-        dJ_T[400 + b] = dJ[25];
-        dJ_T[416 + b] = dJ[26];
-        dJ_T[432 + b] = dJ[27];
-        dJ_T[448 + b] = dJ[28];
-        dJ_T[464 + b] = dJ[29];
-        dJ_T[480 + b] = dJ[30];
-        dJ_T[496 + b] = dJ[31];
-        dJ_T[512 + b] = dJ[32];
-        dJ_T[528 + b] = dJ[33];
-        dJ_T[544 + b] = dJ[34];
-        dJ_T[560 + b] = dJ[35];
-        twist_T[0 + b] = twist[0];
-        twist_T[16 + b] = twist[1];
-        twist_T[32 + b] = twist[2];
-        twist_T[48 + b] = twist[3];
-        twist_T[64 + b] = twist[4];
-        twist_T[80 + b] = twist[5];
-        acc_T[0 + b] = acc[0];
-        acc_T[16 + b] = acc[1];
-        acc_T[32 + b] = acc[2];
-        acc_T[48 + b] = acc[3];
-        acc_T[64 + b] = acc[4];
-        acc_T[80 + b] = acc[5];
+        ur5_kinematics_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, T_T + b, J_T + b, dJ_T + b, twist_T + b, acc_T + b, 16);
     }
 }
 
@@ -3265,11 +1988,11 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_kinematics_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, dJ + (i + b) * 36, twist + (i + b) * 6, acc + (i + b) * 6);
+            ur5_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, dJ + (i + b) * 36, twist + (i + b) * 6, acc + (i + b) * 6, 1);
         }
     }
 }
@@ -3278,45 +2001,47 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
 /* ---- ur5_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
 /* operations: 6 sin, 6 cos, 45 add/sub, 68 mul, 17 neg */
 
-static void ur5_ik_terms_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_ik_terms_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_ik_terms_finish(const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J)
+UR5_BODY void ur5_ik_terms_finish(const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, const size_t stride)
 {
-    const double t0 = -0.425*cs[0]*cs[1];
-    const double t1 = -0.425*cs[1]*sn[0];
-    const double t2 = 0.089159 - 0.425*sn[1];
-    const double t4 = t0 - 0.39225*cs[0]*cs[2];
-    const double t5 = t1 - 0.39225*cs[2]*sn[0];
-    const double t6 = t2 - 0.39225*sn[2];
+    (void)stride;
+    const double t0 = -0.425*cs[0]*cs[1*UR5_STRIDE];
+    const double t1 = -0.425*cs[1*UR5_STRIDE]*sn[0];
+    const double t2 = 0.089159 - 0.425*sn[1*UR5_STRIDE];
+    const double t4 = t0 - 0.39225*cs[0]*cs[2*UR5_STRIDE];
+    const double t5 = t1 - 0.39225*cs[2*UR5_STRIDE]*sn[0];
+    const double t6 = t2 - 0.39225*sn[2*UR5_STRIDE];
     const double t8 = t4 + 0.10915*sn[0];
     const double t9 = t5 - 0.10915*cs[0];
-    const double t10 = cs[0]*cs[3];
-    const double t11 = -cs[0]*sn[3];
-    const double t12 = cs[3]*sn[0];
-    const double t13 = -sn[0]*sn[3];
+    const double t10 = cs[0]*cs[3*UR5_STRIDE];
+    const double t11 = -cs[0]*sn[3*UR5_STRIDE];
+    const double t12 = cs[3*UR5_STRIDE]*sn[0];
+    const double t13 = -sn[0]*sn[3*UR5_STRIDE];
     const double t14 = t8 - 0.09465*t11;
     const double t15 = t9 - 0.09465*t13;
-    const double t16 = t6 - 0.09465*cs[3];
-    const double t17 = t10*cs[4] + sn[0]*sn[4];
-    const double t18 = cs[4]*sn[0] - t10*sn[4];
-    const double t19 = t12*cs[4] - cs[0]*sn[4];
-    const double t20 = -t12*sn[4] - cs[0]*cs[4];
-    const double t21 = cs[4]*sn[3];
-    const double t22 = -sn[3]*sn[4];
-    const double t23 = t11*sn[5] + t17*cs[5];
-    const double t24 = t11*cs[5] - t17*sn[5];
-    const double t25 = t13*sn[5] + t19*cs[5];
-    const double t26 = t13*cs[5] - t19*sn[5];
-    const double t27 = t21*cs[5] + cs[3]*sn[5];
-    const double t28 = cs[3]*cs[5] - t21*sn[5];
+    const double t16 = t6 - 0.09465*cs[3*UR5_STRIDE];
+    const double t17 = t10*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t18 = cs[4*UR5_STRIDE]*sn[0] - t10*sn[4*UR5_STRIDE];
+    const double t19 = t12*cs[4*UR5_STRIDE] - cs[0]*sn[4*UR5_STRIDE];
+    const double t20 = -t12*sn[4*UR5_STRIDE] - cs[0]*cs[4*UR5_STRIDE];
+    const double t21 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t22 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t23 = t11*sn[5*UR5_STRIDE] + t17*cs[5*UR5_STRIDE];
+    const double t24 = t11*cs[5*UR5_STRIDE] - t17*sn[5*UR5_STRIDE];
+    const double t25 = t13*sn[5*UR5_STRIDE] + t19*cs[5*UR5_STRIDE];
+    const double t26 = t13*cs[5*UR5_STRIDE] - t19*sn[5*UR5_STRIDE];
+    const double t27 = t21*cs[5*UR5_STRIDE] + cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t28 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE] - t21*sn[5*UR5_STRIDE];
     const double t29 = t14 + 0.0823*t18;
     const double t30 = t15 + 0.0823*t20;
     const double t31 = t16 + 0.0823*t22;
@@ -3338,8 +2063,8 @@ static void ur5_ik_terms_finish(const double *restrict cs, const double *restric
     const double t47 = cs[0]*t42 + t43*sn[0];
     const double t48 = t29 - t8;
     const double t49 = t30 - t9;
-    const double t50 = cs[3]*t49 - t13*t44;
-    const double t51 = t11*t44 - cs[3]*t48;
+    const double t50 = cs[3*UR5_STRIDE]*t49 - t13*t44;
+    const double t51 = t11*t44 - cs[3*UR5_STRIDE]*t48;
     const double t52 = t13*t48 - t11*t49;
     const double t53 = t29 - t14;
     const double t54 = t30 - t15;
@@ -3350,60 +2075,60 @@ static void ur5_ik_terms_finish(const double *restrict cs, const double *restric
     const double t199 = -t11;
     const double t251 = -cs[0];
     const double t255 = -t13;
-    const double t325 = -cs[3];
+    const double t325 = -cs[3*UR5_STRIDE];
     const double t1416 = -t30;
     T[0] = t23;
-    T[1] = t24;
-    T[2] = t18;
-    T[3] = t29;
-    T[4] = t25;
-    T[5] = t26;
-    T[6] = t20;
-    T[7] = t30;
-    T[8] = t27;
-    T[9] = t28;
-    T[10] = t22;
-    T[11] = t31;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
+    T[1*UR5_STRIDE] = t24;
+    T[2*UR5_STRIDE] = t18;
+    T[3*UR5_STRIDE] = t29;
+    T[4*UR5_STRIDE] = t25;
+    T[5*UR5_STRIDE] = t26;
+    T[6*UR5_STRIDE] = t20;
+    T[7*UR5_STRIDE] = t30;
+    T[8*UR5_STRIDE] = t27;
+    T[9*UR5_STRIDE] = t28;
+    T[10*UR5_STRIDE] = t22;
+    T[11*UR5_STRIDE] = t31;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
     J[0] = t1416;
-    J[1] = t33;
-    J[2] = t39;
-    J[3] = t45;
-    J[4] = t50;
-    J[5] = t56;
-    J[6] = t29;
-    J[7] = t34;
-    J[8] = t40;
-    J[9] = t46;
-    J[10] = t51;
-    J[11] = t57;
-    J[12] = 0.0;
-    J[13] = t35;
-    J[14] = t41;
-    J[15] = t47;
-    J[16] = t52;
-    J[17] = t58;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t199;
-    J[23] = t18;
-    J[24] = 0.0;
-    J[25] = t251;
-    J[26] = t251;
-    J[27] = t251;
-    J[28] = t255;
-    J[29] = t20;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t325;
-    J[35] = t22;
+    J[1*UR5_STRIDE] = t33;
+    J[2*UR5_STRIDE] = t39;
+    J[3*UR5_STRIDE] = t45;
+    J[4*UR5_STRIDE] = t50;
+    J[5*UR5_STRIDE] = t56;
+    J[6*UR5_STRIDE] = t29;
+    J[7*UR5_STRIDE] = t34;
+    J[8*UR5_STRIDE] = t40;
+    J[9*UR5_STRIDE] = t46;
+    J[10*UR5_STRIDE] = t51;
+    J[11*UR5_STRIDE] = t57;
+    J[12*UR5_STRIDE] = 0.0;
+    J[13*UR5_STRIDE] = t35;
+    J[14*UR5_STRIDE] = t41;
+    J[15*UR5_STRIDE] = t47;
+    J[16*UR5_STRIDE] = t52;
+    J[17*UR5_STRIDE] = t58;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[22*UR5_STRIDE] = t199;
+    J[23*UR5_STRIDE] = t18;
+    J[24*UR5_STRIDE] = 0.0;
+    J[25*UR5_STRIDE] = t251;
+    J[26*UR5_STRIDE] = t251;
+    J[27*UR5_STRIDE] = t251;
+    J[28*UR5_STRIDE] = t255;
+    J[29*UR5_STRIDE] = t20;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    J[34*UR5_STRIDE] = t325;
+    J[35*UR5_STRIDE] = t22;
 }
 
 void ur5_ik_terms(const double q[6], double T[16], double J[36])
@@ -3413,224 +2138,24 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_ik_terms_angles(q, ang);
+    ur5_ik_terms_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_ik_terms_finish(cs, sn, T, J);
+    ur5_ik_terms_finish(cs, sn, T, J, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_ik_terms_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double T[16];
-        double J[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t17 = t10*cs[4] + sn[0]*sn[4];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t19 = t12*cs[4] - cs[0]*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t21 = cs[4]*sn[3];
-        const double t22 = -sn[3]*sn[4];
-        const double t23 = t11*sn[5] + t17*cs[5];
-        const double t24 = t11*cs[5] - t17*sn[5];
-        const double t25 = t13*sn[5] + t19*cs[5];
-        const double t26 = t13*cs[5] - t19*sn[5];
-        const double t27 = t21*cs[5] + cs[3]*sn[5];
-        const double t28 = cs[3]*cs[5] - t21*sn[5];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t199 = -t11;
-        const double t251 = -cs[0];
-        const double t255 = -t13;
-        const double t325 = -cs[3];
-        const double t1416 = -t30;
-        T[0] = t23;
-        T[1] = t24;
-        T[2] = t18;
-        T[3] = t29;
-        T[4] = t25;
-        T[5] = t26;
-        T[6] = t20;
-        T[7] = t30;
-        T[8] = t27;
-        T[9] = t28;
-        T[10] = t22;
-        T[11] = t31;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        J[0] = t1416;
-        J[1] = t33;
-        J[2] = t39;
-        J[3] = t45;
-        J[4] = t50;
-        J[5] = t56;
-        J[6] = t29;
-        J[7] = t34;
-        J[8] = t40;
-        J[9] = t46;
-        J[10] = t51;
-        J[11] = t57;
-        J[12] = 0.0;
-        J[13] = t35;
-        J[14] = t41;
-        J[15] = t47;
-        J[16] = t52;
-        J[17] = t58;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t199;
-        J[23] = t18;
-        J[24] = 0.0;
-        J[25] = t251;
-        J[26] = t251;
-        J[27] = t251;
-        J[28] = t255;
-        J[29] = t20;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t325;
-        J[35] = t22;
-        T_T[0 + b] = T[0];
-        T_T[32 + b] = T[1];
-        T_T[64 + b] = T[2];
-        T_T[96 + b] = T[3];
-        T_T[128 + b] = T[4];
-        T_T[160 + b] = T[5];
-        T_T[192 + b] = T[6];
-        T_T[224 + b] = T[7];
-        T_T[256 + b] = T[8];
-        T_T[288 + b] = T[9];
-        T_T[320 + b] = T[10];
-        T_T[352 + b] = T[11];
-        T_T[384 + b] = T[12];
-        T_T[416 + b] = T[13];
-        T_T[448 + b] = T[14];
-        T_T[480 + b] = T[15];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
-        J_T[384 + b] = J[12];
-        J_T[416 + b] = J[13];
-        J_T[448 + b] = J[14];
-        J_T[480 + b] = J[15];
-        J_T[512 + b] = J[16];
-        J_T[544 + b] = J[17];
-        J_T[576 + b] = J[18];
-        J_T[608 + b] = J[19];
-        J_T[640 + b] = J[20];
-        J_T[672 + b] = J[21];
-        J_T[704 + b] = J[22];
-        J_T[736 + b] = J[23];
-        J_T[768 + b] = J[24];
-        J_T[800 + b] = J[25];
-        J_T[832 + b] = J[26];
-        J_T[864 + b] = J[27];
-        J_T[896 + b] = J[28];
-        J_T[928 + b] = J[29];
-        J_T[960 + b] = J[30];
-        J_T[992 + b] = J[31];
-        J_T[1024 + b] = J[32];
-        J_T[1056 + b] = J[33];
-        J_T[1088 + b] = J[34];
-        J_T[1120 + b] = J[35];
+        ur5_ik_terms_finish(cs_T + b, sn_T + b, T_T + b, J_T + b, 32);
     }
 }
 
@@ -3732,11 +2257,11 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_ik_terms_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_ik_terms_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36);
+            ur5_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, 1);
         }
     }
 }
@@ -4088,404 +2613,6 @@ void ur5_manipulability(const double q[6], double w[1])
     ur5_manipulability_finish(cs, sn, w);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_block(const double *restrict q_T, double *restrict w_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t115 = t33*t33;
-        const double t116 = t39*t39;
-        const double t117 = t45*t45;
-        const double t118 = t50*t50;
-        const double t119 = t56*t56;
-        const double t120 = t30*t30;
-        const double t121 = t115 + t116 + t117 + t118 + t119 + t120;
-        const double t122 = sqrt(t121);
-        const double t123 = 1.0/(t122 != 0.0 ? t122 : 1.0);
-        const double t124 = (t122 > 0.0 ? t123 : 1.0);
-        const double t125 = -t124*t30;
-        const double t126 = t33*t124;
-        const double t127 = t39*t124;
-        const double t128 = t45*t124;
-        const double t129 = t50*t124;
-        const double t130 = t56*t124;
-        const double t131 = t34*t126 + t40*t127 + t46*t128 + t51*t129 + t57*t130 + t125*t29;
-        const double t132 = t29 - t131*t125;
-        const double t133 = t34 - t131*t126;
-        const double t134 = t40 - t131*t127;
-        const double t135 = t46 - t131*t128;
-        const double t136 = t51 - t131*t129;
-        const double t137 = t57 - t131*t130;
-        const double t138 = t125*t132 + t126*t133 + t127*t134 + t128*t135 + t129*t136 + t130*t137;
-        const double t139 = t132 - t138*t125;
-        const double t140 = t133 - t138*t126;
-        const double t141 = t134 - t138*t127;
-        const double t142 = t135 - t138*t128;
-        const double t143 = t136 - t138*t129;
-        const double t144 = t137 - t138*t130;
-        const double t145 = t139*t139 + t140*t140 + t141*t141 + t142*t142 + t143*t143 + t144*t144;
-        const double t146 = sqrt(t145);
-        const double t147 = (t146 > 0.0 ? 1.0/(t146 != 0.0 ? t146 : 1.0) : 1.0);
-        const double t148 = t147*t139;
-        const double t149 = t147*t140;
-        const double t150 = t147*t141;
-        const double t151 = t147*t142;
-        const double t152 = t147*t143;
-        const double t153 = t147*t144;
-        const double t155 = t35*t126 + t41*t127 + t47*t128 + t52*t129 + t58*t130;
-        const double t156 = -t155*t125;
-        const double t157 = t35 - t155*t126;
-        const double t158 = t41 - t155*t127;
-        const double t159 = t47 - t155*t128;
-        const double t160 = t52 - t155*t129;
-        const double t161 = t58 - t155*t130;
-        const double t162 = t148*t156 + t149*t157 + t150*t158 + t151*t159 + t152*t160 + t153*t161;
-        const double t163 = t156 - t162*t148;
-        const double t164 = t157 - t162*t149;
-        const double t165 = t158 - t162*t150;
-        const double t166 = t159 - t162*t151;
-        const double t167 = t160 - t162*t152;
-        const double t168 = t161 - t162*t153;
-        const double t169 = t125*t163 + t126*t164 + t127*t165 + t128*t166 + t129*t167 + t130*t168;
-        const double t170 = t163 - t169*t125;
-        const double t171 = t164 - t169*t126;
-        const double t172 = t165 - t169*t127;
-        const double t173 = t166 - t169*t128;
-        const double t174 = t167 - t169*t129;
-        const double t175 = t168 - t169*t130;
-        const double t176 = t148*t170 + t149*t171 + t150*t172 + t151*t173 + t152*t174 + t153*t175;
-        const double t177 = t170 - t176*t148;
-        const double t178 = t171 - t176*t149;
-        const double t179 = t172 - t176*t150;
-        const double t180 = t173 - t176*t151;
-        const double t181 = t174 - t176*t152;
-        const double t182 = t175 - t176*t153;
-        const double t183 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181 + t182*t182;
-        const double t184 = sqrt(t183);
-        const double t185 = (t184 > 0.0 ? 1.0/(t184 != 0.0 ? t184 : 1.0) : 1.0);
-        const double t186 = t185*t177;
-        const double t187 = t185*t178;
-        const double t188 = t185*t179;
-        const double t189 = t185*t180;
-        const double t190 = t185*t181;
-        const double t191 = t185*t182;
-        const double t194 = t18*t130 + t126*sn[0] + t127*sn[0] + t128*sn[0] - t11*t129;
-        const double t195 = -t194*t125;
-        const double t196 = sn[0] - t194*t126;
-        const double t197 = sn[0] - t194*t127;
-        const double t198 = sn[0] - t194*t128;
-        const double t199 = -t11;
-        const double t200 = t199 - t194*t129;
-        const double t201 = t18 - t194*t130;
-        const double t202 = t148*t195 + t149*t196 + t150*t197 + t151*t198 + t152*t200 + t153*t201;
-        const double t203 = t195 - t202*t148;
-        const double t204 = t196 - t202*t149;
-        const double t205 = t197 - t202*t150;
-        const double t206 = t198 - t202*t151;
-        const double t207 = t200 - t202*t152;
-        const double t208 = t201 - t202*t153;
-        const double t209 = t186*t203 + t187*t204 + t188*t205 + t189*t206 + t190*t207 + t191*t208;
-        const double t210 = t203 - t209*t186;
-        const double t211 = t204 - t209*t187;
-        const double t212 = t205 - t209*t188;
-        const double t213 = t206 - t209*t189;
-        const double t214 = t207 - t209*t190;
-        const double t215 = t208 - t209*t191;
-        const double t216 = t125*t210 + t126*t211 + t127*t212 + t128*t213 + t129*t214 + t130*t215;
-        const double t217 = t210 - t216*t125;
-        const double t218 = t211 - t216*t126;
-        const double t219 = t212 - t216*t127;
-        const double t220 = t213 - t216*t128;
-        const double t221 = t214 - t216*t129;
-        const double t222 = t215 - t216*t130;
-        const double t223 = t148*t217 + t149*t218 + t150*t219 + t151*t220 + t152*t221 + t153*t222;
-        const double t224 = t217 - t223*t148;
-        const double t225 = t218 - t223*t149;
-        const double t226 = t219 - t223*t150;
-        const double t227 = t220 - t223*t151;
-        const double t228 = t221 - t223*t152;
-        const double t229 = t222 - t223*t153;
-        const double t230 = t186*t224 + t187*t225 + t188*t226 + t189*t227 + t190*t228 + t191*t229;
-        const double t231 = t224 - t230*t186;
-        const double t232 = t225 - t230*t187;
-        const double t233 = t226 - t230*t188;
-        const double t234 = t227 - t230*t189;
-        const double t235 = t228 - t230*t190;
-        const double t236 = t229 - t230*t191;
-        const double t237 = t231*t231 + t232*t232 + t233*t233 + t234*t234 + t235*t235 + t236*t236;
-        const double t238 = sqrt(t237);
-        const double t239 = (t238 > 0.0 ? 1.0/(t238 != 0.0 ? t238 : 1.0) : 1.0);
-        const double t240 = t239*t231;
-        const double t241 = t239*t232;
-        const double t242 = t239*t233;
-        const double t243 = t239*t234;
-        const double t244 = t239*t235;
-        const double t245 = t239*t236;
-        const double t249 = t20*t130 - t13*t129 - cs[0]*t126 - cs[0]*t127 - cs[0]*t128;
-        const double t250 = -t249*t125;
-        const double t251 = -cs[0];
-        const double t252 = t251 - t249*t126;
-        const double t253 = t251 - t249*t127;
-        const double t254 = t251 - t249*t128;
-        const double t255 = -t13;
-        const double t256 = t255 - t249*t129;
-        const double t257 = t20 - t249*t130;
-        const double t258 = t148*t250 + t149*t252 + t150*t253 + t151*t254 + t152*t256 + t153*t257;
-        const double t259 = t250 - t258*t148;
-        const double t260 = t252 - t258*t149;
-        const double t261 = t253 - t258*t150;
-        const double t262 = t254 - t258*t151;
-        const double t263 = t256 - t258*t152;
-        const double t264 = t257 - t258*t153;
-        const double t265 = t186*t259 + t187*t260 + t188*t261 + t189*t262 + t190*t263 + t191*t264;
-        const double t266 = t259 - t265*t186;
-        const double t267 = t260 - t265*t187;
-        const double t268 = t261 - t265*t188;
-        const double t269 = t262 - t265*t189;
-        const double t270 = t263 - t265*t190;
-        const double t271 = t264 - t265*t191;
-        const double t272 = t240*t266 + t241*t267 + t242*t268 + t243*t269 + t244*t270 + t245*t271;
-        const double t273 = t266 - t272*t240;
-        const double t274 = t267 - t272*t241;
-        const double t275 = t268 - t272*t242;
-        const double t276 = t269 - t272*t243;
-        const double t277 = t270 - t272*t244;
-        const double t278 = t271 - t272*t245;
-        const double t279 = t125*t273 + t126*t274 + t127*t275 + t128*t276 + t129*t277 + t130*t278;
-        const double t280 = t273 - t279*t125;
-        const double t281 = t274 - t279*t126;
-        const double t282 = t275 - t279*t127;
-        const double t283 = t276 - t279*t128;
-        const double t284 = t277 - t279*t129;
-        const double t285 = t278 - t279*t130;
-        const double t286 = t148*t280 + t149*t281 + t150*t282 + t151*t283 + t152*t284 + t153*t285;
-        const double t287 = t280 - t286*t148;
-        const double t288 = t281 - t286*t149;
-        const double t289 = t282 - t286*t150;
-        const double t290 = t283 - t286*t151;
-        const double t291 = t284 - t286*t152;
-        const double t292 = t285 - t286*t153;
-        const double t293 = t186*t287 + t187*t288 + t188*t289 + t189*t290 + t190*t291 + t191*t292;
-        const double t294 = t287 - t293*t186;
-        const double t295 = t288 - t293*t187;
-        const double t296 = t289 - t293*t188;
-        const double t297 = t290 - t293*t189;
-        const double t298 = t291 - t293*t190;
-        const double t299 = t292 - t293*t191;
-        const double t300 = t240*t294 + t241*t295 + t242*t296 + t243*t297 + t244*t298 + t245*t299;
-        const double t301 = t294 - t300*t240;
-        const double t302 = t295 - t300*t241;
-        const double t303 = t296 - t300*t242;
-        const double t304 = t297 - t300*t243;
-        const double t305 = t298 - t300*t244;
-        const double t306 = t299 - t300*t245;
-        const double t307 = t301*t301 + t302*t302 + t303*t303 + t304*t304 + t305*t305 + t306*t306;
-        const double t308 = sqrt(t307);
-        const double t309 = (t308 > 0.0 ? 1.0/(t308 != 0.0 ? t308 : 1.0) : 1.0);
-        const double t310 = t309*t301;
-        const double t311 = t309*t302;
-        const double t312 = t309*t303;
-        const double t313 = t309*t304;
-        const double t314 = t309*t305;
-        const double t315 = t309*t306;
-        const double t320 = t125 + t22*t130 - cs[3]*t129;
-        const double t321 = 1.0 - t320*t125;
-        const double t322 = -t320*t126;
-        const double t323 = -t320*t127;
-        const double t324 = -t320*t128;
-        const double t325 = -cs[3];
-        const double t326 = t325 - t320*t129;
-        const double t327 = t22 - t320*t130;
-        const double t328 = t148*t321 + t149*t322 + t150*t323 + t151*t324 + t152*t326 + t153*t327;
-        const double t329 = t321 - t328*t148;
-        const double t330 = t322 - t328*t149;
-        const double t331 = t323 - t328*t150;
-        const double t332 = t324 - t328*t151;
-        const double t333 = t326 - t328*t152;
-        const double t334 = t327 - t328*t153;
-        const double t335 = t186*t329 + t187*t330 + t188*t331 + t189*t332 + t190*t333 + t191*t334;
-        const double t336 = t329 - t335*t186;
-        const double t337 = t330 - t335*t187;
-        const double t338 = t331 - t335*t188;
-        const double t339 = t332 - t335*t189;
-        const double t340 = t333 - t335*t190;
-        const double t341 = t334 - t335*t191;
-        const double t342 = t240*t336 + t241*t337 + t242*t338 + t243*t339 + t244*t340 + t245*t341;
-        const double t343 = t336 - t342*t240;
-        const double t344 = t337 - t342*t241;
-        const double t345 = t338 - t342*t242;
-        const double t346 = t339 - t342*t243;
-        const double t347 = t340 - t342*t244;
-        const double t348 = t341 - t342*t245;
-        const double t349 = t310*t343 + t311*t344 + t312*t345 + t313*t346 + t314*t347 + t315*t348;
-        const double t350 = t343 - t349*t310;
-        const double t351 = t344 - t349*t311;
-        const double t352 = t345 - t349*t312;
-        const double t353 = t346 - t349*t313;
-        const double t354 = t347 - t349*t314;
-        const double t355 = t348 - t349*t315;
-        const double t356 = t125*t350 + t126*t351 + t127*t352 + t128*t353 + t129*t354 + t130*t355;
-        const double t357 = t350 - t356*t125;
-        const double t358 = t351 - t356*t126;
-        const double t359 = t352 - t356*t127;
-        const double t360 = t353 - t356*t128;
-        const double t361 = t354 - t356*t129;
-        const double t362 = t355 - t356*t130;
-        const double t363 = t148*t357 + t149*t358 + t150*t359 + t151*t360 + t152*t361 + t153*t362;
-        const double t364 = t357 - t363*t148;
-        const double t365 = t358 - t363*t149;
-        const double t366 = t359 - t363*t150;
-        const double t367 = t360 - t363*t151;
-        const double t368 = t361 - t363*t152;
-        const double t369 = t362 - t363*t153;
-        const double t370 = t186*t364 + t187*t365 + t188*t366 + t189*t367 + t190*t368 + t191*t369;
-        const double t371 = t364 - t370*t186;
-        const double t372 = t365 - t370*t187;
-        const double t373 = t366 - t370*t188;
-        const double t374 = t367 - t370*t189;
-        const double t375 = t368 - t370*t190;
-        const double t376 = t369 - t370*t191;
-        const double t377 = t240*t371 + t241*t372 + t242*t373 + t243*t374 + t244*t375 + t245*t376;
-        const double t378 = t371 - t377*t240;
-        const double t379 = t372 - t377*t241;
-        const double t380 = t373 - t377*t242;
-        const double t381 = t374 - t377*t243;
-        const double t382 = t375 - t377*t244;
-        const double t383 = t376 - t377*t245;
-        const double t384 = t310*t378 + t311*t379 + t312*t380 + t313*t381 + t314*t382 + t315*t383;
-        const double t385 = t378 - t384*t310;
-        const double t386 = t379 - t384*t311;
-        const double t387 = t380 - t384*t312;
-        const double t388 = t381 - t384*t313;
-        const double t389 = t382 - t384*t314;
-        const double t390 = t383 - t384*t315;
-        const double t391 = t385*t385 + t386*t386 + t387*t387 + t388*t388 + t389*t389 + t390*t390;
-        const double t392 = sqrt(t391);
-        const double t405 = t122*t146*t184*t238*t308*t392;
-        w[0] = t405;
-        w_T[0 + b] = w[0];
-    }
-}
-
-void ur5_manipulability_batch(size_t m, const double *q, double *w)
-{
-    double q_T[192];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_block(q_T, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_batch(size_t m, const double *q, double *w)
 {
     size_t i;
@@ -4505,7 +2632,6 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
         }
     }
 }
-#endif
 
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 116 add/sub, 154 mul, 14 neg, 2 div, 3 sqrt */
@@ -4654,205 +2780,6 @@ void ur5_manipulability_position(const double q[6], double w_position[1])
     ur5_manipulability_position_finish(cs, sn, w_position);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_position_block(const double *restrict q_T, double *restrict w_position_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double w_position[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t115 = t33*t33;
-        const double t116 = t39*t39;
-        const double t117 = t45*t45;
-        const double t118 = t50*t50;
-        const double t119 = t56*t56;
-        const double t120 = t30*t30;
-        const double t121 = t115 + t116 + t117 + t118 + t119 + t120;
-        const double t122 = sqrt(t121);
-        const double t123 = 1.0/(t122 != 0.0 ? t122 : 1.0);
-        const double t124 = (t122 > 0.0 ? t123 : 1.0);
-        const double t125 = -t124*t30;
-        const double t126 = t33*t124;
-        const double t127 = t39*t124;
-        const double t128 = t45*t124;
-        const double t129 = t50*t124;
-        const double t130 = t56*t124;
-        const double t131 = t34*t126 + t40*t127 + t46*t128 + t51*t129 + t57*t130 + t125*t29;
-        const double t132 = t29 - t131*t125;
-        const double t133 = t34 - t131*t126;
-        const double t134 = t40 - t131*t127;
-        const double t135 = t46 - t131*t128;
-        const double t136 = t51 - t131*t129;
-        const double t137 = t57 - t131*t130;
-        const double t138 = t125*t132 + t126*t133 + t127*t134 + t128*t135 + t129*t136 + t130*t137;
-        const double t139 = t132 - t138*t125;
-        const double t140 = t133 - t138*t126;
-        const double t141 = t134 - t138*t127;
-        const double t142 = t135 - t138*t128;
-        const double t143 = t136 - t138*t129;
-        const double t144 = t137 - t138*t130;
-        const double t145 = t139*t139 + t140*t140 + t141*t141 + t142*t142 + t143*t143 + t144*t144;
-        const double t146 = sqrt(t145);
-        const double t147 = (t146 > 0.0 ? 1.0/(t146 != 0.0 ? t146 : 1.0) : 1.0);
-        const double t148 = t147*t139;
-        const double t149 = t147*t140;
-        const double t150 = t147*t141;
-        const double t151 = t147*t142;
-        const double t152 = t147*t143;
-        const double t153 = t147*t144;
-        const double t155 = t35*t126 + t41*t127 + t47*t128 + t52*t129 + t58*t130;
-        const double t156 = -t155*t125;
-        const double t157 = t35 - t155*t126;
-        const double t158 = t41 - t155*t127;
-        const double t159 = t47 - t155*t128;
-        const double t160 = t52 - t155*t129;
-        const double t161 = t58 - t155*t130;
-        const double t162 = t148*t156 + t149*t157 + t150*t158 + t151*t159 + t152*t160 + t153*t161;
-        const double t163 = t156 - t162*t148;
-        const double t164 = t157 - t162*t149;
-        const double t165 = t158 - t162*t150;
-        const double t166 = t159 - t162*t151;
-        const double t167 = t160 - t162*t152;
-        const double t168 = t161 - t162*t153;
-        const double t169 = t125*t163 + t126*t164 + t127*t165 + t128*t166 + t129*t167 + t130*t168;
-        const double t170 = t163 - t169*t125;
-        const double t171 = t164 - t169*t126;
-        const double t172 = t165 - t169*t127;
-        const double t173 = t166 - t169*t128;
-        const double t174 = t167 - t169*t129;
-        const double t175 = t168 - t169*t130;
-        const double t176 = t148*t170 + t149*t171 + t150*t172 + t151*t173 + t152*t174 + t153*t175;
-        const double t177 = t170 - t176*t148;
-        const double t178 = t171 - t176*t149;
-        const double t179 = t172 - t176*t150;
-        const double t180 = t173 - t176*t151;
-        const double t181 = t174 - t176*t152;
-        const double t182 = t175 - t176*t153;
-        const double t183 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181 + t182*t182;
-        const double t184 = sqrt(t183);
-        const double t406 = t122*t146*t184;
-        w_position[0] = t406;
-        w_position_T[0 + b] = w_position[0];
-    }
-}
-
-void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position)
-{
-    double q_T[192];
-    double w_position_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_position_block(q_T, w_position_T);
-        for (b = 0; b < count; ++b) {
-            double *w_position_b = w_position + (i + b) * 1;
-            w_position_b[0] = w_position_T[0 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position)
 {
     size_t i;
@@ -4872,7 +2799,6 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
         }
     }
 }
-#endif
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 101 mul, 34 neg */
@@ -5204,818 +3130,6 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216])
     ur5_jacobian_hessian_finish(cs, sn, Hs);
 }
 
-#if UR5_VECTOR_MATH
-/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_hessian_block(const double *restrict q_T, double *restrict Hs_T)
-{
-    double ang_T[80], cs_T[80], sn_T[80];
-    int b;
-    for (b = 0; b < 16; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[16 + b];
-        q[2] = q_T[32 + b];
-        q[3] = q_T[48 + b];
-        q[4] = q_T[64 + b];
-        q[5] = q_T[80 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[16 + b] = ang[1];
-        ang_T[32 + b] = ang[2];
-        ang_T[48 + b] = ang[3];
-        ang_T[64 + b] = ang[4];
-    }
-    ur5_trig80(ang_T, cs_T, sn_T, 80);
-    for (b = 0; b < 16; ++b) {
-        double cs[5];
-        double sn[5];
-        double Hs[216];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[16 + b];
-        cs[2] = cs_T[32 + b];
-        cs[3] = cs_T[48 + b];
-        cs[4] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[16 + b];
-        sn[2] = sn_T[32 + b];
-        sn[3] = sn_T[48 + b];
-        sn[4] = sn_T[64 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t199 = -t11;
-        const double t407 = -t35*cs[0];
-        const double t408 = -t41*cs[0];
-        const double t409 = -t47*cs[0];
-        const double t410 = -t52*cs[0];
-        const double t411 = -t58*cs[0];
-        const double t412 = t51*cs[3] - t52*t13;
-        const double t413 = t57*cs[3] - t58*t13;
-        const double t414 = t58*t20 - t57*t22;
-        const double t415 = -t35*sn[0];
-        const double t416 = -t41*sn[0];
-        const double t417 = -t47*sn[0];
-        const double t418 = -t52*sn[0];
-        const double t419 = -t58*sn[0];
-        const double t420 = t52*t11 - t50*cs[3];
-        const double t421 = t58*t11 - t56*cs[3];
-        const double t422 = t56*t22 - t58*t18;
-        const double t423 = t33*cs[0] + t34*sn[0];
-        const double t424 = t39*cs[0] + t40*sn[0];
-        const double t425 = t45*cs[0] + t46*sn[0];
-        const double t426 = t50*cs[0] + t51*sn[0];
-        const double t427 = t56*cs[0] + t57*sn[0];
-        const double t428 = t50*t13 - t51*t11;
-        const double t429 = t56*t13 - t57*t11;
-        const double t430 = t57*t18 - t56*t20;
-        const double t431 = -t22*cs[0];
-        const double t432 = t20*cs[3] - t13*t22;
-        const double t433 = -t22*sn[0];
-        const double t434 = t11*t22 - t18*cs[3];
-        const double t435 = -t11*cs[0] - t13*sn[0];
-        const double t436 = t18*cs[0] + t20*sn[0];
-        const double t437 = t13*t18 - t11*t20;
-        const double t1416 = -t30;
-        const double t1420 = -t34;
-        const double t1421 = -t40;
-        const double t1422 = -t46;
-        const double t1423 = -t51;
-        const double t1424 = -t57;
-        Hs[0] = -t29;
-        Hs[1] = t1420;
-        Hs[2] = t1421;
-        Hs[3] = t1422;
-        Hs[4] = t1423;
-        Hs[5] = t1424;
-        Hs[6] = t1420;
-        Hs[7] = t407;
-        Hs[8] = t408;
-        Hs[9] = t409;
-        Hs[10] = t410;
-        Hs[11] = t411;
-        Hs[12] = t1421;
-        Hs[13] = t408;
-        Hs[14] = t408;
-        Hs[15] = t409;
-        Hs[16] = t410;
-        Hs[17] = t411;
-        Hs[18] = t1422;
-        Hs[19] = t409;
-        Hs[20] = t409;
-        Hs[21] = t409;
-        Hs[22] = t410;
-        Hs[23] = t411;
-        Hs[24] = t1423;
-        Hs[25] = t410;
-        Hs[26] = t410;
-        Hs[27] = t410;
-        Hs[28] = t412;
-        Hs[29] = t413;
-        Hs[30] = t1424;
-        Hs[31] = t411;
-        Hs[32] = t411;
-        Hs[33] = t411;
-        Hs[34] = t413;
-        Hs[35] = t414;
-        Hs[36] = t1416;
-        Hs[37] = t33;
-        Hs[38] = t39;
-        Hs[39] = t45;
-        Hs[40] = t50;
-        Hs[41] = t56;
-        Hs[42] = t33;
-        Hs[43] = t415;
-        Hs[44] = t416;
-        Hs[45] = t417;
-        Hs[46] = t418;
-        Hs[47] = t419;
-        Hs[48] = t39;
-        Hs[49] = t416;
-        Hs[50] = t416;
-        Hs[51] = t417;
-        Hs[52] = t418;
-        Hs[53] = t419;
-        Hs[54] = t45;
-        Hs[55] = t417;
-        Hs[56] = t417;
-        Hs[57] = t417;
-        Hs[58] = t418;
-        Hs[59] = t419;
-        Hs[60] = t50;
-        Hs[61] = t418;
-        Hs[62] = t418;
-        Hs[63] = t418;
-        Hs[64] = t420;
-        Hs[65] = t421;
-        Hs[66] = t56;
-        Hs[67] = t419;
-        Hs[68] = t419;
-        Hs[69] = t419;
-        Hs[70] = t421;
-        Hs[71] = t422;
-        Hs[72] = 0.0;
-        Hs[73] = 0.0;
-        Hs[74] = 0.0;
-        Hs[75] = 0.0;
-        Hs[76] = 0.0;
-        Hs[77] = 0.0;
-        Hs[78] = 0.0;
-        Hs[79] = t423;
-        Hs[80] = t424;
-        Hs[81] = t425;
-        Hs[82] = t426;
-        Hs[83] = t427;
-        Hs[84] = 0.0;
-        Hs[85] = t424;
-        Hs[86] = t424;
-        Hs[87] = t425;
-        Hs[88] = t426;
-        Hs[89] = t427;
-        Hs[90] = 0.0;
-        Hs[91] = t425;
-        Hs[92] = t425;
-        Hs[93] = t425;
-        Hs[94] = t426;
-        Hs[95] = t427;
-        Hs[96] = 0.0;
-        Hs[97] = t426;
-        Hs[98] = t426;
-        Hs[99] = t426;
-        Hs[100] = t428;
-        Hs[101] = t429;
-        Hs[102] = 0.0;
-        Hs[103] = t427;
-        Hs[104] = t427;
-        Hs[105] = t427;
-        Hs[106] = t429;
-        Hs[107] = t430;
-        Hs[108] = 0.0;
-        Hs[109] = 0.0;
-        Hs[110] = 0.0;
-        Hs[111] = 0.0;
-        Hs[112] = 0.0;
-        Hs[113] = 0.0;
-        Hs[114] = cs[0];
-        Hs[115] = 0.0;
-        Hs[116] = 0.0;
-        Hs[117] = 0.0;
-        Hs[118] = 0.0;
-        Hs[119] = 0.0;
-        Hs[120] = cs[0];
-        Hs[121] = 0.0;
-        Hs[122] = 0.0;
-        Hs[123] = 0.0;
-        Hs[124] = 0.0;
-        Hs[125] = 0.0;
-        Hs[126] = cs[0];
-        Hs[127] = 0.0;
-        Hs[128] = 0.0;
-        Hs[129] = 0.0;
-        Hs[130] = 0.0;
-        Hs[131] = 0.0;
-        Hs[132] = t13;
-        Hs[133] = t10;
-        Hs[134] = t10;
-        Hs[135] = t10;
-        Hs[136] = 0.0;
-        Hs[137] = 0.0;
-        Hs[138] = -t20;
-        Hs[139] = t431;
-        Hs[140] = t431;
-        Hs[141] = t431;
-        Hs[142] = t432;
-        Hs[143] = 0.0;
-        Hs[144] = 0.0;
-        Hs[145] = 0.0;
-        Hs[146] = 0.0;
-        Hs[147] = 0.0;
-        Hs[148] = 0.0;
-        Hs[149] = 0.0;
-        Hs[150] = sn[0];
-        Hs[151] = 0.0;
-        Hs[152] = 0.0;
-        Hs[153] = 0.0;
-        Hs[154] = 0.0;
-        Hs[155] = 0.0;
-        Hs[156] = sn[0];
-        Hs[157] = 0.0;
-        Hs[158] = 0.0;
-        Hs[159] = 0.0;
-        Hs[160] = 0.0;
-        Hs[161] = 0.0;
-        Hs[162] = sn[0];
-        Hs[163] = 0.0;
-        Hs[164] = 0.0;
-        Hs[165] = 0.0;
-        Hs[166] = 0.0;
-        Hs[167] = 0.0;
-        Hs[168] = t199;
-        Hs[169] = t12;
-        Hs[170] = t12;
-        Hs[171] = t12;
-        Hs[172] = 0.0;
-        Hs[173] = 0.0;
-        Hs[174] = t18;
-        Hs[175] = t433;
-        Hs[176] = t433;
-        Hs[177] = t433;
-        Hs[178] = t434;
-        Hs[179] = 0.0;
-        Hs[180] = 0.0;
-        Hs[181] = 0.0;
-        Hs[182] = 0.0;
-        Hs[183] = 0.0;
-        Hs[184] = 0.0;
-        Hs[185] = 0.0;
-        Hs[186] = 0.0;
-        Hs[187] = 0.0;
-        Hs[188] = 0.0;
-        Hs[189] = 0.0;
-        Hs[190] = 0.0;
-        Hs[191] = 0.0;
-        Hs[192] = 0.0;
-        Hs[193] = 0.0;
-        Hs[194] = 0.0;
-        Hs[195] = 0.0;
-        Hs[196] = 0.0;
-        Hs[197] = 0.0;
-        Hs[198] = 0.0;
-        Hs[199] = 0.0;
-        Hs[200] = 0.0;
-        Hs[201] = 0.0;
-        Hs[202] = 0.0;
-        Hs[203] = 0.0;
-        Hs[204] = 0.0;
-        Hs[205] = t435;
-        Hs[206] = t435;
-        Hs[207] = t435;
-        Hs[208] = 0.0;
-        Hs[209] = 0.0;
-        Hs[210] = 0.0;
-        Hs[211] = t436;
-        Hs[212] = t436;
-        Hs[213] = t436;
-        Hs[214] = t437;
-        Hs[215] = 0.0;
-        Hs_T[0 + b] = Hs[0];
-        Hs_T[16 + b] = Hs[1];
-        Hs_T[32 + b] = Hs[2];
-        Hs_T[48 + b] = Hs[3];
-        Hs_T[64 + b] = Hs[4];
-        Hs_T[80 + b] = Hs[5];
-        Hs_T[96 + b] = Hs[6];
-        Hs_T[112 + b] = Hs[7];
-        Hs_T[128 + b] = Hs[8];
-        Hs_T[144 + b] = Hs[9];
-        Hs_T[160 + b] = Hs[10];
-        Hs_T[176 + b] = Hs[11];
-        Hs_T[192 + b] = Hs[12];
-        Hs_T[208 + b] = Hs[13];
-        Hs_T[224 + b] = Hs[14];
-        Hs_T[240 + b] = Hs[15];
-        Hs_T[256 + b] = Hs[16];
-        Hs_T[272 + b] = Hs[17];
-        Hs_T[288 + b] = Hs[18];
-        Hs_T[304 + b] = Hs[19];
-        Hs_T[320 + b] = Hs[20];
-        Hs_T[336 + b] = Hs[21];
-        Hs_T[352 + b] = Hs[22];
-        Hs_T[368 + b] = Hs[23];
-        Hs_T[384 + b] = Hs[24];
-        Hs_T[400 + b] = Hs[25];
-        Hs_T[416 + b] = Hs[26];
-        Hs_T[432 + b] = Hs[27];
-        Hs_T[448 + b] = Hs[28];
-        Hs_T[464 + b] = Hs[29];
-        Hs_T[480 + b] = Hs[30];
-        Hs_T[496 + b] = Hs[31];
-        Hs_T[512 + b] = Hs[32];
-        Hs_T[528 + b] = Hs[33];
-        Hs_T[544 + b] = Hs[34];
-        Hs_T[560 + b] = Hs[35];
-        Hs_T[576 + b] = Hs[36];
-        Hs_T[592 + b] = Hs[37];
-        Hs_T[608 + b] = Hs[38];
-        Hs_T[624 + b] = Hs[39];
-        Hs_T[640 + b] = Hs[40];
-        Hs_T[656 + b] = Hs[41];
-        Hs_T[672 + b] = Hs[42];
-        Hs_T[688 + b] = Hs[43];
-        Hs_T[704 + b] = Hs[44];
-        Hs_T[720 + b] = Hs[45];
-        Hs_T[736 + b] = Hs[46];
-        Hs_T[752 + b] = Hs[47];
-        Hs_T[768 + b] = Hs[48];
-        Hs_T[784 + b] = Hs[49];
-        Hs_T[800 + b] = Hs[50];
-        Hs_T[816 + b] = Hs[51];
-        Hs_T[832 + b] = Hs[52];
-        Hs_T[848 + b] = Hs[53];
-        Hs_T[864 + b] = Hs[54];
-        Hs_T[880 + b] = Hs[55];
-        Hs_T[896 + b] = Hs[56];
-        Hs_T[912 + b] = Hs[57];
-        Hs_T[928 + b] = Hs[58];
-        Hs_T[944 + b] = Hs[59];
-        Hs_T[960 + b] = Hs[60];
-        Hs_T[976 + b] = Hs[61];
-        Hs_T[992 + b] = Hs[62];
-        Hs_T[1008 + b] = Hs[63];
-        Hs_T[1024 + b] = Hs[64];
-        Hs_T[1040 + b] = Hs[65];
-        Hs_T[1056 + b] = Hs[66];
-        Hs_T[1072 + b] = Hs[67];
-        Hs_T[1088 + b] = Hs[68];
-        Hs_T[1104 + b] = Hs[69];
-        Hs_T[1120 + b] = Hs[70];
-        Hs_T[1136 + b] = Hs[71];
-        Hs_T[1152 + b] = Hs[72];
-        Hs_T[1168 + b] = Hs[73];
-        Hs_T[1184 + b] = Hs[74];
-        Hs_T[1200 + b] = Hs[75];
-        Hs_T[1216 + b] = Hs[76];
-        Hs_T[1232 + b] = Hs[77];
-        Hs_T[1248 + b] = Hs[78];
-        Hs_T[1264 + b] = Hs[79];
-        Hs_T[1280 + b] = Hs[80];
-        Hs_T[1296 + b] = Hs[81];
-        Hs_T[1312 + b] = Hs[82];
-        Hs_T[1328 + b] = Hs[83];
-        Hs_T[1344 + b] = Hs[84];
-        Hs_T[1360 + b] = Hs[85];
-        Hs_T[1376 + b] = Hs[86];
-        Hs_T[1392 + b] = Hs[87];
-        Hs_T[1408 + b] = Hs[88];
-        Hs_T[1424 + b] = Hs[89];
-        Hs_T[1440 + b] = Hs[90];
-        Hs_T[1456 + b] = Hs[91];
-        Hs_T[1472 + b] = Hs[92];
-        Hs_T[1488 + b] = Hs[93];
-        Hs_T[1504 + b] = Hs[94];
-        Hs_T[1520 + b] = Hs[95];
-        Hs_T[1536 + b] = Hs[96];
-        Hs_T[1552 + b] = Hs[97];
-        Hs_T[1568 + b] = Hs[98];
-        Hs_T[1584 + b] = Hs[99];
-        Hs_T[1600 + b] = Hs[100];
-        Hs_T[1616 + b] = Hs[101];
-        Hs_T[1632 + b] = Hs[102];
-        Hs_T[1648 + b] = Hs[103];
-        Hs_T[1664 + b] = Hs[104];
-        Hs_T[1680 + b] = Hs[105];
-        Hs_T[1696 + b] = Hs[106];
-        Hs_T[1712 + b] = Hs[107];
-        Hs_T[1728 + b] = Hs[108];
-        Hs_T[1744 + b] = Hs[109];
-        Hs_T[1760 + b] = Hs[110];
-        Hs_T[1776 + b] = Hs[111];
-        Hs_T[1792 + b] = Hs[112];
-        Hs_T[1808 + b] = Hs[113];
-        Hs_T[1824 + b] = Hs[114];
-        Hs_T[1840 + b] = Hs[115];
-        Hs_T[1856 + b] = Hs[116];
-        Hs_T[1872 + b] = Hs[117];
-        Hs_T[1888 + b] = Hs[118];
-        Hs_T[1904 + b] = Hs[119];
-        Hs_T[1920 + b] = Hs[120];
-        Hs_T[1936 + b] = Hs[121];
-        Hs_T[1952 + b] = Hs[122];
-        Hs_T[1968 + b] = Hs[123];
-        Hs_T[1984 + b] = Hs[124];
-        Hs_T[2000 + b] = Hs[125];
-        Hs_T[2016 + b] = Hs[126];
-        Hs_T[2032 + b] = Hs[127];
-        Hs_T[2048 + b] = Hs[128];
-        Hs_T[2064 + b] = Hs[129];
-        Hs_T[2080 + b] = Hs[130];
-        Hs_T[2096 + b] = Hs[131];
-        Hs_T[2112 + b] = Hs[132];
-        Hs_T[2128 + b] = Hs[133];
-        Hs_T[2144 + b] = Hs[134];
-        Hs_T[2160 + b] = Hs[135];
-        Hs_T[2176 + b] = Hs[136];
-        Hs_T[2192 + b] = Hs[137];
-        Hs_T[2208 + b] = Hs[138];
-        Hs_T[2224 + b] = Hs[139];
-        Hs_T[2240 + b] = Hs[140];
-        Hs_T[2256 + b] = Hs[141];
-        Hs_T[2272 + b] = Hs[142];
-        Hs_T[2288 + b] = Hs[143];
-        Hs_T[2304 + b] = Hs[144];
-        Hs_T[2320 + b] = Hs[145];
-        Hs_T[2336 + b] = Hs[146];
-        Hs_T[2352 + b] = Hs[147];
-        Hs_T[2368 + b] = Hs[148];
-        Hs_T[2384 + b] = Hs[149];
-        Hs_T[2400 + b] = Hs[150];
-        Hs_T[2416 + b] = Hs[151];
-        Hs_T[2432 + b] = Hs[152];
-        Hs_T[2448 + b] = Hs[153];
-        Hs_T[2464 + b] = Hs[154];
-        Hs_T[2480 + b] = Hs[155];
-        Hs_T[2496 + b] = Hs[156];
-        Hs_T[2512 + b] = Hs[157];
-        Hs_T[2528 + b] = Hs[158];
-        Hs_T[2544 + b] = Hs[159];
-        Hs_T[2560 + b] = Hs[160];
-        Hs_T[2576 + b] = Hs[161];
-        Hs_T[2592 + b] = Hs[162];
-        Hs_T[2608 + b] = Hs[163];
-        Hs_T[2624 + b] = Hs[164];
-        Hs_T[2640 + b] = Hs[165];
-        Hs_T[2656 + b] = Hs[166];
-        Hs_T[2672 + b] = Hs[167];
-        Hs_T[2688 + b] = Hs[168];
-        Hs_T[2704 + b] = Hs[169];
-        Hs_T[2720 + b] = Hs[170];
-        Hs_T[2736 + b] = Hs[171];
-        Hs_T[2752 + b] = Hs[172];
-        Hs_T[2768 + b] = Hs[173];
-        Hs_T[2784 + b] = Hs[174];
-        Hs_T[2800 + b] = Hs[175];
-        Hs_T[2816 + b] = Hs[176];
-        Hs_T[2832 + b] = Hs[177];
-        Hs_T[2848 + b] = Hs[178];
-        Hs_T[2864 + b] = Hs[179];
-        Hs_T[2880 + b] = Hs[180];
-        Hs_T[2896 + b] = Hs[181];
-        Hs_T[2912 + b] = Hs[182];
-        Hs_T[2928 + b] = Hs[183];
-        Hs_T[2944 + b] = Hs[184];
-        Hs_T[2960 + b] = Hs[185];
-        Hs_T[2976 + b] = Hs[186];
-        Hs_T[2992 + b] = Hs[187];
-        Hs_T[3008 + b] = Hs[188];
-        Hs_T[3024 + b] = Hs[189];
-        Hs_T[3040 + b] = Hs[190];
-        Hs_T[3056 + b] = Hs[191];
-        Hs_T[3072 + b] = Hs[192];
-        Hs_T[3088 + b] = Hs[193];
-        Hs_T[3104 + b] = Hs[194];
-        Hs_T[3120 + b] = Hs[195];
-        Hs_T[3136 + b] = Hs[196];
-        Hs_T[3152 + b] = Hs[197];
-        Hs_T[3168 + b] = Hs[198];
-        Hs_T[3184 + b] = Hs[199];
-        Hs_T[3200 + b] = Hs[200];
-        Hs_T[3216 + b] = Hs[201];
-        Hs_T[3232 + b] = Hs[202];
-        Hs_T[3248 + b] = Hs[203];
-        Hs_T[3264 + b] = Hs[204];
-        Hs_T[3280 + b] = Hs[205];
-        Hs_T[3296 + b] = Hs[206];
-        Hs_T[3312 + b] = Hs[207];
-        Hs_T[3328 + b] = Hs[208];
-        Hs_T[3344 + b] = Hs[209];
-        Hs_T[3360 + b] = Hs[210];
-        Hs_T[3376 + b] = Hs[211];
-        Hs_T[3392 + b] = Hs[212];
-        Hs_T[3408 + b] = Hs[213];
-        Hs_T[3424 + b] = Hs[214];
-        Hs_T[3440 + b] = Hs[215];
-    }
-}
-
-void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
-{
-    double q_T[96];
-    double Hs_T[3456];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 16) {
-        if (i + 16 <= m) {
-            for (b = 0; b < 16; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[16 + b] = q_b[1];
-                q_T[32 + b] = q_b[2];
-                q_T[48 + b] = q_b[3];
-                q_T[64 + b] = q_b[4];
-                q_T[80 + b] = q_b[5];
-            }
-            count = 16;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 16; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 16 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_jacobian_hessian_block(q_T, Hs_T);
-        for (b = 0; b < count; ++b) {
-            double *Hs_b = Hs + (i + b) * 216;
-            Hs_b[0] = Hs_T[0 + b];
-            Hs_b[1] = Hs_T[16 + b];
-            Hs_b[2] = Hs_T[32 + b];
-            Hs_b[3] = Hs_T[48 + b];
-            Hs_b[4] = Hs_T[64 + b];
-            Hs_b[5] = Hs_T[80 + b];
-            Hs_b[6] = Hs_T[96 + b];
-            Hs_b[7] = Hs_T[112 + b];
-            Hs_b[8] = Hs_T[128 + b];
-            Hs_b[9] = Hs_T[144 + b];
-            Hs_b[10] = Hs_T[160 + b];
-            Hs_b[11] = Hs_T[176 + b];
-            Hs_b[12] = Hs_T[192 + b];
-            Hs_b[13] = Hs_T[208 + b];
-            Hs_b[14] = Hs_T[224 + b];
-            Hs_b[15] = Hs_T[240 + b];
-            Hs_b[16] = Hs_T[256 + b];
-            Hs_b[17] = Hs_T[272 + b];
-            Hs_b[18] = Hs_T[288 + b];
-            Hs_b[19] = Hs_T[304 + b];
-            Hs_b[20] = Hs_T[320 + b];
-            Hs_b[21] = Hs_T[336 + b];
-            Hs_b[22] = Hs_T[352 + b];
-            Hs_b[23] = Hs_T[368 + b];
-            Hs_b[24] = Hs_T[384 + b];
-            Hs_b[25] = Hs_T[400 + b];
-            Hs_b[26] = Hs_T[416 + b];
-            Hs_b[27] = Hs_T[432 + b];
-            Hs_b[28] = Hs_T[448 + b];
-            Hs_b[29] = Hs_T[464 + b];
-            Hs_b[30] = Hs_T[480 + b];
-            Hs_b[31] = Hs_T[496 + b];
-            Hs_b[32] = Hs_T[512 + b];
-            Hs_b[33] = Hs_T[528 + b];
-            Hs_b[34] = Hs_T[544 + b];
-            Hs_b[35] = Hs_T[560 + b];
-            Hs_b[36] = Hs_T[576 + b];
-            Hs_b[37] = Hs_T[592 + b];
-            Hs_b[38] = Hs_T[608 + b];
-            Hs_b[39] = Hs_T[624 + b];
-            Hs_b[40] = Hs_T[640 + b];
-            Hs_b[41] = Hs_T[656 + b];
-            Hs_b[42] = Hs_T[672 + b];
-            Hs_b[43] = Hs_T[688 + b];
-            Hs_b[44] = Hs_T[704 + b];
-            Hs_b[45] = Hs_T[720 + b];
-            Hs_b[46] = Hs_T[736 + b];
-            Hs_b[47] = Hs_T[752 + b];
-            Hs_b[48] = Hs_T[768 + b];
-            Hs_b[49] = Hs_T[784 + b];
-            Hs_b[50] = Hs_T[800 + b];
-            Hs_b[51] = Hs_T[816 + b];
-            Hs_b[52] = Hs_T[832 + b];
-            Hs_b[53] = Hs_T[848 + b];
-            Hs_b[54] = Hs_T[864 + b];
-            Hs_b[55] = Hs_T[880 + b];
-            Hs_b[56] = Hs_T[896 + b];
-            Hs_b[57] = Hs_T[912 + b];
-            Hs_b[58] = Hs_T[928 + b];
-            Hs_b[59] = Hs_T[944 + b];
-            Hs_b[60] = Hs_T[960 + b];
-            Hs_b[61] = Hs_T[976 + b];
-            Hs_b[62] = Hs_T[992 + b];
-            Hs_b[63] = Hs_T[1008 + b];
-            Hs_b[64] = Hs_T[1024 + b];
-            Hs_b[65] = Hs_T[1040 + b];
-            Hs_b[66] = Hs_T[1056 + b];
-            Hs_b[67] = Hs_T[1072 + b];
-            Hs_b[68] = Hs_T[1088 + b];
-            Hs_b[69] = Hs_T[1104 + b];
-            Hs_b[70] = Hs_T[1120 + b];
-            Hs_b[71] = Hs_T[1136 + b];
-            Hs_b[72] = Hs_T[1152 + b];
-            Hs_b[73] = Hs_T[1168 + b];
-            Hs_b[74] = Hs_T[1184 + b];
-            Hs_b[75] = Hs_T[1200 + b];
-            Hs_b[76] = Hs_T[1216 + b];
-            Hs_b[77] = Hs_T[1232 + b];
-            Hs_b[78] = Hs_T[1248 + b];
-            Hs_b[79] = Hs_T[1264 + b];
-            Hs_b[80] = Hs_T[1280 + b];
-            Hs_b[81] = Hs_T[1296 + b];
-            Hs_b[82] = Hs_T[1312 + b];
-            Hs_b[83] = Hs_T[1328 + b];
-            Hs_b[84] = Hs_T[1344 + b];
-            Hs_b[85] = Hs_T[1360 + b];
-            Hs_b[86] = Hs_T[1376 + b];
-            Hs_b[87] = Hs_T[1392 + b];
-            Hs_b[88] = Hs_T[1408 + b];
-            Hs_b[89] = Hs_T[1424 + b];
-            Hs_b[90] = Hs_T[1440 + b];
-            Hs_b[91] = Hs_T[1456 + b];
-            Hs_b[92] = Hs_T[1472 + b];
-            Hs_b[93] = Hs_T[1488 + b];
-            Hs_b[94] = Hs_T[1504 + b];
-            Hs_b[95] = Hs_T[1520 + b];
-            Hs_b[96] = Hs_T[1536 + b];
-            Hs_b[97] = Hs_T[1552 + b];
-            Hs_b[98] = Hs_T[1568 + b];
-            Hs_b[99] = Hs_T[1584 + b];
-            Hs_b[100] = Hs_T[1600 + b];
-            Hs_b[101] = Hs_T[1616 + b];
-            Hs_b[102] = Hs_T[1632 + b];
-            Hs_b[103] = Hs_T[1648 + b];
-            Hs_b[104] = Hs_T[1664 + b];
-            Hs_b[105] = Hs_T[1680 + b];
-            Hs_b[106] = Hs_T[1696 + b];
-            Hs_b[107] = Hs_T[1712 + b];
-            Hs_b[108] = Hs_T[1728 + b];
-            Hs_b[109] = Hs_T[1744 + b];
-            Hs_b[110] = Hs_T[1760 + b];
-            Hs_b[111] = Hs_T[1776 + b];
-            Hs_b[112] = Hs_T[1792 + b];
-            Hs_b[113] = Hs_T[1808 + b];
-            Hs_b[114] = Hs_T[1824 + b];
-            Hs_b[115] = Hs_T[1840 + b];
-            Hs_b[116] = Hs_T[1856 + b];
-            Hs_b[117] = Hs_T[1872 + b];
-            Hs_b[118] = Hs_T[1888 + b];
-            Hs_b[119] = Hs_T[1904 + b];
-            Hs_b[120] = Hs_T[1920 + b];
-            Hs_b[121] = Hs_T[1936 + b];
-            Hs_b[122] = Hs_T[1952 + b];
-            Hs_b[123] = Hs_T[1968 + b];
-            Hs_b[124] = Hs_T[1984 + b];
-            Hs_b[125] = Hs_T[2000 + b];
-            Hs_b[126] = Hs_T[2016 + b];
-            Hs_b[127] = Hs_T[2032 + b];
-            Hs_b[128] = Hs_T[2048 + b];
-            Hs_b[129] = Hs_T[2064 + b];
-            Hs_b[130] = Hs_T[2080 + b];
-            Hs_b[131] = Hs_T[2096 + b];
-            Hs_b[132] = Hs_T[2112 + b];
-            Hs_b[133] = Hs_T[2128 + b];
-            Hs_b[134] = Hs_T[2144 + b];
-            Hs_b[135] = Hs_T[2160 + b];
-            Hs_b[136] = Hs_T[2176 + b];
-            Hs_b[137] = Hs_T[2192 + b];
-            Hs_b[138] = Hs_T[2208 + b];
-            Hs_b[139] = Hs_T[2224 + b];
-            Hs_b[140] = Hs_T[2240 + b];
-            Hs_b[141] = Hs_T[2256 + b];
-            Hs_b[142] = Hs_T[2272 + b];
-            Hs_b[143] = Hs_T[2288 + b];
-            Hs_b[144] = Hs_T[2304 + b];
-            Hs_b[145] = Hs_T[2320 + b];
-            Hs_b[146] = Hs_T[2336 + b];
-            Hs_b[147] = Hs_T[2352 + b];
-            Hs_b[148] = Hs_T[2368 + b];
-            Hs_b[149] = Hs_T[2384 + b];
-            Hs_b[150] = Hs_T[2400 + b];
-            Hs_b[151] = Hs_T[2416 + b];
-            Hs_b[152] = Hs_T[2432 + b];
-            Hs_b[153] = Hs_T[2448 + b];
-            Hs_b[154] = Hs_T[2464 + b];
-            Hs_b[155] = Hs_T[2480 + b];
-            Hs_b[156] = Hs_T[2496 + b];
-            Hs_b[157] = Hs_T[2512 + b];
-            Hs_b[158] = Hs_T[2528 + b];
-            Hs_b[159] = Hs_T[2544 + b];
-            Hs_b[160] = Hs_T[2560 + b];
-            Hs_b[161] = Hs_T[2576 + b];
-            Hs_b[162] = Hs_T[2592 + b];
-            Hs_b[163] = Hs_T[2608 + b];
-            Hs_b[164] = Hs_T[2624 + b];
-            Hs_b[165] = Hs_T[2640 + b];
-            Hs_b[166] = Hs_T[2656 + b];
-            Hs_b[167] = Hs_T[2672 + b];
-            Hs_b[168] = Hs_T[2688 + b];
-            Hs_b[169] = Hs_T[2704 + b];
-            Hs_b[170] = Hs_T[2720 + b];
-            Hs_b[171] = Hs_T[2736 + b];
-            Hs_b[172] = Hs_T[2752 + b];
-            Hs_b[173] = Hs_T[2768 + b];
-            Hs_b[174] = Hs_T[2784 + b];
-            Hs_b[175] = Hs_T[2800 + b];
-            Hs_b[176] = Hs_T[2816 + b];
-            Hs_b[177] = Hs_T[2832 + b];
-            Hs_b[178] = Hs_T[2848 + b];
-            Hs_b[179] = Hs_T[2864 + b];
-            Hs_b[180] = Hs_T[2880 + b];
-            Hs_b[181] = Hs_T[2896 + b];
-            Hs_b[182] = Hs_T[2912 + b];
-            Hs_b[183] = Hs_T[2928 + b];
-            Hs_b[184] = Hs_T[2944 + b];
-            Hs_b[185] = Hs_T[2960 + b];
-            Hs_b[186] = Hs_T[2976 + b];
-            Hs_b[187] = Hs_T[2992 + b];
-            Hs_b[188] = Hs_T[3008 + b];
-            Hs_b[189] = Hs_T[3024 + b];
-            Hs_b[190] = Hs_T[3040 + b];
-            Hs_b[191] = Hs_T[3056 + b];
-            Hs_b[192] = Hs_T[3072 + b];
-            Hs_b[193] = Hs_T[3088 + b];
-            Hs_b[194] = Hs_T[3104 + b];
-            Hs_b[195] = Hs_T[3120 + b];
-            Hs_b[196] = Hs_T[3136 + b];
-            Hs_b[197] = Hs_T[3152 + b];
-            Hs_b[198] = Hs_T[3168 + b];
-            Hs_b[199] = Hs_T[3184 + b];
-            Hs_b[200] = Hs_T[3200 + b];
-            Hs_b[201] = Hs_T[3216 + b];
-            Hs_b[202] = Hs_T[3232 + b];
-            Hs_b[203] = Hs_T[3248 + b];
-            Hs_b[204] = Hs_T[3264 + b];
-            Hs_b[205] = Hs_T[3280 + b];
-            Hs_b[206] = Hs_T[3296 + b];
-            Hs_b[207] = Hs_T[3312 + b];
-            Hs_b[208] = Hs_T[3328 + b];
-            Hs_b[209] = Hs_T[3344 + b];
-            Hs_b[210] = Hs_T[3360 + b];
-            Hs_b[211] = Hs_T[3376 + b];
-            Hs_b[212] = Hs_T[3392 + b];
-            Hs_b[213] = Hs_T[3408 + b];
-            Hs_b[214] = Hs_T[3424 + b];
-            Hs_b[215] = Hs_T[3440 + b];
-        }
-    }
-}
-#else
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 {
     size_t i;
@@ -6035,7 +3149,6 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
         }
     }
 }
-#endif
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 645 add/sub, 853 mul, 41 neg, 6 div, 6 sqrt */
@@ -6523,554 +3636,6 @@ void ur5_manipulability_gradient(const double q[6], double grad[6])
     ur5_manipulability_gradient_finish(cs, sn, grad);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_gradient_block(const double *restrict q_T, double *restrict grad_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double grad[6];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t115 = t33*t33;
-        const double t116 = t39*t39;
-        const double t117 = t45*t45;
-        const double t118 = t50*t50;
-        const double t119 = t56*t56;
-        const double t120 = t30*t30;
-        const double t121 = t115 + t116 + t117 + t118 + t119 + t120;
-        const double t122 = sqrt(t121);
-        const double t123 = 1.0/(t122 != 0.0 ? t122 : 1.0);
-        const double t124 = (t122 > 0.0 ? t123 : 1.0);
-        const double t125 = -t124*t30;
-        const double t126 = t33*t124;
-        const double t127 = t39*t124;
-        const double t128 = t45*t124;
-        const double t129 = t50*t124;
-        const double t130 = t56*t124;
-        const double t131 = t34*t126 + t40*t127 + t46*t128 + t51*t129 + t57*t130 + t125*t29;
-        const double t132 = t29 - t131*t125;
-        const double t133 = t34 - t131*t126;
-        const double t134 = t40 - t131*t127;
-        const double t135 = t46 - t131*t128;
-        const double t136 = t51 - t131*t129;
-        const double t137 = t57 - t131*t130;
-        const double t138 = t125*t132 + t126*t133 + t127*t134 + t128*t135 + t129*t136 + t130*t137;
-        const double t139 = t132 - t138*t125;
-        const double t140 = t133 - t138*t126;
-        const double t141 = t134 - t138*t127;
-        const double t142 = t135 - t138*t128;
-        const double t143 = t136 - t138*t129;
-        const double t144 = t137 - t138*t130;
-        const double t145 = t139*t139 + t140*t140 + t141*t141 + t142*t142 + t143*t143 + t144*t144;
-        const double t146 = sqrt(t145);
-        const double t147 = (t146 > 0.0 ? 1.0/(t146 != 0.0 ? t146 : 1.0) : 1.0);
-        const double t148 = t147*t139;
-        const double t149 = t147*t140;
-        const double t150 = t147*t141;
-        const double t151 = t147*t142;
-        const double t152 = t147*t143;
-        const double t153 = t147*t144;
-        const double t154 = t131 + t138;
-        const double t155 = t35*t126 + t41*t127 + t47*t128 + t52*t129 + t58*t130;
-        const double t156 = -t155*t125;
-        const double t157 = t35 - t155*t126;
-        const double t158 = t41 - t155*t127;
-        const double t159 = t47 - t155*t128;
-        const double t160 = t52 - t155*t129;
-        const double t161 = t58 - t155*t130;
-        const double t162 = t148*t156 + t149*t157 + t150*t158 + t151*t159 + t152*t160 + t153*t161;
-        const double t163 = t156 - t162*t148;
-        const double t164 = t157 - t162*t149;
-        const double t165 = t158 - t162*t150;
-        const double t166 = t159 - t162*t151;
-        const double t167 = t160 - t162*t152;
-        const double t168 = t161 - t162*t153;
-        const double t169 = t125*t163 + t126*t164 + t127*t165 + t128*t166 + t129*t167 + t130*t168;
-        const double t170 = t163 - t169*t125;
-        const double t171 = t164 - t169*t126;
-        const double t172 = t165 - t169*t127;
-        const double t173 = t166 - t169*t128;
-        const double t174 = t167 - t169*t129;
-        const double t175 = t168 - t169*t130;
-        const double t176 = t148*t170 + t149*t171 + t150*t172 + t151*t173 + t152*t174 + t153*t175;
-        const double t177 = t170 - t176*t148;
-        const double t178 = t171 - t176*t149;
-        const double t179 = t172 - t176*t150;
-        const double t180 = t173 - t176*t151;
-        const double t181 = t174 - t176*t152;
-        const double t182 = t175 - t176*t153;
-        const double t183 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181 + t182*t182;
-        const double t184 = sqrt(t183);
-        const double t185 = (t184 > 0.0 ? 1.0/(t184 != 0.0 ? t184 : 1.0) : 1.0);
-        const double t186 = t185*t177;
-        const double t187 = t185*t178;
-        const double t188 = t185*t179;
-        const double t189 = t185*t180;
-        const double t190 = t185*t181;
-        const double t191 = t185*t182;
-        const double t192 = t155 + t169;
-        const double t193 = t162 + t176;
-        const double t194 = t18*t130 + t126*sn[0] + t127*sn[0] + t128*sn[0] - t11*t129;
-        const double t195 = -t194*t125;
-        const double t196 = sn[0] - t194*t126;
-        const double t197 = sn[0] - t194*t127;
-        const double t198 = sn[0] - t194*t128;
-        const double t199 = -t11;
-        const double t200 = t199 - t194*t129;
-        const double t201 = t18 - t194*t130;
-        const double t202 = t148*t195 + t149*t196 + t150*t197 + t151*t198 + t152*t200 + t153*t201;
-        const double t203 = t195 - t202*t148;
-        const double t204 = t196 - t202*t149;
-        const double t205 = t197 - t202*t150;
-        const double t206 = t198 - t202*t151;
-        const double t207 = t200 - t202*t152;
-        const double t208 = t201 - t202*t153;
-        const double t209 = t186*t203 + t187*t204 + t188*t205 + t189*t206 + t190*t207 + t191*t208;
-        const double t210 = t203 - t209*t186;
-        const double t211 = t204 - t209*t187;
-        const double t212 = t205 - t209*t188;
-        const double t213 = t206 - t209*t189;
-        const double t214 = t207 - t209*t190;
-        const double t215 = t208 - t209*t191;
-        const double t216 = t125*t210 + t126*t211 + t127*t212 + t128*t213 + t129*t214 + t130*t215;
-        const double t217 = t210 - t216*t125;
-        const double t218 = t211 - t216*t126;
-        const double t219 = t212 - t216*t127;
-        const double t220 = t213 - t216*t128;
-        const double t221 = t214 - t216*t129;
-        const double t222 = t215 - t216*t130;
-        const double t223 = t148*t217 + t149*t218 + t150*t219 + t151*t220 + t152*t221 + t153*t222;
-        const double t224 = t217 - t223*t148;
-        const double t225 = t218 - t223*t149;
-        const double t226 = t219 - t223*t150;
-        const double t227 = t220 - t223*t151;
-        const double t228 = t221 - t223*t152;
-        const double t229 = t222 - t223*t153;
-        const double t230 = t186*t224 + t187*t225 + t188*t226 + t189*t227 + t190*t228 + t191*t229;
-        const double t231 = t224 - t230*t186;
-        const double t232 = t225 - t230*t187;
-        const double t233 = t226 - t230*t188;
-        const double t234 = t227 - t230*t189;
-        const double t235 = t228 - t230*t190;
-        const double t236 = t229 - t230*t191;
-        const double t237 = t231*t231 + t232*t232 + t233*t233 + t234*t234 + t235*t235 + t236*t236;
-        const double t238 = sqrt(t237);
-        const double t239 = (t238 > 0.0 ? 1.0/(t238 != 0.0 ? t238 : 1.0) : 1.0);
-        const double t240 = t239*t231;
-        const double t241 = t239*t232;
-        const double t242 = t239*t233;
-        const double t243 = t239*t234;
-        const double t244 = t239*t235;
-        const double t245 = t239*t236;
-        const double t246 = t194 + t216;
-        const double t247 = t202 + t223;
-        const double t248 = t209 + t230;
-        const double t249 = t20*t130 - t13*t129 - cs[0]*t126 - cs[0]*t127 - cs[0]*t128;
-        const double t250 = -t249*t125;
-        const double t251 = -cs[0];
-        const double t252 = t251 - t249*t126;
-        const double t253 = t251 - t249*t127;
-        const double t254 = t251 - t249*t128;
-        const double t255 = -t13;
-        const double t256 = t255 - t249*t129;
-        const double t257 = t20 - t249*t130;
-        const double t258 = t148*t250 + t149*t252 + t150*t253 + t151*t254 + t152*t256 + t153*t257;
-        const double t259 = t250 - t258*t148;
-        const double t260 = t252 - t258*t149;
-        const double t261 = t253 - t258*t150;
-        const double t262 = t254 - t258*t151;
-        const double t263 = t256 - t258*t152;
-        const double t264 = t257 - t258*t153;
-        const double t265 = t186*t259 + t187*t260 + t188*t261 + t189*t262 + t190*t263 + t191*t264;
-        const double t266 = t259 - t265*t186;
-        const double t267 = t260 - t265*t187;
-        const double t268 = t261 - t265*t188;
-        const double t269 = t262 - t265*t189;
-        const double t270 = t263 - t265*t190;
-        const double t271 = t264 - t265*t191;
-        const double t272 = t240*t266 + t241*t267 + t242*t268 + t243*t269 + t244*t270 + t245*t271;
-        const double t273 = t266 - t272*t240;
-        const double t274 = t267 - t272*t241;
-        const double t275 = t268 - t272*t242;
-        const double t276 = t269 - t272*t243;
-        const double t277 = t270 - t272*t244;
-        const double t278 = t271 - t272*t245;
-        const double t279 = t125*t273 + t126*t274 + t127*t275 + t128*t276 + t129*t277 + t130*t278;
-        const double t280 = t273 - t279*t125;
-        const double t281 = t274 - t279*t126;
-        const double t282 = t275 - t279*t127;
-        const double t283 = t276 - t279*t128;
-        const double t284 = t277 - t279*t129;
-        const double t285 = t278 - t279*t130;
-        const double t286 = t148*t280 + t149*t281 + t150*t282 + t151*t283 + t152*t284 + t153*t285;
-        const double t287 = t280 - t286*t148;
-        const double t288 = t281 - t286*t149;
-        const double t289 = t282 - t286*t150;
-        const double t290 = t283 - t286*t151;
-        const double t291 = t284 - t286*t152;
-        const double t292 = t285 - t286*t153;
-        const double t293 = t186*t287 + t187*t288 + t188*t289 + t189*t290 + t190*t291 + t191*t292;
-        const double t294 = t287 - t293*t186;
-        const double t295 = t288 - t293*t187;
-        const double t296 = t289 - t293*t188;
-        const double t297 = t290 - t293*t189;
-        const double t298 = t291 - t293*t190;
-        const double t299 = t292 - t293*t191;
-        const double t300 = t240*t294 + t241*t295 + t242*t296 + t243*t297 + t244*t298 + t245*t299;
-        const double t301 = t294 - t300*t240;
-        const double t302 = t295 - t300*t241;
-        const double t303 = t296 - t300*t242;
-        const double t304 = t297 - t300*t243;
-        const double t305 = t298 - t300*t244;
-        const double t306 = t299 - t300*t245;
-        const double t307 = t301*t301 + t302*t302 + t303*t303 + t304*t304 + t305*t305 + t306*t306;
-        const double t308 = sqrt(t307);
-        const double t309 = (t308 > 0.0 ? 1.0/(t308 != 0.0 ? t308 : 1.0) : 1.0);
-        const double t310 = t309*t301;
-        const double t311 = t309*t302;
-        const double t312 = t309*t303;
-        const double t313 = t309*t304;
-        const double t314 = t309*t305;
-        const double t315 = t309*t306;
-        const double t316 = t249 + t279;
-        const double t317 = t258 + t286;
-        const double t318 = t265 + t293;
-        const double t319 = t272 + t300;
-        const double t320 = t125 + t22*t130 - cs[3]*t129;
-        const double t321 = 1.0 - t320*t125;
-        const double t322 = -t320*t126;
-        const double t323 = -t320*t127;
-        const double t324 = -t320*t128;
-        const double t325 = -cs[3];
-        const double t326 = t325 - t320*t129;
-        const double t327 = t22 - t320*t130;
-        const double t328 = t148*t321 + t149*t322 + t150*t323 + t151*t324 + t152*t326 + t153*t327;
-        const double t329 = t321 - t328*t148;
-        const double t330 = t322 - t328*t149;
-        const double t331 = t323 - t328*t150;
-        const double t332 = t324 - t328*t151;
-        const double t333 = t326 - t328*t152;
-        const double t334 = t327 - t328*t153;
-        const double t335 = t186*t329 + t187*t330 + t188*t331 + t189*t332 + t190*t333 + t191*t334;
-        const double t336 = t329 - t335*t186;
-        const double t337 = t330 - t335*t187;
-        const double t338 = t331 - t335*t188;
-        const double t339 = t332 - t335*t189;
-        const double t340 = t333 - t335*t190;
-        const double t341 = t334 - t335*t191;
-        const double t342 = t240*t336 + t241*t337 + t242*t338 + t243*t339 + t244*t340 + t245*t341;
-        const double t343 = t336 - t342*t240;
-        const double t344 = t337 - t342*t241;
-        const double t345 = t338 - t342*t242;
-        const double t346 = t339 - t342*t243;
-        const double t347 = t340 - t342*t244;
-        const double t348 = t341 - t342*t245;
-        const double t349 = t310*t343 + t311*t344 + t312*t345 + t313*t346 + t314*t347 + t315*t348;
-        const double t350 = t343 - t349*t310;
-        const double t351 = t344 - t349*t311;
-        const double t352 = t345 - t349*t312;
-        const double t353 = t346 - t349*t313;
-        const double t354 = t347 - t349*t314;
-        const double t355 = t348 - t349*t315;
-        const double t356 = t125*t350 + t126*t351 + t127*t352 + t128*t353 + t129*t354 + t130*t355;
-        const double t357 = t350 - t356*t125;
-        const double t358 = t351 - t356*t126;
-        const double t359 = t352 - t356*t127;
-        const double t360 = t353 - t356*t128;
-        const double t361 = t354 - t356*t129;
-        const double t362 = t355 - t356*t130;
-        const double t363 = t148*t357 + t149*t358 + t150*t359 + t151*t360 + t152*t361 + t153*t362;
-        const double t364 = t357 - t363*t148;
-        const double t365 = t358 - t363*t149;
-        const double t366 = t359 - t363*t150;
-        const double t367 = t360 - t363*t151;
-        const double t368 = t361 - t363*t152;
-        const double t369 = t362 - t363*t153;
-        const double t370 = t186*t364 + t187*t365 + t188*t366 + t189*t367 + t190*t368 + t191*t369;
-        const double t371 = t364 - t370*t186;
-        const double t372 = t365 - t370*t187;
-        const double t373 = t366 - t370*t188;
-        const double t374 = t367 - t370*t189;
-        const double t375 = t368 - t370*t190;
-        const double t376 = t369 - t370*t191;
-        const double t377 = t240*t371 + t241*t372 + t242*t373 + t243*t374 + t244*t375 + t245*t376;
-        const double t378 = t371 - t377*t240;
-        const double t379 = t372 - t377*t241;
-        const double t380 = t373 - t377*t242;
-        const double t381 = t374 - t377*t243;
-        const double t382 = t375 - t377*t244;
-        const double t383 = t376 - t377*t245;
-        const double t384 = t310*t378 + t311*t379 + t312*t380 + t313*t381 + t314*t382 + t315*t383;
-        const double t385 = t378 - t384*t310;
-        const double t386 = t379 - t384*t311;
-        const double t387 = t380 - t384*t312;
-        const double t388 = t381 - t384*t313;
-        const double t389 = t382 - t384*t314;
-        const double t390 = t383 - t384*t315;
-        const double t391 = t385*t385 + t386*t386 + t387*t387 + t388*t388 + t389*t389 + t390*t390;
-        const double t392 = sqrt(t391);
-        const double t393 = (t392 > 0.0 ? 1.0/(t392 != 0.0 ? t392 : 1.0) : 1.0);
-        const double t394 = t393*t385;
-        const double t395 = t393*t386;
-        const double t396 = t393*t387;
-        const double t397 = t393*t388;
-        const double t398 = t393*t389;
-        const double t399 = t393*t390;
-        const double t400 = t320 + t356;
-        const double t401 = t328 + t363;
-        const double t402 = t335 + t370;
-        const double t403 = t342 + t377;
-        const double t404 = t349 + t384;
-        const double t407 = -t35*cs[0];
-        const double t408 = -t41*cs[0];
-        const double t409 = -t47*cs[0];
-        const double t410 = -t52*cs[0];
-        const double t411 = -t58*cs[0];
-        const double t412 = t51*cs[3] - t52*t13;
-        const double t413 = t57*cs[3] - t58*t13;
-        const double t414 = t58*t20 - t57*t22;
-        const double t415 = -t35*sn[0];
-        const double t416 = -t41*sn[0];
-        const double t417 = -t47*sn[0];
-        const double t418 = -t52*sn[0];
-        const double t419 = -t58*sn[0];
-        const double t420 = t52*t11 - t50*cs[3];
-        const double t421 = t58*t11 - t56*cs[3];
-        const double t422 = t56*t22 - t58*t18;
-        const double t423 = t33*cs[0] + t34*sn[0];
-        const double t424 = t39*cs[0] + t40*sn[0];
-        const double t425 = t45*cs[0] + t46*sn[0];
-        const double t426 = t50*cs[0] + t51*sn[0];
-        const double t427 = t56*cs[0] + t57*sn[0];
-        const double t428 = t50*t13 - t51*t11;
-        const double t429 = t56*t13 - t57*t11;
-        const double t430 = t57*t18 - t56*t20;
-        const double t431 = -t22*cs[0];
-        const double t432 = t20*cs[3] - t13*t22;
-        const double t433 = -t22*sn[0];
-        const double t434 = t11*t22 - t18*cs[3];
-        const double t435 = -t11*cs[0] - t13*sn[0];
-        const double t436 = t18*cs[0] + t20*sn[0];
-        const double t437 = t13*t18 - t11*t20;
-        const double t438 = t154*t193 - t192*t146;
-        const double t439 = t193*t248 - t247*t184;
-        const double t440 = t192*t248*t146 - t439*t154 - t246*t146*t184;
-        const double t441 = t248*t319 - t318*t238;
-        const double t442 = t247*t319*t184 - t441*t193 - t317*t184*t238;
-        const double t443 = t246*t319*t146*t184 - t442*t154 - t441*t192*t146 - t316*t146*t184*t238;
-        const double t444 = t319*t404 - t403*t308;
-        const double t445 = t318*t404*t238 - t444*t248 - t402*t238*t308;
-        const double t446 = t317*t404*t184*t238 - t445*t193 - t444*t247*t184 - t401*t184*t238*t308;
-        const double t447 = t316*t404*t146*t184*t238 - t446*t154 - t445*t192*t146 - t444*t246*t146*t184 - t400*t146*t184*t238*t308;
-        const double t448 = t146*t184*t238*t308*t392;
-        const double t449 = -t154*t184*t238*t308*t392;
-        const double t450 = t438*t238*t308*t392;
-        const double t451 = t440*t308*t392;
-        const double t452 = t443*t392;
-        const double t453 = t122*t184*t238*t308*t392;
-        const double t454 = -t193*t122*t238*t308*t392;
-        const double t455 = t439*t122*t308*t392;
-        const double t456 = t442*t122*t392;
-        const double t457 = t446*t122;
-        const double t458 = t122*t146*t238*t308*t392;
-        const double t459 = -t248*t122*t146*t308*t392;
-        const double t460 = t441*t122*t146*t392;
-        const double t461 = t445*t122*t146;
-        const double t462 = t122*t146*t184*t308*t392;
-        const double t463 = -t319*t122*t146*t184*t392;
-        const double t464 = t444*t122*t146*t184;
-        const double t465 = t122*t146*t184*t238*t392;
-        const double t466 = -t404*t122*t146*t184*t238;
-        const double t467 = t122*t146*t184*t238*t308;
-        const double t468 = t447*t394 + t448*t125 + t449*t148 + t450*t186 + t451*t240 + t452*t310;
-        const double t469 = t453*t148 + t454*t186 + t455*t240 + t456*t310 + t457*t394;
-        const double t470 = t447*t395 + t448*t126 + t449*t149 + t450*t187 + t451*t241 + t452*t311;
-        const double t471 = t453*t149 + t454*t187 + t455*t241 + t456*t311 + t457*t395;
-        const double t472 = t458*t187 + t459*t241 + t460*t311 + t461*t395;
-        const double t473 = t462*t241 + t463*t311 + t464*t395;
-        const double t474 = t465*t311 + t466*t395;
-        const double t475 = t447*t396 + t448*t127 + t449*t150 + t450*t188 + t451*t242 + t452*t312;
-        const double t476 = t453*t150 + t454*t188 + t455*t242 + t456*t312 + t457*t396;
-        const double t477 = t458*t188 + t459*t242 + t460*t312 + t461*t396;
-        const double t478 = t462*t242 + t463*t312 + t464*t396;
-        const double t479 = t465*t312 + t466*t396;
-        const double t480 = t447*t397 + t448*t128 + t449*t151 + t450*t189 + t451*t243 + t452*t313;
-        const double t481 = t453*t151 + t454*t189 + t455*t243 + t456*t313 + t457*t397;
-        const double t482 = t458*t189 + t459*t243 + t460*t313 + t461*t397;
-        const double t483 = t462*t243 + t463*t313 + t464*t397;
-        const double t484 = t465*t313 + t466*t397;
-        const double t485 = t447*t398 + t448*t129 + t449*t152 + t450*t190 + t451*t244 + t452*t314;
-        const double t486 = t453*t152 + t454*t190 + t455*t244 + t456*t314 + t457*t398;
-        const double t487 = t458*t190 + t459*t244 + t460*t314 + t461*t398;
-        const double t488 = t462*t244 + t463*t314 + t464*t398;
-        const double t489 = t465*t314 + t466*t398;
-        const double t490 = t467*t398;
-        const double t491 = t447*t399 + t448*t130 + t449*t153 + t450*t191 + t451*t245 + t452*t315;
-        const double t492 = t453*t153 + t454*t191 + t455*t245 + t456*t315 + t457*t399;
-        const double t493 = t458*t191 + t459*t245 + t460*t315 + t461*t399;
-        const double t494 = t462*t245 + t463*t315 + t464*t399;
-        const double t495 = t465*t315 + t466*t399;
-        const double t496 = t467*t399;
-        const double t497 = t33*t471 + t39*t476 + t45*t481 + t50*t486 + t56*t492 + t13*t488 + t18*t495 + cs[0]*t473 + cs[0]*t478 + cs[0]*t483 + t474*sn[0] + t479*sn[0] + t484*sn[0] - t34*t470 - t40*t475 - t46*t480 - t51*t485 - t57*t491 - t11*t489 - t20*t494 - t468*t29 - t469*t30;
-        const double t498 = t408*t475;
-        const double t499 = t409*t480;
-        const double t500 = t410*t485;
-        const double t501 = t411*t491;
-        const double t502 = t416*t476;
-        const double t503 = t417*t481;
-        const double t504 = t418*t486;
-        const double t505 = t419*t492;
-        const double t506 = t424*t477;
-        const double t507 = t425*t482;
-        const double t508 = t426*t487;
-        const double t509 = t427*t493;
-        const double t510 = t431*t494;
-        const double t511 = t433*t495;
-        const double t512 = t435*t490;
-        const double t513 = t436*t496;
-        const double t514 = t10*t488;
-        const double t515 = t12*t489;
-        const double t516 = t407*t470 + t498 + t499 + t500 + t501 + t415*t471 + t502 + t503 + t504 + t505 + t423*t472 + t506 + t507 + t508 + t509 + t510 + t511 + t512 + t513 + t33*t469 + t514 + t515 - t34*t468;
-        const double t517 = t408*t470 + t498 + t499 + t500 + t501 + t416*t471 + t502 + t503 + t504 + t505 + t424*t472 + t506 + t507 + t508 + t509 + t510 + t511 + t512 + t513 + t39*t469 + t514 + t515 - t40*t468;
-        const double t518 = t409*t470 + t409*t475 + t499 + t500 + t501 + t417*t471 + t417*t476 + t503 + t504 + t505 + t425*t472 + t425*t477 + t507 + t508 + t509 + t510 + t511 + t512 + t513 + t45*t469 + t514 + t515 - t46*t468;
-        const double t519 = t410*t470 + t410*t475 + t410*t480 + t412*t485 + t413*t491 + t418*t471 + t418*t476 + t418*t481 + t420*t486 + t421*t492 + t426*t472 + t426*t477 + t426*t482 + t428*t487 + t429*t493 + t432*t494 + t434*t495 + t437*t496 + t50*t469 - t51*t468;
-        const double t520 = t411*t470 + t411*t475 + t411*t480 + t413*t485 + t414*t491 + t419*t471 + t419*t476 + t419*t481 + t421*t486 + t422*t492 + t427*t472 + t427*t477 + t427*t482 + t429*t487 + t430*t493 + t56*t469 - t57*t468;
-        grad[0] = t497;
-        grad[1] = t516;
-        grad[2] = t517;
-        grad[3] = t518;
-        grad[4] = t519;
-        grad[5] = t520;
-        grad_T[0 + b] = grad[0];
-        grad_T[32 + b] = grad[1];
-        grad_T[64 + b] = grad[2];
-        grad_T[96 + b] = grad[3];
-        grad_T[128 + b] = grad[4];
-        grad_T[160 + b] = grad[5];
-    }
-}
-
-void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
-{
-    double q_T[192];
-    double grad_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_gradient_block(q_T, grad_T);
-        for (b = 0; b < count; ++b) {
-            double *grad_b = grad + (i + b) * 6;
-            grad_b[0] = grad_T[0 + b];
-            grad_b[1] = grad_T[32 + b];
-            grad_b[2] = grad_T[64 + b];
-            grad_b[3] = grad_T[96 + b];
-            grad_b[4] = grad_T[128 + b];
-            grad_b[5] = grad_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 {
     size_t i;
@@ -7090,7 +3655,6 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
         }
     }
 }
-#endif
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 976 add/sub, 1188 mul, 53 neg, 12 div, 14 sqrt */
@@ -7895,889 +4459,6 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
     ur5_inverse_velocity_finish(twist, lambda, cs, sn, dq);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_inverse_velocity_block(const double *restrict q_T, const double *restrict twist_T, double lambda, double *restrict dq_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double twist[6];
-        double cs[5];
-        double sn[5];
-        double dq[6];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        twist[3] = twist_T[96 + b];
-        twist[4] = twist_T[128 + b];
-        twist[5] = twist_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t114 = lambda*lambda;
-        const double t199 = -t11;
-        const double t251 = -cs[0];
-        const double t255 = -t13;
-        const double t325 = -cs[3];
-        const double t521 = -0.8385680946642751*t30;
-        const double t522 = 0.8385680946642751*t33;
-        const double t523 = 0.8385680946642751*t39;
-        const double t524 = 0.8385680946642751*t45;
-        const double t525 = 0.8385680946642751*t50;
-        const double t526 = 0.8385680946642751*t56;
-        const double t527 = 0.8385680946642751*t29;
-        const double t528 = 0.8385680946642751*t34;
-        const double t529 = 0.8385680946642751*t40;
-        const double t530 = 0.8385680946642751*t46;
-        const double t531 = 0.8385680946642751*t51;
-        const double t532 = 0.8385680946642751*t57;
-        const double t533 = 0.8385680946642751*t35;
-        const double t534 = 0.8385680946642751*t41;
-        const double t535 = 0.8385680946642751*t47;
-        const double t536 = 0.8385680946642751*t52;
-        const double t537 = 0.8385680946642751*t58;
-        const double t538 = t18*t18;
-        const double t539 = t20*t20;
-        const double t540 = t22*t22;
-        const double t541 = t521*t521;
-        const double t542 = t522*t522;
-        const double t543 = t523*t523;
-        const double t544 = t524*t524;
-        const double t545 = t525*t525;
-        const double t546 = t526*t526;
-        const double t547 = 1.0 + t11*t11 + t13*t13 + t538 + t539 + t540 + cs[3]*cs[3] + t541 + t542 + t543 + t544 + t545 + t546 + t527*t527 + t528*t528 + t529*t529 + t530*t530 + t531*t531 + t532*t532 + t533*t533 + t534*t534 + t535*t535 + t536*t536 + t537*t537 + 3.0*(cs[0]*cs[0]) + 3.0*(sn[0]*sn[0]);
-        const double t548 = sqrt(t547);
-        const double t549 = t541 + t542 + t543 + t544 + t545 + t546;
-        const double t550 = sqrt(t549);
-        const double t551 = t548*UR5_RANK_TOL;
-        const int t552 = t550 > t551;
-        const double t553 = (t552 ? t550 : 0.0);
-        const double t554 = (t552 ? 1.0/(t550 != 0.0 ? t550 : 1.0) : 1.0);
-        const double t555 = (t552 ? t554*t521 : 0.0);
-        const double t556 = (t552 ? t554*t522 : 0.0);
-        const double t557 = (t552 ? t554*t523 : 0.0);
-        const double t558 = (t552 ? t554*t524 : 0.0);
-        const double t559 = (t552 ? t554*t525 : 0.0);
-        const double t560 = (t552 ? t554*t526 : 0.0);
-        const double t561 = t555*t527 + t556*t528 + t557*t529 + t558*t530 + t559*t531 + t560*t532;
-        const double t562 = t527 - t561*t555;
-        const double t563 = t528 - t561*t556;
-        const double t564 = t529 - t561*t557;
-        const double t565 = t530 - t561*t558;
-        const double t566 = t531 - t561*t559;
-        const double t567 = t532 - t561*t560;
-        const double t568 = t555*t562 + t556*t563 + t557*t564 + t558*t565 + t559*t566 + t560*t567;
-        const double t569 = t562 - t568*t555;
-        const double t570 = t563 - t568*t556;
-        const double t571 = t564 - t568*t557;
-        const double t572 = t565 - t568*t558;
-        const double t573 = t566 - t568*t559;
-        const double t574 = t567 - t568*t560;
-        const double t575 = t569*t569 + t570*t570 + t571*t571 + t572*t572 + t573*t573 + t574*t574;
-        const double t576 = sqrt(t575);
-        const int t577 = t576 > t551;
-        const double t578 = (t577 ? t576 : 0.0);
-        const double t579 = (t577 ? 1.0/(t576 != 0.0 ? t576 : 1.0) : 1.0);
-        const double t580 = (t577 ? t579*t569 : 0.0);
-        const double t581 = (t577 ? t579*t570 : 0.0);
-        const double t582 = (t577 ? t579*t571 : 0.0);
-        const double t583 = (t577 ? t579*t572 : 0.0);
-        const double t584 = (t577 ? t579*t573 : 0.0);
-        const double t585 = (t577 ? t579*t574 : 0.0);
-        const double t586 = t561 + t568;
-        const double t587 = t556*t533 + t557*t534 + t558*t535 + t559*t536 + t560*t537;
-        const double t588 = -t587*t555;
-        const double t589 = t533 - t587*t556;
-        const double t590 = t534 - t587*t557;
-        const double t591 = t535 - t587*t558;
-        const double t592 = t536 - t587*t559;
-        const double t593 = t537 - t587*t560;
-        const double t594 = t580*t588 + t581*t589 + t582*t590 + t583*t591 + t584*t592 + t585*t593;
-        const double t595 = t588 - t594*t580;
-        const double t596 = t589 - t594*t581;
-        const double t597 = t590 - t594*t582;
-        const double t598 = t591 - t594*t583;
-        const double t599 = t592 - t594*t584;
-        const double t600 = t593 - t594*t585;
-        const double t601 = t555*t595 + t556*t596 + t557*t597 + t558*t598 + t559*t599 + t560*t600;
-        const double t602 = t595 - t601*t555;
-        const double t603 = t596 - t601*t556;
-        const double t604 = t597 - t601*t557;
-        const double t605 = t598 - t601*t558;
-        const double t606 = t599 - t601*t559;
-        const double t607 = t600 - t601*t560;
-        const double t608 = t580*t602 + t581*t603 + t582*t604 + t583*t605 + t584*t606 + t585*t607;
-        const double t609 = t602 - t608*t580;
-        const double t610 = t603 - t608*t581;
-        const double t611 = t604 - t608*t582;
-        const double t612 = t605 - t608*t583;
-        const double t613 = t606 - t608*t584;
-        const double t614 = t607 - t608*t585;
-        const double t615 = t609*t609 + t610*t610 + t611*t611 + t612*t612 + t613*t613 + t614*t614;
-        const double t616 = sqrt(t615);
-        const int t617 = t616 > t551;
-        const double t618 = (t617 ? t616 : 0.0);
-        const double t619 = (t617 ? 1.0/(t616 != 0.0 ? t616 : 1.0) : 1.0);
-        const double t620 = (t617 ? t619*t609 : 0.0);
-        const double t621 = (t617 ? t619*t610 : 0.0);
-        const double t622 = (t617 ? t619*t611 : 0.0);
-        const double t623 = (t617 ? t619*t612 : 0.0);
-        const double t624 = (t617 ? t619*t613 : 0.0);
-        const double t625 = (t617 ? t619*t614 : 0.0);
-        const double t626 = t587 + t601;
-        const double t627 = t594 + t608;
-        const double t628 = t18*t560 + t556*sn[0] + t557*sn[0] + t558*sn[0] - t11*t559;
-        const double t629 = -t628*t555;
-        const double t630 = sn[0] - t628*t556;
-        const double t631 = sn[0] - t628*t557;
-        const double t632 = sn[0] - t628*t558;
-        const double t633 = t199 - t628*t559;
-        const double t634 = t18 - t628*t560;
-        const double t635 = t580*t629 + t581*t630 + t582*t631 + t583*t632 + t584*t633 + t585*t634;
-        const double t636 = t629 - t635*t580;
-        const double t637 = t630 - t635*t581;
-        const double t638 = t631 - t635*t582;
-        const double t639 = t632 - t635*t583;
-        const double t640 = t633 - t635*t584;
-        const double t641 = t634 - t635*t585;
-        const double t642 = t620*t636 + t621*t637 + t622*t638 + t623*t639 + t624*t640 + t625*t641;
-        const double t643 = t636 - t642*t620;
-        const double t644 = t637 - t642*t621;
-        const double t645 = t638 - t642*t622;
-        const double t646 = t639 - t642*t623;
-        const double t647 = t640 - t642*t624;
-        const double t648 = t641 - t642*t625;
-        const double t649 = t555*t643 + t556*t644 + t557*t645 + t558*t646 + t559*t647 + t560*t648;
-        const double t650 = t643 - t649*t555;
-        const double t651 = t644 - t649*t556;
-        const double t652 = t645 - t649*t557;
-        const double t653 = t646 - t649*t558;
-        const double t654 = t647 - t649*t559;
-        const double t655 = t648 - t649*t560;
-        const double t656 = t580*t650 + t581*t651 + t582*t652 + t583*t653 + t584*t654 + t585*t655;
-        const double t657 = t650 - t656*t580;
-        const double t658 = t651 - t656*t581;
-        const double t659 = t652 - t656*t582;
-        const double t660 = t653 - t656*t583;
-        const double t661 = t654 - t656*t584;
-        const double t662 = t655 - t656*t585;
-        const double t663 = t620*t657 + t621*t658 + t622*t659 + t623*t660 + t624*t661 + t625*t662;
-        const double t664 = t657 - t663*t620;
-        const double t665 = t658 - t663*t621;
-        const double t666 = t659 - t663*t622;
-        const double t667 = t660 - t663*t623;
-        const double t668 = t661 - t663*t624;
-        const double t669 = t662 - t663*t625;
-        const double t670 = t664*t664 + t665*t665 + t666*t666 + t667*t667 + t668*t668 + t669*t669;
-        const double t671 = sqrt(t670);
-        const int t672 = t671 > t551;
-        const double t673 = (t672 ? t671 : 0.0);
-        const double t674 = (t672 ? 1.0/(t671 != 0.0 ? t671 : 1.0) : 1.0);
-        const double t675 = (t672 ? t674*t664 : 0.0);
-        const double t676 = (t672 ? t674*t665 : 0.0);
-        const double t677 = (t672 ? t674*t666 : 0.0);
-        const double t678 = (t672 ? t674*t667 : 0.0);
-        const double t679 = (t672 ? t674*t668 : 0.0);
-        const double t680 = (t672 ? t674*t669 : 0.0);
-        const double t681 = t628 + t649;
-        const double t682 = t635 + t656;
-        const double t683 = t642 + t663;
-        const double t684 = t20*t560 - t13*t559 - cs[0]*t556 - cs[0]*t557 - cs[0]*t558;
-        const double t685 = -t684*t555;
-        const double t686 = t251 - t684*t556;
-        const double t687 = t251 - t684*t557;
-        const double t688 = t251 - t684*t558;
-        const double t689 = t255 - t684*t559;
-        const double t690 = t20 - t684*t560;
-        const double t691 = t580*t685 + t581*t686 + t582*t687 + t583*t688 + t584*t689 + t585*t690;
-        const double t692 = t685 - t691*t580;
-        const double t693 = t686 - t691*t581;
-        const double t694 = t687 - t691*t582;
-        const double t695 = t688 - t691*t583;
-        const double t696 = t689 - t691*t584;
-        const double t697 = t690 - t691*t585;
-        const double t698 = t620*t692 + t621*t693 + t622*t694 + t623*t695 + t624*t696 + t625*t697;
-        const double t699 = t692 - t698*t620;
-        const double t700 = t693 - t698*t621;
-        const double t701 = t694 - t698*t622;
-        const double t702 = t695 - t698*t623;
-        const double t703 = t696 - t698*t624;
-        const double t704 = t697 - t698*t625;
-        const double t705 = t675*t699 + t676*t700 + t677*t701 + t678*t702 + t679*t703 + t680*t704;
-        const double t706 = t699 - t705*t675;
-        const double t707 = t700 - t705*t676;
-        const double t708 = t701 - t705*t677;
-        const double t709 = t702 - t705*t678;
-        const double t710 = t703 - t705*t679;
-        const double t711 = t704 - t705*t680;
-        const double t712 = t555*t706 + t556*t707 + t557*t708 + t558*t709 + t559*t710 + t560*t711;
-        const double t713 = t706 - t712*t555;
-        const double t714 = t707 - t712*t556;
-        const double t715 = t708 - t712*t557;
-        const double t716 = t709 - t712*t558;
-        const double t717 = t710 - t712*t559;
-        const double t718 = t711 - t712*t560;
-        const double t719 = t580*t713 + t581*t714 + t582*t715 + t583*t716 + t584*t717 + t585*t718;
-        const double t720 = t713 - t719*t580;
-        const double t721 = t714 - t719*t581;
-        const double t722 = t715 - t719*t582;
-        const double t723 = t716 - t719*t583;
-        const double t724 = t717 - t719*t584;
-        const double t725 = t718 - t719*t585;
-        const double t726 = t620*t720 + t621*t721 + t622*t722 + t623*t723 + t624*t724 + t625*t725;
-        const double t727 = t720 - t726*t620;
-        const double t728 = t721 - t726*t621;
-        const double t729 = t722 - t726*t622;
-        const double t730 = t723 - t726*t623;
-        const double t731 = t724 - t726*t624;
-        const double t732 = t725 - t726*t625;
-        const double t733 = t675*t727 + t676*t728 + t677*t729 + t678*t730 + t679*t731 + t680*t732;
-        const double t734 = t727 - t733*t675;
-        const double t735 = t728 - t733*t676;
-        const double t736 = t729 - t733*t677;
-        const double t737 = t730 - t733*t678;
-        const double t738 = t731 - t733*t679;
-        const double t739 = t732 - t733*t680;
-        const double t740 = t734*t734 + t735*t735 + t736*t736 + t737*t737 + t738*t738 + t739*t739;
-        const double t741 = sqrt(t740);
-        const int t742 = t741 > t551;
-        const double t743 = (t742 ? t741 : 0.0);
-        const double t744 = (t742 ? 1.0/(t741 != 0.0 ? t741 : 1.0) : 1.0);
-        const double t745 = (t742 ? t744*t734 : 0.0);
-        const double t746 = (t742 ? t744*t735 : 0.0);
-        const double t747 = (t742 ? t744*t736 : 0.0);
-        const double t748 = (t742 ? t744*t737 : 0.0);
-        const double t749 = (t742 ? t744*t738 : 0.0);
-        const double t750 = (t742 ? t744*t739 : 0.0);
-        const double t751 = t684 + t712;
-        const double t752 = t691 + t719;
-        const double t753 = t698 + t726;
-        const double t754 = t705 + t733;
-        const double t755 = t555 + t22*t560 - cs[3]*t559;
-        const double t756 = 1.0 - t755*t555;
-        const double t757 = -t755*t556;
-        const double t758 = -t755*t557;
-        const double t759 = -t755*t558;
-        const double t760 = t325 - t755*t559;
-        const double t761 = t22 - t755*t560;
-        const double t762 = t580*t756 + t581*t757 + t582*t758 + t583*t759 + t584*t760 + t585*t761;
-        const double t763 = t756 - t762*t580;
-        const double t764 = t757 - t762*t581;
-        const double t765 = t758 - t762*t582;
-        const double t766 = t759 - t762*t583;
-        const double t767 = t760 - t762*t584;
-        const double t768 = t761 - t762*t585;
-        const double t769 = t620*t763 + t621*t764 + t622*t765 + t623*t766 + t624*t767 + t625*t768;
-        const double t770 = t763 - t769*t620;
-        const double t771 = t764 - t769*t621;
-        const double t772 = t765 - t769*t622;
-        const double t773 = t766 - t769*t623;
-        const double t774 = t767 - t769*t624;
-        const double t775 = t768 - t769*t625;
-        const double t776 = t675*t770 + t676*t771 + t677*t772 + t678*t773 + t679*t774 + t680*t775;
-        const double t777 = t770 - t776*t675;
-        const double t778 = t771 - t776*t676;
-        const double t779 = t772 - t776*t677;
-        const double t780 = t773 - t776*t678;
-        const double t781 = t774 - t776*t679;
-        const double t782 = t775 - t776*t680;
-        const double t783 = t745*t777 + t746*t778 + t747*t779 + t748*t780 + t749*t781 + t750*t782;
-        const double t784 = t777 - t783*t745;
-        const double t785 = t778 - t783*t746;
-        const double t786 = t779 - t783*t747;
-        const double t787 = t780 - t783*t748;
-        const double t788 = t781 - t783*t749;
-        const double t789 = t782 - t783*t750;
-        const double t790 = t555*t784 + t556*t785 + t557*t786 + t558*t787 + t559*t788 + t560*t789;
-        const double t791 = t784 - t790*t555;
-        const double t792 = t785 - t790*t556;
-        const double t793 = t786 - t790*t557;
-        const double t794 = t787 - t790*t558;
-        const double t795 = t788 - t790*t559;
-        const double t796 = t789 - t790*t560;
-        const double t797 = t580*t791 + t581*t792 + t582*t793 + t583*t794 + t584*t795 + t585*t796;
-        const double t798 = t791 - t797*t580;
-        const double t799 = t792 - t797*t581;
-        const double t800 = t793 - t797*t582;
-        const double t801 = t794 - t797*t583;
-        const double t802 = t795 - t797*t584;
-        const double t803 = t796 - t797*t585;
-        const double t804 = t620*t798 + t621*t799 + t622*t800 + t623*t801 + t624*t802 + t625*t803;
-        const double t805 = t798 - t804*t620;
-        const double t806 = t799 - t804*t621;
-        const double t807 = t800 - t804*t622;
-        const double t808 = t801 - t804*t623;
-        const double t809 = t802 - t804*t624;
-        const double t810 = t803 - t804*t625;
-        const double t811 = t675*t805 + t676*t806 + t677*t807 + t678*t808 + t679*t809 + t680*t810;
-        const double t812 = t805 - t811*t675;
-        const double t813 = t806 - t811*t676;
-        const double t814 = t807 - t811*t677;
-        const double t815 = t808 - t811*t678;
-        const double t816 = t809 - t811*t679;
-        const double t817 = t810 - t811*t680;
-        const double t818 = t745*t812 + t746*t813 + t747*t814 + t748*t815 + t749*t816 + t750*t817;
-        const double t819 = t812 - t818*t745;
-        const double t820 = t813 - t818*t746;
-        const double t821 = t814 - t818*t747;
-        const double t822 = t815 - t818*t748;
-        const double t823 = t816 - t818*t749;
-        const double t824 = t817 - t818*t750;
-        const double t825 = t819*t819 + t820*t820 + t821*t821 + t822*t822 + t823*t823 + t824*t824;
-        const double t826 = sqrt(t825);
-        const int t827 = t826 > t551;
-        const double t828 = (t827 ? t826 : 0.0);
-        const double t829 = (t827 ? 1.0/(t826 != 0.0 ? t826 : 1.0) : 1.0);
-        const double t830 = (t827 ? t829*t819 : 0.0);
-        const double t831 = (t827 ? t829*t820 : 0.0);
-        const double t832 = (t827 ? t829*t821 : 0.0);
-        const double t833 = (t827 ? t829*t822 : 0.0);
-        const double t834 = (t827 ? t829*t823 : 0.0);
-        const double t835 = (t827 ? t829*t824 : 0.0);
-        const double t836 = t755 + t790;
-        const double t837 = t762 + t797;
-        const double t838 = t769 + t804;
-        const double t839 = t776 + t811;
-        const double t840 = t783 + t818;
-        const double t841 = sqrt(t114);
-        const double t842 = 1.192509*t553;
-        const double t843 = 1.192509*t586;
-        const double t844 = 1.192509*t626;
-        const double t845 = 1.192509*t578;
-        const double t846 = 1.192509*t627;
-        const double t847 = 1.192509*t618;
-        const double t848 = t841*t841;
-        const double t849 = t681*t681 + t751*t751 + t836*t836 + t842*t842 + t843*t843 + t844*t844 + t848;
-        const double t850 = sqrt(t849);
-        const int t851 = t850 > 0.0;
-        const double t852 = (t851 ? 1.0/(t850 != 0.0 ? t850 : 1.0) : 1.0);
-        const double t853 = t852*t842;
-        const double t854 = t852*t843;
-        const double t855 = t852*t844;
-        const double t856 = t681*t852;
-        const double t857 = t751*t852;
-        const double t858 = t836*t852;
-        const double t859 = t852*t841;
-        const double t860 = t682*t856 + t752*t857 + t837*t858 + t854*t845 + t855*t846;
-        const double t861 = -t860*t853;
-        const double t862 = t845 - t860*t854;
-        const double t863 = t846 - t860*t855;
-        const double t864 = t682 - t860*t856;
-        const double t865 = t752 - t860*t857;
-        const double t866 = t837 - t860*t858;
-        const double t867 = -t860*t859;
-        const double t868 = t853*t861 + t854*t862 + t855*t863 + t856*t864 + t857*t865 + t858*t866 + t859*t867;
-        const double t869 = t861 - t868*t853;
-        const double t870 = t862 - t868*t854;
-        const double t871 = t863 - t868*t855;
-        const double t872 = t864 - t868*t856;
-        const double t873 = t865 - t868*t857;
-        const double t874 = t866 - t868*t858;
-        const double t875 = t867 - t868*t859;
-        const double t876 = t869*t869 + t870*t870 + t871*t871 + t872*t872 + t873*t873 + t874*t874 + t875*t875 + t848;
-        const double t877 = sqrt(t876);
-        const int t878 = t877 > 0.0;
-        const double t879 = (t878 ? 1.0/(t877 != 0.0 ? t877 : 1.0) : 1.0);
-        const double t880 = t879*t869;
-        const double t881 = t879*t870;
-        const double t882 = t879*t871;
-        const double t883 = t879*t872;
-        const double t884 = t879*t873;
-        const double t885 = t879*t874;
-        const double t886 = t879*t875;
-        const double t887 = t879*t841;
-        const double t888 = t860 + t868;
-        const double t889 = t683*t856 + t753*t857 + t838*t858 + t855*t847;
-        const double t890 = -t889*t853;
-        const double t891 = -t889*t854;
-        const double t892 = t847 - t889*t855;
-        const double t893 = t683 - t889*t856;
-        const double t894 = t753 - t889*t857;
-        const double t895 = t838 - t889*t858;
-        const double t896 = -t889*t859;
-        const double t897 = t880*t890 + t881*t891 + t882*t892 + t883*t893 + t884*t894 + t885*t895 + t886*t896;
-        const double t898 = t890 - t897*t880;
-        const double t899 = t891 - t897*t881;
-        const double t900 = t892 - t897*t882;
-        const double t901 = t893 - t897*t883;
-        const double t902 = t894 - t897*t884;
-        const double t903 = t895 - t897*t885;
-        const double t904 = t896 - t897*t886;
-        const double t905 = -t897*t887;
-        const double t906 = t853*t898 + t854*t899 + t855*t900 + t856*t901 + t857*t902 + t858*t903 + t859*t904;
-        const double t907 = t898 - t906*t853;
-        const double t908 = t899 - t906*t854;
-        const double t909 = t900 - t906*t855;
-        const double t910 = t901 - t906*t856;
-        const double t911 = t902 - t906*t857;
-        const double t912 = t903 - t906*t858;
-        const double t913 = t904 - t906*t859;
-        const double t914 = t880*t907 + t881*t908 + t882*t909 + t883*t910 + t884*t911 + t885*t912 + t886*t913 + t887*t905;
-        const double t915 = t907 - t914*t880;
-        const double t916 = t908 - t914*t881;
-        const double t917 = t909 - t914*t882;
-        const double t918 = t910 - t914*t883;
-        const double t919 = t911 - t914*t884;
-        const double t920 = t912 - t914*t885;
-        const double t921 = t913 - t914*t886;
-        const double t922 = t905 - t914*t887;
-        const double t923 = t915*t915 + t916*t916 + t917*t917 + t918*t918 + t919*t919 + t920*t920 + t921*t921 + t922*t922 + t848;
-        const double t924 = sqrt(t923);
-        const int t925 = t924 > 0.0;
-        const double t926 = (t925 ? 1.0/(t924 != 0.0 ? t924 : 1.0) : 1.0);
-        const double t927 = t926*t915;
-        const double t928 = t926*t916;
-        const double t929 = t926*t917;
-        const double t930 = t926*t918;
-        const double t931 = t926*t919;
-        const double t932 = t926*t920;
-        const double t933 = t926*t921;
-        const double t934 = t926*t922;
-        const double t935 = t926*t841;
-        const double t936 = t889 + t906;
-        const double t937 = t897 + t914;
-        const double t938 = t754*t857 + t839*t858 + t673*t856;
-        const double t939 = -t938*t853;
-        const double t940 = -t938*t854;
-        const double t941 = -t938*t855;
-        const double t942 = t673 - t938*t856;
-        const double t943 = t754 - t938*t857;
-        const double t944 = t839 - t938*t858;
-        const double t945 = -t938*t859;
-        const double t946 = t880*t939 + t881*t940 + t882*t941 + t883*t942 + t884*t943 + t885*t944 + t886*t945;
-        const double t947 = t939 - t946*t880;
-        const double t948 = t940 - t946*t881;
-        const double t949 = t941 - t946*t882;
-        const double t950 = t942 - t946*t883;
-        const double t951 = t943 - t946*t884;
-        const double t952 = t944 - t946*t885;
-        const double t953 = t945 - t946*t886;
-        const double t954 = -t946*t887;
-        const double t955 = t927*t947 + t928*t948 + t929*t949 + t930*t950 + t931*t951 + t932*t952 + t933*t953 + t934*t954;
-        const double t956 = t947 - t955*t927;
-        const double t957 = t948 - t955*t928;
-        const double t958 = t949 - t955*t929;
-        const double t959 = t950 - t955*t930;
-        const double t960 = t951 - t955*t931;
-        const double t961 = t952 - t955*t932;
-        const double t962 = t953 - t955*t933;
-        const double t963 = t954 - t955*t934;
-        const double t964 = -t955*t935;
-        const double t965 = t853*t956 + t854*t957 + t855*t958 + t856*t959 + t857*t960 + t858*t961 + t859*t962;
-        const double t966 = t956 - t965*t853;
-        const double t967 = t957 - t965*t854;
-        const double t968 = t958 - t965*t855;
-        const double t969 = t959 - t965*t856;
-        const double t970 = t960 - t965*t857;
-        const double t971 = t961 - t965*t858;
-        const double t972 = t962 - t965*t859;
-        const double t973 = t880*t966 + t881*t967 + t882*t968 + t883*t969 + t884*t970 + t885*t971 + t886*t972 + t887*t963;
-        const double t974 = t966 - t973*t880;
-        const double t975 = t967 - t973*t881;
-        const double t976 = t968 - t973*t882;
-        const double t977 = t969 - t973*t883;
-        const double t978 = t970 - t973*t884;
-        const double t979 = t971 - t973*t885;
-        const double t980 = t972 - t973*t886;
-        const double t981 = t963 - t973*t887;
-        const double t982 = t927*t974 + t928*t975 + t929*t976 + t930*t977 + t931*t978 + t932*t979 + t933*t980 + t934*t981 + t935*t964;
-        const double t983 = t974 - t982*t927;
-        const double t984 = t975 - t982*t928;
-        const double t985 = t976 - t982*t929;
-        const double t986 = t977 - t982*t930;
-        const double t987 = t978 - t982*t931;
-        const double t988 = t979 - t982*t932;
-        const double t989 = t980 - t982*t933;
-        const double t990 = t981 - t982*t934;
-        const double t991 = t964 - t982*t935;
-        const double t992 = t983*t983 + t984*t984 + t985*t985 + t986*t986 + t987*t987 + t988*t988 + t989*t989 + t990*t990 + t991*t991 + t848;
-        const double t993 = sqrt(t992);
-        const int t994 = t993 > 0.0;
-        const double t995 = (t994 ? 1.0/(t993 != 0.0 ? t993 : 1.0) : 1.0);
-        const double t996 = t995*t983;
-        const double t997 = t995*t984;
-        const double t998 = t995*t985;
-        const double t999 = t995*t986;
-        const double t1000 = t995*t987;
-        const double t1001 = t995*t988;
-        const double t1002 = t995*t989;
-        const double t1003 = t995*t990;
-        const double t1004 = t995*t991;
-        const double t1005 = t995*t841;
-        const double t1006 = t938 + t965;
-        const double t1007 = t946 + t973;
-        const double t1008 = t955 + t982;
-        const double t1009 = t840*t858 + t743*t857;
-        const double t1010 = -t1009*t853;
-        const double t1011 = -t1009*t854;
-        const double t1012 = -t1009*t855;
-        const double t1013 = -t1009*t856;
-        const double t1014 = t743 - t1009*t857;
-        const double t1015 = t840 - t1009*t858;
-        const double t1016 = -t1009*t859;
-        const double t1017 = t880*t1010 + t881*t1011 + t882*t1012 + t883*t1013 + t884*t1014 + t885*t1015 + t886*t1016;
-        const double t1018 = t1010 - t1017*t880;
-        const double t1019 = t1011 - t1017*t881;
-        const double t1020 = t1012 - t1017*t882;
-        const double t1021 = t1013 - t1017*t883;
-        const double t1022 = t1014 - t1017*t884;
-        const double t1023 = t1015 - t1017*t885;
-        const double t1024 = t1016 - t1017*t886;
-        const double t1025 = -t1017*t887;
-        const double t1026 = t927*t1018 + t928*t1019 + t929*t1020 + t930*t1021 + t931*t1022 + t932*t1023 + t933*t1024 + t934*t1025;
-        const double t1027 = t1018 - t1026*t927;
-        const double t1028 = t1019 - t1026*t928;
-        const double t1029 = t1020 - t1026*t929;
-        const double t1030 = t1021 - t1026*t930;
-        const double t1031 = t1022 - t1026*t931;
-        const double t1032 = t1023 - t1026*t932;
-        const double t1033 = t1024 - t1026*t933;
-        const double t1034 = t1025 - t1026*t934;
-        const double t1035 = -t1026*t935;
-        const double t1036 = t996*t1027 + t997*t1028 + t998*t1029 + t999*t1030 + t1000*t1031 + t1001*t1032 + t1002*t1033 + t1003*t1034 + t1004*t1035;
-        const double t1037 = t1027 - t1036*t996;
-        const double t1038 = t1028 - t1036*t997;
-        const double t1039 = t1029 - t1036*t998;
-        const double t1040 = t1030 - t1036*t999;
-        const double t1041 = t1031 - t1036*t1000;
-        const double t1042 = t1032 - t1036*t1001;
-        const double t1043 = t1033 - t1036*t1002;
-        const double t1044 = t1034 - t1036*t1003;
-        const double t1045 = t1035 - t1036*t1004;
-        const double t1046 = -t1036*t1005;
-        const double t1047 = t853*t1037 + t854*t1038 + t855*t1039 + t856*t1040 + t857*t1041 + t858*t1042 + t859*t1043;
-        const double t1048 = t1037 - t1047*t853;
-        const double t1049 = t1038 - t1047*t854;
-        const double t1050 = t1039 - t1047*t855;
-        const double t1051 = t1040 - t1047*t856;
-        const double t1052 = t1041 - t1047*t857;
-        const double t1053 = t1042 - t1047*t858;
-        const double t1054 = t1043 - t1047*t859;
-        const double t1055 = t880*t1048 + t881*t1049 + t882*t1050 + t883*t1051 + t884*t1052 + t885*t1053 + t886*t1054 + t887*t1044;
-        const double t1056 = t1048 - t1055*t880;
-        const double t1057 = t1049 - t1055*t881;
-        const double t1058 = t1050 - t1055*t882;
-        const double t1059 = t1051 - t1055*t883;
-        const double t1060 = t1052 - t1055*t884;
-        const double t1061 = t1053 - t1055*t885;
-        const double t1062 = t1054 - t1055*t886;
-        const double t1063 = t1044 - t1055*t887;
-        const double t1064 = t927*t1056 + t928*t1057 + t929*t1058 + t930*t1059 + t931*t1060 + t932*t1061 + t933*t1062 + t934*t1063 + t935*t1045;
-        const double t1065 = t1056 - t1064*t927;
-        const double t1066 = t1057 - t1064*t928;
-        const double t1067 = t1058 - t1064*t929;
-        const double t1068 = t1059 - t1064*t930;
-        const double t1069 = t1060 - t1064*t931;
-        const double t1070 = t1061 - t1064*t932;
-        const double t1071 = t1062 - t1064*t933;
-        const double t1072 = t1063 - t1064*t934;
-        const double t1073 = t1045 - t1064*t935;
-        const double t1074 = t996*t1065 + t997*t1066 + t998*t1067 + t999*t1068 + t1000*t1069 + t1001*t1070 + t1002*t1071 + t1003*t1072 + t1004*t1073 + t1005*t1046;
-        const double t1075 = t1065 - t1074*t996;
-        const double t1076 = t1066 - t1074*t997;
-        const double t1077 = t1067 - t1074*t998;
-        const double t1078 = t1068 - t1074*t999;
-        const double t1079 = t1069 - t1074*t1000;
-        const double t1080 = t1070 - t1074*t1001;
-        const double t1081 = t1071 - t1074*t1002;
-        const double t1082 = t1072 - t1074*t1003;
-        const double t1083 = t1073 - t1074*t1004;
-        const double t1084 = t1046 - t1074*t1005;
-        const double t1085 = t1075*t1075 + t1076*t1076 + t1077*t1077 + t1078*t1078 + t1079*t1079 + t1080*t1080 + t1081*t1081 + t1082*t1082 + t1083*t1083 + t1084*t1084 + t848;
-        const double t1086 = sqrt(t1085);
-        const int t1087 = t1086 > 0.0;
-        const double t1088 = (t1087 ? 1.0/(t1086 != 0.0 ? t1086 : 1.0) : 1.0);
-        const double t1089 = t1088*t1075;
-        const double t1090 = t1088*t1076;
-        const double t1091 = t1088*t1077;
-        const double t1092 = t1088*t1078;
-        const double t1093 = t1088*t1079;
-        const double t1094 = t1088*t1080;
-        const double t1095 = t1088*t1081;
-        const double t1096 = t1088*t1082;
-        const double t1097 = t1088*t1083;
-        const double t1098 = t1088*t1084;
-        const double t1099 = t1088*t841;
-        const double t1100 = t1009 + t1047;
-        const double t1101 = t1017 + t1055;
-        const double t1102 = t1026 + t1064;
-        const double t1103 = t1036 + t1074;
-        const double t1104 = t828*t858;
-        const double t1105 = -t1104*t853;
-        const double t1106 = -t1104*t854;
-        const double t1107 = -t1104*t855;
-        const double t1108 = -t1104*t856;
-        const double t1109 = -t1104*t857;
-        const double t1110 = t828 - t1104*t858;
-        const double t1111 = -t1104*t859;
-        const double t1112 = t880*t1105 + t881*t1106 + t882*t1107 + t883*t1108 + t884*t1109 + t885*t1110 + t886*t1111;
-        const double t1113 = t1105 - t1112*t880;
-        const double t1114 = t1106 - t1112*t881;
-        const double t1115 = t1107 - t1112*t882;
-        const double t1116 = t1108 - t1112*t883;
-        const double t1117 = t1109 - t1112*t884;
-        const double t1118 = t1110 - t1112*t885;
-        const double t1119 = t1111 - t1112*t886;
-        const double t1120 = -t1112*t887;
-        const double t1121 = t927*t1113 + t928*t1114 + t929*t1115 + t930*t1116 + t931*t1117 + t932*t1118 + t933*t1119 + t934*t1120;
-        const double t1122 = t1113 - t1121*t927;
-        const double t1123 = t1114 - t1121*t928;
-        const double t1124 = t1115 - t1121*t929;
-        const double t1125 = t1116 - t1121*t930;
-        const double t1126 = t1117 - t1121*t931;
-        const double t1127 = t1118 - t1121*t932;
-        const double t1128 = t1119 - t1121*t933;
-        const double t1129 = t1120 - t1121*t934;
-        const double t1130 = -t1121*t935;
-        const double t1131 = t996*t1122 + t997*t1123 + t998*t1124 + t999*t1125 + t1000*t1126 + t1001*t1127 + t1002*t1128 + t1003*t1129 + t1004*t1130;
-        const double t1132 = t1122 - t1131*t996;
-        const double t1133 = t1123 - t1131*t997;
-        const double t1134 = t1124 - t1131*t998;
-        const double t1135 = t1125 - t1131*t999;
-        const double t1136 = t1126 - t1131*t1000;
-        const double t1137 = t1127 - t1131*t1001;
-        const double t1138 = t1128 - t1131*t1002;
-        const double t1139 = t1129 - t1131*t1003;
-        const double t1140 = t1130 - t1131*t1004;
-        const double t1141 = -t1131*t1005;
-        const double t1142 = t1089*t1132 + t1090*t1133 + t1091*t1134 + t1092*t1135 + t1093*t1136 + t1094*t1137 + t1095*t1138 + t1096*t1139 + t1097*t1140 + t1098*t1141;
-        const double t1143 = t1132 - t1142*t1089;
-        const double t1144 = t1133 - t1142*t1090;
-        const double t1145 = t1134 - t1142*t1091;
-        const double t1146 = t1135 - t1142*t1092;
-        const double t1147 = t1136 - t1142*t1093;
-        const double t1148 = t1137 - t1142*t1094;
-        const double t1149 = t1138 - t1142*t1095;
-        const double t1150 = t1139 - t1142*t1096;
-        const double t1151 = t1140 - t1142*t1097;
-        const double t1152 = t1141 - t1142*t1098;
-        const double t1153 = -t1142*t1099;
-        const double t1154 = t853*t1143 + t854*t1144 + t855*t1145 + t856*t1146 + t857*t1147 + t858*t1148 + t859*t1149;
-        const double t1155 = t1143 - t1154*t853;
-        const double t1156 = t1144 - t1154*t854;
-        const double t1157 = t1145 - t1154*t855;
-        const double t1158 = t1146 - t1154*t856;
-        const double t1159 = t1147 - t1154*t857;
-        const double t1160 = t1148 - t1154*t858;
-        const double t1161 = t1149 - t1154*t859;
-        const double t1162 = t880*t1155 + t881*t1156 + t882*t1157 + t883*t1158 + t884*t1159 + t885*t1160 + t886*t1161 + t887*t1150;
-        const double t1163 = t1155 - t1162*t880;
-        const double t1164 = t1156 - t1162*t881;
-        const double t1165 = t1157 - t1162*t882;
-        const double t1166 = t1158 - t1162*t883;
-        const double t1167 = t1159 - t1162*t884;
-        const double t1168 = t1160 - t1162*t885;
-        const double t1169 = t1161 - t1162*t886;
-        const double t1170 = t1150 - t1162*t887;
-        const double t1171 = t927*t1163 + t928*t1164 + t929*t1165 + t930*t1166 + t931*t1167 + t932*t1168 + t933*t1169 + t934*t1170 + t935*t1151;
-        const double t1172 = t1163 - t1171*t927;
-        const double t1173 = t1164 - t1171*t928;
-        const double t1174 = t1165 - t1171*t929;
-        const double t1175 = t1166 - t1171*t930;
-        const double t1176 = t1167 - t1171*t931;
-        const double t1177 = t1168 - t1171*t932;
-        const double t1178 = t1169 - t1171*t933;
-        const double t1179 = t1170 - t1171*t934;
-        const double t1180 = t1151 - t1171*t935;
-        const double t1181 = t996*t1172 + t997*t1173 + t998*t1174 + t999*t1175 + t1000*t1176 + t1001*t1177 + t1002*t1178 + t1003*t1179 + t1004*t1180 + t1005*t1152;
-        const double t1182 = t1172 - t1181*t996;
-        const double t1183 = t1173 - t1181*t997;
-        const double t1184 = t1174 - t1181*t998;
-        const double t1185 = t1175 - t1181*t999;
-        const double t1186 = t1176 - t1181*t1000;
-        const double t1187 = t1177 - t1181*t1001;
-        const double t1188 = t1178 - t1181*t1002;
-        const double t1189 = t1179 - t1181*t1003;
-        const double t1190 = t1180 - t1181*t1004;
-        const double t1191 = t1152 - t1181*t1005;
-        const double t1192 = t1089*t1182 + t1090*t1183 + t1099*t1153 + t1091*t1184 + t1092*t1185 + t1093*t1186 + t1094*t1187 + t1095*t1188 + t1096*t1189 + t1097*t1190 + t1098*t1191;
-        const double t1193 = t1182 - t1192*t1089;
-        const double t1194 = t1183 - t1192*t1090;
-        const double t1195 = t1184 - t1192*t1091;
-        const double t1196 = t1185 - t1192*t1092;
-        const double t1197 = t1186 - t1192*t1093;
-        const double t1198 = t1187 - t1192*t1094;
-        const double t1199 = t1188 - t1192*t1095;
-        const double t1200 = t1189 - t1192*t1096;
-        const double t1201 = t1190 - t1192*t1097;
-        const double t1202 = t1191 - t1192*t1098;
-        const double t1203 = t1153 - t1192*t1099;
-        const double t1204 = t1193*t1193 + t1194*t1194 + t1203*t1203 + t1195*t1195 + t1196*t1196 + t1197*t1197 + t1198*t1198 + t1199*t1199 + t1200*t1200 + t1201*t1201 + t1202*t1202 + t848;
-        const double t1205 = sqrt(t1204);
-        const int t1206 = t1205 > 0.0;
-        const double t1207 = (t1206 ? 1.0/(t1205 != 0.0 ? t1205 : 1.0) : 1.0);
-        const double t1208 = t1207*t1193;
-        const double t1209 = t1207*t1194;
-        const double t1210 = t1207*t1195;
-        const double t1211 = t1207*t1196;
-        const double t1212 = t1207*t1197;
-        const double t1213 = t1207*t1198;
-        const double t1214 = t1104 + t1154;
-        const double t1215 = t1112 + t1162;
-        const double t1216 = t1121 + t1171;
-        const double t1217 = t1131 + t1181;
-        const double t1218 = t1142 + t1192;
-        const double t1219 = t853*twist[0] + t854*twist[1] + t855*twist[2] + t856*twist[3] + t857*twist[4] + t858*twist[5];
-        const double t1220 = t880*twist[0] + t881*twist[1] + t882*twist[2] + t883*twist[3] + t884*twist[4] + t885*twist[5];
-        const double t1221 = t927*twist[0] + t928*twist[1] + t929*twist[2] + t930*twist[3] + t931*twist[4] + t932*twist[5];
-        const double t1222 = t996*twist[0] + t997*twist[1] + t998*twist[2] + t999*twist[3] + t1000*twist[4] + t1001*twist[5];
-        const double t1223 = t1089*twist[0] + t1090*twist[1] + t1091*twist[2] + t1092*twist[3] + t1093*twist[4] + t1094*twist[5];
-        const double t1224 = t1208*twist[0] + t1209*twist[1] + t1210*twist[2] + t1211*twist[3] + t1212*twist[4] + t1213*twist[5];
-        const double t1225 = (t1206 ? t1207*t1224 : 0.0);
-        const double t1226 = (t1087 ? t1088*(t1223 - t1218*t1225) : 0.0);
-        const double t1227 = (t994 ? t995*(t1222 - t1103*t1226 - t1217*t1225) : 0.0);
-        const double t1228 = (t925 ? t926*(t1221 - t1008*t1227 - t1102*t1226 - t1216*t1225) : 0.0);
-        const double t1229 = (t878 ? t879*(t1220 - t937*t1228 - t1007*t1227 - t1101*t1226 - t1215*t1225) : 0.0);
-        const double t1230 = (t851 ? t852*(t1219 - t888*t1229 - t936*t1228 - t1006*t1227 - t1100*t1226 - t1214*t1225) : 0.0);
-        const double t1231 = t555*t1230 + t580*t1229 + t620*t1228 + t675*t1227 + t745*t1226 + t830*t1225;
-        const double t1232 = t556*t1230 + t581*t1229 + t621*t1228 + t676*t1227 + t746*t1226 + t831*t1225;
-        const double t1233 = t557*t1230 + t582*t1229 + t622*t1228 + t677*t1227 + t747*t1226 + t832*t1225;
-        const double t1234 = t558*t1230 + t583*t1229 + t623*t1228 + t678*t1227 + t748*t1226 + t833*t1225;
-        const double t1235 = t559*t1230 + t584*t1229 + t624*t1228 + t679*t1227 + t749*t1226 + t834*t1225;
-        const double t1236 = t560*t1230 + t585*t1229 + t625*t1228 + t680*t1227 + t750*t1226 + t835*t1225;
-        dq[0] = t1231;
-        dq[1] = t1232;
-        dq[2] = t1233;
-        dq[3] = t1234;
-        dq[4] = t1235;
-        dq[5] = t1236;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-        dq_T[128 + b] = dq[4];
-        dq_T[160 + b] = dq[5];
-    }
-}
-
-void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
-{
-    double q_T[192];
-    double twist_T[192];
-    double dq_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *twist_b = twist + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-                twist_T[96 + b] = twist_b[3];
-                twist_T[128 + b] = twist_b[4];
-                twist_T[160 + b] = twist_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 6; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 6 + k];
-                }
-            }
-        }
-        ur5_inverse_velocity_block(q_T, twist_T, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 6;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-            dq_b[4] = dq_T[128 + b];
-            dq_b[5] = dq_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
 {
     size_t i;
@@ -8797,7 +4478,6 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
         }
     }
 }
-#endif
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 205 add/sub, 275 mul, 20 neg, 6 div, 8 sqrt */
@@ -9043,324 +4723,6 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
     ur5_inverse_velocity_position_finish(v, lambda, cs, sn, dq_position);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_inverse_velocity_position_block(const double *restrict q_T, const double *restrict v_T, double lambda, double *restrict dq_position_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double v[3];
-        double cs[5];
-        double sn[5];
-        double dq_position[6];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        v[2] = v_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t22 = -sn[3]*sn[4];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t114 = lambda*lambda;
-        const double t115 = t33*t33;
-        const double t116 = t39*t39;
-        const double t117 = t45*t45;
-        const double t118 = t50*t50;
-        const double t119 = t56*t56;
-        const double t120 = t30*t30;
-        const double t121 = t115 + t116 + t117 + t118 + t119 + t120;
-        const double t122 = sqrt(t121);
-        const double t123 = 1.0/(t122 != 0.0 ? t122 : 1.0);
-        const double t841 = sqrt(t114);
-        const double t848 = t841*t841;
-        const double t1237 = t115 + t34*t34 + t35*t35 + t116 + t40*t40 + t41*t41 + t117 + t46*t46 + t47*t47 + t118 + t51*t51 + t52*t52 + t119 + t57*t57 + t58*t58 + t29*t29 + t120;
-        const double t1238 = sqrt(t1237);
-        const double t1239 = t1238*UR5_RANK_TOL;
-        const int t1240 = t122 > t1239;
-        const double t1241 = (t1240 ? t122 : 0.0);
-        const double t1242 = (t1240 ? t123 : 1.0);
-        const double t1243 = (t1240 ? -t1242*t30 : 0.0);
-        const double t1244 = (t1240 ? t33*t1242 : 0.0);
-        const double t1245 = (t1240 ? t39*t1242 : 0.0);
-        const double t1246 = (t1240 ? t45*t1242 : 0.0);
-        const double t1247 = (t1240 ? t50*t1242 : 0.0);
-        const double t1248 = (t1240 ? t56*t1242 : 0.0);
-        const double t1249 = t34*t1244 + t40*t1245 + t46*t1246 + t51*t1247 + t57*t1248 + t1243*t29;
-        const double t1250 = t29 - t1249*t1243;
-        const double t1251 = t34 - t1249*t1244;
-        const double t1252 = t40 - t1249*t1245;
-        const double t1253 = t46 - t1249*t1246;
-        const double t1254 = t51 - t1249*t1247;
-        const double t1255 = t57 - t1249*t1248;
-        const double t1256 = t1243*t1250 + t1244*t1251 + t1245*t1252 + t1246*t1253 + t1247*t1254 + t1248*t1255;
-        const double t1257 = t1250 - t1256*t1243;
-        const double t1258 = t1251 - t1256*t1244;
-        const double t1259 = t1252 - t1256*t1245;
-        const double t1260 = t1253 - t1256*t1246;
-        const double t1261 = t1254 - t1256*t1247;
-        const double t1262 = t1255 - t1256*t1248;
-        const double t1263 = t1257*t1257 + t1258*t1258 + t1259*t1259 + t1260*t1260 + t1261*t1261 + t1262*t1262;
-        const double t1264 = sqrt(t1263);
-        const int t1265 = t1264 > t1239;
-        const double t1266 = (t1265 ? t1264 : 0.0);
-        const double t1267 = (t1265 ? 1.0/(t1264 != 0.0 ? t1264 : 1.0) : 1.0);
-        const double t1268 = (t1265 ? t1267*t1257 : 0.0);
-        const double t1269 = (t1265 ? t1267*t1258 : 0.0);
-        const double t1270 = (t1265 ? t1267*t1259 : 0.0);
-        const double t1271 = (t1265 ? t1267*t1260 : 0.0);
-        const double t1272 = (t1265 ? t1267*t1261 : 0.0);
-        const double t1273 = (t1265 ? t1267*t1262 : 0.0);
-        const double t1274 = t1249 + t1256;
-        const double t1275 = t35*t1244 + t41*t1245 + t47*t1246 + t52*t1247 + t58*t1248;
-        const double t1276 = -t1275*t1243;
-        const double t1277 = t35 - t1275*t1244;
-        const double t1278 = t41 - t1275*t1245;
-        const double t1279 = t47 - t1275*t1246;
-        const double t1280 = t52 - t1275*t1247;
-        const double t1281 = t58 - t1275*t1248;
-        const double t1282 = t1268*t1276 + t1269*t1277 + t1270*t1278 + t1271*t1279 + t1272*t1280 + t1273*t1281;
-        const double t1283 = t1276 - t1282*t1268;
-        const double t1284 = t1277 - t1282*t1269;
-        const double t1285 = t1278 - t1282*t1270;
-        const double t1286 = t1279 - t1282*t1271;
-        const double t1287 = t1280 - t1282*t1272;
-        const double t1288 = t1281 - t1282*t1273;
-        const double t1289 = t1243*t1283 + t1244*t1284 + t1245*t1285 + t1246*t1286 + t1247*t1287 + t1248*t1288;
-        const double t1290 = t1283 - t1289*t1243;
-        const double t1291 = t1284 - t1289*t1244;
-        const double t1292 = t1285 - t1289*t1245;
-        const double t1293 = t1286 - t1289*t1246;
-        const double t1294 = t1287 - t1289*t1247;
-        const double t1295 = t1288 - t1289*t1248;
-        const double t1296 = t1268*t1290 + t1269*t1291 + t1270*t1292 + t1271*t1293 + t1272*t1294 + t1273*t1295;
-        const double t1297 = t1290 - t1296*t1268;
-        const double t1298 = t1291 - t1296*t1269;
-        const double t1299 = t1292 - t1296*t1270;
-        const double t1300 = t1293 - t1296*t1271;
-        const double t1301 = t1294 - t1296*t1272;
-        const double t1302 = t1295 - t1296*t1273;
-        const double t1303 = t1297*t1297 + t1298*t1298 + t1299*t1299 + t1300*t1300 + t1301*t1301 + t1302*t1302;
-        const double t1304 = sqrt(t1303);
-        const int t1305 = t1304 > t1239;
-        const double t1306 = (t1305 ? t1304 : 0.0);
-        const double t1307 = (t1305 ? 1.0/(t1304 != 0.0 ? t1304 : 1.0) : 1.0);
-        const double t1308 = (t1305 ? t1307*t1297 : 0.0);
-        const double t1309 = (t1305 ? t1307*t1298 : 0.0);
-        const double t1310 = (t1305 ? t1307*t1299 : 0.0);
-        const double t1311 = (t1305 ? t1307*t1300 : 0.0);
-        const double t1312 = (t1305 ? t1307*t1301 : 0.0);
-        const double t1313 = (t1305 ? t1307*t1302 : 0.0);
-        const double t1314 = t1275 + t1289;
-        const double t1315 = t1282 + t1296;
-        const double t1316 = t1274*t1274 + t1314*t1314 + t1241*t1241 + t848;
-        const double t1317 = sqrt(t1316);
-        const int t1318 = t1317 > 0.0;
-        const double t1319 = (t1318 ? 1.0/(t1317 != 0.0 ? t1317 : 1.0) : 1.0);
-        const double t1320 = t1241*t1319;
-        const double t1321 = t1274*t1319;
-        const double t1322 = t1314*t1319;
-        const double t1323 = t1319*t841;
-        const double t1324 = t1315*t1322 + t1266*t1321;
-        const double t1325 = -t1324*t1320;
-        const double t1326 = t1266 - t1324*t1321;
-        const double t1327 = t1315 - t1324*t1322;
-        const double t1328 = -t1324*t1323;
-        const double t1329 = t1320*t1325 + t1321*t1326 + t1322*t1327 + t1323*t1328;
-        const double t1330 = t1325 - t1329*t1320;
-        const double t1331 = t1326 - t1329*t1321;
-        const double t1332 = t1327 - t1329*t1322;
-        const double t1333 = t1328 - t1329*t1323;
-        const double t1334 = t1330*t1330 + t1331*t1331 + t1332*t1332 + t1333*t1333 + t848;
-        const double t1335 = sqrt(t1334);
-        const int t1336 = t1335 > 0.0;
-        const double t1337 = (t1336 ? 1.0/(t1335 != 0.0 ? t1335 : 1.0) : 1.0);
-        const double t1338 = t1337*t1330;
-        const double t1339 = t1337*t1331;
-        const double t1340 = t1337*t1332;
-        const double t1341 = t1337*t1333;
-        const double t1342 = t1337*t841;
-        const double t1343 = t1324 + t1329;
-        const double t1344 = t1306*t1322;
-        const double t1345 = -t1344*t1320;
-        const double t1346 = -t1344*t1321;
-        const double t1347 = t1306 - t1344*t1322;
-        const double t1348 = -t1344*t1323;
-        const double t1349 = t1338*t1345 + t1339*t1346 + t1340*t1347 + t1341*t1348;
-        const double t1350 = t1345 - t1349*t1338;
-        const double t1351 = t1346 - t1349*t1339;
-        const double t1352 = t1347 - t1349*t1340;
-        const double t1353 = t1348 - t1349*t1341;
-        const double t1354 = -t1349*t1342;
-        const double t1355 = t1320*t1350 + t1321*t1351 + t1322*t1352 + t1323*t1353;
-        const double t1356 = t1350 - t1355*t1320;
-        const double t1357 = t1351 - t1355*t1321;
-        const double t1358 = t1352 - t1355*t1322;
-        const double t1359 = t1353 - t1355*t1323;
-        const double t1360 = t1338*t1356 + t1339*t1357 + t1340*t1358 + t1341*t1359 + t1342*t1354;
-        const double t1361 = t1356 - t1360*t1338;
-        const double t1362 = t1357 - t1360*t1339;
-        const double t1363 = t1358 - t1360*t1340;
-        const double t1364 = t1359 - t1360*t1341;
-        const double t1365 = t1354 - t1360*t1342;
-        const double t1366 = t1361*t1361 + t1362*t1362 + t1363*t1363 + t1364*t1364 + t1365*t1365 + t848;
-        const double t1367 = sqrt(t1366);
-        const int t1368 = t1367 > 0.0;
-        const double t1369 = (t1368 ? 1.0/(t1367 != 0.0 ? t1367 : 1.0) : 1.0);
-        const double t1370 = t1369*t1361;
-        const double t1371 = t1369*t1362;
-        const double t1372 = t1369*t1363;
-        const double t1373 = t1344 + t1355;
-        const double t1374 = t1349 + t1360;
-        const double t1375 = t1320*v[0] + t1321*v[1] + t1322*v[2];
-        const double t1376 = t1338*v[0] + t1339*v[1] + t1340*v[2];
-        const double t1377 = t1370*v[0] + t1371*v[1] + t1372*v[2];
-        const double t1378 = (t1368 ? t1369*t1377 : 0.0);
-        const double t1379 = (t1336 ? t1337*(t1376 - t1374*t1378) : 0.0);
-        const double t1380 = (t1318 ? t1319*(t1375 - t1343*t1379 - t1373*t1378) : 0.0);
-        const double t1381 = t1243*t1380 + t1268*t1379 + t1308*t1378;
-        const double t1382 = t1244*t1380 + t1269*t1379 + t1309*t1378;
-        const double t1383 = t1245*t1380 + t1270*t1379 + t1310*t1378;
-        const double t1384 = t1246*t1380 + t1271*t1379 + t1311*t1378;
-        const double t1385 = t1247*t1380 + t1272*t1379 + t1312*t1378;
-        const double t1386 = t1248*t1380 + t1273*t1379 + t1313*t1378;
-        dq_position[0] = t1381;
-        dq_position[1] = t1382;
-        dq_position[2] = t1383;
-        dq_position[3] = t1384;
-        dq_position[4] = t1385;
-        dq_position[5] = t1386;
-        dq_position_T[0 + b] = dq_position[0];
-        dq_position_T[32 + b] = dq_position[1];
-        dq_position_T[64 + b] = dq_position[2];
-        dq_position_T[96 + b] = dq_position[3];
-        dq_position_T[128 + b] = dq_position[4];
-        dq_position_T[160 + b] = dq_position[5];
-    }
-}
-
-void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
-{
-    double q_T[192];
-    double v_T[96];
-    double dq_position_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *v_b = v + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-                v_T[64 + b] = v_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    v_T[k * 32 + b] = v[src * 3 + k];
-                }
-            }
-        }
-        ur5_inverse_velocity_position_block(q_T, v_T, lambda, dq_position_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_position_b = dq_position + (i + b) * 6;
-            dq_position_b[0] = dq_position_T[0 + b];
-            dq_position_b[1] = dq_position_T[32 + b];
-            dq_position_b[2] = dq_position_T[64 + b];
-            dq_position_b[3] = dq_position_T[96 + b];
-            dq_position_b[4] = dq_position_T[128 + b];
-            dq_position_b[5] = dq_position_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
 {
     size_t i;
@@ -9380,7 +4742,6 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
         }
     }
 }
-#endif
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 57 add/sub, 100 mul, 19 neg, 3 div, 2 sqrt */
@@ -9529,278 +4890,6 @@ void ur5_jacobian_rpy(const double q[6], double JA[36])
     ur5_jacobian_rpy_finish(cs, sn, JA);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_rpy_block(const double *restrict q_T, double *restrict JA_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    ur5_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double JA[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t0 = -0.425*cs[0]*cs[1];
-        const double t1 = -0.425*cs[1]*sn[0];
-        const double t2 = 0.089159 - 0.425*sn[1];
-        const double t4 = t0 - 0.39225*cs[0]*cs[2];
-        const double t5 = t1 - 0.39225*cs[2]*sn[0];
-        const double t6 = t2 - 0.39225*sn[2];
-        const double t8 = t4 + 0.10915*sn[0];
-        const double t9 = t5 - 0.10915*cs[0];
-        const double t10 = cs[0]*cs[3];
-        const double t11 = -cs[0]*sn[3];
-        const double t12 = cs[3]*sn[0];
-        const double t13 = -sn[0]*sn[3];
-        const double t14 = t8 - 0.09465*t11;
-        const double t15 = t9 - 0.09465*t13;
-        const double t16 = t6 - 0.09465*cs[3];
-        const double t17 = t10*cs[4] + sn[0]*sn[4];
-        const double t18 = cs[4]*sn[0] - t10*sn[4];
-        const double t19 = t12*cs[4] - cs[0]*sn[4];
-        const double t20 = -t12*sn[4] - cs[0]*cs[4];
-        const double t21 = cs[4]*sn[3];
-        const double t22 = -sn[3]*sn[4];
-        const double t23 = t11*sn[5] + t17*cs[5];
-        const double t24 = t11*cs[5] - t17*sn[5];
-        const double t25 = t13*sn[5] + t19*cs[5];
-        const double t26 = t13*cs[5] - t19*sn[5];
-        const double t27 = t21*cs[5] + cs[3]*sn[5];
-        const double t29 = t14 + 0.0823*t18;
-        const double t30 = t15 + 0.0823*t20;
-        const double t31 = t16 + 0.0823*t22;
-        const double t32 = t31 - 0.089159;
-        const double t33 = -cs[0]*t32;
-        const double t34 = -t32*sn[0];
-        const double t35 = cs[0]*t29 + t30*sn[0];
-        const double t36 = t29 - t0;
-        const double t37 = t30 - t1;
-        const double t38 = t31 - t2;
-        const double t39 = -cs[0]*t38;
-        const double t40 = -t38*sn[0];
-        const double t41 = cs[0]*t36 + t37*sn[0];
-        const double t42 = t29 - t4;
-        const double t43 = t30 - t5;
-        const double t44 = t31 - t6;
-        const double t45 = -cs[0]*t44;
-        const double t46 = -t44*sn[0];
-        const double t47 = cs[0]*t42 + t43*sn[0];
-        const double t48 = t29 - t8;
-        const double t49 = t30 - t9;
-        const double t50 = cs[3]*t49 - t13*t44;
-        const double t51 = t11*t44 - cs[3]*t48;
-        const double t52 = t13*t48 - t11*t49;
-        const double t53 = t29 - t14;
-        const double t54 = t30 - t15;
-        const double t55 = t31 - t16;
-        const double t56 = t20*t55 - t22*t54;
-        const double t57 = t22*t53 - t18*t55;
-        const double t58 = t18*t54 - t20*t53;
-        const double t1387 = t23*t23 + t25*t25;
-        const int t1388 = t1387 > UR5_RANK_TOL;
-        const double t1389 = (t1388 ? 1.0/(t1387 != 0.0 ? t1387 : 1.0) : 1.0);
-        const double t1390 = sqrt(t1387);
-        const double t1391 = (t1388 ? 1.0/(t1390 != 0.0 ? t1390 : 1.0) : 1.0);
-        const double t1392 = t24*t24 + t26*t26;
-        const double t1393 = sqrt(t1392);
-        const double t1394 = (t1393 > 0.0 ? 1.0/(t1393 != 0.0 ? t1393 : 1.0) : 1.0);
-        const double t1395 = (t1388 ? t23*t1391 : t26*t1394);
-        const double t1396 = (t1388 ? t25*t1391 : -t24*t1394);
-        const double t1397 = (t1388 ? t23*t1389 : 0.0);
-        const double t1398 = (t1388 ? t25*t1389 : 0.0);
-        const double t1399 = (t1388 ? -t23*t27*t1389 : 0.0);
-        const double t1400 = (t1388 ? -t25*t27*t1389 : 0.0);
-        const double t1401 = t1397*sn[0] - cs[0]*t1398;
-        const double t1402 = -t11*t1397 - t13*t1398;
-        const double t1403 = t18*t1397 + t20*t1398;
-        const double t1404 = -cs[0]*t1395 - t1396*sn[0];
-        const double t1405 = t11*t1396 - t13*t1395;
-        const double t1406 = t20*t1395 - t18*t1396;
-        const double t1407 = (t1388 ? 1.0 : 0.0);
-        const double t1408 = t1407;
-        const double t1409 = t1399*sn[0] - cs[0]*t1400;
-        const double t1410 = -t11*t1399 - t13*t1400 - cs[3]*t1407;
-        const double t1411 = t18*t1399 + t20*t1400 + t22*t1407;
-        const double t1416 = -t30;
-        JA[0] = t1416;
-        JA[1] = t33;
-        JA[2] = t39;
-        JA[3] = t45;
-        JA[4] = t50;
-        JA[5] = t56;
-        JA[6] = t29;
-        JA[7] = t34;
-        JA[8] = t40;
-        JA[9] = t46;
-        JA[10] = t51;
-        JA[11] = t57;
-        JA[12] = 0.0;
-        JA[13] = t35;
-        JA[14] = t41;
-        JA[15] = t47;
-        JA[16] = t52;
-        JA[17] = t58;
-        JA[18] = 0.0;
-        JA[19] = t1401;
-        JA[20] = t1401;
-        JA[21] = t1401;
-        JA[22] = t1402;
-        JA[23] = t1403;
-        JA[24] = 0.0;
-        JA[25] = t1404;
-        JA[26] = t1404;
-        JA[27] = t1404;
-        JA[28] = t1405;
-        JA[29] = t1406;
-        JA[30] = t1408;
-        JA[31] = t1409;
-        JA[32] = t1409;
-        JA[33] = t1409;
-        JA[34] = t1410;
-        JA[35] = t1411;
-        JA_T[0 + b] = JA[0];
-        JA_T[32 + b] = JA[1];
-        JA_T[64 + b] = JA[2];
-        JA_T[96 + b] = JA[3];
-        JA_T[128 + b] = JA[4];
-        JA_T[160 + b] = JA[5];
-        JA_T[192 + b] = JA[6];
-        JA_T[224 + b] = JA[7];
-        JA_T[256 + b] = JA[8];
-        JA_T[288 + b] = JA[9];
-        JA_T[320 + b] = JA[10];
-        JA_T[352 + b] = JA[11];
-        JA_T[384 + b] = JA[12];
-        JA_T[416 + b] = JA[13];
-        JA_T[448 + b] = JA[14];
-        JA_T[480 + b] = JA[15];
-        JA_T[512 + b] = JA[16];
-        JA_T[544 + b] = JA[17];
-        JA_T[576 + b] = JA[18];
-        JA_T[608 + b] = JA[19];
-        JA_T[640 + b] = JA[20];
-        JA_T[672 + b] = JA[21];
-        JA_T[704 + b] = JA[22];
-        JA_T[736 + b] = JA[23];
-        JA_T[768 + b] = JA[24];
-        JA_T[800 + b] = JA[25];
-        JA_T[832 + b] = JA[26];
-        JA_T[864 + b] = JA[27];
-        JA_T[896 + b] = JA[28];
-        JA_T[928 + b] = JA[29];
-        JA_T[960 + b] = JA[30];
-        JA_T[992 + b] = JA[31];
-        JA_T[1024 + b] = JA[32];
-        JA_T[1056 + b] = JA[33];
-        JA_T[1088 + b] = JA[34];
-        JA_T[1120 + b] = JA[35];
-    }
-}
-
-void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
-{
-    double q_T[192];
-    double JA_T[1152];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_jacobian_rpy_block(q_T, JA_T);
-        for (b = 0; b < count; ++b) {
-            double *JA_b = JA + (i + b) * 36;
-            JA_b[0] = JA_T[0 + b];
-            JA_b[1] = JA_T[32 + b];
-            JA_b[2] = JA_T[64 + b];
-            JA_b[3] = JA_T[96 + b];
-            JA_b[4] = JA_T[128 + b];
-            JA_b[5] = JA_T[160 + b];
-            JA_b[6] = JA_T[192 + b];
-            JA_b[7] = JA_T[224 + b];
-            JA_b[8] = JA_T[256 + b];
-            JA_b[9] = JA_T[288 + b];
-            JA_b[10] = JA_T[320 + b];
-            JA_b[11] = JA_T[352 + b];
-            JA_b[12] = JA_T[384 + b];
-            JA_b[13] = JA_T[416 + b];
-            JA_b[14] = JA_T[448 + b];
-            JA_b[15] = JA_T[480 + b];
-            JA_b[16] = JA_T[512 + b];
-            JA_b[17] = JA_T[544 + b];
-            JA_b[18] = JA_T[576 + b];
-            JA_b[19] = JA_T[608 + b];
-            JA_b[20] = JA_T[640 + b];
-            JA_b[21] = JA_T[672 + b];
-            JA_b[22] = JA_T[704 + b];
-            JA_b[23] = JA_T[736 + b];
-            JA_b[24] = JA_T[768 + b];
-            JA_b[25] = JA_T[800 + b];
-            JA_b[26] = JA_T[832 + b];
-            JA_b[27] = JA_T[864 + b];
-            JA_b[28] = JA_T[896 + b];
-            JA_b[29] = JA_T[928 + b];
-            JA_b[30] = JA_T[960 + b];
-            JA_b[31] = JA_T[992 + b];
-            JA_b[32] = JA_T[1024 + b];
-            JA_b[33] = JA_T[1056 + b];
-            JA_b[34] = JA_T[1088 + b];
-            JA_b[35] = JA_T[1120 + b];
-        }
-    }
-}
-#else
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 {
     size_t i;
@@ -9820,7 +4909,6 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
         }
     }
 }
-#endif
 
 /* ---- ur5_ik_uniform: a number in [0, 1) from xorshift64* ---- */
 static double ur5_ik_uniform(unsigned long long state[1])

@@ -10,10 +10,10 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
-from ...ir.nodes import Function, Let, Module, Role, Store, TrigBlock, Type
+from ...ir.nodes import Const, Elem, Function, Let, Module, Role, Store, TrigBlock, Type
 from ...ir.walk import body_names, called, expr_names, needed_lets
 from ..text import c_comment
-from .printer import PRECISIONS, CPrecision, CPrinter
+from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
 
 LANGUAGE = "c"
 FILE_SUFFIXES = (".h", ".c")
@@ -35,6 +35,20 @@ SOA_BYTES = 32 * 1024
 """Largest stack a vectorised batch block may use; functions of larger arms use the per-configuration path."""
 
 
+VECTOR_OUTPUTS = 128
+"""Largest output size (elements per configuration) of a function with a vectorised batch path."""
+
+
+def vectorisable(f: Function) -> bool:
+    """Whether the batch of ``f`` takes the vectorised block path: its body is plain arithmetic (sums,
+    products and negations: no division, square root, comparison, select or atan2, which GCC's vectoriser
+    masks or gives up on) and its outputs are at most ``VECTOR_OUTPUTS`` elements a configuration. A
+    vectorised body is a second copy for the compiler, in a loop; the other functions keep the
+    per-configuration path (their trigonometry still batched) and compile once."""
+    ops = f.ops
+    return sum(o.size for o in f.outputs) <= VECTOR_OUTPUTS and not (ops.div or ops.sqrt or ops.cmp or ops.select or ops.atan2)
+
+
 def pad(count: int, lanes: int) -> int:
     """``count`` rounded up to a multiple of ``lanes`` (at least ``lanes``)."""
     return max(lanes, -(-count // lanes) * lanes)
@@ -51,6 +65,41 @@ def stack_text(size: int) -> str:
     """A stack size for the header: bytes, or KB above 4 KB (an estimate from the array sizes and the
     number of temporaries, all of which an unoptimised build keeps on the stack)."""
     return f"{size} bytes" if size < 4096 else f"{-(-size // 1024)} KB"
+
+
+STRIDE = "stride"
+"""The last parameter of the body functions of a vectorised function: element k of a configuration's
+arrays is at ``[k*stride]`` (1 in a single call; the block size in the vectorised batch path, where a block
+of configurations is stored transposed). The statements index with the macro ``{PREFIX}_STRIDE``: the
+parameter where GCC's vector math is used, the constant 1 elsewhere (every call there passes 1)."""
+
+
+class StridedPrinter(CPrinter):
+    """A :class:`CPrinter` for the body functions shared by single calls and batches: element ``k`` of the
+    arrays in ``strided`` (a configuration's inputs and outputs) prints as ``name[k*STRIDE]``, ``stride``
+    being the text of the stride."""
+
+    def __init__(self, precision: CPrecision, storage: dict[str, str], macro, function_name, strided: set[str],
+                 stride: str) -> None:
+        super().__init__(precision, storage, macro, function_name)
+        self.strided = strided
+        self.stride = stride
+
+    def _node(self, e):
+        if type(e) is Elem and e.array in self.strided and type(e.index) is Const:
+            return element(self.storage.get(e.array, e.array), int(e.index.value), self.stride), _ATOM
+        return super()._node(e)
+
+    def _statement(self, s, depth: int, lines: list[str]) -> None:
+        if type(s) is Store and s.output in self.strided:
+            lines.append(f"{self.indent * depth}{element(s.output, s.index, self.stride)} = {self.expr(s.value)};")
+            return
+        super()._statement(s, depth, lines)
+
+
+def element(name: str, k: int, stride: str | None) -> str:
+    """Element ``k`` of an array, strided by ``stride`` (the text of the stride, or ``None``)."""
+    return f"{name}[{k}*{stride}]" if (k and stride) else f"{name}[{k}]"
 
 
 class Names:
@@ -101,13 +150,25 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
     rest = list(f.body[split + 1:]) if blocks else list(f.body)
     post = [s for s in rest if type(s) is Let]
     stores = [s for s in rest if type(s) is Store]
+    count = len(trig.angles)
+    padded = padded_size(count, ctype)
+    block = max(1, BLOCK_ANGLES // padded) if count else 1
+    shared = {a.name for a in inputs if not a.batched}
+    per_config = sum(a.size for a in inputs if a.name not in shared) + sum(o.size for o in outputs) + 3 * count
+    itemsize = 8 if ctype == "double" else 4
+    soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None) if vectorisable(f) else None
+    stride = names.macro(STRIDE.upper()) if soa else None
     storage: dict[str, str] = {}
     for k, (a, c, s) in enumerate(zip(trig.angles, trig.cos, trig.sin)):
-        storage[a.name] = f"{ANGLES}[{k}]"
-        storage[c.name] = f"{COSINES}[{k}]"
-        storage[s.name] = f"{SINES}[{k}]"
+        storage[a.name] = element(ANGLES, k, stride)
+        storage[c.name] = element(COSINES, k, stride)
+        storage[s.name] = element(SINES, k, stride)
     angle_names = {a.name for a in trig.angles}
-    printer = CPrinter(precision, storage, names.macro, names.function)
+    if soa:
+        strided = {a.name for a in inputs if a.batched and not a.is_scalar} | {o.name for o in outputs}
+        printer: CPrinter = StridedPrinter(precision, storage, names.macro, names.function, strided, stride)
+    else:
+        printer = CPrinter(precision, storage, names.macro, names.function)
     roots: set[str] = set()
     for s in post + stores:
         expr_names(s.value, roots)
@@ -119,13 +180,6 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
     pre_read = set()
     for s in pre:
         expr_names(s.value, pre_read)
-    count = len(trig.angles)
-    padded = padded_size(count, ctype)
-    block = max(1, BLOCK_ANGLES // padded) if count else 1
-    shared = {a.name for a in inputs if not a.batched}
-    per_config = sum(a.size for a in inputs if a.name not in shared) + sum(o.size for o in outputs) + 3 * count
-    itemsize = 8 if ctype == "double" else 4
-    soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None)
     temporaries = len(pre) + len(post_all)
     single_stack = itemsize * (3 * padded + temporaries)
     batch_stack = itemsize * (soa * per_config + temporaries + per_config) if soa else itemsize * (3 * padded * block + temporaries)
@@ -158,7 +212,8 @@ def _common(f: Function, precision: CPrecision, names: Names) -> dict:
         "cname": f"{names.prefix}_{f.name}",
         "summary": f.summary,
         "inputs": [
-            {"name": a.name, "size": a.size, "shared": not a.batched, "scalar": a.is_scalar, "param": parameter(a, precision)}
+            {"name": a.name, "size": a.size, "shared": not a.batched, "scalar": a.is_scalar, "param": parameter(a, precision),
+             "strided_param": f"const {ctype} *restrict {a.name}"}
             for a in f.inputs
         ],
         "outputs": [{"name": o.name, "size": o.size, "shape": o.shape} for o in f.outputs],
@@ -249,6 +304,7 @@ def context(module: Module) -> dict:
             for t in module.tables
         ],
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
+        "stride": STRIDE,
     }
 
 
