@@ -7,7 +7,7 @@ for an IR :class:`~skelarm_sym.ir.nodes.Module`. Adding a language is a new fold
 
 from __future__ import annotations
 
-from . import c, numpy
+from . import c, cpython, numpy
 
-BACKENDS = {c.LANGUAGE: c, numpy.LANGUAGE: numpy}
+BACKENDS = {c.LANGUAGE: c, numpy.LANGUAGE: numpy, cpython.LANGUAGE: cpython}
 """Language name -> backend, in the order files are written."""
