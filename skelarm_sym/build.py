@@ -40,7 +40,16 @@ from typing import Sequence
 
 
 from .errors import InputError
-from .wrapper import CompiledArm  # noqa: F401 - re-exported
+
+
+def __getattr__(name: str):
+    """``CompiledArm`` (re-exported from :mod:`skelarm_sym.wrapper`, imported on first use: it needs NumPy,
+    which the cache folder and the compiler do not)."""
+    if name == "CompiledArm":
+        from .wrapper import CompiledArm
+
+        return CompiledArm
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 EXTENSION_SUFFIX = ".ext.c"
 """The file of a generation's CPython extension (:mod:`skelarm_sym.backends.cpython`), which includes its C."""
@@ -319,6 +328,8 @@ def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str |
     interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
     where it cannot be built); ``False``: never, the ctypes library alone. Batches and solvers go through
     ctypes either way."""
+    from .wrapper import CompiledArm
+
     EXT = EXTENSION_SUFFIX
     sources = {k: v for k, v in generated.sources.items() if k.endswith((".c", ".h")) and not k.endswith(EXT)}
     if not sources:

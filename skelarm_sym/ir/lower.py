@@ -96,12 +96,26 @@ def _dependency_order(assignments: Sequence[Assignment], symbols: _Symbols) -> l
     return order
 
 
+def _trig_atoms(expr: sp.Basic) -> set[sp.Basic]:
+    """``expr.atoms(sp.sin, sp.cos)``, walked without SymPy's generator."""
+    found: set[sp.Basic] = set()
+    stack = [expr]
+    while stack:
+        e = stack.pop()
+        args = e.args
+        if args:
+            if isinstance(e, (sp.sin, sp.cos)):
+                found.add(e)
+            stack.extend(args)
+    return found
+
+
 def _name_trig(steps: list[Assignment], outputs: list[sp.Expr]) -> tuple[list[Assignment], list[sp.Expr]]:
     """Give every sin/cos inside a larger expression a step of its own, so all reach a trig block."""
     named = {rhs: symbol for symbol, rhs in steps if isinstance(rhs, (sp.sin, sp.cos))}
     inner = set()
     for expr in [rhs for _, rhs in steps] + outputs:
-        inner |= {t for t in expr.atoms(sp.sin, sp.cos) if t not in named and t is not expr}
+        inner |= {t for t in _trig_atoms(expr) if t not in named and t is not expr}
     if not inner:
         return steps, outputs
     extra = {t: sp.Symbol(f"_trig_{k}", real=True) for k, t in enumerate(sorted(inner, key=sp.default_sort_key))}
@@ -170,16 +184,17 @@ class Program:
     sin: tuple[sp.Symbol, ...]
     temps: dict[sp.Basic, int]
     _levels: dict[int, int] | None = None
+    _depth: dict[int, int] | None = None
 
     def level(self, slot: int) -> int:
         """The trig block of ``slot``: 0 when its angle needs no sine or cosine, else one more than the
         latest block it needs."""
         if self._levels is None:
-            self._levels = {}
+            self._levels, self._depth = {}, {}
         levels = self._levels
         if slot in levels:
             return levels[slot]
-        depth: dict[int, int] = {}
+        depth = self._depth  # entry -> the latest block below it (-1: none), kept for the next slots
         # iterative depth-first: entry -> max level of the slots below it (-1: none)
         stack: list[tuple[str, int, bool]] = [("slot", slot, False)]
         while stack:

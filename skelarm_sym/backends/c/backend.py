@@ -11,7 +11,7 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 from __future__ import annotations
 
 from ...ir.nodes import Const, Elem, Function, Let, Module, Role, Store, TrigBlock, Type
-from ...ir.walk import body_names, called, expr_names, needed_lets
+from ...ir.walk import body_names, called, expr_names
 from ..text import c_comment
 from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
 
@@ -130,8 +130,52 @@ def parameter(a, precision: CPrecision, required: bool = False) -> str:
     return f"const {t} {a.name}[{a.size}]"
 
 
-def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
-    """What the templates need to lay out one straight-line function (single call and batch)."""
+class Shared:
+    """What the functions of one module share while their context is built: the names each statement
+    reads (statements are shared objects across functions) and one printer per storage layout (so that
+    a statement common to several functions is printed once)."""
+
+    def __init__(self) -> None:
+        self._reads: dict[int, tuple[object, frozenset[str]]] = {}
+        self._printers: dict[tuple, CPrinter] = {}
+
+    def reads(self, s) -> frozenset[str]:
+        """The variable and array names statement ``s`` (a Let or Store) reads."""
+        hit = self._reads.get(id(s))
+        if hit is None or hit[0] is not s:
+            hit = self._reads[id(s)] = (s, frozenset(expr_names(s.value, set())))
+        return hit[1]
+
+    def needed(self, lets: list[Let], roots: set[str]) -> list[Let]:
+        """:func:`skelarm_sym.ir.walk.needed_lets`, with the names each Let reads looked up here."""
+        by_name = {s.var.name: s for s in lets}
+        keep: set[str] = set()
+        todo = [r for r in roots if r in by_name]
+        while todo:
+            name = todo.pop()
+            if name in keep:
+                continue
+            keep.add(name)
+            todo.extend(n for n in self.reads(by_name[name]) if n in by_name and n not in keep)
+        return [s for s in lets if s.var.name in keep]
+
+    def printer(self, precision: CPrecision, storage: dict[str, str], names: "Names", strided: set[str] | None,
+                stride: str | None) -> CPrinter:
+        key = (precision.ctype, tuple(sorted(storage.items())), None if strided is None else tuple(sorted(strided)), stride)
+        printer = self._printers.get(key)
+        if printer is None:
+            if strided is None:
+                printer = CPrinter(precision, storage, names.macro, names.function)
+            else:
+                printer = StridedPrinter(precision, storage, names.macro, names.function, strided, stride)
+            self._printers[key] = printer
+        return printer
+
+
+def straight_context(f: Function, precision: CPrecision, names: Names, common: Shared | None = None) -> dict:
+    """What the templates need to lay out one straight-line function (single call and batch); ``common``:
+    what the functions of the module share (see :class:`Shared`)."""
+    common = common or Shared()
     blocks = [i for i, s in enumerate(f.body) if type(s) is TrigBlock]
     ctype = precision.ctype
     inputs = f.inputs
@@ -164,22 +208,19 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
         storage[c.name] = element(COSINES, k, stride)
         storage[s.name] = element(SINES, k, stride)
     angle_names = {a.name for a in trig.angles}
-    if soa:
-        strided = {a.name for a in inputs if a.batched and not a.is_scalar} | {o.name for o in outputs}
-        printer: CPrinter = StridedPrinter(precision, storage, names.macro, names.function, strided, stride)
-    else:
-        printer = CPrinter(precision, storage, names.macro, names.function)
+    strided = ({a.name for a in inputs if a.batched and not a.is_scalar} | {o.name for o in outputs}) if soa else None
+    printer = common.printer(precision, storage, names, strided, stride)
     roots: set[str] = set()
     for s in post + stores:
-        expr_names(s.value, roots)
-    recomputed = needed_lets([s for s in pre if s.var.name not in angle_names], roots)
+        roots |= common.reads(s)
+    recomputed = common.needed([s for s in pre if s.var.name not in angle_names], roots)
     post_all = recomputed + post
-    post_read = set()
-    for s in post_all + stores:
-        expr_names(s.value, post_read)
-    pre_read = set()
+    post_read = set(roots)
+    for s in recomputed:
+        post_read |= common.reads(s)
+    pre_read: set[str] = set()
     for s in pre:
-        expr_names(s.value, pre_read)
+        pre_read |= common.reads(s)
     temporaries = len(pre) + len(post_all)
     single_stack = itemsize * (3 * padded + temporaries)
     batch_stack = itemsize * (soa * per_config + temporaries + per_config) if soa else itemsize * (3 * padded * block + temporaries)
@@ -277,7 +318,8 @@ def context(module: Module) -> dict:
     """Everything both templates print."""
     precision = PRECISIONS[module.precision]
     names = Names(module.prefix)
-    straight = [straight_context(f, precision, names) for f in module.functions if f.kind == "straight"]
+    shared = Shared()
+    straight = [straight_context(f, precision, names, shared) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, precision, names) for f in module.functions if f.kind != "straight"]
     statuses: dict[str, dict] = {}
     for p in procedures:
