@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x846cdcc7UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x0ba35258UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -168,9 +168,9 @@ ARM2_BODY void arm2_position_finish(const double l[2], const double *restrict cs
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
     const double t6 = t5 - t3;
+    p[1*ARM2_STRIDE] = -t6;
     const double t7 = t1 + t2;
     p[0] = t7;
-    p[1*ARM2_STRIDE] = -t6;
 }
 
 void arm2_position(const double q[2], const double l[2], double p[2])
@@ -268,15 +268,15 @@ ARM2_BODY void arm2_jacobian_finish(const double l[2], const double *restrict cs
     (void)stride;
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
+    J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
-    const double t6 = t5 - t3;
-    const double t7 = t1 + t2;
-    J[0] = t6;
     J[1*ARM2_STRIDE] = t5;
+    const double t6 = t5 - t3;
+    J[0] = t6;
+    const double t7 = t1 + t2;
     J[2*ARM2_STRIDE] = t7;
-    J[3*ARM2_STRIDE] = t2;
 }
 
 void arm2_jacobian(const double q[2], const double l[2], double J[4])
@@ -384,13 +384,13 @@ ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double l[2]
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
     const double t13 = -t10;
-    const double t14 = -t12;
-    const double t15 = t13 - t9;
-    const double t16 = t14 - t11;
-    H[0] = t15;
     H[1*ARM2_STRIDE] = t13;
-    H[2*ARM2_STRIDE] = t16;
+    const double t14 = -t12;
     H[3*ARM2_STRIDE] = t14;
+    const double t15 = t13 - t9;
+    H[0] = t15;
+    const double t16 = t14 - t11;
+    H[2*ARM2_STRIDE] = t16;
 }
 
 void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
@@ -507,9 +507,9 @@ ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double l[2]
     const double t13 = -t10;
     const double t14 = -t12;
     const double t15 = t13 - t9;
+    v[1*ARM2_STRIDE] = -t15;
     const double t16 = t14 - t11;
     v[0] = t16;
-    v[1*ARM2_STRIDE] = -t15;
 }
 
 void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
@@ -627,8 +627,8 @@ ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double 
     const double t13 = -t10;
     const double t14 = -t12;
     const double t15 = t13 - t9;
-    const double t16 = t14 - t11;
     a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
+    const double t16 = t14 - t11;
     a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
@@ -741,33 +741,33 @@ ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *r
     (void)stride;
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
+    J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
+    J[1*ARM2_STRIDE] = t5;
     const double t6 = t5 - t3;
+    p[1*ARM2_STRIDE] = -t6;
+    J[0] = t6;
     const double t7 = t1 + t2;
+    p[0] = t7;
+    J[2*ARM2_STRIDE] = t7;
     const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
     const double t13 = -t10;
-    const double t14 = -t12;
-    const double t15 = t13 - t9;
-    const double t16 = t14 - t11;
-    p[0] = t7;
-    p[1*ARM2_STRIDE] = -t6;
-    J[0] = t6;
-    J[1*ARM2_STRIDE] = t5;
-    J[2*ARM2_STRIDE] = t7;
-    J[3*ARM2_STRIDE] = t2;
-    H[0] = t15;
     H[1*ARM2_STRIDE] = t13;
-    H[2*ARM2_STRIDE] = t16;
+    const double t14 = -t12;
     H[3*ARM2_STRIDE] = t14;
-    v[0] = t16;
+    const double t15 = t13 - t9;
+    H[0] = t15;
     v[1*ARM2_STRIDE] = -t15;
     a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
+    const double t16 = t14 - t11;
+    H[2*ARM2_STRIDE] = t16;
+    v[0] = t16;
     a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
@@ -993,8 +993,8 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t39 = (t34 ? t36*(t35*t28 + t29*t27) : t35*t38);
     const double t40 = (t34 ? t36*(t30*t28 + t21*(t30 - t29*t22)) : 0.0);
     const double t41 = t39*t23 + t40*t25;
-    const double t42 = t39*t24 + t40*t26;
     dq[0] = t41;
+    const double t42 = t39*t24 + t40*t26;
     dq[1] = t42;
 }
 
@@ -1075,8 +1075,8 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t48 = (t34 ? t36*(t47*t28 + t45*t27) : t47*t38);
     const double t49 = (t34 ? t36*(t46*t28 + t21*(t46 - t45*t22)) : 0.0);
     const double t50 = t48*t23 + t49*t25;
-    const double t51 = t48*t24 + t49*t26;
     q_next[0] = t50 + q[0];
+    const double t51 = t48*t24 + t49*t26;
     q_next[1] = t51 + q[1];
 }
 

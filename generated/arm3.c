@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x15d7559fUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x01c875c0UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -173,9 +173,9 @@ ARM3_BODY void arm3_position_finish(const double l[3], const double *restrict cs
     const double t9 = t8 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
+    p[1*ARM3_STRIDE] = -t11;
     const double t12 = t2 + t10;
     p[0] = t12;
-    p[1*ARM3_STRIDE] = -t11;
 }
 
 void arm3_position(const double q[3], const double l[3], double p[2])
@@ -276,20 +276,20 @@ ARM3_BODY void arm3_jacobian_finish(const double l[3], const double *restrict cs
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1*ARM3_STRIDE]*l[1];
     const double t4 = cs[2*ARM3_STRIDE]*l[2];
+    J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
-    const double t9 = t8 - t6;
-    const double t10 = t3 + t4;
-    const double t11 = t9 - t5;
-    const double t12 = t2 + t10;
-    J[0] = t11;
-    J[1*ARM3_STRIDE] = t9;
     J[2*ARM3_STRIDE] = t8;
-    J[3*ARM3_STRIDE] = t12;
+    const double t9 = t8 - t6;
+    J[1*ARM3_STRIDE] = t9;
+    const double t10 = t3 + t4;
     J[4*ARM3_STRIDE] = t10;
-    J[5*ARM3_STRIDE] = t4;
+    const double t11 = t9 - t5;
+    J[0] = t11;
+    const double t12 = t2 + t10;
+    J[3*ARM3_STRIDE] = t12;
 }
 
 void arm3_jacobian(const double q[3], const double l[3], double J[6])
@@ -406,17 +406,17 @@ ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double l[3]
     const double t19 = t6*t13;
     const double t20 = t7*t14;
     const double t21 = -t17;
-    const double t22 = -t20;
-    const double t23 = t21 - t16;
-    const double t24 = t22 - t19;
-    const double t25 = t23 - t15;
-    const double t26 = t24 - t18;
-    H[0] = t25;
-    H[1*ARM3_STRIDE] = t23;
     H[2*ARM3_STRIDE] = t21;
-    H[3*ARM3_STRIDE] = t26;
-    H[4*ARM3_STRIDE] = t24;
+    const double t22 = -t20;
     H[5*ARM3_STRIDE] = t22;
+    const double t23 = t21 - t16;
+    H[1*ARM3_STRIDE] = t23;
+    const double t24 = t22 - t19;
+    H[4*ARM3_STRIDE] = t24;
+    const double t25 = t23 - t15;
+    H[0] = t25;
+    const double t26 = t24 - t18;
+    H[3*ARM3_STRIDE] = t26;
 }
 
 void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
@@ -545,9 +545,9 @@ ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double l[3]
     const double t23 = t21 - t16;
     const double t24 = t22 - t19;
     const double t25 = t23 - t15;
+    v[1*ARM3_STRIDE] = -t25;
     const double t26 = t24 - t18;
     v[0] = t26;
-    v[1*ARM3_STRIDE] = -t25;
 }
 
 void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
@@ -677,8 +677,8 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     const double t23 = t21 - t16;
     const double t24 = t22 - t19;
     const double t25 = t23 - t15;
-    const double t26 = t24 - t18;
     a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
+    const double t26 = t24 - t18;
     a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
@@ -796,14 +796,22 @@ ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *r
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1*ARM3_STRIDE]*l[1];
     const double t4 = cs[2*ARM3_STRIDE]*l[2];
+    J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
+    J[2*ARM3_STRIDE] = t8;
     const double t9 = t8 - t6;
+    J[1*ARM3_STRIDE] = t9;
     const double t10 = t3 + t4;
+    J[4*ARM3_STRIDE] = t10;
     const double t11 = t9 - t5;
+    p[1*ARM3_STRIDE] = -t11;
+    J[0] = t11;
     const double t12 = t2 + t10;
+    p[0] = t12;
+    J[3*ARM3_STRIDE] = t12;
     const double t13 = dq[0] + dq[1*ARM3_STRIDE];
     const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
@@ -813,28 +821,20 @@ ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *r
     const double t19 = t6*t13;
     const double t20 = t7*t14;
     const double t21 = -t17;
-    const double t22 = -t20;
-    const double t23 = t21 - t16;
-    const double t24 = t22 - t19;
-    const double t25 = t23 - t15;
-    const double t26 = t24 - t18;
-    p[0] = t12;
-    p[1*ARM3_STRIDE] = -t11;
-    J[0] = t11;
-    J[1*ARM3_STRIDE] = t9;
-    J[2*ARM3_STRIDE] = t8;
-    J[3*ARM3_STRIDE] = t12;
-    J[4*ARM3_STRIDE] = t10;
-    J[5*ARM3_STRIDE] = t4;
-    H[0] = t25;
-    H[1*ARM3_STRIDE] = t23;
     H[2*ARM3_STRIDE] = t21;
-    H[3*ARM3_STRIDE] = t26;
-    H[4*ARM3_STRIDE] = t24;
+    const double t22 = -t20;
     H[5*ARM3_STRIDE] = t22;
-    v[0] = t26;
+    const double t23 = t21 - t16;
+    H[1*ARM3_STRIDE] = t23;
+    const double t24 = t22 - t19;
+    H[4*ARM3_STRIDE] = t24;
+    const double t25 = t23 - t15;
+    H[0] = t25;
     v[1*ARM3_STRIDE] = -t25;
     a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
+    const double t26 = t24 - t18;
+    H[3*ARM3_STRIDE] = t26;
+    v[0] = t26;
     a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
@@ -1081,10 +1081,10 @@ static void arm3_inverse_velocity_finish(const double v[2], const double l[3], d
     const double t51 = (t46 ? t48*(t47*t40 + t41*t39) : t47*t50);
     const double t52 = (t46 ? t48*(t42*t40 + t31*(t42 - t41*t32)) : 0.0);
     const double t53 = t51*t33 + t52*t36;
-    const double t54 = t51*t34 + t52*t37;
-    const double t55 = t51*t35 + t52*t38;
     dq[0] = t53;
+    const double t54 = t51*t34 + t52*t37;
     dq[1] = t54;
+    const double t55 = t51*t35 + t52*t38;
     dq[2] = t55;
 }
 
@@ -1278,10 +1278,10 @@ static void arm3_ik_step_finish(const double q[3], const double target[2], const
     const double t61 = (t46 ? t48*(t60*t40 + t58*t39) : t60*t50);
     const double t62 = (t46 ? t48*(t59*t40 + t31*(t59 - t58*t32)) : 0.0);
     const double t63 = t61*t33 + t62*t36;
-    const double t64 = t61*t34 + t62*t37;
-    const double t65 = t61*t35 + t62*t38;
     q_next[0] = t63 + q[0];
+    const double t64 = t61*t34 + t62*t37;
     q_next[1] = t64 + q[1];
+    const double t65 = t61*t35 + t62*t38;
     q_next[2] = t65 + q[2];
 }
 

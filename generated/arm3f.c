@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xa99ad89cUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9e0cd21cUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -171,9 +171,9 @@ ARM3F_BODY void arm3f_position_finish(const float *restrict cs, const float *res
     const float t7 = t6 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
+    p[1*ARM3F_STRIDE] = -t9;
     const float t10 = cs[0] + t8;
     p[0] = t10;
-    p[1*ARM3F_STRIDE] = -t9;
 }
 
 void arm3f_position(const float q[3], float p[2])
@@ -273,19 +273,19 @@ ARM3F_BODY void arm3f_jacobian_finish(const float *restrict cs, const float *res
     (void)stride;
     const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    J[5*ARM3F_STRIDE] = t3;
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
-    const float t7 = t6 - t4;
-    const float t8 = t2 + t3;
-    const float t9 = t7 - sn[0];
-    const float t10 = cs[0] + t8;
-    J[0] = t9;
-    J[1*ARM3F_STRIDE] = t7;
     J[2*ARM3F_STRIDE] = t6;
-    J[3*ARM3F_STRIDE] = t10;
+    const float t7 = t6 - t4;
+    J[1*ARM3F_STRIDE] = t7;
+    const float t8 = t2 + t3;
     J[4*ARM3F_STRIDE] = t8;
-    J[5*ARM3F_STRIDE] = t3;
+    const float t9 = t7 - sn[0];
+    J[0] = t9;
+    const float t10 = cs[0] + t8;
+    J[3*ARM3F_STRIDE] = t10;
 }
 
 void arm3f_jacobian(const float q[3], float J[6])
@@ -400,17 +400,17 @@ ARM3F_BODY void arm3f_coriolis_finish(const float *restrict dq, const float *res
     const float t17 = t4*t11;
     const float t18 = t5*t12;
     const float t19 = -t15;
-    const float t20 = -t18;
-    const float t21 = t19 - t14;
-    const float t22 = t20 - t17;
-    const float t23 = t21 - t13;
-    const float t24 = t22 - t16;
-    H[0] = t23;
-    H[1*ARM3F_STRIDE] = t21;
     H[2*ARM3F_STRIDE] = t19;
-    H[3*ARM3F_STRIDE] = t24;
-    H[4*ARM3F_STRIDE] = t22;
+    const float t20 = -t18;
     H[5*ARM3F_STRIDE] = t20;
+    const float t21 = t19 - t14;
+    H[1*ARM3F_STRIDE] = t21;
+    const float t22 = t20 - t17;
+    H[4*ARM3F_STRIDE] = t22;
+    const float t23 = t21 - t13;
+    H[0] = t23;
+    const float t24 = t22 - t16;
+    H[3*ARM3F_STRIDE] = t24;
 }
 
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
@@ -537,9 +537,9 @@ ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *res
     const float t21 = t19 - t14;
     const float t22 = t20 - t17;
     const float t23 = t21 - t13;
+    v[1*ARM3F_STRIDE] = -t23;
     const float t24 = t22 - t16;
     v[0] = t24;
-    v[1*ARM3F_STRIDE] = -t23;
 }
 
 void arm3f_velocity(const float q[3], const float dq[3], float v[2])
@@ -667,8 +667,8 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     const float t21 = t19 - t14;
     const float t22 = t20 - t17;
     const float t23 = t21 - t13;
-    const float t24 = t22 - t16;
     a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
+    const float t24 = t22 - t16;
     a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
@@ -785,13 +785,21 @@ ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *r
     (void)stride;
     const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    J[5*ARM3F_STRIDE] = t3;
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
+    J[2*ARM3F_STRIDE] = t6;
     const float t7 = t6 - t4;
+    J[1*ARM3F_STRIDE] = t7;
     const float t8 = t2 + t3;
+    J[4*ARM3F_STRIDE] = t8;
     const float t9 = t7 - sn[0];
+    p[1*ARM3F_STRIDE] = -t9;
+    J[0] = t9;
     const float t10 = cs[0] + t8;
+    p[0] = t10;
+    J[3*ARM3F_STRIDE] = t10;
     const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
     const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
@@ -801,28 +809,20 @@ ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *r
     const float t17 = t4*t11;
     const float t18 = t5*t12;
     const float t19 = -t15;
-    const float t20 = -t18;
-    const float t21 = t19 - t14;
-    const float t22 = t20 - t17;
-    const float t23 = t21 - t13;
-    const float t24 = t22 - t16;
-    p[0] = t10;
-    p[1*ARM3F_STRIDE] = -t9;
-    J[0] = t9;
-    J[1*ARM3F_STRIDE] = t7;
-    J[2*ARM3F_STRIDE] = t6;
-    J[3*ARM3F_STRIDE] = t10;
-    J[4*ARM3F_STRIDE] = t8;
-    J[5*ARM3F_STRIDE] = t3;
-    H[0] = t23;
-    H[1*ARM3F_STRIDE] = t21;
     H[2*ARM3F_STRIDE] = t19;
-    H[3*ARM3F_STRIDE] = t24;
-    H[4*ARM3F_STRIDE] = t22;
+    const float t20 = -t18;
     H[5*ARM3F_STRIDE] = t20;
-    v[0] = t24;
+    const float t21 = t19 - t14;
+    H[1*ARM3F_STRIDE] = t21;
+    const float t22 = t20 - t17;
+    H[4*ARM3F_STRIDE] = t22;
+    const float t23 = t21 - t13;
+    H[0] = t23;
     v[1*ARM3F_STRIDE] = -t23;
     a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
+    const float t24 = t22 - t16;
+    H[3*ARM3F_STRIDE] = t24;
+    v[0] = t24;
     a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
@@ -1065,10 +1065,10 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t49 = (t44 ? t46*(t45*t38 + t39*t37) : t45*t48);
     const float t50 = (t44 ? t46*(t40*t38 + t29*(t40 - t39*t30)) : 0.0f);
     const float t51 = t49*t31 + t50*t34;
-    const float t52 = t49*t32 + t50*t35;
-    const float t53 = t49*t33 + t50*t36;
     dq[0] = t51;
+    const float t52 = t49*t32 + t50*t35;
     dq[1] = t52;
+    const float t53 = t49*t33 + t50*t36;
     dq[2] = t53;
 }
 
@@ -1257,10 +1257,10 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t59 = (t44 ? t46*(t58*t38 + t56*t37) : t58*t48);
     const float t60 = (t44 ? t46*(t57*t38 + t29*(t57 - t56*t30)) : 0.0f);
     const float t61 = t59*t31 + t60*t34;
-    const float t62 = t59*t32 + t60*t35;
-    const float t63 = t59*t33 + t60*t36;
     q_next[0] = t61 + q[0];
+    const float t62 = t59*t32 + t60*t35;
     q_next[1] = t62 + q[1];
+    const float t63 = t59*t33 + t60*t36;
     q_next[2] = t63 + q[2];
 }
 

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc03b5e48UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x7856d09aUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -178,9 +178,9 @@ ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
+    p[1*ARM4_STRIDE] = -t16;
     const double t17 = t3 + t15;
     p[0] = t17;
-    p[1*ARM4_STRIDE] = -t16;
 }
 
 void arm4_position(const double q[4], const double l[4], double p[2])
@@ -280,25 +280,25 @@ ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs
     const double t4 = cs[1*ARM4_STRIDE]*l[1];
     const double t5 = cs[2*ARM4_STRIDE]*l[2];
     const double t6 = cs[3*ARM4_STRIDE]*l[3];
+    J[7*ARM4_STRIDE] = t6;
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
-    const double t12 = t11 - t9;
-    const double t13 = t5 + t6;
-    const double t14 = t12 - t8;
-    const double t15 = t4 + t13;
-    const double t16 = t14 - t7;
-    const double t17 = t3 + t15;
-    J[0] = t16;
-    J[1*ARM4_STRIDE] = t14;
-    J[2*ARM4_STRIDE] = t12;
     J[3*ARM4_STRIDE] = t11;
-    J[4*ARM4_STRIDE] = t17;
-    J[5*ARM4_STRIDE] = t15;
+    const double t12 = t11 - t9;
+    J[2*ARM4_STRIDE] = t12;
+    const double t13 = t5 + t6;
     J[6*ARM4_STRIDE] = t13;
-    J[7*ARM4_STRIDE] = t6;
+    const double t14 = t12 - t8;
+    J[1*ARM4_STRIDE] = t14;
+    const double t15 = t4 + t13;
+    J[5*ARM4_STRIDE] = t15;
+    const double t16 = t14 - t7;
+    J[0] = t16;
+    const double t17 = t3 + t15;
+    J[4*ARM4_STRIDE] = t17;
 }
 
 void arm4_jacobian(const double q[4], const double l[4], double J[8])
@@ -420,21 +420,21 @@ ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4]
     const double t27 = t9*t19;
     const double t28 = t10*t20;
     const double t29 = -t24;
-    const double t30 = -t28;
-    const double t31 = t29 - t23;
-    const double t32 = t30 - t27;
-    const double t33 = t31 - t22;
-    const double t34 = t32 - t26;
-    const double t35 = t33 - t21;
-    const double t36 = t34 - t25;
-    H[0] = t35;
-    H[1*ARM4_STRIDE] = t33;
-    H[2*ARM4_STRIDE] = t31;
     H[3*ARM4_STRIDE] = t29;
-    H[4*ARM4_STRIDE] = t36;
-    H[5*ARM4_STRIDE] = t34;
-    H[6*ARM4_STRIDE] = t32;
+    const double t30 = -t28;
     H[7*ARM4_STRIDE] = t30;
+    const double t31 = t29 - t23;
+    H[2*ARM4_STRIDE] = t31;
+    const double t32 = t30 - t27;
+    H[6*ARM4_STRIDE] = t32;
+    const double t33 = t31 - t22;
+    H[1*ARM4_STRIDE] = t33;
+    const double t34 = t32 - t26;
+    H[5*ARM4_STRIDE] = t34;
+    const double t35 = t33 - t21;
+    H[0] = t35;
+    const double t36 = t34 - t25;
+    H[4*ARM4_STRIDE] = t36;
 }
 
 void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
@@ -571,9 +571,9 @@ ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4]
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
+    v[1*ARM4_STRIDE] = -t35;
     const double t36 = t34 - t25;
     v[0] = t36;
-    v[1*ARM4_STRIDE] = -t35;
 }
 
 void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
@@ -711,8 +711,8 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
-    const double t36 = t34 - t25;
     a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    const double t36 = t34 - t25;
     a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
@@ -831,17 +831,27 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     const double t4 = cs[1*ARM4_STRIDE]*l[1];
     const double t5 = cs[2*ARM4_STRIDE]*l[2];
     const double t6 = cs[3*ARM4_STRIDE]*l[3];
+    J[7*ARM4_STRIDE] = t6;
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
+    J[3*ARM4_STRIDE] = t11;
     const double t12 = t11 - t9;
+    J[2*ARM4_STRIDE] = t12;
     const double t13 = t5 + t6;
+    J[6*ARM4_STRIDE] = t13;
     const double t14 = t12 - t8;
+    J[1*ARM4_STRIDE] = t14;
     const double t15 = t4 + t13;
+    J[5*ARM4_STRIDE] = t15;
     const double t16 = t14 - t7;
+    p[1*ARM4_STRIDE] = -t16;
+    J[0] = t16;
     const double t17 = t3 + t15;
+    p[0] = t17;
+    J[4*ARM4_STRIDE] = t17;
     const double t18 = dq[0] + dq[1*ARM4_STRIDE];
     const double t19 = t18 + dq[2*ARM4_STRIDE];
     const double t20 = t19 + dq[3*ARM4_STRIDE];
@@ -854,34 +864,24 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     const double t27 = t9*t19;
     const double t28 = t10*t20;
     const double t29 = -t24;
-    const double t30 = -t28;
-    const double t31 = t29 - t23;
-    const double t32 = t30 - t27;
-    const double t33 = t31 - t22;
-    const double t34 = t32 - t26;
-    const double t35 = t33 - t21;
-    const double t36 = t34 - t25;
-    p[0] = t17;
-    p[1*ARM4_STRIDE] = -t16;
-    J[0] = t16;
-    J[1*ARM4_STRIDE] = t14;
-    J[2*ARM4_STRIDE] = t12;
-    J[3*ARM4_STRIDE] = t11;
-    J[4*ARM4_STRIDE] = t17;
-    J[5*ARM4_STRIDE] = t15;
-    J[6*ARM4_STRIDE] = t13;
-    J[7*ARM4_STRIDE] = t6;
-    H[0] = t35;
-    H[1*ARM4_STRIDE] = t33;
-    H[2*ARM4_STRIDE] = t31;
     H[3*ARM4_STRIDE] = t29;
-    H[4*ARM4_STRIDE] = t36;
-    H[5*ARM4_STRIDE] = t34;
-    H[6*ARM4_STRIDE] = t32;
+    const double t30 = -t28;
     H[7*ARM4_STRIDE] = t30;
-    v[0] = t36;
+    const double t31 = t29 - t23;
+    H[2*ARM4_STRIDE] = t31;
+    const double t32 = t30 - t27;
+    H[6*ARM4_STRIDE] = t32;
+    const double t33 = t31 - t22;
+    H[1*ARM4_STRIDE] = t33;
+    const double t34 = t32 - t26;
+    H[5*ARM4_STRIDE] = t34;
+    const double t35 = t33 - t21;
+    H[0] = t35;
     v[1*ARM4_STRIDE] = -t35;
     a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    const double t36 = t34 - t25;
+    H[4*ARM4_STRIDE] = t36;
+    v[0] = t36;
     a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
@@ -1141,12 +1141,12 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t63 = (t58 ? t60*(t59*t52 + t53*t51) : t59*t62);
     const double t64 = (t58 ? t60*(t54*t52 + t41*(t54 - t53*t42)) : 0.0);
     const double t65 = t63*t43 + t64*t47;
-    const double t66 = t63*t44 + t64*t48;
-    const double t67 = t63*t45 + t64*t49;
-    const double t68 = t63*t46 + t64*t50;
     dq[0] = t65;
+    const double t66 = t63*t44 + t64*t48;
     dq[1] = t66;
+    const double t67 = t63*t45 + t64*t49;
     dq[2] = t67;
+    const double t68 = t63*t46 + t64*t50;
     dq[3] = t68;
 }
 
@@ -1345,12 +1345,12 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t74 = (t58 ? t60*(t73*t52 + t71*t51) : t73*t62);
     const double t75 = (t58 ? t60*(t72*t52 + t41*(t72 - t71*t42)) : 0.0);
     const double t76 = t74*t43 + t75*t47;
-    const double t77 = t74*t44 + t75*t48;
-    const double t78 = t74*t45 + t75*t49;
-    const double t79 = t74*t46 + t75*t50;
     q_next[0] = t76 + q[0];
+    const double t77 = t74*t44 + t75*t48;
     q_next[1] = t77 + q[1];
+    const double t78 = t74*t45 + t75*t49;
     q_next[2] = t78 + q[2];
+    const double t79 = t74*t46 + t75*t50;
     q_next[3] = t79 + q[3];
 }
 

@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x1404f784UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x1720238fUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -183,9 +183,9 @@ ARM5_BODY void arm5_position_finish(const double l[5], const double *restrict cs
     const double t19 = t17 - t10;
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
+    p[1*ARM5_STRIDE] = -t21;
     const double t22 = t4 + t20;
     p[0] = t22;
-    p[1*ARM5_STRIDE] = -t21;
 }
 
 void arm5_position(const double q[5], const double l[5], double p[2])
@@ -292,30 +292,30 @@ ARM5_BODY void arm5_jacobian_finish(const double l[5], const double *restrict cs
     const double t6 = cs[2*ARM5_STRIDE]*l[2];
     const double t7 = cs[3*ARM5_STRIDE]*l[3];
     const double t8 = cs[4*ARM5_STRIDE]*l[4];
+    J[9*ARM5_STRIDE] = t8;
     const double t9 = sn[0]*l[0];
     const double t10 = sn[1*ARM5_STRIDE]*l[1];
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
-    const double t15 = t14 - t12;
-    const double t16 = t7 + t8;
-    const double t17 = t15 - t11;
-    const double t18 = t6 + t16;
-    const double t19 = t17 - t10;
-    const double t20 = t5 + t18;
-    const double t21 = t19 - t9;
-    const double t22 = t4 + t20;
-    J[0] = t21;
-    J[1*ARM5_STRIDE] = t19;
-    J[2*ARM5_STRIDE] = t17;
-    J[3*ARM5_STRIDE] = t15;
     J[4*ARM5_STRIDE] = t14;
-    J[5*ARM5_STRIDE] = t22;
-    J[6*ARM5_STRIDE] = t20;
-    J[7*ARM5_STRIDE] = t18;
+    const double t15 = t14 - t12;
+    J[3*ARM5_STRIDE] = t15;
+    const double t16 = t7 + t8;
     J[8*ARM5_STRIDE] = t16;
-    J[9*ARM5_STRIDE] = t8;
+    const double t17 = t15 - t11;
+    J[2*ARM5_STRIDE] = t17;
+    const double t18 = t6 + t16;
+    J[7*ARM5_STRIDE] = t18;
+    const double t19 = t17 - t10;
+    J[1*ARM5_STRIDE] = t19;
+    const double t20 = t5 + t18;
+    J[6*ARM5_STRIDE] = t20;
+    const double t21 = t19 - t9;
+    J[0] = t21;
+    const double t22 = t4 + t20;
+    J[5*ARM5_STRIDE] = t22;
 }
 
 void arm5_jacobian(const double q[5], const double l[5], double J[10])
@@ -450,25 +450,25 @@ ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double l[5]
     const double t35 = t12*t25;
     const double t36 = t13*t26;
     const double t37 = -t31;
-    const double t38 = -t36;
-    const double t39 = t37 - t30;
-    const double t40 = t38 - t35;
-    const double t41 = t39 - t29;
-    const double t42 = t40 - t34;
-    const double t43 = t41 - t28;
-    const double t44 = t42 - t33;
-    const double t45 = t43 - t27;
-    const double t46 = t44 - t32;
-    H[0] = t45;
-    H[1*ARM5_STRIDE] = t43;
-    H[2*ARM5_STRIDE] = t41;
-    H[3*ARM5_STRIDE] = t39;
     H[4*ARM5_STRIDE] = t37;
-    H[5*ARM5_STRIDE] = t46;
-    H[6*ARM5_STRIDE] = t44;
-    H[7*ARM5_STRIDE] = t42;
-    H[8*ARM5_STRIDE] = t40;
+    const double t38 = -t36;
     H[9*ARM5_STRIDE] = t38;
+    const double t39 = t37 - t30;
+    H[3*ARM5_STRIDE] = t39;
+    const double t40 = t38 - t35;
+    H[8*ARM5_STRIDE] = t40;
+    const double t41 = t39 - t29;
+    H[2*ARM5_STRIDE] = t41;
+    const double t42 = t40 - t34;
+    H[7*ARM5_STRIDE] = t42;
+    const double t43 = t41 - t28;
+    H[1*ARM5_STRIDE] = t43;
+    const double t44 = t42 - t33;
+    H[6*ARM5_STRIDE] = t44;
+    const double t45 = t43 - t27;
+    H[0] = t45;
+    const double t46 = t44 - t32;
+    H[5*ARM5_STRIDE] = t46;
 }
 
 void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10])
@@ -621,9 +621,9 @@ ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double l[5]
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
     const double t45 = t43 - t27;
+    v[1*ARM5_STRIDE] = -t45;
     const double t46 = t44 - t32;
     v[0] = t46;
-    v[1*ARM5_STRIDE] = -t45;
 }
 
 void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2])
@@ -777,9 +777,9 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
     const double t45 = t43 - t27;
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
     const double t46 = t44 - t32;
-    a[0] = t45*dq[0] + t43*dq[1*ARM5_STRIDE] + t41*dq[2*ARM5_STRIDE] + t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE] + t21*ddq[0] + t19*ddq[1*ARM5_STRIDE] + t17*ddq[2*ARM5_STRIDE] + t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE];
-    a[1*ARM5_STRIDE] = t8*ddq[4*ARM5_STRIDE] + t46*dq[0] + t44*dq[1*ARM5_STRIDE] + t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE] + t38*dq[4*ARM5_STRIDE] + t22*ddq[0] + t20*ddq[1*ARM5_STRIDE] + t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE];
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])
@@ -906,20 +906,32 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     const double t6 = cs[2*ARM5_STRIDE]*l[2];
     const double t7 = cs[3*ARM5_STRIDE]*l[3];
     const double t8 = cs[4*ARM5_STRIDE]*l[4];
+    J[9*ARM5_STRIDE] = t8;
     const double t9 = sn[0]*l[0];
     const double t10 = sn[1*ARM5_STRIDE]*l[1];
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
+    J[4*ARM5_STRIDE] = t14;
     const double t15 = t14 - t12;
+    J[3*ARM5_STRIDE] = t15;
     const double t16 = t7 + t8;
+    J[8*ARM5_STRIDE] = t16;
     const double t17 = t15 - t11;
+    J[2*ARM5_STRIDE] = t17;
     const double t18 = t6 + t16;
+    J[7*ARM5_STRIDE] = t18;
     const double t19 = t17 - t10;
+    J[1*ARM5_STRIDE] = t19;
     const double t20 = t5 + t18;
+    J[6*ARM5_STRIDE] = t20;
     const double t21 = t19 - t9;
+    p[1*ARM5_STRIDE] = -t21;
+    J[0] = t21;
     const double t22 = t4 + t20;
+    p[0] = t22;
+    J[5*ARM5_STRIDE] = t22;
     const double t23 = dq[0] + dq[1*ARM5_STRIDE];
     const double t24 = t23 + dq[2*ARM5_STRIDE];
     const double t25 = t24 + dq[3*ARM5_STRIDE];
@@ -935,41 +947,29 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     const double t35 = t12*t25;
     const double t36 = t13*t26;
     const double t37 = -t31;
-    const double t38 = -t36;
-    const double t39 = t37 - t30;
-    const double t40 = t38 - t35;
-    const double t41 = t39 - t29;
-    const double t42 = t40 - t34;
-    const double t43 = t41 - t28;
-    const double t44 = t42 - t33;
-    const double t45 = t43 - t27;
-    const double t46 = t44 - t32;
-    p[0] = t22;
-    p[1*ARM5_STRIDE] = -t21;
-    J[0] = t21;
-    J[1*ARM5_STRIDE] = t19;
-    J[2*ARM5_STRIDE] = t17;
-    J[3*ARM5_STRIDE] = t15;
-    J[4*ARM5_STRIDE] = t14;
-    J[5*ARM5_STRIDE] = t22;
-    J[6*ARM5_STRIDE] = t20;
-    J[7*ARM5_STRIDE] = t18;
-    J[8*ARM5_STRIDE] = t16;
-    J[9*ARM5_STRIDE] = t8;
-    H[0] = t45;
-    H[1*ARM5_STRIDE] = t43;
-    H[2*ARM5_STRIDE] = t41;
-    H[3*ARM5_STRIDE] = t39;
     H[4*ARM5_STRIDE] = t37;
-    H[5*ARM5_STRIDE] = t46;
-    H[6*ARM5_STRIDE] = t44;
-    H[7*ARM5_STRIDE] = t42;
-    H[8*ARM5_STRIDE] = t40;
+    const double t38 = -t36;
     H[9*ARM5_STRIDE] = t38;
-    v[0] = t46;
+    const double t39 = t37 - t30;
+    H[3*ARM5_STRIDE] = t39;
+    const double t40 = t38 - t35;
+    H[8*ARM5_STRIDE] = t40;
+    const double t41 = t39 - t29;
+    H[2*ARM5_STRIDE] = t41;
+    const double t42 = t40 - t34;
+    H[7*ARM5_STRIDE] = t42;
+    const double t43 = t41 - t28;
+    H[1*ARM5_STRIDE] = t43;
+    const double t44 = t42 - t33;
+    H[6*ARM5_STRIDE] = t44;
+    const double t45 = t43 - t27;
+    H[0] = t45;
     v[1*ARM5_STRIDE] = -t45;
-    a[0] = t45*dq[0] + t43*dq[1*ARM5_STRIDE] + t41*dq[2*ARM5_STRIDE] + t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE] + t21*ddq[0] + t19*ddq[1*ARM5_STRIDE] + t17*ddq[2*ARM5_STRIDE] + t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE];
-    a[1*ARM5_STRIDE] = t8*ddq[4*ARM5_STRIDE] + t46*dq[0] + t44*dq[1*ARM5_STRIDE] + t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE] + t38*dq[4*ARM5_STRIDE] + t22*ddq[0] + t20*ddq[1*ARM5_STRIDE] + t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE];
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
+    const double t46 = t44 - t32;
+    H[5*ARM5_STRIDE] = t46;
+    v[0] = t46;
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2])
@@ -1257,14 +1257,14 @@ static void arm5_inverse_velocity_finish(const double v[2], const double l[5], d
     const double t75 = (t70 ? t72*(t71*t64 + t65*t63) : t71*t74);
     const double t76 = (t70 ? t72*(t66*t64 + t51*(t66 - t65*t52)) : 0.0);
     const double t77 = t75*t53 + t76*t58;
-    const double t78 = t75*t54 + t76*t59;
-    const double t79 = t75*t55 + t76*t60;
-    const double t80 = t75*t56 + t76*t61;
-    const double t81 = t75*t57 + t76*t62;
     dq[0] = t77;
+    const double t78 = t75*t54 + t76*t59;
     dq[1] = t78;
+    const double t79 = t75*t55 + t76*t60;
     dq[2] = t79;
+    const double t80 = t75*t56 + t76*t61;
     dq[3] = t80;
+    const double t81 = t75*t57 + t76*t62;
     dq[4] = t81;
 }
 
@@ -1484,14 +1484,14 @@ static void arm5_ik_step_finish(const double q[5], const double target[2], const
     const double t87 = (t70 ? t72*(t86*t64 + t84*t63) : t86*t74);
     const double t88 = (t70 ? t72*(t85*t64 + t51*(t85 - t84*t52)) : 0.0);
     const double t89 = t87*t53 + t88*t58;
-    const double t90 = t87*t54 + t88*t59;
-    const double t91 = t87*t55 + t88*t60;
-    const double t92 = t87*t56 + t88*t61;
-    const double t93 = t87*t57 + t88*t62;
     q_next[0] = t89 + q[0];
+    const double t90 = t87*t54 + t88*t59;
     q_next[1] = t90 + q[1];
+    const double t91 = t87*t55 + t88*t60;
     q_next[2] = t91 + q[2];
+    const double t92 = t87*t56 + t88*t61;
     q_next[3] = t92 + q[3];
+    const double t93 = t87*t57 + t88*t62;
     q_next[4] = t93 + q[4];
 }
 

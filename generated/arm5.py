@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1404f784
+STAMP = 0x1720238f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -439,8 +439,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
-    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -537,8 +537,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 9] = t38
     v[..., 0] = t46
     v[..., 1] = -t45
-    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
-    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors

@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x2b0d76ecUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x7e5f5d15UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -188,9 +188,9 @@ ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs
     const double t24 = t22 - t12;
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
+    p[1*ARM6_STRIDE] = -t26;
     const double t27 = t5 + t25;
     p[0] = t27;
-    p[1*ARM6_STRIDE] = -t26;
 }
 
 void arm6_position(const double q[6], const double l[6], double p[2])
@@ -300,6 +300,7 @@ ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs
     const double t8 = cs[3*ARM6_STRIDE]*l[3];
     const double t9 = cs[4*ARM6_STRIDE]*l[4];
     const double t10 = cs[5*ARM6_STRIDE]*l[5];
+    J[11*ARM6_STRIDE] = t10;
     const double t11 = sn[0]*l[0];
     const double t12 = sn[1*ARM6_STRIDE]*l[1];
     const double t13 = sn[2*ARM6_STRIDE]*l[2];
@@ -307,28 +308,27 @@ ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
-    const double t18 = t17 - t15;
-    const double t19 = t9 + t10;
-    const double t20 = t18 - t14;
-    const double t21 = t8 + t19;
-    const double t22 = t20 - t13;
-    const double t23 = t7 + t21;
-    const double t24 = t22 - t12;
-    const double t25 = t6 + t23;
-    const double t26 = t24 - t11;
-    const double t27 = t5 + t25;
-    J[0] = t26;
-    J[1*ARM6_STRIDE] = t24;
-    J[2*ARM6_STRIDE] = t22;
-    J[3*ARM6_STRIDE] = t20;
-    J[4*ARM6_STRIDE] = t18;
     J[5*ARM6_STRIDE] = t17;
-    J[6*ARM6_STRIDE] = t27;
-    J[7*ARM6_STRIDE] = t25;
-    J[8*ARM6_STRIDE] = t23;
-    J[9*ARM6_STRIDE] = t21;
+    const double t18 = t17 - t15;
+    J[4*ARM6_STRIDE] = t18;
+    const double t19 = t9 + t10;
     J[10*ARM6_STRIDE] = t19;
-    J[11*ARM6_STRIDE] = t10;
+    const double t20 = t18 - t14;
+    J[3*ARM6_STRIDE] = t20;
+    const double t21 = t8 + t19;
+    J[9*ARM6_STRIDE] = t21;
+    const double t22 = t20 - t13;
+    J[2*ARM6_STRIDE] = t22;
+    const double t23 = t7 + t21;
+    J[8*ARM6_STRIDE] = t23;
+    const double t24 = t22 - t12;
+    J[1*ARM6_STRIDE] = t24;
+    const double t25 = t6 + t23;
+    J[7*ARM6_STRIDE] = t25;
+    const double t26 = t24 - t11;
+    J[0] = t26;
+    const double t27 = t5 + t25;
+    J[6*ARM6_STRIDE] = t27;
 }
 
 void arm6_jacobian(const double q[6], const double l[6], double J[12])
@@ -472,29 +472,29 @@ ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double l[6]
     const double t43 = t15*t31;
     const double t44 = t16*t32;
     const double t45 = -t38;
-    const double t46 = -t44;
-    const double t47 = t45 - t37;
-    const double t48 = t46 - t43;
-    const double t49 = t47 - t36;
-    const double t50 = t48 - t42;
-    const double t51 = t49 - t35;
-    const double t52 = t50 - t41;
-    const double t53 = t51 - t34;
-    const double t54 = t52 - t40;
-    const double t55 = t53 - t33;
-    const double t56 = t54 - t39;
-    H[0] = t55;
-    H[1*ARM6_STRIDE] = t53;
-    H[2*ARM6_STRIDE] = t51;
-    H[3*ARM6_STRIDE] = t49;
-    H[4*ARM6_STRIDE] = t47;
     H[5*ARM6_STRIDE] = t45;
-    H[6*ARM6_STRIDE] = t56;
-    H[7*ARM6_STRIDE] = t54;
-    H[8*ARM6_STRIDE] = t52;
-    H[9*ARM6_STRIDE] = t50;
-    H[10*ARM6_STRIDE] = t48;
+    const double t46 = -t44;
     H[11*ARM6_STRIDE] = t46;
+    const double t47 = t45 - t37;
+    H[4*ARM6_STRIDE] = t47;
+    const double t48 = t46 - t43;
+    H[10*ARM6_STRIDE] = t48;
+    const double t49 = t47 - t36;
+    H[3*ARM6_STRIDE] = t49;
+    const double t50 = t48 - t42;
+    H[9*ARM6_STRIDE] = t50;
+    const double t51 = t49 - t35;
+    H[2*ARM6_STRIDE] = t51;
+    const double t52 = t50 - t41;
+    H[8*ARM6_STRIDE] = t52;
+    const double t53 = t51 - t34;
+    H[1*ARM6_STRIDE] = t53;
+    const double t54 = t52 - t40;
+    H[7*ARM6_STRIDE] = t54;
+    const double t55 = t53 - t33;
+    H[0] = t55;
+    const double t56 = t54 - t39;
+    H[6*ARM6_STRIDE] = t56;
 }
 
 void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12])
@@ -659,9 +659,9 @@ ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double l[6]
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
     const double t55 = t53 - t33;
+    v[1*ARM6_STRIDE] = -t55;
     const double t56 = t54 - t39;
     v[0] = t56;
-    v[1*ARM6_STRIDE] = -t55;
 }
 
 void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2])
@@ -827,9 +827,9 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
     const double t55 = t53 - t33;
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
     const double t56 = t54 - t39;
-    a[0] = t55*dq[0] + t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE] + t49*dq[3*ARM6_STRIDE] + t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE] + t26*ddq[0] + t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE] + t20*ddq[3*ARM6_STRIDE] + t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE];
-    a[1*ARM6_STRIDE] = t10*ddq[5*ARM6_STRIDE] + t56*dq[0] + t54*dq[1*ARM6_STRIDE] + t52*dq[2*ARM6_STRIDE] + t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE] + t46*dq[5*ARM6_STRIDE] + t27*ddq[0] + t25*ddq[1*ARM6_STRIDE] + t23*ddq[2*ARM6_STRIDE] + t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE];
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])
@@ -961,6 +961,7 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t8 = cs[3*ARM6_STRIDE]*l[3];
     const double t9 = cs[4*ARM6_STRIDE]*l[4];
     const double t10 = cs[5*ARM6_STRIDE]*l[5];
+    J[11*ARM6_STRIDE] = t10;
     const double t11 = sn[0]*l[0];
     const double t12 = sn[1*ARM6_STRIDE]*l[1];
     const double t13 = sn[2*ARM6_STRIDE]*l[2];
@@ -968,16 +969,29 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
+    J[5*ARM6_STRIDE] = t17;
     const double t18 = t17 - t15;
+    J[4*ARM6_STRIDE] = t18;
     const double t19 = t9 + t10;
+    J[10*ARM6_STRIDE] = t19;
     const double t20 = t18 - t14;
+    J[3*ARM6_STRIDE] = t20;
     const double t21 = t8 + t19;
+    J[9*ARM6_STRIDE] = t21;
     const double t22 = t20 - t13;
+    J[2*ARM6_STRIDE] = t22;
     const double t23 = t7 + t21;
+    J[8*ARM6_STRIDE] = t23;
     const double t24 = t22 - t12;
+    J[1*ARM6_STRIDE] = t24;
     const double t25 = t6 + t23;
+    J[7*ARM6_STRIDE] = t25;
     const double t26 = t24 - t11;
+    p[1*ARM6_STRIDE] = -t26;
+    J[0] = t26;
     const double t27 = t5 + t25;
+    p[0] = t27;
+    J[6*ARM6_STRIDE] = t27;
     const double t28 = dq[0] + dq[1*ARM6_STRIDE];
     const double t29 = t28 + dq[2*ARM6_STRIDE];
     const double t30 = t29 + dq[3*ARM6_STRIDE];
@@ -996,47 +1010,33 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t43 = t15*t31;
     const double t44 = t16*t32;
     const double t45 = -t38;
-    const double t46 = -t44;
-    const double t47 = t45 - t37;
-    const double t48 = t46 - t43;
-    const double t49 = t47 - t36;
-    const double t50 = t48 - t42;
-    const double t51 = t49 - t35;
-    const double t52 = t50 - t41;
-    const double t53 = t51 - t34;
-    const double t54 = t52 - t40;
-    const double t55 = t53 - t33;
-    const double t56 = t54 - t39;
-    p[0] = t27;
-    p[1*ARM6_STRIDE] = -t26;
-    J[0] = t26;
-    J[1*ARM6_STRIDE] = t24;
-    J[2*ARM6_STRIDE] = t22;
-    J[3*ARM6_STRIDE] = t20;
-    J[4*ARM6_STRIDE] = t18;
-    J[5*ARM6_STRIDE] = t17;
-    J[6*ARM6_STRIDE] = t27;
-    J[7*ARM6_STRIDE] = t25;
-    J[8*ARM6_STRIDE] = t23;
-    J[9*ARM6_STRIDE] = t21;
-    J[10*ARM6_STRIDE] = t19;
-    J[11*ARM6_STRIDE] = t10;
-    H[0] = t55;
-    H[1*ARM6_STRIDE] = t53;
-    H[2*ARM6_STRIDE] = t51;
-    H[3*ARM6_STRIDE] = t49;
-    H[4*ARM6_STRIDE] = t47;
     H[5*ARM6_STRIDE] = t45;
-    H[6*ARM6_STRIDE] = t56;
-    H[7*ARM6_STRIDE] = t54;
-    H[8*ARM6_STRIDE] = t52;
-    H[9*ARM6_STRIDE] = t50;
-    H[10*ARM6_STRIDE] = t48;
+    const double t46 = -t44;
     H[11*ARM6_STRIDE] = t46;
-    v[0] = t56;
+    const double t47 = t45 - t37;
+    H[4*ARM6_STRIDE] = t47;
+    const double t48 = t46 - t43;
+    H[10*ARM6_STRIDE] = t48;
+    const double t49 = t47 - t36;
+    H[3*ARM6_STRIDE] = t49;
+    const double t50 = t48 - t42;
+    H[9*ARM6_STRIDE] = t50;
+    const double t51 = t49 - t35;
+    H[2*ARM6_STRIDE] = t51;
+    const double t52 = t50 - t41;
+    H[8*ARM6_STRIDE] = t52;
+    const double t53 = t51 - t34;
+    H[1*ARM6_STRIDE] = t53;
+    const double t54 = t52 - t40;
+    H[7*ARM6_STRIDE] = t54;
+    const double t55 = t53 - t33;
+    H[0] = t55;
     v[1*ARM6_STRIDE] = -t55;
-    a[0] = t55*dq[0] + t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE] + t49*dq[3*ARM6_STRIDE] + t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE] + t26*ddq[0] + t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE] + t20*ddq[3*ARM6_STRIDE] + t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE];
-    a[1*ARM6_STRIDE] = t10*ddq[5*ARM6_STRIDE] + t56*dq[0] + t54*dq[1*ARM6_STRIDE] + t52*dq[2*ARM6_STRIDE] + t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE] + t46*dq[5*ARM6_STRIDE] + t27*ddq[0] + t25*ddq[1*ARM6_STRIDE] + t23*ddq[2*ARM6_STRIDE] + t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE];
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
+    const double t56 = t54 - t39;
+    H[6*ARM6_STRIDE] = t56;
+    v[0] = t56;
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2])
@@ -1345,16 +1345,16 @@ static void arm6_inverse_velocity_finish(const double v[2], const double l[6], d
     const double t87 = (t82 ? t84*(t83*t76 + t77*t75) : t83*t86);
     const double t88 = (t82 ? t84*(t78*t76 + t61*(t78 - t77*t62)) : 0.0);
     const double t89 = t87*t63 + t88*t69;
-    const double t90 = t87*t64 + t88*t70;
-    const double t91 = t87*t65 + t88*t71;
-    const double t92 = t87*t66 + t88*t72;
-    const double t93 = t87*t67 + t88*t73;
-    const double t94 = t87*t68 + t88*t74;
     dq[0] = t89;
+    const double t90 = t87*t64 + t88*t70;
     dq[1] = t90;
+    const double t91 = t87*t65 + t88*t71;
     dq[2] = t91;
+    const double t92 = t87*t66 + t88*t72;
     dq[3] = t92;
+    const double t93 = t87*t67 + t88*t73;
     dq[4] = t93;
+    const double t94 = t87*t68 + t88*t74;
     dq[5] = t94;
 }
 
@@ -1587,16 +1587,16 @@ static void arm6_ik_step_finish(const double q[6], const double target[2], const
     const double t100 = (t82 ? t84*(t99*t76 + t97*t75) : t99*t86);
     const double t101 = (t82 ? t84*(t98*t76 + t61*(t98 - t97*t62)) : 0.0);
     const double t102 = t100*t63 + t101*t69;
-    const double t103 = t100*t64 + t101*t70;
-    const double t104 = t100*t65 + t101*t71;
-    const double t105 = t100*t66 + t101*t72;
-    const double t106 = t100*t67 + t101*t73;
-    const double t107 = t100*t68 + t101*t74;
     q_next[0] = t102 + q[0];
+    const double t103 = t100*t64 + t101*t70;
     q_next[1] = t103 + q[1];
+    const double t104 = t100*t65 + t101*t71;
     q_next[2] = t104 + q[2];
+    const double t105 = t100*t66 + t101*t72;
     q_next[3] = t105 + q[3];
+    const double t106 = t100*t67 + t101*t73;
     q_next[4] = t106 + q[4];
+    const double t107 = t100*t68 + t101*t74;
     q_next[5] = t107 + q[5];
 }
 

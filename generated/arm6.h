@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0x2b0d76ecUL
+#define ARM6_STAMP 0x7e5f5d15UL
 
 #ifdef __cplusplus
 extern "C" {

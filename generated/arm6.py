@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x2b0d76ec
+STAMP = 0x7e5f5d15
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -479,8 +479,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
-    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -591,8 +591,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 11] = t46
     v[..., 0] = t56
     v[..., 1] = -t55
-    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
-    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors

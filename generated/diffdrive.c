@@ -14,7 +14,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x36e1bcbbUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xd596c20eUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -105,9 +105,9 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
 static void diffdrive_body_rates_finish(const double wheels[2], double track, double *restrict rates)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
+    rates[0] = t0;
     const double t1 = 1.0/track;
     const double t2 = wheels[1]*t1 - wheels[0]*t1;
-    rates[0] = t0;
     rates[1] = t2;
 }
 
@@ -203,10 +203,10 @@ static void diffdrive_pose_rate_angles(const double pose[3], double *restrict an
 static void diffdrive_pose_rate_finish(const double wheels[2], double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
-    const double t1 = 1.0/track;
-    const double t2 = wheels[1]*t1 - wheels[0]*t1;
     dpose[0] = t0*cs[0];
     dpose[1] = t0*sn[0];
+    const double t1 = 1.0/track;
+    const double t2 = wheels[1]*t1 - wheels[0]*t1;
     dpose[2] = t2;
 }
 

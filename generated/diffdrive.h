@@ -30,7 +30,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x36e1bcbbUL
+#define DIFFDRIVE_STAMP 0xd596c20eUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -46,7 +46,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xebe68b56UL
+#define UR5_STAMP 0xdf320cdbUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -517,7 +517,7 @@ class Converter:
                 minus.append(Neg(self._fresh(-self._rebuild(t))))
             else:
                 plus.append(self(t))
-        return Add(tuple(plus + minus))
+        return _sum(plus, minus)
 
     def _negated(self, coeff: sp.Number, factors: Sequence[sp.Basic]) -> Expr:
         """``-(coeff * factors[0] * ...)`` for a product whose leading number ``coeff`` is negative, as
@@ -567,6 +567,30 @@ class Converter:
 
     def _guarded(self, den: sp.Expr) -> bool:
         return not ((den.is_Number and float(den) > 0) or den in self.plain)
+
+
+LONG_SUM = 8
+"""Sums of more terms are evaluated as balanced trees (see :func:`_sum`)."""
+
+
+def _sum(plus: list[Expr], minus: list[Neg]) -> Expr:
+    """``plus[0] + ... - minus...``: a sum of at most ``LONG_SUM`` terms as one :class:`Add` (evaluated left
+    to right), a longer one as the positive terms summed pairwise minus the negated ones summed pairwise:
+    the same additions and negations, in a dependency chain of log2(terms) instead of terms (planar
+    kinematics at n = 48 has two sums of 96 products), and a rounding error that grows as log(terms)."""
+    if len(plus) + len(minus) <= LONG_SUM:
+        return Add(tuple(plus + minus))
+    if not minus:
+        return _tree(plus)
+    negated = _tree([m.x for m in minus])
+    return Neg(negated) if not plus else Add((_tree(plus), Neg(negated)))
+
+
+def _tree(terms: list[Expr]) -> Expr:
+    if len(terms) == 1:
+        return terms[0]
+    middle = len(terms) // 2
+    return Add((_tree(terms[:middle]), _tree(terms[middle:])))
 
 
 def _negative(number: sp.Number) -> bool:

@@ -35,18 +35,22 @@ SOA_BYTES = 32 * 1024
 """Largest stack a vectorised batch block may use; functions of larger arms use the per-configuration path."""
 
 
-VECTOR_OUTPUTS = 128
-"""Largest output size (elements per configuration) of a function with a vectorised batch path."""
+VECTOR_OUTPUTS = 12
+"""Most output elements per element of a configuration's inputs in a function with a vectorised batch
+path: 6 for a Jacobian (6 rows), 1.4 for planar kinematics, 42 for a 7-joint arm's Hessian (N^2 outputs),
+whose vectorised body compiled in seconds and gained nothing."""
 
 
 def vectorisable(f: Function) -> bool:
     """Whether the batch of ``f`` takes the vectorised block path: its body is plain arithmetic (sums,
     products and negations: no division, square root, comparison, select or atan2, which GCC's vectoriser
-    masks or gives up on) and its outputs are at most ``VECTOR_OUTPUTS`` elements a configuration. A
-    vectorised body is a second copy for the compiler, in a loop; the other functions keep the
-    per-configuration path (their trigonometry still batched) and compile once."""
+    masks or gives up on) and it has at most ``VECTOR_OUTPUTS`` outputs per input element. A vectorised
+    body is a second copy for the compiler, in a loop; the other functions keep the per-configuration
+    path (their trigonometry still batched) and compile once."""
     ops = f.ops
-    return sum(o.size for o in f.outputs) <= VECTOR_OUTPUTS and not (ops.div or ops.sqrt or ops.cmp or ops.select or ops.atan2)
+    inputs = sum(a.size for a in f.inputs if a.batched and not a.is_scalar)
+    outputs = sum(o.size for o in f.outputs)
+    return outputs <= VECTOR_OUTPUTS * max(1, inputs) and not (ops.div or ops.sqrt or ops.cmp or ops.select or ops.atan2)
 
 
 def pad(count: int, lanes: int) -> int:
@@ -184,7 +188,7 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
         printer = CPrinter(precision, macro=names.macro, function_name=names.function)
         return _common(f, precision, names) | {
             "general": printer.statements(f.body), "angle_count": 0, "padded": 0, "block": 1, "soa": None,
-            "pre": [], "post": [], "stores": [], "pre_inputs": [], "post_inputs": [a.name for a in inputs],
+            "pre": [], "post": [], "pre_inputs": [], "post_inputs": [a.name for a in inputs],
             "post_uses": {"ang": False, "cs": False, "sn": False},
             "stack_bytes": 0, "stack": "a few hundred bytes", "batch_stack": "a few hundred bytes",
         }
@@ -234,8 +238,7 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
             "sn": bool(post_read & {s.name for s in trig.sin}),
         },
         "pre": [line.strip() for line in printer.statements(pre)],
-        "post": [line.strip() for line in printer.statements(post_all)],
-        "stores": [line.strip() for line in printer.statements(stores)],
+        "post": [line.strip() for line in printer.statements(interleave(post_all, stores, common))],
         "angle_count": count,
         "padded": padded,
         "block": block,
@@ -244,6 +247,22 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
         "stack": stack_text(single_stack),
         "batch_stack": stack_text(batch_stack),
     }
+
+
+def interleave(lets: list[Let], stores: list[Store], common: Shared) -> list:
+    """``lets`` in order, each store right after the last of them it reads (before them all when it reads
+    none): an output element leaves the registers as soon as it is known, instead of every one staying
+    live until the end of the function (which made GCC spill half the temporaries of long chains)."""
+    position = {s.var.name: i for i, s in enumerate(lets)}
+    after: dict[int, list[Store]] = {}
+    for store in stores:
+        last = max((position[n] for n in common.reads(store) if n in position), default=-1)
+        after.setdefault(last, []).append(store)
+    out: list = list(after.get(-1, []))
+    for i, let in enumerate(lets):
+        out.append(let)
+        out.extend(after.get(i, []))
+    return out
 
 
 def _common(f: Function, precision: CPrecision, names: Names) -> dict:
