@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x50e17a03UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x0ad29a5eUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM2_VECTORIZE
 #define ARM2_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM2_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM2_VECTOR_MATH
+#define ARM2_BODY static inline __attribute__((__always_inline__))
+#define ARM2_STRIDE stride
+#else
+#define ARM2_BODY static
+#define ARM2_STRIDE 1
 #endif
 #if !ARM2_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM2_VECTORIZE void arm2_trig64(const double *restrict ang, double *restr
 }
 #endif
 
-#if !ARM2_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM2_VECTORIZE void arm2_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM2_VECTORIZE void arm2_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,23 +152,25 @@ static int arm2_finite(double x)
 /* ---- arm2_position: endpoint position p (2) ---- */
 /* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 2 neg */
 
-static void arm2_position_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_position_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM2_BODY void arm2_position_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
     const double t6 = t5 - t3;
+    p[1*ARM2_STRIDE] = -t6;
     const double t7 = t1 + t2;
     p[0] = t7;
-    p[1] = -t6;
 }
 
 void arm2_position(const double q[2], const double l[2], double p[2])
@@ -168,48 +180,24 @@ void arm2_position(const double q[2], const double l[2], double p[2])
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_position_angles(q, ang);
+    arm2_position_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_position_finish(l, cs, sn, p);
+    arm2_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_position_block(const double *restrict q_T, const double l[2], double *restrict p_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_position_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double cs[2];
-        double sn[2];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        p[0] = t7;
-        p[1] = -t6;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm2_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -255,11 +243,11 @@ void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_position_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_position_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+            arm2_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2, 1);
         }
     }
 }
@@ -268,25 +256,27 @@ void arm2_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm2_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 1 neg */
 
-static void arm2_jacobian_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_jacobian_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM2_BODY void arm2_jacobian_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
+    J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
+    J[1*ARM2_STRIDE] = t5;
     const double t6 = t5 - t3;
-    const double t7 = t1 + t2;
     J[0] = t6;
-    J[1] = t5;
-    J[2] = t7;
-    J[3] = t2;
+    const double t7 = t1 + t2;
+    J[2*ARM2_STRIDE] = t7;
 }
 
 void arm2_jacobian(const double q[2], const double l[2], double J[4])
@@ -296,52 +286,24 @@ void arm2_jacobian(const double q[2], const double l[2], double J[4])
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_jacobian_angles(q, ang);
+    arm2_jacobian_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_jacobian_finish(l, cs, sn, J);
+    arm2_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_jacobian_block(const double *restrict q_T, const double l[2], double *restrict J_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double cs[2];
-        double sn[2];
-        double J[4];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        J[0] = t6;
-        J[1] = t5;
-        J[2] = t7;
-        J[3] = t2;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
+        arm2_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -389,11 +351,11 @@ void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_jacobian_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 4);
+            arm2_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 4, 1);
         }
     }
 }
@@ -402,31 +364,33 @@ void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm2_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 2 neg */
 
-static void arm2_coriolis_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_coriolis_finish(const double dq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t8 = dq[0] + dq[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
+    const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
     const double t13 = -t10;
+    H[1*ARM2_STRIDE] = t13;
     const double t14 = -t12;
+    H[3*ARM2_STRIDE] = t14;
     const double t15 = t13 - t9;
-    const double t16 = t14 - t11;
     H[0] = t15;
-    H[1] = t13;
-    H[2] = t16;
-    H[3] = t14;
+    const double t16 = t14 - t11;
+    H[2*ARM2_STRIDE] = t16;
 }
 
 void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
@@ -436,61 +400,24 @@ void arm2_coriolis(const double q[2], const double dq[2], const double l[2], dou
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_coriolis_angles(q, ang);
+    arm2_coriolis_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_coriolis_finish(dq, l, cs, sn, H);
+    arm2_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict H_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double dq[2];
-        double cs[2];
-        double sn[2];
-        double H[4];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t8 = dq[0] + dq[1];
-        const double t9 = t1*dq[0];
-        const double t10 = t2*t8;
-        const double t11 = t3*dq[0];
-        const double t12 = t4*t8;
-        const double t13 = -t10;
-        const double t14 = -t12;
-        const double t15 = t13 - t9;
-        const double t16 = t14 - t11;
-        H[0] = t15;
-        H[1] = t13;
-        H[2] = t16;
-        H[3] = t14;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
+        arm2_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -545,11 +472,11 @@ void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_coriolis_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, H + (i + b) * 4);
+            arm2_coriolis_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, H + (i + b) * 4, 1);
         }
     }
 }
@@ -558,19 +485,21 @@ void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm2_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 3 neg */
 
-static void arm2_velocity_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_velocity_finish(const double dq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t8 = dq[0] + dq[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
+    const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
@@ -578,9 +507,9 @@ static void arm2_velocity_finish(const double dq[2], const double l[2], const do
     const double t13 = -t10;
     const double t14 = -t12;
     const double t15 = t13 - t9;
+    v[1*ARM2_STRIDE] = -t15;
     const double t16 = t14 - t11;
     v[0] = t16;
-    v[1] = -t15;
 }
 
 void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
@@ -590,57 +519,24 @@ void arm2_velocity(const double q[2], const double dq[2], const double l[2], dou
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_velocity_angles(q, ang);
+    arm2_velocity_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_velocity_finish(dq, l, cs, sn, v);
+    arm2_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict v_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double dq[2];
-        double cs[2];
-        double sn[2];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t8 = dq[0] + dq[1];
-        const double t9 = t1*dq[0];
-        const double t10 = t2*t8;
-        const double t11 = t3*dq[0];
-        const double t12 = t4*t8;
-        const double t13 = -t10;
-        const double t14 = -t12;
-        const double t15 = t13 - t9;
-        const double t16 = t14 - t11;
-        v[0] = t16;
-        v[1] = -t15;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm2_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -693,11 +589,11 @@ void arm2_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_velocity_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_velocity_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+            arm2_velocity_finish(dq + (i + b) * 2, l, cs + b * 4, sn + b * 4, v + (i + b) * 2, 1);
         }
     }
 }
@@ -706,22 +602,24 @@ void arm2_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm2_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 3 neg */
 
-static void arm2_acceleration_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_acceleration_finish(const double dq[2], const double ddq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
     const double t6 = t5 - t3;
     const double t7 = t1 + t2;
-    const double t8 = dq[0] + dq[1];
+    const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
@@ -729,9 +627,9 @@ static void arm2_acceleration_finish(const double dq[2], const double ddq[2], co
     const double t13 = -t10;
     const double t14 = -t12;
     const double t15 = t13 - t9;
+    a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
     const double t16 = t14 - t11;
-    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
-    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
+    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
 void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
@@ -741,63 +639,24 @@ void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_acceleration_angles(q, ang);
+    arm2_acceleration_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm2_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict a_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double dq[2];
-        double ddq[2];
-        double cs[2];
-        double sn[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        const double t8 = dq[0] + dq[1];
-        const double t9 = t1*dq[0];
-        const double t10 = t2*t8;
-        const double t11 = t3*dq[0];
-        const double t12 = t4*t8;
-        const double t13 = -t10;
-        const double t14 = -t12;
-        const double t15 = t13 - t9;
-        const double t16 = t14 - t11;
-        a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
-        a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm2_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -857,11 +716,11 @@ void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_acceleration_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+            arm2_acceleration_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, a + (i + b) * 2, 1);
         }
     }
 }
@@ -870,44 +729,46 @@ void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm2_kinematics: p, J, H, v and a at once ---- */
 /* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 5 neg */
 
-static void arm2_kinematics_angles(const double q[2], double *restrict ang)
+ARM2_BODY void arm2_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
+    (void)stride;
+    ang[1*ARM2_STRIDE] = q[0] + q[1*ARM2_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm2_kinematics_finish(const double dq[2], const double ddq[2], const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t1 = cs[0]*l[0];
-    const double t2 = cs[1]*l[1];
+    const double t2 = cs[1*ARM2_STRIDE]*l[1];
+    J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
+    const double t4 = sn[1*ARM2_STRIDE]*l[1];
     const double t5 = -t4;
+    J[1*ARM2_STRIDE] = t5;
     const double t6 = t5 - t3;
+    p[1*ARM2_STRIDE] = -t6;
+    J[0] = t6;
     const double t7 = t1 + t2;
-    const double t8 = dq[0] + dq[1];
+    p[0] = t7;
+    J[2*ARM2_STRIDE] = t7;
+    const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
     const double t13 = -t10;
+    H[1*ARM2_STRIDE] = t13;
     const double t14 = -t12;
+    H[3*ARM2_STRIDE] = t14;
     const double t15 = t13 - t9;
-    const double t16 = t14 - t11;
-    p[0] = t7;
-    p[1] = -t6;
-    J[0] = t6;
-    J[1] = t5;
-    J[2] = t7;
-    J[3] = t2;
     H[0] = t15;
-    H[1] = t13;
-    H[2] = t16;
-    H[3] = t14;
+    v[1*ARM2_STRIDE] = -t15;
+    a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
+    const double t16 = t14 - t11;
+    H[2*ARM2_STRIDE] = t16;
     v[0] = t16;
-    v[1] = -t15;
-    a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
-    a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
+    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
 void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
@@ -917,91 +778,24 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
     for (k = 2; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm2_kinematics_angles(q, ang);
+    arm2_kinematics_angles(q, ang, 1);
     arm2_trig4(ang, cs, sn, 2);
-    arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm2_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM2_VECTORIZE void arm2_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
+        arm2_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm2_trig64(ang_T, cs_T, sn_T, 64);
     for (b = 0; b < 32; ++b) {
-        double dq[2];
-        double ddq[2];
-        double cs[2];
-        double sn[2];
-        double p[2];
-        double J[4];
-        double H[4];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        const double t8 = dq[0] + dq[1];
-        const double t9 = t1*dq[0];
-        const double t10 = t2*t8;
-        const double t11 = t3*dq[0];
-        const double t12 = t4*t8;
-        const double t13 = -t10;
-        const double t14 = -t12;
-        const double t15 = t13 - t9;
-        const double t16 = t14 - t11;
-        p[0] = t7;
-        p[1] = -t6;
-        J[0] = t6;
-        J[1] = t5;
-        J[2] = t7;
-        J[3] = t2;
-        H[0] = t15;
-        H[1] = t13;
-        H[2] = t16;
-        H[3] = t14;
-        v[0] = t16;
-        v[1] = -t15;
-        a[0] = t15*dq[0] + t13*dq[1] + t6*ddq[0] + t5*ddq[1];
-        a[1] = t2*ddq[1] + t16*dq[0] + t14*dq[1] + t7*ddq[0];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm2_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1081,11 +875,11 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 4);
+            arm2_kinematics_angles(q + (i + b) * 2, ang + b * 4, 1);
         }
         arm2_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2);
+            arm2_kinematics_finish(dq + (i + b) * 2, ddq + (i + b) * 2, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 4, H + (i + b) * 4, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1135,85 +929,6 @@ void arm2_manipulability(const double q[2], const double l[2], double w[1])
     arm2_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_manipulability_block(const double *restrict q_T, const double l[2], double *restrict w_T)
-{
-    double ang_T[64], cs_T[64], sn_T[64];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-    }
-    arm2_trig64(ang_T, cs_T, sn_T, 64);
-    for (b = 0; b < 32; ++b) {
-        double cs[2];
-        double sn[2];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        const double t17 = t6*t6 + t5*t5;
-        const double t18 = t2*t5 + t6*t7;
-        const double t19 = t2*t2 + t7*t7;
-        const int t20 = t17 >= t19;
-        const double t21 = (t20 ? t17 : t19);
-        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
-        const double t23 = (t20 ? t6 : t7);
-        const double t24 = (t20 ? t5 : t2);
-        const double t25 = (t20 ? t7 : t6) - t23*t22;
-        const double t26 = (t20 ? t2 : t5) - t24*t22;
-        const double t27 = t25*t25 + t26*t26;
-        w[0] = sqrt(t21*t27);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[64];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 2; ++k) {
-                    q_T[k * 32 + b] = q[src * 2 + k];
-                }
-            }
-        }
-        arm2_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1233,7 +948,6 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 2 sin, 2 cos, 22 add/sub, 43 mul, 1 neg, 4 div */
@@ -1283,8 +997,8 @@ static void arm2_inverse_velocity_finish(const double v[2], const double l[2], d
     const double t44 = (t39 ? t41*(t40*t31 + t34*t35) : t40*t43);
     const double t45 = (t39 ? t41*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
     const double t46 = t44*t23 + t45*t25;
-    const double t47 = t44*t24 + t45*t26;
     dq[0] = t46;
+    const double t47 = t44*t24 + t45*t26;
     dq[1] = t47;
 }
 
@@ -1300,118 +1014,6 @@ void arm2_inverse_velocity(const double q[2], const double v[2], const double l[
     arm2_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[2], double lambda, double *restrict dq_T)
-{
-    double ang_T[64], cs_T[64], sn_T[64];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-    }
-    arm2_trig64(ang_T, cs_T, sn_T, 64);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[2];
-        double sn[2];
-        double dq[2];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        const double t17 = t6*t6 + t5*t5;
-        const double t18 = t2*t5 + t6*t7;
-        const double t19 = t2*t2 + t7*t7;
-        const int t20 = t17 >= t19;
-        const double t21 = (t20 ? t17 : t19);
-        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
-        const double t23 = (t20 ? t6 : t7);
-        const double t24 = (t20 ? t5 : t2);
-        const double t25 = (t20 ? t7 : t6) - t23*t22;
-        const double t26 = (t20 ? t2 : t5) - t24*t22;
-        const double t27 = t25*t25 + t26*t26;
-        const int t28 = lambda > 1.0;
-        const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t30 = (t28 ? 1.0 : lambda);
-        const double t31 = t30*t30;
-        const double t32 = t29*t29;
-        const double t33 = t32*t21;
-        const double t34 = t32*t27;
-        const double t35 = (t20 ? v[0] : v[1]);
-        const double t36 = (t20 ? v[1] : v[0]);
-        const double t37 = t32*(t17 + t19);
-        const double t38 = t33*t34 + t31*(t37 + t31);
-        const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
-        const double t40 = t35 + t36*t22;
-        const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
-        const double t42 = t31 + t33*(1.0 + t22*t22);
-        const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
-        const double t44 = (t39 ? t41*(t40*t31 + t34*t35) : t40*t43);
-        const double t45 = (t39 ? t41*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
-        const double t46 = t44*t23 + t45*t25;
-        const double t47 = t44*t24 + t45*t26;
-        dq[0] = t46;
-        dq[1] = t47;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-    }
-}
-
-void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[64];
-    double v_T[64];
-    double dq_T[64];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 2;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 2; ++k) {
-                    q_T[k * 32 + b] = q[src * 2 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm2_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 2;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-        }
-    }
-}
-#else
 void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -1431,7 +1033,6 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 2 sin, 2 cos, 26 add/sub, 43 mul, 1 neg, 4 div */
@@ -1483,8 +1084,8 @@ static void arm2_ik_step_finish(const double q[2], const double target[2], const
     const double t53 = (t39 ? t41*(t52*t31 + t50*t34) : t52*t43);
     const double t54 = (t39 ? t41*(t51*t31 + t33*(t51 - t50*t22)) : 0.0);
     const double t55 = t53*t23 + t54*t25;
-    const double t56 = t53*t24 + t54*t26;
     q_next[0] = t55 + q[0];
+    const double t56 = t53*t24 + t54*t26;
     q_next[1] = t56 + q[1];
 }
 
@@ -1500,123 +1101,6 @@ void arm2_ik_step(const double q[2], const double target[2], const double l[2], 
     arm2_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM2_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[2], double lambda, double *restrict q_next_T)
-{
-    double ang_T[64], cs_T[64], sn_T[64];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[2];
-        double ang[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        ang[1] = q[0] + q[1];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-    }
-    arm2_trig64(ang_T, cs_T, sn_T, 64);
-    for (b = 0; b < 32; ++b) {
-        double q[2];
-        double target[2];
-        double cs[2];
-        double sn[2];
-        double q_next[2];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        const double t1 = cs[0]*l[0];
-        const double t2 = cs[1]*l[1];
-        const double t3 = sn[0]*l[0];
-        const double t4 = sn[1]*l[1];
-        const double t5 = -t4;
-        const double t6 = t5 - t3;
-        const double t7 = t1 + t2;
-        const double t17 = t6*t6 + t5*t5;
-        const double t18 = t2*t5 + t6*t7;
-        const double t19 = t2*t2 + t7*t7;
-        const int t20 = t17 >= t19;
-        const double t21 = (t20 ? t17 : t19);
-        const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
-        const double t23 = (t20 ? t6 : t7);
-        const double t24 = (t20 ? t5 : t2);
-        const double t25 = (t20 ? t7 : t6) - t23*t22;
-        const double t26 = (t20 ? t2 : t5) - t24*t22;
-        const double t27 = t25*t25 + t26*t26;
-        const int t28 = lambda > 1.0;
-        const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t30 = (t28 ? 1.0 : lambda);
-        const double t31 = t30*t30;
-        const double t32 = t29*t29;
-        const double t33 = t32*t21;
-        const double t34 = t32*t27;
-        const double t37 = t32*(t17 + t19);
-        const double t38 = t33*t34 + t31*(t37 + t31);
-        const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
-        const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
-        const double t42 = t31 + t33*(1.0 + t22*t22);
-        const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
-        const double t48 = target[0] - t7;
-        const double t49 = t6 + target[1];
-        const double t50 = (t20 ? t48 : t49);
-        const double t51 = (t20 ? t49 : t48);
-        const double t52 = t50 + t51*t22;
-        const double t53 = (t39 ? t41*(t52*t31 + t50*t34) : t52*t43);
-        const double t54 = (t39 ? t41*(t51*t31 + t33*(t51 - t50*t22)) : 0.0);
-        const double t55 = t53*t23 + t54*t25;
-        const double t56 = t53*t24 + t54*t26;
-        q_next[0] = t55 + q[0];
-        q_next[1] = t56 + q[1];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-    }
-}
-
-void arm2_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[64];
-    double target_T[64];
-    double q_next_T[64];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 2;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 2; ++k) {
-                    q_T[k * 32 + b] = q[src * 2 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm2_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 2;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-        }
-    }
-}
-#else
 void arm2_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -1636,7 +1120,6 @@ void arm2_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm2_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm2_ik_error(const double trial[2], const double target[2], const double l[2], double error[1])

@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x50e17a03UL
+#define ARM2_STAMP 0x0ad29a5eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -102,7 +102,7 @@ void arm2_manipulability(const double q[2], const double l[2], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 2536 bytes. */
+ * Stack: about 13 KB. */
 void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
 /* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 416 bytes. */
@@ -110,7 +110,7 @@ void arm2_inverse_velocity(const double q[2], const double v[2], const double l[
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 3488 bytes. */
+ * Stack: about 13 KB. */
 void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
 /* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 432 bytes. */
@@ -118,7 +118,7 @@ void arm2_ik_step(const double q[2], const double target[2], const double l[2], 
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 3504 bytes. */
+ * Stack: about 13 KB. */
 void arm2_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of the solvers. */

@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x39264076UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x8c49fe38UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM3_VECTORIZE
 #define ARM3_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM3_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM3_VECTOR_MATH
+#define ARM3_BODY static inline __attribute__((__always_inline__))
+#define ARM3_STRIDE stride
+#else
+#define ARM3_BODY static
+#define ARM3_STRIDE 1
 #endif
 #if !ARM3_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM3_VECTORIZE void arm3_trig96(const double *restrict ang, double *restr
 }
 #endif
 
-#if !ARM3_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM3_VECTORIZE void arm3_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM3_VECTORIZE void arm3_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,28 +152,30 @@ static int arm3_finite(double x)
 /* ---- arm3_position: endpoint position p (2) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 2 neg */
 
-static void arm3_position_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_position_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM3_BODY void arm3_position_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
     const double t9 = t8 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
+    p[1*ARM3_STRIDE] = -t11;
     const double t12 = t2 + t10;
     p[0] = t12;
-    p[1] = -t11;
 }
 
 void arm3_position(const double q[3], const double l[3], double p[2])
@@ -173,57 +185,24 @@ void arm3_position(const double q[3], const double l[3], double p[2])
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_position_angles(q, ang);
+    arm3_position_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_position_finish(l, cs, sn, p);
+    arm3_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_position_block(const double *restrict q_T, const double l[3], double *restrict p_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_position_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double cs[3];
-        double sn[3];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        p[0] = t12;
-        p[1] = -t11;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm3_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -270,11 +249,11 @@ void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_position_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_position_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+            arm3_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2, 1);
         }
     }
 }
@@ -283,32 +262,34 @@ void arm3_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm3_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 1 neg */
 
-static void arm3_jacobian_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_jacobian_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM3_BODY void arm3_jacobian_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
+    J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
+    J[2*ARM3_STRIDE] = t8;
     const double t9 = t8 - t6;
+    J[1*ARM3_STRIDE] = t9;
     const double t10 = t3 + t4;
+    J[4*ARM3_STRIDE] = t10;
     const double t11 = t9 - t5;
-    const double t12 = t2 + t10;
     J[0] = t11;
-    J[1] = t9;
-    J[2] = t8;
-    J[3] = t12;
-    J[4] = t10;
-    J[5] = t4;
+    const double t12 = t2 + t10;
+    J[3*ARM3_STRIDE] = t12;
 }
 
 void arm3_jacobian(const double q[3], const double l[3], double J[6])
@@ -318,65 +299,24 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6])
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_jacobian_angles(q, ang);
+    arm3_jacobian_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_jacobian_finish(l, cs, sn, J);
+    arm3_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_jacobian_block(const double *restrict q_T, const double l[3], double *restrict J_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double cs[3];
-        double sn[3];
-        double J[6];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        J[0] = t11;
-        J[1] = t9;
-        J[2] = t8;
-        J[3] = t12;
-        J[4] = t10;
-        J[5] = t4;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
+        arm3_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -427,11 +367,11 @@ void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_jacobian_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 6);
+            arm3_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 6, 1);
         }
     }
 }
@@ -440,23 +380,25 @@ void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm3_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 2 neg */
 
-static void arm3_coriolis_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_coriolis_finish(const double dq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
-    const double t13 = dq[0] + dq[1];
-    const double t14 = t13 + dq[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
+    const double t13 = dq[0] + dq[1*ARM3_STRIDE];
+    const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
     const double t17 = t4*t14;
@@ -464,17 +406,17 @@ static void arm3_coriolis_finish(const double dq[3], const double l[3], const do
     const double t19 = t6*t13;
     const double t20 = t7*t14;
     const double t21 = -t17;
+    H[2*ARM3_STRIDE] = t21;
     const double t22 = -t20;
+    H[5*ARM3_STRIDE] = t22;
     const double t23 = t21 - t16;
+    H[1*ARM3_STRIDE] = t23;
     const double t24 = t22 - t19;
+    H[4*ARM3_STRIDE] = t24;
     const double t25 = t23 - t15;
-    const double t26 = t24 - t18;
     H[0] = t25;
-    H[1] = t23;
-    H[2] = t21;
-    H[3] = t26;
-    H[4] = t24;
-    H[5] = t22;
+    const double t26 = t24 - t18;
+    H[3*ARM3_STRIDE] = t26;
 }
 
 void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
@@ -484,78 +426,24 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_coriolis_angles(q, ang);
+    arm3_coriolis_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_coriolis_finish(dq, l, cs, sn, H);
+    arm3_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict H_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double dq[3];
-        double cs[3];
-        double sn[3];
-        double H[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t13 = dq[0] + dq[1];
-        const double t14 = t13 + dq[2];
-        const double t15 = t2*dq[0];
-        const double t16 = t3*t13;
-        const double t17 = t4*t14;
-        const double t18 = t5*dq[0];
-        const double t19 = t6*t13;
-        const double t20 = t7*t14;
-        const double t21 = -t17;
-        const double t22 = -t20;
-        const double t23 = t21 - t16;
-        const double t24 = t22 - t19;
-        const double t25 = t23 - t15;
-        const double t26 = t24 - t18;
-        H[0] = t25;
-        H[1] = t23;
-        H[2] = t21;
-        H[3] = t26;
-        H[4] = t24;
-        H[5] = t22;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
+        arm3_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -614,11 +502,11 @@ void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_coriolis_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, H + (i + b) * 6);
+            arm3_coriolis_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, H + (i + b) * 6, 1);
         }
     }
 }
@@ -627,23 +515,25 @@ void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm3_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 3 neg */
 
-static void arm3_velocity_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_velocity_finish(const double dq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
-    const double t13 = dq[0] + dq[1];
-    const double t14 = t13 + dq[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
+    const double t13 = dq[0] + dq[1*ARM3_STRIDE];
+    const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
     const double t17 = t4*t14;
@@ -655,9 +545,9 @@ static void arm3_velocity_finish(const double dq[3], const double l[3], const do
     const double t23 = t21 - t16;
     const double t24 = t22 - t19;
     const double t25 = t23 - t15;
+    v[1*ARM3_STRIDE] = -t25;
     const double t26 = t24 - t18;
     v[0] = t26;
-    v[1] = -t25;
 }
 
 void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
@@ -667,70 +557,24 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_velocity_angles(q, ang);
+    arm3_velocity_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_velocity_finish(dq, l, cs, sn, v);
+    arm3_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict v_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double dq[3];
-        double cs[3];
-        double sn[3];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t13 = dq[0] + dq[1];
-        const double t14 = t13 + dq[2];
-        const double t15 = t2*dq[0];
-        const double t16 = t3*t13;
-        const double t17 = t4*t14;
-        const double t18 = t5*dq[0];
-        const double t19 = t6*t13;
-        const double t20 = t7*t14;
-        const double t21 = -t17;
-        const double t22 = -t20;
-        const double t23 = t21 - t16;
-        const double t24 = t22 - t19;
-        const double t25 = t23 - t15;
-        const double t26 = t24 - t18;
-        v[0] = t26;
-        v[1] = -t25;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm3_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -785,11 +629,11 @@ void arm3_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_velocity_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_velocity_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+            arm3_velocity_finish(dq + (i + b) * 3, l, cs + b * 4, sn + b * 4, v + (i + b) * 2, 1);
         }
     }
 }
@@ -798,28 +642,30 @@ void arm3_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm3_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 3 neg */
 
-static void arm3_acceleration_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_acceleration_finish(const double dq[3], const double ddq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
     const double t9 = t8 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t13 = dq[0] + dq[1];
-    const double t14 = t13 + dq[2];
+    const double t13 = dq[0] + dq[1*ARM3_STRIDE];
+    const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
     const double t17 = t4*t14;
@@ -831,9 +677,9 @@ static void arm3_acceleration_finish(const double dq[3], const double ddq[3], co
     const double t23 = t21 - t16;
     const double t24 = t22 - t19;
     const double t25 = t23 - t15;
+    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
     const double t26 = t24 - t18;
-    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
-    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
+    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
 void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
@@ -843,79 +689,24 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_acceleration_angles(q, ang);
+    arm3_acceleration_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm3_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict a_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double dq[3];
-        double ddq[3];
-        double cs[3];
-        double sn[3];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t13 = dq[0] + dq[1];
-        const double t14 = t13 + dq[2];
-        const double t15 = t2*dq[0];
-        const double t16 = t3*t13;
-        const double t17 = t4*t14;
-        const double t18 = t5*dq[0];
-        const double t19 = t6*t13;
-        const double t20 = t7*t14;
-        const double t21 = -t17;
-        const double t22 = -t20;
-        const double t23 = t21 - t16;
-        const double t24 = t22 - t19;
-        const double t25 = t23 - t15;
-        const double t26 = t24 - t18;
-        a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
-        a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm3_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -978,11 +769,11 @@ void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_acceleration_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+            arm3_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, a + (i + b) * 2, 1);
         }
     }
 }
@@ -991,28 +782,38 @@ void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm3_kinematics: p, J, H, v and a at once ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 5 neg */
 
-static void arm3_kinematics_angles(const double q[3], double *restrict ang)
+ARM3_BODY void arm3_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3_STRIDE] = q[0] + q[1*ARM3_STRIDE];
+    ang[2*ARM3_STRIDE] = ang[1*ARM3_STRIDE] + q[2*ARM3_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3_kinematics_finish(const double dq[3], const double ddq[3], const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t2 = cs[0]*l[0];
-    const double t3 = cs[1]*l[1];
-    const double t4 = cs[2]*l[2];
+    const double t3 = cs[1*ARM3_STRIDE]*l[1];
+    const double t4 = cs[2*ARM3_STRIDE]*l[2];
+    J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
+    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t8 = -t7;
+    J[2*ARM3_STRIDE] = t8;
     const double t9 = t8 - t6;
+    J[1*ARM3_STRIDE] = t9;
     const double t10 = t3 + t4;
+    J[4*ARM3_STRIDE] = t10;
     const double t11 = t9 - t5;
+    p[1*ARM3_STRIDE] = -t11;
+    J[0] = t11;
     const double t12 = t2 + t10;
-    const double t13 = dq[0] + dq[1];
-    const double t14 = t13 + dq[2];
+    p[0] = t12;
+    J[3*ARM3_STRIDE] = t12;
+    const double t13 = dq[0] + dq[1*ARM3_STRIDE];
+    const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
     const double t17 = t4*t14;
@@ -1020,29 +821,21 @@ static void arm3_kinematics_finish(const double dq[3], const double ddq[3], cons
     const double t19 = t6*t13;
     const double t20 = t7*t14;
     const double t21 = -t17;
+    H[2*ARM3_STRIDE] = t21;
     const double t22 = -t20;
+    H[5*ARM3_STRIDE] = t22;
     const double t23 = t21 - t16;
+    H[1*ARM3_STRIDE] = t23;
     const double t24 = t22 - t19;
+    H[4*ARM3_STRIDE] = t24;
     const double t25 = t23 - t15;
-    const double t26 = t24 - t18;
-    p[0] = t12;
-    p[1] = -t11;
-    J[0] = t11;
-    J[1] = t9;
-    J[2] = t8;
-    J[3] = t12;
-    J[4] = t10;
-    J[5] = t4;
     H[0] = t25;
-    H[1] = t23;
-    H[2] = t21;
-    H[3] = t26;
-    H[4] = t24;
-    H[5] = t22;
+    v[1*ARM3_STRIDE] = -t25;
+    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
+    const double t26 = t24 - t18;
+    H[3*ARM3_STRIDE] = t26;
     v[0] = t26;
-    v[1] = -t25;
-    a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
-    a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
+    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
 void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
@@ -1052,115 +845,24 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
     for (k = 3; k < 4; ++k) {
         ang[k] = 0;
     }
-    arm3_kinematics_angles(q, ang);
+    arm3_kinematics_angles(q, ang, 1);
     arm3_trig4(ang, cs, sn, 3);
-    arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm3_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3_VECTORIZE void arm3_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm3_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        double dq[3];
-        double ddq[3];
-        double cs[3];
-        double sn[3];
-        double p[2];
-        double J[6];
-        double H[6];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t13 = dq[0] + dq[1];
-        const double t14 = t13 + dq[2];
-        const double t15 = t2*dq[0];
-        const double t16 = t3*t13;
-        const double t17 = t4*t14;
-        const double t18 = t5*dq[0];
-        const double t19 = t6*t13;
-        const double t20 = t7*t14;
-        const double t21 = -t17;
-        const double t22 = -t20;
-        const double t23 = t21 - t16;
-        const double t24 = t22 - t19;
-        const double t25 = t23 - t15;
-        const double t26 = t24 - t18;
-        p[0] = t12;
-        p[1] = -t11;
-        J[0] = t11;
-        J[1] = t9;
-        J[2] = t8;
-        J[3] = t12;
-        J[4] = t10;
-        J[5] = t4;
-        H[0] = t25;
-        H[1] = t23;
-        H[2] = t21;
-        H[3] = t26;
-        H[4] = t24;
-        H[5] = t22;
-        v[0] = t26;
-        v[1] = -t25;
-        a[0] = t25*dq[0] + t23*dq[1] + t21*dq[2] + t11*ddq[0] + t9*ddq[1] + t8*ddq[2];
-        a[1] = t4*ddq[2] + t26*dq[0] + t24*dq[1] + t22*dq[2] + t12*ddq[0] + t10*ddq[1];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm3_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1247,11 +949,11 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 4);
+            arm3_kinematics_angles(q + (i + b) * 3, ang + b * 4, 1);
         }
         arm3_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            arm3_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1308,97 +1010,6 @@ void arm3_manipulability(const double q[3], const double l[3], double w[1])
     arm3_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_manipulability_block(const double *restrict q_T, const double l[3], double *restrict w_T)
-{
-    double ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        double cs[3];
-        double sn[3];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t27 = t11*t11 + t9*t9 + t8*t8;
-        const double t28 = t4*t8 + t11*t12 + t9*t10;
-        const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const int t30 = t27 >= t29;
-        const double t31 = (t30 ? t27 : t29);
-        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
-        const double t33 = (t30 ? t11 : t12);
-        const double t34 = (t30 ? t9 : t10);
-        const double t35 = (t30 ? t8 : t4);
-        const double t36 = (t30 ? t12 : t11) - t33*t32;
-        const double t37 = (t30 ? t10 : t9) - t34*t32;
-        const double t38 = (t30 ? t4 : t8) - t35*t32;
-        const double t39 = t36*t36 + t37*t37 + t38*t38;
-        w[0] = sqrt(t31*t39);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[96];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-            }
-        }
-        arm3_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1418,7 +1029,6 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 52 mul, 1 neg, 4 div */
@@ -1475,10 +1085,10 @@ static void arm3_inverse_velocity_finish(const double v[2], const double l[3], d
     const double t56 = (t51 ? t53*(t52*t43 + t46*t47) : t52*t55);
     const double t57 = (t51 ? t53*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
     const double t58 = t56*t33 + t57*t36;
-    const double t59 = t56*t34 + t57*t37;
-    const double t60 = t56*t35 + t57*t38;
     dq[0] = t58;
+    const double t59 = t56*t34 + t57*t37;
     dq[1] = t59;
+    const double t60 = t56*t35 + t57*t38;
     dq[2] = t60;
 }
 
@@ -1494,134 +1104,6 @@ void arm3_inverse_velocity(const double q[3], const double v[2], const double l[
     arm3_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[3], double lambda, double *restrict dq_T)
-{
-    double ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[3];
-        double sn[3];
-        double dq[3];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t27 = t11*t11 + t9*t9 + t8*t8;
-        const double t28 = t4*t8 + t11*t12 + t9*t10;
-        const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const int t30 = t27 >= t29;
-        const double t31 = (t30 ? t27 : t29);
-        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
-        const double t33 = (t30 ? t11 : t12);
-        const double t34 = (t30 ? t9 : t10);
-        const double t35 = (t30 ? t8 : t4);
-        const double t36 = (t30 ? t12 : t11) - t33*t32;
-        const double t37 = (t30 ? t10 : t9) - t34*t32;
-        const double t38 = (t30 ? t4 : t8) - t35*t32;
-        const double t39 = t36*t36 + t37*t37 + t38*t38;
-        const int t40 = lambda > 1.0;
-        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t42 = (t40 ? 1.0 : lambda);
-        const double t43 = t42*t42;
-        const double t44 = t41*t41;
-        const double t45 = t44*t31;
-        const double t46 = t44*t39;
-        const double t47 = (t30 ? v[0] : v[1]);
-        const double t48 = (t30 ? v[1] : v[0]);
-        const double t49 = t44*(t27 + t29);
-        const double t50 = t45*t46 + t43*(t49 + t43);
-        const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
-        const double t52 = t47 + t48*t32;
-        const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
-        const double t54 = t43 + t45*(1.0 + t32*t32);
-        const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
-        const double t56 = (t51 ? t53*(t52*t43 + t46*t47) : t52*t55);
-        const double t57 = (t51 ? t53*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
-        const double t58 = t56*t33 + t57*t36;
-        const double t59 = t56*t34 + t57*t37;
-        const double t60 = t56*t35 + t57*t38;
-        dq[0] = t58;
-        dq[1] = t59;
-        dq[2] = t60;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-    }
-}
-
-void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[96];
-    double v_T[64];
-    double dq_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 3;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm3_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 3;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-        }
-    }
-}
-#else
 void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -1641,7 +1123,6 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 61 add/sub, 101 mul, 1 neg, 5 div */
@@ -1681,12 +1162,12 @@ static void arm3_inverse_velocity3_finish(const double twist[3], const double l[
     const double t75 = t72*t44;
     const double t76 = t71*t44;
     const double t77 = t72*t43;
-    const double t78 = t77 + t27*t75;
+    const double t78 = t27*t75 + t77;
     const double t79 = t28*t75;
     const double t80 = t73*t76;
-    const double t81 = t77 + t29*t75;
+    const double t81 = t29*t75 + t77;
     const double t82 = t74*t76;
-    const double t83 = 3.0*t44 + t43;
+    const double t83 = t43 + 3.0*t44;
     const double t84 = t76*twist[0];
     const double t85 = t76*twist[1];
     const double t86 = t44*twist[2];
@@ -1706,7 +1187,7 @@ static void arm3_inverse_velocity3_finish(const double twist[3], const double l[
     const double t100 = t78*t81 - t79*t79;
     const double t101 = t78*t95 + t79*t96 + t80*t97;
     const double t102 = t95 + t98 + t100;
-    const int t103 = t101 > ARM3_RANK_TOL*t102*t87;
+    const int t103 = t101 > t102*t87*ARM3_RANK_TOL;
     const double t104 = t87*t87;
     const int t105 = t102 > ARM3_RANK_TOL*t104;
     const double t106 = (t101 > 0.0 ? 1.0/(t101 != 0.0 ? t101 : 1.0) : 1.0);
@@ -1737,156 +1218,6 @@ void arm3_inverse_velocity3(const double q[3], const double twist[3], const doub
     arm3_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
-#if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[3], double lambda, double *restrict dq3_T)
-{
-    double ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        double twist[3];
-        double cs[3];
-        double sn[3];
-        double dq3[3];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t27 = t11*t11 + t9*t9 + t8*t8;
-        const double t28 = t4*t8 + t11*t12 + t9*t10;
-        const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const int t40 = lambda > 1.0;
-        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t42 = (t40 ? 1.0 : lambda);
-        const double t43 = t42*t42;
-        const double t44 = t41*t41;
-        const double t71 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
-        const double t72 = t71*t71;
-        const double t73 = t11 + t9 + t8;
-        const double t74 = t4 + t12 + t10;
-        const double t75 = t72*t44;
-        const double t76 = t71*t44;
-        const double t77 = t72*t43;
-        const double t78 = t77 + t27*t75;
-        const double t79 = t28*t75;
-        const double t80 = t73*t76;
-        const double t81 = t77 + t29*t75;
-        const double t82 = t74*t76;
-        const double t83 = 3.0*t44 + t43;
-        const double t84 = t76*twist[0];
-        const double t85 = t76*twist[1];
-        const double t86 = t44*twist[2];
-        const double t87 = t78 + t81 + t83;
-        const double t88 = t78*t84 + t79*t85 + t80*t86;
-        const double t89 = t79*t84 + t81*t85 + t82*t86;
-        const double t90 = t80*t84 + t82*t85 + t83*t86;
-        const double t91 = (t87 > 0.0 ? 1.0/(t87*t87 != 0.0 ? t87*t87 : 1.0) : 1.0);
-        const double t92 = t88*t91;
-        const double t93 = t89*t91;
-        const double t94 = t90*t91;
-        const double t95 = t81*t83 - t82*t82;
-        const double t96 = t80*t82 - t79*t83;
-        const double t97 = t79*t82 - t80*t81;
-        const double t98 = t78*t83 - t80*t80;
-        const double t99 = t79*t80 - t78*t82;
-        const double t100 = t78*t81 - t79*t79;
-        const double t101 = t78*t95 + t79*t96 + t80*t97;
-        const double t102 = t95 + t98 + t100;
-        const int t103 = t101 > ARM3_RANK_TOL*t102*t87;
-        const double t104 = t87*t87;
-        const int t105 = t102 > ARM3_RANK_TOL*t104;
-        const double t106 = (t101 > 0.0 ? 1.0/(t101 != 0.0 ? t101 : 1.0) : 1.0);
-        const double t107 = t78*t88 + t79*t89 + t80*t90;
-        const double t108 = t79*t88 + t81*t89 + t82*t90;
-        const double t109 = t80*t88 + t82*t89 + t83*t90;
-        const double t110 = (t102 > 0.0 ? 1.0/(t102*t102 != 0.0 ? t102*t102 : 1.0) : 1.0);
-        const double t111 = t104 - t102;
-        const double t112 = (t105 ? (t103 ? t106*(t95*t84 + t96*t85 + t97*t86) : t110*(t88*t111 - t107*t87)) : t92);
-        const double t113 = (t105 ? (t103 ? t106*(t96*t84 + t98*t85 + t99*t86) : t110*(t89*t111 - t108*t87)) : t93);
-        const double t114 = (t105 ? (t103 ? t106*(t97*t84 + t99*t85 + t100*t86) : t110*(t90*t111 - t109*t87)) : t94);
-        const double t115 = t71*t112;
-        const double t116 = t71*t113;
-        dq3[0] = t114 + t115*t11 + t116*t12;
-        dq3[1] = t114 + t115*t9 + t116*t10;
-        dq3[2] = t114 + t4*t116 + t115*t8;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-    }
-}
-
-void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
-{
-    double q_T[96];
-    double twist_T[96];
-    double dq3_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 3;
-                const double *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm3_inverse_velocity3_block(q_T, twist_T, l, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            double *dq3_b = dq3 + (i + b) * 3;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-        }
-    }
-}
-#else
 void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
 {
     size_t i;
@@ -1906,7 +1237,6 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
-#endif
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 52 mul, 1 neg, 4 div */
@@ -1965,10 +1295,10 @@ static void arm3_ik_step_finish(const double q[3], const double target[2], const
     const double t66 = (t51 ? t53*(t65*t43 + t63*t46) : t65*t55);
     const double t67 = (t51 ? t53*(t64*t43 + t45*(t64 - t63*t32)) : 0.0);
     const double t68 = t66*t33 + t67*t36;
-    const double t69 = t66*t34 + t67*t37;
-    const double t70 = t66*t35 + t67*t38;
     q_next[0] = t68 + q[0];
+    const double t69 = t66*t34 + t67*t37;
     q_next[1] = t69 + q[1];
+    const double t70 = t66*t35 + t67*t38;
     q_next[2] = t70 + q[2];
 }
 
@@ -1984,140 +1314,6 @@ void arm3_ik_step(const double q[3], const double target[2], const double l[3], 
     arm3_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM3_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[3], double lambda, double *restrict q_next_T)
-{
-    double ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[3];
-        double ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        double q[3];
-        double target[2];
-        double cs[3];
-        double sn[3];
-        double q_next[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const double t2 = cs[0]*l[0];
-        const double t3 = cs[1]*l[1];
-        const double t4 = cs[2]*l[2];
-        const double t5 = sn[0]*l[0];
-        const double t6 = sn[1]*l[1];
-        const double t7 = sn[2]*l[2];
-        const double t8 = -t7;
-        const double t9 = t8 - t6;
-        const double t10 = t3 + t4;
-        const double t11 = t9 - t5;
-        const double t12 = t2 + t10;
-        const double t27 = t11*t11 + t9*t9 + t8*t8;
-        const double t28 = t4*t8 + t11*t12 + t9*t10;
-        const double t29 = t4*t4 + t12*t12 + t10*t10;
-        const int t30 = t27 >= t29;
-        const double t31 = (t30 ? t27 : t29);
-        const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
-        const double t33 = (t30 ? t11 : t12);
-        const double t34 = (t30 ? t9 : t10);
-        const double t35 = (t30 ? t8 : t4);
-        const double t36 = (t30 ? t12 : t11) - t33*t32;
-        const double t37 = (t30 ? t10 : t9) - t34*t32;
-        const double t38 = (t30 ? t4 : t8) - t35*t32;
-        const double t39 = t36*t36 + t37*t37 + t38*t38;
-        const int t40 = lambda > 1.0;
-        const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t42 = (t40 ? 1.0 : lambda);
-        const double t43 = t42*t42;
-        const double t44 = t41*t41;
-        const double t45 = t44*t31;
-        const double t46 = t44*t39;
-        const double t49 = t44*(t27 + t29);
-        const double t50 = t45*t46 + t43*(t49 + t43);
-        const int t51 = t50 > ARM3_RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43));
-        const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
-        const double t54 = t43 + t45*(1.0 + t32*t32);
-        const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
-        const double t61 = target[0] - t12;
-        const double t62 = t11 + target[1];
-        const double t63 = (t30 ? t61 : t62);
-        const double t64 = (t30 ? t62 : t61);
-        const double t65 = t63 + t64*t32;
-        const double t66 = (t51 ? t53*(t65*t43 + t63*t46) : t65*t55);
-        const double t67 = (t51 ? t53*(t64*t43 + t45*(t64 - t63*t32)) : 0.0);
-        const double t68 = t66*t33 + t67*t36;
-        const double t69 = t66*t34 + t67*t37;
-        const double t70 = t66*t35 + t67*t38;
-        q_next[0] = t68 + q[0];
-        q_next[1] = t69 + q[1];
-        q_next[2] = t70 + q[2];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-    }
-}
-
-void arm3_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[96];
-    double target_T[64];
-    double q_next_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 3;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm3_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 3;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-        }
-    }
-}
-#else
 void arm3_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -2137,7 +1333,6 @@ void arm3_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm3_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm3_ik_error(const double trial[3], const double target[2], const double l[3], double error[1])

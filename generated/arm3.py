@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x39264076
+STAMP = 0x8c49fe38
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -613,12 +613,12 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t75 = t72*t44
     t76 = t71*t44
     t77 = t72*t43
-    t78 = t77 + t27*t75
+    t78 = t27*t75 + t77
     t79 = t28*t75
     t80 = t73*t76
-    t81 = t77 + t29*t75
+    t81 = t29*t75 + t77
     t82 = t74*t76
-    t83 = 3.0*t44 + t43
+    t83 = t43 + 3.0*t44
     t84 = t76*twist[..., 0]
     t85 = t76*twist[..., 1]
     t86 = t44*twist[..., 2]
@@ -638,7 +638,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t100 = t78*t81 - t79*t79
     t101 = t78*t95 + t79*t96 + t80*t97
     t102 = t95 + t98 + t100
-    t103 = t101 > RANK_TOL*t102*t87
+    t103 = t101 > t102*t87*RANK_TOL
     t104 = t87*t87
     t105 = t102 > RANK_TOL*t104
     t106 = np.where(t101 > 0.0, 1.0/t101, 1.0)

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x3ce1ea5cUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdc45dfc8UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #else
 #define ARM3F_VECTORIZE
 #define ARM3F_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM3F_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM3F_VECTOR_MATH
+#define ARM3F_BODY static inline __attribute__((__always_inline__))
+#define ARM3F_STRIDE stride
+#else
+#define ARM3F_BODY static
+#define ARM3F_STRIDE 1
 #endif
 #if !ARM3F_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincosf(float x, float *s, float *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
 }
 #endif
 
-#if !ARM3F_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,26 +152,28 @@ static int arm3f_finite(float x)
 /* ---- arm3f_position: endpoint position p (2) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 2 neg */
 
-static void arm3f_position_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_position_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_position_finish(const float *restrict cs, const float *restrict sn, float *restrict p)
+ARM3F_BODY void arm3f_position_finish(const float *restrict cs, const float *restrict sn, float *restrict p, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
     const float t7 = t6 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
+    p[1*ARM3F_STRIDE] = -t9;
     const float t10 = cs[0] + t8;
     p[0] = t10;
-    p[1] = -t9;
 }
 
 void arm3f_position(const float q[3], float p[2])
@@ -171,55 +183,24 @@ void arm3f_position(const float q[3], float p[2])
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_position_angles(q, ang);
+    arm3f_position_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_position_finish(cs, sn, p);
+    arm3f_position_finish(cs, sn, p, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_position_block(const float *restrict q_T, float *restrict p_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_position_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float cs[3];
-        float sn[3];
-        float p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        p[0] = t10;
-        p[1] = -t9;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm3f_position_finish(cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -266,11 +247,11 @@ void arm3f_position_batch(size_t m, const float *q, float *p)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_position_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_position_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_position_finish(cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm3f_position_finish(cs + b * 8, sn + b * 8, p + (i + b) * 2, 1);
         }
     }
 }
@@ -279,30 +260,32 @@ void arm3f_position_batch(size_t m, const float *q, float *p)
 /* ---- arm3f_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 1 neg */
 
-static void arm3f_jacobian_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_jacobian_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_jacobian_finish(const float *restrict cs, const float *restrict sn, float *restrict J)
+ARM3F_BODY void arm3f_jacobian_finish(const float *restrict cs, const float *restrict sn, float *restrict J, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    J[5*ARM3F_STRIDE] = t3;
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
+    J[2*ARM3F_STRIDE] = t6;
     const float t7 = t6 - t4;
+    J[1*ARM3F_STRIDE] = t7;
     const float t8 = t2 + t3;
+    J[4*ARM3F_STRIDE] = t8;
     const float t9 = t7 - sn[0];
-    const float t10 = cs[0] + t8;
     J[0] = t9;
-    J[1] = t7;
-    J[2] = t6;
-    J[3] = t10;
-    J[4] = t8;
-    J[5] = t3;
+    const float t10 = cs[0] + t8;
+    J[3*ARM3F_STRIDE] = t10;
 }
 
 void arm3f_jacobian(const float q[3], float J[6])
@@ -312,63 +295,24 @@ void arm3f_jacobian(const float q[3], float J[6])
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_jacobian_angles(q, ang);
+    arm3f_jacobian_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_jacobian_finish(cs, sn, J);
+    arm3f_jacobian_finish(cs, sn, J, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_jacobian_block(const float *restrict q_T, float *restrict J_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float cs[3];
-        float sn[3];
-        float J[6];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        J[0] = t9;
-        J[1] = t7;
-        J[2] = t6;
-        J[3] = t10;
-        J[4] = t8;
-        J[5] = t3;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
+        arm3f_jacobian_finish(cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -419,11 +363,11 @@ void arm3f_jacobian_batch(size_t m, const float *q, float *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_jacobian_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 6);
+            arm3f_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 6, 1);
         }
     }
 }
@@ -432,21 +376,23 @@ void arm3f_jacobian_batch(size_t m, const float *q, float *J)
 /* ---- arm3f_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 2 neg */
 
-static void arm3f_coriolis_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_coriolis_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_coriolis_finish(const float dq[3], const float *restrict cs, const float *restrict sn, float *restrict H)
+ARM3F_BODY void arm3f_coriolis_finish(const float *restrict dq, const float *restrict cs, const float *restrict sn, float *restrict H, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t11 = dq[0] + dq[1];
-    const float t12 = t11 + dq[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
+    const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
+    const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;
@@ -454,17 +400,17 @@ static void arm3f_coriolis_finish(const float dq[3], const float *restrict cs, c
     const float t17 = t4*t11;
     const float t18 = t5*t12;
     const float t19 = -t15;
+    H[2*ARM3F_STRIDE] = t19;
     const float t20 = -t18;
+    H[5*ARM3F_STRIDE] = t20;
     const float t21 = t19 - t14;
+    H[1*ARM3F_STRIDE] = t21;
     const float t22 = t20 - t17;
+    H[4*ARM3F_STRIDE] = t22;
     const float t23 = t21 - t13;
-    const float t24 = t22 - t16;
     H[0] = t23;
-    H[1] = t21;
-    H[2] = t19;
-    H[3] = t24;
-    H[4] = t22;
-    H[5] = t20;
+    const float t24 = t22 - t16;
+    H[3*ARM3F_STRIDE] = t24;
 }
 
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
@@ -474,76 +420,24 @@ void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_coriolis_angles(q, ang);
+    arm3f_coriolis_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_coriolis_finish(dq, cs, sn, H);
+    arm3f_coriolis_finish(dq, cs, sn, H, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_coriolis_block(const float *restrict q_T, const float *restrict dq_T, float *restrict H_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float dq[3];
-        float cs[3];
-        float sn[3];
-        float H[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t11 = dq[0] + dq[1];
-        const float t12 = t11 + dq[2];
-        const float t13 = cs[0]*dq[0];
-        const float t14 = t2*t11;
-        const float t15 = t3*t12;
-        const float t16 = sn[0]*dq[0];
-        const float t17 = t4*t11;
-        const float t18 = t5*t12;
-        const float t19 = -t15;
-        const float t20 = -t18;
-        const float t21 = t19 - t14;
-        const float t22 = t20 - t17;
-        const float t23 = t21 - t13;
-        const float t24 = t22 - t16;
-        H[0] = t23;
-        H[1] = t21;
-        H[2] = t19;
-        H[3] = t24;
-        H[4] = t22;
-        H[5] = t20;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
+        arm3f_coriolis_finish(dq_T + b, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -602,11 +496,11 @@ void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_coriolis_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, H + (i + b) * 6);
+            arm3f_coriolis_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, H + (i + b) * 6, 1);
         }
     }
 }
@@ -615,21 +509,23 @@ void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
 /* ---- arm3f_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 3 neg */
 
-static void arm3f_velocity_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_velocity_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_velocity_finish(const float dq[3], const float *restrict cs, const float *restrict sn, float *restrict v)
+ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *restrict cs, const float *restrict sn, float *restrict v, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t11 = dq[0] + dq[1];
-    const float t12 = t11 + dq[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
+    const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
+    const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;
@@ -641,9 +537,9 @@ static void arm3f_velocity_finish(const float dq[3], const float *restrict cs, c
     const float t21 = t19 - t14;
     const float t22 = t20 - t17;
     const float t23 = t21 - t13;
+    v[1*ARM3F_STRIDE] = -t23;
     const float t24 = t22 - t16;
     v[0] = t24;
-    v[1] = -t23;
 }
 
 void arm3f_velocity(const float q[3], const float dq[3], float v[2])
@@ -653,68 +549,24 @@ void arm3f_velocity(const float q[3], const float dq[3], float v[2])
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_velocity_angles(q, ang);
+    arm3f_velocity_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_velocity_finish(dq, cs, sn, v);
+    arm3f_velocity_finish(dq, cs, sn, v, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_velocity_block(const float *restrict q_T, const float *restrict dq_T, float *restrict v_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float dq[3];
-        float cs[3];
-        float sn[3];
-        float v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t11 = dq[0] + dq[1];
-        const float t12 = t11 + dq[2];
-        const float t13 = cs[0]*dq[0];
-        const float t14 = t2*t11;
-        const float t15 = t3*t12;
-        const float t16 = sn[0]*dq[0];
-        const float t17 = t4*t11;
-        const float t18 = t5*t12;
-        const float t19 = -t15;
-        const float t20 = -t18;
-        const float t21 = t19 - t14;
-        const float t22 = t20 - t17;
-        const float t23 = t21 - t13;
-        const float t24 = t22 - t16;
-        v[0] = t24;
-        v[1] = -t23;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm3f_velocity_finish(dq_T + b, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -769,11 +621,11 @@ void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_velocity_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm3f_velocity_finish(dq + (i + b) * 3, cs + b * 8, sn + b * 8, v + (i + b) * 2, 1);
         }
     }
 }
@@ -782,26 +634,28 @@ void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
 /* ---- arm3f_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 3 neg */
 
-static void arm3f_acceleration_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_acceleration_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_acceleration_finish(const float dq[3], const float ddq[3], const float *restrict cs, const float *restrict sn, float *restrict a)
+ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float *restrict ddq, const float *restrict cs, const float *restrict sn, float *restrict a, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
     const float t7 = t6 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t11 = dq[0] + dq[1];
-    const float t12 = t11 + dq[2];
+    const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
+    const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;
@@ -813,9 +667,9 @@ static void arm3f_acceleration_finish(const float dq[3], const float ddq[3], con
     const float t21 = t19 - t14;
     const float t22 = t20 - t17;
     const float t23 = t21 - t13;
+    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
     const float t24 = t22 - t16;
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
@@ -825,77 +679,24 @@ void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3],
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_acceleration_angles(q, ang);
+    arm3f_acceleration_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_acceleration_finish(dq, ddq, cs, sn, a);
+    arm3f_acceleration_finish(dq, ddq, cs, sn, a, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_acceleration_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict a_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float dq[3];
-        float ddq[3];
-        float cs[3];
-        float sn[3];
-        float a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t11 = dq[0] + dq[1];
-        const float t12 = t11 + dq[2];
-        const float t13 = cs[0]*dq[0];
-        const float t14 = t2*t11;
-        const float t15 = t3*t12;
-        const float t16 = sn[0]*dq[0];
-        const float t17 = t4*t11;
-        const float t18 = t5*t12;
-        const float t19 = -t15;
-        const float t20 = -t18;
-        const float t21 = t19 - t14;
-        const float t22 = t20 - t17;
-        const float t23 = t21 - t13;
-        const float t24 = t22 - t16;
-        a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-        a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm3f_acceleration_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -958,11 +759,11 @@ void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const f
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_acceleration_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm3f_acceleration_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, a + (i + b) * 2, 1);
         }
     }
 }
@@ -971,26 +772,36 @@ void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const f
 /* ---- arm3f_kinematics: p, J, H, v and a at once ---- */
 /* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 5 neg */
 
-static void arm3f_kinematics_angles(const float q[3], float *restrict ang)
+ARM3F_BODY void arm3f_kinematics_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
+    (void)stride;
+    ang[1*ARM3F_STRIDE] = q[0] + q[1*ARM3F_STRIDE];
+    ang[2*ARM3F_STRIDE] = ang[1*ARM3F_STRIDE] + q[2*ARM3F_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm3f_kinematics_finish(const float dq[3], const float ddq[3], const float *restrict cs, const float *restrict sn, float *restrict p, float *restrict J, float *restrict H, float *restrict v, float *restrict a)
+ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *restrict ddq, const float *restrict cs, const float *restrict sn, float *restrict p, float *restrict J, float *restrict H, float *restrict v, float *restrict a, const size_t stride)
 {
-    const float t2 = 0.8f*cs[1];
-    const float t3 = 0.5f*cs[2];
-    const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
+    (void)stride;
+    const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
+    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    J[5*ARM3F_STRIDE] = t3;
+    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t6 = -t5;
+    J[2*ARM3F_STRIDE] = t6;
     const float t7 = t6 - t4;
+    J[1*ARM3F_STRIDE] = t7;
     const float t8 = t2 + t3;
+    J[4*ARM3F_STRIDE] = t8;
     const float t9 = t7 - sn[0];
+    p[1*ARM3F_STRIDE] = -t9;
+    J[0] = t9;
     const float t10 = cs[0] + t8;
-    const float t11 = dq[0] + dq[1];
-    const float t12 = t11 + dq[2];
+    p[0] = t10;
+    J[3*ARM3F_STRIDE] = t10;
+    const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
+    const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;
@@ -998,29 +809,21 @@ static void arm3f_kinematics_finish(const float dq[3], const float ddq[3], const
     const float t17 = t4*t11;
     const float t18 = t5*t12;
     const float t19 = -t15;
+    H[2*ARM3F_STRIDE] = t19;
     const float t20 = -t18;
+    H[5*ARM3F_STRIDE] = t20;
     const float t21 = t19 - t14;
+    H[1*ARM3F_STRIDE] = t21;
     const float t22 = t20 - t17;
+    H[4*ARM3F_STRIDE] = t22;
     const float t23 = t21 - t13;
-    const float t24 = t22 - t16;
-    p[0] = t10;
-    p[1] = -t9;
-    J[0] = t9;
-    J[1] = t7;
-    J[2] = t6;
-    J[3] = t10;
-    J[4] = t8;
-    J[5] = t3;
     H[0] = t23;
-    H[1] = t21;
-    H[2] = t19;
-    H[3] = t24;
-    H[4] = t22;
-    H[5] = t20;
+    v[1*ARM3F_STRIDE] = -t23;
+    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
+    const float t24 = t22 - t16;
+    H[3*ARM3F_STRIDE] = t24;
     v[0] = t24;
-    v[1] = -t23;
-    a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-    a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
+    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
@@ -1030,113 +833,24 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
     for (k = 3; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm3f_kinematics_angles(q, ang);
+    arm3f_kinematics_angles(q, ang, 1);
     arm3f_trig8(ang, cs, sn, 3);
-    arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a);
+    arm3f_kinematics_finish(dq, ddq, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM3F_VECTORIZE void arm3f_kinematics_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict p_T, float *restrict J_T, float *restrict H_T, float *restrict v_T, float *restrict a_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
+        arm3f_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm3f_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 32; ++b) {
-        float dq[3];
-        float ddq[3];
-        float cs[3];
-        float sn[3];
-        float p[2];
-        float J[6];
-        float H[6];
-        float v[2];
-        float a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t11 = dq[0] + dq[1];
-        const float t12 = t11 + dq[2];
-        const float t13 = cs[0]*dq[0];
-        const float t14 = t2*t11;
-        const float t15 = t3*t12;
-        const float t16 = sn[0]*dq[0];
-        const float t17 = t4*t11;
-        const float t18 = t5*t12;
-        const float t19 = -t15;
-        const float t20 = -t18;
-        const float t21 = t19 - t14;
-        const float t22 = t20 - t17;
-        const float t23 = t21 - t13;
-        const float t24 = t22 - t16;
-        p[0] = t10;
-        p[1] = -t9;
-        J[0] = t9;
-        J[1] = t7;
-        J[2] = t6;
-        J[3] = t10;
-        J[4] = t8;
-        J[5] = t3;
-        H[0] = t23;
-        H[1] = t21;
-        H[2] = t19;
-        H[3] = t24;
-        H[4] = t22;
-        H[5] = t20;
-        v[0] = t24;
-        v[1] = -t23;
-        a[0] = t23*dq[0] + t21*dq[1] + t19*dq[2] + t9*ddq[0] + t7*ddq[1] + t6*ddq[2];
-        a[1] = t3*ddq[2] + t24*dq[0] + t22*dq[1] + t20*dq[2] + t10*ddq[0] + t8*ddq[1];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm3f_kinematics_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1223,11 +937,11 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 8);
+            arm3f_kinematics_angles(q + (i + b) * 3, ang + b * 8, 1);
         }
         arm3f_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2);
+            arm3f_kinematics_finish(dq + (i + b) * 3, ddq + (i + b) * 3, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 6, H + (i + b) * 6, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1282,95 +996,6 @@ void arm3f_manipulability(const float q[3], float w[1])
     arm3f_manipulability_finish(cs, sn, w);
 }
 
-#if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_manipulability_block(const float *restrict q_T, float *restrict w_T)
-{
-    float ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3f_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        float cs[3];
-        float sn[3];
-        float w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t25 = t9*t9 + t7*t7 + t6*t6;
-        const float t26 = t3*t6 + t9*t10 + t7*t8;
-        const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const int t28 = t25 >= t27;
-        const float t29 = (t28 ? t25 : t27);
-        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
-        const float t31 = (t28 ? t9 : t10);
-        const float t32 = (t28 ? t7 : t8);
-        const float t33 = (t28 ? t6 : t3);
-        const float t34 = (t28 ? t10 : t9) - t31*t30;
-        const float t35 = (t28 ? t8 : t7) - t32*t30;
-        const float t36 = (t28 ? t3 : t6) - t33*t30;
-        const float t37 = t34*t34 + t35*t35 + t36*t36;
-        w[0] = sqrtf(t29*t37);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm3f_manipulability_batch(size_t m, const float *q, float *w)
-{
-    float q_T[96];
-    float w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const float *q_b = q + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-            }
-        }
-        arm3f_manipulability_block(q_T, w_T);
-        for (b = 0; b < count; ++b) {
-            float *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 {
     size_t i;
@@ -1390,7 +1015,6 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
         }
     }
 }
-#endif
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 1 neg, 4 div */
@@ -1445,10 +1069,10 @@ static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const 
     const float t54 = (t49 ? t51*(t50*t41 + t44*t45) : t50*t53);
     const float t55 = (t49 ? t51*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
     const float t56 = t54*t31 + t55*t34;
-    const float t57 = t54*t32 + t55*t35;
-    const float t58 = t54*t33 + t55*t36;
     dq[0] = t56;
+    const float t57 = t54*t32 + t55*t35;
     dq[1] = t57;
+    const float t58 = t54*t33 + t55*t36;
     dq[2] = t58;
 }
 
@@ -1464,132 +1088,6 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
     arm3f_inverse_velocity_finish(v, lambda, cs, sn, dq);
 }
 
-#if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_inverse_velocity_block(const float *restrict q_T, const float *restrict v_T, float lambda, float *restrict dq_T)
-{
-    float ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3f_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        float v[2];
-        float cs[3];
-        float sn[3];
-        float dq[3];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t25 = t9*t9 + t7*t7 + t6*t6;
-        const float t26 = t3*t6 + t9*t10 + t7*t8;
-        const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const int t28 = t25 >= t27;
-        const float t29 = (t28 ? t25 : t27);
-        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
-        const float t31 = (t28 ? t9 : t10);
-        const float t32 = (t28 ? t7 : t8);
-        const float t33 = (t28 ? t6 : t3);
-        const float t34 = (t28 ? t10 : t9) - t31*t30;
-        const float t35 = (t28 ? t8 : t7) - t32*t30;
-        const float t36 = (t28 ? t3 : t6) - t33*t30;
-        const float t37 = t34*t34 + t35*t35 + t36*t36;
-        const int t38 = lambda > 1.0f;
-        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
-        const float t40 = (t38 ? 1.0f : lambda);
-        const float t41 = t40*t40;
-        const float t42 = t39*t39;
-        const float t43 = t42*t29;
-        const float t44 = t42*t37;
-        const float t45 = (t28 ? v[0] : v[1]);
-        const float t46 = (t28 ? v[1] : v[0]);
-        const float t47 = t42*(t25 + t27);
-        const float t48 = t43*t44 + t41*(t47 + t41);
-        const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
-        const float t50 = t45 + t46*t30;
-        const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
-        const float t52 = t41 + t43*(1.0f + t30*t30);
-        const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
-        const float t54 = (t49 ? t51*(t50*t41 + t44*t45) : t50*t53);
-        const float t55 = (t49 ? t51*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
-        const float t56 = t54*t31 + t55*t34;
-        const float t57 = t54*t32 + t55*t35;
-        const float t58 = t54*t33 + t55*t36;
-        dq[0] = t56;
-        dq[1] = t57;
-        dq[2] = t58;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-    }
-}
-
-void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq)
-{
-    float q_T[96];
-    float v_T[64];
-    float dq_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const float *q_b = q + (i + b) * 3;
-                const float *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm3f_inverse_velocity_block(q_T, v_T, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            float *dq_b = dq + (i + b) * 3;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-        }
-    }
-}
-#else
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq)
 {
     size_t i;
@@ -1609,7 +1107,6 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
         }
     }
 }
-#endif
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 1 neg, 4 div */
@@ -1650,7 +1147,7 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t76 = t69*t72;
     const float t77 = t73 + t27*t71;
     const float t78 = t70*t72;
-    const float t79 = 3.0f*t42 + t41;
+    const float t79 = t41 + 3.0f*t42;
     const float t80 = t72*twist[0];
     const float t81 = t72*twist[1];
     const float t82 = t42*twist[2];
@@ -1670,7 +1167,7 @@ static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, c
     const float t96 = t74*t77 - t75*t75;
     const float t97 = t74*t91 + t75*t92 + t76*t93;
     const float t98 = t91 + t94 + t96;
-    const int t99 = t97 > ARM3F_RANK_TOL*t98*t83;
+    const int t99 = t97 > t98*t83*ARM3F_RANK_TOL;
     const float t100 = t83*t83;
     const int t101 = t98 > ARM3F_RANK_TOL*t100;
     const float t102 = (t97 > 0.0f ? 1.0f/(t97 != 0.0f ? t97 : 1.0f) : 1.0f);
@@ -1701,152 +1198,6 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
     arm3f_inverse_velocity3_finish(twist, lambda, cs, sn, dq3);
 }
 
-#if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_inverse_velocity3_block(const float *restrict q_T, const float *restrict twist_T, float lambda, float *restrict dq3_T)
-{
-    float ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3f_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        float twist[3];
-        float cs[3];
-        float sn[3];
-        float dq3[3];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t25 = t9*t9 + t7*t7 + t6*t6;
-        const float t26 = t3*t6 + t9*t10 + t7*t8;
-        const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const int t38 = lambda > 1.0f;
-        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
-        const float t40 = (t38 ? 1.0f : lambda);
-        const float t41 = t40*t40;
-        const float t42 = t39*t39;
-        const float t69 = t9 + t7 + t6;
-        const float t70 = t3 + t10 + t8;
-        const float t71 = 0.18903592f*t42;
-        const float t72 = 0.4347826f*t42;
-        const float t73 = 0.18903592f*t41;
-        const float t74 = t73 + t25*t71;
-        const float t75 = t26*t71;
-        const float t76 = t69*t72;
-        const float t77 = t73 + t27*t71;
-        const float t78 = t70*t72;
-        const float t79 = 3.0f*t42 + t41;
-        const float t80 = t72*twist[0];
-        const float t81 = t72*twist[1];
-        const float t82 = t42*twist[2];
-        const float t83 = t74 + t77 + t79;
-        const float t84 = t74*t80 + t75*t81 + t76*t82;
-        const float t85 = t75*t80 + t77*t81 + t78*t82;
-        const float t86 = t76*t80 + t78*t81 + t79*t82;
-        const float t87 = (t83 > 0.0f ? 1.0f/(t83*t83 != 0.0f ? t83*t83 : 1.0f) : 1.0f);
-        const float t88 = t84*t87;
-        const float t89 = t85*t87;
-        const float t90 = t86*t87;
-        const float t91 = t77*t79 - t78*t78;
-        const float t92 = t76*t78 - t75*t79;
-        const float t93 = t75*t78 - t76*t77;
-        const float t94 = t74*t79 - t76*t76;
-        const float t95 = t75*t76 - t74*t78;
-        const float t96 = t74*t77 - t75*t75;
-        const float t97 = t74*t91 + t75*t92 + t76*t93;
-        const float t98 = t91 + t94 + t96;
-        const int t99 = t97 > ARM3F_RANK_TOL*t98*t83;
-        const float t100 = t83*t83;
-        const int t101 = t98 > ARM3F_RANK_TOL*t100;
-        const float t102 = (t97 > 0.0f ? 1.0f/(t97 != 0.0f ? t97 : 1.0f) : 1.0f);
-        const float t103 = t74*t84 + t75*t85 + t76*t86;
-        const float t104 = t75*t84 + t77*t85 + t78*t86;
-        const float t105 = t76*t84 + t78*t85 + t79*t86;
-        const float t106 = (t98 > 0.0f ? 1.0f/(t98*t98 != 0.0f ? t98*t98 : 1.0f) : 1.0f);
-        const float t107 = t100 - t98;
-        const float t108 = (t101 ? (t99 ? t102*(t91*t80 + t92*t81 + t93*t82) : t106*(t84*t107 - t103*t83)) : t88);
-        const float t109 = (t101 ? (t99 ? t102*(t92*t80 + t94*t81 + t95*t82) : t106*(t85*t107 - t104*t83)) : t89);
-        const float t110 = (t101 ? (t99 ? t102*(t93*t80 + t95*t81 + t96*t82) : t106*(t86*t107 - t105*t83)) : t90);
-        const float t111 = 0.4347826f*t108;
-        const float t112 = 0.4347826f*t109;
-        dq3[0] = t110 + t111*t9 + t112*t10;
-        dq3[1] = t110 + t111*t7 + t112*t8;
-        dq3[2] = t110 + t3*t112 + t111*t6;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-    }
-}
-
-void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3)
-{
-    float q_T[96];
-    float twist_T[96];
-    float dq3_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const float *q_b = q + (i + b) * 3;
-                const float *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm3f_inverse_velocity3_block(q_T, twist_T, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            float *dq3_b = dq3 + (i + b) * 3;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-        }
-    }
-}
-#else
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3)
 {
     size_t i;
@@ -1866,7 +1217,6 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
         }
     }
 }
-#endif
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 1 neg, 4 div */
@@ -1923,10 +1273,10 @@ static void arm3f_ik_step_finish(const float q[3], const float target[2], float 
     const float t64 = (t49 ? t51*(t63*t41 + t61*t44) : t63*t53);
     const float t65 = (t49 ? t51*(t62*t41 + t43*(t62 - t61*t30)) : 0.0f);
     const float t66 = t64*t31 + t65*t34;
-    const float t67 = t64*t32 + t65*t35;
-    const float t68 = t64*t33 + t65*t36;
     q_next[0] = t66 + q[0];
+    const float t67 = t64*t32 + t65*t35;
     q_next[1] = t67 + q[1];
+    const float t68 = t64*t33 + t65*t36;
     q_next[2] = t68 + q[2];
 }
 
@@ -1942,138 +1292,6 @@ void arm3f_ik_step(const float q[3], const float target[2], float lambda, float 
     arm3f_ik_step_finish(q, target, lambda, cs, sn, q_next);
 }
 
-#if ARM3F_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_ik_step_block(const float *restrict q_T, const float *restrict target_T, float lambda, float *restrict q_next_T)
-{
-    float ang_T[96], cs_T[96], sn_T[96];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        float q[3];
-        float ang[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-    }
-    arm3f_trig96(ang_T, cs_T, sn_T, 96);
-    for (b = 0; b < 32; ++b) {
-        float q[3];
-        float target[2];
-        float cs[3];
-        float sn[3];
-        float q_next[3];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        const float t2 = 0.8f*cs[1];
-        const float t3 = 0.5f*cs[2];
-        const float t4 = 0.8f*sn[1];
-        const float t5 = 0.5f*sn[2];
-        const float t6 = -t5;
-        const float t7 = t6 - t4;
-        const float t8 = t2 + t3;
-        const float t9 = t7 - sn[0];
-        const float t10 = cs[0] + t8;
-        const float t25 = t9*t9 + t7*t7 + t6*t6;
-        const float t26 = t3*t6 + t9*t10 + t7*t8;
-        const float t27 = t3*t3 + t10*t10 + t8*t8;
-        const int t28 = t25 >= t27;
-        const float t29 = (t28 ? t25 : t27);
-        const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
-        const float t31 = (t28 ? t9 : t10);
-        const float t32 = (t28 ? t7 : t8);
-        const float t33 = (t28 ? t6 : t3);
-        const float t34 = (t28 ? t10 : t9) - t31*t30;
-        const float t35 = (t28 ? t8 : t7) - t32*t30;
-        const float t36 = (t28 ? t3 : t6) - t33*t30;
-        const float t37 = t34*t34 + t35*t35 + t36*t36;
-        const int t38 = lambda > 1.0f;
-        const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
-        const float t40 = (t38 ? 1.0f : lambda);
-        const float t41 = t40*t40;
-        const float t42 = t39*t39;
-        const float t43 = t42*t29;
-        const float t44 = t42*t37;
-        const float t47 = t42*(t25 + t27);
-        const float t48 = t43*t44 + t41*(t47 + t41);
-        const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
-        const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
-        const float t52 = t41 + t43*(1.0f + t30*t30);
-        const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
-        const float t59 = target[0] - t10;
-        const float t60 = t9 + target[1];
-        const float t61 = (t28 ? t59 : t60);
-        const float t62 = (t28 ? t60 : t59);
-        const float t63 = t61 + t62*t30;
-        const float t64 = (t49 ? t51*(t63*t41 + t61*t44) : t63*t53);
-        const float t65 = (t49 ? t51*(t62*t41 + t43*(t62 - t61*t30)) : 0.0f);
-        const float t66 = t64*t31 + t65*t34;
-        const float t67 = t64*t32 + t65*t35;
-        const float t68 = t64*t33 + t65*t36;
-        q_next[0] = t66 + q[0];
-        q_next[1] = t67 + q[1];
-        q_next[2] = t68 + q[2];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-    }
-}
-
-void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next)
-{
-    float q_T[96];
-    float target_T[64];
-    float q_next_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const float *q_b = q + (i + b) * 3;
-                const float *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    q_T[k * 32 + b] = q[src * 3 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm3f_ik_step_block(q_T, target_T, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            float *q_next_b = q_next + (i + b) * 3;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-        }
-    }
-}
-#else
 void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next)
 {
     size_t i;
@@ -2093,7 +1311,6 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
         }
     }
 }
-#endif
 
 /* ---- arm3f_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm3f_ik_error(const float trial[3], const float target[2], float error[1])

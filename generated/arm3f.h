@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x3ce1ea5cUL
+#define ARM3F_STAMP 0xdc45dfc8UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -102,7 +102,7 @@ void arm3f_manipulability(const float q[3], float w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 1816 bytes. */
+ * Stack: about 7 KB. */
 void arm3f_manipulability_batch(size_t m, const float *q, float *w);
 
 /* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 280 bytes. */
@@ -110,7 +110,7 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 2428 bytes. */
+ * Stack: about 7 KB. */
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
 
 /* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 352 bytes. */
@@ -118,7 +118,7 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 2632 bytes. */
+ * Stack: about 7 KB. */
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
 
 /* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 288 bytes. */
@@ -126,7 +126,7 @@ void arm3f_ik_step(const float q[3], const float target[2], float lambda, float 
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 2436 bytes. */
+ * Stack: about 7 KB. */
 void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next);
 
 /* Return codes of the solvers. */

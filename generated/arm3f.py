@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0x3ce1ea5c
+STAMP = 0xdc45dfc8
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -590,7 +590,7 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t76 = t69*t72
     t77 = t73 + t27*t71
     t78 = t70*t72
-    t79 = 3.0*t42 + t41
+    t79 = t41 + 3.0*t42
     t80 = t72*twist[..., 0]
     t81 = t72*twist[..., 1]
     t82 = t42*twist[..., 2]
@@ -610,7 +610,7 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t96 = t74*t77 - t75*t75
     t97 = t74*t91 + t75*t92 + t76*t93
     t98 = t91 + t94 + t96
-    t99 = t97 > RANK_TOL*t98*t83
+    t99 = t97 > t98*t83*RANK_TOL
     t100 = t83*t83
     t101 = t98 > RANK_TOL*t100
     t102 = np.where(t97 > 0.0, 1.0/t97, 1.0)

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xa438f88eUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc9115ff9UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_VECTORIZE
 #define ARM4_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM4_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM4_VECTOR_MATH
+#define ARM4_BODY static inline __attribute__((__always_inline__))
+#define ARM4_STRIDE stride
+#else
+#define ARM4_BODY static
+#define ARM4_STRIDE 1
 #endif
 #if !ARM4_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *rest
 }
 #endif
 
-#if !ARM4_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,98 +152,58 @@ static int arm4_finite(double x)
 /* ---- arm4_position: endpoint position p (2) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 2 neg */
 
-static void arm4_position_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_position_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
+    p[1*ARM4_STRIDE] = -t16;
     const double t17 = t3 + t15;
     p[0] = t17;
-    p[1] = -t16;
 }
 
 void arm4_position(const double q[4], const double l[4], double p[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_position_angles(q, ang);
+    arm4_position_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_position_finish(l, cs, sn, p);
+    arm4_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_position_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        p[0] = t17;
-        p[1] = -t16;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm4_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -281,11 +251,11 @@ void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_position_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_position_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2);
+            arm4_position_finish(l, cs + b * 4, sn + b * 4, p + (i + b) * 2, 1);
         }
     }
 }
@@ -294,116 +264,64 @@ void arm4_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm4_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 1 neg */
 
-static void arm4_jacobian_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_jacobian_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
+    J[7*ARM4_STRIDE] = t6;
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
+    J[3*ARM4_STRIDE] = t11;
     const double t12 = t11 - t9;
+    J[2*ARM4_STRIDE] = t12;
     const double t13 = t5 + t6;
+    J[6*ARM4_STRIDE] = t13;
     const double t14 = t12 - t8;
+    J[1*ARM4_STRIDE] = t14;
     const double t15 = t4 + t13;
+    J[5*ARM4_STRIDE] = t15;
     const double t16 = t14 - t7;
-    const double t17 = t3 + t15;
     J[0] = t16;
-    J[1] = t14;
-    J[2] = t12;
-    J[3] = t11;
-    J[4] = t17;
-    J[5] = t15;
-    J[6] = t13;
-    J[7] = t6;
+    const double t17 = t3 + t15;
+    J[4*ARM4_STRIDE] = t17;
 }
 
 void arm4_jacobian(const double q[4], const double l[4], double J[8])
 {
     double ang[4], cs[4], sn[4];
-    arm4_jacobian_angles(q, ang);
+    arm4_jacobian_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_jacobian_finish(l, cs, sn, J);
+    arm4_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double J[8];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        J[0] = t16;
-        J[1] = t14;
-        J[2] = t12;
-        J[3] = t11;
-        J[4] = t17;
-        J[5] = t15;
-        J[6] = t13;
-        J[7] = t6;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
+        arm4_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -457,11 +375,11 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_jacobian_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 8);
+            arm4_jacobian_finish(l, cs + b * 4, sn + b * 4, J + (i + b) * 8, 1);
         }
     }
 }
@@ -470,27 +388,29 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm4_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 2 neg */
 
-static void arm4_coriolis_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_coriolis_finish(const double dq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -500,115 +420,44 @@ static void arm4_coriolis_finish(const double dq[4], const double l[4], const do
     const double t27 = t9*t19;
     const double t28 = t10*t20;
     const double t29 = -t24;
+    H[3*ARM4_STRIDE] = t29;
     const double t30 = -t28;
+    H[7*ARM4_STRIDE] = t30;
     const double t31 = t29 - t23;
+    H[2*ARM4_STRIDE] = t31;
     const double t32 = t30 - t27;
+    H[6*ARM4_STRIDE] = t32;
     const double t33 = t31 - t22;
+    H[1*ARM4_STRIDE] = t33;
     const double t34 = t32 - t26;
+    H[5*ARM4_STRIDE] = t34;
     const double t35 = t33 - t21;
-    const double t36 = t34 - t25;
     H[0] = t35;
-    H[1] = t33;
-    H[2] = t31;
-    H[3] = t29;
-    H[4] = t36;
-    H[5] = t34;
-    H[6] = t32;
-    H[7] = t30;
+    const double t36 = t34 - t25;
+    H[4*ARM4_STRIDE] = t36;
 }
 
 void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
 {
     double ang[4], cs[4], sn[4];
-    arm4_coriolis_angles(q, ang);
+    arm4_coriolis_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_coriolis_finish(dq, l, cs, sn, H);
+    arm4_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double cs[4];
-        double sn[4];
-        double H[8];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        H[0] = t35;
-        H[1] = t33;
-        H[2] = t31;
-        H[3] = t29;
-        H[4] = t36;
-        H[5] = t34;
-        H[6] = t32;
-        H[7] = t30;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
+        arm4_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -671,11 +520,11 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_coriolis_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, H + (i + b) * 8);
+            arm4_coriolis_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, H + (i + b) * 8, 1);
         }
     }
 }
@@ -684,27 +533,29 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm4_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 3 neg */
 
-static void arm4_velocity_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_velocity_finish(const double dq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -720,91 +571,32 @@ static void arm4_velocity_finish(const double dq[4], const double l[4], const do
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
+    v[1*ARM4_STRIDE] = -t35;
     const double t36 = t34 - t25;
     v[0] = t36;
-    v[1] = -t35;
 }
 
 void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_velocity_angles(q, ang);
+    arm4_velocity_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_velocity_finish(dq, l, cs, sn, v);
+    arm4_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double cs[4];
-        double sn[4];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        v[0] = t36;
-        v[1] = -t35;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm4_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -861,11 +653,11 @@ void arm4_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_velocity_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_velocity_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, v + (i + b) * 2);
+            arm4_velocity_finish(dq + (i + b) * 4, l, cs + b * 4, sn + b * 4, v + (i + b) * 2, 1);
         }
     }
 }
@@ -874,24 +666,26 @@ void arm4_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm4_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 3 neg */
 
-static void arm4_acceleration_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_acceleration_finish(const double dq[4], const double ddq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
     const double t12 = t11 - t9;
     const double t13 = t5 + t6;
@@ -899,9 +693,9 @@ static void arm4_acceleration_finish(const double dq[4], const double ddq[4], co
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -917,103 +711,32 @@ static void arm4_acceleration_finish(const double dq[4], const double ddq[4], co
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
     const double t36 = t34 - t25;
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_acceleration_angles(q, ang);
+    arm4_acceleration_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm4_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double ddq[4];
-        double cs[4];
-        double sn[4];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm4_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -1079,11 +802,11 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_acceleration_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, a + (i + b) * 2);
+            arm4_acceleration_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1092,34 +815,46 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm4_kinematics: p, J, H, v and a at once ---- */
 /* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 5 neg */
 
-static void arm4_kinematics_angles(const double q[4], double *restrict ang)
+ARM4_BODY void arm4_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[1*ARM4_STRIDE] = q[0] + q[1*ARM4_STRIDE];
+    ang[2*ARM4_STRIDE] = ang[1*ARM4_STRIDE] + q[2*ARM4_STRIDE];
+    ang[3*ARM4_STRIDE] = ang[2*ARM4_STRIDE] + q[3*ARM4_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm4_kinematics_finish(const double dq[4], const double ddq[4], const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t3 = cs[0]*l[0];
-    const double t4 = cs[1]*l[1];
-    const double t5 = cs[2]*l[2];
-    const double t6 = cs[3]*l[3];
+    const double t4 = cs[1*ARM4_STRIDE]*l[1];
+    const double t5 = cs[2*ARM4_STRIDE]*l[2];
+    const double t6 = cs[3*ARM4_STRIDE]*l[3];
+    J[7*ARM4_STRIDE] = t6;
     const double t7 = sn[0]*l[0];
-    const double t8 = sn[1]*l[1];
-    const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
+    const double t8 = sn[1*ARM4_STRIDE]*l[1];
+    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t11 = -t10;
+    J[3*ARM4_STRIDE] = t11;
     const double t12 = t11 - t9;
+    J[2*ARM4_STRIDE] = t12;
     const double t13 = t5 + t6;
+    J[6*ARM4_STRIDE] = t13;
     const double t14 = t12 - t8;
+    J[1*ARM4_STRIDE] = t14;
     const double t15 = t4 + t13;
+    J[5*ARM4_STRIDE] = t15;
     const double t16 = t14 - t7;
+    p[1*ARM4_STRIDE] = -t16;
+    J[0] = t16;
     const double t17 = t3 + t15;
-    const double t18 = dq[0] + dq[1];
-    const double t19 = t18 + dq[2];
-    const double t20 = t19 + dq[3];
+    p[0] = t17;
+    J[4*ARM4_STRIDE] = t17;
+    const double t18 = dq[0] + dq[1*ARM4_STRIDE];
+    const double t19 = t18 + dq[2*ARM4_STRIDE];
+    const double t20 = t19 + dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
@@ -1129,173 +864,48 @@ static void arm4_kinematics_finish(const double dq[4], const double ddq[4], cons
     const double t27 = t9*t19;
     const double t28 = t10*t20;
     const double t29 = -t24;
+    H[3*ARM4_STRIDE] = t29;
     const double t30 = -t28;
+    H[7*ARM4_STRIDE] = t30;
     const double t31 = t29 - t23;
+    H[2*ARM4_STRIDE] = t31;
     const double t32 = t30 - t27;
+    H[6*ARM4_STRIDE] = t32;
     const double t33 = t31 - t22;
+    H[1*ARM4_STRIDE] = t33;
     const double t34 = t32 - t26;
+    H[5*ARM4_STRIDE] = t34;
     const double t35 = t33 - t21;
-    const double t36 = t34 - t25;
-    p[0] = t17;
-    p[1] = -t16;
-    J[0] = t16;
-    J[1] = t14;
-    J[2] = t12;
-    J[3] = t11;
-    J[4] = t17;
-    J[5] = t15;
-    J[6] = t13;
-    J[7] = t6;
     H[0] = t35;
-    H[1] = t33;
-    H[2] = t31;
-    H[3] = t29;
-    H[4] = t36;
-    H[5] = t34;
-    H[6] = t32;
-    H[7] = t30;
+    v[1*ARM4_STRIDE] = -t35;
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    const double t36 = t34 - t25;
+    H[4*ARM4_STRIDE] = t36;
     v[0] = t36;
-    v[1] = -t35;
-    a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-    a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
-    arm4_kinematics_angles(q, ang);
+    arm4_kinematics_angles(q, ang, 1);
     arm4_trig4(ang, cs, sn, 4);
-    arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm4_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
+        arm4_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm4_trig128(ang_T, cs_T, sn_T, 128);
     for (b = 0; b < 32; ++b) {
-        double dq[4];
-        double ddq[4];
-        double cs[4];
-        double sn[4];
-        double p[2];
-        double J[8];
-        double H[8];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t18 = dq[0] + dq[1];
-        const double t19 = t18 + dq[2];
-        const double t20 = t19 + dq[3];
-        const double t21 = t3*dq[0];
-        const double t22 = t4*t18;
-        const double t23 = t5*t19;
-        const double t24 = t6*t20;
-        const double t25 = t7*dq[0];
-        const double t26 = t8*t18;
-        const double t27 = t9*t19;
-        const double t28 = t10*t20;
-        const double t29 = -t24;
-        const double t30 = -t28;
-        const double t31 = t29 - t23;
-        const double t32 = t30 - t27;
-        const double t33 = t31 - t22;
-        const double t34 = t32 - t26;
-        const double t35 = t33 - t21;
-        const double t36 = t34 - t25;
-        p[0] = t17;
-        p[1] = -t16;
-        J[0] = t16;
-        J[1] = t14;
-        J[2] = t12;
-        J[3] = t11;
-        J[4] = t17;
-        J[5] = t15;
-        J[6] = t13;
-        J[7] = t6;
-        H[0] = t35;
-        H[1] = t33;
-        H[2] = t31;
-        H[3] = t29;
-        H[4] = t36;
-        H[5] = t34;
-        H[6] = t32;
-        H[7] = t30;
-        v[0] = t36;
-        v[1] = -t35;
-        a[0] = t35*dq[0] + t33*dq[1] + t31*dq[2] + t29*dq[3] + t16*ddq[0] + t14*ddq[1] + t12*ddq[2] + t11*ddq[3];
-        a[1] = t6*ddq[3] + t36*dq[0] + t34*dq[1] + t32*dq[2] + t30*dq[3] + t17*ddq[0] + t15*ddq[1] + t13*ddq[2];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm4_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1389,11 +999,11 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 128) {
         const size_t count = m - i < 128 ? m - i : 128;
         for (b = 0; b < count; ++b) {
-            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 4);
+            arm4_kinematics_angles(q + (i + b) * 4, ang + b * 4, 1);
         }
         arm4_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2);
+            arm4_kinematics_finish(dq + (i + b) * 4, ddq + (i + b) * 4, l, cs + b * 4, sn + b * 4, p + (i + b) * 2, J + (i + b) * 8, H + (i + b) * 8, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1453,109 +1063,6 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1])
     arm4_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_manipulability_block(const double *restrict q_T, const double l[4], double *restrict w_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double cs[4];
-        double sn[4];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        w[0] = sqrt(t41*t51);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[128];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-            }
-        }
-        arm4_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1575,7 +1082,6 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
@@ -1639,12 +1145,12 @@ static void arm4_inverse_velocity_finish(const double v[2], const double l[4], d
     const double t68 = (t63 ? t65*(t64*t55 + t58*t59) : t64*t67);
     const double t69 = (t63 ? t65*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
     const double t70 = t68*t43 + t69*t47;
-    const double t71 = t68*t44 + t69*t48;
-    const double t72 = t68*t45 + t69*t49;
-    const double t73 = t68*t46 + t69*t50;
     dq[0] = t70;
+    const double t71 = t68*t44 + t69*t48;
     dq[1] = t71;
+    const double t72 = t68*t45 + t69*t49;
     dq[2] = t72;
+    const double t73 = t68*t46 + t69*t50;
     dq[3] = t73;
 }
 
@@ -1656,150 +1162,6 @@ void arm4_inverse_velocity(const double q[4], const double v[2], const double l[
     arm4_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[4], double lambda, double *restrict dq_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[4];
-        double sn[4];
-        double dq[4];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const int t52 = lambda > 1.0;
-        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t54 = (t52 ? 1.0 : lambda);
-        const double t55 = t54*t54;
-        const double t56 = t53*t53;
-        const double t57 = t56*t41;
-        const double t58 = t56*t51;
-        const double t59 = (t40 ? v[0] : v[1]);
-        const double t60 = (t40 ? v[1] : v[0]);
-        const double t61 = t56*(t37 + t39);
-        const double t62 = t57*t58 + t55*(t61 + t55);
-        const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
-        const double t64 = t59 + t60*t42;
-        const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
-        const double t66 = t55 + t57*(1.0 + t42*t42);
-        const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
-        const double t68 = (t63 ? t65*(t64*t55 + t58*t59) : t64*t67);
-        const double t69 = (t63 ? t65*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
-        const double t70 = t68*t43 + t69*t47;
-        const double t71 = t68*t44 + t69*t48;
-        const double t72 = t68*t45 + t69*t49;
-        const double t73 = t68*t46 + t69*t50;
-        dq[0] = t70;
-        dq[1] = t71;
-        dq[2] = t72;
-        dq[3] = t73;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-    }
-}
-
-void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[128];
-    double v_T[64];
-    double dq_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm4_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 4;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -1819,7 +1181,6 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
@@ -1864,12 +1225,12 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t89 = t86*t56;
     const double t90 = t85*t56;
     const double t91 = t86*t55;
-    const double t92 = t91 + t37*t89;
+    const double t92 = t37*t89 + t91;
     const double t93 = t38*t89;
     const double t94 = t87*t90;
-    const double t95 = t91 + t39*t89;
+    const double t95 = t39*t89 + t91;
     const double t96 = t88*t90;
-    const double t97 = 4.0*t56 + t55;
+    const double t97 = t55 + 4.0*t56;
     const double t98 = t90*twist[0];
     const double t99 = t90*twist[1];
     const double t100 = t56*twist[2];
@@ -1889,7 +1250,7 @@ static void arm4_inverse_velocity3_finish(const double twist[3], const double l[
     const double t114 = t92*t95 - t93*t93;
     const double t115 = t92*t109 + t93*t110 + t94*t111;
     const double t116 = t109 + t112 + t114;
-    const int t117 = t115 > ARM4_RANK_TOL*t116*t101;
+    const int t117 = t115 > t116*t101*ARM4_RANK_TOL;
     const double t118 = t101*t101;
     const int t119 = t116 > ARM4_RANK_TOL*t118;
     const double t120 = (t115 > 0.0 ? 1.0/(t115 != 0.0 ? t115 : 1.0) : 1.0);
@@ -1917,169 +1278,6 @@ void arm4_inverse_velocity3(const double q[4], const double twist[3], const doub
     arm4_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[4], double lambda, double *restrict dq3_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double twist[3];
-        double cs[4];
-        double sn[4];
-        double dq3[4];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t52 = lambda > 1.0;
-        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t54 = (t52 ? 1.0 : lambda);
-        const double t55 = t54*t54;
-        const double t56 = t53*t53;
-        const double t85 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-        const double t86 = t85*t85;
-        const double t87 = t16 + t14 + t12 + t11;
-        const double t88 = t6 + t17 + t15 + t13;
-        const double t89 = t86*t56;
-        const double t90 = t85*t56;
-        const double t91 = t86*t55;
-        const double t92 = t91 + t37*t89;
-        const double t93 = t38*t89;
-        const double t94 = t87*t90;
-        const double t95 = t91 + t39*t89;
-        const double t96 = t88*t90;
-        const double t97 = 4.0*t56 + t55;
-        const double t98 = t90*twist[0];
-        const double t99 = t90*twist[1];
-        const double t100 = t56*twist[2];
-        const double t101 = t92 + t95 + t97;
-        const double t102 = t92*t98 + t93*t99 + t94*t100;
-        const double t103 = t93*t98 + t95*t99 + t96*t100;
-        const double t104 = t94*t98 + t96*t99 + t97*t100;
-        const double t105 = (t101 > 0.0 ? 1.0/(t101*t101 != 0.0 ? t101*t101 : 1.0) : 1.0);
-        const double t106 = t102*t105;
-        const double t107 = t103*t105;
-        const double t108 = t104*t105;
-        const double t109 = t95*t97 - t96*t96;
-        const double t110 = t94*t96 - t93*t97;
-        const double t111 = t93*t96 - t94*t95;
-        const double t112 = t92*t97 - t94*t94;
-        const double t113 = t93*t94 - t92*t96;
-        const double t114 = t92*t95 - t93*t93;
-        const double t115 = t92*t109 + t93*t110 + t94*t111;
-        const double t116 = t109 + t112 + t114;
-        const int t117 = t115 > ARM4_RANK_TOL*t116*t101;
-        const double t118 = t101*t101;
-        const int t119 = t116 > ARM4_RANK_TOL*t118;
-        const double t120 = (t115 > 0.0 ? 1.0/(t115 != 0.0 ? t115 : 1.0) : 1.0);
-        const double t121 = t92*t102 + t93*t103 + t94*t104;
-        const double t122 = t93*t102 + t95*t103 + t96*t104;
-        const double t123 = t94*t102 + t96*t103 + t97*t104;
-        const double t124 = (t116 > 0.0 ? 1.0/(t116*t116 != 0.0 ? t116*t116 : 1.0) : 1.0);
-        const double t125 = t118 - t116;
-        const double t126 = (t119 ? (t117 ? t120*(t109*t98 + t110*t99 + t111*t100) : t124*(t102*t125 - t121*t101)) : t106);
-        const double t127 = (t119 ? (t117 ? t120*(t110*t98 + t112*t99 + t113*t100) : t124*(t103*t125 - t122*t101)) : t107);
-        const double t128 = (t119 ? (t117 ? t120*(t111*t98 + t113*t99 + t114*t100) : t124*(t104*t125 - t123*t101)) : t108);
-        const double t129 = t85*t126;
-        const double t130 = t85*t127;
-        dq3[0] = t128 + t129*t16 + t130*t17;
-        dq3[1] = t128 + t129*t14 + t130*t15;
-        dq3[2] = t128 + t129*t12 + t130*t13;
-        dq3[3] = t128 + t6*t130 + t129*t11;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-        dq3_T[96 + b] = dq3[3];
-    }
-}
-
-void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
-{
-    double q_T[128];
-    double twist_T[96];
-    double dq3_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm4_inverse_velocity3_block(q_T, twist_T, l, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            double *dq3_b = dq3 + (i + b) * 4;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-            dq3_b[3] = dq3_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
 {
     size_t i;
@@ -2099,7 +1297,6 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
-#endif
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
@@ -2165,12 +1362,12 @@ static void arm4_ik_step_finish(const double q[4], const double target[2], const
     const double t79 = (t63 ? t65*(t78*t55 + t76*t58) : t78*t67);
     const double t80 = (t63 ? t65*(t77*t55 + t57*(t77 - t76*t42)) : 0.0);
     const double t81 = t79*t43 + t80*t47;
-    const double t82 = t79*t44 + t80*t48;
-    const double t83 = t79*t45 + t80*t49;
-    const double t84 = t79*t46 + t80*t50;
     q_next[0] = t81 + q[0];
+    const double t82 = t79*t44 + t80*t48;
     q_next[1] = t82 + q[1];
+    const double t83 = t79*t45 + t80*t49;
     q_next[2] = t83 + q[2];
+    const double t84 = t79*t46 + t80*t50;
     q_next[3] = t84 + q[3];
 }
 
@@ -2182,157 +1379,6 @@ void arm4_ik_step(const double q[4], const double target[2], const double l[4], 
     arm4_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM4_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[4], double lambda, double *restrict q_next_T)
-{
-    double ang_T[128], cs_T[128], sn_T[128];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double ang[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-    }
-    arm4_trig128(ang_T, cs_T, sn_T, 128);
-    for (b = 0; b < 32; ++b) {
-        double q[4];
-        double target[2];
-        double cs[4];
-        double sn[4];
-        double q_next[4];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        const double t3 = cs[0]*l[0];
-        const double t4 = cs[1]*l[1];
-        const double t5 = cs[2]*l[2];
-        const double t6 = cs[3]*l[3];
-        const double t7 = sn[0]*l[0];
-        const double t8 = sn[1]*l[1];
-        const double t9 = sn[2]*l[2];
-        const double t10 = sn[3]*l[3];
-        const double t11 = -t10;
-        const double t12 = t11 - t9;
-        const double t13 = t5 + t6;
-        const double t14 = t12 - t8;
-        const double t15 = t4 + t13;
-        const double t16 = t14 - t7;
-        const double t17 = t3 + t15;
-        const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-        const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
-        const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-        const int t40 = t37 >= t39;
-        const double t41 = (t40 ? t37 : t39);
-        const double t42 = t38*(t41 > 0.0 ? 1.0/(t41 != 0.0 ? t41 : 1.0) : 1.0);
-        const double t43 = (t40 ? t16 : t17);
-        const double t44 = (t40 ? t14 : t15);
-        const double t45 = (t40 ? t12 : t13);
-        const double t46 = (t40 ? t11 : t6);
-        const double t47 = (t40 ? t17 : t16) - t43*t42;
-        const double t48 = (t40 ? t15 : t14) - t44*t42;
-        const double t49 = (t40 ? t13 : t12) - t45*t42;
-        const double t50 = (t40 ? t6 : t11) - t46*t42;
-        const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
-        const int t52 = lambda > 1.0;
-        const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t54 = (t52 ? 1.0 : lambda);
-        const double t55 = t54*t54;
-        const double t56 = t53*t53;
-        const double t57 = t56*t41;
-        const double t58 = t56*t51;
-        const double t61 = t56*(t37 + t39);
-        const double t62 = t57*t58 + t55*(t61 + t55);
-        const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
-        const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
-        const double t66 = t55 + t57*(1.0 + t42*t42);
-        const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);
-        const double t74 = target[0] - t17;
-        const double t75 = t16 + target[1];
-        const double t76 = (t40 ? t74 : t75);
-        const double t77 = (t40 ? t75 : t74);
-        const double t78 = t76 + t77*t42;
-        const double t79 = (t63 ? t65*(t78*t55 + t76*t58) : t78*t67);
-        const double t80 = (t63 ? t65*(t77*t55 + t57*(t77 - t76*t42)) : 0.0);
-        const double t81 = t79*t43 + t80*t47;
-        const double t82 = t79*t44 + t80*t48;
-        const double t83 = t79*t45 + t80*t49;
-        const double t84 = t79*t46 + t80*t50;
-        q_next[0] = t81 + q[0];
-        q_next[1] = t82 + q[1];
-        q_next[2] = t83 + q[2];
-        q_next[3] = t84 + q[3];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-        q_next_T[96 + b] = q_next[3];
-    }
-}
-
-void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[128];
-    double target_T[64];
-    double q_next_T[128];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 4;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 4; ++k) {
-                    q_T[k * 32 + b] = q[src * 4 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm4_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 4;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-            q_next_b[3] = q_next_T[96 + b];
-        }
-    }
-}
-#else
 void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -2352,7 +1398,6 @@ void arm4_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm4_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm4_ik_error(const double trial[4], const double target[2], const double l[4], double error[1])

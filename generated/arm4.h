@@ -40,7 +40,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0xa438f88eUL
+#define ARM4_STAMP 0xc9115ff9UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -102,7 +102,7 @@ void arm4_manipulability(const double q[4], const double l[4], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 5 KB. */
+ * Stack: about 13 KB. */
 void arm4_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
 /* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 544 bytes. */
@@ -110,7 +110,7 @@ void arm4_inverse_velocity(const double q[4], const double v[2], const double l[
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 7 KB. */
+ * Stack: about 13 KB. */
 void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
 /* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 680 bytes. */
@@ -118,7 +118,7 @@ void arm4_inverse_velocity3(const double q[4], const double twist[3], const doub
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 7 KB. */
+ * Stack: about 13 KB. */
 void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
 /* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 560 bytes. */
@@ -126,7 +126,7 @@ void arm4_ik_step(const double q[4], const double target[2], const double l[4], 
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 7 KB. */
+ * Stack: about 13 KB. */
 void arm4_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of the solvers. */

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xa438f88e
+STAMP = 0xc9115ff9
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -688,12 +688,12 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t89 = t86*t56
     t90 = t85*t56
     t91 = t86*t55
-    t92 = t91 + t37*t89
+    t92 = t37*t89 + t91
     t93 = t38*t89
     t94 = t87*t90
-    t95 = t91 + t39*t89
+    t95 = t39*t89 + t91
     t96 = t88*t90
-    t97 = 4.0*t56 + t55
+    t97 = t55 + 4.0*t56
     t98 = t90*twist[..., 0]
     t99 = t90*twist[..., 1]
     t100 = t56*twist[..., 2]
@@ -713,7 +713,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t114 = t92*t95 - t93*t93
     t115 = t92*t109 + t93*t110 + t94*t111
     t116 = t109 + t112 + t114
-    t117 = t115 > RANK_TOL*t116*t101
+    t117 = t115 > t116*t101*RANK_TOL
     t118 = t101*t101
     t119 = t116 > RANK_TOL*t118
     t120 = np.where(t115 > 0.0, 1.0/t115, 1.0)

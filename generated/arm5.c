@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x5428498fUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xa064540fUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM5_VECTORIZE
 #define ARM5_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM5_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM5_VECTOR_MATH
+#define ARM5_BODY static inline __attribute__((__always_inline__))
+#define ARM5_STRIDE stride
+#else
+#define ARM5_BODY static
+#define ARM5_STRIDE 1
 #endif
 #if !ARM5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *rest
 }
 #endif
 
-#if !ARM5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,27 +152,29 @@ static int arm5_finite(double x)
 /* ---- arm5_position: endpoint position p (2) ---- */
 /* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 2 neg */
 
-static void arm5_position_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_position_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM5_BODY void arm5_position_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
     const double t15 = t14 - t12;
     const double t16 = t7 + t8;
@@ -171,9 +183,9 @@ static void arm5_position_finish(const double l[5], const double *restrict cs, c
     const double t19 = t17 - t10;
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
+    p[1*ARM5_STRIDE] = -t21;
     const double t22 = t4 + t20;
     p[0] = t22;
-    p[1] = -t21;
 }
 
 void arm5_position(const double q[5], const double l[5], double p[2])
@@ -183,75 +195,24 @@ void arm5_position(const double q[5], const double l[5], double p[2])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_position_angles(q, ang);
+    arm5_position_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_position_finish(l, cs, sn, p);
+    arm5_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_position_block(const double *restrict q_T, const double l[5], double *restrict p_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_position_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        p[0] = t22;
-        p[1] = -t21;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm5_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -300,11 +261,11 @@ void arm5_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_position_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_position_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm5_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2, 1);
         }
     }
 }
@@ -313,46 +274,48 @@ void arm5_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm5_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 1 neg */
 
-static void arm5_jacobian_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_jacobian_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM5_BODY void arm5_jacobian_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
+    J[9*ARM5_STRIDE] = t8;
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
+    J[4*ARM5_STRIDE] = t14;
     const double t15 = t14 - t12;
+    J[3*ARM5_STRIDE] = t15;
     const double t16 = t7 + t8;
+    J[8*ARM5_STRIDE] = t16;
     const double t17 = t15 - t11;
+    J[2*ARM5_STRIDE] = t17;
     const double t18 = t6 + t16;
+    J[7*ARM5_STRIDE] = t18;
     const double t19 = t17 - t10;
+    J[1*ARM5_STRIDE] = t19;
     const double t20 = t5 + t18;
+    J[6*ARM5_STRIDE] = t20;
     const double t21 = t19 - t9;
-    const double t22 = t4 + t20;
     J[0] = t21;
-    J[1] = t19;
-    J[2] = t17;
-    J[3] = t15;
-    J[4] = t14;
-    J[5] = t22;
-    J[6] = t20;
-    J[7] = t18;
-    J[8] = t16;
-    J[9] = t8;
+    const double t22 = t4 + t20;
+    J[5*ARM5_STRIDE] = t22;
 }
 
 void arm5_jacobian(const double q[5], const double l[5], double J[10])
@@ -362,91 +325,24 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_jacobian_angles(q, ang);
+    arm5_jacobian_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_jacobian_finish(l, cs, sn, J);
+    arm5_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_jacobian_block(const double *restrict q_T, const double l[5], double *restrict J_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double J[10];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        J[0] = t21;
-        J[1] = t19;
-        J[2] = t17;
-        J[3] = t15;
-        J[4] = t14;
-        J[5] = t22;
-        J[6] = t20;
-        J[7] = t18;
-        J[8] = t16;
-        J[9] = t8;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
+        arm5_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -503,11 +399,11 @@ void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_jacobian_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_jacobian_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 10);
+            arm5_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 10, 1);
         }
     }
 }
@@ -516,31 +412,33 @@ void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm5_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 2 neg */
 
-static void arm5_coriolis_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_coriolis_finish(const double dq[5], const double l[5], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t23 = dq[0] + dq[1];
-    const double t24 = t23 + dq[2];
-    const double t25 = t24 + dq[3];
-    const double t26 = t25 + dq[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
+    const double t23 = dq[0] + dq[1*ARM5_STRIDE];
+    const double t24 = t23 + dq[2*ARM5_STRIDE];
+    const double t25 = t24 + dq[3*ARM5_STRIDE];
+    const double t26 = t25 + dq[4*ARM5_STRIDE];
     const double t27 = t4*dq[0];
     const double t28 = t5*t23;
     const double t29 = t6*t24;
@@ -552,25 +450,25 @@ static void arm5_coriolis_finish(const double dq[5], const double l[5], const do
     const double t35 = t12*t25;
     const double t36 = t13*t26;
     const double t37 = -t31;
+    H[4*ARM5_STRIDE] = t37;
     const double t38 = -t36;
+    H[9*ARM5_STRIDE] = t38;
     const double t39 = t37 - t30;
+    H[3*ARM5_STRIDE] = t39;
     const double t40 = t38 - t35;
+    H[8*ARM5_STRIDE] = t40;
     const double t41 = t39 - t29;
+    H[2*ARM5_STRIDE] = t41;
     const double t42 = t40 - t34;
+    H[7*ARM5_STRIDE] = t42;
     const double t43 = t41 - t28;
+    H[1*ARM5_STRIDE] = t43;
     const double t44 = t42 - t33;
+    H[6*ARM5_STRIDE] = t44;
     const double t45 = t43 - t27;
-    const double t46 = t44 - t32;
     H[0] = t45;
-    H[1] = t43;
-    H[2] = t41;
-    H[3] = t39;
-    H[4] = t37;
-    H[5] = t46;
-    H[6] = t44;
-    H[7] = t42;
-    H[8] = t40;
-    H[9] = t38;
+    const double t46 = t44 - t32;
+    H[5*ARM5_STRIDE] = t46;
 }
 
 void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10])
@@ -580,112 +478,24 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_coriolis_angles(q, ang);
+    arm5_coriolis_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_coriolis_finish(dq, l, cs, sn, H);
+    arm5_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict H_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[5];
-        double cs[5];
-        double sn[5];
-        double H[10];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t23 = dq[0] + dq[1];
-        const double t24 = t23 + dq[2];
-        const double t25 = t24 + dq[3];
-        const double t26 = t25 + dq[4];
-        const double t27 = t4*dq[0];
-        const double t28 = t5*t23;
-        const double t29 = t6*t24;
-        const double t30 = t7*t25;
-        const double t31 = t8*t26;
-        const double t32 = t9*dq[0];
-        const double t33 = t10*t23;
-        const double t34 = t11*t24;
-        const double t35 = t12*t25;
-        const double t36 = t13*t26;
-        const double t37 = -t31;
-        const double t38 = -t36;
-        const double t39 = t37 - t30;
-        const double t40 = t38 - t35;
-        const double t41 = t39 - t29;
-        const double t42 = t40 - t34;
-        const double t43 = t41 - t28;
-        const double t44 = t42 - t33;
-        const double t45 = t43 - t27;
-        const double t46 = t44 - t32;
-        H[0] = t45;
-        H[1] = t43;
-        H[2] = t41;
-        H[3] = t39;
-        H[4] = t37;
-        H[5] = t46;
-        H[6] = t44;
-        H[7] = t42;
-        H[8] = t40;
-        H[9] = t38;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        H_T[256 + b] = H[8];
-        H_T[288 + b] = H[9];
+        arm5_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -752,11 +562,11 @@ void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_coriolis_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_coriolis_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_coriolis_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, H + (i + b) * 10);
+            arm5_coriolis_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, H + (i + b) * 10, 1);
         }
     }
 }
@@ -765,31 +575,33 @@ void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm5_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 3 neg */
 
-static void arm5_velocity_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_velocity_finish(const double dq[5], const double l[5], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t23 = dq[0] + dq[1];
-    const double t24 = t23 + dq[2];
-    const double t25 = t24 + dq[3];
-    const double t26 = t25 + dq[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
+    const double t23 = dq[0] + dq[1*ARM5_STRIDE];
+    const double t24 = t23 + dq[2*ARM5_STRIDE];
+    const double t25 = t24 + dq[3*ARM5_STRIDE];
+    const double t26 = t25 + dq[4*ARM5_STRIDE];
     const double t27 = t4*dq[0];
     const double t28 = t5*t23;
     const double t29 = t6*t24;
@@ -809,9 +621,9 @@ static void arm5_velocity_finish(const double dq[5], const double l[5], const do
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
     const double t45 = t43 - t27;
+    v[1*ARM5_STRIDE] = -t45;
     const double t46 = t44 - t32;
     v[0] = t46;
-    v[1] = -t45;
 }
 
 void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2])
@@ -821,96 +633,24 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_velocity_angles(q, ang);
+    arm5_velocity_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_velocity_finish(dq, l, cs, sn, v);
+    arm5_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict v_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[5];
-        double cs[5];
-        double sn[5];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t23 = dq[0] + dq[1];
-        const double t24 = t23 + dq[2];
-        const double t25 = t24 + dq[3];
-        const double t26 = t25 + dq[4];
-        const double t27 = t4*dq[0];
-        const double t28 = t5*t23;
-        const double t29 = t6*t24;
-        const double t30 = t7*t25;
-        const double t31 = t8*t26;
-        const double t32 = t9*dq[0];
-        const double t33 = t10*t23;
-        const double t34 = t11*t24;
-        const double t35 = t12*t25;
-        const double t36 = t13*t26;
-        const double t37 = -t31;
-        const double t38 = -t36;
-        const double t39 = t37 - t30;
-        const double t40 = t38 - t35;
-        const double t41 = t39 - t29;
-        const double t42 = t40 - t34;
-        const double t43 = t41 - t28;
-        const double t44 = t42 - t33;
-        const double t45 = t43 - t27;
-        const double t46 = t44 - t32;
-        v[0] = t46;
-        v[1] = -t45;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm5_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -969,11 +709,11 @@ void arm5_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_velocity_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_velocity_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_velocity_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm5_velocity_finish(dq + (i + b) * 5, l, cs + b * 8, sn + b * 8, v + (i + b) * 2, 1);
         }
     }
 }
@@ -982,27 +722,29 @@ void arm5_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm5_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 3 neg */
 
-static void arm5_acceleration_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_acceleration_finish(const double dq[5], const double ddq[5], const double l[5], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
     const double t15 = t14 - t12;
     const double t16 = t7 + t8;
@@ -1012,10 +754,10 @@ static void arm5_acceleration_finish(const double dq[5], const double ddq[5], co
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t23 = dq[0] + dq[1];
-    const double t24 = t23 + dq[2];
-    const double t25 = t24 + dq[3];
-    const double t26 = t25 + dq[4];
+    const double t23 = dq[0] + dq[1*ARM5_STRIDE];
+    const double t24 = t23 + dq[2*ARM5_STRIDE];
+    const double t25 = t24 + dq[3*ARM5_STRIDE];
+    const double t26 = t25 + dq[4*ARM5_STRIDE];
     const double t27 = t4*dq[0];
     const double t28 = t5*t23;
     const double t29 = t6*t24;
@@ -1035,9 +777,9 @@ static void arm5_acceleration_finish(const double dq[5], const double ddq[5], co
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
     const double t45 = t43 - t27;
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
     const double t46 = t44 - t32;
-    a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
-    a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])
@@ -1047,111 +789,24 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_acceleration_angles(q, ang);
+    arm5_acceleration_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm5_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict a_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[5];
-        double ddq[5];
-        double cs[5];
-        double sn[5];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t23 = dq[0] + dq[1];
-        const double t24 = t23 + dq[2];
-        const double t25 = t24 + dq[3];
-        const double t26 = t25 + dq[4];
-        const double t27 = t4*dq[0];
-        const double t28 = t5*t23;
-        const double t29 = t6*t24;
-        const double t30 = t7*t25;
-        const double t31 = t8*t26;
-        const double t32 = t9*dq[0];
-        const double t33 = t10*t23;
-        const double t34 = t11*t24;
-        const double t35 = t12*t25;
-        const double t36 = t13*t26;
-        const double t37 = -t31;
-        const double t38 = -t36;
-        const double t39 = t37 - t30;
-        const double t40 = t38 - t35;
-        const double t41 = t39 - t29;
-        const double t42 = t40 - t34;
-        const double t43 = t41 - t28;
-        const double t44 = t42 - t33;
-        const double t45 = t43 - t27;
-        const double t46 = t44 - t32;
-        a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
-        a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm5_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -1220,11 +875,11 @@ void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_acceleration_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_acceleration_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_acceleration_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm5_acceleration_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1233,40 +888,54 @@ void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm5_kinematics: p, J, H, v and a at once ---- */
 /* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 5 neg */
 
-static void arm5_kinematics_angles(const double q[5], double *restrict ang)
+ARM5_BODY void arm5_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
+    (void)stride;
+    ang[1*ARM5_STRIDE] = q[0] + q[1*ARM5_STRIDE];
+    ang[2*ARM5_STRIDE] = ang[1*ARM5_STRIDE] + q[2*ARM5_STRIDE];
+    ang[3*ARM5_STRIDE] = ang[2*ARM5_STRIDE] + q[3*ARM5_STRIDE];
+    ang[4*ARM5_STRIDE] = ang[3*ARM5_STRIDE] + q[4*ARM5_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm5_kinematics_finish(const double dq[5], const double ddq[5], const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t4 = cs[0]*l[0];
-    const double t5 = cs[1]*l[1];
-    const double t6 = cs[2]*l[2];
-    const double t7 = cs[3]*l[3];
-    const double t8 = cs[4]*l[4];
+    const double t5 = cs[1*ARM5_STRIDE]*l[1];
+    const double t6 = cs[2*ARM5_STRIDE]*l[2];
+    const double t7 = cs[3*ARM5_STRIDE]*l[3];
+    const double t8 = cs[4*ARM5_STRIDE]*l[4];
+    J[9*ARM5_STRIDE] = t8;
     const double t9 = sn[0]*l[0];
-    const double t10 = sn[1]*l[1];
-    const double t11 = sn[2]*l[2];
-    const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
+    const double t10 = sn[1*ARM5_STRIDE]*l[1];
+    const double t11 = sn[2*ARM5_STRIDE]*l[2];
+    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t13 = sn[4*ARM5_STRIDE]*l[4];
     const double t14 = -t13;
+    J[4*ARM5_STRIDE] = t14;
     const double t15 = t14 - t12;
+    J[3*ARM5_STRIDE] = t15;
     const double t16 = t7 + t8;
+    J[8*ARM5_STRIDE] = t16;
     const double t17 = t15 - t11;
+    J[2*ARM5_STRIDE] = t17;
     const double t18 = t6 + t16;
+    J[7*ARM5_STRIDE] = t18;
     const double t19 = t17 - t10;
+    J[1*ARM5_STRIDE] = t19;
     const double t20 = t5 + t18;
+    J[6*ARM5_STRIDE] = t20;
     const double t21 = t19 - t9;
+    p[1*ARM5_STRIDE] = -t21;
+    J[0] = t21;
     const double t22 = t4 + t20;
-    const double t23 = dq[0] + dq[1];
-    const double t24 = t23 + dq[2];
-    const double t25 = t24 + dq[3];
-    const double t26 = t25 + dq[4];
+    p[0] = t22;
+    J[5*ARM5_STRIDE] = t22;
+    const double t23 = dq[0] + dq[1*ARM5_STRIDE];
+    const double t24 = t23 + dq[2*ARM5_STRIDE];
+    const double t25 = t24 + dq[3*ARM5_STRIDE];
+    const double t26 = t25 + dq[4*ARM5_STRIDE];
     const double t27 = t4*dq[0];
     const double t28 = t5*t23;
     const double t29 = t6*t24;
@@ -1278,41 +947,29 @@ static void arm5_kinematics_finish(const double dq[5], const double ddq[5], cons
     const double t35 = t12*t25;
     const double t36 = t13*t26;
     const double t37 = -t31;
+    H[4*ARM5_STRIDE] = t37;
     const double t38 = -t36;
+    H[9*ARM5_STRIDE] = t38;
     const double t39 = t37 - t30;
+    H[3*ARM5_STRIDE] = t39;
     const double t40 = t38 - t35;
+    H[8*ARM5_STRIDE] = t40;
     const double t41 = t39 - t29;
+    H[2*ARM5_STRIDE] = t41;
     const double t42 = t40 - t34;
+    H[7*ARM5_STRIDE] = t42;
     const double t43 = t41 - t28;
+    H[1*ARM5_STRIDE] = t43;
     const double t44 = t42 - t33;
+    H[6*ARM5_STRIDE] = t44;
     const double t45 = t43 - t27;
-    const double t46 = t44 - t32;
-    p[0] = t22;
-    p[1] = -t21;
-    J[0] = t21;
-    J[1] = t19;
-    J[2] = t17;
-    J[3] = t15;
-    J[4] = t14;
-    J[5] = t22;
-    J[6] = t20;
-    J[7] = t18;
-    J[8] = t16;
-    J[9] = t8;
     H[0] = t45;
-    H[1] = t43;
-    H[2] = t41;
-    H[3] = t39;
-    H[4] = t37;
-    H[5] = t46;
-    H[6] = t44;
-    H[7] = t42;
-    H[8] = t40;
-    H[9] = t38;
+    v[1*ARM5_STRIDE] = -t45;
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
+    const double t46 = t44 - t32;
+    H[5*ARM5_STRIDE] = t46;
     v[0] = t46;
-    v[1] = -t45;
-    a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
-    a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2])
@@ -1322,163 +979,24 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm5_kinematics_angles(q, ang);
+    arm5_kinematics_angles(q, ang, 1);
     arm5_trig8(ang, cs, sn, 5);
-    arm5_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm5_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM5_VECTORIZE void arm5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        arm5_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[5];
-        double ddq[5];
-        double cs[5];
-        double sn[5];
-        double p[2];
-        double J[10];
-        double H[10];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t23 = dq[0] + dq[1];
-        const double t24 = t23 + dq[2];
-        const double t25 = t24 + dq[3];
-        const double t26 = t25 + dq[4];
-        const double t27 = t4*dq[0];
-        const double t28 = t5*t23;
-        const double t29 = t6*t24;
-        const double t30 = t7*t25;
-        const double t31 = t8*t26;
-        const double t32 = t9*dq[0];
-        const double t33 = t10*t23;
-        const double t34 = t11*t24;
-        const double t35 = t12*t25;
-        const double t36 = t13*t26;
-        const double t37 = -t31;
-        const double t38 = -t36;
-        const double t39 = t37 - t30;
-        const double t40 = t38 - t35;
-        const double t41 = t39 - t29;
-        const double t42 = t40 - t34;
-        const double t43 = t41 - t28;
-        const double t44 = t42 - t33;
-        const double t45 = t43 - t27;
-        const double t46 = t44 - t32;
-        p[0] = t22;
-        p[1] = -t21;
-        J[0] = t21;
-        J[1] = t19;
-        J[2] = t17;
-        J[3] = t15;
-        J[4] = t14;
-        J[5] = t22;
-        J[6] = t20;
-        J[7] = t18;
-        J[8] = t16;
-        J[9] = t8;
-        H[0] = t45;
-        H[1] = t43;
-        H[2] = t41;
-        H[3] = t39;
-        H[4] = t37;
-        H[5] = t46;
-        H[6] = t44;
-        H[7] = t42;
-        H[8] = t40;
-        H[9] = t38;
-        v[0] = t46;
-        v[1] = -t45;
-        a[0] = t45*dq[0] + t43*dq[1] + t41*dq[2] + t39*dq[3] + t37*dq[4] + t21*ddq[0] + t19*ddq[1] + t17*ddq[2] + t15*ddq[3] + t14*ddq[4];
-        a[1] = t8*ddq[4] + t46*dq[0] + t44*dq[1] + t42*dq[2] + t40*dq[3] + t38*dq[4] + t22*ddq[0] + t20*ddq[1] + t18*ddq[2] + t16*ddq[3];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        H_T[256 + b] = H[8];
-        H_T[288 + b] = H[9];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm5_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1579,11 +1097,11 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm5_kinematics_angles(q + (i + b) * 5, ang + b * 8);
+            arm5_kinematics_angles(q + (i + b) * 5, ang + b * 8, 1);
         }
         arm5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm5_kinematics_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 10, H + (i + b) * 10, v + (i + b) * 2, a + (i + b) * 2);
+            arm5_kinematics_finish(dq + (i + b) * 5, ddq + (i + b) * 5, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 10, H + (i + b) * 10, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1654,121 +1172,6 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1])
     arm5_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_manipulability_block(const double *restrict q_T, const double l[5], double *restrict w_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    arm5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
-        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const int t50 = t47 >= t49;
-        const double t51 = (t50 ? t47 : t49);
-        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
-        const double t53 = (t50 ? t21 : t22);
-        const double t54 = (t50 ? t19 : t20);
-        const double t55 = (t50 ? t17 : t18);
-        const double t56 = (t50 ? t15 : t16);
-        const double t57 = (t50 ? t14 : t8);
-        const double t58 = (t50 ? t22 : t21) - t53*t52;
-        const double t59 = (t50 ? t20 : t19) - t54*t52;
-        const double t60 = (t50 ? t18 : t17) - t55*t52;
-        const double t61 = (t50 ? t16 : t15) - t56*t52;
-        const double t62 = (t50 ? t8 : t14) - t57*t52;
-        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        w[0] = sqrt(t51*t63);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[160];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 5;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 5; ++k) {
-                    q_T[k * 32 + b] = q[src * 5 + k];
-                }
-            }
-        }
-        arm5_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1788,7 +1191,6 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
@@ -1859,14 +1261,14 @@ static void arm5_inverse_velocity_finish(const double v[2], const double l[5], d
     const double t80 = (t75 ? t77*(t76*t67 + t70*t71) : t76*t79);
     const double t81 = (t75 ? t77*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
     const double t82 = t80*t53 + t81*t58;
-    const double t83 = t80*t54 + t81*t59;
-    const double t84 = t80*t55 + t81*t60;
-    const double t85 = t80*t56 + t81*t61;
-    const double t86 = t80*t57 + t81*t62;
     dq[0] = t82;
+    const double t83 = t80*t54 + t81*t59;
     dq[1] = t83;
+    const double t84 = t80*t55 + t81*t60;
     dq[2] = t84;
+    const double t85 = t80*t56 + t81*t61;
     dq[3] = t85;
+    const double t86 = t80*t57 + t81*t62;
     dq[4] = t86;
 }
 
@@ -1882,166 +1284,6 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
     arm5_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[5], double lambda, double *restrict dq_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    arm5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[5];
-        double sn[5];
-        double dq[5];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
-        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const int t50 = t47 >= t49;
-        const double t51 = (t50 ? t47 : t49);
-        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
-        const double t53 = (t50 ? t21 : t22);
-        const double t54 = (t50 ? t19 : t20);
-        const double t55 = (t50 ? t17 : t18);
-        const double t56 = (t50 ? t15 : t16);
-        const double t57 = (t50 ? t14 : t8);
-        const double t58 = (t50 ? t22 : t21) - t53*t52;
-        const double t59 = (t50 ? t20 : t19) - t54*t52;
-        const double t60 = (t50 ? t18 : t17) - t55*t52;
-        const double t61 = (t50 ? t16 : t15) - t56*t52;
-        const double t62 = (t50 ? t8 : t14) - t57*t52;
-        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        const int t64 = lambda > 1.0;
-        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t66 = (t64 ? 1.0 : lambda);
-        const double t67 = t66*t66;
-        const double t68 = t65*t65;
-        const double t69 = t68*t51;
-        const double t70 = t68*t63;
-        const double t71 = (t50 ? v[0] : v[1]);
-        const double t72 = (t50 ? v[1] : v[0]);
-        const double t73 = t68*(t47 + t49);
-        const double t74 = t69*t70 + t67*(t73 + t67);
-        const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
-        const double t76 = t71 + t72*t52;
-        const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
-        const double t78 = t67 + t69*(1.0 + t52*t52);
-        const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
-        const double t80 = (t75 ? t77*(t76*t67 + t70*t71) : t76*t79);
-        const double t81 = (t75 ? t77*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
-        const double t82 = t80*t53 + t81*t58;
-        const double t83 = t80*t54 + t81*t59;
-        const double t84 = t80*t55 + t81*t60;
-        const double t85 = t80*t56 + t81*t61;
-        const double t86 = t80*t57 + t81*t62;
-        dq[0] = t82;
-        dq[1] = t83;
-        dq[2] = t84;
-        dq[3] = t85;
-        dq[4] = t86;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-        dq_T[128 + b] = dq[4];
-    }
-}
-
-void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[160];
-    double v_T[64];
-    double dq_T[160];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 5;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 5; ++k) {
-                    q_T[k * 32 + b] = q[src * 5 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm5_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 5;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-            dq_b[4] = dq_T[128 + b];
-        }
-    }
-}
-#else
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -2061,7 +1303,6 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
@@ -2111,12 +1352,12 @@ static void arm5_inverse_velocity3_finish(const double twist[3], const double l[
     const double t103 = t100*t68;
     const double t104 = t99*t68;
     const double t105 = t100*t67;
-    const double t106 = t105 + t47*t103;
+    const double t106 = t47*t103 + t105;
     const double t107 = t48*t103;
     const double t108 = t101*t104;
-    const double t109 = t105 + t49*t103;
+    const double t109 = t49*t103 + t105;
     const double t110 = t102*t104;
-    const double t111 = 5.0*t68 + t67;
+    const double t111 = t67 + 5.0*t68;
     const double t112 = t104*twist[0];
     const double t113 = t104*twist[1];
     const double t114 = t68*twist[2];
@@ -2136,7 +1377,7 @@ static void arm5_inverse_velocity3_finish(const double twist[3], const double l[
     const double t128 = t106*t109 - t107*t107;
     const double t129 = t106*t123 + t107*t124 + t108*t125;
     const double t130 = t123 + t126 + t128;
-    const int t131 = t129 > ARM5_RANK_TOL*t130*t115;
+    const int t131 = t129 > t130*t115*ARM5_RANK_TOL;
     const double t132 = t115*t115;
     const int t133 = t130 > ARM5_RANK_TOL*t132;
     const double t134 = (t129 > 0.0 ? 1.0/(t129 != 0.0 ? t129 : 1.0) : 1.0);
@@ -2169,182 +1410,6 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
     arm5_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
-#if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[5], double lambda, double *restrict dq3_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    arm5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double twist[3];
-        double cs[5];
-        double sn[5];
-        double dq3[5];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
-        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const int t64 = lambda > 1.0;
-        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t66 = (t64 ? 1.0 : lambda);
-        const double t67 = t66*t66;
-        const double t68 = t65*t65;
-        const double t99 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
-        const double t100 = t99*t99;
-        const double t101 = t21 + t19 + t17 + t15 + t14;
-        const double t102 = t8 + t22 + t20 + t18 + t16;
-        const double t103 = t100*t68;
-        const double t104 = t99*t68;
-        const double t105 = t100*t67;
-        const double t106 = t105 + t47*t103;
-        const double t107 = t48*t103;
-        const double t108 = t101*t104;
-        const double t109 = t105 + t49*t103;
-        const double t110 = t102*t104;
-        const double t111 = 5.0*t68 + t67;
-        const double t112 = t104*twist[0];
-        const double t113 = t104*twist[1];
-        const double t114 = t68*twist[2];
-        const double t115 = t106 + t109 + t111;
-        const double t116 = t106*t112 + t107*t113 + t108*t114;
-        const double t117 = t107*t112 + t109*t113 + t110*t114;
-        const double t118 = t108*t112 + t110*t113 + t111*t114;
-        const double t119 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
-        const double t120 = t116*t119;
-        const double t121 = t117*t119;
-        const double t122 = t118*t119;
-        const double t123 = t109*t111 - t110*t110;
-        const double t124 = t108*t110 - t107*t111;
-        const double t125 = t107*t110 - t108*t109;
-        const double t126 = t106*t111 - t108*t108;
-        const double t127 = t107*t108 - t106*t110;
-        const double t128 = t106*t109 - t107*t107;
-        const double t129 = t106*t123 + t107*t124 + t108*t125;
-        const double t130 = t123 + t126 + t128;
-        const int t131 = t129 > ARM5_RANK_TOL*t130*t115;
-        const double t132 = t115*t115;
-        const int t133 = t130 > ARM5_RANK_TOL*t132;
-        const double t134 = (t129 > 0.0 ? 1.0/(t129 != 0.0 ? t129 : 1.0) : 1.0);
-        const double t135 = t106*t116 + t107*t117 + t108*t118;
-        const double t136 = t107*t116 + t109*t117 + t110*t118;
-        const double t137 = t108*t116 + t110*t117 + t111*t118;
-        const double t138 = (t130 > 0.0 ? 1.0/(t130*t130 != 0.0 ? t130*t130 : 1.0) : 1.0);
-        const double t139 = t132 - t130;
-        const double t140 = (t133 ? (t131 ? t134*(t123*t112 + t124*t113 + t125*t114) : t138*(t116*t139 - t135*t115)) : t120);
-        const double t141 = (t133 ? (t131 ? t134*(t124*t112 + t126*t113 + t127*t114) : t138*(t117*t139 - t136*t115)) : t121);
-        const double t142 = (t133 ? (t131 ? t134*(t125*t112 + t127*t113 + t128*t114) : t138*(t118*t139 - t137*t115)) : t122);
-        const double t143 = t99*t140;
-        const double t144 = t99*t141;
-        dq3[0] = t142 + t143*t21 + t144*t22;
-        dq3[1] = t142 + t143*t19 + t144*t20;
-        dq3[2] = t142 + t143*t17 + t144*t18;
-        dq3[3] = t142 + t143*t15 + t144*t16;
-        dq3[4] = t142 + t8*t144 + t143*t14;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-        dq3_T[96 + b] = dq3[3];
-        dq3_T[128 + b] = dq3[4];
-    }
-}
-
-void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
-{
-    double q_T[160];
-    double twist_T[96];
-    double dq3_T[160];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 5;
-                const double *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 5; ++k) {
-                    q_T[k * 32 + b] = q[src * 5 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm5_inverse_velocity3_block(q_T, twist_T, l, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            double *dq3_b = dq3 + (i + b) * 5;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-            dq3_b[3] = dq3_T[96 + b];
-            dq3_b[4] = dq3_T[128 + b];
-        }
-    }
-}
-#else
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
 {
     size_t i;
@@ -2364,7 +1429,6 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
-#endif
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
@@ -2437,14 +1501,14 @@ static void arm5_ik_step_finish(const double q[5], const double target[2], const
     const double t92 = (t75 ? t77*(t91*t67 + t89*t70) : t91*t79);
     const double t93 = (t75 ? t77*(t90*t67 + t69*(t90 - t89*t52)) : 0.0);
     const double t94 = t92*t53 + t93*t58;
-    const double t95 = t92*t54 + t93*t59;
-    const double t96 = t92*t55 + t93*t60;
-    const double t97 = t92*t56 + t93*t61;
-    const double t98 = t92*t57 + t93*t62;
     q_next[0] = t94 + q[0];
+    const double t95 = t92*t54 + t93*t59;
     q_next[1] = t95 + q[1];
+    const double t96 = t92*t55 + t93*t60;
     q_next[2] = t96 + q[2];
+    const double t97 = t92*t56 + t93*t61;
     q_next[3] = t97 + q[3];
+    const double t98 = t92*t57 + t93*t62;
     q_next[4] = t98 + q[4];
 }
 
@@ -2460,174 +1524,6 @@ void arm5_ik_step(const double q[5], const double target[2], const double l[5], 
     arm5_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[5], double lambda, double *restrict q_next_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[5];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    arm5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double q[5];
-        double target[2];
-        double cs[5];
-        double sn[5];
-        double q_next[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t4 = cs[0]*l[0];
-        const double t5 = cs[1]*l[1];
-        const double t6 = cs[2]*l[2];
-        const double t7 = cs[3]*l[3];
-        const double t8 = cs[4]*l[4];
-        const double t9 = sn[0]*l[0];
-        const double t10 = sn[1]*l[1];
-        const double t11 = sn[2]*l[2];
-        const double t12 = sn[3]*l[3];
-        const double t13 = sn[4]*l[4];
-        const double t14 = -t13;
-        const double t15 = t14 - t12;
-        const double t16 = t7 + t8;
-        const double t17 = t15 - t11;
-        const double t18 = t6 + t16;
-        const double t19 = t17 - t10;
-        const double t20 = t5 + t18;
-        const double t21 = t19 - t9;
-        const double t22 = t4 + t20;
-        const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-        const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
-        const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-        const int t50 = t47 >= t49;
-        const double t51 = (t50 ? t47 : t49);
-        const double t52 = t48*(t51 > 0.0 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
-        const double t53 = (t50 ? t21 : t22);
-        const double t54 = (t50 ? t19 : t20);
-        const double t55 = (t50 ? t17 : t18);
-        const double t56 = (t50 ? t15 : t16);
-        const double t57 = (t50 ? t14 : t8);
-        const double t58 = (t50 ? t22 : t21) - t53*t52;
-        const double t59 = (t50 ? t20 : t19) - t54*t52;
-        const double t60 = (t50 ? t18 : t17) - t55*t52;
-        const double t61 = (t50 ? t16 : t15) - t56*t52;
-        const double t62 = (t50 ? t8 : t14) - t57*t52;
-        const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
-        const int t64 = lambda > 1.0;
-        const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t66 = (t64 ? 1.0 : lambda);
-        const double t67 = t66*t66;
-        const double t68 = t65*t65;
-        const double t69 = t68*t51;
-        const double t70 = t68*t63;
-        const double t73 = t68*(t47 + t49);
-        const double t74 = t69*t70 + t67*(t73 + t67);
-        const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
-        const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
-        const double t78 = t67 + t69*(1.0 + t52*t52);
-        const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);
-        const double t87 = target[0] - t22;
-        const double t88 = t21 + target[1];
-        const double t89 = (t50 ? t87 : t88);
-        const double t90 = (t50 ? t88 : t87);
-        const double t91 = t89 + t90*t52;
-        const double t92 = (t75 ? t77*(t91*t67 + t89*t70) : t91*t79);
-        const double t93 = (t75 ? t77*(t90*t67 + t69*(t90 - t89*t52)) : 0.0);
-        const double t94 = t92*t53 + t93*t58;
-        const double t95 = t92*t54 + t93*t59;
-        const double t96 = t92*t55 + t93*t60;
-        const double t97 = t92*t56 + t93*t61;
-        const double t98 = t92*t57 + t93*t62;
-        q_next[0] = t94 + q[0];
-        q_next[1] = t95 + q[1];
-        q_next[2] = t96 + q[2];
-        q_next[3] = t97 + q[3];
-        q_next[4] = t98 + q[4];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-        q_next_T[96 + b] = q_next[3];
-        q_next_T[128 + b] = q_next[4];
-    }
-}
-
-void arm5_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[160];
-    double target_T[64];
-    double q_next_T[160];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 5;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 5; ++k) {
-                    q_T[k * 32 + b] = q[src * 5 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm5_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 5;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-            q_next_b[3] = q_next_T[96 + b];
-            q_next_b[4] = q_next_T[128 + b];
-        }
-    }
-}
-#else
 void arm5_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -2647,7 +1543,6 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm5_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm5_ik_error(const double trial[5], const double target[2], const double l[5], double error[1])

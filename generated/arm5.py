@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x5428498f
+STAMP = 0xa064540f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -439,8 +439,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
-    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -537,8 +537,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 9] = t38
     v[..., 0] = t46
     v[..., 1] = -t45
-    a[..., 0] = t45*dq[..., 0] + t43*dq[..., 1] + t41*dq[..., 2] + t39*dq[..., 3] + t37*dq[..., 4] + t21*ddq[..., 0] + t19*ddq[..., 1] + t17*ddq[..., 2] + t15*ddq[..., 3] + t14*ddq[..., 4]
-    a[..., 1] = t8*ddq[..., 4] + t46*dq[..., 0] + t44*dq[..., 1] + t42*dq[..., 2] + t40*dq[..., 3] + t38*dq[..., 4] + t22*ddq[..., 0] + t20*ddq[..., 1] + t18*ddq[..., 2] + t16*ddq[..., 3]
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -763,12 +763,12 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t103 = t100*t68
     t104 = t99*t68
     t105 = t100*t67
-    t106 = t105 + t47*t103
+    t106 = t47*t103 + t105
     t107 = t48*t103
     t108 = t101*t104
-    t109 = t105 + t49*t103
+    t109 = t49*t103 + t105
     t110 = t102*t104
-    t111 = 5.0*t68 + t67
+    t111 = t67 + 5.0*t68
     t112 = t104*twist[..., 0]
     t113 = t104*twist[..., 1]
     t114 = t68*twist[..., 2]
@@ -788,7 +788,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t128 = t106*t109 - t107*t107
     t129 = t106*t123 + t107*t124 + t108*t125
     t130 = t123 + t126 + t128
-    t131 = t129 > RANK_TOL*t130*t115
+    t131 = t129 > t130*t115*RANK_TOL
     t132 = t115*t115
     t133 = t130 > RANK_TOL*t132
     t134 = np.where(t129 > 0.0, 1.0/t129, 1.0)

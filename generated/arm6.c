@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x0f46620eUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x9c4b87a0UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -41,6 +41,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM6_VECTORIZE
 #define ARM6_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*ARM6_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if ARM6_VECTOR_MATH
+#define ARM6_BODY static inline __attribute__((__always_inline__))
+#define ARM6_STRIDE stride
+#else
+#define ARM6_BODY static
+#define ARM6_STRIDE 1
 #endif
 #if !ARM6_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -99,7 +111,6 @@ static ARM6_VECTORIZE void arm6_trig192(const double *restrict ang, double *rest
 }
 #endif
 
-#if !ARM6_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static ARM6_VECTORIZE void arm6_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -123,7 +134,6 @@ static ARM6_VECTORIZE void arm6_trig512(const double *restrict ang, double *rest
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -142,30 +152,32 @@ static int arm6_finite(double x)
 /* ---- arm6_position: endpoint position p (2) ---- */
 /* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 2 neg */
 
-static void arm6_position_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_position_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p)
+ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
     const double t18 = t17 - t15;
     const double t19 = t9 + t10;
@@ -176,9 +188,9 @@ static void arm6_position_finish(const double l[6], const double *restrict cs, c
     const double t24 = t22 - t12;
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
+    p[1*ARM6_STRIDE] = -t26;
     const double t27 = t5 + t25;
     p[0] = t27;
-    p[1] = -t26;
 }
 
 void arm6_position(const double q[6], const double l[6], double p[2])
@@ -188,84 +200,24 @@ void arm6_position(const double q[6], const double l[6], double p[2])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_position_angles(q, ang);
+    arm6_position_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_position_finish(l, cs, sn, p);
+    arm6_position_finish(l, cs, sn, p, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_position_block(const double *restrict q_T, const double l[6], double *restrict p_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_position_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double p[2];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        p[0] = t27;
-        p[1] = -t26;
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
+        arm6_position_finish(l, cs_T + b, sn_T + b, p_T + b, 32);
     }
 }
 
@@ -315,11 +267,11 @@ void arm6_position_batch(size_t m, const double *q, const double *l, double *p)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_position_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_position_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2);
+            arm6_position_finish(l, cs + b * 8, sn + b * 8, p + (i + b) * 2, 1);
         }
     }
 }
@@ -328,53 +280,55 @@ void arm6_position_batch(size_t m, const double *q, const double *l, double *p)
 /* ---- arm6_jacobian: Jacobian J (2 x N, row-major) ---- */
 /* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 1 neg */
 
-static void arm6_jacobian_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_jacobian_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict J)
+ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
+    J[11*ARM6_STRIDE] = t10;
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
+    J[5*ARM6_STRIDE] = t17;
     const double t18 = t17 - t15;
+    J[4*ARM6_STRIDE] = t18;
     const double t19 = t9 + t10;
+    J[10*ARM6_STRIDE] = t19;
     const double t20 = t18 - t14;
+    J[3*ARM6_STRIDE] = t20;
     const double t21 = t8 + t19;
+    J[9*ARM6_STRIDE] = t21;
     const double t22 = t20 - t13;
+    J[2*ARM6_STRIDE] = t22;
     const double t23 = t7 + t21;
+    J[8*ARM6_STRIDE] = t23;
     const double t24 = t22 - t12;
+    J[1*ARM6_STRIDE] = t24;
     const double t25 = t6 + t23;
+    J[7*ARM6_STRIDE] = t25;
     const double t26 = t24 - t11;
-    const double t27 = t5 + t25;
     J[0] = t26;
-    J[1] = t24;
-    J[2] = t22;
-    J[3] = t20;
-    J[4] = t18;
-    J[5] = t17;
-    J[6] = t27;
-    J[7] = t25;
-    J[8] = t23;
-    J[9] = t21;
-    J[10] = t19;
-    J[11] = t10;
+    const double t27 = t5 + t25;
+    J[6*ARM6_STRIDE] = t27;
 }
 
 void arm6_jacobian(const double q[6], const double l[6], double J[12])
@@ -384,104 +338,24 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_jacobian_angles(q, ang);
+    arm6_jacobian_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_jacobian_finish(l, cs, sn, J);
+    arm6_jacobian_finish(l, cs, sn, J, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_jacobian_block(const double *restrict q_T, const double l[6], double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double J[12];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        J[0] = t26;
-        J[1] = t24;
-        J[2] = t22;
-        J[3] = t20;
-        J[4] = t18;
-        J[5] = t17;
-        J[6] = t27;
-        J[7] = t25;
-        J[8] = t23;
-        J[9] = t21;
-        J[10] = t19;
-        J[11] = t10;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
+        arm6_jacobian_finish(l, cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -541,11 +415,11 @@ void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_jacobian_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 12);
+            arm6_jacobian_finish(l, cs + b * 8, sn + b * 8, J + (i + b) * 12, 1);
         }
     }
 }
@@ -554,35 +428,37 @@ void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 /* ---- arm6_coriolis: H = dJ/dt (2 x N, row-major) ---- */
 /* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 2 neg */
 
-static void arm6_coriolis_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_coriolis_finish(const double dq[6], const double l[6], const double *restrict cs, const double *restrict sn, double *restrict H)
+ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t28 = dq[0] + dq[1];
-    const double t29 = t28 + dq[2];
-    const double t30 = t29 + dq[3];
-    const double t31 = t30 + dq[4];
-    const double t32 = t31 + dq[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
+    const double t28 = dq[0] + dq[1*ARM6_STRIDE];
+    const double t29 = t28 + dq[2*ARM6_STRIDE];
+    const double t30 = t29 + dq[3*ARM6_STRIDE];
+    const double t31 = t30 + dq[4*ARM6_STRIDE];
+    const double t32 = t31 + dq[5*ARM6_STRIDE];
     const double t33 = t5*dq[0];
     const double t34 = t6*t28;
     const double t35 = t7*t29;
@@ -596,29 +472,29 @@ static void arm6_coriolis_finish(const double dq[6], const double l[6], const do
     const double t43 = t15*t31;
     const double t44 = t16*t32;
     const double t45 = -t38;
+    H[5*ARM6_STRIDE] = t45;
     const double t46 = -t44;
+    H[11*ARM6_STRIDE] = t46;
     const double t47 = t45 - t37;
+    H[4*ARM6_STRIDE] = t47;
     const double t48 = t46 - t43;
+    H[10*ARM6_STRIDE] = t48;
     const double t49 = t47 - t36;
+    H[3*ARM6_STRIDE] = t49;
     const double t50 = t48 - t42;
+    H[9*ARM6_STRIDE] = t50;
     const double t51 = t49 - t35;
+    H[2*ARM6_STRIDE] = t51;
     const double t52 = t50 - t41;
+    H[8*ARM6_STRIDE] = t52;
     const double t53 = t51 - t34;
+    H[1*ARM6_STRIDE] = t53;
     const double t54 = t52 - t40;
+    H[7*ARM6_STRIDE] = t54;
     const double t55 = t53 - t33;
-    const double t56 = t54 - t39;
     H[0] = t55;
-    H[1] = t53;
-    H[2] = t51;
-    H[3] = t49;
-    H[4] = t47;
-    H[5] = t45;
-    H[6] = t56;
-    H[7] = t54;
-    H[8] = t52;
-    H[9] = t50;
-    H[10] = t48;
-    H[11] = t46;
+    const double t56 = t54 - t39;
+    H[6*ARM6_STRIDE] = t56;
 }
 
 void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12])
@@ -628,129 +504,24 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_coriolis_angles(q, ang);
+    arm6_coriolis_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_coriolis_finish(dq, l, cs, sn, H);
+    arm6_coriolis_finish(dq, l, cs, sn, H, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict H_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_coriolis_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[6];
-        double sn[6];
-        double H[12];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t28 = dq[0] + dq[1];
-        const double t29 = t28 + dq[2];
-        const double t30 = t29 + dq[3];
-        const double t31 = t30 + dq[4];
-        const double t32 = t31 + dq[5];
-        const double t33 = t5*dq[0];
-        const double t34 = t6*t28;
-        const double t35 = t7*t29;
-        const double t36 = t8*t30;
-        const double t37 = t9*t31;
-        const double t38 = t10*t32;
-        const double t39 = t11*dq[0];
-        const double t40 = t12*t28;
-        const double t41 = t13*t29;
-        const double t42 = t14*t30;
-        const double t43 = t15*t31;
-        const double t44 = t16*t32;
-        const double t45 = -t38;
-        const double t46 = -t44;
-        const double t47 = t45 - t37;
-        const double t48 = t46 - t43;
-        const double t49 = t47 - t36;
-        const double t50 = t48 - t42;
-        const double t51 = t49 - t35;
-        const double t52 = t50 - t41;
-        const double t53 = t51 - t34;
-        const double t54 = t52 - t40;
-        const double t55 = t53 - t33;
-        const double t56 = t54 - t39;
-        H[0] = t55;
-        H[1] = t53;
-        H[2] = t51;
-        H[3] = t49;
-        H[4] = t47;
-        H[5] = t45;
-        H[6] = t56;
-        H[7] = t54;
-        H[8] = t52;
-        H[9] = t50;
-        H[10] = t48;
-        H[11] = t46;
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        H_T[256 + b] = H[8];
-        H_T[288 + b] = H[9];
-        H_T[320 + b] = H[10];
-        H_T[352 + b] = H[11];
+        arm6_coriolis_finish(dq_T + b, l, cs_T + b, sn_T + b, H_T + b, 32);
     }
 }
 
@@ -821,11 +592,11 @@ void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_coriolis_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_coriolis_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_coriolis_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, H + (i + b) * 12);
+            arm6_coriolis_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, H + (i + b) * 12, 1);
         }
     }
 }
@@ -834,35 +605,37 @@ void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm6_velocity: endpoint velocity v = J dq (2) ---- */
 /* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 3 neg */
 
-static void arm6_velocity_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_velocity_finish(const double dq[6], const double l[6], const double *restrict cs, const double *restrict sn, double *restrict v)
+ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t28 = dq[0] + dq[1];
-    const double t29 = t28 + dq[2];
-    const double t30 = t29 + dq[3];
-    const double t31 = t30 + dq[4];
-    const double t32 = t31 + dq[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
+    const double t28 = dq[0] + dq[1*ARM6_STRIDE];
+    const double t29 = t28 + dq[2*ARM6_STRIDE];
+    const double t30 = t29 + dq[3*ARM6_STRIDE];
+    const double t31 = t30 + dq[4*ARM6_STRIDE];
+    const double t32 = t31 + dq[5*ARM6_STRIDE];
     const double t33 = t5*dq[0];
     const double t34 = t6*t28;
     const double t35 = t7*t29;
@@ -886,9 +659,9 @@ static void arm6_velocity_finish(const double dq[6], const double l[6], const do
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
     const double t55 = t53 - t33;
+    v[1*ARM6_STRIDE] = -t55;
     const double t56 = t54 - t39;
     v[0] = t56;
-    v[1] = -t55;
 }
 
 void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2])
@@ -898,109 +671,24 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_velocity_angles(q, ang);
+    arm6_velocity_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_velocity_finish(dq, l, cs, sn, v);
+    arm6_velocity_finish(dq, l, cs, sn, v, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict v_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_velocity_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[6];
-        double sn[6];
-        double v[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t28 = dq[0] + dq[1];
-        const double t29 = t28 + dq[2];
-        const double t30 = t29 + dq[3];
-        const double t31 = t30 + dq[4];
-        const double t32 = t31 + dq[5];
-        const double t33 = t5*dq[0];
-        const double t34 = t6*t28;
-        const double t35 = t7*t29;
-        const double t36 = t8*t30;
-        const double t37 = t9*t31;
-        const double t38 = t10*t32;
-        const double t39 = t11*dq[0];
-        const double t40 = t12*t28;
-        const double t41 = t13*t29;
-        const double t42 = t14*t30;
-        const double t43 = t15*t31;
-        const double t44 = t16*t32;
-        const double t45 = -t38;
-        const double t46 = -t44;
-        const double t47 = t45 - t37;
-        const double t48 = t46 - t43;
-        const double t49 = t47 - t36;
-        const double t50 = t48 - t42;
-        const double t51 = t49 - t35;
-        const double t52 = t50 - t41;
-        const double t53 = t51 - t34;
-        const double t54 = t52 - t40;
-        const double t55 = t53 - t33;
-        const double t56 = t54 - t39;
-        v[0] = t56;
-        v[1] = -t55;
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
+        arm6_velocity_finish(dq_T + b, l, cs_T + b, sn_T + b, v_T + b, 32);
     }
 }
 
@@ -1061,11 +749,11 @@ void arm6_velocity_batch(size_t m, const double *q, const double *dq, const doub
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_velocity_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_velocity_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_velocity_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, v + (i + b) * 2);
+            arm6_velocity_finish(dq + (i + b) * 6, l, cs + b * 8, sn + b * 8, v + (i + b) * 2, 1);
         }
     }
 }
@@ -1074,30 +762,32 @@ void arm6_velocity_batch(size_t m, const double *q, const double *dq, const doub
 /* ---- arm6_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
 /* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 3 neg */
 
-static void arm6_acceleration_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_acceleration_finish(const double dq[6], const double ddq[6], const double l[6], const double *restrict cs, const double *restrict sn, double *restrict a)
+ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
     const double t18 = t17 - t15;
     const double t19 = t9 + t10;
@@ -1109,11 +799,11 @@ static void arm6_acceleration_finish(const double dq[6], const double ddq[6], co
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t28 = dq[0] + dq[1];
-    const double t29 = t28 + dq[2];
-    const double t30 = t29 + dq[3];
-    const double t31 = t30 + dq[4];
-    const double t32 = t31 + dq[5];
+    const double t28 = dq[0] + dq[1*ARM6_STRIDE];
+    const double t29 = t28 + dq[2*ARM6_STRIDE];
+    const double t30 = t29 + dq[3*ARM6_STRIDE];
+    const double t31 = t30 + dq[4*ARM6_STRIDE];
+    const double t32 = t31 + dq[5*ARM6_STRIDE];
     const double t33 = t5*dq[0];
     const double t34 = t6*t28;
     const double t35 = t7*t29;
@@ -1137,9 +827,9 @@ static void arm6_acceleration_finish(const double dq[6], const double ddq[6], co
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
     const double t55 = t53 - t33;
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
     const double t56 = t54 - t39;
-    a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
-    a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])
@@ -1149,127 +839,24 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_acceleration_angles(q, ang);
+    arm6_acceleration_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_acceleration_finish(dq, ddq, l, cs, sn, a);
+    arm6_acceleration_finish(dq, ddq, l, cs, sn, a, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict a_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[6];
-        double sn[6];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        ddq[5] = ddq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t28 = dq[0] + dq[1];
-        const double t29 = t28 + dq[2];
-        const double t30 = t29 + dq[3];
-        const double t31 = t30 + dq[4];
-        const double t32 = t31 + dq[5];
-        const double t33 = t5*dq[0];
-        const double t34 = t6*t28;
-        const double t35 = t7*t29;
-        const double t36 = t8*t30;
-        const double t37 = t9*t31;
-        const double t38 = t10*t32;
-        const double t39 = t11*dq[0];
-        const double t40 = t12*t28;
-        const double t41 = t13*t29;
-        const double t42 = t14*t30;
-        const double t43 = t15*t31;
-        const double t44 = t16*t32;
-        const double t45 = -t38;
-        const double t46 = -t44;
-        const double t47 = t45 - t37;
-        const double t48 = t46 - t43;
-        const double t49 = t47 - t36;
-        const double t50 = t48 - t42;
-        const double t51 = t49 - t35;
-        const double t52 = t50 - t41;
-        const double t53 = t51 - t34;
-        const double t54 = t52 - t40;
-        const double t55 = t53 - t33;
-        const double t56 = t54 - t39;
-        a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
-        a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm6_acceleration_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, a_T + b, 32);
     }
 }
 
@@ -1341,11 +928,11 @@ void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const 
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_acceleration_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, a + (i + b) * 2);
+            arm6_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1354,46 +941,62 @@ void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const 
 /* ---- arm6_kinematics: p, J, H, v and a at once ---- */
 /* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 5 neg */
 
-static void arm6_kinematics_angles(const double q[6], double *restrict ang)
+ARM6_BODY void arm6_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[1] = q[0] + q[1];
-    ang[2] = ang[1] + q[2];
-    ang[3] = ang[2] + q[3];
-    ang[4] = ang[3] + q[4];
-    ang[5] = ang[4] + q[5];
+    (void)stride;
+    ang[1*ARM6_STRIDE] = q[0] + q[1*ARM6_STRIDE];
+    ang[2*ARM6_STRIDE] = ang[1*ARM6_STRIDE] + q[2*ARM6_STRIDE];
+    ang[3*ARM6_STRIDE] = ang[2*ARM6_STRIDE] + q[3*ARM6_STRIDE];
+    ang[4*ARM6_STRIDE] = ang[3*ARM6_STRIDE] + q[4*ARM6_STRIDE];
+    ang[5*ARM6_STRIDE] = ang[4*ARM6_STRIDE] + q[5*ARM6_STRIDE];
     ang[0] = q[0];
 }
 
-static void arm6_kinematics_finish(const double dq[6], const double ddq[6], const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a)
+ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
+    (void)stride;
     const double t5 = cs[0]*l[0];
-    const double t6 = cs[1]*l[1];
-    const double t7 = cs[2]*l[2];
-    const double t8 = cs[3]*l[3];
-    const double t9 = cs[4]*l[4];
-    const double t10 = cs[5]*l[5];
+    const double t6 = cs[1*ARM6_STRIDE]*l[1];
+    const double t7 = cs[2*ARM6_STRIDE]*l[2];
+    const double t8 = cs[3*ARM6_STRIDE]*l[3];
+    const double t9 = cs[4*ARM6_STRIDE]*l[4];
+    const double t10 = cs[5*ARM6_STRIDE]*l[5];
+    J[11*ARM6_STRIDE] = t10;
     const double t11 = sn[0]*l[0];
-    const double t12 = sn[1]*l[1];
-    const double t13 = sn[2]*l[2];
-    const double t14 = sn[3]*l[3];
-    const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
+    const double t12 = sn[1*ARM6_STRIDE]*l[1];
+    const double t13 = sn[2*ARM6_STRIDE]*l[2];
+    const double t14 = sn[3*ARM6_STRIDE]*l[3];
+    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t16 = sn[5*ARM6_STRIDE]*l[5];
     const double t17 = -t16;
+    J[5*ARM6_STRIDE] = t17;
     const double t18 = t17 - t15;
+    J[4*ARM6_STRIDE] = t18;
     const double t19 = t9 + t10;
+    J[10*ARM6_STRIDE] = t19;
     const double t20 = t18 - t14;
+    J[3*ARM6_STRIDE] = t20;
     const double t21 = t8 + t19;
+    J[9*ARM6_STRIDE] = t21;
     const double t22 = t20 - t13;
+    J[2*ARM6_STRIDE] = t22;
     const double t23 = t7 + t21;
+    J[8*ARM6_STRIDE] = t23;
     const double t24 = t22 - t12;
+    J[1*ARM6_STRIDE] = t24;
     const double t25 = t6 + t23;
+    J[7*ARM6_STRIDE] = t25;
     const double t26 = t24 - t11;
+    p[1*ARM6_STRIDE] = -t26;
+    J[0] = t26;
     const double t27 = t5 + t25;
-    const double t28 = dq[0] + dq[1];
-    const double t29 = t28 + dq[2];
-    const double t30 = t29 + dq[3];
-    const double t31 = t30 + dq[4];
-    const double t32 = t31 + dq[5];
+    p[0] = t27;
+    J[6*ARM6_STRIDE] = t27;
+    const double t28 = dq[0] + dq[1*ARM6_STRIDE];
+    const double t29 = t28 + dq[2*ARM6_STRIDE];
+    const double t30 = t29 + dq[3*ARM6_STRIDE];
+    const double t31 = t30 + dq[4*ARM6_STRIDE];
+    const double t32 = t31 + dq[5*ARM6_STRIDE];
     const double t33 = t5*dq[0];
     const double t34 = t6*t28;
     const double t35 = t7*t29;
@@ -1407,47 +1010,33 @@ static void arm6_kinematics_finish(const double dq[6], const double ddq[6], cons
     const double t43 = t15*t31;
     const double t44 = t16*t32;
     const double t45 = -t38;
+    H[5*ARM6_STRIDE] = t45;
     const double t46 = -t44;
+    H[11*ARM6_STRIDE] = t46;
     const double t47 = t45 - t37;
+    H[4*ARM6_STRIDE] = t47;
     const double t48 = t46 - t43;
+    H[10*ARM6_STRIDE] = t48;
     const double t49 = t47 - t36;
+    H[3*ARM6_STRIDE] = t49;
     const double t50 = t48 - t42;
+    H[9*ARM6_STRIDE] = t50;
     const double t51 = t49 - t35;
+    H[2*ARM6_STRIDE] = t51;
     const double t52 = t50 - t41;
+    H[8*ARM6_STRIDE] = t52;
     const double t53 = t51 - t34;
+    H[1*ARM6_STRIDE] = t53;
     const double t54 = t52 - t40;
+    H[7*ARM6_STRIDE] = t54;
     const double t55 = t53 - t33;
-    const double t56 = t54 - t39;
-    p[0] = t27;
-    p[1] = -t26;
-    J[0] = t26;
-    J[1] = t24;
-    J[2] = t22;
-    J[3] = t20;
-    J[4] = t18;
-    J[5] = t17;
-    J[6] = t27;
-    J[7] = t25;
-    J[8] = t23;
-    J[9] = t21;
-    J[10] = t19;
-    J[11] = t10;
     H[0] = t55;
-    H[1] = t53;
-    H[2] = t51;
-    H[3] = t49;
-    H[4] = t47;
-    H[5] = t45;
-    H[6] = t56;
-    H[7] = t54;
-    H[8] = t52;
-    H[9] = t50;
-    H[10] = t48;
-    H[11] = t46;
+    v[1*ARM6_STRIDE] = -t55;
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
+    const double t56 = t54 - t39;
+    H[6*ARM6_STRIDE] = t56;
     v[0] = t56;
-    v[1] = -t55;
-    a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
-    a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2])
@@ -1457,187 +1046,24 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    arm6_kinematics_angles(q, ang);
+    arm6_kinematics_angles(q, ang, 1);
     arm6_trig8(ang, cs, sn, 6);
-    arm6_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a);
+    arm6_kinematics_finish(dq, ddq, l, cs, sn, p, J, H, v, a, 1);
 }
 
 #if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static ARM6_VECTORIZE void arm6_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        arm6_kinematics_angles(q_T + b, ang_T + b, 32);
     }
     arm6_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[6];
-        double sn[6];
-        double p[2];
-        double J[12];
-        double H[12];
-        double v[2];
-        double a[2];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        ddq[5] = ddq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t28 = dq[0] + dq[1];
-        const double t29 = t28 + dq[2];
-        const double t30 = t29 + dq[3];
-        const double t31 = t30 + dq[4];
-        const double t32 = t31 + dq[5];
-        const double t33 = t5*dq[0];
-        const double t34 = t6*t28;
-        const double t35 = t7*t29;
-        const double t36 = t8*t30;
-        const double t37 = t9*t31;
-        const double t38 = t10*t32;
-        const double t39 = t11*dq[0];
-        const double t40 = t12*t28;
-        const double t41 = t13*t29;
-        const double t42 = t14*t30;
-        const double t43 = t15*t31;
-        const double t44 = t16*t32;
-        const double t45 = -t38;
-        const double t46 = -t44;
-        const double t47 = t45 - t37;
-        const double t48 = t46 - t43;
-        const double t49 = t47 - t36;
-        const double t50 = t48 - t42;
-        const double t51 = t49 - t35;
-        const double t52 = t50 - t41;
-        const double t53 = t51 - t34;
-        const double t54 = t52 - t40;
-        const double t55 = t53 - t33;
-        const double t56 = t54 - t39;
-        p[0] = t27;
-        p[1] = -t26;
-        J[0] = t26;
-        J[1] = t24;
-        J[2] = t22;
-        J[3] = t20;
-        J[4] = t18;
-        J[5] = t17;
-        J[6] = t27;
-        J[7] = t25;
-        J[8] = t23;
-        J[9] = t21;
-        J[10] = t19;
-        J[11] = t10;
-        H[0] = t55;
-        H[1] = t53;
-        H[2] = t51;
-        H[3] = t49;
-        H[4] = t47;
-        H[5] = t45;
-        H[6] = t56;
-        H[7] = t54;
-        H[8] = t52;
-        H[9] = t50;
-        H[10] = t48;
-        H[11] = t46;
-        v[0] = t56;
-        v[1] = -t55;
-        a[0] = t55*dq[0] + t53*dq[1] + t51*dq[2] + t49*dq[3] + t47*dq[4] + t45*dq[5] + t26*ddq[0] + t24*ddq[1] + t22*ddq[2] + t20*ddq[3] + t18*ddq[4] + t17*ddq[5];
-        a[1] = t10*ddq[5] + t56*dq[0] + t54*dq[1] + t52*dq[2] + t50*dq[3] + t48*dq[4] + t46*dq[5] + t27*ddq[0] + t25*ddq[1] + t23*ddq[2] + t21*ddq[3] + t19*ddq[4];
-        p_T[0 + b] = p[0];
-        p_T[32 + b] = p[1];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
-        H_T[0 + b] = H[0];
-        H_T[32 + b] = H[1];
-        H_T[64 + b] = H[2];
-        H_T[96 + b] = H[3];
-        H_T[128 + b] = H[4];
-        H_T[160 + b] = H[5];
-        H_T[192 + b] = H[6];
-        H_T[224 + b] = H[7];
-        H_T[256 + b] = H[8];
-        H_T[288 + b] = H[9];
-        H_T[320 + b] = H[10];
-        H_T[352 + b] = H[11];
-        v_T[0 + b] = v[0];
-        v_T[32 + b] = v[1];
-        a_T[0 + b] = a[0];
-        a_T[32 + b] = a[1];
+        arm6_kinematics_finish(dq_T + b, ddq_T + b, l, cs_T + b, sn_T + b, p_T + b, J_T + b, H_T + b, v_T + b, a_T + b, 32);
     }
 }
 
@@ -1745,11 +1171,11 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            arm6_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+            arm6_kinematics_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         arm6_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            arm6_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 12, H + (i + b) * 12, v + (i + b) * 2, a + (i + b) * 2);
+            arm6_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, l, cs + b * 8, sn + b * 8, p + (i + b) * 2, J + (i + b) * 12, H + (i + b) * 12, v + (i + b) * 2, a + (i + b) * 2, 1);
         }
     }
 }
@@ -1827,133 +1253,6 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1])
     arm6_manipulability_finish(l, cs, sn, w);
 }
 
-#if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_manipulability_block(const double *restrict q_T, const double l[6], double *restrict w_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    arm6_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
-        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const int t60 = t57 >= t59;
-        const double t61 = (t60 ? t57 : t59);
-        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t60 ? t26 : t27);
-        const double t64 = (t60 ? t24 : t25);
-        const double t65 = (t60 ? t22 : t23);
-        const double t66 = (t60 ? t20 : t21);
-        const double t67 = (t60 ? t18 : t19);
-        const double t68 = (t60 ? t17 : t10);
-        const double t69 = (t60 ? t27 : t26) - t63*t62;
-        const double t70 = (t60 ? t25 : t24) - t64*t62;
-        const double t71 = (t60 ? t23 : t22) - t65*t62;
-        const double t72 = (t60 ? t21 : t20) - t66*t62;
-        const double t73 = (t60 ? t19 : t18) - t67*t62;
-        const double t74 = (t60 ? t10 : t17) - t68*t62;
-        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        w[0] = sqrt(t61*t75);
-        w_T[0 + b] = w[0];
-    }
-}
-
-void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w)
-{
-    double q_T[192];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        arm6_manipulability_block(q_T, l, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w)
 {
     size_t i;
@@ -1973,7 +1272,6 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
         }
     }
 }
-#endif
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
@@ -2051,16 +1349,16 @@ static void arm6_inverse_velocity_finish(const double v[2], const double l[6], d
     const double t92 = (t87 ? t89*(t88*t79 + t82*t83) : t88*t91);
     const double t93 = (t87 ? t89*(t81*(t84 - t83*t62) + t84*t79) : 0.0);
     const double t94 = t92*t63 + t93*t69;
-    const double t95 = t92*t64 + t93*t70;
-    const double t96 = t92*t65 + t93*t71;
-    const double t97 = t92*t66 + t93*t72;
-    const double t98 = t92*t67 + t93*t73;
-    const double t99 = t92*t68 + t93*t74;
     dq[0] = t94;
+    const double t95 = t92*t64 + t93*t70;
     dq[1] = t95;
+    const double t96 = t92*t65 + t93*t71;
     dq[2] = t96;
+    const double t97 = t92*t66 + t93*t72;
     dq[3] = t97;
+    const double t98 = t92*t67 + t93*t73;
     dq[4] = t98;
+    const double t99 = t92*t68 + t93*t74;
     dq[5] = t99;
 }
 
@@ -2076,182 +1374,6 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
     arm6_inverse_velocity_finish(v, l, lambda, cs, sn, dq);
 }
 
-#if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_inverse_velocity_block(const double *restrict q_T, const double *restrict v_T, const double l[6], double lambda, double *restrict dq_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    arm6_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double v[2];
-        double cs[6];
-        double sn[6];
-        double dq[6];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
-        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const int t60 = t57 >= t59;
-        const double t61 = (t60 ? t57 : t59);
-        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t60 ? t26 : t27);
-        const double t64 = (t60 ? t24 : t25);
-        const double t65 = (t60 ? t22 : t23);
-        const double t66 = (t60 ? t20 : t21);
-        const double t67 = (t60 ? t18 : t19);
-        const double t68 = (t60 ? t17 : t10);
-        const double t69 = (t60 ? t27 : t26) - t63*t62;
-        const double t70 = (t60 ? t25 : t24) - t64*t62;
-        const double t71 = (t60 ? t23 : t22) - t65*t62;
-        const double t72 = (t60 ? t21 : t20) - t66*t62;
-        const double t73 = (t60 ? t19 : t18) - t67*t62;
-        const double t74 = (t60 ? t10 : t17) - t68*t62;
-        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        const int t76 = lambda > 1.0;
-        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t78 = (t76 ? 1.0 : lambda);
-        const double t79 = t78*t78;
-        const double t80 = t77*t77;
-        const double t81 = t80*t61;
-        const double t82 = t80*t75;
-        const double t83 = (t60 ? v[0] : v[1]);
-        const double t84 = (t60 ? v[1] : v[0]);
-        const double t85 = t80*(t57 + t59);
-        const double t86 = t81*t82 + t79*(t85 + t79);
-        const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
-        const double t88 = t83 + t84*t62;
-        const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
-        const double t90 = t79 + t81*(1.0 + t62*t62);
-        const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
-        const double t92 = (t87 ? t89*(t88*t79 + t82*t83) : t88*t91);
-        const double t93 = (t87 ? t89*(t81*(t84 - t83*t62) + t84*t79) : 0.0);
-        const double t94 = t92*t63 + t93*t69;
-        const double t95 = t92*t64 + t93*t70;
-        const double t96 = t92*t65 + t93*t71;
-        const double t97 = t92*t66 + t93*t72;
-        const double t98 = t92*t67 + t93*t73;
-        const double t99 = t92*t68 + t93*t74;
-        dq[0] = t94;
-        dq[1] = t95;
-        dq[2] = t96;
-        dq[3] = t97;
-        dq[4] = t98;
-        dq[5] = t99;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-        dq_T[128 + b] = dq[4];
-        dq_T[160 + b] = dq[5];
-    }
-}
-
-void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
-{
-    double q_T[192];
-    double v_T[64];
-    double dq_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *v_b = v + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    v_T[k * 32 + b] = v[src * 2 + k];
-                }
-            }
-        }
-        arm6_inverse_velocity_block(q_T, v_T, l, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 6;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-            dq_b[4] = dq_T[128 + b];
-            dq_b[5] = dq_T[160 + b];
-        }
-    }
-}
-#else
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq)
 {
     size_t i;
@@ -2271,7 +1393,6 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
         }
     }
 }
-#endif
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
@@ -2326,12 +1447,12 @@ static void arm6_inverse_velocity3_finish(const double twist[3], const double l[
     const double t117 = t114*t80;
     const double t118 = t113*t80;
     const double t119 = t114*t79;
-    const double t120 = t119 + t57*t117;
+    const double t120 = t57*t117 + t119;
     const double t121 = t58*t117;
     const double t122 = t115*t118;
-    const double t123 = t119 + t59*t117;
+    const double t123 = t59*t117 + t119;
     const double t124 = t116*t118;
-    const double t125 = 6.0*t80 + t79;
+    const double t125 = t79 + 6.0*t80;
     const double t126 = t118*twist[0];
     const double t127 = t118*twist[1];
     const double t128 = t80*twist[2];
@@ -2351,7 +1472,7 @@ static void arm6_inverse_velocity3_finish(const double twist[3], const double l[
     const double t142 = t120*t123 - t121*t121;
     const double t143 = t120*t137 + t121*t138 + t122*t139;
     const double t144 = t137 + t140 + t142;
-    const int t145 = t143 > ARM6_RANK_TOL*t144*t129;
+    const int t145 = t143 > t144*t129*ARM6_RANK_TOL;
     const double t146 = t129*t129;
     const int t147 = t144 > ARM6_RANK_TOL*t146;
     const double t148 = (t143 > 0.0 ? 1.0/(t143 != 0.0 ? t143 : 1.0) : 1.0);
@@ -2385,195 +1506,6 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
     arm6_inverse_velocity3_finish(twist, l, lambda, cs, sn, dq3);
 }
 
-#if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_inverse_velocity3_block(const double *restrict q_T, const double *restrict twist_T, const double l[6], double lambda, double *restrict dq3_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    arm6_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double twist[3];
-        double cs[6];
-        double sn[6];
-        double dq3[6];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
-        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const int t76 = lambda > 1.0;
-        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t78 = (t76 ? 1.0 : lambda);
-        const double t79 = t78*t78;
-        const double t80 = t77*t77;
-        const double t113 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
-        const double t114 = t113*t113;
-        const double t115 = t26 + t24 + t22 + t20 + t18 + t17;
-        const double t116 = t10 + t27 + t25 + t23 + t21 + t19;
-        const double t117 = t114*t80;
-        const double t118 = t113*t80;
-        const double t119 = t114*t79;
-        const double t120 = t119 + t57*t117;
-        const double t121 = t58*t117;
-        const double t122 = t115*t118;
-        const double t123 = t119 + t59*t117;
-        const double t124 = t116*t118;
-        const double t125 = 6.0*t80 + t79;
-        const double t126 = t118*twist[0];
-        const double t127 = t118*twist[1];
-        const double t128 = t80*twist[2];
-        const double t129 = t120 + t123 + t125;
-        const double t130 = t120*t126 + t121*t127 + t122*t128;
-        const double t131 = t121*t126 + t123*t127 + t124*t128;
-        const double t132 = t122*t126 + t124*t127 + t125*t128;
-        const double t133 = (t129 > 0.0 ? 1.0/(t129*t129 != 0.0 ? t129*t129 : 1.0) : 1.0);
-        const double t134 = t130*t133;
-        const double t135 = t131*t133;
-        const double t136 = t132*t133;
-        const double t137 = t123*t125 - t124*t124;
-        const double t138 = t122*t124 - t121*t125;
-        const double t139 = t121*t124 - t122*t123;
-        const double t140 = t120*t125 - t122*t122;
-        const double t141 = t121*t122 - t120*t124;
-        const double t142 = t120*t123 - t121*t121;
-        const double t143 = t120*t137 + t121*t138 + t122*t139;
-        const double t144 = t137 + t140 + t142;
-        const int t145 = t143 > ARM6_RANK_TOL*t144*t129;
-        const double t146 = t129*t129;
-        const int t147 = t144 > ARM6_RANK_TOL*t146;
-        const double t148 = (t143 > 0.0 ? 1.0/(t143 != 0.0 ? t143 : 1.0) : 1.0);
-        const double t149 = t120*t130 + t121*t131 + t122*t132;
-        const double t150 = t121*t130 + t123*t131 + t124*t132;
-        const double t151 = t122*t130 + t124*t131 + t125*t132;
-        const double t152 = (t144 > 0.0 ? 1.0/(t144*t144 != 0.0 ? t144*t144 : 1.0) : 1.0);
-        const double t153 = t146 - t144;
-        const double t154 = (t147 ? (t145 ? t148*(t137*t126 + t138*t127 + t139*t128) : t152*(t130*t153 - t149*t129)) : t134);
-        const double t155 = (t147 ? (t145 ? t148*(t138*t126 + t140*t127 + t141*t128) : t152*(t131*t153 - t150*t129)) : t135);
-        const double t156 = (t147 ? (t145 ? t148*(t139*t126 + t141*t127 + t142*t128) : t152*(t132*t153 - t151*t129)) : t136);
-        const double t157 = t113*t154;
-        const double t158 = t113*t155;
-        dq3[0] = t156 + t157*t26 + t158*t27;
-        dq3[1] = t156 + t157*t24 + t158*t25;
-        dq3[2] = t156 + t157*t22 + t158*t23;
-        dq3[3] = t156 + t157*t20 + t158*t21;
-        dq3[4] = t156 + t157*t18 + t158*t19;
-        dq3[5] = t156 + t10*t158 + t157*t17;
-        dq3_T[0 + b] = dq3[0];
-        dq3_T[32 + b] = dq3[1];
-        dq3_T[64 + b] = dq3[2];
-        dq3_T[96 + b] = dq3[3];
-        dq3_T[128 + b] = dq3[4];
-        dq3_T[160 + b] = dq3[5];
-    }
-}
-
-void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
-{
-    double q_T[192];
-    double twist_T[96];
-    double dq3_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *twist_b = twist + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 3 + k];
-                }
-            }
-        }
-        arm6_inverse_velocity3_block(q_T, twist_T, l, lambda, dq3_T);
-        for (b = 0; b < count; ++b) {
-            double *dq3_b = dq3 + (i + b) * 6;
-            dq3_b[0] = dq3_T[0 + b];
-            dq3_b[1] = dq3_T[32 + b];
-            dq3_b[2] = dq3_T[64 + b];
-            dq3_b[3] = dq3_T[96 + b];
-            dq3_b[4] = dq3_T[128 + b];
-            dq3_b[5] = dq3_T[160 + b];
-        }
-    }
-}
-#else
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3)
 {
     size_t i;
@@ -2593,7 +1525,6 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
         }
     }
 }
-#endif
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
@@ -2673,16 +1604,16 @@ static void arm6_ik_step_finish(const double q[6], const double target[2], const
     const double t105 = (t87 ? t89*(t104*t79 + t102*t82) : t104*t91);
     const double t106 = (t87 ? t89*(t103*t79 + t81*(t103 - t102*t62)) : 0.0);
     const double t107 = t105*t63 + t106*t69;
-    const double t108 = t105*t64 + t106*t70;
-    const double t109 = t105*t65 + t106*t71;
-    const double t110 = t105*t66 + t106*t72;
-    const double t111 = t105*t67 + t106*t73;
-    const double t112 = t105*t68 + t106*t74;
     q_next[0] = t107 + q[0];
+    const double t108 = t105*t64 + t106*t70;
     q_next[1] = t108 + q[1];
+    const double t109 = t105*t65 + t106*t71;
     q_next[2] = t109 + q[2];
+    const double t110 = t105*t66 + t106*t72;
     q_next[3] = t110 + q[3];
+    const double t111 = t105*t67 + t106*t73;
     q_next[4] = t111 + q[4];
+    const double t112 = t105*t68 + t106*t74;
     q_next[5] = t112 + q[5];
 }
 
@@ -2698,191 +1629,6 @@ void arm6_ik_step(const double q[6], const double target[2], const double l[6], 
     arm6_ik_step_finish(q, target, l, lambda, cs, sn, q_next);
 }
 
-#if ARM6_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_ik_step_block(const double *restrict q_T, const double *restrict target_T, const double l[6], double lambda, double *restrict q_next_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[1] = q[0] + q[1];
-        ang[2] = ang[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[4] = ang[3] + q[4];
-        ang[5] = ang[4] + q[5];
-        ang[0] = q[0];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    arm6_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double target[2];
-        double cs[6];
-        double sn[6];
-        double q_next[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        target[0] = target_T[0 + b];
-        target[1] = target_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t5 = cs[0]*l[0];
-        const double t6 = cs[1]*l[1];
-        const double t7 = cs[2]*l[2];
-        const double t8 = cs[3]*l[3];
-        const double t9 = cs[4]*l[4];
-        const double t10 = cs[5]*l[5];
-        const double t11 = sn[0]*l[0];
-        const double t12 = sn[1]*l[1];
-        const double t13 = sn[2]*l[2];
-        const double t14 = sn[3]*l[3];
-        const double t15 = sn[4]*l[4];
-        const double t16 = sn[5]*l[5];
-        const double t17 = -t16;
-        const double t18 = t17 - t15;
-        const double t19 = t9 + t10;
-        const double t20 = t18 - t14;
-        const double t21 = t8 + t19;
-        const double t22 = t20 - t13;
-        const double t23 = t7 + t21;
-        const double t24 = t22 - t12;
-        const double t25 = t6 + t23;
-        const double t26 = t24 - t11;
-        const double t27 = t5 + t25;
-        const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-        const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
-        const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-        const int t60 = t57 >= t59;
-        const double t61 = (t60 ? t57 : t59);
-        const double t62 = t58*(t61 > 0.0 ? 1.0/(t61 != 0.0 ? t61 : 1.0) : 1.0);
-        const double t63 = (t60 ? t26 : t27);
-        const double t64 = (t60 ? t24 : t25);
-        const double t65 = (t60 ? t22 : t23);
-        const double t66 = (t60 ? t20 : t21);
-        const double t67 = (t60 ? t18 : t19);
-        const double t68 = (t60 ? t17 : t10);
-        const double t69 = (t60 ? t27 : t26) - t63*t62;
-        const double t70 = (t60 ? t25 : t24) - t64*t62;
-        const double t71 = (t60 ? t23 : t22) - t65*t62;
-        const double t72 = (t60 ? t21 : t20) - t66*t62;
-        const double t73 = (t60 ? t19 : t18) - t67*t62;
-        const double t74 = (t60 ? t10 : t17) - t68*t62;
-        const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
-        const int t76 = lambda > 1.0;
-        const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t78 = (t76 ? 1.0 : lambda);
-        const double t79 = t78*t78;
-        const double t80 = t77*t77;
-        const double t81 = t80*t61;
-        const double t82 = t80*t75;
-        const double t85 = t80*(t57 + t59);
-        const double t86 = t81*t82 + t79*(t85 + t79);
-        const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
-        const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
-        const double t90 = t79 + t81*(1.0 + t62*t62);
-        const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);
-        const double t100 = target[0] - t27;
-        const double t101 = t26 + target[1];
-        const double t102 = (t60 ? t100 : t101);
-        const double t103 = (t60 ? t101 : t100);
-        const double t104 = t102 + t103*t62;
-        const double t105 = (t87 ? t89*(t104*t79 + t102*t82) : t104*t91);
-        const double t106 = (t87 ? t89*(t103*t79 + t81*(t103 - t102*t62)) : 0.0);
-        const double t107 = t105*t63 + t106*t69;
-        const double t108 = t105*t64 + t106*t70;
-        const double t109 = t105*t65 + t106*t71;
-        const double t110 = t105*t66 + t106*t72;
-        const double t111 = t105*t67 + t106*t73;
-        const double t112 = t105*t68 + t106*t74;
-        q_next[0] = t107 + q[0];
-        q_next[1] = t108 + q[1];
-        q_next[2] = t109 + q[2];
-        q_next[3] = t110 + q[3];
-        q_next[4] = t111 + q[4];
-        q_next[5] = t112 + q[5];
-        q_next_T[0 + b] = q_next[0];
-        q_next_T[32 + b] = q_next[1];
-        q_next_T[64 + b] = q_next[2];
-        q_next_T[96 + b] = q_next[3];
-        q_next_T[128 + b] = q_next[4];
-        q_next_T[160 + b] = q_next[5];
-    }
-}
-
-void arm6_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
-{
-    double q_T[192];
-    double target_T[64];
-    double q_next_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *target_b = target + (i + b) * 2;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                target_T[0 + b] = target_b[0];
-                target_T[32 + b] = target_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    target_T[k * 32 + b] = target[src * 2 + k];
-                }
-            }
-        }
-        arm6_ik_step_block(q_T, target_T, l, lambda, q_next_T);
-        for (b = 0; b < count; ++b) {
-            double *q_next_b = q_next + (i + b) * 6;
-            q_next_b[0] = q_next_T[0 + b];
-            q_next_b[1] = q_next_T[32 + b];
-            q_next_b[2] = q_next_T[64 + b];
-            q_next_b[3] = q_next_T[96 + b];
-            q_next_b[4] = q_next_T[128 + b];
-            q_next_b[5] = q_next_T[160 + b];
-        }
-    }
-}
-#else
 void arm6_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next)
 {
     size_t i;
@@ -2902,7 +1648,6 @@ void arm6_ik_step_batch(size_t m, const double *q, const double *target, const d
         }
     }
 }
-#endif
 
 /* ---- arm6_ik_error: endpoint error |target - p| at the pose trial ---- */
 static void arm6_ik_error(const double trial[6], const double target[2], const double l[6], double error[1])

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x0f46620e
+STAMP = 0x9c4b87a0
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -479,8 +479,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
-    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -591,8 +591,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 11] = t46
     v[..., 0] = t56
     v[..., 1] = -t55
-    a[..., 0] = t55*dq[..., 0] + t53*dq[..., 1] + t51*dq[..., 2] + t49*dq[..., 3] + t47*dq[..., 4] + t45*dq[..., 5] + t26*ddq[..., 0] + t24*ddq[..., 1] + t22*ddq[..., 2] + t20*ddq[..., 3] + t18*ddq[..., 4] + t17*ddq[..., 5]
-    a[..., 1] = t10*ddq[..., 5] + t56*dq[..., 0] + t54*dq[..., 1] + t52*dq[..., 2] + t50*dq[..., 3] + t48*dq[..., 4] + t46*dq[..., 5] + t27*ddq[..., 0] + t25*ddq[..., 1] + t23*ddq[..., 2] + t21*ddq[..., 3] + t19*ddq[..., 4]
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -838,12 +838,12 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t117 = t114*t80
     t118 = t113*t80
     t119 = t114*t79
-    t120 = t119 + t57*t117
+    t120 = t57*t117 + t119
     t121 = t58*t117
     t122 = t115*t118
-    t123 = t119 + t59*t117
+    t123 = t59*t117 + t119
     t124 = t116*t118
-    t125 = 6.0*t80 + t79
+    t125 = t79 + 6.0*t80
     t126 = t118*twist[..., 0]
     t127 = t118*twist[..., 1]
     t128 = t80*twist[..., 2]
@@ -863,7 +863,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t142 = t120*t123 - t121*t121
     t143 = t120*t137 + t121*t138 + t122*t139
     t144 = t137 + t140 + t142
-    t145 = t143 > RANK_TOL*t144*t129
+    t145 = t143 > t144*t129*RANK_TOL
     t146 = t129*t129
     t147 = t144 > RANK_TOL*t146
     t148 = np.where(t143 > 0.0, 1.0/t143, 1.0)

@@ -14,7 +14,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x99632b11UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xd596c20eUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -31,6 +31,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define DIFFDRIVE_VECTORIZE
 #define DIFFDRIVE_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*DIFFDRIVE_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if DIFFDRIVE_VECTOR_MATH
+#define DIFFDRIVE_BODY static inline __attribute__((__always_inline__))
+#define DIFFDRIVE_STRIDE stride
+#else
+#define DIFFDRIVE_BODY static
+#define DIFFDRIVE_STRIDE 1
 #endif
 #if !DIFFDRIVE_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -63,33 +75,6 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig4(const double *restrict ang, doub
 #endif
 }
 
-#if DIFFDRIVE_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 32 with vector math, else for k < used. */
-static DIFFDRIVE_VECTORIZE void diffdrive_trig32(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
-{
-    int k;
-#if DIFFDRIVE_VECTOR_MATH
-    (void)used; /* whole vectors: the padding lanes cost nothing */
-    for (k = 0; k < 32; ++k) {
-        cs[k] = cos(ang[k]);
-    }
-    for (k = 0; k < 32; ++k) {
-        sn[k] = sin(ang[k]);
-    }
-#elif DIFFDRIVE_SINCOS
-    for (k = 0; k < used; ++k) {
-        sincos(ang[k], &sn[k], &cs[k]);
-    }
-#else
-    for (k = 0; k < used; ++k) {
-        cs[k] = cos(ang[k]);
-        sn[k] = sin(ang[k]);
-    }
-#endif
-}
-#endif
-
-#if !DIFFDRIVE_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -113,7 +98,6 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
     }
 #endif
 }
-#endif
 
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
@@ -121,9 +105,9 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
 static void diffdrive_body_rates_finish(const double wheels[2], double track, double *restrict rates)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
-    const double t1 = 1.0/track;
-    const double t2 = t1*wheels[1] - t1*wheels[0];
     rates[0] = t0;
+    const double t1 = 1.0/track;
+    const double t2 = wheels[1]*t1 - wheels[0]*t1;
     rates[1] = t2;
 }
 
@@ -132,58 +116,6 @@ void diffdrive_body_rates(const double wheels[2], double track, double rates[2])
     diffdrive_body_rates_finish(wheels, track, rates);
 }
 
-#if DIFFDRIVE_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static DIFFDRIVE_VECTORIZE void diffdrive_body_rates_block(const double *restrict wheels_T, double track, double *restrict rates_T)
-{
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double wheels[2];
-        double rates[2];
-        wheels[0] = wheels_T[0 + b];
-        wheels[1] = wheels_T[32 + b];
-        const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
-        const double t1 = 1.0/track;
-        const double t2 = t1*wheels[1] - t1*wheels[0];
-        rates[0] = t0;
-        rates[1] = t2;
-        rates_T[0 + b] = rates[0];
-        rates_T[32 + b] = rates[1];
-    }
-}
-
-void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates)
-{
-    double wheels_T[64];
-    double rates_T[64];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *wheels_b = wheels + (i + b) * 2;
-                wheels_T[0 + b] = wheels_b[0];
-                wheels_T[32 + b] = wheels_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 2; ++k) {
-                    wheels_T[k * 32 + b] = wheels[src * 2 + k];
-                }
-            }
-        }
-        diffdrive_body_rates_block(wheels_T, track, rates_T);
-        for (b = 0; b < count; ++b) {
-            double *rates_b = rates + (i + b) * 2;
-            rates_b[0] = rates_T[0 + b];
-            rates_b[1] = rates_T[32 + b];
-        }
-    }
-}
-#else
 void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates)
 {
     size_t i;
@@ -192,37 +124,30 @@ void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, do
         diffdrive_body_rates_finish(wheels + (i + b) * 2, track, rates + (i + b) * 2);
     }
 }
-#endif
 
 /* ---- diffdrive_wheel_speeds: wheel speeds (v_L, v_R) for body rates (v, omega) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg */
 
-static void diffdrive_wheel_speeds_finish(const double rates[2], double track, double *restrict wheels)
+DIFFDRIVE_BODY void diffdrive_wheel_speeds_finish(const double *restrict rates, double track, double *restrict wheels, const size_t stride)
 {
-    wheels[0] = rates[0] - 0.5*track*rates[1];
-    wheels[1] = rates[0] + 0.5*track*rates[1];
+    (void)stride;
+    wheels[0] = rates[0] - 0.5*rates[1*DIFFDRIVE_STRIDE]*track;
+    wheels[1*DIFFDRIVE_STRIDE] = rates[0] + 0.5*rates[1*DIFFDRIVE_STRIDE]*track;
 }
 
 void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2])
 {
-    diffdrive_wheel_speeds_finish(rates, track, wheels);
+    diffdrive_wheel_speeds_finish(rates, track, wheels, 1);
 }
 
 #if DIFFDRIVE_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restrict rates_T, double track, double *restrict wheels_T)
 {
     int b;
     for (b = 0; b < 32; ++b) {
-        double rates[2];
-        double wheels[2];
-        rates[0] = rates_T[0 + b];
-        rates[1] = rates_T[32 + b];
-        wheels[0] = rates[0] - 0.5*track*rates[1];
-        wheels[1] = rates[0] + 0.5*track*rates[1];
-        wheels_T[0 + b] = wheels[0];
-        wheels_T[32 + b] = wheels[1];
+        diffdrive_wheel_speeds_finish(rates_T + b, track, wheels_T + b, 32);
     }
 }
 
@@ -262,7 +187,7 @@ void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, d
     size_t i;
     const size_t b = 0;
     for (i = 0; i < m; ++i) {
-        diffdrive_wheel_speeds_finish(rates + (i + b) * 2, track, wheels + (i + b) * 2);
+        diffdrive_wheel_speeds_finish(rates + (i + b) * 2, track, wheels + (i + b) * 2, 1);
     }
 }
 #endif
@@ -278,10 +203,10 @@ static void diffdrive_pose_rate_angles(const double pose[3], double *restrict an
 static void diffdrive_pose_rate_finish(const double wheels[2], double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
-    const double t1 = 1.0/track;
-    const double t2 = t1*wheels[1] - t1*wheels[0];
-    dpose[0] = cs[0]*t0;
+    dpose[0] = t0*cs[0];
     dpose[1] = t0*sn[0];
+    const double t1 = 1.0/track;
+    const double t2 = wheels[1]*t1 - wheels[0]*t1;
     dpose[2] = t2;
 }
 
@@ -297,84 +222,6 @@ void diffdrive_pose_rate(const double pose[3], const double wheels[2], double tr
     diffdrive_pose_rate_finish(wheels, track, cs, sn, dpose);
 }
 
-#if DIFFDRIVE_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static DIFFDRIVE_VECTORIZE void diffdrive_pose_rate_block(const double *restrict pose_T, const double *restrict wheels_T, double track, double *restrict dpose_T)
-{
-    double ang_T[32], cs_T[32], sn_T[32];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double pose[3];
-        double ang[1];
-        pose[0] = pose_T[0 + b];
-        pose[1] = pose_T[32 + b];
-        pose[2] = pose_T[64 + b];
-        ang[0] = pose[2];
-        ang_T[0 + b] = ang[0];
-    }
-    diffdrive_trig32(ang_T, cs_T, sn_T, 32);
-    for (b = 0; b < 32; ++b) {
-        double wheels[2];
-        double cs[1];
-        double sn[1];
-        double dpose[3];
-        wheels[0] = wheels_T[0 + b];
-        wheels[1] = wheels_T[32 + b];
-        cs[0] = cs_T[0 + b];
-        sn[0] = sn_T[0 + b];
-        const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
-        const double t1 = 1.0/track;
-        const double t2 = t1*wheels[1] - t1*wheels[0];
-        dpose[0] = cs[0]*t0;
-        dpose[1] = t0*sn[0];
-        dpose[2] = t2;
-        dpose_T[0 + b] = dpose[0];
-        dpose_T[32 + b] = dpose[1];
-        dpose_T[64 + b] = dpose[2];
-    }
-}
-
-void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose)
-{
-    double pose_T[96];
-    double wheels_T[64];
-    double dpose_T[96];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *pose_b = pose + (i + b) * 3;
-                const double *wheels_b = wheels + (i + b) * 2;
-                pose_T[0 + b] = pose_b[0];
-                pose_T[32 + b] = pose_b[1];
-                pose_T[64 + b] = pose_b[2];
-                wheels_T[0 + b] = wheels_b[0];
-                wheels_T[32 + b] = wheels_b[1];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 3; ++k) {
-                    pose_T[k * 32 + b] = pose[src * 3 + k];
-                }
-                for (k = 0; k < 2; ++k) {
-                    wheels_T[k * 32 + b] = wheels[src * 2 + k];
-                }
-            }
-        }
-        diffdrive_pose_rate_block(pose_T, wheels_T, track, dpose_T);
-        for (b = 0; b < count; ++b) {
-            double *dpose_b = dpose + (i + b) * 3;
-            dpose_b[0] = dpose_T[0 + b];
-            dpose_b[1] = dpose_T[32 + b];
-            dpose_b[2] = dpose_T[64 + b];
-        }
-    }
-}
-#else
 void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose)
 {
     size_t i;
@@ -394,4 +241,3 @@ void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheel
         }
     }
 }
-#endif

@@ -46,7 +46,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x7d0c2a2aUL
+#define PANDA_STAMP 0x70acff39UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -136,7 +136,7 @@ void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 10 KB. */
+ * Stack: about 15 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
 /* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1200 bytes. */
@@ -144,7 +144,7 @@ void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 8 KB. */
+ * Stack: about 13 KB. */
 void panda_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
 /* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1440 bytes. */
@@ -152,7 +152,7 @@ void panda_jacobian_hessian(const double q[7], double Hs[294]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 24 KB. */
+ * Stack: about 14 KB. */
 void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
 /* gradient dw/dq of the manipulability (N). Stack: about 5 KB. */
@@ -160,7 +160,7 @@ void panda_manipulability_gradient(const double q[7], double grad[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: about 17 KB. */
 void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
 /* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 7 KB. */
@@ -168,7 +168,7 @@ void panda_inverse_velocity(const double q[7], const double twist[6], double lam
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 17 KB. */
+ * Stack: about 19 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
 /* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1984 bytes. */
@@ -176,7 +176,7 @@ void panda_inverse_velocity_position(const double q[7], const double v[3], doubl
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 11 KB. */
+ * Stack: about 14 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
 /* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1040 bytes. */
@@ -184,7 +184,7 @@ void panda_jacobian_rpy(const double q[7], double JA[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 19 KB. */
+ * Stack: about 13 KB. */
 void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
 /* Return codes of the solvers. */

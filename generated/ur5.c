@@ -22,6 +22,9 @@
  * RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm
  * least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
+ * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
+ * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
+ * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
  * Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,
  * target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
@@ -30,7 +33,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xfdb2b121UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x9f4a496bUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -47,6 +50,18 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define UR5_VECTORIZE
 #define UR5_VECTOR_MATH 0
+#endif
+/* Each function's statements are written once, in body functions that single calls and batches share.
+ * Those of the functions with a vectorised batch path read and write element k of a configuration at
+ * [k*UR5_STRIDE]: a single call passes stride 1; the batch stores a block of B configurations
+ * transposed (element k of configuration b at [k*B + b]) and calls the body in a loop over b with stride
+ * B, which GCC inlines and vectorises across configurations. */
+#if UR5_VECTOR_MATH
+#define UR5_BODY static inline __attribute__((__always_inline__))
+#define UR5_STRIDE stride
+#else
+#define UR5_BODY static
+#define UR5_STRIDE 1
 #endif
 #if !UR5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -78,32 +93,6 @@ static UR5_VECTORIZE void ur5_trig8(const double *restrict ang, double *restrict
     }
 #endif
 }
-
-#if UR5_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 80 with vector math, else for k < used. */
-static UR5_VECTORIZE void ur5_trig80(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
-{
-    int k;
-#if UR5_VECTOR_MATH
-    (void)used; /* whole vectors: the padding lanes cost nothing */
-    for (k = 0; k < 80; ++k) {
-        cs[k] = cos(ang[k]);
-    }
-    for (k = 0; k < 80; ++k) {
-        sn[k] = sin(ang[k]);
-    }
-#elif UR5_SINCOS
-    for (k = 0; k < used; ++k) {
-        sincos(ang[k], &sn[k], &cs[k]);
-    }
-#else
-    for (k = 0; k < used; ++k) {
-        cs[k] = cos(ang[k]);
-        sn[k] = sin(ang[k]);
-    }
-#endif
-}
-#endif
 
 #if UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
@@ -183,7 +172,6 @@ static UR5_VECTORIZE void ur5_trig192(const double *restrict ang, double *restri
 }
 #endif
 
-#if !UR5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
 static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
@@ -207,7 +195,6 @@ static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restri
     }
 #endif
 }
-#endif
 
 /* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
  * isfinite) cannot remove: integer tests on the exponent bits. */
@@ -226,62 +213,64 @@ static int ur5_finite(double x)
 /* ---- ur5_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 6 sin, 6 cos, 21 add/sub, 36 mul, 3 neg */
 
-static void ur5_pose_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_pose_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_pose_finish(const double *restrict cs, const double *restrict sn, double *restrict T)
+UR5_BODY void ur5_pose_finish(const double *restrict cs, const double *restrict sn, double *restrict T, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t6 = t2*cs[4] + sn[0]*sn[4];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t11 = cs[4]*sn[3];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    const double t6 = t2*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    T[2*UR5_STRIDE] = t8;
+    const double t11 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    T[10*UR5_STRIDE] = t12;
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
+    T[3*UR5_STRIDE] = t22;
     const double t23 = t20*sn[0] - t17*cs[0];
+    T[7*UR5_STRIDE] = t23;
     const double t24 = 0.089159 - t21;
-    const double t34 = t6*cs[5] - t3*sn[5];
-    const double t35 = -t3*cs[5] - t6*sn[5];
-    const double t36 = cs[3]*sn[5];
-    const double t37 = t36 + t11*cs[5];
-    const double t38 = cs[3]*cs[5];
-    const double t39 = t38 - t11*sn[5];
-    const double t40 = t8*t39 - t12*t35;
-    const double t41 = t12*t34 - t8*t37;
-    const double t42 = t35*t37 - t34*t39;
+    T[11*UR5_STRIDE] = t24;
+    const double t34 = t6*cs[5*UR5_STRIDE] - t3*sn[5*UR5_STRIDE];
     T[0] = t34;
-    T[1] = t35;
-    T[2] = t8;
-    T[3] = t22;
-    T[4] = t40;
-    T[5] = t41;
-    T[6] = t42;
-    T[7] = t23;
-    T[8] = t37;
-    T[9] = t39;
-    T[10] = t12;
-    T[11] = t24;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
+    const double t35 = -t3*cs[5*UR5_STRIDE] - t6*sn[5*UR5_STRIDE];
+    T[1*UR5_STRIDE] = t35;
+    const double t36 = cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t37 = t11*cs[5*UR5_STRIDE] + t36;
+    T[8*UR5_STRIDE] = t37;
+    const double t38 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE];
+    const double t39 = t38 - t11*sn[5*UR5_STRIDE];
+    T[9*UR5_STRIDE] = t39;
+    const double t40 = t8*t39 - t12*t35;
+    T[4*UR5_STRIDE] = t40;
+    const double t41 = t12*t34 - t8*t37;
+    T[5*UR5_STRIDE] = t41;
+    const double t42 = t35*t37 - t34*t39;
+    T[6*UR5_STRIDE] = t42;
 }
 
 void ur5_pose(const double q[6], double T[16])
@@ -291,117 +280,24 @@ void ur5_pose(const double q[6], double T[16])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_pose_angles(q, ang);
+    ur5_pose_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_pose_finish(cs, sn, T);
+    ur5_pose_finish(cs, sn, T, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_pose_block(const double *restrict q_T, double *restrict T_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_pose_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double T[16];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t6 = t2*cs[4] + sn[0]*sn[4];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t11 = cs[4]*sn[3];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t24 = 0.089159 - t21;
-        const double t34 = t6*cs[5] - t3*sn[5];
-        const double t35 = -t3*cs[5] - t6*sn[5];
-        const double t36 = cs[3]*sn[5];
-        const double t37 = t36 + t11*cs[5];
-        const double t38 = cs[3]*cs[5];
-        const double t39 = t38 - t11*sn[5];
-        const double t40 = t8*t39 - t12*t35;
-        const double t41 = t12*t34 - t8*t37;
-        const double t42 = t35*t37 - t34*t39;
-        T[0] = t34;
-        T[1] = t35;
-        T[2] = t8;
-        T[3] = t22;
-        T[4] = t40;
-        T[5] = t41;
-        T[6] = t42;
-        T[7] = t23;
-        T[8] = t37;
-        T[9] = t39;
-        T[10] = t12;
-        T[11] = t24;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        T_T[0 + b] = T[0];
-        T_T[32 + b] = T[1];
-        T_T[64 + b] = T[2];
-        T_T[96 + b] = T[3];
-        T_T[128 + b] = T[4];
-        T_T[160 + b] = T[5];
-        T_T[192 + b] = T[6];
-        T_T[224 + b] = T[7];
-        T_T[256 + b] = T[8];
-        T_T[288 + b] = T[9];
-        T_T[320 + b] = T[10];
-        T_T[352 + b] = T[11];
-        T_T[384 + b] = T[12];
-        T_T[416 + b] = T[13];
-        T_T[448 + b] = T[14];
-        T_T[480 + b] = T[15];
+        ur5_pose_finish(cs_T + b, sn_T + b, T_T + b, 32);
     }
 }
 
@@ -465,11 +361,11 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_pose_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_pose_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16);
+            ur5_pose_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, 1);
         }
     }
 }
@@ -478,85 +374,87 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
 /* ---- ur5_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
 /* operations: 5 sin, 5 cos, 15 add/sub, 34 mul, 6 neg */
 
-static void ur5_jacobian_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_jacobian_finish(const double *restrict cs, const double *restrict sn, double *restrict J)
+UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    J[5*UR5_STRIDE] = 0.0;
+    J[11*UR5_STRIDE] = 0.0;
+    J[12*UR5_STRIDE] = 0.0;
+    J[17*UR5_STRIDE] = 0.0;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[24*UR5_STRIDE] = 0.0;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    J[22*UR5_STRIDE] = t3;
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    J[28*UR5_STRIDE] = t5;
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    J[23*UR5_STRIDE] = t8;
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    J[29*UR5_STRIDE] = t10;
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    J[35*UR5_STRIDE] = t12;
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    J[15*UR5_STRIDE] = t15;
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    J[14*UR5_STRIDE] = t18;
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    J[13*UR5_STRIDE] = t20;
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
+    J[6*UR5_STRIDE] = t22;
     const double t23 = t20*sn[0] - t17*cs[0];
     const double t25 = t21*cs[0];
+    J[1*UR5_STRIDE] = t25;
     const double t26 = t21*sn[0];
+    J[7*UR5_STRIDE] = t26;
     const double t27 = t19*cs[0];
+    J[2*UR5_STRIDE] = t27;
     const double t28 = t19*sn[0];
+    J[8*UR5_STRIDE] = t28;
     const double t29 = t16*cs[0];
+    J[3*UR5_STRIDE] = t29;
     const double t30 = t16*sn[0];
+    J[9*UR5_STRIDE] = t30;
     const double t31 = t2*t14 - t13*sn[0];
+    J[4*UR5_STRIDE] = t31;
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
+    J[10*UR5_STRIDE] = t32;
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    J[16*UR5_STRIDE] = t33;
     const double t243 = -cs[0];
-    const double t310 = -cs[3];
-    const double t1357 = -t23;
-    J[0] = t1357;
-    J[1] = t25;
-    J[2] = t27;
-    J[3] = t29;
-    J[4] = t31;
-    J[5] = 0.0;
-    J[6] = t22;
-    J[7] = t26;
-    J[8] = t28;
-    J[9] = t30;
-    J[10] = t32;
-    J[11] = 0.0;
-    J[12] = 0.0;
-    J[13] = t20;
-    J[14] = t18;
-    J[15] = t15;
-    J[16] = t33;
-    J[17] = 0.0;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t3;
-    J[23] = t8;
-    J[24] = 0.0;
-    J[25] = t243;
-    J[26] = t243;
-    J[27] = t243;
-    J[28] = t5;
-    J[29] = t10;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t310;
-    J[35] = t12;
+    J[25*UR5_STRIDE] = t243;
+    J[26*UR5_STRIDE] = t243;
+    J[27*UR5_STRIDE] = t243;
+    const double t310 = -cs[3*UR5_STRIDE];
+    J[34*UR5_STRIDE] = t310;
+    const double t2150 = -t23;
+    J[0] = t2150;
 }
 
 void ur5_jacobian(const double q[6], double J[36])
@@ -566,157 +464,24 @@ void ur5_jacobian(const double q[6], double J[36])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_angles(q, ang);
+    ur5_jacobian_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_jacobian_finish(cs, sn, J);
+    ur5_jacobian_finish(cs, sn, J, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_block(const double *restrict q_T, double *restrict J_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_jacobian_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double J[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t243 = -cs[0];
-        const double t310 = -cs[3];
-        const double t1357 = -t23;
-        J[0] = t1357;
-        J[1] = t25;
-        J[2] = t27;
-        J[3] = t29;
-        J[4] = t31;
-        J[5] = 0.0;
-        J[6] = t22;
-        J[7] = t26;
-        J[8] = t28;
-        J[9] = t30;
-        J[10] = t32;
-        J[11] = 0.0;
-        J[12] = 0.0;
-        J[13] = t20;
-        J[14] = t18;
-        J[15] = t15;
-        J[16] = t33;
-        J[17] = 0.0;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t3;
-        J[23] = t8;
-        J[24] = 0.0;
-        J[25] = t243;
-        J[26] = t243;
-        J[27] = t243;
-        J[28] = t5;
-        J[29] = t10;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t310;
-        J[35] = t12;
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
-        J_T[384 + b] = J[12];
-        J_T[416 + b] = J[13];
-        J_T[448 + b] = J[14];
-        J_T[480 + b] = J[15];
-        J_T[512 + b] = J[16];
-        J_T[544 + b] = J[17];
-        J_T[576 + b] = J[18];
-        J_T[608 + b] = J[19];
-        J_T[640 + b] = J[20];
-        J_T[672 + b] = J[21];
-        J_T[704 + b] = J[22];
-        J_T[736 + b] = J[23];
-        J_T[768 + b] = J[24];
-        J_T[800 + b] = J[25];
-        J_T[832 + b] = J[26];
-        J_T[864 + b] = J[27];
-        J_T[896 + b] = J[28];
-        J_T[928 + b] = J[29];
-        J_T[960 + b] = J[30];
-        J_T[992 + b] = J[31];
-        J_T[1024 + b] = J[32];
-        J_T[1056 + b] = J[33];
-        J_T[1088 + b] = J[34];
-        J_T[1120 + b] = J[35];
+        ur5_jacobian_finish(cs_T + b, sn_T + b, J_T + b, 32);
     }
 }
 
@@ -800,11 +565,11 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 36);
+            ur5_jacobian_finish(cs + b * 8, sn + b * 8, J + (i + b) * 36, 1);
         }
     }
 }
@@ -813,100 +578,102 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 9 neg */
 
-static void ur5_jacobian_tool_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_tool_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_jacobian_tool_finish(const double *restrict cs, const double *restrict sn, double *restrict J_tool)
+UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *restrict sn, double *restrict J_tool, const size_t stride)
 {
-    const double t7 = cs[4]*sn[0];
-    const double t9 = -cs[0]*cs[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    J_tool[5*UR5_STRIDE] = 0.0;
+    J_tool[11*UR5_STRIDE] = 0.0;
+    J_tool[17*UR5_STRIDE] = 0.0;
+    J_tool[22*UR5_STRIDE] = -sn[5*UR5_STRIDE];
+    J_tool[23*UR5_STRIDE] = 0.0;
+    J_tool[28*UR5_STRIDE] = -cs[5*UR5_STRIDE];
+    J_tool[29*UR5_STRIDE] = 0.0;
+    J_tool[31*UR5_STRIDE] = cs[4*UR5_STRIDE];
+    J_tool[32*UR5_STRIDE] = cs[4*UR5_STRIDE];
+    J_tool[33*UR5_STRIDE] = cs[4*UR5_STRIDE];
+    J_tool[34*UR5_STRIDE] = 0.0;
+    J_tool[35*UR5_STRIDE] = 1.0;
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    J_tool[30*UR5_STRIDE] = t12;
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
     const double t23 = t20*sn[0] - t17*cs[0];
-    const double t36 = cs[3]*sn[5];
-    const double t38 = cs[3]*cs[5];
-    const double t92 = cs[4]*cs[5];
-    const double t93 = -cs[4]*sn[5];
-    const double t94 = cs[5]*sn[4];
-    const double t95 = -sn[4]*sn[5];
-    const double t96 = t92*cs[3] - sn[3]*sn[5];
-    const double t97 = t93*cs[3] - cs[5]*sn[3];
-    const double t98 = -cs[3]*sn[4];
-    const double t99 = t36 + t92*sn[3];
-    const double t100 = t38 + t93*sn[3];
+    const double t36 = cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t38 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE];
+    const double t92 = cs[4*UR5_STRIDE]*cs[5*UR5_STRIDE];
+    const double t93 = -cs[4*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t94 = cs[5*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    J_tool[19*UR5_STRIDE] = t94;
+    J_tool[20*UR5_STRIDE] = t94;
+    J_tool[21*UR5_STRIDE] = t94;
+    const double t95 = -sn[4*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    J_tool[25*UR5_STRIDE] = t95;
+    J_tool[26*UR5_STRIDE] = t95;
+    J_tool[27*UR5_STRIDE] = t95;
+    const double t96 = t92*cs[3*UR5_STRIDE] - sn[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t97 = t93*cs[3*UR5_STRIDE] - cs[5*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t98 = -cs[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t99 = t92*sn[3*UR5_STRIDE] + t36;
+    J_tool[18*UR5_STRIDE] = t99;
+    const double t100 = t93*sn[3*UR5_STRIDE] + t38;
+    J_tool[24*UR5_STRIDE] = t100;
     const double t101 = t96*cs[0] + t94*sn[0];
     const double t102 = t97*cs[0] + t95*sn[0];
-    const double t103 = t7 + t98*cs[0];
+    const double t103 = t98*cs[0] + t7;
     const double t104 = t96*sn[0] - t94*cs[0];
     const double t105 = t97*sn[0] - t95*cs[0];
-    const double t106 = t9 + t98*sn[0];
+    const double t106 = t98*sn[0] + t9;
     const double t107 = t104*t22 - t101*t23;
-    const double t108 = t105*t22 - t102*t23;
-    const double t109 = t106*t22 - t103*t23;
-    const double t110 = t96*t21 + t99*t20;
-    const double t111 = t97*t21 + t100*t20;
-    const double t112 = t98*t21 + t12*t20;
-    const double t113 = t96*t19 + t99*t18;
-    const double t114 = t97*t19 + t100*t18;
-    const double t115 = t98*t19 + t12*t18;
-    const double t116 = t96*t16 + t99*t15;
-    const double t117 = t97*t16 + t100*t15;
-    const double t118 = t98*t16 + t12*t15;
-    const double t119 = t92*t14 - t94*t13;
-    const double t120 = t93*t14 - t95*t13;
-    const double t121 = -t13*cs[4] - t14*sn[4];
     J_tool[0] = t107;
-    J_tool[1] = t110;
-    J_tool[2] = t113;
-    J_tool[3] = t116;
-    J_tool[4] = t119;
-    J_tool[5] = 0.0;
-    J_tool[6] = t108;
-    J_tool[7] = t111;
-    J_tool[8] = t114;
-    J_tool[9] = t117;
-    J_tool[10] = t120;
-    J_tool[11] = 0.0;
-    J_tool[12] = t109;
-    J_tool[13] = t112;
-    J_tool[14] = t115;
-    J_tool[15] = t118;
-    J_tool[16] = t121;
-    J_tool[17] = 0.0;
-    J_tool[18] = t99;
-    J_tool[19] = t94;
-    J_tool[20] = t94;
-    J_tool[21] = t94;
-    J_tool[22] = -sn[5];
-    J_tool[23] = 0.0;
-    J_tool[24] = t100;
-    J_tool[25] = t95;
-    J_tool[26] = t95;
-    J_tool[27] = t95;
-    J_tool[28] = -cs[5];
-    J_tool[29] = 0.0;
-    J_tool[30] = t12;
-    J_tool[31] = cs[4];
-    J_tool[32] = cs[4];
-    J_tool[33] = cs[4];
-    J_tool[34] = 0.0;
-    J_tool[35] = 1.0;
+    const double t108 = t105*t22 - t102*t23;
+    J_tool[6*UR5_STRIDE] = t108;
+    const double t109 = t106*t22 - t103*t23;
+    J_tool[12*UR5_STRIDE] = t109;
+    const double t110 = t96*t21 + t99*t20;
+    J_tool[1*UR5_STRIDE] = t110;
+    const double t111 = t97*t21 + t100*t20;
+    J_tool[7*UR5_STRIDE] = t111;
+    const double t112 = t98*t21 + t12*t20;
+    J_tool[13*UR5_STRIDE] = t112;
+    const double t113 = t96*t19 + t99*t18;
+    J_tool[2*UR5_STRIDE] = t113;
+    const double t114 = t97*t19 + t100*t18;
+    J_tool[8*UR5_STRIDE] = t114;
+    const double t115 = t98*t19 + t12*t18;
+    J_tool[14*UR5_STRIDE] = t115;
+    const double t116 = t96*t16 + t99*t15;
+    J_tool[3*UR5_STRIDE] = t116;
+    const double t117 = t97*t16 + t100*t15;
+    J_tool[9*UR5_STRIDE] = t117;
+    const double t118 = t98*t16 + t12*t15;
+    J_tool[15*UR5_STRIDE] = t118;
+    const double t119 = t92*t14 - t94*t13;
+    J_tool[4*UR5_STRIDE] = t119;
+    const double t120 = t93*t14 - t95*t13;
+    J_tool[10*UR5_STRIDE] = t120;
+    const double t121 = -t13*cs[4*UR5_STRIDE] - t14*sn[4*UR5_STRIDE];
+    J_tool[16*UR5_STRIDE] = t121;
 }
 
 void ur5_jacobian_tool(const double q[6], double J_tool[36])
@@ -916,175 +683,24 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_tool_angles(q, ang);
+    ur5_jacobian_tool_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_jacobian_tool_finish(cs, sn, J_tool);
+    ur5_jacobian_tool_finish(cs, sn, J_tool, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_jacobian_tool_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double J_tool[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t7 = cs[4]*sn[0];
-        const double t9 = -cs[0]*cs[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t36 = cs[3]*sn[5];
-        const double t38 = cs[3]*cs[5];
-        const double t92 = cs[4]*cs[5];
-        const double t93 = -cs[4]*sn[5];
-        const double t94 = cs[5]*sn[4];
-        const double t95 = -sn[4]*sn[5];
-        const double t96 = t92*cs[3] - sn[3]*sn[5];
-        const double t97 = t93*cs[3] - cs[5]*sn[3];
-        const double t98 = -cs[3]*sn[4];
-        const double t99 = t36 + t92*sn[3];
-        const double t100 = t38 + t93*sn[3];
-        const double t101 = t96*cs[0] + t94*sn[0];
-        const double t102 = t97*cs[0] + t95*sn[0];
-        const double t103 = t7 + t98*cs[0];
-        const double t104 = t96*sn[0] - t94*cs[0];
-        const double t105 = t97*sn[0] - t95*cs[0];
-        const double t106 = t9 + t98*sn[0];
-        const double t107 = t104*t22 - t101*t23;
-        const double t108 = t105*t22 - t102*t23;
-        const double t109 = t106*t22 - t103*t23;
-        const double t110 = t96*t21 + t99*t20;
-        const double t111 = t97*t21 + t100*t20;
-        const double t112 = t98*t21 + t12*t20;
-        const double t113 = t96*t19 + t99*t18;
-        const double t114 = t97*t19 + t100*t18;
-        const double t115 = t98*t19 + t12*t18;
-        const double t116 = t96*t16 + t99*t15;
-        const double t117 = t97*t16 + t100*t15;
-        const double t118 = t98*t16 + t12*t15;
-        const double t119 = t92*t14 - t94*t13;
-        const double t120 = t93*t14 - t95*t13;
-        const double t121 = -t13*cs[4] - t14*sn[4];
-        J_tool[0] = t107;
-        J_tool[1] = t110;
-        J_tool[2] = t113;
-        J_tool[3] = t116;
-        J_tool[4] = t119;
-        J_tool[5] = 0.0;
-        J_tool[6] = t108;
-        J_tool[7] = t111;
-        J_tool[8] = t114;
-        J_tool[9] = t117;
-        J_tool[10] = t120;
-        J_tool[11] = 0.0;
-        J_tool[12] = t109;
-        J_tool[13] = t112;
-        J_tool[14] = t115;
-        J_tool[15] = t118;
-        J_tool[16] = t121;
-        J_tool[17] = 0.0;
-        J_tool[18] = t99;
-        J_tool[19] = t94;
-        J_tool[20] = t94;
-        J_tool[21] = t94;
-        J_tool[22] = -sn[5];
-        J_tool[23] = 0.0;
-        J_tool[24] = t100;
-        J_tool[25] = t95;
-        J_tool[26] = t95;
-        J_tool[27] = t95;
-        J_tool[28] = -cs[5];
-        J_tool[29] = 0.0;
-        J_tool[30] = t12;
-        J_tool[31] = cs[4];
-        J_tool[32] = cs[4];
-        J_tool[33] = cs[4];
-        J_tool[34] = 0.0;
-        J_tool[35] = 1.0;
-        J_tool_T[0 + b] = J_tool[0];
-        J_tool_T[32 + b] = J_tool[1];
-        J_tool_T[64 + b] = J_tool[2];
-        J_tool_T[96 + b] = J_tool[3];
-        J_tool_T[128 + b] = J_tool[4];
-        J_tool_T[160 + b] = J_tool[5];
-        J_tool_T[192 + b] = J_tool[6];
-        J_tool_T[224 + b] = J_tool[7];
-        J_tool_T[256 + b] = J_tool[8];
-        J_tool_T[288 + b] = J_tool[9];
-        J_tool_T[320 + b] = J_tool[10];
-        J_tool_T[352 + b] = J_tool[11];
-        J_tool_T[384 + b] = J_tool[12];
-        J_tool_T[416 + b] = J_tool[13];
-        J_tool_T[448 + b] = J_tool[14];
-        J_tool_T[480 + b] = J_tool[15];
-        J_tool_T[512 + b] = J_tool[16];
-        J_tool_T[544 + b] = J_tool[17];
-        J_tool_T[576 + b] = J_tool[18];
-        J_tool_T[608 + b] = J_tool[19];
-        J_tool_T[640 + b] = J_tool[20];
-        J_tool_T[672 + b] = J_tool[21];
-        J_tool_T[704 + b] = J_tool[22];
-        J_tool_T[736 + b] = J_tool[23];
-        J_tool_T[768 + b] = J_tool[24];
-        J_tool_T[800 + b] = J_tool[25];
-        J_tool_T[832 + b] = J_tool[26];
-        J_tool_T[864 + b] = J_tool[27];
-        J_tool_T[896 + b] = J_tool[28];
-        J_tool_T[928 + b] = J_tool[29];
-        J_tool_T[960 + b] = J_tool[30];
-        J_tool_T[992 + b] = J_tool[31];
-        J_tool_T[1024 + b] = J_tool[32];
-        J_tool_T[1056 + b] = J_tool[33];
-        J_tool_T[1088 + b] = J_tool[34];
-        J_tool_T[1120 + b] = J_tool[35];
+        ur5_jacobian_tool_finish(cs_T + b, sn_T + b, J_tool_T + b, 32);
     }
 }
 
@@ -1168,11 +784,11 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_tool_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_tool_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 36);
+            ur5_jacobian_tool_finish(cs + b * 8, sn + b * 8, J_tool + (i + b) * 36, 1);
         }
     }
 }
@@ -1181,35 +797,45 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 /* ---- ur5_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
 /* operations: 5 sin, 5 cos, 64 add/sub, 110 mul, 8 neg */
 
-static void ur5_jacobian_dot_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict cs, const double *restrict sn, double *restrict dJ)
+UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *restrict cs, const double *restrict sn, double *restrict dJ, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    dJ[5*UR5_STRIDE] = 0.0;
+    dJ[11*UR5_STRIDE] = 0.0;
+    dJ[12*UR5_STRIDE] = 0.0;
+    dJ[17*UR5_STRIDE] = 0.0;
+    dJ[18*UR5_STRIDE] = 0.0;
+    dJ[24*UR5_STRIDE] = 0.0;
+    dJ[30*UR5_STRIDE] = 0.0;
+    dJ[31*UR5_STRIDE] = 0.0;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
     const double t23 = t20*sn[0] - t17*cs[0];
     const double t25 = t21*cs[0];
@@ -1220,87 +846,79 @@ static void ur5_jacobian_dot_finish(const double dq[6], const double *restrict c
     const double t30 = t16*sn[0];
     const double t31 = t2*t14 - t13*sn[0];
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t43 = sn[0]*dq[1];
-    const double t44 = -cs[0]*dq[1];
-    const double t45 = t43 + sn[0]*dq[2];
-    const double t46 = t44 - cs[0]*dq[2];
-    const double t47 = t45 + sn[0]*dq[3];
-    const double t48 = t46 - cs[0]*dq[3];
-    const double t49 = t47 + t3*dq[4];
-    const double t50 = t48 + t5*dq[4];
-    const double t51 = dq[0] - cs[3]*dq[4];
-    const double t55 = t31*dq[4];
-    const double t56 = t32*dq[4];
-    const double t57 = t33*dq[4];
-    const double t58 = t55 + t29*dq[3];
-    const double t59 = t56 + t30*dq[3];
-    const double t60 = t57 + t15*dq[3];
-    const double t61 = t58 + t27*dq[2];
-    const double t62 = t59 + t28*dq[2];
-    const double t63 = t60 + t18*dq[2];
-    const double t64 = t61 + t25*dq[1];
-    const double t65 = t62 + t26*dq[1];
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    const double t43 = sn[0]*dq[1*UR5_STRIDE];
+    const double t44 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = t43 + sn[0]*dq[2*UR5_STRIDE];
+    const double t46 = t44 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + sn[0]*dq[3*UR5_STRIDE];
+    const double t48 = t46 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + t3*dq[4*UR5_STRIDE];
+    const double t50 = t48 + t5*dq[4*UR5_STRIDE];
+    const double t51 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t55 = t31*dq[4*UR5_STRIDE];
+    const double t56 = t32*dq[4*UR5_STRIDE];
+    const double t57 = t33*dq[4*UR5_STRIDE];
+    const double t58 = t55 + t29*dq[3*UR5_STRIDE];
+    const double t59 = t56 + t30*dq[3*UR5_STRIDE];
+    const double t60 = t57 + t15*dq[3*UR5_STRIDE];
+    const double t61 = t58 + t27*dq[2*UR5_STRIDE];
+    const double t62 = t59 + t28*dq[2*UR5_STRIDE];
+    const double t63 = t60 + t18*dq[2*UR5_STRIDE];
+    const double t64 = t61 + t25*dq[1*UR5_STRIDE];
+    const double t65 = t62 + t26*dq[1*UR5_STRIDE];
     const double t67 = t64 - t23*dq[0];
+    dJ[6*UR5_STRIDE] = t67;
     const double t69 = -t65 - t22*dq[0];
-    const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-    const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-    const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
-    const double t73 = cs[0]*dq[0];
-    const double t74 = sn[0]*dq[0];
-    const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-    const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-    const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-    const double t78 = -t43*cs[0] - t44*sn[0];
-    const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-    const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-    const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-    const double t82 = -t45*cs[0] - t46*sn[0];
-    const double t83 = t33*t50 - t32*t51;
-    const double t84 = t31*t51 - t33*t49;
-    const double t85 = t32*t49 - t31*t50;
-    const double t86 = -t5*dq[0] - t48*cs[3];
-    const double t87 = t3*dq[0] + t47*cs[3];
-    const double t88 = t5*t47 - t3*t48;
-    const double t89 = t12*t50 - t10*t51;
-    const double t90 = t8*t51 - t12*t49;
-    const double t91 = t10*t49 - t8*t50;
     dJ[0] = t69;
-    dJ[1] = t70;
-    dJ[2] = t75;
-    dJ[3] = t79;
-    dJ[4] = t83;
-    dJ[5] = 0.0;
-    dJ[6] = t67;
-    dJ[7] = t71;
-    dJ[8] = t76;
-    dJ[9] = t80;
-    dJ[10] = t84;
-    dJ[11] = 0.0;
-    dJ[12] = 0.0;
-    dJ[13] = t72;
-    dJ[14] = t77;
-    dJ[15] = t81;
-    dJ[16] = t85;
-    dJ[17] = 0.0;
-    dJ[18] = 0.0;
-    dJ[19] = t73;
-    dJ[20] = t73;
-    dJ[21] = t73;
-    dJ[22] = t86;
-    dJ[23] = t89;
-    dJ[24] = 0.0;
-    dJ[25] = t74;
-    dJ[26] = t74;
-    dJ[27] = t74;
-    dJ[28] = t87;
-    dJ[29] = t90;
-    dJ[30] = 0.0;
-    dJ[31] = 0.0;
-    dJ[32] = t78;
-    dJ[33] = t82;
-    dJ[34] = t88;
-    dJ[35] = t91;
+    const double t70 = t20*t44 - t26*dq[0] - cs[0]*t63;
+    dJ[1*UR5_STRIDE] = t70;
+    const double t71 = t25*dq[0] - t20*t43 - sn[0]*t63;
+    dJ[7*UR5_STRIDE] = t71;
+    const double t72 = t26*t43 + cs[0]*t61 + sn[0]*t62 - t25*t44;
+    dJ[13*UR5_STRIDE] = t72;
+    const double t73 = cs[0]*dq[0];
+    dJ[19*UR5_STRIDE] = t73;
+    dJ[20*UR5_STRIDE] = t73;
+    dJ[21*UR5_STRIDE] = t73;
+    const double t74 = sn[0]*dq[0];
+    dJ[25*UR5_STRIDE] = t74;
+    dJ[26*UR5_STRIDE] = t74;
+    dJ[27*UR5_STRIDE] = t74;
+    const double t75 = t18*t46 - t28*dq[0] - cs[0]*t60;
+    dJ[2*UR5_STRIDE] = t75;
+    const double t76 = t27*dq[0] - t18*t45 - sn[0]*t60;
+    dJ[8*UR5_STRIDE] = t76;
+    const double t77 = t28*t45 + cs[0]*t58 + sn[0]*t59 - t27*t46;
+    dJ[14*UR5_STRIDE] = t77;
+    const double t78 = -cs[0]*t43 - sn[0]*t44;
+    dJ[32*UR5_STRIDE] = t78;
+    const double t79 = t15*t48 - t30*dq[0] - cs[0]*t57;
+    dJ[3*UR5_STRIDE] = t79;
+    const double t80 = t29*dq[0] - t15*t47 - sn[0]*t57;
+    dJ[9*UR5_STRIDE] = t80;
+    const double t81 = t30*t47 + cs[0]*t55 + sn[0]*t56 - t29*t48;
+    dJ[15*UR5_STRIDE] = t81;
+    const double t82 = -cs[0]*t45 - sn[0]*t46;
+    dJ[33*UR5_STRIDE] = t82;
+    const double t83 = t33*t50 - t32*t51;
+    dJ[4*UR5_STRIDE] = t83;
+    const double t84 = t31*t51 - t33*t49;
+    dJ[10*UR5_STRIDE] = t84;
+    const double t85 = t32*t49 - t31*t50;
+    dJ[16*UR5_STRIDE] = t85;
+    const double t86 = -t5*dq[0] - cs[3*UR5_STRIDE]*t48;
+    dJ[22*UR5_STRIDE] = t86;
+    const double t87 = t3*dq[0] + cs[3*UR5_STRIDE]*t47;
+    dJ[28*UR5_STRIDE] = t87;
+    const double t88 = t5*t47 - t3*t48;
+    dJ[34*UR5_STRIDE] = t88;
+    const double t89 = t12*t50 - t10*t51;
+    dJ[23*UR5_STRIDE] = t89;
+    const double t90 = t8*t51 - t12*t49;
+    dJ[29*UR5_STRIDE] = t90;
+    const double t91 = t10*t49 - t8*t50;
+    dJ[35*UR5_STRIDE] = t91;
 }
 
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
@@ -1310,205 +928,24 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_jacobian_dot_angles(q, ang);
+    ur5_jacobian_dot_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_jacobian_dot_finish(dq, cs, sn, dJ);
+    ur5_jacobian_dot_finish(dq, cs, sn, dJ, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_jacobian_dot_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[5];
-        double sn[5];
-        double dJ[36];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t43 = sn[0]*dq[1];
-        const double t44 = -cs[0]*dq[1];
-        const double t45 = t43 + sn[0]*dq[2];
-        const double t46 = t44 - cs[0]*dq[2];
-        const double t47 = t45 + sn[0]*dq[3];
-        const double t48 = t46 - cs[0]*dq[3];
-        const double t49 = t47 + t3*dq[4];
-        const double t50 = t48 + t5*dq[4];
-        const double t51 = dq[0] - cs[3]*dq[4];
-        const double t55 = t31*dq[4];
-        const double t56 = t32*dq[4];
-        const double t57 = t33*dq[4];
-        const double t58 = t55 + t29*dq[3];
-        const double t59 = t56 + t30*dq[3];
-        const double t60 = t57 + t15*dq[3];
-        const double t61 = t58 + t27*dq[2];
-        const double t62 = t59 + t28*dq[2];
-        const double t63 = t60 + t18*dq[2];
-        const double t64 = t61 + t25*dq[1];
-        const double t65 = t62 + t26*dq[1];
-        const double t67 = t64 - t23*dq[0];
-        const double t69 = -t65 - t22*dq[0];
-        const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-        const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-        const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
-        const double t73 = cs[0]*dq[0];
-        const double t74 = sn[0]*dq[0];
-        const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-        const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-        const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-        const double t78 = -t43*cs[0] - t44*sn[0];
-        const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-        const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-        const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-        const double t82 = -t45*cs[0] - t46*sn[0];
-        const double t83 = t33*t50 - t32*t51;
-        const double t84 = t31*t51 - t33*t49;
-        const double t85 = t32*t49 - t31*t50;
-        const double t86 = -t5*dq[0] - t48*cs[3];
-        const double t87 = t3*dq[0] + t47*cs[3];
-        const double t88 = t5*t47 - t3*t48;
-        const double t89 = t12*t50 - t10*t51;
-        const double t90 = t8*t51 - t12*t49;
-        const double t91 = t10*t49 - t8*t50;
-        dJ[0] = t69;
-        dJ[1] = t70;
-        dJ[2] = t75;
-        dJ[3] = t79;
-        dJ[4] = t83;
-        dJ[5] = 0.0;
-        dJ[6] = t67;
-        dJ[7] = t71;
-        dJ[8] = t76;
-        dJ[9] = t80;
-        dJ[10] = t84;
-        dJ[11] = 0.0;
-        dJ[12] = 0.0;
-        dJ[13] = t72;
-        dJ[14] = t77;
-        dJ[15] = t81;
-        dJ[16] = t85;
-        dJ[17] = 0.0;
-        dJ[18] = 0.0;
-        dJ[19] = t73;
-        dJ[20] = t73;
-        dJ[21] = t73;
-        dJ[22] = t86;
-        dJ[23] = t89;
-        dJ[24] = 0.0;
-        dJ[25] = t74;
-        dJ[26] = t74;
-        dJ[27] = t74;
-        dJ[28] = t87;
-        dJ[29] = t90;
-        dJ[30] = 0.0;
-        dJ[31] = 0.0;
-        dJ[32] = t78;
-        dJ[33] = t82;
-        dJ[34] = t88;
-        dJ[35] = t91;
-        dJ_T[0 + b] = dJ[0];
-        dJ_T[32 + b] = dJ[1];
-        dJ_T[64 + b] = dJ[2];
-        dJ_T[96 + b] = dJ[3];
-        dJ_T[128 + b] = dJ[4];
-        dJ_T[160 + b] = dJ[5];
-        dJ_T[192 + b] = dJ[6];
-        dJ_T[224 + b] = dJ[7];
-        dJ_T[256 + b] = dJ[8];
-        dJ_T[288 + b] = dJ[9];
-        dJ_T[320 + b] = dJ[10];
-        dJ_T[352 + b] = dJ[11];
-        dJ_T[384 + b] = dJ[12];
-        dJ_T[416 + b] = dJ[13];
-        dJ_T[448 + b] = dJ[14];
-        dJ_T[480 + b] = dJ[15];
-        dJ_T[512 + b] = dJ[16];
-        dJ_T[544 + b] = dJ[17];
-        dJ_T[576 + b] = dJ[18];
-        dJ_T[608 + b] = dJ[19];
-        dJ_T[640 + b] = dJ[20];
-        dJ_T[672 + b] = dJ[21];
-        dJ_T[704 + b] = dJ[22];
-        dJ_T[736 + b] = dJ[23];
-        dJ_T[768 + b] = dJ[24];
-        dJ_T[800 + b] = dJ[25];
-        dJ_T[832 + b] = dJ[26];
-        dJ_T[864 + b] = dJ[27];
-        dJ_T[896 + b] = dJ[28];
-        dJ_T[928 + b] = dJ[29];
-        dJ_T[960 + b] = dJ[30];
-        dJ_T[992 + b] = dJ[31];
-        dJ_T[1024 + b] = dJ[32];
-        dJ_T[1056 + b] = dJ[33];
-        dJ_T[1088 + b] = dJ[34];
-        dJ_T[1120 + b] = dJ[35];
+        ur5_jacobian_dot_finish(dq_T + b, cs_T + b, sn_T + b, dJ_T + b, 32);
     }
 }
 
@@ -1603,11 +1040,11 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_dot_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_jacobian_dot_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_jacobian_dot_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, dJ + (i + b) * 36);
+            ur5_jacobian_dot_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, dJ + (i + b) * 36, 1);
         }
     }
 }
@@ -1616,35 +1053,37 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
 /* operations: 5 sin, 5 cos, 36 add/sub, 60 mul, 4 neg */
 
-static void ur5_twist_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_twist_finish(const double dq[6], const double *restrict cs, const double *restrict sn, double *restrict twist)
+UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict cs, const double *restrict sn, double *restrict twist, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
     const double t23 = t20*sn[0] - t17*cs[0];
     const double t25 = t21*cs[0];
@@ -1655,39 +1094,39 @@ static void ur5_twist_finish(const double dq[6], const double *restrict cs, cons
     const double t30 = t16*sn[0];
     const double t31 = t2*t14 - t13*sn[0];
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t43 = sn[0]*dq[1];
-    const double t44 = -cs[0]*dq[1];
-    const double t45 = t43 + sn[0]*dq[2];
-    const double t46 = t44 - cs[0]*dq[2];
-    const double t47 = t45 + sn[0]*dq[3];
-    const double t48 = t46 - cs[0]*dq[3];
-    const double t49 = t47 + t3*dq[4];
-    const double t50 = t48 + t5*dq[4];
-    const double t51 = dq[0] - cs[3]*dq[4];
-    const double t52 = t49 + t8*dq[5];
-    const double t53 = t50 + t10*dq[5];
-    const double t54 = t51 + t12*dq[5];
-    const double t55 = t31*dq[4];
-    const double t56 = t32*dq[4];
-    const double t57 = t33*dq[4];
-    const double t58 = t55 + t29*dq[3];
-    const double t59 = t56 + t30*dq[3];
-    const double t60 = t57 + t15*dq[3];
-    const double t61 = t58 + t27*dq[2];
-    const double t62 = t59 + t28*dq[2];
-    const double t63 = t60 + t18*dq[2];
-    const double t64 = t61 + t25*dq[1];
-    const double t65 = t62 + t26*dq[1];
-    const double t66 = t63 + t20*dq[1];
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    const double t43 = sn[0]*dq[1*UR5_STRIDE];
+    const double t44 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = t43 + sn[0]*dq[2*UR5_STRIDE];
+    const double t46 = t44 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + sn[0]*dq[3*UR5_STRIDE];
+    const double t48 = t46 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + t3*dq[4*UR5_STRIDE];
+    const double t50 = t48 + t5*dq[4*UR5_STRIDE];
+    const double t51 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t52 = t49 + t8*dq[5*UR5_STRIDE];
+    twist[3*UR5_STRIDE] = t52;
+    const double t53 = t50 + t10*dq[5*UR5_STRIDE];
+    twist[4*UR5_STRIDE] = t53;
+    const double t54 = t51 + t12*dq[5*UR5_STRIDE];
+    twist[5*UR5_STRIDE] = t54;
+    const double t55 = t31*dq[4*UR5_STRIDE];
+    const double t56 = t32*dq[4*UR5_STRIDE];
+    const double t57 = t33*dq[4*UR5_STRIDE];
+    const double t58 = t55 + t29*dq[3*UR5_STRIDE];
+    const double t59 = t56 + t30*dq[3*UR5_STRIDE];
+    const double t60 = t57 + t15*dq[3*UR5_STRIDE];
+    const double t61 = t58 + t27*dq[2*UR5_STRIDE];
+    const double t62 = t59 + t28*dq[2*UR5_STRIDE];
+    const double t63 = t60 + t18*dq[2*UR5_STRIDE];
+    const double t64 = t61 + t25*dq[1*UR5_STRIDE];
+    const double t65 = t62 + t26*dq[1*UR5_STRIDE];
+    const double t66 = t63 + t20*dq[1*UR5_STRIDE];
+    twist[2*UR5_STRIDE] = t66;
     const double t67 = t64 - t23*dq[0];
-    const double t68 = t65 + t22*dq[0];
     twist[0] = t67;
-    twist[1] = t68;
-    twist[2] = t66;
-    twist[3] = t52;
-    twist[4] = t53;
-    twist[5] = t54;
+    const double t68 = t65 + t22*dq[0];
+    twist[1*UR5_STRIDE] = t68;
 }
 
 void ur5_twist(const double q[6], const double dq[6], double twist[6])
@@ -1697,127 +1136,24 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6])
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_twist_angles(q, ang);
+    ur5_twist_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_twist_finish(dq, cs, sn, twist);
+    ur5_twist_finish(dq, cs, sn, twist, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_twist_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double cs[5];
-        double sn[5];
-        double twist[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t43 = sn[0]*dq[1];
-        const double t44 = -cs[0]*dq[1];
-        const double t45 = t43 + sn[0]*dq[2];
-        const double t46 = t44 - cs[0]*dq[2];
-        const double t47 = t45 + sn[0]*dq[3];
-        const double t48 = t46 - cs[0]*dq[3];
-        const double t49 = t47 + t3*dq[4];
-        const double t50 = t48 + t5*dq[4];
-        const double t51 = dq[0] - cs[3]*dq[4];
-        const double t52 = t49 + t8*dq[5];
-        const double t53 = t50 + t10*dq[5];
-        const double t54 = t51 + t12*dq[5];
-        const double t55 = t31*dq[4];
-        const double t56 = t32*dq[4];
-        const double t57 = t33*dq[4];
-        const double t58 = t55 + t29*dq[3];
-        const double t59 = t56 + t30*dq[3];
-        const double t60 = t57 + t15*dq[3];
-        const double t61 = t58 + t27*dq[2];
-        const double t62 = t59 + t28*dq[2];
-        const double t63 = t60 + t18*dq[2];
-        const double t64 = t61 + t25*dq[1];
-        const double t65 = t62 + t26*dq[1];
-        const double t66 = t63 + t20*dq[1];
-        const double t67 = t64 - t23*dq[0];
-        const double t68 = t65 + t22*dq[0];
-        twist[0] = t67;
-        twist[1] = t68;
-        twist[2] = t66;
-        twist[3] = t52;
-        twist[4] = t53;
-        twist[5] = t54;
-        twist_T[0 + b] = twist[0];
-        twist_T[32 + b] = twist[1];
-        twist_T[64 + b] = twist[2];
-        twist_T[96 + b] = twist[3];
-        twist_T[128 + b] = twist[4];
-        twist_T[160 + b] = twist[5];
+        ur5_twist_finish(dq_T + b, cs_T + b, sn_T + b, twist_T + b, 32);
     }
 }
 
@@ -1882,11 +1218,11 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_twist_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_twist_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_twist_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, twist + (i + b) * 6);
+            ur5_twist_finish(dq + (i + b) * 6, cs + b * 8, sn + b * 8, twist + (i + b) * 6, 1);
         }
     }
 }
@@ -1895,35 +1231,37 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
 /* operations: 5 sin, 5 cos, 113 add/sub, 164 mul, 8 neg */
 
-static void ur5_acceleration_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
 }
 
-static void ur5_acceleration_finish(const double dq[6], const double ddq[6], const double *restrict cs, const double *restrict sn, double *restrict acc)
+UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict cs, const double *restrict sn, double *restrict acc, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
     const double t23 = t20*sn[0] - t17*cs[0];
     const double t25 = t21*cs[0];
@@ -1934,57 +1272,57 @@ static void ur5_acceleration_finish(const double dq[6], const double ddq[6], con
     const double t30 = t16*sn[0];
     const double t31 = t2*t14 - t13*sn[0];
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t43 = sn[0]*dq[1];
-    const double t44 = -cs[0]*dq[1];
-    const double t45 = t43 + sn[0]*dq[2];
-    const double t46 = t44 - cs[0]*dq[2];
-    const double t47 = t45 + sn[0]*dq[3];
-    const double t48 = t46 - cs[0]*dq[3];
-    const double t49 = t47 + t3*dq[4];
-    const double t50 = t48 + t5*dq[4];
-    const double t51 = dq[0] - cs[3]*dq[4];
-    const double t55 = t31*dq[4];
-    const double t56 = t32*dq[4];
-    const double t57 = t33*dq[4];
-    const double t58 = t55 + t29*dq[3];
-    const double t59 = t56 + t30*dq[3];
-    const double t60 = t57 + t15*dq[3];
-    const double t61 = t58 + t27*dq[2];
-    const double t62 = t59 + t28*dq[2];
-    const double t63 = t60 + t18*dq[2];
-    const double t64 = t61 + t25*dq[1];
-    const double t65 = t62 + t26*dq[1];
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    const double t43 = sn[0]*dq[1*UR5_STRIDE];
+    const double t44 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = t43 + sn[0]*dq[2*UR5_STRIDE];
+    const double t46 = t44 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + sn[0]*dq[3*UR5_STRIDE];
+    const double t48 = t46 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + t3*dq[4*UR5_STRIDE];
+    const double t50 = t48 + t5*dq[4*UR5_STRIDE];
+    const double t51 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t55 = t31*dq[4*UR5_STRIDE];
+    const double t56 = t32*dq[4*UR5_STRIDE];
+    const double t57 = t33*dq[4*UR5_STRIDE];
+    const double t58 = t55 + t29*dq[3*UR5_STRIDE];
+    const double t59 = t56 + t30*dq[3*UR5_STRIDE];
+    const double t60 = t57 + t15*dq[3*UR5_STRIDE];
+    const double t61 = t58 + t27*dq[2*UR5_STRIDE];
+    const double t62 = t59 + t28*dq[2*UR5_STRIDE];
+    const double t63 = t60 + t18*dq[2*UR5_STRIDE];
+    const double t64 = t61 + t25*dq[1*UR5_STRIDE];
+    const double t65 = t62 + t26*dq[1*UR5_STRIDE];
     const double t67 = t64 - t23*dq[0];
     const double t69 = -t65 - t22*dq[0];
-    const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-    const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-    const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
+    const double t70 = t20*t44 - t26*dq[0] - cs[0]*t63;
+    const double t71 = t25*dq[0] - t20*t43 - sn[0]*t63;
+    const double t72 = t26*t43 + cs[0]*t61 + sn[0]*t62 - t25*t44;
     const double t73 = cs[0]*dq[0];
     const double t74 = sn[0]*dq[0];
-    const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-    const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-    const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-    const double t78 = -t43*cs[0] - t44*sn[0];
-    const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-    const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-    const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-    const double t82 = -t45*cs[0] - t46*sn[0];
+    const double t75 = t18*t46 - t28*dq[0] - cs[0]*t60;
+    const double t76 = t27*dq[0] - t18*t45 - sn[0]*t60;
+    const double t77 = t28*t45 + cs[0]*t58 + sn[0]*t59 - t27*t46;
+    const double t78 = -cs[0]*t43 - sn[0]*t44;
+    const double t79 = t15*t48 - t30*dq[0] - cs[0]*t57;
+    const double t80 = t29*dq[0] - t15*t47 - sn[0]*t57;
+    const double t81 = t30*t47 + cs[0]*t55 + sn[0]*t56 - t29*t48;
+    const double t82 = -cs[0]*t45 - sn[0]*t46;
     const double t83 = t33*t50 - t32*t51;
+    acc[0] = (((t25*ddq[1*UR5_STRIDE] + t27*ddq[2*UR5_STRIDE]) + (t29*ddq[3*UR5_STRIDE] + t31*ddq[4*UR5_STRIDE])) + ((t69*dq[0] + t70*dq[1*UR5_STRIDE]) + (t75*dq[2*UR5_STRIDE] + (t79*dq[3*UR5_STRIDE] + t83*dq[4*UR5_STRIDE])))) - t23*ddq[0];
     const double t84 = t31*t51 - t33*t49;
+    acc[1*UR5_STRIDE] = ((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + (t32*ddq[4*UR5_STRIDE] + t22*ddq[0]))) + ((t71*dq[1*UR5_STRIDE] + t76*dq[2*UR5_STRIDE]) + (t80*dq[3*UR5_STRIDE] + (t84*dq[4*UR5_STRIDE] + t67*dq[0])));
     const double t85 = t32*t49 - t31*t50;
-    const double t86 = -t5*dq[0] - t48*cs[3];
-    const double t87 = t3*dq[0] + t47*cs[3];
+    acc[2*UR5_STRIDE] = t33*ddq[4*UR5_STRIDE] + t20*ddq[1*UR5_STRIDE] + t18*ddq[2*UR5_STRIDE] + t15*ddq[3*UR5_STRIDE] + t72*dq[1*UR5_STRIDE] + t77*dq[2*UR5_STRIDE] + t81*dq[3*UR5_STRIDE] + t85*dq[4*UR5_STRIDE];
+    const double t86 = -t5*dq[0] - cs[3*UR5_STRIDE]*t48;
+    const double t87 = t3*dq[0] + cs[3*UR5_STRIDE]*t47;
     const double t88 = t5*t47 - t3*t48;
     const double t89 = t12*t50 - t10*t51;
+    acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t8*ddq[5*UR5_STRIDE]) + (t73*dq[1*UR5_STRIDE] + (t73*dq[2*UR5_STRIDE] + t73*dq[3*UR5_STRIDE]))) + ((t86*dq[4*UR5_STRIDE] + t89*dq[5*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
     const double t90 = t8*t51 - t12*t49;
+    acc[4*UR5_STRIDE] = ((t5*ddq[4*UR5_STRIDE] + (t10*ddq[5*UR5_STRIDE] + t74*dq[1*UR5_STRIDE])) + ((t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]) + (t87*dq[4*UR5_STRIDE] + t90*dq[5*UR5_STRIDE]))) - (cs[0]*ddq[1*UR5_STRIDE] + (cs[0]*ddq[2*UR5_STRIDE] + cs[0]*ddq[3*UR5_STRIDE]));
     const double t91 = t10*t49 - t8*t50;
-    acc[0] = t25*ddq[1] + t27*ddq[2] + t29*ddq[3] + t31*ddq[4] + t69*dq[0] + t70*dq[1] + t75*dq[2] + t79*dq[3] + t83*dq[4] - t23*ddq[0];
-    acc[1] = t26*ddq[1] + t28*ddq[2] + t30*ddq[3] + t32*ddq[4] + t22*ddq[0] + t71*dq[1] + t76*dq[2] + t80*dq[3] + t84*dq[4] + t67*dq[0];
-    acc[2] = t33*ddq[4] + t20*ddq[1] + t18*ddq[2] + t15*ddq[3] + t72*dq[1] + t77*dq[2] + t81*dq[3] + t85*dq[4];
-    acc[3] = t3*ddq[4] + t8*ddq[5] + t73*dq[1] + t73*dq[2] + t73*dq[3] + t86*dq[4] + t89*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3];
-    acc[4] = t5*ddq[4] + t10*ddq[5] + t74*dq[1] + t74*dq[2] + t74*dq[3] + t87*dq[4] + t90*dq[5] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-    acc[5] = ddq[0] + t12*ddq[5] + t78*dq[2] + t82*dq[3] + t88*dq[4] + t91*dq[5] - cs[3]*ddq[4];
+    acc[5*UR5_STRIDE] = ddq[0] + t12*ddq[5*UR5_STRIDE] + t78*dq[2*UR5_STRIDE] + t82*dq[3*UR5_STRIDE] + t88*dq[4*UR5_STRIDE] + t91*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
 }
 
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6])
@@ -1994,152 +1332,24 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
     for (k = 5; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_acceleration_angles(q, ang);
+    ur5_acceleration_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 5);
-    ur5_acceleration_finish(dq, ddq, cs, sn, acc);
+    ur5_acceleration_finish(dq, ddq, cs, sn, acc, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
+        ur5_acceleration_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig160(ang_T, cs_T, sn_T, 160);
     for (b = 0; b < 32; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[5];
-        double sn[5];
-        double acc[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[32 + b];
-        dq[2] = dq_T[64 + b];
-        dq[3] = dq_T[96 + b];
-        dq[4] = dq_T[128 + b];
-        dq[5] = dq_T[160 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[32 + b];
-        ddq[2] = ddq_T[64 + b];
-        ddq[3] = ddq_T[96 + b];
-        ddq[4] = ddq_T[128 + b];
-        ddq[5] = ddq_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t43 = sn[0]*dq[1];
-        const double t44 = -cs[0]*dq[1];
-        const double t45 = t43 + sn[0]*dq[2];
-        const double t46 = t44 - cs[0]*dq[2];
-        const double t47 = t45 + sn[0]*dq[3];
-        const double t48 = t46 - cs[0]*dq[3];
-        const double t49 = t47 + t3*dq[4];
-        const double t50 = t48 + t5*dq[4];
-        const double t51 = dq[0] - cs[3]*dq[4];
-        const double t55 = t31*dq[4];
-        const double t56 = t32*dq[4];
-        const double t57 = t33*dq[4];
-        const double t58 = t55 + t29*dq[3];
-        const double t59 = t56 + t30*dq[3];
-        const double t60 = t57 + t15*dq[3];
-        const double t61 = t58 + t27*dq[2];
-        const double t62 = t59 + t28*dq[2];
-        const double t63 = t60 + t18*dq[2];
-        const double t64 = t61 + t25*dq[1];
-        const double t65 = t62 + t26*dq[1];
-        const double t67 = t64 - t23*dq[0];
-        const double t69 = -t65 - t22*dq[0];
-        const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-        const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-        const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
-        const double t73 = cs[0]*dq[0];
-        const double t74 = sn[0]*dq[0];
-        const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-        const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-        const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-        const double t78 = -t43*cs[0] - t44*sn[0];
-        const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-        const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-        const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-        const double t82 = -t45*cs[0] - t46*sn[0];
-        const double t83 = t33*t50 - t32*t51;
-        const double t84 = t31*t51 - t33*t49;
-        const double t85 = t32*t49 - t31*t50;
-        const double t86 = -t5*dq[0] - t48*cs[3];
-        const double t87 = t3*dq[0] + t47*cs[3];
-        const double t88 = t5*t47 - t3*t48;
-        const double t89 = t12*t50 - t10*t51;
-        const double t90 = t8*t51 - t12*t49;
-        const double t91 = t10*t49 - t8*t50;
-        acc[0] = t25*ddq[1] + t27*ddq[2] + t29*ddq[3] + t31*ddq[4] + t69*dq[0] + t70*dq[1] + t75*dq[2] + t79*dq[3] + t83*dq[4] - t23*ddq[0];
-        acc[1] = t26*ddq[1] + t28*ddq[2] + t30*ddq[3] + t32*ddq[4] + t22*ddq[0] + t71*dq[1] + t76*dq[2] + t80*dq[3] + t84*dq[4] + t67*dq[0];
-        acc[2] = t33*ddq[4] + t20*ddq[1] + t18*ddq[2] + t15*ddq[3] + t72*dq[1] + t77*dq[2] + t81*dq[3] + t85*dq[4];
-        acc[3] = t3*ddq[4] + t8*ddq[5] + t73*dq[1] + t73*dq[2] + t73*dq[3] + t86*dq[4] + t89*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3];
-        acc[4] = t5*ddq[4] + t10*ddq[5] + t74*dq[1] + t74*dq[2] + t74*dq[3] + t87*dq[4] + t90*dq[5] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-        acc[5] = ddq[0] + t12*ddq[5] + t78*dq[2] + t82*dq[3] + t88*dq[4] + t91*dq[5] - cs[3]*ddq[4];
-        acc_T[0 + b] = acc[0];
-        acc_T[32 + b] = acc[1];
-        acc_T[64 + b] = acc[2];
-        acc_T[96 + b] = acc[3];
-        acc_T[128 + b] = acc[4];
-        acc_T[160 + b] = acc[5];
+        ur5_acceleration_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, acc_T + b, 32);
     }
 }
 
@@ -2215,11 +1425,11 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_acceleration_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_acceleration_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, acc + (i + b) * 6);
+            ur5_acceleration_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, acc + (i + b) * 6, 1);
         }
     }
 }
@@ -2228,211 +1438,213 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
 /* ---- ur5_kinematics: T, J, dJ, twist and acc at once ---- */
 /* operations: 6 sin, 6 cos, 127 add/sub, 186 mul, 12 neg */
 
-static void ur5_kinematics_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_kinematics_finish(const double dq[6], const double ddq[6], const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, double *restrict dJ, double *restrict twist, double *restrict acc)
+UR5_BODY void ur5_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, double *restrict dJ, double *restrict twist, double *restrict acc, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t6 = t2*cs[4] + sn[0]*sn[4];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t11 = cs[4]*sn[3];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
+    J[5*UR5_STRIDE] = 0.0;
+    J[11*UR5_STRIDE] = 0.0;
+    J[12*UR5_STRIDE] = 0.0;
+    J[17*UR5_STRIDE] = 0.0;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[24*UR5_STRIDE] = 0.0;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    dJ[5*UR5_STRIDE] = 0.0;
+    dJ[11*UR5_STRIDE] = 0.0;
+    dJ[12*UR5_STRIDE] = 0.0;
+    dJ[17*UR5_STRIDE] = 0.0;
+    dJ[18*UR5_STRIDE] = 0.0;
+    dJ[24*UR5_STRIDE] = 0.0;
+    dJ[30*UR5_STRIDE] = 0.0;
+    dJ[31*UR5_STRIDE] = 0.0;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    J[22*UR5_STRIDE] = t3;
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    J[28*UR5_STRIDE] = t5;
+    const double t6 = t2*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    T[2*UR5_STRIDE] = t8;
+    J[23*UR5_STRIDE] = t8;
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    J[29*UR5_STRIDE] = t10;
+    const double t11 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    T[10*UR5_STRIDE] = t12;
+    J[35*UR5_STRIDE] = t12;
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    J[15*UR5_STRIDE] = t15;
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    J[14*UR5_STRIDE] = t18;
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    J[13*UR5_STRIDE] = t20;
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
+    T[3*UR5_STRIDE] = t22;
+    J[6*UR5_STRIDE] = t22;
     const double t23 = t20*sn[0] - t17*cs[0];
+    T[7*UR5_STRIDE] = t23;
     const double t24 = 0.089159 - t21;
+    T[11*UR5_STRIDE] = t24;
     const double t25 = t21*cs[0];
+    J[1*UR5_STRIDE] = t25;
     const double t26 = t21*sn[0];
+    J[7*UR5_STRIDE] = t26;
     const double t27 = t19*cs[0];
+    J[2*UR5_STRIDE] = t27;
     const double t28 = t19*sn[0];
+    J[8*UR5_STRIDE] = t28;
     const double t29 = t16*cs[0];
+    J[3*UR5_STRIDE] = t29;
     const double t30 = t16*sn[0];
+    J[9*UR5_STRIDE] = t30;
     const double t31 = t2*t14 - t13*sn[0];
+    J[4*UR5_STRIDE] = t31;
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t34 = t6*cs[5] - t3*sn[5];
-    const double t35 = -t3*cs[5] - t6*sn[5];
-    const double t36 = cs[3]*sn[5];
-    const double t37 = t36 + t11*cs[5];
-    const double t38 = cs[3]*cs[5];
-    const double t39 = t38 - t11*sn[5];
-    const double t40 = t8*t39 - t12*t35;
-    const double t41 = t12*t34 - t8*t37;
-    const double t42 = t35*t37 - t34*t39;
-    const double t43 = sn[0]*dq[1];
-    const double t44 = -cs[0]*dq[1];
-    const double t45 = t43 + sn[0]*dq[2];
-    const double t46 = t44 - cs[0]*dq[2];
-    const double t47 = t45 + sn[0]*dq[3];
-    const double t48 = t46 - cs[0]*dq[3];
-    const double t49 = t47 + t3*dq[4];
-    const double t50 = t48 + t5*dq[4];
-    const double t51 = dq[0] - cs[3]*dq[4];
-    const double t52 = t49 + t8*dq[5];
-    const double t53 = t50 + t10*dq[5];
-    const double t54 = t51 + t12*dq[5];
-    const double t55 = t31*dq[4];
-    const double t56 = t32*dq[4];
-    const double t57 = t33*dq[4];
-    const double t58 = t55 + t29*dq[3];
-    const double t59 = t56 + t30*dq[3];
-    const double t60 = t57 + t15*dq[3];
-    const double t61 = t58 + t27*dq[2];
-    const double t62 = t59 + t28*dq[2];
-    const double t63 = t60 + t18*dq[2];
-    const double t64 = t61 + t25*dq[1];
-    const double t65 = t62 + t26*dq[1];
-    const double t66 = t63 + t20*dq[1];
-    const double t67 = t64 - t23*dq[0];
-    const double t68 = t65 + t22*dq[0];
-    const double t69 = -t65 - t22*dq[0];
-    const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-    const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-    const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
-    const double t73 = cs[0]*dq[0];
-    const double t74 = sn[0]*dq[0];
-    const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-    const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-    const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-    const double t78 = -t43*cs[0] - t44*sn[0];
-    const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-    const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-    const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-    const double t82 = -t45*cs[0] - t46*sn[0];
-    const double t83 = t33*t50 - t32*t51;
-    const double t84 = t31*t51 - t33*t49;
-    const double t85 = t32*t49 - t31*t50;
-    const double t86 = -t5*dq[0] - t48*cs[3];
-    const double t87 = t3*dq[0] + t47*cs[3];
-    const double t88 = t5*t47 - t3*t48;
-    const double t89 = t12*t50 - t10*t51;
-    const double t90 = t8*t51 - t12*t49;
-    const double t91 = t10*t49 - t8*t50;
-    const double t243 = -cs[0];
-    const double t310 = -cs[3];
-    const double t1357 = -t23;
+    J[10*UR5_STRIDE] = t32;
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    J[16*UR5_STRIDE] = t33;
+    const double t34 = t6*cs[5*UR5_STRIDE] - t3*sn[5*UR5_STRIDE];
     T[0] = t34;
-    T[1] = t35;
-    T[2] = t8;
-    T[3] = t22;
-    T[4] = t40;
-    T[5] = t41;
-    T[6] = t42;
-    T[7] = t23;
-    T[8] = t37;
-    T[9] = t39;
-    T[10] = t12;
-    T[11] = t24;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
-    J[0] = t1357;
-    J[1] = t25;
-    J[2] = t27;
-    J[3] = t29;
-    J[4] = t31;
-    J[5] = 0.0;
-    J[6] = t22;
-    J[7] = t26;
-    J[8] = t28;
-    J[9] = t30;
-    J[10] = t32;
-    J[11] = 0.0;
-    J[12] = 0.0;
-    J[13] = t20;
-    J[14] = t18;
-    J[15] = t15;
-    J[16] = t33;
-    J[17] = 0.0;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t3;
-    J[23] = t8;
-    J[24] = 0.0;
-    J[25] = t243;
-    J[26] = t243;
-    J[27] = t243;
-    J[28] = t5;
-    J[29] = t10;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t310;
-    J[35] = t12;
-    dJ[0] = t69;
-    dJ[1] = t70;
-    dJ[2] = t75;
-    dJ[3] = t79;
-    dJ[4] = t83;
-    dJ[5] = 0.0;
-    dJ[6] = t67;
-    dJ[7] = t71;
-    dJ[8] = t76;
-    dJ[9] = t80;
-    dJ[10] = t84;
-    dJ[11] = 0.0;
-    dJ[12] = 0.0;
-    dJ[13] = t72;
-    dJ[14] = t77;
-    dJ[15] = t81;
-    dJ[16] = t85;
-    dJ[17] = 0.0;
-    dJ[18] = 0.0;
-    dJ[19] = t73;
-    dJ[20] = t73;
-    dJ[21] = t73;
-    dJ[22] = t86;
-    dJ[23] = t89;
-    dJ[24] = 0.0;
-    dJ[25] = t74;
-    dJ[26] = t74;
-    dJ[27] = t74;
-    dJ[28] = t87;
-    dJ[29] = t90;
-    dJ[30] = 0.0;
-    dJ[31] = 0.0;
-    dJ[32] = t78;
-    dJ[33] = t82;
-    dJ[34] = t88;
-    dJ[35] = t91;
+    const double t35 = -t3*cs[5*UR5_STRIDE] - t6*sn[5*UR5_STRIDE];
+    T[1*UR5_STRIDE] = t35;
+    const double t36 = cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t37 = t11*cs[5*UR5_STRIDE] + t36;
+    T[8*UR5_STRIDE] = t37;
+    const double t38 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE];
+    const double t39 = t38 - t11*sn[5*UR5_STRIDE];
+    T[9*UR5_STRIDE] = t39;
+    const double t40 = t8*t39 - t12*t35;
+    T[4*UR5_STRIDE] = t40;
+    const double t41 = t12*t34 - t8*t37;
+    T[5*UR5_STRIDE] = t41;
+    const double t42 = t35*t37 - t34*t39;
+    T[6*UR5_STRIDE] = t42;
+    const double t43 = sn[0]*dq[1*UR5_STRIDE];
+    const double t44 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = t43 + sn[0]*dq[2*UR5_STRIDE];
+    const double t46 = t44 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + sn[0]*dq[3*UR5_STRIDE];
+    const double t48 = t46 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + t3*dq[4*UR5_STRIDE];
+    const double t50 = t48 + t5*dq[4*UR5_STRIDE];
+    const double t51 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
+    const double t52 = t49 + t8*dq[5*UR5_STRIDE];
+    twist[3*UR5_STRIDE] = t52;
+    const double t53 = t50 + t10*dq[5*UR5_STRIDE];
+    twist[4*UR5_STRIDE] = t53;
+    const double t54 = t51 + t12*dq[5*UR5_STRIDE];
+    twist[5*UR5_STRIDE] = t54;
+    const double t55 = t31*dq[4*UR5_STRIDE];
+    const double t56 = t32*dq[4*UR5_STRIDE];
+    const double t57 = t33*dq[4*UR5_STRIDE];
+    const double t58 = t55 + t29*dq[3*UR5_STRIDE];
+    const double t59 = t56 + t30*dq[3*UR5_STRIDE];
+    const double t60 = t57 + t15*dq[3*UR5_STRIDE];
+    const double t61 = t58 + t27*dq[2*UR5_STRIDE];
+    const double t62 = t59 + t28*dq[2*UR5_STRIDE];
+    const double t63 = t60 + t18*dq[2*UR5_STRIDE];
+    const double t64 = t61 + t25*dq[1*UR5_STRIDE];
+    const double t65 = t62 + t26*dq[1*UR5_STRIDE];
+    const double t66 = t63 + t20*dq[1*UR5_STRIDE];
+    twist[2*UR5_STRIDE] = t66;
+    const double t67 = t64 - t23*dq[0];
+    dJ[6*UR5_STRIDE] = t67;
     twist[0] = t67;
-    twist[1] = t68;
-    twist[2] = t66;
-    twist[3] = t52;
-    twist[4] = t53;
-    twist[5] = t54;
-    acc[0] = t25*ddq[1] + t27*ddq[2] + t29*ddq[3] + t31*ddq[4] + t69*dq[0] + t70*dq[1] + t75*dq[2] + t79*dq[3] + t83*dq[4] - t23*ddq[0];
-    acc[1] = t26*ddq[1] + t28*ddq[2] + t30*ddq[3] + t32*ddq[4] + t22*ddq[0] + t71*dq[1] + t76*dq[2] + t80*dq[3] + t84*dq[4] + t67*dq[0];
-    acc[2] = t33*ddq[4] + t20*ddq[1] + t18*ddq[2] + t15*ddq[3] + t72*dq[1] + t77*dq[2] + t81*dq[3] + t85*dq[4];
-    acc[3] = t3*ddq[4] + t8*ddq[5] + t73*dq[1] + t73*dq[2] + t73*dq[3] + t86*dq[4] + t89*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3];
-    acc[4] = t5*ddq[4] + t10*ddq[5] + t74*dq[1] + t74*dq[2] + t74*dq[3] + t87*dq[4] + t90*dq[5] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-    acc[5] = ddq[0] + t12*ddq[5] + t78*dq[2] + t82*dq[3] + t88*dq[4] + t91*dq[5] - cs[3]*ddq[4];
+    const double t68 = t65 + t22*dq[0];
+    twist[1*UR5_STRIDE] = t68;
+    const double t69 = -t65 - t22*dq[0];
+    dJ[0] = t69;
+    const double t70 = t20*t44 - t26*dq[0] - cs[0]*t63;
+    dJ[1*UR5_STRIDE] = t70;
+    const double t71 = t25*dq[0] - t20*t43 - sn[0]*t63;
+    dJ[7*UR5_STRIDE] = t71;
+    const double t72 = t26*t43 + cs[0]*t61 + sn[0]*t62 - t25*t44;
+    dJ[13*UR5_STRIDE] = t72;
+    const double t73 = cs[0]*dq[0];
+    dJ[19*UR5_STRIDE] = t73;
+    dJ[20*UR5_STRIDE] = t73;
+    dJ[21*UR5_STRIDE] = t73;
+    const double t74 = sn[0]*dq[0];
+    dJ[25*UR5_STRIDE] = t74;
+    dJ[26*UR5_STRIDE] = t74;
+    dJ[27*UR5_STRIDE] = t74;
+    const double t75 = t18*t46 - t28*dq[0] - cs[0]*t60;
+    dJ[2*UR5_STRIDE] = t75;
+    const double t76 = t27*dq[0] - t18*t45 - sn[0]*t60;
+    dJ[8*UR5_STRIDE] = t76;
+    const double t77 = t28*t45 + cs[0]*t58 + sn[0]*t59 - t27*t46;
+    dJ[14*UR5_STRIDE] = t77;
+    const double t78 = -cs[0]*t43 - sn[0]*t44;
+    dJ[32*UR5_STRIDE] = t78;
+    const double t79 = t15*t48 - t30*dq[0] - cs[0]*t57;
+    dJ[3*UR5_STRIDE] = t79;
+    const double t80 = t29*dq[0] - t15*t47 - sn[0]*t57;
+    dJ[9*UR5_STRIDE] = t80;
+    const double t81 = t30*t47 + cs[0]*t55 + sn[0]*t56 - t29*t48;
+    dJ[15*UR5_STRIDE] = t81;
+    const double t82 = -cs[0]*t45 - sn[0]*t46;
+    dJ[33*UR5_STRIDE] = t82;
+    const double t83 = t33*t50 - t32*t51;
+    dJ[4*UR5_STRIDE] = t83;
+    acc[0] = (((t25*ddq[1*UR5_STRIDE] + t27*ddq[2*UR5_STRIDE]) + (t29*ddq[3*UR5_STRIDE] + t31*ddq[4*UR5_STRIDE])) + ((t69*dq[0] + t70*dq[1*UR5_STRIDE]) + (t75*dq[2*UR5_STRIDE] + (t79*dq[3*UR5_STRIDE] + t83*dq[4*UR5_STRIDE])))) - t23*ddq[0];
+    const double t84 = t31*t51 - t33*t49;
+    dJ[10*UR5_STRIDE] = t84;
+    acc[1*UR5_STRIDE] = ((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + (t32*ddq[4*UR5_STRIDE] + t22*ddq[0]))) + ((t71*dq[1*UR5_STRIDE] + t76*dq[2*UR5_STRIDE]) + (t80*dq[3*UR5_STRIDE] + (t84*dq[4*UR5_STRIDE] + t67*dq[0])));
+    const double t85 = t32*t49 - t31*t50;
+    dJ[16*UR5_STRIDE] = t85;
+    acc[2*UR5_STRIDE] = t33*ddq[4*UR5_STRIDE] + t20*ddq[1*UR5_STRIDE] + t18*ddq[2*UR5_STRIDE] + t15*ddq[3*UR5_STRIDE] + t72*dq[1*UR5_STRIDE] + t77*dq[2*UR5_STRIDE] + t81*dq[3*UR5_STRIDE] + t85*dq[4*UR5_STRIDE];
+    const double t86 = -t5*dq[0] - cs[3*UR5_STRIDE]*t48;
+    dJ[22*UR5_STRIDE] = t86;
+    const double t87 = t3*dq[0] + cs[3*UR5_STRIDE]*t47;
+    dJ[28*UR5_STRIDE] = t87;
+    const double t88 = t5*t47 - t3*t48;
+    dJ[34*UR5_STRIDE] = t88;
+    const double t89 = t12*t50 - t10*t51;
+    dJ[23*UR5_STRIDE] = t89;
+    acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t8*ddq[5*UR5_STRIDE]) + (t73*dq[1*UR5_STRIDE] + (t73*dq[2*UR5_STRIDE] + t73*dq[3*UR5_STRIDE]))) + ((t86*dq[4*UR5_STRIDE] + t89*dq[5*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
+    const double t90 = t8*t51 - t12*t49;
+    dJ[29*UR5_STRIDE] = t90;
+    acc[4*UR5_STRIDE] = ((t5*ddq[4*UR5_STRIDE] + (t10*ddq[5*UR5_STRIDE] + t74*dq[1*UR5_STRIDE])) + ((t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]) + (t87*dq[4*UR5_STRIDE] + t90*dq[5*UR5_STRIDE]))) - (cs[0]*ddq[1*UR5_STRIDE] + (cs[0]*ddq[2*UR5_STRIDE] + cs[0]*ddq[3*UR5_STRIDE]));
+    const double t91 = t10*t49 - t8*t50;
+    dJ[35*UR5_STRIDE] = t91;
+    acc[5*UR5_STRIDE] = ddq[0] + t12*ddq[5*UR5_STRIDE] + t78*dq[2*UR5_STRIDE] + t82*dq[3*UR5_STRIDE] + t88*dq[4*UR5_STRIDE] + t91*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
+    const double t243 = -cs[0];
+    J[25*UR5_STRIDE] = t243;
+    J[26*UR5_STRIDE] = t243;
+    J[27*UR5_STRIDE] = t243;
+    const double t310 = -cs[3*UR5_STRIDE];
+    J[34*UR5_STRIDE] = t310;
+    const double t2150 = -t23;
+    J[0] = t2150;
 }
 
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6])
@@ -2442,368 +1654,24 @@ void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], 
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_kinematics_angles(q, ang);
+    ur5_kinematics_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc);
+    ur5_kinematics_finish(dq, ddq, cs, sn, T, J, dJ, twist, acc, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
     for (b = 0; b < 16; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[16 + b];
-        q[2] = q_T[32 + b];
-        q[3] = q_T[48 + b];
-        q[4] = q_T[64 + b];
-        q[5] = q_T[80 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[16 + b] = ang[1];
-        ang_T[32 + b] = ang[2];
-        ang_T[48 + b] = ang[3];
-        ang_T[64 + b] = ang[4];
-        ang_T[80 + b] = ang[5];
+        ur5_kinematics_angles(q_T + b, ang_T + b, 16);
     }
     ur5_trig96(ang_T, cs_T, sn_T, 96);
     for (b = 0; b < 16; ++b) {
-        double dq[6];
-        double ddq[6];
-        double cs[6];
-        double sn[6];
-        double T[16];
-        double J[36];
-        double dJ[36];
-        double twist[6];
-        double acc[6];
-        dq[0] = dq_T[0 + b];
-        dq[1] = dq_T[16 + b];
-        dq[2] = dq_T[32 + b];
-        dq[3] = dq_T[48 + b];
-        dq[4] = dq_T[64 + b];
-        dq[5] = dq_T[80 + b];
-        ddq[0] = ddq_T[0 + b];
-        ddq[1] = ddq_T[16 + b];
-        ddq[2] = ddq_T[32 + b];
-        ddq[3] = ddq_T[48 + b];
-        ddq[4] = ddq_T[64 + b];
-        ddq[5] = ddq_T[80 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[16 + b];
-        cs[2] = cs_T[32 + b];
-        cs[3] = cs_T[48 + b];
-        cs[4] = cs_T[64 + b];
-        cs[5] = cs_T[80 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[16 + b];
-        sn[2] = sn_T[32 + b];
-        sn[3] = sn_T[48 + b];
-        sn[4] = sn_T[64 + b];
-        sn[5] = sn_T[80 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t6 = t2*cs[4] + sn[0]*sn[4];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t11 = cs[4]*sn[3];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t24 = 0.089159 - t21;
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t34 = t6*cs[5] - t3*sn[5];
-        const double t35 = -t3*cs[5] - t6*sn[5];
-        const double t36 = cs[3]*sn[5];
-        const double t37 = t36 + t11*cs[5];
-        const double t38 = cs[3]*cs[5];
-        const double t39 = t38 - t11*sn[5];
-        const double t40 = t8*t39 - t12*t35;
-        const double t41 = t12*t34 - t8*t37;
-        const double t42 = t35*t37 - t34*t39;
-        const double t43 = sn[0]*dq[1];
-        const double t44 = -cs[0]*dq[1];
-        const double t45 = t43 + sn[0]*dq[2];
-        const double t46 = t44 - cs[0]*dq[2];
-        const double t47 = t45 + sn[0]*dq[3];
-        const double t48 = t46 - cs[0]*dq[3];
-        const double t49 = t47 + t3*dq[4];
-        const double t50 = t48 + t5*dq[4];
-        const double t51 = dq[0] - cs[3]*dq[4];
-        const double t52 = t49 + t8*dq[5];
-        const double t53 = t50 + t10*dq[5];
-        const double t54 = t51 + t12*dq[5];
-        const double t55 = t31*dq[4];
-        const double t56 = t32*dq[4];
-        const double t57 = t33*dq[4];
-        const double t58 = t55 + t29*dq[3];
-        const double t59 = t56 + t30*dq[3];
-        const double t60 = t57 + t15*dq[3];
-        const double t61 = t58 + t27*dq[2];
-        const double t62 = t59 + t28*dq[2];
-        const double t63 = t60 + t18*dq[2];
-        const double t64 = t61 + t25*dq[1];
-        const double t65 = t62 + t26*dq[1];
-        const double t66 = t63 + t20*dq[1];
-        const double t67 = t64 - t23*dq[0];
-        const double t68 = t65 + t22*dq[0];
-        const double t69 = -t65 - t22*dq[0];
-        const double t70 = t20*t44 - t26*dq[0] - t63*cs[0];
-        const double t71 = t25*dq[0] - t20*t43 - t63*sn[0];
-        const double t72 = t26*t43 + t61*cs[0] + t62*sn[0] - t25*t44;
-        const double t73 = cs[0]*dq[0];
-        const double t74 = sn[0]*dq[0];
-        const double t75 = t18*t46 - t28*dq[0] - t60*cs[0];
-        const double t76 = t27*dq[0] - t18*t45 - t60*sn[0];
-        const double t77 = t28*t45 + t58*cs[0] + t59*sn[0] - t27*t46;
-        const double t78 = -t43*cs[0] - t44*sn[0];
-        const double t79 = t15*t48 - t30*dq[0] - t57*cs[0];
-        const double t80 = t29*dq[0] - t15*t47 - t57*sn[0];
-        const double t81 = t30*t47 + t55*cs[0] + t56*sn[0] - t29*t48;
-        const double t82 = -t45*cs[0] - t46*sn[0];
-        const double t83 = t33*t50 - t32*t51;
-        const double t84 = t31*t51 - t33*t49;
-        const double t85 = t32*t49 - t31*t50;
-        const double t86 = -t5*dq[0] - t48*cs[3];
-        const double t87 = t3*dq[0] + t47*cs[3];
-        const double t88 = t5*t47 - t3*t48;
-        const double t89 = t12*t50 - t10*t51;
-        const double t90 = t8*t51 - t12*t49;
-        const double t91 = t10*t49 - t8*t50;
-        const double t243 = -cs[0];
-        const double t310 = -cs[3];
-        const double t1357 = -t23;
-        T[0] = t34;
-        T[1] = t35;
-        T[2] = t8;
-        T[3] = t22;
-        T[4] = t40;
-        T[5] = t41;
-        T[6] = t42;
-        T[7] = t23;
-        T[8] = t37;
-        T[9] = t39;
-        T[10] = t12;
-        T[11] = t24;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        J[0] = t1357;
-        J[1] = t25;
-        J[2] = t27;
-        J[3] = t29;
-        J[4] = t31;
-        J[5] = 0.0;
-        J[6] = t22;
-        J[7] = t26;
-        J[8] = t28;
-        J[9] = t30;
-        J[10] = t32;
-        J[11] = 0.0;
-        J[12] = 0.0;
-        J[13] = t20;
-        J[14] = t18;
-        J[15] = t15;
-        J[16] = t33;
-        J[17] = 0.0;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t3;
-        J[23] = t8;
-        J[24] = 0.0;
-        J[25] = t243;
-        J[26] = t243;
-        J[27] = t243;
-        J[28] = t5;
-        J[29] = t10;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t310;
-        J[35] = t12;
-        dJ[0] = t69;
-        dJ[1] = t70;
-        dJ[2] = t75;
-        dJ[3] = t79;
-        dJ[4] = t83;
-        dJ[5] = 0.0;
-        dJ[6] = t67;
-        dJ[7] = t71;
-        dJ[8] = t76;
-        dJ[9] = t80;
-        dJ[10] = t84;
-        dJ[11] = 0.0;
-        dJ[12] = 0.0;
-        dJ[13] = t72;
-        dJ[14] = t77;
-        dJ[15] = t81;
-        dJ[16] = t85;
-        dJ[17] = 0.0;
-        dJ[18] = 0.0;
-        dJ[19] = t73;
-        dJ[20] = t73;
-        dJ[21] = t73;
-        dJ[22] = t86;
-        dJ[23] = t89;
-        dJ[24] = 0.0;
-        dJ[25] = t74;
-        dJ[26] = t74;
-        dJ[27] = t74;
-        dJ[28] = t87;
-        dJ[29] = t90;
-        dJ[30] = 0.0;
-        dJ[31] = 0.0;
-        dJ[32] = t78;
-        dJ[33] = t82;
-        dJ[34] = t88;
-        dJ[35] = t91;
-        twist[0] = t67;
-        twist[1] = t68;
-        twist[2] = t66;
-        twist[3] = t52;
-        twist[4] = t53;
-        twist[5] = t54;
-        acc[0] = t25*ddq[1] + t27*ddq[2] + t29*ddq[3] + t31*ddq[4] + t69*dq[0] + t70*dq[1] + t75*dq[2] + t79*dq[3] + t83*dq[4] - t23*ddq[0];
-        acc[1] = t26*ddq[1] + t28*ddq[2] + t30*ddq[3] + t32*ddq[4] + t22*ddq[0] + t71*dq[1] + t76*dq[2] + t80*dq[3] + t84*dq[4] + t67*dq[0];
-        acc[2] = t33*ddq[4] + t20*ddq[1] + t18*ddq[2] + t15*ddq[3] + t72*dq[1] + t77*dq[2] + t81*dq[3] + t85*dq[4];
-        acc[3] = t3*ddq[4] + t8*ddq[5] + t73*dq[1] + t73*dq[2] + t73*dq[3] + t86*dq[4] + t89*dq[5] + sn[0]*ddq[1] + sn[0]*ddq[2] + sn[0]*ddq[3];
-        acc[4] = t5*ddq[4] + t10*ddq[5] + t74*dq[1] + t74*dq[2] + t74*dq[3] + t87*dq[4] + t90*dq[5] - cs[0]*ddq[1] - cs[0]*ddq[2] - cs[0]*ddq[3];
-        acc[5] = ddq[0] + t12*ddq[5] + t78*dq[2] + t82*dq[3] + t88*dq[4] + t91*dq[5] - cs[3]*ddq[4];
-        T_T[0 + b] = T[0];
-        T_T[16 + b] = T[1];
-        T_T[32 + b] = T[2];
-        T_T[48 + b] = T[3];
-        T_T[64 + b] = T[4];
-        T_T[80 + b] = T[5];
-        T_T[96 + b] = T[6];
-        T_T[112 + b] = T[7];
-        T_T[128 + b] = T[8];
-        T_T[144 + b] = T[9];
-        T_T[160 + b] = T[10];
-        T_T[176 + b] = T[11];
-        T_T[192 + b] = T[12];
-        T_T[208 + b] = T[13];
-        T_T[224 + b] = T[14];
-        T_T[240 + b] = T[15];
-        J_T[0 + b] = J[0];
-        J_T[16 + b] = J[1];
-        J_T[32 + b] = J[2];
-        J_T[48 + b] = J[3];
-        J_T[64 + b] = J[4];
-        J_T[80 + b] = J[5];
-        J_T[96 + b] = J[6];
-        J_T[112 + b] = J[7];
-        J_T[128 + b] = J[8];
-        J_T[144 + b] = J[9];
-        J_T[160 + b] = J[10];
-        J_T[176 + b] = J[11];
-        J_T[192 + b] = J[12];
-        J_T[208 + b] = J[13];
-        J_T[224 + b] = J[14];
-        J_T[240 + b] = J[15];
-        J_T[256 + b] = J[16];
-        J_T[272 + b] = J[17];
-        J_T[288 + b] = J[18];
-        J_T[304 + b] = J[19];
-        J_T[320 + b] = J[20];
-        J_T[336 + b] = J[21];
-        J_T[352 + b] = J[22];
-        J_T[368 + b] = J[23];
-        J_T[384 + b] = J[24];
-        J_T[400 + b] = J[25];
-        J_T[416 + b] = J[26];
-        J_T[432 + b] = J[27];
-        J_T[448 + b] = J[28];
-        J_T[464 + b] = J[29];
-        J_T[480 + b] = J[30];
-        J_T[496 + b] = J[31];
-        J_T[512 + b] = J[32];
-        J_T[528 + b] = J[33];
-        J_T[544 + b] = J[34];
-        J_T[560 + b] = J[35];
-        dJ_T[0 + b] = dJ[0];
-        dJ_T[16 + b] = dJ[1];
-        dJ_T[32 + b] = dJ[2];
-        dJ_T[48 + b] = dJ[3];
-        dJ_T[64 + b] = dJ[4];
-        dJ_T[80 + b] = dJ[5];
-        dJ_T[96 + b] = dJ[6];
-        dJ_T[112 + b] = dJ[7];
-        dJ_T[128 + b] = dJ[8];
-        dJ_T[144 + b] = dJ[9];
-        dJ_T[160 + b] = dJ[10];
-        dJ_T[176 + b] = dJ[11];
-        dJ_T[192 + b] = dJ[12];
-        dJ_T[208 + b] = dJ[13];
-        dJ_T[224 + b] = dJ[14];
-        dJ_T[240 + b] = dJ[15];
-        dJ_T[256 + b] = dJ[16];
-        dJ_T[272 + b] = dJ[17];
-        dJ_T[288 + b] = dJ[18];
-        dJ_T[304 + b] = dJ[19];
-        dJ_T[320 + b] = dJ[20];
-        dJ_T[336 + b] = dJ[21];
-        dJ_T[352 + b] = dJ[22];
-        dJ_T[368 + b] = dJ[23];
-        dJ_T[384 + b] = dJ[24];
-        dJ_T[400 + b] = dJ[25];
-        dJ_T[416 + b] = dJ[26];
-        dJ_T[432 + b] = dJ[27];
-        dJ_T[448 + b] = dJ[28];
-        dJ_T[464 + b] = dJ[29];
-        dJ_T[480 + b] = dJ[30];
-        dJ_T[496 + b] = dJ[31];
-        dJ_T[512 + b] = dJ[32];
-        dJ_T[528 + b] = dJ[33];
-        dJ_T[544 + b] = dJ[34];
-        dJ_T[560 + b] = dJ[35];
-        twist_T[0 + b] = twist[0];
-        twist_T[16 + b] = twist[1];
-        twist_T[32 + b] = twist[2];
-        twist_T[48 + b] = twist[3];
-        twist_T[64 + b] = twist[4];
-        twist_T[80 + b] = twist[5];
-        acc_T[0 + b] = acc[0];
-        acc_T[16 + b] = acc[1];
-        acc_T[32 + b] = acc[2];
-        acc_T[48 + b] = acc[3];
-        acc_T[64 + b] = acc[4];
-        acc_T[80 + b] = acc[5];
+        ur5_kinematics_finish(dq_T + b, ddq_T + b, cs_T + b, sn_T + b, T_T + b, J_T + b, dJ_T + b, twist_T + b, acc_T + b, 16);
     }
 }
 
@@ -2981,11 +1849,11 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_kinematics_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_kinematics_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, dJ + (i + b) * 36, twist + (i + b) * 6, acc + (i + b) * 6);
+            ur5_kinematics_finish(dq + (i + b) * 6, ddq + (i + b) * 6, cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, dJ + (i + b) * 36, twist + (i + b) * 6, acc + (i + b) * 6, 1);
         }
     }
 }
@@ -2994,114 +1862,116 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
 /* ---- ur5_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
 /* operations: 6 sin, 6 cos, 24 add/sub, 51 mul, 7 neg */
 
-static void ur5_ik_terms_angles(const double q[6], double *restrict ang)
+UR5_BODY void ur5_ik_terms_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
-    ang[2] = q[1] + q[2];
-    ang[3] = ang[2] + q[3];
+    (void)stride;
+    ang[2*UR5_STRIDE] = q[1*UR5_STRIDE] + q[2*UR5_STRIDE];
+    ang[3*UR5_STRIDE] = ang[2*UR5_STRIDE] + q[3*UR5_STRIDE];
     ang[0] = q[0];
-    ang[1] = q[1];
-    ang[4] = q[4];
-    ang[5] = q[5];
+    ang[1*UR5_STRIDE] = q[1*UR5_STRIDE];
+    ang[4*UR5_STRIDE] = q[4*UR5_STRIDE];
+    ang[5*UR5_STRIDE] = q[5*UR5_STRIDE];
 }
 
-static void ur5_ik_terms_finish(const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J)
+UR5_BODY void ur5_ik_terms_finish(const double *restrict cs, const double *restrict sn, double *restrict T, double *restrict J, const size_t stride)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t6 = t2*cs[4] + sn[0]*sn[4];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t11 = cs[4]*sn[3];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    (void)stride;
+    T[12*UR5_STRIDE] = 0.0;
+    T[13*UR5_STRIDE] = 0.0;
+    T[14*UR5_STRIDE] = 0.0;
+    T[15*UR5_STRIDE] = 1.0;
+    J[5*UR5_STRIDE] = 0.0;
+    J[11*UR5_STRIDE] = 0.0;
+    J[12*UR5_STRIDE] = 0.0;
+    J[17*UR5_STRIDE] = 0.0;
+    J[18*UR5_STRIDE] = 0.0;
+    J[19*UR5_STRIDE] = sn[0];
+    J[20*UR5_STRIDE] = sn[0];
+    J[21*UR5_STRIDE] = sn[0];
+    J[24*UR5_STRIDE] = 0.0;
+    J[30*UR5_STRIDE] = 1.0;
+    J[31*UR5_STRIDE] = 0.0;
+    J[32*UR5_STRIDE] = 0.0;
+    J[33*UR5_STRIDE] = 0.0;
+    const double t2 = cs[0]*cs[3*UR5_STRIDE];
+    const double t3 = cs[0]*sn[3*UR5_STRIDE];
+    J[22*UR5_STRIDE] = t3;
+    const double t4 = cs[3*UR5_STRIDE]*sn[0];
+    const double t5 = sn[0]*sn[3*UR5_STRIDE];
+    J[28*UR5_STRIDE] = t5;
+    const double t6 = t2*cs[4*UR5_STRIDE] + sn[0]*sn[4*UR5_STRIDE];
+    const double t7 = cs[4*UR5_STRIDE]*sn[0];
+    const double t8 = t7 - t2*sn[4*UR5_STRIDE];
+    T[2*UR5_STRIDE] = t8;
+    J[23*UR5_STRIDE] = t8;
+    const double t9 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = t9 - t4*sn[4*UR5_STRIDE];
+    J[29*UR5_STRIDE] = t10;
+    const double t11 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t12 = -sn[3*UR5_STRIDE]*sn[4*UR5_STRIDE];
+    T[10*UR5_STRIDE] = t12;
+    J[35*UR5_STRIDE] = t12;
+    const double t13 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*cs[4*UR5_STRIDE];
+    const double t15 = 0.09465*sn[3*UR5_STRIDE] - t13*cs[3*UR5_STRIDE];
+    J[15*UR5_STRIDE] = t15;
+    const double t16 = 0.09465*cs[3*UR5_STRIDE] + t13*sn[3*UR5_STRIDE];
     const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
+    const double t18 = t15 - 0.39225*cs[2*UR5_STRIDE];
+    J[14*UR5_STRIDE] = t18;
+    const double t19 = t16 + 0.39225*sn[2*UR5_STRIDE];
+    const double t20 = t18 - 0.425*cs[1*UR5_STRIDE];
+    J[13*UR5_STRIDE] = t20;
+    const double t21 = t19 + 0.425*sn[1*UR5_STRIDE];
     const double t22 = t20*cs[0] + t17*sn[0];
+    T[3*UR5_STRIDE] = t22;
+    J[6*UR5_STRIDE] = t22;
     const double t23 = t20*sn[0] - t17*cs[0];
+    T[7*UR5_STRIDE] = t23;
     const double t24 = 0.089159 - t21;
+    T[11*UR5_STRIDE] = t24;
     const double t25 = t21*cs[0];
+    J[1*UR5_STRIDE] = t25;
     const double t26 = t21*sn[0];
+    J[7*UR5_STRIDE] = t26;
     const double t27 = t19*cs[0];
+    J[2*UR5_STRIDE] = t27;
     const double t28 = t19*sn[0];
+    J[8*UR5_STRIDE] = t28;
     const double t29 = t16*cs[0];
+    J[3*UR5_STRIDE] = t29;
     const double t30 = t16*sn[0];
+    J[9*UR5_STRIDE] = t30;
     const double t31 = t2*t14 - t13*sn[0];
+    J[4*UR5_STRIDE] = t31;
     const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t34 = t6*cs[5] - t3*sn[5];
-    const double t35 = -t3*cs[5] - t6*sn[5];
-    const double t36 = cs[3]*sn[5];
-    const double t37 = t36 + t11*cs[5];
-    const double t38 = cs[3]*cs[5];
-    const double t39 = t38 - t11*sn[5];
-    const double t40 = t8*t39 - t12*t35;
-    const double t41 = t12*t34 - t8*t37;
-    const double t42 = t35*t37 - t34*t39;
-    const double t243 = -cs[0];
-    const double t310 = -cs[3];
-    const double t1357 = -t23;
+    J[10*UR5_STRIDE] = t32;
+    const double t33 = t14*sn[3*UR5_STRIDE];
+    J[16*UR5_STRIDE] = t33;
+    const double t34 = t6*cs[5*UR5_STRIDE] - t3*sn[5*UR5_STRIDE];
     T[0] = t34;
-    T[1] = t35;
-    T[2] = t8;
-    T[3] = t22;
-    T[4] = t40;
-    T[5] = t41;
-    T[6] = t42;
-    T[7] = t23;
-    T[8] = t37;
-    T[9] = t39;
-    T[10] = t12;
-    T[11] = t24;
-    T[12] = 0.0;
-    T[13] = 0.0;
-    T[14] = 0.0;
-    T[15] = 1.0;
-    J[0] = t1357;
-    J[1] = t25;
-    J[2] = t27;
-    J[3] = t29;
-    J[4] = t31;
-    J[5] = 0.0;
-    J[6] = t22;
-    J[7] = t26;
-    J[8] = t28;
-    J[9] = t30;
-    J[10] = t32;
-    J[11] = 0.0;
-    J[12] = 0.0;
-    J[13] = t20;
-    J[14] = t18;
-    J[15] = t15;
-    J[16] = t33;
-    J[17] = 0.0;
-    J[18] = 0.0;
-    J[19] = sn[0];
-    J[20] = sn[0];
-    J[21] = sn[0];
-    J[22] = t3;
-    J[23] = t8;
-    J[24] = 0.0;
-    J[25] = t243;
-    J[26] = t243;
-    J[27] = t243;
-    J[28] = t5;
-    J[29] = t10;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = t310;
-    J[35] = t12;
+    const double t35 = -t3*cs[5*UR5_STRIDE] - t6*sn[5*UR5_STRIDE];
+    T[1*UR5_STRIDE] = t35;
+    const double t36 = cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t37 = t11*cs[5*UR5_STRIDE] + t36;
+    T[8*UR5_STRIDE] = t37;
+    const double t38 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE];
+    const double t39 = t38 - t11*sn[5*UR5_STRIDE];
+    T[9*UR5_STRIDE] = t39;
+    const double t40 = t8*t39 - t12*t35;
+    T[4*UR5_STRIDE] = t40;
+    const double t41 = t12*t34 - t8*t37;
+    T[5*UR5_STRIDE] = t41;
+    const double t42 = t35*t37 - t34*t39;
+    T[6*UR5_STRIDE] = t42;
+    const double t243 = -cs[0];
+    J[25*UR5_STRIDE] = t243;
+    J[26*UR5_STRIDE] = t243;
+    J[27*UR5_STRIDE] = t243;
+    const double t310 = -cs[3*UR5_STRIDE];
+    J[34*UR5_STRIDE] = t310;
+    const double t2150 = -t23;
+    J[0] = t2150;
 }
 
 void ur5_ik_terms(const double q[6], double T[16], double J[36])
@@ -3111,206 +1981,24 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36])
     for (k = 6; k < 8; ++k) {
         ang[k] = 0;
     }
-    ur5_ik_terms_angles(q, ang);
+    ur5_ik_terms_angles(q, ang, 1);
     ur5_trig8(ang, cs, sn, 6);
-    ur5_ik_terms_finish(cs, sn, T, J);
+    ur5_ik_terms_finish(cs, sn, T, J, 1);
 }
 
 #if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
+/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
+ * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
 static UR5_VECTORIZE void ur5_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
     for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
+        ur5_ik_terms_angles(q_T + b, ang_T + b, 32);
     }
     ur5_trig192(ang_T, cs_T, sn_T, 192);
     for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double T[16];
-        double J[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t6 = t2*cs[4] + sn[0]*sn[4];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t11 = cs[4]*sn[3];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t24 = 0.089159 - t21;
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t34 = t6*cs[5] - t3*sn[5];
-        const double t35 = -t3*cs[5] - t6*sn[5];
-        const double t36 = cs[3]*sn[5];
-        const double t37 = t36 + t11*cs[5];
-        const double t38 = cs[3]*cs[5];
-        const double t39 = t38 - t11*sn[5];
-        const double t40 = t8*t39 - t12*t35;
-        const double t41 = t12*t34 - t8*t37;
-        const double t42 = t35*t37 - t34*t39;
-        const double t243 = -cs[0];
-        const double t310 = -cs[3];
-        const double t1357 = -t23;
-        T[0] = t34;
-        T[1] = t35;
-        T[2] = t8;
-        T[3] = t22;
-        T[4] = t40;
-        T[5] = t41;
-        T[6] = t42;
-        T[7] = t23;
-        T[8] = t37;
-        T[9] = t39;
-        T[10] = t12;
-        T[11] = t24;
-        T[12] = 0.0;
-        T[13] = 0.0;
-        T[14] = 0.0;
-        T[15] = 1.0;
-        J[0] = t1357;
-        J[1] = t25;
-        J[2] = t27;
-        J[3] = t29;
-        J[4] = t31;
-        J[5] = 0.0;
-        J[6] = t22;
-        J[7] = t26;
-        J[8] = t28;
-        J[9] = t30;
-        J[10] = t32;
-        J[11] = 0.0;
-        J[12] = 0.0;
-        J[13] = t20;
-        J[14] = t18;
-        J[15] = t15;
-        J[16] = t33;
-        J[17] = 0.0;
-        J[18] = 0.0;
-        J[19] = sn[0];
-        J[20] = sn[0];
-        J[21] = sn[0];
-        J[22] = t3;
-        J[23] = t8;
-        J[24] = 0.0;
-        J[25] = t243;
-        J[26] = t243;
-        J[27] = t243;
-        J[28] = t5;
-        J[29] = t10;
-        J[30] = 1.0;
-        J[31] = 0.0;
-        J[32] = 0.0;
-        J[33] = 0.0;
-        J[34] = t310;
-        J[35] = t12;
-        T_T[0 + b] = T[0];
-        T_T[32 + b] = T[1];
-        T_T[64 + b] = T[2];
-        T_T[96 + b] = T[3];
-        T_T[128 + b] = T[4];
-        T_T[160 + b] = T[5];
-        T_T[192 + b] = T[6];
-        T_T[224 + b] = T[7];
-        T_T[256 + b] = T[8];
-        T_T[288 + b] = T[9];
-        T_T[320 + b] = T[10];
-        T_T[352 + b] = T[11];
-        T_T[384 + b] = T[12];
-        T_T[416 + b] = T[13];
-        T_T[448 + b] = T[14];
-        T_T[480 + b] = T[15];
-        J_T[0 + b] = J[0];
-        J_T[32 + b] = J[1];
-        J_T[64 + b] = J[2];
-        J_T[96 + b] = J[3];
-        J_T[128 + b] = J[4];
-        J_T[160 + b] = J[5];
-        J_T[192 + b] = J[6];
-        J_T[224 + b] = J[7];
-        J_T[256 + b] = J[8];
-        J_T[288 + b] = J[9];
-        J_T[320 + b] = J[10];
-        J_T[352 + b] = J[11];
-        J_T[384 + b] = J[12];
-        J_T[416 + b] = J[13];
-        J_T[448 + b] = J[14];
-        J_T[480 + b] = J[15];
-        J_T[512 + b] = J[16];
-        J_T[544 + b] = J[17];
-        J_T[576 + b] = J[18];
-        J_T[608 + b] = J[19];
-        J_T[640 + b] = J[20];
-        J_T[672 + b] = J[21];
-        J_T[704 + b] = J[22];
-        J_T[736 + b] = J[23];
-        J_T[768 + b] = J[24];
-        J_T[800 + b] = J[25];
-        J_T[832 + b] = J[26];
-        J_T[864 + b] = J[27];
-        J_T[896 + b] = J[28];
-        J_T[928 + b] = J[29];
-        J_T[960 + b] = J[30];
-        J_T[992 + b] = J[31];
-        J_T[1024 + b] = J[32];
-        J_T[1056 + b] = J[33];
-        J_T[1088 + b] = J[34];
-        J_T[1120 + b] = J[35];
+        ur5_ik_terms_finish(cs_T + b, sn_T + b, T_T + b, J_T + b, 32);
     }
 }
 
@@ -3412,11 +2100,11 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
     for (i = 0; i < m; i += 64) {
         const size_t count = m - i < 64 ? m - i : 64;
         for (b = 0; b < count; ++b) {
-            ur5_ik_terms_angles(q + (i + b) * 6, ang + b * 8);
+            ur5_ik_terms_angles(q + (i + b) * 6, ang + b * 8, 1);
         }
         ur5_trig512(ang, cs, sn, 512);
         for (b = 0; b < count; ++b) {
-            ur5_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36);
+            ur5_ik_terms_finish(cs + b * 8, sn + b * 8, T + (i + b) * 16, J + (i + b) * 36, 1);
         }
     }
 }
@@ -3568,7 +2256,7 @@ static void ur5_manipulability_finish(const double *restrict cs, const double *r
     const double t226 = t220 - t222*t188;
     const double t227 = t221 - t222*t189;
     const double t228 = t8*t8;
-    const double t229 = t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227 + t228;
+    const double t229 = t228 + t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227;
     const double t230 = sqrt(t229);
     const double t231 = (t230 > 0.0 ? 1.0/(t230 != 0.0 ? t230 : 1.0) : 1.0);
     const double t232 = t231*t223;
@@ -3577,7 +2265,7 @@ static void ur5_manipulability_finish(const double *restrict cs, const double *r
     const double t235 = t231*t226;
     const double t236 = t231*t227;
     const double t237 = t8*t231;
-    const double t241 = t5*t136 - t133*cs[0] - t134*cs[0] - t135*cs[0];
+    const double t241 = t5*t136 - cs[0]*t133 - cs[0]*t134 - cs[0]*t135;
     const double t242 = -t241*t132;
     const double t243 = -cs[0];
     const double t244 = t243 - t241*t133;
@@ -3637,7 +2325,7 @@ static void ur5_manipulability_finish(const double *restrict cs, const double *r
     const double t298 = t294*t289;
     const double t299 = t294*t290;
     const double t300 = t294*t291;
-    const double t305 = t132 - t136*cs[3];
+    const double t305 = t132 - cs[3]*t136;
     const double t306 = 1.0 - t305*t132;
     const double t307 = -t305*t133;
     const double t308 = -t305*t134;
@@ -3720,356 +2408,6 @@ void ur5_manipulability(const double q[6], double w[1])
     ur5_manipulability_finish(cs, sn, w);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_block(const double *restrict q_T, double *restrict w_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double w[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t123 = t25*t25;
-        const double t124 = t27*t27;
-        const double t125 = t29*t29;
-        const double t126 = t31*t31;
-        const double t127 = t23*t23;
-        const double t128 = t123 + t124 + t125 + t126 + t127;
-        const double t129 = sqrt(t128);
-        const double t130 = 1.0/(t129 != 0.0 ? t129 : 1.0);
-        const double t131 = (t129 > 0.0 ? t130 : 1.0);
-        const double t132 = -t23*t131;
-        const double t133 = t25*t131;
-        const double t134 = t27*t131;
-        const double t135 = t29*t131;
-        const double t136 = t31*t131;
-        const double t137 = t26*t133 + t28*t134 + t30*t135 + t32*t136 + t22*t132;
-        const double t138 = t22 - t137*t132;
-        const double t139 = t26 - t137*t133;
-        const double t140 = t28 - t137*t134;
-        const double t141 = t30 - t137*t135;
-        const double t142 = t32 - t137*t136;
-        const double t143 = t132*t138 + t133*t139 + t134*t140 + t135*t141 + t136*t142;
-        const double t144 = t138 - t143*t132;
-        const double t145 = t139 - t143*t133;
-        const double t146 = t140 - t143*t134;
-        const double t147 = t141 - t143*t135;
-        const double t148 = t142 - t143*t136;
-        const double t149 = t144*t144 + t145*t145 + t146*t146 + t147*t147 + t148*t148;
-        const double t150 = sqrt(t149);
-        const double t151 = (t150 > 0.0 ? 1.0/(t150 != 0.0 ? t150 : 1.0) : 1.0);
-        const double t152 = t151*t144;
-        const double t153 = t151*t145;
-        const double t154 = t151*t146;
-        const double t155 = t151*t147;
-        const double t156 = t151*t148;
-        const double t158 = t33*t136 + t20*t133 + t18*t134 + t15*t135;
-        const double t159 = -t158*t132;
-        const double t160 = t20 - t158*t133;
-        const double t161 = t18 - t158*t134;
-        const double t162 = t15 - t158*t135;
-        const double t163 = t33 - t158*t136;
-        const double t164 = t152*t159 + t153*t160 + t154*t161 + t155*t162 + t156*t163;
-        const double t165 = t159 - t164*t152;
-        const double t166 = t160 - t164*t153;
-        const double t167 = t161 - t164*t154;
-        const double t168 = t162 - t164*t155;
-        const double t169 = t163 - t164*t156;
-        const double t170 = t132*t165 + t133*t166 + t134*t167 + t135*t168 + t136*t169;
-        const double t171 = t165 - t170*t132;
-        const double t172 = t166 - t170*t133;
-        const double t173 = t167 - t170*t134;
-        const double t174 = t168 - t170*t135;
-        const double t175 = t169 - t170*t136;
-        const double t176 = t152*t171 + t153*t172 + t154*t173 + t155*t174 + t156*t175;
-        const double t177 = t171 - t176*t152;
-        const double t178 = t172 - t176*t153;
-        const double t179 = t173 - t176*t154;
-        const double t180 = t174 - t176*t155;
-        const double t181 = t175 - t176*t156;
-        const double t182 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181;
-        const double t183 = sqrt(t182);
-        const double t184 = (t183 > 0.0 ? 1.0/(t183 != 0.0 ? t183 : 1.0) : 1.0);
-        const double t185 = t184*t177;
-        const double t186 = t184*t178;
-        const double t187 = t184*t179;
-        const double t188 = t184*t180;
-        const double t189 = t184*t181;
-        const double t192 = t3*t136 + t133*sn[0] + t134*sn[0] + t135*sn[0];
-        const double t193 = -t192*t132;
-        const double t194 = sn[0] - t192*t133;
-        const double t195 = sn[0] - t192*t134;
-        const double t196 = sn[0] - t192*t135;
-        const double t197 = t3 - t192*t136;
-        const double t198 = t152*t193 + t153*t194 + t154*t195 + t155*t196 + t156*t197;
-        const double t199 = t193 - t198*t152;
-        const double t200 = t194 - t198*t153;
-        const double t201 = t195 - t198*t154;
-        const double t202 = t196 - t198*t155;
-        const double t203 = t197 - t198*t156;
-        const double t204 = t185*t199 + t186*t200 + t187*t201 + t188*t202 + t189*t203;
-        const double t205 = t199 - t204*t185;
-        const double t206 = t200 - t204*t186;
-        const double t207 = t201 - t204*t187;
-        const double t208 = t202 - t204*t188;
-        const double t209 = t203 - t204*t189;
-        const double t210 = t132*t205 + t133*t206 + t134*t207 + t135*t208 + t136*t209;
-        const double t211 = t205 - t210*t132;
-        const double t212 = t206 - t210*t133;
-        const double t213 = t207 - t210*t134;
-        const double t214 = t208 - t210*t135;
-        const double t215 = t209 - t210*t136;
-        const double t216 = t152*t211 + t153*t212 + t154*t213 + t155*t214 + t156*t215;
-        const double t217 = t211 - t216*t152;
-        const double t218 = t212 - t216*t153;
-        const double t219 = t213 - t216*t154;
-        const double t220 = t214 - t216*t155;
-        const double t221 = t215 - t216*t156;
-        const double t222 = t185*t217 + t186*t218 + t187*t219 + t188*t220 + t189*t221;
-        const double t223 = t217 - t222*t185;
-        const double t224 = t218 - t222*t186;
-        const double t225 = t219 - t222*t187;
-        const double t226 = t220 - t222*t188;
-        const double t227 = t221 - t222*t189;
-        const double t228 = t8*t8;
-        const double t229 = t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227 + t228;
-        const double t230 = sqrt(t229);
-        const double t231 = (t230 > 0.0 ? 1.0/(t230 != 0.0 ? t230 : 1.0) : 1.0);
-        const double t232 = t231*t223;
-        const double t233 = t231*t224;
-        const double t234 = t231*t225;
-        const double t235 = t231*t226;
-        const double t236 = t231*t227;
-        const double t237 = t8*t231;
-        const double t241 = t5*t136 - t133*cs[0] - t134*cs[0] - t135*cs[0];
-        const double t242 = -t241*t132;
-        const double t243 = -cs[0];
-        const double t244 = t243 - t241*t133;
-        const double t245 = t243 - t241*t134;
-        const double t246 = t243 - t241*t135;
-        const double t247 = t5 - t241*t136;
-        const double t248 = t152*t242 + t153*t244 + t154*t245 + t155*t246 + t156*t247;
-        const double t249 = t242 - t248*t152;
-        const double t250 = t244 - t248*t153;
-        const double t251 = t245 - t248*t154;
-        const double t252 = t246 - t248*t155;
-        const double t253 = t247 - t248*t156;
-        const double t254 = t185*t249 + t186*t250 + t187*t251 + t188*t252 + t189*t253;
-        const double t255 = t249 - t254*t185;
-        const double t256 = t250 - t254*t186;
-        const double t257 = t251 - t254*t187;
-        const double t258 = t252 - t254*t188;
-        const double t259 = t253 - t254*t189;
-        const double t260 = t10*t237 + t232*t255 + t233*t256 + t234*t257 + t235*t258 + t236*t259;
-        const double t261 = t255 - t260*t232;
-        const double t262 = t256 - t260*t233;
-        const double t263 = t257 - t260*t234;
-        const double t264 = t258 - t260*t235;
-        const double t265 = t259 - t260*t236;
-        const double t266 = t10 - t260*t237;
-        const double t267 = t132*t261 + t133*t262 + t134*t263 + t135*t264 + t136*t265;
-        const double t268 = t261 - t267*t132;
-        const double t269 = t262 - t267*t133;
-        const double t270 = t263 - t267*t134;
-        const double t271 = t264 - t267*t135;
-        const double t272 = t265 - t267*t136;
-        const double t273 = t152*t268 + t153*t269 + t154*t270 + t155*t271 + t156*t272;
-        const double t274 = t268 - t273*t152;
-        const double t275 = t269 - t273*t153;
-        const double t276 = t270 - t273*t154;
-        const double t277 = t271 - t273*t155;
-        const double t278 = t272 - t273*t156;
-        const double t279 = t185*t274 + t186*t275 + t187*t276 + t188*t277 + t189*t278;
-        const double t280 = t274 - t279*t185;
-        const double t281 = t275 - t279*t186;
-        const double t282 = t276 - t279*t187;
-        const double t283 = t277 - t279*t188;
-        const double t284 = t278 - t279*t189;
-        const double t285 = t232*t280 + t233*t281 + t234*t282 + t235*t283 + t236*t284 + t237*t266;
-        const double t286 = t280 - t285*t232;
-        const double t287 = t281 - t285*t233;
-        const double t288 = t282 - t285*t234;
-        const double t289 = t283 - t285*t235;
-        const double t290 = t284 - t285*t236;
-        const double t291 = t266 - t285*t237;
-        const double t292 = t286*t286 + t287*t287 + t288*t288 + t289*t289 + t290*t290 + t291*t291;
-        const double t293 = sqrt(t292);
-        const double t294 = (t293 > 0.0 ? 1.0/(t293 != 0.0 ? t293 : 1.0) : 1.0);
-        const double t295 = t294*t286;
-        const double t296 = t294*t287;
-        const double t297 = t294*t288;
-        const double t298 = t294*t289;
-        const double t299 = t294*t290;
-        const double t300 = t294*t291;
-        const double t305 = t132 - t136*cs[3];
-        const double t306 = 1.0 - t305*t132;
-        const double t307 = -t305*t133;
-        const double t308 = -t305*t134;
-        const double t309 = -t305*t135;
-        const double t310 = -cs[3];
-        const double t311 = t310 - t305*t136;
-        const double t312 = t152*t306 + t153*t307 + t154*t308 + t155*t309 + t156*t311;
-        const double t313 = t306 - t312*t152;
-        const double t314 = t307 - t312*t153;
-        const double t315 = t308 - t312*t154;
-        const double t316 = t309 - t312*t155;
-        const double t317 = t311 - t312*t156;
-        const double t318 = t185*t313 + t186*t314 + t187*t315 + t188*t316 + t189*t317;
-        const double t319 = t313 - t318*t185;
-        const double t320 = t314 - t318*t186;
-        const double t321 = t315 - t318*t187;
-        const double t322 = t316 - t318*t188;
-        const double t323 = t317 - t318*t189;
-        const double t324 = t12*t237 + t232*t319 + t233*t320 + t234*t321 + t235*t322 + t236*t323;
-        const double t325 = t319 - t324*t232;
-        const double t326 = t320 - t324*t233;
-        const double t327 = t321 - t324*t234;
-        const double t328 = t322 - t324*t235;
-        const double t329 = t323 - t324*t236;
-        const double t330 = t12 - t324*t237;
-        const double t331 = t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329 + t300*t330;
-        const double t332 = t325 - t331*t295;
-        const double t333 = t326 - t331*t296;
-        const double t334 = t327 - t331*t297;
-        const double t335 = t328 - t331*t298;
-        const double t336 = t329 - t331*t299;
-        const double t337 = t330 - t331*t300;
-        const double t338 = t132*t332 + t133*t333 + t134*t334 + t135*t335 + t136*t336;
-        const double t339 = t332 - t338*t132;
-        const double t340 = t333 - t338*t133;
-        const double t341 = t334 - t338*t134;
-        const double t342 = t335 - t338*t135;
-        const double t343 = t336 - t338*t136;
-        const double t344 = t152*t339 + t153*t340 + t154*t341 + t155*t342 + t156*t343;
-        const double t345 = t339 - t344*t152;
-        const double t346 = t340 - t344*t153;
-        const double t347 = t341 - t344*t154;
-        const double t348 = t342 - t344*t155;
-        const double t349 = t343 - t344*t156;
-        const double t350 = t185*t345 + t186*t346 + t187*t347 + t188*t348 + t189*t349;
-        const double t351 = t345 - t350*t185;
-        const double t352 = t346 - t350*t186;
-        const double t353 = t347 - t350*t187;
-        const double t354 = t348 - t350*t188;
-        const double t355 = t349 - t350*t189;
-        const double t356 = t232*t351 + t233*t352 + t234*t353 + t235*t354 + t236*t355 + t237*t337;
-        const double t357 = t351 - t356*t232;
-        const double t358 = t352 - t356*t233;
-        const double t359 = t353 - t356*t234;
-        const double t360 = t354 - t356*t235;
-        const double t361 = t355 - t356*t236;
-        const double t362 = t337 - t356*t237;
-        const double t363 = t295*t357 + t296*t358 + t297*t359 + t298*t360 + t299*t361 + t300*t362;
-        const double t364 = t357 - t363*t295;
-        const double t365 = t358 - t363*t296;
-        const double t366 = t359 - t363*t297;
-        const double t367 = t360 - t363*t298;
-        const double t368 = t361 - t363*t299;
-        const double t369 = t362 - t363*t300;
-        const double t370 = t364*t364 + t365*t365 + t366*t366 + t367*t367 + t368*t368 + t369*t369;
-        const double t371 = sqrt(t370);
-        const double t384 = t129*t150*t183*t230*t293*t371;
-        w[0] = t384;
-        w_T[0 + b] = w[0];
-    }
-}
-
-void ur5_manipulability_batch(size_t m, const double *q, double *w)
-{
-    double q_T[192];
-    double w_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_block(q_T, w_T);
-        for (b = 0; b < count; ++b) {
-            double *w_b = w + (i + b) * 1;
-            w_b[0] = w_T[0 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_batch(size_t m, const double *q, double *w)
 {
     size_t i;
@@ -4089,7 +2427,6 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
         }
     }
 }
-#endif
 
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 3 neg, 2 div, 3 sqrt */
@@ -4203,170 +2540,6 @@ void ur5_manipulability_position(const double q[6], double w_position[1])
     ur5_manipulability_position_finish(cs, sn, w_position);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_position_block(const double *restrict q_T, double *restrict w_position_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double w_position[1];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t4 = cs[3]*sn[0];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t123 = t25*t25;
-        const double t124 = t27*t27;
-        const double t125 = t29*t29;
-        const double t126 = t31*t31;
-        const double t127 = t23*t23;
-        const double t128 = t123 + t124 + t125 + t126 + t127;
-        const double t129 = sqrt(t128);
-        const double t130 = 1.0/(t129 != 0.0 ? t129 : 1.0);
-        const double t131 = (t129 > 0.0 ? t130 : 1.0);
-        const double t132 = -t23*t131;
-        const double t133 = t25*t131;
-        const double t134 = t27*t131;
-        const double t135 = t29*t131;
-        const double t136 = t31*t131;
-        const double t137 = t26*t133 + t28*t134 + t30*t135 + t32*t136 + t22*t132;
-        const double t138 = t22 - t137*t132;
-        const double t139 = t26 - t137*t133;
-        const double t140 = t28 - t137*t134;
-        const double t141 = t30 - t137*t135;
-        const double t142 = t32 - t137*t136;
-        const double t143 = t132*t138 + t133*t139 + t134*t140 + t135*t141 + t136*t142;
-        const double t144 = t138 - t143*t132;
-        const double t145 = t139 - t143*t133;
-        const double t146 = t140 - t143*t134;
-        const double t147 = t141 - t143*t135;
-        const double t148 = t142 - t143*t136;
-        const double t149 = t144*t144 + t145*t145 + t146*t146 + t147*t147 + t148*t148;
-        const double t150 = sqrt(t149);
-        const double t151 = (t150 > 0.0 ? 1.0/(t150 != 0.0 ? t150 : 1.0) : 1.0);
-        const double t152 = t151*t144;
-        const double t153 = t151*t145;
-        const double t154 = t151*t146;
-        const double t155 = t151*t147;
-        const double t156 = t151*t148;
-        const double t158 = t33*t136 + t20*t133 + t18*t134 + t15*t135;
-        const double t159 = -t158*t132;
-        const double t160 = t20 - t158*t133;
-        const double t161 = t18 - t158*t134;
-        const double t162 = t15 - t158*t135;
-        const double t163 = t33 - t158*t136;
-        const double t164 = t152*t159 + t153*t160 + t154*t161 + t155*t162 + t156*t163;
-        const double t165 = t159 - t164*t152;
-        const double t166 = t160 - t164*t153;
-        const double t167 = t161 - t164*t154;
-        const double t168 = t162 - t164*t155;
-        const double t169 = t163 - t164*t156;
-        const double t170 = t132*t165 + t133*t166 + t134*t167 + t135*t168 + t136*t169;
-        const double t171 = t165 - t170*t132;
-        const double t172 = t166 - t170*t133;
-        const double t173 = t167 - t170*t134;
-        const double t174 = t168 - t170*t135;
-        const double t175 = t169 - t170*t136;
-        const double t176 = t152*t171 + t153*t172 + t154*t173 + t155*t174 + t156*t175;
-        const double t177 = t171 - t176*t152;
-        const double t178 = t172 - t176*t153;
-        const double t179 = t173 - t176*t154;
-        const double t180 = t174 - t176*t155;
-        const double t181 = t175 - t176*t156;
-        const double t182 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181;
-        const double t183 = sqrt(t182);
-        const double t385 = t129*t150*t183;
-        w_position[0] = t385;
-        w_position_T[0 + b] = w_position[0];
-    }
-}
-
-void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position)
-{
-    double q_T[192];
-    double w_position_T[32];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_position_block(q_T, w_position_T);
-        for (b = 0; b < count; ++b) {
-            double *w_position_b = w_position + (i + b) * 1;
-            w_position_b[0] = w_position_T[0 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position)
 {
     size_t i;
@@ -4386,7 +2559,6 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
         }
     }
 }
-#endif
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 23 neg */
@@ -4402,91 +2574,10 @@ static void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
 
 static void ur5_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
 {
-    const double t2 = cs[0]*cs[3];
-    const double t3 = cs[0]*sn[3];
-    const double t4 = cs[3]*sn[0];
-    const double t5 = sn[0]*sn[3];
-    const double t7 = cs[4]*sn[0];
-    const double t8 = t7 - t2*sn[4];
-    const double t9 = -cs[0]*cs[4];
-    const double t10 = t9 - t4*sn[4];
-    const double t12 = -sn[3]*sn[4];
-    const double t13 = 0.0823*sn[4];
-    const double t14 = -0.0823*cs[4];
-    const double t15 = 0.09465*sn[3] - t13*cs[3];
-    const double t16 = 0.09465*cs[3] + t13*sn[3];
-    const double t17 = 0.10915 - t14;
-    const double t18 = t15 - 0.39225*cs[2];
-    const double t19 = t16 + 0.39225*sn[2];
-    const double t20 = t18 - 0.425*cs[1];
-    const double t21 = t19 + 0.425*sn[1];
-    const double t22 = t20*cs[0] + t17*sn[0];
-    const double t23 = t20*sn[0] - t17*cs[0];
-    const double t25 = t21*cs[0];
-    const double t26 = t21*sn[0];
-    const double t27 = t19*cs[0];
-    const double t28 = t19*sn[0];
-    const double t29 = t16*cs[0];
-    const double t30 = t16*sn[0];
-    const double t31 = t2*t14 - t13*sn[0];
-    const double t32 = t4*t14 + t13*cs[0];
-    const double t33 = t14*sn[3];
-    const double t386 = -t20*cs[0];
-    const double t387 = -t18*cs[0];
-    const double t388 = -t15*cs[0];
-    const double t389 = -t33*cs[0];
-    const double t390 = t5*t33 + t32*cs[3];
-    const double t391 = -t20*sn[0];
-    const double t392 = -t18*sn[0];
-    const double t393 = -t15*sn[0];
-    const double t394 = -t33*sn[0];
-    const double t395 = -t3*t33 - t31*cs[3];
-    const double t396 = t25*cs[0] + t26*sn[0];
-    const double t397 = t27*cs[0] + t28*sn[0];
-    const double t398 = t29*cs[0] + t30*sn[0];
-    const double t399 = t31*cs[0] + t32*sn[0];
-    const double t400 = t3*t32 - t5*t31;
-    const double t401 = -t12*cs[0];
-    const double t402 = t5*t12 + t10*cs[3];
-    const double t403 = -t12*sn[0];
-    const double t404 = -t3*t12 - t8*cs[3];
-    const double t405 = t3*cs[0] + t5*sn[0];
-    const double t406 = t8*cs[0] + t10*sn[0];
-    const double t407 = t3*t10 - t5*t8;
-    const double t1357 = -t23;
-    const double t1358 = -t26;
-    const double t1359 = -t28;
-    const double t1360 = -t30;
-    const double t1361 = -t32;
-    Hs[0] = -t22;
-    Hs[1] = t1358;
-    Hs[2] = t1359;
-    Hs[3] = t1360;
-    Hs[4] = t1361;
     Hs[5] = 0.0;
-    Hs[6] = t1358;
-    Hs[7] = t386;
-    Hs[8] = t387;
-    Hs[9] = t388;
-    Hs[10] = t389;
     Hs[11] = 0.0;
-    Hs[12] = t1359;
-    Hs[13] = t387;
-    Hs[14] = t387;
-    Hs[15] = t388;
-    Hs[16] = t389;
     Hs[17] = 0.0;
-    Hs[18] = t1360;
-    Hs[19] = t388;
-    Hs[20] = t388;
-    Hs[21] = t388;
-    Hs[22] = t389;
     Hs[23] = 0.0;
-    Hs[24] = t1361;
-    Hs[25] = t389;
-    Hs[26] = t389;
-    Hs[27] = t389;
-    Hs[28] = t390;
     Hs[29] = 0.0;
     Hs[30] = 0.0;
     Hs[31] = 0.0;
@@ -4494,35 +2585,10 @@ static void ur5_jacobian_hessian_finish(const double *restrict cs, const double 
     Hs[33] = 0.0;
     Hs[34] = 0.0;
     Hs[35] = 0.0;
-    Hs[36] = t1357;
-    Hs[37] = t25;
-    Hs[38] = t27;
-    Hs[39] = t29;
-    Hs[40] = t31;
     Hs[41] = 0.0;
-    Hs[42] = t25;
-    Hs[43] = t391;
-    Hs[44] = t392;
-    Hs[45] = t393;
-    Hs[46] = t394;
     Hs[47] = 0.0;
-    Hs[48] = t27;
-    Hs[49] = t392;
-    Hs[50] = t392;
-    Hs[51] = t393;
-    Hs[52] = t394;
     Hs[53] = 0.0;
-    Hs[54] = t29;
-    Hs[55] = t393;
-    Hs[56] = t393;
-    Hs[57] = t393;
-    Hs[58] = t394;
     Hs[59] = 0.0;
-    Hs[60] = t31;
-    Hs[61] = t394;
-    Hs[62] = t394;
-    Hs[63] = t394;
-    Hs[64] = t395;
     Hs[65] = 0.0;
     Hs[66] = 0.0;
     Hs[67] = 0.0;
@@ -4537,28 +2603,12 @@ static void ur5_jacobian_hessian_finish(const double *restrict cs, const double 
     Hs[76] = 0.0;
     Hs[77] = 0.0;
     Hs[78] = 0.0;
-    Hs[79] = t396;
-    Hs[80] = t397;
-    Hs[81] = t398;
-    Hs[82] = t399;
     Hs[83] = 0.0;
     Hs[84] = 0.0;
-    Hs[85] = t397;
-    Hs[86] = t397;
-    Hs[87] = t398;
-    Hs[88] = t399;
     Hs[89] = 0.0;
     Hs[90] = 0.0;
-    Hs[91] = t398;
-    Hs[92] = t398;
-    Hs[93] = t398;
-    Hs[94] = t399;
     Hs[95] = 0.0;
     Hs[96] = 0.0;
-    Hs[97] = t399;
-    Hs[98] = t399;
-    Hs[99] = t399;
-    Hs[100] = t400;
     Hs[101] = 0.0;
     Hs[102] = 0.0;
     Hs[103] = 0.0;
@@ -4590,17 +2640,8 @@ static void ur5_jacobian_hessian_finish(const double *restrict cs, const double 
     Hs[129] = 0.0;
     Hs[130] = 0.0;
     Hs[131] = 0.0;
-    Hs[132] = -t5;
-    Hs[133] = t2;
-    Hs[134] = t2;
-    Hs[135] = t2;
     Hs[136] = 0.0;
     Hs[137] = 0.0;
-    Hs[138] = -t10;
-    Hs[139] = t401;
-    Hs[140] = t401;
-    Hs[141] = t401;
-    Hs[142] = t402;
     Hs[143] = 0.0;
     Hs[144] = 0.0;
     Hs[145] = 0.0;
@@ -4626,17 +2667,8 @@ static void ur5_jacobian_hessian_finish(const double *restrict cs, const double 
     Hs[165] = 0.0;
     Hs[166] = 0.0;
     Hs[167] = 0.0;
-    Hs[168] = t3;
-    Hs[169] = t4;
-    Hs[170] = t4;
-    Hs[171] = t4;
     Hs[172] = 0.0;
     Hs[173] = 0.0;
-    Hs[174] = t8;
-    Hs[175] = t403;
-    Hs[176] = t403;
-    Hs[177] = t403;
-    Hs[178] = t404;
     Hs[179] = 0.0;
     Hs[180] = 0.0;
     Hs[181] = 0.0;
@@ -4663,17 +2695,157 @@ static void ur5_jacobian_hessian_finish(const double *restrict cs, const double 
     Hs[202] = 0.0;
     Hs[203] = 0.0;
     Hs[204] = 0.0;
-    Hs[205] = t405;
-    Hs[206] = t405;
-    Hs[207] = t405;
     Hs[208] = 0.0;
     Hs[209] = 0.0;
     Hs[210] = 0.0;
+    Hs[215] = 0.0;
+    const double t2 = cs[0]*cs[3];
+    Hs[133] = t2;
+    Hs[134] = t2;
+    Hs[135] = t2;
+    const double t3 = cs[0]*sn[3];
+    Hs[168] = t3;
+    const double t4 = cs[3]*sn[0];
+    Hs[169] = t4;
+    Hs[170] = t4;
+    Hs[171] = t4;
+    const double t5 = sn[0]*sn[3];
+    Hs[132] = -t5;
+    const double t7 = cs[4]*sn[0];
+    const double t8 = t7 - t2*sn[4];
+    Hs[174] = t8;
+    const double t9 = -cs[0]*cs[4];
+    const double t10 = t9 - t4*sn[4];
+    Hs[138] = -t10;
+    const double t12 = -sn[3]*sn[4];
+    const double t13 = 0.0823*sn[4];
+    const double t14 = -0.0823*cs[4];
+    const double t15 = 0.09465*sn[3] - t13*cs[3];
+    const double t16 = 0.09465*cs[3] + t13*sn[3];
+    const double t17 = 0.10915 - t14;
+    const double t18 = t15 - 0.39225*cs[2];
+    const double t19 = t16 + 0.39225*sn[2];
+    const double t20 = t18 - 0.425*cs[1];
+    const double t21 = t19 + 0.425*sn[1];
+    const double t22 = t20*cs[0] + t17*sn[0];
+    Hs[0] = -t22;
+    const double t23 = t20*sn[0] - t17*cs[0];
+    const double t25 = t21*cs[0];
+    Hs[37] = t25;
+    Hs[42] = t25;
+    const double t26 = t21*sn[0];
+    const double t27 = t19*cs[0];
+    Hs[38] = t27;
+    Hs[48] = t27;
+    const double t28 = t19*sn[0];
+    const double t29 = t16*cs[0];
+    Hs[39] = t29;
+    Hs[54] = t29;
+    const double t30 = t16*sn[0];
+    const double t31 = t2*t14 - t13*sn[0];
+    Hs[40] = t31;
+    Hs[60] = t31;
+    const double t32 = t4*t14 + t13*cs[0];
+    const double t33 = t14*sn[3];
+    const double t386 = -t20*cs[0];
+    Hs[7] = t386;
+    const double t387 = -t18*cs[0];
+    Hs[8] = t387;
+    Hs[13] = t387;
+    Hs[14] = t387;
+    const double t388 = -t15*cs[0];
+    Hs[9] = t388;
+    Hs[15] = t388;
+    Hs[19] = t388;
+    Hs[20] = t388;
+    Hs[21] = t388;
+    const double t389 = -t33*cs[0];
+    Hs[10] = t389;
+    Hs[16] = t389;
+    Hs[22] = t389;
+    Hs[25] = t389;
+    Hs[26] = t389;
+    Hs[27] = t389;
+    const double t390 = t5*t33 + t32*cs[3];
+    Hs[28] = t390;
+    const double t391 = -t20*sn[0];
+    Hs[43] = t391;
+    const double t392 = -t18*sn[0];
+    Hs[44] = t392;
+    Hs[49] = t392;
+    Hs[50] = t392;
+    const double t393 = -t15*sn[0];
+    Hs[45] = t393;
+    Hs[51] = t393;
+    Hs[55] = t393;
+    Hs[56] = t393;
+    Hs[57] = t393;
+    const double t394 = -t33*sn[0];
+    Hs[46] = t394;
+    Hs[52] = t394;
+    Hs[58] = t394;
+    Hs[61] = t394;
+    Hs[62] = t394;
+    Hs[63] = t394;
+    const double t395 = -t3*t33 - t31*cs[3];
+    Hs[64] = t395;
+    const double t396 = t25*cs[0] + t26*sn[0];
+    Hs[79] = t396;
+    const double t397 = t27*cs[0] + t28*sn[0];
+    Hs[80] = t397;
+    Hs[85] = t397;
+    Hs[86] = t397;
+    const double t398 = t29*cs[0] + t30*sn[0];
+    Hs[81] = t398;
+    Hs[87] = t398;
+    Hs[91] = t398;
+    Hs[92] = t398;
+    Hs[93] = t398;
+    const double t399 = t31*cs[0] + t32*sn[0];
+    Hs[82] = t399;
+    Hs[88] = t399;
+    Hs[94] = t399;
+    Hs[97] = t399;
+    Hs[98] = t399;
+    Hs[99] = t399;
+    const double t400 = t3*t32 - t5*t31;
+    Hs[100] = t400;
+    const double t401 = -t12*cs[0];
+    Hs[139] = t401;
+    Hs[140] = t401;
+    Hs[141] = t401;
+    const double t402 = t5*t12 + t10*cs[3];
+    Hs[142] = t402;
+    const double t403 = -t12*sn[0];
+    Hs[175] = t403;
+    Hs[176] = t403;
+    Hs[177] = t403;
+    const double t404 = -t3*t12 - t8*cs[3];
+    Hs[178] = t404;
+    const double t405 = t3*cs[0] + t5*sn[0];
+    Hs[205] = t405;
+    Hs[206] = t405;
+    Hs[207] = t405;
+    const double t406 = t8*cs[0] + t10*sn[0];
     Hs[211] = t406;
     Hs[212] = t406;
     Hs[213] = t406;
+    const double t407 = t3*t10 - t5*t8;
     Hs[214] = t407;
-    Hs[215] = 0.0;
+    const double t2150 = -t23;
+    Hs[36] = t2150;
+    const double t2151 = -t26;
+    Hs[1] = t2151;
+    Hs[6] = t2151;
+    const double t2152 = -t28;
+    Hs[2] = t2152;
+    Hs[12] = t2152;
+    const double t2153 = -t30;
+    Hs[3] = t2153;
+    Hs[18] = t2153;
+    const double t2154 = -t32;
+    Hs[4] = t2154;
+    Hs[24] = t2154;
 }
 
 void ur5_jacobian_hessian(const double q[6], double Hs[216])
@@ -4688,788 +2860,6 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216])
     ur5_jacobian_hessian_finish(cs, sn, Hs);
 }
 
-#if UR5_VECTOR_MATH
-/* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_hessian_block(const double *restrict q_T, double *restrict Hs_T)
-{
-    double ang_T[80], cs_T[80], sn_T[80];
-    int b;
-    for (b = 0; b < 16; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[16 + b];
-        q[2] = q_T[32 + b];
-        q[3] = q_T[48 + b];
-        q[4] = q_T[64 + b];
-        q[5] = q_T[80 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[16 + b] = ang[1];
-        ang_T[32 + b] = ang[2];
-        ang_T[48 + b] = ang[3];
-        ang_T[64 + b] = ang[4];
-    }
-    ur5_trig80(ang_T, cs_T, sn_T, 80);
-    for (b = 0; b < 16; ++b) {
-        double cs[5];
-        double sn[5];
-        double Hs[216];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[16 + b];
-        cs[2] = cs_T[32 + b];
-        cs[3] = cs_T[48 + b];
-        cs[4] = cs_T[64 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[16 + b];
-        sn[2] = sn_T[32 + b];
-        sn[3] = sn_T[48 + b];
-        sn[4] = sn_T[64 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t386 = -t20*cs[0];
-        const double t387 = -t18*cs[0];
-        const double t388 = -t15*cs[0];
-        const double t389 = -t33*cs[0];
-        const double t390 = t5*t33 + t32*cs[3];
-        const double t391 = -t20*sn[0];
-        const double t392 = -t18*sn[0];
-        const double t393 = -t15*sn[0];
-        const double t394 = -t33*sn[0];
-        const double t395 = -t3*t33 - t31*cs[3];
-        const double t396 = t25*cs[0] + t26*sn[0];
-        const double t397 = t27*cs[0] + t28*sn[0];
-        const double t398 = t29*cs[0] + t30*sn[0];
-        const double t399 = t31*cs[0] + t32*sn[0];
-        const double t400 = t3*t32 - t5*t31;
-        const double t401 = -t12*cs[0];
-        const double t402 = t5*t12 + t10*cs[3];
-        const double t403 = -t12*sn[0];
-        const double t404 = -t3*t12 - t8*cs[3];
-        const double t405 = t3*cs[0] + t5*sn[0];
-        const double t406 = t8*cs[0] + t10*sn[0];
-        const double t407 = t3*t10 - t5*t8;
-        const double t1357 = -t23;
-        const double t1358 = -t26;
-        const double t1359 = -t28;
-        const double t1360 = -t30;
-        const double t1361 = -t32;
-        Hs[0] = -t22;
-        Hs[1] = t1358;
-        Hs[2] = t1359;
-        Hs[3] = t1360;
-        Hs[4] = t1361;
-        Hs[5] = 0.0;
-        Hs[6] = t1358;
-        Hs[7] = t386;
-        Hs[8] = t387;
-        Hs[9] = t388;
-        Hs[10] = t389;
-        Hs[11] = 0.0;
-        Hs[12] = t1359;
-        Hs[13] = t387;
-        Hs[14] = t387;
-        Hs[15] = t388;
-        Hs[16] = t389;
-        Hs[17] = 0.0;
-        Hs[18] = t1360;
-        Hs[19] = t388;
-        Hs[20] = t388;
-        Hs[21] = t388;
-        Hs[22] = t389;
-        Hs[23] = 0.0;
-        Hs[24] = t1361;
-        Hs[25] = t389;
-        Hs[26] = t389;
-        Hs[27] = t389;
-        Hs[28] = t390;
-        Hs[29] = 0.0;
-        Hs[30] = 0.0;
-        Hs[31] = 0.0;
-        Hs[32] = 0.0;
-        Hs[33] = 0.0;
-        Hs[34] = 0.0;
-        Hs[35] = 0.0;
-        Hs[36] = t1357;
-        Hs[37] = t25;
-        Hs[38] = t27;
-        Hs[39] = t29;
-        Hs[40] = t31;
-        Hs[41] = 0.0;
-        Hs[42] = t25;
-        Hs[43] = t391;
-        Hs[44] = t392;
-        Hs[45] = t393;
-        Hs[46] = t394;
-        Hs[47] = 0.0;
-        Hs[48] = t27;
-        Hs[49] = t392;
-        Hs[50] = t392;
-        Hs[51] = t393;
-        Hs[52] = t394;
-        Hs[53] = 0.0;
-        Hs[54] = t29;
-        Hs[55] = t393;
-        Hs[56] = t393;
-        Hs[57] = t393;
-        Hs[58] = t394;
-        Hs[59] = 0.0;
-        Hs[60] = t31;
-        Hs[61] = t394;
-        Hs[62] = t394;
-        Hs[63] = t394;
-        Hs[64] = t395;
-        Hs[65] = 0.0;
-        Hs[66] = 0.0;
-        Hs[67] = 0.0;
-        Hs[68] = 0.0;
-        Hs[69] = 0.0;
-        Hs[70] = 0.0;
-        Hs[71] = 0.0;
-        Hs[72] = 0.0;
-        Hs[73] = 0.0;
-        Hs[74] = 0.0;
-        Hs[75] = 0.0;
-        Hs[76] = 0.0;
-        Hs[77] = 0.0;
-        Hs[78] = 0.0;
-        Hs[79] = t396;
-        Hs[80] = t397;
-        Hs[81] = t398;
-        Hs[82] = t399;
-        Hs[83] = 0.0;
-        Hs[84] = 0.0;
-        Hs[85] = t397;
-        Hs[86] = t397;
-        Hs[87] = t398;
-        Hs[88] = t399;
-        Hs[89] = 0.0;
-        Hs[90] = 0.0;
-        Hs[91] = t398;
-        Hs[92] = t398;
-        Hs[93] = t398;
-        Hs[94] = t399;
-        Hs[95] = 0.0;
-        Hs[96] = 0.0;
-        Hs[97] = t399;
-        Hs[98] = t399;
-        Hs[99] = t399;
-        Hs[100] = t400;
-        Hs[101] = 0.0;
-        Hs[102] = 0.0;
-        Hs[103] = 0.0;
-        Hs[104] = 0.0;
-        Hs[105] = 0.0;
-        Hs[106] = 0.0;
-        Hs[107] = 0.0;
-        Hs[108] = 0.0;
-        Hs[109] = 0.0;
-        Hs[110] = 0.0;
-        Hs[111] = 0.0;
-        Hs[112] = 0.0;
-        Hs[113] = 0.0;
-        Hs[114] = cs[0];
-        Hs[115] = 0.0;
-        Hs[116] = 0.0;
-        Hs[117] = 0.0;
-        Hs[118] = 0.0;
-        Hs[119] = 0.0;
-        Hs[120] = cs[0];
-        Hs[121] = 0.0;
-        Hs[122] = 0.0;
-        Hs[123] = 0.0;
-        Hs[124] = 0.0;
-        Hs[125] = 0.0;
-        Hs[126] = cs[0];
-        Hs[127] = 0.0;
-        Hs[128] = 0.0;
-        Hs[129] = 0.0;
-        Hs[130] = 0.0;
-        Hs[131] = 0.0;
-        Hs[132] = -t5;
-        Hs[133] = t2;
-        Hs[134] = t2;
-        Hs[135] = t2;
-        Hs[136] = 0.0;
-        Hs[137] = 0.0;
-        Hs[138] = -t10;
-        Hs[139] = t401;
-        Hs[140] = t401;
-        Hs[141] = t401;
-        Hs[142] = t402;
-        Hs[143] = 0.0;
-        Hs[144] = 0.0;
-        Hs[145] = 0.0;
-        Hs[146] = 0.0;
-        Hs[147] = 0.0;
-        Hs[148] = 0.0;
-        Hs[149] = 0.0;
-        Hs[150] = sn[0];
-        Hs[151] = 0.0;
-        Hs[152] = 0.0;
-        Hs[153] = 0.0;
-        Hs[154] = 0.0;
-        Hs[155] = 0.0;
-        Hs[156] = sn[0];
-        Hs[157] = 0.0;
-        Hs[158] = 0.0;
-        Hs[159] = 0.0;
-        Hs[160] = 0.0;
-        Hs[161] = 0.0;
-        Hs[162] = sn[0];
-        Hs[163] = 0.0;
-        Hs[164] = 0.0;
-        Hs[165] = 0.0;
-        Hs[166] = 0.0;
-        Hs[167] = 0.0;
-        Hs[168] = t3;
-        Hs[169] = t4;
-        Hs[170] = t4;
-        Hs[171] = t4;
-        Hs[172] = 0.0;
-        Hs[173] = 0.0;
-        Hs[174] = t8;
-        Hs[175] = t403;
-        Hs[176] = t403;
-        Hs[177] = t403;
-        Hs[178] = t404;
-        Hs[179] = 0.0;
-        Hs[180] = 0.0;
-        Hs[181] = 0.0;
-        Hs[182] = 0.0;
-        Hs[183] = 0.0;
-        Hs[184] = 0.0;
-        Hs[185] = 0.0;
-        Hs[186] = 0.0;
-        Hs[187] = 0.0;
-        Hs[188] = 0.0;
-        Hs[189] = 0.0;
-        Hs[190] = 0.0;
-        Hs[191] = 0.0;
-        Hs[192] = 0.0;
-        Hs[193] = 0.0;
-        Hs[194] = 0.0;
-        Hs[195] = 0.0;
-        Hs[196] = 0.0;
-        Hs[197] = 0.0;
-        Hs[198] = 0.0;
-        Hs[199] = 0.0;
-        Hs[200] = 0.0;
-        Hs[201] = 0.0;
-        Hs[202] = 0.0;
-        Hs[203] = 0.0;
-        Hs[204] = 0.0;
-        Hs[205] = t405;
-        Hs[206] = t405;
-        Hs[207] = t405;
-        Hs[208] = 0.0;
-        Hs[209] = 0.0;
-        Hs[210] = 0.0;
-        Hs[211] = t406;
-        Hs[212] = t406;
-        Hs[213] = t406;
-        Hs[214] = t407;
-        Hs[215] = 0.0;
-        Hs_T[0 + b] = Hs[0];
-        Hs_T[16 + b] = Hs[1];
-        Hs_T[32 + b] = Hs[2];
-        Hs_T[48 + b] = Hs[3];
-        Hs_T[64 + b] = Hs[4];
-        Hs_T[80 + b] = Hs[5];
-        Hs_T[96 + b] = Hs[6];
-        Hs_T[112 + b] = Hs[7];
-        Hs_T[128 + b] = Hs[8];
-        Hs_T[144 + b] = Hs[9];
-        Hs_T[160 + b] = Hs[10];
-        Hs_T[176 + b] = Hs[11];
-        Hs_T[192 + b] = Hs[12];
-        Hs_T[208 + b] = Hs[13];
-        Hs_T[224 + b] = Hs[14];
-        Hs_T[240 + b] = Hs[15];
-        Hs_T[256 + b] = Hs[16];
-        Hs_T[272 + b] = Hs[17];
-        Hs_T[288 + b] = Hs[18];
-        Hs_T[304 + b] = Hs[19];
-        Hs_T[320 + b] = Hs[20];
-        Hs_T[336 + b] = Hs[21];
-        Hs_T[352 + b] = Hs[22];
-        Hs_T[368 + b] = Hs[23];
-        Hs_T[384 + b] = Hs[24];
-        Hs_T[400 + b] = Hs[25];
-        Hs_T[416 + b] = Hs[26];
-        Hs_T[432 + b] = Hs[27];
-        Hs_T[448 + b] = Hs[28];
-        Hs_T[464 + b] = Hs[29];
-        Hs_T[480 + b] = Hs[30];
-        Hs_T[496 + b] = Hs[31];
-        Hs_T[512 + b] = Hs[32];
-        Hs_T[528 + b] = Hs[33];
-        Hs_T[544 + b] = Hs[34];
-        Hs_T[560 + b] = Hs[35];
-        Hs_T[576 + b] = Hs[36];
-        Hs_T[592 + b] = Hs[37];
-        Hs_T[608 + b] = Hs[38];
-        Hs_T[624 + b] = Hs[39];
-        Hs_T[640 + b] = Hs[40];
-        Hs_T[656 + b] = Hs[41];
-        Hs_T[672 + b] = Hs[42];
-        Hs_T[688 + b] = Hs[43];
-        Hs_T[704 + b] = Hs[44];
-        Hs_T[720 + b] = Hs[45];
-        Hs_T[736 + b] = Hs[46];
-        Hs_T[752 + b] = Hs[47];
-        Hs_T[768 + b] = Hs[48];
-        Hs_T[784 + b] = Hs[49];
-        Hs_T[800 + b] = Hs[50];
-        Hs_T[816 + b] = Hs[51];
-        Hs_T[832 + b] = Hs[52];
-        Hs_T[848 + b] = Hs[53];
-        Hs_T[864 + b] = Hs[54];
-        Hs_T[880 + b] = Hs[55];
-        Hs_T[896 + b] = Hs[56];
-        Hs_T[912 + b] = Hs[57];
-        Hs_T[928 + b] = Hs[58];
-        Hs_T[944 + b] = Hs[59];
-        Hs_T[960 + b] = Hs[60];
-        Hs_T[976 + b] = Hs[61];
-        Hs_T[992 + b] = Hs[62];
-        Hs_T[1008 + b] = Hs[63];
-        Hs_T[1024 + b] = Hs[64];
-        Hs_T[1040 + b] = Hs[65];
-        Hs_T[1056 + b] = Hs[66];
-        Hs_T[1072 + b] = Hs[67];
-        Hs_T[1088 + b] = Hs[68];
-        Hs_T[1104 + b] = Hs[69];
-        Hs_T[1120 + b] = Hs[70];
-        Hs_T[1136 + b] = Hs[71];
-        Hs_T[1152 + b] = Hs[72];
-        Hs_T[1168 + b] = Hs[73];
-        Hs_T[1184 + b] = Hs[74];
-        Hs_T[1200 + b] = Hs[75];
-        Hs_T[1216 + b] = Hs[76];
-        Hs_T[1232 + b] = Hs[77];
-        Hs_T[1248 + b] = Hs[78];
-        Hs_T[1264 + b] = Hs[79];
-        Hs_T[1280 + b] = Hs[80];
-        Hs_T[1296 + b] = Hs[81];
-        Hs_T[1312 + b] = Hs[82];
-        Hs_T[1328 + b] = Hs[83];
-        Hs_T[1344 + b] = Hs[84];
-        Hs_T[1360 + b] = Hs[85];
-        Hs_T[1376 + b] = Hs[86];
-        Hs_T[1392 + b] = Hs[87];
-        Hs_T[1408 + b] = Hs[88];
-        Hs_T[1424 + b] = Hs[89];
-        Hs_T[1440 + b] = Hs[90];
-        Hs_T[1456 + b] = Hs[91];
-        Hs_T[1472 + b] = Hs[92];
-        Hs_T[1488 + b] = Hs[93];
-        Hs_T[1504 + b] = Hs[94];
-        Hs_T[1520 + b] = Hs[95];
-        Hs_T[1536 + b] = Hs[96];
-        Hs_T[1552 + b] = Hs[97];
-        Hs_T[1568 + b] = Hs[98];
-        Hs_T[1584 + b] = Hs[99];
-        Hs_T[1600 + b] = Hs[100];
-        Hs_T[1616 + b] = Hs[101];
-        Hs_T[1632 + b] = Hs[102];
-        Hs_T[1648 + b] = Hs[103];
-        Hs_T[1664 + b] = Hs[104];
-        Hs_T[1680 + b] = Hs[105];
-        Hs_T[1696 + b] = Hs[106];
-        Hs_T[1712 + b] = Hs[107];
-        Hs_T[1728 + b] = Hs[108];
-        Hs_T[1744 + b] = Hs[109];
-        Hs_T[1760 + b] = Hs[110];
-        Hs_T[1776 + b] = Hs[111];
-        Hs_T[1792 + b] = Hs[112];
-        Hs_T[1808 + b] = Hs[113];
-        Hs_T[1824 + b] = Hs[114];
-        Hs_T[1840 + b] = Hs[115];
-        Hs_T[1856 + b] = Hs[116];
-        Hs_T[1872 + b] = Hs[117];
-        Hs_T[1888 + b] = Hs[118];
-        Hs_T[1904 + b] = Hs[119];
-        Hs_T[1920 + b] = Hs[120];
-        Hs_T[1936 + b] = Hs[121];
-        Hs_T[1952 + b] = Hs[122];
-        Hs_T[1968 + b] = Hs[123];
-        Hs_T[1984 + b] = Hs[124];
-        Hs_T[2000 + b] = Hs[125];
-        Hs_T[2016 + b] = Hs[126];
-        Hs_T[2032 + b] = Hs[127];
-        Hs_T[2048 + b] = Hs[128];
-        Hs_T[2064 + b] = Hs[129];
-        Hs_T[2080 + b] = Hs[130];
-        Hs_T[2096 + b] = Hs[131];
-        Hs_T[2112 + b] = Hs[132];
-        Hs_T[2128 + b] = Hs[133];
-        Hs_T[2144 + b] = Hs[134];
-        Hs_T[2160 + b] = Hs[135];
-        Hs_T[2176 + b] = Hs[136];
-        Hs_T[2192 + b] = Hs[137];
-        Hs_T[2208 + b] = Hs[138];
-        Hs_T[2224 + b] = Hs[139];
-        Hs_T[2240 + b] = Hs[140];
-        Hs_T[2256 + b] = Hs[141];
-        Hs_T[2272 + b] = Hs[142];
-        Hs_T[2288 + b] = Hs[143];
-        Hs_T[2304 + b] = Hs[144];
-        Hs_T[2320 + b] = Hs[145];
-        Hs_T[2336 + b] = Hs[146];
-        Hs_T[2352 + b] = Hs[147];
-        Hs_T[2368 + b] = Hs[148];
-        Hs_T[2384 + b] = Hs[149];
-        Hs_T[2400 + b] = Hs[150];
-        Hs_T[2416 + b] = Hs[151];
-        Hs_T[2432 + b] = Hs[152];
-        Hs_T[2448 + b] = Hs[153];
-        Hs_T[2464 + b] = Hs[154];
-        Hs_T[2480 + b] = Hs[155];
-        Hs_T[2496 + b] = Hs[156];
-        Hs_T[2512 + b] = Hs[157];
-        Hs_T[2528 + b] = Hs[158];
-        Hs_T[2544 + b] = Hs[159];
-        Hs_T[2560 + b] = Hs[160];
-        Hs_T[2576 + b] = Hs[161];
-        Hs_T[2592 + b] = Hs[162];
-        Hs_T[2608 + b] = Hs[163];
-        Hs_T[2624 + b] = Hs[164];
-        Hs_T[2640 + b] = Hs[165];
-        Hs_T[2656 + b] = Hs[166];
-        Hs_T[2672 + b] = Hs[167];
-        Hs_T[2688 + b] = Hs[168];
-        Hs_T[2704 + b] = Hs[169];
-        Hs_T[2720 + b] = Hs[170];
-        Hs_T[2736 + b] = Hs[171];
-        Hs_T[2752 + b] = Hs[172];
-        Hs_T[2768 + b] = Hs[173];
-        Hs_T[2784 + b] = Hs[174];
-        Hs_T[2800 + b] = Hs[175];
-        Hs_T[2816 + b] = Hs[176];
-        Hs_T[2832 + b] = Hs[177];
-        Hs_T[2848 + b] = Hs[178];
-        Hs_T[2864 + b] = Hs[179];
-        Hs_T[2880 + b] = Hs[180];
-        Hs_T[2896 + b] = Hs[181];
-        Hs_T[2912 + b] = Hs[182];
-        Hs_T[2928 + b] = Hs[183];
-        Hs_T[2944 + b] = Hs[184];
-        Hs_T[2960 + b] = Hs[185];
-        Hs_T[2976 + b] = Hs[186];
-        Hs_T[2992 + b] = Hs[187];
-        Hs_T[3008 + b] = Hs[188];
-        Hs_T[3024 + b] = Hs[189];
-        Hs_T[3040 + b] = Hs[190];
-        Hs_T[3056 + b] = Hs[191];
-        Hs_T[3072 + b] = Hs[192];
-        Hs_T[3088 + b] = Hs[193];
-        Hs_T[3104 + b] = Hs[194];
-        Hs_T[3120 + b] = Hs[195];
-        Hs_T[3136 + b] = Hs[196];
-        Hs_T[3152 + b] = Hs[197];
-        Hs_T[3168 + b] = Hs[198];
-        Hs_T[3184 + b] = Hs[199];
-        Hs_T[3200 + b] = Hs[200];
-        Hs_T[3216 + b] = Hs[201];
-        Hs_T[3232 + b] = Hs[202];
-        Hs_T[3248 + b] = Hs[203];
-        Hs_T[3264 + b] = Hs[204];
-        Hs_T[3280 + b] = Hs[205];
-        Hs_T[3296 + b] = Hs[206];
-        Hs_T[3312 + b] = Hs[207];
-        Hs_T[3328 + b] = Hs[208];
-        Hs_T[3344 + b] = Hs[209];
-        Hs_T[3360 + b] = Hs[210];
-        Hs_T[3376 + b] = Hs[211];
-        Hs_T[3392 + b] = Hs[212];
-        Hs_T[3408 + b] = Hs[213];
-        Hs_T[3424 + b] = Hs[214];
-        Hs_T[3440 + b] = Hs[215];
-    }
-}
-
-void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
-{
-    double q_T[96];
-    double Hs_T[3456];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 16) {
-        if (i + 16 <= m) {
-            for (b = 0; b < 16; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[16 + b] = q_b[1];
-                q_T[32 + b] = q_b[2];
-                q_T[48 + b] = q_b[3];
-                q_T[64 + b] = q_b[4];
-                q_T[80 + b] = q_b[5];
-            }
-            count = 16;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 16; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 16 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_jacobian_hessian_block(q_T, Hs_T);
-        for (b = 0; b < count; ++b) {
-            double *Hs_b = Hs + (i + b) * 216;
-            Hs_b[0] = Hs_T[0 + b];
-            Hs_b[1] = Hs_T[16 + b];
-            Hs_b[2] = Hs_T[32 + b];
-            Hs_b[3] = Hs_T[48 + b];
-            Hs_b[4] = Hs_T[64 + b];
-            Hs_b[5] = Hs_T[80 + b];
-            Hs_b[6] = Hs_T[96 + b];
-            Hs_b[7] = Hs_T[112 + b];
-            Hs_b[8] = Hs_T[128 + b];
-            Hs_b[9] = Hs_T[144 + b];
-            Hs_b[10] = Hs_T[160 + b];
-            Hs_b[11] = Hs_T[176 + b];
-            Hs_b[12] = Hs_T[192 + b];
-            Hs_b[13] = Hs_T[208 + b];
-            Hs_b[14] = Hs_T[224 + b];
-            Hs_b[15] = Hs_T[240 + b];
-            Hs_b[16] = Hs_T[256 + b];
-            Hs_b[17] = Hs_T[272 + b];
-            Hs_b[18] = Hs_T[288 + b];
-            Hs_b[19] = Hs_T[304 + b];
-            Hs_b[20] = Hs_T[320 + b];
-            Hs_b[21] = Hs_T[336 + b];
-            Hs_b[22] = Hs_T[352 + b];
-            Hs_b[23] = Hs_T[368 + b];
-            Hs_b[24] = Hs_T[384 + b];
-            Hs_b[25] = Hs_T[400 + b];
-            Hs_b[26] = Hs_T[416 + b];
-            Hs_b[27] = Hs_T[432 + b];
-            Hs_b[28] = Hs_T[448 + b];
-            Hs_b[29] = Hs_T[464 + b];
-            Hs_b[30] = Hs_T[480 + b];
-            Hs_b[31] = Hs_T[496 + b];
-            Hs_b[32] = Hs_T[512 + b];
-            Hs_b[33] = Hs_T[528 + b];
-            Hs_b[34] = Hs_T[544 + b];
-            Hs_b[35] = Hs_T[560 + b];
-            Hs_b[36] = Hs_T[576 + b];
-            Hs_b[37] = Hs_T[592 + b];
-            Hs_b[38] = Hs_T[608 + b];
-            Hs_b[39] = Hs_T[624 + b];
-            Hs_b[40] = Hs_T[640 + b];
-            Hs_b[41] = Hs_T[656 + b];
-            Hs_b[42] = Hs_T[672 + b];
-            Hs_b[43] = Hs_T[688 + b];
-            Hs_b[44] = Hs_T[704 + b];
-            Hs_b[45] = Hs_T[720 + b];
-            Hs_b[46] = Hs_T[736 + b];
-            Hs_b[47] = Hs_T[752 + b];
-            Hs_b[48] = Hs_T[768 + b];
-            Hs_b[49] = Hs_T[784 + b];
-            Hs_b[50] = Hs_T[800 + b];
-            Hs_b[51] = Hs_T[816 + b];
-            Hs_b[52] = Hs_T[832 + b];
-            Hs_b[53] = Hs_T[848 + b];
-            Hs_b[54] = Hs_T[864 + b];
-            Hs_b[55] = Hs_T[880 + b];
-            Hs_b[56] = Hs_T[896 + b];
-            Hs_b[57] = Hs_T[912 + b];
-            Hs_b[58] = Hs_T[928 + b];
-            Hs_b[59] = Hs_T[944 + b];
-            Hs_b[60] = Hs_T[960 + b];
-            Hs_b[61] = Hs_T[976 + b];
-            Hs_b[62] = Hs_T[992 + b];
-            Hs_b[63] = Hs_T[1008 + b];
-            Hs_b[64] = Hs_T[1024 + b];
-            Hs_b[65] = Hs_T[1040 + b];
-            Hs_b[66] = Hs_T[1056 + b];
-            Hs_b[67] = Hs_T[1072 + b];
-            Hs_b[68] = Hs_T[1088 + b];
-            Hs_b[69] = Hs_T[1104 + b];
-            Hs_b[70] = Hs_T[1120 + b];
-            Hs_b[71] = Hs_T[1136 + b];
-            Hs_b[72] = Hs_T[1152 + b];
-            Hs_b[73] = Hs_T[1168 + b];
-            Hs_b[74] = Hs_T[1184 + b];
-            Hs_b[75] = Hs_T[1200 + b];
-            Hs_b[76] = Hs_T[1216 + b];
-            Hs_b[77] = Hs_T[1232 + b];
-            Hs_b[78] = Hs_T[1248 + b];
-            Hs_b[79] = Hs_T[1264 + b];
-            Hs_b[80] = Hs_T[1280 + b];
-            Hs_b[81] = Hs_T[1296 + b];
-            Hs_b[82] = Hs_T[1312 + b];
-            Hs_b[83] = Hs_T[1328 + b];
-            Hs_b[84] = Hs_T[1344 + b];
-            Hs_b[85] = Hs_T[1360 + b];
-            Hs_b[86] = Hs_T[1376 + b];
-            Hs_b[87] = Hs_T[1392 + b];
-            Hs_b[88] = Hs_T[1408 + b];
-            Hs_b[89] = Hs_T[1424 + b];
-            Hs_b[90] = Hs_T[1440 + b];
-            Hs_b[91] = Hs_T[1456 + b];
-            Hs_b[92] = Hs_T[1472 + b];
-            Hs_b[93] = Hs_T[1488 + b];
-            Hs_b[94] = Hs_T[1504 + b];
-            Hs_b[95] = Hs_T[1520 + b];
-            Hs_b[96] = Hs_T[1536 + b];
-            Hs_b[97] = Hs_T[1552 + b];
-            Hs_b[98] = Hs_T[1568 + b];
-            Hs_b[99] = Hs_T[1584 + b];
-            Hs_b[100] = Hs_T[1600 + b];
-            Hs_b[101] = Hs_T[1616 + b];
-            Hs_b[102] = Hs_T[1632 + b];
-            Hs_b[103] = Hs_T[1648 + b];
-            Hs_b[104] = Hs_T[1664 + b];
-            Hs_b[105] = Hs_T[1680 + b];
-            Hs_b[106] = Hs_T[1696 + b];
-            Hs_b[107] = Hs_T[1712 + b];
-            Hs_b[108] = Hs_T[1728 + b];
-            Hs_b[109] = Hs_T[1744 + b];
-            Hs_b[110] = Hs_T[1760 + b];
-            Hs_b[111] = Hs_T[1776 + b];
-            Hs_b[112] = Hs_T[1792 + b];
-            Hs_b[113] = Hs_T[1808 + b];
-            Hs_b[114] = Hs_T[1824 + b];
-            Hs_b[115] = Hs_T[1840 + b];
-            Hs_b[116] = Hs_T[1856 + b];
-            Hs_b[117] = Hs_T[1872 + b];
-            Hs_b[118] = Hs_T[1888 + b];
-            Hs_b[119] = Hs_T[1904 + b];
-            Hs_b[120] = Hs_T[1920 + b];
-            Hs_b[121] = Hs_T[1936 + b];
-            Hs_b[122] = Hs_T[1952 + b];
-            Hs_b[123] = Hs_T[1968 + b];
-            Hs_b[124] = Hs_T[1984 + b];
-            Hs_b[125] = Hs_T[2000 + b];
-            Hs_b[126] = Hs_T[2016 + b];
-            Hs_b[127] = Hs_T[2032 + b];
-            Hs_b[128] = Hs_T[2048 + b];
-            Hs_b[129] = Hs_T[2064 + b];
-            Hs_b[130] = Hs_T[2080 + b];
-            Hs_b[131] = Hs_T[2096 + b];
-            Hs_b[132] = Hs_T[2112 + b];
-            Hs_b[133] = Hs_T[2128 + b];
-            Hs_b[134] = Hs_T[2144 + b];
-            Hs_b[135] = Hs_T[2160 + b];
-            Hs_b[136] = Hs_T[2176 + b];
-            Hs_b[137] = Hs_T[2192 + b];
-            Hs_b[138] = Hs_T[2208 + b];
-            Hs_b[139] = Hs_T[2224 + b];
-            Hs_b[140] = Hs_T[2240 + b];
-            Hs_b[141] = Hs_T[2256 + b];
-            Hs_b[142] = Hs_T[2272 + b];
-            Hs_b[143] = Hs_T[2288 + b];
-            Hs_b[144] = Hs_T[2304 + b];
-            Hs_b[145] = Hs_T[2320 + b];
-            Hs_b[146] = Hs_T[2336 + b];
-            Hs_b[147] = Hs_T[2352 + b];
-            Hs_b[148] = Hs_T[2368 + b];
-            Hs_b[149] = Hs_T[2384 + b];
-            Hs_b[150] = Hs_T[2400 + b];
-            Hs_b[151] = Hs_T[2416 + b];
-            Hs_b[152] = Hs_T[2432 + b];
-            Hs_b[153] = Hs_T[2448 + b];
-            Hs_b[154] = Hs_T[2464 + b];
-            Hs_b[155] = Hs_T[2480 + b];
-            Hs_b[156] = Hs_T[2496 + b];
-            Hs_b[157] = Hs_T[2512 + b];
-            Hs_b[158] = Hs_T[2528 + b];
-            Hs_b[159] = Hs_T[2544 + b];
-            Hs_b[160] = Hs_T[2560 + b];
-            Hs_b[161] = Hs_T[2576 + b];
-            Hs_b[162] = Hs_T[2592 + b];
-            Hs_b[163] = Hs_T[2608 + b];
-            Hs_b[164] = Hs_T[2624 + b];
-            Hs_b[165] = Hs_T[2640 + b];
-            Hs_b[166] = Hs_T[2656 + b];
-            Hs_b[167] = Hs_T[2672 + b];
-            Hs_b[168] = Hs_T[2688 + b];
-            Hs_b[169] = Hs_T[2704 + b];
-            Hs_b[170] = Hs_T[2720 + b];
-            Hs_b[171] = Hs_T[2736 + b];
-            Hs_b[172] = Hs_T[2752 + b];
-            Hs_b[173] = Hs_T[2768 + b];
-            Hs_b[174] = Hs_T[2784 + b];
-            Hs_b[175] = Hs_T[2800 + b];
-            Hs_b[176] = Hs_T[2816 + b];
-            Hs_b[177] = Hs_T[2832 + b];
-            Hs_b[178] = Hs_T[2848 + b];
-            Hs_b[179] = Hs_T[2864 + b];
-            Hs_b[180] = Hs_T[2880 + b];
-            Hs_b[181] = Hs_T[2896 + b];
-            Hs_b[182] = Hs_T[2912 + b];
-            Hs_b[183] = Hs_T[2928 + b];
-            Hs_b[184] = Hs_T[2944 + b];
-            Hs_b[185] = Hs_T[2960 + b];
-            Hs_b[186] = Hs_T[2976 + b];
-            Hs_b[187] = Hs_T[2992 + b];
-            Hs_b[188] = Hs_T[3008 + b];
-            Hs_b[189] = Hs_T[3024 + b];
-            Hs_b[190] = Hs_T[3040 + b];
-            Hs_b[191] = Hs_T[3056 + b];
-            Hs_b[192] = Hs_T[3072 + b];
-            Hs_b[193] = Hs_T[3088 + b];
-            Hs_b[194] = Hs_T[3104 + b];
-            Hs_b[195] = Hs_T[3120 + b];
-            Hs_b[196] = Hs_T[3136 + b];
-            Hs_b[197] = Hs_T[3152 + b];
-            Hs_b[198] = Hs_T[3168 + b];
-            Hs_b[199] = Hs_T[3184 + b];
-            Hs_b[200] = Hs_T[3200 + b];
-            Hs_b[201] = Hs_T[3216 + b];
-            Hs_b[202] = Hs_T[3232 + b];
-            Hs_b[203] = Hs_T[3248 + b];
-            Hs_b[204] = Hs_T[3264 + b];
-            Hs_b[205] = Hs_T[3280 + b];
-            Hs_b[206] = Hs_T[3296 + b];
-            Hs_b[207] = Hs_T[3312 + b];
-            Hs_b[208] = Hs_T[3328 + b];
-            Hs_b[209] = Hs_T[3344 + b];
-            Hs_b[210] = Hs_T[3360 + b];
-            Hs_b[211] = Hs_T[3376 + b];
-            Hs_b[212] = Hs_T[3392 + b];
-            Hs_b[213] = Hs_T[3408 + b];
-            Hs_b[214] = Hs_T[3424 + b];
-            Hs_b[215] = Hs_T[3440 + b];
-        }
-    }
-}
-#else
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 {
     size_t i;
@@ -5489,7 +2879,6 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
         }
     }
 }
-#endif
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 29 neg, 6 div, 6 sqrt */
@@ -5505,6 +2894,7 @@ static void ur5_manipulability_gradient_angles(const double q[6], double *restri
 
 static void ur5_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
 {
+    grad[5] = 0.0;
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
     const double t4 = cs[3]*sn[0];
@@ -5640,7 +3030,7 @@ static void ur5_manipulability_gradient_finish(const double *restrict cs, const 
     const double t226 = t220 - t222*t188;
     const double t227 = t221 - t222*t189;
     const double t228 = t8*t8;
-    const double t229 = t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227 + t228;
+    const double t229 = t228 + t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227;
     const double t230 = sqrt(t229);
     const double t231 = (t230 > 0.0 ? 1.0/(t230 != 0.0 ? t230 : 1.0) : 1.0);
     const double t232 = t231*t223;
@@ -5652,7 +3042,7 @@ static void ur5_manipulability_gradient_finish(const double *restrict cs, const 
     const double t238 = t192 + t210;
     const double t239 = t198 + t216;
     const double t240 = t204 + t222;
-    const double t241 = t5*t136 - t133*cs[0] - t134*cs[0] - t135*cs[0];
+    const double t241 = t5*t136 - cs[0]*t133 - cs[0]*t134 - cs[0]*t135;
     const double t242 = -t241*t132;
     const double t243 = -cs[0];
     const double t244 = t243 - t241*t133;
@@ -5716,7 +3106,7 @@ static void ur5_manipulability_gradient_finish(const double *restrict cs, const 
     const double t302 = t248 + t273;
     const double t303 = t254 + t279;
     const double t304 = t260 + t285;
-    const double t305 = t132 - t136*cs[3];
+    const double t305 = t132 - cs[3]*t136;
     const double t306 = 1.0 - t305*t132;
     const double t307 = -t305*t133;
     const double t308 = -t305*t134;
@@ -5873,7 +3263,8 @@ static void ur5_manipulability_gradient_finish(const double *restrict cs, const 
     const double t461 = t432*t237 + t433*t300 + t434*t378;
     const double t462 = t435*t300 + t436*t378;
     const double t463 = t437*t378;
-    const double t464 = t3*t459 + t8*t462 + t25*t441 + t27*t446 + t29*t451 + t31*t456 + t443*cs[0] + t444*sn[0] + t448*cs[0] + t449*sn[0] + t453*cs[0] + t454*sn[0] - t5*t458 - t10*t461 - t26*t440 - t28*t445 - t30*t450 - t32*t455 - t22*t438 - t23*t439;
+    const double t464 = (((t3*t459 + (t8*t462 + t25*t441)) + (t27*t446 + (t29*t451 + t31*t456))) + ((cs[0]*t443 + (cs[0]*t448 + cs[0]*t453)) + (t444*sn[0] + (t449*sn[0] + t454*sn[0])))) - (((t5*t458 + t10*t461) + (t26*t440 + t28*t445)) + ((t30*t450 + t32*t455) + (t22*t438 + t23*t439)));
+    grad[0] = t464;
     const double t465 = t2*t458;
     const double t466 = t4*t459;
     const double t467 = t387*t445;
@@ -5889,16 +3280,14 @@ static void ur5_manipulability_gradient_finish(const double *restrict cs, const 
     const double t477 = t403*t462;
     const double t478 = t405*t460;
     const double t479 = t406*t463;
-    const double t480 = t465 + t466 + t467 + t468 + t469 + t470 + t471 + t472 + t473 + t474 + t475 + t476 + t477 + t478 + t479 + t386*t440 + t391*t441 + t396*t442 + t25*t439 - t26*t438;
-    const double t481 = t465 + t466 + t467 + t468 + t469 + t470 + t471 + t472 + t473 + t474 + t475 + t476 + t477 + t478 + t479 + t387*t440 + t392*t441 + t397*t442 + t27*t439 - t28*t438;
-    const double t482 = t465 + t466 + t468 + t469 + t471 + t472 + t474 + t475 + t476 + t477 + t478 + t479 + t388*t440 + t388*t445 + t393*t441 + t393*t446 + t398*t442 + t398*t447 + t29*t439 - t30*t438;
-    const double t483 = t389*t440 + t389*t445 + t389*t450 + t390*t455 + t394*t441 + t394*t446 + t394*t451 + t395*t456 + t399*t442 + t399*t447 + t399*t452 + t400*t457 + t402*t461 + t404*t462 + t407*t463 + t31*t439 - t32*t438;
-    grad[0] = t464;
+    const double t480 = ((((t465 + t466) + (t386*t440 + t467)) + ((t468 + t469) + (t391*t441 + (t470 + t471)))) + (((t472 + t396*t442) + (t473 + (t474 + t475))) + ((t476 + t477) + (t478 + (t479 + t25*t439))))) - t26*t438;
     grad[1] = t480;
+    const double t481 = ((((t465 + t466) + (t387*t440 + t467)) + ((t468 + t469) + (t392*t441 + (t470 + t471)))) + (((t472 + t397*t442) + (t473 + (t474 + t475))) + ((t476 + t477) + (t478 + (t479 + t27*t439))))) - t28*t438;
     grad[2] = t481;
+    const double t482 = ((((t465 + t466) + (t388*t440 + t388*t445)) + ((t468 + t469) + (t393*t441 + (t393*t446 + t471)))) + (((t472 + t398*t442) + (t398*t447 + (t474 + t475))) + ((t476 + t477) + (t478 + (t479 + t29*t439))))) - t30*t438;
     grad[3] = t482;
+    const double t483 = ((((t389*t440 + t389*t445) + (t389*t450 + t390*t455)) + ((t394*t441 + t394*t446) + (t394*t451 + t395*t456))) + (((t399*t442 + t399*t447) + (t399*t452 + t400*t457)) + ((t402*t461 + t404*t462) + (t407*t463 + t31*t439)))) - t32*t438;
     grad[4] = t483;
-    grad[5] = 0.0;
 }
 
 void ur5_manipulability_gradient(const double q[6], double grad[6])
@@ -5913,490 +3302,6 @@ void ur5_manipulability_gradient(const double q[6], double grad[6])
     ur5_manipulability_gradient_finish(cs, sn, grad);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_manipulability_gradient_block(const double *restrict q_T, double *restrict grad_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double cs[5];
-        double sn[5];
-        double grad[6];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t123 = t25*t25;
-        const double t124 = t27*t27;
-        const double t125 = t29*t29;
-        const double t126 = t31*t31;
-        const double t127 = t23*t23;
-        const double t128 = t123 + t124 + t125 + t126 + t127;
-        const double t129 = sqrt(t128);
-        const double t130 = 1.0/(t129 != 0.0 ? t129 : 1.0);
-        const double t131 = (t129 > 0.0 ? t130 : 1.0);
-        const double t132 = -t23*t131;
-        const double t133 = t25*t131;
-        const double t134 = t27*t131;
-        const double t135 = t29*t131;
-        const double t136 = t31*t131;
-        const double t137 = t26*t133 + t28*t134 + t30*t135 + t32*t136 + t22*t132;
-        const double t138 = t22 - t137*t132;
-        const double t139 = t26 - t137*t133;
-        const double t140 = t28 - t137*t134;
-        const double t141 = t30 - t137*t135;
-        const double t142 = t32 - t137*t136;
-        const double t143 = t132*t138 + t133*t139 + t134*t140 + t135*t141 + t136*t142;
-        const double t144 = t138 - t143*t132;
-        const double t145 = t139 - t143*t133;
-        const double t146 = t140 - t143*t134;
-        const double t147 = t141 - t143*t135;
-        const double t148 = t142 - t143*t136;
-        const double t149 = t144*t144 + t145*t145 + t146*t146 + t147*t147 + t148*t148;
-        const double t150 = sqrt(t149);
-        const double t151 = (t150 > 0.0 ? 1.0/(t150 != 0.0 ? t150 : 1.0) : 1.0);
-        const double t152 = t151*t144;
-        const double t153 = t151*t145;
-        const double t154 = t151*t146;
-        const double t155 = t151*t147;
-        const double t156 = t151*t148;
-        const double t157 = t137 + t143;
-        const double t158 = t33*t136 + t20*t133 + t18*t134 + t15*t135;
-        const double t159 = -t158*t132;
-        const double t160 = t20 - t158*t133;
-        const double t161 = t18 - t158*t134;
-        const double t162 = t15 - t158*t135;
-        const double t163 = t33 - t158*t136;
-        const double t164 = t152*t159 + t153*t160 + t154*t161 + t155*t162 + t156*t163;
-        const double t165 = t159 - t164*t152;
-        const double t166 = t160 - t164*t153;
-        const double t167 = t161 - t164*t154;
-        const double t168 = t162 - t164*t155;
-        const double t169 = t163 - t164*t156;
-        const double t170 = t132*t165 + t133*t166 + t134*t167 + t135*t168 + t136*t169;
-        const double t171 = t165 - t170*t132;
-        const double t172 = t166 - t170*t133;
-        const double t173 = t167 - t170*t134;
-        const double t174 = t168 - t170*t135;
-        const double t175 = t169 - t170*t136;
-        const double t176 = t152*t171 + t153*t172 + t154*t173 + t155*t174 + t156*t175;
-        const double t177 = t171 - t176*t152;
-        const double t178 = t172 - t176*t153;
-        const double t179 = t173 - t176*t154;
-        const double t180 = t174 - t176*t155;
-        const double t181 = t175 - t176*t156;
-        const double t182 = t177*t177 + t178*t178 + t179*t179 + t180*t180 + t181*t181;
-        const double t183 = sqrt(t182);
-        const double t184 = (t183 > 0.0 ? 1.0/(t183 != 0.0 ? t183 : 1.0) : 1.0);
-        const double t185 = t184*t177;
-        const double t186 = t184*t178;
-        const double t187 = t184*t179;
-        const double t188 = t184*t180;
-        const double t189 = t184*t181;
-        const double t190 = t158 + t170;
-        const double t191 = t164 + t176;
-        const double t192 = t3*t136 + t133*sn[0] + t134*sn[0] + t135*sn[0];
-        const double t193 = -t192*t132;
-        const double t194 = sn[0] - t192*t133;
-        const double t195 = sn[0] - t192*t134;
-        const double t196 = sn[0] - t192*t135;
-        const double t197 = t3 - t192*t136;
-        const double t198 = t152*t193 + t153*t194 + t154*t195 + t155*t196 + t156*t197;
-        const double t199 = t193 - t198*t152;
-        const double t200 = t194 - t198*t153;
-        const double t201 = t195 - t198*t154;
-        const double t202 = t196 - t198*t155;
-        const double t203 = t197 - t198*t156;
-        const double t204 = t185*t199 + t186*t200 + t187*t201 + t188*t202 + t189*t203;
-        const double t205 = t199 - t204*t185;
-        const double t206 = t200 - t204*t186;
-        const double t207 = t201 - t204*t187;
-        const double t208 = t202 - t204*t188;
-        const double t209 = t203 - t204*t189;
-        const double t210 = t132*t205 + t133*t206 + t134*t207 + t135*t208 + t136*t209;
-        const double t211 = t205 - t210*t132;
-        const double t212 = t206 - t210*t133;
-        const double t213 = t207 - t210*t134;
-        const double t214 = t208 - t210*t135;
-        const double t215 = t209 - t210*t136;
-        const double t216 = t152*t211 + t153*t212 + t154*t213 + t155*t214 + t156*t215;
-        const double t217 = t211 - t216*t152;
-        const double t218 = t212 - t216*t153;
-        const double t219 = t213 - t216*t154;
-        const double t220 = t214 - t216*t155;
-        const double t221 = t215 - t216*t156;
-        const double t222 = t185*t217 + t186*t218 + t187*t219 + t188*t220 + t189*t221;
-        const double t223 = t217 - t222*t185;
-        const double t224 = t218 - t222*t186;
-        const double t225 = t219 - t222*t187;
-        const double t226 = t220 - t222*t188;
-        const double t227 = t221 - t222*t189;
-        const double t228 = t8*t8;
-        const double t229 = t223*t223 + t224*t224 + t225*t225 + t226*t226 + t227*t227 + t228;
-        const double t230 = sqrt(t229);
-        const double t231 = (t230 > 0.0 ? 1.0/(t230 != 0.0 ? t230 : 1.0) : 1.0);
-        const double t232 = t231*t223;
-        const double t233 = t231*t224;
-        const double t234 = t231*t225;
-        const double t235 = t231*t226;
-        const double t236 = t231*t227;
-        const double t237 = t8*t231;
-        const double t238 = t192 + t210;
-        const double t239 = t198 + t216;
-        const double t240 = t204 + t222;
-        const double t241 = t5*t136 - t133*cs[0] - t134*cs[0] - t135*cs[0];
-        const double t242 = -t241*t132;
-        const double t243 = -cs[0];
-        const double t244 = t243 - t241*t133;
-        const double t245 = t243 - t241*t134;
-        const double t246 = t243 - t241*t135;
-        const double t247 = t5 - t241*t136;
-        const double t248 = t152*t242 + t153*t244 + t154*t245 + t155*t246 + t156*t247;
-        const double t249 = t242 - t248*t152;
-        const double t250 = t244 - t248*t153;
-        const double t251 = t245 - t248*t154;
-        const double t252 = t246 - t248*t155;
-        const double t253 = t247 - t248*t156;
-        const double t254 = t185*t249 + t186*t250 + t187*t251 + t188*t252 + t189*t253;
-        const double t255 = t249 - t254*t185;
-        const double t256 = t250 - t254*t186;
-        const double t257 = t251 - t254*t187;
-        const double t258 = t252 - t254*t188;
-        const double t259 = t253 - t254*t189;
-        const double t260 = t10*t237 + t232*t255 + t233*t256 + t234*t257 + t235*t258 + t236*t259;
-        const double t261 = t255 - t260*t232;
-        const double t262 = t256 - t260*t233;
-        const double t263 = t257 - t260*t234;
-        const double t264 = t258 - t260*t235;
-        const double t265 = t259 - t260*t236;
-        const double t266 = t10 - t260*t237;
-        const double t267 = t132*t261 + t133*t262 + t134*t263 + t135*t264 + t136*t265;
-        const double t268 = t261 - t267*t132;
-        const double t269 = t262 - t267*t133;
-        const double t270 = t263 - t267*t134;
-        const double t271 = t264 - t267*t135;
-        const double t272 = t265 - t267*t136;
-        const double t273 = t152*t268 + t153*t269 + t154*t270 + t155*t271 + t156*t272;
-        const double t274 = t268 - t273*t152;
-        const double t275 = t269 - t273*t153;
-        const double t276 = t270 - t273*t154;
-        const double t277 = t271 - t273*t155;
-        const double t278 = t272 - t273*t156;
-        const double t279 = t185*t274 + t186*t275 + t187*t276 + t188*t277 + t189*t278;
-        const double t280 = t274 - t279*t185;
-        const double t281 = t275 - t279*t186;
-        const double t282 = t276 - t279*t187;
-        const double t283 = t277 - t279*t188;
-        const double t284 = t278 - t279*t189;
-        const double t285 = t232*t280 + t233*t281 + t234*t282 + t235*t283 + t236*t284 + t237*t266;
-        const double t286 = t280 - t285*t232;
-        const double t287 = t281 - t285*t233;
-        const double t288 = t282 - t285*t234;
-        const double t289 = t283 - t285*t235;
-        const double t290 = t284 - t285*t236;
-        const double t291 = t266 - t285*t237;
-        const double t292 = t286*t286 + t287*t287 + t288*t288 + t289*t289 + t290*t290 + t291*t291;
-        const double t293 = sqrt(t292);
-        const double t294 = (t293 > 0.0 ? 1.0/(t293 != 0.0 ? t293 : 1.0) : 1.0);
-        const double t295 = t294*t286;
-        const double t296 = t294*t287;
-        const double t297 = t294*t288;
-        const double t298 = t294*t289;
-        const double t299 = t294*t290;
-        const double t300 = t294*t291;
-        const double t301 = t241 + t267;
-        const double t302 = t248 + t273;
-        const double t303 = t254 + t279;
-        const double t304 = t260 + t285;
-        const double t305 = t132 - t136*cs[3];
-        const double t306 = 1.0 - t305*t132;
-        const double t307 = -t305*t133;
-        const double t308 = -t305*t134;
-        const double t309 = -t305*t135;
-        const double t310 = -cs[3];
-        const double t311 = t310 - t305*t136;
-        const double t312 = t152*t306 + t153*t307 + t154*t308 + t155*t309 + t156*t311;
-        const double t313 = t306 - t312*t152;
-        const double t314 = t307 - t312*t153;
-        const double t315 = t308 - t312*t154;
-        const double t316 = t309 - t312*t155;
-        const double t317 = t311 - t312*t156;
-        const double t318 = t185*t313 + t186*t314 + t187*t315 + t188*t316 + t189*t317;
-        const double t319 = t313 - t318*t185;
-        const double t320 = t314 - t318*t186;
-        const double t321 = t315 - t318*t187;
-        const double t322 = t316 - t318*t188;
-        const double t323 = t317 - t318*t189;
-        const double t324 = t12*t237 + t232*t319 + t233*t320 + t234*t321 + t235*t322 + t236*t323;
-        const double t325 = t319 - t324*t232;
-        const double t326 = t320 - t324*t233;
-        const double t327 = t321 - t324*t234;
-        const double t328 = t322 - t324*t235;
-        const double t329 = t323 - t324*t236;
-        const double t330 = t12 - t324*t237;
-        const double t331 = t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329 + t300*t330;
-        const double t332 = t325 - t331*t295;
-        const double t333 = t326 - t331*t296;
-        const double t334 = t327 - t331*t297;
-        const double t335 = t328 - t331*t298;
-        const double t336 = t329 - t331*t299;
-        const double t337 = t330 - t331*t300;
-        const double t338 = t132*t332 + t133*t333 + t134*t334 + t135*t335 + t136*t336;
-        const double t339 = t332 - t338*t132;
-        const double t340 = t333 - t338*t133;
-        const double t341 = t334 - t338*t134;
-        const double t342 = t335 - t338*t135;
-        const double t343 = t336 - t338*t136;
-        const double t344 = t152*t339 + t153*t340 + t154*t341 + t155*t342 + t156*t343;
-        const double t345 = t339 - t344*t152;
-        const double t346 = t340 - t344*t153;
-        const double t347 = t341 - t344*t154;
-        const double t348 = t342 - t344*t155;
-        const double t349 = t343 - t344*t156;
-        const double t350 = t185*t345 + t186*t346 + t187*t347 + t188*t348 + t189*t349;
-        const double t351 = t345 - t350*t185;
-        const double t352 = t346 - t350*t186;
-        const double t353 = t347 - t350*t187;
-        const double t354 = t348 - t350*t188;
-        const double t355 = t349 - t350*t189;
-        const double t356 = t232*t351 + t233*t352 + t234*t353 + t235*t354 + t236*t355 + t237*t337;
-        const double t357 = t351 - t356*t232;
-        const double t358 = t352 - t356*t233;
-        const double t359 = t353 - t356*t234;
-        const double t360 = t354 - t356*t235;
-        const double t361 = t355 - t356*t236;
-        const double t362 = t337 - t356*t237;
-        const double t363 = t295*t357 + t296*t358 + t297*t359 + t298*t360 + t299*t361 + t300*t362;
-        const double t364 = t357 - t363*t295;
-        const double t365 = t358 - t363*t296;
-        const double t366 = t359 - t363*t297;
-        const double t367 = t360 - t363*t298;
-        const double t368 = t361 - t363*t299;
-        const double t369 = t362 - t363*t300;
-        const double t370 = t364*t364 + t365*t365 + t366*t366 + t367*t367 + t368*t368 + t369*t369;
-        const double t371 = sqrt(t370);
-        const double t372 = (t371 > 0.0 ? 1.0/(t371 != 0.0 ? t371 : 1.0) : 1.0);
-        const double t373 = t372*t364;
-        const double t374 = t372*t365;
-        const double t375 = t372*t366;
-        const double t376 = t372*t367;
-        const double t377 = t372*t368;
-        const double t378 = t372*t369;
-        const double t379 = t305 + t338;
-        const double t380 = t312 + t344;
-        const double t381 = t318 + t350;
-        const double t382 = t324 + t356;
-        const double t383 = t331 + t363;
-        const double t386 = -t20*cs[0];
-        const double t387 = -t18*cs[0];
-        const double t388 = -t15*cs[0];
-        const double t389 = -t33*cs[0];
-        const double t390 = t5*t33 + t32*cs[3];
-        const double t391 = -t20*sn[0];
-        const double t392 = -t18*sn[0];
-        const double t393 = -t15*sn[0];
-        const double t394 = -t33*sn[0];
-        const double t395 = -t3*t33 - t31*cs[3];
-        const double t396 = t25*cs[0] + t26*sn[0];
-        const double t397 = t27*cs[0] + t28*sn[0];
-        const double t398 = t29*cs[0] + t30*sn[0];
-        const double t399 = t31*cs[0] + t32*sn[0];
-        const double t400 = t3*t32 - t5*t31;
-        const double t401 = -t12*cs[0];
-        const double t402 = t5*t12 + t10*cs[3];
-        const double t403 = -t12*sn[0];
-        const double t404 = -t3*t12 - t8*cs[3];
-        const double t405 = t3*cs[0] + t5*sn[0];
-        const double t406 = t8*cs[0] + t10*sn[0];
-        const double t407 = t3*t10 - t5*t8;
-        const double t408 = t157*t191 - t190*t150;
-        const double t409 = t191*t240 - t239*t183;
-        const double t410 = t190*t240*t150 - t409*t157 - t238*t150*t183;
-        const double t411 = t240*t304 - t303*t230;
-        const double t412 = t239*t304*t183 - t411*t191 - t302*t183*t230;
-        const double t413 = t238*t304*t150*t183 - t412*t157 - t411*t190*t150 - t301*t150*t183*t230;
-        const double t414 = t304*t383 - t382*t293;
-        const double t415 = t303*t383*t230 - t414*t240 - t381*t230*t293;
-        const double t416 = t302*t383*t183*t230 - t415*t191 - t414*t239*t183 - t380*t183*t230*t293;
-        const double t417 = t301*t383*t150*t183*t230 - t416*t157 - t415*t190*t150 - t414*t238*t150*t183 - t379*t150*t183*t230*t293;
-        const double t418 = t150*t183*t230*t293*t371;
-        const double t419 = -t157*t183*t230*t293*t371;
-        const double t420 = t408*t230*t293*t371;
-        const double t421 = t410*t293*t371;
-        const double t422 = t413*t371;
-        const double t423 = t129*t183*t230*t293*t371;
-        const double t424 = -t191*t129*t230*t293*t371;
-        const double t425 = t409*t129*t293*t371;
-        const double t426 = t412*t129*t371;
-        const double t427 = t416*t129;
-        const double t428 = t129*t150*t230*t293*t371;
-        const double t429 = -t240*t129*t150*t293*t371;
-        const double t430 = t411*t129*t150*t371;
-        const double t431 = t415*t129*t150;
-        const double t432 = t129*t150*t183*t293*t371;
-        const double t433 = -t304*t129*t150*t183*t371;
-        const double t434 = t414*t129*t150*t183;
-        const double t435 = t129*t150*t183*t230*t371;
-        const double t436 = -t383*t129*t150*t183*t230;
-        const double t437 = t129*t150*t183*t230*t293;
-        const double t438 = t417*t373 + t418*t132 + t419*t152 + t420*t185 + t421*t232 + t422*t295;
-        const double t439 = t423*t152 + t424*t185 + t425*t232 + t426*t295 + t427*t373;
-        const double t440 = t417*t374 + t418*t133 + t419*t153 + t420*t186 + t421*t233 + t422*t296;
-        const double t441 = t423*t153 + t424*t186 + t425*t233 + t426*t296 + t427*t374;
-        const double t442 = t428*t186 + t429*t233 + t430*t296 + t431*t374;
-        const double t443 = t432*t233 + t433*t296 + t434*t374;
-        const double t444 = t435*t296 + t436*t374;
-        const double t445 = t417*t375 + t418*t134 + t419*t154 + t420*t187 + t421*t234 + t422*t297;
-        const double t446 = t423*t154 + t424*t187 + t425*t234 + t426*t297 + t427*t375;
-        const double t447 = t428*t187 + t429*t234 + t430*t297 + t431*t375;
-        const double t448 = t432*t234 + t433*t297 + t434*t375;
-        const double t449 = t435*t297 + t436*t375;
-        const double t450 = t417*t376 + t418*t135 + t419*t155 + t420*t188 + t421*t235 + t422*t298;
-        const double t451 = t423*t155 + t424*t188 + t425*t235 + t426*t298 + t427*t376;
-        const double t452 = t428*t188 + t429*t235 + t430*t298 + t431*t376;
-        const double t453 = t432*t235 + t433*t298 + t434*t376;
-        const double t454 = t435*t298 + t436*t376;
-        const double t455 = t417*t377 + t418*t136 + t419*t156 + t420*t189 + t421*t236 + t422*t299;
-        const double t456 = t423*t156 + t424*t189 + t425*t236 + t426*t299 + t427*t377;
-        const double t457 = t428*t189 + t429*t236 + t430*t299 + t431*t377;
-        const double t458 = t432*t236 + t433*t299 + t434*t377;
-        const double t459 = t435*t299 + t436*t377;
-        const double t460 = t437*t377;
-        const double t461 = t432*t237 + t433*t300 + t434*t378;
-        const double t462 = t435*t300 + t436*t378;
-        const double t463 = t437*t378;
-        const double t464 = t3*t459 + t8*t462 + t25*t441 + t27*t446 + t29*t451 + t31*t456 + t443*cs[0] + t444*sn[0] + t448*cs[0] + t449*sn[0] + t453*cs[0] + t454*sn[0] - t5*t458 - t10*t461 - t26*t440 - t28*t445 - t30*t450 - t32*t455 - t22*t438 - t23*t439;
-        const double t465 = t2*t458;
-        const double t466 = t4*t459;
-        const double t467 = t387*t445;
-        const double t468 = t388*t450;
-        const double t469 = t389*t455;
-        const double t470 = t392*t446;
-        const double t471 = t393*t451;
-        const double t472 = t394*t456;
-        const double t473 = t397*t447;
-        const double t474 = t398*t452;
-        const double t475 = t399*t457;
-        const double t476 = t401*t461;
-        const double t477 = t403*t462;
-        const double t478 = t405*t460;
-        const double t479 = t406*t463;
-        const double t480 = t465 + t466 + t467 + t468 + t469 + t470 + t471 + t472 + t473 + t474 + t475 + t476 + t477 + t478 + t479 + t386*t440 + t391*t441 + t396*t442 + t25*t439 - t26*t438;
-        const double t481 = t465 + t466 + t467 + t468 + t469 + t470 + t471 + t472 + t473 + t474 + t475 + t476 + t477 + t478 + t479 + t387*t440 + t392*t441 + t397*t442 + t27*t439 - t28*t438;
-        const double t482 = t465 + t466 + t468 + t469 + t471 + t472 + t474 + t475 + t476 + t477 + t478 + t479 + t388*t440 + t388*t445 + t393*t441 + t393*t446 + t398*t442 + t398*t447 + t29*t439 - t30*t438;
-        const double t483 = t389*t440 + t389*t445 + t389*t450 + t390*t455 + t394*t441 + t394*t446 + t394*t451 + t395*t456 + t399*t442 + t399*t447 + t399*t452 + t400*t457 + t402*t461 + t404*t462 + t407*t463 + t31*t439 - t32*t438;
-        grad[0] = t464;
-        grad[1] = t480;
-        grad[2] = t481;
-        grad[3] = t482;
-        grad[4] = t483;
-        grad[5] = 0.0;
-        grad_T[0 + b] = grad[0];
-        grad_T[32 + b] = grad[1];
-        grad_T[64 + b] = grad[2];
-        grad_T[96 + b] = grad[3];
-        grad_T[128 + b] = grad[4];
-        grad_T[160 + b] = grad[5];
-    }
-}
-
-void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
-{
-    double q_T[192];
-    double grad_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_manipulability_gradient_block(q_T, grad_T);
-        for (b = 0; b < count; ++b) {
-            double *grad_b = grad + (i + b) * 6;
-            grad_b[0] = grad_T[0 + b];
-            grad_b[1] = grad_T[32 + b];
-            grad_b[2] = grad_T[64 + b];
-            grad_b[3] = grad_T[96 + b];
-            grad_b[4] = grad_T[128 + b];
-            grad_b[5] = grad_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 {
     size_t i;
@@ -6416,7 +3321,6 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
         }
     }
 }
-#endif
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 42 neg, 13 div, 13 sqrt */
@@ -6484,11 +3388,11 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t500 = t486*t486;
     const double t501 = t487*t487;
     const double t502 = t488*t488;
-    const double t503 = 1.0 + t3*t3 + t5*t5 + t10*t10 + t12*t12 + t489*t489 + t490*t490 + t491*t491 + t492*t492 + t493*t493 + t494*t494 + t495*t495 + t496*t496 + t497*t497 + 3.0*(cs[0]*cs[0]) + cs[3]*cs[3] + t228 + t498 + t499 + t500 + t501 + t502 + 3.0*(sn[0]*sn[0]);
+    const double t503 = (((1.0 + t3*t3) + (t5*t5 + (t228 + t10*t10))) + ((t12*t12 + (cs[3]*cs[3] + t498)) + (t499 + (t500 + t501)))) + (((t502 + (t489*t489 + t490*t490)) + (t491*t491 + (t492*t492 + t493*t493))) + ((t494*t494 + (t495*t495 + t496*t496)) + (t497*t497 + (3.0*(cs[0]*cs[0]) + 3.0*(sn[0]*sn[0])))));
     const double t504 = sqrt(t503);
     const double t505 = t498 + t499 + t500 + t501 + t502;
     const double t506 = sqrt(t505);
-    const double t507 = UR5_RANK_TOL*t504;
+    const double t507 = t504*UR5_RANK_TOL;
     const int t508 = t506 > t507;
     const double t509 = (t508 ? t506 : 0.0);
     const double t510 = (t508 ? 1.0/(t506 != 0.0 ? t506 : 1.0) : 1.0);
@@ -6592,7 +3496,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t608 = t602 - t605*t570;
     const double t609 = t603 - t605*t571;
     const double t610 = t604 - t605*t572;
-    const double t611 = t606*t606 + t607*t607 + t608*t608 + t609*t609 + t610*t610 + t228;
+    const double t611 = t228 + t606*t606 + t607*t607 + t608*t608 + t609*t609 + t610*t610;
     const double t612 = sqrt(t611);
     const int t613 = t612 > t507;
     const double t614 = (t613 ? t612 : 0.0);
@@ -6606,7 +3510,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t622 = t575 + t593;
     const double t623 = t581 + t599;
     const double t624 = t587 + t605;
-    const double t625 = t5*t515 - t512*cs[0] - t513*cs[0] - t514*cs[0];
+    const double t625 = t5*t515 - cs[0]*t512 - cs[0]*t513 - cs[0]*t514;
     const double t626 = -t625*t511;
     const double t627 = t243 - t625*t512;
     const double t628 = t243 - t625*t513;
@@ -6671,7 +3575,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t687 = t631 + t656;
     const double t688 = t637 + t662;
     const double t689 = t643 + t668;
-    const double t690 = t511 - t515*cs[3];
+    const double t690 = t511 - cs[3]*t515;
     const double t691 = 1.0 - t690*t511;
     const double t692 = -t690*t512;
     const double t693 = -t690*t513;
@@ -6849,7 +3753,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t865 = t857 - t859*t830;
     const double t866 = t858 - t859*t831;
     const double t867 = t850 - t859*t832;
-    const double t868 = t860*t860 + t861*t861 + t862*t862 + t863*t863 + t864*t864 + t865*t865 + t866*t866 + t867*t867 + t793;
+    const double t868 = ((t860*t860 + t861*t861) + (t862*t862 + t863*t863)) + ((t864*t864 + t865*t865) + (t866*t866 + (t867*t867 + t793)));
     const double t869 = sqrt(t868);
     const int t870 = t869 > 0.0;
     const double t871 = (t870 ? 1.0/(t869 != 0.0 ? t869 : 1.0) : 1.0);
@@ -6908,7 +3812,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t924 = t916 - t918*t830;
     const double t925 = t917 - t918*t831;
     const double t926 = t908 - t918*t832;
-    const double t927 = t872*t919 + t873*t920 + t874*t921 + t875*t922 + t876*t923 + t877*t924 + t878*t925 + t879*t926 + t880*t909;
+    const double t927 = ((t872*t919 + t873*t920) + (t874*t921 + t875*t922)) + ((t876*t923 + t877*t924) + (t878*t925 + (t879*t926 + t880*t909)));
     const double t928 = t919 - t927*t872;
     const double t929 = t920 - t927*t873;
     const double t930 = t921 - t927*t874;
@@ -6918,7 +3822,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t934 = t925 - t927*t878;
     const double t935 = t926 - t927*t879;
     const double t936 = t909 - t927*t880;
-    const double t937 = t928*t928 + t929*t929 + t930*t930 + t931*t931 + t932*t932 + t933*t933 + t934*t934 + t935*t935 + t936*t936 + t793;
+    const double t937 = ((t928*t928 + t929*t929) + (t930*t930 + (t931*t931 + t932*t932))) + ((t933*t933 + t934*t934) + (t935*t935 + (t936*t936 + t793)));
     const double t938 = sqrt(t937);
     const int t939 = t938 > 0.0;
     const double t940 = (t939 ? 1.0/(t938 != 0.0 ? t938 : 1.0) : 1.0);
@@ -6962,7 +3866,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t978 = t969 - t971*t878;
     const double t979 = t970 - t971*t879;
     const double t980 = -t971*t880;
-    const double t981 = t941*t972 + t942*t973 + t943*t974 + t944*t975 + t945*t976 + t946*t977 + t947*t978 + t948*t979 + t949*t980;
+    const double t981 = ((t941*t972 + t942*t973) + (t943*t974 + t944*t975)) + ((t945*t976 + t946*t977) + (t947*t978 + (t948*t979 + t949*t980)));
     const double t982 = t972 - t981*t941;
     const double t983 = t973 - t981*t942;
     const double t984 = t974 - t981*t943;
@@ -6990,7 +3894,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1006 = t998 - t1000*t830;
     const double t1007 = t999 - t1000*t831;
     const double t1008 = t989 - t1000*t832;
-    const double t1009 = t872*t1001 + t873*t1002 + t874*t1003 + t875*t1004 + t876*t1005 + t877*t1006 + t878*t1007 + t879*t1008 + t880*t990;
+    const double t1009 = ((t872*t1001 + t873*t1002) + (t874*t1003 + t875*t1004)) + ((t876*t1005 + t877*t1006) + (t878*t1007 + (t879*t1008 + t880*t990)));
     const double t1010 = t1001 - t1009*t872;
     const double t1011 = t1002 - t1009*t873;
     const double t1012 = t1003 - t1009*t874;
@@ -7000,7 +3904,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1016 = t1007 - t1009*t878;
     const double t1017 = t1008 - t1009*t879;
     const double t1018 = t990 - t1009*t880;
-    const double t1019 = t941*t1010 + t942*t1011 + t943*t1012 + t944*t1013 + t945*t1014 + t946*t1015 + t947*t1016 + t948*t1017 + t949*t1018 + t950*t991;
+    const double t1019 = ((t941*t1010 + t942*t1011) + (t943*t1012 + (t944*t1013 + t945*t1014))) + ((t946*t1015 + t947*t1016) + (t948*t1017 + (t949*t1018 + t950*t991)));
     const double t1020 = t1010 - t1019*t941;
     const double t1021 = t1011 - t1019*t942;
     const double t1022 = t1012 - t1019*t943;
@@ -7011,7 +3915,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1027 = t1017 - t1019*t948;
     const double t1028 = t1018 - t1019*t949;
     const double t1029 = t991 - t1019*t950;
-    const double t1030 = t1020*t1020 + t1021*t1021 + t1022*t1022 + t1023*t1023 + t1024*t1024 + t1025*t1025 + t1026*t1026 + t1027*t1027 + t1028*t1028 + t1029*t1029 + t793;
+    const double t1030 = ((t1020*t1020 + t1021*t1021) + (t1022*t1022 + (t1023*t1023 + t1024*t1024))) + ((t1025*t1025 + (t1026*t1026 + t1027*t1027)) + (t1028*t1028 + (t1029*t1029 + t793)));
     const double t1031 = sqrt(t1030);
     const int t1032 = t1031 > 0.0;
     const double t1033 = (t1032 ? 1.0/(t1031 != 0.0 ? t1031 : 1.0) : 1.0);
@@ -7057,7 +3961,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1073 = t1064 - t1066*t878;
     const double t1074 = t1065 - t1066*t879;
     const double t1075 = -t1066*t880;
-    const double t1076 = t941*t1067 + t942*t1068 + t943*t1069 + t944*t1070 + t945*t1071 + t946*t1072 + t947*t1073 + t948*t1074 + t949*t1075;
+    const double t1076 = ((t941*t1067 + t942*t1068) + (t943*t1069 + t944*t1070)) + ((t945*t1071 + t946*t1072) + (t947*t1073 + (t948*t1074 + t949*t1075)));
     const double t1077 = t1067 - t1076*t941;
     const double t1078 = t1068 - t1076*t942;
     const double t1079 = t1069 - t1076*t943;
@@ -7068,7 +3972,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1084 = t1074 - t1076*t948;
     const double t1085 = t1075 - t1076*t949;
     const double t1086 = -t1076*t950;
-    const double t1087 = t1034*t1077 + t1035*t1078 + t1036*t1079 + t1037*t1080 + t1038*t1081 + t1039*t1082 + t1040*t1083 + t1041*t1084 + t1042*t1085 + t1043*t1086;
+    const double t1087 = ((t1034*t1077 + t1035*t1078) + (t1036*t1079 + (t1037*t1080 + t1038*t1081))) + ((t1039*t1082 + t1040*t1083) + (t1041*t1084 + (t1042*t1085 + t1043*t1086)));
     const double t1088 = t1077 - t1087*t1034;
     const double t1089 = t1078 - t1087*t1035;
     const double t1090 = t1079 - t1087*t1036;
@@ -7097,7 +4001,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1113 = t1105 - t1107*t830;
     const double t1114 = t1106 - t1107*t831;
     const double t1115 = t1095 - t1107*t832;
-    const double t1116 = t872*t1108 + t873*t1109 + t874*t1110 + t875*t1111 + t876*t1112 + t877*t1113 + t878*t1114 + t879*t1115 + t880*t1096;
+    const double t1116 = ((t872*t1108 + t873*t1109) + (t874*t1110 + t875*t1111)) + ((t876*t1112 + t877*t1113) + (t878*t1114 + (t879*t1115 + t880*t1096)));
     const double t1117 = t1108 - t1116*t872;
     const double t1118 = t1109 - t1116*t873;
     const double t1119 = t1110 - t1116*t874;
@@ -7107,7 +4011,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1123 = t1114 - t1116*t878;
     const double t1124 = t1115 - t1116*t879;
     const double t1125 = t1096 - t1116*t880;
-    const double t1126 = t941*t1117 + t942*t1118 + t943*t1119 + t944*t1120 + t945*t1121 + t946*t1122 + t947*t1123 + t948*t1124 + t949*t1125 + t950*t1097;
+    const double t1126 = ((t941*t1117 + t942*t1118) + (t943*t1119 + (t944*t1120 + t945*t1121))) + ((t946*t1122 + t947*t1123) + (t948*t1124 + (t949*t1125 + t950*t1097)));
     const double t1127 = t1117 - t1126*t941;
     const double t1128 = t1118 - t1126*t942;
     const double t1129 = t1119 - t1126*t943;
@@ -7118,7 +4022,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1134 = t1124 - t1126*t948;
     const double t1135 = t1125 - t1126*t949;
     const double t1136 = t1097 - t1126*t950;
-    const double t1137 = t1034*t1127 + t1035*t1128 + t1044*t1098 + t1036*t1129 + t1037*t1130 + t1038*t1131 + t1039*t1132 + t1040*t1133 + t1041*t1134 + t1042*t1135 + t1043*t1136;
+    const double t1137 = ((t1034*t1127 + t1035*t1128) + (t1044*t1098 + (t1036*t1129 + t1037*t1130))) + ((t1038*t1131 + (t1039*t1132 + t1040*t1133)) + (t1041*t1134 + (t1042*t1135 + t1043*t1136)));
     const double t1138 = t1127 - t1137*t1034;
     const double t1139 = t1128 - t1137*t1035;
     const double t1140 = t1129 - t1137*t1036;
@@ -7130,7 +4034,7 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1146 = t1135 - t1137*t1042;
     const double t1147 = t1136 - t1137*t1043;
     const double t1148 = t1098 - t1137*t1044;
-    const double t1149 = t1138*t1138 + t1139*t1139 + t1148*t1148 + t1140*t1140 + t1141*t1141 + t1142*t1142 + t1143*t1143 + t1144*t1144 + t1145*t1145 + t1146*t1146 + t1147*t1147 + t793;
+    const double t1149 = ((t1138*t1138 + (t1139*t1139 + t1148*t1148)) + (t1140*t1140 + (t1141*t1141 + t1142*t1142))) + ((t1143*t1143 + (t1144*t1144 + t1145*t1145)) + (t1146*t1146 + (t1147*t1147 + t793)));
     const double t1150 = sqrt(t1149);
     const int t1151 = t1150 > 0.0;
     const double t1152 = (t1151 ? 1.0/(t1150 != 0.0 ? t1150 : 1.0) : 1.0);
@@ -7158,16 +4062,16 @@ static void ur5_inverse_velocity_finish(const double twist[6], double lambda, co
     const double t1174 = (t823 ? t824*(t1165 - t882*t1173 - t952*t1172 - t1046*t1171 - t1160*t1170) : 0.0);
     const double t1175 = (t796 ? t797*(t1164 - t833*t1174 - t881*t1173 - t951*t1172 - t1045*t1171 - t1159*t1170) : 0.0);
     const double t1176 = t511*t1175 + t533*t1174 + t568*t1173 + t616*t1172 + t680*t1171 + t759*t1170;
-    const double t1177 = t512*t1175 + t534*t1174 + t569*t1173 + t617*t1172 + t681*t1171 + t760*t1170;
-    const double t1178 = t513*t1175 + t535*t1174 + t570*t1173 + t618*t1172 + t682*t1171 + t761*t1170;
-    const double t1179 = t514*t1175 + t536*t1174 + t571*t1173 + t619*t1172 + t683*t1171 + t762*t1170;
-    const double t1180 = t515*t1175 + t537*t1174 + t572*t1173 + t620*t1172 + t684*t1171 + t763*t1170;
-    const double t1181 = t621*t1172 + t685*t1171 + t764*t1170;
     dq[0] = t1176;
+    const double t1177 = t512*t1175 + t534*t1174 + t569*t1173 + t617*t1172 + t681*t1171 + t760*t1170;
     dq[1] = t1177;
+    const double t1178 = t513*t1175 + t535*t1174 + t570*t1173 + t618*t1172 + t682*t1171 + t761*t1170;
     dq[2] = t1178;
+    const double t1179 = t514*t1175 + t536*t1174 + t571*t1173 + t619*t1172 + t683*t1171 + t762*t1170;
     dq[3] = t1179;
+    const double t1180 = t515*t1175 + t537*t1174 + t572*t1173 + t620*t1172 + t684*t1171 + t763*t1170;
     dq[4] = t1180;
+    const double t1181 = t621*t1172 + t685*t1171 + t764*t1170;
     dq[5] = t1181;
 }
 
@@ -7183,851 +4087,6 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
     ur5_inverse_velocity_finish(twist, lambda, cs, sn, dq);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_inverse_velocity_block(const double *restrict q_T, const double *restrict twist_T, double lambda, double *restrict dq_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double twist[6];
-        double cs[5];
-        double sn[5];
-        double dq[6];
-        twist[0] = twist_T[0 + b];
-        twist[1] = twist_T[32 + b];
-        twist[2] = twist_T[64 + b];
-        twist[3] = twist_T[96 + b];
-        twist[4] = twist_T[128 + b];
-        twist[5] = twist_T[160 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t122 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t228 = t8*t8;
-        const double t243 = -cs[0];
-        const double t310 = -cs[3];
-        const double t484 = -0.8385680946642751*t23;
-        const double t485 = 0.8385680946642751*t25;
-        const double t486 = 0.8385680946642751*t27;
-        const double t487 = 0.8385680946642751*t29;
-        const double t488 = 0.8385680946642751*t31;
-        const double t489 = 0.8385680946642751*t22;
-        const double t490 = 0.8385680946642751*t26;
-        const double t491 = 0.8385680946642751*t28;
-        const double t492 = 0.8385680946642751*t30;
-        const double t493 = 0.8385680946642751*t32;
-        const double t494 = 0.8385680946642751*t20;
-        const double t495 = 0.8385680946642751*t18;
-        const double t496 = 0.8385680946642751*t15;
-        const double t497 = 0.8385680946642751*t33;
-        const double t498 = t484*t484;
-        const double t499 = t485*t485;
-        const double t500 = t486*t486;
-        const double t501 = t487*t487;
-        const double t502 = t488*t488;
-        const double t503 = 1.0 + t3*t3 + t5*t5 + t10*t10 + t12*t12 + t489*t489 + t490*t490 + t491*t491 + t492*t492 + t493*t493 + t494*t494 + t495*t495 + t496*t496 + t497*t497 + 3.0*(cs[0]*cs[0]) + cs[3]*cs[3] + t228 + t498 + t499 + t500 + t501 + t502 + 3.0*(sn[0]*sn[0]);
-        const double t504 = sqrt(t503);
-        const double t505 = t498 + t499 + t500 + t501 + t502;
-        const double t506 = sqrt(t505);
-        const double t507 = UR5_RANK_TOL*t504;
-        const int t508 = t506 > t507;
-        const double t509 = (t508 ? t506 : 0.0);
-        const double t510 = (t508 ? 1.0/(t506 != 0.0 ? t506 : 1.0) : 1.0);
-        const double t511 = (t508 ? t510*t484 : 0.0);
-        const double t512 = (t508 ? t510*t485 : 0.0);
-        const double t513 = (t508 ? t510*t486 : 0.0);
-        const double t514 = (t508 ? t510*t487 : 0.0);
-        const double t515 = (t508 ? t510*t488 : 0.0);
-        const double t516 = t511*t489 + t512*t490 + t513*t491 + t514*t492 + t515*t493;
-        const double t517 = t489 - t516*t511;
-        const double t518 = t490 - t516*t512;
-        const double t519 = t491 - t516*t513;
-        const double t520 = t492 - t516*t514;
-        const double t521 = t493 - t516*t515;
-        const double t522 = t511*t517 + t512*t518 + t513*t519 + t514*t520 + t515*t521;
-        const double t523 = t517 - t522*t511;
-        const double t524 = t518 - t522*t512;
-        const double t525 = t519 - t522*t513;
-        const double t526 = t520 - t522*t514;
-        const double t527 = t521 - t522*t515;
-        const double t528 = t523*t523 + t524*t524 + t525*t525 + t526*t526 + t527*t527;
-        const double t529 = sqrt(t528);
-        const int t530 = t529 > t507;
-        const double t531 = (t530 ? t529 : 0.0);
-        const double t532 = (t530 ? 1.0/(t529 != 0.0 ? t529 : 1.0) : 1.0);
-        const double t533 = (t530 ? t532*t523 : 0.0);
-        const double t534 = (t530 ? t532*t524 : 0.0);
-        const double t535 = (t530 ? t532*t525 : 0.0);
-        const double t536 = (t530 ? t532*t526 : 0.0);
-        const double t537 = (t530 ? t532*t527 : 0.0);
-        const double t538 = t516 + t522;
-        const double t539 = t512*t494 + t513*t495 + t514*t496 + t515*t497;
-        const double t540 = -t539*t511;
-        const double t541 = t494 - t539*t512;
-        const double t542 = t495 - t539*t513;
-        const double t543 = t496 - t539*t514;
-        const double t544 = t497 - t539*t515;
-        const double t545 = t533*t540 + t534*t541 + t535*t542 + t536*t543 + t537*t544;
-        const double t546 = t540 - t545*t533;
-        const double t547 = t541 - t545*t534;
-        const double t548 = t542 - t545*t535;
-        const double t549 = t543 - t545*t536;
-        const double t550 = t544 - t545*t537;
-        const double t551 = t511*t546 + t512*t547 + t513*t548 + t514*t549 + t515*t550;
-        const double t552 = t546 - t551*t511;
-        const double t553 = t547 - t551*t512;
-        const double t554 = t548 - t551*t513;
-        const double t555 = t549 - t551*t514;
-        const double t556 = t550 - t551*t515;
-        const double t557 = t533*t552 + t534*t553 + t535*t554 + t536*t555 + t537*t556;
-        const double t558 = t552 - t557*t533;
-        const double t559 = t553 - t557*t534;
-        const double t560 = t554 - t557*t535;
-        const double t561 = t555 - t557*t536;
-        const double t562 = t556 - t557*t537;
-        const double t563 = t558*t558 + t559*t559 + t560*t560 + t561*t561 + t562*t562;
-        const double t564 = sqrt(t563);
-        const int t565 = t564 > t507;
-        const double t566 = (t565 ? t564 : 0.0);
-        const double t567 = (t565 ? 1.0/(t564 != 0.0 ? t564 : 1.0) : 1.0);
-        const double t568 = (t565 ? t567*t558 : 0.0);
-        const double t569 = (t565 ? t567*t559 : 0.0);
-        const double t570 = (t565 ? t567*t560 : 0.0);
-        const double t571 = (t565 ? t567*t561 : 0.0);
-        const double t572 = (t565 ? t567*t562 : 0.0);
-        const double t573 = t539 + t551;
-        const double t574 = t545 + t557;
-        const double t575 = t3*t515 + t512*sn[0] + t513*sn[0] + t514*sn[0];
-        const double t576 = -t575*t511;
-        const double t577 = sn[0] - t575*t512;
-        const double t578 = sn[0] - t575*t513;
-        const double t579 = sn[0] - t575*t514;
-        const double t580 = t3 - t575*t515;
-        const double t581 = t533*t576 + t534*t577 + t535*t578 + t536*t579 + t537*t580;
-        const double t582 = t576 - t581*t533;
-        const double t583 = t577 - t581*t534;
-        const double t584 = t578 - t581*t535;
-        const double t585 = t579 - t581*t536;
-        const double t586 = t580 - t581*t537;
-        const double t587 = t568*t582 + t569*t583 + t570*t584 + t571*t585 + t572*t586;
-        const double t588 = t582 - t587*t568;
-        const double t589 = t583 - t587*t569;
-        const double t590 = t584 - t587*t570;
-        const double t591 = t585 - t587*t571;
-        const double t592 = t586 - t587*t572;
-        const double t593 = t511*t588 + t512*t589 + t513*t590 + t514*t591 + t515*t592;
-        const double t594 = t588 - t593*t511;
-        const double t595 = t589 - t593*t512;
-        const double t596 = t590 - t593*t513;
-        const double t597 = t591 - t593*t514;
-        const double t598 = t592 - t593*t515;
-        const double t599 = t533*t594 + t534*t595 + t535*t596 + t536*t597 + t537*t598;
-        const double t600 = t594 - t599*t533;
-        const double t601 = t595 - t599*t534;
-        const double t602 = t596 - t599*t535;
-        const double t603 = t597 - t599*t536;
-        const double t604 = t598 - t599*t537;
-        const double t605 = t568*t600 + t569*t601 + t570*t602 + t571*t603 + t572*t604;
-        const double t606 = t600 - t605*t568;
-        const double t607 = t601 - t605*t569;
-        const double t608 = t602 - t605*t570;
-        const double t609 = t603 - t605*t571;
-        const double t610 = t604 - t605*t572;
-        const double t611 = t606*t606 + t607*t607 + t608*t608 + t609*t609 + t610*t610 + t228;
-        const double t612 = sqrt(t611);
-        const int t613 = t612 > t507;
-        const double t614 = (t613 ? t612 : 0.0);
-        const double t615 = (t613 ? 1.0/(t612 != 0.0 ? t612 : 1.0) : 1.0);
-        const double t616 = (t613 ? t615*t606 : 0.0);
-        const double t617 = (t613 ? t615*t607 : 0.0);
-        const double t618 = (t613 ? t615*t608 : 0.0);
-        const double t619 = (t613 ? t615*t609 : 0.0);
-        const double t620 = (t613 ? t615*t610 : 0.0);
-        const double t621 = (t613 ? t8*t615 : 0.0);
-        const double t622 = t575 + t593;
-        const double t623 = t581 + t599;
-        const double t624 = t587 + t605;
-        const double t625 = t5*t515 - t512*cs[0] - t513*cs[0] - t514*cs[0];
-        const double t626 = -t625*t511;
-        const double t627 = t243 - t625*t512;
-        const double t628 = t243 - t625*t513;
-        const double t629 = t243 - t625*t514;
-        const double t630 = t5 - t625*t515;
-        const double t631 = t533*t626 + t534*t627 + t535*t628 + t536*t629 + t537*t630;
-        const double t632 = t626 - t631*t533;
-        const double t633 = t627 - t631*t534;
-        const double t634 = t628 - t631*t535;
-        const double t635 = t629 - t631*t536;
-        const double t636 = t630 - t631*t537;
-        const double t637 = t568*t632 + t569*t633 + t570*t634 + t571*t635 + t572*t636;
-        const double t638 = t632 - t637*t568;
-        const double t639 = t633 - t637*t569;
-        const double t640 = t634 - t637*t570;
-        const double t641 = t635 - t637*t571;
-        const double t642 = t636 - t637*t572;
-        const double t643 = t10*t621 + t616*t638 + t617*t639 + t618*t640 + t619*t641 + t620*t642;
-        const double t644 = t638 - t643*t616;
-        const double t645 = t639 - t643*t617;
-        const double t646 = t640 - t643*t618;
-        const double t647 = t641 - t643*t619;
-        const double t648 = t642 - t643*t620;
-        const double t649 = t10 - t643*t621;
-        const double t650 = t511*t644 + t512*t645 + t513*t646 + t514*t647 + t515*t648;
-        const double t651 = t644 - t650*t511;
-        const double t652 = t645 - t650*t512;
-        const double t653 = t646 - t650*t513;
-        const double t654 = t647 - t650*t514;
-        const double t655 = t648 - t650*t515;
-        const double t656 = t533*t651 + t534*t652 + t535*t653 + t536*t654 + t537*t655;
-        const double t657 = t651 - t656*t533;
-        const double t658 = t652 - t656*t534;
-        const double t659 = t653 - t656*t535;
-        const double t660 = t654 - t656*t536;
-        const double t661 = t655 - t656*t537;
-        const double t662 = t568*t657 + t569*t658 + t570*t659 + t571*t660 + t572*t661;
-        const double t663 = t657 - t662*t568;
-        const double t664 = t658 - t662*t569;
-        const double t665 = t659 - t662*t570;
-        const double t666 = t660 - t662*t571;
-        const double t667 = t661 - t662*t572;
-        const double t668 = t616*t663 + t617*t664 + t618*t665 + t619*t666 + t620*t667 + t621*t649;
-        const double t669 = t663 - t668*t616;
-        const double t670 = t664 - t668*t617;
-        const double t671 = t665 - t668*t618;
-        const double t672 = t666 - t668*t619;
-        const double t673 = t667 - t668*t620;
-        const double t674 = t649 - t668*t621;
-        const double t675 = t669*t669 + t670*t670 + t671*t671 + t672*t672 + t673*t673 + t674*t674;
-        const double t676 = sqrt(t675);
-        const int t677 = t676 > t507;
-        const double t678 = (t677 ? t676 : 0.0);
-        const double t679 = (t677 ? 1.0/(t676 != 0.0 ? t676 : 1.0) : 1.0);
-        const double t680 = (t677 ? t679*t669 : 0.0);
-        const double t681 = (t677 ? t679*t670 : 0.0);
-        const double t682 = (t677 ? t679*t671 : 0.0);
-        const double t683 = (t677 ? t679*t672 : 0.0);
-        const double t684 = (t677 ? t679*t673 : 0.0);
-        const double t685 = (t677 ? t679*t674 : 0.0);
-        const double t686 = t625 + t650;
-        const double t687 = t631 + t656;
-        const double t688 = t637 + t662;
-        const double t689 = t643 + t668;
-        const double t690 = t511 - t515*cs[3];
-        const double t691 = 1.0 - t690*t511;
-        const double t692 = -t690*t512;
-        const double t693 = -t690*t513;
-        const double t694 = -t690*t514;
-        const double t695 = t310 - t690*t515;
-        const double t696 = t533*t691 + t534*t692 + t535*t693 + t536*t694 + t537*t695;
-        const double t697 = t691 - t696*t533;
-        const double t698 = t692 - t696*t534;
-        const double t699 = t693 - t696*t535;
-        const double t700 = t694 - t696*t536;
-        const double t701 = t695 - t696*t537;
-        const double t702 = t568*t697 + t569*t698 + t570*t699 + t571*t700 + t572*t701;
-        const double t703 = t697 - t702*t568;
-        const double t704 = t698 - t702*t569;
-        const double t705 = t699 - t702*t570;
-        const double t706 = t700 - t702*t571;
-        const double t707 = t701 - t702*t572;
-        const double t708 = t12*t621 + t616*t703 + t617*t704 + t618*t705 + t619*t706 + t620*t707;
-        const double t709 = t703 - t708*t616;
-        const double t710 = t704 - t708*t617;
-        const double t711 = t705 - t708*t618;
-        const double t712 = t706 - t708*t619;
-        const double t713 = t707 - t708*t620;
-        const double t714 = t12 - t708*t621;
-        const double t715 = t680*t709 + t681*t710 + t682*t711 + t683*t712 + t684*t713 + t685*t714;
-        const double t716 = t709 - t715*t680;
-        const double t717 = t710 - t715*t681;
-        const double t718 = t711 - t715*t682;
-        const double t719 = t712 - t715*t683;
-        const double t720 = t713 - t715*t684;
-        const double t721 = t714 - t715*t685;
-        const double t722 = t511*t716 + t512*t717 + t513*t718 + t514*t719 + t515*t720;
-        const double t723 = t716 - t722*t511;
-        const double t724 = t717 - t722*t512;
-        const double t725 = t718 - t722*t513;
-        const double t726 = t719 - t722*t514;
-        const double t727 = t720 - t722*t515;
-        const double t728 = t533*t723 + t534*t724 + t535*t725 + t536*t726 + t537*t727;
-        const double t729 = t723 - t728*t533;
-        const double t730 = t724 - t728*t534;
-        const double t731 = t725 - t728*t535;
-        const double t732 = t726 - t728*t536;
-        const double t733 = t727 - t728*t537;
-        const double t734 = t568*t729 + t569*t730 + t570*t731 + t571*t732 + t572*t733;
-        const double t735 = t729 - t734*t568;
-        const double t736 = t730 - t734*t569;
-        const double t737 = t731 - t734*t570;
-        const double t738 = t732 - t734*t571;
-        const double t739 = t733 - t734*t572;
-        const double t740 = t616*t735 + t617*t736 + t618*t737 + t619*t738 + t620*t739 + t621*t721;
-        const double t741 = t735 - t740*t616;
-        const double t742 = t736 - t740*t617;
-        const double t743 = t737 - t740*t618;
-        const double t744 = t738 - t740*t619;
-        const double t745 = t739 - t740*t620;
-        const double t746 = t721 - t740*t621;
-        const double t747 = t680*t741 + t681*t742 + t682*t743 + t683*t744 + t684*t745 + t685*t746;
-        const double t748 = t741 - t747*t680;
-        const double t749 = t742 - t747*t681;
-        const double t750 = t743 - t747*t682;
-        const double t751 = t744 - t747*t683;
-        const double t752 = t745 - t747*t684;
-        const double t753 = t746 - t747*t685;
-        const double t754 = t748*t748 + t749*t749 + t750*t750 + t751*t751 + t752*t752 + t753*t753;
-        const double t755 = sqrt(t754);
-        const int t756 = t755 > t507;
-        const double t757 = (t756 ? t755 : 0.0);
-        const double t758 = (t756 ? 1.0/(t755 != 0.0 ? t755 : 1.0) : 1.0);
-        const double t759 = (t756 ? t758*t748 : 0.0);
-        const double t760 = (t756 ? t758*t749 : 0.0);
-        const double t761 = (t756 ? t758*t750 : 0.0);
-        const double t762 = (t756 ? t758*t751 : 0.0);
-        const double t763 = (t756 ? t758*t752 : 0.0);
-        const double t764 = (t756 ? t758*t753 : 0.0);
-        const double t765 = t690 + t722;
-        const double t766 = t696 + t728;
-        const double t767 = t702 + t734;
-        const double t768 = t708 + t740;
-        const double t769 = t715 + t747;
-        const double t770 = t122*lambda;
-        const double t771 = 1.192509*t122;
-        const double t772 = t509*t771;
-        const double t773 = t538*t771;
-        const double t774 = t573*t771;
-        const double t775 = t622*t122;
-        const double t776 = t686*t122;
-        const double t777 = t765*t122;
-        const double t778 = t531*t771;
-        const double t779 = t574*t771;
-        const double t780 = t623*t122;
-        const double t781 = t687*t122;
-        const double t782 = t766*t122;
-        const double t783 = t566*t771;
-        const double t784 = t624*t122;
-        const double t785 = t688*t122;
-        const double t786 = t767*t122;
-        const double t787 = t614*t122;
-        const double t788 = t689*t122;
-        const double t789 = t768*t122;
-        const double t790 = t678*t122;
-        const double t791 = t769*t122;
-        const double t792 = t757*t122;
-        const double t793 = t770*t770;
-        const double t794 = t772*t772 + t773*t773 + t774*t774 + t775*t775 + t776*t776 + t777*t777 + t793;
-        const double t795 = sqrt(t794);
-        const int t796 = t795 > 0.0;
-        const double t797 = (t796 ? 1.0/(t795 != 0.0 ? t795 : 1.0) : 1.0);
-        const double t798 = t797*t772;
-        const double t799 = t797*t773;
-        const double t800 = t797*t774;
-        const double t801 = t797*t775;
-        const double t802 = t797*t776;
-        const double t803 = t797*t777;
-        const double t804 = t797*t770;
-        const double t805 = t799*t778 + t800*t779 + t801*t780 + t802*t781 + t803*t782;
-        const double t806 = -t805*t798;
-        const double t807 = t778 - t805*t799;
-        const double t808 = t779 - t805*t800;
-        const double t809 = t780 - t805*t801;
-        const double t810 = t781 - t805*t802;
-        const double t811 = t782 - t805*t803;
-        const double t812 = -t805*t804;
-        const double t813 = t798*t806 + t799*t807 + t800*t808 + t801*t809 + t802*t810 + t803*t811 + t804*t812;
-        const double t814 = t806 - t813*t798;
-        const double t815 = t807 - t813*t799;
-        const double t816 = t808 - t813*t800;
-        const double t817 = t809 - t813*t801;
-        const double t818 = t810 - t813*t802;
-        const double t819 = t811 - t813*t803;
-        const double t820 = t812 - t813*t804;
-        const double t821 = t814*t814 + t815*t815 + t816*t816 + t817*t817 + t818*t818 + t819*t819 + t820*t820 + t793;
-        const double t822 = sqrt(t821);
-        const int t823 = t822 > 0.0;
-        const double t824 = (t823 ? 1.0/(t822 != 0.0 ? t822 : 1.0) : 1.0);
-        const double t825 = t824*t814;
-        const double t826 = t824*t815;
-        const double t827 = t824*t816;
-        const double t828 = t824*t817;
-        const double t829 = t824*t818;
-        const double t830 = t824*t819;
-        const double t831 = t824*t820;
-        const double t832 = t824*t770;
-        const double t833 = t805 + t813;
-        const double t834 = t800*t783 + t801*t784 + t802*t785 + t803*t786;
-        const double t835 = -t834*t798;
-        const double t836 = -t834*t799;
-        const double t837 = t783 - t834*t800;
-        const double t838 = t784 - t834*t801;
-        const double t839 = t785 - t834*t802;
-        const double t840 = t786 - t834*t803;
-        const double t841 = -t834*t804;
-        const double t842 = t825*t835 + t826*t836 + t827*t837 + t828*t838 + t829*t839 + t830*t840 + t831*t841;
-        const double t843 = t835 - t842*t825;
-        const double t844 = t836 - t842*t826;
-        const double t845 = t837 - t842*t827;
-        const double t846 = t838 - t842*t828;
-        const double t847 = t839 - t842*t829;
-        const double t848 = t840 - t842*t830;
-        const double t849 = t841 - t842*t831;
-        const double t850 = -t842*t832;
-        const double t851 = t798*t843 + t799*t844 + t800*t845 + t801*t846 + t802*t847 + t803*t848 + t804*t849;
-        const double t852 = t843 - t851*t798;
-        const double t853 = t844 - t851*t799;
-        const double t854 = t845 - t851*t800;
-        const double t855 = t846 - t851*t801;
-        const double t856 = t847 - t851*t802;
-        const double t857 = t848 - t851*t803;
-        const double t858 = t849 - t851*t804;
-        const double t859 = t825*t852 + t826*t853 + t827*t854 + t828*t855 + t829*t856 + t830*t857 + t831*t858 + t832*t850;
-        const double t860 = t852 - t859*t825;
-        const double t861 = t853 - t859*t826;
-        const double t862 = t854 - t859*t827;
-        const double t863 = t855 - t859*t828;
-        const double t864 = t856 - t859*t829;
-        const double t865 = t857 - t859*t830;
-        const double t866 = t858 - t859*t831;
-        const double t867 = t850 - t859*t832;
-        const double t868 = t860*t860 + t861*t861 + t862*t862 + t863*t863 + t864*t864 + t865*t865 + t866*t866 + t867*t867 + t793;
-        const double t869 = sqrt(t868);
-        const int t870 = t869 > 0.0;
-        const double t871 = (t870 ? 1.0/(t869 != 0.0 ? t869 : 1.0) : 1.0);
-        const double t872 = t871*t860;
-        const double t873 = t871*t861;
-        const double t874 = t871*t862;
-        const double t875 = t871*t863;
-        const double t876 = t871*t864;
-        const double t877 = t871*t865;
-        const double t878 = t871*t866;
-        const double t879 = t871*t867;
-        const double t880 = t871*t770;
-        const double t881 = t834 + t851;
-        const double t882 = t842 + t859;
-        const double t883 = t801*t787 + t802*t788 + t803*t789;
-        const double t884 = -t883*t798;
-        const double t885 = -t883*t799;
-        const double t886 = -t883*t800;
-        const double t887 = t787 - t883*t801;
-        const double t888 = t788 - t883*t802;
-        const double t889 = t789 - t883*t803;
-        const double t890 = -t883*t804;
-        const double t891 = t825*t884 + t826*t885 + t827*t886 + t828*t887 + t829*t888 + t830*t889 + t831*t890;
-        const double t892 = t884 - t891*t825;
-        const double t893 = t885 - t891*t826;
-        const double t894 = t886 - t891*t827;
-        const double t895 = t887 - t891*t828;
-        const double t896 = t888 - t891*t829;
-        const double t897 = t889 - t891*t830;
-        const double t898 = t890 - t891*t831;
-        const double t899 = -t891*t832;
-        const double t900 = t872*t892 + t873*t893 + t874*t894 + t875*t895 + t876*t896 + t877*t897 + t878*t898 + t879*t899;
-        const double t901 = t892 - t900*t872;
-        const double t902 = t893 - t900*t873;
-        const double t903 = t894 - t900*t874;
-        const double t904 = t895 - t900*t875;
-        const double t905 = t896 - t900*t876;
-        const double t906 = t897 - t900*t877;
-        const double t907 = t898 - t900*t878;
-        const double t908 = t899 - t900*t879;
-        const double t909 = -t900*t880;
-        const double t910 = t798*t901 + t799*t902 + t800*t903 + t801*t904 + t802*t905 + t803*t906 + t804*t907;
-        const double t911 = t901 - t910*t798;
-        const double t912 = t902 - t910*t799;
-        const double t913 = t903 - t910*t800;
-        const double t914 = t904 - t910*t801;
-        const double t915 = t905 - t910*t802;
-        const double t916 = t906 - t910*t803;
-        const double t917 = t907 - t910*t804;
-        const double t918 = t825*t911 + t826*t912 + t827*t913 + t828*t914 + t829*t915 + t830*t916 + t831*t917 + t832*t908;
-        const double t919 = t911 - t918*t825;
-        const double t920 = t912 - t918*t826;
-        const double t921 = t913 - t918*t827;
-        const double t922 = t914 - t918*t828;
-        const double t923 = t915 - t918*t829;
-        const double t924 = t916 - t918*t830;
-        const double t925 = t917 - t918*t831;
-        const double t926 = t908 - t918*t832;
-        const double t927 = t872*t919 + t873*t920 + t874*t921 + t875*t922 + t876*t923 + t877*t924 + t878*t925 + t879*t926 + t880*t909;
-        const double t928 = t919 - t927*t872;
-        const double t929 = t920 - t927*t873;
-        const double t930 = t921 - t927*t874;
-        const double t931 = t922 - t927*t875;
-        const double t932 = t923 - t927*t876;
-        const double t933 = t924 - t927*t877;
-        const double t934 = t925 - t927*t878;
-        const double t935 = t926 - t927*t879;
-        const double t936 = t909 - t927*t880;
-        const double t937 = t928*t928 + t929*t929 + t930*t930 + t931*t931 + t932*t932 + t933*t933 + t934*t934 + t935*t935 + t936*t936 + t793;
-        const double t938 = sqrt(t937);
-        const int t939 = t938 > 0.0;
-        const double t940 = (t939 ? 1.0/(t938 != 0.0 ? t938 : 1.0) : 1.0);
-        const double t941 = t940*t928;
-        const double t942 = t940*t929;
-        const double t943 = t940*t930;
-        const double t944 = t940*t931;
-        const double t945 = t940*t932;
-        const double t946 = t940*t933;
-        const double t947 = t940*t934;
-        const double t948 = t940*t935;
-        const double t949 = t940*t936;
-        const double t950 = t940*t770;
-        const double t951 = t883 + t910;
-        const double t952 = t891 + t918;
-        const double t953 = t900 + t927;
-        const double t954 = t802*t790 + t803*t791;
-        const double t955 = -t954*t798;
-        const double t956 = -t954*t799;
-        const double t957 = -t954*t800;
-        const double t958 = -t954*t801;
-        const double t959 = t790 - t954*t802;
-        const double t960 = t791 - t954*t803;
-        const double t961 = -t954*t804;
-        const double t962 = t825*t955 + t826*t956 + t827*t957 + t828*t958 + t829*t959 + t830*t960 + t831*t961;
-        const double t963 = t955 - t962*t825;
-        const double t964 = t956 - t962*t826;
-        const double t965 = t957 - t962*t827;
-        const double t966 = t958 - t962*t828;
-        const double t967 = t959 - t962*t829;
-        const double t968 = t960 - t962*t830;
-        const double t969 = t961 - t962*t831;
-        const double t970 = -t962*t832;
-        const double t971 = t872*t963 + t873*t964 + t874*t965 + t875*t966 + t876*t967 + t877*t968 + t878*t969 + t879*t970;
-        const double t972 = t963 - t971*t872;
-        const double t973 = t964 - t971*t873;
-        const double t974 = t965 - t971*t874;
-        const double t975 = t966 - t971*t875;
-        const double t976 = t967 - t971*t876;
-        const double t977 = t968 - t971*t877;
-        const double t978 = t969 - t971*t878;
-        const double t979 = t970 - t971*t879;
-        const double t980 = -t971*t880;
-        const double t981 = t941*t972 + t942*t973 + t943*t974 + t944*t975 + t945*t976 + t946*t977 + t947*t978 + t948*t979 + t949*t980;
-        const double t982 = t972 - t981*t941;
-        const double t983 = t973 - t981*t942;
-        const double t984 = t974 - t981*t943;
-        const double t985 = t975 - t981*t944;
-        const double t986 = t976 - t981*t945;
-        const double t987 = t977 - t981*t946;
-        const double t988 = t978 - t981*t947;
-        const double t989 = t979 - t981*t948;
-        const double t990 = t980 - t981*t949;
-        const double t991 = -t981*t950;
-        const double t992 = t798*t982 + t799*t983 + t800*t984 + t801*t985 + t802*t986 + t803*t987 + t804*t988;
-        const double t993 = t982 - t992*t798;
-        const double t994 = t983 - t992*t799;
-        const double t995 = t984 - t992*t800;
-        const double t996 = t985 - t992*t801;
-        const double t997 = t986 - t992*t802;
-        const double t998 = t987 - t992*t803;
-        const double t999 = t988 - t992*t804;
-        const double t1000 = t825*t993 + t826*t994 + t827*t995 + t828*t996 + t829*t997 + t830*t998 + t831*t999 + t832*t989;
-        const double t1001 = t993 - t1000*t825;
-        const double t1002 = t994 - t1000*t826;
-        const double t1003 = t995 - t1000*t827;
-        const double t1004 = t996 - t1000*t828;
-        const double t1005 = t997 - t1000*t829;
-        const double t1006 = t998 - t1000*t830;
-        const double t1007 = t999 - t1000*t831;
-        const double t1008 = t989 - t1000*t832;
-        const double t1009 = t872*t1001 + t873*t1002 + t874*t1003 + t875*t1004 + t876*t1005 + t877*t1006 + t878*t1007 + t879*t1008 + t880*t990;
-        const double t1010 = t1001 - t1009*t872;
-        const double t1011 = t1002 - t1009*t873;
-        const double t1012 = t1003 - t1009*t874;
-        const double t1013 = t1004 - t1009*t875;
-        const double t1014 = t1005 - t1009*t876;
-        const double t1015 = t1006 - t1009*t877;
-        const double t1016 = t1007 - t1009*t878;
-        const double t1017 = t1008 - t1009*t879;
-        const double t1018 = t990 - t1009*t880;
-        const double t1019 = t941*t1010 + t942*t1011 + t943*t1012 + t944*t1013 + t945*t1014 + t946*t1015 + t947*t1016 + t948*t1017 + t949*t1018 + t950*t991;
-        const double t1020 = t1010 - t1019*t941;
-        const double t1021 = t1011 - t1019*t942;
-        const double t1022 = t1012 - t1019*t943;
-        const double t1023 = t1013 - t1019*t944;
-        const double t1024 = t1014 - t1019*t945;
-        const double t1025 = t1015 - t1019*t946;
-        const double t1026 = t1016 - t1019*t947;
-        const double t1027 = t1017 - t1019*t948;
-        const double t1028 = t1018 - t1019*t949;
-        const double t1029 = t991 - t1019*t950;
-        const double t1030 = t1020*t1020 + t1021*t1021 + t1022*t1022 + t1023*t1023 + t1024*t1024 + t1025*t1025 + t1026*t1026 + t1027*t1027 + t1028*t1028 + t1029*t1029 + t793;
-        const double t1031 = sqrt(t1030);
-        const int t1032 = t1031 > 0.0;
-        const double t1033 = (t1032 ? 1.0/(t1031 != 0.0 ? t1031 : 1.0) : 1.0);
-        const double t1034 = t1033*t1020;
-        const double t1035 = t1033*t1021;
-        const double t1036 = t1033*t1022;
-        const double t1037 = t1033*t1023;
-        const double t1038 = t1033*t1024;
-        const double t1039 = t1033*t1025;
-        const double t1040 = t1033*t1026;
-        const double t1041 = t1033*t1027;
-        const double t1042 = t1033*t1028;
-        const double t1043 = t1033*t1029;
-        const double t1044 = t1033*t770;
-        const double t1045 = t954 + t992;
-        const double t1046 = t962 + t1000;
-        const double t1047 = t971 + t1009;
-        const double t1048 = t981 + t1019;
-        const double t1049 = t803*t792;
-        const double t1050 = -t1049*t798;
-        const double t1051 = -t1049*t799;
-        const double t1052 = -t1049*t800;
-        const double t1053 = -t1049*t801;
-        const double t1054 = -t1049*t802;
-        const double t1055 = t792 - t1049*t803;
-        const double t1056 = -t1049*t804;
-        const double t1057 = t825*t1050 + t826*t1051 + t827*t1052 + t828*t1053 + t829*t1054 + t830*t1055 + t831*t1056;
-        const double t1058 = t1050 - t1057*t825;
-        const double t1059 = t1051 - t1057*t826;
-        const double t1060 = t1052 - t1057*t827;
-        const double t1061 = t1053 - t1057*t828;
-        const double t1062 = t1054 - t1057*t829;
-        const double t1063 = t1055 - t1057*t830;
-        const double t1064 = t1056 - t1057*t831;
-        const double t1065 = -t1057*t832;
-        const double t1066 = t872*t1058 + t873*t1059 + t874*t1060 + t875*t1061 + t876*t1062 + t877*t1063 + t878*t1064 + t879*t1065;
-        const double t1067 = t1058 - t1066*t872;
-        const double t1068 = t1059 - t1066*t873;
-        const double t1069 = t1060 - t1066*t874;
-        const double t1070 = t1061 - t1066*t875;
-        const double t1071 = t1062 - t1066*t876;
-        const double t1072 = t1063 - t1066*t877;
-        const double t1073 = t1064 - t1066*t878;
-        const double t1074 = t1065 - t1066*t879;
-        const double t1075 = -t1066*t880;
-        const double t1076 = t941*t1067 + t942*t1068 + t943*t1069 + t944*t1070 + t945*t1071 + t946*t1072 + t947*t1073 + t948*t1074 + t949*t1075;
-        const double t1077 = t1067 - t1076*t941;
-        const double t1078 = t1068 - t1076*t942;
-        const double t1079 = t1069 - t1076*t943;
-        const double t1080 = t1070 - t1076*t944;
-        const double t1081 = t1071 - t1076*t945;
-        const double t1082 = t1072 - t1076*t946;
-        const double t1083 = t1073 - t1076*t947;
-        const double t1084 = t1074 - t1076*t948;
-        const double t1085 = t1075 - t1076*t949;
-        const double t1086 = -t1076*t950;
-        const double t1087 = t1034*t1077 + t1035*t1078 + t1036*t1079 + t1037*t1080 + t1038*t1081 + t1039*t1082 + t1040*t1083 + t1041*t1084 + t1042*t1085 + t1043*t1086;
-        const double t1088 = t1077 - t1087*t1034;
-        const double t1089 = t1078 - t1087*t1035;
-        const double t1090 = t1079 - t1087*t1036;
-        const double t1091 = t1080 - t1087*t1037;
-        const double t1092 = t1081 - t1087*t1038;
-        const double t1093 = t1082 - t1087*t1039;
-        const double t1094 = t1083 - t1087*t1040;
-        const double t1095 = t1084 - t1087*t1041;
-        const double t1096 = t1085 - t1087*t1042;
-        const double t1097 = t1086 - t1087*t1043;
-        const double t1098 = -t1087*t1044;
-        const double t1099 = t798*t1088 + t799*t1089 + t800*t1090 + t801*t1091 + t802*t1092 + t803*t1093 + t804*t1094;
-        const double t1100 = t1088 - t1099*t798;
-        const double t1101 = t1089 - t1099*t799;
-        const double t1102 = t1090 - t1099*t800;
-        const double t1103 = t1091 - t1099*t801;
-        const double t1104 = t1092 - t1099*t802;
-        const double t1105 = t1093 - t1099*t803;
-        const double t1106 = t1094 - t1099*t804;
-        const double t1107 = t825*t1100 + t826*t1101 + t827*t1102 + t828*t1103 + t829*t1104 + t830*t1105 + t831*t1106 + t832*t1095;
-        const double t1108 = t1100 - t1107*t825;
-        const double t1109 = t1101 - t1107*t826;
-        const double t1110 = t1102 - t1107*t827;
-        const double t1111 = t1103 - t1107*t828;
-        const double t1112 = t1104 - t1107*t829;
-        const double t1113 = t1105 - t1107*t830;
-        const double t1114 = t1106 - t1107*t831;
-        const double t1115 = t1095 - t1107*t832;
-        const double t1116 = t872*t1108 + t873*t1109 + t874*t1110 + t875*t1111 + t876*t1112 + t877*t1113 + t878*t1114 + t879*t1115 + t880*t1096;
-        const double t1117 = t1108 - t1116*t872;
-        const double t1118 = t1109 - t1116*t873;
-        const double t1119 = t1110 - t1116*t874;
-        const double t1120 = t1111 - t1116*t875;
-        const double t1121 = t1112 - t1116*t876;
-        const double t1122 = t1113 - t1116*t877;
-        const double t1123 = t1114 - t1116*t878;
-        const double t1124 = t1115 - t1116*t879;
-        const double t1125 = t1096 - t1116*t880;
-        const double t1126 = t941*t1117 + t942*t1118 + t943*t1119 + t944*t1120 + t945*t1121 + t946*t1122 + t947*t1123 + t948*t1124 + t949*t1125 + t950*t1097;
-        const double t1127 = t1117 - t1126*t941;
-        const double t1128 = t1118 - t1126*t942;
-        const double t1129 = t1119 - t1126*t943;
-        const double t1130 = t1120 - t1126*t944;
-        const double t1131 = t1121 - t1126*t945;
-        const double t1132 = t1122 - t1126*t946;
-        const double t1133 = t1123 - t1126*t947;
-        const double t1134 = t1124 - t1126*t948;
-        const double t1135 = t1125 - t1126*t949;
-        const double t1136 = t1097 - t1126*t950;
-        const double t1137 = t1034*t1127 + t1035*t1128 + t1044*t1098 + t1036*t1129 + t1037*t1130 + t1038*t1131 + t1039*t1132 + t1040*t1133 + t1041*t1134 + t1042*t1135 + t1043*t1136;
-        const double t1138 = t1127 - t1137*t1034;
-        const double t1139 = t1128 - t1137*t1035;
-        const double t1140 = t1129 - t1137*t1036;
-        const double t1141 = t1130 - t1137*t1037;
-        const double t1142 = t1131 - t1137*t1038;
-        const double t1143 = t1132 - t1137*t1039;
-        const double t1144 = t1133 - t1137*t1040;
-        const double t1145 = t1134 - t1137*t1041;
-        const double t1146 = t1135 - t1137*t1042;
-        const double t1147 = t1136 - t1137*t1043;
-        const double t1148 = t1098 - t1137*t1044;
-        const double t1149 = t1138*t1138 + t1139*t1139 + t1148*t1148 + t1140*t1140 + t1141*t1141 + t1142*t1142 + t1143*t1143 + t1144*t1144 + t1145*t1145 + t1146*t1146 + t1147*t1147 + t793;
-        const double t1150 = sqrt(t1149);
-        const int t1151 = t1150 > 0.0;
-        const double t1152 = (t1151 ? 1.0/(t1150 != 0.0 ? t1150 : 1.0) : 1.0);
-        const double t1153 = t1152*t1138;
-        const double t1154 = t1152*t1139;
-        const double t1155 = t1152*t1140;
-        const double t1156 = t1152*t1141;
-        const double t1157 = t1152*t1142;
-        const double t1158 = t1152*t1143;
-        const double t1159 = t1049 + t1099;
-        const double t1160 = t1057 + t1107;
-        const double t1161 = t1066 + t1116;
-        const double t1162 = t1076 + t1126;
-        const double t1163 = t1087 + t1137;
-        const double t1164 = t122*(t798*twist[0] + t799*twist[1] + t800*twist[2] + t801*twist[3] + t802*twist[4] + t803*twist[5]);
-        const double t1165 = t122*(t825*twist[0] + t826*twist[1] + t827*twist[2] + t828*twist[3] + t829*twist[4] + t830*twist[5]);
-        const double t1166 = t122*(t872*twist[0] + t873*twist[1] + t874*twist[2] + t875*twist[3] + t876*twist[4] + t877*twist[5]);
-        const double t1167 = t122*(t941*twist[0] + t942*twist[1] + t943*twist[2] + t944*twist[3] + t945*twist[4] + t946*twist[5]);
-        const double t1168 = t122*(t1034*twist[0] + t1035*twist[1] + t1036*twist[2] + t1037*twist[3] + t1038*twist[4] + t1039*twist[5]);
-        const double t1169 = t122*(t1153*twist[0] + t1154*twist[1] + t1155*twist[2] + t1156*twist[3] + t1157*twist[4] + t1158*twist[5]);
-        const double t1170 = (t1151 ? t1152*t1169 : 0.0);
-        const double t1171 = (t1032 ? t1033*(t1168 - t1163*t1170) : 0.0);
-        const double t1172 = (t939 ? t940*(t1167 - t1048*t1171 - t1162*t1170) : 0.0);
-        const double t1173 = (t870 ? t871*(t1166 - t953*t1172 - t1047*t1171 - t1161*t1170) : 0.0);
-        const double t1174 = (t823 ? t824*(t1165 - t882*t1173 - t952*t1172 - t1046*t1171 - t1160*t1170) : 0.0);
-        const double t1175 = (t796 ? t797*(t1164 - t833*t1174 - t881*t1173 - t951*t1172 - t1045*t1171 - t1159*t1170) : 0.0);
-        const double t1176 = t511*t1175 + t533*t1174 + t568*t1173 + t616*t1172 + t680*t1171 + t759*t1170;
-        const double t1177 = t512*t1175 + t534*t1174 + t569*t1173 + t617*t1172 + t681*t1171 + t760*t1170;
-        const double t1178 = t513*t1175 + t535*t1174 + t570*t1173 + t618*t1172 + t682*t1171 + t761*t1170;
-        const double t1179 = t514*t1175 + t536*t1174 + t571*t1173 + t619*t1172 + t683*t1171 + t762*t1170;
-        const double t1180 = t515*t1175 + t537*t1174 + t572*t1173 + t620*t1172 + t684*t1171 + t763*t1170;
-        const double t1181 = t621*t1172 + t685*t1171 + t764*t1170;
-        dq[0] = t1176;
-        dq[1] = t1177;
-        dq[2] = t1178;
-        dq[3] = t1179;
-        dq[4] = t1180;
-        dq[5] = t1181;
-        dq_T[0 + b] = dq[0];
-        dq_T[32 + b] = dq[1];
-        dq_T[64 + b] = dq[2];
-        dq_T[96 + b] = dq[3];
-        dq_T[128 + b] = dq[4];
-        dq_T[160 + b] = dq[5];
-    }
-}
-
-void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
-{
-    double q_T[192];
-    double twist_T[192];
-    double dq_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *twist_b = twist + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                twist_T[0 + b] = twist_b[0];
-                twist_T[32 + b] = twist_b[1];
-                twist_T[64 + b] = twist_b[2];
-                twist_T[96 + b] = twist_b[3];
-                twist_T[128 + b] = twist_b[4];
-                twist_T[160 + b] = twist_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 6; ++k) {
-                    twist_T[k * 32 + b] = twist[src * 6 + k];
-                }
-            }
-        }
-        ur5_inverse_velocity_block(q_T, twist_T, lambda, dq_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_b = dq + (i + b) * 6;
-            dq_b[0] = dq_T[0 + b];
-            dq_b[1] = dq_T[32 + b];
-            dq_b[2] = dq_T[64 + b];
-            dq_b[3] = dq_T[96 + b];
-            dq_b[4] = dq_T[128 + b];
-            dq_b[5] = dq_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq)
 {
     size_t i;
@@ -8047,7 +4106,6 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
         }
     }
 }
-#endif
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 9 neg, 7 div, 7 sqrt */
@@ -8063,6 +4121,7 @@ static void ur5_inverse_velocity_position_angles(const double q[6], double *rest
 
 static void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
+    dq_position[5] = 0.0;
     const double t2 = cs[0]*cs[3];
     const double t4 = cs[3]*sn[0];
     const double t13 = 0.0823*sn[4];
@@ -8096,9 +4155,9 @@ static void ur5_inverse_velocity_position_finish(const double v[3], double lambd
     const double t130 = 1.0/(t129 != 0.0 ? t129 : 1.0);
     const double t770 = t122*lambda;
     const double t793 = t770*t770;
-    const double t1182 = t26*t26 + t28*t28 + t30*t30 + t32*t32 + t33*t33 + t22*t22 + t20*t20 + t18*t18 + t15*t15 + t123 + t124 + t125 + t126 + t127;
+    const double t1182 = ((t123 + (t26*t26 + t124)) + ((t28*t28 + t125) + (t30*t30 + t126))) + ((t32*t32 + (t33*t33 + t22*t22)) + ((t127 + t20*t20) + (t18*t18 + t15*t15)));
     const double t1183 = sqrt(t1182);
-    const double t1184 = UR5_RANK_TOL*t1183;
+    const double t1184 = t1183*UR5_RANK_TOL;
     const int t1185 = t129 > t1184;
     const double t1186 = (t1185 ? t129 : 0.0);
     const double t1187 = (t1185 ? t130 : 1.0);
@@ -8238,16 +4297,15 @@ static void ur5_inverse_velocity_position_finish(const double v[3], double lambd
     const double t1321 = (t1278 ? t1279*(t1318 - t1316*t1320) : 0.0);
     const double t1322 = (t1260 ? t1261*(t1317 - t1285*t1321 - t1315*t1320) : 0.0);
     const double t1323 = t1188*t1322 + t1210*t1321 + t1245*t1320;
-    const double t1324 = t1189*t1322 + t1211*t1321 + t1246*t1320;
-    const double t1325 = t1190*t1322 + t1212*t1321 + t1247*t1320;
-    const double t1326 = t1191*t1322 + t1213*t1321 + t1248*t1320;
-    const double t1327 = t1192*t1322 + t1214*t1321 + t1249*t1320;
     dq_position[0] = t1323;
+    const double t1324 = t1189*t1322 + t1211*t1321 + t1246*t1320;
     dq_position[1] = t1324;
+    const double t1325 = t1190*t1322 + t1212*t1321 + t1247*t1320;
     dq_position[2] = t1325;
+    const double t1326 = t1191*t1322 + t1213*t1321 + t1248*t1320;
     dq_position[3] = t1326;
+    const double t1327 = t1192*t1322 + t1214*t1321 + t1249*t1320;
     dq_position[4] = t1327;
-    dq_position[5] = 0.0;
 }
 
 void ur5_inverse_velocity_position(const double q[6], const double v[3], double lambda, double dq_position[6])
@@ -8262,293 +4320,6 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
     ur5_inverse_velocity_position_finish(v, lambda, cs, sn, dq_position);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_inverse_velocity_position_block(const double *restrict q_T, const double *restrict v_T, double lambda, double *restrict dq_position_T)
-{
-    double ang_T[160], cs_T[160], sn_T[160];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[5];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-    }
-    ur5_trig160(ang_T, cs_T, sn_T, 160);
-    for (b = 0; b < 32; ++b) {
-        double v[3];
-        double cs[5];
-        double sn[5];
-        double dq_position[6];
-        v[0] = v_T[0 + b];
-        v[1] = v_T[32 + b];
-        v[2] = v_T[64 + b];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t4 = cs[3]*sn[0];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t122 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-        const double t123 = t25*t25;
-        const double t124 = t27*t27;
-        const double t125 = t29*t29;
-        const double t126 = t31*t31;
-        const double t127 = t23*t23;
-        const double t128 = t123 + t124 + t125 + t126 + t127;
-        const double t129 = sqrt(t128);
-        const double t130 = 1.0/(t129 != 0.0 ? t129 : 1.0);
-        const double t770 = t122*lambda;
-        const double t793 = t770*t770;
-        const double t1182 = t26*t26 + t28*t28 + t30*t30 + t32*t32 + t33*t33 + t22*t22 + t20*t20 + t18*t18 + t15*t15 + t123 + t124 + t125 + t126 + t127;
-        const double t1183 = sqrt(t1182);
-        const double t1184 = UR5_RANK_TOL*t1183;
-        const int t1185 = t129 > t1184;
-        const double t1186 = (t1185 ? t129 : 0.0);
-        const double t1187 = (t1185 ? t130 : 1.0);
-        const double t1188 = (t1185 ? -t23*t1187 : 0.0);
-        const double t1189 = (t1185 ? t25*t1187 : 0.0);
-        const double t1190 = (t1185 ? t27*t1187 : 0.0);
-        const double t1191 = (t1185 ? t29*t1187 : 0.0);
-        const double t1192 = (t1185 ? t31*t1187 : 0.0);
-        const double t1193 = t26*t1189 + t28*t1190 + t30*t1191 + t32*t1192 + t22*t1188;
-        const double t1194 = t22 - t1193*t1188;
-        const double t1195 = t26 - t1193*t1189;
-        const double t1196 = t28 - t1193*t1190;
-        const double t1197 = t30 - t1193*t1191;
-        const double t1198 = t32 - t1193*t1192;
-        const double t1199 = t1188*t1194 + t1189*t1195 + t1190*t1196 + t1191*t1197 + t1192*t1198;
-        const double t1200 = t1194 - t1199*t1188;
-        const double t1201 = t1195 - t1199*t1189;
-        const double t1202 = t1196 - t1199*t1190;
-        const double t1203 = t1197 - t1199*t1191;
-        const double t1204 = t1198 - t1199*t1192;
-        const double t1205 = t1200*t1200 + t1201*t1201 + t1202*t1202 + t1203*t1203 + t1204*t1204;
-        const double t1206 = sqrt(t1205);
-        const int t1207 = t1206 > t1184;
-        const double t1208 = (t1207 ? t1206 : 0.0);
-        const double t1209 = (t1207 ? 1.0/(t1206 != 0.0 ? t1206 : 1.0) : 1.0);
-        const double t1210 = (t1207 ? t1209*t1200 : 0.0);
-        const double t1211 = (t1207 ? t1209*t1201 : 0.0);
-        const double t1212 = (t1207 ? t1209*t1202 : 0.0);
-        const double t1213 = (t1207 ? t1209*t1203 : 0.0);
-        const double t1214 = (t1207 ? t1209*t1204 : 0.0);
-        const double t1215 = t1193 + t1199;
-        const double t1216 = t33*t1192 + t20*t1189 + t18*t1190 + t15*t1191;
-        const double t1217 = -t1216*t1188;
-        const double t1218 = t20 - t1216*t1189;
-        const double t1219 = t18 - t1216*t1190;
-        const double t1220 = t15 - t1216*t1191;
-        const double t1221 = t33 - t1216*t1192;
-        const double t1222 = t1210*t1217 + t1211*t1218 + t1212*t1219 + t1213*t1220 + t1214*t1221;
-        const double t1223 = t1217 - t1222*t1210;
-        const double t1224 = t1218 - t1222*t1211;
-        const double t1225 = t1219 - t1222*t1212;
-        const double t1226 = t1220 - t1222*t1213;
-        const double t1227 = t1221 - t1222*t1214;
-        const double t1228 = t1188*t1223 + t1189*t1224 + t1190*t1225 + t1191*t1226 + t1192*t1227;
-        const double t1229 = t1223 - t1228*t1188;
-        const double t1230 = t1224 - t1228*t1189;
-        const double t1231 = t1225 - t1228*t1190;
-        const double t1232 = t1226 - t1228*t1191;
-        const double t1233 = t1227 - t1228*t1192;
-        const double t1234 = t1210*t1229 + t1211*t1230 + t1212*t1231 + t1213*t1232 + t1214*t1233;
-        const double t1235 = t1229 - t1234*t1210;
-        const double t1236 = t1230 - t1234*t1211;
-        const double t1237 = t1231 - t1234*t1212;
-        const double t1238 = t1232 - t1234*t1213;
-        const double t1239 = t1233 - t1234*t1214;
-        const double t1240 = t1235*t1235 + t1236*t1236 + t1237*t1237 + t1238*t1238 + t1239*t1239;
-        const double t1241 = sqrt(t1240);
-        const int t1242 = t1241 > t1184;
-        const double t1243 = (t1242 ? t1241 : 0.0);
-        const double t1244 = (t1242 ? 1.0/(t1241 != 0.0 ? t1241 : 1.0) : 1.0);
-        const double t1245 = (t1242 ? t1244*t1235 : 0.0);
-        const double t1246 = (t1242 ? t1244*t1236 : 0.0);
-        const double t1247 = (t1242 ? t1244*t1237 : 0.0);
-        const double t1248 = (t1242 ? t1244*t1238 : 0.0);
-        const double t1249 = (t1242 ? t1244*t1239 : 0.0);
-        const double t1250 = t1216 + t1228;
-        const double t1251 = t1222 + t1234;
-        const double t1252 = t1186*t122;
-        const double t1253 = t1215*t122;
-        const double t1254 = t1250*t122;
-        const double t1255 = t1208*t122;
-        const double t1256 = t1251*t122;
-        const double t1257 = t1243*t122;
-        const double t1258 = t1252*t1252 + t1253*t1253 + t1254*t1254 + t793;
-        const double t1259 = sqrt(t1258);
-        const int t1260 = t1259 > 0.0;
-        const double t1261 = (t1260 ? 1.0/(t1259 != 0.0 ? t1259 : 1.0) : 1.0);
-        const double t1262 = t1261*t1252;
-        const double t1263 = t1261*t1253;
-        const double t1264 = t1261*t1254;
-        const double t1265 = t1261*t770;
-        const double t1266 = t1263*t1255 + t1264*t1256;
-        const double t1267 = -t1266*t1262;
-        const double t1268 = t1255 - t1266*t1263;
-        const double t1269 = t1256 - t1266*t1264;
-        const double t1270 = -t1266*t1265;
-        const double t1271 = t1262*t1267 + t1263*t1268 + t1264*t1269 + t1265*t1270;
-        const double t1272 = t1267 - t1271*t1262;
-        const double t1273 = t1268 - t1271*t1263;
-        const double t1274 = t1269 - t1271*t1264;
-        const double t1275 = t1270 - t1271*t1265;
-        const double t1276 = t1272*t1272 + t1273*t1273 + t1274*t1274 + t1275*t1275 + t793;
-        const double t1277 = sqrt(t1276);
-        const int t1278 = t1277 > 0.0;
-        const double t1279 = (t1278 ? 1.0/(t1277 != 0.0 ? t1277 : 1.0) : 1.0);
-        const double t1280 = t1279*t1272;
-        const double t1281 = t1279*t1273;
-        const double t1282 = t1279*t1274;
-        const double t1283 = t1279*t1275;
-        const double t1284 = t1279*t770;
-        const double t1285 = t1266 + t1271;
-        const double t1286 = t1264*t1257;
-        const double t1287 = -t1286*t1262;
-        const double t1288 = -t1286*t1263;
-        const double t1289 = t1257 - t1286*t1264;
-        const double t1290 = -t1286*t1265;
-        const double t1291 = t1280*t1287 + t1281*t1288 + t1282*t1289 + t1283*t1290;
-        const double t1292 = t1287 - t1291*t1280;
-        const double t1293 = t1288 - t1291*t1281;
-        const double t1294 = t1289 - t1291*t1282;
-        const double t1295 = t1290 - t1291*t1283;
-        const double t1296 = -t1291*t1284;
-        const double t1297 = t1262*t1292 + t1263*t1293 + t1264*t1294 + t1265*t1295;
-        const double t1298 = t1292 - t1297*t1262;
-        const double t1299 = t1293 - t1297*t1263;
-        const double t1300 = t1294 - t1297*t1264;
-        const double t1301 = t1295 - t1297*t1265;
-        const double t1302 = t1280*t1298 + t1281*t1299 + t1282*t1300 + t1283*t1301 + t1284*t1296;
-        const double t1303 = t1298 - t1302*t1280;
-        const double t1304 = t1299 - t1302*t1281;
-        const double t1305 = t1300 - t1302*t1282;
-        const double t1306 = t1301 - t1302*t1283;
-        const double t1307 = t1296 - t1302*t1284;
-        const double t1308 = t1303*t1303 + t1304*t1304 + t1305*t1305 + t1306*t1306 + t1307*t1307 + t793;
-        const double t1309 = sqrt(t1308);
-        const int t1310 = t1309 > 0.0;
-        const double t1311 = (t1310 ? 1.0/(t1309 != 0.0 ? t1309 : 1.0) : 1.0);
-        const double t1312 = t1311*t1303;
-        const double t1313 = t1311*t1304;
-        const double t1314 = t1311*t1305;
-        const double t1315 = t1286 + t1297;
-        const double t1316 = t1291 + t1302;
-        const double t1317 = t122*(t1262*v[0] + t1263*v[1] + t1264*v[2]);
-        const double t1318 = t122*(t1280*v[0] + t1281*v[1] + t1282*v[2]);
-        const double t1319 = t122*(t1312*v[0] + t1313*v[1] + t1314*v[2]);
-        const double t1320 = (t1310 ? t1311*t1319 : 0.0);
-        const double t1321 = (t1278 ? t1279*(t1318 - t1316*t1320) : 0.0);
-        const double t1322 = (t1260 ? t1261*(t1317 - t1285*t1321 - t1315*t1320) : 0.0);
-        const double t1323 = t1188*t1322 + t1210*t1321 + t1245*t1320;
-        const double t1324 = t1189*t1322 + t1211*t1321 + t1246*t1320;
-        const double t1325 = t1190*t1322 + t1212*t1321 + t1247*t1320;
-        const double t1326 = t1191*t1322 + t1213*t1321 + t1248*t1320;
-        const double t1327 = t1192*t1322 + t1214*t1321 + t1249*t1320;
-        dq_position[0] = t1323;
-        dq_position[1] = t1324;
-        dq_position[2] = t1325;
-        dq_position[3] = t1326;
-        dq_position[4] = t1327;
-        dq_position[5] = 0.0;
-        dq_position_T[0 + b] = dq_position[0];
-        dq_position_T[32 + b] = dq_position[1];
-        dq_position_T[64 + b] = dq_position[2];
-        dq_position_T[96 + b] = dq_position[3];
-        dq_position_T[128 + b] = dq_position[4];
-        dq_position_T[160 + b] = dq_position[5];
-    }
-}
-
-void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
-{
-    double q_T[192];
-    double v_T[96];
-    double dq_position_T[192];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                const double *v_b = v + (i + b) * 3;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-                v_T[0 + b] = v_b[0];
-                v_T[32 + b] = v_b[1];
-                v_T[64 + b] = v_b[2];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-                for (k = 0; k < 3; ++k) {
-                    v_T[k * 32 + b] = v[src * 3 + k];
-                }
-            }
-        }
-        ur5_inverse_velocity_position_block(q_T, v_T, lambda, dq_position_T);
-        for (b = 0; b < count; ++b) {
-            double *dq_position_b = dq_position + (i + b) * 6;
-            dq_position_b[0] = dq_position_T[0 + b];
-            dq_position_b[1] = dq_position_T[32 + b];
-            dq_position_b[2] = dq_position_T[64 + b];
-            dq_position_b[3] = dq_position_T[96 + b];
-            dq_position_b[4] = dq_position_T[128 + b];
-            dq_position_b[5] = dq_position_T[160 + b];
-        }
-    }
-}
-#else
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position)
 {
     size_t i;
@@ -8568,7 +4339,6 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
         }
     }
 }
-#endif
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 9 neg, 3 div, 2 sqrt */
@@ -8585,6 +4355,12 @@ static void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
 
 static void ur5_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
 {
+    JA[5] = 0.0;
+    JA[11] = 0.0;
+    JA[12] = 0.0;
+    JA[17] = 0.0;
+    JA[18] = 0.0;
+    JA[24] = 0.0;
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
     const double t4 = cs[3]*sn[0];
@@ -8599,27 +4375,40 @@ static void ur5_jacobian_rpy_finish(const double *restrict cs, const double *res
     const double t13 = 0.0823*sn[4];
     const double t14 = -0.0823*cs[4];
     const double t15 = 0.09465*sn[3] - t13*cs[3];
+    JA[15] = t15;
     const double t16 = 0.09465*cs[3] + t13*sn[3];
     const double t17 = 0.10915 - t14;
     const double t18 = t15 - 0.39225*cs[2];
+    JA[14] = t18;
     const double t19 = t16 + 0.39225*sn[2];
     const double t20 = t18 - 0.425*cs[1];
+    JA[13] = t20;
     const double t21 = t19 + 0.425*sn[1];
     const double t22 = t20*cs[0] + t17*sn[0];
+    JA[6] = t22;
     const double t23 = t20*sn[0] - t17*cs[0];
     const double t25 = t21*cs[0];
+    JA[1] = t25;
     const double t26 = t21*sn[0];
+    JA[7] = t26;
     const double t27 = t19*cs[0];
+    JA[2] = t27;
     const double t28 = t19*sn[0];
+    JA[8] = t28;
     const double t29 = t16*cs[0];
+    JA[3] = t29;
     const double t30 = t16*sn[0];
+    JA[9] = t30;
     const double t31 = t2*t14 - t13*sn[0];
+    JA[4] = t31;
     const double t32 = t4*t14 + t13*cs[0];
+    JA[10] = t32;
     const double t33 = t14*sn[3];
+    JA[16] = t33;
     const double t34 = t6*cs[5] - t3*sn[5];
     const double t35 = -t3*cs[5] - t6*sn[5];
     const double t36 = cs[3]*sn[5];
-    const double t37 = t36 + t11*cs[5];
+    const double t37 = t11*cs[5] + t36;
     const double t38 = cs[3]*cs[5];
     const double t39 = t38 - t11*sn[5];
     const double t40 = t8*t39 - t12*t35;
@@ -8638,54 +4427,35 @@ static void ur5_jacobian_rpy_finish(const double *restrict cs, const double *res
     const double t1339 = (t1329 ? t40*t1330 : 0.0);
     const double t1340 = (t1329 ? -t34*t37*t1330 : 0.0);
     const double t1341 = (t1329 ? -t37*t40*t1330 : 0.0);
-    const double t1342 = t1338*sn[0] - t1339*cs[0];
-    const double t1343 = t3*t1338 + t5*t1339;
-    const double t1344 = t8*t1338 + t10*t1339;
-    const double t1345 = -t1336*cs[0] - t1337*sn[0];
-    const double t1346 = t5*t1336 - t3*t1337;
-    const double t1347 = t10*t1336 - t8*t1337;
-    const double t1348 = (t1329 ? 1.0 : 0.0);
-    const double t1349 = t1348;
-    const double t1350 = t1340*sn[0] - t1341*cs[0];
-    const double t1351 = t3*t1340 + t5*t1341 - cs[3]*t1348;
-    const double t1352 = t8*t1340 + t10*t1341 + t12*t1348;
-    const double t1357 = -t23;
-    JA[0] = t1357;
-    JA[1] = t25;
-    JA[2] = t27;
-    JA[3] = t29;
-    JA[4] = t31;
-    JA[5] = 0.0;
-    JA[6] = t22;
-    JA[7] = t26;
-    JA[8] = t28;
-    JA[9] = t30;
-    JA[10] = t32;
-    JA[11] = 0.0;
-    JA[12] = 0.0;
-    JA[13] = t20;
-    JA[14] = t18;
-    JA[15] = t15;
-    JA[16] = t33;
-    JA[17] = 0.0;
-    JA[18] = 0.0;
+    const double t1342 = t1338*sn[0] - cs[0]*t1339;
     JA[19] = t1342;
     JA[20] = t1342;
     JA[21] = t1342;
+    const double t1343 = t3*t1338 + t5*t1339;
     JA[22] = t1343;
+    const double t1344 = t8*t1338 + t10*t1339;
     JA[23] = t1344;
-    JA[24] = 0.0;
+    const double t1345 = -cs[0]*t1336 - t1337*sn[0];
     JA[25] = t1345;
     JA[26] = t1345;
     JA[27] = t1345;
+    const double t1346 = t5*t1336 - t3*t1337;
     JA[28] = t1346;
+    const double t1347 = t10*t1336 - t8*t1337;
     JA[29] = t1347;
+    const double t1348 = (t1329 ? 1.0 : 0.0);
+    const double t1349 = t1348;
     JA[30] = t1349;
+    const double t1350 = t1340*sn[0] - cs[0]*t1341;
     JA[31] = t1350;
     JA[32] = t1350;
     JA[33] = t1350;
+    const double t1351 = t3*t1340 + t5*t1341 - cs[3]*t1348;
     JA[34] = t1351;
+    const double t1352 = t8*t1340 + t10*t1341 + t12*t1348;
     JA[35] = t1352;
+    const double t2150 = -t23;
+    JA[0] = t2150;
 }
 
 void ur5_jacobian_rpy(const double q[6], double JA[36])
@@ -8700,261 +4470,6 @@ void ur5_jacobian_rpy(const double q[6], double JA[36])
     ur5_jacobian_rpy_finish(cs, sn, JA);
 }
 
-#if UR5_VECTOR_MATH
-/* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]):
- * every statement then runs on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_rpy_block(const double *restrict q_T, double *restrict JA_T)
-{
-    double ang_T[192], cs_T[192], sn_T[192];
-    int b;
-    for (b = 0; b < 32; ++b) {
-        double q[6];
-        double ang[6];
-        q[0] = q_T[0 + b];
-        q[1] = q_T[32 + b];
-        q[2] = q_T[64 + b];
-        q[3] = q_T[96 + b];
-        q[4] = q_T[128 + b];
-        q[5] = q_T[160 + b];
-        ang[2] = q[1] + q[2];
-        ang[3] = ang[2] + q[3];
-        ang[0] = q[0];
-        ang[1] = q[1];
-        ang[4] = q[4];
-        ang[5] = q[5];
-        ang_T[0 + b] = ang[0];
-        ang_T[32 + b] = ang[1];
-        ang_T[64 + b] = ang[2];
-        ang_T[96 + b] = ang[3];
-        ang_T[128 + b] = ang[4];
-        ang_T[160 + b] = ang[5];
-    }
-    ur5_trig192(ang_T, cs_T, sn_T, 192);
-    for (b = 0; b < 32; ++b) {
-        double cs[6];
-        double sn[6];
-        double JA[36];
-        cs[0] = cs_T[0 + b];
-        cs[1] = cs_T[32 + b];
-        cs[2] = cs_T[64 + b];
-        cs[3] = cs_T[96 + b];
-        cs[4] = cs_T[128 + b];
-        cs[5] = cs_T[160 + b];
-        sn[0] = sn_T[0 + b];
-        sn[1] = sn_T[32 + b];
-        sn[2] = sn_T[64 + b];
-        sn[3] = sn_T[96 + b];
-        sn[4] = sn_T[128 + b];
-        sn[5] = sn_T[160 + b];
-        const double t2 = cs[0]*cs[3];
-        const double t3 = cs[0]*sn[3];
-        const double t4 = cs[3]*sn[0];
-        const double t5 = sn[0]*sn[3];
-        const double t6 = t2*cs[4] + sn[0]*sn[4];
-        const double t7 = cs[4]*sn[0];
-        const double t8 = t7 - t2*sn[4];
-        const double t9 = -cs[0]*cs[4];
-        const double t10 = t9 - t4*sn[4];
-        const double t11 = cs[4]*sn[3];
-        const double t12 = -sn[3]*sn[4];
-        const double t13 = 0.0823*sn[4];
-        const double t14 = -0.0823*cs[4];
-        const double t15 = 0.09465*sn[3] - t13*cs[3];
-        const double t16 = 0.09465*cs[3] + t13*sn[3];
-        const double t17 = 0.10915 - t14;
-        const double t18 = t15 - 0.39225*cs[2];
-        const double t19 = t16 + 0.39225*sn[2];
-        const double t20 = t18 - 0.425*cs[1];
-        const double t21 = t19 + 0.425*sn[1];
-        const double t22 = t20*cs[0] + t17*sn[0];
-        const double t23 = t20*sn[0] - t17*cs[0];
-        const double t25 = t21*cs[0];
-        const double t26 = t21*sn[0];
-        const double t27 = t19*cs[0];
-        const double t28 = t19*sn[0];
-        const double t29 = t16*cs[0];
-        const double t30 = t16*sn[0];
-        const double t31 = t2*t14 - t13*sn[0];
-        const double t32 = t4*t14 + t13*cs[0];
-        const double t33 = t14*sn[3];
-        const double t34 = t6*cs[5] - t3*sn[5];
-        const double t35 = -t3*cs[5] - t6*sn[5];
-        const double t36 = cs[3]*sn[5];
-        const double t37 = t36 + t11*cs[5];
-        const double t38 = cs[3]*cs[5];
-        const double t39 = t38 - t11*sn[5];
-        const double t40 = t8*t39 - t12*t35;
-        const double t41 = t12*t34 - t8*t37;
-        const double t1328 = t34*t34 + t40*t40;
-        const int t1329 = t1328 > UR5_RANK_TOL;
-        const double t1330 = (t1329 ? 1.0/(t1328 != 0.0 ? t1328 : 1.0) : 1.0);
-        const double t1331 = sqrt(t1328);
-        const double t1332 = (t1329 ? 1.0/(t1331 != 0.0 ? t1331 : 1.0) : 1.0);
-        const double t1333 = t35*t35 + t41*t41;
-        const double t1334 = sqrt(t1333);
-        const double t1335 = (t1334 > 0.0 ? 1.0/(t1334 != 0.0 ? t1334 : 1.0) : 1.0);
-        const double t1336 = (t1329 ? t34*t1332 : t41*t1335);
-        const double t1337 = (t1329 ? t40*t1332 : -t35*t1335);
-        const double t1338 = (t1329 ? t34*t1330 : 0.0);
-        const double t1339 = (t1329 ? t40*t1330 : 0.0);
-        const double t1340 = (t1329 ? -t34*t37*t1330 : 0.0);
-        const double t1341 = (t1329 ? -t37*t40*t1330 : 0.0);
-        const double t1342 = t1338*sn[0] - t1339*cs[0];
-        const double t1343 = t3*t1338 + t5*t1339;
-        const double t1344 = t8*t1338 + t10*t1339;
-        const double t1345 = -t1336*cs[0] - t1337*sn[0];
-        const double t1346 = t5*t1336 - t3*t1337;
-        const double t1347 = t10*t1336 - t8*t1337;
-        const double t1348 = (t1329 ? 1.0 : 0.0);
-        const double t1349 = t1348;
-        const double t1350 = t1340*sn[0] - t1341*cs[0];
-        const double t1351 = t3*t1340 + t5*t1341 - cs[3]*t1348;
-        const double t1352 = t8*t1340 + t10*t1341 + t12*t1348;
-        const double t1357 = -t23;
-        JA[0] = t1357;
-        JA[1] = t25;
-        JA[2] = t27;
-        JA[3] = t29;
-        JA[4] = t31;
-        JA[5] = 0.0;
-        JA[6] = t22;
-        JA[7] = t26;
-        JA[8] = t28;
-        JA[9] = t30;
-        JA[10] = t32;
-        JA[11] = 0.0;
-        JA[12] = 0.0;
-        JA[13] = t20;
-        JA[14] = t18;
-        JA[15] = t15;
-        JA[16] = t33;
-        JA[17] = 0.0;
-        JA[18] = 0.0;
-        JA[19] = t1342;
-        JA[20] = t1342;
-        JA[21] = t1342;
-        JA[22] = t1343;
-        JA[23] = t1344;
-        JA[24] = 0.0;
-        JA[25] = t1345;
-        JA[26] = t1345;
-        JA[27] = t1345;
-        JA[28] = t1346;
-        JA[29] = t1347;
-        JA[30] = t1349;
-        JA[31] = t1350;
-        JA[32] = t1350;
-        JA[33] = t1350;
-        JA[34] = t1351;
-        JA[35] = t1352;
-        JA_T[0 + b] = JA[0];
-        JA_T[32 + b] = JA[1];
-        JA_T[64 + b] = JA[2];
-        JA_T[96 + b] = JA[3];
-        JA_T[128 + b] = JA[4];
-        JA_T[160 + b] = JA[5];
-        JA_T[192 + b] = JA[6];
-        JA_T[224 + b] = JA[7];
-        JA_T[256 + b] = JA[8];
-        JA_T[288 + b] = JA[9];
-        JA_T[320 + b] = JA[10];
-        JA_T[352 + b] = JA[11];
-        JA_T[384 + b] = JA[12];
-        JA_T[416 + b] = JA[13];
-        JA_T[448 + b] = JA[14];
-        JA_T[480 + b] = JA[15];
-        JA_T[512 + b] = JA[16];
-        JA_T[544 + b] = JA[17];
-        JA_T[576 + b] = JA[18];
-        JA_T[608 + b] = JA[19];
-        JA_T[640 + b] = JA[20];
-        JA_T[672 + b] = JA[21];
-        JA_T[704 + b] = JA[22];
-        JA_T[736 + b] = JA[23];
-        JA_T[768 + b] = JA[24];
-        JA_T[800 + b] = JA[25];
-        JA_T[832 + b] = JA[26];
-        JA_T[864 + b] = JA[27];
-        JA_T[896 + b] = JA[28];
-        JA_T[928 + b] = JA[29];
-        JA_T[960 + b] = JA[30];
-        JA_T[992 + b] = JA[31];
-        JA_T[1024 + b] = JA[32];
-        JA_T[1056 + b] = JA[33];
-        JA_T[1088 + b] = JA[34];
-        JA_T[1120 + b] = JA[35];
-    }
-}
-
-void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
-{
-    double q_T[192];
-    double JA_T[1152];
-    size_t i, b, k, count;
-    for (i = 0; i < m; i += 32) {
-        if (i + 32 <= m) {
-            for (b = 0; b < 32; ++b) {
-                const double *q_b = q + (i + b) * 6;
-                q_T[0 + b] = q_b[0];
-                q_T[32 + b] = q_b[1];
-                q_T[64 + b] = q_b[2];
-                q_T[96 + b] = q_b[3];
-                q_T[128 + b] = q_b[4];
-                q_T[160 + b] = q_b[5];
-            }
-            count = 32;
-        } else { /* a short last block: pad with its last configuration */
-            count = m - i;
-            for (b = 0; b < 32; ++b) {
-                const size_t src = i + (b < count ? b : count - 1);
-                for (k = 0; k < 6; ++k) {
-                    q_T[k * 32 + b] = q[src * 6 + k];
-                }
-            }
-        }
-        ur5_jacobian_rpy_block(q_T, JA_T);
-        for (b = 0; b < count; ++b) {
-            double *JA_b = JA + (i + b) * 36;
-            JA_b[0] = JA_T[0 + b];
-            JA_b[1] = JA_T[32 + b];
-            JA_b[2] = JA_T[64 + b];
-            JA_b[3] = JA_T[96 + b];
-            JA_b[4] = JA_T[128 + b];
-            JA_b[5] = JA_T[160 + b];
-            JA_b[6] = JA_T[192 + b];
-            JA_b[7] = JA_T[224 + b];
-            JA_b[8] = JA_T[256 + b];
-            JA_b[9] = JA_T[288 + b];
-            JA_b[10] = JA_T[320 + b];
-            JA_b[11] = JA_T[352 + b];
-            JA_b[12] = JA_T[384 + b];
-            JA_b[13] = JA_T[416 + b];
-            JA_b[14] = JA_T[448 + b];
-            JA_b[15] = JA_T[480 + b];
-            JA_b[16] = JA_T[512 + b];
-            JA_b[17] = JA_T[544 + b];
-            JA_b[18] = JA_T[576 + b];
-            JA_b[19] = JA_T[608 + b];
-            JA_b[20] = JA_T[640 + b];
-            JA_b[21] = JA_T[672 + b];
-            JA_b[22] = JA_T[704 + b];
-            JA_b[23] = JA_T[736 + b];
-            JA_b[24] = JA_T[768 + b];
-            JA_b[25] = JA_T[800 + b];
-            JA_b[26] = JA_T[832 + b];
-            JA_b[27] = JA_T[864 + b];
-            JA_b[28] = JA_T[896 + b];
-            JA_b[29] = JA_T[928 + b];
-            JA_b[30] = JA_T[960 + b];
-            JA_b[31] = JA_T[992 + b];
-            JA_b[32] = JA_T[1024 + b];
-            JA_b[33] = JA_T[1056 + b];
-            JA_b[34] = JA_T[1088 + b];
-            JA_b[35] = JA_T[1120 + b];
-        }
-    }
-}
-#else
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 {
     size_t i;
@@ -8974,7 +4489,894 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
         }
     }
 }
-#endif
+
+/* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
+/* operations: 0 sin, 0 cos, 704 add/sub, 758 mul, 117 neg, 74 div, 27 sqrt */
+
+static void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
+{
+    const double t1353 = target[3] + 0.005490999999999996*target[1] + 0.81725*target[0] - 0.19145*target[2];
+    const double t1354 = target[7] + 0.005490999999999996*target[5] + 0.81725*target[4] - 0.19145*target[6];
+    const double t1355 = target[11] + 0.005490999999999996*target[9] + 0.81725*target[8] - 0.19145*target[10];
+    const double t1356 = t1353 + 0.10915*target[2] - 0.005490999999999996*target[1] - 0.81725*target[0];
+    const double t1357 = t1354 + 0.10915*target[6] - 0.005490999999999996*target[5] - 0.81725*target[4];
+    const double t1358 = t1355 + 0.10915*target[10] - 0.005490999999999996*target[9] - 0.81725*target[8];
+    const double t1359 = t1356*t1356;
+    const double t1360 = t1357*t1357;
+    const double t1361 = t1359 + t1360;
+    const double t1362 = t1361 - 0.0119137225;
+    const double t1363 = (t1362 > 0.0 ? sqrt(t1362) : 0.0);
+    const double t1364 = -1e-10*t1361;
+    const double t1365 = (t1362 < t1364 ? 1.0 : 0.0);
+    const double t1366 = t1359 + t1360 + t1358*t1358;
+    const double t1367 = (t1362 >= t1364 && t1362 <= 1e-10*t1361 ? 1.0 : 0.0);
+    const double t1368 = (t1361 <= 1e-18*t1366 ? 1.0 : 0.0);
+    const double t1369 = 1.0 - (1.0 - t1367)*(1.0 - t1368);
+    const double t1370 = -0.10915*t1357;
+    const double t1371 = t1370 - t1356*t1363;
+    const double t1372 = 0.10915*t1356;
+    const double t1373 = t1372 - t1357*t1363;
+    const double t1374 = t1371*t1371 + t1373*t1373;
+    const double t1375 = sqrt(t1374);
+    const double t1376 = fabs(t1373);
+    const double t1377 = fabs(t1371);
+    const int t1378 = t1376 > t1377;
+    const double t1379 = (t1378 ? t1377 : t1376);
+    const double t1380 = (t1378 ? t1376 : t1377);
+    const int t1381 = t1379 > 0.66*t1380;
+    const double t1382 = (t1381 ? t1380 + t1379 : t1380);
+    const double t1383 = (t1381 ? t1379 - t1380 : t1379)/(t1382 != 0.0 ? t1382 : 1.0);
+    const double t1384 = t1383*t1383;
+    const double t1385 = 194.5506571482614 + t1384*(485.3903996359137 + t1384*(432.88106049129027 + t1384*(165.02700983169885 + t1384*(24.858464901423062 + t1384))));
+    const double t1386 = t1383 + t1383*t1384*(t1384*(t1384*(t1384*(-16.157537187333652 - 0.8750608600031904*t1384) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1385 != 0.0 ? t1385 : 1.0) + (t1381 ? 0.7853981633974483 : 0.0);
+    const double t1387 = (t1378 ? 1.5707963267948966 - t1386 : t1386);
+    const double t1388 = (t1371 < 0.0 ? 3.141592653589793 - t1387 : t1387);
+    const int t1389 = t1374 > 0.0;
+    const double t1390 = (t1389 ? (t1373 < 0.0 ? -t1388 : t1388) : 0.0);
+    Q[0] = t1390;
+    Q[6] = t1390;
+    Q[12] = t1390;
+    Q[18] = t1390;
+    const double t1391 = 1.0/(t1375 != 0.0 ? t1375 : 1.0);
+    const double t1392 = (t1389 ? t1371*t1391 : 1.0);
+    const double t1393 = (t1389 ? t1373*t1391 : 0.0);
+    const double t1394 = t1370 + t1356*t1363;
+    const double t1395 = t1372 + t1357*t1363;
+    const double t1396 = t1394*t1394 + t1395*t1395;
+    const double t1397 = sqrt(t1396);
+    const double t1398 = fabs(t1395);
+    const double t1399 = fabs(t1394);
+    const int t1400 = t1398 > t1399;
+    const double t1401 = (t1400 ? t1399 : t1398);
+    const double t1402 = (t1400 ? t1398 : t1399);
+    const int t1403 = t1401 > 0.66*t1402;
+    const double t1404 = (t1403 ? t1402 + t1401 : t1402);
+    const double t1405 = (t1403 ? t1401 - t1402 : t1401)/(t1404 != 0.0 ? t1404 : 1.0);
+    const double t1406 = t1405*t1405;
+    const double t1407 = 194.5506571482614 + t1406*(485.3903996359137 + t1406*(432.88106049129027 + t1406*(165.02700983169885 + t1406*(24.858464901423062 + t1406))));
+    const double t1408 = t1405 + t1405*t1406*(t1406*(t1406*(t1406*(-16.157537187333652 - 0.8750608600031904*t1406) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1407 != 0.0 ? t1407 : 1.0) + (t1403 ? 0.7853981633974483 : 0.0);
+    const double t1409 = (t1400 ? 1.5707963267948966 - t1408 : t1408);
+    const double t1410 = (t1394 < 0.0 ? 3.141592653589793 - t1409 : t1409);
+    const int t1411 = t1396 > 0.0;
+    const double t1412 = (t1411 ? (t1395 < 0.0 ? -t1410 : t1410) : 0.0);
+    Q[24] = t1412;
+    Q[30] = t1412;
+    Q[36] = t1412;
+    Q[42] = t1412;
+    const double t1413 = 1.0/(t1397 != 0.0 ? t1397 : 1.0);
+    const double t1414 = (t1411 ? t1394*t1413 : 1.0);
+    const double t1415 = (t1411 ? t1395*t1413 : 0.0);
+    const double t1416 = t1392*target[2] + t1393*target[6];
+    const double t1417 = t1392*target[6] - t1393*target[2];
+    const double t1418 = t1393*target[0] - t1392*target[4];
+    const double t1419 = t1393*target[1] - t1392*target[5];
+    const double t1420 = t1356*t1392 + t1357*t1393;
+    const double t1421 = t1357*t1392 - t1356*t1393;
+    const double t1422 = t1358 - 0.089159;
+    const double t1423 = t1420*t1420;
+    const double t1424 = t1421*t1421;
+    const double t1425 = t1422*t1422;
+    const double t1426 = 0.020872345 + t1423 + t1424 + t1425 + 0.2183*t1421;
+    const double t1427 = (t1426 > 0.6678975625 ? 0.6678975625 : (t1426 < 0.001072562499999985 ? 0.001072562499999985 : t1426));
+    const double t1428 = target[10]*target[10];
+    const double t1429 = t1416*t1416 + t1428;
+    const double t1430 = (t1429 > 0.0 ? sqrt(t1429) : 0.0);
+    const double t1431 = (t1429 < -1e-10 ? 1.0 : 0.0);
+    const double t1432 = (t1429 >= -1e-10 && t1429 <= 1e-10 ? 1.0 : 0.0);
+    const double t1433 = t1417*t1417;
+    const double t1434 = t1433 + t1430*t1430;
+    const double t1435 = sqrt(t1434);
+    const double t1436 = fabs(t1430);
+    const double t1437 = fabs(t1417);
+    const int t1438 = t1436 > t1437;
+    const double t1439 = (t1438 ? t1437 : t1436);
+    const double t1440 = (t1438 ? t1436 : t1437);
+    const int t1441 = t1439 > 0.66*t1440;
+    const double t1442 = (t1441 ? t1440 + t1439 : t1440);
+    const double t1443 = (t1441 ? t1439 - t1440 : t1439)/(t1442 != 0.0 ? t1442 : 1.0);
+    const double t1444 = t1443*t1443;
+    const double t1445 = 194.5506571482614 + t1444*(485.3903996359137 + t1444*(432.88106049129027 + t1444*(165.02700983169885 + t1444*(24.858464901423062 + t1444))));
+    const double t1446 = t1443 + t1443*t1444*(t1444*(t1444*(t1444*(-16.157537187333652 - 0.8750608600031904*t1444) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1445 != 0.0 ? t1445 : 1.0) + (t1441 ? 0.7853981633974483 : 0.0);
+    const double t1447 = (t1438 ? 1.5707963267948966 - t1446 : t1446);
+    const double t1448 = (-t1417 < 0.0 ? 3.141592653589793 - t1447 : t1447);
+    const int t1449 = t1434 > 0.0;
+    const double t1450 = (t1449 ? (t1430 < 0.0 ? -t1448 : t1448) : 0.0);
+    Q[4] = t1450;
+    Q[10] = t1450;
+    const double t1451 = 1.0/(t1435 != 0.0 ? t1435 : 1.0);
+    const double t1452 = (t1449 ? -t1417*t1451 : 1.0);
+    const double t1453 = (t1449 ? t1430*t1451 : 0.0);
+    const double t1454 = t1418*t1453;
+    const double t1455 = -t1419*t1453;
+    const double t1456 = t1454*t1454 + t1455*t1455;
+    const double t1457 = sqrt(t1456);
+    const double t1458 = fabs(t1455);
+    const double t1459 = fabs(t1454);
+    const int t1460 = t1458 > t1459;
+    const double t1461 = (t1460 ? t1459 : t1458);
+    const double t1462 = (t1460 ? t1458 : t1459);
+    const int t1463 = t1461 > 0.66*t1462;
+    const double t1464 = (t1463 ? t1462 + t1461 : t1462);
+    const double t1465 = (t1463 ? t1461 - t1462 : t1461)/(t1464 != 0.0 ? t1464 : 1.0);
+    const double t1466 = t1465*t1465;
+    const double t1467 = 194.5506571482614 + t1466*(485.3903996359137 + t1466*(432.88106049129027 + t1466*(165.02700983169885 + t1466*(24.858464901423062 + t1466))));
+    const double t1468 = t1465 + t1465*t1466*(t1466*(t1466*(t1466*(-16.157537187333652 - 0.8750608600031904*t1466) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1467 != 0.0 ? t1467 : 1.0) + (t1463 ? 0.7853981633974483 : 0.0);
+    const double t1469 = (t1460 ? 1.5707963267948966 - t1468 : t1468);
+    const double t1470 = (t1454 < 0.0 ? 3.141592653589793 - t1469 : t1469);
+    const int t1471 = t1456 > 0.0;
+    const double t1472 = (t1471 ? (t1455 < 0.0 ? -t1470 : t1470) : 0.0);
+    const double t1473 = 1.0/(t1457 != 0.0 ? t1457 : 1.0);
+    const double t1474 = (t1471 ? t1454*t1473 : 1.0);
+    const double t1475 = (t1471 ? t1455*t1473 : 0.0);
+    const double t1476 = t1418*t1418;
+    const double t1477 = t1419*t1419;
+    const double t1478 = t1476 + t1477;
+    const double t1479 = t1476 + t1477 + t1433;
+    const double t1480 = t1453*t1453;
+    const double t1481 = t1480;
+    const double t1482 = t1452*t1452 + t1480;
+    const double t1483 = (t1478 <= 1e-18*t1479 || t1481 <= 1e-18*t1482 ? 1.0 : 0.0);
+    const double t1484 = t1452*t1474;
+    const double t1485 = -t1452*t1475;
+    const double t1486 = -t1453*target[2];
+    const double t1487 = t1484*target[0] + t1485*target[1] + t1486;
+    const double t1488 = -t1453*target[6];
+    const double t1489 = t1484*target[4] + t1485*target[5] + t1488;
+    const double t1490 = -t1453*target[10];
+    const double t1491 = t1484*target[8] + t1485*target[9] + t1490;
+    const double t1492 = t1487*t1392 + t1489*t1393;
+    const double t1493 = t1491*t1491 + t1492*t1492;
+    const double t1494 = sqrt(t1493);
+    const double t1495 = fabs(t1491);
+    const double t1496 = fabs(t1492);
+    const int t1497 = t1495 > t1496;
+    const double t1498 = (t1497 ? t1496 : t1495);
+    const double t1499 = (t1497 ? t1495 : t1496);
+    const int t1500 = t1498 > 0.66*t1499;
+    const double t1501 = (t1500 ? t1499 + t1498 : t1499);
+    const double t1502 = (t1500 ? t1498 - t1499 : t1498)/(t1501 != 0.0 ? t1501 : 1.0);
+    const double t1503 = t1502*t1502;
+    const double t1504 = 194.5506571482614 + t1503*(485.3903996359137 + t1503*(432.88106049129027 + t1503*(165.02700983169885 + t1503*(24.858464901423062 + t1503))));
+    const double t1505 = t1502 + t1502*t1503*(t1503*(t1503*(t1503*(-16.157537187333652 - 0.8750608600031904*t1503) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1504 != 0.0 ? t1504 : 1.0) + (t1500 ? 0.7853981633974483 : 0.0);
+    const double t1506 = (t1497 ? 1.5707963267948966 - t1505 : t1505);
+    const double t1507 = (t1492 < 0.0 ? 3.141592653589793 - t1506 : t1506);
+    const int t1508 = t1493 > 0.0;
+    const double t1509 = (t1508 ? (t1491 < 0.0 ? -t1507 : t1507) : 0.0);
+    const double t1510 = 1.0/(t1494 != 0.0 ? t1494 : 1.0);
+    const double t1511 = (t1508 ? t1492*t1510 : 1.0);
+    const double t1512 = (t1508 ? t1491*t1510 : 0.0);
+    const double t1513 = (t1481 <= 1e-24*t1482 ? 1.0 : 0.0);
+    const double t1514 = t1452*target[0] + t1486;
+    const double t1515 = t1452*target[4] + t1488;
+    const double t1516 = t1452*target[8] + t1490;
+    const double t1517 = t1514*t1392 + t1515*t1393;
+    const double t1518 = t1516*t1516 + t1517*t1517;
+    const double t1519 = fabs(t1516);
+    const double t1520 = fabs(t1517);
+    const int t1521 = t1519 > t1520;
+    const double t1522 = (t1521 ? t1520 : t1519);
+    const double t1523 = (t1521 ? t1519 : t1520);
+    const int t1524 = t1522 > 0.66*t1523;
+    const double t1525 = (t1524 ? t1523 + t1522 : t1523);
+    const double t1526 = (t1524 ? t1522 - t1523 : t1522)/(t1525 != 0.0 ? t1525 : 1.0);
+    const double t1527 = t1526*t1526;
+    const double t1528 = 194.5506571482614 + t1527*(485.3903996359137 + t1527*(432.88106049129027 + t1527*(165.02700983169885 + t1527*(24.858464901423062 + t1527))));
+    const double t1529 = t1526 + t1526*t1527*(t1527*(t1527*(t1527*(-16.157537187333652 - 0.8750608600031904*t1527) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1528 != 0.0 ? t1528 : 1.0) + (t1524 ? 0.7853981633974483 : 0.0);
+    const double t1530 = (t1521 ? 1.5707963267948966 - t1529 : t1529);
+    const double t1531 = (t1517 < 0.0 ? 3.141592653589793 - t1530 : t1530);
+    const double t1532 = (t1518 > 0.0 ? (t1516 < 0.0 ? -t1531 : t1531) : 0.0);
+    const double t1533 = -0.09465*t1422;
+    const double t1534 = 0.09465*t1420;
+    const double t1535 = 0.5*t1425;
+    const double t1536 = 0.0104361725 + 0.5*t1423 + 0.5*t1424 + t1535 + 0.10915*t1421 - 0.5*t1427;
+    const double t1537 = t1533*t1533;
+    const double t1538 = t1537 + t1534*t1534;
+    const double t1539 = t1538 - t1536*t1536;
+    const double t1540 = (t1539 > 0.0 ? sqrt(t1539) : 0.0);
+    const double t1541 = (t1539 < -1e-10*t1538 ? 1.0 : 0.0);
+    const double t1542 = t1533*t1536 - t1534*t1540;
+    const double t1543 = t1533*t1540 + t1534*t1536;
+    const double t1544 = t1542*t1542 + t1543*t1543;
+    const double t1545 = sqrt(t1544);
+    const double t1546 = fabs(t1543);
+    const double t1547 = fabs(t1542);
+    const int t1548 = t1546 > t1547;
+    const double t1549 = (t1548 ? t1547 : t1546);
+    const double t1550 = (t1548 ? t1546 : t1547);
+    const int t1551 = t1549 > 0.66*t1550;
+    const double t1552 = (t1551 ? t1550 + t1549 : t1550);
+    const double t1553 = (t1551 ? t1549 - t1550 : t1549)/(t1552 != 0.0 ? t1552 : 1.0);
+    const double t1554 = t1553*t1553;
+    const double t1555 = 194.5506571482614 + t1554*(485.3903996359137 + t1554*(432.88106049129027 + t1554*(165.02700983169885 + t1554*(24.858464901423062 + t1554))));
+    const double t1556 = t1553 + t1553*t1554*(t1554*(t1554*(t1554*(-16.157537187333652 - 0.8750608600031904*t1554) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1555 != 0.0 ? t1555 : 1.0) + (t1551 ? 0.7853981633974483 : 0.0);
+    const double t1557 = (t1548 ? 1.5707963267948966 - t1556 : t1556);
+    const double t1558 = (t1542 < 0.0 ? 3.141592653589793 - t1557 : t1557);
+    const int t1559 = t1544 > 0.0;
+    const double t1560 = (t1559 ? (t1543 < 0.0 ? -t1558 : t1558) : 0.0);
+    const double t1561 = 1.0/(t1545 != 0.0 ? t1545 : 1.0);
+    const double t1562 = (t1559 ? t1542*t1561 : 1.0);
+    const double t1563 = (t1559 ? t1543*t1561 : 0.0);
+    const double t1564 = (t1452 >= 0.0 ? 1.0 : -1.0);
+    const int t1565 = t1513 > 0.0;
+    const double t1566 = (t1565 ? t1560 : t1509);
+    const double t1567 = (t1565 ? t1562 : t1511);
+    const double t1568 = (t1565 ? t1563 : t1512);
+    const double t1569 = (t1565 ? t1541 : 0.0);
+    const double t1570 = (t1565 ? t1564*(t1532 - t1560) : t1472);
+    Q[5] = t1570;
+    Q[11] = t1570;
+    const double t1571 = 1.0 - t1483;
+    const double t1572 = 1.0 - t1571*(1.0 - t1513);
+    const double t1573 = t1420 - 0.09465*t1568;
+    const double t1574 = 0.10915 + t1421;
+    const double t1575 = t1358 + 0.09465*t1567;
+    const double t1576 = t1573*t1573;
+    const double t1577 = t1574*t1574;
+    const double t1578 = -0.5*t1577;
+    const double t1579 = (t1575 - 0.089159)*(t1575 - 0.089159);
+    const double t1580 = 0.16724253125 + t1578 - 0.5*t1576 - 0.5*t1579;
+    const double t1581 = 0.0277909737890625 - t1580*t1580;
+    const double t1582 = (t1581 > 0.0 ? sqrt(t1581) : 0.0);
+    const double t1583 = (t1581 < -2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1584 = (t1581 >= -2.77909737890625e-12 && t1581 <= 2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1585 = -0.16670625*t1580;
+    const double t1586 = -0.16670625*t1582;
+    const double t1587 = t1585*t1585;
+    const double t1588 = t1587 + t1586*t1586;
+    const double t1589 = sqrt(t1588);
+    const double t1590 = fabs(t1586);
+    const double t1591 = fabs(t1585);
+    const int t1592 = t1590 > t1591;
+    const double t1593 = (t1592 ? t1591 : t1590);
+    const double t1594 = (t1592 ? t1590 : t1591);
+    const int t1595 = t1593 > 0.66*t1594;
+    const double t1596 = (t1595 ? t1594 + t1593 : t1594);
+    const double t1597 = (t1595 ? t1593 - t1594 : t1593)/(t1596 != 0.0 ? t1596 : 1.0);
+    const double t1598 = t1597*t1597;
+    const double t1599 = 194.5506571482614 + t1598*(485.3903996359137 + t1598*(432.88106049129027 + t1598*(165.02700983169885 + t1598*(24.858464901423062 + t1598))));
+    const double t1600 = t1597 + t1597*t1598*(t1598*(t1598*(t1598*(-16.157537187333652 - 0.8750608600031904*t1598) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1599 != 0.0 ? t1599 : 1.0) + (t1595 ? 0.7853981633974483 : 0.0);
+    const double t1601 = (t1592 ? 1.5707963267948966 - t1600 : t1600);
+    const int t1602 = t1585 < 0.0;
+    const double t1603 = (t1602 ? 3.141592653589793 - t1601 : t1601);
+    const int t1604 = t1588 > 0.0;
+    const double t1605 = (t1604 ? (t1586 < 0.0 ? -t1603 : t1603) : 0.0);
+    Q[2] = t1605;
+    const double t1606 = 1.0/(t1589 != 0.0 ? t1589 : 1.0);
+    const double t1607 = (t1604 ? t1585*t1606 : 1.0);
+    const double t1608 = (t1604 ? t1586*t1606 : 0.0);
+    const double t1609 = 0.16670625*t1582;
+    const double t1610 = t1587 + t1609*t1609;
+    const double t1611 = sqrt(t1610);
+    const double t1612 = fabs(t1609);
+    const int t1613 = t1612 > t1591;
+    const double t1614 = (t1613 ? t1591 : t1612);
+    const double t1615 = (t1613 ? t1612 : t1591);
+    const int t1616 = t1614 > 0.66*t1615;
+    const double t1617 = (t1616 ? t1615 + t1614 : t1615);
+    const double t1618 = (t1616 ? t1614 - t1615 : t1614)/(t1617 != 0.0 ? t1617 : 1.0);
+    const double t1619 = t1618*t1618;
+    const double t1620 = 194.5506571482614 + t1619*(485.3903996359137 + t1619*(432.88106049129027 + t1619*(165.02700983169885 + t1619*(24.858464901423062 + t1619))));
+    const double t1621 = t1618 + t1618*t1619*(t1619*(t1619*(t1619*(-16.157537187333652 - 0.8750608600031904*t1619) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1620 != 0.0 ? t1620 : 1.0) + (t1616 ? 0.7853981633974483 : 0.0);
+    const double t1622 = (t1613 ? 1.5707963267948966 - t1621 : t1621);
+    const double t1623 = (t1602 ? 3.141592653589793 - t1622 : t1622);
+    const int t1624 = t1610 > 0.0;
+    const double t1625 = (t1624 ? (t1609 < 0.0 ? -t1623 : t1623) : 0.0);
+    Q[8] = t1625;
+    const double t1626 = 1.0/(t1611 != 0.0 ? t1611 : 1.0);
+    const double t1627 = (t1624 ? t1585*t1626 : 1.0);
+    const double t1628 = (t1624 ? t1609*t1626 : 0.0);
+    const double t1629 = -0.425 - 0.39225000000000004*t1607;
+    const double t1630 = -0.39225000000000004*t1608;
+    const double t1631 = 0.089159 - t1575;
+    const double t1632 = t1573*t1629 - t1630*t1631;
+    const double t1633 = -t1573*t1630 - t1629*t1631;
+    const double t1634 = t1632*t1632 + t1633*t1633;
+    const double t1635 = fabs(t1633);
+    const double t1636 = fabs(t1632);
+    const int t1637 = t1635 > t1636;
+    const double t1638 = (t1637 ? t1636 : t1635);
+    const double t1639 = (t1637 ? t1635 : t1636);
+    const int t1640 = t1638 > 0.66*t1639;
+    const double t1641 = (t1640 ? t1639 + t1638 : t1639);
+    const double t1642 = (t1640 ? t1638 - t1639 : t1638)/(t1641 != 0.0 ? t1641 : 1.0);
+    const double t1643 = t1642*t1642;
+    const double t1644 = 194.5506571482614 + t1643*(485.3903996359137 + t1643*(432.88106049129027 + t1643*(165.02700983169885 + t1643*(24.858464901423062 + t1643))));
+    const double t1645 = t1642 + t1642*t1643*(t1643*(t1643*(t1643*(-16.157537187333652 - 0.8750608600031904*t1643) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1644 != 0.0 ? t1644 : 1.0) + (t1640 ? 0.7853981633974483 : 0.0);
+    const double t1646 = (t1637 ? 1.5707963267948966 - t1645 : t1645);
+    const double t1647 = (t1632 < 0.0 ? 3.141592653589793 - t1646 : t1646);
+    const double t1648 = (t1634 > 0.0 ? (t1633 < 0.0 ? -t1647 : t1647) : 0.0);
+    Q[1] = t1648;
+    const double t1649 = t1629*t1629 + t1630*t1630;
+    const double t1650 = t1576 + t1631*t1631;
+    const double t1651 = t1576 + t1577 + t1579;
+    const int t1652 = t1650 <= 1e-18*t1651;
+    const double t1653 = (t1649 <= 1e-18*t1649 || t1652 ? 1.0 : 0.0);
+    const double t1654 = t1566 - t1648 - t1605;
+    Q[3] = t1654;
+    const double t1655 = -0.425 - 0.39225000000000004*t1627;
+    const double t1656 = -0.39225000000000004*t1628;
+    const double t1657 = t1573*t1655 - t1656*t1631;
+    const double t1658 = -t1573*t1656 - t1655*t1631;
+    const double t1659 = t1657*t1657 + t1658*t1658;
+    const double t1660 = fabs(t1658);
+    const double t1661 = fabs(t1657);
+    const int t1662 = t1660 > t1661;
+    const double t1663 = (t1662 ? t1661 : t1660);
+    const double t1664 = (t1662 ? t1660 : t1661);
+    const int t1665 = t1663 > 0.66*t1664;
+    const double t1666 = (t1665 ? t1664 + t1663 : t1664);
+    const double t1667 = (t1665 ? t1663 - t1664 : t1663)/(t1666 != 0.0 ? t1666 : 1.0);
+    const double t1668 = t1667*t1667;
+    const double t1669 = 194.5506571482614 + t1668*(485.3903996359137 + t1668*(432.88106049129027 + t1668*(165.02700983169885 + t1668*(24.858464901423062 + t1668))));
+    const double t1670 = t1667 + t1667*t1668*(t1668*(t1668*(t1668*(-16.157537187333652 - 0.8750608600031904*t1668) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1669 != 0.0 ? t1669 : 1.0) + (t1665 ? 0.7853981633974483 : 0.0);
+    const double t1671 = (t1662 ? 1.5707963267948966 - t1670 : t1670);
+    const double t1672 = (t1657 < 0.0 ? 3.141592653589793 - t1671 : t1671);
+    const double t1673 = (t1659 > 0.0 ? (t1658 < 0.0 ? -t1672 : t1672) : 0.0);
+    Q[7] = t1673;
+    const double t1674 = t1655*t1655 + t1656*t1656;
+    const double t1675 = (t1652 || t1674 <= 1e-18*t1674 ? 1.0 : 0.0);
+    const double t1676 = t1566 - t1673 - t1625;
+    Q[9] = t1676;
+    const int t1677 = t1572 > 0.0;
+    const double t1678 = (t1677 ? t1450 : -t1450);
+    Q[16] = t1678;
+    Q[22] = t1678;
+    const double t1679 = (t1677 ? t1570 : (t1570 > 0.0 ? t1570 - 3.141592653589793 : 3.141592653589793 + t1570));
+    Q[17] = t1679;
+    Q[23] = t1679;
+    const double t1680 = (t1677 ? t1566 : (t1566 > 0.0 ? t1566 - 3.141592653589793 : 3.141592653589793 + t1566));
+    const double t1681 = (t1677 ? t1567 : -t1567);
+    const double t1682 = (t1677 ? t1568 : -t1568);
+    const double t1683 = t1420 - 0.09465*t1682;
+    const double t1684 = t1358 + 0.09465*t1681;
+    const double t1685 = t1683*t1683;
+    const double t1686 = (t1684 - 0.089159)*(t1684 - 0.089159);
+    const double t1687 = 0.16724253125 + t1578 - 0.5*t1685 - 0.5*t1686;
+    const double t1688 = 0.0277909737890625 - t1687*t1687;
+    const double t1689 = (t1688 > 0.0 ? sqrt(t1688) : 0.0);
+    const double t1690 = (t1688 < -2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1691 = (t1688 >= -2.77909737890625e-12 && t1688 <= 2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1692 = -0.16670625*t1687;
+    const double t1693 = -0.16670625*t1689;
+    const double t1694 = t1692*t1692;
+    const double t1695 = t1694 + t1693*t1693;
+    const double t1696 = sqrt(t1695);
+    const double t1697 = fabs(t1693);
+    const double t1698 = fabs(t1692);
+    const int t1699 = t1697 > t1698;
+    const double t1700 = (t1699 ? t1698 : t1697);
+    const double t1701 = (t1699 ? t1697 : t1698);
+    const int t1702 = t1700 > 0.66*t1701;
+    const double t1703 = (t1702 ? t1701 + t1700 : t1701);
+    const double t1704 = (t1702 ? t1700 - t1701 : t1700)/(t1703 != 0.0 ? t1703 : 1.0);
+    const double t1705 = t1704*t1704;
+    const double t1706 = 194.5506571482614 + t1705*(485.3903996359137 + t1705*(432.88106049129027 + t1705*(165.02700983169885 + t1705*(24.858464901423062 + t1705))));
+    const double t1707 = t1704 + t1704*t1705*(t1705*(t1705*(t1705*(-16.157537187333652 - 0.8750608600031904*t1705) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1706 != 0.0 ? t1706 : 1.0) + (t1702 ? 0.7853981633974483 : 0.0);
+    const double t1708 = (t1699 ? 1.5707963267948966 - t1707 : t1707);
+    const int t1709 = t1692 < 0.0;
+    const double t1710 = (t1709 ? 3.141592653589793 - t1708 : t1708);
+    const int t1711 = t1695 > 0.0;
+    const double t1712 = (t1711 ? (t1693 < 0.0 ? -t1710 : t1710) : 0.0);
+    Q[14] = t1712;
+    const double t1713 = 1.0/(t1696 != 0.0 ? t1696 : 1.0);
+    const double t1714 = (t1711 ? t1692*t1713 : 1.0);
+    const double t1715 = (t1711 ? t1693*t1713 : 0.0);
+    const double t1716 = 0.16670625*t1689;
+    const double t1717 = t1694 + t1716*t1716;
+    const double t1718 = sqrt(t1717);
+    const double t1719 = fabs(t1716);
+    const int t1720 = t1719 > t1698;
+    const double t1721 = (t1720 ? t1698 : t1719);
+    const double t1722 = (t1720 ? t1719 : t1698);
+    const int t1723 = t1721 > 0.66*t1722;
+    const double t1724 = (t1723 ? t1722 + t1721 : t1722);
+    const double t1725 = (t1723 ? t1721 - t1722 : t1721)/(t1724 != 0.0 ? t1724 : 1.0);
+    const double t1726 = t1725*t1725;
+    const double t1727 = 194.5506571482614 + t1726*(485.3903996359137 + t1726*(432.88106049129027 + t1726*(165.02700983169885 + t1726*(24.858464901423062 + t1726))));
+    const double t1728 = t1725 + t1725*t1726*(t1726*(t1726*(t1726*(-16.157537187333652 - 0.8750608600031904*t1726) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1727 != 0.0 ? t1727 : 1.0) + (t1723 ? 0.7853981633974483 : 0.0);
+    const double t1729 = (t1720 ? 1.5707963267948966 - t1728 : t1728);
+    const double t1730 = (t1709 ? 3.141592653589793 - t1729 : t1729);
+    const int t1731 = t1717 > 0.0;
+    const double t1732 = (t1731 ? (t1716 < 0.0 ? -t1730 : t1730) : 0.0);
+    Q[20] = t1732;
+    const double t1733 = 1.0/(t1718 != 0.0 ? t1718 : 1.0);
+    const double t1734 = (t1731 ? t1692*t1733 : 1.0);
+    const double t1735 = (t1731 ? t1716*t1733 : 0.0);
+    const double t1736 = -0.425 - 0.39225000000000004*t1714;
+    const double t1737 = -0.39225000000000004*t1715;
+    const double t1738 = 0.089159 - t1684;
+    const double t1739 = t1683*t1736 - t1737*t1738;
+    const double t1740 = -t1683*t1737 - t1736*t1738;
+    const double t1741 = t1739*t1739 + t1740*t1740;
+    const double t1742 = fabs(t1740);
+    const double t1743 = fabs(t1739);
+    const int t1744 = t1742 > t1743;
+    const double t1745 = (t1744 ? t1743 : t1742);
+    const double t1746 = (t1744 ? t1742 : t1743);
+    const int t1747 = t1745 > 0.66*t1746;
+    const double t1748 = (t1747 ? t1746 + t1745 : t1746);
+    const double t1749 = (t1747 ? t1745 - t1746 : t1745)/(t1748 != 0.0 ? t1748 : 1.0);
+    const double t1750 = t1749*t1749;
+    const double t1751 = 194.5506571482614 + t1750*(485.3903996359137 + t1750*(432.88106049129027 + t1750*(165.02700983169885 + t1750*(24.858464901423062 + t1750))));
+    const double t1752 = t1749 + t1749*t1750*(t1750*(t1750*(t1750*(-16.157537187333652 - 0.8750608600031904*t1750) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1751 != 0.0 ? t1751 : 1.0) + (t1747 ? 0.7853981633974483 : 0.0);
+    const double t1753 = (t1744 ? 1.5707963267948966 - t1752 : t1752);
+    const double t1754 = (t1739 < 0.0 ? 3.141592653589793 - t1753 : t1753);
+    const double t1755 = (t1741 > 0.0 ? (t1740 < 0.0 ? -t1754 : t1754) : 0.0);
+    Q[13] = t1755;
+    const double t1756 = t1736*t1736 + t1737*t1737;
+    const double t1757 = t1685 + t1738*t1738;
+    const double t1758 = t1577 + t1685 + t1686;
+    const int t1759 = t1757 <= 1e-18*t1758;
+    const double t1760 = (t1756 <= 1e-18*t1756 || t1759 ? 1.0 : 0.0);
+    const double t1761 = t1680 - t1755 - t1712;
+    Q[15] = t1761;
+    const double t1762 = -0.425 - 0.39225000000000004*t1734;
+    const double t1763 = -0.39225000000000004*t1735;
+    const double t1764 = t1683*t1762 - t1763*t1738;
+    const double t1765 = -t1683*t1763 - t1762*t1738;
+    const double t1766 = t1764*t1764 + t1765*t1765;
+    const double t1767 = fabs(t1765);
+    const double t1768 = fabs(t1764);
+    const int t1769 = t1767 > t1768;
+    const double t1770 = (t1769 ? t1768 : t1767);
+    const double t1771 = (t1769 ? t1767 : t1768);
+    const int t1772 = t1770 > 0.66*t1771;
+    const double t1773 = (t1772 ? t1771 + t1770 : t1771);
+    const double t1774 = (t1772 ? t1770 - t1771 : t1770)/(t1773 != 0.0 ? t1773 : 1.0);
+    const double t1775 = t1774*t1774;
+    const double t1776 = 194.5506571482614 + t1775*(485.3903996359137 + t1775*(432.88106049129027 + t1775*(165.02700983169885 + t1775*(24.858464901423062 + t1775))));
+    const double t1777 = t1774 + t1774*t1775*(t1775*(t1775*(t1775*(-16.157537187333652 - 0.8750608600031904*t1775) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1776 != 0.0 ? t1776 : 1.0) + (t1772 ? 0.7853981633974483 : 0.0);
+    const double t1778 = (t1769 ? 1.5707963267948966 - t1777 : t1777);
+    const double t1779 = (t1764 < 0.0 ? 3.141592653589793 - t1778 : t1778);
+    const double t1780 = (t1766 > 0.0 ? (t1765 < 0.0 ? -t1779 : t1779) : 0.0);
+    Q[19] = t1780;
+    const double t1781 = t1762*t1762 + t1763*t1763;
+    const double t1782 = (t1759 || t1781 <= 1e-18*t1781 ? 1.0 : 0.0);
+    const double t1783 = t1680 - t1780 - t1732;
+    Q[21] = t1783;
+    const double t1784 = t1414*target[2] + t1415*target[6];
+    const double t1785 = t1414*target[6] - t1415*target[2];
+    const double t1786 = t1415*target[0] - t1414*target[4];
+    const double t1787 = t1415*target[1] - t1414*target[5];
+    const double t1788 = t1356*t1414 + t1357*t1415;
+    const double t1789 = t1357*t1414 - t1356*t1415;
+    const double t1790 = t1788*t1788;
+    const double t1791 = t1789*t1789;
+    const double t1792 = 0.020872345 + t1790 + t1791 + t1425 + 0.2183*t1789;
+    const double t1793 = (t1792 > 0.6678975625 ? 0.6678975625 : (t1792 < 0.001072562499999985 ? 0.001072562499999985 : t1792));
+    const double t1794 = t1784*t1784 + t1428;
+    const double t1795 = (t1794 > 0.0 ? sqrt(t1794) : 0.0);
+    const double t1796 = (t1794 < -1e-10 ? 1.0 : 0.0);
+    const double t1797 = (t1794 >= -1e-10 && t1794 <= 1e-10 ? 1.0 : 0.0);
+    const double t1798 = t1785*t1785;
+    const double t1799 = t1798 + t1795*t1795;
+    const double t1800 = sqrt(t1799);
+    const double t1801 = fabs(t1795);
+    const double t1802 = fabs(t1785);
+    const int t1803 = t1801 > t1802;
+    const double t1804 = (t1803 ? t1802 : t1801);
+    const double t1805 = (t1803 ? t1801 : t1802);
+    const int t1806 = t1804 > 0.66*t1805;
+    const double t1807 = (t1806 ? t1805 + t1804 : t1805);
+    const double t1808 = (t1806 ? t1804 - t1805 : t1804)/(t1807 != 0.0 ? t1807 : 1.0);
+    const double t1809 = t1808*t1808;
+    const double t1810 = 194.5506571482614 + t1809*(485.3903996359137 + t1809*(432.88106049129027 + t1809*(165.02700983169885 + t1809*(24.858464901423062 + t1809))));
+    const double t1811 = t1808 + t1808*t1809*(t1809*(t1809*(t1809*(-16.157537187333652 - 0.8750608600031904*t1809) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1810 != 0.0 ? t1810 : 1.0) + (t1806 ? 0.7853981633974483 : 0.0);
+    const double t1812 = (t1803 ? 1.5707963267948966 - t1811 : t1811);
+    const double t1813 = (-t1785 < 0.0 ? 3.141592653589793 - t1812 : t1812);
+    const int t1814 = t1799 > 0.0;
+    const double t1815 = (t1814 ? (t1795 < 0.0 ? -t1813 : t1813) : 0.0);
+    Q[28] = t1815;
+    Q[34] = t1815;
+    const double t1816 = 1.0/(t1800 != 0.0 ? t1800 : 1.0);
+    const double t1817 = (t1814 ? -t1785*t1816 : 1.0);
+    const double t1818 = (t1814 ? t1795*t1816 : 0.0);
+    const double t1819 = t1786*t1818;
+    const double t1820 = -t1787*t1818;
+    const double t1821 = t1819*t1819 + t1820*t1820;
+    const double t1822 = sqrt(t1821);
+    const double t1823 = fabs(t1820);
+    const double t1824 = fabs(t1819);
+    const int t1825 = t1823 > t1824;
+    const double t1826 = (t1825 ? t1824 : t1823);
+    const double t1827 = (t1825 ? t1823 : t1824);
+    const int t1828 = t1826 > 0.66*t1827;
+    const double t1829 = (t1828 ? t1827 + t1826 : t1827);
+    const double t1830 = (t1828 ? t1826 - t1827 : t1826)/(t1829 != 0.0 ? t1829 : 1.0);
+    const double t1831 = t1830*t1830;
+    const double t1832 = 194.5506571482614 + t1831*(485.3903996359137 + t1831*(432.88106049129027 + t1831*(165.02700983169885 + t1831*(24.858464901423062 + t1831))));
+    const double t1833 = t1830 + t1830*t1831*(t1831*(t1831*(t1831*(-16.157537187333652 - 0.8750608600031904*t1831) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1832 != 0.0 ? t1832 : 1.0) + (t1828 ? 0.7853981633974483 : 0.0);
+    const double t1834 = (t1825 ? 1.5707963267948966 - t1833 : t1833);
+    const double t1835 = (t1819 < 0.0 ? 3.141592653589793 - t1834 : t1834);
+    const int t1836 = t1821 > 0.0;
+    const double t1837 = (t1836 ? (t1820 < 0.0 ? -t1835 : t1835) : 0.0);
+    const double t1838 = 1.0/(t1822 != 0.0 ? t1822 : 1.0);
+    const double t1839 = (t1836 ? t1819*t1838 : 1.0);
+    const double t1840 = (t1836 ? t1820*t1838 : 0.0);
+    const double t1841 = t1786*t1786;
+    const double t1842 = t1787*t1787;
+    const double t1843 = t1841 + t1842;
+    const double t1844 = t1841 + t1842 + t1798;
+    const double t1845 = t1818*t1818;
+    const double t1846 = t1845;
+    const double t1847 = t1817*t1817 + t1845;
+    const double t1848 = (t1843 <= 1e-18*t1844 || t1846 <= 1e-18*t1847 ? 1.0 : 0.0);
+    const double t1849 = t1817*t1839;
+    const double t1850 = -t1817*t1840;
+    const double t1851 = -t1818*target[2];
+    const double t1852 = t1849*target[0] + t1850*target[1] + t1851;
+    const double t1853 = -t1818*target[6];
+    const double t1854 = t1849*target[4] + t1850*target[5] + t1853;
+    const double t1855 = -t1818*target[10];
+    const double t1856 = t1849*target[8] + t1850*target[9] + t1855;
+    const double t1857 = t1852*t1414 + t1854*t1415;
+    const double t1858 = t1856*t1856 + t1857*t1857;
+    const double t1859 = sqrt(t1858);
+    const double t1860 = fabs(t1856);
+    const double t1861 = fabs(t1857);
+    const int t1862 = t1860 > t1861;
+    const double t1863 = (t1862 ? t1861 : t1860);
+    const double t1864 = (t1862 ? t1860 : t1861);
+    const int t1865 = t1863 > 0.66*t1864;
+    const double t1866 = (t1865 ? t1864 + t1863 : t1864);
+    const double t1867 = (t1865 ? t1863 - t1864 : t1863)/(t1866 != 0.0 ? t1866 : 1.0);
+    const double t1868 = t1867*t1867;
+    const double t1869 = 194.5506571482614 + t1868*(485.3903996359137 + t1868*(432.88106049129027 + t1868*(165.02700983169885 + t1868*(24.858464901423062 + t1868))));
+    const double t1870 = t1867 + t1867*t1868*(t1868*(t1868*(t1868*(-16.157537187333652 - 0.8750608600031904*t1868) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1869 != 0.0 ? t1869 : 1.0) + (t1865 ? 0.7853981633974483 : 0.0);
+    const double t1871 = (t1862 ? 1.5707963267948966 - t1870 : t1870);
+    const double t1872 = (t1857 < 0.0 ? 3.141592653589793 - t1871 : t1871);
+    const int t1873 = t1858 > 0.0;
+    const double t1874 = (t1873 ? (t1856 < 0.0 ? -t1872 : t1872) : 0.0);
+    const double t1875 = 1.0/(t1859 != 0.0 ? t1859 : 1.0);
+    const double t1876 = (t1873 ? t1857*t1875 : 1.0);
+    const double t1877 = (t1873 ? t1856*t1875 : 0.0);
+    const double t1878 = (t1846 <= 1e-24*t1847 ? 1.0 : 0.0);
+    const double t1879 = t1817*target[0] + t1851;
+    const double t1880 = t1817*target[4] + t1853;
+    const double t1881 = t1817*target[8] + t1855;
+    const double t1882 = t1879*t1414 + t1880*t1415;
+    const double t1883 = t1881*t1881 + t1882*t1882;
+    const double t1884 = fabs(t1881);
+    const double t1885 = fabs(t1882);
+    const int t1886 = t1884 > t1885;
+    const double t1887 = (t1886 ? t1885 : t1884);
+    const double t1888 = (t1886 ? t1884 : t1885);
+    const int t1889 = t1887 > 0.66*t1888;
+    const double t1890 = (t1889 ? t1888 + t1887 : t1888);
+    const double t1891 = (t1889 ? t1887 - t1888 : t1887)/(t1890 != 0.0 ? t1890 : 1.0);
+    const double t1892 = t1891*t1891;
+    const double t1893 = 194.5506571482614 + t1892*(485.3903996359137 + t1892*(432.88106049129027 + t1892*(165.02700983169885 + t1892*(24.858464901423062 + t1892))));
+    const double t1894 = t1891 + t1891*t1892*(t1892*(t1892*(t1892*(-16.157537187333652 - 0.8750608600031904*t1892) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1893 != 0.0 ? t1893 : 1.0) + (t1889 ? 0.7853981633974483 : 0.0);
+    const double t1895 = (t1886 ? 1.5707963267948966 - t1894 : t1894);
+    const double t1896 = (t1882 < 0.0 ? 3.141592653589793 - t1895 : t1895);
+    const double t1897 = (t1883 > 0.0 ? (t1881 < 0.0 ? -t1896 : t1896) : 0.0);
+    const double t1898 = 0.09465*t1788;
+    const double t1899 = 0.0104361725 + 0.5*t1790 + 0.5*t1791 + t1535 + 0.10915*t1789 - 0.5*t1793;
+    const double t1900 = t1537 + t1898*t1898;
+    const double t1901 = t1900 - t1899*t1899;
+    const double t1902 = (t1901 > 0.0 ? sqrt(t1901) : 0.0);
+    const double t1903 = (t1901 < -1e-10*t1900 ? 1.0 : 0.0);
+    const double t1904 = t1533*t1899 - t1898*t1902;
+    const double t1905 = t1533*t1902 + t1898*t1899;
+    const double t1906 = t1904*t1904 + t1905*t1905;
+    const double t1907 = sqrt(t1906);
+    const double t1908 = fabs(t1905);
+    const double t1909 = fabs(t1904);
+    const int t1910 = t1908 > t1909;
+    const double t1911 = (t1910 ? t1909 : t1908);
+    const double t1912 = (t1910 ? t1908 : t1909);
+    const int t1913 = t1911 > 0.66*t1912;
+    const double t1914 = (t1913 ? t1912 + t1911 : t1912);
+    const double t1915 = (t1913 ? t1911 - t1912 : t1911)/(t1914 != 0.0 ? t1914 : 1.0);
+    const double t1916 = t1915*t1915;
+    const double t1917 = 194.5506571482614 + t1916*(485.3903996359137 + t1916*(432.88106049129027 + t1916*(165.02700983169885 + t1916*(24.858464901423062 + t1916))));
+    const double t1918 = t1915 + t1915*t1916*(t1916*(t1916*(t1916*(-16.157537187333652 - 0.8750608600031904*t1916) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1917 != 0.0 ? t1917 : 1.0) + (t1913 ? 0.7853981633974483 : 0.0);
+    const double t1919 = (t1910 ? 1.5707963267948966 - t1918 : t1918);
+    const double t1920 = (t1904 < 0.0 ? 3.141592653589793 - t1919 : t1919);
+    const int t1921 = t1906 > 0.0;
+    const double t1922 = (t1921 ? (t1905 < 0.0 ? -t1920 : t1920) : 0.0);
+    const double t1923 = 1.0/(t1907 != 0.0 ? t1907 : 1.0);
+    const double t1924 = (t1921 ? t1904*t1923 : 1.0);
+    const double t1925 = (t1921 ? t1905*t1923 : 0.0);
+    const double t1926 = (t1817 >= 0.0 ? 1.0 : -1.0);
+    const int t1927 = t1878 > 0.0;
+    const double t1928 = (t1927 ? t1922 : t1874);
+    const double t1929 = (t1927 ? t1924 : t1876);
+    const double t1930 = (t1927 ? t1925 : t1877);
+    const double t1931 = (t1927 ? t1903 : 0.0);
+    const double t1932 = (t1927 ? t1926*(t1897 - t1922) : t1837);
+    Q[29] = t1932;
+    Q[35] = t1932;
+    const double t1933 = 1.0 - t1848;
+    const double t1934 = 1.0 - t1933*(1.0 - t1878);
+    const double t1935 = t1788 - 0.09465*t1930;
+    const double t1936 = 0.10915 + t1789;
+    const double t1937 = t1358 + 0.09465*t1929;
+    const double t1938 = t1935*t1935;
+    const double t1939 = t1936*t1936;
+    const double t1940 = -0.5*t1939;
+    const double t1941 = (t1937 - 0.089159)*(t1937 - 0.089159);
+    const double t1942 = 0.16724253125 + t1940 - 0.5*t1938 - 0.5*t1941;
+    const double t1943 = 0.0277909737890625 - t1942*t1942;
+    const double t1944 = (t1943 > 0.0 ? sqrt(t1943) : 0.0);
+    const double t1945 = (t1943 < -2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1946 = (t1943 >= -2.77909737890625e-12 && t1943 <= 2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t1947 = -0.16670625*t1942;
+    const double t1948 = -0.16670625*t1944;
+    const double t1949 = t1947*t1947;
+    const double t1950 = t1949 + t1948*t1948;
+    const double t1951 = sqrt(t1950);
+    const double t1952 = fabs(t1948);
+    const double t1953 = fabs(t1947);
+    const int t1954 = t1952 > t1953;
+    const double t1955 = (t1954 ? t1953 : t1952);
+    const double t1956 = (t1954 ? t1952 : t1953);
+    const int t1957 = t1955 > 0.66*t1956;
+    const double t1958 = (t1957 ? t1956 + t1955 : t1956);
+    const double t1959 = (t1957 ? t1955 - t1956 : t1955)/(t1958 != 0.0 ? t1958 : 1.0);
+    const double t1960 = t1959*t1959;
+    const double t1961 = 194.5506571482614 + t1960*(485.3903996359137 + t1960*(432.88106049129027 + t1960*(165.02700983169885 + t1960*(24.858464901423062 + t1960))));
+    const double t1962 = t1959 + t1959*t1960*(t1960*(t1960*(t1960*(-16.157537187333652 - 0.8750608600031904*t1960) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1961 != 0.0 ? t1961 : 1.0) + (t1957 ? 0.7853981633974483 : 0.0);
+    const double t1963 = (t1954 ? 1.5707963267948966 - t1962 : t1962);
+    const int t1964 = t1947 < 0.0;
+    const double t1965 = (t1964 ? 3.141592653589793 - t1963 : t1963);
+    const int t1966 = t1950 > 0.0;
+    const double t1967 = (t1966 ? (t1948 < 0.0 ? -t1965 : t1965) : 0.0);
+    Q[26] = t1967;
+    const double t1968 = 1.0/(t1951 != 0.0 ? t1951 : 1.0);
+    const double t1969 = (t1966 ? t1947*t1968 : 1.0);
+    const double t1970 = (t1966 ? t1948*t1968 : 0.0);
+    const double t1971 = 0.16670625*t1944;
+    const double t1972 = t1949 + t1971*t1971;
+    const double t1973 = sqrt(t1972);
+    const double t1974 = fabs(t1971);
+    const int t1975 = t1974 > t1953;
+    const double t1976 = (t1975 ? t1953 : t1974);
+    const double t1977 = (t1975 ? t1974 : t1953);
+    const int t1978 = t1976 > 0.66*t1977;
+    const double t1979 = (t1978 ? t1977 + t1976 : t1977);
+    const double t1980 = (t1978 ? t1976 - t1977 : t1976)/(t1979 != 0.0 ? t1979 : 1.0);
+    const double t1981 = t1980*t1980;
+    const double t1982 = 194.5506571482614 + t1981*(485.3903996359137 + t1981*(432.88106049129027 + t1981*(165.02700983169885 + t1981*(24.858464901423062 + t1981))));
+    const double t1983 = t1980 + t1980*t1981*(t1981*(t1981*(t1981*(-16.157537187333652 - 0.8750608600031904*t1981) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1982 != 0.0 ? t1982 : 1.0) + (t1978 ? 0.7853981633974483 : 0.0);
+    const double t1984 = (t1975 ? 1.5707963267948966 - t1983 : t1983);
+    const double t1985 = (t1964 ? 3.141592653589793 - t1984 : t1984);
+    const int t1986 = t1972 > 0.0;
+    const double t1987 = (t1986 ? (t1971 < 0.0 ? -t1985 : t1985) : 0.0);
+    Q[32] = t1987;
+    const double t1988 = 1.0/(t1973 != 0.0 ? t1973 : 1.0);
+    const double t1989 = (t1986 ? t1947*t1988 : 1.0);
+    const double t1990 = (t1986 ? t1971*t1988 : 0.0);
+    const double t1991 = -0.425 - 0.39225000000000004*t1969;
+    const double t1992 = -0.39225000000000004*t1970;
+    const double t1993 = 0.089159 - t1937;
+    const double t1994 = t1935*t1991 - t1992*t1993;
+    const double t1995 = -t1935*t1992 - t1991*t1993;
+    const double t1996 = t1994*t1994 + t1995*t1995;
+    const double t1997 = fabs(t1995);
+    const double t1998 = fabs(t1994);
+    const int t1999 = t1997 > t1998;
+    const double t2000 = (t1999 ? t1998 : t1997);
+    const double t2001 = (t1999 ? t1997 : t1998);
+    const int t2002 = t2000 > 0.66*t2001;
+    const double t2003 = (t2002 ? t2001 + t2000 : t2001);
+    const double t2004 = (t2002 ? t2000 - t2001 : t2000)/(t2003 != 0.0 ? t2003 : 1.0);
+    const double t2005 = t2004*t2004;
+    const double t2006 = 194.5506571482614 + t2005*(485.3903996359137 + t2005*(432.88106049129027 + t2005*(165.02700983169885 + t2005*(24.858464901423062 + t2005))));
+    const double t2007 = t2004 + t2004*t2005*(t2005*(t2005*(t2005*(-16.157537187333652 - 0.8750608600031904*t2005) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2006 != 0.0 ? t2006 : 1.0) + (t2002 ? 0.7853981633974483 : 0.0);
+    const double t2008 = (t1999 ? 1.5707963267948966 - t2007 : t2007);
+    const double t2009 = (t1994 < 0.0 ? 3.141592653589793 - t2008 : t2008);
+    const double t2010 = (t1996 > 0.0 ? (t1995 < 0.0 ? -t2009 : t2009) : 0.0);
+    Q[25] = t2010;
+    const double t2011 = t1991*t1991 + t1992*t1992;
+    const double t2012 = t1938 + t1993*t1993;
+    const double t2013 = t1938 + t1939 + t1941;
+    const int t2014 = t2012 <= 1e-18*t2013;
+    const double t2015 = (t2011 <= 1e-18*t2011 || t2014 ? 1.0 : 0.0);
+    const double t2016 = t1928 - t2010 - t1967;
+    Q[27] = t2016;
+    const double t2017 = -0.425 - 0.39225000000000004*t1989;
+    const double t2018 = -0.39225000000000004*t1990;
+    const double t2019 = t1935*t2017 - t2018*t1993;
+    const double t2020 = -t1935*t2018 - t2017*t1993;
+    const double t2021 = t2019*t2019 + t2020*t2020;
+    const double t2022 = fabs(t2020);
+    const double t2023 = fabs(t2019);
+    const int t2024 = t2022 > t2023;
+    const double t2025 = (t2024 ? t2023 : t2022);
+    const double t2026 = (t2024 ? t2022 : t2023);
+    const int t2027 = t2025 > 0.66*t2026;
+    const double t2028 = (t2027 ? t2026 + t2025 : t2026);
+    const double t2029 = (t2027 ? t2025 - t2026 : t2025)/(t2028 != 0.0 ? t2028 : 1.0);
+    const double t2030 = t2029*t2029;
+    const double t2031 = 194.5506571482614 + t2030*(485.3903996359137 + t2030*(432.88106049129027 + t2030*(165.02700983169885 + t2030*(24.858464901423062 + t2030))));
+    const double t2032 = t2029 + t2029*t2030*(t2030*(t2030*(t2030*(-16.157537187333652 - 0.8750608600031904*t2030) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2031 != 0.0 ? t2031 : 1.0) + (t2027 ? 0.7853981633974483 : 0.0);
+    const double t2033 = (t2024 ? 1.5707963267948966 - t2032 : t2032);
+    const double t2034 = (t2019 < 0.0 ? 3.141592653589793 - t2033 : t2033);
+    const double t2035 = (t2021 > 0.0 ? (t2020 < 0.0 ? -t2034 : t2034) : 0.0);
+    Q[31] = t2035;
+    const double t2036 = t2017*t2017 + t2018*t2018;
+    const double t2037 = (t2014 || t2036 <= 1e-18*t2036 ? 1.0 : 0.0);
+    const double t2038 = t1928 - t2035 - t1987;
+    Q[33] = t2038;
+    const int t2039 = t1934 > 0.0;
+    const double t2040 = (t2039 ? t1815 : -t1815);
+    Q[40] = t2040;
+    Q[46] = t2040;
+    const double t2041 = (t2039 ? t1932 : (t1932 > 0.0 ? t1932 - 3.141592653589793 : 3.141592653589793 + t1932));
+    Q[41] = t2041;
+    Q[47] = t2041;
+    const double t2042 = (t2039 ? t1928 : (t1928 > 0.0 ? t1928 - 3.141592653589793 : 3.141592653589793 + t1928));
+    const double t2043 = (t2039 ? t1929 : -t1929);
+    const double t2044 = (t2039 ? t1930 : -t1930);
+    const double t2045 = t1788 - 0.09465*t2044;
+    const double t2046 = t1358 + 0.09465*t2043;
+    const double t2047 = t2045*t2045;
+    const double t2048 = (t2046 - 0.089159)*(t2046 - 0.089159);
+    const double t2049 = 0.16724253125 + t1940 - 0.5*t2047 - 0.5*t2048;
+    const double t2050 = 0.0277909737890625 - t2049*t2049;
+    const double t2051 = (t2050 > 0.0 ? sqrt(t2050) : 0.0);
+    const double t2052 = (t2050 < -2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t2053 = (t2050 >= -2.77909737890625e-12 && t2050 <= 2.77909737890625e-12 ? 1.0 : 0.0);
+    const double t2054 = -0.16670625*t2049;
+    const double t2055 = -0.16670625*t2051;
+    const double t2056 = t2054*t2054;
+    const double t2057 = t2056 + t2055*t2055;
+    const double t2058 = sqrt(t2057);
+    const double t2059 = fabs(t2055);
+    const double t2060 = fabs(t2054);
+    const int t2061 = t2059 > t2060;
+    const double t2062 = (t2061 ? t2060 : t2059);
+    const double t2063 = (t2061 ? t2059 : t2060);
+    const int t2064 = t2062 > 0.66*t2063;
+    const double t2065 = (t2064 ? t2063 + t2062 : t2063);
+    const double t2066 = (t2064 ? t2062 - t2063 : t2062)/(t2065 != 0.0 ? t2065 : 1.0);
+    const double t2067 = t2066*t2066;
+    const double t2068 = 194.5506571482614 + t2067*(485.3903996359137 + t2067*(432.88106049129027 + t2067*(165.02700983169885 + t2067*(24.858464901423062 + t2067))));
+    const double t2069 = t2066 + t2066*t2067*(t2067*(t2067*(t2067*(-16.157537187333652 - 0.8750608600031904*t2067) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2068 != 0.0 ? t2068 : 1.0) + (t2064 ? 0.7853981633974483 : 0.0);
+    const double t2070 = (t2061 ? 1.5707963267948966 - t2069 : t2069);
+    const int t2071 = t2054 < 0.0;
+    const double t2072 = (t2071 ? 3.141592653589793 - t2070 : t2070);
+    const int t2073 = t2057 > 0.0;
+    const double t2074 = (t2073 ? (t2055 < 0.0 ? -t2072 : t2072) : 0.0);
+    Q[38] = t2074;
+    const double t2075 = 1.0/(t2058 != 0.0 ? t2058 : 1.0);
+    const double t2076 = (t2073 ? t2054*t2075 : 1.0);
+    const double t2077 = (t2073 ? t2055*t2075 : 0.0);
+    const double t2078 = 0.16670625*t2051;
+    const double t2079 = t2056 + t2078*t2078;
+    const double t2080 = sqrt(t2079);
+    const double t2081 = fabs(t2078);
+    const int t2082 = t2081 > t2060;
+    const double t2083 = (t2082 ? t2060 : t2081);
+    const double t2084 = (t2082 ? t2081 : t2060);
+    const int t2085 = t2083 > 0.66*t2084;
+    const double t2086 = (t2085 ? t2084 + t2083 : t2084);
+    const double t2087 = (t2085 ? t2083 - t2084 : t2083)/(t2086 != 0.0 ? t2086 : 1.0);
+    const double t2088 = t2087*t2087;
+    const double t2089 = 194.5506571482614 + t2088*(485.3903996359137 + t2088*(432.88106049129027 + t2088*(165.02700983169885 + t2088*(24.858464901423062 + t2088))));
+    const double t2090 = t2087 + t2087*t2088*(t2088*(t2088*(t2088*(-16.157537187333652 - 0.8750608600031904*t2088) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2089 != 0.0 ? t2089 : 1.0) + (t2085 ? 0.7853981633974483 : 0.0);
+    const double t2091 = (t2082 ? 1.5707963267948966 - t2090 : t2090);
+    const double t2092 = (t2071 ? 3.141592653589793 - t2091 : t2091);
+    const int t2093 = t2079 > 0.0;
+    const double t2094 = (t2093 ? (t2078 < 0.0 ? -t2092 : t2092) : 0.0);
+    Q[44] = t2094;
+    const double t2095 = 1.0/(t2080 != 0.0 ? t2080 : 1.0);
+    const double t2096 = (t2093 ? t2054*t2095 : 1.0);
+    const double t2097 = (t2093 ? t2078*t2095 : 0.0);
+    const double t2098 = -0.425 - 0.39225000000000004*t2076;
+    const double t2099 = -0.39225000000000004*t2077;
+    const double t2100 = 0.089159 - t2046;
+    const double t2101 = t2045*t2098 - t2099*t2100;
+    const double t2102 = -t2045*t2099 - t2098*t2100;
+    const double t2103 = t2101*t2101 + t2102*t2102;
+    const double t2104 = fabs(t2102);
+    const double t2105 = fabs(t2101);
+    const int t2106 = t2104 > t2105;
+    const double t2107 = (t2106 ? t2105 : t2104);
+    const double t2108 = (t2106 ? t2104 : t2105);
+    const int t2109 = t2107 > 0.66*t2108;
+    const double t2110 = (t2109 ? t2108 + t2107 : t2108);
+    const double t2111 = (t2109 ? t2107 - t2108 : t2107)/(t2110 != 0.0 ? t2110 : 1.0);
+    const double t2112 = t2111*t2111;
+    const double t2113 = 194.5506571482614 + t2112*(485.3903996359137 + t2112*(432.88106049129027 + t2112*(165.02700983169885 + t2112*(24.858464901423062 + t2112))));
+    const double t2114 = t2111 + t2111*t2112*(t2112*(t2112*(t2112*(-16.157537187333652 - 0.8750608600031904*t2112) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2113 != 0.0 ? t2113 : 1.0) + (t2109 ? 0.7853981633974483 : 0.0);
+    const double t2115 = (t2106 ? 1.5707963267948966 - t2114 : t2114);
+    const double t2116 = (t2101 < 0.0 ? 3.141592653589793 - t2115 : t2115);
+    const double t2117 = (t2103 > 0.0 ? (t2102 < 0.0 ? -t2116 : t2116) : 0.0);
+    Q[37] = t2117;
+    const double t2118 = t2098*t2098 + t2099*t2099;
+    const double t2119 = t2047 + t2100*t2100;
+    const double t2120 = t1939 + t2047 + t2048;
+    const int t2121 = t2119 <= 1e-18*t2120;
+    const double t2122 = (t2118 <= 1e-18*t2118 || t2121 ? 1.0 : 0.0);
+    const double t2123 = t2042 - t2117 - t2074;
+    Q[39] = t2123;
+    const double t2124 = -0.425 - 0.39225000000000004*t2096;
+    const double t2125 = -0.39225000000000004*t2097;
+    const double t2126 = t2045*t2124 - t2125*t2100;
+    const double t2127 = -t2045*t2125 - t2124*t2100;
+    const double t2128 = t2126*t2126 + t2127*t2127;
+    const double t2129 = fabs(t2127);
+    const double t2130 = fabs(t2126);
+    const int t2131 = t2129 > t2130;
+    const double t2132 = (t2131 ? t2130 : t2129);
+    const double t2133 = (t2131 ? t2129 : t2130);
+    const int t2134 = t2132 > 0.66*t2133;
+    const double t2135 = (t2134 ? t2133 + t2132 : t2133);
+    const double t2136 = (t2134 ? t2132 - t2133 : t2132)/(t2135 != 0.0 ? t2135 : 1.0);
+    const double t2137 = t2136*t2136;
+    const double t2138 = 194.5506571482614 + t2137*(485.3903996359137 + t2137*(432.88106049129027 + t2137*(165.02700983169885 + t2137*(24.858464901423062 + t2137))));
+    const double t2139 = t2136 + t2136*t2137*(t2137*(t2137*(t2137*(-16.157537187333652 - 0.8750608600031904*t2137) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2138 != 0.0 ? t2138 : 1.0) + (t2134 ? 0.7853981633974483 : 0.0);
+    const double t2140 = (t2131 ? 1.5707963267948966 - t2139 : t2139);
+    const double t2141 = (t2126 < 0.0 ? 3.141592653589793 - t2140 : t2140);
+    const double t2142 = (t2128 > 0.0 ? (t2127 < 0.0 ? -t2141 : t2141) : 0.0);
+    Q[43] = t2142;
+    const double t2143 = t2124*t2124 + t2125*t2125;
+    const double t2144 = (t2121 || t2143 <= 1e-18*t2143 ? 1.0 : 0.0);
+    const double t2145 = t2042 - t2142 - t2094;
+    Q[45] = t2145;
+    const double t2155 = 1.0 - t1569;
+    const double t2156 = 1.0 - t1365;
+    const double t2157 = 1.0 - t1431;
+    const double t2158 = -t2155*t2156*(1.0 - t1583)*t2157;
+    const double t2159 = 1.0 - t1369;
+    const double t2160 = 1.0 - t1584;
+    const double t2161 = 1.0 - t1432;
+    const double t2162 = 1.0 - t1572;
+    flags[0] = 3.0 + t2158 - 2.0*t2159*(1.0 - t1653)*t2160*t2161*t1571*t2162;
+    flags[1] = 3.0 + t2158 - 2.0*t2159*(1.0 - t1675)*t2160*t2161*t1571*t2162;
+    const double t2163 = -t2155*t2156*(1.0 - t1690)*t2157;
+    const double t2164 = 1.0 - t1691;
+    flags[2] = 3.0 + t2163 - 2.0*t2159*(1.0 - t1760)*t2164*t2161*t1571*t2162;
+    flags[3] = 3.0 + t2163 - 2.0*t2159*(1.0 - t1782)*t2164*t2161*t1571*t2162;
+    const double t2165 = 1.0 - t1931;
+    const double t2166 = 1.0 - t1796;
+    const double t2167 = -t2165*t2156*(1.0 - t1945)*t2166;
+    const double t2168 = 1.0 - t1946;
+    const double t2169 = 1.0 - t1797;
+    const double t2170 = 1.0 - t1934;
+    flags[4] = 3.0 + t2167 - 2.0*t2159*(1.0 - t2015)*t2168*t2169*t1933*t2170;
+    flags[5] = 3.0 + t2167 - 2.0*t2159*(1.0 - t2037)*t2168*t2169*t1933*t2170;
+    const double t2171 = -t2165*t2156*(1.0 - t2052)*t2166;
+    const double t2172 = 1.0 - t2053;
+    flags[6] = 3.0 + t2171 - 2.0*t2159*(1.0 - t2122)*t2172*t2169*t1933*t2170;
+    flags[7] = 3.0 + t2171 - 2.0*t2159*(1.0 - t2144)*t2172*t2169*t1933*t2170;
+}
+
+void ur5_ik_candidates(const double target[16], double Q[48], double flags[8])
+{
+    ur5_ik_candidates_finish(target, Q, flags);
+}
+
+void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags)
+{
+    size_t i;
+    const size_t b = 0;
+    for (i = 0; i < m; ++i) {
+        ur5_ik_candidates_finish(target + (i + b) * 16, Q + (i + b) * 48, flags + (i + b) * 8);
+    }
+}
 
 /* ---- ur5_ik_uniform: a number in [0, 1) from xorshift64* ---- */
 static double ur5_ik_uniform(unsigned long long state[1])
@@ -9903,4 +6305,287 @@ int ur5_ik_solve_position(const double q0[6], const double target[3], double lam
     double error_local[1];
     int iterations_local[1];
     return ur5_ik_solve_position_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+/* ---- ur5_ik_all_rows: every closed-form solution within the limits, post-processed ---- */
+static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], int flags[8])
+{
+    double raw[48];
+    double raw_flags[8];
+    double cand[6];
+    /* nothing yet: NaN rows, flags -1, count 0 */
+    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS*6; ++k) {
+        q[k] = NAN;
+    }
+    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
+        flags[k] = -1;
+    }
+    count[0] = 0;
+    /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation */
+    for (int k = 0; k < 12; ++k) {
+        if (!UR5_FINITE(target[k])) {
+            return UR5_IK_INVALID;
+        }
+    }
+    const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
+    const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
+    const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
+    const double m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9];
+    const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
+    const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
+    const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
+    if (fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+        return UR5_IK_INVALID;
+    }
+    /* the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable */
+    ur5_ik_candidates(target, raw, raw_flags);
+    int exact = 0;
+    for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
+        if ((int)raw_flags[i] % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
+            exact = 1;
+        }
+    }
+    int kept = 0;
+    int flag = 0;
+    int inside = 0;
+    int dup = 0;
+    double diff = 0.0;
+    for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
+        flag = (int)raw_flags[i];
+        if (exact == 0 || flag % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
+            /* 3. revolute joints to the copy nearest their range's centre; 4. limits */
+            inside = 1;
+            cand[0] = raw[6*i] + (0.0 - raw[6*i] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[0]) > 3.141592653589793) {
+                cand[0] = cand[0] + 6.283185307179586*nearbyint((0.0 - cand[0])*0.15915494309189535);
+            }
+            inside = (cand[0] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[0] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[0] = (cand[0] < -6.283185307179586 ? -6.283185307179586 : (cand[0] > 6.283185307179586 ? 6.283185307179586 : cand[0]));
+            cand[1] = raw[6*i + 1] + (0.0 - raw[6*i + 1] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 1] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[1]) > 3.141592653589793) {
+                cand[1] = cand[1] + 6.283185307179586*nearbyint((0.0 - cand[1])*0.15915494309189535);
+            }
+            inside = (cand[1] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[1] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[1] = (cand[1] < -6.283185307179586 ? -6.283185307179586 : (cand[1] > 6.283185307179586 ? 6.283185307179586 : cand[1]));
+            cand[2] = raw[6*i + 2] + (0.0 - raw[6*i + 2] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 2] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[2]) > 3.141592653589793) {
+                cand[2] = cand[2] + 6.283185307179586*nearbyint((0.0 - cand[2])*0.15915494309189535);
+            }
+            inside = (cand[2] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[2] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[2] = (cand[2] < -6.283185307179586 ? -6.283185307179586 : (cand[2] > 6.283185307179586 ? 6.283185307179586 : cand[2]));
+            cand[3] = raw[6*i + 3] + (0.0 - raw[6*i + 3] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 3] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[3]) > 3.141592653589793) {
+                cand[3] = cand[3] + 6.283185307179586*nearbyint((0.0 - cand[3])*0.15915494309189535);
+            }
+            inside = (cand[3] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[3] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[3] = (cand[3] < -6.283185307179586 ? -6.283185307179586 : (cand[3] > 6.283185307179586 ? 6.283185307179586 : cand[3]));
+            cand[4] = raw[6*i + 4] + (0.0 - raw[6*i + 4] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 4] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[4]) > 3.141592653589793) {
+                cand[4] = cand[4] + 6.283185307179586*nearbyint((0.0 - cand[4])*0.15915494309189535);
+            }
+            inside = (cand[4] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[4] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[4] = (cand[4] < -6.283185307179586 ? -6.283185307179586 : (cand[4] > 6.283185307179586 ? 6.283185307179586 : cand[4]));
+            cand[5] = raw[6*i + 5] + (0.0 - raw[6*i + 5] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 5] < -3.141592653589793 ? -6.283185307179586 : 0.0));
+            if (fabs(0.0 - cand[5]) > 3.141592653589793) {
+                cand[5] = cand[5] + 6.283185307179586*nearbyint((0.0 - cand[5])*0.15915494309189535);
+            }
+            inside = (cand[5] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[5] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
+            cand[5] = (cand[5] < -6.283185307179586 ? -6.283185307179586 : (cand[5] > 6.283185307179586 ? 6.283185307179586 : cand[5]));
+            if (inside > 0) {
+                /* 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped */
+                dup = -1;
+                for (int r = 0; r < kept; ++r) {
+                    /* the same row when every joint is within IK_DUP_TOL: nested, so a row that differs in its first joint costs one test */
+                    diff = cand[0] - q[6*r];
+                    if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                        diff = cand[1] - q[6*r + 1];
+                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                            diff = cand[2] - q[6*r + 2];
+                            if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                diff = cand[3] - q[6*r + 3];
+                                if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                    diff = cand[4] - q[6*r + 4];
+                                    if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                        diff = cand[5] - q[6*r + 5];
+                                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                            dup = r;
+                                            break;
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+                if (dup >= 0) {
+                    /* the kept row takes the duplicate's singular bit */
+                    if (flag >= UR5_IK_FLAG_SINGULAR && flags[dup] < UR5_IK_FLAG_SINGULAR) {
+                        flags[dup] = flags[dup] + UR5_IK_FLAG_SINGULAR;
+                    }
+                } else {
+                    /* 6. kept, in branch order */
+                    q[6*kept] = cand[0];
+                    q[6*kept + 1] = cand[1];
+                    q[6*kept + 2] = cand[2];
+                    q[6*kept + 3] = cand[3];
+                    q[6*kept + 4] = cand[4];
+                    q[6*kept + 5] = cand[5];
+                    flags[kept] = flag;
+                    kept = kept + 1;
+                }
+            }
+        }
+    }
+    count[0] = kept;
+    /* 7. status */
+    return (exact == 0 ? UR5_IK_UNREACHABLE : (kept == 0 ? UR5_IK_OUT_OF_LIMITS : UR5_IK_OK));
+}
+
+/* ---- ur5_ik_all: every closed-form IK solution within the joint limits ---- */
+static int ur5_ik_all_run(const double target[16], double q[48], int count[1], int flags[8])
+{
+    int status = 0;
+    status = ur5_ik_all_rows(target, q, count, flags);
+    return status;
+}
+
+int ur5_ik_all(const double target[16], double q[48], int *count, int *flags)
+{
+    int count_local[1];
+    int flags_local[8];
+    return ur5_ik_all_run(target, q, count ? count : count_local, flags ? flags : flags_local);
+}
+
+/* ---- ur5_ik_nearest: the closed-form IK solution nearest a configuration ---- */
+int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
+{
+    double rows[48];
+    int count[1];
+    int flags[8];
+    double near[6];
+    int status = 0;
+    int best = -1;
+    double best_d = 0.0;
+    double dist = 0.0;
+    double k = 0.0;
+    double y = 0.0;
+    int found = 0;
+    status = ur5_ik_all_rows(target, rows, count, flags);
+    q[0] = NAN;
+    q[1] = NAN;
+    q[2] = NAN;
+    q[3] = NAN;
+    q[4] = NAN;
+    q[5] = NAN;
+    for (int i = 0; i < count[0]; ++i) {
+        /* each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref */
+        k = nearbyint((q_ref[0] - rows[6*i])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i];
+        if (rows[6*i] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i] + 6.283185307179586*k) - q_ref[0]) < fabs(y - q_ref[0]))) {
+            y = rows[6*i] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i] + 6.283185307179586*(k - 1.0)) - q_ref[0]) < fabs(y - q_ref[0]))) {
+            y = rows[6*i] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i] + 6.283185307179586*(k + 1.0)) - q_ref[0]) < fabs(y - q_ref[0]))) {
+            y = rows[6*i] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[0] = y;
+        k = nearbyint((q_ref[1] - rows[6*i + 1])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i + 1];
+        if (rows[6*i + 1] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i + 1] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 1] + 6.283185307179586*k) - q_ref[1]) < fabs(y - q_ref[1]))) {
+            y = rows[6*i + 1] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i + 1] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i + 1] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 1] + 6.283185307179586*(k - 1.0)) - q_ref[1]) < fabs(y - q_ref[1]))) {
+            y = rows[6*i + 1] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i + 1] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i + 1] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 1] + 6.283185307179586*(k + 1.0)) - q_ref[1]) < fabs(y - q_ref[1]))) {
+            y = rows[6*i + 1] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[1] = y;
+        k = nearbyint((q_ref[2] - rows[6*i + 2])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i + 2];
+        if (rows[6*i + 2] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i + 2] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 2] + 6.283185307179586*k) - q_ref[2]) < fabs(y - q_ref[2]))) {
+            y = rows[6*i + 2] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i + 2] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i + 2] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 2] + 6.283185307179586*(k - 1.0)) - q_ref[2]) < fabs(y - q_ref[2]))) {
+            y = rows[6*i + 2] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i + 2] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i + 2] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 2] + 6.283185307179586*(k + 1.0)) - q_ref[2]) < fabs(y - q_ref[2]))) {
+            y = rows[6*i + 2] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[2] = y;
+        k = nearbyint((q_ref[3] - rows[6*i + 3])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i + 3];
+        if (rows[6*i + 3] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i + 3] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 3] + 6.283185307179586*k) - q_ref[3]) < fabs(y - q_ref[3]))) {
+            y = rows[6*i + 3] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i + 3] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i + 3] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 3] + 6.283185307179586*(k - 1.0)) - q_ref[3]) < fabs(y - q_ref[3]))) {
+            y = rows[6*i + 3] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i + 3] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i + 3] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 3] + 6.283185307179586*(k + 1.0)) - q_ref[3]) < fabs(y - q_ref[3]))) {
+            y = rows[6*i + 3] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[3] = y;
+        k = nearbyint((q_ref[4] - rows[6*i + 4])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i + 4];
+        if (rows[6*i + 4] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i + 4] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 4] + 6.283185307179586*k) - q_ref[4]) < fabs(y - q_ref[4]))) {
+            y = rows[6*i + 4] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i + 4] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i + 4] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 4] + 6.283185307179586*(k - 1.0)) - q_ref[4]) < fabs(y - q_ref[4]))) {
+            y = rows[6*i + 4] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i + 4] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i + 4] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 4] + 6.283185307179586*(k + 1.0)) - q_ref[4]) < fabs(y - q_ref[4]))) {
+            y = rows[6*i + 4] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[4] = y;
+        k = nearbyint((q_ref[5] - rows[6*i + 5])*0.15915494309189535);
+        found = 0;
+        y = rows[6*i + 5];
+        if (rows[6*i + 5] + 6.283185307179586*k >= -6.283185307179586 && rows[6*i + 5] + 6.283185307179586*k <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 5] + 6.283185307179586*k) - q_ref[5]) < fabs(y - q_ref[5]))) {
+            y = rows[6*i + 5] + 6.283185307179586*k;
+            found = 1;
+        }
+        if (rows[6*i + 5] + 6.283185307179586*(k - 1.0) >= -6.283185307179586 && rows[6*i + 5] + 6.283185307179586*(k - 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 5] + 6.283185307179586*(k - 1.0)) - q_ref[5]) < fabs(y - q_ref[5]))) {
+            y = rows[6*i + 5] + 6.283185307179586*(k - 1.0);
+            found = 1;
+        }
+        if (rows[6*i + 5] + 6.283185307179586*(k + 1.0) >= -6.283185307179586 && rows[6*i + 5] + 6.283185307179586*(k + 1.0) <= 6.283185307179586 && (found == 0 || fabs((rows[6*i + 5] + 6.283185307179586*(k + 1.0)) - q_ref[5]) < fabs(y - q_ref[5]))) {
+            y = rows[6*i + 5] + 6.283185307179586*(k + 1.0);
+            found = 1;
+        }
+        near[5] = y;
+        dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]);
+        if (best < 0 || dist < best_d) {
+            best = i;
+            best_d = dist;
+            q[0] = near[0];
+            q[1] = near[1];
+            q[2] = near[2];
+            q[3] = near[3];
+            q[4] = near[4];
+            q[5] = near[5];
+        }
+    }
+    return status;
 }

@@ -22,6 +22,9 @@
  * RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm
  * least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
+ * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
+ * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
+ * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
  * Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,
  * target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
@@ -46,7 +49,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xfdb2b121UL
+#define UR5_STAMP 0x9f4a496bUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,6 +57,24 @@ extern "C" {
 
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define UR5_RANK_TOL 2.220446049250313e-14
+
+/* rows of q in ik_all: the most solutions of this arm's closed-form family */
+#define UR5_IK_MAX_SOLUTIONS 8
+
+/* bit of an ik_all flag: a least-squares row (the target is out of reach) */
+#define UR5_IK_FLAG_LEAST_SQUARES 1
+
+/* bit of an ik_all flag: a singular row (one member of a continuum, or a double root) */
+#define UR5_IK_FLAG_SINGULAR 2
+
+/* ik_all refuses a target whose |R^T R - I| exceeds this anywhere */
+#define UR5_IK_ORTHO_TOL 1e-06
+
+/* ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped */
+#define UR5_IK_LIMIT_TOL 1e-12
+
+/* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
+#define UR5_IK_DUP_TOL 1e-09
 
 /* lower joint limits in input order (rad or m); unbounded: a huge negative number
  * An initializer: static const double x[6] = UR5_Q_MIN; */
@@ -136,7 +157,7 @@ void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 8 KB. */
+ * Stack: about 15 KB. */
 void ur5_manipulability_batch(size_t m, const double *q, double *w);
 
 /* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 896 bytes. */
@@ -144,7 +165,7 @@ void ur5_manipulability_position(const double q[6], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 7 KB. */
+ * Stack: about 13 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
 /* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 680 bytes. */
@@ -152,7 +173,7 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 32 KB. */
+ * Stack: about 13 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
 /* gradient dw/dq of the manipulability (N). Stack: about 3336 bytes. */
@@ -160,7 +181,7 @@ void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 11 KB. */
+ * Stack: about 16 KB. */
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
 /* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 6 KB. */
@@ -168,7 +189,7 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 15 KB. */
+ * Stack: about 18 KB. */
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
 /* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1664 bytes. */
@@ -176,7 +197,7 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 10 KB. */
+ * Stack: about 14 KB. */
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
 /* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 760 bytes. */
@@ -184,14 +205,25 @@ void ur5_jacobian_rpy(const double q[6], double JA[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 17 KB. */
+ * Stack: about 13 KB. */
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA);
+
+/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 7 KB. */
+void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]).
+ * Stack: about 7 KB. */
+void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
 
 /* Return codes of the solvers. */
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
 #define UR5_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
+#define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
+#define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit IK_FLAG_LEAST_SQUARES set), possibly none */
+#define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */
 
 /* pose IK of the tool frame.
  * Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step
@@ -224,6 +256,27 @@ int ur5_ik_solve(const double q0[6], const double target[16], double lambda, dou
  * error and iterations may be NULL.
  */
 int ur5_ik_solve_position(const double q0[6], const double target[3], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
+
+/* every closed-form IK solution within the joint limits.
+ * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
+ * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
+ * multiples of 2 pi to the copy nearest the middle of their range, rows outside the joint limits
+ * (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped), duplicates (IK_DUP_TOL) dropped, in the
+ * derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
+ * NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
+ * IK_FLAG_SINGULAR (one member of a continuum, or a double root).
+ * No iteration: the same time for every target.
+ * count and flags may be NULL.
+ */
+int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
+
+/* the closed-form IK solution nearest a configuration.
+ * The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
+ * within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the
+ * least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
+ * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
+ */
+int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 
 #ifdef __cplusplus
 }

@@ -60,7 +60,8 @@ def build_module(kind, derivation, derived: Sequence[str], solvers: Sequence[str
     functions: list[Function] = list(lower(derivation, derived))
     if solvers and kind.solvers is not None:
         functions += kind.solvers(derivation, tuple(solvers), precision)
-    used = {name for f in functions for name in named_constants(f.body)}
+    statements = {id(s): s for f in functions for s in f.body}  # shared by the functions: walked once
+    used = named_constants(list(statements.values()))
     constants = tuple(ConstantDef(c.name, c.values[precision], c.doc) for c in derivation.constants if c.name in used)
     tables = tuple(TableDef(t.name, tuple(t.values), t.doc, t.sign) for t in derivation.tables)
     return Module(prefix, precision, header_notes(prefix, command, derivation, precision), constants, tables,

@@ -40,7 +40,25 @@ from typing import Sequence
 
 
 from .errors import InputError
-from .wrapper import CompiledArm  # noqa: F401 - re-exported
+
+
+def __getattr__(name: str):
+    """``CompiledArm`` (re-exported from :mod:`skelarm_sym.wrapper`, imported on first use: it needs NumPy,
+    which the cache folder and the compiler do not)."""
+    if name == "CompiledArm":
+        from .wrapper import CompiledArm
+
+        return CompiledArm
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+EXTENSION_SUFFIX = ".ext.c"
+"""The file of a generation's CPython extension (:mod:`skelarm_sym.backends.cpython`), which includes its C."""
+
+
+def extension_module(prefix: str) -> str:
+    """The name of the CPython extension module of ``prefix`` (its init function is ``PyInit_{name}``; the
+    backend's ``module_name``)."""
+    return f"{prefix}_ext"
 
 DEFAULT_FLAGS = ("-O2",)
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
@@ -233,9 +251,14 @@ def compile_shared(
     full_key = digest.hexdigest()
     key = full_key[:24]
     c_files = [name for name in sources if name.endswith(".c")]
-    if len(c_files) != 1:
+    units = [name for name in c_files if name.endswith(EXTENSION_SUFFIX)]
+    if len(units) == 1 and len(c_files) == 2 and units[0][: -len(EXTENSION_SUFFIX)] + ".c" in c_files:
+        c_files = units  # the extension includes the C: one translation unit
+        stem = units[0][: -len(EXTENSION_SUFFIX)]
+    elif len(c_files) != 1:
         raise InputError("compile needs exactly one generated .c file (generate with lang 'c')")
-    stem = c_files[0][:-2]
+    else:
+        stem = c_files[0][:-2]
     suffix = ".dll" if sys.platform == "win32" else ".so"
     root = private_folder(cache_folder())
     target = root / key / f"lib{stem}{suffix}"
@@ -279,10 +302,59 @@ def load_python(source: str, name: str):
     return module
 
 
-def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str | None = None) -> CompiledArm:
-    """Compile and load the C of a :class:`~skelarm_sym.generate.Generated` result."""
-    sources = {k: v for k, v in generated.sources.items() if k.endswith((".c", ".h"))}
+def python_headers() -> tuple[str, ...] | None:
+    """The include flags that build a CPython extension for this interpreter, or ``None`` where this
+    module does not build one: no ``Python.h`` (Debian: ``apt-get install python3-dev``), or not Linux
+    (elsewhere an extension links differently)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    import sysconfig
+
+    paths = sysconfig.get_paths()
+    folders = [paths.get("include"), paths.get("platinclude")]
+    if not folders[0] or not Path(folders[0], "Python.h").is_file():
+        return None
+    return tuple(dict.fromkeys(f"-I{folder}" for folder in folders if folder))
+
+
+def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str | None = None,
+                extension: bool | None = None) -> CompiledArm:
+    """Compile and load the C of a :class:`~skelarm_sym.generate.Generated` result.
+
+    ``extension``: also build the CPython extension (``{prefix}.ext.c``, see
+    :mod:`skelarm_sym.backends.cpython`; rendered from the generation's module when its files do not
+    include it) into the same library, so that calls on one configuration skip ctypes (about 1 µs instead
+    of tens). ``None`` (the default): when the generation has that file (languages ``c,cpython``) and this
+    interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
+    where it cannot be built); ``False``: never, the ctypes library alone. Batches and solvers go through
+    ctypes either way."""
+    from .wrapper import CompiledArm
+
+    EXT = EXTENSION_SUFFIX
+    sources = {k: v for k, v in generated.sources.items() if k.endswith((".c", ".h")) and not k.endswith(EXT)}
     if not sources:
         raise InputError("nothing to compile: generate with lang 'c'")
-    library = compile_shared(sources, flags=flags, compiler=compiler)
-    return CompiledArm(library, generated.module)
+    if extension is None and generated.module.prefix + EXT not in generated.sources:
+        extension = False
+    include = python_headers() if extension is not False else None
+    if extension and include is None:
+        raise InputError("the CPython extension needs this Python's headers (Python.h; Debian: apt-get install "
+                         "python3-dev) on Linux; compile_arm(..., extension=False) builds the ctypes library alone")
+    if include is None:
+        return CompiledArm(compile_shared(sources, flags=flags, compiler=compiler), generated.module)
+    prefix = generated.module.prefix
+    name = prefix + EXT
+    sources[name] = generated.sources.get(name) or generated.extension_source()
+    try:
+        library = compile_shared(sources, flags=[*flags, *include], compiler=compiler)
+    except CompileError:
+        plain = {k: v for k, v in sources.items() if k != name}
+        fallback = compile_shared(plain, flags=flags, compiler=compiler)  # the C's own error, if it has one
+        if extension:
+            raise
+        import warnings
+
+        warnings.warn(f"the CPython extension of {prefix} did not compile; single calls go through ctypes",
+                      RuntimeWarning, stacklevel=2)
+        return CompiledArm(fallback, generated.module)
+    return CompiledArm(library, generated.module, extension=extension_module(prefix))

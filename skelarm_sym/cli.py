@@ -59,7 +59,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _generate(args) -> int:
-    from .build import compile_arm
     from .generate import generate
 
     model = model_from_args(args)
@@ -74,6 +73,8 @@ def _generate(args) -> int:
         o = kin.ops
         print(f"kinematics: {o.sin} sin, {o.cos} cos, {o.arithmetic} add/sub/mul/neg")
     if args.compile and any(name.endswith(".c") for name in result.sources):
+        from .build import compile_arm  # (and NumPy) only when compiling
+
         arm = compile_arm(result)
         print(f"compiled {arm.path}")
     return 0

@@ -150,6 +150,14 @@ class Generated:
         """The generation stamp every file of the set carries."""
         return file_stamp(next(iter(self.sources.values()))) or ""
 
+    def extension_source(self) -> str:
+        """The text of ``{prefix}.ext.c`` (the CPython extension of :mod:`skelarm_sym.backends.cpython`) for
+        this set's C, carrying its stamp: :func:`skelarm_sym.build.compile_arm` builds it when the set has
+        no such file."""
+        from .backends.cpython import render_extension
+
+        return render_extension(self.module, self.stamp + "UL")
+
 
 STAMP_PLACEHOLDER = "@SKELARM_STAMP@"
 _STAMP = re.compile(r"STAMP(?: != | = | )(0x[0-9a-f]{8})")

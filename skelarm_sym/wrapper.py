@@ -95,12 +95,20 @@ def _docstring(f: Function, prefix: str) -> str:
     return "\n".join(lines)
 
 
-def _method(f: Function, prefix: str, target) -> object:
+def _method(f: Function, prefix: str, target, fast=None) -> object:
     """A callable ``f.name(inputs...)`` with ``f``'s real signature and docstring that calls
-    ``target(bound_arguments_in_order)``; binding errors are TypeErrors naming the signature."""
+    ``target(bound_arguments_in_order)``; binding errors are TypeErrors naming the signature.
+
+    ``fast``: the CPython extension's entry for ``f``, tried first on positional arguments; it computes
+    one configuration or returns ``NotImplemented`` (anything it does not take: ``target`` then checks,
+    explains and computes as it would have without it)."""
     signature = _signature(f)
 
     def method(*args, **kwargs):
+        if fast is not None and not kwargs:
+            result = fast(*args)
+            if result is not NotImplemented:
+                return result
         try:
             bound = signature.bind(*args, **kwargs)
         except TypeError as exc:
@@ -114,29 +122,47 @@ def _method(f: Function, prefix: str, target) -> object:
     return method
 
 
-class CompiledArm:
-    """A loaded shared library; one method per public emitted function (see the module docstring)."""
+def load_extension(library: Path, name: str):
+    """The CPython extension module ``name`` in ``library`` (not entered in ``sys.modules``)."""
+    from importlib.machinery import ExtensionFileLoader
+    from importlib.util import module_from_spec, spec_from_loader
 
-    def __init__(self, library: Path, module: Module):
+    loader = ExtensionFileLoader(name, str(library))
+    spec = spec_from_loader(name, loader)
+    extension = module_from_spec(spec)
+    loader.exec_module(extension)
+    return extension
+
+
+class CompiledArm:
+    """A loaded shared library; one method per public emitted function (see the module docstring).
+
+    ``extension``: the name of the CPython extension module the library also holds
+    (:mod:`skelarm_sym.backends.cpython`), whose entries take single configurations first."""
+
+    def __init__(self, library: Path, module: Module, extension: str | None = None):
         self.path = library
         self.module = module
         self.prefix = module.prefix
         self.precision = module.precision
         self.dtype = np.float64 if module.precision == "double" else np.float32
         self._lib = ctypes.CDLL(str(library))
+        self.extension = load_extension(library, extension) if extension else None
         self._ctype = ctypes.c_double if module.precision == "double" else ctypes.c_float
         self._pointer = ctypes.POINTER(self._ctype)
         self._functions: dict[str, Function] = {}
         self._methods: dict[str, object] = {}
         for f in module.public:
             self._functions[f.name] = f
+            fast = None
             if f.kind == "straight":
                 self._bind_straight(f)
                 target = lambda args, f=f: self._call(f, args)  # noqa: E731
+                fast = getattr(self.extension, f.name, None)
             else:
                 self._bind_procedure(f)
                 target = lambda args, f=f: self._solve(f, args)  # noqa: E731
-            self._methods[f.name] = _method(f, self.prefix, target)
+            self._methods[f.name] = _method(f, self.prefix, target, fast)
         self._results = {f.name: namedtuple(f.result, f.result_fields) for f in module.public if f.kind != "straight"}
 
     # -- ctypes signatures -----------------------------------------------------------------------

@@ -7,7 +7,7 @@ for an IR :class:`~skelarm_sym.ir.nodes.Module`. Adding a language is a new fold
 
 from __future__ import annotations
 
-from . import c, cuda, jax, numpy, torch
+from . import c, cpython, cuda, jax, numpy, torch
 
-BACKENDS = {backend.LANGUAGE: backend for backend in (c, numpy, torch, jax, cuda)}
+BACKENDS = {backend.LANGUAGE: backend for backend in (c, numpy, cpython, torch, jax, cuda)}
 """Language name -> backend, in the order files are written."""

@@ -11,10 +11,11 @@ SUPPORTS = ("straight", "procedure")
 
 
 def load(generated):
-    """The emitted C compiled (strict flags, cached) and loaded through ctypes: one method per public function."""
+    """The emitted C compiled (strict flags, cached) and loaded through ctypes: one method per public function
+    (the CPython extension's fast entries are the ``cpython`` backend's)."""
     from ...build import compile_arm
 
-    return compile_arm(generated)
+    return compile_arm(generated, extension=False)
 
 
 __all__ = ["FILE_SUFFIXES", "LABEL", "LANGUAGE", "SUPPORTS", "load", "render"]

@@ -10,10 +10,10 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
-from ...ir.nodes import Function, Let, Module, Role, Store, TrigBlock, Type
-from ...ir.walk import body_names, called, expr_names, needed_lets
+from ...ir.nodes import Const, Elem, Function, Let, Module, Role, Store, TrigBlock, Type
+from ...ir.walk import body_names, called, expr_names
 from ..text import c_comment
-from .printer import PRECISIONS, CPrecision, CPrinter
+from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
 
 LANGUAGE = "c"
 FILE_SUFFIXES = (".h", ".c")
@@ -35,6 +35,24 @@ SOA_BYTES = 32 * 1024
 """Largest stack a vectorised batch block may use; functions of larger arms use the per-configuration path."""
 
 
+VECTOR_OUTPUTS = 12
+"""Most output elements per element of a configuration's inputs in a function with a vectorised batch
+path: 6 for a Jacobian (6 rows), 1.4 for planar kinematics, 42 for a 7-joint arm's Hessian (N^2 outputs),
+whose vectorised body compiled in seconds and gained nothing."""
+
+
+def vectorisable(f: Function) -> bool:
+    """Whether the batch of ``f`` takes the vectorised block path: its body is plain arithmetic (sums,
+    products and negations: no division, square root, comparison, select or atan2, which GCC's vectoriser
+    masks or gives up on) and it has at most ``VECTOR_OUTPUTS`` outputs per input element. A vectorised
+    body is a second copy for the compiler, in a loop; the other functions keep the per-configuration
+    path (their trigonometry still batched) and compile once."""
+    ops = f.ops
+    inputs = sum(a.size for a in f.inputs if a.batched and not a.is_scalar)
+    outputs = sum(o.size for o in f.outputs)
+    return outputs <= VECTOR_OUTPUTS * max(1, inputs) and not (ops.div or ops.sqrt or ops.cmp or ops.select or ops.atan2)
+
+
 def pad(count: int, lanes: int) -> int:
     """``count`` rounded up to a multiple of ``lanes`` (at least ``lanes``)."""
     return max(lanes, -(-count // lanes) * lanes)
@@ -51,6 +69,41 @@ def stack_text(size: int) -> str:
     """A stack size for the header: bytes, or KB above 4 KB (an estimate from the array sizes and the
     number of temporaries, all of which an unoptimised build keeps on the stack)."""
     return f"{size} bytes" if size < 4096 else f"{-(-size // 1024)} KB"
+
+
+STRIDE = "stride"
+"""The last parameter of the body functions of a vectorised function: element k of a configuration's
+arrays is at ``[k*stride]`` (1 in a single call; the block size in the vectorised batch path, where a block
+of configurations is stored transposed). The statements index with the macro ``{PREFIX}_STRIDE``: the
+parameter where GCC's vector math is used, the constant 1 elsewhere (every call there passes 1)."""
+
+
+class StridedPrinter(CPrinter):
+    """A :class:`CPrinter` for the body functions shared by single calls and batches: element ``k`` of the
+    arrays in ``strided`` (a configuration's inputs and outputs) prints as ``name[k*STRIDE]``, ``stride``
+    being the text of the stride."""
+
+    def __init__(self, precision: CPrecision, storage: dict[str, str], macro, function_name, strided: set[str],
+                 stride: str) -> None:
+        super().__init__(precision, storage, macro, function_name)
+        self.strided = strided
+        self.stride = stride
+
+    def _node(self, e):
+        if type(e) is Elem and e.array in self.strided and type(e.index) is Const:
+            return element(self.storage.get(e.array, e.array), int(e.index.value), self.stride), _ATOM
+        return super()._node(e)
+
+    def _statement(self, s, depth: int, lines: list[str]) -> None:
+        if type(s) is Store and s.output in self.strided:
+            lines.append(f"{self.indent * depth}{element(s.output, s.index, self.stride)} = {self.expr(s.value)};")
+            return
+        super()._statement(s, depth, lines)
+
+
+def element(name: str, k: int, stride: str | None) -> str:
+    """Element ``k`` of an array, strided by ``stride`` (the text of the stride, or ``None``)."""
+    return f"{name}[{k}*{stride}]" if (k and stride) else f"{name}[{k}]"
 
 
 class Names:
@@ -81,8 +134,52 @@ def parameter(a, precision: CPrecision, required: bool = False) -> str:
     return f"const {t} {a.name}[{a.size}]"
 
 
-def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
-    """What the templates need to lay out one straight-line function (single call and batch)."""
+class Shared:
+    """What the functions of one module share while their context is built: the names each statement
+    reads (statements are shared objects across functions) and one printer per storage layout (so that
+    a statement common to several functions is printed once)."""
+
+    def __init__(self) -> None:
+        self._reads: dict[int, tuple[object, frozenset[str]]] = {}
+        self._printers: dict[tuple, CPrinter] = {}
+
+    def reads(self, s) -> frozenset[str]:
+        """The variable and array names statement ``s`` (a Let or Store) reads."""
+        hit = self._reads.get(id(s))
+        if hit is None or hit[0] is not s:
+            hit = self._reads[id(s)] = (s, frozenset(expr_names(s.value, set())))
+        return hit[1]
+
+    def needed(self, lets: list[Let], roots: set[str]) -> list[Let]:
+        """:func:`skelarm_sym.ir.walk.needed_lets`, with the names each Let reads looked up here."""
+        by_name = {s.var.name: s for s in lets}
+        keep: set[str] = set()
+        todo = [r for r in roots if r in by_name]
+        while todo:
+            name = todo.pop()
+            if name in keep:
+                continue
+            keep.add(name)
+            todo.extend(n for n in self.reads(by_name[name]) if n in by_name and n not in keep)
+        return [s for s in lets if s.var.name in keep]
+
+    def printer(self, precision: CPrecision, storage: dict[str, str], names: "Names", strided: set[str] | None,
+                stride: str | None) -> CPrinter:
+        key = (precision.ctype, tuple(sorted(storage.items())), None if strided is None else tuple(sorted(strided)), stride)
+        printer = self._printers.get(key)
+        if printer is None:
+            if strided is None:
+                printer = CPrinter(precision, storage, names.macro, names.function)
+            else:
+                printer = StridedPrinter(precision, storage, names.macro, names.function, strided, stride)
+            self._printers[key] = printer
+        return printer
+
+
+def straight_context(f: Function, precision: CPrecision, names: Names, common: Shared | None = None) -> dict:
+    """What the templates need to lay out one straight-line function (single call and batch); ``common``:
+    what the functions of the module share (see :class:`Shared`)."""
+    common = common or Shared()
     blocks = [i for i, s in enumerate(f.body) if type(s) is TrigBlock]
     ctype = precision.ctype
     inputs = f.inputs
@@ -91,7 +188,7 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
         printer = CPrinter(precision, macro=names.macro, function_name=names.function)
         return _common(f, precision, names) | {
             "general": printer.statements(f.body), "angle_count": 0, "padded": 0, "block": 1, "soa": None,
-            "pre": [], "post": [], "stores": [], "pre_inputs": [], "post_inputs": [a.name for a in inputs],
+            "pre": [], "post": [], "pre_inputs": [], "post_inputs": [a.name for a in inputs],
             "post_uses": {"ang": False, "cs": False, "sn": False},
             "stack_bytes": 0, "stack": "a few hundred bytes", "batch_stack": "a few hundred bytes",
         }
@@ -101,31 +198,33 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
     rest = list(f.body[split + 1:]) if blocks else list(f.body)
     post = [s for s in rest if type(s) is Let]
     stores = [s for s in rest if type(s) is Store]
-    storage: dict[str, str] = {}
-    for k, (a, c, s) in enumerate(zip(trig.angles, trig.cos, trig.sin)):
-        storage[a.name] = f"{ANGLES}[{k}]"
-        storage[c.name] = f"{COSINES}[{k}]"
-        storage[s.name] = f"{SINES}[{k}]"
-    angle_names = {a.name for a in trig.angles}
-    printer = CPrinter(precision, storage, names.macro, names.function)
-    roots: set[str] = set()
-    for s in post + stores:
-        expr_names(s.value, roots)
-    recomputed = needed_lets([s for s in pre if s.var.name not in angle_names], roots)
-    post_all = recomputed + post
-    post_read = set()
-    for s in post_all + stores:
-        expr_names(s.value, post_read)
-    pre_read = set()
-    for s in pre:
-        expr_names(s.value, pre_read)
     count = len(trig.angles)
     padded = padded_size(count, ctype)
     block = max(1, BLOCK_ANGLES // padded) if count else 1
     shared = {a.name for a in inputs if not a.batched}
     per_config = sum(a.size for a in inputs if a.name not in shared) + sum(o.size for o in outputs) + 3 * count
     itemsize = 8 if ctype == "double" else 4
-    soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None)
+    soa = next((b for b in SOA_BLOCKS if b * per_config * itemsize <= SOA_BYTES), None) if vectorisable(f) else None
+    stride = names.macro(STRIDE.upper()) if soa else None
+    storage: dict[str, str] = {}
+    for k, (a, c, s) in enumerate(zip(trig.angles, trig.cos, trig.sin)):
+        storage[a.name] = element(ANGLES, k, stride)
+        storage[c.name] = element(COSINES, k, stride)
+        storage[s.name] = element(SINES, k, stride)
+    angle_names = {a.name for a in trig.angles}
+    strided = ({a.name for a in inputs if a.batched and not a.is_scalar} | {o.name for o in outputs}) if soa else None
+    printer = common.printer(precision, storage, names, strided, stride)
+    roots: set[str] = set()
+    for s in post + stores:
+        roots |= common.reads(s)
+    recomputed = common.needed([s for s in pre if s.var.name not in angle_names], roots)
+    post_all = recomputed + post
+    post_read = set(roots)
+    for s in recomputed:
+        post_read |= common.reads(s)
+    pre_read: set[str] = set()
+    for s in pre:
+        pre_read |= common.reads(s)
     temporaries = len(pre) + len(post_all)
     single_stack = itemsize * (3 * padded + temporaries)
     batch_stack = itemsize * (soa * per_config + temporaries + per_config) if soa else itemsize * (3 * padded * block + temporaries)
@@ -139,8 +238,7 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
             "sn": bool(post_read & {s.name for s in trig.sin}),
         },
         "pre": [line.strip() for line in printer.statements(pre)],
-        "post": [line.strip() for line in printer.statements(post_all)],
-        "stores": [line.strip() for line in printer.statements(stores)],
+        "post": [line.strip() for line in printer.statements(interleave(post_all, stores, common))],
         "angle_count": count,
         "padded": padded,
         "block": block,
@@ -151,6 +249,22 @@ def straight_context(f: Function, precision: CPrecision, names: Names) -> dict:
     }
 
 
+def interleave(lets: list[Let], stores: list[Store], common: Shared) -> list:
+    """``lets`` in order, each store right after the last of them it reads (before them all when it reads
+    none): an output element leaves the registers as soon as it is known, instead of every one staying
+    live until the end of the function (which made GCC spill half the temporaries of long chains)."""
+    position = {s.var.name: i for i, s in enumerate(lets)}
+    after: dict[int, list[Store]] = {}
+    for store in stores:
+        last = max((position[n] for n in common.reads(store) if n in position), default=-1)
+        after.setdefault(last, []).append(store)
+    out: list = list(after.get(-1, []))
+    for i, let in enumerate(lets):
+        out.append(let)
+        out.extend(after.get(i, []))
+    return out
+
+
 def _common(f: Function, precision: CPrecision, names: Names) -> dict:
     ctype = precision.ctype
     return {
@@ -158,7 +272,8 @@ def _common(f: Function, precision: CPrecision, names: Names) -> dict:
         "cname": f"{names.prefix}_{f.name}",
         "summary": f.summary,
         "inputs": [
-            {"name": a.name, "size": a.size, "shared": not a.batched, "scalar": a.is_scalar, "param": parameter(a, precision)}
+            {"name": a.name, "size": a.size, "shared": not a.batched, "scalar": a.is_scalar, "param": parameter(a, precision),
+             "strided_param": f"const {ctype} *restrict {a.name}"}
             for a in f.inputs
         ],
         "outputs": [{"name": o.name, "size": o.size, "shape": o.shape} for o in f.outputs],
@@ -222,7 +337,8 @@ def context(module: Module) -> dict:
     """Everything both templates print."""
     precision = PRECISIONS[module.precision]
     names = Names(module.prefix)
-    straight = [straight_context(f, precision, names) for f in module.functions if f.kind == "straight"]
+    shared = Shared()
+    straight = [straight_context(f, precision, names, shared) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, precision, names) for f in module.functions if f.kind != "straight"]
     statuses: dict[str, dict] = {}
     for p in procedures:
@@ -249,6 +365,7 @@ def context(module: Module) -> dict:
             for t in module.tables
         ],
         "arrays": {"ang": ANGLES, "cs": COSINES, "sn": SINES},
+        "stride": STRIDE,
     }
 
 

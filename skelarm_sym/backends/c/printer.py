@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..text import c_comment
 
 from ...ir.nodes import (
@@ -42,7 +40,12 @@ class CPrecision:
             return ("-" if value < 0 else "") + "HUGE_VAL" + ("F" if self.suffix else "")
         if math.isnan(value):
             return "NAN"
-        text = repr(float(value)) if self.ctype == "double" else str(np.float32(value))
+        if self.ctype == "double":
+            text = repr(float(value))
+        else:
+            import numpy as np  # float code only: generating double code needs no NumPy
+
+            text = str(np.float32(value))
         if not any(ch in text for ch in ".en"):
             text += ".0"
         return text + self.suffix
@@ -96,11 +99,12 @@ class CPrinter:
         return self._print(e)[0]
 
     def _print(self, e) -> tuple[str, int]:
-        key = e
-        hit = self._memo.get(key)
-        if hit is None:
-            hit = self._memo[key] = self._node(e)
-        return hit
+        # memoised by identity (the lowering shares one object per distinct expression): hashing an IR
+        # node hashes its whole tree; the entry keeps ``e`` alive, so its id is not reused meanwhile
+        hit = self._memo.get(id(e))
+        if hit is None or hit[0] is not e:
+            hit = self._memo[id(e)] = (e, self._node(e))
+        return hit[1]
 
     def _wrap(self, e, above: int) -> str:
         """``e``, parenthesised unless it binds tighter than ``above``."""

@@ -24,8 +24,11 @@ def _function_names(module: Module) -> dict[str, str]:
     return {f.name: (f"_{f.name}_core" if f.kind == "straight" else f"_{f.name}") for f in module.functions}
 
 
-def straight_context(f: Function, calls: dict[str, str]) -> dict:
-    """A straight-line function as vectorised NumPy: its core (statements) and public signature."""
+def straight_context(f: Function, calls: dict[str, str], printers: dict | None = None) -> dict:
+    """A straight-line function as vectorised NumPy: its core (statements) and public signature.
+
+    ``printers``: one printer per storage layout, shared by the functions of a module (their statements
+    are shared objects, printed once)."""
     storage: dict[str, str] = {}
     blocks = [s for s in f.body if type(s) is TrigBlock]
     suffix = (lambda b: "") if len(blocks) == 1 else (lambda b: str(b))
@@ -34,7 +37,11 @@ def straight_context(f: Function, calls: dict[str, str]) -> dict:
             storage[a.name] = f"ang{suffix(b)}[..., {k}]"
             storage[c.name] = f"cs{suffix(b)}[..., {k}]"
             storage[s.name] = f"sn{suffix(b)}[..., {k}]"
-    printer = PythonPrinter(True, storage, constant=lambda name: name, function_name=calls.get)
+    printers = {} if printers is None else printers
+    key = tuple(sorted(storage.items()))
+    printer = printers.get(key)
+    if printer is None:
+        printer = printers[key] = PythonPrinter(True, storage, constant=lambda name: name, function_name=calls.get)
     first_output = f.outputs[0].name
     lines: list[str] = []
     b = 0
@@ -109,7 +116,8 @@ def _camel(name: str) -> str:
 
 def context(module: Module) -> dict:
     calls = _function_names(module)
-    straight = [straight_context(f, calls) for f in module.functions if f.kind == "straight"]
+    printers: dict = {}
+    straight = [straight_context(f, calls, printers) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, calls, {}) for f in module.functions if f.kind != "straight"]
     statuses: dict[str, dict] = {}
     for p in procedures:

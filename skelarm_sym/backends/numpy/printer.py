@@ -52,10 +52,11 @@ class PythonPrinter:
         return self._print(e)[0]
 
     def _print(self, e) -> tuple[str, int]:
-        hit = self._memo.get(e)
-        if hit is None:
-            hit = self._memo[e] = self._node(e)
-        return hit
+        # memoised by identity (see CPrinter._print)
+        hit = self._memo.get(id(e))
+        if hit is None or hit[0] is not e:
+            hit = self._memo[id(e)] = (e, self._node(e))
+        return hit[1]
 
     def _wrap(self, e, above: int) -> str:
         text, prec = self._print(e)

@@ -26,7 +26,6 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Iterable, Mapping, Sequence
 
-import numpy as np
 import sympy as sp
 
 from ...errors import InputError
@@ -161,6 +160,8 @@ class Transform:
 
     def numeric(self, values: Mapping[sp.Symbol, float] | None = None) -> np.ndarray:
         """The 4 x 4 matrix as floats, with parameter ``values`` substituted."""
+        import numpy as np  # here, not at import: generating code needs no NumPy
+
         matrix = self.matrix.xreplace(dict(values or {}))
         try:
             return np.array(matrix.evalf(), dtype=float)
@@ -395,6 +396,8 @@ class Chain:
 
         ``params``: values in the order of :attr:`parameters`, or a mapping by name.
         """
+        import numpy as np
+
         values = self.parameter_values(params)
 
         exact = {k: sp.Float(v) for k, v in values.items()}
@@ -424,6 +427,8 @@ class Chain:
                 raise InputError(f"no value for parameter(s) {', '.join(missing)}")
             values = [by_name[str(p)] for p in self.parameters]
         else:
+            import numpy as np
+
             values = list(np.asarray(params, dtype=float).reshape(-1))
             if len(values) != len(self.parameters):
                 raise InputError(f"expected {len(self.parameters)} parameter values, got {len(values)}")

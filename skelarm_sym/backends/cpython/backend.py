@@ -1,0 +1,82 @@
+"""CPython extension backend: ``{prefix}.ext.c``, a CPython extension module beside the emitted C.
+
+Calling an emitted function from Python through ctypes costs tens of microseconds of argument
+conversion for a function that runs in a fraction of one. The extension module (Python C API and the
+buffer protocol only; no NumPy C API) has one fast entry per straight-line function for the common case
+of one configuration: exactly the function's inputs, positional, each array a C-contiguous buffer of the
+module's real type and of the right length (a NumPy float64 array for double code), each scalar a
+Python float or int, every value inside its domain (finite, nonnegative, positive). It then allocates
+the outputs with ``numpy.empty`` (called through the C API), calls the single-configuration C function
+and returns them as the ctypes wrapper would. Anything else (keywords, a wrong number of arguments, other
+dtypes, lists, batches, a value outside its domain) returns ``NotImplemented`` with no exception set, and
+the Python wrapper (:class:`skelarm_sym.wrapper.CompiledArm`) takes its ordinary path: the same checks,
+the same messages, the same ``TypeError`` naming the signature.
+
+``{prefix}.ext.c`` includes ``{prefix}.c``: the C and its extension are one translation unit and one
+shared library, which ctypes (batches, solvers) and the import system (the extension) both load. The
+file is named with a dot (``arm3.ext.c``) so that it can never be taken for the C of another prefix
+(``robot_ext.c`` is the C of the prefix ``robot_ext``; prefixes have no dots).
+"""
+
+from __future__ import annotations
+
+from ...ir.nodes import Function, Module
+from ..text import c_comment
+
+LANGUAGE = "cpython"
+EXTENSION_SUFFIX = ".ext.c"  # skelarm_sym.build.EXTENSION_SUFFIX, which compiles it
+FILE_SUFFIXES = (".h", ".c", EXTENSION_SUFFIX)
+DOMAINS = {"": 0, "finite": 1, "nonnegative": 2, "positive": 3}
+"""The domain codes the extension's checks take (the argument's ``domain``; see ``wrapper._check_domain``)."""
+
+
+def module_name(prefix: str) -> str:
+    """The extension module's name (its init function is ``PyInit_{name}``)."""
+    return f"{prefix}_ext"
+
+
+def function_context(f: Function, ctype: str, shapes: dict[tuple[int, ...], int]) -> dict:
+    arrays = [a for a in f.inputs if not a.is_scalar]
+    inputs = []
+    for position, a in enumerate(f.inputs):
+        inputs.append({
+            "name": a.name, "position": position, "size": a.size, "scalar": a.is_scalar,
+            "domain": DOMAINS[a.domain], "buffer": None if a.is_scalar else arrays.index(a),
+        })
+    outputs = []
+    for o in f.outputs:
+        shapes.setdefault(tuple(o.shape), len(shapes))
+        outputs.append({"name": o.name, "shape": shapes[tuple(o.shape)]})
+    return {"name": f.name, "inputs": inputs, "arrays": len(arrays), "outputs": outputs}
+
+
+def context(module: Module) -> dict:
+    ctype = "double" if module.precision == "double" else "float"
+    shapes: dict[tuple[int, ...], int] = {}
+    functions = [function_context(f, ctype, shapes) for f in module.functions if f.kind == "straight"]
+    return {
+        "prefix": module.prefix,
+        "P": module.prefix.upper(),
+        "module": module_name(module.prefix),
+        "notes": [c_comment(line) for line in module.notes],
+        "T": ctype,
+        "format": "d" if ctype == "double" else "f",
+        "functions": functions,
+        "uses_arrays": any(a["buffer"] is not None for f in functions for a in f["inputs"]),
+        "uses_scalars": any(a["scalar"] for f in functions for a in f["inputs"]),
+        "shapes": [list(shape) for shape, _ in sorted(shapes.items(), key=lambda item: item[1])],
+    }
+
+
+def render_extension(module: Module, stamp: str) -> str:
+    """The text of ``{prefix}.ext.c``."""
+    from ..templating import render_template
+
+    return render_template("cpython/module.c.j2", stamp=stamp, **context(module))
+
+
+def render(module: Module, stamp: str) -> dict[str, str]:
+    """``{suffix: text}``: the C backend's header and source, and the extension."""
+    from ..c import render as render_c
+
+    return render_c(module, stamp) | {EXTENSION_SUFFIX: render_extension(module, stamp)}
