@@ -219,3 +219,33 @@ def test_the_pose_ik_header_states_success_against_lambda_and_the_measurement_ag
         measured.append(100.0 * sum(r.status == "converged" for r in results) / len(pairs))
     assert all(abs(m - s) <= 0.3 for m, s in zip(measured, stated)), (measured, stated)
     assert min(measured) >= 99.0 and measured[2] >= measured[0] - 0.5, measured
+
+
+# -- what the header says about floating-point environments ------------------------------------------------
+
+def test_the_header_states_the_trap_and_bit_equality_conditions():
+    """A C user reads in the header that glibc's vector sin/cos raise FE_INVALID for huge angles when traps
+    are enabled, and for which compiler flags single calls equal their batches bit for bit (not with FMA
+    contraction or -ffast-math)."""
+    text = " ".join(generate(3, langs="c", out=None).sources["arm3.h"].replace("*", " ").split())
+    assert "libmvec) raise FE_INVALID for |angle| above about 1e300 when floating-point exceptions are enabled as traps" in text
+    assert "Single calls equal their batch results bit for bit when both are built without FMA contraction" in text
+    assert "-O0 to -O3 for plain x86-64, or any target with -ffp-contract=off" in text
+    assert "-ffast-math reorders sums: the results may then differ in the last bits" in text
+
+
+# -- the README is a user's guide -----------------------------------------------------------------------------
+
+def test_the_readme_first_screen_is_the_newcomer_path():
+    """The first 60 lines of README.md: install, list a URDF's links to choose --tip, generate from a URDF
+    with --tip, build with cc, call X_kinematics and X_ik_solve; further down, how long the tests take and
+    the quick subset; no issue numbers anywhere in it."""
+    readme = (ROOT / "README.md").read_text()
+    first = "\n".join(readme.splitlines()[:60])
+    assert "pip install" in first
+    assert re.search(r"skelarm-sym show --robot \S+\.urdf --what links", first)
+    assert re.search(r"skelarm-sym generate --robot \S+\.urdf --tip \S+", first)
+    assert re.search(r"^cc .*-lm", first, re.M)
+    assert re.search(r"\w+_kinematics\(", first) and re.search(r"\w+_ik_solve\(", first)
+    assert re.search(r"about \d+ minutes", readme) and 'pytest -q -m "not slow"' in readme
+    assert not re.search(r"(?i)\bissues? ?#?\d|\(#\d+\)", readme)
