@@ -30,7 +30,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x70acff39UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xf6b09ac8UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

@@ -33,7 +33,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x9f4a496bUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x92ddf9c9UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -1,7 +1,8 @@
 """Command line: ``skelarm-sym generate | show | check``. Parse, call, print; one-line errors.
 
 Bad input prints ``skelarm-sym: error: <message>`` on standard error and exits with status 2; a failed
-check exits with status 1. Nothing in the library imports this module.
+check exits with status 1, and so does a failed compile, whose message goes on with the compiler's
+command and its first lines of output (indented). Nothing in the library imports this module.
 """
 
 from __future__ import annotations
@@ -147,7 +148,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skelarm-sym: error: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:  # compiler failures: the first line says what failed
-        print(f"skelarm-sym: error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        lines = str(exc).splitlines() or [type(exc).__name__]
+        print(f"skelarm-sym: error: {lines[0]}", file=sys.stderr)
+        build = sys.modules.get(f"{__package__}.build")  # loaded if something was compiled
+        if build is not None and isinstance(exc, build.CompileError):  # the command, the compiler's first lines
+            for line in lines[1:]:
+                print(f"  {line}", file=sys.stderr)
         return 1
     except OSError as exc:  # the file system refused something not checked before
         where = f": {exc.filename}" if exc.filename else ""

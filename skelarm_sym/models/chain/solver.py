@@ -530,6 +530,15 @@ def _solver_arguments(rows: int, n: int, params: int, default_tol: float) -> tup
     )
 
 
+SUCCESS_BY_LAMBDA = (
+    "Measured success (1000 random reachable poses and starts, tol 1e-10, 100 steps) for lambda = 0 / 1e-3 / 1e-2 / 0.1:",
+    "UR5 99.7 / 99.7 / 99.8 / 99.4 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.8 / 99.8 / 99.8 / 99.6 %.",
+)
+"""The pose IK's success against lambda, stated in every header (examples/robots/{ur5,panda,puma560}.toml,
+targets and starts drawn within the limits as benchmarks/ik_success.py draws them; tests/test_user_reports.py
+measures UR5's again)."""
+
+
 def _solver_doc(rows: int, default_tol: float) -> tuple[str, ...]:
     return (
         ("Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step" if rows == 6 else
@@ -537,6 +546,7 @@ def _solver_doc(rows: int, default_tol: float) -> tuple[str, ...]:
         f"dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(c |e|, lambda^2 min(1, |e|/{FLOOR_ERROR:g})), c starting at {C_START:g},",
         f"times {C_UP:g} after a rejected step and {C_DOWN:g} after an accepted one: lambda damps while the error is large",
         "and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.",
+        *(SUCCESS_BY_LAMBDA if rows == 6 else ()),
         "Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
         "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
         f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
