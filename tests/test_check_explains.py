@@ -151,7 +151,9 @@ def test_chain_pose_ik_row_when_the_library_has_it():
     impls = load_implementations(generated)
     rows = check_ik(generated, impls, cases=6, seed=1)
     assert [label for label, _ in impls] == ["C", "Python"]  # both print the same IR solver
-    assert [r.implementation for r in rows] == ["C ik_solve", "Python ik_solve"]
+    assert [r.implementation for r in rows] == ["C ik_solve", "Python ik_solve", "C ik_all/ik_nearest",
+                                                "Python ik_all/ik_nearest"]  # UR5 has a closed-form family too
+    assert all(row.ok for row in rows[2:]), [row.row() for row in rows[2:]]
     for row, label in zip(rows, ("C", "Python")):
         assert row.ok, row.row()
         assert row.targets == 6 and row.worst_error <= row.allowed and row.worst_rotation <= row.rotation_allowed < 1e-9
@@ -184,7 +186,7 @@ def test_a_hand_edited_file_fails_the_check(tmp_path, capsys):
     out = _generate(tmp_path, "--links", "3", "--prefix", "arm3")
     c = out / "arm3.c"
     text = c.read_text()
-    body_start = text.index("void arm3_position(")
+    body_start = text.index("void arm3_position_finish(")  # the body single calls and batches share
     body = text[body_start:]
     line = next(x for x in body.splitlines() if re.search(r"p\[0\] = ", x))
     c.write_text(text[:body_start] + body.replace(line, line.replace("p[0] = ", "p[0] = -", 1), 1))

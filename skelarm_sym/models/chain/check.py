@@ -233,7 +233,7 @@ class ClosedCheck:
         count = f"{np.mean(self.solutions):.2f} ({min(self.solutions)}-{max(self.solutions)})" if self.solutions else "-"
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
         problems = "; " + "; ".join(self.failures) if self.failures else ""
-        return (f"{self.implementation} ik_all/ik_nearest: {self.targets} targets, solutions per target {count}; worst "
+        return (f"{self.implementation}: {self.targets} targets, solutions per target {count}; worst "
                 f"pose error {self.worst:.2e} (allowed {self.allowed:.2e}); source configuration among them "
                 f"{self.found}/{self.targets}, ik_nearest from it returns it {self.nearest}/{self.targets}; complete "
                 f"against the 200-start numeric IK {self.complete}/{self.compared}; statuses: {statuses}{problems}; "
@@ -270,7 +270,7 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
         judged.append(np.array([s for s in sols if _fits(s, lower, upper, rev)]).reshape(-1, n))
     rows = []
     for label, impl in solvers:
-        check = ClosedCheck(f"{label}", m, allowed)
+        check = ClosedCheck(f"{label} ik_all/ik_nearest", m, allowed)
         for k in range(m):
             extra = (float(q_gen[k, lock]),) if lock is not None else ()
             if getattr(impl, "ik_all", None) is not None:
