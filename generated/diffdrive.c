@@ -6,15 +6,16 @@
  * wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omega): forward
  * speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
  * Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
- * Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,
- * target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs.
+ * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
+ * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
+ * the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xd596c20eUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x4a6e98f6UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

@@ -6,8 +6,9 @@
  * wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omega): forward
  * speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
  * Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
- * Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,
- * target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs.
+ * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
+ * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
+ * the outputs.
  * Precision: double.
  */
 #ifndef DIFFDRIVE_H
@@ -30,7 +31,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0xd596c20eUL
+#define DIFFDRIVE_STAMP 0x4a6e98f6UL
 
 #ifdef __cplusplus
 extern "C" {

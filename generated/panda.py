@@ -22,8 +22,9 @@ stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt 
 RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm
 least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
 where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
-Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,
-target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs.
+Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
+twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
+the outputs.
 Precision: double.
 """
 
@@ -34,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xf6b09ac8
+STAMP = 0xc639020e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""

@@ -18,7 +18,7 @@ Step = tuple[sp.Symbol, sp.Expr]
 
 ARGUMENT_ROLES: dict[str, int] = {
     # 0: the joint (or body) state
-    "q": 0, "q0": 0, "dq": 0, "ddq": 0, "pose": 0,
+    "q": 0, "q0": 0, "q_ref": 0, "dq": 0, "ddq": 0, "pose": 0,
     # 1: the call's other data
     "v": 1, "twist": 1, "target": 1, "wheels": 1, "rates": 1,
     # 2: the mechanism's parameters
@@ -30,8 +30,8 @@ ARGUMENT_ROLES: dict[str, int] = {
 then its outputs (see :data:`ARGUMENT_RULE`)."""
 
 ARGUMENT_RULE = (
-    "Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,"
-    " target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs."
+    "Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v, twist,"
+    " target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."
 )
 
 

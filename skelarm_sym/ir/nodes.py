@@ -50,12 +50,6 @@ class Role(int, Enum):
     OUTPUT = 4
 
 
-ROLE_RULE = (
-    "Arguments, in every function: the joint state (q or q0, dq, ddq), the call's other data (v, twist,"
-    " target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter), then the outputs."
-)
-
-
 # -- expressions -------------------------------------------------------------------------------------
 
 def _wrap(x: object) -> "Expr":
