@@ -5,7 +5,7 @@ from .errors import InputError
 from .models import DiffDrive, PlanarArm
 from .models import load_robot
 
-__version__ = "0.3.0"
+__version__ = "0.4.0"
 
 
 def derive(model, lengths=None) -> Derivation:
