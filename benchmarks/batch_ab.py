@@ -84,7 +84,7 @@ int main(int argc, char **argv)
         }
         sink += %(first)s[0];
     }
-    for (r = SAMPLES / 10 + 1; r < SAMPLES; ++r) { t[4][r] = 1e300; t[5][r] = 1e300; }
+    for (r = (SAMPLES + 9) / 10; r < SAMPLES; ++r) { t[4][r] = 1e300; t[5][r] = 1e300; }  /* past the large samples (r = 0, 10, ...) */
     printf("%%.2f %%.2f %%.2f %%.2f %%.2f %%.2f %%g\n", quantile(t[0], quant), quantile(t[1], quant), quantile(t[2], quant),
            quantile(t[3], quant), quantile(t[4], quant / 10), quantile(t[5], quant / 10), sink * 0.0);
     return 0;

@@ -1,4 +1,4 @@
-"""Closed-form IK, phase 1 (issue 18): accuracy and completeness per arm, evaluated through lambdify.
+"""Closed-form IK, the NumPy specification: accuracy and completeness per arm, evaluated through lambdify.
 
     PYTHONPATH=.:tests python benchmarks/closed_ik_phase1.py [--targets 1000] [--numeric 20]
 

@@ -1,4 +1,4 @@
-"""GPU benchmark of the CUDA backend (issue 20): the emitted kernels of a 7-joint arm (Panda,
+"""GPU benchmark of the CUDA backend: the emitted kernels of a 7-joint arm (Panda,
 examples/robots/panda.toml) checked against the NumPy reference and timed on the GPU.
 
     python benchmarks/gpu.py                   # everything, about 3 minutes on an H200

@@ -1,4 +1,4 @@
-"""Closed-form IK with all solutions (issue 18): the emitted C per robot, judged and timed. A table, not a test.
+"""Closed-form IK with all solutions: the emitted C per robot, judged and timed. A table, not a test.
 
     PYTHONPATH=.:tests python benchmarks/ik_all.py [--targets 1000] [--numeric 20] [--robots puma560,ur5]
 
