@@ -48,11 +48,11 @@ def iteration_count(value: object, name: str = "max_iter") -> int:
 
 
 def _check_domain(array: np.ndarray, name: str, domain: str) -> None:
-    if domain and not np.all(np.isfinite(array)):
+    if domain and not np.isfinite(array).all():
         raise InputError(f"{name} must be finite")
-    if domain == "nonnegative" and np.any(array < 0):
+    if domain == "nonnegative" and (array < 0).any():
         raise InputError(f"{name} must be >= 0")
-    if domain == "positive" and np.any(array <= 0):
+    if domain == "positive" and (array <= 0).any():
         raise InputError(f"{name} must be > 0")
 
 
@@ -103,12 +103,16 @@ def _method(f: Function, prefix: str, target, fast=None) -> object:
     one configuration or returns ``NotImplemented`` (anything it does not take: ``target`` then checks,
     explains and computes as it would have without it)."""
     signature = _signature(f)
+    count = len(signature.parameters)
 
     def method(*args, **kwargs):
-        if fast is not None and not kwargs:
-            result = fast(*args)
-            if result is not NotImplemented:
-                return result
+        if not kwargs:
+            if fast is not None:
+                result = fast(*args)
+                if result is not NotImplemented:
+                    return result
+            if len(args) == count:  # every argument, positional: binding would give them back in order
+                return target(args)
         try:
             bound = signature.bind(*args, **kwargs)
         except TypeError as exc:
@@ -152,6 +156,8 @@ class CompiledArm:
         self._pointer = ctypes.POINTER(self._ctype)
         self._functions: dict[str, Function] = {}
         self._methods: dict[str, object] = {}
+        self._c_functions: dict[str, object] = {}  # ctypes function objects, looked up once
+        self._statuses: dict[str, tuple[dict[int, str], tuple[int, str] | None]] = {}  # procedures: labels, INVALID
         for f in module.public:
             self._functions[f.name] = f
             fast = None
@@ -177,11 +183,16 @@ class CompiledArm:
         single.argtypes, single.restype = args, None
         batch = getattr(self._lib, f"{self.prefix}_{f.name}_batch")
         batch.argtypes, batch.restype = [ctypes.c_size_t] + args, None
+        self._c_functions[f.name], self._c_functions[f.name + "_batch"] = single, batch
 
     def _bind_procedure(self, f: Function) -> None:
         function = getattr(self._lib, f"{self.prefix}_{f.name}")
         function.argtypes = [self._ctype_of(a) for a in f.arguments]
         function.restype = ctypes.c_int if f.returns is Type.INT else None
+        self._c_functions[f.name] = function
+        labels = {value: name.lower().removeprefix("ik_") for name, value, _ in f.statuses}
+        invalid = next(((value, meaning) for name, value, meaning in f.statuses if name.endswith("INVALID")), None)
+        self._statuses[f.name] = (labels, invalid)
 
     @property
     def functions(self) -> tuple[str, ...]:
@@ -227,9 +238,9 @@ class CompiledArm:
             self._ctype(float(x)) if a.is_scalar else x.ctypes.data_as(self._pointer) for x, a in zip(arrays, f.inputs)
         ] + [o.ctypes.data_as(self._pointer) for o in outputs]
         if batch:
-            getattr(self._lib, f"{self.prefix}_{f.name}_batch")(m, *pointers)
+            self._c_functions[f.name + "_batch"](m, *pointers)
         else:
-            getattr(self._lib, f"{self.prefix}_{f.name}")(*pointers)
+            self._c_functions[f.name](*pointers)
         return outputs[0] if len(outputs) == 1 else tuple(outputs)
 
     def _solve(self, f: Function, args: tuple):
@@ -259,9 +270,8 @@ class CompiledArm:
         for o in f.outputs:
             pointer = ctypes.POINTER(ctypes.c_int) if o.type is Type.INT else self._pointer
             c_args.append(outputs[o.name].ctypes.data_as(pointer))
-        status = getattr(self._lib, f"{self.prefix}_{f.name}")(*c_args)
-        labels = {value: name.lower().removeprefix("ik_") for name, value, _ in f.statuses}
-        invalid = next(((value, meaning) for name, value, meaning in f.statuses if name.endswith("INVALID")), None)
+        status = self._c_functions[f.name](*c_args)
+        labels, invalid = self._statuses[f.name]
         if invalid is not None and status == invalid[0]:
             raise InputError(f"{f.name}: {invalid[1]}")
         fields = []

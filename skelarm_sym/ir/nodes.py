@@ -27,6 +27,7 @@ block), :class:`Store` (an output element), :class:`If`, :class:`For`, :class:`W
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from enum import Enum
 from typing import Union
 
@@ -474,11 +475,11 @@ class Function:
         rest = [x for o in outs[1:] for x in (o.fields or (o.name,))]
         return (outs[0].name, "status", *rest)
 
-    @property
+    @cached_property
     def inputs(self) -> tuple[Argument, ...]:
         return tuple(a for a in self.arguments if not a.is_output)
 
-    @property
+    @cached_property
     def outputs(self) -> tuple[Argument, ...]:
         return tuple(a for a in self.arguments if a.is_output)
 
