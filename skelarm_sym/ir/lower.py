@@ -231,110 +231,14 @@ def optimise(derivation: Derivation, outputs: Iterable[str] | None = None) -> Pr
     matrices = [derivation.compact[name] for name in names]
     out_exprs = [sp.sympify(e) for m in matrices for e in m]
     steps, out_exprs = _name_trig(_needed_steps(derivation.steps, out_exprs), out_exprs)
-
-    # trig slots: one per distinct argument; the first step naming its cosine (sine) stands for it, and
-    # later steps naming the same value are renamed to that one
-    angle_of: dict[sp.Expr, int] = {}
-    angle_args: list[sp.Expr] = []
-    cos_syms: list[sp.Symbol | None] = []
-    sin_syms: list[sp.Symbol | None] = []
-    rename: dict[sp.Symbol, sp.Symbol] = {}
-    plain: list[Assignment] = []
-    for symbol, rhs in steps:
-        if isinstance(rhs, (sp.sin, sp.cos)):
-            arg = rhs.args[0]
-            k = angle_of.get(arg)
-            if k is None:
-                k = angle_of[arg] = len(angle_args)
-                angle_args.append(arg)
-                cos_syms.append(None)
-                sin_syms.append(None)
-            slots = cos_syms if isinstance(rhs, sp.cos) else sin_syms
-            if slots[k] is None:
-                slots[k] = symbol
-            else:
-                rename[symbol] = slots[k]
-        else:
-            plain.append((symbol, rhs))
-    count = len(angle_args)
-    cos_t = tuple(c if c is not None else sp.Symbol(f"_cos_{k}", real=True) for k, c in enumerate(cos_syms))
-    sin_t = tuple(s if s is not None else sp.Symbol(f"_sin_{k}", real=True) for k, s in enumerate(sin_syms))
-    defined = {s for s, _ in plain}
-    angle_syms = tuple(arg if arg in defined else sp.Symbol(f"_angle_{k}", real=True) for k, arg in enumerate(angle_args))
-    if rename:
-        plain = [(s, rhs.xreplace(rename)) for s, rhs in plain]
-        out_exprs = [e.xreplace(rename) for e in out_exprs]
-    plain += [(angle_syms[k], arg.xreplace(rename) if rename else arg)
-              for k, arg in enumerate(angle_args) if angle_syms[k] is not arg]
-    plain = _dependency_order(plain)
+    plain, out_exprs, angle_syms, cos_t, sin_t = _trig_slots(steps, out_exprs)
 
     # the CSE: which subtrees repeat, then (walking as tree_cse's rebuild does) their numbering and every
     # expression's direct dependencies
-    exprs = [rhs for _, rhs in plain] + out_exprs
-    repeated = _repeated(exprs)
-    temp_index: dict[sp.Basic, int] = {}
-    temp_nodes: list[sp.Basic] = []
-    temp_refs: list[tuple[set, set]] = []
-
-    def walk(root: sp.Basic) -> tuple[set, set]:
-        temps: set[int] = set()
-        syms: set[sp.Symbol] = set()
-        stack = [root]
-        while stack:
-            e = stack.pop()
-            if not isinstance(e, sp.Basic):
-                continue
-            if e.is_Symbol:
-                syms.add(e)
-                continue
-            if not e.args:
-                continue
-            if e in repeated and not _is_container(e):
-                k = temp_index.get(e)
-                if k is None:
-                    refs = walk_args(e)
-                    k = temp_index[e] = len(temp_nodes)
-                    temp_nodes.append(e)
-                    temp_refs.append(refs)
-                temps.add(k)
-                continue
-            stack.extend(reversed(e.args))
-        return temps, syms
-
-    def walk_args(e: sp.Basic) -> tuple[set, set]:
-        temps: set[int] = set()
-        syms: set[sp.Symbol] = set()
-        for a in e.args:
-            t, s = walk(a)
-            temps |= t
-            syms |= s
-        return temps, syms
-
-    step_refs = [walk(rhs) for _, rhs in plain]
-    out_refs = [walk(e) for e in out_exprs]
-
-    # program order (as sympy.cse's): each step after the temporaries it needs that are not yet placed
-    order: list[tuple[bool, int]] = []  # (is a temporary, index)
-    placed: set[int] = set()
-
-    def place_temps(temps: set[int]) -> None:
-        needed: set[int] = set()
-        todo = [k for k in temps if k not in placed]
-        while todo:
-            k = todo.pop()
-            if k in needed or k in placed:
-                continue
-            needed.add(k)
-            todo.extend(temp_refs[k][0])
-        for k in sorted(needed):
-            order.append((True, k))
-            placed.add(k)
-
-    for i, (temps, _) in enumerate(step_refs):
-        place_temps(temps)
-        order.append((False, i))
-    for temps, _ in out_refs:
-        place_temps(temps)
+    cse = _CseWalk(_repeated([rhs for _, rhs in plain] + out_exprs))
+    step_refs = [cse.walk(rhs) for _, rhs in plain]
+    out_refs = [cse.walk(e) for e in out_exprs]
+    order = _program_order(step_refs, out_refs, cse.temp_refs)
 
     position_of_temp = {k: p for p, (is_temp, k) in enumerate(order) if is_temp}
     position_of_symbol = {plain[i][0]: p for p, (is_temp, i) in enumerate(order) if not is_temp}
@@ -357,13 +261,13 @@ def optimise(derivation: Derivation, outputs: Iterable[str] | None = None) -> Pr
     entries: list[Entry] = []
     for is_temp, i in order:
         if is_temp:
-            expr = temp_nodes[i]
-            deps, slots = resolve(temp_refs[i])
+            expr = cse.temp_nodes[i]
+            deps, slots = resolve(cse.temp_refs[i])
             entries.append(Entry(expr, True, None, deps, slots, _is_boolean(expr)))
         else:
             symbol, rhs = plain[i]
             deps, slots = resolve(step_refs[i])
-            boolean = _is_boolean(rhs) and not (rhs in repeated and not _is_container(rhs))
+            boolean = _is_boolean(rhs) and not (rhs in cse.repeated and not _is_container(rhs))
             entries.append(Entry(rhs, False, symbol, deps, slots, boolean))
     result: dict[str, tuple] = {}
     offset = 0
@@ -372,8 +276,121 @@ def optimise(derivation: Derivation, outputs: Iterable[str] | None = None) -> Pr
         result[name] = tuple((out_exprs[j], *resolve(out_refs[j])) for j in range(offset, offset + size))
         offset += size
     angles = tuple(position_of_symbol[s] for s in angle_syms)
-    temps = {node: position_of_temp[k] for node, k in temp_index.items()}
+    temps = {node: position_of_temp[k] for node, k in cse.temp_index.items()}
     return Program(entries, result, angles, cos_t, sin_t, temps)
+
+
+def _trig_slots(steps: list[Assignment], out_exprs: list[sp.Expr]):
+    """The trig slots: one per distinct argument; the first step naming its cosine (sine) stands for it,
+    and later steps naming the same value are renamed to that one.
+
+    Returns ``(plain, out_exprs, angle_syms, cos_t, sin_t)``: the other steps (plus one per angle that no
+    step names) in dependency order, the outputs renamed, and per slot its angle, cosine and sine symbols."""
+    angle_of: dict[sp.Expr, int] = {}
+    angle_args: list[sp.Expr] = []
+    cos_syms: list[sp.Symbol | None] = []
+    sin_syms: list[sp.Symbol | None] = []
+    rename: dict[sp.Symbol, sp.Symbol] = {}
+    plain: list[Assignment] = []
+    for symbol, rhs in steps:
+        if isinstance(rhs, (sp.sin, sp.cos)):
+            arg = rhs.args[0]
+            k = angle_of.get(arg)
+            if k is None:
+                k = angle_of[arg] = len(angle_args)
+                angle_args.append(arg)
+                cos_syms.append(None)
+                sin_syms.append(None)
+            slots = cos_syms if isinstance(rhs, sp.cos) else sin_syms
+            if slots[k] is None:
+                slots[k] = symbol
+            else:
+                rename[symbol] = slots[k]
+        else:
+            plain.append((symbol, rhs))
+    cos_t = tuple(c if c is not None else sp.Symbol(f"_cos_{k}", real=True) for k, c in enumerate(cos_syms))
+    sin_t = tuple(s if s is not None else sp.Symbol(f"_sin_{k}", real=True) for k, s in enumerate(sin_syms))
+    defined = {s for s, _ in plain}
+    angle_syms = tuple(arg if arg in defined else sp.Symbol(f"_angle_{k}", real=True) for k, arg in enumerate(angle_args))
+    if rename:
+        plain = [(s, rhs.xreplace(rename)) for s, rhs in plain]
+        out_exprs = [e.xreplace(rename) for e in out_exprs]
+    plain += [(angle_syms[k], arg.xreplace(rename) if rename else arg)
+              for k, arg in enumerate(angle_args) if angle_syms[k] is not arg]
+    return _dependency_order(plain), out_exprs, angle_syms, cos_t, sin_t
+
+
+class _CseWalk:
+    """Numbers the repeated subtrees (the temporaries) in the order tree_cse's rebuild meets them and
+    records, per walked expression and per temporary, the temporaries and symbols it reads directly."""
+
+    def __init__(self, repeated) -> None:
+        self.repeated = repeated
+        self.temp_index: dict[sp.Basic, int] = {}
+        self.temp_nodes: list[sp.Basic] = []
+        self.temp_refs: list[tuple[set, set]] = []
+
+    def walk(self, root: sp.Basic) -> tuple[set, set]:
+        """``(temporaries, symbols)`` that ``root`` reads directly."""
+        temps: set[int] = set()
+        syms: set[sp.Symbol] = set()
+        stack = [root]
+        while stack:
+            e = stack.pop()
+            if not isinstance(e, sp.Basic):
+                continue
+            if e.is_Symbol:
+                syms.add(e)
+                continue
+            if not e.args:
+                continue
+            if e in self.repeated and not _is_container(e):
+                k = self.temp_index.get(e)
+                if k is None:
+                    refs = self._walk_args(e)
+                    k = self.temp_index[e] = len(self.temp_nodes)
+                    self.temp_nodes.append(e)
+                    self.temp_refs.append(refs)
+                temps.add(k)
+                continue
+            stack.extend(reversed(e.args))
+        return temps, syms
+
+    def _walk_args(self, e: sp.Basic) -> tuple[set, set]:
+        temps: set[int] = set()
+        syms: set[sp.Symbol] = set()
+        for a in e.args:
+            t, s = self.walk(a)
+            temps |= t
+            syms |= s
+        return temps, syms
+
+
+def _program_order(step_refs, out_refs, temp_refs) -> list[tuple[bool, int]]:
+    """Program order (as sympy.cse's): ``(is a temporary, index)``, each step after the temporaries it
+    needs that are not yet placed, then those the outputs need."""
+    order: list[tuple[bool, int]] = []
+    placed: set[int] = set()
+
+    def place_temps(temps: set[int]) -> None:
+        needed: set[int] = set()
+        todo = [k for k in temps if k not in placed]
+        while todo:
+            k = todo.pop()
+            if k in needed or k in placed:
+                continue
+            needed.add(k)
+            todo.extend(temp_refs[k][0])
+        for k in sorted(needed):
+            order.append((True, k))
+            placed.add(k)
+
+    for i, (temps, _) in enumerate(step_refs):
+        place_temps(temps)
+        order.append((False, i))
+    for temps, _ in out_refs:
+        place_temps(temps)
+    return order
 
 
 def _is_boolean(e: sp.Basic) -> bool:
