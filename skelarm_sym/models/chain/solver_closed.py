@@ -121,7 +121,6 @@ def rows_helper(arm: _Arm) -> Function:
     S, N = arm.s, arm.n
     b = Body()
     data_args, data = _inputs(arm)
-    target = data[0]
     q, count, flags = Array("q", S * N), Array("count", 1, Type.INT), Array("flags", S, Type.INT)
     raw, raw_flags, cand = b.array("raw", S * N), b.array("raw_flags", S), b.array("cand", N)
     one, zero = _int(1), _int(0)
@@ -134,25 +133,7 @@ def rows_helper(arm: _Arm) -> Function:
         b.set(flags[k], _int(-1))
     b.set(count[0], zero)
 
-    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation")
-    with b.for_("k", 0, 12) as k:
-        with b.if_(~Call1("isfinite", target[k])):
-            b.return_(_status("IK_INVALID"))
-    if arm.locked:
-        with b.if_(~Call1("isfinite", data[1])):
-            b.return_(_status("IK_INVALID"))
-    R = [[target[4 * i + j] for j in range(3)] for i in range(3)]
-    gram = {}
-    for i in range(3):
-        for j in range(i, 3):
-            gram[i, j] = b.let(f"m{i}{j}", R[0][i] * R[0][j] + R[1][i] * R[1][j] + R[2][i] * R[2][j])
-    det = b.let("det", R[0][0] * (R[1][1] * R[2][2] - R[1][2] * R[2][1])
-                - R[0][1] * (R[1][0] * R[2][2] - R[1][2] * R[2][0])
-                + R[0][2] * (R[1][0] * R[2][1] - R[1][1] * R[2][0]))
-    tol = NamedConst("IK_ORTHO_TOL")
-    off = [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
-    with b.if_(off[0] | off[1] | off[2] | off[3] | off[4] | off[5] | ~(det > 0.0)):
-        b.return_(_status("IK_INVALID"))
+    _refuse_invalid(b, arm, data)
 
     b.comment("the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable")
     b.call("ik_candidates", *data, raw, raw_flags)
@@ -173,26 +154,7 @@ def rows_helper(arm: _Arm) -> Function:
             b.comment("3. revolute joints to the copy nearest their range's centre; 4. limits")
             b.set(inside, one)
             for j in range(N):
-                x = raw[_at(N, i, j)]
-                if arm.revolute[j]:
-                    _shifted(b, x, arm.centre[j], cand[j])
-                else:
-                    b.set(cand[j], x)
-                lo, hi = arm.lower[j], arm.upper[j]
-                tests = []
-                if lo is not None:
-                    tests.append(cand[j] < lo - NamedConst("IK_LIMIT_TOL"))
-                if hi is not None:
-                    tests.append(cand[j] > hi + NamedConst("IK_LIMIT_TOL"))
-                if tests:
-                    b.set(inside, select(tests[0] if len(tests) == 1 else tests[0] | tests[1], zero, inside))
-                clipped = cand[j]
-                if hi is not None:
-                    clipped = select(cand[j] > hi, hi, clipped)
-                if lo is not None:
-                    clipped = select(cand[j] < lo, lo, clipped)
-                if tests:
-                    b.set(cand[j], clipped)
+                _joint_to_limits(b, arm, j, raw[_at(N, i, j)], cand[j], inside)
             with b.if_(inside > 0):
                 b.comment("5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped")
                 b.set(dup, _int(-1))
@@ -218,6 +180,57 @@ def rows_helper(arm: _Arm) -> Function:
                  Argument("flags", Role.OUTPUT, (S,), Type.INT))
     return Function("ik_all_rows", "every closed-form solution within the limits, post-processed", arguments,
                     b.statements, kind="helper", returns=Type.INT, statuses=STATUSES)
+
+
+def _refuse_invalid(b: Body, arm: _Arm, data) -> None:
+    """Step 1: return IK_INVALID when a target entry (rows 1-3) or the lock is not finite, or the target's
+    R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0)."""
+    target = data[0]
+    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation")
+    with b.for_("k", 0, 12) as k:
+        with b.if_(~Call1("isfinite", target[k])):
+            b.return_(_status("IK_INVALID"))
+    if arm.locked:
+        with b.if_(~Call1("isfinite", data[1])):
+            b.return_(_status("IK_INVALID"))
+    R = [[target[4 * i + j] for j in range(3)] for i in range(3)]
+    gram = {}
+    for i in range(3):
+        for j in range(i, 3):
+            gram[i, j] = b.let(f"m{i}{j}", R[0][i] * R[0][j] + R[1][i] * R[1][j] + R[2][i] * R[2][j])
+    det = b.let("det", R[0][0] * (R[1][1] * R[2][2] - R[1][2] * R[2][1])
+                - R[0][1] * (R[1][0] * R[2][2] - R[1][2] * R[2][0])
+                + R[0][2] * (R[1][0] * R[2][1] - R[1][1] * R[2][0]))
+    tol = NamedConst("IK_ORTHO_TOL")
+    off = [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
+    with b.if_(off[0] | off[1] | off[2] | off[3] | off[4] | off[5] | ~(det > 0.0)):
+        b.return_(_status("IK_INVALID"))
+
+
+def _joint_to_limits(b: Body, arm: _Arm, j: int, x, cand_j, inside) -> None:
+    """Steps 3-4 for joint ``j`` of a raw row: ``cand_j`` = ``x`` (a revolute joint moved to the copy nearest
+    its range's centre), ``inside`` = 0 when it is outside the limits by more than IK_LIMIT_TOL, and a value
+    within that tolerance clipped onto the limit."""
+    zero = _int(0)
+    if arm.revolute[j]:
+        _shifted(b, x, arm.centre[j], cand_j)
+    else:
+        b.set(cand_j, x)
+    lo, hi = arm.lower[j], arm.upper[j]
+    tests = []
+    if lo is not None:
+        tests.append(cand_j < lo - NamedConst("IK_LIMIT_TOL"))
+    if hi is not None:
+        tests.append(cand_j > hi + NamedConst("IK_LIMIT_TOL"))
+    if tests:
+        b.set(inside, select(tests[0] if len(tests) == 1 else tests[0] | tests[1], zero, inside))
+    clipped = cand_j
+    if hi is not None:
+        clipped = select(cand_j > hi, hi, clipped)
+    if lo is not None:
+        clipped = select(cand_j < lo, lo, clipped)
+    if tests:
+        b.set(cand_j, clipped)
 
 
 def _doc_limits(arm: _Arm) -> str:
