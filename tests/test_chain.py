@@ -116,7 +116,8 @@ def test_python_module_matches_the_reference(chain):
 
 
 @pytest.mark.parametrize("precision", ["double", "float"])
-@pytest.mark.parametrize("chain", [UR5, STANFORD, PARAMS, MIMIC], ids=lambda c: c.name)
+@pytest.mark.parametrize("chain", [UR5, pytest.param(STANFORD, marks=pytest.mark.slow), PARAMS,
+                                   pytest.param(MIMIC, marks=pytest.mark.slow)], ids=lambda c: c.name)
 def test_check_passes_in_both_precisions(chain, precision):
     results = compare(generate(chain, precision=precision, out=None), cases=30, precision=precision)
     assert results and all(r.ok for r in results), [r for r in results if not r.ok]
