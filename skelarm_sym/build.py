@@ -8,7 +8,8 @@ returns ``(..., 2, N)``; batches go through the ``_batch`` C functions.
 
 The shared library lives in a cache folder (``$SKELARM_SYM_CACHE``, else
 ``~/.cache/skelarm-sym``) under the SHA-256 of the sources, compiler and flags,
-so a second call with the same inputs reuses it. The cache is private (created
+so a second call with the same inputs reuses it. Compiles are at ``-O2`` unless ``flags`` say otherwise
+or ``$SKELARM_SYM_OPT`` names another level (:func:`default_flags`; the test suite uses ``0``). The cache is private (created
 with mode 0700; the cache folder and the key folder are refused when another
 user owns them or group or others may write to them, before a cached library is
 used as well as before a build) and is trusted only as far as it can be checked:
@@ -61,6 +62,12 @@ def extension_module(prefix: str) -> str:
     return f"{prefix}_ext"
 
 DEFAULT_FLAGS = ("-O2",)
+OPT_LEVEL_VARIABLE = "SKELARM_SYM_OPT"
+"""An environment variable naming the optimisation level of compiles that pass no ``flags``: ``0``, ``1``, ``2``,
+``3``, ``s`` or ``g`` (``-O0`` ... ``-Og``); unset or empty: :data:`DEFAULT_FLAGS`. The test suite sets ``0``
+where the speed of the library is not what a test checks (``-O0`` compiles several times faster). The strict
+warning flags (:data:`STRICT_FLAGS`) are used at every level."""
+OPT_LEVELS = ("0", "1", "2", "3", "s", "g")
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 STALE_BUILD_SECONDS = 3600
 """A build folder whose process cannot be identified is removed when older than this."""
@@ -108,6 +115,20 @@ def compile_failure(c_file: str, command: Sequence[str], returncode: int, output
         shown.append(f"... ({len(lines) - COMPILER_LINES} more lines)")
     message = "\n".join([f"compiling {c_file} failed: {first}", f"command: {shlex.join(command)}", *shown])
     return CompileError(message, command, output)
+
+
+def default_flags() -> tuple[str, ...]:
+    """The flags of a compile that passes none: ``-O{level}`` when ``$SKELARM_SYM_OPT`` names a level, else
+    :data:`DEFAULT_FLAGS`."""
+    level = os.environ.get(OPT_LEVEL_VARIABLE, "").strip()
+    if not level:
+        return DEFAULT_FLAGS
+    if level.startswith("-O"):
+        level = level[2:]
+    if level not in OPT_LEVELS:
+        raise InputError(f"{OPT_LEVEL_VARIABLE}={os.environ[OPT_LEVEL_VARIABLE]!r} is not an optimisation level: "
+                         f"one of {', '.join(OPT_LEVELS)}")
+    return (f"-O{level}",)
 
 
 def _split_command(text: str, origin: str) -> list[str]:
@@ -230,7 +251,7 @@ def remove_stale_builds(root: Path) -> list[Path]:
 
 def compile_shared(
     sources: dict[str, str],
-    flags: Sequence[str] = DEFAULT_FLAGS,
+    flags: Sequence[str] | None = None,
     compiler: str | None = None,
     strict: bool = True,
 ) -> Path:
@@ -240,7 +261,10 @@ def compile_shared(
     (:func:`private_folder`) before a cached library is returned, and a library is returned only when
     its sidecar vouches for it (:func:`verified`). A compiler that refuses the sources raises
     :class:`CompileError` (a ``RuntimeError``) whose first line names the file and the first error;
-    nothing is left behind."""
+    nothing is left behind. ``flags``: ``None`` for :func:`default_flags` (``-O2``, or the level of
+    ``$SKELARM_SYM_OPT``)."""
+    if flags is None:
+        flags = default_flags()
     cc = find_compiler(compiler)
     cc_words = _split_command(cc, "compiler")
     all_flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), *flags, "-fPIC", "-shared"]
@@ -317,7 +341,7 @@ def python_headers() -> tuple[str, ...] | None:
     return tuple(dict.fromkeys(f"-I{folder}" for folder in folders if folder))
 
 
-def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str | None = None,
+def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | None = None,
                 extension: bool | None = None) -> CompiledArm:
     """Compile and load the C of a :class:`~skelarm_sym.generate.Generated` result.
 
@@ -327,9 +351,11 @@ def compile_arm(generated, flags: Sequence[str] = DEFAULT_FLAGS, compiler: str |
     of tens). ``None`` (the default): when the generation has that file (languages ``c,cpython``) and this
     interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
     where it cannot be built); ``False``: never, the ctypes library alone. Batches and solvers go through
-    ctypes either way."""
+    ctypes either way. ``flags``: as :func:`compile_shared`'s (``None``: :func:`default_flags`)."""
     from .wrapper import CompiledArm
 
+    if flags is None:
+        flags = default_flags()
     EXT = EXTENSION_SUFFIX
     sources = {k: v for k, v in generated.sources.items() if k.endswith((".c", ".h")) and not k.endswith(EXT)}
     if not sources:

@@ -258,3 +258,32 @@ def test_a_key_folder_opened_after_the_build_is_refused_before_loading(cache, mo
     assert loaded == []
     lib.parent.chmod(0o700)
     assert build.compile_shared(sources) == lib  # private again: used as before
+
+
+# -- the optimisation level of compiles that pass no flags --------------------------------------------------------
+
+def test_the_optimisation_level_comes_from_the_environment(monkeypatch):
+    monkeypatch.delenv("SKELARM_SYM_OPT", raising=False)
+    assert build.default_flags() == build.DEFAULT_FLAGS == ("-O2",)
+    for level, flags in (("0", ("-O0",)), ("-O1", ("-O1",)), ("s", ("-Os",)), ("", ("-O2",))):
+        monkeypatch.setenv("SKELARM_SYM_OPT", level)
+        assert build.default_flags() == flags
+    monkeypatch.setenv("SKELARM_SYM_OPT", "fast; rm -rf")
+    with pytest.raises(InputError, match="SKELARM_SYM_OPT"):
+        build.default_flags()
+
+
+@needs_cc
+def test_the_level_is_part_of_the_key_and_the_strict_flags_stay(cache, monkeypatch):
+    _, sources = _sources(2)
+    commands = []
+    real_run = build.subprocess.run
+    monkeypatch.setattr(build.subprocess, "run", lambda command, **kw: commands.append(command) or real_run(command, **kw))
+    monkeypatch.setenv("SKELARM_SYM_OPT", "0")
+    fast = build.compile_shared(sources)
+    monkeypatch.setenv("SKELARM_SYM_OPT", "2")
+    optimised = build.compile_shared(sources)
+    assert fast != optimised and build.compile_shared(sources, flags=("-O2",)) == optimised
+    assert len(commands) == 2
+    for command, level in zip(commands, ("-O0", "-O2")):
+        assert level in command and all(flag in command for flag in build.STRICT_FLAGS)

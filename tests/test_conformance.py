@@ -38,7 +38,10 @@ MODELS = {
 }
 
 
-@pytest.fixture(scope="module", params=[(lang, model) for lang in BACKENDS for model in MODELS], ids=lambda p: f"{p[0]}-{p[1]}")
+# JAX traces and compiles every function of a case (a minute for the UR5 on two cores): its cases are in the
+# slow set; the other backends print the same IR and stay in the quick one
+@pytest.fixture(scope="module", params=[pytest.param((lang, model), marks=pytest.mark.slow if lang == "jax" else ())
+                                        for lang in BACKENDS for model in MODELS], ids=lambda p: f"{p[0]}-{p[1]}")
 def case(request):
     lang, model_name = request.param
     backend = BACKENDS[lang]

@@ -36,7 +36,8 @@ def _robots() -> Path | None:
 
 
 ROBOTS = _robots()
-pytestmark = pytest.mark.skipif(ROBOTS is None, reason="example-robot-data is not installed (pip install example-robot-data, or the oracle extra)")
+pytestmark = [pytest.mark.skipif(ROBOTS is None, reason="example-robot-data is not installed (pip install example-robot-data, or the oracle extra)"),
+              pytest.mark.slow]  # a sweep over every URDF of the package: about 90 s of CPU
 URDFS = sorted(str(p.relative_to(ROBOTS)) for p in ROBOTS.rglob("*.urdf")) if ROBOTS else []
 EVERY_CHAIN = os.environ.get("SKELARM_SYM_EVERY_CHAIN") == "1"
 needs_cc = pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")), reason="no C compiler on PATH")

@@ -15,8 +15,12 @@ ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = sorted((ROOT / "examples" / "robots").glob("*.toml"))
 
 
+QUICK_ROBOTS = ("puma560", "scara", "ur5")  # the others (5 to 7 s each: every function derived) are in the slow set
+
+
 @pytest.mark.parametrize("precision", ["double", "float"])
-@pytest.mark.parametrize("robot", ROBOTS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("robot", [pytest.param(p, id=p.stem, marks=() if p.stem in QUICK_ROBOTS else pytest.mark.slow)
+                                   for p in ROBOTS])
 def test_every_example_robot_compiles_with_the_strict_flags(robot, precision):
     g = generate(load_robot(robot), langs="c", precision=precision, out=None)
     compile_shared({k: v for k, v in g.sources.items()}, flags=("-O0",))  # strict: -std=c99 -Wall -Wextra -Werror -pedantic
