@@ -564,9 +564,13 @@ def test_check_calls_the_extension_one_configuration_at_a_time(arms, monkeypatch
     want = arm.plain.kinematics(q, q, q, l)
     assert all(x.shape == y.shape and np.array_equal(x, y) for x, y in zip(got, want))
     assert np.array_equal(single.position(q[0, 0], l), arm.plain.position(q[0, 0], l))
+    monkeypatch.undo()  # from here the ordinary path may run: it judges what the extension refuses
     q[1, 2, 0] = np.nan
-    with pytest.raises(RuntimeError, match=r"refused configuration \(1, 2\)"):
+    with pytest.raises(ValueError, match="q must be finite"):  # bad input: the ordinary path's error
         single.position(q, l)
+    monkeypatch.setattr(arm.fast.extension, "position", lambda *args: NotImplemented)
+    with pytest.raises(RuntimeError, match=r"refused configuration \(0, 0\)"):  # good input refused: an error
+        single.position(q[:1, :1], l)
     with pytest.raises(RuntimeError, match="without its CPython extension"):
         SingleCalls(arm.plain)
 

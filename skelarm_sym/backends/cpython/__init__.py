@@ -25,9 +25,10 @@ def load(generated):
 class SingleCalls:
     """A :class:`~skelarm_sym.wrapper.CompiledArm` with its extension, whose straight-line functions take a
     batch and call the extension's entry once per configuration (inputs made C-contiguous arrays of the
-    real type and Python floats, as the ordinary path converts them), stacking the outputs; an entry that
-    answers ``NotImplemented`` for a configuration is an error, not a quiet fall-back. Solvers and
-    everything else are the arm's own."""
+    real type and Python floats, as the ordinary path converts them), stacking the outputs. Input the
+    ordinary path refuses (wrong count, shape, type or domain) gets its error and message; an entry that
+    answers ``NotImplemented`` for a configuration the ordinary path takes is an error, not a quiet
+    fall-back. Solvers and everything else are the arm's own."""
 
     def __init__(self, arm):
         if arm.extension is None:
@@ -41,10 +42,20 @@ class SingleCalls:
             return getattr(arm, name)
         entry = getattr(arm.extension, name)
 
+        ordinary = getattr(arm, name)
+
         def each(*args):
             import numpy as np
 
-            values = [np.asarray(x, dtype=arm.dtype) for x in args]
+            if len(args) != len(f.inputs):
+                return ordinary(*args)  # its TypeError, naming the signature
+            try:
+                values = [np.asarray(x) for x in args]
+                if any(x.dtype.kind not in "biuf" for x in values):  # complex, strings, objects
+                    return ordinary(*args)  # its ValueError, naming the argument
+                values = [np.asarray(x, dtype=arm.dtype) for x in values]
+            except (TypeError, ValueError, OverflowError):
+                return ordinary(*args)  # its ValueError, naming the argument
             batch = np.broadcast_shapes(*(x.shape[:-1] for x, a in zip(values, f.inputs) if a.batched and not a.is_scalar))
             if batch:
                 values = [x if a.is_scalar or not a.batched else np.broadcast_to(x, batch + x.shape[-1:])
@@ -55,6 +66,7 @@ class SingleCalls:
                        for x, a in zip(values, f.inputs)]
                 out = entry(*row)
                 if out is NotImplemented:
+                    ordinary(*args)  # bad input: raises the ordinary path's error, naming the argument
                     raise RuntimeError(f"the CPython extension's {name} refused configuration {index} of the check")
                 rows.append(out if isinstance(out, tuple) else (out,))
             if not batch:

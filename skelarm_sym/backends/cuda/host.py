@@ -131,6 +131,7 @@ class HostArm(CompiledArm):
     def _bind_straight(self, f: Function) -> None:
         single = getattr(self._lib, f"{self.prefix}_{f.name}")
         single.argtypes, single.restype = [self._ctype_of(a) for a in f.arguments], None
+        self._c_functions[f.name] = single  # no _batch here: batches run the kernel's body (_call below)
         self._bind_host(f)
 
     def _bind_procedure(self, f: Function) -> None:
