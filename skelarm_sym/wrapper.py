@@ -209,7 +209,9 @@ class CompiledArm:
         return sorted(set(super().__dir__()) | set(self.__dict__.get("_methods", {})))
 
     # -- calls -----------------------------------------------------------------------------------------
-    def _call(self, f: Function, args: tuple) -> np.ndarray | tuple[np.ndarray, ...]:
+    def _checked_inputs(self, f: Function, args: tuple) -> tuple[list[np.ndarray], tuple[int, ...], list[int]]:
+        """The inputs of a straight-line call as arrays of the library's type, checked (shape, real values,
+        domain), their common batch shape and the positions of the per-configuration ones."""
         arrays = []
         for value, a in zip(args, f.inputs):
             array = _real(value, a.name, self.dtype)
@@ -229,6 +231,10 @@ class CompiledArm:
         except ValueError:
             shapes = ", ".join(f"{f.inputs[i].name} {arrays[i].shape}" for i in per_config)
             raise InputError(f"{f.name}: batch shapes do not broadcast: {shapes}") from None
+        return arrays, batch, per_config
+
+    def _call(self, f: Function, args: tuple) -> np.ndarray | tuple[np.ndarray, ...]:
+        arrays, batch, per_config = self._checked_inputs(f, args)
         for i in per_config:
             arrays[i] = np.broadcast_to(arrays[i], batch + arrays[i].shape[-1:])
         m = int(np.prod(batch)) if batch else 1

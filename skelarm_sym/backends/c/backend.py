@@ -120,13 +120,14 @@ class Names:
         return f"{self.prefix}_{name}"
 
 
-def _ctype(precision: CPrecision, t: Type) -> str:
+def c_type(precision: CPrecision, t: Type) -> str:
+    """The C type that holds a value of IR type ``t`` at ``precision``."""
     return precision.ctype if t is Type.REAL else {Type.INT: "int", Type.BOOL: "int", Type.UINT64: "unsigned long long"}[t]
 
 
 def parameter(a, precision: CPrecision, required: bool = False) -> str:
     """The C parameter declaration of argument ``a``."""
-    t = _ctype(precision, a.type)
+    t = c_type(precision, a.type)
     if a.is_output:
         return f"{t} *{a.name}" if a.optional and not required else f"{t} {a.name}[{a.size}]"
     if a.is_scalar:
@@ -290,7 +291,7 @@ def procedure_context(f: Function, precision: CPrecision, names: Names) -> dict:
     used = body_names(f.body)
     body = [f"    (void){a.name};" for a in f.arguments if a.name not in used]
     body += printer.statements(f.body)
-    returns = "int" if f.returns is Type.INT else ("void" if f.returns is None else _ctype(precision, f.returns))
+    returns = "int" if f.returns is Type.INT else ("void" if f.returns is None else c_type(precision, f.returns))
     optional = [a for a in f.outputs if a.optional]
     run = f.kind != "helper" and bool(optional)
     return {
@@ -302,7 +303,7 @@ def procedure_context(f: Function, precision: CPrecision, names: Names) -> dict:
         "run_params": [parameter(a, precision, required=True) for a in f.arguments],
         "body": body,
         "run": run,
-        "locals": [{"name": a.name, "type": _ctype(precision, a.type), "size": a.size} for a in optional],
+        "locals": [{"name": a.name, "type": c_type(precision, a.type), "size": a.size} for a in optional],
         "run_args": [f"{a.name} ? {a.name} : {a.name}_local" if a.optional and a.is_output else a.name for a in f.arguments],
         "doc": [c_comment(line) for line in f.doc],
         "statuses": [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)} for name, value, meaning in f.statuses],

@@ -27,6 +27,7 @@ from ...ir.nodes import (
     ArrayArg, CallFunction, Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Role, TrigBlock, Type, While,
 )
 from ...ir.walk import body_names, called, expr_names
+from ..c.backend import Names, c_type, parameter
 from ..c.printer import PRECISIONS, CPrecision, CPrinter
 from ..numpy.printer import PythonPrinter, identifier
 from ..text import c_comment, py_string
@@ -42,32 +43,6 @@ STATUS = "status"
 """The name of the kernels' extra output, the solver's return value per target."""
 
 
-class Names:
-    """Module-level names: constants and statuses as ``PREFIX_NAME`` macros (the C header's names, so that
-    code written against ``prefix.h`` reads the same), functions as ``prefix_name``."""
-
-    def __init__(self, prefix: str) -> None:
-        self.prefix = prefix
-
-    def macro(self, name: str) -> str:
-        return f"{self.prefix.upper()}_{name}"
-
-    def function(self, name: str) -> str:
-        return f"{self.prefix}_{name}"
-
-
-def _ctype(precision: CPrecision, t: Type) -> str:
-    return precision.ctype if t is Type.REAL else {Type.INT: "int", Type.BOOL: "int", Type.UINT64: "unsigned long long"}[t]
-
-
-def parameter(a, precision: CPrecision, required: bool = False) -> str:
-    """The C parameter declaration of argument ``a`` in a single call (the C header's)."""
-    t = _ctype(precision, a.type)
-    if a.is_output:
-        return f"{t} *{a.name}" if a.optional and not required else f"{t} {a.name}[{a.size}]"
-    if a.is_scalar:
-        return f"{t} {a.name}"
-    return f"const {t} {a.name}[{a.size}]"
 
 
 # -- trigonometry as sincos calls ---------------------------------------------------------------------
@@ -147,7 +122,7 @@ def kernel_arguments(f: Function, precision: CPrecision) -> list[dict]:
     ``shared`` (one array for the batch), ``scalar`` (by value) or ``status`` (the solver's return value)."""
     out = []
     for a in f.arguments:
-        t = _ctype(precision, a.type)
+        t = c_type(precision, a.type)
         how = "scalar" if a.is_scalar and not a.is_output else ("soa" if _batched(f, a) else "shared")
         out.append({"name": a.name, "type": t, "size": a.size, "how": how, "output": a.is_output,
                     "role": a.role.name.lower(), "domain": a.domain, "shape": list(a.shape) or [1],
@@ -155,7 +130,7 @@ def kernel_arguments(f: Function, precision: CPrecision) -> list[dict]:
     if f.returns is not None:
         if any(a.name == STATUS for a in f.arguments):
             raise ValueError(f"internal error: {f.name} has an argument named {STATUS!r}")
-        out.append({"name": STATUS, "type": _ctype(precision, f.returns), "size": 1, "how": "status", "output": True,
+        out.append({"name": STATUS, "type": c_type(precision, f.returns), "size": 1, "how": "status", "output": True,
                     "role": "output", "domain": "", "shape": [], "int": True})
     return out
 
@@ -172,7 +147,7 @@ def function_context(f: Function, precision: CPrecision, names: Names) -> dict:
     functions the kernel's arguments."""
     optional = [a for a in f.outputs if a.optional]
     run = f.kind != "helper" and bool(optional)
-    returns = "void" if f.returns is None else _ctype(precision, f.returns)
+    returns = "void" if f.returns is None else c_type(precision, f.returns)
     kargs = kernel_arguments(f, precision) if f.kind != "helper" else []
     return {
         "name": f.name,
@@ -186,7 +161,7 @@ def function_context(f: Function, precision: CPrecision, names: Names) -> dict:
         "run": run,
         "run_params": [parameter(a, precision, required=True) for a in f.arguments],
         "run_args": [f"{a.name} ? {a.name} : {a.name}_local" if a.optional and a.is_output else a.name for a in f.arguments],
-        "locals": [{"name": a.name, "type": _ctype(precision, a.type), "size": a.size} for a in optional],
+        "locals": [{"name": a.name, "type": c_type(precision, a.type), "size": a.size} for a in optional],
         "body": _printed_body(f, precision, names),
         "calls": sorted(called(f.body)),
         "ops": f.ops.as_dict(),

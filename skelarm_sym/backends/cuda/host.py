@@ -29,8 +29,8 @@ from ...build import (
     remove_stale_builds, verified,
 )
 from ...errors import InputError
-from ...ir.nodes import Function, Type
-from ...wrapper import CompiledArm, _check_domain, _real
+from ...ir.nodes import Function
+from ...wrapper import CompiledArm
 from .backend import STATUS, kernel_arguments
 from ..c.printer import PRECISIONS
 
@@ -161,25 +161,7 @@ class HostArm(CompiledArm):
 
     def _call(self, f: Function, args: tuple):
         """As :meth:`CompiledArm._call` (same checks and broadcasting), with batches through the kernel's body."""
-        arrays = []
-        for value, a in zip(args, f.inputs):
-            array = _real(value, a.name, self.dtype)
-            if a.is_scalar:
-                if array.ndim != 0:
-                    raise InputError(f"{a.name} must be a single number, got shape {array.shape}")
-            elif not a.batched:
-                if array.shape != (a.size,):
-                    raise InputError(f"{a.name} must have shape ({a.size},), got {array.shape}")
-            elif array.ndim == 0 or array.shape[-1] != a.size:
-                raise InputError(f"{a.name} must have shape (..., {a.size}), got {array.shape}")
-            _check_domain(array, a.name, a.domain)
-            arrays.append(array)
-        per_config = [i for i, a in enumerate(f.inputs) if a.batched and not a.is_scalar]
-        try:
-            batch = np.broadcast_shapes(*(arrays[i].shape[:-1] for i in per_config))
-        except ValueError:
-            shapes = ", ".join(f"{f.inputs[i].name} {arrays[i].shape}" for i in per_config)
-            raise InputError(f"{f.name}: batch shapes do not broadcast: {shapes}") from None
+        arrays, batch, per_config = self._checked_inputs(f, args)
         if not batch:
             return super()._call(f, tuple(arrays))  # the single __host__ __device__ function
         m = int(np.prod(batch))

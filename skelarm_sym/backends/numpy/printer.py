@@ -17,6 +17,7 @@ from ...ir.nodes import (
     DeclareArray, Div, Elem, For, If, Let, Logic, Mul, NamedConst, Neg, Not, Return, Select, Store, TrigBlock, Type,
     Var, While,
 )
+from ..python_syntax import PythonArithmetic
 
 _ATOM, _UNARY, _MUL, _ADD, _SHIFT, _BITAND, _BITXOR, _BITOR, _REL, _NOT, _AND, _OR, _COND = (
     100, 90, 80, 70, 65, 62, 61, 60, 50, 45, 40, 30, 20)
@@ -30,7 +31,7 @@ def identifier(name: str) -> str:
     return name + "_" if keyword.iskeyword(name) else name
 
 
-class PythonPrinter:
+class PythonPrinter(PythonArithmetic):
     """Prints IR as Python (see the module docstring). ``storage`` maps names to text; ``constant``
     turns a module constant's name into its Python name; ``function_name`` a called function's name."""
 
@@ -84,29 +85,11 @@ class PythonPrinter:
         if t is NamedConst:
             return self.constant(e.name), _ATOM
         if t is Add:
-            parts = []
-            for i, term in enumerate(e.terms):
-                if type(term) is Neg and i > 0:
-                    parts.append(" - " + self._wrap(term.x, _ADD))
-                elif i > 0 and type(term) is Const and term.type is Type.REAL and term.value < 0:
-                    parts.append(" - " + self._wrap(Const(-term.value), _ADD))
-                elif i == 0:
-                    text, prec = self._print(term)
-                    parts.append(text if prec >= _ADD and type(term) is not Add else f"({text})")
-                else:
-                    parts.append(" + " + self._wrap(term, _ADD))
-            return "".join(parts), _ADD
+            return self._add(e)
         if t is Mul:
-            parts = []
-            for i, f in enumerate(e.factors):
-                text, prec = self._print(f)
-                parts.append(text if prec == _ATOM or (i == 0 and prec >= _UNARY and type(f) is not Neg) else f"({text})")
-            return "*".join(parts), _MUL
+            return self._mul(e)
         if t is Neg:
-            text, prec = self._print(e.x)
-            if prec == _ATOM or type(e.x) is Mul:
-                return f"-{text}", _UNARY
-            return f"-({text})", _UNARY
+            return self._neg(e)
         if t is Div:
             num = self._wrap(e.num, _MUL - 1) if type(e.num) is not Div else f"({self.expr(e.num)})"
             return f"{num}/{self._wrap(e.den, _MUL)}", _MUL

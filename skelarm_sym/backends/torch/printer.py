@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from ...ir.nodes import (
     Add, Bits, Call1, Call2, Cast, Compare, Const, Div, Elem, Logic, Mul, NamedConst, Neg, Not, Select, Type, Var,
 )
+from ..python_syntax import PythonArithmetic
 from ...ir.predicate import PArray, PCall, PComment, PDef, PFor, PGuard, PLoop, PSet, Predicated, Slice, is_static
 from ..text import line_comment
 
@@ -59,7 +60,7 @@ TORCH = Dialect(
 )
 
 
-class TensorPrinter:
+class TensorPrinter(PythonArithmetic):
     """Expressions as Python text over ``dialect``. ``statics``/``consts``: names whose values are Python
     numbers (loop counters, constant tables); ``constant(text, type)``: an array of the working precision
     holding the number ``text``; ``elements``: ``"list"`` (``x[k]``) or ``"last"`` (``x[..., k]``: an
@@ -122,29 +123,11 @@ class TensorPrinter:
                 return f"_pick({identifier(e.array)}, {index})", _ATOM
             return f"{identifier(e.array)}[{index}]", _ATOM
         if t is Add:
-            parts = []
-            for i, term in enumerate(e.terms):
-                if type(term) is Neg and i > 0:
-                    parts.append(" - " + self._wrap(term.x, _ADD))
-                elif i > 0 and type(term) is Const and term.type is Type.REAL and term.value < 0:
-                    parts.append(" - " + self._wrap(Const(-term.value), _ADD))
-                elif i == 0:
-                    text, prec = self._print(term)
-                    parts.append(text if prec >= _ADD and type(term) is not Add else f"({text})")
-                else:
-                    parts.append(" + " + self._wrap(term, _ADD))
-            return "".join(parts), _ADD
+            return self._add(e)
         if t is Mul:
-            parts = []
-            for i, f in enumerate(e.factors):
-                text, prec = self._print(f)
-                parts.append(text if prec == _ATOM or (i == 0 and prec >= _UNARY and type(f) is not Neg) else f"({text})")
-            return "*".join(parts), _MUL
+            return self._mul(e)
         if t is Neg:
-            text, prec = self._print(e.x)
-            if prec == _ATOM or type(e.x) is Mul:
-                return f"-{text}", _UNARY
-            return f"-({text})", _UNARY
+            return self._neg(e)
         if t is Div:
             num = self._wrap(e.num, _MUL - 1) if type(e.num) is not Div else f"({self.expr(e.num)})"
             if e.guarded and not self.static(e.den):
