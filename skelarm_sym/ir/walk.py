@@ -98,9 +98,11 @@ def called(body: Iterable, out: set[str] | None = None) -> set[str]:
     return out
 
 
-def needed_lets(lets: list[Let], roots: set[str]) -> list[Let]:
+def needed_lets(lets: list[Let], roots: set[str], reads=None) -> list[Let]:
     """The :class:`Let` statements among ``lets`` that names ``roots`` need, directly or through each
-    other, in their order."""
+    other, in their order. ``reads(let)``: the names a Let's value reads (a caller may pass one that
+    remembers them)."""
+    reads = reads or (lambda s: expr_names(s.value, set()))
     by_name = {s.var.name: s for s in lets}
     keep: set[str] = set()
     todo = [r for r in roots if r in by_name]
@@ -109,7 +111,7 @@ def needed_lets(lets: list[Let], roots: set[str]) -> list[Let]:
         if name in keep:
             continue
         keep.add(name)
-        todo.extend(n for n in expr_names(by_name[name].value, set()) if n in by_name and n not in keep)
+        todo.extend(n for n in reads(by_name[name]) if n in by_name and n not in keep)
     return [s for s in lets if s.var.name in keep]
 
 

@@ -10,8 +10,8 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
-from ...ir.nodes import Const, Elem, Function, Let, Module, Role, Store, TrigBlock, Type
-from ...ir.walk import body_names, called, expr_names
+from ...ir.nodes import Const, Elem, Function, Let, Module, Store, TrigBlock, Type
+from ...ir.walk import body_names, called, expr_names, needed_lets
 from ..text import c_comment
 from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
 
@@ -153,16 +153,7 @@ class Shared:
 
     def needed(self, lets: list[Let], roots: set[str]) -> list[Let]:
         """:func:`skelarm_sym.ir.walk.needed_lets`, with the names each Let reads looked up here."""
-        by_name = {s.var.name: s for s in lets}
-        keep: set[str] = set()
-        todo = [r for r in roots if r in by_name]
-        while todo:
-            name = todo.pop()
-            if name in keep:
-                continue
-            keep.add(name)
-            todo.extend(n for n in self.reads(by_name[name]) if n in by_name and n not in keep)
-        return [s for s in lets if s.var.name in keep]
+        return needed_lets(lets, roots, self.reads)
 
     def printer(self, precision: CPrecision, storage: dict[str, str], names: "Names", strided: set[str] | None,
                 stride: str | None) -> CPrinter:

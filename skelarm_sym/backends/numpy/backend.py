@@ -130,11 +130,19 @@ def context(module: Module) -> dict:
         "functions": straight,
         "procedures": procedures,
         "statuses": list(statuses.values()),
+        **constants_context(module, "np.inf"),
+    }
+
+
+def constants_context(module: Module, inf: str) -> dict:
+    """The module's named constants and constant tables as Python literals (``inf``: how the module names
+    infinity, for the limits a table leaves open)."""
+    return {
         "constants": [{"name": c.name, "value": repr(c.value if type(c.value) is int else float(c.value)), "doc": py_string(c.doc)}
                       for c in module.constants],
         "tables": [
             {"name": t.name, "doc": py_string(t.doc),
-             "values": [repr(float(v)) if v is not None else ("np.inf" if t.sign > 0 else "-np.inf") for v in t.values]}
+             "values": [repr(float(v)) if v is not None else (inf if t.sign > 0 else "-" + inf) for v in t.values]}
             for t in module.tables
         ],
     }

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from ...ir.nodes import Comment, Function, Let, Module, Store, TrigBlock, Type
 from ...ir.predicate import predicate
+from ..numpy.backend import constants_context
 from ..text import py_string
 from .printer import TORCH, Dialect, ProcedurePrinter, TensorPrinter, identifier
 
@@ -133,13 +134,7 @@ def context(module: Module, dialect: Dialect = TORCH, printer_class=ProcedurePri
         "functions": straight,
         "procedures": procedures,
         "statuses": list(statuses.values()),
-        "constants": [{"name": c.name, "value": repr(c.value if type(c.value) is int else float(c.value)), "doc": py_string(c.doc)}
-                      for c in module.constants],
-        "tables": [
-            {"name": t.name, "doc": py_string(t.doc),
-             "values": [repr(float(v)) if v is not None else ("_INF" if t.sign > 0 else "-_INF") for v in t.values]}
-            for t in module.tables
-        ],
+        **constants_context(module, "_INF"),
     }
 
 
