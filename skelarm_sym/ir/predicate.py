@@ -322,6 +322,9 @@ class _Scope:
     """Array argument -> (the caller's array, offset)."""
     alive: Var | None = None
     result: Var | None = None
+    lane_counters: set[str] = field(default_factory=set)
+    """Counters of loops with data bounds now renamed in ``rename`` to a fresh name of their own (a counter is a
+    value per lane there, and a number the printer knows in a loop with constant bounds: one name cannot be both)."""
     loops: list[Var] = field(default_factory=list)
     """Run masks of the loops around the current statement, inside this scope (outermost first)."""
     guards: list[Var] = field(default_factory=list)
@@ -506,11 +509,12 @@ class _Pass:
             raise TypeError(f"internal error: no masked form of {t.__name__}")
 
     def local(self, name: str, scope: _Scope) -> str:
+        new = scope.rename.get(name)
+        if new is not None:
+            return new
         if scope.prefix is None:
             return name
-        new = scope.rename.get(name)
-        if new is None:
-            new = scope.rename[name] = f"_{scope.prefix}_{name}"
+        new = scope.rename[name] = f"_{scope.prefix}_{name}"
         return new
 
     def assign(self, target, value, mask: Var | None, scope: _Scope) -> None:
@@ -546,8 +550,11 @@ class _Pass:
     def for_(self, s: For, mask: Var | None, scope: _Scope) -> None:
         start = static_value(self.expr(s.start, scope), self.env)
         stop = static_value(self.expr(s.stop, scope), self.env)
-        var = Var(self.local(s.var.name, scope), Type.INT)
         if start is not None and stop is not None:
+            if s.var.name in scope.lane_counters:  # the name a loop with data bounds lent it: back to its own
+                scope.lane_counters.discard(s.var.name)
+                del scope.rename[s.var.name]
+            var = Var(self.local(s.var.name, scope), Type.INT)
             exits = _contains(s.body, (Return,)) or _contains(s.body, (Break,), into_loops=False)
             run = self.define("run", mask if mask is not None else Const(True, Type.BOOL), lanes=True) if exits else None
             if run is not None:
@@ -569,9 +576,12 @@ class _Pass:
                 self.rollable.add(var.name)
             self.emit(PFor(var, start, stop, body, rollable, _carried(body) if rollable else ()))
             return
-        # bounds that are data: a counter per lane
-        self.emit(PDef(var, self.expr(s.start, scope), lanes=True))
-        stop_expr = self.expr(s.stop, scope)
+        # bounds that are data: a counter per lane, under a fresh name (until the next loop over this counter)
+        first, stop_expr = self.expr(s.start, scope), self.expr(s.stop, scope)
+        var = Var(self.fresh(s.var.name.lstrip("_") or "k"), Type.INT)
+        scope.rename[s.var.name] = var.name
+        scope.lane_counters.add(s.var.name)
+        self.emit(PDef(var, first, lanes=True))
         test = Compare("<", var, stop_expr)
         run = self.define("run", test if mask is None else Logic("and", (mask, test)), lanes=True)
         scope.loops.append(run)
