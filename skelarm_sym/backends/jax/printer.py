@@ -1,4 +1,4 @@
-"""IR as Python over ``jax.numpy``: the expression printer of the PyTorch backend with JAX's names, and
+"""IR as Python over ``jax.numpy``: the array expression printer (:mod:`..array_syntax`) with JAX's names, and
 masked procedures (:mod:`skelarm_sym.ir.predicate`) as functional control flow.
 
 A loop over data (:class:`~skelarm_sym.ir.predicate.PLoop`) is ``lax.while_loop`` whose state is the
@@ -14,7 +14,7 @@ from __future__ import annotations
 from ...ir.nodes import Type, Var as Var_
 from ...ir.predicate import PArray, PCall, PComment, PDef, PFor, PGuard, PLoop, PSet, Predicated, Slice
 from ..text import line_comment
-from ..torch.printer import FULL, Dialect, TensorPrinter, identifier
+from ..array_syntax import FULL, Dialect, TensorPrinter, identifier
 
 JAX = Dialect(
     where="jnp.where",
@@ -31,12 +31,12 @@ JAX = Dialect(
 class JaxProcedurePrinter:
     """A :class:`~skelarm_sym.ir.predicate.Predicated` procedure as JAX statements (module docstring)."""
 
-    def __init__(self, p: Predicated, calls: dict[str, str], indent: str = "    ") -> None:
+    def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect = JAX, indent: str = "    ") -> None:
         self.p = p
         self.calls = calls
         self.indent = indent
         self.count = 0
-        self.printer = TensorPrinter(JAX, p.statics - p.rollable, p.consts, constant=self._full)
+        self.printer = TensorPrinter(dialect, p.statics - p.rollable, p.consts, constant=self._full)
 
     def _full(self, text: str, type_: Type) -> str:
         return f"{FULL[type_]}({text})"

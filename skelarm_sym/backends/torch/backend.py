@@ -88,7 +88,7 @@ def procedure_context(module: Module, f: Function, dialect: Dialect = TORCH, pri
     """A public procedure: its masked body, its wrappers' checks, defaults and result record."""
     calls = {g.name: core_name(g) for g in module.functions if g.kind == "straight"}
     p = predicate(module, f)
-    body = printer_class(p, calls).statements(p.body, 1)
+    body = printer_class(p, calls, dialect).statements(p.body, 1)
     defaults = TensorPrinter(dialect, elements="last")
     inputs = []
     for a in f.inputs:
