@@ -400,6 +400,9 @@ def pytorch_kinematics_comparison(cp, chain, arms: dict, sizes) -> None:
     except ImportError as exc:
         say(f"  pytorch_kinematics: not installed ({exc}); skipped (carry its wheels to compare: docs/gpu-and-autodiff.md)")
         return
+    if not torch.cuda.is_available():
+        say("  pytorch_kinematics: torch sees no GPU, skipped")
+        return
     urdf = urdf_of(chain)
     for precision, arm in arms.items():
         dtype = torch.float64 if precision == "double" else torch.float32

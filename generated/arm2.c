@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xea12fe73UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xd9b0a6abUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1286,4 +1286,15 @@ int arm2_ik_solve(const double q0[2], const double target[2], const double l[2],
     double error_local[1];
     int iterations_local[1];
     return arm2_ik_solve_run(q0, target, l, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm2_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm2_ik_solve(q0 + j * 2, target + j * 2, l + j * 2, lambda, tol, max_iter, q + j * 2, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

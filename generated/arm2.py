@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xea12fe73
+STAMP = 0xd9b0a6ab
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -131,7 +131,7 @@ def _vector(value, name, shape, domain):
     array = np.array(_real_array(value, name), dtype=DTYPE)
     size = int(np.prod(shape))
     if array.shape != shape and array.shape != (size,):
-        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+        raise ValueError(f"{name} must have shape {shape} (a batch: (..., {', '.join(map(str, shape))})), got {array.shape}")
     _check_domain(array, name, domain)
     return array.reshape(size)
 
@@ -145,6 +145,122 @@ def _count(value, name):
     if not ok:
         raise ValueError(f"{name} must be a whole number in 0..{2**31 - 1}, got {value!r}")
     return int(value)
+
+
+def _is_batch(arrays, scalars):
+    """Whether a solver call holds a batch of problems: an array ``(value, shape)`` with dimensions before
+    its problem's shape, or a scalar that is not a single number."""
+    return any(np.ndim(value) > len(shape) for value, shape in arrays) or any(np.ndim(value) > 0 for value in scalars)
+
+
+def _problems(value, name, shape, domain):
+    """A batch's array of shape (..., *shape), checked."""
+    array = _real_array(value, name)
+    if array.shape[array.ndim - len(shape):] != shape:
+        raise ValueError(f"{name} must have shape (..., {', '.join(map(str, shape))}), got {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _lane_scalar(value, name, domain):
+    """A batch's scalar: a number, or an array over the batch."""
+    array = _real_array(value, name)
+    _check_domain(array, name, domain)
+    return array
+
+
+def _batch_shape(name, shapes):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+    try:
+        return np.broadcast_shapes(*shapes.values())
+    except ValueError:
+        listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
+        raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+
+
+def _lanes(array, batch, shape):
+    """A batch's array (..., *shape) as a list of per-lane values, one per element of ``shape`` (a lane
+    per problem)."""
+    flat = np.broadcast_to(array, batch + shape).reshape(-1, int(np.prod(shape)))
+    return [flat[:, k] for k in range(flat.shape[1])]
+
+
+def _stacked(_c, elements):
+    """A list of per-lane values as one array (lanes, size)."""
+    return np.stack([np.broadcast_to(x, _c.shape) for x in elements], axis=-1)
+
+
+def _assembled(elements, batch, shape, dtype):
+    """Output elements (per-lane values) as one array (*batch, *shape)."""
+    lanes = int(np.prod(batch))
+    return np.stack([np.broadcast_to(np.asarray(x, dtype=dtype), (lanes,)) for x in elements], axis=-1).reshape(batch + shape)
+
+
+def _merge(mask, new, old, offset, full):
+    """old[offset + j] = new[j] where mask (all lanes: mask None)."""
+    for j, value in enumerate(new):
+        if mask is None:
+            old[offset + j] = value if isinstance(value, np.ndarray) else full(value)
+        else:
+            old[offset + j] = np.where(mask, value, old[offset + j])
+
+
+def _first_problem(where, batch):
+    """The index of the first problem where ``where`` holds, as text."""
+    index = np.unravel_index(int(np.argmax(where.reshape(-1))), batch)
+    return "(" + ", ".join(str(int(i)) for i in index) + ("," if len(index) == 1 else "") + ")"
+
+
+_INF = np.inf
+_NAN = np.nan
+
+
+# xorshift64* on 64-bit words held as (high, low) 32-bit halves in int64 arrays: no product or shift
+# below leaves 63 bits, so every backend draws the same numbers.
+_M32 = 0xFFFFFFFF
+
+
+def _u64_where(mask, a, b):
+    return np.where(mask, a[0], b[0]), np.where(mask, a[1], b[1])
+
+
+def _u64_xor(a, b):
+    return a[0] ^ b[0], a[1] ^ b[1]
+
+
+def _u64_shr(a, n):
+    if n >= 32:
+        return a[0] * 0, a[0] >> (n - 32)
+    return a[0] >> n, ((a[1] >> n) | (a[0] << (32 - n))) & _M32
+
+
+def _u64_shl(a, n):
+    if n >= 32:
+        return (a[1] << (n - 32)) & _M32, a[1] * 0
+    return ((a[0] << n) | (a[1] >> (32 - n))) & _M32, (a[1] << n) & _M32
+
+
+def _mul32(x, y):
+    """(high, low) halves of the 64-bit product of two 32-bit numbers, through 16-bit pieces of x."""
+    p0 = (x & 0xFFFF) * y
+    p1 = (x >> 16) * y
+    low = p0 + ((p1 & 0xFFFF) << 16)
+    return ((p1 >> 16) + (low >> 32)) & _M32, low & _M32
+
+
+def _mul32_low(x, y):
+    """The low 32 bits of x * y."""
+    return ((x & 0xFFFF) * y + ((((x >> 16) * y) & 0xFFFF) << 16)) & _M32
+
+
+def _u64_mul(a, b):
+    high, low = _mul32(a[1], b[1])
+    return (high + _mul32_low(a[0], b[1]) + _mul32_low(a[1], b[0])) & _M32, low
+
+
+def _u64_real(a, dtype):
+    """The word as a real (exact in float64, then rounded once to dtype)."""
+    return (a[0].astype(np.float64) * 4294967296.0 + a[1].astype(np.float64)).astype(dtype)
 
 
 def _position_core(q, l, p):
@@ -579,6 +695,20 @@ def ik_step(q, target, l, lambda_):
     return outputs[0].reshape(batch + (2,))
 
 
+def _position_on_lanes(_c, q, l):
+    """_position_core on every lane (problem) of a masked program: lists of per-lane values in and out."""
+    outputs = (np.empty(_c.shape + (2,), dtype=DTYPE), )
+    _position_core(_stacked(_c, q), _stacked(_c, l), *outputs)
+    return tuple([o[:, k] for k in range(o.shape[1])] for o in outputs)
+
+
+def _ik_step_on_lanes(_c, q, target, l, lambda_):
+    """_ik_step_core on every lane (problem) of a masked program: lists of per-lane values in and out."""
+    outputs = (np.empty(_c.shape + (2,), dtype=DTYPE), )
+    _ik_step_core(_stacked(_c, q), _stacked(_c, target), _stacked(_c, l), lambda_, *outputs)
+    return tuple([o[:, k] for k in range(o.shape[1])] for o in outputs)
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_error(trial, target, l, error):
     """endpoint error |target - p| at the pose trial (one problem; arrays are 1-D)."""
@@ -729,7 +859,13 @@ def ik_solve(q0, target, l, lambda_=0.0, tol=None, max_iter=200):
     max_iter: a number: at most this many steps (default 200).
     Returns IKResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape) and real scalars that are numbers or arrays, whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """
+    if _is_batch(((q0, (2,)), (target, (2,)), (l, (2,)), ), (lambda_, tol, )):
+        return _ik_solve_batch(q0, target, l, lambda_, tol, max_iter)
     q0 = _vector(q0, "q0", (2,), "finite")
     target = _vector(target, "target", (2,), "finite")
     l = _vector(l, "l", (2,), "positive")
@@ -746,3 +882,272 @@ def ik_solve(q0, target, l, lambda_=0.0, tol=None, max_iter=200):
         raise ValueError("ik_solve: q0, target or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), int(iterations[0]))
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_solve_lanes(_c, q0, target, l, lambda_, tol, max_iter):
+    """inverse kinematics of the endpoint by damped least squares: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 2
+    error = [_fr(0.0)] * 1
+    iterations = [_fi(0)] * 1
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    q_next = [_fr(0.0)] * 2
+    trial = [_fr(0.0)] * 2
+    probe = [_fr(0.0)] * 2
+    e1 = [_fr(0.0)] * 1
+    err = _fr(0.0)
+    err_trial = _fr(0.0)
+    alpha = _fr(0.0)
+    mu = _fr(0.0)
+    improvement = _fr(0.0)
+    c = _fr(0.5)
+    halving = _fi(0)
+    found = _fi(0)
+    for k in range(0, 2):
+        q[k] = q0[k]
+    iterations[0] = _fi(0)
+    error[0] = _fr(_INF)
+    _c3 = (~np.isfinite(tol)) | (tol <= 0.0) | (max_iter < 0) | (~np.isfinite(lambda_)) | (lambda_ < 0.0)
+    _m4 = _c3
+    _status1 = np.where(_m4, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m4)
+    _run5 = _alive2
+    for k in range(0, 2):
+        _c6 = ~np.isfinite(q0[k])
+        _m7 = _run5 & _c6
+        _status1 = np.where(_m7, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m7)
+        _run5 = _run5 & (~_m7)
+    _run8 = _alive2
+    for k in range(0, 2):
+        _c9 = ~np.isfinite(target[k])
+        _m10 = _run8 & _c9
+        _status1 = np.where(_m10, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m10)
+        _run8 = _run8 & (~_m10)
+    _run11 = _alive2
+    for k in range(0, 2):
+        _c12 = ~np.isfinite(l[k])
+        _m13 = _run11 & _c12
+        _status1 = np.where(_m13, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m13)
+        _run11 = _run11 & (~_m13)
+    _ik_error14_p = [_fr(0.0)] * 2
+    _o = _position_on_lanes(_c, q[0:2], l[0:2])
+    _merge(_alive2, _o[0], _ik_error14_p, 0, _fr)
+    _ik_error14_d0 = target[0] - _ik_error14_p[0]
+    _ik_error14_d1 = target[1] - _ik_error14_p[1]
+    _ik_error14_distance_squares = _ik_error14_d0*_ik_error14_d0 + _ik_error14_d1*_ik_error14_d1
+    _ik_error14_distance = np.sqrt(_ik_error14_distance_squares)
+    _c15 = ~np.isfinite(_ik_error14_distance_squares)
+    _m16 = _alive2 & _c15
+    _ik_error14_distance_top = np.where(np.abs(_ik_error14_d1) > np.abs(_ik_error14_d0), np.abs(_ik_error14_d1), np.abs(_ik_error14_d0))
+    _ik_error14_distance = np.where(_m16, _ik_error14_distance_top*np.sqrt((_ik_error14_d0/_ik_error14_distance_top)*(_ik_error14_d0/_ik_error14_distance_top) + (_ik_error14_d1/_ik_error14_distance_top)*(_ik_error14_d1/_ik_error14_distance_top)), _ik_error14_distance)
+    e1[0] = np.where(_alive2, _ik_error14_distance, e1[0])
+    err = np.where(_alive2, e1[0], err)
+    error[0] = np.where(_alive2, err, error[0])
+    _it17 = _fi(0)
+    _run18 = _alive2 & (_it17 < max_iter)
+    while bool(_run18.any()):
+        _c19 = err <= tol
+        _m20 = _run18 & _c19
+        _status1 = np.where(_m20, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m20)
+        _run18 = _run18 & (~_m20)
+        mu = np.where(_run18, c*err, mu)
+        _c21 = mu < lambda_
+        _m22 = _run18 & _c21
+        mu = np.where(_m22, lambda_, mu)
+        _o = _ik_step_on_lanes(_c, q[0:2], target[0:2], l[0:2], mu)
+        _merge(_run18, _o[0], q_next, 0, _fr)
+        alpha = np.where(_run18, 1.0, alpha)
+        halving = np.where(_run18, 0, halving)
+        found = np.where(_run18, 0, found)
+        _run23 = _run18 & (halving <= 30)
+        while bool(_run23.any()):
+            for k in range(0, 2):
+                trial[k] = np.where(_run23, q[k] + alpha*(q_next[k] - q[k]), trial[k])
+            _ik_error24_p = [_fr(0.0)] * 2
+            _o = _position_on_lanes(_c, trial[0:2], l[0:2])
+            _merge(_run23, _o[0], _ik_error24_p, 0, _fr)
+            _ik_error24_d0 = target[0] - _ik_error24_p[0]
+            _ik_error24_d1 = target[1] - _ik_error24_p[1]
+            _ik_error24_distance_squares = _ik_error24_d0*_ik_error24_d0 + _ik_error24_d1*_ik_error24_d1
+            _ik_error24_distance = np.sqrt(_ik_error24_distance_squares)
+            _c25 = ~np.isfinite(_ik_error24_distance_squares)
+            _m26 = _run23 & _c25
+            _ik_error24_distance_top = np.where(np.abs(_ik_error24_d1) > np.abs(_ik_error24_d0), np.abs(_ik_error24_d1), np.abs(_ik_error24_d0))
+            _ik_error24_distance = np.where(_m26, _ik_error24_distance_top*np.sqrt((_ik_error24_d0/_ik_error24_distance_top)*(_ik_error24_d0/_ik_error24_distance_top) + (_ik_error24_d1/_ik_error24_distance_top)*(_ik_error24_d1/_ik_error24_distance_top)), _ik_error24_distance)
+            e1[0] = np.where(_run23, _ik_error24_distance, e1[0])
+            err_trial = np.where(_run23, e1[0], err_trial)
+            _c27 = err_trial < err
+            _m28 = _run23 & _c27
+            found = np.where(_m28, 1, found)
+            _run23 = _run23 & (~_m28)
+            alpha = np.where(_run23, alpha*0.5, alpha)
+            halving = np.where(_run23, halving + 1, halving)
+            _run23 = _run23 & (halving <= 30)
+        _c29 = found == 0
+        _m30 = _run18 & _c29
+        _m31 = _run18 & (~_c29)
+        if bool(_m30.any()):
+            # no damped step lowers the error: q is a stationary point of it; probe each joint by +-0.01 rad, and a damped step from each probe
+            err_trial = np.where(_m30, err, err_trial)
+            for j in range(0, 2):
+                for k in range(0, 2):
+                    probe[k] = np.where(_m30, q[k], probe[k])
+                probe[j] = np.where(_m30, probe[j] + 0.01, probe[j])
+                _ik_error32_p = [_fr(0.0)] * 2
+                _o = _position_on_lanes(_c, probe[0:2], l[0:2])
+                _merge(_m30, _o[0], _ik_error32_p, 0, _fr)
+                _ik_error32_d0 = target[0] - _ik_error32_p[0]
+                _ik_error32_d1 = target[1] - _ik_error32_p[1]
+                _ik_error32_distance_squares = _ik_error32_d0*_ik_error32_d0 + _ik_error32_d1*_ik_error32_d1
+                _ik_error32_distance = np.sqrt(_ik_error32_distance_squares)
+                _c33 = ~np.isfinite(_ik_error32_distance_squares)
+                _m34 = _m30 & _c33
+                _ik_error32_distance_top = np.where(np.abs(_ik_error32_d1) > np.abs(_ik_error32_d0), np.abs(_ik_error32_d1), np.abs(_ik_error32_d0))
+                _ik_error32_distance = np.where(_m34, _ik_error32_distance_top*np.sqrt((_ik_error32_d0/_ik_error32_distance_top)*(_ik_error32_d0/_ik_error32_distance_top) + (_ik_error32_d1/_ik_error32_distance_top)*(_ik_error32_d1/_ik_error32_distance_top)), _ik_error32_distance)
+                e1[0] = np.where(_m30, _ik_error32_distance, e1[0])
+                _c35 = e1[0] < err_trial
+                _m36 = _m30 & _c35
+                err_trial = np.where(_m36, e1[0], err_trial)
+                found = np.where(_m36, 1, found)
+                for k in range(0, 2):
+                    trial[k] = np.where(_m36, probe[k], trial[k])
+                _o = _ik_step_on_lanes(_c, probe[0:2], target[0:2], l[0:2], mu)
+                _merge(_m30, _o[0], q_next, 0, _fr)
+                _ik_error37_p = [_fr(0.0)] * 2
+                _o = _position_on_lanes(_c, q_next[0:2], l[0:2])
+                _merge(_m30, _o[0], _ik_error37_p, 0, _fr)
+                _ik_error37_d0 = target[0] - _ik_error37_p[0]
+                _ik_error37_d1 = target[1] - _ik_error37_p[1]
+                _ik_error37_distance_squares = _ik_error37_d0*_ik_error37_d0 + _ik_error37_d1*_ik_error37_d1
+                _ik_error37_distance = np.sqrt(_ik_error37_distance_squares)
+                _c38 = ~np.isfinite(_ik_error37_distance_squares)
+                _m39 = _m30 & _c38
+                _ik_error37_distance_top = np.where(np.abs(_ik_error37_d1) > np.abs(_ik_error37_d0), np.abs(_ik_error37_d1), np.abs(_ik_error37_d0))
+                _ik_error37_distance = np.where(_m39, _ik_error37_distance_top*np.sqrt((_ik_error37_d0/_ik_error37_distance_top)*(_ik_error37_d0/_ik_error37_distance_top) + (_ik_error37_d1/_ik_error37_distance_top)*(_ik_error37_d1/_ik_error37_distance_top)), _ik_error37_distance)
+                e1[0] = np.where(_m30, _ik_error37_distance, e1[0])
+                _c40 = e1[0] < err_trial
+                _m41 = _m30 & _c40
+                err_trial = np.where(_m41, e1[0], err_trial)
+                found = np.where(_m41, 1, found)
+                for k in range(0, 2):
+                    trial[k] = np.where(_m41, q_next[k], trial[k])
+                for k in range(0, 2):
+                    probe[k] = np.where(_m30, q[k], probe[k])
+                probe[j] = np.where(_m30, probe[j] - 0.01, probe[j])
+                _ik_error42_p = [_fr(0.0)] * 2
+                _o = _position_on_lanes(_c, probe[0:2], l[0:2])
+                _merge(_m30, _o[0], _ik_error42_p, 0, _fr)
+                _ik_error42_d0 = target[0] - _ik_error42_p[0]
+                _ik_error42_d1 = target[1] - _ik_error42_p[1]
+                _ik_error42_distance_squares = _ik_error42_d0*_ik_error42_d0 + _ik_error42_d1*_ik_error42_d1
+                _ik_error42_distance = np.sqrt(_ik_error42_distance_squares)
+                _c43 = ~np.isfinite(_ik_error42_distance_squares)
+                _m44 = _m30 & _c43
+                _ik_error42_distance_top = np.where(np.abs(_ik_error42_d1) > np.abs(_ik_error42_d0), np.abs(_ik_error42_d1), np.abs(_ik_error42_d0))
+                _ik_error42_distance = np.where(_m44, _ik_error42_distance_top*np.sqrt((_ik_error42_d0/_ik_error42_distance_top)*(_ik_error42_d0/_ik_error42_distance_top) + (_ik_error42_d1/_ik_error42_distance_top)*(_ik_error42_d1/_ik_error42_distance_top)), _ik_error42_distance)
+                e1[0] = np.where(_m30, _ik_error42_distance, e1[0])
+                _c45 = e1[0] < err_trial
+                _m46 = _m30 & _c45
+                err_trial = np.where(_m46, e1[0], err_trial)
+                found = np.where(_m46, 1, found)
+                for k in range(0, 2):
+                    trial[k] = np.where(_m46, probe[k], trial[k])
+                _o = _ik_step_on_lanes(_c, probe[0:2], target[0:2], l[0:2], mu)
+                _merge(_m30, _o[0], q_next, 0, _fr)
+                _ik_error47_p = [_fr(0.0)] * 2
+                _o = _position_on_lanes(_c, q_next[0:2], l[0:2])
+                _merge(_m30, _o[0], _ik_error47_p, 0, _fr)
+                _ik_error47_d0 = target[0] - _ik_error47_p[0]
+                _ik_error47_d1 = target[1] - _ik_error47_p[1]
+                _ik_error47_distance_squares = _ik_error47_d0*_ik_error47_d0 + _ik_error47_d1*_ik_error47_d1
+                _ik_error47_distance = np.sqrt(_ik_error47_distance_squares)
+                _c48 = ~np.isfinite(_ik_error47_distance_squares)
+                _m49 = _m30 & _c48
+                _ik_error47_distance_top = np.where(np.abs(_ik_error47_d1) > np.abs(_ik_error47_d0), np.abs(_ik_error47_d1), np.abs(_ik_error47_d0))
+                _ik_error47_distance = np.where(_m49, _ik_error47_distance_top*np.sqrt((_ik_error47_d0/_ik_error47_distance_top)*(_ik_error47_d0/_ik_error47_distance_top) + (_ik_error47_d1/_ik_error47_distance_top)*(_ik_error47_d1/_ik_error47_distance_top)), _ik_error47_distance)
+                e1[0] = np.where(_m30, _ik_error47_distance, e1[0])
+                _c50 = e1[0] < err_trial
+                _m51 = _m30 & _c50
+                err_trial = np.where(_m51, e1[0], err_trial)
+                found = np.where(_m51, 1, found)
+                for k in range(0, 2):
+                    trial[k] = np.where(_m51, q_next[k], trial[k])
+            _c52 = found == 0
+            _m53 = _m30 & _c52
+            _status1 = np.where(_m53, IK_STALLED, _status1)
+            _alive2 = _alive2 & (~_m53)
+            _run18 = _run18 & (~_m53)
+            _m54 = _m30 & _run18
+        if bool(_m31.any()):
+            # Levenberg-Marquardt: a full step lowers the damping, each halving doubles it
+            _c55 = halving == 0
+            _m56 = _m31 & _c55
+            _m57 = _m31 & (~_c55)
+            c = np.where(_m56, np.where(c*0.3333333333333333 < 0.0001, 0.0001, c*0.3333333333333333), c)
+            if bool(_m57.any()):
+                _k58 = _fi(0)
+                _run59 = _m57 & (_k58 < halving)
+                while bool(_run59.any()):
+                    c = np.where(_run59, np.where(c*2.0 > 10000.0, 10000.0, c*2.0), c)
+                    _k58 = np.where(_run59, _k58 + 1, _k58)
+                    _run59 = _run59 & (_k58 < halving)
+        for k in range(0, 2):
+            q[k] = np.where(_run18, trial[k], q[k])
+        iterations[0] = np.where(_run18, _it17 + 1, iterations[0])
+        improvement = np.where(_run18, err - err_trial, improvement)
+        err = np.where(_run18, err_trial, err)
+        error[0] = np.where(_run18, err, error[0])
+        _c60 = err <= tol
+        _m61 = _run18 & _c60
+        _status1 = np.where(_m61, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m61)
+        _run18 = _run18 & (~_m61)
+        _c62 = improvement <= 1e-10*err
+        _m63 = _run18 & _c62
+        _status1 = np.where(_m63, IK_STALLED, _status1)
+        _alive2 = _alive2 & (~_m63)
+        _run18 = _run18 & (~_m63)
+        _it17 = np.where(_run18, _it17 + 1, _it17)
+        _run18 = _run18 & (_it17 < max_iter)
+    _status1 = np.where(_alive2, np.where(err <= tol, _fi(IK_CONVERGED), IK_MAX_ITER), _status1)
+    _alive2 = _alive2 & (~_alive2)
+    return (q, error, iterations, ), _status1
+
+
+def _ik_solve_batch(q0, target, l, lambda_, tol, max_iter):
+    """ik_solve for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    q0 = _problems(q0, "q0", (2,), "finite")
+    target = _problems(target, "target", (2,), "finite")
+    l = _problems(l, "l", (2,), "positive")
+    lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
+    if tol is None:
+        tol = 1e-09*np.where(l[..., 0] + l[..., 1] > 1.0, l[..., 0] + l[..., 1], 1.0)
+    tol = _lane_scalar(tol, "tol", "positive")
+    max_iter = _count(max_iter, "max_iter")
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "l": l.shape[:l.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (2,)), _lanes(target, batch, (2,)), _lanes(l, batch, (2,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: q0, target or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+    names = np.array(["converged", "stalled", "max_iter", "invalid"])
+    return IKResult(_assembled(q, batch, (2,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))

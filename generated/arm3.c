@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x54201644UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x6575768cUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1499,4 +1499,15 @@ int arm3_ik_solve(const double q0[3], const double target[2], const double l[3],
     double error_local[1];
     int iterations_local[1];
     return arm3_ik_solve_run(q0, target, l, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm3_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm3_ik_solve(q0 + j * 3, target + j * 2, l + j * 3, lambda, tol, max_iter, q + j * 3, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0x54201644UL
+#define ARM3_STAMP 0x6575768cUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -147,6 +147,12 @@ void arm3_ik_step_batch(size_t m, const double *q, const double *target, const d
  * error and iterations may be NULL.
  */
 int arm3_ik_solve(const double q0[3], const double target[2], const double l[3], double lambda, double tol, int max_iter, double q[3], double *error, int *iterations);
+
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
+ * status[j] is problem j's return code.
+ * error, iterations and status may be NULL.
+ * Each problem is one call of arm3_ik_solve: the same result bit for bit. */
+void arm3_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus
 }

@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x8960f5aaUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xd5c79918UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1472,4 +1472,15 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
     float error_local[1];
     int iterations_local[1];
     return arm3f_ik_solve_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm3f_ik_solve_batch(size_t m, const float *q0, const float *target, float lambda, float tol, int max_iter, float *q, float *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm3f_ik_solve(q0 + j * 3, target + j * 2, lambda, tol, max_iter, q + j * 3, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

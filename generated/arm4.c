@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xf0d5ca8aUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xb8162f33UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1564,4 +1564,15 @@ int arm4_ik_solve(const double q0[4], const double target[2], const double l[4],
     double error_local[1];
     int iterations_local[1];
     return arm4_ik_solve_run(q0, target, l, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm4_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm4_ik_solve(q0 + j * 4, target + j * 2, l + j * 4, lambda, tol, max_iter, q + j * 4, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x56ce8754UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x0d1e6c53UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -1709,4 +1709,15 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
     double error_local[1];
     int iterations_local[1];
     return arm5_ik_solve_run(q0, target, l, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm5_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm5_ik_solve(q0 + j * 5, target + j * 2, l + j * 5, lambda, tol, max_iter, q + j * 5, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

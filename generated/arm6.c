@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x2a1e84aaUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xecfcb878UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -1814,4 +1814,15 @@ int arm6_ik_solve(const double q0[6], const double target[2], const double l[6],
     double error_local[1];
     int iterations_local[1];
     return arm6_ik_solve_run(q0, target, l, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void arm6_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = arm6_ik_solve(q0 + j * 6, target + j * 2, l + j * 6, lambda, tol, max_iter, q + j * 6, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x781e4e54UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x49e2ad89UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -5972,6 +5972,17 @@ int panda_ik_solve(const double q0[7], const double target[16], double lambda, d
     return panda_ik_solve_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
 }
 
+void panda_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = panda_ik_solve(q0 + j * 7, target + j * 16, lambda, tol, max_iter, q + j * 7, error ? error + j * 2 : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
+}
+
 /* ---- panda_ik_solve_position: position IK of the tool origin ---- */
 static int panda_ik_solve_position_run(const double q0[7], const double target[3], double lambda, double tol, int max_iter, double q[7], double error[1], int iterations[1])
 {
@@ -6238,4 +6249,15 @@ int panda_ik_solve_position(const double q0[7], const double target[3], double l
     double error_local[1];
     int iterations_local[1];
     return panda_ik_solve_position_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
+}
+
+void panda_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = panda_ik_solve_position(q0 + j * 7, target + j * 3, lambda, tol, max_iter, q + j * 7, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

@@ -47,7 +47,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x781e4e54UL
+#define PANDA_STAMP 0x49e2ad89UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -212,6 +212,12 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
  */
 int panda_ik_solve(const double q0[7], const double target[16], double lambda, double tol, int max_iter, double q[7], double *error, int *iterations);
 
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
+ * status[j] is problem j's return code.
+ * error, iterations and status may be NULL.
+ * Each problem is one call of panda_ik_solve: the same result bit for bit. */
+void panda_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
+
 /* position IK of the tool origin.
  * Position IK of the tool origin: Levenberg-Marquardt on e = p_target - p with the 3 linear rows of J, step
  * dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(c |e|, lambda^2 min(1, |e|/1)), c starting at 0.01,
@@ -227,6 +233,12 @@ int panda_ik_solve(const double q0[7], const double target[16], double lambda, d
  * error and iterations may be NULL.
  */
 int panda_ik_solve_position(const double q0[7], const double target[3], double lambda, double tol, int max_iter, double q[7], double *error, int *iterations);
+
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
+ * status[j] is problem j's return code.
+ * error, iterations and status may be NULL.
+ * Each problem is one call of panda_ik_solve_position: the same result bit for bit. */
+void panda_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus
 }

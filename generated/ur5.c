@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x776d33dcUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3fd51a57UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6004,6 +6004,17 @@ int ur5_ik_solve(const double q0[6], const double target[16], double lambda, dou
     return ur5_ik_solve_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
 }
 
+void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = ur5_ik_solve(q0 + j * 6, target + j * 16, lambda, tol, max_iter, q + j * 6, error ? error + j * 2 : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
+}
+
 /* ---- ur5_ik_solve_position: position IK of the tool origin ---- */
 static int ur5_ik_solve_position_run(const double q0[6], const double target[3], double lambda, double tol, int max_iter, double q[6], double error[1], int iterations[1])
 {
@@ -6308,6 +6319,17 @@ int ur5_ik_solve_position(const double q0[6], const double target[3], double lam
     return ur5_ik_solve_position_run(q0, target, lambda, tol, max_iter, q, error ? error : error_local, iterations ? iterations : iterations_local);
 }
 
+void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = ur5_ik_solve_position(q0 + j * 6, target + j * 3, lambda, tol, max_iter, q + j * 6, error ? error + j : NULL, iterations ? iterations + j : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
+}
+
 /* ---- ur5_ik_all_rows: every closed-form solution within the limits, post-processed ---- */
 static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], int flags[8])
 {
@@ -6457,6 +6479,17 @@ int ur5_ik_all(const double target[16], double q[48], int *count, int *flags)
     return ur5_ik_all_run(target, q, count ? count : count_local, flags ? flags : flags_local);
 }
 
+void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = ur5_ik_all(target + j * 16, q + j * 48, count ? count + j : NULL, flags ? flags + j * 8 : NULL);
+        if (status) {
+            status[j] = s;
+        }
+    }
+}
+
 /* ---- ur5_ik_nearest: the closed-form IK solution nearest a configuration ---- */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
 {
@@ -6589,4 +6622,15 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
         }
     }
     return status;
+}
+
+void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = ur5_ik_nearest(q_ref + j * 6, target + j * 16, q + j * 6);
+        if (status) {
+            status[j] = s;
+        }
+    }
 }

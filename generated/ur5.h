@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x776d33dcUL
+#define UR5_STAMP 0x3fd51a57UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -244,6 +244,12 @@ void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *
  */
 int ur5_ik_solve(const double q0[6], const double target[16], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
+ * status[j] is problem j's return code.
+ * error, iterations and status may be NULL.
+ * Each problem is one call of ur5_ik_solve: the same result bit for bit. */
+void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
+
 /* position IK of the tool origin.
  * Position IK of the tool origin: Levenberg-Marquardt on e = p_target - p with the 3 linear rows of J, step
  * dq = J^T (J J^T + mu2 I)^-1 e with mu2 = max(c |e|, lambda^2 min(1, |e|/1)), c starting at 0.01,
@@ -260,6 +266,12 @@ int ur5_ik_solve(const double q0[6], const double target[16], double lambda, dou
  */
 int ur5_ik_solve_position(const double q0[6], const double target[3], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
+ * status[j] is problem j's return code.
+ * error, iterations and status may be NULL.
+ * Each problem is one call of ur5_ik_solve_position: the same result bit for bit. */
+void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
+
 /* every closed-form IK solution within the joint limits.
  * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
  * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
@@ -273,6 +285,12 @@ int ur5_ik_solve_position(const double q0[6], const double target[3], double lam
  */
 int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
 
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]).
+ * status[j] is problem j's return code.
+ * count, flags and status may be NULL.
+ * Each problem is one call of ur5_ik_all: the same result bit for bit. */
+void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status);
+
 /* the closed-form IK solution nearest a configuration.
  * The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
  * within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the
@@ -280,6 +298,12 @@ int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
  * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
  */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
+
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]).
+ * status[j] is problem j's return code.
+ * status may be NULL.
+ * Each problem is one call of ur5_ik_nearest: the same result bit for bit. */
+void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status);
 
 #ifdef __cplusplus
 }

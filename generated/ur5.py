@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x776d33dc
+STAMP = 0x3fd51a57
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -164,7 +164,7 @@ def _vector(value, name, shape, domain):
     array = np.array(_real_array(value, name), dtype=DTYPE)
     size = int(np.prod(shape))
     if array.shape != shape and array.shape != (size,):
-        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+        raise ValueError(f"{name} must have shape {shape} (a batch: (..., {', '.join(map(str, shape))})), got {array.shape}")
     _check_domain(array, name, domain)
     return array.reshape(size)
 
@@ -178,6 +178,122 @@ def _count(value, name):
     if not ok:
         raise ValueError(f"{name} must be a whole number in 0..{2**31 - 1}, got {value!r}")
     return int(value)
+
+
+def _is_batch(arrays, scalars):
+    """Whether a solver call holds a batch of problems: an array ``(value, shape)`` with dimensions before
+    its problem's shape, or a scalar that is not a single number."""
+    return any(np.ndim(value) > len(shape) for value, shape in arrays) or any(np.ndim(value) > 0 for value in scalars)
+
+
+def _problems(value, name, shape, domain):
+    """A batch's array of shape (..., *shape), checked."""
+    array = _real_array(value, name)
+    if array.shape[array.ndim - len(shape):] != shape:
+        raise ValueError(f"{name} must have shape (..., {', '.join(map(str, shape))}), got {array.shape}")
+    _check_domain(array, name, domain)
+    return array
+
+
+def _lane_scalar(value, name, domain):
+    """A batch's scalar: a number, or an array over the batch."""
+    array = _real_array(value, name)
+    _check_domain(array, name, domain)
+    return array
+
+
+def _batch_shape(name, shapes):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+    try:
+        return np.broadcast_shapes(*shapes.values())
+    except ValueError:
+        listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
+        raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+
+
+def _lanes(array, batch, shape):
+    """A batch's array (..., *shape) as a list of per-lane values, one per element of ``shape`` (a lane
+    per problem)."""
+    flat = np.broadcast_to(array, batch + shape).reshape(-1, int(np.prod(shape)))
+    return [flat[:, k] for k in range(flat.shape[1])]
+
+
+def _stacked(_c, elements):
+    """A list of per-lane values as one array (lanes, size)."""
+    return np.stack([np.broadcast_to(x, _c.shape) for x in elements], axis=-1)
+
+
+def _assembled(elements, batch, shape, dtype):
+    """Output elements (per-lane values) as one array (*batch, *shape)."""
+    lanes = int(np.prod(batch))
+    return np.stack([np.broadcast_to(np.asarray(x, dtype=dtype), (lanes,)) for x in elements], axis=-1).reshape(batch + shape)
+
+
+def _merge(mask, new, old, offset, full):
+    """old[offset + j] = new[j] where mask (all lanes: mask None)."""
+    for j, value in enumerate(new):
+        if mask is None:
+            old[offset + j] = value if isinstance(value, np.ndarray) else full(value)
+        else:
+            old[offset + j] = np.where(mask, value, old[offset + j])
+
+
+def _first_problem(where, batch):
+    """The index of the first problem where ``where`` holds, as text."""
+    index = np.unravel_index(int(np.argmax(where.reshape(-1))), batch)
+    return "(" + ", ".join(str(int(i)) for i in index) + ("," if len(index) == 1 else "") + ")"
+
+
+_INF = np.inf
+_NAN = np.nan
+
+
+# xorshift64* on 64-bit words held as (high, low) 32-bit halves in int64 arrays: no product or shift
+# below leaves 63 bits, so every backend draws the same numbers.
+_M32 = 0xFFFFFFFF
+
+
+def _u64_where(mask, a, b):
+    return np.where(mask, a[0], b[0]), np.where(mask, a[1], b[1])
+
+
+def _u64_xor(a, b):
+    return a[0] ^ b[0], a[1] ^ b[1]
+
+
+def _u64_shr(a, n):
+    if n >= 32:
+        return a[0] * 0, a[0] >> (n - 32)
+    return a[0] >> n, ((a[1] >> n) | (a[0] << (32 - n))) & _M32
+
+
+def _u64_shl(a, n):
+    if n >= 32:
+        return (a[1] << (n - 32)) & _M32, a[1] * 0
+    return ((a[0] << n) | (a[1] >> (32 - n))) & _M32, (a[1] << n) & _M32
+
+
+def _mul32(x, y):
+    """(high, low) halves of the 64-bit product of two 32-bit numbers, through 16-bit pieces of x."""
+    p0 = (x & 0xFFFF) * y
+    p1 = (x >> 16) * y
+    low = p0 + ((p1 & 0xFFFF) << 16)
+    return ((p1 >> 16) + (low >> 32)) & _M32, low & _M32
+
+
+def _mul32_low(x, y):
+    """The low 32 bits of x * y."""
+    return ((x & 0xFFFF) * y + ((((x >> 16) * y) & 0xFFFF) << 16)) & _M32
+
+
+def _u64_mul(a, b):
+    high, low = _mul32(a[1], b[1])
+    return (high + _mul32_low(a[0], b[1]) + _mul32_low(a[1], b[0])) & _M32, low
+
+
+def _u64_real(a, dtype):
+    """The word as a real (exact in float64, then rounded once to dtype)."""
+    return (a[0].astype(np.float64) * 4294967296.0 + a[1].astype(np.float64)).astype(dtype)
 
 
 def _pose_core(q, T):
@@ -4254,6 +4370,20 @@ def ik_candidates(target):
     return outputs[0].reshape(batch + (8, 6,)), outputs[1].reshape(batch + (8,))
 
 
+def _ik_terms_on_lanes(_c, q):
+    """_ik_terms_core on every lane (problem) of a masked program: lists of per-lane values in and out."""
+    outputs = (np.empty(_c.shape + (16,), dtype=DTYPE), np.empty(_c.shape + (36,), dtype=DTYPE), )
+    _ik_terms_core(_stacked(_c, q), *outputs)
+    return tuple([o[:, k] for k in range(o.shape[1])] for o in outputs)
+
+
+def _ik_candidates_on_lanes(_c, target):
+    """_ik_candidates_core on every lane (problem) of a masked program: lists of per-lane values in and out."""
+    outputs = (np.empty(_c.shape + (48,), dtype=DTYPE), np.empty(_c.shape + (8,), dtype=DTYPE), )
+    _ik_candidates_core(_stacked(_c, target), *outputs)
+    return tuple([o[:, k] for k in range(o.shape[1])] for o in outputs)
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_uniform(state):
     """a number in [0, 1) from xorshift64* (one problem; arrays are 1-D)."""
@@ -4842,7 +4972,13 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     max_iter: a number: at most this many steps over all attempts (default 100).
     Returns IKResult(q, status, position_error, rotation_error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape) and real scalars that are numbers or arrays, whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """
+    if _is_batch(((q0, (6,)), (target, (4, 4,)), ), (lambda_, tol, )):
+        return _ik_solve_batch(q0, target, lambda_, tol, max_iter)
     q0 = _vector(q0, "q0", (6,), "finite")
     target = _vector(target, "target", (4, 4,), "finite")
     lambda_ = DTYPE(_scalar(lambda_, "lambda", "nonnegative"))
@@ -4856,6 +4992,836 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
         raise ValueError("ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
+    """pose IK of the tool frame: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 6
+    error = [_fr(0.0)] * 2
+    iterations = [_fi(0)] * 1
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    hi = [6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586]
+    draw_lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    draw_span = [12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172]
+    near_lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    near_span = [12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172]
+    Tm = [_fr(0.0)] * 16
+    Tt = [_fr(0.0)] * 16
+    J = [_fr(0.0)] * 36
+    Jt = [_fr(0.0)] * 36
+    Jf = [_fr(0.0)] * 36
+    e = [_fr(0.0)] * 6
+    et = [_fr(0.0)] * 6
+    trial = [_fr(0.0)] * 6
+    dq = [_fr(0.0)] * 6
+    best_q = [_fr(0.0)] * 6
+    G = [_fr(0.0)] * 21
+    Gf = [_fr(0.0)] * 21
+    norms = [_fr(0.0)] * 3
+    blocked = [_fi(0)] * 6
+    state = [_fu((0x9e3779b9, 0x21a722f8))]
+    pe = _fr(0.0)
+    re = _fr(0.0)
+    en = _fr(0.0)
+    pet = _fr(0.0)
+    ret = _fr(0.0)
+    ent = _fr(0.0)
+    mu2 = _fr(0.0)
+    big = _fr(0.0)
+    scale = _fr(0.0)
+    gg = _fr(0.0)
+    ff = _fr(0.0)
+    c = _fr(0.01)
+    checkpoint = _fr(0.0)
+    window_start = _fr(0.0)
+    best_en = _fr(0.0)
+    best_pe = _fr(0.0)
+    best_re = _fr(0.0)
+    gram_ready = _fi(0)
+    any = _fi(0)
+    it = _fi(0)
+    attempt = _fi(0)
+    stalled = _fi(0)
+    slow = _fi(0)
+    stationary = _fi(0)
+    restarts = _fi(0)
+    best_stalled = _fi(0)
+    best_here = _fi(1)
+    nearest = _fr(0.0)
+    u = _fr(0.0)
+    d = _fr(0.0)
+    mu2_floor = lambda_*lambda_
+    for k in range(0, 6):
+        q[k] = q0[k]
+    iterations[0] = _fi(0)
+    error[0] = _fr(_INF)
+    error[1] = _fr(_INF)
+    _c3 = (~np.isfinite(lambda_)) | (lambda_ < 0.0) | (~np.isfinite(tol)) | (~(tol > 0.0)) | (max_iter < 0)
+    _m4 = _c3
+    _status1 = np.where(_m4, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m4)
+    _run5 = _alive2
+    for k in range(0, 6):
+        _c6 = ~np.isfinite(q0[k])
+        _m7 = _run5 & _c6
+        _status1 = np.where(_m7, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m7)
+        _run5 = _run5 & (~_m7)
+    _run8 = _alive2
+    for k in range(0, 16):
+        _c9 = ~np.isfinite(target[k])
+        _m10 = _run8 & _c9
+        _status1 = np.where(_m10, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m10)
+        _run8 = _run8 & (~_m10)
+    for k in range(0, 6):
+        q[k] = np.where(_alive2, np.where(q[k] < lo[k], lo[k], np.where(q[k] > hi[k], hi[k], q[k])), q[k])
+    _o = _ik_terms_on_lanes(_c, q[0:6])
+    _merge(_alive2, _o[0], Tm, 0, _fr)
+    _merge(_alive2, _o[1], J, 0, _fr)
+    _ik_error_pose11_M = [_fr(0.0)] * 9
+    e[0] = np.where(_alive2, target[3] - Tm[3], e[0])
+    e[1] = np.where(_alive2, target[7] - Tm[7], e[1])
+    e[2] = np.where(_alive2, target[11] - Tm[11], e[2])
+    _ik_error_pose11_M[0] = np.where(_alive2, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose11_M[0])
+    _ik_error_pose11_M[1] = np.where(_alive2, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose11_M[1])
+    _ik_error_pose11_M[2] = np.where(_alive2, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose11_M[2])
+    _ik_error_pose11_M[3] = np.where(_alive2, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose11_M[3])
+    _ik_error_pose11_M[4] = np.where(_alive2, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose11_M[4])
+    _ik_error_pose11_M[5] = np.where(_alive2, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose11_M[5])
+    _ik_error_pose11_M[6] = np.where(_alive2, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose11_M[6])
+    _ik_error_pose11_M[7] = np.where(_alive2, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose11_M[7])
+    _ik_error_pose11_M[8] = np.where(_alive2, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose11_M[8])
+    _alive13 = _alive2
+    _ik_log312_v0 = _ik_error_pose11_M[7] - _ik_error_pose11_M[5]
+    _ik_log312_v1 = _ik_error_pose11_M[2] - _ik_error_pose11_M[6]
+    _ik_log312_v2 = _ik_error_pose11_M[3] - _ik_error_pose11_M[1]
+    _ik_log312_c = (((_ik_error_pose11_M[0] + _ik_error_pose11_M[4]) + _ik_error_pose11_M[8]) - 1.0)*0.5
+    _ik_log312_s = np.sqrt((_ik_log312_v0*_ik_log312_v0 + _ik_log312_v1*_ik_log312_v1) + _ik_log312_v2*_ik_log312_v2)*0.5
+    _ik_log312_angle = np.arctan2(_ik_log312_s, _ik_log312_c)
+    _ik_log312_k = _fr(0.0)
+    _c14 = _ik_log312_angle < 0.0001
+    _m15 = _alive2 & _c14
+    _ik_log312_k = np.where(_m15, 0.5 + (_ik_log312_angle*_ik_log312_angle)*0.08333333333333333, _ik_log312_k)
+    e[0 + 3] = np.where(_m15, _ik_log312_v0*_ik_log312_k, e[0 + 3])
+    e[1 + 3] = np.where(_m15, _ik_log312_v1*_ik_log312_k, e[1 + 3])
+    e[2 + 3] = np.where(_m15, _ik_log312_v2*_ik_log312_k, e[2 + 3])
+    _alive13 = _alive13 & (~_m15)
+    _c16 = 3.141592653589793 - _ik_log312_angle > 0.001
+    _m17 = _alive13 & _c16
+    _ik_log312_k = np.where(_m17, _ik_log312_angle/(_ik_log312_s + _ik_log312_s), _ik_log312_k)
+    e[0 + 3] = np.where(_m17, _ik_log312_v0*_ik_log312_k, e[0 + 3])
+    e[1 + 3] = np.where(_m17, _ik_log312_v1*_ik_log312_k, e[1 + 3])
+    e[2 + 3] = np.where(_m17, _ik_log312_v2*_ik_log312_k, e[2 + 3])
+    _alive13 = _alive13 & (~_m17)
+    # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
+    _ik_log312_col = [_fr(0.0)] * 3
+    _ik_log312_i = np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[4], np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[8], _fi(0), 2), np.where(_ik_error_pose11_M[4] >= _ik_error_pose11_M[8], _fi(1), 2))
+    _i18 = 3*_ik_log312_i
+    _ik_log312_col[0] = np.where(_alive13, (np.where(_ik_log312_i == 0, _ik_error_pose11_M[0], np.where(_ik_log312_i == 1, _ik_error_pose11_M[1], np.where(_ik_log312_i == 2, _ik_error_pose11_M[2], np.where(_ik_log312_i == 3, _ik_error_pose11_M[3], np.where(_ik_log312_i == 4, _ik_error_pose11_M[4], np.where(_ik_log312_i == 5, _ik_error_pose11_M[5], np.where(_ik_log312_i == 6, _ik_error_pose11_M[6], np.where(_ik_log312_i == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i18 == 0, _ik_error_pose11_M[0], np.where(_i18 == 1, _ik_error_pose11_M[1], np.where(_i18 == 2, _ik_error_pose11_M[2], np.where(_i18 == 3, _ik_error_pose11_M[3], np.where(_i18 == 4, _ik_error_pose11_M[4], np.where(_i18 == 5, _ik_error_pose11_M[5], np.where(_i18 == 6, _ik_error_pose11_M[6], np.where(_i18 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))))*0.5, _ik_log312_col[0])
+    _i19 = 3 + _ik_log312_i
+    _i20 = 3*_ik_log312_i + 1
+    _ik_log312_col[1] = np.where(_alive13, (np.where(_i19 == 0, _ik_error_pose11_M[0], np.where(_i19 == 1, _ik_error_pose11_M[1], np.where(_i19 == 2, _ik_error_pose11_M[2], np.where(_i19 == 3, _ik_error_pose11_M[3], np.where(_i19 == 4, _ik_error_pose11_M[4], np.where(_i19 == 5, _ik_error_pose11_M[5], np.where(_i19 == 6, _ik_error_pose11_M[6], np.where(_i19 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i20 == 0, _ik_error_pose11_M[0], np.where(_i20 == 1, _ik_error_pose11_M[1], np.where(_i20 == 2, _ik_error_pose11_M[2], np.where(_i20 == 3, _ik_error_pose11_M[3], np.where(_i20 == 4, _ik_error_pose11_M[4], np.where(_i20 == 5, _ik_error_pose11_M[5], np.where(_i20 == 6, _ik_error_pose11_M[6], np.where(_i20 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))))*0.5, _ik_log312_col[1])
+    _i21 = 6 + _ik_log312_i
+    _i22 = 3*_ik_log312_i + 2
+    _ik_log312_col[2] = np.where(_alive13, (np.where(_i21 == 0, _ik_error_pose11_M[0], np.where(_i21 == 1, _ik_error_pose11_M[1], np.where(_i21 == 2, _ik_error_pose11_M[2], np.where(_i21 == 3, _ik_error_pose11_M[3], np.where(_i21 == 4, _ik_error_pose11_M[4], np.where(_i21 == 5, _ik_error_pose11_M[5], np.where(_i21 == 6, _ik_error_pose11_M[6], np.where(_i21 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i22 == 0, _ik_error_pose11_M[0], np.where(_i22 == 1, _ik_error_pose11_M[1], np.where(_i22 == 2, _ik_error_pose11_M[2], np.where(_i22 == 3, _ik_error_pose11_M[3], np.where(_i22 == 4, _ik_error_pose11_M[4], np.where(_i22 == 5, _ik_error_pose11_M[5], np.where(_i22 == 6, _ik_error_pose11_M[6], np.where(_i22 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))))*0.5, _ik_log312_col[2])
+    _v23 = np.where(_ik_log312_i == 0, _ik_log312_col[0], np.where(_ik_log312_i == 1, _ik_log312_col[1], _ik_log312_col[2])) - _ik_log312_c
+    _m24 = _alive13 & (_ik_log312_i == 0)
+    _ik_log312_col[0] = np.where(_m24, _v23, _ik_log312_col[0])
+    _m25 = _alive13 & (_ik_log312_i == 1)
+    _ik_log312_col[1] = np.where(_m25, _v23, _ik_log312_col[1])
+    _m26 = _alive13 & (_ik_log312_i == 2)
+    _ik_log312_col[2] = np.where(_m26, _v23, _ik_log312_col[2])
+    _ik_log312_norm = np.sqrt((_ik_log312_col[0]*_ik_log312_col[0] + _ik_log312_col[1]*_ik_log312_col[1]) + _ik_log312_col[2]*_ik_log312_col[2])
+    _ik_log312_k = np.where(_alive13, np.where((_ik_log312_col[0]*_ik_log312_v0 + _ik_log312_col[1]*_ik_log312_v1) + _ik_log312_col[2]*_ik_log312_v2 < 0.0, -_ik_log312_angle, _ik_log312_angle)/_ik_log312_norm, _ik_log312_k)
+    e[0 + 3] = np.where(_alive13, _ik_log312_col[0]*_ik_log312_k, e[0 + 3])
+    e[1 + 3] = np.where(_alive13, _ik_log312_col[1]*_ik_log312_k, e[1 + 3])
+    e[2 + 3] = np.where(_alive13, _ik_log312_col[2]*_ik_log312_k, e[2 + 3])
+    _ik_error_pose11_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+    _ik_error_pose11_rotation = np.sqrt(_ik_error_pose11_rotation_squares)
+    _c27 = ~np.isfinite(_ik_error_pose11_rotation_squares)
+    _m28 = _alive2 & _c27
+    _ik_error_pose11_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+    _ik_error_pose11_rotation = np.where(_m28, _ik_error_pose11_rotation_top*np.sqrt((e[3]/_ik_error_pose11_rotation_top)*(e[3]/_ik_error_pose11_rotation_top) + (e[4]/_ik_error_pose11_rotation_top)*(e[4]/_ik_error_pose11_rotation_top) + (e[5]/_ik_error_pose11_rotation_top)*(e[5]/_ik_error_pose11_rotation_top)), _ik_error_pose11_rotation)
+    norms[1] = np.where(_alive2, _ik_error_pose11_rotation, norms[1])
+    _ik_error_pose11_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    _ik_error_pose11_position = np.sqrt(_ik_error_pose11_position_squares)
+    _c29 = ~np.isfinite(_ik_error_pose11_position_squares)
+    _m30 = _alive2 & _c29
+    _ik_error_pose11_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+    _ik_error_pose11_position = np.where(_m30, _ik_error_pose11_position_top*np.sqrt((e[0]/_ik_error_pose11_position_top)*(e[0]/_ik_error_pose11_position_top) + (e[1]/_ik_error_pose11_position_top)*(e[1]/_ik_error_pose11_position_top) + (e[2]/_ik_error_pose11_position_top)*(e[2]/_ik_error_pose11_position_top)), _ik_error_pose11_position)
+    norms[0] = np.where(_alive2, _ik_error_pose11_position, norms[0])
+    _ik_error_pose11_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    _ik_error_pose11_whole = np.sqrt(_ik_error_pose11_whole_squares)
+    _c31 = ~np.isfinite(_ik_error_pose11_whole_squares)
+    _m32 = _alive2 & _c31
+    _ik_error_pose11_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+    _ik_error_pose11_whole = np.where(_m32, _ik_error_pose11_whole_top*np.sqrt((norms[0]/_ik_error_pose11_whole_top)*(norms[0]/_ik_error_pose11_whole_top) + (norms[1]/_ik_error_pose11_whole_top)*(norms[1]/_ik_error_pose11_whole_top)), _ik_error_pose11_whole)
+    norms[2] = np.where(_alive2, _ik_error_pose11_whole, norms[2])
+    pe = np.where(_alive2, norms[0], pe)
+    re = np.where(_alive2, norms[1], re)
+    en = np.where(_alive2, norms[2], en)
+    best_en = np.where(_alive2, en, best_en)
+    best_pe = np.where(_alive2, pe, best_pe)
+    best_re = np.where(_alive2, re, best_re)
+    for k in range(0, 6):
+        best_q[k] = np.where(_alive2, q[k], best_q[k])
+    checkpoint = np.where(_alive2, en, checkpoint)
+    window_start = np.where(_alive2, en, window_start)
+    _run33 = _alive2
+    while bool(_run33.any()):
+        _c34 = (pe <= tol) & (re <= tol)
+        _m35 = _run33 & _c34
+        error[0] = np.where(_m35, pe, error[0])
+        error[1] = np.where(_m35, re, error[1])
+        iterations[0] = np.where(_m35, it, iterations[0])
+        _status1 = np.where(_m35, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m35)
+        _run33 = _run33 & (~_m35)
+        _c36 = it == max_iter
+        _m37 = _run33 & _c36
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
+        _c38 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        _m39 = _m37 & _c38
+        best_stalled = np.where(_m39, 1, best_stalled)
+        _run33 = _run33 & (~_m37)
+        mu2 = np.where(_run33, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+        _c40 = gram_ready == 0
+        _m41 = _run33 & _c40
+        G[0] = np.where(_m41, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5], G[0])
+        G[1] = np.where(_m41, J[6]*J[0] + J[7]*J[1] + J[8]*J[2] + J[9]*J[3] + J[10]*J[4] + J[11]*J[5], G[1])
+        G[2] = np.where(_m41, J[6]*J[6] + J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11], G[2])
+        G[3] = np.where(_m41, J[12]*J[0] + J[13]*J[1] + J[14]*J[2] + J[15]*J[3] + J[16]*J[4] + J[17]*J[5], G[3])
+        G[4] = np.where(_m41, J[12]*J[6] + J[13]*J[7] + J[14]*J[8] + J[15]*J[9] + J[16]*J[10] + J[17]*J[11], G[4])
+        G[5] = np.where(_m41, J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17], G[5])
+        G[6] = np.where(_m41, J[18]*J[0] + J[19]*J[1] + J[20]*J[2] + J[21]*J[3] + J[22]*J[4] + J[23]*J[5], G[6])
+        G[7] = np.where(_m41, J[18]*J[6] + J[19]*J[7] + J[20]*J[8] + J[21]*J[9] + J[22]*J[10] + J[23]*J[11], G[7])
+        G[8] = np.where(_m41, J[18]*J[12] + J[19]*J[13] + J[20]*J[14] + J[21]*J[15] + J[22]*J[16] + J[23]*J[17], G[8])
+        G[9] = np.where(_m41, J[18]*J[18] + J[19]*J[19] + J[20]*J[20] + J[21]*J[21] + J[22]*J[22] + J[23]*J[23], G[9])
+        G[10] = np.where(_m41, J[24]*J[0] + J[25]*J[1] + J[26]*J[2] + J[27]*J[3] + J[28]*J[4] + J[29]*J[5], G[10])
+        G[11] = np.where(_m41, J[24]*J[6] + J[25]*J[7] + J[26]*J[8] + J[27]*J[9] + J[28]*J[10] + J[29]*J[11], G[11])
+        G[12] = np.where(_m41, J[24]*J[12] + J[25]*J[13] + J[26]*J[14] + J[27]*J[15] + J[28]*J[16] + J[29]*J[17], G[12])
+        G[13] = np.where(_m41, J[24]*J[18] + J[25]*J[19] + J[26]*J[20] + J[27]*J[21] + J[28]*J[22] + J[29]*J[23], G[13])
+        G[14] = np.where(_m41, J[24]*J[24] + J[25]*J[25] + J[26]*J[26] + J[27]*J[27] + J[28]*J[28] + J[29]*J[29], G[14])
+        G[15] = np.where(_m41, J[30]*J[0] + J[31]*J[1] + J[32]*J[2] + J[33]*J[3] + J[34]*J[4] + J[35]*J[5], G[15])
+        G[16] = np.where(_m41, J[30]*J[6] + J[31]*J[7] + J[32]*J[8] + J[33]*J[9] + J[34]*J[10] + J[35]*J[11], G[16])
+        G[17] = np.where(_m41, J[30]*J[12] + J[31]*J[13] + J[32]*J[14] + J[33]*J[15] + J[34]*J[16] + J[35]*J[17], G[17])
+        G[18] = np.where(_m41, J[30]*J[18] + J[31]*J[19] + J[32]*J[20] + J[33]*J[21] + J[34]*J[22] + J[35]*J[23], G[18])
+        G[19] = np.where(_m41, J[30]*J[24] + J[31]*J[25] + J[32]*J[26] + J[33]*J[27] + J[34]*J[28] + J[35]*J[29], G[19])
+        G[20] = np.where(_m41, J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34] + J[35]*J[35], G[20])
+        gram_ready = np.where(_m41, 1, gram_ready)
+        _ik_damped_pose43_mu2 = mu2
+        _ik_damped_pose43_a00 = G[0] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_a10 = G[1]
+        _ik_damped_pose43_a11 = G[2] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_a20 = G[3]
+        _ik_damped_pose43_a21 = G[4]
+        _ik_damped_pose43_a22 = G[5] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_a30 = G[6]
+        _ik_damped_pose43_a31 = G[7]
+        _ik_damped_pose43_a32 = G[8]
+        _ik_damped_pose43_a33 = G[9] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_a40 = G[10]
+        _ik_damped_pose43_a41 = G[11]
+        _ik_damped_pose43_a42 = G[12]
+        _ik_damped_pose43_a43 = G[13]
+        _ik_damped_pose43_a44 = G[14] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_a50 = G[15]
+        _ik_damped_pose43_a51 = G[16]
+        _ik_damped_pose43_a52 = G[17]
+        _ik_damped_pose43_a53 = G[18]
+        _ik_damped_pose43_a54 = G[19]
+        _ik_damped_pose43_a55 = G[20] + _ik_damped_pose43_mu2
+        _ik_damped_pose43_cut = np.where(_ik_damped_pose43_a55 > np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))), _ik_damped_pose43_a55, np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))))*1e-13
+        _ik_damped_pose43_s0 = _ik_damped_pose43_a00
+        _ik_damped_pose43_kept0 = _ik_damped_pose43_s0 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i0 = np.where(_ik_damped_pose43_kept0, 1.0/_ik_damped_pose43_s0, 0.0)
+        _ik_damped_pose43_t10 = _ik_damped_pose43_a10
+        _ik_damped_pose43_l10 = _ik_damped_pose43_t10*_ik_damped_pose43_i0
+        _ik_damped_pose43_ld10 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t10, 0.0)
+        _ik_damped_pose43_t20 = _ik_damped_pose43_a20
+        _ik_damped_pose43_l20 = _ik_damped_pose43_t20*_ik_damped_pose43_i0
+        _ik_damped_pose43_ld20 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t20, 0.0)
+        _ik_damped_pose43_t30 = _ik_damped_pose43_a30
+        _ik_damped_pose43_l30 = _ik_damped_pose43_t30*_ik_damped_pose43_i0
+        _ik_damped_pose43_ld30 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t30, 0.0)
+        _ik_damped_pose43_t40 = _ik_damped_pose43_a40
+        _ik_damped_pose43_l40 = _ik_damped_pose43_t40*_ik_damped_pose43_i0
+        _ik_damped_pose43_ld40 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t40, 0.0)
+        _ik_damped_pose43_t50 = _ik_damped_pose43_a50
+        _ik_damped_pose43_l50 = _ik_damped_pose43_t50*_ik_damped_pose43_i0
+        _ik_damped_pose43_ld50 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t50, 0.0)
+        _ik_damped_pose43_s1 = _ik_damped_pose43_a11 - _ik_damped_pose43_l10*_ik_damped_pose43_ld10
+        _ik_damped_pose43_kept1 = _ik_damped_pose43_s1 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i1 = np.where(_ik_damped_pose43_kept1, 1.0/_ik_damped_pose43_s1, 0.0)
+        _ik_damped_pose43_t21 = _ik_damped_pose43_a21 - _ik_damped_pose43_l20*_ik_damped_pose43_ld10
+        _ik_damped_pose43_l21 = _ik_damped_pose43_t21*_ik_damped_pose43_i1
+        _ik_damped_pose43_ld21 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t21, 0.0)
+        _ik_damped_pose43_t31 = _ik_damped_pose43_a31 - _ik_damped_pose43_l30*_ik_damped_pose43_ld10
+        _ik_damped_pose43_l31 = _ik_damped_pose43_t31*_ik_damped_pose43_i1
+        _ik_damped_pose43_ld31 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t31, 0.0)
+        _ik_damped_pose43_t41 = _ik_damped_pose43_a41 - _ik_damped_pose43_l40*_ik_damped_pose43_ld10
+        _ik_damped_pose43_l41 = _ik_damped_pose43_t41*_ik_damped_pose43_i1
+        _ik_damped_pose43_ld41 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t41, 0.0)
+        _ik_damped_pose43_t51 = _ik_damped_pose43_a51 - _ik_damped_pose43_l50*_ik_damped_pose43_ld10
+        _ik_damped_pose43_l51 = _ik_damped_pose43_t51*_ik_damped_pose43_i1
+        _ik_damped_pose43_ld51 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t51, 0.0)
+        _ik_damped_pose43_s2 = (_ik_damped_pose43_a22 - _ik_damped_pose43_l20*_ik_damped_pose43_ld20) - _ik_damped_pose43_l21*_ik_damped_pose43_ld21
+        _ik_damped_pose43_kept2 = _ik_damped_pose43_s2 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i2 = np.where(_ik_damped_pose43_kept2, 1.0/_ik_damped_pose43_s2, 0.0)
+        _ik_damped_pose43_t32 = (_ik_damped_pose43_a32 - _ik_damped_pose43_l30*_ik_damped_pose43_ld20) - _ik_damped_pose43_l31*_ik_damped_pose43_ld21
+        _ik_damped_pose43_l32 = _ik_damped_pose43_t32*_ik_damped_pose43_i2
+        _ik_damped_pose43_ld32 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t32, 0.0)
+        _ik_damped_pose43_t42 = (_ik_damped_pose43_a42 - _ik_damped_pose43_l40*_ik_damped_pose43_ld20) - _ik_damped_pose43_l41*_ik_damped_pose43_ld21
+        _ik_damped_pose43_l42 = _ik_damped_pose43_t42*_ik_damped_pose43_i2
+        _ik_damped_pose43_ld42 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t42, 0.0)
+        _ik_damped_pose43_t52 = (_ik_damped_pose43_a52 - _ik_damped_pose43_l50*_ik_damped_pose43_ld20) - _ik_damped_pose43_l51*_ik_damped_pose43_ld21
+        _ik_damped_pose43_l52 = _ik_damped_pose43_t52*_ik_damped_pose43_i2
+        _ik_damped_pose43_ld52 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t52, 0.0)
+        _ik_damped_pose43_s3 = (_ik_damped_pose43_a33 - (_ik_damped_pose43_l30*_ik_damped_pose43_ld30 + _ik_damped_pose43_l31*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l32*_ik_damped_pose43_ld32
+        _ik_damped_pose43_kept3 = _ik_damped_pose43_s3 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i3 = np.where(_ik_damped_pose43_kept3, 1.0/_ik_damped_pose43_s3, 0.0)
+        _ik_damped_pose43_t43 = (_ik_damped_pose43_a43 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld30 + _ik_damped_pose43_l41*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l42*_ik_damped_pose43_ld32
+        _ik_damped_pose43_l43 = _ik_damped_pose43_t43*_ik_damped_pose43_i3
+        _ik_damped_pose43_ld43 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t43, 0.0)
+        _ik_damped_pose43_t53 = (_ik_damped_pose43_a53 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld30 + _ik_damped_pose43_l51*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l52*_ik_damped_pose43_ld32
+        _ik_damped_pose43_l53 = _ik_damped_pose43_t53*_ik_damped_pose43_i3
+        _ik_damped_pose43_ld53 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t53, 0.0)
+        _ik_damped_pose43_s4 = (_ik_damped_pose43_a44 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l41*_ik_damped_pose43_ld41 + _ik_damped_pose43_l42*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l43*_ik_damped_pose43_ld43
+        _ik_damped_pose43_kept4 = _ik_damped_pose43_s4 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i4 = np.where(_ik_damped_pose43_kept4, 1.0/_ik_damped_pose43_s4, 0.0)
+        _ik_damped_pose43_t54 = (_ik_damped_pose43_a54 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l51*_ik_damped_pose43_ld41 + _ik_damped_pose43_l52*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l53*_ik_damped_pose43_ld43
+        _ik_damped_pose43_l54 = _ik_damped_pose43_t54*_ik_damped_pose43_i4
+        _ik_damped_pose43_ld54 = np.where(_ik_damped_pose43_kept4, _ik_damped_pose43_t54, 0.0)
+        _ik_damped_pose43_s5 = (_ik_damped_pose43_a55 - ((_ik_damped_pose43_l50*_ik_damped_pose43_ld50 + _ik_damped_pose43_l51*_ik_damped_pose43_ld51) + (_ik_damped_pose43_l52*_ik_damped_pose43_ld52 + _ik_damped_pose43_l53*_ik_damped_pose43_ld53))) - _ik_damped_pose43_l54*_ik_damped_pose43_ld54
+        _ik_damped_pose43_kept5 = _ik_damped_pose43_s5 > _ik_damped_pose43_cut
+        _ik_damped_pose43_i5 = np.where(_ik_damped_pose43_kept5, 1.0/_ik_damped_pose43_s5, 0.0)
+        _ik_damped_pose43_y0 = e[0]
+        _ik_damped_pose43_y1 = e[1] - _ik_damped_pose43_l10*_ik_damped_pose43_y0
+        _ik_damped_pose43_y2 = (e[2] - _ik_damped_pose43_l20*_ik_damped_pose43_y0) - _ik_damped_pose43_l21*_ik_damped_pose43_y1
+        _ik_damped_pose43_y3 = (e[3] - (_ik_damped_pose43_l30*_ik_damped_pose43_y0 + _ik_damped_pose43_l31*_ik_damped_pose43_y1)) - _ik_damped_pose43_l32*_ik_damped_pose43_y2
+        _ik_damped_pose43_y4 = (e[4] - (_ik_damped_pose43_l40*_ik_damped_pose43_y0 + (_ik_damped_pose43_l41*_ik_damped_pose43_y1 + _ik_damped_pose43_l42*_ik_damped_pose43_y2))) - _ik_damped_pose43_l43*_ik_damped_pose43_y3
+        _ik_damped_pose43_y5 = (e[5] - ((_ik_damped_pose43_l50*_ik_damped_pose43_y0 + _ik_damped_pose43_l51*_ik_damped_pose43_y1) + (_ik_damped_pose43_l52*_ik_damped_pose43_y2 + _ik_damped_pose43_l53*_ik_damped_pose43_y3))) - _ik_damped_pose43_l54*_ik_damped_pose43_y4
+        _ik_damped_pose43_z5 = _ik_damped_pose43_y5*_ik_damped_pose43_i5
+        _ik_damped_pose43_z4 = _ik_damped_pose43_y4*_ik_damped_pose43_i4 - _ik_damped_pose43_l54*_ik_damped_pose43_z5
+        _ik_damped_pose43_z3 = (_ik_damped_pose43_y3*_ik_damped_pose43_i3 - _ik_damped_pose43_l53*_ik_damped_pose43_z5) - _ik_damped_pose43_l43*_ik_damped_pose43_z4
+        _ik_damped_pose43_z2 = (_ik_damped_pose43_y2*_ik_damped_pose43_i2 - (_ik_damped_pose43_l52*_ik_damped_pose43_z5 + _ik_damped_pose43_l42*_ik_damped_pose43_z4)) - _ik_damped_pose43_l32*_ik_damped_pose43_z3
+        _ik_damped_pose43_z1 = (_ik_damped_pose43_y1*_ik_damped_pose43_i1 - (_ik_damped_pose43_l51*_ik_damped_pose43_z5 + (_ik_damped_pose43_l41*_ik_damped_pose43_z4 + _ik_damped_pose43_l31*_ik_damped_pose43_z3))) - _ik_damped_pose43_l21*_ik_damped_pose43_z2
+        _ik_damped_pose43_z0 = (_ik_damped_pose43_y0*_ik_damped_pose43_i0 - ((_ik_damped_pose43_l50*_ik_damped_pose43_z5 + _ik_damped_pose43_l40*_ik_damped_pose43_z4) + (_ik_damped_pose43_l30*_ik_damped_pose43_z3 + _ik_damped_pose43_l20*_ik_damped_pose43_z2))) - _ik_damped_pose43_l10*_ik_damped_pose43_z1
+        dq[0] = np.where(_run33, (J[0]*_ik_damped_pose43_z0 + (J[6]*_ik_damped_pose43_z1 + J[12]*_ik_damped_pose43_z2)) + (J[18]*_ik_damped_pose43_z3 + (J[24]*_ik_damped_pose43_z4 + J[30]*_ik_damped_pose43_z5)), dq[0])
+        dq[1] = np.where(_run33, (J[1]*_ik_damped_pose43_z0 + (J[7]*_ik_damped_pose43_z1 + J[13]*_ik_damped_pose43_z2)) + (J[19]*_ik_damped_pose43_z3 + (J[25]*_ik_damped_pose43_z4 + J[31]*_ik_damped_pose43_z5)), dq[1])
+        dq[2] = np.where(_run33, (J[2]*_ik_damped_pose43_z0 + (J[8]*_ik_damped_pose43_z1 + J[14]*_ik_damped_pose43_z2)) + (J[20]*_ik_damped_pose43_z3 + (J[26]*_ik_damped_pose43_z4 + J[32]*_ik_damped_pose43_z5)), dq[2])
+        dq[3] = np.where(_run33, (J[3]*_ik_damped_pose43_z0 + (J[9]*_ik_damped_pose43_z1 + J[15]*_ik_damped_pose43_z2)) + (J[21]*_ik_damped_pose43_z3 + (J[27]*_ik_damped_pose43_z4 + J[33]*_ik_damped_pose43_z5)), dq[3])
+        dq[4] = np.where(_run33, (J[4]*_ik_damped_pose43_z0 + (J[10]*_ik_damped_pose43_z1 + J[16]*_ik_damped_pose43_z2)) + (J[22]*_ik_damped_pose43_z3 + (J[28]*_ik_damped_pose43_z4 + J[34]*_ik_damped_pose43_z5)), dq[4])
+        dq[5] = np.where(_run33, (J[5]*_ik_damped_pose43_z0 + (J[11]*_ik_damped_pose43_z1 + J[17]*_ik_damped_pose43_z2)) + (J[23]*_ik_damped_pose43_z3 + (J[29]*_ik_damped_pose43_z4 + J[35]*_ik_damped_pose43_z5)), dq[5])
+        for k in range(0, 6):
+            blocked[k] = np.where(_run33, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
+        blocked[0] = np.where(_run33, 0, blocked[0])
+        blocked[1] = np.where(_run33, 0, blocked[1])
+        blocked[2] = np.where(_run33, 0, blocked[2])
+        blocked[3] = np.where(_run33, 0, blocked[3])
+        blocked[4] = np.where(_run33, 0, blocked[4])
+        blocked[5] = np.where(_run33, 0, blocked[5])
+        any = np.where(_run33, 0, any)
+        for k in range(0, 6):
+            _c44 = blocked[k] > 0
+            _m45 = _run33 & _c44
+            any = np.where(_m45, 1, any)
+        _c46 = any > 0
+        _m47 = _run33 & _c46
+        _m48 = _run33 & (~_c46)
+        if bool(_m47.any()):
+            # blocked columns zeroed, their outer products taken out of G, the step solved again
+            for r in range(0, 6):
+                for k in range(0, 6):
+                    Jf[r*6 + k] = np.where(_m47, np.where(blocked[k] > 0, 0.0, J[r*6 + k]), Jf[r*6 + k])
+            for k in range(0, 21):
+                Gf[k] = np.where(_m47, G[k], Gf[k])
+            for k in range(0, 6):
+                _c49 = blocked[k] > 0
+                _m50 = _m47 & _c49
+                Gf[0] = np.where(_m50, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
+                Gf[1] = np.where(_m50, Gf[1] - J[6 + k]*J[0 + k], Gf[1])
+                Gf[2] = np.where(_m50, Gf[2] - J[6 + k]*J[6 + k], Gf[2])
+                Gf[3] = np.where(_m50, Gf[3] - J[12 + k]*J[0 + k], Gf[3])
+                Gf[4] = np.where(_m50, Gf[4] - J[12 + k]*J[6 + k], Gf[4])
+                Gf[5] = np.where(_m50, Gf[5] - J[12 + k]*J[12 + k], Gf[5])
+                Gf[6] = np.where(_m50, Gf[6] - J[18 + k]*J[0 + k], Gf[6])
+                Gf[7] = np.where(_m50, Gf[7] - J[18 + k]*J[6 + k], Gf[7])
+                Gf[8] = np.where(_m50, Gf[8] - J[18 + k]*J[12 + k], Gf[8])
+                Gf[9] = np.where(_m50, Gf[9] - J[18 + k]*J[18 + k], Gf[9])
+                Gf[10] = np.where(_m50, Gf[10] - J[24 + k]*J[0 + k], Gf[10])
+                Gf[11] = np.where(_m50, Gf[11] - J[24 + k]*J[6 + k], Gf[11])
+                Gf[12] = np.where(_m50, Gf[12] - J[24 + k]*J[12 + k], Gf[12])
+                Gf[13] = np.where(_m50, Gf[13] - J[24 + k]*J[18 + k], Gf[13])
+                Gf[14] = np.where(_m50, Gf[14] - J[24 + k]*J[24 + k], Gf[14])
+                Gf[15] = np.where(_m50, Gf[15] - J[30 + k]*J[0 + k], Gf[15])
+                Gf[16] = np.where(_m50, Gf[16] - J[30 + k]*J[6 + k], Gf[16])
+                Gf[17] = np.where(_m50, Gf[17] - J[30 + k]*J[12 + k], Gf[17])
+                Gf[18] = np.where(_m50, Gf[18] - J[30 + k]*J[18 + k], Gf[18])
+                Gf[19] = np.where(_m50, Gf[19] - J[30 + k]*J[24 + k], Gf[19])
+                Gf[20] = np.where(_m50, Gf[20] - J[30 + k]*J[30 + k], Gf[20])
+            _ik_damped_pose51_mu2 = mu2
+            _ik_damped_pose51_a00 = Gf[0] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_a10 = Gf[1]
+            _ik_damped_pose51_a11 = Gf[2] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_a20 = Gf[3]
+            _ik_damped_pose51_a21 = Gf[4]
+            _ik_damped_pose51_a22 = Gf[5] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_a30 = Gf[6]
+            _ik_damped_pose51_a31 = Gf[7]
+            _ik_damped_pose51_a32 = Gf[8]
+            _ik_damped_pose51_a33 = Gf[9] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_a40 = Gf[10]
+            _ik_damped_pose51_a41 = Gf[11]
+            _ik_damped_pose51_a42 = Gf[12]
+            _ik_damped_pose51_a43 = Gf[13]
+            _ik_damped_pose51_a44 = Gf[14] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_a50 = Gf[15]
+            _ik_damped_pose51_a51 = Gf[16]
+            _ik_damped_pose51_a52 = Gf[17]
+            _ik_damped_pose51_a53 = Gf[18]
+            _ik_damped_pose51_a54 = Gf[19]
+            _ik_damped_pose51_a55 = Gf[20] + _ik_damped_pose51_mu2
+            _ik_damped_pose51_cut = np.where(_ik_damped_pose51_a55 > np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))), _ik_damped_pose51_a55, np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))))*1e-13
+            _ik_damped_pose51_s0 = _ik_damped_pose51_a00
+            _ik_damped_pose51_kept0 = _ik_damped_pose51_s0 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i0 = np.where(_ik_damped_pose51_kept0, 1.0/_ik_damped_pose51_s0, 0.0)
+            _ik_damped_pose51_t10 = _ik_damped_pose51_a10
+            _ik_damped_pose51_l10 = _ik_damped_pose51_t10*_ik_damped_pose51_i0
+            _ik_damped_pose51_ld10 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t10, 0.0)
+            _ik_damped_pose51_t20 = _ik_damped_pose51_a20
+            _ik_damped_pose51_l20 = _ik_damped_pose51_t20*_ik_damped_pose51_i0
+            _ik_damped_pose51_ld20 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t20, 0.0)
+            _ik_damped_pose51_t30 = _ik_damped_pose51_a30
+            _ik_damped_pose51_l30 = _ik_damped_pose51_t30*_ik_damped_pose51_i0
+            _ik_damped_pose51_ld30 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t30, 0.0)
+            _ik_damped_pose51_t40 = _ik_damped_pose51_a40
+            _ik_damped_pose51_l40 = _ik_damped_pose51_t40*_ik_damped_pose51_i0
+            _ik_damped_pose51_ld40 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t40, 0.0)
+            _ik_damped_pose51_t50 = _ik_damped_pose51_a50
+            _ik_damped_pose51_l50 = _ik_damped_pose51_t50*_ik_damped_pose51_i0
+            _ik_damped_pose51_ld50 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t50, 0.0)
+            _ik_damped_pose51_s1 = _ik_damped_pose51_a11 - _ik_damped_pose51_l10*_ik_damped_pose51_ld10
+            _ik_damped_pose51_kept1 = _ik_damped_pose51_s1 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i1 = np.where(_ik_damped_pose51_kept1, 1.0/_ik_damped_pose51_s1, 0.0)
+            _ik_damped_pose51_t21 = _ik_damped_pose51_a21 - _ik_damped_pose51_l20*_ik_damped_pose51_ld10
+            _ik_damped_pose51_l21 = _ik_damped_pose51_t21*_ik_damped_pose51_i1
+            _ik_damped_pose51_ld21 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t21, 0.0)
+            _ik_damped_pose51_t31 = _ik_damped_pose51_a31 - _ik_damped_pose51_l30*_ik_damped_pose51_ld10
+            _ik_damped_pose51_l31 = _ik_damped_pose51_t31*_ik_damped_pose51_i1
+            _ik_damped_pose51_ld31 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t31, 0.0)
+            _ik_damped_pose51_t41 = _ik_damped_pose51_a41 - _ik_damped_pose51_l40*_ik_damped_pose51_ld10
+            _ik_damped_pose51_l41 = _ik_damped_pose51_t41*_ik_damped_pose51_i1
+            _ik_damped_pose51_ld41 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t41, 0.0)
+            _ik_damped_pose51_t51 = _ik_damped_pose51_a51 - _ik_damped_pose51_l50*_ik_damped_pose51_ld10
+            _ik_damped_pose51_l51 = _ik_damped_pose51_t51*_ik_damped_pose51_i1
+            _ik_damped_pose51_ld51 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t51, 0.0)
+            _ik_damped_pose51_s2 = (_ik_damped_pose51_a22 - _ik_damped_pose51_l20*_ik_damped_pose51_ld20) - _ik_damped_pose51_l21*_ik_damped_pose51_ld21
+            _ik_damped_pose51_kept2 = _ik_damped_pose51_s2 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i2 = np.where(_ik_damped_pose51_kept2, 1.0/_ik_damped_pose51_s2, 0.0)
+            _ik_damped_pose51_t32 = (_ik_damped_pose51_a32 - _ik_damped_pose51_l30*_ik_damped_pose51_ld20) - _ik_damped_pose51_l31*_ik_damped_pose51_ld21
+            _ik_damped_pose51_l32 = _ik_damped_pose51_t32*_ik_damped_pose51_i2
+            _ik_damped_pose51_ld32 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t32, 0.0)
+            _ik_damped_pose51_t42 = (_ik_damped_pose51_a42 - _ik_damped_pose51_l40*_ik_damped_pose51_ld20) - _ik_damped_pose51_l41*_ik_damped_pose51_ld21
+            _ik_damped_pose51_l42 = _ik_damped_pose51_t42*_ik_damped_pose51_i2
+            _ik_damped_pose51_ld42 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t42, 0.0)
+            _ik_damped_pose51_t52 = (_ik_damped_pose51_a52 - _ik_damped_pose51_l50*_ik_damped_pose51_ld20) - _ik_damped_pose51_l51*_ik_damped_pose51_ld21
+            _ik_damped_pose51_l52 = _ik_damped_pose51_t52*_ik_damped_pose51_i2
+            _ik_damped_pose51_ld52 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t52, 0.0)
+            _ik_damped_pose51_s3 = (_ik_damped_pose51_a33 - (_ik_damped_pose51_l30*_ik_damped_pose51_ld30 + _ik_damped_pose51_l31*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l32*_ik_damped_pose51_ld32
+            _ik_damped_pose51_kept3 = _ik_damped_pose51_s3 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i3 = np.where(_ik_damped_pose51_kept3, 1.0/_ik_damped_pose51_s3, 0.0)
+            _ik_damped_pose51_t43 = (_ik_damped_pose51_a43 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld30 + _ik_damped_pose51_l41*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l42*_ik_damped_pose51_ld32
+            _ik_damped_pose51_l43 = _ik_damped_pose51_t43*_ik_damped_pose51_i3
+            _ik_damped_pose51_ld43 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t43, 0.0)
+            _ik_damped_pose51_t53 = (_ik_damped_pose51_a53 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld30 + _ik_damped_pose51_l51*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l52*_ik_damped_pose51_ld32
+            _ik_damped_pose51_l53 = _ik_damped_pose51_t53*_ik_damped_pose51_i3
+            _ik_damped_pose51_ld53 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t53, 0.0)
+            _ik_damped_pose51_s4 = (_ik_damped_pose51_a44 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l41*_ik_damped_pose51_ld41 + _ik_damped_pose51_l42*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l43*_ik_damped_pose51_ld43
+            _ik_damped_pose51_kept4 = _ik_damped_pose51_s4 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i4 = np.where(_ik_damped_pose51_kept4, 1.0/_ik_damped_pose51_s4, 0.0)
+            _ik_damped_pose51_t54 = (_ik_damped_pose51_a54 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l51*_ik_damped_pose51_ld41 + _ik_damped_pose51_l52*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l53*_ik_damped_pose51_ld43
+            _ik_damped_pose51_l54 = _ik_damped_pose51_t54*_ik_damped_pose51_i4
+            _ik_damped_pose51_ld54 = np.where(_ik_damped_pose51_kept4, _ik_damped_pose51_t54, 0.0)
+            _ik_damped_pose51_s5 = (_ik_damped_pose51_a55 - ((_ik_damped_pose51_l50*_ik_damped_pose51_ld50 + _ik_damped_pose51_l51*_ik_damped_pose51_ld51) + (_ik_damped_pose51_l52*_ik_damped_pose51_ld52 + _ik_damped_pose51_l53*_ik_damped_pose51_ld53))) - _ik_damped_pose51_l54*_ik_damped_pose51_ld54
+            _ik_damped_pose51_kept5 = _ik_damped_pose51_s5 > _ik_damped_pose51_cut
+            _ik_damped_pose51_i5 = np.where(_ik_damped_pose51_kept5, 1.0/_ik_damped_pose51_s5, 0.0)
+            _ik_damped_pose51_y0 = e[0]
+            _ik_damped_pose51_y1 = e[1] - _ik_damped_pose51_l10*_ik_damped_pose51_y0
+            _ik_damped_pose51_y2 = (e[2] - _ik_damped_pose51_l20*_ik_damped_pose51_y0) - _ik_damped_pose51_l21*_ik_damped_pose51_y1
+            _ik_damped_pose51_y3 = (e[3] - (_ik_damped_pose51_l30*_ik_damped_pose51_y0 + _ik_damped_pose51_l31*_ik_damped_pose51_y1)) - _ik_damped_pose51_l32*_ik_damped_pose51_y2
+            _ik_damped_pose51_y4 = (e[4] - (_ik_damped_pose51_l40*_ik_damped_pose51_y0 + (_ik_damped_pose51_l41*_ik_damped_pose51_y1 + _ik_damped_pose51_l42*_ik_damped_pose51_y2))) - _ik_damped_pose51_l43*_ik_damped_pose51_y3
+            _ik_damped_pose51_y5 = (e[5] - ((_ik_damped_pose51_l50*_ik_damped_pose51_y0 + _ik_damped_pose51_l51*_ik_damped_pose51_y1) + (_ik_damped_pose51_l52*_ik_damped_pose51_y2 + _ik_damped_pose51_l53*_ik_damped_pose51_y3))) - _ik_damped_pose51_l54*_ik_damped_pose51_y4
+            _ik_damped_pose51_z5 = _ik_damped_pose51_y5*_ik_damped_pose51_i5
+            _ik_damped_pose51_z4 = _ik_damped_pose51_y4*_ik_damped_pose51_i4 - _ik_damped_pose51_l54*_ik_damped_pose51_z5
+            _ik_damped_pose51_z3 = (_ik_damped_pose51_y3*_ik_damped_pose51_i3 - _ik_damped_pose51_l53*_ik_damped_pose51_z5) - _ik_damped_pose51_l43*_ik_damped_pose51_z4
+            _ik_damped_pose51_z2 = (_ik_damped_pose51_y2*_ik_damped_pose51_i2 - (_ik_damped_pose51_l52*_ik_damped_pose51_z5 + _ik_damped_pose51_l42*_ik_damped_pose51_z4)) - _ik_damped_pose51_l32*_ik_damped_pose51_z3
+            _ik_damped_pose51_z1 = (_ik_damped_pose51_y1*_ik_damped_pose51_i1 - (_ik_damped_pose51_l51*_ik_damped_pose51_z5 + (_ik_damped_pose51_l41*_ik_damped_pose51_z4 + _ik_damped_pose51_l31*_ik_damped_pose51_z3))) - _ik_damped_pose51_l21*_ik_damped_pose51_z2
+            _ik_damped_pose51_z0 = (_ik_damped_pose51_y0*_ik_damped_pose51_i0 - ((_ik_damped_pose51_l50*_ik_damped_pose51_z5 + _ik_damped_pose51_l40*_ik_damped_pose51_z4) + (_ik_damped_pose51_l30*_ik_damped_pose51_z3 + _ik_damped_pose51_l20*_ik_damped_pose51_z2))) - _ik_damped_pose51_l10*_ik_damped_pose51_z1
+            dq[0] = np.where(_m47, (Jf[0]*_ik_damped_pose51_z0 + (Jf[6]*_ik_damped_pose51_z1 + Jf[12]*_ik_damped_pose51_z2)) + (Jf[18]*_ik_damped_pose51_z3 + (Jf[24]*_ik_damped_pose51_z4 + Jf[30]*_ik_damped_pose51_z5)), dq[0])
+            dq[1] = np.where(_m47, (Jf[1]*_ik_damped_pose51_z0 + (Jf[7]*_ik_damped_pose51_z1 + Jf[13]*_ik_damped_pose51_z2)) + (Jf[19]*_ik_damped_pose51_z3 + (Jf[25]*_ik_damped_pose51_z4 + Jf[31]*_ik_damped_pose51_z5)), dq[1])
+            dq[2] = np.where(_m47, (Jf[2]*_ik_damped_pose51_z0 + (Jf[8]*_ik_damped_pose51_z1 + Jf[14]*_ik_damped_pose51_z2)) + (Jf[20]*_ik_damped_pose51_z3 + (Jf[26]*_ik_damped_pose51_z4 + Jf[32]*_ik_damped_pose51_z5)), dq[2])
+            dq[3] = np.where(_m47, (Jf[3]*_ik_damped_pose51_z0 + (Jf[9]*_ik_damped_pose51_z1 + Jf[15]*_ik_damped_pose51_z2)) + (Jf[21]*_ik_damped_pose51_z3 + (Jf[27]*_ik_damped_pose51_z4 + Jf[33]*_ik_damped_pose51_z5)), dq[3])
+            dq[4] = np.where(_m47, (Jf[4]*_ik_damped_pose51_z0 + (Jf[10]*_ik_damped_pose51_z1 + Jf[16]*_ik_damped_pose51_z2)) + (Jf[22]*_ik_damped_pose51_z3 + (Jf[28]*_ik_damped_pose51_z4 + Jf[34]*_ik_damped_pose51_z5)), dq[4])
+            dq[5] = np.where(_m47, (Jf[5]*_ik_damped_pose51_z0 + (Jf[11]*_ik_damped_pose51_z1 + Jf[17]*_ik_damped_pose51_z2)) + (Jf[23]*_ik_damped_pose51_z3 + (Jf[29]*_ik_damped_pose51_z4 + Jf[35]*_ik_damped_pose51_z5)), dq[5])
+            ff = np.where(_m47, Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20], ff)
+            gg = np.where(_m47, 0.0, gg)
+            for k in range(0, 6):
+                gg = np.where(_m47, gg + (Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5])*(Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5]), gg)
+        ff = np.where(_m48, G[0] + G[2] + G[5] + G[9] + G[14] + G[20], ff)
+        gg = np.where(_m48, 0.0, gg)
+        for k in range(0, 6):
+            gg = np.where(_m48, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5]), gg)
+        # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
+        stationary = np.where(_run33, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        big = np.where(_run33, 0.0, big)
+        for k in range(0, 6):
+            big = np.where(_run33, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
+        scale = np.where(_run33, np.where(big > 1.0, 1.0/big, 1.0), scale)
+        for k in range(0, 6):
+            trial[k] = np.where(_run33, q[k] + dq[k]*scale, trial[k])
+        _c52 = trial[0] > hi[0]
+        _m53 = _run33 & _c52
+        _m54 = _run33 & (~_c52)
+        trial[0] = np.where(_m53, trial[0] - 6.283185307179586, trial[0])
+        _c55 = trial[0] < lo[0]
+        _m56 = _m54 & _c55
+        trial[0] = np.where(_m56, trial[0] + 6.283185307179586, trial[0])
+        _c57 = trial[1] > hi[1]
+        _m58 = _run33 & _c57
+        _m59 = _run33 & (~_c57)
+        trial[1] = np.where(_m58, trial[1] - 6.283185307179586, trial[1])
+        _c60 = trial[1] < lo[1]
+        _m61 = _m59 & _c60
+        trial[1] = np.where(_m61, trial[1] + 6.283185307179586, trial[1])
+        _c62 = trial[2] > hi[2]
+        _m63 = _run33 & _c62
+        _m64 = _run33 & (~_c62)
+        trial[2] = np.where(_m63, trial[2] - 6.283185307179586, trial[2])
+        _c65 = trial[2] < lo[2]
+        _m66 = _m64 & _c65
+        trial[2] = np.where(_m66, trial[2] + 6.283185307179586, trial[2])
+        _c67 = trial[3] > hi[3]
+        _m68 = _run33 & _c67
+        _m69 = _run33 & (~_c67)
+        trial[3] = np.where(_m68, trial[3] - 6.283185307179586, trial[3])
+        _c70 = trial[3] < lo[3]
+        _m71 = _m69 & _c70
+        trial[3] = np.where(_m71, trial[3] + 6.283185307179586, trial[3])
+        _c72 = trial[4] > hi[4]
+        _m73 = _run33 & _c72
+        _m74 = _run33 & (~_c72)
+        trial[4] = np.where(_m73, trial[4] - 6.283185307179586, trial[4])
+        _c75 = trial[4] < lo[4]
+        _m76 = _m74 & _c75
+        trial[4] = np.where(_m76, trial[4] + 6.283185307179586, trial[4])
+        _c77 = trial[5] > hi[5]
+        _m78 = _run33 & _c77
+        _m79 = _run33 & (~_c77)
+        trial[5] = np.where(_m78, trial[5] - 6.283185307179586, trial[5])
+        _c80 = trial[5] < lo[5]
+        _m81 = _m79 & _c80
+        trial[5] = np.where(_m81, trial[5] + 6.283185307179586, trial[5])
+        for k in range(0, 6):
+            trial[k] = np.where(_run33, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
+        _o = _ik_terms_on_lanes(_c, trial[0:6])
+        _merge(_run33, _o[0], Tt, 0, _fr)
+        _merge(_run33, _o[1], Jt, 0, _fr)
+        _ik_error_pose82_M = [_fr(0.0)] * 9
+        et[0] = np.where(_run33, target[3] - Tt[3], et[0])
+        et[1] = np.where(_run33, target[7] - Tt[7], et[1])
+        et[2] = np.where(_run33, target[11] - Tt[11], et[2])
+        _ik_error_pose82_M[0] = np.where(_run33, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose82_M[0])
+        _ik_error_pose82_M[1] = np.where(_run33, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose82_M[1])
+        _ik_error_pose82_M[2] = np.where(_run33, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose82_M[2])
+        _ik_error_pose82_M[3] = np.where(_run33, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose82_M[3])
+        _ik_error_pose82_M[4] = np.where(_run33, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose82_M[4])
+        _ik_error_pose82_M[5] = np.where(_run33, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose82_M[5])
+        _ik_error_pose82_M[6] = np.where(_run33, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose82_M[6])
+        _ik_error_pose82_M[7] = np.where(_run33, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose82_M[7])
+        _ik_error_pose82_M[8] = np.where(_run33, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose82_M[8])
+        _alive84 = _run33
+        _ik_log383_v0 = _ik_error_pose82_M[7] - _ik_error_pose82_M[5]
+        _ik_log383_v1 = _ik_error_pose82_M[2] - _ik_error_pose82_M[6]
+        _ik_log383_v2 = _ik_error_pose82_M[3] - _ik_error_pose82_M[1]
+        _ik_log383_c = (((_ik_error_pose82_M[0] + _ik_error_pose82_M[4]) + _ik_error_pose82_M[8]) - 1.0)*0.5
+        _ik_log383_s = np.sqrt((_ik_log383_v0*_ik_log383_v0 + _ik_log383_v1*_ik_log383_v1) + _ik_log383_v2*_ik_log383_v2)*0.5
+        _ik_log383_angle = np.arctan2(_ik_log383_s, _ik_log383_c)
+        _ik_log383_k = _fr(0.0)
+        _c85 = _ik_log383_angle < 0.0001
+        _m86 = _run33 & _c85
+        _ik_log383_k = np.where(_m86, 0.5 + (_ik_log383_angle*_ik_log383_angle)*0.08333333333333333, _ik_log383_k)
+        et[0 + 3] = np.where(_m86, _ik_log383_v0*_ik_log383_k, et[0 + 3])
+        et[1 + 3] = np.where(_m86, _ik_log383_v1*_ik_log383_k, et[1 + 3])
+        et[2 + 3] = np.where(_m86, _ik_log383_v2*_ik_log383_k, et[2 + 3])
+        _alive84 = _alive84 & (~_m86)
+        _c87 = 3.141592653589793 - _ik_log383_angle > 0.001
+        _m88 = _alive84 & _c87
+        _ik_log383_k = np.where(_m88, _ik_log383_angle/(_ik_log383_s + _ik_log383_s), _ik_log383_k)
+        et[0 + 3] = np.where(_m88, _ik_log383_v0*_ik_log383_k, et[0 + 3])
+        et[1 + 3] = np.where(_m88, _ik_log383_v1*_ik_log383_k, et[1 + 3])
+        et[2 + 3] = np.where(_m88, _ik_log383_v2*_ik_log383_k, et[2 + 3])
+        _alive84 = _alive84 & (~_m88)
+        # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
+        _ik_log383_col = [_fr(0.0)] * 3
+        _ik_log383_i = np.where(_ik_error_pose82_M[0] >= _ik_error_pose82_M[4], np.where(_ik_error_pose82_M[0] >= _ik_error_pose82_M[8], _fi(0), 2), np.where(_ik_error_pose82_M[4] >= _ik_error_pose82_M[8], _fi(1), 2))
+        _i89 = 3*_ik_log383_i
+        _ik_log383_col[0] = np.where(_alive84, (np.where(_ik_log383_i == 0, _ik_error_pose82_M[0], np.where(_ik_log383_i == 1, _ik_error_pose82_M[1], np.where(_ik_log383_i == 2, _ik_error_pose82_M[2], np.where(_ik_log383_i == 3, _ik_error_pose82_M[3], np.where(_ik_log383_i == 4, _ik_error_pose82_M[4], np.where(_ik_log383_i == 5, _ik_error_pose82_M[5], np.where(_ik_log383_i == 6, _ik_error_pose82_M[6], np.where(_ik_log383_i == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i89 == 0, _ik_error_pose82_M[0], np.where(_i89 == 1, _ik_error_pose82_M[1], np.where(_i89 == 2, _ik_error_pose82_M[2], np.where(_i89 == 3, _ik_error_pose82_M[3], np.where(_i89 == 4, _ik_error_pose82_M[4], np.where(_i89 == 5, _ik_error_pose82_M[5], np.where(_i89 == 6, _ik_error_pose82_M[6], np.where(_i89 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))))*0.5, _ik_log383_col[0])
+        _i90 = 3 + _ik_log383_i
+        _i91 = 3*_ik_log383_i + 1
+        _ik_log383_col[1] = np.where(_alive84, (np.where(_i90 == 0, _ik_error_pose82_M[0], np.where(_i90 == 1, _ik_error_pose82_M[1], np.where(_i90 == 2, _ik_error_pose82_M[2], np.where(_i90 == 3, _ik_error_pose82_M[3], np.where(_i90 == 4, _ik_error_pose82_M[4], np.where(_i90 == 5, _ik_error_pose82_M[5], np.where(_i90 == 6, _ik_error_pose82_M[6], np.where(_i90 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i91 == 0, _ik_error_pose82_M[0], np.where(_i91 == 1, _ik_error_pose82_M[1], np.where(_i91 == 2, _ik_error_pose82_M[2], np.where(_i91 == 3, _ik_error_pose82_M[3], np.where(_i91 == 4, _ik_error_pose82_M[4], np.where(_i91 == 5, _ik_error_pose82_M[5], np.where(_i91 == 6, _ik_error_pose82_M[6], np.where(_i91 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))))*0.5, _ik_log383_col[1])
+        _i92 = 6 + _ik_log383_i
+        _i93 = 3*_ik_log383_i + 2
+        _ik_log383_col[2] = np.where(_alive84, (np.where(_i92 == 0, _ik_error_pose82_M[0], np.where(_i92 == 1, _ik_error_pose82_M[1], np.where(_i92 == 2, _ik_error_pose82_M[2], np.where(_i92 == 3, _ik_error_pose82_M[3], np.where(_i92 == 4, _ik_error_pose82_M[4], np.where(_i92 == 5, _ik_error_pose82_M[5], np.where(_i92 == 6, _ik_error_pose82_M[6], np.where(_i92 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i93 == 0, _ik_error_pose82_M[0], np.where(_i93 == 1, _ik_error_pose82_M[1], np.where(_i93 == 2, _ik_error_pose82_M[2], np.where(_i93 == 3, _ik_error_pose82_M[3], np.where(_i93 == 4, _ik_error_pose82_M[4], np.where(_i93 == 5, _ik_error_pose82_M[5], np.where(_i93 == 6, _ik_error_pose82_M[6], np.where(_i93 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))))*0.5, _ik_log383_col[2])
+        _v94 = np.where(_ik_log383_i == 0, _ik_log383_col[0], np.where(_ik_log383_i == 1, _ik_log383_col[1], _ik_log383_col[2])) - _ik_log383_c
+        _m95 = _alive84 & (_ik_log383_i == 0)
+        _ik_log383_col[0] = np.where(_m95, _v94, _ik_log383_col[0])
+        _m96 = _alive84 & (_ik_log383_i == 1)
+        _ik_log383_col[1] = np.where(_m96, _v94, _ik_log383_col[1])
+        _m97 = _alive84 & (_ik_log383_i == 2)
+        _ik_log383_col[2] = np.where(_m97, _v94, _ik_log383_col[2])
+        _ik_log383_norm = np.sqrt((_ik_log383_col[0]*_ik_log383_col[0] + _ik_log383_col[1]*_ik_log383_col[1]) + _ik_log383_col[2]*_ik_log383_col[2])
+        _ik_log383_k = np.where(_alive84, np.where((_ik_log383_col[0]*_ik_log383_v0 + _ik_log383_col[1]*_ik_log383_v1) + _ik_log383_col[2]*_ik_log383_v2 < 0.0, -_ik_log383_angle, _ik_log383_angle)/_ik_log383_norm, _ik_log383_k)
+        et[0 + 3] = np.where(_alive84, _ik_log383_col[0]*_ik_log383_k, et[0 + 3])
+        et[1 + 3] = np.where(_alive84, _ik_log383_col[1]*_ik_log383_k, et[1 + 3])
+        et[2 + 3] = np.where(_alive84, _ik_log383_col[2]*_ik_log383_k, et[2 + 3])
+        _ik_error_pose82_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+        _ik_error_pose82_rotation = np.sqrt(_ik_error_pose82_rotation_squares)
+        _c98 = ~np.isfinite(_ik_error_pose82_rotation_squares)
+        _m99 = _run33 & _c98
+        _ik_error_pose82_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+        _ik_error_pose82_rotation = np.where(_m99, _ik_error_pose82_rotation_top*np.sqrt((et[3]/_ik_error_pose82_rotation_top)*(et[3]/_ik_error_pose82_rotation_top) + (et[4]/_ik_error_pose82_rotation_top)*(et[4]/_ik_error_pose82_rotation_top) + (et[5]/_ik_error_pose82_rotation_top)*(et[5]/_ik_error_pose82_rotation_top)), _ik_error_pose82_rotation)
+        norms[1] = np.where(_run33, _ik_error_pose82_rotation, norms[1])
+        _ik_error_pose82_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_pose82_position = np.sqrt(_ik_error_pose82_position_squares)
+        _c100 = ~np.isfinite(_ik_error_pose82_position_squares)
+        _m101 = _run33 & _c100
+        _ik_error_pose82_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_pose82_position = np.where(_m101, _ik_error_pose82_position_top*np.sqrt((et[0]/_ik_error_pose82_position_top)*(et[0]/_ik_error_pose82_position_top) + (et[1]/_ik_error_pose82_position_top)*(et[1]/_ik_error_pose82_position_top) + (et[2]/_ik_error_pose82_position_top)*(et[2]/_ik_error_pose82_position_top)), _ik_error_pose82_position)
+        norms[0] = np.where(_run33, _ik_error_pose82_position, norms[0])
+        _ik_error_pose82_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_pose82_whole = np.sqrt(_ik_error_pose82_whole_squares)
+        _c102 = ~np.isfinite(_ik_error_pose82_whole_squares)
+        _m103 = _run33 & _c102
+        _ik_error_pose82_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_pose82_whole = np.where(_m103, _ik_error_pose82_whole_top*np.sqrt((norms[0]/_ik_error_pose82_whole_top)*(norms[0]/_ik_error_pose82_whole_top) + (norms[1]/_ik_error_pose82_whole_top)*(norms[1]/_ik_error_pose82_whole_top)), _ik_error_pose82_whole)
+        norms[2] = np.where(_run33, _ik_error_pose82_whole, norms[2])
+        pet = np.where(_run33, norms[0], pet)
+        ret = np.where(_run33, norms[1], ret)
+        ent = np.where(_run33, norms[2], ent)
+        it = np.where(_run33, it + 1, it)
+        attempt = np.where(_run33, attempt + 1, attempt)
+        _c104 = ent < en
+        _m105 = _run33 & _c104
+        _m106 = _run33 & (~_c104)
+        stalled = np.where(_m105, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        for k in range(0, 6):
+            q[k] = np.where(_m105, trial[k], q[k])
+        for k in range(0, 16):
+            Tm[k] = np.where(_m105, Tt[k], Tm[k])
+        for k in range(0, 36):
+            J[k] = np.where(_m105, Jt[k], J[k])
+        for k in range(0, 6):
+            e[k] = np.where(_m105, et[k], e[k])
+        gram_ready = np.where(_m105, 0, gram_ready)
+        pe = np.where(_m105, pet, pe)
+        re = np.where(_m105, ret, re)
+        en = np.where(_m105, ent, en)
+        c = np.where(_m105, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m106, c*4.0, c)
+        stalled = np.where(_m106, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        _c107 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m108 = _run33 & _c107
+        best_en = np.where(_m108, en, best_en)
+        best_pe = np.where(_m108, pe, best_pe)
+        best_re = np.where(_m108, re, best_re)
+        best_stalled = np.where(_m108, stalled, best_stalled)
+        best_here = np.where(_m108, 1, best_here)
+        for k in range(0, 6):
+            best_q[k] = np.where(_m108, q[k], best_q[k])
+        _c109 = ~((pe <= tol) & (re <= tol))
+        _m110 = _run33 & _c109
+        if bool(_m110.any()):
+            slow = np.where(_m110, stationary, slow)
+            _c111 = attempt % 3 == 0
+            _m112 = _m110 & _c111
+            _c113 = en > checkpoint*0.6
+            _m114 = _m112 & _c113
+            slow = np.where(_m114, 1, slow)
+            window_start = np.where(_m112, checkpoint, window_start)
+            checkpoint = np.where(_m112, en, checkpoint)
+            _c115 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m116 = _m110 & _c115
+            if bool(_m116.any()):
+                _c117 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m118 = _m116 & _c117
+                # this attempt's best is (near) a stationary point
+                best_stalled = np.where(_m118, 1, best_stalled)
+                best_here = np.where(_m116, 0, best_here)
+                nearest = np.where(_m116, 0.0, nearest)
+                for m in range(0, 8):
+                    for k in range(0, 6):
+                        _alive120 = _m116
+                        _ik_uniform119_s = state[0]
+                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shr(_ik_uniform119_s, 12)), _ik_uniform119_s)
+                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shl(_ik_uniform119_s, 25)), _ik_uniform119_s)
+                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shr(_ik_uniform119_s, 27)), _ik_uniform119_s)
+                        state[0] = _u64_where(_m116, _ik_uniform119_s, state[0])
+                        u = np.where(_m116, _u64_real(_u64_shr(_u64_mul(_ik_uniform119_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive120 = _alive120 & (~_m116)
+                        trial[k] = np.where(_m116, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                    _o = _ik_terms_on_lanes(_c, trial[0:6])
+                    _merge(_m116, _o[0], Tt, 0, _fr)
+                    _merge(_m116, _o[1], Jt, 0, _fr)
+                    d = np.where(_m116, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
+                    _c121 = (d < nearest) | (m == 0)
+                    _m122 = _m116 & _c121
+                    nearest = np.where(_m122, d, nearest)
+                    for k in range(0, 6):
+                        q[k] = np.where(_m122, trial[k], q[k])
+                restarts = np.where(_m116, restarts + 1, restarts)
+                gram_ready = np.where(_m116, 0, gram_ready)
+                _o = _ik_terms_on_lanes(_c, q[0:6])
+                _merge(_m116, _o[0], Tm, 0, _fr)
+                _merge(_m116, _o[1], J, 0, _fr)
+                _ik_error_pose123_M = [_fr(0.0)] * 9
+                e[0] = np.where(_m116, target[3] - Tm[3], e[0])
+                e[1] = np.where(_m116, target[7] - Tm[7], e[1])
+                e[2] = np.where(_m116, target[11] - Tm[11], e[2])
+                _ik_error_pose123_M[0] = np.where(_m116, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose123_M[0])
+                _ik_error_pose123_M[1] = np.where(_m116, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose123_M[1])
+                _ik_error_pose123_M[2] = np.where(_m116, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose123_M[2])
+                _ik_error_pose123_M[3] = np.where(_m116, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose123_M[3])
+                _ik_error_pose123_M[4] = np.where(_m116, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose123_M[4])
+                _ik_error_pose123_M[5] = np.where(_m116, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose123_M[5])
+                _ik_error_pose123_M[6] = np.where(_m116, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose123_M[6])
+                _ik_error_pose123_M[7] = np.where(_m116, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose123_M[7])
+                _ik_error_pose123_M[8] = np.where(_m116, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose123_M[8])
+                _alive125 = _m116
+                _ik_log3124_v0 = _ik_error_pose123_M[7] - _ik_error_pose123_M[5]
+                _ik_log3124_v1 = _ik_error_pose123_M[2] - _ik_error_pose123_M[6]
+                _ik_log3124_v2 = _ik_error_pose123_M[3] - _ik_error_pose123_M[1]
+                _ik_log3124_c = (((_ik_error_pose123_M[0] + _ik_error_pose123_M[4]) + _ik_error_pose123_M[8]) - 1.0)*0.5
+                _ik_log3124_s = np.sqrt((_ik_log3124_v0*_ik_log3124_v0 + _ik_log3124_v1*_ik_log3124_v1) + _ik_log3124_v2*_ik_log3124_v2)*0.5
+                _ik_log3124_angle = np.arctan2(_ik_log3124_s, _ik_log3124_c)
+                _ik_log3124_k = _fr(0.0)
+                _c126 = _ik_log3124_angle < 0.0001
+                _m127 = _m116 & _c126
+                _ik_log3124_k = np.where(_m127, 0.5 + (_ik_log3124_angle*_ik_log3124_angle)*0.08333333333333333, _ik_log3124_k)
+                e[0 + 3] = np.where(_m127, _ik_log3124_v0*_ik_log3124_k, e[0 + 3])
+                e[1 + 3] = np.where(_m127, _ik_log3124_v1*_ik_log3124_k, e[1 + 3])
+                e[2 + 3] = np.where(_m127, _ik_log3124_v2*_ik_log3124_k, e[2 + 3])
+                _alive125 = _alive125 & (~_m127)
+                _c128 = 3.141592653589793 - _ik_log3124_angle > 0.001
+                _m129 = _alive125 & _c128
+                _ik_log3124_k = np.where(_m129, _ik_log3124_angle/(_ik_log3124_s + _ik_log3124_s), _ik_log3124_k)
+                e[0 + 3] = np.where(_m129, _ik_log3124_v0*_ik_log3124_k, e[0 + 3])
+                e[1 + 3] = np.where(_m129, _ik_log3124_v1*_ik_log3124_k, e[1 + 3])
+                e[2 + 3] = np.where(_m129, _ik_log3124_v2*_ik_log3124_k, e[2 + 3])
+                _alive125 = _alive125 & (~_m129)
+                # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
+                _ik_log3124_col = [_fr(0.0)] * 3
+                _ik_log3124_i = np.where(_ik_error_pose123_M[0] >= _ik_error_pose123_M[4], np.where(_ik_error_pose123_M[0] >= _ik_error_pose123_M[8], _fi(0), 2), np.where(_ik_error_pose123_M[4] >= _ik_error_pose123_M[8], _fi(1), 2))
+                _i130 = 3*_ik_log3124_i
+                _ik_log3124_col[0] = np.where(_alive125, (np.where(_ik_log3124_i == 0, _ik_error_pose123_M[0], np.where(_ik_log3124_i == 1, _ik_error_pose123_M[1], np.where(_ik_log3124_i == 2, _ik_error_pose123_M[2], np.where(_ik_log3124_i == 3, _ik_error_pose123_M[3], np.where(_ik_log3124_i == 4, _ik_error_pose123_M[4], np.where(_ik_log3124_i == 5, _ik_error_pose123_M[5], np.where(_ik_log3124_i == 6, _ik_error_pose123_M[6], np.where(_ik_log3124_i == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i130 == 0, _ik_error_pose123_M[0], np.where(_i130 == 1, _ik_error_pose123_M[1], np.where(_i130 == 2, _ik_error_pose123_M[2], np.where(_i130 == 3, _ik_error_pose123_M[3], np.where(_i130 == 4, _ik_error_pose123_M[4], np.where(_i130 == 5, _ik_error_pose123_M[5], np.where(_i130 == 6, _ik_error_pose123_M[6], np.where(_i130 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))))*0.5, _ik_log3124_col[0])
+                _i131 = 3 + _ik_log3124_i
+                _i132 = 3*_ik_log3124_i + 1
+                _ik_log3124_col[1] = np.where(_alive125, (np.where(_i131 == 0, _ik_error_pose123_M[0], np.where(_i131 == 1, _ik_error_pose123_M[1], np.where(_i131 == 2, _ik_error_pose123_M[2], np.where(_i131 == 3, _ik_error_pose123_M[3], np.where(_i131 == 4, _ik_error_pose123_M[4], np.where(_i131 == 5, _ik_error_pose123_M[5], np.where(_i131 == 6, _ik_error_pose123_M[6], np.where(_i131 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i132 == 0, _ik_error_pose123_M[0], np.where(_i132 == 1, _ik_error_pose123_M[1], np.where(_i132 == 2, _ik_error_pose123_M[2], np.where(_i132 == 3, _ik_error_pose123_M[3], np.where(_i132 == 4, _ik_error_pose123_M[4], np.where(_i132 == 5, _ik_error_pose123_M[5], np.where(_i132 == 6, _ik_error_pose123_M[6], np.where(_i132 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))))*0.5, _ik_log3124_col[1])
+                _i133 = 6 + _ik_log3124_i
+                _i134 = 3*_ik_log3124_i + 2
+                _ik_log3124_col[2] = np.where(_alive125, (np.where(_i133 == 0, _ik_error_pose123_M[0], np.where(_i133 == 1, _ik_error_pose123_M[1], np.where(_i133 == 2, _ik_error_pose123_M[2], np.where(_i133 == 3, _ik_error_pose123_M[3], np.where(_i133 == 4, _ik_error_pose123_M[4], np.where(_i133 == 5, _ik_error_pose123_M[5], np.where(_i133 == 6, _ik_error_pose123_M[6], np.where(_i133 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i134 == 0, _ik_error_pose123_M[0], np.where(_i134 == 1, _ik_error_pose123_M[1], np.where(_i134 == 2, _ik_error_pose123_M[2], np.where(_i134 == 3, _ik_error_pose123_M[3], np.where(_i134 == 4, _ik_error_pose123_M[4], np.where(_i134 == 5, _ik_error_pose123_M[5], np.where(_i134 == 6, _ik_error_pose123_M[6], np.where(_i134 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))))*0.5, _ik_log3124_col[2])
+                _v135 = np.where(_ik_log3124_i == 0, _ik_log3124_col[0], np.where(_ik_log3124_i == 1, _ik_log3124_col[1], _ik_log3124_col[2])) - _ik_log3124_c
+                _m136 = _alive125 & (_ik_log3124_i == 0)
+                _ik_log3124_col[0] = np.where(_m136, _v135, _ik_log3124_col[0])
+                _m137 = _alive125 & (_ik_log3124_i == 1)
+                _ik_log3124_col[1] = np.where(_m137, _v135, _ik_log3124_col[1])
+                _m138 = _alive125 & (_ik_log3124_i == 2)
+                _ik_log3124_col[2] = np.where(_m138, _v135, _ik_log3124_col[2])
+                _ik_log3124_norm = np.sqrt((_ik_log3124_col[0]*_ik_log3124_col[0] + _ik_log3124_col[1]*_ik_log3124_col[1]) + _ik_log3124_col[2]*_ik_log3124_col[2])
+                _ik_log3124_k = np.where(_alive125, np.where((_ik_log3124_col[0]*_ik_log3124_v0 + _ik_log3124_col[1]*_ik_log3124_v1) + _ik_log3124_col[2]*_ik_log3124_v2 < 0.0, -_ik_log3124_angle, _ik_log3124_angle)/_ik_log3124_norm, _ik_log3124_k)
+                e[0 + 3] = np.where(_alive125, _ik_log3124_col[0]*_ik_log3124_k, e[0 + 3])
+                e[1 + 3] = np.where(_alive125, _ik_log3124_col[1]*_ik_log3124_k, e[1 + 3])
+                e[2 + 3] = np.where(_alive125, _ik_log3124_col[2]*_ik_log3124_k, e[2 + 3])
+                _ik_error_pose123_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+                _ik_error_pose123_rotation = np.sqrt(_ik_error_pose123_rotation_squares)
+                _c139 = ~np.isfinite(_ik_error_pose123_rotation_squares)
+                _m140 = _m116 & _c139
+                _ik_error_pose123_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+                _ik_error_pose123_rotation = np.where(_m140, _ik_error_pose123_rotation_top*np.sqrt((e[3]/_ik_error_pose123_rotation_top)*(e[3]/_ik_error_pose123_rotation_top) + (e[4]/_ik_error_pose123_rotation_top)*(e[4]/_ik_error_pose123_rotation_top) + (e[5]/_ik_error_pose123_rotation_top)*(e[5]/_ik_error_pose123_rotation_top)), _ik_error_pose123_rotation)
+                norms[1] = np.where(_m116, _ik_error_pose123_rotation, norms[1])
+                _ik_error_pose123_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_pose123_position = np.sqrt(_ik_error_pose123_position_squares)
+                _c141 = ~np.isfinite(_ik_error_pose123_position_squares)
+                _m142 = _m116 & _c141
+                _ik_error_pose123_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_pose123_position = np.where(_m142, _ik_error_pose123_position_top*np.sqrt((e[0]/_ik_error_pose123_position_top)*(e[0]/_ik_error_pose123_position_top) + (e[1]/_ik_error_pose123_position_top)*(e[1]/_ik_error_pose123_position_top) + (e[2]/_ik_error_pose123_position_top)*(e[2]/_ik_error_pose123_position_top)), _ik_error_pose123_position)
+                norms[0] = np.where(_m116, _ik_error_pose123_position, norms[0])
+                _ik_error_pose123_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_pose123_whole = np.sqrt(_ik_error_pose123_whole_squares)
+                _c143 = ~np.isfinite(_ik_error_pose123_whole_squares)
+                _m144 = _m116 & _c143
+                _ik_error_pose123_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_pose123_whole = np.where(_m144, _ik_error_pose123_whole_top*np.sqrt((norms[0]/_ik_error_pose123_whole_top)*(norms[0]/_ik_error_pose123_whole_top) + (norms[1]/_ik_error_pose123_whole_top)*(norms[1]/_ik_error_pose123_whole_top)), _ik_error_pose123_whole)
+                norms[2] = np.where(_m116, _ik_error_pose123_whole, norms[2])
+                pe = np.where(_m116, norms[0], pe)
+                re = np.where(_m116, norms[1], re)
+                en = np.where(_m116, norms[2], en)
+                c = np.where(_m116, 0.01, c)
+                attempt = np.where(_m116, 0, attempt)
+                checkpoint = np.where(_m116, en, checkpoint)
+                window_start = np.where(_m116, en, window_start)
+                _c145 = en < best_en
+                _m146 = _m116 & _c145
+                best_en = np.where(_m146, en, best_en)
+                best_pe = np.where(_m146, pe, best_pe)
+                best_re = np.where(_m146, re, best_re)
+                best_stalled = np.where(_m146, 0, best_stalled)
+                best_here = np.where(_m146, 1, best_here)
+                for k in range(0, 6):
+                    best_q[k] = np.where(_m146, q[k], best_q[k])
+    for k in range(0, 6):
+        q[k] = np.where(_alive2, best_q[k], q[k])
+    error[0] = np.where(_alive2, best_pe, error[0])
+    error[1] = np.where(_alive2, best_re, error[1])
+    iterations[0] = np.where(_alive2, it, iterations[0])
+    _status1 = np.where(_alive2, np.where(best_stalled > 0, _fi(IK_STALLED), IK_MAX_ITER), _status1)
+    _alive2 = _alive2 & (~_alive2)
+    return (q, error, iterations, ), _status1
+
+
+def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
+    """ik_solve for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    q0 = _problems(q0, "q0", (6,), "finite")
+    target = _problems(target, "target", (4, 4,), "finite")
+    lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
+    tol = _lane_scalar(tol, "tol", "positive")
+    max_iter = _count(max_iter, "max_iter")
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 2], "lambda": lambda_.shape, "tol": tol.shape})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+    names = np.array(["converged", "stalled", "max_iter", "invalid"])
+    return IKResult(_assembled(q, batch, (6,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([error[1]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 
 
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
@@ -5130,7 +6096,13 @@ def ik_solve_position(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     max_iter: a number: at most this many steps over all attempts (default 100).
     Returns IKPositionResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape) and real scalars that are numbers or arrays, whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """
+    if _is_batch(((q0, (6,)), (target, (3,)), ), (lambda_, tol, )):
+        return _ik_solve_position_batch(q0, target, lambda_, tol, max_iter)
     q0 = _vector(q0, "q0", (6,), "finite")
     target = _vector(target, "target", (3,), "finite")
     lambda_ = DTYPE(_scalar(lambda_, "lambda", "nonnegative"))
@@ -5144,6 +6116,483 @@ def ik_solve_position(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
         raise ValueError("ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKPositionResult(q, names[status], float(error[0]), int(iterations[0]))
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
+    """position IK of the tool origin: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 6
+    error = [_fr(0.0)] * 1
+    iterations = [_fi(0)] * 1
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    hi = [6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586]
+    draw_lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    draw_span = [12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172]
+    near_lo = [-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586]
+    near_span = [12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172, 12.566370614359172]
+    Tm = [_fr(0.0)] * 16
+    Tt = [_fr(0.0)] * 16
+    J = [_fr(0.0)] * 36
+    Jt = [_fr(0.0)] * 36
+    Jf = [_fr(0.0)] * 36
+    e = [_fr(0.0)] * 3
+    et = [_fr(0.0)] * 3
+    trial = [_fr(0.0)] * 6
+    dq = [_fr(0.0)] * 6
+    best_q = [_fr(0.0)] * 6
+    G = [_fr(0.0)] * 6
+    Gf = [_fr(0.0)] * 6
+    norms = [_fr(0.0)] * 3
+    blocked = [_fi(0)] * 6
+    state = [_fu((0x9e3779b9, 0x21a722f8))]
+    pe = _fr(0.0)
+    re = _fr(0.0)
+    en = _fr(0.0)
+    pet = _fr(0.0)
+    ret = _fr(0.0)
+    ent = _fr(0.0)
+    mu2 = _fr(0.0)
+    big = _fr(0.0)
+    scale = _fr(0.0)
+    gg = _fr(0.0)
+    ff = _fr(0.0)
+    c = _fr(0.01)
+    checkpoint = _fr(0.0)
+    window_start = _fr(0.0)
+    best_en = _fr(0.0)
+    best_pe = _fr(0.0)
+    gram_ready = _fi(0)
+    any = _fi(0)
+    it = _fi(0)
+    attempt = _fi(0)
+    stalled = _fi(0)
+    slow = _fi(0)
+    stationary = _fi(0)
+    restarts = _fi(0)
+    best_stalled = _fi(0)
+    best_here = _fi(1)
+    nearest = _fr(0.0)
+    u = _fr(0.0)
+    d = _fr(0.0)
+    mu2_floor = lambda_*lambda_
+    for k in range(0, 6):
+        q[k] = q0[k]
+    iterations[0] = _fi(0)
+    error[0] = _fr(_INF)
+    _c3 = (~np.isfinite(lambda_)) | (lambda_ < 0.0) | (~np.isfinite(tol)) | (~(tol > 0.0)) | (max_iter < 0)
+    _m4 = _c3
+    _status1 = np.where(_m4, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m4)
+    _run5 = _alive2
+    for k in range(0, 6):
+        _c6 = ~np.isfinite(q0[k])
+        _m7 = _run5 & _c6
+        _status1 = np.where(_m7, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m7)
+        _run5 = _run5 & (~_m7)
+    _run8 = _alive2
+    for k in range(0, 3):
+        _c9 = ~np.isfinite(target[k])
+        _m10 = _run8 & _c9
+        _status1 = np.where(_m10, IK_INVALID, _status1)
+        _alive2 = _alive2 & (~_m10)
+        _run8 = _run8 & (~_m10)
+    for k in range(0, 6):
+        q[k] = np.where(_alive2, np.where(q[k] < lo[k], lo[k], np.where(q[k] > hi[k], hi[k], q[k])), q[k])
+    _o = _ik_terms_on_lanes(_c, q[0:6])
+    _merge(_alive2, _o[0], Tm, 0, _fr)
+    _merge(_alive2, _o[1], J, 0, _fr)
+    e[0] = np.where(_alive2, target[0] - Tm[3], e[0])
+    e[1] = np.where(_alive2, target[1] - Tm[7], e[1])
+    e[2] = np.where(_alive2, target[2] - Tm[11], e[2])
+    norms[1] = np.where(_alive2, 0.0, norms[1])
+    _ik_error_position11_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    _ik_error_position11_position = np.sqrt(_ik_error_position11_position_squares)
+    _c12 = ~np.isfinite(_ik_error_position11_position_squares)
+    _m13 = _alive2 & _c12
+    _ik_error_position11_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+    _ik_error_position11_position = np.where(_m13, _ik_error_position11_position_top*np.sqrt((e[0]/_ik_error_position11_position_top)*(e[0]/_ik_error_position11_position_top) + (e[1]/_ik_error_position11_position_top)*(e[1]/_ik_error_position11_position_top) + (e[2]/_ik_error_position11_position_top)*(e[2]/_ik_error_position11_position_top)), _ik_error_position11_position)
+    norms[0] = np.where(_alive2, _ik_error_position11_position, norms[0])
+    _ik_error_position11_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    _ik_error_position11_whole = np.sqrt(_ik_error_position11_whole_squares)
+    _c14 = ~np.isfinite(_ik_error_position11_whole_squares)
+    _m15 = _alive2 & _c14
+    _ik_error_position11_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+    _ik_error_position11_whole = np.where(_m15, _ik_error_position11_whole_top*np.sqrt((norms[0]/_ik_error_position11_whole_top)*(norms[0]/_ik_error_position11_whole_top) + (norms[1]/_ik_error_position11_whole_top)*(norms[1]/_ik_error_position11_whole_top)), _ik_error_position11_whole)
+    norms[2] = np.where(_alive2, _ik_error_position11_whole, norms[2])
+    pe = np.where(_alive2, norms[0], pe)
+    re = np.where(_alive2, norms[1], re)
+    en = np.where(_alive2, norms[2], en)
+    best_en = np.where(_alive2, en, best_en)
+    best_pe = np.where(_alive2, pe, best_pe)
+    for k in range(0, 6):
+        best_q[k] = np.where(_alive2, q[k], best_q[k])
+    checkpoint = np.where(_alive2, en, checkpoint)
+    window_start = np.where(_alive2, en, window_start)
+    _run16 = _alive2
+    while bool(_run16.any()):
+        _c17 = (pe <= tol) & (re <= tol)
+        _m18 = _run16 & _c17
+        error[0] = np.where(_m18, pe, error[0])
+        iterations[0] = np.where(_m18, it, iterations[0])
+        _status1 = np.where(_m18, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m18)
+        _run16 = _run16 & (~_m18)
+        _c19 = it == max_iter
+        _m20 = _run16 & _c19
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
+        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        _m22 = _m20 & _c21
+        best_stalled = np.where(_m22, 1, best_stalled)
+        _run16 = _run16 & (~_m20)
+        mu2 = np.where(_run16, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+        _c23 = gram_ready == 0
+        _m24 = _run16 & _c23
+        G[0] = np.where(_m24, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5], G[0])
+        G[1] = np.where(_m24, J[6]*J[0] + J[7]*J[1] + J[8]*J[2] + J[9]*J[3] + J[10]*J[4] + J[11]*J[5], G[1])
+        G[2] = np.where(_m24, J[6]*J[6] + J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11], G[2])
+        G[3] = np.where(_m24, J[12]*J[0] + J[13]*J[1] + J[14]*J[2] + J[15]*J[3] + J[16]*J[4] + J[17]*J[5], G[3])
+        G[4] = np.where(_m24, J[12]*J[6] + J[13]*J[7] + J[14]*J[8] + J[15]*J[9] + J[16]*J[10] + J[17]*J[11], G[4])
+        G[5] = np.where(_m24, J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17], G[5])
+        gram_ready = np.where(_m24, 1, gram_ready)
+        _ik_damped_position26_mu2 = mu2
+        _ik_damped_position26_a00 = G[0] + _ik_damped_position26_mu2
+        _ik_damped_position26_a10 = G[1]
+        _ik_damped_position26_a11 = G[2] + _ik_damped_position26_mu2
+        _ik_damped_position26_a20 = G[3]
+        _ik_damped_position26_a21 = G[4]
+        _ik_damped_position26_a22 = G[5] + _ik_damped_position26_mu2
+        _ik_damped_position26_cut = np.where(_ik_damped_position26_a22 > np.where(_ik_damped_position26_a11 > _ik_damped_position26_a00, _ik_damped_position26_a11, _ik_damped_position26_a00), _ik_damped_position26_a22, np.where(_ik_damped_position26_a11 > _ik_damped_position26_a00, _ik_damped_position26_a11, _ik_damped_position26_a00))*1e-13
+        _ik_damped_position26_s0 = _ik_damped_position26_a00
+        _ik_damped_position26_kept0 = _ik_damped_position26_s0 > _ik_damped_position26_cut
+        _ik_damped_position26_i0 = np.where(_ik_damped_position26_kept0, 1.0/_ik_damped_position26_s0, 0.0)
+        _ik_damped_position26_t10 = _ik_damped_position26_a10
+        _ik_damped_position26_l10 = _ik_damped_position26_t10*_ik_damped_position26_i0
+        _ik_damped_position26_ld10 = np.where(_ik_damped_position26_kept0, _ik_damped_position26_t10, 0.0)
+        _ik_damped_position26_t20 = _ik_damped_position26_a20
+        _ik_damped_position26_l20 = _ik_damped_position26_t20*_ik_damped_position26_i0
+        _ik_damped_position26_ld20 = np.where(_ik_damped_position26_kept0, _ik_damped_position26_t20, 0.0)
+        _ik_damped_position26_s1 = _ik_damped_position26_a11 - _ik_damped_position26_l10*_ik_damped_position26_ld10
+        _ik_damped_position26_kept1 = _ik_damped_position26_s1 > _ik_damped_position26_cut
+        _ik_damped_position26_i1 = np.where(_ik_damped_position26_kept1, 1.0/_ik_damped_position26_s1, 0.0)
+        _ik_damped_position26_t21 = _ik_damped_position26_a21 - _ik_damped_position26_l20*_ik_damped_position26_ld10
+        _ik_damped_position26_l21 = _ik_damped_position26_t21*_ik_damped_position26_i1
+        _ik_damped_position26_ld21 = np.where(_ik_damped_position26_kept1, _ik_damped_position26_t21, 0.0)
+        _ik_damped_position26_s2 = (_ik_damped_position26_a22 - _ik_damped_position26_l20*_ik_damped_position26_ld20) - _ik_damped_position26_l21*_ik_damped_position26_ld21
+        _ik_damped_position26_kept2 = _ik_damped_position26_s2 > _ik_damped_position26_cut
+        _ik_damped_position26_i2 = np.where(_ik_damped_position26_kept2, 1.0/_ik_damped_position26_s2, 0.0)
+        _ik_damped_position26_y0 = e[0]
+        _ik_damped_position26_y1 = e[1] - _ik_damped_position26_l10*_ik_damped_position26_y0
+        _ik_damped_position26_y2 = (e[2] - _ik_damped_position26_l20*_ik_damped_position26_y0) - _ik_damped_position26_l21*_ik_damped_position26_y1
+        _ik_damped_position26_z2 = _ik_damped_position26_y2*_ik_damped_position26_i2
+        _ik_damped_position26_z1 = _ik_damped_position26_y1*_ik_damped_position26_i1 - _ik_damped_position26_l21*_ik_damped_position26_z2
+        _ik_damped_position26_z0 = (_ik_damped_position26_y0*_ik_damped_position26_i0 - _ik_damped_position26_l20*_ik_damped_position26_z2) - _ik_damped_position26_l10*_ik_damped_position26_z1
+        dq[0] = np.where(_run16, J[0]*_ik_damped_position26_z0 + (J[6]*_ik_damped_position26_z1 + J[12]*_ik_damped_position26_z2), dq[0])
+        dq[1] = np.where(_run16, J[1]*_ik_damped_position26_z0 + (J[7]*_ik_damped_position26_z1 + J[13]*_ik_damped_position26_z2), dq[1])
+        dq[2] = np.where(_run16, J[2]*_ik_damped_position26_z0 + (J[8]*_ik_damped_position26_z1 + J[14]*_ik_damped_position26_z2), dq[2])
+        dq[3] = np.where(_run16, J[3]*_ik_damped_position26_z0 + (J[9]*_ik_damped_position26_z1 + J[15]*_ik_damped_position26_z2), dq[3])
+        dq[4] = np.where(_run16, J[4]*_ik_damped_position26_z0 + (J[10]*_ik_damped_position26_z1 + J[16]*_ik_damped_position26_z2), dq[4])
+        dq[5] = np.where(_run16, J[5]*_ik_damped_position26_z0 + (J[11]*_ik_damped_position26_z1 + J[17]*_ik_damped_position26_z2), dq[5])
+        for k in range(0, 6):
+            blocked[k] = np.where(_run16, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
+        blocked[0] = np.where(_run16, 0, blocked[0])
+        blocked[1] = np.where(_run16, 0, blocked[1])
+        blocked[2] = np.where(_run16, 0, blocked[2])
+        blocked[3] = np.where(_run16, 0, blocked[3])
+        blocked[4] = np.where(_run16, 0, blocked[4])
+        blocked[5] = np.where(_run16, 0, blocked[5])
+        any = np.where(_run16, 0, any)
+        for k in range(0, 6):
+            _c27 = blocked[k] > 0
+            _m28 = _run16 & _c27
+            any = np.where(_m28, 1, any)
+        _c29 = any > 0
+        _m30 = _run16 & _c29
+        _m31 = _run16 & (~_c29)
+        # blocked columns zeroed, their outer products taken out of G, the step solved again
+        for r in range(0, 3):
+            for k in range(0, 6):
+                Jf[r*6 + k] = np.where(_m30, np.where(blocked[k] > 0, 0.0, J[r*6 + k]), Jf[r*6 + k])
+        for k in range(0, 6):
+            Gf[k] = np.where(_m30, G[k], Gf[k])
+        for k in range(0, 6):
+            _c32 = blocked[k] > 0
+            _m33 = _m30 & _c32
+            Gf[0] = np.where(_m33, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
+            Gf[1] = np.where(_m33, Gf[1] - J[6 + k]*J[0 + k], Gf[1])
+            Gf[2] = np.where(_m33, Gf[2] - J[6 + k]*J[6 + k], Gf[2])
+            Gf[3] = np.where(_m33, Gf[3] - J[12 + k]*J[0 + k], Gf[3])
+            Gf[4] = np.where(_m33, Gf[4] - J[12 + k]*J[6 + k], Gf[4])
+            Gf[5] = np.where(_m33, Gf[5] - J[12 + k]*J[12 + k], Gf[5])
+        _ik_damped_position34_mu2 = mu2
+        _ik_damped_position34_a00 = Gf[0] + _ik_damped_position34_mu2
+        _ik_damped_position34_a10 = Gf[1]
+        _ik_damped_position34_a11 = Gf[2] + _ik_damped_position34_mu2
+        _ik_damped_position34_a20 = Gf[3]
+        _ik_damped_position34_a21 = Gf[4]
+        _ik_damped_position34_a22 = Gf[5] + _ik_damped_position34_mu2
+        _ik_damped_position34_cut = np.where(_ik_damped_position34_a22 > np.where(_ik_damped_position34_a11 > _ik_damped_position34_a00, _ik_damped_position34_a11, _ik_damped_position34_a00), _ik_damped_position34_a22, np.where(_ik_damped_position34_a11 > _ik_damped_position34_a00, _ik_damped_position34_a11, _ik_damped_position34_a00))*1e-13
+        _ik_damped_position34_s0 = _ik_damped_position34_a00
+        _ik_damped_position34_kept0 = _ik_damped_position34_s0 > _ik_damped_position34_cut
+        _ik_damped_position34_i0 = np.where(_ik_damped_position34_kept0, 1.0/_ik_damped_position34_s0, 0.0)
+        _ik_damped_position34_t10 = _ik_damped_position34_a10
+        _ik_damped_position34_l10 = _ik_damped_position34_t10*_ik_damped_position34_i0
+        _ik_damped_position34_ld10 = np.where(_ik_damped_position34_kept0, _ik_damped_position34_t10, 0.0)
+        _ik_damped_position34_t20 = _ik_damped_position34_a20
+        _ik_damped_position34_l20 = _ik_damped_position34_t20*_ik_damped_position34_i0
+        _ik_damped_position34_ld20 = np.where(_ik_damped_position34_kept0, _ik_damped_position34_t20, 0.0)
+        _ik_damped_position34_s1 = _ik_damped_position34_a11 - _ik_damped_position34_l10*_ik_damped_position34_ld10
+        _ik_damped_position34_kept1 = _ik_damped_position34_s1 > _ik_damped_position34_cut
+        _ik_damped_position34_i1 = np.where(_ik_damped_position34_kept1, 1.0/_ik_damped_position34_s1, 0.0)
+        _ik_damped_position34_t21 = _ik_damped_position34_a21 - _ik_damped_position34_l20*_ik_damped_position34_ld10
+        _ik_damped_position34_l21 = _ik_damped_position34_t21*_ik_damped_position34_i1
+        _ik_damped_position34_ld21 = np.where(_ik_damped_position34_kept1, _ik_damped_position34_t21, 0.0)
+        _ik_damped_position34_s2 = (_ik_damped_position34_a22 - _ik_damped_position34_l20*_ik_damped_position34_ld20) - _ik_damped_position34_l21*_ik_damped_position34_ld21
+        _ik_damped_position34_kept2 = _ik_damped_position34_s2 > _ik_damped_position34_cut
+        _ik_damped_position34_i2 = np.where(_ik_damped_position34_kept2, 1.0/_ik_damped_position34_s2, 0.0)
+        _ik_damped_position34_y0 = e[0]
+        _ik_damped_position34_y1 = e[1] - _ik_damped_position34_l10*_ik_damped_position34_y0
+        _ik_damped_position34_y2 = (e[2] - _ik_damped_position34_l20*_ik_damped_position34_y0) - _ik_damped_position34_l21*_ik_damped_position34_y1
+        _ik_damped_position34_z2 = _ik_damped_position34_y2*_ik_damped_position34_i2
+        _ik_damped_position34_z1 = _ik_damped_position34_y1*_ik_damped_position34_i1 - _ik_damped_position34_l21*_ik_damped_position34_z2
+        _ik_damped_position34_z0 = (_ik_damped_position34_y0*_ik_damped_position34_i0 - _ik_damped_position34_l20*_ik_damped_position34_z2) - _ik_damped_position34_l10*_ik_damped_position34_z1
+        dq[0] = np.where(_m30, Jf[0]*_ik_damped_position34_z0 + (Jf[6]*_ik_damped_position34_z1 + Jf[12]*_ik_damped_position34_z2), dq[0])
+        dq[1] = np.where(_m30, Jf[1]*_ik_damped_position34_z0 + (Jf[7]*_ik_damped_position34_z1 + Jf[13]*_ik_damped_position34_z2), dq[1])
+        dq[2] = np.where(_m30, Jf[2]*_ik_damped_position34_z0 + (Jf[8]*_ik_damped_position34_z1 + Jf[14]*_ik_damped_position34_z2), dq[2])
+        dq[3] = np.where(_m30, Jf[3]*_ik_damped_position34_z0 + (Jf[9]*_ik_damped_position34_z1 + Jf[15]*_ik_damped_position34_z2), dq[3])
+        dq[4] = np.where(_m30, Jf[4]*_ik_damped_position34_z0 + (Jf[10]*_ik_damped_position34_z1 + Jf[16]*_ik_damped_position34_z2), dq[4])
+        dq[5] = np.where(_m30, Jf[5]*_ik_damped_position34_z0 + (Jf[11]*_ik_damped_position34_z1 + Jf[17]*_ik_damped_position34_z2), dq[5])
+        ff = np.where(_m30, Gf[0] + Gf[2] + Gf[5], ff)
+        gg = np.where(_m30, 0.0, gg)
+        for k in range(0, 6):
+            gg = np.where(_m30, gg + (Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2])*(Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2]), gg)
+        ff = np.where(_m31, G[0] + G[2] + G[5], ff)
+        gg = np.where(_m31, 0.0, gg)
+        for k in range(0, 6):
+            gg = np.where(_m31, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2]), gg)
+        # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
+        stationary = np.where(_run16, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        big = np.where(_run16, 0.0, big)
+        for k in range(0, 6):
+            big = np.where(_run16, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
+        scale = np.where(_run16, np.where(big > 1.0, 1.0/big, 1.0), scale)
+        for k in range(0, 6):
+            trial[k] = np.where(_run16, q[k] + dq[k]*scale, trial[k])
+        _c35 = trial[0] > hi[0]
+        _m36 = _run16 & _c35
+        _m37 = _run16 & (~_c35)
+        trial[0] = np.where(_m36, trial[0] - 6.283185307179586, trial[0])
+        _c38 = trial[0] < lo[0]
+        _m39 = _m37 & _c38
+        trial[0] = np.where(_m39, trial[0] + 6.283185307179586, trial[0])
+        _c40 = trial[1] > hi[1]
+        _m41 = _run16 & _c40
+        _m42 = _run16 & (~_c40)
+        trial[1] = np.where(_m41, trial[1] - 6.283185307179586, trial[1])
+        _c43 = trial[1] < lo[1]
+        _m44 = _m42 & _c43
+        trial[1] = np.where(_m44, trial[1] + 6.283185307179586, trial[1])
+        _c45 = trial[2] > hi[2]
+        _m46 = _run16 & _c45
+        _m47 = _run16 & (~_c45)
+        trial[2] = np.where(_m46, trial[2] - 6.283185307179586, trial[2])
+        _c48 = trial[2] < lo[2]
+        _m49 = _m47 & _c48
+        trial[2] = np.where(_m49, trial[2] + 6.283185307179586, trial[2])
+        _c50 = trial[3] > hi[3]
+        _m51 = _run16 & _c50
+        _m52 = _run16 & (~_c50)
+        trial[3] = np.where(_m51, trial[3] - 6.283185307179586, trial[3])
+        _c53 = trial[3] < lo[3]
+        _m54 = _m52 & _c53
+        trial[3] = np.where(_m54, trial[3] + 6.283185307179586, trial[3])
+        _c55 = trial[4] > hi[4]
+        _m56 = _run16 & _c55
+        _m57 = _run16 & (~_c55)
+        trial[4] = np.where(_m56, trial[4] - 6.283185307179586, trial[4])
+        _c58 = trial[4] < lo[4]
+        _m59 = _m57 & _c58
+        trial[4] = np.where(_m59, trial[4] + 6.283185307179586, trial[4])
+        _c60 = trial[5] > hi[5]
+        _m61 = _run16 & _c60
+        _m62 = _run16 & (~_c60)
+        trial[5] = np.where(_m61, trial[5] - 6.283185307179586, trial[5])
+        _c63 = trial[5] < lo[5]
+        _m64 = _m62 & _c63
+        trial[5] = np.where(_m64, trial[5] + 6.283185307179586, trial[5])
+        for k in range(0, 6):
+            trial[k] = np.where(_run16, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
+        _o = _ik_terms_on_lanes(_c, trial[0:6])
+        _merge(_run16, _o[0], Tt, 0, _fr)
+        _merge(_run16, _o[1], Jt, 0, _fr)
+        et[0] = np.where(_run16, target[0] - Tt[3], et[0])
+        et[1] = np.where(_run16, target[1] - Tt[7], et[1])
+        et[2] = np.where(_run16, target[2] - Tt[11], et[2])
+        norms[1] = np.where(_run16, 0.0, norms[1])
+        _ik_error_position65_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_position65_position = np.sqrt(_ik_error_position65_position_squares)
+        _c66 = ~np.isfinite(_ik_error_position65_position_squares)
+        _m67 = _run16 & _c66
+        _ik_error_position65_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_position65_position = np.where(_m67, _ik_error_position65_position_top*np.sqrt((et[0]/_ik_error_position65_position_top)*(et[0]/_ik_error_position65_position_top) + (et[1]/_ik_error_position65_position_top)*(et[1]/_ik_error_position65_position_top) + (et[2]/_ik_error_position65_position_top)*(et[2]/_ik_error_position65_position_top)), _ik_error_position65_position)
+        norms[0] = np.where(_run16, _ik_error_position65_position, norms[0])
+        _ik_error_position65_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_position65_whole = np.sqrt(_ik_error_position65_whole_squares)
+        _c68 = ~np.isfinite(_ik_error_position65_whole_squares)
+        _m69 = _run16 & _c68
+        _ik_error_position65_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_position65_whole = np.where(_m69, _ik_error_position65_whole_top*np.sqrt((norms[0]/_ik_error_position65_whole_top)*(norms[0]/_ik_error_position65_whole_top) + (norms[1]/_ik_error_position65_whole_top)*(norms[1]/_ik_error_position65_whole_top)), _ik_error_position65_whole)
+        norms[2] = np.where(_run16, _ik_error_position65_whole, norms[2])
+        pet = np.where(_run16, norms[0], pet)
+        ret = np.where(_run16, norms[1], ret)
+        ent = np.where(_run16, norms[2], ent)
+        it = np.where(_run16, it + 1, it)
+        attempt = np.where(_run16, attempt + 1, attempt)
+        _c70 = ent < en
+        _m71 = _run16 & _c70
+        _m72 = _run16 & (~_c70)
+        stalled = np.where(_m71, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        for k in range(0, 6):
+            q[k] = np.where(_m71, trial[k], q[k])
+        for k in range(0, 16):
+            Tm[k] = np.where(_m71, Tt[k], Tm[k])
+        for k in range(0, 36):
+            J[k] = np.where(_m71, Jt[k], J[k])
+        for k in range(0, 3):
+            e[k] = np.where(_m71, et[k], e[k])
+        gram_ready = np.where(_m71, 0, gram_ready)
+        pe = np.where(_m71, pet, pe)
+        re = np.where(_m71, ret, re)
+        en = np.where(_m71, ent, en)
+        c = np.where(_m71, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m72, c*4.0, c)
+        stalled = np.where(_m72, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        _c73 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m74 = _run16 & _c73
+        best_en = np.where(_m74, en, best_en)
+        best_pe = np.where(_m74, pe, best_pe)
+        best_stalled = np.where(_m74, stalled, best_stalled)
+        best_here = np.where(_m74, 1, best_here)
+        for k in range(0, 6):
+            best_q[k] = np.where(_m74, q[k], best_q[k])
+        _c75 = ~((pe <= tol) & (re <= tol))
+        _m76 = _run16 & _c75
+        if bool(_m76.any()):
+            slow = np.where(_m76, stationary, slow)
+            _c77 = attempt % 3 == 0
+            _m78 = _m76 & _c77
+            _c79 = en > checkpoint*0.6
+            _m80 = _m78 & _c79
+            slow = np.where(_m80, 1, slow)
+            window_start = np.where(_m78, checkpoint, window_start)
+            checkpoint = np.where(_m78, en, checkpoint)
+            _c81 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m82 = _m76 & _c81
+            if bool(_m82.any()):
+                _c83 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m84 = _m82 & _c83
+                # this attempt's best is (near) a stationary point
+                best_stalled = np.where(_m84, 1, best_stalled)
+                best_here = np.where(_m82, 0, best_here)
+                nearest = np.where(_m82, 0.0, nearest)
+                for m in range(0, 8):
+                    for k in range(0, 6):
+                        _alive86 = _m82
+                        _ik_uniform85_s = state[0]
+                        _ik_uniform85_s = _u64_where(_m82, _u64_xor(_ik_uniform85_s, _u64_shr(_ik_uniform85_s, 12)), _ik_uniform85_s)
+                        _ik_uniform85_s = _u64_where(_m82, _u64_xor(_ik_uniform85_s, _u64_shl(_ik_uniform85_s, 25)), _ik_uniform85_s)
+                        _ik_uniform85_s = _u64_where(_m82, _u64_xor(_ik_uniform85_s, _u64_shr(_ik_uniform85_s, 27)), _ik_uniform85_s)
+                        state[0] = _u64_where(_m82, _ik_uniform85_s, state[0])
+                        u = np.where(_m82, _u64_real(_u64_shr(_u64_mul(_ik_uniform85_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive86 = _alive86 & (~_m82)
+                        trial[k] = np.where(_m82, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                    _o = _ik_terms_on_lanes(_c, trial[0:6])
+                    _merge(_m82, _o[0], Tt, 0, _fr)
+                    _merge(_m82, _o[1], Jt, 0, _fr)
+                    d = np.where(_m82, np.sqrt(((target[0] - Tt[3])*(target[0] - Tt[3]) + (target[1] - Tt[7])*(target[1] - Tt[7])) + (target[2] - Tt[11])*(target[2] - Tt[11])), d)
+                    _c87 = (d < nearest) | (m == 0)
+                    _m88 = _m82 & _c87
+                    nearest = np.where(_m88, d, nearest)
+                    for k in range(0, 6):
+                        q[k] = np.where(_m88, trial[k], q[k])
+                restarts = np.where(_m82, restarts + 1, restarts)
+                gram_ready = np.where(_m82, 0, gram_ready)
+                _o = _ik_terms_on_lanes(_c, q[0:6])
+                _merge(_m82, _o[0], Tm, 0, _fr)
+                _merge(_m82, _o[1], J, 0, _fr)
+                e[0] = np.where(_m82, target[0] - Tm[3], e[0])
+                e[1] = np.where(_m82, target[1] - Tm[7], e[1])
+                e[2] = np.where(_m82, target[2] - Tm[11], e[2])
+                norms[1] = np.where(_m82, 0.0, norms[1])
+                _ik_error_position89_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_position89_position = np.sqrt(_ik_error_position89_position_squares)
+                _c90 = ~np.isfinite(_ik_error_position89_position_squares)
+                _m91 = _m82 & _c90
+                _ik_error_position89_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_position89_position = np.where(_m91, _ik_error_position89_position_top*np.sqrt((e[0]/_ik_error_position89_position_top)*(e[0]/_ik_error_position89_position_top) + (e[1]/_ik_error_position89_position_top)*(e[1]/_ik_error_position89_position_top) + (e[2]/_ik_error_position89_position_top)*(e[2]/_ik_error_position89_position_top)), _ik_error_position89_position)
+                norms[0] = np.where(_m82, _ik_error_position89_position, norms[0])
+                _ik_error_position89_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_position89_whole = np.sqrt(_ik_error_position89_whole_squares)
+                _c92 = ~np.isfinite(_ik_error_position89_whole_squares)
+                _m93 = _m82 & _c92
+                _ik_error_position89_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_position89_whole = np.where(_m93, _ik_error_position89_whole_top*np.sqrt((norms[0]/_ik_error_position89_whole_top)*(norms[0]/_ik_error_position89_whole_top) + (norms[1]/_ik_error_position89_whole_top)*(norms[1]/_ik_error_position89_whole_top)), _ik_error_position89_whole)
+                norms[2] = np.where(_m82, _ik_error_position89_whole, norms[2])
+                pe = np.where(_m82, norms[0], pe)
+                re = np.where(_m82, norms[1], re)
+                en = np.where(_m82, norms[2], en)
+                c = np.where(_m82, 0.01, c)
+                attempt = np.where(_m82, 0, attempt)
+                checkpoint = np.where(_m82, en, checkpoint)
+                window_start = np.where(_m82, en, window_start)
+                _c94 = en < best_en
+                _m95 = _m82 & _c94
+                best_en = np.where(_m95, en, best_en)
+                best_pe = np.where(_m95, pe, best_pe)
+                best_stalled = np.where(_m95, 0, best_stalled)
+                best_here = np.where(_m95, 1, best_here)
+                for k in range(0, 6):
+                    best_q[k] = np.where(_m95, q[k], best_q[k])
+    for k in range(0, 6):
+        q[k] = np.where(_alive2, best_q[k], q[k])
+    error[0] = np.where(_alive2, best_pe, error[0])
+    iterations[0] = np.where(_alive2, it, iterations[0])
+    _status1 = np.where(_alive2, np.where(best_stalled > 0, _fi(IK_STALLED), IK_MAX_ITER), _status1)
+    _alive2 = _alive2 & (~_alive2)
+    return (q, error, iterations, ), _status1
+
+
+def _ik_solve_position_batch(q0, target, lambda_, tol, max_iter):
+    """ik_solve_position for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    q0 = _problems(q0, "q0", (6,), "finite")
+    target = _problems(target, "target", (3,), "finite")
+    lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
+    tol = _lane_scalar(tol, "tol", "positive")
+    max_iter = _count(max_iter, "max_iter")
+    batch = _batch_shape("ik_solve_position", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, error, iterations, ), status = _ik_solve_position_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (3,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_solve_position: problem {_first_problem(status == 3, batch)}: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+    names = np.array(["converged", "stalled", "max_iter", "invalid"])
+    return IKPositionResult(_assembled(q, batch, (6,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 
 
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
@@ -5283,7 +6732,13 @@ def ik_all(target):
     target: array of shape (4, 4), finite: tool pose T (4 x 4, row-major; the last row is not read).
     Returns IKAllResult(q, status, count, flags). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape), whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """
+    if _is_batch(((target, (4, 4,)), ), ()):
+        return _ik_all_batch(target)
     target = _vector(target, "target", (4, 4,), "finite")
     q = np.zeros(48, dtype=DTYPE)
     count = np.zeros(1, dtype=np.int64)
@@ -5293,6 +6748,953 @@ def ik_all(target):
         raise ValueError("ik_all: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKAllResult(q.reshape(8, 6), names[status], int(count[0]), flags)
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_all_lanes(_c, target):
+    """every closed-form IK solution within the joint limits: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 48
+    count = [_fi(0)] * 1
+    flags = [_fi(0)] * 8
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    status = _fi(0)
+    _alive4 = _fb(True)
+    _ik_all_rows3_raw = [_fr(0.0)] * 48
+    _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
+    _ik_all_rows3_cand = [_fr(0.0)] * 6
+    # nothing yet: NaN rows, flags -1, count 0
+    _k5 = _fi(0)
+    _run6 = _k5 < IK_MAX_SOLUTIONS*6
+    while bool(_run6.any()):
+        _m7 = _run6 & (_k5 == 0)
+        q[0] = np.where(_m7, _NAN, q[0])
+        _m8 = _run6 & (_k5 == 1)
+        q[1] = np.where(_m8, _NAN, q[1])
+        _m9 = _run6 & (_k5 == 2)
+        q[2] = np.where(_m9, _NAN, q[2])
+        _m10 = _run6 & (_k5 == 3)
+        q[3] = np.where(_m10, _NAN, q[3])
+        _m11 = _run6 & (_k5 == 4)
+        q[4] = np.where(_m11, _NAN, q[4])
+        _m12 = _run6 & (_k5 == 5)
+        q[5] = np.where(_m12, _NAN, q[5])
+        _m13 = _run6 & (_k5 == 6)
+        q[6] = np.where(_m13, _NAN, q[6])
+        _m14 = _run6 & (_k5 == 7)
+        q[7] = np.where(_m14, _NAN, q[7])
+        _m15 = _run6 & (_k5 == 8)
+        q[8] = np.where(_m15, _NAN, q[8])
+        _m16 = _run6 & (_k5 == 9)
+        q[9] = np.where(_m16, _NAN, q[9])
+        _m17 = _run6 & (_k5 == 10)
+        q[10] = np.where(_m17, _NAN, q[10])
+        _m18 = _run6 & (_k5 == 11)
+        q[11] = np.where(_m18, _NAN, q[11])
+        _m19 = _run6 & (_k5 == 12)
+        q[12] = np.where(_m19, _NAN, q[12])
+        _m20 = _run6 & (_k5 == 13)
+        q[13] = np.where(_m20, _NAN, q[13])
+        _m21 = _run6 & (_k5 == 14)
+        q[14] = np.where(_m21, _NAN, q[14])
+        _m22 = _run6 & (_k5 == 15)
+        q[15] = np.where(_m22, _NAN, q[15])
+        _m23 = _run6 & (_k5 == 16)
+        q[16] = np.where(_m23, _NAN, q[16])
+        _m24 = _run6 & (_k5 == 17)
+        q[17] = np.where(_m24, _NAN, q[17])
+        _m25 = _run6 & (_k5 == 18)
+        q[18] = np.where(_m25, _NAN, q[18])
+        _m26 = _run6 & (_k5 == 19)
+        q[19] = np.where(_m26, _NAN, q[19])
+        _m27 = _run6 & (_k5 == 20)
+        q[20] = np.where(_m27, _NAN, q[20])
+        _m28 = _run6 & (_k5 == 21)
+        q[21] = np.where(_m28, _NAN, q[21])
+        _m29 = _run6 & (_k5 == 22)
+        q[22] = np.where(_m29, _NAN, q[22])
+        _m30 = _run6 & (_k5 == 23)
+        q[23] = np.where(_m30, _NAN, q[23])
+        _m31 = _run6 & (_k5 == 24)
+        q[24] = np.where(_m31, _NAN, q[24])
+        _m32 = _run6 & (_k5 == 25)
+        q[25] = np.where(_m32, _NAN, q[25])
+        _m33 = _run6 & (_k5 == 26)
+        q[26] = np.where(_m33, _NAN, q[26])
+        _m34 = _run6 & (_k5 == 27)
+        q[27] = np.where(_m34, _NAN, q[27])
+        _m35 = _run6 & (_k5 == 28)
+        q[28] = np.where(_m35, _NAN, q[28])
+        _m36 = _run6 & (_k5 == 29)
+        q[29] = np.where(_m36, _NAN, q[29])
+        _m37 = _run6 & (_k5 == 30)
+        q[30] = np.where(_m37, _NAN, q[30])
+        _m38 = _run6 & (_k5 == 31)
+        q[31] = np.where(_m38, _NAN, q[31])
+        _m39 = _run6 & (_k5 == 32)
+        q[32] = np.where(_m39, _NAN, q[32])
+        _m40 = _run6 & (_k5 == 33)
+        q[33] = np.where(_m40, _NAN, q[33])
+        _m41 = _run6 & (_k5 == 34)
+        q[34] = np.where(_m41, _NAN, q[34])
+        _m42 = _run6 & (_k5 == 35)
+        q[35] = np.where(_m42, _NAN, q[35])
+        _m43 = _run6 & (_k5 == 36)
+        q[36] = np.where(_m43, _NAN, q[36])
+        _m44 = _run6 & (_k5 == 37)
+        q[37] = np.where(_m44, _NAN, q[37])
+        _m45 = _run6 & (_k5 == 38)
+        q[38] = np.where(_m45, _NAN, q[38])
+        _m46 = _run6 & (_k5 == 39)
+        q[39] = np.where(_m46, _NAN, q[39])
+        _m47 = _run6 & (_k5 == 40)
+        q[40] = np.where(_m47, _NAN, q[40])
+        _m48 = _run6 & (_k5 == 41)
+        q[41] = np.where(_m48, _NAN, q[41])
+        _m49 = _run6 & (_k5 == 42)
+        q[42] = np.where(_m49, _NAN, q[42])
+        _m50 = _run6 & (_k5 == 43)
+        q[43] = np.where(_m50, _NAN, q[43])
+        _m51 = _run6 & (_k5 == 44)
+        q[44] = np.where(_m51, _NAN, q[44])
+        _m52 = _run6 & (_k5 == 45)
+        q[45] = np.where(_m52, _NAN, q[45])
+        _m53 = _run6 & (_k5 == 46)
+        q[46] = np.where(_m53, _NAN, q[46])
+        _m54 = _run6 & (_k5 == 47)
+        q[47] = np.where(_m54, _NAN, q[47])
+        _k5 = np.where(_run6, _k5 + 1, _k5)
+        _run6 = _run6 & (_k5 < IK_MAX_SOLUTIONS*6)
+    _k55 = _fi(0)
+    _run56 = _k55 < IK_MAX_SOLUTIONS
+    while bool(_run56.any()):
+        _m57 = _run56 & (_k55 == 0)
+        flags[0] = np.where(_m57, -1, flags[0])
+        _m58 = _run56 & (_k55 == 1)
+        flags[1] = np.where(_m58, -1, flags[1])
+        _m59 = _run56 & (_k55 == 2)
+        flags[2] = np.where(_m59, -1, flags[2])
+        _m60 = _run56 & (_k55 == 3)
+        flags[3] = np.where(_m60, -1, flags[3])
+        _m61 = _run56 & (_k55 == 4)
+        flags[4] = np.where(_m61, -1, flags[4])
+        _m62 = _run56 & (_k55 == 5)
+        flags[5] = np.where(_m62, -1, flags[5])
+        _m63 = _run56 & (_k55 == 6)
+        flags[6] = np.where(_m63, -1, flags[6])
+        _m64 = _run56 & (_k55 == 7)
+        flags[7] = np.where(_m64, -1, flags[7])
+        _k55 = np.where(_run56, _k55 + 1, _k55)
+        _run56 = _run56 & (_k55 < IK_MAX_SOLUTIONS)
+    count[0] = _fi(0)
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation
+    _run65 = _fb(True)
+    for _ik_all_rows3_k in range(0, 12):
+        _c66 = ~np.isfinite(target[_ik_all_rows3_k])
+        _m67 = _run65 & _c66
+        status = np.where(_m67, IK_INVALID, status)
+        _alive4 = _alive4 & (~_m67)
+        _run65 = _run65 & (~_m67)
+    _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    _ik_all_rows3_m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c68 = (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _m69 = _alive4 & _c68
+    status = np.where(_m69, IK_INVALID, status)
+    _alive4 = _alive4 & (~_m69)
+    # the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable
+    _o = _ik_candidates_on_lanes(_c, target[0:16])
+    _merge(_alive4, _o[0], _ik_all_rows3_raw, 0, _fr)
+    _merge(_alive4, _o[1], _ik_all_rows3_raw_flags, 0, _fr)
+    _ik_all_rows3_exact = _fi(0)
+    _i70 = _fi(0)
+    _run71 = _alive4 & (_i70 < IK_MAX_SOLUTIONS)
+    while bool(_run71.any()):
+        _c72 = np.where(_i70 == 0, _ik_all_rows3_raw_flags[0], np.where(_i70 == 1, _ik_all_rows3_raw_flags[1], np.where(_i70 == 2, _ik_all_rows3_raw_flags[2], np.where(_i70 == 3, _ik_all_rows3_raw_flags[3], np.where(_i70 == 4, _ik_all_rows3_raw_flags[4], np.where(_i70 == 5, _ik_all_rows3_raw_flags[5], np.where(_i70 == 6, _ik_all_rows3_raw_flags[6], _ik_all_rows3_raw_flags[7]))))))).astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
+        _m73 = _run71 & _c72
+        _ik_all_rows3_exact = np.where(_m73, 1, _ik_all_rows3_exact)
+        _i70 = np.where(_run71, _i70 + 1, _i70)
+        _run71 = _run71 & (_i70 < IK_MAX_SOLUTIONS)
+    _ik_all_rows3_kept = _fi(0)
+    _ik_all_rows3_flag = _fi(0)
+    _ik_all_rows3_inside = _fi(0)
+    _ik_all_rows3_dup = _fi(0)
+    _ik_all_rows3_diff = _fr(0.0)
+    _i74 = _fi(0)
+    _run75 = _alive4 & (_i74 < IK_MAX_SOLUTIONS)
+    while bool(_run75.any()):
+        _ik_all_rows3_flag = np.where(_run75, np.where(_i74 == 0, _ik_all_rows3_raw_flags[0], np.where(_i74 == 1, _ik_all_rows3_raw_flags[1], np.where(_i74 == 2, _ik_all_rows3_raw_flags[2], np.where(_i74 == 3, _ik_all_rows3_raw_flags[3], np.where(_i74 == 4, _ik_all_rows3_raw_flags[4], np.where(_i74 == 5, _ik_all_rows3_raw_flags[5], np.where(_i74 == 6, _ik_all_rows3_raw_flags[6], _ik_all_rows3_raw_flags[7]))))))).astype(np.int64), _ik_all_rows3_flag)
+        _c76 = (_ik_all_rows3_exact == 0) | (_ik_all_rows3_flag % 2 != IK_FLAG_LEAST_SQUARES)
+        _m77 = _run75 & _c76
+        if bool(_m77.any()):
+            # 3. revolute joints to the copy nearest their range's centre; 4. limits
+            _ik_all_rows3_inside = np.where(_m77, 1, _ik_all_rows3_inside)
+            _i78 = 6*_i74
+            _i79 = 6*_i74
+            _i80 = 6*_i74
+            _ik_all_rows3_cand[0] = np.where(_m77, np.where(_i78 == 0, _ik_all_rows3_raw[0], np.where(_i78 == 1, _ik_all_rows3_raw[1], np.where(_i78 == 2, _ik_all_rows3_raw[2], np.where(_i78 == 3, _ik_all_rows3_raw[3], np.where(_i78 == 4, _ik_all_rows3_raw[4], np.where(_i78 == 5, _ik_all_rows3_raw[5], np.where(_i78 == 6, _ik_all_rows3_raw[6], np.where(_i78 == 7, _ik_all_rows3_raw[7], np.where(_i78 == 8, _ik_all_rows3_raw[8], np.where(_i78 == 9, _ik_all_rows3_raw[9], np.where(_i78 == 10, _ik_all_rows3_raw[10], np.where(_i78 == 11, _ik_all_rows3_raw[11], np.where(_i78 == 12, _ik_all_rows3_raw[12], np.where(_i78 == 13, _ik_all_rows3_raw[13], np.where(_i78 == 14, _ik_all_rows3_raw[14], np.where(_i78 == 15, _ik_all_rows3_raw[15], np.where(_i78 == 16, _ik_all_rows3_raw[16], np.where(_i78 == 17, _ik_all_rows3_raw[17], np.where(_i78 == 18, _ik_all_rows3_raw[18], np.where(_i78 == 19, _ik_all_rows3_raw[19], np.where(_i78 == 20, _ik_all_rows3_raw[20], np.where(_i78 == 21, _ik_all_rows3_raw[21], np.where(_i78 == 22, _ik_all_rows3_raw[22], np.where(_i78 == 23, _ik_all_rows3_raw[23], np.where(_i78 == 24, _ik_all_rows3_raw[24], np.where(_i78 == 25, _ik_all_rows3_raw[25], np.where(_i78 == 26, _ik_all_rows3_raw[26], np.where(_i78 == 27, _ik_all_rows3_raw[27], np.where(_i78 == 28, _ik_all_rows3_raw[28], np.where(_i78 == 29, _ik_all_rows3_raw[29], np.where(_i78 == 30, _ik_all_rows3_raw[30], np.where(_i78 == 31, _ik_all_rows3_raw[31], np.where(_i78 == 32, _ik_all_rows3_raw[32], np.where(_i78 == 33, _ik_all_rows3_raw[33], np.where(_i78 == 34, _ik_all_rows3_raw[34], np.where(_i78 == 35, _ik_all_rows3_raw[35], np.where(_i78 == 36, _ik_all_rows3_raw[36], np.where(_i78 == 37, _ik_all_rows3_raw[37], np.where(_i78 == 38, _ik_all_rows3_raw[38], np.where(_i78 == 39, _ik_all_rows3_raw[39], np.where(_i78 == 40, _ik_all_rows3_raw[40], np.where(_i78 == 41, _ik_all_rows3_raw[41], np.where(_i78 == 42, _ik_all_rows3_raw[42], np.where(_i78 == 43, _ik_all_rows3_raw[43], np.where(_i78 == 44, _ik_all_rows3_raw[44], np.where(_i78 == 45, _ik_all_rows3_raw[45], np.where(_i78 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i79 == 0, _ik_all_rows3_raw[0], np.where(_i79 == 1, _ik_all_rows3_raw[1], np.where(_i79 == 2, _ik_all_rows3_raw[2], np.where(_i79 == 3, _ik_all_rows3_raw[3], np.where(_i79 == 4, _ik_all_rows3_raw[4], np.where(_i79 == 5, _ik_all_rows3_raw[5], np.where(_i79 == 6, _ik_all_rows3_raw[6], np.where(_i79 == 7, _ik_all_rows3_raw[7], np.where(_i79 == 8, _ik_all_rows3_raw[8], np.where(_i79 == 9, _ik_all_rows3_raw[9], np.where(_i79 == 10, _ik_all_rows3_raw[10], np.where(_i79 == 11, _ik_all_rows3_raw[11], np.where(_i79 == 12, _ik_all_rows3_raw[12], np.where(_i79 == 13, _ik_all_rows3_raw[13], np.where(_i79 == 14, _ik_all_rows3_raw[14], np.where(_i79 == 15, _ik_all_rows3_raw[15], np.where(_i79 == 16, _ik_all_rows3_raw[16], np.where(_i79 == 17, _ik_all_rows3_raw[17], np.where(_i79 == 18, _ik_all_rows3_raw[18], np.where(_i79 == 19, _ik_all_rows3_raw[19], np.where(_i79 == 20, _ik_all_rows3_raw[20], np.where(_i79 == 21, _ik_all_rows3_raw[21], np.where(_i79 == 22, _ik_all_rows3_raw[22], np.where(_i79 == 23, _ik_all_rows3_raw[23], np.where(_i79 == 24, _ik_all_rows3_raw[24], np.where(_i79 == 25, _ik_all_rows3_raw[25], np.where(_i79 == 26, _ik_all_rows3_raw[26], np.where(_i79 == 27, _ik_all_rows3_raw[27], np.where(_i79 == 28, _ik_all_rows3_raw[28], np.where(_i79 == 29, _ik_all_rows3_raw[29], np.where(_i79 == 30, _ik_all_rows3_raw[30], np.where(_i79 == 31, _ik_all_rows3_raw[31], np.where(_i79 == 32, _ik_all_rows3_raw[32], np.where(_i79 == 33, _ik_all_rows3_raw[33], np.where(_i79 == 34, _ik_all_rows3_raw[34], np.where(_i79 == 35, _ik_all_rows3_raw[35], np.where(_i79 == 36, _ik_all_rows3_raw[36], np.where(_i79 == 37, _ik_all_rows3_raw[37], np.where(_i79 == 38, _ik_all_rows3_raw[38], np.where(_i79 == 39, _ik_all_rows3_raw[39], np.where(_i79 == 40, _ik_all_rows3_raw[40], np.where(_i79 == 41, _ik_all_rows3_raw[41], np.where(_i79 == 42, _ik_all_rows3_raw[42], np.where(_i79 == 43, _ik_all_rows3_raw[43], np.where(_i79 == 44, _ik_all_rows3_raw[44], np.where(_i79 == 45, _ik_all_rows3_raw[45], np.where(_i79 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i80 == 0, _ik_all_rows3_raw[0], np.where(_i80 == 1, _ik_all_rows3_raw[1], np.where(_i80 == 2, _ik_all_rows3_raw[2], np.where(_i80 == 3, _ik_all_rows3_raw[3], np.where(_i80 == 4, _ik_all_rows3_raw[4], np.where(_i80 == 5, _ik_all_rows3_raw[5], np.where(_i80 == 6, _ik_all_rows3_raw[6], np.where(_i80 == 7, _ik_all_rows3_raw[7], np.where(_i80 == 8, _ik_all_rows3_raw[8], np.where(_i80 == 9, _ik_all_rows3_raw[9], np.where(_i80 == 10, _ik_all_rows3_raw[10], np.where(_i80 == 11, _ik_all_rows3_raw[11], np.where(_i80 == 12, _ik_all_rows3_raw[12], np.where(_i80 == 13, _ik_all_rows3_raw[13], np.where(_i80 == 14, _ik_all_rows3_raw[14], np.where(_i80 == 15, _ik_all_rows3_raw[15], np.where(_i80 == 16, _ik_all_rows3_raw[16], np.where(_i80 == 17, _ik_all_rows3_raw[17], np.where(_i80 == 18, _ik_all_rows3_raw[18], np.where(_i80 == 19, _ik_all_rows3_raw[19], np.where(_i80 == 20, _ik_all_rows3_raw[20], np.where(_i80 == 21, _ik_all_rows3_raw[21], np.where(_i80 == 22, _ik_all_rows3_raw[22], np.where(_i80 == 23, _ik_all_rows3_raw[23], np.where(_i80 == 24, _ik_all_rows3_raw[24], np.where(_i80 == 25, _ik_all_rows3_raw[25], np.where(_i80 == 26, _ik_all_rows3_raw[26], np.where(_i80 == 27, _ik_all_rows3_raw[27], np.where(_i80 == 28, _ik_all_rows3_raw[28], np.where(_i80 == 29, _ik_all_rows3_raw[29], np.where(_i80 == 30, _ik_all_rows3_raw[30], np.where(_i80 == 31, _ik_all_rows3_raw[31], np.where(_i80 == 32, _ik_all_rows3_raw[32], np.where(_i80 == 33, _ik_all_rows3_raw[33], np.where(_i80 == 34, _ik_all_rows3_raw[34], np.where(_i80 == 35, _ik_all_rows3_raw[35], np.where(_i80 == 36, _ik_all_rows3_raw[36], np.where(_i80 == 37, _ik_all_rows3_raw[37], np.where(_i80 == 38, _ik_all_rows3_raw[38], np.where(_i80 == 39, _ik_all_rows3_raw[39], np.where(_i80 == 40, _ik_all_rows3_raw[40], np.where(_i80 == 41, _ik_all_rows3_raw[41], np.where(_i80 == 42, _ik_all_rows3_raw[42], np.where(_i80 == 43, _ik_all_rows3_raw[43], np.where(_i80 == 44, _ik_all_rows3_raw[44], np.where(_i80 == 45, _ik_all_rows3_raw[45], np.where(_i80 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[0])
+            _c81 = np.abs(0.0 - _ik_all_rows3_cand[0]) > 3.141592653589793
+            _m82 = _m77 & _c81
+            _ik_all_rows3_cand[0] = np.where(_m82, _ik_all_rows3_cand[0] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[0])*0.15915494309189535), _ik_all_rows3_cand[0])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[0] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[0] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[0] = np.where(_m77, np.where(_ik_all_rows3_cand[0] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[0] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[0])), _ik_all_rows3_cand[0])
+            _i83 = 6*_i74 + 1
+            _i84 = 6*_i74 + 1
+            _i85 = 6*_i74 + 1
+            _ik_all_rows3_cand[1] = np.where(_m77, np.where(_i83 == 0, _ik_all_rows3_raw[0], np.where(_i83 == 1, _ik_all_rows3_raw[1], np.where(_i83 == 2, _ik_all_rows3_raw[2], np.where(_i83 == 3, _ik_all_rows3_raw[3], np.where(_i83 == 4, _ik_all_rows3_raw[4], np.where(_i83 == 5, _ik_all_rows3_raw[5], np.where(_i83 == 6, _ik_all_rows3_raw[6], np.where(_i83 == 7, _ik_all_rows3_raw[7], np.where(_i83 == 8, _ik_all_rows3_raw[8], np.where(_i83 == 9, _ik_all_rows3_raw[9], np.where(_i83 == 10, _ik_all_rows3_raw[10], np.where(_i83 == 11, _ik_all_rows3_raw[11], np.where(_i83 == 12, _ik_all_rows3_raw[12], np.where(_i83 == 13, _ik_all_rows3_raw[13], np.where(_i83 == 14, _ik_all_rows3_raw[14], np.where(_i83 == 15, _ik_all_rows3_raw[15], np.where(_i83 == 16, _ik_all_rows3_raw[16], np.where(_i83 == 17, _ik_all_rows3_raw[17], np.where(_i83 == 18, _ik_all_rows3_raw[18], np.where(_i83 == 19, _ik_all_rows3_raw[19], np.where(_i83 == 20, _ik_all_rows3_raw[20], np.where(_i83 == 21, _ik_all_rows3_raw[21], np.where(_i83 == 22, _ik_all_rows3_raw[22], np.where(_i83 == 23, _ik_all_rows3_raw[23], np.where(_i83 == 24, _ik_all_rows3_raw[24], np.where(_i83 == 25, _ik_all_rows3_raw[25], np.where(_i83 == 26, _ik_all_rows3_raw[26], np.where(_i83 == 27, _ik_all_rows3_raw[27], np.where(_i83 == 28, _ik_all_rows3_raw[28], np.where(_i83 == 29, _ik_all_rows3_raw[29], np.where(_i83 == 30, _ik_all_rows3_raw[30], np.where(_i83 == 31, _ik_all_rows3_raw[31], np.where(_i83 == 32, _ik_all_rows3_raw[32], np.where(_i83 == 33, _ik_all_rows3_raw[33], np.where(_i83 == 34, _ik_all_rows3_raw[34], np.where(_i83 == 35, _ik_all_rows3_raw[35], np.where(_i83 == 36, _ik_all_rows3_raw[36], np.where(_i83 == 37, _ik_all_rows3_raw[37], np.where(_i83 == 38, _ik_all_rows3_raw[38], np.where(_i83 == 39, _ik_all_rows3_raw[39], np.where(_i83 == 40, _ik_all_rows3_raw[40], np.where(_i83 == 41, _ik_all_rows3_raw[41], np.where(_i83 == 42, _ik_all_rows3_raw[42], np.where(_i83 == 43, _ik_all_rows3_raw[43], np.where(_i83 == 44, _ik_all_rows3_raw[44], np.where(_i83 == 45, _ik_all_rows3_raw[45], np.where(_i83 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i84 == 0, _ik_all_rows3_raw[0], np.where(_i84 == 1, _ik_all_rows3_raw[1], np.where(_i84 == 2, _ik_all_rows3_raw[2], np.where(_i84 == 3, _ik_all_rows3_raw[3], np.where(_i84 == 4, _ik_all_rows3_raw[4], np.where(_i84 == 5, _ik_all_rows3_raw[5], np.where(_i84 == 6, _ik_all_rows3_raw[6], np.where(_i84 == 7, _ik_all_rows3_raw[7], np.where(_i84 == 8, _ik_all_rows3_raw[8], np.where(_i84 == 9, _ik_all_rows3_raw[9], np.where(_i84 == 10, _ik_all_rows3_raw[10], np.where(_i84 == 11, _ik_all_rows3_raw[11], np.where(_i84 == 12, _ik_all_rows3_raw[12], np.where(_i84 == 13, _ik_all_rows3_raw[13], np.where(_i84 == 14, _ik_all_rows3_raw[14], np.where(_i84 == 15, _ik_all_rows3_raw[15], np.where(_i84 == 16, _ik_all_rows3_raw[16], np.where(_i84 == 17, _ik_all_rows3_raw[17], np.where(_i84 == 18, _ik_all_rows3_raw[18], np.where(_i84 == 19, _ik_all_rows3_raw[19], np.where(_i84 == 20, _ik_all_rows3_raw[20], np.where(_i84 == 21, _ik_all_rows3_raw[21], np.where(_i84 == 22, _ik_all_rows3_raw[22], np.where(_i84 == 23, _ik_all_rows3_raw[23], np.where(_i84 == 24, _ik_all_rows3_raw[24], np.where(_i84 == 25, _ik_all_rows3_raw[25], np.where(_i84 == 26, _ik_all_rows3_raw[26], np.where(_i84 == 27, _ik_all_rows3_raw[27], np.where(_i84 == 28, _ik_all_rows3_raw[28], np.where(_i84 == 29, _ik_all_rows3_raw[29], np.where(_i84 == 30, _ik_all_rows3_raw[30], np.where(_i84 == 31, _ik_all_rows3_raw[31], np.where(_i84 == 32, _ik_all_rows3_raw[32], np.where(_i84 == 33, _ik_all_rows3_raw[33], np.where(_i84 == 34, _ik_all_rows3_raw[34], np.where(_i84 == 35, _ik_all_rows3_raw[35], np.where(_i84 == 36, _ik_all_rows3_raw[36], np.where(_i84 == 37, _ik_all_rows3_raw[37], np.where(_i84 == 38, _ik_all_rows3_raw[38], np.where(_i84 == 39, _ik_all_rows3_raw[39], np.where(_i84 == 40, _ik_all_rows3_raw[40], np.where(_i84 == 41, _ik_all_rows3_raw[41], np.where(_i84 == 42, _ik_all_rows3_raw[42], np.where(_i84 == 43, _ik_all_rows3_raw[43], np.where(_i84 == 44, _ik_all_rows3_raw[44], np.where(_i84 == 45, _ik_all_rows3_raw[45], np.where(_i84 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i85 == 0, _ik_all_rows3_raw[0], np.where(_i85 == 1, _ik_all_rows3_raw[1], np.where(_i85 == 2, _ik_all_rows3_raw[2], np.where(_i85 == 3, _ik_all_rows3_raw[3], np.where(_i85 == 4, _ik_all_rows3_raw[4], np.where(_i85 == 5, _ik_all_rows3_raw[5], np.where(_i85 == 6, _ik_all_rows3_raw[6], np.where(_i85 == 7, _ik_all_rows3_raw[7], np.where(_i85 == 8, _ik_all_rows3_raw[8], np.where(_i85 == 9, _ik_all_rows3_raw[9], np.where(_i85 == 10, _ik_all_rows3_raw[10], np.where(_i85 == 11, _ik_all_rows3_raw[11], np.where(_i85 == 12, _ik_all_rows3_raw[12], np.where(_i85 == 13, _ik_all_rows3_raw[13], np.where(_i85 == 14, _ik_all_rows3_raw[14], np.where(_i85 == 15, _ik_all_rows3_raw[15], np.where(_i85 == 16, _ik_all_rows3_raw[16], np.where(_i85 == 17, _ik_all_rows3_raw[17], np.where(_i85 == 18, _ik_all_rows3_raw[18], np.where(_i85 == 19, _ik_all_rows3_raw[19], np.where(_i85 == 20, _ik_all_rows3_raw[20], np.where(_i85 == 21, _ik_all_rows3_raw[21], np.where(_i85 == 22, _ik_all_rows3_raw[22], np.where(_i85 == 23, _ik_all_rows3_raw[23], np.where(_i85 == 24, _ik_all_rows3_raw[24], np.where(_i85 == 25, _ik_all_rows3_raw[25], np.where(_i85 == 26, _ik_all_rows3_raw[26], np.where(_i85 == 27, _ik_all_rows3_raw[27], np.where(_i85 == 28, _ik_all_rows3_raw[28], np.where(_i85 == 29, _ik_all_rows3_raw[29], np.where(_i85 == 30, _ik_all_rows3_raw[30], np.where(_i85 == 31, _ik_all_rows3_raw[31], np.where(_i85 == 32, _ik_all_rows3_raw[32], np.where(_i85 == 33, _ik_all_rows3_raw[33], np.where(_i85 == 34, _ik_all_rows3_raw[34], np.where(_i85 == 35, _ik_all_rows3_raw[35], np.where(_i85 == 36, _ik_all_rows3_raw[36], np.where(_i85 == 37, _ik_all_rows3_raw[37], np.where(_i85 == 38, _ik_all_rows3_raw[38], np.where(_i85 == 39, _ik_all_rows3_raw[39], np.where(_i85 == 40, _ik_all_rows3_raw[40], np.where(_i85 == 41, _ik_all_rows3_raw[41], np.where(_i85 == 42, _ik_all_rows3_raw[42], np.where(_i85 == 43, _ik_all_rows3_raw[43], np.where(_i85 == 44, _ik_all_rows3_raw[44], np.where(_i85 == 45, _ik_all_rows3_raw[45], np.where(_i85 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[1])
+            _c86 = np.abs(0.0 - _ik_all_rows3_cand[1]) > 3.141592653589793
+            _m87 = _m77 & _c86
+            _ik_all_rows3_cand[1] = np.where(_m87, _ik_all_rows3_cand[1] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[1])*0.15915494309189535), _ik_all_rows3_cand[1])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[1] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[1] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[1] = np.where(_m77, np.where(_ik_all_rows3_cand[1] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[1] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[1])), _ik_all_rows3_cand[1])
+            _i88 = 6*_i74 + 2
+            _i89 = 6*_i74 + 2
+            _i90 = 6*_i74 + 2
+            _ik_all_rows3_cand[2] = np.where(_m77, np.where(_i88 == 0, _ik_all_rows3_raw[0], np.where(_i88 == 1, _ik_all_rows3_raw[1], np.where(_i88 == 2, _ik_all_rows3_raw[2], np.where(_i88 == 3, _ik_all_rows3_raw[3], np.where(_i88 == 4, _ik_all_rows3_raw[4], np.where(_i88 == 5, _ik_all_rows3_raw[5], np.where(_i88 == 6, _ik_all_rows3_raw[6], np.where(_i88 == 7, _ik_all_rows3_raw[7], np.where(_i88 == 8, _ik_all_rows3_raw[8], np.where(_i88 == 9, _ik_all_rows3_raw[9], np.where(_i88 == 10, _ik_all_rows3_raw[10], np.where(_i88 == 11, _ik_all_rows3_raw[11], np.where(_i88 == 12, _ik_all_rows3_raw[12], np.where(_i88 == 13, _ik_all_rows3_raw[13], np.where(_i88 == 14, _ik_all_rows3_raw[14], np.where(_i88 == 15, _ik_all_rows3_raw[15], np.where(_i88 == 16, _ik_all_rows3_raw[16], np.where(_i88 == 17, _ik_all_rows3_raw[17], np.where(_i88 == 18, _ik_all_rows3_raw[18], np.where(_i88 == 19, _ik_all_rows3_raw[19], np.where(_i88 == 20, _ik_all_rows3_raw[20], np.where(_i88 == 21, _ik_all_rows3_raw[21], np.where(_i88 == 22, _ik_all_rows3_raw[22], np.where(_i88 == 23, _ik_all_rows3_raw[23], np.where(_i88 == 24, _ik_all_rows3_raw[24], np.where(_i88 == 25, _ik_all_rows3_raw[25], np.where(_i88 == 26, _ik_all_rows3_raw[26], np.where(_i88 == 27, _ik_all_rows3_raw[27], np.where(_i88 == 28, _ik_all_rows3_raw[28], np.where(_i88 == 29, _ik_all_rows3_raw[29], np.where(_i88 == 30, _ik_all_rows3_raw[30], np.where(_i88 == 31, _ik_all_rows3_raw[31], np.where(_i88 == 32, _ik_all_rows3_raw[32], np.where(_i88 == 33, _ik_all_rows3_raw[33], np.where(_i88 == 34, _ik_all_rows3_raw[34], np.where(_i88 == 35, _ik_all_rows3_raw[35], np.where(_i88 == 36, _ik_all_rows3_raw[36], np.where(_i88 == 37, _ik_all_rows3_raw[37], np.where(_i88 == 38, _ik_all_rows3_raw[38], np.where(_i88 == 39, _ik_all_rows3_raw[39], np.where(_i88 == 40, _ik_all_rows3_raw[40], np.where(_i88 == 41, _ik_all_rows3_raw[41], np.where(_i88 == 42, _ik_all_rows3_raw[42], np.where(_i88 == 43, _ik_all_rows3_raw[43], np.where(_i88 == 44, _ik_all_rows3_raw[44], np.where(_i88 == 45, _ik_all_rows3_raw[45], np.where(_i88 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i89 == 0, _ik_all_rows3_raw[0], np.where(_i89 == 1, _ik_all_rows3_raw[1], np.where(_i89 == 2, _ik_all_rows3_raw[2], np.where(_i89 == 3, _ik_all_rows3_raw[3], np.where(_i89 == 4, _ik_all_rows3_raw[4], np.where(_i89 == 5, _ik_all_rows3_raw[5], np.where(_i89 == 6, _ik_all_rows3_raw[6], np.where(_i89 == 7, _ik_all_rows3_raw[7], np.where(_i89 == 8, _ik_all_rows3_raw[8], np.where(_i89 == 9, _ik_all_rows3_raw[9], np.where(_i89 == 10, _ik_all_rows3_raw[10], np.where(_i89 == 11, _ik_all_rows3_raw[11], np.where(_i89 == 12, _ik_all_rows3_raw[12], np.where(_i89 == 13, _ik_all_rows3_raw[13], np.where(_i89 == 14, _ik_all_rows3_raw[14], np.where(_i89 == 15, _ik_all_rows3_raw[15], np.where(_i89 == 16, _ik_all_rows3_raw[16], np.where(_i89 == 17, _ik_all_rows3_raw[17], np.where(_i89 == 18, _ik_all_rows3_raw[18], np.where(_i89 == 19, _ik_all_rows3_raw[19], np.where(_i89 == 20, _ik_all_rows3_raw[20], np.where(_i89 == 21, _ik_all_rows3_raw[21], np.where(_i89 == 22, _ik_all_rows3_raw[22], np.where(_i89 == 23, _ik_all_rows3_raw[23], np.where(_i89 == 24, _ik_all_rows3_raw[24], np.where(_i89 == 25, _ik_all_rows3_raw[25], np.where(_i89 == 26, _ik_all_rows3_raw[26], np.where(_i89 == 27, _ik_all_rows3_raw[27], np.where(_i89 == 28, _ik_all_rows3_raw[28], np.where(_i89 == 29, _ik_all_rows3_raw[29], np.where(_i89 == 30, _ik_all_rows3_raw[30], np.where(_i89 == 31, _ik_all_rows3_raw[31], np.where(_i89 == 32, _ik_all_rows3_raw[32], np.where(_i89 == 33, _ik_all_rows3_raw[33], np.where(_i89 == 34, _ik_all_rows3_raw[34], np.where(_i89 == 35, _ik_all_rows3_raw[35], np.where(_i89 == 36, _ik_all_rows3_raw[36], np.where(_i89 == 37, _ik_all_rows3_raw[37], np.where(_i89 == 38, _ik_all_rows3_raw[38], np.where(_i89 == 39, _ik_all_rows3_raw[39], np.where(_i89 == 40, _ik_all_rows3_raw[40], np.where(_i89 == 41, _ik_all_rows3_raw[41], np.where(_i89 == 42, _ik_all_rows3_raw[42], np.where(_i89 == 43, _ik_all_rows3_raw[43], np.where(_i89 == 44, _ik_all_rows3_raw[44], np.where(_i89 == 45, _ik_all_rows3_raw[45], np.where(_i89 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i90 == 0, _ik_all_rows3_raw[0], np.where(_i90 == 1, _ik_all_rows3_raw[1], np.where(_i90 == 2, _ik_all_rows3_raw[2], np.where(_i90 == 3, _ik_all_rows3_raw[3], np.where(_i90 == 4, _ik_all_rows3_raw[4], np.where(_i90 == 5, _ik_all_rows3_raw[5], np.where(_i90 == 6, _ik_all_rows3_raw[6], np.where(_i90 == 7, _ik_all_rows3_raw[7], np.where(_i90 == 8, _ik_all_rows3_raw[8], np.where(_i90 == 9, _ik_all_rows3_raw[9], np.where(_i90 == 10, _ik_all_rows3_raw[10], np.where(_i90 == 11, _ik_all_rows3_raw[11], np.where(_i90 == 12, _ik_all_rows3_raw[12], np.where(_i90 == 13, _ik_all_rows3_raw[13], np.where(_i90 == 14, _ik_all_rows3_raw[14], np.where(_i90 == 15, _ik_all_rows3_raw[15], np.where(_i90 == 16, _ik_all_rows3_raw[16], np.where(_i90 == 17, _ik_all_rows3_raw[17], np.where(_i90 == 18, _ik_all_rows3_raw[18], np.where(_i90 == 19, _ik_all_rows3_raw[19], np.where(_i90 == 20, _ik_all_rows3_raw[20], np.where(_i90 == 21, _ik_all_rows3_raw[21], np.where(_i90 == 22, _ik_all_rows3_raw[22], np.where(_i90 == 23, _ik_all_rows3_raw[23], np.where(_i90 == 24, _ik_all_rows3_raw[24], np.where(_i90 == 25, _ik_all_rows3_raw[25], np.where(_i90 == 26, _ik_all_rows3_raw[26], np.where(_i90 == 27, _ik_all_rows3_raw[27], np.where(_i90 == 28, _ik_all_rows3_raw[28], np.where(_i90 == 29, _ik_all_rows3_raw[29], np.where(_i90 == 30, _ik_all_rows3_raw[30], np.where(_i90 == 31, _ik_all_rows3_raw[31], np.where(_i90 == 32, _ik_all_rows3_raw[32], np.where(_i90 == 33, _ik_all_rows3_raw[33], np.where(_i90 == 34, _ik_all_rows3_raw[34], np.where(_i90 == 35, _ik_all_rows3_raw[35], np.where(_i90 == 36, _ik_all_rows3_raw[36], np.where(_i90 == 37, _ik_all_rows3_raw[37], np.where(_i90 == 38, _ik_all_rows3_raw[38], np.where(_i90 == 39, _ik_all_rows3_raw[39], np.where(_i90 == 40, _ik_all_rows3_raw[40], np.where(_i90 == 41, _ik_all_rows3_raw[41], np.where(_i90 == 42, _ik_all_rows3_raw[42], np.where(_i90 == 43, _ik_all_rows3_raw[43], np.where(_i90 == 44, _ik_all_rows3_raw[44], np.where(_i90 == 45, _ik_all_rows3_raw[45], np.where(_i90 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[2])
+            _c91 = np.abs(0.0 - _ik_all_rows3_cand[2]) > 3.141592653589793
+            _m92 = _m77 & _c91
+            _ik_all_rows3_cand[2] = np.where(_m92, _ik_all_rows3_cand[2] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[2])*0.15915494309189535), _ik_all_rows3_cand[2])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[2] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[2] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[2] = np.where(_m77, np.where(_ik_all_rows3_cand[2] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[2] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[2])), _ik_all_rows3_cand[2])
+            _i93 = 6*_i74 + 3
+            _i94 = 6*_i74 + 3
+            _i95 = 6*_i74 + 3
+            _ik_all_rows3_cand[3] = np.where(_m77, np.where(_i93 == 0, _ik_all_rows3_raw[0], np.where(_i93 == 1, _ik_all_rows3_raw[1], np.where(_i93 == 2, _ik_all_rows3_raw[2], np.where(_i93 == 3, _ik_all_rows3_raw[3], np.where(_i93 == 4, _ik_all_rows3_raw[4], np.where(_i93 == 5, _ik_all_rows3_raw[5], np.where(_i93 == 6, _ik_all_rows3_raw[6], np.where(_i93 == 7, _ik_all_rows3_raw[7], np.where(_i93 == 8, _ik_all_rows3_raw[8], np.where(_i93 == 9, _ik_all_rows3_raw[9], np.where(_i93 == 10, _ik_all_rows3_raw[10], np.where(_i93 == 11, _ik_all_rows3_raw[11], np.where(_i93 == 12, _ik_all_rows3_raw[12], np.where(_i93 == 13, _ik_all_rows3_raw[13], np.where(_i93 == 14, _ik_all_rows3_raw[14], np.where(_i93 == 15, _ik_all_rows3_raw[15], np.where(_i93 == 16, _ik_all_rows3_raw[16], np.where(_i93 == 17, _ik_all_rows3_raw[17], np.where(_i93 == 18, _ik_all_rows3_raw[18], np.where(_i93 == 19, _ik_all_rows3_raw[19], np.where(_i93 == 20, _ik_all_rows3_raw[20], np.where(_i93 == 21, _ik_all_rows3_raw[21], np.where(_i93 == 22, _ik_all_rows3_raw[22], np.where(_i93 == 23, _ik_all_rows3_raw[23], np.where(_i93 == 24, _ik_all_rows3_raw[24], np.where(_i93 == 25, _ik_all_rows3_raw[25], np.where(_i93 == 26, _ik_all_rows3_raw[26], np.where(_i93 == 27, _ik_all_rows3_raw[27], np.where(_i93 == 28, _ik_all_rows3_raw[28], np.where(_i93 == 29, _ik_all_rows3_raw[29], np.where(_i93 == 30, _ik_all_rows3_raw[30], np.where(_i93 == 31, _ik_all_rows3_raw[31], np.where(_i93 == 32, _ik_all_rows3_raw[32], np.where(_i93 == 33, _ik_all_rows3_raw[33], np.where(_i93 == 34, _ik_all_rows3_raw[34], np.where(_i93 == 35, _ik_all_rows3_raw[35], np.where(_i93 == 36, _ik_all_rows3_raw[36], np.where(_i93 == 37, _ik_all_rows3_raw[37], np.where(_i93 == 38, _ik_all_rows3_raw[38], np.where(_i93 == 39, _ik_all_rows3_raw[39], np.where(_i93 == 40, _ik_all_rows3_raw[40], np.where(_i93 == 41, _ik_all_rows3_raw[41], np.where(_i93 == 42, _ik_all_rows3_raw[42], np.where(_i93 == 43, _ik_all_rows3_raw[43], np.where(_i93 == 44, _ik_all_rows3_raw[44], np.where(_i93 == 45, _ik_all_rows3_raw[45], np.where(_i93 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i94 == 0, _ik_all_rows3_raw[0], np.where(_i94 == 1, _ik_all_rows3_raw[1], np.where(_i94 == 2, _ik_all_rows3_raw[2], np.where(_i94 == 3, _ik_all_rows3_raw[3], np.where(_i94 == 4, _ik_all_rows3_raw[4], np.where(_i94 == 5, _ik_all_rows3_raw[5], np.where(_i94 == 6, _ik_all_rows3_raw[6], np.where(_i94 == 7, _ik_all_rows3_raw[7], np.where(_i94 == 8, _ik_all_rows3_raw[8], np.where(_i94 == 9, _ik_all_rows3_raw[9], np.where(_i94 == 10, _ik_all_rows3_raw[10], np.where(_i94 == 11, _ik_all_rows3_raw[11], np.where(_i94 == 12, _ik_all_rows3_raw[12], np.where(_i94 == 13, _ik_all_rows3_raw[13], np.where(_i94 == 14, _ik_all_rows3_raw[14], np.where(_i94 == 15, _ik_all_rows3_raw[15], np.where(_i94 == 16, _ik_all_rows3_raw[16], np.where(_i94 == 17, _ik_all_rows3_raw[17], np.where(_i94 == 18, _ik_all_rows3_raw[18], np.where(_i94 == 19, _ik_all_rows3_raw[19], np.where(_i94 == 20, _ik_all_rows3_raw[20], np.where(_i94 == 21, _ik_all_rows3_raw[21], np.where(_i94 == 22, _ik_all_rows3_raw[22], np.where(_i94 == 23, _ik_all_rows3_raw[23], np.where(_i94 == 24, _ik_all_rows3_raw[24], np.where(_i94 == 25, _ik_all_rows3_raw[25], np.where(_i94 == 26, _ik_all_rows3_raw[26], np.where(_i94 == 27, _ik_all_rows3_raw[27], np.where(_i94 == 28, _ik_all_rows3_raw[28], np.where(_i94 == 29, _ik_all_rows3_raw[29], np.where(_i94 == 30, _ik_all_rows3_raw[30], np.where(_i94 == 31, _ik_all_rows3_raw[31], np.where(_i94 == 32, _ik_all_rows3_raw[32], np.where(_i94 == 33, _ik_all_rows3_raw[33], np.where(_i94 == 34, _ik_all_rows3_raw[34], np.where(_i94 == 35, _ik_all_rows3_raw[35], np.where(_i94 == 36, _ik_all_rows3_raw[36], np.where(_i94 == 37, _ik_all_rows3_raw[37], np.where(_i94 == 38, _ik_all_rows3_raw[38], np.where(_i94 == 39, _ik_all_rows3_raw[39], np.where(_i94 == 40, _ik_all_rows3_raw[40], np.where(_i94 == 41, _ik_all_rows3_raw[41], np.where(_i94 == 42, _ik_all_rows3_raw[42], np.where(_i94 == 43, _ik_all_rows3_raw[43], np.where(_i94 == 44, _ik_all_rows3_raw[44], np.where(_i94 == 45, _ik_all_rows3_raw[45], np.where(_i94 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i95 == 0, _ik_all_rows3_raw[0], np.where(_i95 == 1, _ik_all_rows3_raw[1], np.where(_i95 == 2, _ik_all_rows3_raw[2], np.where(_i95 == 3, _ik_all_rows3_raw[3], np.where(_i95 == 4, _ik_all_rows3_raw[4], np.where(_i95 == 5, _ik_all_rows3_raw[5], np.where(_i95 == 6, _ik_all_rows3_raw[6], np.where(_i95 == 7, _ik_all_rows3_raw[7], np.where(_i95 == 8, _ik_all_rows3_raw[8], np.where(_i95 == 9, _ik_all_rows3_raw[9], np.where(_i95 == 10, _ik_all_rows3_raw[10], np.where(_i95 == 11, _ik_all_rows3_raw[11], np.where(_i95 == 12, _ik_all_rows3_raw[12], np.where(_i95 == 13, _ik_all_rows3_raw[13], np.where(_i95 == 14, _ik_all_rows3_raw[14], np.where(_i95 == 15, _ik_all_rows3_raw[15], np.where(_i95 == 16, _ik_all_rows3_raw[16], np.where(_i95 == 17, _ik_all_rows3_raw[17], np.where(_i95 == 18, _ik_all_rows3_raw[18], np.where(_i95 == 19, _ik_all_rows3_raw[19], np.where(_i95 == 20, _ik_all_rows3_raw[20], np.where(_i95 == 21, _ik_all_rows3_raw[21], np.where(_i95 == 22, _ik_all_rows3_raw[22], np.where(_i95 == 23, _ik_all_rows3_raw[23], np.where(_i95 == 24, _ik_all_rows3_raw[24], np.where(_i95 == 25, _ik_all_rows3_raw[25], np.where(_i95 == 26, _ik_all_rows3_raw[26], np.where(_i95 == 27, _ik_all_rows3_raw[27], np.where(_i95 == 28, _ik_all_rows3_raw[28], np.where(_i95 == 29, _ik_all_rows3_raw[29], np.where(_i95 == 30, _ik_all_rows3_raw[30], np.where(_i95 == 31, _ik_all_rows3_raw[31], np.where(_i95 == 32, _ik_all_rows3_raw[32], np.where(_i95 == 33, _ik_all_rows3_raw[33], np.where(_i95 == 34, _ik_all_rows3_raw[34], np.where(_i95 == 35, _ik_all_rows3_raw[35], np.where(_i95 == 36, _ik_all_rows3_raw[36], np.where(_i95 == 37, _ik_all_rows3_raw[37], np.where(_i95 == 38, _ik_all_rows3_raw[38], np.where(_i95 == 39, _ik_all_rows3_raw[39], np.where(_i95 == 40, _ik_all_rows3_raw[40], np.where(_i95 == 41, _ik_all_rows3_raw[41], np.where(_i95 == 42, _ik_all_rows3_raw[42], np.where(_i95 == 43, _ik_all_rows3_raw[43], np.where(_i95 == 44, _ik_all_rows3_raw[44], np.where(_i95 == 45, _ik_all_rows3_raw[45], np.where(_i95 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[3])
+            _c96 = np.abs(0.0 - _ik_all_rows3_cand[3]) > 3.141592653589793
+            _m97 = _m77 & _c96
+            _ik_all_rows3_cand[3] = np.where(_m97, _ik_all_rows3_cand[3] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[3])*0.15915494309189535), _ik_all_rows3_cand[3])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[3] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[3] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[3] = np.where(_m77, np.where(_ik_all_rows3_cand[3] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[3] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[3])), _ik_all_rows3_cand[3])
+            _i98 = 6*_i74 + 4
+            _i99 = 6*_i74 + 4
+            _i100 = 6*_i74 + 4
+            _ik_all_rows3_cand[4] = np.where(_m77, np.where(_i98 == 0, _ik_all_rows3_raw[0], np.where(_i98 == 1, _ik_all_rows3_raw[1], np.where(_i98 == 2, _ik_all_rows3_raw[2], np.where(_i98 == 3, _ik_all_rows3_raw[3], np.where(_i98 == 4, _ik_all_rows3_raw[4], np.where(_i98 == 5, _ik_all_rows3_raw[5], np.where(_i98 == 6, _ik_all_rows3_raw[6], np.where(_i98 == 7, _ik_all_rows3_raw[7], np.where(_i98 == 8, _ik_all_rows3_raw[8], np.where(_i98 == 9, _ik_all_rows3_raw[9], np.where(_i98 == 10, _ik_all_rows3_raw[10], np.where(_i98 == 11, _ik_all_rows3_raw[11], np.where(_i98 == 12, _ik_all_rows3_raw[12], np.where(_i98 == 13, _ik_all_rows3_raw[13], np.where(_i98 == 14, _ik_all_rows3_raw[14], np.where(_i98 == 15, _ik_all_rows3_raw[15], np.where(_i98 == 16, _ik_all_rows3_raw[16], np.where(_i98 == 17, _ik_all_rows3_raw[17], np.where(_i98 == 18, _ik_all_rows3_raw[18], np.where(_i98 == 19, _ik_all_rows3_raw[19], np.where(_i98 == 20, _ik_all_rows3_raw[20], np.where(_i98 == 21, _ik_all_rows3_raw[21], np.where(_i98 == 22, _ik_all_rows3_raw[22], np.where(_i98 == 23, _ik_all_rows3_raw[23], np.where(_i98 == 24, _ik_all_rows3_raw[24], np.where(_i98 == 25, _ik_all_rows3_raw[25], np.where(_i98 == 26, _ik_all_rows3_raw[26], np.where(_i98 == 27, _ik_all_rows3_raw[27], np.where(_i98 == 28, _ik_all_rows3_raw[28], np.where(_i98 == 29, _ik_all_rows3_raw[29], np.where(_i98 == 30, _ik_all_rows3_raw[30], np.where(_i98 == 31, _ik_all_rows3_raw[31], np.where(_i98 == 32, _ik_all_rows3_raw[32], np.where(_i98 == 33, _ik_all_rows3_raw[33], np.where(_i98 == 34, _ik_all_rows3_raw[34], np.where(_i98 == 35, _ik_all_rows3_raw[35], np.where(_i98 == 36, _ik_all_rows3_raw[36], np.where(_i98 == 37, _ik_all_rows3_raw[37], np.where(_i98 == 38, _ik_all_rows3_raw[38], np.where(_i98 == 39, _ik_all_rows3_raw[39], np.where(_i98 == 40, _ik_all_rows3_raw[40], np.where(_i98 == 41, _ik_all_rows3_raw[41], np.where(_i98 == 42, _ik_all_rows3_raw[42], np.where(_i98 == 43, _ik_all_rows3_raw[43], np.where(_i98 == 44, _ik_all_rows3_raw[44], np.where(_i98 == 45, _ik_all_rows3_raw[45], np.where(_i98 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i99 == 0, _ik_all_rows3_raw[0], np.where(_i99 == 1, _ik_all_rows3_raw[1], np.where(_i99 == 2, _ik_all_rows3_raw[2], np.where(_i99 == 3, _ik_all_rows3_raw[3], np.where(_i99 == 4, _ik_all_rows3_raw[4], np.where(_i99 == 5, _ik_all_rows3_raw[5], np.where(_i99 == 6, _ik_all_rows3_raw[6], np.where(_i99 == 7, _ik_all_rows3_raw[7], np.where(_i99 == 8, _ik_all_rows3_raw[8], np.where(_i99 == 9, _ik_all_rows3_raw[9], np.where(_i99 == 10, _ik_all_rows3_raw[10], np.where(_i99 == 11, _ik_all_rows3_raw[11], np.where(_i99 == 12, _ik_all_rows3_raw[12], np.where(_i99 == 13, _ik_all_rows3_raw[13], np.where(_i99 == 14, _ik_all_rows3_raw[14], np.where(_i99 == 15, _ik_all_rows3_raw[15], np.where(_i99 == 16, _ik_all_rows3_raw[16], np.where(_i99 == 17, _ik_all_rows3_raw[17], np.where(_i99 == 18, _ik_all_rows3_raw[18], np.where(_i99 == 19, _ik_all_rows3_raw[19], np.where(_i99 == 20, _ik_all_rows3_raw[20], np.where(_i99 == 21, _ik_all_rows3_raw[21], np.where(_i99 == 22, _ik_all_rows3_raw[22], np.where(_i99 == 23, _ik_all_rows3_raw[23], np.where(_i99 == 24, _ik_all_rows3_raw[24], np.where(_i99 == 25, _ik_all_rows3_raw[25], np.where(_i99 == 26, _ik_all_rows3_raw[26], np.where(_i99 == 27, _ik_all_rows3_raw[27], np.where(_i99 == 28, _ik_all_rows3_raw[28], np.where(_i99 == 29, _ik_all_rows3_raw[29], np.where(_i99 == 30, _ik_all_rows3_raw[30], np.where(_i99 == 31, _ik_all_rows3_raw[31], np.where(_i99 == 32, _ik_all_rows3_raw[32], np.where(_i99 == 33, _ik_all_rows3_raw[33], np.where(_i99 == 34, _ik_all_rows3_raw[34], np.where(_i99 == 35, _ik_all_rows3_raw[35], np.where(_i99 == 36, _ik_all_rows3_raw[36], np.where(_i99 == 37, _ik_all_rows3_raw[37], np.where(_i99 == 38, _ik_all_rows3_raw[38], np.where(_i99 == 39, _ik_all_rows3_raw[39], np.where(_i99 == 40, _ik_all_rows3_raw[40], np.where(_i99 == 41, _ik_all_rows3_raw[41], np.where(_i99 == 42, _ik_all_rows3_raw[42], np.where(_i99 == 43, _ik_all_rows3_raw[43], np.where(_i99 == 44, _ik_all_rows3_raw[44], np.where(_i99 == 45, _ik_all_rows3_raw[45], np.where(_i99 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i100 == 0, _ik_all_rows3_raw[0], np.where(_i100 == 1, _ik_all_rows3_raw[1], np.where(_i100 == 2, _ik_all_rows3_raw[2], np.where(_i100 == 3, _ik_all_rows3_raw[3], np.where(_i100 == 4, _ik_all_rows3_raw[4], np.where(_i100 == 5, _ik_all_rows3_raw[5], np.where(_i100 == 6, _ik_all_rows3_raw[6], np.where(_i100 == 7, _ik_all_rows3_raw[7], np.where(_i100 == 8, _ik_all_rows3_raw[8], np.where(_i100 == 9, _ik_all_rows3_raw[9], np.where(_i100 == 10, _ik_all_rows3_raw[10], np.where(_i100 == 11, _ik_all_rows3_raw[11], np.where(_i100 == 12, _ik_all_rows3_raw[12], np.where(_i100 == 13, _ik_all_rows3_raw[13], np.where(_i100 == 14, _ik_all_rows3_raw[14], np.where(_i100 == 15, _ik_all_rows3_raw[15], np.where(_i100 == 16, _ik_all_rows3_raw[16], np.where(_i100 == 17, _ik_all_rows3_raw[17], np.where(_i100 == 18, _ik_all_rows3_raw[18], np.where(_i100 == 19, _ik_all_rows3_raw[19], np.where(_i100 == 20, _ik_all_rows3_raw[20], np.where(_i100 == 21, _ik_all_rows3_raw[21], np.where(_i100 == 22, _ik_all_rows3_raw[22], np.where(_i100 == 23, _ik_all_rows3_raw[23], np.where(_i100 == 24, _ik_all_rows3_raw[24], np.where(_i100 == 25, _ik_all_rows3_raw[25], np.where(_i100 == 26, _ik_all_rows3_raw[26], np.where(_i100 == 27, _ik_all_rows3_raw[27], np.where(_i100 == 28, _ik_all_rows3_raw[28], np.where(_i100 == 29, _ik_all_rows3_raw[29], np.where(_i100 == 30, _ik_all_rows3_raw[30], np.where(_i100 == 31, _ik_all_rows3_raw[31], np.where(_i100 == 32, _ik_all_rows3_raw[32], np.where(_i100 == 33, _ik_all_rows3_raw[33], np.where(_i100 == 34, _ik_all_rows3_raw[34], np.where(_i100 == 35, _ik_all_rows3_raw[35], np.where(_i100 == 36, _ik_all_rows3_raw[36], np.where(_i100 == 37, _ik_all_rows3_raw[37], np.where(_i100 == 38, _ik_all_rows3_raw[38], np.where(_i100 == 39, _ik_all_rows3_raw[39], np.where(_i100 == 40, _ik_all_rows3_raw[40], np.where(_i100 == 41, _ik_all_rows3_raw[41], np.where(_i100 == 42, _ik_all_rows3_raw[42], np.where(_i100 == 43, _ik_all_rows3_raw[43], np.where(_i100 == 44, _ik_all_rows3_raw[44], np.where(_i100 == 45, _ik_all_rows3_raw[45], np.where(_i100 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[4])
+            _c101 = np.abs(0.0 - _ik_all_rows3_cand[4]) > 3.141592653589793
+            _m102 = _m77 & _c101
+            _ik_all_rows3_cand[4] = np.where(_m102, _ik_all_rows3_cand[4] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[4])*0.15915494309189535), _ik_all_rows3_cand[4])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[4] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[4] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[4] = np.where(_m77, np.where(_ik_all_rows3_cand[4] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[4] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[4])), _ik_all_rows3_cand[4])
+            _i103 = 6*_i74 + 5
+            _i104 = 6*_i74 + 5
+            _i105 = 6*_i74 + 5
+            _ik_all_rows3_cand[5] = np.where(_m77, np.where(_i103 == 0, _ik_all_rows3_raw[0], np.where(_i103 == 1, _ik_all_rows3_raw[1], np.where(_i103 == 2, _ik_all_rows3_raw[2], np.where(_i103 == 3, _ik_all_rows3_raw[3], np.where(_i103 == 4, _ik_all_rows3_raw[4], np.where(_i103 == 5, _ik_all_rows3_raw[5], np.where(_i103 == 6, _ik_all_rows3_raw[6], np.where(_i103 == 7, _ik_all_rows3_raw[7], np.where(_i103 == 8, _ik_all_rows3_raw[8], np.where(_i103 == 9, _ik_all_rows3_raw[9], np.where(_i103 == 10, _ik_all_rows3_raw[10], np.where(_i103 == 11, _ik_all_rows3_raw[11], np.where(_i103 == 12, _ik_all_rows3_raw[12], np.where(_i103 == 13, _ik_all_rows3_raw[13], np.where(_i103 == 14, _ik_all_rows3_raw[14], np.where(_i103 == 15, _ik_all_rows3_raw[15], np.where(_i103 == 16, _ik_all_rows3_raw[16], np.where(_i103 == 17, _ik_all_rows3_raw[17], np.where(_i103 == 18, _ik_all_rows3_raw[18], np.where(_i103 == 19, _ik_all_rows3_raw[19], np.where(_i103 == 20, _ik_all_rows3_raw[20], np.where(_i103 == 21, _ik_all_rows3_raw[21], np.where(_i103 == 22, _ik_all_rows3_raw[22], np.where(_i103 == 23, _ik_all_rows3_raw[23], np.where(_i103 == 24, _ik_all_rows3_raw[24], np.where(_i103 == 25, _ik_all_rows3_raw[25], np.where(_i103 == 26, _ik_all_rows3_raw[26], np.where(_i103 == 27, _ik_all_rows3_raw[27], np.where(_i103 == 28, _ik_all_rows3_raw[28], np.where(_i103 == 29, _ik_all_rows3_raw[29], np.where(_i103 == 30, _ik_all_rows3_raw[30], np.where(_i103 == 31, _ik_all_rows3_raw[31], np.where(_i103 == 32, _ik_all_rows3_raw[32], np.where(_i103 == 33, _ik_all_rows3_raw[33], np.where(_i103 == 34, _ik_all_rows3_raw[34], np.where(_i103 == 35, _ik_all_rows3_raw[35], np.where(_i103 == 36, _ik_all_rows3_raw[36], np.where(_i103 == 37, _ik_all_rows3_raw[37], np.where(_i103 == 38, _ik_all_rows3_raw[38], np.where(_i103 == 39, _ik_all_rows3_raw[39], np.where(_i103 == 40, _ik_all_rows3_raw[40], np.where(_i103 == 41, _ik_all_rows3_raw[41], np.where(_i103 == 42, _ik_all_rows3_raw[42], np.where(_i103 == 43, _ik_all_rows3_raw[43], np.where(_i103 == 44, _ik_all_rows3_raw[44], np.where(_i103 == 45, _ik_all_rows3_raw[45], np.where(_i103 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i104 == 0, _ik_all_rows3_raw[0], np.where(_i104 == 1, _ik_all_rows3_raw[1], np.where(_i104 == 2, _ik_all_rows3_raw[2], np.where(_i104 == 3, _ik_all_rows3_raw[3], np.where(_i104 == 4, _ik_all_rows3_raw[4], np.where(_i104 == 5, _ik_all_rows3_raw[5], np.where(_i104 == 6, _ik_all_rows3_raw[6], np.where(_i104 == 7, _ik_all_rows3_raw[7], np.where(_i104 == 8, _ik_all_rows3_raw[8], np.where(_i104 == 9, _ik_all_rows3_raw[9], np.where(_i104 == 10, _ik_all_rows3_raw[10], np.where(_i104 == 11, _ik_all_rows3_raw[11], np.where(_i104 == 12, _ik_all_rows3_raw[12], np.where(_i104 == 13, _ik_all_rows3_raw[13], np.where(_i104 == 14, _ik_all_rows3_raw[14], np.where(_i104 == 15, _ik_all_rows3_raw[15], np.where(_i104 == 16, _ik_all_rows3_raw[16], np.where(_i104 == 17, _ik_all_rows3_raw[17], np.where(_i104 == 18, _ik_all_rows3_raw[18], np.where(_i104 == 19, _ik_all_rows3_raw[19], np.where(_i104 == 20, _ik_all_rows3_raw[20], np.where(_i104 == 21, _ik_all_rows3_raw[21], np.where(_i104 == 22, _ik_all_rows3_raw[22], np.where(_i104 == 23, _ik_all_rows3_raw[23], np.where(_i104 == 24, _ik_all_rows3_raw[24], np.where(_i104 == 25, _ik_all_rows3_raw[25], np.where(_i104 == 26, _ik_all_rows3_raw[26], np.where(_i104 == 27, _ik_all_rows3_raw[27], np.where(_i104 == 28, _ik_all_rows3_raw[28], np.where(_i104 == 29, _ik_all_rows3_raw[29], np.where(_i104 == 30, _ik_all_rows3_raw[30], np.where(_i104 == 31, _ik_all_rows3_raw[31], np.where(_i104 == 32, _ik_all_rows3_raw[32], np.where(_i104 == 33, _ik_all_rows3_raw[33], np.where(_i104 == 34, _ik_all_rows3_raw[34], np.where(_i104 == 35, _ik_all_rows3_raw[35], np.where(_i104 == 36, _ik_all_rows3_raw[36], np.where(_i104 == 37, _ik_all_rows3_raw[37], np.where(_i104 == 38, _ik_all_rows3_raw[38], np.where(_i104 == 39, _ik_all_rows3_raw[39], np.where(_i104 == 40, _ik_all_rows3_raw[40], np.where(_i104 == 41, _ik_all_rows3_raw[41], np.where(_i104 == 42, _ik_all_rows3_raw[42], np.where(_i104 == 43, _ik_all_rows3_raw[43], np.where(_i104 == 44, _ik_all_rows3_raw[44], np.where(_i104 == 45, _ik_all_rows3_raw[45], np.where(_i104 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i105 == 0, _ik_all_rows3_raw[0], np.where(_i105 == 1, _ik_all_rows3_raw[1], np.where(_i105 == 2, _ik_all_rows3_raw[2], np.where(_i105 == 3, _ik_all_rows3_raw[3], np.where(_i105 == 4, _ik_all_rows3_raw[4], np.where(_i105 == 5, _ik_all_rows3_raw[5], np.where(_i105 == 6, _ik_all_rows3_raw[6], np.where(_i105 == 7, _ik_all_rows3_raw[7], np.where(_i105 == 8, _ik_all_rows3_raw[8], np.where(_i105 == 9, _ik_all_rows3_raw[9], np.where(_i105 == 10, _ik_all_rows3_raw[10], np.where(_i105 == 11, _ik_all_rows3_raw[11], np.where(_i105 == 12, _ik_all_rows3_raw[12], np.where(_i105 == 13, _ik_all_rows3_raw[13], np.where(_i105 == 14, _ik_all_rows3_raw[14], np.where(_i105 == 15, _ik_all_rows3_raw[15], np.where(_i105 == 16, _ik_all_rows3_raw[16], np.where(_i105 == 17, _ik_all_rows3_raw[17], np.where(_i105 == 18, _ik_all_rows3_raw[18], np.where(_i105 == 19, _ik_all_rows3_raw[19], np.where(_i105 == 20, _ik_all_rows3_raw[20], np.where(_i105 == 21, _ik_all_rows3_raw[21], np.where(_i105 == 22, _ik_all_rows3_raw[22], np.where(_i105 == 23, _ik_all_rows3_raw[23], np.where(_i105 == 24, _ik_all_rows3_raw[24], np.where(_i105 == 25, _ik_all_rows3_raw[25], np.where(_i105 == 26, _ik_all_rows3_raw[26], np.where(_i105 == 27, _ik_all_rows3_raw[27], np.where(_i105 == 28, _ik_all_rows3_raw[28], np.where(_i105 == 29, _ik_all_rows3_raw[29], np.where(_i105 == 30, _ik_all_rows3_raw[30], np.where(_i105 == 31, _ik_all_rows3_raw[31], np.where(_i105 == 32, _ik_all_rows3_raw[32], np.where(_i105 == 33, _ik_all_rows3_raw[33], np.where(_i105 == 34, _ik_all_rows3_raw[34], np.where(_i105 == 35, _ik_all_rows3_raw[35], np.where(_i105 == 36, _ik_all_rows3_raw[36], np.where(_i105 == 37, _ik_all_rows3_raw[37], np.where(_i105 == 38, _ik_all_rows3_raw[38], np.where(_i105 == 39, _ik_all_rows3_raw[39], np.where(_i105 == 40, _ik_all_rows3_raw[40], np.where(_i105 == 41, _ik_all_rows3_raw[41], np.where(_i105 == 42, _ik_all_rows3_raw[42], np.where(_i105 == 43, _ik_all_rows3_raw[43], np.where(_i105 == 44, _ik_all_rows3_raw[44], np.where(_i105 == 45, _ik_all_rows3_raw[45], np.where(_i105 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[5])
+            _c106 = np.abs(0.0 - _ik_all_rows3_cand[5]) > 3.141592653589793
+            _m107 = _m77 & _c106
+            _ik_all_rows3_cand[5] = np.where(_m107, _ik_all_rows3_cand[5] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[5])*0.15915494309189535), _ik_all_rows3_cand[5])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[5] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[5] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[5] = np.where(_m77, np.where(_ik_all_rows3_cand[5] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[5] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[5])), _ik_all_rows3_cand[5])
+            _c108 = _ik_all_rows3_inside > 0
+            _m109 = _m77 & _c108
+            if bool(_m109.any()):
+                # 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped
+                _ik_all_rows3_dup = np.where(_m109, -1, _ik_all_rows3_dup)
+                _r110 = _fi(0)
+                _run111 = _m109 & (_r110 < _ik_all_rows3_kept)
+                while bool(_run111.any()):
+                    # the same row when every joint is within IK_DUP_TOL: nested, so a row that differs in its first joint costs one test
+                    _i112 = 6*_r110
+                    _ik_all_rows3_diff = np.where(_run111, _ik_all_rows3_cand[0] - np.where(_i112 == 0, q[0], np.where(_i112 == 1, q[1], np.where(_i112 == 2, q[2], np.where(_i112 == 3, q[3], np.where(_i112 == 4, q[4], np.where(_i112 == 5, q[5], np.where(_i112 == 6, q[6], np.where(_i112 == 7, q[7], np.where(_i112 == 8, q[8], np.where(_i112 == 9, q[9], np.where(_i112 == 10, q[10], np.where(_i112 == 11, q[11], np.where(_i112 == 12, q[12], np.where(_i112 == 13, q[13], np.where(_i112 == 14, q[14], np.where(_i112 == 15, q[15], np.where(_i112 == 16, q[16], np.where(_i112 == 17, q[17], np.where(_i112 == 18, q[18], np.where(_i112 == 19, q[19], np.where(_i112 == 20, q[20], np.where(_i112 == 21, q[21], np.where(_i112 == 22, q[22], np.where(_i112 == 23, q[23], np.where(_i112 == 24, q[24], np.where(_i112 == 25, q[25], np.where(_i112 == 26, q[26], np.where(_i112 == 27, q[27], np.where(_i112 == 28, q[28], np.where(_i112 == 29, q[29], np.where(_i112 == 30, q[30], np.where(_i112 == 31, q[31], np.where(_i112 == 32, q[32], np.where(_i112 == 33, q[33], np.where(_i112 == 34, q[34], np.where(_i112 == 35, q[35], np.where(_i112 == 36, q[36], np.where(_i112 == 37, q[37], np.where(_i112 == 38, q[38], np.where(_i112 == 39, q[39], np.where(_i112 == 40, q[40], np.where(_i112 == 41, q[41], np.where(_i112 == 42, q[42], np.where(_i112 == 43, q[43], np.where(_i112 == 44, q[44], np.where(_i112 == 45, q[45], np.where(_i112 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c113 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m114 = _run111 & _c113
+                    _i115 = 6*_r110 + 1
+                    _ik_all_rows3_diff = np.where(_m114, _ik_all_rows3_cand[1] - np.where(_i115 == 0, q[0], np.where(_i115 == 1, q[1], np.where(_i115 == 2, q[2], np.where(_i115 == 3, q[3], np.where(_i115 == 4, q[4], np.where(_i115 == 5, q[5], np.where(_i115 == 6, q[6], np.where(_i115 == 7, q[7], np.where(_i115 == 8, q[8], np.where(_i115 == 9, q[9], np.where(_i115 == 10, q[10], np.where(_i115 == 11, q[11], np.where(_i115 == 12, q[12], np.where(_i115 == 13, q[13], np.where(_i115 == 14, q[14], np.where(_i115 == 15, q[15], np.where(_i115 == 16, q[16], np.where(_i115 == 17, q[17], np.where(_i115 == 18, q[18], np.where(_i115 == 19, q[19], np.where(_i115 == 20, q[20], np.where(_i115 == 21, q[21], np.where(_i115 == 22, q[22], np.where(_i115 == 23, q[23], np.where(_i115 == 24, q[24], np.where(_i115 == 25, q[25], np.where(_i115 == 26, q[26], np.where(_i115 == 27, q[27], np.where(_i115 == 28, q[28], np.where(_i115 == 29, q[29], np.where(_i115 == 30, q[30], np.where(_i115 == 31, q[31], np.where(_i115 == 32, q[32], np.where(_i115 == 33, q[33], np.where(_i115 == 34, q[34], np.where(_i115 == 35, q[35], np.where(_i115 == 36, q[36], np.where(_i115 == 37, q[37], np.where(_i115 == 38, q[38], np.where(_i115 == 39, q[39], np.where(_i115 == 40, q[40], np.where(_i115 == 41, q[41], np.where(_i115 == 42, q[42], np.where(_i115 == 43, q[43], np.where(_i115 == 44, q[44], np.where(_i115 == 45, q[45], np.where(_i115 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c116 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m117 = _m114 & _c116
+                    _i118 = 6*_r110 + 2
+                    _ik_all_rows3_diff = np.where(_m117, _ik_all_rows3_cand[2] - np.where(_i118 == 0, q[0], np.where(_i118 == 1, q[1], np.where(_i118 == 2, q[2], np.where(_i118 == 3, q[3], np.where(_i118 == 4, q[4], np.where(_i118 == 5, q[5], np.where(_i118 == 6, q[6], np.where(_i118 == 7, q[7], np.where(_i118 == 8, q[8], np.where(_i118 == 9, q[9], np.where(_i118 == 10, q[10], np.where(_i118 == 11, q[11], np.where(_i118 == 12, q[12], np.where(_i118 == 13, q[13], np.where(_i118 == 14, q[14], np.where(_i118 == 15, q[15], np.where(_i118 == 16, q[16], np.where(_i118 == 17, q[17], np.where(_i118 == 18, q[18], np.where(_i118 == 19, q[19], np.where(_i118 == 20, q[20], np.where(_i118 == 21, q[21], np.where(_i118 == 22, q[22], np.where(_i118 == 23, q[23], np.where(_i118 == 24, q[24], np.where(_i118 == 25, q[25], np.where(_i118 == 26, q[26], np.where(_i118 == 27, q[27], np.where(_i118 == 28, q[28], np.where(_i118 == 29, q[29], np.where(_i118 == 30, q[30], np.where(_i118 == 31, q[31], np.where(_i118 == 32, q[32], np.where(_i118 == 33, q[33], np.where(_i118 == 34, q[34], np.where(_i118 == 35, q[35], np.where(_i118 == 36, q[36], np.where(_i118 == 37, q[37], np.where(_i118 == 38, q[38], np.where(_i118 == 39, q[39], np.where(_i118 == 40, q[40], np.where(_i118 == 41, q[41], np.where(_i118 == 42, q[42], np.where(_i118 == 43, q[43], np.where(_i118 == 44, q[44], np.where(_i118 == 45, q[45], np.where(_i118 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c119 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m120 = _m117 & _c119
+                    _i121 = 6*_r110 + 3
+                    _ik_all_rows3_diff = np.where(_m120, _ik_all_rows3_cand[3] - np.where(_i121 == 0, q[0], np.where(_i121 == 1, q[1], np.where(_i121 == 2, q[2], np.where(_i121 == 3, q[3], np.where(_i121 == 4, q[4], np.where(_i121 == 5, q[5], np.where(_i121 == 6, q[6], np.where(_i121 == 7, q[7], np.where(_i121 == 8, q[8], np.where(_i121 == 9, q[9], np.where(_i121 == 10, q[10], np.where(_i121 == 11, q[11], np.where(_i121 == 12, q[12], np.where(_i121 == 13, q[13], np.where(_i121 == 14, q[14], np.where(_i121 == 15, q[15], np.where(_i121 == 16, q[16], np.where(_i121 == 17, q[17], np.where(_i121 == 18, q[18], np.where(_i121 == 19, q[19], np.where(_i121 == 20, q[20], np.where(_i121 == 21, q[21], np.where(_i121 == 22, q[22], np.where(_i121 == 23, q[23], np.where(_i121 == 24, q[24], np.where(_i121 == 25, q[25], np.where(_i121 == 26, q[26], np.where(_i121 == 27, q[27], np.where(_i121 == 28, q[28], np.where(_i121 == 29, q[29], np.where(_i121 == 30, q[30], np.where(_i121 == 31, q[31], np.where(_i121 == 32, q[32], np.where(_i121 == 33, q[33], np.where(_i121 == 34, q[34], np.where(_i121 == 35, q[35], np.where(_i121 == 36, q[36], np.where(_i121 == 37, q[37], np.where(_i121 == 38, q[38], np.where(_i121 == 39, q[39], np.where(_i121 == 40, q[40], np.where(_i121 == 41, q[41], np.where(_i121 == 42, q[42], np.where(_i121 == 43, q[43], np.where(_i121 == 44, q[44], np.where(_i121 == 45, q[45], np.where(_i121 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c122 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m123 = _m120 & _c122
+                    _i124 = 6*_r110 + 4
+                    _ik_all_rows3_diff = np.where(_m123, _ik_all_rows3_cand[4] - np.where(_i124 == 0, q[0], np.where(_i124 == 1, q[1], np.where(_i124 == 2, q[2], np.where(_i124 == 3, q[3], np.where(_i124 == 4, q[4], np.where(_i124 == 5, q[5], np.where(_i124 == 6, q[6], np.where(_i124 == 7, q[7], np.where(_i124 == 8, q[8], np.where(_i124 == 9, q[9], np.where(_i124 == 10, q[10], np.where(_i124 == 11, q[11], np.where(_i124 == 12, q[12], np.where(_i124 == 13, q[13], np.where(_i124 == 14, q[14], np.where(_i124 == 15, q[15], np.where(_i124 == 16, q[16], np.where(_i124 == 17, q[17], np.where(_i124 == 18, q[18], np.where(_i124 == 19, q[19], np.where(_i124 == 20, q[20], np.where(_i124 == 21, q[21], np.where(_i124 == 22, q[22], np.where(_i124 == 23, q[23], np.where(_i124 == 24, q[24], np.where(_i124 == 25, q[25], np.where(_i124 == 26, q[26], np.where(_i124 == 27, q[27], np.where(_i124 == 28, q[28], np.where(_i124 == 29, q[29], np.where(_i124 == 30, q[30], np.where(_i124 == 31, q[31], np.where(_i124 == 32, q[32], np.where(_i124 == 33, q[33], np.where(_i124 == 34, q[34], np.where(_i124 == 35, q[35], np.where(_i124 == 36, q[36], np.where(_i124 == 37, q[37], np.where(_i124 == 38, q[38], np.where(_i124 == 39, q[39], np.where(_i124 == 40, q[40], np.where(_i124 == 41, q[41], np.where(_i124 == 42, q[42], np.where(_i124 == 43, q[43], np.where(_i124 == 44, q[44], np.where(_i124 == 45, q[45], np.where(_i124 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c125 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m126 = _m123 & _c125
+                    _i127 = 6*_r110 + 5
+                    _ik_all_rows3_diff = np.where(_m126, _ik_all_rows3_cand[5] - np.where(_i127 == 0, q[0], np.where(_i127 == 1, q[1], np.where(_i127 == 2, q[2], np.where(_i127 == 3, q[3], np.where(_i127 == 4, q[4], np.where(_i127 == 5, q[5], np.where(_i127 == 6, q[6], np.where(_i127 == 7, q[7], np.where(_i127 == 8, q[8], np.where(_i127 == 9, q[9], np.where(_i127 == 10, q[10], np.where(_i127 == 11, q[11], np.where(_i127 == 12, q[12], np.where(_i127 == 13, q[13], np.where(_i127 == 14, q[14], np.where(_i127 == 15, q[15], np.where(_i127 == 16, q[16], np.where(_i127 == 17, q[17], np.where(_i127 == 18, q[18], np.where(_i127 == 19, q[19], np.where(_i127 == 20, q[20], np.where(_i127 == 21, q[21], np.where(_i127 == 22, q[22], np.where(_i127 == 23, q[23], np.where(_i127 == 24, q[24], np.where(_i127 == 25, q[25], np.where(_i127 == 26, q[26], np.where(_i127 == 27, q[27], np.where(_i127 == 28, q[28], np.where(_i127 == 29, q[29], np.where(_i127 == 30, q[30], np.where(_i127 == 31, q[31], np.where(_i127 == 32, q[32], np.where(_i127 == 33, q[33], np.where(_i127 == 34, q[34], np.where(_i127 == 35, q[35], np.where(_i127 == 36, q[36], np.where(_i127 == 37, q[37], np.where(_i127 == 38, q[38], np.where(_i127 == 39, q[39], np.where(_i127 == 40, q[40], np.where(_i127 == 41, q[41], np.where(_i127 == 42, q[42], np.where(_i127 == 43, q[43], np.where(_i127 == 44, q[44], np.where(_i127 == 45, q[45], np.where(_i127 == 46, q[46], q[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c128 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m129 = _m126 & _c128
+                    _ik_all_rows3_dup = np.where(_m129, _r110, _ik_all_rows3_dup)
+                    _run111 = _run111 & (~_m129)
+                    _m130 = _m126 & _run111
+                    _m131 = _m123 & _run111
+                    _m132 = _m120 & _run111
+                    _m133 = _m117 & _run111
+                    _m134 = _m114 & _run111
+                    _r110 = np.where(_run111, _r110 + 1, _r110)
+                    _run111 = _run111 & (_r110 < _ik_all_rows3_kept)
+                _c135 = _ik_all_rows3_dup >= 0
+                _m136 = _m109 & _c135
+                _m137 = _m109 & (~_c135)
+                # the kept row takes the duplicate's singular bit
+                _c138 = (_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) < IK_FLAG_SINGULAR)
+                _m139 = _m136 & _c138
+                _v140 = np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) + IK_FLAG_SINGULAR
+                _m141 = _m139 & (_ik_all_rows3_dup == 0)
+                flags[0] = np.where(_m141, _v140, flags[0])
+                _m142 = _m139 & (_ik_all_rows3_dup == 1)
+                flags[1] = np.where(_m142, _v140, flags[1])
+                _m143 = _m139 & (_ik_all_rows3_dup == 2)
+                flags[2] = np.where(_m143, _v140, flags[2])
+                _m144 = _m139 & (_ik_all_rows3_dup == 3)
+                flags[3] = np.where(_m144, _v140, flags[3])
+                _m145 = _m139 & (_ik_all_rows3_dup == 4)
+                flags[4] = np.where(_m145, _v140, flags[4])
+                _m146 = _m139 & (_ik_all_rows3_dup == 5)
+                flags[5] = np.where(_m146, _v140, flags[5])
+                _m147 = _m139 & (_ik_all_rows3_dup == 6)
+                flags[6] = np.where(_m147, _v140, flags[6])
+                _m148 = _m139 & (_ik_all_rows3_dup == 7)
+                flags[7] = np.where(_m148, _v140, flags[7])
+                if bool(_m137.any()):
+                    # 6. kept, in branch order
+                    _i149 = 6*_ik_all_rows3_kept
+                    _v150 = _ik_all_rows3_cand[0]
+                    _m151 = _m137 & (_i149 == 0)
+                    q[0] = np.where(_m151, _v150, q[0])
+                    _m152 = _m137 & (_i149 == 1)
+                    q[1] = np.where(_m152, _v150, q[1])
+                    _m153 = _m137 & (_i149 == 2)
+                    q[2] = np.where(_m153, _v150, q[2])
+                    _m154 = _m137 & (_i149 == 3)
+                    q[3] = np.where(_m154, _v150, q[3])
+                    _m155 = _m137 & (_i149 == 4)
+                    q[4] = np.where(_m155, _v150, q[4])
+                    _m156 = _m137 & (_i149 == 5)
+                    q[5] = np.where(_m156, _v150, q[5])
+                    _m157 = _m137 & (_i149 == 6)
+                    q[6] = np.where(_m157, _v150, q[6])
+                    _m158 = _m137 & (_i149 == 7)
+                    q[7] = np.where(_m158, _v150, q[7])
+                    _m159 = _m137 & (_i149 == 8)
+                    q[8] = np.where(_m159, _v150, q[8])
+                    _m160 = _m137 & (_i149 == 9)
+                    q[9] = np.where(_m160, _v150, q[9])
+                    _m161 = _m137 & (_i149 == 10)
+                    q[10] = np.where(_m161, _v150, q[10])
+                    _m162 = _m137 & (_i149 == 11)
+                    q[11] = np.where(_m162, _v150, q[11])
+                    _m163 = _m137 & (_i149 == 12)
+                    q[12] = np.where(_m163, _v150, q[12])
+                    _m164 = _m137 & (_i149 == 13)
+                    q[13] = np.where(_m164, _v150, q[13])
+                    _m165 = _m137 & (_i149 == 14)
+                    q[14] = np.where(_m165, _v150, q[14])
+                    _m166 = _m137 & (_i149 == 15)
+                    q[15] = np.where(_m166, _v150, q[15])
+                    _m167 = _m137 & (_i149 == 16)
+                    q[16] = np.where(_m167, _v150, q[16])
+                    _m168 = _m137 & (_i149 == 17)
+                    q[17] = np.where(_m168, _v150, q[17])
+                    _m169 = _m137 & (_i149 == 18)
+                    q[18] = np.where(_m169, _v150, q[18])
+                    _m170 = _m137 & (_i149 == 19)
+                    q[19] = np.where(_m170, _v150, q[19])
+                    _m171 = _m137 & (_i149 == 20)
+                    q[20] = np.where(_m171, _v150, q[20])
+                    _m172 = _m137 & (_i149 == 21)
+                    q[21] = np.where(_m172, _v150, q[21])
+                    _m173 = _m137 & (_i149 == 22)
+                    q[22] = np.where(_m173, _v150, q[22])
+                    _m174 = _m137 & (_i149 == 23)
+                    q[23] = np.where(_m174, _v150, q[23])
+                    _m175 = _m137 & (_i149 == 24)
+                    q[24] = np.where(_m175, _v150, q[24])
+                    _m176 = _m137 & (_i149 == 25)
+                    q[25] = np.where(_m176, _v150, q[25])
+                    _m177 = _m137 & (_i149 == 26)
+                    q[26] = np.where(_m177, _v150, q[26])
+                    _m178 = _m137 & (_i149 == 27)
+                    q[27] = np.where(_m178, _v150, q[27])
+                    _m179 = _m137 & (_i149 == 28)
+                    q[28] = np.where(_m179, _v150, q[28])
+                    _m180 = _m137 & (_i149 == 29)
+                    q[29] = np.where(_m180, _v150, q[29])
+                    _m181 = _m137 & (_i149 == 30)
+                    q[30] = np.where(_m181, _v150, q[30])
+                    _m182 = _m137 & (_i149 == 31)
+                    q[31] = np.where(_m182, _v150, q[31])
+                    _m183 = _m137 & (_i149 == 32)
+                    q[32] = np.where(_m183, _v150, q[32])
+                    _m184 = _m137 & (_i149 == 33)
+                    q[33] = np.where(_m184, _v150, q[33])
+                    _m185 = _m137 & (_i149 == 34)
+                    q[34] = np.where(_m185, _v150, q[34])
+                    _m186 = _m137 & (_i149 == 35)
+                    q[35] = np.where(_m186, _v150, q[35])
+                    _m187 = _m137 & (_i149 == 36)
+                    q[36] = np.where(_m187, _v150, q[36])
+                    _m188 = _m137 & (_i149 == 37)
+                    q[37] = np.where(_m188, _v150, q[37])
+                    _m189 = _m137 & (_i149 == 38)
+                    q[38] = np.where(_m189, _v150, q[38])
+                    _m190 = _m137 & (_i149 == 39)
+                    q[39] = np.where(_m190, _v150, q[39])
+                    _m191 = _m137 & (_i149 == 40)
+                    q[40] = np.where(_m191, _v150, q[40])
+                    _m192 = _m137 & (_i149 == 41)
+                    q[41] = np.where(_m192, _v150, q[41])
+                    _m193 = _m137 & (_i149 == 42)
+                    q[42] = np.where(_m193, _v150, q[42])
+                    _m194 = _m137 & (_i149 == 43)
+                    q[43] = np.where(_m194, _v150, q[43])
+                    _m195 = _m137 & (_i149 == 44)
+                    q[44] = np.where(_m195, _v150, q[44])
+                    _m196 = _m137 & (_i149 == 45)
+                    q[45] = np.where(_m196, _v150, q[45])
+                    _m197 = _m137 & (_i149 == 46)
+                    q[46] = np.where(_m197, _v150, q[46])
+                    _m198 = _m137 & (_i149 == 47)
+                    q[47] = np.where(_m198, _v150, q[47])
+                    _i199 = 6*_ik_all_rows3_kept + 1
+                    _v200 = _ik_all_rows3_cand[1]
+                    _m201 = _m137 & (_i199 == 0)
+                    q[0] = np.where(_m201, _v200, q[0])
+                    _m202 = _m137 & (_i199 == 1)
+                    q[1] = np.where(_m202, _v200, q[1])
+                    _m203 = _m137 & (_i199 == 2)
+                    q[2] = np.where(_m203, _v200, q[2])
+                    _m204 = _m137 & (_i199 == 3)
+                    q[3] = np.where(_m204, _v200, q[3])
+                    _m205 = _m137 & (_i199 == 4)
+                    q[4] = np.where(_m205, _v200, q[4])
+                    _m206 = _m137 & (_i199 == 5)
+                    q[5] = np.where(_m206, _v200, q[5])
+                    _m207 = _m137 & (_i199 == 6)
+                    q[6] = np.where(_m207, _v200, q[6])
+                    _m208 = _m137 & (_i199 == 7)
+                    q[7] = np.where(_m208, _v200, q[7])
+                    _m209 = _m137 & (_i199 == 8)
+                    q[8] = np.where(_m209, _v200, q[8])
+                    _m210 = _m137 & (_i199 == 9)
+                    q[9] = np.where(_m210, _v200, q[9])
+                    _m211 = _m137 & (_i199 == 10)
+                    q[10] = np.where(_m211, _v200, q[10])
+                    _m212 = _m137 & (_i199 == 11)
+                    q[11] = np.where(_m212, _v200, q[11])
+                    _m213 = _m137 & (_i199 == 12)
+                    q[12] = np.where(_m213, _v200, q[12])
+                    _m214 = _m137 & (_i199 == 13)
+                    q[13] = np.where(_m214, _v200, q[13])
+                    _m215 = _m137 & (_i199 == 14)
+                    q[14] = np.where(_m215, _v200, q[14])
+                    _m216 = _m137 & (_i199 == 15)
+                    q[15] = np.where(_m216, _v200, q[15])
+                    _m217 = _m137 & (_i199 == 16)
+                    q[16] = np.where(_m217, _v200, q[16])
+                    _m218 = _m137 & (_i199 == 17)
+                    q[17] = np.where(_m218, _v200, q[17])
+                    _m219 = _m137 & (_i199 == 18)
+                    q[18] = np.where(_m219, _v200, q[18])
+                    _m220 = _m137 & (_i199 == 19)
+                    q[19] = np.where(_m220, _v200, q[19])
+                    _m221 = _m137 & (_i199 == 20)
+                    q[20] = np.where(_m221, _v200, q[20])
+                    _m222 = _m137 & (_i199 == 21)
+                    q[21] = np.where(_m222, _v200, q[21])
+                    _m223 = _m137 & (_i199 == 22)
+                    q[22] = np.where(_m223, _v200, q[22])
+                    _m224 = _m137 & (_i199 == 23)
+                    q[23] = np.where(_m224, _v200, q[23])
+                    _m225 = _m137 & (_i199 == 24)
+                    q[24] = np.where(_m225, _v200, q[24])
+                    _m226 = _m137 & (_i199 == 25)
+                    q[25] = np.where(_m226, _v200, q[25])
+                    _m227 = _m137 & (_i199 == 26)
+                    q[26] = np.where(_m227, _v200, q[26])
+                    _m228 = _m137 & (_i199 == 27)
+                    q[27] = np.where(_m228, _v200, q[27])
+                    _m229 = _m137 & (_i199 == 28)
+                    q[28] = np.where(_m229, _v200, q[28])
+                    _m230 = _m137 & (_i199 == 29)
+                    q[29] = np.where(_m230, _v200, q[29])
+                    _m231 = _m137 & (_i199 == 30)
+                    q[30] = np.where(_m231, _v200, q[30])
+                    _m232 = _m137 & (_i199 == 31)
+                    q[31] = np.where(_m232, _v200, q[31])
+                    _m233 = _m137 & (_i199 == 32)
+                    q[32] = np.where(_m233, _v200, q[32])
+                    _m234 = _m137 & (_i199 == 33)
+                    q[33] = np.where(_m234, _v200, q[33])
+                    _m235 = _m137 & (_i199 == 34)
+                    q[34] = np.where(_m235, _v200, q[34])
+                    _m236 = _m137 & (_i199 == 35)
+                    q[35] = np.where(_m236, _v200, q[35])
+                    _m237 = _m137 & (_i199 == 36)
+                    q[36] = np.where(_m237, _v200, q[36])
+                    _m238 = _m137 & (_i199 == 37)
+                    q[37] = np.where(_m238, _v200, q[37])
+                    _m239 = _m137 & (_i199 == 38)
+                    q[38] = np.where(_m239, _v200, q[38])
+                    _m240 = _m137 & (_i199 == 39)
+                    q[39] = np.where(_m240, _v200, q[39])
+                    _m241 = _m137 & (_i199 == 40)
+                    q[40] = np.where(_m241, _v200, q[40])
+                    _m242 = _m137 & (_i199 == 41)
+                    q[41] = np.where(_m242, _v200, q[41])
+                    _m243 = _m137 & (_i199 == 42)
+                    q[42] = np.where(_m243, _v200, q[42])
+                    _m244 = _m137 & (_i199 == 43)
+                    q[43] = np.where(_m244, _v200, q[43])
+                    _m245 = _m137 & (_i199 == 44)
+                    q[44] = np.where(_m245, _v200, q[44])
+                    _m246 = _m137 & (_i199 == 45)
+                    q[45] = np.where(_m246, _v200, q[45])
+                    _m247 = _m137 & (_i199 == 46)
+                    q[46] = np.where(_m247, _v200, q[46])
+                    _m248 = _m137 & (_i199 == 47)
+                    q[47] = np.where(_m248, _v200, q[47])
+                    _i249 = 6*_ik_all_rows3_kept + 2
+                    _v250 = _ik_all_rows3_cand[2]
+                    _m251 = _m137 & (_i249 == 0)
+                    q[0] = np.where(_m251, _v250, q[0])
+                    _m252 = _m137 & (_i249 == 1)
+                    q[1] = np.where(_m252, _v250, q[1])
+                    _m253 = _m137 & (_i249 == 2)
+                    q[2] = np.where(_m253, _v250, q[2])
+                    _m254 = _m137 & (_i249 == 3)
+                    q[3] = np.where(_m254, _v250, q[3])
+                    _m255 = _m137 & (_i249 == 4)
+                    q[4] = np.where(_m255, _v250, q[4])
+                    _m256 = _m137 & (_i249 == 5)
+                    q[5] = np.where(_m256, _v250, q[5])
+                    _m257 = _m137 & (_i249 == 6)
+                    q[6] = np.where(_m257, _v250, q[6])
+                    _m258 = _m137 & (_i249 == 7)
+                    q[7] = np.where(_m258, _v250, q[7])
+                    _m259 = _m137 & (_i249 == 8)
+                    q[8] = np.where(_m259, _v250, q[8])
+                    _m260 = _m137 & (_i249 == 9)
+                    q[9] = np.where(_m260, _v250, q[9])
+                    _m261 = _m137 & (_i249 == 10)
+                    q[10] = np.where(_m261, _v250, q[10])
+                    _m262 = _m137 & (_i249 == 11)
+                    q[11] = np.where(_m262, _v250, q[11])
+                    _m263 = _m137 & (_i249 == 12)
+                    q[12] = np.where(_m263, _v250, q[12])
+                    _m264 = _m137 & (_i249 == 13)
+                    q[13] = np.where(_m264, _v250, q[13])
+                    _m265 = _m137 & (_i249 == 14)
+                    q[14] = np.where(_m265, _v250, q[14])
+                    _m266 = _m137 & (_i249 == 15)
+                    q[15] = np.where(_m266, _v250, q[15])
+                    _m267 = _m137 & (_i249 == 16)
+                    q[16] = np.where(_m267, _v250, q[16])
+                    _m268 = _m137 & (_i249 == 17)
+                    q[17] = np.where(_m268, _v250, q[17])
+                    _m269 = _m137 & (_i249 == 18)
+                    q[18] = np.where(_m269, _v250, q[18])
+                    _m270 = _m137 & (_i249 == 19)
+                    q[19] = np.where(_m270, _v250, q[19])
+                    _m271 = _m137 & (_i249 == 20)
+                    q[20] = np.where(_m271, _v250, q[20])
+                    _m272 = _m137 & (_i249 == 21)
+                    q[21] = np.where(_m272, _v250, q[21])
+                    _m273 = _m137 & (_i249 == 22)
+                    q[22] = np.where(_m273, _v250, q[22])
+                    _m274 = _m137 & (_i249 == 23)
+                    q[23] = np.where(_m274, _v250, q[23])
+                    _m275 = _m137 & (_i249 == 24)
+                    q[24] = np.where(_m275, _v250, q[24])
+                    _m276 = _m137 & (_i249 == 25)
+                    q[25] = np.where(_m276, _v250, q[25])
+                    _m277 = _m137 & (_i249 == 26)
+                    q[26] = np.where(_m277, _v250, q[26])
+                    _m278 = _m137 & (_i249 == 27)
+                    q[27] = np.where(_m278, _v250, q[27])
+                    _m279 = _m137 & (_i249 == 28)
+                    q[28] = np.where(_m279, _v250, q[28])
+                    _m280 = _m137 & (_i249 == 29)
+                    q[29] = np.where(_m280, _v250, q[29])
+                    _m281 = _m137 & (_i249 == 30)
+                    q[30] = np.where(_m281, _v250, q[30])
+                    _m282 = _m137 & (_i249 == 31)
+                    q[31] = np.where(_m282, _v250, q[31])
+                    _m283 = _m137 & (_i249 == 32)
+                    q[32] = np.where(_m283, _v250, q[32])
+                    _m284 = _m137 & (_i249 == 33)
+                    q[33] = np.where(_m284, _v250, q[33])
+                    _m285 = _m137 & (_i249 == 34)
+                    q[34] = np.where(_m285, _v250, q[34])
+                    _m286 = _m137 & (_i249 == 35)
+                    q[35] = np.where(_m286, _v250, q[35])
+                    _m287 = _m137 & (_i249 == 36)
+                    q[36] = np.where(_m287, _v250, q[36])
+                    _m288 = _m137 & (_i249 == 37)
+                    q[37] = np.where(_m288, _v250, q[37])
+                    _m289 = _m137 & (_i249 == 38)
+                    q[38] = np.where(_m289, _v250, q[38])
+                    _m290 = _m137 & (_i249 == 39)
+                    q[39] = np.where(_m290, _v250, q[39])
+                    _m291 = _m137 & (_i249 == 40)
+                    q[40] = np.where(_m291, _v250, q[40])
+                    _m292 = _m137 & (_i249 == 41)
+                    q[41] = np.where(_m292, _v250, q[41])
+                    _m293 = _m137 & (_i249 == 42)
+                    q[42] = np.where(_m293, _v250, q[42])
+                    _m294 = _m137 & (_i249 == 43)
+                    q[43] = np.where(_m294, _v250, q[43])
+                    _m295 = _m137 & (_i249 == 44)
+                    q[44] = np.where(_m295, _v250, q[44])
+                    _m296 = _m137 & (_i249 == 45)
+                    q[45] = np.where(_m296, _v250, q[45])
+                    _m297 = _m137 & (_i249 == 46)
+                    q[46] = np.where(_m297, _v250, q[46])
+                    _m298 = _m137 & (_i249 == 47)
+                    q[47] = np.where(_m298, _v250, q[47])
+                    _i299 = 6*_ik_all_rows3_kept + 3
+                    _v300 = _ik_all_rows3_cand[3]
+                    _m301 = _m137 & (_i299 == 0)
+                    q[0] = np.where(_m301, _v300, q[0])
+                    _m302 = _m137 & (_i299 == 1)
+                    q[1] = np.where(_m302, _v300, q[1])
+                    _m303 = _m137 & (_i299 == 2)
+                    q[2] = np.where(_m303, _v300, q[2])
+                    _m304 = _m137 & (_i299 == 3)
+                    q[3] = np.where(_m304, _v300, q[3])
+                    _m305 = _m137 & (_i299 == 4)
+                    q[4] = np.where(_m305, _v300, q[4])
+                    _m306 = _m137 & (_i299 == 5)
+                    q[5] = np.where(_m306, _v300, q[5])
+                    _m307 = _m137 & (_i299 == 6)
+                    q[6] = np.where(_m307, _v300, q[6])
+                    _m308 = _m137 & (_i299 == 7)
+                    q[7] = np.where(_m308, _v300, q[7])
+                    _m309 = _m137 & (_i299 == 8)
+                    q[8] = np.where(_m309, _v300, q[8])
+                    _m310 = _m137 & (_i299 == 9)
+                    q[9] = np.where(_m310, _v300, q[9])
+                    _m311 = _m137 & (_i299 == 10)
+                    q[10] = np.where(_m311, _v300, q[10])
+                    _m312 = _m137 & (_i299 == 11)
+                    q[11] = np.where(_m312, _v300, q[11])
+                    _m313 = _m137 & (_i299 == 12)
+                    q[12] = np.where(_m313, _v300, q[12])
+                    _m314 = _m137 & (_i299 == 13)
+                    q[13] = np.where(_m314, _v300, q[13])
+                    _m315 = _m137 & (_i299 == 14)
+                    q[14] = np.where(_m315, _v300, q[14])
+                    _m316 = _m137 & (_i299 == 15)
+                    q[15] = np.where(_m316, _v300, q[15])
+                    _m317 = _m137 & (_i299 == 16)
+                    q[16] = np.where(_m317, _v300, q[16])
+                    _m318 = _m137 & (_i299 == 17)
+                    q[17] = np.where(_m318, _v300, q[17])
+                    _m319 = _m137 & (_i299 == 18)
+                    q[18] = np.where(_m319, _v300, q[18])
+                    _m320 = _m137 & (_i299 == 19)
+                    q[19] = np.where(_m320, _v300, q[19])
+                    _m321 = _m137 & (_i299 == 20)
+                    q[20] = np.where(_m321, _v300, q[20])
+                    _m322 = _m137 & (_i299 == 21)
+                    q[21] = np.where(_m322, _v300, q[21])
+                    _m323 = _m137 & (_i299 == 22)
+                    q[22] = np.where(_m323, _v300, q[22])
+                    _m324 = _m137 & (_i299 == 23)
+                    q[23] = np.where(_m324, _v300, q[23])
+                    _m325 = _m137 & (_i299 == 24)
+                    q[24] = np.where(_m325, _v300, q[24])
+                    _m326 = _m137 & (_i299 == 25)
+                    q[25] = np.where(_m326, _v300, q[25])
+                    _m327 = _m137 & (_i299 == 26)
+                    q[26] = np.where(_m327, _v300, q[26])
+                    _m328 = _m137 & (_i299 == 27)
+                    q[27] = np.where(_m328, _v300, q[27])
+                    _m329 = _m137 & (_i299 == 28)
+                    q[28] = np.where(_m329, _v300, q[28])
+                    _m330 = _m137 & (_i299 == 29)
+                    q[29] = np.where(_m330, _v300, q[29])
+                    _m331 = _m137 & (_i299 == 30)
+                    q[30] = np.where(_m331, _v300, q[30])
+                    _m332 = _m137 & (_i299 == 31)
+                    q[31] = np.where(_m332, _v300, q[31])
+                    _m333 = _m137 & (_i299 == 32)
+                    q[32] = np.where(_m333, _v300, q[32])
+                    _m334 = _m137 & (_i299 == 33)
+                    q[33] = np.where(_m334, _v300, q[33])
+                    _m335 = _m137 & (_i299 == 34)
+                    q[34] = np.where(_m335, _v300, q[34])
+                    _m336 = _m137 & (_i299 == 35)
+                    q[35] = np.where(_m336, _v300, q[35])
+                    _m337 = _m137 & (_i299 == 36)
+                    q[36] = np.where(_m337, _v300, q[36])
+                    _m338 = _m137 & (_i299 == 37)
+                    q[37] = np.where(_m338, _v300, q[37])
+                    _m339 = _m137 & (_i299 == 38)
+                    q[38] = np.where(_m339, _v300, q[38])
+                    _m340 = _m137 & (_i299 == 39)
+                    q[39] = np.where(_m340, _v300, q[39])
+                    _m341 = _m137 & (_i299 == 40)
+                    q[40] = np.where(_m341, _v300, q[40])
+                    _m342 = _m137 & (_i299 == 41)
+                    q[41] = np.where(_m342, _v300, q[41])
+                    _m343 = _m137 & (_i299 == 42)
+                    q[42] = np.where(_m343, _v300, q[42])
+                    _m344 = _m137 & (_i299 == 43)
+                    q[43] = np.where(_m344, _v300, q[43])
+                    _m345 = _m137 & (_i299 == 44)
+                    q[44] = np.where(_m345, _v300, q[44])
+                    _m346 = _m137 & (_i299 == 45)
+                    q[45] = np.where(_m346, _v300, q[45])
+                    _m347 = _m137 & (_i299 == 46)
+                    q[46] = np.where(_m347, _v300, q[46])
+                    _m348 = _m137 & (_i299 == 47)
+                    q[47] = np.where(_m348, _v300, q[47])
+                    _i349 = 6*_ik_all_rows3_kept + 4
+                    _v350 = _ik_all_rows3_cand[4]
+                    _m351 = _m137 & (_i349 == 0)
+                    q[0] = np.where(_m351, _v350, q[0])
+                    _m352 = _m137 & (_i349 == 1)
+                    q[1] = np.where(_m352, _v350, q[1])
+                    _m353 = _m137 & (_i349 == 2)
+                    q[2] = np.where(_m353, _v350, q[2])
+                    _m354 = _m137 & (_i349 == 3)
+                    q[3] = np.where(_m354, _v350, q[3])
+                    _m355 = _m137 & (_i349 == 4)
+                    q[4] = np.where(_m355, _v350, q[4])
+                    _m356 = _m137 & (_i349 == 5)
+                    q[5] = np.where(_m356, _v350, q[5])
+                    _m357 = _m137 & (_i349 == 6)
+                    q[6] = np.where(_m357, _v350, q[6])
+                    _m358 = _m137 & (_i349 == 7)
+                    q[7] = np.where(_m358, _v350, q[7])
+                    _m359 = _m137 & (_i349 == 8)
+                    q[8] = np.where(_m359, _v350, q[8])
+                    _m360 = _m137 & (_i349 == 9)
+                    q[9] = np.where(_m360, _v350, q[9])
+                    _m361 = _m137 & (_i349 == 10)
+                    q[10] = np.where(_m361, _v350, q[10])
+                    _m362 = _m137 & (_i349 == 11)
+                    q[11] = np.where(_m362, _v350, q[11])
+                    _m363 = _m137 & (_i349 == 12)
+                    q[12] = np.where(_m363, _v350, q[12])
+                    _m364 = _m137 & (_i349 == 13)
+                    q[13] = np.where(_m364, _v350, q[13])
+                    _m365 = _m137 & (_i349 == 14)
+                    q[14] = np.where(_m365, _v350, q[14])
+                    _m366 = _m137 & (_i349 == 15)
+                    q[15] = np.where(_m366, _v350, q[15])
+                    _m367 = _m137 & (_i349 == 16)
+                    q[16] = np.where(_m367, _v350, q[16])
+                    _m368 = _m137 & (_i349 == 17)
+                    q[17] = np.where(_m368, _v350, q[17])
+                    _m369 = _m137 & (_i349 == 18)
+                    q[18] = np.where(_m369, _v350, q[18])
+                    _m370 = _m137 & (_i349 == 19)
+                    q[19] = np.where(_m370, _v350, q[19])
+                    _m371 = _m137 & (_i349 == 20)
+                    q[20] = np.where(_m371, _v350, q[20])
+                    _m372 = _m137 & (_i349 == 21)
+                    q[21] = np.where(_m372, _v350, q[21])
+                    _m373 = _m137 & (_i349 == 22)
+                    q[22] = np.where(_m373, _v350, q[22])
+                    _m374 = _m137 & (_i349 == 23)
+                    q[23] = np.where(_m374, _v350, q[23])
+                    _m375 = _m137 & (_i349 == 24)
+                    q[24] = np.where(_m375, _v350, q[24])
+                    _m376 = _m137 & (_i349 == 25)
+                    q[25] = np.where(_m376, _v350, q[25])
+                    _m377 = _m137 & (_i349 == 26)
+                    q[26] = np.where(_m377, _v350, q[26])
+                    _m378 = _m137 & (_i349 == 27)
+                    q[27] = np.where(_m378, _v350, q[27])
+                    _m379 = _m137 & (_i349 == 28)
+                    q[28] = np.where(_m379, _v350, q[28])
+                    _m380 = _m137 & (_i349 == 29)
+                    q[29] = np.where(_m380, _v350, q[29])
+                    _m381 = _m137 & (_i349 == 30)
+                    q[30] = np.where(_m381, _v350, q[30])
+                    _m382 = _m137 & (_i349 == 31)
+                    q[31] = np.where(_m382, _v350, q[31])
+                    _m383 = _m137 & (_i349 == 32)
+                    q[32] = np.where(_m383, _v350, q[32])
+                    _m384 = _m137 & (_i349 == 33)
+                    q[33] = np.where(_m384, _v350, q[33])
+                    _m385 = _m137 & (_i349 == 34)
+                    q[34] = np.where(_m385, _v350, q[34])
+                    _m386 = _m137 & (_i349 == 35)
+                    q[35] = np.where(_m386, _v350, q[35])
+                    _m387 = _m137 & (_i349 == 36)
+                    q[36] = np.where(_m387, _v350, q[36])
+                    _m388 = _m137 & (_i349 == 37)
+                    q[37] = np.where(_m388, _v350, q[37])
+                    _m389 = _m137 & (_i349 == 38)
+                    q[38] = np.where(_m389, _v350, q[38])
+                    _m390 = _m137 & (_i349 == 39)
+                    q[39] = np.where(_m390, _v350, q[39])
+                    _m391 = _m137 & (_i349 == 40)
+                    q[40] = np.where(_m391, _v350, q[40])
+                    _m392 = _m137 & (_i349 == 41)
+                    q[41] = np.where(_m392, _v350, q[41])
+                    _m393 = _m137 & (_i349 == 42)
+                    q[42] = np.where(_m393, _v350, q[42])
+                    _m394 = _m137 & (_i349 == 43)
+                    q[43] = np.where(_m394, _v350, q[43])
+                    _m395 = _m137 & (_i349 == 44)
+                    q[44] = np.where(_m395, _v350, q[44])
+                    _m396 = _m137 & (_i349 == 45)
+                    q[45] = np.where(_m396, _v350, q[45])
+                    _m397 = _m137 & (_i349 == 46)
+                    q[46] = np.where(_m397, _v350, q[46])
+                    _m398 = _m137 & (_i349 == 47)
+                    q[47] = np.where(_m398, _v350, q[47])
+                    _i399 = 6*_ik_all_rows3_kept + 5
+                    _v400 = _ik_all_rows3_cand[5]
+                    _m401 = _m137 & (_i399 == 0)
+                    q[0] = np.where(_m401, _v400, q[0])
+                    _m402 = _m137 & (_i399 == 1)
+                    q[1] = np.where(_m402, _v400, q[1])
+                    _m403 = _m137 & (_i399 == 2)
+                    q[2] = np.where(_m403, _v400, q[2])
+                    _m404 = _m137 & (_i399 == 3)
+                    q[3] = np.where(_m404, _v400, q[3])
+                    _m405 = _m137 & (_i399 == 4)
+                    q[4] = np.where(_m405, _v400, q[4])
+                    _m406 = _m137 & (_i399 == 5)
+                    q[5] = np.where(_m406, _v400, q[5])
+                    _m407 = _m137 & (_i399 == 6)
+                    q[6] = np.where(_m407, _v400, q[6])
+                    _m408 = _m137 & (_i399 == 7)
+                    q[7] = np.where(_m408, _v400, q[7])
+                    _m409 = _m137 & (_i399 == 8)
+                    q[8] = np.where(_m409, _v400, q[8])
+                    _m410 = _m137 & (_i399 == 9)
+                    q[9] = np.where(_m410, _v400, q[9])
+                    _m411 = _m137 & (_i399 == 10)
+                    q[10] = np.where(_m411, _v400, q[10])
+                    _m412 = _m137 & (_i399 == 11)
+                    q[11] = np.where(_m412, _v400, q[11])
+                    _m413 = _m137 & (_i399 == 12)
+                    q[12] = np.where(_m413, _v400, q[12])
+                    _m414 = _m137 & (_i399 == 13)
+                    q[13] = np.where(_m414, _v400, q[13])
+                    _m415 = _m137 & (_i399 == 14)
+                    q[14] = np.where(_m415, _v400, q[14])
+                    _m416 = _m137 & (_i399 == 15)
+                    q[15] = np.where(_m416, _v400, q[15])
+                    _m417 = _m137 & (_i399 == 16)
+                    q[16] = np.where(_m417, _v400, q[16])
+                    _m418 = _m137 & (_i399 == 17)
+                    q[17] = np.where(_m418, _v400, q[17])
+                    _m419 = _m137 & (_i399 == 18)
+                    q[18] = np.where(_m419, _v400, q[18])
+                    _m420 = _m137 & (_i399 == 19)
+                    q[19] = np.where(_m420, _v400, q[19])
+                    _m421 = _m137 & (_i399 == 20)
+                    q[20] = np.where(_m421, _v400, q[20])
+                    _m422 = _m137 & (_i399 == 21)
+                    q[21] = np.where(_m422, _v400, q[21])
+                    _m423 = _m137 & (_i399 == 22)
+                    q[22] = np.where(_m423, _v400, q[22])
+                    _m424 = _m137 & (_i399 == 23)
+                    q[23] = np.where(_m424, _v400, q[23])
+                    _m425 = _m137 & (_i399 == 24)
+                    q[24] = np.where(_m425, _v400, q[24])
+                    _m426 = _m137 & (_i399 == 25)
+                    q[25] = np.where(_m426, _v400, q[25])
+                    _m427 = _m137 & (_i399 == 26)
+                    q[26] = np.where(_m427, _v400, q[26])
+                    _m428 = _m137 & (_i399 == 27)
+                    q[27] = np.where(_m428, _v400, q[27])
+                    _m429 = _m137 & (_i399 == 28)
+                    q[28] = np.where(_m429, _v400, q[28])
+                    _m430 = _m137 & (_i399 == 29)
+                    q[29] = np.where(_m430, _v400, q[29])
+                    _m431 = _m137 & (_i399 == 30)
+                    q[30] = np.where(_m431, _v400, q[30])
+                    _m432 = _m137 & (_i399 == 31)
+                    q[31] = np.where(_m432, _v400, q[31])
+                    _m433 = _m137 & (_i399 == 32)
+                    q[32] = np.where(_m433, _v400, q[32])
+                    _m434 = _m137 & (_i399 == 33)
+                    q[33] = np.where(_m434, _v400, q[33])
+                    _m435 = _m137 & (_i399 == 34)
+                    q[34] = np.where(_m435, _v400, q[34])
+                    _m436 = _m137 & (_i399 == 35)
+                    q[35] = np.where(_m436, _v400, q[35])
+                    _m437 = _m137 & (_i399 == 36)
+                    q[36] = np.where(_m437, _v400, q[36])
+                    _m438 = _m137 & (_i399 == 37)
+                    q[37] = np.where(_m438, _v400, q[37])
+                    _m439 = _m137 & (_i399 == 38)
+                    q[38] = np.where(_m439, _v400, q[38])
+                    _m440 = _m137 & (_i399 == 39)
+                    q[39] = np.where(_m440, _v400, q[39])
+                    _m441 = _m137 & (_i399 == 40)
+                    q[40] = np.where(_m441, _v400, q[40])
+                    _m442 = _m137 & (_i399 == 41)
+                    q[41] = np.where(_m442, _v400, q[41])
+                    _m443 = _m137 & (_i399 == 42)
+                    q[42] = np.where(_m443, _v400, q[42])
+                    _m444 = _m137 & (_i399 == 43)
+                    q[43] = np.where(_m444, _v400, q[43])
+                    _m445 = _m137 & (_i399 == 44)
+                    q[44] = np.where(_m445, _v400, q[44])
+                    _m446 = _m137 & (_i399 == 45)
+                    q[45] = np.where(_m446, _v400, q[45])
+                    _m447 = _m137 & (_i399 == 46)
+                    q[46] = np.where(_m447, _v400, q[46])
+                    _m448 = _m137 & (_i399 == 47)
+                    q[47] = np.where(_m448, _v400, q[47])
+                    _m449 = _m137 & (_ik_all_rows3_kept == 0)
+                    flags[0] = np.where(_m449, _ik_all_rows3_flag, flags[0])
+                    _m450 = _m137 & (_ik_all_rows3_kept == 1)
+                    flags[1] = np.where(_m450, _ik_all_rows3_flag, flags[1])
+                    _m451 = _m137 & (_ik_all_rows3_kept == 2)
+                    flags[2] = np.where(_m451, _ik_all_rows3_flag, flags[2])
+                    _m452 = _m137 & (_ik_all_rows3_kept == 3)
+                    flags[3] = np.where(_m452, _ik_all_rows3_flag, flags[3])
+                    _m453 = _m137 & (_ik_all_rows3_kept == 4)
+                    flags[4] = np.where(_m453, _ik_all_rows3_flag, flags[4])
+                    _m454 = _m137 & (_ik_all_rows3_kept == 5)
+                    flags[5] = np.where(_m454, _ik_all_rows3_flag, flags[5])
+                    _m455 = _m137 & (_ik_all_rows3_kept == 6)
+                    flags[6] = np.where(_m455, _ik_all_rows3_flag, flags[6])
+                    _m456 = _m137 & (_ik_all_rows3_kept == 7)
+                    flags[7] = np.where(_m456, _ik_all_rows3_flag, flags[7])
+                    _ik_all_rows3_kept = np.where(_m137, _ik_all_rows3_kept + 1, _ik_all_rows3_kept)
+        _i74 = np.where(_run75, _i74 + 1, _i74)
+        _run75 = _run75 & (_i74 < IK_MAX_SOLUTIONS)
+    count[0] = np.where(_alive4, _ik_all_rows3_kept, count[0])
+    # 7. status
+    status = np.where(_alive4, np.where(_ik_all_rows3_exact == 0, IK_UNREACHABLE, np.where(_ik_all_rows3_kept == 0, _fi(IK_OUT_OF_LIMITS), IK_OK)), status)
+    _alive4 = _alive4 & (~_alive4)
+    _status1 = status
+    _alive2 = _fb(False)
+    return (q, count, flags, ), _status1
+
+
+def _ik_all_batch(target):
+    """ik_all for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    target = _problems(target, "target", (4, 4,), "finite")
+    batch = _batch_shape("ik_all", {"target": target.shape[:target.ndim - 2]})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, count, flags, ), status = _ik_all_lanes(_c, _lanes(target, batch, (4, 4,)))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+    names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
+    return IKAllResult(_assembled(q, batch, (8, 6,), DTYPE), names[status], _assembled([count[0]], batch, (), np.int64), _assembled(flags, batch, (8,), np.int64))
 
 
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
@@ -5426,7 +7828,13 @@ def ik_nearest(q_ref, target):
     target: array of shape (4, 4), finite: tool pose T (4 x 4, row-major; the last row is not read).
     Returns IKNearestResult(q, status). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape), whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """
+    if _is_batch(((q_ref, (6,)), (target, (4, 4,)), ), ()):
+        return _ik_nearest_batch(q_ref, target)
     q_ref = _vector(q_ref, "q_ref", (6,), "finite")
     target = _vector(target, "target", (4, 4,), "finite")
     q = np.zeros(6, dtype=DTYPE)
@@ -5435,3 +7843,1162 @@ def ik_nearest(q_ref, target):
         raise ValueError("ik_nearest: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKNearestResult(q, names[status])
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_nearest_lanes(_c, q_ref, target):
+    """the closed-form IK solution nearest a configuration: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 6
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    rows = [_fr(0.0)] * 48
+    count = [_fi(0)] * 1
+    flags = [_fi(0)] * 8
+    near = [_fr(0.0)] * 6
+    status = _fi(0)
+    best = _fi(-1)
+    best_d = _fr(0.0)
+    dist = _fr(0.0)
+    k = _fr(0.0)
+    y = _fr(0.0)
+    found = _fi(0)
+    _alive4 = _fb(True)
+    _ik_all_rows3_raw = [_fr(0.0)] * 48
+    _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
+    _ik_all_rows3_cand = [_fr(0.0)] * 6
+    # nothing yet: NaN rows, flags -1, count 0
+    _k5 = _fi(0)
+    _run6 = _k5 < IK_MAX_SOLUTIONS*6
+    while bool(_run6.any()):
+        _m7 = _run6 & (_k5 == 0)
+        rows[0] = np.where(_m7, _NAN, rows[0])
+        _m8 = _run6 & (_k5 == 1)
+        rows[1] = np.where(_m8, _NAN, rows[1])
+        _m9 = _run6 & (_k5 == 2)
+        rows[2] = np.where(_m9, _NAN, rows[2])
+        _m10 = _run6 & (_k5 == 3)
+        rows[3] = np.where(_m10, _NAN, rows[3])
+        _m11 = _run6 & (_k5 == 4)
+        rows[4] = np.where(_m11, _NAN, rows[4])
+        _m12 = _run6 & (_k5 == 5)
+        rows[5] = np.where(_m12, _NAN, rows[5])
+        _m13 = _run6 & (_k5 == 6)
+        rows[6] = np.where(_m13, _NAN, rows[6])
+        _m14 = _run6 & (_k5 == 7)
+        rows[7] = np.where(_m14, _NAN, rows[7])
+        _m15 = _run6 & (_k5 == 8)
+        rows[8] = np.where(_m15, _NAN, rows[8])
+        _m16 = _run6 & (_k5 == 9)
+        rows[9] = np.where(_m16, _NAN, rows[9])
+        _m17 = _run6 & (_k5 == 10)
+        rows[10] = np.where(_m17, _NAN, rows[10])
+        _m18 = _run6 & (_k5 == 11)
+        rows[11] = np.where(_m18, _NAN, rows[11])
+        _m19 = _run6 & (_k5 == 12)
+        rows[12] = np.where(_m19, _NAN, rows[12])
+        _m20 = _run6 & (_k5 == 13)
+        rows[13] = np.where(_m20, _NAN, rows[13])
+        _m21 = _run6 & (_k5 == 14)
+        rows[14] = np.where(_m21, _NAN, rows[14])
+        _m22 = _run6 & (_k5 == 15)
+        rows[15] = np.where(_m22, _NAN, rows[15])
+        _m23 = _run6 & (_k5 == 16)
+        rows[16] = np.where(_m23, _NAN, rows[16])
+        _m24 = _run6 & (_k5 == 17)
+        rows[17] = np.where(_m24, _NAN, rows[17])
+        _m25 = _run6 & (_k5 == 18)
+        rows[18] = np.where(_m25, _NAN, rows[18])
+        _m26 = _run6 & (_k5 == 19)
+        rows[19] = np.where(_m26, _NAN, rows[19])
+        _m27 = _run6 & (_k5 == 20)
+        rows[20] = np.where(_m27, _NAN, rows[20])
+        _m28 = _run6 & (_k5 == 21)
+        rows[21] = np.where(_m28, _NAN, rows[21])
+        _m29 = _run6 & (_k5 == 22)
+        rows[22] = np.where(_m29, _NAN, rows[22])
+        _m30 = _run6 & (_k5 == 23)
+        rows[23] = np.where(_m30, _NAN, rows[23])
+        _m31 = _run6 & (_k5 == 24)
+        rows[24] = np.where(_m31, _NAN, rows[24])
+        _m32 = _run6 & (_k5 == 25)
+        rows[25] = np.where(_m32, _NAN, rows[25])
+        _m33 = _run6 & (_k5 == 26)
+        rows[26] = np.where(_m33, _NAN, rows[26])
+        _m34 = _run6 & (_k5 == 27)
+        rows[27] = np.where(_m34, _NAN, rows[27])
+        _m35 = _run6 & (_k5 == 28)
+        rows[28] = np.where(_m35, _NAN, rows[28])
+        _m36 = _run6 & (_k5 == 29)
+        rows[29] = np.where(_m36, _NAN, rows[29])
+        _m37 = _run6 & (_k5 == 30)
+        rows[30] = np.where(_m37, _NAN, rows[30])
+        _m38 = _run6 & (_k5 == 31)
+        rows[31] = np.where(_m38, _NAN, rows[31])
+        _m39 = _run6 & (_k5 == 32)
+        rows[32] = np.where(_m39, _NAN, rows[32])
+        _m40 = _run6 & (_k5 == 33)
+        rows[33] = np.where(_m40, _NAN, rows[33])
+        _m41 = _run6 & (_k5 == 34)
+        rows[34] = np.where(_m41, _NAN, rows[34])
+        _m42 = _run6 & (_k5 == 35)
+        rows[35] = np.where(_m42, _NAN, rows[35])
+        _m43 = _run6 & (_k5 == 36)
+        rows[36] = np.where(_m43, _NAN, rows[36])
+        _m44 = _run6 & (_k5 == 37)
+        rows[37] = np.where(_m44, _NAN, rows[37])
+        _m45 = _run6 & (_k5 == 38)
+        rows[38] = np.where(_m45, _NAN, rows[38])
+        _m46 = _run6 & (_k5 == 39)
+        rows[39] = np.where(_m46, _NAN, rows[39])
+        _m47 = _run6 & (_k5 == 40)
+        rows[40] = np.where(_m47, _NAN, rows[40])
+        _m48 = _run6 & (_k5 == 41)
+        rows[41] = np.where(_m48, _NAN, rows[41])
+        _m49 = _run6 & (_k5 == 42)
+        rows[42] = np.where(_m49, _NAN, rows[42])
+        _m50 = _run6 & (_k5 == 43)
+        rows[43] = np.where(_m50, _NAN, rows[43])
+        _m51 = _run6 & (_k5 == 44)
+        rows[44] = np.where(_m51, _NAN, rows[44])
+        _m52 = _run6 & (_k5 == 45)
+        rows[45] = np.where(_m52, _NAN, rows[45])
+        _m53 = _run6 & (_k5 == 46)
+        rows[46] = np.where(_m53, _NAN, rows[46])
+        _m54 = _run6 & (_k5 == 47)
+        rows[47] = np.where(_m54, _NAN, rows[47])
+        _k5 = np.where(_run6, _k5 + 1, _k5)
+        _run6 = _run6 & (_k5 < IK_MAX_SOLUTIONS*6)
+    _k55 = _fi(0)
+    _run56 = _k55 < IK_MAX_SOLUTIONS
+    while bool(_run56.any()):
+        _m57 = _run56 & (_k55 == 0)
+        flags[0] = np.where(_m57, -1, flags[0])
+        _m58 = _run56 & (_k55 == 1)
+        flags[1] = np.where(_m58, -1, flags[1])
+        _m59 = _run56 & (_k55 == 2)
+        flags[2] = np.where(_m59, -1, flags[2])
+        _m60 = _run56 & (_k55 == 3)
+        flags[3] = np.where(_m60, -1, flags[3])
+        _m61 = _run56 & (_k55 == 4)
+        flags[4] = np.where(_m61, -1, flags[4])
+        _m62 = _run56 & (_k55 == 5)
+        flags[5] = np.where(_m62, -1, flags[5])
+        _m63 = _run56 & (_k55 == 6)
+        flags[6] = np.where(_m63, -1, flags[6])
+        _m64 = _run56 & (_k55 == 7)
+        flags[7] = np.where(_m64, -1, flags[7])
+        _k55 = np.where(_run56, _k55 + 1, _k55)
+        _run56 = _run56 & (_k55 < IK_MAX_SOLUTIONS)
+    count[0] = _fi(0)
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation
+    _run65 = _fb(True)
+    for _ik_all_rows3_k in range(0, 12):
+        _c66 = ~np.isfinite(target[_ik_all_rows3_k])
+        _m67 = _run65 & _c66
+        status = np.where(_m67, IK_INVALID, status)
+        _alive4 = _alive4 & (~_m67)
+        _run65 = _run65 & (~_m67)
+    _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    _ik_all_rows3_m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c68 = (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _m69 = _alive4 & _c68
+    status = np.where(_m69, IK_INVALID, status)
+    _alive4 = _alive4 & (~_m69)
+    # the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable
+    _o = _ik_candidates_on_lanes(_c, target[0:16])
+    _merge(_alive4, _o[0], _ik_all_rows3_raw, 0, _fr)
+    _merge(_alive4, _o[1], _ik_all_rows3_raw_flags, 0, _fr)
+    _ik_all_rows3_exact = _fi(0)
+    _i70 = _fi(0)
+    _run71 = _alive4 & (_i70 < IK_MAX_SOLUTIONS)
+    while bool(_run71.any()):
+        _c72 = np.where(_i70 == 0, _ik_all_rows3_raw_flags[0], np.where(_i70 == 1, _ik_all_rows3_raw_flags[1], np.where(_i70 == 2, _ik_all_rows3_raw_flags[2], np.where(_i70 == 3, _ik_all_rows3_raw_flags[3], np.where(_i70 == 4, _ik_all_rows3_raw_flags[4], np.where(_i70 == 5, _ik_all_rows3_raw_flags[5], np.where(_i70 == 6, _ik_all_rows3_raw_flags[6], _ik_all_rows3_raw_flags[7]))))))).astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
+        _m73 = _run71 & _c72
+        _ik_all_rows3_exact = np.where(_m73, 1, _ik_all_rows3_exact)
+        _i70 = np.where(_run71, _i70 + 1, _i70)
+        _run71 = _run71 & (_i70 < IK_MAX_SOLUTIONS)
+    _ik_all_rows3_kept = _fi(0)
+    _ik_all_rows3_flag = _fi(0)
+    _ik_all_rows3_inside = _fi(0)
+    _ik_all_rows3_dup = _fi(0)
+    _ik_all_rows3_diff = _fr(0.0)
+    _i74 = _fi(0)
+    _run75 = _alive4 & (_i74 < IK_MAX_SOLUTIONS)
+    while bool(_run75.any()):
+        _ik_all_rows3_flag = np.where(_run75, np.where(_i74 == 0, _ik_all_rows3_raw_flags[0], np.where(_i74 == 1, _ik_all_rows3_raw_flags[1], np.where(_i74 == 2, _ik_all_rows3_raw_flags[2], np.where(_i74 == 3, _ik_all_rows3_raw_flags[3], np.where(_i74 == 4, _ik_all_rows3_raw_flags[4], np.where(_i74 == 5, _ik_all_rows3_raw_flags[5], np.where(_i74 == 6, _ik_all_rows3_raw_flags[6], _ik_all_rows3_raw_flags[7]))))))).astype(np.int64), _ik_all_rows3_flag)
+        _c76 = (_ik_all_rows3_exact == 0) | (_ik_all_rows3_flag % 2 != IK_FLAG_LEAST_SQUARES)
+        _m77 = _run75 & _c76
+        if bool(_m77.any()):
+            # 3. revolute joints to the copy nearest their range's centre; 4. limits
+            _ik_all_rows3_inside = np.where(_m77, 1, _ik_all_rows3_inside)
+            _i78 = 6*_i74
+            _i79 = 6*_i74
+            _i80 = 6*_i74
+            _ik_all_rows3_cand[0] = np.where(_m77, np.where(_i78 == 0, _ik_all_rows3_raw[0], np.where(_i78 == 1, _ik_all_rows3_raw[1], np.where(_i78 == 2, _ik_all_rows3_raw[2], np.where(_i78 == 3, _ik_all_rows3_raw[3], np.where(_i78 == 4, _ik_all_rows3_raw[4], np.where(_i78 == 5, _ik_all_rows3_raw[5], np.where(_i78 == 6, _ik_all_rows3_raw[6], np.where(_i78 == 7, _ik_all_rows3_raw[7], np.where(_i78 == 8, _ik_all_rows3_raw[8], np.where(_i78 == 9, _ik_all_rows3_raw[9], np.where(_i78 == 10, _ik_all_rows3_raw[10], np.where(_i78 == 11, _ik_all_rows3_raw[11], np.where(_i78 == 12, _ik_all_rows3_raw[12], np.where(_i78 == 13, _ik_all_rows3_raw[13], np.where(_i78 == 14, _ik_all_rows3_raw[14], np.where(_i78 == 15, _ik_all_rows3_raw[15], np.where(_i78 == 16, _ik_all_rows3_raw[16], np.where(_i78 == 17, _ik_all_rows3_raw[17], np.where(_i78 == 18, _ik_all_rows3_raw[18], np.where(_i78 == 19, _ik_all_rows3_raw[19], np.where(_i78 == 20, _ik_all_rows3_raw[20], np.where(_i78 == 21, _ik_all_rows3_raw[21], np.where(_i78 == 22, _ik_all_rows3_raw[22], np.where(_i78 == 23, _ik_all_rows3_raw[23], np.where(_i78 == 24, _ik_all_rows3_raw[24], np.where(_i78 == 25, _ik_all_rows3_raw[25], np.where(_i78 == 26, _ik_all_rows3_raw[26], np.where(_i78 == 27, _ik_all_rows3_raw[27], np.where(_i78 == 28, _ik_all_rows3_raw[28], np.where(_i78 == 29, _ik_all_rows3_raw[29], np.where(_i78 == 30, _ik_all_rows3_raw[30], np.where(_i78 == 31, _ik_all_rows3_raw[31], np.where(_i78 == 32, _ik_all_rows3_raw[32], np.where(_i78 == 33, _ik_all_rows3_raw[33], np.where(_i78 == 34, _ik_all_rows3_raw[34], np.where(_i78 == 35, _ik_all_rows3_raw[35], np.where(_i78 == 36, _ik_all_rows3_raw[36], np.where(_i78 == 37, _ik_all_rows3_raw[37], np.where(_i78 == 38, _ik_all_rows3_raw[38], np.where(_i78 == 39, _ik_all_rows3_raw[39], np.where(_i78 == 40, _ik_all_rows3_raw[40], np.where(_i78 == 41, _ik_all_rows3_raw[41], np.where(_i78 == 42, _ik_all_rows3_raw[42], np.where(_i78 == 43, _ik_all_rows3_raw[43], np.where(_i78 == 44, _ik_all_rows3_raw[44], np.where(_i78 == 45, _ik_all_rows3_raw[45], np.where(_i78 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i79 == 0, _ik_all_rows3_raw[0], np.where(_i79 == 1, _ik_all_rows3_raw[1], np.where(_i79 == 2, _ik_all_rows3_raw[2], np.where(_i79 == 3, _ik_all_rows3_raw[3], np.where(_i79 == 4, _ik_all_rows3_raw[4], np.where(_i79 == 5, _ik_all_rows3_raw[5], np.where(_i79 == 6, _ik_all_rows3_raw[6], np.where(_i79 == 7, _ik_all_rows3_raw[7], np.where(_i79 == 8, _ik_all_rows3_raw[8], np.where(_i79 == 9, _ik_all_rows3_raw[9], np.where(_i79 == 10, _ik_all_rows3_raw[10], np.where(_i79 == 11, _ik_all_rows3_raw[11], np.where(_i79 == 12, _ik_all_rows3_raw[12], np.where(_i79 == 13, _ik_all_rows3_raw[13], np.where(_i79 == 14, _ik_all_rows3_raw[14], np.where(_i79 == 15, _ik_all_rows3_raw[15], np.where(_i79 == 16, _ik_all_rows3_raw[16], np.where(_i79 == 17, _ik_all_rows3_raw[17], np.where(_i79 == 18, _ik_all_rows3_raw[18], np.where(_i79 == 19, _ik_all_rows3_raw[19], np.where(_i79 == 20, _ik_all_rows3_raw[20], np.where(_i79 == 21, _ik_all_rows3_raw[21], np.where(_i79 == 22, _ik_all_rows3_raw[22], np.where(_i79 == 23, _ik_all_rows3_raw[23], np.where(_i79 == 24, _ik_all_rows3_raw[24], np.where(_i79 == 25, _ik_all_rows3_raw[25], np.where(_i79 == 26, _ik_all_rows3_raw[26], np.where(_i79 == 27, _ik_all_rows3_raw[27], np.where(_i79 == 28, _ik_all_rows3_raw[28], np.where(_i79 == 29, _ik_all_rows3_raw[29], np.where(_i79 == 30, _ik_all_rows3_raw[30], np.where(_i79 == 31, _ik_all_rows3_raw[31], np.where(_i79 == 32, _ik_all_rows3_raw[32], np.where(_i79 == 33, _ik_all_rows3_raw[33], np.where(_i79 == 34, _ik_all_rows3_raw[34], np.where(_i79 == 35, _ik_all_rows3_raw[35], np.where(_i79 == 36, _ik_all_rows3_raw[36], np.where(_i79 == 37, _ik_all_rows3_raw[37], np.where(_i79 == 38, _ik_all_rows3_raw[38], np.where(_i79 == 39, _ik_all_rows3_raw[39], np.where(_i79 == 40, _ik_all_rows3_raw[40], np.where(_i79 == 41, _ik_all_rows3_raw[41], np.where(_i79 == 42, _ik_all_rows3_raw[42], np.where(_i79 == 43, _ik_all_rows3_raw[43], np.where(_i79 == 44, _ik_all_rows3_raw[44], np.where(_i79 == 45, _ik_all_rows3_raw[45], np.where(_i79 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i80 == 0, _ik_all_rows3_raw[0], np.where(_i80 == 1, _ik_all_rows3_raw[1], np.where(_i80 == 2, _ik_all_rows3_raw[2], np.where(_i80 == 3, _ik_all_rows3_raw[3], np.where(_i80 == 4, _ik_all_rows3_raw[4], np.where(_i80 == 5, _ik_all_rows3_raw[5], np.where(_i80 == 6, _ik_all_rows3_raw[6], np.where(_i80 == 7, _ik_all_rows3_raw[7], np.where(_i80 == 8, _ik_all_rows3_raw[8], np.where(_i80 == 9, _ik_all_rows3_raw[9], np.where(_i80 == 10, _ik_all_rows3_raw[10], np.where(_i80 == 11, _ik_all_rows3_raw[11], np.where(_i80 == 12, _ik_all_rows3_raw[12], np.where(_i80 == 13, _ik_all_rows3_raw[13], np.where(_i80 == 14, _ik_all_rows3_raw[14], np.where(_i80 == 15, _ik_all_rows3_raw[15], np.where(_i80 == 16, _ik_all_rows3_raw[16], np.where(_i80 == 17, _ik_all_rows3_raw[17], np.where(_i80 == 18, _ik_all_rows3_raw[18], np.where(_i80 == 19, _ik_all_rows3_raw[19], np.where(_i80 == 20, _ik_all_rows3_raw[20], np.where(_i80 == 21, _ik_all_rows3_raw[21], np.where(_i80 == 22, _ik_all_rows3_raw[22], np.where(_i80 == 23, _ik_all_rows3_raw[23], np.where(_i80 == 24, _ik_all_rows3_raw[24], np.where(_i80 == 25, _ik_all_rows3_raw[25], np.where(_i80 == 26, _ik_all_rows3_raw[26], np.where(_i80 == 27, _ik_all_rows3_raw[27], np.where(_i80 == 28, _ik_all_rows3_raw[28], np.where(_i80 == 29, _ik_all_rows3_raw[29], np.where(_i80 == 30, _ik_all_rows3_raw[30], np.where(_i80 == 31, _ik_all_rows3_raw[31], np.where(_i80 == 32, _ik_all_rows3_raw[32], np.where(_i80 == 33, _ik_all_rows3_raw[33], np.where(_i80 == 34, _ik_all_rows3_raw[34], np.where(_i80 == 35, _ik_all_rows3_raw[35], np.where(_i80 == 36, _ik_all_rows3_raw[36], np.where(_i80 == 37, _ik_all_rows3_raw[37], np.where(_i80 == 38, _ik_all_rows3_raw[38], np.where(_i80 == 39, _ik_all_rows3_raw[39], np.where(_i80 == 40, _ik_all_rows3_raw[40], np.where(_i80 == 41, _ik_all_rows3_raw[41], np.where(_i80 == 42, _ik_all_rows3_raw[42], np.where(_i80 == 43, _ik_all_rows3_raw[43], np.where(_i80 == 44, _ik_all_rows3_raw[44], np.where(_i80 == 45, _ik_all_rows3_raw[45], np.where(_i80 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[0])
+            _c81 = np.abs(0.0 - _ik_all_rows3_cand[0]) > 3.141592653589793
+            _m82 = _m77 & _c81
+            _ik_all_rows3_cand[0] = np.where(_m82, _ik_all_rows3_cand[0] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[0])*0.15915494309189535), _ik_all_rows3_cand[0])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[0] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[0] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[0] = np.where(_m77, np.where(_ik_all_rows3_cand[0] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[0] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[0])), _ik_all_rows3_cand[0])
+            _i83 = 6*_i74 + 1
+            _i84 = 6*_i74 + 1
+            _i85 = 6*_i74 + 1
+            _ik_all_rows3_cand[1] = np.where(_m77, np.where(_i83 == 0, _ik_all_rows3_raw[0], np.where(_i83 == 1, _ik_all_rows3_raw[1], np.where(_i83 == 2, _ik_all_rows3_raw[2], np.where(_i83 == 3, _ik_all_rows3_raw[3], np.where(_i83 == 4, _ik_all_rows3_raw[4], np.where(_i83 == 5, _ik_all_rows3_raw[5], np.where(_i83 == 6, _ik_all_rows3_raw[6], np.where(_i83 == 7, _ik_all_rows3_raw[7], np.where(_i83 == 8, _ik_all_rows3_raw[8], np.where(_i83 == 9, _ik_all_rows3_raw[9], np.where(_i83 == 10, _ik_all_rows3_raw[10], np.where(_i83 == 11, _ik_all_rows3_raw[11], np.where(_i83 == 12, _ik_all_rows3_raw[12], np.where(_i83 == 13, _ik_all_rows3_raw[13], np.where(_i83 == 14, _ik_all_rows3_raw[14], np.where(_i83 == 15, _ik_all_rows3_raw[15], np.where(_i83 == 16, _ik_all_rows3_raw[16], np.where(_i83 == 17, _ik_all_rows3_raw[17], np.where(_i83 == 18, _ik_all_rows3_raw[18], np.where(_i83 == 19, _ik_all_rows3_raw[19], np.where(_i83 == 20, _ik_all_rows3_raw[20], np.where(_i83 == 21, _ik_all_rows3_raw[21], np.where(_i83 == 22, _ik_all_rows3_raw[22], np.where(_i83 == 23, _ik_all_rows3_raw[23], np.where(_i83 == 24, _ik_all_rows3_raw[24], np.where(_i83 == 25, _ik_all_rows3_raw[25], np.where(_i83 == 26, _ik_all_rows3_raw[26], np.where(_i83 == 27, _ik_all_rows3_raw[27], np.where(_i83 == 28, _ik_all_rows3_raw[28], np.where(_i83 == 29, _ik_all_rows3_raw[29], np.where(_i83 == 30, _ik_all_rows3_raw[30], np.where(_i83 == 31, _ik_all_rows3_raw[31], np.where(_i83 == 32, _ik_all_rows3_raw[32], np.where(_i83 == 33, _ik_all_rows3_raw[33], np.where(_i83 == 34, _ik_all_rows3_raw[34], np.where(_i83 == 35, _ik_all_rows3_raw[35], np.where(_i83 == 36, _ik_all_rows3_raw[36], np.where(_i83 == 37, _ik_all_rows3_raw[37], np.where(_i83 == 38, _ik_all_rows3_raw[38], np.where(_i83 == 39, _ik_all_rows3_raw[39], np.where(_i83 == 40, _ik_all_rows3_raw[40], np.where(_i83 == 41, _ik_all_rows3_raw[41], np.where(_i83 == 42, _ik_all_rows3_raw[42], np.where(_i83 == 43, _ik_all_rows3_raw[43], np.where(_i83 == 44, _ik_all_rows3_raw[44], np.where(_i83 == 45, _ik_all_rows3_raw[45], np.where(_i83 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i84 == 0, _ik_all_rows3_raw[0], np.where(_i84 == 1, _ik_all_rows3_raw[1], np.where(_i84 == 2, _ik_all_rows3_raw[2], np.where(_i84 == 3, _ik_all_rows3_raw[3], np.where(_i84 == 4, _ik_all_rows3_raw[4], np.where(_i84 == 5, _ik_all_rows3_raw[5], np.where(_i84 == 6, _ik_all_rows3_raw[6], np.where(_i84 == 7, _ik_all_rows3_raw[7], np.where(_i84 == 8, _ik_all_rows3_raw[8], np.where(_i84 == 9, _ik_all_rows3_raw[9], np.where(_i84 == 10, _ik_all_rows3_raw[10], np.where(_i84 == 11, _ik_all_rows3_raw[11], np.where(_i84 == 12, _ik_all_rows3_raw[12], np.where(_i84 == 13, _ik_all_rows3_raw[13], np.where(_i84 == 14, _ik_all_rows3_raw[14], np.where(_i84 == 15, _ik_all_rows3_raw[15], np.where(_i84 == 16, _ik_all_rows3_raw[16], np.where(_i84 == 17, _ik_all_rows3_raw[17], np.where(_i84 == 18, _ik_all_rows3_raw[18], np.where(_i84 == 19, _ik_all_rows3_raw[19], np.where(_i84 == 20, _ik_all_rows3_raw[20], np.where(_i84 == 21, _ik_all_rows3_raw[21], np.where(_i84 == 22, _ik_all_rows3_raw[22], np.where(_i84 == 23, _ik_all_rows3_raw[23], np.where(_i84 == 24, _ik_all_rows3_raw[24], np.where(_i84 == 25, _ik_all_rows3_raw[25], np.where(_i84 == 26, _ik_all_rows3_raw[26], np.where(_i84 == 27, _ik_all_rows3_raw[27], np.where(_i84 == 28, _ik_all_rows3_raw[28], np.where(_i84 == 29, _ik_all_rows3_raw[29], np.where(_i84 == 30, _ik_all_rows3_raw[30], np.where(_i84 == 31, _ik_all_rows3_raw[31], np.where(_i84 == 32, _ik_all_rows3_raw[32], np.where(_i84 == 33, _ik_all_rows3_raw[33], np.where(_i84 == 34, _ik_all_rows3_raw[34], np.where(_i84 == 35, _ik_all_rows3_raw[35], np.where(_i84 == 36, _ik_all_rows3_raw[36], np.where(_i84 == 37, _ik_all_rows3_raw[37], np.where(_i84 == 38, _ik_all_rows3_raw[38], np.where(_i84 == 39, _ik_all_rows3_raw[39], np.where(_i84 == 40, _ik_all_rows3_raw[40], np.where(_i84 == 41, _ik_all_rows3_raw[41], np.where(_i84 == 42, _ik_all_rows3_raw[42], np.where(_i84 == 43, _ik_all_rows3_raw[43], np.where(_i84 == 44, _ik_all_rows3_raw[44], np.where(_i84 == 45, _ik_all_rows3_raw[45], np.where(_i84 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i85 == 0, _ik_all_rows3_raw[0], np.where(_i85 == 1, _ik_all_rows3_raw[1], np.where(_i85 == 2, _ik_all_rows3_raw[2], np.where(_i85 == 3, _ik_all_rows3_raw[3], np.where(_i85 == 4, _ik_all_rows3_raw[4], np.where(_i85 == 5, _ik_all_rows3_raw[5], np.where(_i85 == 6, _ik_all_rows3_raw[6], np.where(_i85 == 7, _ik_all_rows3_raw[7], np.where(_i85 == 8, _ik_all_rows3_raw[8], np.where(_i85 == 9, _ik_all_rows3_raw[9], np.where(_i85 == 10, _ik_all_rows3_raw[10], np.where(_i85 == 11, _ik_all_rows3_raw[11], np.where(_i85 == 12, _ik_all_rows3_raw[12], np.where(_i85 == 13, _ik_all_rows3_raw[13], np.where(_i85 == 14, _ik_all_rows3_raw[14], np.where(_i85 == 15, _ik_all_rows3_raw[15], np.where(_i85 == 16, _ik_all_rows3_raw[16], np.where(_i85 == 17, _ik_all_rows3_raw[17], np.where(_i85 == 18, _ik_all_rows3_raw[18], np.where(_i85 == 19, _ik_all_rows3_raw[19], np.where(_i85 == 20, _ik_all_rows3_raw[20], np.where(_i85 == 21, _ik_all_rows3_raw[21], np.where(_i85 == 22, _ik_all_rows3_raw[22], np.where(_i85 == 23, _ik_all_rows3_raw[23], np.where(_i85 == 24, _ik_all_rows3_raw[24], np.where(_i85 == 25, _ik_all_rows3_raw[25], np.where(_i85 == 26, _ik_all_rows3_raw[26], np.where(_i85 == 27, _ik_all_rows3_raw[27], np.where(_i85 == 28, _ik_all_rows3_raw[28], np.where(_i85 == 29, _ik_all_rows3_raw[29], np.where(_i85 == 30, _ik_all_rows3_raw[30], np.where(_i85 == 31, _ik_all_rows3_raw[31], np.where(_i85 == 32, _ik_all_rows3_raw[32], np.where(_i85 == 33, _ik_all_rows3_raw[33], np.where(_i85 == 34, _ik_all_rows3_raw[34], np.where(_i85 == 35, _ik_all_rows3_raw[35], np.where(_i85 == 36, _ik_all_rows3_raw[36], np.where(_i85 == 37, _ik_all_rows3_raw[37], np.where(_i85 == 38, _ik_all_rows3_raw[38], np.where(_i85 == 39, _ik_all_rows3_raw[39], np.where(_i85 == 40, _ik_all_rows3_raw[40], np.where(_i85 == 41, _ik_all_rows3_raw[41], np.where(_i85 == 42, _ik_all_rows3_raw[42], np.where(_i85 == 43, _ik_all_rows3_raw[43], np.where(_i85 == 44, _ik_all_rows3_raw[44], np.where(_i85 == 45, _ik_all_rows3_raw[45], np.where(_i85 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[1])
+            _c86 = np.abs(0.0 - _ik_all_rows3_cand[1]) > 3.141592653589793
+            _m87 = _m77 & _c86
+            _ik_all_rows3_cand[1] = np.where(_m87, _ik_all_rows3_cand[1] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[1])*0.15915494309189535), _ik_all_rows3_cand[1])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[1] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[1] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[1] = np.where(_m77, np.where(_ik_all_rows3_cand[1] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[1] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[1])), _ik_all_rows3_cand[1])
+            _i88 = 6*_i74 + 2
+            _i89 = 6*_i74 + 2
+            _i90 = 6*_i74 + 2
+            _ik_all_rows3_cand[2] = np.where(_m77, np.where(_i88 == 0, _ik_all_rows3_raw[0], np.where(_i88 == 1, _ik_all_rows3_raw[1], np.where(_i88 == 2, _ik_all_rows3_raw[2], np.where(_i88 == 3, _ik_all_rows3_raw[3], np.where(_i88 == 4, _ik_all_rows3_raw[4], np.where(_i88 == 5, _ik_all_rows3_raw[5], np.where(_i88 == 6, _ik_all_rows3_raw[6], np.where(_i88 == 7, _ik_all_rows3_raw[7], np.where(_i88 == 8, _ik_all_rows3_raw[8], np.where(_i88 == 9, _ik_all_rows3_raw[9], np.where(_i88 == 10, _ik_all_rows3_raw[10], np.where(_i88 == 11, _ik_all_rows3_raw[11], np.where(_i88 == 12, _ik_all_rows3_raw[12], np.where(_i88 == 13, _ik_all_rows3_raw[13], np.where(_i88 == 14, _ik_all_rows3_raw[14], np.where(_i88 == 15, _ik_all_rows3_raw[15], np.where(_i88 == 16, _ik_all_rows3_raw[16], np.where(_i88 == 17, _ik_all_rows3_raw[17], np.where(_i88 == 18, _ik_all_rows3_raw[18], np.where(_i88 == 19, _ik_all_rows3_raw[19], np.where(_i88 == 20, _ik_all_rows3_raw[20], np.where(_i88 == 21, _ik_all_rows3_raw[21], np.where(_i88 == 22, _ik_all_rows3_raw[22], np.where(_i88 == 23, _ik_all_rows3_raw[23], np.where(_i88 == 24, _ik_all_rows3_raw[24], np.where(_i88 == 25, _ik_all_rows3_raw[25], np.where(_i88 == 26, _ik_all_rows3_raw[26], np.where(_i88 == 27, _ik_all_rows3_raw[27], np.where(_i88 == 28, _ik_all_rows3_raw[28], np.where(_i88 == 29, _ik_all_rows3_raw[29], np.where(_i88 == 30, _ik_all_rows3_raw[30], np.where(_i88 == 31, _ik_all_rows3_raw[31], np.where(_i88 == 32, _ik_all_rows3_raw[32], np.where(_i88 == 33, _ik_all_rows3_raw[33], np.where(_i88 == 34, _ik_all_rows3_raw[34], np.where(_i88 == 35, _ik_all_rows3_raw[35], np.where(_i88 == 36, _ik_all_rows3_raw[36], np.where(_i88 == 37, _ik_all_rows3_raw[37], np.where(_i88 == 38, _ik_all_rows3_raw[38], np.where(_i88 == 39, _ik_all_rows3_raw[39], np.where(_i88 == 40, _ik_all_rows3_raw[40], np.where(_i88 == 41, _ik_all_rows3_raw[41], np.where(_i88 == 42, _ik_all_rows3_raw[42], np.where(_i88 == 43, _ik_all_rows3_raw[43], np.where(_i88 == 44, _ik_all_rows3_raw[44], np.where(_i88 == 45, _ik_all_rows3_raw[45], np.where(_i88 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i89 == 0, _ik_all_rows3_raw[0], np.where(_i89 == 1, _ik_all_rows3_raw[1], np.where(_i89 == 2, _ik_all_rows3_raw[2], np.where(_i89 == 3, _ik_all_rows3_raw[3], np.where(_i89 == 4, _ik_all_rows3_raw[4], np.where(_i89 == 5, _ik_all_rows3_raw[5], np.where(_i89 == 6, _ik_all_rows3_raw[6], np.where(_i89 == 7, _ik_all_rows3_raw[7], np.where(_i89 == 8, _ik_all_rows3_raw[8], np.where(_i89 == 9, _ik_all_rows3_raw[9], np.where(_i89 == 10, _ik_all_rows3_raw[10], np.where(_i89 == 11, _ik_all_rows3_raw[11], np.where(_i89 == 12, _ik_all_rows3_raw[12], np.where(_i89 == 13, _ik_all_rows3_raw[13], np.where(_i89 == 14, _ik_all_rows3_raw[14], np.where(_i89 == 15, _ik_all_rows3_raw[15], np.where(_i89 == 16, _ik_all_rows3_raw[16], np.where(_i89 == 17, _ik_all_rows3_raw[17], np.where(_i89 == 18, _ik_all_rows3_raw[18], np.where(_i89 == 19, _ik_all_rows3_raw[19], np.where(_i89 == 20, _ik_all_rows3_raw[20], np.where(_i89 == 21, _ik_all_rows3_raw[21], np.where(_i89 == 22, _ik_all_rows3_raw[22], np.where(_i89 == 23, _ik_all_rows3_raw[23], np.where(_i89 == 24, _ik_all_rows3_raw[24], np.where(_i89 == 25, _ik_all_rows3_raw[25], np.where(_i89 == 26, _ik_all_rows3_raw[26], np.where(_i89 == 27, _ik_all_rows3_raw[27], np.where(_i89 == 28, _ik_all_rows3_raw[28], np.where(_i89 == 29, _ik_all_rows3_raw[29], np.where(_i89 == 30, _ik_all_rows3_raw[30], np.where(_i89 == 31, _ik_all_rows3_raw[31], np.where(_i89 == 32, _ik_all_rows3_raw[32], np.where(_i89 == 33, _ik_all_rows3_raw[33], np.where(_i89 == 34, _ik_all_rows3_raw[34], np.where(_i89 == 35, _ik_all_rows3_raw[35], np.where(_i89 == 36, _ik_all_rows3_raw[36], np.where(_i89 == 37, _ik_all_rows3_raw[37], np.where(_i89 == 38, _ik_all_rows3_raw[38], np.where(_i89 == 39, _ik_all_rows3_raw[39], np.where(_i89 == 40, _ik_all_rows3_raw[40], np.where(_i89 == 41, _ik_all_rows3_raw[41], np.where(_i89 == 42, _ik_all_rows3_raw[42], np.where(_i89 == 43, _ik_all_rows3_raw[43], np.where(_i89 == 44, _ik_all_rows3_raw[44], np.where(_i89 == 45, _ik_all_rows3_raw[45], np.where(_i89 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i90 == 0, _ik_all_rows3_raw[0], np.where(_i90 == 1, _ik_all_rows3_raw[1], np.where(_i90 == 2, _ik_all_rows3_raw[2], np.where(_i90 == 3, _ik_all_rows3_raw[3], np.where(_i90 == 4, _ik_all_rows3_raw[4], np.where(_i90 == 5, _ik_all_rows3_raw[5], np.where(_i90 == 6, _ik_all_rows3_raw[6], np.where(_i90 == 7, _ik_all_rows3_raw[7], np.where(_i90 == 8, _ik_all_rows3_raw[8], np.where(_i90 == 9, _ik_all_rows3_raw[9], np.where(_i90 == 10, _ik_all_rows3_raw[10], np.where(_i90 == 11, _ik_all_rows3_raw[11], np.where(_i90 == 12, _ik_all_rows3_raw[12], np.where(_i90 == 13, _ik_all_rows3_raw[13], np.where(_i90 == 14, _ik_all_rows3_raw[14], np.where(_i90 == 15, _ik_all_rows3_raw[15], np.where(_i90 == 16, _ik_all_rows3_raw[16], np.where(_i90 == 17, _ik_all_rows3_raw[17], np.where(_i90 == 18, _ik_all_rows3_raw[18], np.where(_i90 == 19, _ik_all_rows3_raw[19], np.where(_i90 == 20, _ik_all_rows3_raw[20], np.where(_i90 == 21, _ik_all_rows3_raw[21], np.where(_i90 == 22, _ik_all_rows3_raw[22], np.where(_i90 == 23, _ik_all_rows3_raw[23], np.where(_i90 == 24, _ik_all_rows3_raw[24], np.where(_i90 == 25, _ik_all_rows3_raw[25], np.where(_i90 == 26, _ik_all_rows3_raw[26], np.where(_i90 == 27, _ik_all_rows3_raw[27], np.where(_i90 == 28, _ik_all_rows3_raw[28], np.where(_i90 == 29, _ik_all_rows3_raw[29], np.where(_i90 == 30, _ik_all_rows3_raw[30], np.where(_i90 == 31, _ik_all_rows3_raw[31], np.where(_i90 == 32, _ik_all_rows3_raw[32], np.where(_i90 == 33, _ik_all_rows3_raw[33], np.where(_i90 == 34, _ik_all_rows3_raw[34], np.where(_i90 == 35, _ik_all_rows3_raw[35], np.where(_i90 == 36, _ik_all_rows3_raw[36], np.where(_i90 == 37, _ik_all_rows3_raw[37], np.where(_i90 == 38, _ik_all_rows3_raw[38], np.where(_i90 == 39, _ik_all_rows3_raw[39], np.where(_i90 == 40, _ik_all_rows3_raw[40], np.where(_i90 == 41, _ik_all_rows3_raw[41], np.where(_i90 == 42, _ik_all_rows3_raw[42], np.where(_i90 == 43, _ik_all_rows3_raw[43], np.where(_i90 == 44, _ik_all_rows3_raw[44], np.where(_i90 == 45, _ik_all_rows3_raw[45], np.where(_i90 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[2])
+            _c91 = np.abs(0.0 - _ik_all_rows3_cand[2]) > 3.141592653589793
+            _m92 = _m77 & _c91
+            _ik_all_rows3_cand[2] = np.where(_m92, _ik_all_rows3_cand[2] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[2])*0.15915494309189535), _ik_all_rows3_cand[2])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[2] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[2] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[2] = np.where(_m77, np.where(_ik_all_rows3_cand[2] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[2] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[2])), _ik_all_rows3_cand[2])
+            _i93 = 6*_i74 + 3
+            _i94 = 6*_i74 + 3
+            _i95 = 6*_i74 + 3
+            _ik_all_rows3_cand[3] = np.where(_m77, np.where(_i93 == 0, _ik_all_rows3_raw[0], np.where(_i93 == 1, _ik_all_rows3_raw[1], np.where(_i93 == 2, _ik_all_rows3_raw[2], np.where(_i93 == 3, _ik_all_rows3_raw[3], np.where(_i93 == 4, _ik_all_rows3_raw[4], np.where(_i93 == 5, _ik_all_rows3_raw[5], np.where(_i93 == 6, _ik_all_rows3_raw[6], np.where(_i93 == 7, _ik_all_rows3_raw[7], np.where(_i93 == 8, _ik_all_rows3_raw[8], np.where(_i93 == 9, _ik_all_rows3_raw[9], np.where(_i93 == 10, _ik_all_rows3_raw[10], np.where(_i93 == 11, _ik_all_rows3_raw[11], np.where(_i93 == 12, _ik_all_rows3_raw[12], np.where(_i93 == 13, _ik_all_rows3_raw[13], np.where(_i93 == 14, _ik_all_rows3_raw[14], np.where(_i93 == 15, _ik_all_rows3_raw[15], np.where(_i93 == 16, _ik_all_rows3_raw[16], np.where(_i93 == 17, _ik_all_rows3_raw[17], np.where(_i93 == 18, _ik_all_rows3_raw[18], np.where(_i93 == 19, _ik_all_rows3_raw[19], np.where(_i93 == 20, _ik_all_rows3_raw[20], np.where(_i93 == 21, _ik_all_rows3_raw[21], np.where(_i93 == 22, _ik_all_rows3_raw[22], np.where(_i93 == 23, _ik_all_rows3_raw[23], np.where(_i93 == 24, _ik_all_rows3_raw[24], np.where(_i93 == 25, _ik_all_rows3_raw[25], np.where(_i93 == 26, _ik_all_rows3_raw[26], np.where(_i93 == 27, _ik_all_rows3_raw[27], np.where(_i93 == 28, _ik_all_rows3_raw[28], np.where(_i93 == 29, _ik_all_rows3_raw[29], np.where(_i93 == 30, _ik_all_rows3_raw[30], np.where(_i93 == 31, _ik_all_rows3_raw[31], np.where(_i93 == 32, _ik_all_rows3_raw[32], np.where(_i93 == 33, _ik_all_rows3_raw[33], np.where(_i93 == 34, _ik_all_rows3_raw[34], np.where(_i93 == 35, _ik_all_rows3_raw[35], np.where(_i93 == 36, _ik_all_rows3_raw[36], np.where(_i93 == 37, _ik_all_rows3_raw[37], np.where(_i93 == 38, _ik_all_rows3_raw[38], np.where(_i93 == 39, _ik_all_rows3_raw[39], np.where(_i93 == 40, _ik_all_rows3_raw[40], np.where(_i93 == 41, _ik_all_rows3_raw[41], np.where(_i93 == 42, _ik_all_rows3_raw[42], np.where(_i93 == 43, _ik_all_rows3_raw[43], np.where(_i93 == 44, _ik_all_rows3_raw[44], np.where(_i93 == 45, _ik_all_rows3_raw[45], np.where(_i93 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i94 == 0, _ik_all_rows3_raw[0], np.where(_i94 == 1, _ik_all_rows3_raw[1], np.where(_i94 == 2, _ik_all_rows3_raw[2], np.where(_i94 == 3, _ik_all_rows3_raw[3], np.where(_i94 == 4, _ik_all_rows3_raw[4], np.where(_i94 == 5, _ik_all_rows3_raw[5], np.where(_i94 == 6, _ik_all_rows3_raw[6], np.where(_i94 == 7, _ik_all_rows3_raw[7], np.where(_i94 == 8, _ik_all_rows3_raw[8], np.where(_i94 == 9, _ik_all_rows3_raw[9], np.where(_i94 == 10, _ik_all_rows3_raw[10], np.where(_i94 == 11, _ik_all_rows3_raw[11], np.where(_i94 == 12, _ik_all_rows3_raw[12], np.where(_i94 == 13, _ik_all_rows3_raw[13], np.where(_i94 == 14, _ik_all_rows3_raw[14], np.where(_i94 == 15, _ik_all_rows3_raw[15], np.where(_i94 == 16, _ik_all_rows3_raw[16], np.where(_i94 == 17, _ik_all_rows3_raw[17], np.where(_i94 == 18, _ik_all_rows3_raw[18], np.where(_i94 == 19, _ik_all_rows3_raw[19], np.where(_i94 == 20, _ik_all_rows3_raw[20], np.where(_i94 == 21, _ik_all_rows3_raw[21], np.where(_i94 == 22, _ik_all_rows3_raw[22], np.where(_i94 == 23, _ik_all_rows3_raw[23], np.where(_i94 == 24, _ik_all_rows3_raw[24], np.where(_i94 == 25, _ik_all_rows3_raw[25], np.where(_i94 == 26, _ik_all_rows3_raw[26], np.where(_i94 == 27, _ik_all_rows3_raw[27], np.where(_i94 == 28, _ik_all_rows3_raw[28], np.where(_i94 == 29, _ik_all_rows3_raw[29], np.where(_i94 == 30, _ik_all_rows3_raw[30], np.where(_i94 == 31, _ik_all_rows3_raw[31], np.where(_i94 == 32, _ik_all_rows3_raw[32], np.where(_i94 == 33, _ik_all_rows3_raw[33], np.where(_i94 == 34, _ik_all_rows3_raw[34], np.where(_i94 == 35, _ik_all_rows3_raw[35], np.where(_i94 == 36, _ik_all_rows3_raw[36], np.where(_i94 == 37, _ik_all_rows3_raw[37], np.where(_i94 == 38, _ik_all_rows3_raw[38], np.where(_i94 == 39, _ik_all_rows3_raw[39], np.where(_i94 == 40, _ik_all_rows3_raw[40], np.where(_i94 == 41, _ik_all_rows3_raw[41], np.where(_i94 == 42, _ik_all_rows3_raw[42], np.where(_i94 == 43, _ik_all_rows3_raw[43], np.where(_i94 == 44, _ik_all_rows3_raw[44], np.where(_i94 == 45, _ik_all_rows3_raw[45], np.where(_i94 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i95 == 0, _ik_all_rows3_raw[0], np.where(_i95 == 1, _ik_all_rows3_raw[1], np.where(_i95 == 2, _ik_all_rows3_raw[2], np.where(_i95 == 3, _ik_all_rows3_raw[3], np.where(_i95 == 4, _ik_all_rows3_raw[4], np.where(_i95 == 5, _ik_all_rows3_raw[5], np.where(_i95 == 6, _ik_all_rows3_raw[6], np.where(_i95 == 7, _ik_all_rows3_raw[7], np.where(_i95 == 8, _ik_all_rows3_raw[8], np.where(_i95 == 9, _ik_all_rows3_raw[9], np.where(_i95 == 10, _ik_all_rows3_raw[10], np.where(_i95 == 11, _ik_all_rows3_raw[11], np.where(_i95 == 12, _ik_all_rows3_raw[12], np.where(_i95 == 13, _ik_all_rows3_raw[13], np.where(_i95 == 14, _ik_all_rows3_raw[14], np.where(_i95 == 15, _ik_all_rows3_raw[15], np.where(_i95 == 16, _ik_all_rows3_raw[16], np.where(_i95 == 17, _ik_all_rows3_raw[17], np.where(_i95 == 18, _ik_all_rows3_raw[18], np.where(_i95 == 19, _ik_all_rows3_raw[19], np.where(_i95 == 20, _ik_all_rows3_raw[20], np.where(_i95 == 21, _ik_all_rows3_raw[21], np.where(_i95 == 22, _ik_all_rows3_raw[22], np.where(_i95 == 23, _ik_all_rows3_raw[23], np.where(_i95 == 24, _ik_all_rows3_raw[24], np.where(_i95 == 25, _ik_all_rows3_raw[25], np.where(_i95 == 26, _ik_all_rows3_raw[26], np.where(_i95 == 27, _ik_all_rows3_raw[27], np.where(_i95 == 28, _ik_all_rows3_raw[28], np.where(_i95 == 29, _ik_all_rows3_raw[29], np.where(_i95 == 30, _ik_all_rows3_raw[30], np.where(_i95 == 31, _ik_all_rows3_raw[31], np.where(_i95 == 32, _ik_all_rows3_raw[32], np.where(_i95 == 33, _ik_all_rows3_raw[33], np.where(_i95 == 34, _ik_all_rows3_raw[34], np.where(_i95 == 35, _ik_all_rows3_raw[35], np.where(_i95 == 36, _ik_all_rows3_raw[36], np.where(_i95 == 37, _ik_all_rows3_raw[37], np.where(_i95 == 38, _ik_all_rows3_raw[38], np.where(_i95 == 39, _ik_all_rows3_raw[39], np.where(_i95 == 40, _ik_all_rows3_raw[40], np.where(_i95 == 41, _ik_all_rows3_raw[41], np.where(_i95 == 42, _ik_all_rows3_raw[42], np.where(_i95 == 43, _ik_all_rows3_raw[43], np.where(_i95 == 44, _ik_all_rows3_raw[44], np.where(_i95 == 45, _ik_all_rows3_raw[45], np.where(_i95 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[3])
+            _c96 = np.abs(0.0 - _ik_all_rows3_cand[3]) > 3.141592653589793
+            _m97 = _m77 & _c96
+            _ik_all_rows3_cand[3] = np.where(_m97, _ik_all_rows3_cand[3] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[3])*0.15915494309189535), _ik_all_rows3_cand[3])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[3] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[3] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[3] = np.where(_m77, np.where(_ik_all_rows3_cand[3] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[3] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[3])), _ik_all_rows3_cand[3])
+            _i98 = 6*_i74 + 4
+            _i99 = 6*_i74 + 4
+            _i100 = 6*_i74 + 4
+            _ik_all_rows3_cand[4] = np.where(_m77, np.where(_i98 == 0, _ik_all_rows3_raw[0], np.where(_i98 == 1, _ik_all_rows3_raw[1], np.where(_i98 == 2, _ik_all_rows3_raw[2], np.where(_i98 == 3, _ik_all_rows3_raw[3], np.where(_i98 == 4, _ik_all_rows3_raw[4], np.where(_i98 == 5, _ik_all_rows3_raw[5], np.where(_i98 == 6, _ik_all_rows3_raw[6], np.where(_i98 == 7, _ik_all_rows3_raw[7], np.where(_i98 == 8, _ik_all_rows3_raw[8], np.where(_i98 == 9, _ik_all_rows3_raw[9], np.where(_i98 == 10, _ik_all_rows3_raw[10], np.where(_i98 == 11, _ik_all_rows3_raw[11], np.where(_i98 == 12, _ik_all_rows3_raw[12], np.where(_i98 == 13, _ik_all_rows3_raw[13], np.where(_i98 == 14, _ik_all_rows3_raw[14], np.where(_i98 == 15, _ik_all_rows3_raw[15], np.where(_i98 == 16, _ik_all_rows3_raw[16], np.where(_i98 == 17, _ik_all_rows3_raw[17], np.where(_i98 == 18, _ik_all_rows3_raw[18], np.where(_i98 == 19, _ik_all_rows3_raw[19], np.where(_i98 == 20, _ik_all_rows3_raw[20], np.where(_i98 == 21, _ik_all_rows3_raw[21], np.where(_i98 == 22, _ik_all_rows3_raw[22], np.where(_i98 == 23, _ik_all_rows3_raw[23], np.where(_i98 == 24, _ik_all_rows3_raw[24], np.where(_i98 == 25, _ik_all_rows3_raw[25], np.where(_i98 == 26, _ik_all_rows3_raw[26], np.where(_i98 == 27, _ik_all_rows3_raw[27], np.where(_i98 == 28, _ik_all_rows3_raw[28], np.where(_i98 == 29, _ik_all_rows3_raw[29], np.where(_i98 == 30, _ik_all_rows3_raw[30], np.where(_i98 == 31, _ik_all_rows3_raw[31], np.where(_i98 == 32, _ik_all_rows3_raw[32], np.where(_i98 == 33, _ik_all_rows3_raw[33], np.where(_i98 == 34, _ik_all_rows3_raw[34], np.where(_i98 == 35, _ik_all_rows3_raw[35], np.where(_i98 == 36, _ik_all_rows3_raw[36], np.where(_i98 == 37, _ik_all_rows3_raw[37], np.where(_i98 == 38, _ik_all_rows3_raw[38], np.where(_i98 == 39, _ik_all_rows3_raw[39], np.where(_i98 == 40, _ik_all_rows3_raw[40], np.where(_i98 == 41, _ik_all_rows3_raw[41], np.where(_i98 == 42, _ik_all_rows3_raw[42], np.where(_i98 == 43, _ik_all_rows3_raw[43], np.where(_i98 == 44, _ik_all_rows3_raw[44], np.where(_i98 == 45, _ik_all_rows3_raw[45], np.where(_i98 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i99 == 0, _ik_all_rows3_raw[0], np.where(_i99 == 1, _ik_all_rows3_raw[1], np.where(_i99 == 2, _ik_all_rows3_raw[2], np.where(_i99 == 3, _ik_all_rows3_raw[3], np.where(_i99 == 4, _ik_all_rows3_raw[4], np.where(_i99 == 5, _ik_all_rows3_raw[5], np.where(_i99 == 6, _ik_all_rows3_raw[6], np.where(_i99 == 7, _ik_all_rows3_raw[7], np.where(_i99 == 8, _ik_all_rows3_raw[8], np.where(_i99 == 9, _ik_all_rows3_raw[9], np.where(_i99 == 10, _ik_all_rows3_raw[10], np.where(_i99 == 11, _ik_all_rows3_raw[11], np.where(_i99 == 12, _ik_all_rows3_raw[12], np.where(_i99 == 13, _ik_all_rows3_raw[13], np.where(_i99 == 14, _ik_all_rows3_raw[14], np.where(_i99 == 15, _ik_all_rows3_raw[15], np.where(_i99 == 16, _ik_all_rows3_raw[16], np.where(_i99 == 17, _ik_all_rows3_raw[17], np.where(_i99 == 18, _ik_all_rows3_raw[18], np.where(_i99 == 19, _ik_all_rows3_raw[19], np.where(_i99 == 20, _ik_all_rows3_raw[20], np.where(_i99 == 21, _ik_all_rows3_raw[21], np.where(_i99 == 22, _ik_all_rows3_raw[22], np.where(_i99 == 23, _ik_all_rows3_raw[23], np.where(_i99 == 24, _ik_all_rows3_raw[24], np.where(_i99 == 25, _ik_all_rows3_raw[25], np.where(_i99 == 26, _ik_all_rows3_raw[26], np.where(_i99 == 27, _ik_all_rows3_raw[27], np.where(_i99 == 28, _ik_all_rows3_raw[28], np.where(_i99 == 29, _ik_all_rows3_raw[29], np.where(_i99 == 30, _ik_all_rows3_raw[30], np.where(_i99 == 31, _ik_all_rows3_raw[31], np.where(_i99 == 32, _ik_all_rows3_raw[32], np.where(_i99 == 33, _ik_all_rows3_raw[33], np.where(_i99 == 34, _ik_all_rows3_raw[34], np.where(_i99 == 35, _ik_all_rows3_raw[35], np.where(_i99 == 36, _ik_all_rows3_raw[36], np.where(_i99 == 37, _ik_all_rows3_raw[37], np.where(_i99 == 38, _ik_all_rows3_raw[38], np.where(_i99 == 39, _ik_all_rows3_raw[39], np.where(_i99 == 40, _ik_all_rows3_raw[40], np.where(_i99 == 41, _ik_all_rows3_raw[41], np.where(_i99 == 42, _ik_all_rows3_raw[42], np.where(_i99 == 43, _ik_all_rows3_raw[43], np.where(_i99 == 44, _ik_all_rows3_raw[44], np.where(_i99 == 45, _ik_all_rows3_raw[45], np.where(_i99 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i100 == 0, _ik_all_rows3_raw[0], np.where(_i100 == 1, _ik_all_rows3_raw[1], np.where(_i100 == 2, _ik_all_rows3_raw[2], np.where(_i100 == 3, _ik_all_rows3_raw[3], np.where(_i100 == 4, _ik_all_rows3_raw[4], np.where(_i100 == 5, _ik_all_rows3_raw[5], np.where(_i100 == 6, _ik_all_rows3_raw[6], np.where(_i100 == 7, _ik_all_rows3_raw[7], np.where(_i100 == 8, _ik_all_rows3_raw[8], np.where(_i100 == 9, _ik_all_rows3_raw[9], np.where(_i100 == 10, _ik_all_rows3_raw[10], np.where(_i100 == 11, _ik_all_rows3_raw[11], np.where(_i100 == 12, _ik_all_rows3_raw[12], np.where(_i100 == 13, _ik_all_rows3_raw[13], np.where(_i100 == 14, _ik_all_rows3_raw[14], np.where(_i100 == 15, _ik_all_rows3_raw[15], np.where(_i100 == 16, _ik_all_rows3_raw[16], np.where(_i100 == 17, _ik_all_rows3_raw[17], np.where(_i100 == 18, _ik_all_rows3_raw[18], np.where(_i100 == 19, _ik_all_rows3_raw[19], np.where(_i100 == 20, _ik_all_rows3_raw[20], np.where(_i100 == 21, _ik_all_rows3_raw[21], np.where(_i100 == 22, _ik_all_rows3_raw[22], np.where(_i100 == 23, _ik_all_rows3_raw[23], np.where(_i100 == 24, _ik_all_rows3_raw[24], np.where(_i100 == 25, _ik_all_rows3_raw[25], np.where(_i100 == 26, _ik_all_rows3_raw[26], np.where(_i100 == 27, _ik_all_rows3_raw[27], np.where(_i100 == 28, _ik_all_rows3_raw[28], np.where(_i100 == 29, _ik_all_rows3_raw[29], np.where(_i100 == 30, _ik_all_rows3_raw[30], np.where(_i100 == 31, _ik_all_rows3_raw[31], np.where(_i100 == 32, _ik_all_rows3_raw[32], np.where(_i100 == 33, _ik_all_rows3_raw[33], np.where(_i100 == 34, _ik_all_rows3_raw[34], np.where(_i100 == 35, _ik_all_rows3_raw[35], np.where(_i100 == 36, _ik_all_rows3_raw[36], np.where(_i100 == 37, _ik_all_rows3_raw[37], np.where(_i100 == 38, _ik_all_rows3_raw[38], np.where(_i100 == 39, _ik_all_rows3_raw[39], np.where(_i100 == 40, _ik_all_rows3_raw[40], np.where(_i100 == 41, _ik_all_rows3_raw[41], np.where(_i100 == 42, _ik_all_rows3_raw[42], np.where(_i100 == 43, _ik_all_rows3_raw[43], np.where(_i100 == 44, _ik_all_rows3_raw[44], np.where(_i100 == 45, _ik_all_rows3_raw[45], np.where(_i100 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[4])
+            _c101 = np.abs(0.0 - _ik_all_rows3_cand[4]) > 3.141592653589793
+            _m102 = _m77 & _c101
+            _ik_all_rows3_cand[4] = np.where(_m102, _ik_all_rows3_cand[4] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[4])*0.15915494309189535), _ik_all_rows3_cand[4])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[4] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[4] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[4] = np.where(_m77, np.where(_ik_all_rows3_cand[4] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[4] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[4])), _ik_all_rows3_cand[4])
+            _i103 = 6*_i74 + 5
+            _i104 = 6*_i74 + 5
+            _i105 = 6*_i74 + 5
+            _ik_all_rows3_cand[5] = np.where(_m77, np.where(_i103 == 0, _ik_all_rows3_raw[0], np.where(_i103 == 1, _ik_all_rows3_raw[1], np.where(_i103 == 2, _ik_all_rows3_raw[2], np.where(_i103 == 3, _ik_all_rows3_raw[3], np.where(_i103 == 4, _ik_all_rows3_raw[4], np.where(_i103 == 5, _ik_all_rows3_raw[5], np.where(_i103 == 6, _ik_all_rows3_raw[6], np.where(_i103 == 7, _ik_all_rows3_raw[7], np.where(_i103 == 8, _ik_all_rows3_raw[8], np.where(_i103 == 9, _ik_all_rows3_raw[9], np.where(_i103 == 10, _ik_all_rows3_raw[10], np.where(_i103 == 11, _ik_all_rows3_raw[11], np.where(_i103 == 12, _ik_all_rows3_raw[12], np.where(_i103 == 13, _ik_all_rows3_raw[13], np.where(_i103 == 14, _ik_all_rows3_raw[14], np.where(_i103 == 15, _ik_all_rows3_raw[15], np.where(_i103 == 16, _ik_all_rows3_raw[16], np.where(_i103 == 17, _ik_all_rows3_raw[17], np.where(_i103 == 18, _ik_all_rows3_raw[18], np.where(_i103 == 19, _ik_all_rows3_raw[19], np.where(_i103 == 20, _ik_all_rows3_raw[20], np.where(_i103 == 21, _ik_all_rows3_raw[21], np.where(_i103 == 22, _ik_all_rows3_raw[22], np.where(_i103 == 23, _ik_all_rows3_raw[23], np.where(_i103 == 24, _ik_all_rows3_raw[24], np.where(_i103 == 25, _ik_all_rows3_raw[25], np.where(_i103 == 26, _ik_all_rows3_raw[26], np.where(_i103 == 27, _ik_all_rows3_raw[27], np.where(_i103 == 28, _ik_all_rows3_raw[28], np.where(_i103 == 29, _ik_all_rows3_raw[29], np.where(_i103 == 30, _ik_all_rows3_raw[30], np.where(_i103 == 31, _ik_all_rows3_raw[31], np.where(_i103 == 32, _ik_all_rows3_raw[32], np.where(_i103 == 33, _ik_all_rows3_raw[33], np.where(_i103 == 34, _ik_all_rows3_raw[34], np.where(_i103 == 35, _ik_all_rows3_raw[35], np.where(_i103 == 36, _ik_all_rows3_raw[36], np.where(_i103 == 37, _ik_all_rows3_raw[37], np.where(_i103 == 38, _ik_all_rows3_raw[38], np.where(_i103 == 39, _ik_all_rows3_raw[39], np.where(_i103 == 40, _ik_all_rows3_raw[40], np.where(_i103 == 41, _ik_all_rows3_raw[41], np.where(_i103 == 42, _ik_all_rows3_raw[42], np.where(_i103 == 43, _ik_all_rows3_raw[43], np.where(_i103 == 44, _ik_all_rows3_raw[44], np.where(_i103 == 45, _ik_all_rows3_raw[45], np.where(_i103 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) + np.where(0.0 - np.where(_i104 == 0, _ik_all_rows3_raw[0], np.where(_i104 == 1, _ik_all_rows3_raw[1], np.where(_i104 == 2, _ik_all_rows3_raw[2], np.where(_i104 == 3, _ik_all_rows3_raw[3], np.where(_i104 == 4, _ik_all_rows3_raw[4], np.where(_i104 == 5, _ik_all_rows3_raw[5], np.where(_i104 == 6, _ik_all_rows3_raw[6], np.where(_i104 == 7, _ik_all_rows3_raw[7], np.where(_i104 == 8, _ik_all_rows3_raw[8], np.where(_i104 == 9, _ik_all_rows3_raw[9], np.where(_i104 == 10, _ik_all_rows3_raw[10], np.where(_i104 == 11, _ik_all_rows3_raw[11], np.where(_i104 == 12, _ik_all_rows3_raw[12], np.where(_i104 == 13, _ik_all_rows3_raw[13], np.where(_i104 == 14, _ik_all_rows3_raw[14], np.where(_i104 == 15, _ik_all_rows3_raw[15], np.where(_i104 == 16, _ik_all_rows3_raw[16], np.where(_i104 == 17, _ik_all_rows3_raw[17], np.where(_i104 == 18, _ik_all_rows3_raw[18], np.where(_i104 == 19, _ik_all_rows3_raw[19], np.where(_i104 == 20, _ik_all_rows3_raw[20], np.where(_i104 == 21, _ik_all_rows3_raw[21], np.where(_i104 == 22, _ik_all_rows3_raw[22], np.where(_i104 == 23, _ik_all_rows3_raw[23], np.where(_i104 == 24, _ik_all_rows3_raw[24], np.where(_i104 == 25, _ik_all_rows3_raw[25], np.where(_i104 == 26, _ik_all_rows3_raw[26], np.where(_i104 == 27, _ik_all_rows3_raw[27], np.where(_i104 == 28, _ik_all_rows3_raw[28], np.where(_i104 == 29, _ik_all_rows3_raw[29], np.where(_i104 == 30, _ik_all_rows3_raw[30], np.where(_i104 == 31, _ik_all_rows3_raw[31], np.where(_i104 == 32, _ik_all_rows3_raw[32], np.where(_i104 == 33, _ik_all_rows3_raw[33], np.where(_i104 == 34, _ik_all_rows3_raw[34], np.where(_i104 == 35, _ik_all_rows3_raw[35], np.where(_i104 == 36, _ik_all_rows3_raw[36], np.where(_i104 == 37, _ik_all_rows3_raw[37], np.where(_i104 == 38, _ik_all_rows3_raw[38], np.where(_i104 == 39, _ik_all_rows3_raw[39], np.where(_i104 == 40, _ik_all_rows3_raw[40], np.where(_i104 == 41, _ik_all_rows3_raw[41], np.where(_i104 == 42, _ik_all_rows3_raw[42], np.where(_i104 == 43, _ik_all_rows3_raw[43], np.where(_i104 == 44, _ik_all_rows3_raw[44], np.where(_i104 == 45, _ik_all_rows3_raw[45], np.where(_i104 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) > 3.141592653589793, 6.283185307179586, np.where(0.0 - np.where(_i105 == 0, _ik_all_rows3_raw[0], np.where(_i105 == 1, _ik_all_rows3_raw[1], np.where(_i105 == 2, _ik_all_rows3_raw[2], np.where(_i105 == 3, _ik_all_rows3_raw[3], np.where(_i105 == 4, _ik_all_rows3_raw[4], np.where(_i105 == 5, _ik_all_rows3_raw[5], np.where(_i105 == 6, _ik_all_rows3_raw[6], np.where(_i105 == 7, _ik_all_rows3_raw[7], np.where(_i105 == 8, _ik_all_rows3_raw[8], np.where(_i105 == 9, _ik_all_rows3_raw[9], np.where(_i105 == 10, _ik_all_rows3_raw[10], np.where(_i105 == 11, _ik_all_rows3_raw[11], np.where(_i105 == 12, _ik_all_rows3_raw[12], np.where(_i105 == 13, _ik_all_rows3_raw[13], np.where(_i105 == 14, _ik_all_rows3_raw[14], np.where(_i105 == 15, _ik_all_rows3_raw[15], np.where(_i105 == 16, _ik_all_rows3_raw[16], np.where(_i105 == 17, _ik_all_rows3_raw[17], np.where(_i105 == 18, _ik_all_rows3_raw[18], np.where(_i105 == 19, _ik_all_rows3_raw[19], np.where(_i105 == 20, _ik_all_rows3_raw[20], np.where(_i105 == 21, _ik_all_rows3_raw[21], np.where(_i105 == 22, _ik_all_rows3_raw[22], np.where(_i105 == 23, _ik_all_rows3_raw[23], np.where(_i105 == 24, _ik_all_rows3_raw[24], np.where(_i105 == 25, _ik_all_rows3_raw[25], np.where(_i105 == 26, _ik_all_rows3_raw[26], np.where(_i105 == 27, _ik_all_rows3_raw[27], np.where(_i105 == 28, _ik_all_rows3_raw[28], np.where(_i105 == 29, _ik_all_rows3_raw[29], np.where(_i105 == 30, _ik_all_rows3_raw[30], np.where(_i105 == 31, _ik_all_rows3_raw[31], np.where(_i105 == 32, _ik_all_rows3_raw[32], np.where(_i105 == 33, _ik_all_rows3_raw[33], np.where(_i105 == 34, _ik_all_rows3_raw[34], np.where(_i105 == 35, _ik_all_rows3_raw[35], np.where(_i105 == 36, _ik_all_rows3_raw[36], np.where(_i105 == 37, _ik_all_rows3_raw[37], np.where(_i105 == 38, _ik_all_rows3_raw[38], np.where(_i105 == 39, _ik_all_rows3_raw[39], np.where(_i105 == 40, _ik_all_rows3_raw[40], np.where(_i105 == 41, _ik_all_rows3_raw[41], np.where(_i105 == 42, _ik_all_rows3_raw[42], np.where(_i105 == 43, _ik_all_rows3_raw[43], np.where(_i105 == 44, _ik_all_rows3_raw[44], np.where(_i105 == 45, _ik_all_rows3_raw[45], np.where(_i105 == 46, _ik_all_rows3_raw[46], _ik_all_rows3_raw[47]))))))))))))))))))))))))))))))))))))))))))))))) < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[5])
+            _c106 = np.abs(0.0 - _ik_all_rows3_cand[5]) > 3.141592653589793
+            _m107 = _m77 & _c106
+            _ik_all_rows3_cand[5] = np.where(_m107, _ik_all_rows3_cand[5] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[5])*0.15915494309189535), _ik_all_rows3_cand[5])
+            _ik_all_rows3_inside = np.where(_m77, np.where((_ik_all_rows3_cand[5] < -6.283185307179586 - IK_LIMIT_TOL) | (_ik_all_rows3_cand[5] > 6.283185307179586 + IK_LIMIT_TOL), 0, _ik_all_rows3_inside), _ik_all_rows3_inside)
+            _ik_all_rows3_cand[5] = np.where(_m77, np.where(_ik_all_rows3_cand[5] < -6.283185307179586, -6.283185307179586, np.where(_ik_all_rows3_cand[5] > 6.283185307179586, 6.283185307179586, _ik_all_rows3_cand[5])), _ik_all_rows3_cand[5])
+            _c108 = _ik_all_rows3_inside > 0
+            _m109 = _m77 & _c108
+            if bool(_m109.any()):
+                # 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped
+                _ik_all_rows3_dup = np.where(_m109, -1, _ik_all_rows3_dup)
+                _r110 = _fi(0)
+                _run111 = _m109 & (_r110 < _ik_all_rows3_kept)
+                while bool(_run111.any()):
+                    # the same row when every joint is within IK_DUP_TOL: nested, so a row that differs in its first joint costs one test
+                    _i112 = 6*_r110
+                    _ik_all_rows3_diff = np.where(_run111, _ik_all_rows3_cand[0] - np.where(_i112 == 0, rows[0], np.where(_i112 == 1, rows[1], np.where(_i112 == 2, rows[2], np.where(_i112 == 3, rows[3], np.where(_i112 == 4, rows[4], np.where(_i112 == 5, rows[5], np.where(_i112 == 6, rows[6], np.where(_i112 == 7, rows[7], np.where(_i112 == 8, rows[8], np.where(_i112 == 9, rows[9], np.where(_i112 == 10, rows[10], np.where(_i112 == 11, rows[11], np.where(_i112 == 12, rows[12], np.where(_i112 == 13, rows[13], np.where(_i112 == 14, rows[14], np.where(_i112 == 15, rows[15], np.where(_i112 == 16, rows[16], np.where(_i112 == 17, rows[17], np.where(_i112 == 18, rows[18], np.where(_i112 == 19, rows[19], np.where(_i112 == 20, rows[20], np.where(_i112 == 21, rows[21], np.where(_i112 == 22, rows[22], np.where(_i112 == 23, rows[23], np.where(_i112 == 24, rows[24], np.where(_i112 == 25, rows[25], np.where(_i112 == 26, rows[26], np.where(_i112 == 27, rows[27], np.where(_i112 == 28, rows[28], np.where(_i112 == 29, rows[29], np.where(_i112 == 30, rows[30], np.where(_i112 == 31, rows[31], np.where(_i112 == 32, rows[32], np.where(_i112 == 33, rows[33], np.where(_i112 == 34, rows[34], np.where(_i112 == 35, rows[35], np.where(_i112 == 36, rows[36], np.where(_i112 == 37, rows[37], np.where(_i112 == 38, rows[38], np.where(_i112 == 39, rows[39], np.where(_i112 == 40, rows[40], np.where(_i112 == 41, rows[41], np.where(_i112 == 42, rows[42], np.where(_i112 == 43, rows[43], np.where(_i112 == 44, rows[44], np.where(_i112 == 45, rows[45], np.where(_i112 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c113 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m114 = _run111 & _c113
+                    _i115 = 6*_r110 + 1
+                    _ik_all_rows3_diff = np.where(_m114, _ik_all_rows3_cand[1] - np.where(_i115 == 0, rows[0], np.where(_i115 == 1, rows[1], np.where(_i115 == 2, rows[2], np.where(_i115 == 3, rows[3], np.where(_i115 == 4, rows[4], np.where(_i115 == 5, rows[5], np.where(_i115 == 6, rows[6], np.where(_i115 == 7, rows[7], np.where(_i115 == 8, rows[8], np.where(_i115 == 9, rows[9], np.where(_i115 == 10, rows[10], np.where(_i115 == 11, rows[11], np.where(_i115 == 12, rows[12], np.where(_i115 == 13, rows[13], np.where(_i115 == 14, rows[14], np.where(_i115 == 15, rows[15], np.where(_i115 == 16, rows[16], np.where(_i115 == 17, rows[17], np.where(_i115 == 18, rows[18], np.where(_i115 == 19, rows[19], np.where(_i115 == 20, rows[20], np.where(_i115 == 21, rows[21], np.where(_i115 == 22, rows[22], np.where(_i115 == 23, rows[23], np.where(_i115 == 24, rows[24], np.where(_i115 == 25, rows[25], np.where(_i115 == 26, rows[26], np.where(_i115 == 27, rows[27], np.where(_i115 == 28, rows[28], np.where(_i115 == 29, rows[29], np.where(_i115 == 30, rows[30], np.where(_i115 == 31, rows[31], np.where(_i115 == 32, rows[32], np.where(_i115 == 33, rows[33], np.where(_i115 == 34, rows[34], np.where(_i115 == 35, rows[35], np.where(_i115 == 36, rows[36], np.where(_i115 == 37, rows[37], np.where(_i115 == 38, rows[38], np.where(_i115 == 39, rows[39], np.where(_i115 == 40, rows[40], np.where(_i115 == 41, rows[41], np.where(_i115 == 42, rows[42], np.where(_i115 == 43, rows[43], np.where(_i115 == 44, rows[44], np.where(_i115 == 45, rows[45], np.where(_i115 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c116 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m117 = _m114 & _c116
+                    _i118 = 6*_r110 + 2
+                    _ik_all_rows3_diff = np.where(_m117, _ik_all_rows3_cand[2] - np.where(_i118 == 0, rows[0], np.where(_i118 == 1, rows[1], np.where(_i118 == 2, rows[2], np.where(_i118 == 3, rows[3], np.where(_i118 == 4, rows[4], np.where(_i118 == 5, rows[5], np.where(_i118 == 6, rows[6], np.where(_i118 == 7, rows[7], np.where(_i118 == 8, rows[8], np.where(_i118 == 9, rows[9], np.where(_i118 == 10, rows[10], np.where(_i118 == 11, rows[11], np.where(_i118 == 12, rows[12], np.where(_i118 == 13, rows[13], np.where(_i118 == 14, rows[14], np.where(_i118 == 15, rows[15], np.where(_i118 == 16, rows[16], np.where(_i118 == 17, rows[17], np.where(_i118 == 18, rows[18], np.where(_i118 == 19, rows[19], np.where(_i118 == 20, rows[20], np.where(_i118 == 21, rows[21], np.where(_i118 == 22, rows[22], np.where(_i118 == 23, rows[23], np.where(_i118 == 24, rows[24], np.where(_i118 == 25, rows[25], np.where(_i118 == 26, rows[26], np.where(_i118 == 27, rows[27], np.where(_i118 == 28, rows[28], np.where(_i118 == 29, rows[29], np.where(_i118 == 30, rows[30], np.where(_i118 == 31, rows[31], np.where(_i118 == 32, rows[32], np.where(_i118 == 33, rows[33], np.where(_i118 == 34, rows[34], np.where(_i118 == 35, rows[35], np.where(_i118 == 36, rows[36], np.where(_i118 == 37, rows[37], np.where(_i118 == 38, rows[38], np.where(_i118 == 39, rows[39], np.where(_i118 == 40, rows[40], np.where(_i118 == 41, rows[41], np.where(_i118 == 42, rows[42], np.where(_i118 == 43, rows[43], np.where(_i118 == 44, rows[44], np.where(_i118 == 45, rows[45], np.where(_i118 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c119 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m120 = _m117 & _c119
+                    _i121 = 6*_r110 + 3
+                    _ik_all_rows3_diff = np.where(_m120, _ik_all_rows3_cand[3] - np.where(_i121 == 0, rows[0], np.where(_i121 == 1, rows[1], np.where(_i121 == 2, rows[2], np.where(_i121 == 3, rows[3], np.where(_i121 == 4, rows[4], np.where(_i121 == 5, rows[5], np.where(_i121 == 6, rows[6], np.where(_i121 == 7, rows[7], np.where(_i121 == 8, rows[8], np.where(_i121 == 9, rows[9], np.where(_i121 == 10, rows[10], np.where(_i121 == 11, rows[11], np.where(_i121 == 12, rows[12], np.where(_i121 == 13, rows[13], np.where(_i121 == 14, rows[14], np.where(_i121 == 15, rows[15], np.where(_i121 == 16, rows[16], np.where(_i121 == 17, rows[17], np.where(_i121 == 18, rows[18], np.where(_i121 == 19, rows[19], np.where(_i121 == 20, rows[20], np.where(_i121 == 21, rows[21], np.where(_i121 == 22, rows[22], np.where(_i121 == 23, rows[23], np.where(_i121 == 24, rows[24], np.where(_i121 == 25, rows[25], np.where(_i121 == 26, rows[26], np.where(_i121 == 27, rows[27], np.where(_i121 == 28, rows[28], np.where(_i121 == 29, rows[29], np.where(_i121 == 30, rows[30], np.where(_i121 == 31, rows[31], np.where(_i121 == 32, rows[32], np.where(_i121 == 33, rows[33], np.where(_i121 == 34, rows[34], np.where(_i121 == 35, rows[35], np.where(_i121 == 36, rows[36], np.where(_i121 == 37, rows[37], np.where(_i121 == 38, rows[38], np.where(_i121 == 39, rows[39], np.where(_i121 == 40, rows[40], np.where(_i121 == 41, rows[41], np.where(_i121 == 42, rows[42], np.where(_i121 == 43, rows[43], np.where(_i121 == 44, rows[44], np.where(_i121 == 45, rows[45], np.where(_i121 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c122 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m123 = _m120 & _c122
+                    _i124 = 6*_r110 + 4
+                    _ik_all_rows3_diff = np.where(_m123, _ik_all_rows3_cand[4] - np.where(_i124 == 0, rows[0], np.where(_i124 == 1, rows[1], np.where(_i124 == 2, rows[2], np.where(_i124 == 3, rows[3], np.where(_i124 == 4, rows[4], np.where(_i124 == 5, rows[5], np.where(_i124 == 6, rows[6], np.where(_i124 == 7, rows[7], np.where(_i124 == 8, rows[8], np.where(_i124 == 9, rows[9], np.where(_i124 == 10, rows[10], np.where(_i124 == 11, rows[11], np.where(_i124 == 12, rows[12], np.where(_i124 == 13, rows[13], np.where(_i124 == 14, rows[14], np.where(_i124 == 15, rows[15], np.where(_i124 == 16, rows[16], np.where(_i124 == 17, rows[17], np.where(_i124 == 18, rows[18], np.where(_i124 == 19, rows[19], np.where(_i124 == 20, rows[20], np.where(_i124 == 21, rows[21], np.where(_i124 == 22, rows[22], np.where(_i124 == 23, rows[23], np.where(_i124 == 24, rows[24], np.where(_i124 == 25, rows[25], np.where(_i124 == 26, rows[26], np.where(_i124 == 27, rows[27], np.where(_i124 == 28, rows[28], np.where(_i124 == 29, rows[29], np.where(_i124 == 30, rows[30], np.where(_i124 == 31, rows[31], np.where(_i124 == 32, rows[32], np.where(_i124 == 33, rows[33], np.where(_i124 == 34, rows[34], np.where(_i124 == 35, rows[35], np.where(_i124 == 36, rows[36], np.where(_i124 == 37, rows[37], np.where(_i124 == 38, rows[38], np.where(_i124 == 39, rows[39], np.where(_i124 == 40, rows[40], np.where(_i124 == 41, rows[41], np.where(_i124 == 42, rows[42], np.where(_i124 == 43, rows[43], np.where(_i124 == 44, rows[44], np.where(_i124 == 45, rows[45], np.where(_i124 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c125 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m126 = _m123 & _c125
+                    _i127 = 6*_r110 + 5
+                    _ik_all_rows3_diff = np.where(_m126, _ik_all_rows3_cand[5] - np.where(_i127 == 0, rows[0], np.where(_i127 == 1, rows[1], np.where(_i127 == 2, rows[2], np.where(_i127 == 3, rows[3], np.where(_i127 == 4, rows[4], np.where(_i127 == 5, rows[5], np.where(_i127 == 6, rows[6], np.where(_i127 == 7, rows[7], np.where(_i127 == 8, rows[8], np.where(_i127 == 9, rows[9], np.where(_i127 == 10, rows[10], np.where(_i127 == 11, rows[11], np.where(_i127 == 12, rows[12], np.where(_i127 == 13, rows[13], np.where(_i127 == 14, rows[14], np.where(_i127 == 15, rows[15], np.where(_i127 == 16, rows[16], np.where(_i127 == 17, rows[17], np.where(_i127 == 18, rows[18], np.where(_i127 == 19, rows[19], np.where(_i127 == 20, rows[20], np.where(_i127 == 21, rows[21], np.where(_i127 == 22, rows[22], np.where(_i127 == 23, rows[23], np.where(_i127 == 24, rows[24], np.where(_i127 == 25, rows[25], np.where(_i127 == 26, rows[26], np.where(_i127 == 27, rows[27], np.where(_i127 == 28, rows[28], np.where(_i127 == 29, rows[29], np.where(_i127 == 30, rows[30], np.where(_i127 == 31, rows[31], np.where(_i127 == 32, rows[32], np.where(_i127 == 33, rows[33], np.where(_i127 == 34, rows[34], np.where(_i127 == 35, rows[35], np.where(_i127 == 36, rows[36], np.where(_i127 == 37, rows[37], np.where(_i127 == 38, rows[38], np.where(_i127 == 39, rows[39], np.where(_i127 == 40, rows[40], np.where(_i127 == 41, rows[41], np.where(_i127 == 42, rows[42], np.where(_i127 == 43, rows[43], np.where(_i127 == 44, rows[44], np.where(_i127 == 45, rows[45], np.where(_i127 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), _ik_all_rows3_diff)
+                    _c128 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _m129 = _m126 & _c128
+                    _ik_all_rows3_dup = np.where(_m129, _r110, _ik_all_rows3_dup)
+                    _run111 = _run111 & (~_m129)
+                    _m130 = _m126 & _run111
+                    _m131 = _m123 & _run111
+                    _m132 = _m120 & _run111
+                    _m133 = _m117 & _run111
+                    _m134 = _m114 & _run111
+                    _r110 = np.where(_run111, _r110 + 1, _r110)
+                    _run111 = _run111 & (_r110 < _ik_all_rows3_kept)
+                _c135 = _ik_all_rows3_dup >= 0
+                _m136 = _m109 & _c135
+                _m137 = _m109 & (~_c135)
+                # the kept row takes the duplicate's singular bit
+                _c138 = (_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) < IK_FLAG_SINGULAR)
+                _m139 = _m136 & _c138
+                _v140 = np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) + IK_FLAG_SINGULAR
+                _m141 = _m139 & (_ik_all_rows3_dup == 0)
+                flags[0] = np.where(_m141, _v140, flags[0])
+                _m142 = _m139 & (_ik_all_rows3_dup == 1)
+                flags[1] = np.where(_m142, _v140, flags[1])
+                _m143 = _m139 & (_ik_all_rows3_dup == 2)
+                flags[2] = np.where(_m143, _v140, flags[2])
+                _m144 = _m139 & (_ik_all_rows3_dup == 3)
+                flags[3] = np.where(_m144, _v140, flags[3])
+                _m145 = _m139 & (_ik_all_rows3_dup == 4)
+                flags[4] = np.where(_m145, _v140, flags[4])
+                _m146 = _m139 & (_ik_all_rows3_dup == 5)
+                flags[5] = np.where(_m146, _v140, flags[5])
+                _m147 = _m139 & (_ik_all_rows3_dup == 6)
+                flags[6] = np.where(_m147, _v140, flags[6])
+                _m148 = _m139 & (_ik_all_rows3_dup == 7)
+                flags[7] = np.where(_m148, _v140, flags[7])
+                if bool(_m137.any()):
+                    # 6. kept, in branch order
+                    _i149 = 6*_ik_all_rows3_kept
+                    _v150 = _ik_all_rows3_cand[0]
+                    _m151 = _m137 & (_i149 == 0)
+                    rows[0] = np.where(_m151, _v150, rows[0])
+                    _m152 = _m137 & (_i149 == 1)
+                    rows[1] = np.where(_m152, _v150, rows[1])
+                    _m153 = _m137 & (_i149 == 2)
+                    rows[2] = np.where(_m153, _v150, rows[2])
+                    _m154 = _m137 & (_i149 == 3)
+                    rows[3] = np.where(_m154, _v150, rows[3])
+                    _m155 = _m137 & (_i149 == 4)
+                    rows[4] = np.where(_m155, _v150, rows[4])
+                    _m156 = _m137 & (_i149 == 5)
+                    rows[5] = np.where(_m156, _v150, rows[5])
+                    _m157 = _m137 & (_i149 == 6)
+                    rows[6] = np.where(_m157, _v150, rows[6])
+                    _m158 = _m137 & (_i149 == 7)
+                    rows[7] = np.where(_m158, _v150, rows[7])
+                    _m159 = _m137 & (_i149 == 8)
+                    rows[8] = np.where(_m159, _v150, rows[8])
+                    _m160 = _m137 & (_i149 == 9)
+                    rows[9] = np.where(_m160, _v150, rows[9])
+                    _m161 = _m137 & (_i149 == 10)
+                    rows[10] = np.where(_m161, _v150, rows[10])
+                    _m162 = _m137 & (_i149 == 11)
+                    rows[11] = np.where(_m162, _v150, rows[11])
+                    _m163 = _m137 & (_i149 == 12)
+                    rows[12] = np.where(_m163, _v150, rows[12])
+                    _m164 = _m137 & (_i149 == 13)
+                    rows[13] = np.where(_m164, _v150, rows[13])
+                    _m165 = _m137 & (_i149 == 14)
+                    rows[14] = np.where(_m165, _v150, rows[14])
+                    _m166 = _m137 & (_i149 == 15)
+                    rows[15] = np.where(_m166, _v150, rows[15])
+                    _m167 = _m137 & (_i149 == 16)
+                    rows[16] = np.where(_m167, _v150, rows[16])
+                    _m168 = _m137 & (_i149 == 17)
+                    rows[17] = np.where(_m168, _v150, rows[17])
+                    _m169 = _m137 & (_i149 == 18)
+                    rows[18] = np.where(_m169, _v150, rows[18])
+                    _m170 = _m137 & (_i149 == 19)
+                    rows[19] = np.where(_m170, _v150, rows[19])
+                    _m171 = _m137 & (_i149 == 20)
+                    rows[20] = np.where(_m171, _v150, rows[20])
+                    _m172 = _m137 & (_i149 == 21)
+                    rows[21] = np.where(_m172, _v150, rows[21])
+                    _m173 = _m137 & (_i149 == 22)
+                    rows[22] = np.where(_m173, _v150, rows[22])
+                    _m174 = _m137 & (_i149 == 23)
+                    rows[23] = np.where(_m174, _v150, rows[23])
+                    _m175 = _m137 & (_i149 == 24)
+                    rows[24] = np.where(_m175, _v150, rows[24])
+                    _m176 = _m137 & (_i149 == 25)
+                    rows[25] = np.where(_m176, _v150, rows[25])
+                    _m177 = _m137 & (_i149 == 26)
+                    rows[26] = np.where(_m177, _v150, rows[26])
+                    _m178 = _m137 & (_i149 == 27)
+                    rows[27] = np.where(_m178, _v150, rows[27])
+                    _m179 = _m137 & (_i149 == 28)
+                    rows[28] = np.where(_m179, _v150, rows[28])
+                    _m180 = _m137 & (_i149 == 29)
+                    rows[29] = np.where(_m180, _v150, rows[29])
+                    _m181 = _m137 & (_i149 == 30)
+                    rows[30] = np.where(_m181, _v150, rows[30])
+                    _m182 = _m137 & (_i149 == 31)
+                    rows[31] = np.where(_m182, _v150, rows[31])
+                    _m183 = _m137 & (_i149 == 32)
+                    rows[32] = np.where(_m183, _v150, rows[32])
+                    _m184 = _m137 & (_i149 == 33)
+                    rows[33] = np.where(_m184, _v150, rows[33])
+                    _m185 = _m137 & (_i149 == 34)
+                    rows[34] = np.where(_m185, _v150, rows[34])
+                    _m186 = _m137 & (_i149 == 35)
+                    rows[35] = np.where(_m186, _v150, rows[35])
+                    _m187 = _m137 & (_i149 == 36)
+                    rows[36] = np.where(_m187, _v150, rows[36])
+                    _m188 = _m137 & (_i149 == 37)
+                    rows[37] = np.where(_m188, _v150, rows[37])
+                    _m189 = _m137 & (_i149 == 38)
+                    rows[38] = np.where(_m189, _v150, rows[38])
+                    _m190 = _m137 & (_i149 == 39)
+                    rows[39] = np.where(_m190, _v150, rows[39])
+                    _m191 = _m137 & (_i149 == 40)
+                    rows[40] = np.where(_m191, _v150, rows[40])
+                    _m192 = _m137 & (_i149 == 41)
+                    rows[41] = np.where(_m192, _v150, rows[41])
+                    _m193 = _m137 & (_i149 == 42)
+                    rows[42] = np.where(_m193, _v150, rows[42])
+                    _m194 = _m137 & (_i149 == 43)
+                    rows[43] = np.where(_m194, _v150, rows[43])
+                    _m195 = _m137 & (_i149 == 44)
+                    rows[44] = np.where(_m195, _v150, rows[44])
+                    _m196 = _m137 & (_i149 == 45)
+                    rows[45] = np.where(_m196, _v150, rows[45])
+                    _m197 = _m137 & (_i149 == 46)
+                    rows[46] = np.where(_m197, _v150, rows[46])
+                    _m198 = _m137 & (_i149 == 47)
+                    rows[47] = np.where(_m198, _v150, rows[47])
+                    _i199 = 6*_ik_all_rows3_kept + 1
+                    _v200 = _ik_all_rows3_cand[1]
+                    _m201 = _m137 & (_i199 == 0)
+                    rows[0] = np.where(_m201, _v200, rows[0])
+                    _m202 = _m137 & (_i199 == 1)
+                    rows[1] = np.where(_m202, _v200, rows[1])
+                    _m203 = _m137 & (_i199 == 2)
+                    rows[2] = np.where(_m203, _v200, rows[2])
+                    _m204 = _m137 & (_i199 == 3)
+                    rows[3] = np.where(_m204, _v200, rows[3])
+                    _m205 = _m137 & (_i199 == 4)
+                    rows[4] = np.where(_m205, _v200, rows[4])
+                    _m206 = _m137 & (_i199 == 5)
+                    rows[5] = np.where(_m206, _v200, rows[5])
+                    _m207 = _m137 & (_i199 == 6)
+                    rows[6] = np.where(_m207, _v200, rows[6])
+                    _m208 = _m137 & (_i199 == 7)
+                    rows[7] = np.where(_m208, _v200, rows[7])
+                    _m209 = _m137 & (_i199 == 8)
+                    rows[8] = np.where(_m209, _v200, rows[8])
+                    _m210 = _m137 & (_i199 == 9)
+                    rows[9] = np.where(_m210, _v200, rows[9])
+                    _m211 = _m137 & (_i199 == 10)
+                    rows[10] = np.where(_m211, _v200, rows[10])
+                    _m212 = _m137 & (_i199 == 11)
+                    rows[11] = np.where(_m212, _v200, rows[11])
+                    _m213 = _m137 & (_i199 == 12)
+                    rows[12] = np.where(_m213, _v200, rows[12])
+                    _m214 = _m137 & (_i199 == 13)
+                    rows[13] = np.where(_m214, _v200, rows[13])
+                    _m215 = _m137 & (_i199 == 14)
+                    rows[14] = np.where(_m215, _v200, rows[14])
+                    _m216 = _m137 & (_i199 == 15)
+                    rows[15] = np.where(_m216, _v200, rows[15])
+                    _m217 = _m137 & (_i199 == 16)
+                    rows[16] = np.where(_m217, _v200, rows[16])
+                    _m218 = _m137 & (_i199 == 17)
+                    rows[17] = np.where(_m218, _v200, rows[17])
+                    _m219 = _m137 & (_i199 == 18)
+                    rows[18] = np.where(_m219, _v200, rows[18])
+                    _m220 = _m137 & (_i199 == 19)
+                    rows[19] = np.where(_m220, _v200, rows[19])
+                    _m221 = _m137 & (_i199 == 20)
+                    rows[20] = np.where(_m221, _v200, rows[20])
+                    _m222 = _m137 & (_i199 == 21)
+                    rows[21] = np.where(_m222, _v200, rows[21])
+                    _m223 = _m137 & (_i199 == 22)
+                    rows[22] = np.where(_m223, _v200, rows[22])
+                    _m224 = _m137 & (_i199 == 23)
+                    rows[23] = np.where(_m224, _v200, rows[23])
+                    _m225 = _m137 & (_i199 == 24)
+                    rows[24] = np.where(_m225, _v200, rows[24])
+                    _m226 = _m137 & (_i199 == 25)
+                    rows[25] = np.where(_m226, _v200, rows[25])
+                    _m227 = _m137 & (_i199 == 26)
+                    rows[26] = np.where(_m227, _v200, rows[26])
+                    _m228 = _m137 & (_i199 == 27)
+                    rows[27] = np.where(_m228, _v200, rows[27])
+                    _m229 = _m137 & (_i199 == 28)
+                    rows[28] = np.where(_m229, _v200, rows[28])
+                    _m230 = _m137 & (_i199 == 29)
+                    rows[29] = np.where(_m230, _v200, rows[29])
+                    _m231 = _m137 & (_i199 == 30)
+                    rows[30] = np.where(_m231, _v200, rows[30])
+                    _m232 = _m137 & (_i199 == 31)
+                    rows[31] = np.where(_m232, _v200, rows[31])
+                    _m233 = _m137 & (_i199 == 32)
+                    rows[32] = np.where(_m233, _v200, rows[32])
+                    _m234 = _m137 & (_i199 == 33)
+                    rows[33] = np.where(_m234, _v200, rows[33])
+                    _m235 = _m137 & (_i199 == 34)
+                    rows[34] = np.where(_m235, _v200, rows[34])
+                    _m236 = _m137 & (_i199 == 35)
+                    rows[35] = np.where(_m236, _v200, rows[35])
+                    _m237 = _m137 & (_i199 == 36)
+                    rows[36] = np.where(_m237, _v200, rows[36])
+                    _m238 = _m137 & (_i199 == 37)
+                    rows[37] = np.where(_m238, _v200, rows[37])
+                    _m239 = _m137 & (_i199 == 38)
+                    rows[38] = np.where(_m239, _v200, rows[38])
+                    _m240 = _m137 & (_i199 == 39)
+                    rows[39] = np.where(_m240, _v200, rows[39])
+                    _m241 = _m137 & (_i199 == 40)
+                    rows[40] = np.where(_m241, _v200, rows[40])
+                    _m242 = _m137 & (_i199 == 41)
+                    rows[41] = np.where(_m242, _v200, rows[41])
+                    _m243 = _m137 & (_i199 == 42)
+                    rows[42] = np.where(_m243, _v200, rows[42])
+                    _m244 = _m137 & (_i199 == 43)
+                    rows[43] = np.where(_m244, _v200, rows[43])
+                    _m245 = _m137 & (_i199 == 44)
+                    rows[44] = np.where(_m245, _v200, rows[44])
+                    _m246 = _m137 & (_i199 == 45)
+                    rows[45] = np.where(_m246, _v200, rows[45])
+                    _m247 = _m137 & (_i199 == 46)
+                    rows[46] = np.where(_m247, _v200, rows[46])
+                    _m248 = _m137 & (_i199 == 47)
+                    rows[47] = np.where(_m248, _v200, rows[47])
+                    _i249 = 6*_ik_all_rows3_kept + 2
+                    _v250 = _ik_all_rows3_cand[2]
+                    _m251 = _m137 & (_i249 == 0)
+                    rows[0] = np.where(_m251, _v250, rows[0])
+                    _m252 = _m137 & (_i249 == 1)
+                    rows[1] = np.where(_m252, _v250, rows[1])
+                    _m253 = _m137 & (_i249 == 2)
+                    rows[2] = np.where(_m253, _v250, rows[2])
+                    _m254 = _m137 & (_i249 == 3)
+                    rows[3] = np.where(_m254, _v250, rows[3])
+                    _m255 = _m137 & (_i249 == 4)
+                    rows[4] = np.where(_m255, _v250, rows[4])
+                    _m256 = _m137 & (_i249 == 5)
+                    rows[5] = np.where(_m256, _v250, rows[5])
+                    _m257 = _m137 & (_i249 == 6)
+                    rows[6] = np.where(_m257, _v250, rows[6])
+                    _m258 = _m137 & (_i249 == 7)
+                    rows[7] = np.where(_m258, _v250, rows[7])
+                    _m259 = _m137 & (_i249 == 8)
+                    rows[8] = np.where(_m259, _v250, rows[8])
+                    _m260 = _m137 & (_i249 == 9)
+                    rows[9] = np.where(_m260, _v250, rows[9])
+                    _m261 = _m137 & (_i249 == 10)
+                    rows[10] = np.where(_m261, _v250, rows[10])
+                    _m262 = _m137 & (_i249 == 11)
+                    rows[11] = np.where(_m262, _v250, rows[11])
+                    _m263 = _m137 & (_i249 == 12)
+                    rows[12] = np.where(_m263, _v250, rows[12])
+                    _m264 = _m137 & (_i249 == 13)
+                    rows[13] = np.where(_m264, _v250, rows[13])
+                    _m265 = _m137 & (_i249 == 14)
+                    rows[14] = np.where(_m265, _v250, rows[14])
+                    _m266 = _m137 & (_i249 == 15)
+                    rows[15] = np.where(_m266, _v250, rows[15])
+                    _m267 = _m137 & (_i249 == 16)
+                    rows[16] = np.where(_m267, _v250, rows[16])
+                    _m268 = _m137 & (_i249 == 17)
+                    rows[17] = np.where(_m268, _v250, rows[17])
+                    _m269 = _m137 & (_i249 == 18)
+                    rows[18] = np.where(_m269, _v250, rows[18])
+                    _m270 = _m137 & (_i249 == 19)
+                    rows[19] = np.where(_m270, _v250, rows[19])
+                    _m271 = _m137 & (_i249 == 20)
+                    rows[20] = np.where(_m271, _v250, rows[20])
+                    _m272 = _m137 & (_i249 == 21)
+                    rows[21] = np.where(_m272, _v250, rows[21])
+                    _m273 = _m137 & (_i249 == 22)
+                    rows[22] = np.where(_m273, _v250, rows[22])
+                    _m274 = _m137 & (_i249 == 23)
+                    rows[23] = np.where(_m274, _v250, rows[23])
+                    _m275 = _m137 & (_i249 == 24)
+                    rows[24] = np.where(_m275, _v250, rows[24])
+                    _m276 = _m137 & (_i249 == 25)
+                    rows[25] = np.where(_m276, _v250, rows[25])
+                    _m277 = _m137 & (_i249 == 26)
+                    rows[26] = np.where(_m277, _v250, rows[26])
+                    _m278 = _m137 & (_i249 == 27)
+                    rows[27] = np.where(_m278, _v250, rows[27])
+                    _m279 = _m137 & (_i249 == 28)
+                    rows[28] = np.where(_m279, _v250, rows[28])
+                    _m280 = _m137 & (_i249 == 29)
+                    rows[29] = np.where(_m280, _v250, rows[29])
+                    _m281 = _m137 & (_i249 == 30)
+                    rows[30] = np.where(_m281, _v250, rows[30])
+                    _m282 = _m137 & (_i249 == 31)
+                    rows[31] = np.where(_m282, _v250, rows[31])
+                    _m283 = _m137 & (_i249 == 32)
+                    rows[32] = np.where(_m283, _v250, rows[32])
+                    _m284 = _m137 & (_i249 == 33)
+                    rows[33] = np.where(_m284, _v250, rows[33])
+                    _m285 = _m137 & (_i249 == 34)
+                    rows[34] = np.where(_m285, _v250, rows[34])
+                    _m286 = _m137 & (_i249 == 35)
+                    rows[35] = np.where(_m286, _v250, rows[35])
+                    _m287 = _m137 & (_i249 == 36)
+                    rows[36] = np.where(_m287, _v250, rows[36])
+                    _m288 = _m137 & (_i249 == 37)
+                    rows[37] = np.where(_m288, _v250, rows[37])
+                    _m289 = _m137 & (_i249 == 38)
+                    rows[38] = np.where(_m289, _v250, rows[38])
+                    _m290 = _m137 & (_i249 == 39)
+                    rows[39] = np.where(_m290, _v250, rows[39])
+                    _m291 = _m137 & (_i249 == 40)
+                    rows[40] = np.where(_m291, _v250, rows[40])
+                    _m292 = _m137 & (_i249 == 41)
+                    rows[41] = np.where(_m292, _v250, rows[41])
+                    _m293 = _m137 & (_i249 == 42)
+                    rows[42] = np.where(_m293, _v250, rows[42])
+                    _m294 = _m137 & (_i249 == 43)
+                    rows[43] = np.where(_m294, _v250, rows[43])
+                    _m295 = _m137 & (_i249 == 44)
+                    rows[44] = np.where(_m295, _v250, rows[44])
+                    _m296 = _m137 & (_i249 == 45)
+                    rows[45] = np.where(_m296, _v250, rows[45])
+                    _m297 = _m137 & (_i249 == 46)
+                    rows[46] = np.where(_m297, _v250, rows[46])
+                    _m298 = _m137 & (_i249 == 47)
+                    rows[47] = np.where(_m298, _v250, rows[47])
+                    _i299 = 6*_ik_all_rows3_kept + 3
+                    _v300 = _ik_all_rows3_cand[3]
+                    _m301 = _m137 & (_i299 == 0)
+                    rows[0] = np.where(_m301, _v300, rows[0])
+                    _m302 = _m137 & (_i299 == 1)
+                    rows[1] = np.where(_m302, _v300, rows[1])
+                    _m303 = _m137 & (_i299 == 2)
+                    rows[2] = np.where(_m303, _v300, rows[2])
+                    _m304 = _m137 & (_i299 == 3)
+                    rows[3] = np.where(_m304, _v300, rows[3])
+                    _m305 = _m137 & (_i299 == 4)
+                    rows[4] = np.where(_m305, _v300, rows[4])
+                    _m306 = _m137 & (_i299 == 5)
+                    rows[5] = np.where(_m306, _v300, rows[5])
+                    _m307 = _m137 & (_i299 == 6)
+                    rows[6] = np.where(_m307, _v300, rows[6])
+                    _m308 = _m137 & (_i299 == 7)
+                    rows[7] = np.where(_m308, _v300, rows[7])
+                    _m309 = _m137 & (_i299 == 8)
+                    rows[8] = np.where(_m309, _v300, rows[8])
+                    _m310 = _m137 & (_i299 == 9)
+                    rows[9] = np.where(_m310, _v300, rows[9])
+                    _m311 = _m137 & (_i299 == 10)
+                    rows[10] = np.where(_m311, _v300, rows[10])
+                    _m312 = _m137 & (_i299 == 11)
+                    rows[11] = np.where(_m312, _v300, rows[11])
+                    _m313 = _m137 & (_i299 == 12)
+                    rows[12] = np.where(_m313, _v300, rows[12])
+                    _m314 = _m137 & (_i299 == 13)
+                    rows[13] = np.where(_m314, _v300, rows[13])
+                    _m315 = _m137 & (_i299 == 14)
+                    rows[14] = np.where(_m315, _v300, rows[14])
+                    _m316 = _m137 & (_i299 == 15)
+                    rows[15] = np.where(_m316, _v300, rows[15])
+                    _m317 = _m137 & (_i299 == 16)
+                    rows[16] = np.where(_m317, _v300, rows[16])
+                    _m318 = _m137 & (_i299 == 17)
+                    rows[17] = np.where(_m318, _v300, rows[17])
+                    _m319 = _m137 & (_i299 == 18)
+                    rows[18] = np.where(_m319, _v300, rows[18])
+                    _m320 = _m137 & (_i299 == 19)
+                    rows[19] = np.where(_m320, _v300, rows[19])
+                    _m321 = _m137 & (_i299 == 20)
+                    rows[20] = np.where(_m321, _v300, rows[20])
+                    _m322 = _m137 & (_i299 == 21)
+                    rows[21] = np.where(_m322, _v300, rows[21])
+                    _m323 = _m137 & (_i299 == 22)
+                    rows[22] = np.where(_m323, _v300, rows[22])
+                    _m324 = _m137 & (_i299 == 23)
+                    rows[23] = np.where(_m324, _v300, rows[23])
+                    _m325 = _m137 & (_i299 == 24)
+                    rows[24] = np.where(_m325, _v300, rows[24])
+                    _m326 = _m137 & (_i299 == 25)
+                    rows[25] = np.where(_m326, _v300, rows[25])
+                    _m327 = _m137 & (_i299 == 26)
+                    rows[26] = np.where(_m327, _v300, rows[26])
+                    _m328 = _m137 & (_i299 == 27)
+                    rows[27] = np.where(_m328, _v300, rows[27])
+                    _m329 = _m137 & (_i299 == 28)
+                    rows[28] = np.where(_m329, _v300, rows[28])
+                    _m330 = _m137 & (_i299 == 29)
+                    rows[29] = np.where(_m330, _v300, rows[29])
+                    _m331 = _m137 & (_i299 == 30)
+                    rows[30] = np.where(_m331, _v300, rows[30])
+                    _m332 = _m137 & (_i299 == 31)
+                    rows[31] = np.where(_m332, _v300, rows[31])
+                    _m333 = _m137 & (_i299 == 32)
+                    rows[32] = np.where(_m333, _v300, rows[32])
+                    _m334 = _m137 & (_i299 == 33)
+                    rows[33] = np.where(_m334, _v300, rows[33])
+                    _m335 = _m137 & (_i299 == 34)
+                    rows[34] = np.where(_m335, _v300, rows[34])
+                    _m336 = _m137 & (_i299 == 35)
+                    rows[35] = np.where(_m336, _v300, rows[35])
+                    _m337 = _m137 & (_i299 == 36)
+                    rows[36] = np.where(_m337, _v300, rows[36])
+                    _m338 = _m137 & (_i299 == 37)
+                    rows[37] = np.where(_m338, _v300, rows[37])
+                    _m339 = _m137 & (_i299 == 38)
+                    rows[38] = np.where(_m339, _v300, rows[38])
+                    _m340 = _m137 & (_i299 == 39)
+                    rows[39] = np.where(_m340, _v300, rows[39])
+                    _m341 = _m137 & (_i299 == 40)
+                    rows[40] = np.where(_m341, _v300, rows[40])
+                    _m342 = _m137 & (_i299 == 41)
+                    rows[41] = np.where(_m342, _v300, rows[41])
+                    _m343 = _m137 & (_i299 == 42)
+                    rows[42] = np.where(_m343, _v300, rows[42])
+                    _m344 = _m137 & (_i299 == 43)
+                    rows[43] = np.where(_m344, _v300, rows[43])
+                    _m345 = _m137 & (_i299 == 44)
+                    rows[44] = np.where(_m345, _v300, rows[44])
+                    _m346 = _m137 & (_i299 == 45)
+                    rows[45] = np.where(_m346, _v300, rows[45])
+                    _m347 = _m137 & (_i299 == 46)
+                    rows[46] = np.where(_m347, _v300, rows[46])
+                    _m348 = _m137 & (_i299 == 47)
+                    rows[47] = np.where(_m348, _v300, rows[47])
+                    _i349 = 6*_ik_all_rows3_kept + 4
+                    _v350 = _ik_all_rows3_cand[4]
+                    _m351 = _m137 & (_i349 == 0)
+                    rows[0] = np.where(_m351, _v350, rows[0])
+                    _m352 = _m137 & (_i349 == 1)
+                    rows[1] = np.where(_m352, _v350, rows[1])
+                    _m353 = _m137 & (_i349 == 2)
+                    rows[2] = np.where(_m353, _v350, rows[2])
+                    _m354 = _m137 & (_i349 == 3)
+                    rows[3] = np.where(_m354, _v350, rows[3])
+                    _m355 = _m137 & (_i349 == 4)
+                    rows[4] = np.where(_m355, _v350, rows[4])
+                    _m356 = _m137 & (_i349 == 5)
+                    rows[5] = np.where(_m356, _v350, rows[5])
+                    _m357 = _m137 & (_i349 == 6)
+                    rows[6] = np.where(_m357, _v350, rows[6])
+                    _m358 = _m137 & (_i349 == 7)
+                    rows[7] = np.where(_m358, _v350, rows[7])
+                    _m359 = _m137 & (_i349 == 8)
+                    rows[8] = np.where(_m359, _v350, rows[8])
+                    _m360 = _m137 & (_i349 == 9)
+                    rows[9] = np.where(_m360, _v350, rows[9])
+                    _m361 = _m137 & (_i349 == 10)
+                    rows[10] = np.where(_m361, _v350, rows[10])
+                    _m362 = _m137 & (_i349 == 11)
+                    rows[11] = np.where(_m362, _v350, rows[11])
+                    _m363 = _m137 & (_i349 == 12)
+                    rows[12] = np.where(_m363, _v350, rows[12])
+                    _m364 = _m137 & (_i349 == 13)
+                    rows[13] = np.where(_m364, _v350, rows[13])
+                    _m365 = _m137 & (_i349 == 14)
+                    rows[14] = np.where(_m365, _v350, rows[14])
+                    _m366 = _m137 & (_i349 == 15)
+                    rows[15] = np.where(_m366, _v350, rows[15])
+                    _m367 = _m137 & (_i349 == 16)
+                    rows[16] = np.where(_m367, _v350, rows[16])
+                    _m368 = _m137 & (_i349 == 17)
+                    rows[17] = np.where(_m368, _v350, rows[17])
+                    _m369 = _m137 & (_i349 == 18)
+                    rows[18] = np.where(_m369, _v350, rows[18])
+                    _m370 = _m137 & (_i349 == 19)
+                    rows[19] = np.where(_m370, _v350, rows[19])
+                    _m371 = _m137 & (_i349 == 20)
+                    rows[20] = np.where(_m371, _v350, rows[20])
+                    _m372 = _m137 & (_i349 == 21)
+                    rows[21] = np.where(_m372, _v350, rows[21])
+                    _m373 = _m137 & (_i349 == 22)
+                    rows[22] = np.where(_m373, _v350, rows[22])
+                    _m374 = _m137 & (_i349 == 23)
+                    rows[23] = np.where(_m374, _v350, rows[23])
+                    _m375 = _m137 & (_i349 == 24)
+                    rows[24] = np.where(_m375, _v350, rows[24])
+                    _m376 = _m137 & (_i349 == 25)
+                    rows[25] = np.where(_m376, _v350, rows[25])
+                    _m377 = _m137 & (_i349 == 26)
+                    rows[26] = np.where(_m377, _v350, rows[26])
+                    _m378 = _m137 & (_i349 == 27)
+                    rows[27] = np.where(_m378, _v350, rows[27])
+                    _m379 = _m137 & (_i349 == 28)
+                    rows[28] = np.where(_m379, _v350, rows[28])
+                    _m380 = _m137 & (_i349 == 29)
+                    rows[29] = np.where(_m380, _v350, rows[29])
+                    _m381 = _m137 & (_i349 == 30)
+                    rows[30] = np.where(_m381, _v350, rows[30])
+                    _m382 = _m137 & (_i349 == 31)
+                    rows[31] = np.where(_m382, _v350, rows[31])
+                    _m383 = _m137 & (_i349 == 32)
+                    rows[32] = np.where(_m383, _v350, rows[32])
+                    _m384 = _m137 & (_i349 == 33)
+                    rows[33] = np.where(_m384, _v350, rows[33])
+                    _m385 = _m137 & (_i349 == 34)
+                    rows[34] = np.where(_m385, _v350, rows[34])
+                    _m386 = _m137 & (_i349 == 35)
+                    rows[35] = np.where(_m386, _v350, rows[35])
+                    _m387 = _m137 & (_i349 == 36)
+                    rows[36] = np.where(_m387, _v350, rows[36])
+                    _m388 = _m137 & (_i349 == 37)
+                    rows[37] = np.where(_m388, _v350, rows[37])
+                    _m389 = _m137 & (_i349 == 38)
+                    rows[38] = np.where(_m389, _v350, rows[38])
+                    _m390 = _m137 & (_i349 == 39)
+                    rows[39] = np.where(_m390, _v350, rows[39])
+                    _m391 = _m137 & (_i349 == 40)
+                    rows[40] = np.where(_m391, _v350, rows[40])
+                    _m392 = _m137 & (_i349 == 41)
+                    rows[41] = np.where(_m392, _v350, rows[41])
+                    _m393 = _m137 & (_i349 == 42)
+                    rows[42] = np.where(_m393, _v350, rows[42])
+                    _m394 = _m137 & (_i349 == 43)
+                    rows[43] = np.where(_m394, _v350, rows[43])
+                    _m395 = _m137 & (_i349 == 44)
+                    rows[44] = np.where(_m395, _v350, rows[44])
+                    _m396 = _m137 & (_i349 == 45)
+                    rows[45] = np.where(_m396, _v350, rows[45])
+                    _m397 = _m137 & (_i349 == 46)
+                    rows[46] = np.where(_m397, _v350, rows[46])
+                    _m398 = _m137 & (_i349 == 47)
+                    rows[47] = np.where(_m398, _v350, rows[47])
+                    _i399 = 6*_ik_all_rows3_kept + 5
+                    _v400 = _ik_all_rows3_cand[5]
+                    _m401 = _m137 & (_i399 == 0)
+                    rows[0] = np.where(_m401, _v400, rows[0])
+                    _m402 = _m137 & (_i399 == 1)
+                    rows[1] = np.where(_m402, _v400, rows[1])
+                    _m403 = _m137 & (_i399 == 2)
+                    rows[2] = np.where(_m403, _v400, rows[2])
+                    _m404 = _m137 & (_i399 == 3)
+                    rows[3] = np.where(_m404, _v400, rows[3])
+                    _m405 = _m137 & (_i399 == 4)
+                    rows[4] = np.where(_m405, _v400, rows[4])
+                    _m406 = _m137 & (_i399 == 5)
+                    rows[5] = np.where(_m406, _v400, rows[5])
+                    _m407 = _m137 & (_i399 == 6)
+                    rows[6] = np.where(_m407, _v400, rows[6])
+                    _m408 = _m137 & (_i399 == 7)
+                    rows[7] = np.where(_m408, _v400, rows[7])
+                    _m409 = _m137 & (_i399 == 8)
+                    rows[8] = np.where(_m409, _v400, rows[8])
+                    _m410 = _m137 & (_i399 == 9)
+                    rows[9] = np.where(_m410, _v400, rows[9])
+                    _m411 = _m137 & (_i399 == 10)
+                    rows[10] = np.where(_m411, _v400, rows[10])
+                    _m412 = _m137 & (_i399 == 11)
+                    rows[11] = np.where(_m412, _v400, rows[11])
+                    _m413 = _m137 & (_i399 == 12)
+                    rows[12] = np.where(_m413, _v400, rows[12])
+                    _m414 = _m137 & (_i399 == 13)
+                    rows[13] = np.where(_m414, _v400, rows[13])
+                    _m415 = _m137 & (_i399 == 14)
+                    rows[14] = np.where(_m415, _v400, rows[14])
+                    _m416 = _m137 & (_i399 == 15)
+                    rows[15] = np.where(_m416, _v400, rows[15])
+                    _m417 = _m137 & (_i399 == 16)
+                    rows[16] = np.where(_m417, _v400, rows[16])
+                    _m418 = _m137 & (_i399 == 17)
+                    rows[17] = np.where(_m418, _v400, rows[17])
+                    _m419 = _m137 & (_i399 == 18)
+                    rows[18] = np.where(_m419, _v400, rows[18])
+                    _m420 = _m137 & (_i399 == 19)
+                    rows[19] = np.where(_m420, _v400, rows[19])
+                    _m421 = _m137 & (_i399 == 20)
+                    rows[20] = np.where(_m421, _v400, rows[20])
+                    _m422 = _m137 & (_i399 == 21)
+                    rows[21] = np.where(_m422, _v400, rows[21])
+                    _m423 = _m137 & (_i399 == 22)
+                    rows[22] = np.where(_m423, _v400, rows[22])
+                    _m424 = _m137 & (_i399 == 23)
+                    rows[23] = np.where(_m424, _v400, rows[23])
+                    _m425 = _m137 & (_i399 == 24)
+                    rows[24] = np.where(_m425, _v400, rows[24])
+                    _m426 = _m137 & (_i399 == 25)
+                    rows[25] = np.where(_m426, _v400, rows[25])
+                    _m427 = _m137 & (_i399 == 26)
+                    rows[26] = np.where(_m427, _v400, rows[26])
+                    _m428 = _m137 & (_i399 == 27)
+                    rows[27] = np.where(_m428, _v400, rows[27])
+                    _m429 = _m137 & (_i399 == 28)
+                    rows[28] = np.where(_m429, _v400, rows[28])
+                    _m430 = _m137 & (_i399 == 29)
+                    rows[29] = np.where(_m430, _v400, rows[29])
+                    _m431 = _m137 & (_i399 == 30)
+                    rows[30] = np.where(_m431, _v400, rows[30])
+                    _m432 = _m137 & (_i399 == 31)
+                    rows[31] = np.where(_m432, _v400, rows[31])
+                    _m433 = _m137 & (_i399 == 32)
+                    rows[32] = np.where(_m433, _v400, rows[32])
+                    _m434 = _m137 & (_i399 == 33)
+                    rows[33] = np.where(_m434, _v400, rows[33])
+                    _m435 = _m137 & (_i399 == 34)
+                    rows[34] = np.where(_m435, _v400, rows[34])
+                    _m436 = _m137 & (_i399 == 35)
+                    rows[35] = np.where(_m436, _v400, rows[35])
+                    _m437 = _m137 & (_i399 == 36)
+                    rows[36] = np.where(_m437, _v400, rows[36])
+                    _m438 = _m137 & (_i399 == 37)
+                    rows[37] = np.where(_m438, _v400, rows[37])
+                    _m439 = _m137 & (_i399 == 38)
+                    rows[38] = np.where(_m439, _v400, rows[38])
+                    _m440 = _m137 & (_i399 == 39)
+                    rows[39] = np.where(_m440, _v400, rows[39])
+                    _m441 = _m137 & (_i399 == 40)
+                    rows[40] = np.where(_m441, _v400, rows[40])
+                    _m442 = _m137 & (_i399 == 41)
+                    rows[41] = np.where(_m442, _v400, rows[41])
+                    _m443 = _m137 & (_i399 == 42)
+                    rows[42] = np.where(_m443, _v400, rows[42])
+                    _m444 = _m137 & (_i399 == 43)
+                    rows[43] = np.where(_m444, _v400, rows[43])
+                    _m445 = _m137 & (_i399 == 44)
+                    rows[44] = np.where(_m445, _v400, rows[44])
+                    _m446 = _m137 & (_i399 == 45)
+                    rows[45] = np.where(_m446, _v400, rows[45])
+                    _m447 = _m137 & (_i399 == 46)
+                    rows[46] = np.where(_m447, _v400, rows[46])
+                    _m448 = _m137 & (_i399 == 47)
+                    rows[47] = np.where(_m448, _v400, rows[47])
+                    _m449 = _m137 & (_ik_all_rows3_kept == 0)
+                    flags[0] = np.where(_m449, _ik_all_rows3_flag, flags[0])
+                    _m450 = _m137 & (_ik_all_rows3_kept == 1)
+                    flags[1] = np.where(_m450, _ik_all_rows3_flag, flags[1])
+                    _m451 = _m137 & (_ik_all_rows3_kept == 2)
+                    flags[2] = np.where(_m451, _ik_all_rows3_flag, flags[2])
+                    _m452 = _m137 & (_ik_all_rows3_kept == 3)
+                    flags[3] = np.where(_m452, _ik_all_rows3_flag, flags[3])
+                    _m453 = _m137 & (_ik_all_rows3_kept == 4)
+                    flags[4] = np.where(_m453, _ik_all_rows3_flag, flags[4])
+                    _m454 = _m137 & (_ik_all_rows3_kept == 5)
+                    flags[5] = np.where(_m454, _ik_all_rows3_flag, flags[5])
+                    _m455 = _m137 & (_ik_all_rows3_kept == 6)
+                    flags[6] = np.where(_m455, _ik_all_rows3_flag, flags[6])
+                    _m456 = _m137 & (_ik_all_rows3_kept == 7)
+                    flags[7] = np.where(_m456, _ik_all_rows3_flag, flags[7])
+                    _ik_all_rows3_kept = np.where(_m137, _ik_all_rows3_kept + 1, _ik_all_rows3_kept)
+        _i74 = np.where(_run75, _i74 + 1, _i74)
+        _run75 = _run75 & (_i74 < IK_MAX_SOLUTIONS)
+    count[0] = np.where(_alive4, _ik_all_rows3_kept, count[0])
+    # 7. status
+    status = np.where(_alive4, np.where(_ik_all_rows3_exact == 0, IK_UNREACHABLE, np.where(_ik_all_rows3_kept == 0, _fi(IK_OUT_OF_LIMITS), IK_OK)), status)
+    _alive4 = _alive4 & (~_alive4)
+    q[0] = _fr(_NAN)
+    q[1] = _fr(_NAN)
+    q[2] = _fr(_NAN)
+    q[3] = _fr(_NAN)
+    q[4] = _fr(_NAN)
+    q[5] = _fr(_NAN)
+    _i457 = _fi(0)
+    _run458 = _i457 < count[0]
+    while bool(_run458.any()):
+        # each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref
+        _i459 = 6*_i457
+        k = np.where(_run458, np.rint((q_ref[0] - np.where(_i459 == 0, rows[0], np.where(_i459 == 1, rows[1], np.where(_i459 == 2, rows[2], np.where(_i459 == 3, rows[3], np.where(_i459 == 4, rows[4], np.where(_i459 == 5, rows[5], np.where(_i459 == 6, rows[6], np.where(_i459 == 7, rows[7], np.where(_i459 == 8, rows[8], np.where(_i459 == 9, rows[9], np.where(_i459 == 10, rows[10], np.where(_i459 == 11, rows[11], np.where(_i459 == 12, rows[12], np.where(_i459 == 13, rows[13], np.where(_i459 == 14, rows[14], np.where(_i459 == 15, rows[15], np.where(_i459 == 16, rows[16], np.where(_i459 == 17, rows[17], np.where(_i459 == 18, rows[18], np.where(_i459 == 19, rows[19], np.where(_i459 == 20, rows[20], np.where(_i459 == 21, rows[21], np.where(_i459 == 22, rows[22], np.where(_i459 == 23, rows[23], np.where(_i459 == 24, rows[24], np.where(_i459 == 25, rows[25], np.where(_i459 == 26, rows[26], np.where(_i459 == 27, rows[27], np.where(_i459 == 28, rows[28], np.where(_i459 == 29, rows[29], np.where(_i459 == 30, rows[30], np.where(_i459 == 31, rows[31], np.where(_i459 == 32, rows[32], np.where(_i459 == 33, rows[33], np.where(_i459 == 34, rows[34], np.where(_i459 == 35, rows[35], np.where(_i459 == 36, rows[36], np.where(_i459 == 37, rows[37], np.where(_i459 == 38, rows[38], np.where(_i459 == 39, rows[39], np.where(_i459 == 40, rows[40], np.where(_i459 == 41, rows[41], np.where(_i459 == 42, rows[42], np.where(_i459 == 43, rows[43], np.where(_i459 == 44, rows[44], np.where(_i459 == 45, rows[45], np.where(_i459 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i460 = 6*_i457
+        y = np.where(_run458, np.where(_i460 == 0, rows[0], np.where(_i460 == 1, rows[1], np.where(_i460 == 2, rows[2], np.where(_i460 == 3, rows[3], np.where(_i460 == 4, rows[4], np.where(_i460 == 5, rows[5], np.where(_i460 == 6, rows[6], np.where(_i460 == 7, rows[7], np.where(_i460 == 8, rows[8], np.where(_i460 == 9, rows[9], np.where(_i460 == 10, rows[10], np.where(_i460 == 11, rows[11], np.where(_i460 == 12, rows[12], np.where(_i460 == 13, rows[13], np.where(_i460 == 14, rows[14], np.where(_i460 == 15, rows[15], np.where(_i460 == 16, rows[16], np.where(_i460 == 17, rows[17], np.where(_i460 == 18, rows[18], np.where(_i460 == 19, rows[19], np.where(_i460 == 20, rows[20], np.where(_i460 == 21, rows[21], np.where(_i460 == 22, rows[22], np.where(_i460 == 23, rows[23], np.where(_i460 == 24, rows[24], np.where(_i460 == 25, rows[25], np.where(_i460 == 26, rows[26], np.where(_i460 == 27, rows[27], np.where(_i460 == 28, rows[28], np.where(_i460 == 29, rows[29], np.where(_i460 == 30, rows[30], np.where(_i460 == 31, rows[31], np.where(_i460 == 32, rows[32], np.where(_i460 == 33, rows[33], np.where(_i460 == 34, rows[34], np.where(_i460 == 35, rows[35], np.where(_i460 == 36, rows[36], np.where(_i460 == 37, rows[37], np.where(_i460 == 38, rows[38], np.where(_i460 == 39, rows[39], np.where(_i460 == 40, rows[40], np.where(_i460 == 41, rows[41], np.where(_i460 == 42, rows[42], np.where(_i460 == 43, rows[43], np.where(_i460 == 44, rows[44], np.where(_i460 == 45, rows[45], np.where(_i460 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i461 = 6*_i457
+        _i462 = 6*_i457
+        _i463 = 6*_i457
+        _c464 = (np.where(_i461 == 0, rows[0], np.where(_i461 == 1, rows[1], np.where(_i461 == 2, rows[2], np.where(_i461 == 3, rows[3], np.where(_i461 == 4, rows[4], np.where(_i461 == 5, rows[5], np.where(_i461 == 6, rows[6], np.where(_i461 == 7, rows[7], np.where(_i461 == 8, rows[8], np.where(_i461 == 9, rows[9], np.where(_i461 == 10, rows[10], np.where(_i461 == 11, rows[11], np.where(_i461 == 12, rows[12], np.where(_i461 == 13, rows[13], np.where(_i461 == 14, rows[14], np.where(_i461 == 15, rows[15], np.where(_i461 == 16, rows[16], np.where(_i461 == 17, rows[17], np.where(_i461 == 18, rows[18], np.where(_i461 == 19, rows[19], np.where(_i461 == 20, rows[20], np.where(_i461 == 21, rows[21], np.where(_i461 == 22, rows[22], np.where(_i461 == 23, rows[23], np.where(_i461 == 24, rows[24], np.where(_i461 == 25, rows[25], np.where(_i461 == 26, rows[26], np.where(_i461 == 27, rows[27], np.where(_i461 == 28, rows[28], np.where(_i461 == 29, rows[29], np.where(_i461 == 30, rows[30], np.where(_i461 == 31, rows[31], np.where(_i461 == 32, rows[32], np.where(_i461 == 33, rows[33], np.where(_i461 == 34, rows[34], np.where(_i461 == 35, rows[35], np.where(_i461 == 36, rows[36], np.where(_i461 == 37, rows[37], np.where(_i461 == 38, rows[38], np.where(_i461 == 39, rows[39], np.where(_i461 == 40, rows[40], np.where(_i461 == 41, rows[41], np.where(_i461 == 42, rows[42], np.where(_i461 == 43, rows[43], np.where(_i461 == 44, rows[44], np.where(_i461 == 45, rows[45], np.where(_i461 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i462 == 0, rows[0], np.where(_i462 == 1, rows[1], np.where(_i462 == 2, rows[2], np.where(_i462 == 3, rows[3], np.where(_i462 == 4, rows[4], np.where(_i462 == 5, rows[5], np.where(_i462 == 6, rows[6], np.where(_i462 == 7, rows[7], np.where(_i462 == 8, rows[8], np.where(_i462 == 9, rows[9], np.where(_i462 == 10, rows[10], np.where(_i462 == 11, rows[11], np.where(_i462 == 12, rows[12], np.where(_i462 == 13, rows[13], np.where(_i462 == 14, rows[14], np.where(_i462 == 15, rows[15], np.where(_i462 == 16, rows[16], np.where(_i462 == 17, rows[17], np.where(_i462 == 18, rows[18], np.where(_i462 == 19, rows[19], np.where(_i462 == 20, rows[20], np.where(_i462 == 21, rows[21], np.where(_i462 == 22, rows[22], np.where(_i462 == 23, rows[23], np.where(_i462 == 24, rows[24], np.where(_i462 == 25, rows[25], np.where(_i462 == 26, rows[26], np.where(_i462 == 27, rows[27], np.where(_i462 == 28, rows[28], np.where(_i462 == 29, rows[29], np.where(_i462 == 30, rows[30], np.where(_i462 == 31, rows[31], np.where(_i462 == 32, rows[32], np.where(_i462 == 33, rows[33], np.where(_i462 == 34, rows[34], np.where(_i462 == 35, rows[35], np.where(_i462 == 36, rows[36], np.where(_i462 == 37, rows[37], np.where(_i462 == 38, rows[38], np.where(_i462 == 39, rows[39], np.where(_i462 == 40, rows[40], np.where(_i462 == 41, rows[41], np.where(_i462 == 42, rows[42], np.where(_i462 == 43, rows[43], np.where(_i462 == 44, rows[44], np.where(_i462 == 45, rows[45], np.where(_i462 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i463 == 0, rows[0], np.where(_i463 == 1, rows[1], np.where(_i463 == 2, rows[2], np.where(_i463 == 3, rows[3], np.where(_i463 == 4, rows[4], np.where(_i463 == 5, rows[5], np.where(_i463 == 6, rows[6], np.where(_i463 == 7, rows[7], np.where(_i463 == 8, rows[8], np.where(_i463 == 9, rows[9], np.where(_i463 == 10, rows[10], np.where(_i463 == 11, rows[11], np.where(_i463 == 12, rows[12], np.where(_i463 == 13, rows[13], np.where(_i463 == 14, rows[14], np.where(_i463 == 15, rows[15], np.where(_i463 == 16, rows[16], np.where(_i463 == 17, rows[17], np.where(_i463 == 18, rows[18], np.where(_i463 == 19, rows[19], np.where(_i463 == 20, rows[20], np.where(_i463 == 21, rows[21], np.where(_i463 == 22, rows[22], np.where(_i463 == 23, rows[23], np.where(_i463 == 24, rows[24], np.where(_i463 == 25, rows[25], np.where(_i463 == 26, rows[26], np.where(_i463 == 27, rows[27], np.where(_i463 == 28, rows[28], np.where(_i463 == 29, rows[29], np.where(_i463 == 30, rows[30], np.where(_i463 == 31, rows[31], np.where(_i463 == 32, rows[32], np.where(_i463 == 33, rows[33], np.where(_i463 == 34, rows[34], np.where(_i463 == 35, rows[35], np.where(_i463 == 36, rows[36], np.where(_i463 == 37, rows[37], np.where(_i463 == 38, rows[38], np.where(_i463 == 39, rows[39], np.where(_i463 == 40, rows[40], np.where(_i463 == 41, rows[41], np.where(_i463 == 42, rows[42], np.where(_i463 == 43, rows[43], np.where(_i463 == 44, rows[44], np.where(_i463 == 45, rows[45], np.where(_i463 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[0]) < np.abs(y - q_ref[0])))
+        _m465 = _run458 & _c464
+        _i466 = 6*_i457
+        y = np.where(_m465, np.where(_i466 == 0, rows[0], np.where(_i466 == 1, rows[1], np.where(_i466 == 2, rows[2], np.where(_i466 == 3, rows[3], np.where(_i466 == 4, rows[4], np.where(_i466 == 5, rows[5], np.where(_i466 == 6, rows[6], np.where(_i466 == 7, rows[7], np.where(_i466 == 8, rows[8], np.where(_i466 == 9, rows[9], np.where(_i466 == 10, rows[10], np.where(_i466 == 11, rows[11], np.where(_i466 == 12, rows[12], np.where(_i466 == 13, rows[13], np.where(_i466 == 14, rows[14], np.where(_i466 == 15, rows[15], np.where(_i466 == 16, rows[16], np.where(_i466 == 17, rows[17], np.where(_i466 == 18, rows[18], np.where(_i466 == 19, rows[19], np.where(_i466 == 20, rows[20], np.where(_i466 == 21, rows[21], np.where(_i466 == 22, rows[22], np.where(_i466 == 23, rows[23], np.where(_i466 == 24, rows[24], np.where(_i466 == 25, rows[25], np.where(_i466 == 26, rows[26], np.where(_i466 == 27, rows[27], np.where(_i466 == 28, rows[28], np.where(_i466 == 29, rows[29], np.where(_i466 == 30, rows[30], np.where(_i466 == 31, rows[31], np.where(_i466 == 32, rows[32], np.where(_i466 == 33, rows[33], np.where(_i466 == 34, rows[34], np.where(_i466 == 35, rows[35], np.where(_i466 == 36, rows[36], np.where(_i466 == 37, rows[37], np.where(_i466 == 38, rows[38], np.where(_i466 == 39, rows[39], np.where(_i466 == 40, rows[40], np.where(_i466 == 41, rows[41], np.where(_i466 == 42, rows[42], np.where(_i466 == 43, rows[43], np.where(_i466 == 44, rows[44], np.where(_i466 == 45, rows[45], np.where(_i466 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m465, 1, found)
+        _i467 = 6*_i457
+        _i468 = 6*_i457
+        _i469 = 6*_i457
+        _c470 = (np.where(_i467 == 0, rows[0], np.where(_i467 == 1, rows[1], np.where(_i467 == 2, rows[2], np.where(_i467 == 3, rows[3], np.where(_i467 == 4, rows[4], np.where(_i467 == 5, rows[5], np.where(_i467 == 6, rows[6], np.where(_i467 == 7, rows[7], np.where(_i467 == 8, rows[8], np.where(_i467 == 9, rows[9], np.where(_i467 == 10, rows[10], np.where(_i467 == 11, rows[11], np.where(_i467 == 12, rows[12], np.where(_i467 == 13, rows[13], np.where(_i467 == 14, rows[14], np.where(_i467 == 15, rows[15], np.where(_i467 == 16, rows[16], np.where(_i467 == 17, rows[17], np.where(_i467 == 18, rows[18], np.where(_i467 == 19, rows[19], np.where(_i467 == 20, rows[20], np.where(_i467 == 21, rows[21], np.where(_i467 == 22, rows[22], np.where(_i467 == 23, rows[23], np.where(_i467 == 24, rows[24], np.where(_i467 == 25, rows[25], np.where(_i467 == 26, rows[26], np.where(_i467 == 27, rows[27], np.where(_i467 == 28, rows[28], np.where(_i467 == 29, rows[29], np.where(_i467 == 30, rows[30], np.where(_i467 == 31, rows[31], np.where(_i467 == 32, rows[32], np.where(_i467 == 33, rows[33], np.where(_i467 == 34, rows[34], np.where(_i467 == 35, rows[35], np.where(_i467 == 36, rows[36], np.where(_i467 == 37, rows[37], np.where(_i467 == 38, rows[38], np.where(_i467 == 39, rows[39], np.where(_i467 == 40, rows[40], np.where(_i467 == 41, rows[41], np.where(_i467 == 42, rows[42], np.where(_i467 == 43, rows[43], np.where(_i467 == 44, rows[44], np.where(_i467 == 45, rows[45], np.where(_i467 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i468 == 0, rows[0], np.where(_i468 == 1, rows[1], np.where(_i468 == 2, rows[2], np.where(_i468 == 3, rows[3], np.where(_i468 == 4, rows[4], np.where(_i468 == 5, rows[5], np.where(_i468 == 6, rows[6], np.where(_i468 == 7, rows[7], np.where(_i468 == 8, rows[8], np.where(_i468 == 9, rows[9], np.where(_i468 == 10, rows[10], np.where(_i468 == 11, rows[11], np.where(_i468 == 12, rows[12], np.where(_i468 == 13, rows[13], np.where(_i468 == 14, rows[14], np.where(_i468 == 15, rows[15], np.where(_i468 == 16, rows[16], np.where(_i468 == 17, rows[17], np.where(_i468 == 18, rows[18], np.where(_i468 == 19, rows[19], np.where(_i468 == 20, rows[20], np.where(_i468 == 21, rows[21], np.where(_i468 == 22, rows[22], np.where(_i468 == 23, rows[23], np.where(_i468 == 24, rows[24], np.where(_i468 == 25, rows[25], np.where(_i468 == 26, rows[26], np.where(_i468 == 27, rows[27], np.where(_i468 == 28, rows[28], np.where(_i468 == 29, rows[29], np.where(_i468 == 30, rows[30], np.where(_i468 == 31, rows[31], np.where(_i468 == 32, rows[32], np.where(_i468 == 33, rows[33], np.where(_i468 == 34, rows[34], np.where(_i468 == 35, rows[35], np.where(_i468 == 36, rows[36], np.where(_i468 == 37, rows[37], np.where(_i468 == 38, rows[38], np.where(_i468 == 39, rows[39], np.where(_i468 == 40, rows[40], np.where(_i468 == 41, rows[41], np.where(_i468 == 42, rows[42], np.where(_i468 == 43, rows[43], np.where(_i468 == 44, rows[44], np.where(_i468 == 45, rows[45], np.where(_i468 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i469 == 0, rows[0], np.where(_i469 == 1, rows[1], np.where(_i469 == 2, rows[2], np.where(_i469 == 3, rows[3], np.where(_i469 == 4, rows[4], np.where(_i469 == 5, rows[5], np.where(_i469 == 6, rows[6], np.where(_i469 == 7, rows[7], np.where(_i469 == 8, rows[8], np.where(_i469 == 9, rows[9], np.where(_i469 == 10, rows[10], np.where(_i469 == 11, rows[11], np.where(_i469 == 12, rows[12], np.where(_i469 == 13, rows[13], np.where(_i469 == 14, rows[14], np.where(_i469 == 15, rows[15], np.where(_i469 == 16, rows[16], np.where(_i469 == 17, rows[17], np.where(_i469 == 18, rows[18], np.where(_i469 == 19, rows[19], np.where(_i469 == 20, rows[20], np.where(_i469 == 21, rows[21], np.where(_i469 == 22, rows[22], np.where(_i469 == 23, rows[23], np.where(_i469 == 24, rows[24], np.where(_i469 == 25, rows[25], np.where(_i469 == 26, rows[26], np.where(_i469 == 27, rows[27], np.where(_i469 == 28, rows[28], np.where(_i469 == 29, rows[29], np.where(_i469 == 30, rows[30], np.where(_i469 == 31, rows[31], np.where(_i469 == 32, rows[32], np.where(_i469 == 33, rows[33], np.where(_i469 == 34, rows[34], np.where(_i469 == 35, rows[35], np.where(_i469 == 36, rows[36], np.where(_i469 == 37, rows[37], np.where(_i469 == 38, rows[38], np.where(_i469 == 39, rows[39], np.where(_i469 == 40, rows[40], np.where(_i469 == 41, rows[41], np.where(_i469 == 42, rows[42], np.where(_i469 == 43, rows[43], np.where(_i469 == 44, rows[44], np.where(_i469 == 45, rows[45], np.where(_i469 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])))
+        _m471 = _run458 & _c470
+        _i472 = 6*_i457
+        y = np.where(_m471, np.where(_i472 == 0, rows[0], np.where(_i472 == 1, rows[1], np.where(_i472 == 2, rows[2], np.where(_i472 == 3, rows[3], np.where(_i472 == 4, rows[4], np.where(_i472 == 5, rows[5], np.where(_i472 == 6, rows[6], np.where(_i472 == 7, rows[7], np.where(_i472 == 8, rows[8], np.where(_i472 == 9, rows[9], np.where(_i472 == 10, rows[10], np.where(_i472 == 11, rows[11], np.where(_i472 == 12, rows[12], np.where(_i472 == 13, rows[13], np.where(_i472 == 14, rows[14], np.where(_i472 == 15, rows[15], np.where(_i472 == 16, rows[16], np.where(_i472 == 17, rows[17], np.where(_i472 == 18, rows[18], np.where(_i472 == 19, rows[19], np.where(_i472 == 20, rows[20], np.where(_i472 == 21, rows[21], np.where(_i472 == 22, rows[22], np.where(_i472 == 23, rows[23], np.where(_i472 == 24, rows[24], np.where(_i472 == 25, rows[25], np.where(_i472 == 26, rows[26], np.where(_i472 == 27, rows[27], np.where(_i472 == 28, rows[28], np.where(_i472 == 29, rows[29], np.where(_i472 == 30, rows[30], np.where(_i472 == 31, rows[31], np.where(_i472 == 32, rows[32], np.where(_i472 == 33, rows[33], np.where(_i472 == 34, rows[34], np.where(_i472 == 35, rows[35], np.where(_i472 == 36, rows[36], np.where(_i472 == 37, rows[37], np.where(_i472 == 38, rows[38], np.where(_i472 == 39, rows[39], np.where(_i472 == 40, rows[40], np.where(_i472 == 41, rows[41], np.where(_i472 == 42, rows[42], np.where(_i472 == 43, rows[43], np.where(_i472 == 44, rows[44], np.where(_i472 == 45, rows[45], np.where(_i472 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m471, 1, found)
+        _i473 = 6*_i457
+        _i474 = 6*_i457
+        _i475 = 6*_i457
+        _c476 = (np.where(_i473 == 0, rows[0], np.where(_i473 == 1, rows[1], np.where(_i473 == 2, rows[2], np.where(_i473 == 3, rows[3], np.where(_i473 == 4, rows[4], np.where(_i473 == 5, rows[5], np.where(_i473 == 6, rows[6], np.where(_i473 == 7, rows[7], np.where(_i473 == 8, rows[8], np.where(_i473 == 9, rows[9], np.where(_i473 == 10, rows[10], np.where(_i473 == 11, rows[11], np.where(_i473 == 12, rows[12], np.where(_i473 == 13, rows[13], np.where(_i473 == 14, rows[14], np.where(_i473 == 15, rows[15], np.where(_i473 == 16, rows[16], np.where(_i473 == 17, rows[17], np.where(_i473 == 18, rows[18], np.where(_i473 == 19, rows[19], np.where(_i473 == 20, rows[20], np.where(_i473 == 21, rows[21], np.where(_i473 == 22, rows[22], np.where(_i473 == 23, rows[23], np.where(_i473 == 24, rows[24], np.where(_i473 == 25, rows[25], np.where(_i473 == 26, rows[26], np.where(_i473 == 27, rows[27], np.where(_i473 == 28, rows[28], np.where(_i473 == 29, rows[29], np.where(_i473 == 30, rows[30], np.where(_i473 == 31, rows[31], np.where(_i473 == 32, rows[32], np.where(_i473 == 33, rows[33], np.where(_i473 == 34, rows[34], np.where(_i473 == 35, rows[35], np.where(_i473 == 36, rows[36], np.where(_i473 == 37, rows[37], np.where(_i473 == 38, rows[38], np.where(_i473 == 39, rows[39], np.where(_i473 == 40, rows[40], np.where(_i473 == 41, rows[41], np.where(_i473 == 42, rows[42], np.where(_i473 == 43, rows[43], np.where(_i473 == 44, rows[44], np.where(_i473 == 45, rows[45], np.where(_i473 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i474 == 0, rows[0], np.where(_i474 == 1, rows[1], np.where(_i474 == 2, rows[2], np.where(_i474 == 3, rows[3], np.where(_i474 == 4, rows[4], np.where(_i474 == 5, rows[5], np.where(_i474 == 6, rows[6], np.where(_i474 == 7, rows[7], np.where(_i474 == 8, rows[8], np.where(_i474 == 9, rows[9], np.where(_i474 == 10, rows[10], np.where(_i474 == 11, rows[11], np.where(_i474 == 12, rows[12], np.where(_i474 == 13, rows[13], np.where(_i474 == 14, rows[14], np.where(_i474 == 15, rows[15], np.where(_i474 == 16, rows[16], np.where(_i474 == 17, rows[17], np.where(_i474 == 18, rows[18], np.where(_i474 == 19, rows[19], np.where(_i474 == 20, rows[20], np.where(_i474 == 21, rows[21], np.where(_i474 == 22, rows[22], np.where(_i474 == 23, rows[23], np.where(_i474 == 24, rows[24], np.where(_i474 == 25, rows[25], np.where(_i474 == 26, rows[26], np.where(_i474 == 27, rows[27], np.where(_i474 == 28, rows[28], np.where(_i474 == 29, rows[29], np.where(_i474 == 30, rows[30], np.where(_i474 == 31, rows[31], np.where(_i474 == 32, rows[32], np.where(_i474 == 33, rows[33], np.where(_i474 == 34, rows[34], np.where(_i474 == 35, rows[35], np.where(_i474 == 36, rows[36], np.where(_i474 == 37, rows[37], np.where(_i474 == 38, rows[38], np.where(_i474 == 39, rows[39], np.where(_i474 == 40, rows[40], np.where(_i474 == 41, rows[41], np.where(_i474 == 42, rows[42], np.where(_i474 == 43, rows[43], np.where(_i474 == 44, rows[44], np.where(_i474 == 45, rows[45], np.where(_i474 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i475 == 0, rows[0], np.where(_i475 == 1, rows[1], np.where(_i475 == 2, rows[2], np.where(_i475 == 3, rows[3], np.where(_i475 == 4, rows[4], np.where(_i475 == 5, rows[5], np.where(_i475 == 6, rows[6], np.where(_i475 == 7, rows[7], np.where(_i475 == 8, rows[8], np.where(_i475 == 9, rows[9], np.where(_i475 == 10, rows[10], np.where(_i475 == 11, rows[11], np.where(_i475 == 12, rows[12], np.where(_i475 == 13, rows[13], np.where(_i475 == 14, rows[14], np.where(_i475 == 15, rows[15], np.where(_i475 == 16, rows[16], np.where(_i475 == 17, rows[17], np.where(_i475 == 18, rows[18], np.where(_i475 == 19, rows[19], np.where(_i475 == 20, rows[20], np.where(_i475 == 21, rows[21], np.where(_i475 == 22, rows[22], np.where(_i475 == 23, rows[23], np.where(_i475 == 24, rows[24], np.where(_i475 == 25, rows[25], np.where(_i475 == 26, rows[26], np.where(_i475 == 27, rows[27], np.where(_i475 == 28, rows[28], np.where(_i475 == 29, rows[29], np.where(_i475 == 30, rows[30], np.where(_i475 == 31, rows[31], np.where(_i475 == 32, rows[32], np.where(_i475 == 33, rows[33], np.where(_i475 == 34, rows[34], np.where(_i475 == 35, rows[35], np.where(_i475 == 36, rows[36], np.where(_i475 == 37, rows[37], np.where(_i475 == 38, rows[38], np.where(_i475 == 39, rows[39], np.where(_i475 == 40, rows[40], np.where(_i475 == 41, rows[41], np.where(_i475 == 42, rows[42], np.where(_i475 == 43, rows[43], np.where(_i475 == 44, rows[44], np.where(_i475 == 45, rows[45], np.where(_i475 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])))
+        _m477 = _run458 & _c476
+        _i478 = 6*_i457
+        y = np.where(_m477, np.where(_i478 == 0, rows[0], np.where(_i478 == 1, rows[1], np.where(_i478 == 2, rows[2], np.where(_i478 == 3, rows[3], np.where(_i478 == 4, rows[4], np.where(_i478 == 5, rows[5], np.where(_i478 == 6, rows[6], np.where(_i478 == 7, rows[7], np.where(_i478 == 8, rows[8], np.where(_i478 == 9, rows[9], np.where(_i478 == 10, rows[10], np.where(_i478 == 11, rows[11], np.where(_i478 == 12, rows[12], np.where(_i478 == 13, rows[13], np.where(_i478 == 14, rows[14], np.where(_i478 == 15, rows[15], np.where(_i478 == 16, rows[16], np.where(_i478 == 17, rows[17], np.where(_i478 == 18, rows[18], np.where(_i478 == 19, rows[19], np.where(_i478 == 20, rows[20], np.where(_i478 == 21, rows[21], np.where(_i478 == 22, rows[22], np.where(_i478 == 23, rows[23], np.where(_i478 == 24, rows[24], np.where(_i478 == 25, rows[25], np.where(_i478 == 26, rows[26], np.where(_i478 == 27, rows[27], np.where(_i478 == 28, rows[28], np.where(_i478 == 29, rows[29], np.where(_i478 == 30, rows[30], np.where(_i478 == 31, rows[31], np.where(_i478 == 32, rows[32], np.where(_i478 == 33, rows[33], np.where(_i478 == 34, rows[34], np.where(_i478 == 35, rows[35], np.where(_i478 == 36, rows[36], np.where(_i478 == 37, rows[37], np.where(_i478 == 38, rows[38], np.where(_i478 == 39, rows[39], np.where(_i478 == 40, rows[40], np.where(_i478 == 41, rows[41], np.where(_i478 == 42, rows[42], np.where(_i478 == 43, rows[43], np.where(_i478 == 44, rows[44], np.where(_i478 == 45, rows[45], np.where(_i478 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m477, 1, found)
+        near[0] = np.where(_run458, y, near[0])
+        _i479 = 6*_i457 + 1
+        k = np.where(_run458, np.rint((q_ref[1] - np.where(_i479 == 0, rows[0], np.where(_i479 == 1, rows[1], np.where(_i479 == 2, rows[2], np.where(_i479 == 3, rows[3], np.where(_i479 == 4, rows[4], np.where(_i479 == 5, rows[5], np.where(_i479 == 6, rows[6], np.where(_i479 == 7, rows[7], np.where(_i479 == 8, rows[8], np.where(_i479 == 9, rows[9], np.where(_i479 == 10, rows[10], np.where(_i479 == 11, rows[11], np.where(_i479 == 12, rows[12], np.where(_i479 == 13, rows[13], np.where(_i479 == 14, rows[14], np.where(_i479 == 15, rows[15], np.where(_i479 == 16, rows[16], np.where(_i479 == 17, rows[17], np.where(_i479 == 18, rows[18], np.where(_i479 == 19, rows[19], np.where(_i479 == 20, rows[20], np.where(_i479 == 21, rows[21], np.where(_i479 == 22, rows[22], np.where(_i479 == 23, rows[23], np.where(_i479 == 24, rows[24], np.where(_i479 == 25, rows[25], np.where(_i479 == 26, rows[26], np.where(_i479 == 27, rows[27], np.where(_i479 == 28, rows[28], np.where(_i479 == 29, rows[29], np.where(_i479 == 30, rows[30], np.where(_i479 == 31, rows[31], np.where(_i479 == 32, rows[32], np.where(_i479 == 33, rows[33], np.where(_i479 == 34, rows[34], np.where(_i479 == 35, rows[35], np.where(_i479 == 36, rows[36], np.where(_i479 == 37, rows[37], np.where(_i479 == 38, rows[38], np.where(_i479 == 39, rows[39], np.where(_i479 == 40, rows[40], np.where(_i479 == 41, rows[41], np.where(_i479 == 42, rows[42], np.where(_i479 == 43, rows[43], np.where(_i479 == 44, rows[44], np.where(_i479 == 45, rows[45], np.where(_i479 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i480 = 6*_i457 + 1
+        y = np.where(_run458, np.where(_i480 == 0, rows[0], np.where(_i480 == 1, rows[1], np.where(_i480 == 2, rows[2], np.where(_i480 == 3, rows[3], np.where(_i480 == 4, rows[4], np.where(_i480 == 5, rows[5], np.where(_i480 == 6, rows[6], np.where(_i480 == 7, rows[7], np.where(_i480 == 8, rows[8], np.where(_i480 == 9, rows[9], np.where(_i480 == 10, rows[10], np.where(_i480 == 11, rows[11], np.where(_i480 == 12, rows[12], np.where(_i480 == 13, rows[13], np.where(_i480 == 14, rows[14], np.where(_i480 == 15, rows[15], np.where(_i480 == 16, rows[16], np.where(_i480 == 17, rows[17], np.where(_i480 == 18, rows[18], np.where(_i480 == 19, rows[19], np.where(_i480 == 20, rows[20], np.where(_i480 == 21, rows[21], np.where(_i480 == 22, rows[22], np.where(_i480 == 23, rows[23], np.where(_i480 == 24, rows[24], np.where(_i480 == 25, rows[25], np.where(_i480 == 26, rows[26], np.where(_i480 == 27, rows[27], np.where(_i480 == 28, rows[28], np.where(_i480 == 29, rows[29], np.where(_i480 == 30, rows[30], np.where(_i480 == 31, rows[31], np.where(_i480 == 32, rows[32], np.where(_i480 == 33, rows[33], np.where(_i480 == 34, rows[34], np.where(_i480 == 35, rows[35], np.where(_i480 == 36, rows[36], np.where(_i480 == 37, rows[37], np.where(_i480 == 38, rows[38], np.where(_i480 == 39, rows[39], np.where(_i480 == 40, rows[40], np.where(_i480 == 41, rows[41], np.where(_i480 == 42, rows[42], np.where(_i480 == 43, rows[43], np.where(_i480 == 44, rows[44], np.where(_i480 == 45, rows[45], np.where(_i480 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i481 = 6*_i457 + 1
+        _i482 = 6*_i457 + 1
+        _i483 = 6*_i457 + 1
+        _c484 = (np.where(_i481 == 0, rows[0], np.where(_i481 == 1, rows[1], np.where(_i481 == 2, rows[2], np.where(_i481 == 3, rows[3], np.where(_i481 == 4, rows[4], np.where(_i481 == 5, rows[5], np.where(_i481 == 6, rows[6], np.where(_i481 == 7, rows[7], np.where(_i481 == 8, rows[8], np.where(_i481 == 9, rows[9], np.where(_i481 == 10, rows[10], np.where(_i481 == 11, rows[11], np.where(_i481 == 12, rows[12], np.where(_i481 == 13, rows[13], np.where(_i481 == 14, rows[14], np.where(_i481 == 15, rows[15], np.where(_i481 == 16, rows[16], np.where(_i481 == 17, rows[17], np.where(_i481 == 18, rows[18], np.where(_i481 == 19, rows[19], np.where(_i481 == 20, rows[20], np.where(_i481 == 21, rows[21], np.where(_i481 == 22, rows[22], np.where(_i481 == 23, rows[23], np.where(_i481 == 24, rows[24], np.where(_i481 == 25, rows[25], np.where(_i481 == 26, rows[26], np.where(_i481 == 27, rows[27], np.where(_i481 == 28, rows[28], np.where(_i481 == 29, rows[29], np.where(_i481 == 30, rows[30], np.where(_i481 == 31, rows[31], np.where(_i481 == 32, rows[32], np.where(_i481 == 33, rows[33], np.where(_i481 == 34, rows[34], np.where(_i481 == 35, rows[35], np.where(_i481 == 36, rows[36], np.where(_i481 == 37, rows[37], np.where(_i481 == 38, rows[38], np.where(_i481 == 39, rows[39], np.where(_i481 == 40, rows[40], np.where(_i481 == 41, rows[41], np.where(_i481 == 42, rows[42], np.where(_i481 == 43, rows[43], np.where(_i481 == 44, rows[44], np.where(_i481 == 45, rows[45], np.where(_i481 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i482 == 0, rows[0], np.where(_i482 == 1, rows[1], np.where(_i482 == 2, rows[2], np.where(_i482 == 3, rows[3], np.where(_i482 == 4, rows[4], np.where(_i482 == 5, rows[5], np.where(_i482 == 6, rows[6], np.where(_i482 == 7, rows[7], np.where(_i482 == 8, rows[8], np.where(_i482 == 9, rows[9], np.where(_i482 == 10, rows[10], np.where(_i482 == 11, rows[11], np.where(_i482 == 12, rows[12], np.where(_i482 == 13, rows[13], np.where(_i482 == 14, rows[14], np.where(_i482 == 15, rows[15], np.where(_i482 == 16, rows[16], np.where(_i482 == 17, rows[17], np.where(_i482 == 18, rows[18], np.where(_i482 == 19, rows[19], np.where(_i482 == 20, rows[20], np.where(_i482 == 21, rows[21], np.where(_i482 == 22, rows[22], np.where(_i482 == 23, rows[23], np.where(_i482 == 24, rows[24], np.where(_i482 == 25, rows[25], np.where(_i482 == 26, rows[26], np.where(_i482 == 27, rows[27], np.where(_i482 == 28, rows[28], np.where(_i482 == 29, rows[29], np.where(_i482 == 30, rows[30], np.where(_i482 == 31, rows[31], np.where(_i482 == 32, rows[32], np.where(_i482 == 33, rows[33], np.where(_i482 == 34, rows[34], np.where(_i482 == 35, rows[35], np.where(_i482 == 36, rows[36], np.where(_i482 == 37, rows[37], np.where(_i482 == 38, rows[38], np.where(_i482 == 39, rows[39], np.where(_i482 == 40, rows[40], np.where(_i482 == 41, rows[41], np.where(_i482 == 42, rows[42], np.where(_i482 == 43, rows[43], np.where(_i482 == 44, rows[44], np.where(_i482 == 45, rows[45], np.where(_i482 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i483 == 0, rows[0], np.where(_i483 == 1, rows[1], np.where(_i483 == 2, rows[2], np.where(_i483 == 3, rows[3], np.where(_i483 == 4, rows[4], np.where(_i483 == 5, rows[5], np.where(_i483 == 6, rows[6], np.where(_i483 == 7, rows[7], np.where(_i483 == 8, rows[8], np.where(_i483 == 9, rows[9], np.where(_i483 == 10, rows[10], np.where(_i483 == 11, rows[11], np.where(_i483 == 12, rows[12], np.where(_i483 == 13, rows[13], np.where(_i483 == 14, rows[14], np.where(_i483 == 15, rows[15], np.where(_i483 == 16, rows[16], np.where(_i483 == 17, rows[17], np.where(_i483 == 18, rows[18], np.where(_i483 == 19, rows[19], np.where(_i483 == 20, rows[20], np.where(_i483 == 21, rows[21], np.where(_i483 == 22, rows[22], np.where(_i483 == 23, rows[23], np.where(_i483 == 24, rows[24], np.where(_i483 == 25, rows[25], np.where(_i483 == 26, rows[26], np.where(_i483 == 27, rows[27], np.where(_i483 == 28, rows[28], np.where(_i483 == 29, rows[29], np.where(_i483 == 30, rows[30], np.where(_i483 == 31, rows[31], np.where(_i483 == 32, rows[32], np.where(_i483 == 33, rows[33], np.where(_i483 == 34, rows[34], np.where(_i483 == 35, rows[35], np.where(_i483 == 36, rows[36], np.where(_i483 == 37, rows[37], np.where(_i483 == 38, rows[38], np.where(_i483 == 39, rows[39], np.where(_i483 == 40, rows[40], np.where(_i483 == 41, rows[41], np.where(_i483 == 42, rows[42], np.where(_i483 == 43, rows[43], np.where(_i483 == 44, rows[44], np.where(_i483 == 45, rows[45], np.where(_i483 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[1]) < np.abs(y - q_ref[1])))
+        _m485 = _run458 & _c484
+        _i486 = 6*_i457 + 1
+        y = np.where(_m485, np.where(_i486 == 0, rows[0], np.where(_i486 == 1, rows[1], np.where(_i486 == 2, rows[2], np.where(_i486 == 3, rows[3], np.where(_i486 == 4, rows[4], np.where(_i486 == 5, rows[5], np.where(_i486 == 6, rows[6], np.where(_i486 == 7, rows[7], np.where(_i486 == 8, rows[8], np.where(_i486 == 9, rows[9], np.where(_i486 == 10, rows[10], np.where(_i486 == 11, rows[11], np.where(_i486 == 12, rows[12], np.where(_i486 == 13, rows[13], np.where(_i486 == 14, rows[14], np.where(_i486 == 15, rows[15], np.where(_i486 == 16, rows[16], np.where(_i486 == 17, rows[17], np.where(_i486 == 18, rows[18], np.where(_i486 == 19, rows[19], np.where(_i486 == 20, rows[20], np.where(_i486 == 21, rows[21], np.where(_i486 == 22, rows[22], np.where(_i486 == 23, rows[23], np.where(_i486 == 24, rows[24], np.where(_i486 == 25, rows[25], np.where(_i486 == 26, rows[26], np.where(_i486 == 27, rows[27], np.where(_i486 == 28, rows[28], np.where(_i486 == 29, rows[29], np.where(_i486 == 30, rows[30], np.where(_i486 == 31, rows[31], np.where(_i486 == 32, rows[32], np.where(_i486 == 33, rows[33], np.where(_i486 == 34, rows[34], np.where(_i486 == 35, rows[35], np.where(_i486 == 36, rows[36], np.where(_i486 == 37, rows[37], np.where(_i486 == 38, rows[38], np.where(_i486 == 39, rows[39], np.where(_i486 == 40, rows[40], np.where(_i486 == 41, rows[41], np.where(_i486 == 42, rows[42], np.where(_i486 == 43, rows[43], np.where(_i486 == 44, rows[44], np.where(_i486 == 45, rows[45], np.where(_i486 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m485, 1, found)
+        _i487 = 6*_i457 + 1
+        _i488 = 6*_i457 + 1
+        _i489 = 6*_i457 + 1
+        _c490 = (np.where(_i487 == 0, rows[0], np.where(_i487 == 1, rows[1], np.where(_i487 == 2, rows[2], np.where(_i487 == 3, rows[3], np.where(_i487 == 4, rows[4], np.where(_i487 == 5, rows[5], np.where(_i487 == 6, rows[6], np.where(_i487 == 7, rows[7], np.where(_i487 == 8, rows[8], np.where(_i487 == 9, rows[9], np.where(_i487 == 10, rows[10], np.where(_i487 == 11, rows[11], np.where(_i487 == 12, rows[12], np.where(_i487 == 13, rows[13], np.where(_i487 == 14, rows[14], np.where(_i487 == 15, rows[15], np.where(_i487 == 16, rows[16], np.where(_i487 == 17, rows[17], np.where(_i487 == 18, rows[18], np.where(_i487 == 19, rows[19], np.where(_i487 == 20, rows[20], np.where(_i487 == 21, rows[21], np.where(_i487 == 22, rows[22], np.where(_i487 == 23, rows[23], np.where(_i487 == 24, rows[24], np.where(_i487 == 25, rows[25], np.where(_i487 == 26, rows[26], np.where(_i487 == 27, rows[27], np.where(_i487 == 28, rows[28], np.where(_i487 == 29, rows[29], np.where(_i487 == 30, rows[30], np.where(_i487 == 31, rows[31], np.where(_i487 == 32, rows[32], np.where(_i487 == 33, rows[33], np.where(_i487 == 34, rows[34], np.where(_i487 == 35, rows[35], np.where(_i487 == 36, rows[36], np.where(_i487 == 37, rows[37], np.where(_i487 == 38, rows[38], np.where(_i487 == 39, rows[39], np.where(_i487 == 40, rows[40], np.where(_i487 == 41, rows[41], np.where(_i487 == 42, rows[42], np.where(_i487 == 43, rows[43], np.where(_i487 == 44, rows[44], np.where(_i487 == 45, rows[45], np.where(_i487 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i488 == 0, rows[0], np.where(_i488 == 1, rows[1], np.where(_i488 == 2, rows[2], np.where(_i488 == 3, rows[3], np.where(_i488 == 4, rows[4], np.where(_i488 == 5, rows[5], np.where(_i488 == 6, rows[6], np.where(_i488 == 7, rows[7], np.where(_i488 == 8, rows[8], np.where(_i488 == 9, rows[9], np.where(_i488 == 10, rows[10], np.where(_i488 == 11, rows[11], np.where(_i488 == 12, rows[12], np.where(_i488 == 13, rows[13], np.where(_i488 == 14, rows[14], np.where(_i488 == 15, rows[15], np.where(_i488 == 16, rows[16], np.where(_i488 == 17, rows[17], np.where(_i488 == 18, rows[18], np.where(_i488 == 19, rows[19], np.where(_i488 == 20, rows[20], np.where(_i488 == 21, rows[21], np.where(_i488 == 22, rows[22], np.where(_i488 == 23, rows[23], np.where(_i488 == 24, rows[24], np.where(_i488 == 25, rows[25], np.where(_i488 == 26, rows[26], np.where(_i488 == 27, rows[27], np.where(_i488 == 28, rows[28], np.where(_i488 == 29, rows[29], np.where(_i488 == 30, rows[30], np.where(_i488 == 31, rows[31], np.where(_i488 == 32, rows[32], np.where(_i488 == 33, rows[33], np.where(_i488 == 34, rows[34], np.where(_i488 == 35, rows[35], np.where(_i488 == 36, rows[36], np.where(_i488 == 37, rows[37], np.where(_i488 == 38, rows[38], np.where(_i488 == 39, rows[39], np.where(_i488 == 40, rows[40], np.where(_i488 == 41, rows[41], np.where(_i488 == 42, rows[42], np.where(_i488 == 43, rows[43], np.where(_i488 == 44, rows[44], np.where(_i488 == 45, rows[45], np.where(_i488 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i489 == 0, rows[0], np.where(_i489 == 1, rows[1], np.where(_i489 == 2, rows[2], np.where(_i489 == 3, rows[3], np.where(_i489 == 4, rows[4], np.where(_i489 == 5, rows[5], np.where(_i489 == 6, rows[6], np.where(_i489 == 7, rows[7], np.where(_i489 == 8, rows[8], np.where(_i489 == 9, rows[9], np.where(_i489 == 10, rows[10], np.where(_i489 == 11, rows[11], np.where(_i489 == 12, rows[12], np.where(_i489 == 13, rows[13], np.where(_i489 == 14, rows[14], np.where(_i489 == 15, rows[15], np.where(_i489 == 16, rows[16], np.where(_i489 == 17, rows[17], np.where(_i489 == 18, rows[18], np.where(_i489 == 19, rows[19], np.where(_i489 == 20, rows[20], np.where(_i489 == 21, rows[21], np.where(_i489 == 22, rows[22], np.where(_i489 == 23, rows[23], np.where(_i489 == 24, rows[24], np.where(_i489 == 25, rows[25], np.where(_i489 == 26, rows[26], np.where(_i489 == 27, rows[27], np.where(_i489 == 28, rows[28], np.where(_i489 == 29, rows[29], np.where(_i489 == 30, rows[30], np.where(_i489 == 31, rows[31], np.where(_i489 == 32, rows[32], np.where(_i489 == 33, rows[33], np.where(_i489 == 34, rows[34], np.where(_i489 == 35, rows[35], np.where(_i489 == 36, rows[36], np.where(_i489 == 37, rows[37], np.where(_i489 == 38, rows[38], np.where(_i489 == 39, rows[39], np.where(_i489 == 40, rows[40], np.where(_i489 == 41, rows[41], np.where(_i489 == 42, rows[42], np.where(_i489 == 43, rows[43], np.where(_i489 == 44, rows[44], np.where(_i489 == 45, rows[45], np.where(_i489 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])))
+        _m491 = _run458 & _c490
+        _i492 = 6*_i457 + 1
+        y = np.where(_m491, np.where(_i492 == 0, rows[0], np.where(_i492 == 1, rows[1], np.where(_i492 == 2, rows[2], np.where(_i492 == 3, rows[3], np.where(_i492 == 4, rows[4], np.where(_i492 == 5, rows[5], np.where(_i492 == 6, rows[6], np.where(_i492 == 7, rows[7], np.where(_i492 == 8, rows[8], np.where(_i492 == 9, rows[9], np.where(_i492 == 10, rows[10], np.where(_i492 == 11, rows[11], np.where(_i492 == 12, rows[12], np.where(_i492 == 13, rows[13], np.where(_i492 == 14, rows[14], np.where(_i492 == 15, rows[15], np.where(_i492 == 16, rows[16], np.where(_i492 == 17, rows[17], np.where(_i492 == 18, rows[18], np.where(_i492 == 19, rows[19], np.where(_i492 == 20, rows[20], np.where(_i492 == 21, rows[21], np.where(_i492 == 22, rows[22], np.where(_i492 == 23, rows[23], np.where(_i492 == 24, rows[24], np.where(_i492 == 25, rows[25], np.where(_i492 == 26, rows[26], np.where(_i492 == 27, rows[27], np.where(_i492 == 28, rows[28], np.where(_i492 == 29, rows[29], np.where(_i492 == 30, rows[30], np.where(_i492 == 31, rows[31], np.where(_i492 == 32, rows[32], np.where(_i492 == 33, rows[33], np.where(_i492 == 34, rows[34], np.where(_i492 == 35, rows[35], np.where(_i492 == 36, rows[36], np.where(_i492 == 37, rows[37], np.where(_i492 == 38, rows[38], np.where(_i492 == 39, rows[39], np.where(_i492 == 40, rows[40], np.where(_i492 == 41, rows[41], np.where(_i492 == 42, rows[42], np.where(_i492 == 43, rows[43], np.where(_i492 == 44, rows[44], np.where(_i492 == 45, rows[45], np.where(_i492 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m491, 1, found)
+        _i493 = 6*_i457 + 1
+        _i494 = 6*_i457 + 1
+        _i495 = 6*_i457 + 1
+        _c496 = (np.where(_i493 == 0, rows[0], np.where(_i493 == 1, rows[1], np.where(_i493 == 2, rows[2], np.where(_i493 == 3, rows[3], np.where(_i493 == 4, rows[4], np.where(_i493 == 5, rows[5], np.where(_i493 == 6, rows[6], np.where(_i493 == 7, rows[7], np.where(_i493 == 8, rows[8], np.where(_i493 == 9, rows[9], np.where(_i493 == 10, rows[10], np.where(_i493 == 11, rows[11], np.where(_i493 == 12, rows[12], np.where(_i493 == 13, rows[13], np.where(_i493 == 14, rows[14], np.where(_i493 == 15, rows[15], np.where(_i493 == 16, rows[16], np.where(_i493 == 17, rows[17], np.where(_i493 == 18, rows[18], np.where(_i493 == 19, rows[19], np.where(_i493 == 20, rows[20], np.where(_i493 == 21, rows[21], np.where(_i493 == 22, rows[22], np.where(_i493 == 23, rows[23], np.where(_i493 == 24, rows[24], np.where(_i493 == 25, rows[25], np.where(_i493 == 26, rows[26], np.where(_i493 == 27, rows[27], np.where(_i493 == 28, rows[28], np.where(_i493 == 29, rows[29], np.where(_i493 == 30, rows[30], np.where(_i493 == 31, rows[31], np.where(_i493 == 32, rows[32], np.where(_i493 == 33, rows[33], np.where(_i493 == 34, rows[34], np.where(_i493 == 35, rows[35], np.where(_i493 == 36, rows[36], np.where(_i493 == 37, rows[37], np.where(_i493 == 38, rows[38], np.where(_i493 == 39, rows[39], np.where(_i493 == 40, rows[40], np.where(_i493 == 41, rows[41], np.where(_i493 == 42, rows[42], np.where(_i493 == 43, rows[43], np.where(_i493 == 44, rows[44], np.where(_i493 == 45, rows[45], np.where(_i493 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i494 == 0, rows[0], np.where(_i494 == 1, rows[1], np.where(_i494 == 2, rows[2], np.where(_i494 == 3, rows[3], np.where(_i494 == 4, rows[4], np.where(_i494 == 5, rows[5], np.where(_i494 == 6, rows[6], np.where(_i494 == 7, rows[7], np.where(_i494 == 8, rows[8], np.where(_i494 == 9, rows[9], np.where(_i494 == 10, rows[10], np.where(_i494 == 11, rows[11], np.where(_i494 == 12, rows[12], np.where(_i494 == 13, rows[13], np.where(_i494 == 14, rows[14], np.where(_i494 == 15, rows[15], np.where(_i494 == 16, rows[16], np.where(_i494 == 17, rows[17], np.where(_i494 == 18, rows[18], np.where(_i494 == 19, rows[19], np.where(_i494 == 20, rows[20], np.where(_i494 == 21, rows[21], np.where(_i494 == 22, rows[22], np.where(_i494 == 23, rows[23], np.where(_i494 == 24, rows[24], np.where(_i494 == 25, rows[25], np.where(_i494 == 26, rows[26], np.where(_i494 == 27, rows[27], np.where(_i494 == 28, rows[28], np.where(_i494 == 29, rows[29], np.where(_i494 == 30, rows[30], np.where(_i494 == 31, rows[31], np.where(_i494 == 32, rows[32], np.where(_i494 == 33, rows[33], np.where(_i494 == 34, rows[34], np.where(_i494 == 35, rows[35], np.where(_i494 == 36, rows[36], np.where(_i494 == 37, rows[37], np.where(_i494 == 38, rows[38], np.where(_i494 == 39, rows[39], np.where(_i494 == 40, rows[40], np.where(_i494 == 41, rows[41], np.where(_i494 == 42, rows[42], np.where(_i494 == 43, rows[43], np.where(_i494 == 44, rows[44], np.where(_i494 == 45, rows[45], np.where(_i494 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i495 == 0, rows[0], np.where(_i495 == 1, rows[1], np.where(_i495 == 2, rows[2], np.where(_i495 == 3, rows[3], np.where(_i495 == 4, rows[4], np.where(_i495 == 5, rows[5], np.where(_i495 == 6, rows[6], np.where(_i495 == 7, rows[7], np.where(_i495 == 8, rows[8], np.where(_i495 == 9, rows[9], np.where(_i495 == 10, rows[10], np.where(_i495 == 11, rows[11], np.where(_i495 == 12, rows[12], np.where(_i495 == 13, rows[13], np.where(_i495 == 14, rows[14], np.where(_i495 == 15, rows[15], np.where(_i495 == 16, rows[16], np.where(_i495 == 17, rows[17], np.where(_i495 == 18, rows[18], np.where(_i495 == 19, rows[19], np.where(_i495 == 20, rows[20], np.where(_i495 == 21, rows[21], np.where(_i495 == 22, rows[22], np.where(_i495 == 23, rows[23], np.where(_i495 == 24, rows[24], np.where(_i495 == 25, rows[25], np.where(_i495 == 26, rows[26], np.where(_i495 == 27, rows[27], np.where(_i495 == 28, rows[28], np.where(_i495 == 29, rows[29], np.where(_i495 == 30, rows[30], np.where(_i495 == 31, rows[31], np.where(_i495 == 32, rows[32], np.where(_i495 == 33, rows[33], np.where(_i495 == 34, rows[34], np.where(_i495 == 35, rows[35], np.where(_i495 == 36, rows[36], np.where(_i495 == 37, rows[37], np.where(_i495 == 38, rows[38], np.where(_i495 == 39, rows[39], np.where(_i495 == 40, rows[40], np.where(_i495 == 41, rows[41], np.where(_i495 == 42, rows[42], np.where(_i495 == 43, rows[43], np.where(_i495 == 44, rows[44], np.where(_i495 == 45, rows[45], np.where(_i495 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])))
+        _m497 = _run458 & _c496
+        _i498 = 6*_i457 + 1
+        y = np.where(_m497, np.where(_i498 == 0, rows[0], np.where(_i498 == 1, rows[1], np.where(_i498 == 2, rows[2], np.where(_i498 == 3, rows[3], np.where(_i498 == 4, rows[4], np.where(_i498 == 5, rows[5], np.where(_i498 == 6, rows[6], np.where(_i498 == 7, rows[7], np.where(_i498 == 8, rows[8], np.where(_i498 == 9, rows[9], np.where(_i498 == 10, rows[10], np.where(_i498 == 11, rows[11], np.where(_i498 == 12, rows[12], np.where(_i498 == 13, rows[13], np.where(_i498 == 14, rows[14], np.where(_i498 == 15, rows[15], np.where(_i498 == 16, rows[16], np.where(_i498 == 17, rows[17], np.where(_i498 == 18, rows[18], np.where(_i498 == 19, rows[19], np.where(_i498 == 20, rows[20], np.where(_i498 == 21, rows[21], np.where(_i498 == 22, rows[22], np.where(_i498 == 23, rows[23], np.where(_i498 == 24, rows[24], np.where(_i498 == 25, rows[25], np.where(_i498 == 26, rows[26], np.where(_i498 == 27, rows[27], np.where(_i498 == 28, rows[28], np.where(_i498 == 29, rows[29], np.where(_i498 == 30, rows[30], np.where(_i498 == 31, rows[31], np.where(_i498 == 32, rows[32], np.where(_i498 == 33, rows[33], np.where(_i498 == 34, rows[34], np.where(_i498 == 35, rows[35], np.where(_i498 == 36, rows[36], np.where(_i498 == 37, rows[37], np.where(_i498 == 38, rows[38], np.where(_i498 == 39, rows[39], np.where(_i498 == 40, rows[40], np.where(_i498 == 41, rows[41], np.where(_i498 == 42, rows[42], np.where(_i498 == 43, rows[43], np.where(_i498 == 44, rows[44], np.where(_i498 == 45, rows[45], np.where(_i498 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m497, 1, found)
+        near[1] = np.where(_run458, y, near[1])
+        _i499 = 6*_i457 + 2
+        k = np.where(_run458, np.rint((q_ref[2] - np.where(_i499 == 0, rows[0], np.where(_i499 == 1, rows[1], np.where(_i499 == 2, rows[2], np.where(_i499 == 3, rows[3], np.where(_i499 == 4, rows[4], np.where(_i499 == 5, rows[5], np.where(_i499 == 6, rows[6], np.where(_i499 == 7, rows[7], np.where(_i499 == 8, rows[8], np.where(_i499 == 9, rows[9], np.where(_i499 == 10, rows[10], np.where(_i499 == 11, rows[11], np.where(_i499 == 12, rows[12], np.where(_i499 == 13, rows[13], np.where(_i499 == 14, rows[14], np.where(_i499 == 15, rows[15], np.where(_i499 == 16, rows[16], np.where(_i499 == 17, rows[17], np.where(_i499 == 18, rows[18], np.where(_i499 == 19, rows[19], np.where(_i499 == 20, rows[20], np.where(_i499 == 21, rows[21], np.where(_i499 == 22, rows[22], np.where(_i499 == 23, rows[23], np.where(_i499 == 24, rows[24], np.where(_i499 == 25, rows[25], np.where(_i499 == 26, rows[26], np.where(_i499 == 27, rows[27], np.where(_i499 == 28, rows[28], np.where(_i499 == 29, rows[29], np.where(_i499 == 30, rows[30], np.where(_i499 == 31, rows[31], np.where(_i499 == 32, rows[32], np.where(_i499 == 33, rows[33], np.where(_i499 == 34, rows[34], np.where(_i499 == 35, rows[35], np.where(_i499 == 36, rows[36], np.where(_i499 == 37, rows[37], np.where(_i499 == 38, rows[38], np.where(_i499 == 39, rows[39], np.where(_i499 == 40, rows[40], np.where(_i499 == 41, rows[41], np.where(_i499 == 42, rows[42], np.where(_i499 == 43, rows[43], np.where(_i499 == 44, rows[44], np.where(_i499 == 45, rows[45], np.where(_i499 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i500 = 6*_i457 + 2
+        y = np.where(_run458, np.where(_i500 == 0, rows[0], np.where(_i500 == 1, rows[1], np.where(_i500 == 2, rows[2], np.where(_i500 == 3, rows[3], np.where(_i500 == 4, rows[4], np.where(_i500 == 5, rows[5], np.where(_i500 == 6, rows[6], np.where(_i500 == 7, rows[7], np.where(_i500 == 8, rows[8], np.where(_i500 == 9, rows[9], np.where(_i500 == 10, rows[10], np.where(_i500 == 11, rows[11], np.where(_i500 == 12, rows[12], np.where(_i500 == 13, rows[13], np.where(_i500 == 14, rows[14], np.where(_i500 == 15, rows[15], np.where(_i500 == 16, rows[16], np.where(_i500 == 17, rows[17], np.where(_i500 == 18, rows[18], np.where(_i500 == 19, rows[19], np.where(_i500 == 20, rows[20], np.where(_i500 == 21, rows[21], np.where(_i500 == 22, rows[22], np.where(_i500 == 23, rows[23], np.where(_i500 == 24, rows[24], np.where(_i500 == 25, rows[25], np.where(_i500 == 26, rows[26], np.where(_i500 == 27, rows[27], np.where(_i500 == 28, rows[28], np.where(_i500 == 29, rows[29], np.where(_i500 == 30, rows[30], np.where(_i500 == 31, rows[31], np.where(_i500 == 32, rows[32], np.where(_i500 == 33, rows[33], np.where(_i500 == 34, rows[34], np.where(_i500 == 35, rows[35], np.where(_i500 == 36, rows[36], np.where(_i500 == 37, rows[37], np.where(_i500 == 38, rows[38], np.where(_i500 == 39, rows[39], np.where(_i500 == 40, rows[40], np.where(_i500 == 41, rows[41], np.where(_i500 == 42, rows[42], np.where(_i500 == 43, rows[43], np.where(_i500 == 44, rows[44], np.where(_i500 == 45, rows[45], np.where(_i500 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i501 = 6*_i457 + 2
+        _i502 = 6*_i457 + 2
+        _i503 = 6*_i457 + 2
+        _c504 = (np.where(_i501 == 0, rows[0], np.where(_i501 == 1, rows[1], np.where(_i501 == 2, rows[2], np.where(_i501 == 3, rows[3], np.where(_i501 == 4, rows[4], np.where(_i501 == 5, rows[5], np.where(_i501 == 6, rows[6], np.where(_i501 == 7, rows[7], np.where(_i501 == 8, rows[8], np.where(_i501 == 9, rows[9], np.where(_i501 == 10, rows[10], np.where(_i501 == 11, rows[11], np.where(_i501 == 12, rows[12], np.where(_i501 == 13, rows[13], np.where(_i501 == 14, rows[14], np.where(_i501 == 15, rows[15], np.where(_i501 == 16, rows[16], np.where(_i501 == 17, rows[17], np.where(_i501 == 18, rows[18], np.where(_i501 == 19, rows[19], np.where(_i501 == 20, rows[20], np.where(_i501 == 21, rows[21], np.where(_i501 == 22, rows[22], np.where(_i501 == 23, rows[23], np.where(_i501 == 24, rows[24], np.where(_i501 == 25, rows[25], np.where(_i501 == 26, rows[26], np.where(_i501 == 27, rows[27], np.where(_i501 == 28, rows[28], np.where(_i501 == 29, rows[29], np.where(_i501 == 30, rows[30], np.where(_i501 == 31, rows[31], np.where(_i501 == 32, rows[32], np.where(_i501 == 33, rows[33], np.where(_i501 == 34, rows[34], np.where(_i501 == 35, rows[35], np.where(_i501 == 36, rows[36], np.where(_i501 == 37, rows[37], np.where(_i501 == 38, rows[38], np.where(_i501 == 39, rows[39], np.where(_i501 == 40, rows[40], np.where(_i501 == 41, rows[41], np.where(_i501 == 42, rows[42], np.where(_i501 == 43, rows[43], np.where(_i501 == 44, rows[44], np.where(_i501 == 45, rows[45], np.where(_i501 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i502 == 0, rows[0], np.where(_i502 == 1, rows[1], np.where(_i502 == 2, rows[2], np.where(_i502 == 3, rows[3], np.where(_i502 == 4, rows[4], np.where(_i502 == 5, rows[5], np.where(_i502 == 6, rows[6], np.where(_i502 == 7, rows[7], np.where(_i502 == 8, rows[8], np.where(_i502 == 9, rows[9], np.where(_i502 == 10, rows[10], np.where(_i502 == 11, rows[11], np.where(_i502 == 12, rows[12], np.where(_i502 == 13, rows[13], np.where(_i502 == 14, rows[14], np.where(_i502 == 15, rows[15], np.where(_i502 == 16, rows[16], np.where(_i502 == 17, rows[17], np.where(_i502 == 18, rows[18], np.where(_i502 == 19, rows[19], np.where(_i502 == 20, rows[20], np.where(_i502 == 21, rows[21], np.where(_i502 == 22, rows[22], np.where(_i502 == 23, rows[23], np.where(_i502 == 24, rows[24], np.where(_i502 == 25, rows[25], np.where(_i502 == 26, rows[26], np.where(_i502 == 27, rows[27], np.where(_i502 == 28, rows[28], np.where(_i502 == 29, rows[29], np.where(_i502 == 30, rows[30], np.where(_i502 == 31, rows[31], np.where(_i502 == 32, rows[32], np.where(_i502 == 33, rows[33], np.where(_i502 == 34, rows[34], np.where(_i502 == 35, rows[35], np.where(_i502 == 36, rows[36], np.where(_i502 == 37, rows[37], np.where(_i502 == 38, rows[38], np.where(_i502 == 39, rows[39], np.where(_i502 == 40, rows[40], np.where(_i502 == 41, rows[41], np.where(_i502 == 42, rows[42], np.where(_i502 == 43, rows[43], np.where(_i502 == 44, rows[44], np.where(_i502 == 45, rows[45], np.where(_i502 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i503 == 0, rows[0], np.where(_i503 == 1, rows[1], np.where(_i503 == 2, rows[2], np.where(_i503 == 3, rows[3], np.where(_i503 == 4, rows[4], np.where(_i503 == 5, rows[5], np.where(_i503 == 6, rows[6], np.where(_i503 == 7, rows[7], np.where(_i503 == 8, rows[8], np.where(_i503 == 9, rows[9], np.where(_i503 == 10, rows[10], np.where(_i503 == 11, rows[11], np.where(_i503 == 12, rows[12], np.where(_i503 == 13, rows[13], np.where(_i503 == 14, rows[14], np.where(_i503 == 15, rows[15], np.where(_i503 == 16, rows[16], np.where(_i503 == 17, rows[17], np.where(_i503 == 18, rows[18], np.where(_i503 == 19, rows[19], np.where(_i503 == 20, rows[20], np.where(_i503 == 21, rows[21], np.where(_i503 == 22, rows[22], np.where(_i503 == 23, rows[23], np.where(_i503 == 24, rows[24], np.where(_i503 == 25, rows[25], np.where(_i503 == 26, rows[26], np.where(_i503 == 27, rows[27], np.where(_i503 == 28, rows[28], np.where(_i503 == 29, rows[29], np.where(_i503 == 30, rows[30], np.where(_i503 == 31, rows[31], np.where(_i503 == 32, rows[32], np.where(_i503 == 33, rows[33], np.where(_i503 == 34, rows[34], np.where(_i503 == 35, rows[35], np.where(_i503 == 36, rows[36], np.where(_i503 == 37, rows[37], np.where(_i503 == 38, rows[38], np.where(_i503 == 39, rows[39], np.where(_i503 == 40, rows[40], np.where(_i503 == 41, rows[41], np.where(_i503 == 42, rows[42], np.where(_i503 == 43, rows[43], np.where(_i503 == 44, rows[44], np.where(_i503 == 45, rows[45], np.where(_i503 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[2]) < np.abs(y - q_ref[2])))
+        _m505 = _run458 & _c504
+        _i506 = 6*_i457 + 2
+        y = np.where(_m505, np.where(_i506 == 0, rows[0], np.where(_i506 == 1, rows[1], np.where(_i506 == 2, rows[2], np.where(_i506 == 3, rows[3], np.where(_i506 == 4, rows[4], np.where(_i506 == 5, rows[5], np.where(_i506 == 6, rows[6], np.where(_i506 == 7, rows[7], np.where(_i506 == 8, rows[8], np.where(_i506 == 9, rows[9], np.where(_i506 == 10, rows[10], np.where(_i506 == 11, rows[11], np.where(_i506 == 12, rows[12], np.where(_i506 == 13, rows[13], np.where(_i506 == 14, rows[14], np.where(_i506 == 15, rows[15], np.where(_i506 == 16, rows[16], np.where(_i506 == 17, rows[17], np.where(_i506 == 18, rows[18], np.where(_i506 == 19, rows[19], np.where(_i506 == 20, rows[20], np.where(_i506 == 21, rows[21], np.where(_i506 == 22, rows[22], np.where(_i506 == 23, rows[23], np.where(_i506 == 24, rows[24], np.where(_i506 == 25, rows[25], np.where(_i506 == 26, rows[26], np.where(_i506 == 27, rows[27], np.where(_i506 == 28, rows[28], np.where(_i506 == 29, rows[29], np.where(_i506 == 30, rows[30], np.where(_i506 == 31, rows[31], np.where(_i506 == 32, rows[32], np.where(_i506 == 33, rows[33], np.where(_i506 == 34, rows[34], np.where(_i506 == 35, rows[35], np.where(_i506 == 36, rows[36], np.where(_i506 == 37, rows[37], np.where(_i506 == 38, rows[38], np.where(_i506 == 39, rows[39], np.where(_i506 == 40, rows[40], np.where(_i506 == 41, rows[41], np.where(_i506 == 42, rows[42], np.where(_i506 == 43, rows[43], np.where(_i506 == 44, rows[44], np.where(_i506 == 45, rows[45], np.where(_i506 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m505, 1, found)
+        _i507 = 6*_i457 + 2
+        _i508 = 6*_i457 + 2
+        _i509 = 6*_i457 + 2
+        _c510 = (np.where(_i507 == 0, rows[0], np.where(_i507 == 1, rows[1], np.where(_i507 == 2, rows[2], np.where(_i507 == 3, rows[3], np.where(_i507 == 4, rows[4], np.where(_i507 == 5, rows[5], np.where(_i507 == 6, rows[6], np.where(_i507 == 7, rows[7], np.where(_i507 == 8, rows[8], np.where(_i507 == 9, rows[9], np.where(_i507 == 10, rows[10], np.where(_i507 == 11, rows[11], np.where(_i507 == 12, rows[12], np.where(_i507 == 13, rows[13], np.where(_i507 == 14, rows[14], np.where(_i507 == 15, rows[15], np.where(_i507 == 16, rows[16], np.where(_i507 == 17, rows[17], np.where(_i507 == 18, rows[18], np.where(_i507 == 19, rows[19], np.where(_i507 == 20, rows[20], np.where(_i507 == 21, rows[21], np.where(_i507 == 22, rows[22], np.where(_i507 == 23, rows[23], np.where(_i507 == 24, rows[24], np.where(_i507 == 25, rows[25], np.where(_i507 == 26, rows[26], np.where(_i507 == 27, rows[27], np.where(_i507 == 28, rows[28], np.where(_i507 == 29, rows[29], np.where(_i507 == 30, rows[30], np.where(_i507 == 31, rows[31], np.where(_i507 == 32, rows[32], np.where(_i507 == 33, rows[33], np.where(_i507 == 34, rows[34], np.where(_i507 == 35, rows[35], np.where(_i507 == 36, rows[36], np.where(_i507 == 37, rows[37], np.where(_i507 == 38, rows[38], np.where(_i507 == 39, rows[39], np.where(_i507 == 40, rows[40], np.where(_i507 == 41, rows[41], np.where(_i507 == 42, rows[42], np.where(_i507 == 43, rows[43], np.where(_i507 == 44, rows[44], np.where(_i507 == 45, rows[45], np.where(_i507 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i508 == 0, rows[0], np.where(_i508 == 1, rows[1], np.where(_i508 == 2, rows[2], np.where(_i508 == 3, rows[3], np.where(_i508 == 4, rows[4], np.where(_i508 == 5, rows[5], np.where(_i508 == 6, rows[6], np.where(_i508 == 7, rows[7], np.where(_i508 == 8, rows[8], np.where(_i508 == 9, rows[9], np.where(_i508 == 10, rows[10], np.where(_i508 == 11, rows[11], np.where(_i508 == 12, rows[12], np.where(_i508 == 13, rows[13], np.where(_i508 == 14, rows[14], np.where(_i508 == 15, rows[15], np.where(_i508 == 16, rows[16], np.where(_i508 == 17, rows[17], np.where(_i508 == 18, rows[18], np.where(_i508 == 19, rows[19], np.where(_i508 == 20, rows[20], np.where(_i508 == 21, rows[21], np.where(_i508 == 22, rows[22], np.where(_i508 == 23, rows[23], np.where(_i508 == 24, rows[24], np.where(_i508 == 25, rows[25], np.where(_i508 == 26, rows[26], np.where(_i508 == 27, rows[27], np.where(_i508 == 28, rows[28], np.where(_i508 == 29, rows[29], np.where(_i508 == 30, rows[30], np.where(_i508 == 31, rows[31], np.where(_i508 == 32, rows[32], np.where(_i508 == 33, rows[33], np.where(_i508 == 34, rows[34], np.where(_i508 == 35, rows[35], np.where(_i508 == 36, rows[36], np.where(_i508 == 37, rows[37], np.where(_i508 == 38, rows[38], np.where(_i508 == 39, rows[39], np.where(_i508 == 40, rows[40], np.where(_i508 == 41, rows[41], np.where(_i508 == 42, rows[42], np.where(_i508 == 43, rows[43], np.where(_i508 == 44, rows[44], np.where(_i508 == 45, rows[45], np.where(_i508 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i509 == 0, rows[0], np.where(_i509 == 1, rows[1], np.where(_i509 == 2, rows[2], np.where(_i509 == 3, rows[3], np.where(_i509 == 4, rows[4], np.where(_i509 == 5, rows[5], np.where(_i509 == 6, rows[6], np.where(_i509 == 7, rows[7], np.where(_i509 == 8, rows[8], np.where(_i509 == 9, rows[9], np.where(_i509 == 10, rows[10], np.where(_i509 == 11, rows[11], np.where(_i509 == 12, rows[12], np.where(_i509 == 13, rows[13], np.where(_i509 == 14, rows[14], np.where(_i509 == 15, rows[15], np.where(_i509 == 16, rows[16], np.where(_i509 == 17, rows[17], np.where(_i509 == 18, rows[18], np.where(_i509 == 19, rows[19], np.where(_i509 == 20, rows[20], np.where(_i509 == 21, rows[21], np.where(_i509 == 22, rows[22], np.where(_i509 == 23, rows[23], np.where(_i509 == 24, rows[24], np.where(_i509 == 25, rows[25], np.where(_i509 == 26, rows[26], np.where(_i509 == 27, rows[27], np.where(_i509 == 28, rows[28], np.where(_i509 == 29, rows[29], np.where(_i509 == 30, rows[30], np.where(_i509 == 31, rows[31], np.where(_i509 == 32, rows[32], np.where(_i509 == 33, rows[33], np.where(_i509 == 34, rows[34], np.where(_i509 == 35, rows[35], np.where(_i509 == 36, rows[36], np.where(_i509 == 37, rows[37], np.where(_i509 == 38, rows[38], np.where(_i509 == 39, rows[39], np.where(_i509 == 40, rows[40], np.where(_i509 == 41, rows[41], np.where(_i509 == 42, rows[42], np.where(_i509 == 43, rows[43], np.where(_i509 == 44, rows[44], np.where(_i509 == 45, rows[45], np.where(_i509 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])))
+        _m511 = _run458 & _c510
+        _i512 = 6*_i457 + 2
+        y = np.where(_m511, np.where(_i512 == 0, rows[0], np.where(_i512 == 1, rows[1], np.where(_i512 == 2, rows[2], np.where(_i512 == 3, rows[3], np.where(_i512 == 4, rows[4], np.where(_i512 == 5, rows[5], np.where(_i512 == 6, rows[6], np.where(_i512 == 7, rows[7], np.where(_i512 == 8, rows[8], np.where(_i512 == 9, rows[9], np.where(_i512 == 10, rows[10], np.where(_i512 == 11, rows[11], np.where(_i512 == 12, rows[12], np.where(_i512 == 13, rows[13], np.where(_i512 == 14, rows[14], np.where(_i512 == 15, rows[15], np.where(_i512 == 16, rows[16], np.where(_i512 == 17, rows[17], np.where(_i512 == 18, rows[18], np.where(_i512 == 19, rows[19], np.where(_i512 == 20, rows[20], np.where(_i512 == 21, rows[21], np.where(_i512 == 22, rows[22], np.where(_i512 == 23, rows[23], np.where(_i512 == 24, rows[24], np.where(_i512 == 25, rows[25], np.where(_i512 == 26, rows[26], np.where(_i512 == 27, rows[27], np.where(_i512 == 28, rows[28], np.where(_i512 == 29, rows[29], np.where(_i512 == 30, rows[30], np.where(_i512 == 31, rows[31], np.where(_i512 == 32, rows[32], np.where(_i512 == 33, rows[33], np.where(_i512 == 34, rows[34], np.where(_i512 == 35, rows[35], np.where(_i512 == 36, rows[36], np.where(_i512 == 37, rows[37], np.where(_i512 == 38, rows[38], np.where(_i512 == 39, rows[39], np.where(_i512 == 40, rows[40], np.where(_i512 == 41, rows[41], np.where(_i512 == 42, rows[42], np.where(_i512 == 43, rows[43], np.where(_i512 == 44, rows[44], np.where(_i512 == 45, rows[45], np.where(_i512 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m511, 1, found)
+        _i513 = 6*_i457 + 2
+        _i514 = 6*_i457 + 2
+        _i515 = 6*_i457 + 2
+        _c516 = (np.where(_i513 == 0, rows[0], np.where(_i513 == 1, rows[1], np.where(_i513 == 2, rows[2], np.where(_i513 == 3, rows[3], np.where(_i513 == 4, rows[4], np.where(_i513 == 5, rows[5], np.where(_i513 == 6, rows[6], np.where(_i513 == 7, rows[7], np.where(_i513 == 8, rows[8], np.where(_i513 == 9, rows[9], np.where(_i513 == 10, rows[10], np.where(_i513 == 11, rows[11], np.where(_i513 == 12, rows[12], np.where(_i513 == 13, rows[13], np.where(_i513 == 14, rows[14], np.where(_i513 == 15, rows[15], np.where(_i513 == 16, rows[16], np.where(_i513 == 17, rows[17], np.where(_i513 == 18, rows[18], np.where(_i513 == 19, rows[19], np.where(_i513 == 20, rows[20], np.where(_i513 == 21, rows[21], np.where(_i513 == 22, rows[22], np.where(_i513 == 23, rows[23], np.where(_i513 == 24, rows[24], np.where(_i513 == 25, rows[25], np.where(_i513 == 26, rows[26], np.where(_i513 == 27, rows[27], np.where(_i513 == 28, rows[28], np.where(_i513 == 29, rows[29], np.where(_i513 == 30, rows[30], np.where(_i513 == 31, rows[31], np.where(_i513 == 32, rows[32], np.where(_i513 == 33, rows[33], np.where(_i513 == 34, rows[34], np.where(_i513 == 35, rows[35], np.where(_i513 == 36, rows[36], np.where(_i513 == 37, rows[37], np.where(_i513 == 38, rows[38], np.where(_i513 == 39, rows[39], np.where(_i513 == 40, rows[40], np.where(_i513 == 41, rows[41], np.where(_i513 == 42, rows[42], np.where(_i513 == 43, rows[43], np.where(_i513 == 44, rows[44], np.where(_i513 == 45, rows[45], np.where(_i513 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i514 == 0, rows[0], np.where(_i514 == 1, rows[1], np.where(_i514 == 2, rows[2], np.where(_i514 == 3, rows[3], np.where(_i514 == 4, rows[4], np.where(_i514 == 5, rows[5], np.where(_i514 == 6, rows[6], np.where(_i514 == 7, rows[7], np.where(_i514 == 8, rows[8], np.where(_i514 == 9, rows[9], np.where(_i514 == 10, rows[10], np.where(_i514 == 11, rows[11], np.where(_i514 == 12, rows[12], np.where(_i514 == 13, rows[13], np.where(_i514 == 14, rows[14], np.where(_i514 == 15, rows[15], np.where(_i514 == 16, rows[16], np.where(_i514 == 17, rows[17], np.where(_i514 == 18, rows[18], np.where(_i514 == 19, rows[19], np.where(_i514 == 20, rows[20], np.where(_i514 == 21, rows[21], np.where(_i514 == 22, rows[22], np.where(_i514 == 23, rows[23], np.where(_i514 == 24, rows[24], np.where(_i514 == 25, rows[25], np.where(_i514 == 26, rows[26], np.where(_i514 == 27, rows[27], np.where(_i514 == 28, rows[28], np.where(_i514 == 29, rows[29], np.where(_i514 == 30, rows[30], np.where(_i514 == 31, rows[31], np.where(_i514 == 32, rows[32], np.where(_i514 == 33, rows[33], np.where(_i514 == 34, rows[34], np.where(_i514 == 35, rows[35], np.where(_i514 == 36, rows[36], np.where(_i514 == 37, rows[37], np.where(_i514 == 38, rows[38], np.where(_i514 == 39, rows[39], np.where(_i514 == 40, rows[40], np.where(_i514 == 41, rows[41], np.where(_i514 == 42, rows[42], np.where(_i514 == 43, rows[43], np.where(_i514 == 44, rows[44], np.where(_i514 == 45, rows[45], np.where(_i514 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i515 == 0, rows[0], np.where(_i515 == 1, rows[1], np.where(_i515 == 2, rows[2], np.where(_i515 == 3, rows[3], np.where(_i515 == 4, rows[4], np.where(_i515 == 5, rows[5], np.where(_i515 == 6, rows[6], np.where(_i515 == 7, rows[7], np.where(_i515 == 8, rows[8], np.where(_i515 == 9, rows[9], np.where(_i515 == 10, rows[10], np.where(_i515 == 11, rows[11], np.where(_i515 == 12, rows[12], np.where(_i515 == 13, rows[13], np.where(_i515 == 14, rows[14], np.where(_i515 == 15, rows[15], np.where(_i515 == 16, rows[16], np.where(_i515 == 17, rows[17], np.where(_i515 == 18, rows[18], np.where(_i515 == 19, rows[19], np.where(_i515 == 20, rows[20], np.where(_i515 == 21, rows[21], np.where(_i515 == 22, rows[22], np.where(_i515 == 23, rows[23], np.where(_i515 == 24, rows[24], np.where(_i515 == 25, rows[25], np.where(_i515 == 26, rows[26], np.where(_i515 == 27, rows[27], np.where(_i515 == 28, rows[28], np.where(_i515 == 29, rows[29], np.where(_i515 == 30, rows[30], np.where(_i515 == 31, rows[31], np.where(_i515 == 32, rows[32], np.where(_i515 == 33, rows[33], np.where(_i515 == 34, rows[34], np.where(_i515 == 35, rows[35], np.where(_i515 == 36, rows[36], np.where(_i515 == 37, rows[37], np.where(_i515 == 38, rows[38], np.where(_i515 == 39, rows[39], np.where(_i515 == 40, rows[40], np.where(_i515 == 41, rows[41], np.where(_i515 == 42, rows[42], np.where(_i515 == 43, rows[43], np.where(_i515 == 44, rows[44], np.where(_i515 == 45, rows[45], np.where(_i515 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])))
+        _m517 = _run458 & _c516
+        _i518 = 6*_i457 + 2
+        y = np.where(_m517, np.where(_i518 == 0, rows[0], np.where(_i518 == 1, rows[1], np.where(_i518 == 2, rows[2], np.where(_i518 == 3, rows[3], np.where(_i518 == 4, rows[4], np.where(_i518 == 5, rows[5], np.where(_i518 == 6, rows[6], np.where(_i518 == 7, rows[7], np.where(_i518 == 8, rows[8], np.where(_i518 == 9, rows[9], np.where(_i518 == 10, rows[10], np.where(_i518 == 11, rows[11], np.where(_i518 == 12, rows[12], np.where(_i518 == 13, rows[13], np.where(_i518 == 14, rows[14], np.where(_i518 == 15, rows[15], np.where(_i518 == 16, rows[16], np.where(_i518 == 17, rows[17], np.where(_i518 == 18, rows[18], np.where(_i518 == 19, rows[19], np.where(_i518 == 20, rows[20], np.where(_i518 == 21, rows[21], np.where(_i518 == 22, rows[22], np.where(_i518 == 23, rows[23], np.where(_i518 == 24, rows[24], np.where(_i518 == 25, rows[25], np.where(_i518 == 26, rows[26], np.where(_i518 == 27, rows[27], np.where(_i518 == 28, rows[28], np.where(_i518 == 29, rows[29], np.where(_i518 == 30, rows[30], np.where(_i518 == 31, rows[31], np.where(_i518 == 32, rows[32], np.where(_i518 == 33, rows[33], np.where(_i518 == 34, rows[34], np.where(_i518 == 35, rows[35], np.where(_i518 == 36, rows[36], np.where(_i518 == 37, rows[37], np.where(_i518 == 38, rows[38], np.where(_i518 == 39, rows[39], np.where(_i518 == 40, rows[40], np.where(_i518 == 41, rows[41], np.where(_i518 == 42, rows[42], np.where(_i518 == 43, rows[43], np.where(_i518 == 44, rows[44], np.where(_i518 == 45, rows[45], np.where(_i518 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m517, 1, found)
+        near[2] = np.where(_run458, y, near[2])
+        _i519 = 6*_i457 + 3
+        k = np.where(_run458, np.rint((q_ref[3] - np.where(_i519 == 0, rows[0], np.where(_i519 == 1, rows[1], np.where(_i519 == 2, rows[2], np.where(_i519 == 3, rows[3], np.where(_i519 == 4, rows[4], np.where(_i519 == 5, rows[5], np.where(_i519 == 6, rows[6], np.where(_i519 == 7, rows[7], np.where(_i519 == 8, rows[8], np.where(_i519 == 9, rows[9], np.where(_i519 == 10, rows[10], np.where(_i519 == 11, rows[11], np.where(_i519 == 12, rows[12], np.where(_i519 == 13, rows[13], np.where(_i519 == 14, rows[14], np.where(_i519 == 15, rows[15], np.where(_i519 == 16, rows[16], np.where(_i519 == 17, rows[17], np.where(_i519 == 18, rows[18], np.where(_i519 == 19, rows[19], np.where(_i519 == 20, rows[20], np.where(_i519 == 21, rows[21], np.where(_i519 == 22, rows[22], np.where(_i519 == 23, rows[23], np.where(_i519 == 24, rows[24], np.where(_i519 == 25, rows[25], np.where(_i519 == 26, rows[26], np.where(_i519 == 27, rows[27], np.where(_i519 == 28, rows[28], np.where(_i519 == 29, rows[29], np.where(_i519 == 30, rows[30], np.where(_i519 == 31, rows[31], np.where(_i519 == 32, rows[32], np.where(_i519 == 33, rows[33], np.where(_i519 == 34, rows[34], np.where(_i519 == 35, rows[35], np.where(_i519 == 36, rows[36], np.where(_i519 == 37, rows[37], np.where(_i519 == 38, rows[38], np.where(_i519 == 39, rows[39], np.where(_i519 == 40, rows[40], np.where(_i519 == 41, rows[41], np.where(_i519 == 42, rows[42], np.where(_i519 == 43, rows[43], np.where(_i519 == 44, rows[44], np.where(_i519 == 45, rows[45], np.where(_i519 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i520 = 6*_i457 + 3
+        y = np.where(_run458, np.where(_i520 == 0, rows[0], np.where(_i520 == 1, rows[1], np.where(_i520 == 2, rows[2], np.where(_i520 == 3, rows[3], np.where(_i520 == 4, rows[4], np.where(_i520 == 5, rows[5], np.where(_i520 == 6, rows[6], np.where(_i520 == 7, rows[7], np.where(_i520 == 8, rows[8], np.where(_i520 == 9, rows[9], np.where(_i520 == 10, rows[10], np.where(_i520 == 11, rows[11], np.where(_i520 == 12, rows[12], np.where(_i520 == 13, rows[13], np.where(_i520 == 14, rows[14], np.where(_i520 == 15, rows[15], np.where(_i520 == 16, rows[16], np.where(_i520 == 17, rows[17], np.where(_i520 == 18, rows[18], np.where(_i520 == 19, rows[19], np.where(_i520 == 20, rows[20], np.where(_i520 == 21, rows[21], np.where(_i520 == 22, rows[22], np.where(_i520 == 23, rows[23], np.where(_i520 == 24, rows[24], np.where(_i520 == 25, rows[25], np.where(_i520 == 26, rows[26], np.where(_i520 == 27, rows[27], np.where(_i520 == 28, rows[28], np.where(_i520 == 29, rows[29], np.where(_i520 == 30, rows[30], np.where(_i520 == 31, rows[31], np.where(_i520 == 32, rows[32], np.where(_i520 == 33, rows[33], np.where(_i520 == 34, rows[34], np.where(_i520 == 35, rows[35], np.where(_i520 == 36, rows[36], np.where(_i520 == 37, rows[37], np.where(_i520 == 38, rows[38], np.where(_i520 == 39, rows[39], np.where(_i520 == 40, rows[40], np.where(_i520 == 41, rows[41], np.where(_i520 == 42, rows[42], np.where(_i520 == 43, rows[43], np.where(_i520 == 44, rows[44], np.where(_i520 == 45, rows[45], np.where(_i520 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i521 = 6*_i457 + 3
+        _i522 = 6*_i457 + 3
+        _i523 = 6*_i457 + 3
+        _c524 = (np.where(_i521 == 0, rows[0], np.where(_i521 == 1, rows[1], np.where(_i521 == 2, rows[2], np.where(_i521 == 3, rows[3], np.where(_i521 == 4, rows[4], np.where(_i521 == 5, rows[5], np.where(_i521 == 6, rows[6], np.where(_i521 == 7, rows[7], np.where(_i521 == 8, rows[8], np.where(_i521 == 9, rows[9], np.where(_i521 == 10, rows[10], np.where(_i521 == 11, rows[11], np.where(_i521 == 12, rows[12], np.where(_i521 == 13, rows[13], np.where(_i521 == 14, rows[14], np.where(_i521 == 15, rows[15], np.where(_i521 == 16, rows[16], np.where(_i521 == 17, rows[17], np.where(_i521 == 18, rows[18], np.where(_i521 == 19, rows[19], np.where(_i521 == 20, rows[20], np.where(_i521 == 21, rows[21], np.where(_i521 == 22, rows[22], np.where(_i521 == 23, rows[23], np.where(_i521 == 24, rows[24], np.where(_i521 == 25, rows[25], np.where(_i521 == 26, rows[26], np.where(_i521 == 27, rows[27], np.where(_i521 == 28, rows[28], np.where(_i521 == 29, rows[29], np.where(_i521 == 30, rows[30], np.where(_i521 == 31, rows[31], np.where(_i521 == 32, rows[32], np.where(_i521 == 33, rows[33], np.where(_i521 == 34, rows[34], np.where(_i521 == 35, rows[35], np.where(_i521 == 36, rows[36], np.where(_i521 == 37, rows[37], np.where(_i521 == 38, rows[38], np.where(_i521 == 39, rows[39], np.where(_i521 == 40, rows[40], np.where(_i521 == 41, rows[41], np.where(_i521 == 42, rows[42], np.where(_i521 == 43, rows[43], np.where(_i521 == 44, rows[44], np.where(_i521 == 45, rows[45], np.where(_i521 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i522 == 0, rows[0], np.where(_i522 == 1, rows[1], np.where(_i522 == 2, rows[2], np.where(_i522 == 3, rows[3], np.where(_i522 == 4, rows[4], np.where(_i522 == 5, rows[5], np.where(_i522 == 6, rows[6], np.where(_i522 == 7, rows[7], np.where(_i522 == 8, rows[8], np.where(_i522 == 9, rows[9], np.where(_i522 == 10, rows[10], np.where(_i522 == 11, rows[11], np.where(_i522 == 12, rows[12], np.where(_i522 == 13, rows[13], np.where(_i522 == 14, rows[14], np.where(_i522 == 15, rows[15], np.where(_i522 == 16, rows[16], np.where(_i522 == 17, rows[17], np.where(_i522 == 18, rows[18], np.where(_i522 == 19, rows[19], np.where(_i522 == 20, rows[20], np.where(_i522 == 21, rows[21], np.where(_i522 == 22, rows[22], np.where(_i522 == 23, rows[23], np.where(_i522 == 24, rows[24], np.where(_i522 == 25, rows[25], np.where(_i522 == 26, rows[26], np.where(_i522 == 27, rows[27], np.where(_i522 == 28, rows[28], np.where(_i522 == 29, rows[29], np.where(_i522 == 30, rows[30], np.where(_i522 == 31, rows[31], np.where(_i522 == 32, rows[32], np.where(_i522 == 33, rows[33], np.where(_i522 == 34, rows[34], np.where(_i522 == 35, rows[35], np.where(_i522 == 36, rows[36], np.where(_i522 == 37, rows[37], np.where(_i522 == 38, rows[38], np.where(_i522 == 39, rows[39], np.where(_i522 == 40, rows[40], np.where(_i522 == 41, rows[41], np.where(_i522 == 42, rows[42], np.where(_i522 == 43, rows[43], np.where(_i522 == 44, rows[44], np.where(_i522 == 45, rows[45], np.where(_i522 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i523 == 0, rows[0], np.where(_i523 == 1, rows[1], np.where(_i523 == 2, rows[2], np.where(_i523 == 3, rows[3], np.where(_i523 == 4, rows[4], np.where(_i523 == 5, rows[5], np.where(_i523 == 6, rows[6], np.where(_i523 == 7, rows[7], np.where(_i523 == 8, rows[8], np.where(_i523 == 9, rows[9], np.where(_i523 == 10, rows[10], np.where(_i523 == 11, rows[11], np.where(_i523 == 12, rows[12], np.where(_i523 == 13, rows[13], np.where(_i523 == 14, rows[14], np.where(_i523 == 15, rows[15], np.where(_i523 == 16, rows[16], np.where(_i523 == 17, rows[17], np.where(_i523 == 18, rows[18], np.where(_i523 == 19, rows[19], np.where(_i523 == 20, rows[20], np.where(_i523 == 21, rows[21], np.where(_i523 == 22, rows[22], np.where(_i523 == 23, rows[23], np.where(_i523 == 24, rows[24], np.where(_i523 == 25, rows[25], np.where(_i523 == 26, rows[26], np.where(_i523 == 27, rows[27], np.where(_i523 == 28, rows[28], np.where(_i523 == 29, rows[29], np.where(_i523 == 30, rows[30], np.where(_i523 == 31, rows[31], np.where(_i523 == 32, rows[32], np.where(_i523 == 33, rows[33], np.where(_i523 == 34, rows[34], np.where(_i523 == 35, rows[35], np.where(_i523 == 36, rows[36], np.where(_i523 == 37, rows[37], np.where(_i523 == 38, rows[38], np.where(_i523 == 39, rows[39], np.where(_i523 == 40, rows[40], np.where(_i523 == 41, rows[41], np.where(_i523 == 42, rows[42], np.where(_i523 == 43, rows[43], np.where(_i523 == 44, rows[44], np.where(_i523 == 45, rows[45], np.where(_i523 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[3]) < np.abs(y - q_ref[3])))
+        _m525 = _run458 & _c524
+        _i526 = 6*_i457 + 3
+        y = np.where(_m525, np.where(_i526 == 0, rows[0], np.where(_i526 == 1, rows[1], np.where(_i526 == 2, rows[2], np.where(_i526 == 3, rows[3], np.where(_i526 == 4, rows[4], np.where(_i526 == 5, rows[5], np.where(_i526 == 6, rows[6], np.where(_i526 == 7, rows[7], np.where(_i526 == 8, rows[8], np.where(_i526 == 9, rows[9], np.where(_i526 == 10, rows[10], np.where(_i526 == 11, rows[11], np.where(_i526 == 12, rows[12], np.where(_i526 == 13, rows[13], np.where(_i526 == 14, rows[14], np.where(_i526 == 15, rows[15], np.where(_i526 == 16, rows[16], np.where(_i526 == 17, rows[17], np.where(_i526 == 18, rows[18], np.where(_i526 == 19, rows[19], np.where(_i526 == 20, rows[20], np.where(_i526 == 21, rows[21], np.where(_i526 == 22, rows[22], np.where(_i526 == 23, rows[23], np.where(_i526 == 24, rows[24], np.where(_i526 == 25, rows[25], np.where(_i526 == 26, rows[26], np.where(_i526 == 27, rows[27], np.where(_i526 == 28, rows[28], np.where(_i526 == 29, rows[29], np.where(_i526 == 30, rows[30], np.where(_i526 == 31, rows[31], np.where(_i526 == 32, rows[32], np.where(_i526 == 33, rows[33], np.where(_i526 == 34, rows[34], np.where(_i526 == 35, rows[35], np.where(_i526 == 36, rows[36], np.where(_i526 == 37, rows[37], np.where(_i526 == 38, rows[38], np.where(_i526 == 39, rows[39], np.where(_i526 == 40, rows[40], np.where(_i526 == 41, rows[41], np.where(_i526 == 42, rows[42], np.where(_i526 == 43, rows[43], np.where(_i526 == 44, rows[44], np.where(_i526 == 45, rows[45], np.where(_i526 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m525, 1, found)
+        _i527 = 6*_i457 + 3
+        _i528 = 6*_i457 + 3
+        _i529 = 6*_i457 + 3
+        _c530 = (np.where(_i527 == 0, rows[0], np.where(_i527 == 1, rows[1], np.where(_i527 == 2, rows[2], np.where(_i527 == 3, rows[3], np.where(_i527 == 4, rows[4], np.where(_i527 == 5, rows[5], np.where(_i527 == 6, rows[6], np.where(_i527 == 7, rows[7], np.where(_i527 == 8, rows[8], np.where(_i527 == 9, rows[9], np.where(_i527 == 10, rows[10], np.where(_i527 == 11, rows[11], np.where(_i527 == 12, rows[12], np.where(_i527 == 13, rows[13], np.where(_i527 == 14, rows[14], np.where(_i527 == 15, rows[15], np.where(_i527 == 16, rows[16], np.where(_i527 == 17, rows[17], np.where(_i527 == 18, rows[18], np.where(_i527 == 19, rows[19], np.where(_i527 == 20, rows[20], np.where(_i527 == 21, rows[21], np.where(_i527 == 22, rows[22], np.where(_i527 == 23, rows[23], np.where(_i527 == 24, rows[24], np.where(_i527 == 25, rows[25], np.where(_i527 == 26, rows[26], np.where(_i527 == 27, rows[27], np.where(_i527 == 28, rows[28], np.where(_i527 == 29, rows[29], np.where(_i527 == 30, rows[30], np.where(_i527 == 31, rows[31], np.where(_i527 == 32, rows[32], np.where(_i527 == 33, rows[33], np.where(_i527 == 34, rows[34], np.where(_i527 == 35, rows[35], np.where(_i527 == 36, rows[36], np.where(_i527 == 37, rows[37], np.where(_i527 == 38, rows[38], np.where(_i527 == 39, rows[39], np.where(_i527 == 40, rows[40], np.where(_i527 == 41, rows[41], np.where(_i527 == 42, rows[42], np.where(_i527 == 43, rows[43], np.where(_i527 == 44, rows[44], np.where(_i527 == 45, rows[45], np.where(_i527 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i528 == 0, rows[0], np.where(_i528 == 1, rows[1], np.where(_i528 == 2, rows[2], np.where(_i528 == 3, rows[3], np.where(_i528 == 4, rows[4], np.where(_i528 == 5, rows[5], np.where(_i528 == 6, rows[6], np.where(_i528 == 7, rows[7], np.where(_i528 == 8, rows[8], np.where(_i528 == 9, rows[9], np.where(_i528 == 10, rows[10], np.where(_i528 == 11, rows[11], np.where(_i528 == 12, rows[12], np.where(_i528 == 13, rows[13], np.where(_i528 == 14, rows[14], np.where(_i528 == 15, rows[15], np.where(_i528 == 16, rows[16], np.where(_i528 == 17, rows[17], np.where(_i528 == 18, rows[18], np.where(_i528 == 19, rows[19], np.where(_i528 == 20, rows[20], np.where(_i528 == 21, rows[21], np.where(_i528 == 22, rows[22], np.where(_i528 == 23, rows[23], np.where(_i528 == 24, rows[24], np.where(_i528 == 25, rows[25], np.where(_i528 == 26, rows[26], np.where(_i528 == 27, rows[27], np.where(_i528 == 28, rows[28], np.where(_i528 == 29, rows[29], np.where(_i528 == 30, rows[30], np.where(_i528 == 31, rows[31], np.where(_i528 == 32, rows[32], np.where(_i528 == 33, rows[33], np.where(_i528 == 34, rows[34], np.where(_i528 == 35, rows[35], np.where(_i528 == 36, rows[36], np.where(_i528 == 37, rows[37], np.where(_i528 == 38, rows[38], np.where(_i528 == 39, rows[39], np.where(_i528 == 40, rows[40], np.where(_i528 == 41, rows[41], np.where(_i528 == 42, rows[42], np.where(_i528 == 43, rows[43], np.where(_i528 == 44, rows[44], np.where(_i528 == 45, rows[45], np.where(_i528 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i529 == 0, rows[0], np.where(_i529 == 1, rows[1], np.where(_i529 == 2, rows[2], np.where(_i529 == 3, rows[3], np.where(_i529 == 4, rows[4], np.where(_i529 == 5, rows[5], np.where(_i529 == 6, rows[6], np.where(_i529 == 7, rows[7], np.where(_i529 == 8, rows[8], np.where(_i529 == 9, rows[9], np.where(_i529 == 10, rows[10], np.where(_i529 == 11, rows[11], np.where(_i529 == 12, rows[12], np.where(_i529 == 13, rows[13], np.where(_i529 == 14, rows[14], np.where(_i529 == 15, rows[15], np.where(_i529 == 16, rows[16], np.where(_i529 == 17, rows[17], np.where(_i529 == 18, rows[18], np.where(_i529 == 19, rows[19], np.where(_i529 == 20, rows[20], np.where(_i529 == 21, rows[21], np.where(_i529 == 22, rows[22], np.where(_i529 == 23, rows[23], np.where(_i529 == 24, rows[24], np.where(_i529 == 25, rows[25], np.where(_i529 == 26, rows[26], np.where(_i529 == 27, rows[27], np.where(_i529 == 28, rows[28], np.where(_i529 == 29, rows[29], np.where(_i529 == 30, rows[30], np.where(_i529 == 31, rows[31], np.where(_i529 == 32, rows[32], np.where(_i529 == 33, rows[33], np.where(_i529 == 34, rows[34], np.where(_i529 == 35, rows[35], np.where(_i529 == 36, rows[36], np.where(_i529 == 37, rows[37], np.where(_i529 == 38, rows[38], np.where(_i529 == 39, rows[39], np.where(_i529 == 40, rows[40], np.where(_i529 == 41, rows[41], np.where(_i529 == 42, rows[42], np.where(_i529 == 43, rows[43], np.where(_i529 == 44, rows[44], np.where(_i529 == 45, rows[45], np.where(_i529 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])))
+        _m531 = _run458 & _c530
+        _i532 = 6*_i457 + 3
+        y = np.where(_m531, np.where(_i532 == 0, rows[0], np.where(_i532 == 1, rows[1], np.where(_i532 == 2, rows[2], np.where(_i532 == 3, rows[3], np.where(_i532 == 4, rows[4], np.where(_i532 == 5, rows[5], np.where(_i532 == 6, rows[6], np.where(_i532 == 7, rows[7], np.where(_i532 == 8, rows[8], np.where(_i532 == 9, rows[9], np.where(_i532 == 10, rows[10], np.where(_i532 == 11, rows[11], np.where(_i532 == 12, rows[12], np.where(_i532 == 13, rows[13], np.where(_i532 == 14, rows[14], np.where(_i532 == 15, rows[15], np.where(_i532 == 16, rows[16], np.where(_i532 == 17, rows[17], np.where(_i532 == 18, rows[18], np.where(_i532 == 19, rows[19], np.where(_i532 == 20, rows[20], np.where(_i532 == 21, rows[21], np.where(_i532 == 22, rows[22], np.where(_i532 == 23, rows[23], np.where(_i532 == 24, rows[24], np.where(_i532 == 25, rows[25], np.where(_i532 == 26, rows[26], np.where(_i532 == 27, rows[27], np.where(_i532 == 28, rows[28], np.where(_i532 == 29, rows[29], np.where(_i532 == 30, rows[30], np.where(_i532 == 31, rows[31], np.where(_i532 == 32, rows[32], np.where(_i532 == 33, rows[33], np.where(_i532 == 34, rows[34], np.where(_i532 == 35, rows[35], np.where(_i532 == 36, rows[36], np.where(_i532 == 37, rows[37], np.where(_i532 == 38, rows[38], np.where(_i532 == 39, rows[39], np.where(_i532 == 40, rows[40], np.where(_i532 == 41, rows[41], np.where(_i532 == 42, rows[42], np.where(_i532 == 43, rows[43], np.where(_i532 == 44, rows[44], np.where(_i532 == 45, rows[45], np.where(_i532 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m531, 1, found)
+        _i533 = 6*_i457 + 3
+        _i534 = 6*_i457 + 3
+        _i535 = 6*_i457 + 3
+        _c536 = (np.where(_i533 == 0, rows[0], np.where(_i533 == 1, rows[1], np.where(_i533 == 2, rows[2], np.where(_i533 == 3, rows[3], np.where(_i533 == 4, rows[4], np.where(_i533 == 5, rows[5], np.where(_i533 == 6, rows[6], np.where(_i533 == 7, rows[7], np.where(_i533 == 8, rows[8], np.where(_i533 == 9, rows[9], np.where(_i533 == 10, rows[10], np.where(_i533 == 11, rows[11], np.where(_i533 == 12, rows[12], np.where(_i533 == 13, rows[13], np.where(_i533 == 14, rows[14], np.where(_i533 == 15, rows[15], np.where(_i533 == 16, rows[16], np.where(_i533 == 17, rows[17], np.where(_i533 == 18, rows[18], np.where(_i533 == 19, rows[19], np.where(_i533 == 20, rows[20], np.where(_i533 == 21, rows[21], np.where(_i533 == 22, rows[22], np.where(_i533 == 23, rows[23], np.where(_i533 == 24, rows[24], np.where(_i533 == 25, rows[25], np.where(_i533 == 26, rows[26], np.where(_i533 == 27, rows[27], np.where(_i533 == 28, rows[28], np.where(_i533 == 29, rows[29], np.where(_i533 == 30, rows[30], np.where(_i533 == 31, rows[31], np.where(_i533 == 32, rows[32], np.where(_i533 == 33, rows[33], np.where(_i533 == 34, rows[34], np.where(_i533 == 35, rows[35], np.where(_i533 == 36, rows[36], np.where(_i533 == 37, rows[37], np.where(_i533 == 38, rows[38], np.where(_i533 == 39, rows[39], np.where(_i533 == 40, rows[40], np.where(_i533 == 41, rows[41], np.where(_i533 == 42, rows[42], np.where(_i533 == 43, rows[43], np.where(_i533 == 44, rows[44], np.where(_i533 == 45, rows[45], np.where(_i533 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i534 == 0, rows[0], np.where(_i534 == 1, rows[1], np.where(_i534 == 2, rows[2], np.where(_i534 == 3, rows[3], np.where(_i534 == 4, rows[4], np.where(_i534 == 5, rows[5], np.where(_i534 == 6, rows[6], np.where(_i534 == 7, rows[7], np.where(_i534 == 8, rows[8], np.where(_i534 == 9, rows[9], np.where(_i534 == 10, rows[10], np.where(_i534 == 11, rows[11], np.where(_i534 == 12, rows[12], np.where(_i534 == 13, rows[13], np.where(_i534 == 14, rows[14], np.where(_i534 == 15, rows[15], np.where(_i534 == 16, rows[16], np.where(_i534 == 17, rows[17], np.where(_i534 == 18, rows[18], np.where(_i534 == 19, rows[19], np.where(_i534 == 20, rows[20], np.where(_i534 == 21, rows[21], np.where(_i534 == 22, rows[22], np.where(_i534 == 23, rows[23], np.where(_i534 == 24, rows[24], np.where(_i534 == 25, rows[25], np.where(_i534 == 26, rows[26], np.where(_i534 == 27, rows[27], np.where(_i534 == 28, rows[28], np.where(_i534 == 29, rows[29], np.where(_i534 == 30, rows[30], np.where(_i534 == 31, rows[31], np.where(_i534 == 32, rows[32], np.where(_i534 == 33, rows[33], np.where(_i534 == 34, rows[34], np.where(_i534 == 35, rows[35], np.where(_i534 == 36, rows[36], np.where(_i534 == 37, rows[37], np.where(_i534 == 38, rows[38], np.where(_i534 == 39, rows[39], np.where(_i534 == 40, rows[40], np.where(_i534 == 41, rows[41], np.where(_i534 == 42, rows[42], np.where(_i534 == 43, rows[43], np.where(_i534 == 44, rows[44], np.where(_i534 == 45, rows[45], np.where(_i534 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i535 == 0, rows[0], np.where(_i535 == 1, rows[1], np.where(_i535 == 2, rows[2], np.where(_i535 == 3, rows[3], np.where(_i535 == 4, rows[4], np.where(_i535 == 5, rows[5], np.where(_i535 == 6, rows[6], np.where(_i535 == 7, rows[7], np.where(_i535 == 8, rows[8], np.where(_i535 == 9, rows[9], np.where(_i535 == 10, rows[10], np.where(_i535 == 11, rows[11], np.where(_i535 == 12, rows[12], np.where(_i535 == 13, rows[13], np.where(_i535 == 14, rows[14], np.where(_i535 == 15, rows[15], np.where(_i535 == 16, rows[16], np.where(_i535 == 17, rows[17], np.where(_i535 == 18, rows[18], np.where(_i535 == 19, rows[19], np.where(_i535 == 20, rows[20], np.where(_i535 == 21, rows[21], np.where(_i535 == 22, rows[22], np.where(_i535 == 23, rows[23], np.where(_i535 == 24, rows[24], np.where(_i535 == 25, rows[25], np.where(_i535 == 26, rows[26], np.where(_i535 == 27, rows[27], np.where(_i535 == 28, rows[28], np.where(_i535 == 29, rows[29], np.where(_i535 == 30, rows[30], np.where(_i535 == 31, rows[31], np.where(_i535 == 32, rows[32], np.where(_i535 == 33, rows[33], np.where(_i535 == 34, rows[34], np.where(_i535 == 35, rows[35], np.where(_i535 == 36, rows[36], np.where(_i535 == 37, rows[37], np.where(_i535 == 38, rows[38], np.where(_i535 == 39, rows[39], np.where(_i535 == 40, rows[40], np.where(_i535 == 41, rows[41], np.where(_i535 == 42, rows[42], np.where(_i535 == 43, rows[43], np.where(_i535 == 44, rows[44], np.where(_i535 == 45, rows[45], np.where(_i535 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])))
+        _m537 = _run458 & _c536
+        _i538 = 6*_i457 + 3
+        y = np.where(_m537, np.where(_i538 == 0, rows[0], np.where(_i538 == 1, rows[1], np.where(_i538 == 2, rows[2], np.where(_i538 == 3, rows[3], np.where(_i538 == 4, rows[4], np.where(_i538 == 5, rows[5], np.where(_i538 == 6, rows[6], np.where(_i538 == 7, rows[7], np.where(_i538 == 8, rows[8], np.where(_i538 == 9, rows[9], np.where(_i538 == 10, rows[10], np.where(_i538 == 11, rows[11], np.where(_i538 == 12, rows[12], np.where(_i538 == 13, rows[13], np.where(_i538 == 14, rows[14], np.where(_i538 == 15, rows[15], np.where(_i538 == 16, rows[16], np.where(_i538 == 17, rows[17], np.where(_i538 == 18, rows[18], np.where(_i538 == 19, rows[19], np.where(_i538 == 20, rows[20], np.where(_i538 == 21, rows[21], np.where(_i538 == 22, rows[22], np.where(_i538 == 23, rows[23], np.where(_i538 == 24, rows[24], np.where(_i538 == 25, rows[25], np.where(_i538 == 26, rows[26], np.where(_i538 == 27, rows[27], np.where(_i538 == 28, rows[28], np.where(_i538 == 29, rows[29], np.where(_i538 == 30, rows[30], np.where(_i538 == 31, rows[31], np.where(_i538 == 32, rows[32], np.where(_i538 == 33, rows[33], np.where(_i538 == 34, rows[34], np.where(_i538 == 35, rows[35], np.where(_i538 == 36, rows[36], np.where(_i538 == 37, rows[37], np.where(_i538 == 38, rows[38], np.where(_i538 == 39, rows[39], np.where(_i538 == 40, rows[40], np.where(_i538 == 41, rows[41], np.where(_i538 == 42, rows[42], np.where(_i538 == 43, rows[43], np.where(_i538 == 44, rows[44], np.where(_i538 == 45, rows[45], np.where(_i538 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m537, 1, found)
+        near[3] = np.where(_run458, y, near[3])
+        _i539 = 6*_i457 + 4
+        k = np.where(_run458, np.rint((q_ref[4] - np.where(_i539 == 0, rows[0], np.where(_i539 == 1, rows[1], np.where(_i539 == 2, rows[2], np.where(_i539 == 3, rows[3], np.where(_i539 == 4, rows[4], np.where(_i539 == 5, rows[5], np.where(_i539 == 6, rows[6], np.where(_i539 == 7, rows[7], np.where(_i539 == 8, rows[8], np.where(_i539 == 9, rows[9], np.where(_i539 == 10, rows[10], np.where(_i539 == 11, rows[11], np.where(_i539 == 12, rows[12], np.where(_i539 == 13, rows[13], np.where(_i539 == 14, rows[14], np.where(_i539 == 15, rows[15], np.where(_i539 == 16, rows[16], np.where(_i539 == 17, rows[17], np.where(_i539 == 18, rows[18], np.where(_i539 == 19, rows[19], np.where(_i539 == 20, rows[20], np.where(_i539 == 21, rows[21], np.where(_i539 == 22, rows[22], np.where(_i539 == 23, rows[23], np.where(_i539 == 24, rows[24], np.where(_i539 == 25, rows[25], np.where(_i539 == 26, rows[26], np.where(_i539 == 27, rows[27], np.where(_i539 == 28, rows[28], np.where(_i539 == 29, rows[29], np.where(_i539 == 30, rows[30], np.where(_i539 == 31, rows[31], np.where(_i539 == 32, rows[32], np.where(_i539 == 33, rows[33], np.where(_i539 == 34, rows[34], np.where(_i539 == 35, rows[35], np.where(_i539 == 36, rows[36], np.where(_i539 == 37, rows[37], np.where(_i539 == 38, rows[38], np.where(_i539 == 39, rows[39], np.where(_i539 == 40, rows[40], np.where(_i539 == 41, rows[41], np.where(_i539 == 42, rows[42], np.where(_i539 == 43, rows[43], np.where(_i539 == 44, rows[44], np.where(_i539 == 45, rows[45], np.where(_i539 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i540 = 6*_i457 + 4
+        y = np.where(_run458, np.where(_i540 == 0, rows[0], np.where(_i540 == 1, rows[1], np.where(_i540 == 2, rows[2], np.where(_i540 == 3, rows[3], np.where(_i540 == 4, rows[4], np.where(_i540 == 5, rows[5], np.where(_i540 == 6, rows[6], np.where(_i540 == 7, rows[7], np.where(_i540 == 8, rows[8], np.where(_i540 == 9, rows[9], np.where(_i540 == 10, rows[10], np.where(_i540 == 11, rows[11], np.where(_i540 == 12, rows[12], np.where(_i540 == 13, rows[13], np.where(_i540 == 14, rows[14], np.where(_i540 == 15, rows[15], np.where(_i540 == 16, rows[16], np.where(_i540 == 17, rows[17], np.where(_i540 == 18, rows[18], np.where(_i540 == 19, rows[19], np.where(_i540 == 20, rows[20], np.where(_i540 == 21, rows[21], np.where(_i540 == 22, rows[22], np.where(_i540 == 23, rows[23], np.where(_i540 == 24, rows[24], np.where(_i540 == 25, rows[25], np.where(_i540 == 26, rows[26], np.where(_i540 == 27, rows[27], np.where(_i540 == 28, rows[28], np.where(_i540 == 29, rows[29], np.where(_i540 == 30, rows[30], np.where(_i540 == 31, rows[31], np.where(_i540 == 32, rows[32], np.where(_i540 == 33, rows[33], np.where(_i540 == 34, rows[34], np.where(_i540 == 35, rows[35], np.where(_i540 == 36, rows[36], np.where(_i540 == 37, rows[37], np.where(_i540 == 38, rows[38], np.where(_i540 == 39, rows[39], np.where(_i540 == 40, rows[40], np.where(_i540 == 41, rows[41], np.where(_i540 == 42, rows[42], np.where(_i540 == 43, rows[43], np.where(_i540 == 44, rows[44], np.where(_i540 == 45, rows[45], np.where(_i540 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i541 = 6*_i457 + 4
+        _i542 = 6*_i457 + 4
+        _i543 = 6*_i457 + 4
+        _c544 = (np.where(_i541 == 0, rows[0], np.where(_i541 == 1, rows[1], np.where(_i541 == 2, rows[2], np.where(_i541 == 3, rows[3], np.where(_i541 == 4, rows[4], np.where(_i541 == 5, rows[5], np.where(_i541 == 6, rows[6], np.where(_i541 == 7, rows[7], np.where(_i541 == 8, rows[8], np.where(_i541 == 9, rows[9], np.where(_i541 == 10, rows[10], np.where(_i541 == 11, rows[11], np.where(_i541 == 12, rows[12], np.where(_i541 == 13, rows[13], np.where(_i541 == 14, rows[14], np.where(_i541 == 15, rows[15], np.where(_i541 == 16, rows[16], np.where(_i541 == 17, rows[17], np.where(_i541 == 18, rows[18], np.where(_i541 == 19, rows[19], np.where(_i541 == 20, rows[20], np.where(_i541 == 21, rows[21], np.where(_i541 == 22, rows[22], np.where(_i541 == 23, rows[23], np.where(_i541 == 24, rows[24], np.where(_i541 == 25, rows[25], np.where(_i541 == 26, rows[26], np.where(_i541 == 27, rows[27], np.where(_i541 == 28, rows[28], np.where(_i541 == 29, rows[29], np.where(_i541 == 30, rows[30], np.where(_i541 == 31, rows[31], np.where(_i541 == 32, rows[32], np.where(_i541 == 33, rows[33], np.where(_i541 == 34, rows[34], np.where(_i541 == 35, rows[35], np.where(_i541 == 36, rows[36], np.where(_i541 == 37, rows[37], np.where(_i541 == 38, rows[38], np.where(_i541 == 39, rows[39], np.where(_i541 == 40, rows[40], np.where(_i541 == 41, rows[41], np.where(_i541 == 42, rows[42], np.where(_i541 == 43, rows[43], np.where(_i541 == 44, rows[44], np.where(_i541 == 45, rows[45], np.where(_i541 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i542 == 0, rows[0], np.where(_i542 == 1, rows[1], np.where(_i542 == 2, rows[2], np.where(_i542 == 3, rows[3], np.where(_i542 == 4, rows[4], np.where(_i542 == 5, rows[5], np.where(_i542 == 6, rows[6], np.where(_i542 == 7, rows[7], np.where(_i542 == 8, rows[8], np.where(_i542 == 9, rows[9], np.where(_i542 == 10, rows[10], np.where(_i542 == 11, rows[11], np.where(_i542 == 12, rows[12], np.where(_i542 == 13, rows[13], np.where(_i542 == 14, rows[14], np.where(_i542 == 15, rows[15], np.where(_i542 == 16, rows[16], np.where(_i542 == 17, rows[17], np.where(_i542 == 18, rows[18], np.where(_i542 == 19, rows[19], np.where(_i542 == 20, rows[20], np.where(_i542 == 21, rows[21], np.where(_i542 == 22, rows[22], np.where(_i542 == 23, rows[23], np.where(_i542 == 24, rows[24], np.where(_i542 == 25, rows[25], np.where(_i542 == 26, rows[26], np.where(_i542 == 27, rows[27], np.where(_i542 == 28, rows[28], np.where(_i542 == 29, rows[29], np.where(_i542 == 30, rows[30], np.where(_i542 == 31, rows[31], np.where(_i542 == 32, rows[32], np.where(_i542 == 33, rows[33], np.where(_i542 == 34, rows[34], np.where(_i542 == 35, rows[35], np.where(_i542 == 36, rows[36], np.where(_i542 == 37, rows[37], np.where(_i542 == 38, rows[38], np.where(_i542 == 39, rows[39], np.where(_i542 == 40, rows[40], np.where(_i542 == 41, rows[41], np.where(_i542 == 42, rows[42], np.where(_i542 == 43, rows[43], np.where(_i542 == 44, rows[44], np.where(_i542 == 45, rows[45], np.where(_i542 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i543 == 0, rows[0], np.where(_i543 == 1, rows[1], np.where(_i543 == 2, rows[2], np.where(_i543 == 3, rows[3], np.where(_i543 == 4, rows[4], np.where(_i543 == 5, rows[5], np.where(_i543 == 6, rows[6], np.where(_i543 == 7, rows[7], np.where(_i543 == 8, rows[8], np.where(_i543 == 9, rows[9], np.where(_i543 == 10, rows[10], np.where(_i543 == 11, rows[11], np.where(_i543 == 12, rows[12], np.where(_i543 == 13, rows[13], np.where(_i543 == 14, rows[14], np.where(_i543 == 15, rows[15], np.where(_i543 == 16, rows[16], np.where(_i543 == 17, rows[17], np.where(_i543 == 18, rows[18], np.where(_i543 == 19, rows[19], np.where(_i543 == 20, rows[20], np.where(_i543 == 21, rows[21], np.where(_i543 == 22, rows[22], np.where(_i543 == 23, rows[23], np.where(_i543 == 24, rows[24], np.where(_i543 == 25, rows[25], np.where(_i543 == 26, rows[26], np.where(_i543 == 27, rows[27], np.where(_i543 == 28, rows[28], np.where(_i543 == 29, rows[29], np.where(_i543 == 30, rows[30], np.where(_i543 == 31, rows[31], np.where(_i543 == 32, rows[32], np.where(_i543 == 33, rows[33], np.where(_i543 == 34, rows[34], np.where(_i543 == 35, rows[35], np.where(_i543 == 36, rows[36], np.where(_i543 == 37, rows[37], np.where(_i543 == 38, rows[38], np.where(_i543 == 39, rows[39], np.where(_i543 == 40, rows[40], np.where(_i543 == 41, rows[41], np.where(_i543 == 42, rows[42], np.where(_i543 == 43, rows[43], np.where(_i543 == 44, rows[44], np.where(_i543 == 45, rows[45], np.where(_i543 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[4]) < np.abs(y - q_ref[4])))
+        _m545 = _run458 & _c544
+        _i546 = 6*_i457 + 4
+        y = np.where(_m545, np.where(_i546 == 0, rows[0], np.where(_i546 == 1, rows[1], np.where(_i546 == 2, rows[2], np.where(_i546 == 3, rows[3], np.where(_i546 == 4, rows[4], np.where(_i546 == 5, rows[5], np.where(_i546 == 6, rows[6], np.where(_i546 == 7, rows[7], np.where(_i546 == 8, rows[8], np.where(_i546 == 9, rows[9], np.where(_i546 == 10, rows[10], np.where(_i546 == 11, rows[11], np.where(_i546 == 12, rows[12], np.where(_i546 == 13, rows[13], np.where(_i546 == 14, rows[14], np.where(_i546 == 15, rows[15], np.where(_i546 == 16, rows[16], np.where(_i546 == 17, rows[17], np.where(_i546 == 18, rows[18], np.where(_i546 == 19, rows[19], np.where(_i546 == 20, rows[20], np.where(_i546 == 21, rows[21], np.where(_i546 == 22, rows[22], np.where(_i546 == 23, rows[23], np.where(_i546 == 24, rows[24], np.where(_i546 == 25, rows[25], np.where(_i546 == 26, rows[26], np.where(_i546 == 27, rows[27], np.where(_i546 == 28, rows[28], np.where(_i546 == 29, rows[29], np.where(_i546 == 30, rows[30], np.where(_i546 == 31, rows[31], np.where(_i546 == 32, rows[32], np.where(_i546 == 33, rows[33], np.where(_i546 == 34, rows[34], np.where(_i546 == 35, rows[35], np.where(_i546 == 36, rows[36], np.where(_i546 == 37, rows[37], np.where(_i546 == 38, rows[38], np.where(_i546 == 39, rows[39], np.where(_i546 == 40, rows[40], np.where(_i546 == 41, rows[41], np.where(_i546 == 42, rows[42], np.where(_i546 == 43, rows[43], np.where(_i546 == 44, rows[44], np.where(_i546 == 45, rows[45], np.where(_i546 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m545, 1, found)
+        _i547 = 6*_i457 + 4
+        _i548 = 6*_i457 + 4
+        _i549 = 6*_i457 + 4
+        _c550 = (np.where(_i547 == 0, rows[0], np.where(_i547 == 1, rows[1], np.where(_i547 == 2, rows[2], np.where(_i547 == 3, rows[3], np.where(_i547 == 4, rows[4], np.where(_i547 == 5, rows[5], np.where(_i547 == 6, rows[6], np.where(_i547 == 7, rows[7], np.where(_i547 == 8, rows[8], np.where(_i547 == 9, rows[9], np.where(_i547 == 10, rows[10], np.where(_i547 == 11, rows[11], np.where(_i547 == 12, rows[12], np.where(_i547 == 13, rows[13], np.where(_i547 == 14, rows[14], np.where(_i547 == 15, rows[15], np.where(_i547 == 16, rows[16], np.where(_i547 == 17, rows[17], np.where(_i547 == 18, rows[18], np.where(_i547 == 19, rows[19], np.where(_i547 == 20, rows[20], np.where(_i547 == 21, rows[21], np.where(_i547 == 22, rows[22], np.where(_i547 == 23, rows[23], np.where(_i547 == 24, rows[24], np.where(_i547 == 25, rows[25], np.where(_i547 == 26, rows[26], np.where(_i547 == 27, rows[27], np.where(_i547 == 28, rows[28], np.where(_i547 == 29, rows[29], np.where(_i547 == 30, rows[30], np.where(_i547 == 31, rows[31], np.where(_i547 == 32, rows[32], np.where(_i547 == 33, rows[33], np.where(_i547 == 34, rows[34], np.where(_i547 == 35, rows[35], np.where(_i547 == 36, rows[36], np.where(_i547 == 37, rows[37], np.where(_i547 == 38, rows[38], np.where(_i547 == 39, rows[39], np.where(_i547 == 40, rows[40], np.where(_i547 == 41, rows[41], np.where(_i547 == 42, rows[42], np.where(_i547 == 43, rows[43], np.where(_i547 == 44, rows[44], np.where(_i547 == 45, rows[45], np.where(_i547 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i548 == 0, rows[0], np.where(_i548 == 1, rows[1], np.where(_i548 == 2, rows[2], np.where(_i548 == 3, rows[3], np.where(_i548 == 4, rows[4], np.where(_i548 == 5, rows[5], np.where(_i548 == 6, rows[6], np.where(_i548 == 7, rows[7], np.where(_i548 == 8, rows[8], np.where(_i548 == 9, rows[9], np.where(_i548 == 10, rows[10], np.where(_i548 == 11, rows[11], np.where(_i548 == 12, rows[12], np.where(_i548 == 13, rows[13], np.where(_i548 == 14, rows[14], np.where(_i548 == 15, rows[15], np.where(_i548 == 16, rows[16], np.where(_i548 == 17, rows[17], np.where(_i548 == 18, rows[18], np.where(_i548 == 19, rows[19], np.where(_i548 == 20, rows[20], np.where(_i548 == 21, rows[21], np.where(_i548 == 22, rows[22], np.where(_i548 == 23, rows[23], np.where(_i548 == 24, rows[24], np.where(_i548 == 25, rows[25], np.where(_i548 == 26, rows[26], np.where(_i548 == 27, rows[27], np.where(_i548 == 28, rows[28], np.where(_i548 == 29, rows[29], np.where(_i548 == 30, rows[30], np.where(_i548 == 31, rows[31], np.where(_i548 == 32, rows[32], np.where(_i548 == 33, rows[33], np.where(_i548 == 34, rows[34], np.where(_i548 == 35, rows[35], np.where(_i548 == 36, rows[36], np.where(_i548 == 37, rows[37], np.where(_i548 == 38, rows[38], np.where(_i548 == 39, rows[39], np.where(_i548 == 40, rows[40], np.where(_i548 == 41, rows[41], np.where(_i548 == 42, rows[42], np.where(_i548 == 43, rows[43], np.where(_i548 == 44, rows[44], np.where(_i548 == 45, rows[45], np.where(_i548 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i549 == 0, rows[0], np.where(_i549 == 1, rows[1], np.where(_i549 == 2, rows[2], np.where(_i549 == 3, rows[3], np.where(_i549 == 4, rows[4], np.where(_i549 == 5, rows[5], np.where(_i549 == 6, rows[6], np.where(_i549 == 7, rows[7], np.where(_i549 == 8, rows[8], np.where(_i549 == 9, rows[9], np.where(_i549 == 10, rows[10], np.where(_i549 == 11, rows[11], np.where(_i549 == 12, rows[12], np.where(_i549 == 13, rows[13], np.where(_i549 == 14, rows[14], np.where(_i549 == 15, rows[15], np.where(_i549 == 16, rows[16], np.where(_i549 == 17, rows[17], np.where(_i549 == 18, rows[18], np.where(_i549 == 19, rows[19], np.where(_i549 == 20, rows[20], np.where(_i549 == 21, rows[21], np.where(_i549 == 22, rows[22], np.where(_i549 == 23, rows[23], np.where(_i549 == 24, rows[24], np.where(_i549 == 25, rows[25], np.where(_i549 == 26, rows[26], np.where(_i549 == 27, rows[27], np.where(_i549 == 28, rows[28], np.where(_i549 == 29, rows[29], np.where(_i549 == 30, rows[30], np.where(_i549 == 31, rows[31], np.where(_i549 == 32, rows[32], np.where(_i549 == 33, rows[33], np.where(_i549 == 34, rows[34], np.where(_i549 == 35, rows[35], np.where(_i549 == 36, rows[36], np.where(_i549 == 37, rows[37], np.where(_i549 == 38, rows[38], np.where(_i549 == 39, rows[39], np.where(_i549 == 40, rows[40], np.where(_i549 == 41, rows[41], np.where(_i549 == 42, rows[42], np.where(_i549 == 43, rows[43], np.where(_i549 == 44, rows[44], np.where(_i549 == 45, rows[45], np.where(_i549 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])))
+        _m551 = _run458 & _c550
+        _i552 = 6*_i457 + 4
+        y = np.where(_m551, np.where(_i552 == 0, rows[0], np.where(_i552 == 1, rows[1], np.where(_i552 == 2, rows[2], np.where(_i552 == 3, rows[3], np.where(_i552 == 4, rows[4], np.where(_i552 == 5, rows[5], np.where(_i552 == 6, rows[6], np.where(_i552 == 7, rows[7], np.where(_i552 == 8, rows[8], np.where(_i552 == 9, rows[9], np.where(_i552 == 10, rows[10], np.where(_i552 == 11, rows[11], np.where(_i552 == 12, rows[12], np.where(_i552 == 13, rows[13], np.where(_i552 == 14, rows[14], np.where(_i552 == 15, rows[15], np.where(_i552 == 16, rows[16], np.where(_i552 == 17, rows[17], np.where(_i552 == 18, rows[18], np.where(_i552 == 19, rows[19], np.where(_i552 == 20, rows[20], np.where(_i552 == 21, rows[21], np.where(_i552 == 22, rows[22], np.where(_i552 == 23, rows[23], np.where(_i552 == 24, rows[24], np.where(_i552 == 25, rows[25], np.where(_i552 == 26, rows[26], np.where(_i552 == 27, rows[27], np.where(_i552 == 28, rows[28], np.where(_i552 == 29, rows[29], np.where(_i552 == 30, rows[30], np.where(_i552 == 31, rows[31], np.where(_i552 == 32, rows[32], np.where(_i552 == 33, rows[33], np.where(_i552 == 34, rows[34], np.where(_i552 == 35, rows[35], np.where(_i552 == 36, rows[36], np.where(_i552 == 37, rows[37], np.where(_i552 == 38, rows[38], np.where(_i552 == 39, rows[39], np.where(_i552 == 40, rows[40], np.where(_i552 == 41, rows[41], np.where(_i552 == 42, rows[42], np.where(_i552 == 43, rows[43], np.where(_i552 == 44, rows[44], np.where(_i552 == 45, rows[45], np.where(_i552 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m551, 1, found)
+        _i553 = 6*_i457 + 4
+        _i554 = 6*_i457 + 4
+        _i555 = 6*_i457 + 4
+        _c556 = (np.where(_i553 == 0, rows[0], np.where(_i553 == 1, rows[1], np.where(_i553 == 2, rows[2], np.where(_i553 == 3, rows[3], np.where(_i553 == 4, rows[4], np.where(_i553 == 5, rows[5], np.where(_i553 == 6, rows[6], np.where(_i553 == 7, rows[7], np.where(_i553 == 8, rows[8], np.where(_i553 == 9, rows[9], np.where(_i553 == 10, rows[10], np.where(_i553 == 11, rows[11], np.where(_i553 == 12, rows[12], np.where(_i553 == 13, rows[13], np.where(_i553 == 14, rows[14], np.where(_i553 == 15, rows[15], np.where(_i553 == 16, rows[16], np.where(_i553 == 17, rows[17], np.where(_i553 == 18, rows[18], np.where(_i553 == 19, rows[19], np.where(_i553 == 20, rows[20], np.where(_i553 == 21, rows[21], np.where(_i553 == 22, rows[22], np.where(_i553 == 23, rows[23], np.where(_i553 == 24, rows[24], np.where(_i553 == 25, rows[25], np.where(_i553 == 26, rows[26], np.where(_i553 == 27, rows[27], np.where(_i553 == 28, rows[28], np.where(_i553 == 29, rows[29], np.where(_i553 == 30, rows[30], np.where(_i553 == 31, rows[31], np.where(_i553 == 32, rows[32], np.where(_i553 == 33, rows[33], np.where(_i553 == 34, rows[34], np.where(_i553 == 35, rows[35], np.where(_i553 == 36, rows[36], np.where(_i553 == 37, rows[37], np.where(_i553 == 38, rows[38], np.where(_i553 == 39, rows[39], np.where(_i553 == 40, rows[40], np.where(_i553 == 41, rows[41], np.where(_i553 == 42, rows[42], np.where(_i553 == 43, rows[43], np.where(_i553 == 44, rows[44], np.where(_i553 == 45, rows[45], np.where(_i553 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i554 == 0, rows[0], np.where(_i554 == 1, rows[1], np.where(_i554 == 2, rows[2], np.where(_i554 == 3, rows[3], np.where(_i554 == 4, rows[4], np.where(_i554 == 5, rows[5], np.where(_i554 == 6, rows[6], np.where(_i554 == 7, rows[7], np.where(_i554 == 8, rows[8], np.where(_i554 == 9, rows[9], np.where(_i554 == 10, rows[10], np.where(_i554 == 11, rows[11], np.where(_i554 == 12, rows[12], np.where(_i554 == 13, rows[13], np.where(_i554 == 14, rows[14], np.where(_i554 == 15, rows[15], np.where(_i554 == 16, rows[16], np.where(_i554 == 17, rows[17], np.where(_i554 == 18, rows[18], np.where(_i554 == 19, rows[19], np.where(_i554 == 20, rows[20], np.where(_i554 == 21, rows[21], np.where(_i554 == 22, rows[22], np.where(_i554 == 23, rows[23], np.where(_i554 == 24, rows[24], np.where(_i554 == 25, rows[25], np.where(_i554 == 26, rows[26], np.where(_i554 == 27, rows[27], np.where(_i554 == 28, rows[28], np.where(_i554 == 29, rows[29], np.where(_i554 == 30, rows[30], np.where(_i554 == 31, rows[31], np.where(_i554 == 32, rows[32], np.where(_i554 == 33, rows[33], np.where(_i554 == 34, rows[34], np.where(_i554 == 35, rows[35], np.where(_i554 == 36, rows[36], np.where(_i554 == 37, rows[37], np.where(_i554 == 38, rows[38], np.where(_i554 == 39, rows[39], np.where(_i554 == 40, rows[40], np.where(_i554 == 41, rows[41], np.where(_i554 == 42, rows[42], np.where(_i554 == 43, rows[43], np.where(_i554 == 44, rows[44], np.where(_i554 == 45, rows[45], np.where(_i554 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i555 == 0, rows[0], np.where(_i555 == 1, rows[1], np.where(_i555 == 2, rows[2], np.where(_i555 == 3, rows[3], np.where(_i555 == 4, rows[4], np.where(_i555 == 5, rows[5], np.where(_i555 == 6, rows[6], np.where(_i555 == 7, rows[7], np.where(_i555 == 8, rows[8], np.where(_i555 == 9, rows[9], np.where(_i555 == 10, rows[10], np.where(_i555 == 11, rows[11], np.where(_i555 == 12, rows[12], np.where(_i555 == 13, rows[13], np.where(_i555 == 14, rows[14], np.where(_i555 == 15, rows[15], np.where(_i555 == 16, rows[16], np.where(_i555 == 17, rows[17], np.where(_i555 == 18, rows[18], np.where(_i555 == 19, rows[19], np.where(_i555 == 20, rows[20], np.where(_i555 == 21, rows[21], np.where(_i555 == 22, rows[22], np.where(_i555 == 23, rows[23], np.where(_i555 == 24, rows[24], np.where(_i555 == 25, rows[25], np.where(_i555 == 26, rows[26], np.where(_i555 == 27, rows[27], np.where(_i555 == 28, rows[28], np.where(_i555 == 29, rows[29], np.where(_i555 == 30, rows[30], np.where(_i555 == 31, rows[31], np.where(_i555 == 32, rows[32], np.where(_i555 == 33, rows[33], np.where(_i555 == 34, rows[34], np.where(_i555 == 35, rows[35], np.where(_i555 == 36, rows[36], np.where(_i555 == 37, rows[37], np.where(_i555 == 38, rows[38], np.where(_i555 == 39, rows[39], np.where(_i555 == 40, rows[40], np.where(_i555 == 41, rows[41], np.where(_i555 == 42, rows[42], np.where(_i555 == 43, rows[43], np.where(_i555 == 44, rows[44], np.where(_i555 == 45, rows[45], np.where(_i555 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])))
+        _m557 = _run458 & _c556
+        _i558 = 6*_i457 + 4
+        y = np.where(_m557, np.where(_i558 == 0, rows[0], np.where(_i558 == 1, rows[1], np.where(_i558 == 2, rows[2], np.where(_i558 == 3, rows[3], np.where(_i558 == 4, rows[4], np.where(_i558 == 5, rows[5], np.where(_i558 == 6, rows[6], np.where(_i558 == 7, rows[7], np.where(_i558 == 8, rows[8], np.where(_i558 == 9, rows[9], np.where(_i558 == 10, rows[10], np.where(_i558 == 11, rows[11], np.where(_i558 == 12, rows[12], np.where(_i558 == 13, rows[13], np.where(_i558 == 14, rows[14], np.where(_i558 == 15, rows[15], np.where(_i558 == 16, rows[16], np.where(_i558 == 17, rows[17], np.where(_i558 == 18, rows[18], np.where(_i558 == 19, rows[19], np.where(_i558 == 20, rows[20], np.where(_i558 == 21, rows[21], np.where(_i558 == 22, rows[22], np.where(_i558 == 23, rows[23], np.where(_i558 == 24, rows[24], np.where(_i558 == 25, rows[25], np.where(_i558 == 26, rows[26], np.where(_i558 == 27, rows[27], np.where(_i558 == 28, rows[28], np.where(_i558 == 29, rows[29], np.where(_i558 == 30, rows[30], np.where(_i558 == 31, rows[31], np.where(_i558 == 32, rows[32], np.where(_i558 == 33, rows[33], np.where(_i558 == 34, rows[34], np.where(_i558 == 35, rows[35], np.where(_i558 == 36, rows[36], np.where(_i558 == 37, rows[37], np.where(_i558 == 38, rows[38], np.where(_i558 == 39, rows[39], np.where(_i558 == 40, rows[40], np.where(_i558 == 41, rows[41], np.where(_i558 == 42, rows[42], np.where(_i558 == 43, rows[43], np.where(_i558 == 44, rows[44], np.where(_i558 == 45, rows[45], np.where(_i558 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m557, 1, found)
+        near[4] = np.where(_run458, y, near[4])
+        _i559 = 6*_i457 + 5
+        k = np.where(_run458, np.rint((q_ref[5] - np.where(_i559 == 0, rows[0], np.where(_i559 == 1, rows[1], np.where(_i559 == 2, rows[2], np.where(_i559 == 3, rows[3], np.where(_i559 == 4, rows[4], np.where(_i559 == 5, rows[5], np.where(_i559 == 6, rows[6], np.where(_i559 == 7, rows[7], np.where(_i559 == 8, rows[8], np.where(_i559 == 9, rows[9], np.where(_i559 == 10, rows[10], np.where(_i559 == 11, rows[11], np.where(_i559 == 12, rows[12], np.where(_i559 == 13, rows[13], np.where(_i559 == 14, rows[14], np.where(_i559 == 15, rows[15], np.where(_i559 == 16, rows[16], np.where(_i559 == 17, rows[17], np.where(_i559 == 18, rows[18], np.where(_i559 == 19, rows[19], np.where(_i559 == 20, rows[20], np.where(_i559 == 21, rows[21], np.where(_i559 == 22, rows[22], np.where(_i559 == 23, rows[23], np.where(_i559 == 24, rows[24], np.where(_i559 == 25, rows[25], np.where(_i559 == 26, rows[26], np.where(_i559 == 27, rows[27], np.where(_i559 == 28, rows[28], np.where(_i559 == 29, rows[29], np.where(_i559 == 30, rows[30], np.where(_i559 == 31, rows[31], np.where(_i559 == 32, rows[32], np.where(_i559 == 33, rows[33], np.where(_i559 == 34, rows[34], np.where(_i559 == 35, rows[35], np.where(_i559 == 36, rows[36], np.where(_i559 == 37, rows[37], np.where(_i559 == 38, rows[38], np.where(_i559 == 39, rows[39], np.where(_i559 == 40, rows[40], np.where(_i559 == 41, rows[41], np.where(_i559 == 42, rows[42], np.where(_i559 == 43, rows[43], np.where(_i559 == 44, rows[44], np.where(_i559 == 45, rows[45], np.where(_i559 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))))*0.15915494309189535), k)
+        found = np.where(_run458, 0, found)
+        _i560 = 6*_i457 + 5
+        y = np.where(_run458, np.where(_i560 == 0, rows[0], np.where(_i560 == 1, rows[1], np.where(_i560 == 2, rows[2], np.where(_i560 == 3, rows[3], np.where(_i560 == 4, rows[4], np.where(_i560 == 5, rows[5], np.where(_i560 == 6, rows[6], np.where(_i560 == 7, rows[7], np.where(_i560 == 8, rows[8], np.where(_i560 == 9, rows[9], np.where(_i560 == 10, rows[10], np.where(_i560 == 11, rows[11], np.where(_i560 == 12, rows[12], np.where(_i560 == 13, rows[13], np.where(_i560 == 14, rows[14], np.where(_i560 == 15, rows[15], np.where(_i560 == 16, rows[16], np.where(_i560 == 17, rows[17], np.where(_i560 == 18, rows[18], np.where(_i560 == 19, rows[19], np.where(_i560 == 20, rows[20], np.where(_i560 == 21, rows[21], np.where(_i560 == 22, rows[22], np.where(_i560 == 23, rows[23], np.where(_i560 == 24, rows[24], np.where(_i560 == 25, rows[25], np.where(_i560 == 26, rows[26], np.where(_i560 == 27, rows[27], np.where(_i560 == 28, rows[28], np.where(_i560 == 29, rows[29], np.where(_i560 == 30, rows[30], np.where(_i560 == 31, rows[31], np.where(_i560 == 32, rows[32], np.where(_i560 == 33, rows[33], np.where(_i560 == 34, rows[34], np.where(_i560 == 35, rows[35], np.where(_i560 == 36, rows[36], np.where(_i560 == 37, rows[37], np.where(_i560 == 38, rows[38], np.where(_i560 == 39, rows[39], np.where(_i560 == 40, rows[40], np.where(_i560 == 41, rows[41], np.where(_i560 == 42, rows[42], np.where(_i560 == 43, rows[43], np.where(_i560 == 44, rows[44], np.where(_i560 == 45, rows[45], np.where(_i560 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))), y)
+        _i561 = 6*_i457 + 5
+        _i562 = 6*_i457 + 5
+        _i563 = 6*_i457 + 5
+        _c564 = (np.where(_i561 == 0, rows[0], np.where(_i561 == 1, rows[1], np.where(_i561 == 2, rows[2], np.where(_i561 == 3, rows[3], np.where(_i561 == 4, rows[4], np.where(_i561 == 5, rows[5], np.where(_i561 == 6, rows[6], np.where(_i561 == 7, rows[7], np.where(_i561 == 8, rows[8], np.where(_i561 == 9, rows[9], np.where(_i561 == 10, rows[10], np.where(_i561 == 11, rows[11], np.where(_i561 == 12, rows[12], np.where(_i561 == 13, rows[13], np.where(_i561 == 14, rows[14], np.where(_i561 == 15, rows[15], np.where(_i561 == 16, rows[16], np.where(_i561 == 17, rows[17], np.where(_i561 == 18, rows[18], np.where(_i561 == 19, rows[19], np.where(_i561 == 20, rows[20], np.where(_i561 == 21, rows[21], np.where(_i561 == 22, rows[22], np.where(_i561 == 23, rows[23], np.where(_i561 == 24, rows[24], np.where(_i561 == 25, rows[25], np.where(_i561 == 26, rows[26], np.where(_i561 == 27, rows[27], np.where(_i561 == 28, rows[28], np.where(_i561 == 29, rows[29], np.where(_i561 == 30, rows[30], np.where(_i561 == 31, rows[31], np.where(_i561 == 32, rows[32], np.where(_i561 == 33, rows[33], np.where(_i561 == 34, rows[34], np.where(_i561 == 35, rows[35], np.where(_i561 == 36, rows[36], np.where(_i561 == 37, rows[37], np.where(_i561 == 38, rows[38], np.where(_i561 == 39, rows[39], np.where(_i561 == 40, rows[40], np.where(_i561 == 41, rows[41], np.where(_i561 == 42, rows[42], np.where(_i561 == 43, rows[43], np.where(_i561 == 44, rows[44], np.where(_i561 == 45, rows[45], np.where(_i561 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k >= -6.283185307179586) & (np.where(_i562 == 0, rows[0], np.where(_i562 == 1, rows[1], np.where(_i562 == 2, rows[2], np.where(_i562 == 3, rows[3], np.where(_i562 == 4, rows[4], np.where(_i562 == 5, rows[5], np.where(_i562 == 6, rows[6], np.where(_i562 == 7, rows[7], np.where(_i562 == 8, rows[8], np.where(_i562 == 9, rows[9], np.where(_i562 == 10, rows[10], np.where(_i562 == 11, rows[11], np.where(_i562 == 12, rows[12], np.where(_i562 == 13, rows[13], np.where(_i562 == 14, rows[14], np.where(_i562 == 15, rows[15], np.where(_i562 == 16, rows[16], np.where(_i562 == 17, rows[17], np.where(_i562 == 18, rows[18], np.where(_i562 == 19, rows[19], np.where(_i562 == 20, rows[20], np.where(_i562 == 21, rows[21], np.where(_i562 == 22, rows[22], np.where(_i562 == 23, rows[23], np.where(_i562 == 24, rows[24], np.where(_i562 == 25, rows[25], np.where(_i562 == 26, rows[26], np.where(_i562 == 27, rows[27], np.where(_i562 == 28, rows[28], np.where(_i562 == 29, rows[29], np.where(_i562 == 30, rows[30], np.where(_i562 == 31, rows[31], np.where(_i562 == 32, rows[32], np.where(_i562 == 33, rows[33], np.where(_i562 == 34, rows[34], np.where(_i562 == 35, rows[35], np.where(_i562 == 36, rows[36], np.where(_i562 == 37, rows[37], np.where(_i562 == 38, rows[38], np.where(_i562 == 39, rows[39], np.where(_i562 == 40, rows[40], np.where(_i562 == 41, rows[41], np.where(_i562 == 42, rows[42], np.where(_i562 == 43, rows[43], np.where(_i562 == 44, rows[44], np.where(_i562 == 45, rows[45], np.where(_i562 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i563 == 0, rows[0], np.where(_i563 == 1, rows[1], np.where(_i563 == 2, rows[2], np.where(_i563 == 3, rows[3], np.where(_i563 == 4, rows[4], np.where(_i563 == 5, rows[5], np.where(_i563 == 6, rows[6], np.where(_i563 == 7, rows[7], np.where(_i563 == 8, rows[8], np.where(_i563 == 9, rows[9], np.where(_i563 == 10, rows[10], np.where(_i563 == 11, rows[11], np.where(_i563 == 12, rows[12], np.where(_i563 == 13, rows[13], np.where(_i563 == 14, rows[14], np.where(_i563 == 15, rows[15], np.where(_i563 == 16, rows[16], np.where(_i563 == 17, rows[17], np.where(_i563 == 18, rows[18], np.where(_i563 == 19, rows[19], np.where(_i563 == 20, rows[20], np.where(_i563 == 21, rows[21], np.where(_i563 == 22, rows[22], np.where(_i563 == 23, rows[23], np.where(_i563 == 24, rows[24], np.where(_i563 == 25, rows[25], np.where(_i563 == 26, rows[26], np.where(_i563 == 27, rows[27], np.where(_i563 == 28, rows[28], np.where(_i563 == 29, rows[29], np.where(_i563 == 30, rows[30], np.where(_i563 == 31, rows[31], np.where(_i563 == 32, rows[32], np.where(_i563 == 33, rows[33], np.where(_i563 == 34, rows[34], np.where(_i563 == 35, rows[35], np.where(_i563 == 36, rows[36], np.where(_i563 == 37, rows[37], np.where(_i563 == 38, rows[38], np.where(_i563 == 39, rows[39], np.where(_i563 == 40, rows[40], np.where(_i563 == 41, rows[41], np.where(_i563 == 42, rows[42], np.where(_i563 == 43, rows[43], np.where(_i563 == 44, rows[44], np.where(_i563 == 45, rows[45], np.where(_i563 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k) - q_ref[5]) < np.abs(y - q_ref[5])))
+        _m565 = _run458 & _c564
+        _i566 = 6*_i457 + 5
+        y = np.where(_m565, np.where(_i566 == 0, rows[0], np.where(_i566 == 1, rows[1], np.where(_i566 == 2, rows[2], np.where(_i566 == 3, rows[3], np.where(_i566 == 4, rows[4], np.where(_i566 == 5, rows[5], np.where(_i566 == 6, rows[6], np.where(_i566 == 7, rows[7], np.where(_i566 == 8, rows[8], np.where(_i566 == 9, rows[9], np.where(_i566 == 10, rows[10], np.where(_i566 == 11, rows[11], np.where(_i566 == 12, rows[12], np.where(_i566 == 13, rows[13], np.where(_i566 == 14, rows[14], np.where(_i566 == 15, rows[15], np.where(_i566 == 16, rows[16], np.where(_i566 == 17, rows[17], np.where(_i566 == 18, rows[18], np.where(_i566 == 19, rows[19], np.where(_i566 == 20, rows[20], np.where(_i566 == 21, rows[21], np.where(_i566 == 22, rows[22], np.where(_i566 == 23, rows[23], np.where(_i566 == 24, rows[24], np.where(_i566 == 25, rows[25], np.where(_i566 == 26, rows[26], np.where(_i566 == 27, rows[27], np.where(_i566 == 28, rows[28], np.where(_i566 == 29, rows[29], np.where(_i566 == 30, rows[30], np.where(_i566 == 31, rows[31], np.where(_i566 == 32, rows[32], np.where(_i566 == 33, rows[33], np.where(_i566 == 34, rows[34], np.where(_i566 == 35, rows[35], np.where(_i566 == 36, rows[36], np.where(_i566 == 37, rows[37], np.where(_i566 == 38, rows[38], np.where(_i566 == 39, rows[39], np.where(_i566 == 40, rows[40], np.where(_i566 == 41, rows[41], np.where(_i566 == 42, rows[42], np.where(_i566 == 43, rows[43], np.where(_i566 == 44, rows[44], np.where(_i566 == 45, rows[45], np.where(_i566 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*k, y)
+        found = np.where(_m565, 1, found)
+        _i567 = 6*_i457 + 5
+        _i568 = 6*_i457 + 5
+        _i569 = 6*_i457 + 5
+        _c570 = (np.where(_i567 == 0, rows[0], np.where(_i567 == 1, rows[1], np.where(_i567 == 2, rows[2], np.where(_i567 == 3, rows[3], np.where(_i567 == 4, rows[4], np.where(_i567 == 5, rows[5], np.where(_i567 == 6, rows[6], np.where(_i567 == 7, rows[7], np.where(_i567 == 8, rows[8], np.where(_i567 == 9, rows[9], np.where(_i567 == 10, rows[10], np.where(_i567 == 11, rows[11], np.where(_i567 == 12, rows[12], np.where(_i567 == 13, rows[13], np.where(_i567 == 14, rows[14], np.where(_i567 == 15, rows[15], np.where(_i567 == 16, rows[16], np.where(_i567 == 17, rows[17], np.where(_i567 == 18, rows[18], np.where(_i567 == 19, rows[19], np.where(_i567 == 20, rows[20], np.where(_i567 == 21, rows[21], np.where(_i567 == 22, rows[22], np.where(_i567 == 23, rows[23], np.where(_i567 == 24, rows[24], np.where(_i567 == 25, rows[25], np.where(_i567 == 26, rows[26], np.where(_i567 == 27, rows[27], np.where(_i567 == 28, rows[28], np.where(_i567 == 29, rows[29], np.where(_i567 == 30, rows[30], np.where(_i567 == 31, rows[31], np.where(_i567 == 32, rows[32], np.where(_i567 == 33, rows[33], np.where(_i567 == 34, rows[34], np.where(_i567 == 35, rows[35], np.where(_i567 == 36, rows[36], np.where(_i567 == 37, rows[37], np.where(_i567 == 38, rows[38], np.where(_i567 == 39, rows[39], np.where(_i567 == 40, rows[40], np.where(_i567 == 41, rows[41], np.where(_i567 == 42, rows[42], np.where(_i567 == 43, rows[43], np.where(_i567 == 44, rows[44], np.where(_i567 == 45, rows[45], np.where(_i567 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (np.where(_i568 == 0, rows[0], np.where(_i568 == 1, rows[1], np.where(_i568 == 2, rows[2], np.where(_i568 == 3, rows[3], np.where(_i568 == 4, rows[4], np.where(_i568 == 5, rows[5], np.where(_i568 == 6, rows[6], np.where(_i568 == 7, rows[7], np.where(_i568 == 8, rows[8], np.where(_i568 == 9, rows[9], np.where(_i568 == 10, rows[10], np.where(_i568 == 11, rows[11], np.where(_i568 == 12, rows[12], np.where(_i568 == 13, rows[13], np.where(_i568 == 14, rows[14], np.where(_i568 == 15, rows[15], np.where(_i568 == 16, rows[16], np.where(_i568 == 17, rows[17], np.where(_i568 == 18, rows[18], np.where(_i568 == 19, rows[19], np.where(_i568 == 20, rows[20], np.where(_i568 == 21, rows[21], np.where(_i568 == 22, rows[22], np.where(_i568 == 23, rows[23], np.where(_i568 == 24, rows[24], np.where(_i568 == 25, rows[25], np.where(_i568 == 26, rows[26], np.where(_i568 == 27, rows[27], np.where(_i568 == 28, rows[28], np.where(_i568 == 29, rows[29], np.where(_i568 == 30, rows[30], np.where(_i568 == 31, rows[31], np.where(_i568 == 32, rows[32], np.where(_i568 == 33, rows[33], np.where(_i568 == 34, rows[34], np.where(_i568 == 35, rows[35], np.where(_i568 == 36, rows[36], np.where(_i568 == 37, rows[37], np.where(_i568 == 38, rows[38], np.where(_i568 == 39, rows[39], np.where(_i568 == 40, rows[40], np.where(_i568 == 41, rows[41], np.where(_i568 == 42, rows[42], np.where(_i568 == 43, rows[43], np.where(_i568 == 44, rows[44], np.where(_i568 == 45, rows[45], np.where(_i568 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i569 == 0, rows[0], np.where(_i569 == 1, rows[1], np.where(_i569 == 2, rows[2], np.where(_i569 == 3, rows[3], np.where(_i569 == 4, rows[4], np.where(_i569 == 5, rows[5], np.where(_i569 == 6, rows[6], np.where(_i569 == 7, rows[7], np.where(_i569 == 8, rows[8], np.where(_i569 == 9, rows[9], np.where(_i569 == 10, rows[10], np.where(_i569 == 11, rows[11], np.where(_i569 == 12, rows[12], np.where(_i569 == 13, rows[13], np.where(_i569 == 14, rows[14], np.where(_i569 == 15, rows[15], np.where(_i569 == 16, rows[16], np.where(_i569 == 17, rows[17], np.where(_i569 == 18, rows[18], np.where(_i569 == 19, rows[19], np.where(_i569 == 20, rows[20], np.where(_i569 == 21, rows[21], np.where(_i569 == 22, rows[22], np.where(_i569 == 23, rows[23], np.where(_i569 == 24, rows[24], np.where(_i569 == 25, rows[25], np.where(_i569 == 26, rows[26], np.where(_i569 == 27, rows[27], np.where(_i569 == 28, rows[28], np.where(_i569 == 29, rows[29], np.where(_i569 == 30, rows[30], np.where(_i569 == 31, rows[31], np.where(_i569 == 32, rows[32], np.where(_i569 == 33, rows[33], np.where(_i569 == 34, rows[34], np.where(_i569 == 35, rows[35], np.where(_i569 == 36, rows[36], np.where(_i569 == 37, rows[37], np.where(_i569 == 38, rows[38], np.where(_i569 == 39, rows[39], np.where(_i569 == 40, rows[40], np.where(_i569 == 41, rows[41], np.where(_i569 == 42, rows[42], np.where(_i569 == 43, rows[43], np.where(_i569 == 44, rows[44], np.where(_i569 == 45, rows[45], np.where(_i569 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])))
+        _m571 = _run458 & _c570
+        _i572 = 6*_i457 + 5
+        y = np.where(_m571, np.where(_i572 == 0, rows[0], np.where(_i572 == 1, rows[1], np.where(_i572 == 2, rows[2], np.where(_i572 == 3, rows[3], np.where(_i572 == 4, rows[4], np.where(_i572 == 5, rows[5], np.where(_i572 == 6, rows[6], np.where(_i572 == 7, rows[7], np.where(_i572 == 8, rows[8], np.where(_i572 == 9, rows[9], np.where(_i572 == 10, rows[10], np.where(_i572 == 11, rows[11], np.where(_i572 == 12, rows[12], np.where(_i572 == 13, rows[13], np.where(_i572 == 14, rows[14], np.where(_i572 == 15, rows[15], np.where(_i572 == 16, rows[16], np.where(_i572 == 17, rows[17], np.where(_i572 == 18, rows[18], np.where(_i572 == 19, rows[19], np.where(_i572 == 20, rows[20], np.where(_i572 == 21, rows[21], np.where(_i572 == 22, rows[22], np.where(_i572 == 23, rows[23], np.where(_i572 == 24, rows[24], np.where(_i572 == 25, rows[25], np.where(_i572 == 26, rows[26], np.where(_i572 == 27, rows[27], np.where(_i572 == 28, rows[28], np.where(_i572 == 29, rows[29], np.where(_i572 == 30, rows[30], np.where(_i572 == 31, rows[31], np.where(_i572 == 32, rows[32], np.where(_i572 == 33, rows[33], np.where(_i572 == 34, rows[34], np.where(_i572 == 35, rows[35], np.where(_i572 == 36, rows[36], np.where(_i572 == 37, rows[37], np.where(_i572 == 38, rows[38], np.where(_i572 == 39, rows[39], np.where(_i572 == 40, rows[40], np.where(_i572 == 41, rows[41], np.where(_i572 == 42, rows[42], np.where(_i572 == 43, rows[43], np.where(_i572 == 44, rows[44], np.where(_i572 == 45, rows[45], np.where(_i572 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k - 1.0), y)
+        found = np.where(_m571, 1, found)
+        _i573 = 6*_i457 + 5
+        _i574 = 6*_i457 + 5
+        _i575 = 6*_i457 + 5
+        _c576 = (np.where(_i573 == 0, rows[0], np.where(_i573 == 1, rows[1], np.where(_i573 == 2, rows[2], np.where(_i573 == 3, rows[3], np.where(_i573 == 4, rows[4], np.where(_i573 == 5, rows[5], np.where(_i573 == 6, rows[6], np.where(_i573 == 7, rows[7], np.where(_i573 == 8, rows[8], np.where(_i573 == 9, rows[9], np.where(_i573 == 10, rows[10], np.where(_i573 == 11, rows[11], np.where(_i573 == 12, rows[12], np.where(_i573 == 13, rows[13], np.where(_i573 == 14, rows[14], np.where(_i573 == 15, rows[15], np.where(_i573 == 16, rows[16], np.where(_i573 == 17, rows[17], np.where(_i573 == 18, rows[18], np.where(_i573 == 19, rows[19], np.where(_i573 == 20, rows[20], np.where(_i573 == 21, rows[21], np.where(_i573 == 22, rows[22], np.where(_i573 == 23, rows[23], np.where(_i573 == 24, rows[24], np.where(_i573 == 25, rows[25], np.where(_i573 == 26, rows[26], np.where(_i573 == 27, rows[27], np.where(_i573 == 28, rows[28], np.where(_i573 == 29, rows[29], np.where(_i573 == 30, rows[30], np.where(_i573 == 31, rows[31], np.where(_i573 == 32, rows[32], np.where(_i573 == 33, rows[33], np.where(_i573 == 34, rows[34], np.where(_i573 == 35, rows[35], np.where(_i573 == 36, rows[36], np.where(_i573 == 37, rows[37], np.where(_i573 == 38, rows[38], np.where(_i573 == 39, rows[39], np.where(_i573 == 40, rows[40], np.where(_i573 == 41, rows[41], np.where(_i573 == 42, rows[42], np.where(_i573 == 43, rows[43], np.where(_i573 == 44, rows[44], np.where(_i573 == 45, rows[45], np.where(_i573 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (np.where(_i574 == 0, rows[0], np.where(_i574 == 1, rows[1], np.where(_i574 == 2, rows[2], np.where(_i574 == 3, rows[3], np.where(_i574 == 4, rows[4], np.where(_i574 == 5, rows[5], np.where(_i574 == 6, rows[6], np.where(_i574 == 7, rows[7], np.where(_i574 == 8, rows[8], np.where(_i574 == 9, rows[9], np.where(_i574 == 10, rows[10], np.where(_i574 == 11, rows[11], np.where(_i574 == 12, rows[12], np.where(_i574 == 13, rows[13], np.where(_i574 == 14, rows[14], np.where(_i574 == 15, rows[15], np.where(_i574 == 16, rows[16], np.where(_i574 == 17, rows[17], np.where(_i574 == 18, rows[18], np.where(_i574 == 19, rows[19], np.where(_i574 == 20, rows[20], np.where(_i574 == 21, rows[21], np.where(_i574 == 22, rows[22], np.where(_i574 == 23, rows[23], np.where(_i574 == 24, rows[24], np.where(_i574 == 25, rows[25], np.where(_i574 == 26, rows[26], np.where(_i574 == 27, rows[27], np.where(_i574 == 28, rows[28], np.where(_i574 == 29, rows[29], np.where(_i574 == 30, rows[30], np.where(_i574 == 31, rows[31], np.where(_i574 == 32, rows[32], np.where(_i574 == 33, rows[33], np.where(_i574 == 34, rows[34], np.where(_i574 == 35, rows[35], np.where(_i574 == 36, rows[36], np.where(_i574 == 37, rows[37], np.where(_i574 == 38, rows[38], np.where(_i574 == 39, rows[39], np.where(_i574 == 40, rows[40], np.where(_i574 == 41, rows[41], np.where(_i574 == 42, rows[42], np.where(_i574 == 43, rows[43], np.where(_i574 == 44, rows[44], np.where(_i574 == 45, rows[45], np.where(_i574 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((np.where(_i575 == 0, rows[0], np.where(_i575 == 1, rows[1], np.where(_i575 == 2, rows[2], np.where(_i575 == 3, rows[3], np.where(_i575 == 4, rows[4], np.where(_i575 == 5, rows[5], np.where(_i575 == 6, rows[6], np.where(_i575 == 7, rows[7], np.where(_i575 == 8, rows[8], np.where(_i575 == 9, rows[9], np.where(_i575 == 10, rows[10], np.where(_i575 == 11, rows[11], np.where(_i575 == 12, rows[12], np.where(_i575 == 13, rows[13], np.where(_i575 == 14, rows[14], np.where(_i575 == 15, rows[15], np.where(_i575 == 16, rows[16], np.where(_i575 == 17, rows[17], np.where(_i575 == 18, rows[18], np.where(_i575 == 19, rows[19], np.where(_i575 == 20, rows[20], np.where(_i575 == 21, rows[21], np.where(_i575 == 22, rows[22], np.where(_i575 == 23, rows[23], np.where(_i575 == 24, rows[24], np.where(_i575 == 25, rows[25], np.where(_i575 == 26, rows[26], np.where(_i575 == 27, rows[27], np.where(_i575 == 28, rows[28], np.where(_i575 == 29, rows[29], np.where(_i575 == 30, rows[30], np.where(_i575 == 31, rows[31], np.where(_i575 == 32, rows[32], np.where(_i575 == 33, rows[33], np.where(_i575 == 34, rows[34], np.where(_i575 == 35, rows[35], np.where(_i575 == 36, rows[36], np.where(_i575 == 37, rows[37], np.where(_i575 == 38, rows[38], np.where(_i575 == 39, rows[39], np.where(_i575 == 40, rows[40], np.where(_i575 == 41, rows[41], np.where(_i575 == 42, rows[42], np.where(_i575 == 43, rows[43], np.where(_i575 == 44, rows[44], np.where(_i575 == 45, rows[45], np.where(_i575 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])))
+        _m577 = _run458 & _c576
+        _i578 = 6*_i457 + 5
+        y = np.where(_m577, np.where(_i578 == 0, rows[0], np.where(_i578 == 1, rows[1], np.where(_i578 == 2, rows[2], np.where(_i578 == 3, rows[3], np.where(_i578 == 4, rows[4], np.where(_i578 == 5, rows[5], np.where(_i578 == 6, rows[6], np.where(_i578 == 7, rows[7], np.where(_i578 == 8, rows[8], np.where(_i578 == 9, rows[9], np.where(_i578 == 10, rows[10], np.where(_i578 == 11, rows[11], np.where(_i578 == 12, rows[12], np.where(_i578 == 13, rows[13], np.where(_i578 == 14, rows[14], np.where(_i578 == 15, rows[15], np.where(_i578 == 16, rows[16], np.where(_i578 == 17, rows[17], np.where(_i578 == 18, rows[18], np.where(_i578 == 19, rows[19], np.where(_i578 == 20, rows[20], np.where(_i578 == 21, rows[21], np.where(_i578 == 22, rows[22], np.where(_i578 == 23, rows[23], np.where(_i578 == 24, rows[24], np.where(_i578 == 25, rows[25], np.where(_i578 == 26, rows[26], np.where(_i578 == 27, rows[27], np.where(_i578 == 28, rows[28], np.where(_i578 == 29, rows[29], np.where(_i578 == 30, rows[30], np.where(_i578 == 31, rows[31], np.where(_i578 == 32, rows[32], np.where(_i578 == 33, rows[33], np.where(_i578 == 34, rows[34], np.where(_i578 == 35, rows[35], np.where(_i578 == 36, rows[36], np.where(_i578 == 37, rows[37], np.where(_i578 == 38, rows[38], np.where(_i578 == 39, rows[39], np.where(_i578 == 40, rows[40], np.where(_i578 == 41, rows[41], np.where(_i578 == 42, rows[42], np.where(_i578 == 43, rows[43], np.where(_i578 == 44, rows[44], np.where(_i578 == 45, rows[45], np.where(_i578 == 46, rows[46], rows[47]))))))))))))))))))))))))))))))))))))))))))))))) + 6.283185307179586*(k + 1.0), y)
+        found = np.where(_m577, 1, found)
+        near[5] = np.where(_run458, y, near[5])
+        dist = np.where(_run458, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
+        _c579 = (best < 0) | (dist < best_d)
+        _m580 = _run458 & _c579
+        best = np.where(_m580, _i457, best)
+        best_d = np.where(_m580, dist, best_d)
+        q[0] = np.where(_m580, near[0], q[0])
+        q[1] = np.where(_m580, near[1], q[1])
+        q[2] = np.where(_m580, near[2], q[2])
+        q[3] = np.where(_m580, near[3], q[3])
+        q[4] = np.where(_m580, near[4], q[4])
+        q[5] = np.where(_m580, near[5], q[5])
+        _i457 = np.where(_run458, _i457 + 1, _i457)
+        _run458 = _run458 & (_i457 < count[0])
+    _status1 = status
+    _alive2 = _fb(False)
+    return (q, ), _status1
+
+
+def _ik_nearest_batch(q_ref, target):
+    """ik_nearest for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    q_ref = _problems(q_ref, "q_ref", (6,), "finite")
+    target = _problems(target, "target", (4, 4,), "finite")
+    batch = _batch_shape("ik_nearest", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "target": target.shape[:target.ndim - 2]})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, ), status = _ik_nearest_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(target, batch, (4, 4,)))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+    names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
+    return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])

@@ -4,7 +4,9 @@
 and reads its functions from the IR :class:`~skelarm_sym.ir.nodes.Module` it was printed from.
 Straight-line functions broadcast like the emitted NumPy module (``arm.jacobian(q, l)`` with ``q`` of
 shape ``(..., N)`` returns ``(..., 2, N)``; batches go through the ``_batch`` C functions); solvers
-take one problem and return the same named record as the NumPy module.
+take one problem and return the same named record as the NumPy module, or a batch of problems (arrays
+``(..., *shape)`` whose batch shapes broadcast) and return that record over the batch, through the
+solver's C ``_batch``.
 
 Each method has the NumPy module's signature (``inspect.signature(arm.inverse_velocity)`` is
 ``(q, v, l, lambda_)``), accepts keywords, and checks what the header promises: shapes, real finite
@@ -82,8 +84,10 @@ def _docstring(f: Function, prefix: str) -> str:
         rule = {"finite": ", finite", "nonnegative": ", finite and >= 0", "positive": ", finite and > 0"}.get(a.domain, "")
         if a.is_scalar:
             lines.append(f"{identifier(a.name)}: a number{rule}{', shared by the batch' if f.kind == 'straight' else ''}.")
-        elif not a.batched or f.kind != "straight":
-            lines.append(f"{identifier(a.name)}: array of shape ({a.size},){rule}{', shared by the batch' if f.kind == 'straight' else ''}.")
+        elif f.kind != "straight":
+            lines.append(f"{identifier(a.name)}: array of shape {a.shape} (a batch of problems: (..., {', '.join(map(str, a.shape))})){rule}.")
+        elif not a.batched:
+            lines.append(f"{identifier(a.name)}: array of shape ({a.size},){rule}, shared by the batch.")
         else:
             lines.append(f"{identifier(a.name)}: array of shape (..., {a.size}){rule}.")
     if f.kind == "straight":
@@ -168,6 +172,7 @@ class CompiledArm:
             else:
                 self._bind_procedure(f)
                 target = lambda args, f=f: self._solve(f, args)  # noqa: E731
+                fast = self._fast_solver(f, getattr(self.extension, f.name, None))
             self._methods[f.name] = _method(f, self.prefix, target, fast)
         self._results = {f.name: namedtuple(f.result, f.result_fields) for f in module.public if f.kind != "straight"}
 
@@ -190,6 +195,14 @@ class CompiledArm:
         function.argtypes = [self._ctype_of(a) for a in f.arguments]
         function.restype = ctypes.c_int if f.returns is Type.INT else None
         self._c_functions[f.name] = function
+        try:  # libraries of other generators (the CUDA host code) may have the single call alone
+            batch = getattr(self._lib, f"{self.prefix}_{f.name}_batch")
+        except AttributeError:
+            batch = None
+        else:
+            batch.argtypes = [ctypes.c_size_t] + function.argtypes + ([ctypes.POINTER(ctypes.c_int)] if f.returns is Type.INT else [])
+            batch.restype = None
+        self._c_functions[f.name + "_batch"] = batch
         labels = {value: name.lower().removeprefix("ik_") for name, value, _ in f.statuses}
         invalid = next(((value, meaning) for name, value, meaning in f.statuses if name.endswith("INVALID")), None)
         self._statuses[f.name] = (labels, invalid)
@@ -250,6 +263,8 @@ class CompiledArm:
         return outputs[0] if len(outputs) == 1 else tuple(outputs)
 
     def _solve(self, f: Function, args: tuple):
+        if is_batch(f, args):
+            return self._solve_batch(f, args)
         values: dict[str, object] = {}
         for value, a in zip(args, f.inputs):
             if value is None and a.default is not None:
@@ -259,7 +274,8 @@ class CompiledArm:
                 continue
             array = _real(value, a.name, self.dtype)
             if array.shape != a.shape and array.shape != (a.size,):
-                raise InputError(f"{a.name} must have shape {a.shape}, got {array.shape}")
+                batch = f" (a batch: (..., {', '.join(map(str, a.shape))}))" if not a.is_scalar else ""
+                raise InputError(f"{a.name} must have shape {a.shape}{batch}, got {array.shape}")
             array = array.reshape(a.shape)
             _check_domain(array, a.name, a.domain)
             values[a.name] = array if a.is_scalar else np.ascontiguousarray(array).reshape(-1)
@@ -277,16 +293,131 @@ class CompiledArm:
             pointer = ctypes.POINTER(ctypes.c_int) if o.type is Type.INT else self._pointer
             c_args.append(outputs[o.name].ctypes.data_as(pointer))
         status = self._c_functions[f.name](*c_args)
+        return self._record(f, status, [outputs[o.name] for o in f.outputs])
+
+    def _record(self, f: Function, status: int, outputs) -> tuple:
+        """The named record of one solved problem from its status and output arrays (an INVALID status: an
+        InputError with the header's meaning)."""
         labels, invalid = self._statuses[f.name]
         if invalid is not None and status == invalid[0]:
             raise InputError(f"{f.name}: {invalid[1]}")
         fields = []
+        for i, (o, out) in enumerate(zip(f.outputs, outputs)):
+            if out.shape != o.shape:
+                out = out.reshape(o.shape)
+            if i == 0:
+                fields += [out, labels.get(status, str(status))]
+            elif o.fields:
+                fields += [out.item(k) for k in range(len(o.fields))]  # Python ints and floats
+            else:
+                fields.append(out)
+        return self._results[f.name](*fields)
+
+    def _fast_solver(self, f: Function, entry):
+        """The extension's entry for solver ``f`` (``None``: none) as a fast path for ``_method``: one problem,
+        positional arguments, the omitted ones filled in when their defaults are numbers; its ``(status,
+        *outputs)`` made the named record. ``NotImplemented`` where the entry does not take the call."""
+        if entry is None:
+            return None
+        literal = [a.default.value if type(a.default).__name__ == "Const" else None for a in f.inputs]
+        count = len(f.inputs)
+
+        def fast(*args):
+            if len(args) < count:
+                rest = literal[len(args):]
+                if any(value is None for value in rest):
+                    return NotImplemented
+                args = args + tuple(rest)
+            raw = entry(*args)
+            if raw is NotImplemented:
+                return raw
+            return self._record(f, raw[0], raw[1:])
+
+        return fast
+
+    def _solve_batch(self, f: Function, args: tuple):
+        """A batch of problems (arrays ``(..., *shape)``, real scalars numbers or arrays over the batch): one
+        call of the C ``_batch`` when every scalar is one number, else one C call per problem. The record
+        holds arrays over the batch: the first output ``(..., *shape)``, status an array of names."""
+        values: dict[str, object] = {}
+        shapes: dict[str, tuple[int, ...]] = {}
+        for value, a in zip(args, f.inputs):
+            if value is None and a.default is not None:
+                value = evaluate(a.default, values)
+            if a.type is Type.INT:
+                values[a.name] = iteration_count(value, a.name)
+                continue
+            array = _real(value, a.name, self.dtype)
+            if not a.is_scalar and array.shape[array.ndim - len(a.shape):] != a.shape:
+                raise InputError(f"{a.name} must have shape (..., {', '.join(map(str, a.shape))}), got {array.shape}")
+            _check_domain(array, a.name, a.domain)
+            values[a.name] = array
+            shapes[a.name] = array.shape if a.is_scalar else array.shape[:array.ndim - len(a.shape)]
+        try:
+            batch = np.broadcast_shapes(*shapes.values())
+        except ValueError:
+            listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
+            raise InputError(f"{f.name}: batch shapes do not broadcast: {listed}") from None
+        m = int(np.prod(batch))
+        inputs = {}
+        for a in f.inputs:
+            x = values[a.name]
+            if a.type is Type.INT or (a.is_scalar and np.ndim(x) == 0):
+                inputs[a.name] = x
+            else:
+                inputs[a.name] = np.ascontiguousarray(np.broadcast_to(x, batch + a.shape).reshape(m, a.size))
+        outputs = {o.name: np.zeros((m, o.size), dtype=np.intc if o.type is Type.INT else self.dtype) for o in f.outputs}
+        status = np.zeros(m, dtype=np.intc)
+        int_pointer = ctypes.POINTER(ctypes.c_int)
+
+        def pointers(j: int | None) -> list:
+            """The C arguments for problem ``j`` (``None``: the whole batch)."""
+            c_args = []
+            for a in f.inputs:
+                x = inputs[a.name]
+                if a.type is Type.INT:
+                    c_args.append(ctypes.c_int(x))
+                elif a.is_scalar:
+                    c_args.append(self._ctype(float(x if np.ndim(x) == 0 else x[j, 0])))
+                else:
+                    c_args.append((x if j is None else x[j]).ctypes.data_as(self._pointer))
+            for o in f.outputs:
+                out = outputs[o.name] if j is None else outputs[o.name][j]
+                c_args.append(out.ctypes.data_as(int_pointer if o.type is Type.INT else self._pointer))
+            return c_args
+
+        batch_call = self._c_functions[f.name + "_batch"]
+        if batch_call is not None and all(np.ndim(inputs[a.name]) == 0 for a in f.inputs if a.is_scalar):
+            batch_call(m, *pointers(None), status.ctypes.data_as(int_pointer))
+        else:
+            for j in range(m):
+                status[j] = self._c_functions[f.name](*pointers(j))
+        status = status.reshape(batch)
+        labels, invalid = self._statuses[f.name]
+        if invalid is not None and np.any(status == invalid[0]):
+            index = np.unravel_index(int(np.argmax(status.reshape(-1) == invalid[0])), batch)
+            raise InputError(f"{f.name}: problem {tuple(int(i) for i in index)}: {invalid[1]}")
+        names = np.array([labels.get(k, str(k)) for k in range(max(labels, default=0) + 1)])
+        fields = []
         for i, o in enumerate(f.outputs):
             out = outputs[o.name]
+            if o.type is Type.INT:
+                out = out.astype(np.int64)
             if i == 0:
-                fields += [out.astype(self.dtype, copy=False).reshape(o.shape), labels.get(status, str(status))]
+                fields += [out.reshape(batch + o.shape), names[status]]
             elif o.fields:
-                fields += [int(out[k]) if o.type is Type.INT else float(out[k]) for k in range(len(o.fields))]
+                fields += [out[:, k].reshape(batch) for k in range(len(o.fields))]
             else:
-                fields.append(out.reshape(o.shape))
+                fields.append(out.reshape(batch + o.shape))
         return self._results[f.name](*fields)
+
+
+def is_batch(f: Function, args: tuple) -> bool:
+    """Whether a solver call holds a batch of problems: an array with dimensions before its problem's
+    shape, or a real scalar that is not one number."""
+    for value, a in zip(args, f.inputs):
+        if a.type is Type.INT or value is None:
+            continue
+        if np.ndim(value) > (0 if a.is_scalar else len(a.shape)):
+            return True
+    return False

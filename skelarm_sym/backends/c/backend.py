@@ -299,6 +299,37 @@ def procedure_context(f: Function, precision: CPrecision, names: Names) -> dict:
         "doc": [c_comment(line) for line in f.doc],
         "statuses": [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)} for name, value, meaning in f.statuses],
         "calls": sorted(called(f.body)),
+        "batch": None if f.kind == "helper" else procedure_batch(f, precision),
+    }
+
+
+def procedure_batch(f: Function, precision: CPrecision) -> dict:
+    """The ``_batch`` variant of a public procedure: one problem after another, each a call of the single
+    function. Arrays (inputs and outputs) hold the problems one after another (element k of problem j at
+    ``[j*size + k]``); scalars are shared by the batch; optional outputs may be NULL, and so may ``status``
+    (the return value of each call)."""
+    params, args = ["size_t m"], []
+    for a in f.arguments:
+        t = c_type(precision, a.type)
+        if a.is_scalar and not a.is_output:
+            params.append(f"{t} {a.name}")
+            args.append(a.name)
+        elif a.is_output:
+            params.append(f"{t} *{a.name}")
+            offset = f"{a.name} + j * {a.size}" if a.size > 1 else f"{a.name} + j"
+            args.append(f"{a.name} ? {offset} : NULL" if a.optional else offset)
+        else:
+            params.append(f"const {t} *{a.name}")
+            args.append(f"{a.name} + j * {a.size}")
+    status = f.returns is Type.INT
+    if status:
+        params.append("int *status")
+    return {
+        "params": params,
+        "args": args,
+        "status": status,
+        "optional": [a.name for a in f.outputs if a.optional] + (["status"] if status else []),
+        "shared": [a.name for a in f.inputs if a.is_scalar],
     }
 
 

@@ -12,12 +12,16 @@ defaults and returns a named tuple.
 from __future__ import annotations
 
 from ...ir.nodes import Function, Let, Module, Store, TrigBlock, Type
+from ...ir.predicate import PCall, PFor, PGuard, PLoop, predicate
 from ..text import py_string
-from .printer import PythonPrinter, identifier
+from ..array_syntax import Dialect, ProcedurePrinter
+from .printer import VECTOR_CALLS, PythonPrinter, identifier
 
 LANGUAGE = "python"
 FILE_SUFFIXES = (".py",)
 DTYPES = {"double": "np.float64", "float": "np.float32"}
+NUMPY = Dialect(where="np.where", calls=VECTOR_CALLS, int_dtype="np.int64", bool_dtype="np.bool_", cast="{x}.astype({dtype})")
+"""NumPy's names for the masked (batched) form of the procedures."""
 
 
 def _function_names(module: Module) -> dict[str, str]:
@@ -77,17 +81,19 @@ def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, st
     printer = PythonPrinter(False, constant=lambda name: name, function_name=calls.get)
     body = printer.statements(f.body)
     defaults = PythonPrinter(False, constant=lambda name: name)
+    batch_defaults = PythonPrinter(True, constant=lambda name: name)
     inputs = []
     for a in f.inputs:
-        default = None
+        default = batch_default = None
         if a.default is not None:
             default = defaults.expr(a.default)
+            batch_default = batch_defaults.expr(a.default)
         inputs.append({
             "name": a.name, "py": identifier(a.name), "size": a.size, "shape": a.shape, "scalar": a.is_scalar,
-            "int": a.type is Type.INT, "domain": a.domain, "default": default,
+            "int": a.type is Type.INT, "domain": a.domain, "default": default, "batch_default": batch_default,
             "literal": default is not None and a.default.__class__.__name__ == "Const", "doc": py_string(a.doc),
         })
-    outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "int": o.type is Type.INT,
+    outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "shape": list(o.shape), "int": o.type is Type.INT,
                 "fields": list(o.fields), "doc": py_string(o.doc),
                 "reshape": f".reshape({', '.join(map(str, o.shape))})" if len(o.shape) > 1 else ""} for o in f.outputs]
     invalid = next((meaning for name, _, meaning in f.statuses if name.endswith("INVALID")), None)
@@ -107,6 +113,55 @@ def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, st
         "invalid_value": next((value for name, value, _ in f.statuses if name.endswith("INVALID")), None),
         "statuses": [{"name": name, "label": name.lower().removeprefix("ik_"), "value": value, "meaning": py_string(meaning)}
                      for name, value, meaning in f.statuses],
+        "labels": _labels(f.statuses),
+    }
+
+
+def _labels(statuses) -> list[str]:
+    """Status names indexed by their codes (codes no status has: ``"?"``)."""
+    labels = ["?"] * (max((value for _, value, _ in statuses), default=-1) + 1)
+    for name, value, _ in statuses:
+        labels[value] = name.lower().removeprefix("ik_")
+    return labels
+
+
+def lanes_context(module: Module, f: Function) -> dict:
+    """A public procedure in masked form over a batch of problems (:mod:`skelarm_sym.ir.predicate`): every
+    value is an array over the problems (the lanes), an array of the IR a list of such values; the
+    straight-line functions it calls run on all lanes at once through their ``_<name>_on_lanes`` adapters."""
+    p = predicate(module, f)
+    calls = {g.name: f"_{g.name}_on_lanes" for g in module.functions if g.kind == "straight"}
+    body = ProcedurePrinter(p, calls, NUMPY).statements(p.body, 1)
+    return {
+        "core": f"_{f.name}_lanes",
+        "body": body,
+        "status": identifier(p.status.name) if p.status is not None else None,
+        "called": sorted(_called(p.body)),
+    }
+
+
+def _called(body) -> set[str]:
+    """Names of the straight-line functions a masked program calls."""
+    names: set[str] = set()
+    for s in body:
+        t = type(s)
+        if t is PCall:
+            names.add(s.function)
+        elif t in (PFor, PLoop, PGuard):
+            names |= _called(s.body)
+    return names
+
+
+def on_lanes_context(f: Function) -> dict:
+    """The adapter through which masked programs call straight-line function ``f``: lists of per-lane
+    values in (the order of ``f``'s IR arguments), lists out, one element per output element."""
+    return {
+        "name": f"_{f.name}_on_lanes",
+        "core": f"_{f.name}_core",
+        "args": [identifier(a.name) for a in f.inputs],
+        "core_args": [identifier(a.name) if a.is_scalar else f"_stacked(_c, {identifier(a.name)})"
+                      for a in [*(a for a in f.inputs if not a.is_scalar), *(a for a in f.inputs if a.is_scalar)]],
+        "sizes": [o.size for o in f.outputs],
     }
 
 
@@ -119,6 +174,11 @@ def context(module: Module) -> dict:
     printers: dict = {}
     straight = [straight_context(f, calls, printers) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, calls, {}) for f in module.functions if f.kind != "straight"]
+    called: set[str] = set()
+    for f, p in zip([f for f in module.functions if f.kind != "straight"], procedures):
+        if f.kind == "procedure":
+            p["lanes"] = lanes_context(module, f)
+            called |= set(p["lanes"]["called"])
     statuses: dict[str, dict] = {}
     for p in procedures:
         for s in p["statuses"]:
@@ -129,6 +189,7 @@ def context(module: Module) -> dict:
         "dtype": DTYPES[module.precision],
         "functions": straight,
         "procedures": procedures,
+        "on_lanes": [on_lanes_context(f) for f in module.functions if f.name in called],
         "statuses": list(statuses.values()),
         **constants_context(module, "np.inf"),
     }
