@@ -10,7 +10,9 @@ configuration, a tenth of a millisecond or so, and the printed figures are the m
 the samples in microseconds per call (other load on the machine only adds time: the minimum is the
 undisturbed cost, the median what a busy machine gives). ``direct`` calls the extension's entry without
 the Python method around it. The C function itself takes well under 0.2 µs in every case
-(``benchmarks/batch_ab.py`` times it), so these figures are the overhead of the call.
+(``benchmarks/batch_ab.py`` times it), so these figures are the overhead of the call; the solvers' take about
+1 µs (``ik_all``, ``ik_nearest``) and a few µs (``ik_solve``, ``benchmarks/ik_all.py``), included here. For a
+solver, ``direct`` returns the raw ``(status, outputs...)`` tuple, not the record.
 """
 
 from __future__ import annotations
@@ -35,10 +37,21 @@ CASES = {
     "planar n = 3 kinematics": (lambda: PlanarArm(3), "kinematics"),
     "panda jacobian": (lambda: load_robot(ROOT / "examples/robots/panda.toml"), "jacobian"),
     "panda kinematics": (lambda: load_robot(ROOT / "examples/robots/panda.toml"), "kinematics"),
+    "puma560 ik_all": (lambda: load_robot(ROOT / "examples/robots/puma560.toml"), "ik_all"),
+    "puma560 ik_nearest": (lambda: load_robot(ROOT / "examples/robots/puma560.toml"), "ik_nearest"),
+    "puma560 ik_solve": (lambda: load_robot(ROOT / "examples/robots/puma560.toml"), "ik_solve"),
 }
 
 
-def arguments(function, rng) -> list:
+def arguments(function, rng, model=None) -> list:
+    """Values for every input: a solver's target is the pose of a configuration, its start that configuration
+    moved by 0.1 rad; its other inputs their defaults."""
+    if function.kind != "straight":
+        from skelarm_sym.models.chain.reference import chain_kinematics
+
+        q = rng.uniform(-1.0, 1.0, model.n)
+        values = {"target": chain_kinematics(model.numeric(), q[None]).T[0], "q0": q + 0.1, "q_ref": q + 0.1}
+        return [values[a.name] if a.name in values else a.default.value for a in function.inputs]
     out = []
     for a in function.inputs:
         low, high = (0.5, 1.5) if a.domain == "positive" else (0.0, 0.2) if a.domain == "nonnegative" else (-1.0, 1.0)
@@ -47,8 +60,9 @@ def arguments(function, rng) -> list:
 
 
 def flat(result) -> np.ndarray:
-    """Every output of a call, one after another."""
-    return np.concatenate([np.ravel(x) for x in (result if isinstance(result, tuple) else (result,))])
+    """Every output of a call, one after another (a solver's status as its length)."""
+    parts = result if isinstance(result, tuple) else (result,)
+    return np.concatenate([np.ravel(len(x) if isinstance(x, str) else x).astype(float) for x in parts])
 
 
 def sample(fn, args, loops: int) -> float:
@@ -70,10 +84,11 @@ def main() -> None:
     print("|---|---|---|---|---|")
     for name in args.cases.split(","):
         make, function = CASES[name]
-        g = generate(make(), langs="c", out=None, functions=function, prefix="bench")
+        model = make()
+        g = generate(model, langs="c", out=None, functions=function, prefix="bench")
         plain, fast = compile_arm(g, extension=False), compile_arm(g, extension=True)
         f = g.module.function(function)
-        values = arguments(f, rng)
+        values = arguments(f, rng, model)
         calls = {"ctypes": getattr(plain, function), "extension": getattr(fast, function),
                  "direct": getattr(fast.extension, function)}
         np.testing.assert_array_equal(flat(calls["ctypes"](*values)), flat(calls["extension"](*values)))

@@ -20,7 +20,7 @@ file is named with a dot (``arm3.ext.c``) so that it can never be taken for the 
 
 from __future__ import annotations
 
-from ...ir.nodes import Function, Module
+from ...ir.nodes import Function, Module, Type
 from ..text import c_comment
 
 LANGUAGE = "cpython"
@@ -50,10 +50,29 @@ def function_context(f: Function, ctype: str, shapes: dict[tuple[int, ...], int]
     return {"name": f.name, "inputs": inputs, "arrays": len(arrays), "outputs": outputs}
 
 
+def solver_context(f: Function, shapes: dict[tuple[int, ...], int]) -> dict:
+    """A public procedure's entry: arrays (1-D, or a matrix given as its rows: ``rows``), real scalars,
+    counts (C ints in 0..INT_MAX); outputs of the real type or C int; it returns ``(status, *outputs)``."""
+    arrays = [a for a in f.inputs if not a.is_scalar]
+    inputs = []
+    for position, a in enumerate(f.inputs):
+        kind = ("count" if a.type is Type.INT else "real") if a.is_scalar else "array"
+        inputs.append({
+            "name": a.name, "position": position, "size": a.size, "kind": kind, "domain": DOMAINS[a.domain],
+            "rows": a.shape[0] if len(a.shape) == 2 else 0, "buffer": arrays.index(a) if kind == "array" else None,
+        })
+    outputs = []
+    for o in f.outputs:
+        shapes.setdefault(tuple(o.shape), len(shapes))
+        outputs.append({"name": o.name, "shape": shapes[tuple(o.shape)], "int": o.type is Type.INT})
+    return {"name": f.name, "inputs": inputs, "arrays": len(arrays), "outputs": outputs, "status": f.returns is Type.INT}
+
+
 def context(module: Module) -> dict:
     ctype = "double" if module.precision == "double" else "float"
     shapes: dict[tuple[int, ...], int] = {}
     functions = [function_context(f, ctype, shapes) for f in module.functions if f.kind == "straight"]
+    solvers = [solver_context(f, shapes) for f in module.functions if f.kind == "procedure"]
     return {
         "prefix": module.prefix,
         "P": module.prefix.upper(),
@@ -62,8 +81,11 @@ def context(module: Module) -> dict:
         "T": ctype,
         "format": "d" if ctype == "double" else "f",
         "functions": functions,
-        "uses_arrays": any(a["buffer"] is not None for f in functions for a in f["inputs"]),
-        "uses_scalars": any(a["scalar"] for f in functions for a in f["inputs"]),
+        "solvers": solvers,
+        "uses_arrays": any(a["buffer"] is not None for f in [*functions, *solvers] for a in f["inputs"]),
+        "uses_scalars": (any(a["scalar"] for f in functions for a in f["inputs"])
+                         or any(a["kind"] == "real" for f in solvers for a in f["inputs"])),
+        "uses_counts": any(a["kind"] == "count" for f in solvers for a in f["inputs"]),
         "shapes": [list(shape) for shape, _ in sorted(shapes.items(), key=lambda item: item[1])],
     }
 
