@@ -162,6 +162,7 @@ class CompiledArm:
         self._methods: dict[str, object] = {}
         self._c_functions: dict[str, object] = {}  # ctypes function objects, looked up once
         self._statuses: dict[str, tuple[dict[int, str], tuple[int, str] | None]] = {}  # procedures: labels, INVALID
+        self._results = {f.name: namedtuple(f.result, f.result_fields) for f in module.public if f.kind != "straight"}
         for f in module.public:
             self._functions[f.name] = f
             fast = None
@@ -174,7 +175,6 @@ class CompiledArm:
                 target = lambda args, f=f: self._solve(f, args)  # noqa: E731
                 fast = self._fast_solver(f, getattr(self.extension, f.name, None))
             self._methods[f.name] = _method(f, self.prefix, target, fast)
-        self._results = {f.name: namedtuple(f.result, f.result_fields) for f in module.public if f.kind != "straight"}
 
     # -- ctypes signatures -----------------------------------------------------------------------
     def _ctype_of(self, a: Argument):
@@ -321,17 +321,30 @@ class CompiledArm:
             return None
         literal = [a.default.value if type(a.default).__name__ == "Const" else None for a in f.inputs]
         count = len(f.inputs)
+        labels, invalid = self._statuses[f.name]
+        invalid_code = None if invalid is None else invalid[0]
+        make = self._results[f.name]._make
+        split = [len(o.fields) if i and o.fields else 0 for i, o in enumerate(f.outputs)]  # the entry's shapes are final
 
         def fast(*args):
             if len(args) < count:
                 rest = literal[len(args):]
-                if any(value is None for value in rest):
+                if None in rest:
                     return NotImplemented
                 args = args + tuple(rest)
             raw = entry(*args)
             if raw is NotImplemented:
                 return raw
-            return self._record(f, raw[0], raw[1:])
+            status = raw[0]
+            if status == invalid_code:
+                raise InputError(f"{f.name}: {invalid[1]}")
+            fields = [raw[1], labels.get(status, str(status))]
+            for out, n in zip(raw[2:], split[1:]):
+                if n:
+                    fields.extend(out.tolist()[:n])  # Python ints and floats
+                else:
+                    fields.append(out)
+            return make(fields)
 
         return fast
 
