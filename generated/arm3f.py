@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0xd5c79918
+STAMP = 0x86ad49de
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -149,13 +149,21 @@ def _count(value, name):
 
 def _is_batch(arrays, scalars):
     """Whether a solver call holds a batch of problems: an array ``(value, shape)`` with dimensions before
-    its problem's shape, or a scalar that is not a single number."""
-    return any(np.ndim(value) > len(shape) for value, shape in arrays) or any(np.ndim(value) > 0 for value in scalars)
+    its problem's shape (or, for a matrix, before its elements in a row: ``(m, 16)`` targets), or a scalar
+    that is not a single number."""
+    for value, shape in arrays:
+        dims = np.shape(value)
+        if len(dims) > len(shape) or (len(shape) > 1 and len(dims) > 1 and dims[-1] == int(np.prod(shape))):
+            return True
+    return any(np.ndim(value) > 0 for value in scalars)
 
 
 def _problems(value, name, shape, domain):
-    """A batch's array of shape (..., *shape), checked."""
+    """A batch's array of shape (..., *shape) (a matrix may come flat: (..., size)), checked."""
     array = _real_array(value, name)
+    size = int(np.prod(shape))
+    if len(shape) > 1 and array.ndim > 1 and array.shape[-1] == size and array.shape[array.ndim - len(shape):] != shape:
+        array = array.reshape(array.shape[:-1] + shape)
     if array.shape[array.ndim - len(shape):] != shape:
         raise ValueError(f"{name} must have shape (..., {', '.join(map(str, shape))}), got {array.shape}")
     _check_domain(array, name, domain)
@@ -1000,7 +1008,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=None, max_iter=200):
     Returns IKResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.
 
-    A batch of problems: arrays of shape (..., *shape) and real scalars that are numbers or arrays, whose batch
+    A batch of problems: arrays of shape (..., *shape) (a matrix also (..., size), flat) and real scalars that are numbers or arrays, whose batch
     shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
     the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
     """

@@ -361,6 +361,9 @@ class CompiledArm:
                 values[a.name] = iteration_count(value, a.name)
                 continue
             array = _real(value, a.name, self.dtype)
+            if (len(a.shape) > 1 and array.ndim > 1 and array.shape[-1] == a.size
+                    and array.shape[array.ndim - len(a.shape):] != a.shape):  # flat matrices: (m, 16) targets
+                array = array.reshape(array.shape[:-1] + a.shape)
             if not a.is_scalar and array.shape[array.ndim - len(a.shape):] != a.shape:
                 raise InputError(f"{a.name} must have shape (..., {', '.join(map(str, a.shape))}), got {array.shape}")
             _check_domain(array, a.name, a.domain)
@@ -427,10 +430,11 @@ class CompiledArm:
 
 def is_batch(f: Function, args: tuple) -> bool:
     """Whether a solver call holds a batch of problems: an array with dimensions before its problem's
-    shape, or a real scalar that is not one number."""
+    shape (a matrix's elements may come flat: ``(m, 16)`` targets), or a real scalar that is not one number."""
     for value, a in zip(args, f.inputs):
         if a.type is Type.INT or value is None:
             continue
-        if np.ndim(value) > (0 if a.is_scalar else len(a.shape)):
+        dims = np.shape(value)
+        if len(dims) > len(a.shape) or (len(a.shape) > 1 and len(dims) > 1 and dims[-1] == a.size):
             return True
     return False

@@ -185,8 +185,8 @@ def test_locked_joint_per_problem(impl):
 @pytest.mark.parametrize("impl", ["numpy", "compiled"])
 def test_batch_input_errors_name_the_problem(impl):
     """A batch with a target that is not a rotation raises ValueError naming that problem; shapes that do not
-    broadcast and a flat (m, 16) target are one-line ValueErrors naming the argument; an empty batch returns
-    empty arrays."""
+    broadcast and a (4, 15) target are one-line ValueErrors naming the argument; (m, 16) targets are a batch;
+    an empty batch returns empty arrays."""
     s = solvers("puma560")
     q, T = problems(s, 4, 7)
     arm = s.py if impl == "numpy" else s.c
@@ -197,7 +197,9 @@ def test_batch_input_errors_name_the_problem(impl):
     with pytest.raises(ValueError, match="broadcast"):
         arm.ik_nearest(q[:3], T)
     with pytest.raises(ValueError, match=r"target must have shape \(4, 4\)"):
-        arm.ik_all(T.reshape(4, 16))
+        arm.ik_all(T.reshape(4, 16)[:, :15])
+    flat = arm.ik_all(T.reshape(4, 16))  # targets stored flat, as the C batch takes them
+    assert np.array_equal(flat.q, arm.ik_all(T).q, equal_nan=True) and flat.q.shape == (4, 8, s.n)
     nan = T.copy()
     nan[1, 0, 3] = np.nan
     with pytest.raises(ValueError, match="target must be finite"):
