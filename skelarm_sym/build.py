@@ -31,7 +31,6 @@ import os
 import re
 import shlex
 import shutil
-import stat
 import subprocess
 import sys
 import tempfile
@@ -41,6 +40,7 @@ from typing import Sequence
 
 
 from .errors import InputError
+from .compile_cache import cache_folder, private_folder  # noqa: F401 - part of this module's interface
 
 
 def __getattr__(name: str):
@@ -159,30 +159,6 @@ def find_compiler(preferred: str | None = None) -> str:
     raise CompilerNotFound(
         "no C compiler found: install gcc or clang (Debian/Ubuntu: apt-get install gcc) or set CC"
     )
-
-
-def cache_folder() -> Path:
-    """Where compiled libraries are kept: ``$SKELARM_SYM_CACHE``, else ``~/.cache/skelarm-sym``."""
-    root = os.environ.get("SKELARM_SYM_CACHE")
-    return Path(root) if root else Path.home() / ".cache" / "skelarm-sym"
-
-
-def private_folder(folder: Path) -> Path:
-    """``folder``, created with mode 0700 if missing; refused if another user owns it or group or
-    others may write to it (they could plant a library that the interpreter would load)."""
-    try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        info = folder.stat()
-    except OSError as exc:
-        raise InputError(f"cannot create the compile cache folder {str(folder)!r}: {exc.strerror or exc} (set SKELARM_SYM_CACHE)") from None
-    if not stat.S_ISDIR(info.st_mode):
-        raise InputError(f"compile cache {str(folder)!r} is not a folder (set SKELARM_SYM_CACHE)")
-    if hasattr(os, "getuid"):
-        if info.st_uid != os.getuid():
-            raise InputError(f"compile cache folder {str(folder)!r} belongs to another user (uid {info.st_uid}); set SKELARM_SYM_CACHE to a folder of your own")
-        if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-            raise InputError(f"compile cache folder {str(folder)!r} is writable by group or others (mode {stat.S_IMODE(info.st_mode):o}); chmod 700 it or set SKELARM_SYM_CACHE")
-    return folder
 
 
 def file_sha256(path: Path) -> str:

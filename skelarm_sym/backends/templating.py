@@ -17,7 +17,7 @@ from .text import c_comment, line_comment, py_string
 
 class CompiledTemplates(jinja2.BytecodeCache):
     """Templates as Jinja compiles them (Python code objects), kept in the compile cache's private folder
-    (``$SKELARM_SYM_CACHE/templates``, see :func:`skelarm_sym.build.private_folder`): compiling the
+    (``$SKELARM_SYM_CACHE/templates``, see :func:`skelarm_sym.compile_cache.private_folder`): compiling the
     templates took a fifth of a ``generate`` command. Each file holds the SHA-256 of what follows it;
     one that does not match (truncated, damaged) is ignored and written again, and Jinja itself drops
     code compiled from another text of the template or by another Jinja or Python. A file that cannot
@@ -53,7 +53,7 @@ class CompiledTemplates(jinja2.BytecodeCache):
 
 def compiled_templates() -> CompiledTemplates | None:
     """The cache of compiled templates, or ``None`` when the private cache folder is not usable here."""
-    from ..build import cache_folder, private_folder
+    from ..compile_cache import cache_folder, private_folder
     from ..errors import InputError
 
     try:

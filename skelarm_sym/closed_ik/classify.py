@@ -43,6 +43,7 @@ import sympy as sp
 from ..models.chain.derive import canonical_joints
 from ..errors import InputError
 from ..models.chain import Chain, Transform
+from ..models.chain.ik_scope import joint_count, unsupported
 
 Vec = tuple[sp.Expr, sp.Expr, sp.Expr]
 
@@ -151,12 +152,9 @@ def _clean(v: Sequence) -> Vec:
 @functools.lru_cache(maxsize=16)
 def chain_geometry(chain: Chain) -> Geometry:
     """The chain's screw geometry at ``q = 0`` (exact), one entry per moving joint; refuses what it cannot solve."""
-    if chain.parameters:
-        raise ClosedFormError(
-            f"{chain.name}: named parameters ({', '.join(map(str, chain.parameters))}) are not supported by closed-form IK:"
-            " give numbers")
-    if len(chain.joints) != chain.n or any(sp.sympify(j.multiplier) != 1 for j in chain.joints):
-        raise ClosedFormError(f"{chain.name}: mimic joints (a coordinate moving several joints) are not supported by closed-form IK")
+    reason = unsupported(chain)
+    if reason is not None:
+        raise ClosedFormError(reason)
     joints, tool = canonical_joints(chain)
     frame = Transform.identity()
     kinds, axes, points = [], [], []
@@ -371,15 +369,10 @@ class Family:
 def problem_geometry(chain: Chain, lock: int | None = None) -> Geometry:
     """The six solved joints' geometry (locked, if ``lock`` is given); refuses other joint counts."""
     geom = chain_geometry(chain)
-    n = len(geom.kinds)
-    if lock is not None:
-        if n != 7:
-            raise ClosedFormError(f"{chain.name}: a locked joint reduces a 7-joint chain to 6; this chain has {n} joints")
-        return lock_geometry(geom, lock)
-    if n != 6:
-        hint = " (give lock=JOINT for a 7-joint arm)" if n == 7 else ""
-        raise ClosedFormError(f"{chain.name}: closed-form families here need 6 moving joints, this chain has {n}{hint}")
-    return geom
+    reason = joint_count(chain.name, len(geom.kinds), lock)
+    if reason is not None:
+        raise ClosedFormError(reason)
+    return lock_geometry(geom, lock) if lock is not None else geom
 
 
 def classify(chain: Chain, lock: int | None = None) -> Family:

@@ -43,6 +43,7 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 
 from __future__ import annotations
 
+import functools
 import math
 import textwrap
 from dataclasses import dataclass
@@ -644,16 +645,23 @@ def _settle_signs(step: _Steps, outputs: tuple, axes: list[Vector]) -> tuple[tup
     return tuple(rewrite[:-1]), rewrite[-1]
 
 
+@functools.lru_cache(maxsize=8192)
+def _ops(expr: sp.Expr) -> int:
+    """SymPy's operation count of ``expr``, remembered: the candidates of :func:`_pose` and
+    :func:`_choose_columns` share most of their steps, and ``count_ops`` is slow."""
+    return sp.count_ops(expr)
+
+
 def _closure_ops(steps: dict, exprs: Sequence[sp.Expr]) -> int:
     """Operations (SymPy's count) of ``exprs`` and of every step they need."""
     seen: set[sp.Symbol] = set()
     todo = [s for e in exprs for s in sp.sympify(e).free_symbols if s in steps]
-    total = sum(sp.count_ops(e) for e in exprs)
+    total = sum(_ops(sp.sympify(e)) for e in exprs)
     while todo:
         s = todo.pop()
         if s not in seen:
             seen.add(s)
-            total += sp.count_ops(steps[s])
+            total += _ops(steps[s])
             todo.extend(x for x in steps[s].free_symbols if x in steps)
     return total
 

@@ -7,6 +7,7 @@ import os
 from ...errors import InputError
 from ..kind import ModelKind
 from .loader import PREFIX_RULE
+from .ik_scope import refusal
 from .lock import LOCK_OPTION, ik_lock, lock_index, with_ik_lock
 from .model import Chain
 
@@ -25,10 +26,12 @@ def _derive(model: Chain, wanted):
     derivation = derive_chain(model, inverse=wanted is None or not set(wanted) <= forward)
     if wanted is not None and not set(wanted) & set(CLOSED):
         return derivation
+    lock = lock_index(model, ik_lock(model))
+    if wanted is None and lock is None and refusal(model, lock) is not None:
+        return derivation  # in no family, as derive_ik_all would find, without importing it (and NumPy)
     from ...closed_ik.classify import ClosedFormError
     from ...closed_ik.derive import derive_ik_all, with_candidates
 
-    lock = lock_index(model, ik_lock(model))
     try:
         ik = derive_ik_all(model, lock)
     except ClosedFormError:
@@ -40,9 +43,12 @@ def _derive(model: Chain, wanted):
 
 def _solvers(derivation, names, precision):
     from .solver import chain_solvers
-    from .solver_closed import closed_solvers
 
     iterative = chain_solvers(derivation, names, precision) if set(names) & set(SOLVERS) else []
+    if not set(names) & {"ik_all", "ik_nearest"}:  # the closed-form procedures (they import NumPy) are not asked for
+        return iterative
+    from .solver_closed import closed_solvers
+
     return iterative + closed_solvers(derivation, names, precision)
 
 

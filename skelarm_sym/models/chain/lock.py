@@ -19,8 +19,6 @@ def ik_lock(model: Chain) -> str | None:
 def lock_index(model: Chain, joint: str | int | None) -> int | None:
     """The 0-based index of the locked joint: ``joint`` is a joint number 1..N (base to tip) or a joint name;
     InputError (one line) for anything else."""
-    from ...closed_ik.derive import lock_index as by_index
-
     if joint is None:
         return None
     text = str(joint).strip()
@@ -32,6 +30,8 @@ def lock_index(model: Chain, joint: str | int | None) -> int | None:
         if not 1 <= number <= len(names):
             raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
         return number - 1
+    from ...closed_ik.derive import lock_index as by_index  # here: the closed-form IK imports NumPy
+
     return by_index(model, text)  # a coordinate name, else a one-line error naming the joints
 
 

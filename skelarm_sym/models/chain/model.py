@@ -98,16 +98,33 @@ def _fold(expr: sp.Expr) -> sp.Expr:
 
 # -- constant transforms --------------------------------------------------------------------------
 
+def _folded(value: object) -> sp.ImmutableMatrix:
+    """``value`` as an immutable matrix with every entry folded (:func:`_fold`). An immutable matrix whose
+    entries are folded already (what ``@`` and the constructors below pass) is returned as it is: building
+    SymPy matrices again, not the folding, was most of the time spent reading a URDF."""
+    if isinstance(value, sp.ImmutableMatrix):
+        entries = list(value)
+        folded = [_fold(e) for e in entries]
+        if all(a is b for a, b in zip(entries, folded)):
+            return value
+        return sp.ImmutableMatrix(value.rows, value.cols, folded)
+    return sp.ImmutableMatrix(sp.Matrix(value).applyfunc(_fold))
+
+
+_IDENTITY = sp.ImmutableMatrix(sp.eye(3))
+_ZERO = sp.ImmutableMatrix(sp.zeros(3, 1))
+
+
 @dataclass(frozen=True)
 class Transform:
     """A constant rigid transform ``[R t; 0 1]``: ``rotation`` 3 x 3 and ``translation`` 3 x 1 (SymPy)."""
 
-    rotation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.eye(3)))
-    translation: sp.ImmutableMatrix = field(default_factory=lambda: sp.ImmutableMatrix(sp.zeros(3, 1)))
+    rotation: sp.ImmutableMatrix = field(default_factory=lambda: _IDENTITY)
+    translation: sp.ImmutableMatrix = field(default_factory=lambda: _ZERO)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "rotation", sp.ImmutableMatrix(sp.Matrix(self.rotation).applyfunc(_fold)))
-        object.__setattr__(self, "translation", sp.ImmutableMatrix(sp.Matrix(self.translation).applyfunc(_fold)))
+        object.__setattr__(self, "rotation", _folded(self.rotation))
+        object.__setattr__(self, "translation", _folded(self.translation))
 
     @staticmethod
     def identity() -> "Transform":
