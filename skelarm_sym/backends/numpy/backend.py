@@ -4,9 +4,12 @@ The emitted module depends on NumPy only. Straight-line functions broadcast over
 dimensions: inputs of shape ``(..., size)``, outputs ``(..., *shape)``, element k read and written as
 ``x[..., k]``; the arithmetic runs on whole arrays of configurations in slices of ``CHUNK`` so that
 temporaries stay in cache, and each trigonometric block is one ``np.cos``/``np.sin`` call. Procedures
-(the iterative solvers) run one problem per call, statement by statement, calling the straight-line
-functions on single configurations; each gets a public wrapper that checks its inputs, fills in the
-defaults and returns a named tuple.
+(the solvers) run one problem per call, statement by statement, calling the straight-line functions on
+single configurations; each gets a public wrapper that checks its inputs, fills in the defaults and returns
+a named tuple. Given a batch of problems (arrays ``(..., *shape)``), the wrapper runs the procedure's
+masked form instead (:mod:`skelarm_sym.ir.predicate`, printed by :class:`..array_syntax.ProcedurePrinter`
+with NumPy's names): every problem at once, one array per value over the problems, the straight-line
+functions called on all of them through ``_<name>_on_lanes`` adapters.
 """
 
 from __future__ import annotations
