@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3360d63dUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x7df6f7e7UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 

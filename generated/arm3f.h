@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x86ad49deUL
+#define ARM3F_STAMP 0x6c1ef5adUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -151,7 +151,7 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm3f_ik_solve: the same result bit for bit. */
+ * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: about 516 bytes. */
 void arm3f_ik_solve_batch(size_t m, const float *q0, const float *target, float lambda, float tol, int max_iter, float *q, float *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2a833b3aUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x76f60c07UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x456ea763UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe38683bbUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xf14c62b6UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xda8d1817UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

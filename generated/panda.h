@@ -47,7 +47,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xf14c62b6UL
+#define PANDA_STAMP 0xda8d1817UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -215,7 +215,7 @@ int panda_ik_solve(const double q0[7], const double target[16], double lambda, d
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of panda_ik_solve: the same result bit for bit. */
+ * Each problem is one call of panda_ik_solve: the same result bit for bit. Stack: about 3560 bytes. */
 void panda_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* position IK of the tool origin.
@@ -237,7 +237,7 @@ int panda_ik_solve_position(const double q0[7], const double target[3], double l
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of panda_ik_solve_position: the same result bit for bit. */
+ * Each problem is one call of panda_ik_solve_position: the same result bit for bit. Stack: about 3256 bytes. */
 void panda_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -10,7 +10,7 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
-from ...ir.nodes import Const, Elem, Function, Let, Module, Store, TrigBlock, Type
+from ...ir.nodes import Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Store, TrigBlock, Type, While
 from ...ir.walk import body_names, called, expr_names, needed_lets
 from ..text import c_comment
 from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
@@ -303,6 +303,41 @@ def procedure_context(f: Function, precision: CPrecision, names: Names) -> dict:
     }
 
 
+def local_bytes(body, itemsize: int) -> int:
+    """Bytes of the locals a procedure's body declares (arrays and numbers, nested blocks included; every
+    number counted at the real type's size or 8, whichever is larger: an estimate, as for the straight-line
+    functions)."""
+    size = 0
+    word = max(itemsize, 8)
+    for s in body:
+        t = type(s)
+        if t is DeclareArray:
+            size += s.size * (itemsize if s.type is Type.REAL else 8)
+        elif t in (Let, Declare):
+            size += word
+        elif t is If:
+            size += max(local_bytes(s.then, itemsize), local_bytes(s.otherwise, itemsize))
+        elif t in (For, While):
+            size += word + local_bytes(s.body, itemsize)
+    return size
+
+
+def procedure_stacks(module: Module, straight: list[dict], itemsize: int) -> dict[str, int]:
+    """Stack bytes of each procedure and helper: its locals, its arguments' copies of lent outputs, and the
+    deepest function it calls (straight-line functions: their own estimate)."""
+    stacks = {f["name"]: f["stack_bytes"] for f in straight}
+    by_name = {f.name: f for f in module.functions}
+
+    def stack(name: str) -> int:
+        if name not in stacks:
+            f = by_name[name]
+            lent = sum(a.size * (itemsize if a.type is Type.REAL else 8) for a in f.outputs if a.optional)
+            stacks[name] = local_bytes(f.body, itemsize) + lent + max((stack(g) for g in called(f.body)), default=0)
+        return stacks[name]
+
+    return {f.name: stack(f.name) for f in module.functions if f.kind != "straight"}
+
+
 def procedure_batch(f: Function, precision: CPrecision) -> dict:
     """The ``_batch`` variant of a public procedure: one problem after another, each a call of the single
     function. Arrays (inputs and outputs) hold the problems one after another (element k of problem j at
@@ -363,6 +398,9 @@ def context(module: Module) -> dict:
     shared = Shared()
     straight = [straight_context(f, precision, names, shared) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, precision, names) for f in module.functions if f.kind != "straight"]
+    stacks = procedure_stacks(module, straight, 8 if precision.ctype == "double" else 4)
+    for p in procedures:
+        p["stack"] = stack_text(stacks[p["name"]])
     statuses: dict[str, dict] = {}
     for p in procedures:
         for s in p["statuses"]:
