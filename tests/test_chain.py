@@ -222,6 +222,7 @@ def test_random_tables_match_the_reference(data):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * max(1.0, np.abs(want).max()))
 
 
+@pytest.mark.fresh_derivation  # times the derivation itself
 def test_generation_stays_linear_and_fast():
     import time
 

@@ -373,6 +373,7 @@ def test_the_files_sit_beside_c_and_python_and_share_one_stamp(tmp_path):
     assert len({file_stamp(text) for text in generated.sources.values()}) == 1
 
 
+@pytest.mark.fresh_derivation  # two derivations from scratch, not one remembered
 def test_the_output_is_deterministic_ascii_and_escapes_robot_text():
     chain = load_robot(HOSTILE)
     first = generate(chain, langs="cuda", out=None, prefix="hostile")
