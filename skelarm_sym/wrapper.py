@@ -267,12 +267,9 @@ class CompiledArm:
             return self._solve_batch(f, args)
         values: dict[str, object] = {}
         for value, a in zip(args, f.inputs):
-            if value is None and a.default is not None:
-                value = evaluate(a.default, values)
-            if a.type is Type.INT:
-                values[a.name] = iteration_count(value, a.name)
+            array = self._solver_input(a, value, values)
+            if array is None:
                 continue
-            array = _real(value, a.name, self.dtype)
             if array.shape != a.shape and array.shape != (a.size,):
                 batch = f" (a batch: (..., {', '.join(map(str, a.shape))}))" if not a.is_scalar else ""
                 raise InputError(f"{a.name} must have shape {a.shape}{batch}, got {array.shape}")
@@ -294,6 +291,16 @@ class CompiledArm:
             c_args.append(outputs[o.name].ctypes.data_as(pointer))
         status = self._c_functions[f.name](*c_args)
         return self._record(f, status, [outputs[o.name] for o in f.outputs])
+
+    def _solver_input(self, a: Argument, value, values: dict):
+        """A solver's argument as an array of the library's type (its default, from the arguments before it in
+        ``values``, when it is None); a count goes into ``values`` checked, and gives None."""
+        if value is None and a.default is not None:
+            value = evaluate(a.default, values)
+        if a.type is Type.INT:
+            values[a.name] = iteration_count(value, a.name)
+            return None
+        return _real(value, a.name, self.dtype)
 
     def _record(self, f: Function, status: int, outputs) -> tuple:
         """The named record of one solved problem from its status and output arrays (an INVALID status: an
@@ -355,12 +362,9 @@ class CompiledArm:
         values: dict[str, object] = {}
         shapes: dict[str, tuple[int, ...]] = {}
         for value, a in zip(args, f.inputs):
-            if value is None and a.default is not None:
-                value = evaluate(a.default, values)
-            if a.type is Type.INT:
-                values[a.name] = iteration_count(value, a.name)
+            array = self._solver_input(a, value, values)
+            if array is None:
                 continue
-            array = _real(value, a.name, self.dtype)
             if (len(a.shape) > 1 and array.ndim > 1 and array.shape[-1] == a.size
                     and array.shape[array.ndim - len(a.shape):] != a.shape):  # flat matrices: (m, 16) targets
                 array = array.reshape(array.shape[:-1] + a.shape)
