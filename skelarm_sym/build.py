@@ -326,8 +326,8 @@ def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | N
     include it) into the same library, so that calls on one configuration skip ctypes (about 1 µs instead
     of tens). ``None`` (the default): when the generation has that file (languages ``c,cpython``) and this
     interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
-    where it cannot be built); ``False``: never, the ctypes library alone. Batches and solvers go through
-    ctypes either way. ``flags``: as :func:`compile_shared`'s (``None``: :func:`default_flags`)."""
+    where it cannot be built); ``False``: never, the ctypes library alone. Batches go through ctypes
+    either way (single solver problems take the extension too). ``flags``: as :func:`compile_shared`'s (``None``: :func:`default_flags`)."""
     from .wrapper import CompiledArm
 
     if flags is None:

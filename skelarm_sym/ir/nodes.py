@@ -449,8 +449,9 @@ class Function:
     """One emitted function.
 
     ``kind``: ``"straight"`` (a straight-line program of its inputs: backends also emit a batch
-    variant and vectorise it), ``"procedure"`` (loops and branches on data: the iterative solvers;
-    one problem per call) or ``"helper"`` (a procedure used by other functions, not public).
+    variant and vectorise it), ``"procedure"`` (loops and branches on data: the solvers; one problem
+    per call, and a batch variant that solves one problem after another, or all at once in masked form
+    in the array backends) or ``"helper"`` (a procedure used by other functions, not public).
     ``returns``: ``Type.INT`` for a status, else ``None``. ``statuses``: the named return values.
     ``doc``: lines for the header beside the prototype."""
 
