@@ -80,7 +80,8 @@ def test_functions_emits_only_the_named_ones():
 
 def test_ik_solve_brings_what_it_needs():
     g = generate(2, langs="c,python", out=None, functions=["ik_solve"])
-    assert _declared(g.sources["arm2.h"]) == ["arm2_position", "arm2_position_batch", "arm2_ik_step", "arm2_ik_step_batch", "arm2_ik_solve"]
+    assert _declared(g.sources["arm2.h"]) == [
+        "arm2_position", "arm2_position_batch", "arm2_ik_step", "arm2_ik_step_batch", "arm2_ik_solve", "arm2_ik_solve_batch"]
     assert "def ik_solve(" in g.sources["arm2.py"]
 
 
