@@ -277,20 +277,27 @@ class CompiledArm:
             _check_domain(array, a.name, a.domain)
             values[a.name] = array if a.is_scalar else np.ascontiguousarray(array).reshape(-1)
         outputs = {o.name: np.zeros(o.size, dtype=np.intc if o.type is Type.INT else self.dtype) for o in f.outputs}
+        c_args = self._c_arguments(f, values, outputs)
+        status = self._c_functions[f.name](*c_args)
+        return self._record(f, status, [outputs[o.name] for o in f.outputs])
+
+    def _c_arguments(self, f: Function, inputs: dict, outputs: dict, j: int | None = None) -> list:
+        """The C arguments of solver ``f``: counts as C ints, real scalars as numbers (an array over a batch:
+        its element ``j``), arrays and outputs as pointers to their data (``j``: to problem ``j``'s row of a
+        batch's ``(m, size)`` array; ``None``: the whole array)."""
         c_args = []
         for a in f.inputs:
-            x = values[a.name]
+            x = inputs[a.name]
             if a.type is Type.INT:
                 c_args.append(ctypes.c_int(x))
             elif a.is_scalar:
-                c_args.append(self._ctype(float(x)))
+                c_args.append(self._ctype(float(x if np.ndim(x) == 0 else x[j, 0])))
             else:
-                c_args.append(x.ctypes.data_as(self._pointer))
+                c_args.append((x if j is None else x[j]).ctypes.data_as(self._pointer))
         for o in f.outputs:
-            pointer = ctypes.POINTER(ctypes.c_int) if o.type is Type.INT else self._pointer
-            c_args.append(outputs[o.name].ctypes.data_as(pointer))
-        status = self._c_functions[f.name](*c_args)
-        return self._record(f, status, [outputs[o.name] for o in f.outputs])
+            out = outputs[o.name] if j is None else outputs[o.name][j]
+            c_args.append(out.ctypes.data_as(ctypes.POINTER(ctypes.c_int) if o.type is Type.INT else self._pointer))
+        return c_args
 
     def _solver_input(self, a: Argument, value, values: dict):
         """A solver's argument as an array of the library's type (its default, from the arguments before it in
@@ -388,30 +395,12 @@ class CompiledArm:
                 inputs[a.name] = np.ascontiguousarray(np.broadcast_to(x, batch + a.shape).reshape(m, a.size))
         outputs = {o.name: np.zeros((m, o.size), dtype=np.intc if o.type is Type.INT else self.dtype) for o in f.outputs}
         status = np.zeros(m, dtype=np.intc)
-        int_pointer = ctypes.POINTER(ctypes.c_int)
-
-        def pointers(j: int | None) -> list:
-            """The C arguments for problem ``j`` (``None``: the whole batch)."""
-            c_args = []
-            for a in f.inputs:
-                x = inputs[a.name]
-                if a.type is Type.INT:
-                    c_args.append(ctypes.c_int(x))
-                elif a.is_scalar:
-                    c_args.append(self._ctype(float(x if np.ndim(x) == 0 else x[j, 0])))
-                else:
-                    c_args.append((x if j is None else x[j]).ctypes.data_as(self._pointer))
-            for o in f.outputs:
-                out = outputs[o.name] if j is None else outputs[o.name][j]
-                c_args.append(out.ctypes.data_as(int_pointer if o.type is Type.INT else self._pointer))
-            return c_args
-
         batch_call = self._c_functions[f.name + "_batch"]
         if batch_call is not None and all(np.ndim(inputs[a.name]) == 0 for a in f.inputs if a.is_scalar):
-            batch_call(m, *pointers(None), status.ctypes.data_as(int_pointer))
+            batch_call(m, *self._c_arguments(f, inputs, outputs), status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
         else:
             for j in range(m):
-                status[j] = self._c_functions[f.name](*pointers(j))
+                status[j] = self._c_functions[f.name](*self._c_arguments(f, inputs, outputs, j))
         status = status.reshape(batch)
         labels, invalid = self._statuses[f.name]
         if invalid is not None and np.any(status == invalid[0]):
