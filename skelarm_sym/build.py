@@ -36,11 +36,13 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Sequence
-
+from typing import TYPE_CHECKING, Sequence
 
 from .errors import InputError
 from .compile_cache import cache_folder, private_folder  # noqa: F401 - part of this module's interface
+
+if TYPE_CHECKING:
+    from .wrapper import CompiledArm
 
 
 def __getattr__(name: str):
@@ -303,18 +305,24 @@ def load_python(source: str, name: str):
 
 
 def python_headers() -> tuple[str, ...] | None:
-    """The include flags that build a CPython extension for this interpreter, or ``None`` where this
-    module does not build one: no ``Python.h`` (Debian: ``apt-get install python3-dev``), or not Linux
-    (elsewhere an extension links differently)."""
+    """The include flags that build a CPython extension for this interpreter (Python's headers, and NumPy's
+    as system headers), or ``None`` where this module does not build one: no ``Python.h`` (Debian:
+    ``apt-get install python3-dev``), or not Linux (elsewhere an extension links differently)."""
     if not sys.platform.startswith("linux"):
         return None
     import sysconfig
+
+    import numpy
 
     paths = sysconfig.get_paths()
     folders = [paths.get("include"), paths.get("platinclude")]
     if not folders[0] or not Path(folders[0], "Python.h").is_file():
         return None
-    return tuple(dict.fromkeys(f"-I{folder}" for folder in folders if folder))
+    # NumPy's headers as system headers: they are not -pedantic clean (function pointers from data pointers).
+    # The extension is tied to the NumPy whose headers built it; the (unused) define puts NumPy's version in
+    # the compile cache's key, so that another NumPy builds its own.
+    return (*dict.fromkeys(f"-I{folder}" for folder in folders if folder), "-isystem", numpy.get_include(),
+            f"-DSKELARM_SYM_BUILT_WITH_NUMPY={numpy.__version__}")
 
 
 def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | None = None,

@@ -175,6 +175,8 @@ class CompiledArm:
                 target = lambda args, f=f: self._solve(f, args)  # noqa: E731
                 fast = self._fast_solver(f, getattr(self.extension, f.name, None))
             self._methods[f.name] = _method(f, self.prefix, target, fast)
+            if f.name not in self.__dict__ and not hasattr(type(self), f.name):
+                self.__dict__[f.name] = self._methods[f.name]  # found without __getattr__: a call's lookup is a dict's
 
     # -- ctypes signatures -----------------------------------------------------------------------
     def _ctype_of(self, a: Argument):
@@ -330,15 +332,16 @@ class CompiledArm:
     def _fast_solver(self, f: Function, entry):
         """The extension's entry for solver ``f`` (``None``: none) as a fast path for ``_method``: one problem,
         positional arguments, the omitted ones filled in when their defaults are numbers; its ``(status,
-        *outputs)`` made the named record. ``NotImplemented`` where the entry does not take the call."""
+        *fields)`` (the record's fields but the status name, small outputs already Python numbers) made the
+        named record. ``NotImplemented`` where the entry does not take the call."""
         if entry is None:
             return None
         literal = [a.default.value if type(a.default).__name__ == "Const" else None for a in f.inputs]
         count = len(f.inputs)
         labels, invalid = self._statuses[f.name]
         invalid_code = None if invalid is None else invalid[0]
-        make = self._results[f.name]._make
-        split = [len(o.fields) if i and o.fields else 0 for i, o in enumerate(f.outputs)]  # the entry's shapes are final
+        record = self._results[f.name]
+        new = tuple.__new__
 
         def fast(*args):
             if len(args) < count:
@@ -352,13 +355,7 @@ class CompiledArm:
             status = raw[0]
             if status == invalid_code:
                 raise InputError(f"{f.name}: {invalid[1]}")
-            fields = [raw[1], labels.get(status, str(status))]
-            for out, n in zip(raw[2:], split[1:]):
-                if n:
-                    fields.extend(out.tolist()[:n])  # Python ints and floats
-                else:
-                    fields.append(out)
-            return make(fields)
+            return new(record, (raw[1], labels[status] if status in labels else str(status), *raw[2:]))
 
         return fast
 
