@@ -8,6 +8,8 @@ command and its first lines of output (indented). Nothing in the library imports
 from __future__ import annotations
 
 import argparse
+import atexit
+import gc
 import sys
 import textwrap
 from typing import Sequence
@@ -137,8 +139,25 @@ def _check(args) -> int:
     return 1 if failed or solver_failed else 0
 
 
+_EXIT_FREEZE: list[bool] = []
+
+
+def _freeze_at_exit() -> None:
+    """Have the interpreter move every object to the collector's permanent generation when it exits.
+
+    Shutting down, Python runs full collections while it clears the modules; after a derivation they walk
+    SymPy's hundreds of thousands of objects again, 0.2-0.4 s of a ``generate`` command's CPU. Frozen objects
+    are skipped (they are freed by reference counts as before). Nothing changes before the interpreter exits,
+    so a program that calls :func:`main` itself keeps its collector as it was. Registered once.
+    """
+    if not _EXIT_FREEZE:
+        _EXIT_FREEZE.append(True)
+        atexit.register(gc.freeze)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``skelarm-sym`` command; returns the exit status."""
+    _freeze_at_exit()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

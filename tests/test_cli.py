@@ -58,3 +58,20 @@ def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):
     assert len(lines) == 1 and lines[0].startswith("skelarm-sym: error:") and message in lines[0], r.stderr
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_command_freezes_the_collector_at_exit_only():
+    """A command registers gc.freeze once to run at exit (Python's shutdown collections then skip SymPy's
+    objects); while the program runs its collector is untouched. atexit runs handlers last-in first-out, so
+    the probe registered before main() runs after the freeze."""
+    probe = (
+        "import atexit, gc\n"
+        "atexit.register(lambda: print('at exit', gc.get_freeze_count() > 0))\n"
+        "from skelarm_sym.cli import main\n"
+        "for _ in range(2):\n"
+        "    main(['show', '--links', '2', '--what', 'J', '--format', 'text'])\n"
+        "print('running', gc.get_freeze_count(), gc.isenabled())\n"
+    )
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[-2:] == ["running 0 True", "at exit True"]
