@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
 import gc
 import sys
 import textwrap
@@ -61,12 +62,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextlib.contextmanager
+def _collector_paused():
+    """The cyclic garbage collector off for the block, then as it was.
+
+    A derivation builds tens of thousands of SymPy and IR nodes that live until the files are written and
+    form almost no reference cycles: the collections their allocations trigger find nothing and cost up to
+    0.1 s of a ``generate`` command (128 planar links, a 7-joint arm's every function)."""
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if collecting:
+            gc.enable()
+
+
 def _generate(args) -> int:
     from .generate import generate
 
-    model = model_from_args(args)
-    result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
-                      functions=args.functions, cmake=args.cmake, force=args.force)
+    with _collector_paused():
+        model = model_from_args(args)
+        result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
+                          functions=args.functions, cmake=args.cmake, force=args.force)
     for line in model.summary():
         print(line)
     for path in result.paths:

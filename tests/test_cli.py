@@ -75,3 +75,43 @@ def test_command_freezes_the_collector_at_exit_only():
     r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert r.stdout.splitlines()[-2:] == ["running 0 True", "at exit True"]
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_sympy_is_imported_without_collections(enabled):
+    """The package imports SymPy with the collector paused (its import would otherwise trigger about ten
+    full-generation-1 collections over its own long-lived objects) and leaves the collector as it found it."""
+    probe = (
+        "import gc\n"
+        f"{'' if enabled else 'gc.disable()'}\n"
+        "before = [s['collections'] for s in gc.get_stats()]\n"
+        "import skelarm_sym\n"
+        "import sys; assert 'sympy' in sys.modules\n"
+        "print([s['collections'] - b for s, b in zip(gc.get_stats(), before)][1:], gc.isenabled())\n"
+    )
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    older, collecting = r.stdout.split("]")
+    assert sum(int(x) for x in older.strip("[ ").split(",")) <= 2, r.stdout
+    assert collecting.strip() == str(enabled)
+
+
+def test_generate_runs_with_the_collector_paused(monkeypatch, tmp_path):
+    """``generate`` derives and prints with the cyclic collector off (its nodes form no cycles worth a
+    collection) and turns it back on afterwards, also when the generation fails."""
+    import gc
+
+    import skelarm_sym.generate as generate_module
+
+    seen = []
+    real = generate_module.generate
+
+    def spy(*args, **kwargs):
+        seen.append(gc.isenabled())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(generate_module, "generate", spy)
+    assert gc.isenabled()
+    assert main(["generate", "--links", "2", "--out", str(tmp_path / "ok")]) == 0
+    assert main(["generate", "--links", "2", "--prefix", "x;y", "--out", str(tmp_path / "bad")]) == 2
+    assert seen == [False, False] and gc.isenabled()
