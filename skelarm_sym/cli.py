@@ -79,12 +79,16 @@ def _collector_paused():
 
 
 def _generate(args) -> int:
+    with _collector_paused():
+        return _generate_files(args)
+
+
+def _generate_files(args) -> int:
     from .generate import generate
 
-    with _collector_paused():
-        model = model_from_args(args)
-        result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
-                          functions=args.functions, cmake=args.cmake, force=args.force)
+    model = model_from_args(args)
+    result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
+                      functions=args.functions, cmake=args.cmake, force=args.force)
     for line in model.summary():
         print(line)
     for path in result.paths:
