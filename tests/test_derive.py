@@ -92,3 +92,17 @@ def test_large_n_derivation_matches_reference_numerically(rng):
     l = rng.uniform(0.2, 2.0, n)
     (H,) = _evaluate(d, ["H"], q, dq, ddq, l)
     np.testing.assert_allclose(H, reference.kinematics(q, dq, ddq, l).H, atol=1e-10)
+
+
+@pytest.mark.parametrize("terms", [["positive"] * 3, ["positive"] * 40, ["positive", "real"], ["positive", "number"]])
+def test_nonzero_is_what_sympy_decides(terms):
+    """``linalg.nonzero`` answers a sum of positive symbols without SymPy's assumption query: the same
+    expression SymPy's comparison gives, for such sums and for the sums it must leave to SymPy."""
+    import importlib
+
+    linalg = importlib.import_module("skelarm_sym.derive.linalg")  # ``skelarm_sym.derive`` is also a function's name
+    parts = [sp.Integer(2) if kind == "number" else sp.Symbol(f"x{i}", **{kind: True}) for i, kind in enumerate(terms)]
+    value = sp.Add(*parts)
+    by_sympy = sp.Piecewise((value, sp.StrictGreaterThan(value, 0)), (sp.S.One, True))
+    got = linalg.nonzero(value)
+    assert got == by_sympy and type(got) is type(by_sympy)
