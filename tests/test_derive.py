@@ -106,3 +106,24 @@ def test_nonzero_is_what_sympy_decides(terms):
     by_sympy = sp.Piecewise((value, sp.StrictGreaterThan(value, 0)), (sp.S.One, True))
     got = linalg.nonzero(value)
     assert got == by_sympy and type(got) is type(by_sympy)
+
+
+def test_unevaluated_shortcuts_build_what_sympy_evaluates():
+    """``linalg.select`` and the planar sines and cosines skip SymPy's evaluation only where it would change
+    nothing: the expressions equal the evaluated ones, and where evaluation does rewrite (equal branches,
+    a constant condition, a zero or negated angle) they are the rewritten ones."""
+    import importlib
+
+    linalg = importlib.import_module("skelarm_sym.derive.linalg")
+    planar = importlib.import_module("skelarm_sym.models.planar.derive")
+    a, b, c = sp.symbols("a b c", real=True)
+    x = sp.Symbol("x", positive=True)
+    for cond, then, otherwise in [(c, a, b), (c, a * b, a + b), (c, a, a), (sp.true, a, b), (a > 0, a, b),
+                                  (c, sp.Piecewise((a, c), (b, True)), b)]:
+        got = linalg.select(cond, then, otherwise)
+        assert got == sp.Piecewise((then, cond), (otherwise, True))
+    assert linalg.select(c, a, a) == a
+    for func in (sp.cos, sp.sin):
+        for angle in (a, x, sp.S.Zero, -a, sp.pi / 2):
+            assert planar._unevaluated(func, angle) == func(angle)
+    assert planar._unevaluated(sp.cos, sp.S.Zero) == 1 and planar._unevaluated(sp.cos, -a) == sp.cos(a)
