@@ -274,3 +274,26 @@ def test_urdf_angles_written_as_rounded_multiples_of_half_pi_are_exact(tmp_path)
     chain = load_urdf(urdf)
     assert all(e.is_Integer for e in chain.joints[0].before.rotation)  # 11 and 8 decimals: snapped
     assert not all(e.is_Integer for e in chain.joints[1].before.rotation)  # 4 decimals: kept as written
+
+
+def test_product_with_identity_is_the_general_product():
+    """``Transform @`` returns the other factor when one is the exact identity and the other holds only
+    numbers; the general product (multiplied, expanded, folded) gives the same entries, precision included.
+    With symbols the general product runs: an unexpanded entry comes back expanded."""
+    def general(a: Transform, b: Transform) -> list[str]:
+        rotation = (a.rotation * b.rotation).applyfunc(lambda e: sp.expand(e))
+        translation = (a.rotation * b.translation + a.translation).applyfunc(lambda e: sp.expand(e))
+        return [sp.srepr(x) for x in list(Transform(rotation, translation).rotation) + list(Transform(rotation, translation).translation)]
+
+    def entries(t: Transform) -> list[str]:
+        return [sp.srepr(x) for x in list(t.rotation) + list(t.translation)]
+
+    one = Transform.identity()
+    numeric = Transform.from_xyz_rpy([0.1, 0.0, -0.25], [0.0, 0.0, -0.785398163397])  # Panda's TCP: 17-digit floats
+    for a, b in ((one, numeric), (numeric, one), (one, Transform.rotate("x", sp.pi / 2)), (one, one)):
+        product = a @ b
+        assert entries(product) == general(a, b)
+    assert (one @ numeric) is numeric and (numeric @ one) is numeric
+    a, b, c = sp.symbols("a b c", real=True)
+    symbolic = Transform(translation=sp.ImmutableMatrix([a * (b + c), 0, 0]))
+    assert (one @ symbolic).translation[0] == a * b + a * c

@@ -58,3 +58,86 @@ def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):
     assert len(lines) == 1 and lines[0].startswith("skelarm-sym: error:") and message in lines[0], r.stderr
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_command_freezes_the_collector_at_exit():
+    """A command registers gc.freeze to run at exit (Python's shutdown collections then skip the objects of
+    the run); while the program runs its collector is on. atexit runs handlers last-in first-out, so the
+    probe registered before main() runs after the freeze and finds more objects frozen than while running
+    (where the package's import froze those that existed when SymPy was loaded)."""
+    probe = (
+        "import atexit, gc\n"
+        "counts = []\n"
+        "atexit.register(lambda: print('frozen at exit', gc.get_freeze_count() > counts[0]))\n"
+        "from skelarm_sym.cli import main\n"
+        "for _ in range(2):\n"
+        "    main(['show', '--links', '2', '--what', 'J', '--format', 'text'])\n"
+        "counts.append(gc.get_freeze_count())\n"
+        "print('running', gc.isenabled())\n"
+    )
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[-2:] == ["running True", "frozen at exit True"]
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+@pytest.mark.parametrize("sympy_first", [False, True])
+def test_sympy_is_imported_without_collections(enabled, sympy_first):
+    """The package imports SymPy with the collector paused (its import would otherwise trigger about ten
+    generation-1 collections over its own long-lived objects), freezes what exists then (so no later
+    collection walks SymPy's objects again) and leaves the collector on or off as it found it; when SymPy
+    was imported before, the package pauses and freezes nothing."""
+    probe = (
+        "import gc\n"
+        f"{'import sympy' if sympy_first else ''}\n"
+        f"{'' if enabled else 'gc.disable()'}\n"
+        "before = [s['collections'] for s in gc.get_stats()]\n"
+        "import skelarm_sym\n"
+        "import sys; assert 'sympy' in sys.modules\n"
+        "print([s['collections'] - b for s, b in zip(gc.get_stats(), before)][1:], gc.isenabled(), gc.get_freeze_count() > 0)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    older, state = r.stdout.split("]")
+    assert sum(int(x) for x in older.strip("[ ").split(",")) <= 2, r.stdout
+    assert state.split() == [str(enabled), str(not sympy_first)]
+
+
+def test_generate_runs_with_the_collector_paused(monkeypatch, tmp_path):
+    """``generate`` derives and prints with the cyclic collector off (its nodes form no cycles worth a
+    collection) and turns it back on afterwards, also when the generation fails."""
+    import gc
+
+    import skelarm_sym.generate as generate_module
+
+    seen = []
+    real = generate_module.generate
+
+    def spy(*args, **kwargs):
+        seen.append(gc.isenabled())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(generate_module, "generate", spy)
+    assert gc.isenabled()
+    frozen = gc.get_freeze_count()
+    assert main(["generate", "--links", "2", "--out", str(tmp_path / "ok")]) == 0
+    assert main(["generate", "--links", "2", "--prefix", "x;y", "--out", str(tmp_path / "bad")]) == 2
+    assert seen == [False, False] and gc.isenabled()
+    assert gc.get_freeze_count() <= frozen  # called with arguments (a program of its own): nothing frozen
+
+
+def test_generate_as_the_program_freezes_what_it_built(tmp_path):
+    """Run as the command itself (``main()`` reading ``sys.argv``), a successful generation freezes what it
+    built before turning the collector back on: the process ends next, and a collection would only walk the
+    run's nodes once more."""
+    probe = (
+        "import gc, sys\n"
+        "from skelarm_sym.cli import main\n"
+        "before = gc.get_freeze_count()\n"
+        f"sys.argv = ['skelarm-sym', 'generate', '--links', '3', '--out', {str(tmp_path / 'ok')!r}]\n"
+        "assert main() == 0\n"
+        "print(gc.get_freeze_count() > before, gc.isenabled())\n"
+    )
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[-1] == "True True"

@@ -92,3 +92,38 @@ def test_large_n_derivation_matches_reference_numerically(rng):
     l = rng.uniform(0.2, 2.0, n)
     (H,) = _evaluate(d, ["H"], q, dq, ddq, l)
     np.testing.assert_allclose(H, reference.kinematics(q, dq, ddq, l).H, atol=1e-10)
+
+
+@pytest.mark.parametrize("terms", [["positive"] * 3, ["positive"] * 40, ["positive", "real"], ["positive", "number"]])
+def test_nonzero_is_what_sympy_decides(terms):
+    """``linalg.nonzero`` answers a sum of positive symbols without SymPy's assumption query: the same
+    expression SymPy's comparison gives, for such sums and for the sums it must leave to SymPy."""
+    import importlib
+
+    linalg = importlib.import_module("skelarm_sym.derive.linalg")  # ``skelarm_sym.derive`` is also a function's name
+    parts = [sp.Integer(2) if kind == "number" else sp.Symbol(f"x{i}", **{kind: True}) for i, kind in enumerate(terms)]
+    value = sp.Add(*parts)
+    by_sympy = sp.Piecewise((value, sp.StrictGreaterThan(value, 0)), (sp.S.One, True))
+    got = linalg.nonzero(value)
+    assert got == by_sympy and type(got) is type(by_sympy)
+
+
+def test_unevaluated_shortcuts_build_what_sympy_evaluates():
+    """``linalg.select`` and the planar sines and cosines skip SymPy's evaluation only where it would change
+    nothing: the expressions equal the evaluated ones, and where evaluation does rewrite (equal branches,
+    a constant condition, a zero or negated angle) they are the rewritten ones."""
+    import importlib
+
+    linalg = importlib.import_module("skelarm_sym.derive.linalg")
+    planar = importlib.import_module("skelarm_sym.models.planar.derive")
+    a, b, c = sp.symbols("a b c", real=True)
+    x = sp.Symbol("x", positive=True)
+    for cond, then, otherwise in [(c, a, b), (c, a * b, a + b), (c, a, a), (sp.true, a, b), (a > 0, a, b),
+                                  (c, sp.Piecewise((a, c), (b, True)), b)]:
+        got = linalg.select(cond, then, otherwise)
+        assert got == sp.Piecewise((then, cond), (otherwise, True))
+    assert linalg.select(c, a, a) == a
+    for func in (sp.cos, sp.sin):
+        for angle in (a, x, sp.S.Zero, -a, sp.pi / 2):
+            assert planar._unevaluated(func, angle) == func(angle)
+    assert planar._unevaluated(sp.cos, sp.S.Zero) == 1 and planar._unevaluated(sp.cos, -a) == sp.cos(a)

@@ -52,7 +52,7 @@ from typing import Sequence
 import sympy as sp
 
 from .model import Chain, Transform
-from .joints import E_Z, JointType, add, cross, half_pi_multiple, joint_type
+from .joints import E_Z, JointType, add, cross, joint_type
 from ...derive.core import Derivation, FunctionSpec, StepRecorder, Table
 
 Vector = list  # three SymPy expressions
@@ -320,22 +320,40 @@ class _Steps(StepRecorder):
 
 # -- the derivation, stage by stage (see the module docstring) -------------------------------------
 
-def _skeleton(e: sp.Expr) -> tuple:
-    """``e`` reduced to what decides its negations: sums, products (with their coefficient), symbols, signs."""
+def _skeleton(e: sp.Expr, ids: dict[sp.Symbol, int]) -> tuple:
+    """``e`` reduced to what decides its negations: sums, products (with their coefficient), symbols, signs.
+    A symbol is written as its number in ``ids`` (given one if it has none): the search asks "is it flipped?"
+    thousands of times, and a set of integers answers without SymPy's hash, a Python method."""
     if e.is_Symbol:
-        return ("sym", e)
+        return ("sym", ids.setdefault(e, len(ids)))
     if e.is_Number:
         return ("num", -1 if e.is_negative else 1)
     if e.is_Add:
-        return ("add", tuple(_skeleton(a) for a in e.args))
+        return ("add", tuple(_skeleton(a, ids) for a in e.args))
     if e.is_Mul:
         coeff, factors = e.as_coeff_mul()
-        return ("mul", -1 if coeff.is_negative else 1, abs(coeff) == 1, tuple(_skeleton(f) for f in factors))
-    return ("other", tuple(_skeleton(a) for a in e.args))
+        return ("mul", -1 if coeff.is_negative else 1, abs(coeff) == 1, tuple(_skeleton(f, ids) for f in factors))
+    return ("other", tuple(_skeleton(a, ids) for a in e.args))
+
+
+def _skeleton_atoms(node: tuple) -> set[int]:
+    """The numbers of the symbols in a skeleton."""
+    found: set[int] = set()
+    stack = [node]
+    while stack:
+        e = stack.pop()
+        if e[0] == "sym":
+            found.add(e[1])
+        elif e[0] == "mul":
+            stack.extend(e[3])
+        elif e[0] != "num":
+            stack.extend(e[1])
+    return found
 
 
 def _sign(node: tuple, flips: set) -> int:
-    """-1 where SymPy would see a minus sign in front of ``node`` once the symbols in ``flips`` are negated."""
+    """-1 where SymPy would see a minus sign in front of ``node`` once the symbols in ``flips`` (their numbers,
+    see :func:`_skeleton`) are negated."""
     op = node[0]
     if op == "sym":
         return -1 if node[1] in flips else 1
@@ -350,7 +368,7 @@ def _sign(node: tuple, flips: set) -> int:
     return 1
 
 
-def _negated_atom(node: tuple, sign: int) -> sp.Symbol | None:
+def _negated_atom(node: tuple, sign: int) -> int | None:
     if node[0] == "sym" and sign < 0:
         return node[1]
     if node[0] == "mul" and node[2] and len(node[3]) == 1 and node[3][0][0] == "sym" and sign < 0:
@@ -358,7 +376,7 @@ def _negated_atom(node: tuple, sign: int) -> sp.Symbol | None:
     return None
 
 
-def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tuple[sp.Symbol, bool], ...]]:
+def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tuple[int, bool], ...]]:
     """Negations the expression with skeleton ``node`` pays as printed (times ``outer``, with the symbols in
     ``flips`` negated), and the atoms it uses negated on their own.
 
@@ -442,40 +460,66 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
     counts once for every function whose program contains it."""
     rhs = dict(steps)
     order = [s for s, _ in steps]
-    users: dict[sp.Symbol, list] = {s: [] for s in order}
-    exprs = {("out", i): sp.sympify(e) for i, e in enumerate(outputs)}
-    exprs.update({("step", s): rhs[s] for s in order})
-    exprs = {k: e for k, e in exprs.items() if not (e.is_Add and len(e.args) > 6)}  # a long sum (acc) pays nothing
-    skeletons = {k: _skeleton(e) for k, e in exprs.items()}
-    for key, e in exprs.items():
-        for x in e.free_symbols:
+    ids = {s: i for i, s in enumerate(order)}  # every symbol as a number (see _skeleton); the steps first
+    # the expressions, numbered: output i is i, step j (ids) is len(outputs) + j; a long sum (acc) pays nothing
+    base = len(outputs)
+    values = [sp.sympify(e) for e in outputs] + [rhs[s] for s in order]
+    kept = [k for k, e in enumerate(values) if not (e.is_Add and len(e.args) > 6)]
+    skeletons: list[tuple | None] = [None] * len(values)
+    for k in kept:
+        skeletons[k] = _skeleton(values[k], ids)
+    own = [-1] * base + list(range(len(order)))  # an expression's own step number (-1: an output)
+    users: dict[sp.Symbol, list[int]] = {s: [] for s in order}
+    for k in kept:
+        for x in values[k].free_symbols:
             if x in users:
-                users[x].append(key)
-    weight = _function_weights(rhs, outputs, functions)
-    flips: set[sp.Symbol] = set()
+                users[x].append(k)
+    weights = _function_weights(rhs, outputs, functions)
+    weight = [weights.get(("out", i), 1) for i in range(base)] + [weights.get(("step", s), 1) for s in order]
+    flips: set[int] = set()  # numbers of the flipped steps
+    # an expression's profile depends only on which of its own steps are flipped: remembered by that choice
+    # (a pass meets most choices again; the Panda's 2829 profiles are 915 distinct ones)
+    steps_in: list[tuple[int, ...]] = []  # per expression: the steps whose flip can change its profile
+    for k, skeleton in enumerate(skeletons):
+        inside = set() if skeleton is None else {i for i in _skeleton_atoms(skeleton) if i < len(order)}
+        steps_in.append(tuple(sorted(inside | {own[k]} if own[k] >= 0 else inside)))
+    known: dict[tuple, tuple] = {}
 
-    def profile_of(key):
-        return _negations(skeletons[key], flips, -1 if key[0] == "step" and key[1] in flips else 1)
+    def profile_of(k):
+        key = (k, *[i for i in steps_in[k] if i in flips])
+        found = known.get(key)
+        if found is None:
+            found = known[key] = _negations(skeletons[k], flips, -1 if own[k] in flips else 1)
+        return found
 
-    profile = {key: profile_of(key) for key in exprs}
-    uses: dict[sp.Symbol, list[int]] = {}  # atom -> [negated uses, negated alone]
-    for _, atoms in profile.values():
-        for atom, alone in atoms:
+    def atom_weight(atom):  # a negated atom is hoisted once in each function that has it (inputs: 1)
+        return weight[base + atom] if atom < len(order) else 1
+
+    profile: list[tuple | None] = [None] * len(values)
+    for k in kept:
+        profile[k] = profile_of(k)
+    uses: dict[int, list[int]] = {}  # atom (its number) -> [negated uses, negated alone]
+    for k in kept:
+        for atom, alone in profile[k][1]:
             entry = uses.setdefault(atom, [0, 0])
             entry[0] += 1
             entry[1] += alone
     flippable = {s for s in order if rhs[s].is_Add or rhs[s].is_Mul}  # a sine or cosine stays what the trig block computes
     moves = [(s,) for s in reversed(order) if s in flippable] + [g for g in groups if all(s in flippable for s in g)]
+    # per move: the numbers of its steps, and the expressions a flip changes (its steps' own and their users')
+    moves = [(tuple(ids[s] for s in move),
+              list(dict.fromkeys([base + ids[s] for s in move if skeletons[base + ids[s]] is not None]
+                                 + [k for s in move for k in users[s]])))
+             for move in moves]
     for _ in range(4):
         changed = False
-        for move in moves:
-            keys = list(dict.fromkeys([("step", s) for s in move if ("step", s) in exprs] + [k for s in move for k in users[s]]))
+        for numbers, keys in moves:
             if not any(profile[k][0] or profile[k][1] for k in keys):
                 continue
-            flips.symmetric_difference_update(move)
+            flips.symmetric_difference_update(numbers)
             new_profile = {k: profile_of(k) for k in keys}
-            delta = sum(weight.get(k, 1) * (new_profile[k][0] - profile[k][0]) for k in keys)
-            change: dict[sp.Symbol, list[int]] = {}
+            delta = sum(weight[k] * (new_profile[k][0] - profile[k][0]) for k in keys)
+            change: dict[int, list[int]] = {}
             for sign, table in ((-1, profile), (1, new_profile)):
                 for k in keys:
                     for atom, alone in table[k][1]:
@@ -484,19 +528,20 @@ def _normalise_signs(steps: Sequence[tuple[sp.Symbol, sp.Expr]], outputs: Sequen
                         entry[1] += sign * alone
             for atom, (d_uses, d_alone) in change.items():
                 old = uses.get(atom, [0, 0])
-                delta += weight.get(("step", atom), 1) * (_hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old))
+                delta += atom_weight(atom) * (_hoisted(old[0] + d_uses, old[1] + d_alone) - _hoisted(*old))
             if delta < 0:
-                profile.update(new_profile)
+                for k, value in new_profile.items():
+                    profile[k] = value
                 for atom, (d_uses, d_alone) in change.items():
                     entry = uses.setdefault(atom, [0, 0])
                     entry[0] += d_uses
                     entry[1] += d_alone
                 changed = True
             else:
-                flips.symmetric_difference_update(move)
+                flips.symmetric_difference_update(numbers)
         if not changed:
             break
-    return {s: -s for s in flips}
+    return {s: -s for s in order if ids[s] in flips}
 
 
 @dataclass

@@ -103,7 +103,7 @@ def _folded(value: object) -> sp.ImmutableMatrix:
     entries are folded already (what ``@`` and the constructors below pass) is returned as it is: building
     SymPy matrices again, not the folding, was most of the time spent reading a URDF."""
     if isinstance(value, sp.ImmutableMatrix):
-        entries = list(value)
+        entries = value.flat()  # the same entries as list(value), a third of the time
         folded = [_fold(e) for e in entries]
         if all(a is b for a, b in zip(entries, folded)):
             return value
@@ -113,6 +113,7 @@ def _folded(value: object) -> sp.ImmutableMatrix:
 
 _IDENTITY = sp.ImmutableMatrix(sp.eye(3))
 _ZERO = sp.ImmutableMatrix(sp.zeros(3, 1))
+_IDENTITY_ENTRIES = tuple(_IDENTITY.flat())
 
 
 @dataclass(frozen=True)
@@ -155,9 +156,24 @@ class Transform:
         return Transform(rotation.rotation, sp.ImmutableMatrix(list(xyz)))
 
     def __matmul__(self, other: "Transform") -> "Transform":
+        if self._is_identity_entries() and other._is_numeric():  # a URDF's chain is mostly identities
+            return other
+        if other._is_identity_entries() and self._is_numeric():
+            return self
         rotation = (self.rotation * other.rotation).applyfunc(lambda e: _fold(sp.expand(e)))
         translation = (self.rotation * other.translation + self.translation).applyfunc(lambda e: _fold(sp.expand(e)))
         return Transform(sp.ImmutableMatrix(rotation), sp.ImmutableMatrix(translation))
+
+    def _is_identity_entries(self) -> bool:
+        """Whether every entry is SymPy's exact 1 or 0 where the identity has it (a cheap identity test:
+        folded entries are those singletons)."""
+        return all(x is y for x, y in zip(self.rotation.flat(), _IDENTITY_ENTRIES)) and all(x is sp.S.Zero for x in self.translation.flat())
+
+    def _is_numeric(self) -> bool:
+        """Whether every entry is a number. The product of such a transform with the identity is that
+        transform, entry for entry (SymPy's product and expansion leave a number alone); an entry with
+        symbols could come back expanded, so those take the general product."""
+        return all(x.is_Number for x in self.rotation.flat()) and all(x.is_Number for x in self.translation.flat())
 
     @property
     def matrix(self) -> sp.Matrix:

@@ -149,8 +149,8 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
     for k in range(n):
         th = q[k] if k == 0 else step(f"theta{k + 1}", theta[-1] + q[k])
         theta.append(th)
-        cos_t.append(step(f"c{k + 1}", sp.cos(th)))
-        sin_t.append(step(f"s{k + 1}", sp.sin(th)))
+        cos_t.append(step(f"c{k + 1}", _unevaluated(sp.cos, th)))
+        sin_t.append(step(f"s{k + 1}", _unevaluated(sp.sin, th)))
     X = [step(f"X{k + 1}", l_syms[k] * cos_t[k]) for k in range(n)]
     Y = [step(f"Y{k + 1}", l_syms[k] * sin_t[k]) for k in range(n)]
 
@@ -225,6 +225,15 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             "a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.",
         ),
     )
+
+
+def _unevaluated(func, angle: sp.Symbol) -> sp.Expr:
+    """``func(angle)`` (``sp.cos`` or ``sp.sin``) of a real symbol (an input or a named step) that is neither
+    known to be 0 nor of a known sign: SymPy's evaluation finds nothing to rewrite in it (no number, no
+    multiple of pi, no sign to extract), so it is built unevaluated, the same expression at a third of the
+    cost; anything else is evaluated."""
+    plain = angle.is_Symbol and angle.is_real and angle.is_zero is None and angle.is_positive is None
+    return func(angle, evaluate=not plain)
 
 
 @dataclass(frozen=True)
