@@ -9,32 +9,22 @@ straight-line program; nothing after this stage knows which model it prints.
 from __future__ import annotations
 
 import gc
-import sys
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
 
 def _import_sympy():
-    """``import sympy`` with the cyclic garbage collector paused (and restored as it was), then, when this
-    import loaded SymPy, every object so far moved to the collector's permanent generation (``gc.freeze``).
+    """``import sympy`` with the cyclic garbage collector paused (and restored as it was).
 
     SymPy's import builds several hundred thousand long-lived objects (classes, caches, tables) and no
-    garbage worth collecting. The collections those allocations trigger walk them again and again (about
-    0.09 s of the 0.55 s import); paused, the next two collections still walk them all once each to
-    promote them (0.06 s). Frozen, no collection walks them again; they are freed by reference counts as
-    before, and only a reference cycle that was already garbage when SymPy loaded is left uncollected.
-    This is the package's first import of SymPy (``skelarm_sym`` imports :mod:`skelarm_sym.derive`
-    first); when SymPy was loaded already nothing is paused or frozen."""
-    if "sympy" in sys.modules:
-        import sympy
-
-        return sympy
+    garbage worth collecting; the collections those allocations trigger walk them again and again, about
+    0.09 s of the 0.55 s import. This is the package's first import of SymPy (``skelarm_sym`` imports
+    :mod:`skelarm_sym.derive` first); once SymPy is loaded this costs nothing."""
     collecting = gc.isenabled()
     gc.disable()
     try:
         import sympy
     finally:
-        gc.freeze()
         if collecting:
             gc.enable()
     return sympy
