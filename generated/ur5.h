@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xfc5adf94UL
+#define UR5_STAMP 0x03df54d5UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -209,12 +209,12 @@ void ur5_jacobian_rpy(const double q[6], double JA[36]);
  * Stack: about 13 KB. */
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
-/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 7 KB. */
+/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 6 KB. */
 void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 7 KB. */
+ * Stack: about 6 KB. */
 void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
 
 /* Return codes of the solvers. */
@@ -288,7 +288,7 @@ int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * count, flags and status may be NULL.
- * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 8 KB. */
+ * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 6 KB. */
 void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status);
 
 /* the closed-form IK solution nearest a configuration.
@@ -302,7 +302,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * status may be NULL.
- * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 8 KB. */
+ * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 7 KB. */
 void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status);
 
 #ifdef __cplusplus

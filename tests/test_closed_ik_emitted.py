@@ -497,3 +497,27 @@ def test_show_ik(capsys):
     assert "spherical_wrist (parallel_23)" in text and "SP3 q3" in text and "Q[7] = (" in text
     assert main(["show", "--robot", str(ROBOTS / "scara.toml"), "--what", "ik"]) == 2
     assert "6 moving joints" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name, principal", [("ur5", (True, True, True, False, True, True)), ("puma560", (True,) * 6)])
+def test_principal_columns_hold_every_candidate(name, principal):
+    """The columns ``derive_ik_all`` declares principal (every candidate an angle in [-pi, pi], so ik_all leaves
+    them unshifted where the centre is 0) hold only such values, on random targets and on the singular ones where the
+    UR wrist splits q6 from q2 + q3 + q4 (q6 = +-(sigma - phi) turned into [-pi, pi]: up to 2 pi away before) and
+    the spherical wrist takes its aligned representative."""
+    b = built(name)
+    ik = b.generated.derivation.function("ik_candidates")
+    assert ik.principal == principal
+    rng = np.random.default_rng(12)
+    q = rng.uniform(-np.pi, np.pi, size=(400, 6))
+    q[100:200, 4] = 0.0             # wrist aligned exactly (UR: the split; PUMA: q4 = 0, q6 the whole rotation)
+    q[200:300, 4] = np.pi           # UR: aligned the other way
+    q[300:, 2] = 0.0                # elbow stretched (UR)
+    T = targets_of(b.chain, q).reshape(-1, 16)
+    cols = np.array(principal)
+    for impl in (b.c, b.py):
+        Q, flags = impl.ik_candidates(T)
+        assert np.all(np.abs(Q[..., cols]) <= math.pi)
+        if name == "ur5":  # the split happened (singular bit on rows of the aligned targets)
+            assert np.any(np.asarray(flags[100:300]).astype(int) & 2)
+
