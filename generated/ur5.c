@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x03df54d5UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3cd6bc27UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6202,20 +6202,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     double raw[48];
     double raw_flags[8];
     double cand[6];
-    /* nothing yet: NaN rows, flags -1, count 0 */
-    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS*6; ++k) {
-        q[k] = NAN;
-    }
-    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
-        flags[k] = -1;
-    }
-    count[0] = 0;
     /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation */
-    for (int k = 0; k < 12; ++k) {
-        if (!UR5_FINITE(target[k])) {
-            return UR5_IK_INVALID;
-        }
-    }
     const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
     const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
     const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
@@ -6223,7 +6210,18 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
     const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
     const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
-    if (fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+    if (!UR5_FINITE(target[3]) || !UR5_FINITE(target[7]) || !UR5_FINITE(target[11]) || !UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+        count[0] = 0;
+        /* rows past count: NaN, flags -1 */
+        for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
+            q[6*k] = NAN;
+            q[6*k + 1] = NAN;
+            q[6*k + 2] = NAN;
+            q[6*k + 3] = NAN;
+            q[6*k + 4] = NAN;
+            q[6*k + 5] = NAN;
+            flags[k] = -1;
+        }
         return UR5_IK_INVALID;
     }
     /* the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable */
@@ -6236,96 +6234,77 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     }
     int kept = 0;
     int flag = 0;
-    int inside = 0;
     int dup = 0;
     double diff = 0.0;
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         flag = (int)raw_flags[i];
         if (exact == 0 || flag % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
-            /* 3. revolute joints to the copy nearest their range's centre; 4. limits */
-            inside = 1;
-            cand[0] = raw[6*i] + (0.0 - raw[6*i] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i] < -3.141592653589793 ? -6.283185307179586 : 0.0));
-            if (fabs(0.0 - cand[0]) > 3.141592653589793) {
-                cand[0] = cand[0] + 6.283185307179586*nearbyint((0.0 - cand[0])*0.15915494309189535);
-            }
-            inside = (cand[0] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[0] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[0] = (cand[0] < -6.283185307179586 ? -6.283185307179586 : (cand[0] > 6.283185307179586 ? 6.283185307179586 : cand[0]));
-            cand[1] = raw[6*i + 1] + (0.0 - raw[6*i + 1] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 1] < -3.141592653589793 ? -6.283185307179586 : 0.0));
-            if (fabs(0.0 - cand[1]) > 3.141592653589793) {
-                cand[1] = cand[1] + 6.283185307179586*nearbyint((0.0 - cand[1])*0.15915494309189535);
-            }
-            inside = (cand[1] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[1] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[1] = (cand[1] < -6.283185307179586 ? -6.283185307179586 : (cand[1] > 6.283185307179586 ? 6.283185307179586 : cand[1]));
-            cand[2] = raw[6*i + 2] + (0.0 - raw[6*i + 2] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 2] < -3.141592653589793 ? -6.283185307179586 : 0.0));
-            if (fabs(0.0 - cand[2]) > 3.141592653589793) {
-                cand[2] = cand[2] + 6.283185307179586*nearbyint((0.0 - cand[2])*0.15915494309189535);
-            }
-            inside = (cand[2] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[2] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[2] = (cand[2] < -6.283185307179586 ? -6.283185307179586 : (cand[2] > 6.283185307179586 ? 6.283185307179586 : cand[2]));
+            /* 3. revolute joints to the copy nearest their range's centre (each range wider than a turn around its centre: 4. no copy is outside the limits) */
+            cand[0] = raw[6*i];
+            cand[1] = raw[6*i + 1];
+            cand[2] = raw[6*i + 2];
             cand[3] = raw[6*i + 3] + (0.0 - raw[6*i + 3] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 3] < -3.141592653589793 ? -6.283185307179586 : 0.0));
             if (fabs(0.0 - cand[3]) > 3.141592653589793) {
                 cand[3] = cand[3] + 6.283185307179586*nearbyint((0.0 - cand[3])*0.15915494309189535);
             }
-            inside = (cand[3] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[3] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[3] = (cand[3] < -6.283185307179586 ? -6.283185307179586 : (cand[3] > 6.283185307179586 ? 6.283185307179586 : cand[3]));
-            cand[4] = raw[6*i + 4] + (0.0 - raw[6*i + 4] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 4] < -3.141592653589793 ? -6.283185307179586 : 0.0));
-            if (fabs(0.0 - cand[4]) > 3.141592653589793) {
-                cand[4] = cand[4] + 6.283185307179586*nearbyint((0.0 - cand[4])*0.15915494309189535);
-            }
-            inside = (cand[4] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[4] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[4] = (cand[4] < -6.283185307179586 ? -6.283185307179586 : (cand[4] > 6.283185307179586 ? 6.283185307179586 : cand[4]));
-            cand[5] = raw[6*i + 5] + (0.0 - raw[6*i + 5] > 3.141592653589793 ? 6.283185307179586 : (0.0 - raw[6*i + 5] < -3.141592653589793 ? -6.283185307179586 : 0.0));
-            if (fabs(0.0 - cand[5]) > 3.141592653589793) {
-                cand[5] = cand[5] + 6.283185307179586*nearbyint((0.0 - cand[5])*0.15915494309189535);
-            }
-            inside = (cand[5] < -6.283185307179586 - UR5_IK_LIMIT_TOL || cand[5] > 6.283185307179586 + UR5_IK_LIMIT_TOL ? 0 : inside);
-            cand[5] = (cand[5] < -6.283185307179586 ? -6.283185307179586 : (cand[5] > 6.283185307179586 ? 6.283185307179586 : cand[5]));
-            if (inside > 0) {
-                /* 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped */
-                dup = -1;
-                for (int r = 0; r < kept; ++r) {
-                    /* the same row when every joint is within IK_DUP_TOL: nested, so a row that differs in its first joint costs one test */
-                    diff = cand[0] - q[6*r];
+            cand[4] = raw[6*i + 4];
+            cand[5] = raw[6*i + 5];
+            /* 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped */
+            dup = -1;
+            for (int r = 0; r < kept; ++r) {
+                /* the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test */
+                diff = cand[1] - q[6*r + 1];
+                if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                    diff = cand[2] - q[6*r + 2];
                     if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                        diff = cand[1] - q[6*r + 1];
+                        diff = cand[3] - q[6*r + 3];
                         if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                            diff = cand[2] - q[6*r + 2];
+                            diff = cand[4] - q[6*r + 4];
                             if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                diff = cand[3] - q[6*r + 3];
+                                diff = cand[5] - q[6*r + 5];
                                 if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                    diff = cand[4] - q[6*r + 4];
+                                    diff = cand[0] - q[6*r];
                                     if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                        diff = cand[5] - q[6*r + 5];
-                                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                            dup = r;
-                                            break;
-                                        }
+                                        dup = r;
+                                        break;
                                     }
                                 }
                             }
                         }
                     }
                 }
-                if (dup >= 0) {
-                    /* the kept row takes the duplicate's singular bit */
-                    if (flag >= UR5_IK_FLAG_SINGULAR && flags[dup] < UR5_IK_FLAG_SINGULAR) {
-                        flags[dup] = flags[dup] + UR5_IK_FLAG_SINGULAR;
-                    }
-                } else {
-                    /* 6. kept, in branch order */
-                    q[6*kept] = cand[0];
-                    q[6*kept + 1] = cand[1];
-                    q[6*kept + 2] = cand[2];
-                    q[6*kept + 3] = cand[3];
-                    q[6*kept + 4] = cand[4];
-                    q[6*kept + 5] = cand[5];
-                    flags[kept] = flag;
-                    kept = kept + 1;
+            }
+            if (dup >= 0) {
+                /* the kept row takes the duplicate's singular bit */
+                if (flag >= UR5_IK_FLAG_SINGULAR && flags[dup] < UR5_IK_FLAG_SINGULAR) {
+                    flags[dup] = flags[dup] + UR5_IK_FLAG_SINGULAR;
                 }
+            } else {
+                /* 6. kept, in branch order */
+                q[6*kept] = cand[0];
+                q[6*kept + 1] = cand[1];
+                q[6*kept + 2] = cand[2];
+                q[6*kept + 3] = cand[3];
+                q[6*kept + 4] = cand[4];
+                q[6*kept + 5] = cand[5];
+                flags[kept] = flag;
+                kept = kept + 1;
             }
         }
     }
     count[0] = kept;
+    /* rows past count: NaN, flags -1 */
+    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
+        if (k >= kept) {
+            q[6*k] = NAN;
+            q[6*k + 1] = NAN;
+            q[6*k + 2] = NAN;
+            q[6*k + 3] = NAN;
+            q[6*k + 4] = NAN;
+            q[6*k + 5] = NAN;
+            flags[k] = -1;
+        }
+    }
     /* 7. status */
     return (exact == 0 ? UR5_IK_UNREACHABLE : (kept == 0 ? UR5_IK_OUT_OF_LIMITS : UR5_IK_OK));
 }

@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x03df54d5UL
+#define UR5_STAMP 0x3cd6bc27UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -70,9 +70,6 @@ extern "C" {
 
 /* ik_all refuses a target whose |R^T R - I| exceeds this anywhere */
 #define UR5_IK_ORTHO_TOL 1e-06
-
-/* ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped */
-#define UR5_IK_LIMIT_TOL 1e-12
 
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09
@@ -275,8 +272,8 @@ void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *targe
 /* every closed-form IK solution within the joint limits.
  * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
  * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
- * multiples of 2 pi to the copy nearest the middle of their range, rows outside the joint limits
- * (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped), duplicates (IK_DUP_TOL) dropped, in the
+ * multiples of 2 pi to the copy nearest the middle of their range,
+ * every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide), duplicates (IK_DUP_TOL) dropped, in the
  * derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
  * NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
  * IK_FLAG_SINGULAR (one member of a continuum, or a double root).
