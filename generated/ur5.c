@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x3cd6bc27UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x605d4a64UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6251,22 +6251,25 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
             cand[5] = raw[6*i + 5];
             /* 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped */
             dup = -1;
-            for (int r = 0; r < kept; ++r) {
-                /* the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test */
-                diff = cand[1] - q[6*r + 1];
-                if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                    diff = cand[2] - q[6*r + 2];
+            if (flag > 0) {
+                /* an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart */
+                for (int r = 0; r < kept; ++r) {
+                    /* the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test */
+                    diff = cand[1] - q[6*r + 1];
                     if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                        diff = cand[3] - q[6*r + 3];
+                        diff = cand[2] - q[6*r + 2];
                         if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                            diff = cand[4] - q[6*r + 4];
+                            diff = cand[3] - q[6*r + 3];
                             if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                diff = cand[5] - q[6*r + 5];
+                                diff = cand[4] - q[6*r + 4];
                                 if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                    diff = cand[0] - q[6*r];
+                                    diff = cand[5] - q[6*r + 5];
                                     if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
-                                        dup = r;
-                                        break;
+                                        diff = cand[0] - q[6*r];
+                                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                            dup = r;
+                                            break;
+                                        }
                                     }
                                 }
                             }

@@ -585,3 +585,33 @@ def test_every_non_finite_entry_is_invalid(name):
     huge[5] = 1e200
     out = np.zeros(8 * b.chain.n)
     assert raw_call(b, "ik_all", np.ascontiguousarray(huge).ctypes.data_as(dp), out.ctypes.data_as(dp), None, None) == STATUS["invalid"]
+
+
+def test_regular_rows_skip_the_duplicate_test_only_where_provably_distinct():
+    """An exact regular row (flag 0) skips the duplicate test in double precision on all-revolute arms
+    (solver_closed.REGULAR_ROWS_DISTINCT): near the UR5's stretched elbow (q3 = 0) such rows stay 1e-5 rad or more
+    from every other row, while at and within the double-root tolerance the two elbows are flagged and one of them
+    is dropped. Float arms and arms with a prismatic joint keep the test for every row."""
+    from skelarm_sym.models.chain.solver_closed import _Arm
+
+    b = built("ur5")
+    rows_c = b.generated.sources["ur5.c"].split("_ik_all_rows(")[1]
+    assert "if (flag > 0) {" in rows_c
+    assert _Arm(b.chain, False, precision="double").regular_rows_distinct
+    assert not _Arm(b.chain, False, precision="float").regular_rows_distinct
+    assert not _Arm(load_arm("stanford")[0], False, precision="double").regular_rows_distinct
+    rng = np.random.default_rng(31)
+    for e in (0.0, 1e-12, -1e-9, 1e-7, -1e-6, 1e-5, -1e-4):
+        q = inner_configurations(b, 4, rng)
+        q[:, 2] = e
+        T = targets_of(b.chain, q)
+        for i in range(len(q)):
+            r = b.c.ik_all(T[i])
+            assert r.status == "ok"
+            rows = check_rows(b, r, T[i], tol=1e-11)  # none twice
+            flags = np.asarray(r.flags)[: r.count]
+            if e == 0.0:  # the source's elbow pairs collapsed: one row each, flagged (the other shoulder's are not)
+                assert r.count < 8 and np.any(flags & 2)
+            for k in np.nonzero(flags == 0)[0]:
+                others = np.delete(rows, k, axis=0)
+                assert np.min(wrapped_distance(others, rows[k], b.revolute)) > 1e-5

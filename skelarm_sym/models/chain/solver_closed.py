@@ -60,12 +60,22 @@ copy shifted toward that centre (within pi of it, up to the rounding of a few tu
 limit tests and clipping are left out."""
 
 
+REGULAR_ROWS_DISTINCT = """Why an exact regular candidate (flag 0) is no duplicate, in double precision with revolute joints:
+two candidates' branches part at one subproblem on both their paths, whose flags both carry. There, with the
+singular bit clear: SP4/SP3's roots are 2 atan(s / |C|) >= 2e-5 rad apart (s^2 = disc > LS_TOL r2 >= LS_TOL C^2);
+SP2's common points 2 sqrt(disc) > 2e-5 sqrt(norm2) apart, which each SP1 turns into 1.4e-5 rad or more (a
+chord over a radius of at most sqrt(2 norm2)); a wrist flip moves q4 (UR: q6) by pi. All far above IK_DUP_TOL =
+1e-9 rad (the shifts, a multiple of 2 pi, and clipping, 1e-12, do not change that), and above the subproblems'
+rounding. Not used in float (IK_DUP_TOL 1e-4 exceeds 2e-5) nor with a prismatic joint (its two roots are 2 sqrt(disc)
+metres apart, which the arm's size scales)."""
+
+
 class _Arm:
     """What the procedures need of the arm, as plain numbers: joints, revolute, limits, centres, lock; and what
     the candidates guarantee (``principal``: per coordinate, every candidate in ``[-pi, pi]``) and the order in
     which the duplicate test compares the joints (``order``)."""
 
-    def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = ()) -> None:
+    def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double") -> None:
         limits = chain.limits()
         self.n = chain.n
         self.s = 8
@@ -79,11 +89,17 @@ class _Arm:
         self.centre = [float(c) for c in centres([-inf if x is None else x for x in self.lower],
                                                  [inf if x is None else x for x in self.upper])]
         self.locked = locked
+        self.precision = precision
         self.principal = list(principal) if principal else [False] * chain.n
         # the duplicate test's joint order: the columns with the most distinct candidates first (the joint in
         # which two rows most likely differ: one test per kept row); the result does not depend on the order
         distinct = list(columns) if columns else [0] * chain.n
         self.order = sorted(range(chain.n), key=lambda j: -distinct[j])
+
+    @property
+    def regular_rows_distinct(self) -> bool:
+        """Whether a row flagged 0 (exact, regular) needs no duplicate test (see :data:`REGULAR_ROWS_DISTINCT`)."""
+        return self.precision == "double" and all(self.revolute)
 
     def unshifted(self, j: int) -> bool:
         """Revolute joint ``j``'s candidates are in ``[-pi, pi]`` and its centre is 0: the 2 pi shift moves none."""
@@ -187,10 +203,14 @@ def rows_helper(arm: _Arm) -> Function:
             with (b.if_(inside > 0) if tested else contextlib.nullcontext()):
                 b.comment("5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped")
                 b.set(dup, _int(-1))
-                with b.for_("r", 0, kept) as r:
-                    b.comment("the same row when every joint is within IK_DUP_TOL: nested, the joint with the most "
-                              "distinct candidates first, so a row that differs there costs one test")
-                    _same_row(b, arm, cand, q, r, diff, dup, 0)
+                with (b.if_(flag > 0) if arm.regular_rows_distinct else contextlib.nullcontext()):
+                    if arm.regular_rows_distinct:
+                        b.comment("an exact regular row (flag 0) is no other row's duplicate: their branches part at a "
+                                  "subproblem that is not singular, 1e-5 rad or more apart")
+                    with b.for_("r", 0, kept) as r:
+                        b.comment("the same row when every joint is within IK_DUP_TOL: nested, the joint with the most "
+                                  "distinct candidates first, so a row that differs there costs one test")
+                        _same_row(b, arm, cand, q, r, diff, dup, 0)
                 with b.if_(dup >= 0):
                     b.comment("the kept row takes the duplicate's singular bit")
                     singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
@@ -385,14 +405,15 @@ def nearest_solver(arm: _Arm) -> Function:
 
 def closed_solvers(derivation, names, precision: str) -> list[Function]:
     """The helper and the procedures named in ``names`` (``ik_all``, ``ik_nearest``) for a derivation that has
-    ``ik_candidates``; ``precision`` changes nothing here (the tolerances are module constants)."""
+    ``ik_candidates``; ``precision`` decides whether an exact regular row skips the duplicate test (see
+    :data:`REGULAR_ROWS_DISTINCT`; the tolerances themselves are module constants)."""
     wanted = [name for name in ("ik_all", "ik_nearest") if name in names]
     if not wanted:
         return []
     spec = derivation.function("ik_candidates")
     Q = derivation.compact["Q"]
     columns = tuple(len(set(Q[:, j])) for j in range(Q.cols))
-    arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns)
+    arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision)
     out = [rows_helper(arm)]
     if "ik_all" in wanted:
         out.append(all_solver(arm))
