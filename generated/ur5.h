@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xfc5adf94UL
+#define UR5_STAMP 0x605d4a64UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -70,9 +70,6 @@ extern "C" {
 
 /* ik_all refuses a target whose |R^T R - I| exceeds this anywhere */
 #define UR5_IK_ORTHO_TOL 1e-06
-
-/* ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped */
-#define UR5_IK_LIMIT_TOL 1e-12
 
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09
@@ -209,12 +206,12 @@ void ur5_jacobian_rpy(const double q[6], double JA[36]);
  * Stack: about 13 KB. */
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
-/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 7 KB. */
+/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 6 KB. */
 void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 7 KB. */
+ * Stack: about 6 KB. */
 void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
 
 /* Return codes of the solvers. */
@@ -275,8 +272,8 @@ void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *targe
 /* every closed-form IK solution within the joint limits.
  * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
  * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
- * multiples of 2 pi to the copy nearest the middle of their range, rows outside the joint limits
- * (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped), duplicates (IK_DUP_TOL) dropped, in the
+ * multiples of 2 pi to the copy nearest the middle of their range,
+ * every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide), duplicates (IK_DUP_TOL) dropped, in the
  * derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
  * NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
  * IK_FLAG_SINGULAR (one member of a continuum, or a double root).
@@ -288,7 +285,7 @@ int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * count, flags and status may be NULL.
- * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 8 KB. */
+ * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 6 KB. */
 void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status);
 
 /* the closed-form IK solution nearest a configuration.
@@ -302,7 +299,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * status may be NULL.
- * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 8 KB. */
+ * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 7 KB. */
 void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status);
 
 #ifdef __cplusplus

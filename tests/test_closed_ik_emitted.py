@@ -497,3 +497,121 @@ def test_show_ik(capsys):
     assert "spherical_wrist (parallel_23)" in text and "SP3 q3" in text and "Q[7] = (" in text
     assert main(["show", "--robot", str(ROBOTS / "scara.toml"), "--what", "ik"]) == 2
     assert "6 moving joints" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name, principal", [("ur5", (True, True, True, False, True, True)), ("puma560", (True,) * 6)])
+def test_principal_columns_hold_every_candidate(name, principal):
+    """The columns ``derive_ik_all`` declares principal (every candidate an angle in [-pi, pi], so ik_all leaves
+    them unshifted where the centre is 0) hold only such values, on random targets and on the singular ones where the
+    UR wrist splits q6 from q2 + q3 + q4 (q6 = +-(sigma - phi) turned into [-pi, pi]: up to 2 pi away before) and
+    the spherical wrist takes its aligned representative."""
+    b = built(name)
+    ik = b.generated.derivation.function("ik_candidates")
+    assert ik.principal == principal
+    rng = np.random.default_rng(12)
+    q = rng.uniform(-np.pi, np.pi, size=(400, 6))
+    q[100:200, 4] = 0.0             # wrist aligned exactly (UR: the split; PUMA: q4 = 0, q6 the whole rotation)
+    q[200:300, 4] = np.pi           # UR: aligned the other way
+    q[300:, 2] = 0.0                # elbow stretched (UR)
+    T = targets_of(b.chain, q).reshape(-1, 16)
+    cols = np.array(principal)
+    for impl in (b.c, b.py):
+        Q, flags = impl.ik_candidates(T)
+        assert np.all(np.abs(Q[..., cols]) <= math.pi)
+        if name == "ur5":  # the split happened (singular bit on rows of the aligned targets)
+            assert np.any(np.asarray(flags[100:300]).astype(int) & 2)
+
+
+def test_wide_limits_need_no_test_and_agree_with_the_spec():
+    """Joints whose range holds every copy shifted toward its centre (more than a turn wide, or [-pi, pi] for a
+    column of principal candidates with centre 0) are neither tested nor clipped in ik_all, the others are; a
+    principal column with centre 0 is not shifted. On random and singular targets C and NumPy still return the
+    spec's rows, within the limits (at an exact double root, the stretched elbow, SymPy's evaluation rounds to two
+    rows 3e-8 apart where the C has one: there C and NumPy agree with each other and reproduce the target)."""
+    import dataclasses
+
+    from skelarm_sym.models.chain.solver_closed import _Arm
+
+    chain, _ = load_arm("ur5")
+    limits = [(-2 * math.pi, 2 * math.pi), (-3.0, 4.0), (-math.pi, math.pi), (-1.5, 2.5), (-2.0, None), (-4.0, 2.3)]
+    joints = [dataclasses.replace(j, lower=lo, upper=hi) for j, (lo, hi) in zip(chain.joints, limits)]
+    b = Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+    spec = b.generated.derivation.function("ik_candidates")
+    arm = _Arm(b.chain, False, spec.principal)
+    assert [arm.unshifted(j) for j in range(6)] == [True, False, True, False, False, False]
+    assert [arm.always_inside(j) for j in range(6)] == [True, True, True, False, False, True]
+    rows_c = b.generated.sources["ur5.c"].split("_ik_all_rows(")[1]
+    assert rows_c.count("IK_LIMIT_TOL") == 3  # joint 4's two limits, joint 5's lower one
+    rng = np.random.default_rng(21)
+    q = inner_configurations(b, 40, rng)
+    q[30:35, 4] = 0.0
+    q[35:, 2] = 0.0
+    T = targets_of(b.chain, q)
+    for i in range(len(q)):
+        want = b.spec(T[i], q[i]) if i < 30 else b.c.ik_all(T[i])
+        solutions = want.solutions if i < 30 else np.asarray(want.q)[: want.count]
+        for impl in (b.c, b.py):
+            r = impl.ik_all(T[i])
+            assert r.status == (LABELS[want.status] if i < 30 else want.status) and r.count == want.count
+            rows = check_rows(b, r, T[i], tol=1e-11)
+            np.testing.assert_allclose(rows, solutions, atol=1e-9)
+            assert list(np.asarray(r.flags)[: r.count]) == list(np.asarray(want.flags)[: want.count])
+
+
+@pytest.mark.parametrize("name", ["puma560", "ur5"])
+def test_every_non_finite_entry_is_invalid(name):
+    """NaN or +-inf in any of the 12 entries read (R's through the sum of their squares, t's one by one) gives
+    IK_INVALID, count 0, NaN rows, flags -1, in C and NumPy; a far but finite position (1e100 m) is unreachable, not
+    invalid; a huge rotation entry is not a rotation."""
+    b = built(name)
+    q = inner_configurations(b, 1, np.random.default_rng(2))[0]
+    good = targets_of(b.chain, q[None])[0].reshape(16)
+    dp = ctypes.POINTER(ctypes.c_double)
+    for k in range(12):
+        for value in (np.nan, np.inf, -np.inf):
+            bad = good.copy()
+            bad[k] = value
+            out, count, flags = np.zeros(8 * b.chain.n), ctypes.c_int(5), np.zeros(8, dtype=np.intc)
+            status = raw_call(b, "ik_all", np.ascontiguousarray(bad).ctypes.data_as(dp), out.ctypes.data_as(dp),
+                              ctypes.byref(count), flags.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+            assert status == STATUS["invalid"] and count.value == 0 and np.all(np.isnan(out)) and np.all(flags == -1), (k, value)
+            with pytest.raises(ValueError):
+                b.py.ik_all(bad.reshape(4, 4))
+    far = good.copy()
+    far[[3, 7, 11]] = 1e100
+    for impl in (b.c, b.py):
+        assert impl.ik_all(far.reshape(4, 4)).status == "unreachable"
+    huge = good.copy()
+    huge[5] = 1e200
+    out = np.zeros(8 * b.chain.n)
+    assert raw_call(b, "ik_all", np.ascontiguousarray(huge).ctypes.data_as(dp), out.ctypes.data_as(dp), None, None) == STATUS["invalid"]
+
+
+def test_regular_rows_skip_the_duplicate_test_only_where_provably_distinct():
+    """An exact regular row (flag 0) skips the duplicate test in double precision on all-revolute arms
+    (solver_closed.REGULAR_ROWS_DISTINCT): near the UR5's stretched elbow (q3 = 0) such rows stay 1e-5 rad or more
+    from every other row, while at and within the double-root tolerance the two elbows are flagged and one of them
+    is dropped. Float arms and arms with a prismatic joint keep the test for every row."""
+    from skelarm_sym.models.chain.solver_closed import _Arm
+
+    b = built("ur5")
+    rows_c = b.generated.sources["ur5.c"].split("_ik_all_rows(")[1]
+    assert "if (flag > 0) {" in rows_c
+    assert _Arm(b.chain, False, precision="double").regular_rows_distinct
+    assert not _Arm(b.chain, False, precision="float").regular_rows_distinct
+    assert not _Arm(load_arm("stanford")[0], False, precision="double").regular_rows_distinct
+    rng = np.random.default_rng(31)
+    for e in (0.0, 1e-12, -1e-9, 1e-7, -1e-6, 1e-5, -1e-4):
+        q = inner_configurations(b, 4, rng)
+        q[:, 2] = e
+        T = targets_of(b.chain, q)
+        for i in range(len(q)):
+            r = b.c.ik_all(T[i])
+            assert r.status == "ok"
+            rows = check_rows(b, r, T[i], tol=1e-11)  # none twice
+            flags = np.asarray(r.flags)[: r.count]
+            if e == 0.0:  # the source's elbow pairs collapsed: one row each, flagged (the other shoulder's are not)
+                assert r.count < 8 and np.any(flags & 2)
+            for k in np.nonzero(flags == 0)[0]:
+                others = np.delete(rows, k, axis=0)
+                assert np.min(wrapped_distance(others, rows[k], b.revolute)) > 1e-5

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from skelarm_sym.closed_ik.subproblems import Steps, sp1, sp2, sp3, sp4, sp_line, unit_disc
+from skelarm_sym.closed_ik.subproblems import Parts, Steps, choose_parts, sp1, sp2, sp3, sp4, sp_line, unit_disc
 
 
 def rot(k, theta):
@@ -155,3 +155,79 @@ def test_no_nan_on_zero_input(maker):
         inputs, values = H + P + K + [D], [0] * 6 + [0, 0, 1, 0]
     outs = [x for b in a for x in angle_outputs(b)]
     assert all(np.isfinite(run(steps, inputs, outs, values)))
+
+
+def atan2_count(steps: Steps) -> int:
+    """The rational atans among the steps (one ``_Q`` step, the denominator polynomial, per atan2)."""
+    return sum(1 for sym, _ in steps.steps if sym.name.endswith("_Q"))
+
+
+@pytest.mark.parametrize("plane, mirrored", [("B = 0", "y"), ("A = 0", "x")])
+def test_sp4_mirrored_branch_shares_its_atan2(plane, mirrored):
+    """With B = 0 (h perpendicular to k x p) the roots are +-theta; with A = 0, theta and pi - theta: the second
+    branch is written on the first's atan2 (one rational atan, not two), and both still solve h . R(k, t) p = d
+    with their cosines and sines."""
+    k, p = np.array([0.0, 0.0, 1.0]), np.array([0.7, 0.0, 0.2])
+    Hs = [sp.Symbol("h0", real=True), sp.S.Zero, sp.Symbol("h2", real=True)] if plane == "B = 0" else \
+        [sp.S.Zero, sp.Symbol("h1", real=True), sp.Symbol("h2", real=True)]
+    free = [x for x in Hs if x.is_Symbol]
+    steps = Steps("t")
+    b0, b1 = sp4(steps, "a", Hs, p.tolist(), k.tolist(), D)
+    assert atan2_count(steps) == 1
+    general = Steps("g")
+    sp4(general, "a", H, P, K, D)
+    assert atan2_count(general) == 2
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        h = np.array([float(x) if not x.is_Symbol else rng.normal() for x in Hs])
+        th = rng.uniform(-np.pi, np.pi)
+        d = h @ rot(k, th) @ p
+        v = run(steps, free + [D], angle_outputs(b0) + angle_outputs(b1), [*h[[i for i, x in enumerate(Hs) if x.is_Symbol]], d])
+        for t, c, s in ((v[0], v[1], v[2]), (v[5], v[6], v[7])):
+            assert abs(h @ rot(k, t) @ p - d) < 1e-12
+            assert abs(c - np.cos(t)) < 1e-14 and abs(s - np.sin(t)) < 1e-14
+        assert min(abs(wrap(v[0] - th)), abs(wrap(v[5] - th))) < 1e-9
+        if mirrored == "y":
+            assert v[5] == -v[0] or v[0] == v[5] == np.pi
+        else:
+            assert abs(wrap(v[5] - (np.pi - v[0]))) < 1e-15
+
+
+def test_choose_parts_selects_the_inputs_of_one_atan2():
+    """``choose_parts`` then ``.angle``: one atan2 whose angle, cosine and sine are those of the chosen parts'
+    own angle, for either choice."""
+    x1, y1, x2, y2, pick = sp.symbols("x1 y1 x2 y2 pick", real=True)
+    steps = Steps("t")
+    one, two = Parts(x1, y1).angle(steps, "one"), Parts(x2, y2).angle(steps, "two")
+    chosen = choose_parts(steps, "c", pick > 0, Parts(x1, y1), Parts(x2, y2), sp.S.One, sp.S.Zero).angle(steps, "c")
+    assert chosen.ls == 1 and chosen.singular == 0
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        values = list(rng.normal(size=4))
+        for p_value in (1.0, 0.0):
+            v = run(steps, [x1, y1, x2, y2, pick], [chosen.theta, chosen.c, chosen.s] + [one.theta, one.c, one.s]
+                    + [two.theta, two.c, two.s], values + [p_value])
+            assert v[:3] == (v[3:6] if p_value else v[6:9])
+
+
+def test_steps_refuse_a_second_definition_of_a_name():
+    """Two different expressions under one label: the lowering would keep one definition for both uses (a q4 SP1's
+    singular flag once took the value of an unrelated test that way), so the recorder refuses."""
+    steps = Steps("t")
+    x, y = sp.symbols("x y")
+    steps("a", x + y)
+    assert steps("a", x + y) == sp.Symbol("_t_a")  # the same expression again: its first name
+    with pytest.raises(ValueError, match="defined twice"):
+        steps("a", x * y)
+
+
+def test_principal_angles_are_recorded():
+    """An SP angle, its negation and selects of such are known to lie in [-pi, pi]; a sum of two is not."""
+    steps = Steps("t")
+    a = sp1(steps, "a", K, P, Q)
+    b = sp1(steps, "b", K, Q, P)
+    assert steps.is_principal(a.theta) and steps.is_principal(-a.theta)
+    sel = steps("s", sp.Piecewise((a.theta, D > 0), (-b.theta, True), evaluate=False))
+    assert steps.is_principal(sel) and steps.is_principal(sp.Float(3.0)) and not steps.is_principal(sp.Float(3.2))
+    assert not steps.is_principal(steps("sum", a.theta + b.theta))
+    assert not steps.is_principal(steps("s2", sp.Piecewise((a.theta + b.theta, D > 0), (a.theta, True), evaluate=False)))

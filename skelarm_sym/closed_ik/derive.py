@@ -59,6 +59,9 @@ class ClosedIK:
     upper: tuple[float | None, ...]
     lock: int | None = None
     notes: tuple[str, ...] = field(default=())
+    principal: tuple[bool, ...] = field(default=())
+    """Per coordinate: every row's value is an angle in ``[-pi, pi]`` (``pi`` the double 3.141592653589793;
+    :meth:`~.subproblems.Steps.is_principal`), so a 2 pi shift toward a centre of 0 leaves it as it is."""
 
     @property
     def max_solutions(self) -> int:
@@ -142,6 +145,7 @@ def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
 
     n = chain.n
     rows, flags = [], []
+    principal = [True] * n
     for b in branches:
         thetas = [a.theta for a in b.angles]
         if family.reversed:
@@ -149,8 +153,10 @@ def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
         row = [sp.S.Zero] * n
         for k, t in enumerate(thetas):
             row[geom.coordinates[k]] = t
+            principal[geom.coordinates[k]] &= geom.kinds[k] == "revolute" and steps.is_principal(t)
         if lock_idx is not None:
             row[chain.joints[lock_idx].coordinate] = inputs["lock"][0]
+            principal[chain.joints[lock_idx].coordinate] = False
         rows.append(row)
         flags.append(FLAG_LS * b.ls + FLAG_SINGULAR * b.singular)
     limits = chain.limits()
@@ -160,6 +166,7 @@ def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
         limits["lower"], limits["upper"],
         None if lock_idx is None else chain.joints[lock_idx].coordinate,
         (family.describe(),),
+        tuple(principal),
     )
 
 
@@ -182,7 +189,15 @@ def operations(ik: ClosedIK) -> set[str]:
 
 # -- as a derivation the code generator emits ----------------------------------------------------------
 
-CANDIDATES = FunctionSpec(
+@dataclass(frozen=True)
+class CandidatesSpec(FunctionSpec):
+    """:data:`CANDIDATES` with what the post-processing may rely on: ``principal`` (per coordinate, see
+    :attr:`ClosedIK.principal`; empty: nothing known)."""
+
+    principal: tuple[bool, ...] = ()
+
+
+CANDIDATES = CandidatesSpec(
     "ik_candidates", ("target", "lock"), ("Q", "flags"),
     "every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S)",
 )
@@ -231,7 +246,7 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         steps=tuple(derivation.steps) + tuple(ik.steps),
         compact={**derivation.compact, "Q": ik.Q, "flags": ik.flags},
         shapes={**derivation.shapes, "Q": (S, N), "flags": (S,)},
-        functions=tuple(derivation.functions) + (CANDIDATES,),
+        functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal),),
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {})},

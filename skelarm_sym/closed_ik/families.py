@@ -41,12 +41,15 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, sub, turn
-from .subproblems import Angle, Steps, _select, any_of, indicator, sp1, sp2, sp3, sp4, sp_line, unit_disc
+from .subproblems import (Angle, Steps, _select, any_of, choose_parts, indicator, sp1, sp1_parts, sp2, sp3, sp3_parts, sp4,
+                          sp_line, unit_disc)
 
 
 ALIGNED_TOL = 1e-14
 """Spherical wrist: with ``|q5|`` at most this (rad) and q4's SP1 a continuum, q4 is the representative 0 (the
 orientation error of doing so is at most ``|q5|``)."""
+PI_DOUBLE = sp.Float(math.pi, 17)
+"""pi as the emitted code has it (3.141592653589793)."""
 SPLIT_TOL = 1e-12
 """UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
 (its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
@@ -109,8 +112,10 @@ def _sq(v) -> sp.Expr:
 
 def _half_turn(steps: Steps, label: str, a: Angle, same: sp.Expr) -> Angle:
     """``a + pi`` wrapped into [-pi, pi] (``a`` itself where ``same`` is 1): the wrist flip's angle, no atan2."""
-    turned = _select((a.theta - sp.Float(math.pi, 17), a.theta > 0), (a.theta + sp.Float(math.pi, 17), True))
-    return Angle(steps(label, _select((a.theta, same > 0), (turned, True))), None, None, a.ls, a.singular)
+    turned = _select((a.theta - PI_DOUBLE, a.theta > 0), (a.theta + PI_DOUBLE, True))
+    out = _select((a.theta, same > 0), (turned, True))
+    # in [-pi, pi] when a is: a - pi for a in (0, pi], a + pi for a in [-pi, 0] (rounding is monotonic)
+    return Angle((steps.principal if steps.is_principal(a.theta) else steps)(label, out), None, None, a.ls, a.singular)
 
 
 def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = False) -> list[Branch]:
@@ -239,10 +244,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
                 out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
                 continue
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
-            q6r = sp1(steps, f"q6_{i}{j}", H[5], a, b)
-            x5 = steps.vec(f"x5_{i}{j}", _rot(q5, H[4], x, True))
-            y = _rot(q1, H[0], steps.vec(f"Rx6_{i}{j}", matvec(RG, steps.vec(f"x6_{i}{j}", _rot(q6r, H[5], x5, True)))), True)
-            phir = sp1(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
+            q6r = sp1_parts(steps, f"q6_{i}{j}", H[5], a, b)
             # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
             # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
             # middle of both its range over phi and the 2R arm's range [dmin, dmax], so the 2R arm reaches it.
@@ -251,21 +253,30 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
             bb = cross(H[5], b)
             bb2, b2 = steps(f"bb{i}{j}", dot(bb, bb)), steps(f"b2{i}{j}", dot(b, b))  # named: cheap relational
             sel = steps(f"split{i}{j}", indicator(bb2 <= SPLIT_TOL**2 * b2))
+            pick = sel > 0
+            x5 = steps.vec(f"x5_{i}{j}", _rot(q5, H[4], x, True))
             z = _rot(q1, H[0], steps.vec(f"Rx5_{i}{j}", matvec(RG, x5)), True)
-            sigma = sp1(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
-            phis = sp3(steps, f"phis{i}{j}", H[1], v, u, dstar)[0]
+            sigma = sp1_parts(steps, f"sig{i}{j}", H[1], x, steps.vec(f"z{i}{j}", z))
+            # one atan2 for sigma (split) or q6 (regular), one for phi's two forms: the inputs are selected, so
+            # each path's angle, cosine and sine are bit for bit its own. Where split, phi's regular form below
+            # is computed from sigma's cosine and sine, finite and unused
+            t6 = choose_parts(steps, f"t6{i}{j}", pick, sigma, q6r).angle(steps, f"t6{i}{j}")
+            y = _rot(q1, H[0], steps.vec(f"Rx6_{i}{j}", matvec(RG, steps.vec(f"x6_{i}{j}", _rot(t6, H[5], x5, True)))), True)
+            phir = sp1_parts(steps, f"phi{i}{j}", H[1], x, steps.vec(f"y{i}{j}", y))
+            phis = sp3_parts(steps, f"phis{i}{j}", H[1], v, u, dstar)[0][0]
             r5h6 = _rot(q5, H[4], H[5])
             h2r = steps(f"h2r{i}{j}", dot(H[1], r5h6))
             sgn = steps(f"sgn{i}{j}", _select((sp.S.One, h2r >= 0), (-sp.S.One, True)))
-            pick = sel > 0
-
-            def choose(label, singular_value, regular_value):
-                return steps(label, _select((singular_value, pick), (regular_value, True)))
-
-            phi = Angle(choose(f"phit{i}{j}", phis.theta, phir.theta), choose(f"phic{i}{j}", phis.c, phir.c),
-                        choose(f"phisn{i}{j}", phis.s, phir.s), choose(f"phils{i}{j}", phis.ls, phir.ls), q6r.singular)
-            q6 = Angle(choose(f"q6t{i}{j}", sgn * (sigma.theta - phis.theta), q6r.theta), None, None, q6r.ls,
-                       steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
+            ls = steps(f"phils{i}{j}", _select((phis.ls, pick), (phir.ls, True)))
+            phi = choose_parts(steps, f"ph{i}{j}", pick, phis, phir, ls, q6r.singular).angle(steps, f"phit{i}{j}")
+            # split: q6 = +-(sigma - phi), in [-2 pi, 2 pi]; one turn toward 0 puts it in [-pi, pi] like every
+            # other angle here (the post-processing's shift would do the same for a centre of 0; done here, the
+            # column needs none: solver_closed)
+            split = steps(f"q6s{i}{j}", sgn * (t6.theta - phi.theta))
+            wrapped = _select((split - 2 * PI_DOUBLE, split > PI_DOUBLE), (split + 2 * PI_DOUBLE, split < -PI_DOUBLE),
+                              (split, True))
+            q6 = Angle(steps.principal(f"q6t{i}{j}", _select((wrapped, pick), (t6.theta, True))), None, None,
+                       q6r.ls, steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
             firsts = (q5, q6, phi)
             out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
     return out

@@ -74,7 +74,16 @@ class Steps(StepRecorder):
     again in the lowering's CSE, which rebuilds every node) by asking the assumptions system about its operands;
     for a real symbol that is a deduction over its facts, 3.4 ms per relational against 0.07 ms without (measured
     on the 2-core machine), and the candidates have about a thousand of them. Nothing here needs the assumption:
-    no step is simplified, and every value is real by construction."""
+    no step is simplified, and every value is real by construction.
+
+    It also records which steps are angles in ``[-pi, pi]`` (:meth:`principal`, :meth:`is_principal`): the
+    post-processing skips a 2 pi shift that cannot move such a column (``models/chain/solver_closed.py``)."""
+
+    def __init__(self, tag: str) -> None:
+        super().__init__(tag)
+        self._principal: set = set()
+        self._definitions: dict = {}
+        self._names: set = set()
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         expr = _floaty(sp.sympify(expr))
@@ -86,6 +95,9 @@ class Steps(StepRecorder):
         if known is not None:
             return known
         symbol = sp.Symbol(f"_{self._tag}_{label}")
+        if symbol in self._names:  # two definitions of one symbol: the lowering would keep one for both
+            raise ValueError(f"internal error: step {symbol} defined twice")
+        self._names.add(symbol)
         self.steps.append((symbol, expr))
         self._known[expr] = symbol
         return symbol
@@ -93,6 +105,33 @@ class Steps(StepRecorder):
     def vec(self, label: str, v: Sequence) -> list:
         """Name each component of a 3-vector."""
         return [self(f"{label}{'xyz'[i]}", v[i]) for i in range(3)]
+
+    def principal(self, label: str, expr: sp.Expr) -> sp.Expr:
+        """``self(label, expr)`` for an angle known to lie in ``[-pi, pi]`` (``pi`` the double 3.141592653589793,
+        the emitted code's), recorded so that :meth:`is_principal` knows it."""
+        out = self(label, expr)
+        if out.is_Symbol:
+            self._principal.add(out)
+        return out
+
+    def is_principal(self, expr: sp.Expr) -> bool:
+        """Whether ``expr`` is known to lie in ``[-pi, pi]``: a number there, a step recorded by :meth:`principal`,
+        a negation or a select (any depth) of such, or a step that names one of these."""
+        expr = sp.sympify(expr)
+        if expr.is_Number:
+            return abs(float(expr)) <= math.pi
+        if expr.is_Symbol:
+            if expr in self._principal:
+                return True
+            if len(self._definitions) != len(self.steps):
+                self._definitions = dict(self.steps)
+            definition = self._definitions.get(expr)
+            return definition is not None and self.is_principal(definition)
+        if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1:
+            return self.is_principal(expr.args[1])
+        if isinstance(expr, sp.Piecewise):
+            return all(self.is_principal(value) for value, _ in expr.args)
+        return False
 
 
 def any_of(*flags: sp.Expr) -> sp.Expr:
@@ -190,44 +229,83 @@ def atan2_steps(steps: Steps, label: str, y: sp.Expr, x: sp.Expr) -> sp.Expr:
 
 def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr) -> Angle:
     """``theta = atan2(y, x)`` with ``cos = x / rho``, ``sin = y / rho`` (``(1, 0)`` when ``rho = 0``); singular
-    when ``rho^2 <= SING_TOL^2 scale2``."""
+    when ``rho^2 <= SING_TOL^2 scale2``.
+
+    ``theta`` lies in ``[-pi, pi]`` (``pi`` the double 3.141592653589793) and is recorded so
+    (:meth:`Steps.principal`): :func:`atan2_steps`' magnitude before its last two selects is in ``[0, pi/2]`` (an
+    ``atan`` of ``u`` in ``[0, 0.66]``, or ``pi/4`` plus one of ``u`` in ``(-0.21, 0]``, or ``pi/2`` less one of these),
+    ``pi - r`` of an ``r >= 0`` rounds to at most that double, and libm's and NumPy's ``atan2`` return at most it.
+
+    Where ``y`` (or ``x``) is the negation of a step, the ``Abs``, ``rho`` and the rational ``atan`` are those of
+    the angle at ``(x, -y)`` (or ``(-x, y)``) if that was solved before: the steps are recorded once, so a mirrored
+    branch (SP4 with ``B = 0``: the 2R arm's elbow) costs a select, not a second ``atan2``."""
     x, y = steps(f"{label}_x", x), steps(f"{label}_y", y)
     rho2 = steps(f"{label}_r2", x * x + y * y)
     rho = steps(f"{label}_r", sp.sqrt(rho2))
     angle = atan2_steps(steps, label, y, x) if ATAN2 == "arithmetic" else sp.atan2(y, x)
     # rho2 > 0 (the same test as rho > 0): an angle whose cosine and sine nothing uses (the last joints) needs no sqrt
-    theta = steps(f"{label}", _select((angle, rho2 > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 on every backend
+    theta = steps.principal(f"{label}", _select((angle, rho2 > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 everywhere
     c = steps(f"{label}_c", _select((x / rho, rho2 > 0), (sp.S.One, True)))
     s = steps(f"{label}_s", _select((y / rho, rho2 > 0), (sp.S.Zero, True)))
-    singular = steps(f"{label}_sg", indicator(rho2 <= SING_TOL**2 * scale2))
+    singular = steps(f"{label}_rsg", indicator(rho2 <= SING_TOL**2 * scale2))
     return Angle(theta, c, s, sp.S.Zero, singular)
 
 
-def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angle:
-    """SP1: ``theta`` with ``R(k, theta) p = q`` (least squares when inconsistent); ``k`` unit. Singular (a
-    continuum) when ``p`` or ``q`` is within ``SING_TOL`` (sine of the angle) of the axis."""
+@dataclass(frozen=True)
+class Parts:
+    """An angle before its ``atan2``: ``theta = atan2(y, x)``, and its 0/1 flags. :func:`choose_parts` selects
+    between two of them, so that one ``atan2`` (and one ``sqrt``) serves two alternatives."""
+
+    x: sp.Expr
+    y: sp.Expr
+    ls: sp.Expr = sp.S.Zero
+    singular: sp.Expr = sp.S.Zero
+
+    def angle(self, steps: Steps, label: str, scale2: sp.Expr = sp.S.Zero) -> Angle:
+        """The angle (see :func:`angle_from`), with these flags."""
+        a = angle_from(steps, label, self.x, self.y, scale2)
+        return Angle(a.theta, a.c, a.s, self.ls, self.singular)
+
+
+def choose_parts(steps: Steps, label: str, pick: sp.Expr, first: Parts, second: Parts, ls: sp.Expr = sp.S.Zero,
+                 singular: sp.Expr = sp.S.Zero) -> Parts:
+    """``first`` where ``pick`` holds, else ``second``, with the flags ``ls`` and ``singular``: the inputs of the
+    ``atan2`` selected, not its outputs. The angle, its cosine and its sine are, bit for bit, those of the chosen
+    parts (the same operations on the same numbers)."""
+    def sel(name, a, b):
+        return a if a == b else steps(f"{label}_{name}", _select((a, pick), (b, True)))
+
+    return Parts(sel("x", first.x, second.x), sel("y", first.y, second.y), ls, singular)
+
+
+def sp1_parts(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Parts:
+    """:func:`sp1` before its ``atan2``."""
     # perpendicular parts as k x p, k x q: p . q - (k . p)(k . q) cancels when p and q lie near the axis
     # (a circle of radius 1e-7 m at 0.4 m from its centre: 3e-3 rad error in theta), k x p does not
     u = steps.vec(f"{label}_u", cross(k, p))
     w = steps.vec(f"{label}_w", cross(k, q))
     x = dot(u, w)
     y = dot(k, cross(u, w))
-    a = angle_from(steps, label, x, y, sp.S.Zero)
     # comparisons of named quantities: SymPy evaluates a relational through the assumptions system, which
     # costs milliseconds on a large expression (and the lowering's CSE builds every relational again)
     uu, pp = steps(f"{label}_uu", dot(u, u)), steps(f"{label}_pp", dot(p, p))
     ww, qq = steps(f"{label}_ww", dot(w, w)), steps(f"{label}_qq", dot(q, q))
     flat = sp.Or(uu <= SING_TOL**2 * pp, ww <= SING_TOL**2 * qq)
-    return Angle(a.theta, a.c, a.s, sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
+    return Parts(steps(f"{label}_x", x), steps(f"{label}_y", y), sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
 
 
-def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
-        disc: sp.Expr | None = None) -> tuple[Angle, Angle]:
-    """SP4: both ``theta`` with ``h . R(k, theta) p = d`` (``k`` unit; ``h`` any length). Branch 0 takes ``+s``.
+def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angle:
+    """SP1: ``theta`` with ``R(k, theta) p = q`` (least squares when inconsistent); ``k`` unit. Singular (a
+    continuum) when ``p`` or ``q`` is within ``SING_TOL`` (sine of the angle) of the axis."""
+    return sp1_parts(steps, label, k, p, q).angle(steps, label)
 
-    ``disc``: the discriminant ``A^2 + B^2 - C^2`` written without cancellation, when the caller has such a
-    form (see :func:`unit_disc`); by default it is computed as written, which loses digits near a double root.
-    """
+
+def sp4_parts(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
+              disc: sp.Expr | None = None) -> tuple[tuple[Parts, Parts], sp.Expr]:
+    """:func:`sp4` before its ``atan2`` s: both branches' parts and the scale of their singular test (``r2^2``).
+
+    Where ``B`` is 0 (or ``A``), the second branch's ``y`` (or ``x``) is written as the negation of the first's,
+    which :func:`angle_from` turns into a select on the first branch's ``atan2``."""
     hk, kp = steps(f"{label}_hk", dot(h, k)), steps(f"{label}_kp", dot(k, p))
     A = steps(f"{label}_A", dot(cross(k, h), cross(k, p)))  # h . p - (h . k)(k . p), without its cancellation
     B = steps(f"{label}_B", dot(h, cross(k, p)))
@@ -240,13 +318,27 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * r2, disc >= -LS_TOL * r2)))
     flat = steps(f"{label}_flat", indicator(r2 <= SING_TOL**2 * scale2))
     singular = steps(f"{label}_sg", any_of(double, flat))
+    xs = [A * C - sign * B * root for sign in (1, -1)]
+    ys = [B * C + sign * A * root for sign in (1, -1)]
     out = []
-    for b, sign in enumerate((1, -1)):
-        x = A * C - sign * B * root
-        y = B * C + sign * A * root
-        a = angle_from(steps, f"{label}{b}", x, y, r2 * r2)
-        out.append(Angle(a.theta, a.c, a.s, ls, singular))
-    return out[0], out[1]
+    for b in range(2):
+        mirror_x = b == 1 and not out[0].x.is_Number and xs[0] + xs[1] == 0  # A = 0: the mirror image in y
+        mirror_y = b == 1 and not out[0].y.is_Number and ys[0] + ys[1] == 0  # B = 0: the mirror image in x
+        x = -out[0].x if mirror_x else steps(f"{label}{b}_x", xs[b])
+        y = -out[0].y if mirror_y else steps(f"{label}{b}_y", ys[b])
+        out.append(Parts(x, y, ls, singular))
+    return (out[0], out[1]), r2 * r2
+
+
+def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
+        disc: sp.Expr | None = None) -> tuple[Angle, Angle]:
+    """SP4: both ``theta`` with ``h . R(k, theta) p = d`` (``k`` unit; ``h`` any length). Branch 0 takes ``+s``.
+
+    ``disc``: the discriminant ``A^2 + B^2 - C^2`` written without cancellation, when the caller has such a
+    form (see :func:`unit_disc`); by default it is computed as written, which loses digits near a double root.
+    """
+    parts, scale2 = sp4_parts(steps, label, h, p, k, d, disc)
+    return parts[0].angle(steps, f"{label}0", scale2), parts[1].angle(steps, f"{label}1", scale2)
 
 
 def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
@@ -258,6 +350,12 @@ def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
     hk, pk, d = dot(h, k), dot(p, k), dot(h, g)
     hg = cross(h, g)
     return dot(hg, hg) - (hk * hk + pk * pk - 2 * d * hk * pk)
+
+
+def sp3_parts(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[tuple[Parts, Parts], sp.Expr]:
+    """:func:`sp3` before its ``atan2`` s (see :func:`sp4_parts`)."""
+    d = (dot(p1, p1) + dot(p2, p2) - d2) / 2
+    return sp4_parts(steps, label, p2, p1, k, d)
 
 
 def sp3(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[Angle, Angle]:

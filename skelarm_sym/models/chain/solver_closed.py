@@ -17,6 +17,7 @@ generation time; the loops over rows and over kept rows run at run time (at most
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 from ...closed_ik.postprocess import STATUS, centres
@@ -53,10 +54,28 @@ def _at(n: int, row, j: int):
     return start + _int(j) if j else start
 
 
-class _Arm:
-    """What the procedures need of the arm, as plain numbers: joints, revolute, limits, centres, lock."""
+WIDE_MARGIN = 1e-9
+"""A revolute joint whose limits are at least pi plus this (rad) from its range's centre on both sides takes every
+copy shifted toward that centre (within pi of it, up to the rounding of a few turns' arithmetic, 1e-14): its
+limit tests and clipping are left out."""
 
-    def __init__(self, chain, locked: bool) -> None:
+
+REGULAR_ROWS_DISTINCT = """Why an exact regular candidate (flag 0) is no duplicate, in double precision with revolute joints:
+two candidates' branches part at one subproblem on both their paths, whose flags both carry. There, with the
+singular bit clear: SP4/SP3's roots are 2 atan(s / |C|) >= 2e-5 rad apart (s^2 = disc > LS_TOL r2 >= LS_TOL C^2);
+SP2's common points 2 sqrt(disc) > 2e-5 sqrt(norm2) apart, which each SP1 turns into 1.4e-5 rad or more (a
+chord over a radius of at most sqrt(2 norm2)); a wrist flip moves q4 (UR: q6) by pi. All far above IK_DUP_TOL =
+1e-9 rad (the shifts, a multiple of 2 pi, and clipping, 1e-12, do not change that), and above the subproblems'
+rounding. Not used in float (IK_DUP_TOL 1e-4 exceeds 2e-5) nor with a prismatic joint (its two roots are 2 sqrt(disc)
+metres apart, which the arm's size scales)."""
+
+
+class _Arm:
+    """What the procedures need of the arm, as plain numbers: joints, revolute, limits, centres, lock; and what
+    the candidates guarantee (``principal``: per coordinate, every candidate in ``[-pi, pi]``) and the order in
+    which the duplicate test compares the joints (``order``)."""
+
+    def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double") -> None:
         limits = chain.limits()
         self.n = chain.n
         self.s = 8
@@ -70,6 +89,33 @@ class _Arm:
         self.centre = [float(c) for c in centres([-inf if x is None else x for x in self.lower],
                                                  [inf if x is None else x for x in self.upper])]
         self.locked = locked
+        self.precision = precision
+        self.principal = list(principal) if principal else [False] * chain.n
+        # the duplicate test's joint order: the columns with the most distinct candidates first (the joint in
+        # which two rows most likely differ: one test per kept row); the result does not depend on the order
+        distinct = list(columns) if columns else [0] * chain.n
+        self.order = sorted(range(chain.n), key=lambda j: -distinct[j])
+
+    @property
+    def regular_rows_distinct(self) -> bool:
+        """Whether a row flagged 0 (exact, regular) needs no duplicate test (see :data:`REGULAR_ROWS_DISTINCT`)."""
+        return self.precision == "double" and all(self.revolute)
+
+    def unshifted(self, j: int) -> bool:
+        """Revolute joint ``j``'s candidates are in ``[-pi, pi]`` and its centre is 0: the 2 pi shift moves none."""
+        return self.revolute[j] and self.principal[j] and self.centre[j] == 0.0
+
+    def always_inside(self, j: int) -> bool:
+        """Joint ``j``'s candidate, after the shift, is within its limits (no test, no clipping): its candidates
+        are in ``[-pi, pi]`` and unshifted and the limits hold that interval, or the limits are at least
+        ``pi + WIDE_MARGIN`` from the centre on both sides."""
+        lo, hi = self.lower[j], self.upper[j]
+        if not self.revolute[j] or lo is None or hi is None:
+            return lo is None and hi is None
+        if self.unshifted(j) and lo <= -math.pi and hi >= math.pi:
+            return True
+        c = self.centre[j]
+        return lo <= c - math.pi - WIDE_MARGIN and hi >= c + math.pi + WIDE_MARGIN
 
 
 def _inputs(arm: _Arm) -> tuple[list[Argument], list]:
@@ -105,12 +151,13 @@ def _close(d, revolute: bool):
     return (fabs(d) <= tol) | (fabs(TWO_PI - fabs(d)) <= tol)
 
 
-def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var, j: int) -> None:
-    """Joint ``j`` and on of ``cand`` against kept row ``r``: a nest of tests ending in ``dup = r; break``."""
+def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var, depth: int) -> None:
+    """Joints ``arm.order[depth:]`` of ``cand`` against kept row ``r``: a nest of tests ending in ``dup = r; break``."""
+    j = arm.order[depth]
     b.set(diff, cand[j] - q[_at(arm.n, r, j)])
     with b.if_(_close(diff, arm.revolute[j])):
-        if j + 1 < arm.n:
-            _same_row(b, arm, cand, q, r, diff, dup, j + 1)
+        if depth + 1 < arm.n:
+            _same_row(b, arm, cand, q, r, diff, dup, depth + 1)
         else:
             b.set(dup, r)
             b.break_()
@@ -125,15 +172,8 @@ def rows_helper(arm: _Arm) -> Function:
     raw, raw_flags, cand = b.array("raw", S * N), b.array("raw_flags", S), b.array("cand", N)
     one, zero = _int(1), _int(0)
 
-    b.comment("nothing yet: NaN rows, flags -1, count 0")
     rows = NamedConst("IK_MAX_SOLUTIONS", Type.INT)
-    with b.for_("k", 0, rows * _int(N)) as k:
-        b.set(q[k], Const(math.nan))
-    with b.for_("k", 0, rows) as k:
-        b.set(flags[k], _int(-1))
-    b.set(count[0], zero)
-
-    _refuse_invalid(b, arm, data)
+    _refuse_invalid(b, arm, data, q, count, flags)
 
     b.comment("the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable")
     b.call("ik_candidates", *data, raw, raw_flags)
@@ -145,23 +185,32 @@ def rows_helper(arm: _Arm) -> Function:
 
     kept = b.var("kept", zero, Type.INT)
     flag = b.var("flag", zero, Type.INT)
-    inside = b.var("inside", zero, Type.INT)
+    tested = not all(arm.always_inside(j) for j in range(N))
+    inside = b.var("inside", zero, Type.INT) if tested else None
     dup = b.var("dup", zero, Type.INT)
     diff = b.var("diff", 0.0)
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
         with b.if_(eq(exact, 0) | ne(Bits("%", flag, _int(2)), least_squares)):
-            b.comment("3. revolute joints to the copy nearest their range's centre; 4. limits")
-            b.set(inside, one)
+            if tested:
+                b.comment("3. revolute joints to the copy nearest their range's centre; 4. limits")
+                b.set(inside, one)
+            else:
+                b.comment("3. revolute joints to the copy nearest their range's centre (each range wider than a turn "
+                          "around its centre: 4. no copy is outside the limits)")
             for j in range(N):
                 _joint_to_limits(b, arm, j, raw[_at(N, i, j)], cand[j], inside)
-            with b.if_(inside > 0):
+            with (b.if_(inside > 0) if tested else contextlib.nullcontext()):
                 b.comment("5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped")
                 b.set(dup, _int(-1))
-                with b.for_("r", 0, kept) as r:
-                    b.comment("the same row when every joint is within IK_DUP_TOL: nested, so a row that differs "
-                              "in its first joint costs one test")
-                    _same_row(b, arm, cand, q, r, diff, dup, 0)
+                with (b.if_(flag > 0) if arm.regular_rows_distinct else contextlib.nullcontext()):
+                    if arm.regular_rows_distinct:
+                        b.comment("an exact regular row (flag 0) is no other row's duplicate: their branches part at a "
+                                  "subproblem that is not singular, 1e-5 rad or more apart")
+                    with b.for_("r", 0, kept) as r:
+                        b.comment("the same row when every joint is within IK_DUP_TOL: nested, the joint with the most "
+                                  "distinct candidates first, so a row that differs there costs one test")
+                        _same_row(b, arm, cand, q, r, diff, dup, 0)
                 with b.if_(dup >= 0):
                     b.comment("the kept row takes the duplicate's singular bit")
                     singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
@@ -174,6 +223,7 @@ def rows_helper(arm: _Arm) -> Function:
                     b.set(flags[kept], flag)
                     b.set(kept, kept + one)
     b.set(count[0], kept)
+    _fill_rest(b, arm, q, flags, kept)
     b.comment("7. status")
     b.return_(select(eq(exact, 0), _status("IK_UNREACHABLE"), select(eq(kept, 0), _status("IK_OUT_OF_LIMITS"), _status("IK_OK"))))
     arguments = (*data_args, Argument("q", Role.OUTPUT, (S, N)), Argument("count", Role.OUTPUT, (1,), Type.INT),
@@ -182,17 +232,23 @@ def rows_helper(arm: _Arm) -> Function:
                     b.statements, kind="helper", returns=Type.INT, statuses=STATUSES)
 
 
-def _refuse_invalid(b: Body, arm: _Arm, data) -> None:
-    """Step 1: return IK_INVALID when a target entry (rows 1-3) or the lock is not finite, or the target's
-    R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0)."""
+def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
+    """Rows ``kept`` and on (every row when ``kept`` is None): NaN, their flags -1."""
+    b.comment("rows past count: NaN, flags -1")
+    with b.for_("k", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as k:
+        with (b.if_(k >= kept) if kept is not None else contextlib.nullcontext()):
+            for j in range(arm.n):
+                b.set(q[_at(arm.n, k, j)], Const(math.nan))
+            b.set(flags[k], _int(-1))
+
+
+def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Array) -> None:
+    """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite,
+    or the target's R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0).
+    R's entries are finite when the trace of its Gram matrix (the sum of their squares) is: one test for nine
+    (an entry above 1e154 makes the sum infinite, and is off the identity anyway)."""
     target = data[0]
     b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation")
-    with b.for_("k", 0, 12) as k:
-        with b.if_(~Call1("isfinite", target[k])):
-            b.return_(_status("IK_INVALID"))
-    if arm.locked:
-        with b.if_(~Call1("isfinite", data[1])):
-            b.return_(_status("IK_INVALID"))
     R = [[target[4 * i + j] for j in range(3)] for i in range(3)]
     gram = {}
     for i in range(3):
@@ -202,8 +258,18 @@ def _refuse_invalid(b: Body, arm: _Arm, data) -> None:
                 - R[0][1] * (R[1][0] * R[2][2] - R[1][2] * R[2][0])
                 + R[0][2] * (R[1][0] * R[2][1] - R[1][1] * R[2][0]))
     tol = NamedConst("IK_ORTHO_TOL")
-    off = [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
-    with b.if_(off[0] | off[1] | off[2] | off[3] | off[4] | off[5] | ~(det > 0.0)):
+    bad = [~Call1("isfinite", target[k]) for k in (3, 7, 11)]
+    if arm.locked:
+        bad.append(~Call1("isfinite", data[1]))
+    bad.append(~Call1("isfinite", gram[0, 0] + gram[1, 1] + gram[2, 2]))
+    bad += [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
+    bad.append(~(det > 0.0))
+    cond = bad[0]
+    for c in bad[1:]:
+        cond = cond | c
+    with b.if_(cond):
+        b.set(count[0], _int(0))
+        _fill_rest(b, arm, q, flags)
         b.return_(_status("IK_INVALID"))
 
 
@@ -212,10 +278,12 @@ def _joint_to_limits(b: Body, arm: _Arm, j: int, x, cand_j, inside) -> None:
     its range's centre), ``inside`` = 0 when it is outside the limits by more than IK_LIMIT_TOL, and a value
     within that tolerance clipped onto the limit."""
     zero = _int(0)
-    if arm.revolute[j]:
+    if arm.revolute[j] and not arm.unshifted(j):
         _shifted(b, x, arm.centre[j], cand_j)
     else:
         b.set(cand_j, x)
+    if arm.always_inside(j):
+        return
     lo, hi = arm.lower[j], arm.upper[j]
     tests = []
     if lo is not None:
@@ -234,7 +302,11 @@ def _joint_to_limits(b: Body, arm: _Arm, j: int, x, cand_j, inside) -> None:
 
 
 def _doc_limits(arm: _Arm) -> str:
-    return ("Q_MIN/Q_MAX" if any(x is not None for x in arm.lower + arm.upper) else "none (the arm has no limits)")
+    if not any(x is not None for x in arm.lower + arm.upper):
+        return "rows outside the joint limits (none (the arm has no limits)) dropped (within IK_LIMIT_TOL: clipped)"
+    if all(arm.always_inside(j) for j in range(arm.n)):
+        return "every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide)"
+    return "rows outside the joint limits (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped)"
 
 
 def all_solver(arm: _Arm) -> Function:
@@ -256,8 +328,8 @@ def all_solver(arm: _Arm) -> Function:
     doc = (
         f"Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = {S},",
         f"one per row of q ({S} x {N}, row-major): exact candidates only when any exists, revolute joints shifted by",
-        "multiples of 2 pi to the copy nearest the middle of their range, rows outside the joint limits",
-        f"({_doc_limits(arm)}) dropped (within IK_LIMIT_TOL: clipped), duplicates (IK_DUP_TOL) dropped, in the",
+        "multiples of 2 pi to the copy nearest the middle of their range,",
+        f"{_doc_limits(arm)}, duplicates (IK_DUP_TOL) dropped, in the",
         "derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are",
         "NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),",
         "IK_FLAG_SINGULAR (one member of a continuum, or a double root)." + (" " + lock.strip() if lock else ""),
@@ -333,11 +405,15 @@ def nearest_solver(arm: _Arm) -> Function:
 
 def closed_solvers(derivation, names, precision: str) -> list[Function]:
     """The helper and the procedures named in ``names`` (``ik_all``, ``ik_nearest``) for a derivation that has
-    ``ik_candidates``; ``precision`` changes nothing here (the tolerances are module constants)."""
+    ``ik_candidates``; ``precision`` decides whether an exact regular row skips the duplicate test (see
+    :data:`REGULAR_ROWS_DISTINCT`; the tolerances themselves are module constants)."""
     wanted = [name for name in ("ik_all", "ik_nearest") if name in names]
     if not wanted:
         return []
-    arm = _Arm(derivation.model, "lock" in derivation.inputs)
+    spec = derivation.function("ik_candidates")
+    Q = derivation.compact["Q"]
+    columns = tuple(len(set(Q[:, j])) for j in range(Q.cols))
+    arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision)
     out = [rows_helper(arm)]
     if "ik_all" in wanted:
         out.append(all_solver(arm))
