@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x605d4a64UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xd5ce1012UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6202,7 +6202,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     double raw[48];
     double raw_flags[8];
     double cand[6];
-    /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation */
+    /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation */
     const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
     const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
     const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
@@ -6210,7 +6210,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
     const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
     const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
-    if (!UR5_FINITE(target[3]) || !UR5_FINITE(target[7]) || !UR5_FINITE(target[11]) || !UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+    if (!UR5_FINITE(target[3]) || !UR5_FINITE(target[7]) || !UR5_FINITE(target[11]) || fabs(target[3]) > UR5_IK_TRANSLATION_MAX || fabs(target[7]) > UR5_IK_TRANSLATION_MAX || fabs(target[11]) > UR5_IK_TRANSLATION_MAX || !UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
         count[0] = 0;
         /* rows past count: NaN, flags -1 */
         for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {

@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x605d4a64UL
+#define UR5_STAMP 0xd5ce1012UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -70,6 +70,9 @@ extern "C" {
 
 /* ik_all refuses a target whose |R^T R - I| exceeds this anywhere */
 #define UR5_IK_ORTHO_TOL 1e-06
+
+/* ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it */
+#define UR5_IK_TRANSLATION_MAX 1e+150
 
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x605d4a64
+STAMP = 0xd5ce1012
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -50,6 +50,8 @@ IK_FLAG_SINGULAR = 2
 """bit of an ik_all flag: a singular row (one member of a continuum, or a double root)"""
 IK_ORTHO_TOL = 1e-06
 """ik_all refuses a target whose |R^T R - I| exceeds this anywhere"""
+IK_TRANSLATION_MAX = 1e+150
+"""ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"""
 IK_DUP_TOL = 1e-09
 """ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"""
 Q_MIN = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
@@ -6473,7 +6475,7 @@ def _ik_all_rows(target, q, count, flags):
     raw = np.zeros(48, dtype=DTYPE)
     raw_flags = np.zeros(8, dtype=DTYPE)
     cand = np.zeros(6, dtype=DTYPE)
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -6481,7 +6483,7 @@ def _ik_all_rows(target, q, count, flags):
     m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    if not np.isfinite(target[3]) or not np.isfinite(target[7]) or not np.isfinite(target[11]) or not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01 - 0.0) > IK_ORTHO_TOL or np.abs(m02 - 0.0) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12 - 0.0) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
+    if not np.isfinite(target[3]) or not np.isfinite(target[7]) or not np.isfinite(target[11]) or np.abs(target[3]) > IK_TRANSLATION_MAX or np.abs(target[7]) > IK_TRANSLATION_MAX or np.abs(target[11]) > IK_TRANSLATION_MAX or not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01 - 0.0) > IK_ORTHO_TOL or np.abs(m02 - 0.0) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12 - 0.0) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
         count[0] = 0
         # rows past count: NaN, flags -1
         for k in range(0, IK_MAX_SOLUTIONS):
@@ -6605,7 +6607,7 @@ def ik_all(target):
     flags = np.zeros(8, dtype=np.int64)
     status = _ik_all(target, q, count, flags)
     if status == 3:
-        raise ValueError("ik_all: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError("ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKAllResult(q.reshape(8, 6), names[status], int(count[0]), flags)
 
@@ -6636,7 +6638,7 @@ def _ik_all_lanes(_c, target):
     _ik_all_rows3_raw = [_fr(0.0)] * 48
     _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows3_cand = [_fr(0.0)] * 6
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -6644,7 +6646,7 @@ def _ik_all_lanes(_c, target):
     _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
     _m6 = _c5
     if bool(_m6.any()):
         count[0] = np.where(_m6, 0, count[0])
@@ -8596,7 +8598,7 @@ def _ik_all_batch(target):
     (q, count, flags, ), status = _ik_all_lanes(_c, _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKAllResult(_assembled(q, batch, (8, 6,), DTYPE), names[status], _assembled([count[0]], batch, (), np.int64), _assembled(flags, batch, (8,), np.int64))
 
@@ -8744,7 +8746,7 @@ def ik_nearest(q_ref, target):
     q = np.zeros(6, dtype=DTYPE)
     status = _ik_nearest(q_ref, target, q)
     if status == 3:
-        raise ValueError("ik_nearest: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError("ik_nearest: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKNearestResult(q, names[status])
 
@@ -8783,7 +8785,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _ik_all_rows3_raw = [_fr(0.0)] * 48
     _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows3_cand = [_fr(0.0)] * 6
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -8791,7 +8793,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
     _m6 = _c5
     if bool(_m6.any()):
         count[0] = np.where(_m6, 0, count[0])
@@ -10947,6 +10949,6 @@ def _ik_nearest_batch(q_ref, target):
     (q, ), status = _ik_nearest_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from skelarm_sym.build import compile_arm, compile_shared, load_python
 from skelarm_sym.cli import main
 from skelarm_sym.closed_ik.evaluate import lambdify_candidates
-from skelarm_sym.closed_ik.postprocess import STATUS, nearest, postprocess
+from skelarm_sym.closed_ik.postprocess import STATUS, is_valid_target, nearest, postprocess
 from skelarm_sym.closed_ik.subproblems import Steps, atan2_steps
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import reference_ik_all as judge
@@ -561,8 +561,9 @@ def test_wide_limits_need_no_test_and_agree_with_the_spec():
 @pytest.mark.parametrize("name", ["puma560", "ur5"])
 def test_every_non_finite_entry_is_invalid(name):
     """NaN or +-inf in any of the 12 entries read (R's through the sum of their squares, t's one by one) gives
-    IK_INVALID, count 0, NaN rows, flags -1, in C and NumPy; a far but finite position (1e100 m) is unreachable, not
-    invalid; a huge rotation entry is not a rotation."""
+    IK_INVALID, count 0, NaN rows, flags -1, in C and NumPy; a far but finite position (1e100 m, and IK_TRANSLATION_MAX
+    itself) is unreachable with finite rows, not invalid, while one beyond IK_TRANSLATION_MAX (whose squares
+    would overflow into NaN rows) is invalid, as in the spec; a huge rotation entry is not a rotation."""
     b = built(name)
     q = inner_configurations(b, 1, np.random.default_rng(2))[0]
     good = targets_of(b.chain, q[None])[0].reshape(16)
@@ -581,6 +582,24 @@ def test_every_non_finite_entry_is_invalid(name):
     far[[3, 7, 11]] = 1e100
     for impl in (b.c, b.py):
         assert impl.ik_all(far.reshape(4, 4)).status == "unreachable"
+    assert f"#define {name.upper()}_IK_TRANSLATION_MAX 1e+150" in b.generated.sources[f"{name}.h"]
+    edge = good.copy()
+    edge[[3, 7, 11]] = [1e150, -1e150, 1e150]
+    assert is_valid_target(edge)
+    for impl in (b.c, b.py):
+        r = impl.ik_all(edge.reshape(4, 4))
+        assert r.status == "unreachable" and np.all(np.isfinite(np.asarray(r.q)[: r.count])), (impl, r)
+    for k in (3, 7, 11):
+        for value in (1.0000001e150, -1e151, 1e155, 1e300):
+            beyond = good.copy()
+            beyond[k] = value
+            assert not is_valid_target(beyond)
+            out, count, flags = np.zeros(8 * b.chain.n), ctypes.c_int(5), np.zeros(8, dtype=np.intc)
+            status = raw_call(b, "ik_all", np.ascontiguousarray(beyond).ctypes.data_as(dp), out.ctypes.data_as(dp),
+                              ctypes.byref(count), flags.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+            assert status == STATUS["invalid"] and count.value == 0 and np.all(np.isnan(out)), (k, value)
+            with pytest.raises(ValueError, match="IK_TRANSLATION_MAX"):
+                b.py.ik_all(beyond.reshape(4, 4))
     huge = good.copy()
     huge[5] = 1e200
     out = np.zeros(8 * b.chain.n)

@@ -29,7 +29,8 @@ import sympy as sp
 from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
-from .postprocess import DUP_TOL, DUP_TOL_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT
+from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
+                          TRANSLATION_MAX_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
 from .subproblems import Steps
 
@@ -212,6 +213,8 @@ EMITTED_CONSTANTS = (
              "bit of an ik_all flag: a singular row (one member of a continuum, or a double root)"),
     Constant(sp.Symbol("IK_ORTHO_TOL"), {"double": ORTHO_TOL, "float": ORTHO_TOL_FLOAT},
              "ik_all refuses a target whose |R^T R - I| exceeds this anywhere"),
+    Constant(sp.Symbol("IK_TRANSLATION_MAX"), {"double": TRANSLATION_MAX, "float": TRANSLATION_MAX_FLOAT},
+             "ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"),
     Constant(sp.Symbol("IK_LIMIT_TOL"), {"double": LIMIT_TOL, "float": LIMIT_TOL_FLOAT},
              "ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped"),
     Constant(sp.Symbol("IK_DUP_TOL"), {"double": DUP_TOL, "float": DUP_TOL_FLOAT},

@@ -4,8 +4,10 @@ Input: ``Q`` (S, N) raw candidates in branch order and ``flags`` (S) from :func:
 (bit 1: least squares, bit 2: singular), the joint limits ``lower``/``upper`` (N, rad or m; +-inf where
 absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and N joints):
 
-1. **Invalid input** (``STATUS["invalid"]``, count 0): a non-finite target entry (or lock value), or a
-   rotation part that is not a rotation: ``max |R^T R - I| > ORTHO_TOL`` or ``det R < 0``.
+1. **Invalid input** (``STATUS["invalid"]``, count 0): a non-finite target entry (or lock value), a
+   translation entry beyond ``TRANSLATION_MAX`` (no arm reaches it, and the candidates' squares of it would
+   overflow into NaN rows), or a rotation part that is not a rotation: ``max |R^T R - I| > ORTHO_TOL`` or
+   ``det R < 0``.
 2. **Exact or least squares**: if any candidate has flag bit 1 clear, only those (exact) candidates are
    kept; otherwise every candidate is kept and the status becomes ``unreachable`` (least-squares poses;
    every returned row has bit 1 set).
@@ -45,6 +47,11 @@ LIMIT_TOL = 1e-12
 """Joints this far (rad or m) outside a limit are clipped onto it; further out, the candidate is dropped."""
 DUP_TOL = 1e-9
 """Candidates closer than this (max over joints, rad or m) are one solution."""
+TRANSLATION_MAX = 1e150
+"""Largest ``|t_i|`` (m) of a target accepted: the candidates square translations (about 1.3e154 overflows a
+double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
+TRANSLATION_MAX_FLOAT = 1e18
+"""The same for code emitted in float (squares overflow a float from about 1.8e19)."""
 ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT = 1e-4, 1e-5, 1e-4
 """The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9."""
@@ -69,9 +76,10 @@ class IKAll:
 
 
 def is_valid_target(target: np.ndarray) -> bool:
-    """Step 1: finite, rotation part orthonormal within ``ORTHO_TOL`` with determinant > 0."""
+    """Step 1: finite, translation within ``TRANSLATION_MAX``, rotation part orthonormal within ``ORTHO_TOL``
+    with determinant > 0."""
     T = np.asarray(target, dtype=float).reshape(4, 4)
-    if not np.all(np.isfinite(T)):
+    if not np.all(np.isfinite(T)) or not np.all(np.abs(T[:3, 3]) <= TRANSLATION_MAX):
         return False
     R = T[:3, :3]
     return bool(np.max(np.abs(R.T @ R - np.eye(3))) <= ORTHO_TOL and np.linalg.det(R) > 0)

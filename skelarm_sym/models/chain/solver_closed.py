@@ -34,8 +34,8 @@ STATUSES = (
      "IK_FLAG_LEAST_SQUARES set), possibly none"),
     ("IK_OUT_OF_LIMITS", STATUS["out_of_limits"], "exact solutions exist, none within the joint limits (count 0)"),
     ("IK_INVALID", STATUS["invalid"],
-     "target (or lock) not finite, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): "
-     "count 0"),
+     "target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a "
+     "rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0"),
 )
 """Return codes of ``ik_all`` and ``ik_nearest`` (``IK_INVALID`` is 3, as for ``ik_solve``)."""
 
@@ -244,11 +244,11 @@ def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
 
 def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Array) -> None:
     """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite,
-    or the target's R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0).
+    a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0).
     R's entries are finite when the trace of its Gram matrix (the sum of their squares) is: one test for nine
     (an entry above 1e154 makes the sum infinite, and is off the identity anyway)."""
     target = data[0]
-    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; R not a rotation")
+    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation")
     R = [[target[4 * i + j] for j in range(3)] for i in range(3)]
     gram = {}
     for i in range(3):
@@ -258,7 +258,8 @@ def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Arr
                 - R[0][1] * (R[1][0] * R[2][2] - R[1][2] * R[2][0])
                 + R[0][2] * (R[1][0] * R[2][1] - R[1][1] * R[2][0]))
     tol = NamedConst("IK_ORTHO_TOL")
-    bad = [~Call1("isfinite", target[k]) for k in (3, 7, 11)]
+    bad = [~Call1("isfinite", target[k]) for k in (3, 7, 11)]  # from the bits: -ffast-math keeps it
+    bad += [fabs(target[k]) > NamedConst("IK_TRANSLATION_MAX") for k in (3, 7, 11)]
     if arm.locked:
         bad.append(~Call1("isfinite", data[1]))
     bad.append(~Call1("isfinite", gram[0, 0] + gram[1, 1] + gram[2, 2]))
