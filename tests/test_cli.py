@@ -60,11 +60,17 @@ def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def _probe(code: str) -> str:
+    """What ``code`` prints, run by this interpreter in a fresh process (which must succeed)."""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
 def test_command_freezes_the_collector_at_exit():
     """A command registers gc.freeze to run at exit (Python's shutdown collections then skip the objects of
     the run); while the program runs its collector is on. atexit runs handlers last-in first-out, so the
-    probe registered before main() runs after the freeze and finds more objects frozen than while running
-    (where the package's import froze those that existed when SymPy was loaded)."""
+    probe registered before main() runs after the freeze and finds more objects frozen than while running."""
     probe = (
         "import atexit, gc\n"
         "counts = []\n"
@@ -75,9 +81,7 @@ def test_command_freezes_the_collector_at_exit():
         "counts.append(gc.get_freeze_count())\n"
         "print('running', gc.isenabled())\n"
     )
-    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.splitlines()[-2:] == ["running True", "frozen at exit True"]
+    assert _probe(probe).splitlines()[-2:] == ["running True", "frozen at exit True"]
 
 
 @pytest.mark.parametrize("enabled", [True, False])
@@ -95,10 +99,9 @@ def test_sympy_is_imported_without_collections(enabled, sympy_first):
         "import sys; assert 'sympy' in sys.modules\n"
         "print([s['collections'] - b for s, b in zip(gc.get_stats(), before)][1:], gc.isenabled(), gc.get_freeze_count() > 0)\n"
     )
-    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    older, state = r.stdout.split("]")
-    assert sum(int(x) for x in older.strip("[ ").split(",")) <= 2, r.stdout
+    out = _probe(probe)
+    older, state = out.split("]")
+    assert sum(int(x) for x in older.strip("[ ").split(",")) <= 2, out
     assert state.split() == [str(enabled), "False"]
 
 
@@ -137,6 +140,4 @@ def test_generate_as_the_program_freezes_what_it_built(tmp_path):
         "assert main() == 0\n"
         "print(gc.get_freeze_count() > before, gc.isenabled())\n"
     )
-    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.splitlines()[-1] == "True True"
+    assert _probe(probe).splitlines()[-1] == "True True"

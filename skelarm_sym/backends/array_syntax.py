@@ -199,17 +199,20 @@ class ProcedurePrinter:
     loops over data are ``while`` loops that end when no lane runs (one host synchronisation per pass),
     guards skip a branch no lane takes."""
 
-    def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect, indent: str = "    ") -> None:
+    def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect, indent: str = "    ",
+                 statics: set[str] | None = None) -> None:
+        """``statics``: the names the printer may treat as plain numbers (``p.statics`` when ``None``)."""
         self.p = p
         self.calls = calls
         self.indent = indent
-        self.printer = TensorPrinter(dialect, p.statics, p.consts, constant=self._full)
+        self.printer = TensorPrinter(dialect, p.statics if statics is None else statics, p.consts, constant=self._full)
 
     def _full(self, text: str, type_: Type) -> str:
         return f"{FULL[type_]}({text})"
 
-    def value(self, e, type_: Type) -> str:
-        """``e`` for an assignment to a variable of ``type_``: an array (over the lanes when a number)."""
+    def value(self, e, type_: Type, lanes: bool = True) -> str:
+        """``e`` for an assignment to a variable of ``type_``: an array (over the lanes when a number).
+        ``lanes``: whether the variable must hold a value per lane (an eager library broadcasts; see JAX's)."""
         if self.printer.static(e):
             return self._full(self.printer.expr(e), type_)
         return self.printer.expr(e)
@@ -237,7 +240,7 @@ class ProcedurePrinter:
         pr = self.printer
         t = type(s)
         if t is PDef:
-            lines.append(f"{pad}{identifier(s.var.name)} = {self.value(s.value, s.var.type)}")
+            lines.append(f"{pad}{identifier(s.var.name)} = {self.value(s.value, s.var.type, s.lanes)}")
         elif t is PArray:
             name = identifier(s.name)
             if s.const:

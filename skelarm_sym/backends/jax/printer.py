@@ -12,9 +12,8 @@ carries is an array over the whole batch (``_lanes``), so the state keeps its sh
 from __future__ import annotations
 
 from ...ir.nodes import Type, Var as Var_
-from ...ir.predicate import PArray, PCall, PComment, PDef, PFor, PGuard, PLoop, PSet, Predicated, Slice
-from ..text import line_comment
-from ..array_syntax import FULL, Dialect, TensorPrinter, identifier
+from ...ir.predicate import PFor, PGuard, PLoop, PSet, Predicated
+from ..array_syntax import Dialect, ProcedurePrinter, identifier
 
 JAX = Dialect(
     where="jnp.where",
@@ -28,39 +27,22 @@ JAX = Dialect(
 )
 
 
-class JaxProcedurePrinter:
-    """A :class:`~skelarm_sym.ir.predicate.Predicated` procedure as JAX statements (module docstring)."""
+class JaxProcedurePrinter(ProcedurePrinter):
+    """A :class:`~skelarm_sym.ir.predicate.Predicated` procedure as JAX statements (module docstring): the
+    shared printer's statements, but for loops, guards and elements at a traced index, which JAX writes as
+    functional control flow and ``_put``; values a loop carries are kept over every lane."""
 
     def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect = JAX, indent: str = "    ") -> None:
-        self.p = p
-        self.calls = calls
-        self.indent = indent
+        super().__init__(p, calls, dialect, indent, statics=p.statics - p.rollable)
         self.count = 0
-        self.printer = TensorPrinter(dialect, p.statics - p.rollable, p.consts, constant=self._full)
 
-    def _full(self, text: str, type_: Type) -> str:
-        return f"{FULL[type_]}({text})"
-
-    def value(self, e, type_: Type, lanes: bool) -> str:
+    def value(self, e, type_: Type, lanes: bool = True) -> str:
         if self.printer.static(e):
             return self._full(self.printer.expr(e), type_)
         text = self.printer.expr(e)
         if lanes:
             return f"_lu({text})" if type_ is Type.UINT64 else f"_lanes({text})"
         return text
-
-    def statements(self, body, depth: int) -> list[str]:
-        lines: list[str] = []
-        for s in body:
-            self.statement(s, depth, lines)
-        if not lines:
-            lines.append(self.indent * depth + "pass")
-        return lines
-
-    def target(self, target) -> tuple[str, Type]:
-        if type(target) is Var_:
-            return identifier(target.name), target.type
-        return f"{identifier(target.array)}[{self.printer.expr(target.index)}]", target.type
 
     def dynamic(self, target) -> bool:
         """An element whose index is a counter of a rolled loop (a traced number)."""
@@ -86,54 +68,24 @@ class JaxProcedurePrinter:
         lines.append(f"{inner}return {pack}")
         return pack
 
-    def statement(self, s, depth: int, lines: list[str]) -> None:  # noqa: C901
+    def statement(self, s, depth: int, lines: list[str]) -> None:
         pad = self.indent * depth
-        pr = self.printer
         t = type(s)
-        if t is PDef:
-            lines.append(f"{pad}{identifier(s.var.name)} = {self.value(s.value, s.var.type, s.lanes)}")
-        elif t is PArray:
-            name = identifier(s.name)
-            if s.const:
-                lines.append(f"{pad}{name} = [{', '.join(pr.expr(v) for v in s.values)}]")
-            elif s.values is None:
-                lines.append(f"{pad}{name} = [{self._full('0' if s.type is not Type.REAL else '0.0', s.type)}] * {s.size}")
-            else:
-                lines.append(f"{pad}{name} = [{', '.join(self.value(v, s.type, True) for v in s.values)}]")
-        elif t is PSet:
-            target, type_ = self.target(s.target)
-            if self.dynamic(s.target):
-                name = identifier(s.target.array)
-                mask = "None" if s.mask is None else identifier(s.mask.name)
-                lines.append(f"{pad}{name} = _put({name}, {pr.expr(s.target.index)}, {pr.tensor(s.value, type_)}, {mask})")
-            elif s.mask is None:
-                lines.append(f"{pad}{target} = {self.value(s.value, type_, True)}")
-            else:
-                new = pr.expr(s.value)
-                if type_ is Type.UINT64:
-                    if pr.static(s.value):
-                        new = self._full(new, type_)
-                    lines.append(f"{pad}{target} = _u64_where({identifier(s.mask.name)}, {new}, {target})")
-                else:
-                    lines.append(f"{pad}{target} = jnp.where({identifier(s.mask.name)}, {new}, {target})")
-        elif t is PCall:
-            args = ", ".join(f"{identifier(a.name)}[{a.offset}:{a.offset + a.size}]" if type(a) is Slice else pr.tensor(a)
-                             for a in s.args)
-            lines.append(f"{pad}_o = {self.calls[s.function]}(_c, {args})")
+        if t is PSet and self.dynamic(s.target):
+            name = identifier(s.target.array)
             mask = "None" if s.mask is None else identifier(s.mask.name)
-            for i, o in enumerate(s.outputs):
-                lines.append(f"{pad}_merge({mask}, _o[{i}], {identifier(o.name)}, {o.offset}, _fr)")
+            _, type_ = self.target(s.target)
+            lines.append(f"{pad}{name} = _put({name}, {self.printer.expr(s.target.index)}, "
+                         f"{self.printer.tensor(s.value, type_)}, {mask})")
+        elif t is PFor and s.rollable and s.carried:
+            self.count += 1
+            name = f"_for{self.count}"
+            pack = self._function(f"{name}({identifier(s.var.name)}, _s)", s.carried, s.body, depth, lines)
+            lines.append(f"{pad}{pack} = lax.fori_loop({s.start}, {s.stop}, {name}, {pack})")
         elif t is PFor:
-            if s.rollable and s.carried:
-                self.count += 1
-                name = f"_for{self.count}"
-                pack = self._function(f"{name}({identifier(s.var.name)}, _s)", s.carried, s.body, depth, lines)
-                lines.append(f"{pad}{pack} = lax.fori_loop({s.start}, {s.stop}, {name}, {pack})")
-            else:
-                if s.rollable:  # a counter the printer knows after all: unroll
-                    pr.statics.add(s.var.name)
-                lines.append(f"{pad}for {identifier(s.var.name)} in range({s.start}, {s.stop}):")
-                lines.extend(self.statements(s.body, depth + 1))
+            if s.rollable:  # a counter the printer knows after all: unroll
+                self.printer.statics.add(s.var.name)
+            super().statement(s, depth, lines)
         elif t is PLoop:
             self.count += 1
             name = f"_loop{self.count}"
@@ -149,8 +101,5 @@ class JaxProcedurePrinter:
             name = f"_branch{self.count}"
             pack = self._function(f"{name}(_s)", s.carried, s.body, depth, lines)
             lines.append(f"{pad}{pack} = lax.cond(jnp.any({identifier(s.mask.name)}), {name}, _same, {pack})")
-        elif t is PComment:
-            lines.append(f"{pad}# {line_comment(s.text)}")
         else:
-            raise TypeError(f"internal error: no JAX for {t.__name__}")
-
+            super().statement(s, depth, lines)
