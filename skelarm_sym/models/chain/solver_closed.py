@@ -18,7 +18,9 @@ generation time; the loops over rows and over kept rows run at run time (at most
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
+import operator
 
 from ...closed_ik.postprocess import STATUS, centres
 from ...ir.build import Array, Body, fabs, select
@@ -244,8 +246,8 @@ def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
 
 def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Array) -> None:
     """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite,
-    a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation (Gram matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0).
-    R's entries are finite when the trace of its Gram matrix (the sum of their squares) is: one test for nine
+    a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation (Gram
+    matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0). R's entries are finite when the trace of its Gram matrix (the sum of their squares) is: one test for nine
     (an entry above 1e154 makes the sum infinite, and is off the identity anyway)."""
     target = data[0]
     b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation")
@@ -265,10 +267,7 @@ def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Arr
     bad.append(~Call1("isfinite", gram[0, 0] + gram[1, 1] + gram[2, 2]))
     bad += [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
     bad.append(~(det > 0.0))
-    cond = bad[0]
-    for c in bad[1:]:
-        cond = cond | c
-    with b.if_(cond):
+    with b.if_(functools.reduce(operator.or_, bad)):
         b.set(count[0], _int(0))
         _fill_rest(b, arm, q, flags)
         b.return_(_status("IK_INVALID"))
