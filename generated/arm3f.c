@@ -25,14 +25,15 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x6c1ef5adUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x071060ceUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
-/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below.
- * Any other compiler on glibc calls sincos once per angle (one call for both values, as a
- * hand-written recursion would: glibc's sincos returns exactly its sin and cos); elsewhere,
- * or with -DSKELARM_NO_SINCOS, plain sin and cos calls. */
+/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below. Elsewhere double code
+ * computes them four at a time in plain arithmetic (arm3f_sincos4 below) (not in float code); with
+ * -DSKELARM_LIBM_TRIG, under -ffast-math, or where that cannot run, libm: on glibc sincos once per angle
+ * (one call for both values, as a hand-written recursion would: glibc's sincos returns exactly its sin
+ * and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) float sinf(float);
@@ -55,14 +56,16 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #define ARM3F_BODY static
 #define ARM3F_STRIDE 1
 #endif
-#if !ARM3F_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
+#define ARM3F_OWN_TRIG 0
+#if !ARM3F_VECTOR_MATH && !ARM3F_OWN_TRIG && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincosf(float x, float *s, float *c); /* glibc (GNU), not C99 */
 #define ARM3F_SINCOS 1
 #else
 #define ARM3F_SINCOS 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used. */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used (the
+ * own kernel: for k < used rounded up to 4; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -74,6 +77,10 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
     for (k = 0; k < 8; ++k) {
         sn[k] = sinf(ang[k]);
     }
+#elif ARM3F_OWN_TRIG
+    for (k = 0; k < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
         sincosf(ang[k], &sn[k], &cs[k]);
@@ -87,7 +94,8 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
 }
 
 #if ARM3F_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used. */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used (the
+ * own kernel: for k < used rounded up to 4; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -99,6 +107,10 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
     for (k = 0; k < 96; ++k) {
         sn[k] = sinf(ang[k]);
     }
+#elif ARM3F_OWN_TRIG
+    for (k = 0; k < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
         sincosf(ang[k], &sn[k], &cs[k]);
@@ -112,7 +124,8 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
 }
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used. */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used (the
+ * own kernel: for k < used rounded up to 4; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -123,6 +136,10 @@ static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *rest
     }
     for (k = 0; k < 512; ++k) {
         sn[k] = sinf(ang[k]);
+    }
+#elif ARM3F_OWN_TRIG
+    for (k = 0; k < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
