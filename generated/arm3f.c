@@ -25,14 +25,16 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x8795878cUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xc2986a92UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
-/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below. Any other compiler on
- * glibc calls sincos once per angle (one call for both values, as a hand-written recursion would:
- * glibc's sincos returns exactly its sin and cos); elsewhere, or with -DSKELARM_NO_SINCOS, plain sin
- * and cos calls. */
+/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below and vectorises batches
+ * across configurations. Elsewhere double code computes sines and cosines with its own kernel
+ * (arm3f_sincos4 below, four angles at a time in plain arithmetic); with -DSKELARM_LIBM_TRIG,
+ * under -ffast-math, where that kernel cannot run, and in float code, libm: on glibc sincos once per
+ * angle (one call for both values, as a hand-written recursion would: glibc's sincos returns exactly
+ * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) float sinf(float);

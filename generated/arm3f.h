@@ -36,13 +36,14 @@
  * FMA available (-march=native on most CPUs since 2013) the compiler may contract a*b + c differently
  * in the two, and -ffast-math reorders sums: the results may then differ in the last bits.
  * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
- * other functions check nothing in any mode. Sines and cosines: glibc's vector math (libmvec) where GCC
- * targets x86-64 with AVX2, else libm; -DSKELARM_NO_SIMD turns the vector math off.
- * libmvec raises FE_INVALID for |angle| above about 1e300, when floating-point exceptions are enabled as traps (feenableexcept):
- * keep angles finite and of sensible size.
+ * other functions check nothing in any mode.
+ * Sines and cosines: glibc's vector math (libmvec) where GCC targets x86-64 glibc, else libm;
+ * -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions enabled as traps
+ * (feenableexcept), libmvec raises FE_INVALID for |angle| above about 1e300: keep angles finite and of
+ * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x8795878cUL
+#define ARM3F_STAMP 0xc2986a92UL
 
 #ifdef __cplusplus
 extern "C" {

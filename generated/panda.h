@@ -42,15 +42,16 @@
  * FMA available (-march=native on most CPUs since 2013) the compiler may contract a*b + c differently
  * in the two, and -ffast-math reorders sums: the results may then differ in the last bits.
  * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
- * other functions check nothing in any mode. Sines and cosines: glibc's vector math (libmvec) where GCC
- * targets x86-64 with AVX2, else the source's own kernel (at most 1 ulp from libm; libm for |angle| > 1e5,
- * under -ffast-math, or with -DSKELARM_LIBM_TRIG); -DSKELARM_NO_SIMD turns the vector math off.
- * libmvec raises FE_INVALID for |angle| above about 1e300, the own kernel FE_OVERFLOW above about 1e150 (before
- * libm recomputes the value), when floating-point exceptions are enabled as traps (feenableexcept):
- * keep angles finite and of sensible size.
+ * other functions check nothing in any mode.
+ * Sines and cosines: glibc's vector math (libmvec) where GCC targets x86-64 glibc, else the source's
+ * own kernel (at most 1 ulp from libm), libm for |angle| > 1e5, under -ffast-math or with
+ * -DSKELARM_LIBM_TRIG; -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions
+ * enabled as traps (feenableexcept), libmvec raises FE_INVALID for |angle| above about 1e300 and the own
+ * kernel FE_OVERFLOW above about 1e150 (before libm recomputes the value): keep angles finite and of
+ * sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x66fb0602UL
+#define PANDA_STAMP 0xc0dbdf32UL
 
 #ifdef __cplusplus
 extern "C" {

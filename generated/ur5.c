@@ -34,19 +34,18 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x1a8b0b40UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x5c6ee17bUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
-/* Vector math: GCC on x86-64 glibc with AVX2 calls libmvec for the sin/cos loops below and vectorises
- * batches across configurations. Without AVX2, libmvec's 2-wide routines are slower than the source's
- * own kernel (ur5_sincos4 below, four angles at a time in plain arithmetic), and so is a batch's
- * vectorised block than per-configuration calls (measured with GCC 12 on x86-64: with AVX2 the blocks
- * win). Elsewhere, then, the own kernel; with -DSKELARM_LIBM_TRIG, under -ffast-math, or where it
- * cannot run, libm: on glibc sincos once per angle (one call for both values, as a hand-written
- * recursion would), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
+/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below and vectorises batches
+ * across configurations. Elsewhere double code computes sines and cosines with its own kernel
+ * (ur5_sincos4 below, four angles at a time in plain arithmetic); with -DSKELARM_LIBM_TRIG,
+ * under -ffast-math, where that kernel cannot run, and in float code, libm: on glibc sincos once per
+ * angle (one call for both values, as a hand-written recursion would: glibc's sincos returns exactly
+ * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
-    && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__) && defined(__AVX2__)
+    && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define UR5_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
