@@ -296,6 +296,7 @@ class _Steps(StepRecorder):
     def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
         """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
         self.steps = list(steps)
+        self.__dict__.pop("_definitions", None)
         self._known = {}
         for symbol, rhs in self.steps:
             self._known.setdefault(rhs, symbol)
@@ -303,9 +304,10 @@ class _Steps(StepRecorder):
     def definitions(self) -> dict[sp.Symbol, sp.Expr]:
         """Each recorded step's right-hand side by its symbol (kept up to date as steps are recorded)."""
         table = self.__dict__.setdefault("_definitions", {})
-        if len(table) != len(self.steps):
-            table.clear()
-            table.update(self.steps)
+        if len(table) > len(self.steps) or (table and self.steps[len(table) - 1][0] not in table):
+            table.clear()  # the steps were replaced
+        if len(table) < len(self.steps):
+            table.update(self.steps[len(table):])
         return table
 
     def _group(self, entries: Sequence[sp.Expr]) -> None:
@@ -709,6 +711,12 @@ def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
     return any(x not in (-1, 0, 1) for k in f.starts[1:] for x in joints[k].before.rotation)
 
 
+CANDIDATES_UP_TO = 16
+"""Chains of at most this many joints try every candidate (summed positions, base-axes columns with a row as
+cofactors); longer ones only Horner's rule and the segment columns (and the base-axes columns with every row
+where constants are dense, as before): each candidate costs about 20 ms a joint to derive and price."""
+
+
 @dataclass
 class _Columns:
     """One way to write the Jacobian: per joint its linear and angular columns in base axes, the axes ``z_k``
@@ -738,6 +746,9 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
         r, base = _base_offsets(step, joints, f, tool, axes, dropped)
         base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
         ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
+        steps = dict(step.steps)
+        if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
+            continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
         tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
         out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}"), tip))
     return out
@@ -751,7 +762,7 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
     (:func:`_cofactor_view`), ``C`` the constant rotation before it, ``W_(k+1)`` the tool offset in its axes
     (:func:`_tool_offsets`) and ``t`` the translation to the next joint. Near a wrist ``W`` has a zero and the
     column is one column of ``F'`` times one number (3 multiplications instead of a cross product)."""
-    steps = dict(step.steps)
+    steps = step.definitions()
     paid = frozenset(_price(steps, _flat(axes, r))[1])
     out = list(base)
     tag = "" if dropped is None else str(dropped)
@@ -760,14 +771,16 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
             continue
         nxt = joints[k + 1].before
         turned = [nxt.rotation[2, i] for i in range(3)]  # z_k in the next frame's axes
-        column = matvec(views[f.segment[k + 1]], joints[k].motion.column(turned, W[k + 1])[0])
+        local = joints[k].motion.column(turned, W[k + 1])[0]
+        if sum(x != 0 for x in local) > 1:  # two terms or more: no cheaper than the cross product in base axes
+            continue
+        column = matvec(views[f.segment[k + 1]], local)
         t = list(nxt.translation)
         moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + joints[k].motion.advance(f.theta[k])])
         if moved is not None and any(x != 0 for x in moved):
             column = add(column, matvec(_after_joint(step, f, k, dropped, axes), moved))
         if _price(steps, column, paid)[0] < _price(steps, base[k], paid)[0]:
             out[k] = step.vec(f"Jn{tag}_{k + 1}", column)
-            steps = dict(step.steps)
     return out
 
 
@@ -822,6 +835,8 @@ def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns]) -> dict[st
     def pick(candidates: list, price) -> object:
         """The cheapest candidate; one after the first (the segment columns, Horner's rule) only when it saves
         2 % or more: the estimate ignores what the sign choice removes, and a tie is not worth a variant."""
+        if len(candidates) == 1:
+            return candidates[0]
         prices = [price(x) for x in candidates]
         best_index = min(range(len(candidates)), key=lambda i: prices[i])
         return candidates[best_index] if prices[best_index][0] <= 0.98 * prices[0][0] else candidates[0]
@@ -900,24 +915,34 @@ def _nodes(e: sp.Expr) -> dict:
     return out
 
 
-def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, W: Sequence[Vector]) -> list[Pose]:
-    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``.
+def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform,
+          W: Sequence[Vector]) -> tuple[list[Pose], int | None]:
+    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``, and the row the cheapest rotation
+    drops (``None``: all three carried).
 
     ``R = F_last Rz(psi_n) C_tool``: all rows multiplied out, or two of them and the third as their cross
     product (``r_0 = r_1 x r_2`` cyclically): carrying two rows down the chain instead of three saves six
     operations per dense step. ``p_e = o_1 + F_1 W_1`` (Horner's rule, shared with the Jacobian's offsets)
-    or summed link by link in base axes (:func:`_summed_tip`). :func:`_choose` picks per function.
+    or, with the cheapest rotation, summed link by link in base axes (:func:`_summed_tip`). :func:`_choose`
+    picks per function.
     """
     full = matmul(step.mat("Ge_", _times_rz(f.rotation[-1], f.trig[-1])), _rows(tool.rotation))
     rows = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
     horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
-    out = []
+    rotations = []
     for d in (None, 0, 1, 2):
         candidate = [list(r) for r in rows]
         if d is not None:
             candidate[d] = step.vec(f"Rx{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
-        out += [(candidate, horner), (candidate, _summed_tip(step, joints, f, tool, candidate, d))]
-    return out
+        rotations.append(candidate)
+    steps = dict(step.steps)
+    prices = [_price(steps, _flat(r))[0] for r in rotations]
+    dropped = (None, 0, 1, 2)[prices.index(min(prices))]  # the row the cheapest rotation drops
+    poses = [(r, horner) for r in rotations]
+    if len(joints) <= CANDIDATES_UP_TO:
+        poses.append((rotations[prices.index(min(prices))],
+                      _summed_tip(step, joints, f, tool, rotations[prices.index(min(prices))], dropped)))
+    return poses, dropped
 
 
 def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
@@ -929,17 +954,20 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
     n = len(joints)
     views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
     axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
-    p = list(joints[0].before.translation)
+    terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
     for k in range(n):
         advance = joints[k].motion.advance(f.theta[k])
         if advance != 0:
-            p = [p[i] + axes[k][i] * advance for i in range(3)]
+            for i in range(3):
+                terms[i].append(axes[k][i] * advance)
         t = list(joints[k + 1].before.translation) if k + 1 < n else []
         if any(x != 0 for x in t):
-            p = add(p, matvec(_after_joint(step, f, k, dropped, axes), t))
+            for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes), t)):
+                terms[i].append(x)
     shift = tool.rotation.T * tool.translation
-    p = add(p, matvec(rotation, [shift[i] for i in range(3)]))
-    return step.vec(f"ps{'' if dropped is None else dropped}", p)
+    for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):
+        terms[i].append(x)
+    return step.vec(f"ps{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])
 
 
 @dataclass
@@ -1020,11 +1048,9 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     frames = _frames(step, joints, q)
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)
-    poses = _pose(step, joints, frames, tool, W)
-    steps = dict(step.steps)
-    prices = [_price(steps, _flat(p[0]))[0] for p in poses[::2]]  # the rotation alone, rows None, 0, 1, 2 dropped
-    dropped = (None, 0, 1, 2)[prices.index(min(prices))]
-    rows = (None, 0, 1, 2) if _dense_constants(joints, frames) else (dropped,)
+    poses, dropped = _pose(step, joints, frames, tool, W)
+    dense = _dense_constants(joints, frames)
+    rows = ((None, 0, 1, 2) if dense else (dropped,)) if len(joints) <= CANDIDATES_UP_TO else ((None,) if dense else ())
     chosen = _choose(step, poses, _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows))
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
 
