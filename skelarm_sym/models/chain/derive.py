@@ -30,9 +30,18 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 4. **Columns** (:func:`_columns`): ``[Jv_k; Jw_k] = F_s column_k(W_k)``; for a revolute joint
    ``F_s [e_z x W_k; e_z] = [-W_y f_0 + W_x f_1; f_2]``: two columns of ``F_s``, shared by the
    segment, six multiplications.
+   Or in base axes (:func:`_column_candidates`): ``z_k x r_(k+1)`` with ``r_k = p_e - o_k`` suffix sums of
+   the links (:func:`_base_offsets`; a link along the axis adds nothing, so a wrist's last column is
+   exactly zero), one row of every frame taken as cofactors of the two others where an output needs it
+   (:func:`_cofactor_view`: 3 operations an entry instead of carrying the row), and a column taken in the
+   next frame's axes where the tool offset has a zero there (:func:`_next_frame_columns`).
 5. **Pose** (:func:`_pose`): ``R = F_last Rz(psi_n) C_tool``; two of its rows are multiplied out and
    the third is their cross product (the cheapest choice is taken): the rotation chain carries
-   two rows, not three.
+   two rows, not three. The position by Horner's rule (3.), or summed link by link in base axes with
+   the dropped row's entries as cofactors (:func:`_summed_tip`: a wrist's offset is then ``d R e_z``).
+   Each forward function takes the candidates cheapest for its own outputs (:func:`_choose`); where
+   that differs from ``kinematics``'s choice the function reads its own output
+   (:attr:`~skelarm_sym.derive.core.Derivation.variants`).
 6. **Velocities** (:func:`_velocities`): ``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j
    dtheta_j`` (a suffix sum; ``u_0`` is the tool velocity); each joint type gives ``d/dt`` of its
    column from them (for a revolute joint ``[w_k x Jv_k + z_k x u_k; w_(k-1) x z_k]``, Jacobi's
