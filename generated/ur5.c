@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x5c6ee17bUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x6c99266fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -4584,7 +4584,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 }
 
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
-/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 101 neg, 52 div, 21 sqrt */
+/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 77 neg, 52 div, 21 sqrt */
 
 static void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
 {

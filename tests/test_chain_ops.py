@@ -11,6 +11,7 @@ import sympy as sp
 
 from skelarm_sym import reference
 from skelarm_sym.build import compile_arm, load_python
+from skelarm_sym.derive.core import expand_steps
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import Chain, Joint, Transform
 from skelarm_sym.models.chain import derive as chain_derive
@@ -27,6 +28,7 @@ CASADI = {  # arith of CasADi 3.8.2's generated C (SX, cse): python benchmarks/c
     "puma560_modified": (95, 100, 229, 256, 466),
     "stanford": (68, 48, 150, 135, 291),
     "scara": (25, 14, 37, 28, 83),
+    "iiwa14": (107, 141, 344, 392, 690),
 }
 BUDGET = {  # ours (additions, multiplications, negations) when these were measured: a regression guard
     "ur5": (60, 55, 115, 182, 325),
@@ -35,8 +37,9 @@ BUDGET = {  # ours (additions, multiplications, negations) when these were measu
     "puma560_modified": (64, 53, 105, 142, 264),
     "stanford": (53, 41, 82, 113, 225),
     "scara": (15, 9, 29, 19, 51),
+    "iiwa14": (87, 112, 182, 305, 472),
 }
-SHORT_OF_TARGET = {("panda", "pose"), ("stanford", "jacobian"), ("stanford", "jacobian_dot")}
+SHORT_OF_TARGET = {("panda", "pose"), ("stanford", "jacobian"), ("stanford", "jacobian_dot"), ("iiwa14", "pose")}
 """Where 0.8 x CasADi is not reached (docs/performance.md says by how much and why)."""
 
 
@@ -52,6 +55,27 @@ def test_forward_functions_stay_within_budget_and_under_casadi(name):
         assert ops.arithmetic <= budget, (function, ops.arithmetic, budget)
         if (name, function) not in SHORT_OF_TARGET:
             assert ops.arithmetic <= 0.8 * casadi, (function, ops.arithmetic, casadi)
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "stanford", "ur5"])
+def test_every_function_variant_has_the_values_of_the_shared_output(name):
+    """A function that computes an output its own way (``Derivation.variants``: the iiwa's pose sums its
+    position, its Jacobian takes base axes) gives the values every other function gives, everywhere."""
+    chain = load_robot_file(ROOT / "examples" / "robots" / f"{name}.toml")
+    derivation = chain_derive.derive_chain(chain, inverse=False)
+    if name == "iiwa14":
+        assert "pose" in derivation.variants, derivation.variants
+    rng = np.random.default_rng(3)
+    symbols = [*derivation.q, *derivation.dq, *derivation.ddq]
+    for function, outputs in derivation.variants.items():
+        for output, key in outputs.items():
+            assert key != output and derivation.output_key(function, output) == key
+            values = [derivation.compact[k] for k in (output, key)]
+            closed = [sp.Matrix(v.rows, v.cols, expand_steps(derivation.steps, list(v))) for v in values]
+            for _ in range(3):
+                point = dict(zip(symbols, rng.uniform(-np.pi, np.pi, len(symbols))))
+                a, b = (np.array(m.xreplace(point), dtype=float) for m in closed)
+                np.testing.assert_allclose(b, a, atol=1e-12, err_msg=f"{function} {key}")
 
 
 def test_operations_grow_linearly_with_the_joints():

@@ -176,6 +176,10 @@ class Derivation:
             the Python wrappers reject other values with a ``ValueError``.
         constants: named constants the emitted code defines (see :class:`Constant`).
         tables: named constant arrays (joint limits) the emitted code defines (see :class:`Table`).
+        variants: function name -> {output name -> key of ``compact``}: where one function computes an
+            output another way than the others (the same values, fewer operations for what it needs
+            alone: the chain's ``pose`` sums its position where ``kinematics`` reuses its Jacobian's
+            offsets); every other function, and :meth:`closed_form`, reads ``compact[name]``.
     """
 
     model: object
@@ -190,6 +194,7 @@ class Derivation:
     domains: dict[str, str] = field(default_factory=dict)
     constants: tuple[Constant, ...] = ()
     tables: tuple[Table, ...] = ()
+    variants: dict[str, dict[str, str]] = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False)
 
     # -- symbols --------------------------------------------------------------
@@ -197,6 +202,10 @@ class Derivation:
     def n(self) -> int:
         """Number of joints of a chain; ``AttributeError`` for other models."""
         return self.model.n
+
+    def output_key(self, function: str, output: str) -> str:
+        """The key of ``compact`` that function ``function`` reads for its output ``output``."""
+        return self.variants.get(function, {}).get(output, output)
 
     def function(self, name: str) -> FunctionSpec:
         """The function spec called ``name``; ``KeyError`` if this derivation has none."""

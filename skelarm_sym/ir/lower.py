@@ -534,6 +534,17 @@ class Converter:
                 minus.append(Neg(self._fresh(-self._rebuild(t))))
             else:
                 plus.append(self(t))
+        if not plus and minus:  # every term negative: a number, or a product led by one, takes the sign itself
+            for i, m in enumerate(minus):
+                x = m.x
+                if type(x) is Const:
+                    plus.append(Const(-x.value, x.type))
+                elif type(x) is Mul and type(x.factors[0]) is Const:
+                    plus.append(Mul((Const(-x.factors[0].value, x.factors[0].type), *x.factors[1:])))
+                else:
+                    continue
+                del minus[i]
+                break
         return _sum(plus, minus)
 
     def _negated(self, coeff: sp.Number, factors: Sequence[sp.Basic]) -> Expr:
@@ -683,7 +694,8 @@ class Lowering:
         program = self.program
         entries = program.entries
         args = arguments(self.derivation, spec)
-        outs = [(name, i, item) for name in spec.outputs for i, item in enumerate(program.outputs[name])]
+        outs = [(name, i, item) for name in spec.outputs
+                for i, item in enumerate(program.outputs[self.derivation.output_key(spec.name, name)])]
         # what the outputs need, and the angle slots used; an angle may need sines and cosines of other
         # angles in turn (closed-form solutions), so repeat until nothing new is found
         needed: set[int] = set()
@@ -740,6 +752,6 @@ def lower_function(derivation: Derivation, spec: FunctionSpec, program: Program)
 def lower(derivation: Derivation, names: Sequence[str] | None = None) -> list[Function]:
     """IR functions for the derivation's functions (all, or those in ``names``), in declaration order."""
     specs = [f for f in derivation.functions if names is None or f.name in names]
-    program = optimise(derivation, None if names is None else {o for spec in specs for o in spec.outputs})
+    program = optimise(derivation, None if names is None else {derivation.output_key(spec.name, o) for spec in specs for o in spec.outputs})
     lowering = Lowering(derivation, program)
     return [lowering.function(spec) for spec in specs]

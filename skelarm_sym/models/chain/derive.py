@@ -30,9 +30,18 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 4. **Columns** (:func:`_columns`): ``[Jv_k; Jw_k] = F_s column_k(W_k)``; for a revolute joint
    ``F_s [e_z x W_k; e_z] = [-W_y f_0 + W_x f_1; f_2]``: two columns of ``F_s``, shared by the
    segment, six multiplications.
+   Or in base axes (:func:`_column_candidates`): ``z_k x r_(k+1)`` with ``r_k = p_e - o_k`` suffix sums of
+   the links (:func:`_base_offsets`; a link along the axis adds nothing, so a wrist's last column is
+   exactly zero), one row of every frame taken as cofactors of the two others where an output needs it
+   (:func:`_cofactor_view`: 3 operations an entry instead of carrying the row), and a column taken in the
+   next frame's axes where the tool offset has a zero there (:func:`_next_frame_columns`).
 5. **Pose** (:func:`_pose`): ``R = F_last Rz(psi_n) C_tool``; two of its rows are multiplied out and
    the third is their cross product (the cheapest choice is taken): the rotation chain carries
-   two rows, not three.
+   two rows, not three. The position by Horner's rule (3.), or summed link by link in base axes with
+   the dropped row's entries as cofactors (:func:`_summed_tip`: a wrist's offset is then ``d R e_z``).
+   Each forward function takes the candidates cheapest for its own outputs (:func:`_choose`); where
+   that differs from ``kinematics``'s choice the function reads its own output
+   (:attr:`~skelarm_sym.derive.core.Derivation.variants`).
 6. **Velocities** (:func:`_velocities`): ``w_k = w_(k-1) + z_k dtheta_k``, ``u_k = sum_(j>k) Jv_j
    dtheta_j`` (a suffix sum; ``u_0`` is the tool velocity); each joint type gives ``d/dt`` of its
    column from them (for a revolute joint ``[w_k x Jv_k + z_k x u_k; w_(k-1) x z_k]``, Jacobi's
@@ -296,9 +305,19 @@ class _Steps(StepRecorder):
     def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
         """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
         self.steps = list(steps)
+        self.__dict__.pop("_definitions", None)
         self._known = {}
         for symbol, rhs in self.steps:
             self._known.setdefault(rhs, symbol)
+
+    def definitions(self) -> dict[sp.Symbol, sp.Expr]:
+        """Each recorded step's right-hand side by its symbol (kept up to date as steps are recorded)."""
+        table = self.__dict__.setdefault("_definitions", {})
+        if len(table) > len(self.steps) or (table and self.steps[len(table) - 1][0] not in table):
+            table.clear()  # the steps were replaced
+        if len(table) < len(self.steps):
+            table.update(self.steps[len(table):])
+        return table
 
     def _group(self, entries: Sequence[sp.Expr]) -> None:
         symbols = tuple(e for e in entries if isinstance(e, sp.Symbol) and e.name.startswith(f"_{self._tag}_"))
@@ -394,7 +413,8 @@ def _negations(node: tuple, flips: set, outer: int = 1) -> tuple[int, tuple[tupl
         op = e[0]
         if op == "add":
             signs = [out * _sign(t, flips) for t in e[1]]
-            count += all(x < 0 for x in signs)
+            # every term negative: paid, unless a number or a product led by one carries the sign (-0.4 - x)
+            count += all(x < 0 for x in signs) and not any(t[0] == "num" or (t[0] == "mul" and not t[2]) for t in e[1])
             for t, sign in zip(e[1], signs):
                 atom = _negated_atom(t, sign)
                 if atom is not None:
@@ -623,113 +643,340 @@ def _columns(step: _Steps, joints: Sequence[_Canonical], f: _Frames, W: Sequence
     return linear, angular
 
 
-def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform) -> list[Vector]:
-    """``r_k = p_e - o_k`` in base axes, tip to base: ``r_k = r_(k+1) + G_k t_(k+1)`` plus the joint's own
-    advance along ``z_k``, with ``G_k = F_s Rz(psi_k)`` the rotation after joint ``k`` (suffix sums of the
-    links in base axes: no rotation of a whole vector, only the columns of ``G_k`` a translation uses)."""
+def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None) -> Rows:
+    """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
+    r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
+    entries only where an output uses them. ``M`` itself when ``dropped`` is ``None`` or the row is constant.
+    ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s)."""
+    if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
+        return M
+    a, b = (dropped + 1) % 3, (dropped + 2) % 3
+    out = [list(r) for r in M]
+    for j in range(3):
+        if j == 2 and column2 is not None:
+            out[dropped][j] = column2[dropped]
+            continue
+        if _cheap(step, M[dropped][j]):  # near the base a frame is sparse: its entry is one product of sines
+            continue
+        expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
+        known = step._known.get(-expr)  # the same cofactor met before with the other sign (a permuted frame)
+        out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
+    return out
+
+
+def _cheap(step: _Steps, x: sp.Expr) -> bool:
+    """True when ``x`` is a constant, an input, a sine or cosine, or one product or sum of those (at most one
+    operation, cheaper than a cofactor's three)."""
+    x = sp.sympify(x)
+    definitions = step.definitions()
+    if x.could_extract_minus_sign():
+        x = -x
+    if not x.is_Symbol:
+        return x.is_Number
+    rhs = definitions.get(x)
+    if rhs is None:
+        return True
+    if isinstance(rhs, (sp.sin, sp.cos)):
+        return True
+    return (rhs.is_Mul or rhs.is_Add) and len(rhs.args) == 2 and all(
+        a.is_Number or (a.is_Symbol and isinstance(definitions.get(a, sp.sin(a)), (sp.sin, sp.cos))) for a in rhs.args)
+
+
+def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: list[Vector]) -> Rows:
+    """``G_k = F_s Rz(psi_k)``, the rotation after joint ``k``'s motion in base axes (row ``dropped`` as
+    cofactors; its third column is the joint's axis)."""
+    G = step.mat(f"H{k + 1}_", _times_rz(f.rotation[f.segment[k]], f.trig[k]))
+    return _cofactor_view(step, G, dropped, f"Hc{k + 1}_", axes[k])
+
+
+def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, axes: list[Vector],
+                  dropped: int | None = None) -> tuple[list[Vector], list[Vector]]:
+    """``(r, columns)``: ``r_k = p_e - o_k`` in base axes, tip to base, ``r_k = r_(k+1) + G_k t_(k+1)`` plus the
+    joint's own advance along ``z_k`` (:func:`_after_joint`; suffix sums of the links in base axes: no rotation
+    of a whole vector, only the columns of ``G_k`` a translation uses), and the linear columns
+    ``column(z_k, r_k)``, or ``column(z_k, r_(k+1))`` where the link runs along the axis (standard DH with
+    ``a = 0``: ``z_k x G_k t = G_k (e_z x t) = 0``), which makes the last column of a wrist exactly zero."""
     n = len(joints)
     r: list[Vector] = [None] * n
+    linear: list[Vector] = [None] * n
     below = [sp.S.Zero] * 3
+    tag = "" if dropped is None else str(dropped)
     for k in reversed(range(n)):
         t = list((joints[k + 1].before if k + 1 < n else tool).translation)
-        G = step.mat(f"H{k + 1}_", _times_rz(f.rotation[f.segment[k]], f.trig[k]))
-        v = add(below, matvec(G, t))
         advance = joints[k].motion.advance(f.theta[k])
-        r[k] = below = step.vec(f"r{k + 1}", [v[i] + f.axes[k][i] * advance for i in range(3)])
-    return r
+        G = _after_joint(step, f, k, dropped, axes) if any(x != 0 for x in t) else None
+        v = add(below, matvec(G, t)) if G is not None else list(below)
+        r[k] = step.vec(f"r{tag}{k + 1}", [v[i] + axes[k][i] * advance for i in range(3)])
+        moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + advance])
+        along = moved is None or all(x == 0 for x in moved)  # the link runs along the axis: z_k x r_k = z_k x r_(k+1)
+        linear[k] = step.vec(f"Jb{tag}_{k + 1}", joints[k].motion.column(axes[k], below if along else r[k])[0])
+        below = r[k]
+    return r, linear
 
 
 def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
     """True when some segment starts with a constant rotation that is not a signed permutation (URDF angles
-    written with few decimals: xArm7's 1.5708): there, rotating each column costs more than its cross product."""
+    written with few decimals: xArm7's 1.5708): there every way to carry the frames is worth trying."""
     return any(x not in (-1, 0, 1) for k in f.starts[1:] for x in joints[k].before.rotation)
 
 
-def _choose_columns(step: _Steps, joints, f: _Frames, tool: Transform, segment_columns, tip, angular, rotation, dq, ddq):
-    """``(linear columns, p_e, rates)``: the columns in segment axes rotated by ``F_s`` with ``p_e`` by Horner's
-    rule, or, where constant rotations are dense, the columns in base axes ``z_k x r_k`` (:func:`_base_offsets`)
-    with ``p_e`` from either; whichever needs the fewest operations for pose, jacobian, jacobian_dot and
-    kinematics together."""
-    candidates = [(segment_columns, tip, "")]
-    if _dense_constants(joints, f):
-        r = _base_offsets(step, joints, f, tool)
-        base = [step.vec(f"Jb{k + 1}", joint.motion.column(f.axes[k], r[k])[0]) for k, joint in enumerate(joints)]
-        suffix_tip = step.vec("pb", add(list(joints[0].before.translation), r[0]))
-        candidates += [(base, tip, "a"), (base, suffix_tip, "b")]
-    best, best_cost = None, None
-    for linear, p, tag in candidates:
-        rates = _velocities(step, joints, f.axes, linear, angular, dq, ddq, tag)
-        if len(candidates) == 1:
-            return linear, p, rates
-        T = [e for row in rotation for e in row] + list(p)
-        J = [e for v in list(linear) + list(angular) for e in v]
-        dJ = [e for v in rates.d_linear + rates.d_angular for e in v]
+CANDIDATES_UP_TO = 16
+"""Chains of at most this many joints try every candidate (summed positions, base-axes columns with a row as
+cofactors); longer ones only Horner's rule and the segment columns (and the base-axes columns with every row
+where constants are dense, as before): each candidate costs about 20 ms a joint to derive and price."""
+
+
+@dataclass
+class _Columns:
+    """One way to write the Jacobian: per joint its linear and angular columns in base axes, the axes ``z_k``
+    they use, their rates (:func:`_velocities`) and the tool position their offsets give (``None``: none)."""
+
+    linear: list[Vector]
+    angular: list[Vector]
+    axes: list[Vector]
+    rates: "_Rates"
+    tip: Vector | None
+
+
+def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Sequence[Vector], linear, angular, dq, ddq,
+                       rows: Sequence[int | None]) -> list[_Columns]:
+    """The columns in segment axes (:func:`_columns`, with ``p_e`` by Horner's rule), and in base axes
+    (``z_k x r_(k+1)``, :func:`_base_offsets`) with the frames' rows carried whole (``None`` in ``rows``) or
+    one row as cofactors of the other two (:func:`_cofactor_view`)."""
+    out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq), None)]
+    seen: list[list[Rows]] = []
+    for dropped in rows:
+        tag = "" if dropped is None else str(dropped)
+        views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
+        if views in seen:  # that row is constant in every frame (a planar chain): nothing new
+            continue
+        seen.append(views)
+        axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped)
+        base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
+        ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
         steps = dict(step.steps)
-        cost = sum(_closure_ops(steps, x) for x in (T, J, dJ, T + J + dJ + rates.twist + rates.acc))
-        if best_cost is None or cost < best_cost:
-            best, best_cost = (linear, p, rates), cost
+        if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
+            continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
+        tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}"), tip))
+    return out
+
+
+def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axes: list[Vector], r: list[Vector],
+                        W: Sequence[Vector], base: list[Vector], dropped: int | None) -> list[Vector]:
+    """The base-axes columns ``base``, each replaced by the same column taken in the axes of the frame that
+    starts at the next joint where that needs fewer operations (SYMORO's choice of projection frame):
+    ``z_k x (p_e - o_k) = F' ((C^T e_z) x W_(k+1)) + G_k (e_z x t)``, with ``F'`` that frame
+    (:func:`_cofactor_view`), ``C`` the constant rotation before it, ``W_(k+1)`` the tool offset in its axes
+    (:func:`_tool_offsets`) and ``t`` the translation to the next joint. Near a wrist ``W`` has a zero and the
+    column is one column of ``F'`` times one number (3 multiplications instead of a cross product)."""
+    steps = step.definitions()
+    paid = frozenset(_price(steps, _flat(axes, r))[1])
+    out = list(base)
+    tag = "" if dropped is None else str(dropped)
+    for k in range(len(joints) - 1):
+        if f.segment[k + 1] == f.segment[k]:
+            continue
+        nxt = joints[k + 1].before
+        turned = [nxt.rotation[2, i] for i in range(3)]  # z_k in the next frame's axes
+        local = joints[k].motion.column(turned, W[k + 1])[0]
+        if sum(x != 0 for x in local) > 1:  # two terms or more: no cheaper than the cross product in base axes
+            continue
+        column = matvec(views[f.segment[k + 1]], local)
+        t = list(nxt.translation)
+        moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + joints[k].motion.advance(f.theta[k])])
+        if moved is not None and any(x != 0 for x in moved):
+            column = add(column, matvec(_after_joint(step, f, k, dropped, axes), moved))
+        if _price(steps, column, paid)[0] < _price(steps, base[k], paid)[0]:
+            out[k] = step.vec(f"Jn{tag}_{k + 1}", column)
+    return out
+
+
+def _flat(*groups) -> list[sp.Expr]:
+    return [e for group in groups for v in group for e in v]
+
+
+Pose = tuple[Rows, Vector]
+
+
+def _price(steps: dict, exprs: Sequence[sp.Expr], paid: frozenset = frozenset()) -> tuple[int, set]:
+    """Operations (:func:`_nodes`) of ``exprs`` and of the steps they need but ``paid``, and those steps."""
+    found: set[sp.Symbol] = set()
+    exprs = [sp.sympify(e) for e in exprs]
+    todo = [x for e in exprs for x in e.free_symbols if x in steps and x not in paid]
+    while todo:
+        x = todo.pop()
+        if x not in found:
+            found.add(x)
+            todo.extend(y for y in steps[x].free_symbols if y in steps and y not in paid and y not in found)
+    nodes: dict = {}
+    for x in found:
+        nodes.update(_nodes(steps[x]))
+    for e in exprs:
+        nodes.update(_nodes(e))
+    return sum(nodes.values()), found
+
+
+def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns]) -> dict[str, tuple[Pose, _Columns]]:
+    """Per forward function, the pose and the columns that need the fewest operations (:func:`_price`) for its
+    outputs: ``pose`` over every rotation and position, ``jacobian``, ``jacobian_dot``, ``twist`` and
+    ``acceleration`` over the columns, ``kinematics`` over both together (a position from the columns'
+    offsets only with those columns)."""
+    steps = dict(step.steps)
+    alone: dict[tuple[int, int], int] = {}
+
+    def cost(exprs, paid=frozenset()) -> tuple[int, set]:
+        return _price(steps, exprs, paid)
+
+    def pose_cost(pose: Pose) -> int:
+        key = (id(pose[0]), id(pose[1]))
+        if key not in alone:
+            alone[key] = cost(T(pose))[0]
+        return alone[key]
+
+    def T(pose: Pose) -> list[sp.Expr]:
+        return _flat(pose[0], [pose[1]])
+
+    def parts(c: _Columns) -> list[list[sp.Expr]]:
+        return [_flat(c.linear, c.angular), _flat(c.rates.d_linear, c.rates.d_angular), list(c.rates.twist), list(c.rates.acc)]
+
+    def pick(candidates: list, price) -> object:
+        """The cheapest candidate; one after the first (the segment columns, Horner's rule) only when it saves
+        2 % or more: the estimate ignores what the sign choice removes, and a tie is not worth a variant."""
+        if len(candidates) == 1:
+            return candidates[0]
+        prices = [price(x) for x in candidates]
+        best_index = min(range(len(candidates)), key=lambda i: prices[i])
+        return candidates[best_index] if prices[best_index][0] <= 0.98 * prices[0][0] else candidates[0]
+
+    rotations = list({id(p[0]): p[0] for p in poses}.values())
+    with_tips = [(rot, c.tip) for c in columns if c.tip is not None for rot in rotations]
+    horner = min((p for p in poses if p[1] is poses[0][1]), key=pose_cost)
+    best = {"pose": (pick([horner] + poses + with_tips, lambda p: (pose_cost(p),)), columns[0])}
+    for index, name in enumerate(("jacobian", "jacobian_dot", "twist", "acceleration")):
+        best[name] = (best["pose"][0], pick(columns, lambda c: (cost(parts(c)[index])[0],)))
+    options = []
+    for c in columns:
+        base, paid = cost([e for part in parts(c) for e in part])
+        paid = frozenset(paid)
+        for pose in ([horner] if c is columns[0] else []) + poses + ([(rot, c.tip) for rot in rotations] if c.tip is not None else []):
+            options.append(((base + cost(T(pose), paid)[0], pose_cost(pose)), pose, c))  # a tie: the pose cheapest alone
+    found = pick(options, lambda o: o[0])
+    best["kinematics"] = (found[1], found[2])
     return best
 
 
-def _settle_signs(step: _Steps, outputs: tuple, axes: list[Vector]) -> tuple[tuple, list[Vector]]:
-    """Drop dead steps, choose the signs of the rest (:func:`_normalise_signs`) and return ``outputs``
-    (groups of vectors: rotation, tip, J, dJ, rates, J_tool parts) and ``axes`` written with the flipped steps."""
-    values, where, at = [], {}, 0
-    for name, group in zip(("T", "T", "J", "J", "dJ", "dJ", "rates", "J_tool", "J_tool"), outputs):
+def _settle_signs(step: _Steps, groups: dict[str, list[Vector]], functions: Sequence[Sequence[str]],
+                  axes: list[Vector]) -> tuple[dict[str, list[Vector]], list[Vector]]:
+    """Drop dead steps, choose the signs of the rest (:func:`_normalise_signs`) and return ``groups`` (named
+    lists of vectors: the outputs) and ``axes`` written with the flipped steps. ``functions``: the names of
+    the groups each function reads (a negation counts once for every function that pays it)."""
+    values, where = [], {}
+    for name, group in groups.items():
         flat = [e for v in group for e in v]
-        where.setdefault(name, []).extend(range(at, at + len(flat)))
+        where[name] = range(len(values), len(values) + len(flat))
         values.extend(flat)
-        at += len(flat)
-    functions = [where[f] for f in ("T", "J", "dJ", "rates", "J_tool")] + [where["T"] + where["J"] + where["dJ"] + where["rates"]]
     step.replace_steps(_live_steps(step.steps, values))
-    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), functions)
+    indices = [[i for name in names for i in where[name]] for names in functions]
+    flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), indices)
     if not flips:
-        return outputs, axes
+        return groups, axes
     step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
-    rewrite = [[[sp.sympify(e).xreplace(flips) for e in v] for v in group] for group in outputs + (axes,)]
-    return tuple(rewrite[:-1]), rewrite[-1]
+    rewrite = {name: [[sp.sympify(e).xreplace(flips) for e in v] for v in group] for name, group in groups.items()}
+    return rewrite, [[sp.sympify(e).xreplace(flips) for e in v] for v in axes]
 
 
-@functools.lru_cache(maxsize=8192)
-def _ops(expr: sp.Expr) -> int:
-    """SymPy's operation count of ``expr``, remembered: the candidates of :func:`_pose` and
-    :func:`_choose_columns` share most of their steps, and ``count_ops`` is slow."""
-    return sp.count_ops(expr)
+@functools.lru_cache(maxsize=65536)
+def _nodes(e: sp.Expr) -> dict:
+    """The composite subtrees of ``e`` with the operations each adds itself, as :mod:`skelarm_sym.ir.count`
+    counts them: a sum of k terms k - 1 (one more when every term is negative and none is a number or led by
+    one), a product of k factors k - 1
+    (a coefficient other than +-1 is a factor, -1 a negation), ``x**k`` k - 1. The union over several
+    expressions counts a repeated subtree once, as the CSE of :mod:`skelarm_sym.ir.lower` computes it once.
+    Remembered: the candidates of :func:`_choose` share most of their steps."""
+    out: dict = {}
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if x.is_Atom or x in out:
+            continue
+        if x.is_Add:
+            own, negative, literal = len(x.args) - 1, 0, False
+            for term in x.args:
+                coeff, _ = term.as_coeff_Mul()
+                literal = literal or abs(coeff) != 1
+                if coeff.is_negative:
+                    negative += 1
+                    term = -term
+                stack.append(term)
+            out[x] = own + (negative == len(x.args) and not literal)
+        elif x.is_Mul:
+            coeff, factors = x.as_coeff_mul()
+            out[x] = len(factors) - 1 + (abs(coeff) != 1) + (coeff == -1)
+            stack.extend(factors)
+        elif x.is_Pow and x.exp.is_Integer and x.exp > 0:
+            out[x] = int(x.exp) - 1
+            stack.append(x.base)
+        else:
+            out[x] = 1 if x.is_Pow else 0
+            stack.extend(x.args)
+    return out
 
 
-def _closure_ops(steps: dict, exprs: Sequence[sp.Expr]) -> int:
-    """Operations (SymPy's count) of ``exprs`` and of every step they need."""
-    seen: set[sp.Symbol] = set()
-    todo = [s for e in exprs for s in sp.sympify(e).free_symbols if s in steps]
-    total = sum(_ops(sp.sympify(e)) for e in exprs)
-    while todo:
-        s = todo.pop()
-        if s not in seen:
-            seen.add(s)
-            total += _ops(steps[s])
-            todo.extend(x for x in steps[s].free_symbols if x in steps)
-    return total
+def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform,
+          W: Sequence[Vector]) -> tuple[list[Pose], int | None]:
+    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``, and the row the cheapest rotation
+    drops (``None``: all three carried).
 
-
-def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, W: Sequence[Vector]) -> tuple[Rows, Vector]:
-    """Tool rotation ``R`` (rows) and position ``p_e = o_1 + F_1 W_1``.
-
-    ``R = F_last Rz(psi_n) C_tool``: either all rows multiplied out, or two of them and the third as their
-    cross product (``r_0 = r_1 x r_2`` cyclically), whichever needs the fewest operations: carrying two
-    rows down the chain instead of three saves six operations per dense step.
+    ``R = F_last Rz(psi_n) C_tool``: all rows multiplied out, or two of them and the third as their cross
+    product (``r_0 = r_1 x r_2`` cyclically): carrying two rows down the chain instead of three saves six
+    operations per dense step. ``p_e = o_1 + F_1 W_1`` (Horner's rule, shared with the Jacobian's offsets)
+    or, with the cheapest rotation, summed link by link in base axes (:func:`_summed_tip`). :func:`_choose`
+    picks per function.
     """
     full = matmul(step.mat("Ge_", _times_rz(f.rotation[-1], f.trig[-1])), _rows(tool.rotation))
     rows = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
-    best, best_ops = rows, None
+    horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
+    rotations = []
     for d in (None, 0, 1, 2):
         candidate = [list(r) for r in rows]
         if d is not None:
             candidate[d] = step.vec(f"Rx{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
-        ops = _closure_ops(dict(step.steps), [e for r in candidate for e in r])
-        if best_ops is None or ops < best_ops:
-            best, best_ops = candidate, ops
-    origin = add(list(joints[0].before.translation), matvec(f.rotation[0], W[0]))
-    return best, step.vec("pe", origin)
+        rotations.append(candidate)
+    steps = dict(step.steps)
+    prices = [_price(steps, _flat(r))[0] for r in rotations]
+    dropped = (None, 0, 1, 2)[prices.index(min(prices))]  # the row the cheapest rotation drops
+    poses = [(r, horner) for r in rotations]
+    if len(joints) <= CANDIDATES_UP_TO:
+        poses.append((rotations[prices.index(min(prices))],
+                      _summed_tip(step, joints, f, tool, rotations[prices.index(min(prices))], dropped)))
+    return poses, dropped
+
+
+def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
+                dropped: int | None) -> Vector:
+    """``p_e = o_1 + sum_k (advance_k z_k + G_k t_(k+1))`` in base axes (``G_k = F_s Rz(psi_k)``, the frame after
+    joint ``k``'s motion, ``t_(k+1)`` the translation to the next joint; :func:`_after_joint`), the tool's share
+    ``R (C_tool^T t_tool)`` from the pose's rotation. Where the pose drops row ``dropped`` of the rotation,
+    that row's entries of the frames are cofactors of the two carried rows (:func:`_cofactor_view`)."""
+    n = len(joints)
+    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
+    axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
+    terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
+    for k in range(n):
+        advance = joints[k].motion.advance(f.theta[k])
+        if advance != 0:
+            for i in range(3):
+                terms[i].append(axes[k][i] * advance)
+        t = list(joints[k + 1].before.translation) if k + 1 < n else []
+        if any(x != 0 for x in t):
+            for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes), t)):
+                terms[i].append(x)
+    shift = tool.rotation.T * tool.translation
+    for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):
+        terms[i].append(x)
+    return step.vec(f"ps{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])
 
 
 @dataclass
@@ -751,7 +998,7 @@ def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq, tag: str =
     omega_before, omega = [], [sp.S.Zero] * 3
     for k, joint in enumerate(joints):
         omega_before.append(omega)
-        omega = step.vec(f"w{k + 1}", add(omega, joint.motion.angular_rate(axes[k], rates[k])))
+        omega = step.vec(f"w{tag.lstrip('ab')}{k + 1}", add(omega, joint.motion.angular_rate(axes[k], rates[k])))
     omega_after = omega_before[1:] + [omega]
     suffix: list[Vector] = [None] * count
     u = [sp.S.Zero] * 3
@@ -810,20 +1057,43 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     frames = _frames(step, joints, q)
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)
-    rotation, tip = _pose(step, joints, frames, tool, W)
-    linear, tip, rates = _choose_columns(step, joints, frames, tool, linear, tip, angular, rotation, dq, ddq)
+    poses, dropped = _pose(step, joints, frames, tool, W)
+    dense = _dense_constants(joints, frames)
+    rows = ((None, 0, 1, 2) if dense else (dropped,)) if len(joints) <= CANDIDATES_UP_TO else ((None,) if dense else ())
+    chosen = _choose(step, poses, _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows))
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
-    outputs = (rotation, [tip], linear, angular, rates.d_linear, rates.d_angular, [rates.twist, rates.acc], tool_linear, tool_angular)
-    (rotation, (tip,), linear, angular, d_linear, d_angular, (twist, acc), tool_linear, tool_angular), axes = \
-        _settle_signs(step, outputs, frames.axes)
-    compact = {
-        "T": sp.Matrix(rotation).row_join(sp.Matrix(tip)).col_join(sp.Matrix([[0, 0, 0, 1]])),
-        "J": _by_coordinate(joints, n, linear, angular),
-        "J_tool": _by_coordinate(joints, n, tool_linear, tool_angular),
-        "dJ": _by_coordinate(joints, n, d_linear, d_angular),
-        "twist": sp.Matrix(twist),
-        "acc": sp.Matrix(acc),
-    }
+
+    def values(pose: Pose, c: _Columns) -> dict[str, list[Vector]]:
+        return {"T": [*pose[0], pose[1]], "J": [*c.linear, *c.angular], "dJ": [*c.rates.d_linear, *c.rates.d_angular],
+                "twist": [c.rates.twist], "acc": [c.rates.acc]}
+
+    groups = values(*chosen["kinematics"])  # every function's outputs but where another needs fewer operations
+    groups["J_tool"] = [*tool_linear, *tool_angular]
+    variants: dict[str, dict[str, str]] = {}
+    for function, output in (("pose", "T"), ("jacobian", "J"), ("jacobian_dot", "dJ"), ("twist", "twist"), ("acceleration", "acc")):
+        own = values(*chosen[function])[output]
+        if any(x is not y for x, y in zip(own, groups[output])):
+            variants[function] = {output: f"{output}@{function}"}
+            groups[f"{output}@{function}"] = own
+
+    def keys(*functions: str) -> list[str]:
+        return [variants.get(f, {}).get(o, o) for f in functions for o in {"pose": ("T",), "jacobian": ("J",),
+                "jacobian_dot": ("dJ",), "twist": ("twist",), "acceleration": ("acc",)}[f]]
+
+    functions = [keys("pose"), keys("jacobian"), keys("jacobian_dot"), keys("twist", "acceleration"), ["J_tool"],
+                 ["T", "J", "dJ", "twist", "acc"]]
+    groups, axes = _settle_signs(step, groups, functions, chosen["kinematics"][1].axes)
+    count = len(joints)
+    compact = {}
+    order = ["T", "J", "J_tool", "dJ", "twist", "acc"]
+    for key in order + [k for k in groups if k not in order]:
+        group, output = groups[key], key.split("@")[0]
+        if output == "T":
+            compact[key] = sp.Matrix(group[:3]).row_join(sp.Matrix(group[3])).col_join(sp.Matrix([[0, 0, 0, 1]]))
+        elif output in ("J", "J_tool", "dJ"):
+            compact[key] = _by_coordinate(joints, n, group[:count], group[count:])
+        else:
+            compact[key] = sp.Matrix(group[0])
     shapes = {"T": (4, 4), "J": (6, n), "J_tool": (6, n), "dJ": (6, n), "twist": (6,), "acc": (6,)}
     tables, limit_notes = _limit_tables(chain)
     derivation = ChainDerivation(
@@ -837,12 +1107,13 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
         domains={"q": "finite", "dq": "finite", "ddq": "finite", "params": "finite"},
         notes=_notes(chain) + limit_notes,
         tables=tables,
+        variants=variants,
     )
     if not inverse:
         return derivation
     from .inverse import extend  # inverse functions (manipulability, Hessian, inverse velocity, rpy)
 
-    return extend(derivation, step, joints, axes, linear, angular, rotation)
+    return extend(derivation, step, joints, axes, groups["J"][:count], groups["J"][count:], groups["T"][:3])
 
 
 def _named_trig_constants(step: _Steps, joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
