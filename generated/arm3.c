@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x7df6f7e7UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3844568fUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -54,6 +54,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM3_BODY static
 #define ARM3_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM3_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM3_LIGHT
 #endif
 #if !ARM3_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -911,28 +921,37 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm3_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
-            double *J_b = J + (i + b) * 6;
-            double *H_b = H + (i + b) * 6;
-            double *v_b = v + (i + b) * 2;
-            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 6;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
             J_b[3] = J_T[96 + b];
             J_b[4] = J_T[128 + b];
             J_b[5] = J_T[160 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *H_b = H + (i + b) * 6;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
             H_b[3] = H_T[96 + b];
             H_b[4] = H_T[128 + b];
             H_b[5] = H_T[160 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }
@@ -963,14 +982,14 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm3_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 23 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm3_manipulability_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_manipulability_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM3_LIGHT void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1034,14 +1053,14 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 52 mul, 1 neg, 4 div */
 
-static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_inverse_velocity_finish(const double v[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM3_LIGHT void arm3_inverse_velocity_finish(const double v[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1128,14 +1147,14 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 61 add/sub, 101 mul, 1 neg, 5 div */
 
-static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_inverse_velocity3_finish(const double twist[3], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1242,14 +1261,14 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 52 mul, 1 neg, 4 div */
 
-static void arm3_ik_step_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_ik_step_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_ik_step_finish(const double q[3], const double target[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM3_LIGHT void arm3_ik_step_finish(const double q[3], const double target[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];

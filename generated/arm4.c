@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x76f60c07UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x1ffb67e7UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -54,6 +54,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_BODY static
 #define ARM4_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM4_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM4_LIGHT
 #endif
 #if !ARM4_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -957,14 +967,14 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm4_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
-            double *J_b = J + (i + b) * 8;
-            double *H_b = H + (i + b) * 8;
-            double *v_b = v + (i + b) * 2;
-            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 8;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -973,6 +983,9 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             J_b[5] = J_T[160 + b];
             J_b[6] = J_T[192 + b];
             J_b[7] = J_T[224 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *H_b = H + (i + b) * 8;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
@@ -981,8 +994,14 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             H_b[5] = H_T[160 + b];
             H_b[6] = H_T[192 + b];
             H_b[7] = H_T[224 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }
@@ -1013,7 +1032,7 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm4_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 4 sin, 4 cos, 25 add/sub, 30 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm4_manipulability_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_manipulability_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1021,7 +1040,7 @@ static void arm4_manipulability_angles(const double q[4], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM4_LIGHT void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1087,7 +1106,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
 
-static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1095,7 +1114,7 @@ static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm4_inverse_velocity_finish(const double v[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM4_LIGHT void arm4_inverse_velocity_finish(const double v[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1186,7 +1205,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
 
-static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1194,7 +1213,7 @@ static void arm4_inverse_velocity3_angles(const double q[4], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm4_inverse_velocity3_finish(const double twist[3], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1302,7 +1321,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
 
-static void arm4_ik_step_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1310,7 +1329,7 @@ static void arm4_ik_step_angles(const double q[4], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm4_ik_step_finish(const double q[4], const double target[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM4_LIGHT void arm4_ik_step_finish(const double q[4], const double target[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe38683bbUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x53647bfaUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -54,6 +54,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM5_BODY static
 #define ARM5_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM5_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM5_LIGHT
 #endif
 #if !ARM5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -1051,14 +1061,14 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm5_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
-            double *J_b = J + (i + b) * 10;
-            double *H_b = H + (i + b) * 10;
-            double *v_b = v + (i + b) * 2;
-            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 10;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -1069,6 +1079,9 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
             J_b[7] = J_T[224 + b];
             J_b[8] = J_T[256 + b];
             J_b[9] = J_T[288 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *H_b = H + (i + b) * 10;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
@@ -1079,8 +1092,14 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
             H_b[7] = H_T[224 + b];
             H_b[8] = H_T[256 + b];
             H_b[9] = H_T[288 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }
@@ -1111,7 +1130,7 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm5_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 5 sin, 5 cos, 33 add/sub, 37 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm5_manipulability_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_manipulability_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1120,7 +1139,7 @@ static void arm5_manipulability_angles(const double q[5], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1196,7 +1215,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
 
-static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1205,7 +1224,7 @@ static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm5_inverse_velocity_finish(const double v[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1308,7 +1327,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
 
-static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1317,7 +1336,7 @@ static void arm5_inverse_velocity3_angles(const double q[5], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm5_inverse_velocity3_finish(const double twist[3], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1434,7 +1453,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
 
-static void arm5_ik_step_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_ik_step_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1443,7 +1462,7 @@ static void arm5_ik_step_angles(const double q[5], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm5_ik_step_finish(const double q[5], const double target[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double target[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];

@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xbde9d158UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x4b181475UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -54,6 +54,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM6_BODY static
 #define ARM6_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM6_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM6_LIGHT
 #endif
 #if !ARM6_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -1121,14 +1131,14 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm6_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
-            double *J_b = J + (i + b) * 12;
-            double *H_b = H + (i + b) * 12;
-            double *v_b = v + (i + b) * 2;
-            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 12;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -1141,6 +1151,9 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             J_b[9] = J_T[288 + b];
             J_b[10] = J_T[320 + b];
             J_b[11] = J_T[352 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *H_b = H + (i + b) * 12;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
@@ -1153,8 +1166,14 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             H_b[9] = H_T[288 + b];
             H_b[10] = H_T[320 + b];
             H_b[11] = H_T[352 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }
@@ -1185,7 +1204,7 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm6_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 6 sin, 6 cos, 41 add/sub, 44 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm6_manipulability_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_manipulability_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1195,7 +1214,7 @@ static void arm6_manipulability_angles(const double q[6], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1277,7 +1296,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
 
-static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1287,7 +1306,7 @@ static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm6_inverse_velocity_finish(const double v[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1398,7 +1417,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
 
-static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1408,7 +1427,7 @@ static void arm6_inverse_velocity3_angles(const double q[6], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm6_inverse_velocity3_finish(const double twist[3], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1530,7 +1549,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
 
-static void arm6_ik_step_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_ik_step_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1540,7 +1559,7 @@ static void arm6_ik_step_angles(const double q[6], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm6_ik_step_finish(const double q[6], const double target[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double target[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];

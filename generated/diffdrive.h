@@ -31,7 +31,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0xb4ab5c66UL
+#define DIFFDRIVE_STAMP 0x4bc5c83bUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xda8d1817UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x0e8b4813UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -60,6 +60,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define PANDA_BODY static
 #define PANDA_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define PANDA_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define PANDA_LIGHT
 #endif
 #if !PANDA_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -2020,12 +2030,9 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             }
         }
         panda_kinematics_block(q_T, dq_T, ddq_T, T_T, J_T, dJ_T, twist_T, acc_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
-            double *J_b = J + (i + b) * 42;
-            double *dJ_b = dJ + (i + b) * 42;
-            double *twist_b = twist + (i + b) * 6;
-            double *acc_b = acc + (i + b) * 6;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[16 + b];
             T_b[2] = T_T[32 + b];
@@ -2042,6 +2049,9 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             T_b[13] = T_T[208 + b];
             T_b[14] = T_T[224 + b];
             T_b[15] = T_T[240 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 42;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[16 + b];
             J_b[2] = J_T[32 + b];
@@ -2084,6 +2094,9 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             J_b[39] = J_T[624 + b];
             J_b[40] = J_T[640 + b];
             J_b[41] = J_T[656 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *dJ_b = dJ + (i + b) * 42;
             dJ_b[0] = dJ_T[0 + b];
             dJ_b[1] = dJ_T[16 + b];
             dJ_b[2] = dJ_T[32 + b];
@@ -2126,12 +2139,18 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             dJ_b[39] = dJ_T[624 + b];
             dJ_b[40] = dJ_T[640 + b];
             dJ_b[41] = dJ_T[656 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *twist_b = twist + (i + b) * 6;
             twist_b[0] = twist_T[0 + b];
             twist_b[1] = twist_T[16 + b];
             twist_b[2] = twist_T[32 + b];
             twist_b[3] = twist_T[48 + b];
             twist_b[4] = twist_T[64 + b];
             twist_b[5] = twist_T[80 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *acc_b = acc + (i + b) * 6;
             acc_b[0] = acc_T[0 + b];
             acc_b[1] = acc_T[16 + b];
             acc_b[2] = acc_T[32 + b];
@@ -2366,9 +2385,9 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             }
         }
         panda_ik_terms_block(q_T, T_T, J_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
-            double *J_b = J + (i + b) * 42;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[32 + b];
             T_b[2] = T_T[64 + b];
@@ -2385,6 +2404,9 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             T_b[13] = T_T[416 + b];
             T_b[14] = T_T[448 + b];
             T_b[15] = T_T[480 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 42;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -2455,7 +2477,7 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 10 neg, 5 div, 6 sqrt */
 
-static void panda_manipulability_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -2465,7 +2487,7 @@ static void panda_manipulability_angles(const double q[7], double *restrict ang)
     ang[5] = q[5];
 }
 
-static void panda_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
+static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -2836,7 +2858,7 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 6 neg, 2 div, 3 sqrt */
 
-static void panda_manipulability_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_position_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -2846,7 +2868,7 @@ static void panda_manipulability_position_angles(const double q[7], double *rest
     ang[5] = q[5];
 }
 
-static void panda_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
+static PANDA_LIGHT void panda_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -3006,7 +3028,7 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 29 neg */
 
-static void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3016,7 +3038,7 @@ static void panda_jacobian_hessian_angles(const double q[7], double *restrict an
     ang[5] = q[5];
 }
 
-static void panda_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
+static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
 {
     Hs[6] = 0.0;
     Hs[13] = 0.0;
@@ -3499,7 +3521,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 27 neg, 6 div, 6 sqrt */
 
-static void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3509,7 +3531,7 @@ static void panda_manipulability_gradient_angles(const double q[7], double *rest
     ang[5] = q[5];
 }
 
-static void panda_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
+static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
 {
     grad[6] = 0.0;
     const double t0 = cs[0]*cs[1];
@@ -4066,7 +4088,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 40 neg, 13 div, 13 sqrt */
 
-static void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -4076,7 +4098,7 @@ static void panda_inverse_velocity_angles(const double q[7], double *restrict an
     ang[5] = q[5];
 }
 
-static void panda_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -4919,7 +4941,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 12 neg, 7 div, 7 sqrt */
 
-static void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -4929,7 +4951,7 @@ static void panda_inverse_velocity_position_angles(const double q[7], double *re
     ang[5] = q[5];
 }
 
-static void panda_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[6] = 0.0;
     const double t0 = cs[0]*cs[1];
@@ -5193,7 +5215,7 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 8 neg, 3 div, 2 sqrt */
 
-static void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -5204,7 +5226,7 @@ static void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
     ang[6] = q[6];
 }
 
-static void panda_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
+static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
 {
     JA[6] = 0.0;
     JA[13] = 0.0;

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xd5ce1012UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x1527e04dUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -63,6 +63,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define UR5_BODY static
 #define UR5_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define UR5_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define UR5_LIGHT
 #endif
 #if !UR5_VECTOR_MATH && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -1729,12 +1739,9 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             }
         }
         ur5_kinematics_block(q_T, dq_T, ddq_T, T_T, J_T, dJ_T, twist_T, acc_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
-            double *J_b = J + (i + b) * 36;
-            double *dJ_b = dJ + (i + b) * 36;
-            double *twist_b = twist + (i + b) * 6;
-            double *acc_b = acc + (i + b) * 6;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[16 + b];
             T_b[2] = T_T[32 + b];
@@ -1751,6 +1758,9 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             T_b[13] = T_T[208 + b];
             T_b[14] = T_T[224 + b];
             T_b[15] = T_T[240 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 36;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[16 + b];
             J_b[2] = J_T[32 + b];
@@ -1787,6 +1797,9 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             J_b[33] = J_T[528 + b];
             J_b[34] = J_T[544 + b];
             J_b[35] = J_T[560 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *dJ_b = dJ + (i + b) * 36;
             dJ_b[0] = dJ_T[0 + b];
             dJ_b[1] = dJ_T[16 + b];
             dJ_b[2] = dJ_T[32 + b];
@@ -1823,12 +1836,18 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             dJ_b[33] = dJ_T[528 + b];
             dJ_b[34] = dJ_T[544 + b];
             dJ_b[35] = dJ_T[560 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *twist_b = twist + (i + b) * 6;
             twist_b[0] = twist_T[0 + b];
             twist_b[1] = twist_T[16 + b];
             twist_b[2] = twist_T[32 + b];
             twist_b[3] = twist_T[48 + b];
             twist_b[4] = twist_T[64 + b];
             twist_b[5] = twist_T[80 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *acc_b = acc + (i + b) * 6;
             acc_b[0] = acc_T[0 + b];
             acc_b[1] = acc_T[16 + b];
             acc_b[2] = acc_T[32 + b];
@@ -2031,9 +2050,9 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             }
         }
         ur5_ik_terms_block(q_T, T_T, J_T);
+        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
-            double *J_b = J + (i + b) * 36;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[32 + b];
             T_b[2] = T_T[64 + b];
@@ -2050,6 +2069,9 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             T_b[13] = T_T[416 + b];
             T_b[14] = T_T[448 + b];
             T_b[15] = T_T[480 + b];
+        }
+        for (b = 0; b < count; ++b) {
+            double *J_b = J + (i + b) * 36;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -2114,7 +2136,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 12 neg, 5 div, 6 sqrt */
 
-static void ur5_manipulability_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2123,7 +2145,7 @@ static void ur5_manipulability_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
+static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
@@ -2432,7 +2454,7 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 3 neg, 2 div, 3 sqrt */
 
-static void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2441,7 +2463,7 @@ static void ur5_manipulability_position_angles(const double q[6], double *restri
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
+static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
 {
     const double t2 = cs[0]*cs[3];
     const double t4 = cs[3]*sn[0];
@@ -2564,7 +2586,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 23 neg */
 
-static void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2573,7 +2595,7 @@ static void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
+static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
 {
     Hs[5] = 0.0;
     Hs[11] = 0.0;
@@ -2884,7 +2906,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 29 neg, 6 div, 6 sqrt */
 
-static void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2893,7 +2915,7 @@ static void ur5_manipulability_gradient_angles(const double q[6], double *restri
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
+static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
 {
     grad[5] = 0.0;
     const double t2 = cs[0]*cs[3];
@@ -3326,7 +3348,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 42 neg, 13 div, 13 sqrt */
 
-static void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -3335,7 +3357,7 @@ static void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
@@ -4111,7 +4133,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 9 neg, 7 div, 7 sqrt */
 
-static void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4120,7 +4142,7 @@ static void ur5_inverse_velocity_position_angles(const double q[6], double *rest
     ang[4] = q[4];
 }
 
-static void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[5] = 0.0;
     const double t2 = cs[0]*cs[3];
@@ -4344,7 +4366,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 9 neg, 3 div, 2 sqrt */
 
-static void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4354,7 +4376,7 @@ static void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
     ang[5] = q[5];
 }
 
-static void ur5_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
+static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
 {
     JA[5] = 0.0;
     JA[11] = 0.0;
@@ -4494,7 +4516,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
 /* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 101 neg, 52 div, 21 sqrt */
 
-static void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
+static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
 {
     const double t1353 = target[3] + 0.005490999999999996*target[1] + 0.81725*target[0] - 0.19145*target[2];
     const double t1354 = target[7] + 0.005490999999999996*target[5] + 0.81725*target[4] - 0.19145*target[6];
