@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3844568fUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xbd85068dUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -921,37 +921,28 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm3_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 6;
+            double *H_b = H + (i + b) * 6;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 6;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
             J_b[3] = J_T[96 + b];
             J_b[4] = J_T[128 + b];
             J_b[5] = J_T[160 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *H_b = H + (i + b) * 6;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
             H_b[3] = H_T[96 + b];
             H_b[4] = H_T[128 + b];
             H_b[5] = H_T[160 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }

@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0x3844568fUL
+#define ARM3_STAMP 0xbd85068dUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x5ac752d8UL
+#define ARM3F_STAMP 0x4a29184bUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x1ffb67e7UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x01b5ec21UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -967,14 +967,14 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm4_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 8;
+            double *H_b = H + (i + b) * 8;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 8;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -983,9 +983,6 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             J_b[5] = J_T[160 + b];
             J_b[6] = J_T[192 + b];
             J_b[7] = J_T[224 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *H_b = H + (i + b) * 8;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
@@ -994,14 +991,8 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
             H_b[5] = H_T[160 + b];
             H_b[6] = H_T[192 + b];
             H_b[7] = H_T[224 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }

@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x1ffb67e7UL
+#define ARM4_STAMP 0x01b5ec21UL
 
 #ifdef __cplusplus
 extern "C" {

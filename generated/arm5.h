@@ -41,7 +41,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x53647bfaUL
+#define ARM5_STAMP 0x2a0e75beUL
 
 #ifdef __cplusplus
 extern "C" {

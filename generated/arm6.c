@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x4b181475UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x6de05a53UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -1131,14 +1131,14 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             }
         }
         arm6_kinematics_block(q_T, dq_T, ddq_T, l, p_T, J_T, H_T, v_T, a_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *p_b = p + (i + b) * 2;
+            double *J_b = J + (i + b) * 12;
+            double *H_b = H + (i + b) * 12;
+            double *v_b = v + (i + b) * 2;
+            double *a_b = a + (i + b) * 2;
             p_b[0] = p_T[0 + b];
             p_b[1] = p_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 12;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];
@@ -1151,9 +1151,6 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             J_b[9] = J_T[288 + b];
             J_b[10] = J_T[320 + b];
             J_b[11] = J_T[352 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *H_b = H + (i + b) * 12;
             H_b[0] = H_T[0 + b];
             H_b[1] = H_T[32 + b];
             H_b[2] = H_T[64 + b];
@@ -1166,14 +1163,8 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
             H_b[9] = H_T[288 + b];
             H_b[10] = H_T[320 + b];
             H_b[11] = H_T[352 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *v_b = v + (i + b) * 2;
             v_b[0] = v_T[0 + b];
             v_b[1] = v_T[32 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *a_b = a + (i + b) * 2;
             a_b[0] = a_T[0 + b];
             a_b[1] = a_T[32 + b];
         }

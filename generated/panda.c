@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x0e8b4813UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x20c814c0UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -2030,9 +2030,12 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             }
         }
         panda_kinematics_block(q_T, dq_T, ddq_T, T_T, J_T, dJ_T, twist_T, acc_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
+            double *J_b = J + (i + b) * 42;
+            double *dJ_b = dJ + (i + b) * 42;
+            double *twist_b = twist + (i + b) * 6;
+            double *acc_b = acc + (i + b) * 6;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[16 + b];
             T_b[2] = T_T[32 + b];
@@ -2049,9 +2052,6 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             T_b[13] = T_T[208 + b];
             T_b[14] = T_T[224 + b];
             T_b[15] = T_T[240 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 42;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[16 + b];
             J_b[2] = J_T[32 + b];
@@ -2094,9 +2094,6 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             J_b[39] = J_T[624 + b];
             J_b[40] = J_T[640 + b];
             J_b[41] = J_T[656 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *dJ_b = dJ + (i + b) * 42;
             dJ_b[0] = dJ_T[0 + b];
             dJ_b[1] = dJ_T[16 + b];
             dJ_b[2] = dJ_T[32 + b];
@@ -2139,18 +2136,12 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
             dJ_b[39] = dJ_T[624 + b];
             dJ_b[40] = dJ_T[640 + b];
             dJ_b[41] = dJ_T[656 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *twist_b = twist + (i + b) * 6;
             twist_b[0] = twist_T[0 + b];
             twist_b[1] = twist_T[16 + b];
             twist_b[2] = twist_T[32 + b];
             twist_b[3] = twist_T[48 + b];
             twist_b[4] = twist_T[64 + b];
             twist_b[5] = twist_T[80 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *acc_b = acc + (i + b) * 6;
             acc_b[0] = acc_T[0 + b];
             acc_b[1] = acc_T[16 + b];
             acc_b[2] = acc_T[32 + b];
@@ -2385,9 +2376,9 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             }
         }
         panda_ik_terms_block(q_T, T_T, J_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
+            double *J_b = J + (i + b) * 42;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[32 + b];
             T_b[2] = T_T[64 + b];
@@ -2404,9 +2395,6 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             T_b[13] = T_T[416 + b];
             T_b[14] = T_T[448 + b];
             T_b[15] = T_T[480 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 42;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];

@@ -47,7 +47,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x0e8b4813UL
+#define PANDA_STAMP 0x20c814c0UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x1527e04dUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x6e8d4177UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -1739,9 +1739,12 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             }
         }
         ur5_kinematics_block(q_T, dq_T, ddq_T, T_T, J_T, dJ_T, twist_T, acc_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
+            double *J_b = J + (i + b) * 36;
+            double *dJ_b = dJ + (i + b) * 36;
+            double *twist_b = twist + (i + b) * 6;
+            double *acc_b = acc + (i + b) * 6;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[16 + b];
             T_b[2] = T_T[32 + b];
@@ -1758,9 +1761,6 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             T_b[13] = T_T[208 + b];
             T_b[14] = T_T[224 + b];
             T_b[15] = T_T[240 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 36;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[16 + b];
             J_b[2] = J_T[32 + b];
@@ -1797,9 +1797,6 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             J_b[33] = J_T[528 + b];
             J_b[34] = J_T[544 + b];
             J_b[35] = J_T[560 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *dJ_b = dJ + (i + b) * 36;
             dJ_b[0] = dJ_T[0 + b];
             dJ_b[1] = dJ_T[16 + b];
             dJ_b[2] = dJ_T[32 + b];
@@ -1836,18 +1833,12 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
             dJ_b[33] = dJ_T[528 + b];
             dJ_b[34] = dJ_T[544 + b];
             dJ_b[35] = dJ_T[560 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *twist_b = twist + (i + b) * 6;
             twist_b[0] = twist_T[0 + b];
             twist_b[1] = twist_T[16 + b];
             twist_b[2] = twist_T[32 + b];
             twist_b[3] = twist_T[48 + b];
             twist_b[4] = twist_T[64 + b];
             twist_b[5] = twist_T[80 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *acc_b = acc + (i + b) * 6;
             acc_b[0] = acc_T[0 + b];
             acc_b[1] = acc_T[16 + b];
             acc_b[2] = acc_T[32 + b];
@@ -2050,9 +2041,9 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             }
         }
         ur5_ik_terms_block(q_T, T_T, J_T);
-        /* one loop per output: GCC's time on a loop of copies grows with the square of their number */
         for (b = 0; b < count; ++b) {
             double *T_b = T + (i + b) * 16;
+            double *J_b = J + (i + b) * 36;
             T_b[0] = T_T[0 + b];
             T_b[1] = T_T[32 + b];
             T_b[2] = T_T[64 + b];
@@ -2069,9 +2060,6 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
             T_b[13] = T_T[416 + b];
             T_b[14] = T_T[448 + b];
             T_b[15] = T_T[480 + b];
-        }
-        for (b = 0; b < count; ++b) {
-            double *J_b = J + (i + b) * 36;
             J_b[0] = J_T[0 + b];
             J_b[1] = J_T[32 + b];
             J_b[2] = J_T[64 + b];

@@ -50,7 +50,7 @@
  * exceptions are enabled as traps (feenableexcept); keep angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x1527e04dUL
+#define UR5_STAMP 0x6e8d4177UL
 
 #ifdef __cplusplus
 extern "C" {
