@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xf9d48d00UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x5f9e0daaUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM2_BODY static
 #define ARM2_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM2_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM2_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from arm2_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -971,13 +981,13 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm2_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 2 sin, 2 cos, 9 add/sub, 16 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm2_manipulability_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_manipulability_angles(const double q[2], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static void arm2_manipulability_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM2_LIGHT void arm2_manipulability_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
@@ -1035,13 +1045,13 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 2 sin, 2 cos, 22 add/sub, 43 mul, 1 neg, 4 div */
 
-static void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static void arm2_inverse_velocity_finish(const double v[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM2_LIGHT void arm2_inverse_velocity_finish(const double v[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
@@ -1120,13 +1130,13 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 2 sin, 2 cos, 26 add/sub, 43 mul, 1 neg, 4 div */
 
-static void arm2_ik_step_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_ik_step_angles(const double q[2], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static void arm2_ik_step_finish(const double q[2], const double target[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM2_LIGHT void arm2_ik_step_finish(const double q[2], const double target[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];

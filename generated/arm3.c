@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x68c53d89UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3a3df3b3UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM3_BODY static
 #define ARM3_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM3_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM3_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from arm3_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -1045,14 +1055,14 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm3_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 23 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm3_manipulability_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_manipulability_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM3_LIGHT void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1116,14 +1126,14 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 52 mul, 1 neg, 4 div */
 
-static void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_inverse_velocity_finish(const double v[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM3_LIGHT void arm3_inverse_velocity_finish(const double v[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1210,14 +1220,14 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 61 add/sub, 101 mul, 1 neg, 5 div */
 
-static void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_inverse_velocity3_finish(const double twist[3], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1324,14 +1334,14 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 52 mul, 1 neg, 4 div */
 
-static void arm3_ik_step_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_ik_step_angles(const double q[3], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3_ik_step_finish(const double q[3], const double target[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM3_LIGHT void arm3_ik_step_finish(const double q[3], const double target[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];

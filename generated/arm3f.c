@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xc2986a92UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9e9956dfUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 #else
 #define ARM3F_BODY static
 #define ARM3F_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM3F_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM3F_LIGHT
 #endif
 #define ARM3F_OWN_TRIG 0
 #if !ARM3F_VECTOR_MATH && !ARM3F_OWN_TRIG && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
@@ -969,14 +979,14 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
 /* ---- arm3f_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm3f_manipulability_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_manipulability_angles(const float q[3], float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3f_manipulability_finish(const float *restrict cs, const float *restrict sn, float *restrict w)
+static ARM3F_LIGHT void arm3f_manipulability_finish(const float *restrict cs, const float *restrict sn, float *restrict w)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
@@ -1038,14 +1048,14 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 1 neg, 4 div */
 
-static void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3f_inverse_velocity_finish(const float v[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq)
+static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float v[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
@@ -1130,14 +1140,14 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 1 neg, 4 div */
 
-static void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq3)
+static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq3)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
@@ -1240,14 +1250,14 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 1 neg, 4 div */
 
-static void arm3f_ik_step_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_ik_step_angles(const float q[3], float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static void arm3f_ik_step_finish(const float q[3], const float target[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict q_next)
+static ARM3F_LIGHT void arm3f_ik_step_finish(const float q[3], const float target[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict q_next)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];

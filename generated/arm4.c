@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x78ebc251UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2eea878dUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_BODY static
 #define ARM4_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM4_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM4_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from arm4_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -1095,7 +1105,7 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm4_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 4 sin, 4 cos, 25 add/sub, 30 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm4_manipulability_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_manipulability_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1103,7 +1113,7 @@ static void arm4_manipulability_angles(const double q[4], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM4_LIGHT void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1169,7 +1179,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
 
-static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1177,7 +1187,7 @@ static void arm4_inverse_velocity_angles(const double q[4], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm4_inverse_velocity_finish(const double v[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM4_LIGHT void arm4_inverse_velocity_finish(const double v[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1268,7 +1278,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
 
-static void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1276,7 +1286,7 @@ static void arm4_inverse_velocity3_angles(const double q[4], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm4_inverse_velocity3_finish(const double twist[3], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1384,7 +1394,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
 
-static void arm4_ik_step_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_ik_step_angles(const double q[4], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1392,7 +1402,7 @@ static void arm4_ik_step_angles(const double q[4], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm4_ik_step_finish(const double q[4], const double target[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM4_LIGHT void arm4_ik_step_finish(const double q[4], const double target[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];

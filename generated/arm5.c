@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x36a2f689UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe3bf0df8UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM5_BODY static
 #define ARM5_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM5_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM5_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from arm5_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -1193,7 +1203,7 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm5_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 5 sin, 5 cos, 33 add/sub, 37 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm5_manipulability_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_manipulability_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1202,7 +1212,7 @@ static void arm5_manipulability_angles(const double q[5], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1278,7 +1288,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
 
-static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1287,7 +1297,7 @@ static void arm5_inverse_velocity_angles(const double q[5], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm5_inverse_velocity_finish(const double v[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1390,7 +1400,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
 
-static void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1399,7 +1409,7 @@ static void arm5_inverse_velocity3_angles(const double q[5], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm5_inverse_velocity3_finish(const double twist[3], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1516,7 +1526,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
 
-static void arm5_ik_step_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_ik_step_angles(const double q[5], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1525,7 +1535,7 @@ static void arm5_ik_step_angles(const double q[5], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm5_ik_step_finish(const double q[5], const double target[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double target[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];

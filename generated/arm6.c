@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x8a0bca97UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x1f8f236bUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -56,6 +56,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM6_BODY static
 #define ARM6_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define ARM6_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define ARM6_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from arm6_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -1267,7 +1277,7 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm6_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 6 sin, 6 cos, 41 add/sub, 44 mul, 1 neg, 1 div, 1 sqrt */
 
-static void arm6_manipulability_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_manipulability_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1277,7 +1287,7 @@ static void arm6_manipulability_angles(const double q[6], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1359,7 +1369,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
 
-static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1369,7 +1379,7 @@ static void arm6_inverse_velocity_angles(const double q[6], double *restrict ang
     ang[0] = q[0];
 }
 
-static void arm6_inverse_velocity_finish(const double v[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1480,7 +1490,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
 
-static void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1490,7 +1500,7 @@ static void arm6_inverse_velocity3_angles(const double q[6], double *restrict an
     ang[0] = q[0];
 }
 
-static void arm6_inverse_velocity3_finish(const double twist[3], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1612,7 +1622,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
 
-static void arm6_ik_step_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_ik_step_angles(const double q[6], double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1622,7 +1632,7 @@ static void arm6_ik_step_angles(const double q[6], double *restrict ang)
     ang[0] = q[0];
 }
 
-static void arm6_ik_step_finish(const double q[6], const double target[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double target[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xdd4f915cUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x1862bca0UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -46,6 +46,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define DIFFDRIVE_BODY static
 #define DIFFDRIVE_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define DIFFDRIVE_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define DIFFDRIVE_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from diffdrive_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -180,7 +190,7 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
 
-static void diffdrive_body_rates_finish(const double wheels[2], double track, double *restrict rates)
+static DIFFDRIVE_LIGHT void diffdrive_body_rates_finish(const double wheels[2], double track, double *restrict rates)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     rates[0] = t0;
@@ -273,12 +283,12 @@ void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, d
 /* ---- diffdrive_pose_rate: pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R) ---- */
 /* operations: 1 sin, 1 cos, 2 add/sub, 6 mul, 0 neg, 1 div */
 
-static void diffdrive_pose_rate_angles(const double pose[3], double *restrict ang)
+static DIFFDRIVE_LIGHT void diffdrive_pose_rate_angles(const double pose[3], double *restrict ang)
 {
     ang[0] = pose[2];
 }
 
-static void diffdrive_pose_rate_finish(const double wheels[2], double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
+static DIFFDRIVE_LIGHT void diffdrive_pose_rate_finish(const double wheels[2], double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     dpose[0] = t0*cs[0];

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x24d66e3eUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xdfd9cf02UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -62,6 +62,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define PANDA_BODY static
 #define PANDA_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define PANDA_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define PANDA_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from panda_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -2547,7 +2557,7 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 10 neg, 5 div, 6 sqrt */
 
-static void panda_manipulability_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -2557,7 +2567,7 @@ static void panda_manipulability_angles(const double q[7], double *restrict ang)
     ang[5] = q[5];
 }
 
-static void panda_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
+static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -2928,7 +2938,7 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 6 neg, 2 div, 3 sqrt */
 
-static void panda_manipulability_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_position_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -2938,7 +2948,7 @@ static void panda_manipulability_position_angles(const double q[7], double *rest
     ang[5] = q[5];
 }
 
-static void panda_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
+static PANDA_LIGHT void panda_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -3098,7 +3108,7 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 29 neg */
 
-static void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3108,7 +3118,7 @@ static void panda_jacobian_hessian_angles(const double q[7], double *restrict an
     ang[5] = q[5];
 }
 
-static void panda_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
+static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
 {
     Hs[6] = 0.0;
     Hs[13] = 0.0;
@@ -3591,7 +3601,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 27 neg, 6 div, 6 sqrt */
 
-static void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3601,7 +3611,7 @@ static void panda_manipulability_gradient_angles(const double q[7], double *rest
     ang[5] = q[5];
 }
 
-static void panda_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
+static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
 {
     grad[6] = 0.0;
     const double t0 = cs[0]*cs[1];
@@ -4158,7 +4168,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 40 neg, 13 div, 13 sqrt */
 
-static void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -4168,7 +4178,7 @@ static void panda_inverse_velocity_angles(const double q[7], double *restrict an
     ang[5] = q[5];
 }
 
-static void panda_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t0 = cs[0]*cs[1];
     const double t1 = cs[0]*sn[1];
@@ -5011,7 +5021,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 12 neg, 7 div, 7 sqrt */
 
-static void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -5021,7 +5031,7 @@ static void panda_inverse_velocity_position_angles(const double q[7], double *re
     ang[5] = q[5];
 }
 
-static void panda_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[6] = 0.0;
     const double t0 = cs[0]*cs[1];
@@ -5285,7 +5295,7 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 8 neg, 3 div, 2 sqrt */
 
-static void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -5296,7 +5306,7 @@ static void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
     ang[6] = q[6];
 }
 
-static void panda_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
+static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
 {
     JA[6] = 0.0;
     JA[13] = 0.0;

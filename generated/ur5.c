@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x6c99266fUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x22c1a949UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -65,6 +65,16 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define UR5_BODY static
 #define UR5_STRIDE 1
+#endif
+/* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
+ * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
+ * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
+ * compiles them at the command line's level. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
+    && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
+#define UR5_LIGHT __attribute__((__optimize__("O1")))
+#else
+#define UR5_LIGHT
 #endif
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from ur5_sincos4 below: four angles at a time in straight-line double arithmetic that any
@@ -2206,7 +2216,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 12 neg, 5 div, 6 sqrt */
 
-static void ur5_manipulability_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2215,7 +2225,7 @@ static void ur5_manipulability_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
+static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
@@ -2524,7 +2534,7 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 3 neg, 2 div, 3 sqrt */
 
-static void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2533,7 +2543,7 @@ static void ur5_manipulability_position_angles(const double q[6], double *restri
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
+static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict cs, const double *restrict sn, double *restrict w_position)
 {
     const double t2 = cs[0]*cs[3];
     const double t4 = cs[3]*sn[0];
@@ -2656,7 +2666,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 23 neg */
 
-static void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2665,7 +2675,7 @@ static void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
+static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, const double *restrict sn, double *restrict Hs)
 {
     Hs[5] = 0.0;
     Hs[11] = 0.0;
@@ -2976,7 +2986,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 29 neg, 6 div, 6 sqrt */
 
-static void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2985,7 +2995,7 @@ static void ur5_manipulability_gradient_angles(const double q[6], double *restri
     ang[4] = q[4];
 }
 
-static void ur5_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
+static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict cs, const double *restrict sn, double *restrict grad)
 {
     grad[5] = 0.0;
     const double t2 = cs[0]*cs[3];
@@ -3418,7 +3428,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 42 neg, 13 div, 13 sqrt */
 
-static void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -3427,7 +3437,7 @@ static void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
     ang[4] = q[4];
 }
 
-static void ur5_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
@@ -4203,7 +4213,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 9 neg, 7 div, 7 sqrt */
 
-static void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4212,7 +4222,7 @@ static void ur5_inverse_velocity_position_angles(const double q[6], double *rest
     ang[4] = q[4];
 }
 
-static void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[5] = 0.0;
     const double t2 = cs[0]*cs[3];
@@ -4436,7 +4446,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 9 neg, 3 div, 2 sqrt */
 
-static void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4446,7 +4456,7 @@ static void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
     ang[5] = q[5];
 }
 
-static void ur5_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
+static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const double *restrict sn, double *restrict JA)
 {
     JA[5] = 0.0;
     JA[11] = 0.0;
@@ -4586,7 +4596,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
 /* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 77 neg, 52 div, 21 sqrt */
 
-static void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
+static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
 {
     const double t1353 = target[3] + 0.005490999999999996*target[1] + 0.81725*target[0] - 0.19145*target[2];
     const double t1354 = target[7] + 0.005490999999999996*target[5] + 0.81725*target[4] - 0.19145*target[6];

@@ -253,3 +253,25 @@ def test_check_catches_a_wrong_statement(precision):
     failed = {(r.implementation.split()[0], r.output) for r in results if not r.ok}
     assert ("C", "H") in failed and ("Python", "H") in failed
     assert all(r.ok for r in results if r.output in ("p", "J"))  # the rest still agrees
+
+
+LIGHT_FUNCTIONS = "manipulability,manipulability_gradient,inverse_velocity,jacobian_rpy"
+
+
+@pytest.mark.parametrize("flags", [("-O2",), ("-O2", "-DSKELARM_FULL_OPTIMIZE")])
+def test_long_closed_forms_compiled_light_or_full_match_the_reference(flags):
+    """The long closed forms without a vectorised batch (divisions, square roots) carry ``{P}_LIGHT``: GCC
+    compiles them at -O1 when the file is optimised (half the compile time, no loss of speed:
+    benchmarks/compile_time.py, benchmarks/batch_ab.py), or at the command line's level with
+    -DSKELARM_FULL_OPTIMIZE. Both builds agree with the reference, single calls and batches."""
+    from skelarm_sym.models.chain.loader import load_robot
+
+    g = generate(load_robot(ROOT / "examples" / "robots" / "panda.toml"), langs="c", out=None, functions=LIGHT_FUNCTIONS)
+    src = g.sources["panda.c"]
+    for name in LIGHT_FUNCTIONS.split(","):
+        assert f"static PANDA_LIGHT void panda_{name}_finish(" in src, name
+    arm = compile_arm(g, flags=flags)
+    results = compare(g, cases=20, seed=5, implementations=[("C", arm)])
+    assert {r.output for r in results} >= {"w", "grad", "dq", "JA"}
+    bad = [r for r in results if not r.ok]
+    assert not bad, bad
