@@ -187,6 +187,7 @@ def _cost(unit: str, tests: int) -> float:
     return 0.2 * tests
 
 
+@pytest.hookimpl(optionalhook=True)  # a hook of pytest-xdist: a run without it (-p no:xdist) ignores it
 def pytest_xdist_make_scheduler(config, log):
     """``--dist loadfile`` (pyproject.toml's default), refined: the files of :data:`_SPLIT` cut smaller, and the
     work units handed out longest first (:data:`_COST`). Any other ``--dist`` is left as pytest-xdist has it."""
