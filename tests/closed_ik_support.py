@@ -98,6 +98,18 @@ def targets_of(chain: Chain, q: np.ndarray) -> np.ndarray:
     return chain_kinematics(chain.numeric(), q).T
 
 
+def pose_errors(num, Q: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The judge's :func:`~skelarm_sym.models.chain.reference_ik_all.pose_error` of every candidate ``Q`` (m, S, n)
+    against its own target ``T`` (m, 4, 4), by one forward pass over all m * S rows: ``(pos, rot)``, each (m, S)."""
+    from skelarm_sym.models.chain.reference_ik_all import reach
+
+    m, S, n = Q.shape
+    Tq = chain_kinematics(num, Q.reshape(-1, n)).T.reshape(m, S, 4, 4)
+    pos = np.linalg.norm(Tq[..., :3, 3] - T[:, None, :3, 3], axis=-1) / reach(num)
+    rot = np.max(np.abs(Tq[..., :3, :3] - T[:, None, :3, :3]), axis=(-1, -2))
+    return pos, rot
+
+
 def wrapped_distance(a: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
     """max |a - b| over the last axis, revolute entries modulo 2 pi."""
     d = a - b

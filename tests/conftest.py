@@ -26,6 +26,12 @@ functions asked for. The rule that keeps this honest:
 * a test about the derivation run itself (that two runs give the same text, how long it takes) carries
   ``@pytest.mark.fresh_derivation``: it derives from scratch and stores nothing. ``SKELARM_SYM_TEST_FRESH=1
   pytest`` does that for every test.
+
+Scheduling. ``--dist loadfile`` (pyproject.toml) keeps a file's tests in one worker, which left one worker
+alone for minutes with the last long file. :func:`pytest_xdist_make_scheduler` keeps that rule but cuts the
+longest files into parts that do not share a module fixture or a cached solver (:data:`_SPLIT`: each JAX
+conformance case, each closed-form IK arm, each random family arm) and hands the work units out longest first
+(:data:`_COST`, measured CPU seconds), so that both workers stay busy to the end.
 """
 
 import os
@@ -115,3 +121,88 @@ def _fresh_derivation(request):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+# -- scheduling the two xdist workers ------------------------------------------------------------------------
+
+_SPLIT = {
+    # file -> the work unit of one of its tests, from the test's name and parameter id ("" when it has none)
+    "tests/test_closed_ik_families.py": lambda name, param: f"{name}[{param}]",  # each random arm alone
+    # a backend and model per module-scoped case: each JAX case alone (tracing and XLA compiles, up to 90 s of
+    # CPU), the other backends of one model together (one derivation of the model in the worker's memo)
+    "tests/test_conformance.py": lambda name, param: param if param.startswith("jax-") else param.split("-", 1)[-1],
+    # by arm (the first word of the parameter id): an arm's solver, derived once and cached, serves its tests
+    "tests/test_closed_ik_arms.py": lambda name, param: param.split("-")[0],
+    "tests/test_closed_ik_emitted.py": lambda name, param: param.split("-")[0],
+}
+"""Files cut into smaller work units than the whole file (the other files go to one worker whole: their module
+fixtures, ``lru_cache`` s and the memo of derivations are built once)."""
+
+_COST = {
+    # measured (user + sys of the worker and its compilers, 6817a38, two workers on a loaded machine), rounded
+    "tests/test_conformance.py::jax-chain-ur5": 87, "tests/test_codegen.py": 86, "tests/test_example_robot_data.py": 61,
+    "tests/test_conformance.py::chain-ur5": 28, "tests/test_closed_ik_emitted.py::spherical_wrist": 19,
+    "tests/test_conformance.py::jax-chain-params": 18, "tests/test_conformance.py::jax-chain-mimic": 18,
+    "tests/test_robot_cli.py": 17, "tests/test_conformance.py::jax-planar": 15, "tests/test_urdf.py": 13,
+    "tests/test_cpython_extension.py": 13, "tests/test_closed_ik_arms.py::iiwa14_lock3": 10,
+    "tests/test_closed_ik_arms.py::panda_lock7": 10, "tests/test_closed_ik_arms.py::ur5": 10,
+    "tests/test_closed_ik_emitted.py::panda_lock7": 9, "tests/test_closed_ik_emitted.py::puma560": 8,
+    "tests/test_closed_ik_arms.py::puma560": 8, "tests/test_closed_ik_arms.py::panda_urdf_lock7": 8,
+    "tests/test_conformance.py::jax-planar-fixed": 8, "tests/test_closed_ik_emitted.py::iiwa14_lock3": 8,
+    "tests/test_closed_ik_arms.py::stanford": 8, "tests/test_closed_ik_emitted.py::abb_irb140": 8,
+    "tests/test_conformance.py::chain-params": 8, "tests/test_conformance.py::chain-mimic": 7,
+    "tests/test_conformance.py::planar": 7, "tests/test_closed_ik_emitted.py::ur5": 7,
+    "tests/test_closed_ik_arms.py::ur5_urdf": 7, "tests/test_closed_ik_arms.py::puma560_modified": 7,
+    "tests/test_closed_ik_arms.py::kinova_j2s6": 7, "tests/test_closed_ik_arms.py::abb_irb140": 7,
+    "tests/test_closed_ik_arms.py::ur10_urdf": 7, "tests/test_closed_ik_arms.py::kuka_kr6": 7,
+    "tests/test_closed_ik_emitted.py::panda_urdf_lock7": 7, "tests/test_closed_ik_emitted.py::kuka_kr6": 6,
+    "tests/test_inverse.py": 5,
+    # estimated from an older run's durations
+    "tests/test_chain.py": 60, "tests/test_docs.py": 40, "tests/test_autodiff.py": 30,
+    "tests/test_torch_jax_backends.py": 25, "tests/test_cuda.py": 25, "tests/test_check_explains.py": 20,
+    "tests/test_sanitizers.py": 20, "tests/test_chain_reference.py": 15, "tests/test_cache.py": 12,
+    "tests/test_examples.py": 10,
+}
+"""Seconds of CPU of the larger work units (a file, or a unit of :data:`_SPLIT`); only their order matters: units
+start longest first so that neither worker is left with a long one at the end. A unit not listed counts 0.2 s a
+test (a random arm of ``test_closed_ik_families.py``: 4 s, 12 s for the three of ``..._more``)."""
+
+
+def _unit(nodeid: str) -> str:
+    """The work unit of a test's node id: its file, or a part of it (:data:`_SPLIT`)."""
+    file, _, test = nodeid.partition("::")
+    split = _SPLIT.get(file)
+    if split is None:
+        return file
+    name, _, param = test.partition("[")
+    return f"{file}::{split(name, param[:-1])}"
+
+
+def _cost(unit: str, tests: int) -> float:
+    """:data:`_COST` of a work unit, or an estimate."""
+    if unit in _COST:
+        return _COST[unit]
+    if unit.startswith("tests/test_closed_ik_families.py::test_random_arm"):
+        return 12.0 if "_more[" in unit else 4.0
+    return 0.2 * tests
+
+
+@pytest.hookimpl(optionalhook=True)  # a hook of pytest-xdist: a run without it (-p no:xdist) ignores it
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadfile`` (pyproject.toml's default), refined: the files of :data:`_SPLIT` cut smaller, and the
+    work units handed out longest first (:data:`_COST`). Any other ``--dist`` is left as pytest-xdist has it."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class Schedule(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _unit(nodeid)
+
+        def _assign_work_unit(self, node) -> None:
+            # the costliest unit waiting goes first (the base class hands out the queue's first)
+            unit = max(self.workqueue, key=lambda u: _cost(u, len(self.workqueue[u])))
+            self.workqueue.move_to_end(unit, last=False)
+            super()._assign_work_unit(node)
+
+    return Schedule(config, log)
