@@ -20,7 +20,7 @@ when ``abs_error <= allowed_abs`` (up to rounding of the product), which the ``c
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np

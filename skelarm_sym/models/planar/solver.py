@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from ...ir.build import Array, Body, select, sqrt, total
+from ...ir.build import Array, Body, select, total
 from ...ir.nodes import Argument, Call1, Const, Function, NamedConst, Role, Type, Var, eq
 
 SETTINGS = {
