@@ -222,6 +222,25 @@ def test_random_tables_match_the_reference(data):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * max(1.0, np.abs(want).max()))
 
 
+def test_a_long_chain_with_dense_twists_tries_every_candidate_and_matches_the_reference():
+    """Twists written as 1.5708 (not pi/2: dense constant rotations, as in xArm7's URDF) make the derivation build
+    the base-axes columns with every frame row carried and with each row as cofactors, for chains of up to
+    CANDIDATES_UP_TO joints. With 12 joints the candidates' step labels once read alike ("r" of row 1 at joint 1
+    and "r" at joint 11: one SymPy symbol for two expressions); the recorder now refuses that, and the values
+    are the reference's."""
+    rows = [{"type": "revolute", "a": 0.1 + 0.05 * (k % 3), "d": 0.05, "alpha": ("1.5708", "0", "-1.5708")[k % 3]}
+            for k in range(12)]
+    chain = dh_table("dense12", "standard", rows, tool={"xyz": [0.0, 0.02, 0.1]})
+    g = generate(chain, langs="python", out=None, functions="pose,jacobian,jacobian_dot,kinematics")
+    module = load_python(g.sources["dense12.py"], "dense12")
+    q, dq, ddq = _random_state(chain, 10, seed=3)
+    ref = _reference(chain, q, dq, ddq)
+    T, J, dJ, twist, acc = module.kinematics(q, dq, ddq)
+    for got, want in ((T, ref.T), (J, ref.J), (dJ, ref.dJ), (twist, ref.twist), (acc, ref.acc),
+                      (module.pose(q), ref.T), (module.jacobian(q), ref.J), (module.jacobian_dot(q, dq), ref.dJ)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
+
+
 @pytest.mark.fresh_derivation  # times the derivation itself
 def test_generation_stays_linear_and_fast():
     import time

@@ -127,3 +127,18 @@ def test_unevaluated_shortcuts_build_what_sympy_evaluates():
         for angle in (a, x, sp.S.Zero, -a, sp.pi / 2):
             assert planar._unevaluated(func, angle) == func(angle)
     assert planar._unevaluated(sp.cos, sp.S.Zero) == 1 and planar._unevaluated(sp.cos, -a) == sp.cos(a)
+
+
+def test_a_step_label_names_one_expression():
+    """SymPy makes equal symbols of equal names: a second, different expression under a label would share the
+    first's symbol, and the lowering would keep one definition for both. The recorder refuses it; the same
+    expression again gets its first name."""
+    from skelarm_sym.derive import StepRecorder
+
+    steps = StepRecorder("t")
+    x, y = sp.symbols("x y")
+    first = steps("a", x + y)
+    assert steps("a", x + y) is first and steps("b", x + y) is first
+    assert steps.definitions() == {first: x + y}
+    with pytest.raises(ValueError, match="defined twice"):
+        steps("a", x * y)

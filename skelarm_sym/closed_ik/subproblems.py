@@ -82,25 +82,16 @@ class Steps(StepRecorder):
     def __init__(self, tag: str) -> None:
         super().__init__(tag)
         self._principal: set = set()
-        self._definitions: dict = {}
-        self._names: set = set()
+
+    def symbol(self, label: str) -> sp.Symbol:
+        """The symbol of the step called ``label``, without assumptions (see above)."""
+        return sp.Symbol(f"_{self._tag}_{label}")
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         expr = _floaty(sp.sympify(expr))
         if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1 and expr.args[1].is_Atom:
             return expr  # -x costs nothing where it is used
-        if expr.is_Atom:
-            return expr
-        known = self._known.get(expr)
-        if known is not None:
-            return known
-        symbol = sp.Symbol(f"_{self._tag}_{label}")
-        if symbol in self._names:  # two definitions of one symbol: the lowering would keep one for both
-            raise ValueError(f"internal error: step {symbol} defined twice")
-        self._names.add(symbol)
-        self.steps.append((symbol, expr))
-        self._known[expr] = symbol
-        return symbol
+        return super().__call__(label, expr)
 
     def vec(self, label: str, v: Sequence) -> list:
         """Name each component of a 3-vector."""
@@ -123,9 +114,7 @@ class Steps(StepRecorder):
         if expr.is_Symbol:
             if expr in self._principal:
                 return True
-            if len(self._definitions) != len(self.steps):
-                self._definitions = dict(self.steps)
-            definition = self._definitions.get(expr)
+            definition = self.definitions().get(expr)
             return definition is not None and self.is_principal(definition)
         if expr.is_Mul and len(expr.args) == 2 and expr.args[0] == -1:
             return self.is_principal(expr.args[1])

@@ -121,13 +121,20 @@ class StepRecorder:
     """Collects named intermediate quantities.
 
     Trivial ones (atoms) are not given a name, and an expression recorded before
-    returns its first name (two derivations of the same quantity share one step).
+    returns its first name (two derivations of the same quantity share one step). A label
+    that names a second, different expression is an internal error: SymPy makes equal
+    symbols of equal names, so the lowering would keep one definition for both.
     """
 
     def __init__(self, tag: str) -> None:
         self._tag = tag
         self.steps: list[Step] = []
         self._known: dict[sp.Expr, sp.Symbol] = {}
+        self._definitions: dict[sp.Symbol, sp.Expr] = {}
+
+    def symbol(self, label: str) -> sp.Symbol:
+        """The symbol of the step called ``label`` (real)."""
+        return sp.Symbol(f"_{self._tag}_{label}", real=True)
 
     def __call__(self, label: str, expr: sp.Expr) -> sp.Expr:
         if expr.is_Atom:
@@ -135,10 +142,17 @@ class StepRecorder:
         known = self._known.get(expr)
         if known is not None:
             return known
-        symbol = sp.Symbol(f"_{self._tag}_{label}", real=True)
+        symbol = self.symbol(label)
+        if symbol in self._definitions:
+            raise ValueError(f"internal error: step {symbol} defined twice")
         self.steps.append((symbol, expr))
         self._known[expr] = symbol
+        self._definitions[symbol] = expr
         return symbol
+
+    def definitions(self) -> dict[sp.Symbol, sp.Expr]:
+        """Each recorded step's right-hand side by its symbol (read only)."""
+        return self._definitions
 
 
 def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:

@@ -305,19 +305,10 @@ class _Steps(StepRecorder):
     def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
         """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
         self.steps = list(steps)
-        self.__dict__.pop("_definitions", None)
+        self._definitions = dict(self.steps)
         self._known = {}
         for symbol, rhs in self.steps:
             self._known.setdefault(rhs, symbol)
-
-    def definitions(self) -> dict[sp.Symbol, sp.Expr]:
-        """Each recorded step's right-hand side by its symbol (kept up to date as steps are recorded)."""
-        table = self.__dict__.setdefault("_definitions", {})
-        if len(table) > len(self.steps) or (table and self.steps[len(table) - 1][0] not in table):
-            table.clear()  # the steps were replaced
-        if len(table) < len(self.steps):
-            table.update(self.steps[len(table):])
-        return table
 
     def _group(self, entries: Sequence[sp.Expr]) -> None:
         symbols = tuple(e for e in entries if isinstance(e, sp.Symbol) and e.name.startswith(f"_{self._tag}_"))
@@ -643,6 +634,12 @@ def _columns(step: _Steps, joints: Sequence[_Canonical], f: _Frames, W: Sequence
     return linear, angular
 
 
+def _row_tag(dropped: int | None) -> str:
+    """The part of a step's label that tells a candidate with frame row ``dropped`` as cofactors from the one
+    carrying every row: it ends in ``_``, so that the joint number after it never reads as part of it."""
+    return "" if dropped is None else f"c{dropped}_"
+
+
 def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None) -> Rows:
     """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
     r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
@@ -700,7 +697,7 @@ def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: 
     r: list[Vector] = [None] * n
     linear: list[Vector] = [None] * n
     below = [sp.S.Zero] * 3
-    tag = "" if dropped is None else str(dropped)
+    tag = _row_tag(dropped)
     for k in reversed(range(n)):
         t = list((joints[k + 1].before if k + 1 < n else tool).translation)
         advance = joints[k].motion.advance(f.theta[k])
@@ -746,7 +743,7 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
     out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq), None)]
     seen: list[list[Rows]] = []
     for dropped in rows:
-        tag = "" if dropped is None else str(dropped)
+        tag = _row_tag(dropped)
         views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
         if views in seen:  # that row is constant in every frame (a planar chain): nothing new
             continue
@@ -755,7 +752,7 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
         r, base = _base_offsets(step, joints, f, tool, axes, dropped)
         base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
         ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-        steps = dict(step.steps)
+        steps = step.definitions()
         if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
             continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
         tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
@@ -774,7 +771,7 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
     steps = step.definitions()
     paid = frozenset(_price(steps, _flat(axes, r))[1])
     out = list(base)
-    tag = "" if dropped is None else str(dropped)
+    tag = _row_tag(dropped)
     for k in range(len(joints) - 1):
         if f.segment[k + 1] == f.segment[k]:
             continue
@@ -823,7 +820,7 @@ def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns]) -> dict[st
     outputs: ``pose`` over every rotation and position, ``jacobian``, ``jacobian_dot``, ``twist`` and
     ``acceleration`` over the columns, ``kinematics`` over both together (a position from the columns'
     offsets only with those columns)."""
-    steps = dict(step.steps)
+    steps = step.definitions()
     alone: dict[tuple[int, int], int] = {}
 
     def cost(exprs, paid=frozenset()) -> tuple[int, set]:
@@ -944,13 +941,13 @@ def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transfor
         if d is not None:
             candidate[d] = step.vec(f"Rx{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
         rotations.append(candidate)
-    steps = dict(step.steps)
+    steps = step.definitions()
     prices = [_price(steps, _flat(r))[0] for r in rotations]
-    dropped = (None, 0, 1, 2)[prices.index(min(prices))]  # the row the cheapest rotation drops
+    cheapest = prices.index(min(prices))
+    dropped = (None, 0, 1, 2)[cheapest]  # the row the cheapest rotation drops
     poses = [(r, horner) for r in rotations]
     if len(joints) <= CANDIDATES_UP_TO:
-        poses.append((rotations[prices.index(min(prices))],
-                      _summed_tip(step, joints, f, tool, rotations[prices.index(min(prices))], dropped)))
+        poses.append((rotations[cheapest], _summed_tip(step, joints, f, tool, rotations[cheapest], dropped)))
     return poses, dropped
 
 
@@ -998,7 +995,7 @@ def _velocities(step: _Steps, joints, axes, linear, angular, dq, ddq, tag: str =
     omega_before, omega = [], [sp.S.Zero] * 3
     for k, joint in enumerate(joints):
         omega_before.append(omega)
-        omega = step.vec(f"w{tag.lstrip('ab')}{k + 1}", add(omega, joint.motion.angular_rate(axes[k], rates[k])))
+        omega = step.vec(f"w{tag}{k + 1}", add(omega, joint.motion.angular_rate(axes[k], rates[k])))
     omega_after = omega_before[1:] + [omega]
     suffix: list[Vector] = [None] * count
     u = [sp.S.Zero] * 3
@@ -1042,6 +1039,10 @@ def _by_coordinate(joints: Sequence[_Canonical], n: int, linear: Sequence[Vector
     return sp.Matrix([[columns[c][i] for c in range(n)] for i in range(6)])
 
 
+_OUTPUT_OF = {"pose": "T", "jacobian": "J", "jacobian_dot": "dJ", "twist": "twist", "acceleration": "acc"}
+"""The output of each forward function that may be written its own way (:func:`_choose`)."""
+
+
 def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     """Derive ``T, J, J_tool, dJ, twist, acc`` of ``chain`` (see the module docstring), and with ``inverse``
     the inverse functions of :mod:`skelarm_sym.models.chain.inverse`. Linear in N (the Hessian aside)."""
@@ -1070,15 +1071,14 @@ def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     groups = values(*chosen["kinematics"])  # every function's outputs but where another needs fewer operations
     groups["J_tool"] = [*tool_linear, *tool_angular]
     variants: dict[str, dict[str, str]] = {}
-    for function, output in (("pose", "T"), ("jacobian", "J"), ("jacobian_dot", "dJ"), ("twist", "twist"), ("acceleration", "acc")):
+    for function, output in _OUTPUT_OF.items():
         own = values(*chosen[function])[output]
         if any(x is not y for x, y in zip(own, groups[output])):
             variants[function] = {output: f"{output}@{function}"}
             groups[f"{output}@{function}"] = own
 
     def keys(*functions: str) -> list[str]:
-        return [variants.get(f, {}).get(o, o) for f in functions for o in {"pose": ("T",), "jacobian": ("J",),
-                "jacobian_dot": ("dJ",), "twist": ("twist",), "acceleration": ("acc",)}[f]]
+        return [variants.get(f, {}).get(_OUTPUT_OF[f], _OUTPUT_OF[f]) for f in functions]
 
     functions = [keys("pose"), keys("jacobian"), keys("jacobian_dot"), keys("twist", "acceleration"), ["J_tool"],
                  ["T", "J", "dJ", "twist", "acc"]]
