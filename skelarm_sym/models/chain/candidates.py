@@ -10,7 +10,7 @@ import sympy as sp
 
 from .algebra import Rows, Vector, _rows, _times_rz, matmul, matvec
 from .canonical import _Canonical
-from .frames import _Frames
+from .frames import _Frames, _actual
 from .joints import E_Z, add, cross
 from .model import Transform
 from .price import Pose, _flat, _price
@@ -24,15 +24,19 @@ def _row_tag(dropped: int | None) -> str:
     return "" if dropped is None else f"c{dropped}_"
 
 
-def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None) -> Rows:
+def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None,
+                   scale: sp.Expr | None = None) -> Rows:
     """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
     r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
     entries only where an output uses them. ``M`` itself when ``dropped`` is ``None`` or the row is constant.
-    ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s)."""
+    ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s).
+    ``scale``: ``M`` is kept with its third column divided by ``scale`` (:func:`_scaled_frames`); the view is
+    the true matrix, its cofactors those of the kept rows times the scale where they use the third column."""
+    scaled = scale is not None and scale != 1
     if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
-        return M
+        return [[r[0], r[1], r[2] * scale] for r in M] if scaled else M
     a, b = (dropped + 1) % 3, (dropped + 2) % 3
-    out = [list(r) for r in M]
+    out = [[r[0], r[1], r[2] * scale] for r in M] if scaled else [list(r) for r in M]
     for j in range(3):
         if j == 2 and column2 is not None:
             out[dropped][j] = column2[dropped]
@@ -42,6 +46,8 @@ def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, colum
         expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
         known = step._known.get(-expr)  # the same cofactor met before with the other sign (a permuted frame)
         out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
+        if scaled and j != 2:  # the kept rows' cofactor through the third column: times the scale
+            out[dropped][j] = out[dropped][j] * scale
     return out
 
 
@@ -66,8 +72,9 @@ def _cheap(step: _Steps, x: sp.Expr) -> bool:
 def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: list[Vector]) -> Rows:
     """``G_k = F_s Rz(psi_k)``, the rotation after joint ``k``'s motion in base axes (row ``dropped`` as
     cofactors; its third column is the joint's axis)."""
-    G = step.mat(f"H{k + 1}_", _times_rz(f.rotation[f.segment[k]], f.trig[k]))
-    return _cofactor_view(step, G, dropped, f"Hc{k + 1}_", axes[k])
+    s = f.segment[k]
+    G = step.mat(f"H{f.tag}{k + 1}_", _times_rz(f.rotation[s], f.trig[k]))
+    return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], f.scale[s] if f.scale else None)
 
 
 def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, axes: list[Vector],
@@ -175,7 +182,7 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
 
 
 def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform,
-          W: Sequence[Vector]) -> tuple[list[Pose], int | None]:
+          W: Sequence[Vector], scaled: _Frames | None = None) -> tuple[list[Pose], int | None]:
     """Candidates for the tool rotation ``R`` (rows) and position ``p_e``, and the row the cheapest rotation
     drops (``None``: all three carried).
 
@@ -183,25 +190,38 @@ def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transfor
     product (``r_0 = r_1 x r_2`` cyclically): carrying two rows down the chain instead of three saves six
     operations per dense step. ``p_e = o_1 + F_1 W_1`` (Horner's rule, shared with the Jacobian's offsets)
     or, with the cheapest rotation, summed link by link in base axes (:func:`_summed_tip`). :func:`_choose`
-    picks per function.
+    picks per function. ``scaled``: the frames with their third columns scaled (:func:`_scaled_frames`, where
+    constants are dense), for one more candidate: the rotation and the summed position from those.
     """
-    full = matmul(step.mat("Ge_", _times_rz(f.rotation[-1], f.trig[-1])), _rows(tool.rotation))
-    rows = [[step(f"Re{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
     horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
+    rotations, dropped = _rotations(step, f, tool)
+    poses = [(r, horner) for r in rotations]
+    cheapest = rotations[(None, 0, 1, 2).index(dropped)]
+    if len(joints) <= CANDIDATES_UP_TO:
+        poses.append((cheapest, _summed_tip(step, joints, f, tool, cheapest, dropped)))
+        if scaled is not None:
+            others, other_dropped = _rotations(step, scaled, tool)
+            rotation = others[(None, 0, 1, 2).index(other_dropped)]
+            poses.append((rotation, _summed_tip(step, joints, scaled, tool, rotation, other_dropped)))
+    return poses, dropped
+
+
+def _rotations(step: _Steps, f: _Frames, tool: Transform) -> tuple[list[Rows], int | None]:
+    """``R = F_last Rz(psi_n) C_tool`` with every row multiplied out, then with row 0, 1 or 2 as the cross
+    product of the other two; and the row the cheapest of them drops (``None``: none)."""
+    last = len(f.rotation) - 1
+    turned = _actual(f, last, step.mat(f"Ge{f.tag}_", _times_rz(f.rotation[last], f.trig[-1])))
+    full = matmul(turned, _rows(tool.rotation))
+    rows = [[step(f"Re{f.tag}{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
     rotations = []
     for d in (None, 0, 1, 2):
         candidate = [list(r) for r in rows]
         if d is not None:
-            candidate[d] = step.vec(f"Rx{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
+            candidate[d] = step.vec(f"Rx{f.tag}{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
         rotations.append(candidate)
     steps = step.definitions()
     prices = [_price(steps, _flat(r))[0] for r in rotations]
-    cheapest = prices.index(min(prices))
-    dropped = (None, 0, 1, 2)[cheapest]  # the row the cheapest rotation drops
-    poses = [(r, horner) for r in rotations]
-    if len(joints) <= CANDIDATES_UP_TO:
-        poses.append((rotations[cheapest], _summed_tip(step, joints, f, tool, rotations[cheapest], dropped)))
-    return poses, dropped
+    return rotations, (None, 0, 1, 2)[prices.index(min(prices))]
 
 
 def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
@@ -211,7 +231,8 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
     ``R (C_tool^T t_tool)`` from the pose's rotation. Where the pose drops row ``dropped`` of the rotation,
     that row's entries of the frames are cofactors of the two carried rows (:func:`_cofactor_view`)."""
     n = len(joints)
-    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
+    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{f.tag}{s + 1}_", scale=f.scale[s] if f.scale else None)
+             for s in range(len(f.rotation))]
     axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
     terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
     for k in range(n):
@@ -226,4 +247,4 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
     shift = tool.rotation.T * tool.translation
     for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):
         terms[i].append(x)
-    return step.vec(f"ps{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])
+    return step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])

@@ -33,6 +33,11 @@ class _Frames:
     trig: list[tuple[sp.Expr, sp.Expr] | None]
     theta: list[sp.Expr]
     axes: list[Vector]
+    scale: list[sp.Expr] | None = None
+    """``tau_s`` per segment where ``rotation[s]`` holds ``F~_s = F_s diag(1, 1, 1 / tau_s)`` (:func:`_scaled_frames`);
+    ``None``: every ``rotation[s]`` is ``F_s`` itself."""
+    tag: str = ""
+    """Told apart in step labels from the other frames' steps (``""`` for the plain frames)."""
 
 
 def _frames(step: _Steps, joints: Sequence[_Canonical], q: Sequence[sp.Symbol]) -> _Frames:
@@ -110,3 +115,50 @@ def _tool_jacobian(step: _Steps, joints, f: _Frames, tool: Transform, W) -> tupl
         linear.append(step.vec(f"Jtv{k + 1}", matvec(Bt, lin)))
         angular.append(step.vec(f"Jtw{k + 1}", matvec(Bt, ang)))
     return linear, angular
+
+
+def _scaled_frames(step: _Steps, joints: Sequence[_Canonical], f: _Frames) -> _Frames:
+    """The frames of ``f`` with their third columns scaled: ``F_s = F~_s diag(1, 1, tau_s)``.
+
+    ``Rz`` commutes with ``diag(1, 1, tau)``, so ``F_(s+1) = F_s Rz(psi) C = F~_s Rz(psi) C~ diag(1, 1, tau')``
+    with ``C~ = diag(1, 1, tau) C diag(1, 1, 1 / tau')``; ``tau'`` is chosen to make an entry of ``C~`` +-1.
+    A dense constant rotation (a URDF twist written ``1.5708``: ``Rx`` with cosine -3.67e-6) then costs 5
+    operations a row instead of 6 (``(x, y, z) -> (x, c y - s^2 z, y + c z)``), and the scales fold into the
+    constants that multiply the third columns (link offsets). Where every constant is a signed permutation
+    every ``tau`` stays 1 and these are the frames of ``f`` (the recorder returns the same steps)."""
+    rotation: list[Rows] = [f.rotation[0]]
+    scale: list[sp.Expr] = [sp.S.One]
+    for s, k in enumerate(f.starts[1:], start=1):
+        C = _rows(joints[k].before.rotation)
+        tau = scale[-1]
+        options = [tau, sp.S.One] + [x for x in (C[0][2], C[1][2], tau * C[2][2]) if x != 0] + [-x for x in (C[0][2], C[1][2], tau * C[2][2]) if x != 0]
+        best = None
+        for new in options:
+            Ct = [[_scaled_entry(C[i][j], tau if i == 2 else 1, new if j == 2 else 1) for j in range(3)] for i in range(3)]
+            cost = sum(1 for row in Ct for x in row if x != 0 and abs(x) != 1)
+            if best is None or cost < best[0]:
+                best = (cost, new, Ct)
+        _, new, Ct = best
+        turned = step.mat(f"Gz{s + 1}_", _times_rz(rotation[-1], f.trig[k - 1]))
+        rotation.append(step.mat(f"Fz{s + 1}_", matmul(turned, Ct)))
+        scale.append(new)
+    axes = [[row[2] * scale[f.segment[k]] for row in rotation[f.segment[k]]] for k in range(len(joints))]
+    return _Frames(f.segment, rotation, f.starts, f.ends, f.trig, f.theta, axes, scale, "z")
+
+
+def _actual(f: _Frames, s: int, M: Rows) -> Rows:
+    """``M`` (a matrix in the axes of segment ``s``'s frame as :func:`_scaled_frames` keeps it) with its third
+    column times ``tau_s``: the true matrix."""
+    if f.scale is None or f.scale[s] == 1:
+        return M
+    return [[r[0], r[1], r[2] * f.scale[s]] for r in M]
+
+
+def _scaled_entry(x: sp.Expr, times: sp.Expr, over: sp.Expr) -> sp.Expr:
+    """``x times / over`` for the constants of :func:`_scaled_frames`: exact where all three are, else a double
+    (exactly +-1 or 0 where the double is: ``x / x`` is 1 in floating point, and prints as no product)."""
+    value = sp.sympify(x) * times / over
+    if not value.has(sp.Float):
+        return value
+    number = float(value)
+    return sp.Integer(int(number)) if number in (0.0, 1.0, -1.0) else sp.Float(number)
