@@ -193,31 +193,36 @@ def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transfor
     picks per function. ``scaled``: the frames with their third columns scaled (:func:`_scaled_frames`, where
     constants are dense), for one more candidate: the rotation and the summed position from those.
     """
+    rows = _tool_rows(step, f, tool)
     horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
-    rotations, dropped = _rotations(step, f, tool)
+    rotations, dropped = _rotations(step, rows, f.tag)
     poses = [(r, horner) for r in rotations]
     cheapest = rotations[(None, 0, 1, 2).index(dropped)]
     if len(joints) <= CANDIDATES_UP_TO:
         poses.append((cheapest, _summed_tip(step, joints, f, tool, cheapest, dropped)))
         if scaled is not None:
-            others, other_dropped = _rotations(step, scaled, tool)
+            others, other_dropped = _rotations(step, _tool_rows(step, scaled, tool), scaled.tag)
             rotation = others[(None, 0, 1, 2).index(other_dropped)]
             poses.append((rotation, _summed_tip(step, joints, scaled, tool, rotation, other_dropped)))
     return poses, dropped
 
 
-def _rotations(step: _Steps, f: _Frames, tool: Transform) -> tuple[list[Rows], int | None]:
-    """``R = F_last Rz(psi_n) C_tool`` with every row multiplied out, then with row 0, 1 or 2 as the cross
-    product of the other two; and the row the cheapest of them drops (``None``: none)."""
+def _tool_rows(step: _Steps, f: _Frames, tool: Transform) -> Rows:
+    """``R = F_last Rz(psi_n) C_tool``, every entry a step (the unused ones are dropped later)."""
     last = len(f.rotation) - 1
     turned = _actual(f, last, step.mat(f"Ge{f.tag}_", _times_rz(f.rotation[last], f.trig[-1])))
     full = matmul(turned, _rows(tool.rotation))
-    rows = [[step(f"Re{f.tag}{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
+    return [[step(f"Re{f.tag}{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
+
+
+def _rotations(step: _Steps, rows: Rows, tag: str) -> tuple[list[Rows], int | None]:
+    """The rotation ``rows`` as it is, then with row 0, 1 or 2 as the cross product of the other two; and the
+    row the cheapest of them drops (``None``: none)."""
     rotations = []
     for d in (None, 0, 1, 2):
         candidate = [list(r) for r in rows]
         if d is not None:
-            candidate[d] = step.vec(f"Rx{f.tag}{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
+            candidate[d] = step.vec(f"Rx{tag}{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
         rotations.append(candidate)
     steps = step.definitions()
     prices = [_price(steps, _flat(r))[0] for r in rotations]
