@@ -15,6 +15,7 @@ from skelarm_sym.derive.core import expand_steps
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import Chain, Joint, Transform
 from skelarm_sym.models.chain import derive as chain_derive
+from skelarm_sym.models.chain.algebra import _split_z
 from skelarm_sym.models.chain.dh_file import load_robot_file
 from skelarm_sym.models.chain.joints import JOINT_TYPES, Prismatic, Revolute, joint_type
 
@@ -136,11 +137,11 @@ def test_column_rates_are_time_derivatives_of_the_columns():
 
 def test_split_z_writes_a_rotation_as_a_permutation_times_a_turn_about_z():
     rotation = Transform.rotate("x", sp.pi / 2).rotation @ Transform.rotate("y", sp.pi).rotation @ Transform.rotate("z", sp.Float(0.45)).rotation
-    P, beta = chain_derive._split_z(sp.Matrix(rotation))
+    P, beta = _split_z(sp.Matrix(rotation))
     assert all(x in (-1, 0, 1) for x in P)
     np.testing.assert_allclose(np.array(P * Transform.rotate("z", beta).rotation, dtype=float), np.array(rotation, dtype=float), atol=1e-15)
-    assert chain_derive._split_z(sp.Matrix(Transform.rotate("x", sp.Float(0.3)).rotation)) is None  # z does not stay an axis
-    assert chain_derive._split_z(sp.eye(3)) is None  # nothing to fold
+    assert _split_z(sp.Matrix(Transform.rotate("x", sp.Float(0.3)).rotation)) is None  # z does not stay an axis
+    assert _split_z(sp.eye(3)) is None  # nothing to fold
 
 
 def _yawed(tool_yaw):
@@ -206,3 +207,41 @@ def test_planar_damped_solves_tend_to_zero_for_huge_lambda(precision, huge):
         tol = 1e-12 if precision == "double" else 1e-5
         np.testing.assert_allclose(module.inverse_velocity(q, v, l, lam), want, rtol=0, atol=tol * max(1, np.abs(want).max()))
     assert math.isfinite(float(module.inverse_velocity(q, v, l, 0.0)[0]))
+
+
+# -- dense constant rotations (a URDF twist written 1.5708) -----------------------------------------
+
+XARM7 = (  # xArm7's joint origins (example-robot-data's xarm7.urdf): xyz, rpy; every axis z, tool at link7
+    ((0, 0, 0.267), (0, 0, 0)), ((0, 0, 0), (-1.5708, 0, 0)), ((0, -0.293, 0), (1.5708, 0, 0)),
+    ((0.0525, 0, 0), (1.5708, 0, 0)), ((0.0775, -0.3425, 0), (1.5708, 0, 0)), ((0, 0, 0), (1.5708, 0, 0)),
+    ((0.076, 0.097, 0), (-1.5708, 0, 0)),
+)
+
+
+def _xarm7_like() -> Chain:
+    joints = tuple(
+        Joint(f"joint{i + 1}", "revolute", Transform.from_xyz_rpy([sp.Float(x) for x in xyz], [sp.Float(a) for a in rpy]),
+              (0, 0, 1), Transform.identity(), i)
+        for i, (xyz, rpy) in enumerate(XARM7)
+    )
+    return Chain("xarm7_like", joints)
+
+
+def test_dense_twists_cost_five_operations_a_row_in_the_pose():
+    """With twists of 1.5708 (cosine -3.67e-6, not 0) each constant rotation is dense; the pose carries its
+    frames with the third column scaled (``_scaled_frames``): 179 operations in the C text, 190 before, CasADi 229 on the
+    URDF (0.8 x 229 = 183.2). The values stay the URDF's: they agree with the reference to 1e-14."""
+    chain = _xarm7_like()
+    g = generate(chain, langs="python", out=None, functions="pose,jacobian,kinematics")
+    programs = {p.name: p for p in g.programs}
+    assert programs["pose"].ops.arithmetic <= 180, programs["pose"].ops  # 191 before (IR count; C text 179, 190)
+    assert programs["pose"].ops.sin == programs["pose"].ops.cos == 7
+    module = load_python(g.sources["xarm7_like.py"], "xarm7_like")
+    rng = np.random.default_rng(5)
+    q, dq, ddq = (rng.uniform(-3, 3, (20, 7)) for _ in range(3))
+    ref = reference.chain_kinematics(chain.numeric(), q, dq, ddq)
+    np.testing.assert_allclose(module.pose(q), ref.T, atol=1e-14)
+    np.testing.assert_allclose(module.jacobian(q), ref.J, atol=1e-14)
+    T, J, dJ, twist, acc = module.kinematics(q, dq, ddq)
+    np.testing.assert_allclose(T, ref.T, atol=1e-14)
+    np.testing.assert_allclose(J, ref.J, atol=1e-14)

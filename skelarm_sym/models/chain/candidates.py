@@ -1,0 +1,255 @@
+"""Candidate ways to write the pose and the Jacobian's columns (base axes, rows as cofactors, the next frame's
+axes, summed tip positions); :func:`~skelarm_sym.models.chain.price._choose` picks among them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import sympy as sp
+
+from .algebra import Rows, Vector, _rows, _times_rz, matmul, matvec
+from .canonical import _Canonical
+from .frames import _Frames, _actual
+from .joints import E_Z, add, cross
+from .model import Transform
+from .price import Pose, _flat, _price
+from .rates import _Rates, _velocities
+from .steps import _Steps
+
+
+def _row_tag(dropped: int | None) -> str:
+    """The part of a step's label that tells a candidate with frame row ``dropped`` as cofactors from the one
+    carrying every row: it ends in ``_``, so that the joint number after it never reads as part of it."""
+    return "" if dropped is None else f"c{dropped}_"
+
+
+def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None,
+                   scale: sp.Expr | None = None) -> Rows:
+    """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
+    r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
+    entries only where an output uses them. ``M`` itself when ``dropped`` is ``None`` or the row is constant.
+    ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s).
+    ``scale``: ``M`` is kept with its third column divided by ``scale`` (:func:`_scaled_frames`); the view is
+    the true matrix, its cofactors those of the kept rows times the scale where they use the third column."""
+    scaled = scale is not None and scale != 1
+    if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
+        return [[r[0], r[1], r[2] * scale] for r in M] if scaled else M
+    a, b = (dropped + 1) % 3, (dropped + 2) % 3
+    out = [[r[0], r[1], r[2] * scale] for r in M] if scaled else [list(r) for r in M]
+    for j in range(3):
+        if j == 2 and column2 is not None:
+            out[dropped][j] = column2[dropped]
+            continue
+        if _cheap(step, M[dropped][j]):  # near the base a frame is sparse: its entry is one product of sines
+            continue
+        expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
+        known = step._known.get(-expr)  # the same cofactor met before with the other sign (a permuted frame)
+        out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
+        if scaled and j != 2:  # the kept rows' cofactor through the third column: times the scale
+            out[dropped][j] = out[dropped][j] * scale
+    return out
+
+
+def _cheap(step: _Steps, x: sp.Expr) -> bool:
+    """True when ``x`` is a constant, an input, a sine or cosine, or one product or sum of those (at most one
+    operation, cheaper than a cofactor's three)."""
+    x = sp.sympify(x)
+    definitions = step.definitions()
+    if x.could_extract_minus_sign():
+        x = -x
+    if not x.is_Symbol:
+        return x.is_Number
+    rhs = definitions.get(x)
+    if rhs is None:
+        return True
+    if isinstance(rhs, (sp.sin, sp.cos)):
+        return True
+    return (rhs.is_Mul or rhs.is_Add) and len(rhs.args) == 2 and all(
+        a.is_Number or (a.is_Symbol and isinstance(definitions.get(a, sp.sin(a)), (sp.sin, sp.cos))) for a in rhs.args)
+
+
+def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: list[Vector]) -> Rows:
+    """``G_k = F_s Rz(psi_k)``, the rotation after joint ``k``'s motion in base axes (row ``dropped`` as
+    cofactors; its third column is the joint's axis)."""
+    s = f.segment[k]
+    G = step.mat(f"H{f.tag}{k + 1}_", _times_rz(f.rotation[s], f.trig[k]))
+    return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], f.scale[s] if f.scale else None)
+
+
+def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, axes: list[Vector],
+                  dropped: int | None = None) -> tuple[list[Vector], list[Vector]]:
+    """``(r, columns)``: ``r_k = p_e - o_k`` in base axes, tip to base, ``r_k = r_(k+1) + G_k t_(k+1)`` plus the
+    joint's own advance along ``z_k`` (:func:`_after_joint`; suffix sums of the links in base axes: no rotation
+    of a whole vector, only the columns of ``G_k`` a translation uses), and the linear columns
+    ``column(z_k, r_k)``, or ``column(z_k, r_(k+1))`` where the link runs along the axis (standard DH with
+    ``a = 0``: ``z_k x G_k t = G_k (e_z x t) = 0``), which makes the last column of a wrist exactly zero."""
+    n = len(joints)
+    r: list[Vector] = [None] * n
+    linear: list[Vector] = [None] * n
+    below = [sp.S.Zero] * 3
+    tag = _row_tag(dropped)
+    for k in reversed(range(n)):
+        t = list((joints[k + 1].before if k + 1 < n else tool).translation)
+        advance = joints[k].motion.advance(f.theta[k])
+        G = _after_joint(step, f, k, dropped, axes) if any(x != 0 for x in t) else None
+        v = add(below, matvec(G, t)) if G is not None else list(below)
+        r[k] = step.vec(f"r{tag}{k + 1}", [v[i] + axes[k][i] * advance for i in range(3)])
+        moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + advance])
+        along = moved is None or all(x == 0 for x in moved)  # the link runs along the axis: z_k x r_k = z_k x r_(k+1)
+        linear[k] = step.vec(f"Jb{tag}_{k + 1}", joints[k].motion.column(axes[k], below if along else r[k])[0])
+        below = r[k]
+    return r, linear
+
+
+def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
+    """True when some segment starts with a constant rotation that is not a signed permutation (URDF angles
+    written with few decimals: xArm7's 1.5708): there every way to carry the frames is worth trying."""
+    return any(x not in (-1, 0, 1) for k in f.starts[1:] for x in joints[k].before.rotation)
+
+
+CANDIDATES_UP_TO = 16
+"""Chains of at most this many joints try every candidate (summed positions, base-axes columns with a row as
+cofactors); longer ones only Horner's rule and the segment columns (and the base-axes columns with every row
+where constants are dense, as before): each candidate costs about 20 ms a joint to derive and price."""
+
+
+@dataclass
+class _Columns:
+    """One way to write the Jacobian: per joint its linear and angular columns in base axes, the axes ``z_k``
+    they use, their rates (:func:`_velocities`) and the tool position their offsets give (``None``: none)."""
+
+    linear: list[Vector]
+    angular: list[Vector]
+    axes: list[Vector]
+    rates: "_Rates"
+    tip: Vector | None
+
+
+def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Sequence[Vector], linear, angular, dq, ddq,
+                       rows: Sequence[int | None]) -> list[_Columns]:
+    """The columns in segment axes (:func:`_columns`, with ``p_e`` by Horner's rule), and in base axes
+    (``z_k x r_(k+1)``, :func:`_base_offsets`) with the frames' rows carried whole (``None`` in ``rows``) or
+    one row as cofactors of the other two (:func:`_cofactor_view`)."""
+    out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq), None)]
+    seen: list[list[Rows]] = []
+    for dropped in rows:
+        tag = _row_tag(dropped)
+        views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
+        if views in seen:  # that row is constant in every frame (a planar chain): nothing new
+            continue
+        seen.append(views)
+        axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped)
+        base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
+        ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
+        steps = step.definitions()
+        if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
+            continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
+        tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}"), tip))
+    return out
+
+
+def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axes: list[Vector], r: list[Vector],
+                        W: Sequence[Vector], base: list[Vector], dropped: int | None) -> list[Vector]:
+    """The base-axes columns ``base``, each replaced by the same column taken in the axes of the frame that
+    starts at the next joint where that needs fewer operations (SYMORO's choice of projection frame):
+    ``z_k x (p_e - o_k) = F' ((C^T e_z) x W_(k+1)) + G_k (e_z x t)``, with ``F'`` that frame
+    (:func:`_cofactor_view`), ``C`` the constant rotation before it, ``W_(k+1)`` the tool offset in its axes
+    (:func:`_tool_offsets`) and ``t`` the translation to the next joint. Near a wrist ``W`` has a zero and the
+    column is one column of ``F'`` times one number (3 multiplications instead of a cross product)."""
+    steps = step.definitions()
+    paid = frozenset(_price(steps, _flat(axes, r))[1])
+    out = list(base)
+    tag = _row_tag(dropped)
+    for k in range(len(joints) - 1):
+        if f.segment[k + 1] == f.segment[k]:
+            continue
+        nxt = joints[k + 1].before
+        turned = [nxt.rotation[2, i] for i in range(3)]  # z_k in the next frame's axes
+        local = joints[k].motion.column(turned, W[k + 1])[0]
+        if sum(x != 0 for x in local) > 1:  # two terms or more: no cheaper than the cross product in base axes
+            continue
+        column = matvec(views[f.segment[k + 1]], local)
+        t = list(nxt.translation)
+        moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + joints[k].motion.advance(f.theta[k])])
+        if moved is not None and any(x != 0 for x in moved):
+            column = add(column, matvec(_after_joint(step, f, k, dropped, axes), moved))
+        if _price(steps, column, paid)[0] < _price(steps, base[k], paid)[0]:
+            out[k] = step.vec(f"Jn{tag}_{k + 1}", column)
+    return out
+
+
+def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform,
+          W: Sequence[Vector], scaled: _Frames | None = None) -> tuple[list[Pose], int | None]:
+    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``, and the row the cheapest rotation
+    drops (``None``: all three carried).
+
+    ``R = F_last Rz(psi_n) C_tool``: all rows multiplied out, or two of them and the third as their cross
+    product (``r_0 = r_1 x r_2`` cyclically): carrying two rows down the chain instead of three saves six
+    operations per dense step. ``p_e = o_1 + F_1 W_1`` (Horner's rule, shared with the Jacobian's offsets)
+    or, with the cheapest rotation, summed link by link in base axes (:func:`_summed_tip`). :func:`_choose`
+    picks per function. ``scaled``: the frames with their third columns scaled (:func:`_scaled_frames`, where
+    constants are dense), for one more candidate: the rotation and the summed position from those.
+    """
+    rows = _tool_rows(step, f, tool)
+    horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
+    rotations, dropped = _rotations(step, rows, f.tag)
+    poses = [(r, horner) for r in rotations]
+    cheapest = rotations[(None, 0, 1, 2).index(dropped)]
+    if len(joints) <= CANDIDATES_UP_TO:
+        poses.append((cheapest, _summed_tip(step, joints, f, tool, cheapest, dropped)))
+        if scaled is not None:
+            others, other_dropped = _rotations(step, _tool_rows(step, scaled, tool), scaled.tag)
+            rotation = others[(None, 0, 1, 2).index(other_dropped)]
+            poses.append((rotation, _summed_tip(step, joints, scaled, tool, rotation, other_dropped)))
+    return poses, dropped
+
+
+def _tool_rows(step: _Steps, f: _Frames, tool: Transform) -> Rows:
+    """``R = F_last Rz(psi_n) C_tool``, every entry a step (the unused ones are dropped later)."""
+    last = len(f.rotation) - 1
+    turned = _actual(f, last, step.mat(f"Ge{f.tag}_", _times_rz(f.rotation[last], f.trig[-1])))
+    full = matmul(turned, _rows(tool.rotation))
+    return [[step(f"Re{f.tag}{i}{j}", e) for j, e in enumerate(row)] for i, row in enumerate(full)]
+
+
+def _rotations(step: _Steps, rows: Rows, tag: str) -> tuple[list[Rows], int | None]:
+    """The rotation ``rows`` as it is, then with row 0, 1 or 2 as the cross product of the other two; and the
+    row the cheapest of them drops (``None``: none)."""
+    rotations = []
+    for d in (None, 0, 1, 2):
+        candidate = [list(r) for r in rows]
+        if d is not None:
+            candidate[d] = step.vec(f"Rx{tag}{d}", cross(rows[(d + 1) % 3], rows[(d + 2) % 3]))
+        rotations.append(candidate)
+    steps = step.definitions()
+    prices = [_price(steps, _flat(r))[0] for r in rotations]
+    return rotations, (None, 0, 1, 2)[prices.index(min(prices))]
+
+
+def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
+                dropped: int | None) -> Vector:
+    """``p_e = o_1 + sum_k (advance_k z_k + G_k t_(k+1))`` in base axes (``G_k = F_s Rz(psi_k)``, the frame after
+    joint ``k``'s motion, ``t_(k+1)`` the translation to the next joint; :func:`_after_joint`), the tool's share
+    ``R (C_tool^T t_tool)`` from the pose's rotation. Where the pose drops row ``dropped`` of the rotation,
+    that row's entries of the frames are cofactors of the two carried rows (:func:`_cofactor_view`)."""
+    n = len(joints)
+    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{f.tag}{s + 1}_", scale=f.scale[s] if f.scale else None)
+             for s in range(len(f.rotation))]
+    axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
+    terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
+    for k in range(n):
+        advance = joints[k].motion.advance(f.theta[k])
+        if advance != 0:
+            for i in range(3):
+                terms[i].append(axes[k][i] * advance)
+        t = list(joints[k + 1].before.translation) if k + 1 < n else []
+        if any(x != 0 for x in t):
+            for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes), t)):
+                terms[i].append(x)
+    shift = tool.rotation.T * tool.translation
+    for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):
+        terms[i].append(x)
+    return step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])
