@@ -10,7 +10,9 @@ One job per module:
 * :mod:`.derive` -- :func:`derive_ik_all`: named steps plus the outputs ``Q`` (S x N) and ``flags`` (S);
 * :mod:`.postprocess` -- the post-processing spec in NumPy (2 pi shifts into limits, drop, dedupe,
   status, nearest);
-* :mod:`.evaluate` -- the derivation evaluated with ``sympy.lambdify`` (until the IR emits it).
+* :mod:`.evaluate` -- the derivation evaluated in NumPy, independent of the IR (:mod:`.numpy_source`: the steps
+  printed directly; ``sympy.lambdify`` as its fallback);
+* :mod:`.float_facts` -- two SymPy Float queries answered from the number while deriving (speed only).
 
 Judge: :mod:`skelarm_sym.models.chain.reference_ik_all` (NumPy only, imports nothing from here).
 """

@@ -105,8 +105,11 @@ def _lock_subs(geom: Geometry, value: float) -> dict:
 
 # -- small exact vector algebra ------------------------------------------------------------------
 
+# sums are built by one ``Add`` of all their terms: SymPy's ``a + b + c`` flattens ``a + b`` and then flattens it
+# again with ``c`` (it unpacks nested sums), for the same canonical result (checked on every step of every arm)
+
 def dot(a: Sequence, b: Sequence) -> sp.Expr:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return sp.Add(a[0] * b[0], a[1] * b[1], a[2] * b[2])
 
 
 def cross(a: Sequence, b: Sequence) -> list:
@@ -140,7 +143,7 @@ def turn(k: Sequence, c, s, v: Sequence) -> list:
     kv = dot(k, v)
     kxv = cross(k, v)
     along = [kv * k[i] for i in range(3)]
-    return [along[i] + c * (v[i] - along[i]) + s * kxv[i] for i in range(3)]
+    return [sp.Add(along[i], c * (v[i] - along[i]), s * kxv[i]) for i in range(3)]
 
 
 def _clean(v: Sequence) -> Vec:

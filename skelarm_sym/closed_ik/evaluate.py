@@ -1,4 +1,5 @@
-"""The closed-form IK evaluated in NumPy through ``sympy.lambdify`` (until the IR emits it).
+"""The closed-form IK's SymPy steps evaluated in NumPy (:func:`~.numpy_source.numpy_function`: printed directly,
+``sympy.lambdify`` as the fallback for a node it has no rule for), independent of the IR and its backends.
 
 :func:`lambdify_ik` turns a :class:`~.derive.ClosedIK` into ``f(target, lock=None) -> (Q, flags)`` with
 ``target`` of shape ``(..., 16)`` (or ``(..., 4, 4)``), ``Q`` ``(..., S, N)`` and ``flags`` ``(..., S)`` (ints):
@@ -15,17 +16,26 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from .derive import ClosedIK, derive_ik_all
+from .numpy_source import Unsupported, numpy_function
 from .postprocess import IKAll, nearest, postprocess
+
+
+def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
+    """``f(*args) -> outs`` through the steps: :func:`~.numpy_source.numpy_function`, or ``sympy.lambdify`` where
+    the steps hold a node that has no rule there."""
+    try:
+        return numpy_function(args, steps, outs)
+    except Unsupported:
+        printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+                                "user_functions": {}, "order": "none"})  # "none": no term sorting (3x faster printing)
+        return sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
 
 
 def lambdify_ik(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     """``f(target, lock=None) -> (Q (..., S, N), flags (..., S))`` for ``ik`` (see the module docstring)."""
     args = list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
     outs = list(ik.Q) + list(ik.flags)
-    steps = list(ik.steps)
-    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
-                            "user_functions": {}, "order": "none"})  # "none": no term sorting (3x faster printing)
-    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
+    fn = _steps_function(args, list(ik.steps), outs)
     S, N = ik.Q.shape
 
     def evaluate(target, lock=None):
@@ -77,7 +87,7 @@ class ClosedFormIK:
 
 def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     """``f(target (m, 16), lock=None) -> (Q (m, S, N), flags (m, S))`` from a derivation that has the function
-    ``ik_candidates`` (:func:`~.derive.with_candidates`): its steps evaluated by ``sympy.lambdify`` in double, the
+    ``ik_candidates`` (:func:`~.derive.with_candidates`): its SymPy steps evaluated in double (:func:`_steps_function`), the
     check's expectation for the emitted ``ik_candidates`` (the emission against SymPy's own evaluation; whether
     the candidates solve the IK is judged by the reference in the ``ik_all`` rows)."""
     Q, flags = derivation.compact["Q"], derivation.compact["flags"]
@@ -93,9 +103,7 @@ def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarra
             todo.extend(s for s in derivation.steps[i][1].free_symbols if s in index)
     steps = [derivation.steps[i] for i in sorted(keep)]
     args = list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
-    printer = NumPyPrinter({"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
-                            "user_functions": {}, "order": "none"})
-    fn = sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
+    fn = _steps_function(args, steps, outs)
     locked = "lock" in derivation.inputs
 
     def evaluate(target, lock=None):

@@ -47,6 +47,22 @@ SING_TOL = 1e-9
 """An SP1/SP4 whose ``rho`` (or ``sqrt(A^2 + B^2)``) is at most this times its scale is a continuum (singular)."""
 
 
+def _irrational_inside(expr: sp.Basic) -> bool:
+    """Whether ``expr`` has a number symbol (``pi``) or a power of a number (``sqrt(2)``) anywhere in it: what
+    ``expr.atoms(NumberSymbol)`` and ``expr.atoms(Pow)`` would find, in one walk that stops at the first."""
+    stack = [expr]
+    while stack:
+        e = stack.pop()
+        if e.is_Atom:
+            if isinstance(e, sp.NumberSymbol):
+                return True
+        elif e.is_Pow and e.base.is_number:
+            return True
+        else:
+            stack.extend(e.args)
+    return False
+
+
 def _floaty(expr: sp.Expr) -> sp.Expr:
     """Irrational number subexpressions (``sqrt(2)``, ``pi``) as Floats: the emitted code has only literals."""
     expr = sp.sympify(expr)
@@ -57,7 +73,7 @@ def _floaty(expr: sp.Expr) -> sp.Expr:
     # an irrational number below has a number symbol (pi) or a numeric power (sqrt(2)) in it (no step here takes
     # a function of a number);
     # without one, skip replace(), which rebuilds the whole tree (a third of the derivation's time)
-    if not expr.atoms(sp.NumberSymbol) and not any(a.base.is_number for a in expr.atoms(sp.Pow)):
+    if not _irrational_inside(expr):
         return expr
     return expr.replace(
         lambda e: e.is_number and not e.is_Atom and not e.is_Rational and not e.is_Float and e.is_real is not False
