@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x5f9e0daaUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x9044dbd4UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM2_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM2_SINGLE) and vectorised blocks
+ * (ARM2_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM2_BLOCK ARM2_VECTORIZE
+#define ARM2_SINGLE
+#else
+#define ARM2_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM2_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM2_VECTOR_MATH 1
 #else
 #define ARM2_VECTORIZE
+#define ARM2_BLOCK
+#define ARM2_SINGLE
 #define ARM2_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM2_LIGHT __attribute__((__optimize__("O1")))
+#define ARM2_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM2_LIGHT
 #endif
@@ -266,7 +284,7 @@ ARM2_BODY void arm2_position_finish(const double l[2], const double *restrict cs
     p[0] = t7;
 }
 
-void arm2_position(const double q[2], const double l[2], double p[2])
+ARM2_SINGLE void arm2_position(const double q[2], const double l[2], double p[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -281,7 +299,7 @@ void arm2_position(const double q[2], const double l[2], double p[2])
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_position_block(const double *restrict q_T, const double l[2], double *restrict p_T)
+static ARM2_BLOCK void arm2_position_block(const double *restrict q_T, const double l[2], double *restrict p_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
@@ -372,7 +390,7 @@ ARM2_BODY void arm2_jacobian_finish(const double l[2], const double *restrict cs
     J[2*ARM2_STRIDE] = t7;
 }
 
-void arm2_jacobian(const double q[2], const double l[2], double J[4])
+ARM2_SINGLE void arm2_jacobian(const double q[2], const double l[2], double J[4])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -387,7 +405,7 @@ void arm2_jacobian(const double q[2], const double l[2], double J[4])
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_jacobian_block(const double *restrict q_T, const double l[2], double *restrict J_T)
+static ARM2_BLOCK void arm2_jacobian_block(const double *restrict q_T, const double l[2], double *restrict J_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
@@ -486,7 +504,7 @@ ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double l[2]
     H[2*ARM2_STRIDE] = t16;
 }
 
-void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
+ARM2_SINGLE void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -501,7 +519,7 @@ void arm2_coriolis(const double q[2], const double dq[2], const double l[2], dou
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict H_T)
+static ARM2_BLOCK void arm2_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict H_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
@@ -605,7 +623,7 @@ ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double l[2]
     v[0] = t16;
 }
 
-void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
+ARM2_SINGLE void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -620,7 +638,7 @@ void arm2_velocity(const double q[2], const double dq[2], const double l[2], dou
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict v_T)
+static ARM2_BLOCK void arm2_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[2], double *restrict v_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
@@ -725,7 +743,7 @@ ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double 
     a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
-void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
+ARM2_SINGLE void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -740,7 +758,7 @@ void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict a_T)
+static ARM2_BLOCK void arm2_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict a_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;
@@ -864,7 +882,7 @@ ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *r
     a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
-void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
+ARM2_SINGLE void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -879,7 +897,7 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
 #if ARM2_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM2_VECTORIZE void arm2_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+static ARM2_BLOCK void arm2_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[2], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[64], cs_T[64], sn_T[64];
     int b;

@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3a3df3b3UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x9c32c0c6UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM3_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM3_SINGLE) and vectorised blocks
+ * (ARM3_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM3_BLOCK ARM3_VECTORIZE
+#define ARM3_SINGLE
+#else
+#define ARM3_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM3_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM3_VECTOR_MATH 1
 #else
 #define ARM3_VECTORIZE
+#define ARM3_BLOCK
+#define ARM3_SINGLE
 #define ARM3_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM3_LIGHT __attribute__((__optimize__("O1")))
+#define ARM3_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM3_LIGHT
 #endif
@@ -271,7 +289,7 @@ ARM3_BODY void arm3_position_finish(const double l[3], const double *restrict cs
     p[0] = t12;
 }
 
-void arm3_position(const double q[3], const double l[3], double p[2])
+ARM3_SINGLE void arm3_position(const double q[3], const double l[3], double p[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -286,7 +304,7 @@ void arm3_position(const double q[3], const double l[3], double p[2])
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_position_block(const double *restrict q_T, const double l[3], double *restrict p_T)
+static ARM3_BLOCK void arm3_position_block(const double *restrict q_T, const double l[3], double *restrict p_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -385,7 +403,7 @@ ARM3_BODY void arm3_jacobian_finish(const double l[3], const double *restrict cs
     J[3*ARM3_STRIDE] = t12;
 }
 
-void arm3_jacobian(const double q[3], const double l[3], double J[6])
+ARM3_SINGLE void arm3_jacobian(const double q[3], const double l[3], double J[6])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -400,7 +418,7 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6])
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_jacobian_block(const double *restrict q_T, const double l[3], double *restrict J_T)
+static ARM3_BLOCK void arm3_jacobian_block(const double *restrict q_T, const double l[3], double *restrict J_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -512,7 +530,7 @@ ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double l[3]
     H[3*ARM3_STRIDE] = t26;
 }
 
-void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
+ARM3_SINGLE void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -527,7 +545,7 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict H_T)
+static ARM3_BLOCK void arm3_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict H_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -643,7 +661,7 @@ ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double l[3]
     v[0] = t26;
 }
 
-void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
+ARM3_SINGLE void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -658,7 +676,7 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict v_T)
+static ARM3_BLOCK void arm3_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[3], double *restrict v_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -775,7 +793,7 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
-void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
+ARM3_SINGLE void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -790,7 +808,7 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict a_T)
+static ARM3_BLOCK void arm3_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict a_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -931,7 +949,7 @@ ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *r
     a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
-void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
+ARM3_SINGLE void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
     int k;
@@ -946,7 +964,7 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
 #if ARM3_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3_VECTORIZE void arm3_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+static ARM3_BLOCK void arm3_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[3], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;

@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x9e9956dfUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xcf1ffa2fUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) float sinf(float);
 __attribute__((__simd__("notinbranch"))) float cosf(float);
 #define ARM3F_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM3F_SINGLE) and vectorised blocks
+ * (ARM3F_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM3F_BLOCK ARM3F_VECTORIZE
+#define ARM3F_SINGLE
+#else
+#define ARM3F_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM3F_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM3F_VECTOR_MATH 1
 #else
 #define ARM3F_VECTORIZE
+#define ARM3F_BLOCK
+#define ARM3F_SINGLE
 #define ARM3F_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) float cosf(float);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM3F_LIGHT __attribute__((__optimize__("O1")))
+#define ARM3F_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM3F_LIGHT
 #endif
@@ -205,7 +223,7 @@ ARM3F_BODY void arm3f_position_finish(const float *restrict cs, const float *res
     p[0] = t10;
 }
 
-void arm3f_position(const float q[3], float p[2])
+ARM3F_SINGLE void arm3f_position(const float q[3], float p[2])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -220,7 +238,7 @@ void arm3f_position(const float q[3], float p[2])
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_position_block(const float *restrict q_T, float *restrict p_T)
+static ARM3F_BLOCK void arm3f_position_block(const float *restrict q_T, float *restrict p_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -317,7 +335,7 @@ ARM3F_BODY void arm3f_jacobian_finish(const float *restrict cs, const float *res
     J[3*ARM3F_STRIDE] = t10;
 }
 
-void arm3f_jacobian(const float q[3], float J[6])
+ARM3F_SINGLE void arm3f_jacobian(const float q[3], float J[6])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -332,7 +350,7 @@ void arm3f_jacobian(const float q[3], float J[6])
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_jacobian_block(const float *restrict q_T, float *restrict J_T)
+static ARM3F_BLOCK void arm3f_jacobian_block(const float *restrict q_T, float *restrict J_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -442,7 +460,7 @@ ARM3F_BODY void arm3f_coriolis_finish(const float *restrict dq, const float *res
     H[3*ARM3F_STRIDE] = t24;
 }
 
-void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
+ARM3F_SINGLE void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -457,7 +475,7 @@ void arm3f_coriolis(const float q[3], const float dq[3], float H[6])
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_coriolis_block(const float *restrict q_T, const float *restrict dq_T, float *restrict H_T)
+static ARM3F_BLOCK void arm3f_coriolis_block(const float *restrict q_T, const float *restrict dq_T, float *restrict H_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -571,7 +589,7 @@ ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *res
     v[0] = t24;
 }
 
-void arm3f_velocity(const float q[3], const float dq[3], float v[2])
+ARM3F_SINGLE void arm3f_velocity(const float q[3], const float dq[3], float v[2])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -586,7 +604,7 @@ void arm3f_velocity(const float q[3], const float dq[3], float v[2])
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_velocity_block(const float *restrict q_T, const float *restrict dq_T, float *restrict v_T)
+static ARM3F_BLOCK void arm3f_velocity_block(const float *restrict q_T, const float *restrict dq_T, float *restrict v_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -701,7 +719,7 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
-void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
+ARM3F_SINGLE void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -716,7 +734,7 @@ void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3],
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_acceleration_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict a_T)
+static ARM3F_BLOCK void arm3f_acceleration_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict a_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -855,7 +873,7 @@ ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *r
     a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
-void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
+ARM3F_SINGLE void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
 {
     float ang[8], cs[8], sn[8];
     int k;
@@ -870,7 +888,7 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
 #if ARM3F_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM3F_VECTORIZE void arm3f_kinematics_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict p_T, float *restrict J_T, float *restrict H_T, float *restrict v_T, float *restrict a_T)
+static ARM3F_BLOCK void arm3f_kinematics_block(const float *restrict q_T, const float *restrict dq_T, const float *restrict ddq_T, float *restrict p_T, float *restrict J_T, float *restrict H_T, float *restrict v_T, float *restrict a_T)
 {
     float ang_T[96], cs_T[96], sn_T[96];
     int b;

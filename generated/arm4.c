@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2eea878dUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc638c62eUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM4_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM4_SINGLE) and vectorised blocks
+ * (ARM4_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM4_BLOCK ARM4_VECTORIZE
+#define ARM4_SINGLE
+#else
+#define ARM4_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM4_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM4_VECTOR_MATH 1
 #else
 #define ARM4_VECTORIZE
+#define ARM4_BLOCK
+#define ARM4_SINGLE
 #define ARM4_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM4_LIGHT __attribute__((__optimize__("O1")))
+#define ARM4_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM4_LIGHT
 #endif
@@ -276,7 +294,7 @@ ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs
     p[0] = t17;
 }
 
-void arm4_position(const double q[4], const double l[4], double p[2])
+ARM4_SINGLE void arm4_position(const double q[4], const double l[4], double p[2])
 {
     double ang[4], cs[4], sn[4];
     arm4_position_angles(q, ang, 1);
@@ -287,7 +305,7 @@ void arm4_position(const double q[4], const double l[4], double p[2])
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
+static ARM4_BLOCK void arm4_position_block(const double *restrict q_T, const double l[4], double *restrict p_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
@@ -394,7 +412,7 @@ ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs
     J[4*ARM4_STRIDE] = t17;
 }
 
-void arm4_jacobian(const double q[4], const double l[4], double J[8])
+ARM4_SINGLE void arm4_jacobian(const double q[4], const double l[4], double J[8])
 {
     double ang[4], cs[4], sn[4];
     arm4_jacobian_angles(q, ang, 1);
@@ -405,7 +423,7 @@ void arm4_jacobian(const double q[4], const double l[4], double J[8])
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
+static ARM4_BLOCK void arm4_jacobian_block(const double *restrict q_T, const double l[4], double *restrict J_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
@@ -530,7 +548,7 @@ ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4]
     H[4*ARM4_STRIDE] = t36;
 }
 
-void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
+ARM4_SINGLE void arm4_coriolis(const double q[4], const double dq[4], const double l[4], double H[8])
 {
     double ang[4], cs[4], sn[4];
     arm4_coriolis_angles(q, ang, 1);
@@ -541,7 +559,7 @@ void arm4_coriolis(const double q[4], const double dq[4], const double l[4], dou
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
+static ARM4_BLOCK void arm4_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict H_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
@@ -669,7 +687,7 @@ ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4]
     v[0] = t36;
 }
 
-void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
+ARM4_SINGLE void arm4_velocity(const double q[4], const double dq[4], const double l[4], double v[2])
 {
     double ang[4], cs[4], sn[4];
     arm4_velocity_angles(q, ang, 1);
@@ -680,7 +698,7 @@ void arm4_velocity(const double q[4], const double dq[4], const double l[4], dou
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
+static ARM4_BLOCK void arm4_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[4], double *restrict v_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
@@ -809,7 +827,7 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
-void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
+ARM4_SINGLE void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
 {
     double ang[4], cs[4], sn[4];
     arm4_acceleration_angles(q, ang, 1);
@@ -820,7 +838,7 @@ void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
+static ARM4_BLOCK void arm4_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;
@@ -978,7 +996,7 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
-void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
+ARM4_SINGLE void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
 {
     double ang[4], cs[4], sn[4];
     arm4_kinematics_angles(q, ang, 1);
@@ -989,7 +1007,7 @@ void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4],
 #if ARM4_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM4_VECTORIZE void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+static ARM4_BLOCK void arm4_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[4], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[128], cs_T[128], sn_T[128];
     int b;

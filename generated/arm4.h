@@ -45,7 +45,7 @@
  * sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x2eea878dUL
+#define ARM4_STAMP 0xc638c62eUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe3bf0df8UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xc8e59472UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM5_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM5_SINGLE) and vectorised blocks
+ * (ARM5_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM5_BLOCK ARM5_VECTORIZE
+#define ARM5_SINGLE
+#else
+#define ARM5_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM5_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM5_VECTOR_MATH 1
 #else
 #define ARM5_VECTORIZE
+#define ARM5_BLOCK
+#define ARM5_SINGLE
 #define ARM5_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM5_LIGHT __attribute__((__optimize__("O1")))
+#define ARM5_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM5_LIGHT
 #endif
@@ -281,7 +299,7 @@ ARM5_BODY void arm5_position_finish(const double l[5], const double *restrict cs
     p[0] = t22;
 }
 
-void arm5_position(const double q[5], const double l[5], double p[2])
+ARM5_SINGLE void arm5_position(const double q[5], const double l[5], double p[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -296,7 +314,7 @@ void arm5_position(const double q[5], const double l[5], double p[2])
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_position_block(const double *restrict q_T, const double l[5], double *restrict p_T)
+static ARM5_BLOCK void arm5_position_block(const double *restrict q_T, const double l[5], double *restrict p_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -411,7 +429,7 @@ ARM5_BODY void arm5_jacobian_finish(const double l[5], const double *restrict cs
     J[5*ARM5_STRIDE] = t22;
 }
 
-void arm5_jacobian(const double q[5], const double l[5], double J[10])
+ARM5_SINGLE void arm5_jacobian(const double q[5], const double l[5], double J[10])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -426,7 +444,7 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10])
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_jacobian_block(const double *restrict q_T, const double l[5], double *restrict J_T)
+static ARM5_BLOCK void arm5_jacobian_block(const double *restrict q_T, const double l[5], double *restrict J_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -564,7 +582,7 @@ ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double l[5]
     H[5*ARM5_STRIDE] = t46;
 }
 
-void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10])
+ARM5_SINGLE void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -579,7 +597,7 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict H_T)
+static ARM5_BLOCK void arm5_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict H_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -719,7 +737,7 @@ ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double l[5]
     v[0] = t46;
 }
 
-void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2])
+ARM5_SINGLE void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -734,7 +752,7 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict v_T)
+static ARM5_BLOCK void arm5_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[5], double *restrict v_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -875,7 +893,7 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
-void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])
+ARM5_SINGLE void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -890,7 +908,7 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict a_T)
+static ARM5_BLOCK void arm5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict a_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -1065,7 +1083,7 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
-void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2])
+ARM5_SINGLE void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1080,7 +1098,7 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
 #if ARM5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM5_VECTORIZE void arm5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+static ARM5_BLOCK void arm5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[5], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;

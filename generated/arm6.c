@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x1f8f236bUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x657305b7UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -40,9 +40,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define ARM6_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (ARM6_SINGLE) and vectorised blocks
+ * (ARM6_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define ARM6_BLOCK ARM6_VECTORIZE
+#define ARM6_SINGLE
+#else
+#define ARM6_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define ARM6_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define ARM6_VECTOR_MATH 1
 #else
 #define ARM6_VECTORIZE
+#define ARM6_BLOCK
+#define ARM6_SINGLE
 #define ARM6_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -60,10 +77,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define ARM6_LIGHT __attribute__((__optimize__("O1")))
+#define ARM6_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define ARM6_LIGHT
 #endif
@@ -286,7 +304,7 @@ ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs
     p[0] = t27;
 }
 
-void arm6_position(const double q[6], const double l[6], double p[2])
+ARM6_SINGLE void arm6_position(const double q[6], const double l[6], double p[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -301,7 +319,7 @@ void arm6_position(const double q[6], const double l[6], double p[2])
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_position_block(const double *restrict q_T, const double l[6], double *restrict p_T)
+static ARM6_BLOCK void arm6_position_block(const double *restrict q_T, const double l[6], double *restrict p_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -424,7 +442,7 @@ ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs
     J[6*ARM6_STRIDE] = t27;
 }
 
-void arm6_jacobian(const double q[6], const double l[6], double J[12])
+ARM6_SINGLE void arm6_jacobian(const double q[6], const double l[6], double J[12])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -439,7 +457,7 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12])
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_jacobian_block(const double *restrict q_T, const double l[6], double *restrict J_T)
+static ARM6_BLOCK void arm6_jacobian_block(const double *restrict q_T, const double l[6], double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -590,7 +608,7 @@ ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double l[6]
     H[6*ARM6_STRIDE] = t56;
 }
 
-void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12])
+ARM6_SINGLE void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -605,7 +623,7 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict H_T)
+static ARM6_BLOCK void arm6_coriolis_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict H_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -757,7 +775,7 @@ ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double l[6]
     v[0] = t56;
 }
 
-void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2])
+ARM6_SINGLE void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -772,7 +790,7 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict v_T)
+static ARM6_BLOCK void arm6_velocity_block(const double *restrict q_T, const double *restrict dq_T, const double l[6], double *restrict v_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -925,7 +943,7 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
-void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])
+ARM6_SINGLE void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -940,7 +958,7 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict a_T)
+static ARM6_BLOCK void arm6_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict a_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -1132,7 +1150,7 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
-void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2])
+ARM6_SINGLE void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1147,7 +1165,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
 #if ARM6_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static ARM6_VECTORIZE void arm6_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
+static ARM6_BLOCK void arm6_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, const double l[6], double *restrict p_T, double *restrict J_T, double *restrict H_T, double *restrict v_T, double *restrict a_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x1862bca0UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x5881d6e3UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -30,9 +30,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define DIFFDRIVE_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (DIFFDRIVE_SINGLE) and vectorised blocks
+ * (DIFFDRIVE_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define DIFFDRIVE_BLOCK DIFFDRIVE_VECTORIZE
+#define DIFFDRIVE_SINGLE
+#else
+#define DIFFDRIVE_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define DIFFDRIVE_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define DIFFDRIVE_VECTOR_MATH 1
 #else
 #define DIFFDRIVE_VECTORIZE
+#define DIFFDRIVE_BLOCK
+#define DIFFDRIVE_SINGLE
 #define DIFFDRIVE_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -50,10 +67,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define DIFFDRIVE_LIGHT __attribute__((__optimize__("O1")))
+#define DIFFDRIVE_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define DIFFDRIVE_LIGHT
 #endif
@@ -223,7 +241,7 @@ DIFFDRIVE_BODY void diffdrive_wheel_speeds_finish(const double *restrict rates, 
     wheels[1*DIFFDRIVE_STRIDE] = rates[0] + 0.5*rates[1*DIFFDRIVE_STRIDE]*track;
 }
 
-void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2])
+DIFFDRIVE_SINGLE void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2])
 {
     diffdrive_wheel_speeds_finish(rates, track, wheels, 1);
 }
@@ -231,7 +249,7 @@ void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2
 #if DIFFDRIVE_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static DIFFDRIVE_VECTORIZE void diffdrive_wheel_speeds_block(const double *restrict rates_T, double track, double *restrict wheels_T)
+static DIFFDRIVE_BLOCK void diffdrive_wheel_speeds_block(const double *restrict rates_T, double track, double *restrict wheels_T)
 {
     int b;
     for (b = 0; b < 32; ++b) {

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xdfd9cf02UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x66a89e39UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -46,9 +46,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define PANDA_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (PANDA_SINGLE) and vectorised blocks
+ * (PANDA_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define PANDA_BLOCK PANDA_VECTORIZE
+#define PANDA_SINGLE
+#else
+#define PANDA_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define PANDA_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define PANDA_VECTOR_MATH 1
 #else
 #define PANDA_VECTORIZE
+#define PANDA_BLOCK
+#define PANDA_SINGLE
 #define PANDA_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -66,10 +83,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define PANDA_LIGHT __attribute__((__optimize__("O1")))
+#define PANDA_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define PANDA_LIGHT
 #endif
@@ -388,7 +406,7 @@ PANDA_BODY void panda_pose_finish(const double *restrict cs, const double *restr
     T[2*PANDA_STRIDE] = t64;
 }
 
-void panda_pose(const double q[7], double T[16])
+PANDA_SINGLE void panda_pose(const double q[7], double T[16])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -403,7 +421,7 @@ void panda_pose(const double q[7], double T[16])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_pose_block(const double *restrict q_T, double *restrict T_T)
+static PANDA_BLOCK void panda_pose_block(const double *restrict q_T, double *restrict T_T)
 {
     double ang_T[224], cs_T[224], sn_T[224];
     int b;
@@ -606,7 +624,7 @@ PANDA_BODY void panda_jacobian_finish(const double *restrict cs, const double *r
     J[0] = t1579;
 }
 
-void panda_jacobian(const double q[7], double J[42])
+PANDA_SINGLE void panda_jacobian(const double q[7], double J[42])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -621,7 +639,7 @@ void panda_jacobian(const double q[7], double J[42])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_jacobian_block(const double *restrict q_T, double *restrict J_T)
+static PANDA_BLOCK void panda_jacobian_block(const double *restrict q_T, double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -861,7 +879,7 @@ PANDA_BODY void panda_jacobian_tool_finish(const double *restrict cs, const doub
     J_tool[19*PANDA_STRIDE] = t183;
 }
 
-void panda_jacobian_tool(const double q[7], double J_tool[42])
+PANDA_SINGLE void panda_jacobian_tool(const double q[7], double J_tool[42])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -876,7 +894,7 @@ void panda_jacobian_tool(const double q[7], double J_tool[42])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
+static PANDA_BLOCK void panda_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
 {
     double ang_T[224], cs_T[224], sn_T[224];
     int b;
@@ -1164,7 +1182,7 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     dJ[41*PANDA_STRIDE] = t131;
 }
 
-void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42])
+PANDA_SINGLE void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1179,7 +1197,7 @@ void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
+static PANDA_BLOCK void panda_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -1415,7 +1433,7 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     twist[1*PANDA_STRIDE] = t98;
 }
 
-void panda_twist(const double q[7], const double dq[7], double twist[6])
+PANDA_SINGLE void panda_twist(const double q[7], const double dq[7], double twist[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1430,7 +1448,7 @@ void panda_twist(const double q[7], const double dq[7], double twist[6])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
+static PANDA_BLOCK void panda_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -1658,7 +1676,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     acc[5*PANDA_STRIDE] = ((ddq[0] + t9*ddq[3*PANDA_STRIDE]) + (t15*ddq[4*PANDA_STRIDE] + (t21*ddq[5*PANDA_STRIDE] + t26*ddq[6*PANDA_STRIDE]))) + ((cs[1*PANDA_STRIDE]*ddq[2*PANDA_STRIDE] + (t110*dq[2*PANDA_STRIDE] + t116*dq[3*PANDA_STRIDE])) + (t122*dq[4*PANDA_STRIDE] + (t128*dq[5*PANDA_STRIDE] + t131*dq[6*PANDA_STRIDE])));
 }
 
-void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6])
+PANDA_SINGLE void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1673,7 +1691,7 @@ void panda_acceleration(const double q[7], const double dq[7], const double ddq[
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
+static PANDA_BLOCK void panda_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -2038,7 +2056,7 @@ PANDA_BODY void panda_kinematics_finish(const double *restrict dq, const double 
     J[0] = t1579;
 }
 
-void panda_kinematics(const double q[7], const double dq[7], const double ddq[7], double T[16], double J[42], double dJ[42], double twist[6], double acc[6])
+PANDA_SINGLE void panda_kinematics(const double q[7], const double dq[7], const double ddq[7], double T[16], double J[42], double dJ[42], double twist[6], double acc[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -2053,7 +2071,7 @@ void panda_kinematics(const double q[7], const double dq[7], const double ddq[7]
 #if PANDA_VECTOR_MATH
 /* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
+static PANDA_BLOCK void panda_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
 {
     double ang_T[112], cs_T[112], sn_T[112];
     int b;
@@ -2411,7 +2429,7 @@ PANDA_BODY void panda_ik_terms_finish(const double *restrict cs, const double *r
     J[0] = t1579;
 }
 
-void panda_ik_terms(const double q[7], double T[16], double J[42])
+PANDA_SINGLE void panda_ik_terms(const double q[7], double T[16], double J[42])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -2426,7 +2444,7 @@ void panda_ik_terms(const double q[7], double T[16], double J[42])
 #if PANDA_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static PANDA_VECTORIZE void panda_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
+static PANDA_BLOCK void panda_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
 {
     double ang_T[224], cs_T[224], sn_T[224];
     int b;

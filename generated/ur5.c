@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x22c1a949UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x2c8bc28fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -49,9 +49,26 @@
 __attribute__((__simd__("notinbranch"))) double sin(double);
 __attribute__((__simd__("notinbranch"))) double cos(double);
 #define UR5_VECTORIZE __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap")))
+/* The forward functions' straight-line bodies, in their single calls (UR5_SINGLE) and vectorised blocks
+ * (UR5_BLOCK), skip five passes that cost a fifth of their compile time and find nothing to do in them:
+ * each output is stored once (dead stores), no expression is partly redundant across paths (RTL GCSE),
+ * nothing is reused across iterations of the block's loop (predictive commoning), and the out-of-order
+ * cores that run vector code reorder it themselves (the second scheduling pass); benchmarks/batch_ab.py
+ * finds their speed unchanged. -DSKELARM_FULL_OPTIMIZE keeps these passes. */
+#if defined(SKELARM_FULL_OPTIMIZE)
+#define UR5_BLOCK UR5_VECTORIZE
+#define UR5_SINGLE
+#else
+#define UR5_BLOCK __attribute__((__optimize__("tree-vectorize", "vect-cost-model=cheap", "no-tree-dse", "no-dse", \
+    "no-gcse", "no-predictive-commoning", "no-schedule-insns2")))
+#define UR5_SINGLE __attribute__((__optimize__("no-tree-dse", "no-dse", "no-gcse", "no-predictive-commoning", \
+    "no-schedule-insns2")))
+#endif
 #define UR5_VECTOR_MATH 1
 #else
 #define UR5_VECTORIZE
+#define UR5_BLOCK
+#define UR5_SINGLE
 #define UR5_VECTOR_MATH 0
 #endif
 /* Each function's statements are written once, in body functions that single calls and batches share.
@@ -69,10 +86,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* The long closed forms without a vectorised batch (divisions, square roots: Gram determinants, QR) compile
  * at GCC's -O1 level when the file is optimised: -O2 took about twice the compile time on them and gave
  * them no measurable speed (benchmarks/compile_time.py, benchmarks/batch_ab.py). -DSKELARM_FULL_OPTIMIZE
- * compiles them at the command line's level. */
+ * compiles them at the command line's level. Dead-store elimination is skipped as well (each output is
+ * stored once): a tenth of their compile time. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && (__GNUC__ >= 6) \
     && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__) && !defined(SKELARM_FULL_OPTIMIZE)
-#define UR5_LIGHT __attribute__((__optimize__("O1")))
+#define UR5_LIGHT __attribute__((__optimize__("O1", "no-tree-dse", "no-dse")))
 #else
 #define UR5_LIGHT
 #endif
@@ -376,7 +394,7 @@ UR5_BODY void ur5_pose_finish(const double *restrict cs, const double *restrict 
     T[6*UR5_STRIDE] = t42;
 }
 
-void ur5_pose(const double q[6], double T[16])
+UR5_SINGLE void ur5_pose(const double q[6], double T[16])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -391,7 +409,7 @@ void ur5_pose(const double q[6], double T[16])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_pose_block(const double *restrict q_T, double *restrict T_T)
+static UR5_BLOCK void ur5_pose_block(const double *restrict q_T, double *restrict T_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -560,7 +578,7 @@ UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restr
     J[0] = t2016;
 }
 
-void ur5_jacobian(const double q[6], double J[36])
+UR5_SINGLE void ur5_jacobian(const double q[6], double J[36])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -575,7 +593,7 @@ void ur5_jacobian(const double q[6], double J[36])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_block(const double *restrict q_T, double *restrict J_T)
+static UR5_BLOCK void ur5_jacobian_block(const double *restrict q_T, double *restrict J_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -779,7 +797,7 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     J_tool[16*UR5_STRIDE] = t121;
 }
 
-void ur5_jacobian_tool(const double q[6], double J_tool[36])
+UR5_SINGLE void ur5_jacobian_tool(const double q[6], double J_tool[36])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -794,7 +812,7 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
+static UR5_BLOCK void ur5_jacobian_tool_block(const double *restrict q_T, double *restrict J_tool_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
@@ -1024,7 +1042,7 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     dJ[35*UR5_STRIDE] = t91;
 }
 
-void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
+UR5_SINGLE void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1039,7 +1057,7 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
+static UR5_BLOCK void ur5_jacobian_dot_block(const double *restrict q_T, const double *restrict dq_T, double *restrict dJ_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -1232,7 +1250,7 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     twist[1*UR5_STRIDE] = t68;
 }
 
-void ur5_twist(const double q[6], const double dq[6], double twist[6])
+UR5_SINGLE void ur5_twist(const double q[6], const double dq[6], double twist[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1247,7 +1265,7 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
+static UR5_BLOCK void ur5_twist_block(const double *restrict q_T, const double *restrict dq_T, double *restrict twist_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -1428,7 +1446,7 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     acc[5*UR5_STRIDE] = ddq[0] + t12*ddq[5*UR5_STRIDE] + t78*dq[2*UR5_STRIDE] + t82*dq[3*UR5_STRIDE] + t88*dq[4*UR5_STRIDE] + t91*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
 }
 
-void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6])
+UR5_SINGLE void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1443,7 +1461,7 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
+static UR5_BLOCK void ur5_acceleration_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict acc_T)
 {
     double ang_T[160], cs_T[160], sn_T[160];
     int b;
@@ -1750,7 +1768,7 @@ UR5_BODY void ur5_kinematics_finish(const double *restrict dq, const double *res
     J[0] = t2016;
 }
 
-void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6])
+UR5_SINGLE void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -1765,7 +1783,7 @@ void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], 
 #if UR5_VECTOR_MATH
 /* 16 configurations at once, stored transposed (element k of configuration b at [k*16 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
+static UR5_BLOCK void ur5_kinematics_block(const double *restrict q_T, const double *restrict dq_T, const double *restrict ddq_T, double *restrict T_T, double *restrict J_T, double *restrict dJ_T, double *restrict twist_T, double *restrict acc_T)
 {
     double ang_T[96], cs_T[96], sn_T[96];
     int b;
@@ -2077,7 +2095,7 @@ UR5_BODY void ur5_ik_terms_finish(const double *restrict cs, const double *restr
     J[0] = t2016;
 }
 
-void ur5_ik_terms(const double q[6], double T[16], double J[36])
+UR5_SINGLE void ur5_ik_terms(const double q[6], double T[16], double J[36])
 {
     double ang[8], cs[8], sn[8];
     int k;
@@ -2092,7 +2110,7 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36])
 #if UR5_VECTOR_MATH
 /* 32 configurations at once, stored transposed (element k of configuration b at [k*32 + b]): the
  * body functions, inlined in loops over b, run every statement on whole vectors of configurations. */
-static UR5_VECTORIZE void ur5_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
+static UR5_BLOCK void ur5_ik_terms_block(const double *restrict q_T, double *restrict T_T, double *restrict J_T)
 {
     double ang_T[192], cs_T[192], sn_T[192];
     int b;
