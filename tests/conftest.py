@@ -7,6 +7,16 @@ use ``-O0`` (``$SKELARM_SYM_OPT``, see :func:`skelarm_sym.build.default_flags`):
 the same, and the tests that are about the optimised library (the vectorised batch paths, bit-equality of
 batch and single calls, the SIMD trig helpers) pass their ``-O2`` explicitly.
 
+JAX compiles. XLA compiling the emitted solvers (one ``lax.while_loop`` program per solver and input shape) was
+the longest single cost of the suite. :func:`pytest_configure` asks XLA for quick CPU compiles (:data:`XLA_QUICK`:
+LLVM at ``-O0`` and XLA's older elemental emitters, 2 to 2.5 times less CPU a compile) for the whole session,
+workers and the processes they start included, the way the C is compiled at ``-O0``. The HLO programs are the
+same; the machine code is not: on a UR5 sample the straight-line functions gave the same bits and the compiled
+solvers differed from a default compile by rounding only (at most 3e-14 in double), well within what every test
+allows, and no test is about the speed of the JAX code. A JAX that does not take the flags (XLA stops a process on an unknown one) is found by one probe
+in a child process and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT``
+(other than 0) itself: ``SKELARM_SYM_OPT=2 pytest`` checks the default, optimised compiles of C and JAX alike.
+
 Derivations. Most of the suite's time is SymPy deriving the same robots again: the same arm in several
 files, in both precisions, for C and for NumPy. Each worker process therefore keeps, for the whole session,
 what a model kind's ``derive(model, wanted)`` returned (the step of :func:`skelarm_sym.generate.generate`,
@@ -34,10 +44,39 @@ conformance case, each closed-form IK arm, each random family arm) and hands the
 (:data:`_COST`, measured CPU seconds), so that both workers stay busy to the end.
 """
 
+import importlib.util
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
+
+XLA_QUICK = "--xla_backend_optimization_level=0 --xla_cpu_use_fusion_emitters=false"
+"""XLA's flags for quick CPU compiles (see the module docstring, "JAX compiles")."""
+
+
+def _quick_xla_flags() -> str | None:
+    """:data:`XLA_QUICK` when this session should use it and the installed XLA takes it, else None."""
+    if "XLA_FLAGS" in os.environ or os.environ.get("SKELARM_SYM_OPT") not in (None, "", "0"):
+        return None  # the run chose its own compiler settings
+    if importlib.util.find_spec("jax") is None:
+        return None
+    probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
+    try:
+        done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
+                              capture_output=True, timeout=120)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return XLA_QUICK if done.returncode == 0 else None
+
+
+def pytest_configure(config):
+    # once, in the process that starts the pytest-xdist workers (they inherit the environment), or in a run without them
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        flags = _quick_xla_flags()
+        if flags is not None:
+            os.environ["XLA_FLAGS"] = flags
 
 
 @pytest.fixture(autouse=True, scope="session")
