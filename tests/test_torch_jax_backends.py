@@ -152,7 +152,7 @@ def test_jax_rounds_draws_to_float32_once_without_x64(tmp_path):
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
 
 
-@pytest.mark.parametrize("lang", ["torch", "jax"])
+@pytest.mark.parametrize("lang", ["torch", pytest.param("jax", marks=pytest.mark.slow)])  # XLA compiles ik_solve
 def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     """One call over 12 targets (one start shared): every problem's status, iteration count and pose equal
     the NumPy module's for that problem alone; restarts included (some problems need them)."""
@@ -179,6 +179,7 @@ _EXAMPLE_RUNS: dict[str, subprocess.CompletedProcess] = {}
 importing PyTorch and SymPy: 5 s of CPU)."""
 
 
+@pytest.mark.slow  # a new process importing PyTorch and SymPy
 @pytest.mark.parametrize("document", ["README.md", "docs/gpu-and-autodiff.md"])
 def test_the_documented_pytorch_example_runs(tmp_path, document):
     _torch()
