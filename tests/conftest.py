@@ -7,6 +7,16 @@ use ``-O0`` (``$SKELARM_SYM_OPT``, see :func:`skelarm_sym.build.default_flags`):
 the same, and the tests that are about the optimised library (the vectorised batch paths, bit-equality of
 batch and single calls, the SIMD trig helpers) pass their ``-O2`` explicitly.
 
+JAX compiles. XLA compiling the emitted solvers (one ``lax.while_loop`` program per solver and input shape) was
+the longest single cost of the suite. :func:`pytest_configure` asks XLA for quick CPU compiles (:data:`XLA_QUICK`:
+LLVM at ``-O0`` and XLA's older elemental emitters, 2 to 2.5 times less CPU a compile) for the whole session,
+workers and the processes they start included, the way the C is compiled at ``-O0``. The HLO programs are the
+same; the machine code is not: on a UR5 sample the straight-line functions gave the same bits and the compiled
+solvers differed from a default compile by rounding only (at most 3e-14 in double), well within what every test
+allows, and no test is about the speed of the JAX code. A JAX that does not take the flags (XLA stops a process on an unknown one) is found by one probe
+in a child process and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT``
+(other than 0) itself: ``SKELARM_SYM_OPT=2 pytest`` checks the default, optimised compiles of C and JAX alike.
+
 Derivations. Most of the suite's time is SymPy deriving the same robots again: the same arm in several
 files, in both precisions, for C and for NumPy. Each worker process therefore keeps, for the whole session,
 what a model kind's ``derive(model, wanted)`` returned (the step of :func:`skelarm_sym.generate.generate`,
@@ -34,10 +44,39 @@ conformance case, each closed-form IK arm, each random family arm) and hands the
 (:data:`_COST`, measured CPU seconds), so that both workers stay busy to the end.
 """
 
+import importlib.util
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
+
+XLA_QUICK = "--xla_backend_optimization_level=0 --xla_cpu_use_fusion_emitters=false"
+"""XLA's flags for quick CPU compiles (see the module docstring, "JAX compiles")."""
+
+
+def _quick_xla_flags() -> str | None:
+    """:data:`XLA_QUICK` when this session should use it and the installed XLA takes it, else None."""
+    if "XLA_FLAGS" in os.environ or os.environ.get("SKELARM_SYM_OPT") not in (None, "", "0"):
+        return None  # the run chose its own compiler settings
+    if importlib.util.find_spec("jax") is None:
+        return None
+    probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
+    try:
+        done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
+                              capture_output=True, timeout=120)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return XLA_QUICK if done.returncode == 0 else None
+
+
+def pytest_configure(config):
+    # once, in the process that starts the pytest-xdist workers (they inherit the environment), or in a run without them
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        flags = _quick_xla_flags()
+        if flags is not None:
+            os.environ["XLA_FLAGS"] = flags
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -139,33 +178,40 @@ _SPLIT = {
 fixtures, ``lru_cache`` s and the memo of derivations are built once)."""
 
 _COST = {
-    # measured (user + sys of the worker and its compilers, 6817a38, two workers on a loaded machine), rounded
-    "tests/test_conformance.py::jax-chain-ur5": 87, "tests/test_codegen.py": 86, "tests/test_example_robot_data.py": 61,
-    "tests/test_conformance.py::chain-ur5": 28, "tests/test_closed_ik_emitted.py::spherical_wrist": 19,
-    "tests/test_conformance.py::jax-chain-params": 18, "tests/test_conformance.py::jax-chain-mimic": 18,
-    "tests/test_robot_cli.py": 17, "tests/test_conformance.py::jax-planar": 15, "tests/test_urdf.py": 13,
-    "tests/test_cpython_extension.py": 13, "tests/test_closed_ik_arms.py::iiwa14_lock3": 10,
-    "tests/test_closed_ik_arms.py::panda_lock7": 10, "tests/test_closed_ik_arms.py::ur5": 10,
-    "tests/test_closed_ik_emitted.py::panda_lock7": 9, "tests/test_closed_ik_emitted.py::puma560": 8,
-    "tests/test_closed_ik_arms.py::puma560": 8, "tests/test_closed_ik_arms.py::panda_urdf_lock7": 8,
-    "tests/test_conformance.py::jax-planar-fixed": 8, "tests/test_closed_ik_emitted.py::iiwa14_lock3": 8,
-    "tests/test_closed_ik_arms.py::stanford": 8, "tests/test_closed_ik_emitted.py::abb_irb140": 8,
-    "tests/test_conformance.py::chain-params": 8, "tests/test_conformance.py::chain-mimic": 7,
-    "tests/test_conformance.py::planar": 7, "tests/test_closed_ik_emitted.py::ur5": 7,
-    "tests/test_closed_ik_arms.py::ur5_urdf": 7, "tests/test_closed_ik_arms.py::puma560_modified": 7,
-    "tests/test_closed_ik_arms.py::kinova_j2s6": 7, "tests/test_closed_ik_arms.py::abb_irb140": 7,
-    "tests/test_closed_ik_arms.py::ur10_urdf": 7, "tests/test_closed_ik_arms.py::kuka_kr6": 7,
-    "tests/test_closed_ik_emitted.py::panda_urdf_lock7": 7, "tests/test_closed_ik_emitted.py::kuka_kr6": 6,
-    "tests/test_inverse.py": 5,
-    # estimated from an older run's durations
-    "tests/test_chain.py": 60, "tests/test_docs.py": 40, "tests/test_autodiff.py": 30,
-    "tests/test_torch_jax_backends.py": 25, "tests/test_cuda.py": 25, "tests/test_check_explains.py": 20,
-    "tests/test_sanitizers.py": 20, "tests/test_chain_reference.py": 15, "tests/test_cache.py": 12,
-    "tests/test_examples.py": 10,
+    # measured: CPU (user + sys) of each test and the processes it ran, d2dba39 (quick XLA compiles), two workers
+    # on a machine shared with other work, rounded; each unit of 2.5 s or more, or one the estimate below misses
+    "tests/test_codegen.py": 55, "tests/test_example_robot_data.py": 44, "tests/test_chain.py": 38,
+    "tests/test_conformance.py::jax-chain-ur5": 38, "tests/test_robot_cli.py": 33, "tests/test_docs.py": 29,
+    "tests/test_torch_jax_backends.py": 22, "tests/test_cuda.py": 27, "tests/test_robustness_c.py": 26,
+    "tests/test_autodiff.py": 20, "tests/test_conformance.py::chain-ur5": 18, "tests/test_sanitizers.py": 17,
+    "tests/test_ik.py": 15, "tests/test_chain_inverse.py": 13, "tests/test_ik_batch.py": 11,
+    "tests/test_foreign_text.py": 11, "tests/test_closed_ik_emitted.py::spherical_wrist": 11,
+    "tests/test_closed_ik_emitted.py::": 11, "tests/test_examples.py": 10, "tests/test_closed_ik_postprocess.py": 9,
+    "tests/test_cpython_solvers.py": 9, "tests/test_cli.py": 9, "tests/test_cpython_extension.py": 8,
+    "tests/test_conformance.py::jax-chain-params": 7, "tests/test_closed_ik_emitted.py::puma560": 7,
+    "tests/test_closed_ik_emitted.py::iiwa14_lock3": 7, "tests/test_check_explains.py": 7,
+    "tests/test_chain_reference.py": 6, "tests/test_conformance.py::jax-chain-mimic": 6,
+    "tests/test_conformance.py::jax-planar": 5, "tests/test_chain_ops.py": 5, "tests/test_cache.py": 5,
+    "tests/test_closed_ik_emitted.py::ur5": 5, "tests/test_closed_ik_arms.py::iiwa14_lock3": 5,
+    "tests/test_closed_ik_emitted.py::panda_lock7": 4, "tests/test_closed_ik_arms.py::puma560": 4,
+    "tests/test_closed_ik_arms.py::panda_lock7": 4, "tests/test_closed_ik_arms.py::panda_urdf_lock7": 4,
+    "tests/test_conformance.py::chain-params": 4, "tests/test_closed_ik_arms.py::kinova_j2s6": 4,
+    "tests/test_closed_ik_subproblems.py": 4, "tests/test_closed_ik_arms.py::ur5": 4,
+    "tests/test_closed_ik_emitted.py::panda_urdf_lock7": 4, "tests/test_derive.py": 4,
+    "tests/test_closed_ik_arms.py::stanford": 3, "tests/test_closed_ik_emitted.py::ur5_urdf": 3,
+    "tests/test_closed_ik_arms.py::abb_irb140": 3, "tests/test_closed_ik_arms.py::kuka_kr6": 3,
+    "tests/test_conformance.py::chain-mimic": 3, "tests/test_closed_ik_emitted.py::abb_irb140": 3,
+    "tests/test_closed_ik_arms.py::ur5_urdf": 3, "tests/test_closed_ik_arms.py::ur10_urdf": 3,
+    "tests/test_closed_ik_emitted.py::kuka_kr6": 3, "tests/test_closed_ik_arms.py::puma560_modified": 3,
+    "tests/test_closed_ik_emitted.py::three_parallel": 3, "tests/test_architecture.py": 3,
+    "tests/test_conformance.py::jax-planar-fixed": 2, "tests/test_urdf.py": 2, "tests/test_inverse.py": 2,
+    "tests/test_conformance.py::planar": 1, "tests/test_conformance.py::planar-fixed": 1,
+    "tests/test_contracts.py": 1, "tests/test_robot_file.py": 0.7, "tests/test_robot_fixtures.py": 0.5,
+    "tests/test_conformance.py::diffdrive": 0.5, "tests/test_names.py": 0.1, "tests/test_model.py": 0.0,
 }
 """Seconds of CPU of the larger work units (a file, or a unit of :data:`_SPLIT`); only their order matters: units
 start longest first so that neither worker is left with a long one at the end. A unit not listed counts 0.2 s a
-test (a random arm of ``test_closed_ik_families.py``: 4 s, 12 s for the three of ``..._more``)."""
+test (a random arm of ``test_closed_ik_families.py``: 2 s, 6 s for the three of ``..._more``)."""
 
 
 def _unit(nodeid: str) -> str:
@@ -183,7 +229,7 @@ def _cost(unit: str, tests: int) -> float:
     if unit in _COST:
         return _COST[unit]
     if unit.startswith("tests/test_closed_ik_families.py::test_random_arm"):
-        return 12.0 if "_more[" in unit else 4.0
+        return 6.0 if "_more[" in unit else 2.0
     return 0.2 * tests
 
 

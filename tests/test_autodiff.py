@@ -119,6 +119,7 @@ def test_torch_float32_keeps_its_dtype_and_device(torch_module):
     np.testing.assert_allclose(out.numpy(), reference.jacobian(q.astype(np.float32), *extra), rtol=0, atol=2e-5)
 
 
+@pytest.mark.slow  # torch.compile: a C++ compile
 def test_torch_compile_gives_the_same_numbers(torch_module):
     torch, name, mod, _ = torch_module
     if name != "ur5":

@@ -209,6 +209,7 @@ def _random_chain(draw) -> Chain:
     return Chain("rnd", tuple(joints), base, tool)
 
 
+@pytest.mark.slow  # 25 random tables, each derived: 6 s of CPU
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_random_tables_match_the_reference(data):

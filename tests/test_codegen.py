@@ -18,6 +18,8 @@ from skelarm_sym import derive
 
 ROOT = Path(__file__).resolve().parents[1]
 COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
+BY_COMPILER = [pytest.param(c, marks=pytest.mark.slow if c == "clang" else ()) for c in COMPILERS]
+"""The compilers as parameters: clang's compiles are in the slow set (gcc compiles the same text in the quick one)."""
 
 
 @pytest.mark.parametrize("n", [*range(1, 13), 64])
@@ -30,7 +32,7 @@ def test_emitted_code_matches_reference(n, precision):
     assert not bad, bad
 
 
-@pytest.mark.parametrize("compiler", COMPILERS)
+@pytest.mark.parametrize("compiler", BY_COMPILER)
 @pytest.mark.parametrize("n, lengths, precision", [(1, None, "double"), (4, None, "float"), (5, (1.0, 0.8, 0.5, 2.0, 1.0), "double"), (3, (1.0, 0.5, 0.25), "float")])
 def test_compiles_with_strict_flags(tmp_path, compiler, n, lengths, precision):
     g = generate(n, lengths=lengths, precision=precision, langs="c", out=tmp_path)

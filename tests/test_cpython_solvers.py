@@ -186,7 +186,7 @@ def test_entries_keep_reference_counts_and_give_fresh_arrays():
     assert isinstance(a.count, int) and a.status == "ok"
 
 
-@pytest.mark.parametrize("compiler", COMPILERS)
+@pytest.mark.parametrize("compiler", [pytest.param(c, marks=pytest.mark.slow if c == "clang" else ()) for c in COMPILERS])
 def test_the_solver_entries_compile_strictly(compiler, tmp_path):
     """The extension with solver entries (PUMA 560, double and float) compiles with -Werror under gcc and clang,
     at -O2 too (where GCC's flow analysis finds values that may be used uninitialized)."""

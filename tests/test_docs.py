@@ -84,7 +84,17 @@ def test_the_documents_have_blocks_to_run():
             "--compile"] in commands(blocks("sh")[0][2])
 
 
-@pytest.mark.parametrize("block", blocks("sh"), ids=_id)
+def _checks_a_robot(block) -> bool:
+    """A shell block that runs ``check --robot``: a 3-D arm's every function and solver (7 to 8 s of CPU)."""
+    try:
+        runs = commands(block[2])
+    except AssertionError:  # a step neither run nor allowed: the test itself reports it
+        return False
+    return any(args and args[0] == "check" and "--robot" in args for args in runs)
+
+
+@pytest.mark.parametrize("block", [pytest.param(b, marks=pytest.mark.slow if _checks_a_robot(b) else ()) for b in blocks("sh")],
+                         ids=_id)
 def test_shell_block(block, workdir, capsys):
     runs = commands(block[2])
     assert runs or all(part.strip().startswith(NOT_RUN) for line in block[2].splitlines() for part in line.split("&&") if part.strip())

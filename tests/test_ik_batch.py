@@ -226,7 +226,7 @@ def test_planar_solver_batch_with_default_tolerance():
         assert np.all(r.status == "converged")
 
 
-@pytest.mark.parametrize("language", ["torch", "jax"])
+@pytest.mark.parametrize("language", ["torch", pytest.param("jax", marks=pytest.mark.slow)])  # XLA compiles ik_all
 def test_torch_and_jax_ik_all_agree_with_the_numpy_batch(language):
     """The PyTorch and JAX modules' ik_all (the same masked program, their own printers) over 20 targets equal
     the NumPy batch: statuses and counts exactly, rows to 1e-12. (Their loop over the 48 output slots has data

@@ -26,7 +26,7 @@ def ulps(got, want, dtype):
 
 @needs_cc
 @pytest.mark.parametrize("precision, big", [("double", 1e8), ("float", 1e4)])
-@pytest.mark.parametrize("n", [1, 2, 3, 6])
+@pytest.mark.parametrize("n", [1, 2, pytest.param(3, marks=pytest.mark.slow), pytest.param(6, marks=pytest.mark.slow)])
 def test_sines_and_cosines_match_libm_and_batches_bit_for_bit(precision, big, n):
     """With q = (a, 0, ..., 0) and lengths 1 the last Jacobian column is (-sin a, cos a) exactly."""
     dtype = np.float64 if precision == "double" else np.float32
@@ -190,7 +190,7 @@ def test_ik_solve_accepts_null_outputs_and_keeps_nan_checks_under_fast_math(tmp_
 
 
 @needs_cc
-@pytest.mark.parametrize("compiler", COMPILERS)
+@pytest.mark.parametrize("compiler", [pytest.param(c, marks=pytest.mark.slow if c == "clang" else ()) for c in COMPILERS])
 def test_strict_and_fast_math_compiles_and_a_mismatched_header_is_an_error(tmp_path, compiler):
     from skelarm_sym.models.diffdrive import DiffDrive
 

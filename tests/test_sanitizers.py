@@ -120,8 +120,8 @@ CASES = [
     ("planar", 1, None, "double"),
     ("planar", 3, None, "float"),
     ("planar", 3, (1.0, 0.8, 0.5), "double"),
-    ("planar", 7, None, "double"),
-    ("planar", 7, (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4), "float"),
+    pytest.param("planar", 7, None, "double", marks=pytest.mark.slow),  # the 7-link arms: the slow set
+    pytest.param("planar", 7, (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4), "float", marks=pytest.mark.slow),
     ("diffdrive", None, None, "double"),
 ]
 

@@ -152,7 +152,7 @@ def test_jax_rounds_draws_to_float32_once_without_x64(tmp_path):
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
 
 
-@pytest.mark.parametrize("lang", ["torch", "jax"])
+@pytest.mark.parametrize("lang", ["torch", pytest.param("jax", marks=pytest.mark.slow)])  # XLA compiles ik_solve
 def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     """One call over 12 targets (one start shared): every problem's status, iteration count and pose equal
     the NumPy module's for that problem alone; restarts included (some problems need them)."""
@@ -174,6 +174,12 @@ def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     np.testing.assert_allclose(np.asarray(batch.position_error), [r.position_error for r in singles], rtol=0, atol=1e-9)
 
 
+_EXAMPLE_RUNS: dict[str, subprocess.CompletedProcess] = {}
+"""The run of each example's text: the documents that hold the same example share one run (a new Python process
+importing PyTorch and SymPy: 5 s of CPU)."""
+
+
+@pytest.mark.slow  # a new process importing PyTorch and SymPy
 @pytest.mark.parametrize("document", ["README.md", "docs/gpu-and-autodiff.md"])
 def test_the_documented_pytorch_example_runs(tmp_path, document):
     _torch()
@@ -182,9 +188,12 @@ def test_the_documented_pytorch_example_runs(tmp_path, document):
     assert block is not None, f"{document} lost its PyTorch example"
     code = block.group(1)
     assert len(code.strip().splitlines()) <= 12
-    script = tmp_path / "example.py"
-    script.write_text(code + "\nprint(tuple(J.shape), float((q.grad - J[..., :3, :].sum(-2)).abs().max()))\n")
-    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=ROOT, timeout=300)
+    result = _EXAMPLE_RUNS.get(code)
+    if result is None:
+        script = tmp_path / "example.py"
+        script.write_text(code + "\nprint(tuple(J.shape), float((q.grad - J[..., :3, :].sum(-2)).abs().max()))\n")
+        result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, cwd=ROOT, timeout=300)
+        _EXAMPLE_RUNS[code] = result
     assert result.returncode == 0, result.stderr[-2000:]
     shape, error = result.stdout.strip().splitlines()[-1].rsplit(" ", 1)
     assert shape == "(4096, 6, 6)" and float(error) < 1e-12
