@@ -154,6 +154,19 @@ class StepRecorder:
         """Each recorded step's right-hand side by its symbol (read only)."""
         return self._definitions
 
+    def recorded(self, expr: sp.Expr) -> sp.Symbol | None:
+        """The symbol of the step recorded for ``expr``, or ``None``."""
+        return self._known.get(expr)
+
+    def replace_steps(self, steps: Sequence[Step]) -> None:
+        """Take ``steps`` (symbol, right-hand side) as the recorded steps, in order (a pass that drops dead steps
+        or rewrites their signs); an expression recorded twice keeps its first symbol."""
+        self.steps = list(steps)
+        self._definitions = dict(self.steps)
+        self._known = {}
+        for symbol, rhs in self.steps:
+            self._known.setdefault(rhs, symbol)
+
 
 def expand_steps(steps: Sequence[Step], exprs: Iterable[sp.Expr]) -> list[sp.Expr]:
     """Substitute the steps into ``exprs`` (in order), giving closed forms in the inputs only."""

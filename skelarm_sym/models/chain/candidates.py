@@ -44,7 +44,7 @@ def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, colum
         if _cheap(step, M[dropped][j]):  # near the base a frame is sparse: its entry is one product of sines
             continue
         expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
-        known = step._known.get(-expr)  # the same cofactor met before with the other sign (a permuted frame)
+        known = step.recorded(-expr)  # the same cofactor met before with the other sign (a permuted frame)
         out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
         if scaled and j != 2:  # the kept rows' cofactor through the third column: times the scale
             out[dropped][j] = out[dropped][j] * scale

@@ -23,14 +23,6 @@ class _Steps(StepRecorder):
     groups: list[tuple[sp.Symbol, ...]]
     """Steps that belong together (a vector; a row or a column of a matrix): candidates for one sign flip."""
 
-    def replace_steps(self, steps: Sequence[tuple[sp.Symbol, sp.Expr]]) -> None:
-        """Take ``steps`` (symbols of the recorded steps, new right-hand sides) as the recorded steps."""
-        self.steps = list(steps)
-        self._definitions = dict(self.steps)
-        self._known = {}
-        for symbol, rhs in self.steps:
-            self._known.setdefault(rhs, symbol)
-
     def _group(self, entries: Sequence[sp.Expr]) -> None:
         symbols = tuple(e for e in entries if isinstance(e, sp.Symbol) and e.name.startswith(f"_{self._tag}_"))
         if len(symbols) > 1:
