@@ -64,6 +64,39 @@ def _wrap(x: object) -> "Expr":
     return x  # type: ignore[return-value]
 
 
+def _hash_slot():
+    """The ``_hash`` field of a composite expression: its structural hash once computed (see :func:`_hashed`);
+    no part of the node's value (not in ``__init__``, ``==`` or ``repr``)."""
+    return field(default=None, init=False, repr=False, compare=False)
+
+
+def _hashed(cls):
+    """Memoise a composite node's structural hash in its ``_hash`` slot, and answer ``==`` from the hashes
+    first: the printers' memos, the common-subexpression tables and the operation counts look up deep
+    trees, and a frozen dataclass's own hash walks the whole tree on every lookup (quadratic in depth).
+    Equal nodes keep equal hashes (the same function of the same fields)."""
+    structural_hash, structural_eq = cls.__hash__, cls.__eq__
+
+    def __hash__(self):
+        h = self._hash
+        if h is None:
+            h = structural_hash(self)
+            object.__setattr__(self, "_hash", h)
+        return h
+
+    def __eq__(self, other):
+        if self is other:
+            return True
+        if type(other) is not type(self):
+            return NotImplemented
+        if __hash__(self) != __hash__(other):
+            return False
+        return structural_eq(self, other)
+
+    cls.__hash__, cls.__eq__ = __hash__, __eq__
+    return cls
+
+
 class ExprOps:
     """Operators that build expressions (``a + b``, ``a * 2.0``, ``-a``, ``a < b``); ``==`` stays
     structural equality: use :func:`eq` and :func:`ne` for comparisons."""
@@ -130,6 +163,7 @@ class Var(ExprOps):
     type: Type = Type.REAL
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Elem(ExprOps):
     """Element ``index`` of array ``array`` (an argument, a local array or a table), row-major."""
@@ -137,29 +171,37 @@ class Elem(ExprOps):
     array: str
     index: "Expr"
     type: Type = Type.REAL
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Add(ExprOps):
     """``terms[0] + terms[1] + ...``; a :class:`Neg` term prints as a subtraction."""
 
     terms: tuple["Expr", ...]
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Mul(ExprOps):
     """``factors[0] * factors[1] * ...``."""
 
     factors: tuple["Expr", ...]
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Neg(ExprOps):
     """``-x``."""
 
     x: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Div(ExprOps):
     """``num / den``; with ``guarded``, ``num / (den != 0 ? den : 1)``."""
@@ -167,12 +209,14 @@ class Div(ExprOps):
     num: "Expr"
     den: "Expr"
     guarded: bool = False
+    _hash: int | None = _hash_slot()
 
 
 UNARY = ("sqrt", "sin", "cos", "fabs", "floor", "nearbyint", "isfinite")
 BINARY = ("atan2", "fmin", "fmax")
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Call1(ExprOps):
     """A math function of one real: one of :data:`UNARY` (``isfinite`` is a ``bool`` that -ffast-math
@@ -181,8 +225,10 @@ class Call1(ExprOps):
 
     function: str
     x: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Call2(ExprOps):
     """A math function of two reals: one of :data:`BINARY`."""
@@ -190,11 +236,13 @@ class Call2(ExprOps):
     function: str
     a: "Expr"
     b: "Expr"
+    _hash: int | None = _hash_slot()
 
 
 COMPARISONS = ("<", "<=", ">", ">=", "==", "!=")
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Compare(ExprOps):
     """``a op b`` for ``op`` in :data:`COMPARISONS`; a ``bool``."""
@@ -202,23 +250,29 @@ class Compare(ExprOps):
     op: str
     a: "Expr"
     b: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Logic(ExprOps):
     """``terms[0] and terms[1] ...`` (``op == "and"``) or ``or``; a ``bool``."""
 
     op: str
     terms: tuple["Expr", ...]
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Not(ExprOps):
     """``not x``."""
 
     x: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Select(ExprOps):
     """``cond ? then : otherwise`` (both sides are evaluated in vectorised backends)."""
@@ -226,8 +280,10 @@ class Select(ExprOps):
     cond: "Expr"
     then: "Expr"
     otherwise: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Bits(ExprOps):
     """Integer operations: ``^ << >> *`` on ``uint64`` (the random-number generator; ``*`` and ``<<`` wrap
@@ -236,14 +292,17 @@ class Bits(ExprOps):
     op: str
     a: "Expr"
     b: "Expr"
+    _hash: int | None = _hash_slot()
 
 
+@_hashed
 @dataclass(frozen=True, slots=True)
 class Cast(ExprOps):
     """``x`` converted to ``type`` (``uint64`` -> ``real``: the top 53 bits as a number in [0, 1))."""
 
     type: Type
     x: "Expr"
+    _hash: int | None = _hash_slot()
 
 
 Expr = Union[Const, NamedConst, Var, Elem, Add, Mul, Neg, Div, Call1, Call2, Compare, Logic, Not, Select, Bits, Cast]
