@@ -288,6 +288,17 @@ def test_batch_equals_single():
     np.testing.assert_array_equal(shared.acc[1, 2], chain_kinematics(chain, q[1, 2], dq[0, 0], ddq[0, 0]).acc)
 
 
+@pytest.mark.parametrize("name", ["stanford.toml", "ur5.toml"])  # a prismatic joint; revolute only
+def test_a_pose_without_rates_is_the_pose_with_zero_rates(name):
+    # without dq and ddq the recursion skips the rates' terms: the same numbers as with zero rates given
+    chain = load_robot_file(ROBOTS / name).numeric()
+    q = np.random.default_rng(3).uniform(-3, 3, (5, chain.n))
+    lean, full = chain_kinematics(chain, q), chain_kinematics(chain, q, np.zeros_like(q), np.zeros_like(q))
+    for field in ("T", "J", "J_tool", "dJ", "twist", "acc", "origins", "axes"):
+        np.testing.assert_array_equal(getattr(lean, field), getattr(full, field), err_msg=field)
+    assert not np.any(lean.dJ) and not np.any(lean.twist) and not np.any(lean.acc)
+
+
 def test_wrong_shape_is_refused():
     chain = load_robot_file(ROBOTS / "ur5.toml").numeric()
     with pytest.raises(ValueError, match=r"\(\.\.\., 6\)"):

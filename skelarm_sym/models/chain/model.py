@@ -427,11 +427,25 @@ class Chain:
     def numeric(self, params: Sequence[float] | Mapping[str, float] | None = None) -> NumericChain:
         """The chain with parameter values substituted, as floats (for the NumPy reference).
 
-        ``params``: values in the order of :attr:`parameters`, or a mapping by name.
+        ``params``: values in the order of :attr:`parameters`, or a mapping by name. Computed once per chain
+        and parameter values (SymPy's evaluation of every constant takes milliseconds; checks and judges
+        ask again and again): the arrays are read-only, shared by every caller.
         """
+        values = self.parameter_values(params)
+        key = tuple(sorted((str(k), float(v)) for k, v in values.items()))
+        memo = self.__dict__.setdefault("_numeric_memo", {})  # not a field: no part of the chain's value
+        hit = memo.get(key)
+        if hit is None:
+            hit = memo[key] = self._numeric(values)
+        return hit
+
+    def _numeric(self, values: dict) -> NumericChain:
         import numpy as np
 
-        values = self.parameter_values(params)
+        def frozen(a):
+            a = np.array(a, dtype=float)
+            a.setflags(write=False)
+            return a
 
         exact = {k: sp.Float(v) for k, v in values.items()}
 
@@ -440,12 +454,12 @@ class Chain:
 
         joints = tuple(
             NumericJoint(
-                j.name, j.kind, j.before.numeric(values), np.array([num(a) for a in j.axis]), j.after.numeric(values),
-                j.coordinate, num(j.offset), num(j.multiplier),
+                j.name, j.kind, frozen(j.before.numeric(values)), frozen([num(a) for a in j.axis]),
+                frozen(j.after.numeric(values)), j.coordinate, num(j.offset), num(j.multiplier),
             )
             for j in self.joints
         )
-        return NumericChain(joints, self.base.numeric(values), self.tool.numeric(values), self.n)
+        return NumericChain(joints, frozen(self.base.numeric(values)), frozen(self.tool.numeric(values)), self.n)
 
     def parameter_values(self, params: Sequence[float] | Mapping[str, float] | None) -> dict[sp.Symbol, float]:
         """``{symbol: value}`` for every named parameter; InputError when one is missing or not finite."""

@@ -97,9 +97,11 @@ def _array(value: object, name: str, n: int) -> np.ndarray:
 def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
     """Pose, Jacobian, its derivative, twist and acceleration of the tool by the forward recursion.
 
-    ``q``, ``dq``, ``ddq`` (..., n) broadcast together; ``dq`` and ``ddq`` default to zeros.
+    ``q``, ``dq``, ``ddq`` (..., n) broadcast together; ``dq`` and ``ddq`` default to zeros. Without either,
+    every rate is zero and the recursion carries only pose and axes (the rates' terms would add exact zeros).
     """
     n = int(chain.n)
+    moving = dq is not None or ddq is not None
     q = _array(q, "q", n)
     dq = np.zeros_like(q) if dq is None else _array(dq, "dq", n)
     ddq = np.zeros_like(q) if ddq is None else _array(ddq, "ddq", n)
@@ -114,6 +116,8 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
         R, p, w, dw, v, a = state
         transform = np.asarray(transform, dtype=float)
         r = np.einsum("...ij,j->...i", R, transform[:3, 3])
+        if not moving:
+            return (R @ transform[:3, :3], p + r, w, dw, v, a)
         return (R @ transform[:3, :3], p + r, w, dw, v + cross(w, r), a + cross(dw, r) + cross(w, cross(w, r)))
 
     base = np.asarray(chain.base, dtype=float)
@@ -139,15 +143,17 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
         kinds.append(joint.kind)
         coords.append(c)
         mults.append(mult)
-        if joint.kind == "revolute":
+        if joint.kind not in ("revolute", "prismatic"):
+            raise ValueError(f"joint kind must be revolute or prismatic, got {joint.kind!r}")
+        if not moving:
+            state = (R @ rodrigues(axis, th), p, w, dw, v, a) if joint.kind == "revolute" else (R, p + z * th[..., None], w, dw, v, a)
+        elif joint.kind == "revolute":
             state = (R @ rodrigues(axis, th), p, w + z * dth, dw + z * ddth + cross(w, z) * dth, v, a)
-        elif joint.kind == "prismatic":
+        else:
             r = z * th[..., None]
             state = (R, p + r, w, dw,
                      v + cross(w, r) + z * dth,
                      a + cross(dw, r) + cross(w, cross(w, r)) + 2.0 * cross(w, z) * dth + z * ddth)
-        else:
-            raise ValueError(f"joint kind must be revolute or prismatic, got {joint.kind!r}")
         state = rigid(state, joint.after)
     state = rigid(state, chain.tool)
     R_e, p_e, w_e, dw_e, v_e, a_e = state
@@ -155,15 +161,19 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
     J = np.zeros(batch + (6, n))
     dJ = np.zeros(batch + (6, n))
     for o, z, kind, c, mult, w, v_o in zip(origins, axes, kinds, coords, mults, w_before, v_before):
-        dz = cross(w, z)
         if kind == "revolute":
             r = p_e - o
             J[..., :3, c] += mult * cross(z, r)
             J[..., 3:, c] += mult * z
+        else:
+            J[..., :3, c] += mult * z
+        if not moving:
+            continue  # dJ = 0
+        dz = cross(w, z)
+        if kind == "revolute":
             dJ[..., :3, c] += mult * (cross(dz, r) + cross(z, v_e - v_o))
             dJ[..., 3:, c] += mult * dz
         else:
-            J[..., :3, c] += mult * z
             dJ[..., :3, c] += mult * dz
 
     T = np.zeros(batch + (4, 4))

@@ -10,7 +10,8 @@ nothing from :mod:`skelarm_sym.closed_ik` (a test reads the imports). It reads a
   ``[-pi, pi]`` for revolute joints, in ``[-reach, reach]`` for prismatic ones; unconstrained), batched over
   the starts: error ``[p_t - p; log(R_t R^T)]`` in base axes with the geometric Jacobian of the reference
   (LOCAL_WORLD_ALIGNED); damping ``mu`` per start, divided by 3 after a successful step and multiplied by 4
-  otherwise. Converged: both errors of :func:`pose_error` at most ``tol``. Coordinates in ``fixed`` (a dict
+  otherwise; a start whose weighted error is below ``tol / 1000`` takes no more steps. Converged: both errors of
+  :func:`pose_error` at most ``tol``. Coordinates in ``fixed`` (a dict
   ``{coordinate: value}``, the locked joint) do not move. Returns the distinct converged configurations.
 * :func:`same`: two configurations equal within ``tol`` (revolute joints modulo 2 pi).
 * :func:`missing`: the rows of one set that have no equal in another.
@@ -96,21 +97,27 @@ def multistart_ik(chain, target, starts: int = 200, seed: int = 0, iterations: i
     e, J = _errors(chain, q, target)
     cost = np.sum((W * e) ** 2, -1)
     mu = np.full(starts, 1e-3)
+    # a start whose weighted error is a thousandth of tol has converged for good (a step is accepted only when
+    # it lowers the error, so later steps would move it by about that much): it stops taking steps
+    settled = (1e-3 * tol) ** 2
     for _ in range(iterations):
-        A = (W[:, None] * J) * free
-        g = np.einsum("kij,ki->kj", A, W * e)
-        H = np.einsum("kij,kil->kjl", A, A) + mu[:, None, None] * np.eye(n)
+        k = np.flatnonzero(cost > settled)
+        if k.size == 0:
+            break
+        A = (W[:, None] * J[k]) * free
+        g = np.einsum("kij,ki->kj", A, W * e[k])
+        H = np.einsum("kij,kil->kjl", A, A) + mu[k, None, None] * np.eye(n)
         dq = np.linalg.solve(H, g[..., None])[..., 0]
         step = np.linalg.norm(dq, axis=-1, keepdims=True)
         dq = dq * np.minimum(1.0, 1.0 / np.maximum(step, 1e-300))
-        e2, J2 = _errors(chain, q + dq, target)
+        e2, J2 = _errors(chain, q[k] + dq, target)
         cost2 = np.sum((W * e2) ** 2, -1)
-        better = cost2 < cost
-        q = np.where(better[:, None], q + dq, q)
-        e = np.where(better[:, None], e2, e)
-        J = np.where(better[:, None, None], J2, J)
-        cost = np.where(better, cost2, cost)
-        mu = np.where(better, np.maximum(mu / 3.0, 1e-12), np.minimum(mu * 4.0, 1e8))
+        better = cost2 < cost[k]
+        q[k] = np.where(better[:, None], q[k] + dq, q[k])
+        e[k] = np.where(better[:, None], e2, e[k])
+        J[k] = np.where(better[:, None, None], J2, J[k])
+        cost[k] = np.where(better, cost2, cost[k])
+        mu[k] = np.where(better, np.maximum(mu[k] / 3.0, 1e-12), np.minimum(mu[k] * 4.0, 1e8))
     pos, rot = pose_error(chain, q, target)
     done = q[(pos <= tol) & (rot <= tol)]
     out: list[np.ndarray] = []
