@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x66a89e39UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9ec412a2UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -1005,7 +1005,7 @@ void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 #endif
 
 /* ---- panda_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
-/* operations: 6 sin, 6 cos, 121 add/sub, 205 mul, 7 neg */
+/* operations: 6 sin, 6 cos, 120 add/sub, 204 mul, 8 neg */
 
 PANDA_BODY void panda_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1132,11 +1132,11 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     dJ[9*PANDA_STRIDE] = t106;
     const double t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68;
     dJ[16*PANDA_STRIDE] = t107;
-    const double t108 = cs[1*PANDA_STRIDE]*t66 - t3*dq[0];
+    const double t108 = t0*dq[1*PANDA_STRIDE] - t3*dq[0];
     dJ[23*PANDA_STRIDE] = t108;
-    const double t109 = t1*dq[0] - cs[1*PANDA_STRIDE]*t65;
+    const double t109 = t1*dq[0] + t2*dq[1*PANDA_STRIDE];
     dJ[30*PANDA_STRIDE] = t109;
-    const double t110 = t3*t65 - t1*t66;
+    const double t110 = -sn[1*PANDA_STRIDE]*dq[1*PANDA_STRIDE];
     dJ[37*PANDA_STRIDE] = t110;
     const double t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72;
     dJ[3*PANDA_STRIDE] = t111;
@@ -1535,7 +1535,7 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
 #endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 6 sin, 6 cos, 184 add/sub, 273 mul, 7 neg */
+/* operations: 6 sin, 6 cos, 183 add/sub, 272 mul, 8 neg */
 
 PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1644,9 +1644,9 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t105 = t3*t90 + t48*t68 - t47*t69 - cs[1*PANDA_STRIDE]*t89;
     const double t106 = t46*t69 + cs[1*PANDA_STRIDE]*t88 - t1*t90 - t48*t67;
     const double t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68;
-    const double t108 = cs[1*PANDA_STRIDE]*t66 - t3*dq[0];
-    const double t109 = t1*dq[0] - cs[1*PANDA_STRIDE]*t65;
-    const double t110 = t3*t65 - t1*t66;
+    const double t108 = t0*dq[1*PANDA_STRIDE] - t3*dq[0];
+    const double t109 = t1*dq[0] + t2*dq[1*PANDA_STRIDE];
+    const double t110 = -sn[1*PANDA_STRIDE]*dq[1*PANDA_STRIDE];
     const double t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72;
     const double t112 = t9*t85 + t49*t72 - t5*t87 - t51*t70;
     const double t113 = t5*t86 + t50*t70 - t7*t85 - t49*t71;
@@ -1790,7 +1790,7 @@ void panda_acceleration_batch(size_t m, const double *q, const double *dq, const
 #endif
 
 /* ---- panda_kinematics: T, J, dJ, twist and acc at once ---- */
-/* operations: 7 sin, 7 cos, 199 add/sub, 296 mul, 10 neg */
+/* operations: 7 sin, 7 cos, 198 add/sub, 295 mul, 11 neg */
 
 PANDA_BODY void panda_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1994,11 +1994,11 @@ PANDA_BODY void panda_kinematics_finish(const double *restrict dq, const double 
     dJ[9*PANDA_STRIDE] = t106;
     const double t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68;
     dJ[16*PANDA_STRIDE] = t107;
-    const double t108 = cs[1*PANDA_STRIDE]*t66 - t3*dq[0];
+    const double t108 = t0*dq[1*PANDA_STRIDE] - t3*dq[0];
     dJ[23*PANDA_STRIDE] = t108;
-    const double t109 = t1*dq[0] - cs[1*PANDA_STRIDE]*t65;
+    const double t109 = t1*dq[0] + t2*dq[1*PANDA_STRIDE];
     dJ[30*PANDA_STRIDE] = t109;
-    const double t110 = t3*t65 - t1*t66;
+    const double t110 = -sn[1*PANDA_STRIDE]*dq[1*PANDA_STRIDE];
     dJ[37*PANDA_STRIDE] = t110;
     const double t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72;
     dJ[3*PANDA_STRIDE] = t111;

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x66a89e39
+STAMP = 0x9ec412a2
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -738,9 +738,9 @@ def _jacobian_dot_core(q, dq, dJ):
     t105 = t3*t90 + t48*t68 - t47*t69 - cs[..., 1]*t89
     t106 = t46*t69 + cs[..., 1]*t88 - t1*t90 - t48*t67
     t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68
-    t108 = cs[..., 1]*t66 - t3*dq[..., 0]
-    t109 = t1*dq[..., 0] - cs[..., 1]*t65
-    t110 = t3*t65 - t1*t66
+    t108 = t0*dq[..., 1] - t3*dq[..., 0]
+    t109 = t1*dq[..., 0] + t2*dq[..., 1]
+    t110 = -sn[..., 1]*dq[..., 1]
     t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72
     t112 = t9*t85 + t49*t72 - t5*t87 - t51*t70
     t113 = t5*t86 + t50*t70 - t7*t85 - t49*t71
@@ -813,7 +813,7 @@ def jacobian_dot(q, dq):
     q: array of shape (..., 7), finite.
     dq: array of shape (..., 7), finite.
     Returns dJ of shape (..., 6, 7).
-    Operations: 6 sin, 6 cos, 333 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 332 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (7, 7, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (42,), dtype=DTYPE), )
@@ -1048,9 +1048,9 @@ def _acceleration_core(q, dq, ddq, acc):
     t105 = t3*t90 + t48*t68 - t47*t69 - cs[..., 1]*t89
     t106 = t46*t69 + cs[..., 1]*t88 - t1*t90 - t48*t67
     t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68
-    t108 = cs[..., 1]*t66 - t3*dq[..., 0]
-    t109 = t1*dq[..., 0] - cs[..., 1]*t65
-    t110 = t3*t65 - t1*t66
+    t108 = t0*dq[..., 1] - t3*dq[..., 0]
+    t109 = t1*dq[..., 0] + t2*dq[..., 1]
+    t110 = -sn[..., 1]*dq[..., 1]
     t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72
     t112 = t9*t85 + t49*t72 - t5*t87 - t51*t70
     t113 = t5*t86 + t50*t70 - t7*t85 - t49*t71
@@ -1088,7 +1088,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns acc of shape (..., 6).
-    Operations: 6 sin, 6 cos, 464 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 463 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -1216,9 +1216,9 @@ def _kinematics_core(q, dq, ddq, T, J, dJ, twist, acc):
     t105 = t3*t90 + t48*t68 - t47*t69 - cs[..., 1]*t89
     t106 = t46*t69 + cs[..., 1]*t88 - t1*t90 - t48*t67
     t107 = t1*t89 + t47*t67 - t3*t88 - t46*t68
-    t108 = cs[..., 1]*t66 - t3*dq[..., 0]
-    t109 = t1*dq[..., 0] - cs[..., 1]*t65
-    t110 = t3*t65 - t1*t66
+    t108 = t0*dq[..., 1] - t3*dq[..., 0]
+    t109 = t1*dq[..., 0] + t2*dq[..., 1]
+    t110 = -sn[..., 1]*dq[..., 1]
     t111 = t7*t87 + t51*t71 - t9*t86 - t50*t72
     t112 = t9*t85 + t49*t72 - t5*t87 - t51*t70
     t113 = t5*t86 + t50*t70 - t7*t85 - t49*t71
@@ -1365,7 +1365,7 @@ def kinematics(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns T of shape (..., 4, 4), J of shape (..., 6, 7), dJ of shape (..., 6, 7), twist of shape (..., 6), acc of shape (..., 6).
-    Operations: 7 sin, 7 cos, 505 add/sub/mul/neg.
+    Operations: 7 sin, 7 cos, 504 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), np.empty(batch + (42,), dtype=DTYPE), np.empty(batch + (42,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), )

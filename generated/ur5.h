@@ -54,7 +54,7 @@
  * sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x2c8bc28fUL
+#define UR5_STAMP 0xf12fe552UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -117,7 +117,7 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36]);
  * Stack: about 16 KB. */
 void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 816 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: about 800 bytes. */
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -133,7 +133,7 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6]);
  * Stack: about 9 KB. */
 void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 816 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 800 bytes. */
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -141,7 +141,7 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
  * Stack: about 11 KB. */
 void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 984 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: about 968 bytes. */
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
