@@ -51,7 +51,7 @@
  * sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x66a89e39UL
+#define PANDA_STAMP 0x72464655UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -88,7 +88,7 @@ void panda_jacobian(const double q[7], double J[42]);
  * Stack: about 18 KB. */
 void panda_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 792 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 800 bytes. */
 void panda_jacobian_tool(const double q[7], double J_tool[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -96,7 +96,7 @@ void panda_jacobian_tool(const double q[7], double J_tool[42]);
  * Stack: about 19 KB. */
 void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1176 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1192 bytes. */
 void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -104,7 +104,7 @@ void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
  * Stack: about 21 KB. */
 void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 952 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 960 bytes. */
 void panda_twist(const double q[7], const double dq[7], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -112,7 +112,7 @@ void panda_twist(const double q[7], const double dq[7], double twist[6]);
  * Stack: about 11 KB. */
 void panda_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1176 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1192 bytes. */
 void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -120,7 +120,7 @@ void panda_acceleration(const double q[7], const double dq[7], const double ddq[
  * Stack: about 13 KB. */
 void panda_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 1328 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: about 1344 bytes. */
 void panda_kinematics(const double q[7], const double dq[7], const double ddq[7], double T[16], double J[42], double dJ[42], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of

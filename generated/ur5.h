@@ -54,7 +54,7 @@
  * sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x2c8bc28fUL
+#define UR5_STAMP 0xa4feadd8UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -93,7 +93,7 @@ extern "C" {
  * An initializer: static const double x[6] = UR5_DQ_MAX; */
 #define UR5_DQ_MAX {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793}
 
-/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 464 bytes. */
+/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 472 bytes. */
 void ur5_pose(const double q[6], double T[16]);
 
 /* The same for m configurations stored one after another (element k of
@@ -101,7 +101,7 @@ void ur5_pose(const double q[6], double T[16]);
  * Stack: about 11 KB. */
 void ur5_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 488 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 496 bytes. */
 void ur5_jacobian(const double q[6], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -109,7 +109,7 @@ void ur5_jacobian(const double q[6], double J[36]);
  * Stack: about 15 KB. */
 void ur5_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 608 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 616 bytes. */
 void ur5_jacobian_tool(const double q[6], double J_tool[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -117,7 +117,7 @@ void ur5_jacobian_tool(const double q[6], double J_tool[36]);
  * Stack: about 16 KB. */
 void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 816 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: about 808 bytes. */
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -125,7 +125,7 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
  * Stack: about 17 KB. */
 void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 672 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 680 bytes. */
 void ur5_twist(const double q[6], const double dq[6], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -133,7 +133,7 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6]);
  * Stack: about 9 KB. */
 void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 816 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 808 bytes. */
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -141,7 +141,7 @@ void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6]
  * Stack: about 11 KB. */
 void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 984 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: about 976 bytes. */
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -149,7 +149,7 @@ void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], 
  * Stack: about 19 KB. */
 void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 592 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 600 bytes. */
 void ur5_ik_terms(const double q[6], double T[16], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -157,7 +157,7 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36]);
  * Stack: about 20 KB. */
 void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2384 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2392 bytes. */
 void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -173,7 +173,7 @@ void ur5_manipulability_position(const double q[6], double w_position[1]);
  * Stack: about 13 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 680 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 688 bytes. */
 void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of
@@ -181,7 +181,7 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216]);
  * Stack: about 13 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 3336 bytes. */
+/* gradient dw/dq of the manipulability (N). Stack: about 3344 bytes. */
 void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -205,7 +205,7 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
  * Stack: about 14 KB. */
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 760 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 768 bytes. */
 void ur5_jacobian_rpy(const double q[6], double JA[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -273,7 +273,7 @@ int ur5_ik_solve_position(const double q0[6], const double target[3], double lam
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of ur5_ik_solve_position: the same result bit for bit. Stack: about 2832 bytes. */
+ * Each problem is one call of ur5_ik_solve_position: the same result bit for bit. Stack: about 2840 bytes. */
 void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* every closed-form IK solution within the joint limits.

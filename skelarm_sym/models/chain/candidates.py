@@ -131,7 +131,8 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
     """The columns in segment axes (:func:`_columns`, with ``p_e`` by Horner's rule), and in base axes
     (``z_k x r_(k+1)``, :func:`_base_offsets`) with the frames' rows carried whole (``None`` in ``rows``) or
     one row as cofactors of the other two (:func:`_cofactor_view`)."""
-    out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq), None)]
+    out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq,
+                                                         axis_cross=_axis_cross(joints, f, f.rotation, f.axes)), None)]
     seen: list[list[Rows]] = []
     for dropped in rows:
         tag = _row_tag(dropped)
@@ -147,8 +148,32 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
         if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
             continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
         tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
-        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}"), tip))
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+                                                         _axis_cross(joints, f, views, axes)), tip))
     return out
+
+
+def _axis_cross(joints, f: _Frames, views: list[Rows], axes: list[Vector]):
+    """``z_j x z_k`` (``j < k``) without a cross product where the frames give it, else ``None``: zero for
+    parallel axes (one segment), the cross product itself for a constant axis with one nonzero entry, and for
+    consecutive segments ``F_s ((C^T e_z) x e_z)`` (``z_j = F_s C^T e_z``, ``C`` the constant rotation that
+    starts segment ``s``), one column of ``F_s`` where ``C`` takes ``z`` to ``+-x`` or ``+-y``."""
+
+    def known(j: int, k: int) -> Vector | None:
+        if all(a == b for a, b in zip(axes[j], axes[k])):
+            return [sp.S.Zero] * 3
+        if not any(sp.sympify(x).free_symbols for x in axes[j]) and sum(x != 0 for x in axes[j]) == 1:
+            return cross(axes[j], axes[k])
+        s = f.segment[k]
+        if f.segment[j] != s - 1:
+            return None
+        C = joints[f.starts[s]].before.rotation
+        v = [C[2, i] for i in range(3)]
+        if v[2] != 0 or sum(abs(x) == 1 for x in v[:2]) != 1 or any(x not in (-1, 0, 1) for x in v):
+            return None
+        return matvec(views[s], [v[1], -v[0], sp.S.Zero])
+
+    return known
 
 
 def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axes: list[Vector], r: list[Vector],

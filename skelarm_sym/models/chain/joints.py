@@ -86,9 +86,10 @@ class JointType(Protocol):
         ...
 
     def column_rate(self, omega_before: Vector, omega_after: Vector, z: Vector, linear: Vector,
-                    angular: Vector, suffix: Vector) -> tuple[Vector, Vector]:
+                    angular: Vector, suffix: Vector, axis_rate: Vector | None = None) -> tuple[Vector, Vector]:
         """``d/dt`` of its column (all vectors in base axes): ``omega_before``/``omega_after`` the angular
-        velocity of the link before/after it, ``suffix`` the velocity the joints after it give the tool point."""
+        velocity of the link before/after it, ``suffix`` the velocity the joints after it give the tool point;
+        ``axis_rate``: ``d z/dt = omega_before x z`` written another way where the derivation has one."""
         ...
 
     def turns_columns(self, z: Vector, linear: Vector, angular: Vector) -> tuple[Vector, Vector] | None:
@@ -123,9 +124,9 @@ class Revolute:
     def angular_rate(self, z: Vector, rate: sp.Expr) -> Vector:
         return scale(z, rate)
 
-    def column_rate(self, omega_before, omega_after, z, linear, angular, suffix):
+    def column_rate(self, omega_before, omega_after, z, linear, angular, suffix, axis_rate=None):
         # d/dt (z x r) = (w x z) x r + z x (w x r + u) = w x (z x r) + z x u (Jacobi); d/dt z = w_before x z
-        return add(cross(omega_after, linear), cross(z, suffix)), cross(omega_before, z)
+        return add(cross(omega_after, linear), cross(z, suffix)), axis_rate or cross(omega_before, z)
 
     def turns_columns(self, z, linear, angular):
         return cross(z, linear), cross(z, angular)
@@ -155,8 +156,8 @@ class Prismatic:
     def angular_rate(self, z: Vector, rate: sp.Expr) -> Vector:
         return list(ZERO)
 
-    def column_rate(self, omega_before, omega_after, z, linear, angular, suffix):
-        return cross(omega_before, z), list(ZERO)  # the axis turns with the link before it
+    def column_rate(self, omega_before, omega_after, z, linear, angular, suffix, axis_rate=None):
+        return axis_rate or cross(omega_before, z), list(ZERO)  # the axis turns with the link before it
 
     def turns_columns(self, z, linear, angular):
         return None  # a translation moves a later axis and the tool point alike

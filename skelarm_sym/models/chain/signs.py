@@ -249,8 +249,46 @@ def _settle_signs(step: _Steps, groups: dict[str, list[Vector]], functions: Sequ
     step.replace_steps(_live_steps(step.steps, values))
     indices = [[i for name in names for i in where[name]] for names in functions]
     flips = _normalise_signs(step.steps, values, getattr(step, "groups", ()), indices)
-    if not flips:
+    if flips:
+        step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
+        groups = {name: [[sp.sympify(e).xreplace(flips) for e in v] for v in group] for name, group in groups.items()}
+        axes = [[sp.sympify(e).xreplace(flips) for e in v] for v in axes]
+    return _hoist_negated_factors(step, groups, axes)
+
+
+def _hoist_negated_factors(step: _Steps, groups: dict[str, list[Vector]],
+                           axes: list[Vector]) -> tuple[dict[str, list[Vector]], list[Vector]]:
+    """Negated products that pay their negation (a step or an output ``-x y``, no sum to subtract them in) and
+    share a factor ``x``: ``-x`` becomes a step of its own and each product ``(-x) y``, one negation for all of
+    them (``-dq1 c1``, ``-dq1 s1``: Stanford's ``dJ``). A function with one such product pays one negation
+    either way; the sign search (:func:`_normalise_signs`) has left what flips can remove."""
+    outputs = [sp.sympify(e) for group in groups.values() for v in group for e in v]
+    negated = [e for e in outputs + [rhs for _, rhs in step.steps]
+               if e.is_Mul and e.as_coeff_Mul()[0] == -1 and len(e.args) > 2]
+    negated = list(dict.fromkeys(negated))
+    chosen: dict[sp.Expr, sp.Symbol] = {}
+    while True:
+        counts: dict[sp.Symbol, int] = {}
+        for e in negated:
+            if e not in chosen:
+                for x in e.args[1:]:
+                    if x.is_Symbol:
+                        counts[x] = counts.get(x, 0) + 1
+        if not counts or max(counts.values()) < 2:
+            break
+        atom = max(counts, key=lambda x: (counts[x], x.name))  # the most products; a tie by name (deterministic)
+        for e in negated:
+            if e not in chosen and atom in e.args[1:]:
+                chosen[e] = atom
+    if not chosen:
         return groups, axes
-    step.replace_steps([(s, (-1 if s in flips else 1) * rhs.xreplace(flips)) for s, rhs in step.steps])
-    rewrite = {name: [[sp.sympify(e).xreplace(flips) for e in v] for v in group] for name, group in groups.items()}
-    return rewrite, [[sp.sympify(e).xreplace(flips) for e in v] for v in axes]
+    names = {atom: step.symbol(f"neg_{atom.name.lstrip('_')}") for atom in dict.fromkeys(chosen.values())}
+    rewrite = {e: names[atom] * sp.Mul(*[x for x in e.args[1:] if x != atom]) for e, atom in chosen.items()}
+    steps = [(name, -atom) for atom, name in names.items() if atom not in step.definitions()]  # inputs first
+    for symbol, rhs in step.steps:
+        steps.append((symbol, rhs.xreplace(rewrite)))
+        if symbol in names:  # a step's negation right after its definition
+            steps.append((names[symbol], -symbol))
+    step.replace_steps(steps)
+    groups = {name: [[sp.sympify(e).xreplace(rewrite) for e in v] for v in group] for name, group in groups.items()}
+    return groups, [[sp.sympify(e).xreplace(rewrite) for e in v] for v in axes]
