@@ -683,33 +683,31 @@ def test_loading_is_linear_in_the_number_of_links(tmp_path):
     seconds = {}
     # The collector's passes over the session's objects are not the loader's time: the objects the session holds
     # (a worker's SymPy derivations: a full collection took a second each) are frozen, out of the collector's
-    # sight, and the collector is off while a load is timed.
+    # sight (they stay so: the session freezes what it holds, see conftest.py), and the collector is off while a
+    # load is timed.
     gc.freeze()
-    try:
-        for n, path in paths.items():
-            runs = []
-            # the fastest of five (CPU time, so other processes do not count); the larger file stops early once
-            # the bounds below hold: more runs could only lower its minimum, never fail them
-            for _ in range(5):
-                gc.collect()  # the previous load's garbage, not the session's
-                gc.disable()
-                try:
-                    start = time.process_time()
-                    chain = load_urdf(path, tip="tool")
-                    runs.append(time.process_time() - start)
-                finally:
-                    gc.enable()
-                if n == 20_000 and min(runs) < min(8 * seconds[5_000], 3.0):
-                    break
-            assert chain.coordinates == ("j1", "j2")
-            seconds[n] = min(runs)
-        assert seconds[20_000] < 8 * seconds[5_000], seconds  # 4 when linear, 16 when quadratic
-        assert seconds[20_000] < 3.0, seconds
-        # without a tip the 10 002 leaves (tool, the wide half, the end of the deep branch) are counted, quickly
-        with pytest.raises(InputError, match=r"10002 leaf links below 'base' \('tool', 'w0', .*\(10002 in all\)\): choose one as tip"):
-            load_urdf(paths[20_000])
-    finally:
-        gc.unfreeze()
+    for n, path in paths.items():
+        runs = []
+        # the fastest of five (CPU time, so other processes do not count); the larger file stops early once
+        # the bounds below hold: more runs could only lower its minimum, never fail them
+        for _ in range(5):
+            gc.collect()  # the previous load's garbage, not the session's
+            gc.disable()
+            try:
+                start = time.process_time()
+                chain = load_urdf(path, tip="tool")
+                runs.append(time.process_time() - start)
+            finally:
+                gc.enable()
+            if n == 20_000 and min(runs) < min(8 * seconds[5_000], 3.0):
+                break
+        assert chain.coordinates == ("j1", "j2")
+        seconds[n] = min(runs)
+    assert seconds[20_000] < 8 * seconds[5_000], seconds  # 4 when linear, 16 when quadratic
+    assert seconds[20_000] < 3.0, seconds
+    # without a tip the 10 002 leaves (tool, the wide half, the end of the deep branch) are counted, quickly
+    with pytest.raises(InputError, match=r"10002 leaf links below 'base' \('tool', 'w0', .*\(10002 in all\)\): choose one as tip"):
+        load_urdf(paths[20_000])
 
 
 def test_element_and_size_limits(tmp_path, monkeypatch):
