@@ -64,17 +64,15 @@ def _wrap(x: object) -> "Expr":
     return x  # type: ignore[return-value]
 
 
-def _hash_slot():
-    """The ``_hash`` field of a composite expression: its structural hash once computed (see :func:`_hashed`);
-    no part of the node's value (not in ``__init__``, ``==`` or ``repr``)."""
-    return field(default=None, init=False, repr=False, compare=False)
-
-
-def _hashed(cls):
-    """Memoise a composite node's structural hash in its ``_hash`` slot, and answer ``==`` from the hashes
-    first: the printers' memos, the common-subexpression tables and the operation counts look up deep
-    trees, and a frozen dataclass's own hash walks the whole tree on every lookup (quadratic in depth).
-    Equal nodes keep equal hashes (the same function of the same fields)."""
+def _composite(cls):
+    """A composite expression node: a frozen, slotted dataclass that remembers its structural hash in a ``_hash``
+    slot (no part of its value: not in ``__init__``, ``==`` or ``repr``) and answers ``==`` from the hashes
+    first. The printers' memos, the common-subexpression tables and the operation counts look up deep trees,
+    and a frozen dataclass's own hash walks the whole tree on every lookup (quadratic in depth). Equal nodes
+    keep equal hashes (the same function of the same fields)."""
+    cls.__annotations__["_hash"] = "int | None"
+    cls._hash = field(default=None, init=False, repr=False, compare=False)
+    cls = dataclass(frozen=True, slots=True)(cls)
     structural_hash, structural_eq = cls.__hash__, cls.__eq__
 
     def __hash__(self):
@@ -163,61 +161,50 @@ class Var(ExprOps):
     type: Type = Type.REAL
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Elem(ExprOps):
     """Element ``index`` of array ``array`` (an argument, a local array or a table), row-major."""
 
     array: str
     index: "Expr"
     type: Type = Type.REAL
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Add(ExprOps):
     """``terms[0] + terms[1] + ...``; a :class:`Neg` term prints as a subtraction."""
 
     terms: tuple["Expr", ...]
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Mul(ExprOps):
     """``factors[0] * factors[1] * ...``."""
 
     factors: tuple["Expr", ...]
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Neg(ExprOps):
     """``-x``."""
 
     x: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Div(ExprOps):
     """``num / den``; with ``guarded``, ``num / (den != 0 ? den : 1)``."""
 
     num: "Expr"
     den: "Expr"
     guarded: bool = False
-    _hash: int | None = _hash_slot()
 
 
 UNARY = ("sqrt", "sin", "cos", "fabs", "floor", "nearbyint", "isfinite")
 BINARY = ("atan2", "fmin", "fmax")
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Call1(ExprOps):
     """A math function of one real: one of :data:`UNARY` (``isfinite`` is a ``bool`` that -ffast-math
     cannot remove in C; ``nearbyint`` rounds to the nearest whole number, halves to even: C99's
@@ -225,66 +212,54 @@ class Call1(ExprOps):
 
     function: str
     x: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Call2(ExprOps):
     """A math function of two reals: one of :data:`BINARY`."""
 
     function: str
     a: "Expr"
     b: "Expr"
-    _hash: int | None = _hash_slot()
 
 
 COMPARISONS = ("<", "<=", ">", ">=", "==", "!=")
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Compare(ExprOps):
     """``a op b`` for ``op`` in :data:`COMPARISONS`; a ``bool``."""
 
     op: str
     a: "Expr"
     b: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Logic(ExprOps):
     """``terms[0] and terms[1] ...`` (``op == "and"``) or ``or``; a ``bool``."""
 
     op: str
     terms: tuple["Expr", ...]
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Not(ExprOps):
     """``not x``."""
 
     x: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Select(ExprOps):
     """``cond ? then : otherwise`` (both sides are evaluated in vectorised backends)."""
 
     cond: "Expr"
     then: "Expr"
     otherwise: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Bits(ExprOps):
     """Integer operations: ``^ << >> *`` on ``uint64`` (the random-number generator; ``*`` and ``<<`` wrap
     modulo 2**64) and ``%`` on non-negative ``int``."""
@@ -292,17 +267,14 @@ class Bits(ExprOps):
     op: str
     a: "Expr"
     b: "Expr"
-    _hash: int | None = _hash_slot()
 
 
-@_hashed
-@dataclass(frozen=True, slots=True)
+@_composite
 class Cast(ExprOps):
     """``x`` converted to ``type`` (``uint64`` -> ``real``: the top 53 bits as a number in [0, 1))."""
 
     type: Type
     x: "Expr"
-    _hash: int | None = _hash_slot()
 
 
 Expr = Union[Const, NamedConst, Var, Elem, Add, Mul, Neg, Div, Call1, Call2, Compare, Logic, Not, Select, Bits, Cast]

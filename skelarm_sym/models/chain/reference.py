@@ -143,17 +143,18 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
         kinds.append(joint.kind)
         coords.append(c)
         mults.append(mult)
-        if joint.kind not in ("revolute", "prismatic"):
-            raise ValueError(f"joint kind must be revolute or prismatic, got {joint.kind!r}")
-        if not moving:
-            state = (R @ rodrigues(axis, th), p, w, dw, v, a) if joint.kind == "revolute" else (R, p + z * th[..., None], w, dw, v, a)
-        elif joint.kind == "revolute":
-            state = (R @ rodrigues(axis, th), p, w + z * dth, dw + z * ddth + cross(w, z) * dth, v, a)
-        else:
+        if joint.kind == "revolute":
+            if moving:
+                w, dw = w + z * dth, dw + z * ddth + cross(w, z) * dth
+            state = (R @ rodrigues(axis, th), p, w, dw, v, a)
+        elif joint.kind == "prismatic":
             r = z * th[..., None]
-            state = (R, p + r, w, dw,
-                     v + cross(w, r) + z * dth,
-                     a + cross(dw, r) + cross(w, cross(w, r)) + 2.0 * cross(w, z) * dth + z * ddth)
+            if moving:
+                v, a = (v + cross(w, r) + z * dth,
+                        a + cross(dw, r) + cross(w, cross(w, r)) + 2.0 * cross(w, z) * dth + z * ddth)
+            state = (R, p + r, w, dw, v, a)
+        else:
+            raise ValueError(f"joint kind must be revolute or prismatic, got {joint.kind!r}")
         state = rigid(state, joint.after)
     state = rigid(state, chain.tool)
     R_e, p_e, w_e, dw_e, v_e, a_e = state

@@ -10,9 +10,9 @@ nothing from :mod:`skelarm_sym.closed_ik` (a test reads the imports). It reads a
   ``[-pi, pi]`` for revolute joints, in ``[-reach, reach]`` for prismatic ones; unconstrained), batched over
   the starts: error ``[p_t - p; log(R_t R^T)]`` in base axes with the geometric Jacobian of the reference
   (LOCAL_WORLD_ALIGNED); damping ``mu`` per start, divided by 3 after a successful step and multiplied by 4
-  otherwise; a start whose weighted error is below ``tol / 1000`` takes no more steps. Converged: both errors of
-  :func:`pose_error` at most ``tol``. Coordinates in ``fixed`` (a dict
-  ``{coordinate: value}``, the locked joint) do not move. Returns the distinct converged configurations.
+  otherwise; a start whose weighted error is below ``tol / 1000`` takes no more steps. Converged: both errors
+  of :func:`pose_error` at most ``tol``. Coordinates in ``fixed`` (a dict ``{coordinate: value}``, the locked
+  joint) do not move. Returns the distinct converged configurations.
 * :func:`same`: two configurations equal within ``tol`` (revolute joints modulo 2 pi).
 * :func:`missing`: the rows of one set that have no equal in another.
 * :func:`eaik_solutions`: EAIK's solutions (``pip install eaik``; ``None`` when it is not installed) from
