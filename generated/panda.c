@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x72464655UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9a995fdfUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -4192,7 +4192,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 }
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 40 neg, 13 div, 13 sqrt */
+/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 38 neg, 13 div, 13 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
 {

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x72464655
+STAMP = 0x9a995fdf
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -3887,7 +3887,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 7).
-    Operations: 6 sin, 6 cos, 2332 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 2330 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (7, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

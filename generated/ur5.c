@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xa4feadd8UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xcb73743dUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -332,7 +332,7 @@ static int ur5_finite(double x)
 #endif
 
 /* ---- ur5_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
-/* operations: 6 sin, 6 cos, 21 add/sub, 36 mul, 3 neg */
+/* operations: 6 sin, 6 cos, 21 add/sub, 36 mul, 2 neg */
 
 UR5_BODY void ur5_pose_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -362,10 +362,10 @@ UR5_BODY void ur5_pose_finish(const double *restrict cs, const double *restrict 
     const double t12 = cs[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
     T[10*UR5_STRIDE] = t13;
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
@@ -494,7 +494,7 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
 #endif
 
 /* ---- ur5_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
-/* operations: 5 sin, 5 cos, 15 add/sub, 34 mul, 6 neg */
+/* operations: 5 sin, 5 cos, 15 add/sub, 34 mul, 5 neg */
 
 UR5_BODY void ur5_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -537,11 +537,11 @@ UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restr
     J[29*UR5_STRIDE] = t11;
     const double t13 = t6*sn[3*UR5_STRIDE];
     J[35*UR5_STRIDE] = t13;
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
     J[15*UR5_STRIDE] = t16;
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     J[14*UR5_STRIDE] = t19;
@@ -564,9 +564,9 @@ UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restr
     J[3*UR5_STRIDE] = t30;
     const double t31 = t17*sn[0];
     J[9*UR5_STRIDE] = t31;
-    const double t32 = t2*t15 - t14*sn[0];
+    const double t32 = t2*t15 + t14*sn[0];
     J[4*UR5_STRIDE] = t32;
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t33 = t4*t15 - t14*cs[0];
     J[10*UR5_STRIDE] = t33;
     const double t34 = t15*sn[3*UR5_STRIDE];
     J[16*UR5_STRIDE] = t34;
@@ -699,7 +699,7 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
 #endif
 
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 7 neg */
+/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 5 neg */
 
 UR5_BODY void ur5_jacobian_tool_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -732,10 +732,10 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     const double t10 = -cs[0]*cs[4*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
     J_tool[30*UR5_STRIDE] = t13;
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
@@ -792,11 +792,11 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     J_tool[9*UR5_STRIDE] = t116;
     const double t117 = t97*t17 + t13*t16;
     J_tool[15*UR5_STRIDE] = t117;
-    const double t118 = t91*t15 - t93*t14;
+    const double t118 = t91*t15 + t93*t14;
     J_tool[4*UR5_STRIDE] = t118;
-    const double t119 = t92*t15 - t94*t14;
+    const double t119 = t92*t15 + t94*t14;
     J_tool[10*UR5_STRIDE] = t119;
-    const double t120 = -t14*cs[4*UR5_STRIDE] - t15*sn[4*UR5_STRIDE];
+    const double t120 = t14*cs[4*UR5_STRIDE] - t15*sn[4*UR5_STRIDE];
     J_tool[16*UR5_STRIDE] = t120;
 }
 
@@ -919,7 +919,7 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 #endif
 
 /* ---- ur5_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
-/* operations: 5 sin, 5 cos, 62 add/sub, 106 mul, 6 neg */
+/* operations: 5 sin, 5 cos, 62 add/sub, 106 mul, 5 neg */
 
 UR5_BODY void ur5_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -954,10 +954,10 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     const double t10 = -cs[0]*cs[4*UR5_STRIDE];
     const double t11 = t10 - t4*sn[4*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
@@ -971,8 +971,8 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3*UR5_STRIDE];
     const double t44 = sn[0]*dq[1*UR5_STRIDE];
     const double t45 = -cs[0]*dq[1*UR5_STRIDE];
@@ -1174,7 +1174,7 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
 #endif
 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 5 sin, 5 cos, 36 add/sub, 60 mul, 4 neg */
+/* operations: 5 sin, 5 cos, 36 add/sub, 60 mul, 3 neg */
 
 UR5_BODY void ur5_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1199,10 +1199,10 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t10 = -cs[0]*cs[4*UR5_STRIDE];
     const double t11 = t10 - t4*sn[4*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
@@ -1216,8 +1216,8 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3*UR5_STRIDE];
     const double t44 = sn[0]*dq[1*UR5_STRIDE];
     const double t45 = -cs[0]*dq[1*UR5_STRIDE];
@@ -1353,7 +1353,7 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 #endif
 
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 6 neg */
+/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 5 neg */
 
 UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1378,10 +1378,10 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t10 = -cs[0]*cs[4*UR5_STRIDE];
     const double t11 = t10 - t4*sn[4*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
@@ -1395,8 +1395,8 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3*UR5_STRIDE];
     const double t44 = sn[0]*dq[1*UR5_STRIDE];
     const double t45 = -cs[0]*dq[1*UR5_STRIDE];
@@ -1559,7 +1559,7 @@ void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const d
 #endif
 
 /* ---- ur5_kinematics: T, J, dJ, twist and acc at once ---- */
-/* operations: 6 sin, 6 cos, 123 add/sub, 180 mul, 10 neg */
+/* operations: 6 sin, 6 cos, 123 add/sub, 180 mul, 9 neg */
 
 UR5_BODY void ur5_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1621,11 +1621,11 @@ UR5_BODY void ur5_kinematics_finish(const double *restrict dq, const double *res
     const double t13 = t6*sn[3*UR5_STRIDE];
     T[10*UR5_STRIDE] = t13;
     J[35*UR5_STRIDE] = t13;
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
     J[15*UR5_STRIDE] = t16;
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     J[14*UR5_STRIDE] = t19;
@@ -1652,9 +1652,9 @@ UR5_BODY void ur5_kinematics_finish(const double *restrict dq, const double *res
     J[3*UR5_STRIDE] = t30;
     const double t31 = t17*sn[0];
     J[9*UR5_STRIDE] = t31;
-    const double t32 = t2*t15 - t14*sn[0];
+    const double t32 = t2*t15 + t14*sn[0];
     J[4*UR5_STRIDE] = t32;
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t33 = t4*t15 - t14*cs[0];
     J[10*UR5_STRIDE] = t33;
     const double t34 = t15*sn[3*UR5_STRIDE];
     J[16*UR5_STRIDE] = t34;
@@ -1982,7 +1982,7 @@ void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const dou
 #endif
 
 /* ---- ur5_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
-/* operations: 6 sin, 6 cos, 24 add/sub, 51 mul, 7 neg */
+/* operations: 6 sin, 6 cos, 24 add/sub, 51 mul, 6 neg */
 
 UR5_BODY void ur5_ik_terms_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -2034,11 +2034,11 @@ UR5_BODY void ur5_ik_terms_finish(const double *restrict cs, const double *restr
     const double t13 = t6*sn[3*UR5_STRIDE];
     T[10*UR5_STRIDE] = t13;
     J[35*UR5_STRIDE] = t13;
-    const double t14 = 0.0823*sn[4*UR5_STRIDE];
+    const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
+    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
     J[15*UR5_STRIDE] = t16;
-    const double t17 = 0.09465*cs[3*UR5_STRIDE] + t14*sn[3*UR5_STRIDE];
+    const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
     J[14*UR5_STRIDE] = t19;
@@ -2065,9 +2065,9 @@ UR5_BODY void ur5_ik_terms_finish(const double *restrict cs, const double *restr
     J[3*UR5_STRIDE] = t30;
     const double t31 = t17*sn[0];
     J[9*UR5_STRIDE] = t31;
-    const double t32 = t2*t15 - t14*sn[0];
+    const double t32 = t2*t15 + t14*sn[0];
     J[4*UR5_STRIDE] = t32;
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t33 = t4*t15 - t14*cs[0];
     J[10*UR5_STRIDE] = t33;
     const double t34 = t15*sn[3*UR5_STRIDE];
     J[16*UR5_STRIDE] = t34;
@@ -2234,7 +2234,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 12 neg, 5 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 11 neg, 5 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_angles(const double q[6], double *restrict ang)
 {
@@ -2257,10 +2257,10 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
     const double t13 = t6*sn[3];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -2274,8 +2274,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t122 = t26*t26;
     const double t123 = t28*t28;
@@ -2553,7 +2553,7 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
 }
 
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
-/* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 3 neg, 2 div, 3 sqrt */
+/* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 2 neg, 2 div, 3 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
 {
@@ -2568,10 +2568,10 @@ static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict 
 {
     const double t2 = cs[0]*cs[3];
     const double t4 = cs[3]*sn[0];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -2585,8 +2585,8 @@ static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict 
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t122 = t26*t26;
     const double t123 = t28*t28;
@@ -2685,7 +2685,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 }
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
-/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 23 neg */
+/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 22 neg */
 
 static UR5_LIGHT void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
 {
@@ -2843,10 +2843,10 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     const double t11 = t10 - t4*sn[4];
     Hs[138] = -t11;
     const double t13 = t6*sn[3];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -2867,10 +2867,10 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[39] = t30;
     Hs[54] = t30;
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
+    const double t32 = t2*t15 + t14*sn[0];
     Hs[40] = t32;
     Hs[60] = t32;
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t385 = -t21*cs[0];
     Hs[7] = t385;
@@ -3006,7 +3006,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 29 neg, 6 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 28 neg, 6 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
 {
@@ -3030,10 +3030,10 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
     const double t13 = t6*sn[3];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -3047,8 +3047,8 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t122 = t26*t26;
     const double t123 = t28*t28;
@@ -3449,7 +3449,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 42 neg, 13 div, 13 sqrt */
+/* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 40 neg, 13 div, 13 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
@@ -3472,10 +3472,10 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
     const double t13 = t6*sn[3];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -3489,8 +3489,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t121 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
     const double t227 = t9*t9;
@@ -4235,7 +4235,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 }
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 9 neg, 7 div, 7 sqrt */
+/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 8 neg, 7 div, 7 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
 {
@@ -4251,10 +4251,10 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     dq_position[5] = 0.0;
     const double t2 = cs[0]*cs[3];
     const double t4 = cs[3]*sn[0];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
@@ -4268,8 +4268,8 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 - t14*sn[0];
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t32 = t2*t15 + t14*sn[0];
+    const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3];
     const double t121 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
     const double t122 = t26*t26;
@@ -4468,7 +4468,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 }
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 9 neg, 3 div, 2 sqrt */
+/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 8 neg, 3 div, 2 sqrt */
 
 static UR5_LIGHT void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
 {
@@ -4500,11 +4500,11 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t11 = t10 - t4*sn[4];
     const double t12 = cs[4]*sn[3];
     const double t13 = t6*sn[3];
-    const double t14 = 0.0823*sn[4];
+    const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] - t14*cs[3];
+    const double t16 = 0.09465*sn[3] + t14*cs[3];
     JA[15] = t16;
-    const double t17 = 0.09465*cs[3] + t14*sn[3];
+    const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
     const double t19 = t16 - 0.39225*cs[2];
     JA[14] = t19;
@@ -4527,9 +4527,9 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     JA[3] = t30;
     const double t31 = t17*sn[0];
     JA[9] = t31;
-    const double t32 = t2*t15 - t14*sn[0];
+    const double t32 = t2*t15 + t14*sn[0];
     JA[4] = t32;
-    const double t33 = t4*t15 + t14*cs[0];
+    const double t33 = t4*t15 - t14*cs[0];
     JA[10] = t33;
     const double t34 = t15*sn[3];
     JA[16] = t34;
@@ -4619,7 +4619,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 }
 
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
-/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 77 neg, 52 div, 21 sqrt */
+/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 56 neg, 52 div, 21 sqrt */
 
 static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
 {

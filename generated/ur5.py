@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xa4feadd8
+STAMP = 0xcb73743d
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -323,10 +323,10 @@ def _pose_core(q, T):
     t9 = t8 - t2*sn[..., 4]
     t12 = cs[..., 4]*sn[..., 3]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -368,7 +368,7 @@ def pose(q):
 
     q: array of shape (..., 6), finite.
     Returns T of shape (..., 4, 4).
-    Operations: 6 sin, 6 cos, 60 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 59 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), )
@@ -396,10 +396,10 @@ def _jacobian_core(q, J):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -413,8 +413,8 @@ def _jacobian_core(q, J):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t242 = -cs[..., 0]
     t309 = -cs[..., 3]
@@ -463,7 +463,7 @@ def jacobian(q):
 
     q: array of shape (..., 6), finite.
     Returns J of shape (..., 6, 6).
-    Operations: 5 sin, 5 cos, 55 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 54 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (36,), dtype=DTYPE), )
@@ -486,10 +486,10 @@ def _jacobian_tool_core(q, J_tool):
     t8 = cs[..., 4]*sn[..., 0]
     t10 = -cs[..., 0]*cs[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -526,9 +526,9 @@ def _jacobian_tool_core(q, J_tool):
     t115 = t95*t17 + t98*t16
     t116 = t96*t17 + t99*t16
     t117 = t97*t17 + t13*t16
-    t118 = t91*t15 - t93*t14
-    t119 = t92*t15 - t94*t14
-    t120 = -t14*cs[..., 4] - t15*sn[..., 4]
+    t118 = t91*t15 + t93*t14
+    t119 = t92*t15 + t94*t14
+    t120 = t14*cs[..., 4] - t15*sn[..., 4]
     J_tool[..., 0] = t106
     J_tool[..., 1] = t109
     J_tool[..., 2] = t112
@@ -573,7 +573,7 @@ def jacobian_tool(q):
 
     q: array of shape (..., 6), finite.
     Returns J_tool of shape (..., 6, 6).
-    Operations: 6 sin, 6 cos, 113 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 111 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (36,), dtype=DTYPE), )
@@ -601,10 +601,10 @@ def _jacobian_dot_core(q, dq, dJ):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -618,8 +618,8 @@ def _jacobian_dot_core(q, dq, dJ):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t44 = sn[..., 0]*dq[..., 1]
     t45 = -cs[..., 0]*dq[..., 1]
@@ -708,7 +708,7 @@ def jacobian_dot(q, dq):
     q: array of shape (..., 6), finite.
     dq: array of shape (..., 6), finite.
     Returns dJ of shape (..., 6, 6).
-    Operations: 5 sin, 5 cos, 174 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 173 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (6, 6, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (36,), dtype=DTYPE), )
@@ -736,10 +736,10 @@ def _twist_core(q, dq, twist):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -753,8 +753,8 @@ def _twist_core(q, dq, twist):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t44 = sn[..., 0]*dq[..., 1]
     t45 = -cs[..., 0]*dq[..., 1]
@@ -797,7 +797,7 @@ def twist(q, dq):
     q: array of shape (..., 6), finite.
     dq: array of shape (..., 6), finite.
     Returns twist of shape (..., 6).
-    Operations: 5 sin, 5 cos, 100 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 99 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (6, 6, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -825,10 +825,10 @@ def _acceleration_core(q, dq, ddq, acc):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -842,8 +842,8 @@ def _acceleration_core(q, dq, ddq, acc):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t44 = sn[..., 0]*dq[..., 1]
     t45 = -cs[..., 0]*dq[..., 1]
@@ -903,7 +903,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 6), finite.
     ddq: array of shape (..., 6), finite.
     Returns acc of shape (..., 6).
-    Operations: 5 sin, 5 cos, 273 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 272 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (6, 6, 6, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -934,10 +934,10 @@ def _kinematics_core(q, dq, ddq, T, J, dJ, twist, acc):
     t11 = t10 - t4*sn[..., 4]
     t12 = cs[..., 4]*sn[..., 3]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -952,8 +952,8 @@ def _kinematics_core(q, dq, ddq, T, J, dJ, twist, acc):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t35 = t7*cs[..., 5] - t3*sn[..., 5]
     t36 = -t3*cs[..., 5] - t7*sn[..., 5]
@@ -1124,7 +1124,7 @@ def kinematics(q, dq, ddq):
     dq: array of shape (..., 6), finite.
     ddq: array of shape (..., 6), finite.
     Returns T of shape (..., 4, 4), J of shape (..., 6, 6), dJ of shape (..., 6, 6), twist of shape (..., 6), acc of shape (..., 6).
-    Operations: 6 sin, 6 cos, 313 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 312 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (6, 6, 6, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), np.empty(batch + (36,), dtype=DTYPE), np.empty(batch + (36,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), )
@@ -1155,10 +1155,10 @@ def _ik_terms_core(q, T, J):
     t11 = t10 - t4*sn[..., 4]
     t12 = cs[..., 4]*sn[..., 3]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -1173,8 +1173,8 @@ def _ik_terms_core(q, T, J):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t35 = t7*cs[..., 5] - t3*sn[..., 5]
     t36 = -t3*cs[..., 5] - t7*sn[..., 5]
@@ -1248,7 +1248,7 @@ def ik_terms(q):
 
     q: array of shape (..., 6), finite.
     Returns T of shape (..., 4, 4), J of shape (..., 6, 6).
-    Operations: 6 sin, 6 cos, 82 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 81 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), np.empty(batch + (36,), dtype=DTYPE), )
@@ -1277,10 +1277,10 @@ def _manipulability_core(q, w):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -1294,8 +1294,8 @@ def _manipulability_core(q, w):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t122 = t26*t26
     t123 = t28*t28
@@ -1546,7 +1546,7 @@ def manipulability(q):
 
     q: array of shape (..., 6), finite.
     Returns w of shape (..., 1).
-    Operations: 5 sin, 5 cos, 728 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 727 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -1567,10 +1567,10 @@ def _manipulability_position_core(q, w_position):
     sn = np.sin(ang)
     t2 = cs[..., 0]*cs[..., 3]
     t4 = cs[..., 3]*sn[..., 0]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -1584,8 +1584,8 @@ def _manipulability_position_core(q, w_position):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t122 = t26*t26
     t123 = t28*t28
@@ -1657,7 +1657,7 @@ def manipulability_position(q):
 
     q: array of shape (..., 6), finite.
     Returns w_position of shape (..., 1).
-    Operations: 5 sin, 5 cos, 193 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 192 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -1685,10 +1685,10 @@ def _jacobian_hessian_core(q, Hs):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -1702,8 +1702,8 @@ def _jacobian_hessian_core(q, Hs):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t385 = -t21*cs[..., 0]
     t386 = -t19*cs[..., 0]
@@ -1956,7 +1956,7 @@ def jacobian_hessian(q):
 
     q: array of shape (..., 6), finite.
     Returns Hs of shape (..., 6, 6, 6).
-    Operations: 5 sin, 5 cos, 118 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 117 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (216,), dtype=DTYPE), )
@@ -1985,10 +1985,10 @@ def _manipulability_gradient_core(q, grad):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -2002,8 +2002,8 @@ def _manipulability_gradient_core(q, grad):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t122 = t26*t26
     t123 = t28*t28
@@ -2378,7 +2378,7 @@ def manipulability_gradient(q):
 
     q: array of shape (..., 6), finite.
     Returns grad of shape (..., 6).
-    Operations: 5 sin, 5 cos, 1278 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 1277 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -2407,10 +2407,10 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t10 = -cs[..., 0]*cs[..., 4]
     t11 = t10 - t4*sn[..., 4]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -2424,8 +2424,8 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t121 = np.where(lambda_ > 1.0, 1.0/lambda_, 1.0)
     t227 = t9*t9
@@ -3145,7 +3145,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 5 sin, 5 cos, 2069 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 2067 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (6, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -3167,10 +3167,10 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     sn = np.sin(ang)
     t2 = cs[..., 0]*cs[..., 3]
     t4 = cs[..., 3]*sn[..., 0]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -3184,8 +3184,8 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t121 = np.where(lambda_ > 1.0, 1.0/lambda_, 1.0)
     t122 = t26*t26
@@ -3360,7 +3360,7 @@ def inverse_velocity_position(q, v, lambda_):
     v: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq_position of shape (..., 6).
-    Operations: 5 sin, 5 cos, 407 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 406 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (6, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -3393,10 +3393,10 @@ def _jacobian_rpy_core(q, JA):
     t11 = t10 - t4*sn[..., 4]
     t12 = cs[..., 4]*sn[..., 3]
     t13 = t6*sn[..., 3]
-    t14 = 0.0823*sn[..., 4]
+    t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
-    t16 = 0.09465*sn[..., 3] - t14*cs[..., 3]
-    t17 = 0.09465*cs[..., 3] + t14*sn[..., 3]
+    t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
+    t17 = 0.09465*cs[..., 3] - t14*sn[..., 3]
     t18 = 0.10915 - t15
     t19 = t16 - 0.39225*cs[..., 2]
     t20 = t17 + 0.39225*sn[..., 2]
@@ -3410,8 +3410,8 @@ def _jacobian_rpy_core(q, JA):
     t29 = t20*sn[..., 0]
     t30 = t17*cs[..., 0]
     t31 = t17*sn[..., 0]
-    t32 = t2*t15 - t14*sn[..., 0]
-    t33 = t4*t15 + t14*cs[..., 0]
+    t32 = t2*t15 + t14*sn[..., 0]
+    t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t35 = t7*cs[..., 5] - t3*sn[..., 5]
     t36 = -t3*cs[..., 5] - t7*sn[..., 5]
@@ -3491,7 +3491,7 @@ def jacobian_rpy(q):
 
     q: array of shape (..., 6), finite.
     Returns JA of shape (..., 6, 6).
-    Operations: 6 sin, 6 cos, 127 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 126 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (36,), dtype=DTYPE), )
@@ -4243,7 +4243,7 @@ def ik_candidates(target):
 
     target: array of shape (..., 16), finite.
     Returns Q of shape (..., 8, 6), flags of shape (..., 8).
-    Operations: 0 sin, 0 cos, 1275 add/sub/mul/neg.
+    Operations: 0 sin, 0 cos, 1254 add/sub/mul/neg.
     """
     batch, (target,) = _inputs((target,), ("target", ), (16, ), ("finite", ))
     outputs = (np.empty(batch + (48,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), )

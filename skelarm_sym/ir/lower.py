@@ -558,14 +558,11 @@ class Converter:
         return self._mul_parts(c, factors)
 
     def _mul(self, e: sp.Mul) -> Expr:
-        """A product as ``Mul.as_coeff_mul`` splits it: a rational coefficient, or -1 and a positive float."""
+        """A product led by its number (``Mul.as_coeff_Mul``): a rational, or a float."""
         args = e.args
         first = args[0]
-        if first.is_Number:
-            if first.is_Rational:
-                return self._mul_parts(first, args[1:])
-            if _negative(first):
-                return self._mul_parts(sp.S.NegativeOne, (-first, *args[1:]))
+        if first.is_Number and (first.is_Rational or _negative(first)):
+            return self._mul_parts(first, args[1:])  # a negative literal leads: -0.4*x, its sign free
         return self._mul_parts(sp.S.One, args)
 
     def _mul_parts(self, coeff: sp.Number, factors: Sequence[sp.Basic]) -> Expr:

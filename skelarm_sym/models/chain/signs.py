@@ -22,7 +22,7 @@ def _skeleton(e: sp.Expr, ids: dict[sp.Symbol, int]) -> tuple:
     if e.is_Add:
         return ("add", tuple(_skeleton(a, ids) for a in e.args))
     if e.is_Mul:
-        coeff, factors = e.as_coeff_mul()
+        coeff, factors = e.as_coeff_mul(rational=False)  # a Float coefficient carries a sign too (-0.4 x)
         return ("mul", -1 if coeff.is_negative else 1, abs(coeff) == 1, tuple(_skeleton(f, ids) for f in factors))
     return ("other", tuple(_skeleton(a, ids) for a in e.args))
 
