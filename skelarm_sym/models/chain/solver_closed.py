@@ -353,6 +353,7 @@ def nearest_solver(arm: _Arm) -> Function:
     dist = b.var("dist", 0.0)
     k = b.var("k", 0.0)
     y = b.var("y", 0.0)
+    x = b.var("x", 0.0)
     found = b.var("found", _int(0), Type.INT)
     b.call("ik_all_rows", *data, rows, count, flags, result=status)
     for j in range(N):
@@ -360,7 +361,7 @@ def nearest_solver(arm: _Arm) -> Function:
     with b.for_("i", 0, count[0]) as i:
         b.comment("each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref")
         for j in range(N):
-            x = rows[_at(N, i, j)]
+            b.set(x, rows[_at(N, i, j)])  # read once: an array backend reads an element at a data index by a gather or selects
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
