@@ -97,17 +97,6 @@ def test_the_masked_form_has_a_loop_per_loop_over_data():
     assert "m" not in p.statics and "k" in p.statics
 
 
-def test_a_gathering_backend_reads_an_element_at_a_data_index_in_one_operation():
-    """PyTorch reads ``v[m]`` (``m`` per lane) as a chain of selects over ``v``; JAX, whose printer gathers per
-    lane, as one ``_pick`` (an ik_nearest of 8 x 6 rows read 60 times a pass was 2800 selects for XLA)."""
-    module = _module()
-    torch_text = BACKENDS["torch"].render(module, "0")["_torch.py"]
-    jax_text = BACKENDS["jax"].render(module, "0")["_jax.py"]
-    assert "torch.where(_m5 == 0, v[0], torch.where(_m5 == 1, v[1]" in torch_text
-    assert "acc + _pick(v, _m5)" in jax_text and "_pick(out, i)" in jax_text
-    assert "== 0, v[0]" not in jax_text
-
-
 @pytest.mark.parametrize("lang", ["torch", "jax"])
 def test_every_lane_ends_as_the_scalar_program_ends(lang):
     pytest.importorskip(lang, reason=f"{lang} is not installed: pip install 'skelarm-sym[{lang}]'")

@@ -199,10 +199,6 @@ class ProcedurePrinter:
     loops over data are ``while`` loops that end when no lane runs (one host synchronisation per pass),
     guards skip a branch no lane takes."""
 
-    GATHER = False
-    """Whether the module has a per-lane gather (``_pick``) for element reads at a data index; without one
-    they are chains of selects (:func:`~skelarm_sym.ir.predicate.predicate`)."""
-
     def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect, indent: str = "    ",
                  statics: set[str] | None = None) -> None:
         """``statics``: the names the printer may treat as plain numbers (``p.statics`` when ``None``)."""

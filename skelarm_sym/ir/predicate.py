@@ -20,8 +20,7 @@ per problem of a batch) in which no control flow depends on data:
   body; calls of straight-line functions stay calls (:class:`PCall`) whose outputs are merged under the
   mask;
 * an element read with an index that is data (``M[i]``, ``i`` per lane) becomes a chain of selects over
-  the array (or, for a backend that gathers per lane, ``gather=True``, stays an element at that index),
-  a write one masked assignment per element;
+  the array, a write one masked assignment per element;
 * a branch whose body is costly (a call or a loop) is wrapped in :class:`PGuard`: printers may skip it
   when no lane is active (every assignment in it is masked, so skipping changes nothing).
 
@@ -337,9 +336,8 @@ class _Scope:
 
 
 class _Pass:
-    def __init__(self, module: Module, gather: bool = False) -> None:
+    def __init__(self, module: Module) -> None:
         self.module = module
-        self.gather = gather
         self.count = 0
         self.arrays: dict[str, tuple[int, Type]] = {}
         self.consts: set[str] = set()
@@ -432,10 +430,8 @@ class _Pass:
         return range(offset, min(offset + size, self.arrays[name][0]))
 
     def pick(self, name: str, idx, type_: Type, scope: _Scope, original: str, offset: int):
-        """``name[idx]`` for an index that is data: a chain of selects, or the element itself (``gather``)."""
+        """``name[idx]`` for an index that is data: a chain of selects."""
         i = idx if type(idx) is Var else self.define("i", idx, Type.INT)
-        if self.gather:
-            return Elem(name, i, type_)
         cells = list(self.span(name, original, offset, scope))
         out = Elem(name, Const(cells[-1], Type.INT), type_)
         for j in reversed(cells[:-1]):
@@ -733,12 +729,9 @@ def _zero(t: Type):
             Type.UINT64: Const(0, Type.UINT64)}[t]
 
 
-def predicate(module: Module, function: Function, gather: bool = False) -> Predicated:
-    """The masked form of procedure ``function`` of ``module`` (see the module docstring). ``gather``: the
-    printer reads an element at a per-lane index in one operation (JAX's ``_pick``), so such a read stays an
-    :class:`~skelarm_sym.ir.nodes.Elem` instead of becoming a chain of selects over the whole array (a
-    48-element array read 60 times in a loop: 2800 selects for XLA to compile)."""
-    p = _Pass(module, gather)
+def predicate(module: Module, function: Function) -> Predicated:
+    """The masked form of procedure ``function`` of ``module`` (see the module docstring)."""
+    p = _Pass(module)
     scope = _Scope()
     for a in function.arguments:
         if not a.is_scalar:

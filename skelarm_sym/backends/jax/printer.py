@@ -30,10 +30,7 @@ JAX = Dialect(
 class JaxProcedurePrinter(ProcedurePrinter):
     """A :class:`~skelarm_sym.ir.predicate.Predicated` procedure as JAX statements (module docstring): the
     shared printer's statements, but for loops, guards and elements at a traced index, which JAX writes as
-    functional control flow and ``_put``; values a loop carries are kept over every lane. An element read at
-    a per-lane index is one gather (``_pick``), not a chain of selects (:func:`~skelarm_sym.ir.predicate.predicate`)."""
-
-    GATHER = True
+    functional control flow and ``_put``; values a loop carries are kept over every lane."""
 
     def __init__(self, p: Predicated, calls: dict[str, str], dialect: Dialect = JAX, indent: str = "    ") -> None:
         super().__init__(p, calls, dialect, indent, statics=p.statics - p.rollable)

@@ -87,7 +87,7 @@ def straight_context(f: Function, dialect: Dialect = TORCH) -> dict:
 def procedure_context(module: Module, f: Function, dialect: Dialect = TORCH, printer_class=ProcedurePrinter) -> dict:
     """A public procedure: its masked body, its wrappers' checks, defaults and result record."""
     calls = {g.name: core_name(g) for g in module.functions if g.kind == "straight"}
-    p = predicate(module, f, gather=printer_class.GATHER)
+    p = predicate(module, f)
     body = printer_class(p, calls, dialect).statements(p.body, 1)
     defaults = TensorPrinter(dialect, elements="last")
     inputs = []
