@@ -28,22 +28,14 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def run_one(robot: Path, solver: str, targets: int, repeats: int, folder: str) -> dict:
     """In this process: load the modules written to ``folder``, check ``solver`` against NumPy, time it."""
-    import importlib.util
-
     import jax
     import numpy as np
 
-    jax.config.update("jax_enable_x64", True)
-
-    def load(name):
-        spec = importlib.util.spec_from_file_location(name, f"{folder}/{name}.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        return module
-
+    from skelarm_sym.build import load_python
     from skelarm_sym.models.chain.loader import load_robot
 
-    jm, nm = load("arm_jax"), load("arm")
+    jax.config.update("jax_enable_x64", True)
+    jm, nm = (load_python(Path(folder, f"{name}.py").read_text(), name) for name in ("arm_jax", "arm"))
     rng = np.random.default_rng(0)
     q = rng.uniform(-2.0, 2.0, (targets, load_robot(robot).n))
     T = nm.pose(q)

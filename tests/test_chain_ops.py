@@ -13,11 +13,15 @@ from skelarm_sym import reference
 from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.derive.core import expand_steps
 from skelarm_sym.generate import generate
+from skelarm_sym.ir.count import count_ops
+from skelarm_sym.ir.lower import Converter
+from skelarm_sym.ir.nodes import Store, Var
 from skelarm_sym.models.chain import Chain, Joint, Transform
 from skelarm_sym.models.chain import derive as chain_derive
 from skelarm_sym.models.chain.algebra import _split_z
 from skelarm_sym.models.chain.dh_file import load_robot_file
 from skelarm_sym.models.chain.joints import JOINT_TYPES, Prismatic, Revolute, joint_type
+from skelarm_sym.models.chain.signs import _normalise_signs
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ("pose", "jacobian", "jacobian_tool", "jacobian_dot", "kinematics")
@@ -62,18 +66,12 @@ def test_a_decimal_coefficient_carries_the_sign_of_a_stored_negated_step():
     """``y = w s + 0.1337 c`` read only as ``-y``: stored negated it is ``-0.1337 c - w s`` (the sign rides on
     the printed literal, one subtraction) and the output is ``y`` itself: no negation anywhere. The search
     must see the Float coefficient as a coefficient, as it sees a Rational one."""
-    from skelarm_sym.models.chain.signs import _normalise_signs
-
     w, s, c, y = sp.symbols("w s c y")
     for coefficient in (sp.Float(0.1337), sp.Rational(3, 7)):
         steps = [(y, w * s + coefficient * c)]
         assert _normalise_signs(steps, [-y]) == {y: -y}, coefficient
     # and the count agrees with the printed code: a product led by a negative literal (-0.0823 s, -3/7 s)
     # is printed with the sign on the literal and costs no negation, whether the literal is a Float or not
-    from skelarm_sym.ir.count import count_ops
-    from skelarm_sym.ir.lower import Converter
-    from skelarm_sym.ir.nodes import Store, Var
-
     convert = Converter({s: Var("s"), c: Var("c")})
     for coefficient in (sp.Float(-0.0823), sp.Rational(-3, 7)):
         value = convert(coefficient * s * c)

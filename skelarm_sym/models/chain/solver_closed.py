@@ -361,7 +361,7 @@ def nearest_solver(arm: _Arm) -> Function:
     with b.for_("i", 0, count[0]) as i:
         b.comment("each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref")
         for j in range(N):
-            b.set(x, rows[_at(N, i, j)])  # read once: an array backend reads an element at a data index by a gather or selects
+            b.set(x, rows[_at(N, i, j)])  # read once: array backends read an element at a data index as a chain of selects
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
