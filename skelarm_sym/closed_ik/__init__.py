@@ -11,8 +11,7 @@ One job per module:
 * :mod:`.postprocess` -- the post-processing spec in NumPy (2 pi shifts into limits, drop, dedupe,
   status, nearest);
 * :mod:`.evaluate` -- the derivation evaluated in NumPy, independent of the IR (:mod:`.numpy_source`: the steps
-  printed directly; ``sympy.lambdify`` as its fallback);
-* :mod:`.float_facts` -- two SymPy Float queries answered from the number while deriving (speed only).
+  printed directly; ``sympy.lambdify`` as its fallback).
 
 Judge: :mod:`skelarm_sym.models.chain.reference_ik_all` (NumPy only, imports nothing from here).
 """

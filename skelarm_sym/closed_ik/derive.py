@@ -32,7 +32,7 @@ from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, c
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
-from .float_facts import float_facts
+from ..derive.float_facts import float_facts
 from .subproblems import Steps
 
 Step = tuple[sp.Symbol, sp.Expr]
@@ -110,7 +110,7 @@ def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int
 def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
     """All closed-form IK candidates of ``chain`` (see the module docstring); ``lock``: the joint held at a
     run-time value (0-based index or name) for 7-joint chains. :class:`ClosedFormError` (one line) when the
-    chain is in no family. Derived with two Float queries answered directly (:func:`~.float_facts.float_facts`)."""
+    chain is in no family. Derived with two Float queries answered directly (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
     with float_facts():
         return _derive_ik_all(chain, lock)
 

@@ -71,6 +71,7 @@ from .price import Pose, _choose
 from .signs import _settle_signs
 from .steps import _Steps
 from ...derive.core import Derivation, FunctionSpec, Table
+from ...derive.float_facts import float_facts
 
 __all__ = ["CHAIN_FUNCTIONS", "ChainDerivation", "canonical_joints", "derive_chain"]
 
@@ -143,7 +144,13 @@ _OUTPUT_OF = {"pose": "T", "jacobian": "J", "jacobian_dot": "dJ", "twist": "twis
 
 def derive_chain(chain: Chain, inverse: bool = True) -> ChainDerivation:
     """Derive ``T, J, J_tool, dJ, twist, acc`` of ``chain`` (see the module docstring), and with ``inverse``
-    the inverse functions of :mod:`skelarm_sym.models.chain.inverse`. Linear in N (the Hessian aside)."""
+    the inverse functions of :mod:`skelarm_sym.models.chain.inverse`. Linear in N (the Hessian aside). Runs with
+    two Float queries answered from the number (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
+    with float_facts():
+        return _derive_chain(chain, inverse)
+
+
+def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
     n = chain.n
     q = sp.symbols(f"q1:{n + 1}", real=True)
     dq = sp.symbols(f"dq1:{n + 1}", real=True)

@@ -1,9 +1,11 @@
-"""Two assumption queries on SymPy Floats answered directly while the candidates are derived.
+"""Two assumption queries on SymPy Floats answered directly while a chain's kinematics or its closed-form IK
+is derived.
 
-SymPy multiplies the geometry's Float constants into every product it distributes (``k_i (k . v)`` of a
-rotation, ``-(a + b)``), and each product is a new Float that ``Mul`` and ``Add`` then ask ``is_zero`` (and
-``as_coeff_mul`` ``is_extended_negative``). A new object's first query copies the class's fact base and deduces
-every implied fact, about 0.1 ms each: 5000 queries, a quarter of a random arm's derivation. Float's own handlers
+SymPy multiplies the geometry's Float constants (a URDF's offsets and rotations) into every product it
+distributes (``k_i (k . v)`` of a rotation, ``-(a + b)``), and each product is a new Float that ``Mul`` and
+``Add`` then ask ``is_zero`` (and ``as_coeff_mul`` ``is_extended_negative``). A new object's first query copies
+the class's fact base and deduces every implied fact, about 0.1 ms each: 5000 queries, a quarter of a random
+arm's closed-form derivation, and 0.86 x the instructions of deriving the iCub arm, the UR5 and the Panda. Float's own handlers
 answer both from its ``mpf`` tuple alone (``_eval_is_zero``: ``mpf == fzero``; ``_eval_is_extended_negative``:
 ``-inf``, ``+inf``, else ``num < 0``, which for an ``mpf`` tuple is its sign bit: NaN and zero have sign 0), and
 a handler that answers ends the query, so answering them as properties gives the same values without storing
