@@ -2,7 +2,8 @@
 
 ``compile_host(generated)`` compiles ``{prefix}.cu`` (with ``{prefix}.cuh`` beside it) with the system C++
 compiler (``$CXX``, else ``c++``, ``g++`` or ``clang++``) as C++, where ``__host__ __device__`` are
-defined away, strict (``-Wall -Wextra -Werror -pedantic``), into a shared library cached and verified
+defined away, strict (``-Wall -Wextra -Werror -pedantic``), at the optimisation level of the C
+(:func:`skelarm_sym.build.default_flags`: ``-O2``, or the level of ``$SKELARM_SYM_OPT``), into a shared library cached and verified
 exactly as :mod:`skelarm_sym.build` caches the C (private folder, SHA-256 sidecar, rebuilt when they
 disagree). :class:`HostArm` loads it: a :class:`~skelarm_sym.wrapper.CompiledArm` (same methods,
 signatures and input checks) whose single calls are the ``__host__ __device__`` functions and whose
@@ -25,8 +26,8 @@ from typing import Sequence
 import numpy as np
 
 from ...build import (
-    CompilerNotFound, _durable_replace, _split_command, cache_folder, compile_failure, file_sha256, private_folder,
-    remove_stale_builds, verified,
+    CompilerNotFound, _durable_replace, _split_command, cache_folder, compile_failure, default_flags, file_sha256,
+    private_folder, remove_stale_builds, verified,
 )
 from ...errors import InputError
 from ...ir.nodes import Function
@@ -34,8 +35,9 @@ from ...wrapper import CompiledArm
 from .backend import STATUS, kernel_arguments
 from ..c.printer import PRECISIONS
 
-HOST_FLAGS = ("-x", "c++", "-std=c++11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
-"""The .cu as strict C++11 (what ``__host__ __device__`` functions must be anyway)."""
+HOST_FLAGS = ("-x", "c++", "-std=c++11", "-Wall", "-Wextra", "-Werror", "-pedantic")
+"""The .cu as strict C++11 (what ``__host__ __device__`` functions must be anyway); the optimisation level comes
+from the ``flags`` of :func:`compile_host_library`."""
 
 
 def find_cxx(preferred: str | None = None) -> str:
@@ -63,10 +65,14 @@ def cuda_sources(generated) -> dict[str, str]:
     return {n: generated.sources[n] for n in names}
 
 
-def compile_host_library(sources: dict[str, str], flags: Sequence[str] = (), compiler: str | None = None) -> Path:
+def compile_host_library(sources: dict[str, str], flags: Sequence[str] | None = None, compiler: str | None = None) -> Path:
     """Compile the ``.cu`` of ``sources`` as host C++ into a cached shared library; its path.
 
-    The cache is :func:`skelarm_sym.build.cache_folder`, checked and trusted as for the C libraries."""
+    ``flags`` follow :data:`HOST_FLAGS`; ``None`` for :func:`skelarm_sym.build.default_flags` (``-O2``, or the
+    level of ``$SKELARM_SYM_OPT``, as for the C). The cache is :func:`skelarm_sym.build.cache_folder`, checked
+    and trusted as for the C libraries."""
+    if flags is None:
+        flags = default_flags()
     cxx = find_cxx(compiler)
     words = _split_command(cxx, "compiler")
     all_flags = [*HOST_FLAGS, *flags, "-fPIC", "-shared"]
@@ -103,7 +109,7 @@ def compile_host_library(sources: dict[str, str], flags: Sequence[str] = (), com
     return target
 
 
-def compile_host(generated, flags: Sequence[str] = (), compiler: str | None = None) -> "HostArm":
+def compile_host(generated, flags: Sequence[str] | None = None, compiler: str | None = None) -> "HostArm":
     """Compile and load the ``.cu`` of a :class:`~skelarm_sym.generate.Generated` result as host C++."""
     return HostArm(compile_host_library(cuda_sources(generated), flags, compiler), generated.module)
 
