@@ -94,7 +94,7 @@ def test_cli_check_prints_allowance_columns_and_the_note(capsys):
 
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_ik_row_for_planar_arms(precision):
-    generated = generate(4, precision=precision, out=None)
+    generated = generate(4, precision=precision, out=None, functions="ik_solve")
     impls = load_implementations(generated)
     rows = check_ik(generated, impls, cases=12, seed=3, precision=precision)
     assert [r.implementation for r in rows] == ["C ik_solve", "Python ik_solve"]
@@ -107,7 +107,7 @@ def test_ik_row_for_planar_arms(precision):
 
 def test_ik_row_fails_when_the_solver_does_not_reach(monkeypatch):
     """A solver that stops early (max_iter 1) or claims success at a wrong pose fails the row."""
-    generated = generate(3, out=None, langs="python")
+    generated = generate(3, out=None, langs="python", functions="ik_solve")
     (label, module), = load_implementations(generated)
     real = module.ik_solve
 
@@ -148,7 +148,9 @@ def test_no_ik_row_for_a_diffdrive(capsys):
 def test_chain_pose_ik_row_when_the_library_has_it():
     from skelarm_sym.models.chain.loader import load_robot
 
-    generated = generate(load_robot(str(ROOT / "examples" / "robots" / "ur5.toml")), out=None)
+    # the solvers the rows judge: ik_solve and the closed-form ik_all / ik_nearest
+    generated = generate(load_robot(str(ROOT / "examples" / "robots" / "ur5.toml")), out=None,
+                         functions="ik_solve,ik_all,ik_nearest")
     impls = load_implementations(generated)
     rows = check_ik(generated, impls, cases=6, seed=1)
     assert [label for label, _ in impls] == ["C", "Python"]  # both print the same IR solver
@@ -283,7 +285,7 @@ def test_prefix_without_from_is_an_error(capsys):
 def test_flipped_condition_would_be_caught(tmp_path):
     """The condition factor recorded per row is the one of its deciding case, not the largest: at the
     undamped solves it varies over the cases, and the deciding case's allowance must explain the row."""
-    generated = generate(3, langs="c", out=None)
+    generated = generate(3, langs="c", out=None, functions="inverse_velocity3")  # the row judged
     results = compare(generated, cases=40)
     solve = next(r for r in results if r.implementation == "C inverse_velocity3 [lambda=0*reach]")
     assert solve.condition > 1.0

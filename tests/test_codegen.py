@@ -98,7 +98,7 @@ def test_batches_equal_single_calls_and_shapes(rng, n):
 
 
 def test_wrong_shapes_are_clear_errors():
-    g = generate(3, out=None)
+    g = generate(3, out=None, functions="jacobian,velocity")
     arm = compile_arm(g)
     py = load_python(g.sources["arm3.py"], "arm3")
     with pytest.raises(InputError, match=r"q must have shape \(\.\.\., 3\)"):
@@ -112,7 +112,7 @@ def test_wrong_shapes_are_clear_errors():
 
 
 def test_compile_cache_is_reused():
-    g = generate(2, langs="c", out=None)
+    g = generate(2, langs="c", out=None, functions="position")  # calls nothing: any one function makes a library
     first = compile_arm(g).path
     mtime = first.stat().st_mtime_ns
     assert compile_arm(g).path == first and first.stat().st_mtime_ns == mtime
@@ -202,7 +202,7 @@ def test_written_files_follow_the_umask(tmp_path):
 
 def test_numpy_chunks_give_the_same_values(rng):
     """Batches larger than CHUNK run in slices; partial broadcasts are expanded first."""
-    g = generate(4, out=None, langs="python")
+    g = generate(4, out=None, langs="python", functions="kinematics")
     py = load_python(g.sources["arm4.py"], "arm4")
     q = rng.uniform(-np.pi, np.pi, (3, 1, 7, 4))  # broadcasts with dq's (5, 1, 4)
     dq = rng.uniform(-1, 1, (5, 1, 4))
@@ -221,7 +221,7 @@ def test_numpy_chunks_give_the_same_values(rng):
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
 def test_trig_helpers_with_and_without_vector_math(n, rng):
     """Each trig strategy (scalar, paired or quad vector sines, vector loops) and its plain fallback."""
-    g = generate(n, out=None, langs="c")
+    g = generate(n, out=None, langs="c", functions="kinematics")
     q, dq, ddq = rng.uniform(-np.pi, np.pi, (3, 40, n))
     l = rng.uniform(0.5, 1.5, n)
     want = reference.kinematics(q, dq, ddq, l)

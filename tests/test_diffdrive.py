@@ -67,7 +67,7 @@ def test_wheel_contact_points_move_as_the_wheel_speeds_say(rng):
 
 
 def test_straight_and_spinning_motion():
-    g = generate(DiffDrive(0.5), out=None)
+    g = generate(DiffDrive(0.5), out=None, functions="body_rates")
     py = load_python(g.sources["diffdrive.py"], "diffdrive")
     np.testing.assert_allclose(py.body_rates([1.0, 1.0]), [1.0, 0.0])  # straight: R infinite, no trouble
     np.testing.assert_allclose(py.body_rates([-1.0, 1.0]), [0.0, 4.0])  # spin in place: omega = 2 / 0.5

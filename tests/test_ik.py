@@ -18,12 +18,15 @@ from skelarm_sym.models.chain.dh_file import load_robot_file
 
 ROBOTS = Path(__file__).resolve().parents[1] / "examples" / "robots"
 STATUS = {"converged": 0, "stalled": 1, "max_iter": 2, "invalid": 3}
+IK_FUNCTIONS = "ik_solve,ik_solve_position"
+"""The functions these tests call (with what they bring: ik_terms and the solvers' helpers)."""
 
 
 @pytest.fixture(scope="module", params=["ur5", "panda", "puma560"])
 def robot(request):
     chain = load_robot_file(ROBOTS / f"{request.param}.toml")
-    generated = generate(chain, langs="c,python", out=None, prefix=f"tik_{request.param}")
+    # only the two solvers the tests call: the closed-form IK (ik_all) and the forward functions are not derived
+    generated = generate(chain, langs="c,python", out=None, prefix=f"tik_{request.param}", functions=IK_FUNCTIONS)
     arm = compile_arm(generated)
     module = load_python(generated.sources[f"tik_{request.param}.py"], f"tik_{request.param}")
     lim = chain.limits()
@@ -216,7 +219,8 @@ def test_c_status_codes_and_null_out_pointers(robot):
 @pytest.fixture(scope="module")
 def ur5_module():
     chain = load_robot_file(ROBOTS / "ur5.toml")
-    return load_python(generate(chain, langs="python", out=None, prefix="tik_log").sources["tik_log.py"], "tik_log")
+    generated = generate(chain, langs="python", out=None, prefix="tik_log", functions=IK_FUNCTIONS)  # _ik_log3, _ik_uniform
+    return load_python(generated.sources["tik_log.py"], "tik_log")
 
 
 @pytest.mark.parametrize("angle", [0.0, 1e-12, 1e-6, 0.3, 2.0, np.pi - 1e-3, np.pi - 1e-7, np.pi])

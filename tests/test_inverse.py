@@ -17,9 +17,9 @@ TOL = 1e-14
 
 @pytest.fixture(scope="module", params=[2, 3, 5])
 def impls(request):
-    """(n, compiled C, NumPy module) for symbolic lengths."""
+    """(n, compiled C, NumPy module) for symbolic lengths: the functions its tests call."""
     n = request.param
-    g = generate(n, out=None)
+    g = generate(n, out=None, functions="manipulability,inverse_velocity,ik_step")
     return n, compile_arm(g), load_python(g.sources[f"arm{n}.py"], f"arm{n}")
 
 
@@ -130,7 +130,7 @@ def test_undamped_inverse_velocity_at_a_singular_pose_is_the_pseudo_inverse(impl
 
 
 def test_inverse_velocity3_with_orientation_row(rng):
-    g = generate(3, out=None)
+    g = generate(3, out=None, functions="inverse_velocity3")
     c, py = compile_arm(g), load_python(g.sources["arm3.py"], "arm3")
     l = np.array([1.0, 0.7, 0.4])
     twist = np.array([0.2, -0.5, 0.8])
@@ -168,7 +168,7 @@ def test_non_finite_velocity_or_target_is_refused(impls):
 
 @pytest.mark.parametrize("n", range(2, 9))
 def test_ik_converges_to_random_reachable_targets(n, rng):
-    g = generate(n, out=None)
+    g = generate(n, out=None, functions="ik_solve")
     c, py = compile_arm(g), load_python(g.sources[f"arm{n}.py"], f"arm{n}")
     l = rng.uniform(0.4, 1.5, n)
     for _ in range(10):
@@ -183,7 +183,7 @@ def test_ik_converges_to_random_reachable_targets(n, rng):
 
 def test_ik_step_moves_toward_the_target(rng):
     n = 4
-    g = generate(n, out=None)
+    g = generate(n, out=None, functions="ik_step")
     py = load_python(g.sources["arm4.py"], "arm4")
     l = np.ones(n)
     q = rng.uniform(-1, 1, n)
@@ -200,7 +200,7 @@ def test_ik_step_moves_toward_the_target(rng):
     ((2.0, 0.5, 0.3), (0.1, 0.0), 2.0 - 0.8 - 0.1),  # inside the hole the short links cannot fill
 ])
 def test_unreachable_targets_stop_at_the_closest_reach(lengths, target, closest):
-    g = generate(3, out=None)
+    g = generate(3, out=None, functions="ik_solve")
     c, py = compile_arm(g), load_python(g.sources["arm3.py"], "arm3")
     for impl in (c, py):
         for lam in (0.0, 0.05):
@@ -211,7 +211,7 @@ def test_unreachable_targets_stop_at_the_closest_reach(lengths, target, closest)
 
 
 def test_ik_bad_input():
-    g = generate(2, out=None)
+    g = generate(2, out=None, functions="ik_solve")
     c, py = compile_arm(g), load_python(g.sources["arm2.py"], "arm2")
     for impl in (c, py):
         with pytest.raises(ValueError, match="target must be finite"):
@@ -232,7 +232,7 @@ def test_c_ik_solve_reports_invalid_for_nan_target(tmp_path):
     """The C function itself (no Python checks in front): INVALID, q = q0, never NaN."""
     import ctypes
 
-    g = generate(2, out=None)
+    g = generate(2, out=None, functions="ik_solve")
     arm = compile_arm(g)
     lib = ctypes.CDLL(str(arm.path))
     P = ctypes.POINTER(ctypes.c_double)
@@ -260,7 +260,7 @@ def test_solver_op_counts_grow_linearly():
 
 
 def test_float_ik_solver_converges(rng):
-    g = generate(4, out=None, precision="float")
+    g = generate(4, out=None, precision="float", functions="ik_solve")
     c, py = compile_arm(g), load_python(g.sources["arm4.py"], "arm4")
     l = np.array([1.0, 0.8, 0.6, 0.4], dtype=np.float32)
     for _ in range(5):

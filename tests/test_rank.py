@@ -9,8 +9,9 @@ from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym.generate import generate
 
 
-def _impls(n, precision):
-    g = generate(n, out=None, precision=precision)
+def _impls(n, precision, functions):
+    """Compiled C and the NumPy module of an n-link arm with symbolic lengths, holding ``functions``."""
+    g = generate(n, out=None, precision=precision, functions=functions)
     return compile_arm(g), load_python(g.sources[f"arm{n}.py"], f"arm{n}")
 
 
@@ -29,7 +30,7 @@ def _pinv3(J3, twist, reach):
 def test_inverse_velocity3_keeps_every_direction_in_any_unit(precision, length, rng):
     """Before: float with lengths 500 dropped the orientation direction (median relative error 0.84)."""
     dtype = np.float32 if precision == "float" else np.float64
-    impls = _impls(3, precision)
+    impls = _impls(3, precision, "inverse_velocity3")
     l = np.array([1.0, 0.8, 0.6]) * length
     reach = l.sum()
     checked = 0
@@ -54,7 +55,7 @@ def test_inverse_velocity3_keeps_every_direction_in_any_unit(precision, length, 
 @pytest.mark.parametrize("length", [5e4, 1e6, 1e-6])
 def test_inverse_velocity3_at_singular_poses_is_the_scaled_pseudo_inverse(length, rng):
     """Before: double with lengths >= 5e4 at singular poses was wrong by a factor of 600 (median)."""
-    impls = _impls(3, "double")
+    impls = _impls(3, "double", "inverse_velocity3")
     l = np.array([1.0, 0.7, 0.4]) * length
     reach = l.sum()
     for k in range(20):
@@ -73,7 +74,7 @@ def test_rank_decisions_do_not_depend_on_the_unit_of_length(n, rng):
 
     (inverse_velocity3 only undamped: lambda^2 I adds the same lambda^2 to the length rows and to the
     orientation row, so the damped 3 x 3 problem itself changes with the unit.)"""
-    c, py = _impls(n, "double")
+    c, py = _impls(n, "double", "inverse_velocity,inverse_velocity3" if n >= 3 else "inverse_velocity")
     l = rng.uniform(0.3, 1.5, n)
     poses = [rng.uniform(-np.pi, np.pi, n) for _ in range(10)] + [np.zeros(n), np.r_[0.4, np.full(n - 1, np.pi)]]
     poses += [np.r_[0.3, 1e-5, np.zeros(n - 2)]]  # near singular: the rule decides between the branches
@@ -105,7 +106,7 @@ def test_one_link_damped_solve_follows_the_damped_problem(precision, lam, bound,
     """n = 1: J J^T is singular but the damped problem is well conditioned.
     Before: float, lambda = 0.01: 6e-2 relative; double, lambda = 1e-4: 1.3e-6."""
     dtype = np.float32 if precision == "float" else np.float64
-    for impl in _impls(1, precision):
+    for impl in _impls(1, precision, "inverse_velocity"):
         errors = []
         for _ in range(200):
             q = rng.uniform(-np.pi, np.pi, 1).astype(dtype)
@@ -121,7 +122,7 @@ def test_one_link_damped_solve_follows_the_damped_problem(precision, lam, bound,
 
 def test_two_link_undamped_solve_error_follows_cond_J_not_its_square(rng):
     """Near a singular pose (cond(J) about 1e6) the exact inverse keeps about eps cond(J)."""
-    c, py = _impls(2, "double")
+    c, py = _impls(2, "double", "inverse_velocity")
     l = np.array([1.0, 0.8])
     for q2 in (1e-3, 1e-5, 1e-6):
         q = np.array([0.7, q2])

@@ -30,7 +30,7 @@ def ulps(got, want, dtype):
 def test_sines_and_cosines_match_libm_and_batches_bit_for_bit(precision, big, n):
     """With q = (a, 0, ..., 0) and lengths 1 the last Jacobian column is (-sin a, cos a) exactly."""
     dtype = np.float64 if precision == "double" else np.float32
-    g = generate(n, out=None, langs="c", precision=precision, lengths=(1.0,) * n)
+    g = generate(n, out=None, langs="c", precision=precision, lengths=(1.0,) * n, functions="jacobian,kinematics")
     rng = np.random.default_rng(n)
     a = np.concatenate([rng.uniform(-big, big, 61), rng.uniform(-200, 200, 60), [100.0, -100.0, big, -big, 1e3]])
     a = a.astype(dtype).astype(np.float64)  # exactly representable in the precision
@@ -92,7 +92,8 @@ def test_no_division_by_zero_at_singular_poses_and_zero_lengths(tmp_path, precis
     """Traps on: the stretched pose, the folded pose and an arm of length 0 must not raise
     FE_DIVBYZERO or FE_INVALID, and give NumPy's pinv results (0 rates and w = 0 for length 0)."""
     n = 3
-    generate(n, out=tmp_path, langs="c", precision=precision, prefix="arm")
+    generate(n, out=tmp_path, langs="c", precision=precision, prefix="arm",
+             functions="inverse_velocity,inverse_velocity3,manipulability,ik_step")  # the functions the driver calls
     T = "double" if precision == "double" else "float"
     poses = {"stretched": (0.0, 0.0, 0.0), "folded": (0.3, np.pi, 0.0), "regular": (0.3, 0.9, -0.5)}
     lengths = {"unit": (1.0, 1.0, 1.0), "zero": (0.0, 0.0, 0.0), "tail0": (1.0, 0.0, 0.0)}
@@ -133,7 +134,7 @@ def test_ik_from_the_stretched_pose_reaches_targets_behind_and_in_front(precisio
     step is zero. Reachable targets must still converge (C and NumPy alike); unreachable ones stall."""
     from skelarm_sym.build import load_python
 
-    g = generate(2, out=None, precision=precision)
+    g = generate(2, out=None, precision=precision, functions="ik_solve")
     impls = {"C": compile_arm(g), "NumPy": load_python(g.sources["arm2.py"], "arm2")}
     l = np.ones(2)
     for target in [(0.0, 0.0), (-1.0, 0.0), (0.5, 0.0), (-2.0, 0.0), (1.999, 0.0), (-0.3, 0.0)]:
@@ -152,7 +153,7 @@ def test_ik_from_the_stretched_pose_reaches_targets_behind_and_in_front(precisio
 @needs_cc
 @pytest.mark.parametrize("compiler", COMPILERS)
 def test_ik_solve_accepts_null_outputs_and_keeps_nan_checks_under_fast_math(tmp_path, compiler):
-    generate(2, out=tmp_path, langs="c", prefix="arm")
+    generate(2, out=tmp_path, langs="c", prefix="arm", functions="ik_solve")  # the one function the driver calls
     body = """
     double q[2], err = -1.0;
     const double zero[2] = {0.0, 0.0}, l[2] = {1.0, 1.0}, target[2] = {-1.0, 0.0};
