@@ -101,7 +101,7 @@ def _random_state(chain, m, seed=0):
 
 @pytest.mark.parametrize("chain", ALL, ids=lambda c: c.name)
 def test_python_module_matches_the_reference(chain):
-    g = generate(chain, langs="python", out=None)
+    g = generate(chain, langs="python", out=None, functions="jacobian_tool,kinematics")
     module = load_python(g.sources[f"{chain.name}.py"], chain.name)
     q, dq, ddq = _random_state(chain, 40)
     params = np.linspace(0.3, 0.9, len(chain.parameters))
@@ -136,7 +136,7 @@ def test_batch_equals_single_bit_for_bit():
 
 @pytest.mark.parametrize("chain, budget", [(PUMA, 400), (UR5, 480), (PANDA, 640)], ids=["puma560", "ur5", "panda"])
 def test_operation_counts_meet_the_budget(chain, budget):
-    kin = next(p for p in generate(chain, langs="c", out=None).programs if p.name == "kinematics")
+    kin = next(p for p in generate(chain, langs="c", out=None, functions="kinematics").programs if p.name == "kinematics")
     revolute = sum(j.kind == "revolute" for j in chain.joints)
     assert kin.ops.sin <= revolute and kin.ops.cos <= revolute
     assert kin.ops.div == kin.ops.sqrt == 0
@@ -150,7 +150,7 @@ def test_prismatic_columns_are_axes_and_their_derivative_rotates_with_the_chain(
         {"type": "prismatic", "alpha": HALF_PI, "a": 0.1},
         {"type": "revolute", "d": 0.2},
     ])
-    g = generate(chain, langs="python", out=None)
+    g = generate(chain, langs="python", out=None, functions="kinematics")
     module = load_python(g.sources["rp.py"], "rp")
     q, dq, ddq = np.array([0.4, 0.3, -0.6]), np.array([1.5, -0.7, 0.4]), np.zeros(3)
     T, J, dJ, twist, acc = module.kinematics(q, dq, ddq)
@@ -172,7 +172,7 @@ def _dh_standard(theta, d, a, alpha):
 def test_a_planar_dh_table_gives_the_planar_model():
     lengths = np.array([1.0, 0.8, 0.5, 0.3])
     chain = dh_table("flat", "standard", [{"type": "revolute", "a": float(x)} for x in lengths])
-    g = generate(chain, langs="python", out=None)
+    g = generate(chain, langs="python", out=None, functions="kinematics")
     module = load_python(g.sources["flat.py"], "flat")
     q, dq, ddq = _random_state(chain, 20, seed=5)
     T, J, dJ, twist, acc = module.kinematics(q, dq, ddq)
@@ -260,7 +260,7 @@ def test_joint_limits_are_emitted_in_input_order():
 
     chain = load_robot_file(ROBOTS / "panda.toml")
     limits = chain.limits()
-    g = generate(chain, out=None)
+    g = generate(chain, out=None, functions="pose")  # the limits are module constants, whatever functions are emitted
     module = load_python(g.sources["panda.py"], "panda")
     np.testing.assert_array_equal(module.Q_MIN, np.array(limits["lower"], dtype=float))
     np.testing.assert_array_equal(module.Q_MAX, np.array(limits["upper"], dtype=float))

@@ -455,7 +455,7 @@ def test_outputs_are_fresh_writable_arrays_of_the_declared_shapes(arms, rng):
 
 
 def test_compile_arm_extension_choices(arms, monkeypatch):
-    g = generate(DiffDrive(None), langs="c", out=None, prefix="dd_c")
+    g = generate(DiffDrive(None), langs="c", out=None, prefix="dd_c", functions="body_rates")
     built = compile_arm(g, extension=True)  # rendered from the module: the set has no .ext.c
     assert built.extension is not None and built.extension.__name__ == "dd_c_ext"
     assert compile_arm(g).extension is None  # the default: only when the set has the file

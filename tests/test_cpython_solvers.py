@@ -44,9 +44,9 @@ class Pair:
 @functools.lru_cache(maxsize=None)
 def pair(name: str, precision: str = "double") -> Pair:
     if name == "puma560":
-        return Pair(load_robot(ROBOTS / "puma560.toml"), "pose,ik_solve,ik_all,ik_nearest", precision)
+        return Pair(load_robot(ROBOTS / "puma560.toml"), "ik_solve,ik_all,ik_nearest", precision)
     if name == "iiwa14_lock3":
-        return Pair(with_ik_lock(load_robot(ROBOTS / "iiwa14.toml"), 3), "pose,ik_all,ik_nearest", precision)
+        return Pair(with_ik_lock(load_robot(ROBOTS / "iiwa14.toml"), 3), "ik_all,ik_nearest", precision)
     return Pair(PlanarArm(3), "ik_solve", precision)
 
 

@@ -51,11 +51,23 @@ NVCC = _nvcc()
 needs_nvcc = pytest.mark.skipif(NVCC is None, reason="no nvcc (a CUDA toolkit on PATH, $CUDA_HOME or /usr/local/cuda): the .cu is not compiled for the GPU here")
 
 
+PANDA_FUNCTIONS = "pose,jacobian,twist,kinematics,inverse_velocity,ik_solve"
+"""What the tests of Panda's kernels and Python entry call (``panda``); the checks over every kernel take ``panda_every``."""
+
+
 @pytest.fixture(scope="module")
 def panda():
     chain = load_robot(PANDA)
-    generated = generate(chain, langs="cuda", out=None, prefix="panda")
+    generated = generate(chain, langs="cuda", out=None, prefix="panda", functions=PANDA_FUNCTIONS)
     return chain.numeric(), generated, cuda.load(generated)  # the numeric chain: what the reference takes
+
+
+@pytest.fixture(scope="module")
+def panda_every():
+    """Panda with every function, for the checks that go over all of its kernels (nvcc, NVRTC, a real GPU); the
+    host build is left to the test that runs it."""
+    chain = load_robot(PANDA)
+    return chain.numeric(), generate(chain, langs="cuda", out=None, prefix="panda")
 
 
 @pytest.fixture(scope="module")
@@ -156,8 +168,8 @@ def _write(generated, folder: Path) -> Path:
 
 @needs_nvcc
 @pytest.mark.slow
-def test_nvcc_compiles_the_kernels_warning_free_without_spills(panda, tmp_path):
-    chain, generated, arm = panda
+def test_nvcc_compiles_the_kernels_warning_free_without_spills(panda_every, tmp_path):
+    chain, generated = panda_every
     cu = _write(generated, tmp_path)
     command = [NVCC, "-O3", "-arch=sm_90", "-c", str(cu), "-o", str(tmp_path / "panda.o"), "-Werror", "all-warnings",
                "-Xcompiler", "-Wall,-Wextra,-Werror", "-Xptxas", "-v"]
@@ -235,13 +247,13 @@ def _nvrtc():
     return None
 
 
-def test_nvrtc_compiles_what_the_python_entry_hands_to_cupy(panda):
+def test_nvrtc_compiles_what_the_python_entry_hands_to_cupy(panda_every):
     """CuPy's RawModule compiles with NVRTC: the entry's source_text (header, then .cu) must compile there,
     without <math.h> or the CUDA runtime's headers."""
     lib = _nvrtc()
     if lib is None:
         pytest.skip("no libnvrtc (pip install nvidia-cuda-nvrtc, or a CUDA toolkit): CuPy's compile path not checked here")
-    chain, generated, arm = panda
+    chain, generated = panda_every
     entry = load_python(generated.sources["panda_cuda.py"], "panda_cuda")
     code = entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"])
     program = ctypes.c_void_p()
@@ -308,7 +320,7 @@ def test_the_entry_solves_a_batch_of_targets(gpu, panda, rng):
 def test_the_entry_shares_parameters_and_computes_the_solvers_defaults(monkeypatch, rng):
     """A planar arm: the lengths l are one array for the batch, and ik_solve's tol defaults to 1e-9 times the
     reach, computed from l as in the NumPy module."""
-    generated = generate(PlanarArm(3), langs="cuda,python", out=None, prefix="arm3")
+    generated = generate(PlanarArm(3), langs="cuda,python", out=None, prefix="arm3", functions="position,ik_solve")
     host = cuda.load(generated)
     monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
     entry = load_python(generated.sources["arm3_cuda.py"], "arm3_cuda")
@@ -368,7 +380,7 @@ def test_the_entry_refuses_files_of_another_generation(panda):
 # -- text ----------------------------------------------------------------------------------------------
 
 def test_the_files_sit_beside_c_and_python_and_share_one_stamp(tmp_path):
-    generated = generate(PlanarArm(2), langs="c,python,cuda", out=tmp_path, prefix="arm2")
+    generated = generate(PlanarArm(2), langs="c,python,cuda", out=tmp_path, prefix="arm2", functions="position")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm2.c", "arm2.cu", "arm2.cuh", "arm2.h", "arm2.py", "arm2_cuda.py"]
     assert len({file_stamp(text) for text in generated.sources.values()}) == 1
 
@@ -458,14 +470,15 @@ def _real_cupy():
         return None
 
 
-def test_on_a_real_gpu_every_kernel_agrees_with_the_host_build(panda, rng):
+def test_on_a_real_gpu_every_kernel_agrees_with_the_host_build(panda_every, rng):
     """The device check (runs where CuPy finds a GPU): every kernel of Panda through the Python entry against
     the host build of the same .cu, which the conformance test holds to the references. Not bit for bit:
     nvcc contracts a*b + c into fused multiply-adds."""
     cp = _real_cupy()
     if cp is None:
         pytest.skip("no GPU: CuPy is not installed or finds no CUDA device")
-    chain, generated, arm = panda
+    chain, generated = panda_every
+    arm = cuda.load(generated)
     entry = load_python(generated.sources["panda_cuda.py"], "panda_cuda")
     gpu = entry.load(code=entry.source_text(generated.sources["panda.cuh"], generated.sources["panda.cu"]))
     for f in generated.programs:

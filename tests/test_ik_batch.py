@@ -163,7 +163,7 @@ def test_locked_joint_per_problem(impl):
     """iiwa 14 with joint 3 locked: a lock value per problem (one target, 16 locks; the C batch shares
     scalars, so the wrapper calls once per problem) gives rows that hold joint 3 at its lock and reproduce the
     target; each equals its single call."""
-    s = solvers("iiwa14_lock3", "pose,ik_all")
+    s = solvers("iiwa14_lock3", "ik_all")
     q, T = problems(s, 1, 6)
     locks = np.linspace(-2.0, 2.0, 16)
     arm = s.py if impl == "numpy" else s.c

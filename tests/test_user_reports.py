@@ -75,7 +75,8 @@ def test_a_failed_compile_on_the_command_line_shows_the_command_and_the_first_er
     compiler = shutil.which("gcc") or shutil.which("cc")
     monkeypatch.setenv("SKELARM_SYM_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", f"{compiler} -DSKELARM_USER_REPORTS=1 -include no_such_header_4715.h")
-    assert main(["generate", "--links", "2", "--lang", "c", "--out", str(tmp_path / "out"), "--compile"]) == 1
+    assert main(["generate", "--links", "2", "--functions", "position", "--lang", "c", "--out", str(tmp_path / "out"),
+                 "--compile"]) == 1
     err = capsys.readouterr().err
     lines = err.splitlines()
     assert lines[0].startswith("skelarm-sym: error: compiling arm2.c failed: ") and "no_such_header_4715.h" in lines[0], err
@@ -120,8 +121,8 @@ def test_check_from_another_folder_regenerates_a_urdf_chain_with_base_tip_and_ou
 def _mixed(tmp_path: Path) -> Path:
     """A folder as a kill between renames leaves it: arm2.h and arm2.c of one generation, arm2.py of another."""
     first, second = tmp_path / "first", tmp_path / "second"
-    generate(2, out=first, lengths=[1.0, 0.5])
-    generate(2, out=second, lengths=[0.7, 0.3])
+    generate(2, out=first, lengths=[1.0, 0.5], functions="position")
+    generate(2, out=second, lengths=[0.7, 0.3], functions="position")
     shutil.copy(second / "arm2.py", first / "arm2.py")
     return first
 
@@ -146,8 +147,8 @@ def test_cmake_refuses_a_header_of_another_generation(tmp_path):
     """The CMakeLists.txt of a set stops the configure step, naming the header, when arm2.h is not of its
     generation; with its own header it configures."""
     ours, theirs = tmp_path / "ours", tmp_path / "theirs"
-    generate(2, out=ours, langs="c", cmake=True, lengths=[1.0, 0.5])
-    generate(2, out=theirs, langs="c", cmake=True, lengths=[0.7, 0.3])
+    generate(2, out=ours, langs="c", cmake=True, lengths=[1.0, 0.5], functions="position")
+    generate(2, out=theirs, langs="c", cmake=True, lengths=[0.7, 0.3], functions="position")
     build = tmp_path / "build"
     run = subprocess.run(["cmake", "-S", str(ours), "-B", str(build)], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stdout + run.stderr
@@ -165,7 +166,7 @@ def test_cmake_refuses_a_header_of_another_generation(tmp_path):
 ])
 def test_check_from_a_set_with_missing_files_names_them_in_one_line(tmp_path, capsys, keep, shown):
     folder = tmp_path / "f"
-    generate(2, out=folder, langs="c,cuda")
+    generate(2, out=folder, langs="c,cuda", functions="position")
     for path in folder.iterdir():
         if path.name not in keep:
             path.unlink()
@@ -227,7 +228,7 @@ def test_the_header_states_the_trap_and_bit_equality_conditions():
     """A C user reads in the header that glibc's vector sin/cos (and the scalar path's own kernel) raise
     FE_INVALID (FE_OVERFLOW) for huge angles when traps are enabled, and for which compiler flags single calls equal their batches bit for bit (not with FMA
     contraction or -ffast-math)."""
-    text = " ".join(generate(3, langs="c", out=None).sources["arm3.h"].replace("*", " ").split())
+    text = " ".join(generate(3, langs="c", out=None, functions="position").sources["arm3.h"].replace("*", " ").split())
     assert ("With floating-point exceptions enabled as traps (feenableexcept), libmvec raises FE_INVALID for |angle| "
             "above about 1e300 and the own kernel FE_OVERFLOW above about 1e150") in text
     assert "Single calls equal their batch results bit for bit when both are built without FMA contraction" in text
