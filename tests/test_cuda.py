@@ -141,6 +141,25 @@ def test_the_solver_kernel_solves_each_target_as_a_single_call_does(panda, rng):
         np.testing.assert_allclose(reached, targets[i], rtol=0, atol=1e-9)
 
 
+def test_the_host_build_takes_the_level_of_the_c_and_keeps_the_strict_flags(monkeypatch):
+    """The host C++ builds at -O2, or at the level of $SKELARM_SYM_OPT as the C does; the level is part of the
+    cache key, and the strict language flags stay at every level."""
+    import skelarm_sym.backends.cuda.host as host
+
+    sources = cuda_sources(generate(PlanarArm(2), langs="cuda", out=None, prefix="arm2lvl", functions="position"))
+    commands = []
+    real_run = host.subprocess.run
+    monkeypatch.setattr(host.subprocess, "run", lambda command, **kw: commands.append(command) or real_run(command, **kw))
+    monkeypatch.setenv("SKELARM_SYM_OPT", "0")
+    fast = host.compile_host_library(sources)
+    monkeypatch.delenv("SKELARM_SYM_OPT")
+    optimised = host.compile_host_library(sources)
+    assert fast != optimised and host.compile_host_library(sources, flags=("-O2",)) == optimised
+    assert len(commands) == 2
+    for command, level in zip(commands, ("-O0", "-O2")):
+        assert level in command and all(flag in command for flag in host.HOST_FLAGS)
+
+
 def test_float_precision_meets_the_float_tolerance(planar_float):
     generated, arm = planar_float
     assert "sincosf" in generated.sources["arm3f.cu"] and "sinf(x)" in generated.sources["arm3f.cu"]
