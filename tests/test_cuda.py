@@ -340,7 +340,6 @@ def test_the_entry_shares_parameters_and_computes_the_solvers_defaults(monkeypat
     """A planar arm: the lengths l are one array for the batch, and ik_solve's tol defaults to 1e-9 times the
     reach, computed from l as in the NumPy module."""
     generated = generate(PlanarArm(3), langs="cuda,python", out=None, prefix="arm3", functions="position,ik_solve")
-    host = cuda.load(generated)
     monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
     entry = load_python(generated.sources["arm3_cuda.py"], "arm3_cuda")
     gpu = entry.load(code=entry.source_text(generated.sources["arm3.cuh"], generated.sources["arm3.cu"]))
