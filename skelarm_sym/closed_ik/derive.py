@@ -110,7 +110,8 @@ def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int
 def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
     """All closed-form IK candidates of ``chain`` (see the module docstring); ``lock``: the joint held at a
     run-time value (0-based index or name) for 7-joint chains. :class:`ClosedFormError` (one line) when the
-    chain is in no family. Derived with two Float queries answered directly (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
+    chain is in no family. Derived with two Float queries answered directly
+    (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
     with float_facts():
         return _derive_ik_all(chain, lock)
 

@@ -3,8 +3,8 @@
 ``compile_host(generated)`` compiles ``{prefix}.cu`` (with ``{prefix}.cuh`` beside it) with the system C++
 compiler (``$CXX``, else ``c++``, ``g++`` or ``clang++``) as C++, where ``__host__ __device__`` are
 defined away, strict (``-Wall -Wextra -Werror -pedantic``), at the optimisation level of the C
-(:func:`skelarm_sym.build.default_flags`: ``-O2``, or the level of ``$SKELARM_SYM_OPT``), into a shared library cached and verified
-exactly as :mod:`skelarm_sym.build` caches the C (private folder, SHA-256 sidecar, rebuilt when they
+(:func:`skelarm_sym.build.default_flags`: ``-O2``, or the level of ``$SKELARM_SYM_OPT``), into a shared
+library cached and verified exactly as :mod:`skelarm_sym.build` caches the C (private folder, SHA-256 sidecar, rebuilt when they
 disagree). :class:`HostArm` loads it: a :class:`~skelarm_sym.wrapper.CompiledArm` (same methods,
 signatures and input checks) whose single calls are the ``__host__ __device__`` functions and whose
 batches run ``{prefix}_{name}_host``, the kernel's per-thread body in a loop over the batch, on arrays
@@ -65,7 +65,8 @@ def cuda_sources(generated) -> dict[str, str]:
     return {n: generated.sources[n] for n in names}
 
 
-def compile_host_library(sources: dict[str, str], flags: Sequence[str] | None = None, compiler: str | None = None) -> Path:
+def compile_host_library(sources: dict[str, str], flags: Sequence[str] | None = None,
+                         compiler: str | None = None) -> Path:
     """Compile the ``.cu`` of ``sources`` as host C++ into a cached shared library; its path.
 
     ``flags`` follow :data:`HOST_FLAGS`; ``None`` for :func:`skelarm_sym.build.default_flags` (``-O2``, or the
