@@ -106,6 +106,23 @@ def test_bad_input_is_one_line_naming_file_and_problem(tmp_path, case):
     assert re.search(pattern, message), message
 
 
+@pytest.mark.parametrize("case", ["deep_array", "deep_inline_table"])
+def test_deep_values_are_refused_whatever_the_recursion_limit(tmp_path, case):
+    """tomllib reads 600 levels where the stack allows it (PyTorch's compiler raises the limit on import): the
+    file is refused all the same, with the same message."""
+    import sys
+
+    text, pattern = BAD[case]
+    path = write(tmp_path, text, f"{case}.toml")
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(20000)
+    try:
+        with pytest.raises(InputError, match=pattern):
+            load_robot_file(path)
+    finally:
+        sys.setrecursionlimit(old)
+
+
 HUGE = {  # issue 16's cases, each 100 000 deep or long: exit 1 without a file name, or a traceback, before
     "nested_arrays": ("x = " + "[" * 100_000 + "]" * 100_000 + "\n" + REV, "line 1: key 'x' nests arrays or inline tables more than 32 deep"),
     "nested_arrays_in_a_joint": (REV + "a = " + "[" * 100_000 + "]" * 100_000 + "\n",

@@ -265,6 +265,8 @@ def load_robot_file(path: str | os.PathLike) -> Chain:
         raise InputError(f"{path}: not valid TOML: {reason[:200]}") from None
     except (RecursionError, MemoryError):
         raise InputError(f"{path}: {_too_deep(text)}") from None
+    if _nesting(data) > MAX_TOML_DEPTH:  # parsed where the stack allowed it (a raised recursion limit): the same refusal
+        raise InputError(f"{path}: {_too_deep(text)}")
     try:
         return chain_from_table(data, source=str(path), default_name=_default_name(path))
     except InputError as exc:
@@ -274,7 +276,19 @@ def load_robot_file(path: str | os.PathLike) -> Chain:
 
 
 MAX_TOML_DEPTH = 32
-"""Arrays and inline tables nested deeper than this are named as the cause when tomllib gives up."""
+"""Arrays and inline tables nested deeper than this are refused (named as the cause when tomllib gives up, and
+checked on what it read where a raised recursion limit let it read more: PyTorch's compiler raises it)."""
+
+
+def _nesting(document: dict) -> int:
+    """How deep arrays and tables nest inside a parsed TOML document (its own table not counted)."""
+    deepest, stack = 0, [(document, 0)]
+    while stack:
+        x, depth = stack.pop()
+        deepest = max(deepest, depth)
+        children = x.values() if isinstance(x, dict) else x
+        stack.extend((v, depth + 1) for v in children if isinstance(v, (dict, list)))
+    return deepest
 
 
 def _too_deep(text: str) -> str:
