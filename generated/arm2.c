@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x9044dbd4UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xccb3917eUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -261,7 +261,7 @@ static int arm2_finite(double x)
 #endif
 
 /* ---- arm2_position: endpoint position p (2) ---- */
-/* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 2 neg */
+/* operations: 2 sin, 2 cos, 3 add/sub, 4 mul, 0 neg */
 
 ARM2_BODY void arm2_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -277,9 +277,8 @@ ARM2_BODY void arm2_position_finish(const double l[2], const double *restrict cs
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
-    const double t5 = -t4;
-    const double t6 = t5 - t3;
-    p[1*ARM2_STRIDE] = -t6;
+    const double t6 = t4 + t3;
+    p[1*ARM2_STRIDE] = t6;
     const double t7 = t1 + t2;
     p[0] = t7;
 }
@@ -381,10 +380,9 @@ ARM2_BODY void arm2_jacobian_finish(const double l[2], const double *restrict cs
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
     J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1*ARM2_STRIDE]*l[1];
-    const double t5 = -t4;
-    J[1*ARM2_STRIDE] = t5;
-    const double t6 = t5 - t3;
+    const double t4 = -sn[1*ARM2_STRIDE]*l[1];
+    J[1*ARM2_STRIDE] = t4;
+    const double t6 = t4 - t3;
     J[0] = t6;
     const double t7 = t1 + t2;
     J[2*ARM2_STRIDE] = t7;
@@ -473,7 +471,7 @@ void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 #endif
 
 /* ---- arm2_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 2 neg */
+/* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 1 neg */
 
 ARM2_BODY void arm2_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -489,18 +487,16 @@ ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double l[2]
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
-    const double t8 = dq[0] + dq[1*ARM2_STRIDE];
+    const double t8 = -dq[0] - dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
+    H[1*ARM2_STRIDE] = t10;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
-    const double t13 = -t10;
-    H[1*ARM2_STRIDE] = t13;
-    const double t14 = -t12;
-    H[3*ARM2_STRIDE] = t14;
-    const double t15 = t13 - t9;
+    H[3*ARM2_STRIDE] = t12;
+    const double t15 = t10 - t9;
     H[0] = t15;
-    const double t16 = t14 - t11;
+    const double t16 = t12 - t11;
     H[2*ARM2_STRIDE] = t16;
 }
 
@@ -594,7 +590,7 @@ void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm2_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 3 neg */
+/* operations: 2 sin, 2 cos, 4 add/sub, 8 mul, 1 neg */
 
 ARM2_BODY void arm2_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -615,11 +611,9 @@ ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double l[2]
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
-    const double t13 = -t10;
-    const double t14 = -t12;
-    const double t15 = t13 - t9;
-    v[1*ARM2_STRIDE] = -t15;
-    const double t16 = t14 - t11;
+    const double t15 = t10 + t9;
+    v[1*ARM2_STRIDE] = t15;
+    const double t16 = -t12 - t11;
     v[0] = t16;
 }
 
@@ -711,7 +705,7 @@ void arm2_velocity_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm2_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
-/* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 3 neg */
+/* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 1 neg */
 
 ARM2_BODY void arm2_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -727,20 +721,17 @@ ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double 
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
     const double t3 = sn[0]*l[0];
     const double t4 = sn[1*ARM2_STRIDE]*l[1];
-    const double t5 = -t4;
-    const double t6 = t5 - t3;
+    const double t6 = -t4 - t3;
     const double t7 = t1 + t2;
     const double t8 = dq[0] + dq[1*ARM2_STRIDE];
     const double t9 = t1*dq[0];
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
-    const double t13 = -t10;
-    const double t14 = -t12;
-    const double t15 = t13 - t9;
-    a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
-    const double t16 = t14 - t11;
-    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
+    const double t15 = t10 + t9;
+    a[0] = t6*ddq[0] - t15*dq[0] - t10*dq[1*ARM2_STRIDE] - t4*ddq[1*ARM2_STRIDE];
+    const double t16 = t12 + t11;
+    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] - t16*dq[0] - t12*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
 ARM2_SINGLE void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2])
@@ -838,7 +829,7 @@ void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const 
 #endif
 
 /* ---- arm2_kinematics: p, J, H, v and a at once ---- */
-/* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 5 neg */
+/* operations: 2 sin, 2 cos, 12 add/sub, 16 mul, 4 neg */
 
 ARM2_BODY void arm2_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -854,10 +845,9 @@ ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *r
     const double t2 = cs[1*ARM2_STRIDE]*l[1];
     J[3*ARM2_STRIDE] = t2;
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1*ARM2_STRIDE]*l[1];
-    const double t5 = -t4;
-    J[1*ARM2_STRIDE] = t5;
-    const double t6 = t5 - t3;
+    const double t4 = -sn[1*ARM2_STRIDE]*l[1];
+    J[1*ARM2_STRIDE] = t4;
+    const double t6 = t4 - t3;
     p[1*ARM2_STRIDE] = -t6;
     J[0] = t6;
     const double t7 = t1 + t2;
@@ -868,18 +858,17 @@ ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *r
     const double t10 = t2*t8;
     const double t11 = t3*dq[0];
     const double t12 = t4*t8;
+    H[3*ARM2_STRIDE] = t12;
     const double t13 = -t10;
     H[1*ARM2_STRIDE] = t13;
-    const double t14 = -t12;
-    H[3*ARM2_STRIDE] = t14;
-    const double t15 = t13 - t9;
-    H[0] = t15;
-    v[1*ARM2_STRIDE] = -t15;
-    a[0] = t15*dq[0] + t13*dq[1*ARM2_STRIDE] + t6*ddq[0] + t5*ddq[1*ARM2_STRIDE];
-    const double t16 = t14 - t11;
+    const double t15 = t10 + t9;
+    H[0] = -t15;
+    v[1*ARM2_STRIDE] = t15;
+    a[0] = t6*ddq[0] - t15*dq[0] - t10*dq[1*ARM2_STRIDE] + t4*ddq[1*ARM2_STRIDE];
+    const double t16 = t12 - t11;
     H[2*ARM2_STRIDE] = t16;
     v[0] = t16;
-    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t14*dq[1*ARM2_STRIDE] + t7*ddq[0];
+    a[1*ARM2_STRIDE] = t2*ddq[1*ARM2_STRIDE] + t16*dq[0] + t12*dq[1*ARM2_STRIDE] + t7*ddq[0];
 }
 
 ARM2_SINGLE void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2])
@@ -1010,20 +999,19 @@ static ARM2_LIGHT void arm2_manipulability_finish(const double l[2], const doubl
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = -t4;
-    const double t6 = t5 - t3;
+    const double t4 = -sn[1]*l[1];
+    const double t6 = t4 - t3;
     const double t7 = t1 + t2;
-    const double t17 = t6*t6 + t5*t5;
-    const double t18 = t2*t5 + t6*t7;
+    const double t17 = t6*t6 + t4*t4;
+    const double t18 = t2*t4 + t6*t7;
     const double t19 = t2*t2 + t7*t7;
     const int t20 = t17 >= t19;
     const double t21 = (t20 ? t17 : t19);
     const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
     const double t23 = (t20 ? t6 : t7);
-    const double t24 = (t20 ? t5 : t2);
+    const double t24 = (t20 ? t4 : t2);
     const double t25 = (t20 ? t7 : t6) - t23*t22;
-    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t26 = (t20 ? t2 : t4) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
     w[0] = sqrt(t21*t27);
 }
@@ -1074,20 +1062,19 @@ static ARM2_LIGHT void arm2_inverse_velocity_finish(const double v[2], const dou
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = -t4;
-    const double t6 = t5 - t3;
+    const double t4 = -sn[1]*l[1];
+    const double t6 = t4 - t3;
     const double t7 = t1 + t2;
-    const double t17 = t6*t6 + t5*t5;
-    const double t18 = t2*t5 + t6*t7;
+    const double t17 = t6*t6 + t4*t4;
+    const double t18 = t2*t4 + t6*t7;
     const double t19 = t2*t2 + t7*t7;
     const int t20 = t17 >= t19;
     const double t21 = (t20 ? t17 : t19);
     const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
     const double t23 = (t20 ? t6 : t7);
-    const double t24 = (t20 ? t5 : t2);
+    const double t24 = (t20 ? t4 : t2);
     const double t25 = (t20 ? t7 : t6) - t23*t22;
-    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t26 = (t20 ? t2 : t4) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
     const int t28 = lambda > 1.0;
     const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1159,20 +1146,19 @@ static ARM2_LIGHT void arm2_ik_step_finish(const double q[2], const double targe
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
     const double t3 = sn[0]*l[0];
-    const double t4 = sn[1]*l[1];
-    const double t5 = -t4;
-    const double t6 = t5 - t3;
+    const double t4 = -sn[1]*l[1];
+    const double t6 = t4 - t3;
     const double t7 = t1 + t2;
-    const double t17 = t6*t6 + t5*t5;
-    const double t18 = t2*t5 + t6*t7;
+    const double t17 = t6*t6 + t4*t4;
+    const double t18 = t2*t4 + t6*t7;
     const double t19 = t2*t2 + t7*t7;
     const int t20 = t17 >= t19;
     const double t21 = (t20 ? t17 : t19);
     const double t22 = t18*(t21 > 0.0 ? 1.0/(t21 != 0.0 ? t21 : 1.0) : 1.0);
     const double t23 = (t20 ? t6 : t7);
-    const double t24 = (t20 ? t5 : t2);
+    const double t24 = (t20 ? t4 : t2);
     const double t25 = (t20 ? t7 : t6) - t23*t22;
-    const double t26 = (t20 ? t2 : t5) - t24*t22;
+    const double t26 = (t20 ? t2 : t4) - t24*t22;
     const double t27 = t25*t25 + t26*t26;
     const int t28 = lambda > 1.0;
     const double t29 = (t28 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);

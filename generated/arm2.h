@@ -45,7 +45,7 @@
  * sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x9044dbd4UL
+#define ARM2_STAMP 0xccb3917eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,47 +54,47 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM2_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 168 bytes. */
+/* endpoint position p (2). Stack: about 160 bytes. */
 void arm2_position(const double q[2], const double l[2], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 2712 bytes. */
+ * Stack: about 2704 bytes. */
 void arm2_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 168 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: about 160 bytes. */
 void arm2_jacobian(const double q[2], const double l[2], double J[4]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 3240 bytes. */
+ * Stack: about 3232 bytes. */
 void arm2_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 216 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: about 200 bytes. */
 void arm2_coriolis(const double q[2], const double dq[2], const double l[2], double H[4]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 3816 bytes. */
+ * Stack: about 3800 bytes. */
 void arm2_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 216 bytes. */
+/* endpoint velocity v = J dq (2). Stack: about 200 bytes. */
 void arm2_velocity(const double q[2], const double dq[2], const double l[2], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 3288 bytes. */
+ * Stack: about 3272 bytes. */
 void arm2_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 240 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 216 bytes. */
 void arm2_acceleration(const double q[2], const double dq[2], const double ddq[2], const double l[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 3840 bytes. */
+ * Stack: about 3816 bytes. */
 void arm2_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 240 bytes. */
+/* p, J, H, v and a at once. Stack: about 224 bytes. */
 void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2], const double l[2], double p[2], double J[4], double H[4], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -102,7 +102,7 @@ void arm2_kinematics(const double q[2], const double dq[2], const double ddq[2],
  * Stack: about 7 KB. */
 void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 256 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 248 bytes. */
 void arm2_manipulability(const double q[2], const double l[2], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -110,7 +110,7 @@ void arm2_manipulability(const double q[2], const double l[2], double w[1]);
  * Stack: about 13 KB. */
 void arm2_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 416 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 408 bytes. */
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -118,7 +118,7 @@ void arm2_inverse_velocity(const double q[2], const double v[2], const double l[
  * Stack: about 13 KB. */
 void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 432 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 424 bytes. */
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -147,7 +147,7 @@ int arm2_ik_solve(const double q0[2], const double target[2], const double l[2],
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm2_ik_solve: the same result bit for bit. Stack: about 688 bytes. */
+ * Each problem is one call of arm2_ik_solve: the same result bit for bit. Stack: about 680 bytes. */
 void arm2_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

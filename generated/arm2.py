@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x9044dbd4
+STAMP = 0xccb3917e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -282,11 +282,10 @@ def _position_core(q, l, p):
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
     t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t6 = t4 + t3
     t7 = t1 + t2
     p[..., 0] = t7
-    p[..., 1] = -t6
+    p[..., 1] = t6
 
 
 @_signature_errors
@@ -296,7 +295,7 @@ def position(q, l):
     q: array of shape (..., 2), finite.
     l: array of shape (..., 2), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 2 sin, 2 cos, 9 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 7 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (2, 2, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -314,12 +313,11 @@ def _jacobian_core(q, l, J):
     t1 = cs[..., 0]*l[..., 0]
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
-    t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t4 = -sn[..., 1]*l[..., 1]
+    t6 = t4 - t3
     t7 = t1 + t2
     J[..., 0] = t6
-    J[..., 1] = t5
+    J[..., 1] = t4
     J[..., 2] = t7
     J[..., 3] = t2
 
@@ -350,19 +348,17 @@ def _coriolis_core(q, dq, l, H):
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
     t4 = sn[..., 1]*l[..., 1]
-    t8 = dq[..., 0] + dq[..., 1]
+    t8 = -dq[..., 0] - dq[..., 1]
     t9 = t1*dq[..., 0]
     t10 = t2*t8
     t11 = t3*dq[..., 0]
     t12 = t4*t8
-    t13 = -t10
-    t14 = -t12
-    t15 = t13 - t9
-    t16 = t14 - t11
+    t15 = t10 - t9
+    t16 = t12 - t11
     H[..., 0] = t15
-    H[..., 1] = t13
+    H[..., 1] = t10
     H[..., 2] = t16
-    H[..., 3] = t14
+    H[..., 3] = t12
 
 
 @_signature_errors
@@ -373,7 +369,7 @@ def coriolis(q, dq, l):
     dq: array of shape (..., 2), finite.
     l: array of shape (..., 2), finite and > 0.
     Returns H of shape (..., 2, 2).
-    Operations: 2 sin, 2 cos, 14 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 13 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (4,), dtype=DTYPE), )
@@ -397,12 +393,10 @@ def _velocity_core(q, dq, l, v):
     t10 = t2*t8
     t11 = t3*dq[..., 0]
     t12 = t4*t8
-    t13 = -t10
-    t14 = -t12
-    t15 = t13 - t9
-    t16 = t14 - t11
+    t15 = t10 + t9
+    t16 = -t12 - t11
     v[..., 0] = t16
-    v[..., 1] = -t15
+    v[..., 1] = t15
 
 
 @_signature_errors
@@ -413,7 +407,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 2), finite.
     l: array of shape (..., 2), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 2 sin, 2 cos, 15 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 13 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -432,20 +426,17 @@ def _acceleration_core(q, dq, ddq, l, a):
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
     t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t6 = -t4 - t3
     t7 = t1 + t2
     t8 = dq[..., 0] + dq[..., 1]
     t9 = t1*dq[..., 0]
     t10 = t2*t8
     t11 = t3*dq[..., 0]
     t12 = t4*t8
-    t13 = -t10
-    t14 = -t12
-    t15 = t13 - t9
-    t16 = t14 - t11
-    a[..., 0] = t15*dq[..., 0] + t13*dq[..., 1] + t6*ddq[..., 0] + t5*ddq[..., 1]
-    a[..., 1] = t2*ddq[..., 1] + t16*dq[..., 0] + t14*dq[..., 1] + t7*ddq[..., 0]
+    t15 = t10 + t9
+    t16 = t12 + t11
+    a[..., 0] = t6*ddq[..., 0] - t15*dq[..., 0] - t10*dq[..., 1] - t4*ddq[..., 1]
+    a[..., 1] = t2*ddq[..., 1] - t16*dq[..., 0] - t12*dq[..., 1] + t7*ddq[..., 0]
 
 
 @_signature_errors
@@ -457,7 +448,7 @@ def acceleration(q, dq, ddq, l):
     ddq: array of shape (..., 2), finite.
     l: array of shape (..., 2), finite and > 0.
     Returns a of shape (..., 2).
-    Operations: 2 sin, 2 cos, 31 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 29 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -475,9 +466,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t1 = cs[..., 0]*l[..., 0]
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
-    t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t4 = -sn[..., 1]*l[..., 1]
+    t6 = t4 - t3
     t7 = t1 + t2
     t8 = dq[..., 0] + dq[..., 1]
     t9 = t1*dq[..., 0]
@@ -485,23 +475,22 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t11 = t3*dq[..., 0]
     t12 = t4*t8
     t13 = -t10
-    t14 = -t12
-    t15 = t13 - t9
-    t16 = t14 - t11
+    t15 = t10 + t9
+    t16 = t12 - t11
     p[..., 0] = t7
     p[..., 1] = -t6
     J[..., 0] = t6
-    J[..., 1] = t5
+    J[..., 1] = t4
     J[..., 2] = t7
     J[..., 3] = t2
-    H[..., 0] = t15
+    H[..., 0] = -t15
     H[..., 1] = t13
     H[..., 2] = t16
-    H[..., 3] = t14
+    H[..., 3] = t12
     v[..., 0] = t16
-    v[..., 1] = -t15
-    a[..., 0] = t15*dq[..., 0] + t13*dq[..., 1] + t6*ddq[..., 0] + t5*ddq[..., 1]
-    a[..., 1] = t2*ddq[..., 1] + t16*dq[..., 0] + t14*dq[..., 1] + t7*ddq[..., 0]
+    v[..., 1] = t15
+    a[..., 0] = t6*ddq[..., 0] - t15*dq[..., 0] - t10*dq[..., 1] + t4*ddq[..., 1]
+    a[..., 1] = t2*ddq[..., 1] + t16*dq[..., 0] + t12*dq[..., 1] + t7*ddq[..., 0]
 
 
 @_signature_errors
@@ -513,7 +502,7 @@ def kinematics(q, dq, ddq, l):
     ddq: array of shape (..., 2), finite.
     l: array of shape (..., 2), finite and > 0.
     Returns p of shape (..., 2), J of shape (..., 2, 2), H of shape (..., 2, 2), v of shape (..., 2), a of shape (..., 2).
-    Operations: 2 sin, 2 cos, 33 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 32 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (2, 2, 2, 2, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (4,), dtype=DTYPE), np.empty(batch + (4,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -532,20 +521,19 @@ def _manipulability_core(q, l, w):
     t1 = cs[..., 0]*l[..., 0]
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
-    t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t4 = -sn[..., 1]*l[..., 1]
+    t6 = t4 - t3
     t7 = t1 + t2
-    t17 = t6*t6 + t5*t5
-    t18 = t2*t5 + t6*t7
+    t17 = t6*t6 + t4*t4
+    t18 = t2*t4 + t6*t7
     t19 = t2*t2 + t7*t7
     t20 = t17 >= t19
     t21 = np.where(t20, t17, t19)
     t22 = t18*np.where(t21 > 0.0, 1.0/t21, 1.0)
     t23 = np.where(t20, t6, t7)
-    t24 = np.where(t20, t5, t2)
+    t24 = np.where(t20, t4, t2)
     t25 = np.where(t20, t7, t6) - t23*t22
-    t26 = np.where(t20, t2, t5) - t24*t22
+    t26 = np.where(t20, t2, t4) - t24*t22
     t27 = t25*t25 + t26*t26
     w[..., 0] = np.sqrt(t21*t27)
 
@@ -576,20 +564,19 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t1 = cs[..., 0]*l[..., 0]
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
-    t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t4 = -sn[..., 1]*l[..., 1]
+    t6 = t4 - t3
     t7 = t1 + t2
-    t17 = t6*t6 + t5*t5
-    t18 = t2*t5 + t6*t7
+    t17 = t6*t6 + t4*t4
+    t18 = t2*t4 + t6*t7
     t19 = t2*t2 + t7*t7
     t20 = t17 >= t19
     t21 = np.where(t20, t17, t19)
     t22 = t18*np.where(t21 > 0.0, 1.0/t21, 1.0)
     t23 = np.where(t20, t6, t7)
-    t24 = np.where(t20, t5, t2)
+    t24 = np.where(t20, t4, t2)
     t25 = np.where(t20, t7, t6) - t23*t22
-    t26 = np.where(t20, t2, t5) - t24*t22
+    t26 = np.where(t20, t2, t4) - t24*t22
     t27 = t25*t25 + t26*t26
     t28 = lambda_ > 1.0
     t29 = np.where(t28, 1.0/lambda_, 1.0)
@@ -644,20 +631,19 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t1 = cs[..., 0]*l[..., 0]
     t2 = cs[..., 1]*l[..., 1]
     t3 = sn[..., 0]*l[..., 0]
-    t4 = sn[..., 1]*l[..., 1]
-    t5 = -t4
-    t6 = t5 - t3
+    t4 = -sn[..., 1]*l[..., 1]
+    t6 = t4 - t3
     t7 = t1 + t2
-    t17 = t6*t6 + t5*t5
-    t18 = t2*t5 + t6*t7
+    t17 = t6*t6 + t4*t4
+    t18 = t2*t4 + t6*t7
     t19 = t2*t2 + t7*t7
     t20 = t17 >= t19
     t21 = np.where(t20, t17, t19)
     t22 = t18*np.where(t21 > 0.0, 1.0/t21, 1.0)
     t23 = np.where(t20, t6, t7)
-    t24 = np.where(t20, t5, t2)
+    t24 = np.where(t20, t4, t2)
     t25 = np.where(t20, t7, t6) - t23*t22
-    t26 = np.where(t20, t2, t5) - t24*t22
+    t26 = np.where(t20, t2, t4) - t24*t22
     t27 = t25*t25 + t26*t26
     t28 = lambda_ > 1.0
     t29 = np.where(t28, 1.0/lambda_, 1.0)

@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x9c32c0c6UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x39eafaafUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -261,7 +261,7 @@ static int arm3_finite(double x)
 #endif
 
 /* ---- arm3_position: endpoint position p (2) ---- */
-/* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 2 neg */
+/* operations: 3 sin, 3 cos, 6 add/sub, 6 mul, 0 neg */
 
 ARM3_BODY void arm3_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -280,11 +280,10 @@ ARM3_BODY void arm3_position_finish(const double l[3], const double *restrict cs
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t9 = t7 + t6;
     const double t10 = t3 + t4;
-    const double t11 = t9 - t5;
-    p[1*ARM3_STRIDE] = -t11;
+    const double t11 = t9 + t5;
+    p[1*ARM3_STRIDE] = t11;
     const double t12 = t2 + t10;
     p[0] = t12;
 }
@@ -390,10 +389,9 @@ ARM3_BODY void arm3_jacobian_finish(const double l[3], const double *restrict cs
     J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
-    const double t7 = sn[2*ARM3_STRIDE]*l[2];
-    const double t8 = -t7;
-    J[2*ARM3_STRIDE] = t8;
-    const double t9 = t8 - t6;
+    const double t7 = -sn[2*ARM3_STRIDE]*l[2];
+    J[2*ARM3_STRIDE] = t7;
+    const double t9 = t7 - t6;
     J[1*ARM3_STRIDE] = t9;
     const double t10 = t3 + t4;
     J[4*ARM3_STRIDE] = t10;
@@ -489,7 +487,7 @@ void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 #endif
 
 /* ---- arm3_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 2 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 1 neg */
 
 ARM3_BODY void arm3_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -509,20 +507,18 @@ ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double l[3]
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
     const double t13 = dq[0] + dq[1*ARM3_STRIDE];
-    const double t14 = t13 + dq[2*ARM3_STRIDE];
+    const double t14 = -t13 - dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
     const double t17 = t4*t14;
+    H[2*ARM3_STRIDE] = t17;
     const double t18 = t5*dq[0];
     const double t19 = t6*t13;
     const double t20 = t7*t14;
-    const double t21 = -t17;
-    H[2*ARM3_STRIDE] = t21;
-    const double t22 = -t20;
-    H[5*ARM3_STRIDE] = t22;
-    const double t23 = t21 - t16;
+    H[5*ARM3_STRIDE] = t20;
+    const double t23 = t17 - t16;
     H[1*ARM3_STRIDE] = t23;
-    const double t24 = t22 - t19;
+    const double t24 = t20 - t19;
     H[4*ARM3_STRIDE] = t24;
     const double t25 = t23 - t15;
     H[0] = t25;
@@ -624,7 +620,7 @@ void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm3_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 3 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 12 mul, 1 neg */
 
 ARM3_BODY void arm3_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -651,12 +647,10 @@ ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double l[3]
     const double t18 = t5*dq[0];
     const double t19 = t6*t13;
     const double t20 = t7*t14;
-    const double t21 = -t17;
-    const double t22 = -t20;
-    const double t23 = t21 - t16;
-    const double t24 = t22 - t19;
-    const double t25 = t23 - t15;
-    v[1*ARM3_STRIDE] = -t25;
+    const double t23 = t17 + t16;
+    const double t24 = -t20 - t19;
+    const double t25 = t23 + t15;
+    v[1*ARM3_STRIDE] = t25;
     const double t26 = t24 - t18;
     v[0] = t26;
 }
@@ -770,8 +764,7 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t9 = -t7 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
@@ -783,14 +776,12 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     const double t18 = t5*dq[0];
     const double t19 = t6*t13;
     const double t20 = t7*t14;
-    const double t21 = -t17;
-    const double t22 = -t20;
-    const double t23 = t21 - t16;
-    const double t24 = t22 - t19;
+    const double t23 = -t17 - t16;
+    const double t24 = -t20 - t19;
     const double t25 = t23 - t15;
-    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
+    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] - t17*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] - t7*ddq[2*ARM3_STRIDE];
     const double t26 = t24 - t18;
-    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
+    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] - t20*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
 ARM3_SINGLE void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])
@@ -891,7 +882,7 @@ void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const 
 #endif
 
 /* ---- arm3_kinematics: p, J, H, v and a at once ---- */
-/* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 5 neg */
+/* operations: 3 sin, 3 cos, 22 add/sub, 24 mul, 4 neg */
 
 ARM3_BODY void arm3_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -910,10 +901,9 @@ ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *r
     J[5*ARM3_STRIDE] = t4;
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1*ARM3_STRIDE]*l[1];
-    const double t7 = sn[2*ARM3_STRIDE]*l[2];
-    const double t8 = -t7;
-    J[2*ARM3_STRIDE] = t8;
-    const double t9 = t8 - t6;
+    const double t7 = -sn[2*ARM3_STRIDE]*l[2];
+    J[2*ARM3_STRIDE] = t7;
+    const double t9 = t7 - t6;
     J[1*ARM3_STRIDE] = t9;
     const double t10 = t3 + t4;
     J[4*ARM3_STRIDE] = t10;
@@ -927,26 +917,24 @@ ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *r
     const double t14 = t13 + dq[2*ARM3_STRIDE];
     const double t15 = t2*dq[0];
     const double t16 = t3*t13;
-    const double t17 = t4*t14;
+    const double t17 = -t4*t14;
+    H[2*ARM3_STRIDE] = t17;
     const double t18 = t5*dq[0];
     const double t19 = t6*t13;
     const double t20 = t7*t14;
-    const double t21 = -t17;
-    H[2*ARM3_STRIDE] = t21;
-    const double t22 = -t20;
-    H[5*ARM3_STRIDE] = t22;
-    const double t23 = t21 - t16;
+    H[5*ARM3_STRIDE] = t20;
+    const double t23 = t17 - t16;
     H[1*ARM3_STRIDE] = t23;
-    const double t24 = t22 - t19;
+    const double t24 = t20 - t19;
     H[4*ARM3_STRIDE] = t24;
     const double t25 = t23 - t15;
     H[0] = t25;
     v[1*ARM3_STRIDE] = -t25;
-    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t21*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t8*ddq[2*ARM3_STRIDE];
+    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] + t17*dq[2*ARM3_STRIDE] + t11*ddq[0] + t9*ddq[1*ARM3_STRIDE] + t7*ddq[2*ARM3_STRIDE];
     const double t26 = t24 - t18;
     H[3*ARM3_STRIDE] = t26;
     v[0] = t26;
-    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t22*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
+    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] + t20*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
 ARM3_SINGLE void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2])
@@ -1087,24 +1075,23 @@ static ARM3_LIGHT void arm3_manipulability_finish(const double l[3], const doubl
     const double t4 = cs[2]*l[2];
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t7 = -sn[2]*l[2];
+    const double t9 = t7 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t27 = t11*t11 + t9*t9 + t8*t8;
-    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t27 = t11*t11 + t9*t9 + t7*t7;
+    const double t28 = t4*t7 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
     const int t30 = t27 >= t29;
     const double t31 = (t30 ? t27 : t29);
     const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
     const double t33 = (t30 ? t11 : t12);
     const double t34 = (t30 ? t9 : t10);
-    const double t35 = (t30 ? t8 : t4);
+    const double t35 = (t30 ? t7 : t4);
     const double t36 = (t30 ? t12 : t11) - t33*t32;
     const double t37 = (t30 ? t10 : t9) - t34*t32;
-    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t38 = (t30 ? t4 : t7) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
     w[0] = sqrt(t31*t39);
 }
@@ -1158,24 +1145,23 @@ static ARM3_LIGHT void arm3_inverse_velocity_finish(const double v[2], const dou
     const double t4 = cs[2]*l[2];
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t7 = -sn[2]*l[2];
+    const double t9 = t7 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t27 = t11*t11 + t9*t9 + t8*t8;
-    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t27 = t11*t11 + t9*t9 + t7*t7;
+    const double t28 = t4*t7 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
     const int t30 = t27 >= t29;
     const double t31 = (t30 ? t27 : t29);
     const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
     const double t33 = (t30 ? t11 : t12);
     const double t34 = (t30 ? t9 : t10);
-    const double t35 = (t30 ? t8 : t4);
+    const double t35 = (t30 ? t7 : t4);
     const double t36 = (t30 ? t12 : t11) - t33*t32;
     const double t37 = (t30 ? t10 : t9) - t34*t32;
-    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t38 = (t30 ? t4 : t7) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
     const int t40 = lambda > 1.0;
     const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1253,13 +1239,12 @@ static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], cons
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1]*l[1];
     const double t7 = sn[2]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t9 = -t7 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t27 = t11*t11 + t9*t9 + t8*t8;
-    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t27 = t11*t11 + t9*t9 + t7*t7;
+    const double t28 = t11*t12 - t4*t7 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
     const int t40 = lambda > 1.0;
     const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1268,7 +1253,7 @@ static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], cons
     const double t44 = t41*t41;
     const double t71 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
     const double t72 = t71*t71;
-    const double t73 = t11 + t9 + t8;
+    const double t73 = t11 + t9 - t7;
     const double t74 = t4 + t12 + t10;
     const double t75 = t72*t44;
     const double t76 = t71*t44;
@@ -1314,7 +1299,7 @@ static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], cons
     const double t116 = t71*t113;
     dq3[0] = t114 + t115*t11 + t116*t12;
     dq3[1] = t114 + t115*t9 + t116*t10;
-    dq3[2] = t114 + t4*t116 + t115*t8;
+    dq3[2] = t114 + t4*t116 - t115*t7;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3])
@@ -1366,24 +1351,23 @@ static ARM3_LIGHT void arm3_ik_step_finish(const double q[3], const double targe
     const double t4 = cs[2]*l[2];
     const double t5 = sn[0]*l[0];
     const double t6 = sn[1]*l[1];
-    const double t7 = sn[2]*l[2];
-    const double t8 = -t7;
-    const double t9 = t8 - t6;
+    const double t7 = -sn[2]*l[2];
+    const double t9 = t7 - t6;
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t27 = t11*t11 + t9*t9 + t8*t8;
-    const double t28 = t4*t8 + t11*t12 + t9*t10;
+    const double t27 = t11*t11 + t9*t9 + t7*t7;
+    const double t28 = t4*t7 + t11*t12 + t9*t10;
     const double t29 = t4*t4 + t12*t12 + t10*t10;
     const int t30 = t27 >= t29;
     const double t31 = (t30 ? t27 : t29);
     const double t32 = t28*(t31 > 0.0 ? 1.0/(t31 != 0.0 ? t31 : 1.0) : 1.0);
     const double t33 = (t30 ? t11 : t12);
     const double t34 = (t30 ? t9 : t10);
-    const double t35 = (t30 ? t8 : t4);
+    const double t35 = (t30 ? t7 : t4);
     const double t36 = (t30 ? t12 : t11) - t33*t32;
     const double t37 = (t30 ? t10 : t9) - t34*t32;
-    const double t38 = (t30 ? t4 : t8) - t35*t32;
+    const double t38 = (t30 ? t4 : t7) - t35*t32;
     const double t39 = t36*t36 + t37*t37 + t38*t38;
     const int t40 = lambda > 1.0;
     const double t41 = (t40 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);

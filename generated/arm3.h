@@ -45,7 +45,7 @@
  * sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0x9c32c0c6UL
+#define ARM3_STAMP 0x39eafaafUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,15 +54,15 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM3_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 208 bytes. */
+/* endpoint position p (2). Stack: about 200 bytes. */
 void arm3_position(const double q[3], const double l[3], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 3808 bytes. */
+ * Stack: about 3800 bytes. */
 void arm3_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 208 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: about 200 bytes. */
 void arm3_jacobian(const double q[3], const double l[3], double J[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -70,7 +70,7 @@ void arm3_jacobian(const double q[3], const double l[3], double J[6]);
  * Stack: about 5 KB. */
 void arm3_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 280 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: about 264 bytes. */
 void arm3_coriolis(const double q[3], const double dq[3], const double l[3], double H[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -78,7 +78,7 @@ void arm3_coriolis(const double q[3], const double dq[3], const double l[3], dou
  * Stack: about 6 KB. */
 void arm3_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 280 bytes. */
+/* endpoint velocity v = J dq (2). Stack: about 264 bytes. */
 void arm3_velocity(const double q[3], const double dq[3], const double l[3], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -86,7 +86,7 @@ void arm3_velocity(const double q[3], const double dq[3], const double l[3], dou
  * Stack: about 5 KB. */
 void arm3_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 320 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 296 bytes. */
 void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -94,7 +94,7 @@ void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3
  * Stack: about 6 KB. */
 void arm3_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 320 bytes. */
+/* p, J, H, v and a at once. Stack: about 296 bytes. */
 void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3], const double l[3], double p[2], double J[6], double H[6], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -102,7 +102,7 @@ void arm3_kinematics(const double q[3], const double dq[3], const double ddq[3],
  * Stack: about 10 KB. */
 void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 312 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 304 bytes. */
 void arm3_manipulability(const double q[3], const double l[3], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -110,7 +110,7 @@ void arm3_manipulability(const double q[3], const double l[3], double w[1]);
  * Stack: about 13 KB. */
 void arm3_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 480 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 472 bytes. */
 void arm3_inverse_velocity(const double q[3], const double v[2], const double l[3], double lambda, double dq[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -118,7 +118,7 @@ void arm3_inverse_velocity(const double q[3], const double v[2], const double l[
  * Stack: about 13 KB. */
 void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 640 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 632 bytes. */
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -126,7 +126,7 @@ void arm3_inverse_velocity3(const double q[3], const double twist[3], const doub
  * Stack: about 13 KB. */
 void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 496 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 488 bytes. */
 void arm3_ik_step(const double q[3], const double target[2], const double l[3], double lambda, double q_next[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -155,7 +155,7 @@ int arm3_ik_solve(const double q0[3], const double target[2], const double l[3],
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm3_ik_solve: the same result bit for bit. Stack: about 776 bytes. */
+ * Each problem is one call of arm3_ik_solve: the same result bit for bit. Stack: about 768 bytes. */
 void arm3_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

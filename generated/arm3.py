@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x9c32c0c6
+STAMP = 0x39eafaaf
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -285,13 +285,12 @@ def _position_core(q, l, p):
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
     t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t9 = t7 + t6
     t10 = t3 + t4
-    t11 = t9 - t5
+    t11 = t9 + t5
     t12 = t2 + t10
     p[..., 0] = t12
-    p[..., 1] = -t11
+    p[..., 1] = t11
 
 
 @_signature_errors
@@ -301,7 +300,7 @@ def position(q, l):
     q: array of shape (..., 3), finite.
     l: array of shape (..., 3), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 3 sin, 3 cos, 14 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 12 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (3, 3, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -322,15 +321,14 @@ def _jacobian_core(q, l, J):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
     J[..., 0] = t11
     J[..., 1] = t9
-    J[..., 2] = t8
+    J[..., 2] = t7
     J[..., 3] = t12
     J[..., 4] = t10
     J[..., 5] = t4
@@ -366,25 +364,23 @@ def _coriolis_core(q, dq, l, H):
     t6 = sn[..., 1]*l[..., 1]
     t7 = sn[..., 2]*l[..., 2]
     t13 = dq[..., 0] + dq[..., 1]
-    t14 = t13 + dq[..., 2]
+    t14 = -t13 - dq[..., 2]
     t15 = t2*dq[..., 0]
     t16 = t3*t13
     t17 = t4*t14
     t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
-    t21 = -t17
-    t22 = -t20
-    t23 = t21 - t16
-    t24 = t22 - t19
+    t23 = t17 - t16
+    t24 = t20 - t19
     t25 = t23 - t15
     t26 = t24 - t18
     H[..., 0] = t25
     H[..., 1] = t23
-    H[..., 2] = t21
+    H[..., 2] = t17
     H[..., 3] = t26
     H[..., 4] = t24
-    H[..., 5] = t22
+    H[..., 5] = t20
 
 
 @_signature_errors
@@ -395,7 +391,7 @@ def coriolis(q, dq, l):
     dq: array of shape (..., 3), finite.
     l: array of shape (..., 3), finite and > 0.
     Returns H of shape (..., 2, 3).
-    Operations: 3 sin, 3 cos, 22 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -425,14 +421,12 @@ def _velocity_core(q, dq, l, v):
     t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
-    t21 = -t17
-    t22 = -t20
-    t23 = t21 - t16
-    t24 = t22 - t19
-    t25 = t23 - t15
+    t23 = t17 + t16
+    t24 = -t20 - t19
+    t25 = t23 + t15
     t26 = t24 - t18
     v[..., 0] = t26
-    v[..., 1] = -t25
+    v[..., 1] = t25
 
 
 @_signature_errors
@@ -443,7 +437,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 3), finite.
     l: array of shape (..., 3), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 3 sin, 3 cos, 23 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -465,8 +459,7 @@ def _acceleration_core(q, dq, ddq, l, a):
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
     t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t9 = -t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
@@ -478,14 +471,12 @@ def _acceleration_core(q, dq, ddq, l, a):
     t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
-    t21 = -t17
-    t22 = -t20
-    t23 = t21 - t16
-    t24 = t22 - t19
+    t23 = -t17 - t16
+    t24 = -t20 - t19
     t25 = t23 - t15
     t26 = t24 - t18
-    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] + t21*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] + t8*ddq[..., 2]
-    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] + t22*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
+    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] - t17*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] - t7*ddq[..., 2]
+    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] - t20*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
 
 
 @_signature_errors
@@ -518,9 +509,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
@@ -528,34 +518,32 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t14 = t13 + dq[..., 2]
     t15 = t2*dq[..., 0]
     t16 = t3*t13
-    t17 = t4*t14
+    t17 = -t4*t14
     t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
-    t21 = -t17
-    t22 = -t20
-    t23 = t21 - t16
-    t24 = t22 - t19
+    t23 = t17 - t16
+    t24 = t20 - t19
     t25 = t23 - t15
     t26 = t24 - t18
     p[..., 0] = t12
     p[..., 1] = -t11
     J[..., 0] = t11
     J[..., 1] = t9
-    J[..., 2] = t8
+    J[..., 2] = t7
     J[..., 3] = t12
     J[..., 4] = t10
     J[..., 5] = t4
     H[..., 0] = t25
     H[..., 1] = t23
-    H[..., 2] = t21
+    H[..., 2] = t17
     H[..., 3] = t26
     H[..., 4] = t24
-    H[..., 5] = t22
+    H[..., 5] = t20
     v[..., 0] = t26
     v[..., 1] = -t25
-    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] + t21*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] + t8*ddq[..., 2]
-    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] + t22*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
+    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] + t17*dq[..., 2] + t11*ddq[..., 0] + t9*ddq[..., 1] + t7*ddq[..., 2]
+    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] + t20*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
 
 
 @_signature_errors
@@ -567,7 +555,7 @@ def kinematics(q, dq, ddq, l):
     ddq: array of shape (..., 3), finite.
     l: array of shape (..., 3), finite and > 0.
     Returns p of shape (..., 2), J of shape (..., 2, 3), H of shape (..., 2, 3), v of shape (..., 2), a of shape (..., 2).
-    Operations: 3 sin, 3 cos, 51 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 50 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (3, 3, 3, 3, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -589,24 +577,23 @@ def _manipulability_core(q, l, w):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t27 = t11*t11 + t9*t9 + t8*t8
-    t28 = t4*t8 + t11*t12 + t9*t10
+    t27 = t11*t11 + t9*t9 + t7*t7
+    t28 = t4*t7 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
     t30 = t27 >= t29
     t31 = np.where(t30, t27, t29)
     t32 = t28*np.where(t31 > 0.0, 1.0/t31, 1.0)
     t33 = np.where(t30, t11, t12)
     t34 = np.where(t30, t9, t10)
-    t35 = np.where(t30, t8, t4)
+    t35 = np.where(t30, t7, t4)
     t36 = np.where(t30, t12, t11) - t33*t32
     t37 = np.where(t30, t10, t9) - t34*t32
-    t38 = np.where(t30, t4, t8) - t35*t32
+    t38 = np.where(t30, t4, t7) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
     w[..., 0] = np.sqrt(t31*t39)
 
@@ -640,24 +627,23 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t27 = t11*t11 + t9*t9 + t8*t8
-    t28 = t4*t8 + t11*t12 + t9*t10
+    t27 = t11*t11 + t9*t9 + t7*t7
+    t28 = t4*t7 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
     t30 = t27 >= t29
     t31 = np.where(t30, t27, t29)
     t32 = t28*np.where(t31 > 0.0, 1.0/t31, 1.0)
     t33 = np.where(t30, t11, t12)
     t34 = np.where(t30, t9, t10)
-    t35 = np.where(t30, t8, t4)
+    t35 = np.where(t30, t7, t4)
     t36 = np.where(t30, t12, t11) - t33*t32
     t37 = np.where(t30, t10, t9) - t34*t32
-    t38 = np.where(t30, t4, t8) - t35*t32
+    t38 = np.where(t30, t4, t7) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
     t40 = lambda_ > 1.0
     t41 = np.where(t40, 1.0/lambda_, 1.0)
@@ -718,13 +704,12 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
     t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t9 = -t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t27 = t11*t11 + t9*t9 + t8*t8
-    t28 = t4*t8 + t11*t12 + t9*t10
+    t27 = t11*t11 + t9*t9 + t7*t7
+    t28 = t11*t12 - t4*t7 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
     t40 = lambda_ > 1.0
     t41 = np.where(t40, 1.0/lambda_, 1.0)
@@ -733,7 +718,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t44 = t41*t41
     t71 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
     t72 = t71*t71
-    t73 = t11 + t9 + t8
+    t73 = t11 + t9 - t7
     t74 = t4 + t12 + t10
     t75 = t72*t44
     t76 = t71*t44
@@ -779,7 +764,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t116 = t71*t113
     dq3[..., 0] = t114 + t115*t11 + t116*t12
     dq3[..., 1] = t114 + t115*t9 + t116*t10
-    dq3[..., 2] = t114 + t4*t116 + t115*t8
+    dq3[..., 2] = t114 + t4*t116 - t115*t7
 
 
 @_signature_errors
@@ -814,24 +799,23 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t8 = -t7
-    t9 = t8 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t27 = t11*t11 + t9*t9 + t8*t8
-    t28 = t4*t8 + t11*t12 + t9*t10
+    t27 = t11*t11 + t9*t9 + t7*t7
+    t28 = t4*t7 + t11*t12 + t9*t10
     t29 = t4*t4 + t12*t12 + t10*t10
     t30 = t27 >= t29
     t31 = np.where(t30, t27, t29)
     t32 = t28*np.where(t31 > 0.0, 1.0/t31, 1.0)
     t33 = np.where(t30, t11, t12)
     t34 = np.where(t30, t9, t10)
-    t35 = np.where(t30, t8, t4)
+    t35 = np.where(t30, t7, t4)
     t36 = np.where(t30, t12, t11) - t33*t32
     t37 = np.where(t30, t10, t9) - t34*t32
-    t38 = np.where(t30, t4, t8) - t35*t32
+    t38 = np.where(t30, t4, t7) - t35*t32
     t39 = t36*t36 + t37*t37 + t38*t38
     t40 = lambda_ > 1.0
     t41 = np.where(t40, 1.0/lambda_, 1.0)

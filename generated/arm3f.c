@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xcf1ffa2fUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdefb9ae3UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -197,7 +197,7 @@ static int arm3f_finite(float x)
 #endif
 
 /* ---- arm3f_position: endpoint position p (2) ---- */
-/* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 2 neg */
+/* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 0 neg */
 
 ARM3F_BODY void arm3f_position_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -214,11 +214,10 @@ ARM3F_BODY void arm3f_position_finish(const float *restrict cs, const float *res
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t7 = t5 + t4;
     const float t8 = t2 + t3;
-    const float t9 = t7 - sn[0];
-    p[1*ARM3F_STRIDE] = -t9;
+    const float t9 = t7 + sn[0];
+    p[1*ARM3F_STRIDE] = t9;
     const float t10 = cs[0] + t8;
     p[0] = t10;
 }
@@ -305,7 +304,7 @@ void arm3f_position_batch(size_t m, const float *q, float *p)
 #endif
 
 /* ---- arm3f_jacobian: Jacobian J (2 x N, row-major) ---- */
-/* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 1 neg */
+/* operations: 3 sin, 3 cos, 6 add/sub, 4 mul, 0 neg */
 
 ARM3F_BODY void arm3f_jacobian_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -322,10 +321,9 @@ ARM3F_BODY void arm3f_jacobian_finish(const float *restrict cs, const float *res
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
     J[5*ARM3F_STRIDE] = t3;
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
-    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
-    const float t6 = -t5;
-    J[2*ARM3F_STRIDE] = t6;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2*ARM3F_STRIDE];
+    J[2*ARM3F_STRIDE] = t5;
+    const float t7 = t5 - t4;
     J[1*ARM3F_STRIDE] = t7;
     const float t8 = t2 + t3;
     J[4*ARM3F_STRIDE] = t8;
@@ -421,7 +419,7 @@ void arm3f_jacobian_batch(size_t m, const float *q, float *J)
 #endif
 
 /* ---- arm3f_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 2 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 1 neg */
 
 ARM3F_BODY void arm3f_coriolis_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -439,20 +437,18 @@ ARM3F_BODY void arm3f_coriolis_finish(const float *restrict dq, const float *res
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
-    const float t12 = t11 + dq[2*ARM3F_STRIDE];
+    const float t12 = -t11 - dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;
+    H[2*ARM3F_STRIDE] = t15;
     const float t16 = sn[0]*dq[0];
     const float t17 = t4*t11;
     const float t18 = t5*t12;
-    const float t19 = -t15;
-    H[2*ARM3F_STRIDE] = t19;
-    const float t20 = -t18;
-    H[5*ARM3F_STRIDE] = t20;
-    const float t21 = t19 - t14;
+    H[5*ARM3F_STRIDE] = t18;
+    const float t21 = t15 - t14;
     H[1*ARM3F_STRIDE] = t21;
-    const float t22 = t20 - t17;
+    const float t22 = t18 - t17;
     H[4*ARM3F_STRIDE] = t22;
     const float t23 = t21 - t13;
     H[0] = t23;
@@ -554,7 +550,7 @@ void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
 #endif
 
 /* ---- arm3f_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 3 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 1 neg */
 
 ARM3F_BODY void arm3f_velocity_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -579,12 +575,10 @@ ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *res
     const float t16 = sn[0]*dq[0];
     const float t17 = t4*t11;
     const float t18 = t5*t12;
-    const float t19 = -t15;
-    const float t20 = -t18;
-    const float t21 = t19 - t14;
-    const float t22 = t20 - t17;
-    const float t23 = t21 - t13;
-    v[1*ARM3F_STRIDE] = -t23;
+    const float t21 = t15 + t14;
+    const float t22 = -t18 - t17;
+    const float t23 = t21 + t13;
+    v[1*ARM3F_STRIDE] = t23;
     const float t24 = t22 - t16;
     v[0] = t24;
 }
@@ -696,8 +690,7 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t7 = -t5 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
@@ -709,14 +702,12 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     const float t16 = sn[0]*dq[0];
     const float t17 = t4*t11;
     const float t18 = t5*t12;
-    const float t19 = -t15;
-    const float t20 = -t18;
-    const float t21 = t19 - t14;
-    const float t22 = t20 - t17;
+    const float t21 = -t15 - t14;
+    const float t22 = -t18 - t17;
     const float t23 = t21 - t13;
-    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
+    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] - t15*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] - t5*ddq[2*ARM3F_STRIDE];
     const float t24 = t22 - t16;
-    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
+    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] - t18*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
 ARM3F_SINGLE void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])
@@ -817,7 +808,7 @@ void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const f
 #endif
 
 /* ---- arm3f_kinematics: p, J, H, v and a at once ---- */
-/* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 5 neg */
+/* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 3 neg */
 
 ARM3F_BODY void arm3f_kinematics_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -834,10 +825,9 @@ ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *r
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
     J[5*ARM3F_STRIDE] = t3;
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
-    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
-    const float t6 = -t5;
-    J[2*ARM3F_STRIDE] = t6;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2*ARM3F_STRIDE];
+    J[2*ARM3F_STRIDE] = t5;
+    const float t7 = t5 - t4;
     J[1*ARM3F_STRIDE] = t7;
     const float t8 = t2 + t3;
     J[4*ARM3F_STRIDE] = t8;
@@ -851,26 +841,24 @@ ARM3F_BODY void arm3f_kinematics_finish(const float *restrict dq, const float *r
     const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
-    const float t15 = t3*t12;
+    const float t15 = -t3*t12;
+    H[2*ARM3F_STRIDE] = t15;
     const float t16 = sn[0]*dq[0];
     const float t17 = t4*t11;
     const float t18 = t5*t12;
-    const float t19 = -t15;
-    H[2*ARM3F_STRIDE] = t19;
-    const float t20 = -t18;
-    H[5*ARM3F_STRIDE] = t20;
-    const float t21 = t19 - t14;
+    H[5*ARM3F_STRIDE] = t18;
+    const float t21 = t15 - t14;
     H[1*ARM3F_STRIDE] = t21;
-    const float t22 = t20 - t17;
+    const float t22 = t18 - t17;
     H[4*ARM3F_STRIDE] = t22;
     const float t23 = t21 - t13;
     H[0] = t23;
     v[1*ARM3F_STRIDE] = -t23;
-    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t19*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t6*ddq[2*ARM3F_STRIDE];
+    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] + t15*dq[2*ARM3F_STRIDE] + t9*ddq[0] + t7*ddq[1*ARM3F_STRIDE] + t5*ddq[2*ARM3F_STRIDE];
     const float t24 = t22 - t16;
     H[3*ARM3F_STRIDE] = t24;
     v[0] = t24;
-    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t20*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
+    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] + t18*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
 ARM3F_SINGLE void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2])
@@ -995,7 +983,7 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
 #endif
 
 /* ---- arm3f_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
-/* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 1 neg, 1 div, 1 sqrt */
+/* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 0 neg, 1 div, 1 sqrt */
 
 static ARM3F_LIGHT void arm3f_manipulability_angles(const float q[3], float *restrict ang)
 {
@@ -1009,24 +997,23 @@ static ARM3F_LIGHT void arm3f_manipulability_finish(const float *restrict cs, co
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
     const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2];
+    const float t7 = t5 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t25 = t9*t9 + t7*t7 + t6*t6;
-    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t25 = t9*t9 + t7*t7 + t5*t5;
+    const float t26 = t3*t5 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
     const int t28 = t25 >= t27;
     const float t29 = (t28 ? t25 : t27);
     const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
     const float t31 = (t28 ? t9 : t10);
     const float t32 = (t28 ? t7 : t8);
-    const float t33 = (t28 ? t6 : t3);
+    const float t33 = (t28 ? t5 : t3);
     const float t34 = (t28 ? t10 : t9) - t31*t30;
     const float t35 = (t28 ? t8 : t7) - t32*t30;
-    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t36 = (t28 ? t3 : t5) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
     w[0] = sqrtf(t29*t37);
 }
@@ -1064,7 +1051,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
 {
@@ -1078,24 +1065,23 @@ static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float v[2], float la
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
     const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2];
+    const float t7 = t5 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t25 = t9*t9 + t7*t7 + t6*t6;
-    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t25 = t9*t9 + t7*t7 + t5*t5;
+    const float t26 = t3*t5 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
     const int t28 = t25 >= t27;
     const float t29 = (t28 ? t25 : t27);
     const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
     const float t31 = (t28 ? t9 : t10);
     const float t32 = (t28 ? t7 : t8);
-    const float t33 = (t28 ? t6 : t3);
+    const float t33 = (t28 ? t5 : t3);
     const float t34 = (t28 ? t10 : t9) - t31*t30;
     const float t35 = (t28 ? t8 : t7) - t32*t30;
-    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t36 = (t28 ? t3 : t5) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
     const int t38 = lambda > 1.0f;
     const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
@@ -1156,7 +1142,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
 {
@@ -1170,21 +1156,20 @@ static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float twist[3], flo
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
     const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2];
+    const float t7 = t5 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t25 = t9*t9 + t7*t7 + t6*t6;
-    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t25 = t9*t9 + t7*t7 + t5*t5;
+    const float t26 = t3*t5 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
     const int t38 = lambda > 1.0f;
     const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
     const float t40 = (t38 ? 1.0f : lambda);
     const float t41 = t40*t40;
     const float t42 = t39*t39;
-    const float t69 = t9 + t7 + t6;
+    const float t69 = t9 + t7 + t5;
     const float t70 = t3 + t10 + t8;
     const float t71 = 0.18903592f*t42;
     const float t72 = 0.4347826f*t42;
@@ -1230,7 +1215,7 @@ static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float twist[3], flo
     const float t112 = 0.4347826f*t109;
     dq3[0] = t110 + t111*t9 + t112*t10;
     dq3[1] = t110 + t111*t7 + t112*t8;
-    dq3[2] = t110 + t3*t112 + t111*t6;
+    dq3[2] = t110 + t3*t112 + t111*t5;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1266,7 +1251,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_ik_step_angles(const float q[3], float *restrict ang)
 {
@@ -1280,24 +1265,23 @@ static ARM3F_LIGHT void arm3f_ik_step_finish(const float q[3], const float targe
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
     const float t4 = 0.8f*sn[1];
-    const float t5 = 0.5f*sn[2];
-    const float t6 = -t5;
-    const float t7 = t6 - t4;
+    const float t5 = -0.5f*sn[2];
+    const float t7 = t5 - t4;
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t25 = t9*t9 + t7*t7 + t6*t6;
-    const float t26 = t3*t6 + t9*t10 + t7*t8;
+    const float t25 = t9*t9 + t7*t7 + t5*t5;
+    const float t26 = t3*t5 + t9*t10 + t7*t8;
     const float t27 = t3*t3 + t10*t10 + t8*t8;
     const int t28 = t25 >= t27;
     const float t29 = (t28 ? t25 : t27);
     const float t30 = t26*(t29 > 0.0f ? 1.0f/(t29 != 0.0f ? t29 : 1.0f) : 1.0f);
     const float t31 = (t28 ? t9 : t10);
     const float t32 = (t28 ? t7 : t8);
-    const float t33 = (t28 ? t6 : t3);
+    const float t33 = (t28 ? t5 : t3);
     const float t34 = (t28 ? t10 : t9) - t31*t30;
     const float t35 = (t28 ? t8 : t7) - t32*t30;
-    const float t36 = (t28 ? t3 : t6) - t33*t30;
+    const float t36 = (t28 ? t3 : t5) - t33*t30;
     const float t37 = t34*t34 + t35*t35 + t36*t36;
     const int t38 = lambda > 1.0f;
     const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);

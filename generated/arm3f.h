@@ -43,7 +43,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xcf1ffa2fUL
+#define ARM3F_STAMP 0xdefb9ae3UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -52,47 +52,47 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM3F_RANK_TOL 1.1920929e-05f
 
-/* endpoint position p (2). Stack: about 144 bytes. */
+/* endpoint position p (2). Stack: about 140 bytes. */
 void arm3f_position(const float q[3], float p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 1896 bytes. */
+ * Stack: about 1892 bytes. */
 void arm3f_position_batch(size_t m, const float *q, float *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 144 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: about 140 bytes. */
 void arm3f_jacobian(const float q[3], float J[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2424 bytes. */
+ * Stack: about 2420 bytes. */
 void arm3f_jacobian_batch(size_t m, const float *q, float *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 180 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: about 172 bytes. */
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2856 bytes. */
+ * Stack: about 2848 bytes. */
 void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 180 bytes. */
+/* endpoint velocity v = J dq (2). Stack: about 172 bytes. */
 void arm3f_velocity(const float q[3], const float dq[3], float v[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2328 bytes. */
+ * Stack: about 2320 bytes. */
 void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 200 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 188 bytes. */
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2744 bytes. */
+ * Stack: about 2732 bytes. */
 void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a);
 
-/* p, J, H, v and a at once. Stack: about 200 bytes. */
+/* p, J, H, v and a at once. Stack: about 188 bytes. */
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -100,7 +100,7 @@ void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], f
  * Stack: about 5 KB. */
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 196 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 192 bytes. */
 void arm3f_manipulability(const float q[3], float w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -108,7 +108,7 @@ void arm3f_manipulability(const float q[3], float w[1]);
  * Stack: about 7 KB. */
 void arm3f_manipulability_batch(size_t m, const float *q, float *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 280 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 276 bytes. */
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -116,7 +116,7 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
  * Stack: about 7 KB. */
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 352 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 348 bytes. */
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -124,7 +124,7 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
  * Stack: about 7 KB. */
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 288 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 284 bytes. */
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -153,7 +153,7 @@ int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: about 516 bytes. */
+ * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: about 512 bytes. */
 void arm3f_ik_solve_batch(size_t m, const float *q0, const float *target, float lambda, float tol, int max_iter, float *q, float *error, int *iterations, int *status);
 
 #ifdef __cplusplus

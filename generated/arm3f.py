@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0xcf1ffa2f
+STAMP = 0xdefb9ae3
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -283,13 +283,12 @@ def _position_core(q, p):
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
     t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t7 = t5 + t4
     t8 = t2 + t3
-    t9 = t7 - sn[..., 0]
+    t9 = t7 + sn[..., 0]
     t10 = cs[..., 0] + t8
     p[..., 0] = t10
-    p[..., 1] = -t9
+    p[..., 1] = t9
 
 
 @_signature_errors
@@ -298,7 +297,7 @@ def position(q):
 
     q: array of shape (..., 3), finite.
     Returns p of shape (..., 2).
-    Operations: 3 sin, 3 cos, 12 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 10 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -317,15 +316,14 @@ def _jacobian_core(q, J):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
     J[..., 0] = t9
     J[..., 1] = t7
-    J[..., 2] = t6
+    J[..., 2] = t5
     J[..., 3] = t10
     J[..., 4] = t8
     J[..., 5] = t3
@@ -337,7 +335,7 @@ def jacobian(q):
 
     q: array of shape (..., 3), finite.
     Returns J of shape (..., 2, 3).
-    Operations: 3 sin, 3 cos, 11 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 10 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -358,25 +356,23 @@ def _coriolis_core(q, dq, H):
     t4 = 0.8*sn[..., 1]
     t5 = 0.5*sn[..., 2]
     t11 = dq[..., 0] + dq[..., 1]
-    t12 = t11 + dq[..., 2]
+    t12 = -t11 - dq[..., 2]
     t13 = cs[..., 0]*dq[..., 0]
     t14 = t2*t11
     t15 = t3*t12
     t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
+    t21 = t15 - t14
+    t22 = t18 - t17
     t23 = t21 - t13
     t24 = t22 - t16
     H[..., 0] = t23
     H[..., 1] = t21
-    H[..., 2] = t19
+    H[..., 2] = t15
     H[..., 3] = t24
     H[..., 4] = t22
-    H[..., 5] = t20
+    H[..., 5] = t18
 
 
 @_signature_errors
@@ -386,7 +382,7 @@ def coriolis(q, dq):
     q: array of shape (..., 3), finite.
     dq: array of shape (..., 3), finite.
     Returns H of shape (..., 2, 3).
-    Operations: 3 sin, 3 cos, 20 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 19 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -414,14 +410,12 @@ def _velocity_core(q, dq, v):
     t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
-    t23 = t21 - t13
+    t21 = t15 + t14
+    t22 = -t18 - t17
+    t23 = t21 + t13
     t24 = t22 - t16
     v[..., 0] = t24
-    v[..., 1] = -t23
+    v[..., 1] = t23
 
 
 @_signature_errors
@@ -431,7 +425,7 @@ def velocity(q, dq):
     q: array of shape (..., 3), finite.
     dq: array of shape (..., 3), finite.
     Returns v of shape (..., 2).
-    Operations: 3 sin, 3 cos, 21 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 19 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (3, 3, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -451,8 +445,7 @@ def _acceleration_core(q, dq, ddq, a):
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
     t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t7 = -t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
@@ -464,14 +457,12 @@ def _acceleration_core(q, dq, ddq, a):
     t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
+    t21 = -t15 - t14
+    t22 = -t18 - t17
     t23 = t21 - t13
     t24 = t22 - t16
-    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] + t19*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] + t6*ddq[..., 2]
-    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
+    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] - t15*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] - t5*ddq[..., 2]
+    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] - t18*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
 @_signature_errors
@@ -501,9 +492,8 @@ def _kinematics_core(q, dq, ddq, p, J, H, v, a):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
@@ -511,34 +501,32 @@ def _kinematics_core(q, dq, ddq, p, J, H, v, a):
     t12 = t11 + dq[..., 2]
     t13 = cs[..., 0]*dq[..., 0]
     t14 = t2*t11
-    t15 = t3*t12
+    t15 = -t3*t12
     t16 = sn[..., 0]*dq[..., 0]
     t17 = t4*t11
     t18 = t5*t12
-    t19 = -t15
-    t20 = -t18
-    t21 = t19 - t14
-    t22 = t20 - t17
+    t21 = t15 - t14
+    t22 = t18 - t17
     t23 = t21 - t13
     t24 = t22 - t16
     p[..., 0] = t10
     p[..., 1] = -t9
     J[..., 0] = t9
     J[..., 1] = t7
-    J[..., 2] = t6
+    J[..., 2] = t5
     J[..., 3] = t10
     J[..., 4] = t8
     J[..., 5] = t3
     H[..., 0] = t23
     H[..., 1] = t21
-    H[..., 2] = t19
+    H[..., 2] = t15
     H[..., 3] = t24
     H[..., 4] = t22
-    H[..., 5] = t20
+    H[..., 5] = t18
     v[..., 0] = t24
     v[..., 1] = -t23
-    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] + t19*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] + t6*ddq[..., 2]
-    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t20*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
+    a[..., 0] = t23*dq[..., 0] + t21*dq[..., 1] + t15*dq[..., 2] + t9*ddq[..., 0] + t7*ddq[..., 1] + t5*ddq[..., 2]
+    a[..., 1] = t3*ddq[..., 2] + t24*dq[..., 0] + t22*dq[..., 1] + t18*dq[..., 2] + t10*ddq[..., 0] + t8*ddq[..., 1]
 
 
 @_signature_errors
@@ -549,7 +537,7 @@ def kinematics(q, dq, ddq):
     dq: array of shape (..., 3), finite.
     ddq: array of shape (..., 3), finite.
     Returns p of shape (..., 2), J of shape (..., 2, 3), H of shape (..., 2, 3), v of shape (..., 2), a of shape (..., 2).
-    Operations: 3 sin, 3 cos, 49 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 47 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (3, 3, 3, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -569,24 +557,23 @@ def _manipulability_core(q, w):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t25 = t9*t9 + t7*t7 + t6*t6
-    t26 = t3*t6 + t9*t10 + t7*t8
+    t25 = t9*t9 + t7*t7 + t5*t5
+    t26 = t3*t5 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
     t28 = t25 >= t27
     t29 = np.where(t28, t25, t27)
     t30 = t26*np.where(t29 > 0.0, 1.0/t29, 1.0)
     t31 = np.where(t28, t9, t10)
     t32 = np.where(t28, t7, t8)
-    t33 = np.where(t28, t6, t3)
+    t33 = np.where(t28, t5, t3)
     t34 = np.where(t28, t10, t9) - t31*t30
     t35 = np.where(t28, t8, t7) - t32*t30
-    t36 = np.where(t28, t3, t6) - t33*t30
+    t36 = np.where(t28, t3, t5) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
     w[..., 0] = np.sqrt(t29*t37)
 
@@ -597,7 +584,7 @@ def manipulability(q):
 
     q: array of shape (..., 3), finite.
     Returns w of shape (..., 1).
-    Operations: 3 sin, 3 cos, 39 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 38 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (3, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -617,24 +604,23 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t25 = t9*t9 + t7*t7 + t6*t6
-    t26 = t3*t6 + t9*t10 + t7*t8
+    t25 = t9*t9 + t7*t7 + t5*t5
+    t26 = t3*t5 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
     t28 = t25 >= t27
     t29 = np.where(t28, t25, t27)
     t30 = t26*np.where(t29 > 0.0, 1.0/t29, 1.0)
     t31 = np.where(t28, t9, t10)
     t32 = np.where(t28, t7, t8)
-    t33 = np.where(t28, t6, t3)
+    t33 = np.where(t28, t5, t3)
     t34 = np.where(t28, t10, t9) - t31*t30
     t35 = np.where(t28, t8, t7) - t32*t30
-    t36 = np.where(t28, t3, t6) - t33*t30
+    t36 = np.where(t28, t3, t5) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
     t38 = lambda_ > 1.0
     t39 = np.where(t38, 1.0/lambda_, 1.0)
@@ -670,7 +656,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 82 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -691,21 +677,20 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t25 = t9*t9 + t7*t7 + t6*t6
-    t26 = t3*t6 + t9*t10 + t7*t8
+    t25 = t9*t9 + t7*t7 + t5*t5
+    t26 = t3*t5 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
     t38 = lambda_ > 1.0
     t39 = np.where(t38, 1.0/lambda_, 1.0)
     t40 = np.where(t38, 1.0, lambda_)
     t41 = t40*t40
     t42 = t39*t39
-    t69 = t9 + t7 + t6
+    t69 = t9 + t7 + t5
     t70 = t3 + t10 + t8
     t71 = 0.18903591682419663*t42
     t72 = 0.4347826086956522*t42
@@ -751,7 +736,7 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t112 = 0.4347826086956522*t109
     dq3[..., 0] = t110 + t111*t9 + t112*t10
     dq3[..., 1] = t110 + t111*t7 + t112*t8
-    dq3[..., 2] = t110 + t3*t112 + t111*t6
+    dq3[..., 2] = t110 + t3*t112 + t111*t5
 
 
 @_signature_errors
@@ -762,7 +747,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 158 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 157 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -783,24 +768,23 @@ def _ik_step_core(q, target, lambda_, q_next):
     t2 = 0.8*cs[..., 1]
     t3 = 0.5*cs[..., 2]
     t4 = 0.8*sn[..., 1]
-    t5 = 0.5*sn[..., 2]
-    t6 = -t5
-    t7 = t6 - t4
+    t5 = -0.5*sn[..., 2]
+    t7 = t5 - t4
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t25 = t9*t9 + t7*t7 + t6*t6
-    t26 = t3*t6 + t9*t10 + t7*t8
+    t25 = t9*t9 + t7*t7 + t5*t5
+    t26 = t3*t5 + t9*t10 + t7*t8
     t27 = t3*t3 + t10*t10 + t8*t8
     t28 = t25 >= t27
     t29 = np.where(t28, t25, t27)
     t30 = t26*np.where(t29 > 0.0, 1.0/t29, 1.0)
     t31 = np.where(t28, t9, t10)
     t32 = np.where(t28, t7, t8)
-    t33 = np.where(t28, t6, t3)
+    t33 = np.where(t28, t5, t3)
     t34 = np.where(t28, t10, t9) - t31*t30
     t35 = np.where(t28, t8, t7) - t32*t30
-    t36 = np.where(t28, t3, t6) - t33*t30
+    t36 = np.where(t28, t3, t5) - t33*t30
     t37 = t34*t34 + t35*t35 + t36*t36
     t38 = lambda_ > 1.0
     t39 = np.where(t38, 1.0/lambda_, 1.0)
@@ -838,7 +822,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 87 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 86 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

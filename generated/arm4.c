@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc638c62eUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xcb013918UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -261,7 +261,7 @@ static int arm4_finite(double x)
 #endif
 
 /* ---- arm4_position: endpoint position p (2) ---- */
-/* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 2 neg */
+/* operations: 4 sin, 4 cos, 9 add/sub, 8 mul, 1 neg */
 
 ARM4_BODY void arm4_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -283,13 +283,12 @@ ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t12 = -t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
-    const double t16 = t14 - t7;
-    p[1*ARM4_STRIDE] = -t16;
+    const double t16 = t7 - t14;
+    p[1*ARM4_STRIDE] = t16;
     const double t17 = t3 + t15;
     p[0] = t17;
 }
@@ -395,10 +394,9 @@ ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
-    const double t10 = sn[3*ARM4_STRIDE]*l[3];
-    const double t11 = -t10;
-    J[3*ARM4_STRIDE] = t11;
-    const double t12 = t11 - t9;
+    const double t10 = -sn[3*ARM4_STRIDE]*l[3];
+    J[3*ARM4_STRIDE] = t10;
+    const double t12 = t10 - t9;
     J[2*ARM4_STRIDE] = t12;
     const double t13 = t5 + t6;
     J[6*ARM4_STRIDE] = t13;
@@ -497,7 +495,7 @@ void arm4_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 #endif
 
 /* ---- arm4_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 2 neg */
+/* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 1 neg */
 
 ARM4_BODY void arm4_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -521,22 +519,20 @@ ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4]
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
     const double t18 = dq[0] + dq[1*ARM4_STRIDE];
     const double t19 = t18 + dq[2*ARM4_STRIDE];
-    const double t20 = t19 + dq[3*ARM4_STRIDE];
+    const double t20 = -t19 - dq[3*ARM4_STRIDE];
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
     const double t24 = t6*t20;
+    H[3*ARM4_STRIDE] = t24;
     const double t25 = t7*dq[0];
     const double t26 = t8*t18;
     const double t27 = t9*t19;
     const double t28 = t10*t20;
-    const double t29 = -t24;
-    H[3*ARM4_STRIDE] = t29;
-    const double t30 = -t28;
-    H[7*ARM4_STRIDE] = t30;
-    const double t31 = t29 - t23;
+    H[7*ARM4_STRIDE] = t28;
+    const double t31 = t24 - t23;
     H[2*ARM4_STRIDE] = t31;
-    const double t32 = t30 - t27;
+    const double t32 = t28 - t27;
     H[6*ARM4_STRIDE] = t32;
     const double t33 = t31 - t22;
     H[1*ARM4_STRIDE] = t33;
@@ -642,7 +638,7 @@ void arm4_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm4_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 3 neg */
+/* operations: 4 sin, 4 cos, 12 add/sub, 16 mul, 2 neg */
 
 ARM4_BODY void arm4_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -675,14 +671,12 @@ ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4]
     const double t26 = t8*t18;
     const double t27 = t9*t19;
     const double t28 = t10*t20;
-    const double t29 = -t24;
-    const double t30 = -t28;
-    const double t31 = t29 - t23;
-    const double t32 = t30 - t27;
+    const double t31 = -t24 - t23;
+    const double t32 = -t28 - t27;
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
-    const double t35 = t33 - t21;
-    v[1*ARM4_STRIDE] = -t35;
+    const double t35 = t21 - t33;
+    v[1*ARM4_STRIDE] = t35;
     const double t36 = t34 - t25;
     v[0] = t36;
 }
@@ -797,8 +791,7 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t12 = -t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
@@ -815,16 +808,14 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     const double t26 = t8*t18;
     const double t27 = t9*t19;
     const double t28 = t10*t20;
-    const double t29 = -t24;
-    const double t30 = -t28;
-    const double t31 = t29 - t23;
-    const double t32 = t30 - t27;
+    const double t31 = -t24 - t23;
+    const double t32 = -t28 - t27;
     const double t33 = t31 - t22;
     const double t34 = t32 - t26;
     const double t35 = t33 - t21;
-    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] - t24*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] - t10*ddq[3*ARM4_STRIDE];
     const double t36 = t34 - t25;
-    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] - t28*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 ARM4_SINGLE void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])
@@ -924,7 +915,7 @@ void arm4_acceleration_batch(size_t m, const double *q, const double *dq, const 
 #endif
 
 /* ---- arm4_kinematics: p, J, H, v and a at once ---- */
-/* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 5 neg */
+/* operations: 4 sin, 4 cos, 32 add/sub, 32 mul, 4 neg */
 
 ARM4_BODY void arm4_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -946,10 +937,9 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
     const double t9 = sn[2*ARM4_STRIDE]*l[2];
-    const double t10 = sn[3*ARM4_STRIDE]*l[3];
-    const double t11 = -t10;
-    J[3*ARM4_STRIDE] = t11;
-    const double t12 = t11 - t9;
+    const double t10 = -sn[3*ARM4_STRIDE]*l[3];
+    J[3*ARM4_STRIDE] = t10;
+    const double t12 = t10 - t9;
     J[2*ARM4_STRIDE] = t12;
     const double t13 = t5 + t6;
     J[6*ARM4_STRIDE] = t13;
@@ -969,18 +959,16 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     const double t21 = t3*dq[0];
     const double t22 = t4*t18;
     const double t23 = t5*t19;
-    const double t24 = t6*t20;
+    const double t24 = -t6*t20;
+    H[3*ARM4_STRIDE] = t24;
     const double t25 = t7*dq[0];
     const double t26 = t8*t18;
     const double t27 = t9*t19;
     const double t28 = t10*t20;
-    const double t29 = -t24;
-    H[3*ARM4_STRIDE] = t29;
-    const double t30 = -t28;
-    H[7*ARM4_STRIDE] = t30;
-    const double t31 = t29 - t23;
+    H[7*ARM4_STRIDE] = t28;
+    const double t31 = t24 - t23;
     H[2*ARM4_STRIDE] = t31;
-    const double t32 = t30 - t27;
+    const double t32 = t28 - t27;
     H[6*ARM4_STRIDE] = t32;
     const double t33 = t31 - t22;
     H[1*ARM4_STRIDE] = t33;
@@ -989,11 +977,11 @@ ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *r
     const double t35 = t33 - t21;
     H[0] = t35;
     v[1*ARM4_STRIDE] = -t35;
-    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t29*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t11*ddq[3*ARM4_STRIDE];
+    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] + t24*dq[3*ARM4_STRIDE] + t16*ddq[0] + t14*ddq[1*ARM4_STRIDE] + t12*ddq[2*ARM4_STRIDE] + t10*ddq[3*ARM4_STRIDE];
     const double t36 = t34 - t25;
     H[4*ARM4_STRIDE] = t36;
     v[0] = t36;
-    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t30*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] + t28*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 ARM4_SINGLE void arm4_kinematics(const double q[4], const double dq[4], const double ddq[4], const double l[4], double p[2], double J[8], double H[8], double v[2], double a[2])
@@ -1140,16 +1128,15 @@ static ARM4_LIGHT void arm4_manipulability_finish(const double l[4], const doubl
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1]*l[1];
     const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t10 = -sn[3]*l[3];
+    const double t12 = t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10;
+    const double t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
     const int t40 = t37 >= t39;
     const double t41 = (t40 ? t37 : t39);
@@ -1157,11 +1144,11 @@ static ARM4_LIGHT void arm4_manipulability_finish(const double l[4], const doubl
     const double t43 = (t40 ? t16 : t17);
     const double t44 = (t40 ? t14 : t15);
     const double t45 = (t40 ? t12 : t13);
-    const double t46 = (t40 ? t11 : t6);
+    const double t46 = (t40 ? t10 : t6);
     const double t47 = (t40 ? t17 : t16) - t43*t42;
     const double t48 = (t40 ? t15 : t14) - t44*t42;
     const double t49 = (t40 ? t13 : t12) - t45*t42;
-    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t50 = (t40 ? t6 : t10) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
     w[0] = sqrt(t41*t51);
 }
@@ -1214,16 +1201,15 @@ static ARM4_LIGHT void arm4_inverse_velocity_finish(const double v[2], const dou
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1]*l[1];
     const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t10 = -sn[3]*l[3];
+    const double t12 = t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10;
+    const double t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
     const int t40 = t37 >= t39;
     const double t41 = (t40 ? t37 : t39);
@@ -1231,11 +1217,11 @@ static ARM4_LIGHT void arm4_inverse_velocity_finish(const double v[2], const dou
     const double t43 = (t40 ? t16 : t17);
     const double t44 = (t40 ? t14 : t15);
     const double t45 = (t40 ? t12 : t13);
-    const double t46 = (t40 ? t11 : t6);
+    const double t46 = (t40 ? t10 : t6);
     const double t47 = (t40 ? t17 : t16) - t43*t42;
     const double t48 = (t40 ? t15 : t14) - t44*t42;
     const double t49 = (t40 ? t13 : t12) - t45*t42;
-    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t50 = (t40 ? t6 : t10) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
     const int t52 = lambda > 1.0;
     const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1314,15 +1300,14 @@ static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], cons
     const double t8 = sn[1]*l[1];
     const double t9 = sn[2]*l[2];
     const double t10 = sn[3]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t12 = -t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10;
+    const double t38 = t16*t17 - t6*t10 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
     const int t52 = lambda > 1.0;
     const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1331,7 +1316,7 @@ static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], cons
     const double t56 = t53*t53;
     const double t85 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
     const double t86 = t85*t85;
-    const double t87 = t16 + t14 + t12 + t11;
+    const double t87 = t16 + t14 + t12 - t10;
     const double t88 = t6 + t17 + t15 + t13;
     const double t89 = t86*t56;
     const double t90 = t85*t56;
@@ -1378,7 +1363,7 @@ static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], cons
     dq3[0] = t128 + t129*t16 + t130*t17;
     dq3[1] = t128 + t129*t14 + t130*t15;
     dq3[2] = t128 + t129*t12 + t130*t13;
-    dq3[3] = t128 + t6*t130 + t129*t11;
+    dq3[3] = t128 + t6*t130 - t129*t10;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
@@ -1429,16 +1414,15 @@ static ARM4_LIGHT void arm4_ik_step_finish(const double q[4], const double targe
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1]*l[1];
     const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t11 = -t10;
-    const double t12 = t11 - t9;
+    const double t10 = -sn[3]*l[3];
+    const double t12 = t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11;
-    const double t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13;
+    const double t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10;
+    const double t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13;
     const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
     const int t40 = t37 >= t39;
     const double t41 = (t40 ? t37 : t39);
@@ -1446,11 +1430,11 @@ static ARM4_LIGHT void arm4_ik_step_finish(const double q[4], const double targe
     const double t43 = (t40 ? t16 : t17);
     const double t44 = (t40 ? t14 : t15);
     const double t45 = (t40 ? t12 : t13);
-    const double t46 = (t40 ? t11 : t6);
+    const double t46 = (t40 ? t10 : t6);
     const double t47 = (t40 ? t17 : t16) - t43*t42;
     const double t48 = (t40 ? t15 : t14) - t44*t42;
     const double t49 = (t40 ? t13 : t12) - t45*t42;
-    const double t50 = (t40 ? t6 : t11) - t46*t42;
+    const double t50 = (t40 ? t6 : t10) - t46*t42;
     const double t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50;
     const int t52 = lambda > 1.0;
     const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);

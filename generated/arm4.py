@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc638c62e
+STAMP = 0xcb013918
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -288,15 +288,14 @@ def _position_core(q, l, p):
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
     t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t12 = -t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
-    t16 = t14 - t7
+    t16 = t7 - t14
     t17 = t3 + t15
     p[..., 0] = t17
-    p[..., 1] = -t16
+    p[..., 1] = t16
 
 
 @_signature_errors
@@ -306,7 +305,7 @@ def position(q, l):
     q: array of shape (..., 4), finite.
     l: array of shape (..., 4), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 4 sin, 4 cos, 19 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 18 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (4, 4, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -330,9 +329,8 @@ def _jacobian_core(q, l, J):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
@@ -341,7 +339,7 @@ def _jacobian_core(q, l, J):
     J[..., 0] = t16
     J[..., 1] = t14
     J[..., 2] = t12
-    J[..., 3] = t11
+    J[..., 3] = t10
     J[..., 4] = t17
     J[..., 5] = t15
     J[..., 6] = t13
@@ -382,7 +380,7 @@ def _coriolis_core(q, dq, l, H):
     t10 = sn[..., 3]*l[..., 3]
     t18 = dq[..., 0] + dq[..., 1]
     t19 = t18 + dq[..., 2]
-    t20 = t19 + dq[..., 3]
+    t20 = -t19 - dq[..., 3]
     t21 = t3*dq[..., 0]
     t22 = t4*t18
     t23 = t5*t19
@@ -391,10 +389,8 @@ def _coriolis_core(q, dq, l, H):
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
-    t29 = -t24
-    t30 = -t28
-    t31 = t29 - t23
-    t32 = t30 - t27
+    t31 = t24 - t23
+    t32 = t28 - t27
     t33 = t31 - t22
     t34 = t32 - t26
     t35 = t33 - t21
@@ -402,11 +398,11 @@ def _coriolis_core(q, dq, l, H):
     H[..., 0] = t35
     H[..., 1] = t33
     H[..., 2] = t31
-    H[..., 3] = t29
+    H[..., 3] = t24
     H[..., 4] = t36
     H[..., 5] = t34
     H[..., 6] = t32
-    H[..., 7] = t30
+    H[..., 7] = t28
 
 
 @_signature_errors
@@ -417,7 +413,7 @@ def coriolis(q, dq, l):
     dq: array of shape (..., 4), finite.
     l: array of shape (..., 4), finite and > 0.
     Returns H of shape (..., 2, 4).
-    Operations: 4 sin, 4 cos, 30 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 29 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (8,), dtype=DTYPE), )
@@ -453,16 +449,14 @@ def _velocity_core(q, dq, l, v):
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
-    t29 = -t24
-    t30 = -t28
-    t31 = t29 - t23
-    t32 = t30 - t27
+    t31 = -t24 - t23
+    t32 = -t28 - t27
     t33 = t31 - t22
     t34 = t32 - t26
-    t35 = t33 - t21
+    t35 = t21 - t33
     t36 = t34 - t25
     v[..., 0] = t36
-    v[..., 1] = -t35
+    v[..., 1] = t35
 
 
 @_signature_errors
@@ -473,7 +467,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 4), finite.
     l: array of shape (..., 4), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 4 sin, 4 cos, 31 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 30 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (4, 4, 4, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -498,8 +492,7 @@ def _acceleration_core(q, dq, ddq, l, a):
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
     t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t12 = -t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
@@ -516,16 +509,14 @@ def _acceleration_core(q, dq, ddq, l, a):
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
-    t29 = -t24
-    t30 = -t28
-    t31 = t29 - t23
-    t32 = t30 - t27
+    t31 = -t24 - t23
+    t32 = -t28 - t27
     t33 = t31 - t22
     t34 = t32 - t26
     t35 = t33 - t21
     t36 = t34 - t25
-    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] + t29*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] + t11*ddq[..., 3]
-    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] + t30*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
+    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] - t24*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] - t10*ddq[..., 3]
+    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] - t28*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
 
 
 @_signature_errors
@@ -561,9 +552,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
@@ -575,15 +565,13 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t21 = t3*dq[..., 0]
     t22 = t4*t18
     t23 = t5*t19
-    t24 = t6*t20
+    t24 = -t6*t20
     t25 = t7*dq[..., 0]
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
-    t29 = -t24
-    t30 = -t28
-    t31 = t29 - t23
-    t32 = t30 - t27
+    t31 = t24 - t23
+    t32 = t28 - t27
     t33 = t31 - t22
     t34 = t32 - t26
     t35 = t33 - t21
@@ -593,7 +581,7 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     J[..., 0] = t16
     J[..., 1] = t14
     J[..., 2] = t12
-    J[..., 3] = t11
+    J[..., 3] = t10
     J[..., 4] = t17
     J[..., 5] = t15
     J[..., 6] = t13
@@ -601,15 +589,15 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 0] = t35
     H[..., 1] = t33
     H[..., 2] = t31
-    H[..., 3] = t29
+    H[..., 3] = t24
     H[..., 4] = t36
     H[..., 5] = t34
     H[..., 6] = t32
-    H[..., 7] = t30
+    H[..., 7] = t28
     v[..., 0] = t36
     v[..., 1] = -t35
-    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] + t29*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] + t11*ddq[..., 3]
-    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] + t30*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
+    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] + t24*dq[..., 3] + t16*ddq[..., 0] + t14*ddq[..., 1] + t12*ddq[..., 2] + t10*ddq[..., 3]
+    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] + t28*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
 
 
 @_signature_errors
@@ -621,7 +609,7 @@ def kinematics(q, dq, ddq, l):
     ddq: array of shape (..., 4), finite.
     l: array of shape (..., 4), finite and > 0.
     Returns p of shape (..., 2), J of shape (..., 2, 4), H of shape (..., 2, 4), v of shape (..., 2), a of shape (..., 2).
-    Operations: 4 sin, 4 cos, 69 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 68 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (4, 4, 4, 4, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -646,16 +634,15 @@ def _manipulability_core(q, l, w):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
-    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10
+    t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
     t40 = t37 >= t39
     t41 = np.where(t40, t37, t39)
@@ -663,11 +650,11 @@ def _manipulability_core(q, l, w):
     t43 = np.where(t40, t16, t17)
     t44 = np.where(t40, t14, t15)
     t45 = np.where(t40, t12, t13)
-    t46 = np.where(t40, t11, t6)
+    t46 = np.where(t40, t10, t6)
     t47 = np.where(t40, t17, t16) - t43*t42
     t48 = np.where(t40, t15, t14) - t44*t42
     t49 = np.where(t40, t13, t12) - t45*t42
-    t50 = np.where(t40, t6, t11) - t46*t42
+    t50 = np.where(t40, t6, t10) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
     w[..., 0] = np.sqrt(t41*t51)
 
@@ -704,16 +691,15 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
-    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10
+    t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
     t40 = t37 >= t39
     t41 = np.where(t40, t37, t39)
@@ -721,11 +707,11 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t43 = np.where(t40, t16, t17)
     t44 = np.where(t40, t14, t15)
     t45 = np.where(t40, t12, t13)
-    t46 = np.where(t40, t11, t6)
+    t46 = np.where(t40, t10, t6)
     t47 = np.where(t40, t17, t16) - t43*t42
     t48 = np.where(t40, t15, t14) - t44*t42
     t49 = np.where(t40, t13, t12) - t45*t42
-    t50 = np.where(t40, t6, t11) - t46*t42
+    t50 = np.where(t40, t6, t10) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
     t52 = lambda_ > 1.0
     t53 = np.where(t52, 1.0/lambda_, 1.0)
@@ -791,15 +777,14 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
     t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t12 = -t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
-    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10
+    t38 = t16*t17 - t6*t10 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
     t52 = lambda_ > 1.0
     t53 = np.where(t52, 1.0/lambda_, 1.0)
@@ -808,7 +793,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t56 = t53*t53
     t85 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
     t86 = t85*t85
-    t87 = t16 + t14 + t12 + t11
+    t87 = t16 + t14 + t12 - t10
     t88 = t6 + t17 + t15 + t13
     t89 = t86*t56
     t90 = t85*t56
@@ -855,7 +840,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     dq3[..., 0] = t128 + t129*t16 + t130*t17
     dq3[..., 1] = t128 + t129*t14 + t130*t15
     dq3[..., 2] = t128 + t129*t12 + t130*t13
-    dq3[..., 3] = t128 + t6*t130 + t129*t11
+    dq3[..., 3] = t128 + t6*t130 - t129*t10
 
 
 @_signature_errors
@@ -893,16 +878,15 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t11 = -t10
-    t12 = t11 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t37 = t16*t16 + t14*t14 + t12*t12 + t11*t11
-    t38 = t6*t11 + t16*t17 + t14*t15 + t12*t13
+    t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10
+    t38 = t6*t10 + t16*t17 + t14*t15 + t12*t13
     t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
     t40 = t37 >= t39
     t41 = np.where(t40, t37, t39)
@@ -910,11 +894,11 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t43 = np.where(t40, t16, t17)
     t44 = np.where(t40, t14, t15)
     t45 = np.where(t40, t12, t13)
-    t46 = np.where(t40, t11, t6)
+    t46 = np.where(t40, t10, t6)
     t47 = np.where(t40, t17, t16) - t43*t42
     t48 = np.where(t40, t15, t14) - t44*t42
     t49 = np.where(t40, t13, t12) - t45*t42
-    t50 = np.where(t40, t6, t11) - t46*t42
+    t50 = np.where(t40, t6, t10) - t46*t42
     t51 = t47*t47 + t48*t48 + t49*t49 + t50*t50
     t52 = lambda_ > 1.0
     t53 = np.where(t52, 1.0/lambda_, 1.0)

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xc8e59472UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x4c8b559bUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -261,7 +261,7 @@ static int arm5_finite(double x)
 #endif
 
 /* ---- arm5_position: endpoint position p (2) ---- */
-/* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 2 neg */
+/* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 1 neg */
 
 ARM5_BODY void arm5_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -286,15 +286,14 @@ ARM5_BODY void arm5_position_finish(const double l[5], const double *restrict cs
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t15 = -t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
     const double t19 = t17 - t10;
     const double t20 = t5 + t18;
-    const double t21 = t19 - t9;
-    p[1*ARM5_STRIDE] = -t21;
+    const double t21 = t9 - t19;
+    p[1*ARM5_STRIDE] = t21;
     const double t22 = t4 + t20;
     p[0] = t22;
 }
@@ -408,10 +407,9 @@ ARM5_BODY void arm5_jacobian_finish(const double l[5], const double *restrict cs
     const double t10 = sn[1*ARM5_STRIDE]*l[1];
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
-    const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t14 = -t13;
-    J[4*ARM5_STRIDE] = t14;
-    const double t15 = t14 - t12;
+    const double t13 = -sn[4*ARM5_STRIDE]*l[4];
+    J[4*ARM5_STRIDE] = t13;
+    const double t15 = t13 - t12;
     J[3*ARM5_STRIDE] = t15;
     const double t16 = t7 + t8;
     J[8*ARM5_STRIDE] = t16;
@@ -521,7 +519,7 @@ void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 #endif
 
 /* ---- arm5_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 2 neg */
+/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 1 neg */
 
 ARM5_BODY void arm5_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -549,24 +547,22 @@ ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double l[5]
     const double t23 = dq[0] + dq[1*ARM5_STRIDE];
     const double t24 = t23 + dq[2*ARM5_STRIDE];
     const double t25 = t24 + dq[3*ARM5_STRIDE];
-    const double t26 = t25 + dq[4*ARM5_STRIDE];
+    const double t26 = -t25 - dq[4*ARM5_STRIDE];
     const double t27 = t4*dq[0];
     const double t28 = t5*t23;
     const double t29 = t6*t24;
     const double t30 = t7*t25;
     const double t31 = t8*t26;
+    H[4*ARM5_STRIDE] = t31;
     const double t32 = t9*dq[0];
     const double t33 = t10*t23;
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t37 = -t31;
-    H[4*ARM5_STRIDE] = t37;
-    const double t38 = -t36;
-    H[9*ARM5_STRIDE] = t38;
-    const double t39 = t37 - t30;
+    H[9*ARM5_STRIDE] = t36;
+    const double t39 = t31 - t30;
     H[3*ARM5_STRIDE] = t39;
-    const double t40 = t38 - t35;
+    const double t40 = t36 - t35;
     H[8*ARM5_STRIDE] = t40;
     const double t41 = t39 - t29;
     H[2*ARM5_STRIDE] = t41;
@@ -684,7 +680,7 @@ void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm5_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 3 neg */
+/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 2 neg */
 
 ARM5_BODY void arm5_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -723,16 +719,14 @@ ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double l[5]
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t37 = -t31;
-    const double t38 = -t36;
-    const double t39 = t37 - t30;
-    const double t40 = t38 - t35;
+    const double t39 = -t31 - t30;
+    const double t40 = -t36 - t35;
     const double t41 = t39 - t29;
     const double t42 = t40 - t34;
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
-    const double t45 = t43 - t27;
-    v[1*ARM5_STRIDE] = -t45;
+    const double t45 = t27 - t43;
+    v[1*ARM5_STRIDE] = t45;
     const double t46 = t44 - t32;
     v[0] = t46;
 }
@@ -856,8 +850,7 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t15 = -t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -879,18 +872,16 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t37 = -t31;
-    const double t38 = -t36;
-    const double t39 = t37 - t30;
-    const double t40 = t38 - t35;
+    const double t39 = -t31 - t30;
+    const double t40 = -t36 - t35;
     const double t41 = t39 - t29;
     const double t42 = t40 - t34;
     const double t43 = t41 - t28;
     const double t44 = t42 - t33;
     const double t45 = t43 - t27;
-    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] - t31*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] - t13*ddq[4*ARM5_STRIDE])));
     const double t46 = t44 - t32;
-    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t22*ddq[0] - t36*dq[4*ARM5_STRIDE]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 ARM5_SINGLE void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])
@@ -997,7 +988,7 @@ void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const 
 #endif
 
 /* ---- arm5_kinematics: p, J, H, v and a at once ---- */
-/* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 5 neg */
+/* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 4 neg */
 
 ARM5_BODY void arm5_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1022,10 +1013,9 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     const double t10 = sn[1*ARM5_STRIDE]*l[1];
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
-    const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t14 = -t13;
-    J[4*ARM5_STRIDE] = t14;
-    const double t15 = t14 - t12;
+    const double t13 = -sn[4*ARM5_STRIDE]*l[4];
+    J[4*ARM5_STRIDE] = t13;
+    const double t15 = t13 - t12;
     J[3*ARM5_STRIDE] = t15;
     const double t16 = t7 + t8;
     J[8*ARM5_STRIDE] = t16;
@@ -1051,19 +1041,17 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     const double t28 = t5*t23;
     const double t29 = t6*t24;
     const double t30 = t7*t25;
-    const double t31 = t8*t26;
+    const double t31 = -t8*t26;
+    H[4*ARM5_STRIDE] = t31;
     const double t32 = t9*dq[0];
     const double t33 = t10*t23;
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t37 = -t31;
-    H[4*ARM5_STRIDE] = t37;
-    const double t38 = -t36;
-    H[9*ARM5_STRIDE] = t38;
-    const double t39 = t37 - t30;
+    H[9*ARM5_STRIDE] = t36;
+    const double t39 = t31 - t30;
     H[3*ARM5_STRIDE] = t39;
-    const double t40 = t38 - t35;
+    const double t40 = t36 - t35;
     H[8*ARM5_STRIDE] = t40;
     const double t41 = t39 - t29;
     H[2*ARM5_STRIDE] = t41;
@@ -1076,11 +1064,11 @@ ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *r
     const double t45 = t43 - t27;
     H[0] = t45;
     v[1*ARM5_STRIDE] = -t45;
-    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t37*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t14*ddq[4*ARM5_STRIDE])));
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t31*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t13*ddq[4*ARM5_STRIDE])));
     const double t46 = t44 - t32;
     H[5*ARM5_STRIDE] = t46;
     v[0] = t46;
-    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t38*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t36*dq[4*ARM5_STRIDE] + t22*ddq[0]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 ARM5_SINGLE void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2])
@@ -1241,9 +1229,8 @@ static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const doubl
     const double t10 = sn[1]*l[1];
     const double t11 = sn[2]*l[2];
     const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t13 = -sn[4]*l[4];
+    const double t15 = t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -1251,8 +1238,8 @@ static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const doubl
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
     const int t50 = t47 >= t49;
     const double t51 = (t50 ? t47 : t49);
@@ -1261,12 +1248,12 @@ static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const doubl
     const double t54 = (t50 ? t19 : t20);
     const double t55 = (t50 ? t17 : t18);
     const double t56 = (t50 ? t15 : t16);
-    const double t57 = (t50 ? t14 : t8);
+    const double t57 = (t50 ? t13 : t8);
     const double t58 = (t50 ? t22 : t21) - t53*t52;
     const double t59 = (t50 ? t20 : t19) - t54*t52;
     const double t60 = (t50 ? t18 : t17) - t55*t52;
     const double t61 = (t50 ? t16 : t15) - t56*t52;
-    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t62 = (t50 ? t8 : t13) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
     w[0] = sqrt(t51*t63);
 }
@@ -1326,9 +1313,8 @@ static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const dou
     const double t10 = sn[1]*l[1];
     const double t11 = sn[2]*l[2];
     const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t13 = -sn[4]*l[4];
+    const double t15 = t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -1336,8 +1322,8 @@ static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const dou
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
     const int t50 = t47 >= t49;
     const double t51 = (t50 ? t47 : t49);
@@ -1346,12 +1332,12 @@ static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const dou
     const double t54 = (t50 ? t19 : t20);
     const double t55 = (t50 ? t17 : t18);
     const double t56 = (t50 ? t15 : t16);
-    const double t57 = (t50 ? t14 : t8);
+    const double t57 = (t50 ? t13 : t8);
     const double t58 = (t50 ? t22 : t21) - t53*t52;
     const double t59 = (t50 ? t20 : t19) - t54*t52;
     const double t60 = (t50 ? t18 : t17) - t55*t52;
     const double t61 = (t50 ? t16 : t15) - t56*t52;
-    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t62 = (t50 ? t8 : t13) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
     const int t64 = lambda > 1.0;
     const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1439,8 +1425,7 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], cons
     const double t11 = sn[2]*l[2];
     const double t12 = sn[3]*l[3];
     const double t13 = sn[4]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t15 = -t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -1448,8 +1433,8 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], cons
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = t21*t22 - t8*t13 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
     const int t64 = lambda > 1.0;
     const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1458,7 +1443,7 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], cons
     const double t68 = t65*t65;
     const double t99 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
     const double t100 = t99*t99;
-    const double t101 = t21 + t19 + t17 + t15 + t14;
+    const double t101 = t21 + t19 + t17 + t15 - t13;
     const double t102 = t8 + t22 + t20 + t18 + t16;
     const double t103 = t100*t68;
     const double t104 = t99*t68;
@@ -1506,7 +1491,7 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], cons
     dq3[1] = t142 + t143*t19 + t144*t20;
     dq3[2] = t142 + t143*t17 + t144*t18;
     dq3[3] = t142 + t143*t15 + t144*t16;
-    dq3[4] = t142 + t8*t144 + t143*t14;
+    dq3[4] = t142 + t8*t144 - t143*t13;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5])
@@ -1564,9 +1549,8 @@ static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double targe
     const double t10 = sn[1]*l[1];
     const double t11 = sn[2]*l[2];
     const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t14 = -t13;
-    const double t15 = t14 - t12;
+    const double t13 = -sn[4]*l[4];
+    const double t15 = t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -1574,8 +1558,8 @@ static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double targe
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14;
-    const double t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
+    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13;
+    const double t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16;
     const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
     const int t50 = t47 >= t49;
     const double t51 = (t50 ? t47 : t49);
@@ -1584,12 +1568,12 @@ static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double targe
     const double t54 = (t50 ? t19 : t20);
     const double t55 = (t50 ? t17 : t18);
     const double t56 = (t50 ? t15 : t16);
-    const double t57 = (t50 ? t14 : t8);
+    const double t57 = (t50 ? t13 : t8);
     const double t58 = (t50 ? t22 : t21) - t53*t52;
     const double t59 = (t50 ? t20 : t19) - t54*t52;
     const double t60 = (t50 ? t18 : t17) - t55*t52;
     const double t61 = (t50 ? t16 : t15) - t56*t52;
-    const double t62 = (t50 ? t8 : t14) - t57*t52;
+    const double t62 = (t50 ? t8 : t13) - t57*t52;
     const double t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62;
     const int t64 = lambda > 1.0;
     const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);

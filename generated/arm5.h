@@ -45,7 +45,7 @@
  * sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0xc8e59472UL
+#define ARM5_STAMP 0x4c8b559bUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,7 +54,7 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM5_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 384 bytes. */
+/* endpoint position p (2). Stack: about 376 bytes. */
 void arm5_position(const double q[5], const double l[5], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -62,7 +62,7 @@ void arm5_position(const double q[5], const double l[5], double p[2]);
  * Stack: about 6 KB. */
 void arm5_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 384 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: about 376 bytes. */
 void arm5_jacobian(const double q[5], const double l[5], double J[10]);
 
 /* The same for m configurations stored one after another (element k of
@@ -70,7 +70,7 @@ void arm5_jacobian(const double q[5], const double l[5], double J[10]);
  * Stack: about 8 KB. */
 void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 504 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: about 488 bytes. */
 void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10]);
 
 /* The same for m configurations stored one after another (element k of
@@ -78,7 +78,7 @@ void arm5_coriolis(const double q[5], const double dq[5], const double l[5], dou
  * Stack: about 10 KB. */
 void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 504 bytes. */
+/* endpoint velocity v = J dq (2). Stack: about 488 bytes. */
 void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -86,7 +86,7 @@ void arm5_velocity(const double q[5], const double dq[5], const double l[5], dou
  * Stack: about 8 KB. */
 void arm5_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 576 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 552 bytes. */
 void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -94,7 +94,7 @@ void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5
  * Stack: about 9 KB. */
 void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 576 bytes. */
+/* p, J, H, v and a at once. Stack: about 552 bytes. */
 void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -102,7 +102,7 @@ void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5],
  * Stack: about 15 KB. */
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 520 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 512 bytes. */
 void arm5_manipulability(const double q[5], const double l[5], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -110,7 +110,7 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1]);
  * Stack: about 13 KB. */
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 704 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 696 bytes. */
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -118,7 +118,7 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
  * Stack: about 13 KB. */
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 816 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 808 bytes. */
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -126,7 +126,7 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
  * Stack: about 13 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 720 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 712 bytes. */
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -155,7 +155,7 @@ int arm5_ik_solve(const double q0[5], const double target[2], const double l[5],
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: about 1048 bytes. */
+ * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: about 1040 bytes. */
 void arm5_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

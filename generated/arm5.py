@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc8e59472
+STAMP = 0x4c8b559b
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -291,17 +291,16 @@ def _position_core(q, l, p):
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t15 = -t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
     t19 = t17 - t10
     t20 = t5 + t18
-    t21 = t19 - t9
+    t21 = t9 - t19
     t22 = t4 + t20
     p[..., 0] = t22
-    p[..., 1] = -t21
+    p[..., 1] = t21
 
 
 @_signature_errors
@@ -311,7 +310,7 @@ def position(q, l):
     q: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 5 sin, 5 cos, 24 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 23 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -338,9 +337,8 @@ def _jacobian_core(q, l, J):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -352,7 +350,7 @@ def _jacobian_core(q, l, J):
     J[..., 1] = t19
     J[..., 2] = t17
     J[..., 3] = t15
-    J[..., 4] = t14
+    J[..., 4] = t13
     J[..., 5] = t22
     J[..., 6] = t20
     J[..., 7] = t18
@@ -398,7 +396,7 @@ def _coriolis_core(q, dq, l, H):
     t23 = dq[..., 0] + dq[..., 1]
     t24 = t23 + dq[..., 2]
     t25 = t24 + dq[..., 3]
-    t26 = t25 + dq[..., 4]
+    t26 = -t25 - dq[..., 4]
     t27 = t4*dq[..., 0]
     t28 = t5*t23
     t29 = t6*t24
@@ -409,10 +407,8 @@ def _coriolis_core(q, dq, l, H):
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t37 = -t31
-    t38 = -t36
-    t39 = t37 - t30
-    t40 = t38 - t35
+    t39 = t31 - t30
+    t40 = t36 - t35
     t41 = t39 - t29
     t42 = t40 - t34
     t43 = t41 - t28
@@ -423,12 +419,12 @@ def _coriolis_core(q, dq, l, H):
     H[..., 1] = t43
     H[..., 2] = t41
     H[..., 3] = t39
-    H[..., 4] = t37
+    H[..., 4] = t31
     H[..., 5] = t46
     H[..., 6] = t44
     H[..., 7] = t42
     H[..., 8] = t40
-    H[..., 9] = t38
+    H[..., 9] = t36
 
 
 @_signature_errors
@@ -439,7 +435,7 @@ def coriolis(q, dq, l):
     dq: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns H of shape (..., 2, 5).
-    Operations: 5 sin, 5 cos, 38 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 37 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (10,), dtype=DTYPE), )
@@ -481,18 +477,16 @@ def _velocity_core(q, dq, l, v):
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t37 = -t31
-    t38 = -t36
-    t39 = t37 - t30
-    t40 = t38 - t35
+    t39 = -t31 - t30
+    t40 = -t36 - t35
     t41 = t39 - t29
     t42 = t40 - t34
     t43 = t41 - t28
     t44 = t42 - t33
-    t45 = t43 - t27
+    t45 = t27 - t43
     t46 = t44 - t32
     v[..., 0] = t46
-    v[..., 1] = -t45
+    v[..., 1] = t45
 
 
 @_signature_errors
@@ -503,7 +497,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 5 sin, 5 cos, 39 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 38 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -531,8 +525,7 @@ def _acceleration_core(q, dq, ddq, l, a):
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t15 = -t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -554,18 +547,16 @@ def _acceleration_core(q, dq, ddq, l, a):
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t37 = -t31
-    t38 = -t36
-    t39 = t37 - t30
-    t40 = t38 - t35
+    t39 = -t31 - t30
+    t40 = -t36 - t35
     t41 = t39 - t29
     t42 = t40 - t34
     t43 = t41 - t28
     t44 = t42 - t33
     t45 = t43 - t27
     t46 = t44 - t32
-    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
-    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] - t31*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] - t13*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t22*ddq[..., 0] - t36*dq[..., 4]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -604,9 +595,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -622,16 +612,14 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t28 = t5*t23
     t29 = t6*t24
     t30 = t7*t25
-    t31 = t8*t26
+    t31 = -t8*t26
     t32 = t9*dq[..., 0]
     t33 = t10*t23
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t37 = -t31
-    t38 = -t36
-    t39 = t37 - t30
-    t40 = t38 - t35
+    t39 = t31 - t30
+    t40 = t36 - t35
     t41 = t39 - t29
     t42 = t40 - t34
     t43 = t41 - t28
@@ -644,7 +632,7 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     J[..., 1] = t19
     J[..., 2] = t17
     J[..., 3] = t15
-    J[..., 4] = t14
+    J[..., 4] = t13
     J[..., 5] = t22
     J[..., 6] = t20
     J[..., 7] = t18
@@ -654,16 +642,16 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 1] = t43
     H[..., 2] = t41
     H[..., 3] = t39
-    H[..., 4] = t37
+    H[..., 4] = t31
     H[..., 5] = t46
     H[..., 6] = t44
     H[..., 7] = t42
     H[..., 8] = t40
-    H[..., 9] = t38
+    H[..., 9] = t36
     v[..., 0] = t46
     v[..., 1] = -t45
-    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t37*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t14*ddq[..., 4])))
-    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t38*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t31*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t13*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t36*dq[..., 4] + t22*ddq[..., 0]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -675,7 +663,7 @@ def kinematics(q, dq, ddq, l):
     ddq: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns p of shape (..., 2), J of shape (..., 2, 5), H of shape (..., 2, 5), v of shape (..., 2), a of shape (..., 2).
-    Operations: 5 sin, 5 cos, 87 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 86 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (10,), dtype=DTYPE), np.empty(batch + (10,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -703,9 +691,8 @@ def _manipulability_core(q, l, w):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -713,8 +700,8 @@ def _manipulability_core(q, l, w):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
-    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13
+    t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
     t50 = t47 >= t49
     t51 = np.where(t50, t47, t49)
@@ -723,12 +710,12 @@ def _manipulability_core(q, l, w):
     t54 = np.where(t50, t19, t20)
     t55 = np.where(t50, t17, t18)
     t56 = np.where(t50, t15, t16)
-    t57 = np.where(t50, t14, t8)
+    t57 = np.where(t50, t13, t8)
     t58 = np.where(t50, t22, t21) - t53*t52
     t59 = np.where(t50, t20, t19) - t54*t52
     t60 = np.where(t50, t18, t17) - t55*t52
     t61 = np.where(t50, t16, t15) - t56*t52
-    t62 = np.where(t50, t8, t14) - t57*t52
+    t62 = np.where(t50, t8, t13) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
     w[..., 0] = np.sqrt(t51*t63)
 
@@ -768,9 +755,8 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -778,8 +764,8 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
-    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13
+    t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
     t50 = t47 >= t49
     t51 = np.where(t50, t47, t49)
@@ -788,12 +774,12 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t54 = np.where(t50, t19, t20)
     t55 = np.where(t50, t17, t18)
     t56 = np.where(t50, t15, t16)
-    t57 = np.where(t50, t14, t8)
+    t57 = np.where(t50, t13, t8)
     t58 = np.where(t50, t22, t21) - t53*t52
     t59 = np.where(t50, t20, t19) - t54*t52
     t60 = np.where(t50, t18, t17) - t55*t52
     t61 = np.where(t50, t16, t15) - t56*t52
-    t62 = np.where(t50, t8, t14) - t57*t52
+    t62 = np.where(t50, t8, t13) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
     t64 = lambda_ > 1.0
     t65 = np.where(t64, 1.0/lambda_, 1.0)
@@ -864,8 +850,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t15 = -t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -873,8 +858,8 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
-    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13
+    t48 = t21*t22 - t8*t13 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
     t64 = lambda_ > 1.0
     t65 = np.where(t64, 1.0/lambda_, 1.0)
@@ -883,7 +868,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t68 = t65*t65
     t99 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
     t100 = t99*t99
-    t101 = t21 + t19 + t17 + t15 + t14
+    t101 = t21 + t19 + t17 + t15 - t13
     t102 = t8 + t22 + t20 + t18 + t16
     t103 = t100*t68
     t104 = t99*t68
@@ -931,7 +916,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     dq3[..., 1] = t142 + t143*t19 + t144*t20
     dq3[..., 2] = t142 + t143*t17 + t144*t18
     dq3[..., 3] = t142 + t143*t15 + t144*t16
-    dq3[..., 4] = t142 + t8*t144 + t143*t14
+    dq3[..., 4] = t142 + t8*t144 - t143*t13
 
 
 @_signature_errors
@@ -972,9 +957,8 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t14 = -t13
-    t15 = t14 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -982,8 +966,8 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t14*t14
-    t48 = t8*t14 + t21*t22 + t19*t20 + t17*t18 + t15*t16
+    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13
+    t48 = t8*t13 + t21*t22 + t19*t20 + t17*t18 + t15*t16
     t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
     t50 = t47 >= t49
     t51 = np.where(t50, t47, t49)
@@ -992,12 +976,12 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t54 = np.where(t50, t19, t20)
     t55 = np.where(t50, t17, t18)
     t56 = np.where(t50, t15, t16)
-    t57 = np.where(t50, t14, t8)
+    t57 = np.where(t50, t13, t8)
     t58 = np.where(t50, t22, t21) - t53*t52
     t59 = np.where(t50, t20, t19) - t54*t52
     t60 = np.where(t50, t18, t17) - t55*t52
     t61 = np.where(t50, t16, t15) - t56*t52
-    t62 = np.where(t50, t8, t14) - t57*t52
+    t62 = np.where(t50, t8, t13) - t57*t52
     t63 = t58*t58 + t59*t59 + t60*t60 + t61*t61 + t62*t62
     t64 = lambda_ > 1.0
     t65 = np.where(t64, 1.0/lambda_, 1.0)

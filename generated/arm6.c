@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x657305b7UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xef863e6dUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -261,7 +261,7 @@ static int arm6_finite(double x)
 #endif
 
 /* ---- arm6_position: endpoint position p (2) ---- */
-/* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 2 neg */
+/* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 1 neg */
 
 ARM6_BODY void arm6_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -289,8 +289,7 @@ ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t18 = -t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -298,8 +297,8 @@ ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs
     const double t23 = t7 + t21;
     const double t24 = t22 - t12;
     const double t25 = t6 + t23;
-    const double t26 = t24 - t11;
-    p[1*ARM6_STRIDE] = -t26;
+    const double t26 = t11 - t24;
+    p[1*ARM6_STRIDE] = t26;
     const double t27 = t5 + t25;
     p[0] = t27;
 }
@@ -417,10 +416,9 @@ ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs
     const double t13 = sn[2*ARM6_STRIDE]*l[2];
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
-    const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t17 = -t16;
-    J[5*ARM6_STRIDE] = t17;
-    const double t18 = t17 - t15;
+    const double t16 = -sn[5*ARM6_STRIDE]*l[5];
+    J[5*ARM6_STRIDE] = t16;
+    const double t18 = t16 - t15;
     J[4*ARM6_STRIDE] = t18;
     const double t19 = t9 + t10;
     J[10*ARM6_STRIDE] = t19;
@@ -537,7 +535,7 @@ void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J)
 #endif
 
 /* ---- arm6_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 2 neg */
+/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 1 neg */
 
 ARM6_BODY void arm6_coriolis_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -569,26 +567,24 @@ ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double l[6]
     const double t29 = t28 + dq[2*ARM6_STRIDE];
     const double t30 = t29 + dq[3*ARM6_STRIDE];
     const double t31 = t30 + dq[4*ARM6_STRIDE];
-    const double t32 = t31 + dq[5*ARM6_STRIDE];
+    const double t32 = -t31 - dq[5*ARM6_STRIDE];
     const double t33 = t5*dq[0];
     const double t34 = t6*t28;
     const double t35 = t7*t29;
     const double t36 = t8*t30;
     const double t37 = t9*t31;
     const double t38 = t10*t32;
+    H[5*ARM6_STRIDE] = t38;
     const double t39 = t11*dq[0];
     const double t40 = t12*t28;
     const double t41 = t13*t29;
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t45 = -t38;
-    H[5*ARM6_STRIDE] = t45;
-    const double t46 = -t44;
-    H[11*ARM6_STRIDE] = t46;
-    const double t47 = t45 - t37;
+    H[11*ARM6_STRIDE] = t44;
+    const double t47 = t38 - t37;
     H[4*ARM6_STRIDE] = t47;
-    const double t48 = t46 - t43;
+    const double t48 = t44 - t43;
     H[10*ARM6_STRIDE] = t48;
     const double t49 = t47 - t36;
     H[3*ARM6_STRIDE] = t49;
@@ -714,7 +710,7 @@ void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm6_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 3 neg */
+/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 2 neg */
 
 ARM6_BODY void arm6_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -759,18 +755,16 @@ ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double l[6]
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t45 = -t38;
-    const double t46 = -t44;
-    const double t47 = t45 - t37;
-    const double t48 = t46 - t43;
+    const double t47 = -t38 - t37;
+    const double t48 = -t44 - t43;
     const double t49 = t47 - t36;
     const double t50 = t48 - t42;
     const double t51 = t49 - t35;
     const double t52 = t50 - t41;
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
-    const double t55 = t53 - t33;
-    v[1*ARM6_STRIDE] = -t55;
+    const double t55 = t33 - t53;
+    v[1*ARM6_STRIDE] = t55;
     const double t56 = t54 - t39;
     v[0] = t56;
 }
@@ -899,8 +893,7 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t18 = -t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -927,10 +920,8 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t45 = -t38;
-    const double t46 = -t44;
-    const double t47 = t45 - t37;
-    const double t48 = t46 - t43;
+    const double t47 = -t38 - t37;
+    const double t48 = -t44 - t43;
     const double t49 = t47 - t36;
     const double t50 = t48 - t42;
     const double t51 = t49 - t35;
@@ -938,9 +929,9 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t53 = t51 - t34;
     const double t54 = t52 - t40;
     const double t55 = t53 - t33;
-    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] - t38*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] - t16*ddq[5*ARM6_STRIDE])));
     const double t56 = t54 - t39;
-    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + (((t27*ddq[0] + t25*ddq[1*ARM6_STRIDE]) - t44*dq[5*ARM6_STRIDE]) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 ARM6_SINGLE void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])
@@ -1050,7 +1041,7 @@ void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const 
 #endif
 
 /* ---- arm6_kinematics: p, J, H, v and a at once ---- */
-/* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 5 neg */
+/* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 4 neg */
 
 ARM6_BODY void arm6_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1078,10 +1069,9 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t13 = sn[2*ARM6_STRIDE]*l[2];
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
-    const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t17 = -t16;
-    J[5*ARM6_STRIDE] = t17;
-    const double t18 = t17 - t15;
+    const double t16 = -sn[5*ARM6_STRIDE]*l[5];
+    J[5*ARM6_STRIDE] = t16;
+    const double t18 = t16 - t15;
     J[4*ARM6_STRIDE] = t18;
     const double t19 = t9 + t10;
     J[10*ARM6_STRIDE] = t19;
@@ -1113,20 +1103,18 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t35 = t7*t29;
     const double t36 = t8*t30;
     const double t37 = t9*t31;
-    const double t38 = t10*t32;
+    const double t38 = -t10*t32;
+    H[5*ARM6_STRIDE] = t38;
     const double t39 = t11*dq[0];
     const double t40 = t12*t28;
     const double t41 = t13*t29;
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t45 = -t38;
-    H[5*ARM6_STRIDE] = t45;
-    const double t46 = -t44;
-    H[11*ARM6_STRIDE] = t46;
-    const double t47 = t45 - t37;
+    H[11*ARM6_STRIDE] = t44;
+    const double t47 = t38 - t37;
     H[4*ARM6_STRIDE] = t47;
-    const double t48 = t46 - t43;
+    const double t48 = t44 - t43;
     H[10*ARM6_STRIDE] = t48;
     const double t49 = t47 - t36;
     H[3*ARM6_STRIDE] = t49;
@@ -1143,11 +1131,11 @@ ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *r
     const double t55 = t53 - t33;
     H[0] = t55;
     v[1*ARM6_STRIDE] = -t55;
-    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t45*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t17*ddq[5*ARM6_STRIDE])));
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t38*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t16*ddq[5*ARM6_STRIDE])));
     const double t56 = t54 - t39;
     H[6*ARM6_STRIDE] = t56;
     v[0] = t56;
-    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t46*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + ((t44*dq[5*ARM6_STRIDE] + (t27*ddq[0] + t25*ddq[1*ARM6_STRIDE])) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 ARM6_SINGLE void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2])
@@ -1318,9 +1306,8 @@ static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const doubl
     const double t13 = sn[2]*l[2];
     const double t14 = sn[3]*l[3];
     const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t16 = -sn[5]*l[5];
+    const double t18 = t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -1330,8 +1317,8 @@ static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const doubl
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
     const int t60 = t57 >= t59;
     const double t61 = (t60 ? t57 : t59);
@@ -1341,13 +1328,13 @@ static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const doubl
     const double t65 = (t60 ? t22 : t23);
     const double t66 = (t60 ? t20 : t21);
     const double t67 = (t60 ? t18 : t19);
-    const double t68 = (t60 ? t17 : t10);
+    const double t68 = (t60 ? t16 : t10);
     const double t69 = (t60 ? t27 : t26) - t63*t62;
     const double t70 = (t60 ? t25 : t24) - t64*t62;
     const double t71 = (t60 ? t23 : t22) - t65*t62;
     const double t72 = (t60 ? t21 : t20) - t66*t62;
     const double t73 = (t60 ? t19 : t18) - t67*t62;
-    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t74 = (t60 ? t10 : t16) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
     w[0] = sqrt(t61*t75);
 }
@@ -1410,9 +1397,8 @@ static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const dou
     const double t13 = sn[2]*l[2];
     const double t14 = sn[3]*l[3];
     const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t16 = -sn[5]*l[5];
+    const double t18 = t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -1422,8 +1408,8 @@ static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const dou
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
     const int t60 = t57 >= t59;
     const double t61 = (t60 ? t57 : t59);
@@ -1433,13 +1419,13 @@ static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const dou
     const double t65 = (t60 ? t22 : t23);
     const double t66 = (t60 ? t20 : t21);
     const double t67 = (t60 ? t18 : t19);
-    const double t68 = (t60 ? t17 : t10);
+    const double t68 = (t60 ? t16 : t10);
     const double t69 = (t60 ? t27 : t26) - t63*t62;
     const double t70 = (t60 ? t25 : t24) - t64*t62;
     const double t71 = (t60 ? t23 : t22) - t65*t62;
     const double t72 = (t60 ? t21 : t20) - t66*t62;
     const double t73 = (t60 ? t19 : t18) - t67*t62;
-    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t74 = (t60 ? t10 : t16) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
     const int t76 = lambda > 1.0;
     const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1532,8 +1518,7 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], cons
     const double t14 = sn[3]*l[3];
     const double t15 = sn[4]*l[4];
     const double t16 = sn[5]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t18 = -t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -1543,8 +1528,8 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], cons
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t58 = t26*t27 - t10*t16 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
     const int t76 = lambda > 1.0;
     const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
@@ -1553,7 +1538,7 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], cons
     const double t80 = t77*t77;
     const double t113 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
     const double t114 = t113*t113;
-    const double t115 = t26 + t24 + t22 + t20 + t18 + t17;
+    const double t115 = t26 + t24 + t22 + t20 + t18 - t16;
     const double t116 = t10 + t27 + t25 + t23 + t21 + t19;
     const double t117 = t114*t80;
     const double t118 = t113*t80;
@@ -1602,7 +1587,7 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], cons
     dq3[2] = t156 + t157*t22 + t158*t23;
     dq3[3] = t156 + t157*t20 + t158*t21;
     dq3[4] = t156 + t157*t18 + t158*t19;
-    dq3[5] = t156 + t10*t158 + t157*t17;
+    dq3[5] = t156 + t10*t158 - t157*t16;
 }
 
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6])
@@ -1663,9 +1648,8 @@ static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double targe
     const double t13 = sn[2]*l[2];
     const double t14 = sn[3]*l[3];
     const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t17 = -t16;
-    const double t18 = t17 - t15;
+    const double t16 = -sn[5]*l[5];
+    const double t18 = t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -1675,8 +1659,8 @@ static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double targe
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17;
-    const double t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
+    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
+    const double t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
     const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
     const int t60 = t57 >= t59;
     const double t61 = (t60 ? t57 : t59);
@@ -1686,13 +1670,13 @@ static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double targe
     const double t65 = (t60 ? t22 : t23);
     const double t66 = (t60 ? t20 : t21);
     const double t67 = (t60 ? t18 : t19);
-    const double t68 = (t60 ? t17 : t10);
+    const double t68 = (t60 ? t16 : t10);
     const double t69 = (t60 ? t27 : t26) - t63*t62;
     const double t70 = (t60 ? t25 : t24) - t64*t62;
     const double t71 = (t60 ? t23 : t22) - t65*t62;
     const double t72 = (t60 ? t21 : t20) - t66*t62;
     const double t73 = (t60 ? t19 : t18) - t67*t62;
-    const double t74 = (t60 ? t10 : t17) - t68*t62;
+    const double t74 = (t60 ? t10 : t16) - t68*t62;
     const double t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74;
     const int t76 = lambda > 1.0;
     const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);

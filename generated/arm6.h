@@ -45,7 +45,7 @@
  * sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0x657305b7UL
+#define ARM6_STAMP 0xef863e6dUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,7 +54,7 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM6_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 424 bytes. */
+/* endpoint position p (2). Stack: about 416 bytes. */
 void arm6_position(const double q[6], const double l[6], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -62,7 +62,7 @@ void arm6_position(const double q[6], const double l[6], double p[2]);
  * Stack: about 7 KB. */
 void arm6_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 424 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: about 416 bytes. */
 void arm6_jacobian(const double q[6], const double l[6], double J[12]);
 
 /* The same for m configurations stored one after another (element k of
@@ -70,7 +70,7 @@ void arm6_jacobian(const double q[6], const double l[6], double J[12]);
  * Stack: about 10 KB. */
 void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 568 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: about 552 bytes. */
 void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12]);
 
 /* The same for m configurations stored one after another (element k of
@@ -78,7 +78,7 @@ void arm6_coriolis(const double q[6], const double dq[6], const double l[6], dou
  * Stack: about 12 KB. */
 void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 568 bytes. */
+/* endpoint velocity v = J dq (2). Stack: about 552 bytes. */
 void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -86,7 +86,7 @@ void arm6_velocity(const double q[6], const double dq[6], const double l[6], dou
  * Stack: about 9 KB. */
 void arm6_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 656 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: about 632 bytes. */
 void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -94,7 +94,7 @@ void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6
  * Stack: about 11 KB. */
 void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 656 bytes. */
+/* p, J, H, v and a at once. Stack: about 632 bytes. */
 void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
@@ -102,7 +102,7 @@ void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6],
  * Stack: about 18 KB. */
 void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 576 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 568 bytes. */
 void arm6_manipulability(const double q[6], const double l[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -110,7 +110,7 @@ void arm6_manipulability(const double q[6], const double l[6], double w[1]);
  * Stack: about 13 KB. */
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 768 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 760 bytes. */
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -118,7 +118,7 @@ void arm6_inverse_velocity(const double q[6], const double v[2], const double l[
  * Stack: about 13 KB. */
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 856 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 848 bytes. */
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -126,7 +126,7 @@ void arm6_inverse_velocity3(const double q[6], const double twist[3], const doub
  * Stack: about 13 KB. */
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 784 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 776 bytes. */
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -155,7 +155,7 @@ int arm6_ik_solve(const double q0[6], const double target[2], const double l[6],
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm6_ik_solve: the same result bit for bit. Stack: about 1136 bytes. */
+ * Each problem is one call of arm6_ik_solve: the same result bit for bit. Stack: about 1128 bytes. */
 void arm6_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x657305b7
+STAMP = 0xef863e6d
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -294,8 +294,7 @@ def _position_core(q, l, p):
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t18 = -t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -303,10 +302,10 @@ def _position_core(q, l, p):
     t23 = t7 + t21
     t24 = t22 - t12
     t25 = t6 + t23
-    t26 = t24 - t11
+    t26 = t11 - t24
     t27 = t5 + t25
     p[..., 0] = t27
-    p[..., 1] = -t26
+    p[..., 1] = t26
 
 
 @_signature_errors
@@ -316,7 +315,7 @@ def position(q, l):
     q: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 6 sin, 6 cos, 29 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 28 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -346,9 +345,8 @@ def _jacobian_core(q, l, J):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -363,7 +361,7 @@ def _jacobian_core(q, l, J):
     J[..., 2] = t22
     J[..., 3] = t20
     J[..., 4] = t18
-    J[..., 5] = t17
+    J[..., 5] = t16
     J[..., 6] = t27
     J[..., 7] = t25
     J[..., 8] = t23
@@ -414,7 +412,7 @@ def _coriolis_core(q, dq, l, H):
     t29 = t28 + dq[..., 2]
     t30 = t29 + dq[..., 3]
     t31 = t30 + dq[..., 4]
-    t32 = t31 + dq[..., 5]
+    t32 = -t31 - dq[..., 5]
     t33 = t5*dq[..., 0]
     t34 = t6*t28
     t35 = t7*t29
@@ -427,10 +425,8 @@ def _coriolis_core(q, dq, l, H):
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t45 = -t38
-    t46 = -t44
-    t47 = t45 - t37
-    t48 = t46 - t43
+    t47 = t38 - t37
+    t48 = t44 - t43
     t49 = t47 - t36
     t50 = t48 - t42
     t51 = t49 - t35
@@ -444,13 +440,13 @@ def _coriolis_core(q, dq, l, H):
     H[..., 2] = t51
     H[..., 3] = t49
     H[..., 4] = t47
-    H[..., 5] = t45
+    H[..., 5] = t38
     H[..., 6] = t56
     H[..., 7] = t54
     H[..., 8] = t52
     H[..., 9] = t50
     H[..., 10] = t48
-    H[..., 11] = t46
+    H[..., 11] = t44
 
 
 @_signature_errors
@@ -461,7 +457,7 @@ def coriolis(q, dq, l):
     dq: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns H of shape (..., 2, 6).
-    Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 45 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (12,), dtype=DTYPE), )
@@ -509,20 +505,18 @@ def _velocity_core(q, dq, l, v):
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t45 = -t38
-    t46 = -t44
-    t47 = t45 - t37
-    t48 = t46 - t43
+    t47 = -t38 - t37
+    t48 = -t44 - t43
     t49 = t47 - t36
     t50 = t48 - t42
     t51 = t49 - t35
     t52 = t50 - t41
     t53 = t51 - t34
     t54 = t52 - t40
-    t55 = t53 - t33
+    t55 = t33 - t53
     t56 = t54 - t39
     v[..., 0] = t56
-    v[..., 1] = -t55
+    v[..., 1] = t55
 
 
 @_signature_errors
@@ -533,7 +527,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 6 sin, 6 cos, 47 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -564,8 +558,7 @@ def _acceleration_core(q, dq, ddq, l, a):
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t18 = -t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -592,10 +585,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t45 = -t38
-    t46 = -t44
-    t47 = t45 - t37
-    t48 = t46 - t43
+    t47 = -t38 - t37
+    t48 = -t44 - t43
     t49 = t47 - t36
     t50 = t48 - t42
     t51 = t49 - t35
@@ -604,8 +595,8 @@ def _acceleration_core(q, dq, ddq, l, a):
     t54 = t52 - t40
     t55 = t53 - t33
     t56 = t54 - t39
-    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
-    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] - t38*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] - t16*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + (((t27*ddq[..., 0] + t25*ddq[..., 1]) - t44*dq[..., 5]) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -647,9 +638,8 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -669,17 +659,15 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     t35 = t7*t29
     t36 = t8*t30
     t37 = t9*t31
-    t38 = t10*t32
+    t38 = -t10*t32
     t39 = t11*dq[..., 0]
     t40 = t12*t28
     t41 = t13*t29
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t45 = -t38
-    t46 = -t44
-    t47 = t45 - t37
-    t48 = t46 - t43
+    t47 = t38 - t37
+    t48 = t44 - t43
     t49 = t47 - t36
     t50 = t48 - t42
     t51 = t49 - t35
@@ -695,7 +683,7 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     J[..., 2] = t22
     J[..., 3] = t20
     J[..., 4] = t18
-    J[..., 5] = t17
+    J[..., 5] = t16
     J[..., 6] = t27
     J[..., 7] = t25
     J[..., 8] = t23
@@ -707,17 +695,17 @@ def _kinematics_core(q, dq, ddq, l, p, J, H, v, a):
     H[..., 2] = t51
     H[..., 3] = t49
     H[..., 4] = t47
-    H[..., 5] = t45
+    H[..., 5] = t38
     H[..., 6] = t56
     H[..., 7] = t54
     H[..., 8] = t52
     H[..., 9] = t50
     H[..., 10] = t48
-    H[..., 11] = t46
+    H[..., 11] = t44
     v[..., 0] = t56
     v[..., 1] = -t55
-    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t45*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t17*ddq[..., 5])))
-    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t46*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t38*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t16*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + ((t44*dq[..., 5] + (t27*ddq[..., 0] + t25*ddq[..., 1])) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -729,7 +717,7 @@ def kinematics(q, dq, ddq, l):
     ddq: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns p of shape (..., 2), J of shape (..., 2, 6), H of shape (..., 2, 6), v of shape (..., 2), a of shape (..., 2).
-    Operations: 6 sin, 6 cos, 105 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 104 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (12,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), np.empty(batch + (2,), dtype=DTYPE), )
@@ -760,9 +748,8 @@ def _manipulability_core(q, l, w):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -772,8 +759,8 @@ def _manipulability_core(q, l, w):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
-    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
     t60 = t57 >= t59
     t61 = np.where(t60, t57, t59)
@@ -783,13 +770,13 @@ def _manipulability_core(q, l, w):
     t65 = np.where(t60, t22, t23)
     t66 = np.where(t60, t20, t21)
     t67 = np.where(t60, t18, t19)
-    t68 = np.where(t60, t17, t10)
+    t68 = np.where(t60, t16, t10)
     t69 = np.where(t60, t27, t26) - t63*t62
     t70 = np.where(t60, t25, t24) - t64*t62
     t71 = np.where(t60, t23, t22) - t65*t62
     t72 = np.where(t60, t21, t20) - t66*t62
     t73 = np.where(t60, t19, t18) - t67*t62
-    t74 = np.where(t60, t10, t17) - t68*t62
+    t74 = np.where(t60, t10, t16) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
     w[..., 0] = np.sqrt(t61*t75)
 
@@ -832,9 +819,8 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -844,8 +830,8 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
-    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
     t60 = t57 >= t59
     t61 = np.where(t60, t57, t59)
@@ -855,13 +841,13 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t65 = np.where(t60, t22, t23)
     t66 = np.where(t60, t20, t21)
     t67 = np.where(t60, t18, t19)
-    t68 = np.where(t60, t17, t10)
+    t68 = np.where(t60, t16, t10)
     t69 = np.where(t60, t27, t26) - t63*t62
     t70 = np.where(t60, t25, t24) - t64*t62
     t71 = np.where(t60, t23, t22) - t65*t62
     t72 = np.where(t60, t21, t20) - t66*t62
     t73 = np.where(t60, t19, t18) - t67*t62
-    t74 = np.where(t60, t10, t17) - t68*t62
+    t74 = np.where(t60, t10, t16) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
     t76 = lambda_ > 1.0
     t77 = np.where(t76, 1.0/lambda_, 1.0)
@@ -937,8 +923,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t18 = -t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -948,8 +933,8 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
-    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t58 = t26*t27 - t10*t16 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
     t76 = lambda_ > 1.0
     t77 = np.where(t76, 1.0/lambda_, 1.0)
@@ -958,7 +943,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t80 = t77*t77
     t113 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4] + l[..., 5])
     t114 = t113*t113
-    t115 = t26 + t24 + t22 + t20 + t18 + t17
+    t115 = t26 + t24 + t22 + t20 + t18 - t16
     t116 = t10 + t27 + t25 + t23 + t21 + t19
     t117 = t114*t80
     t118 = t113*t80
@@ -1007,7 +992,7 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     dq3[..., 2] = t156 + t157*t22 + t158*t23
     dq3[..., 3] = t156 + t157*t20 + t158*t21
     dq3[..., 4] = t156 + t157*t18 + t158*t19
-    dq3[..., 5] = t156 + t10*t158 + t157*t17
+    dq3[..., 5] = t156 + t10*t158 - t157*t16
 
 
 @_signature_errors
@@ -1051,9 +1036,8 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t17 = -t16
-    t18 = t17 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -1063,8 +1047,8 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t17*t17
-    t58 = t10*t17 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
+    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16
+    t58 = t10*t16 + t26*t27 + t24*t25 + t22*t23 + t20*t21 + t18*t19
     t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
     t60 = t57 >= t59
     t61 = np.where(t60, t57, t59)
@@ -1074,13 +1058,13 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t65 = np.where(t60, t22, t23)
     t66 = np.where(t60, t20, t21)
     t67 = np.where(t60, t18, t19)
-    t68 = np.where(t60, t17, t10)
+    t68 = np.where(t60, t16, t10)
     t69 = np.where(t60, t27, t26) - t63*t62
     t70 = np.where(t60, t25, t24) - t64*t62
     t71 = np.where(t60, t23, t22) - t65*t62
     t72 = np.where(t60, t21, t20) - t66*t62
     t73 = np.where(t60, t19, t18) - t67*t62
-    t74 = np.where(t60, t10, t17) - t68*t62
+    t74 = np.where(t60, t10, t16) - t68*t62
     t75 = t69*t69 + t70*t70 + t71*t71 + t72*t72 + t73*t73 + t74*t74
     t76 = lambda_ > 1.0
     t77 = np.where(t76, 1.0/lambda_, 1.0)

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9a995fdfUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xaef6947aUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -329,7 +329,7 @@ static int panda_finite(double x)
 #endif
 
 /* ---- panda_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
-/* operations: 7 sin, 7 cos, 36 add/sub, 68 mul, 2 neg */
+/* operations: 7 sin, 7 cos, 36 add/sub, 68 mul, 0 neg */
 
 PANDA_BODY void panda_pose_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -355,15 +355,15 @@ PANDA_BODY void panda_pose_finish(const double *restrict cs, const double *restr
     const double t8 = t4*cs[2*PANDA_STRIDE] + cs[0]*sn[2*PANDA_STRIDE];
     const double t9 = t4*sn[2*PANDA_STRIDE] - cs[0]*cs[2*PANDA_STRIDE];
     const double t10 = cs[2*PANDA_STRIDE]*sn[1*PANDA_STRIDE];
-    const double t11 = -sn[1*PANDA_STRIDE]*sn[2*PANDA_STRIDE];
+    const double t11 = sn[1*PANDA_STRIDE]*sn[2*PANDA_STRIDE];
     const double t14 = t5*sn[3*PANDA_STRIDE] + t8*cs[3*PANDA_STRIDE];
     const double t15 = t5*cs[3*PANDA_STRIDE] - t8*sn[3*PANDA_STRIDE];
     const double t16 = cs[1*PANDA_STRIDE]*sn[3*PANDA_STRIDE] - t10*cs[3*PANDA_STRIDE];
     const double t17 = t10*sn[3*PANDA_STRIDE] + cs[1*PANDA_STRIDE]*cs[3*PANDA_STRIDE];
     const double t20 = t14*cs[4*PANDA_STRIDE] - t9*sn[4*PANDA_STRIDE];
     const double t21 = t9*cs[4*PANDA_STRIDE] + t14*sn[4*PANDA_STRIDE];
-    const double t22 = t16*cs[4*PANDA_STRIDE] - t11*sn[4*PANDA_STRIDE];
-    const double t23 = t11*cs[4*PANDA_STRIDE] + t16*sn[4*PANDA_STRIDE];
+    const double t22 = t16*cs[4*PANDA_STRIDE] + t11*sn[4*PANDA_STRIDE];
+    const double t23 = t16*sn[4*PANDA_STRIDE] - t11*cs[4*PANDA_STRIDE];
     const double t26 = t15*sn[5*PANDA_STRIDE] + t20*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     T[6*PANDA_STRIDE] = t27;
@@ -373,14 +373,14 @@ PANDA_BODY void panda_pose_finish(const double *restrict cs, const double *restr
     const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
     const double t35 = t32 - 0.0825;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2*PANDA_STRIDE] + cs[2*PANDA_STRIDE]*t38;
-    const double t40 = sn[2*PANDA_STRIDE]*t38 - t33*cs[2*PANDA_STRIDE];
+    const double t39 = cs[2*PANDA_STRIDE]*t38 - t33*sn[2*PANDA_STRIDE];
+    const double t40 = sn[2*PANDA_STRIDE]*t38 + t33*cs[2*PANDA_STRIDE];
     const double t41 = 0.316 - t37;
     const double t42 = t39*cs[1*PANDA_STRIDE] + t41*sn[1*PANDA_STRIDE];
     const double t43 = t41*cs[1*PANDA_STRIDE] - t39*sn[1*PANDA_STRIDE];
@@ -1006,7 +1006,7 @@ void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 #endif
 
 /* ---- panda_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
-/* operations: 6 sin, 6 cos, 120 add/sub, 204 mul, 6 neg */
+/* operations: 6 sin, 6 cos, 120 add/sub, 204 mul, 4 neg */
 
 PANDA_BODY void panda_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1071,11 +1071,11 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     const double t41 = 0.316 - t37;
     const double t42 = t39*cs[1*PANDA_STRIDE] + t41*sn[1*PANDA_STRIDE];
     const double t43 = t41*cs[1*PANDA_STRIDE] - t39*sn[1*PANDA_STRIDE];
-    const double t44 = t42*cs[0] - t40*sn[0];
+    const double t44 = t40*sn[0] - t42*cs[0];
     const double t45 = t42*sn[0] + t40*cs[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     const double t50 = t39*cs[0] - t4*t40;
     const double t51 = t40*sn[1*PANDA_STRIDE];
     const double t52 = t3*t36 + t6*t37;
@@ -1110,14 +1110,14 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     const double t91 = t88 + t52*dq[3*PANDA_STRIDE];
     const double t92 = t89 + t53*dq[3*PANDA_STRIDE];
     const double t93 = t90 + t54*dq[3*PANDA_STRIDE];
-    const double t94 = t91 + t49*dq[2*PANDA_STRIDE];
+    const double t94 = t91 - t49*dq[2*PANDA_STRIDE];
     const double t95 = t92 + t50*dq[2*PANDA_STRIDE];
     const double t96 = t93 + t51*dq[2*PANDA_STRIDE];
     const double t97 = t94 + t47*dq[1*PANDA_STRIDE];
     const double t98 = t95 + t48*dq[1*PANDA_STRIDE];
     const double t100 = t97 - t45*dq[0];
     dJ[7*PANDA_STRIDE] = t100;
-    const double t102 = -t98 - t44*dq[0];
+    const double t102 = t44*dq[0] - t98;
     dJ[0] = t102;
     const double t103 = cs[0]*t96 - t48*dq[0] - t42*t69;
     dJ[1*PANDA_STRIDE] = t103;
@@ -1131,9 +1131,9 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     dJ[29*PANDA_STRIDE] = t107;
     const double t108 = t5*t93 + t51*t71 - t50*t72 - cs[1*PANDA_STRIDE]*t92;
     dJ[2*PANDA_STRIDE] = t108;
-    const double t109 = t49*t72 + cs[1*PANDA_STRIDE]*t91 - t3*t93 - t51*t70;
+    const double t109 = cs[1*PANDA_STRIDE]*t91 - t49*t72 - t3*t93 - t51*t70;
     dJ[9*PANDA_STRIDE] = t109;
-    const double t110 = t3*t92 + t50*t70 - t5*t91 - t49*t71;
+    const double t110 = t3*t92 + t50*t70 - t5*t91 + t49*t71;
     dJ[16*PANDA_STRIDE] = t110;
     const double t111 = t2*dq[1*PANDA_STRIDE] - t5*dq[0];
     dJ[23*PANDA_STRIDE] = t111;
@@ -1323,7 +1323,7 @@ void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, doubl
 #endif
 
 /* ---- panda_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 6 sin, 6 cos, 73 add/sub, 125 mul, 4 neg */
+/* operations: 6 sin, 6 cos, 73 add/sub, 124 mul, 2 neg */
 
 PANDA_BODY void panda_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1349,7 +1349,7 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t8 = t4*cs[2*PANDA_STRIDE] + cs[0]*sn[2*PANDA_STRIDE];
     const double t9 = t4*sn[2*PANDA_STRIDE] - cs[0]*cs[2*PANDA_STRIDE];
     const double t10 = cs[2*PANDA_STRIDE]*sn[1*PANDA_STRIDE];
-    const double t11 = -sn[1*PANDA_STRIDE]*sn[2*PANDA_STRIDE];
+    const double t11 = sn[1*PANDA_STRIDE]*sn[2*PANDA_STRIDE];
     const double t12 = t3*sn[3*PANDA_STRIDE] + t6*cs[3*PANDA_STRIDE];
     const double t13 = t3*cs[3*PANDA_STRIDE] - t6*sn[3*PANDA_STRIDE];
     const double t14 = t5*sn[3*PANDA_STRIDE] + t8*cs[3*PANDA_STRIDE];
@@ -1360,8 +1360,8 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t19 = t7*cs[4*PANDA_STRIDE] + t12*sn[4*PANDA_STRIDE];
     const double t20 = t14*cs[4*PANDA_STRIDE] - t9*sn[4*PANDA_STRIDE];
     const double t21 = t9*cs[4*PANDA_STRIDE] + t14*sn[4*PANDA_STRIDE];
-    const double t22 = t16*cs[4*PANDA_STRIDE] - t11*sn[4*PANDA_STRIDE];
-    const double t23 = t11*cs[4*PANDA_STRIDE] + t16*sn[4*PANDA_STRIDE];
+    const double t22 = t16*cs[4*PANDA_STRIDE] + t11*sn[4*PANDA_STRIDE];
+    const double t23 = t16*sn[4*PANDA_STRIDE] - t11*cs[4*PANDA_STRIDE];
     const double t25 = t18*sn[5*PANDA_STRIDE] - t13*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
@@ -1381,9 +1381,8 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t43 = t41*cs[1*PANDA_STRIDE] - t39*sn[1*PANDA_STRIDE];
     const double t44 = t42*cs[0] - t40*sn[0];
     const double t45 = t42*sn[0] + t40*cs[0];
-    const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     const double t50 = t39*cs[0] - t4*t40;
     const double t51 = t40*sn[1*PANDA_STRIDE];
     const double t52 = t3*t36 + t6*t37;
@@ -1391,7 +1390,7 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
     const double t55 = t12*t33 - t7*t32;
     const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     const double t58 = t13*t30 + t18*t31;
     const double t59 = t15*t30 + t20*t31;
     const double t60 = t17*t30 + t22*t31;
@@ -1402,7 +1401,7 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t72 = dq[0] + cs[1*PANDA_STRIDE]*dq[2*PANDA_STRIDE];
     const double t73 = t70 + t7*dq[3*PANDA_STRIDE];
     const double t74 = t71 + t9*dq[3*PANDA_STRIDE];
-    const double t75 = t72 + t11*dq[3*PANDA_STRIDE];
+    const double t75 = t72 - t11*dq[3*PANDA_STRIDE];
     const double t76 = t73 + t13*dq[4*PANDA_STRIDE];
     const double t77 = t74 + t15*dq[4*PANDA_STRIDE];
     const double t78 = t75 + t17*dq[4*PANDA_STRIDE];
@@ -1424,10 +1423,10 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t91 = t88 + t52*dq[3*PANDA_STRIDE];
     const double t92 = t89 + t53*dq[3*PANDA_STRIDE];
     const double t93 = t90 + t54*dq[3*PANDA_STRIDE];
-    const double t94 = t91 + t49*dq[2*PANDA_STRIDE];
+    const double t94 = t91 - t49*dq[2*PANDA_STRIDE];
     const double t95 = t92 + t50*dq[2*PANDA_STRIDE];
     const double t96 = t93 + t51*dq[2*PANDA_STRIDE];
-    const double t97 = t94 + t47*dq[1*PANDA_STRIDE];
+    const double t97 = t94 + t69*t43;
     const double t98 = t95 + t48*dq[1*PANDA_STRIDE];
     const double t99 = t96 - t42*dq[1*PANDA_STRIDE];
     twist[2*PANDA_STRIDE] = t99;
@@ -1539,7 +1538,7 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
 #endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 6 sin, 6 cos, 183 add/sub, 272 mul, 6 neg */
+/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 4 neg */
 
 PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1600,7 +1599,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t45 = t42*sn[0] + t40*cs[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     const double t50 = t39*cs[0] - t4*t40;
     const double t51 = t40*sn[1*PANDA_STRIDE];
     const double t52 = t3*t36 + t6*t37;
@@ -1635,21 +1634,20 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t91 = t88 + t52*dq[3*PANDA_STRIDE];
     const double t92 = t89 + t53*dq[3*PANDA_STRIDE];
     const double t93 = t90 + t54*dq[3*PANDA_STRIDE];
-    const double t94 = t91 + t49*dq[2*PANDA_STRIDE];
+    const double t94 = t91 - t49*dq[2*PANDA_STRIDE];
     const double t95 = t92 + t50*dq[2*PANDA_STRIDE];
     const double t96 = t93 + t51*dq[2*PANDA_STRIDE];
     const double t97 = t94 + t47*dq[1*PANDA_STRIDE];
     const double t98 = t95 + t48*dq[1*PANDA_STRIDE];
     const double t100 = t97 - t45*dq[0];
-    const double t102 = -t98 - t44*dq[0];
+    const double t102 = t98 + t44*dq[0];
     const double t103 = cs[0]*t96 - t48*dq[0] - t42*t69;
     const double t104 = t47*dq[0] + t42*t68 + sn[0]*t96;
     const double t105 = t48*t68 - t47*t69 - cs[0]*t94 - sn[0]*t95;
-    const double t106 = cs[0]*t1;
     const double t107 = t1*sn[0];
     const double t108 = t5*t93 + t51*t71 - t50*t72 - cs[1*PANDA_STRIDE]*t92;
-    const double t109 = t49*t72 + cs[1*PANDA_STRIDE]*t91 - t3*t93 - t51*t70;
-    const double t110 = t3*t92 + t50*t70 - t5*t91 - t49*t71;
+    const double t109 = cs[1*PANDA_STRIDE]*t91 - t49*t72 - t3*t93 - t51*t70;
+    const double t110 = t3*t92 + t50*t70 - t5*t91 + t49*t71;
     const double t111 = t2*dq[1*PANDA_STRIDE] - t5*dq[0];
     const double t112 = t3*dq[0] + t4*dq[1*PANDA_STRIDE];
     const double t113 = t0*sn[1*PANDA_STRIDE];
@@ -1666,7 +1664,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t124 = t13*t75 - t17*t73;
     const double t125 = t15*t73 - t13*t74;
     const double t126 = t60*t80 - t59*t81;
-    acc[0] = (((t47*ddq[1*PANDA_STRIDE] + t49*ddq[2*PANDA_STRIDE]) + (t52*ddq[3*PANDA_STRIDE] + (t55*ddq[4*PANDA_STRIDE] + t58*ddq[5*PANDA_STRIDE]))) + ((t102*dq[0] + (t103*dq[1*PANDA_STRIDE] + t108*dq[2*PANDA_STRIDE])) + (t114*dq[3*PANDA_STRIDE] + (t120*dq[4*PANDA_STRIDE] + t126*dq[5*PANDA_STRIDE])))) - t45*ddq[0];
+    acc[0] = (((t47*ddq[1*PANDA_STRIDE] - t49*ddq[2*PANDA_STRIDE]) + (t52*ddq[3*PANDA_STRIDE] + (t55*ddq[4*PANDA_STRIDE] + t58*ddq[5*PANDA_STRIDE]))) + (((t103*dq[1*PANDA_STRIDE] + t108*dq[2*PANDA_STRIDE]) - t102*dq[0]) + (t114*dq[3*PANDA_STRIDE] + (t120*dq[4*PANDA_STRIDE] + t126*dq[5*PANDA_STRIDE])))) - t45*ddq[0];
     const double t127 = t58*t81 - t60*t79;
     acc[1*PANDA_STRIDE] = ((t48*ddq[1*PANDA_STRIDE] + (t50*ddq[2*PANDA_STRIDE] + t53*ddq[3*PANDA_STRIDE])) + (t56*ddq[4*PANDA_STRIDE] + (t59*ddq[5*PANDA_STRIDE] + t44*ddq[0]))) + ((t104*dq[1*PANDA_STRIDE] + (t109*dq[2*PANDA_STRIDE] + t115*dq[3*PANDA_STRIDE])) + (t121*dq[4*PANDA_STRIDE] + (t127*dq[5*PANDA_STRIDE] + t100*dq[0])));
     const double t128 = t59*t79 - t58*t80;
@@ -1675,7 +1673,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t130 = t19*t78 - t23*t76;
     const double t131 = t21*t76 - t19*t77;
     const double t132 = t29*t80 - t27*t81;
-    acc[3*PANDA_STRIDE] = (((t3*ddq[2*PANDA_STRIDE] + t7*ddq[3*PANDA_STRIDE]) + (t13*ddq[4*PANDA_STRIDE] + (t19*ddq[5*PANDA_STRIDE] + t25*ddq[6*PANDA_STRIDE]))) + ((t106*dq[1*PANDA_STRIDE] + (t111*dq[2*PANDA_STRIDE] + t117*dq[3*PANDA_STRIDE])) + (t123*dq[4*PANDA_STRIDE] + (t129*dq[5*PANDA_STRIDE] + t132*dq[6*PANDA_STRIDE])))) - sn[0]*ddq[1*PANDA_STRIDE];
+    acc[3*PANDA_STRIDE] = (((t3*ddq[2*PANDA_STRIDE] + t7*ddq[3*PANDA_STRIDE]) + (t13*ddq[4*PANDA_STRIDE] + (t19*ddq[5*PANDA_STRIDE] + t25*ddq[6*PANDA_STRIDE]))) + ((t69*t1 + (t111*dq[2*PANDA_STRIDE] + t117*dq[3*PANDA_STRIDE])) + (t123*dq[4*PANDA_STRIDE] + (t129*dq[5*PANDA_STRIDE] + t132*dq[6*PANDA_STRIDE])))) - sn[0]*ddq[1*PANDA_STRIDE];
     const double t133 = t25*t81 - t29*t79;
     acc[4*PANDA_STRIDE] = ((t5*ddq[2*PANDA_STRIDE] + (t9*ddq[3*PANDA_STRIDE] + t15*ddq[4*PANDA_STRIDE])) + (t21*ddq[5*PANDA_STRIDE] + (t27*ddq[6*PANDA_STRIDE] + cs[0]*ddq[1*PANDA_STRIDE]))) + ((t107*dq[1*PANDA_STRIDE] + (t112*dq[2*PANDA_STRIDE] + t118*dq[3*PANDA_STRIDE])) + (t124*dq[4*PANDA_STRIDE] + (t130*dq[5*PANDA_STRIDE] + t133*dq[6*PANDA_STRIDE])));
     const double t134 = t27*t79 - t25*t80;
@@ -2581,7 +2579,7 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 10 neg, 5 div, 6 sqrt */
+/* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 6 neg, 5 div, 6 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_angles(const double q[7], double *restrict ang)
 {
@@ -2689,14 +2687,13 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t224 = t220*t215;
     const double t225 = t220*t216;
     const double t226 = t220*t217;
-    const double t228 = t51*t200 + t54*t201 + t57*t202 + t60*t203 - t42*t199;
-    const double t229 = -t228*t198;
-    const double t230 = -t42;
-    const double t231 = t230 - t228*t199;
-    const double t232 = t51 - t228*t200;
-    const double t233 = t54 - t228*t201;
-    const double t234 = t57 - t228*t202;
-    const double t235 = t60 - t228*t203;
+    const double t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203;
+    const double t229 = t228*t198;
+    const double t231 = t228*t199 - t42;
+    const double t232 = t51 + t228*t200;
+    const double t233 = t54 + t228*t201;
+    const double t234 = t57 + t228*t202;
+    const double t235 = t60 + t228*t203;
     const double t236 = t221*t229 + t222*t231 + t223*t232 + t224*t233 + t225*t234 + t226*t235;
     const double t237 = t229 - t236*t221;
     const double t238 = t231 - t236*t222;
@@ -2727,14 +2724,13 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t263 = t259*t254;
     const double t264 = t259*t255;
     const double t265 = t259*t256;
-    const double t268 = t3*t200 + t7*t201 + t13*t202 + t19*t203 - t199*sn[0];
-    const double t269 = -t268*t198;
-    const double t270 = -sn[0];
-    const double t271 = t270 - t268*t199;
-    const double t272 = t3 - t268*t200;
-    const double t273 = t7 - t268*t201;
-    const double t274 = t13 - t268*t202;
-    const double t275 = t19 - t268*t203;
+    const double t268 = t199*sn[0] - t3*t200 - t7*t201 - t13*t202 - t19*t203;
+    const double t269 = t268*t198;
+    const double t271 = t268*t199 - sn[0];
+    const double t272 = t3 + t268*t200;
+    const double t273 = t7 + t268*t201;
+    const double t274 = t13 + t268*t202;
+    const double t275 = t19 + t268*t203;
     const double t276 = t221*t269 + t222*t271 + t223*t272 + t224*t273 + t225*t274 + t226*t275;
     const double t277 = t269 - t276*t221;
     const double t278 = t271 - t276*t222;
@@ -2962,7 +2958,7 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
 }
 
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
-/* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 6 neg, 2 div, 3 sqrt */
+/* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 3 neg, 2 div, 3 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_position_angles(const double q[7], double *restrict ang)
 {
@@ -2985,7 +2981,7 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t8 = t4*cs[2] + cs[0]*sn[2];
     const double t9 = t4*sn[2] - cs[0]*cs[2];
     const double t10 = cs[2]*sn[1];
-    const double t11 = -sn[1]*sn[2];
+    const double t11 = sn[1]*sn[2];
     const double t12 = t3*sn[3] + t6*cs[3];
     const double t13 = t3*cs[3] - t6*sn[3];
     const double t14 = t5*sn[3] + t8*cs[3];
@@ -2994,7 +2990,7 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t17 = t10*sn[3] + cs[1]*cs[3];
     const double t18 = t12*cs[4] - t7*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
-    const double t22 = t16*cs[4] - t11*sn[4];
+    const double t22 = t16*cs[4] + t11*sn[4];
     const double t30 = 0.088*cs[5] + 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
@@ -3021,7 +3017,7 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t54 = t36*cs[1] - t10*t37;
     const double t55 = t12*t33 - t7*t32;
     const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     const double t58 = t13*t30 + t18*t31;
     const double t59 = t15*t30 + t20*t31;
     const double t60 = t17*t30 + t22*t31;
@@ -3064,14 +3060,13 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t224 = t220*t215;
     const double t225 = t220*t216;
     const double t226 = t220*t217;
-    const double t228 = t51*t200 + t54*t201 + t57*t202 + t60*t203 - t42*t199;
-    const double t229 = -t228*t198;
-    const double t230 = -t42;
-    const double t231 = t230 - t228*t199;
-    const double t232 = t51 - t228*t200;
-    const double t233 = t54 - t228*t201;
-    const double t234 = t57 - t228*t202;
-    const double t235 = t60 - t228*t203;
+    const double t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203;
+    const double t229 = t228*t198;
+    const double t231 = t228*t199 - t42;
+    const double t232 = t51 + t228*t200;
+    const double t233 = t54 + t228*t201;
+    const double t234 = t57 + t228*t202;
+    const double t235 = t60 + t228*t203;
     const double t236 = t221*t229 + t222*t231 + t223*t232 + t224*t233 + t225*t234 + t226*t235;
     const double t237 = t229 - t236*t221;
     const double t238 = t231 - t236*t222;
@@ -3132,7 +3127,7 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
 }
 
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
-/* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 29 neg */
+/* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 25 neg */
 
 static PANDA_LIGHT void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
 {
@@ -3338,17 +3333,21 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     const double t41 = 0.316 - t37;
     const double t42 = t39*cs[1] + t41*sn[1];
     const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
-    Hs[0] = -t44;
+    const double t44 = t40*sn[0] - t42*cs[0];
+    Hs[0] = t44;
     const double t45 = t42*sn[0] + t40*cs[0];
     const double t47 = t43*cs[0];
     Hs[50] = t47;
     Hs[56] = t47;
-    const double t48 = t43*sn[0];
+    const double t48 = -t43*sn[0];
+    Hs[1] = t48;
+    Hs[7] = t48;
     const double t49 = -t2*t40 - t39*sn[0];
     Hs[51] = t49;
     Hs[63] = t49;
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t50 = t4*t40 - t39*cs[0];
+    Hs[2] = t50;
+    Hs[14] = t50;
     const double t51 = t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
     Hs[52] = t52;
@@ -3381,7 +3380,7 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     const double t492 = t60*cs[0];
     Hs[12] = t492;
     Hs[36] = t492;
-    const double t493 = t5*t51 - t50*cs[1];
+    const double t493 = t5*t51 + t50*cs[1];
     Hs[16] = t493;
     const double t494 = t5*t54 - t53*cs[1];
     Hs[17] = t494;
@@ -3407,7 +3406,7 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[39] = t501;
     const double t502 = t21*t60 - t23*t59;
     Hs[40] = t502;
-    const double t503 = -t42*sn[0];
+    const double t503 = t42*t270;
     Hs[57] = t503;
     const double t504 = t51*sn[0];
     Hs[58] = t504;
@@ -3447,9 +3446,9 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[88] = t516;
     const double t517 = t23*t58 - t19*t60;
     Hs[89] = t517;
-    const double t518 = -t47*cs[0] - t48*sn[0];
+    const double t518 = t48*sn[0] - t47*cs[0];
     Hs[106] = t518;
-    const double t519 = -t49*cs[0] - t50*sn[0];
+    const double t519 = t50*sn[0] - t49*cs[0];
     Hs[107] = t519;
     Hs[113] = t519;
     const double t520 = -t52*cs[0] - t53*sn[0];
@@ -3461,7 +3460,7 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     const double t522 = -t58*cs[0] - t59*sn[0];
     Hs[110] = t522;
     Hs[134] = t522;
-    const double t523 = t3*t50 - t5*t49;
+    const double t523 = -t3*t50 - t5*t49;
     Hs[114] = t523;
     const double t524 = t3*t53 - t5*t52;
     Hs[115] = t524;
@@ -3575,12 +3574,6 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[292] = t575;
     const double t1582 = -t45;
     Hs[49] = t1582;
-    const double t1583 = -t48;
-    Hs[1] = t1583;
-    Hs[7] = t1583;
-    const double t1584 = -t50;
-    Hs[2] = t1584;
-    Hs[14] = t1584;
     const double t1585 = -t53;
     Hs[3] = t1585;
     Hs[21] = t1585;
@@ -3625,7 +3618,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 27 neg, 6 div, 6 sqrt */
+/* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 7 neg, 6 div, 6 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
 {
@@ -3735,14 +3728,14 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t225 = t220*t216;
     const double t226 = t220*t217;
     const double t227 = t204 + t211;
-    const double t228 = t51*t200 + t54*t201 + t57*t202 + t60*t203 - t42*t199;
-    const double t229 = -t228*t198;
+    const double t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203;
+    const double t229 = t228*t198;
     const double t230 = -t42;
-    const double t231 = t230 - t228*t199;
-    const double t232 = t51 - t228*t200;
-    const double t233 = t54 - t228*t201;
-    const double t234 = t57 - t228*t202;
-    const double t235 = t60 - t228*t203;
+    const double t231 = t228*t199 - t42;
+    const double t232 = t51 + t228*t200;
+    const double t233 = t54 + t228*t201;
+    const double t234 = t57 + t228*t202;
+    const double t235 = t60 + t228*t203;
     const double t236 = t221*t229 + t222*t231 + t223*t232 + t224*t233 + t225*t234 + t226*t235;
     const double t237 = t229 - t236*t221;
     const double t238 = t231 - t236*t222;
@@ -3773,16 +3766,15 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t263 = t259*t254;
     const double t264 = t259*t255;
     const double t265 = t259*t256;
-    const double t266 = t228 + t243;
+    const double t266 = t243 - t228;
     const double t267 = t236 + t250;
-    const double t268 = t3*t200 + t7*t201 + t13*t202 + t19*t203 - t199*sn[0];
-    const double t269 = -t268*t198;
-    const double t270 = -sn[0];
-    const double t271 = t270 - t268*t199;
-    const double t272 = t3 - t268*t200;
-    const double t273 = t7 - t268*t201;
-    const double t274 = t13 - t268*t202;
-    const double t275 = t19 - t268*t203;
+    const double t268 = t199*sn[0] - t3*t200 - t7*t201 - t13*t202 - t19*t203;
+    const double t269 = t268*t198;
+    const double t271 = t268*t199 - sn[0];
+    const double t272 = t3 + t268*t200;
+    const double t273 = t7 + t268*t201;
+    const double t274 = t13 + t268*t202;
+    const double t275 = t19 + t268*t203;
     const double t276 = t221*t269 + t222*t271 + t223*t272 + t224*t273 + t225*t274 + t226*t275;
     const double t277 = t269 - t276*t221;
     const double t278 = t271 - t276*t222;
@@ -3829,7 +3821,7 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t319 = t314*t309;
     const double t320 = t314*t310;
     const double t321 = t25*t314;
-    const double t322 = t268 + t290;
+    const double t322 = t290 - t268;
     const double t323 = t276 + t297;
     const double t324 = t283 + t304;
     const double t325 = t5*t200 + t9*t201 + t15*t202 + t21*t203 + cs[0]*t199;
@@ -3993,7 +3985,7 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t483 = t411 + t448;
     const double t484 = t418 + t455;
     const double t485 = t426 + t463;
-    const double t488 = -t42*cs[0];
+    const double t488 = t230*cs[0];
     const double t489 = t51*cs[0];
     const double t490 = t54*cs[0];
     const double t491 = t57*cs[0];
@@ -4008,7 +4000,7 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t500 = t15*t57 - t17*t56;
     const double t501 = t15*t60 - t17*t59;
     const double t502 = t21*t60 - t23*t59;
-    const double t503 = -t42*sn[0];
+    const double t503 = t230*sn[0];
     const double t504 = t51*sn[0];
     const double t505 = t54*sn[0];
     const double t506 = t57*sn[0];
@@ -4023,11 +4015,11 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t515 = t17*t55 - t13*t57;
     const double t516 = t17*t58 - t13*t60;
     const double t517 = t23*t58 - t19*t60;
-    const double t518 = -t47*cs[0] - t48*sn[0];
-    const double t519 = -t49*cs[0] - t50*sn[0];
-    const double t520 = -t52*cs[0] - t53*sn[0];
-    const double t521 = -t55*cs[0] - t56*sn[0];
-    const double t522 = -t58*cs[0] - t59*sn[0];
+    const double t518 = t47*cs[0] + t48*sn[0];
+    const double t519 = t49*cs[0] + t50*sn[0];
+    const double t520 = t52*cs[0] + t53*sn[0];
+    const double t521 = t55*cs[0] + t56*sn[0];
+    const double t522 = t58*cs[0] + t59*sn[0];
     const double t523 = t3*t50 - t5*t49;
     const double t524 = t3*t53 - t5*t52;
     const double t525 = t3*t56 - t5*t55;
@@ -4066,17 +4058,17 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t558 = t11*t25 - t7*t29;
     const double t559 = t17*t25 - t13*t29;
     const double t560 = t23*t25 - t19*t29;
-    const double t561 = -t3*cs[0] - t5*sn[0];
-    const double t562 = -t7*cs[0] - t9*sn[0];
+    const double t561 = t3*cs[0] + t5*sn[0];
+    const double t562 = t7*cs[0] + t9*sn[0];
     const double t563 = t3*t9 - t5*t7;
-    const double t564 = -t13*cs[0] - t15*sn[0];
+    const double t564 = t13*cs[0] + t15*sn[0];
     const double t565 = t3*t15 - t5*t13;
     const double t566 = t7*t15 - t9*t13;
-    const double t567 = -t19*cs[0] - t21*sn[0];
+    const double t567 = t19*cs[0] + t21*sn[0];
     const double t568 = t3*t21 - t5*t19;
     const double t569 = t7*t21 - t9*t19;
     const double t570 = t13*t21 - t15*t19;
-    const double t571 = -t25*cs[0] - t27*sn[0];
+    const double t571 = t25*cs[0] + t27*sn[0];
     const double t572 = t3*t27 - t5*t25;
     const double t573 = t7*t27 - t9*t25;
     const double t574 = t13*t27 - t15*t25;
@@ -4092,70 +4084,70 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t584 = t394*t485*t258*t313 - t583*t267 - t582*t323*t258 - t482*t258*t313*t384;
     const double t585 = t393*t485*t219*t258*t313 - t584*t227 - t583*t266*t219 - t582*t322*t219*t258 - t481*t219*t258*t313*t384;
     const double t586 = t219*t258*t313*t384*t472;
-    const double t587 = -t227*t258*t313*t384*t472;
+    const double t587 = t227*t258*t313*t384*t472;
     const double t588 = t576*t313*t384*t472;
     const double t589 = t578*t384*t472;
     const double t590 = t581*t472;
     const double t591 = t195*t258*t313*t384*t472;
-    const double t592 = -t267*t195*t313*t384*t472;
+    const double t592 = t267*t195*t313*t384*t472;
     const double t593 = t577*t195*t384*t472;
     const double t594 = t580*t195*t472;
     const double t595 = t584*t195;
     const double t596 = t195*t219*t313*t384*t472;
-    const double t597 = -t324*t195*t219*t384*t472;
+    const double t597 = t324*t195*t219*t384*t472;
     const double t598 = t579*t195*t219*t472;
     const double t599 = t583*t195*t219;
     const double t600 = t195*t219*t258*t384*t472;
-    const double t601 = -t396*t195*t219*t258*t472;
+    const double t601 = t396*t195*t219*t258*t472;
     const double t602 = t582*t195*t219*t258;
     const double t603 = t195*t219*t258*t313*t472;
-    const double t604 = -t485*t195*t219*t258*t313;
+    const double t604 = t485*t195*t219*t258*t313;
     const double t605 = t195*t219*t258*t313*t384;
-    const double t606 = t585*t474 + t586*t198 + t587*t221 + t588*t260 + t589*t315 + t590*t386;
-    const double t607 = t591*t221 + t592*t260 + t593*t315 + t594*t386 + t595*t474;
-    const double t608 = t585*t475 + t586*t199 + t587*t222 + t588*t261 + t589*t316 + t590*t387;
-    const double t609 = t591*t222 + t592*t261 + t593*t316 + t594*t387 + t595*t475;
-    const double t610 = t596*t261 + t597*t316 + t598*t387 + t599*t475;
-    const double t611 = t600*t316 + t601*t387 + t602*t475;
-    const double t612 = t603*t387 + t604*t475;
-    const double t613 = t585*t476 + t586*t200 + t587*t223 + t588*t262 + t589*t317 + t590*t388;
-    const double t614 = t591*t223 + t592*t262 + t593*t317 + t594*t388 + t595*t476;
-    const double t615 = t596*t262 + t597*t317 + t598*t388 + t599*t476;
-    const double t616 = t600*t317 + t601*t388 + t602*t476;
-    const double t617 = t603*t388 + t604*t476;
+    const double t606 = t585*t474 + t586*t198 - t587*t221 + t588*t260 + t589*t315 + t590*t386;
+    const double t607 = t591*t221 - t592*t260 + t593*t315 + t594*t386 + t595*t474;
+    const double t608 = t585*t475 + t586*t199 - t587*t222 + t588*t261 + t589*t316 + t590*t387;
+    const double t609 = t591*t222 - t592*t261 + t593*t316 + t594*t387 + t595*t475;
+    const double t610 = t596*t261 - t597*t316 + t598*t387 + t599*t475;
+    const double t611 = t600*t316 - t601*t387 + t602*t475;
+    const double t612 = t603*t387 - t604*t475;
+    const double t613 = t585*t476 + t586*t200 - t587*t223 + t588*t262 + t589*t317 + t590*t388;
+    const double t614 = t591*t223 - t592*t262 + t593*t317 + t594*t388 + t595*t476;
+    const double t615 = t596*t262 - t597*t317 + t598*t388 + t599*t476;
+    const double t616 = t600*t317 - t601*t388 + t602*t476;
+    const double t617 = t603*t388 - t604*t476;
     const double t618 = t605*t476;
-    const double t619 = t585*t477 + t586*t201 + t587*t224 + t588*t263 + t589*t318 + t590*t389;
-    const double t620 = t591*t224 + t592*t263 + t593*t318 + t594*t389 + t595*t477;
-    const double t621 = t596*t263 + t597*t318 + t598*t389 + t599*t477;
-    const double t622 = t600*t318 + t601*t389 + t602*t477;
-    const double t623 = t603*t389 + t604*t477;
+    const double t619 = t585*t477 + t586*t201 - t587*t224 + t588*t263 + t589*t318 + t590*t389;
+    const double t620 = t591*t224 - t592*t263 + t593*t318 + t594*t389 + t595*t477;
+    const double t621 = t596*t263 - t597*t318 + t598*t389 + t599*t477;
+    const double t622 = t600*t318 - t601*t389 + t602*t477;
+    const double t623 = t603*t389 - t604*t477;
     const double t624 = t605*t477;
-    const double t625 = t585*t478 + t586*t202 + t587*t225 + t588*t264 + t589*t319 + t590*t390;
-    const double t626 = t591*t225 + t592*t264 + t593*t319 + t594*t390 + t595*t478;
-    const double t627 = t596*t264 + t597*t319 + t598*t390 + t599*t478;
-    const double t628 = t600*t319 + t601*t390 + t602*t478;
-    const double t629 = t603*t390 + t604*t478;
+    const double t625 = t585*t478 + t586*t202 - t587*t225 + t588*t264 + t589*t319 + t590*t390;
+    const double t626 = t591*t225 - t592*t264 + t593*t319 + t594*t390 + t595*t478;
+    const double t627 = t596*t264 - t597*t319 + t598*t390 + t599*t478;
+    const double t628 = t600*t319 - t601*t390 + t602*t478;
+    const double t629 = t603*t390 - t604*t478;
     const double t630 = t605*t478;
-    const double t631 = t585*t479 + t586*t203 + t587*t226 + t588*t265 + t589*t320 + t590*t391;
-    const double t632 = t591*t226 + t592*t265 + t593*t320 + t594*t391 + t595*t479;
-    const double t633 = t596*t265 + t597*t320 + t598*t391 + t599*t479;
-    const double t634 = t600*t320 + t601*t391 + t602*t479;
-    const double t635 = t603*t391 + t604*t479;
+    const double t631 = t585*t479 + t586*t203 - t587*t226 + t588*t265 + t589*t320 + t590*t391;
+    const double t632 = t591*t226 - t592*t265 + t593*t320 + t594*t391 + t595*t479;
+    const double t633 = t596*t265 - t597*t320 + t598*t391 + t599*t479;
+    const double t634 = t600*t320 - t601*t391 + t602*t479;
+    const double t635 = t603*t391 - t604*t479;
     const double t636 = t605*t479;
-    const double t637 = t600*t321 + t601*t392 + t602*t480;
-    const double t638 = t603*t392 + t604*t480;
+    const double t637 = t600*t321 - t601*t392 + t602*t480;
+    const double t638 = t603*t392 - t604*t480;
     const double t639 = t605*t480;
     const double t640 = (((t3*t617 + t7*t623) + (t13*t629 + (t19*t635 + t25*t638))) + ((t47*t609 + t49*t614) + (t52*t620 + (t55*t626 + t58*t632)))) - (((t5*t616 + (t9*t622 + t15*t628)) + ((t21*t634 + t27*t637) + (t48*t608 + t50*t613))) + ((t53*t619 + (t56*t625 + t59*t631)) + ((t44*t606 + t45*t607) + (cs[0]*t611 + t612*sn[0]))));
     grad[0] = t640;
-    const double t641 = ((((t2*t616 + (t4*t617 + t488*t608)) + ((t489*t613 + t490*t619) + (t491*t625 + t492*t631))) + (((t503*t609 + t504*t614) + (t505*t620 + t506*t626)) + ((t507*t632 + t518*t610) + (t519*t615 + t520*t621)))) + ((((t521*t627 + t522*t633) + (t533*t622 + t535*t628)) + ((t538*t634 + t542*t637) + (t547*t623 + t549*t629))) + (((t552*t635 + t556*t638) + (t561*t618 + t562*t624)) + ((t564*t630 + t567*t636) + (t571*t639 + t47*t607))))) - t48*t606;
+    const double t641 = ((((t2*t616 + (t4*t617 + t488*t608)) + ((t489*t613 + t490*t619) + (t491*t625 + t492*t631))) + (((t503*t609 + t504*t614) + (t505*t620 + t506*t626)) + ((t507*t632 - t518*t610) - (t519*t615 + t520*t621)))) + ((((t533*t622 + t535*t628) - (t521*t627 + t522*t633)) + ((t538*t634 + t542*t637) + (t547*t623 + t549*t629))) + (((t552*t635 + t556*t638) - (t561*t618 + t562*t624)) + ((t47*t607 - t571*t639) - (t564*t630 + t567*t636))))) - t48*t606;
     grad[1] = t641;
-    const double t642 = ((((t489*t608 + (t493*t613 + t494*t619)) + ((t495*t625 + t496*t631) + (t504*t609 + t508*t614))) + ((t509*t620 + (t510*t626 + t511*t632)) + ((t519*t610 + t523*t615) + (t524*t621 + t525*t627)))) + (((t526*t633 + (t534*t622 + t536*t628)) + ((t539*t634 + t543*t637) + (t548*t623 + t550*t629))) + ((t553*t635 + (t557*t638 + t563*t624)) + ((t565*t630 + t568*t636) + (t572*t639 + t49*t607))))) - t50*t606;
+    const double t642 = ((((t489*t608 + (t493*t613 + t494*t619)) + ((t495*t625 + t496*t631) + (t504*t609 + t508*t614))) + ((t509*t620 + (t510*t626 + t511*t632)) + ((t523*t615 - t519*t610) + (t524*t621 + t525*t627)))) + (((t526*t633 + (t534*t622 + t536*t628)) + ((t539*t634 + t543*t637) + (t548*t623 + t550*t629))) + ((t553*t635 + (t557*t638 + t563*t624)) + ((t565*t630 + t568*t636) + (t572*t639 + t49*t607))))) - t50*t606;
     grad[2] = t642;
-    const double t643 = ((((t490*t608 + (t494*t613 + t497*t619)) + (t498*t625 + (t499*t631 + t505*t609))) + ((t509*t614 + (t512*t620 + t513*t626)) + (t514*t632 + (t520*t610 + t524*t615)))) + (((t527*t621 + (t528*t627 + t529*t633)) + (t537*t628 + (t540*t634 + t544*t637))) + ((t551*t629 + (t554*t635 + t558*t638)) + ((t566*t630 + t569*t636) + (t573*t639 + t52*t607))))) - t53*t606;
+    const double t643 = ((((t490*t608 + (t494*t613 + t497*t619)) + (t498*t625 + (t499*t631 + t505*t609))) + ((t509*t614 + (t512*t620 + t513*t626)) + (t514*t632 + (t524*t615 - t520*t610)))) + (((t527*t621 + (t528*t627 + t529*t633)) + (t537*t628 + (t540*t634 + t544*t637))) + ((t551*t629 + (t554*t635 + t558*t638)) + ((t566*t630 + t569*t636) + (t573*t639 + t52*t607))))) - t53*t606;
     grad[3] = t643;
-    const double t644 = ((((t491*t608 + t495*t613) + (t498*t619 + (t500*t625 + t501*t631))) + ((t506*t609 + (t510*t614 + t513*t620)) + (t515*t626 + (t516*t632 + t521*t610)))) + (((t525*t615 + t528*t621) + (t530*t627 + (t531*t633 + t541*t634))) + ((t545*t637 + (t555*t635 + t559*t638)) + (t570*t636 + (t574*t639 + t55*t607))))) - t56*t606;
+    const double t644 = ((((t491*t608 + t495*t613) + (t498*t619 + (t500*t625 + t501*t631))) + ((t506*t609 + (t510*t614 + t513*t620)) + (t515*t626 + (t516*t632 - t521*t610)))) + (((t525*t615 + t528*t621) + (t530*t627 + (t531*t633 + t541*t634))) + ((t545*t637 + (t555*t635 + t559*t638)) + (t570*t636 + (t574*t639 + t55*t607))))) - t56*t606;
     grad[4] = t644;
-    const double t645 = ((((t492*t608 + t496*t613) + (t499*t619 + t501*t625)) + ((t502*t631 + t507*t609) + (t511*t614 + (t514*t620 + t516*t626)))) + (((t517*t632 + t522*t610) + (t526*t615 + (t529*t621 + t531*t627))) + ((t532*t633 + t546*t637) + (t560*t638 + (t575*t639 + t58*t607))))) - t59*t606;
+    const double t645 = ((((t492*t608 + t496*t613) + (t499*t619 + t501*t625)) + ((t502*t631 + t507*t609) + (t511*t614 + (t514*t620 + t516*t626)))) + (((t517*t632 - t522*t610) + (t526*t615 + (t529*t621 + t531*t627))) + ((t532*t633 + t546*t637) + (t560*t638 + (t575*t639 + t58*t607))))) - t59*t606;
     grad[5] = t645;
 }
 
@@ -4192,7 +4184,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 }
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 38 neg, 13 div, 13 sqrt */
+/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 10 neg, 13 div, 13 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
 {
@@ -4249,7 +4241,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t45 = t42*sn[0] + t40*cs[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     const double t50 = t39*cs[0] - t4*t40;
     const double t51 = t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
@@ -4262,11 +4254,10 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t59 = t15*t30 + t20*t31;
     const double t60 = t17*t30 + t22*t31;
     const double t187 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-    const double t270 = -sn[0];
     const double t311 = t25*t25;
     const double t646 = -0.7178750897343862*t45;
     const double t647 = 0.7178750897343862*t47;
-    const double t648 = 0.7178750897343862*t49;
+    const double t648 = -0.7178750897343862*t49;
     const double t649 = 0.7178750897343862*t52;
     const double t650 = 0.7178750897343862*t55;
     const double t651 = 0.7178750897343862*t58;
@@ -4368,13 +4359,13 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t747 = (t739 ? t741*t736 : 0.0);
     const double t748 = t709 + t723;
     const double t749 = t716 + t730;
-    const double t750 = t3*t679 + t7*t680 + t13*t681 + t19*t682 - t678*sn[0];
-    const double t751 = -t750*t677;
-    const double t752 = t270 - t750*t678;
-    const double t753 = t3 - t750*t679;
-    const double t754 = t7 - t750*t680;
-    const double t755 = t13 - t750*t681;
-    const double t756 = t19 - t750*t682;
+    const double t750 = t678*sn[0] - t3*t679 - t7*t680 - t13*t681 - t19*t682;
+    const double t751 = t750*t677;
+    const double t752 = t750*t678 - sn[0];
+    const double t753 = t3 + t750*t679;
+    const double t754 = t7 + t750*t680;
+    const double t755 = t13 + t750*t681;
+    const double t756 = t19 + t750*t682;
     const double t757 = t702*t751 + t703*t752 + t704*t753 + t705*t754 + t706*t755 + t707*t756;
     const double t758 = t751 - t757*t702;
     const double t759 = t752 - t757*t703;
@@ -4422,7 +4413,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t801 = (t794 ? t796*t790 : 0.0);
     const double t802 = (t794 ? t796*t791 : 0.0);
     const double t803 = (t794 ? t25*t796 : 0.0);
-    const double t804 = t750 + t771;
+    const double t804 = t771 - t750;
     const double t805 = t757 + t778;
     const double t806 = t764 + t785;
     const double t807 = t5*t679 + t9*t680 + t15*t681 + t21*t682 + cs[0]*t678;
@@ -4623,23 +4614,23 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1002 = t999*t976;
     const double t1003 = t999*t977;
     const double t1004 = t999*t978;
-    const double t1005 = t999*t979;
+    const double t1005 = -t999*t979;
     const double t1006 = t999*t972;
-    const double t1007 = t1001*t980 + t1002*t981 + t1003*t982 + t1004*t983 + t1005*t984;
-    const double t1008 = -t1007*t1000;
-    const double t1009 = t980 - t1007*t1001;
-    const double t1010 = t981 - t1007*t1002;
-    const double t1011 = t982 - t1007*t1003;
-    const double t1012 = t983 - t1007*t1004;
+    const double t1007 = t1005*t984 - t1001*t980 - t1002*t981 - t1003*t982 - t1004*t983;
+    const double t1008 = t1007*t1000;
+    const double t1009 = t980 + t1007*t1001;
+    const double t1010 = t981 + t1007*t1002;
+    const double t1011 = t982 + t1007*t1003;
+    const double t1012 = t983 + t1007*t1004;
     const double t1013 = t984 - t1007*t1005;
-    const double t1014 = -t1007*t1006;
-    const double t1015 = t1000*t1008 + t1001*t1009 + t1002*t1010 + t1003*t1011 + t1004*t1012 + t1005*t1013 + t1006*t1014;
+    const double t1014 = t1007*t1006;
+    const double t1015 = t1000*t1008 + t1001*t1009 + t1002*t1010 + t1003*t1011 + t1004*t1012 - t1005*t1013 + t1006*t1014;
     const double t1016 = t1008 - t1015*t1000;
     const double t1017 = t1009 - t1015*t1001;
     const double t1018 = t1010 - t1015*t1002;
     const double t1019 = t1011 - t1015*t1003;
     const double t1020 = t1012 - t1015*t1004;
-    const double t1021 = t1013 - t1015*t1005;
+    const double t1021 = t1013 + t1015*t1005;
     const double t1022 = t1014 - t1015*t1006;
     const double t1023 = t1016*t1016 + t1017*t1017 + t1018*t1018 + t1019*t1019 + t1020*t1020 + t1021*t1021 + t1022*t1022 + t995;
     const double t1024 = sqrt(t1023);
@@ -4652,16 +4643,16 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1031 = t1026*t1020;
     const double t1032 = t1026*t1021;
     const double t1033 = t1026*t1022;
-    const double t1034 = t1026*t972;
-    const double t1035 = t1007 + t1015;
-    const double t1036 = t1002*t985 + t1003*t986 + t1004*t987 + t1005*t988;
-    const double t1037 = -t1036*t1000;
-    const double t1038 = -t1036*t1001;
-    const double t1039 = t985 - t1036*t1002;
-    const double t1040 = t986 - t1036*t1003;
-    const double t1041 = t987 - t1036*t1004;
+    const double t1034 = -t1026*t972;
+    const double t1035 = t1015 - t1007;
+    const double t1036 = t1005*t988 - t1002*t985 - t1003*t986 - t1004*t987;
+    const double t1037 = t1036*t1000;
+    const double t1038 = t1036*t1001;
+    const double t1039 = t985 + t1036*t1002;
+    const double t1040 = t986 + t1036*t1003;
+    const double t1041 = t987 + t1036*t1004;
     const double t1042 = t988 - t1036*t1005;
-    const double t1043 = -t1036*t1006;
+    const double t1043 = t1036*t1006;
     const double t1044 = t1027*t1037 + t1028*t1038 + t1029*t1039 + t1030*t1040 + t1031*t1041 + t1032*t1042 + t1033*t1043;
     const double t1045 = t1037 - t1044*t1027;
     const double t1046 = t1038 - t1044*t1028;
@@ -4670,16 +4661,16 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1049 = t1041 - t1044*t1031;
     const double t1050 = t1042 - t1044*t1032;
     const double t1051 = t1043 - t1044*t1033;
-    const double t1052 = -t1044*t1034;
-    const double t1053 = t1000*t1045 + t1001*t1046 + t1002*t1047 + t1003*t1048 + t1004*t1049 + t1005*t1050 + t1006*t1051;
+    const double t1052 = t1044*t1034;
+    const double t1053 = t1000*t1045 + t1001*t1046 + t1002*t1047 + t1003*t1048 + t1004*t1049 - t1005*t1050 + t1006*t1051;
     const double t1054 = t1045 - t1053*t1000;
     const double t1055 = t1046 - t1053*t1001;
     const double t1056 = t1047 - t1053*t1002;
     const double t1057 = t1048 - t1053*t1003;
     const double t1058 = t1049 - t1053*t1004;
-    const double t1059 = t1050 - t1053*t1005;
+    const double t1059 = t1050 + t1053*t1005;
     const double t1060 = t1051 - t1053*t1006;
-    const double t1061 = t1027*t1054 + t1028*t1055 + t1029*t1056 + t1030*t1057 + t1031*t1058 + t1032*t1059 + t1033*t1060 + t1034*t1052;
+    const double t1061 = t1027*t1054 + t1028*t1055 + t1029*t1056 + t1030*t1057 + t1031*t1058 + t1032*t1059 + t1033*t1060 - t1034*t1052;
     const double t1062 = t1054 - t1061*t1027;
     const double t1063 = t1055 - t1061*t1028;
     const double t1064 = t1056 - t1061*t1029;
@@ -4687,7 +4678,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1066 = t1058 - t1061*t1031;
     const double t1067 = t1059 - t1061*t1032;
     const double t1068 = t1060 - t1061*t1033;
-    const double t1069 = t1052 - t1061*t1034;
+    const double t1069 = t1052 + t1061*t1034;
     const double t1070 = ((t1062*t1062 + t1063*t1063) + (t1064*t1064 + t1065*t1065)) + ((t1066*t1066 + t1067*t1067) + (t1068*t1068 + (t1069*t1069 + t995)));
     const double t1071 = sqrt(t1070);
     const int t1072 = t1071 > 0.0;
@@ -4700,17 +4691,17 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1079 = t1073*t1067;
     const double t1080 = t1073*t1068;
     const double t1081 = t1073*t1069;
-    const double t1082 = t1073*t972;
-    const double t1083 = t1036 + t1053;
+    const double t1082 = -t1073*t972;
+    const double t1083 = t1053 - t1036;
     const double t1084 = t1044 + t1061;
-    const double t1085 = t1003*t989 + t1004*t990 + t1005*t991;
-    const double t1086 = -t1085*t1000;
-    const double t1087 = -t1085*t1001;
-    const double t1088 = -t1085*t1002;
-    const double t1089 = t989 - t1085*t1003;
-    const double t1090 = t990 - t1085*t1004;
+    const double t1085 = t1005*t991 - t1003*t989 - t1004*t990;
+    const double t1086 = t1085*t1000;
+    const double t1087 = t1085*t1001;
+    const double t1088 = t1085*t1002;
+    const double t1089 = t989 + t1085*t1003;
+    const double t1090 = t990 + t1085*t1004;
     const double t1091 = t991 - t1085*t1005;
-    const double t1092 = -t1085*t1006;
+    const double t1092 = t1085*t1006;
     const double t1093 = t1027*t1086 + t1028*t1087 + t1029*t1088 + t1030*t1089 + t1031*t1090 + t1032*t1091 + t1033*t1092;
     const double t1094 = t1086 - t1093*t1027;
     const double t1095 = t1087 - t1093*t1028;
@@ -4719,7 +4710,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1098 = t1090 - t1093*t1031;
     const double t1099 = t1091 - t1093*t1032;
     const double t1100 = t1092 - t1093*t1033;
-    const double t1101 = -t1093*t1034;
+    const double t1101 = t1093*t1034;
     const double t1102 = t1074*t1094 + t1075*t1095 + t1076*t1096 + t1077*t1097 + t1078*t1098 + t1079*t1099 + t1080*t1100 + t1081*t1101;
     const double t1103 = t1094 - t1102*t1074;
     const double t1104 = t1095 - t1102*t1075;
@@ -4729,16 +4720,16 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1108 = t1099 - t1102*t1079;
     const double t1109 = t1100 - t1102*t1080;
     const double t1110 = t1101 - t1102*t1081;
-    const double t1111 = -t1102*t1082;
-    const double t1112 = t1000*t1103 + t1001*t1104 + t1002*t1105 + t1003*t1106 + t1004*t1107 + t1005*t1108 + t1006*t1109;
+    const double t1111 = t1102*t1082;
+    const double t1112 = t1000*t1103 + t1001*t1104 + t1002*t1105 + t1003*t1106 + t1004*t1107 - t1005*t1108 + t1006*t1109;
     const double t1113 = t1103 - t1112*t1000;
     const double t1114 = t1104 - t1112*t1001;
     const double t1115 = t1105 - t1112*t1002;
     const double t1116 = t1106 - t1112*t1003;
     const double t1117 = t1107 - t1112*t1004;
-    const double t1118 = t1108 - t1112*t1005;
+    const double t1118 = t1108 + t1112*t1005;
     const double t1119 = t1109 - t1112*t1006;
-    const double t1120 = t1027*t1113 + t1028*t1114 + t1029*t1115 + t1030*t1116 + t1031*t1117 + t1032*t1118 + t1033*t1119 + t1034*t1110;
+    const double t1120 = t1027*t1113 + t1028*t1114 + t1029*t1115 + t1030*t1116 + t1031*t1117 + t1032*t1118 + t1033*t1119 - t1034*t1110;
     const double t1121 = t1113 - t1120*t1027;
     const double t1122 = t1114 - t1120*t1028;
     const double t1123 = t1115 - t1120*t1029;
@@ -4746,8 +4737,8 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1125 = t1117 - t1120*t1031;
     const double t1126 = t1118 - t1120*t1032;
     const double t1127 = t1119 - t1120*t1033;
-    const double t1128 = t1110 - t1120*t1034;
-    const double t1129 = ((t1074*t1121 + t1075*t1122) + (t1076*t1123 + t1077*t1124)) + ((t1078*t1125 + t1079*t1126) + (t1080*t1127 + (t1081*t1128 + t1082*t1111)));
+    const double t1128 = t1110 + t1120*t1034;
+    const double t1129 = ((t1074*t1121 + t1075*t1122) + (t1076*t1123 + t1077*t1124)) + ((t1078*t1125 + t1079*t1126) + (t1080*t1127 + (t1081*t1128 - t1082*t1111)));
     const double t1130 = t1121 - t1129*t1074;
     const double t1131 = t1122 - t1129*t1075;
     const double t1132 = t1123 - t1129*t1076;
@@ -4756,7 +4747,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1135 = t1126 - t1129*t1079;
     const double t1136 = t1127 - t1129*t1080;
     const double t1137 = t1128 - t1129*t1081;
-    const double t1138 = t1111 - t1129*t1082;
+    const double t1138 = t1111 + t1129*t1082;
     const double t1139 = ((t1130*t1130 + t1131*t1131) + (t1132*t1132 + (t1133*t1133 + t1134*t1134))) + ((t1135*t1135 + t1136*t1136) + (t1137*t1137 + (t1138*t1138 + t995)));
     const double t1140 = sqrt(t1139);
     const int t1141 = t1140 > 0.0;
@@ -4770,18 +4761,18 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1149 = t1142*t1136;
     const double t1150 = t1142*t1137;
     const double t1151 = t1142*t1138;
-    const double t1152 = t1142*t972;
-    const double t1153 = t1085 + t1112;
+    const double t1152 = -t1142*t972;
+    const double t1153 = t1112 - t1085;
     const double t1154 = t1093 + t1120;
     const double t1155 = t1102 + t1129;
-    const double t1156 = t1004*t992 + t1005*t993;
-    const double t1157 = -t1156*t1000;
-    const double t1158 = -t1156*t1001;
-    const double t1159 = -t1156*t1002;
-    const double t1160 = -t1156*t1003;
-    const double t1161 = t992 - t1156*t1004;
+    const double t1156 = t1005*t993 - t1004*t992;
+    const double t1157 = t1156*t1000;
+    const double t1158 = t1156*t1001;
+    const double t1159 = t1156*t1002;
+    const double t1160 = t1156*t1003;
+    const double t1161 = t992 + t1156*t1004;
     const double t1162 = t993 - t1156*t1005;
-    const double t1163 = -t1156*t1006;
+    const double t1163 = t1156*t1006;
     const double t1164 = t1027*t1157 + t1028*t1158 + t1029*t1159 + t1030*t1160 + t1031*t1161 + t1032*t1162 + t1033*t1163;
     const double t1165 = t1157 - t1164*t1027;
     const double t1166 = t1158 - t1164*t1028;
@@ -4790,7 +4781,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1169 = t1161 - t1164*t1031;
     const double t1170 = t1162 - t1164*t1032;
     const double t1171 = t1163 - t1164*t1033;
-    const double t1172 = -t1164*t1034;
+    const double t1172 = t1164*t1034;
     const double t1173 = t1074*t1165 + t1075*t1166 + t1076*t1167 + t1077*t1168 + t1078*t1169 + t1079*t1170 + t1080*t1171 + t1081*t1172;
     const double t1174 = t1165 - t1173*t1074;
     const double t1175 = t1166 - t1173*t1075;
@@ -4800,7 +4791,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1179 = t1170 - t1173*t1079;
     const double t1180 = t1171 - t1173*t1080;
     const double t1181 = t1172 - t1173*t1081;
-    const double t1182 = -t1173*t1082;
+    const double t1182 = t1173*t1082;
     const double t1183 = ((t1143*t1174 + t1144*t1175) + (t1145*t1176 + t1146*t1177)) + ((t1147*t1178 + t1148*t1179) + (t1149*t1180 + (t1150*t1181 + t1151*t1182)));
     const double t1184 = t1174 - t1183*t1143;
     const double t1185 = t1175 - t1183*t1144;
@@ -4811,16 +4802,16 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1190 = t1180 - t1183*t1149;
     const double t1191 = t1181 - t1183*t1150;
     const double t1192 = t1182 - t1183*t1151;
-    const double t1193 = -t1183*t1152;
-    const double t1194 = t1000*t1184 + t1001*t1185 + t1002*t1186 + t1003*t1187 + t1004*t1188 + t1005*t1189 + t1006*t1190;
+    const double t1193 = t1183*t1152;
+    const double t1194 = t1000*t1184 + t1001*t1185 + t1002*t1186 + t1003*t1187 + t1004*t1188 - t1005*t1189 + t1006*t1190;
     const double t1195 = t1184 - t1194*t1000;
     const double t1196 = t1185 - t1194*t1001;
     const double t1197 = t1186 - t1194*t1002;
     const double t1198 = t1187 - t1194*t1003;
     const double t1199 = t1188 - t1194*t1004;
-    const double t1200 = t1189 - t1194*t1005;
+    const double t1200 = t1189 + t1194*t1005;
     const double t1201 = t1190 - t1194*t1006;
-    const double t1202 = t1027*t1195 + t1028*t1196 + t1029*t1197 + t1030*t1198 + t1031*t1199 + t1032*t1200 + t1033*t1201 + t1034*t1191;
+    const double t1202 = t1027*t1195 + t1028*t1196 + t1029*t1197 + t1030*t1198 + t1031*t1199 + t1032*t1200 + t1033*t1201 - t1034*t1191;
     const double t1203 = t1195 - t1202*t1027;
     const double t1204 = t1196 - t1202*t1028;
     const double t1205 = t1197 - t1202*t1029;
@@ -4828,8 +4819,8 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1207 = t1199 - t1202*t1031;
     const double t1208 = t1200 - t1202*t1032;
     const double t1209 = t1201 - t1202*t1033;
-    const double t1210 = t1191 - t1202*t1034;
-    const double t1211 = ((t1074*t1203 + t1075*t1204) + (t1076*t1205 + t1077*t1206)) + ((t1078*t1207 + t1079*t1208) + (t1080*t1209 + (t1081*t1210 + t1082*t1192)));
+    const double t1210 = t1191 + t1202*t1034;
+    const double t1211 = ((t1074*t1203 + t1075*t1204) + (t1076*t1205 + t1077*t1206)) + ((t1078*t1207 + t1079*t1208) + (t1080*t1209 + (t1081*t1210 - t1082*t1192)));
     const double t1212 = t1203 - t1211*t1074;
     const double t1213 = t1204 - t1211*t1075;
     const double t1214 = t1205 - t1211*t1076;
@@ -4838,8 +4829,8 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1217 = t1208 - t1211*t1079;
     const double t1218 = t1209 - t1211*t1080;
     const double t1219 = t1210 - t1211*t1081;
-    const double t1220 = t1192 - t1211*t1082;
-    const double t1221 = ((t1143*t1212 + t1144*t1213) + (t1145*t1214 + (t1146*t1215 + t1147*t1216))) + ((t1148*t1217 + t1149*t1218) + (t1150*t1219 + (t1151*t1220 + t1152*t1193)));
+    const double t1220 = t1192 + t1211*t1082;
+    const double t1221 = ((t1143*t1212 + t1144*t1213) + (t1145*t1214 + (t1146*t1215 + t1147*t1216))) + ((t1148*t1217 + t1149*t1218) + (t1150*t1219 + (t1151*t1220 - t1152*t1193)));
     const double t1222 = t1212 - t1221*t1143;
     const double t1223 = t1213 - t1221*t1144;
     const double t1224 = t1214 - t1221*t1145;
@@ -4849,7 +4840,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1228 = t1218 - t1221*t1149;
     const double t1229 = t1219 - t1221*t1150;
     const double t1230 = t1220 - t1221*t1151;
-    const double t1231 = t1193 - t1221*t1152;
+    const double t1231 = t1193 + t1221*t1152;
     const double t1232 = ((t1222*t1222 + t1223*t1223) + (t1224*t1224 + (t1225*t1225 + t1226*t1226))) + ((t1227*t1227 + (t1228*t1228 + t1229*t1229)) + (t1230*t1230 + (t1231*t1231 + t995)));
     const double t1233 = sqrt(t1232);
     const int t1234 = t1233 > 0.0;
@@ -4865,18 +4856,18 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1244 = t1235*t1230;
     const double t1245 = t1235*t1231;
     const double t1246 = t1235*t972;
-    const double t1247 = t1156 + t1194;
+    const double t1247 = t1194 - t1156;
     const double t1248 = t1164 + t1202;
     const double t1249 = t1173 + t1211;
     const double t1250 = t1183 + t1221;
     const double t1251 = t1005*t994;
-    const double t1252 = -t1251*t1000;
-    const double t1253 = -t1251*t1001;
-    const double t1254 = -t1251*t1002;
-    const double t1255 = -t1251*t1003;
-    const double t1256 = -t1251*t1004;
+    const double t1252 = t1251*t1000;
+    const double t1253 = t1251*t1001;
+    const double t1254 = t1251*t1002;
+    const double t1255 = t1251*t1003;
+    const double t1256 = t1251*t1004;
     const double t1257 = t994 - t1251*t1005;
-    const double t1258 = -t1251*t1006;
+    const double t1258 = t1251*t1006;
     const double t1259 = t1027*t1252 + t1028*t1253 + t1029*t1254 + t1030*t1255 + t1031*t1256 + t1032*t1257 + t1033*t1258;
     const double t1260 = t1252 - t1259*t1027;
     const double t1261 = t1253 - t1259*t1028;
@@ -4885,7 +4876,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1264 = t1256 - t1259*t1031;
     const double t1265 = t1257 - t1259*t1032;
     const double t1266 = t1258 - t1259*t1033;
-    const double t1267 = -t1259*t1034;
+    const double t1267 = t1259*t1034;
     const double t1268 = t1074*t1260 + t1075*t1261 + t1076*t1262 + t1077*t1263 + t1078*t1264 + t1079*t1265 + t1080*t1266 + t1081*t1267;
     const double t1269 = t1260 - t1268*t1074;
     const double t1270 = t1261 - t1268*t1075;
@@ -4895,7 +4886,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1274 = t1265 - t1268*t1079;
     const double t1275 = t1266 - t1268*t1080;
     const double t1276 = t1267 - t1268*t1081;
-    const double t1277 = -t1268*t1082;
+    const double t1277 = t1268*t1082;
     const double t1278 = ((t1143*t1269 + t1144*t1270) + (t1145*t1271 + t1146*t1272)) + ((t1147*t1273 + t1148*t1274) + (t1149*t1275 + (t1150*t1276 + t1151*t1277)));
     const double t1279 = t1269 - t1278*t1143;
     const double t1280 = t1270 - t1278*t1144;
@@ -4906,7 +4897,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1285 = t1275 - t1278*t1149;
     const double t1286 = t1276 - t1278*t1150;
     const double t1287 = t1277 - t1278*t1151;
-    const double t1288 = -t1278*t1152;
+    const double t1288 = t1278*t1152;
     const double t1289 = ((t1236*t1279 + t1237*t1280) + (t1238*t1281 + (t1239*t1282 + t1240*t1283))) + ((t1241*t1284 + t1242*t1285) + (t1243*t1286 + (t1244*t1287 + t1245*t1288)));
     const double t1290 = t1279 - t1289*t1236;
     const double t1291 = t1280 - t1289*t1237;
@@ -4919,15 +4910,15 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1298 = t1287 - t1289*t1244;
     const double t1299 = t1288 - t1289*t1245;
     const double t1300 = -t1289*t1246;
-    const double t1301 = t1000*t1290 + t1001*t1291 + t1002*t1292 + t1003*t1293 + t1004*t1294 + t1005*t1295 + t1006*t1296;
+    const double t1301 = t1000*t1290 + t1001*t1291 + t1002*t1292 + t1003*t1293 + t1004*t1294 - t1005*t1295 + t1006*t1296;
     const double t1302 = t1290 - t1301*t1000;
     const double t1303 = t1291 - t1301*t1001;
     const double t1304 = t1292 - t1301*t1002;
     const double t1305 = t1293 - t1301*t1003;
     const double t1306 = t1294 - t1301*t1004;
-    const double t1307 = t1295 - t1301*t1005;
+    const double t1307 = t1295 + t1301*t1005;
     const double t1308 = t1296 - t1301*t1006;
-    const double t1309 = t1027*t1302 + t1028*t1303 + t1029*t1304 + t1030*t1305 + t1031*t1306 + t1032*t1307 + t1033*t1308 + t1034*t1297;
+    const double t1309 = t1027*t1302 + t1028*t1303 + t1029*t1304 + t1030*t1305 + t1031*t1306 + t1032*t1307 + t1033*t1308 - t1034*t1297;
     const double t1310 = t1302 - t1309*t1027;
     const double t1311 = t1303 - t1309*t1028;
     const double t1312 = t1304 - t1309*t1029;
@@ -4935,8 +4926,8 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1314 = t1306 - t1309*t1031;
     const double t1315 = t1307 - t1309*t1032;
     const double t1316 = t1308 - t1309*t1033;
-    const double t1317 = t1297 - t1309*t1034;
-    const double t1318 = ((t1074*t1310 + t1075*t1311) + (t1076*t1312 + t1077*t1313)) + ((t1078*t1314 + t1079*t1315) + (t1080*t1316 + (t1081*t1317 + t1082*t1298)));
+    const double t1317 = t1297 + t1309*t1034;
+    const double t1318 = ((t1074*t1310 + t1075*t1311) + (t1076*t1312 + t1077*t1313)) + ((t1078*t1314 + t1079*t1315) + (t1080*t1316 + (t1081*t1317 - t1082*t1298)));
     const double t1319 = t1310 - t1318*t1074;
     const double t1320 = t1311 - t1318*t1075;
     const double t1321 = t1312 - t1318*t1076;
@@ -4945,8 +4936,8 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1324 = t1315 - t1318*t1079;
     const double t1325 = t1316 - t1318*t1080;
     const double t1326 = t1317 - t1318*t1081;
-    const double t1327 = t1298 - t1318*t1082;
-    const double t1328 = ((t1143*t1319 + t1144*t1320) + (t1145*t1321 + (t1146*t1322 + t1147*t1323))) + ((t1148*t1324 + t1149*t1325) + (t1150*t1326 + (t1151*t1327 + t1152*t1299)));
+    const double t1327 = t1298 + t1318*t1082;
+    const double t1328 = ((t1143*t1319 + t1144*t1320) + (t1145*t1321 + (t1146*t1322 + t1147*t1323))) + ((t1148*t1324 + t1149*t1325) + (t1150*t1326 + (t1151*t1327 - t1152*t1299)));
     const double t1329 = t1319 - t1328*t1143;
     const double t1330 = t1320 - t1328*t1144;
     const double t1331 = t1321 - t1328*t1145;
@@ -4956,7 +4947,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1335 = t1325 - t1328*t1149;
     const double t1336 = t1326 - t1328*t1150;
     const double t1337 = t1327 - t1328*t1151;
-    const double t1338 = t1299 - t1328*t1152;
+    const double t1338 = t1299 + t1328*t1152;
     const double t1339 = ((t1236*t1329 + t1237*t1330) + (t1246*t1300 + (t1238*t1331 + t1239*t1332))) + ((t1240*t1333 + (t1241*t1334 + t1242*t1335)) + (t1243*t1336 + (t1244*t1337 + t1245*t1338)));
     const double t1340 = t1329 - t1339*t1236;
     const double t1341 = t1330 - t1339*t1237;
@@ -4979,12 +4970,12 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], dou
     const double t1358 = t1354*t1343;
     const double t1359 = t1354*t1344;
     const double t1360 = t1354*t1345;
-    const double t1361 = t1251 + t1301;
+    const double t1361 = t1301 - t1251;
     const double t1362 = t1259 + t1309;
     const double t1363 = t1268 + t1318;
     const double t1364 = t1278 + t1328;
     const double t1365 = t1289 + t1339;
-    const double t1366 = t187*(t1000*twist[0] + t1001*twist[1] + t1002*twist[2] + t1003*twist[3] + t1004*twist[4] + t1005*twist[5]);
+    const double t1366 = t187*(t1000*twist[0] + t1001*twist[1] + t1002*twist[2] + t1003*twist[3] + t1004*twist[4] - t1005*twist[5]);
     const double t1367 = t187*(t1027*twist[0] + t1028*twist[1] + t1029*twist[2] + t1030*twist[3] + t1031*twist[4] + t1032*twist[5]);
     const double t1368 = t187*(t1074*twist[0] + t1075*twist[1] + t1076*twist[2] + t1077*twist[3] + t1078*twist[4] + t1079*twist[5]);
     const double t1369 = t187*(t1143*twist[0] + t1144*twist[1] + t1145*twist[2] + t1146*twist[3] + t1147*twist[4] + t1148*twist[5]);
@@ -5045,7 +5036,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 12 neg, 7 div, 7 sqrt */
+/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 5 neg, 7 div, 7 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
 {
@@ -5069,7 +5060,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t8 = t4*cs[2] + cs[0]*sn[2];
     const double t9 = t4*sn[2] - cs[0]*cs[2];
     const double t10 = cs[2]*sn[1];
-    const double t11 = -sn[1]*sn[2];
+    const double t11 = sn[1]*sn[2];
     const double t12 = t3*sn[3] + t6*cs[3];
     const double t13 = t3*cs[3] - t6*sn[3];
     const double t14 = t5*sn[3] + t8*cs[3];
@@ -5078,7 +5069,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t17 = t10*sn[3] + cs[1]*cs[3];
     const double t18 = t12*cs[4] - t7*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
-    const double t22 = t16*cs[4] - t11*sn[4];
+    const double t22 = t16*cs[4] + t11*sn[4];
     const double t30 = 0.088*cs[5] + 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
@@ -5105,7 +5096,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t54 = t36*cs[1] - t10*t37;
     const double t55 = t12*t33 - t7*t32;
     const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     const double t58 = t13*t30 + t18*t31;
     const double t59 = t15*t30 + t20*t31;
     const double t60 = t17*t30 + t22*t31;
@@ -5119,7 +5110,6 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t194 = t188 + t189 + t190 + t191 + t192 + t193;
     const double t195 = sqrt(t194);
     const double t196 = 1.0/(t195 != 0.0 ? t195 : 1.0);
-    const double t230 = -t42;
     const double t972 = t187*lambda;
     const double t995 = t972*t972;
     const double t1385 = (((t188 + t48*t48) + (t189 + t50*t50)) + ((t51*t51 + t190) + (t53*t53 + t54*t54))) + (((t191 + t56*t56) + (t57*t57 + t192)) + ((t59*t59 + t60*t60) + (t44*t44 + (t193 + t42*t42))));
@@ -5160,13 +5150,13 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t1420 = (t1413 ? t1415*t1409 : 0.0);
     const double t1421 = (t1413 ? t1415*t1410 : 0.0);
     const double t1422 = t1397 + t1404;
-    const double t1423 = t51*t1393 + t54*t1394 + t57*t1395 + t60*t1396 - t42*t1392;
-    const double t1424 = -t1423*t1391;
-    const double t1425 = t230 - t1423*t1392;
-    const double t1426 = t51 - t1423*t1393;
-    const double t1427 = t54 - t1423*t1394;
-    const double t1428 = t57 - t1423*t1395;
-    const double t1429 = t60 - t1423*t1396;
+    const double t1423 = t42*t1392 - t51*t1393 - t54*t1394 - t57*t1395 - t60*t1396;
+    const double t1424 = t1423*t1391;
+    const double t1425 = t1423*t1392 - t42;
+    const double t1426 = t51 + t1423*t1393;
+    const double t1427 = t54 + t1423*t1394;
+    const double t1428 = t57 + t1423*t1395;
+    const double t1429 = t60 + t1423*t1396;
     const double t1430 = t1416*t1424 + t1417*t1425 + t1418*t1426 + t1419*t1427 + t1420*t1428 + t1421*t1429;
     const double t1431 = t1424 - t1430*t1416;
     const double t1432 = t1425 - t1430*t1417;
@@ -5199,7 +5189,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t1459 = (t1453 ? t1455*t1448 : 0.0);
     const double t1460 = (t1453 ? t1455*t1449 : 0.0);
     const double t1461 = (t1453 ? t1455*t1450 : 0.0);
-    const double t1462 = t1423 + t1437;
+    const double t1462 = t1437 - t1423;
     const double t1463 = t1430 + t1444;
     const double t1464 = t1389*t187;
     const double t1465 = t1422*t187;
@@ -5213,17 +5203,17 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t1473 = (t1472 ? 1.0/(t1471 != 0.0 ? t1471 : 1.0) : 1.0);
     const double t1474 = t1473*t1464;
     const double t1475 = t1473*t1465;
-    const double t1476 = t1473*t1466;
+    const double t1476 = -t1473*t1466;
     const double t1477 = t1473*t972;
-    const double t1478 = t1475*t1467 + t1476*t1468;
-    const double t1479 = -t1478*t1474;
-    const double t1480 = t1467 - t1478*t1475;
+    const double t1478 = t1476*t1468 - t1475*t1467;
+    const double t1479 = t1478*t1474;
+    const double t1480 = t1467 + t1478*t1475;
     const double t1481 = t1468 - t1478*t1476;
-    const double t1482 = -t1478*t1477;
-    const double t1483 = t1474*t1479 + t1475*t1480 + t1476*t1481 + t1477*t1482;
+    const double t1482 = t1478*t1477;
+    const double t1483 = t1474*t1479 + t1475*t1480 - t1476*t1481 + t1477*t1482;
     const double t1484 = t1479 - t1483*t1474;
     const double t1485 = t1480 - t1483*t1475;
-    const double t1486 = t1481 - t1483*t1476;
+    const double t1486 = t1481 + t1483*t1476;
     const double t1487 = t1482 - t1483*t1477;
     const double t1488 = t1484*t1484 + t1485*t1485 + t1486*t1486 + t1487*t1487 + t995;
     const double t1489 = sqrt(t1488);
@@ -5234,22 +5224,22 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t1494 = t1491*t1486;
     const double t1495 = t1491*t1487;
     const double t1496 = t1491*t972;
-    const double t1497 = t1478 + t1483;
+    const double t1497 = t1483 - t1478;
     const double t1498 = t1476*t1469;
-    const double t1499 = -t1498*t1474;
-    const double t1500 = -t1498*t1475;
+    const double t1499 = t1498*t1474;
+    const double t1500 = t1498*t1475;
     const double t1501 = t1469 - t1498*t1476;
-    const double t1502 = -t1498*t1477;
+    const double t1502 = t1498*t1477;
     const double t1503 = t1492*t1499 + t1493*t1500 + t1494*t1501 + t1495*t1502;
     const double t1504 = t1499 - t1503*t1492;
     const double t1505 = t1500 - t1503*t1493;
     const double t1506 = t1501 - t1503*t1494;
     const double t1507 = t1502 - t1503*t1495;
     const double t1508 = -t1503*t1496;
-    const double t1509 = t1474*t1504 + t1475*t1505 + t1476*t1506 + t1477*t1507;
+    const double t1509 = t1474*t1504 + t1475*t1505 - t1476*t1506 + t1477*t1507;
     const double t1510 = t1504 - t1509*t1474;
     const double t1511 = t1505 - t1509*t1475;
-    const double t1512 = t1506 - t1509*t1476;
+    const double t1512 = t1506 + t1509*t1476;
     const double t1513 = t1507 - t1509*t1477;
     const double t1514 = t1492*t1510 + t1493*t1511 + t1494*t1512 + t1495*t1513 + t1496*t1508;
     const double t1515 = t1510 - t1514*t1492;
@@ -5264,9 +5254,9 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3]
     const double t1524 = t1523*t1515;
     const double t1525 = t1523*t1516;
     const double t1526 = t1523*t1517;
-    const double t1527 = t1498 + t1509;
+    const double t1527 = t1509 - t1498;
     const double t1528 = t1503 + t1514;
-    const double t1529 = t187*(t1474*v[0] + t1475*v[1] + t1476*v[2]);
+    const double t1529 = t187*(t1474*v[0] + t1475*v[1] - t1476*v[2]);
     const double t1530 = t187*(t1492*v[0] + t1493*v[1] + t1494*v[2]);
     const double t1531 = t187*(t1524*v[0] + t1525*v[1] + t1526*v[2]);
     const double t1532 = (t1522 ? t1523*t1531 : 0.0);
@@ -5319,7 +5309,7 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
 }
 
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
-/* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 8 neg, 3 div, 2 sqrt */
+/* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 5 neg, 3 div, 2 sqrt */
 
 static PANDA_LIGHT void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
 {
@@ -5349,7 +5339,7 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     const double t8 = t4*cs[2] + cs[0]*sn[2];
     const double t9 = t4*sn[2] - cs[0]*cs[2];
     const double t10 = cs[2]*sn[1];
-    const double t11 = -sn[1]*sn[2];
+    const double t11 = sn[1]*sn[2];
     const double t12 = t3*sn[3] + t6*cs[3];
     const double t13 = t3*cs[3] - t6*sn[3];
     const double t14 = t5*sn[3] + t8*cs[3];
@@ -5360,8 +5350,8 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     const double t19 = t7*cs[4] + t12*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
     const double t21 = t9*cs[4] + t14*sn[4];
-    const double t22 = t16*cs[4] - t11*sn[4];
-    const double t23 = t11*cs[4] + t16*sn[4];
+    const double t22 = t16*cs[4] + t11*sn[4];
+    const double t23 = t16*sn[4] - t11*cs[4];
     const double t25 = t18*sn[5] - t13*cs[5];
     const double t26 = t15*sn[5] + t20*cs[5];
     const double t27 = t20*sn[5] - t15*cs[5];
@@ -5404,7 +5394,7 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     JA[4] = t55;
     const double t56 = t14*t33 - t9*t32;
     JA[11] = t56;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     JA[18] = t57;
     const double t58 = t13*t30 + t18*t31;
     JA[5] = t58;
@@ -5414,10 +5404,10 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     JA[19] = t60;
     const double t61 = t21*sn[6] + t26*cs[6];
     const double t62 = t21*cs[6] - t26*sn[6];
-    const double t63 = t23*sn[6] + t28*cs[6];
+    const double t63 = -t23*sn[6] - t28*cs[6];
     const double t64 = t23*cs[6] - t28*sn[6];
     const double t65 = t29*t62 - t27*t64;
-    const double t66 = t27*t63 - t29*t61;
+    const double t66 = t27*t63 + t29*t61;
     const double t230 = -t42;
     JA[15] = t230;
     const double t1541 = t61*t61 + t65*t65;
@@ -5429,11 +5419,11 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     const double t1547 = sqrt(t1546);
     const double t1548 = (t1547 > 0.0 ? 1.0/(t1547 != 0.0 ? t1547 : 1.0) : 1.0);
     const double t1549 = (t1542 ? t65*t1545 : t62*t1548);
-    const double t1550 = (t1542 ? t61*t1545 : -t66*t1548);
+    const double t1550 = (t1542 ? t61*t1545 : t66*t1548);
     const double t1551 = (t1542 ? t65*t1543 : 0.0);
     const double t1552 = (t1542 ? t61*t1543 : 0.0);
-    const double t1553 = (t1542 ? -t63*t65*t1543 : 0.0);
-    const double t1554 = (t1542 ? -t61*t63*t1543 : 0.0);
+    const double t1553 = (t1542 ? t63*t65*t1543 : 0.0);
+    const double t1554 = (t1542 ? t61*t63*t1543 : 0.0);
     const double t1555 = cs[0]*t1552 - t1551*sn[0];
     JA[22] = t1555;
     const double t1556 = t3*t1551 + t5*t1552;
@@ -5465,7 +5455,7 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     JA[36] = t1569;
     const double t1570 = t3*t1553 + t5*t1554 + cs[1]*t1567;
     JA[37] = t1570;
-    const double t1571 = t7*t1553 + t9*t1554 + t11*t1567;
+    const double t1571 = t7*t1553 + t9*t1554 - t11*t1567;
     JA[38] = t1571;
     const double t1572 = t13*t1553 + t15*t1554 + t17*t1567;
     JA[39] = t1572;

@@ -51,7 +51,7 @@
  * sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x9a995fdfUL
+#define PANDA_STAMP 0xaef6947aUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -104,7 +104,7 @@ void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
  * Stack: about 21 KB. */
 void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 960 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 952 bytes. */
 void panda_twist(const double q[7], const double dq[7], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -112,7 +112,7 @@ void panda_twist(const double q[7], const double dq[7], double twist[6]);
  * Stack: about 11 KB. */
 void panda_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1192 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1184 bytes. */
 void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -136,7 +136,7 @@ void panda_ik_terms(const double q[7], double T[16], double J[42]);
  * Stack: about 23 KB. */
 void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2888 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2872 bytes. */
 void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -144,7 +144,7 @@ void panda_manipulability(const double q[7], double w[1]);
  * Stack: about 15 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1200 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1192 bytes. */
 void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -152,7 +152,7 @@ void panda_manipulability_position(const double q[7], double w_position[1]);
  * Stack: about 13 KB. */
 void panda_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1440 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1424 bytes. */
 void panda_jacobian_hessian(const double q[7], double Hs[294]);
 
 /* The same for m configurations stored one after another (element k of
@@ -176,7 +176,7 @@ void panda_inverse_velocity(const double q[7], const double twist[6], double lam
  * Stack: about 19 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1984 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1976 bytes. */
 void panda_inverse_velocity_position(const double q[7], const double v[3], double lambda, double dq_position[7]);
 
 /* The same for m configurations stored one after another (element k of

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x7e224f0aUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3dc32c37UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -494,7 +494,7 @@ void ur5_pose_batch(size_t m, const double *q, double *T)
 #endif
 
 /* ---- ur5_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
-/* operations: 5 sin, 5 cos, 15 add/sub, 34 mul, 5 neg */
+/* operations: 5 sin, 5 cos, 15 add/sub, 34 mul, 4 neg */
 
 UR5_BODY void ur5_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -551,7 +551,8 @@ UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restr
     const double t22 = t20 + 0.425*sn[1*UR5_STRIDE];
     const double t23 = t21*cs[0] + t18*sn[0];
     J[6*UR5_STRIDE] = t23;
-    const double t24 = t21*sn[0] - t18*cs[0];
+    const double t24 = t18*cs[0] - t21*sn[0];
+    J[0] = t24;
     const double t26 = t22*cs[0];
     J[1*UR5_STRIDE] = t26;
     const double t27 = t22*sn[0];
@@ -576,8 +577,6 @@ UR5_BODY void ur5_jacobian_finish(const double *restrict cs, const double *restr
     J[27*UR5_STRIDE] = t242;
     const double t309 = -cs[3*UR5_STRIDE];
     J[34*UR5_STRIDE] = t309;
-    const double t2015 = -t24;
-    J[0] = t2015;
 }
 
 UR5_SINGLE void ur5_jacobian(const double q[6], double J[36])
@@ -699,7 +698,7 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
 #endif
 
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 5 neg */
+/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 4 neg */
 
 UR5_BODY void ur5_jacobian_tool_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -729,7 +728,7 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     J_tool[35*UR5_STRIDE] = 1.0;
     const double t6 = -sn[4*UR5_STRIDE];
     const double t8 = cs[4*UR5_STRIDE]*sn[0];
-    const double t10 = -cs[0]*cs[4*UR5_STRIDE];
+    const double t10 = cs[0]*cs[4*UR5_STRIDE];
     const double t13 = t6*sn[3*UR5_STRIDE];
     J_tool[30*UR5_STRIDE] = t13;
     const double t14 = -0.0823*sn[4*UR5_STRIDE];
@@ -767,7 +766,7 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     const double t102 = t97*cs[0] + t8;
     const double t103 = t95*sn[0] - t93*cs[0];
     const double t104 = t96*sn[0] - t94*cs[0];
-    const double t105 = t97*sn[0] + t10;
+    const double t105 = t97*sn[0] - t10;
     const double t106 = t103*t23 - t100*t24;
     J_tool[0] = t106;
     const double t107 = t104*t23 - t101*t24;
@@ -1174,7 +1173,7 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
 #endif
 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 5 sin, 5 cos, 36 add/sub, 60 mul, 3 neg */
+/* operations: 5 sin, 5 cos, 36 add/sub, 59 mul, 2 neg */
 
 UR5_BODY void ur5_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1193,12 +1192,11 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t3 = cs[0]*sn[3*UR5_STRIDE];
     const double t4 = cs[3*UR5_STRIDE]*sn[0];
     const double t5 = sn[0]*sn[3*UR5_STRIDE];
-    const double t6 = -sn[4*UR5_STRIDE];
     const double t8 = cs[4*UR5_STRIDE]*sn[0];
     const double t9 = t8 - t2*sn[4*UR5_STRIDE];
     const double t10 = -cs[0]*cs[4*UR5_STRIDE];
     const double t11 = t10 - t4*sn[4*UR5_STRIDE];
-    const double t13 = t6*sn[3*UR5_STRIDE];
+    const double t13 = sn[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
     const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
     const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
@@ -1211,7 +1209,6 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t23 = t21*cs[0] + t18*sn[0];
     const double t24 = t21*sn[0] - t18*cs[0];
     const double t26 = t22*cs[0];
-    const double t27 = t22*sn[0];
     const double t28 = t20*cs[0];
     const double t29 = t20*sn[0];
     const double t30 = t17*cs[0];
@@ -1232,7 +1229,7 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     twist[3*UR5_STRIDE] = t53;
     const double t54 = t51 + t11*dq[5*UR5_STRIDE];
     twist[4*UR5_STRIDE] = t54;
-    const double t55 = t52 + t13*dq[5*UR5_STRIDE];
+    const double t55 = t52 - t13*dq[5*UR5_STRIDE];
     twist[5*UR5_STRIDE] = t55;
     const double t56 = t32*dq[4*UR5_STRIDE];
     const double t57 = t33*dq[4*UR5_STRIDE];
@@ -1244,7 +1241,7 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t63 = t60 + t29*dq[2*UR5_STRIDE];
     const double t64 = t61 + t19*dq[2*UR5_STRIDE];
     const double t65 = t62 + t26*dq[1*UR5_STRIDE];
-    const double t66 = t63 + t27*dq[1*UR5_STRIDE];
+    const double t66 = t63 + t44*t22;
     const double t67 = t64 + t21*dq[1*UR5_STRIDE];
     twist[2*UR5_STRIDE] = t67;
     const double t68 = t65 - t24*dq[0];
@@ -1353,7 +1350,7 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 #endif
 
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 5 neg */
+/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 3 neg */
 
 UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1419,7 +1416,7 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t65 = t62 + t26*dq[1*UR5_STRIDE];
     const double t66 = t63 + t27*dq[1*UR5_STRIDE];
     const double t68 = t65 - t24*dq[0];
-    const double t70 = -t66 - t23*dq[0];
+    const double t70 = t66 + t23*dq[0];
     const double t71 = t21*t45 - t27*dq[0] - cs[0]*t64;
     const double t72 = t26*dq[0] - t21*t44 - sn[0]*t64;
     const double t73 = t27*t44 + cs[0]*t62 + sn[0]*t63 - t26*t45;
@@ -1432,16 +1429,16 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t80 = t30*dq[0] - t16*t48 - sn[0]*t58;
     const double t81 = t31*t48 + cs[0]*t56 + sn[0]*t57 - t30*t49;
     const double t82 = t34*t51 - t33*t52;
-    acc[0] = (((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + t32*ddq[4*UR5_STRIDE])) + ((t70*dq[0] + t71*dq[1*UR5_STRIDE]) + (t76*dq[2*UR5_STRIDE] + (t79*dq[3*UR5_STRIDE] + t82*dq[4*UR5_STRIDE])))) - t24*ddq[0];
+    acc[0] = (((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + t32*ddq[4*UR5_STRIDE])) + ((t71*dq[1*UR5_STRIDE] - t70*dq[0]) + (t76*dq[2*UR5_STRIDE] + (t79*dq[3*UR5_STRIDE] + t82*dq[4*UR5_STRIDE])))) - t24*ddq[0];
     const double t83 = t32*t52 - t34*t50;
     acc[1*UR5_STRIDE] = ((t27*ddq[1*UR5_STRIDE] + t29*ddq[2*UR5_STRIDE]) + (t31*ddq[3*UR5_STRIDE] + (t33*ddq[4*UR5_STRIDE] + t23*ddq[0]))) + ((t72*dq[1*UR5_STRIDE] + t77*dq[2*UR5_STRIDE]) + (t80*dq[3*UR5_STRIDE] + (t83*dq[4*UR5_STRIDE] + t68*dq[0])));
     const double t84 = t33*t50 - t32*t51;
     acc[2*UR5_STRIDE] = t34*ddq[4*UR5_STRIDE] + t21*ddq[1*UR5_STRIDE] + t19*ddq[2*UR5_STRIDE] + t16*ddq[3*UR5_STRIDE] + t73*dq[1*UR5_STRIDE] + t78*dq[2*UR5_STRIDE] + t81*dq[3*UR5_STRIDE] + t84*dq[4*UR5_STRIDE];
-    const double t85 = -t5*dq[0] - cs[3*UR5_STRIDE]*t49;
+    const double t85 = t5*dq[0] + cs[3*UR5_STRIDE]*t49;
     const double t86 = t3*dq[0] + cs[3*UR5_STRIDE]*t48;
     const double t87 = t5*t48 - t3*t49;
     const double t88 = t13*t51 - t11*t52;
-    acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t9*ddq[5*UR5_STRIDE]) + (t74*dq[1*UR5_STRIDE] + (t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]))) + ((t85*dq[4*UR5_STRIDE] + t88*dq[5*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
+    acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t9*ddq[5*UR5_STRIDE]) + (t74*dq[1*UR5_STRIDE] + (t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]))) + ((t88*dq[5*UR5_STRIDE] - t85*dq[4*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
     const double t89 = t9*t52 - t13*t50;
     acc[4*UR5_STRIDE] = ((t5*ddq[4*UR5_STRIDE] + (t11*ddq[5*UR5_STRIDE] + t75*dq[1*UR5_STRIDE])) + ((t75*dq[2*UR5_STRIDE] + t75*dq[3*UR5_STRIDE]) + (t86*dq[4*UR5_STRIDE] + t89*dq[5*UR5_STRIDE]))) - (cs[0]*ddq[1*UR5_STRIDE] + (cs[0]*ddq[2*UR5_STRIDE] + cs[0]*ddq[3*UR5_STRIDE]));
     const double t90 = t11*t50 - t9*t51;
@@ -2234,7 +2231,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 11 neg, 5 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 3 neg, 5 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_angles(const double q[6], double *restrict ang)
 {
@@ -2286,19 +2283,19 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t128 = sqrt(t127);
     const double t129 = 1.0/(t128 != 0.0 ? t128 : 1.0);
     const double t130 = (t128 > 0.0 ? t129 : 1.0);
-    const double t131 = -t24*t130;
+    const double t131 = t24*t130;
     const double t132 = t26*t130;
     const double t133 = t28*t130;
     const double t134 = t30*t130;
     const double t135 = t32*t130;
-    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 + t23*t131;
-    const double t137 = t23 - t136*t131;
+    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 - t23*t131;
+    const double t137 = t23 + t136*t131;
     const double t138 = t27 - t136*t132;
     const double t139 = t29 - t136*t133;
     const double t140 = t31 - t136*t134;
     const double t141 = t33 - t136*t135;
-    const double t142 = t131*t137 + t132*t138 + t133*t139 + t134*t140 + t135*t141;
-    const double t143 = t137 - t142*t131;
+    const double t142 = t132*t138 - t131*t137 + t133*t139 + t134*t140 + t135*t141;
+    const double t143 = t137 + t142*t131;
     const double t144 = t138 - t142*t132;
     const double t145 = t139 - t142*t133;
     const double t146 = t140 - t142*t134;
@@ -2312,7 +2309,7 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t154 = t150*t146;
     const double t155 = t150*t147;
     const double t157 = t34*t135 + t21*t132 + t19*t133 + t16*t134;
-    const double t158 = -t157*t131;
+    const double t158 = t157*t131;
     const double t159 = t21 - t157*t132;
     const double t160 = t19 - t157*t133;
     const double t161 = t16 - t157*t134;
@@ -2323,8 +2320,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t166 = t160 - t163*t153;
     const double t167 = t161 - t163*t154;
     const double t168 = t162 - t163*t155;
-    const double t169 = t131*t164 + t132*t165 + t133*t166 + t134*t167 + t135*t168;
-    const double t170 = t164 - t169*t131;
+    const double t169 = t132*t165 - t131*t164 + t133*t166 + t134*t167 + t135*t168;
+    const double t170 = t164 + t169*t131;
     const double t171 = t165 - t169*t132;
     const double t172 = t166 - t169*t133;
     const double t173 = t167 - t169*t134;
@@ -2344,7 +2341,7 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t187 = t183*t179;
     const double t188 = t183*t180;
     const double t191 = t3*t135 + t132*sn[0] + t133*sn[0] + t134*sn[0];
-    const double t192 = -t191*t131;
+    const double t192 = t191*t131;
     const double t193 = sn[0] - t191*t132;
     const double t194 = sn[0] - t191*t133;
     const double t195 = sn[0] - t191*t134;
@@ -2361,8 +2358,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t206 = t200 - t203*t186;
     const double t207 = t201 - t203*t187;
     const double t208 = t202 - t203*t188;
-    const double t209 = t131*t204 + t132*t205 + t133*t206 + t134*t207 + t135*t208;
-    const double t210 = t204 - t209*t131;
+    const double t209 = t132*t205 - t131*t204 + t133*t206 + t134*t207 + t135*t208;
+    const double t210 = t204 + t209*t131;
     const double t211 = t205 - t209*t132;
     const double t212 = t206 - t209*t133;
     const double t213 = t207 - t209*t134;
@@ -2389,13 +2386,12 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t234 = t230*t225;
     const double t235 = t230*t226;
     const double t236 = t9*t230;
-    const double t240 = t5*t135 - cs[0]*t132 - cs[0]*t133 - cs[0]*t134;
+    const double t240 = cs[0]*t132 - t5*t135 + cs[0]*t133 + cs[0]*t134;
     const double t241 = -t240*t131;
-    const double t242 = -cs[0];
-    const double t243 = t242 - t240*t132;
-    const double t244 = t242 - t240*t133;
-    const double t245 = t242 - t240*t134;
-    const double t246 = t5 - t240*t135;
+    const double t243 = t240*t132 - cs[0];
+    const double t244 = t240*t133 - cs[0];
+    const double t245 = t240*t134 - cs[0];
+    const double t246 = t5 + t240*t135;
     const double t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246;
     const double t248 = t241 - t247*t151;
     const double t249 = t243 - t247*t152;
@@ -2415,8 +2411,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t263 = t257 - t259*t234;
     const double t264 = t258 - t259*t235;
     const double t265 = t11 - t259*t236;
-    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t260 - t266*t131;
+    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t260 + t266*t131;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -2449,13 +2445,12 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t297 = t293*t288;
     const double t298 = t293*t289;
     const double t299 = t293*t290;
-    const double t304 = t131 - cs[3]*t135;
+    const double t304 = t131 + cs[3]*t135;
     const double t305 = 1.0 - t304*t131;
-    const double t306 = -t304*t132;
-    const double t307 = -t304*t133;
-    const double t308 = -t304*t134;
-    const double t309 = -cs[3];
-    const double t310 = t309 - t304*t135;
+    const double t306 = t304*t132;
+    const double t307 = t304*t133;
+    const double t308 = t304*t134;
+    const double t310 = t304*t135 - cs[3];
     const double t311 = t151*t305 + t152*t306 + t153*t307 + t154*t308 + t155*t310;
     const double t312 = t305 - t311*t151;
     const double t313 = t306 - t311*t152;
@@ -2482,8 +2477,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t334 = t327 - t330*t297;
     const double t335 = t328 - t330*t298;
     const double t336 = t329 - t330*t299;
-    const double t337 = t131*t331 + t132*t332 + t133*t333 + t134*t334 + t135*t335;
-    const double t338 = t331 - t337*t131;
+    const double t337 = t132*t332 - t131*t331 + t133*t333 + t134*t334 + t135*t335;
+    const double t338 = t331 + t337*t131;
     const double t339 = t332 - t337*t132;
     const double t340 = t333 - t337*t133;
     const double t341 = t334 - t337*t134;
@@ -2553,7 +2548,7 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
 }
 
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
-/* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 2 neg, 2 div, 3 sqrt */
+/* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 0 neg, 2 div, 3 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
 {
@@ -2597,19 +2592,19 @@ static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict 
     const double t128 = sqrt(t127);
     const double t129 = 1.0/(t128 != 0.0 ? t128 : 1.0);
     const double t130 = (t128 > 0.0 ? t129 : 1.0);
-    const double t131 = -t24*t130;
+    const double t131 = t24*t130;
     const double t132 = t26*t130;
     const double t133 = t28*t130;
     const double t134 = t30*t130;
     const double t135 = t32*t130;
-    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 + t23*t131;
-    const double t137 = t23 - t136*t131;
+    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 - t23*t131;
+    const double t137 = t23 + t136*t131;
     const double t138 = t27 - t136*t132;
     const double t139 = t29 - t136*t133;
     const double t140 = t31 - t136*t134;
     const double t141 = t33 - t136*t135;
-    const double t142 = t131*t137 + t132*t138 + t133*t139 + t134*t140 + t135*t141;
-    const double t143 = t137 - t142*t131;
+    const double t142 = t132*t138 - t131*t137 + t133*t139 + t134*t140 + t135*t141;
+    const double t143 = t137 + t142*t131;
     const double t144 = t138 - t142*t132;
     const double t145 = t139 - t142*t133;
     const double t146 = t140 - t142*t134;
@@ -2623,7 +2618,7 @@ static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict 
     const double t154 = t150*t146;
     const double t155 = t150*t147;
     const double t157 = t34*t135 + t21*t132 + t19*t133 + t16*t134;
-    const double t158 = -t157*t131;
+    const double t158 = t157*t131;
     const double t159 = t21 - t157*t132;
     const double t160 = t19 - t157*t133;
     const double t161 = t16 - t157*t134;
@@ -2634,8 +2629,8 @@ static UR5_LIGHT void ur5_manipulability_position_finish(const double *restrict 
     const double t166 = t160 - t163*t153;
     const double t167 = t161 - t163*t154;
     const double t168 = t162 - t163*t155;
-    const double t169 = t131*t164 + t132*t165 + t133*t166 + t134*t167 + t135*t168;
-    const double t170 = t164 - t169*t131;
+    const double t169 = t132*t165 - t131*t164 + t133*t166 + t134*t167 + t135*t168;
+    const double t170 = t164 + t169*t131;
     const double t171 = t165 - t169*t132;
     const double t172 = t166 - t169*t133;
     const double t173 = t167 - t169*t134;
@@ -2685,7 +2680,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 }
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
-/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 22 neg */
+/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 8 neg */
 
 static UR5_LIGHT void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
 {
@@ -2835,26 +2830,26 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[171] = t4;
     const double t5 = sn[0]*sn[3];
     Hs[132] = -t5;
-    const double t6 = -sn[4];
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
     Hs[174] = t9;
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
     Hs[138] = -t11;
-    const double t13 = t6*sn[3];
+    const double t13 = sn[4]*sn[3];
     const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
-    const double t16 = 0.09465*sn[3] + t14*cs[3];
+    const double t16 = -0.09465*sn[3] - t14*cs[3];
     const double t17 = 0.09465*cs[3] - t14*sn[3];
     const double t18 = 0.10915 - t15;
-    const double t19 = t16 - 0.39225*cs[2];
+    const double t19 = t16 + 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
-    const double t21 = t19 - 0.425*cs[1];
+    const double t21 = t19 + 0.425*cs[1];
     const double t22 = t20 + 0.425*sn[1];
-    const double t23 = t21*cs[0] + t18*sn[0];
-    Hs[0] = -t23;
-    const double t24 = t21*sn[0] - t18*cs[0];
+    const double t23 = t21*cs[0] - t18*sn[0];
+    Hs[0] = t23;
+    const double t24 = t21*sn[0] + t18*cs[0];
+    Hs[36] = t24;
     const double t26 = t22*cs[0];
     Hs[37] = t26;
     Hs[42] = t26;
@@ -2871,48 +2866,48 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[40] = t32;
     Hs[60] = t32;
     const double t33 = t4*t15 - t14*cs[0];
-    const double t34 = t15*sn[3];
-    const double t385 = -t21*cs[0];
+    const double t34 = -t15*sn[3];
+    const double t385 = t21*cs[0];
     Hs[7] = t385;
-    const double t386 = -t19*cs[0];
+    const double t386 = t19*cs[0];
     Hs[8] = t386;
     Hs[13] = t386;
     Hs[14] = t386;
-    const double t387 = -t16*cs[0];
+    const double t387 = t16*cs[0];
     Hs[9] = t387;
     Hs[15] = t387;
     Hs[19] = t387;
     Hs[20] = t387;
     Hs[21] = t387;
-    const double t388 = -t34*cs[0];
+    const double t388 = t34*cs[0];
     Hs[10] = t388;
     Hs[16] = t388;
     Hs[22] = t388;
     Hs[25] = t388;
     Hs[26] = t388;
     Hs[27] = t388;
-    const double t389 = t5*t34 + t33*cs[3];
+    const double t389 = t33*cs[3] - t5*t34;
     Hs[28] = t389;
-    const double t390 = -t21*sn[0];
+    const double t390 = t21*sn[0];
     Hs[43] = t390;
-    const double t391 = -t19*sn[0];
+    const double t391 = t19*sn[0];
     Hs[44] = t391;
     Hs[49] = t391;
     Hs[50] = t391;
-    const double t392 = -t16*sn[0];
+    const double t392 = t16*sn[0];
     Hs[45] = t392;
     Hs[51] = t392;
     Hs[55] = t392;
     Hs[56] = t392;
     Hs[57] = t392;
-    const double t393 = -t34*sn[0];
+    const double t393 = t34*sn[0];
     Hs[46] = t393;
     Hs[52] = t393;
     Hs[58] = t393;
     Hs[61] = t393;
     Hs[62] = t393;
     Hs[63] = t393;
-    const double t394 = -t3*t34 - t32*cs[3];
+    const double t394 = t3*t34 - t32*cs[3];
     Hs[64] = t394;
     const double t395 = t26*cs[0] + t27*sn[0];
     Hs[79] = t395;
@@ -2935,17 +2930,17 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[99] = t398;
     const double t399 = t3*t33 - t5*t32;
     Hs[100] = t399;
-    const double t400 = -t13*cs[0];
+    const double t400 = t13*cs[0];
     Hs[139] = t400;
     Hs[140] = t400;
     Hs[141] = t400;
-    const double t401 = t5*t13 + t11*cs[3];
+    const double t401 = t11*cs[3] - t5*t13;
     Hs[142] = t401;
-    const double t402 = -t13*sn[0];
+    const double t402 = t13*sn[0];
     Hs[175] = t402;
     Hs[176] = t402;
     Hs[177] = t402;
-    const double t403 = -t3*t13 - t9*cs[3];
+    const double t403 = t3*t13 - t9*cs[3];
     Hs[178] = t403;
     const double t404 = t3*cs[0] + t5*sn[0];
     Hs[205] = t404;
@@ -2957,8 +2952,6 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[213] = t405;
     const double t406 = t3*t11 - t5*t9;
     Hs[214] = t406;
-    const double t2015 = -t24;
-    Hs[36] = t2015;
     const double t2016 = -t27;
     Hs[1] = t2016;
     Hs[6] = t2016;
@@ -3006,7 +2999,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 28 neg, 6 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 6 neg, 6 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
 {
@@ -3024,12 +3017,11 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t3 = cs[0]*sn[3];
     const double t4 = cs[3]*sn[0];
     const double t5 = sn[0]*sn[3];
-    const double t6 = -sn[4];
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
-    const double t13 = t6*sn[3];
+    const double t13 = sn[4]*sn[3];
     const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
     const double t16 = 0.09465*sn[3] + t14*cs[3];
@@ -3059,19 +3051,19 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t128 = sqrt(t127);
     const double t129 = 1.0/(t128 != 0.0 ? t128 : 1.0);
     const double t130 = (t128 > 0.0 ? t129 : 1.0);
-    const double t131 = -t24*t130;
+    const double t131 = t24*t130;
     const double t132 = t26*t130;
     const double t133 = t28*t130;
     const double t134 = t30*t130;
     const double t135 = t32*t130;
-    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 + t23*t131;
-    const double t137 = t23 - t136*t131;
+    const double t136 = t27*t132 + t29*t133 + t31*t134 + t33*t135 - t23*t131;
+    const double t137 = t23 + t136*t131;
     const double t138 = t27 - t136*t132;
     const double t139 = t29 - t136*t133;
     const double t140 = t31 - t136*t134;
     const double t141 = t33 - t136*t135;
-    const double t142 = t131*t137 + t132*t138 + t133*t139 + t134*t140 + t135*t141;
-    const double t143 = t137 - t142*t131;
+    const double t142 = t132*t138 - t131*t137 + t133*t139 + t134*t140 + t135*t141;
+    const double t143 = t137 + t142*t131;
     const double t144 = t138 - t142*t132;
     const double t145 = t139 - t142*t133;
     const double t146 = t140 - t142*t134;
@@ -3086,7 +3078,7 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t155 = t150*t147;
     const double t156 = t136 + t142;
     const double t157 = t34*t135 + t21*t132 + t19*t133 + t16*t134;
-    const double t158 = -t157*t131;
+    const double t158 = t157*t131;
     const double t159 = t21 - t157*t132;
     const double t160 = t19 - t157*t133;
     const double t161 = t16 - t157*t134;
@@ -3097,8 +3089,8 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t166 = t160 - t163*t153;
     const double t167 = t161 - t163*t154;
     const double t168 = t162 - t163*t155;
-    const double t169 = t131*t164 + t132*t165 + t133*t166 + t134*t167 + t135*t168;
-    const double t170 = t164 - t169*t131;
+    const double t169 = t132*t165 - t131*t164 + t133*t166 + t134*t167 + t135*t168;
+    const double t170 = t164 + t169*t131;
     const double t171 = t165 - t169*t132;
     const double t172 = t166 - t169*t133;
     const double t173 = t167 - t169*t134;
@@ -3120,7 +3112,7 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t189 = t157 + t169;
     const double t190 = t163 + t175;
     const double t191 = t3*t135 + t132*sn[0] + t133*sn[0] + t134*sn[0];
-    const double t192 = -t191*t131;
+    const double t192 = t191*t131;
     const double t193 = sn[0] - t191*t132;
     const double t194 = sn[0] - t191*t133;
     const double t195 = sn[0] - t191*t134;
@@ -3137,8 +3129,8 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t206 = t200 - t203*t186;
     const double t207 = t201 - t203*t187;
     const double t208 = t202 - t203*t188;
-    const double t209 = t131*t204 + t132*t205 + t133*t206 + t134*t207 + t135*t208;
-    const double t210 = t204 - t209*t131;
+    const double t209 = t132*t205 - t131*t204 + t133*t206 + t134*t207 + t135*t208;
+    const double t210 = t204 + t209*t131;
     const double t211 = t205 - t209*t132;
     const double t212 = t206 - t209*t133;
     const double t213 = t207 - t209*t134;
@@ -3168,13 +3160,13 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t237 = t191 + t209;
     const double t238 = t197 + t215;
     const double t239 = t203 + t221;
-    const double t240 = t5*t135 - cs[0]*t132 - cs[0]*t133 - cs[0]*t134;
+    const double t240 = cs[0]*t132 - t5*t135 + cs[0]*t133 + cs[0]*t134;
     const double t241 = -t240*t131;
     const double t242 = -cs[0];
-    const double t243 = t242 - t240*t132;
-    const double t244 = t242 - t240*t133;
-    const double t245 = t242 - t240*t134;
-    const double t246 = t5 - t240*t135;
+    const double t243 = t240*t132 - cs[0];
+    const double t244 = t240*t133 - cs[0];
+    const double t245 = t240*t134 - cs[0];
+    const double t246 = t5 + t240*t135;
     const double t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246;
     const double t248 = t241 - t247*t151;
     const double t249 = t243 - t247*t152;
@@ -3194,8 +3186,8 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t263 = t257 - t259*t234;
     const double t264 = t258 - t259*t235;
     const double t265 = t11 - t259*t236;
-    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t260 - t266*t131;
+    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t260 + t266*t131;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -3228,17 +3220,16 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t297 = t293*t288;
     const double t298 = t293*t289;
     const double t299 = t293*t290;
-    const double t300 = t240 + t266;
+    const double t300 = t266 - t240;
     const double t301 = t247 + t272;
     const double t302 = t253 + t278;
     const double t303 = t259 + t284;
-    const double t304 = t131 - cs[3]*t135;
+    const double t304 = t131 + cs[3]*t135;
     const double t305 = 1.0 - t304*t131;
-    const double t306 = -t304*t132;
-    const double t307 = -t304*t133;
-    const double t308 = -t304*t134;
-    const double t309 = -cs[3];
-    const double t310 = t309 - t304*t135;
+    const double t306 = t304*t132;
+    const double t307 = t304*t133;
+    const double t308 = t304*t134;
+    const double t310 = t304*t135 - cs[3];
     const double t311 = t151*t305 + t152*t306 + t153*t307 + t154*t308 + t155*t310;
     const double t312 = t305 - t311*t151;
     const double t313 = t306 - t311*t152;
@@ -3251,13 +3242,13 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t320 = t314 - t317*t186;
     const double t321 = t315 - t317*t187;
     const double t322 = t316 - t317*t188;
-    const double t323 = t13*t236 + t231*t318 + t232*t319 + t233*t320 + t234*t321 + t235*t322;
-    const double t324 = t318 - t323*t231;
-    const double t325 = t319 - t323*t232;
-    const double t326 = t320 - t323*t233;
-    const double t327 = t321 - t323*t234;
-    const double t328 = t322 - t323*t235;
-    const double t329 = t13 - t323*t236;
+    const double t323 = t13*t236 - t231*t318 - t232*t319 - t233*t320 - t234*t321 - t235*t322;
+    const double t324 = t318 + t323*t231;
+    const double t325 = t319 + t323*t232;
+    const double t326 = t320 + t323*t233;
+    const double t327 = t321 + t323*t234;
+    const double t328 = t322 + t323*t235;
+    const double t329 = t323*t236 - t13;
     const double t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329;
     const double t331 = t324 - t330*t294;
     const double t332 = t325 - t330*t295;
@@ -3265,8 +3256,8 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t334 = t327 - t330*t297;
     const double t335 = t328 - t330*t298;
     const double t336 = t329 - t330*t299;
-    const double t337 = t131*t331 + t132*t332 + t133*t333 + t134*t334 + t135*t335;
-    const double t338 = t331 - t337*t131;
+    const double t337 = t132*t332 - t131*t331 + t133*t333 + t134*t334 + t135*t335;
+    const double t338 = t331 + t337*t131;
     const double t339 = t332 - t337*t132;
     const double t340 = t333 - t337*t133;
     const double t341 = t334 - t337*t134;
@@ -3306,30 +3297,30 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t375 = t371*t366;
     const double t376 = t371*t367;
     const double t377 = t371*t368;
-    const double t378 = t304 + t337;
+    const double t378 = t337 - t304;
     const double t379 = t311 + t343;
     const double t380 = t317 + t349;
-    const double t381 = t323 + t355;
+    const double t381 = t355 - t323;
     const double t382 = t330 + t362;
-    const double t385 = -t21*cs[0];
-    const double t386 = -t19*cs[0];
-    const double t387 = -t16*cs[0];
-    const double t388 = -t34*cs[0];
+    const double t385 = t21*t242;
+    const double t386 = t19*t242;
+    const double t387 = t16*t242;
+    const double t388 = t34*t242;
     const double t389 = t5*t34 + t33*cs[3];
-    const double t390 = -t21*sn[0];
+    const double t390 = t21*sn[0];
     const double t391 = -t19*sn[0];
     const double t392 = -t16*sn[0];
     const double t393 = -t34*sn[0];
-    const double t394 = -t3*t34 - t32*cs[3];
+    const double t394 = t3*t34 + t32*cs[3];
     const double t395 = t26*cs[0] + t27*sn[0];
     const double t396 = t28*cs[0] + t29*sn[0];
     const double t397 = t30*cs[0] + t31*sn[0];
     const double t398 = t32*cs[0] + t33*sn[0];
     const double t399 = t3*t33 - t5*t32;
-    const double t400 = -t13*cs[0];
-    const double t401 = t5*t13 + t11*cs[3];
-    const double t402 = -t13*sn[0];
-    const double t403 = -t3*t13 - t9*cs[3];
+    const double t400 = t13*cs[0];
+    const double t401 = t11*cs[3] - t5*t13;
+    const double t402 = t13*sn[0];
+    const double t403 = t9*cs[3] - t3*t13;
     const double t404 = t3*cs[0] + t5*sn[0];
     const double t405 = t9*cs[0] + t11*sn[0];
     const double t406 = t3*t11 - t5*t9;
@@ -3344,50 +3335,50 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t415 = t301*t382*t182*t229 - t414*t190 - t413*t238*t182 - t379*t182*t229*t292;
     const double t416 = t300*t382*t149*t182*t229 - t415*t156 - t414*t189*t149 - t413*t237*t149*t182 - t378*t149*t182*t229*t292;
     const double t417 = t149*t182*t229*t292*t370;
-    const double t418 = -t156*t182*t229*t292*t370;
+    const double t418 = t156*t182*t229*t292*t370;
     const double t419 = t407*t229*t292*t370;
     const double t420 = t409*t292*t370;
     const double t421 = t412*t370;
     const double t422 = t128*t182*t229*t292*t370;
-    const double t423 = -t190*t128*t229*t292*t370;
+    const double t423 = t190*t128*t229*t292*t370;
     const double t424 = t408*t128*t292*t370;
     const double t425 = t411*t128*t370;
     const double t426 = t415*t128;
     const double t427 = t128*t149*t229*t292*t370;
-    const double t428 = -t239*t128*t149*t292*t370;
+    const double t428 = t239*t128*t149*t292*t370;
     const double t429 = t410*t128*t149*t370;
     const double t430 = t414*t128*t149;
     const double t431 = t128*t149*t182*t292*t370;
-    const double t432 = -t303*t128*t149*t182*t370;
+    const double t432 = t303*t128*t149*t182*t370;
     const double t433 = t413*t128*t149*t182;
     const double t434 = t128*t149*t182*t229*t370;
-    const double t435 = -t382*t128*t149*t182*t229;
+    const double t435 = t382*t128*t149*t182*t229;
     const double t436 = t128*t149*t182*t229*t292;
-    const double t437 = t416*t372 + t417*t131 + t418*t151 + t419*t184 + t420*t231 + t421*t294;
-    const double t438 = t422*t151 + t423*t184 + t424*t231 + t425*t294 + t426*t372;
-    const double t439 = t416*t373 + t417*t132 + t418*t152 + t419*t185 + t420*t232 + t421*t295;
-    const double t440 = t422*t152 + t423*t185 + t424*t232 + t425*t295 + t426*t373;
-    const double t441 = t427*t185 + t428*t232 + t429*t295 + t430*t373;
-    const double t442 = t431*t232 + t432*t295 + t433*t373;
-    const double t443 = t434*t295 + t435*t373;
-    const double t444 = t416*t374 + t417*t133 + t418*t153 + t419*t186 + t420*t233 + t421*t296;
-    const double t445 = t422*t153 + t423*t186 + t424*t233 + t425*t296 + t426*t374;
-    const double t446 = t427*t186 + t428*t233 + t429*t296 + t430*t374;
-    const double t447 = t431*t233 + t432*t296 + t433*t374;
-    const double t448 = t434*t296 + t435*t374;
-    const double t449 = t416*t375 + t417*t134 + t418*t154 + t419*t187 + t420*t234 + t421*t297;
-    const double t450 = t422*t154 + t423*t187 + t424*t234 + t425*t297 + t426*t375;
-    const double t451 = t427*t187 + t428*t234 + t429*t297 + t430*t375;
-    const double t452 = t431*t234 + t432*t297 + t433*t375;
-    const double t453 = t434*t297 + t435*t375;
-    const double t454 = t416*t376 + t417*t135 + t418*t155 + t419*t188 + t420*t235 + t421*t298;
-    const double t455 = t422*t155 + t423*t188 + t424*t235 + t425*t298 + t426*t376;
-    const double t456 = t427*t188 + t428*t235 + t429*t298 + t430*t376;
-    const double t457 = t431*t235 + t432*t298 + t433*t376;
-    const double t458 = t434*t298 + t435*t376;
+    const double t437 = t416*t372 - t417*t131 - t418*t151 + t419*t184 + t420*t231 + t421*t294;
+    const double t438 = t422*t151 - t423*t184 + t424*t231 + t425*t294 + t426*t372;
+    const double t439 = t416*t373 + t417*t132 - t418*t152 + t419*t185 + t420*t232 + t421*t295;
+    const double t440 = t422*t152 - t423*t185 + t424*t232 + t425*t295 + t426*t373;
+    const double t441 = t427*t185 - t428*t232 + t429*t295 + t430*t373;
+    const double t442 = t431*t232 - t432*t295 + t433*t373;
+    const double t443 = t434*t295 - t435*t373;
+    const double t444 = t416*t374 + t417*t133 - t418*t153 + t419*t186 + t420*t233 + t421*t296;
+    const double t445 = t422*t153 - t423*t186 + t424*t233 + t425*t296 + t426*t374;
+    const double t446 = t427*t186 - t428*t233 + t429*t296 + t430*t374;
+    const double t447 = t431*t233 - t432*t296 + t433*t374;
+    const double t448 = t434*t296 - t435*t374;
+    const double t449 = t416*t375 + t417*t134 - t418*t154 + t419*t187 + t420*t234 + t421*t297;
+    const double t450 = t422*t154 - t423*t187 + t424*t234 + t425*t297 + t426*t375;
+    const double t451 = t427*t187 - t428*t234 + t429*t297 + t430*t375;
+    const double t452 = t431*t234 - t432*t297 + t433*t375;
+    const double t453 = t434*t297 - t435*t375;
+    const double t454 = t416*t376 + t417*t135 - t418*t155 + t419*t188 + t420*t235 + t421*t298;
+    const double t455 = t422*t155 - t423*t188 + t424*t235 + t425*t298 + t426*t376;
+    const double t456 = t427*t188 - t428*t235 + t429*t298 + t430*t376;
+    const double t457 = t431*t235 - t432*t298 + t433*t376;
+    const double t458 = t434*t298 - t435*t376;
     const double t459 = t436*t376;
-    const double t460 = t431*t236 + t432*t299 + t433*t377;
-    const double t461 = t434*t299 + t435*t377;
+    const double t460 = t431*t236 - t432*t299 + t433*t377;
+    const double t461 = t434*t299 - t435*t377;
     const double t462 = t436*t377;
     const double t463 = (((t3*t458 + (t9*t461 + t26*t440)) + (t28*t445 + (t30*t450 + t32*t455))) + ((cs[0]*t442 + (cs[0]*t447 + cs[0]*t452)) + (t443*sn[0] + (t448*sn[0] + t453*sn[0])))) - (((t5*t457 + t11*t460) + (t27*t439 + t29*t444)) + ((t31*t449 + t33*t454) + (t23*t437 + t24*t438)));
     grad[0] = t463;
@@ -3406,13 +3397,13 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t476 = t402*t461;
     const double t477 = t404*t459;
     const double t478 = t405*t462;
-    const double t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) + (t390*t440 + (t469 + t470)))) + (((t471 + t395*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437;
+    const double t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) + ((t469 + t470) - t390*t440))) + (((t471 + t395*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437;
     grad[1] = t479;
     const double t480 = ((((t464 + t465) + (t386*t439 + t466)) + ((t467 + t468) + (t391*t440 + (t469 + t470)))) + (((t471 + t396*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t28*t438))))) - t29*t437;
     grad[2] = t480;
     const double t481 = ((((t464 + t465) + (t387*t439 + t387*t444)) + ((t467 + t468) + (t392*t440 + (t392*t445 + t470)))) + (((t471 + t397*t441) + (t397*t446 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t30*t438))))) - t31*t437;
     grad[3] = t481;
-    const double t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) + ((t393*t440 + t393*t445) + (t393*t450 + t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 + t403*t461) + (t406*t462 + t32*t438)))) - t33*t437;
+    const double t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) + ((t393*t440 + t393*t445) + (t393*t450 - t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 - t403*t461) + (t406*t462 + t32*t438)))) - t33*t437;
     grad[4] = t482;
 }
 
@@ -3449,7 +3440,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 40 neg, 13 div, 13 sqrt */
+/* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 9 neg, 13 div, 13 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
 {
@@ -3494,8 +3485,6 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t34 = t15*sn[3];
     const double t121 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
     const double t227 = t9*t9;
-    const double t242 = -cs[0];
-    const double t309 = -cs[3];
     const double t483 = -0.8385680946642751*t24;
     const double t484 = 0.8385680946642751*t26;
     const double t485 = 0.8385680946642751*t28;
@@ -3637,12 +3626,12 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t621 = t574 + t592;
     const double t622 = t580 + t598;
     const double t623 = t586 + t604;
-    const double t624 = t5*t514 - cs[0]*t511 - cs[0]*t512 - cs[0]*t513;
-    const double t625 = -t624*t510;
-    const double t626 = t242 - t624*t511;
-    const double t627 = t242 - t624*t512;
-    const double t628 = t242 - t624*t513;
-    const double t629 = t5 - t624*t514;
+    const double t624 = cs[0]*t511 - t5*t514 + cs[0]*t512 + cs[0]*t513;
+    const double t625 = t624*t510;
+    const double t626 = t624*t511 - cs[0];
+    const double t627 = t624*t512 - cs[0];
+    const double t628 = t624*t513 - cs[0];
+    const double t629 = t5 + t624*t514;
     const double t630 = t532*t625 + t533*t626 + t534*t627 + t535*t628 + t536*t629;
     const double t631 = t625 - t630*t532;
     const double t632 = t626 - t630*t533;
@@ -3698,16 +3687,16 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t682 = (t676 ? t678*t671 : 0.0);
     const double t683 = (t676 ? t678*t672 : 0.0);
     const double t684 = (t676 ? t678*t673 : 0.0);
-    const double t685 = t624 + t649;
+    const double t685 = t649 - t624;
     const double t686 = t630 + t655;
     const double t687 = t636 + t661;
     const double t688 = t642 + t667;
-    const double t689 = t510 - cs[3]*t514;
-    const double t690 = 1.0 - t689*t510;
-    const double t691 = -t689*t511;
-    const double t692 = -t689*t512;
-    const double t693 = -t689*t513;
-    const double t694 = t309 - t689*t514;
+    const double t689 = cs[3]*t514 - t510;
+    const double t690 = 1.0 + t689*t510;
+    const double t691 = t689*t511;
+    const double t692 = t689*t512;
+    const double t693 = t689*t513;
+    const double t694 = t689*t514 - cs[3];
     const double t695 = t532*t690 + t533*t691 + t534*t692 + t535*t693 + t536*t694;
     const double t696 = t690 - t695*t532;
     const double t697 = t691 - t695*t533;
@@ -3777,7 +3766,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t761 = (t755 ? t757*t750 : 0.0);
     const double t762 = (t755 ? t757*t751 : 0.0);
     const double t763 = (t755 ? t757*t752 : 0.0);
-    const double t764 = t689 + t721;
+    const double t764 = t721 - t689;
     const double t765 = t695 + t727;
     const double t766 = t701 + t733;
     const double t767 = t707 + t739;
@@ -3815,23 +3804,23 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t799 = t796*t773;
     const double t800 = t796*t774;
     const double t801 = t796*t775;
-    const double t802 = t796*t776;
+    const double t802 = -t796*t776;
     const double t803 = t796*t769;
-    const double t804 = t798*t777 + t799*t778 + t800*t779 + t801*t780 + t802*t781;
-    const double t805 = -t804*t797;
-    const double t806 = t777 - t804*t798;
-    const double t807 = t778 - t804*t799;
-    const double t808 = t779 - t804*t800;
-    const double t809 = t780 - t804*t801;
+    const double t804 = t802*t781 - t798*t777 - t799*t778 - t800*t779 - t801*t780;
+    const double t805 = t804*t797;
+    const double t806 = t777 + t804*t798;
+    const double t807 = t778 + t804*t799;
+    const double t808 = t779 + t804*t800;
+    const double t809 = t780 + t804*t801;
     const double t810 = t781 - t804*t802;
-    const double t811 = -t804*t803;
-    const double t812 = t797*t805 + t798*t806 + t799*t807 + t800*t808 + t801*t809 + t802*t810 + t803*t811;
+    const double t811 = t804*t803;
+    const double t812 = t797*t805 + t798*t806 + t799*t807 + t800*t808 + t801*t809 - t802*t810 + t803*t811;
     const double t813 = t805 - t812*t797;
     const double t814 = t806 - t812*t798;
     const double t815 = t807 - t812*t799;
     const double t816 = t808 - t812*t800;
     const double t817 = t809 - t812*t801;
-    const double t818 = t810 - t812*t802;
+    const double t818 = t810 + t812*t802;
     const double t819 = t811 - t812*t803;
     const double t820 = t813*t813 + t814*t814 + t815*t815 + t816*t816 + t817*t817 + t818*t818 + t819*t819 + t792;
     const double t821 = sqrt(t820);
@@ -3844,16 +3833,16 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t828 = t823*t817;
     const double t829 = t823*t818;
     const double t830 = t823*t819;
-    const double t831 = t823*t769;
-    const double t832 = t804 + t812;
-    const double t833 = t799*t782 + t800*t783 + t801*t784 + t802*t785;
-    const double t834 = -t833*t797;
-    const double t835 = -t833*t798;
-    const double t836 = t782 - t833*t799;
-    const double t837 = t783 - t833*t800;
-    const double t838 = t784 - t833*t801;
+    const double t831 = -t823*t769;
+    const double t832 = t812 - t804;
+    const double t833 = t802*t785 - t799*t782 - t800*t783 - t801*t784;
+    const double t834 = t833*t797;
+    const double t835 = t833*t798;
+    const double t836 = t782 + t833*t799;
+    const double t837 = t783 + t833*t800;
+    const double t838 = t784 + t833*t801;
     const double t839 = t785 - t833*t802;
-    const double t840 = -t833*t803;
+    const double t840 = t833*t803;
     const double t841 = t824*t834 + t825*t835 + t826*t836 + t827*t837 + t828*t838 + t829*t839 + t830*t840;
     const double t842 = t834 - t841*t824;
     const double t843 = t835 - t841*t825;
@@ -3862,16 +3851,16 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t846 = t838 - t841*t828;
     const double t847 = t839 - t841*t829;
     const double t848 = t840 - t841*t830;
-    const double t849 = -t841*t831;
-    const double t850 = t797*t842 + t798*t843 + t799*t844 + t800*t845 + t801*t846 + t802*t847 + t803*t848;
+    const double t849 = t841*t831;
+    const double t850 = t797*t842 + t798*t843 + t799*t844 + t800*t845 + t801*t846 - t802*t847 + t803*t848;
     const double t851 = t842 - t850*t797;
     const double t852 = t843 - t850*t798;
     const double t853 = t844 - t850*t799;
     const double t854 = t845 - t850*t800;
     const double t855 = t846 - t850*t801;
-    const double t856 = t847 - t850*t802;
+    const double t856 = t847 + t850*t802;
     const double t857 = t848 - t850*t803;
-    const double t858 = t824*t851 + t825*t852 + t826*t853 + t827*t854 + t828*t855 + t829*t856 + t830*t857 + t831*t849;
+    const double t858 = t824*t851 + t825*t852 + t826*t853 + t827*t854 + t828*t855 + t829*t856 + t830*t857 - t831*t849;
     const double t859 = t851 - t858*t824;
     const double t860 = t852 - t858*t825;
     const double t861 = t853 - t858*t826;
@@ -3879,7 +3868,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t863 = t855 - t858*t828;
     const double t864 = t856 - t858*t829;
     const double t865 = t857 - t858*t830;
-    const double t866 = t849 - t858*t831;
+    const double t866 = t849 + t858*t831;
     const double t867 = ((t859*t859 + t860*t860) + (t861*t861 + t862*t862)) + ((t863*t863 + t864*t864) + (t865*t865 + (t866*t866 + t792)));
     const double t868 = sqrt(t867);
     const int t869 = t868 > 0.0;
@@ -3892,17 +3881,17 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t876 = t870*t864;
     const double t877 = t870*t865;
     const double t878 = t870*t866;
-    const double t879 = t870*t769;
-    const double t880 = t833 + t850;
+    const double t879 = -t870*t769;
+    const double t880 = t850 - t833;
     const double t881 = t841 + t858;
-    const double t882 = t800*t786 + t801*t787 + t802*t788;
-    const double t883 = -t882*t797;
-    const double t884 = -t882*t798;
-    const double t885 = -t882*t799;
-    const double t886 = t786 - t882*t800;
-    const double t887 = t787 - t882*t801;
+    const double t882 = t802*t788 - t800*t786 - t801*t787;
+    const double t883 = t882*t797;
+    const double t884 = t882*t798;
+    const double t885 = t882*t799;
+    const double t886 = t786 + t882*t800;
+    const double t887 = t787 + t882*t801;
     const double t888 = t788 - t882*t802;
-    const double t889 = -t882*t803;
+    const double t889 = t882*t803;
     const double t890 = t824*t883 + t825*t884 + t826*t885 + t827*t886 + t828*t887 + t829*t888 + t830*t889;
     const double t891 = t883 - t890*t824;
     const double t892 = t884 - t890*t825;
@@ -3911,7 +3900,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t895 = t887 - t890*t828;
     const double t896 = t888 - t890*t829;
     const double t897 = t889 - t890*t830;
-    const double t898 = -t890*t831;
+    const double t898 = t890*t831;
     const double t899 = t871*t891 + t872*t892 + t873*t893 + t874*t894 + t875*t895 + t876*t896 + t877*t897 + t878*t898;
     const double t900 = t891 - t899*t871;
     const double t901 = t892 - t899*t872;
@@ -3921,16 +3910,16 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t905 = t896 - t899*t876;
     const double t906 = t897 - t899*t877;
     const double t907 = t898 - t899*t878;
-    const double t908 = -t899*t879;
-    const double t909 = t797*t900 + t798*t901 + t799*t902 + t800*t903 + t801*t904 + t802*t905 + t803*t906;
+    const double t908 = t899*t879;
+    const double t909 = t797*t900 + t798*t901 + t799*t902 + t800*t903 + t801*t904 - t802*t905 + t803*t906;
     const double t910 = t900 - t909*t797;
     const double t911 = t901 - t909*t798;
     const double t912 = t902 - t909*t799;
     const double t913 = t903 - t909*t800;
     const double t914 = t904 - t909*t801;
-    const double t915 = t905 - t909*t802;
+    const double t915 = t905 + t909*t802;
     const double t916 = t906 - t909*t803;
-    const double t917 = t824*t910 + t825*t911 + t826*t912 + t827*t913 + t828*t914 + t829*t915 + t830*t916 + t831*t907;
+    const double t917 = t824*t910 + t825*t911 + t826*t912 + t827*t913 + t828*t914 + t829*t915 + t830*t916 - t831*t907;
     const double t918 = t910 - t917*t824;
     const double t919 = t911 - t917*t825;
     const double t920 = t912 - t917*t826;
@@ -3938,8 +3927,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t922 = t914 - t917*t828;
     const double t923 = t915 - t917*t829;
     const double t924 = t916 - t917*t830;
-    const double t925 = t907 - t917*t831;
-    const double t926 = ((t871*t918 + t872*t919) + (t873*t920 + t874*t921)) + ((t875*t922 + t876*t923) + (t877*t924 + (t878*t925 + t879*t908)));
+    const double t925 = t907 + t917*t831;
+    const double t926 = ((t871*t918 + t872*t919) + (t873*t920 + t874*t921)) + ((t875*t922 + t876*t923) + (t877*t924 + (t878*t925 - t879*t908)));
     const double t927 = t918 - t926*t871;
     const double t928 = t919 - t926*t872;
     const double t929 = t920 - t926*t873;
@@ -3948,7 +3937,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t932 = t923 - t926*t876;
     const double t933 = t924 - t926*t877;
     const double t934 = t925 - t926*t878;
-    const double t935 = t908 - t926*t879;
+    const double t935 = t908 + t926*t879;
     const double t936 = ((t927*t927 + t928*t928) + (t929*t929 + (t930*t930 + t931*t931))) + ((t932*t932 + t933*t933) + (t934*t934 + (t935*t935 + t792)));
     const double t937 = sqrt(t936);
     const int t938 = t937 > 0.0;
@@ -3962,18 +3951,18 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t946 = t939*t933;
     const double t947 = t939*t934;
     const double t948 = t939*t935;
-    const double t949 = t939*t769;
-    const double t950 = t882 + t909;
+    const double t949 = -t939*t769;
+    const double t950 = t909 - t882;
     const double t951 = t890 + t917;
     const double t952 = t899 + t926;
-    const double t953 = t801*t789 + t802*t790;
-    const double t954 = -t953*t797;
-    const double t955 = -t953*t798;
-    const double t956 = -t953*t799;
-    const double t957 = -t953*t800;
-    const double t958 = t789 - t953*t801;
+    const double t953 = t802*t790 - t801*t789;
+    const double t954 = t953*t797;
+    const double t955 = t953*t798;
+    const double t956 = t953*t799;
+    const double t957 = t953*t800;
+    const double t958 = t789 + t953*t801;
     const double t959 = t790 - t953*t802;
-    const double t960 = -t953*t803;
+    const double t960 = t953*t803;
     const double t961 = t824*t954 + t825*t955 + t826*t956 + t827*t957 + t828*t958 + t829*t959 + t830*t960;
     const double t962 = t954 - t961*t824;
     const double t963 = t955 - t961*t825;
@@ -3982,7 +3971,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t966 = t958 - t961*t828;
     const double t967 = t959 - t961*t829;
     const double t968 = t960 - t961*t830;
-    const double t969 = -t961*t831;
+    const double t969 = t961*t831;
     const double t970 = t871*t962 + t872*t963 + t873*t964 + t874*t965 + t875*t966 + t876*t967 + t877*t968 + t878*t969;
     const double t971 = t962 - t970*t871;
     const double t972 = t963 - t970*t872;
@@ -3992,7 +3981,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t976 = t967 - t970*t876;
     const double t977 = t968 - t970*t877;
     const double t978 = t969 - t970*t878;
-    const double t979 = -t970*t879;
+    const double t979 = t970*t879;
     const double t980 = ((t940*t971 + t941*t972) + (t942*t973 + t943*t974)) + ((t944*t975 + t945*t976) + (t946*t977 + (t947*t978 + t948*t979)));
     const double t981 = t971 - t980*t940;
     const double t982 = t972 - t980*t941;
@@ -4003,16 +3992,16 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t987 = t977 - t980*t946;
     const double t988 = t978 - t980*t947;
     const double t989 = t979 - t980*t948;
-    const double t990 = -t980*t949;
-    const double t991 = t797*t981 + t798*t982 + t799*t983 + t800*t984 + t801*t985 + t802*t986 + t803*t987;
+    const double t990 = t980*t949;
+    const double t991 = t797*t981 + t798*t982 + t799*t983 + t800*t984 + t801*t985 - t802*t986 + t803*t987;
     const double t992 = t981 - t991*t797;
     const double t993 = t982 - t991*t798;
     const double t994 = t983 - t991*t799;
     const double t995 = t984 - t991*t800;
     const double t996 = t985 - t991*t801;
-    const double t997 = t986 - t991*t802;
+    const double t997 = t986 + t991*t802;
     const double t998 = t987 - t991*t803;
-    const double t999 = t824*t992 + t825*t993 + t826*t994 + t827*t995 + t828*t996 + t829*t997 + t830*t998 + t831*t988;
+    const double t999 = t824*t992 + t825*t993 + t826*t994 + t827*t995 + t828*t996 + t829*t997 + t830*t998 - t831*t988;
     const double t1000 = t992 - t999*t824;
     const double t1001 = t993 - t999*t825;
     const double t1002 = t994 - t999*t826;
@@ -4020,8 +4009,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1004 = t996 - t999*t828;
     const double t1005 = t997 - t999*t829;
     const double t1006 = t998 - t999*t830;
-    const double t1007 = t988 - t999*t831;
-    const double t1008 = ((t871*t1000 + t872*t1001) + (t873*t1002 + t874*t1003)) + ((t875*t1004 + t876*t1005) + (t877*t1006 + (t878*t1007 + t879*t989)));
+    const double t1007 = t988 + t999*t831;
+    const double t1008 = ((t871*t1000 + t872*t1001) + (t873*t1002 + t874*t1003)) + ((t875*t1004 + t876*t1005) + (t877*t1006 + (t878*t1007 - t879*t989)));
     const double t1009 = t1000 - t1008*t871;
     const double t1010 = t1001 - t1008*t872;
     const double t1011 = t1002 - t1008*t873;
@@ -4030,8 +4019,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1014 = t1005 - t1008*t876;
     const double t1015 = t1006 - t1008*t877;
     const double t1016 = t1007 - t1008*t878;
-    const double t1017 = t989 - t1008*t879;
-    const double t1018 = ((t940*t1009 + t941*t1010) + (t942*t1011 + (t943*t1012 + t944*t1013))) + ((t945*t1014 + t946*t1015) + (t947*t1016 + (t948*t1017 + t949*t990)));
+    const double t1017 = t989 + t1008*t879;
+    const double t1018 = ((t940*t1009 + t941*t1010) + (t942*t1011 + (t943*t1012 + t944*t1013))) + ((t945*t1014 + t946*t1015) + (t947*t1016 + (t948*t1017 - t949*t990)));
     const double t1019 = t1009 - t1018*t940;
     const double t1020 = t1010 - t1018*t941;
     const double t1021 = t1011 - t1018*t942;
@@ -4041,7 +4030,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1025 = t1015 - t1018*t946;
     const double t1026 = t1016 - t1018*t947;
     const double t1027 = t1017 - t1018*t948;
-    const double t1028 = t990 - t1018*t949;
+    const double t1028 = t990 + t1018*t949;
     const double t1029 = ((t1019*t1019 + t1020*t1020) + (t1021*t1021 + (t1022*t1022 + t1023*t1023))) + ((t1024*t1024 + (t1025*t1025 + t1026*t1026)) + (t1027*t1027 + (t1028*t1028 + t792)));
     const double t1030 = sqrt(t1029);
     const int t1031 = t1030 > 0.0;
@@ -4057,18 +4046,18 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1041 = t1032*t1027;
     const double t1042 = t1032*t1028;
     const double t1043 = t1032*t769;
-    const double t1044 = t953 + t991;
+    const double t1044 = t991 - t953;
     const double t1045 = t961 + t999;
     const double t1046 = t970 + t1008;
     const double t1047 = t980 + t1018;
     const double t1048 = t802*t791;
-    const double t1049 = -t1048*t797;
-    const double t1050 = -t1048*t798;
-    const double t1051 = -t1048*t799;
-    const double t1052 = -t1048*t800;
-    const double t1053 = -t1048*t801;
+    const double t1049 = t1048*t797;
+    const double t1050 = t1048*t798;
+    const double t1051 = t1048*t799;
+    const double t1052 = t1048*t800;
+    const double t1053 = t1048*t801;
     const double t1054 = t791 - t1048*t802;
-    const double t1055 = -t1048*t803;
+    const double t1055 = t1048*t803;
     const double t1056 = t824*t1049 + t825*t1050 + t826*t1051 + t827*t1052 + t828*t1053 + t829*t1054 + t830*t1055;
     const double t1057 = t1049 - t1056*t824;
     const double t1058 = t1050 - t1056*t825;
@@ -4077,7 +4066,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1061 = t1053 - t1056*t828;
     const double t1062 = t1054 - t1056*t829;
     const double t1063 = t1055 - t1056*t830;
-    const double t1064 = -t1056*t831;
+    const double t1064 = t1056*t831;
     const double t1065 = t871*t1057 + t872*t1058 + t873*t1059 + t874*t1060 + t875*t1061 + t876*t1062 + t877*t1063 + t878*t1064;
     const double t1066 = t1057 - t1065*t871;
     const double t1067 = t1058 - t1065*t872;
@@ -4087,7 +4076,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1071 = t1062 - t1065*t876;
     const double t1072 = t1063 - t1065*t877;
     const double t1073 = t1064 - t1065*t878;
-    const double t1074 = -t1065*t879;
+    const double t1074 = t1065*t879;
     const double t1075 = ((t940*t1066 + t941*t1067) + (t942*t1068 + t943*t1069)) + ((t944*t1070 + t945*t1071) + (t946*t1072 + (t947*t1073 + t948*t1074)));
     const double t1076 = t1066 - t1075*t940;
     const double t1077 = t1067 - t1075*t941;
@@ -4098,7 +4087,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1082 = t1072 - t1075*t946;
     const double t1083 = t1073 - t1075*t947;
     const double t1084 = t1074 - t1075*t948;
-    const double t1085 = -t1075*t949;
+    const double t1085 = t1075*t949;
     const double t1086 = ((t1033*t1076 + t1034*t1077) + (t1035*t1078 + (t1036*t1079 + t1037*t1080))) + ((t1038*t1081 + t1039*t1082) + (t1040*t1083 + (t1041*t1084 + t1042*t1085)));
     const double t1087 = t1076 - t1086*t1033;
     const double t1088 = t1077 - t1086*t1034;
@@ -4111,15 +4100,15 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1095 = t1084 - t1086*t1041;
     const double t1096 = t1085 - t1086*t1042;
     const double t1097 = -t1086*t1043;
-    const double t1098 = t797*t1087 + t798*t1088 + t799*t1089 + t800*t1090 + t801*t1091 + t802*t1092 + t803*t1093;
+    const double t1098 = t797*t1087 + t798*t1088 + t799*t1089 + t800*t1090 + t801*t1091 - t802*t1092 + t803*t1093;
     const double t1099 = t1087 - t1098*t797;
     const double t1100 = t1088 - t1098*t798;
     const double t1101 = t1089 - t1098*t799;
     const double t1102 = t1090 - t1098*t800;
     const double t1103 = t1091 - t1098*t801;
-    const double t1104 = t1092 - t1098*t802;
+    const double t1104 = t1092 + t1098*t802;
     const double t1105 = t1093 - t1098*t803;
-    const double t1106 = t824*t1099 + t825*t1100 + t826*t1101 + t827*t1102 + t828*t1103 + t829*t1104 + t830*t1105 + t831*t1094;
+    const double t1106 = t824*t1099 + t825*t1100 + t826*t1101 + t827*t1102 + t828*t1103 + t829*t1104 + t830*t1105 - t831*t1094;
     const double t1107 = t1099 - t1106*t824;
     const double t1108 = t1100 - t1106*t825;
     const double t1109 = t1101 - t1106*t826;
@@ -4127,8 +4116,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1111 = t1103 - t1106*t828;
     const double t1112 = t1104 - t1106*t829;
     const double t1113 = t1105 - t1106*t830;
-    const double t1114 = t1094 - t1106*t831;
-    const double t1115 = ((t871*t1107 + t872*t1108) + (t873*t1109 + t874*t1110)) + ((t875*t1111 + t876*t1112) + (t877*t1113 + (t878*t1114 + t879*t1095)));
+    const double t1114 = t1094 + t1106*t831;
+    const double t1115 = ((t871*t1107 + t872*t1108) + (t873*t1109 + t874*t1110)) + ((t875*t1111 + t876*t1112) + (t877*t1113 + (t878*t1114 - t879*t1095)));
     const double t1116 = t1107 - t1115*t871;
     const double t1117 = t1108 - t1115*t872;
     const double t1118 = t1109 - t1115*t873;
@@ -4137,8 +4126,8 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1121 = t1112 - t1115*t876;
     const double t1122 = t1113 - t1115*t877;
     const double t1123 = t1114 - t1115*t878;
-    const double t1124 = t1095 - t1115*t879;
-    const double t1125 = ((t940*t1116 + t941*t1117) + (t942*t1118 + (t943*t1119 + t944*t1120))) + ((t945*t1121 + t946*t1122) + (t947*t1123 + (t948*t1124 + t949*t1096)));
+    const double t1124 = t1095 + t1115*t879;
+    const double t1125 = ((t940*t1116 + t941*t1117) + (t942*t1118 + (t943*t1119 + t944*t1120))) + ((t945*t1121 + t946*t1122) + (t947*t1123 + (t948*t1124 - t949*t1096)));
     const double t1126 = t1116 - t1125*t940;
     const double t1127 = t1117 - t1125*t941;
     const double t1128 = t1118 - t1125*t942;
@@ -4148,7 +4137,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1132 = t1122 - t1125*t946;
     const double t1133 = t1123 - t1125*t947;
     const double t1134 = t1124 - t1125*t948;
-    const double t1135 = t1096 - t1125*t949;
+    const double t1135 = t1096 + t1125*t949;
     const double t1136 = ((t1033*t1126 + t1034*t1127) + (t1043*t1097 + (t1035*t1128 + t1036*t1129))) + ((t1037*t1130 + (t1038*t1131 + t1039*t1132)) + (t1040*t1133 + (t1041*t1134 + t1042*t1135)));
     const double t1137 = t1126 - t1136*t1033;
     const double t1138 = t1127 - t1136*t1034;
@@ -4171,12 +4160,12 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double 
     const double t1155 = t1151*t1140;
     const double t1156 = t1151*t1141;
     const double t1157 = t1151*t1142;
-    const double t1158 = t1048 + t1098;
+    const double t1158 = t1098 - t1048;
     const double t1159 = t1056 + t1106;
     const double t1160 = t1065 + t1115;
     const double t1161 = t1075 + t1125;
     const double t1162 = t1086 + t1136;
-    const double t1163 = t121*(t797*twist[0] + t798*twist[1] + t799*twist[2] + t800*twist[3] + t801*twist[4] + t802*twist[5]);
+    const double t1163 = t121*(t797*twist[0] + t798*twist[1] + t799*twist[2] + t800*twist[3] + t801*twist[4] - t802*twist[5]);
     const double t1164 = t121*(t824*twist[0] + t825*twist[1] + t826*twist[2] + t827*twist[3] + t828*twist[4] + t829*twist[5]);
     const double t1165 = t121*(t871*twist[0] + t872*twist[1] + t873*twist[2] + t874*twist[3] + t875*twist[4] + t876*twist[5]);
     const double t1166 = t121*(t940*twist[0] + t941*twist[1] + t942*twist[2] + t943*twist[3] + t944*twist[4] + t945*twist[5]);
@@ -4235,7 +4224,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 }
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 8 neg, 7 div, 7 sqrt */
+/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 3 neg, 7 div, 7 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
 {
@@ -4261,7 +4250,7 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const double t21 = t19 - 0.425*cs[1];
     const double t22 = t20 + 0.425*sn[1];
     const double t23 = t21*cs[0] + t18*sn[0];
-    const double t24 = t21*sn[0] - t18*cs[0];
+    const double t24 = t18*cs[0] - t21*sn[0];
     const double t26 = t22*cs[0];
     const double t27 = t22*sn[0];
     const double t28 = t20*cs[0];
@@ -4288,7 +4277,7 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const int t1184 = t128 > t1183;
     const double t1185 = (t1184 ? t128 : 0.0);
     const double t1186 = (t1184 ? t129 : 1.0);
-    const double t1187 = (t1184 ? -t24*t1186 : 0.0);
+    const double t1187 = (t1184 ? t24*t1186 : 0.0);
     const double t1188 = (t1184 ? t26*t1186 : 0.0);
     const double t1189 = (t1184 ? t28*t1186 : 0.0);
     const double t1190 = (t1184 ? t30*t1186 : 0.0);
@@ -4364,17 +4353,17 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const double t1260 = (t1259 ? 1.0/(t1258 != 0.0 ? t1258 : 1.0) : 1.0);
     const double t1261 = t1260*t1251;
     const double t1262 = t1260*t1252;
-    const double t1263 = t1260*t1253;
+    const double t1263 = -t1260*t1253;
     const double t1264 = t1260*t769;
-    const double t1265 = t1262*t1254 + t1263*t1255;
-    const double t1266 = -t1265*t1261;
-    const double t1267 = t1254 - t1265*t1262;
+    const double t1265 = t1263*t1255 - t1262*t1254;
+    const double t1266 = t1265*t1261;
+    const double t1267 = t1254 + t1265*t1262;
     const double t1268 = t1255 - t1265*t1263;
-    const double t1269 = -t1265*t1264;
-    const double t1270 = t1261*t1266 + t1262*t1267 + t1263*t1268 + t1264*t1269;
+    const double t1269 = t1265*t1264;
+    const double t1270 = t1261*t1266 + t1262*t1267 - t1263*t1268 + t1264*t1269;
     const double t1271 = t1266 - t1270*t1261;
     const double t1272 = t1267 - t1270*t1262;
-    const double t1273 = t1268 - t1270*t1263;
+    const double t1273 = t1268 + t1270*t1263;
     const double t1274 = t1269 - t1270*t1264;
     const double t1275 = t1271*t1271 + t1272*t1272 + t1273*t1273 + t1274*t1274 + t792;
     const double t1276 = sqrt(t1275);
@@ -4385,22 +4374,22 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const double t1281 = t1278*t1273;
     const double t1282 = t1278*t1274;
     const double t1283 = t1278*t769;
-    const double t1284 = t1265 + t1270;
+    const double t1284 = t1270 - t1265;
     const double t1285 = t1263*t1256;
-    const double t1286 = -t1285*t1261;
-    const double t1287 = -t1285*t1262;
+    const double t1286 = t1285*t1261;
+    const double t1287 = t1285*t1262;
     const double t1288 = t1256 - t1285*t1263;
-    const double t1289 = -t1285*t1264;
+    const double t1289 = t1285*t1264;
     const double t1290 = t1279*t1286 + t1280*t1287 + t1281*t1288 + t1282*t1289;
     const double t1291 = t1286 - t1290*t1279;
     const double t1292 = t1287 - t1290*t1280;
     const double t1293 = t1288 - t1290*t1281;
     const double t1294 = t1289 - t1290*t1282;
     const double t1295 = -t1290*t1283;
-    const double t1296 = t1261*t1291 + t1262*t1292 + t1263*t1293 + t1264*t1294;
+    const double t1296 = t1261*t1291 + t1262*t1292 - t1263*t1293 + t1264*t1294;
     const double t1297 = t1291 - t1296*t1261;
     const double t1298 = t1292 - t1296*t1262;
-    const double t1299 = t1293 - t1296*t1263;
+    const double t1299 = t1293 + t1296*t1263;
     const double t1300 = t1294 - t1296*t1264;
     const double t1301 = t1279*t1297 + t1280*t1298 + t1281*t1299 + t1282*t1300 + t1283*t1295;
     const double t1302 = t1297 - t1301*t1279;
@@ -4415,9 +4404,9 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], do
     const double t1311 = t1310*t1302;
     const double t1312 = t1310*t1303;
     const double t1313 = t1310*t1304;
-    const double t1314 = t1285 + t1296;
+    const double t1314 = t1296 - t1285;
     const double t1315 = t1290 + t1301;
-    const double t1316 = t121*(t1261*v[0] + t1262*v[1] + t1263*v[2]);
+    const double t1316 = t121*(t1261*v[0] + t1262*v[1] - t1263*v[2]);
     const double t1317 = t121*(t1279*v[0] + t1280*v[1] + t1281*v[2]);
     const double t1318 = t121*(t1311*v[0] + t1312*v[1] + t1313*v[2]);
     const double t1319 = (t1309 ? t1310*t1318 : 0.0);
@@ -4468,7 +4457,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 }
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 8 neg, 3 div, 2 sqrt */
+/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 3 neg, 3 div, 2 sqrt */
 
 static UR5_LIGHT void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
 {
@@ -4492,14 +4481,13 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t3 = cs[0]*sn[3];
     const double t4 = cs[3]*sn[0];
     const double t5 = sn[0]*sn[3];
-    const double t6 = -sn[4];
     const double t7 = t2*cs[4] + sn[0]*sn[4];
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
     const double t10 = -cs[0]*cs[4];
     const double t11 = t10 - t4*sn[4];
     const double t12 = cs[4]*sn[3];
-    const double t13 = t6*sn[3];
+    const double t13 = sn[4]*sn[3];
     const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
     const double t16 = 0.09465*sn[3] + t14*cs[3];
@@ -4514,7 +4502,8 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t22 = t20 + 0.425*sn[1];
     const double t23 = t21*cs[0] + t18*sn[0];
     JA[6] = t23;
-    const double t24 = t21*sn[0] - t18*cs[0];
+    const double t24 = t18*cs[0] - t21*sn[0];
+    JA[0] = t24;
     const double t26 = t22*cs[0];
     JA[1] = t26;
     const double t27 = t22*sn[0];
@@ -4534,13 +4523,13 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t34 = t15*sn[3];
     JA[16] = t34;
     const double t35 = t7*cs[5] - t3*sn[5];
-    const double t36 = -t3*cs[5] - t7*sn[5];
+    const double t36 = t3*cs[5] + t7*sn[5];
     const double t37 = cs[3]*sn[5];
-    const double t38 = t12*cs[5] + t37;
+    const double t38 = -t12*cs[5] - t37;
     const double t39 = cs[3]*cs[5];
     const double t40 = t39 - t12*sn[5];
     const double t41 = t9*t40 - t13*t36;
-    const double t42 = t13*t35 - t9*t38;
+    const double t42 = t9*t38 - t13*t35;
     const double t1327 = t35*t35 + t41*t41;
     const int t1328 = t1327 > UR5_RANK_TOL;
     const double t1329 = (t1328 ? 1.0/(t1327 != 0.0 ? t1327 : 1.0) : 1.0);
@@ -4550,11 +4539,11 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t1333 = sqrt(t1332);
     const double t1334 = (t1333 > 0.0 ? 1.0/(t1333 != 0.0 ? t1333 : 1.0) : 1.0);
     const double t1335 = (t1328 ? t35*t1331 : t42*t1334);
-    const double t1336 = (t1328 ? t41*t1331 : -t36*t1334);
+    const double t1336 = (t1328 ? t41*t1331 : t36*t1334);
     const double t1337 = (t1328 ? t35*t1329 : 0.0);
     const double t1338 = (t1328 ? t41*t1329 : 0.0);
-    const double t1339 = (t1328 ? -t35*t38*t1329 : 0.0);
-    const double t1340 = (t1328 ? -t38*t41*t1329 : 0.0);
+    const double t1339 = (t1328 ? t35*t38*t1329 : 0.0);
+    const double t1340 = (t1328 ? t38*t41*t1329 : 0.0);
     const double t1341 = t1337*sn[0] - cs[0]*t1338;
     JA[19] = t1341;
     JA[20] = t1341;
@@ -4580,10 +4569,8 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     JA[33] = t1349;
     const double t1350 = t3*t1339 + t5*t1340 - cs[3]*t1347;
     JA[34] = t1350;
-    const double t1351 = t9*t1339 + t11*t1340 + t13*t1347;
+    const double t1351 = t9*t1339 + t11*t1340 - t13*t1347;
     JA[35] = t1351;
-    const double t2015 = -t24;
-    JA[0] = t2015;
 }
 
 void ur5_jacobian_rpy(const double q[6], double JA[36])
@@ -4619,7 +4606,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 }
 
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
-/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 56 neg, 52 div, 21 sqrt */
+/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 36 neg, 52 div, 21 sqrt */
 
 static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
 {
@@ -4658,7 +4645,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1384 = (t1382 ? t1380 - t1381 : t1380)/(t1383 != 0.0 ? t1383 : 1.0);
     const double t1385 = t1384*t1384;
     const double t1386 = 194.5506571482614 + t1385*(485.3903996359137 + t1385*(432.88106049129027 + t1385*(165.02700983169885 + t1385*(24.858464901423062 + t1385))));
-    const double t1387 = t1384 + t1384*t1385*(t1385*(t1385*(t1385*(-16.157537187333652 - 0.8750608600031904*t1385) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1386 != 0.0 ? t1386 : 1.0) + (t1382 ? 0.7853981633974483 : 0.0);
+    const double t1387 = t1384 - t1384*t1385*(t1385*(t1385*(t1385*(16.157537187333652 + 0.8750608600031904*t1385) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1386 != 0.0 ? t1386 : 1.0) + (t1382 ? 0.7853981633974483 : 0.0);
     const double t1388 = (t1379 ? 1.5707963267948966 - t1387 : t1387);
     const double t1389 = (t1370 < 0.0 ? 3.141592653589793 - t1388 : t1388);
     const int t1390 = t1375 > 0.0;
@@ -4682,7 +4669,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1404 = (t1402 ? t1400 - t1401 : t1400)/(t1403 != 0.0 ? t1403 : 1.0);
     const double t1405 = t1404*t1404;
     const double t1406 = 194.5506571482614 + t1405*(485.3903996359137 + t1405*(432.88106049129027 + t1405*(165.02700983169885 + t1405*(24.858464901423062 + t1405))));
-    const double t1407 = t1404 + t1404*t1405*(t1405*(t1405*(t1405*(-16.157537187333652 - 0.8750608600031904*t1405) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1406 != 0.0 ? t1406 : 1.0) + (t1402 ? 0.7853981633974483 : 0.0);
+    const double t1407 = t1404 - t1404*t1405*(t1405*(t1405*(t1405*(16.157537187333652 + 0.8750608600031904*t1405) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1406 != 0.0 ? t1406 : 1.0) + (t1402 ? 0.7853981633974483 : 0.0);
     const double t1408 = (t1399 ? 1.5707963267948966 - t1407 : t1407);
     const double t1409 = (t1373 < 0.0 ? 3.141592653589793 - t1408 : t1408);
     const int t1410 = t1395 > 0.0;
@@ -4695,9 +4682,9 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1413 = (t1410 ? t1373*t1412 : 1.0);
     const double t1414 = (t1410 ? t1374*t1412 : 0.0);
     const double t1415 = t1393*target[2] + t1394*target[6];
-    const double t1416 = t1393*target[6] - t1394*target[2];
+    const double t1416 = t1394*target[2] - t1393*target[6];
     const double t1417 = t1394*target[0] - t1393*target[4];
-    const double t1418 = t1394*target[1] - t1393*target[5];
+    const double t1418 = t1393*target[5] - t1394*target[1];
     const double t1419 = t1355*t1393 + t1356*t1394;
     const double t1420 = t1356*t1393 - t1355*t1394;
     const double t1421 = t1357 - 0.089159;
@@ -4715,7 +4702,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1433 = t1432 + t1429*t1429;
     const double t1434 = sqrt(t1433);
     const double t1435 = fabs(t1429);
-    const double t1436 = fabs(t1416);
+    const double t1436 = fabs(-t1416);
     const int t1437 = t1435 > t1436;
     const double t1438 = (t1437 ? t1436 : t1435);
     const double t1439 = (t1437 ? t1435 : t1436);
@@ -4724,15 +4711,15 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1442 = (t1440 ? t1438 - t1439 : t1438)/(t1441 != 0.0 ? t1441 : 1.0);
     const double t1443 = t1442*t1442;
     const double t1444 = 194.5506571482614 + t1443*(485.3903996359137 + t1443*(432.88106049129027 + t1443*(165.02700983169885 + t1443*(24.858464901423062 + t1443))));
-    const double t1445 = t1442 + t1442*t1443*(t1443*(t1443*(t1443*(-16.157537187333652 - 0.8750608600031904*t1443) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1444 != 0.0 ? t1444 : 1.0) + (t1440 ? 0.7853981633974483 : 0.0);
+    const double t1445 = t1442 - t1442*t1443*(t1443*(t1443*(t1443*(16.157537187333652 + 0.8750608600031904*t1443) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1444 != 0.0 ? t1444 : 1.0) + (t1440 ? 0.7853981633974483 : 0.0);
     const double t1446 = (t1437 ? 1.5707963267948966 - t1445 : t1445);
-    const double t1447 = (-t1416 < 0.0 ? 3.141592653589793 - t1446 : t1446);
+    const double t1447 = (t1416 < 0.0 ? 3.141592653589793 - t1446 : t1446);
     const int t1448 = t1433 > 0.0;
     const double t1449 = (t1448 ? (t1429 < 0.0 ? -t1447 : t1447) : 0.0);
     Q[4] = t1449;
     Q[10] = t1449;
     const double t1450 = 1.0/(t1434 != 0.0 ? t1434 : 1.0);
-    const double t1451 = (t1448 ? -t1416*t1450 : 1.0);
+    const double t1451 = (t1448 ? t1416*t1450 : 1.0);
     const double t1452 = (t1448 ? t1429*t1450 : 0.0);
     const double t1453 = t1417*t1417;
     const double t1454 = t1418*t1418;
@@ -4742,15 +4729,15 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1458 = t1457;
     const double t1459 = t1451*t1451 + t1457;
     const double t1460 = t1417*t1452;
-    const double t1461 = -t1418*t1452;
+    const double t1461 = t1418*t1452;
     const double t1462 = (t1455 <= 1e-18*t1456 || t1458 <= 1e-18*t1459 ? 1.0 : 0.0);
     const double t1463 = (t1458 <= 1e-24*t1459 ? 1.0 : 0.0);
-    const double t1464 = -t1452*target[2];
-    const double t1465 = t1451*target[0] + t1464;
-    const double t1466 = -t1452*target[6];
-    const double t1467 = t1451*target[4] + t1466;
-    const double t1468 = -t1452*target[10];
-    const double t1469 = t1451*target[8] + t1468;
+    const double t1464 = t1452*target[2];
+    const double t1465 = t1451*target[0] - t1464;
+    const double t1466 = t1452*target[6];
+    const double t1467 = t1451*target[4] - t1466;
+    const double t1468 = t1452*target[10];
+    const double t1469 = t1451*target[8] - t1468;
     const double t1470 = t1465*t1393 + t1467*t1394;
     const int t1471 = t1463 > 0.0;
     const double t1472 = (t1471 ? t1470 : t1460);
@@ -4767,7 +4754,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1483 = (t1481 ? t1479 - t1480 : t1479)/(t1482 != 0.0 ? t1482 : 1.0);
     const double t1484 = t1483*t1483;
     const double t1485 = 194.5506571482614 + t1484*(485.3903996359137 + t1484*(432.88106049129027 + t1484*(165.02700983169885 + t1484*(24.858464901423062 + t1484))));
-    const double t1486 = t1483 + t1483*t1484*(t1484*(t1484*(t1484*(-16.157537187333652 - 0.8750608600031904*t1484) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1485 != 0.0 ? t1485 : 1.0) + (t1481 ? 0.7853981633974483 : 0.0);
+    const double t1486 = t1483 - t1483*t1484*(t1484*(t1484*(t1484*(16.157537187333652 + 0.8750608600031904*t1484) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1485 != 0.0 ? t1485 : 1.0) + (t1481 ? 0.7853981633974483 : 0.0);
     const double t1487 = (t1478 ? 1.5707963267948966 - t1486 : t1486);
     const double t1488 = (t1472 < 0.0 ? 3.141592653589793 - t1487 : t1487);
     const int t1489 = t1474 > 0.0;
@@ -4776,10 +4763,10 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1492 = (t1489 ? t1472*t1491 : 1.0);
     const double t1493 = (t1489 ? t1473*t1491 : 0.0);
     const double t1494 = t1451*t1492;
-    const double t1495 = -t1451*t1493;
-    const double t1496 = t1494*target[0] + t1495*target[1] + t1464;
-    const double t1497 = t1494*target[4] + t1495*target[5] + t1466;
-    const double t1498 = t1494*target[8] + t1495*target[9] + t1468;
+    const double t1495 = t1451*t1493;
+    const double t1496 = t1494*target[0] - t1495*target[1] - t1464;
+    const double t1497 = t1494*target[4] - t1495*target[5] - t1466;
+    const double t1498 = t1494*target[8] - t1495*target[9] - t1468;
     const double t1499 = t1496*t1393 + t1497*t1394;
     const double t1500 = -0.09465*t1421;
     const double t1501 = 0.09465*t1419;
@@ -4808,7 +4795,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1524 = (t1522 ? t1520 - t1521 : t1520)/(t1523 != 0.0 ? t1523 : 1.0);
     const double t1525 = t1524*t1524;
     const double t1526 = 194.5506571482614 + t1525*(485.3903996359137 + t1525*(432.88106049129027 + t1525*(165.02700983169885 + t1525*(24.858464901423062 + t1525))));
-    const double t1527 = t1524 + t1524*t1525*(t1525*(t1525*(t1525*(-16.157537187333652 - 0.8750608600031904*t1525) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1526 != 0.0 ? t1526 : 1.0) + (t1522 ? 0.7853981633974483 : 0.0);
+    const double t1527 = t1524 - t1524*t1525*(t1525*(t1525*(t1525*(16.157537187333652 + 0.8750608600031904*t1525) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1526 != 0.0 ? t1526 : 1.0) + (t1522 ? 0.7853981633974483 : 0.0);
     const double t1528 = (t1519 ? 1.5707963267948966 - t1527 : t1527);
     const double t1529 = (t1513 < 0.0 ? 3.141592653589793 - t1528 : t1528);
     const int t1530 = t1515 > 0.0;
@@ -4848,7 +4835,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1562 = (t1560 ? t1558 - t1559 : t1558)/(t1561 != 0.0 ? t1561 : 1.0);
     const double t1563 = t1562*t1562;
     const double t1564 = 194.5506571482614 + t1563*(485.3903996359137 + t1563*(432.88106049129027 + t1563*(165.02700983169885 + t1563*(24.858464901423062 + t1563))));
-    const double t1565 = t1562 + t1562*t1563*(t1563*(t1563*(t1563*(-16.157537187333652 - 0.8750608600031904*t1563) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1564 != 0.0 ? t1564 : 1.0) + (t1560 ? 0.7853981633974483 : 0.0);
+    const double t1565 = t1562 - t1562*t1563*(t1563*(t1563*(t1563*(16.157537187333652 + 0.8750608600031904*t1563) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1564 != 0.0 ? t1564 : 1.0) + (t1560 ? 0.7853981633974483 : 0.0);
     const double t1566 = (t1557 ? 1.5707963267948966 - t1565 : t1565);
     const double t1567 = (t1551 < 0.0 ? 3.141592653589793 - t1566 : t1566);
     const double t1568 = -t1567;
@@ -4863,14 +4850,14 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1575 = (t1569 ? -t1552*t1571 : 0.0);
     const double t1576 = -0.425 - 0.39225000000000004*t1572;
     const double t1577 = -0.39225000000000004*t1573;
-    const double t1578 = 0.089159 - t1541;
+    const double t1578 = t1541 - 0.089159;
     const double t1579 = t1576*t1576;
     const double t1580 = t1579 + t1577*t1577;
     const double t1581 = t1542 + t1578*t1578;
     const double t1582 = t1542 + t1543 + t1545;
     const double t1583 = t1539*t1576;
-    const double t1584 = t1583 - t1577*t1578;
-    const double t1585 = -t1576*t1578;
+    const double t1584 = t1583 + t1577*t1578;
+    const double t1585 = t1576*t1578;
     const double t1586 = t1585 - t1539*t1577;
     const int t1587 = t1581 <= 1e-18*t1582;
     const double t1588 = (t1580 <= 1e-18*t1580 || t1587 ? 1.0 : 0.0);
@@ -4885,7 +4872,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1597 = (t1595 ? t1593 - t1594 : t1593)/(t1596 != 0.0 ? t1596 : 1.0);
     const double t1598 = t1597*t1597;
     const double t1599 = 194.5506571482614 + t1598*(485.3903996359137 + t1598*(432.88106049129027 + t1598*(165.02700983169885 + t1598*(24.858464901423062 + t1598))));
-    const double t1600 = t1597 + t1597*t1598*(t1598*(t1598*(t1598*(-16.157537187333652 - 0.8750608600031904*t1598) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1599 != 0.0 ? t1599 : 1.0) + (t1595 ? 0.7853981633974483 : 0.0);
+    const double t1600 = t1597 - t1597*t1598*(t1598*(t1598*(t1598*(16.157537187333652 + 0.8750608600031904*t1598) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1599 != 0.0 ? t1599 : 1.0) + (t1595 ? 0.7853981633974483 : 0.0);
     const double t1601 = (t1592 ? 1.5707963267948966 - t1600 : t1600);
     const double t1602 = (t1584 < 0.0 ? 3.141592653589793 - t1601 : t1601);
     const double t1603 = (t1589 > 0.0 ? (t1586 < 0.0 ? -t1602 : t1602) : 0.0);
@@ -4894,7 +4881,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     Q[3] = t1604;
     const double t1605 = -0.39225000000000004*t1575;
     const double t1606 = t1579 + t1605*t1605;
-    const double t1607 = t1583 - t1605*t1578;
+    const double t1607 = t1583 + t1605*t1578;
     const double t1608 = t1585 - t1539*t1605;
     const double t1609 = (t1587 || t1606 <= 1e-18*t1606 ? 1.0 : 0.0);
     const double t1610 = t1607*t1607 + t1608*t1608;
@@ -4908,7 +4895,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1618 = (t1616 ? t1614 - t1615 : t1614)/(t1617 != 0.0 ? t1617 : 1.0);
     const double t1619 = t1618*t1618;
     const double t1620 = 194.5506571482614 + t1619*(485.3903996359137 + t1619*(432.88106049129027 + t1619*(165.02700983169885 + t1619*(24.858464901423062 + t1619))));
-    const double t1621 = t1618 + t1618*t1619*(t1619*(t1619*(t1619*(-16.157537187333652 - 0.8750608600031904*t1619) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1620 != 0.0 ? t1620 : 1.0) + (t1616 ? 0.7853981633974483 : 0.0);
+    const double t1621 = t1618 - t1618*t1619*(t1619*(t1619*(t1619*(16.157537187333652 + 0.8750608600031904*t1619) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1620 != 0.0 ? t1620 : 1.0) + (t1616 ? 0.7853981633974483 : 0.0);
     const double t1622 = (t1613 ? 1.5707963267948966 - t1621 : t1621);
     const double t1623 = (t1607 < 0.0 ? 3.141592653589793 - t1622 : t1622);
     const double t1624 = (t1610 > 0.0 ? (t1608 < 0.0 ? -t1623 : t1623) : 0.0);
@@ -4948,7 +4935,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1652 = (t1650 ? t1648 - t1649 : t1648)/(t1651 != 0.0 ? t1651 : 1.0);
     const double t1653 = t1652*t1652;
     const double t1654 = 194.5506571482614 + t1653*(485.3903996359137 + t1653*(432.88106049129027 + t1653*(165.02700983169885 + t1653*(24.858464901423062 + t1653))));
-    const double t1655 = t1652 + t1652*t1653*(t1653*(t1653*(t1653*(-16.157537187333652 - 0.8750608600031904*t1653) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1654 != 0.0 ? t1654 : 1.0) + (t1650 ? 0.7853981633974483 : 0.0);
+    const double t1655 = t1652 - t1652*t1653*(t1653*(t1653*(t1653*(16.157537187333652 + 0.8750608600031904*t1653) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1654 != 0.0 ? t1654 : 1.0) + (t1650 ? 0.7853981633974483 : 0.0);
     const double t1656 = (t1647 ? 1.5707963267948966 - t1655 : t1655);
     const double t1657 = (t1641 < 0.0 ? 3.141592653589793 - t1656 : t1656);
     const double t1658 = -t1657;
@@ -4963,14 +4950,14 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1665 = (t1659 ? -t1642*t1661 : 0.0);
     const double t1666 = -0.425 - 0.39225000000000004*t1662;
     const double t1667 = -0.39225000000000004*t1663;
-    const double t1668 = 0.089159 - t1633;
+    const double t1668 = t1633 - 0.089159;
     const double t1669 = t1666*t1666;
     const double t1670 = t1669 + t1667*t1667;
     const double t1671 = t1634 + t1668*t1668;
     const double t1672 = t1543 + t1634 + t1635;
     const double t1673 = t1632*t1666;
-    const double t1674 = t1673 - t1667*t1668;
-    const double t1675 = -t1666*t1668;
+    const double t1674 = t1673 + t1667*t1668;
+    const double t1675 = t1666*t1668;
     const double t1676 = t1675 - t1632*t1667;
     const int t1677 = t1671 <= 1e-18*t1672;
     const double t1678 = (t1670 <= 1e-18*t1670 || t1677 ? 1.0 : 0.0);
@@ -4985,7 +4972,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1687 = (t1685 ? t1683 - t1684 : t1683)/(t1686 != 0.0 ? t1686 : 1.0);
     const double t1688 = t1687*t1687;
     const double t1689 = 194.5506571482614 + t1688*(485.3903996359137 + t1688*(432.88106049129027 + t1688*(165.02700983169885 + t1688*(24.858464901423062 + t1688))));
-    const double t1690 = t1687 + t1687*t1688*(t1688*(t1688*(t1688*(-16.157537187333652 - 0.8750608600031904*t1688) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1689 != 0.0 ? t1689 : 1.0) + (t1685 ? 0.7853981633974483 : 0.0);
+    const double t1690 = t1687 - t1687*t1688*(t1688*(t1688*(t1688*(16.157537187333652 + 0.8750608600031904*t1688) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1689 != 0.0 ? t1689 : 1.0) + (t1685 ? 0.7853981633974483 : 0.0);
     const double t1691 = (t1682 ? 1.5707963267948966 - t1690 : t1690);
     const double t1692 = (t1674 < 0.0 ? 3.141592653589793 - t1691 : t1691);
     const double t1693 = (t1679 > 0.0 ? (t1676 < 0.0 ? -t1692 : t1692) : 0.0);
@@ -4994,7 +4981,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     Q[15] = t1694;
     const double t1695 = -0.39225000000000004*t1665;
     const double t1696 = t1669 + t1695*t1695;
-    const double t1697 = t1673 - t1695*t1668;
+    const double t1697 = t1673 + t1695*t1668;
     const double t1698 = t1675 - t1632*t1695;
     const double t1699 = (t1677 || t1696 <= 1e-18*t1696 ? 1.0 : 0.0);
     const double t1700 = t1697*t1697 + t1698*t1698;
@@ -5008,7 +4995,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1708 = (t1706 ? t1704 - t1705 : t1704)/(t1707 != 0.0 ? t1707 : 1.0);
     const double t1709 = t1708*t1708;
     const double t1710 = 194.5506571482614 + t1709*(485.3903996359137 + t1709*(432.88106049129027 + t1709*(165.02700983169885 + t1709*(24.858464901423062 + t1709))));
-    const double t1711 = t1708 + t1708*t1709*(t1709*(t1709*(t1709*(-16.157537187333652 - 0.8750608600031904*t1709) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1710 != 0.0 ? t1710 : 1.0) + (t1706 ? 0.7853981633974483 : 0.0);
+    const double t1711 = t1708 - t1708*t1709*(t1709*(t1709*(t1709*(16.157537187333652 + 0.8750608600031904*t1709) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1710 != 0.0 ? t1710 : 1.0) + (t1706 ? 0.7853981633974483 : 0.0);
     const double t1712 = (t1703 ? 1.5707963267948966 - t1711 : t1711);
     const double t1713 = (t1697 < 0.0 ? 3.141592653589793 - t1712 : t1712);
     const double t1714 = (t1700 > 0.0 ? (t1698 < 0.0 ? -t1713 : t1713) : 0.0);
@@ -5016,9 +5003,9 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1715 = t1629 - t1714 - t1664;
     Q[21] = t1715;
     const double t1716 = t1413*target[2] + t1414*target[6];
-    const double t1717 = t1413*target[6] - t1414*target[2];
+    const double t1717 = t1414*target[2] - t1413*target[6];
     const double t1718 = t1414*target[0] - t1413*target[4];
-    const double t1719 = t1414*target[1] - t1413*target[5];
+    const double t1719 = t1413*target[5] - t1414*target[1];
     const double t1720 = t1355*t1413 + t1356*t1414;
     const double t1721 = t1356*t1413 - t1355*t1414;
     const double t1722 = t1720*t1720;
@@ -5033,7 +5020,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1731 = t1730 + t1727*t1727;
     const double t1732 = sqrt(t1731);
     const double t1733 = fabs(t1727);
-    const double t1734 = fabs(t1717);
+    const double t1734 = fabs(-t1717);
     const int t1735 = t1733 > t1734;
     const double t1736 = (t1735 ? t1734 : t1733);
     const double t1737 = (t1735 ? t1733 : t1734);
@@ -5042,15 +5029,15 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1740 = (t1738 ? t1736 - t1737 : t1736)/(t1739 != 0.0 ? t1739 : 1.0);
     const double t1741 = t1740*t1740;
     const double t1742 = 194.5506571482614 + t1741*(485.3903996359137 + t1741*(432.88106049129027 + t1741*(165.02700983169885 + t1741*(24.858464901423062 + t1741))));
-    const double t1743 = t1740 + t1740*t1741*(t1741*(t1741*(t1741*(-16.157537187333652 - 0.8750608600031904*t1741) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1742 != 0.0 ? t1742 : 1.0) + (t1738 ? 0.7853981633974483 : 0.0);
+    const double t1743 = t1740 - t1740*t1741*(t1741*(t1741*(t1741*(16.157537187333652 + 0.8750608600031904*t1741) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1742 != 0.0 ? t1742 : 1.0) + (t1738 ? 0.7853981633974483 : 0.0);
     const double t1744 = (t1735 ? 1.5707963267948966 - t1743 : t1743);
-    const double t1745 = (-t1717 < 0.0 ? 3.141592653589793 - t1744 : t1744);
+    const double t1745 = (t1717 < 0.0 ? 3.141592653589793 - t1744 : t1744);
     const int t1746 = t1731 > 0.0;
     const double t1747 = (t1746 ? (t1727 < 0.0 ? -t1745 : t1745) : 0.0);
     Q[28] = t1747;
     Q[34] = t1747;
     const double t1748 = 1.0/(t1732 != 0.0 ? t1732 : 1.0);
-    const double t1749 = (t1746 ? -t1717*t1748 : 1.0);
+    const double t1749 = (t1746 ? t1717*t1748 : 1.0);
     const double t1750 = (t1746 ? t1727*t1748 : 0.0);
     const double t1751 = t1718*t1718;
     const double t1752 = t1719*t1719;
@@ -5060,15 +5047,15 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1756 = t1755;
     const double t1757 = t1749*t1749 + t1755;
     const double t1758 = t1718*t1750;
-    const double t1759 = -t1719*t1750;
+    const double t1759 = t1719*t1750;
     const double t1760 = (t1753 <= 1e-18*t1754 || t1756 <= 1e-18*t1757 ? 1.0 : 0.0);
     const double t1761 = (t1756 <= 1e-24*t1757 ? 1.0 : 0.0);
-    const double t1762 = -t1750*target[2];
-    const double t1763 = t1749*target[0] + t1762;
-    const double t1764 = -t1750*target[6];
-    const double t1765 = t1749*target[4] + t1764;
-    const double t1766 = -t1750*target[10];
-    const double t1767 = t1749*target[8] + t1766;
+    const double t1762 = t1750*target[2];
+    const double t1763 = t1749*target[0] - t1762;
+    const double t1764 = t1750*target[6];
+    const double t1765 = t1749*target[4] - t1764;
+    const double t1766 = t1750*target[10];
+    const double t1767 = t1749*target[8] - t1766;
     const double t1768 = t1763*t1413 + t1765*t1414;
     const int t1769 = t1761 > 0.0;
     const double t1770 = (t1769 ? t1768 : t1758);
@@ -5085,7 +5072,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1781 = (t1779 ? t1777 - t1778 : t1777)/(t1780 != 0.0 ? t1780 : 1.0);
     const double t1782 = t1781*t1781;
     const double t1783 = 194.5506571482614 + t1782*(485.3903996359137 + t1782*(432.88106049129027 + t1782*(165.02700983169885 + t1782*(24.858464901423062 + t1782))));
-    const double t1784 = t1781 + t1781*t1782*(t1782*(t1782*(t1782*(-16.157537187333652 - 0.8750608600031904*t1782) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1783 != 0.0 ? t1783 : 1.0) + (t1779 ? 0.7853981633974483 : 0.0);
+    const double t1784 = t1781 - t1781*t1782*(t1782*(t1782*(t1782*(16.157537187333652 + 0.8750608600031904*t1782) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1783 != 0.0 ? t1783 : 1.0) + (t1779 ? 0.7853981633974483 : 0.0);
     const double t1785 = (t1776 ? 1.5707963267948966 - t1784 : t1784);
     const double t1786 = (t1770 < 0.0 ? 3.141592653589793 - t1785 : t1785);
     const int t1787 = t1772 > 0.0;
@@ -5094,10 +5081,10 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1790 = (t1787 ? t1770*t1789 : 1.0);
     const double t1791 = (t1787 ? t1771*t1789 : 0.0);
     const double t1792 = t1749*t1790;
-    const double t1793 = -t1749*t1791;
-    const double t1794 = t1792*target[0] + t1793*target[1] + t1762;
-    const double t1795 = t1792*target[4] + t1793*target[5] + t1764;
-    const double t1796 = t1792*target[8] + t1793*target[9] + t1766;
+    const double t1793 = t1749*t1791;
+    const double t1794 = t1792*target[0] - t1793*target[1] - t1762;
+    const double t1795 = t1792*target[4] - t1793*target[5] - t1764;
+    const double t1796 = t1792*target[8] - t1793*target[9] - t1766;
     const double t1797 = t1794*t1413 + t1795*t1414;
     const double t1798 = 0.09465*t1720;
     const double t1799 = 0.0104361725 + 0.5*t1722 + 0.5*t1723 + t1502 + 0.10915*t1721 - 0.5*t1725;
@@ -5123,7 +5110,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1819 = (t1817 ? t1815 - t1816 : t1815)/(t1818 != 0.0 ? t1818 : 1.0);
     const double t1820 = t1819*t1819;
     const double t1821 = 194.5506571482614 + t1820*(485.3903996359137 + t1820*(432.88106049129027 + t1820*(165.02700983169885 + t1820*(24.858464901423062 + t1820))));
-    const double t1822 = t1819 + t1819*t1820*(t1820*(t1820*(t1820*(-16.157537187333652 - 0.8750608600031904*t1820) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1821 != 0.0 ? t1821 : 1.0) + (t1817 ? 0.7853981633974483 : 0.0);
+    const double t1822 = t1819 - t1819*t1820*(t1820*(t1820*(t1820*(16.157537187333652 + 0.8750608600031904*t1820) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1821 != 0.0 ? t1821 : 1.0) + (t1817 ? 0.7853981633974483 : 0.0);
     const double t1823 = (t1814 ? 1.5707963267948966 - t1822 : t1822);
     const double t1824 = (t1808 < 0.0 ? 3.141592653589793 - t1823 : t1823);
     const int t1825 = t1810 > 0.0;
@@ -5163,7 +5150,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1857 = (t1855 ? t1853 - t1854 : t1853)/(t1856 != 0.0 ? t1856 : 1.0);
     const double t1858 = t1857*t1857;
     const double t1859 = 194.5506571482614 + t1858*(485.3903996359137 + t1858*(432.88106049129027 + t1858*(165.02700983169885 + t1858*(24.858464901423062 + t1858))));
-    const double t1860 = t1857 + t1857*t1858*(t1858*(t1858*(t1858*(-16.157537187333652 - 0.8750608600031904*t1858) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1859 != 0.0 ? t1859 : 1.0) + (t1855 ? 0.7853981633974483 : 0.0);
+    const double t1860 = t1857 - t1857*t1858*(t1858*(t1858*(t1858*(16.157537187333652 + 0.8750608600031904*t1858) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1859 != 0.0 ? t1859 : 1.0) + (t1855 ? 0.7853981633974483 : 0.0);
     const double t1861 = (t1852 ? 1.5707963267948966 - t1860 : t1860);
     const double t1862 = (t1846 < 0.0 ? 3.141592653589793 - t1861 : t1861);
     const double t1863 = -t1862;
@@ -5178,14 +5165,14 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1870 = (t1864 ? -t1847*t1866 : 0.0);
     const double t1871 = -0.425 - 0.39225000000000004*t1867;
     const double t1872 = -0.39225000000000004*t1868;
-    const double t1873 = 0.089159 - t1836;
+    const double t1873 = t1836 - 0.089159;
     const double t1874 = t1871*t1871;
     const double t1875 = t1874 + t1872*t1872;
     const double t1876 = t1837 + t1873*t1873;
     const double t1877 = t1837 + t1838 + t1840;
     const double t1878 = t1834*t1871;
-    const double t1879 = t1878 - t1872*t1873;
-    const double t1880 = -t1871*t1873;
+    const double t1879 = t1878 + t1872*t1873;
+    const double t1880 = t1871*t1873;
     const double t1881 = t1880 - t1834*t1872;
     const int t1882 = t1876 <= 1e-18*t1877;
     const double t1883 = (t1875 <= 1e-18*t1875 || t1882 ? 1.0 : 0.0);
@@ -5200,7 +5187,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1892 = (t1890 ? t1888 - t1889 : t1888)/(t1891 != 0.0 ? t1891 : 1.0);
     const double t1893 = t1892*t1892;
     const double t1894 = 194.5506571482614 + t1893*(485.3903996359137 + t1893*(432.88106049129027 + t1893*(165.02700983169885 + t1893*(24.858464901423062 + t1893))));
-    const double t1895 = t1892 + t1892*t1893*(t1893*(t1893*(t1893*(-16.157537187333652 - 0.8750608600031904*t1893) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1894 != 0.0 ? t1894 : 1.0) + (t1890 ? 0.7853981633974483 : 0.0);
+    const double t1895 = t1892 - t1892*t1893*(t1893*(t1893*(t1893*(16.157537187333652 + 0.8750608600031904*t1893) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1894 != 0.0 ? t1894 : 1.0) + (t1890 ? 0.7853981633974483 : 0.0);
     const double t1896 = (t1887 ? 1.5707963267948966 - t1895 : t1895);
     const double t1897 = (t1879 < 0.0 ? 3.141592653589793 - t1896 : t1896);
     const double t1898 = (t1884 > 0.0 ? (t1881 < 0.0 ? -t1897 : t1897) : 0.0);
@@ -5209,7 +5196,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     Q[27] = t1899;
     const double t1900 = -0.39225000000000004*t1870;
     const double t1901 = t1874 + t1900*t1900;
-    const double t1902 = t1878 - t1900*t1873;
+    const double t1902 = t1878 + t1900*t1873;
     const double t1903 = t1880 - t1834*t1900;
     const double t1904 = (t1882 || t1901 <= 1e-18*t1901 ? 1.0 : 0.0);
     const double t1905 = t1902*t1902 + t1903*t1903;
@@ -5223,7 +5210,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1913 = (t1911 ? t1909 - t1910 : t1909)/(t1912 != 0.0 ? t1912 : 1.0);
     const double t1914 = t1913*t1913;
     const double t1915 = 194.5506571482614 + t1914*(485.3903996359137 + t1914*(432.88106049129027 + t1914*(165.02700983169885 + t1914*(24.858464901423062 + t1914))));
-    const double t1916 = t1913 + t1913*t1914*(t1914*(t1914*(t1914*(-16.157537187333652 - 0.8750608600031904*t1914) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1915 != 0.0 ? t1915 : 1.0) + (t1911 ? 0.7853981633974483 : 0.0);
+    const double t1916 = t1913 - t1913*t1914*(t1914*(t1914*(t1914*(16.157537187333652 + 0.8750608600031904*t1914) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1915 != 0.0 ? t1915 : 1.0) + (t1911 ? 0.7853981633974483 : 0.0);
     const double t1917 = (t1908 ? 1.5707963267948966 - t1916 : t1916);
     const double t1918 = (t1902 < 0.0 ? 3.141592653589793 - t1917 : t1917);
     const double t1919 = (t1905 > 0.0 ? (t1903 < 0.0 ? -t1918 : t1918) : 0.0);
@@ -5263,7 +5250,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1947 = (t1945 ? t1943 - t1944 : t1943)/(t1946 != 0.0 ? t1946 : 1.0);
     const double t1948 = t1947*t1947;
     const double t1949 = 194.5506571482614 + t1948*(485.3903996359137 + t1948*(432.88106049129027 + t1948*(165.02700983169885 + t1948*(24.858464901423062 + t1948))));
-    const double t1950 = t1947 + t1947*t1948*(t1948*(t1948*(t1948*(-16.157537187333652 - 0.8750608600031904*t1948) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1949 != 0.0 ? t1949 : 1.0) + (t1945 ? 0.7853981633974483 : 0.0);
+    const double t1950 = t1947 - t1947*t1948*(t1948*(t1948*(t1948*(16.157537187333652 + 0.8750608600031904*t1948) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1949 != 0.0 ? t1949 : 1.0) + (t1945 ? 0.7853981633974483 : 0.0);
     const double t1951 = (t1942 ? 1.5707963267948966 - t1950 : t1950);
     const double t1952 = (t1936 < 0.0 ? 3.141592653589793 - t1951 : t1951);
     const double t1953 = -t1952;
@@ -5278,14 +5265,14 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1960 = (t1954 ? -t1937*t1956 : 0.0);
     const double t1961 = -0.425 - 0.39225000000000004*t1957;
     const double t1962 = -0.39225000000000004*t1958;
-    const double t1963 = 0.089159 - t1928;
+    const double t1963 = t1928 - 0.089159;
     const double t1964 = t1961*t1961;
     const double t1965 = t1964 + t1962*t1962;
     const double t1966 = t1929 + t1963*t1963;
     const double t1967 = t1838 + t1929 + t1930;
     const double t1968 = t1927*t1961;
-    const double t1969 = t1968 - t1962*t1963;
-    const double t1970 = -t1961*t1963;
+    const double t1969 = t1968 + t1962*t1963;
+    const double t1970 = t1961*t1963;
     const double t1971 = t1970 - t1927*t1962;
     const int t1972 = t1966 <= 1e-18*t1967;
     const double t1973 = (t1965 <= 1e-18*t1965 || t1972 ? 1.0 : 0.0);
@@ -5300,7 +5287,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t1982 = (t1980 ? t1978 - t1979 : t1978)/(t1981 != 0.0 ? t1981 : 1.0);
     const double t1983 = t1982*t1982;
     const double t1984 = 194.5506571482614 + t1983*(485.3903996359137 + t1983*(432.88106049129027 + t1983*(165.02700983169885 + t1983*(24.858464901423062 + t1983))));
-    const double t1985 = t1982 + t1982*t1983*(t1983*(t1983*(t1983*(-16.157537187333652 - 0.8750608600031904*t1983) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t1984 != 0.0 ? t1984 : 1.0) + (t1980 ? 0.7853981633974483 : 0.0);
+    const double t1985 = t1982 - t1982*t1983*(t1983*(t1983*(t1983*(16.157537187333652 + 0.8750608600031904*t1983) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t1984 != 0.0 ? t1984 : 1.0) + (t1980 ? 0.7853981633974483 : 0.0);
     const double t1986 = (t1977 ? 1.5707963267948966 - t1985 : t1985);
     const double t1987 = (t1969 < 0.0 ? 3.141592653589793 - t1986 : t1986);
     const double t1988 = (t1974 > 0.0 ? (t1971 < 0.0 ? -t1987 : t1987) : 0.0);
@@ -5309,7 +5296,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     Q[39] = t1989;
     const double t1990 = -0.39225000000000004*t1960;
     const double t1991 = t1964 + t1990*t1990;
-    const double t1992 = t1968 - t1990*t1963;
+    const double t1992 = t1968 + t1990*t1963;
     const double t1993 = t1970 - t1927*t1990;
     const double t1994 = (t1972 || t1991 <= 1e-18*t1991 ? 1.0 : 0.0);
     const double t1995 = t1992*t1992 + t1993*t1993;
@@ -5323,7 +5310,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t2003 = (t2001 ? t1999 - t2000 : t1999)/(t2002 != 0.0 ? t2002 : 1.0);
     const double t2004 = t2003*t2003;
     const double t2005 = 194.5506571482614 + t2004*(485.3903996359137 + t2004*(432.88106049129027 + t2004*(165.02700983169885 + t2004*(24.858464901423062 + t2004))));
-    const double t2006 = t2003 + t2003*t2004*(t2004*(t2004*(t2004*(-16.157537187333652 - 0.8750608600031904*t2004) - 75.00855792314705) - 122.88666844901361) - 64.85021904942025)/(t2005 != 0.0 ? t2005 : 1.0) + (t2001 ? 0.7853981633974483 : 0.0);
+    const double t2006 = t2003 - t2003*t2004*(t2004*(t2004*(t2004*(16.157537187333652 + 0.8750608600031904*t2004) + 75.00855792314705) + 122.88666844901361) + 64.85021904942025)/(t2005 != 0.0 ? t2005 : 1.0) + (t2001 ? 0.7853981633974483 : 0.0);
     const double t2007 = (t1998 ? 1.5707963267948966 - t2006 : t2006);
     const double t2008 = (t1992 < 0.0 ? 3.141592653589793 - t2007 : t2007);
     const double t2009 = (t1995 > 0.0 ? (t1993 < 0.0 ? -t2008 : t2008) : 0.0);
@@ -5333,29 +5320,29 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *
     const double t2020 = 1.0 - t1512;
     const double t2021 = 1.0 - t1364;
     const double t2022 = 1.0 - t1430;
-    const double t2023 = -t2020*t2021*(1.0 - t1549)*t2022;
+    const double t2023 = t2020*t2021*(1.0 - t1549)*t2022;
     const double t2024 = 1.0 - t1368;
     const double t2025 = 1.0 - t1550;
     const double t2026 = 1.0 - t1431;
     const double t2027 = 1.0 - t1538;
-    flags[0] = 3.0 + t2023 - 2.0*t2024*(1.0 - t1588)*t2025*t2026*t1537*t2027;
-    flags[1] = 3.0 + t2023 - 2.0*t2024*(1.0 - t1609)*t2025*t2026*t1537*t2027;
-    const double t2028 = -t2020*t2021*(1.0 - t1639)*t2022;
+    flags[0] = 3.0 - t2023 - 2.0*t2024*(1.0 - t1588)*t2025*t2026*t1537*t2027;
+    flags[1] = 3.0 - t2023 - 2.0*t2024*(1.0 - t1609)*t2025*t2026*t1537*t2027;
+    const double t2028 = t2020*t2021*(1.0 - t1639)*t2022;
     const double t2029 = 1.0 - t1640;
-    flags[2] = 3.0 + t2028 - 2.0*t2024*(1.0 - t1678)*t2029*t2026*t1537*t2027;
-    flags[3] = 3.0 + t2028 - 2.0*t2024*(1.0 - t1699)*t2029*t2026*t1537*t2027;
+    flags[2] = 3.0 - t2028 - 2.0*t2024*(1.0 - t1678)*t2029*t2026*t1537*t2027;
+    flags[3] = 3.0 - t2028 - 2.0*t2024*(1.0 - t1699)*t2029*t2026*t1537*t2027;
     const double t2030 = 1.0 - t1807;
     const double t2031 = 1.0 - t1728;
-    const double t2032 = -t2030*t2021*(1.0 - t1844)*t2031;
+    const double t2032 = t2030*t2021*(1.0 - t1844)*t2031;
     const double t2033 = 1.0 - t1845;
     const double t2034 = 1.0 - t1729;
     const double t2035 = 1.0 - t1833;
-    flags[4] = 3.0 + t2032 - 2.0*t2024*(1.0 - t1883)*t2033*t2034*t1832*t2035;
-    flags[5] = 3.0 + t2032 - 2.0*t2024*(1.0 - t1904)*t2033*t2034*t1832*t2035;
-    const double t2036 = -t2030*t2021*(1.0 - t1934)*t2031;
+    flags[4] = 3.0 - t2032 - 2.0*t2024*(1.0 - t1883)*t2033*t2034*t1832*t2035;
+    flags[5] = 3.0 - t2032 - 2.0*t2024*(1.0 - t1904)*t2033*t2034*t1832*t2035;
+    const double t2036 = t2030*t2021*(1.0 - t1934)*t2031;
     const double t2037 = 1.0 - t1935;
-    flags[6] = 3.0 + t2036 - 2.0*t2024*(1.0 - t1973)*t2037*t2034*t1832*t2035;
-    flags[7] = 3.0 + t2036 - 2.0*t2024*(1.0 - t1994)*t2037*t2034*t1832*t2035;
+    flags[6] = 3.0 - t2036 - 2.0*t2024*(1.0 - t1973)*t2037*t2034*t1832*t2035;
+    flags[7] = 3.0 - t2036 - 2.0*t2024*(1.0 - t1994)*t2037*t2034*t1832*t2035;
 }
 
 void ur5_ik_candidates(const double target[16], double Q[48], double flags[8])

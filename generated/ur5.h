@@ -54,7 +54,7 @@
  * sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x7e224f0aUL
+#define UR5_STAMP 0x3dc32c37UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -101,7 +101,7 @@ void ur5_pose(const double q[6], double T[16]);
  * Stack: about 11 KB. */
 void ur5_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 496 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 488 bytes. */
 void ur5_jacobian(const double q[6], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
@@ -125,7 +125,7 @@ void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
  * Stack: about 17 KB. */
 void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 680 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 664 bytes. */
 void ur5_twist(const double q[6], const double dq[6], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -157,7 +157,7 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36]);
  * Stack: about 20 KB. */
 void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2392 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2376 bytes. */
 void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -173,7 +173,7 @@ void ur5_manipulability_position(const double q[6], double w_position[1]);
  * Stack: about 13 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 688 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 672 bytes. */
 void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of
@@ -181,7 +181,7 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216]);
  * Stack: about 13 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 3344 bytes. */
+/* gradient dw/dq of the manipulability (N). Stack: about 3328 bytes. */
 void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -205,7 +205,7 @@ void ur5_inverse_velocity_position(const double q[6], const double v[3], double 
  * Stack: about 14 KB. */
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 768 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 752 bytes. */
 void ur5_jacobian_rpy(const double q[6], double JA[36]);
 
 /* The same for m configurations stored one after another (element k of

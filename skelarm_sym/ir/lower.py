@@ -32,6 +32,8 @@ from sympy.utilities.iterables import iterable as _sympy_iterable
 
 from ..derive.core import ARGUMENT_ROLES, Derivation, FunctionSpec
 from .count import count_ops
+from .products import reuse_products
+from .signs import settle_signs
 from .nodes import (
     Add, Argument, Call1, Call2, Compare, Const, Div, Elem, Expr, Function, Let, Logic, Mul, NamedConst, Neg, Not,
     Role, Select, Store, TrigBlock, Type, Var,
@@ -737,7 +739,7 @@ class Lowering:
                                   tuple(Var(f"s{k}") for k in ks)))
         body.extend(self.let(i) for i in assigned if i not in block_of)
         body.extend(Store(name, i, self.convert(expr)) for name, i, (expr, _, _) in outs)
-        body_t = tuple(body)
+        body_t = settle_signs(reuse_products(body))
         return Function(spec.name, spec.summary, args, body_t, kind="straight", ops=count_ops(body_t))
 
 

@@ -3,6 +3,7 @@ statements a set of names needs."""
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Iterable
 
 from .nodes import (
@@ -43,6 +44,19 @@ def expr_names(e, out: set[str]) -> set[str]:
             if not isinstance(x.offset, int):
                 stack.append(x.offset)
     return out
+
+
+@lru_cache(maxsize=1 << 16)
+def statement_reads(s) -> frozenset[str]:
+    """The names a :class:`Let`, :class:`Store` or :class:`TrigBlock` reads (remembered: the functions of one
+    derivation share their statements, and the passes of :mod:`.products` and :mod:`.signs` ask for each)."""
+    names: set[str] = set()
+    if type(s) in (Let, Store):
+        expr_names(s.value, names)
+    elif type(s) is TrigBlock:
+        for a in s.angles:
+            expr_names(a, names)
+    return frozenset(names)
 
 
 def body_names(body: Iterable, out: set[str] | None = None) -> set[str]:

@@ -1,0 +1,144 @@
+"""The per-function sign pass on the IR (skelarm_sym/ir/signs.py): the same values, never more operations,
+and the negations it is there to remove.
+
+Values are judged by evaluating the body before and after with NumPy (skelarm_sym/ir/evaluate.py) on random
+inputs, operation counts by skelarm_sym/ir/count.py; the chain's functions against its recursive reference
+(skelarm_sym/models/chain/reference.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from skelarm_sym.ir.count import count_ops
+from skelarm_sym.ir.evaluate import evaluate
+from skelarm_sym.ir.nodes import Add, Const, Elem, If, Let, Mul, Neg, Store, TrigBlock, Type, Var
+from skelarm_sym.ir.signs import settle_signs
+
+X = [Elem("x", Const(i, Type.INT)) for i in range(4)]
+C = [Var(f"c{k}") for k in range(2)]
+S = [Var(f"s{k}") for k in range(2)]
+TRIG = TrigBlock((X[0], X[1]), tuple(C), tuple(S))
+
+
+def run(body, x):
+    """Outputs of a straight body at inputs ``x``: {(output, index): value}."""
+    values = {"x": np.asarray(x, dtype=float)}
+    out = {}
+    for s in body:
+        if type(s) is TrigBlock:
+            for a, c, sn in zip(s.angles, s.cos, s.sin):
+                angle = evaluate(a, values)
+                values[c.name], values[sn.name] = np.cos(angle), np.sin(angle)
+        elif type(s) is Let:
+            values[s.var.name] = evaluate(s.value, values)
+        elif type(s) is Store:
+            out[(s.output, s.index)] = float(evaluate(s.value, values))
+    return out
+
+
+def test_a_local_only_read_negated_is_stored_negated():
+    t = Var("t0")
+    body = (TRIG, Let(t, Add((Mul((Const(0.5), C[0])), Mul((S[0], X[2]))))), Store("y", 0, Neg(t)), Store("y", 1, Add((t, S[1]))))
+    after = settle_signs(body)
+    assert count_ops(body).neg == 1 and count_ops(after).neg == 0  # t = -0.5 c0 - s0 x2, y0 = t, y1 = s1 - t
+    assert after[1].value == Add((Mul((Const(-0.5), C[0])), Neg(Mul((S[0], X[2])))))
+    x = np.random.default_rng(1).uniform(-2, 2, 4)
+    assert run(after, x) == pytest.approx(run(body, x), rel=1e-15, abs=0)
+
+
+def test_a_negated_product_reads_an_earlier_negated_factor():
+    n, t = Var("t0"), Var("t1")  # n = -s0 exists (the derivation hoisted it); y0 = -(s0 x2) can read it
+    body = (TRIG, Let(n, Neg(S[0])), Let(t, Mul((C[1], n))), Store("y", 0, t), Store("y", 1, Neg(Mul((S[0], X[2])))))
+    after = settle_signs(body)
+    assert count_ops(body).neg == 2 and count_ops(after).neg == 1
+    assert Store("y", 1, Mul((n, X[2]))) in after
+
+
+def test_a_negation_nothing_reads_any_more_is_dropped():
+    t, u = Var("t0"), Var("t1")  # u = -t feeds only y0: storing t negated makes u dead
+    body = (TRIG, Let(t, Add((Mul((Const(2.0), C[0])), S[1]))), Let(u, Neg(t)), Store("y", 0, u), Store("y", 1, Add((t, C[1]))))
+    after = settle_signs(body)
+    assert count_ops(after).neg == 0
+    assert all(not (type(s) is Let and s.var == u) for s in after)
+
+
+def test_a_condition_reads_a_flipped_local_with_its_sign():
+    """A select's condition, a logical term and a comparison read the local as stored: ``t > 0`` becomes ``-t > 0``
+    when ``t`` holds ``-t`` (the closed-form IK's branches; a condition left as it was chose the other branch)."""
+    from skelarm_sym.ir.nodes import Compare, Logic, Not, Select
+
+    t = Var("t0")
+    cond = Logic("and", (Compare(">", t, Const(0.0)), Not(Compare("<", t, Const(-5.0)))))
+    body = (TRIG, Let(t, Add((Mul((Const(0.5), C[0])), S[1]))), Store("y", 0, Neg(t)), Store("y", 1, Neg(Mul((t, C[1])))),
+            Store("y", 2, Neg(Mul((t, S[1])))), Store("y", 3, Select(cond, C[0], S[0])))
+    after = settle_signs(body)
+    assert count_ops(after).neg < count_ops(body).neg  # t is stored negated
+    for x in np.random.default_rng(3).uniform(-3, 3, (40, 4)):
+        assert run(after, x) == pytest.approx(run(body, x), rel=1e-15, abs=0)
+
+
+def test_bodies_with_control_flow_and_bodies_with_nothing_to_gain_come_back_unchanged():
+    t = Var("t0")
+    body = (TRIG, Let(t, Mul((C[0], S[1]))), Store("y", 0, t))
+    assert settle_signs(body) == body
+    flow = (Let(t, Neg(X[0])), If(Const(True, Type.BOOL), (Store("y", 0, t),)))
+    assert settle_signs(flow) == flow
+
+
+# random straight-line bodies: sums and products of the inputs, trig values and earlier locals, some negated
+_leaf = st.sampled_from(X + C + S + [Const(0.75), Const(-1.5)])
+
+
+def _body(draw_ops):
+    lets, stores = [], []
+    names = []
+    for k, (kind, picks, neg, out) in enumerate(draw_ops):
+        pool = X + C + S + [Var(n) for n in names] + [Const(0.75), Const(-1.5)]
+        args = tuple(pool[p % len(pool)] for p in picks)
+        args = tuple(Neg(a) if (neg >> i) & 1 and type(a) is not Const else a for i, a in enumerate(args))
+        value = Add(args) if kind == "add" else (Mul(tuple(a.x if type(a) is Neg else a for a in args)) if kind == "mul" else Neg(args[0]))
+        if kind == "mul" and any(type(a) is Neg for a in args):
+            value = Neg(value)
+        name = f"t{k}"
+        names.append(name)
+        lets.append(Let(Var(name), value))
+        if out:
+            stores.append(Store("y", len(stores), Neg(Var(name)) if out == 2 else Var(name)))
+    return (TRIG, *lets, *stores)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["add", "mul", "neg"]), st.lists(st.integers(0, 40), min_size=2, max_size=3),
+                          st.integers(0, 7), st.integers(0, 2)), min_size=1, max_size=12),
+       st.lists(st.floats(-3, 3), min_size=4, max_size=4))
+def test_random_bodies_keep_their_values_and_never_pay_more(ops, x):
+    body = _body(ops)
+    after = settle_signs(body)
+    before_ops, after_ops = count_ops(body), count_ops(after)
+    assert after_ops.neg <= before_ops.neg
+    assert (after_ops.add, after_ops.mul) == (before_ops.add, before_ops.mul)
+    want, got = run(body, x), run(after, x)
+    assert got.keys() == want.keys()
+    for key in want:
+        assert got[key] == pytest.approx(want[key], rel=1e-12, abs=1e-12)
+
+
+def test_stanford_jacobian_pays_only_its_two_unavoidable_negations():
+    """Stanford arm: J[19] = -sin q1 and J[34] = -sin q2 cos q4 need a negation each; the others (J[0], J[13]) are
+    taken by storing q3 sin q2 and the first column's sum negated. Values against the recursive reference."""
+    from pathlib import Path
+
+    from skelarm_sym.generate import generate
+    from skelarm_sym.models.chain.loader import load_robot
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    chain = load_robot(Path(__file__).resolve().parents[1] / "examples" / "robots" / "stanford.toml")
+    g = generate(chain, langs="python", functions="jacobian", out=None)
+    function = next(f for f in g.module.functions if f.name == "jacobian")
+    assert function.ops.neg == 2
+    namespace: dict = {}
+    exec(g.sources["stanford.py"], namespace)  # noqa: S102 - the module this test generated
+    q = np.array([0.3, -0.7, 0.5, 1.1, -0.4, 0.9])
+    assert namespace["jacobian"](q) == pytest.approx(chain_kinematics(chain.numeric(), q).J, abs=1e-12)
