@@ -77,6 +77,8 @@ class _Signs:
                             break
                         name = alias.name
         self.flipped: set[str] = set()
+        self.info: dict = {}  # sum or product -> the locals it reads (None: not plain), and memoised normal forms
+        self.memo: dict = {}
         # per statement: the negations it pays and the negated copies (aliases) it reads; a copy costs its
         # one negation while anything reads it
         self.cost: list[int] = []
@@ -86,6 +88,10 @@ class _Signs:
             paid, reads = self.price(i)
             self.cost.append(paid)
             self.reads.append(reads)
+        # the search's clock: when each statement last changed, each local was last tried, a copy last came or went
+        self.clock, self.copies_at = 0, 0
+        self.changed_at = [0] * len(self.body)
+        self.tried_at: dict[str, int] = {}
         self.readers: dict[str, int] = {u: 0 for u in self.alias_of}
         for reads in self.reads:
             for u in reads:
@@ -145,6 +151,44 @@ class _Signs:
         if t is Neg:
             sign, x, paid = self.normal(e.x, at)
             return -sign, x, paid
+        if t is Mul or t is Add:
+            info = self.info.get(e)
+            if info is None:
+                info = self.info[e] = self._plain_names(e)
+            if info is not None:  # memoised by the flips among the locals it reads
+                key = (e, info & self.flipped) if info else e
+                found = self.memo.get(key)
+                if found is None:
+                    found = self.memo[key] = self._normal_sum_or_product(e, at)
+                return found
+            return self._normal_sum_or_product(e, at)
+        return self._normal_other(e, at)
+
+    def _plain_names(self, e) -> frozenset | None:
+        """The flippable locals a sum or product of plain parts (variables, elements, numbers, negations, sums,
+        products) reads, through copies; ``None`` where it has another part (its form may depend on where it is)."""
+        names, stack = set(), [e]
+        while stack:
+            x = stack.pop()
+            t = type(x)
+            if t is Var:
+                name = x.name
+                while name in self.alias_of:
+                    name = self.alias_of[name].name
+                if name in self.position:
+                    names.add(name)
+            elif t is Add:
+                stack.extend(x.terms)
+            elif t is Mul:
+                stack.extend(x.factors)
+            elif t is Neg:
+                stack.append(x.x)
+            elif t is not Const and t is not Elem:
+                return None
+        return frozenset(names)
+
+    def _normal_sum_or_product(self, e, at: int):
+        t = type(e)
         if t is Mul:
             sign, factors, paid = 1, [], 0
             for f in e.factors:
@@ -163,6 +207,9 @@ class _Signs:
             if first:
                 terms.insert(0, terms.pop(first))
             return 1, Add(tuple(terms)), paid
+
+    def _normal_other(self, e, at: int):
+        t = type(e)
         if t is Div:
             sign, num, paid = self.normal(e.num, at)
             den, p = self.written_out(e.den, at)
@@ -237,6 +284,11 @@ class _Signs:
         affected = [self.position[name]] + self.users[name]
         if len(affected) > MOST_READERS or not any(self.cost[i] or self.reads[i] for i in affected):
             return False  # nothing there pays a negation: a flip can only add some
+        tried = self.tried_at.get(name)
+        if tried is not None and tried >= self.copies_at and all(self.changed_at[i] <= tried for i in affected):
+            return False  # refused before, and nothing it depends on has moved since
+        self.clock += 1
+        self.tried_at[name] = self.clock
         self.flipped ^= {name}
         new = {i: self.price(i) for i in affected}
         readers = {}
@@ -250,6 +302,9 @@ class _Signs:
         if delta < 0:
             for i, (c, reads) in new.items():
                 self.cost[i], self.reads[i] = c, reads
+                self.changed_at[i] = self.clock
+            if any(bool(n) != bool(self.readers[u]) for u, n in readers.items()):
+                self.copies_at = self.clock  # a copy is now read or unread: every price that reads it moved
             self.readers.update(readers)
             return True
         self.flipped ^= {name}
