@@ -24,6 +24,8 @@ and one memoised converter serves every function of the derivation.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 from dataclasses import dataclass
 from typing import Iterable, Sequence
 
@@ -739,8 +741,15 @@ class Lowering:
                                   tuple(Var(f"s{k}") for k in ks)))
         body.extend(self.let(i) for i in assigned if i not in block_of)
         body.extend(Store(name, i, self.convert(expr)) for name, i, (expr, _, _) in outs)
-        body_t = settle_signs(reuse_products(body))
+        body_t = _per_function_passes(tuple(body))
         return Function(spec.name, spec.summary, args, body_t, kind="straight", ops=count_ops(body_t))
+
+
+@lru_cache(maxsize=512)
+def _per_function_passes(body: tuple) -> tuple:
+    """A function's statements after :func:`~.products.reuse_products` and :func:`~.signs.settle_signs`;
+    remembered, as the same derivation is lowered again for each generation of it (a test session's many)."""
+    return settle_signs(reuse_products(body))
 
 
 def lower_function(derivation: Derivation, spec: FunctionSpec, program: Program) -> Function:
