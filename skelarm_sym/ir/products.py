@@ -21,8 +21,8 @@ from collections import Counter
 from functools import lru_cache
 from typing import Sequence
 
-from .nodes import Add, Call1, Call2, Compare, Const, Div, Elem, Let, Mul, Neg, Select, Store, TrigBlock, Var
-from .walk import statement_reads
+from .nodes import Const, Elem, Let, Mul, Store, TrigBlock, Var
+from .walk import children, statement_reads, with_children
 
 PASSES = 3
 """Rounds of dropping products at most."""
@@ -127,37 +127,9 @@ class _Products:
                 new = self.cover(atoms, at, without, own)
                 if uses or len(new) < len(factors):
                     return Mul(new) if len(new) > 1 else new[0], saved + len(factors) - len(new)
-            if all(x is y for x, y in zip(factors, e.factors)):
-                return e, saved
-            return Mul(tuple(factors)), saved
-        if t is Add:
-            parts = [self.rewrite(x, at, own, without) for x in e.terms]
-            if all(x is y for (x, _), y in zip(parts, e.terms)):
-                return e, 0
-            return Add(tuple(x for x, _ in parts)), sum(s for _, s in parts)
-        if t is Neg:
-            x, s = self.rewrite(e.x, at, own, without)
-            return (e if x is e.x else Neg(x)), s
-        if t is Div:
-            a, s = self.rewrite(e.num, at, own, without)
-            b, r = self.rewrite(e.den, at, own, without)
-            return Div(a, b, e.guarded), s + r
-        if t is Call1:
-            x, s = self.rewrite(e.x, at, own, without)
-            return Call1(e.function, x), s
-        if t is Call2:
-            a, s = self.rewrite(e.a, at, own, without)
-            b, r = self.rewrite(e.b, at, own, without)
-            return Call2(e.function, a, b), s + r
-        if t is Compare:
-            a, s = self.rewrite(e.a, at, own, without)
-            b, r = self.rewrite(e.b, at, own, without)
-            return Compare(e.op, a, b), s + r
-        if t is Select:
-            a, s = self.rewrite(e.then, at, own, without)
-            b, r = self.rewrite(e.otherwise, at, own, without)
-            return Select(e.cond, a, b), s + r
-        return e, 0
+            return with_children(e, tuple(factors)), saved
+        parts = [self.rewrite(x, at, own, without) for x in children(e)]
+        return with_children(e, tuple(x for x, _ in parts)), sum(saved for _, saved in parts)
 
     def statement(self, i: int, without: str | None = None):
         """Statement ``i`` rewritten, and the multiplications that saves."""
@@ -237,43 +209,19 @@ def _products_in(statement) -> tuple:
     found, stack = [], [statement.value]
     while stack:
         e = stack.pop()
-        t = type(e)
-        if t is Mul:
-            if all(type(f) in (Var, Elem, Const) for f in e.factors):
-                found.append(e)
-            else:
-                stack.extend(e.factors)
-        elif t is Add:
-            stack.extend(e.terms)
-        elif t in (Neg, Call1):
-            stack.append(e.x)
-        elif t is Div:
-            stack.extend((e.num, e.den))
-        elif t in (Call2, Compare):
-            stack.extend((e.a, e.b))
-        elif t is Select:
-            stack.extend((e.then, e.otherwise))
+        if type(e) is Mul and all(type(f) in (Var, Elem, Const) for f in e.factors):
+            found.append(e)
+        else:
+            stack.extend(children(e))
     return tuple(found)
 
 
 def _only_factor(e, name: str) -> bool:
     """Whether every occurrence of variable ``name`` in ``e`` is a factor of a product."""
-    t = type(e)
-    if t is Var:
+    if type(e) is Var:
         return e.name != name
-    if t is Mul:
-        return all(_only_factor(f, name) if not (type(f) is Var and f.name == name) else True for f in e.factors)
-    if t is Add:
-        return all(_only_factor(x, name) for x in e.terms)
-    if t in (Neg, Call1):
-        return _only_factor(e.x, name)
-    if t is Div:
-        return _only_factor(e.num, name) and _only_factor(e.den, name)
-    if t in (Call2, Compare):
-        return _only_factor(e.a, name) and _only_factor(e.b, name)
-    if t is Select:
-        return _only_factor(e.cond, name) and _only_factor(e.then, name) and _only_factor(e.otherwise, name)
-    return True
+    factors = e.factors if type(e) is Mul else ()
+    return all(_only_factor(x, name) for x in children(e) if not (x in factors and type(x) is Var and x.name == name))
 
 
 def reuse_products(body: Sequence) -> tuple:

@@ -26,7 +26,7 @@ from typing import Sequence
 
 from .count import count_ops
 from .nodes import Add, Bits, Call1, Call2, Cast, Compare, Const, Div, Elem, Let, Logic, Mul, Neg, Not, Select, Store, TrigBlock, Type, Var
-from .walk import expr_names, statement_reads
+from .walk import children, expr_names, statement_reads
 
 PASSES = 4
 """Greedy passes over the locals at most (the chain's bodies settle in two)."""
@@ -109,10 +109,6 @@ class _Signs:
         if type(s) not in (Let, Store) or (type(s) is Let and s.var.name in self.alias_of):
             return 0, frozenset()
         return paid, statement_reads(s) & self.alias_of.keys()
-
-    def total(self) -> int:
-        """Negations the body pays under the current flips."""
-        return sum(self.cost) + sum(1 for n in self.readers.values() if n)
 
     # -- one statement under the current flips -------------------------------------------------------
     def statement(self, i: int):
@@ -359,23 +355,10 @@ def _opaque_reads(e, out: set[str]) -> None:
     stack = [e]
     while stack:
         x = stack.pop()
-        t = type(x)
-        if t is Elem:
-            expr_names(x.index, out)
-        elif t in (Cast, Bits):
+        if type(x) in (Elem, Cast, Bits):
             expr_names(x, out)
-        elif t is Add or t is Logic:
-            stack.extend(x.terms)
-        elif t is Mul:
-            stack.extend(x.factors)
-        elif t in (Neg, Call1, Not):
-            stack.append(x.x)
-        elif t is Div:
-            stack.extend((x.num, x.den))
-        elif t in (Call2, Compare):
-            stack.extend((x.a, x.b))
-        elif t is Select:
-            stack.extend((x.cond, x.then, x.otherwise))
+        else:
+            stack.extend(children(x))
 
 
 def _signless(e, aliases: dict, flipped: set) -> bool:
@@ -393,22 +376,8 @@ def _signless(e, aliases: dict, flipped: set) -> bool:
                 return False
         elif t is Neg:
             return False
-        elif t is Add:
-            stack.extend(x.terms)
-        elif t is Mul:
-            stack.extend(x.factors)
-        elif t is Div:
-            stack.extend((x.num, x.den))
-        elif t is Call1:
-            stack.append(x.x)
-        elif t in (Call2, Compare):
-            stack.extend((x.a, x.b))
-        elif t is Select:
-            stack.extend((x.cond, x.then, x.otherwise))
-        elif t is Logic:
-            stack.extend(x.terms)
-        elif t is Not:
-            stack.append(x.x)
+        else:
+            stack.extend(children(x))
     return True
 
 

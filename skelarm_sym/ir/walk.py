@@ -46,6 +46,60 @@ def expr_names(e, out: set[str]) -> set[str]:
     return out
 
 
+def children(e) -> tuple:
+    """The sub-expressions of expression ``e``, in field order (none for a leaf)."""
+    t = type(e)
+    if t is Add or t is Logic:
+        return e.terms
+    if t is Mul:
+        return e.factors
+    if t in (Neg, Not, Call1, Cast):
+        return (e.x,)
+    if t is Div:
+        return (e.num, e.den)
+    if t in (Call2, Compare, Bits):
+        return (e.a, e.b)
+    if t is Select:
+        return (e.cond, e.then, e.otherwise)
+    if t is Elem:
+        return (e.index,)
+    return ()
+
+
+def with_children(e, parts: tuple):
+    """``e`` with its sub-expressions (:func:`children`) replaced by ``parts``; ``e`` itself when they are the same."""
+    if all(a is b for a, b in zip(parts, children(e))):
+        return e
+    t = type(e)
+    if t is Add:
+        return Add(parts)
+    if t is Logic:
+        return Logic(e.op, parts)
+    if t is Mul:
+        return Mul(parts)
+    if t is Neg:
+        return Neg(parts[0])
+    if t is Not:
+        return Not(parts[0])
+    if t is Call1:
+        return Call1(e.function, parts[0])
+    if t is Cast:
+        return Cast(e.type, parts[0])
+    if t is Div:
+        return Div(parts[0], parts[1], e.guarded)
+    if t is Call2:
+        return Call2(e.function, *parts)
+    if t is Compare:
+        return Compare(e.op, *parts)
+    if t is Bits:
+        return Bits(e.op, *parts)
+    if t is Select:
+        return Select(*parts)
+    if t is Elem:
+        return Elem(e.array, parts[0], e.type)
+    return e
+
+
 @lru_cache(maxsize=1 << 16)
 def statement_reads(s) -> frozenset[str]:
     """The names a :class:`Let`, :class:`Store` or :class:`TrigBlock` reads (remembered: the functions of one
