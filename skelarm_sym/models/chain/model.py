@@ -20,6 +20,7 @@ and named parameters (symbols) where the source named them.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import numbers
@@ -116,6 +117,21 @@ _ZERO = sp.ImmutableMatrix(sp.zeros(3, 1))
 _IDENTITY_ENTRIES = tuple(_IDENTITY.flat())
 
 
+@functools.lru_cache(maxsize=4096)
+def _xyz_rpy(xyz: tuple[sp.Expr, ...], rpy: tuple[sp.Expr, ...]) -> "Transform":
+    """:meth:`Transform.from_xyz_rpy` of exact values (a Transform is immutable: one per distinct origin; a
+    file loaded once per tip, and the many origins of a URDF that repeat, are built once). A zero angle
+    contributes no factor: most origins have no rotation at all."""
+    rotation = _IDENTITY
+    factors = [Transform.rotate(axis, angle) for axis, angle in zip("zyx", reversed(rpy)) if angle is not sp.S.Zero]
+    if factors:
+        product = factors[0]
+        for factor in factors[1:]:
+            product = product @ factor
+        rotation = product.rotation
+    return Transform(rotation, sp.ImmutableMatrix(list(xyz)))
+
+
 @dataclass(frozen=True)
 class Transform:
     """A constant rigid transform ``[R t; 0 1]``: ``rotation`` 3 x 3 and ``translation`` 3 x 1 (SymPy)."""
@@ -129,8 +145,8 @@ class Transform:
 
     @staticmethod
     def identity() -> "Transform":
-        """The identity transform."""
-        return Transform()
+        """The identity transform (one shared instance: a Transform is immutable)."""
+        return _IDENTITY_TRANSFORM
 
     @staticmethod
     def translate(x: sp.Expr = 0, y: sp.Expr = 0, z: sp.Expr = 0) -> "Transform":
@@ -151,9 +167,7 @@ class Transform:
     @staticmethod
     def from_xyz_rpy(xyz: Sequence[sp.Expr], rpy: Sequence[sp.Expr]) -> "Transform":
         """URDF origin: translation ``xyz``, rotation ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-        roll, pitch, yaw = rpy
-        rotation = Transform.rotate("z", yaw) @ Transform.rotate("y", pitch) @ Transform.rotate("x", roll)
-        return Transform(rotation.rotation, sp.ImmutableMatrix(list(xyz)))
+        return _xyz_rpy(tuple(sp.sympify(v) for v in xyz), tuple(sp.sympify(v) for v in rpy))
 
     def __matmul__(self, other: "Transform") -> "Transform":
         if self._is_identity_entries() and other._is_numeric():  # a URDF's chain is mostly identities
@@ -201,6 +215,10 @@ class Transform:
         except TypeError:
             missing = sorted(str(s) for s in matrix.free_symbols)
             raise InputError(f"no value for parameter(s) {', '.join(missing)}") from None
+
+
+_IDENTITY_TRANSFORM = Transform()
+"""The identity transform (:meth:`Transform.identity`)."""
 
 
 # -- joints and chains ------------------------------------------------------------------------------
