@@ -52,9 +52,10 @@ class _Products:
         # each product (of two atoms or more) filed under its rarest atom: a product inside a set of atoms has
         # that atom among them, so the atoms' files hold every candidate, each once
         frequency = Counter(a for name in ranked for a in self.atoms[name])
+        first = {a: k for k, a in enumerate(frequency)}  # ties: the atom met first (any rule files each product once)
         self.by_atom: dict = {}
         for name in ranked:
-            rarest = min(self.atoms[name], key=lambda a: (frequency[a], repr(a)))
+            rarest = min(self.atoms[name], key=lambda a: (frequency[a], first[a]))
             self.by_atom.setdefault(rarest, []).append(name)
         self.containing: dict = {}  # atom -> every product (of two atoms or more) that contains it
         for name in ranked:

@@ -25,7 +25,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from .count import count_ops
-from .nodes import Add, Bits, Call1, Call2, Cast, Compare, Const, Div, Elem, Let, Logic, Mul, Neg, Not, Select, Store, TrigBlock, Type, Var
+from .nodes import Add, Bits, Call1, Call2, Cast, Compare, Const, Div, Elem, Let, Logic, Mul, NamedConst, Neg, Not, Select, Store, TrigBlock, Type, Var
 from .walk import children, expr_names, statement_reads
 
 PASSES = 4
@@ -101,7 +101,7 @@ class _Signs:
         """``(negations, aliases read)`` of statement ``i`` under the current flips."""
         s = self.body[i]
         unflipped = type(s) is Store or (type(s) is Let and s.var.name not in self.flipped)
-        if unflipped and _signless(s.value, self.alias_of, self.flipped):
+        if unflipped and _settled(s.value, self.alias_of, self.flipped):
             return 0, frozenset()
         s, paid = self.statement(i)
         if not self.flipped:
@@ -361,24 +361,29 @@ def _opaque_reads(e, out: set[str]) -> None:
             stack.extend(children(x))
 
 
-def _signless(e, aliases: dict, flipped: set) -> bool:
-    """Whether ``e`` has no sign anywhere (no negation, negative literal, negated copy or flipped local): then it
-    pays nothing and reads no copy, as :meth:`_Signs.statement` would find at more cost."""
-    stack = [e]
-    while stack:
-        x = stack.pop()
-        t = type(x)
-        if t is Var:
-            if x.name in aliases or x.name in flipped:
-                return False
-        elif t is Const:
-            if x.type is Type.REAL and x.value < 0:
-                return False
-        elif t is Neg:
-            return False
-        else:
-            stack.extend(children(x))
-    return True
+def _settled(e, aliases: dict, flipped: set) -> bool:
+    """Whether :meth:`_Signs.normal` leaves ``e`` as it is: sign +1, the same tree, nothing paid. So it is where
+    no sign is anywhere (no negated copy or flipped local, no negative literal) but subtractions: a sum whose
+    first term is added and each other term added or subtracted (``a - b + c``), of such parts. Such a statement
+    pays nothing and reads no copy, as :meth:`_Signs.statement` would find at more cost (most statements of a
+    body are such sums)."""
+    t = type(e)
+    if t is Var:
+        return e.name not in aliases and e.name not in flipped
+    if t is Const:
+        return not (e.type is Type.REAL and e.value < 0)
+    if t is Add:
+        terms = e.terms
+        return type(terms[0]) is not Neg and all(_settled(x.x if type(x) is Neg else x, aliases, flipped) for x in terms)
+    if t is Neg:
+        return False
+    if t in _WRITTEN_AS_THEY_ARE:
+        return True
+    return all(_settled(x, aliases, flipped) for x in children(e))
+
+
+_WRITTEN_AS_THEY_ARE = (Elem, NamedConst, Cast, Bits)
+"""Parts :meth:`_Signs.normal` returns untouched, whatever they hold (an array index, a cast, bit operations)."""
 
 
 def settle_signs(body: Sequence) -> tuple:
