@@ -13,8 +13,8 @@ from hypothesis import given, settings, strategies as st
 
 from skelarm_sym.ir.count import count_ops
 from skelarm_sym.ir.evaluate import evaluate
-from skelarm_sym.ir.nodes import Add, Const, Elem, If, Let, Mul, Neg, Store, TrigBlock, Type, Var
-from skelarm_sym.ir.signs import settle_signs
+from skelarm_sym.ir.nodes import Add, Call1, Const, Div, Elem, If, Let, Mul, Neg, Store, TrigBlock, Type, Var
+from skelarm_sym.ir.signs import _settled, _Signs, settle_signs
 
 X = [Elem("x", Const(i, Type.INT)) for i in range(4)]
 C = [Var(f"c{k}") for k in range(2)]
@@ -146,3 +146,32 @@ def test_stanford_jacobian_pays_only_its_two_unavoidable_negations():
     exec(g.sources["stanford.py"], namespace)  # noqa: S102 - the module this test generated
     q = np.array([0.3, -0.7, 0.5, 1.1, -0.4, 0.9])
     assert namespace["jacobian"](q) == pytest.approx(chain_kinematics(chain.numeric(), q).J, abs=1e-12)
+
+
+# the sign pass takes a statement it finds settled as it is, without writing its normal form: that must be exactly
+# what the normal form would have been (sign +1, the same tree, nothing paid), on any expression
+
+_LEAVES = X + C + S + [Var("u"), Var("t0"), Const(0.75), Const(-1.5)]  # u = -x0 is a negated copy
+
+
+def _expressions():
+    leaf = st.sampled_from(_LEAVES)
+
+    def grow(inner):
+        parts = st.lists(inner, min_size=2, max_size=4).map(tuple)
+        return st.one_of(parts.map(Add), parts.map(Mul), inner.map(Neg), st.tuples(inner, inner).map(lambda ab: Div(*ab)),
+                         inner.map(lambda a: Call1("sqrt", a)))
+
+    return st.recursive(leaf, grow, max_leaves=12)
+
+
+@settings(max_examples=400, deadline=None)
+@given(_expressions())
+def test_what_the_sign_pass_takes_as_settled_is_its_own_normal_form(value):
+    body = (TRIG, Let(Var("u"), Neg(X[0])), Let(Var("t0"), Add((X[1], Neg(S[0])))), Let(Var("t1"), value))
+    signs = _Signs(body)
+    if _settled(value, signs.alias_of, set()):
+        sign, written, paid = signs.normal(value, 3)
+        assert (sign, written, paid) == (1, value, 0)
+        assert signs.cost[3] == 0 and not signs.reads[3]
+
