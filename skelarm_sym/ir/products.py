@@ -46,7 +46,7 @@ class _Products:
                 self.atoms[s.var.name] = atoms
                 self.reads[s.var.name] = reads
         self.dropped: set[str] = set()
-        sizes = {name: sum(atoms.values()) for name, atoms in self.atoms.items()}
+        self.sizes = sizes = {name: sum(atoms.values()) for name, atoms in self.atoms.items()}
         ranked = sorted((name for name in self.atoms if sizes[name] >= 2), key=lambda name: (-sizes[name], self.position[name]))
         self.rank = {name: k for k, name in enumerate(ranked)}
         # each product (of two atoms or more) filed under its rarest atom: a product inside a set of atoms has
@@ -81,6 +81,10 @@ class _Products:
         self._note(i, old, -1)
         self.body[i] = statement
         self._note(i, statement, 1)
+
+    def size(self, factors) -> int:
+        """How many atoms the product of ``factors`` has (the total of :meth:`expand`, without building it)."""
+        return sum(self.sizes.get(f.name, 1) if type(f) is Var else 1 for f in factors)
 
     def expand(self, factors) -> Counter:
         """The atoms of a product of ``factors`` (local products expanded; other factors as they are)."""
@@ -144,11 +148,11 @@ class _Products:
         return s, 0
 
     def run(self) -> tuple:
-        # a statement that reads no product and has no product of three factors keeps its form
-        wanted = set().union(*self.readers.values())
-        wanted.update(i for i, s in enumerate(self.body)
-                      if type(s) in (Let, Store) and any(len(m.factors) > 2 for m in _products_in(s)))
-        for i in sorted(wanted):
+        # only a product of three atoms or more can read an earlier product (of two, the CSE has shared it): a
+        # statement with none keeps its form (most readers of a product read it whole, as a term of a sum)
+        wanted = [i for i, s in enumerate(self.body)
+                  if type(s) in (Let, Store) and any(self.size(m.factors) > 2 for m in _products_in(s))]
+        for i in wanted:
             self.replace(i, self.statement(i)[0])
         for _ in range(PASSES):
             if not any([self.drop(name) for name in reversed(list(self.atoms)) if name not in self.dropped]):
