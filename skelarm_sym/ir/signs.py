@@ -84,6 +84,9 @@ class _Signs:
         self.cost: list[int] = []
         self.reads: list[frozenset] = []
         self.unflipped: dict[int, object] = {}  # statement -> as written with no flip (kept for written())
+        # settled with no flip (_settled): then it stays so while it reads no flipped local (its reads include what
+        # _settled does not look into, which only makes the test stricter)
+        self.settled = [type(s) in (Let, Store) and _settled(s.value, self.alias_of, ()) for s in self.body]
         for i in range(len(self.body)):
             paid, reads = self.price(i)
             self.cost.append(paid)
@@ -101,7 +104,7 @@ class _Signs:
         """``(negations, aliases read)`` of statement ``i`` under the current flips."""
         s = self.body[i]
         unflipped = type(s) is Store or (type(s) is Let and s.var.name not in self.flipped)
-        if unflipped and _settled(s.value, self.alias_of, self.flipped):
+        if unflipped and self.settled[i] and self.names[i].isdisjoint(self.flipped):
             return 0, frozenset()
         s, paid = self.statement(i)
         if not self.flipped:
