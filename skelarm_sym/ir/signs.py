@@ -22,6 +22,7 @@ uses; passes until none does) and leaves a body with no other statements than :c
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Sequence
 
 from .count import count_ops
@@ -58,7 +59,7 @@ class _Signs:
         opaque = set()  # read where normal() moves no sign (an index, a cast, bit operations): never flipped
         for s in self.body:
             if type(s) in (Let, Store):
-                _opaque_reads(s.value, opaque)
+                opaque |= _opaque_reads(s.value)
         self.flippable = [
             s.var.name for s in self.body
             if type(s) is Let and s.var.type is Type.REAL and s.var.name not in angles and s.var.name not in self.alias_of
@@ -353,8 +354,11 @@ def _negations(s) -> int:
     return count_ops((s,)).neg
 
 
-def _opaque_reads(e, out: set[str]) -> None:
-    """Add to ``out`` the names read inside array indices, casts and bit operations of ``e``."""
+@lru_cache(maxsize=1 << 16)
+def _opaque_reads(e) -> frozenset[str]:
+    """The names read inside array indices, casts and bit operations of ``e`` (remembered: the functions of one
+    derivation share most statements)."""
+    out: set[str] = set()
     stack = [e]
     while stack:
         x = stack.pop()
@@ -362,6 +366,7 @@ def _opaque_reads(e, out: set[str]) -> None:
             expr_names(x, out)
         else:
             stack.extend(children(x))
+    return frozenset(out)
 
 
 def _settled(e, aliases: dict, flipped: set) -> bool:
