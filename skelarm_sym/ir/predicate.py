@@ -32,6 +32,7 @@ program ends with the status per lane in :attr:`Predicated.status`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Union
 
 from .nodes import (
@@ -336,8 +337,8 @@ class _Scope:
 
 
 class _Pass:
-    def __init__(self, module: Module) -> None:
-        self.module = module
+    def __init__(self, functions: tuple[Function, ...]) -> None:
+        self.functions = {f.name: f for f in functions}  # the callees, by name
         self.count = 0
         self.arrays: dict[str, tuple[int, Type]] = {}
         self.consts: set[str] = set()
@@ -616,7 +617,7 @@ class _Pass:
         self.emit(PLoop(run, inner, _carried(inner)))
 
     def call(self, s: CallFunction, mask: Var | None, scope: _Scope) -> None:
-        callee = self.module.function(s.function)
+        callee = self.functions[s.function]
         if callee.kind == "straight":
             args, outputs = [], []
             for a, arg in zip(callee.arguments, s.args):
@@ -730,8 +731,15 @@ def _zero(t: Type):
 
 
 def predicate(module: Module, function: Function) -> Predicated:
-    """The masked form of procedure ``function`` of ``module`` (see the module docstring)."""
-    p = _Pass(module)
+    """The masked form of procedure ``function`` of ``module`` (see the module docstring). Remembered for the
+    module's functions: the NumPy, PyTorch and JAX printers of one generation mask the same procedures, and so do
+    a session's generations of one derivation. The result is shared: printers only read it."""
+    return _predicated(module.functions, function)
+
+
+@lru_cache(maxsize=64)
+def _predicated(functions: tuple[Function, ...], function: Function) -> Predicated:
+    p = _Pass(functions)
     scope = _Scope()
     for a in function.arguments:
         if not a.is_scalar:
