@@ -737,7 +737,7 @@ def predicate(module: Module, function: Function) -> Predicated:
     return _predicated(module.functions, function)
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=16)  # a generation masks a handful of procedures; each key holds its module's functions alive
 def _predicated(functions: tuple[Function, ...], function: Function) -> Predicated:
     p = _Pass(functions)
     scope = _Scope()
