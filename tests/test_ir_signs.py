@@ -97,7 +97,6 @@ def test_bodies_with_control_flow_and_bodies_with_nothing_to_gain_come_back_unch
 
 # random straight-line bodies: sums and products of the inputs, trig values and earlier locals, some negated
 
-
 def _body(draw_ops):
     lets, stores = [], []
     names = []
@@ -170,8 +169,7 @@ def _expressions():
 def test_what_the_sign_pass_takes_as_settled_is_its_own_normal_form(value):
     body = (TRIG, Let(Var("u"), Neg(X[0])), Let(Var("t0"), Add((X[1], Neg(S[0])))), Let(Var("t1"), value))
     signs = _Signs(body)
-    if _settled(value, signs.alias_of, set()):
+    if _settled(value, signs.alias_of):
         sign, written, paid = signs.normal(value, 3)
         assert (sign, written, paid) == (1, value, 0)
         assert signs.cost[3] == 0 and not signs.reads[3]
-

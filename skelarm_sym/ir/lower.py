@@ -24,9 +24,8 @@ and one memoised converter serves every function of the derivation.
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Iterable, Sequence
 
 import sympy as sp

@@ -87,7 +87,7 @@ class _Signs:
         self.unflipped: dict[int, object] = {}  # statement -> as written with no flip (kept for written())
         # settled with no flip (_settled): then it stays so while it reads no flipped local (its reads include what
         # _settled does not look into, which only makes the test stricter)
-        self.settled = [type(s) in (Let, Store) and _settled(s.value, self.alias_of, ()) for s in self.body]
+        self.settled = [type(s) in (Let, Store) and _settled(s.value, self.alias_of) for s in self.body]
         for i in range(len(self.body)):
             paid, reads = self.price(i)
             self.cost.append(paid)
@@ -369,25 +369,25 @@ def _opaque_reads(e) -> frozenset[str]:
     return frozenset(out)
 
 
-def _settled(e, aliases: dict, flipped: set) -> bool:
-    """Whether :meth:`_Signs.normal` leaves ``e`` as it is: sign +1, the same tree, nothing paid. So it is where
-    no sign is anywhere (no negated copy or flipped local, no negative literal) but subtractions: a sum whose
+def _settled(e, aliases: dict) -> bool:
+    """Whether :meth:`_Signs.normal` with no flip leaves ``e`` as it is: sign +1, the same tree, nothing paid. So
+    it is where no sign is anywhere (no negated copy, no negative literal) but subtractions: a sum whose
     first term is added and each other term added or subtracted (``a - b + c``), of such parts. Such a statement
     pays nothing and reads no copy, as :meth:`_Signs.statement` would find at more cost (most statements of a
     body are such sums)."""
     t = type(e)
     if t is Var:
-        return e.name not in aliases and e.name not in flipped
+        return e.name not in aliases
     if t is Const:
         return not (e.type is Type.REAL and e.value < 0)
     if t is Add:
         terms = e.terms
-        return type(terms[0]) is not Neg and all(_settled(x.x if type(x) is Neg else x, aliases, flipped) for x in terms)
+        return type(terms[0]) is not Neg and all(_settled(x.x if type(x) is Neg else x, aliases) for x in terms)
     if t is Neg:
         return False
     if t in _WRITTEN_AS_THEY_ARE:
         return True
-    return all(_settled(x, aliases, flipped) for x in children(e))
+    return all(_settled(x, aliases) for x in children(e))
 
 
 _WRITTEN_AS_THEY_ARE = (Elem, NamedConst, Cast, Bits)

@@ -24,6 +24,7 @@ import functools
 import math
 import os
 import numbers
+import operator
 from dataclasses import dataclass, field
 from typing import Iterable, Mapping, Sequence
 
@@ -122,13 +123,8 @@ def _xyz_rpy(xyz: tuple[sp.Expr, ...], rpy: tuple[sp.Expr, ...]) -> "Transform":
     """:meth:`Transform.from_xyz_rpy` of exact values (a Transform is immutable: one per distinct origin; a
     file loaded once per tip, and the many origins of a URDF that repeat, are built once). A zero angle
     contributes no factor: most origins have no rotation at all."""
-    rotation = _IDENTITY
     factors = [Transform.rotate(axis, angle) for axis, angle in zip("zyx", reversed(rpy)) if angle is not sp.S.Zero]
-    if factors:
-        product = factors[0]
-        for factor in factors[1:]:
-            product = product @ factor
-        rotation = product.rotation
+    rotation = functools.reduce(operator.matmul, factors).rotation if factors else _IDENTITY
     return Transform(rotation, sp.ImmutableMatrix(list(xyz)))
 
 
