@@ -14,7 +14,7 @@ workers and the processes they start included, the way the C is compiled at ``-O
 same; the machine code is not: on a UR5 sample the straight-line functions gave the same bits and the compiled
 solvers differed from a default compile by rounding only (at most 3e-14 in double), well within what every test
 allows, and no test is about the speed of the JAX code. A JAX that does not take the flags (XLA stops a process on an unknown one) is found by one probe
-in a child process and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT``
+in a child process (once per installed jaxlib: pytest's cache keeps a yes) and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT``
 (other than 0) itself: ``SKELARM_SYM_OPT=2 pytest`` checks the default, optimised compiles of C and JAX alike.
 
 Python's cyclic collector. A worker keeps what it has loaded (SymPy, JAX, PyTorch) and the session's memoised
@@ -65,19 +65,34 @@ XLA_QUICK = "--xla_backend_optimization_level=0 --xla_cpu_use_fusion_emitters=fa
 """XLA's flags for quick CPU compiles (see the module docstring, "JAX compiles")."""
 
 
-def _quick_xla_flags() -> str | None:
-    """:data:`XLA_QUICK` when this session should use it and the installed XLA takes it, else None."""
+def _quick_xla_flags(cache) -> str | None:
+    """:data:`XLA_QUICK` when this session should use it and the installed XLA takes it, else None.
+
+    The probe (a child process that imports JAX: 2.5 s before the workers start) runs once per installed
+    jaxlib: a yes is kept in pytest's cache (``cache``, None without the cache plugin), keyed by jaxlib's
+    version and the flags."""
     if "XLA_FLAGS" in os.environ or os.environ.get("SKELARM_SYM_OPT") not in (None, "", "0"):
         return None  # the run chose its own compiler settings
     if importlib.util.find_spec("jax") is None:
         return None
-    probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
     try:
-        done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
-                              capture_output=True, timeout=120)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return XLA_QUICK if done.returncode == 0 else None
+        from importlib.metadata import version
+
+        key = f"skelarm-sym/xla-quick/{version('jaxlib')}/{XLA_QUICK}".replace(" ", "_")
+    except Exception:  # noqa: BLE001 - no version to key by: probe every time
+        key = None
+    known = cache.get(key, None) if cache is not None and key is not None else None
+    if known is None:
+        probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
+        try:
+            done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
+                                  capture_output=True, timeout=120)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        known = done.returncode == 0
+        if known and cache is not None and key is not None:  # a refusal is asked again: it may have been a failed start
+            cache.set(key, True)
+    return XLA_QUICK if known else None
 
 
 GC_THRESHOLDS = (50_000, 20, 1000)
@@ -88,7 +103,7 @@ def pytest_configure(config):
     gc.set_threshold(*GC_THRESHOLDS)
     # once, in the process that starts the pytest-xdist workers (they inherit the environment), or in a run without them
     if os.environ.get("PYTEST_XDIST_WORKER") is None:
-        flags = _quick_xla_flags()
+        flags = _quick_xla_flags(getattr(config, "cache", None))
         if flags is not None:
             os.environ["XLA_FLAGS"] = flags
 
