@@ -13,9 +13,10 @@ LLVM at ``-O0`` and XLA's older elemental emitters, 2 to 2.5 times less CPU a co
 workers and the processes they start included, the way the C is compiled at ``-O0``. The HLO programs are the
 same; the machine code is not: on a UR5 sample the straight-line functions gave the same bits and the compiled
 solvers differed from a default compile by rounding only (at most 3e-14 in double), well within what every test
-allows, and no test is about the speed of the JAX code. A JAX that does not take the flags (XLA stops a process on an unknown one) is found by one probe
-in a child process (once per installed jaxlib: pytest's cache keeps a yes) and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT``
-(other than 0) itself: ``SKELARM_SYM_OPT=2 pytest`` checks the default, optimised compiles of C and JAX alike.
+allows, and no test is about the speed of the JAX code. A JAX that does not take the flags (XLA stops a process
+on an unknown one) is found by one probe in a child process (once per installed jaxlib: pytest's cache keeps a
+yes) and left as it is, and so is a run that sets ``XLA_FLAGS`` (even empty) or ``SKELARM_SYM_OPT`` (other than
+0) itself: ``SKELARM_SYM_OPT=2 pytest`` checks the default, optimised compiles of C and JAX alike.
 
 Python's cyclic collector. A worker keeps what it has loaded (SymPy, JAX, PyTorch) and the session's memoised
 derivations alive to the end, millions of objects that every full collection walks again; and SymPy, JAX
@@ -62,6 +63,7 @@ conformance case, each closed-form IK arm, each random family arm) and hands the
 """
 
 import gc
+import importlib.metadata
 import importlib.util
 import os
 import subprocess
@@ -89,23 +91,22 @@ def _quick_xla_flags(cache) -> str | None:
     if importlib.util.find_spec("jax") is None:
         return None
     try:
-        from importlib.metadata import version
-
-        key = f"skelarm-sym/xla-quick/{version('jaxlib')}/{XLA_QUICK}".replace(" ", "_")
-    except Exception:  # noqa: BLE001 - no version to key by: probe every time
-        key = None
-    known = cache.get(key, None) if cache is not None and key is not None else None
-    if known is None:
-        probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
-        try:
-            done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
-                                  capture_output=True, timeout=120)
-        except (OSError, subprocess.SubprocessError):
-            return None
-        known = done.returncode == 0
-        if known and cache is not None and key is not None:  # a refusal is asked again: it may have been a failed start
-            cache.set(key, True)
-    return XLA_QUICK if known else None
+        key = f"skelarm-sym/xla-quick/{importlib.metadata.version('jaxlib')}/{XLA_QUICK}".replace(" ", "_")
+    except importlib.metadata.PackageNotFoundError:
+        cache = None  # no jaxlib version to key the answer by: probe every time
+    if cache is not None and cache.get(key, False):
+        return XLA_QUICK
+    probe = "import jax.numpy as jnp; jnp.sin(jnp.arange(3.0)).block_until_ready()"
+    try:
+        done = subprocess.run([sys.executable, "-c", probe], env={**os.environ, "XLA_FLAGS": XLA_QUICK},
+                              capture_output=True, timeout=120)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if done.returncode != 0:
+        return None  # not kept: a refusal is asked again (it may have been a failed start)
+    if cache is not None:
+        cache.set(key, True)
+    return XLA_QUICK
 
 
 GC_THRESHOLDS = (50_000, 20, 1000)
