@@ -72,6 +72,9 @@ class ChainKinematics:
     axes: np.ndarray
 
 
+EYE3 = np.eye(3)
+
+
 def rodrigues(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) by ``angle`` (...) about the unit ``axis`` (3,)."""
     k = np.asarray(axis, dtype=float)
@@ -84,7 +87,11 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b over the last axis (broadcasting; np.cross is several times slower on small arrays)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def _array(value: object, name: str, n: int) -> np.ndarray:
@@ -112,13 +119,19 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
     zero3 = np.zeros(batch + (3,))
 
     def rigid(state, transform):
-        """Move along a constant transform: same link, origin displaced by R t."""
+        """Move along a constant transform: same link, origin displaced by R t. An exact identity rotation
+        leaves R as it is, a zero displacement leaves p, v and a (the terms it skips are exact zeros)."""
         R, p, w, dw, v, a = state
         transform = np.asarray(transform, dtype=float)
-        r = np.einsum("...ij,j->...i", R, transform[:3, 3])
-        if not moving:
-            return (R @ transform[:3, :3], p + r, w, dw, v, a)
-        return (R @ transform[:3, :3], p + r, w, dw, v + cross(w, r), a + cross(dw, r) + cross(w, cross(w, r)))
+        t = transform[:3, 3]
+        if np.any(t):
+            r = np.einsum("...ij,j->...i", R, t)
+            p = p + r
+            if moving:
+                v, a = v + cross(w, r), a + cross(dw, r) + cross(w, cross(w, r))
+        if not np.array_equal(transform[:3, :3], EYE3):
+            R = R @ transform[:3, :3]
+        return (R, p, w, dw, v, a)
 
     base = np.asarray(chain.base, dtype=float)
     state = (np.broadcast_to(base[:3, :3], batch + (3, 3)).copy(), np.broadcast_to(base[:3, 3], batch + (3,)).copy(),
