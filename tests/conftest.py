@@ -227,7 +227,7 @@ fixtures, ``lru_cache`` s and the memo of derivations are built once)."""
 _COST = {
     # measured: CPU (user + sys) of each test and the processes it ran, d2dba39 (quick XLA compiles), two workers
     # on a machine shared with other work, rounded; each unit of 2.5 s or more, or one the estimate below misses
-    "tests/test_codegen.py": 55, "tests/test_example_robot_data.py": 44, "tests/test_chain.py": 38,
+    "tests/test_codegen.py": 55, "tests/test_example_robot_data.py": 50, "tests/test_chain.py": 38,
     "tests/test_conformance.py::jax-chain-ur5": 38, "tests/test_robot_cli.py": 40, "tests/test_docs.py": 29,
     "tests/test_torch_jax_backends.py": 22, "tests/test_cuda.py": 27, "tests/test_robustness_c.py": 26,
     "tests/test_autodiff.py": 20, "tests/test_conformance.py::chain-ur5": 18, "tests/test_sanitizers.py": 17,

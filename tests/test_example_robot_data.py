@@ -6,7 +6,8 @@ For each file: the default chain (base = root, tip = the only leaf) when there i
 to every leaf; each loads or raises an InputError of one line that starts with the file's path. One
 chain per file (the default one, else the one with the most coordinates) is generated (C and NumPy,
 ``pose`` and ``jacobian``), compiled by ``compile_shared`` (``-std=c99 -Wall -Wextra -Werror
--pedantic``) and its NumPy module imported and run against ``chain_kinematics``. Set
+-pedantic``), its C checked by clang with the same flags (``-fsyntax-only``: clang's diagnostics without
+generating code) when clang is installed, and its NumPy module imported and run against ``chain_kinematics``. Set
 ``SKELARM_SYM_EVERY_CHAIN=1`` to generate every chain that loads (about 540, some 20 minutes).
 """
 
@@ -16,6 +17,7 @@ import functools
 import importlib.metadata
 import os
 import shutil
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -105,8 +107,8 @@ def _generated_chains(rel):
 
 @needs_cc
 @pytest.mark.parametrize("rel", [r for r in URDFS if r not in NO_CHAIN])
-def test_emitted_code_compiles_strictly_and_runs(rel, rng):
-    from skelarm_sym.build import compile_shared, load_python
+def test_emitted_code_compiles_strictly_and_runs(rel, rng, tmp_path):
+    from skelarm_sym.build import STRICT_FLAGS, compile_shared, load_python
     from skelarm_sym.generate import generate
 
     for tip, chain in _generated_chains(rel):
@@ -114,6 +116,13 @@ def test_emitted_code_compiles_strictly_and_runs(rel, rng):
         sources = {k: v for k, v in generated.sources.items() if k.endswith((".c", ".h"))}
         library = compile_shared(sources)
         assert library.is_file()
+        if shutil.which("clang"):  # and clang's diagnostics (its front end's: no code generated), a warning an error
+            for name, text in sources.items():
+                (tmp_path / name).write_text(text, encoding="utf-8")
+            c_file = next(name for name in sources if name.endswith(".c"))
+            result = subprocess.run(["clang", *STRICT_FLAGS, "-fsyntax-only", str(tmp_path / c_file)],
+                                    capture_output=True, text=True)
+            assert result.returncode == 0 and result.stderr == "", f"{rel} tip {tip}: {result.stderr[-2000:]}"
         prefix = next(k for k in generated.sources if k.endswith(".py"))[:-3]
         module = load_python(generated.sources[f"{prefix}.py"], prefix)
         numeric = chain.numeric()
