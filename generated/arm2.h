@@ -45,7 +45,7 @@
  * sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0xccb3917eUL
+#define ARM2_STAMP 0x9a17497cUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdefb9ae3UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xe1a57e44UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -94,7 +94,7 @@ extern void sincosf(float x, float *s, float *c); /* glibc (GNU), not C99 */
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -107,8 +107,11 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
         sn[k] = sinf(ang[k]);
     }
 #elif ARM3F_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
@@ -124,7 +127,7 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
 
 #if ARM3F_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -137,8 +140,11 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
         sn[k] = sinf(ang[k]);
     }
 #elif ARM3F_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
@@ -154,7 +160,7 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
@@ -167,8 +173,11 @@ static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *rest
         sn[k] = sinf(ang[k]);
     }
 #elif ARM3F_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x4c8b559bUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x8d8cf492UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -149,6 +149,56 @@ static void arm5_sincos4(const double *restrict ang, double *restrict cs, double
         }
     }
 }
+
+/* The same for k < 2: a tail of one or two angles. With 2-lane vectors (x86-64 without -march) four
+ * lanes cost twice two; each lane computes exactly what it computes in the four-lane kernel. */
+static void arm5_sincos2(const double *restrict ang, double *restrict cs, double *restrict sn)
+{
+    unsigned long long big = 0;
+    int k;
+    for (k = 0; k < 2; ++k) {
+        union { double f; unsigned long long u; } x, n, s, c;
+        double f, t0, w0, t1, w1, t2, e, r, y, z, v, p, hz, w;
+        unsigned long long swap, sign_s, sign_c;
+        x.f = ang[k];
+        n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
+        f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
+        t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
+        w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
+        t1 = t0 - w0;
+        w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
+        t2 = t1 - w1;
+        e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
+        r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
+        y = (t2 - r) - e;
+        z = r * r;
+        v = z * r;
+        p = 8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04 + z * (2.75573137070700676789e-06
+            + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+        s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
+        p = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+            + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+        hz = 0.5 * z;
+        w = 1.0 - hz;
+        c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+        swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
+        sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
+        sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
+        n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
+        s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
+        sn[k] = n.f;
+        cs[k] = s.f;
+        big |= ((x.u & 0x7fffffffffffffffull) + (0x7fffffffffffffffull - 0x40f86a0000000000ull)) >> 63; /* |x| > 1e5 or NaN */
+    }
+    if (big) {
+        for (k = 0; k < 2; ++k) {
+            if (!(fabs(ang[k]) <= 1e5)) {
+                sn[k] = sin(ang[k]);
+                cs[k] = cos(ang[k]);
+            }
+        }
+    }
+}
 #endif
 #if !ARM5_VECTOR_MATH && !ARM5_OWN_TRIG && defined(__GLIBC__) && !defined(SKELARM_NO_SINCOS)
 extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
@@ -158,7 +208,7 @@ extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
@@ -171,8 +221,11 @@ static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restri
         sn[k] = sin(ang[k]);
     }
 #elif ARM5_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm5_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm5_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM5_SINCOS
     for (k = 0; k < used; ++k) {
@@ -188,7 +241,7 @@ static ARM5_VECTORIZE void arm5_trig8(const double *restrict ang, double *restri
 
 #if ARM5_VECTOR_MATH
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 160 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
@@ -201,8 +254,11 @@ static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *rest
         sn[k] = sin(ang[k]);
     }
 #elif ARM5_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm5_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm5_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM5_SINCOS
     for (k = 0; k < used; ++k) {
@@ -218,7 +274,7 @@ static ARM5_VECTORIZE void arm5_trig160(const double *restrict ang, double *rest
 #endif
 
 /* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used (the
- * own kernel: for k < used rounded up to 4; callers zero the padding). */
+ * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
 static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
@@ -231,8 +287,11 @@ static ARM5_VECTORIZE void arm5_trig512(const double *restrict ang, double *rest
         sn[k] = sin(ang[k]);
     }
 #elif ARM5_OWN_TRIG
-    for (k = 0; k < used; k += 4) {
+    for (k = 0; k + 2 < used; k += 4) {
         arm5_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm5_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM5_SINCOS
     for (k = 0; k < used; ++k) {

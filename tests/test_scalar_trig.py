@@ -23,7 +23,7 @@ DRIVER = r"""
 #include "arm.c"
 int main(int argc, char **argv)
 {
-    static double ang[1 << 12], cs[1 << 12], sn[1 << 12];
+    static double ang[1 << 12], cs[1 << 12], sn[1 << 12], cs2[1 << 12], sn2[1 << 12];
     FILE *in = fopen(argv[1], "rb"), *out = fopen(argv[2], "wb");
     size_t n, k;
     (void)argc;
@@ -35,6 +35,9 @@ int main(int argc, char **argv)
         for (k = 0; k < n; k += 4) {
             arm_trig4(ang + k, cs + k, sn + k, n - k < 4 ? (int)(n - k) : 4);
         }
+        for (k = 0; k < n; k += 2) { /* the same angles through the tail kernel, two at a time */
+            arm_trig4(ang + k, cs2 + k, sn2 + k, 2);
+        }
         for (k = 0; k < n; ++k) {
             double libm[2];
             libm[0] = sin(ang[k]);
@@ -42,6 +45,8 @@ int main(int argc, char **argv)
             fwrite(&sn[k], sizeof(double), 1, out);
             fwrite(&cs[k], sizeof(double), 1, out);
             fwrite(libm, sizeof(double), 2, out);
+            fwrite(&sn2[k], sizeof(double), 1, out);
+            fwrite(&cs2[k], sizeof(double), 1, out);
         }
     }
     fclose(in);
@@ -64,9 +69,10 @@ def _angles() -> np.ndarray:
     return np.concatenate(parts + [near, np.array(edge)])
 
 
-def _run(tmp_path, compiler: str, flags: tuple[str, ...], angles: np.ndarray) -> tuple[bool, np.ndarray, np.ndarray]:
-    """Whether the own kernel was compiled in, (sin, cos) from the emitted helper built with ``flags`` and
-    (libm sin, libm cos), for ``angles``."""
+def _run(tmp_path, compiler: str, flags: tuple[str, ...], angles: np.ndarray) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray]:
+    """Whether the own kernel was compiled in, (sin, cos) from the emitted helper built with ``flags``,
+    (libm sin, libm cos), and (sin, cos) from the helper asked for two angles at a time (the tail kernel),
+    for ``angles``."""
     folder = tmp_path / f"{compiler}{''.join(flags)}".replace("-", "_").replace("=", "_")
     folder.mkdir()
     # a function of at most 4 angles has the helper of a single call, 4 wide (backends/c/backend.py)
@@ -78,8 +84,8 @@ def _run(tmp_path, compiler: str, flags: tuple[str, ...], angles: np.ndarray) ->
     angles.astype(np.float64).tofile(folder / "in.bin")
     run = subprocess.run([str(exe), str(folder / "in.bin"), str(folder / "out.bin")], check=True,
                          capture_output=True, text=True)
-    out = np.fromfile(folder / "out.bin", dtype=np.float64).reshape(-1, 4)
-    return run.stdout.strip() == "1", out[:, :2], out[:, 2:]
+    out = np.fromfile(folder / "out.bin", dtype=np.float64).reshape(-1, 6)
+    return run.stdout.strip() == "1", out[:, :2], out[:, 2:4], out[:, 4:]
 
 
 def _ulps(got: np.ndarray, want: np.ndarray) -> np.ndarray:
@@ -91,8 +97,11 @@ def _ulps(got: np.ndarray, want: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("compiler", COMPILERS)
 def test_own_sine_and_cosine_within_one_ulp_of_libm(tmp_path, compiler):
     angles = _angles()
-    used, own, libm = _run(tmp_path, compiler, ("-O2", "-DSKELARM_NO_SIMD"), angles)
+    used, own, libm, tail = _run(tmp_path, compiler, ("-O2", "-DSKELARM_NO_SIMD"), angles)
     assert used  # x86-64 gcc and clang evaluate in double without fast-math: the kernel is compiled in
+    # a single call's tail of one or two angles goes through the two-lane kernel, a batch's through the four-lane
+    # one: the same bits, so that single calls and batches agree
+    assert np.array_equal(tail, own, equal_nan=True)
     finite = np.isfinite(angles)
     inside = finite & (np.abs(angles) <= 1e5)
     assert _ulps(own[inside], libm[inside]).max() <= 1.0
@@ -114,7 +123,7 @@ def test_libm_where_asked_or_where_the_kernel_cannot_run(tmp_path, flags):
     """``-DSKELARM_LIBM_TRIG`` chooses libm; ``-ffast-math`` would fold the kernel's rounding and its
     compensated reduction, so there it is libm too: the values equal libm's bit for bit."""
     angles = _angles()[::7]
-    used, own, libm = _run(tmp_path, COMPILERS[0], flags, angles)
+    used, own, libm, _ = _run(tmp_path, COMPILERS[0], flags, angles)
     assert not used
     finite = np.isfinite(angles)
     assert np.array_equal(own[finite], libm[finite])
