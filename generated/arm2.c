@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x9a17497cUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x05107ff6UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -329,7 +329,7 @@ ARM2_BODY void arm2_position_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_position_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
+ARM2_BODY void arm2_position_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -432,7 +432,7 @@ ARM2_BODY void arm2_jacobian_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_jacobian_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
+ARM2_BODY void arm2_jacobian_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -539,7 +539,7 @@ ARM2_BODY void arm2_coriolis_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
+ARM2_BODY void arm2_coriolis_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -658,7 +658,7 @@ ARM2_BODY void arm2_velocity_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
+ARM2_BODY void arm2_velocity_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -773,7 +773,7 @@ ARM2_BODY void arm2_acceleration_angles(const double *restrict q, double *restri
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
+ARM2_BODY void arm2_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -897,7 +897,7 @@ ARM2_BODY void arm2_kinematics_angles(const double *restrict q, double *restrict
     ang[0] = q[0];
 }
 
-ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[2], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
+ARM2_BODY void arm2_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t1 = cs[0]*l[0];
@@ -1047,13 +1047,13 @@ void arm2_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm2_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 2 sin, 2 cos, 9 add/sub, 16 mul, 1 neg, 1 div, 1 sqrt */
 
-static ARM2_LIGHT void arm2_manipulability_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static ARM2_LIGHT void arm2_manipulability_finish(const double l[2], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM2_LIGHT void arm2_manipulability_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
@@ -1110,13 +1110,13 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 2 sin, 2 cos, 22 add/sub, 43 mul, 1 neg, 4 div */
 
-static ARM2_LIGHT void arm2_inverse_velocity_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static ARM2_LIGHT void arm2_inverse_velocity_finish(const double v[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM2_LIGHT void arm2_inverse_velocity_finish(const double *restrict v, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];
@@ -1194,13 +1194,13 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 2 sin, 2 cos, 26 add/sub, 43 mul, 1 neg, 4 div */
 
-static ARM2_LIGHT void arm2_ik_step_angles(const double q[2], double *restrict ang)
+static ARM2_LIGHT void arm2_ik_step_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[0] = q[0];
 }
 
-static ARM2_LIGHT void arm2_ik_step_finish(const double q[2], const double target[2], const double l[2], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM2_LIGHT void arm2_ik_step_finish(const double *restrict q, const double *restrict target, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t1 = cs[0]*l[0];
     const double t2 = cs[1]*l[1];

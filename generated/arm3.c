@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x2dfb5d3fUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x0186ce11UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -330,7 +330,7 @@ ARM3_BODY void arm3_position_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_position_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
+ARM3_BODY void arm3_position_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -439,7 +439,7 @@ ARM3_BODY void arm3_jacobian_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_jacobian_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
+ARM3_BODY void arm3_jacobian_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -556,7 +556,7 @@ ARM3_BODY void arm3_coriolis_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
+ARM3_BODY void arm3_coriolis_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -689,7 +689,7 @@ ARM3_BODY void arm3_velocity_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
+ARM3_BODY void arm3_velocity_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -814,7 +814,7 @@ ARM3_BODY void arm3_acceleration_angles(const double *restrict q, double *restri
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
+ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -951,7 +951,7 @@ ARM3_BODY void arm3_kinematics_angles(const double *restrict q, double *restrict
     ang[0] = q[0];
 }
 
-ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[3], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
+ARM3_BODY void arm3_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t2 = cs[0]*l[0];
@@ -1120,14 +1120,14 @@ void arm3_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm3_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 23 mul, 1 neg, 1 div, 1 sqrt */
 
-static ARM3_LIGHT void arm3_manipulability_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3_LIGHT void arm3_manipulability_finish(const double l[3], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM3_LIGHT void arm3_manipulability_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1190,14 +1190,14 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 52 mul, 1 neg, 4 div */
 
-static ARM3_LIGHT void arm3_inverse_velocity_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3_LIGHT void arm3_inverse_velocity_finish(const double v[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM3_LIGHT void arm3_inverse_velocity_finish(const double *restrict v, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1283,14 +1283,14 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 61 add/sub, 101 mul, 1 neg, 5 div */
 
-static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double twist[3], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double *restrict twist, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];
@@ -1396,14 +1396,14 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 52 mul, 1 neg, 4 div */
 
-static ARM3_LIGHT void arm3_ik_step_angles(const double q[3], double *restrict ang)
+static ARM3_LIGHT void arm3_ik_step_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3_LIGHT void arm3_ik_step_finish(const double q[3], const double target[2], const double l[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM3_LIGHT void arm3_ik_step_finish(const double *restrict q, const double *restrict target, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t2 = cs[0]*l[0];
     const double t3 = cs[1]*l[1];

@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xe1a57e44UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x758d5c4dUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -994,7 +994,7 @@ void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const flo
 /* ---- arm3f_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 3 sin, 3 cos, 17 add/sub, 21 mul, 0 neg, 1 div, 1 sqrt */
 
-static ARM3F_LIGHT void arm3f_manipulability_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_manipulability_angles(const float *restrict q, float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1062,14 +1062,14 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 0 neg, 4 div */
 
-static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float *restrict q, float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float v[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq)
+static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float *restrict v, float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
@@ -1153,14 +1153,14 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 0 neg, 4 div */
 
-static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float *restrict q, float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float twist[3], float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq3)
+static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float *restrict twist, float lambda, const float *restrict cs, const float *restrict sn, float *restrict dq3)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];
@@ -1262,14 +1262,14 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 0 neg, 4 div */
 
-static ARM3F_LIGHT void arm3f_ik_step_angles(const float q[3], float *restrict ang)
+static ARM3F_LIGHT void arm3f_ik_step_angles(const float *restrict q, float *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
     ang[0] = q[0];
 }
 
-static ARM3F_LIGHT void arm3f_ik_step_finish(const float q[3], const float target[2], float lambda, const float *restrict cs, const float *restrict sn, float *restrict q_next)
+static ARM3F_LIGHT void arm3f_ik_step_finish(const float *restrict q, const float *restrict target, float lambda, const float *restrict cs, const float *restrict sn, float *restrict q_next)
 {
     const float t2 = 0.8f*cs[1];
     const float t3 = 0.5f*cs[2];

@@ -43,7 +43,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xe1a57e44UL
+#define ARM3F_STAMP 0x758d5c4dUL
 
 #ifdef __cplusplus
 extern "C" {

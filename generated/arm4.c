@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xf76a1698UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x42e4e932UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -331,7 +331,7 @@ ARM4_BODY void arm4_position_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_position_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
+ARM4_BODY void arm4_position_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -442,7 +442,7 @@ ARM4_BODY void arm4_jacobian_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_jacobian_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
+ARM4_BODY void arm4_jacobian_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -565,7 +565,7 @@ ARM4_BODY void arm4_coriolis_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
+ARM4_BODY void arm4_coriolis_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -708,7 +708,7 @@ ARM4_BODY void arm4_velocity_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
+ARM4_BODY void arm4_velocity_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -839,7 +839,7 @@ ARM4_BODY void arm4_acceleration_angles(const double *restrict q, double *restri
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
+ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -985,7 +985,7 @@ ARM4_BODY void arm4_kinematics_angles(const double *restrict q, double *restrict
     ang[0] = q[0];
 }
 
-ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[4], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
+ARM4_BODY void arm4_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t3 = cs[0]*l[0];
@@ -1170,7 +1170,7 @@ void arm4_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm4_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 4 sin, 4 cos, 25 add/sub, 30 mul, 1 neg, 1 div, 1 sqrt */
 
-static ARM4_LIGHT void arm4_manipulability_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1178,7 +1178,7 @@ static ARM4_LIGHT void arm4_manipulability_angles(const double q[4], double *res
     ang[0] = q[0];
 }
 
-static ARM4_LIGHT void arm4_manipulability_finish(const double l[4], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM4_LIGHT void arm4_manipulability_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1243,7 +1243,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
 
-static ARM4_LIGHT void arm4_inverse_velocity_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1251,7 +1251,7 @@ static ARM4_LIGHT void arm4_inverse_velocity_angles(const double q[4], double *r
     ang[0] = q[0];
 }
 
-static ARM4_LIGHT void arm4_inverse_velocity_finish(const double v[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM4_LIGHT void arm4_inverse_velocity_finish(const double *restrict v, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1341,7 +1341,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
 
-static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1349,7 +1349,7 @@ static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double q[4], double *
     ang[0] = q[0];
 }
 
-static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double twist[3], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double *restrict twist, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];
@@ -1456,7 +1456,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
 
-static ARM4_LIGHT void arm4_ik_step_angles(const double q[4], double *restrict ang)
+static ARM4_LIGHT void arm4_ik_step_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1464,7 +1464,7 @@ static ARM4_LIGHT void arm4_ik_step_angles(const double q[4], double *restrict a
     ang[0] = q[0];
 }
 
-static ARM4_LIGHT void arm4_ik_step_finish(const double q[4], const double target[2], const double l[4], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM4_LIGHT void arm4_ik_step_finish(const double *restrict q, const double *restrict target, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t3 = cs[0]*l[0];
     const double t4 = cs[1]*l[1];

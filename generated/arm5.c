@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x8d8cf492UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x9b353062UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -332,7 +332,7 @@ ARM5_BODY void arm5_position_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_position_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
+ARM5_BODY void arm5_position_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -453,7 +453,7 @@ ARM5_BODY void arm5_jacobian_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_jacobian_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
+ARM5_BODY void arm5_jacobian_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -590,7 +590,7 @@ ARM5_BODY void arm5_coriolis_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
+ARM5_BODY void arm5_coriolis_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -751,7 +751,7 @@ ARM5_BODY void arm5_velocity_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
+ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -896,7 +896,7 @@ ARM5_BODY void arm5_acceleration_angles(const double *restrict q, double *restri
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
+ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -1059,7 +1059,7 @@ ARM5_BODY void arm5_kinematics_angles(const double *restrict q, double *restrict
     ang[0] = q[0];
 }
 
-ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[5], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
+ARM5_BODY void arm5_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t4 = cs[0]*l[0];
@@ -1268,7 +1268,7 @@ void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm5_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 5 sin, 5 cos, 33 add/sub, 37 mul, 1 neg, 1 div, 1 sqrt */
 
-static ARM5_LIGHT void arm5_manipulability_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1277,7 +1277,7 @@ static ARM5_LIGHT void arm5_manipulability_angles(const double q[5], double *res
     ang[0] = q[0];
 }
 
-static ARM5_LIGHT void arm5_manipulability_finish(const double l[5], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM5_LIGHT void arm5_manipulability_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1352,7 +1352,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
 
-static ARM5_LIGHT void arm5_inverse_velocity_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1361,7 +1361,7 @@ static ARM5_LIGHT void arm5_inverse_velocity_angles(const double q[5], double *r
     ang[0] = q[0];
 }
 
-static ARM5_LIGHT void arm5_inverse_velocity_finish(const double v[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM5_LIGHT void arm5_inverse_velocity_finish(const double *restrict v, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1463,7 +1463,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
 
-static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1472,7 +1472,7 @@ static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double q[5], double *
     ang[0] = q[0];
 }
 
-static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double twist[3], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double *restrict twist, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];
@@ -1588,7 +1588,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
 
-static ARM5_LIGHT void arm5_ik_step_angles(const double q[5], double *restrict ang)
+static ARM5_LIGHT void arm5_ik_step_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1597,7 +1597,7 @@ static ARM5_LIGHT void arm5_ik_step_angles(const double q[5], double *restrict a
     ang[0] = q[0];
 }
 
-static ARM5_LIGHT void arm5_ik_step_finish(const double q[5], const double target[2], const double l[5], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM5_LIGHT void arm5_ik_step_finish(const double *restrict q, const double *restrict target, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t4 = cs[0]*l[0];
     const double t5 = cs[1]*l[1];

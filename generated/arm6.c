@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x053488a5UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xa8cfc35cUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -333,7 +333,7 @@ ARM6_BODY void arm6_position_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_position_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
+ARM6_BODY void arm6_position_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -460,7 +460,7 @@ ARM6_BODY void arm6_jacobian_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_jacobian_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
+ARM6_BODY void arm6_jacobian_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict J, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -607,7 +607,7 @@ ARM6_BODY void arm6_coriolis_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
+ARM6_BODY void arm6_coriolis_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict H, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -782,7 +782,7 @@ ARM6_BODY void arm6_velocity_angles(const double *restrict q, double *restrict a
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
+ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict v, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -937,7 +937,7 @@ ARM6_BODY void arm6_acceleration_angles(const double *restrict q, double *restri
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
+ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -1113,7 +1113,7 @@ ARM6_BODY void arm6_kinematics_angles(const double *restrict q, double *restrict
     ang[0] = q[0];
 }
 
-ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double l[6], const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
+ARM6_BODY void arm6_kinematics_finish(const double *restrict dq, const double *restrict ddq, const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict p, double *restrict J, double *restrict H, double *restrict v, double *restrict a, const size_t stride)
 {
     (void)stride;
     const double t5 = cs[0]*l[0];
@@ -1342,7 +1342,7 @@ void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const do
 /* ---- arm6_manipulability: manipulability w = sqrt(det(J J^T)) (1) ---- */
 /* operations: 6 sin, 6 cos, 41 add/sub, 44 mul, 1 neg, 1 div, 1 sqrt */
 
-static ARM6_LIGHT void arm6_manipulability_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1352,7 +1352,7 @@ static ARM6_LIGHT void arm6_manipulability_angles(const double q[6], double *res
     ang[0] = q[0];
 }
 
-static ARM6_LIGHT void arm6_manipulability_finish(const double l[6], const double *restrict cs, const double *restrict sn, double *restrict w)
+static ARM6_LIGHT void arm6_manipulability_finish(const double *restrict l, const double *restrict cs, const double *restrict sn, double *restrict w)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1433,7 +1433,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
 /* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
 
-static ARM6_LIGHT void arm6_inverse_velocity_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1443,7 +1443,7 @@ static ARM6_LIGHT void arm6_inverse_velocity_angles(const double q[6], double *r
     ang[0] = q[0];
 }
 
-static ARM6_LIGHT void arm6_inverse_velocity_finish(const double v[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static ARM6_LIGHT void arm6_inverse_velocity_finish(const double *restrict v, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1553,7 +1553,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
 /* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
 
-static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1563,7 +1563,7 @@ static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double q[6], double *
     ang[0] = q[0];
 }
 
-static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double twist[3], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
+static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double *restrict twist, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq3)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];
@@ -1684,7 +1684,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
 /* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
 
-static ARM6_LIGHT void arm6_ik_step_angles(const double q[6], double *restrict ang)
+static ARM6_LIGHT void arm6_ik_step_angles(const double *restrict q, double *restrict ang)
 {
     ang[1] = q[0] + q[1];
     ang[2] = ang[1] + q[2];
@@ -1694,7 +1694,7 @@ static ARM6_LIGHT void arm6_ik_step_angles(const double q[6], double *restrict a
     ang[0] = q[0];
 }
 
-static ARM6_LIGHT void arm6_ik_step_finish(const double q[6], const double target[2], const double l[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
+static ARM6_LIGHT void arm6_ik_step_finish(const double *restrict q, const double *restrict target, const double *restrict l, double lambda, const double *restrict cs, const double *restrict sn, double *restrict q_next)
 {
     const double t5 = cs[0]*l[0];
     const double t6 = cs[1]*l[1];

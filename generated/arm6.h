@@ -45,7 +45,7 @@
  * sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0x053488a5UL
+#define ARM6_STAMP 0xa8cfc35cUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x278079a1UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x961c80f1UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -264,7 +264,7 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
 /* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
 
-static DIFFDRIVE_LIGHT void diffdrive_body_rates_finish(const double wheels[2], double track, double *restrict rates)
+static DIFFDRIVE_LIGHT void diffdrive_body_rates_finish(const double *restrict wheels, double track, double *restrict rates)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     rates[0] = t0;
@@ -357,12 +357,12 @@ void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, d
 /* ---- diffdrive_pose_rate: pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R) ---- */
 /* operations: 1 sin, 1 cos, 2 add/sub, 6 mul, 0 neg, 1 div */
 
-static DIFFDRIVE_LIGHT void diffdrive_pose_rate_angles(const double pose[3], double *restrict ang)
+static DIFFDRIVE_LIGHT void diffdrive_pose_rate_angles(const double *restrict pose, double *restrict ang)
 {
     ang[0] = pose[2];
 }
 
-static DIFFDRIVE_LIGHT void diffdrive_pose_rate_finish(const double wheels[2], double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
+static DIFFDRIVE_LIGHT void diffdrive_pose_rate_finish(const double *restrict wheels, double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
 {
     const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
     dpose[0] = t0*cs[0];

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x4a9ac15aUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x17105912UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -2646,7 +2646,7 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 6 neg, 5 div, 6 sqrt */
 
-static PANDA_LIGHT void panda_manipulability_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3025,7 +3025,7 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 3 neg, 2 div, 3 sqrt */
 
-static PANDA_LIGHT void panda_manipulability_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_position_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3194,7 +3194,7 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 25 neg */
 
-static PANDA_LIGHT void panda_jacobian_hessian_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_hessian_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -3685,7 +3685,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 7 neg, 6 div, 6 sqrt */
 
-static PANDA_LIGHT void panda_manipulability_gradient_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -4251,7 +4251,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 10 neg, 13 div, 13 sqrt */
 
-static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -4261,7 +4261,7 @@ static PANDA_LIGHT void panda_inverse_velocity_angles(const double q[7], double 
     ang[5] = q[5];
 }
 
-static PANDA_LIGHT void panda_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twist, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*cs[1];
     const double t3 = cs[0]*sn[1];
@@ -5103,7 +5103,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 5 neg, 7 div, 7 sqrt */
 
-static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];
@@ -5113,7 +5113,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double q[7]
     ang[5] = q[5];
 }
 
-static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *restrict v, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[6] = 0.0;
     const double t2 = cs[0]*cs[1];
@@ -5376,7 +5376,7 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 5 neg, 3 div, 2 sqrt */
 
-static PANDA_LIGHT void panda_jacobian_rpy_angles(const double q[7], double *restrict ang)
+static PANDA_LIGHT void panda_jacobian_rpy_angles(const double *restrict q, double *restrict ang)
 {
     ang[0] = q[0];
     ang[1] = q[1];

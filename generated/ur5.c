@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x24209ec5UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x2b7e5e5bUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -2298,7 +2298,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
 /* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 3 neg, 5 div, 6 sqrt */
 
-static UR5_LIGHT void ur5_manipulability_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2615,7 +2615,7 @@ void ur5_manipulability_batch(size_t m, const double *q, double *w)
 /* ---- ur5_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
 /* operations: 5 sin, 5 cos, 77 add/sub, 113 mul, 0 neg, 2 div, 3 sqrt */
 
-static UR5_LIGHT void ur5_manipulability_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_position_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -2747,7 +2747,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
 /* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 8 neg */
 
-static UR5_LIGHT void ur5_jacobian_hessian_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_hessian_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -3066,7 +3066,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
 /* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 6 neg, 6 div, 6 sqrt */
 
-static UR5_LIGHT void ur5_manipulability_gradient_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -3507,7 +3507,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
 /* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 9 neg, 13 div, 13 sqrt */
 
-static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -3516,7 +3516,7 @@ static UR5_LIGHT void ur5_inverse_velocity_angles(const double q[6], double *res
     ang[4] = q[4];
 }
 
-static UR5_LIGHT void ur5_inverse_velocity_finish(const double twist[6], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
+static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq)
 {
     const double t2 = cs[0]*cs[3];
     const double t3 = cs[0]*sn[3];
@@ -4291,7 +4291,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
 /* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 3 neg, 7 div, 7 sqrt */
 
-static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4300,7 +4300,7 @@ static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double q[6], do
     ang[4] = q[4];
 }
 
-static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double v[3], double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
+static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restrict v, double lambda, const double *restrict cs, const double *restrict sn, double *restrict dq_position)
 {
     dq_position[5] = 0.0;
     const double t2 = cs[0]*cs[3];
@@ -4524,7 +4524,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
 /* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 3 neg, 3 div, 2 sqrt */
 
-static UR5_LIGHT void ur5_jacobian_rpy_angles(const double q[6], double *restrict ang)
+static UR5_LIGHT void ur5_jacobian_rpy_angles(const double *restrict q, double *restrict ang)
 {
     ang[2] = q[1] + q[2];
     ang[3] = ang[2] + q[3];
@@ -4673,7 +4673,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
 /* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 36 neg, 52 div, 21 sqrt */
 
-static UR5_LIGHT void ur5_ik_candidates_finish(const double target[16], double *restrict Q, double *restrict flags)
+static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, double *restrict Q, double *restrict flags)
 {
     const double t1352 = target[3] + 0.005490999999999996*target[1] + 0.81725*target[0] - 0.19145*target[2];
     const double t1353 = target[7] + 0.005490999999999996*target[5] + 0.81725*target[4] - 0.19145*target[6];

@@ -31,6 +31,23 @@ def test_every_example_robot_compiles_with_the_strict_flags(robot, precision):
         compile_shared(dict(g.sources), flags=("-O0",), compiler=compiler)
 
 
+DEGENERATE = {  # chains whose functions coincide: GCC's optimiser folds identical bodies (-fipa-icf) into one
+    "two prismatic joints": '[[joints]]\ntype = "prismatic"\n\n[[joints]]\ntype = "prismatic"\nalpha = "pi/2"\n',
+}
+
+
+@pytest.mark.parametrize("text", DEGENERATE.values(), ids=DEGENERATE.keys())
+def test_degenerate_chains_compile_with_the_strict_flags_optimised(tmp_path, text):
+    """Every function at -O2 under the default compiler and clang: where two bodies are identical (the inverse
+    velocity and the position-only one of a prismatic pair) GCC folds them into one, and a body that took its
+    arrays with sizes then read as a 6-element argument given 3 elements (-Wstringop-overread)."""
+    robot = tmp_path / "degenerate.toml"
+    robot.write_text(text)
+    g = generate(load_robot(robot), langs="c", out=None)
+    for compiler in (None, *(("clang",) if shutil.which("clang") else ())):
+        compile_shared(dict(g.sources), flags=("-O2",), compiler=compiler)
+
+
 def test_generate_check_show_a_robot_file(tmp_path, capsys):
     robot = str(ROOT / "examples" / "robots" / "stanford.toml")
     assert main(["generate", "--robot", robot, "--out", str(tmp_path), "--lang", "c"]) == 0
