@@ -35,6 +35,7 @@ from ..derive.core import ARGUMENT_ROLES, Derivation, FunctionSpec
 from .count import count_ops
 from .products import reuse_products
 from .signs import settle_signs
+from .unread import drop_unread
 from .nodes import (
     Add, Argument, Call1, Call2, Compare, Const, Div, Elem, Expr, Function, Let, Logic, Mul, NamedConst, Neg, Not,
     Role, Select, Store, TrigBlock, Type, Var,
@@ -746,9 +747,10 @@ class Lowering:
 
 @lru_cache(maxsize=512)
 def _per_function_passes(body: tuple) -> tuple:
-    """A function's statements after :func:`~.products.reuse_products` and :func:`~.signs.settle_signs`;
-    remembered, as the same derivation is lowered again for each generation of it (a test session's many)."""
-    return settle_signs(reuse_products(body))
+    """A function's statements after :func:`~.products.reuse_products`, :func:`~.signs.settle_signs` and
+    :func:`~.unread.drop_unread`; remembered, as the same derivation is lowered again for each generation of
+    it (a test session's many)."""
+    return drop_unread(settle_signs(reuse_products(body)))
 
 
 def lower_function(derivation: Derivation, spec: FunctionSpec, program: Program) -> Function:
