@@ -6,13 +6,11 @@ from __future__ import annotations
 
 import shutil
 
-import pytest
-
 from skelarm_sym.build import compile_shared
 from skelarm_sym.generate import generate
 from skelarm_sym.ir.nodes import Add, Let, Mul, Store, TrigBlock, Var
 from skelarm_sym.ir.unread import drop_unread
-from skelarm_sym.ir.walk import expr_names
+from skelarm_sym.ir.walk import statement_reads
 from skelarm_sym.models.chain.loader import load_robot
 
 from test_ir_signs import C, S, TRIG, X
@@ -34,13 +32,7 @@ def test_trigonometry_blocks_and_stores_stay_even_when_nothing_reads_them():
 
 
 def _unread_lets(body) -> list[str]:
-    read: set[str] = set()
-    for s in body:
-        if type(s) in (Let, Store):
-            expr_names(s.value, read)
-        elif type(s) is TrigBlock:
-            for angle in s.angles:
-                expr_names(angle, read)
+    read = set().union(*(statement_reads(s) for s in body))
     return [s.var.name for s in body if type(s) is Let and s.var.name not in read]
 
 

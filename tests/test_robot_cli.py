@@ -16,6 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = sorted((ROOT / "examples" / "robots").glob("*.toml"))
 
 
+COMPILERS = (None, *(("clang",) if shutil.which("clang") else ()))
+"""compile_shared's default compiler, and clang when installed."""
 QUICK_ROBOTS = ("puma560", "scara", "ur5")  # the others (5 to 7 s each: every function derived) are in the slow set
 
 
@@ -27,7 +29,7 @@ def test_every_example_robot_compiles_with_the_strict_flags(robot, precision):
     flags (-std=c99 -Wall -Wextra -Werror -pedantic: a warning fails the compile), at -O0: nearly all of clang's
     warnings come from its front end, at any level."""
     g = generate(load_robot(robot), langs="c", precision=precision, out=None)
-    for compiler in (None, *(("clang",) if shutil.which("clang") else ())):
+    for compiler in COMPILERS:
         compile_shared(dict(g.sources), flags=("-O0",), compiler=compiler)
 
 
@@ -44,7 +46,7 @@ def test_degenerate_chains_compile_with_the_strict_flags_optimised(tmp_path, tex
     robot = tmp_path / "degenerate.toml"
     robot.write_text(text)
     g = generate(load_robot(robot), langs="c", out=None)
-    for compiler in (None, *(("clang",) if shutil.which("clang") else ())):
+    for compiler in COMPILERS:
         compile_shared(dict(g.sources), flags=("-O2",), compiler=compiler)
 
 

@@ -265,7 +265,7 @@ def _common(f: Function, precision: CPrecision, names: Names) -> dict:
         "summary": f.summary,
         "inputs": [
             {"name": a.name, "size": a.size, "shared": not a.batched, "scalar": a.is_scalar, "param": parameter(a, precision),
-             "strided_param": f"const {ctype} *restrict {a.name}"}
+             "pointer_param": f"const {ctype} *restrict {a.name}"}
             for a in f.inputs
         ],
         "outputs": [{"name": o.name, "size": o.size, "shape": o.shape} for o in f.outputs],
