@@ -53,12 +53,12 @@ def test_complete_against_multistart_numeric_ik(name):
     num = chain.numeric()
     rev = judge.revolute_mask(num)
     rng = np.random.default_rng(11)
-    for q in random_configurations(chain, 2, rng):
-        T = targets_of(chain, q[None])[0]
-        fixed = None if lock is None else {lock: q[lock]}
-        numeric = judge.multistart_ik(num, T, starts=200, fixed=fixed)
+    q = random_configurations(chain, 2, rng)
+    T = targets_of(chain, q)
+    each = judge.multistart_ik_each(num, T, starts=200, fixed=None if lock is None else {lock: q[:, lock]})
+    for i, numeric in enumerate(each):
         assert len(numeric) >= 1
-        Q, flags = ik.candidates(T.reshape(16), None if lock is None else q[lock])
+        Q, flags = ik.candidates(T[i].reshape(16), None if lock is None else q[i, lock])
         exact = Q[(flags & 1) == 0]
         assert len(judge.missing(exact, numeric, rev, 1e-5)) == 0
 
@@ -70,10 +70,11 @@ def test_complete_against_multistart_numeric_ik_more_targets(name):
     num = chain.numeric()
     rev = judge.revolute_mask(num)
     rng = np.random.default_rng(12)
-    for q in random_configurations(chain, 10, rng):
-        T = targets_of(chain, q[None])[0]
-        numeric = judge.multistart_ik(num, T, starts=200, fixed=None if lock is None else {lock: q[lock]})
-        Q, flags = ik.candidates(T.reshape(16), None if lock is None else q[lock])
+    q = random_configurations(chain, 10, rng)
+    T = targets_of(chain, q)
+    each = judge.multistart_ik_each(num, T, starts=200, fixed=None if lock is None else {lock: q[:, lock]})
+    for i, numeric in enumerate(each):
+        Q, flags = ik.candidates(T[i].reshape(16), None if lock is None else q[i, lock])
         assert len(judge.missing(Q[(flags & 1) == 0], numeric, rev, 1e-5)) == 0
 
 

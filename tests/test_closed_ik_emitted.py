@@ -147,11 +147,12 @@ def test_complete_against_numeric_ik_and_eaik(name):
     q = inner_configurations(b, 5, rng)
     T = targets_of(b.chain, q)
     fixed_joint = None if b.lock is None else next(k for k, j in enumerate(b.chain.joints) if j.coordinate == b.lock)
-    for i in range(len(q)):
+    each = judge.multistart_ik_each(b.numeric, T, starts=200, seeds=range(len(q)),
+                                    fixed=None if b.lock is None else {b.lock: q[:, b.lock]})
+    for i, numeric in enumerate(each):
         r = b.c.ik_all(T[i], *b.extra(q[i]))
         rows = r.q[: r.count]
         fixed = None if b.lock is None else {b.lock: float(q[i][b.lock])}
-        numeric = judge.multistart_ik(b.numeric, T[i], starts=200, seed=i, fixed=fixed)
         inside = [s for s in numeric if fits(s, b)]
         assert len(judge.missing(rows, np.array(inside).reshape(-1, b.chain.n), b.revolute, 1e-6)) == 0
         eaik = judge.eaik_solutions(b.numeric, T[i], None if fixed is None else {fixed_joint: fixed[b.lock]})

@@ -42,6 +42,24 @@ def test_judge_sees_a_missing_and_a_wrong_solution():
     assert judge.same(Q[0], Q[0] + 2 * np.pi, rev, 1e-9)
 
 
+def test_many_targets_at_once_give_each_target_its_own_solutions():
+    # one batch of 3 x 200 starts: each entry is what the target's own run gives (seed, locked value and all), so
+    # no start reads another target's pose, seed or lock
+    chain, lock, _ = solver("iiwa14_lock3")
+    num = chain.numeric()
+    q = np.array([[0.3, 0.4, -0.5, 0.6, 0.7, -0.8, 0.2], [-1.0, 0.9, 0.4, -1.2, 0.1, 0.5, -0.3],
+                  [0.6, -0.2, -0.9, 1.4, -0.6, 1.1, 0.8]])
+    T = targets_of(chain, q)
+    each = judge.multistart_ik_each(num, T, starts=200, seeds=[5, 6, 7], fixed={lock: q[:, lock]})
+    assert len(each) == 3
+    for i in range(3):
+        alone = judge.multistart_ik(num, T[i], starts=200, seed=5 + i, fixed={lock: q[i, lock]})
+        assert len(alone) >= 1 and np.array_equal(each[i], alone), i
+        assert np.allclose(each[i][:, lock], q[i, lock], atol=0)  # the lock held at its own target's value
+    others = judge.multistart_ik(num, T[1], starts=200, seed=5, fixed={lock: q[1, lock]})
+    assert not np.array_equal(each[0], others)
+
+
 def test_hp_data_reproduces_the_pose():
     chain, _, _ = solver("ur5")
     num = chain.numeric()

@@ -18,7 +18,7 @@ import numpy as np
 from ... import reference
 from ...check.scenario import EPSILONS, Scenario, solve_cutoff, tolerance
 from ...check.solver_rows import CHAIN_MAX_ITER, IK_TARGETS, IKCheck, rotation_error, summary
-from .reference_ik_all import missing, multistart_ik, pose_error, revolute_mask, same
+from .reference_ik_all import missing, multistart_ik_each, pose_error, revolute_mask, same
 from .reference_inverse import check_expectations
 from .solver import SETTINGS
 
@@ -263,11 +263,10 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
     lock = _lock_coordinate(chain)
     allowed = tolerance(precision, n)
     found_tol = FOUND_TOL[precision]
-    judged = []
-    for k in range(min(m, COMPLETE_TARGETS)):
-        fixed = {lock: float(q_gen[k, lock])} if lock is not None else None
-        sols = multistart_ik(numeric, targets[k], starts=200, seed=seed + k, fixed=fixed)
-        judged.append(np.array([s for s in sols if _fits(s, lower, upper, rev)]).reshape(-1, n))
+    complete = min(m, COMPLETE_TARGETS)
+    each = multistart_ik_each(numeric, targets[:complete], starts=200, seeds=[seed + k for k in range(complete)],
+                              fixed={lock: q_gen[:complete, lock]} if lock is not None else None)
+    judged = [np.array([s for s in sols if _fits(s, lower, upper, rev)]).reshape(-1, n) for sols in each]
     rows = []
     for label, impl in solvers:
         check = ClosedCheck(f"{label} ik_all/ik_nearest", m, allowed)
