@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x2b7e5e5bUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x51db784bUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6539,7 +6539,10 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     q[3] = NAN;
     q[4] = NAN;
     q[5] = NAN;
-    for (int i = 0; i < count[0]; ++i) {
+    for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
+        if (i >= count[0]) {
+            break;
+        }
         /* each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref */
         x = rows[6*i];
         k = nearbyint((q_ref[0] - x)*0.15915494309189535);

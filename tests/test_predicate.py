@@ -2,7 +2,8 @@
 are data, ``break`` and ``return`` inside loops and inside an inlined helper, a helper that returns a
 value, array elements read and written at indices that are data, a 64-bit word. The batched PyTorch and
 JAX programs must give every lane exactly what the NumPy backend (which prints the IR statement by
-statement, one problem per call, with no masking) gives that problem alone."""
+statement, one problem per call, with no masking) gives that problem alone. A loop bounded by a module constant
+has constant bounds (its counter is the same number in every lane)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import pytest
 from skelarm_sym.backends import BACKENDS
 from skelarm_sym.build import load_python
 from skelarm_sym.ir.build import Array, Body, fabs, select
-from skelarm_sym.ir.nodes import Argument, Bits, Call1, Cast, Const, Function, Module, Role, Type, Var
+from skelarm_sym.ir.nodes import Argument, Bits, Call1, Cast, Const, ConstantDef, Function, Module, NamedConst, Role, Type, Var
 from skelarm_sym.ir.predicate import PLoop, predicate
 
 
@@ -74,6 +75,10 @@ def _module() -> Module:
             b.break_()
     b.set(count[0], j)
     b.set(out[3], out[3] + acc)
+    with b.for_("n", 0, NamedConst("TOY_N", Type.INT)) as n:  # a bound that is a module constant, left by data
+        with b.if_(n >= i):
+            b.break_()
+        b.set(out[3], out[3] + 0.125 * out[n])
     b.set(out[i], out[i] + 1.0)  # a write at an index that is data
     b.return_(Const(0, Type.INT))
     toy = Function(
@@ -86,7 +91,7 @@ def _module() -> Module:
         b.statements, kind="procedure", returns=Type.INT,
         statuses=(("TOY_DONE", 0, "done"), ("TOY_SMALL", 1, "small"), ("TOY_BAD", 2, "bad")), result="ToyResult",
     )
-    return Module("toy", "double", ("a test module",), (), (), (halve, draw, toy))
+    return Module("toy", "double", ("a test module",), (ConstantDef("TOY_N", 4, "a loop bound"),), (), (halve, draw, toy))
 
 
 def test_the_masked_form_has_a_loop_per_loop_over_data():
@@ -95,6 +100,7 @@ def test_the_masked_form_has_a_loop_per_loop_over_data():
     loops = [s for s in p.body if type(s) is PLoop]
     assert len(loops) == 2  # the For with a data bound and the While; the constant For stays a PFor
     assert "m" not in p.statics and "k" in p.statics
+    assert "n" in p.statics  # bounded by TOY_N: a number the printer knows, not a counter per lane
 
 
 @pytest.mark.parametrize("lang", ["torch", "jax"])

@@ -13,8 +13,9 @@ per problem of a batch) in which no control flow depends on data:
   narrowed to the lanes left;
 * ``While`` and ``For`` loops whose bounds are data become :class:`PLoop`: ``while any(run)`` with a
   per-lane ``run`` mask re-evaluated at the end of each pass (a counter per lane for ``For``); ``For``
-  loops with constant bounds stay loops over a number the printer knows (:class:`PFor`: unrolled or
-  ``range``);
+  loops with constant bounds (numbers, or the module's integer constants such as ``IK_MAX_SOLUTIONS``)
+  stay loops over a number the printer knows (:class:`PFor`: unrolled or ``range``), a ``break`` on data
+  leaving them by a run mask;
 * helpers (kind ``helper``) are inlined: their arrays are the caller's (an argument with an offset is an
   alias, as a C pointer is), their locals get fresh names, and their ``Return`` leaves only the inlined
   body; calls of straight-line functions stay calls (:class:`PCall`) whose outputs are merged under the
@@ -183,12 +184,15 @@ def is_static(e, statics: frozenset[str] | set[str], consts: frozenset[str] | se
 
 
 def static_value(e, env: dict[str, int]) -> int | None:
-    """The integer value of an index expression of constants and the counters in ``env``, or ``None``."""
+    """The integer value of an index expression of constants and the counters in ``env``, or ``None``. The
+    module's integer constants are in ``env`` too, as ``"#" + name`` (no variable's name starts with ``#``)."""
     t = type(e)
     if t is Const and e.type is Type.INT:
         return int(e.value)
     if t is Var and e.name in env:
         return env[e.name]
+    if t is NamedConst and e.type is Type.INT:
+        return env.get("#" + e.name)
     if t is Add:
         parts = [static_value(x, env) for x in e.terms]
         return None if None in parts else sum(parts)
@@ -337,14 +341,15 @@ class _Scope:
 
 
 class _Pass:
-    def __init__(self, functions: tuple[Function, ...]) -> None:
+    def __init__(self, functions: tuple[Function, ...], integers: tuple[tuple[str, int], ...] = ()) -> None:
         self.functions = {f.name: f for f in functions}  # the callees, by name
         self.count = 0
         self.arrays: dict[str, tuple[int, Type]] = {}
         self.consts: set[str] = set()
         self.statics: set[str] = set()
         self.rollable: set[str] = set()
-        self.env: dict[str, int] = {}  # a static loop counter -> a sample value (to tell static indices)
+        # a static loop counter -> a sample value (to tell static indices); "#NAME" -> a module integer's value
+        self.env: dict[str, int] = {"#" + name: value for name, value in integers}
         self.out: list = []
 
     # -- names and emission ----------------------------------------------------------------------------
@@ -733,13 +738,15 @@ def _zero(t: Type):
 def predicate(module: Module, function: Function) -> Predicated:
     """The masked form of procedure ``function`` of ``module`` (see the module docstring). Remembered for the
     module's functions: the NumPy, PyTorch and JAX printers of one generation mask the same procedures, and so do
-    a session's generations of one derivation. The result is shared: printers only read it."""
-    return _predicated(module.functions, function)
+    a session's generations of one derivation. The result is shared: printers only read it. A loop bounded by
+    one of the module's integer constants (``IK_MAX_SOLUTIONS``) has constant bounds."""
+    integers = tuple((c.name, c.value) for c in module.constants if type(c.value) is int)
+    return _predicated(module.functions, function, integers)
 
 
 @lru_cache(maxsize=16)  # a generation masks a handful of procedures; each key holds its module's functions alive
-def _predicated(functions: tuple[Function, ...], function: Function) -> Predicated:
-    p = _Pass(functions)
+def _predicated(functions: tuple[Function, ...], function: Function, integers: tuple[tuple[str, int], ...] = ()) -> Predicated:
+    p = _Pass(functions, integers)
     scope = _Scope()
     for a in function.arguments:
         if not a.is_scalar:

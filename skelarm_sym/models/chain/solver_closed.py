@@ -358,10 +358,14 @@ def nearest_solver(arm: _Arm) -> Function:
     b.call("ik_all_rows", *data, rows, count, flags, result=status)
     for j in range(N):
         b.set(q[j], Const(math.nan))
-    with b.for_("i", 0, count[0]) as i:
+    with b.for_("i", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as i:
+        # a constant bound and a break, not a bound of count[0]: the row index is then the same for every problem of a
+        # batch, and array backends read rows[...] directly instead of through a chain of selects per lane
+        with b.if_(i >= count[0]):
+            b.break_()
         b.comment("each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref")
         for j in range(N):
-            b.set(x, rows[_at(N, i, j)])  # read once: array backends read an element at a data index as a chain of selects
+            b.set(x, rows[_at(N, i, j)])
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
