@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x17105912UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x70b9d2ceUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

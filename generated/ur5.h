@@ -54,7 +54,7 @@
  * sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x51db784bUL
+#define UR5_STAMP 0x767ccd47UL
 
 #ifdef __cplusplus
 extern "C" {

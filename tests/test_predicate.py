@@ -14,7 +14,7 @@ from skelarm_sym.backends import BACKENDS
 from skelarm_sym.build import load_python
 from skelarm_sym.ir.build import Array, Body, fabs, select
 from skelarm_sym.ir.nodes import Argument, Bits, Call1, Cast, Const, ConstantDef, Function, Module, NamedConst, Role, Type, Var
-from skelarm_sym.ir.predicate import PLoop, predicate
+from skelarm_sym.ir.predicate import PLoop, _congruence, predicate
 
 
 def _module() -> Module:
@@ -80,6 +80,9 @@ def _module() -> Module:
             b.break_()
         b.set(out[3], out[3] + 0.125 * out[n])
     b.set(out[i], out[i] + 1.0)  # a write at an index that is data
+    w = b.array("w", 8, values=[Const(0.5 * k) for k in range(8)])
+    b.set(w[i * Const(2, Type.INT)], acc)  # strided: the write reaches the even elements only, the reads the odd
+    b.set(out[1], out[1] + w[i * Const(2, Type.INT) + Const(1, Type.INT)] - 0.25 * w[i * Const(2, Type.INT)])
     b.return_(Const(0, Type.INT))
     toy = Function(
         "toy", "a procedure of every construct",
@@ -101,6 +104,18 @@ def test_the_masked_form_has_a_loop_per_loop_over_data():
     assert len(loops) == 2  # the For with a data bound and the While; the constant For stays a PFor
     assert "m" not in p.statics and "k" in p.statics
     assert "n" in p.statics  # bounded by TOY_N: a number the printer knows, not a counter per lane
+
+
+def test_an_index_keeps_the_congruence_its_form_fixes():
+    # the elements a data index can reach: 6 r + 3 is 3 modulo 6 whatever r; a product and a sum of such forms too
+    r, k = Var("r", Type.INT), Var("k", Type.INT)
+    n = lambda v: Const(v, Type.INT)  # noqa: E731
+    assert _congruence(n(6) * r + n(3), {}) == (6, 3)
+    assert _congruence((n(2) * r + n(1)) * n(3), {}) == (6, 3)
+    assert _congruence(n(6) * r + n(4) * k + n(3), {}) == (2, 1)
+    assert _congruence(NamedConst("N", Type.INT) * r + n(1), {"#N": 8}) == (8, 1)
+    assert _congruence(r, {}) == (1, 0) and _congruence(n(5), {}) == (0, 5)
+    assert _congruence(NamedConst("N", Type.INT) * r, {}) == (1, 0)  # a constant of unknown value: nothing known
 
 
 @pytest.mark.parametrize("lang", ["torch", "jax"])

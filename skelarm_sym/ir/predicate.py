@@ -32,6 +32,8 @@ program ends with the status per lane in :attr:`Predicated.status`.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Union
@@ -208,6 +210,33 @@ def static_value(e, env: dict[str, int]) -> int | None:
         v = static_value(e.x, env)
         return None if v is None else -v
     return None
+
+
+def _congruence(e, env: dict[str, int]) -> tuple[int, int]:
+    """``(m, c)`` such that the integer expression ``e`` equals ``c`` modulo ``m`` whatever its variables' values
+    (``m`` 0: it is ``c``; 1: nothing is known). Only numbers and the module's integer constants are constants
+    here: a loop counter the printer knows takes many values."""
+    t = type(e)
+    if t is Const and e.type is Type.INT:
+        return 0, int(e.value)
+    if t is NamedConst and e.type is Type.INT and "#" + e.name in env:
+        return 0, env["#" + e.name]
+    if t is Neg:
+        m, c = _congruence(e.x, env)
+        return m, -c
+    if t is Add:
+        m, c = 0, 0
+        for x in e.terms:
+            mx, cx = _congruence(x, env)
+            m, c = math.gcd(m, mx), c + cx
+        return m, (c % m if m else c)
+    if t is Mul:
+        m, c = 0, 1
+        for x in e.factors:  # (c + m a)(cx + mx b) = c cx + c mx b + cx m a + m mx a b
+            mx, cx = _congruence(x, env)
+            m, c = math.gcd(math.gcd(c * mx, cx * m), m * mx), c * cx
+        return m, (c % m if m else c)
+    return 1, 0
 
 
 def _names(e, out: set[str]) -> set[str]:
@@ -435,10 +464,18 @@ class _Pass:
             size = scope.sizes[original]
         return range(offset, min(offset + size, self.arrays[name][0]))
 
+    def cells(self, name: str, idx, original: str, offset: int, scope: _Scope) -> list[int]:
+        """The elements of :meth:`span` that ``idx``, an integer index, can equal: those congruent to it modulo
+        the stride its form fixes (``6*r + 2``: every sixth from 2), as an index must be in range to be read."""
+        stride, rest = _congruence(idx, self.env)
+        cells = [j for j in self.span(name, original, offset, scope) if (j - rest) % stride == 0] if stride \
+            else [rest]
+        return cells or list(self.span(name, original, offset, scope))
+
     def pick(self, name: str, idx, type_: Type, scope: _Scope, original: str, offset: int):
-        """``name[idx]`` for an index that is data: a chain of selects."""
+        """``name[idx]`` for an index that is data: a chain of selects over the elements it can reach."""
+        cells = self.cells(name, idx, original, offset, scope)
         i = idx if type(idx) is Var else self.define("i", idx, Type.INT)
-        cells = list(self.span(name, original, offset, scope))
         out = Elem(name, Const(cells[-1], Type.INT), type_)
         for j in reversed(cells[:-1]):
             out = Select(Compare("==", i, Const(j, Type.INT)), Elem(name, Const(j, Type.INT), type_), out)
@@ -533,10 +570,11 @@ class _Pass:
         if static is not None:
             self.emit(PSet(Elem(name, idx, target.type), v, mask))
             return
+        cells = self.cells(name, idx, target.array, offset, scope)
         i = idx if type(idx) is Var else self.define("i", idx, Type.INT)
         if not (type(v) in (Const, Var)):
             v = self.define("v", v, target.type)
-        for j in self.span(name, target.array, offset, scope):
+        for j in cells:
             hit = Compare("==", i, Const(j, Type.INT))
             self.emit(PSet(Elem(name, Const(j, Type.INT), target.type), v, self.narrow(mask, hit)))
 
