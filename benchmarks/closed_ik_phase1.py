@@ -1,6 +1,6 @@
 """Closed-form IK, the NumPy specification: accuracy and completeness per arm, evaluated through lambdify.
 
-    PYTHONPATH=.:tests python benchmarks/closed_ik_phase1.py [--targets 1000] [--numeric 20]
+    python benchmarks/closed_ik_phase1.py [--targets 1000] [--numeric 20]
 
 Per arm: family; derivation time and steps; over ``--targets`` random configurations (revolute joints
 uniform in [-pi, pi], the prismatic stroke within limits): distinct exact solutions per target (no limits;
@@ -14,9 +14,13 @@ the closed form lacks (1e-5). No timing: lambdify is not the emitted code.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))  # closed_ik_support: the tests' arms
 
 from closed_ik_support import TOML_ARMS, URDF_ARMS, load_arm, random_configurations, targets_of, wrapped_distance
 from skelarm_sym.closed_ik import derive_ik_all

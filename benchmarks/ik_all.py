@@ -1,6 +1,6 @@
 """Closed-form IK with all solutions: the emitted C per robot, judged and timed. A table, not a test.
 
-    PYTHONPATH=.:tests python benchmarks/ik_all.py [--targets 1000] [--numeric 20] [--robots puma560,ur5]
+    python benchmarks/ik_all.py [--targets 1000] [--numeric 20] [--robots puma560,ur5]
 
 Per robot (UR5 and UR10 URDFs and the Kinova j2s6 from example-robot-data when installed, PUMA 560, KUKA KR 6,
 ABB IRB 140, Stanford arm, iiwa 14 with joint 3 locked, Panda with joint 7 locked):
@@ -38,6 +38,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))  # closed_ik_support: the tests' arms
 
 from closed_ik_support import ROBOTS, example_robot_data_dir, load_arm
 from skelarm_sym.build import compile_arm, find_compiler

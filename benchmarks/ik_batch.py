@@ -1,6 +1,6 @@
 """Closed-form IK over a batch of targets from Python: time per target of each way to call it. A table, not a test.
 
-    PYTHONPATH=.:tests python benchmarks/ik_batch.py [--targets 1000,10000] [--robots puma560,ur5,iiwa14_lock3]
+    python benchmarks/ik_batch.py [--targets 1000,10000] [--robots puma560,ur5,iiwa14_lock3]
 
 Per robot and batch size m (targets: poses of random configurations within the joint limits; a locked joint held
 at 0.3 rad):
@@ -22,8 +22,11 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))  # closed_ik_support: the tests' arms
 
 from closed_ik_support import load_arm, random_configurations, targets_of
 from skelarm_sym.build import compile_arm, load_python
