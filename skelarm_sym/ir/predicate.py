@@ -33,7 +33,6 @@ program ends with the status per lane in :attr:`Predicated.status`.
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Union
@@ -370,7 +369,7 @@ class _Scope:
 
 
 class _Pass:
-    def __init__(self, functions: tuple[Function, ...], integers: tuple[tuple[str, int], ...] = ()) -> None:
+    def __init__(self, functions: tuple[Function, ...], integers: tuple[tuple[str, int], ...]) -> None:
         self.functions = {f.name: f for f in functions}  # the callees, by name
         self.count = 0
         self.arrays: dict[str, tuple[int, Type]] = {}
@@ -783,7 +782,7 @@ def predicate(module: Module, function: Function) -> Predicated:
 
 
 @lru_cache(maxsize=16)  # a generation masks a handful of procedures; each key holds its module's functions alive
-def _predicated(functions: tuple[Function, ...], function: Function, integers: tuple[tuple[str, int], ...] = ()) -> Predicated:
+def _predicated(functions: tuple[Function, ...], function: Function, integers: tuple[tuple[str, int], ...]) -> Predicated:
     p = _Pass(functions, integers)
     scope = _Scope()
     for a in function.arguments:

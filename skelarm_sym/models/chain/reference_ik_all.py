@@ -149,22 +149,23 @@ def multistart_ik_each(chain, targets, starts: int = 200, seeds=None, iterations
     results = []
     for i in range(m):
         # in start order, a configuration is kept unless it equals (see same) one kept before it
-        left = np.where(rev, (q[i][converged[i]] + np.pi) % (2 * np.pi) - np.pi, q[i][converged[i]])
+        left = _wrapped(q[i][converged[i]], rev)
         out: list[np.ndarray] = []
         while len(left):
             out.append(left[0])
-            d = left - left[0]
-            d = np.where(rev, (d + np.pi) % (2 * np.pi) - np.pi, d)
-            left = left[np.max(np.abs(d), axis=-1) > dup_tol]
+            left = left[np.max(np.abs(_wrapped(left - left[0], rev)), axis=-1) > dup_tol]
         results.append(np.array(out).reshape(-1, n))
     return results
 
 
+def _wrapped(d: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """``d`` (..., n) with its revolute entries taken into [-pi, pi)."""
+    return np.where(revolute, (d + np.pi) % (2 * np.pi) - np.pi, d)
+
+
 def same(a: np.ndarray, b: np.ndarray, revolute: np.ndarray, tol: float) -> bool:
     """``max |a - b| <= tol``, revolute differences taken modulo 2 pi."""
-    d = np.asarray(a, float) - np.asarray(b, float)
-    d = np.where(revolute, (d + np.pi) % (2 * np.pi) - np.pi, d)
-    return bool(np.max(np.abs(d)) <= tol)
+    return bool(np.max(np.abs(_wrapped(np.asarray(a, float) - np.asarray(b, float), revolute))) <= tol)
 
 
 def missing(found: np.ndarray, reference: np.ndarray, revolute: np.ndarray, tol: float) -> np.ndarray:
