@@ -45,7 +45,7 @@
  * sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x05107ff6UL
+#define ARM2_STAMP 0x72dc2c4aUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -45,7 +45,7 @@
  * sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0x0186ce11UL
+#define ARM3_STAMP 0xe7cffd35UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -45,7 +45,7 @@
  * sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x42e4e932UL
+#define ARM4_STAMP 0xcbaf6c05UL
 
 #ifdef __cplusplus
 extern "C" {

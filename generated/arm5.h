@@ -45,7 +45,7 @@
  * sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x9b353062UL
+#define ARM5_STAMP 0xea45603bUL
 
 #ifdef __cplusplus
 extern "C" {

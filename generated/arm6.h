@@ -45,7 +45,7 @@
  * sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0xa8cfc35cUL
+#define ARM6_STAMP 0x9364c9d2UL
 
 #ifdef __cplusplus
 extern "C" {

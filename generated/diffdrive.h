@@ -35,7 +35,7 @@
  * sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x961c80f1UL
+#define DIFFDRIVE_STAMP 0x23066dd4UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -51,7 +51,7 @@
  * sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x70b9d2ceUL
+#define PANDA_STAMP 0x1d488c87UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x767ccd47UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xf1744345UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -97,9 +97,12 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
  * from ur5_sincos4 below: four angles at a time in straight-line double arithmetic that any
  * compiler vectorises at -O2, instead of one libm call per angle. Method (fdlibm's): the angle is
- * reduced by the nearest multiple of pi/2 in three parts (Cody and Waite; exact for |x| <= 1e5), then
- * fdlibm's degree-13 sine and degree-14 cosine polynomials on [-pi/4, pi/4] with the reduction's tail,
- * and the quadrant chooses, by bits, which value and which sign. Error: at most 1 ulp from libm's
+ * reduced by the nearest multiple of pi/2 written in two parts (Cody and Waite: 33 exact bits and the
+ * next 53); a lane whose remainder lost more than 16 bits to cancellation (within about 2^-16 of a
+ * multiple of pi/2) is redone with pi/2 in four parts (118 bits; exact for |x| <= 1e5), as fdlibm's
+ * __ieee754_rem_pio2 does. Then fdlibm's degree-13 sine and degree-14 cosine polynomials on
+ * [-pi/4, pi/4] with the reduction's tail (evaluated by Estrin's scheme, which shortens their chains of
+ * dependent operations), and the quadrant chooses, by bits, which value and which sign. Error: at most 1 ulp from libm's
  * (measured against glibc on 2 million angles; tests/test_scalar_trig.py). |x| > 1e5, infinities and
  * NaNs get libm's sin and cos. Needs IEEE doubles evaluated in double (FLT_EVAL_METHOD 0) and no
  * -ffast-math (which would fold the rounding trick); otherwise, or with -DSKELARM_LIBM_TRIG, libm. */
@@ -113,30 +116,30 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 /* sn[k] = sin(ang[k]) and cs[k] = cos(ang[k]) for k < 4. */
 static void ur5_sincos4(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
-    unsigned long long big = 0;
+    unsigned long long big = 0, slow = 0, redo[4];
     int k;
     for (k = 0; k < 4; ++k) {
-        union { double f; unsigned long long u; } x, n, s, c;
-        double f, t0, w0, t1, w1, t2, e, r, y, z, v, p, hz, w;
+        union { double f; unsigned long long u; } x, n, s, c, rb;
+        double f, t0, w0, r, y, z, zz, v, p, hz, w;
         unsigned long long swap, sign_s, sign_c;
         x.f = ang[k];
         n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
         f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
         t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
-        w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
-        t1 = t0 - w0;
-        w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
-        t2 = t1 - w1;
-        e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
-        r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
-        y = (t2 - r) - e;
+        w0 = f * 6.07710050650619224932e-11;                          /* the rest of pi/2, to 53 bits */
+        r = t0 - w0;                                                  /* x - f pi/2 = r + y, |r| <= pi/4 */
+        y = (t0 - r) - w0;
+        rb.f = r;                    /* r lost more than 16 bits to cancellation: the lane is redone in full */
+        redo[k] = ((((rb.u >> 52) & 0x7ffull) + 16ull) - ((x.u >> 52) & 0x7ffull)) >> 63;
+        slow |= redo[k];
         z = r * r;
         v = z * r;
-        p = 8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04 + z * (2.75573137070700676789e-06
-            + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+        zz = z * z;                                                   /* Estrin's scheme: shorter chains */
+        p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
+            + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
         s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-        p = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
-            + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+        p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
+            + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
         hz = 0.5 * z;
         w = 1.0 - hz;
         c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
@@ -148,6 +151,44 @@ static void ur5_sincos4(const double *restrict ang, double *restrict cs, double 
         sn[k] = n.f;
         cs[k] = s.f;
         big |= ((x.u & 0x7fffffffffffffffull) + (0x7fffffffffffffffull - 0x40f86a0000000000ull)) >> 63; /* |x| > 1e5 or NaN */
+    }
+    if (slow) { /* an angle within 2^-16 of its multiple of pi/2 (rare): pi/2 to 118 bits for that lane */
+        for (k = 0; k < 4; ++k) {
+            if (redo[k]) {
+                union { double f; unsigned long long u; } x, n, s, c;
+                double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
+                unsigned long long swap, sign_s, sign_c;
+                x.f = ang[k];
+                n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
+                f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
+                t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
+                w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
+                t1 = t0 - w0;
+                w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
+                t2 = t1 - w1;
+                e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
+                r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
+                y = (t2 - r) - e;
+                z = r * r;
+                v = z * r;
+                zz = z * z;                                                   /* Estrin's scheme: shorter chains */
+                p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
+                    + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
+                s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
+                p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
+                    + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+                hz = 0.5 * z;
+                w = 1.0 - hz;
+                c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+                swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
+                sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
+                sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
+                n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
+                s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
+                sn[k] = n.f;
+                cs[k] = s.f;
+            }
+        }
     }
     if (big) {
         for (k = 0; k < 4; ++k) {
@@ -163,30 +204,30 @@ static void ur5_sincos4(const double *restrict ang, double *restrict cs, double 
  * lanes cost twice two; each lane computes exactly what it computes in the four-lane kernel. */
 static void ur5_sincos2(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
-    unsigned long long big = 0;
+    unsigned long long big = 0, slow = 0, redo[2];
     int k;
     for (k = 0; k < 2; ++k) {
-        union { double f; unsigned long long u; } x, n, s, c;
-        double f, t0, w0, t1, w1, t2, e, r, y, z, v, p, hz, w;
+        union { double f; unsigned long long u; } x, n, s, c, rb;
+        double f, t0, w0, r, y, z, zz, v, p, hz, w;
         unsigned long long swap, sign_s, sign_c;
         x.f = ang[k];
         n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
         f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
         t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
-        w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
-        t1 = t0 - w0;
-        w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
-        t2 = t1 - w1;
-        e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
-        r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
-        y = (t2 - r) - e;
+        w0 = f * 6.07710050650619224932e-11;                          /* the rest of pi/2, to 53 bits */
+        r = t0 - w0;                                                  /* x - f pi/2 = r + y, |r| <= pi/4 */
+        y = (t0 - r) - w0;
+        rb.f = r;                    /* r lost more than 16 bits to cancellation: the lane is redone in full */
+        redo[k] = ((((rb.u >> 52) & 0x7ffull) + 16ull) - ((x.u >> 52) & 0x7ffull)) >> 63;
+        slow |= redo[k];
         z = r * r;
         v = z * r;
-        p = 8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04 + z * (2.75573137070700676789e-06
-            + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)));
+        zz = z * z;                                                   /* Estrin's scheme: shorter chains */
+        p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
+            + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
         s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-        p = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
-            + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+        p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
+            + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
         hz = 0.5 * z;
         w = 1.0 - hz;
         c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
@@ -198,6 +239,44 @@ static void ur5_sincos2(const double *restrict ang, double *restrict cs, double 
         sn[k] = n.f;
         cs[k] = s.f;
         big |= ((x.u & 0x7fffffffffffffffull) + (0x7fffffffffffffffull - 0x40f86a0000000000ull)) >> 63; /* |x| > 1e5 or NaN */
+    }
+    if (slow) { /* an angle within 2^-16 of its multiple of pi/2 (rare): pi/2 to 118 bits for that lane */
+        for (k = 0; k < 2; ++k) {
+            if (redo[k]) {
+                union { double f; unsigned long long u; } x, n, s, c;
+                double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
+                unsigned long long swap, sign_s, sign_c;
+                x.f = ang[k];
+                n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
+                f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
+                t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
+                w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
+                t1 = t0 - w0;
+                w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
+                t2 = t1 - w1;
+                e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
+                r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
+                y = (t2 - r) - e;
+                z = r * r;
+                v = z * r;
+                zz = z * z;                                                   /* Estrin's scheme: shorter chains */
+                p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
+                    + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
+                s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
+                p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
+                    + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+                hz = 0.5 * z;
+                w = 1.0 - hz;
+                c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+                swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
+                sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
+                sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
+                n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
+                s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
+                sn[k] = n.f;
+                cs[k] = s.f;
+            }
+        }
     }
     if (big) {
         for (k = 0; k < 2; ++k) {

@@ -54,7 +54,7 @@
  * sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x767ccd47UL
+#define UR5_STAMP 0xf1744345UL
 
 #ifdef __cplusplus
 extern "C" {
