@@ -62,14 +62,22 @@ def compiled_templates() -> CompiledTemplates | None:
         return None
 
 
+def template_folder(module: Path | None = None) -> Path:
+    """The templates of this copy of the package: ``templates/`` beside it in a source checkout, else the wheel's
+    ``skelarm_sym.templates``. The checkout's own folder comes first because an editable install maps
+    ``skelarm_sym.templates`` to its checkout's folder whichever copy of the package is imported: a benchmark
+    that runs another checkout's code (``PYTHONPATH=/other/checkout``, the ``--before`` of ``benchmarks/``)
+    would otherwise print that code through this checkout's templates. ``module``: where this file lies (tests)."""
+    checkout = Path(module or __file__).resolve().parents[2]
+    if (checkout / "pyproject.toml").is_file() and (checkout / "templates" / "c").is_dir():
+        return checkout / "templates"
+    return Path(str(resources.files("skelarm_sym.templates")))
+
+
 @lru_cache(maxsize=1)
 def environment() -> jinja2.Environment:
-    try:
-        folder = Path(str(resources.files("skelarm_sym.templates")))
-    except ModuleNotFoundError:  # a source checkout: templates/ beside the package
-        folder = Path(__file__).resolve().parents[2] / "templates"
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(folder)),
+        loader=jinja2.FileSystemLoader(str(template_folder())),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
