@@ -25,16 +25,19 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x758d5c4dUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xe3af0b31UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
-/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below and vectorises batches
- * across configurations. Elsewhere double code computes sines and cosines with its own kernel
- * (arm3f_sincos4 below, four angles at a time in plain arithmetic); with -DSKELARM_LIBM_TRIG,
- * under -ffast-math, where that kernel cannot run, and in float code, libm: on glibc sincos once per
+/* Vector math: GCC on x86-64 glibc vectorises batches across configurations, and calls libmvec for the
+ * sin/cos loops below in float code, and in double code where it targets AVX2 (-march=native, -mavx2).
+ * Double code on plain x86-64 (SSE2, where libmvec's two-wide routines cost more: benchmarks/batch_ab.py)
+ * and elsewhere computes sines and cosines with its own kernel (arm3f_sincos4 below, four angles at
+ * a time in plain arithmetic that the compiler vectorises); with -DSKELARM_LIBM_TRIG, under -ffast-math,
+ * where that kernel cannot run, and in float code without vector math, libm: on glibc sincos once per
  * angle (one call for both values, as a hand-written recursion would: glibc's sincos returns exactly
- * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
+ * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. Single calls and
+ * batches take the same routine in every build. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) float sinf(float);
@@ -93,25 +96,25 @@ extern void sincosf(float x, float *s, float *c); /* glibc (GNU), not C99 */
 #define ARM3F_SINCOS 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 8 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 8 with libmvec (whole vectors). */
 static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
-#if ARM3F_VECTOR_MATH
+#if ARM3F_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM3F_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 8; ++k) {
         cs[k] = cosf(ang[k]);
     }
     for (k = 0; k < 8; ++k) {
         sn[k] = sinf(ang[k]);
-    }
-#elif ARM3F_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm3f_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
@@ -126,25 +129,25 @@ static ARM3F_VECTORIZE void arm3f_trig8(const float *restrict ang, float *restri
 }
 
 #if ARM3F_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 96 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 96 with libmvec (whole vectors). */
 static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
-#if ARM3F_VECTOR_MATH
+#if ARM3F_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM3F_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 96; ++k) {
         cs[k] = cosf(ang[k]);
     }
     for (k = 0; k < 96; ++k) {
         sn[k] = sinf(ang[k]);
-    }
-#elif ARM3F_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm3f_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {
@@ -159,25 +162,25 @@ static ARM3F_VECTORIZE void arm3f_trig96(const float *restrict ang, float *restr
 }
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 512 with libmvec (whole vectors). */
 static ARM3F_VECTORIZE void arm3f_trig512(const float *restrict ang, float *restrict cs, float *restrict sn, int used)
 {
     int k;
-#if ARM3F_VECTOR_MATH
+#if ARM3F_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm3f_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm3f_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM3F_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 512; ++k) {
         cs[k] = cosf(ang[k]);
     }
     for (k = 0; k < 512; ++k) {
         sn[k] = sinf(ang[k]);
-    }
-#elif ARM3F_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm3f_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm3f_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM3F_SINCOS
     for (k = 0; k < used; ++k) {

@@ -27,7 +27,7 @@
 #include <stddef.h> /* size_t only (freestanding header) */
 
 /* Building: link the math library, e.g.  cc app.c arm3f.c -lm
- * (without -lm GCC's vectorised sin/cos fail to link: undefined reference to _ZGVbN2v_sin).
+ * (without -lm the link fails: undefined reference to sin, or to GCC's vectorised _ZGVbN2v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
  * allocates or keeps state; the stack each needs is stated beside it (float).
@@ -43,7 +43,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x758d5c4dUL
+#define ARM3F_STAMP 0xe3af0b31UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,16 +25,19 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xcbaf6c05UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x56ca15c2UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
-/* Vector math: GCC on x86-64 glibc calls libmvec for the sin/cos loops below and vectorises batches
- * across configurations. Elsewhere double code computes sines and cosines with its own kernel
- * (arm4_sincos4 below, four angles at a time in plain arithmetic); with -DSKELARM_LIBM_TRIG,
- * under -ffast-math, where that kernel cannot run, and in float code, libm: on glibc sincos once per
+/* Vector math: GCC on x86-64 glibc vectorises batches across configurations, and calls libmvec for the
+ * sin/cos loops below in float code, and in double code where it targets AVX2 (-march=native, -mavx2).
+ * Double code on plain x86-64 (SSE2, where libmvec's two-wide routines cost more: benchmarks/batch_ab.py)
+ * and elsewhere computes sines and cosines with its own kernel (arm4_sincos4 below, four angles at
+ * a time in plain arithmetic that the compiler vectorises); with -DSKELARM_LIBM_TRIG, under -ffast-math,
+ * where that kernel cannot run, and in float code without vector math, libm: on glibc sincos once per
  * angle (one call for both values, as a hand-written recursion would: glibc's sincos returns exactly
- * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. */
+ * its sin and cos), elsewhere or with -DSKELARM_NO_SINCOS plain sin and cos calls. Single calls and
+ * batches take the same routine in every build. */
 #if !defined(SKELARM_NO_SIMD) && defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) \
     && (__GNUC__ >= 6) && defined(__x86_64__) && defined(__GLIBC__)
 __attribute__((__simd__("notinbranch"))) double sin(double);
@@ -85,9 +88,9 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #else
 #define ARM4_LIGHT
 #endif
-/* Without vector math (other compilers, other C libraries, -DSKELARM_NO_SIMD), sines and cosines come
- * from arm4_sincos4 below: four angles at a time in straight-line double arithmetic that any
- * compiler vectorises at -O2, instead of one libm call per angle. Method (fdlibm's): the angle is
+/* Double code's sines and cosines come from arm4_sincos4 below (but where GCC targets x86-64 glibc
+ * with AVX2, whose libmvec is faster there): four angles at a time in straight-line double arithmetic that
+ * any compiler vectorises at -O2, instead of one libm call per angle. Method (fdlibm's): the angle is
  * reduced by the nearest multiple of pi/2 written in two parts (Cody and Waite: 33 exact bits and the
  * next 53); a lane whose remainder lost more than 16 bits to cancellation (within about 2^-16 of a
  * multiple of pi/2) is redone with pi/2 in four parts (118 bits; exact for |x| <= 1e5), as fdlibm's
@@ -97,7 +100,7 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
  * (measured against glibc on 2 million angles; tests/test_scalar_trig.py). |x| > 1e5, infinities and
  * NaNs get libm's sin and cos. Needs IEEE doubles evaluated in double (FLT_EVAL_METHOD 0) and no
  * -ffast-math (which would fold the rounding trick); otherwise, or with -DSKELARM_LIBM_TRIG, libm. */
-#if !ARM4_VECTOR_MATH && !defined(SKELARM_LIBM_TRIG) && !defined(__FAST_MATH__) \
+#if (!ARM4_VECTOR_MATH || !defined(__AVX2__)) && !defined(SKELARM_LIBM_TRIG) && !defined(__FAST_MATH__) \
     && defined(__FLT_EVAL_METHOD__) && __FLT_EVAL_METHOD__ == 0 && defined(__DBL_MANT_DIG__) && __DBL_MANT_DIG__ == 53
 #define ARM4_OWN_TRIG 1
 #else
@@ -286,25 +289,25 @@ extern void sincos(double x, double *s, double *c); /* glibc (GNU), not C99 */
 #define ARM4_SINCOS 0
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 4 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 4 with libmvec (whole vectors). */
 static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
-#if ARM4_VECTOR_MATH
+#if ARM4_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm4_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm4_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM4_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 4; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 4; ++k) {
         sn[k] = sin(ang[k]);
-    }
-#elif ARM4_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm4_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm4_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM4_SINCOS
     for (k = 0; k < used; ++k) {
@@ -319,25 +322,25 @@ static ARM4_VECTORIZE void arm4_trig4(const double *restrict ang, double *restri
 }
 
 #if ARM4_VECTOR_MATH
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 128 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 128 with libmvec (whole vectors). */
 static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
-#if ARM4_VECTOR_MATH
+#if ARM4_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm4_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm4_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM4_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 128; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 128; ++k) {
         sn[k] = sin(ang[k]);
-    }
-#elif ARM4_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm4_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm4_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM4_SINCOS
     for (k = 0; k < used; ++k) {
@@ -352,25 +355,25 @@ static ARM4_VECTORIZE void arm4_trig128(const double *restrict ang, double *rest
 }
 #endif
 
-/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < 512 with vector math, else for k < used (the
- * own kernel: four at a time, a tail of one or two as two; callers zero the padding). */
+/* cs[k] = cos(ang[k]), sn[k] = sin(ang[k]) for k < used (the own kernel: four at a time, a tail of one or two
+ * as two; callers zero the padding), or for k < 512 with libmvec (whole vectors). */
 static ARM4_VECTORIZE void arm4_trig512(const double *restrict ang, double *restrict cs, double *restrict sn, int used)
 {
     int k;
-#if ARM4_VECTOR_MATH
+#if ARM4_OWN_TRIG
+    for (k = 0; k + 2 < used; k += 4) {
+        arm4_sincos4(ang + k, cs + k, sn + k);
+    }
+    if (k < used) { /* a tail of one or two angles */
+        arm4_sincos2(ang + k, cs + k, sn + k);
+    }
+#elif ARM4_VECTOR_MATH
     (void)used; /* whole vectors: the padding lanes cost nothing */
     for (k = 0; k < 512; ++k) {
         cs[k] = cos(ang[k]);
     }
     for (k = 0; k < 512; ++k) {
         sn[k] = sin(ang[k]);
-    }
-#elif ARM4_OWN_TRIG
-    for (k = 0; k + 2 < used; k += 4) {
-        arm4_sincos4(ang + k, cs + k, sn + k);
-    }
-    if (k < used) { /* a tail of one or two angles */
-        arm4_sincos2(ang + k, cs + k, sn + k);
     }
 #elif ARM4_SINCOS
     for (k = 0; k < used; ++k) {

@@ -17,7 +17,7 @@
 #include <stddef.h> /* size_t only (freestanding header) */
 
 /* Building: link the math library, e.g.  cc app.c diffdrive.c -lm
- * (without -lm GCC's vectorised sin/cos fail to link: undefined reference to _ZGVbN2v_sin).
+ * (without -lm the link fails: undefined reference to sin, or to GCC's vectorised _ZGVbN2v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
  * allocates or keeps state; the stack each needs is stated beside it (double).
@@ -27,15 +27,15 @@
  * in the two, and -ffast-math reorders sums: the results may then differ in the last bits.
  * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
  * other functions check nothing in any mode.
- * Sines and cosines: glibc's vector math (libmvec) where GCC targets x86-64 glibc, else the source's
- * own kernel (at most 1 ulp from libm), libm for |angle| > 1e5, under -ffast-math or with
- * -DSKELARM_LIBM_TRIG; -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions
+ * Sines and cosines: the source's own kernel (at most 1 ulp from libm), but glibc's vector math
+ * (libmvec) where GCC targets x86-64 glibc with AVX2 (-march=native, -mavx2); libm for |angle| > 1e5,
+ * under -ffast-math or with -DSKELARM_LIBM_TRIG; -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions
  * enabled as traps (feenableexcept), libmvec raises FE_INVALID for |angle| above about 1e300 and the own
  * kernel FE_OVERFLOW above about 1e150 (before libm recomputes the value): keep angles finite and of
  * sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x23066dd4UL
+#define DIFFDRIVE_STAMP 0x1370ec7eUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,11 +1,12 @@
 """The scalar path's own sine and cosine (``templates/c/sincos.c.j2``), judged against the C library's.
 
-Without vector math (``-DSKELARM_NO_SIMD``, clang, other C libraries) the emitted double code computes
-sines and cosines four angles at a time in plain arithmetic. A driver includes the generated source (its
+The emitted double code computes sines and cosines four angles at a time in plain arithmetic, except where
+GCC targets x86-64 glibc with AVX2 (there libmvec). A driver includes the generated source (its
 static helpers are then visible) and compares the trigonometry helper with libm's ``sin`` and ``cos``
 angle by angle: at most 1 ulp for |x| <= 1e5, libm's own values beyond, NaN for non-finite angles, the
 sign of zero kept. The reference is the C library, which shares nothing with the kernel."""
 
+import platform
 import shutil
 import subprocess
 
@@ -127,3 +128,21 @@ def test_libm_where_asked_or_where_the_kernel_cannot_run(tmp_path, flags):
     assert not used
     finite = np.isfinite(angles)
     assert np.array_equal(own[finite], libm[finite])
+
+
+GCC_X86_64_GLIBC = (shutil.which("gcc") is not None and platform.machine() == "x86_64"
+                    and platform.libc_ver()[0] == "glibc")
+
+
+@pytest.mark.skipif(not GCC_X86_64_GLIBC, reason="GCC's vector math is the x86-64 glibc build's")
+@pytest.mark.parametrize("flags, own", [(("-O2",), 1), (("-O2", "-mavx2"), 0), (("-O2", "-mavx2", "-DSKELARM_NO_SIMD"), 1),
+                                        (("-O3", "-march=x86-64-v3"), 0)])
+def test_gcc_takes_the_kernel_on_plain_x86_64_and_libmvec_with_avx2(tmp_path, flags, own):
+    """Where GCC targets plain x86-64 (SSE2) the vector build's single calls and batches take the kernel
+    (libmvec's two-wide routines cost more: benchmarks/batch_ab.py); with AVX2 libmvec's wider ones, which
+    are faster there. Read from the preprocessor (an AVX2 binary need not run on this machine)."""
+    generate(3, out=tmp_path, langs="c", prefix="arm", functions="position")
+    macros = subprocess.run(["gcc", "-std=c99", *flags, "-dM", "-E", str(tmp_path / "arm.c")], check=True,
+                            capture_output=True, text=True).stdout
+    assert f"#define ARM_OWN_TRIG {own}" in macros.splitlines()
+    assert "#define ARM_VECTOR_MATH 1" in macros.splitlines() or "-DSKELARM_NO_SIMD" in flags

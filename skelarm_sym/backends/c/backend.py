@@ -2,9 +2,10 @@
 
 Emitted functions take caller-owned arrays (row-major), allocate nothing and use no globals.
 Straight-line functions: the angles are computed first (``_angles``), their sines and cosines in one
-loop over small arrays (on GCC with glibc, x86-64, ``sin``/``cos`` are declared with the ``simd``
-attribute so that loop calls glibc's vector math, libmvec, found through plain ``-lm``; other compilers
-get the same loop with plain or ``sincos`` calls), then the rest (``_finish``). Each has a ``_batch``
+helper over small arrays (double code: the source's own kernel, four angles at a time, but where GCC targets
+x86-64 glibc with AVX2, whose ``sin``/``cos`` are declared with the ``simd`` attribute so that the helper's
+loops call glibc's vector math, libmvec, found through plain ``-lm``; libm's ``sincos`` or ``sin``/``cos``
+where the kernel cannot run), then the rest (``_finish``). Each has a ``_batch``
 variant. Procedures (the iterative solvers) and their helpers are printed statement by statement.
 """
 
