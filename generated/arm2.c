@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x606b8598UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x850244eaUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -186,7 +186,7 @@ static void arm2_sincos4(const double *restrict ang, double *restrict cs, double
     }
     if (big) {
         for (k = 0; k < 4; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }
@@ -274,7 +274,7 @@ static void arm2_sincos2(const double *restrict ang, double *restrict cs, double
     }
     if (big) {
         for (k = 0; k < 2; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }

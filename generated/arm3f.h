@@ -27,23 +27,27 @@
 #include <stddef.h> /* size_t only (freestanding header) */
 
 /* Building: link the math library, e.g.  cc app.c arm3f.c -lm
- * (without -lm the link fails: undefined reference to sin, or to GCC's vectorised _ZGVbN2v_sin).
+ * (without -lm the link fails: undefined reference to sincos or sqrt, or to a vector routine of glibc's
+ * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
  * allocates or keeps state; the stack each needs is stated beside it (float).
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
- * or value-changing options: -O0 to -O3 for plain x86-64, or any target with -ffp-contract=off. With
- * FMA available (-march=native on most CPUs since 2013) the compiler may contract a*b + c differently
- * in the two, and -ffast-math reorders sums: the results may then differ in the last bits.
+ * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
+ * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
+ * contraction off). Otherwise, with FMA available (-march=native on most CPUs since 2013), the compiler
+ * may contract a*b + c differently in the two, and -ffast-math reorders sums: the results may then differ
+ * in the last bits.
  * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
  * other functions check nothing in any mode.
  * Sines and cosines: glibc's vector math (libmvec) where GCC targets x86-64 glibc, else libm;
  * -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions enabled as traps
- * (feenableexcept), libmvec raises FE_INVALID for |angle| above about 1e300: keep angles finite and of
+ * (feenableexcept), libmvec raises FE_OVERFLOW for |angle| above about 1e20 (and its two-wide routines
+ * FE_INVALID for NaN angles), every path FE_INVALID for infinite angles: keep angles finite and of
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xe3af0b31UL
+#define ARM3F_STAMP 0x4756f313UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x1370ec7eUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xaf957983UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -176,7 +176,7 @@ static void diffdrive_sincos4(const double *restrict ang, double *restrict cs, d
     }
     if (big) {
         for (k = 0; k < 4; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }
@@ -264,7 +264,7 @@ static void diffdrive_sincos2(const double *restrict ang, double *restrict cs, d
     }
     if (big) {
         for (k = 0; k < 2; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }

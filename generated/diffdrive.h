@@ -17,25 +17,31 @@
 #include <stddef.h> /* size_t only (freestanding header) */
 
 /* Building: link the math library, e.g.  cc app.c diffdrive.c -lm
- * (without -lm the link fails: undefined reference to sin, or to GCC's vectorised _ZGVbN2v_sin).
+ * (without -lm the link fails: undefined reference to sincos or sqrt, or to a vector routine of glibc's
+ * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
  * allocates or keeps state; the stack each needs is stated beside it (double).
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
- * or value-changing options: -O0 to -O3 for plain x86-64, or any target with -ffp-contract=off. With
- * FMA available (-march=native on most CPUs since 2013) the compiler may contract a*b + c differently
- * in the two, and -ffast-math reorders sums: the results may then differ in the last bits.
+ * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
+ * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
+ * contraction off). Otherwise, with FMA available (-march=native on most CPUs since 2013), the compiler
+ * may contract a*b + c differently in the two, and -ffast-math reorders sums: the results may then differ
+ * in the last bits.
  * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
  * other functions check nothing in any mode.
- * Sines and cosines: the source's own kernel (at most 1 ulp from libm), but glibc's vector math
- * (libmvec) where GCC targets x86-64 glibc with AVX2 (-march=native, -mavx2); libm for |angle| > 1e5,
- * under -ffast-math or with -DSKELARM_LIBM_TRIG; -DSKELARM_NO_SIMD turns the vector math off. With floating-point exceptions
- * enabled as traps (feenableexcept), libmvec raises FE_INVALID for |angle| above about 1e300 and the own
- * kernel FE_OVERFLOW above about 1e150 (before libm recomputes the value): keep angles finite and of
- * sensible size.
+ * Sines and cosines: the source's own kernel (at most 1 ulp from libm; libm's sin and cos for
+ * |angle| > 1e5), but glibc's vector math (libmvec) where GCC targets x86-64 glibc with AVX2
+ * (-march=native, -mavx2). Under -ffast-math or with -DSKELARM_LIBM_TRIG, where the kernel cannot or
+ * should not run: libmvec where GCC targets x86-64 glibc, else libm. -DSKELARM_NO_SIMD turns the vector
+ * math off. With floating-point exceptions enabled as traps (feenableexcept), huge angles raise them:
+ * libmvec FE_OVERFLOW for |angle| above about 1e38, the own kernel FE_OVERFLOW above about 1e39 and
+ * FE_INVALID above about 1e119 (before libm recomputes the value), every path FE_INVALID for infinite
+ * angles, and libmvec's two-wide routines (-ffast-math, -DSKELARM_LIBM_TRIG) for NaN angles too: keep
+ * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x1370ec7eUL
+#define DIFFDRIVE_STAMP 0xaf957983UL
 
 #ifdef __cplusplus
 extern "C" {

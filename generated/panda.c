@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x8736b359UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x5fdd8eceUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -192,7 +192,7 @@ static void panda_sincos4(const double *restrict ang, double *restrict cs, doubl
     }
     if (big) {
         for (k = 0; k < 4; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }
@@ -280,7 +280,7 @@ static void panda_sincos2(const double *restrict ang, double *restrict cs, doubl
     }
     if (big) {
         for (k = 0; k < 2; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x83a202f7UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x9eedfb81UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -195,7 +195,7 @@ static void ur5_sincos4(const double *restrict ang, double *restrict cs, double 
     }
     if (big) {
         for (k = 0; k < 4; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }
@@ -283,7 +283,7 @@ static void ur5_sincos2(const double *restrict ang, double *restrict cs, double 
     }
     if (big) {
         for (k = 0; k < 2; ++k) {
-            if (!(fabs(ang[k]) <= 1e5)) {
+            if (!islessequal(fabs(ang[k]), 1e5)) { /* a quiet comparison: a NaN angle raises nothing */
                 sn[k] = sin(ang[k]);
                 cs[k] = cos(ang[k]);
             }

@@ -1,7 +1,9 @@
 """Numerical robustness of the emitted C (issue 13): trigonometry, floating-point traps, fast-math,
 the contracts the header states. Values are judged against NumPy, never against the generator."""
 
+import math
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -83,6 +85,55 @@ def _print(name: str, array: str, size: int) -> str:
 fe_available = pytest.mark.skipif(
     not sys.platform.startswith("linux") or not shutil.which("gcc"), reason="feenableexcept needs glibc and gcc"
 )
+
+
+TRAP_MAIN = r"""
+#define _GNU_SOURCE
+#include <fenv.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "arm.h"
+int main(int argc, char **argv)
+{
+    double q[1], l[1] = {1.0}, p[2];
+    (void)argc;
+    q[0] = strtod(argv[1], NULL);
+    feenableexcept(!strcmp(argv[2], "overflow") ? FE_OVERFLOW : !strcmp(argv[2], "invalid") ? FE_INVALID
+                   : FE_INVALID | FE_DIVBYZERO | FE_OVERFLOW);
+    arm_position(q, l, p);
+    printf("%.17g %.17g\n", p[0], p[1]);
+    return 0;
+}
+"""
+
+
+@fe_available
+@pytest.mark.parametrize("flags", [("-O2",), ("-O2", "-DSKELARM_NO_SIMD")])
+def test_the_own_kernel_traps_only_where_the_header_says(tmp_path, flags):
+    """Traps on (feenableexcept): the own sine/cosine kernel (GCC's plain x86-64 build and -DSKELARM_NO_SIMD)
+    raises nothing for angles up to about 1e39, nor for a NaN angle (NaN out: its fallback compares quietly);
+    FE_OVERFLOW beyond, and libm's FE_INVALID for an infinite angle, as the header states."""
+    generate(1, out=tmp_path, langs="c", prefix="arm", functions="position")
+    header = " ".join((tmp_path / "arm.h").read_text().replace("*", " ").split())
+    assert "the own kernel FE_OVERFLOW above about 1e39 and FE_INVALID above about 1e119" in header
+    (tmp_path / "main.c").write_text(TRAP_MAIN)
+    exe = tmp_path / "main"
+    subprocess.run(["gcc", "-std=c99", *flags, "-I", str(tmp_path), str(tmp_path / "main.c"), str(tmp_path / "arm.c"),
+                    "-o", str(exe), "-lm"], check=True, capture_output=True, text=True)
+
+    def run(angle: str, traps: str) -> subprocess.CompletedProcess:
+        return subprocess.run([str(exe), angle, traps], capture_output=True, text=True, timeout=60)
+
+    for angle in ("0.7", "-3e4", "1e5", "100001", "1e20", "1e36", "-1e36"):
+        done = run(angle, "all")
+        assert done.returncode == 0, (angle, done.returncode)
+        np.testing.assert_allclose([float(x) for x in done.stdout.split()],
+                                   [math.cos(float(angle)), math.sin(float(angle))], rtol=0, atol=1e-15)
+    done = run("nan", "all")
+    assert done.returncode == 0 and all(math.isnan(float(x)) for x in done.stdout.split()), done
+    assert run("1e42", "overflow").returncode == -signal.SIGFPE
+    assert run("inf", "invalid").returncode == -signal.SIGFPE
 
 
 @fe_available
