@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x9eedfb81UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x982f179aUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -116,6 +116,44 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 #define UR5_OWN_TRIG 0
 #endif
 #if UR5_OWN_TRIG
+/* sn[k] = sin(ang[k]) and cs[k] = cos(ang[k]) for the one lane k with pi/2 in four parts (118 bits): the kernels
+ * below call it for an angle whose two-part reduction cancelled (rare), so it is written once, not in each. */
+static void ur5_sincos_exact(const double *restrict ang, double *restrict cs, double *restrict sn, const int k)
+{
+    union { double f; unsigned long long u; } x, n, s, c;
+    double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
+    unsigned long long swap, sign_s, sign_c;
+    x.f = ang[k];
+    n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
+    f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
+    t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
+    w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
+    t1 = t0 - w0;
+    w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
+    t2 = t1 - w1;
+    e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
+    r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
+    y = (t2 - r) - e;
+    z = r * r;
+    v = z * r;
+    zz = z * z;                                                   /* Estrin's scheme: shorter chains */
+    p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
+        + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
+    s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
+    p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
+        + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+    hz = 0.5 * z;
+    w = 1.0 - hz;
+    c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+    swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
+    sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
+    sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
+    n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
+    s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
+    sn[k] = n.f;
+    cs[k] = s.f;
+}
+
 /* sn[k] = sin(ang[k]) and cs[k] = cos(ang[k]) for k < 4. */
 static void ur5_sincos4(const double *restrict ang, double *restrict cs, double *restrict sn)
 {
@@ -158,38 +196,7 @@ static void ur5_sincos4(const double *restrict ang, double *restrict cs, double 
     if (slow) { /* an angle within 2^-16 of its multiple of pi/2 (rare): pi/2 to 118 bits for that lane */
         for (k = 0; k < 4; ++k) {
             if (redo[k]) {
-                union { double f; unsigned long long u; } x, n, s, c;
-                double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
-                unsigned long long swap, sign_s, sign_c;
-                x.f = ang[k];
-                n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
-                f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
-                t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
-                w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
-                t1 = t0 - w0;
-                w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
-                t2 = t1 - w1;
-                e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
-                r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
-                y = (t2 - r) - e;
-                z = r * r;
-                v = z * r;
-                zz = z * z;                                                   /* Estrin's scheme: shorter chains */
-                p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
-                    + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
-                s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-                p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
-                    + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
-                hz = 0.5 * z;
-                w = 1.0 - hz;
-                c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
-                swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
-                sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
-                sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
-                n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
-                s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
-                sn[k] = n.f;
-                cs[k] = s.f;
+                ur5_sincos_exact(ang, cs, sn, k);
             }
         }
     }
@@ -246,38 +253,7 @@ static void ur5_sincos2(const double *restrict ang, double *restrict cs, double 
     if (slow) { /* an angle within 2^-16 of its multiple of pi/2 (rare): pi/2 to 118 bits for that lane */
         for (k = 0; k < 2; ++k) {
             if (redo[k]) {
-                union { double f; unsigned long long u; } x, n, s, c;
-                double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
-                unsigned long long swap, sign_s, sign_c;
-                x.f = ang[k];
-                n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
-                f = n.f - 6755399441055744.0;                                 /* the nearest whole number of pi/2 */
-                t0 = x.f - f * 1.57079632673412561417e+00;                    /* pi/2's first 33 bits: exact */
-                w0 = f * 6.07710050630396597660e-11;                          /* its next 33 */
-                t1 = t0 - w0;
-                w1 = f * 2.02226624871116645580e-21;                          /* and the next 33 */
-                t2 = t1 - w1;
-                e = f * 8.47842766036889956997e-32 - ((t1 - t2) - w1);
-                r = t2 - e;                                                   /* x - f pi/2 = r + y, |r| <= pi/4 */
-                y = (t2 - r) - e;
-                z = r * r;
-                v = z * r;
-                zz = z * z;                                                   /* Estrin's scheme: shorter chains */
-                p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
-                    + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
-                s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-                p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
-                    + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
-                hz = 0.5 * z;
-                w = 1.0 - hz;
-                c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
-                swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
-                sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
-                sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
-                n.u = ((c.u & swap) | (s.u & ~swap)) ^ sign_s;
-                s.u = ((s.u & swap) | (c.u & ~swap)) ^ sign_c;
-                sn[k] = n.f;
-                cs[k] = s.f;
+                ur5_sincos_exact(ang, cs, sn, k);
             }
         }
     }
