@@ -1,11 +1,12 @@
-"""The scalar path's own sine and cosine (``templates/c/sincos.c.j2``) against libm, and against another checkout's.
+"""The emitted C's own sine and cosine (``templates/c/sincos.c.j2``) against libm, and against another checkout's.
 
     python benchmarks/scalar_trig.py                                   # this checkout's kernel and libm
     python benchmarks/scalar_trig.py --before /path/to/other/.venv/bin/python --angles 3,4,7
 
-Without vector math (clang, other C libraries, ``-DSKELARM_NO_SIMD``) a single call computes the sines and
-cosines of all its angles in one static helper, ``{prefix}_trigK`` (K: the angles padded to 4, or to a
-multiple of 8 beyond 4), four angles at a time. For each count of angles this script generates a planar arm
+A single call computes the sines and cosines of all its angles in one static helper, ``{prefix}_trigK`` (K: the
+angles padded to 4, or to a multiple of 8 beyond 4): with the kernel four angles at a time (double code, but where
+GCC targets x86-64 glibc with AVX2; ``--flags`` with ``-mavx2`` and without ``-DSKELARM_NO_SIMD`` times libmvec's
+loops there instead). For each count of angles this script generates a planar arm
 with that many links (its ``position`` has one angle a link), includes the C source in a driver (the helper
 is static) and times, in turn, many short samples of 200 calls each (cycling through 256 sets of random
 angles in [-pi, pi]): the helper of this checkout (``after``), of another one (``before``, when given: the
