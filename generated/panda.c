@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x8861bed0UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xcefd23d7UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -102,10 +102,11 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
  * multiple of pi/2) is redone with pi/2 in four parts (118 bits; exact for |x| <= 1e5), as fdlibm's
  * __ieee754_rem_pio2 does. Then fdlibm's degree-13 sine and degree-14 cosine polynomials on
  * [-pi/4, pi/4] with the reduction's tail (evaluated by Estrin's scheme, which shortens their chains of
- * dependent operations), and the quadrant chooses, by bits, which value and which sign. Error: at most 1 ulp from libm's
- * (measured against glibc on 2 million angles; tests/test_scalar_trig.py). |x| > 1e5, infinities and
- * NaNs get libm's sin and cos. Needs IEEE doubles evaluated in double (FLT_EVAL_METHOD 0) and no
- * -ffast-math (which would fold the rounding trick); otherwise, or with -DSKELARM_LIBM_TRIG, libm. */
+ * dependent operations), and the quadrant chooses, by bits, which value and which sign. Error: at most
+ * 1 ulp from libm's (measured against glibc on 1.4 million angles; tests/test_scalar_trig.py). |x| > 1e5,
+ * infinities and NaNs get libm's sin and cos. Needs IEEE doubles evaluated in double (FLT_EVAL_METHOD 0)
+ * and no -ffast-math (which would fold the rounding trick); otherwise, or with -DSKELARM_LIBM_TRIG,
+ * libm (libmvec where GCC targets x86-64 glibc). */
 #if (!PANDA_VECTOR_MATH || !defined(__AVX2__)) && !defined(SKELARM_LIBM_TRIG) && !defined(__FAST_MATH__) \
     && defined(__FLT_EVAL_METHOD__) && __FLT_EVAL_METHOD__ == 0 && defined(__DBL_MANT_DIG__) && __DBL_MANT_DIG__ == 53
 #define PANDA_OWN_TRIG 1
