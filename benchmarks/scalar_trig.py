@@ -25,16 +25,15 @@ import sys
 import tempfile
 from pathlib import Path
 
+HERE = Path(__file__).resolve().parent
+
 DRIVER = r"""
-#define _POSIX_C_SOURCE 199309L
-#include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
-%(includes)s
 #define SAMPLES %(samples)d
+#define REPEATS SAMPLES
+#include "timing.h"
+#include <stdio.h>
+%(includes)s
 #define USED %(used)d
-static double now(void) { struct timespec t; clock_gettime(CLOCK_MONOTONIC, &t); return t.tv_sec * 1e9 + t.tv_nsec; }
-static int cmp(const void *x, const void *y) { double a = *(const double *)x, b = *(const double *)y; return (a > b) - (a < b); }
 static void libm_trig(const double *ang, double *cs, double *sn)
 {
     int k;
@@ -114,8 +113,8 @@ def main() -> None:
                                                      "width": width, "timed": "\n".join(timed)})
             for cc in compilers:
                 exe = folder / f"main_{cc}"
-                subprocess.run([cc, "-std=c99", *args.flags.split(), f"-I{folder}", str(folder / "main.c"), "-o", str(exe),
-                                "-lm"], check=True)
+                subprocess.run([cc, "-std=c99", *args.flags.split(), f"-I{folder}", f"-I{HERE}", str(folder / "main.c"),
+                                "-o", str(exe), "-lm"], check=True)
                 out = [float(x) for x in subprocess.run([str(exe), str(args.quantile)], capture_output=True, text=True,
                                                         check=True).stdout.split()[:3]]
                 own = out[:len(generators)] if args.before else [out[0]]
