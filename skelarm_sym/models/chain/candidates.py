@@ -8,7 +8,7 @@ from typing import Sequence
 
 import sympy as sp
 
-from .algebra import Rows, Vector, _rows, _times_rz, matmul, matvec
+from .algebra import Rows, Vector, _rows, _rz, _times_rz, matmul, matvec
 from .canonical import _Canonical
 from .frames import _Frames, _actual
 from .joints import E_Z, add, cross
@@ -78,12 +78,14 @@ def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: li
 
 
 def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, axes: list[Vector],
-                  dropped: int | None = None, tag: str | None = None) -> tuple[list[Vector], list[Vector]]:
+                  dropped: int | None = None, tag: str | None = None, turned: bool = False) -> tuple[list[Vector], list[Vector]]:
     """``(r, columns)``: ``r_k = p_e - o_k`` in base axes, tip to base, ``r_k = r_(k+1) + G_k t_(k+1)`` plus the
     joint's own advance along ``z_k`` (:func:`_after_joint`; suffix sums of the links in base axes: no rotation
     of a whole vector, only the columns of ``G_k`` a translation uses), and the linear columns
     ``column(z_k, r_k)``, or ``column(z_k, r_(k+1))`` where the link runs along the axis (standard DH with
-    ``a = 0``: ``z_k x G_k t = G_k (e_z x t) = 0``), which makes the last column of a wrist exactly zero."""
+    ``a = 0``: ``z_k x G_k t = G_k (e_z x t) = 0``), which makes the last column of a wrist exactly zero.
+    ``turned``: the last link (:func:`_last_link`) as ``F_s (Rz(psi_k) t)``, the offset turned instead of the
+    frame's rows (:func:`_turned_last_axes`)."""
     n = len(joints)
     r: list[Vector] = [None] * n
     linear: list[Vector] = [None] * n
@@ -97,9 +99,15 @@ def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: 
         along = moved is None or all(x == 0 for x in moved)  # the link runs along the axis: z_k x r_k = z_k x r_(k+1)
         if G is not None and not along and dropped is not None and advance == 0 and joints[k].motion.kind == "revolute" \
                 and all(x == 0 for x in below):
+            if turned:  # G = F_s Rz(psi): G t = F_s t' with t' = Rz(psi) t, and G (e_z x t) = F_s (e_z x t')
+                G = _cofactor_view(step, f.rotation[f.segment[k]], dropped, f"Fc{f.segment[k] + 1}_")
+                t = step.vec(f"tl{tag}{k + 1}", _rz(f.trig[k], t))
+                moved = [-t[1], t[0], sp.S.Zero]
             r[k], linear[k] = _last_link(step, f"r{tag}{k + 1}", f"Jb{tag}_{k + 1}", axes[k], G, t, moved, dropped)
-            below = r[k]
+            below, turned = r[k], False
             continue
+        if turned and G is not None:
+            raise ValueError(f"internal error: joint {k + 1}'s link was to be turned, and is not the last link")
         v = add(below, matvec(G, t)) if G is not None else list(below)
         r[k] = step.vec(f"r{tag}{k + 1}", [v[i] + axes[k][i] * advance for i in range(3)])
         linear[k] = step.vec(f"Jb{tag}_{k + 1}", joints[k].motion.column(axes[k], below if along else r[k])[0])
@@ -153,10 +161,13 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
                        rows: Sequence[int | None]) -> list[_Columns]:
     """The columns in segment axes (:func:`_columns`, with ``p_e`` by Horner's rule), and in base axes
     (``z_k x r_(k+1)``, :func:`_base_offsets`) with the frames' rows carried whole (``None`` in ``rows``) or
-    one row as cofactors of the other two (:func:`_cofactor_view`)."""
+    one row as cofactors of the other two (:func:`_cofactor_view`); for the row whose columns cost least,
+    two more: some axes' entries in that row from the frame before (:func:`_propagated_views`), and then the
+    last link turned instead of its frame (:func:`_turned_last_axes`)."""
     out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq,
                                                          axis_cross=_axis_cross(joints, f, f.rotation, f.axes)), None)]
     seen: list[list[Rows]] = []
+    cheapest: tuple[int, int, list[Rows]] | None = None
     for dropped in rows:
         tag = _row_tag(dropped)
         views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
@@ -168,33 +179,89 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
         base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
         ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
         steps = step.definitions()
-        if _price(steps, _flat(base, ang))[0] > 0.98 * _price(steps, _flat(linear, angular))[0]:
+        price = _price(steps, _flat(base, ang))[0]
+        if price > 0.98 * _price(steps, _flat(linear, angular))[0]:
             continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
+        if dropped is not None and (cheapest is None or price < cheapest[0]):
+            cheapest = (price, dropped, views)
         tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
         out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
                                                          _axis_cross(joints, f, views, axes)), tip))
-        turned = _propagated_views(step, joints, f, tool, views, dropped)
-        if turned is not None:  # the same columns with some axes' dropped entries from the frame before
-            tag = f"{tag}p_"
-            axes = [[row[2] for row in turned[f.segment[k]]] for k in range(len(joints))]
-            r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag)
-            base = _next_frame_columns(step, joints, f, turned, axes, r, W, base, dropped, tag)
-            ang = [matvec(turned[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-            out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
-                                                             _axis_cross(joints, f, turned, axes)), None))
+    if cheapest is None:
+        return out
+    _, dropped, views = cheapest
+    turned = _propagated_views(step, joints, f, tool, views, dropped)
+    if turned is not None:  # the same columns with some axes' entries in the dropped row from the frame before
+        tag = f"{_row_tag(dropped)}p_"
+        axes = [[row[2] for row in turned[f.segment[k]]] for k in range(len(joints))]
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag)
+        base = _next_frame_columns(step, joints, f, turned, axes, r, W, base, dropped, tag)
+        ang = [matvec(turned[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+                                                         _axis_cross(joints, f, turned, axes)), None))
+    else:
+        axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
+    link = _turned_last_axes(joints, f, tool, dropped)
+    if link is not None:  # and the last link's offset turned instead of its frame's rows
+        tag = f"{_row_tag(dropped)}t_"
+        k, coefficients, moved_axes = link
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag, turned=True)
+        last = step.vec(f"zt{tag}{k + 2}", [sum((c * x[i] for c, x in zip(coefficients, (r[k], base[k], axes[k]))), sp.S.Zero)
+                                              for i in range(3)])
+        axes = [last if j in moved_axes else axes[j] for j in range(len(joints))]
+        ang = [joint.motion.column(axes[j], [0, 0, 0])[1] for j, joint in enumerate(joints)]
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+                                                         _axis_cross(joints, f, views, axes)), None))
     return out
+
+
+def _turned_last_axes(joints, f: _Frames, tool: Transform, dropped: int | None):
+    """Where the chain ends in a link across a revolute joint ``k``'s axis (offset ``t`` in ``G_k``'s axes,
+    numbers) followed by joints without offsets in at most one more segment: ``(k, (alpha, beta, gamma), J)``
+    with ``J`` the joints of that segment, whose axis ``z' = G_k C e_z`` is ``alpha u + beta w + gamma z_k``
+    (``u = G_k t``, ``w = z_k x u = G_k (e_z x t)``: ``G_k e_x = (t_x (u - t_z z_k) - t_y w) / rho``,
+    ``G_k e_y = (t_y (u - t_z z_k) + t_x w) / rho``, ``rho = t_x^2 + t_y^2``), 15 operations from what the
+    Jacobian computes anyway; else ``None``. With that, and the offset turned by ``psi_k`` before the frame
+    ``F_s`` takes it (``_base_offsets(turned=True)``), nothing in the Jacobian reads ``G_k``'s first two
+    columns: xArm7's ``jacobian`` saves their 12 operations and pays 9 more for the offset and the axis."""
+    n = len(joints)
+    if dropped is None or f.scale is not None:
+        return None
+    k = n - 1
+    while k >= 0 and all(x == 0 for x in (joints[k + 1].before if k + 1 < n else tool).translation):
+        if joints[k].motion.advance(f.theta[k]) != 0:
+            return None
+        k -= 1
+    if k < 0 or joints[k].motion.kind != "revolute" or f.trig[k] is None:
+        return None
+    t = [sp.sympify(x) for x in (joints[k + 1].before if k + 1 < n else tool).translation]
+    rho = t[0] ** 2 + t[1] ** 2
+    if rho == 0 or any(x.free_symbols for x in t):
+        return None
+    after = [j for j in range(k + 1, n) if f.segment[j] != f.segment[k]]
+    if any(f.segment[j] != f.segment[k] + 1 for j in after):
+        return None
+    if not after:
+        return k, (sp.S.Zero, sp.S.Zero, sp.S.One), frozenset()
+    C = _rows(joints[after[0]].before.rotation)
+    if any(sp.sympify(C[i][2]).free_symbols for i in range(3)):
+        return None
+    alpha = (C[0][2] * t[0] + C[1][2] * t[1]) / rho
+    beta = (C[1][2] * t[0] - C[0][2] * t[1]) / rho
+    return k, (alpha, beta, C[2][2] - alpha * t[2]), frozenset(after)
 
 
 def _propagated_views(step: _Steps, joints, f: _Frames, tool: Transform, views: list[Rows],
                       dropped: int | None) -> list[Rows] | None:
     """``views`` (the frames with row ``dropped`` as cofactors) with that row's third-column entry of a frame
     ``F_s = G C`` (``G = F_(s-1) Rz(psi)``, the frame after the joint before it; ``C`` the constant rotation
-    that starts segment ``s``) written ``sum_i G[d][i] C[i][2]`` where every ``G[d][i]`` it needs is an entry
-    the link offset after that joint uses anyway (:func:`_base_offsets`: ``G t``, a cofactor of ``G`` where
-    ``t_i`` is not zero) or ``G``'s third column (the axis before). A cofactor of ``F_s`` needs ``F_s``'s
-    other rows in its first two columns, which nothing else may need: xArm7's last axis, whose frame's other
-    columns only the tool's rotation reads, costs 3 operations instead of 9 in its ``jacobian``. ``None``
-    when no frame's entry can be written so (or no row is dropped)."""
+    that starts segment ``s``) written ``sum_i G[d][i] C[i][2]``: ``G``'s third column is the axis before, its
+    first two columns' entries are cofactors of ``G`` (3 operations each), taken only where the link after that
+    joint has an offset along them (a frame whose offsets read its first two columns). The cofactor of ``F_s``
+    it replaces needs ``F_s``'s other rows in their first two columns, which nothing else may need: xArm7's last
+    axis, whose frame's other columns only the tool's rotation reads, costs 6 operations instead of 9 in its
+    ``jacobian``. A candidate of its own (:func:`_choose` prices it per function). ``None`` when no frame's
+    entry can be written so (or no row is dropped)."""
     if dropped is None or f.scale is not None:
         return None
     out = [list(map(list, v)) for v in views]
