@@ -10,7 +10,7 @@ import sympy as sp
 
 from .algebra import Rows, Vector, _rows, _rz, _times_rz, matmul, matvec
 from .canonical import _Canonical
-from .frames import _Frames, _actual
+from .frames import _Frames, _actual, _ratio, _turned_rows
 from .joints import E_Z, add, cross
 from .model import Transform
 from .price import Pose, _flat, _price
@@ -25,13 +25,17 @@ def _row_tag(dropped: int | None) -> str:
 
 
 def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None,
-                   scale: sp.Expr | None = None) -> Rows:
+                   scale: sp.Expr | None = None, columns: tuple[sp.Expr, sp.Expr, sp.Expr] | None = None) -> Rows:
     """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
     r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
     entries only where an output uses them. ``M`` itself when ``dropped`` is ``None`` or the row is constant.
     ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s).
     ``scale``: ``M`` is kept with its third column divided by ``scale`` (:func:`_scaled_frames`); the view is
-    the true matrix, its cofactors those of the kept rows times the scale where they use the third column."""
+    the true matrix, its cofactors those of the kept rows times the scale where they use the third column.
+    ``columns``: ``M`` is kept with its first two columns scaled (:func:`_twist_scaled_frames`; the factors that
+    make a kept entry of each, and their cofactor, true); the view is the true matrix."""
+    if columns is not None and any(x != 1 for x in columns):
+        return _column_scaled_view(step, M, dropped, label, column2, columns)
     scaled = scale is not None and scale != 1
     if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
         return [[r[0], r[1], r[2] * scale] for r in M] if scaled else M
@@ -48,6 +52,26 @@ def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, colum
         out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
         if scaled and j != 2:  # the kept rows' cofactor through the third column: times the scale
             out[dropped][j] = out[dropped][j] * scale
+    return out
+
+
+def _column_scaled_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None,
+                        columns: tuple[sp.Expr, sp.Expr, sp.Expr]) -> Rows:
+    """:func:`_cofactor_view` of a matrix kept with its first two columns scaled: every entry of those columns
+    times its factor (a number, which the constants that multiply it absorb), the cofactors of the kept rows
+    times the product of the factors of the two columns they read (1 for the third column's entry)."""
+    out = [[r[0] * columns[0], r[1] * columns[1], r[2]] for r in M]
+    if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
+        return out
+    a, b = (dropped + 1) % 3, (dropped + 2) % 3
+    factor = (columns[1], columns[0], columns[2])  # entry j reads columns j + 1 and j + 2
+    for j in range(3):
+        if j == 2 and column2 is not None:
+            out[dropped][j] = column2[dropped]
+            continue
+        expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
+        known = step.recorded(-expr)
+        out[dropped][j] = (-known if known is not None else step(f"{label}{dropped}{j}", expr)) * factor[j]
     return out
 
 
@@ -69,12 +93,23 @@ def _cheap(step: _Steps, x: sp.Expr) -> bool:
         a.is_Number or (a.is_Symbol and isinstance(definitions.get(a, sp.sin(a)), (sp.sin, sp.cos))) for a in rhs.args)
 
 
-def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: list[Vector]) -> Rows:
+def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: Sequence[Vector] | dict[int, Vector]) -> Rows:
     """``G_k = F_s Rz(psi_k)``, the rotation after joint ``k``'s motion in base axes (row ``dropped`` as
-    cofactors; its third column is the joint's axis)."""
+    cofactors; its third column is the joint's axis ``axes[k]``), true-valued also where ``f`` keeps it scaled."""
     s = f.segment[k]
-    G = step.mat(f"H{f.tag}{k + 1}_", _times_rz(f.rotation[s], f.trig[k]))
+    G = _kept_after_joint(step, f, k)
+    if f.turns is not None:
+        mu = _ratio(1, f.turns[k][2])
+        return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], columns=(mu, mu, mu * mu))
     return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], f.scale[s] if f.scale else None)
+
+
+def _kept_after_joint(step: _Steps, f: _Frames, k: int) -> Rows:
+    """``G_k = F_s Rz(psi_k)`` as ``f`` keeps it (:func:`_twist_scaled_frames`: ``G_k diag(mu, mu, 1)``)."""
+    s = f.segment[k]
+    if f.turns is not None:
+        return step.mat(f"H{f.tag}{k + 1}_", _turned_rows(step, f, k, f.rotation[s], f.turns[k]))
+    return step.mat(f"H{f.tag}{k + 1}_", _times_rz(f.rotation[s], f.trig[k]))
 
 
 def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, axes: list[Vector],
@@ -100,9 +135,12 @@ def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: 
         if G is not None and not along and dropped is not None and advance == 0 and joints[k].motion.kind == "revolute" \
                 and all(x == 0 for x in below):
             if turned:  # G = F_s Rz(psi): G t = F_s t' with t' = Rz(psi) t, and G (e_z x t) = F_s (e_z x t')
-                G = _cofactor_view(step, f.rotation[f.segment[k]], dropped, f"Fc{f.segment[k] + 1}_")
-                t = step.vec(f"tl{tag}{k + 1}", _rz(f.trig[k], t))
-                moved = [-t[1], t[0], sp.S.Zero]
+                G = _cofactor_view(step, f.rotation[f.segment[k]], dropped, f"Fc{f.tag}{f.segment[k] + 1}_")
+                scales = f.columns[f.segment[k]] if f.columns is not None else (1, 1, 1)  # F_s t' = F~_s t'~
+                turned_t = _rz(f.trig[k], t)
+                t = step.vec(f"tl{tag}{k + 1}", [turned_t[0] * scales[0], turned_t[1] * scales[1], turned_t[2]])
+                ratio = _ratio(scales[0], scales[1])  # e_z x t' in the kept columns' scales, from t'~
+                moved = [step(f"tm{tag}{k + 1}x", -t[1] * ratio), step(f"tm{tag}{k + 1}y", t[0] / ratio), sp.S.Zero]
             r[k], linear[k] = _last_link(step, f"r{tag}{k + 1}", f"Jb{tag}_{k + 1}", axes[k], G, t, moved, dropped)
             below, turned = r[k], False
             continue
@@ -158,59 +196,81 @@ class _Columns:
 
 
 def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Sequence[Vector], linear, angular, dq, ddq,
-                       rows: Sequence[int | None]) -> list[_Columns]:
+                       rows: Sequence[int | None], twisted: _Frames | None = None) -> list[_Columns]:
     """The columns in segment axes (:func:`_columns`, with ``p_e`` by Horner's rule), and in base axes
     (``z_k x r_(k+1)``, :func:`_base_offsets`) with the frames' rows carried whole (``None`` in ``rows``) or
     one row as cofactors of the other two (:func:`_cofactor_view`); for the row whose columns cost least,
     two more: some axes' entries in that row from the frame before (:func:`_propagated_views`), and then the
-    last link turned instead of its frame (:func:`_turned_last_axes`)."""
+    last link turned instead of its frame (:func:`_turned_last_axes`). Where ``twisted`` is given (the frames
+    kept with their first two columns scaled, :func:`_twist_scaled_frames`: every twist 2 operations a row
+    cheaper), those two and the base-axes columns once more are built from it instead (xArm7: 210, 6 fewer
+    operations than the same from ``f``)."""
     out = [_Columns(linear, angular, f.axes, _velocities(step, joints, f.axes, linear, angular, dq, ddq,
                                                          axis_cross=_axis_cross(joints, f, f.rotation, f.axes)), None)]
     seen: list[list[Rows]] = []
-    cheapest: tuple[int, int, list[Rows]] | None = None
+    cheapest: tuple[int, int] | None = None
     for dropped in rows:
-        tag = _row_tag(dropped)
         views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
         if views in seen:  # that row is constant in every frame (a planar chain): nothing new
             continue
         seen.append(views)
-        axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
-        r, base = _base_offsets(step, joints, f, tool, axes, dropped)
-        base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped)
-        ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-        steps = step.definitions()
-        price = _price(steps, _flat(base, ang))[0]
-        if price > 0.98 * _price(steps, _flat(linear, angular))[0]:
+        price, columns = _base_columns(step, joints, f, tool, W, views, dropped, _row_tag(dropped), dq, ddq)
+        if price > 0.98 * _price(step.definitions(), _flat(linear, angular))[0]:
             continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
+        out.append(columns)
         if dropped is not None and (cheapest is None or price < cheapest[0]):
-            cheapest = (price, dropped, views)
-        tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
-        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
-                                                         _axis_cross(joints, f, views, axes)), tip))
+            cheapest = (price, dropped)
     if cheapest is None:
         return out
-    _, dropped, views = cheapest
+    dropped = cheapest[1]
+    for frames in (twisted,) if twisted is not None else (f,):  # twisted: each of these costs less than with f
+        tag = _row_tag(dropped) + frames.tag + ("_" if frames.tag else "")
+        views = [_cofactor_view(step, frames.rotation[s], dropped, f"Fc{frames.tag}{s + 1}_",
+                                columns=frames.columns[s] if frames.columns else None) for s in range(len(frames.rotation))]
+        if frames is twisted:
+            out.append(_base_columns(step, joints, frames, tool, W, views, dropped, tag, dq, ddq)[1])
+        out.extend(_more_columns(step, joints, frames, tool, W, views, dropped, tag, dq, ddq))
+    return out
+
+
+def _base_columns(step: _Steps, joints, f: _Frames, tool: Transform, W, views: list[Rows], dropped: int | None, tag: str,
+                  dq, ddq) -> tuple[int, _Columns]:
+    """The base-axes columns from the frames' ``views`` (:func:`_cofactor_view`), the tip position their offsets
+    give, and their price without rates."""
+    axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
+    r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag)
+    base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped, tag)
+    ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
+    price = _price(step.definitions(), _flat(base, ang))[0]
+    tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
+    return price, _Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+                                                        _axis_cross(joints, f, views, axes)), tip)
+
+
+def _more_columns(step: _Steps, joints, f: _Frames, tool: Transform, W, views: list[Rows], dropped: int, tag: str,
+                  dq, ddq) -> list[_Columns]:
+    """The base-axes columns with some axes' entries in row ``dropped`` from the frame before
+    (:func:`_propagated_views`), then with the last link turned instead of its frame (:func:`_turned_last_axes`)."""
+    out = []
     turned = _propagated_views(step, joints, f, tool, views, dropped)
-    if turned is not None:  # the same columns with some axes' entries in the dropped row from the frame before
-        tag = f"{_row_tag(dropped)}p_"
-        axes = [[row[2] for row in turned[f.segment[k]]] for k in range(len(joints))]
-        r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag)
-        base = _next_frame_columns(step, joints, f, turned, axes, r, W, base, dropped, tag)
-        ang = [matvec(turned[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
-                                                         _axis_cross(joints, f, turned, axes)), None))
-    else:
+    if turned is not None:
+        views = turned
         axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped, f"{tag}p_")
+        base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped, f"{tag}p_")
+        ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}p_",
+                                                         _axis_cross(joints, f, views, axes)), None))
     link = _turned_last_axes(joints, f, tool, dropped)
     if link is not None:  # and the last link's offset turned instead of its frame's rows
-        tag = f"{_row_tag(dropped)}t_"
         k, coefficients, moved_axes = link
-        r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag, turned=True)
+        axes = [[row[2] for row in views[f.segment[j]]] for j in range(len(joints))]
+        r, base = _base_offsets(step, joints, f, tool, axes, dropped, f"{tag}t_", turned=True)
         last = step.vec(f"zt{tag}{k + 2}", [sum((c * x[i] for c, x in zip(coefficients, (r[k], base[k], axes[k]))), sp.S.Zero)
                                               for i in range(3)])
         axes = [last if j in moved_axes else axes[j] for j in range(len(joints))]
         ang = [joint.motion.column(axes[j], [0, 0, 0])[1] for j, joint in enumerate(joints)]
-        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}t_",
                                                          _axis_cross(joints, f, views, axes)), None))
     return out
 
@@ -273,8 +333,7 @@ def _propagated_views(step: _Steps, joints, f: _Frames, tool: Transform, views: 
         need = [i for i in range(3) if C[i][2] != 0]
         if any(i < 2 and t[i] == 0 for i in need) or not any(sp.sympify(x).free_symbols for x in f.rotation[s][dropped]):
             continue
-        G = step.mat(f"H{f.tag}{k}_", _times_rz(f.rotation[s - 1], f.trig[k - 1]))
-        Gv = _cofactor_view(step, G, dropped, f"Hc{f.tag}{k}_", [row[2] for row in out[s - 1]])
+        Gv = _after_joint(step, f, k - 1, dropped, {k - 1: [row[2] for row in out[s - 1]]})  # the true G
         entry = step(f"Fp{f.tag}{s + 1}_{dropped}2", sum((Gv[dropped][i] * C[i][2] for i in need), sp.S.Zero))
         if entry != out[s][dropped][2]:
             out[s][dropped][2] = entry

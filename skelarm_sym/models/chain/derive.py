@@ -65,7 +65,7 @@ import sympy as sp
 from .algebra import Vector
 from .canonical import _Canonical, _axis_turns_into_angles, _named_trig_constants, canonical_joints
 from .candidates import CANDIDATES_UP_TO, _Columns, _column_candidates, _dense_constants, _pose
-from .frames import _columns, _frames, _scaled_frames, _tool_jacobian, _tool_offsets
+from .frames import _columns, _frames, _scaled_frames, _tool_jacobian, _tool_offsets, _twist_scaled_frames
 from .model import Chain
 from .price import Pose, _choose
 from .signs import _settle_signs
@@ -167,7 +167,8 @@ def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
     scaled = _scaled_frames(step, joints, frames) if dense and len(joints) <= CANDIDATES_UP_TO else None
     poses, dropped = _pose(step, joints, frames, tool, W, scaled)
     rows = ((None, 0, 1, 2) if dense else (dropped,)) if len(joints) <= CANDIDATES_UP_TO else ((None,) if dense else ())
-    chosen = _choose(step, poses, _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows))
+    twisted = _twist_scaled_frames(step, joints, frames) if scaled is not None else None
+    chosen = _choose(step, poses, _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows, twisted))
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
 
     def values(pose: Pose, c: _Columns) -> dict[str, list[Vector]]:
