@@ -209,8 +209,7 @@ def _ratio(a, b) -> sp.Expr:
 
 
 def _product(a, b) -> sp.Expr:
-    """``a b`` for the same constants: +-1 exactly where ``|a| = 1 / |b|`` holds by construction (never here:
-    the scales are sines), else the double."""
+    """``a b`` for the same constants: exact where both are, else the double (:func:`_scaled_entry`)."""
     return _scaled_entry(sp.sympify(a), sp.sympify(b), 1)
 
 
