@@ -34,7 +34,12 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
    the links (:func:`_base_offsets`; a link along the axis adds nothing, so a wrist's last column is
    exactly zero), one row of every frame taken as cofactors of the two others where an output needs it
    (:func:`_cofactor_view`: 3 operations an entry instead of carrying the row), and a column taken in the
-   next frame's axes where the tool offset has a zero there (:func:`_next_frame_columns`).
+   next frame's axes where the tool offset has a zero there (:func:`_next_frame_columns`). The last link's
+   offset and column come from the two carried rows (:func:`_last_link`); for the cheapest dropped row, an
+   axis's entry in that row may come from the frame before it (:func:`_propagated_views`), and the last link
+   may be turned by its joint's angle instead of its frame's rows (:func:`_turned_last_axes`); with dense twists
+   about ``x``, these from frames kept with their first two columns scaled (:func:`_twist_scaled_frames`: a
+   twist 4 operations a row instead of 6).
 5. **Pose** (:func:`_pose`): ``R = F_last Rz(psi_n) C_tool``; two of its rows are multiplied out and
    the third is their cross product (the cheapest choice is taken): the rotation chain carries
    two rows, not three. The position by Horner's rule (3.), or summed link by link in base axes with
