@@ -325,6 +325,53 @@ def test_dense_twists_jacobian_meets_four_fifths_of_casadi(last, tool, budget):
         np.testing.assert_allclose(got, want, atol=1e-13)
 
 
+def _twist_chain(rpys) -> Chain:
+    joints = [Joint("j0", "revolute", Transform.from_xyz_rpy([0, 0, sp.Float(0.3)], [0, 0, 0]), (0, 0, 1), Transform.identity(), 0)]
+    for i, rpy in enumerate(rpys):
+        joints.append(Joint(f"j{i + 1}", "revolute", Transform.from_xyz_rpy([sp.Float(0.1), 0, 0], [sp.Float(a) for a in rpy]),
+                            (0, 0, 1), Transform.identity(), i + 1))
+    return Chain("tw", tuple(joints))
+
+
+@pytest.mark.parametrize("alphas", [(1.5708, -1.5708, 1.5708), (0.01, -0.02, 0.015, 0.03, -0.01), (1.5708, 0.01, -1.5708, 3.1, 0.5)])
+def test_twist_scaled_frames_are_the_frames_times_their_column_scales(alphas):
+    """``_twist_scaled_frames`` keeps ``F~_s = F_s diag(S_s, 1 / S_s, 1)`` (``S_s`` the sine of the twist that starts
+    segment ``s``): at random angles its kept rows, times the factors it records, are the plain frames to 1e-15,
+    for twists of 1.5708, of a hundredth of a radian (scales of 100) and mixed; the scales are the sines."""
+    from skelarm_sym.models.chain.canonical import _axis_turns_into_angles, _named_trig_constants, canonical_joints
+    from skelarm_sym.models.chain.frames import _frames, _twist_scaled_frames
+    from skelarm_sym.models.chain.steps import _Steps
+
+    chain = _twist_chain([(a, 0, 0) for a in alphas])
+    q = sp.symbols(f"q1:{chain.n + 1}", real=True)
+    step = _Steps("t")
+    joints, _ = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
+    plain = _frames(step, joints, q)
+    kept = _twist_scaled_frames(step, joints, plain)
+    assert [float(c[1]) for c in kept.columns[1:]] == pytest.approx([math.sin(a) for a in alphas], rel=1e-15)
+    values = dict(zip(q, np.random.default_rng(3).uniform(-3, 3, chain.n)))
+
+    def numbers(rows):
+        return np.array([float(e.subs(values)) for e in expand_steps(step.steps, [x for r in rows for x in r])]).reshape(3, 3)
+
+    for s, factors in enumerate(kept.columns):
+        np.testing.assert_allclose(numbers(kept.rotation[s]) * [float(factors[0]), float(factors[1]), 1.0],
+                                   numbers(plain.rotation[s]), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("rpys", [[(math.pi / 2, 0, 0), (-math.pi / 2, 0, 0)], [(1.5708, 0, 0), (0, 1.5708, 0)]])
+def test_twist_scaled_frames_only_for_dense_twists_about_x(rpys):
+    """Exact quarter turns need no scaling, and a twist about another axis has no such scaling: ``None``."""
+    from skelarm_sym.models.chain.canonical import _axis_turns_into_angles, _named_trig_constants, canonical_joints
+    from skelarm_sym.models.chain.frames import _frames, _twist_scaled_frames
+    from skelarm_sym.models.chain.steps import _Steps
+
+    chain = _twist_chain(rpys)
+    step = _Steps("t")
+    joints, _ = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
+    assert _twist_scaled_frames(step, joints, _frames(step, joints, sp.symbols(f"q1:{chain.n + 1}", real=True))) is None
+
+
 def test_dense_twists_cost_five_operations_a_row_in_the_pose():
     """With twists of 1.5708 (cosine -3.67e-6, not 0) each constant rotation is dense; the pose carries its
     frames with the third column scaled (``_scaled_frames``): 179 operations in the C text, 190 before, CasADi 229 on the
