@@ -4,6 +4,7 @@ sines and cosines of named parameters as steps."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -74,6 +75,93 @@ def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[
         last = out[-1]
         out[-1] = _Canonical(last.before, last.motion, last.coordinate, last.multiplier, _numeric(last.offset + beta))
     return out, tool
+
+
+def _twists_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
+    """The canonical chain with each constant rotation between two revolute joints written ``Rz(gamma) Rx(alpha)
+    Rz(delta)`` (z-x-z angles) and its turns about the joint axes moved into the angles: ``Rz(gamma)`` into the
+    joint before (``Rz(theta') [Rz(gamma) C', t] = Rz(theta' + gamma) [C', Rz(-gamma) t]``), ``Rz(delta)`` into
+    the joint itself (``[C' Rz(delta), t] Rz(theta) = [C', t] Rz(theta + delta)``); multiples of pi/2 stay in
+    the constant (a signed permutation, free). A URDF whose joint frames are turned about their axes (iCub,
+    Romeo, TIAGo: every entry of the constant rotations a decimal) then carries its frames' rows through
+    ``Rx(alpha)``, 6 operations a row instead of 15, for one addition per angle that takes a turn. Only where
+    the constant gets fewer entries other than 0 and +-1; the values are the same rigid motions (the angles
+    rounded once, to a double)."""
+    out = list(joints)
+    for k in range(len(out)):
+        C = out[k].before.rotation
+        if C.free_symbols or not _turns(out[k].motion):
+            continue
+        split = _zxz(C)
+        if split is None:
+            continue
+        gamma, alpha, delta = split
+        before_turns = k > 0 and _turns(out[k - 1].motion)
+        g0, gr = _quarter(gamma) if before_turns else (gamma, 0.0)
+        d0, dr = _quarter(delta)
+        if gr == 0.0 and dr == 0.0:
+            continue
+        rotation = _rz_matrix(g0) * _rx_matrix(alpha) * _rz_matrix(d0)
+        if _dense_entries(rotation) >= _dense_entries(C):
+            continue
+        rebuilt = _rz_matrix(gr) * rotation * _rz_matrix(dr)
+        if any(abs(float(rebuilt[i, j]) - float(C[i, j])) > 1e-15 for i in range(3) for j in range(3)):
+            continue  # a turn kept in neither place: not the same rotation to a double
+        turn = _rz_matrix(-gr) if gr else sp.eye(3)
+        translation = sp.ImmutableMatrix([sp.Float(float(x), 17) if x.is_Float else x for x in turn * out[k].before.translation]) \
+            if gr else out[k].before.translation
+        joint = out[k]
+        out[k] = _Canonical(Transform(sp.ImmutableMatrix(rotation), sp.ImmutableMatrix(translation)), joint.motion,
+                            joint.coordinate, joint.multiplier, _numeric(joint.offset + sp.Float(dr)) if dr else joint.offset)
+        if gr:
+            prev = out[k - 1]
+            out[k - 1] = _Canonical(prev.before, prev.motion, prev.coordinate, prev.multiplier, _numeric(prev.offset + sp.Float(gr)))
+    return out, tool
+
+
+def _zxz(C: sp.Matrix) -> tuple[float, float, float] | None:
+    """``(gamma, alpha, delta)`` with ``C = Rz(gamma) Rx(alpha) Rz(delta)`` (to 1e-12), ``sin alpha`` not 0; else
+    ``None`` (a turn about ``z`` alone, which :func:`_axis_turns_into_angles` and the segments take)."""
+    m = [[float(C[i, j]) for j in range(3)] for i in range(3)]
+    sa = math.hypot(m[2][0], m[2][1])
+    if sa < 1e-9:
+        return None
+    alpha = math.atan2(sa, m[2][2])
+    gamma = math.atan2(m[0][2], -m[1][2])
+    delta = math.atan2(m[2][0], m[2][1])
+    back = _rz_matrix(gamma) * _rx_matrix(alpha) * _rz_matrix(delta)
+    if any(abs(float(back[i, j]) - m[i][j]) > 1e-15 for i in range(3) for j in range(3)):
+        return None
+    return gamma, alpha, delta
+
+
+def _quarter(angle: float) -> tuple[sp.Expr, float]:
+    """``(q, r)``: ``angle = q + r`` with ``q`` an exact multiple of pi/2 and ``r`` the rest, 0.0 where it is
+    rounding only (below 1e-15; a rest of 1e-13, as in SO-101's URDF, is a turn and is kept)."""
+    k = round(angle / (math.pi / 2))
+    rest = angle - k * math.pi / 2
+    return sp.Integer(k) * sp.pi / 2, (rest if abs(rest) > 1e-15 else 0.0)
+
+
+def _rz_matrix(angle) -> sp.Matrix:
+    c, s = _trig(angle)
+    return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def _rx_matrix(angle) -> sp.Matrix:
+    c, s = _trig(angle)
+    return sp.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _trig(angle) -> tuple[sp.Expr, sp.Expr]:
+    """Cosine and sine: exact for a SymPy multiple of pi/2, else doubles."""
+    if isinstance(angle, sp.Basic):
+        return sp.cos(angle), sp.sin(angle)
+    return sp.Float(math.cos(angle), 17), sp.Float(math.sin(angle), 17)
+
+
+def _dense_entries(C: sp.Matrix) -> int:
+    return sum(1 for x in C if x not in (-1, 0, 1))
 
 
 def _named_trig_constants(step: _Steps, joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:

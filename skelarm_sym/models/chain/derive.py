@@ -68,7 +68,7 @@ from typing import Sequence
 import sympy as sp
 
 from .algebra import Vector
-from .canonical import _Canonical, _axis_turns_into_angles, _named_trig_constants, canonical_joints
+from .canonical import _Canonical, _axis_turns_into_angles, _named_trig_constants, _twists_into_angles, canonical_joints
 from .candidates import CANDIDATES_UP_TO, _Columns, _column_candidates, _dense_constants, _pose
 from .frames import _columns, _frames, _scaled_frames, _tool_jacobian, _tool_offsets, _twist_scaled_frames
 from .model import Chain
@@ -164,7 +164,7 @@ def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
     if chain.parameters:
         inputs["params"] = tuple(chain.parameters)
     step = _Steps("ch")
-    joints, tool = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
+    joints, tool = _named_trig_constants(step, *_twists_into_angles(*_axis_turns_into_angles(*canonical_joints(chain))))
     frames = _frames(step, joints, q)
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)

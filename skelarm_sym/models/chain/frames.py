@@ -165,13 +165,18 @@ def _twist_scaled_frames(step: _Steps, joints: Sequence[_Canonical], f: _Frames)
     (:func:`_turned_rows`; 2 operations a joint, shared by the rows; none where every twist has the same
     ``|sin|`` and ``k1 = mu / S_s`` is +-1). A cofactor of the first two columns (an axis's entry in the row
     the Jacobian does not carry) needs no unscaling (``S_s / S_s = 1``); the link offsets fold the scales into
-    their constants. The values are the URDF's: only the constants ``c / S^2`` and ``mu S`` are rounded."""
+    their constants. The values are the URDF's: only the constants ``c / S^2`` and ``mu S`` are rounded. Only
+    for twists within 45 degrees of a quarter turn (``|cos alpha| <= |sin alpha|``): a row's kept entries mix
+    ``c / S^2 y~`` with ``z``, which amplifies their rounding by ``|cot alpha|`` (a URDF's 3.14159, sine 2.65e-6,
+    would lose 5 digits)."""
     starts = f.starts[1:]
     sines = []
     for k in starts:
         C = _rows(joints[k].before.rotation)
         if [C[0][0], C[0][1], C[0][2], C[1][0], C[2][0]] != [1, 0, 0, 0, 0] or C[2][1] == 0 or C[1][1] != C[2][2] \
                 or C[1][2] != -C[2][1] or any(sp.sympify(x).free_symbols for row in C for x in row):
+            return None
+        if abs(C[1][1]) > abs(C[2][1]):  # |cot alpha| > 1: the scales would amplify rounding (by |cot alpha|)
             return None
         sines.append(sp.sympify(C[2][1]))
     if all(abs(x) == 1 for x in sines) or any(t is None for t in f.trig):
