@@ -18,7 +18,9 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 1. **Canonical joints** (:func:`canonical_joints`): every joint becomes a motion about or along
    ``z`` after a constant transform; offsets that are multiples of pi/2 (revolute) and all
    prismatic offsets fold into the constants, and a constant rotation about a joint's axis (or
-   about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`).
+   about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`); a
+   constant rotation between two revolute joints is written ``Rz(gamma) Rx(alpha) Rz(delta)`` and its
+   turns go into the angles of the joints on either side (:func:`_twists_into_angles`).
 2. **Segments** (:func:`_frames`): consecutive joints whose axes are parallel (the constant
    rotation between them is about ``z``: UR5's joints 2-4, every planar arm) share one frame
    ``F_s``; their angles add up (``psi_k = psi_(k-1) + beta_k + theta_k``), one sine and one
