@@ -116,6 +116,9 @@ def _twists_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list
         if gr:
             prev = out[k - 1]
             out[k - 1] = _Canonical(prev.before, prev.motion, prev.coordinate, prev.multiplier, _numeric(prev.offset + sp.Float(gr)))
+    for k, joint in enumerate(out):  # two turns that cancel to rounding (iCub: -3.67e-6 + 3.67e-6 = 2.2e-16): no addition
+        if joint.offset != joints[k].offset and joint.offset.is_Float and abs(float(joint.offset)) <= 1e-15:
+            out[k] = _Canonical(joint.before, joint.motion, joint.coordinate, joint.multiplier, sp.S.Zero)
     return out, tool
 
 
