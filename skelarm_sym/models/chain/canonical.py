@@ -85,8 +85,8 @@ def _twists_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list
     the constant (a signed permutation, free). A URDF whose joint frames are turned about their axes (iCub,
     Romeo, TIAGo: every entry of the constant rotations a decimal) then carries its frames' rows through
     ``Rx(alpha)``, 6 operations a row instead of 15, for one addition per angle that takes a turn. Only where
-    the constant gets fewer entries other than 0 and +-1; the values are the same rigid motions (the angles
-    rounded once, to a double)."""
+    the constant gets fewer entries other than 0 and +-1 and the rebuilt rotation is the URDF's to 1e-15: the
+    values are the same rigid motions (the angles rounded once, to a double)."""
     out = list(joints)
     for k in range(len(out)):
         C = out[k].before.rotation
@@ -123,7 +123,7 @@ def _twists_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list
 
 
 def _zxz(C: sp.Matrix) -> tuple[float, float, float] | None:
-    """``(gamma, alpha, delta)`` with ``C = Rz(gamma) Rx(alpha) Rz(delta)`` (to 1e-12), ``sin alpha`` not 0; else
+    """``(gamma, alpha, delta)`` with ``C = Rz(gamma) Rx(alpha) Rz(delta)`` (to 1e-15), ``sin alpha`` not 0; else
     ``None`` (a turn about ``z`` alone, which :func:`_axis_turns_into_angles` and the segments take)."""
     m = [[float(C[i, j]) for j in range(3)] for i in range(3)]
     sa = math.hypot(m[2][0], m[2][1])
