@@ -10,7 +10,7 @@ import sympy as sp
 
 from .algebra import Rows, Vector, _rows, _rz, _times_rz, matmul, matvec
 from .canonical import _Canonical
-from .frames import _Frames, _actual, _ratio, _turned_rows
+from .frames import _Frames, _actual, _scaled_entry, _turned_rows
 from .joints import E_Z, add, cross
 from .model import Transform
 from .price import Pose, _flat, _price
@@ -25,53 +25,32 @@ def _row_tag(dropped: int | None) -> str:
 
 
 def _cofactor_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None = None,
-                   scale: sp.Expr | None = None, columns: tuple[sp.Expr, sp.Expr, sp.Expr] | None = None) -> Rows:
+                   factors: Sequence[sp.Expr] = (1, 1, 1), pair: sp.Expr | None = None) -> Rows:
     """The rotation ``M`` with row ``dropped`` written as cofactors of its other two rows (``r_d = r_(d+1) x
     r_(d+2)``, 3 operations an entry): a chain that carries two rows of its frames gets the third's
     entries only where an output uses them. ``M`` itself when ``dropped`` is ``None`` or the row is constant.
     ``column2``: the third column's entry of that row when known already (``G_k = F_s Rz`` keeps ``F_s``'s).
-    ``scale``: ``M`` is kept with its third column divided by ``scale`` (:func:`_scaled_frames`); the view is
-    the true matrix, its cofactors those of the kept rows times the scale where they use the third column.
-    ``columns``: ``M`` is kept with its first two columns scaled (:func:`_twist_scaled_frames`; the factors that
-    make a kept entry of each, and their cofactor, true); the view is the true matrix."""
-    if columns is not None and any(x != 1 for x in columns):
-        return _column_scaled_view(step, M, dropped, label, column2, columns)
-    scaled = scale is not None and scale != 1
+    ``factors``: ``M`` is kept with its columns scaled (the third by :func:`_scaled_frames`, the first two by
+    :func:`_twist_scaled_frames`), and these numbers make a kept entry of each column true; the view is the true
+    matrix, each cofactor times the factors of the two columns it reads (``pair`` for the first two where their
+    product is known exactly: ``S (1 / S)`` is 1, which its double need not be)."""
+    scaled = any(x != 1 for x in factors)
     if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
-        return [[r[0], r[1], r[2] * scale] for r in M] if scaled else M
+        return [[r[j] * factors[j] for j in range(3)] for r in M] if scaled else M
     a, b = (dropped + 1) % 3, (dropped + 2) % 3
-    out = [[r[0], r[1], r[2] * scale] for r in M] if scaled else [list(r) for r in M]
+    out = [[r[j] * factors[j] for j in range(3)] for r in M]
     for j in range(3):
         if j == 2 and column2 is not None:
             out[dropped][j] = column2[dropped]
             continue
-        if _cheap(step, M[dropped][j]):  # near the base a frame is sparse: its entry is one product of sines
+        if factors[0] == factors[1] == 1 and _cheap(step, M[dropped][j]):  # one product of sines (times a factor: two)
             continue
         expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
         known = step.recorded(-expr)  # the same cofactor met before with the other sign (a permuted frame)
         out[dropped][j] = -known if known is not None else step(f"{label}{dropped}{j}", expr)
-        if scaled and j != 2:  # the kept rows' cofactor through the third column: times the scale
-            out[dropped][j] = out[dropped][j] * scale
-    return out
-
-
-def _column_scaled_view(step: _Steps, M: Rows, dropped: int | None, label: str, column2: Vector | None,
-                        columns: tuple[sp.Expr, sp.Expr, sp.Expr]) -> Rows:
-    """:func:`_cofactor_view` of a matrix kept with its first two columns scaled: every entry of those columns
-    times its factor (a number, which the constants that multiply it absorb), the cofactors of the kept rows
-    times the product of the factors of the two columns they read (1 for the third column's entry)."""
-    out = [[r[0] * columns[0], r[1] * columns[1], r[2]] for r in M]
-    if dropped is None or not any(sp.sympify(x).free_symbols for x in M[dropped]):
-        return out
-    a, b = (dropped + 1) % 3, (dropped + 2) % 3
-    factor = (columns[1], columns[0], columns[2])  # entry j reads columns j + 1 and j + 2
-    for j in range(3):
-        if j == 2 and column2 is not None:
-            out[dropped][j] = column2[dropped]
-            continue
-        expr = M[a][(j + 1) % 3] * M[b][(j + 2) % 3] - M[a][(j + 2) % 3] * M[b][(j + 1) % 3]
-        known = step.recorded(-expr)
-        out[dropped][j] = (-known if known is not None else step(f"{label}{dropped}{j}", expr)) * factor[j]
+        read = pair if j == 2 and pair is not None else factors[(j + 1) % 3] * factors[(j + 2) % 3]
+        if read != 1:
+            out[dropped][j] = out[dropped][j] * read
     return out
 
 
@@ -93,15 +72,15 @@ def _cheap(step: _Steps, x: sp.Expr) -> bool:
         a.is_Number or (a.is_Symbol and isinstance(definitions.get(a, sp.sin(a)), (sp.sin, sp.cos))) for a in rhs.args)
 
 
-def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axes: Sequence[Vector] | dict[int, Vector]) -> Rows:
+def _after_joint(step: _Steps, f: _Frames, k: int, dropped: int | None, axis: Vector) -> Rows:
     """``G_k = F_s Rz(psi_k)``, the rotation after joint ``k``'s motion in base axes (row ``dropped`` as
-    cofactors; its third column is the joint's axis ``axes[k]``), true-valued also where ``f`` keeps it scaled."""
+    cofactors; its third column is the joint's ``axis``), true-valued also where ``f`` keeps it scaled."""
     s = f.segment[k]
     G = _kept_after_joint(step, f, k)
     if f.turns is not None:
-        mu = _ratio(1, f.turns[k][2])
-        return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], columns=(mu, mu, mu * mu))
-    return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axes[k], f.scale[s] if f.scale else None)
+        mu = _scaled_entry(1, 1, f.turns[k][2])
+        return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axis, (mu, mu, 1))
+    return _cofactor_view(step, G, dropped, f"Hc{f.tag}{k + 1}_", axis, (1, 1, f.scale[s]) if f.scale else (1, 1, 1))
 
 
 def _kept_after_joint(step: _Steps, f: _Frames, k: int) -> Rows:
@@ -129,17 +108,17 @@ def _base_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: 
     for k in reversed(range(n)):
         t = list((joints[k + 1].before if k + 1 < n else tool).translation)
         advance = joints[k].motion.advance(f.theta[k])
-        G = _after_joint(step, f, k, dropped, axes) if any(x != 0 for x in t) else None
+        G = _after_joint(step, f, k, dropped, axes[k]) if any(x != 0 for x in t) else None
         moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + advance])
         along = moved is None or all(x == 0 for x in moved)  # the link runs along the axis: z_k x r_k = z_k x r_(k+1)
         if G is not None and not along and dropped is not None and advance == 0 and joints[k].motion.kind == "revolute" \
                 and all(x == 0 for x in below) and (turned or _last_link_pays(step, axes[k], G, t, moved, dropped)):
             if turned:  # G = F_s Rz(psi): G t = F_s t' with t' = Rz(psi) t, and G (e_z x t) = F_s (e_z x t')
                 G = _cofactor_view(step, f.rotation[f.segment[k]], dropped, f"Fc{f.tag}{f.segment[k] + 1}_")
-                scales = f.columns[f.segment[k]] if f.columns is not None else (1, 1, 1)  # F_s t' = F~_s t'~
+                scales = f.columns[f.segment[k]] if f.columns is not None else (1, 1)  # F_s t' = F~_s t'~
                 turned_t = _rz(f.trig[k], t)
                 t = step.vec(f"tl{tag}{k + 1}", [turned_t[0] * scales[0], turned_t[1] * scales[1], turned_t[2]])
-                ratio = _ratio(scales[0], scales[1])  # e_z x t' in the kept columns' scales, from t'~
+                ratio = _scaled_entry(scales[0], 1, scales[1])  # e_z x t' in the kept columns' scales, from t'~
                 moved = [step(f"tm{tag}{k + 1}x", -t[1] * ratio), step(f"tm{tag}{k + 1}y", t[0] / ratio), sp.S.Zero]
             r[k], linear[k] = _last_link(step, f"r{tag}{k + 1}", f"Jb{tag}_{k + 1}", axes[k], G, t, moved, dropped)
             below, turned = r[k], False
@@ -161,28 +140,33 @@ def _last_link(step: _Steps, offset_label: str, column_label: str, z: Vector, G:
     ``u_d = ((z x u) x z)_d + t_z z_d`` (``u - t_z z`` is perpendicular to the unit ``z``), 3 operations
     each, instead of ``G``'s cofactors and a whole cross product ``z x u``: xArm7's last offset costs 18
     operations instead of 24."""
-    d, a, b = dropped, (dropped + 1) % 3, (dropped + 2) % 3
+    a, b = (dropped + 1) % 3, (dropped + 2) % 3
     u, w = matvec(G, t), matvec(G, moved)
     for i in (a, b):  # named first: the dropped entries read them
         u[i] = step(f"{offset_label}{'xyz'[i]}", u[i])
         w[i] = step(f"{column_label}{'xyz'[i]}", w[i])
-    w[d] = z[a] * u[b] - z[b] * u[a]
-    u[d] = w[a] * z[b] - w[b] * z[a] + t[2] * z[d]
+    u, w = _dropped_entries(z, u, w, t[2], dropped)
     return step.vec(offset_label, u), step.vec(column_label, w)
+
+
+def _dropped_entries(z: Vector, u: Vector, w: Vector, t_z: sp.Expr, d: int) -> tuple[Vector, Vector]:
+    """``u`` and ``w = z x u`` with their entries in row ``d`` from the other two of each (:func:`_last_link`)."""
+    a, b = (d + 1) % 3, (d + 2) % 3
+    w = list(w)
+    w[d] = z[a] * u[b] - z[b] * u[a]
+    u = list(u)
+    u[d] = w[a] * z[b] - w[b] * z[a] + t_z * z[d]
+    return u, w
 
 
 def _last_link_pays(step: _Steps, z: Vector, G: Rows, t: Vector, moved: Vector, dropped: int) -> bool:
     """True when :func:`_last_link` costs at least 2 operations fewer than ``u = G t`` with ``G``'s cofactors and
     the cross product ``z x u`` (priced as written, nothing recorded). One fewer is within what the sign pass
     moves afterwards (TALOS's left arm: 71 against 72 here, and 136 against 135 emitted): the cross product."""
-    d, a, b = dropped, (dropped + 1) % 3, (dropped + 2) % 3
     u = matvec(G, t)
-    plain = u + cross(z, u)
-    w = matvec(G, moved)
-    w[d] = z[a] * u[b] - z[b] * u[a]
-    u[d] = w[a] * z[b] - w[b] * z[a] + t[2] * z[d]
     steps = step.definitions()
-    return _price(steps, u + w)[0] + 1 < _price(steps, plain)[0]
+    return _price(steps, sum(_dropped_entries(z, u, matvec(G, moved), t[2], dropped), []))[0] + 1 \
+        < _price(steps, u + cross(z, u))[0]
 
 
 def _dense_constants(joints: Sequence[_Canonical], f: _Frames) -> bool:
@@ -228,7 +212,8 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
         if views in seen:  # that row is constant in every frame (a planar chain): nothing new
             continue
         seen.append(views)
-        price, columns = _base_columns(step, joints, f, tool, W, views, dropped, _row_tag(dropped), dq, ddq)
+        columns = _base_columns(step, joints, f, tool, W, views, dropped, _row_tag(dropped), dq, ddq)
+        price = _price(step.definitions(), _flat(columns.linear, columns.angular))[0]
         if price > 0.98 * _price(step.definitions(), _flat(linear, angular))[0]:
             continue  # not 2 % cheaper without their rates (which follow the columns; see _choose): not worth those
         out.append(columns)
@@ -237,28 +222,27 @@ def _column_candidates(step: _Steps, joints, f: _Frames, tool: Transform, W: Seq
     if cheapest is None:
         return out
     dropped = cheapest[1]
-    for frames in (twisted,) if twisted is not None else (f,):  # twisted: each of these costs less than with f
-        tag = _row_tag(dropped) + frames.tag + ("_" if frames.tag else "")
-        views = [_cofactor_view(step, frames.rotation[s], dropped, f"Fc{frames.tag}{s + 1}_",
-                                columns=frames.columns[s] if frames.columns else None) for s in range(len(frames.rotation))]
-        if frames is twisted:
-            out.append(_base_columns(step, joints, frames, tool, W, views, dropped, tag, dq, ddq)[1])
-        out.extend(_more_columns(step, joints, frames, tool, W, views, dropped, tag, dq, ddq))
-    return out
+    if twisted is None:
+        views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{s + 1}_") for s in range(len(f.rotation))]
+        return out + _more_columns(step, joints, f, tool, W, views, dropped, _row_tag(dropped), dq, ddq)
+    tag = f"{_row_tag(dropped)}{twisted.tag}_"  # each of these costs less with the twisted frames than with f
+    views = [_cofactor_view(step, twisted.rotation[s], dropped, f"Fc{twisted.tag}{s + 1}_", factors=(*twisted.columns[s], 1),
+                            pair=sp.S.One) for s in range(len(twisted.rotation))]
+    out.append(_base_columns(step, joints, twisted, tool, W, views, dropped, tag, dq, ddq))
+    return out + _more_columns(step, joints, twisted, tool, W, views, dropped, tag, dq, ddq)
 
 
 def _base_columns(step: _Steps, joints, f: _Frames, tool: Transform, W, views: list[Rows], dropped: int | None, tag: str,
-                  dq, ddq) -> tuple[int, _Columns]:
-    """The base-axes columns from the frames' ``views`` (:func:`_cofactor_view`), the tip position their offsets
-    give, and their price without rates."""
+                  dq, ddq, tip: bool = True) -> _Columns:
+    """The base-axes columns from the frames' ``views`` (:func:`_cofactor_view`), with the tip position their
+    offsets give where ``tip``."""
     axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
     r, base = _base_offsets(step, joints, f, tool, axes, dropped, tag)
     base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped, tag)
     ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-    price = _price(step.definitions(), _flat(base, ang))[0]
-    tip = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0]))
-    return price, _Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
-                                                        _axis_cross(joints, f, views, axes)), tip)
+    position = step.vec(f"pb{tag}", add(list(joints[0].before.translation), r[0])) if tip else None
+    return _Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}",
+                                                 _axis_cross(joints, f, views, axes)), position)
 
 
 def _more_columns(step: _Steps, joints, f: _Frames, tool: Transform, W, views: list[Rows], dropped: int, tag: str,
@@ -269,12 +253,7 @@ def _more_columns(step: _Steps, joints, f: _Frames, tool: Transform, W, views: l
     turned = _propagated_views(step, joints, f, tool, views, dropped)
     if turned is not None:
         views = turned
-        axes = [[row[2] for row in views[f.segment[k]]] for k in range(len(joints))]
-        r, base = _base_offsets(step, joints, f, tool, axes, dropped, f"{tag}p_")
-        base = _next_frame_columns(step, joints, f, views, axes, r, W, base, dropped, f"{tag}p_")
-        ang = [matvec(views[f.segment[k]], joint.motion.column(E_Z, [0, 0, 0])[1]) for k, joint in enumerate(joints)]
-        out.append(_Columns(base, ang, axes, _velocities(step, joints, axes, base, ang, dq, ddq, f"a{tag}p_",
-                                                         _axis_cross(joints, f, views, axes)), None))
+        out.append(_base_columns(step, joints, f, tool, W, views, dropped, f"{tag}p_", dq, ddq, tip=False))
     link = _turned_last_axes(joints, f, tool, dropped)
     if link is not None:  # and the last link's offset turned instead of its frame's rows
         k, coefficients, moved_axes = link
@@ -347,7 +326,7 @@ def _propagated_views(step: _Steps, joints, f: _Frames, tool: Transform, views: 
         need = [i for i in range(3) if C[i][2] != 0]
         if any(i < 2 and t[i] == 0 for i in need) or not any(sp.sympify(x).free_symbols for x in f.rotation[s][dropped]):
             continue
-        Gv = _after_joint(step, f, k - 1, dropped, {k - 1: [row[2] for row in out[s - 1]]})  # the true G
+        Gv = _after_joint(step, f, k - 1, dropped, [row[2] for row in out[s - 1]])  # the true G
         entry = step(f"Fp{f.tag}{s + 1}_{dropped}2", sum((Gv[dropped][i] * C[i][2] for i in need), sp.S.Zero))
         if entry != out[s][dropped][2]:
             out[s][dropped][2] = entry
@@ -403,7 +382,7 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
         t = list(nxt.translation)
         moved = joints[k].motion.follows_tool(E_Z, [t[0], t[1], t[2] + joints[k].motion.advance(f.theta[k])])
         if moved is not None and any(x != 0 for x in moved):
-            column = add(column, matvec(_after_joint(step, f, k, dropped, axes), moved))
+            column = add(column, matvec(_after_joint(step, f, k, dropped, axes[k]), moved))
         if _price(steps, column, paid)[0] < _price(steps, base[k], paid)[0]:
             out[k] = step.vec(f"Jn{tag}_{k + 1}", column)
     return out
@@ -464,7 +443,7 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
     ``R (C_tool^T t_tool)`` from the pose's rotation. Where the pose drops row ``dropped`` of the rotation,
     that row's entries of the frames are cofactors of the two carried rows (:func:`_cofactor_view`)."""
     n = len(joints)
-    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{f.tag}{s + 1}_", scale=f.scale[s] if f.scale else None)
+    views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{f.tag}{s + 1}_", factors=(1, 1, f.scale[s]) if f.scale else (1, 1, 1))
              for s in range(len(f.rotation))]
     axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
     terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
@@ -475,7 +454,7 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
                 terms[i].append(axes[k][i] * advance)
         t = list(joints[k + 1].before.translation) if k + 1 < n else []
         if any(x != 0 for x in t):
-            for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes), t)):
+            for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes[k]), t)):
                 terms[i].append(x)
     shift = tool.rotation.T * tool.translation
     for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):

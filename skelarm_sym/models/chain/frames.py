@@ -38,10 +38,10 @@ class _Frames:
     ``None``: every ``rotation[s]`` is ``F_s`` itself."""
     tag: str = ""
     """Told apart in step labels from the other frames' steps (``""`` for the plain frames)."""
-    columns: list[tuple[sp.Expr, sp.Expr, sp.Expr]] | None = None
-    """Per segment ``(1 / sigma_s, 1 / tau_s, 1 / (sigma_s tau_s))`` where ``rotation[s]`` holds
-    ``F~_s = F_s diag(sigma_s, tau_s, 1)`` (:func:`_twist_scaled_frames`): what turns a kept entry of the first
-    column, of the second, and a cofactor of those two columns into the true value. ``None``: unscaled."""
+    columns: list[tuple[sp.Expr, sp.Expr]] | None = None
+    """Per segment ``(1 / sigma_s, 1 / tau_s)`` where ``rotation[s]`` holds ``F~_s = F_s diag(sigma_s, tau_s, 1)``
+    with ``sigma_s tau_s = 1`` (:func:`_twist_scaled_frames`): what turns a kept entry of the first column, and
+    of the second, into the true value (a cofactor of the two needs nothing). ``None``: unscaled."""
     turns: list[tuple[sp.Expr, sp.Expr, sp.Expr]] | None = None
     """Per joint ``(k1, k2, mu)``: ``G~_k = G_k diag(mu, mu, 1) = F~_s [[c k1, -s k1, 0], [s k2, c k2, 0], [0, 0, 1]]``
     (:func:`_turned_rows`); ``None`` with ``columns``."""
@@ -183,39 +183,24 @@ def _twist_scaled_frames(step: _Steps, joints: Sequence[_Canonical], f: _Frames)
         return None
     n = len(joints)
     rotation: list[Rows] = [f.rotation[0]]
-    columns = [(sp.S.One, sp.S.One, sp.S.One)]
+    columns = [(sp.S.One, sp.S.One)]
     sigma = [sp.S.One]
     turns: list[tuple[sp.Expr, sp.Expr, sp.Expr]] = [None] * n
     for s in range(len(f.starts)):
         following = sines[s] if s < len(sines) else None
         for k in range(f.starts[s], f.ends[s] + 1):
             mu = following if k == f.ends[s] and following is not None else sigma[s]
-            turns[k] = (_ratio(mu, sigma[s]), _product(mu, sigma[s]) if s else mu, mu)
+            turns[k] = (_scaled_entry(mu, 1, sigma[s]), _scaled_entry(mu, sigma[s], 1) if s else mu, mu)
         if following is None:
             break
         k = f.ends[s]
         C = _rows(joints[f.starts[s + 1]].before.rotation)
-        Ct = [[1, 0, 0], [0, _ratio(C[1][1], _product(following, following)), -1], [0, 1, C[2][2]]]
+        Ct = [[1, 0, 0], [0, _scaled_entry(C[1][1], 1, _scaled_entry(following, following, 1)), -1], [0, 1, C[2][2]]]
         G = step.mat(f"Gy{s + 2}_", _turned_rows(step, f, k, rotation[s], turns[k]))
         rotation.append(step.mat(f"Fy{s + 2}_", matmul(G, Ct)))
-        columns.append((_ratio(1, following), following, sp.S.One))
+        columns.append((_scaled_entry(1, 1, following), following))
         sigma.append(following)
     return _Frames(f.segment, rotation, f.starts, f.ends, f.trig, f.theta, f.axes, None, "y", columns, turns)
-
-
-def _ratio(a, b) -> sp.Expr:
-    """``a / b`` for the constants of :func:`_twist_scaled_frames`: +-1 exactly where ``|a| = |b|``."""
-    a, b = sp.sympify(a), sp.sympify(b)
-    if a == b:
-        return sp.S.One
-    if a == -b:
-        return -sp.S.One
-    return _scaled_entry(a, 1, b)
-
-
-def _product(a, b) -> sp.Expr:
-    """``a b`` for the same constants: exact where both are, else the double (:func:`_scaled_entry`)."""
-    return _scaled_entry(sp.sympify(a), sp.sympify(b), 1)
 
 
 def _turned_rows(step: _Steps, f: _Frames, k: int, M: Rows, turn: tuple[sp.Expr, sp.Expr, sp.Expr]) -> Rows:
