@@ -333,21 +333,26 @@ def _twist_chain(rpys) -> Chain:
     return Chain("tw", tuple(joints))
 
 
+def _plain_and_twisted_frames(chain: Chain):
+    """``(step recorder, q, the derivation's frames, _twist_scaled_frames of them)`` for ``chain``."""
+    from skelarm_sym.models.chain.canonical import _axis_turns_into_angles, _named_trig_constants, canonical_joints
+    from skelarm_sym.models.chain.frames import _frames, _twist_scaled_frames
+    from skelarm_sym.models.chain.steps import _Steps
+
+    q = sp.symbols(f"q1:{chain.n + 1}", real=True)
+    step = _Steps("t")
+    joints, _ = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
+    plain = _frames(step, joints, q)
+    return step, q, plain, _twist_scaled_frames(step, joints, plain)
+
+
 @pytest.mark.parametrize("alphas", [(1.5708, -1.5708, 1.5708), (1.5708, -1.2, 2.0, -1.5708, 1.0), (0.8, -2.3, 1.5708)])
 def test_twist_scaled_frames_are_the_frames_times_their_column_scales(alphas):
     """``_twist_scaled_frames`` keeps ``F~_s = F_s diag(S_s, 1 / S_s, 1)`` (``S_s`` the sine of the twist that starts
     segment ``s``): at random angles its kept rows, times the factors it records, are the plain frames to 1e-15,
     for twists of 1.5708 and mixed ones within 45 degrees of a quarter turn; the scales are the sines."""
-    from skelarm_sym.models.chain.canonical import _axis_turns_into_angles, _named_trig_constants, canonical_joints
-    from skelarm_sym.models.chain.frames import _frames, _twist_scaled_frames
-    from skelarm_sym.models.chain.steps import _Steps
-
     chain = _twist_chain([(a, 0, 0) for a in alphas])
-    q = sp.symbols(f"q1:{chain.n + 1}", real=True)
-    step = _Steps("t")
-    joints, _ = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
-    plain = _frames(step, joints, q)
-    kept = _twist_scaled_frames(step, joints, plain)
+    step, q, plain, kept = _plain_and_twisted_frames(chain)
     assert [float(c[1]) for c in kept.columns[1:]] == pytest.approx([math.sin(a) for a in alphas], rel=1e-15)
     values = dict(zip(q, np.random.default_rng(3).uniform(-3, 3, chain.n)))
 
@@ -365,14 +370,7 @@ def test_twist_scaled_frames_only_for_dense_twists_about_x(rpys):
     """Exact quarter turns need no scaling, a twist about another axis has no such scaling, and a twist farther
     than 45 degrees from a quarter turn (3.14159: sine 2.65e-6; a hundredth of a radian) would amplify rounding by
     its cotangent (4e5, 100): ``None``."""
-    from skelarm_sym.models.chain.canonical import _axis_turns_into_angles, _named_trig_constants, canonical_joints
-    from skelarm_sym.models.chain.frames import _frames, _twist_scaled_frames
-    from skelarm_sym.models.chain.steps import _Steps
-
-    chain = _twist_chain(rpys)
-    step = _Steps("t")
-    joints, _ = _named_trig_constants(step, *_axis_turns_into_angles(*canonical_joints(chain)))
-    assert _twist_scaled_frames(step, joints, _frames(step, joints, sp.symbols(f"q1:{chain.n + 1}", real=True))) is None
+    assert _plain_and_twisted_frames(_twist_chain(rpys))[3] is None
 
 
 def _turned_frames_chain(turns) -> Chain:
