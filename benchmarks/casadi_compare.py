@@ -3,6 +3,7 @@
     python benchmarks/casadi_compare.py                    # UR5, Panda, xArm7 (example-robot-data) + examples/robots/*.toml
     python benchmarks/casadi_compare.py --no-time          # operation counts only
     python benchmarks/casadi_compare.py examples/robots/ur5.toml path/to/panda.urdf:panda_hand_tcp
+    python benchmarks/casadi_compare.py --no-time --example-robot-data   # every example-robot-data chain (66)
 
 Needs ``pip install casadi example-robot-data`` (the URDFs are read from example-robot-data's
 ``cmeel.prefix/share/example-robot-data/robots``) and a C compiler.
@@ -75,6 +76,17 @@ def default_robots() -> list[tuple[Path, str | None]]:
     ]
     out = [(p, t) for p, t in out if p.exists()]
     return out + [(p, None) for p in sorted((ROOT / "examples" / "robots").glob("*.toml"))]
+
+
+def example_robots() -> list[tuple[Path, str | None]]:
+    """Every example-robot-data URDF with a chain without named parameters, and its tip (see ``urdf_ops.py``)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from urdf_ops import example_chains
+
+    root = robots_folder()
+    if not root.is_dir():
+        raise SystemExit(f"example-robot-data's robots are not at {root}: pip install example-robot-data")
+    return [(root / rel, tip) for rel, (chain, tip) in example_chains(root).items() if not chain.parameters]
 
 
 # -- CasADi -------------------------------------------------------------------------------------
@@ -272,6 +284,11 @@ def arithmetic(counts: dict[str, int]) -> int:
     return counts["add"] + counts["mul"] + counts["div"] + counts["neg"]
 
 
+def ratio(ours: int, theirs: int) -> str:
+    """``ours / theirs`` to two decimals; ``-`` where CasADi needs no arithmetic (a constant output)."""
+    return f"{ours / theirs:.2f}" if theirs else ("1.00" if not ours else "-")
+
+
 # -- building and timing --------------------------------------------------------------------------
 
 def check_ours(chain, rng) -> None:
@@ -395,8 +412,10 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("robots", nargs="*", help="robot files (a URDF as PATH:TIP); default: see the module docstring")
     parser.add_argument("--no-time", action="store_true", help="count operations only")
+    parser.add_argument("--example-robot-data", action="store_true",
+                        help="every example-robot-data URDF instead (its chain as benchmarks/urdf_ops.py takes it)")
     args = parser.parse_args(argv)
-    robots = [parse_robot(r) for r in args.robots] or default_robots()
+    robots = [parse_robot(r) for r in args.robots] or (example_robots() if args.example_robot_data else default_robots())
     cc = find_compiler()
     if not args.no_time:
         version = subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
@@ -422,7 +441,7 @@ def main(argv=None) -> None:
             for name in FUNCTIONS:
                 a = count_function(ours_c, f"ours_{name}")
                 b = count_function(casadi_c, f"ca_{name}")
-                row = (f"| {label} | {chain.n} | {name} | {arithmetic(a)} | {arithmetic(b)} | {arithmetic(a) / arithmetic(b):.2f} "
+                row = (f"| {label} | {chain.n} | {name} | {arithmetic(a)} | {arithmetic(b)} | {ratio(arithmetic(a), arithmetic(b))} "
                        f"| {a['sin']}+{a['cos']} | {b['sin']}+{b['cos']} ")
                 if name in times:
                     s, ns, c = times[name]

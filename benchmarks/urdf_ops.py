@@ -26,35 +26,47 @@ FUNCTIONS = "pose,jacobian,jacobian_dot,kinematics"
 COUNT = r"""
 import json, sys
 from pathlib import Path
-from skelarm_sym.errors import InputError
+sys.path.insert(0, sys.argv[3])  # this folder: example_chains below, run by the other checkout's package
 from skelarm_sym.generate import generate
-from skelarm_sym.models.chain.loader import load_robot
-from skelarm_sym.models.chain.urdf import urdf_links
+from urdf_ops import example_chains
 
 root, functions = Path(sys.argv[1]), sys.argv[2]
 out = {}
-for path in sorted(root.rglob("*.urdf")):
-    try:
-        chain = load_robot(path)
-    except InputError:
-        chain = None
-        try:
-            leaves = [link.name for link in urdf_links(path) if link.leaf and link.depth]
-        except InputError:
-            leaves = []
-        for tip in leaves:
-            try:
-                found = load_robot(path, tip=tip)
-            except InputError:
-                continue
-            if chain is None or found.n > chain.n:  # the first of the longest
-                chain = found
-    if chain is None:
-        continue
+for rel, (chain, _tip) in example_chains(root).items():
     g = generate(chain, langs="python", out=None, functions=functions)
-    out[str(path.relative_to(root))] = {p.name: p.ops.arithmetic for p in g.programs}
+    out[rel] = {p.name: p.ops.arithmetic for p in g.programs}
 print(json.dumps(out))
 """
+
+
+def example_chains(root: Path) -> dict:
+    """``{urdf path relative to root: (chain, tip or None)}``, sorted: of every URDF under ``root`` the chain
+    ``tests/test_example_robot_data.py`` compiles: the default chain, else the first of the longest (66 files of
+    example-robot-data 6). Imports the ``skelarm_sym`` on the path (this checkout's or another's)."""
+    from skelarm_sym.errors import InputError
+    from skelarm_sym.models.chain.loader import load_robot
+    from skelarm_sym.models.chain.urdf import urdf_links
+
+    out = {}
+    for path in sorted(root.rglob("*.urdf")):
+        try:
+            chain, tip = load_robot(path), None
+        except InputError:
+            chain, tip = None, None
+            try:
+                leaves = [link.name for link in urdf_links(path) if link.leaf and link.depth]
+            except InputError:
+                leaves = []
+            for leaf in leaves:
+                try:
+                    found = load_robot(path, tip=leaf)
+                except InputError:
+                    continue
+                if chain is None or found.n > chain.n:  # the first of the longest
+                    chain, tip = found, leaf
+        if chain is not None:
+            out[str(path.relative_to(root))] = (chain, tip)
+    return out
 
 
 def robots_folder() -> Path:
@@ -63,7 +75,8 @@ def robots_folder() -> Path:
 
 def counts(python: str, root: Path, functions: str) -> dict[str, dict[str, int]]:
     """``{urdf: {function: operations}}`` from the checkout that ``python`` runs."""
-    done = subprocess.run([python, "-c", COUNT, str(root), functions], check=True, capture_output=True, text=True)
+    done = subprocess.run([python, "-c", COUNT, str(root), functions, str(Path(__file__).resolve().parent)],
+                          check=True, capture_output=True, text=True)
     return json.loads(done.stdout)
 
 

@@ -482,6 +482,7 @@ needs_oracle = pytest.mark.skipif(
     [
         ("panda_description/urdf/panda.urdf", "panda_hand", 7),
         ("panda_description/urdf/panda.urdf", "panda_hand_tcp", 7),
+        ("panda_description/urdf/panda.urdf", "panda_leftfinger", 8),  # a prismatic joint in a hand turned by -pi/4
         ("ur_description/urdf/ur5_robot.urdf", "tool0", 6),
     ],
 )

@@ -78,44 +78,54 @@ def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[
 
 
 def _twists_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
-    """The canonical chain with each constant rotation between two revolute joints written ``Rz(gamma) Rx(alpha)
-    Rz(delta)`` (z-x-z angles) and its turns about the joint axes moved into the angles: ``Rz(gamma)`` into the
-    joint before (``Rz(theta') [Rz(gamma) C', t] = Rz(theta' + gamma) [C', Rz(-gamma) t]``), ``Rz(delta)`` into
-    the joint itself (``[C' Rz(delta), t] Rz(theta) = [C', t] Rz(theta + delta)``); multiples of pi/2 stay in
-    the constant (a signed permutation, free). A URDF whose joint frames are turned about their axes (iCub,
+    """The canonical chain with each constant rotation after a revolute joint or before one written ``Rz(gamma)
+    Rx(alpha) Rz(delta)`` (z-x-z angles) and its turns about the joint axes moved into the angles: ``Rz(gamma)``
+    into the revolute joint before (``Rz(theta') [Rz(gamma) C', t] = Rz(theta' + gamma) [C', Rz(-gamma) t]``),
+    ``Rz(delta)`` into a revolute joint after (``[C' Rz(delta), t] Rz(theta) = [C', t] Rz(theta + delta)``);
+    before a prismatic joint or in the tool transform ``Rz(delta)`` stays in the constant. Multiples of pi/2 stay
+    in the constant (a signed permutation, free). A URDF whose joint frames are turned about their axes (iCub,
     Romeo, TIAGo: every entry of the constant rotations a decimal) then carries its frames' rows through
-    ``Rx(alpha)``, 6 operations a row instead of 15, for one addition per angle that takes a turn. Only where
-    the constant gets fewer entries other than 0 and +-1 and the rebuilt rotation is the URDF's to 1e-15: the
-    values are the same rigid motions (the angles rounded once, to a double)."""
-    out = list(joints)
-    for k in range(len(out)):
-        C = out[k].before.rotation
-        if C.free_symbols or not _turns(out[k].motion):
-            continue
+    ``Rx(alpha)``, 6 operations a row instead of 15, for one addition per angle that takes a turn; Panda's
+    finger, a prismatic joint in a hand turned by -pi/4, gets a signed permutation before it (pose 133 -> 113).
+    Only where the constant gets fewer entries other than 0 and +-1 and the rebuilt rotation is the URDF's to
+    1e-15: the values are the same rigid motions (the angles rounded once, to a double)."""
+    out, n = list(joints), len(joints)
+    for k in range(n + 1):  # k = n: the tool transform
+        constant = out[k].before if k < n else tool
+        C = constant.rotation
+        turns = k < n and _turns(out[k].motion)
+        before_turns = k > 0 and _turns(out[k - 1].motion)
+        if C.free_symbols or not (turns or before_turns) or (k == n and any(constant.translation[:2])):
+            continue  # (a tool offset off the last axis would turn with it: the Jacobian would pay for the pose)
         split = _zxz(C)
         if split is None:
             continue
         gamma, alpha, delta = split
-        before_turns = k > 0 and _turns(out[k - 1].motion)
         g0, gr = _quarter(gamma) if before_turns else (gamma, 0.0)
         d0, dr = _quarter(delta)
+        if not turns and dr:  # before a prismatic joint or in the tool: Rz(delta) stays in the constant
+            d0, dr = delta, 0.0
         if gr == 0.0 and dr == 0.0:
             continue
-        rotation = _rz_matrix(g0) * _rx_matrix(alpha) * _rz_matrix(d0)
+        a0, ar = _quarter(alpha)
+        rotation = _rz_matrix(g0) * _rx_matrix(alpha if ar else a0) * _rz_matrix(d0)
         if _dense_entries(rotation) >= _dense_entries(C):
             continue
         rebuilt = _rz_matrix(gr) * rotation * _rz_matrix(dr)
         if any(abs(float(rebuilt[i, j]) - float(C[i, j])) > 1e-15 for i in range(3) for j in range(3)):
             continue  # a turn kept in neither place: not the same rotation to a double
-        turn = _rz_matrix(-gr) if gr else sp.eye(3)
-        translation = sp.ImmutableMatrix([sp.Float(float(x), 17) if x.is_Float else x for x in turn * out[k].before.translation]) \
-            if gr else out[k].before.translation
-        joint = out[k]
-        out[k] = _Canonical(Transform(sp.ImmutableMatrix(rotation), sp.ImmutableMatrix(translation)), joint.motion,
-                            joint.coordinate, joint.multiplier, _numeric(joint.offset + sp.Float(dr)) if dr else joint.offset)
+        translation = constant.translation
         if gr:
+            translation = sp.ImmutableMatrix([sp.Float(float(x), 17) if x.is_Float else x for x in _rz_matrix(-gr) * translation])
             prev = out[k - 1]
             out[k - 1] = _Canonical(prev.before, prev.motion, prev.coordinate, prev.multiplier, _numeric(prev.offset + sp.Float(gr)))
+        constant = Transform(sp.ImmutableMatrix(rotation), sp.ImmutableMatrix(translation))
+        if k == n:
+            tool = constant
+        else:
+            joint = out[k]
+            out[k] = _Canonical(constant, joint.motion, joint.coordinate, joint.multiplier,
+                                _numeric(joint.offset + sp.Float(dr)) if dr else joint.offset)
     for k, joint in enumerate(out):  # two turns that cancel to rounding (iCub: -3.67e-6 + 3.67e-6 = 2.2e-16): no addition
         if joint.offset != joints[k].offset and joint.offset.is_Float and abs(float(joint.offset)) <= 1e-15:
             out[k] = _Canonical(joint.before, joint.motion, joint.coordinate, joint.multiplier, sp.S.Zero)

@@ -19,8 +19,9 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
    ``z`` after a constant transform; offsets that are multiples of pi/2 (revolute) and all
    prismatic offsets fold into the constants, and a constant rotation about a joint's axis (or
    about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`); a
-   constant rotation between two revolute joints is written ``Rz(gamma) Rx(alpha) Rz(delta)`` and its
-   turns go into the angles of the joints on either side (:func:`_twists_into_angles`).
+   constant rotation next to a revolute joint (between two, before a prismatic joint, or in the tool
+   transform) is written ``Rz(gamma) Rx(alpha) Rz(delta)`` and its turns go into the angles of the revolute
+   joints on either side (:func:`_twists_into_angles`).
 2. **Segments** (:func:`_frames`): consecutive joints whose axes are parallel (the constant
    rotation between them is about ``z``: UR5's joints 2-4, every planar arm) share one frame
    ``F_s``; their angles add up (``psi_k = psi_(k-1) + beta_k + theta_k``), one sine and one
