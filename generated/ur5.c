@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x49d9a2c0UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x13225d07UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -4730,7 +4730,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 }
 
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
-/* operations: 0 sin, 0 cos, 576 add/sub, 622 mul, 36 neg, 52 div, 21 sqrt */
+/* operations: 0 sin, 0 cos, 574 add/sub, 622 mul, 36 neg, 52 div, 21 sqrt */
 
 static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, double *restrict Q, double *restrict flags)
 {
@@ -4750,7 +4750,6 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1365 = t1358 + t1359 + t1357*t1357;
     const double t1366 = (t1361 >= t1363 && t1361 <= 1e-10*t1360 ? 1.0 : 0.0);
     const double t1367 = (t1360 <= 1e-18*t1365 ? 1.0 : 0.0);
-    const double t1368 = 1.0 - (1.0 - t1366)*(1.0 - t1367);
     const double t1369 = -0.10915*t1356;
     const double t1370 = t1369 - t1355*t1362;
     const double t1371 = 0.10915*t1355;
@@ -5445,7 +5444,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t2021 = 1.0 - t1364;
     const double t2022 = 1.0 - t1430;
     const double t2023 = t2020*t2021*(1.0 - t1549)*t2022;
-    const double t2024 = 1.0 - t1368;
+    const double t2024 = (1.0 - t1366)*(1.0 - t1367);
     const double t2025 = 1.0 - t1550;
     const double t2026 = 1.0 - t1431;
     const double t2027 = 1.0 - t1538;

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x49d9a2c0
+STAMP = 0x13225d07
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -3505,7 +3505,6 @@ def _ik_candidates_core(target, Q, flags):
     t1365 = t1358 + t1359 + t1357*t1357
     t1366 = np.where((t1361 >= t1363) & (t1361 <= 1e-10*t1360), 1.0, 0.0)
     t1367 = np.where(t1360 <= 1e-18*t1365, 1.0, 0.0)
-    t1368 = 1.0 - (1.0 - t1366)*(1.0 - t1367)
     t1369 = -0.10915*t1356
     t1370 = t1369 - t1355*t1362
     t1371 = 0.10915*t1355
@@ -4152,7 +4151,7 @@ def _ik_candidates_core(target, Q, flags):
     t2021 = 1.0 - t1364
     t2022 = 1.0 - t1430
     t2023 = t2020*t2021*(1.0 - t1549)*t2022
-    t2024 = 1.0 - t1368
+    t2024 = (1.0 - t1366)*(1.0 - t1367)
     t2025 = 1.0 - t1550
     t2026 = 1.0 - t1431
     t2027 = 1.0 - t1538
@@ -4230,7 +4229,7 @@ def ik_candidates(target):
 
     target: array of shape (..., 16), finite.
     Returns Q of shape (..., 8, 6), flags of shape (..., 8).
-    Operations: 0 sin, 0 cos, 1234 add/sub/mul/neg.
+    Operations: 0 sin, 0 cos, 1232 add/sub/mul/neg.
     """
     batch, (target,) = _inputs((target,), ("target", ), (16, ), ("finite", ))
     outputs = (np.empty(batch + (48,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), )

@@ -32,12 +32,13 @@ import sympy as sp
 from sympy.utilities.iterables import iterable as _sympy_iterable
 
 from ..derive.core import ARGUMENT_ROLES, Derivation, FunctionSpec
+from .constants import fold_constants
 from .count import count_ops
 from .products import reuse_products
 from .signs import settle_signs
 from .unread import drop_unread
 from .nodes import (
-    Add, Argument, Call1, Call2, Compare, Const, Div, Elem, Expr, Function, Let, Logic, Mul, NamedConst, Neg, Not,
+    LONG_SUM, Add, Argument, Call1, Call2, Compare, Const, Div, Elem, Expr, Function, Let, Logic, Mul, NamedConst, Neg, Not,
     Role, Select, Store, TrigBlock, Type, Var,
 )
 
@@ -598,8 +599,6 @@ class Converter:
         return not ((den.is_Number and float(den) > 0) or den in self.plain)
 
 
-LONG_SUM = 8
-"""Sums of more terms are evaluated as balanced trees (see :func:`_sum`)."""
 
 
 def _sum(plus: list[Expr], minus: list[Neg]) -> Expr:
@@ -747,10 +746,10 @@ class Lowering:
 
 @lru_cache(maxsize=512)
 def _per_function_passes(body: tuple) -> tuple:
-    """A function's statements after :func:`~.products.reuse_products`, :func:`~.signs.settle_signs` and
-    :func:`~.unread.drop_unread`; remembered, as the same derivation is lowered again for each generation of
-    it (a test session's many)."""
-    return drop_unread(settle_signs(reuse_products(body)))
+    """A function's statements after :func:`~.products.reuse_products`, :func:`~.signs.settle_signs`,
+    :func:`~.constants.fold_constants` and :func:`~.unread.drop_unread`; remembered, as the same derivation is
+    lowered again for each generation of it (a test session's many)."""
+    return drop_unread(fold_constants(settle_signs(reuse_products(body))))
 
 
 def lower_function(derivation: Derivation, spec: FunctionSpec, program: Program) -> Function:

@@ -32,6 +32,10 @@ from enum import Enum
 from typing import Union
 
 
+LONG_SUM = 8
+"""Sums of more terms are lowered as balanced trees of :class:`Add` (``lower._sum``); no pass writes a longer one."""
+
+
 class Type(str, Enum):
     """Scalar types: the module's real type (``double`` or ``float``), ``int`` and ``bool``."""
 
