@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x55f7236dUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xec4d21bbUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -321,14 +321,14 @@ static DIFFDRIVE_VECTORIZE void diffdrive_trig512(const double *restrict ang, do
 }
 
 /* ---- diffdrive_body_rates: body rates (v, omega) from wheel speeds (v_L, v_R) ---- */
-/* operations: 0 sin, 0 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
+/* operations: 0 sin, 0 cos, 2 add/sub, 2 mul, 0 neg, 1 div */
 
 static DIFFDRIVE_LIGHT void diffdrive_body_rates_finish(const double *restrict wheels, double track, double *restrict rates)
 {
-    const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
+    const double t0 = 0.5*(wheels[0] + wheels[1]);
     rates[0] = t0;
     const double t1 = 1.0/track;
-    const double t2 = wheels[1]*t1 - wheels[0]*t1;
+    const double t2 = t1*(wheels[1] - wheels[0]);
     rates[1] = t2;
 }
 
@@ -414,7 +414,7 @@ void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, d
 #endif
 
 /* ---- diffdrive_pose_rate: pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R) ---- */
-/* operations: 1 sin, 1 cos, 2 add/sub, 6 mul, 0 neg, 1 div */
+/* operations: 1 sin, 1 cos, 2 add/sub, 4 mul, 0 neg, 1 div */
 
 static DIFFDRIVE_LIGHT void diffdrive_pose_rate_angles(const double *restrict pose, double *restrict ang)
 {
@@ -423,11 +423,11 @@ static DIFFDRIVE_LIGHT void diffdrive_pose_rate_angles(const double *restrict po
 
 static DIFFDRIVE_LIGHT void diffdrive_pose_rate_finish(const double *restrict wheels, double track, const double *restrict cs, const double *restrict sn, double *restrict dpose)
 {
-    const double t0 = 0.5*wheels[0] + 0.5*wheels[1];
+    const double t0 = 0.5*(wheels[0] + wheels[1]);
     dpose[0] = t0*cs[0];
     dpose[1] = t0*sn[0];
     const double t1 = 1.0/track;
-    const double t2 = wheels[1]*t1 - wheels[0]*t1;
+    const double t2 = t1*(wheels[1] - wheels[0]);
     dpose[2] = t2;
 }
 

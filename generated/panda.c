@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xcefd23d7UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x659f620bUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -3742,7 +3742,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 6 sin, 6 cos, 751 add/sub, 1088 mul, 7 neg, 6 div, 6 sqrt */
+/* operations: 6 sin, 6 cos, 751 add/sub, 1073 mul, 7 neg, 6 div, 6 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
@@ -4199,14 +4199,14 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t575 = t19*t27 - t21*t25;
     const double t576 = t227*t267 - t266*t219;
     const double t577 = t267*t324 - t323*t258;
-    const double t578 = t266*t324*t219 - t577*t227 - t322*t219*t258;
+    const double t578 = t219*(t266*t324 - t322*t258) - t577*t227;
     const double t579 = t324*t396 - t395*t313;
-    const double t580 = t323*t396*t258 - t579*t267 - t394*t258*t313;
-    const double t581 = t322*t396*t219*t258 - t580*t227 - t579*t266*t219 - t393*t219*t258*t313;
+    const double t580 = t258*(t323*t396 - t394*t313) - t579*t267;
+    const double t581 = t219*(t258*(t322*t396 - t393*t313) - t579*t266) - t580*t227;
     const double t582 = t396*t485 - t484*t384;
-    const double t583 = t395*t485*t313 - t582*t324 - t483*t313*t384;
-    const double t584 = t394*t485*t258*t313 - t583*t267 - t582*t323*t258 - t482*t258*t313*t384;
-    const double t585 = t393*t485*t219*t258*t313 - t584*t227 - t583*t266*t219 - t582*t322*t219*t258 - t481*t219*t258*t313*t384;
+    const double t583 = t313*(t395*t485 - t483*t384) - t582*t324;
+    const double t584 = t258*(t313*(t394*t485 - t482*t384) - t582*t323) - t583*t267;
+    const double t585 = t219*(t258*(t313*(t393*t485 - t481*t384) - t582*t322) - t583*t266) - t584*t227;
     const double t586 = t219*t258*t313*t384*t472;
     const double t587 = t227*t258*t313*t384*t472;
     const double t588 = t576*t313*t384*t472;

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x13225d07UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xc6160751UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -2355,7 +2355,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 5 sin, 5 cos, 312 add/sub, 404 mul, 3 neg, 5 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 312 add/sub, 400 mul, 3 neg, 5 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_angles(const double *restrict q, double *restrict ang)
 {
@@ -2464,7 +2464,7 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t186 = t183*t178;
     const double t187 = t183*t179;
     const double t188 = t183*t180;
-    const double t191 = t3*t135 + t132*sn[0] + t133*sn[0] + t134*sn[0];
+    const double t191 = t3*t135 + sn[0]*(t132 + t133 + t134);
     const double t192 = t191*t131;
     const double t193 = sn[0] - t191*t132;
     const double t194 = sn[0] - t191*t133;
@@ -2510,7 +2510,7 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t234 = t230*t225;
     const double t235 = t230*t226;
     const double t236 = t9*t230;
-    const double t240 = cs[0]*t132 - t5*t135 + cs[0]*t133 + cs[0]*t134;
+    const double t240 = cs[0]*(t132 + t133 + t134) - t5*t135;
     const double t241 = -t240*t131;
     const double t243 = t240*t132 - cs[0];
     const double t244 = t240*t133 - cs[0];
@@ -3123,7 +3123,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 5 sin, 5 cos, 523 add/sub, 726 mul, 6 neg, 6 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 523 add/sub, 707 mul, 6 neg, 6 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
@@ -3235,7 +3235,7 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t188 = t183*t180;
     const double t189 = t157 + t169;
     const double t190 = t163 + t175;
-    const double t191 = t3*t135 + t132*sn[0] + t133*sn[0] + t134*sn[0];
+    const double t191 = t3*t135 + sn[0]*(t132 + t133 + t134);
     const double t192 = t191*t131;
     const double t193 = sn[0] - t191*t132;
     const double t194 = sn[0] - t191*t133;
@@ -3284,7 +3284,7 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t237 = t191 + t209;
     const double t238 = t197 + t215;
     const double t239 = t203 + t221;
-    const double t240 = cs[0]*t132 - t5*t135 + cs[0]*t133 + cs[0]*t134;
+    const double t240 = cs[0]*(t132 + t133 + t134) - t5*t135;
     const double t241 = -t240*t131;
     const double t242 = -cs[0];
     const double t243 = t240*t132 - cs[0];
@@ -3450,14 +3450,14 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t406 = t3*t11 - t5*t9;
     const double t407 = t156*t190 - t189*t149;
     const double t408 = t190*t239 - t238*t182;
-    const double t409 = t189*t239*t149 - t408*t156 - t237*t149*t182;
+    const double t409 = t149*(t189*t239 - t237*t182) - t408*t156;
     const double t410 = t239*t303 - t302*t229;
-    const double t411 = t238*t303*t182 - t410*t190 - t301*t182*t229;
-    const double t412 = t237*t303*t149*t182 - t411*t156 - t410*t189*t149 - t300*t149*t182*t229;
+    const double t411 = t182*(t238*t303 - t301*t229) - t410*t190;
+    const double t412 = t149*(t182*(t237*t303 - t300*t229) - t410*t189) - t411*t156;
     const double t413 = t303*t382 - t381*t292;
-    const double t414 = t302*t382*t229 - t413*t239 - t380*t229*t292;
-    const double t415 = t301*t382*t182*t229 - t414*t190 - t413*t238*t182 - t379*t182*t229*t292;
-    const double t416 = t300*t382*t149*t182*t229 - t415*t156 - t414*t189*t149 - t413*t237*t149*t182 - t378*t149*t182*t229*t292;
+    const double t414 = t229*(t302*t382 - t380*t292) - t413*t239;
+    const double t415 = t182*(t229*(t301*t382 - t379*t292) - t413*t238) - t414*t190;
+    const double t416 = t149*(t182*(t229*(t300*t382 - t378*t292) - t413*t237) - t414*t189) - t415*t156;
     const double t417 = t149*t182*t229*t292*t370;
     const double t418 = t156*t182*t229*t292*t370;
     const double t419 = t407*t229*t292*t370;
@@ -3564,7 +3564,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 897 add/sub, 1130 mul, 9 neg, 13 div, 13 sqrt */
+/* operations: 5 sin, 5 cos, 897 add/sub, 1126 mul, 9 neg, 13 div, 13 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -3700,7 +3700,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t571 = (t564 ? t566*t561 : 0.0);
     const double t572 = t538 + t550;
     const double t573 = t544 + t556;
-    const double t574 = t3*t514 + t511*sn[0] + t512*sn[0] + t513*sn[0];
+    const double t574 = t3*t514 + sn[0]*(t511 + t512 + t513);
     const double t575 = -t574*t510;
     const double t576 = sn[0] - t574*t511;
     const double t577 = sn[0] - t574*t512;
@@ -3750,7 +3750,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t621 = t574 + t592;
     const double t622 = t580 + t598;
     const double t623 = t586 + t604;
-    const double t624 = cs[0]*t511 - t5*t514 + cs[0]*t512 + cs[0]*t513;
+    const double t624 = cs[0]*(t511 + t512 + t513) - t5*t514;
     const double t625 = t624*t510;
     const double t626 = t624*t511 - cs[0];
     const double t627 = t624*t512 - cs[0];
@@ -4730,7 +4730,7 @@ void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA)
 }
 
 /* ---- ur5_ik_candidates: every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S) ---- */
-/* operations: 0 sin, 0 cos, 574 add/sub, 622 mul, 36 neg, 52 div, 21 sqrt */
+/* operations: 0 sin, 0 cos, 574 add/sub, 614 mul, 36 neg, 52 div, 21 sqrt */
 
 static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, double *restrict Q, double *restrict flags)
 {
@@ -4894,7 +4894,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1500 = -0.09465*t1421;
     const double t1501 = 0.09465*t1419;
     const double t1502 = 0.5*t1424;
-    const double t1503 = 0.0104361725 + 0.5*t1422 + 0.5*t1423 + t1502 + 0.10915*t1420 - 0.5*t1426;
+    const double t1503 = 0.0104361725 + 0.5*(t1422 + t1423 - t1426) + t1502 + 0.10915*t1420;
     const double t1504 = t1500*t1500;
     const double t1505 = t1504 + t1501*t1501;
     const double t1506 = t1505 - t1503*t1503;
@@ -4939,7 +4939,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1543 = t1540*t1540;
     const double t1544 = -0.5*t1543;
     const double t1545 = (t1541 - 0.089159)*(t1541 - 0.089159);
-    const double t1546 = 0.16724253125 + t1544 - 0.5*t1542 - 0.5*t1545;
+    const double t1546 = 0.16724253125 + t1544 - 0.5*(t1542 + t1545);
     const double t1547 = 0.0277909737890625 - t1546*t1546;
     const double t1548 = (t1547 > 0.0 ? sqrt(t1547) : 0.0);
     const double t1549 = (t1547 < -2.77909737890625e-12 ? 1.0 : 0.0);
@@ -5039,7 +5039,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1633 = t1357 + 0.09465*t1630;
     const double t1634 = t1632*t1632;
     const double t1635 = (t1633 - 0.089159)*(t1633 - 0.089159);
-    const double t1636 = 0.16724253125 + t1544 - 0.5*t1634 - 0.5*t1635;
+    const double t1636 = 0.16724253125 + t1544 - 0.5*(t1634 + t1635);
     const double t1637 = 0.0277909737890625 - t1636*t1636;
     const double t1638 = (t1637 > 0.0 ? sqrt(t1637) : 0.0);
     const double t1639 = (t1637 < -2.77909737890625e-12 ? 1.0 : 0.0);
@@ -5210,7 +5210,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1796 = t1792*target[8] - t1793*target[9] - t1766;
     const double t1797 = t1794*t1413 + t1795*t1414;
     const double t1798 = 0.09465*t1720;
-    const double t1799 = 0.0104361725 + 0.5*t1722 + 0.5*t1723 + t1502 + 0.10915*t1721 - 0.5*t1725;
+    const double t1799 = 0.0104361725 + 0.5*(t1722 + t1723 - t1725) + t1502 + 0.10915*t1721;
     const double t1800 = t1504 + t1798*t1798;
     const double t1801 = t1800 - t1799*t1799;
     const double t1802 = (t1801 > 0.0 ? sqrt(t1801) : 0.0);
@@ -5254,7 +5254,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1838 = t1835*t1835;
     const double t1839 = -0.5*t1838;
     const double t1840 = (t1836 - 0.089159)*(t1836 - 0.089159);
-    const double t1841 = 0.16724253125 + t1839 - 0.5*t1837 - 0.5*t1840;
+    const double t1841 = 0.16724253125 + t1839 - 0.5*(t1837 + t1840);
     const double t1842 = 0.0277909737890625 - t1841*t1841;
     const double t1843 = (t1842 > 0.0 ? sqrt(t1842) : 0.0);
     const double t1844 = (t1842 < -2.77909737890625e-12 ? 1.0 : 0.0);
@@ -5354,7 +5354,7 @@ static UR5_LIGHT void ur5_ik_candidates_finish(const double *restrict target, do
     const double t1928 = t1357 + 0.09465*t1925;
     const double t1929 = t1927*t1927;
     const double t1930 = (t1928 - 0.089159)*(t1928 - 0.089159);
-    const double t1931 = 0.16724253125 + t1839 - 0.5*t1929 - 0.5*t1930;
+    const double t1931 = 0.16724253125 + t1839 - 0.5*(t1929 + t1930);
     const double t1932 = 0.0277909737890625 - t1931*t1931;
     const double t1933 = (t1932 > 0.0 ? sqrt(t1932) : 0.0);
     const double t1934 = (t1932 < -2.77909737890625e-12 ? 1.0 : 0.0);

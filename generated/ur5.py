@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x13225d07
+STAMP = 0xc6160751
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -1360,7 +1360,7 @@ def _manipulability_core(q, w):
     t186 = t183*t178
     t187 = t183*t179
     t188 = t183*t180
-    t191 = t3*t135 + t132*sn[..., 0] + t133*sn[..., 0] + t134*sn[..., 0]
+    t191 = t3*t135 + sn[..., 0]*(t132 + t133 + t134)
     t192 = t191*t131
     t193 = sn[..., 0] - t191*t132
     t194 = sn[..., 0] - t191*t133
@@ -1406,7 +1406,7 @@ def _manipulability_core(q, w):
     t234 = t230*t225
     t235 = t230*t226
     t236 = t9*t230
-    t240 = cs[..., 0]*t132 - t5*t135 + cs[..., 0]*t133 + cs[..., 0]*t134
+    t240 = cs[..., 0]*(t132 + t133 + t134) - t5*t135
     t241 = -t240*t131
     t243 = t240*t132 - cs[..., 0]
     t244 = t240*t133 - cs[..., 0]
@@ -1541,7 +1541,7 @@ def manipulability(q):
 
     q: array of shape (..., 6), finite.
     Returns w of shape (..., 1).
-    Operations: 5 sin, 5 cos, 719 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 715 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -2066,7 +2066,7 @@ def _manipulability_gradient_core(q, grad):
     t188 = t183*t180
     t189 = t157 + t169
     t190 = t163 + t175
-    t191 = t3*t135 + t132*sn[..., 0] + t133*sn[..., 0] + t134*sn[..., 0]
+    t191 = t3*t135 + sn[..., 0]*(t132 + t133 + t134)
     t192 = t191*t131
     t193 = sn[..., 0] - t191*t132
     t194 = sn[..., 0] - t191*t133
@@ -2115,7 +2115,7 @@ def _manipulability_gradient_core(q, grad):
     t237 = t191 + t209
     t238 = t197 + t215
     t239 = t203 + t221
-    t240 = cs[..., 0]*t132 - t5*t135 + cs[..., 0]*t133 + cs[..., 0]*t134
+    t240 = cs[..., 0]*(t132 + t133 + t134) - t5*t135
     t241 = -t240*t131
     t242 = -cs[..., 0]
     t243 = t240*t132 - cs[..., 0]
@@ -2281,14 +2281,14 @@ def _manipulability_gradient_core(q, grad):
     t406 = t3*t11 - t5*t9
     t407 = t156*t190 - t189*t149
     t408 = t190*t239 - t238*t182
-    t409 = t189*t239*t149 - t408*t156 - t237*t149*t182
+    t409 = t149*(t189*t239 - t237*t182) - t408*t156
     t410 = t239*t303 - t302*t229
-    t411 = t238*t303*t182 - t410*t190 - t301*t182*t229
-    t412 = t237*t303*t149*t182 - t411*t156 - t410*t189*t149 - t300*t149*t182*t229
+    t411 = t182*(t238*t303 - t301*t229) - t410*t190
+    t412 = t149*(t182*(t237*t303 - t300*t229) - t410*t189) - t411*t156
     t413 = t303*t382 - t381*t292
-    t414 = t302*t382*t229 - t413*t239 - t380*t229*t292
-    t415 = t301*t382*t182*t229 - t414*t190 - t413*t238*t182 - t379*t182*t229*t292
-    t416 = t300*t382*t149*t182*t229 - t415*t156 - t414*t189*t149 - t413*t237*t149*t182 - t378*t149*t182*t229*t292
+    t414 = t229*(t302*t382 - t380*t292) - t413*t239
+    t415 = t182*(t229*(t301*t382 - t379*t292) - t413*t238) - t414*t190
+    t416 = t149*(t182*(t229*(t300*t382 - t378*t292) - t413*t237) - t414*t189) - t415*t156
     t417 = t149*t182*t229*t292*t370
     t418 = t156*t182*t229*t292*t370
     t419 = t407*t229*t292*t370
@@ -2369,7 +2369,7 @@ def manipulability_gradient(q):
 
     q: array of shape (..., 6), finite.
     Returns grad of shape (..., 6).
-    Operations: 5 sin, 5 cos, 1255 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 1236 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -2511,7 +2511,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t571 = np.where(t564, t566*t561, 0.0)
     t572 = t538 + t550
     t573 = t544 + t556
-    t574 = t3*t514 + t511*sn[..., 0] + t512*sn[..., 0] + t513*sn[..., 0]
+    t574 = t3*t514 + sn[..., 0]*(t511 + t512 + t513)
     t575 = -t574*t510
     t576 = sn[..., 0] - t574*t511
     t577 = sn[..., 0] - t574*t512
@@ -2561,7 +2561,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t621 = t574 + t592
     t622 = t580 + t598
     t623 = t586 + t604
-    t624 = cs[..., 0]*t511 - t5*t514 + cs[..., 0]*t512 + cs[..., 0]*t513
+    t624 = cs[..., 0]*(t511 + t512 + t513) - t5*t514
     t625 = t624*t510
     t626 = t624*t511 - cs[..., 0]
     t627 = t624*t512 - cs[..., 0]
@@ -3134,7 +3134,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 5 sin, 5 cos, 2036 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 2032 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (6, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -3639,7 +3639,7 @@ def _ik_candidates_core(target, Q, flags):
     t1500 = -0.09465*t1421
     t1501 = 0.09465*t1419
     t1502 = 0.5*t1424
-    t1503 = 0.0104361725 + 0.5*t1422 + 0.5*t1423 + t1502 + 0.10915*t1420 - 0.5*t1426
+    t1503 = 0.0104361725 + 0.5*(t1422 + t1423 - t1426) + t1502 + 0.10915*t1420
     t1504 = t1500*t1500
     t1505 = t1504 + t1501*t1501
     t1506 = t1505 - t1503*t1503
@@ -3682,7 +3682,7 @@ def _ik_candidates_core(target, Q, flags):
     t1543 = t1540*t1540
     t1544 = -0.5*t1543
     t1545 = (t1541 - 0.089159)*(t1541 - 0.089159)
-    t1546 = 0.16724253125 + t1544 - 0.5*t1542 - 0.5*t1545
+    t1546 = 0.16724253125 + t1544 - 0.5*(t1542 + t1545)
     t1547 = 0.0277909737890625 - t1546*t1546
     t1548 = np.where(t1547 > 0.0, np.sqrt(t1547), 0.0)
     t1549 = np.where(t1547 < -2.77909737890625e-12, 1.0, 0.0)
@@ -3772,7 +3772,7 @@ def _ik_candidates_core(target, Q, flags):
     t1633 = t1357 + 0.09465*t1630
     t1634 = t1632*t1632
     t1635 = (t1633 - 0.089159)*(t1633 - 0.089159)
-    t1636 = 0.16724253125 + t1544 - 0.5*t1634 - 0.5*t1635
+    t1636 = 0.16724253125 + t1544 - 0.5*(t1634 + t1635)
     t1637 = 0.0277909737890625 - t1636*t1636
     t1638 = np.where(t1637 > 0.0, np.sqrt(t1637), 0.0)
     t1639 = np.where(t1637 < -2.77909737890625e-12, 1.0, 0.0)
@@ -3935,7 +3935,7 @@ def _ik_candidates_core(target, Q, flags):
     t1796 = t1792*target[..., 8] - t1793*target[..., 9] - t1766
     t1797 = t1794*t1413 + t1795*t1414
     t1798 = 0.09465*t1720
-    t1799 = 0.0104361725 + 0.5*t1722 + 0.5*t1723 + t1502 + 0.10915*t1721 - 0.5*t1725
+    t1799 = 0.0104361725 + 0.5*(t1722 + t1723 - t1725) + t1502 + 0.10915*t1721
     t1800 = t1504 + t1798*t1798
     t1801 = t1800 - t1799*t1799
     t1802 = np.where(t1801 > 0.0, np.sqrt(t1801), 0.0)
@@ -3977,7 +3977,7 @@ def _ik_candidates_core(target, Q, flags):
     t1838 = t1835*t1835
     t1839 = -0.5*t1838
     t1840 = (t1836 - 0.089159)*(t1836 - 0.089159)
-    t1841 = 0.16724253125 + t1839 - 0.5*t1837 - 0.5*t1840
+    t1841 = 0.16724253125 + t1839 - 0.5*(t1837 + t1840)
     t1842 = 0.0277909737890625 - t1841*t1841
     t1843 = np.where(t1842 > 0.0, np.sqrt(t1842), 0.0)
     t1844 = np.where(t1842 < -2.77909737890625e-12, 1.0, 0.0)
@@ -4067,7 +4067,7 @@ def _ik_candidates_core(target, Q, flags):
     t1928 = t1357 + 0.09465*t1925
     t1929 = t1927*t1927
     t1930 = (t1928 - 0.089159)*(t1928 - 0.089159)
-    t1931 = 0.16724253125 + t1839 - 0.5*t1929 - 0.5*t1930
+    t1931 = 0.16724253125 + t1839 - 0.5*(t1929 + t1930)
     t1932 = 0.0277909737890625 - t1931*t1931
     t1933 = np.where(t1932 > 0.0, np.sqrt(t1932), 0.0)
     t1934 = np.where(t1932 < -2.77909737890625e-12, 1.0, 0.0)
@@ -4229,7 +4229,7 @@ def ik_candidates(target):
 
     target: array of shape (..., 16), finite.
     Returns Q of shape (..., 8, 6), flags of shape (..., 8).
-    Operations: 0 sin, 0 cos, 1232 add/sub/mul/neg.
+    Operations: 0 sin, 0 cos, 1224 add/sub/mul/neg.
     """
     batch, (target,) = _inputs((target,), ("target", ), (16, ), ("finite", ))
     outputs = (np.empty(batch + (48,), dtype=DTYPE), np.empty(batch + (8,), dtype=DTYPE), )

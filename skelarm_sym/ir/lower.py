@@ -33,6 +33,7 @@ from sympy.utilities.iterables import iterable as _sympy_iterable
 
 from ..derive.core import ARGUMENT_ROLES, Derivation, FunctionSpec
 from .constants import fold_constants
+from .factors import factor_sums
 from .count import count_ops
 from .products import reuse_products
 from .signs import settle_signs
@@ -747,9 +748,9 @@ class Lowering:
 @lru_cache(maxsize=512)
 def _per_function_passes(body: tuple) -> tuple:
     """A function's statements after :func:`~.products.reuse_products`, :func:`~.signs.settle_signs`,
-    :func:`~.constants.fold_constants` and :func:`~.unread.drop_unread`; remembered, as the same derivation is
-    lowered again for each generation of it (a test session's many)."""
-    return drop_unread(fold_constants(settle_signs(reuse_products(body))))
+    :func:`~.constants.fold_constants`, :func:`~.factors.factor_sums` and :func:`~.unread.drop_unread`;
+    remembered, as the same derivation is lowered again for each generation of it (a test session's many)."""
+    return drop_unread(factor_sums(fold_constants(settle_signs(reuse_products(body)))))
 
 
 def lower_function(derivation: Derivation, spec: FunctionSpec, program: Program) -> Function:
