@@ -2,6 +2,7 @@
 
     python benchmarks/batch_ab.py --before /path/to/other/checkout/.venv/bin/python
     python benchmarks/batch_ab.py --before ... --cases links:2:kinematics,robot:examples/robots/panda.toml:jacobian
+    python benchmarks/batch_ab.py --before ... --cases robot:path/to/ur5_robot.urdf@tool0:pose   # a URDF's tip after @
 
 Each case is generated twice, by this checkout (``after``) and by the Python of another checkout
 (``before``: the interpreter of a virtual environment where that checkout is installed), with prefixes
@@ -93,7 +94,11 @@ int main(int argc, char **argv)
 
 
 def model_of(kind: str, what: str):
-    return PlanarArm(int(what)) if kind == "links" else load_robot(ROOT / what)
+    """A planar arm of ``what`` links, or the robot file ``what`` (a URDF's tip after ``@``: ``panda.urdf@panda_hand``)."""
+    if kind == "links":
+        return PlanarArm(int(what))
+    path, _, tip = what.partition("@")
+    return load_robot(ROOT / path, tip=tip or None)
 
 
 def driver(kind: str, what: str, function: str, repeats: int) -> str:
@@ -148,9 +153,10 @@ def main() -> None:
         work = Path(tmp)
         for case in args.cases.split(","):
             kind, what, function = case.split(":")
-            folder = work / f"{kind}_{Path(what).stem}_{function}"
+            path, _, tip = what.partition("@")
+            folder = work / f"{kind}_{Path(path).stem}_{function}"
             folder.mkdir()
-            source = ["--links", what] if kind == "links" else ["--robot", str(ROOT / what)]
+            source = ["--links", what] if kind == "links" else ["--robot", str(ROOT / path)] + (["--tip", tip] if tip else [])
             for label, python in (("before", args.before), ("after", sys.executable)):
                 subprocess.run([python, "-m", "skelarm_sym", "generate", *source, "--lang", "c", "--functions", function,
                                 "--prefix", f"{label}_x", "--out", str(folder), "--force"], check=True, capture_output=True,
@@ -161,7 +167,7 @@ def main() -> None:
                             str(folder / "after_x.c"), "-o", str(exe), "-lm"], check=True)
             out = subprocess.run([str(exe), str(args.large), str(args.quantile)], capture_output=True, text=True, check=True).stdout.split()
             v = [float(x) for x in out[:6]]
-            name = f"planar n = {what}" if kind == "links" else Path(what).stem
+            name = f"planar n = {what}" if kind == "links" else Path(path).stem + (f" ({tip})" if tip else "")
             print(f"| {name} | {function} | {v[0]:.1f} | {v[1]:.1f} | {v[1] / v[0]:.2f} | {v[2]:.1f} | {v[3]:.1f} | "
                   f"{v[3] / v[2]:.2f} | {v[4]:.1f} | {v[5]:.1f} | {v[5] / v[4]:.2f} |", flush=True)
 
