@@ -13,17 +13,26 @@ from __future__ import annotations
 from collections import Counter
 from typing import Sequence
 
-from .nodes import LONG_SUM, Add, Const, Let, Neg, Store, TrigBlock, Var
+from .nodes import LONG_SUM, Add, Const, Let, Mul, Neg, Store, TrigBlock, Var
 from .walk import children
 
 
 def _reads(e, counts: Counter) -> None:
+    """Add to ``counts`` how many times ``e`` reads each variable (the common nodes first: this walks every
+    statement of the body)."""
     stack = [e]
     while stack:
         x = stack.pop()
-        if type(x) is Var:
+        t = type(x)
+        if t is Var:
             counts[x.name] += 1
-        else:
+        elif t is Mul:
+            stack.extend(x.factors)
+        elif t is Add:
+            stack.extend(x.terms)
+        elif t is Neg:
+            stack.append(x.x)
+        elif t is not Const:
             stack.extend(children(x))
 
 
@@ -55,53 +64,47 @@ def _literal_term(value: float):
 def fold_constants(body: Sequence) -> tuple:
     """``body`` (straight-line: lets, trigonometry blocks, stores) with each sum ``x + c1`` that one sum
     ``... + c2`` reads once, as a term, folded into it (``... + x + (c1 + c2)``; a literal of 0 dropped, and a
-    sum left with one term that term); any other body comes back as it is."""
+    sum left with one term that term); any other body comes back as it is.
+
+    One pass in order: a fold moves the local's terms into its reader, so every other count of reads stays
+    what it was, and a chain of such locals folds into its last reader one after the other."""
     if not all(type(s) in (Let, TrigBlock, Store) for s in body):
         return tuple(body)
     statements = list(body)
-    while True:
-        counts: Counter = Counter()
-        for s in statements:
-            if type(s) is TrigBlock:
-                for angle in s.angles:
-                    _reads(angle, counts)
-            else:
-                _reads(s.value, counts)
-        defined = {s.var.name: i for i, s in enumerate(statements) if type(s) is Let}
-        folded = False
-        for j, reader in enumerate(statements):
-            if type(reader) is TrigBlock or type(reader.value) is not Add:
-                continue
-            outer = _split(reader.value)
-            if outer is None:
-                continue
+    counts: Counter = Counter()
+    for s in statements:
+        if type(s) is TrigBlock:
+            for angle in s.angles:
+                _reads(angle, counts)
+        else:
+            _reads(s.value, counts)
+    defined = {s.var.name: i for i, s in enumerate(statements) if type(s) is Let}
+    dropped: set[int] = set()
+    for j, reader in enumerate(statements):
+        if type(reader) is TrigBlock:
+            continue
+        while type(reader.value) is Add and (outer := _split(reader.value)) is not None:
             for term in outer[1]:
-                inner_var = term.x if type(term) is Neg else term
-                if type(inner_var) is not Var or counts[inner_var.name] != 1 or inner_var.name not in defined:
+                local = term.x if type(term) is Neg else term
+                i = defined.get(local.name, j) if type(local) is Var and counts[local.name] == 1 else j
+                if i >= j or i in dropped or type(statements[i].value) is not Add:
                     continue
-                i = defined[inner_var.name]
-                inner = statements[i].value if i < j else None
-                if type(inner) is not Add:
-                    continue
-                split = _split(inner)
-                if split is None:
+                inner = _split(statements[i].value)
+                if inner is None:
                     continue
                 sign = -1.0 if type(term) is Neg else 1.0
-                value = outer[0] + sign * split[0]
-                others = [t for t in outer[1] if t is not term]
-                moved = split[1] if sign > 0 else [_negated(t) for t in split[1]]
-                terms = [*others, *moved] + ([_literal_term(value)] if value != 0.0 else [])
+                value = outer[0] + sign * inner[0]
+                moved = inner[1] if sign > 0 else [_negated(t) for t in inner[1]]
+                terms = [t for t in outer[1] if t is not term] + moved + ([_literal_term(value)] if value != 0.0 else [])
                 if len(terms) > LONG_SUM:
                     continue
-                value = Add(tuple(terms)) if len(terms) > 1 else terms[0]  # offsets that cancel: a copy (TIAGo)
-                statements[j] = type(reader)(**{**_fields(reader), "value": value})
-                del statements[i]
-                folded = True
+                reader = type(reader)(**{**_fields(reader), "value": Add(tuple(terms)) if len(terms) > 1 else terms[0]})
+                dropped.add(i)  # offsets that cancel leave a copy (TIAGo's t39 = (0.027 + t31) - 0.027)
                 break
-            if folded:
+            else:
                 break
-        if not folded:
-            return tuple(statements)
+        statements[j] = reader
+    return tuple(s for i, s in enumerate(statements) if i not in dropped)
 
 
 def _fields(statement) -> dict:

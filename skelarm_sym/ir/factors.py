@@ -30,7 +30,7 @@ def _without(factors: tuple, factor) -> object:
 
 def _factored(e):
     """``e`` with shared factors taken out of its sum's products (``e`` itself where none is shared)."""
-    if type(e) is not Add:
+    if type(e) is not Add or sum(1 for t in e.terms if type(t) is Mul or (type(t) is Neg and type(t.x) is Mul)) < 2:
         return e
     terms = list(e.terms)
     changed = False
