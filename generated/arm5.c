@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x794ad9e9UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xf4f4ef1eUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -379,7 +379,7 @@ static int arm5_finite(double x)
 #endif
 
 /* ---- arm5_position: endpoint position p (2) ---- */
-/* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 1 neg */
+/* operations: 5 sin, 5 cos, 12 add/sub, 10 mul, 0 neg */
 
 ARM5_BODY void arm5_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -404,13 +404,13 @@ ARM5_BODY void arm5_position_finish(const double *restrict l, const double *rest
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t15 = -t13 - t12;
+    const double t15 = t13 + t12;
     const double t16 = t7 + t8;
-    const double t17 = t15 - t11;
+    const double t17 = t15 + t11;
     const double t18 = t6 + t16;
-    const double t19 = t17 - t10;
+    const double t19 = t17 + t10;
     const double t20 = t5 + t18;
-    const double t21 = t9 - t19;
+    const double t21 = t19 + t9;
     p[1*ARM5_STRIDE] = t21;
     const double t22 = t4 + t20;
     p[0] = t22;
@@ -798,7 +798,7 @@ void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm5_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 2 neg */
+/* operations: 5 sin, 5 cos, 16 add/sub, 20 mul, 1 neg */
 
 ARM5_BODY void arm5_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -837,13 +837,13 @@ ARM5_BODY void arm5_velocity_finish(const double *restrict dq, const double *res
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t39 = -t31 - t30;
+    const double t39 = t31 + t30;
     const double t40 = -t36 - t35;
-    const double t41 = t39 - t29;
+    const double t41 = t39 + t29;
     const double t42 = t40 - t34;
-    const double t43 = t41 - t28;
+    const double t43 = t41 + t28;
     const double t44 = t42 - t33;
-    const double t45 = t27 - t43;
+    const double t45 = t43 + t27;
     v[1*ARM5_STRIDE] = t45;
     const double t46 = t44 - t32;
     v[0] = t46;
@@ -943,7 +943,7 @@ void arm5_velocity_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm5_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
-/* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 3 neg */
+/* operations: 5 sin, 5 cos, 42 add/sub, 40 mul, 1 neg */
 
 ARM5_BODY void arm5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -968,13 +968,13 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
     const double t12 = sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t15 = -t13 - t12;
+    const double t15 = t13 + t12;
     const double t16 = t7 + t8;
-    const double t17 = t15 - t11;
+    const double t17 = t15 + t11;
     const double t18 = t6 + t16;
-    const double t19 = t17 - t10;
+    const double t19 = t17 + t10;
     const double t20 = t5 + t18;
-    const double t21 = t19 - t9;
+    const double t21 = t19 + t9;
     const double t22 = t4 + t20;
     const double t23 = dq[0] + dq[1*ARM5_STRIDE];
     const double t24 = t23 + dq[2*ARM5_STRIDE];
@@ -991,15 +991,15 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t35 = t12*t25;
     const double t36 = t13*t26;
     const double t39 = -t31 - t30;
-    const double t40 = -t36 - t35;
+    const double t40 = t36 + t35;
     const double t41 = t39 - t29;
-    const double t42 = t40 - t34;
+    const double t42 = t40 + t34;
     const double t43 = t41 - t28;
-    const double t44 = t42 - t33;
+    const double t44 = t42 + t33;
     const double t45 = t43 - t27;
-    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] - t31*dq[4*ARM5_STRIDE]))) + ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] - t13*ddq[4*ARM5_STRIDE])));
-    const double t46 = t44 - t32;
-    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t22*ddq[0] - t36*dq[4*ARM5_STRIDE]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
+    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] - t31*dq[4*ARM5_STRIDE]))) - ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t13*ddq[4*ARM5_STRIDE])));
+    const double t46 = t44 + t32;
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] - t46*dq[0]) - (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t22*ddq[0] - t36*dq[4*ARM5_STRIDE]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 ARM5_SINGLE void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])

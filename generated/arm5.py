@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x794ad9e9
+STAMP = 0xf4f4ef1e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -291,13 +291,13 @@ def _position_core(q, l, p):
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t15 = -t13 - t12
+    t15 = t13 + t12
     t16 = t7 + t8
-    t17 = t15 - t11
+    t17 = t15 + t11
     t18 = t6 + t16
-    t19 = t17 - t10
+    t19 = t17 + t10
     t20 = t5 + t18
-    t21 = t9 - t19
+    t21 = t19 + t9
     t22 = t4 + t20
     p[..., 0] = t22
     p[..., 1] = t21
@@ -310,7 +310,7 @@ def position(q, l):
     q: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 5 sin, 5 cos, 23 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 22 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (5, 5, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -477,13 +477,13 @@ def _velocity_core(q, dq, l, v):
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t39 = -t31 - t30
+    t39 = t31 + t30
     t40 = -t36 - t35
-    t41 = t39 - t29
+    t41 = t39 + t29
     t42 = t40 - t34
-    t43 = t41 - t28
+    t43 = t41 + t28
     t44 = t42 - t33
-    t45 = t27 - t43
+    t45 = t43 + t27
     t46 = t44 - t32
     v[..., 0] = t46
     v[..., 1] = t45
@@ -497,7 +497,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 5 sin, 5 cos, 38 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 37 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (5, 5, 5, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -525,13 +525,13 @@ def _acceleration_core(q, dq, ddq, l, a):
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t15 = -t13 - t12
+    t15 = t13 + t12
     t16 = t7 + t8
-    t17 = t15 - t11
+    t17 = t15 + t11
     t18 = t6 + t16
-    t19 = t17 - t10
+    t19 = t17 + t10
     t20 = t5 + t18
-    t21 = t19 - t9
+    t21 = t19 + t9
     t22 = t4 + t20
     t23 = dq[..., 0] + dq[..., 1]
     t24 = t23 + dq[..., 2]
@@ -548,15 +548,15 @@ def _acceleration_core(q, dq, ddq, l, a):
     t35 = t12*t25
     t36 = t13*t26
     t39 = -t31 - t30
-    t40 = -t36 - t35
+    t40 = t36 + t35
     t41 = t39 - t29
-    t42 = t40 - t34
+    t42 = t40 + t34
     t43 = t41 - t28
-    t44 = t42 - t33
+    t44 = t42 + t33
     t45 = t43 - t27
-    t46 = t44 - t32
-    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] - t31*dq[..., 4]))) + ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] - t13*ddq[..., 4])))
-    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t22*ddq[..., 0] - t36*dq[..., 4]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
+    t46 = t44 + t32
+    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] - t31*dq[..., 4]))) - ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t13*ddq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] - t46*dq[..., 0]) - (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t22*ddq[..., 0] - t36*dq[..., 4]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors
@@ -568,7 +568,7 @@ def acceleration(q, dq, ddq, l):
     ddq: array of shape (..., 5), finite.
     l: array of shape (..., 5), finite and > 0.
     Returns a of shape (..., 2).
-    Operations: 5 sin, 5 cos, 85 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 83 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (5, 5, 5, 5, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )

@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x417bfa2cUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x5cb2819aUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -379,7 +379,7 @@ static int arm6_finite(double x)
 #endif
 
 /* ---- arm6_position: endpoint position p (2) ---- */
-/* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 1 neg */
+/* operations: 6 sin, 6 cos, 15 add/sub, 12 mul, 0 neg */
 
 ARM6_BODY void arm6_position_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -407,15 +407,15 @@ ARM6_BODY void arm6_position_finish(const double *restrict l, const double *rest
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t18 = -t16 - t15;
+    const double t18 = t16 + t15;
     const double t19 = t9 + t10;
-    const double t20 = t18 - t14;
+    const double t20 = t18 + t14;
     const double t21 = t8 + t19;
-    const double t22 = t20 - t13;
+    const double t22 = t20 + t13;
     const double t23 = t7 + t21;
-    const double t24 = t22 - t12;
+    const double t24 = t22 + t12;
     const double t25 = t6 + t23;
-    const double t26 = t11 - t24;
+    const double t26 = t24 + t11;
     p[1*ARM6_STRIDE] = t26;
     const double t27 = t5 + t25;
     p[0] = t27;
@@ -828,7 +828,7 @@ void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm6_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 2 neg */
+/* operations: 6 sin, 6 cos, 20 add/sub, 24 mul, 1 neg */
 
 ARM6_BODY void arm6_velocity_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -873,15 +873,15 @@ ARM6_BODY void arm6_velocity_finish(const double *restrict dq, const double *res
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t47 = -t38 - t37;
+    const double t47 = t38 + t37;
     const double t48 = -t44 - t43;
-    const double t49 = t47 - t36;
+    const double t49 = t47 + t36;
     const double t50 = t48 - t42;
-    const double t51 = t49 - t35;
+    const double t51 = t49 + t35;
     const double t52 = t50 - t41;
-    const double t53 = t51 - t34;
+    const double t53 = t51 + t34;
     const double t54 = t52 - t40;
-    const double t55 = t33 - t53;
+    const double t55 = t53 + t33;
     v[1*ARM6_STRIDE] = t55;
     const double t56 = t54 - t39;
     v[0] = t56;
@@ -983,7 +983,7 @@ void arm6_velocity_batch(size_t m, const double *q, const double *dq, const doub
 #endif
 
 /* ---- arm6_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
-/* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 3 neg */
+/* operations: 6 sin, 6 cos, 52 add/sub, 48 mul, 1 neg */
 
 ARM6_BODY void arm6_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1011,15 +1011,15 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
     const double t15 = sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t18 = -t16 - t15;
+    const double t18 = t16 + t15;
     const double t19 = t9 + t10;
-    const double t20 = t18 - t14;
+    const double t20 = t18 + t14;
     const double t21 = t8 + t19;
-    const double t22 = t20 - t13;
+    const double t22 = t20 + t13;
     const double t23 = t7 + t21;
-    const double t24 = t22 - t12;
+    const double t24 = t22 + t12;
     const double t25 = t6 + t23;
-    const double t26 = t24 - t11;
+    const double t26 = t24 + t11;
     const double t27 = t5 + t25;
     const double t28 = dq[0] + dq[1*ARM6_STRIDE];
     const double t29 = t28 + dq[2*ARM6_STRIDE];
@@ -1039,17 +1039,17 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t43 = t15*t31;
     const double t44 = t16*t32;
     const double t47 = -t38 - t37;
-    const double t48 = -t44 - t43;
+    const double t48 = t44 + t43;
     const double t49 = t47 - t36;
-    const double t50 = t48 - t42;
+    const double t50 = t48 + t42;
     const double t51 = t49 - t35;
-    const double t52 = t50 - t41;
+    const double t52 = t50 + t41;
     const double t53 = t51 - t34;
-    const double t54 = t52 - t40;
+    const double t54 = t52 + t40;
     const double t55 = t53 - t33;
-    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] - t38*dq[5*ARM6_STRIDE]))) + ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] - t16*ddq[5*ARM6_STRIDE])));
-    const double t56 = t54 - t39;
-    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + (((t27*ddq[0] + t25*ddq[1*ARM6_STRIDE]) - t44*dq[5*ARM6_STRIDE]) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
+    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] - t38*dq[5*ARM6_STRIDE]))) - ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t16*ddq[5*ARM6_STRIDE])));
+    const double t56 = t54 + t39;
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] - (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) - (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + (((t27*ddq[0] + t25*ddq[1*ARM6_STRIDE]) - t44*dq[5*ARM6_STRIDE]) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 ARM6_SINGLE void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])

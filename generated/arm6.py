@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x417bfa2c
+STAMP = 0x5cb2819a
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -294,15 +294,15 @@ def _position_core(q, l, p):
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t18 = -t16 - t15
+    t18 = t16 + t15
     t19 = t9 + t10
-    t20 = t18 - t14
+    t20 = t18 + t14
     t21 = t8 + t19
-    t22 = t20 - t13
+    t22 = t20 + t13
     t23 = t7 + t21
-    t24 = t22 - t12
+    t24 = t22 + t12
     t25 = t6 + t23
-    t26 = t11 - t24
+    t26 = t24 + t11
     t27 = t5 + t25
     p[..., 0] = t27
     p[..., 1] = t26
@@ -315,7 +315,7 @@ def position(q, l):
     q: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns p of shape (..., 2).
-    Operations: 6 sin, 6 cos, 28 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 27 add/sub/mul/neg.
     """
     batch, (q, l,) = _inputs((q, l,), ("q", "l", ), (6, 6, ), ("finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -505,15 +505,15 @@ def _velocity_core(q, dq, l, v):
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t47 = -t38 - t37
+    t47 = t38 + t37
     t48 = -t44 - t43
-    t49 = t47 - t36
+    t49 = t47 + t36
     t50 = t48 - t42
-    t51 = t49 - t35
+    t51 = t49 + t35
     t52 = t50 - t41
-    t53 = t51 - t34
+    t53 = t51 + t34
     t54 = t52 - t40
-    t55 = t33 - t53
+    t55 = t53 + t33
     t56 = t54 - t39
     v[..., 0] = t56
     v[..., 1] = t55
@@ -527,7 +527,7 @@ def velocity(q, dq, l):
     dq: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns v of shape (..., 2).
-    Operations: 6 sin, 6 cos, 46 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 45 add/sub/mul/neg.
     """
     batch, (q, dq, l,) = _inputs((q, dq, l,), ("q", "dq", "l", ), (6, 6, 6, ), ("finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )
@@ -558,15 +558,15 @@ def _acceleration_core(q, dq, ddq, l, a):
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t18 = -t16 - t15
+    t18 = t16 + t15
     t19 = t9 + t10
-    t20 = t18 - t14
+    t20 = t18 + t14
     t21 = t8 + t19
-    t22 = t20 - t13
+    t22 = t20 + t13
     t23 = t7 + t21
-    t24 = t22 - t12
+    t24 = t22 + t12
     t25 = t6 + t23
-    t26 = t24 - t11
+    t26 = t24 + t11
     t27 = t5 + t25
     t28 = dq[..., 0] + dq[..., 1]
     t29 = t28 + dq[..., 2]
@@ -586,17 +586,17 @@ def _acceleration_core(q, dq, ddq, l, a):
     t43 = t15*t31
     t44 = t16*t32
     t47 = -t38 - t37
-    t48 = -t44 - t43
+    t48 = t44 + t43
     t49 = t47 - t36
-    t50 = t48 - t42
+    t50 = t48 + t42
     t51 = t49 - t35
-    t52 = t50 - t41
+    t52 = t50 + t41
     t53 = t51 - t34
-    t54 = t52 - t40
+    t54 = t52 + t40
     t55 = t53 - t33
-    t56 = t54 - t39
-    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] - t38*dq[..., 5]))) + ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] - t16*ddq[..., 5])))
-    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + (((t27*ddq[..., 0] + t25*ddq[..., 1]) - t44*dq[..., 5]) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
+    t56 = t54 + t39
+    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] - t38*dq[..., 5]))) - ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t16*ddq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] - (t56*dq[..., 0] + t54*dq[..., 1])) - (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + (((t27*ddq[..., 0] + t25*ddq[..., 1]) - t44*dq[..., 5]) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors
@@ -608,7 +608,7 @@ def acceleration(q, dq, ddq, l):
     ddq: array of shape (..., 6), finite.
     l: array of shape (..., 6), finite and > 0.
     Returns a of shape (..., 2).
-    Operations: 6 sin, 6 cos, 103 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 101 add/sub/mul/neg.
     """
     batch, (q, dq, ddq, l,) = _inputs((q, dq, ddq, l,), ("q", "dq", "ddq", "l", ), (6, 6, 6, 6, ), ("finite", "finite", "finite", "positive", ))
     outputs = (np.empty(batch + (2,), dtype=DTYPE), )

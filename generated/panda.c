@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x659f620bUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xc3aba849UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -1447,7 +1447,7 @@ void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, doubl
 #endif
 
 /* ---- panda_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 6 sin, 6 cos, 73 add/sub, 124 mul, 2 neg */
+/* operations: 6 sin, 6 cos, 73 add/sub, 124 mul, 1 neg */
 
 PANDA_BODY void panda_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1463,7 +1463,7 @@ PANDA_BODY void panda_twist_angles(const double *restrict q, double *restrict an
 PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *restrict cs, const double *restrict sn, double *restrict twist, const size_t stride)
 {
     (void)stride;
-    const double t0 = -dq[1*PANDA_STRIDE];
+    const double t0 = dq[1*PANDA_STRIDE];
     const double t2 = cs[0]*cs[1*PANDA_STRIDE];
     const double t3 = cs[0]*sn[1*PANDA_STRIDE];
     const double t4 = cs[1*PANDA_STRIDE]*sn[0];
@@ -1520,7 +1520,7 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t60 = t17*t30 + t22*t31;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
-    const double t70 = t68 + t3*dq[2*PANDA_STRIDE];
+    const double t70 = t3*dq[2*PANDA_STRIDE] - t68;
     const double t71 = t69 + t5*dq[2*PANDA_STRIDE];
     const double t72 = dq[0] + cs[1*PANDA_STRIDE]*dq[2*PANDA_STRIDE];
     const double t73 = t70 + t7*dq[3*PANDA_STRIDE];
@@ -1662,7 +1662,7 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
 #endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 4 neg */
+/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 3 neg */
 
 PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1679,7 +1679,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
 {
     (void)stride;
     const double t0 = -dq[1*PANDA_STRIDE];
-    const double t1 = -dq[0];
+    const double t1 = dq[0];
     const double t2 = cs[0]*cs[1*PANDA_STRIDE];
     const double t3 = cs[0]*sn[1*PANDA_STRIDE];
     const double t4 = cs[1*PANDA_STRIDE]*sn[0];
@@ -1797,9 +1797,9 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t130 = t19*t78 - t23*t76;
     const double t131 = t21*t76 - t19*t77;
     const double t132 = t29*t80 - t27*t81;
-    acc[3*PANDA_STRIDE] = (((t3*ddq[2*PANDA_STRIDE] + t7*ddq[3*PANDA_STRIDE]) + (t13*ddq[4*PANDA_STRIDE] + (t19*ddq[5*PANDA_STRIDE] + t25*ddq[6*PANDA_STRIDE]))) + ((t69*t1 + (t111*dq[2*PANDA_STRIDE] + t117*dq[3*PANDA_STRIDE])) + (t123*dq[4*PANDA_STRIDE] + (t129*dq[5*PANDA_STRIDE] + t132*dq[6*PANDA_STRIDE])))) - sn[0]*ddq[1*PANDA_STRIDE];
+    acc[3*PANDA_STRIDE] = (((t3*ddq[2*PANDA_STRIDE] + t7*ddq[3*PANDA_STRIDE]) + (t13*ddq[4*PANDA_STRIDE] + (t19*ddq[5*PANDA_STRIDE] + t25*ddq[6*PANDA_STRIDE]))) + (((t111*dq[2*PANDA_STRIDE] + t117*dq[3*PANDA_STRIDE]) - t69*t1) + (t123*dq[4*PANDA_STRIDE] + (t129*dq[5*PANDA_STRIDE] + t132*dq[6*PANDA_STRIDE])))) - sn[0]*ddq[1*PANDA_STRIDE];
     const double t133 = t25*t81 - t29*t79;
-    acc[4*PANDA_STRIDE] = ((t5*ddq[2*PANDA_STRIDE] + (t9*ddq[3*PANDA_STRIDE] + t15*ddq[4*PANDA_STRIDE])) + (t21*ddq[5*PANDA_STRIDE] + (t27*ddq[6*PANDA_STRIDE] + cs[0]*ddq[1*PANDA_STRIDE]))) + ((t107*dq[1*PANDA_STRIDE] + (t112*dq[2*PANDA_STRIDE] + t118*dq[3*PANDA_STRIDE])) + (t124*dq[4*PANDA_STRIDE] + (t130*dq[5*PANDA_STRIDE] + t133*dq[6*PANDA_STRIDE])));
+    acc[4*PANDA_STRIDE] = ((t5*ddq[2*PANDA_STRIDE] + (t9*ddq[3*PANDA_STRIDE] + t15*ddq[4*PANDA_STRIDE])) + (t21*ddq[5*PANDA_STRIDE] + (t27*ddq[6*PANDA_STRIDE] + cs[0]*ddq[1*PANDA_STRIDE]))) + (((t112*dq[2*PANDA_STRIDE] + t118*dq[3*PANDA_STRIDE]) - t107*dq[1*PANDA_STRIDE]) + (t124*dq[4*PANDA_STRIDE] + (t130*dq[5*PANDA_STRIDE] + t133*dq[6*PANDA_STRIDE])));
     const double t134 = t27*t79 - t25*t80;
     acc[5*PANDA_STRIDE] = ((ddq[0] + t11*ddq[3*PANDA_STRIDE]) + (t17*ddq[4*PANDA_STRIDE] + (t23*ddq[5*PANDA_STRIDE] + t29*ddq[6*PANDA_STRIDE]))) + ((cs[1*PANDA_STRIDE]*ddq[2*PANDA_STRIDE] + (t113*dq[2*PANDA_STRIDE] + t119*dq[3*PANDA_STRIDE])) + (t125*dq[4*PANDA_STRIDE] + (t131*dq[5*PANDA_STRIDE] + t134*dq[6*PANDA_STRIDE])));
 }
@@ -4308,7 +4308,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 }
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 10 neg, 13 div, 13 sqrt */
+/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 8 neg, 13 div, 13 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -4705,7 +4705,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t969 = t895 + t932;
     const double t970 = t902 + t939;
     const double t971 = t910 + t947;
-    const double t972 = t187*lambda;
+    const double t972 = -t187*lambda;
     const double t973 = 1.393*t187;
     const double t974 = t675*t973;
     const double t975 = t708*t973;
@@ -4739,7 +4739,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1003 = t999*t977;
     const double t1004 = t999*t978;
     const double t1005 = -t999*t979;
-    const double t1006 = t999*t972;
+    const double t1006 = -t999*t972;
     const double t1007 = t1005*t984 - t1001*t980 - t1002*t981 - t1003*t982 - t1004*t983;
     const double t1008 = t1007*t1000;
     const double t1009 = t980 + t1007*t1001;
@@ -4767,7 +4767,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1031 = t1026*t1020;
     const double t1032 = t1026*t1021;
     const double t1033 = t1026*t1022;
-    const double t1034 = -t1026*t972;
+    const double t1034 = t1026*t972;
     const double t1035 = t1015 - t1007;
     const double t1036 = t1005*t988 - t1002*t985 - t1003*t986 - t1004*t987;
     const double t1037 = t1036*t1000;
@@ -4815,7 +4815,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1079 = t1073*t1067;
     const double t1080 = t1073*t1068;
     const double t1081 = t1073*t1069;
-    const double t1082 = -t1073*t972;
+    const double t1082 = t1073*t972;
     const double t1083 = t1053 - t1036;
     const double t1084 = t1044 + t1061;
     const double t1085 = t1005*t991 - t1003*t989 - t1004*t990;
@@ -4885,7 +4885,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1149 = t1142*t1136;
     const double t1150 = t1142*t1137;
     const double t1151 = t1142*t1138;
-    const double t1152 = -t1142*t972;
+    const double t1152 = t1142*t972;
     const double t1153 = t1112 - t1085;
     const double t1154 = t1093 + t1120;
     const double t1155 = t1102 + t1129;
@@ -5033,7 +5033,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1297 = t1286 - t1289*t1243;
     const double t1298 = t1287 - t1289*t1244;
     const double t1299 = t1288 - t1289*t1245;
-    const double t1300 = -t1289*t1246;
+    const double t1300 = t1289*t1246;
     const double t1301 = t1000*t1290 + t1001*t1291 + t1002*t1292 + t1003*t1293 + t1004*t1294 - t1005*t1295 + t1006*t1296;
     const double t1302 = t1290 - t1301*t1000;
     const double t1303 = t1291 - t1301*t1001;
@@ -5072,7 +5072,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1336 = t1326 - t1328*t1150;
     const double t1337 = t1327 - t1328*t1151;
     const double t1338 = t1299 + t1328*t1152;
-    const double t1339 = ((t1236*t1329 + t1237*t1330) + (t1246*t1300 + (t1238*t1331 + t1239*t1332))) + ((t1240*t1333 + (t1241*t1334 + t1242*t1335)) + (t1243*t1336 + (t1244*t1337 + t1245*t1338)));
+    const double t1339 = ((t1236*t1329 + t1237*t1330) + ((t1238*t1331 + t1239*t1332) - t1246*t1300)) + ((t1240*t1333 + (t1241*t1334 + t1242*t1335)) + (t1243*t1336 + (t1244*t1337 + t1245*t1338)));
     const double t1340 = t1329 - t1339*t1236;
     const double t1341 = t1330 - t1339*t1237;
     const double t1342 = t1331 - t1339*t1238;
@@ -5083,7 +5083,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t1347 = t1336 - t1339*t1243;
     const double t1348 = t1337 - t1339*t1244;
     const double t1349 = t1338 - t1339*t1245;
-    const double t1350 = t1300 - t1339*t1246;
+    const double t1350 = t1300 + t1339*t1246;
     const double t1351 = ((t1340*t1340 + (t1341*t1341 + t1350*t1350)) + (t1342*t1342 + (t1343*t1343 + t1344*t1344))) + ((t1345*t1345 + (t1346*t1346 + t1347*t1347)) + (t1348*t1348 + (t1349*t1349 + t995)));
     const double t1352 = sqrt(t1351);
     const int t1353 = t1352 > 0.0;
@@ -5160,7 +5160,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 5 neg, 7 div, 7 sqrt */
+/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 4 neg, 7 div, 7 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -5359,18 +5359,18 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t1505 = t1500 - t1503*t1493;
     const double t1506 = t1501 - t1503*t1494;
     const double t1507 = t1502 - t1503*t1495;
-    const double t1508 = -t1503*t1496;
+    const double t1508 = t1503*t1496;
     const double t1509 = t1474*t1504 + t1475*t1505 - t1476*t1506 + t1477*t1507;
     const double t1510 = t1504 - t1509*t1474;
     const double t1511 = t1505 - t1509*t1475;
     const double t1512 = t1506 + t1509*t1476;
     const double t1513 = t1507 - t1509*t1477;
-    const double t1514 = t1492*t1510 + t1493*t1511 + t1494*t1512 + t1495*t1513 + t1496*t1508;
+    const double t1514 = t1492*t1510 + t1493*t1511 + t1494*t1512 + t1495*t1513 - t1496*t1508;
     const double t1515 = t1510 - t1514*t1492;
     const double t1516 = t1511 - t1514*t1493;
     const double t1517 = t1512 - t1514*t1494;
     const double t1518 = t1513 - t1514*t1495;
-    const double t1519 = t1508 - t1514*t1496;
+    const double t1519 = t1508 + t1514*t1496;
     const double t1520 = t1515*t1515 + t1516*t1516 + t1517*t1517 + t1518*t1518 + t1519*t1519 + t995;
     const double t1521 = sqrt(t1520);
     const int t1522 = t1521 > 0.0;

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x659f620b
+STAMP = 0xc3aba849
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -835,7 +835,7 @@ def _twist_core(q, dq, twist):
     ang[..., 5] = q[..., 5]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = -dq[..., 1]
+    t0 = dq[..., 1]
     t2 = cs[..., 0]*cs[..., 1]
     t3 = cs[..., 0]*sn[..., 1]
     t4 = cs[..., 1]*sn[..., 0]
@@ -892,7 +892,7 @@ def _twist_core(q, dq, twist):
     t60 = t17*t30 + t22*t31
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
-    t70 = t68 + t3*dq[..., 2]
+    t70 = t3*dq[..., 2] - t68
     t71 = t69 + t5*dq[..., 2]
     t72 = dq[..., 0] + cs[..., 1]*dq[..., 2]
     t73 = t70 + t7*dq[..., 3]
@@ -939,7 +939,7 @@ def twist(q, dq):
     q: array of shape (..., 7), finite.
     dq: array of shape (..., 7), finite.
     Returns twist of shape (..., 6).
-    Operations: 6 sin, 6 cos, 199 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 198 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (7, 7, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -959,7 +959,7 @@ def _acceleration_core(q, dq, ddq, acc):
     cs = np.cos(ang)
     sn = np.sin(ang)
     t0 = -dq[..., 1]
-    t1 = -dq[..., 0]
+    t1 = dq[..., 0]
     t2 = cs[..., 0]*cs[..., 1]
     t3 = cs[..., 0]*sn[..., 1]
     t4 = cs[..., 1]*sn[..., 0]
@@ -1079,8 +1079,8 @@ def _acceleration_core(q, dq, ddq, acc):
     acc[..., 0] = (((t47*ddq[..., 1] - t49*ddq[..., 2]) + (t52*ddq[..., 3] + (t55*ddq[..., 4] + t58*ddq[..., 5]))) + (((t103*dq[..., 1] + t108*dq[..., 2]) - t102*dq[..., 0]) + (t114*dq[..., 3] + (t120*dq[..., 4] + t126*dq[..., 5])))) - t45*ddq[..., 0]
     acc[..., 1] = ((t48*ddq[..., 1] + (t50*ddq[..., 2] + t53*ddq[..., 3])) + (t56*ddq[..., 4] + (t59*ddq[..., 5] + t44*ddq[..., 0]))) + ((t104*dq[..., 1] + (t109*dq[..., 2] + t115*dq[..., 3])) + (t121*dq[..., 4] + (t127*dq[..., 5] + t100*dq[..., 0])))
     acc[..., 2] = (((t51*ddq[..., 2] + t54*ddq[..., 3]) + (t57*ddq[..., 4] + t60*ddq[..., 5])) + ((t105*dq[..., 1] + t110*dq[..., 2]) + (t116*dq[..., 3] + (t122*dq[..., 4] + t128*dq[..., 5])))) - t42*ddq[..., 1]
-    acc[..., 3] = (((t3*ddq[..., 2] + t7*ddq[..., 3]) + (t13*ddq[..., 4] + (t19*ddq[..., 5] + t25*ddq[..., 6]))) + ((t69*t1 + (t111*dq[..., 2] + t117*dq[..., 3])) + (t123*dq[..., 4] + (t129*dq[..., 5] + t132*dq[..., 6])))) - sn[..., 0]*ddq[..., 1]
-    acc[..., 4] = ((t5*ddq[..., 2] + (t9*ddq[..., 3] + t15*ddq[..., 4])) + (t21*ddq[..., 5] + (t27*ddq[..., 6] + cs[..., 0]*ddq[..., 1]))) + ((t107*dq[..., 1] + (t112*dq[..., 2] + t118*dq[..., 3])) + (t124*dq[..., 4] + (t130*dq[..., 5] + t133*dq[..., 6])))
+    acc[..., 3] = (((t3*ddq[..., 2] + t7*ddq[..., 3]) + (t13*ddq[..., 4] + (t19*ddq[..., 5] + t25*ddq[..., 6]))) + (((t111*dq[..., 2] + t117*dq[..., 3]) - t69*t1) + (t123*dq[..., 4] + (t129*dq[..., 5] + t132*dq[..., 6])))) - sn[..., 0]*ddq[..., 1]
+    acc[..., 4] = ((t5*ddq[..., 2] + (t9*ddq[..., 3] + t15*ddq[..., 4])) + (t21*ddq[..., 5] + (t27*ddq[..., 6] + cs[..., 0]*ddq[..., 1]))) + (((t112*dq[..., 2] + t118*dq[..., 3]) - t107*dq[..., 1]) + (t124*dq[..., 4] + (t130*dq[..., 5] + t133*dq[..., 6])))
     acc[..., 5] = ((ddq[..., 0] + t11*ddq[..., 3]) + (t17*ddq[..., 4] + (t23*ddq[..., 5] + t29*ddq[..., 6]))) + ((cs[..., 1]*ddq[..., 2] + (t113*dq[..., 2] + t119*dq[..., 3])) + (t125*dq[..., 4] + (t131*dq[..., 5] + t134*dq[..., 6])))
 
 
@@ -1092,7 +1092,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns acc of shape (..., 6).
-    Operations: 6 sin, 6 cos, 458 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 457 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -3448,7 +3448,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t969 = t895 + t932
     t970 = t902 + t939
     t971 = t910 + t947
-    t972 = t187*lambda_
+    t972 = -t187*lambda_
     t973 = 1.393*t187
     t974 = t675*t973
     t975 = t708*t973
@@ -3482,7 +3482,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1003 = t999*t977
     t1004 = t999*t978
     t1005 = -t999*t979
-    t1006 = t999*t972
+    t1006 = -t999*t972
     t1007 = t1005*t984 - t1001*t980 - t1002*t981 - t1003*t982 - t1004*t983
     t1008 = t1007*t1000
     t1009 = t980 + t1007*t1001
@@ -3510,7 +3510,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1031 = t1026*t1020
     t1032 = t1026*t1021
     t1033 = t1026*t1022
-    t1034 = -t1026*t972
+    t1034 = t1026*t972
     t1035 = t1015 - t1007
     t1036 = t1005*t988 - t1002*t985 - t1003*t986 - t1004*t987
     t1037 = t1036*t1000
@@ -3558,7 +3558,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1079 = t1073*t1067
     t1080 = t1073*t1068
     t1081 = t1073*t1069
-    t1082 = -t1073*t972
+    t1082 = t1073*t972
     t1083 = t1053 - t1036
     t1084 = t1044 + t1061
     t1085 = t1005*t991 - t1003*t989 - t1004*t990
@@ -3628,7 +3628,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1149 = t1142*t1136
     t1150 = t1142*t1137
     t1151 = t1142*t1138
-    t1152 = -t1142*t972
+    t1152 = t1142*t972
     t1153 = t1112 - t1085
     t1154 = t1093 + t1120
     t1155 = t1102 + t1129
@@ -3776,7 +3776,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1297 = t1286 - t1289*t1243
     t1298 = t1287 - t1289*t1244
     t1299 = t1288 - t1289*t1245
-    t1300 = -t1289*t1246
+    t1300 = t1289*t1246
     t1301 = t1000*t1290 + t1001*t1291 + t1002*t1292 + t1003*t1293 + t1004*t1294 - t1005*t1295 + t1006*t1296
     t1302 = t1290 - t1301*t1000
     t1303 = t1291 - t1301*t1001
@@ -3815,7 +3815,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1336 = t1326 - t1328*t1150
     t1337 = t1327 - t1328*t1151
     t1338 = t1299 + t1328*t1152
-    t1339 = ((t1236*t1329 + t1237*t1330) + (t1246*t1300 + (t1238*t1331 + t1239*t1332))) + ((t1240*t1333 + (t1241*t1334 + t1242*t1335)) + (t1243*t1336 + (t1244*t1337 + t1245*t1338)))
+    t1339 = ((t1236*t1329 + t1237*t1330) + ((t1238*t1331 + t1239*t1332) - t1246*t1300)) + ((t1240*t1333 + (t1241*t1334 + t1242*t1335)) + (t1243*t1336 + (t1244*t1337 + t1245*t1338)))
     t1340 = t1329 - t1339*t1236
     t1341 = t1330 - t1339*t1237
     t1342 = t1331 - t1339*t1238
@@ -3826,7 +3826,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1347 = t1336 - t1339*t1243
     t1348 = t1337 - t1339*t1244
     t1349 = t1338 - t1339*t1245
-    t1350 = t1300 - t1339*t1246
+    t1350 = t1300 + t1339*t1246
     t1351 = ((t1340*t1340 + (t1341*t1341 + t1350*t1350)) + (t1342*t1342 + (t1343*t1343 + t1344*t1344))) + ((t1345*t1345 + (t1346*t1346 + t1347*t1347)) + (t1348*t1348 + (t1349*t1349 + t995)))
     t1352 = np.sqrt(t1351)
     t1353 = t1352 > 0.0
@@ -3878,7 +3878,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 7).
-    Operations: 6 sin, 6 cos, 2302 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 2300 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (7, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -4083,18 +4083,18 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1505 = t1500 - t1503*t1493
     t1506 = t1501 - t1503*t1494
     t1507 = t1502 - t1503*t1495
-    t1508 = -t1503*t1496
+    t1508 = t1503*t1496
     t1509 = t1474*t1504 + t1475*t1505 - t1476*t1506 + t1477*t1507
     t1510 = t1504 - t1509*t1474
     t1511 = t1505 - t1509*t1475
     t1512 = t1506 + t1509*t1476
     t1513 = t1507 - t1509*t1477
-    t1514 = t1492*t1510 + t1493*t1511 + t1494*t1512 + t1495*t1513 + t1496*t1508
+    t1514 = t1492*t1510 + t1493*t1511 + t1494*t1512 + t1495*t1513 - t1496*t1508
     t1515 = t1510 - t1514*t1492
     t1516 = t1511 - t1514*t1493
     t1517 = t1512 - t1514*t1494
     t1518 = t1513 - t1514*t1495
-    t1519 = t1508 - t1514*t1496
+    t1519 = t1508 + t1514*t1496
     t1520 = t1515*t1515 + t1516*t1516 + t1517*t1517 + t1518*t1518 + t1519*t1519 + t995
     t1521 = np.sqrt(t1520)
     t1522 = t1521 > 0.0
@@ -4133,7 +4133,7 @@ def inverse_velocity_position(q, v, lambda_):
     v: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq_position of shape (..., 7).
-    Operations: 6 sin, 6 cos, 523 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 522 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (7, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

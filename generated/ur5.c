@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xc6160751UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x90396ef4UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -1297,7 +1297,7 @@ void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double 
 #endif
 
 /* ---- ur5_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 5 sin, 5 cos, 36 add/sub, 59 mul, 2 neg */
+/* operations: 5 sin, 5 cos, 36 add/sub, 59 mul, 0 neg */
 
 UR5_BODY void ur5_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1318,8 +1318,8 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t5 = sn[0]*sn[3*UR5_STRIDE];
     const double t8 = cs[4*UR5_STRIDE]*sn[0];
     const double t9 = t8 - t2*sn[4*UR5_STRIDE];
-    const double t10 = -cs[0]*cs[4*UR5_STRIDE];
-    const double t11 = t10 - t4*sn[4*UR5_STRIDE];
+    const double t10 = cs[0]*cs[4*UR5_STRIDE];
+    const double t11 = t10 + t4*sn[4*UR5_STRIDE];
     const double t13 = sn[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
     const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
@@ -1341,17 +1341,17 @@ UR5_BODY void ur5_twist_finish(const double *restrict dq, const double *restrict
     const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3*UR5_STRIDE];
     const double t44 = sn[0]*dq[1*UR5_STRIDE];
-    const double t45 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = cs[0]*dq[1*UR5_STRIDE];
     const double t46 = t44 + sn[0]*dq[2*UR5_STRIDE];
-    const double t47 = t45 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + cs[0]*dq[2*UR5_STRIDE];
     const double t48 = t46 + sn[0]*dq[3*UR5_STRIDE];
-    const double t49 = t47 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + cs[0]*dq[3*UR5_STRIDE];
     const double t50 = t48 + t3*dq[4*UR5_STRIDE];
-    const double t51 = t49 + t5*dq[4*UR5_STRIDE];
+    const double t51 = t5*dq[4*UR5_STRIDE] - t49;
     const double t52 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
     const double t53 = t50 + t9*dq[5*UR5_STRIDE];
     twist[3*UR5_STRIDE] = t53;
-    const double t54 = t51 + t11*dq[5*UR5_STRIDE];
+    const double t54 = t51 - t11*dq[5*UR5_STRIDE];
     twist[4*UR5_STRIDE] = t54;
     const double t55 = t52 - t13*dq[5*UR5_STRIDE];
     twist[5*UR5_STRIDE] = t55;
@@ -1474,7 +1474,7 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 #endif
 
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 3 neg */
+/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 1 neg */
 
 UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1493,12 +1493,11 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t3 = cs[0]*sn[3*UR5_STRIDE];
     const double t4 = cs[3*UR5_STRIDE]*sn[0];
     const double t5 = sn[0]*sn[3*UR5_STRIDE];
-    const double t6 = -sn[4*UR5_STRIDE];
     const double t8 = cs[4*UR5_STRIDE]*sn[0];
     const double t9 = t8 - t2*sn[4*UR5_STRIDE];
-    const double t10 = -cs[0]*cs[4*UR5_STRIDE];
-    const double t11 = t10 - t4*sn[4*UR5_STRIDE];
-    const double t13 = t6*sn[3*UR5_STRIDE];
+    const double t10 = cs[0]*cs[4*UR5_STRIDE];
+    const double t11 = t10 + t4*sn[4*UR5_STRIDE];
+    const double t13 = sn[4*UR5_STRIDE]*sn[3*UR5_STRIDE];
     const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
     const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
@@ -1561,12 +1560,12 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t85 = t5*dq[0] + cs[3*UR5_STRIDE]*t49;
     const double t86 = t3*dq[0] + cs[3*UR5_STRIDE]*t48;
     const double t87 = t5*t48 - t3*t49;
-    const double t88 = t13*t51 - t11*t52;
+    const double t88 = t11*t52 - t13*t51;
     acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t9*ddq[5*UR5_STRIDE]) + (t74*dq[1*UR5_STRIDE] + (t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]))) + ((t88*dq[5*UR5_STRIDE] - t85*dq[4*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
-    const double t89 = t9*t52 - t13*t50;
-    acc[4*UR5_STRIDE] = ((t5*ddq[4*UR5_STRIDE] + (t11*ddq[5*UR5_STRIDE] + t75*dq[1*UR5_STRIDE])) + ((t75*dq[2*UR5_STRIDE] + t75*dq[3*UR5_STRIDE]) + (t86*dq[4*UR5_STRIDE] + t89*dq[5*UR5_STRIDE]))) - (cs[0]*ddq[1*UR5_STRIDE] + (cs[0]*ddq[2*UR5_STRIDE] + cs[0]*ddq[3*UR5_STRIDE]));
-    const double t90 = t11*t50 - t9*t51;
-    acc[5*UR5_STRIDE] = ddq[0] + t13*ddq[5*UR5_STRIDE] + t87*dq[4*UR5_STRIDE] + t90*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
+    const double t89 = t9*t52 + t13*t50;
+    acc[4*UR5_STRIDE] = ((t5*ddq[4*UR5_STRIDE] + (t75*dq[1*UR5_STRIDE] - t11*ddq[5*UR5_STRIDE])) + ((t75*dq[2*UR5_STRIDE] + t75*dq[3*UR5_STRIDE]) + (t86*dq[4*UR5_STRIDE] + t89*dq[5*UR5_STRIDE]))) - (cs[0]*ddq[1*UR5_STRIDE] + (cs[0]*ddq[2*UR5_STRIDE] + cs[0]*ddq[3*UR5_STRIDE]));
+    const double t90 = t11*t50 + t9*t51;
+    acc[5*UR5_STRIDE] = ddq[0] - t13*ddq[5*UR5_STRIDE] + t87*dq[4*UR5_STRIDE] - t90*dq[5*UR5_STRIDE] - cs[3*UR5_STRIDE]*ddq[4*UR5_STRIDE];
 }
 
 UR5_SINGLE void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6])
@@ -2355,7 +2354,7 @@ void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- ur5_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 5 sin, 5 cos, 312 add/sub, 400 mul, 3 neg, 5 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 312 add/sub, 400 mul, 1 neg, 5 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_angles(const double *restrict q, double *restrict ang)
 {
@@ -2375,8 +2374,8 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t6 = -sn[4];
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
-    const double t10 = -cs[0]*cs[4];
-    const double t11 = t10 - t4*sn[4];
+    const double t10 = cs[0]*cs[4];
+    const double t11 = t10 + t4*sn[4];
     const double t13 = t6*sn[3];
     const double t14 = -0.0823*sn[4];
     const double t15 = -0.0823*cs[4];
@@ -2511,32 +2510,32 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t235 = t230*t226;
     const double t236 = t9*t230;
     const double t240 = cs[0]*(t132 + t133 + t134) - t5*t135;
-    const double t241 = -t240*t131;
+    const double t241 = t240*t131;
     const double t243 = t240*t132 - cs[0];
     const double t244 = t240*t133 - cs[0];
     const double t245 = t240*t134 - cs[0];
     const double t246 = t5 + t240*t135;
-    const double t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246;
-    const double t248 = t241 - t247*t151;
+    const double t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246;
+    const double t248 = t241 + t247*t151;
     const double t249 = t243 - t247*t152;
     const double t250 = t244 - t247*t153;
     const double t251 = t245 - t247*t154;
     const double t252 = t246 - t247*t155;
-    const double t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252;
-    const double t254 = t248 - t253*t184;
+    const double t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252;
+    const double t254 = t248 + t253*t184;
     const double t255 = t249 - t253*t185;
     const double t256 = t250 - t253*t186;
     const double t257 = t251 - t253*t187;
     const double t258 = t252 - t253*t188;
-    const double t259 = t11*t236 + t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258;
-    const double t260 = t254 - t259*t231;
+    const double t259 = t232*t255 - t11*t236 - t231*t254 + t233*t256 + t234*t257 + t235*t258;
+    const double t260 = t254 + t259*t231;
     const double t261 = t255 - t259*t232;
     const double t262 = t256 - t259*t233;
     const double t263 = t257 - t259*t234;
     const double t264 = t258 - t259*t235;
-    const double t265 = t11 - t259*t236;
-    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t260 + t266*t131;
+    const double t265 = t11 + t259*t236;
+    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t266*t131 - t260;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -2553,13 +2552,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t281 = t275 - t278*t186;
     const double t282 = t276 - t278*t187;
     const double t283 = t277 - t278*t188;
-    const double t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 + t236*t265;
+    const double t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 - t236*t265;
     const double t285 = t279 - t284*t231;
     const double t286 = t280 - t284*t232;
     const double t287 = t281 - t284*t233;
     const double t288 = t282 - t284*t234;
     const double t289 = t283 - t284*t235;
-    const double t290 = t265 - t284*t236;
+    const double t290 = t265 + t284*t236;
     const double t291 = t285*t285 + t286*t286 + t287*t287 + t288*t288 + t289*t289 + t290*t290;
     const double t292 = sqrt(t291);
     const double t293 = (t292 > 0.0 ? 1.0/(t292 != 0.0 ? t292 : 1.0) : 1.0);
@@ -2594,13 +2593,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t327 = t321 - t323*t234;
     const double t328 = t322 - t323*t235;
     const double t329 = t13 - t323*t236;
-    const double t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329;
+    const double t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 - t299*t329;
     const double t331 = t324 - t330*t294;
     const double t332 = t325 - t330*t295;
     const double t333 = t326 - t330*t296;
     const double t334 = t327 - t330*t297;
     const double t335 = t328 - t330*t298;
-    const double t336 = t329 - t330*t299;
+    const double t336 = t329 + t330*t299;
     const double t337 = t132*t332 - t131*t331 + t133*t333 + t134*t334 + t135*t335;
     const double t338 = t331 + t337*t131;
     const double t339 = t332 - t337*t132;
@@ -2626,13 +2625,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t359 = t353 - t355*t234;
     const double t360 = t354 - t355*t235;
     const double t361 = t336 - t355*t236;
-    const double t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 + t299*t361;
+    const double t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 - t299*t361;
     const double t363 = t356 - t362*t294;
     const double t364 = t357 - t362*t295;
     const double t365 = t358 - t362*t296;
     const double t366 = t359 - t362*t297;
     const double t367 = t360 - t362*t298;
-    const double t368 = t361 - t362*t299;
+    const double t368 = t361 + t362*t299;
     const double t369 = t363*t363 + t364*t364 + t365*t365 + t366*t366 + t367*t367 + t368*t368;
     const double t370 = sqrt(t369);
     const double t383 = t128*t149*t182*t229*t292*t370;
@@ -3123,7 +3122,7 @@ void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- ur5_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 5 sin, 5 cos, 523 add/sub, 707 mul, 6 neg, 6 div, 6 sqrt */
+/* operations: 5 sin, 5 cos, 523 add/sub, 707 mul, 2 neg, 6 div, 6 sqrt */
 
 static UR5_LIGHT void ur5_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
@@ -3285,33 +3284,33 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t238 = t197 + t215;
     const double t239 = t203 + t221;
     const double t240 = cs[0]*(t132 + t133 + t134) - t5*t135;
-    const double t241 = -t240*t131;
+    const double t241 = t240*t131;
     const double t242 = -cs[0];
     const double t243 = t240*t132 - cs[0];
     const double t244 = t240*t133 - cs[0];
     const double t245 = t240*t134 - cs[0];
     const double t246 = t5 + t240*t135;
-    const double t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246;
-    const double t248 = t241 - t247*t151;
+    const double t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246;
+    const double t248 = t241 + t247*t151;
     const double t249 = t243 - t247*t152;
     const double t250 = t244 - t247*t153;
     const double t251 = t245 - t247*t154;
     const double t252 = t246 - t247*t155;
-    const double t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252;
-    const double t254 = t248 - t253*t184;
+    const double t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252;
+    const double t254 = t248 + t253*t184;
     const double t255 = t249 - t253*t185;
     const double t256 = t250 - t253*t186;
     const double t257 = t251 - t253*t187;
     const double t258 = t252 - t253*t188;
-    const double t259 = t11*t236 + t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258;
-    const double t260 = t254 - t259*t231;
+    const double t259 = t11*t236 - t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258;
+    const double t260 = t254 + t259*t231;
     const double t261 = t255 - t259*t232;
     const double t262 = t256 - t259*t233;
     const double t263 = t257 - t259*t234;
     const double t264 = t258 - t259*t235;
     const double t265 = t11 - t259*t236;
-    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t260 + t266*t131;
+    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t266*t131 - t260;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -3432,9 +3431,9 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t388 = t34*t242;
     const double t389 = t5*t34 + t33*cs[3];
     const double t390 = t21*sn[0];
-    const double t391 = -t19*sn[0];
-    const double t392 = -t16*sn[0];
-    const double t393 = -t34*sn[0];
+    const double t391 = t19*sn[0];
+    const double t392 = t16*sn[0];
+    const double t393 = t34*sn[0];
     const double t394 = t3*t34 + t32*cs[3];
     const double t395 = t26*cs[0] + t27*sn[0];
     const double t396 = t28*cs[0] + t29*sn[0];
@@ -3521,13 +3520,13 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t476 = t402*t461;
     const double t477 = t404*t459;
     const double t478 = t405*t462;
-    const double t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) + ((t469 + t470) - t390*t440))) + (((t471 + t395*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437;
+    const double t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) - (t390*t440 + (t469 + t470)))) + (((t395*t441 - t471) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437;
     grad[1] = t479;
-    const double t480 = ((((t464 + t465) + (t386*t439 + t466)) + ((t467 + t468) + (t391*t440 + (t469 + t470)))) + (((t471 + t396*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t28*t438))))) - t29*t437;
+    const double t480 = ((((t464 + t465) + (t386*t439 + t466)) + ((t467 + t468) - (t391*t440 + (t469 + t470)))) + (((t396*t441 - t471) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t28*t438))))) - t29*t437;
     grad[2] = t480;
-    const double t481 = ((((t464 + t465) + (t387*t439 + t387*t444)) + ((t467 + t468) + (t392*t440 + (t392*t445 + t470)))) + (((t471 + t397*t441) + (t397*t446 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t30*t438))))) - t31*t437;
+    const double t481 = ((((t464 + t465) + (t387*t439 + t387*t444)) + ((t467 + t468) - (t392*t440 + (t392*t445 + t470)))) + (((t397*t441 - t471) + (t397*t446 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t30*t438))))) - t31*t437;
     grad[3] = t481;
-    const double t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) + ((t393*t440 + t393*t445) + (t393*t450 - t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 - t403*t461) + (t406*t462 + t32*t438)))) - t33*t437;
+    const double t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) - ((t393*t440 + t393*t445) + (t393*t450 + t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 - t403*t461) + (t406*t462 + t32*t438)))) - t33*t437;
     grad[4] = t482;
 }
 
@@ -3564,7 +3563,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 897 add/sub, 1126 mul, 9 neg, 13 div, 13 sqrt */
+/* operations: 5 sin, 5 cos, 897 add/sub, 1126 mul, 7 neg, 13 div, 13 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -3895,7 +3894,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t766 = t701 + t733;
     const double t767 = t707 + t739;
     const double t768 = t714 + t746;
-    const double t769 = t121*lambda;
+    const double t769 = -t121*lambda;
     const double t770 = 1.192509*t121;
     const double t771 = t508*t770;
     const double t772 = t537*t770;
@@ -3929,7 +3928,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t800 = t796*t774;
     const double t801 = t796*t775;
     const double t802 = -t796*t776;
-    const double t803 = t796*t769;
+    const double t803 = -t796*t769;
     const double t804 = t802*t781 - t798*t777 - t799*t778 - t800*t779 - t801*t780;
     const double t805 = t804*t797;
     const double t806 = t777 + t804*t798;
@@ -3957,7 +3956,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t828 = t823*t817;
     const double t829 = t823*t818;
     const double t830 = t823*t819;
-    const double t831 = -t823*t769;
+    const double t831 = t823*t769;
     const double t832 = t812 - t804;
     const double t833 = t802*t785 - t799*t782 - t800*t783 - t801*t784;
     const double t834 = t833*t797;
@@ -4005,7 +4004,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t876 = t870*t864;
     const double t877 = t870*t865;
     const double t878 = t870*t866;
-    const double t879 = -t870*t769;
+    const double t879 = t870*t769;
     const double t880 = t850 - t833;
     const double t881 = t841 + t858;
     const double t882 = t802*t788 - t800*t786 - t801*t787;
@@ -4075,7 +4074,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t946 = t939*t933;
     const double t947 = t939*t934;
     const double t948 = t939*t935;
-    const double t949 = -t939*t769;
+    const double t949 = t939*t769;
     const double t950 = t909 - t882;
     const double t951 = t890 + t917;
     const double t952 = t899 + t926;
@@ -4223,7 +4222,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t1094 = t1083 - t1086*t1040;
     const double t1095 = t1084 - t1086*t1041;
     const double t1096 = t1085 - t1086*t1042;
-    const double t1097 = -t1086*t1043;
+    const double t1097 = t1086*t1043;
     const double t1098 = t797*t1087 + t798*t1088 + t799*t1089 + t800*t1090 + t801*t1091 - t802*t1092 + t803*t1093;
     const double t1099 = t1087 - t1098*t797;
     const double t1100 = t1088 - t1098*t798;
@@ -4262,7 +4261,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t1133 = t1123 - t1125*t947;
     const double t1134 = t1124 - t1125*t948;
     const double t1135 = t1096 + t1125*t949;
-    const double t1136 = ((t1033*t1126 + t1034*t1127) + (t1043*t1097 + (t1035*t1128 + t1036*t1129))) + ((t1037*t1130 + (t1038*t1131 + t1039*t1132)) + (t1040*t1133 + (t1041*t1134 + t1042*t1135)));
+    const double t1136 = ((t1033*t1126 + t1034*t1127) + ((t1035*t1128 + t1036*t1129) - t1043*t1097)) + ((t1037*t1130 + (t1038*t1131 + t1039*t1132)) + (t1040*t1133 + (t1041*t1134 + t1042*t1135)));
     const double t1137 = t1126 - t1136*t1033;
     const double t1138 = t1127 - t1136*t1034;
     const double t1139 = t1128 - t1136*t1035;
@@ -4273,7 +4272,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t1144 = t1133 - t1136*t1040;
     const double t1145 = t1134 - t1136*t1041;
     const double t1146 = t1135 - t1136*t1042;
-    const double t1147 = t1097 - t1136*t1043;
+    const double t1147 = t1097 + t1136*t1043;
     const double t1148 = ((t1137*t1137 + (t1138*t1138 + t1147*t1147)) + (t1139*t1139 + (t1140*t1140 + t1141*t1141))) + ((t1142*t1142 + (t1143*t1143 + t1144*t1144)) + (t1145*t1145 + (t1146*t1146 + t792)));
     const double t1149 = sqrt(t1148);
     const int t1150 = t1149 > 0.0;
@@ -4348,7 +4347,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 }
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 3 neg, 7 div, 7 sqrt */
+/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 2 neg, 7 div, 7 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -4509,18 +4508,18 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restric
     const double t1292 = t1287 - t1290*t1280;
     const double t1293 = t1288 - t1290*t1281;
     const double t1294 = t1289 - t1290*t1282;
-    const double t1295 = -t1290*t1283;
+    const double t1295 = t1290*t1283;
     const double t1296 = t1261*t1291 + t1262*t1292 - t1263*t1293 + t1264*t1294;
     const double t1297 = t1291 - t1296*t1261;
     const double t1298 = t1292 - t1296*t1262;
     const double t1299 = t1293 + t1296*t1263;
     const double t1300 = t1294 - t1296*t1264;
-    const double t1301 = t1279*t1297 + t1280*t1298 + t1281*t1299 + t1282*t1300 + t1283*t1295;
+    const double t1301 = t1279*t1297 + t1280*t1298 + t1281*t1299 + t1282*t1300 - t1283*t1295;
     const double t1302 = t1297 - t1301*t1279;
     const double t1303 = t1298 - t1301*t1280;
     const double t1304 = t1299 - t1301*t1281;
     const double t1305 = t1300 - t1301*t1282;
-    const double t1306 = t1295 - t1301*t1283;
+    const double t1306 = t1295 + t1301*t1283;
     const double t1307 = t1302*t1302 + t1303*t1303 + t1304*t1304 + t1305*t1305 + t1306*t1306 + t792;
     const double t1308 = sqrt(t1307);
     const int t1309 = t1308 > 0.0;

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xc6160751UL
+#define UR5_STAMP 0x90396ef4UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -139,7 +139,7 @@ void ur5_twist(const double q[6], const double dq[6], double twist[6]);
  * Stack: about 9 KB. */
 void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 808 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 800 bytes. */
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc6160751
+STAMP = 0x90396ef4
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -731,8 +731,8 @@ def _twist_core(q, dq, twist):
     t5 = sn[..., 0]*sn[..., 3]
     t8 = cs[..., 4]*sn[..., 0]
     t9 = t8 - t2*sn[..., 4]
-    t10 = -cs[..., 0]*cs[..., 4]
-    t11 = t10 - t4*sn[..., 4]
+    t10 = cs[..., 0]*cs[..., 4]
+    t11 = t10 + t4*sn[..., 4]
     t13 = sn[..., 4]*sn[..., 3]
     t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
@@ -754,16 +754,16 @@ def _twist_core(q, dq, twist):
     t33 = t4*t15 - t14*cs[..., 0]
     t34 = t15*sn[..., 3]
     t44 = sn[..., 0]*dq[..., 1]
-    t45 = -cs[..., 0]*dq[..., 1]
+    t45 = cs[..., 0]*dq[..., 1]
     t46 = t44 + sn[..., 0]*dq[..., 2]
-    t47 = t45 - cs[..., 0]*dq[..., 2]
+    t47 = t45 + cs[..., 0]*dq[..., 2]
     t48 = t46 + sn[..., 0]*dq[..., 3]
-    t49 = t47 - cs[..., 0]*dq[..., 3]
+    t49 = t47 + cs[..., 0]*dq[..., 3]
     t50 = t48 + t3*dq[..., 4]
-    t51 = t49 + t5*dq[..., 4]
+    t51 = t5*dq[..., 4] - t49
     t52 = dq[..., 0] - cs[..., 3]*dq[..., 4]
     t53 = t50 + t9*dq[..., 5]
-    t54 = t51 + t11*dq[..., 5]
+    t54 = t51 - t11*dq[..., 5]
     t55 = t52 - t13*dq[..., 5]
     t56 = t32*dq[..., 4]
     t57 = t33*dq[..., 4]
@@ -794,7 +794,7 @@ def twist(q, dq):
     q: array of shape (..., 6), finite.
     dq: array of shape (..., 6), finite.
     Returns twist of shape (..., 6).
-    Operations: 5 sin, 5 cos, 97 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 95 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (6, 6, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -816,12 +816,11 @@ def _acceleration_core(q, dq, ddq, acc):
     t3 = cs[..., 0]*sn[..., 3]
     t4 = cs[..., 3]*sn[..., 0]
     t5 = sn[..., 0]*sn[..., 3]
-    t6 = -sn[..., 4]
     t8 = cs[..., 4]*sn[..., 0]
     t9 = t8 - t2*sn[..., 4]
-    t10 = -cs[..., 0]*cs[..., 4]
-    t11 = t10 - t4*sn[..., 4]
-    t13 = t6*sn[..., 3]
+    t10 = cs[..., 0]*cs[..., 4]
+    t11 = t10 + t4*sn[..., 4]
+    t13 = sn[..., 4]*sn[..., 3]
     t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
     t16 = 0.09465*sn[..., 3] + t14*cs[..., 3]
@@ -881,15 +880,15 @@ def _acceleration_core(q, dq, ddq, acc):
     t85 = t5*dq[..., 0] + cs[..., 3]*t49
     t86 = t3*dq[..., 0] + cs[..., 3]*t48
     t87 = t5*t48 - t3*t49
-    t88 = t13*t51 - t11*t52
-    t89 = t9*t52 - t13*t50
-    t90 = t11*t50 - t9*t51
+    t88 = t11*t52 - t13*t51
+    t89 = t9*t52 + t13*t50
+    t90 = t11*t50 + t9*t51
     acc[..., 0] = (((t26*ddq[..., 1] + t28*ddq[..., 2]) + (t30*ddq[..., 3] + t32*ddq[..., 4])) + ((t71*dq[..., 1] - t70*dq[..., 0]) + (t76*dq[..., 2] + (t79*dq[..., 3] + t82*dq[..., 4])))) - t24*ddq[..., 0]
     acc[..., 1] = ((t27*ddq[..., 1] + t29*ddq[..., 2]) + (t31*ddq[..., 3] + (t33*ddq[..., 4] + t23*ddq[..., 0]))) + ((t72*dq[..., 1] + t77*dq[..., 2]) + (t80*dq[..., 3] + (t83*dq[..., 4] + t68*dq[..., 0])))
     acc[..., 2] = t34*ddq[..., 4] + t21*ddq[..., 1] + t19*ddq[..., 2] + t16*ddq[..., 3] + t73*dq[..., 1] + t78*dq[..., 2] + t81*dq[..., 3] + t84*dq[..., 4]
     acc[..., 3] = ((t3*ddq[..., 4] + t9*ddq[..., 5]) + (t74*dq[..., 1] + (t74*dq[..., 2] + t74*dq[..., 3]))) + ((t88*dq[..., 5] - t85*dq[..., 4]) + (sn[..., 0]*ddq[..., 1] + (sn[..., 0]*ddq[..., 2] + sn[..., 0]*ddq[..., 3])))
-    acc[..., 4] = ((t5*ddq[..., 4] + (t11*ddq[..., 5] + t75*dq[..., 1])) + ((t75*dq[..., 2] + t75*dq[..., 3]) + (t86*dq[..., 4] + t89*dq[..., 5]))) - (cs[..., 0]*ddq[..., 1] + (cs[..., 0]*ddq[..., 2] + cs[..., 0]*ddq[..., 3]))
-    acc[..., 5] = ddq[..., 0] + t13*ddq[..., 5] + t87*dq[..., 4] + t90*dq[..., 5] - cs[..., 3]*ddq[..., 4]
+    acc[..., 4] = ((t5*ddq[..., 4] + (t75*dq[..., 1] - t11*ddq[..., 5])) + ((t75*dq[..., 2] + t75*dq[..., 3]) + (t86*dq[..., 4] + t89*dq[..., 5]))) - (cs[..., 0]*ddq[..., 1] + (cs[..., 0]*ddq[..., 2] + cs[..., 0]*ddq[..., 3]))
+    acc[..., 5] = ddq[..., 0] - t13*ddq[..., 5] + t87*dq[..., 4] - t90*dq[..., 5] - cs[..., 3]*ddq[..., 4]
 
 
 @_signature_errors
@@ -900,7 +899,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 6), finite.
     ddq: array of shape (..., 6), finite.
     Returns acc of shape (..., 6).
-    Operations: 5 sin, 5 cos, 270 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 268 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (6, 6, 6, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -1271,8 +1270,8 @@ def _manipulability_core(q, w):
     t6 = -sn[..., 4]
     t8 = cs[..., 4]*sn[..., 0]
     t9 = t8 - t2*sn[..., 4]
-    t10 = -cs[..., 0]*cs[..., 4]
-    t11 = t10 - t4*sn[..., 4]
+    t10 = cs[..., 0]*cs[..., 4]
+    t11 = t10 + t4*sn[..., 4]
     t13 = t6*sn[..., 3]
     t14 = -0.0823*sn[..., 4]
     t15 = -0.0823*cs[..., 4]
@@ -1407,32 +1406,32 @@ def _manipulability_core(q, w):
     t235 = t230*t226
     t236 = t9*t230
     t240 = cs[..., 0]*(t132 + t133 + t134) - t5*t135
-    t241 = -t240*t131
+    t241 = t240*t131
     t243 = t240*t132 - cs[..., 0]
     t244 = t240*t133 - cs[..., 0]
     t245 = t240*t134 - cs[..., 0]
     t246 = t5 + t240*t135
-    t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246
-    t248 = t241 - t247*t151
+    t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246
+    t248 = t241 + t247*t151
     t249 = t243 - t247*t152
     t250 = t244 - t247*t153
     t251 = t245 - t247*t154
     t252 = t246 - t247*t155
-    t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252
-    t254 = t248 - t253*t184
+    t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252
+    t254 = t248 + t253*t184
     t255 = t249 - t253*t185
     t256 = t250 - t253*t186
     t257 = t251 - t253*t187
     t258 = t252 - t253*t188
-    t259 = t11*t236 + t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258
-    t260 = t254 - t259*t231
+    t259 = t232*t255 - t11*t236 - t231*t254 + t233*t256 + t234*t257 + t235*t258
+    t260 = t254 + t259*t231
     t261 = t255 - t259*t232
     t262 = t256 - t259*t233
     t263 = t257 - t259*t234
     t264 = t258 - t259*t235
-    t265 = t11 - t259*t236
-    t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264
-    t267 = t260 + t266*t131
+    t265 = t11 + t259*t236
+    t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264
+    t267 = t266*t131 - t260
     t268 = t261 - t266*t132
     t269 = t262 - t266*t133
     t270 = t263 - t266*t134
@@ -1449,13 +1448,13 @@ def _manipulability_core(q, w):
     t281 = t275 - t278*t186
     t282 = t276 - t278*t187
     t283 = t277 - t278*t188
-    t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 + t236*t265
+    t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 - t236*t265
     t285 = t279 - t284*t231
     t286 = t280 - t284*t232
     t287 = t281 - t284*t233
     t288 = t282 - t284*t234
     t289 = t283 - t284*t235
-    t290 = t265 - t284*t236
+    t290 = t265 + t284*t236
     t291 = t285*t285 + t286*t286 + t287*t287 + t288*t288 + t289*t289 + t290*t290
     t292 = np.sqrt(t291)
     t293 = np.where(t292 > 0.0, 1.0/t292, 1.0)
@@ -1490,13 +1489,13 @@ def _manipulability_core(q, w):
     t327 = t321 - t323*t234
     t328 = t322 - t323*t235
     t329 = t13 - t323*t236
-    t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329
+    t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 - t299*t329
     t331 = t324 - t330*t294
     t332 = t325 - t330*t295
     t333 = t326 - t330*t296
     t334 = t327 - t330*t297
     t335 = t328 - t330*t298
-    t336 = t329 - t330*t299
+    t336 = t329 + t330*t299
     t337 = t132*t332 - t131*t331 + t133*t333 + t134*t334 + t135*t335
     t338 = t331 + t337*t131
     t339 = t332 - t337*t132
@@ -1522,13 +1521,13 @@ def _manipulability_core(q, w):
     t359 = t353 - t355*t234
     t360 = t354 - t355*t235
     t361 = t336 - t355*t236
-    t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 + t299*t361
+    t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 - t299*t361
     t363 = t356 - t362*t294
     t364 = t357 - t362*t295
     t365 = t358 - t362*t296
     t366 = t359 - t362*t297
     t367 = t360 - t362*t298
-    t368 = t361 - t362*t299
+    t368 = t361 + t362*t299
     t369 = t363*t363 + t364*t364 + t365*t365 + t366*t366 + t367*t367 + t368*t368
     t370 = np.sqrt(t369)
     t383 = t128*t149*t182*t229*t292*t370
@@ -1541,7 +1540,7 @@ def manipulability(q):
 
     q: array of shape (..., 6), finite.
     Returns w of shape (..., 1).
-    Operations: 5 sin, 5 cos, 715 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 713 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -2116,33 +2115,33 @@ def _manipulability_gradient_core(q, grad):
     t238 = t197 + t215
     t239 = t203 + t221
     t240 = cs[..., 0]*(t132 + t133 + t134) - t5*t135
-    t241 = -t240*t131
+    t241 = t240*t131
     t242 = -cs[..., 0]
     t243 = t240*t132 - cs[..., 0]
     t244 = t240*t133 - cs[..., 0]
     t245 = t240*t134 - cs[..., 0]
     t246 = t5 + t240*t135
-    t247 = t151*t241 + t152*t243 + t153*t244 + t154*t245 + t155*t246
-    t248 = t241 - t247*t151
+    t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246
+    t248 = t241 + t247*t151
     t249 = t243 - t247*t152
     t250 = t244 - t247*t153
     t251 = t245 - t247*t154
     t252 = t246 - t247*t155
-    t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252
-    t254 = t248 - t253*t184
+    t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252
+    t254 = t248 + t253*t184
     t255 = t249 - t253*t185
     t256 = t250 - t253*t186
     t257 = t251 - t253*t187
     t258 = t252 - t253*t188
-    t259 = t11*t236 + t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258
-    t260 = t254 - t259*t231
+    t259 = t11*t236 - t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258
+    t260 = t254 + t259*t231
     t261 = t255 - t259*t232
     t262 = t256 - t259*t233
     t263 = t257 - t259*t234
     t264 = t258 - t259*t235
     t265 = t11 - t259*t236
-    t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264
-    t267 = t260 + t266*t131
+    t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264
+    t267 = t266*t131 - t260
     t268 = t261 - t266*t132
     t269 = t262 - t266*t133
     t270 = t263 - t266*t134
@@ -2263,9 +2262,9 @@ def _manipulability_gradient_core(q, grad):
     t388 = t34*t242
     t389 = t5*t34 + t33*cs[..., 3]
     t390 = t21*sn[..., 0]
-    t391 = -t19*sn[..., 0]
-    t392 = -t16*sn[..., 0]
-    t393 = -t34*sn[..., 0]
+    t391 = t19*sn[..., 0]
+    t392 = t16*sn[..., 0]
+    t393 = t34*sn[..., 0]
     t394 = t3*t34 + t32*cs[..., 3]
     t395 = t26*cs[..., 0] + t27*sn[..., 0]
     t396 = t28*cs[..., 0] + t29*sn[..., 0]
@@ -2351,10 +2350,10 @@ def _manipulability_gradient_core(q, grad):
     t476 = t402*t461
     t477 = t404*t459
     t478 = t405*t462
-    t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) + ((t469 + t470) - t390*t440))) + (((t471 + t395*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437
-    t480 = ((((t464 + t465) + (t386*t439 + t466)) + ((t467 + t468) + (t391*t440 + (t469 + t470)))) + (((t471 + t396*t441) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t28*t438))))) - t29*t437
-    t481 = ((((t464 + t465) + (t387*t439 + t387*t444)) + ((t467 + t468) + (t392*t440 + (t392*t445 + t470)))) + (((t471 + t397*t441) + (t397*t446 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t30*t438))))) - t31*t437
-    t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) + ((t393*t440 + t393*t445) + (t393*t450 - t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 - t403*t461) + (t406*t462 + t32*t438)))) - t33*t437
+    t479 = ((((t464 + t465) + (t385*t439 + t466)) + ((t467 + t468) - (t390*t440 + (t469 + t470)))) + (((t395*t441 - t471) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t26*t438))))) - t27*t437
+    t480 = ((((t464 + t465) + (t386*t439 + t466)) + ((t467 + t468) - (t391*t440 + (t469 + t470)))) + (((t396*t441 - t471) + (t472 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t28*t438))))) - t29*t437
+    t481 = ((((t464 + t465) + (t387*t439 + t387*t444)) + ((t467 + t468) - (t392*t440 + (t392*t445 + t470)))) + (((t397*t441 - t471) + (t397*t446 + (t473 + t474))) + ((t475 + t476) + (t477 + (t478 + t30*t438))))) - t31*t437
+    t482 = ((((t388*t439 + t388*t444) + (t388*t449 + t389*t454)) - ((t393*t440 + t393*t445) + (t393*t450 + t394*t455))) + (((t398*t441 + t398*t446) + (t398*t451 + t399*t456)) + ((t401*t460 - t403*t461) + (t406*t462 + t32*t438)))) - t33*t437
     grad[..., 0] = t463
     grad[..., 1] = t479
     grad[..., 2] = t480
@@ -2369,7 +2368,7 @@ def manipulability_gradient(q):
 
     q: array of shape (..., 6), finite.
     Returns grad of shape (..., 6).
-    Operations: 5 sin, 5 cos, 1236 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 1232 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (6, ), ("finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -2706,7 +2705,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t766 = t701 + t733
     t767 = t707 + t739
     t768 = t714 + t746
-    t769 = t121*lambda_
+    t769 = -t121*lambda_
     t770 = 1.192509*t121
     t771 = t508*t770
     t772 = t537*t770
@@ -2740,7 +2739,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t800 = t796*t774
     t801 = t796*t775
     t802 = -t796*t776
-    t803 = t796*t769
+    t803 = -t796*t769
     t804 = t802*t781 - t798*t777 - t799*t778 - t800*t779 - t801*t780
     t805 = t804*t797
     t806 = t777 + t804*t798
@@ -2768,7 +2767,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t828 = t823*t817
     t829 = t823*t818
     t830 = t823*t819
-    t831 = -t823*t769
+    t831 = t823*t769
     t832 = t812 - t804
     t833 = t802*t785 - t799*t782 - t800*t783 - t801*t784
     t834 = t833*t797
@@ -2816,7 +2815,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t876 = t870*t864
     t877 = t870*t865
     t878 = t870*t866
-    t879 = -t870*t769
+    t879 = t870*t769
     t880 = t850 - t833
     t881 = t841 + t858
     t882 = t802*t788 - t800*t786 - t801*t787
@@ -2886,7 +2885,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t946 = t939*t933
     t947 = t939*t934
     t948 = t939*t935
-    t949 = -t939*t769
+    t949 = t939*t769
     t950 = t909 - t882
     t951 = t890 + t917
     t952 = t899 + t926
@@ -3034,7 +3033,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1094 = t1083 - t1086*t1040
     t1095 = t1084 - t1086*t1041
     t1096 = t1085 - t1086*t1042
-    t1097 = -t1086*t1043
+    t1097 = t1086*t1043
     t1098 = t797*t1087 + t798*t1088 + t799*t1089 + t800*t1090 + t801*t1091 - t802*t1092 + t803*t1093
     t1099 = t1087 - t1098*t797
     t1100 = t1088 - t1098*t798
@@ -3073,7 +3072,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1133 = t1123 - t1125*t947
     t1134 = t1124 - t1125*t948
     t1135 = t1096 + t1125*t949
-    t1136 = ((t1033*t1126 + t1034*t1127) + (t1043*t1097 + (t1035*t1128 + t1036*t1129))) + ((t1037*t1130 + (t1038*t1131 + t1039*t1132)) + (t1040*t1133 + (t1041*t1134 + t1042*t1135)))
+    t1136 = ((t1033*t1126 + t1034*t1127) + ((t1035*t1128 + t1036*t1129) - t1043*t1097)) + ((t1037*t1130 + (t1038*t1131 + t1039*t1132)) + (t1040*t1133 + (t1041*t1134 + t1042*t1135)))
     t1137 = t1126 - t1136*t1033
     t1138 = t1127 - t1136*t1034
     t1139 = t1128 - t1136*t1035
@@ -3084,7 +3083,7 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t1144 = t1133 - t1136*t1040
     t1145 = t1134 - t1136*t1041
     t1146 = t1135 - t1136*t1042
-    t1147 = t1097 - t1136*t1043
+    t1147 = t1097 + t1136*t1043
     t1148 = ((t1137*t1137 + (t1138*t1138 + t1147*t1147)) + (t1139*t1139 + (t1140*t1140 + t1141*t1141))) + ((t1142*t1142 + (t1143*t1143 + t1144*t1144)) + (t1145*t1145 + (t1146*t1146 + t792)))
     t1149 = np.sqrt(t1148)
     t1150 = t1149 > 0.0
@@ -3134,7 +3133,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 5 sin, 5 cos, 2032 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 2030 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (6, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -3301,18 +3300,18 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1292 = t1287 - t1290*t1280
     t1293 = t1288 - t1290*t1281
     t1294 = t1289 - t1290*t1282
-    t1295 = -t1290*t1283
+    t1295 = t1290*t1283
     t1296 = t1261*t1291 + t1262*t1292 - t1263*t1293 + t1264*t1294
     t1297 = t1291 - t1296*t1261
     t1298 = t1292 - t1296*t1262
     t1299 = t1293 + t1296*t1263
     t1300 = t1294 - t1296*t1264
-    t1301 = t1279*t1297 + t1280*t1298 + t1281*t1299 + t1282*t1300 + t1283*t1295
+    t1301 = t1279*t1297 + t1280*t1298 + t1281*t1299 + t1282*t1300 - t1283*t1295
     t1302 = t1297 - t1301*t1279
     t1303 = t1298 - t1301*t1280
     t1304 = t1299 - t1301*t1281
     t1305 = t1300 - t1301*t1282
-    t1306 = t1295 - t1301*t1283
+    t1306 = t1295 + t1301*t1283
     t1307 = t1302*t1302 + t1303*t1303 + t1304*t1304 + t1305*t1305 + t1306*t1306 + t792
     t1308 = np.sqrt(t1307)
     t1309 = t1308 > 0.0
@@ -3349,7 +3348,7 @@ def inverse_velocity_position(q, v, lambda_):
     v: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq_position of shape (..., 6).
-    Operations: 5 sin, 5 cos, 401 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 400 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (6, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

@@ -173,3 +173,23 @@ def test_what_the_sign_pass_takes_as_settled_is_its_own_normal_form(value):
         sign, written, paid = signs.normal(value, 3)
         assert (sign, written, paid) == (1, value, 0)
         assert signs.cost[3] == 0 and not signs.reads[3]
+
+
+def test_a_negation_moved_along_a_chain_of_locals_to_a_subtraction():
+    """``u = -x0 x1 - x2 x3`` pays a negation that no single flip removes: flipping ``u`` moves it to ``v``, then
+    to ``w``, whose reader subtracts it for free (TALOS's arm: its pose 109 -> 108 so). The chase flips the three
+    together; the values are the same."""
+    from skelarm_sym.ir import signs
+
+    u, v, w = Var("t0"), Var("t1"), Var("t2")
+    body = (TRIG, Let(u, Add((Neg(Mul((X[0], X[1]))), Neg(Mul((X[2], X[3])))))),
+            Let(v, Add((Mul((u, C[0])), Neg(Mul((X[1], S[0])))))), Let(w, Add((Mul((v, C[1])), Neg(Mul((X[0], S[1])))))),
+            Store("y", 0, Add((X[3], Mul((w, S[0]))))))
+    assert count_ops(body).neg == 1
+    after = settle_signs(body)
+    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 1
+    for x in np.random.default_rng(12).uniform(-3, 3, (30, 4)):
+        assert run(after, x) == pytest.approx(run(body, x), rel=1e-15, abs=0)
+    with pytest.MonkeyPatch.context() as patch:  # the greedy flips alone leave it
+        patch.setattr(signs, "CHASE_DEPTH", 0)
+        assert count_ops(settle_signs(body)).neg == 1

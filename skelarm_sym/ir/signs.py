@@ -32,6 +32,17 @@ from .walk import children, expr_names, statement_reads
 PASSES = 4
 """Greedy passes over the locals at most (the chain's bodies settle in two)."""
 
+CHASE_DEPTH = 8
+"""Flips in one chain of :meth:`_Signs.chase` at most."""
+
+CHASE_BUDGET = 1
+"""Flips that :meth:`_Signs.chase` makes at most, per flippable local of the body (its cost stays a fraction of
+the greedy passes')."""
+
+CHASE_READERS = 6
+"""Locals read by more statements are not flipped in a chase (each flip re-prices every reader; a chain's frame
+entries, where negations travel, have two to four)."""
+
 MOST_READERS = 24
 """A local read by more statements keeps its sign: trying it re-prices every reader (a planar arm's joint
 terms are read by each of the long sums after them). On every example robot and planar arms of 3, 8 and 48
@@ -279,16 +290,11 @@ class _Signs:
         return Neg(e), 1
 
     # -- the search ------------------------------------------------------------------------------------
-    def try_flip(self, name: str) -> bool:
-        """Flip ``name`` if that lowers the negations; say whether it did."""
+    def _evaluate(self, name: str) -> tuple[dict, dict, int]:
+        """Flip ``name`` and price what that changes: the new prices of its statements, the new reader counts of
+        the copies, and the change in negations (the flip stays made; :meth:`_commit` or flip back)."""
         affected = [self.position[name]] + self.users[name]
-        if len(affected) > MOST_READERS or not any(self.cost[i] or self.reads[i] for i in affected):
-            return False  # nothing there pays a negation: a flip can only add some
-        tried = self.tried_at.get(name)
-        if tried is not None and tried >= self.copies_at and all(self.changed_at[i] <= tried for i in affected):
-            return False  # refused before, and nothing it depends on has moved since
         self.clock += 1
-        self.tried_at[name] = self.clock
         self.flipped ^= {name}
         new = {i: self.price(i) for i in affected}
         readers = {}
@@ -299,24 +305,79 @@ class _Signs:
                 readers[u] = readers.get(u, self.readers[u]) + 1
         delta = sum(c - self.cost[i] for i, (c, _) in new.items())
         delta += sum(bool(n) - bool(self.readers[u]) for u, n in readers.items())
+        return new, readers, delta
+
+    def _commit(self, new: dict, readers: dict) -> None:
+        for i, (c, reads) in new.items():
+            self.cost[i], self.reads[i] = c, reads
+            self.changed_at[i] = self.clock
+        if any(bool(n) != bool(self.readers[u]) for u, n in readers.items()):
+            self.copies_at = self.clock  # a copy is now read or unread: every price that reads it moved
+        self.readers.update(readers)
+
+    def try_flip(self, name: str) -> bool:
+        """Flip ``name`` if that lowers the negations; say whether it did."""
+        affected = [self.position[name]] + self.users[name]
+        if len(affected) > MOST_READERS or not any(self.cost[i] or self.reads[i] for i in affected):
+            return False  # nothing there pays a negation: a flip can only add some
+        tried = self.tried_at.get(name)
+        if tried is not None and tried >= self.copies_at and all(self.changed_at[i] <= tried for i in affected):
+            return False  # refused before, and nothing it depends on has moved since
+        new, readers, delta = self._evaluate(name)
+        self.tried_at[name] = self.clock
         if delta < 0:
-            for i, (c, reads) in new.items():
-                self.cost[i], self.reads[i] = c, reads
-                self.changed_at[i] = self.clock
-            if any(bool(n) != bool(self.readers[u]) for u, n in readers.items()):
-                self.copies_at = self.clock  # a copy is now read or unread: every price that reads it moved
-            self.readers.update(readers)
+            self._commit(new, readers)
             return True
         self.flipped ^= {name}
         return False
 
-    def search(self) -> None:
+    def greedy(self) -> None:
         for _ in range(PASSES):
             changed = False
             for name in reversed(self.flippable):
                 changed |= self.try_flip(name)
             if not changed:
                 break
+
+    def _suspects(self, i: int) -> list[str]:
+        """The locals whose flip may move statement ``i``'s negation on: its own, else (a stored output) those it
+        reads."""
+        s = self.body[i]
+        own = [s.var.name] if type(s) is Let and s.var.name in self.chaseable else []
+        return own or [n for n in sorted(self.names[i]) if n in self.chaseable]
+
+    def chase(self) -> bool:
+        """A chain of flips that no single flip makes: flipping a local moves a negation its statement pays to a
+        reader, flipping that one moves it on, until a subtraction or another sign absorbs it (TALOS's arm: three
+        such chains). From each local where a negation is paid, follow the readers that then pay, flipping even
+        where it costs, up to CHASE_DEPTH flips; keep the best prefix if it saves, else flip back. Say whether
+        any saved."""
+        saved = False
+        budget = CHASE_BUDGET * max(1, len(self.flippable))
+        starts = [n for i in range(len(self.body)) if self.cost[i] for n in self._suspects(i)]
+        for start in dict.fromkeys(starts):
+            taken: list[str] = []
+            total = best = best_length = 0
+            name: str | None = start
+            while name is not None and len(taken) < CHASE_DEPTH and budget > 0:
+                budget -= 1
+                new, readers, delta = self._evaluate(name)
+                self._commit(new, readers)
+                taken.append(name)
+                total += delta
+                if total < best:
+                    best, best_length = total, len(taken)
+                name = next((n for i in sorted(new) if self.cost[i] for n in self._suspects(i) if n not in taken), None)
+            for undo in reversed(taken[best_length:]):
+                self._commit(*self._evaluate(undo)[:2])
+            saved |= best < 0
+        return saved
+
+    def search(self) -> None:
+        self.greedy()
+        self.chaseable = {n for n in self.flippable if len(self.users[n]) <= CHASE_READERS}
+        if self.chase():
+            self.greedy()
 
     def written(self) -> tuple[tuple, int, int]:
         """The body with the flips applied, copies no longer read dropped, and the negations that the
