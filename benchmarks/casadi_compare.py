@@ -413,13 +413,17 @@ def main(argv=None) -> None:
     parser.add_argument("robots", nargs="*", help="robot files (a URDF as PATH:TIP); default: see the module docstring")
     parser.add_argument("--no-time", action="store_true", help="count operations only")
     parser.add_argument("--example-robot-data", action="store_true",
-                        help="every example-robot-data URDF instead (its chain as benchmarks/urdf_ops.py takes it)")
+                        help="every example-robot-data URDF instead: its default chain, else the first of its longest "
+                             "(the tip in parentheses), as benchmarks/urdf_ops.py takes it")
     args = parser.parse_args(argv)
     robots = [parse_robot(r) for r in args.robots] or (example_robots() if args.example_robot_data else default_robots())
     cc = find_compiler()
     if not args.no_time:
         version = subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
         print(f"compiler: {version}; flags: {' '.join(FLAGS)}; times: medians of 31 interleaved passes of {CONFIGS} calls")
+    print("arith: additions, multiplications, divisions and negations in the C text of each function; ratio: ours / "
+          "CasADi's (lower is fewer operations); sin+cos: sines + cosines evaluated"
+          + ("" if args.no_time else "; ns: time per call, medians"))
     print()
     print("| robot | n | function | arith ours | arith CasADi | ratio | sin+cos ours | sin+cos CasADi "
           + ("| ns ours | ns ours NO_SIMD | ns CasADi | ours / CasADi | NO_SIMD / CasADi " if not args.no_time else "") + "|")
