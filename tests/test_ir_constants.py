@@ -1,4 +1,5 @@
-"""The per-function pass that adds consecutive constants once (skelarm_sym/ir/constants.py): the same values to
+"""The per-function pass that adds consecutive constants once (skelarm_sym/ir/constants.py; with random bodies
+also skelarm_sym/ir/factors.py's, which shares a factor): the same values to
 rounding, an addition fewer per folded literal, and nothing folded where the local is read twice or its reader
 is no sum with a literal. Values are judged by evaluating the body before and after with NumPy
 (skelarm_sym/ir/evaluate.py) on random inputs; the chain's pose against its recursive reference."""
@@ -10,16 +11,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from skelarm_sym import reference
 from skelarm_sym.build import load_python
 from skelarm_sym.generate import generate
 from skelarm_sym.ir.constants import fold_constants
+from skelarm_sym.ir.factors import factor_sums
 from skelarm_sym.ir.count import count_ops
 from skelarm_sym.ir.nodes import Add, Const, Let, Mul, Neg, Store, Var
 from skelarm_sym.models.chain.loader import load_robot
 
-from test_ir_signs import C, S, TRIG, X, run
+from test_ir_signs import C, S, TRIG, X, _body, assert_same_outputs, run
 
 
 def _check(body, folded, fewer: int) -> None:
@@ -79,3 +82,51 @@ def test_ur5_urdf_pose_pays_each_offset_along_the_shoulder_axis_once():
     module = load_python(g.sources["ur5_robot.py"], "ur5_robot")
     q = np.random.default_rng(9).uniform(-3, 3, (20, 6))
     np.testing.assert_allclose(module.pose(q), reference.chain_kinematics(chain.numeric(), q).T, rtol=0, atol=1e-14)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["add", "mul", "neg"]), st.lists(st.integers(0, 40), min_size=2, max_size=3),
+                          st.integers(0, 7), st.integers(0, 2)), min_size=1, max_size=12),
+       st.lists(st.floats(-3, 3), min_size=4, max_size=4))
+def test_random_bodies_keep_their_values_and_never_pay_more(ops, x):
+    """Random straight-line bodies (sums and products of inputs, sines, cosines, earlier locals and the literals
+    0.75 and -1.5; test_ir_signs's): both passes, alone and in the lowering's order, keep every output to
+    rounding and never add an operation of any kind."""
+    body = _body(ops)
+    for after in (fold_constants(body), factor_sums(body), factor_sums(fold_constants(body))):
+        before_ops, after_ops = count_ops(body), count_ops(after)
+        assert after_ops.add <= before_ops.add and after_ops.mul <= before_ops.mul and after_ops.neg <= before_ops.neg
+        assert_same_outputs(body, after, x)
+
+
+_ATOMS = [X[1], X[2], C[0], S[1]]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.floats(-2, 2, allow_nan=False).map(lambda v: round(v, 3)), st.booleans(), st.booleans(),
+                          st.integers(0, 4), st.booleans()), min_size=1, max_size=8),
+       st.lists(st.floats(-3, 3), min_size=4, max_size=4))
+def test_random_chains_of_offsets_fold_to_the_same_values(links, x):
+    """Chains of locals, each the one before (added or subtracted) plus a literal and maybe an atom, some also
+    stored: folded, the same outputs to rounding, never an addition more nor more operations in all; a local
+    stored as well stays."""
+    body, previous, stored = [TRIG], X[0], []
+    for k, (literal, subtract, literal_first, atom, store) in enumerate(links):
+        term = Neg(previous) if subtract else previous
+        extra = [_ATOMS[atom]] if atom < len(_ATOMS) else []
+        lit = Const(literal) if literal >= 0 else Neg(Const(-literal))
+        terms = [lit, term, *extra] if literal_first else [term, *extra, lit]
+        local = Var(f"t{k}")
+        body.append(Let(local, Add(tuple(terms))))
+        if store:
+            stored.append(local)
+        previous = local
+    body += [Store("y", i, v) for i, v in enumerate(stored + [previous])]
+    body = tuple(body)
+    after = fold_constants(body)
+    before_ops, after_ops = count_ops(body), count_ops(after)
+    # a fold saves an addition or two; offsets that cancel to 0 under a subtracted local may leave a sum of
+    # subtractions only, which pays a negation (one of the two additions it saved)
+    assert after_ops.add <= before_ops.add and after_ops.arithmetic <= before_ops.arithmetic
+    assert {s.var.name for s in after if type(s) is Let} >= {v.name for v in stored}
+    assert_same_outputs(body, after, x)

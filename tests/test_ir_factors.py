@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from skelarm_sym import reference
 from skelarm_sym.build import load_python
@@ -16,7 +17,7 @@ from skelarm_sym.ir.factors import factor_sums
 from skelarm_sym.ir.nodes import Add, Const, Let, Mul, Neg, Store, Var
 from skelarm_sym.models.chain.dh_file import load_robot_file
 
-from test_ir_signs import C, S, TRIG, X, run
+from test_ir_signs import C, S, TRIG, X, assert_same_outputs, run
 
 
 def _same_values(body, after) -> None:
@@ -86,3 +87,32 @@ def test_parallel_axes_share_their_axis_in_the_angular_velocity_and_acceleration
     T, J, dJ, twist, acc = module.kinematics(q, dq, ddq)
     for got, expected in ((T, ref.T), (J, ref.J), (dJ, ref.dJ), (twist, ref.twist), (acc, ref.acc)):
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-13)
+
+
+_POOL = [X[1], X[2], C[0], S[0], C[1], Const(0.5), Const(2.0)]
+_PRODUCTS = st.lists(st.tuples(st.lists(st.integers(0, len(_POOL) - 1), min_size=1, max_size=3), st.booleans()),
+                     min_size=1, max_size=6)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(_PRODUCTS, min_size=1, max_size=3), st.lists(st.floats(-3, 3), min_size=4, max_size=4))
+def test_random_sums_of_products_keep_their_values_and_never_pay_more(sums, x):
+    """Sums of up to six products of up to three factors from a pool of seven (so that factors repeat), each
+    product maybe subtracted, stored or read by the next sum: the same outputs to rounding, and never an
+    addition, multiplication or negation more."""
+    body, previous = [TRIG], None
+    for k, products in enumerate(sums):
+        terms = []
+        for picks, negated in products:
+            factors = tuple(_POOL[p] for p in picks) + ((previous,) if previous is not None and k % 2 else ())
+            term = factors[0] if len(factors) == 1 else Mul(factors)
+            terms.append(Neg(term) if negated else term)
+        local = Var(f"t{k}")
+        body.append(Let(local, terms[0] if len(terms) == 1 else Add(tuple(terms))))
+        previous = local
+    body.append(Store("y", 0, previous))
+    body = tuple(body)
+    after = factor_sums(body)
+    before_ops, after_ops = count_ops(body), count_ops(after)
+    assert after_ops.add <= before_ops.add and after_ops.mul <= before_ops.mul and after_ops.neg <= before_ops.neg
+    assert_same_outputs(body, after, x)

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Sequence
 
-from .nodes import LONG_SUM, Add, Const, Let, Mul, Neg, Store, TrigBlock, Var
+from .nodes import LONG_SUM, Add, Const, Let, Mul, Neg, Store, TrigBlock, Var, signed_sum
 from .walk import children
 
 
@@ -98,7 +98,7 @@ def fold_constants(body: Sequence) -> tuple:
                 terms = [t for t in outer[1] if t is not term] + moved + ([_literal_term(value)] if value != 0.0 else [])
                 if len(terms) > LONG_SUM:
                     continue
-                reader = type(reader)(**{**_fields(reader), "value": Add(tuple(terms)) if len(terms) > 1 else terms[0]})
+                reader = type(reader)(**{**_fields(reader), "value": signed_sum(terms)})
                 dropped.add(i)  # offsets that cancel leave a copy (TIAGo's t39 = (0.027 + t31) - 0.027)
                 break
             else:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Sequence
 
-from .nodes import Add, Let, Mul, Neg, Store, TrigBlock
+from .nodes import Add, Let, Mul, Neg, Store, TrigBlock, signed_sum
 
 
 def _product(term):
@@ -53,14 +53,14 @@ def _factored(e):
         outside = all(type(t) is Neg for t in inner)  # -(f x) - (f y) = -(f (x + y)): the sum's own negation kept
         if outside:
             inner = [t.x for t in inner]
-        product = Mul((factor, _factored(Add(tuple(inner)))))
+        product = Mul((factor, _factored(signed_sum(inner))))
         first = terms.index(group[0])
         terms = [t for t in terms if t not in group]
         terms.insert(first, Neg(product) if outside else product)
         changed = True
     if not changed:
         return e
-    return Add(tuple(terms)) if len(terms) > 1 else terms[0]
+    return signed_sum(terms)
 
 
 def factor_sums(body: Sequence) -> tuple:

@@ -286,6 +286,22 @@ Expr = Union[Const, NamedConst, Var, Elem, Add, Mul, Neg, Div, Call1, Call2, Com
 
 # -- statements --------------------------------------------------------------------------------------
 
+
+def signed_sum(terms) -> "Expr":
+    """The sum of ``terms`` as the lowering writes one: added terms first, then the subtracted ones (a
+    :class:`Neg` each); where every term is subtracted, a literal among them takes the sign itself (``-x - 0.3``
+    is ``-0.3 - x``: no negation to pay). One term is that term."""
+    plus = [t for t in terms if type(t) is not Neg]
+    minus = [t for t in terms if type(t) is Neg]
+    if not plus:
+        for i, m in enumerate(minus):
+            if type(m.x) is Const and m.x.type is Type.REAL:
+                plus.append(Const(-m.x.value))
+                del minus[i]
+                break
+    ordered = plus + minus
+    return ordered[0] if len(ordered) == 1 else Add(tuple(ordered))
+
 @dataclass(frozen=True, slots=True)
 class Let:
     """``const type var = value``: assigned once, never changed."""
