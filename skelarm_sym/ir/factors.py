@@ -39,7 +39,7 @@ def _factored(e):
         for term in terms:
             product = _product(term)
             if product is not None:
-                counts.update(set(product[1]))
+                counts.update(list(dict.fromkeys(product[1])))  # each factor once, in order (a set's order is the hash's)
         shared = [f for f, c in counts.items() if c >= 2]
         if not shared:
             break
