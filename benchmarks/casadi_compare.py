@@ -3,7 +3,7 @@
     python benchmarks/casadi_compare.py                    # UR5, Panda, xArm7 (example-robot-data) + examples/robots/*.toml
     python benchmarks/casadi_compare.py --no-time          # operation counts only
     python benchmarks/casadi_compare.py examples/robots/ur5.toml path/to/panda.urdf:panda_hand_tcp
-    python benchmarks/casadi_compare.py --no-time --example-robot-data   # every example-robot-data chain (66)
+    python benchmarks/casadi_compare.py --no-time --example-robot-data   # every example-robot-data chain (65 without named parameters)
 
 Needs ``pip install casadi example-robot-data`` (the URDFs are read from example-robot-data's
 ``cmeel.prefix/share/example-robot-data/robots``) and a C compiler.

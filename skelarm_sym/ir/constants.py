@@ -11,6 +11,7 @@ for rounding (the literals add first, once, in double precision).
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import replace
 from typing import Sequence
 
 from .nodes import LONG_SUM, Add, Const, Let, Mul, Neg, Store, TrigBlock, Var, signed_sum
@@ -98,14 +99,10 @@ def fold_constants(body: Sequence) -> tuple:
                 terms = [t for t in outer[1] if t is not term] + moved + ([_literal_term(value)] if value != 0.0 else [])
                 if len(terms) > LONG_SUM:
                     continue
-                reader = type(reader)(**{**_fields(reader), "value": signed_sum(terms)})
+                reader = replace(reader, value=signed_sum(terms))
                 dropped.add(i)  # offsets that cancel leave a copy (TIAGo's t39 = (0.027 + t31) - 0.027)
                 break
             else:
                 break
         statements[j] = reader
     return tuple(s for i, s in enumerate(statements) if i not in dropped)
-
-
-def _fields(statement) -> dict:
-    return {name: getattr(statement, name) for name in statement.__dataclass_fields__}

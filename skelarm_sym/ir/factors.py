@@ -10,6 +10,7 @@ shared by the most is taken out of them (first seen on a tie), and again in what
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import replace
 from typing import Sequence
 
 from .nodes import Add, Let, Mul, Neg, Store, TrigBlock, signed_sum
@@ -73,6 +74,6 @@ def factor_sums(body: Sequence) -> tuple:
         if type(s) is not TrigBlock and type(s.value) is Add:
             value = _factored(s.value)
             if value is not s.value:
-                s = Let(s.var, value) if type(s) is Let else Store(s.output, s.index, value)
+                s = replace(s, value=value)
         out.append(s)
     return tuple(out)

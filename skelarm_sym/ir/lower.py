@@ -33,14 +33,14 @@ from sympy.utilities.iterables import iterable as _sympy_iterable
 
 from ..derive.core import ARGUMENT_ROLES, Derivation, FunctionSpec
 from .constants import fold_constants
-from .factors import factor_sums
 from .count import count_ops
+from .factors import factor_sums
 from .products import reuse_products
 from .signs import settle_signs
 from .unread import drop_unread
 from .nodes import (
     LONG_SUM, Add, Argument, Call1, Call2, Compare, Const, Div, Elem, Expr, Function, Let, Logic, Mul, NamedConst, Neg, Not,
-    Role, Select, Store, TrigBlock, Type, Var,
+    Role, Select, Store, TrigBlock, Type, Var, take_sign,
 )
 
 Assignment = tuple[sp.Symbol, sp.Expr]
@@ -540,17 +540,7 @@ class Converter:
                 minus.append(Neg(self._fresh(-self._rebuild(t))))
             else:
                 plus.append(self(t))
-        if not plus and minus:  # every term negative: a number, or a product led by one, takes the sign itself
-            for i, m in enumerate(minus):
-                x = m.x
-                if type(x) is Const:
-                    plus.append(Const(-x.value, x.type))
-                elif type(x) is Mul and type(x.factors[0]) is Const:
-                    plus.append(Mul((Const(-x.factors[0].value, x.factors[0].type), *x.factors[1:])))
-                else:
-                    continue
-                del minus[i]
-                break
+        take_sign(plus, minus)  # every term negative: a number, or a product led by one, takes the sign itself
         return _sum(plus, minus)
 
     def _negated(self, coeff: sp.Number, factors: Sequence[sp.Basic]) -> Expr:
@@ -598,8 +588,6 @@ class Converter:
 
     def _guarded(self, den: sp.Expr) -> bool:
         return not ((den.is_Number and float(den) > 0) or den in self.plain)
-
-
 
 
 def _sum(plus: list[Expr], minus: list[Neg]) -> Expr:

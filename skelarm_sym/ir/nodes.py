@@ -284,23 +284,36 @@ class Cast(ExprOps):
 Expr = Union[Const, NamedConst, Var, Elem, Add, Mul, Neg, Div, Call1, Call2, Compare, Logic, Not, Select, Bits, Cast]
 
 
-# -- statements --------------------------------------------------------------------------------------
+def take_sign(plus: list, minus: list) -> None:
+    """Where every term of a sum is subtracted (``plus`` empty, ``minus`` a :class:`Neg` each), let the first
+    literal, or product led by one, take the sign itself: ``-x - 0.3`` is ``-0.3 - x``, no negation to pay.
+    Moves that term from ``minus`` to ``plus``; nothing otherwise."""
+    if plus:
+        return
+    for i, m in enumerate(minus):
+        x = m.x
+        if type(x) is Const:
+            plus.append(Const(-x.value, x.type))
+        elif type(x) is Mul and type(x.factors[0]) is Const:
+            plus.append(Mul((Const(-x.factors[0].value, x.factors[0].type), *x.factors[1:])))
+        else:
+            continue
+        del minus[i]
+        return
 
 
-def signed_sum(terms) -> "Expr":
-    """The sum of ``terms`` as the lowering writes one: added terms first, then the subtracted ones (a
-    :class:`Neg` each); where every term is subtracted, a literal among them takes the sign itself (``-x - 0.3``
-    is ``-0.3 - x``: no negation to pay). One term is that term."""
+def signed_sum(terms) -> Expr:
+    """The sum of ``terms`` as the lowering writes one (``lower._add``): added terms first, then the subtracted
+    ones (a :class:`Neg` each), the sign taken by a literal where all are subtracted (:func:`take_sign`). One
+    term is that term."""
     plus = [t for t in terms if type(t) is not Neg]
     minus = [t for t in terms if type(t) is Neg]
-    if not plus:
-        for i, m in enumerate(minus):
-            if type(m.x) is Const and m.x.type is Type.REAL:
-                plus.append(Const(-m.x.value))
-                del minus[i]
-                break
+    take_sign(plus, minus)
     ordered = plus + minus
     return ordered[0] if len(ordered) == 1 else Add(tuple(ordered))
+
+
+# -- statements --------------------------------------------------------------------------------------
 
 @dataclass(frozen=True, slots=True)
 class Let:
