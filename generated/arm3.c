@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x3c8a8af7UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xe32ebe17UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -880,11 +880,11 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     const double t3 = cs[1*ARM3_STRIDE]*l[1];
     const double t4 = cs[2*ARM3_STRIDE]*l[2];
     const double t5 = sn[0]*l[0];
-    const double t6 = sn[1*ARM3_STRIDE]*l[1];
+    const double t6 = -sn[1*ARM3_STRIDE]*l[1];
     const double t7 = sn[2*ARM3_STRIDE]*l[2];
-    const double t9 = t7 + t6;
+    const double t9 = t6 - t7;
     const double t10 = t3 + t4;
-    const double t11 = t9 + t5;
+    const double t11 = t9 - t5;
     const double t12 = t2 + t10;
     const double t13 = dq[0] + dq[1*ARM3_STRIDE];
     const double t14 = t13 + dq[2*ARM3_STRIDE];
@@ -894,12 +894,12 @@ ARM3_BODY void arm3_acceleration_finish(const double *restrict dq, const double 
     const double t18 = t5*dq[0];
     const double t19 = t6*t13;
     const double t20 = t7*t14;
-    const double t23 = -t17 - t16;
-    const double t24 = t20 + t19;
-    const double t25 = t23 - t15;
-    a[0] = t25*dq[0] + t23*dq[1*ARM3_STRIDE] - t17*dq[2*ARM3_STRIDE] - t11*ddq[0] - t9*ddq[1*ARM3_STRIDE] - t7*ddq[2*ARM3_STRIDE];
-    const double t26 = t24 + t18;
-    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] - t26*dq[0] - t24*dq[1*ARM3_STRIDE] - t20*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
+    const double t23 = t17 + t16;
+    const double t24 = t19 - t20;
+    const double t25 = t23 + t15;
+    a[0] = t11*ddq[0] - t25*dq[0] - t23*dq[1*ARM3_STRIDE] - t17*dq[2*ARM3_STRIDE] + t9*ddq[1*ARM3_STRIDE] - t7*ddq[2*ARM3_STRIDE];
+    const double t26 = t24 - t18;
+    a[1*ARM3_STRIDE] = t4*ddq[2*ARM3_STRIDE] + t26*dq[0] + t24*dq[1*ARM3_STRIDE] - t20*dq[2*ARM3_STRIDE] + t12*ddq[0] + t10*ddq[1*ARM3_STRIDE];
 }
 
 ARM3_SINGLE void arm3_acceleration(const double q[3], const double dq[3], const double ddq[3], const double l[3], double a[2])

@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x3c8a8af7
+STAMP = 0xe32ebe17
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -457,11 +457,11 @@ def _acceleration_core(q, dq, ddq, l, a):
     t3 = cs[..., 1]*l[..., 1]
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
-    t6 = sn[..., 1]*l[..., 1]
+    t6 = -sn[..., 1]*l[..., 1]
     t7 = sn[..., 2]*l[..., 2]
-    t9 = t7 + t6
+    t9 = t6 - t7
     t10 = t3 + t4
-    t11 = t9 + t5
+    t11 = t9 - t5
     t12 = t2 + t10
     t13 = dq[..., 0] + dq[..., 1]
     t14 = t13 + dq[..., 2]
@@ -471,12 +471,12 @@ def _acceleration_core(q, dq, ddq, l, a):
     t18 = t5*dq[..., 0]
     t19 = t6*t13
     t20 = t7*t14
-    t23 = -t17 - t16
-    t24 = t20 + t19
-    t25 = t23 - t15
-    t26 = t24 + t18
-    a[..., 0] = t25*dq[..., 0] + t23*dq[..., 1] - t17*dq[..., 2] - t11*ddq[..., 0] - t9*ddq[..., 1] - t7*ddq[..., 2]
-    a[..., 1] = t4*ddq[..., 2] - t26*dq[..., 0] - t24*dq[..., 1] - t20*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
+    t23 = t17 + t16
+    t24 = t19 - t20
+    t25 = t23 + t15
+    t26 = t24 - t18
+    a[..., 0] = t11*ddq[..., 0] - t25*dq[..., 0] - t23*dq[..., 1] - t17*dq[..., 2] + t9*ddq[..., 1] - t7*ddq[..., 2]
+    a[..., 1] = t4*ddq[..., 2] + t26*dq[..., 0] + t24*dq[..., 1] - t20*dq[..., 2] + t12*ddq[..., 0] + t10*ddq[..., 1]
 
 
 @_signature_errors

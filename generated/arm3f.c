@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x6a945a58UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x55db62bbUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -562,7 +562,7 @@ void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H)
 #endif
 
 /* ---- arm3f_velocity: endpoint velocity v = J dq (2) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 1 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 0 neg */
 
 ARM3F_BODY void arm3f_velocity_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -577,7 +577,7 @@ ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *res
     (void)stride;
     const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
-    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t4 = -0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
     const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
     const float t12 = t11 + dq[2*ARM3F_STRIDE];
@@ -588,7 +588,7 @@ ARM3F_BODY void arm3f_velocity_finish(const float *restrict dq, const float *res
     const float t17 = t4*t11;
     const float t18 = t5*t12;
     const float t21 = t15 + t14;
-    const float t22 = -t18 - t17;
+    const float t22 = t17 - t18;
     const float t23 = t21 + t13;
     v[1*ARM3F_STRIDE] = t23;
     const float t24 = t22 - t16;
@@ -685,7 +685,7 @@ void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v)
 #endif
 
 /* ---- arm3f_acceleration: endpoint acceleration a = J ddq + H dq (2) ---- */
-/* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 1 neg */
+/* operations: 3 sin, 3 cos, 22 add/sub, 22 mul, 0 neg */
 
 ARM3F_BODY void arm3f_acceleration_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -700,11 +700,11 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     (void)stride;
     const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
     const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
-    const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
+    const float t4 = -0.8f*sn[1*ARM3F_STRIDE];
     const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
-    const float t7 = t5 + t4;
+    const float t7 = t4 - t5;
     const float t8 = t2 + t3;
-    const float t9 = t7 + sn[0];
+    const float t9 = sn[0] - t7;
     const float t10 = cs[0] + t8;
     const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
     const float t12 = t11 + dq[2*ARM3F_STRIDE];
@@ -714,12 +714,12 @@ ARM3F_BODY void arm3f_acceleration_finish(const float *restrict dq, const float 
     const float t16 = sn[0]*dq[0];
     const float t17 = t4*t11;
     const float t18 = t5*t12;
-    const float t21 = -t15 - t14;
-    const float t22 = t18 + t17;
-    const float t23 = t21 - t13;
-    a[0] = t23*dq[0] + t21*dq[1*ARM3F_STRIDE] - t15*dq[2*ARM3F_STRIDE] - t9*ddq[0] - t7*ddq[1*ARM3F_STRIDE] - t5*ddq[2*ARM3F_STRIDE];
-    const float t24 = t22 + t16;
-    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] - t24*dq[0] - t22*dq[1*ARM3F_STRIDE] - t18*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
+    const float t21 = t15 + t14;
+    const float t22 = t17 - t18;
+    const float t23 = t21 + t13;
+    a[0] = t7*ddq[1*ARM3F_STRIDE] - t23*dq[0] - t21*dq[1*ARM3F_STRIDE] - t15*dq[2*ARM3F_STRIDE] - t9*ddq[0] - t5*ddq[2*ARM3F_STRIDE];
+    const float t24 = t22 - t16;
+    a[1*ARM3F_STRIDE] = t3*ddq[2*ARM3F_STRIDE] + t24*dq[0] + t22*dq[1*ARM3F_STRIDE] - t18*dq[2*ARM3F_STRIDE] + t10*ddq[0] + t8*ddq[1*ARM3F_STRIDE];
 }
 
 ARM3F_SINGLE void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2])

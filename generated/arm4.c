@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x7b612431UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2036cb48UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -907,11 +907,11 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     const double t6 = cs[3*ARM4_STRIDE]*l[3];
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1*ARM4_STRIDE]*l[1];
-    const double t9 = sn[2*ARM4_STRIDE]*l[2];
+    const double t9 = -sn[2*ARM4_STRIDE]*l[2];
     const double t10 = sn[3*ARM4_STRIDE]*l[3];
-    const double t12 = t10 + t9;
+    const double t12 = t9 - t10;
     const double t13 = t5 + t6;
-    const double t14 = t12 + t8;
+    const double t14 = t8 - t12;
     const double t15 = t4 + t13;
     const double t16 = t14 + t7;
     const double t17 = t3 + t15;
@@ -926,14 +926,14 @@ ARM4_BODY void arm4_acceleration_finish(const double *restrict dq, const double 
     const double t26 = t8*t18;
     const double t27 = t9*t19;
     const double t28 = t10*t20;
-    const double t31 = -t24 - t23;
-    const double t32 = t28 + t27;
-    const double t33 = t31 - t22;
-    const double t34 = t32 + t26;
-    const double t35 = t33 - t21;
-    a[0] = t35*dq[0] + t33*dq[1*ARM4_STRIDE] + t31*dq[2*ARM4_STRIDE] - t24*dq[3*ARM4_STRIDE] - t16*ddq[0] - t14*ddq[1*ARM4_STRIDE] - t12*ddq[2*ARM4_STRIDE] - t10*ddq[3*ARM4_STRIDE];
-    const double t36 = t34 + t25;
-    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] - t36*dq[0] - t34*dq[1*ARM4_STRIDE] - t32*dq[2*ARM4_STRIDE] - t28*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
+    const double t31 = t24 + t23;
+    const double t32 = t27 - t28;
+    const double t33 = t31 + t22;
+    const double t34 = t32 - t26;
+    const double t35 = t33 + t21;
+    a[0] = t12*ddq[2*ARM4_STRIDE] - t35*dq[0] - t33*dq[1*ARM4_STRIDE] - t31*dq[2*ARM4_STRIDE] - t24*dq[3*ARM4_STRIDE] - t16*ddq[0] - t14*ddq[1*ARM4_STRIDE] - t10*ddq[3*ARM4_STRIDE];
+    const double t36 = t34 - t25;
+    a[1*ARM4_STRIDE] = t6*ddq[3*ARM4_STRIDE] + t36*dq[0] + t34*dq[1*ARM4_STRIDE] + t32*dq[2*ARM4_STRIDE] - t28*dq[3*ARM4_STRIDE] + t17*ddq[0] + t15*ddq[1*ARM4_STRIDE] + t13*ddq[2*ARM4_STRIDE];
 }
 
 ARM4_SINGLE void arm4_acceleration(const double q[4], const double dq[4], const double ddq[4], const double l[4], double a[2])

@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x7b612431
+STAMP = 0x2036cb48
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -490,11 +490,11 @@ def _acceleration_core(q, dq, ddq, l, a):
     t6 = cs[..., 3]*l[..., 3]
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
-    t9 = sn[..., 2]*l[..., 2]
+    t9 = -sn[..., 2]*l[..., 2]
     t10 = sn[..., 3]*l[..., 3]
-    t12 = t10 + t9
+    t12 = t9 - t10
     t13 = t5 + t6
-    t14 = t12 + t8
+    t14 = t8 - t12
     t15 = t4 + t13
     t16 = t14 + t7
     t17 = t3 + t15
@@ -509,14 +509,14 @@ def _acceleration_core(q, dq, ddq, l, a):
     t26 = t8*t18
     t27 = t9*t19
     t28 = t10*t20
-    t31 = -t24 - t23
-    t32 = t28 + t27
-    t33 = t31 - t22
-    t34 = t32 + t26
-    t35 = t33 - t21
-    t36 = t34 + t25
-    a[..., 0] = t35*dq[..., 0] + t33*dq[..., 1] + t31*dq[..., 2] - t24*dq[..., 3] - t16*ddq[..., 0] - t14*ddq[..., 1] - t12*ddq[..., 2] - t10*ddq[..., 3]
-    a[..., 1] = t6*ddq[..., 3] - t36*dq[..., 0] - t34*dq[..., 1] - t32*dq[..., 2] - t28*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
+    t31 = t24 + t23
+    t32 = t27 - t28
+    t33 = t31 + t22
+    t34 = t32 - t26
+    t35 = t33 + t21
+    t36 = t34 - t25
+    a[..., 0] = t12*ddq[..., 2] - t35*dq[..., 0] - t33*dq[..., 1] - t31*dq[..., 2] - t24*dq[..., 3] - t16*ddq[..., 0] - t14*ddq[..., 1] - t10*ddq[..., 3]
+    a[..., 1] = t6*ddq[..., 3] + t36*dq[..., 0] + t34*dq[..., 1] + t32*dq[..., 2] - t28*dq[..., 3] + t17*ddq[..., 0] + t15*ddq[..., 1] + t13*ddq[..., 2]
 
 
 @_signature_errors

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xf4f4ef1eUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xbb91f8a8UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -966,11 +966,11 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t9 = sn[0]*l[0];
     const double t10 = sn[1*ARM5_STRIDE]*l[1];
     const double t11 = sn[2*ARM5_STRIDE]*l[2];
-    const double t12 = sn[3*ARM5_STRIDE]*l[3];
+    const double t12 = -sn[3*ARM5_STRIDE]*l[3];
     const double t13 = sn[4*ARM5_STRIDE]*l[4];
-    const double t15 = t13 + t12;
+    const double t15 = t12 - t13;
     const double t16 = t7 + t8;
-    const double t17 = t15 + t11;
+    const double t17 = t11 - t15;
     const double t18 = t6 + t16;
     const double t19 = t17 + t10;
     const double t20 = t5 + t18;
@@ -990,16 +990,16 @@ ARM5_BODY void arm5_acceleration_finish(const double *restrict dq, const double 
     const double t34 = t11*t24;
     const double t35 = t12*t25;
     const double t36 = t13*t26;
-    const double t39 = -t31 - t30;
-    const double t40 = t36 + t35;
-    const double t41 = t39 - t29;
-    const double t42 = t40 + t34;
-    const double t43 = t41 - t28;
-    const double t44 = t42 + t33;
-    const double t45 = t43 - t27;
-    a[0] = ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] - t31*dq[4*ARM5_STRIDE]))) - ((t21*ddq[0] + t19*ddq[1*ARM5_STRIDE]) + (t17*ddq[2*ARM5_STRIDE] + (t15*ddq[3*ARM5_STRIDE] + t13*ddq[4*ARM5_STRIDE])));
-    const double t46 = t44 + t32;
-    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] - t46*dq[0]) - (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t22*ddq[0] - t36*dq[4*ARM5_STRIDE]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
+    const double t39 = t31 + t30;
+    const double t40 = t35 - t36;
+    const double t41 = t39 + t29;
+    const double t42 = t40 - t34;
+    const double t43 = t41 + t28;
+    const double t44 = t42 - t33;
+    const double t45 = t43 + t27;
+    a[0] = (((t15*ddq[3*ARM5_STRIDE] - t13*ddq[4*ARM5_STRIDE]) - t17*ddq[2*ARM5_STRIDE]) - (t21*ddq[0] + t19*ddq[1*ARM5_STRIDE])) - ((t45*dq[0] + t43*dq[1*ARM5_STRIDE]) + (t41*dq[2*ARM5_STRIDE] + (t39*dq[3*ARM5_STRIDE] + t31*dq[4*ARM5_STRIDE])));
+    const double t46 = t44 - t32;
+    a[1*ARM5_STRIDE] = ((t8*ddq[4*ARM5_STRIDE] + t46*dq[0]) + (t44*dq[1*ARM5_STRIDE] + (t42*dq[2*ARM5_STRIDE] + t40*dq[3*ARM5_STRIDE]))) + ((t22*ddq[0] - t36*dq[4*ARM5_STRIDE]) + (t20*ddq[1*ARM5_STRIDE] + (t18*ddq[2*ARM5_STRIDE] + t16*ddq[3*ARM5_STRIDE])));
 }
 
 ARM5_SINGLE void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2])

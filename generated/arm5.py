@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xf4f4ef1e
+STAMP = 0xbb91f8a8
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -523,11 +523,11 @@ def _acceleration_core(q, dq, ddq, l, a):
     t9 = sn[..., 0]*l[..., 0]
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
-    t12 = sn[..., 3]*l[..., 3]
+    t12 = -sn[..., 3]*l[..., 3]
     t13 = sn[..., 4]*l[..., 4]
-    t15 = t13 + t12
+    t15 = t12 - t13
     t16 = t7 + t8
-    t17 = t15 + t11
+    t17 = t11 - t15
     t18 = t6 + t16
     t19 = t17 + t10
     t20 = t5 + t18
@@ -547,16 +547,16 @@ def _acceleration_core(q, dq, ddq, l, a):
     t34 = t11*t24
     t35 = t12*t25
     t36 = t13*t26
-    t39 = -t31 - t30
-    t40 = t36 + t35
-    t41 = t39 - t29
-    t42 = t40 + t34
-    t43 = t41 - t28
-    t44 = t42 + t33
-    t45 = t43 - t27
-    t46 = t44 + t32
-    a[..., 0] = ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] - t31*dq[..., 4]))) - ((t21*ddq[..., 0] + t19*ddq[..., 1]) + (t17*ddq[..., 2] + (t15*ddq[..., 3] + t13*ddq[..., 4])))
-    a[..., 1] = ((t8*ddq[..., 4] - t46*dq[..., 0]) - (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t22*ddq[..., 0] - t36*dq[..., 4]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
+    t39 = t31 + t30
+    t40 = t35 - t36
+    t41 = t39 + t29
+    t42 = t40 - t34
+    t43 = t41 + t28
+    t44 = t42 - t33
+    t45 = t43 + t27
+    t46 = t44 - t32
+    a[..., 0] = (((t15*ddq[..., 3] - t13*ddq[..., 4]) - t17*ddq[..., 2]) - (t21*ddq[..., 0] + t19*ddq[..., 1])) - ((t45*dq[..., 0] + t43*dq[..., 1]) + (t41*dq[..., 2] + (t39*dq[..., 3] + t31*dq[..., 4])))
+    a[..., 1] = ((t8*ddq[..., 4] + t46*dq[..., 0]) + (t44*dq[..., 1] + (t42*dq[..., 2] + t40*dq[..., 3]))) + ((t22*ddq[..., 0] - t36*dq[..., 4]) + (t20*ddq[..., 1] + (t18*ddq[..., 2] + t16*ddq[..., 3])))
 
 
 @_signature_errors

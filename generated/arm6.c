@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x5cb2819aUL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x49319465UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -1009,11 +1009,11 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t12 = sn[1*ARM6_STRIDE]*l[1];
     const double t13 = sn[2*ARM6_STRIDE]*l[2];
     const double t14 = sn[3*ARM6_STRIDE]*l[3];
-    const double t15 = sn[4*ARM6_STRIDE]*l[4];
+    const double t15 = -sn[4*ARM6_STRIDE]*l[4];
     const double t16 = sn[5*ARM6_STRIDE]*l[5];
-    const double t18 = t16 + t15;
+    const double t18 = t15 - t16;
     const double t19 = t9 + t10;
-    const double t20 = t18 + t14;
+    const double t20 = t14 - t18;
     const double t21 = t8 + t19;
     const double t22 = t20 + t13;
     const double t23 = t7 + t21;
@@ -1038,18 +1038,18 @@ ARM6_BODY void arm6_acceleration_finish(const double *restrict dq, const double 
     const double t42 = t14*t30;
     const double t43 = t15*t31;
     const double t44 = t16*t32;
-    const double t47 = -t38 - t37;
-    const double t48 = t44 + t43;
-    const double t49 = t47 - t36;
-    const double t50 = t48 + t42;
-    const double t51 = t49 - t35;
-    const double t52 = t50 + t41;
-    const double t53 = t51 - t34;
-    const double t54 = t52 + t40;
-    const double t55 = t53 - t33;
-    a[0] = ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] - t38*dq[5*ARM6_STRIDE]))) - ((t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE])) + (t20*ddq[3*ARM6_STRIDE] + (t18*ddq[4*ARM6_STRIDE] + t16*ddq[5*ARM6_STRIDE])));
-    const double t56 = t54 + t39;
-    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] - (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) - (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + (((t27*ddq[0] + t25*ddq[1*ARM6_STRIDE]) - t44*dq[5*ARM6_STRIDE]) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
+    const double t47 = t38 + t37;
+    const double t48 = t43 - t44;
+    const double t49 = t47 + t36;
+    const double t50 = t48 - t42;
+    const double t51 = t49 + t35;
+    const double t52 = t50 - t41;
+    const double t53 = t51 + t34;
+    const double t54 = t52 - t40;
+    const double t55 = t53 + t33;
+    a[0] = (((t18*ddq[4*ARM6_STRIDE] - t16*ddq[5*ARM6_STRIDE]) - t20*ddq[3*ARM6_STRIDE]) - (t26*ddq[0] + (t24*ddq[1*ARM6_STRIDE] + t22*ddq[2*ARM6_STRIDE]))) - ((t55*dq[0] + (t53*dq[1*ARM6_STRIDE] + t51*dq[2*ARM6_STRIDE])) + (t49*dq[3*ARM6_STRIDE] + (t47*dq[4*ARM6_STRIDE] + t38*dq[5*ARM6_STRIDE])));
+    const double t56 = t54 - t39;
+    a[1*ARM6_STRIDE] = ((t10*ddq[5*ARM6_STRIDE] + (t56*dq[0] + t54*dq[1*ARM6_STRIDE])) + (t52*dq[2*ARM6_STRIDE] + (t50*dq[3*ARM6_STRIDE] + t48*dq[4*ARM6_STRIDE]))) + (((t27*ddq[0] + t25*ddq[1*ARM6_STRIDE]) - t44*dq[5*ARM6_STRIDE]) + (t23*ddq[2*ARM6_STRIDE] + (t21*ddq[3*ARM6_STRIDE] + t19*ddq[4*ARM6_STRIDE])));
 }
 
 ARM6_SINGLE void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2])

@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x5cb2819a
+STAMP = 0x49319465
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -556,11 +556,11 @@ def _acceleration_core(q, dq, ddq, l, a):
     t12 = sn[..., 1]*l[..., 1]
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
-    t15 = sn[..., 4]*l[..., 4]
+    t15 = -sn[..., 4]*l[..., 4]
     t16 = sn[..., 5]*l[..., 5]
-    t18 = t16 + t15
+    t18 = t15 - t16
     t19 = t9 + t10
-    t20 = t18 + t14
+    t20 = t14 - t18
     t21 = t8 + t19
     t22 = t20 + t13
     t23 = t7 + t21
@@ -585,18 +585,18 @@ def _acceleration_core(q, dq, ddq, l, a):
     t42 = t14*t30
     t43 = t15*t31
     t44 = t16*t32
-    t47 = -t38 - t37
-    t48 = t44 + t43
-    t49 = t47 - t36
-    t50 = t48 + t42
-    t51 = t49 - t35
-    t52 = t50 + t41
-    t53 = t51 - t34
-    t54 = t52 + t40
-    t55 = t53 - t33
-    t56 = t54 + t39
-    a[..., 0] = ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] - t38*dq[..., 5]))) - ((t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2])) + (t20*ddq[..., 3] + (t18*ddq[..., 4] + t16*ddq[..., 5])))
-    a[..., 1] = ((t10*ddq[..., 5] - (t56*dq[..., 0] + t54*dq[..., 1])) - (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + (((t27*ddq[..., 0] + t25*ddq[..., 1]) - t44*dq[..., 5]) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
+    t47 = t38 + t37
+    t48 = t43 - t44
+    t49 = t47 + t36
+    t50 = t48 - t42
+    t51 = t49 + t35
+    t52 = t50 - t41
+    t53 = t51 + t34
+    t54 = t52 - t40
+    t55 = t53 + t33
+    t56 = t54 - t39
+    a[..., 0] = (((t18*ddq[..., 4] - t16*ddq[..., 5]) - t20*ddq[..., 3]) - (t26*ddq[..., 0] + (t24*ddq[..., 1] + t22*ddq[..., 2]))) - ((t55*dq[..., 0] + (t53*dq[..., 1] + t51*dq[..., 2])) + (t49*dq[..., 3] + (t47*dq[..., 4] + t38*dq[..., 5])))
+    a[..., 1] = ((t10*ddq[..., 5] + (t56*dq[..., 0] + t54*dq[..., 1])) + (t52*dq[..., 2] + (t50*dq[..., 3] + t48*dq[..., 4]))) + (((t27*ddq[..., 0] + t25*ddq[..., 1]) - t44*dq[..., 5]) + (t23*ddq[..., 2] + (t21*ddq[..., 3] + t19*ddq[..., 4])))
 
 
 @_signature_errors

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xc3aba849UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x7b823f59UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -630,7 +630,7 @@ void panda_pose_batch(size_t m, const double *q, double *T)
 #endif
 
 /* ---- panda_jacobian: geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin) ---- */
-/* operations: 6 sin, 6 cos, 44 add/sub, 91 mul, 6 neg */
+/* operations: 6 sin, 6 cos, 44 add/sub, 91 mul, 3 neg */
 
 PANDA_BODY void panda_jacobian_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -695,32 +695,34 @@ PANDA_BODY void panda_jacobian_finish(const double *restrict cs, const double *r
     J[34*PANDA_STRIDE] = t27;
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
     J[41*PANDA_STRIDE] = t29;
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
-    const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2*PANDA_STRIDE] + cs[2*PANDA_STRIDE]*t38;
-    const double t40 = sn[2*PANDA_STRIDE]*t38 - t33*cs[2*PANDA_STRIDE];
+    const double t38 = -0.0825 - t36;
+    const double t39 = cs[2*PANDA_STRIDE]*t38 - t33*sn[2*PANDA_STRIDE];
+    const double t40 = sn[2*PANDA_STRIDE]*t38 + t33*cs[2*PANDA_STRIDE];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1*PANDA_STRIDE] + t41*sn[1*PANDA_STRIDE];
-    const double t43 = t41*cs[1*PANDA_STRIDE] - t39*sn[1*PANDA_STRIDE];
-    const double t44 = t42*cs[0] - t40*sn[0];
+    const double t42 = t39*cs[1*PANDA_STRIDE] - t41*sn[1*PANDA_STRIDE];
+    J[15*PANDA_STRIDE] = t42;
+    const double t43 = t41*cs[1*PANDA_STRIDE] + t39*sn[1*PANDA_STRIDE];
+    const double t44 = t40*sn[0] - t42*cs[0];
     J[7*PANDA_STRIDE] = t44;
     const double t45 = t42*sn[0] + t40*cs[0];
+    J[0] = t45;
     const double t47 = t43*cs[0];
     J[1*PANDA_STRIDE] = t47;
     const double t48 = t43*sn[0];
     J[8*PANDA_STRIDE] = t48;
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     J[2*PANDA_STRIDE] = t49;
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t50 = t4*t40 - t39*cs[0];
     J[9*PANDA_STRIDE] = t50;
-    const double t51 = t40*sn[1*PANDA_STRIDE];
+    const double t51 = -t40*sn[1*PANDA_STRIDE];
     J[16*PANDA_STRIDE] = t51;
     const double t52 = t3*t36 + t6*t37;
     J[3*PANDA_STRIDE] = t52;
@@ -728,24 +730,20 @@ PANDA_BODY void panda_jacobian_finish(const double *restrict cs, const double *r
     J[10*PANDA_STRIDE] = t53;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
     J[17*PANDA_STRIDE] = t54;
-    const double t55 = t12*t33 - t7*t32;
+    const double t55 = t12*t33 + t7*t32;
     J[4*PANDA_STRIDE] = t55;
-    const double t56 = t14*t33 - t9*t32;
+    const double t56 = t14*t33 + t9*t32;
     J[11*PANDA_STRIDE] = t56;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     J[18*PANDA_STRIDE] = t57;
-    const double t58 = t13*t30 + t18*t31;
+    const double t58 = t18*t31 - t13*t30;
     J[5*PANDA_STRIDE] = t58;
-    const double t59 = t15*t30 + t20*t31;
+    const double t59 = t20*t31 - t15*t30;
     J[12*PANDA_STRIDE] = t59;
-    const double t60 = t17*t30 + t22*t31;
+    const double t60 = t22*t31 - t17*t30;
     J[19*PANDA_STRIDE] = t60;
-    const double t230 = -t42;
-    J[15*PANDA_STRIDE] = t230;
     const double t270 = -sn[0];
     J[22*PANDA_STRIDE] = t270;
-    const double t1582 = -t45;
-    J[0] = t1582;
 }
 
 PANDA_SINGLE void panda_jacobian(const double q[7], double J[42])
@@ -1130,7 +1128,7 @@ void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 #endif
 
 /* ---- panda_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
-/* operations: 6 sin, 6 cos, 120 add/sub, 204 mul, 4 neg */
+/* operations: 6 sin, 6 cos, 120 add/sub, 204 mul, 3 neg */
 
 PANDA_BODY void panda_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1181,12 +1179,12 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     const double t25 = t18*sn[5*PANDA_STRIDE] - t13*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
@@ -1205,12 +1203,12 @@ PANDA_BODY void panda_jacobian_dot_finish(const double *restrict dq, const doubl
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 + t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
     const double t70 = t68 + t3*dq[2*PANDA_STRIDE];
@@ -1447,7 +1445,7 @@ void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, doubl
 #endif
 
 /* ---- panda_twist: tool twist J dq: (vx, vy, vz, wx, wy, wz) (6) ---- */
-/* operations: 6 sin, 6 cos, 73 add/sub, 124 mul, 1 neg */
+/* operations: 6 sin, 6 cos, 73 add/sub, 124 mul, 0 neg */
 
 PANDA_BODY void panda_twist_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1489,12 +1487,12 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t25 = t18*sn[5*PANDA_STRIDE] - t13*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
@@ -1512,12 +1510,12 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 + t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 - t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
     const double t70 = t3*dq[2*PANDA_STRIDE] - t68;
@@ -1662,7 +1660,7 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
 #endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 3 neg */
+/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 2 neg */
 
 PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1705,12 +1703,12 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t25 = t18*sn[5*PANDA_STRIDE] - t13*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
@@ -1729,12 +1727,12 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 + t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
     const double t70 = t68 + t3*dq[2*PANDA_STRIDE];
@@ -1918,7 +1916,7 @@ void panda_acceleration_batch(size_t m, const double *q, const double *dq, const
 #endif
 
 /* ---- panda_kinematics: T, J, dJ, twist and acc at once ---- */
-/* operations: 7 sin, 7 cos, 198 add/sub, 295 mul, 9 neg */
+/* operations: 7 sin, 7 cos, 198 add/sub, 295 mul, 8 neg */
 
 PANDA_BODY void panda_kinematics_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -2002,12 +2000,12 @@ PANDA_BODY void panda_kinematics_finish(const double *restrict dq, const double 
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
     T[10*PANDA_STRIDE] = t29;
     J[41*PANDA_STRIDE] = t29;
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
@@ -2039,17 +2037,17 @@ PANDA_BODY void panda_kinematics_finish(const double *restrict dq, const double 
     J[10*PANDA_STRIDE] = t53;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
     J[17*PANDA_STRIDE] = t54;
-    const double t55 = t12*t33 - t7*t32;
+    const double t55 = t12*t33 + t7*t32;
     J[4*PANDA_STRIDE] = t55;
-    const double t56 = t14*t33 - t9*t32;
+    const double t56 = t14*t33 + t9*t32;
     J[11*PANDA_STRIDE] = t56;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     J[18*PANDA_STRIDE] = t57;
-    const double t58 = t13*t30 + t18*t31;
+    const double t58 = t18*t31 - t13*t30;
     J[5*PANDA_STRIDE] = t58;
-    const double t59 = t15*t30 + t20*t31;
+    const double t59 = t20*t31 - t15*t30;
     J[12*PANDA_STRIDE] = t59;
-    const double t60 = t17*t30 + t22*t31;
+    const double t60 = t22*t31 - t17*t30;
     J[19*PANDA_STRIDE] = t60;
     const double t61 = t21*sn[6*PANDA_STRIDE] + t26*cs[6*PANDA_STRIDE];
     T[4*PANDA_STRIDE] = t61;
@@ -2414,7 +2412,7 @@ void panda_kinematics_batch(size_t m, const double *q, const double *dq, const d
 #endif
 
 /* ---- panda_ik_terms: tool pose T and Jacobian J at once (the terms of an IK step) ---- */
-/* operations: 7 sin, 7 cos, 54 add/sub, 109 mul, 6 neg */
+/* operations: 7 sin, 7 cos, 54 add/sub, 109 mul, 5 neg */
 
 PANDA_BODY void panda_ik_terms_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -2488,12 +2486,12 @@ PANDA_BODY void panda_ik_terms_finish(const double *restrict cs, const double *r
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
     T[10*PANDA_STRIDE] = t29;
     J[41*PANDA_STRIDE] = t29;
-    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
-    const double t33 = -t30*sn[4*PANDA_STRIDE];
+    const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
@@ -2525,17 +2523,17 @@ PANDA_BODY void panda_ik_terms_finish(const double *restrict cs, const double *r
     J[10*PANDA_STRIDE] = t53;
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
     J[17*PANDA_STRIDE] = t54;
-    const double t55 = t12*t33 - t7*t32;
+    const double t55 = t12*t33 + t7*t32;
     J[4*PANDA_STRIDE] = t55;
-    const double t56 = t14*t33 - t9*t32;
+    const double t56 = t14*t33 + t9*t32;
     J[11*PANDA_STRIDE] = t56;
-    const double t57 = t16*t33 - t11*t32;
+    const double t57 = t16*t33 + t11*t32;
     J[18*PANDA_STRIDE] = t57;
-    const double t58 = t13*t30 + t18*t31;
+    const double t58 = t18*t31 - t13*t30;
     J[5*PANDA_STRIDE] = t58;
-    const double t59 = t15*t30 + t20*t31;
+    const double t59 = t20*t31 - t15*t30;
     J[12*PANDA_STRIDE] = t59;
-    const double t60 = t17*t30 + t22*t31;
+    const double t60 = t22*t31 - t17*t30;
     J[19*PANDA_STRIDE] = t60;
     const double t61 = t21*sn[6*PANDA_STRIDE] + t26*cs[6*PANDA_STRIDE];
     T[4*PANDA_STRIDE] = t61;
@@ -2703,7 +2701,7 @@ void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J)
 #endif
 
 /* ---- panda_manipulability: manipulability w = product of the singular values of J (1) ---- */
-/* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 6 neg, 5 div, 6 sqrt */
+/* operations: 6 sin, 6 cos, 411 add/sub, 534 mul, 0 neg, 5 div, 6 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_angles(const double *restrict q, double *restrict ang)
 {
@@ -2726,7 +2724,7 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t8 = t4*cs[2] + cs[0]*sn[2];
     const double t9 = t4*sn[2] - cs[0]*cs[2];
     const double t10 = cs[2]*sn[1];
-    const double t11 = -sn[1]*sn[2];
+    const double t11 = sn[1]*sn[2];
     const double t12 = t3*sn[3] + t6*cs[3];
     const double t13 = t3*cs[3] - t6*sn[3];
     const double t14 = t5*sn[3] + t8*cs[3];
@@ -2737,41 +2735,41 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t19 = t7*cs[4] + t12*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
     const double t21 = t9*cs[4] + t14*sn[4];
-    const double t22 = t16*cs[4] - t11*sn[4];
-    const double t23 = t11*cs[4] + t16*sn[4];
+    const double t22 = t16*cs[4] + t11*sn[4];
+    const double t23 = t16*sn[4] - t11*cs[4];
     const double t25 = t18*sn[5] - t13*cs[5];
     const double t27 = t20*sn[5] - t15*cs[5];
     const double t29 = t22*sn[5] - t17*cs[5];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
-    const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2] + cs[2]*t38;
-    const double t40 = sn[2]*t38 - t33*cs[2];
+    const double t38 = -0.0825 - t36;
+    const double t39 = cs[2]*t38 - t33*sn[2];
+    const double t40 = sn[2]*t38 + t33*cs[2];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1] + t41*sn[1];
-    const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
-    const double t45 = t42*sn[0] + t40*cs[0];
+    const double t42 = t41*sn[1] - t39*cs[1];
+    const double t43 = t41*cs[1] + t39*sn[1];
+    const double t44 = t42*cs[0] + t40*sn[0];
+    const double t45 = t40*cs[0] - t42*sn[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t49 = t2*t40 + t39*sn[0];
+    const double t50 = t4*t40 - t39*cs[0];
     const double t51 = t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
     const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t188 = t47*t47;
     const double t189 = t49*t49;
     const double t190 = t52*t52;
@@ -2782,7 +2780,7 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t195 = sqrt(t194);
     const double t196 = 1.0/(t195 != 0.0 ? t195 : 1.0);
     const double t197 = (t195 > 0.0 ? t196 : 1.0);
-    const double t198 = -t45*t197;
+    const double t198 = t45*t197;
     const double t199 = t47*t197;
     const double t200 = t49*t197;
     const double t201 = t52*t197;
@@ -2811,10 +2809,10 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t224 = t220*t215;
     const double t225 = t220*t216;
     const double t226 = t220*t217;
-    const double t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203;
+    const double t228 = t51*t200 - t54*t201 - t57*t202 - t60*t203 + t42*t199;
     const double t229 = t228*t198;
     const double t231 = t228*t199 - t42;
-    const double t232 = t51 + t228*t200;
+    const double t232 = t228*t200 - t51;
     const double t233 = t54 + t228*t201;
     const double t234 = t57 + t228*t202;
     const double t235 = t60 + t228*t203;
@@ -2902,19 +2900,19 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t320 = t314*t310;
     const double t321 = t25*t314;
     const double t325 = t5*t200 + t9*t201 + t15*t202 + t21*t203 + cs[0]*t199;
-    const double t326 = -t325*t198;
+    const double t326 = t325*t198;
     const double t327 = cs[0] - t325*t199;
     const double t328 = t5 - t325*t200;
     const double t329 = t9 - t325*t201;
     const double t330 = t15 - t325*t202;
     const double t331 = t21 - t325*t203;
-    const double t332 = t221*t326 + t222*t327 + t223*t328 + t224*t329 + t225*t330 + t226*t331;
-    const double t333 = t326 - t332*t221;
-    const double t334 = t327 - t332*t222;
-    const double t335 = t328 - t332*t223;
-    const double t336 = t329 - t332*t224;
-    const double t337 = t330 - t332*t225;
-    const double t338 = t331 - t332*t226;
+    const double t332 = t221*t326 - t222*t327 - t223*t328 - t224*t329 - t225*t330 - t226*t331;
+    const double t333 = t332*t221 - t326;
+    const double t334 = t327 + t332*t222;
+    const double t335 = t328 + t332*t223;
+    const double t336 = t329 + t332*t224;
+    const double t337 = t330 + t332*t225;
+    const double t338 = t331 + t332*t226;
     const double t339 = t260*t333 + t261*t334 + t262*t335 + t263*t336 + t264*t337 + t265*t338;
     const double t340 = t333 - t339*t260;
     const double t341 = t334 - t339*t261;
@@ -2969,13 +2967,13 @@ static PANDA_LIGHT void panda_manipulability_finish(const double *restrict cs, c
     const double t390 = t385*t380;
     const double t391 = t385*t381;
     const double t392 = t385*t382;
-    const double t397 = t198 + t11*t201 + t17*t202 + t23*t203 + cs[1]*t200;
-    const double t398 = 1.0 - t397*t198;
-    const double t399 = -t397*t199;
-    const double t400 = cs[1] - t397*t200;
-    const double t401 = t11 - t397*t201;
-    const double t402 = t17 - t397*t202;
-    const double t403 = t23 - t397*t203;
+    const double t397 = t11*t201 - t198 - t17*t202 - t23*t203 - cs[1]*t200;
+    const double t398 = 1.0 + t397*t198;
+    const double t399 = t397*t199;
+    const double t400 = cs[1] + t397*t200;
+    const double t401 = t397*t201 - t11;
+    const double t402 = t17 + t397*t202;
+    const double t403 = t23 + t397*t203;
     const double t404 = t221*t398 + t222*t399 + t223*t400 + t224*t401 + t225*t402 + t226*t403;
     const double t405 = t398 - t404*t221;
     const double t406 = t399 - t404*t222;
@@ -3082,7 +3080,7 @@ void panda_manipulability_batch(size_t m, const double *q, double *w)
 }
 
 /* ---- panda_manipulability_position: position manipulability: product of the singular values of the 3 x N linear rows of J (1) ---- */
-/* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 3 neg, 2 div, 3 sqrt */
+/* operations: 6 sin, 6 cos, 117 add/sub, 182 mul, 0 neg, 2 div, 3 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -3115,36 +3113,36 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t18 = t12*cs[4] - t7*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
     const double t22 = t16*cs[4] + t11*sn[4];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
-    const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2] + cs[2]*t38;
-    const double t40 = sn[2]*t38 - t33*cs[2];
+    const double t38 = -0.0825 - t36;
+    const double t39 = cs[2]*t38 - t33*sn[2];
+    const double t40 = sn[2]*t38 + t33*cs[2];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1] + t41*sn[1];
-    const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
-    const double t45 = t42*sn[0] + t40*cs[0];
+    const double t42 = t41*sn[1] - t39*cs[1];
+    const double t43 = t41*cs[1] + t39*sn[1];
+    const double t44 = t42*cs[0] + t40*sn[0];
+    const double t45 = t40*cs[0] - t42*sn[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t49 = t2*t40 + t39*sn[0];
+    const double t50 = t4*t40 - t39*cs[0];
     const double t51 = t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 + t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 - t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t188 = t47*t47;
     const double t189 = t49*t49;
     const double t190 = t52*t52;
@@ -3155,7 +3153,7 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t195 = sqrt(t194);
     const double t196 = 1.0/(t195 != 0.0 ? t195 : 1.0);
     const double t197 = (t195 > 0.0 ? t196 : 1.0);
-    const double t198 = -t45*t197;
+    const double t198 = t45*t197;
     const double t199 = t47*t197;
     const double t200 = t49*t197;
     const double t201 = t52*t197;
@@ -3184,10 +3182,10 @@ static PANDA_LIGHT void panda_manipulability_position_finish(const double *restr
     const double t224 = t220*t215;
     const double t225 = t220*t216;
     const double t226 = t220*t217;
-    const double t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203;
+    const double t228 = t51*t200 - t54*t201 - t57*t202 - t60*t203 + t42*t199;
     const double t229 = t228*t198;
     const double t231 = t228*t199 - t42;
-    const double t232 = t51 + t228*t200;
+    const double t232 = t228*t200 - t51;
     const double t233 = t54 + t228*t201;
     const double t234 = t57 + t228*t202;
     const double t235 = t60 + t228*t203;
@@ -3251,7 +3249,7 @@ void panda_manipulability_position_batch(size_t m, const double *q, double *w_po
 }
 
 /* ---- panda_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
-/* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 25 neg */
+/* operations: 6 sin, 6 cos, 114 add/sub, 249 mul, 22 neg */
 
 static PANDA_LIGHT void panda_jacobian_hessian_angles(const double *restrict q, double *restrict ang)
 {
@@ -3443,33 +3441,34 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     const double t27 = t20*sn[5] - t15*cs[5];
     Hs[189] = -t27;
     const double t29 = t22*sn[5] - t17*cs[5];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
     const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2] + cs[2]*t38;
+    const double t39 = -t33*sn[2] - cs[2]*t38;
     const double t40 = sn[2]*t38 - t33*cs[2];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1] + t41*sn[1];
-    const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t40*sn[0] - t42*cs[0];
+    const double t42 = t39*cs[1] - t41*sn[1];
+    const double t43 = t41*cs[1] + t39*sn[1];
+    const double t44 = t42*cs[0] + t40*sn[0];
     Hs[0] = t44;
-    const double t45 = t42*sn[0] + t40*cs[0];
+    const double t45 = t42*sn[0] - t40*cs[0];
+    Hs[49] = t45;
     const double t47 = t43*cs[0];
     Hs[50] = t47;
     Hs[56] = t47;
     const double t48 = -t43*sn[0];
     Hs[1] = t48;
     Hs[7] = t48;
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t39*sn[0] - t2*t40;
     Hs[51] = t49;
     Hs[63] = t49;
-    const double t50 = t4*t40 - t39*cs[0];
+    const double t50 = t39*cs[0] + t4*t40;
     Hs[2] = t50;
     Hs[14] = t50;
     const double t51 = t40*sn[1];
@@ -3478,19 +3477,19 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[70] = t52;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
+    const double t55 = t12*t33 + t7*t32;
     Hs[53] = t55;
     Hs[77] = t55;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 + t11*t32;
+    const double t58 = t18*t31 - t13*t30;
     Hs[54] = t58;
     Hs[84] = t58;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t270 = -sn[0];
     Hs[203] = t270;
-    const double t488 = -t42*cs[0];
+    const double t488 = t42*cs[0];
     Hs[8] = t488;
     const double t489 = t51*cs[0];
     Hs[9] = t489;
@@ -3530,7 +3529,7 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[39] = t501;
     const double t502 = t21*t60 - t23*t59;
     Hs[40] = t502;
-    const double t503 = t42*t270;
+    const double t503 = t42*sn[0];
     Hs[57] = t503;
     const double t504 = t51*sn[0];
     Hs[58] = t504;
@@ -3696,8 +3695,6 @@ static PANDA_LIGHT void panda_jacobian_hessian_finish(const double *restrict cs,
     Hs[291] = t574;
     const double t575 = t19*t27 - t21*t25;
     Hs[292] = t575;
-    const double t1582 = -t45;
-    Hs[49] = t1582;
     const double t1585 = -t53;
     Hs[3] = t1585;
     Hs[21] = t1585;
@@ -3742,7 +3739,7 @@ void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs)
 }
 
 /* ---- panda_manipulability_gradient: gradient dw/dq of the manipulability (N) ---- */
-/* operations: 6 sin, 6 cos, 751 add/sub, 1073 mul, 7 neg, 6 div, 6 sqrt */
+/* operations: 6 sin, 6 cos, 751 add/sub, 1073 mul, 5 neg, 6 div, 6 sqrt */
 
 static PANDA_LIGHT void panda_manipulability_gradient_angles(const double *restrict q, double *restrict ang)
 {
@@ -3782,36 +3779,36 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t25 = t18*sn[5] - t13*cs[5];
     const double t27 = t20*sn[5] - t15*cs[5];
     const double t29 = t22*sn[5] - t17*cs[5];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
     const double t38 = 0.0825 + t36;
     const double t39 = t33*sn[2] + cs[2]*t38;
-    const double t40 = sn[2]*t38 - t33*cs[2];
+    const double t40 = t33*cs[2] - sn[2]*t38;
     const double t41 = 0.316 - t37;
     const double t42 = t39*cs[1] + t41*sn[1];
     const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
-    const double t45 = t42*sn[0] + t40*cs[0];
+    const double t44 = t42*cs[0] + t40*sn[0];
+    const double t45 = t40*cs[0] - t42*sn[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
-    const double t50 = t39*cs[0] - t4*t40;
-    const double t51 = t40*sn[1];
+    const double t49 = t2*t40 - t39*sn[0];
+    const double t50 = t39*cs[0] + t4*t40;
+    const double t51 = -t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 + t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t188 = t47*t47;
     const double t189 = t49*t49;
     const double t190 = t52*t52;
@@ -3822,7 +3819,7 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t195 = sqrt(t194);
     const double t196 = 1.0/(t195 != 0.0 ? t195 : 1.0);
     const double t197 = (t195 > 0.0 ? t196 : 1.0);
-    const double t198 = -t45*t197;
+    const double t198 = t45*t197;
     const double t199 = t47*t197;
     const double t200 = t49*t197;
     const double t201 = t52*t197;
@@ -4261,7 +4258,7 @@ static PANDA_LIGHT void panda_manipulability_gradient_finish(const double *restr
     const double t637 = t600*t321 - t601*t392 + t602*t480;
     const double t638 = t603*t392 - t604*t480;
     const double t639 = t605*t480;
-    const double t640 = (((t3*t617 + t7*t623) + (t13*t629 + (t19*t635 + t25*t638))) + ((t47*t609 + t49*t614) + (t52*t620 + (t55*t626 + t58*t632)))) - (((t5*t616 + (t9*t622 + t15*t628)) + ((t21*t634 + t27*t637) + (t48*t608 + t50*t613))) + ((t53*t619 + (t56*t625 + t59*t631)) + ((t44*t606 + t45*t607) + (cs[0]*t611 + t612*sn[0]))));
+    const double t640 = (((t3*t617 + t7*t623) + (t13*t629 + (t19*t635 + t25*t638))) + ((t47*t609 + t49*t614) + (t52*t620 + (t55*t626 + t58*t632)))) - (((t5*t616 + (t9*t622 + t15*t628)) + ((t21*t634 + t27*t637) + (t48*t608 + t50*t613))) + ((t53*t619 + (t56*t625 + t59*t631)) + ((t44*t606 - t45*t607) + (cs[0]*t611 + t612*sn[0]))));
     grad[0] = t640;
     const double t641 = ((((t2*t616 + (t4*t617 + t488*t608)) + ((t489*t613 + t490*t619) + (t491*t625 + t492*t631))) + (((t503*t609 + t504*t614) + (t505*t620 + t506*t626)) + ((t507*t632 - t518*t610) - (t519*t615 + t520*t621)))) + ((((t533*t622 + t535*t628) - (t521*t627 + t522*t633)) + ((t538*t634 + t542*t637) + (t547*t623 + t549*t629))) + (((t552*t635 + t556*t638) - (t561*t618 + t562*t624)) + ((t47*t607 - t571*t639) - (t564*t630 + t567*t636))))) - t48*t606;
     grad[1] = t641;
@@ -4308,7 +4305,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 }
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 8 neg, 13 div, 13 sqrt */
+/* operations: 6 sin, 6 cos, 1013 add/sub, 1279 mul, 7 neg, 13 div, 13 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -4347,12 +4344,12 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t25 = t18*sn[5] - t13*cs[5];
     const double t27 = t20*sn[5] - t15*cs[5];
     const double t29 = t22*sn[5] - t17*cs[5];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
     const double t38 = 0.0825 + t36;
@@ -4371,12 +4368,12 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 + t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t187 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
     const double t311 = t25*t25;
     const double t646 = -0.7178750897343862*t45;
@@ -5160,7 +5157,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 4 neg, 7 div, 7 sqrt */
+/* operations: 6 sin, 6 cos, 206 add/sub, 312 mul, 0 neg, 7 div, 7 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -5194,36 +5191,36 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t18 = t12*cs[4] - t7*sn[4];
     const double t20 = t14*cs[4] - t9*sn[4];
     const double t22 = t16*cs[4] + t11*sn[4];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
-    const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2] + cs[2]*t38;
-    const double t40 = sn[2]*t38 - t33*cs[2];
+    const double t38 = -0.0825 - t36;
+    const double t39 = cs[2]*t38 - t33*sn[2];
+    const double t40 = sn[2]*t38 + t33*cs[2];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1] + t41*sn[1];
-    const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
-    const double t45 = t42*sn[0] + t40*cs[0];
+    const double t42 = t41*sn[1] - t39*cs[1];
+    const double t43 = t41*cs[1] + t39*sn[1];
+    const double t44 = t42*cs[0] + t40*sn[0];
+    const double t45 = t40*cs[0] - t42*sn[0];
     const double t47 = t43*cs[0];
     const double t48 = t43*sn[0];
-    const double t49 = -t2*t40 - t39*sn[0];
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t49 = t2*t40 + t39*sn[0];
+    const double t50 = t4*t40 - t39*cs[0];
     const double t51 = t40*sn[1];
     const double t52 = t3*t36 + t6*t37;
     const double t53 = t5*t36 + t8*t37;
     const double t54 = t36*cs[1] - t10*t37;
-    const double t55 = t12*t33 - t7*t32;
-    const double t56 = t14*t33 - t9*t32;
-    const double t57 = t16*t33 + t11*t32;
-    const double t58 = t13*t30 + t18*t31;
-    const double t59 = t15*t30 + t20*t31;
-    const double t60 = t17*t30 + t22*t31;
+    const double t55 = t12*t33 + t7*t32;
+    const double t56 = t14*t33 + t9*t32;
+    const double t57 = t16*t33 - t11*t32;
+    const double t58 = t18*t31 - t13*t30;
+    const double t59 = t20*t31 - t15*t30;
+    const double t60 = t22*t31 - t17*t30;
     const double t187 = (lambda > 1.0 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
     const double t188 = t47*t47;
     const double t189 = t49*t49;
@@ -5242,7 +5239,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const int t1388 = t195 > t1387;
     const double t1389 = (t1388 ? t195 : 0.0);
     const double t1390 = (t1388 ? t196 : 1.0);
-    const double t1391 = (t1388 ? -t45*t1390 : 0.0);
+    const double t1391 = (t1388 ? t45*t1390 : 0.0);
     const double t1392 = (t1388 ? t47*t1390 : 0.0);
     const double t1393 = (t1388 ? t49*t1390 : 0.0);
     const double t1394 = (t1388 ? t52*t1390 : 0.0);
@@ -5274,10 +5271,10 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t1420 = (t1413 ? t1415*t1409 : 0.0);
     const double t1421 = (t1413 ? t1415*t1410 : 0.0);
     const double t1422 = t1397 + t1404;
-    const double t1423 = t42*t1392 - t51*t1393 - t54*t1394 - t57*t1395 - t60*t1396;
+    const double t1423 = t51*t1393 - t54*t1394 - t57*t1395 - t60*t1396 + t42*t1392;
     const double t1424 = t1423*t1391;
     const double t1425 = t1423*t1392 - t42;
-    const double t1426 = t51 + t1423*t1393;
+    const double t1426 = t1423*t1393 - t51;
     const double t1427 = t54 + t1423*t1394;
     const double t1428 = t57 + t1423*t1395;
     const double t1429 = t60 + t1423*t1396;
@@ -5313,7 +5310,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t1459 = (t1453 ? t1455*t1448 : 0.0);
     const double t1460 = (t1453 ? t1455*t1449 : 0.0);
     const double t1461 = (t1453 ? t1455*t1450 : 0.0);
-    const double t1462 = t1437 - t1423;
+    const double t1462 = t1423 - t1437;
     const double t1463 = t1430 + t1444;
     const double t1464 = t1389*t187;
     const double t1465 = t1422*t187;
@@ -5327,7 +5324,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t1473 = (t1472 ? 1.0/(t1471 != 0.0 ? t1471 : 1.0) : 1.0);
     const double t1474 = t1473*t1464;
     const double t1475 = t1473*t1465;
-    const double t1476 = -t1473*t1466;
+    const double t1476 = t1473*t1466;
     const double t1477 = t1473*t972;
     const double t1478 = t1476*t1468 - t1475*t1467;
     const double t1479 = t1478*t1474;
@@ -5433,7 +5430,7 @@ void panda_inverse_velocity_position_batch(size_t m, const double *q, const doub
 }
 
 /* ---- panda_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
-/* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 5 neg, 3 div, 2 sqrt */
+/* operations: 7 sin, 7 cos, 77 add/sub, 162 mul, 1 neg, 3 div, 2 sqrt */
 
 static PANDA_LIGHT void panda_jacobian_rpy_angles(const double *restrict q, double *restrict ang)
 {
@@ -5475,38 +5472,40 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     const double t20 = t14*cs[4] - t9*sn[4];
     const double t21 = t9*cs[4] + t14*sn[4];
     const double t22 = t16*cs[4] + t11*sn[4];
-    const double t23 = t16*sn[4] - t11*cs[4];
+    const double t23 = t11*cs[4] - t16*sn[4];
     const double t25 = t18*sn[5] - t13*cs[5];
     const double t26 = t15*sn[5] + t20*cs[5];
     const double t27 = t20*sn[5] - t15*cs[5];
     const double t28 = t17*sn[5] + t22*cs[5];
     const double t29 = t22*sn[5] - t17*cs[5];
-    const double t30 = 0.088*cs[5] + 0.107*sn[5];
+    const double t30 = -0.088*cs[5] - 0.107*sn[5];
     const double t31 = 0.107*cs[5] - 0.088*sn[5];
     const double t32 = t30*cs[4];
-    const double t33 = -t30*sn[4];
+    const double t33 = t30*sn[4];
     const double t34 = t31 - 0.384;
-    const double t35 = t32 - 0.0825;
+    const double t35 = -0.0825 - t32;
     const double t36 = t34*sn[3] + cs[3]*t35;
     const double t37 = t34*cs[3] - sn[3]*t35;
-    const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2] + cs[2]*t38;
-    const double t40 = sn[2]*t38 - t33*cs[2];
+    const double t38 = -0.0825 - t36;
+    const double t39 = cs[2]*t38 - t33*sn[2];
+    const double t40 = sn[2]*t38 + t33*cs[2];
     const double t41 = 0.316 - t37;
-    const double t42 = t39*cs[1] + t41*sn[1];
-    const double t43 = t41*cs[1] - t39*sn[1];
-    const double t44 = t42*cs[0] - t40*sn[0];
+    const double t42 = t39*cs[1] - t41*sn[1];
+    JA[15] = t42;
+    const double t43 = t41*cs[1] + t39*sn[1];
+    const double t44 = t40*sn[0] - t42*cs[0];
     JA[7] = t44;
     const double t45 = t42*sn[0] + t40*cs[0];
+    JA[0] = t45;
     const double t47 = t43*cs[0];
     JA[1] = t47;
     const double t48 = t43*sn[0];
     JA[8] = t48;
-    const double t49 = -t2*t40 - t39*sn[0];
+    const double t49 = t2*t40 + t39*sn[0];
     JA[2] = t49;
-    const double t50 = t39*cs[0] - t4*t40;
+    const double t50 = t4*t40 - t39*cs[0];
     JA[9] = t50;
-    const double t51 = t40*sn[1];
+    const double t51 = -t40*sn[1];
     JA[16] = t51;
     const double t52 = t3*t36 + t6*t37;
     JA[3] = t52;
@@ -5514,26 +5513,24 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     JA[10] = t53;
     const double t54 = t36*cs[1] - t10*t37;
     JA[17] = t54;
-    const double t55 = t12*t33 - t7*t32;
+    const double t55 = t12*t33 + t7*t32;
     JA[4] = t55;
-    const double t56 = t14*t33 - t9*t32;
+    const double t56 = t14*t33 + t9*t32;
     JA[11] = t56;
-    const double t57 = t16*t33 + t11*t32;
+    const double t57 = t16*t33 - t11*t32;
     JA[18] = t57;
-    const double t58 = t13*t30 + t18*t31;
+    const double t58 = t18*t31 - t13*t30;
     JA[5] = t58;
-    const double t59 = t15*t30 + t20*t31;
+    const double t59 = t20*t31 - t15*t30;
     JA[12] = t59;
-    const double t60 = t17*t30 + t22*t31;
+    const double t60 = t22*t31 - t17*t30;
     JA[19] = t60;
     const double t61 = t21*sn[6] + t26*cs[6];
     const double t62 = t21*cs[6] - t26*sn[6];
-    const double t63 = -t23*sn[6] - t28*cs[6];
-    const double t64 = t23*cs[6] - t28*sn[6];
-    const double t65 = t29*t62 - t27*t64;
+    const double t63 = t23*sn[6] - t28*cs[6];
+    const double t64 = t23*cs[6] + t28*sn[6];
+    const double t65 = t29*t62 + t27*t64;
     const double t66 = t27*t63 + t29*t61;
-    const double t230 = -t42;
-    JA[15] = t230;
     const double t1541 = t61*t61 + t65*t65;
     const int t1542 = t1541 > PANDA_RANK_TOL;
     const double t1543 = (t1542 ? 1.0/(t1541 != 0.0 ? t1541 : 1.0) : 1.0);
@@ -5583,12 +5580,10 @@ static PANDA_LIGHT void panda_jacobian_rpy_finish(const double *restrict cs, con
     JA[38] = t1571;
     const double t1572 = t13*t1553 + t15*t1554 + t17*t1567;
     JA[39] = t1572;
-    const double t1573 = t19*t1553 + t21*t1554 + t23*t1567;
+    const double t1573 = t19*t1553 + t21*t1554 - t23*t1567;
     JA[40] = t1573;
     const double t1574 = t25*t1553 + t27*t1554 + t29*t1567;
     JA[41] = t1574;
-    const double t1582 = -t45;
-    JA[0] = t1582;
 }
 
 void panda_jacobian_rpy(const double q[7], double JA[42])

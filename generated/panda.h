@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xc3aba849UL
+#define PANDA_STAMP 0x7b823f59UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -86,7 +86,7 @@ void panda_pose(const double q[7], double T[16]);
  * Stack: about 12 KB. */
 void panda_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 704 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 688 bytes. */
 void panda_jacobian(const double q[7], double J[42]);
 
 /* The same for m configurations stored one after another (element k of
@@ -158,7 +158,7 @@ void panda_manipulability_position(const double q[7], double w_position[1]);
  * Stack: about 13 KB. */
 void panda_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1424 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1416 bytes. */
 void panda_jacobian_hessian(const double q[7], double Hs[294]);
 
 /* The same for m configurations stored one after another (element k of
@@ -190,7 +190,7 @@ void panda_inverse_velocity_position(const double q[7], const double v[3], doubl
  * Stack: about 14 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1040 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1024 bytes. */
 void panda_jacobian_rpy(const double q[7], double JA[42]);
 
 /* The same for m configurations stored one after another (element k of

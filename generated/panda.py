@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc3aba849
+STAMP = 0x7b823f59
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -405,40 +405,38 @@ def _jacobian_core(q, J):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
-    t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t38 = -0.0825 - t36
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
+    t42 = t39*cs[..., 1] - t41*sn[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t40*sn[..., 0] - t42*cs[..., 0]
     t45 = t42*sn[..., 0] + t40*cs[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
-    t51 = t40*sn[..., 1]
+    t49 = t2*t40 + t39*sn[..., 0]
+    t50 = t4*t40 - t39*cs[..., 0]
+    t51 = -t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
-    t230 = -t42
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t270 = -sn[..., 0]
-    t1582 = -t45
-    J[..., 0] = t1582
+    J[..., 0] = t45
     J[..., 1] = t47
     J[..., 2] = t49
     J[..., 3] = t52
@@ -453,7 +451,7 @@ def _jacobian_core(q, J):
     J[..., 12] = t59
     J[..., 13] = 0.0
     J[..., 14] = 0.0
-    J[..., 15] = t230
+    J[..., 15] = t42
     J[..., 16] = t51
     J[..., 17] = t54
     J[..., 18] = t57
@@ -488,7 +486,7 @@ def jacobian(q):
 
     q: array of shape (..., 7), finite.
     Returns J of shape (..., 6, 7).
-    Operations: 6 sin, 6 cos, 141 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 138 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (42,), dtype=DTYPE), )
@@ -673,12 +671,12 @@ def _jacobian_dot_core(q, dq, dJ):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -697,12 +695,12 @@ def _jacobian_dot_core(q, dq, dJ):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
     t70 = t68 + t3*dq[..., 2]
@@ -816,7 +814,7 @@ def jacobian_dot(q, dq):
     q: array of shape (..., 7), finite.
     dq: array of shape (..., 7), finite.
     Returns dJ of shape (..., 6, 7).
-    Operations: 6 sin, 6 cos, 328 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 327 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (7, 7, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (42,), dtype=DTYPE), )
@@ -861,12 +859,12 @@ def _twist_core(q, dq, twist):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -884,12 +882,12 @@ def _twist_core(q, dq, twist):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 + t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 - t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
     t70 = t3*dq[..., 2] - t68
@@ -939,7 +937,7 @@ def twist(q, dq):
     q: array of shape (..., 7), finite.
     dq: array of shape (..., 7), finite.
     Returns twist of shape (..., 6).
-    Operations: 6 sin, 6 cos, 198 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 197 add/sub/mul/neg.
     """
     batch, (q, dq,) = _inputs((q, dq,), ("q", "dq", ), (7, 7, ), ("finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -985,12 +983,12 @@ def _acceleration_core(q, dq, ddq, acc):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -1009,12 +1007,12 @@ def _acceleration_core(q, dq, ddq, acc):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
     t70 = t68 + t3*dq[..., 2]
@@ -1092,7 +1090,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns acc of shape (..., 6).
-    Operations: 6 sin, 6 cos, 457 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 456 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )
@@ -1141,12 +1139,12 @@ def _kinematics_core(q, dq, ddq, T, J, dJ, twist, acc):
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t28 = t17*sn[..., 5] + t22*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -1166,12 +1164,12 @@ def _kinematics_core(q, dq, ddq, T, J, dJ, twist, acc):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t61 = t21*sn[..., 6] + t26*cs[..., 6]
     t62 = t21*cs[..., 6] - t26*sn[..., 6]
     t63 = t23*sn[..., 6] + t28*cs[..., 6]
@@ -1371,7 +1369,7 @@ def kinematics(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns T of shape (..., 4, 4), J of shape (..., 6, 7), dJ of shape (..., 6, 7), twist of shape (..., 6), acc of shape (..., 6).
-    Operations: 7 sin, 7 cos, 502 add/sub/mul/neg.
+    Operations: 7 sin, 7 cos, 501 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), np.empty(batch + (42,), dtype=DTYPE), np.empty(batch + (42,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), np.empty(batch + (6,), dtype=DTYPE), )
@@ -1418,12 +1416,12 @@ def _ik_terms_core(q, T, J):
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t28 = t17*sn[..., 5] + t22*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -1443,12 +1441,12 @@ def _ik_terms_core(q, T, J):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t61 = t21*sn[..., 6] + t26*cs[..., 6]
     t62 = t21*cs[..., 6] - t26*sn[..., 6]
     t63 = t23*sn[..., 6] + t28*cs[..., 6]
@@ -1525,7 +1523,7 @@ def ik_terms(q):
 
     q: array of shape (..., 7), finite.
     Returns T of shape (..., 4, 4), J of shape (..., 6, 7).
-    Operations: 7 sin, 7 cos, 169 add/sub/mul/neg.
+    Operations: 7 sin, 7 cos, 168 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (16,), dtype=DTYPE), np.empty(batch + (42,), dtype=DTYPE), )
@@ -1554,7 +1552,7 @@ def _manipulability_core(q, w):
     t8 = t4*cs[..., 2] + cs[..., 0]*sn[..., 2]
     t9 = t4*sn[..., 2] - cs[..., 0]*cs[..., 2]
     t10 = cs[..., 2]*sn[..., 1]
-    t11 = -sn[..., 1]*sn[..., 2]
+    t11 = sn[..., 1]*sn[..., 2]
     t12 = t3*sn[..., 3] + t6*cs[..., 3]
     t13 = t3*cs[..., 3] - t6*sn[..., 3]
     t14 = t5*sn[..., 3] + t8*cs[..., 3]
@@ -1565,41 +1563,41 @@ def _manipulability_core(q, w):
     t19 = t7*cs[..., 4] + t12*sn[..., 4]
     t20 = t14*cs[..., 4] - t9*sn[..., 4]
     t21 = t9*cs[..., 4] + t14*sn[..., 4]
-    t22 = t16*cs[..., 4] - t11*sn[..., 4]
-    t23 = t11*cs[..., 4] + t16*sn[..., 4]
+    t22 = t16*cs[..., 4] + t11*sn[..., 4]
+    t23 = t16*sn[..., 4] - t11*cs[..., 4]
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
-    t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t38 = -0.0825 - t36
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
-    t45 = t42*sn[..., 0] + t40*cs[..., 0]
+    t42 = t41*sn[..., 1] - t39*cs[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t42*cs[..., 0] + t40*sn[..., 0]
+    t45 = t40*cs[..., 0] - t42*sn[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
+    t49 = t2*t40 + t39*sn[..., 0]
+    t50 = t4*t40 - t39*cs[..., 0]
     t51 = t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
     t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t188 = t47*t47
     t189 = t49*t49
     t190 = t52*t52
@@ -1610,7 +1608,7 @@ def _manipulability_core(q, w):
     t195 = np.sqrt(t194)
     t196 = 1.0/t195
     t197 = np.where(t195 > 0.0, t196, 1.0)
-    t198 = -t45*t197
+    t198 = t45*t197
     t199 = t47*t197
     t200 = t49*t197
     t201 = t52*t197
@@ -1639,10 +1637,10 @@ def _manipulability_core(q, w):
     t224 = t220*t215
     t225 = t220*t216
     t226 = t220*t217
-    t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203
+    t228 = t51*t200 - t54*t201 - t57*t202 - t60*t203 + t42*t199
     t229 = t228*t198
     t231 = t228*t199 - t42
-    t232 = t51 + t228*t200
+    t232 = t228*t200 - t51
     t233 = t54 + t228*t201
     t234 = t57 + t228*t202
     t235 = t60 + t228*t203
@@ -1730,19 +1728,19 @@ def _manipulability_core(q, w):
     t320 = t314*t310
     t321 = t25*t314
     t325 = t5*t200 + t9*t201 + t15*t202 + t21*t203 + cs[..., 0]*t199
-    t326 = -t325*t198
+    t326 = t325*t198
     t327 = cs[..., 0] - t325*t199
     t328 = t5 - t325*t200
     t329 = t9 - t325*t201
     t330 = t15 - t325*t202
     t331 = t21 - t325*t203
-    t332 = t221*t326 + t222*t327 + t223*t328 + t224*t329 + t225*t330 + t226*t331
-    t333 = t326 - t332*t221
-    t334 = t327 - t332*t222
-    t335 = t328 - t332*t223
-    t336 = t329 - t332*t224
-    t337 = t330 - t332*t225
-    t338 = t331 - t332*t226
+    t332 = t221*t326 - t222*t327 - t223*t328 - t224*t329 - t225*t330 - t226*t331
+    t333 = t332*t221 - t326
+    t334 = t327 + t332*t222
+    t335 = t328 + t332*t223
+    t336 = t329 + t332*t224
+    t337 = t330 + t332*t225
+    t338 = t331 + t332*t226
     t339 = t260*t333 + t261*t334 + t262*t335 + t263*t336 + t264*t337 + t265*t338
     t340 = t333 - t339*t260
     t341 = t334 - t339*t261
@@ -1797,13 +1795,13 @@ def _manipulability_core(q, w):
     t390 = t385*t380
     t391 = t385*t381
     t392 = t385*t382
-    t397 = t198 + t11*t201 + t17*t202 + t23*t203 + cs[..., 1]*t200
-    t398 = 1.0 - t397*t198
-    t399 = -t397*t199
-    t400 = cs[..., 1] - t397*t200
-    t401 = t11 - t397*t201
-    t402 = t17 - t397*t202
-    t403 = t23 - t397*t203
+    t397 = t11*t201 - t198 - t17*t202 - t23*t203 - cs[..., 1]*t200
+    t398 = 1.0 + t397*t198
+    t399 = t397*t199
+    t400 = cs[..., 1] + t397*t200
+    t401 = t397*t201 - t11
+    t402 = t17 + t397*t202
+    t403 = t23 + t397*t203
     t404 = t221*t398 + t222*t399 + t223*t400 + t224*t401 + t225*t402 + t226*t403
     t405 = t398 - t404*t221
     t406 = t399 - t404*t222
@@ -1883,7 +1881,7 @@ def manipulability(q):
 
     q: array of shape (..., 7), finite.
     Returns w of shape (..., 1).
-    Operations: 6 sin, 6 cos, 951 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 945 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -1922,36 +1920,36 @@ def _manipulability_position_core(q, w_position):
     t18 = t12*cs[..., 4] - t7*sn[..., 4]
     t20 = t14*cs[..., 4] - t9*sn[..., 4]
     t22 = t16*cs[..., 4] + t11*sn[..., 4]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
-    t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t38 = -0.0825 - t36
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
-    t45 = t42*sn[..., 0] + t40*cs[..., 0]
+    t42 = t41*sn[..., 1] - t39*cs[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t42*cs[..., 0] + t40*sn[..., 0]
+    t45 = t40*cs[..., 0] - t42*sn[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
+    t49 = t2*t40 + t39*sn[..., 0]
+    t50 = t4*t40 - t39*cs[..., 0]
     t51 = t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 + t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 - t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t188 = t47*t47
     t189 = t49*t49
     t190 = t52*t52
@@ -1962,7 +1960,7 @@ def _manipulability_position_core(q, w_position):
     t195 = np.sqrt(t194)
     t196 = 1.0/t195
     t197 = np.where(t195 > 0.0, t196, 1.0)
-    t198 = -t45*t197
+    t198 = t45*t197
     t199 = t47*t197
     t200 = t49*t197
     t201 = t52*t197
@@ -1991,10 +1989,10 @@ def _manipulability_position_core(q, w_position):
     t224 = t220*t215
     t225 = t220*t216
     t226 = t220*t217
-    t228 = t42*t199 - t51*t200 - t54*t201 - t57*t202 - t60*t203
+    t228 = t51*t200 - t54*t201 - t57*t202 - t60*t203 + t42*t199
     t229 = t228*t198
     t231 = t228*t199 - t42
-    t232 = t51 + t228*t200
+    t232 = t228*t200 - t51
     t233 = t54 + t228*t201
     t234 = t57 + t228*t202
     t235 = t60 + t228*t203
@@ -2031,7 +2029,7 @@ def manipulability_position(q):
 
     q: array of shape (..., 7), finite.
     Returns w_position of shape (..., 1).
-    Operations: 6 sin, 6 cos, 302 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 299 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (1,), dtype=DTYPE), )
@@ -2075,38 +2073,38 @@ def _jacobian_hessian_core(q, Hs):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
+    t39 = -t33*sn[..., 2] - cs[..., 2]*t38
     t40 = sn[..., 2]*t38 - t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t40*sn[..., 0] - t42*cs[..., 0]
-    t45 = t42*sn[..., 0] + t40*cs[..., 0]
+    t42 = t39*cs[..., 1] - t41*sn[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t42*cs[..., 0] + t40*sn[..., 0]
+    t45 = t42*sn[..., 0] - t40*cs[..., 0]
     t47 = t43*cs[..., 0]
     t48 = -t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t4*t40 - t39*cs[..., 0]
+    t49 = t39*sn[..., 0] - t2*t40
+    t50 = t39*cs[..., 0] + t4*t40
     t51 = t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t270 = -sn[..., 0]
-    t488 = -t42*cs[..., 0]
+    t488 = t42*cs[..., 0]
     t489 = t51*cs[..., 0]
     t490 = t54*cs[..., 0]
     t491 = t57*cs[..., 0]
@@ -2121,7 +2119,7 @@ def _jacobian_hessian_core(q, Hs):
     t500 = t15*t57 - t17*t56
     t501 = t15*t60 - t17*t59
     t502 = t21*t60 - t23*t59
-    t503 = t42*t270
+    t503 = t42*sn[..., 0]
     t504 = t51*sn[..., 0]
     t505 = t54*sn[..., 0]
     t506 = t57*sn[..., 0]
@@ -2194,7 +2192,6 @@ def _jacobian_hessian_core(q, Hs):
     t573 = t7*t27 - t9*t25
     t574 = t13*t27 - t15*t25
     t575 = t19*t27 - t21*t25
-    t1582 = -t45
     t1585 = -t53
     t1586 = -t56
     t1587 = -t59
@@ -2247,7 +2244,7 @@ def _jacobian_hessian_core(q, Hs):
     Hs[..., 46] = 0.0
     Hs[..., 47] = 0.0
     Hs[..., 48] = 0.0
-    Hs[..., 49] = t1582
+    Hs[..., 49] = t45
     Hs[..., 50] = t47
     Hs[..., 51] = t49
     Hs[..., 52] = t52
@@ -2500,7 +2497,7 @@ def jacobian_hessian(q):
 
     q: array of shape (..., 7), finite.
     Returns Hs of shape (..., 6, 7, 7).
-    Operations: 6 sin, 6 cos, 388 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 385 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (294,), dtype=DTYPE), )
@@ -2545,36 +2542,36 @@ def _manipulability_gradient_core(q, grad):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
     t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t40 = t33*cs[..., 2] - sn[..., 2]*t38
     t41 = 0.316 - t37
     t42 = t39*cs[..., 1] + t41*sn[..., 1]
     t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
-    t45 = t42*sn[..., 0] + t40*cs[..., 0]
+    t44 = t42*cs[..., 0] + t40*sn[..., 0]
+    t45 = t40*cs[..., 0] - t42*sn[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
-    t51 = t40*sn[..., 1]
+    t49 = t2*t40 - t39*sn[..., 0]
+    t50 = t39*cs[..., 0] + t4*t40
+    t51 = -t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t188 = t47*t47
     t189 = t49*t49
     t190 = t52*t52
@@ -2585,7 +2582,7 @@ def _manipulability_gradient_core(q, grad):
     t195 = np.sqrt(t194)
     t196 = 1.0/t195
     t197 = np.where(t195 > 0.0, t196, 1.0)
-    t198 = -t45*t197
+    t198 = t45*t197
     t199 = t47*t197
     t200 = t49*t197
     t201 = t52*t197
@@ -3024,7 +3021,7 @@ def _manipulability_gradient_core(q, grad):
     t637 = t600*t321 - t601*t392 + t602*t480
     t638 = t603*t392 - t604*t480
     t639 = t605*t480
-    t640 = (((t3*t617 + t7*t623) + (t13*t629 + (t19*t635 + t25*t638))) + ((t47*t609 + t49*t614) + (t52*t620 + (t55*t626 + t58*t632)))) - (((t5*t616 + (t9*t622 + t15*t628)) + ((t21*t634 + t27*t637) + (t48*t608 + t50*t613))) + ((t53*t619 + (t56*t625 + t59*t631)) + ((t44*t606 + t45*t607) + (cs[..., 0]*t611 + t612*sn[..., 0]))))
+    t640 = (((t3*t617 + t7*t623) + (t13*t629 + (t19*t635 + t25*t638))) + ((t47*t609 + t49*t614) + (t52*t620 + (t55*t626 + t58*t632)))) - (((t5*t616 + (t9*t622 + t15*t628)) + ((t21*t634 + t27*t637) + (t48*t608 + t50*t613))) + ((t53*t619 + (t56*t625 + t59*t631)) + ((t44*t606 - t45*t607) + (cs[..., 0]*t611 + t612*sn[..., 0]))))
     t641 = ((((t2*t616 + (t4*t617 + t488*t608)) + ((t489*t613 + t490*t619) + (t491*t625 + t492*t631))) + (((t503*t609 + t504*t614) + (t505*t620 + t506*t626)) + ((t507*t632 - t518*t610) - (t519*t615 + t520*t621)))) + ((((t533*t622 + t535*t628) - (t521*t627 + t522*t633)) + ((t538*t634 + t542*t637) + (t547*t623 + t549*t629))) + (((t552*t635 + t556*t638) - (t561*t618 + t562*t624)) + ((t47*t607 - t571*t639) - (t564*t630 + t567*t636))))) - t48*t606
     t642 = ((((t489*t608 + (t493*t613 + t494*t619)) + ((t495*t625 + t496*t631) + (t504*t609 + t508*t614))) + ((t509*t620 + (t510*t626 + t511*t632)) + ((t523*t615 - t519*t610) + (t524*t621 + t525*t627)))) + (((t526*t633 + (t534*t622 + t536*t628)) + ((t539*t634 + t543*t637) + (t548*t623 + t550*t629))) + ((t553*t635 + (t557*t638 + t563*t624)) + ((t565*t630 + t568*t636) + (t572*t639 + t49*t607))))) - t50*t606
     t643 = ((((t490*t608 + (t494*t613 + t497*t619)) + (t498*t625 + (t499*t631 + t505*t609))) + ((t509*t614 + (t512*t620 + t513*t626)) + (t514*t632 + (t524*t615 - t520*t610)))) + (((t527*t621 + (t528*t627 + t529*t633)) + (t537*t628 + (t540*t634 + t544*t637))) + ((t551*t629 + (t554*t635 + t558*t638)) + ((t566*t630 + t569*t636) + (t573*t639 + t52*t607))))) - t53*t606
@@ -3045,7 +3042,7 @@ def manipulability_gradient(q):
 
     q: array of shape (..., 7), finite.
     Returns grad of shape (..., 7).
-    Operations: 6 sin, 6 cos, 1831 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 1829 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (7,), dtype=DTYPE), )
@@ -3090,12 +3087,12 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
@@ -3114,12 +3111,12 @@ def _inverse_velocity_core(q, twist, lambda_, dq):
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 + t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t187 = np.where(lambda_ > 1.0, 1.0/lambda_, 1.0)
     t311 = t25*t25
     t646 = -0.7178750897343862*t45
@@ -3878,7 +3875,7 @@ def inverse_velocity(q, twist, lambda_):
     twist: array of shape (..., 6), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 7).
-    Operations: 6 sin, 6 cos, 2300 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 2299 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (7, 6, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -3918,36 +3915,36 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t18 = t12*cs[..., 4] - t7*sn[..., 4]
     t20 = t14*cs[..., 4] - t9*sn[..., 4]
     t22 = t16*cs[..., 4] + t11*sn[..., 4]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
-    t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t38 = -0.0825 - t36
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
-    t45 = t42*sn[..., 0] + t40*cs[..., 0]
+    t42 = t41*sn[..., 1] - t39*cs[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t42*cs[..., 0] + t40*sn[..., 0]
+    t45 = t40*cs[..., 0] - t42*sn[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
+    t49 = t2*t40 + t39*sn[..., 0]
+    t50 = t4*t40 - t39*cs[..., 0]
     t51 = t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 + t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 - t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t187 = np.where(lambda_ > 1.0, 1.0/lambda_, 1.0)
     t188 = t47*t47
     t189 = t49*t49
@@ -3966,7 +3963,7 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1388 = t195 > t1387
     t1389 = np.where(t1388, t195, 0.0)
     t1390 = np.where(t1388, t196, 1.0)
-    t1391 = np.where(t1388, -t45*t1390, 0.0)
+    t1391 = np.where(t1388, t45*t1390, 0.0)
     t1392 = np.where(t1388, t47*t1390, 0.0)
     t1393 = np.where(t1388, t49*t1390, 0.0)
     t1394 = np.where(t1388, t52*t1390, 0.0)
@@ -3998,10 +3995,10 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1420 = np.where(t1413, t1415*t1409, 0.0)
     t1421 = np.where(t1413, t1415*t1410, 0.0)
     t1422 = t1397 + t1404
-    t1423 = t42*t1392 - t51*t1393 - t54*t1394 - t57*t1395 - t60*t1396
+    t1423 = t51*t1393 - t54*t1394 - t57*t1395 - t60*t1396 + t42*t1392
     t1424 = t1423*t1391
     t1425 = t1423*t1392 - t42
-    t1426 = t51 + t1423*t1393
+    t1426 = t1423*t1393 - t51
     t1427 = t54 + t1423*t1394
     t1428 = t57 + t1423*t1395
     t1429 = t60 + t1423*t1396
@@ -4037,7 +4034,7 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1459 = np.where(t1453, t1455*t1448, 0.0)
     t1460 = np.where(t1453, t1455*t1449, 0.0)
     t1461 = np.where(t1453, t1455*t1450, 0.0)
-    t1462 = t1437 - t1423
+    t1462 = t1423 - t1437
     t1463 = t1430 + t1444
     t1464 = t1389*t187
     t1465 = t1422*t187
@@ -4051,7 +4048,7 @@ def _inverse_velocity_position_core(q, v, lambda_, dq_position):
     t1473 = np.where(t1472, 1.0/t1471, 1.0)
     t1474 = t1473*t1464
     t1475 = t1473*t1465
-    t1476 = -t1473*t1466
+    t1476 = t1473*t1466
     t1477 = t1473*t972
     t1478 = t1476*t1468 - t1475*t1467
     t1479 = t1478*t1474
@@ -4133,7 +4130,7 @@ def inverse_velocity_position(q, v, lambda_):
     v: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq_position of shape (..., 7).
-    Operations: 6 sin, 6 cos, 522 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 518 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (7, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -4176,49 +4173,48 @@ def _jacobian_rpy_core(q, JA):
     t20 = t14*cs[..., 4] - t9*sn[..., 4]
     t21 = t9*cs[..., 4] + t14*sn[..., 4]
     t22 = t16*cs[..., 4] + t11*sn[..., 4]
-    t23 = t16*sn[..., 4] - t11*cs[..., 4]
+    t23 = t11*cs[..., 4] - t16*sn[..., 4]
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t26 = t15*sn[..., 5] + t20*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t28 = t17*sn[..., 5] + t22*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
+    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
-    t33 = -t30*sn[..., 4]
+    t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = t32 - 0.0825
+    t35 = -0.0825 - t32
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
-    t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t38 = -0.0825 - t36
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
-    t42 = t39*cs[..., 1] + t41*sn[..., 1]
-    t43 = t41*cs[..., 1] - t39*sn[..., 1]
-    t44 = t42*cs[..., 0] - t40*sn[..., 0]
+    t42 = t39*cs[..., 1] - t41*sn[..., 1]
+    t43 = t41*cs[..., 1] + t39*sn[..., 1]
+    t44 = t40*sn[..., 0] - t42*cs[..., 0]
     t45 = t42*sn[..., 0] + t40*cs[..., 0]
     t47 = t43*cs[..., 0]
     t48 = t43*sn[..., 0]
-    t49 = -t2*t40 - t39*sn[..., 0]
-    t50 = t39*cs[..., 0] - t4*t40
-    t51 = t40*sn[..., 1]
+    t49 = t2*t40 + t39*sn[..., 0]
+    t50 = t4*t40 - t39*cs[..., 0]
+    t51 = -t40*sn[..., 1]
     t52 = t3*t36 + t6*t37
     t53 = t5*t36 + t8*t37
     t54 = t36*cs[..., 1] - t10*t37
-    t55 = t12*t33 - t7*t32
-    t56 = t14*t33 - t9*t32
-    t57 = t16*t33 + t11*t32
-    t58 = t13*t30 + t18*t31
-    t59 = t15*t30 + t20*t31
-    t60 = t17*t30 + t22*t31
+    t55 = t12*t33 + t7*t32
+    t56 = t14*t33 + t9*t32
+    t57 = t16*t33 - t11*t32
+    t58 = t18*t31 - t13*t30
+    t59 = t20*t31 - t15*t30
+    t60 = t22*t31 - t17*t30
     t61 = t21*sn[..., 6] + t26*cs[..., 6]
     t62 = t21*cs[..., 6] - t26*sn[..., 6]
-    t63 = -t23*sn[..., 6] - t28*cs[..., 6]
-    t64 = t23*cs[..., 6] - t28*sn[..., 6]
-    t65 = t29*t62 - t27*t64
+    t63 = t23*sn[..., 6] - t28*cs[..., 6]
+    t64 = t23*cs[..., 6] + t28*sn[..., 6]
+    t65 = t29*t62 + t27*t64
     t66 = t27*t63 + t29*t61
-    t230 = -t42
     t1541 = t61*t61 + t65*t65
     t1542 = t1541 > RANK_TOL
     t1543 = np.where(t1542, 1.0/t1541, 1.0)
@@ -4251,10 +4247,9 @@ def _jacobian_rpy_core(q, JA):
     t1570 = t3*t1553 + t5*t1554 + cs[..., 1]*t1567
     t1571 = t7*t1553 + t9*t1554 - t11*t1567
     t1572 = t13*t1553 + t15*t1554 + t17*t1567
-    t1573 = t19*t1553 + t21*t1554 + t23*t1567
+    t1573 = t19*t1553 + t21*t1554 - t23*t1567
     t1574 = t25*t1553 + t27*t1554 + t29*t1567
-    t1582 = -t45
-    JA[..., 0] = t1582
+    JA[..., 0] = t45
     JA[..., 1] = t47
     JA[..., 2] = t49
     JA[..., 3] = t52
@@ -4269,7 +4264,7 @@ def _jacobian_rpy_core(q, JA):
     JA[..., 12] = t59
     JA[..., 13] = 0.0
     JA[..., 14] = 0.0
-    JA[..., 15] = t230
+    JA[..., 15] = t42
     JA[..., 16] = t51
     JA[..., 17] = t54
     JA[..., 18] = t57
@@ -4304,7 +4299,7 @@ def jacobian_rpy(q):
 
     q: array of shape (..., 7), finite.
     Returns JA of shape (..., 6, 7).
-    Operations: 7 sin, 7 cos, 244 add/sub/mul/neg.
+    Operations: 7 sin, 7 cos, 240 add/sub/mul/neg.
     """
     batch, (q,) = _inputs((q,), ("q", ), (7, ), ("finite", ))
     outputs = (np.empty(batch + (42,), dtype=DTYPE), )

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x90396ef4UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3ee8b1e1UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -822,7 +822,7 @@ void ur5_jacobian_batch(size_t m, const double *q, double *J)
 #endif
 
 /* ---- ur5_jacobian_tool: the Jacobian in the tool frame's axes (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 4 neg */
+/* operations: 6 sin, 6 cos, 36 add/sub, 70 mul, 3 neg */
 
 UR5_BODY void ur5_jacobian_tool_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -869,7 +869,7 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     const double t37 = cs[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
     const double t39 = cs[3*UR5_STRIDE]*cs[5*UR5_STRIDE];
     const double t91 = cs[4*UR5_STRIDE]*cs[5*UR5_STRIDE];
-    const double t92 = -cs[4*UR5_STRIDE]*sn[5*UR5_STRIDE];
+    const double t92 = cs[4*UR5_STRIDE]*sn[5*UR5_STRIDE];
     const double t93 = cs[5*UR5_STRIDE]*sn[4*UR5_STRIDE];
     J_tool[19*UR5_STRIDE] = t93;
     J_tool[20*UR5_STRIDE] = t93;
@@ -879,45 +879,45 @@ UR5_BODY void ur5_jacobian_tool_finish(const double *restrict cs, const double *
     J_tool[26*UR5_STRIDE] = t94;
     J_tool[27*UR5_STRIDE] = t94;
     const double t95 = t91*cs[3*UR5_STRIDE] - sn[3*UR5_STRIDE]*sn[5*UR5_STRIDE];
-    const double t96 = t92*cs[3*UR5_STRIDE] - cs[5*UR5_STRIDE]*sn[3*UR5_STRIDE];
+    const double t96 = t92*cs[3*UR5_STRIDE] + cs[5*UR5_STRIDE]*sn[3*UR5_STRIDE];
     const double t97 = cs[3*UR5_STRIDE]*t6;
     const double t98 = t91*sn[3*UR5_STRIDE] + t37;
     J_tool[18*UR5_STRIDE] = t98;
-    const double t99 = t92*sn[3*UR5_STRIDE] + t39;
+    const double t99 = t39 - t92*sn[3*UR5_STRIDE];
     J_tool[24*UR5_STRIDE] = t99;
     const double t100 = t95*cs[0] + t93*sn[0];
-    const double t101 = t96*cs[0] + t94*sn[0];
+    const double t101 = t96*cs[0] - t94*sn[0];
     const double t102 = t97*cs[0] + t8;
     const double t103 = t95*sn[0] - t93*cs[0];
-    const double t104 = t96*sn[0] - t94*cs[0];
+    const double t104 = t96*sn[0] + t94*cs[0];
     const double t105 = t97*sn[0] - t10;
     const double t106 = t103*t23 - t100*t24;
     J_tool[0] = t106;
-    const double t107 = t104*t23 - t101*t24;
+    const double t107 = t101*t24 - t104*t23;
     J_tool[6*UR5_STRIDE] = t107;
     const double t108 = t105*t23 - t102*t24;
     J_tool[12*UR5_STRIDE] = t108;
     const double t109 = t95*t22 + t98*t21;
     J_tool[1*UR5_STRIDE] = t109;
-    const double t110 = t96*t22 + t99*t21;
+    const double t110 = t99*t21 - t96*t22;
     J_tool[7*UR5_STRIDE] = t110;
     const double t111 = t97*t22 + t13*t21;
     J_tool[13*UR5_STRIDE] = t111;
     const double t112 = t95*t20 + t98*t19;
     J_tool[2*UR5_STRIDE] = t112;
-    const double t113 = t96*t20 + t99*t19;
+    const double t113 = t99*t19 - t96*t20;
     J_tool[8*UR5_STRIDE] = t113;
     const double t114 = t97*t20 + t13*t19;
     J_tool[14*UR5_STRIDE] = t114;
     const double t115 = t95*t17 + t98*t16;
     J_tool[3*UR5_STRIDE] = t115;
-    const double t116 = t96*t17 + t99*t16;
+    const double t116 = t99*t16 - t96*t17;
     J_tool[9*UR5_STRIDE] = t116;
     const double t117 = t97*t17 + t13*t16;
     J_tool[15*UR5_STRIDE] = t117;
     const double t118 = t91*t15 + t93*t14;
     J_tool[4*UR5_STRIDE] = t118;
-    const double t119 = t92*t15 + t94*t14;
+    const double t119 = t94*t14 - t92*t15;
     J_tool[10*UR5_STRIDE] = t119;
     const double t120 = t14*cs[4*UR5_STRIDE] - t15*sn[4*UR5_STRIDE];
     J_tool[16*UR5_STRIDE] = t120;
@@ -1042,7 +1042,7 @@ void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool)
 #endif
 
 /* ---- ur5_jacobian_dot: dJ/dt (6 x N row-major, same frame as J) ---- */
-/* operations: 5 sin, 5 cos, 62 add/sub, 106 mul, 5 neg */
+/* operations: 5 sin, 5 cos, 62 add/sub, 106 mul, 3 neg */
 
 UR5_BODY void ur5_jacobian_dot_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1079,15 +1079,15 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     const double t13 = t6*sn[3*UR5_STRIDE];
     const double t14 = -0.0823*sn[4*UR5_STRIDE];
     const double t15 = -0.0823*cs[4*UR5_STRIDE];
-    const double t16 = 0.09465*sn[3*UR5_STRIDE] + t14*cs[3*UR5_STRIDE];
+    const double t16 = -0.09465*sn[3*UR5_STRIDE] - t14*cs[3*UR5_STRIDE];
     const double t17 = 0.09465*cs[3*UR5_STRIDE] - t14*sn[3*UR5_STRIDE];
-    const double t18 = 0.10915 - t15;
-    const double t19 = t16 - 0.39225*cs[2*UR5_STRIDE];
+    const double t18 = t15 - 0.10915;
+    const double t19 = -0.39225*cs[2*UR5_STRIDE] - t16;
     const double t20 = t17 + 0.39225*sn[2*UR5_STRIDE];
     const double t21 = t19 - 0.425*cs[1*UR5_STRIDE];
     const double t22 = t20 + 0.425*sn[1*UR5_STRIDE];
-    const double t23 = t21*cs[0] + t18*sn[0];
-    const double t24 = t21*sn[0] - t18*cs[0];
+    const double t23 = t18*sn[0] - t21*cs[0];
+    const double t24 = t21*sn[0] + t18*cs[0];
     const double t26 = t22*cs[0];
     const double t27 = t22*sn[0];
     const double t28 = t20*cs[0];
@@ -1102,16 +1102,16 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     const double t46 = t44 + sn[0]*dq[2*UR5_STRIDE];
     const double t47 = t45 - cs[0]*dq[2*UR5_STRIDE];
     const double t48 = t46 + sn[0]*dq[3*UR5_STRIDE];
-    const double t49 = t47 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = cs[0]*dq[3*UR5_STRIDE] - t47;
     const double t50 = t48 + t3*dq[4*UR5_STRIDE];
-    const double t51 = t49 + t5*dq[4*UR5_STRIDE];
+    const double t51 = t5*dq[4*UR5_STRIDE] - t49;
     const double t52 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
     const double t56 = t32*dq[4*UR5_STRIDE];
     const double t57 = t33*dq[4*UR5_STRIDE];
     const double t58 = t34*dq[4*UR5_STRIDE];
     const double t59 = t56 + t30*dq[3*UR5_STRIDE];
     const double t60 = t57 + t31*dq[3*UR5_STRIDE];
-    const double t61 = t58 + t16*dq[3*UR5_STRIDE];
+    const double t61 = t58 - t16*dq[3*UR5_STRIDE];
     const double t62 = t59 + t28*dq[2*UR5_STRIDE];
     const double t63 = t60 + t29*dq[2*UR5_STRIDE];
     const double t64 = t61 + t19*dq[2*UR5_STRIDE];
@@ -1119,7 +1119,7 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     const double t66 = t63 + t27*dq[1*UR5_STRIDE];
     const double t68 = t65 - t24*dq[0];
     dJ[6*UR5_STRIDE] = t68;
-    const double t70 = -t66 - t23*dq[0];
+    const double t70 = t23*dq[0] - t66;
     dJ[0] = t70;
     const double t71 = t21*t45 - t27*dq[0] - cs[0]*t64;
     dJ[1*UR5_STRIDE] = t71;
@@ -1143,9 +1143,9 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     dJ[14*UR5_STRIDE] = t78;
     const double t79 = t16*t49 - t31*dq[0] - cs[0]*t58;
     dJ[3*UR5_STRIDE] = t79;
-    const double t80 = t30*dq[0] - t16*t48 - sn[0]*t58;
+    const double t80 = t30*dq[0] + t16*t48 - sn[0]*t58;
     dJ[9*UR5_STRIDE] = t80;
-    const double t81 = t31*t48 + cs[0]*t56 + sn[0]*t57 - t30*t49;
+    const double t81 = t31*t48 + cs[0]*t56 + sn[0]*t57 + t30*t49;
     dJ[15*UR5_STRIDE] = t81;
     const double t82 = t34*t51 - t33*t52;
     dJ[4*UR5_STRIDE] = t82;
@@ -1153,11 +1153,11 @@ UR5_BODY void ur5_jacobian_dot_finish(const double *restrict dq, const double *r
     dJ[10*UR5_STRIDE] = t83;
     const double t84 = t33*t50 - t32*t51;
     dJ[16*UR5_STRIDE] = t84;
-    const double t85 = -t5*dq[0] - cs[3*UR5_STRIDE]*t49;
+    const double t85 = cs[3*UR5_STRIDE]*t49 - t5*dq[0];
     dJ[22*UR5_STRIDE] = t85;
     const double t86 = t3*dq[0] + cs[3*UR5_STRIDE]*t48;
     dJ[28*UR5_STRIDE] = t86;
-    const double t87 = t5*t48 - t3*t49;
+    const double t87 = t5*t48 + t3*t49;
     dJ[34*UR5_STRIDE] = t87;
     const double t88 = t13*t51 - t11*t52;
     dJ[23*UR5_STRIDE] = t88;
@@ -2515,27 +2515,27 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t244 = t240*t133 - cs[0];
     const double t245 = t240*t134 - cs[0];
     const double t246 = t5 + t240*t135;
-    const double t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246;
-    const double t248 = t241 + t247*t151;
-    const double t249 = t243 - t247*t152;
-    const double t250 = t244 - t247*t153;
-    const double t251 = t245 - t247*t154;
-    const double t252 = t246 - t247*t155;
-    const double t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252;
-    const double t254 = t248 + t253*t184;
+    const double t247 = t151*t241 - t152*t243 - t153*t244 - t154*t245 - t155*t246;
+    const double t248 = t247*t151 - t241;
+    const double t249 = t243 + t247*t152;
+    const double t250 = t244 + t247*t153;
+    const double t251 = t245 + t247*t154;
+    const double t252 = t246 + t247*t155;
+    const double t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252;
+    const double t254 = t248 - t253*t184;
     const double t255 = t249 - t253*t185;
     const double t256 = t250 - t253*t186;
     const double t257 = t251 - t253*t187;
     const double t258 = t252 - t253*t188;
-    const double t259 = t232*t255 - t11*t236 - t231*t254 + t233*t256 + t234*t257 + t235*t258;
+    const double t259 = t11*t236 - t231*t254 - t232*t255 - t233*t256 - t234*t257 - t235*t258;
     const double t260 = t254 + t259*t231;
-    const double t261 = t255 - t259*t232;
-    const double t262 = t256 - t259*t233;
-    const double t263 = t257 - t259*t234;
-    const double t264 = t258 - t259*t235;
-    const double t265 = t11 + t259*t236;
-    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t266*t131 - t260;
+    const double t261 = t255 + t259*t232;
+    const double t262 = t256 + t259*t233;
+    const double t263 = t257 + t259*t234;
+    const double t264 = t258 + t259*t235;
+    const double t265 = t259*t236 - t11;
+    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t260 + t266*t131;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -2552,13 +2552,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t281 = t275 - t278*t186;
     const double t282 = t276 - t278*t187;
     const double t283 = t277 - t278*t188;
-    const double t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 - t236*t265;
+    const double t284 = t231*t279 + t232*t280 + t233*t281 + t234*t282 + t235*t283 + t236*t265;
     const double t285 = t279 - t284*t231;
     const double t286 = t280 - t284*t232;
     const double t287 = t281 - t284*t233;
     const double t288 = t282 - t284*t234;
     const double t289 = t283 - t284*t235;
-    const double t290 = t265 + t284*t236;
+    const double t290 = t265 - t284*t236;
     const double t291 = t285*t285 + t286*t286 + t287*t287 + t288*t288 + t289*t289 + t290*t290;
     const double t292 = sqrt(t291);
     const double t293 = (t292 > 0.0 ? 1.0/(t292 != 0.0 ? t292 : 1.0) : 1.0);
@@ -2593,13 +2593,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t327 = t321 - t323*t234;
     const double t328 = t322 - t323*t235;
     const double t329 = t13 - t323*t236;
-    const double t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 - t299*t329;
+    const double t330 = t294*t324 + t295*t325 + t296*t326 + t297*t327 + t298*t328 + t299*t329;
     const double t331 = t324 - t330*t294;
     const double t332 = t325 - t330*t295;
     const double t333 = t326 - t330*t296;
     const double t334 = t327 - t330*t297;
     const double t335 = t328 - t330*t298;
-    const double t336 = t329 + t330*t299;
+    const double t336 = t329 - t330*t299;
     const double t337 = t132*t332 - t131*t331 + t133*t333 + t134*t334 + t135*t335;
     const double t338 = t331 + t337*t131;
     const double t339 = t332 - t337*t132;
@@ -2625,13 +2625,13 @@ static UR5_LIGHT void ur5_manipulability_finish(const double *restrict cs, const
     const double t359 = t353 - t355*t234;
     const double t360 = t354 - t355*t235;
     const double t361 = t336 - t355*t236;
-    const double t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 - t299*t361;
+    const double t362 = t294*t356 + t295*t357 + t296*t358 + t297*t359 + t298*t360 + t299*t361;
     const double t363 = t356 - t362*t294;
     const double t364 = t357 - t362*t295;
     const double t365 = t358 - t362*t296;
     const double t366 = t359 - t362*t297;
     const double t367 = t360 - t362*t298;
-    const double t368 = t361 + t362*t299;
+    const double t368 = t361 - t362*t299;
     const double t369 = t363*t363 + t364*t364 + t365*t365 + t366*t366 + t367*t367 + t368*t368;
     const double t370 = sqrt(t369);
     const double t383 = t128*t149*t182*t229*t292*t370;
@@ -2803,7 +2803,7 @@ void ur5_manipulability_position_batch(size_t m, const double *q, double *w_posi
 }
 
 /* ---- ur5_jacobian_hessian: kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N) ---- */
-/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 8 neg */
+/* operations: 5 sin, 5 cos, 27 add/sub, 68 mul, 4 neg */
 
 static UR5_LIGHT void ur5_jacobian_hessian_angles(const double *restrict q, double *restrict ang)
 {
@@ -2951,20 +2951,20 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[169] = t4;
     Hs[170] = t4;
     Hs[171] = t4;
-    const double t5 = sn[0]*sn[3];
-    Hs[132] = -t5;
+    const double t5 = -sn[0]*sn[3];
+    Hs[132] = t5;
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
     Hs[174] = t9;
-    const double t10 = -cs[0]*cs[4];
-    const double t11 = t10 - t4*sn[4];
-    Hs[138] = -t11;
+    const double t10 = cs[0]*cs[4];
+    const double t11 = t10 + t4*sn[4];
+    Hs[138] = t11;
     const double t13 = sn[4]*sn[3];
     const double t14 = -0.0823*sn[4];
-    const double t15 = -0.0823*cs[4];
+    const double t15 = 0.0823*cs[4];
     const double t16 = -0.09465*sn[3] - t14*cs[3];
     const double t17 = 0.09465*cs[3] - t14*sn[3];
-    const double t18 = 0.10915 - t15;
+    const double t18 = 0.10915 + t15;
     const double t19 = t16 + 0.39225*cs[2];
     const double t20 = t17 + 0.39225*sn[2];
     const double t21 = t19 + 0.425*cs[1];
@@ -2985,11 +2985,13 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[39] = t30;
     Hs[54] = t30;
     const double t31 = t17*sn[0];
-    const double t32 = t2*t15 + t14*sn[0];
+    const double t32 = t14*sn[0] - t2*t15;
     Hs[40] = t32;
     Hs[60] = t32;
-    const double t33 = t4*t15 - t14*cs[0];
-    const double t34 = -t15*sn[3];
+    const double t33 = t4*t15 + t14*cs[0];
+    Hs[4] = t33;
+    Hs[24] = t33;
+    const double t34 = t15*sn[3];
     const double t385 = t21*cs[0];
     Hs[7] = t385;
     const double t386 = t19*cs[0];
@@ -3009,7 +3011,7 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[25] = t388;
     Hs[26] = t388;
     Hs[27] = t388;
-    const double t389 = t33*cs[3] - t5*t34;
+    const double t389 = t5*t34 - t33*cs[3];
     Hs[28] = t389;
     const double t390 = t21*sn[0];
     Hs[43] = t390;
@@ -3044,20 +3046,20 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[91] = t397;
     Hs[92] = t397;
     Hs[93] = t397;
-    const double t398 = t32*cs[0] + t33*sn[0];
+    const double t398 = t32*cs[0] - t33*sn[0];
     Hs[82] = t398;
     Hs[88] = t398;
     Hs[94] = t398;
     Hs[97] = t398;
     Hs[98] = t398;
     Hs[99] = t398;
-    const double t399 = t3*t33 - t5*t32;
+    const double t399 = t5*t32 - t3*t33;
     Hs[100] = t399;
     const double t400 = t13*cs[0];
     Hs[139] = t400;
     Hs[140] = t400;
     Hs[141] = t400;
-    const double t401 = t11*cs[3] - t5*t13;
+    const double t401 = t5*t13 - t11*cs[3];
     Hs[142] = t401;
     const double t402 = t13*sn[0];
     Hs[175] = t402;
@@ -3065,15 +3067,15 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     Hs[177] = t402;
     const double t403 = t3*t13 - t9*cs[3];
     Hs[178] = t403;
-    const double t404 = t3*cs[0] + t5*sn[0];
+    const double t404 = t3*cs[0] - t5*sn[0];
     Hs[205] = t404;
     Hs[206] = t404;
     Hs[207] = t404;
-    const double t405 = t9*cs[0] + t11*sn[0];
+    const double t405 = t9*cs[0] - t11*sn[0];
     Hs[211] = t405;
     Hs[212] = t405;
     Hs[213] = t405;
-    const double t406 = t3*t11 - t5*t9;
+    const double t406 = t5*t9 - t3*t11;
     Hs[214] = t406;
     const double t2016 = -t27;
     Hs[1] = t2016;
@@ -3084,9 +3086,6 @@ static UR5_LIGHT void ur5_jacobian_hessian_finish(const double *restrict cs, con
     const double t2018 = -t31;
     Hs[3] = t2018;
     Hs[18] = t2018;
-    const double t2019 = -t33;
-    Hs[4] = t2019;
-    Hs[24] = t2019;
 }
 
 void ur5_jacobian_hessian(const double q[6], double Hs[216])
@@ -3290,27 +3289,27 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t244 = t240*t133 - cs[0];
     const double t245 = t240*t134 - cs[0];
     const double t246 = t5 + t240*t135;
-    const double t247 = t152*t243 - t151*t241 + t153*t244 + t154*t245 + t155*t246;
-    const double t248 = t241 + t247*t151;
-    const double t249 = t243 - t247*t152;
-    const double t250 = t244 - t247*t153;
-    const double t251 = t245 - t247*t154;
-    const double t252 = t246 - t247*t155;
-    const double t253 = t185*t249 - t184*t248 + t186*t250 + t187*t251 + t188*t252;
-    const double t254 = t248 + t253*t184;
+    const double t247 = t151*t241 - t152*t243 - t153*t244 - t154*t245 - t155*t246;
+    const double t248 = t247*t151 - t241;
+    const double t249 = t243 + t247*t152;
+    const double t250 = t244 + t247*t153;
+    const double t251 = t245 + t247*t154;
+    const double t252 = t246 + t247*t155;
+    const double t253 = t184*t248 + t185*t249 + t186*t250 + t187*t251 + t188*t252;
+    const double t254 = t248 - t253*t184;
     const double t255 = t249 - t253*t185;
     const double t256 = t250 - t253*t186;
     const double t257 = t251 - t253*t187;
     const double t258 = t252 - t253*t188;
-    const double t259 = t11*t236 - t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258;
-    const double t260 = t254 + t259*t231;
+    const double t259 = t11*t236 + t231*t254 + t232*t255 + t233*t256 + t234*t257 + t235*t258;
+    const double t260 = t254 - t259*t231;
     const double t261 = t255 - t259*t232;
     const double t262 = t256 - t259*t233;
     const double t263 = t257 - t259*t234;
     const double t264 = t258 - t259*t235;
     const double t265 = t11 - t259*t236;
-    const double t266 = t131*t260 + t132*t261 + t133*t262 + t134*t263 + t135*t264;
-    const double t267 = t266*t131 - t260;
+    const double t266 = t132*t261 - t131*t260 + t133*t262 + t134*t263 + t135*t264;
+    const double t267 = t260 + t266*t131;
     const double t268 = t261 - t266*t132;
     const double t269 = t262 - t266*t133;
     const double t270 = t263 - t266*t134;
@@ -3344,7 +3343,7 @@ static UR5_LIGHT void ur5_manipulability_gradient_finish(const double *restrict 
     const double t298 = t293*t289;
     const double t299 = t293*t290;
     const double t300 = t266 - t240;
-    const double t301 = t247 + t272;
+    const double t301 = t272 - t247;
     const double t302 = t253 + t278;
     const double t303 = t259 + t284;
     const double t304 = t131 + cs[3]*t135;
@@ -3563,7 +3562,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 897 add/sub, 1126 mul, 7 neg, 13 div, 13 sqrt */
+/* operations: 5 sin, 5 cos, 897 add/sub, 1126 mul, 4 neg, 13 div, 13 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -3664,17 +3663,17 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t536 = (t529 ? t531*t526 : 0.0);
     const double t537 = t515 + t521;
     const double t538 = t511*t493 + t512*t494 + t513*t495 + t514*t496;
-    const double t539 = -t538*t510;
+    const double t539 = t538*t510;
     const double t540 = t493 - t538*t511;
     const double t541 = t494 - t538*t512;
     const double t542 = t495 - t538*t513;
     const double t543 = t496 - t538*t514;
-    const double t544 = t532*t539 + t533*t540 + t534*t541 + t535*t542 + t536*t543;
-    const double t545 = t539 - t544*t532;
-    const double t546 = t540 - t544*t533;
-    const double t547 = t541 - t544*t534;
-    const double t548 = t542 - t544*t535;
-    const double t549 = t543 - t544*t536;
+    const double t544 = t532*t539 - t533*t540 - t534*t541 - t535*t542 - t536*t543;
+    const double t545 = t544*t532 - t539;
+    const double t546 = t540 + t544*t533;
+    const double t547 = t541 + t544*t534;
+    const double t548 = t542 + t544*t535;
+    const double t549 = t543 + t544*t536;
     const double t550 = t510*t545 + t511*t546 + t512*t547 + t513*t548 + t514*t549;
     const double t551 = t545 - t550*t510;
     const double t552 = t546 - t550*t511;
@@ -3698,19 +3697,19 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t570 = (t564 ? t566*t560 : 0.0);
     const double t571 = (t564 ? t566*t561 : 0.0);
     const double t572 = t538 + t550;
-    const double t573 = t544 + t556;
+    const double t573 = t556 - t544;
     const double t574 = t3*t514 + sn[0]*(t511 + t512 + t513);
-    const double t575 = -t574*t510;
+    const double t575 = t574*t510;
     const double t576 = sn[0] - t574*t511;
     const double t577 = sn[0] - t574*t512;
     const double t578 = sn[0] - t574*t513;
     const double t579 = t3 - t574*t514;
-    const double t580 = t532*t575 + t533*t576 + t534*t577 + t535*t578 + t536*t579;
-    const double t581 = t575 - t580*t532;
-    const double t582 = t576 - t580*t533;
-    const double t583 = t577 - t580*t534;
-    const double t584 = t578 - t580*t535;
-    const double t585 = t579 - t580*t536;
+    const double t580 = t532*t575 - t533*t576 - t534*t577 - t535*t578 - t536*t579;
+    const double t581 = t580*t532 - t575;
+    const double t582 = t576 + t580*t533;
+    const double t583 = t577 + t580*t534;
+    const double t584 = t578 + t580*t535;
+    const double t585 = t579 + t580*t536;
     const double t586 = t567*t581 + t568*t582 + t569*t583 + t570*t584 + t571*t585;
     const double t587 = t581 - t586*t567;
     const double t588 = t582 - t586*t568;
@@ -3747,7 +3746,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t619 = (t612 ? t614*t609 : 0.0);
     const double t620 = (t612 ? t9*t614 : 0.0);
     const double t621 = t574 + t592;
-    const double t622 = t580 + t598;
+    const double t622 = t598 - t580;
     const double t623 = t586 + t604;
     const double t624 = cs[0]*(t511 + t512 + t513) - t5*t514;
     const double t625 = t624*t510;
@@ -3889,7 +3888,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t761 = (t755 ? t757*t750 : 0.0);
     const double t762 = (t755 ? t757*t751 : 0.0);
     const double t763 = (t755 ? t757*t752 : 0.0);
-    const double t764 = t721 - t689;
+    const double t764 = t689 - t721;
     const double t765 = t695 + t727;
     const double t766 = t701 + t733;
     const double t767 = t707 + t739;
@@ -3927,7 +3926,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t799 = t796*t773;
     const double t800 = t796*t774;
     const double t801 = t796*t775;
-    const double t802 = -t796*t776;
+    const double t802 = t796*t776;
     const double t803 = -t796*t769;
     const double t804 = t802*t781 - t798*t777 - t799*t778 - t800*t779 - t801*t780;
     const double t805 = t804*t797;
@@ -4347,7 +4346,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 }
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 2 neg, 7 div, 7 sqrt */
+/* operations: 5 sin, 5 cos, 161 add/sub, 237 mul, 0 neg, 7 div, 7 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -4429,23 +4428,23 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restric
     const double t1213 = (t1206 ? t1208*t1203 : 0.0);
     const double t1214 = t1192 + t1198;
     const double t1215 = t34*t1191 + t21*t1188 + t19*t1189 + t16*t1190;
-    const double t1216 = -t1215*t1187;
+    const double t1216 = t1215*t1187;
     const double t1217 = t21 - t1215*t1188;
     const double t1218 = t19 - t1215*t1189;
     const double t1219 = t16 - t1215*t1190;
     const double t1220 = t34 - t1215*t1191;
-    const double t1221 = t1209*t1216 + t1210*t1217 + t1211*t1218 + t1212*t1219 + t1213*t1220;
+    const double t1221 = t1209*t1216 - t1210*t1217 - t1211*t1218 - t1212*t1219 - t1213*t1220;
     const double t1222 = t1216 - t1221*t1209;
-    const double t1223 = t1217 - t1221*t1210;
-    const double t1224 = t1218 - t1221*t1211;
-    const double t1225 = t1219 - t1221*t1212;
-    const double t1226 = t1220 - t1221*t1213;
-    const double t1227 = t1187*t1222 + t1188*t1223 + t1189*t1224 + t1190*t1225 + t1191*t1226;
-    const double t1228 = t1222 - t1227*t1187;
-    const double t1229 = t1223 - t1227*t1188;
-    const double t1230 = t1224 - t1227*t1189;
-    const double t1231 = t1225 - t1227*t1190;
-    const double t1232 = t1226 - t1227*t1191;
+    const double t1223 = t1217 + t1221*t1210;
+    const double t1224 = t1218 + t1221*t1211;
+    const double t1225 = t1219 + t1221*t1212;
+    const double t1226 = t1220 + t1221*t1213;
+    const double t1227 = t1187*t1222 - t1188*t1223 - t1189*t1224 - t1190*t1225 - t1191*t1226;
+    const double t1228 = t1227*t1187 - t1222;
+    const double t1229 = t1223 + t1227*t1188;
+    const double t1230 = t1224 + t1227*t1189;
+    const double t1231 = t1225 + t1227*t1190;
+    const double t1232 = t1226 + t1227*t1191;
     const double t1233 = t1209*t1228 + t1210*t1229 + t1211*t1230 + t1212*t1231 + t1213*t1232;
     const double t1234 = t1228 - t1233*t1209;
     const double t1235 = t1229 - t1233*t1210;
@@ -4462,8 +4461,8 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restric
     const double t1246 = (t1241 ? t1243*t1236 : 0.0);
     const double t1247 = (t1241 ? t1243*t1237 : 0.0);
     const double t1248 = (t1241 ? t1243*t1238 : 0.0);
-    const double t1249 = t1215 + t1227;
-    const double t1250 = t1221 + t1233;
+    const double t1249 = t1227 - t1215;
+    const double t1250 = t1233 - t1221;
     const double t1251 = t1185*t121;
     const double t1252 = t1214*t121;
     const double t1253 = t1249*t121;
@@ -4476,7 +4475,7 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restric
     const double t1260 = (t1259 ? 1.0/(t1258 != 0.0 ? t1258 : 1.0) : 1.0);
     const double t1261 = t1260*t1251;
     const double t1262 = t1260*t1252;
-    const double t1263 = -t1260*t1253;
+    const double t1263 = t1260*t1253;
     const double t1264 = t1260*t769;
     const double t1265 = t1263*t1255 - t1262*t1254;
     const double t1266 = t1265*t1261;
@@ -4580,7 +4579,7 @@ void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double
 }
 
 /* ---- ur5_jacobian_rpy: analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major) ---- */
-/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 3 neg, 3 div, 2 sqrt */
+/* operations: 6 sin, 6 cos, 35 add/sub, 83 mul, 2 neg, 3 div, 2 sqrt */
 
 static UR5_LIGHT void ur5_jacobian_rpy_angles(const double *restrict q, double *restrict ang)
 {
@@ -4607,8 +4606,8 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t7 = t2*cs[4] + sn[0]*sn[4];
     const double t8 = cs[4]*sn[0];
     const double t9 = t8 - t2*sn[4];
-    const double t10 = -cs[0]*cs[4];
-    const double t11 = t10 - t4*sn[4];
+    const double t10 = cs[0]*cs[4];
+    const double t11 = t10 + t4*sn[4];
     const double t12 = cs[4]*sn[3];
     const double t13 = sn[4]*sn[3];
     const double t14 = -0.0823*sn[4];
@@ -4662,7 +4661,7 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     const double t1333 = sqrt(t1332);
     const double t1334 = (t1333 > 0.0 ? 1.0/(t1333 != 0.0 ? t1333 : 1.0) : 1.0);
     const double t1335 = (t1328 ? t35*t1331 : t42*t1334);
-    const double t1336 = (t1328 ? t41*t1331 : t36*t1334);
+    const double t1336 = -(t1328 ? t41*t1331 : t36*t1334);
     const double t1337 = (t1328 ? t35*t1329 : 0.0);
     const double t1338 = (t1328 ? t41*t1329 : 0.0);
     const double t1339 = (t1328 ? t35*t38*t1329 : 0.0);
@@ -4673,15 +4672,15 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     JA[21] = t1341;
     const double t1342 = t3*t1337 + t5*t1338;
     JA[22] = t1342;
-    const double t1343 = t9*t1337 + t11*t1338;
+    const double t1343 = t9*t1337 - t11*t1338;
     JA[23] = t1343;
-    const double t1344 = -cs[0]*t1335 - t1336*sn[0];
+    const double t1344 = t1336*sn[0] - cs[0]*t1335;
     JA[25] = t1344;
     JA[26] = t1344;
     JA[27] = t1344;
-    const double t1345 = t5*t1335 - t3*t1336;
+    const double t1345 = t5*t1335 + t3*t1336;
     JA[28] = t1345;
-    const double t1346 = t11*t1335 - t9*t1336;
+    const double t1346 = t9*t1336 - t11*t1335;
     JA[29] = t1346;
     const double t1347 = (t1328 ? 1.0 : 0.0);
     const double t1348 = t1347;
@@ -4692,7 +4691,7 @@ static UR5_LIGHT void ur5_jacobian_rpy_finish(const double *restrict cs, const d
     JA[33] = t1349;
     const double t1350 = t3*t1339 + t5*t1340 - cs[3]*t1347;
     JA[34] = t1350;
-    const double t1351 = t9*t1339 + t11*t1340 - t13*t1347;
+    const double t1351 = t9*t1339 - t11*t1340 - t13*t1347;
     JA[35] = t1351;
 }
 

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x90396ef4UL
+#define UR5_STAMP 0x3ee8b1e1UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -179,7 +179,7 @@ void ur5_manipulability_position(const double q[6], double w_position[1]);
  * Stack: about 13 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 672 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 664 bytes. */
 void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of

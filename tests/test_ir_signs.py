@@ -193,3 +193,41 @@ def test_a_negation_moved_along_a_chain_of_locals_to_a_subtraction():
     with pytest.MonkeyPatch.context() as patch:  # the greedy flips alone leave it
         patch.setattr(signs, "CHASE_DEPTH", 0)
         assert count_ops(settle_signs(body)).neg == 1
+
+
+@pytest.mark.parametrize("copied", [False, True], ids=["negated store", "negated copy"])
+def test_a_chase_flips_what_a_paying_local_reads(copied):
+    """TALOS's arm ends its pose with ``T[2] = -t34``, ``T[6] = -t36`` and ``t41 = t34*t37 - t35*t36``: flipping
+    ``t34`` alone moves a negation into ``t41``, flipping ``t41`` moves it to its store. Flipping ``t36`` (which
+    ``t41`` reads) and ``t17`` (which ``t36`` reads) too leaves no negation (its pose 108 -> 106). The chase takes
+    the reads of a paying local as next flips and the cheapest of them; the values are the same. Where the
+    derivation wrote the negations as copies (``t99 = -t34; T[2] = t99``: the arm's pose generated with the
+    other functions), no statement pays one itself, and the chase starts from the locals the copies negate."""
+    from skelarm_sym.ir import signs
+
+    t = {k: Var(f"t{k}") for k in (17, 34, 35, 36, 37, 41, 42, 98, 99)}
+    c5, s5, c6, s6 = C[0], S[0], C[1], S[1]
+    body = (
+        TRIG,
+        Let(t[17], Add((Mul((X[3], c5)), Neg(Mul((X[0], s5)))))),
+        Let(t[34], Add((Mul((X[0], s6)), Neg(Mul((X[1], c6)))))),
+        *((Let(t[99], Neg(t[34])), Store("T", 2, t[99])) if copied else (Store("T", 2, Neg(t[34])),)),
+        Let(t[35], Add((Mul((X[0], c6)), Mul((X[1], s6))))),
+        Store("T", 1, t[35]),
+        Let(t[36], Add((Mul((X[2], s6)), Mul((t[17], c6))))),
+        *((Let(t[98], Neg(t[36])), Store("T", 6, t[98])) if copied else (Store("T", 6, Neg(t[36])),)),
+        Let(t[37], Add((Mul((X[2], c6)), Neg(Mul((t[17], s6)))))),
+        Store("T", 5, t[37]),
+        Let(t[41], Add((Mul((t[34], t[37])), Neg(Mul((t[35], t[36])))))),
+        Store("T", 8, t[41]),
+        Let(t[42], Add((Mul((X[1], t[36])), Neg(Mul((X[2], t[34])))))),
+        Store("T", 9, t[42]),
+    )
+    assert count_ops(body).neg == 2
+    after = settle_signs(body)
+    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 2
+    for x in np.random.default_rng(13).uniform(-3, 3, (30, 4)):
+        assert_same_outputs(body, after, x)
+    with pytest.MonkeyPatch.context() as patch:  # following only the paying local's own flip leaves both
+        patch.setattr(signs, "CHASE_OPTIONS", 1)
+        assert count_ops(settle_signs(body)).neg == 2
