@@ -389,29 +389,35 @@ def _next_frame_columns(step: _Steps, joints, f: _Frames, views: list[Rows], axe
 
 
 def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform,
-          W: Sequence[Vector], scaled: _Frames | None = None) -> tuple[list[Pose], int | None]:
-    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``, and the row the cheapest rotation
-    drops (``None``: all three carried).
+          W: Sequence[Vector], scaled: _Frames | None = None) -> tuple[list[Pose], list[Pose], int | None]:
+    """Candidates for the tool rotation ``R`` (rows) and position ``p_e``: those of every function with a pose,
+    those of the ``pose`` function alone, and the row the cheapest rotation drops (``None``: all three carried).
 
     ``R = F_last Rz(psi_n) C_tool``: all rows multiplied out, or two of them and the third as their cross
     product (``r_0 = r_1 x r_2`` cyclically): carrying two rows down the chain instead of three saves six
     operations per dense step. ``p_e = o_1 + F_1 W_1`` (Horner's rule, shared with the Jacobian's offsets)
-    or, with the cheapest rotation, summed link by link in base axes (:func:`_summed_tip`). :func:`_choose`
+    or, with the cheapest rotation, summed link by link in base axes (:func:`_link_shares`). :func:`_choose`
     picks per function. ``scaled``: the frames with their third columns scaled (:func:`_scaled_frames`, where
-    constants are dense), for one more candidate: the rotation and the summed position from those.
+    constants are dense), for one more candidate: the rotation and the summed position from those. For the
+    ``pose`` function alone, the position cut at a joint (:func:`_split_tips`); ``kinematics`` takes its
+    position from its Jacobian's offsets where that is cheaper.
     """
     rows = _tool_rows(step, f, tool)
     horner = step.vec("pe", add(list(joints[0].before.translation), matvec(f.rotation[0], W[0])))
     rotations, dropped = _rotations(step, rows, f.tag)
     poses = [(r, horner) for r in rotations]
+    alone: list[Pose] = []
     cheapest = rotations[(None, 0, 1, 2).index(dropped)]
     if len(joints) <= CANDIDATES_UP_TO:
-        poses.append((cheapest, _summed_tip(step, joints, f, tool, cheapest, dropped)))
+        shares = _link_shares(step, joints, f, tool, cheapest, dropped)
+        poses.append((cheapest, step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", _summed(shares))))
+        alone = [(cheapest, tip) for tip in _split_tips(step, joints, f, shares, dropped)]
         if scaled is not None:
             others, other_dropped = _rotations(step, _tool_rows(step, scaled, tool), scaled.tag)
             rotation = others[(None, 0, 1, 2).index(other_dropped)]
-            poses.append((rotation, _summed_tip(step, joints, scaled, tool, rotation, other_dropped)))
-    return poses, dropped
+            summed = _summed(_link_shares(step, joints, scaled, tool, rotation, other_dropped))
+            poses.append((rotation, step.vec(f"ps{scaled.tag}{'' if other_dropped is None else other_dropped}", summed)))
+    return poses, alone, dropped
 
 
 def _tool_rows(step: _Steps, f: _Frames, tool: Transform) -> Rows:
@@ -436,18 +442,21 @@ def _rotations(step: _Steps, rows: Rows, tag: str) -> tuple[list[Rows], int | No
     return rotations, (None, 0, 1, 2)[prices.index(min(prices))]
 
 
-def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
-                dropped: int | None) -> Vector:
-    """``p_e = o_1 + sum_k (advance_k z_k + G_k t_(k+1))`` in base axes (``G_k = F_s Rz(psi_k)``, the frame after
-    joint ``k``'s motion, ``t_(k+1)`` the translation to the next joint; :func:`_after_joint`), the tool's share
-    ``R (C_tool^T t_tool)`` from the pose's rotation. Where the pose drops row ``dropped`` of the rotation,
-    that row's entries of the frames are cofactors of the two carried rows (:func:`_cofactor_view`)."""
+def _link_shares(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform, rotation: Rows,
+                 dropped: int | None) -> list[list[sp.Expr]]:
+    """What each part of the chain adds to ``p_e`` in base axes, as terms of a sum per axis: ``o_1``; then per joint
+    ``k`` its advance along ``z_k`` and ``G_k t_(k+1)`` (``G_k = F_s Rz(psi_k)``, the frame after joint ``k``'s motion,
+    ``t_(k+1)`` the translation to the next joint; :func:`_after_joint`); last the tool's share
+    ``R (C_tool^T t_tool)`` from the pose's rotation: ``n + 2`` entries of three term lists each. Where the pose drops
+    row ``dropped`` of the rotation, that row's entries of the frames are cofactors of the two carried rows
+    (:func:`_cofactor_view`)."""
     n = len(joints)
     views = [_cofactor_view(step, f.rotation[s], dropped, f"Fc{f.tag}{s + 1}_", factors=(1, 1, f.scale[s]) if f.scale else (1, 1, 1))
              for s in range(len(f.rotation))]
     axes = [[row[2] for row in views[f.segment[k]]] for k in range(n)]
-    terms: list[list[sp.Expr]] = [[x] for x in joints[0].before.translation]  # summed once at the end
+    shares = [[[x] for x in joints[0].before.translation]]
     for k in range(n):
+        terms: list[list[sp.Expr]] = [[], [], []]
         advance = joints[k].motion.advance(f.theta[k])
         if advance != 0:
             for i in range(3):
@@ -456,7 +465,50 @@ def _summed_tip(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Tr
         if any(x != 0 for x in t):
             for i, x in enumerate(matvec(_after_joint(step, f, k, dropped, axes[k]), t)):
                 terms[i].append(x)
+        shares.append(terms)
     shift = tool.rotation.T * tool.translation
-    for i, x in enumerate(matvec(rotation, [shift[i] for i in range(3)])):
-        terms[i].append(x)
-    return step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", [sp.Add(*t) for t in terms])
+    shares.append([[x] for x in matvec(rotation, [shift[i] for i in range(3)])])
+    return shares
+
+
+def _summed(shares: Sequence[list[list[sp.Expr]]]) -> Vector:
+    """The per-axis sums of :func:`_link_shares`' terms (one sum per axis, its terms in chain order)."""
+    return [sp.Add(*[x for share in shares for x in share[i]]) for i in range(3)]
+
+
+def _split_tips(step: _Steps, joints: Sequence[_Canonical], f: _Frames, shares: Sequence[list[list[sp.Expr]]],
+                dropped: int | None) -> list[Vector]:
+    """``p_e = o_1 + F_1 W'_1 + (p_e - o_m)``, one candidate per joint ``m`` after the first: the links before
+    joint ``m`` by Horner's rule (``W'`` the tool offsets of the chain cut at ``o_m``, :func:`_cut_offsets`), the
+    rest summed in base axes (``shares``: :func:`_link_shares`). Where the last links are short and their frames'
+    rows are carried for the rotation anyway, their share costs a few products of those rows, and Horner's rule
+    before them turns fewer dense vectors (TALOS's arm: the gripper's offset from the last frame's rows, the
+    elbow by Horner's rule; ABB IRB 140 `pose` 69 -> 62). Only cuts with a share on both sides; cuts that give
+    the same sums, one candidate."""
+    n = len(joints)
+    tail = [any(share[i] for i in range(3)) for share in shares[1:]]  # per joint, then the tool
+    tips: dict[tuple, Vector] = {}
+    for m in range(1, n):
+        if not any(tail[:m]) or not any(tail[m:]):
+            continue
+        head = matvec(f.rotation[0], _cut_offsets(step, joints, f, m))
+        v = add(add([sp.Add(*x) for x in shares[0]], head), _summed(shares[m + 1:]))
+        key = tuple(v)
+        if key not in tips:
+            tips[key] = step.vec(f"pm{f.tag}{m}_{'' if dropped is None else dropped}", v)
+    return list(tips.values())
+
+
+def _cut_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, m: int) -> Vector:
+    """``W'_1 = o_m - o_1`` in the axes of the first segment's frame: :func:`~.frames._tool_offsets`'s Horner
+    rule over joints ``1 .. m - 1``, with nothing after joint ``m``'s origin."""
+    w: Vector = [sp.S.Zero] * 3
+    for k in reversed(range(m)):
+        t = list(joints[k + 1].before.translation)
+        if f.segment[k + 1] == f.segment[k]:
+            v = add(_rz(f.trig[k], t), w)
+        else:
+            v = _rz(f.trig[k], add(t, matvec(_rows(joints[k + 1].before.rotation), w)))
+        v[2] = v[2] + joints[k].motion.advance(f.theta[k])
+        w = step.vec(f"Wm{f.tag}{m}_{k + 1}", v)
+    return w

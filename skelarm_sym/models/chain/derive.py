@@ -46,7 +46,8 @@ from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 5. **Pose** (:func:`_pose`): ``R = F_last Rz(psi_n) C_tool``; two of its rows are multiplied out and
    the third is their cross product (the cheapest choice is taken): the rotation chain carries
    two rows, not three. The position by Horner's rule (3.), or summed link by link in base axes with
-   the dropped row's entries as cofactors (:func:`_summed_tip`: a wrist's offset is then ``d R e_z``).
+   the dropped row's entries as cofactors (:func:`_link_shares`: a wrist's offset is then ``d R e_z``); for the
+   ``pose`` function also cut at a joint, Horner's rule before it and the sum after it (:func:`_split_tips`).
    Each forward function takes the candidates cheapest for its own outputs (:func:`_choose`); where
    that differs from ``kinematics``'s choice the function reads its own output
    (:attr:`~skelarm_sym.derive.core.Derivation.variants`).
@@ -173,10 +174,11 @@ def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
     linear, angular = _columns(step, joints, frames, W)
     dense = _dense_constants(joints, frames)
     scaled = _scaled_frames(step, joints, frames) if dense and len(joints) <= CANDIDATES_UP_TO else None
-    poses, dropped = _pose(step, joints, frames, tool, W, scaled)
+    poses, pose_alone, dropped = _pose(step, joints, frames, tool, W, scaled)
     rows = ((None, 0, 1, 2) if dense else (dropped,)) if len(joints) <= CANDIDATES_UP_TO else ((None,) if dense else ())
     twisted = _twist_scaled_frames(step, joints, frames) if scaled is not None else None
-    chosen = _choose(step, poses, _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows, twisted))
+    columns = _column_candidates(step, joints, frames, tool, W, linear, angular, dq, ddq, rows, twisted)
+    chosen = _choose(step, poses, columns, pose_alone)
     tool_linear, tool_angular = _tool_jacobian(step, joints, frames, tool, W)
 
     def values(pose: Pose, c: _Columns) -> dict[str, list[Vector]]:

@@ -40,11 +40,12 @@ def _price(steps: dict, exprs: Sequence[sp.Expr], paid: frozenset = frozenset())
     return sum(nodes.values()), found
 
 
-def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns]) -> dict[str, tuple[Pose, _Columns]]:
+def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns],
+            pose_alone: Sequence[Pose] = ()) -> dict[str, tuple[Pose, _Columns]]:
     """Per forward function, the pose and the columns that need the fewest operations (:func:`_price`) for its
-    outputs: ``pose`` over every rotation and position, ``jacobian``, ``jacobian_dot``, ``twist`` and
-    ``acceleration`` over the columns, ``kinematics`` over both together (a position from the columns'
-    offsets only with those columns)."""
+    outputs: ``pose`` over every rotation and position (``pose_alone``: candidates for it only), ``jacobian``,
+    ``jacobian_dot``, ``twist`` and ``acceleration`` over the columns, ``kinematics`` over both together (a
+    position from the columns' offsets only with those columns)."""
     steps = step.definitions()
     alone: dict[tuple[int, int], int] = {}
 
@@ -75,7 +76,7 @@ def _choose(step: _Steps, poses: list[Pose], columns: list[_Columns]) -> dict[st
     rotations = list({id(p[0]): p[0] for p in poses}.values())
     with_tips = [(rot, c.tip) for c in columns if c.tip is not None for rot in rotations]
     horner = min((p for p in poses if p[1] is poses[0][1]), key=pose_cost)
-    best = {"pose": (pick([horner] + poses + with_tips, lambda p: (pose_cost(p),)), columns[0])}
+    best = {"pose": (pick([horner] + poses + with_tips + list(pose_alone), lambda p: (pose_cost(p),)), columns[0])}
     for index, name in enumerate(("jacobian", "jacobian_dot", "twist", "acceleration")):
         best[name] = (best["pose"][0], pick(columns, lambda c: (cost(parts(c)[index])[0],)))
     options = []
