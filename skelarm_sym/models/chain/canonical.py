@@ -54,6 +54,35 @@ def canonical_joints(chain: Chain) -> tuple[list[_Canonical], Transform]:
     return out, carry @ chain.tool
 
 
+_FLIP = sp.ImmutableMatrix([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
+"""``Rx(pi)``: turns ``z`` into ``-z``; ``Rx(pi) Rz(theta) = Rz(-theta) Rx(pi)``."""
+
+
+def _flips_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
+    """The canonical chain with a turning joint whose axis is the previous turning joint's reversed (the constant
+    rotation between them takes ``z`` to ``-z``) turned into one about the same axis with the angle negated:
+    ``[P, t] Rz(theta) = [P Rx(pi), t] Rz(-theta) Rx(pi)``, ``P Rx(pi)`` a turn about ``z`` that
+    :func:`_axis_turns_into_angles` folds into the angle, and ``Rx(pi)`` carried into the next constant (or the
+    tool transform). The two joints then share a segment and their angles add up: PR2's finger tip, about
+    ``-z`` and mimicking the finger joint, turns by ``q - q = 0`` (one sine and cosine fewer, and no frame
+    multiplied by a turn that the next one undoes). Prismatic joints and the first joint keep their constants."""
+    out = list(joints)
+    for k in range(1, len(out)):
+        joint, prev = out[k], out[k - 1]
+        P = joint.before.rotation
+        if not (_turns(joint.motion) and _turns(prev.motion)) or list(P[:, 2]) != [0, 0, -1]:
+            continue
+        out[k] = _Canonical(Transform(sp.ImmutableMatrix(P * _FLIP), joint.before.translation), joint.motion,
+                            joint.coordinate, -joint.multiplier, _numeric(-joint.offset))
+        if k + 1 < len(out):
+            after = out[k + 1]
+            out[k + 1] = _Canonical(Transform(rotation=_FLIP) @ after.before, after.motion, after.coordinate,
+                                    after.multiplier, after.offset)
+        else:
+            tool = Transform(rotation=_FLIP) @ tool
+    return out, tool
+
+
 def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
     """The canonical chain with constant rotations about joint axes moved into the angles (free at run time):
     one about a turning joint's axis right before it (``[P Rz(beta), t] Rz(theta) = [P, t] Rz(theta + beta)``)

@@ -16,17 +16,19 @@ projected into the axes where it is cheapest and rotated once; what a joint cont
 from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 
 1. **Canonical joints** (:func:`canonical_joints`): every joint becomes a motion about or along
-   ``z`` after a constant transform; offsets that are multiples of pi/2 (revolute) and all
-   prismatic offsets fold into the constants, and a constant rotation about a joint's axis (or
-   about the last axis in the tool transform) into its angle (:func:`_axis_turns_into_angles`); a
-   constant rotation next to a revolute joint (between two, before a prismatic joint, or in the tool
-   transform) is written ``Rz(gamma) Rx(alpha) Rz(delta)`` and its turns go into the angles of the revolute
-   joints on either side (:func:`_twists_into_angles`).
+   ``z`` after a constant transform; a turning joint about the previous one's reversed axis turns about
+   the same axis by the negated angle (:func:`_flips_into_angles`: the two share a frame); offsets that
+   are multiples of pi/2 (revolute) and all prismatic offsets fold into the constants, and a constant
+   rotation about a joint's axis (or about the last axis in the tool transform) into its angle
+   (:func:`_axis_turns_into_angles`); a constant rotation next to a revolute joint (between two, before a
+   prismatic joint, or in the tool transform) is written ``Rz(gamma) Rx(alpha) Rz(delta)`` and its turns go
+   into the angles of the revolute joints on either side (:func:`_twists_into_angles`).
 2. **Segments** (:func:`_frames`): consecutive joints whose axes are parallel (the constant
    rotation between them is about ``z``: UR5's joints 2-4, every planar arm) share one frame
    ``F_s``; their angles add up (``psi_k = psi_(k-1) + beta_k + theta_k``), one sine and one
-   cosine per revolute joint. Frame ``F_(s+1) = F_s Rz(psi) C`` is multiplied out entry by entry
-   (only the entries some output uses are emitted).
+   cosine per revolute joint (none where the sum cancels: a mimic turning back, :func:`_angle_sum`).
+   Frame ``F_(s+1) = F_s Rz(psi) C`` is multiplied out entry by entry (only the entries some output uses
+   are emitted).
 3. **Tool offsets** (:func:`_tool_offsets`), tip to base, Horner's rule: ``W_k = p_e - o_k`` in the
    axes of ``F_s``. Within a segment ``W_k = W_(k+1) + Rz(psi_k) t_(k+1)`` (planar-arm cost);
    across segments ``W_k = Rz(psi_k) (t + C W_(k+1))``. ``p_e = o_1 + F_1 W_1``.
@@ -72,7 +74,8 @@ from typing import Sequence
 import sympy as sp
 
 from .algebra import Vector
-from .canonical import _Canonical, _axis_turns_into_angles, _named_trig_constants, _twists_into_angles, canonical_joints
+from .canonical import (_Canonical, _axis_turns_into_angles, _flips_into_angles, _named_trig_constants, _twists_into_angles,
+                        canonical_joints)
 from .candidates import CANDIDATES_UP_TO, _Columns, _column_candidates, _dense_constants, _pose
 from .frames import _columns, _frames, _scaled_frames, _tool_jacobian, _tool_offsets, _twist_scaled_frames
 from .model import Chain
@@ -168,7 +171,8 @@ def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
     if chain.parameters:
         inputs["params"] = tuple(chain.parameters)
     step = _Steps("ch")
-    joints, tool = _named_trig_constants(step, *_twists_into_angles(*_axis_turns_into_angles(*canonical_joints(chain))))
+    joints, tool = canonical_joints(chain)
+    joints, tool = _named_trig_constants(step, *_twists_into_angles(*_axis_turns_into_angles(*_flips_into_angles(joints, tool))))
     frames = _frames(step, joints, q)
     W = _tool_offsets(step, joints, frames, tool)
     linear, angular = _columns(step, joints, frames, W)

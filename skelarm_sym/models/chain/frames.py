@@ -68,7 +68,7 @@ def _frames(step: _Steps, joints: Sequence[_Canonical], q: Sequence[sp.Symbol]) 
                 f.rotation.append(step.mat(f"F{s}_", matmul(turned, _rows(joint.before.rotation))))
             angle, beta = None, sp.S.Zero
         if turn is not None:
-            angle = step(f"th{k + 1}", (angle if angle is not None else 0) + _numeric(beta) + turn)
+            angle = step(f"th{k + 1}", _angle_sum(step, angle, _numeric(beta) + turn))
             f.trig.append((step(f"c{k + 1}", sp.cos(angle)), step(f"s{k + 1}", sp.sin(angle))))
         else:
             f.trig.append(f.trig[k - 1] if f.starts[-1] != k else None)
@@ -76,6 +76,19 @@ def _frames(step: _Steps, joints: Sequence[_Canonical], q: Sequence[sp.Symbol]) 
         f.theta.append(theta)
         f.axes.append([row[2] for row in f.rotation[-1]])
     return f
+
+
+def _angle_sum(step: _Steps, before: sp.Expr | None, turn: sp.Expr) -> sp.Expr:
+    """``psi_k = psi_(k-1) + turn``, written with the terms of ``psi_(k-1)``'s step where a term cancels (PR2's finger
+    tip turns back by the finger's angle: ``(psi + q) - q = psi``, the same sine and cosine)."""
+    if before is None:
+        return turn
+    definition = step.definitions().get(before)
+    if definition is not None:
+        expanded = definition + turn
+        if sp.count_ops(expanded) < sp.count_ops(before + turn):
+            return expanded
+    return before + turn
 
 
 def _tool_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transform) -> list[Vector]:
