@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x55db62bbUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x7c4b9439UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -431,7 +431,7 @@ void arm3f_jacobian_batch(size_t m, const float *q, float *J)
 #endif
 
 /* ---- arm3f_coriolis: H = dJ/dt (2 x N, row-major) ---- */
-/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 1 neg */
+/* operations: 3 sin, 3 cos, 8 add/sub, 10 mul, 0 neg */
 
 ARM3F_BODY void arm3f_coriolis_angles(const float *restrict q, float *restrict ang, const size_t stride)
 {
@@ -445,11 +445,11 @@ ARM3F_BODY void arm3f_coriolis_finish(const float *restrict dq, const float *res
 {
     (void)stride;
     const float t2 = 0.8f*cs[1*ARM3F_STRIDE];
-    const float t3 = 0.5f*cs[2*ARM3F_STRIDE];
+    const float t3 = -0.5f*cs[2*ARM3F_STRIDE];
     const float t4 = 0.8f*sn[1*ARM3F_STRIDE];
-    const float t5 = 0.5f*sn[2*ARM3F_STRIDE];
+    const float t5 = -0.5f*sn[2*ARM3F_STRIDE];
     const float t11 = dq[0] + dq[1*ARM3F_STRIDE];
-    const float t12 = -t11 - dq[2*ARM3F_STRIDE];
+    const float t12 = t11 + dq[2*ARM3F_STRIDE];
     const float t13 = cs[0]*dq[0];
     const float t14 = t2*t11;
     const float t15 = t3*t12;

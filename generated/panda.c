@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x7b823f59UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9fcfe197UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -1487,17 +1487,17 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t25 = t18*sn[5*PANDA_STRIDE] - t13*cs[5*PANDA_STRIDE];
     const double t27 = t20*sn[5*PANDA_STRIDE] - t15*cs[5*PANDA_STRIDE];
     const double t29 = t22*sn[5*PANDA_STRIDE] - t17*cs[5*PANDA_STRIDE];
-    const double t30 = -0.088*cs[5*PANDA_STRIDE] - 0.107*sn[5*PANDA_STRIDE];
+    const double t30 = 0.088*cs[5*PANDA_STRIDE] + 0.107*sn[5*PANDA_STRIDE];
     const double t31 = 0.107*cs[5*PANDA_STRIDE] - 0.088*sn[5*PANDA_STRIDE];
     const double t32 = t30*cs[4*PANDA_STRIDE];
     const double t33 = t30*sn[4*PANDA_STRIDE];
     const double t34 = t31 - 0.384;
-    const double t35 = -0.0825 - t32;
+    const double t35 = t32 - 0.0825;
     const double t36 = t34*sn[3*PANDA_STRIDE] + cs[3*PANDA_STRIDE]*t35;
     const double t37 = t34*cs[3*PANDA_STRIDE] - sn[3*PANDA_STRIDE]*t35;
     const double t38 = 0.0825 + t36;
-    const double t39 = t33*sn[2*PANDA_STRIDE] + cs[2*PANDA_STRIDE]*t38;
-    const double t40 = sn[2*PANDA_STRIDE]*t38 - t33*cs[2*PANDA_STRIDE];
+    const double t39 = cs[2*PANDA_STRIDE]*t38 - t33*sn[2*PANDA_STRIDE];
+    const double t40 = sn[2*PANDA_STRIDE]*t38 + t33*cs[2*PANDA_STRIDE];
     const double t41 = 0.316 - t37;
     const double t42 = t39*cs[1*PANDA_STRIDE] + t41*sn[1*PANDA_STRIDE];
     const double t43 = t41*cs[1*PANDA_STRIDE] - t39*sn[1*PANDA_STRIDE];
@@ -1512,10 +1512,10 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t54 = t36*cs[1*PANDA_STRIDE] - t10*t37;
     const double t55 = t12*t33 + t7*t32;
     const double t56 = t14*t33 + t9*t32;
-    const double t57 = t16*t33 - t11*t32;
-    const double t58 = t18*t31 - t13*t30;
-    const double t59 = t20*t31 - t15*t30;
-    const double t60 = t22*t31 - t17*t30;
+    const double t57 = t11*t32 - t16*t33;
+    const double t58 = t13*t30 + t18*t31;
+    const double t59 = t15*t30 + t20*t31;
+    const double t60 = t17*t30 + t22*t31;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
     const double t70 = t3*dq[2*PANDA_STRIDE] - t68;
@@ -1539,8 +1539,8 @@ PANDA_BODY void panda_twist_finish(const double *restrict dq, const double *rest
     const double t85 = t58*dq[5*PANDA_STRIDE];
     const double t86 = t59*dq[5*PANDA_STRIDE];
     const double t87 = t60*dq[5*PANDA_STRIDE];
-    const double t88 = t85 + t55*dq[4*PANDA_STRIDE];
-    const double t89 = t86 + t56*dq[4*PANDA_STRIDE];
+    const double t88 = t85 - t55*dq[4*PANDA_STRIDE];
+    const double t89 = t86 - t56*dq[4*PANDA_STRIDE];
     const double t90 = t87 + t57*dq[4*PANDA_STRIDE];
     const double t91 = t88 + t52*dq[3*PANDA_STRIDE];
     const double t92 = t89 + t53*dq[3*PANDA_STRIDE];
@@ -1660,7 +1660,7 @@ void panda_twist_batch(size_t m, const double *q, const double *dq, double *twis
 #endif
 
 /* ---- panda_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 2 neg */
+/* operations: 6 sin, 6 cos, 183 add/sub, 271 mul, 1 neg */
 
 PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1676,7 +1676,7 @@ PANDA_BODY void panda_acceleration_angles(const double *restrict q, double *rest
 PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const double *restrict ddq, const double *restrict cs, const double *restrict sn, double *restrict acc, const size_t stride)
 {
     (void)stride;
-    const double t0 = -dq[1*PANDA_STRIDE];
+    const double t0 = dq[1*PANDA_STRIDE];
     const double t1 = dq[0];
     const double t2 = cs[0]*cs[1*PANDA_STRIDE];
     const double t3 = cs[0]*sn[1*PANDA_STRIDE];
@@ -1735,7 +1735,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t60 = t22*t31 - t17*t30;
     const double t68 = t0*sn[0];
     const double t69 = cs[0]*dq[1*PANDA_STRIDE];
-    const double t70 = t68 + t3*dq[2*PANDA_STRIDE];
+    const double t70 = t3*dq[2*PANDA_STRIDE] - t68;
     const double t71 = t69 + t5*dq[2*PANDA_STRIDE];
     const double t72 = dq[0] + cs[1*PANDA_STRIDE]*dq[2*PANDA_STRIDE];
     const double t73 = t70 + t7*dq[3*PANDA_STRIDE];
@@ -1764,8 +1764,8 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t100 = t97 - t45*dq[0];
     const double t102 = t98 + t44*dq[0];
     const double t103 = cs[0]*t96 - t48*dq[0] - t42*t69;
-    const double t104 = t47*dq[0] + t42*t68 + sn[0]*t96;
-    const double t105 = t48*t68 - t47*t69 - cs[0]*t94 - sn[0]*t95;
+    const double t104 = t47*dq[0] - t42*t68 + sn[0]*t96;
+    const double t105 = t48*t68 + t47*t69 + cs[0]*t94 + sn[0]*t95;
     const double t107 = t1*sn[0];
     const double t108 = t5*t93 + t51*t71 - t50*t72 - cs[1*PANDA_STRIDE]*t92;
     const double t109 = cs[1*PANDA_STRIDE]*t91 - t49*t72 - t3*t93 - t51*t70;
@@ -1790,7 +1790,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t127 = t58*t81 - t60*t79;
     acc[1*PANDA_STRIDE] = ((t48*ddq[1*PANDA_STRIDE] + (t50*ddq[2*PANDA_STRIDE] + t53*ddq[3*PANDA_STRIDE])) + (t56*ddq[4*PANDA_STRIDE] + (t59*ddq[5*PANDA_STRIDE] + t44*ddq[0]))) + ((t104*dq[1*PANDA_STRIDE] + (t109*dq[2*PANDA_STRIDE] + t115*dq[3*PANDA_STRIDE])) + (t121*dq[4*PANDA_STRIDE] + (t127*dq[5*PANDA_STRIDE] + t100*dq[0])));
     const double t128 = t59*t79 - t58*t80;
-    acc[2*PANDA_STRIDE] = (((t51*ddq[2*PANDA_STRIDE] + t54*ddq[3*PANDA_STRIDE]) + (t57*ddq[4*PANDA_STRIDE] + t60*ddq[5*PANDA_STRIDE])) + ((t105*dq[1*PANDA_STRIDE] + t110*dq[2*PANDA_STRIDE]) + (t116*dq[3*PANDA_STRIDE] + (t122*dq[4*PANDA_STRIDE] + t128*dq[5*PANDA_STRIDE])))) - t42*ddq[1*PANDA_STRIDE];
+    acc[2*PANDA_STRIDE] = (((t51*ddq[2*PANDA_STRIDE] + t54*ddq[3*PANDA_STRIDE]) + (t57*ddq[4*PANDA_STRIDE] + t60*ddq[5*PANDA_STRIDE])) + ((t110*dq[2*PANDA_STRIDE] - t105*dq[1*PANDA_STRIDE]) + (t116*dq[3*PANDA_STRIDE] + (t122*dq[4*PANDA_STRIDE] + t128*dq[5*PANDA_STRIDE])))) - t42*ddq[1*PANDA_STRIDE];
     const double t129 = t23*t77 - t21*t78;
     const double t130 = t19*t78 - t23*t76;
     const double t131 = t21*t76 - t19*t77;
@@ -1799,7 +1799,7 @@ PANDA_BODY void panda_acceleration_finish(const double *restrict dq, const doubl
     const double t133 = t25*t81 - t29*t79;
     acc[4*PANDA_STRIDE] = ((t5*ddq[2*PANDA_STRIDE] + (t9*ddq[3*PANDA_STRIDE] + t15*ddq[4*PANDA_STRIDE])) + (t21*ddq[5*PANDA_STRIDE] + (t27*ddq[6*PANDA_STRIDE] + cs[0]*ddq[1*PANDA_STRIDE]))) + (((t112*dq[2*PANDA_STRIDE] + t118*dq[3*PANDA_STRIDE]) - t107*dq[1*PANDA_STRIDE]) + (t124*dq[4*PANDA_STRIDE] + (t130*dq[5*PANDA_STRIDE] + t133*dq[6*PANDA_STRIDE])));
     const double t134 = t27*t79 - t25*t80;
-    acc[5*PANDA_STRIDE] = ((ddq[0] + t11*ddq[3*PANDA_STRIDE]) + (t17*ddq[4*PANDA_STRIDE] + (t23*ddq[5*PANDA_STRIDE] + t29*ddq[6*PANDA_STRIDE]))) + ((cs[1*PANDA_STRIDE]*ddq[2*PANDA_STRIDE] + (t113*dq[2*PANDA_STRIDE] + t119*dq[3*PANDA_STRIDE])) + (t125*dq[4*PANDA_STRIDE] + (t131*dq[5*PANDA_STRIDE] + t134*dq[6*PANDA_STRIDE])));
+    acc[5*PANDA_STRIDE] = ((ddq[0] + t11*ddq[3*PANDA_STRIDE]) + (t17*ddq[4*PANDA_STRIDE] + (t23*ddq[5*PANDA_STRIDE] + t29*ddq[6*PANDA_STRIDE]))) + ((cs[1*PANDA_STRIDE]*ddq[2*PANDA_STRIDE] + (t119*dq[3*PANDA_STRIDE] - t113*dq[2*PANDA_STRIDE])) + (t125*dq[4*PANDA_STRIDE] + (t131*dq[5*PANDA_STRIDE] + t134*dq[6*PANDA_STRIDE])));
 }
 
 PANDA_SINGLE void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6])

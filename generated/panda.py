@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x7b823f59
+STAMP = 0x9fcfe197
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -859,17 +859,17 @@ def _twist_core(q, dq, twist):
     t25 = t18*sn[..., 5] - t13*cs[..., 5]
     t27 = t20*sn[..., 5] - t15*cs[..., 5]
     t29 = t22*sn[..., 5] - t17*cs[..., 5]
-    t30 = -0.088*cs[..., 5] - 0.107*sn[..., 5]
+    t30 = 0.088*cs[..., 5] + 0.107*sn[..., 5]
     t31 = 0.107*cs[..., 5] - 0.088*sn[..., 5]
     t32 = t30*cs[..., 4]
     t33 = t30*sn[..., 4]
     t34 = t31 - 0.384
-    t35 = -0.0825 - t32
+    t35 = t32 - 0.0825
     t36 = t34*sn[..., 3] + cs[..., 3]*t35
     t37 = t34*cs[..., 3] - sn[..., 3]*t35
     t38 = 0.0825 + t36
-    t39 = t33*sn[..., 2] + cs[..., 2]*t38
-    t40 = sn[..., 2]*t38 - t33*cs[..., 2]
+    t39 = cs[..., 2]*t38 - t33*sn[..., 2]
+    t40 = sn[..., 2]*t38 + t33*cs[..., 2]
     t41 = 0.316 - t37
     t42 = t39*cs[..., 1] + t41*sn[..., 1]
     t43 = t41*cs[..., 1] - t39*sn[..., 1]
@@ -884,10 +884,10 @@ def _twist_core(q, dq, twist):
     t54 = t36*cs[..., 1] - t10*t37
     t55 = t12*t33 + t7*t32
     t56 = t14*t33 + t9*t32
-    t57 = t16*t33 - t11*t32
-    t58 = t18*t31 - t13*t30
-    t59 = t20*t31 - t15*t30
-    t60 = t22*t31 - t17*t30
+    t57 = t11*t32 - t16*t33
+    t58 = t13*t30 + t18*t31
+    t59 = t15*t30 + t20*t31
+    t60 = t17*t30 + t22*t31
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
     t70 = t3*dq[..., 2] - t68
@@ -908,8 +908,8 @@ def _twist_core(q, dq, twist):
     t85 = t58*dq[..., 5]
     t86 = t59*dq[..., 5]
     t87 = t60*dq[..., 5]
-    t88 = t85 + t55*dq[..., 4]
-    t89 = t86 + t56*dq[..., 4]
+    t88 = t85 - t55*dq[..., 4]
+    t89 = t86 - t56*dq[..., 4]
     t90 = t87 + t57*dq[..., 4]
     t91 = t88 + t52*dq[..., 3]
     t92 = t89 + t53*dq[..., 3]
@@ -956,7 +956,7 @@ def _acceleration_core(q, dq, ddq, acc):
     ang[..., 5] = q[..., 5]
     cs = np.cos(ang)
     sn = np.sin(ang)
-    t0 = -dq[..., 1]
+    t0 = dq[..., 1]
     t1 = dq[..., 0]
     t2 = cs[..., 0]*cs[..., 1]
     t3 = cs[..., 0]*sn[..., 1]
@@ -1015,7 +1015,7 @@ def _acceleration_core(q, dq, ddq, acc):
     t60 = t22*t31 - t17*t30
     t68 = t0*sn[..., 0]
     t69 = cs[..., 0]*dq[..., 1]
-    t70 = t68 + t3*dq[..., 2]
+    t70 = t3*dq[..., 2] - t68
     t71 = t69 + t5*dq[..., 2]
     t72 = dq[..., 0] + cs[..., 1]*dq[..., 2]
     t73 = t70 + t7*dq[..., 3]
@@ -1044,8 +1044,8 @@ def _acceleration_core(q, dq, ddq, acc):
     t100 = t97 - t45*dq[..., 0]
     t102 = t98 + t44*dq[..., 0]
     t103 = cs[..., 0]*t96 - t48*dq[..., 0] - t42*t69
-    t104 = t47*dq[..., 0] + t42*t68 + sn[..., 0]*t96
-    t105 = t48*t68 - t47*t69 - cs[..., 0]*t94 - sn[..., 0]*t95
+    t104 = t47*dq[..., 0] - t42*t68 + sn[..., 0]*t96
+    t105 = t48*t68 + t47*t69 + cs[..., 0]*t94 + sn[..., 0]*t95
     t107 = t1*sn[..., 0]
     t108 = t5*t93 + t51*t71 - t50*t72 - cs[..., 1]*t92
     t109 = cs[..., 1]*t91 - t49*t72 - t3*t93 - t51*t70
@@ -1076,10 +1076,10 @@ def _acceleration_core(q, dq, ddq, acc):
     t134 = t27*t79 - t25*t80
     acc[..., 0] = (((t47*ddq[..., 1] - t49*ddq[..., 2]) + (t52*ddq[..., 3] + (t55*ddq[..., 4] + t58*ddq[..., 5]))) + (((t103*dq[..., 1] + t108*dq[..., 2]) - t102*dq[..., 0]) + (t114*dq[..., 3] + (t120*dq[..., 4] + t126*dq[..., 5])))) - t45*ddq[..., 0]
     acc[..., 1] = ((t48*ddq[..., 1] + (t50*ddq[..., 2] + t53*ddq[..., 3])) + (t56*ddq[..., 4] + (t59*ddq[..., 5] + t44*ddq[..., 0]))) + ((t104*dq[..., 1] + (t109*dq[..., 2] + t115*dq[..., 3])) + (t121*dq[..., 4] + (t127*dq[..., 5] + t100*dq[..., 0])))
-    acc[..., 2] = (((t51*ddq[..., 2] + t54*ddq[..., 3]) + (t57*ddq[..., 4] + t60*ddq[..., 5])) + ((t105*dq[..., 1] + t110*dq[..., 2]) + (t116*dq[..., 3] + (t122*dq[..., 4] + t128*dq[..., 5])))) - t42*ddq[..., 1]
+    acc[..., 2] = (((t51*ddq[..., 2] + t54*ddq[..., 3]) + (t57*ddq[..., 4] + t60*ddq[..., 5])) + ((t110*dq[..., 2] - t105*dq[..., 1]) + (t116*dq[..., 3] + (t122*dq[..., 4] + t128*dq[..., 5])))) - t42*ddq[..., 1]
     acc[..., 3] = (((t3*ddq[..., 2] + t7*ddq[..., 3]) + (t13*ddq[..., 4] + (t19*ddq[..., 5] + t25*ddq[..., 6]))) + (((t111*dq[..., 2] + t117*dq[..., 3]) - t69*t1) + (t123*dq[..., 4] + (t129*dq[..., 5] + t132*dq[..., 6])))) - sn[..., 0]*ddq[..., 1]
     acc[..., 4] = ((t5*ddq[..., 2] + (t9*ddq[..., 3] + t15*ddq[..., 4])) + (t21*ddq[..., 5] + (t27*ddq[..., 6] + cs[..., 0]*ddq[..., 1]))) + (((t112*dq[..., 2] + t118*dq[..., 3]) - t107*dq[..., 1]) + (t124*dq[..., 4] + (t130*dq[..., 5] + t133*dq[..., 6])))
-    acc[..., 5] = ((ddq[..., 0] + t11*ddq[..., 3]) + (t17*ddq[..., 4] + (t23*ddq[..., 5] + t29*ddq[..., 6]))) + ((cs[..., 1]*ddq[..., 2] + (t113*dq[..., 2] + t119*dq[..., 3])) + (t125*dq[..., 4] + (t131*dq[..., 5] + t134*dq[..., 6])))
+    acc[..., 5] = ((ddq[..., 0] + t11*ddq[..., 3]) + (t17*ddq[..., 4] + (t23*ddq[..., 5] + t29*ddq[..., 6]))) + ((cs[..., 1]*ddq[..., 2] + (t119*dq[..., 3] - t113*dq[..., 2])) + (t125*dq[..., 4] + (t131*dq[..., 5] + t134*dq[..., 6])))
 
 
 @_signature_errors
@@ -1090,7 +1090,7 @@ def acceleration(q, dq, ddq):
     dq: array of shape (..., 7), finite.
     ddq: array of shape (..., 7), finite.
     Returns acc of shape (..., 6).
-    Operations: 6 sin, 6 cos, 456 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 455 add/sub/mul/neg.
     """
     batch, (q, dq, ddq,) = _inputs((q, dq, ddq,), ("q", "dq", "ddq", ), (7, 7, 7, ), ("finite", "finite", "finite", ))
     outputs = (np.empty(batch + (6,), dtype=DTYPE), )

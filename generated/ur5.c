@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x3ee8b1e1UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xea3ccb17UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -1474,7 +1474,7 @@ void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist)
 #endif
 
 /* ---- ur5_acceleration: classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6) ---- */
-/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 1 neg */
+/* operations: 5 sin, 5 cos, 109 add/sub, 158 mul, 0 neg */
 
 UR5_BODY void ur5_acceleration_angles(const double *restrict q, double *restrict ang, const size_t stride)
 {
@@ -1519,13 +1519,13 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t33 = t4*t15 - t14*cs[0];
     const double t34 = t15*sn[3*UR5_STRIDE];
     const double t44 = sn[0]*dq[1*UR5_STRIDE];
-    const double t45 = -cs[0]*dq[1*UR5_STRIDE];
+    const double t45 = cs[0]*dq[1*UR5_STRIDE];
     const double t46 = t44 + sn[0]*dq[2*UR5_STRIDE];
-    const double t47 = t45 - cs[0]*dq[2*UR5_STRIDE];
+    const double t47 = t45 + cs[0]*dq[2*UR5_STRIDE];
     const double t48 = t46 + sn[0]*dq[3*UR5_STRIDE];
-    const double t49 = t47 - cs[0]*dq[3*UR5_STRIDE];
+    const double t49 = t47 + cs[0]*dq[3*UR5_STRIDE];
     const double t50 = t48 + t3*dq[4*UR5_STRIDE];
-    const double t51 = t49 + t5*dq[4*UR5_STRIDE];
+    const double t51 = t5*dq[4*UR5_STRIDE] - t49;
     const double t52 = dq[0] - cs[3*UR5_STRIDE]*dq[4*UR5_STRIDE];
     const double t56 = t32*dq[4*UR5_STRIDE];
     const double t57 = t33*dq[4*UR5_STRIDE];
@@ -1540,26 +1540,26 @@ UR5_BODY void ur5_acceleration_finish(const double *restrict dq, const double *r
     const double t66 = t63 + t27*dq[1*UR5_STRIDE];
     const double t68 = t65 - t24*dq[0];
     const double t70 = t66 + t23*dq[0];
-    const double t71 = t21*t45 - t27*dq[0] - cs[0]*t64;
+    const double t71 = t21*t45 + t27*dq[0] + cs[0]*t64;
     const double t72 = t26*dq[0] - t21*t44 - sn[0]*t64;
-    const double t73 = t27*t44 + cs[0]*t62 + sn[0]*t63 - t26*t45;
+    const double t73 = t27*t44 + cs[0]*t62 + sn[0]*t63 + t26*t45;
     const double t74 = cs[0]*dq[0];
     const double t75 = sn[0]*dq[0];
-    const double t76 = t19*t47 - t29*dq[0] - cs[0]*t61;
+    const double t76 = t19*t47 + t29*dq[0] + cs[0]*t61;
     const double t77 = t28*dq[0] - t19*t46 - sn[0]*t61;
-    const double t78 = t29*t46 + cs[0]*t59 + sn[0]*t60 - t28*t47;
-    const double t79 = t16*t49 - t31*dq[0] - cs[0]*t58;
+    const double t78 = t29*t46 + cs[0]*t59 + sn[0]*t60 + t28*t47;
+    const double t79 = t16*t49 + t31*dq[0] + cs[0]*t58;
     const double t80 = t30*dq[0] - t16*t48 - sn[0]*t58;
-    const double t81 = t31*t48 + cs[0]*t56 + sn[0]*t57 - t30*t49;
+    const double t81 = t31*t48 + cs[0]*t56 + sn[0]*t57 + t30*t49;
     const double t82 = t34*t51 - t33*t52;
-    acc[0] = (((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + t32*ddq[4*UR5_STRIDE])) + ((t71*dq[1*UR5_STRIDE] - t70*dq[0]) + (t76*dq[2*UR5_STRIDE] + (t79*dq[3*UR5_STRIDE] + t82*dq[4*UR5_STRIDE])))) - t24*ddq[0];
+    acc[0] = (((t26*ddq[1*UR5_STRIDE] + t28*ddq[2*UR5_STRIDE]) + (t30*ddq[3*UR5_STRIDE] + t32*ddq[4*UR5_STRIDE])) + (((t82*dq[4*UR5_STRIDE] - t79*dq[3*UR5_STRIDE]) - t76*dq[2*UR5_STRIDE]) - (t70*dq[0] + t71*dq[1*UR5_STRIDE]))) - t24*ddq[0];
     const double t83 = t32*t52 - t34*t50;
     acc[1*UR5_STRIDE] = ((t27*ddq[1*UR5_STRIDE] + t29*ddq[2*UR5_STRIDE]) + (t31*ddq[3*UR5_STRIDE] + (t33*ddq[4*UR5_STRIDE] + t23*ddq[0]))) + ((t72*dq[1*UR5_STRIDE] + t77*dq[2*UR5_STRIDE]) + (t80*dq[3*UR5_STRIDE] + (t83*dq[4*UR5_STRIDE] + t68*dq[0])));
     const double t84 = t33*t50 - t32*t51;
     acc[2*UR5_STRIDE] = t34*ddq[4*UR5_STRIDE] + t21*ddq[1*UR5_STRIDE] + t19*ddq[2*UR5_STRIDE] + t16*ddq[3*UR5_STRIDE] + t73*dq[1*UR5_STRIDE] + t78*dq[2*UR5_STRIDE] + t81*dq[3*UR5_STRIDE] + t84*dq[4*UR5_STRIDE];
-    const double t85 = t5*dq[0] + cs[3*UR5_STRIDE]*t49;
+    const double t85 = t5*dq[0] - cs[3*UR5_STRIDE]*t49;
     const double t86 = t3*dq[0] + cs[3*UR5_STRIDE]*t48;
-    const double t87 = t5*t48 - t3*t49;
+    const double t87 = t5*t48 + t3*t49;
     const double t88 = t11*t52 - t13*t51;
     acc[3*UR5_STRIDE] = ((t3*ddq[4*UR5_STRIDE] + t9*ddq[5*UR5_STRIDE]) + (t74*dq[1*UR5_STRIDE] + (t74*dq[2*UR5_STRIDE] + t74*dq[3*UR5_STRIDE]))) + ((t88*dq[5*UR5_STRIDE] - t85*dq[4*UR5_STRIDE]) + (sn[0]*ddq[1*UR5_STRIDE] + (sn[0]*ddq[2*UR5_STRIDE] + sn[0]*ddq[3*UR5_STRIDE])));
     const double t89 = t9*t52 + t13*t50;

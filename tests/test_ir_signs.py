@@ -231,3 +231,36 @@ def test_a_chase_flips_what_a_paying_local_reads(copied):
     with pytest.MonkeyPatch.context() as patch:  # following only the paying local's own flip leaves both
         patch.setattr(signs, "CHASE_OPTIONS", 1)
         assert count_ops(settle_signs(body)).neg == 2
+
+
+def test_a_chase_goes_on_from_what_an_earlier_flip_left_paying():
+    """The simple humanoid's pose ends with ``T[6] = -t31``, ``T[10] = -t33`` and ``t35 = t31*t34 - t32*t33``.
+    Flipping ``t31`` moves a negation into its own sum and one into ``t35``; flipping ``t28`` (which ``t31`` reads)
+    takes the first back, and nothing that flip moved pays: the chase goes on from ``t35``, which the first flip
+    left paying, through ``t33`` and ``t30``. No negation is left (its pose 138 -> 135); the values are the same."""
+    t = {k: Var(f"t{k}") for k in (24, 26, 28, 30, 31, 32, 33, 34, 35, 36)}
+    c8, s8, c9, s9 = C[0], S[0], C[1], S[1]
+    body = (
+        TRIG,
+        Let(t[24], Add((Mul((X[0], c8)), Neg(Mul((X[1], s8)))))),
+        Let(t[26], Add((Mul((X[2], c8)), Neg(Mul((X[3], s8)))))),
+        Let(t[28], Add((Mul((X[1], c8)), Neg(Mul((X[0], s8)))))),
+        Let(t[30], Add((Mul((X[3], c8)), Neg(Mul((X[2], s8)))))),
+        Let(t[31], Add((Mul((t[28], c9)), Mul((t[24], s9))))),
+        Store("T", 6, Neg(t[31])),
+        Let(t[32], Add((Mul((t[24], c9)), Neg(Mul((t[28], s9)))))),
+        Store("T", 5, t[32]),
+        Let(t[33], Add((Mul((t[30], c9)), Mul((t[26], s9))))),
+        Store("T", 10, Neg(t[33])),
+        Let(t[34], Add((Mul((t[26], c9)), Neg(Mul((t[30], s9)))))),
+        Store("T", 9, t[34]),
+        Let(t[35], Add((Mul((t[31], t[34])), Neg(Mul((t[32], t[33])))))),
+        Store("T", 0, t[35]),
+        Let(t[36], Add((Mul((X[0], t[33])), Neg(Mul((X[1], t[31])))))),
+        Store("T", 1, t[36]),
+    )
+    assert count_ops(body).neg == 2
+    after = settle_signs(body)
+    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 2
+    for x in np.random.default_rng(14).uniform(-3, 3, (30, 4)):
+        assert_same_outputs(body, after, x)

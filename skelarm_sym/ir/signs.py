@@ -365,10 +365,13 @@ class _Signs:
         """What a flip of ``name`` re-prices: its statement and its readers, each by the names it reads."""
         return sum(1 + len(self.names[i]) for i in [self.position[name]] + self.users[name])
 
-    def _next_flip(self, changed: dict, taken: list[str]) -> tuple[str | None, int]:
-        """The chase's next flip: of the suspects of the statements in ``changed`` that now pay (at most
-        CHASE_OPTIONS, in body order), the one whose flip costs least; and the work of the tries (:meth:`_work`)."""
-        paying = [i for i in sorted(changed) if self.cost[i] or self.reads[i]]
+    def _next_flip(self, last: dict, changed: set[int], taken: list[str]) -> tuple[str | None, int]:
+        """The chase's next flip: of the suspects of the statements that the ``last`` flip re-priced and that now pay
+        (where none does, of those the chain's earlier flips re-priced, ``changed``; in body order, at most
+        CHASE_OPTIONS), the one whose flip costs least; and the work of the tries (:meth:`_work`)."""
+        paying = [i for i in sorted(last) if self.cost[i] or self.reads[i]]
+        if not paying:  # nothing the last flip moved pays: what an earlier flip of the chain left paying
+            paying = [i for i in sorted(changed - last.keys()) if self.cost[i] or self.reads[i]]
         options = dict.fromkeys(n for i in paying for n in self._suspects(i) if n not in taken)
         best, least, work = None, 0, 0
         for name in list(options)[:CHASE_OPTIONS]:
@@ -384,14 +387,17 @@ class _Signs:
         reader, flipping that one or a local it reads moves it on, until a subtraction or another sign absorbs it
         (TALOS's arm: ``T[2] = -t34``, ``T[6] = -t36`` and ``t41 = t34*t37 - t35*t36`` lose both negations when
         ``t34``, ``t36`` and ``t17``, which ``t36`` reads, are flipped, each flip alone saving nothing). From each
-        local where a negation is paid or copied, take at each step the cheapest of the next suspects, flipping even
-        where it costs, up to CHASE_DEPTH flips and while the chain is within one negation of its best; keep the
-        best prefix if it saves, else flip back. Say whether any saved."""
+        local where a negation is paid or copied, take at each step the cheapest of the next suspects (those of what
+        the last flip left paying, else of what an earlier flip of the chain did: the simple humanoid's
+        ``T[6] = -t31``, ``T[10] = -t33``), flipping even where it costs, up to CHASE_DEPTH flips and while the
+        chain is within one negation of its best; keep the best prefix if it saves, else flip back. Say whether
+        any saved."""
         saved = False
         budget = CHASE_BUDGET * sum(1 + len(names) for names in self.names)
         starts = [n for i in range(len(self.body)) if self.cost[i] or self.reads[i] for n in self._suspects(i)]
         for start in dict.fromkeys(starts):
             taken: list[str] = []
+            touched: set[int] = set()  # the statements the chain's flips re-priced
             total = best = best_length = 0
             name: str | None = start
             while name is not None and len(taken) < CHASE_DEPTH and budget > 0 and total <= best + 1:
@@ -399,10 +405,11 @@ class _Signs:
                 new, readers, delta = self._evaluate(name)
                 self._commit(new, readers)
                 taken.append(name)
+                touched.update(new)
                 total += delta
                 if total < best:
                     best, best_length = total, len(taken)
-                name, work = self._next_flip(new, taken)
+                name, work = self._next_flip(new, touched, taken)
                 budget -= work
             for undo in reversed(taken[best_length:]):
                 self._commit(*self._evaluate(undo)[:2])
