@@ -556,8 +556,9 @@ def test_a_joint_about_the_reversed_axis_joins_the_one_before():
     """A constant rotation that takes ``z`` to ``-z`` between two turning joints becomes a turn about ``z`` with the
     second angle negated, and ``Rx(pi)`` moves on to the next constant: the two joints share a frame (Kinova's
     ``jacobian`` 103 -> 74 operations, PR2's ``pose`` 145 -> 122). The chain is the same rigid motion (composed with
-    NumPy, 1e-15); a finger tip that mimics the finger about the reversed axis turns by ``q - q = 0``, so the chain
-    needs one sine and cosine fewer; the values are the reference's."""
+    NumPy, 1e-15); a finger tip that mimics the finger about the reversed axis turns by ``q - q = 0``, and as the
+    finger shares the segment of the joint before it, the chain needs one sine and cosine fewer (``(psi + q) - q``
+    written ``psi``); the values are the reference's."""
     from skelarm_sym.models.chain.canonical import _flips_into_angles, canonical_joints
 
     chain = _reversed_axes_chain()

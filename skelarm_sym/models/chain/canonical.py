@@ -64,8 +64,9 @@ def _flips_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[
     ``[P, t] Rz(theta) = [P Rx(pi), t] Rz(-theta) Rx(pi)``, ``P Rx(pi)`` a turn about ``z`` that
     :func:`_axis_turns_into_angles` folds into the angle, and ``Rx(pi)`` carried into the next constant (or the
     tool transform). The two joints then share a segment and their angles add up: PR2's finger tip, about
-    ``-z`` and mimicking the finger joint, turns by ``q - q = 0`` (one sine and cosine fewer, and no frame
-    multiplied by a turn that the next one undoes). Prismatic joints and the first joint keep their constants."""
+    ``-z`` and mimicking the finger joint, turns by ``q - q = 0``: no frame multiplied by a turn that the next
+    one undoes (and, where the finger shares its segment with the joint before, no sine and cosine of its own:
+    :func:`~.frames._angle_sum`). Prismatic joints and the first joint keep their constants."""
     out = list(joints)
     for k in range(1, len(out)):
         joint, prev = out[k], out[k - 1]
