@@ -12,10 +12,10 @@
  * J_tool is the same Jacobian in the tool frame's axes; dJ = dJ/dt in the frame of J;
  * twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical
  * acceleration of the tool origin, angular acceleration), all in base axes.
- * Joint limits (Q_MIN, Q_MAX, DQ_MAX): panda_joint1 [-2.8973, 2.8973] |dq| <= 2.175, panda_joint2
- * [-1.7628, 1.7628] |dq| <= 2.175, panda_joint3 [-2.8973, 2.8973] |dq| <= 2.175, panda_joint4
- * [-3.0718, -0.0698] |dq| <= 2.175, panda_joint5 [-2.8973, 2.8973] |dq| <= 2.61, panda_joint6
- * [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq| <= 2.61.
+ * Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): panda_joint1 [-2.8973, 2.8973] |dq| <= 2.175,
+ * panda_joint2 [-1.7628, 1.7628] |dq| <= 2.175, panda_joint3 [-2.8973, 2.8973] |dq| <= 2.175,
+ * panda_joint4 [-3.0718, -0.0698] |dq| <= 2.175, panda_joint5 [-2.8973, 2.8973] |dq| <= 2.61,
+ * panda_joint6 [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq| <= 2.61.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9fcfe197UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x402b1072UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

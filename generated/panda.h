@@ -12,10 +12,10 @@
  * J_tool is the same Jacobian in the tool frame's axes; dJ = dJ/dt in the frame of J;
  * twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical
  * acceleration of the tool origin, angular acceleration), all in base axes.
- * Joint limits (Q_MIN, Q_MAX, DQ_MAX): panda_joint1 [-2.8973, 2.8973] |dq| <= 2.175, panda_joint2
- * [-1.7628, 1.7628] |dq| <= 2.175, panda_joint3 [-2.8973, 2.8973] |dq| <= 2.175, panda_joint4
- * [-3.0718, -0.0698] |dq| <= 2.175, panda_joint5 [-2.8973, 2.8973] |dq| <= 2.61, panda_joint6
- * [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq| <= 2.61.
+ * Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): panda_joint1 [-2.8973, 2.8973] |dq| <= 2.175,
+ * panda_joint2 [-1.7628, 1.7628] |dq| <= 2.175, panda_joint3 [-2.8973, 2.8973] |dq| <= 2.175,
+ * panda_joint4 [-3.0718, -0.0698] |dq| <= 2.175, panda_joint5 [-2.8973, 2.8973] |dq| <= 2.61,
+ * panda_joint6 [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq| <= 2.61.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x9fcfe197UL
+#define PANDA_STAMP 0x402b1072UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -66,15 +66,15 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define PANDA_RANK_TOL 2.220446049250313e-14
 
-/* lower joint limits in input order (rad or m); unbounded: a huge negative number
+/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)
  * An initializer: static const double x[7] = PANDA_Q_MIN; */
 #define PANDA_Q_MIN {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973}
 
-/* upper joint limits in input order (rad or m); unbounded: a huge number
+/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
  * An initializer: static const double x[7] = PANDA_Q_MAX; */
 #define PANDA_Q_MAX {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973}
 
-/* joint speed limits in input order (rad/s or m/s); unbounded: a huge number
+/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
  * An initializer: static const double x[7] = PANDA_DQ_MAX; */
 #define PANDA_DQ_MAX {2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61}
 

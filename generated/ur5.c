@@ -12,10 +12,10 @@
  * J_tool is the same Jacobian in the tool frame's axes; dJ = dJ/dt in the frame of J;
  * twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical
  * acceleration of the tool origin, angular acceleration), all in base axes.
- * Joint limits (Q_MIN, Q_MAX, DQ_MAX): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159, shoulder_lift
- * [-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159, wrist_1 [-6.28319,
- * 6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3 [-6.28319, 6.28319]
- * |dq| <= 3.14159.
+ * Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159,
+ * shoulder_lift [-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159,
+ * wrist_1 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3
+ * [-6.28319, 6.28319] |dq| <= 3.14159.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xea3ccb17UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x079d0a61UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

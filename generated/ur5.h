@@ -12,10 +12,10 @@
  * J_tool is the same Jacobian in the tool frame's axes; dJ = dJ/dt in the frame of J;
  * twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical
  * acceleration of the tool origin, angular acceleration), all in base axes.
- * Joint limits (Q_MIN, Q_MAX, DQ_MAX): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159, shoulder_lift
- * [-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159, wrist_1 [-6.28319,
- * 6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3 [-6.28319, 6.28319]
- * |dq| <= 3.14159.
+ * Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159,
+ * shoulder_lift [-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159,
+ * wrist_1 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3
+ * [-6.28319, 6.28319] |dq| <= 3.14159.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xea3ccb17UL
+#define UR5_STAMP 0x079d0a61UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -87,15 +87,15 @@ extern "C" {
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09
 
-/* lower joint limits in input order (rad or m); unbounded: a huge negative number
+/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */
 #define UR5_Q_MIN {-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586}
 
-/* upper joint limits in input order (rad or m); unbounded: a huge number
+/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
  * An initializer: static const double x[6] = UR5_Q_MAX; */
 #define UR5_Q_MAX {6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586}
 
-/* joint speed limits in input order (rad/s or m/s); unbounded: a huge number
+/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
  * An initializer: static const double x[6] = UR5_DQ_MAX; */
 #define UR5_DQ_MAX {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793}
 

@@ -12,10 +12,10 @@ origin (Pinocchio's LOCAL_WORLD_ALIGNED); a revolute column is [z x (p_tool - o)
 J_tool is the same Jacobian in the tool frame's axes; dJ = dJ/dt in the frame of J;
 twist = J dq = (velocity of the tool origin, angular velocity); acc = J ddq + dJ dq = (classical
 acceleration of the tool origin, angular acceleration), all in base axes.
-Joint limits (Q_MIN, Q_MAX, DQ_MAX): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159, shoulder_lift
-[-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159, wrist_1 [-6.28319,
-6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3 [-6.28319, 6.28319]
-|dq| <= 3.14159.
+Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): shoulder_pan [-6.28319, 6.28319] |dq| <= 3.14159,
+shoulder_lift [-6.28319, 6.28319] |dq| <= 3.14159, elbow [-6.28319, 6.28319] |dq| <= 3.14159,
+wrist_1 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_2 [-6.28319, 6.28319] |dq| <= 3.14159, wrist_3
+[-6.28319, 6.28319] |dq| <= 3.14159.
 Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
 Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
 stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xea3ccb17
+STAMP = 0x079d0a61
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -55,11 +55,11 @@ IK_TRANSLATION_MAX = 1e+150
 IK_DUP_TOL = 1e-09
 """ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"""
 Q_MIN = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
-"""lower joint limits in input order (rad or m); unbounded: a huge negative number"""
+"""lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)"""
 Q_MAX = np.array([6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586], dtype=DTYPE)
-"""upper joint limits in input order (rad or m); unbounded: a huge number"""
+"""upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
 DQ_MAX = np.array([3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793], dtype=DTYPE)
-"""joint speed limits in input order (rad/s or m/s); unbounded: a huge number"""
+"""joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
 IK_CONVERGED = 0
 """position error and rotation error are both <= tol"""
 IK_STALLED = 1

@@ -268,7 +268,7 @@ def test_joint_limits_are_emitted_in_input_order():
     header = g.sources["panda.h"]
     values = header.split("#define PANDA_Q_MAX {")[1].split("}")[0]
     np.testing.assert_array_equal([float(v) for v in values.split(",")], limits["upper"])
-    assert "Joint limits (Q_MIN, Q_MAX, DQ_MAX): " + chain.coordinates[0] in header
+    assert "Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): " + chain.coordinates[0] in header
     # a C program can use the initialiser
     import shutil
     import subprocess

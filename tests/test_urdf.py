@@ -281,6 +281,14 @@ def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
         expected = raw_fk(text, "a", "e", dict(zip(chain.coordinates, q)))
         np.testing.assert_allclose(chain_kinematics(nc, q).T, expected, atol=1e-12)
         np.testing.assert_allclose(chain_kinematics(nc, q).J, fd_jacobian(text, "a", "e", chain.coordinates, q), atol=1e-8)
+    # the header says which coordinate moves each mimic joint, and the URDF angle rule
+    from skelarm_sym.generate import generate
+
+    header = generate(chain, langs="c", out=None, functions="pose").sources["robot.h"]
+    notes = " ".join(line.lstrip(" */") for line in header.splitlines())
+    assert "Mimic joints (moved by another joint's coordinate): f1 = q[0] (lead); f2 = -2*q[0] (lead) + 0.3;" in notes
+    assert "p = -0.2*q[0] (lead) + 0.05" in notes, notes
+    assert "URDF angles within 1e-12 of a multiple of pi/2" in notes
 
 
 # -- a chain inside a tree -------------------------------------------------------------------------------

@@ -241,11 +241,17 @@ def _notes(chain: Chain) -> tuple[str, ...]:
     """Header lines: the model, its coordinates and the frames of every output."""
     n = chain.n
     kinds = ", ".join(f"{j.name}: {j.kind}" for j in chain.joints)
+    followers = [j.coordinate for j in chain.joints]
+    mimics = [f"{j.name} = {_coefficient(j.multiplier)}q[{j.coordinate}] ({chain.coordinates[j.coordinate]})"
+              + _plus(j.offset)
+              for j in chain.joints if followers.count(j.coordinate) > 1 and j.name != chain.coordinates[j.coordinate]]
     return (
         f"Model: {chain.describe()}.",
         f"Joints (base to tip): {kinds}.",
+        *(textwrap.wrap(f"Mimic joints (moved by another joint's coordinate): {'; '.join(mimics)}.", 100) if mimics else ()),
         f"Coordinates q[0..{n - 1}]: {', '.join(chain.coordinates)}; radians (revolute) or metres (prismatic);",
         "dq, ddq are their first and second time derivatives.",
+        *(_URDF_ANGLES if (chain.source or "").lower().endswith(".urdf") else ()),
         *([f"params[0..{len(chain.parameters) - 1}]: {', '.join(map(str, chain.parameters))} (metres or radians)."] if chain.parameters else []),
         "Frames: T is the 4 x 4 pose of the tool frame in the base frame (row-major, last row 0 0 0 1).",
         f"J is 6 x {n}, row-major (J[r*{n} + c]): rows vx vy vz wx wy wz in BASE axes, reference point the tool",
@@ -255,15 +261,42 @@ def _notes(chain: Chain) -> tuple[str, ...]:
         "acceleration of the tool origin, angular acceleration), all in base axes.",
     )
 
+_URDF_ANGLES = (
+    "URDF angles within 1e-12 of a multiple of pi/2, or written as its rounded decimal with 8 or more decimals",
+    "(1.57079632679), are taken as that multiple exactly: a tool that reads the decimals differs by up to ~1e-10.",
+)
+"""Header lines of a chain from a URDF: the rule of :func:`~.urdf.written_angle`, which explains a difference
+from a library that reads the decimals as written (Pinocchio on Kinova's URDF: 1e-11 to 2e-10)."""
+
+
+def _plus(offset: sp.Expr) -> str:
+    """`` + c`` or `` - c`` for a nonzero offset ``c``; nothing for 0."""
+    c = sp.sympify(offset)
+    if c == 0:
+        return ""
+    return f" - {_text(-c)}" if c.could_extract_minus_sign() else f" + {_text(c)}"
+
+
+def _coefficient(multiplier: sp.Expr) -> str:
+    """``multiplier`` as the factor written before ``q[c]``: nothing for 1, ``-`` for -1, else ``m*``."""
+    m = sp.sympify(multiplier)
+    return "" if m == 1 else "-" if m == -1 else f"{_text(m)}*"
+
+
+def _text(x: sp.Expr) -> str:
+    """A number as a header writes it: a float's shortest decimal (``0.5``), else SymPy's text (``pi/2``)."""
+    return repr(float(x)) if x.is_Float else str(x)
+
+
 def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
     """``Q_MIN``, ``Q_MAX`` (and ``DQ_MAX``) per coordinate when the model has limits, and header lines listing them."""
     limits = chain.limits()
     tables: list[Table] = []
     if any(v is not None for v in limits["lower"] + limits["upper"]):
-        tables.append(Table("Q_MIN", limits["lower"], "lower joint limits in input order (rad or m); unbounded: a huge negative number", -1))
-        tables.append(Table("Q_MAX", limits["upper"], "upper joint limits in input order (rad or m); unbounded: a huge number", 1))
+        tables.append(Table("Q_MIN", limits["lower"], "lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)", -1))
+        tables.append(Table("Q_MAX", limits["upper"], "upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)", 1))
     if any(v is not None for v in limits["velocity"]):
-        tables.append(Table("DQ_MAX", limits["velocity"], "joint speed limits in input order (rad/s or m/s); unbounded: a huge number", 1))
+        tables.append(Table("DQ_MAX", limits["velocity"], "joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)", 1))
     if not tables:
         return (), ()
 
@@ -274,4 +307,4 @@ def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
         f"{name} [{shown(lo)}, {shown(hi)}]" + (f" |dq| <= {shown(vel)}" if vel is not None else "")
         for name, lo, hi, vel in zip(chain.coordinates, limits["lower"], limits["upper"], limits["velocity"])
     )
-    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX): {rows}.", 100))
+    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.", 100))
