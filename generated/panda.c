@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x402b1072UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x044613acUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

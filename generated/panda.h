@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x402b1072UL
+#define PANDA_STAMP 0x044613acUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -66,15 +66,15 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define PANDA_RANK_TOL 2.220446049250313e-14
 
-/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)
+/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[7] = PANDA_Q_MIN; */
 #define PANDA_Q_MIN {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973}
 
-/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
+/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)
  * An initializer: static const double x[7] = PANDA_Q_MAX; */
 #define PANDA_Q_MAX {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973}
 
-/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
+/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)
  * An initializer: static const double x[7] = PANDA_DQ_MAX; */
 #define PANDA_DQ_MAX {2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61}
 

@@ -35,16 +35,16 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x402b1072
+STAMP = 0x044613ac
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 Q_MIN = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973], dtype=DTYPE)
-"""lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)"""
+"""lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)"""
 Q_MAX = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973], dtype=DTYPE)
-"""upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
+"""upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)"""
 DQ_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61], dtype=DTYPE)
-"""joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
+"""joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)"""
 IK_CONVERGED = 0
 """position error and rotation error are both <= tol"""
 IK_STALLED = 1

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x079d0a61UL
+#define UR5_STAMP 0x1da4acd2UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -87,15 +87,15 @@ extern "C" {
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09
 
-/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)
+/* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */
 #define UR5_Q_MIN {-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586}
 
-/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
+/* upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MAX; */
 #define UR5_Q_MAX {6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586}
 
-/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)
+/* joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)
  * An initializer: static const double x[6] = UR5_DQ_MAX; */
 #define UR5_DQ_MAX {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793}
 

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x079d0a61
+STAMP = 0x1da4acd2
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -55,11 +55,11 @@ IK_TRANSLATION_MAX = 1e+150
 IK_DUP_TOL = 1e-09
 """ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"""
 Q_MIN = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
-"""lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)"""
+"""lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)"""
 Q_MAX = np.array([6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586], dtype=DTYPE)
-"""upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
+"""upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)"""
 DQ_MAX = np.array([3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793], dtype=DTYPE)
-"""joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)"""
+"""joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e+300 in C (1e+30 in float)"""
 IK_CONVERGED = 0
 """position error and rotation error are both <= tol"""
 IK_STALLED = 1

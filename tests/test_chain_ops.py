@@ -410,6 +410,16 @@ def _compose_canonical(joints, tool, q) -> np.ndarray:
     return M @ homogeneous(tool)
 
 
+def _with_and_without(chain: Chain, functions: str, module, name: str, replacement=lambda joints, tool: (joints, tool)):
+    """``chain``'s ``functions`` generated (NumPy), and every function's :class:`OpCount` with the derivation as it
+    is and with ``module.name`` replaced by ``replacement`` (by default a pass on the canonical joints left out)."""
+    g = generate(chain, langs="python", out=None, functions=functions)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(module, name, replacement)
+        before = generate(chain, langs="python", out=None, functions=functions)
+    return g, {p.name: p.ops for p in g.programs}, {p.name: p.ops for p in before.programs}
+
+
 @pytest.mark.fresh_derivation  # derives the same chain with and without the pass
 def test_turns_about_the_joint_axes_go_into_the_angles():
     """``_twists_into_angles`` writes each constant rotation between revolute joints as ``Rz(gamma) Rx(alpha)
@@ -427,13 +437,9 @@ def test_turns_about_the_joint_axes_go_into_the_angles():
     rng = np.random.default_rng(4)
     for q in rng.uniform(-3, 3, (5, chain.n)):
         np.testing.assert_allclose(_compose_canonical(*turned, q), _compose_canonical(*plain, q), rtol=0, atol=1e-15)
-    g = generate(chain, langs="python", out=None, functions="pose,jacobian")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(chain_derive, "_twists_into_angles", lambda joints, tool: (joints, tool))
-        before = generate(chain, langs="python", out=None, functions="pose,jacobian")
-    ops = {p.name: p.ops.arithmetic for p in g.programs}
-    old = {p.name: p.ops.arithmetic for p in before.programs}
-    assert ops["pose"] < old["pose"] - 20 and ops["jacobian"] < old["jacobian"] - 20, (ops, old)
+    g, ops, old = _with_and_without(chain, "pose,jacobian", chain_derive, "_twists_into_angles")
+    assert ops["pose"].arithmetic < old["pose"].arithmetic - 20, (ops, old)
+    assert ops["jacobian"].arithmetic < old["jacobian"].arithmetic - 20, (ops, old)
     module = load_python(g.sources["turned.py"], "turned")
     q = rng.uniform(-3, 3, (20, chain.n))
     ref = reference.chain_kinematics(chain.numeric(), q)
@@ -478,14 +484,9 @@ def test_turns_before_a_prismatic_joint_or_in_the_tool_go_into_the_angle_before(
     rng = np.random.default_rng(6)
     for q in rng.uniform(-3, 3, (5, chain.n)):
         np.testing.assert_allclose(_compose_canonical(*turned, q), _compose_canonical(*plain, q), rtol=0, atol=1e-15)
-    functions = "pose,jacobian,jacobian_dot"
-    g = generate(chain, langs="python", out=None, functions=functions)
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(chain_derive, "_twists_into_angles", lambda joints, tool: (joints, tool))
-        before = generate(chain, langs="python", out=None, functions=functions)
-    ops = {p.name: p.ops.arithmetic for p in g.programs}
-    old = {p.name: p.ops.arithmetic for p in before.programs}
-    assert ops["pose"] <= old["pose"] - 10 and ops["jacobian"] <= old["jacobian"], (ops, old)
+    g, ops, old = _with_and_without(chain, "pose,jacobian,jacobian_dot", chain_derive, "_twists_into_angles")
+    assert ops["pose"].arithmetic <= old["pose"].arithmetic - 10, (ops, old)
+    assert ops["jacobian"].arithmetic <= old["jacobian"].arithmetic, (ops, old)
     module = load_python(g.sources["hand.py"], "hand")
     q, dq = rng.uniform(-3, 3, (20, chain.n)), rng.uniform(-1, 1, (20, chain.n))
     ref = reference.chain_kinematics(chain.numeric(), q, dq)
@@ -522,13 +523,9 @@ def test_a_position_cut_at_a_joint_sums_the_short_links_after_it():
     from skelarm_sym.models.chain import candidates
 
     chain = load_robot_file(ROOT / "examples" / "robots" / "abb_irb140.toml")
-    g = generate(chain, langs="python", out=None, functions=",".join(FORWARD))
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(candidates, "_split_tips", lambda *args: [])
-        before = generate(chain, langs="python", out=None, functions=",".join(FORWARD))
-    ops = {p.name: p.ops.arithmetic for p in g.programs}
-    old = {p.name: p.ops.arithmetic for p in before.programs}
-    assert ops["pose"] <= old["pose"] - 5 and all(ops[f] <= old[f] for f in FORWARD), (ops, old)
+    g, ops, old = _with_and_without(chain, ",".join(FORWARD), candidates, "_split_tips", lambda *args: [])
+    assert ops["pose"].arithmetic <= old["pose"].arithmetic - 5, (ops, old)
+    assert all(ops[f].arithmetic <= old[f].arithmetic for f in FORWARD), (ops, old)
     module = load_python(g.sources["abb_irb140.py"], "abb_irb140")
     q = np.random.default_rng(19).uniform(-3, 3, (20, chain.n))
     np.testing.assert_allclose(module.pose(q), reference.chain_kinematics(chain.numeric(), q, q).T, rtol=0, atol=1e-14)
@@ -569,13 +566,7 @@ def test_a_joint_about_the_reversed_axis_joins_the_one_before():
     rng = np.random.default_rng(8)
     for q in rng.uniform(-3, 3, (5, chain.n)):
         np.testing.assert_allclose(_compose_canonical(*flipped, q), _compose_canonical(*plain, q), rtol=0, atol=1e-15)
-    functions = "pose,jacobian,jacobian_dot"
-    g = generate(chain, langs="python", out=None, functions=functions)
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(chain_derive, "_flips_into_angles", lambda joints, tool: (joints, tool))
-        before = generate(chain, langs="python", out=None, functions=functions)
-    ops = {p.name: p.ops for p in g.programs}
-    old = {p.name: p.ops for p in before.programs}
+    g, ops, old = _with_and_without(chain, "pose,jacobian,jacobian_dot", chain_derive, "_flips_into_angles")
     assert ops["pose"].sin == old["pose"].sin - 1 == 5
     for f in ("pose", "jacobian"):
         assert ops[f].arithmetic <= old[f].arithmetic - 10, (f, ops[f], old[f])

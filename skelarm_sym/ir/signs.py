@@ -188,9 +188,7 @@ class _Signs:
             x = stack.pop()
             t = type(x)
             if t is Var:
-                name = x.name
-                while name in self.alias_of:
-                    name = self.alias_of[name].name
+                name = self._copied(x.name)
                 if name in self.position:
                     names.add(name)
             elif t is Add:
@@ -323,7 +321,7 @@ class _Signs:
     def try_flip(self, name: str) -> bool:
         """Flip ``name`` if that lowers the negations; say whether it did."""
         affected = [self.position[name]] + self.users[name]
-        if len(affected) > MOST_READERS or not any(self.cost[i] or self.reads[i] for i in affected):
+        if len(affected) > MOST_READERS or not any(self._pays(i) for i in affected):
             return False  # nothing there pays a negation: a flip can only add some
         tried = self.tried_at.get(name)
         if tried is not None and tried >= self.copies_at and all(self.changed_at[i] <= tried for i in affected):
@@ -355,6 +353,10 @@ class _Signs:
         own = [s.var.name] if type(s) is Let and s.var.name in self.chaseable else []
         return own + [n for n in sorted(self.names[i]) if n in self.chaseable]
 
+    def _pays(self, i: int) -> bool:
+        """Whether statement ``i`` pays a negation or reads a negated copy (which pays one while it is read)."""
+        return bool(self.cost[i] or self.reads[i])
+
     def _copied(self, name: str) -> str:
         """The local a copy ``u = -x`` (of a copy ...) stores the negation of; ``name`` itself if it is no copy."""
         while name in self.alias_of:
@@ -369,9 +371,9 @@ class _Signs:
         """The chase's next flip: of the suspects of the statements that the ``last`` flip re-priced and that now pay
         (where none does, of those the chain's earlier flips re-priced, ``changed``; in body order, at most
         CHASE_OPTIONS), the one whose flip costs least; and the work of the tries (:meth:`_work`)."""
-        paying = [i for i in sorted(last) if self.cost[i] or self.reads[i]]
+        paying = [i for i in sorted(last) if self._pays(i)]
         if not paying:  # nothing the last flip moved pays: what an earlier flip of the chain left paying
-            paying = [i for i in sorted(changed - last.keys()) if self.cost[i] or self.reads[i]]
+            paying = [i for i in sorted(changed - last.keys()) if self._pays(i)]
         options = dict.fromkeys(n for i in paying for n in self._suspects(i) if n not in taken)
         best, least, work = None, 0, 0
         for name in list(options)[:CHASE_OPTIONS]:
@@ -394,7 +396,7 @@ class _Signs:
         any saved."""
         saved = False
         budget = CHASE_BUDGET * sum(1 + len(names) for names in self.names)
-        starts = [n for i in range(len(self.body)) if self.cost[i] or self.reads[i] for n in self._suspects(i)]
+        starts = [n for i in range(len(self.body)) if self._pays(i) for n in self._suspects(i)]
         for start in dict.fromkeys(starts):
             taken: list[str] = []
             touched: set[int] = set()  # the statements the chain's flips re-priced

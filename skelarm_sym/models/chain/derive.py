@@ -82,7 +82,7 @@ from .model import Chain
 from .price import Pose, _choose
 from .signs import _settle_signs
 from .steps import _Steps
-from ...derive.core import Derivation, FunctionSpec, Table
+from ...derive.core import UNBOUNDED, Derivation, FunctionSpec, Table
 from ...derive.float_facts import float_facts
 
 __all__ = ["CHAIN_FUNCTIONS", "ChainDerivation", "canonical_joints", "derive_chain"]
@@ -261,6 +261,7 @@ def _notes(chain: Chain) -> tuple[str, ...]:
         "acceleration of the tool origin, angular acceleration), all in base axes.",
     )
 
+
 _URDF_ANGLES = (
     "URDF angles within 1e-12 of a multiple of pi/2, or written as its rounded decimal with 8 or more decimals",
     "(1.57079632679), are taken as that multiple exactly: a tool that reads the decimals differs by up to ~1e-10.",
@@ -288,15 +289,21 @@ def _text(x: sp.Expr) -> str:
     return repr(float(x)) if x.is_Float else str(x)
 
 
+def _unbounded(sign: str) -> str:
+    """What a table's entry without a limit holds in each language (:data:`~skelarm_sym.derive.core.UNBOUNDED`)."""
+    return (f"unbounded: {sign}inf in NumPy, {sign}{UNBOUNDED['double']:g} in C "
+            f"({sign}{UNBOUNDED['float']:g} in float)")
+
+
 def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
     """``Q_MIN``, ``Q_MAX`` (and ``DQ_MAX``) per coordinate when the model has limits, and header lines listing them."""
     limits = chain.limits()
     tables: list[Table] = []
     if any(v is not None for v in limits["lower"] + limits["upper"]):
-        tables.append(Table("Q_MIN", limits["lower"], "lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e300 in C (-1e30 in float)", -1))
-        tables.append(Table("Q_MAX", limits["upper"], "upper joint limits in input order (rad or m); unbounded: inf in NumPy, 1e300 in C (1e30 in float)", 1))
+        tables.append(Table("Q_MIN", limits["lower"], f"lower joint limits in input order (rad or m); {_unbounded('-')}", -1))
+        tables.append(Table("Q_MAX", limits["upper"], f"upper joint limits in input order (rad or m); {_unbounded('')}", 1))
     if any(v is not None for v in limits["velocity"]):
-        tables.append(Table("DQ_MAX", limits["velocity"], "joint speed limits in input order (rad/s or m/s); unbounded: inf in NumPy, 1e300 in C (1e30 in float)", 1))
+        tables.append(Table("DQ_MAX", limits["velocity"], f"joint speed limits in input order (rad/s or m/s); {_unbounded('')}", 1))
     if not tables:
         return (), ()
 
