@@ -59,29 +59,53 @@ _FLIP = sp.ImmutableMatrix([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
 
 
 def _flips_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
-    """The canonical chain with a turning joint whose axis is the previous turning joint's reversed (the constant
-    rotation between them takes ``z`` to ``-z``) turned into one about the same axis with the angle negated:
-    ``[P, t] Rz(theta) = [P Rx(pi), t] Rz(-theta) Rx(pi)``, ``P Rx(pi)`` a turn about ``z`` that
-    :func:`_axis_turns_into_angles` folds into the angle, and ``Rx(pi)`` carried into the next constant (or the
-    tool transform). The two joints then share a segment and their angles add up: PR2's finger tip, about
-    ``-z`` and mimicking the finger joint, turns by ``q - q = 0``: no frame multiplied by a turn that the next
-    one undoes (and, where the finger shares its segment with the joint before, no sine and cosine of its own:
-    :func:`~.frames._angle_sum`). Prismatic joints and the first joint keep their constants."""
+    """The canonical chain with a joint whose axis is the reversed axis of a turning joint of its segment (the
+    constant rotations between them take ``z`` to ``-z``, slides along the axis between them) written about the
+    same axis with the variable negated: ``[P, t] M(theta) = [P Rx(pi), t] M(-theta) Rx(pi)`` for a turn or a
+    slide ``M`` along ``z``, ``P Rx(pi)`` a turn about ``z`` that :func:`_axis_turns_into_angles` folds into the
+    angle, and ``Rx(pi)`` carried into the next constant (or the tool transform). The joint then shares the
+    segment and the angles add up: PR2's finger tip, about ``-z`` and mimicking the finger joint, turns by
+    ``q - q = 0``: no frame multiplied by a turn that the next one undoes (and, where the finger shares its
+    segment with the joint before, no sine and cosine of its own: :func:`~.frames._angle_sum`). A SCARA's quill
+    slides along the elbow's reversed axis and its wrist turns about it: both flipped, the wrist's angle is
+    ``q1 + q2 - q4``, one sine and cosine instead of a product of frames. A slide is flipped only where it then
+    joins the segment (no turn before it) and a turning joint of the same axis follows; the first joint keeps
+    its constant."""
     out = list(joints)
-    for k in range(1, len(out)):
-        joint, prev = out[k], out[k - 1]
+    turned = False  # the segment so far (as frames._frames builds it) has a turning joint
+    for k, joint in enumerate(out):
         P = joint.before.rotation
-        if not (_turns(joint.motion) and _turns(prev.motion)) or list(P[:, 2]) != [0, 0, -1]:
-            continue
-        out[k] = _Canonical(Transform(sp.ImmutableMatrix(P * _FLIP), joint.before.translation), joint.motion,
-                            joint.coordinate, -joint.multiplier, _numeric(-joint.offset))
-        if k + 1 < len(out):
-            after = out[k + 1]
-            out[k + 1] = _Canonical(Transform(rotation=_FLIP) @ after.before, after.motion, after.coordinate,
-                                    after.multiplier, after.offset)
-        else:
-            tool = Transform(rotation=_FLIP) @ tool
+        turns = _turns(joint.motion)
+        if k and turned and list(P[:, 2]) == [0, 0, -1] and (
+                turns or (P * _FLIP == sp.eye(3) and _turn_follows(out, k + 1, _FLIP))):
+            joint = out[k] = _Canonical(Transform(sp.ImmutableMatrix(P * _FLIP), joint.before.translation),
+                                        joint.motion, joint.coordinate, -joint.multiplier, _numeric(-joint.offset))
+            P = joint.before.rotation
+            if k + 1 < len(out):
+                after = out[k + 1]
+                out[k + 1] = _Canonical(Transform(rotation=_FLIP) @ after.before, after.motion, after.coordinate,
+                                        after.multiplier, after.offset)
+            else:
+                tool = Transform(rotation=_FLIP) @ tool
+        joins = k > 0 and list(P[:, 2]) == [0, 0, 1] and (turns or P == sp.eye(3))
+        turned = turns or (joins and turned)
     return out, tool
+
+
+def _turn_follows(joints: list[_Canonical], j: int, pushed: sp.Matrix) -> bool:
+    """Whether, with the rotation ``pushed`` in front of joint ``j``'s constant, a turning joint about the same axis
+    (either sign) follows, across slides that keep to it."""
+    for joint in joints[j:]:
+        P = pushed * joint.before.rotation
+        if _turns(joint.motion):
+            return list(P[:, 2]) in ([0, 0, 1], [0, 0, -1])
+        if P == sp.eye(3):
+            pushed = sp.eye(3)
+        elif P * _FLIP == sp.eye(3):
+            pushed = _FLIP
+        else:
+            return False
+    return False
 
 
 def _axis_turns_into_angles(joints: list[_Canonical], tool: Transform) -> tuple[list[_Canonical], Transform]:
