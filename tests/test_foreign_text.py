@@ -6,7 +6,6 @@ CMakeLists.txt; nothing written in a robot file runs, and no byte of it reaches 
 from __future__ import annotations
 
 import ctypes
-import os
 import re
 import shutil
 import subprocess

@@ -26,11 +26,14 @@ import os
 import numbers
 import operator
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
 import sympy as sp
 
 from ...errors import InputError
+
+if TYPE_CHECKING:  # the annotations only: generating code needs no NumPy
+    import numpy as np
 
 MAX_JOINTS = 200
 """Largest number of moving joints accepted."""
