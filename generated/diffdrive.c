@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x008be085UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x0691ece2UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 
@@ -103,7 +103,7 @@ __attribute__((__simd__("notinbranch"))) double cos(double);
 static void diffdrive_sincos_exact(const double *restrict ang, double *restrict cs, double *restrict sn, const int k)
 {
     union { double f; unsigned long long u; } x, n, s, c;
-    double f, t0, w0, t1, w1, t2, e, r, y, z, zz, v, p, hz, w;
+    double f, t0, w0, t1, w1, t2, e, r, y, z, zz, z4, v, p, hz, w;
     unsigned long long swap, sign_s, sign_c;
     x.f = ang[k];
     n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
@@ -119,14 +119,17 @@ static void diffdrive_sincos_exact(const double *restrict ang, double *restrict 
     z = r * r;
     v = z * r;
     zz = z * z;                                                   /* Estrin's scheme: shorter chains */
-    p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
-        + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
-    s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-    p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
-        + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+    z4 = zz * zz;
+    /* sin(r + y) = r - ((z y / 2 - y) - v (S1 + z S2 + ... + z^5 S6)): fdlibm's terms, its leading S1 taken
+     * into the polynomial, three operations follow it instead of six */
+    p = ((-1.66666666666666324348e-01 + z * 8.33333333332248946124e-03) + zz * (-1.98412698298579493134e-04
+        + z * 2.75573137070700676789e-06)) + z4 * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10);
+    s.f = r - ((z * (0.5 * y) - y) - v * p);                      /* a subtraction last: sin(-0) = -0 */
+    p = ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * (2.48015872894767294178e-05
+        + z * -2.75573143513906633035e-07)) + z4 * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11);
     hz = 0.5 * z;
     w = 1.0 - hz;
-    c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+    c.f = w + (((1.0 - w) - hz) + (zz * p - r * y));              /* cos(r + y), p times z^2: fdlibm's */
     swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
     sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
     sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
@@ -143,7 +146,7 @@ static void diffdrive_sincos4(const double *restrict ang, double *restrict cs, d
     int k;
     for (k = 0; k < 4; ++k) {
         union { double f; unsigned long long u; } x, n, s, c, rb;
-        double f, t0, w0, r, y, z, zz, v, p, hz, w;
+        double f, t0, w0, r, y, z, zz, z4, v, p, hz, w;
         unsigned long long swap, sign_s, sign_c;
         x.f = ang[k];
         n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
@@ -158,14 +161,17 @@ static void diffdrive_sincos4(const double *restrict ang, double *restrict cs, d
         z = r * r;
         v = z * r;
         zz = z * z;                                                   /* Estrin's scheme: shorter chains */
-        p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
-            + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
-        s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-        p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
-            + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+        z4 = zz * zz;
+        /* sin(r + y) = r - ((z y / 2 - y) - v (S1 + z S2 + ... + z^5 S6)): fdlibm's terms, its leading S1 taken
+         * into the polynomial, three operations follow it instead of six */
+        p = ((-1.66666666666666324348e-01 + z * 8.33333333332248946124e-03) + zz * (-1.98412698298579493134e-04
+            + z * 2.75573137070700676789e-06)) + z4 * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10);
+        s.f = r - ((z * (0.5 * y) - y) - v * p);                      /* a subtraction last: sin(-0) = -0 */
+        p = ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * (2.48015872894767294178e-05
+            + z * -2.75573143513906633035e-07)) + z4 * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11);
         hz = 0.5 * z;
         w = 1.0 - hz;
-        c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+        c.f = w + (((1.0 - w) - hz) + (zz * p - r * y));              /* cos(r + y), p times z^2: fdlibm's */
         swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
         sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
         sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */
@@ -200,7 +206,7 @@ static void diffdrive_sincos2(const double *restrict ang, double *restrict cs, d
     int k;
     for (k = 0; k < 2; ++k) {
         union { double f; unsigned long long u; } x, n, s, c, rb;
-        double f, t0, w0, r, y, z, zz, v, p, hz, w;
+        double f, t0, w0, r, y, z, zz, z4, v, p, hz, w;
         unsigned long long swap, sign_s, sign_c;
         x.f = ang[k];
         n.f = x.f * 6.36619772367581382433e-01 + 6755399441055744.0; /* 2/pi; adding 1.5 * 2^52 rounds */
@@ -215,14 +221,17 @@ static void diffdrive_sincos2(const double *restrict ang, double *restrict cs, d
         z = r * r;
         v = z * r;
         zz = z * z;                                                   /* Estrin's scheme: shorter chains */
-        p = (8.33333333332248946124e-03 + z * -1.98412698298579493134e-04) + zz * ((2.75573137070700676789e-06
-            + z * -2.50507602534068634195e-08) + zz * 1.58969099521155010221e-10);
-        s.f = r - ((z * (0.5 * y - v * p) - y) - v * -1.66666666666666324348e-01);
-        p = z * ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * ((2.48015872894767294178e-05
-            + z * -2.75573143513906633035e-07) + zz * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)));
+        z4 = zz * zz;
+        /* sin(r + y) = r - ((z y / 2 - y) - v (S1 + z S2 + ... + z^5 S6)): fdlibm's terms, its leading S1 taken
+         * into the polynomial, three operations follow it instead of six */
+        p = ((-1.66666666666666324348e-01 + z * 8.33333333332248946124e-03) + zz * (-1.98412698298579493134e-04
+            + z * 2.75573137070700676789e-06)) + z4 * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10);
+        s.f = r - ((z * (0.5 * y) - y) - v * p);                      /* a subtraction last: sin(-0) = -0 */
+        p = ((4.16666666666666019037e-02 + z * -1.38888888888741095749e-03) + zz * (2.48015872894767294178e-05
+            + z * -2.75573143513906633035e-07)) + z4 * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11);
         hz = 0.5 * z;
         w = 1.0 - hz;
-        c.f = w + (((1.0 - w) - hz) + (z * p - r * y));
+        c.f = w + (((1.0 - w) - hz) + (zz * p - r * y));              /* cos(r + y), p times z^2: fdlibm's */
         swap = 0ull - (n.u & 1ull);                  /* odd quadrants swap sine and cosine */
         sign_s = (n.u & 2ull) << 62;                 /* quadrants 2, 3: sine negative */
         sign_c = ((n.u + 1ull) & 2ull) << 62;        /* quadrants 1, 2: cosine negative */

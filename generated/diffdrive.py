@@ -18,7 +18,7 @@ import inspect
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x008be085
+STAMP = 0x0691ece2
 """The generation stamp: the same number in every file of the set this module was generated with."""
 
 __all__ = ["body_rates", "wheel_speeds", "pose_rate", ]
