@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x1af71479UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xbcba9ee5UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6116,6 +6116,8 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
+            /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
+            stationary = (ent <= en*0.6 ? 0 : stationary);
             stalled = (en - ent <= en*1e-09 ? 1 : 0);
             for (int k = 0; k < 7; ++k) {
                 q[k] = trial[k];
@@ -6398,6 +6400,8 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
+            /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
+            stationary = (ent <= en*0.6 ? 0 : stationary);
             stalled = (en - ent <= en*1e-09 ? 1 : 0);
             for (int k = 0; k < 7; ++k) {
                 q[k] = trial[k];

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1af71479
+STAMP = 0xbcba9ee5
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -4770,6 +4770,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         it = it + 1
         attempt = attempt + 1
         if ent < en:
+            # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+            stationary = 0 if ent <= en*0.6 else stationary
             stalled = 1 if en - ent <= en*1e-09 else 0
             for k in range(0, 7):
                 q[k] = trial[k]
@@ -5487,6 +5489,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c74 = ent < en
         _m75 = _run33 & _c74
         _m76 = _run33 & (~_c74)
+        # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+        stationary = np.where(_m75, np.where(ent <= en*0.6, 0, stationary), stationary)
         stalled = np.where(_m75, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 7):
             q[k] = np.where(_m75, trial[k], q[k])
@@ -5823,6 +5827,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         it = it + 1
         attempt = attempt + 1
         if ent < en:
+            # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+            stationary = 0 if ent <= en*0.6 else stationary
             stalled = 1 if en - ent <= en*1e-09 else 0
             for k in range(0, 7):
                 q[k] = trial[k]
@@ -6246,6 +6252,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c40 = ent < en
         _m41 = _run16 & _c40
         _m42 = _run16 & (~_c40)
+        # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+        stationary = np.where(_m41, np.where(ent <= en*0.6, 0, stationary), stationary)
         stalled = np.where(_m41, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 7):
             q[k] = np.where(_m41, trial[k], q[k])

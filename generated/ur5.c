@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xf9ad1a89UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x670d5b38UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6012,6 +6012,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
+            /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
+            stationary = (ent <= en*0.6 ? 0 : stationary);
             stalled = (en - ent <= en*1e-09 ? 1 : 0);
             for (int k = 0; k < 6; ++k) {
                 q[k] = trial[k];
@@ -6330,6 +6332,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         it = it + 1;
         attempt = attempt + 1;
         if (ent < en) {
+            /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
+            stationary = (ent <= en*0.6 ? 0 : stationary);
             stalled = (en - ent <= en*1e-09 ? 1 : 0);
             for (int k = 0; k < 6; ++k) {
                 q[k] = trial[k];

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xf9ad1a89
+STAMP = 0x670d5b38
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -4733,6 +4733,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         it = it + 1
         attempt = attempt + 1
         if ent < en:
+            # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+            stationary = 0 if ent <= en*0.6 else stationary
             stalled = 1 if en - ent <= en*1e-09 else 0
             for k in range(0, 6):
                 q[k] = trial[k]
@@ -5496,6 +5498,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c104 = ent < en
         _m105 = _run33 & _c104
         _m106 = _run33 & (~_c104)
+        # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+        stationary = np.where(_m105, np.where(ent <= en*0.6, 0, stationary), stationary)
         stalled = np.where(_m105, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 6):
             q[k] = np.where(_m105, trial[k], q[k])
@@ -5862,6 +5866,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         it = it + 1
         attempt = attempt + 1
         if ent < en:
+            # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+            stationary = 0 if ent <= en*0.6 else stationary
             stalled = 1 if en - ent <= en*1e-09 else 0
             for k in range(0, 6):
                 q[k] = trial[k]
@@ -6331,6 +6337,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c70 = ent < en
         _m71 = _run16 & _c70
         _m72 = _run16 & (~_c70)
+        # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
+        stationary = np.where(_m71, np.where(ent <= en*0.6, 0, stationary), stationary)
         stalled = np.where(_m71, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 6):
             q[k] = np.where(_m71, trial[k], q[k])

@@ -18,7 +18,9 @@ derived ``ik_terms`` (tool pose T and Jacobian J at once):
   make the progress clamping would kill; revolute joints whose range spans 2 pi or more wrap by 2 pi;
 * restarts: an attempt ends when it stalls (``c > C_MAX``, or an accepted step improving ``|e|`` by less
   than a relative ``STALL``), when a step starts at a (near) stationary point of ``|e|`` over the free
-  joints (``|J_f^T e| <= STATIONARY |J_f|_F |e|``), when its error is above ``PROGRESS`` times its error
+  joints (``|J_f^T e| <= STATIONARY |J_f|_F |e|``) and does not cut ``|e|`` below ``PROGRESS`` of its start
+  (near a stretched elbow the error lies along a weak direction of J and the test alone misjudges it: SCARA's
+  attempts restarted at errors of 1e-10), when its error is above ``PROGRESS`` times its error
   ``WINDOW`` steps earlier, or after ``ATTEMPT`` steps. The next attempt starts from the best of
   ``CANDIDATES`` random configurations by tool position error, drawn from ``SHRINK`` times the limits'
   range around its centre on even restarts and from the whole range on odd ones (periodic joints: the
@@ -443,6 +445,9 @@ class _PoseIK:
         """Levenberg-Marquardt: a lower error is taken and lowers the damping; else the damping grows."""
         b, one, zero = self.b, self.one, self.zero
         with b.if_(self.ent < self.en):
+            b.comment(f"a step that cut |e| below {PROGRESS} of its start was not taken at a stationary point (the error lay "
+                      "along a weak direction of J, as near a stretched elbow)")
+            b.set(self.stationary, select(self.ent <= self.en * PROGRESS, zero, self.stationary))
             b.set(self.stalled, select(self.en - self.ent <= self.en * self.s["stall"], one, zero))
             self.copy(self.q, self.trial, self.n)
             self.copy(self.Tm, self.Tt, 16)
