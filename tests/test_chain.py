@@ -282,6 +282,20 @@ def test_joint_limits_are_emitted_in_input_order():
             assert subprocess.run([str(Path(tmp, "use"))]).returncode == 0
 
 
+def test_a_joint_with_a_theta_offset_keeps_its_limits():
+    """A DH row's limits bound its joint variable, whatever its ``theta`` offset: ABB IRB 140's axis 2 (theta
+    -pi/2, limits -90 to +110 degrees) lost them, so its Q_MIN/Q_MAX entries read unbounded and the IK did
+    not clamp it."""
+    from skelarm_sym.models.chain.dh_file import load_robot_file
+
+    chain = load_robot_file(ROBOTS / "abb_irb140.toml")
+    g = generate(chain, out=None, langs="python", functions="pose")
+    module = load_python(g.sources["abb_irb140.py"], "abb_irb140")
+    assert module.Q_MIN[1] == pytest.approx(-np.pi / 2, abs=1e-15)
+    assert module.Q_MAX[1] == pytest.approx(np.radians(110), abs=1e-15)
+    assert np.all(np.isfinite(module.Q_MIN)) and np.all(np.isfinite(module.Q_MAX))
+
+
 def test_urdf_angles_written_as_rounded_multiples_of_half_pi_are_exact(tmp_path):
     from skelarm_sym.models.chain.urdf import load_urdf
 

@@ -86,7 +86,11 @@ def test_gantry_gripper_reads_every_joint_type(rng):
     assert chain.base.translation == sp.ImmutableMatrix([0, 0, sp.Float(1.2)])
     # turret "3.141592654 0 0" is Rx(pi); elbow "1.570796327 0 0" is Rx(pi/2): exact entries
     assert chain.joints[2].before.rotation == sp.ImmutableMatrix([[1, 0, 0], [0, -1, 0], [0, 0, -1]])
-    assert chain.limits()["lower"] == (0.0, -0.5, None, -1.5)
+    # y's own range [-0.5, 0.5] narrowed by finger_slide = 0.5 y + 0.01 within [0, 0.04]: y in [-0.02, 0.06];
+    # parallel = -elbow within [-1.5, 1.5] narrows nothing
+    limits = chain.limits()
+    assert limits["lower"] == pytest.approx((0.0, -0.02, None, -1.5), abs=1e-15)
+    assert limits["upper"][1] == pytest.approx(0.06, abs=1e-15) and limits["upper"][3] == 1.5
     _pose_matches_the_raw_xml(chain, FIXTURES / "gantry_gripper.urdf", "floor", "tcp", rng)
 
 

@@ -216,11 +216,11 @@ def test_edge_arm_structure(tmp_path):
 def test_edge_arm_limits(tmp_path):
     chain = load_urdf(write(tmp_path, EDGE))
     limits = chain.limits()
-    assert limits == {
-        "lower": (-2.5, None, -0.1, -3.0),
-        "upper": (2.0, None, 0.35, 3.0),
-        "velocity": (1.5, 2.5, 0.5, 4.0),
-    }
+    # j1's range [-2.5, 2] narrowed by its mimic "follow" = -0.5 q + 0.3 within [-1, 1]: q in [-1.4, 2.6];
+    # follow's speed limit 3 allows |dq| <= 6, above j1's own 1.5
+    assert limits["lower"] == pytest.approx((-1.4, None, -0.1, -3.0), abs=1e-15)
+    assert limits["upper"] == (2.0, None, 0.35, 3.0)
+    assert limits["velocity"] == (1.5, 2.5, 0.5, 4.0)
     j2 = chain.joints[1]
     assert (j2.lower, j2.upper, j2.velocity) == (None, None, 2.5)  # continuous: no position limits
 
@@ -273,8 +273,13 @@ def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
     # p = 0.1 * f2 + 0.02 = 0.1 * (-2 * f1 + 0.3) + 0.02, f1 = lead
     p = chain.joints[3]
     assert p.kind == "prismatic" and float(p.multiplier) == pytest.approx(-0.2) and float(p.offset) == pytest.approx(0.05)
-    # the coordinate's limits are its own joint's, not those of a follower with multiplier 1
-    assert chain.limits() == {"lower": (-1.0, -2.0), "upper": (1.5, 2.0), "velocity": (2.0, 3.0)}
+    # the coordinate's limits are its own joint's [-1, 1.5], narrowed to where every follower stays within its
+    # own: f1 (= lead, within [-9, 9]) narrows nothing; p = 0.1 (-2 lead + 0.3) + 0.02 within [0, 0.2] keeps lead
+    # in [-0.75, 0.25], and p's speed limit 0.1 allows |d lead| <= 0.5
+    limits = chain.limits()
+    assert limits["lower"] == pytest.approx((-0.75, -2.0), abs=1e-15)
+    assert limits["upper"] == pytest.approx((0.25, 2.0), abs=1e-15)
+    assert limits["velocity"] == pytest.approx((0.5, 3.0), abs=1e-15)
     nc = chain.numeric()
     for _ in range(4):
         q = rng.uniform(-1, 1, 2)
@@ -289,6 +294,8 @@ def test_mimic_before_its_leader_and_prismatic_mimic(tmp_path, rng):
     assert "Mimic joints (moved by another joint's coordinate): f1 = q[0] (lead); f2 = -2*q[0] (lead) + 0.3;" in notes
     assert "p = -0.2*q[0] (lead) + 0.05" in notes, notes
     assert "URDF angles within 1e-12 of a multiple of pi/2" in notes
+    assert "lead [-0.75, 0.25] |dq| <= 0.5" in notes
+    assert "Each coordinate's range keeps the mimic joints that follow it within their own limits." in notes
 
 
 # -- a chain inside a tree -------------------------------------------------------------------------------
@@ -386,6 +393,9 @@ J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axi
         (_arm(J_AB, J_BC.replace("revolute", "hinge")), {}, "joint 'bc': type must be one of"),
         (_arm(J_AB, J_BC.replace("<axis", '<limit lower="1" upper="-1"/><axis')), {}, "lower 1.0 is above upper -1.0"),
         (_arm(J_AB, J_BC.replace("<axis", '<limit velocity="-1"/><axis')), {}, "velocity must not be negative"),
+        (_arm(J_AB.replace("<axis", '<limit lower="0" upper="1"/><axis'),
+              J_BC.replace("<axis", '<limit lower="2" upper="3"/><mimic joint="ab"/><axis')), {},
+         "coordinate 'ab': the limits of the joints that follow it ('bc') leave no value within its range"),
         (_arm(J_AB, J_BC.replace("<axis", '<limit upper="one"/><axis')), {}, "joint 'bc' limit upper must be numbers"),
         (_arm(J_AB.replace("revolute", "fixed"), J_BC.replace("revolute", "fixed")), {}, "no revolute, continuous or prismatic joint"),
         (_arm(J_AB), {}, "2 root links ('a', 'c')"),

@@ -314,4 +314,7 @@ def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
         f"{name} [{shown(lo)}, {shown(hi)}]" + (f" |dq| <= {shown(vel)}" if vel is not None else "")
         for name, lo, hi, vel in zip(chain.coordinates, limits["lower"], limits["upper"], limits["velocity"])
     )
-    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.", 100))
+    followers = [j for j in chain.joints if chain.coordinates[j.coordinate] != j.name
+                 and (j.lower is not None or j.upper is not None or j.velocity is not None)]
+    narrowed = " Each coordinate's range keeps the mimic joints that follow it within their own limits." if followers else ""
+    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.{narrowed}", 100))

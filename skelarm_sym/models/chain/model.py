@@ -362,6 +362,7 @@ class Chain:
         if missing:
             params = params + tuple(sorted(missing, key=str))
         object.__setattr__(self, "parameters", params)
+        self.limits()  # followers' limits that leave a coordinate no value are refused here, at load
 
     @property
     def n(self) -> int:
@@ -429,16 +430,44 @@ class Chain:
             check_number(reach, "the robot's reach (sum of its constant translations)", precision, -1)
 
     def limits(self) -> dict[str, tuple[float | None, ...]]:
-        """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent."""
-        first = {}
-        for j in sorted(self.joints, key=lambda j: j.name != self.coordinates[j.coordinate]):  # own joint first
-            if j.coordinate not in first and _fold(j.multiplier) == 1 and _fold(j.offset) == 0:
-                first[j.coordinate] = j
-        out: dict[str, list] = {"lower": [], "upper": [], "velocity": []}
+        """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent.
+
+        A coordinate's own joint (the one it is named after; else the first that follows it with multiplier 1 and
+        offset 0) gives its limits as they are: a DH row's ``lower``/``upper`` bound the joint variable, its
+        ``theta`` offset aside. Every other joint that follows the coordinate, ``theta = m q + offset`` (a URDF
+        ``mimic`` joint), narrows the range to where it stays within its own limits, and the speed limit to
+        ``velocity / |m|``; a multiplier or offset that is a named parameter narrows nothing."""
+        own: dict[int, Joint] = {}
+        for j in self.joints:
+            if self.coordinates[j.coordinate] == j.name:
+                own.setdefault(j.coordinate, j)
+        for j in self.joints:
+            if _fold(j.multiplier) == 1 and _fold(j.offset) == 0:
+                own.setdefault(j.coordinate, j)
+        out: dict[str, list] = {"lower": [None] * self.n, "upper": [None] * self.n, "velocity": [None] * self.n}
+        for c, j in own.items():
+            out["lower"][c], out["upper"][c], out["velocity"][c] = j.lower, j.upper, j.velocity
+        for j in self.joints:
+            m, offset = _fold(j.multiplier), _fold(j.offset)
+            if own.get(j.coordinate) is j or m.free_symbols or offset.free_symbols or m == 0:
+                continue
+            m, offset = float(m), float(offset)
+            c = j.coordinate
+            bounds = [None if b is None else (b - offset) / m for b in (j.lower, j.upper)]
+            low, high = bounds if m > 0 else bounds[::-1]
+            if low is not None and (out["lower"][c] is None or low > out["lower"][c]):
+                out["lower"][c] = low
+            if high is not None and (out["upper"][c] is None or high < out["upper"][c]):
+                out["upper"][c] = high
+            if j.velocity is not None:
+                v = j.velocity / abs(m)
+                out["velocity"][c] = v if out["velocity"][c] is None else min(v, out["velocity"][c])
         for c in range(self.n):
-            j = first.get(c)
-            for key in out:
-                out[key].append(getattr(j, key) if j is not None else None)
+            low, high = out["lower"][c], out["upper"][c]
+            if low is not None and high is not None and low > high:
+                followers = ", ".join(repr(j.name) for j in self.joints if j.coordinate == c and own.get(c) is not j)
+                raise InputError(f"coordinate {self.coordinates[c]!r}: the limits of the joints that follow it ({followers}) "
+                                 f"leave no value within its range (lower {low:g} above upper {high:g})")
         return {k: tuple(v) for k, v in out.items()}
 
     def numeric(self, params: Sequence[float] | Mapping[str, float] | None = None) -> NumericChain:
