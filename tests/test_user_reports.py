@@ -253,3 +253,32 @@ def test_the_readme_first_screen_is_the_newcomer_path():
     assert re.search(r"\w+_kinematics\(", first) and re.search(r"\w+_ik_solve\(", first)
     assert re.search(r"about \d+ minutes", readme) and 'pytest -q -m "not slow"' in readme
     assert not re.search(r"(?i)\bissues? ?#?\d|\(#\d+\)", readme)
+
+
+def test_the_recorded_command_runs_as_printed_with_trigraphs_and_comment_ends_in_names(tmp_path, monkeypatch, capsys):
+    """A tip named ``tip?? ??/`` or ``a */ b /* c`` (a new user's probe): the C header recorded ``--tip 'tip?\\?
+    ?\\?/'``, its comment escapes, and the command did not run as printed. The words are now quoted so that no
+    trigraph or comment end appears (``'tip?''? ?''?/'``: the same word to a shell); run as printed, the command
+    regenerates the same files, and ``check --from`` reads it."""
+    import shlex
+
+    for tip in ("tip?? ??/", "a */ b /* c"):
+        folder = tmp_path / ("x" if "?" in tip else "y")
+        folder.mkdir()
+        text = (FIXTURES / "ur_like.urdf").read_text().replace('"wrist_3_link"', f'"{tip}"')
+        (folder / "arm.urdf").write_text(text)
+        monkeypatch.chdir(folder)
+        assert main(["generate", "--robot", "arm.urdf", "--tip", tip, "--functions", "pose", "--out", "gen"]) == 0
+        capsys.readouterr()
+        for name in ("arm.h", "arm.c", "arm.py"):
+            line = next(x for x in (folder / "gen" / name).read_text().splitlines() if "regenerate with (in this folder):" in x)
+            command = line.split("(in this folder): ", 1)[1].strip()
+            assert "??" not in command and "*/" not in command and "\\" not in command
+            words = shlex.split(command)
+            assert words[words.index("--tip") + 1] == tip
+        monkeypatch.chdir(folder / "gen")
+        before = {p.name: p.read_text() for p in (folder / "gen").iterdir()}
+        assert main(words[1:]) == 0  # as printed: skelarm-sym generate ... --out .
+        assert {p.name: p.read_text() for p in (folder / "gen").iterdir()} == before
+        assert main(["check", "--from", ".", "--cases", "2"]) == 0
+        capsys.readouterr()
