@@ -44,7 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_model_options(show)
     show.add_argument("--what", help="planar: p, phi, J, J3, H, v, a, det, manipulability, singular or all (default J); "
                       "diffdrive: matrix, inverse or all (default all); robots: T, J, J_tool, dJ, twist, acc or all "
-                      "(default J), or links: the link tree of a URDF, to choose --base and --tip")
+                      "(default J), ik: the closed-form IK's subproblems, or links: the link tree of a URDF (from --base "
+                      "when given), to choose --base and --tip")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
     show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")

@@ -817,6 +817,30 @@ def test_urdf_tree_lists_links_joints_and_leaves(tmp_path):
             assert load_urdf(path, base="torso", tip=link.name).n == link.coordinates
 
 
+def test_urdf_tree_from_a_base_and_tips_with_a_stray_mimic(tmp_path):
+    """``show --what links --base L`` lists the tree from L, its coordinates counted from there; a leaf whose path
+    holds a mimic joint that follows a joint off it is marked as refused (a new user's probe: the tree counted
+    from the root whatever the base, and offered Panda's right finger, which generate refuses)."""
+    from skelarm_sym.models.chain.loader import urdf_tree
+
+    path = write(tmp_path, TREE.replace("</robot>", """<link name="thumb"/>
+      <joint name="thumb" type="revolute"><parent link="L1"/><child link="thumb"/><axis xyz="0 0 1"/>
+        <mimic joint="l2"/></joint></robot>"""))
+    lines = urdf_tree(path, "chest")
+    assert lines[0] == "chest"
+    assert "        Lfinger  <- lfinger (prismatic)  [leaf: 3 coordinates from chest]" in lines
+    thumb = next(x for x in lines if x.strip().startswith("thumb"))
+    assert thumb.endswith("[leaf: 1 coordinate from chest; refused as a tip: mimic joint 'thumb' follows 'l2', off this chain]")
+    with pytest.raises(InputError, match="mimic refers to joint 'l2', which is not on the chain"):
+        load_urdf(path, base="chest", tip="thumb")
+    for line in lines:  # every leaf not marked refused loads from the base with the coordinates it announced
+        if "[leaf:" in line and "refused" not in line:
+            tip, count = line.split("<-")[0].strip(), int(line.split("[leaf: ")[1].split()[0])
+            assert load_urdf(path, base="chest", tip=tip).n == count
+    with pytest.raises(InputError, match="no link 'nowhere' \\(base\\)"):
+        urdf_tree(path, "nowhere")
+
+
 def test_urdf_tree_counts_mimic_joints_out_and_stays_flat_when_deep(tmp_path):
     from skelarm_sym.models.chain.loader import urdf_tree
 

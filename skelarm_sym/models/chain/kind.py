@@ -92,7 +92,7 @@ def _preview(args) -> str | None:
         return None
     from .urdf import urdf_tree
 
-    return "\n".join(urdf_tree(args.robot)) + "\n"
+    return "\n".join(urdf_tree(args.robot, getattr(args, "base", None))) + "\n"
 
 
 def _show(model: Chain, args) -> str:

@@ -431,36 +431,49 @@ class UrdfLink:
     joint_type: str | None
     coordinates: int
     leaf: bool
+    stray_mimic: str | None = None
+    """For a leaf: ``"'f' follows 'l'"`` when a mimic joint between its root and it follows a joint off that path
+    (a chain to this tip is refused), else None."""
 
 
 TREE_INDENT_LIMIT = 24
 """:func:`urdf_tree` indents by depth up to this many levels; deeper lines say their depth instead."""
 
 
-def urdf_links(path: str | os.PathLike) -> list[UrdfLink]:
+def urdf_links(path: str | os.PathLike, base: str | None = None) -> list[UrdfLink]:
     """Every link of the URDF file ``path`` in depth-first order from its roots (file order among
-    siblings), with the joint above it; InputError (one line naming the file) on a bad file. Linear in
-    the number of elements."""
+    siblings), or from link ``base`` down, with the joint above it; InputError (one line naming the file) on
+    a bad file or an unknown ``base``. Linear in the number of elements (and in the depth, per leaf)."""
     path = Path(path)
     root = _parse(path)
     try:
         tree = _read_tree(root)
+        if base is not None and base not in tree.links:
+            raise _unknown_link(base, "base", tree.links)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    starts = tree.roots if base is None else [base]
     out: list[UrdfLink] = []
-    stack: list[tuple[str, int, _UrdfJoint | None, int]] = [(r, 0, None, 0) for r in reversed(tree.roots)]
+    # per entry: link, depth, joint above, coordinates, moving joints on the path, (follower, leader) pairs on it
+    stack: list[tuple] = [(r, 0, None, 0, (), ()) for r in reversed(starts)]
     while stack:
-        link, depth, joint, coordinates = stack.pop()
-        if joint is not None and joint.type in MOVING and not _children(joint.element, "mimic"):
-            coordinates += 1
+        link, depth, joint, coordinates, moving, mimics = stack.pop()
+        if joint is not None and joint.type in MOVING:
+            moving = moving + (joint.name,)
+            mimic = _children(joint.element, "mimic")
+            if mimic:
+                mimics = mimics + ((joint.name, mimic[0].get("joint")),)
+            else:
+                coordinates += 1
         below = tree.children.get(link, [])
+        stray = next((f"{f!r} follows {lead!r}" for f, lead in mimics if lead not in moving), None) if not below else None
         out.append(UrdfLink(link, depth, None if joint is None else joint.parent, None if joint is None else joint.name,
-                            None if joint is None else joint.type, coordinates, not below))
-        stack.extend((j.child, depth + 1, j, coordinates) for j in reversed(below))
+                            None if joint is None else joint.type, coordinates, not below, stray))
+        stack.extend((j.child, depth + 1, j, coordinates, moving, mimics) for j in reversed(below))
     return out
 
 
-def urdf_tree(path: str | os.PathLike) -> list[str]:
+def urdf_tree(path: str | os.PathLike, base: str | None = None) -> list[str]:
     """The link tree of the URDF file ``path`` as lines to print, one per link, depth first: the link
     name indented two spaces per level, the joint above it and its type, and for a leaf (a ``tip``
     candidate) how many coordinates a chain from its root to it has::
@@ -471,10 +484,12 @@ def urdf_tree(path: str | os.PathLike) -> list[str]:
             ...
                       tool0  <- wrist_3-tool0 (fixed)  [leaf: 6 coordinates from world]
 
-    Names are printed as written (the loader refuses control characters in them). Beyond
-    ``TREE_INDENT_LIMIT`` levels a line starts with ``[depth N]`` instead of more spaces."""
+    From link ``base`` when given (the coordinates counted from there). A leaf whose chain holds a mimic joint
+    that follows a joint off it says so (``generate --tip`` refuses it). Names are printed as written (the
+    loader refuses control characters in them). Beyond ``TREE_INDENT_LIMIT`` levels a line starts with
+    ``[depth N]`` instead of more spaces."""
     lines, root = [], ""
-    for entry in urdf_links(path):
+    for entry in urdf_links(path, base):
         if entry.depth == 0:
             root = entry.name
         indent = "  " * min(entry.depth, TREE_INDENT_LIMIT)
@@ -485,7 +500,8 @@ def urdf_tree(path: str | os.PathLike) -> list[str]:
             text += f"  <- {entry.joint} ({entry.joint_type})"
         if entry.leaf and entry.depth > 0:
             plural = "" if entry.coordinates == 1 else "s"
-            text += f"  [leaf: {entry.coordinates} coordinate{plural} from {root}]"
+            text += f"  [leaf: {entry.coordinates} coordinate{plural} from {root}"
+            text += f"; refused as a tip: mimic joint {entry.stray_mimic}, off this chain]" if entry.stray_mimic else "]"
         elif entry.leaf:
             text += "  [no joints]"
         lines.append(text)
