@@ -3,7 +3,7 @@
     python benchmarks/casadi_compare.py                    # UR5, Panda, xArm7 (example-robot-data) + examples/robots/*.toml
     python benchmarks/casadi_compare.py --no-time          # operation counts only
     python benchmarks/casadi_compare.py examples/robots/ur5.toml path/to/panda.urdf:panda_hand_tcp
-    python benchmarks/casadi_compare.py --no-time --example-robot-data   # every example-robot-data chain (65 without named parameters)
+    python benchmarks/casadi_compare.py --no-time --example-robot-data   # every example-robot-data chain (66: one chain per URDF, none with named parameters)
 
 Needs ``pip install casadi example-robot-data`` (the URDFs are read from example-robot-data's
 ``cmeel.prefix/share/example-robot-data/robots``) and a C compiler.
@@ -12,9 +12,9 @@ For each robot, from the same :class:`~skelarm_sym.models.chain.model.Chain`:
 
 * **CasADi**: SX expressions written the way a CasADi user would: the tool pose as the product of
   the chain's constant 4 x 4 transforms and its joint motions (rotation about the joint's axis, or
-  translation along it; SX folds the products with structural zeros and ones), the linear rows
-  of the geometric Jacobian as ``jacobian(p, q)``, the angular rows as the joints' axes in base
-  axes (``R_k axis_k``), ``J_tool = blockdiag(R^T, R^T) J``, ``dJ = jtimes(J, q, dq)``,
+  translation along it; SX folds the products with structural zeros and ones), the geometric
+  Jacobian's columns ``[z_k x (p - o_k); z_k]`` (``[z_k; 0]`` for a prismatic joint) with ``z_k`` the joint's
+  axis in base axes (``R_k axis_k``) and ``o_k`` its origin, a mimic joint's column added with its multiplier, ``J_tool = blockdiag(R^T, R^T) J``, ``dJ = jtimes(J, q, dq)``,
   ``twist = J dq``, ``acc = J ddq + dJ dq``; one ``casadi.Function`` per emitted function with
   ``cse`` on, printed by ``casadi.CodeGenerator``. Its values are checked against
   :func:`skelarm_sym.reference.chain_kinematics` before anything is counted or timed.
