@@ -60,6 +60,7 @@ BAD = {
     "boolean_value": (REV + "a = true\n", r"joints\[0\]\.a must be a number or a string expression, got bool"),
     "short_rpy": (REV + "[base]\nrpy = [0.0, 0.0]\n", r"base\.rpy must be a list of three numbers"),
     "robot_name_not_identifier": ('name = "3d-arm"\n' + REV, r"name must be a C identifier"),
+    "robot_name_quoted_once": ("name = \"'x */ y\"\n" + REV, r"name must be a C identifier .*, got \"'x \*/ y\"$"),
     "duplicate_joint_names": ('[[joints]]\ntype = "revolute"\nname = "j"\n' * 2, r"joint names must be distinct"),
     "lower_above_upper": (REV + "lower = 1.0\nupper = -1.0\n", r"lower limit 1\.0 is above upper limit -1\.0"),
     "negative_velocity": (REV + "velocity = -2.0\n", r"joints\[0\]\.velocity must be positive"),

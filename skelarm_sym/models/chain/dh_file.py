@@ -182,7 +182,7 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
     if isinstance(name, str):
         check_printable(name, "name")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,47}", name):
-        raise InputError(f"name must be a C identifier (a letter, then letters, digits or _; at most 48), got {quoted(name) if isinstance(name, str) else name!r}")
+        raise InputError(f"name must be a C identifier (a letter, then letters, digits or _; at most 48), got {quoted(name) if isinstance(name, str) else repr(name)}")
     convention = data.get("convention", "standard")
     if convention not in CONVENTIONS:
         raise InputError(f"convention must be standard or modified, got {convention!r}")
