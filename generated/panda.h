@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xbcba9ee5UL
+#define PANDA_STAMP 0x92bdc31eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -200,7 +200,7 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
 /* Return codes of the solvers. */
 #define PANDA_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
-#define PANDA_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found) */
+#define PANDA_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define PANDA_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
 #define PANDA_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
 

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xbcba9ee5
+STAMP = 0x92bdc31e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -48,7 +48,7 @@ DQ_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61], dtype=DTYPE)
 IK_CONVERGED = 0
 """position error and rotation error are both <= tol"""
 IK_STALLED = 1
-"""max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found)"""
+"""max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge)"""
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3

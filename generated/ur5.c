@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x670d5b38UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x31b93625UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x670d5b38UL
+#define UR5_STAMP 0x31b93625UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -229,7 +229,7 @@ void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *
 
 /* Return codes of the solvers. */
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
-#define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found) */
+#define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
 #define UR5_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
