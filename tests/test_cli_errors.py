@@ -88,3 +88,30 @@ def test_show_at_the_limit_still_prints(capsys):
     assert main(["show", "--links", str(SHOW_MAX_LINKS), "--what", "p", "--format", "text"]) == 0
     out = capsys.readouterr().out
     assert f"l{SHOW_MAX_LINKS}*cos(q1 + " in out
+
+
+def test_a_refusal_for_other_options_comes_before_the_derivation(tmp_path, monkeypatch, capsys):
+    """Files generated with other options in the target folder are refused before the derivation where the
+    options besides the function list differ (a new user's probe: an all-functions generate into a folder of
+    pose-only files derived every function, seconds for a large chain, before it refused); a function list that
+    differs is still refused, after the derivation that settles it; the same options regenerate."""
+    import dataclasses
+
+    import skelarm_sym.generate as generation
+
+    out = tmp_path / "gen"
+    assert main(["generate", "--links", "3", "--functions", "jacobian", "--out", str(out)]) == 0
+    derived, kind_of = [], generation.kind_of
+
+    def counting(model):  # the model's kind, its derivations counted
+        kind = kind_of(model)
+        return dataclasses.replace(kind, derive=lambda *a, **k: derived.append(1) or kind.derive(*a, **k))
+
+    monkeypatch.setattr(generation, "kind_of", counting)
+    for argv in (["--functions", "jacobian", "--precision", "float"], []):  # other options: no derivation
+        assert main(["generate", "--links", "3", *argv, "--out", str(out)]) == 2
+        assert "was generated with other options" in capsys.readouterr().err
+    assert derived == []
+    assert main(["generate", "--links", "3", "--functions", "position", "--out", str(out)]) == 2  # after deriving
+    assert "was generated with other options" in capsys.readouterr().err and derived == [1]
+    assert main(["generate", "--links", "3", "--functions", "jacobian", "--out", str(out)]) == 0
