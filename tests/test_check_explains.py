@@ -290,3 +290,20 @@ def test_flipped_condition_would_be_caught(tmp_path):
     solve = next(r for r in results if r.implementation == "C inverse_velocity3 [lambda=0*reach]")
     assert solve.condition > 1.0
     assert np.isclose(solve.abs_error / (solve.size * solve.condition), solve.max_rel, rtol=1e-12)
+
+
+def test_check_of_one_closed_form_solver_reports_only_that_one(tmp_path, capsys):
+    """A generation with ``ik_nearest`` alone: its row says what was checked, nothing about ``ik_all`` (it
+    reported "source configuration among them 10/10" and "complete 0/0" for a function not emitted; a new user's
+    probe), and the reverse for ``ik_all`` alone."""
+    robot = Path(__file__).resolve().parents[1] / "examples" / "robots" / "puma560.toml"
+    for only, absent in (("ik_nearest", "source configuration among them"), ("ik_all", "ik_nearest from")):
+        out = tmp_path / only
+        assert main(["generate", "--robot", str(robot), "--functions", only, "--out", str(out)]) == 0
+        capsys.readouterr()
+        assert main(["check", "--from", str(out), "--cases", "4"]) == 0
+        rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith((f"C {only}:", f"Python {only}:"))]
+        assert [line.split(":")[0] for line in rows] == [f"C {only}", f"Python {only}"]
+        for line in rows:
+            assert absent not in line and line.endswith("; ok"), line
+            assert ("4/4" in line) and ("0/0" not in line), line
