@@ -249,6 +249,30 @@ def test_wrist_aligned_exactly_is_flagged():
     assert aligned.any() and np.all(flags[aligned] & 2)
 
 
+@pytest.mark.parametrize("name, q, pair", [
+    ("puma560", [1.7034576792211449, 3.0219331109601084, -1.4985763218216936, -0.5231731521948495, -1.16e-16,
+                 -1.082937625587884], (3, 5)),
+    ("iiwa14_lock3", [-1.9074823757314854, 0.45884333718735215, 0.3, 0.0541989919576511, -0.24138025631065618, 0.0,
+                      2.574040951750458], (4, 6)),
+])
+def test_a_wrist_aligned_to_rounding_keeps_the_source_branch(name, q, pair):
+    """Targets from the emitted NumPy pose at configurations with the wrist aligned: rounding leaves the candidate
+    ``q5`` at 1.1e-14 to 1.2e-14, past an aligned tolerance of 1e-14, so q4's SP1 took an angle of rounding noise and
+    the row fell outside the limits: the source's branch (its joints outside the aligned pair, which share one
+    rotation) was missing in C and NumPy (a new user's probe). With ``ALIGNED_TOL = 1e-13`` (an orientation error of
+    at most that) it is among the rows."""
+    b = built(name)
+    prefix = b.generated.module.prefix
+    poses = load_python(generate(b.chain, out=None, langs="python", functions="pose").sources[f"{prefix}.py"], prefix)
+    q = np.array(q)
+    T = poses.pose(q)
+    other = [k for k in range(b.chain.n) if k not in pair]  # the aligned pair shares one rotation: a representative
+    for r in (b.c.ik_all(T, *b.extra(q)), b.py.ik_all(T, *b.extra(q))):
+        assert r.status == "ok"
+        rows = check_rows(b, r, T)
+        assert np.min(wrapped_distance(rows[:, other], q[other], b.revolute[other])) <= 1e-7, (rows, q)
+
+
 def test_limits_and_two_pi_shifts():
     """Joint 1 of the PUMA limited to [pi/2, 5pi/2] (centre 3pi/2): every row's q1 is in that range, the copy of
     the spec's; a joint limited to a range that the target's solutions miss gives out_of_limits, count 0."""
