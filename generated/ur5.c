@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x31b93625UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xd411ee14UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6484,6 +6484,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     int flag = 0;
     int dup = 0;
     double diff = 0.0;
+    double tol = 0.0;
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         flag = (int)raw_flags[i];
         if (exact == 0 || flag % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
@@ -6502,19 +6503,20 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
             if (flag > 0) {
                 /* an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart */
                 for (int r = 0; r < kept; ++r) {
-                    /* the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test */
+                    /* the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test */
+                    tol = (flag >= UR5_IK_FLAG_SINGULAR && flags[r] >= UR5_IK_FLAG_SINGULAR ? UR5_IK_DUP_TOL_SINGULAR : UR5_IK_DUP_TOL);
                     diff = cand[1] - q[6*r + 1];
-                    if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                    if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                         diff = cand[2] - q[6*r + 2];
-                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                        if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                             diff = cand[3] - q[6*r + 3];
-                            if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                            if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                                 diff = cand[4] - q[6*r + 4];
-                                if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                                     diff = cand[5] - q[6*r + 5];
-                                    if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                    if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                                         diff = cand[0] - q[6*r];
-                                        if (fabs(diff) <= UR5_IK_DUP_TOL || fabs(6.283185307179586 - fabs(diff)) <= UR5_IK_DUP_TOL) {
+                                        if (fabs(diff) <= tol || fabs(6.283185307179586 - fabs(diff)) <= tol) {
                                             dup = r;
                                             break;
                                         }

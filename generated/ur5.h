@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x31b93625UL
+#define UR5_STAMP 0xd411ee14UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -86,6 +86,9 @@ extern "C" {
 
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09
+
+/* ik_all returns rows both flagged singular and closer than this once (a double root's two roots) */
+#define UR5_IK_DUP_TOL_SINGULAR 1e-06
 
 /* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */

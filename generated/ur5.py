@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x31b93625
+STAMP = 0xd411ee14
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -54,6 +54,8 @@ IK_TRANSLATION_MAX = 1e+150
 """ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"""
 IK_DUP_TOL = 1e-09
 """ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"""
+IK_DUP_TOL_SINGULAR = 1e-06
+"""ik_all returns rows both flagged singular and closer than this once (a double root's two roots)"""
 Q_MIN = np.array([-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586], dtype=DTYPE)
 """lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)"""
 Q_MAX = np.array([6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586], dtype=DTYPE)
@@ -6504,6 +6506,7 @@ def _ik_all_rows(target, q, count, flags):
     flag = 0
     dup = 0
     diff = DTYPE(0.0)
+    tol = DTYPE(0.0)
     for i in range(0, IK_MAX_SOLUTIONS):
         flag = int(raw_flags[i])
         if exact == 0 or flag % 2 != IK_FLAG_LEAST_SQUARES:
@@ -6521,19 +6524,20 @@ def _ik_all_rows(target, q, count, flags):
             if flag > 0:
                 # an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart
                 for r in range(0, kept):
-                    # the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    tol = IK_DUP_TOL_SINGULAR if flag >= IK_FLAG_SINGULAR and flags[r] >= IK_FLAG_SINGULAR else IK_DUP_TOL
                     diff = cand[1] - q[6*r + 1]
-                    if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                    if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                         diff = cand[2] - q[6*r + 2]
-                        if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                        if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                             diff = cand[3] - q[6*r + 3]
-                            if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                            if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                                 diff = cand[4] - q[6*r + 4]
-                                if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                                if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                                     diff = cand[5] - q[6*r + 5]
-                                    if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                                    if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                                         diff = cand[0] - q[6*r]
-                                        if np.abs(diff) <= IK_DUP_TOL or np.abs(6.283185307179586 - np.abs(diff)) <= IK_DUP_TOL:
+                                        if np.abs(diff) <= tol or np.abs(6.283185307179586 - np.abs(diff)) <= tol:
                                             dup = r
                                             break
             if dup >= 0:
@@ -6672,6 +6676,7 @@ def _ik_all_lanes(_c, target):
     _ik_all_rows3_flag = _fi(0)
     _ik_all_rows3_dup = _fi(0)
     _ik_all_rows3_diff = _fr(0.0)
+    _ik_all_rows3_tol = _fr(0.0)
     for _ik_all_rows3_i in range(0, 8):
         _ik_all_rows3_flag = np.where(_alive4, _ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64), _ik_all_rows3_flag)
         _c9 = (_ik_all_rows3_exact == 0) | (_ik_all_rows3_flag % 2 != IK_FLAG_LEAST_SQUARES)
@@ -6696,30 +6701,31 @@ def _ik_all_lanes(_c, target):
                 _r15 = _fi(0)
                 _run16 = _m14 & (_r15 < _ik_all_rows3_kept)
                 while bool(_run16.any()):
-                    # the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    _ik_all_rows3_tol = np.where(_run16, np.where((_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_r15 == 0, flags[0], np.where(_r15 == 1, flags[1], np.where(_r15 == 2, flags[2], np.where(_r15 == 3, flags[3], np.where(_r15 == 4, flags[4], np.where(_r15 == 5, flags[5], np.where(_r15 == 6, flags[6], flags[7]))))))) >= IK_FLAG_SINGULAR), _fr(IK_DUP_TOL_SINGULAR), IK_DUP_TOL), _ik_all_rows3_tol)
                     _i17 = 6*_r15 + 1
                     _ik_all_rows3_diff = np.where(_run16, _ik_all_rows3_cand[1] - np.where(_i17 == 1, q[1], np.where(_i17 == 7, q[7], np.where(_i17 == 13, q[13], np.where(_i17 == 19, q[19], np.where(_i17 == 25, q[25], np.where(_i17 == 31, q[31], np.where(_i17 == 37, q[37], q[43]))))))), _ik_all_rows3_diff)
-                    _c18 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c18 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m19 = _run16 & _c18
                     _i20 = 6*_r15 + 2
                     _ik_all_rows3_diff = np.where(_m19, _ik_all_rows3_cand[2] - np.where(_i20 == 2, q[2], np.where(_i20 == 8, q[8], np.where(_i20 == 14, q[14], np.where(_i20 == 20, q[20], np.where(_i20 == 26, q[26], np.where(_i20 == 32, q[32], np.where(_i20 == 38, q[38], q[44]))))))), _ik_all_rows3_diff)
-                    _c21 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c21 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m22 = _m19 & _c21
                     _i23 = 6*_r15 + 3
                     _ik_all_rows3_diff = np.where(_m22, _ik_all_rows3_cand[3] - np.where(_i23 == 3, q[3], np.where(_i23 == 9, q[9], np.where(_i23 == 15, q[15], np.where(_i23 == 21, q[21], np.where(_i23 == 27, q[27], np.where(_i23 == 33, q[33], np.where(_i23 == 39, q[39], q[45]))))))), _ik_all_rows3_diff)
-                    _c24 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c24 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m25 = _m22 & _c24
                     _i26 = 6*_r15 + 4
                     _ik_all_rows3_diff = np.where(_m25, _ik_all_rows3_cand[4] - np.where(_i26 == 4, q[4], np.where(_i26 == 10, q[10], np.where(_i26 == 16, q[16], np.where(_i26 == 22, q[22], np.where(_i26 == 28, q[28], np.where(_i26 == 34, q[34], np.where(_i26 == 40, q[40], q[46]))))))), _ik_all_rows3_diff)
-                    _c27 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c27 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m28 = _m25 & _c27
                     _i29 = 6*_r15 + 5
                     _ik_all_rows3_diff = np.where(_m28, _ik_all_rows3_cand[5] - np.where(_i29 == 5, q[5], np.where(_i29 == 11, q[11], np.where(_i29 == 17, q[17], np.where(_i29 == 23, q[23], np.where(_i29 == 29, q[29], np.where(_i29 == 35, q[35], np.where(_i29 == 41, q[41], q[47]))))))), _ik_all_rows3_diff)
-                    _c30 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c30 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m31 = _m28 & _c30
                     _i32 = 6*_r15
                     _ik_all_rows3_diff = np.where(_m31, _ik_all_rows3_cand[0] - np.where(_i32 == 0, q[0], np.where(_i32 == 6, q[6], np.where(_i32 == 12, q[12], np.where(_i32 == 18, q[18], np.where(_i32 == 24, q[24], np.where(_i32 == 30, q[30], np.where(_i32 == 36, q[36], q[42]))))))), _ik_all_rows3_diff)
-                    _c33 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c33 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m34 = _m31 & _c33
                     _ik_all_rows3_dup = np.where(_m34, _r15, _ik_all_rows3_dup)
                     _run16 = _run16 & (~_m34)
@@ -7141,6 +7147,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _ik_all_rows3_flag = _fi(0)
     _ik_all_rows3_dup = _fi(0)
     _ik_all_rows3_diff = _fr(0.0)
+    _ik_all_rows3_tol = _fr(0.0)
     for _ik_all_rows3_i in range(0, 8):
         _ik_all_rows3_flag = np.where(_alive4, _ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64), _ik_all_rows3_flag)
         _c9 = (_ik_all_rows3_exact == 0) | (_ik_all_rows3_flag % 2 != IK_FLAG_LEAST_SQUARES)
@@ -7165,30 +7172,31 @@ def _ik_nearest_lanes(_c, q_ref, target):
                 _r15 = _fi(0)
                 _run16 = _m14 & (_r15 < _ik_all_rows3_kept)
                 while bool(_run16.any()):
-                    # the same row when every joint is within IK_DUP_TOL: nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    _ik_all_rows3_tol = np.where(_run16, np.where((_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_r15 == 0, flags[0], np.where(_r15 == 1, flags[1], np.where(_r15 == 2, flags[2], np.where(_r15 == 3, flags[3], np.where(_r15 == 4, flags[4], np.where(_r15 == 5, flags[5], np.where(_r15 == 6, flags[6], flags[7]))))))) >= IK_FLAG_SINGULAR), _fr(IK_DUP_TOL_SINGULAR), IK_DUP_TOL), _ik_all_rows3_tol)
                     _i17 = 6*_r15 + 1
                     _ik_all_rows3_diff = np.where(_run16, _ik_all_rows3_cand[1] - np.where(_i17 == 1, rows[1], np.where(_i17 == 7, rows[7], np.where(_i17 == 13, rows[13], np.where(_i17 == 19, rows[19], np.where(_i17 == 25, rows[25], np.where(_i17 == 31, rows[31], np.where(_i17 == 37, rows[37], rows[43]))))))), _ik_all_rows3_diff)
-                    _c18 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c18 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m19 = _run16 & _c18
                     _i20 = 6*_r15 + 2
                     _ik_all_rows3_diff = np.where(_m19, _ik_all_rows3_cand[2] - np.where(_i20 == 2, rows[2], np.where(_i20 == 8, rows[8], np.where(_i20 == 14, rows[14], np.where(_i20 == 20, rows[20], np.where(_i20 == 26, rows[26], np.where(_i20 == 32, rows[32], np.where(_i20 == 38, rows[38], rows[44]))))))), _ik_all_rows3_diff)
-                    _c21 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c21 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m22 = _m19 & _c21
                     _i23 = 6*_r15 + 3
                     _ik_all_rows3_diff = np.where(_m22, _ik_all_rows3_cand[3] - np.where(_i23 == 3, rows[3], np.where(_i23 == 9, rows[9], np.where(_i23 == 15, rows[15], np.where(_i23 == 21, rows[21], np.where(_i23 == 27, rows[27], np.where(_i23 == 33, rows[33], np.where(_i23 == 39, rows[39], rows[45]))))))), _ik_all_rows3_diff)
-                    _c24 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c24 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m25 = _m22 & _c24
                     _i26 = 6*_r15 + 4
                     _ik_all_rows3_diff = np.where(_m25, _ik_all_rows3_cand[4] - np.where(_i26 == 4, rows[4], np.where(_i26 == 10, rows[10], np.where(_i26 == 16, rows[16], np.where(_i26 == 22, rows[22], np.where(_i26 == 28, rows[28], np.where(_i26 == 34, rows[34], np.where(_i26 == 40, rows[40], rows[46]))))))), _ik_all_rows3_diff)
-                    _c27 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c27 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m28 = _m25 & _c27
                     _i29 = 6*_r15 + 5
                     _ik_all_rows3_diff = np.where(_m28, _ik_all_rows3_cand[5] - np.where(_i29 == 5, rows[5], np.where(_i29 == 11, rows[11], np.where(_i29 == 17, rows[17], np.where(_i29 == 23, rows[23], np.where(_i29 == 29, rows[29], np.where(_i29 == 35, rows[35], np.where(_i29 == 41, rows[41], rows[47]))))))), _ik_all_rows3_diff)
-                    _c30 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c30 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m31 = _m28 & _c30
                     _i32 = 6*_r15
                     _ik_all_rows3_diff = np.where(_m31, _ik_all_rows3_cand[0] - np.where(_i32 == 0, rows[0], np.where(_i32 == 6, rows[6], np.where(_i32 == 12, rows[12], np.where(_i32 == 18, rows[18], np.where(_i32 == 24, rows[24], np.where(_i32 == 30, rows[30], np.where(_i32 == 36, rows[36], rows[42]))))))), _ik_all_rows3_diff)
-                    _c33 = (np.abs(_ik_all_rows3_diff) <= IK_DUP_TOL) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= IK_DUP_TOL)
+                    _c33 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
                     _m34 = _m31 & _c33
                     _ik_all_rows3_dup = np.where(_m34, _r15, _ik_all_rows3_dup)
                     _run16 = _run16 & (~_m34)

@@ -273,6 +273,24 @@ def test_a_wrist_aligned_to_rounding_keeps_the_source_branch(name, q, pair):
         assert np.min(wrapped_distance(rows[:, other], q[other], b.revolute[other])) <= 1e-7, (rows, q)
 
 
+def test_a_double_root_gives_one_row():
+    """At an elbow double root (det J = 0 in q2) the two roots part by about the square root of rounding: C and
+    NumPy returned two pairs of rows 3e-8 rad apart, all flagged singular, where JAX's rounding gave one row each (a
+    new user's probe). Rows both flagged singular within IK_DUP_TOL_SINGULAR (1e-6) are one: two rows, the same in
+    every language, each reproducing the target."""
+    b = built("puma560")
+    poses = load_python(generate(b.chain, out=None, langs="python", functions="pose").sources["puma560.py"], "puma560")
+    q = np.array([-0.5111820541496077, -0.48304311766483954, -3.69722551824775, 2.9630334670541765, 0.5318685351098063,
+                  -2.465113031220812])
+    T = poses.pose(q)
+    results = [b.c.ik_all(T), b.py.ik_all(T)]
+    for r in results:
+        assert r.status == "ok" and r.count == 2 and np.all(np.asarray(r.flags)[:2] & 2)
+        rows = check_rows(b, r, T, tol=1e-10)
+        assert np.min(wrapped_distance(rows[1:], rows[0], b.revolute)) > 1e-6
+    np.testing.assert_array_equal(np.asarray(results[0].q)[:2], np.asarray(results[1].q)[:2])
+
+
 def test_limits_and_two_pi_shifts():
     """Joint 1 of the PUMA limited to [pi/2, 5pi/2] (centre 3pi/2): every row's q1 is in that range, the copy of
     the spec's; a joint limited to a range that the target's solutions miss gives out_of_limits, count 0."""

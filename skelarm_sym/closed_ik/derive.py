@@ -29,7 +29,7 @@ import sympy as sp
 from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
-from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
+from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
@@ -226,6 +226,8 @@ EMITTED_CONSTANTS = (
              "ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped"),
     Constant(sp.Symbol("IK_DUP_TOL"), {"double": DUP_TOL, "float": DUP_TOL_FLOAT},
              "ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"),
+    Constant(sp.Symbol("IK_DUP_TOL_SINGULAR"), {"double": DUP_TOL_SINGULAR, "float": DUP_TOL_SINGULAR_FLOAT},
+             "ik_all returns rows both flagged singular and closer than this once (a double root's two roots)"),
 )
 """The module constants the emitted ``ik_all`` and ``ik_nearest`` use (integers print as such)."""
 

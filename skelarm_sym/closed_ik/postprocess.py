@@ -19,7 +19,7 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
 4. **Limits**: a candidate with any joint below ``lower - LIMIT_TOL`` or above ``upper + LIMIT_TOL`` is dropped;
    joints within ``LIMIT_TOL`` outside are clipped onto the limit.
 5. **Duplicates**: a candidate within ``DUP_TOL`` (max over joints; revolute differences taken modulo
-   2 pi) of an earlier kept one is dropped (the earlier one stays, its flags OR-ed with the duplicate's
+   2 pi) of an earlier kept one, or within ``DUP_TOL_SINGULAR`` where both are flagged singular, is dropped (the earlier one stays, its flags OR-ed with the duplicate's
    singular bit). Double roots and repeated branches of singular cases collapse here.
 6. **Order**: the kept rows in branch order (deterministic; a branch keeps its index as the target moves,
    ``branch`` reports it). ``count`` = their number; rows past ``count`` are NaN.
@@ -47,12 +47,16 @@ LIMIT_TOL = 1e-12
 """Joints this far (rad or m) outside a limit are clipped onto it; further out, the candidate is dropped."""
 DUP_TOL = 1e-9
 """Candidates closer than this (max over joints, rad or m) are one solution."""
+DUP_TOL_SINGULAR = 1e-6
+"""Candidates both flagged singular and closer than this are one solution: the two roots of a double root part by
+about the square root of rounding (3e-8 rad seen on the PUMA 560 and UR5), which DUP_TOL keeps as two rows."""
 TRANSLATION_MAX = 1e150
 """Largest ``|t_i|`` (m) of a target accepted: the candidates square translations (about 1.3e154 overflows a
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
 TRANSLATION_MAX_FLOAT = 1e18
 """The same for code emitted in float (squares overflow a float from about 1.8e19)."""
 ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT = 1e-4, 1e-5, 1e-4
+DUP_TOL_SINGULAR_FLOAT = DUP_TOL_FLOAT
 """The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9."""
 TWO_PI = 2.0 * np.pi
@@ -112,7 +116,7 @@ def _difference(a: np.ndarray, b: np.ndarray, revolute) -> np.ndarray:
 
 
 def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = DUP_TOL,
-                limit_tol: float = LIMIT_TOL) -> IKAll:
+                limit_tol: float = LIMIT_TOL, dup_tol_singular: float = DUP_TOL_SINGULAR) -> IKAll:
     """Steps 1-7 of the module docstring for one target. ``Q`` (S, N), ``flags`` (S); ``Q = None`` means the
     caller found the input invalid; ``target`` (16) enables step 1's rotation check."""
     lower = np.asarray(lower, float)
@@ -139,7 +143,8 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
         q = np.clip(q, lower, upper)
         dup = False
         for r in range(count):
-            if np.max(np.abs(_difference(q, out_q[r], revolute))) <= dup_tol:
+            tol = dup_tol_singular if flags[i] & 2 and out_f[r] & 2 else dup_tol
+            if np.max(np.abs(_difference(q, out_q[r], revolute))) <= tol:
                 out_f[r] |= flags[i] & 2
                 dup = True
                 break

@@ -144,22 +144,21 @@ def _shifted(b: Body, x, centre: float, out) -> None:
         b.set(out, out + TWO_PI * Call1("nearbyint", (centre - out) * INV_TWO_PI))
 
 
-def _close(d, revolute: bool):
-    """``|d| <= IK_DUP_TOL``, modulo 2 pi for a revolute joint: ``d`` is the difference of two angles shifted
-    toward the same centre (``|d| <= 2 pi`` up to the clipping), so ``|d|`` or ``|2 pi - |d||`` (no call)."""
-    tol = NamedConst("IK_DUP_TOL")
+def _close(d, revolute: bool, tol):
+    """``|d| <= tol``, modulo 2 pi for a revolute joint: ``d`` is the difference of two angles shifted toward the
+    same centre (``|d| <= 2 pi`` up to the clipping), so ``|d|`` or ``|2 pi - |d||`` (no call)."""
     if not revolute:
         return fabs(d) <= tol
     return (fabs(d) <= tol) | (fabs(TWO_PI - fabs(d)) <= tol)
 
 
-def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var, depth: int) -> None:
+def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var, depth: int, tol) -> None:
     """Joints ``arm.order[depth:]`` of ``cand`` against kept row ``r``: a nest of tests ending in ``dup = r; break``."""
     j = arm.order[depth]
     b.set(diff, cand[j] - q[_at(arm.n, r, j)])
-    with b.if_(_close(diff, arm.revolute[j])):
+    with b.if_(_close(diff, arm.revolute[j], tol)):
         if depth + 1 < arm.n:
-            _same_row(b, arm, cand, q, r, diff, dup, depth + 1)
+            _same_row(b, arm, cand, q, r, diff, dup, depth + 1, tol)
         else:
             b.set(dup, r)
             b.break_()
@@ -191,6 +190,8 @@ def rows_helper(arm: _Arm) -> Function:
     inside = b.var("inside", zero, Type.INT) if tested else None
     dup = b.var("dup", zero, Type.INT)
     diff = b.var("diff", 0.0)
+    tol = b.var("tol", 0.0)
+    singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
         with b.if_(eq(exact, 0) | ne(Bits("%", flag, _int(2)), least_squares)):
@@ -210,12 +211,14 @@ def rows_helper(arm: _Arm) -> Function:
                         b.comment("an exact regular row (flag 0) is no other row's duplicate: their branches part at a "
                                   "subproblem that is not singular, 1e-5 rad or more apart")
                     with b.for_("r", 0, kept) as r:
-                        b.comment("the same row when every joint is within IK_DUP_TOL: nested, the joint with the most "
+                        b.comment("the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are "
+                                  "flagged singular: a double root's two roots): nested, the joint with the most "
                                   "distinct candidates first, so a row that differs there costs one test")
-                        _same_row(b, arm, cand, q, r, diff, dup, 0)
+                        b.set(tol, select((flag >= singular) & (flags[r] >= singular), NamedConst("IK_DUP_TOL_SINGULAR"),
+                                          NamedConst("IK_DUP_TOL")))
+                        _same_row(b, arm, cand, q, r, diff, dup, 0, tol)
                 with b.if_(dup >= 0):
                     b.comment("the kept row takes the duplicate's singular bit")
-                    singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
                     with b.if_((flag >= singular) & (flags[dup] < singular)):
                         b.set(flags[dup], flags[dup] + singular)
                 with b.else_():
