@@ -38,6 +38,15 @@ def run(body, x):
     return out
 
 
+def assert_both_negations_go(body, seed: int) -> None:
+    """``body`` pays two negations; the sign pass leaves none (two operations fewer), the outputs the same."""
+    assert count_ops(body).neg == 2
+    after = settle_signs(body)
+    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 2
+    for x in np.random.default_rng(seed).uniform(-3, 3, (30, 4)):
+        assert_same_outputs(body, after, x)
+
+
 def assert_same_outputs(body, after, x) -> None:
     """``after`` stores what ``body`` stores at inputs ``x``, to rounding."""
     want, got = run(body, x), run(after, x)
@@ -223,11 +232,7 @@ def test_a_chase_flips_what_a_paying_local_reads(copied):
         Let(t[42], Add((Mul((X[1], t[36])), Neg(Mul((X[2], t[34])))))),
         Store("T", 9, t[42]),
     )
-    assert count_ops(body).neg == 2
-    after = settle_signs(body)
-    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 2
-    for x in np.random.default_rng(13).uniform(-3, 3, (30, 4)):
-        assert_same_outputs(body, after, x)
+    assert_both_negations_go(body, seed=13)
     with pytest.MonkeyPatch.context() as patch:  # following only the paying local's own flip leaves both
         patch.setattr(signs, "CHASE_OPTIONS", 1)
         assert count_ops(settle_signs(body)).neg == 2
@@ -259,8 +264,4 @@ def test_a_chase_goes_on_from_what_an_earlier_flip_left_paying():
         Let(t[36], Add((Mul((X[0], t[33])), Neg(Mul((X[1], t[31])))))),
         Store("T", 1, t[36]),
     )
-    assert count_ops(body).neg == 2
-    after = settle_signs(body)
-    assert count_ops(after).neg == 0 and count_ops(after).arithmetic == count_ops(body).arithmetic - 2
-    for x in np.random.default_rng(14).uniform(-3, 3, (30, 4)):
-        assert_same_outputs(body, after, x)
+    assert_both_negations_go(body, seed=14)

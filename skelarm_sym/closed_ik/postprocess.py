@@ -19,8 +19,9 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
 4. **Limits**: a candidate with any joint below ``lower - LIMIT_TOL`` or above ``upper + LIMIT_TOL`` is dropped;
    joints within ``LIMIT_TOL`` outside are clipped onto the limit.
 5. **Duplicates**: a candidate within ``DUP_TOL`` (max over joints; revolute differences taken modulo
-   2 pi) of an earlier kept one, or within ``DUP_TOL_SINGULAR`` where both are flagged singular, is dropped (the earlier one stays, its flags OR-ed with the duplicate's
-   singular bit). Double roots and repeated branches of singular cases collapse here.
+   2 pi) of an earlier kept one, or within ``DUP_TOL_SINGULAR`` where both are flagged singular, is dropped
+   (the earlier one stays, its flags OR-ed with the duplicate's singular bit). Double roots and repeated
+   branches of singular cases collapse here.
 6. **Order**: the kept rows in branch order (deterministic; a branch keeps its index as the target moves,
    ``branch`` reports it). ``count`` = their number; rows past ``count`` are NaN.
 7. **Status**: ``ok`` (at least one exact solution within limits, all of them returned), ``unreachable``
@@ -55,10 +56,10 @@ TRANSLATION_MAX = 1e150
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
 TRANSLATION_MAX_FLOAT = 1e18
 """The same for code emitted in float (squares overflow a float from about 1.8e19)."""
-ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT = 1e-4, 1e-5, 1e-4
-DUP_TOL_SINGULAR_FLOAT = DUP_TOL_FLOAT
+ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT = 1e-4, 1e-5, 1e-4, 1e-4
 """The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
-about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9."""
+about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9 (singular
+rows keep the same tolerance as the others in float)."""
 TWO_PI = 2.0 * np.pi
 
 

@@ -10,7 +10,7 @@ import sympy as sp
 
 from .algebra import Rows, Vector, _rows, _rz, _times_rz, matmul, matvec
 from .canonical import _Canonical
-from .frames import _Frames, _actual, _scaled_entry, _turned_rows
+from .frames import _Frames, _actual, _horner_step, _scaled_entry, _turned_rows
 from .joints import E_Z, add, cross
 from .model import Transform
 from .price import Pose, _flat, _price
@@ -410,13 +410,13 @@ def _pose(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: Transfor
     cheapest = rotations[(None, 0, 1, 2).index(dropped)]
     if len(joints) <= CANDIDATES_UP_TO:
         shares = _link_shares(step, joints, f, tool, cheapest, dropped)
-        poses.append((cheapest, step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", _summed(shares))))
+        poses.append((cheapest, _summed_tip(step, f, dropped, shares)))
         alone = [(cheapest, tip) for tip in _split_tips(step, joints, f, shares, dropped)]
         if scaled is not None:
             others, other_dropped = _rotations(step, _tool_rows(step, scaled, tool), scaled.tag)
             rotation = others[(None, 0, 1, 2).index(other_dropped)]
-            summed = _summed(_link_shares(step, joints, scaled, tool, rotation, other_dropped))
-            poses.append((rotation, step.vec(f"ps{scaled.tag}{'' if other_dropped is None else other_dropped}", summed)))
+            shares = _link_shares(step, joints, scaled, tool, rotation, other_dropped)
+            poses.append((rotation, _summed_tip(step, scaled, other_dropped, shares)))
     return poses, alone, dropped
 
 
@@ -471,6 +471,11 @@ def _link_shares(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: T
     return shares
 
 
+def _summed_tip(step: _Steps, f: _Frames, dropped: int | None, shares: Sequence[list[list[sp.Expr]]]) -> Vector:
+    """``p_e`` summed link by link in base axes (:func:`_link_shares`), as a step of the frames ``f``."""
+    return step.vec(f"ps{f.tag}{'' if dropped is None else dropped}", _summed(shares))
+
+
 def _summed(shares: Sequence[list[list[sp.Expr]]]) -> Vector:
     """The per-axis sums of :func:`_link_shares`' terms (one sum per axis, its terms in chain order)."""
     return [sp.Add(*[x for share in shares for x in share[i]]) for i in range(3)]
@@ -502,13 +507,7 @@ def _split_tips(step: _Steps, joints: Sequence[_Canonical], f: _Frames, shares: 
 def _cut_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, m: int) -> Vector:
     """``W'_1 = o_m - o_1`` in the axes of the first segment's frame: :func:`~.frames._tool_offsets`'s Horner
     rule over joints ``1 .. m - 1``, with nothing after joint ``m``'s origin."""
-    w: Vector = [sp.S.Zero] * 3
+    w: Vector | None = None
     for k in reversed(range(m)):
-        t = list(joints[k + 1].before.translation)
-        if f.segment[k + 1] == f.segment[k]:
-            v = add(_rz(f.trig[k], t), w)
-        else:
-            v = _rz(f.trig[k], add(t, matvec(_rows(joints[k + 1].before.rotation), w)))
-        v[2] = v[2] + joints[k].motion.advance(f.theta[k])
-        w = step.vec(f"Wm{f.tag}{m}_{k + 1}", v)
+        w = _horner_step(step, joints, f, k, joints[k + 1].before, w, f"Wm{f.tag}{m}_{k + 1}")
     return w

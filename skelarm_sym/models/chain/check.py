@@ -280,7 +280,7 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
         check = ClosedCheck(f"{label} {names}", m, allowed, has_all, has_nearest)
         for k in range(m):
             extra = (float(q_gen[k, lock]),) if lock is not None else ()
-            if getattr(impl, "ik_all", None) is not None:
+            if has_all:
                 r = impl.ik_all(targets[k], *extra)
                 check.statuses[str(r.status)] = check.statuses.get(str(r.status), 0) + 1
                 q = np.asarray(r.q, dtype=np.float64).reshape(-1, n)
@@ -313,7 +313,7 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
                         check.complete += 1
                     else:
                         check.fail(f"target {k}: {len(lost)} of the numeric IK's {len(judged[k])} solutions missing")
-            if getattr(impl, "ik_nearest", None) is not None:
+            if has_nearest:
                 r = impl.ik_nearest(q_gen[k], targets[k], *extra)
                 if r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), found_tol):
                     check.nearest += 1

@@ -16,8 +16,9 @@ projected into the axes where it is cheapest and rotated once; what a joint cont
 from its :class:`~skelarm_sym.models.chain.joints.JointType`):
 
 1. **Canonical joints** (:func:`canonical_joints`): every joint becomes a motion about or along
-   ``z`` after a constant transform; a turning joint about the previous one's reversed axis turns about
-   the same axis by the negated angle (:func:`_flips_into_angles`: the two share a frame); offsets that
+   ``z`` after a constant transform; a joint about the reversed axis of a turning joint of its segment
+   (slides along it between them) moves about the same axis by the negated variable (:func:`_flips_into_angles`:
+   they share a frame); offsets that
    are multiples of pi/2 (revolute) and all prismatic offsets fold into the constants, and a constant
    rotation about a joint's axis (or about the last axis in the tool transform) into its angle
    (:func:`_axis_turns_into_angles`); a constant rotation next to a revolute joint (between two, before a
@@ -241,10 +242,8 @@ def _notes(chain: Chain) -> tuple[str, ...]:
     """Header lines: the model, its coordinates and the frames of every output."""
     n = chain.n
     kinds = ", ".join(f"{j.name}: {j.kind}" for j in chain.joints)
-    followers = [j.coordinate for j in chain.joints]
     mimics = [f"{j.name} = {_coefficient(j.multiplier)}q[{j.coordinate}] ({chain.coordinates[j.coordinate]})"
-              + _plus(j.offset)
-              for j in chain.joints if followers.count(j.coordinate) > 1 and j.name != chain.coordinates[j.coordinate]]
+              + _plus(j.offset) for j in chain.followers()]
     return (
         f"Model: {chain.describe()}.",
         f"Joints (base to tip): {kinds}.",
@@ -314,7 +313,6 @@ def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
         f"{name} [{shown(lo)}, {shown(hi)}]" + (f" |dq| <= {shown(vel)}" if vel is not None else "")
         for name, lo, hi, vel in zip(chain.coordinates, limits["lower"], limits["upper"], limits["velocity"])
     )
-    followers = [j for j in chain.joints if chain.coordinates[j.coordinate] != j.name
-                 and (j.lower is not None or j.upper is not None or j.velocity is not None)]
-    narrowed = " Each coordinate's range keeps the mimic joints that follow it within their own limits." if followers else ""
+    limited = [j for j in chain.followers() if j.lower is not None or j.upper is not None or j.velocity is not None]
+    narrowed = " Each coordinate's range keeps the mimic joints that follow it within their own limits." if limited else ""
     return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.{narrowed}", 100))

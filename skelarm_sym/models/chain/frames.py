@@ -96,16 +96,24 @@ def _tool_offsets(step: _Steps, joints: Sequence[_Canonical], f: _Frames, tool: 
     n = len(joints)
     W: list[Vector] = [None] * n
     for k in reversed(range(n)):
-        nxt = joints[k + 1].before if k + 1 < n else tool
-        t = list(nxt.translation)
-        if k + 1 < n and f.segment[k + 1] == f.segment[k]:
-            v = add(_rz(f.trig[k], t), W[k + 1])  # same axes: the planar arm's sum
-        else:
-            inner = add(t, matvec(_rows(nxt.rotation), W[k + 1])) if k + 1 < n else t
-            v = _rz(f.trig[k], inner)
-        v[2] = v[2] + joints[k].motion.advance(f.theta[k])
-        W[k] = step.vec(f"W{k + 1}", v)
+        W[k] = _horner_step(step, joints, f, k, joints[k + 1].before if k + 1 < n else tool,
+                            W[k + 1] if k + 1 < n else None, f"W{k + 1}")
     return W
+
+
+def _horner_step(step: _Steps, joints: Sequence[_Canonical], f: _Frames, k: int, nxt: Transform, w: Vector | None,
+                 name: str) -> Vector:
+    """One step of Horner's rule: the offset from ``o_k`` in the axes of joint ``k``'s segment frame, given the
+    constant transform ``nxt`` after joint ``k`` and the offset ``w`` beyond it in the axes after ``nxt`` (``None``:
+    nothing beyond it), named ``name``."""
+    t = list(nxt.translation)
+    if w is not None and k + 1 < len(joints) and f.segment[k + 1] == f.segment[k]:
+        v = add(_rz(f.trig[k], t), w)  # same axes: the planar arm's sum
+    else:
+        inner = add(t, matvec(_rows(nxt.rotation), w)) if w is not None else t
+        v = _rz(f.trig[k], inner)
+    v[2] = v[2] + joints[k].motion.advance(f.theta[k])
+    return step.vec(name, v)
 
 
 def _columns(step: _Steps, joints: Sequence[_Canonical], f: _Frames, W: Sequence[Vector]) -> tuple[list[Vector], list[Vector]]:

@@ -429,6 +429,23 @@ class Chain:
                          "the inverse functions use its fourth power")
             check_number(reach, "the robot's reach (sum of its constant translations)", precision, -1)
 
+    def _own_joints(self) -> dict[int, Joint]:
+        """Per coordinate, its own joint: the one it is named after, else the first that follows it with multiplier 1
+        and offset 0."""
+        own: dict[int, Joint] = {}
+        for j in self.joints:
+            if self.coordinates[j.coordinate] == j.name:
+                own.setdefault(j.coordinate, j)
+        for j in self.joints:
+            if _fold(j.multiplier) == 1 and _fold(j.offset) == 0:
+                own.setdefault(j.coordinate, j)
+        return own
+
+    def followers(self) -> tuple[Joint, ...]:
+        """The joints, base to tip, that follow a coordinate other than as its own joint (URDF ``mimic`` joints)."""
+        own = self._own_joints()
+        return tuple(j for j in self.joints if own.get(j.coordinate) is not j)
+
     def limits(self) -> dict[str, tuple[float | None, ...]]:
         """Per coordinate (in input order): ``lower``, ``upper`` (rad or m) and ``velocity`` limits, ``None`` where absent.
 
@@ -437,19 +454,14 @@ class Chain:
         ``theta`` offset aside. Every other joint that follows the coordinate, ``theta = m q + offset`` (a URDF
         ``mimic`` joint), narrows the range to where it stays within its own limits, and the speed limit to
         ``velocity / |m|``; a multiplier or offset that is a named parameter narrows nothing."""
-        own: dict[int, Joint] = {}
-        for j in self.joints:
-            if self.coordinates[j.coordinate] == j.name:
-                own.setdefault(j.coordinate, j)
-        for j in self.joints:
-            if _fold(j.multiplier) == 1 and _fold(j.offset) == 0:
-                own.setdefault(j.coordinate, j)
+        own = self._own_joints()
         out: dict[str, list] = {"lower": [None] * self.n, "upper": [None] * self.n, "velocity": [None] * self.n}
         for c, j in own.items():
             out["lower"][c], out["upper"][c], out["velocity"][c] = j.lower, j.upper, j.velocity
-        for j in self.joints:
+        followers = self.followers()
+        for j in followers:
             m, offset = _fold(j.multiplier), _fold(j.offset)
-            if own.get(j.coordinate) is j or m.free_symbols or offset.free_symbols or m == 0:
+            if m.free_symbols or offset.free_symbols or m == 0:
                 continue
             m, offset = float(m), float(offset)
             c = j.coordinate
@@ -465,8 +477,8 @@ class Chain:
         for c in range(self.n):
             low, high = out["lower"][c], out["upper"][c]
             if low is not None and high is not None and low > high:
-                followers = ", ".join(repr(j.name) for j in self.joints if j.coordinate == c and own.get(c) is not j)
-                raise InputError(f"coordinate {self.coordinates[c]!r}: the limits of the joints that follow it ({followers}) "
+                names = ", ".join(repr(j.name) for j in followers if j.coordinate == c)
+                raise InputError(f"coordinate {self.coordinates[c]!r}: the limits of the joints that follow it ({names}) "
                                  f"leave no value within its range (lower {low:g} above upper {high:g})")
         return {k: tuple(v) for k, v in out.items()}
 

@@ -443,7 +443,8 @@ TREE_INDENT_LIMIT = 24
 def urdf_links(path: str | os.PathLike, base: str | None = None) -> list[UrdfLink]:
     """Every link of the URDF file ``path`` in depth-first order from its roots (file order among
     siblings), or from link ``base`` down, with the joint above it; InputError (one line naming the file) on
-    a bad file or an unknown ``base``. Linear in the number of elements (and in the depth, per leaf)."""
+    a bad file or an unknown ``base``. Linear in the number of elements (and in the depth, per leaf below a mimic
+    joint)."""
     path = Path(path)
     root = _parse(path)
     try:
@@ -454,23 +455,36 @@ def urdf_links(path: str | os.PathLike, base: str | None = None) -> list[UrdfLin
         raise InputError(f"{path}: {exc}") from None
     starts = tree.roots if base is None else [base]
     out: list[UrdfLink] = []
-    # per entry: link, depth, joint above, coordinates, moving joints on the path, (follower, leader) pairs on it
-    stack: list[tuple] = [(r, 0, None, 0, (), ()) for r in reversed(starts)]
+    # per entry: link, depth, joint above, coordinates, the (follower, leader) pairs of the mimic joints above it
+    stack: list[tuple] = [(r, 0, None, 0, ()) for r in reversed(starts)]
     while stack:
-        link, depth, joint, coordinates, moving, mimics = stack.pop()
+        link, depth, joint, coordinates, mimics = stack.pop()
         if joint is not None and joint.type in MOVING:
-            moving = moving + (joint.name,)
             mimic = _children(joint.element, "mimic")
             if mimic:
                 mimics = mimics + ((joint.name, mimic[0].get("joint")),)
             else:
                 coordinates += 1
         below = tree.children.get(link, [])
-        stray = next((f"{f!r} follows {lead!r}" for f, lead in mimics if lead not in moving), None) if not below else None
+        stray = None
+        if mimics and not below:  # a leaf below a mimic joint: are the leaders on its path? (a walk up, rare)
+            path = _joints_above(tree, link, depth)  # moving joints only: a mimic of a fixed joint is refused too
+            stray = next((f"{f!r} follows {lead!r}" for f, lead in mimics if lead not in path), None)
         out.append(UrdfLink(link, depth, None if joint is None else joint.parent, None if joint is None else joint.name,
                             None if joint is None else joint.type, coordinates, not below, stray))
-        stack.extend((j.child, depth + 1, j, coordinates, moving, mimics) for j in reversed(below))
+        stack.extend((j.child, depth + 1, j, coordinates, mimics) for j in reversed(below))
     return out
+
+
+def _joints_above(tree: _Tree, link: str, depth: int) -> set[str]:
+    """The names of the moving joints among the ``depth`` joints above ``link``."""
+    names = set()
+    for _ in range(depth):
+        joint = tree.parent_joint[link]
+        if joint.type in MOVING:
+            names.add(joint.name)
+        link = joint.parent
+    return names
 
 
 def urdf_tree(path: str | os.PathLike, base: str | None = None) -> list[str]:
