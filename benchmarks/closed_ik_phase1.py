@@ -65,7 +65,7 @@ def main() -> None:
         for i in range(args.targets):
             exact = Q[i][(flags[i] & 1) == 0]
             counts.append(len(distinct(exact, rev)))
-            r = postprocess(Q[i], flags[i], ik.lower, ik.upper, ik.revolute, target=T[i].reshape(16))
+            r = postprocess(Q[i], flags[i], ik.lower, ik.upper, ik.revolute, target=T[i].reshape(16), continuum=ik.ik.continuum)
             limited.append(r.count)
             pos, rot = judge.pose_error(num, exact, T[i])
             worst = max(worst, pos.max(initial=0), rot.max(initial=0))

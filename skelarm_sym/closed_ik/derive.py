@@ -30,7 +30,7 @@ from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
-                          TRANSLATION_MAX_FLOAT)
+                          TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
 from .subproblems import Steps
@@ -64,6 +64,8 @@ class ClosedIK:
     principal: tuple[bool, ...] = field(default=())
     """Per coordinate: every row's value is an angle in ``[-pi, pi]`` (``pi`` the double 3.141592653589793;
     :meth:`~.subproblems.Steps.is_principal`), so a 2 pi shift toward a centre of 0 leaves it as it is."""
+    continuum: tuple[int, ...] = field(default=())
+    """The wrist's continuum, ``(a, w, b, sigma)`` (see :func:`wrist_continuum`), or ``()``."""
 
     @property
     def max_solutions(self) -> int:
@@ -105,6 +107,30 @@ def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int
         if abs(h4 @ h5) > FLIP_TOL or abs(h5 @ h6) > FLIP_TOL or np.linalg.norm(np.cross(h4, h6)) > FLIP_TOL:
             return False
     return True
+
+
+def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
+    """The continuum of an aligned spherical wrist as ``(a, w, b, sigma)`` (chain coordinates, 0-based), or ``()``.
+
+    For a wrist that flips (:func:`wrist_flips`: ``h4 . h5 = 0``, ``h5 . h6 = 0``, ``h4 || h6``), ``q5`` at a multiple
+    of pi turns h6 onto the line of h4, and joints 4 and 6 turn about one axis: every ``(q4 + t, q6 - s t)`` is the same
+    pose, ``s = h4 . h6`` (+1 or -1, at ``q = 0``) where ``q5`` is an even multiple of pi and ``-s`` where odd. In chain
+    coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a spherical shoulder:
+    its variables are negated, which keeps the relation) and ``sigma = s``. ``()`` for the other families, or where
+    ``s`` is not the same at every sampled lock value."""
+    from .classify import LOCK_SAMPLES, _lock_subs
+
+    if family.name not in ("spherical_wrist", "spherical_shoulder") or not wrist_flips(geom, family.reversed, locked):
+        return ()
+    signs = set()
+    for value in (LOCK_SAMPLES if locked else (0.0,)):
+        _, H, _ = geom.numeric(_lock_subs(geom, value))
+        H = H[::-1] if family.reversed else H
+        signs.add(1 if float(H[3] @ H[5]) > 0 else -1)
+    wrist = [5 - k if family.reversed else k for k in (3, 4, 5)]  # geometry indices of problem joints 4, 5, 6
+    if len(signs) != 1 or any(geom.kinds[k] != "revolute" for k in wrist):
+        return ()
+    return (*(geom.coordinates[k] for k in wrist), signs.pop())
 
 
 def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
@@ -175,6 +201,7 @@ def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
         None if lock_idx is None else chain.joints[lock_idx].coordinate,
         (family.describe(),),
         tuple(principal),
+        wrist_continuum(geom, family, lock_idx is not None),
     )
 
 
@@ -203,6 +230,8 @@ class CandidatesSpec(FunctionSpec):
     :attr:`ClosedIK.principal`; empty: nothing known)."""
 
     principal: tuple[bool, ...] = ()
+    continuum: tuple[int, ...] = ()
+    """The wrist's continuum (:attr:`ClosedIK.continuum`), which the post-processing moves along; ``()``: none."""
 
 
 CANDIDATES = CandidatesSpec(
@@ -230,6 +259,10 @@ EMITTED_CONSTANTS = (
              "ik_all returns rows both flagged singular and closer than this once (a double root's two roots)"),
 )
 """The module constants the emitted ``ik_all`` and ``ik_nearest`` use (integers print as such)."""
+WRIST_CONSTANT = Constant(sp.Symbol("IK_WRIST_ALIGNED_TOL"), {"double": WRIST_ALIGNED_TOL, "float": WRIST_ALIGNED_TOL_FLOAT},
+                          "a row flagged singular with the wrist angle this close to a multiple of pi (rad) is a member "
+                          "of the wrist's continuum, moved along it into the limits (ik_all) or toward q_ref (ik_nearest)")
+"""The constant of an arm with a wrist continuum (:attr:`ClosedIK.continuum`)."""
 
 
 def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
@@ -258,11 +291,11 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         steps=tuple(derivation.steps) + tuple(ik.steps),
         compact={**derivation.compact, "Q": ik.Q, "flags": ik.flags},
         shapes={**derivation.shapes, "Q": (S, N), "flags": (S,)},
-        functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal),),
+        functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal, continuum=ik.continuum),),
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {})},
-        constants=tuple(derivation.constants) + EMITTED_CONSTANTS,
+        constants=tuple(derivation.constants) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ()),
         notes=tuple(derivation.notes) + notes,
         _cache={},
     )

@@ -78,11 +78,13 @@ class ClosedFormIK:
         if not np.all(np.isfinite(target)) or (lock is not None and not np.isfinite(lock)):
             return postprocess(None, None, self.lower, self.upper, self.revolute, target=target)
         Q, flags = self.candidates(target, lock)
-        return postprocess(Q, flags, self.lower, self.upper, self.revolute, target=target, **kwargs)
+        return postprocess(Q, flags, self.lower, self.upper, self.revolute, target=target,
+                           continuum=self.ik.continuum, **kwargs)
 
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
         """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
-        return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights)
+        return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights,
+                       continuum=self.ik.continuum)
 
 
 def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:

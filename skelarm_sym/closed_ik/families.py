@@ -41,14 +41,17 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, sub, turn
+from .postprocess import WRIST_ALIGNED_TOL
 from .subproblems import (Angle, Steps, _select, any_of, choose_parts, indicator, sp1, sp1_parts, sp2, sp3, sp3_parts, sp4,
                           sp_line, unit_disc)
 
 
-ALIGNED_TOL = 1e-13
-"""Spherical wrist: with ``|q5|`` at most this (rad) and q4's SP1 a continuum, q4 is the representative 0 (the
-orientation error of doing so is at most ``|q5|``). Targets from the emitted pose at an exactly aligned wrist leave
-``q5`` at about 1.2e-14 (PUMA 560, iiwa 14): 1e-14 missed them."""
+ALIGNED_TOL = WRIST_ALIGNED_TOL
+"""Spherical wrist: with ``q5`` at most this (rad) from 0 or +-pi and q4's SP1 a continuum, q4 is the representative 0
+(the orientation error of doing so is at most that distance). Targets from poses with the wrist exactly aligned leave
+``q5`` within 1.6e-14 of it on the iiwa 14, PUMA 560 and Stanford arm, 7.6e-13 on the Kinova j2s6 and 3.6e-12 on the
+Panda's shoulder (1e-14 missed the first, 1e-13 the last two: their q4 was an angle of rounding noise, different in
+C and in NumPy). The post-processing's continuum test uses the same tolerance."""
 PI_DOUBLE = sp.Float(math.pi, 17)
 """pi as the emitted code has it (3.141592653589793)."""
 SPLIT_TOL = 1e-12
@@ -188,10 +191,11 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
                 continue
             r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
             q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
-            # the wrist aligned to rounding (|q5| <= ALIGNED_TOL and q4's SP1 a continuum): q4 = 0 and q6 takes the
-            # whole rotation (off by at most |q5| there, below rounding; the SP1 would return an angle of rounding
-            # noise, pi as often as 0, which may miss the joint's limits while q4 = 0 fits)
-            aligned = sp.And(steps(f"q5a_{a}{b}", sp.Abs(q5.theta)) <= ALIGNED_TOL, q4.singular > 0)
+            # the wrist aligned to rounding (q5 within ALIGNED_TOL of 0 or +-pi and q4's SP1 a continuum): q4 = 0 and
+            # q6 takes the whole rotation (off by at most that distance there; the SP1 would return an angle of
+            # rounding noise, pi as often as 0, another in each language, which may miss the joint's limits)
+            q5a = steps(f"q5a_{a}{b}", sp.Abs(q5.theta))
+            aligned = sp.And(sp.Or(q5a <= ALIGNED_TOL, q5a >= PI_DOUBLE - ALIGNED_TOL), q4.singular > 0)
             q4 = Angle(steps(f"q4r_{a}{b}", _select((sp.S.Zero, aligned), (q4.theta, True))),
                        steps(f"q4rc_{a}{b}", _select((sp.S.One, aligned), (q4.c, True))),
                        steps(f"q4rs_{a}{b}", _select((sp.S.Zero, aligned), (q4.s, True))), q4.ls, q4.singular)

@@ -16,6 +16,13 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    the lower limit is finite, ``upper - pi`` when only the upper one is, 0 when none (then the result lies
    in ``[-pi, pi]``). This is the copy nearest the middle of the range; when several copies fit (a range
    wider than 2 pi) it is the one returned.
+   **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s)`` of :func:`~.derive.wrist_continuum`): a row
+   flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of a multiple of pi has joints a
+   and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi (``sigma = s`` for an even multiple, ``-s`` for an
+   odd one). Its ``q[a]``, ``q[b]`` become the member within both joints' limits nearest the row's own values
+   (:func:`continuum_member`): the row itself when it fits; when it does not, the member the least turn
+   away, which step 4 then keeps. (Moving along the line changes the pose by at most twice the wrist's distance
+   from the multiple of pi, in rotation-matrix entries.)
 4. **Limits**: a candidate with any joint below ``lower - LIMIT_TOL`` or above ``upper + LIMIT_TOL`` is dropped;
    joints within ``LIMIT_TOL`` outside are clipped onto the limit.
 5. **Duplicates**: a candidate within ``DUP_TOL`` (max over joints; revolute differences taken modulo
@@ -29,8 +36,8 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    limits; count 0), ``invalid``.
 
 :func:`nearest` then picks, among the returned rows, the one nearest ``q_ref`` in the (weighted) Euclidean
-norm, each revolute joint taking the copy ``q + 2 pi k`` within limits nearest ``q_ref``; ties go to the
-lower row.
+norm, each revolute joint taking the copy ``q + 2 pi k`` within limits nearest ``q_ref`` and a continuum row's
+joints a and b the member within limits nearest ``q_ref`` (:func:`continuum_member`); ties go to the lower row.
 """
 
 from __future__ import annotations
@@ -51,12 +58,16 @@ DUP_TOL = 1e-9
 DUP_TOL_SINGULAR = 1e-6
 """Candidates both flagged singular and closer than this are one solution: the two roots of a double root part by
 about the square root of rounding (3e-8 rad seen on the PUMA 560 and UR5), which DUP_TOL keeps as two rows."""
+WRIST_ALIGNED_TOL = 1e-11
+"""A row flagged singular with its wrist angle this close (rad) to a multiple of pi is a member of the wrist's
+continuum (step 3). Targets from poses with the wrist exactly aligned leave the candidates' wrist angle within
+4e-12 of it (3.6e-12 the largest seen, Panda with joint 7 locked; 1.6e-14 for the iiwa, PUMA 560, Stanford arm)."""
 TRANSLATION_MAX = 1e150
 """Largest ``|t_i|`` (m) of a target accepted: the candidates square translations (about 1.3e154 overflows a
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
 TRANSLATION_MAX_FLOAT = 1e18
 """The same for code emitted in float (squares overflow a float from about 1.8e19)."""
-ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT = 1e-4, 1e-5, 1e-4, 1e-4
+ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT, WRIST_ALIGNED_TOL_FLOAT = 1e-4, 1e-5, 1e-4, 1e-4, 1e-4
 """The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9 (singular
 rows keep the same tolerance as the others in float)."""
@@ -111,15 +122,72 @@ def shift(q: np.ndarray, lower, upper, revolute) -> np.ndarray:
     return np.where(rev, q + TWO_PI * k, q)
 
 
+def continuum_sign(q_w: float, flag: int, s: int, tol: float = WRIST_ALIGNED_TOL) -> int:
+    """``sigma`` of a row's continuum (``q[a] + sigma q[b]`` fixed), or 0 when the row is not a member of one: its flag
+    has the singular bit and its wrist angle ``q_w`` is within ``tol`` of ``k pi``; ``sigma = s`` for even ``k``,
+    ``-s`` for odd ``k``."""
+    k = np.rint(q_w / np.pi)
+    if not flag & 2 or abs(q_w - np.pi * k) > tol:
+        return 0
+    return s if k % 2 == 0 else -s
+
+
+def _window(lo: float, hi: float, r: float) -> tuple[float, float]:
+    """The offsets ``u = x - r`` (rad) of a joint within ``[lo, hi]`` that a nearest point can take: all of them for
+    two finite limits; otherwise a window of one turn (a point further out has a copy within the limit nearer ``r``)."""
+    if np.isfinite(lo) and np.isfinite(hi):
+        return lo - r, hi - r
+    if np.isfinite(lo):
+        start = max(lo - r, -np.pi)
+        return start, start + TWO_PI
+    if np.isfinite(hi):
+        end = min(hi - r, np.pi)
+        return end - TWO_PI, end
+    return -np.pi, np.pi
+
+
+def continuum_member(x: float, y: float, ref: tuple[float, float], sigma: int, lower: tuple[float, float],
+                     upper: tuple[float, float], weights: tuple[float, float] = (1.0, 1.0)) -> tuple[float, float] | None:
+    """The member ``(x', y')`` of the continuum through ``(x, y)`` (``x' + sigma y' = x + sigma y`` modulo 2 pi, rad)
+    within ``lower <= (x', y') <= upper`` (per joint; +-inf where absent) nearest ``ref`` in the weighted norm
+    ``w_a (x' - ref_a)^2 + w_b (y' - ref_b)^2``; ``None`` when no member is within the limits.
+
+    With ``u = x' - ref_a``, ``v = sigma (y' - ref_b)``: the members are the lines ``u + v = e0 + 2 pi m``, ``e0``
+    the line through ``(x, y)`` reduced to [-pi, pi]; on each line the nearest point within the limits is the
+    unconstrained one (``u = w_b e / (w_a + w_b)``) clamped to the line's segment in the box of ``u`` and ``v``."""
+    ua = _window(lower[0], upper[0], ref[0])
+    vb = _window(lower[1], upper[1], ref[1])
+    va = (vb[0], vb[1]) if sigma > 0 else (-vb[1], -vb[0])
+    e = (x - ref[0]) + sigma * (y - ref[1])
+    e0 = e - TWO_PI * np.rint(e / TWO_PI)
+    first = int(np.ceil((ua[0] + va[0] - e0) / TWO_PI))
+    last = int(np.floor((ua[1] + va[1] - e0) / TWO_PI))
+    best, best_d = None, np.inf
+    for m in range(first, last + 1):
+        em = e0 + TWO_PI * m
+        lo, hi = max(ua[0], em - va[1]), min(ua[1], em - va[0])
+        if lo > hi:
+            continue
+        u = min(max(weights[1] * em / (weights[0] + weights[1]), lo), hi)
+        d = weights[0] * u * u + weights[1] * (em - u) ** 2
+        if d < best_d:
+            best_d = d
+            best = (float(np.clip(ref[0] + u, lower[0], upper[0])),
+                    float(np.clip(ref[1] + sigma * (em - u), lower[1], upper[1])))
+    return best
+
+
 def _difference(a: np.ndarray, b: np.ndarray, revolute) -> np.ndarray:
     d = a - b
     return np.where(revolute, (d + np.pi) % TWO_PI - np.pi, d)
 
 
 def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = DUP_TOL,
-                limit_tol: float = LIMIT_TOL, dup_tol_singular: float = DUP_TOL_SINGULAR) -> IKAll:
+                limit_tol: float = LIMIT_TOL, dup_tol_singular: float = DUP_TOL_SINGULAR, continuum: tuple = (),
+                aligned_tol: float = WRIST_ALIGNED_TOL) -> IKAll:
     """Steps 1-7 of the module docstring for one target. ``Q`` (S, N), ``flags`` (S); ``Q = None`` means the
-    caller found the input invalid; ``target`` (16) enables step 1's rotation check."""
+    caller found the input invalid; ``target`` (16) enables step 1's rotation check; ``continuum``: the wrist's
+    ``(a, w, b, s)`` (:func:`~.derive.wrist_continuum`) or ``()``."""
     lower = np.asarray(lower, float)
     upper = np.asarray(upper, float)
     revolute = np.asarray(revolute, bool)
@@ -139,6 +207,12 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
         if not keep[i]:
             continue
         q = shift(Q[i], lower, upper, revolute)
+        if continuum:
+            a, w, b, s = continuum
+            sigma = continuum_sign(q[w], flags[i], s, aligned_tol)
+            member = sigma and continuum_member(q[a], q[b], (q[a], q[b]), sigma, (lower[a], lower[b]), (upper[a], upper[b]))
+            if member:
+                q[a], q[b] = member
         if np.any(q < lower - limit_tol) or np.any(q > upper + limit_tol):
             continue
         q = np.clip(q, lower, upper)
@@ -162,9 +236,12 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
     return IKAll(out_q, out_f, out_b, count, status)
 
 
-def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None) -> tuple[np.ndarray | None, int]:
+def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
+            aligned_tol: float = WRIST_ALIGNED_TOL) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
-    nearest ``q_ref``; ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric weights (default 1)."""
+    nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
+    (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
+    weights (default 1)."""
     if result.count == 0:
         return None, -1
     q_ref = np.asarray(q_ref, float)
@@ -179,6 +256,13 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None) -> tuple
             options = [q[j] + TWO_PI * (k[j] + m) for m in (0, -1, 1)]
             options = [x for x in options if lower[j] <= x <= upper[j]] or [q[j]]
             q[j] = min(options, key=lambda x: abs(x - q_ref[j]))
+        if continuum:
+            a, wj, b, s = continuum
+            sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol)
+            member = sigma and continuum_member(result.q[i, a], result.q[i, b], (q_ref[a], q_ref[b]), sigma,
+                                                (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]))
+            if member:
+                q[a], q[b] = member
         d = float(np.sum(w * (q - q_ref) ** 2))
         if d < best_d:
             best, best_d, best_i = q, d, i

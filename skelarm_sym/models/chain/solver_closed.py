@@ -25,6 +25,7 @@ import operator
 from ...closed_ik.postprocess import STATUS, centres
 from ...ir.build import Array, Body, fabs, select
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
+from .solver_continuum import Continuum
 
 TWO_PI = 2.0 * math.pi
 INV_TWO_PI = 1.0 / TWO_PI
@@ -77,7 +78,8 @@ class _Arm:
     the candidates guarantee (``principal``: per coordinate, every candidate in ``[-pi, pi]``) and the order in
     which the duplicate test compares the joints (``order``)."""
 
-    def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double") -> None:
+    def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double",
+                 continuum: tuple = ()) -> None:
         limits = chain.limits()
         self.n = chain.n
         self.s = 8
@@ -93,10 +95,17 @@ class _Arm:
         self.locked = locked
         self.precision = precision
         self.principal = list(principal) if principal else [False] * chain.n
+        self.continuum = tuple(continuum)
         # the duplicate test's joint order: the columns with the most distinct candidates first (the joint in
         # which two rows most likely differ: one test per kept row); the result does not depend on the order
         distinct = list(columns) if columns else [0] * chain.n
         self.order = sorted(range(chain.n), key=lambda j: -distinct[j])
+
+    @property
+    def moves_continuum(self) -> bool:
+        """Whether ``ik_all`` moves a continuum's row into the limits: the arm has a wrist continuum and one of its
+        two joints can be outside its limits (else the row's own values always fit)."""
+        return bool(self.continuum) and not (self.always_inside(self.continuum[0]) and self.always_inside(self.continuum[2]))
 
     @property
     def regular_rows_distinct(self) -> bool:
@@ -192,6 +201,7 @@ def rows_helper(arm: _Arm) -> Function:
     diff = b.var("diff", 0.0)
     tol = b.var("tol", 0.0)
     singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
+    continuum = Continuum(b, arm) if arm.moves_continuum else None
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
         with b.if_(eq(exact, 0) | ne(Bits("%", flag, _int(2)), least_squares)):
@@ -201,8 +211,21 @@ def rows_helper(arm: _Arm) -> Function:
             else:
                 b.comment("3. revolute joints to the copy nearest their range's centre (each range wider than a turn "
                           "around its centre: 4. no copy is outside the limits)")
-            for j in range(N):
-                _joint_to_limits(b, arm, j, raw[_at(N, i, j)], cand[j], inside)
+            if continuum is None:
+                for j in range(N):
+                    _joint_to_limits(b, arm, j, raw[_at(N, i, j)], cand[j], inside)
+            else:
+                a, w, c = continuum.a, continuum.w, continuum.b
+                for j in range(N):
+                    _joint_shift(b, arm, j, raw[_at(N, i, j)], cand[j])
+                    if j not in (a, c):
+                        _joint_limits(b, arm, j, cand[j], inside)
+                b.comment(f"a row of the wrist's continuum (flagged singular, the wrist aligned): joints {a + 1} and {c + 1} "
+                          "to the member within their limits nearest the row")
+                continuum.move(b, cand[w], flag >= singular, cand[a], cand[c], cand[a], cand[c], cand[a], cand[c],
+                               through_ref=True)
+                for j in (a, c):
+                    _joint_limits(b, arm, j, cand[j], inside)
             with (b.if_(inside > 0) if tested else contextlib.nullcontext()):
                 b.comment("5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped")
                 b.set(dup, _int(-1))
@@ -280,11 +303,22 @@ def _joint_to_limits(b: Body, arm: _Arm, j: int, x, cand_j, inside) -> None:
     """Steps 3-4 for joint ``j`` of a raw row: ``cand_j`` = ``x`` (a revolute joint moved to the copy nearest
     its range's centre), ``inside`` = 0 when it is outside the limits by more than IK_LIMIT_TOL, and a value
     within that tolerance clipped onto the limit."""
-    zero = _int(0)
+    _joint_shift(b, arm, j, x, cand_j)
+    _joint_limits(b, arm, j, cand_j, inside)
+
+
+def _joint_shift(b: Body, arm: _Arm, j: int, x, cand_j) -> None:
+    """Step 3 for joint ``j``: ``cand_j`` = ``x``, a revolute joint moved to the copy nearest its range's centre."""
     if arm.revolute[j] and not arm.unshifted(j):
         _shifted(b, x, arm.centre[j], cand_j)
     else:
         b.set(cand_j, x)
+
+
+def _joint_limits(b: Body, arm: _Arm, j: int, cand_j, inside) -> None:
+    """Step 4 for joint ``j``: ``inside`` = 0 when ``cand_j`` is outside the limits by more than IK_LIMIT_TOL, and
+    a value within that tolerance clipped onto the limit."""
+    zero = _int(0)
     if arm.always_inside(j):
         return
     lo, hi = arm.lower[j], arm.upper[j]
@@ -312,6 +346,16 @@ def _doc_limits(arm: _Arm) -> str:
     return "rows outside the joint limits (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped)"
 
 
+def _doc_continuum(arm: _Arm, choice: str) -> tuple[str, ...]:
+    """The doc line on the wrist's continuum (none for an arm without one)."""
+    if not arm.continuum:
+        return ()
+    a, _, b, _ = arm.continuum
+    return (f"An aligned wrist (a row flagged singular, joint {arm.continuum[1] + 1} within IK_WRIST_ALIGNED_TOL of a "
+            f"multiple of pi) turns joints {a + 1} and {b + 1}",
+            f"about one axis: such a row takes {choice}.")
+
+
 def all_solver(arm: _Arm) -> Function:
     """``ik_all(target, [lock], q, count, flags)``: the public face of ``ik_all_rows``."""
     S, N = arm.s, arm.n
@@ -336,6 +380,7 @@ def all_solver(arm: _Arm) -> Function:
         "derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are",
         "NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),",
         "IK_FLAG_SINGULAR (one member of a continuum, or a double root)." + (" " + lock.strip() if lock else ""),
+        *_doc_continuum(arm, "the member within the limits nearest the row (the row itself when it fits)"),
         "No iteration: the same time for every target.",
     )
     return Function("ik_all", "every closed-form IK solution within the joint limits", arguments, b.statements,
@@ -358,6 +403,7 @@ def nearest_solver(arm: _Arm) -> Function:
     y = b.var("y", 0.0)
     x = b.var("x", 0.0)
     found = b.var("found", _int(0), Type.INT)
+    continuum = Continuum(b, arm) if arm.continuum else None
     b.call("ik_all_rows", *data, rows, count, flags, result=status)
     for j in range(N):
         b.set(q[j], Const(math.nan))
@@ -388,6 +434,12 @@ def nearest_solver(arm: _Arm) -> Function:
                     b.set(y, xm)
                     b.set(found, _int(1))
             b.set(near[j], y)
+        if continuum is not None:
+            a, w, c = continuum.a, continuum.w, continuum.b
+            b.comment(f"a row of the wrist's continuum: joints {a + 1} and {c + 1} to the member within their limits "
+                      "nearest q_ref")
+            continuum.move(b, rows[_at(N, i, w)], flags[i] >= NamedConst("IK_FLAG_SINGULAR", Type.INT), rows[_at(N, i, a)],
+                           rows[_at(N, i, c)], q_ref[a], q_ref[c], near[a], near[c])
         b.set(dist, sum(((near[j] - q_ref[j]) * (near[j] - q_ref[j]) for j in range(1, N)),
                         (near[0] - q_ref[0]) * (near[0] - q_ref[0])))
         with b.if_((best < 0) | (dist < best_d)):
@@ -406,6 +458,7 @@ def nearest_solver(arm: _Arm) -> Function:
         "within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the",
         "least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row",
         "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).",
+        *_doc_continuum(arm, "the member within the limits nearest q_ref"),
     )
     return Function("ik_nearest", "the closed-form IK solution nearest a configuration", arguments, b.statements,
                     kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKNearestResult")
@@ -421,7 +474,8 @@ def closed_solvers(derivation, names, precision: str) -> list[Function]:
     spec = derivation.function("ik_candidates")
     Q = derivation.compact["Q"]
     columns = tuple(len(set(Q[:, j])) for j in range(Q.cols))
-    arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision)
+    arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision,
+               getattr(spec, "continuum", ()))
     out = [rows_helper(arm)]
     if "ik_all" in wanted:
         out.append(all_solver(arm))
