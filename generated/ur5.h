@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xd411ee14UL
+#define UR5_STAMP 0x3c3ce1d8UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -306,7 +306,7 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
 
 /* the closed-form IK solution nearest a configuration.
  * The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
- * within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the
+ * within the joint limits nearest q_ref[j], then the row with the
  * least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
  */

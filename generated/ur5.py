@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xd411ee14
+STAMP = 0x3c3ce1d8
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -6931,10 +6931,8 @@ def _ik_nearest(q_ref, target, q):
     best = -1
     best_d = DTYPE(0.0)
     dist = DTYPE(0.0)
-    k = DTYPE(0.0)
     y = DTYPE(0.0)
     x = DTYPE(0.0)
-    found = 0
     status = _ik_all_rows(target, rows, count, flags)
     q[0] = DTYPE(np.nan)
     q[1] = DTYPE(np.nan)
@@ -6945,90 +6943,36 @@ def _ik_nearest(q_ref, target, q):
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
             break
-        # each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit)
         x = rows[6*i]
-        k = np.rint((q_ref[0] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[0]) < np.abs(y - q_ref[0])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[0] = y
         x = rows[6*i + 1]
-        k = np.rint((q_ref[1] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[1]) < np.abs(y - q_ref[1])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[1] = y
         x = rows[6*i + 2]
-        k = np.rint((q_ref[2] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[2]) < np.abs(y - q_ref[2])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[2] = y
         x = rows[6*i + 3]
-        k = np.rint((q_ref[3] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[3]) < np.abs(y - q_ref[3])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[3] = y
         x = rows[6*i + 4]
-        k = np.rint((q_ref[4] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[4]) < np.abs(y - q_ref[4])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[4] = y
         x = rows[6*i + 5]
-        k = np.rint((q_ref[5] - x)*0.15915494309189535)
-        found = 0
-        y = x
-        if x + 6.283185307179586*k >= -6.283185307179586 and x + 6.283185307179586*k <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*k) - q_ref[5]) < np.abs(y - q_ref[5])):
-            y = x + 6.283185307179586*k
-            found = 1
-        if x + 6.283185307179586*(k - 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k - 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])):
-            y = x + 6.283185307179586*(k - 1.0)
-            found = 1
-        if x + 6.283185307179586*(k + 1.0) >= -6.283185307179586 and x + 6.283185307179586*(k + 1.0) <= 6.283185307179586 and (found == 0 or np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])):
-            y = x + 6.283185307179586*(k + 1.0)
-            found = 1
+        y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
+        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
         near[5] = y
         dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5])
         if best < 0 or dist < best_d:
@@ -7052,7 +6996,7 @@ def ik_nearest(q_ref, target):
     """the closed-form IK solution nearest a configuration.
 
     The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
-    within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the
+    within the joint limits nearest q_ref[j], then the row with the
     least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
     (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
 
@@ -7104,10 +7048,8 @@ def _ik_nearest_lanes(_c, q_ref, target):
     best = _fi(-1)
     best_d = _fr(0.0)
     dist = _fr(0.0)
-    k = _fr(0.0)
     y = _fr(0.0)
     x = _fr(0.0)
-    found = _fi(0)
     _alive4 = _fb(True)
     _ik_all_rows3_raw = [_fr(0.0)] * 48
     _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
@@ -7383,120 +7325,48 @@ def _ik_nearest_lanes(_c, q_ref, target):
         _c125 = i >= count[0]
         _m126 = _run124 & _c125
         _run124 = _run124 & (~_m126)
-        # each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit)
         x = np.where(_run124, rows[6*i], x)
-        k = np.where(_run124, np.rint((q_ref[0] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c127 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[0]) < np.abs(y - q_ref[0])))
-        _m128 = _run124 & _c127
-        y = np.where(_m128, x + 6.283185307179586*k, y)
-        found = np.where(_m128, 1, found)
-        _c129 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])))
-        _m130 = _run124 & _c129
-        y = np.where(_m130, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m130, 1, found)
-        _c131 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[0]) < np.abs(y - q_ref[0])))
-        _m132 = _run124 & _c131
-        y = np.where(_m132, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m132, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[0] = np.where(_run124, y, near[0])
         x = np.where(_run124, rows[6*i + 1], x)
-        k = np.where(_run124, np.rint((q_ref[1] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c133 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[1]) < np.abs(y - q_ref[1])))
-        _m134 = _run124 & _c133
-        y = np.where(_m134, x + 6.283185307179586*k, y)
-        found = np.where(_m134, 1, found)
-        _c135 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])))
-        _m136 = _run124 & _c135
-        y = np.where(_m136, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m136, 1, found)
-        _c137 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[1]) < np.abs(y - q_ref[1])))
-        _m138 = _run124 & _c137
-        y = np.where(_m138, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m138, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[1] = np.where(_run124, y, near[1])
         x = np.where(_run124, rows[6*i + 2], x)
-        k = np.where(_run124, np.rint((q_ref[2] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c139 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[2]) < np.abs(y - q_ref[2])))
-        _m140 = _run124 & _c139
-        y = np.where(_m140, x + 6.283185307179586*k, y)
-        found = np.where(_m140, 1, found)
-        _c141 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])))
-        _m142 = _run124 & _c141
-        y = np.where(_m142, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m142, 1, found)
-        _c143 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[2]) < np.abs(y - q_ref[2])))
-        _m144 = _run124 & _c143
-        y = np.where(_m144, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m144, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[2] = np.where(_run124, y, near[2])
         x = np.where(_run124, rows[6*i + 3], x)
-        k = np.where(_run124, np.rint((q_ref[3] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c145 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[3]) < np.abs(y - q_ref[3])))
-        _m146 = _run124 & _c145
-        y = np.where(_m146, x + 6.283185307179586*k, y)
-        found = np.where(_m146, 1, found)
-        _c147 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])))
-        _m148 = _run124 & _c147
-        y = np.where(_m148, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m148, 1, found)
-        _c149 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[3]) < np.abs(y - q_ref[3])))
-        _m150 = _run124 & _c149
-        y = np.where(_m150, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m150, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[3] = np.where(_run124, y, near[3])
         x = np.where(_run124, rows[6*i + 4], x)
-        k = np.where(_run124, np.rint((q_ref[4] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c151 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[4]) < np.abs(y - q_ref[4])))
-        _m152 = _run124 & _c151
-        y = np.where(_m152, x + 6.283185307179586*k, y)
-        found = np.where(_m152, 1, found)
-        _c153 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])))
-        _m154 = _run124 & _c153
-        y = np.where(_m154, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m154, 1, found)
-        _c155 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[4]) < np.abs(y - q_ref[4])))
-        _m156 = _run124 & _c155
-        y = np.where(_m156, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m156, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[4] = np.where(_run124, y, near[4])
         x = np.where(_run124, rows[6*i + 5], x)
-        k = np.where(_run124, np.rint((q_ref[5] - x)*0.15915494309189535), k)
-        found = np.where(_run124, 0, found)
-        y = np.where(_run124, x, y)
-        _c157 = (x + 6.283185307179586*k >= -6.283185307179586) & (x + 6.283185307179586*k <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*k) - q_ref[5]) < np.abs(y - q_ref[5])))
-        _m158 = _run124 & _c157
-        y = np.where(_m158, x + 6.283185307179586*k, y)
-        found = np.where(_m158, 1, found)
-        _c159 = (x + 6.283185307179586*(k - 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k - 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k - 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])))
-        _m160 = _run124 & _c159
-        y = np.where(_m160, x + 6.283185307179586*(k - 1.0), y)
-        found = np.where(_m160, 1, found)
-        _c161 = (x + 6.283185307179586*(k + 1.0) >= -6.283185307179586) & (x + 6.283185307179586*(k + 1.0) <= 6.283185307179586) & ((found == 0) | (np.abs((x + 6.283185307179586*(k + 1.0)) - q_ref[5]) < np.abs(y - q_ref[5])))
-        _m162 = _run124 & _c161
-        y = np.where(_m162, x + 6.283185307179586*(k + 1.0), y)
-        found = np.where(_m162, 1, found)
+        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
         near[5] = np.where(_run124, y, near[5])
         dist = np.where(_run124, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
-        _c163 = (best < 0) | (dist < best_d)
-        _m164 = _run124 & _c163
-        best = np.where(_m164, i, best)
-        best_d = np.where(_m164, dist, best_d)
-        q[0] = np.where(_m164, near[0], q[0])
-        q[1] = np.where(_m164, near[1], q[1])
-        q[2] = np.where(_m164, near[2], q[2])
-        q[3] = np.where(_m164, near[3], q[3])
-        q[4] = np.where(_m164, near[4], q[4])
-        q[5] = np.where(_m164, near[5], q[5])
+        _c127 = (best < 0) | (dist < best_d)
+        _m128 = _run124 & _c127
+        best = np.where(_m128, i, best)
+        best_d = np.where(_m128, dist, best_d)
+        q[0] = np.where(_m128, near[0], q[0])
+        q[1] = np.where(_m128, near[1], q[1])
+        q[2] = np.where(_m128, near[2], q[2])
+        q[3] = np.where(_m128, near[3], q[3])
+        q[4] = np.where(_m128, near[4], q[4])
+        q[5] = np.where(_m128, near[5], q[5])
     _status1 = status
     _alive2 = _fb(False)
     return (q, ), _status1

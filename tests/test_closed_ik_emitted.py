@@ -664,6 +664,59 @@ def test_an_aligned_wrist_moves_along_its_continuum(name):
             np.testing.assert_allclose(np.asarray(module.ik_all(T).q), b.py.ik_all(T).q, atol=1e-12, rtol=0)
 
 
+def test_the_continuum_with_wide_limits_and_far_references():
+    """Joints 4 and 6 of the PUMA limited to +-1e12 rad: at most three lines of the continuum unroll (the emitted C
+    was 4.5 MB at +-1e4 and generation ran out of memory at +-1e12, one line per turn of the ranges), and the member
+    nearest a reference a few turns away is the spec's. With the PUMA's own limits, references far from the row
+    (1e3 to 1e15 rad): ik_nearest builds the member from the row's values, within the limits, so it reproduces the
+    target to rounding (built from q_ref, a reference 1e15 rad away missed it by 1e-2)."""
+    import dataclasses
+
+    chain, _ = load_arm("puma560")
+    joints = [dataclasses.replace(j, lower=-1e12, upper=1e12) if k in (3, 5) else j for k, j in enumerate(chain.joints)]
+    wide = Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+    # three lines in ik_nearest (ik_all moves nothing: every copy fits such ranges)
+    assert wide.generated.sources["puma560.c"].count("of the continuum that can cross the windows") == 3
+    q = inner_configurations(built("puma560"), 1, np.random.default_rng(8))[0]
+    q[4] = 0.0
+    for b, far in ((wide, 20.0), (wide, -35.0), (built("puma560"), 1e3), (built("puma560"), 1e9), (built("puma560"), -1e15)):
+        T = targets_of(b.chain, q[None])[0]
+        ref = q.copy()
+        ref[3] = far
+        want, _ = nearest(b.spec(T, q), ref, b.lower, b.upper, b.revolute, continuum=b.continuum)
+        for impl in (b.c, b.py):
+            got = np.asarray(impl.ik_nearest(ref, T).q)
+            pos, rot = judge.pose_error(b.numeric, got[None], T)
+            assert max(pos.max(), rot.max()) <= 1e-11, (far, pos, rot)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+            assert np.all(got <= b.upper) and np.all(got >= b.lower)
+
+
+def test_a_far_reference_on_a_joint_wider_than_a_turn_takes_its_nearest_copy():
+    """PUMA joint 6 ranges over +-4.64 rad: from q_ref[5] = 20 rad (three turns away) the nearest copy within the
+    limits of the source's q6 = -3.0 is -3.0 + 2 pi; only the copies k and k +- 1 around the nearest were tried, none
+    fit, and ik_nearest returned a row at distance^2 369 (the source's row is at 280, another at 272). C, NumPy and
+    the spec agree with a scan over every row and copy."""
+    b = built("puma560")
+    q = np.array([0.3, 1.0, -1.0, 0.5, 0.7, -3.0])
+    T = targets_of(b.chain, q[None])[0]
+    ref = q.copy()
+    ref[5] = 20.0
+    spec = b.spec(T, q)
+    want, _ = nearest(spec, ref, b.lower, b.upper, b.revolute, continuum=b.continuum)
+    best = np.inf
+    for row in spec.solutions:
+        d = 0.0
+        for j in range(6):
+            copies = row[j] + 2 * np.pi * np.arange(-10, 11)
+            copies = copies[(copies >= b.lower[j]) & (copies <= b.upper[j])]
+            d += np.min((copies - ref[j]) ** 2)
+        best = min(best, d)
+    assert np.sum((want - ref) ** 2) == pytest.approx(best, rel=1e-12) and best < 300
+    for impl in (b.c, b.py):
+        np.testing.assert_allclose(impl.ik_nearest(ref, T).q, want, atol=1e-12)
+
+
 @pytest.mark.parametrize("name", ["puma560", "ur5"])
 def test_every_non_finite_entry_is_invalid(name):
     """NaN or +-inf in any of the 12 entries read (R's through the sum of their squares, t's one by one) gives

@@ -41,17 +41,17 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, sub, turn
-from .postprocess import WRIST_ALIGNED_TOL
 from .subproblems import (Angle, Steps, _select, any_of, choose_parts, indicator, sp1, sp1_parts, sp2, sp3, sp3_parts, sp4,
                           sp_line, unit_disc)
 
 
-ALIGNED_TOL = WRIST_ALIGNED_TOL
+ALIGNED_TOL = 1e-13
 """Spherical wrist: with ``q5`` at most this (rad) from 0 or +-pi and q4's SP1 a continuum, q4 is the representative 0
-(the orientation error of doing so is at most that distance). Targets from poses with the wrist exactly aligned leave
-``q5`` within 1.6e-14 of it on the iiwa 14, PUMA 560 and Stanford arm, 7.6e-13 on the Kinova j2s6 and 3.6e-12 on the
-Panda's shoulder (1e-14 missed the first, 1e-13 the last two: their q4 was an angle of rounding noise, different in
-C and in NumPy). The post-processing's continuum test uses the same tolerance."""
+(the orientation error of doing so is at most that distance). Targets from the emitted pose at an exactly aligned
+wrist leave ``q5`` at about 1.2e-14 (PUMA 560, iiwa 14): 1e-14 missed them. Further out (up to 6.5e-12 on the
+Panda's shoulder, 3.4e-12 on the Kinova j2s6) q4 is the SP1's angle, exact for that ``q5``, and the post-processing
+moves the row along the continuum where it must (``postprocess.WRIST_ALIGNED_TOL``): a representative there would
+cost twice that distance in every row."""
 PI_DOUBLE = sp.Float(math.pi, 17)
 """pi as the emitted code has it (3.141592653589793)."""
 SPLIT_TOL = 1e-12

@@ -60,8 +60,9 @@ DUP_TOL_SINGULAR = 1e-6
 about the square root of rounding (3e-8 rad seen on the PUMA 560 and UR5), which DUP_TOL keeps as two rows."""
 WRIST_ALIGNED_TOL = 1e-11
 """A row flagged singular with its wrist angle this close (rad) to a multiple of pi is a member of the wrist's
-continuum (step 3). Targets from poses with the wrist exactly aligned leave the candidates' wrist angle within
-4e-12 of it (3.6e-12 the largest seen, Panda with joint 7 locked; 1.6e-14 for the iiwa, PUMA 560, Stanford arm)."""
+continuum (step 3); moving it along the continuum changes its pose by at most twice that distance. Targets from
+poses with the wrist exactly aligned leave the candidates' wrist angle within 6.5e-12 of it (3000 targets each: the
+Panda's shoulder with joint 7 locked; 3.4e-12 on the Kinova j2s6, 1.6e-12 on the iiwa 14)."""
 TRANSLATION_MAX = 1e150
 """Largest ``|t_i|`` (m) of a target accepted: the candidates square translations (about 1.3e154 overflows a
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
@@ -132,18 +133,12 @@ def continuum_sign(q_w: float, flag: int, s: int, tol: float = WRIST_ALIGNED_TOL
     return s if k % 2 == 0 else -s
 
 
-def _window(lo: float, hi: float, r: float) -> tuple[float, float]:
-    """The offsets ``u = x - r`` (rad) of a joint within ``[lo, hi]`` that a nearest point can take: all of them for
-    two finite limits; otherwise a window of one turn (a point further out has a copy within the limit nearer ``r``)."""
-    if np.isfinite(lo) and np.isfinite(hi):
-        return lo - r, hi - r
-    if np.isfinite(lo):
-        start = max(lo - r, -np.pi)
-        return start, start + TWO_PI
-    if np.isfinite(hi):
-        end = min(hi - r, np.pi)
-        return end - TWO_PI, end
-    return -np.pi, np.pi
+def _window(low: float, high: float, d: float) -> tuple[float, float]:
+    """Where a nearest point's offset ``t`` (rad) can lie: ``t`` within ``[low, high]`` (a joint's limits less the
+    row's value; +-inf where absent), nearest ``d`` (the reference's offset). A copy ``t - 2 pi`` within the limits
+    is nearer ``d`` where ``t > d + pi``, and ``t + 2 pi`` where ``t < d - pi``, so the window is
+    ``[max(low, min(high - 2 pi, d - pi)), min(high, max(low + 2 pi, d + pi))]``: at most one turn wide."""
+    return max(low, min(high - TWO_PI, d - np.pi)), min(high, max(low + TWO_PI, d + np.pi))
 
 
 def continuum_member(x: float, y: float, ref: tuple[float, float], sigma: int, lower: tuple[float, float],
@@ -152,28 +147,26 @@ def continuum_member(x: float, y: float, ref: tuple[float, float], sigma: int, l
     within ``lower <= (x', y') <= upper`` (per joint; +-inf where absent) nearest ``ref`` in the weighted norm
     ``w_a (x' - ref_a)^2 + w_b (y' - ref_b)^2``; ``None`` when no member is within the limits.
 
-    With ``u = x' - ref_a``, ``v = sigma (y' - ref_b)``: the members are the lines ``u + v = e0 + 2 pi m``, ``e0``
-    the line through ``(x, y)`` reduced to [-pi, pi]; on each line the nearest point within the limits is the
-    unconstrained one (``u = w_b e / (w_a + w_b)``) clamped to the line's segment in the box of ``u`` and ``v``."""
-    ua = _window(lower[0], upper[0], ref[0])
-    vb = _window(lower[1], upper[1], ref[1])
-    va = (vb[0], vb[1]) if sigma > 0 else (-vb[1], -vb[0])
-    e = (x - ref[0]) + sigma * (y - ref[1])
-    e0 = e - TWO_PI * np.rint(e / TWO_PI)
-    first = int(np.ceil((ua[0] + va[0] - e0) / TWO_PI))
-    last = int(np.floor((ua[1] + va[1] - e0) / TWO_PI))
+    In offsets from the row, ``u = x' - x`` and ``v = sigma (y' - y)``, the members are the lines ``u + v = 2 pi m``;
+    on each, the nearest point within the limits is the unconstrained one clamped to the line's segment in the
+    windows of ``u`` and ``v`` (:func:`_window`, at most a turn wide each: at most three lines cross them). The
+    member is built from the row, ``x' = x + u``, ``y' = y + sigma (2 pi m - u)``: on the continuum to the rounding of
+    those offsets, whatever the reference's magnitude."""
+    da, db = ref[0] - x, sigma * (ref[1] - y)
+    ua = _window(lower[0] - x, upper[0] - x, da)
+    wb = _window(lower[1] - y, upper[1] - y, ref[1] - y)
+    vb = wb if sigma > 0 else (-wb[1], -wb[0])
     best, best_d = None, np.inf
-    for m in range(first, last + 1):
-        em = e0 + TWO_PI * m
-        lo, hi = max(ua[0], em - va[1]), min(ua[1], em - va[0])
+    for m in range(int(np.ceil((ua[0] + vb[0]) / TWO_PI)), int(np.floor((ua[1] + vb[1]) / TWO_PI)) + 1):
+        e = TWO_PI * m
+        lo, hi = max(ua[0], e - vb[1]), min(ua[1], e - vb[0])
         if lo > hi:
             continue
-        u = min(max(weights[1] * em / (weights[0] + weights[1]), lo), hi)
-        d = weights[0] * u * u + weights[1] * (em - u) ** 2
+        u = min(max((weights[0] * da + weights[1] * (e - db)) / (weights[0] + weights[1]), lo), hi)
+        d = weights[0] * (u - da) ** 2 + weights[1] * (e - u - db) ** 2
         if d < best_d:
             best_d = d
-            best = (float(np.clip(ref[0] + u, lower[0], upper[0])),
-                    float(np.clip(ref[1] + sigma * (em - u), lower[1], upper[1])))
+            best = (float(np.clip(x + u, lower[0], upper[0])), float(np.clip(y + sigma * (e - u), lower[1], upper[1])))
     return best
 
 
@@ -236,6 +229,18 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
     return IKAll(out_q, out_f, out_b, count, status)
 
 
+def nearest_copy(x: float, ref: float, lo: float, hi: float) -> float:
+    """The copy ``x + 2 pi k`` within ``[lo, hi]`` (+-inf where absent; ``x`` is within) nearest ``ref`` (rad): the
+    nearest copy when it is within, else the last one below ``hi`` (the nearest copy is above the range) or the first
+    one above ``lo`` (below it)."""
+    y = x + TWO_PI * np.rint((ref - x) / TWO_PI)
+    if y > hi:
+        y = x + TWO_PI * np.floor((hi - x) / TWO_PI)
+    if y < lo:
+        y = x - TWO_PI * np.floor((x - lo) / TWO_PI)
+    return float(y)
+
+
 def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
             aligned_tol: float = WRIST_ALIGNED_TOL) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
@@ -251,11 +256,8 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     best, best_d, best_i = None, np.inf, -1
     for i in range(result.count):
         q = result.q[i].copy()
-        k = np.round((q_ref - q) / TWO_PI)
         for j in np.nonzero(rev)[0]:
-            options = [q[j] + TWO_PI * (k[j] + m) for m in (0, -1, 1)]
-            options = [x for x in options if lower[j] <= x <= upper[j]] or [q[j]]
-            q[j] = min(options, key=lambda x: abs(x - q_ref[j]))
+            q[j] = nearest_copy(q[j], q_ref[j], lower[j], upper[j])
         if continuum:
             a, wj, b, s = continuum
             sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol)

@@ -201,7 +201,7 @@ def rows_helper(arm: _Arm) -> Function:
     diff = b.var("diff", 0.0)
     tol = b.var("tol", 0.0)
     singular = NamedConst("IK_FLAG_SINGULAR", Type.INT)
-    continuum = Continuum(b, arm) if arm.moves_continuum else None
+    continuum = Continuum(b, arm, reference=False) if arm.moves_continuum else None
     with b.for_("i", 0, rows) as i:
         b.set(flag, Cast(Type.INT, raw_flags[i]))
         with b.if_(eq(exact, 0) | ne(Bits("%", flag, _int(2)), least_squares)):
@@ -399,11 +399,9 @@ def nearest_solver(arm: _Arm) -> Function:
     best = b.var("best", _int(-1), Type.INT)
     best_d = b.var("best_d", 0.0)
     dist = b.var("dist", 0.0)
-    k = b.var("k", 0.0)
     y = b.var("y", 0.0)
     x = b.var("x", 0.0)
-    found = b.var("found", _int(0), Type.INT)
-    continuum = Continuum(b, arm) if arm.continuum else None
+    continuum = Continuum(b, arm, reference=True) if arm.continuum else None
     b.call("ik_all_rows", *data, rows, count, flags, result=status)
     for j in range(N):
         b.set(q[j], Const(math.nan))
@@ -412,27 +410,18 @@ def nearest_solver(arm: _Arm) -> Function:
         # batch, and array backends read rows[...] directly instead of through a chain of selects per lane
         with b.if_(i >= count[0]):
             b.break_()
-        b.comment("each revolute joint: the copy q + 2 pi (k + m), m = 0, -1, 1, within the limits nearest q_ref")
+        b.comment("each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last "
+                  "one below the upper limit or the first one above the lower limit)")
         for j in range(N):
             b.set(x, rows[_at(N, i, j)])
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
-            b.set(k, Call1("nearbyint", (q_ref[j] - x) * INV_TWO_PI))
-            b.set(found, _int(0))
-            b.set(y, x)
-            for m in (0, -1, 1):
-                xm = x + TWO_PI * (k + float(m)) if m else x + TWO_PI * k
-                tests = []
-                if arm.lower[j] is not None:
-                    tests.append(xm >= arm.lower[j])
-                if arm.upper[j] is not None:
-                    tests.append(xm <= arm.upper[j])
-                better = eq(found, 0) | (fabs(xm - q_ref[j]) < fabs(y - q_ref[j]))
-                cond = better if not tests else (tests[0] & better if len(tests) == 1 else tests[0] & tests[1] & better)
-                with b.if_(cond):
-                    b.set(y, xm)
-                    b.set(found, _int(1))
+            b.set(y, x + TWO_PI * Call1("nearbyint", (q_ref[j] - x) * INV_TWO_PI))
+            if arm.upper[j] is not None:
+                b.set(y, select(y > arm.upper[j], x + TWO_PI * Call1("floor", (arm.upper[j] - x) * INV_TWO_PI), y))
+            if arm.lower[j] is not None:
+                b.set(y, select(y < arm.lower[j], x - TWO_PI * Call1("floor", (x - arm.lower[j]) * INV_TWO_PI), y))
             b.set(near[j], y)
         if continuum is not None:
             a, w, c = continuum.a, continuum.w, continuum.b
@@ -455,7 +444,7 @@ def nearest_solver(arm: _Arm) -> Function:
     )
     doc = (
         "The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k",
-        "within the joint limits nearest q_ref[j] (the copy ik_all returns when no other fits), then the row with the",
+        "within the joint limits nearest q_ref[j], then the row with the",
         "least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row",
         "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).",
         *_doc_continuum(arm, "the member within the limits nearest q_ref"),
