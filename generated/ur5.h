@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x3c3ce1d8UL
+#define UR5_STAMP 0x62111f7dUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -83,6 +83,9 @@ extern "C" {
 
 /* ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it */
 #define UR5_IK_TRANSLATION_MAX 1e+150
+
+/* ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped */
+#define UR5_IK_LIMIT_TOL 1e-12
 
 /* ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once */
 #define UR5_IK_DUP_TOL 1e-09

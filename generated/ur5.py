@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x3c3ce1d8
+STAMP = 0x62111f7d
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -52,6 +52,8 @@ IK_ORTHO_TOL = 1e-06
 """ik_all refuses a target whose |R^T R - I| exceeds this anywhere"""
 IK_TRANSLATION_MAX = 1e+150
 """ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"""
+IK_LIMIT_TOL = 1e-12
+"""ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped"""
 IK_DUP_TOL = 1e-09
 """ik_all returns rows closer than this (max over joints, modulo 2 pi for revolute ones) once"""
 IK_DUP_TOL_SINGULAR = 1e-06
@@ -6943,36 +6945,48 @@ def _ik_nearest(q_ref, target, q):
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
             break
-        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit)
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = rows[6*i]
         y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[0] = y
         x = rows[6*i + 1]
         y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[1] = y
         x = rows[6*i + 2]
         y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[2] = y
         x = rows[6*i + 3]
         y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[3] = y
         x = rows[6*i + 4]
         y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[4] = y
         x = rows[6*i + 5]
         y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
-        y = x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535) if y > 6.283185307179586 else y
-        y = x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535) if y < -6.283185307179586 else y
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
         near[5] = y
         dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5])
         if best < 0 or dist < best_d:
@@ -7325,36 +7339,48 @@ def _ik_nearest_lanes(_c, q_ref, target):
         _c125 = i >= count[0]
         _m126 = _run124 & _c125
         _run124 = _run124 & (~_m126)
-        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit)
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = np.where(_run124, rows[6*i], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[0] = np.where(_run124, y, near[0])
         x = np.where(_run124, rows[6*i + 1], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[1] = np.where(_run124, y, near[1])
         x = np.where(_run124, rows[6*i + 2], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[2] = np.where(_run124, y, near[2])
         x = np.where(_run124, rows[6*i + 3], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[3] = np.where(_run124, y, near[3])
         x = np.where(_run124, rows[6*i + 4], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[4] = np.where(_run124, y, near[4])
         x = np.where(_run124, rows[6*i + 5], x)
         y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, x + 6.283185307179586*np.floor((6.283185307179586 - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, x - 6.283185307179586*np.floor((x - -6.283185307179586)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[5] = np.where(_run124, y, near[5])
         dist = np.where(_run124, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
         _c127 = (best < 0) | (dist < best_d)

@@ -717,6 +717,65 @@ def test_a_far_reference_on_a_joint_wider_than_a_turn_takes_its_nearest_copy():
         np.testing.assert_allclose(impl.ik_nearest(ref, T).q, want, atol=1e-12)
 
 
+def puma_with_limits(limits: dict) -> Built:
+    """The PUMA 560 with the limits ``{coordinate: (lower, upper)}`` (None: absent)."""
+    import dataclasses
+
+    chain, _ = load_arm("puma560")
+    joints = [dataclasses.replace(j, lower=limits[k][0], upper=limits[k][1]) if k in limits else j
+              for k, j in enumerate(chain.joints)]
+    return Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+
+
+@pytest.mark.parametrize("limits, q", [
+    # joints 4 and 6 on limits (a corner of the continuum's box): rounding put the member 1e-16 outside, and the
+    # line was skipped: ik_nearest(q, pose(q)) returned another member (distance^2 25)
+    ({3: (-1.0, 0.5), 4: (None, None), 5: (1.2, 1.2 + 2 * math.pi)},
+     [-1.7655046381547823, 3.57528605945932, 0.08297888745890969, 0.5, math.pi, 1.2]),
+    ({3: (-math.pi / 2, math.pi / 2), 4: (None, None), 5: (-math.pi / 2, math.pi / 2)},
+     [-1.9152899944325303, 1.2610125631538995, -1.046517043822345, math.pi / 2, 0.0, math.pi / 2]),
+    # both joints pinned (lower == upper): ik_all found no member and returned out_of_limits
+    ({3: (0.3, 0.3), 4: (None, None), 5: (-0.7, -0.7)},
+     [0.059421966898915546, 3.4812804695616206, -3.0799688146111333, 0.3, 0.0, -0.7]),
+])
+def test_a_continuum_member_on_the_limits_is_kept(limits, q):
+    """Members of the aligned wrist's continuum within IK_LIMIT_TOL of a limit are kept and clipped onto it, as step 4
+    keeps any row (a new user's probe: C, NumPy and the spec all lost them)."""
+    b = puma_with_limits(limits)
+    q = np.array(q)
+    T = targets_of(b.chain, q[None])[0]
+    spec = b.spec(T, q)
+    assert spec.status == STATUS["ok"]
+    want, _ = nearest(spec, q, b.lower, b.upper, b.revolute, continuum=b.continuum)
+    np.testing.assert_allclose(want, q, atol=1e-9)
+    for impl in (b.c, b.py):
+        r = impl.ik_all(T)
+        assert r.status == "ok"
+        check_rows(b, r, T, tol=1e-11)
+        np.testing.assert_allclose(impl.ik_nearest(q, T).q, q, atol=1e-9)
+
+
+def test_nearest_copy_on_a_limit_a_whole_number_of_turns_away():
+    """A copy of the row's joint that lands on a limit a whole number of turns away (limits 360 degrees apart, the row
+    clipped onto one): ``floor`` of the turns to the other limit rounded past it, and the copy was an ulp outside the
+    limits (C, NumPy, spec); at other values it rounded short and a copy on the limit was missed for one a turn
+    further. Within IK_LIMIT_TOL is within, clipped: the result is inside and the nearest."""
+    from skelarm_sym.closed_ik.postprocess import nearest_copy
+
+    assert nearest_copy(4.0168300106375785, 32.29116389294572, -2.2663552965420077, 16.58320062499675) == 16.58320062499675
+    assert nearest_copy(-2.7903555779935028, -24.781504153122054, -9.073540885173088, -2.7903555779935028) == -9.073540885173088
+    lo, hi = math.radians(-357), math.radians(3)
+    b = puma_with_limits({0: (lo, hi)})
+    q = inner_configurations(b, 1, np.random.default_rng(4))[0]
+    q[0] = lo
+    T = targets_of(b.chain, q[None])[0]
+    ref = q.copy()
+    ref[0] = 10.0
+    for impl in (b.c, b.py):
+        got = np.asarray(impl.ik_nearest(ref, T).q)
+        assert lo <= got[0] <= hi and got[0] == pytest.approx(hi, abs=1e-12)
+
+
 @pytest.mark.parametrize("name", ["puma560", "ur5"])
 def test_every_non_finite_entry_is_invalid(name):
     """NaN or +-inf in any of the 12 entries read (R's through the sum of their squares, t's one by one) gives

@@ -73,6 +73,9 @@ ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT, WRIST_A
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9 (singular
 rows keep the same tolerance as the others in float)."""
 TWO_PI = 2.0 * np.pi
+INV_TWO_PI = 1.0 / TWO_PI
+"""Turns are counted by multiplying with this, as the emitted code does (a division can round a half-turn tie the
+other way)."""
 
 
 @dataclass(frozen=True)
@@ -142,7 +145,8 @@ def _window(low: float, high: float, d: float) -> tuple[float, float]:
 
 
 def continuum_member(x: float, y: float, ref: tuple[float, float], sigma: int, lower: tuple[float, float],
-                     upper: tuple[float, float], weights: tuple[float, float] = (1.0, 1.0)) -> tuple[float, float] | None:
+                     upper: tuple[float, float], weights: tuple[float, float] = (1.0, 1.0),
+                     tol: float = LIMIT_TOL) -> tuple[float, float] | None:
     """The member ``(x', y')`` of the continuum through ``(x, y)`` (``x' + sigma y' = x + sigma y`` modulo 2 pi, rad)
     within ``lower <= (x', y') <= upper`` (per joint; +-inf where absent) nearest ``ref`` in the weighted norm
     ``w_a (x' - ref_a)^2 + w_b (y' - ref_b)^2``; ``None`` when no member is within the limits.
@@ -151,13 +155,14 @@ def continuum_member(x: float, y: float, ref: tuple[float, float], sigma: int, l
     on each, the nearest point within the limits is the unconstrained one clamped to the line's segment in the
     windows of ``u`` and ``v`` (:func:`_window`, at most a turn wide each: at most three lines cross them). The
     member is built from the row, ``x' = x + u``, ``y' = y + sigma (2 pi m - u)``: on the continuum to the rounding of
-    those offsets, whatever the reference's magnitude."""
+    those offsets, whatever the reference's magnitude. As in step 4, limits are met within ``tol`` (rad) and the
+    member clipped onto them: a member on a limit, or on a corner of two, is kept when rounding puts it just past."""
     da, db = ref[0] - x, sigma * (ref[1] - y)
-    ua = _window(lower[0] - x, upper[0] - x, da)
-    wb = _window(lower[1] - y, upper[1] - y, ref[1] - y)
+    ua = _window(lower[0] - tol - x, upper[0] + tol - x, da)
+    wb = _window(lower[1] - tol - y, upper[1] + tol - y, ref[1] - y)
     vb = wb if sigma > 0 else (-wb[1], -wb[0])
     best, best_d = None, np.inf
-    for m in range(int(np.ceil((ua[0] + vb[0]) / TWO_PI)), int(np.floor((ua[1] + vb[1]) / TWO_PI)) + 1):
+    for m in range(-int(np.floor(-(ua[0] + vb[0]) * INV_TWO_PI)), int(np.floor((ua[1] + vb[1]) * INV_TWO_PI)) + 1):
         e = TWO_PI * m
         lo, hi = max(ua[0], e - vb[1]), min(ua[1], e - vb[0])
         if lo > hi:
@@ -203,7 +208,8 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
         if continuum:
             a, w, b, s = continuum
             sigma = continuum_sign(q[w], flags[i], s, aligned_tol)
-            member = sigma and continuum_member(q[a], q[b], (q[a], q[b]), sigma, (lower[a], lower[b]), (upper[a], upper[b]))
+            member = sigma and continuum_member(q[a], q[b], (q[a], q[b]), sigma, (lower[a], lower[b]), (upper[a], upper[b]),
+                                                tol=limit_tol)
             if member:
                 q[a], q[b] = member
         if np.any(q < lower - limit_tol) or np.any(q > upper + limit_tol):
@@ -229,20 +235,21 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
     return IKAll(out_q, out_f, out_b, count, status)
 
 
-def nearest_copy(x: float, ref: float, lo: float, hi: float) -> float:
+def nearest_copy(x: float, ref: float, lo: float, hi: float, tol: float = LIMIT_TOL) -> float:
     """The copy ``x + 2 pi k`` within ``[lo, hi]`` (+-inf where absent; ``x`` is within) nearest ``ref`` (rad): the
     nearest copy when it is within, else the last one below ``hi`` (the nearest copy is above the range) or the first
-    one above ``lo`` (below it)."""
-    y = x + TWO_PI * np.rint((ref - x) / TWO_PI)
-    if y > hi:
-        y = x + TWO_PI * np.floor((hi - x) / TWO_PI)
-    if y < lo:
-        y = x - TWO_PI * np.floor((x - lo) / TWO_PI)
-    return float(y)
+    one above ``lo`` (below it). As in step 4, within ``tol`` of a limit counts as within, clipped onto it (a copy a
+    whole number of turns from ``x`` that lands on a limit rounds to either side of it)."""
+    y = x + TWO_PI * np.rint((ref - x) * INV_TWO_PI)
+    if y > hi + tol:
+        y = x + TWO_PI * np.floor((hi + tol - x) * INV_TWO_PI)
+    if y < lo - tol:
+        y = x - TWO_PI * np.floor((x - (lo - tol)) * INV_TWO_PI)
+    return float(min(max(y, lo), hi))
 
 
 def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
-            aligned_tol: float = WRIST_ALIGNED_TOL) -> tuple[np.ndarray | None, int]:
+            aligned_tol: float = WRIST_ALIGNED_TOL, limit_tol: float = LIMIT_TOL) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
     nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
     (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
@@ -257,12 +264,12 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     for i in range(result.count):
         q = result.q[i].copy()
         for j in np.nonzero(rev)[0]:
-            q[j] = nearest_copy(q[j], q_ref[j], lower[j], upper[j])
+            q[j] = nearest_copy(q[j], q_ref[j], lower[j], upper[j], limit_tol)
         if continuum:
             a, wj, b, s = continuum
             sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol)
             member = sigma and continuum_member(result.q[i, a], result.q[i, b], (q_ref[a], q_ref[b]), sigma,
-                                                (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]))
+                                                (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]), limit_tol)
             if member:
                 q[a], q[b] = member
         d = float(np.sum(w * (q - q_ref) ** 2))

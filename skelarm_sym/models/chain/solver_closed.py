@@ -411,17 +411,23 @@ def nearest_solver(arm: _Arm) -> Function:
         with b.if_(i >= count[0]):
             b.break_()
         b.comment("each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last "
-                  "one below the upper limit or the first one above the lower limit)")
+                  "one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit "
+                  "clipped onto it)")
         for j in range(N):
             b.set(x, rows[_at(N, i, j)])
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
             b.set(y, x + TWO_PI * Call1("nearbyint", (q_ref[j] - x) * INV_TWO_PI))
-            if arm.upper[j] is not None:
-                b.set(y, select(y > arm.upper[j], x + TWO_PI * Call1("floor", (arm.upper[j] - x) * INV_TWO_PI), y))
-            if arm.lower[j] is not None:
-                b.set(y, select(y < arm.lower[j], x - TWO_PI * Call1("floor", (x - arm.lower[j]) * INV_TWO_PI), y))
+            lo, hi, tol = arm.lower[j], arm.upper[j], NamedConst("IK_LIMIT_TOL")
+            if hi is not None:
+                b.set(y, select(y > hi + tol, x + TWO_PI * Call1("floor", ((hi + tol) - x) * INV_TWO_PI), y))
+            if lo is not None:
+                b.set(y, select(y < lo - tol, x - TWO_PI * Call1("floor", (x - (lo - tol)) * INV_TWO_PI), y))
+            if hi is not None:
+                b.set(y, select(y > hi, hi, y))
+            if lo is not None:
+                b.set(y, select(y < lo, lo, y))
             b.set(near[j], y)
         if continuum is not None:
             a, w, c = continuum.a, continuum.w, continuum.b

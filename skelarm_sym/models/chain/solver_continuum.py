@@ -77,10 +77,12 @@ class Continuum:
     @staticmethod
     def _window(b: Body, lo: float | None, hi: float | None, value, d, start, end) -> None:
         """``start``, ``end`` = the window of offsets ``t`` from ``value`` a nearest point can take (postprocess._window):
-        ``[max(low, min(high - 2 pi, d - pi)), min(high, max(low + 2 pi, d + pi))]``, ``low = lo - value``, ``high =
-        hi - value``, a missing limit left out."""
-        low = None if lo is None else lo - value
-        high = None if hi is None else hi - value
+        ``[max(low, min(high - 2 pi, d - pi)), min(high, max(low + 2 pi, d + pi))]``, ``low = lo - IK_LIMIT_TOL -
+        value``, ``high = hi + IK_LIMIT_TOL - value`` (a member within the tolerance of a limit is clipped onto it, as
+        in step 4), a missing limit left out."""
+        tol = NamedConst("IK_LIMIT_TOL")
+        low = None if lo is None else (lo - tol) - value
+        high = None if hi is None else (hi + tol) - value
         first = d - math.pi if high is None else fmin(high - TWO_PI, d - math.pi)
         last = d + math.pi if low is None else fmax(low + TWO_PI, d + math.pi)
         b.set(start, first if low is None else fmax(low, first))
