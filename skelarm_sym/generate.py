@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
-from .assemble import build_module, select_functions
+from .assemble import build_module, select_functions, wanted_functions
 from .backends import BACKENDS
 from .backends.templating import render_template
 from .backends.text import unescape
@@ -158,17 +158,29 @@ def _without_functions(words: list[str] | str) -> list[str] | str:
     return words[: i + 1] + words[i + 2:]
 
 
-def refuse_before_deriving(target: Path, names: Sequence[str], command: str) -> None:
+def _recorded_functions(words: list[str] | str) -> frozenset[str] | None:
+    """The function names of a recorded command's ``--functions`` value, or ``None`` when it has none."""
+    if isinstance(words, str) or "--functions" not in words or words.index("--functions") + 1 >= len(words):
+        return None
+    return frozenset(words[words.index("--functions") + 1].split(","))
+
+
+def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wanted: frozenset[str] | None = None) -> None:
     """The refusals of :func:`refuse_other_options` that need no derivation, made before it (a large chain's
     derivation takes seconds): a file of the set that skelarm-sym did not write, or one recorded with other
     options. ``command``: the command to record, with any function list as a placeholder (the derivation settles
     the list, which :func:`refuse_other_options` compares afterwards); a file recorded with a function list where
-    the new one has none, or the reverse, differs already."""
+    the new one has none, or the reverse, differs already. ``wanted``: the functions the new list asks for with the
+    ones its solvers need; fewer than a file records differ already (names the file does not record wait for the
+    derivation, which says whether they exist)."""
     new = _without_functions(_words(command))
     for name in names:
         path = target / name
         before = _recorded_before(path)
-        if before is not None and _without_functions(_words(before)) != new:
+        if before is None:
+            continue
+        recorded = _recorded_functions(_words(before))
+        if _without_functions(_words(before)) != new or (wanted is not None and recorded is not None and wanted < recorded):
             raise _other_options(path, before)
 
 
@@ -295,7 +307,8 @@ def generate(
     if target is not None and not force:
         names = [prefix + suffix for lang in langs for suffix in BACKENDS[lang].FILE_SUFFIXES]
         refuse_before_deriving(target, names + (["CMakeLists.txt"] if cmake else []),
-                               regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"], recorded_in))
+                               regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"], recorded_in),
+                               None if functions is None else wanted_functions(kind, functions))
     derivation = kind.derive(model, None if functions is None else frozenset(
         x.strip() for x in (functions.split(",") if isinstance(functions, str) else map(str, functions))))
     derived, solvers = select_functions(kind, derivation, functions)

@@ -94,7 +94,8 @@ def test_a_refusal_for_other_options_comes_before_the_derivation(tmp_path, monke
     """Files generated with other options in the target folder are refused before the derivation where the
     options besides the function list differ (a new user's probe: an all-functions generate into a folder of
     pose-only files derived every function, seconds for a large chain, before it refused); a function list that
-    differs is still refused, after the derivation that settles it; the same options regenerate."""
+    asks for fewer functions than the files record is refused before it too; one with names they do not record is
+    refused after the derivation that settles it; the same options regenerate."""
     import dataclasses
 
     import skelarm_sym.generate as generation
@@ -115,3 +116,13 @@ def test_a_refusal_for_other_options_comes_before_the_derivation(tmp_path, monke
     assert main(["generate", "--links", "3", "--functions", "position", "--out", str(out)]) == 2  # after deriving
     assert "was generated with other options" in capsys.readouterr().err and derived == [1]
     assert main(["generate", "--links", "3", "--functions", "jacobian", "--out", str(out)]) == 0
+    # fewer functions than the files record: refused before deriving (names they record exist); a name they do not
+    # record waits for the derivation, which tells an unknown one
+    both = tmp_path / "both"
+    assert main(["generate", "--links", "3", "--functions", "jacobian,position", "--out", str(both)]) == 0
+    derived.clear()
+    assert main(["generate", "--links", "3", "--functions", "position", "--out", str(both)]) == 2
+    assert "was generated with other options" in capsys.readouterr().err and derived == []
+    assert main(["generate", "--links", "3", "--functions", "position,positon", "--out", str(both)]) == 2
+    assert "unknown function 'positon'" in capsys.readouterr().err and derived == [1]
+    assert main(["generate", "--links", "3", "--functions", "position,jacobian", "--out", str(both)]) == 0
