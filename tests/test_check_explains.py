@@ -184,6 +184,23 @@ def test_check_from_folder_checks_the_files_there(tmp_path, capsys):
     assert "C ik_solve: converged 8/8" in text and text.rstrip().endswith("34 passed, 0 failed; ik: 2 passed, 0 failed")
 
 
+def test_files_of_one_language_from_a_two_language_generation_are_not_called_edited(tmp_path, capsys):
+    """Only the .h and .c of a `--lang c,python` generation copied to a folder: check --from compared them with a
+    C-only generation, whose recorded command reads `--lang c`, and noted both as differing (a new user's probe);
+    they are compared with the recorded command's output: no note."""
+    import shutil
+
+    out = _generate(tmp_path, "--links", "3", "--prefix", "arm3")
+    only_c = tmp_path / "only_c"
+    only_c.mkdir()
+    for name in ("arm3.h", "arm3.c"):
+        shutil.copy(out / name, only_c / name)
+    capsys.readouterr()
+    assert main(["check", "--from", str(only_c), "--cases", "4"]) == 0
+    text = capsys.readouterr().out
+    assert "note:" not in text and "--lang c,python" in text.splitlines()[0]
+
+
 def test_a_hand_edited_file_fails_the_check(tmp_path, capsys):
     """Flip one sign in the emitted C and in the NumPy module: check --from says FAIL for those rows."""
     out = _generate(tmp_path, "--links", "3", "--prefix", "arm3")

@@ -1,11 +1,15 @@
 """The command line: output, exit codes, one-line errors."""
 
 import subprocess
+from pathlib import Path
 import sys
 
 import pytest
 
 from skelarm_sym.cli import main
+
+
+ROBOTS = Path(__file__).resolve().parent.parent / "examples" / "robots"
 
 
 def run(*args):
@@ -49,6 +53,12 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["show", "--links", "2", "--what", "Q"], "unknown --what"),
         (["check", "--links", "2", "--cases", "0"], "at least 1"),
         ([], "required"),
+        # a new user's probe: messages that pointed the wrong way or listed too little
+        (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "links"], "--what links lists a URDF file's link tree"),
+        (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "nosuch"], "all, ik, links"),
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest"),
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "--tip applies to URDF files only"),
+        (["generate", "--robot", str(ROBOTS / "panda.toml"), "--functions", "ik_all"], "lock one joint, --ik-lock JOINT"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):

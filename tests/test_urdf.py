@@ -462,9 +462,9 @@ def test_load_robot_dispatches_on_suffix(tmp_path):
     assert dh.name == "two"
     T = pose_by_hand(dh, np.array([0.3, -0.4]))
     np.testing.assert_allclose(T[:2, 3], [0.5 * math.cos(0.3) + 0.25 * math.cos(-0.1), 0.5 * math.sin(0.3) + 0.25 * math.sin(-0.1)])
-    with pytest.raises(InputError, match=r"two\.toml: tip apply to URDF files only"):
+    with pytest.raises(InputError, match=r"two\.toml: --tip applies to URDF files only"):
         load_robot(toml_path, tip="x")
-    with pytest.raises(InputError, match=r"two\.toml: base and tip apply"):
+    with pytest.raises(InputError, match=r"two\.toml: --base and --tip apply"):
         load_robot(toml_path, base="a", tip="x")
     with pytest.raises(InputError, match=r"arm\.xml: unknown kind of robot file '\.xml'"):
         load_robot(tmp_path / "arm.xml")

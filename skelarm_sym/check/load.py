@@ -106,8 +106,9 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
                          f"its .c or .py beside the header, or every file of another language's set ({sets})")
     if args.prefix != prefix:
         raise InputError(f"{root / names[0]} records --prefix {args.prefix}, not {prefix}; was it renamed?")
-    fresh = generate(model, langs=langs, prefix=args.prefix, precision=args.precision, out=None, functions=args.functions,
-                     recorded_folder=root)
+    # every language the command records (its header line names them all), though only some files are here
+    fresh = generate(model, langs=args.lang or langs, prefix=args.prefix, precision=args.precision, out=None,
+                     functions=args.functions, recorded_folder=root)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
     return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited)
 

@@ -19,13 +19,16 @@ def _derive(model: Chain, wanted):
     functions (they take most of the generation time); any other name (an inverse function, a solver, or an
     unknown one, which the error then lists among all) needs the whole derivation. The closed-form IK is added
     when the chain is in a closed-form family; asked for by name (or with a lock) on a chain in none, the
-    one-line reason is the error."""
+    one-line reason is the error. A name that is none of these is derived as if nothing were named, so that the
+    error that follows lists every function the chain has."""
     from .derive import CHAIN_FUNCTIONS, derive_chain
 
     forward = {f.name for f in CHAIN_FUNCTIONS} | set(CLOSED)
     derivation = derive_chain(model, inverse=wanted is None or not set(wanted) <= forward)
     if wanted is not None and not set(wanted) & set(CLOSED):
-        return derivation
+        if set(wanted) <= {f.name for f in derivation.functions} | set(SOLVERS):
+            return derivation
+        wanted = None  # an unknown name: the error lists every function, the closed-form ones where the chain has them
     lock = lock_index(model, ik_lock(model))
     if wanted is None and lock is None and refusal(model, lock) is not None:
         return derivation  # in no family, as derive_ik_all would find, without importing it (and NumPy)
@@ -90,6 +93,9 @@ def _preview(args) -> str | None:
     """``show --robot X.urdf --what links``: the link tree, to choose --base and --tip."""
     if getattr(args, "what", None) != "links" or getattr(args, "robot", None) is None:
         return None
+    if not str(args.robot).lower().endswith(".urdf"):
+        raise InputError(f"{args.robot}: --what links lists a URDF file's link tree (to choose --base and --tip); a "
+                         "TOML robot file is one chain: show its closed forms with --what T, J, ...")
     from .urdf import urdf_tree
 
     return "\n".join(urdf_tree(args.robot, getattr(args, "base", None))) + "\n"

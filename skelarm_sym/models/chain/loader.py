@@ -54,8 +54,9 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
         options = tuple((flag, value) for flag, value in (("--base", base), ("--tip", tip)) if value is not None)
         return dataclasses.replace(chain, load_options=options) if options else chain
     if suffix == ".toml":
-        given = [k for k, v in (("base", base), ("tip", tip)) if v is not None]
+        given = [k for k, v in (("--base", base), ("--tip", tip)) if v is not None]
         if given:
-            raise InputError(f"{path}: {' and '.join(given)} apply to URDF files only (a TOML robot file is one chain)")
+            verb = "apply" if len(given) > 1 else "applies"
+            raise InputError(f"{path}: {' and '.join(given)} {verb} to URDF files only (a TOML robot file is one chain)")
         return load_robot_file(path)
     raise InputError(f"{path}: unknown kind of robot file {path.suffix!r}: expected {' or '.join(SUFFIXES)}")

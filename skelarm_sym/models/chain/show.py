@@ -41,7 +41,7 @@ def show_chain(derivation: ChainDerivation, what: str = "J", fmt: str = "pretty"
     names = WHAT if what == "all" else (what,)
     unknown = [w for w in names if w not in WHAT]
     if unknown:
-        raise InputError(f"unknown --what {unknown[0]!r} for a robot; choose from {', '.join(WHAT + ('all', 'ik'))}")
+        raise InputError(f"unknown --what {unknown[0]!r} for a robot; choose from {', '.join(WHAT + ('all', 'ik', 'links'))}")
     expand = derivation.n <= EXPAND_UP_TO if expand is None else expand
     lines: list[str] = []
     if expand:
