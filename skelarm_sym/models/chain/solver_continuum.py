@@ -10,7 +10,8 @@ In offsets from the row, ``u = q'[a] - q[a]`` and ``v = sigma (q'[b] - q[b])``, 
 ``u + v = 2 pi m``; on each the nearest point within the limits is the unconstrained one clamped to the line's
 segment in the windows of ``u`` and ``v`` (each at most a turn wide: a point further out has a nearer copy within the
 limits), and the member is built from the row, so it stays on the continuum whatever the reference's magnitude.
-At most three lines cross the windows (two where a range is narrower), known at generation time: they unroll.
+At most three lines cross the windows (fewer where the ranges are narrower), known at generation time: they
+unroll.
 """
 
 from __future__ import annotations
@@ -41,7 +42,9 @@ class Continuum:
         self.a, self.w, self.b, self.s = arm.continuum
         self.lower = (arm.lower[self.a], arm.lower[self.b])
         self.upper = (arm.upper[self.a], arm.upper[self.b])
-        self.lines = int(math.floor((_width(self.lower[0], self.upper[0]) + _width(self.lower[1], self.upper[1]))
+        # the windows take the limits widened by IK_LIMIT_TOL (at most 1e-5, in float): a margin above that keeps
+        # the count from missing a line where the widths sum to just under a multiple of a turn
+        self.lines = int(math.floor((_width(self.lower[0], self.upper[0]) + _width(self.lower[1], self.upper[1]) + 1e-4)
                                     * INV_TWO_PI)) + 1
         self.sigma = b.var("c_sigma", 0.0)
         self.k = b.var("c_k", 0.0)
