@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xb7f4f64aUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x6dc6933cUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 

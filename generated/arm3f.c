@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x7c4b9439UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xd0a6d8e2UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 

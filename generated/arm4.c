@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x4e3a968bUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xaf986388UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

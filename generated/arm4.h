@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x4e3a968bUL
+#define ARM4_STAMP 0xaf986388UL
 
 #ifdef __cplusplus
 extern "C" {

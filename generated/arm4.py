@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x4e3a968b
+STAMP = 0xaf986388
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -90,9 +90,10 @@ def _inputs(values, names, sizes, domains):
     """Arrays of shape (..., size) -> (batch shape, the arrays as contiguous NumPy arrays)."""
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
-        array = np.ascontiguousarray(_real_array(value, name))
-        if array.ndim == 0 or array.shape[-1] != size:
+        array = _real_array(value, name)
+        if array.ndim == 0 or array.shape[-1] != size:  # the shape given (a contiguous copy of a number has shape (1,))
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
+        array = np.ascontiguousarray(array)
         _check_domain(array, name, domain)
         arrays.append(array)
     try:

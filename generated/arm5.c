@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xfd9cbe74UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xfb42127fUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

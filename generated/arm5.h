@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0xfd9cbe74UL
+#define ARM5_STAMP 0xfb42127fUL
 
 #ifdef __cplusplus
 extern "C" {

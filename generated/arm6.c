@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xf68c5663UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x0e1fdc07UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 

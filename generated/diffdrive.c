@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x0691ece2UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x15e87ec4UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x92bdc31eUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xc81cd4d2UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

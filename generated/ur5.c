@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x62111f7dUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x39fde14fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -1,6 +1,7 @@
 """Emitted C and Python: strict compilation, values against the reference, layout, determinism."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -109,6 +110,9 @@ def test_wrong_shapes_are_clear_errors():
         py.jacobian(np.zeros((5, 2)), np.ones(3))
     with pytest.raises(ValueError, match="do not broadcast"):
         py.velocity(np.zeros((5, 3)), np.zeros((4, 3)), np.ones(3))
+    for impl in (arm, py):  # a number for q: the shape given, () (the NumPy module said (1,), its contiguous copy's)
+        with pytest.raises(ValueError, match=re.escape("q must have shape (..., 3), got ()")):
+            impl.jacobian(1.0, np.ones(3))
 
 
 def test_compile_cache_is_reused():
