@@ -18,7 +18,7 @@ from .ir.nodes import ConstantDef, Function, Module, TableDef
 from .ir.walk import named_constants
 
 
-def _function_items(functions) -> list[str]:
+def function_items(functions) -> list[str]:
     """The names of a ``--functions`` list (a comma-separated string or a sequence), blanks dropped."""
     items = [x.strip() for x in functions.split(",")] if isinstance(functions, str) else [str(x).strip() for x in functions]
     return [x for x in items if x]
@@ -27,7 +27,7 @@ def _function_items(functions) -> list[str]:
 def wanted_functions(kind, functions) -> frozenset[str]:
     """The names a ``--functions`` list chooses, known before any derivation: its own and those its solvers need
     (what :func:`select_functions` returns for it when every name exists)."""
-    items = _function_items(functions)
+    items = function_items(functions)
     return frozenset(items) | {n for s in items for n in kind.solver_names.get(s, ())}
 
 
@@ -38,7 +38,7 @@ def select_functions(kind, derivation, functions) -> tuple[tuple[str, ...], tupl
     solvers = [name for name, needs in kind.solver_names.items() if all(n in derived for n in needs)]
     if functions is None:
         return tuple(derived), tuple(solvers)
-    items = _function_items(functions)
+    items = function_items(functions)
     valid = derived + solvers
     unknown = [x for x in items if x not in valid]
     if unknown or not items:

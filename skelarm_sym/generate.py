@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
-from .assemble import build_module, select_functions, wanted_functions
+from .assemble import build_module, function_items, select_functions, wanted_functions
 from .backends import BACKENDS
 from .backends.templating import render_template
 from .backends.text import unescape
@@ -160,9 +160,10 @@ def _without_functions(words: list[str] | str) -> list[str] | str:
 
 def _recorded_functions(words: list[str] | str) -> frozenset[str] | None:
     """The function names of a recorded command's ``--functions`` value, or ``None`` when it has none."""
-    if isinstance(words, str) or "--functions" not in words or words.index("--functions") + 1 >= len(words):
+    if isinstance(words, str) or "--functions" not in words:
         return None
-    return frozenset(words[words.index("--functions") + 1].split(","))
+    i = words.index("--functions") + 1
+    return frozenset(words[i].split(",")) if i < len(words) else None
 
 
 def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wanted: frozenset[str] | None = None) -> None:
@@ -309,8 +310,7 @@ def generate(
         refuse_before_deriving(target, names + (["CMakeLists.txt"] if cmake else []),
                                regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"], recorded_in),
                                None if functions is None else wanted_functions(kind, functions))
-    derivation = kind.derive(model, None if functions is None else frozenset(
-        x.strip() for x in (functions.split(",") if isinstance(functions, str) else map(str, functions))))
+    derivation = kind.derive(model, None if functions is None else frozenset(function_items(functions)))
     derived, solvers = select_functions(kind, derivation, functions)
     chosen = None if functions is None else derived + solvers
     command = regenerate_command(model, prefix, precision, langs, chosen, recorded_in)

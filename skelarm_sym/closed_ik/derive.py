@@ -94,15 +94,21 @@ FLIP_TOL = 1e-15
 exact zeros from pi/2 angles, or a URDF's rounding of them (6e-17), not a wrist that is merely near one."""
 
 
-def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int] = (3, 4, 5)) -> bool:
-    """Whether problem axes ``joints`` (a, b, c; 0-based) have ``a . b = 0``, ``b . c = 0`` and ``a || c`` within
-    :data:`FLIP_TOL` at every sampled lock value: the wrist flip of :mod:`.families` (joints 4, 5, 6 of a spherical
-    wrist; 2, 5, 6 of three parallel axes)."""
+def _sampled_axes(geom, reversed_: bool, locked: bool):
+    """The problem's unit axes ``H`` (6 x 3, in problem order: reversed for a reversed family) at each sampled lock
+    value (at the one configuration without a lock)."""
     from .classify import LOCK_SAMPLES, _lock_subs
 
     for value in (LOCK_SAMPLES if locked else (0.0,)):
         _, H, _ = geom.numeric(_lock_subs(geom, value))
-        H = H[::-1] if reversed_ else H
+        yield H[::-1] if reversed_ else H
+
+
+def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int] = (3, 4, 5)) -> bool:
+    """Whether problem axes ``joints`` (a, b, c; 0-based) have ``a . b = 0``, ``b . c = 0`` and ``a || c`` within
+    :data:`FLIP_TOL` at every sampled lock value: the wrist flip of :mod:`.families` (joints 4, 5, 6 of a spherical
+    wrist; 2, 5, 6 of three parallel axes)."""
+    for H in _sampled_axes(geom, reversed_, locked):
         h4, h5, h6 = H[joints[0]], H[joints[1]], H[joints[2]]
         if abs(h4 @ h5) > FLIP_TOL or abs(h5 @ h6) > FLIP_TOL or np.linalg.norm(np.cross(h4, h6)) > FLIP_TOL:
             return False
@@ -118,15 +124,9 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
     coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a spherical shoulder:
     its variables are negated, which keeps the relation) and ``sigma = s``. ``()`` for the other families, or where
     ``s`` is not the same at every sampled lock value."""
-    from .classify import LOCK_SAMPLES, _lock_subs
-
     if family.name not in ("spherical_wrist", "spherical_shoulder") or not wrist_flips(geom, family.reversed, locked):
         return ()
-    signs = set()
-    for value in (LOCK_SAMPLES if locked else (0.0,)):
-        _, H, _ = geom.numeric(_lock_subs(geom, value))
-        H = H[::-1] if family.reversed else H
-        signs.add(1 if float(H[3] @ H[5]) > 0 else -1)
+    signs = {1 if float(H[3] @ H[5]) > 0 else -1 for H in _sampled_axes(geom, family.reversed, locked)}
     wrist = [5 - k if family.reversed else k for k in (3, 4, 5)]  # geometry indices of problem joints 4, 5, 6
     if len(signs) != 1 or any(geom.kinds[k] != "revolute" for k in wrist):
         return ()

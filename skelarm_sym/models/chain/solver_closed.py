@@ -22,13 +22,11 @@ import functools
 import math
 import operator
 
-from ...closed_ik.postprocess import STATUS, centres
+from ...closed_ik.postprocess import INV_TWO_PI, STATUS, TWO_PI, centres
 from ...ir.build import Array, Body, fabs, select
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
 from .solver_continuum import Continuum
 
-TWO_PI = 2.0 * math.pi
-INV_TWO_PI = 1.0 / TWO_PI
 
 STATUSES = (
     ("IK_OK", STATUS["ok"], "at least one exact solution within the joint limits: all of them are returned"),
@@ -350,8 +348,8 @@ def _doc_continuum(arm: _Arm, choice: str) -> tuple[str, ...]:
     """The doc line on the wrist's continuum (none for an arm without one)."""
     if not arm.continuum:
         return ()
-    a, _, b, _ = arm.continuum
-    return (f"An aligned wrist (a row flagged singular, joint {arm.continuum[1] + 1} within IK_WRIST_ALIGNED_TOL of a "
+    a, w, b, _ = arm.continuum
+    return (f"An aligned wrist (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of a "
             f"multiple of pi) turns joints {a + 1} and {b + 1}",
             f"about one axis: such a row takes {choice}.")
 

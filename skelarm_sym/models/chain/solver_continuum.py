@@ -19,11 +19,10 @@ from __future__ import annotations
 import contextlib
 import math
 
+from ...closed_ik.postprocess import INV_TWO_PI, TWO_PI
 from ...ir.build import Body, fabs, fmax, fmin, select
 from ...ir.nodes import Call1, Const, NamedConst, Type, eq, ne
 
-TWO_PI = 2.0 * math.pi
-INV_TWO_PI = 1.0 / TWO_PI
 
 
 def _width(lo: float | None, hi: float | None) -> float:
