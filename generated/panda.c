@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xc81cd4d2UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x227e49dfUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6001,6 +6001,16 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         if (!PANDA_FINITE(target[k])) {
             return PANDA_IK_INVALID;
         }
+    }
+    const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
+    const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
+    const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
+    const double m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9];
+    const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
+    const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
+    const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
+    if (!PANDA_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > PANDA_IK_ORTHO_TOL || fabs(m01) > PANDA_IK_ORTHO_TOL || fabs(m02) > PANDA_IK_ORTHO_TOL || fabs(m11 - 1.0) > PANDA_IK_ORTHO_TOL || fabs(m12) > PANDA_IK_ORTHO_TOL || fabs(m22 - 1.0) > PANDA_IK_ORTHO_TOL || !(det > 0.0)) {
+        return PANDA_IK_INVALID;
     }
     for (int k = 0; k < 7; ++k) {
         q[k] = (q[k] < lo[k] ? lo[k] : (q[k] > hi[k] ? hi[k] : q[k]));

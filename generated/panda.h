@@ -57,11 +57,14 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xc81cd4d2UL
+#define PANDA_STAMP 0x227e49dfUL
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0) */
+#define PANDA_IK_ORTHO_TOL 1e-06
 
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define PANDA_RANK_TOL 2.220446049250313e-14
@@ -202,7 +205,7 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 #define PANDA_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define PANDA_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define PANDA_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define PANDA_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
+#define PANDA_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed) */
 
 /* pose IK of the tool frame.
  * Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step
@@ -225,7 +228,7 @@ int panda_ik_solve(const double q0[7], const double target[16], double lambda, d
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of panda_ik_solve: the same result bit for bit. Stack: about 3560 bytes. */
+ * Each problem is one call of panda_ik_solve: the same result bit for bit. Stack: about 3616 bytes. */
 void panda_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* position IK of the tool origin.

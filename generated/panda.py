@@ -35,8 +35,10 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc81cd4d2
+STAMP = 0x227e49df
 """The generation stamp: the same number in every file of the set this module was generated with."""
+IK_ORTHO_TOL = 1e-06
+"""ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 Q_MIN = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973], dtype=DTYPE)
@@ -52,7 +54,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)"""
+"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed)"""
 
 __all__ = ["pose", "jacobian", "jacobian_tool", "jacobian_dot", "twist", "acceleration", "kinematics", "ik_terms", "manipulability", "manipulability_position", "jacobian_hessian", "manipulability_gradient", "inverse_velocity", "inverse_velocity_position", "jacobian_rpy", "ik_solve", "IKResult", "ik_solve_position", "IKPositionResult", ]
 
@@ -4677,6 +4679,15 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     for k in range(0, 16):
         if not np.isfinite(target[k]):
             return IK_INVALID
+    m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    if not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01) > IK_ORTHO_TOL or np.abs(m02) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
+        return IK_INVALID
     for k in range(0, 7):
         q[k] = lo[k] if q[k] < lo[k] else hi[k] if q[k] > hi[k] else q[k]
     _ik_terms_core(q, Tm, J)
@@ -4894,7 +4905,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     iterations = np.zeros(1, dtype=np.int64)
     status = _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations)
     if status == 3:
-        raise ValueError("ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+        raise ValueError("ik_solve: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
@@ -4995,90 +5006,101 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _status1 = np.where(_m10, IK_INVALID, _status1)
         _alive2 = _alive2 & (~_m10)
         _run8 = _run8 & (~_m10)
+    m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c11 = (~np.isfinite((m00 + m11) + m22)) | (np.abs(m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(m01) > IK_ORTHO_TOL) | (np.abs(m02) > IK_ORTHO_TOL) | (np.abs(m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(m12) > IK_ORTHO_TOL) | (np.abs(m22 - 1.0) > IK_ORTHO_TOL) | (~(det > 0.0))
+    _m12 = _alive2 & _c11
+    _status1 = np.where(_m12, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m12)
     for k in range(0, 7):
         q[k] = np.where(_alive2, np.where(q[k] < lo[k], lo[k], np.where(q[k] > hi[k], hi[k], q[k])), q[k])
     _o = _ik_terms_on_lanes(_c, q[0:7])
     _merge(_alive2, _o[0], Tm, 0, _fr)
     _merge(_alive2, _o[1], J, 0, _fr)
-    _ik_error_pose11_M = [_fr(0.0)] * 9
+    _ik_error_pose13_M = [_fr(0.0)] * 9
     e[0] = np.where(_alive2, target[3] - Tm[3], e[0])
     e[1] = np.where(_alive2, target[7] - Tm[7], e[1])
     e[2] = np.where(_alive2, target[11] - Tm[11], e[2])
-    _ik_error_pose11_M[0] = np.where(_alive2, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose11_M[0])
-    _ik_error_pose11_M[1] = np.where(_alive2, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose11_M[1])
-    _ik_error_pose11_M[2] = np.where(_alive2, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose11_M[2])
-    _ik_error_pose11_M[3] = np.where(_alive2, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose11_M[3])
-    _ik_error_pose11_M[4] = np.where(_alive2, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose11_M[4])
-    _ik_error_pose11_M[5] = np.where(_alive2, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose11_M[5])
-    _ik_error_pose11_M[6] = np.where(_alive2, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose11_M[6])
-    _ik_error_pose11_M[7] = np.where(_alive2, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose11_M[7])
-    _ik_error_pose11_M[8] = np.where(_alive2, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose11_M[8])
-    _alive13 = _alive2
-    _ik_log312_v0 = _ik_error_pose11_M[7] - _ik_error_pose11_M[5]
-    _ik_log312_v1 = _ik_error_pose11_M[2] - _ik_error_pose11_M[6]
-    _ik_log312_v2 = _ik_error_pose11_M[3] - _ik_error_pose11_M[1]
-    _ik_log312_c = (((_ik_error_pose11_M[0] + _ik_error_pose11_M[4]) + _ik_error_pose11_M[8]) - 1.0)*0.5
-    _ik_log312_s = np.sqrt((_ik_log312_v0*_ik_log312_v0 + _ik_log312_v1*_ik_log312_v1) + _ik_log312_v2*_ik_log312_v2)*0.5
-    _ik_log312_angle = np.arctan2(_ik_log312_s, _ik_log312_c)
-    _ik_log312_k = _fr(0.0)
-    _c14 = _ik_log312_angle < 0.0001
-    _m15 = _alive2 & _c14
-    _ik_log312_k = np.where(_m15, 0.5 + (_ik_log312_angle*_ik_log312_angle)*0.08333333333333333, _ik_log312_k)
-    e[0 + 3] = np.where(_m15, _ik_log312_v0*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_m15, _ik_log312_v1*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_m15, _ik_log312_v2*_ik_log312_k, e[2 + 3])
-    _alive13 = _alive13 & (~_m15)
-    _c16 = 3.141592653589793 - _ik_log312_angle > 0.001
-    _m17 = _alive13 & _c16
-    _ik_log312_k = np.where(_m17, _ik_log312_angle/(_ik_log312_s + _ik_log312_s), _ik_log312_k)
-    e[0 + 3] = np.where(_m17, _ik_log312_v0*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_m17, _ik_log312_v1*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_m17, _ik_log312_v2*_ik_log312_k, e[2 + 3])
-    _alive13 = _alive13 & (~_m17)
+    _ik_error_pose13_M[0] = np.where(_alive2, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose13_M[0])
+    _ik_error_pose13_M[1] = np.where(_alive2, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose13_M[1])
+    _ik_error_pose13_M[2] = np.where(_alive2, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose13_M[2])
+    _ik_error_pose13_M[3] = np.where(_alive2, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose13_M[3])
+    _ik_error_pose13_M[4] = np.where(_alive2, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose13_M[4])
+    _ik_error_pose13_M[5] = np.where(_alive2, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose13_M[5])
+    _ik_error_pose13_M[6] = np.where(_alive2, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose13_M[6])
+    _ik_error_pose13_M[7] = np.where(_alive2, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose13_M[7])
+    _ik_error_pose13_M[8] = np.where(_alive2, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose13_M[8])
+    _alive15 = _alive2
+    _ik_log314_v0 = _ik_error_pose13_M[7] - _ik_error_pose13_M[5]
+    _ik_log314_v1 = _ik_error_pose13_M[2] - _ik_error_pose13_M[6]
+    _ik_log314_v2 = _ik_error_pose13_M[3] - _ik_error_pose13_M[1]
+    _ik_log314_c = (((_ik_error_pose13_M[0] + _ik_error_pose13_M[4]) + _ik_error_pose13_M[8]) - 1.0)*0.5
+    _ik_log314_s = np.sqrt((_ik_log314_v0*_ik_log314_v0 + _ik_log314_v1*_ik_log314_v1) + _ik_log314_v2*_ik_log314_v2)*0.5
+    _ik_log314_angle = np.arctan2(_ik_log314_s, _ik_log314_c)
+    _ik_log314_k = _fr(0.0)
+    _c16 = _ik_log314_angle < 0.0001
+    _m17 = _alive2 & _c16
+    _ik_log314_k = np.where(_m17, 0.5 + (_ik_log314_angle*_ik_log314_angle)*0.08333333333333333, _ik_log314_k)
+    e[0 + 3] = np.where(_m17, _ik_log314_v0*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_m17, _ik_log314_v1*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_m17, _ik_log314_v2*_ik_log314_k, e[2 + 3])
+    _alive15 = _alive15 & (~_m17)
+    _c18 = 3.141592653589793 - _ik_log314_angle > 0.001
+    _m19 = _alive15 & _c18
+    _ik_log314_k = np.where(_m19, _ik_log314_angle/(_ik_log314_s + _ik_log314_s), _ik_log314_k)
+    e[0 + 3] = np.where(_m19, _ik_log314_v0*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_m19, _ik_log314_v1*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_m19, _ik_log314_v2*_ik_log314_k, e[2 + 3])
+    _alive15 = _alive15 & (~_m19)
     # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-    _ik_log312_col = [_fr(0.0)] * 3
-    _ik_log312_i = np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[4], np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[8], _fi(0), 2), np.where(_ik_error_pose11_M[4] >= _ik_error_pose11_M[8], _fi(1), 2))
-    _i18 = 3*_ik_log312_i
-    _ik_log312_col[0] = np.where(_alive13, (np.where(_ik_log312_i == 0, _ik_error_pose11_M[0], np.where(_ik_log312_i == 1, _ik_error_pose11_M[1], np.where(_ik_log312_i == 2, _ik_error_pose11_M[2], np.where(_ik_log312_i == 3, _ik_error_pose11_M[3], np.where(_ik_log312_i == 4, _ik_error_pose11_M[4], np.where(_ik_log312_i == 5, _ik_error_pose11_M[5], np.where(_ik_log312_i == 6, _ik_error_pose11_M[6], np.where(_ik_log312_i == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i18 == 0, _ik_error_pose11_M[0], np.where(_i18 == 3, _ik_error_pose11_M[3], _ik_error_pose11_M[6])))*0.5, _ik_log312_col[0])
-    _i19 = 3 + _ik_log312_i
-    _i20 = 3*_ik_log312_i + 1
-    _ik_log312_col[1] = np.where(_alive13, (np.where(_i19 == 0, _ik_error_pose11_M[0], np.where(_i19 == 1, _ik_error_pose11_M[1], np.where(_i19 == 2, _ik_error_pose11_M[2], np.where(_i19 == 3, _ik_error_pose11_M[3], np.where(_i19 == 4, _ik_error_pose11_M[4], np.where(_i19 == 5, _ik_error_pose11_M[5], np.where(_i19 == 6, _ik_error_pose11_M[6], np.where(_i19 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i20 == 1, _ik_error_pose11_M[1], np.where(_i20 == 4, _ik_error_pose11_M[4], _ik_error_pose11_M[7])))*0.5, _ik_log312_col[1])
-    _i21 = 6 + _ik_log312_i
-    _i22 = 3*_ik_log312_i + 2
-    _ik_log312_col[2] = np.where(_alive13, (np.where(_i21 == 0, _ik_error_pose11_M[0], np.where(_i21 == 1, _ik_error_pose11_M[1], np.where(_i21 == 2, _ik_error_pose11_M[2], np.where(_i21 == 3, _ik_error_pose11_M[3], np.where(_i21 == 4, _ik_error_pose11_M[4], np.where(_i21 == 5, _ik_error_pose11_M[5], np.where(_i21 == 6, _ik_error_pose11_M[6], np.where(_i21 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i22 == 2, _ik_error_pose11_M[2], np.where(_i22 == 5, _ik_error_pose11_M[5], _ik_error_pose11_M[8])))*0.5, _ik_log312_col[2])
-    _v23 = np.where(_ik_log312_i == 0, _ik_log312_col[0], np.where(_ik_log312_i == 1, _ik_log312_col[1], _ik_log312_col[2])) - _ik_log312_c
-    _m24 = _alive13 & (_ik_log312_i == 0)
-    _ik_log312_col[0] = np.where(_m24, _v23, _ik_log312_col[0])
-    _m25 = _alive13 & (_ik_log312_i == 1)
-    _ik_log312_col[1] = np.where(_m25, _v23, _ik_log312_col[1])
-    _m26 = _alive13 & (_ik_log312_i == 2)
-    _ik_log312_col[2] = np.where(_m26, _v23, _ik_log312_col[2])
-    _ik_log312_norm = np.sqrt((_ik_log312_col[0]*_ik_log312_col[0] + _ik_log312_col[1]*_ik_log312_col[1]) + _ik_log312_col[2]*_ik_log312_col[2])
-    _ik_log312_k = np.where(_alive13, np.where((_ik_log312_col[0]*_ik_log312_v0 + _ik_log312_col[1]*_ik_log312_v1) + _ik_log312_col[2]*_ik_log312_v2 < 0.0, -_ik_log312_angle, _ik_log312_angle)/_ik_log312_norm, _ik_log312_k)
-    e[0 + 3] = np.where(_alive13, _ik_log312_col[0]*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_alive13, _ik_log312_col[1]*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_alive13, _ik_log312_col[2]*_ik_log312_k, e[2 + 3])
-    _ik_error_pose11_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-    _ik_error_pose11_rotation = np.sqrt(_ik_error_pose11_rotation_squares)
-    _c27 = ~np.isfinite(_ik_error_pose11_rotation_squares)
-    _m28 = _alive2 & _c27
-    _ik_error_pose11_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-    _ik_error_pose11_rotation = np.where(_m28, _ik_error_pose11_rotation_top*np.sqrt((e[3]/_ik_error_pose11_rotation_top)*(e[3]/_ik_error_pose11_rotation_top) + (e[4]/_ik_error_pose11_rotation_top)*(e[4]/_ik_error_pose11_rotation_top) + (e[5]/_ik_error_pose11_rotation_top)*(e[5]/_ik_error_pose11_rotation_top)), _ik_error_pose11_rotation)
-    norms[1] = np.where(_alive2, _ik_error_pose11_rotation, norms[1])
-    _ik_error_pose11_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-    _ik_error_pose11_position = np.sqrt(_ik_error_pose11_position_squares)
-    _c29 = ~np.isfinite(_ik_error_pose11_position_squares)
+    _ik_log314_col = [_fr(0.0)] * 3
+    _ik_log314_i = np.where(_ik_error_pose13_M[0] >= _ik_error_pose13_M[4], np.where(_ik_error_pose13_M[0] >= _ik_error_pose13_M[8], _fi(0), 2), np.where(_ik_error_pose13_M[4] >= _ik_error_pose13_M[8], _fi(1), 2))
+    _i20 = 3*_ik_log314_i
+    _ik_log314_col[0] = np.where(_alive15, (np.where(_ik_log314_i == 0, _ik_error_pose13_M[0], np.where(_ik_log314_i == 1, _ik_error_pose13_M[1], np.where(_ik_log314_i == 2, _ik_error_pose13_M[2], np.where(_ik_log314_i == 3, _ik_error_pose13_M[3], np.where(_ik_log314_i == 4, _ik_error_pose13_M[4], np.where(_ik_log314_i == 5, _ik_error_pose13_M[5], np.where(_ik_log314_i == 6, _ik_error_pose13_M[6], np.where(_ik_log314_i == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i20 == 0, _ik_error_pose13_M[0], np.where(_i20 == 3, _ik_error_pose13_M[3], _ik_error_pose13_M[6])))*0.5, _ik_log314_col[0])
+    _i21 = 3 + _ik_log314_i
+    _i22 = 3*_ik_log314_i + 1
+    _ik_log314_col[1] = np.where(_alive15, (np.where(_i21 == 0, _ik_error_pose13_M[0], np.where(_i21 == 1, _ik_error_pose13_M[1], np.where(_i21 == 2, _ik_error_pose13_M[2], np.where(_i21 == 3, _ik_error_pose13_M[3], np.where(_i21 == 4, _ik_error_pose13_M[4], np.where(_i21 == 5, _ik_error_pose13_M[5], np.where(_i21 == 6, _ik_error_pose13_M[6], np.where(_i21 == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i22 == 1, _ik_error_pose13_M[1], np.where(_i22 == 4, _ik_error_pose13_M[4], _ik_error_pose13_M[7])))*0.5, _ik_log314_col[1])
+    _i23 = 6 + _ik_log314_i
+    _i24 = 3*_ik_log314_i + 2
+    _ik_log314_col[2] = np.where(_alive15, (np.where(_i23 == 0, _ik_error_pose13_M[0], np.where(_i23 == 1, _ik_error_pose13_M[1], np.where(_i23 == 2, _ik_error_pose13_M[2], np.where(_i23 == 3, _ik_error_pose13_M[3], np.where(_i23 == 4, _ik_error_pose13_M[4], np.where(_i23 == 5, _ik_error_pose13_M[5], np.where(_i23 == 6, _ik_error_pose13_M[6], np.where(_i23 == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i24 == 2, _ik_error_pose13_M[2], np.where(_i24 == 5, _ik_error_pose13_M[5], _ik_error_pose13_M[8])))*0.5, _ik_log314_col[2])
+    _v25 = np.where(_ik_log314_i == 0, _ik_log314_col[0], np.where(_ik_log314_i == 1, _ik_log314_col[1], _ik_log314_col[2])) - _ik_log314_c
+    _m26 = _alive15 & (_ik_log314_i == 0)
+    _ik_log314_col[0] = np.where(_m26, _v25, _ik_log314_col[0])
+    _m27 = _alive15 & (_ik_log314_i == 1)
+    _ik_log314_col[1] = np.where(_m27, _v25, _ik_log314_col[1])
+    _m28 = _alive15 & (_ik_log314_i == 2)
+    _ik_log314_col[2] = np.where(_m28, _v25, _ik_log314_col[2])
+    _ik_log314_norm = np.sqrt((_ik_log314_col[0]*_ik_log314_col[0] + _ik_log314_col[1]*_ik_log314_col[1]) + _ik_log314_col[2]*_ik_log314_col[2])
+    _ik_log314_k = np.where(_alive15, np.where((_ik_log314_col[0]*_ik_log314_v0 + _ik_log314_col[1]*_ik_log314_v1) + _ik_log314_col[2]*_ik_log314_v2 < 0.0, -_ik_log314_angle, _ik_log314_angle)/_ik_log314_norm, _ik_log314_k)
+    e[0 + 3] = np.where(_alive15, _ik_log314_col[0]*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_alive15, _ik_log314_col[1]*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_alive15, _ik_log314_col[2]*_ik_log314_k, e[2 + 3])
+    _ik_error_pose13_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+    _ik_error_pose13_rotation = np.sqrt(_ik_error_pose13_rotation_squares)
+    _c29 = ~np.isfinite(_ik_error_pose13_rotation_squares)
     _m30 = _alive2 & _c29
-    _ik_error_pose11_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-    _ik_error_pose11_position = np.where(_m30, _ik_error_pose11_position_top*np.sqrt((e[0]/_ik_error_pose11_position_top)*(e[0]/_ik_error_pose11_position_top) + (e[1]/_ik_error_pose11_position_top)*(e[1]/_ik_error_pose11_position_top) + (e[2]/_ik_error_pose11_position_top)*(e[2]/_ik_error_pose11_position_top)), _ik_error_pose11_position)
-    norms[0] = np.where(_alive2, _ik_error_pose11_position, norms[0])
-    _ik_error_pose11_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-    _ik_error_pose11_whole = np.sqrt(_ik_error_pose11_whole_squares)
-    _c31 = ~np.isfinite(_ik_error_pose11_whole_squares)
+    _ik_error_pose13_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+    _ik_error_pose13_rotation = np.where(_m30, _ik_error_pose13_rotation_top*np.sqrt((e[3]/_ik_error_pose13_rotation_top)*(e[3]/_ik_error_pose13_rotation_top) + (e[4]/_ik_error_pose13_rotation_top)*(e[4]/_ik_error_pose13_rotation_top) + (e[5]/_ik_error_pose13_rotation_top)*(e[5]/_ik_error_pose13_rotation_top)), _ik_error_pose13_rotation)
+    norms[1] = np.where(_alive2, _ik_error_pose13_rotation, norms[1])
+    _ik_error_pose13_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    _ik_error_pose13_position = np.sqrt(_ik_error_pose13_position_squares)
+    _c31 = ~np.isfinite(_ik_error_pose13_position_squares)
     _m32 = _alive2 & _c31
-    _ik_error_pose11_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-    _ik_error_pose11_whole = np.where(_m32, _ik_error_pose11_whole_top*np.sqrt((norms[0]/_ik_error_pose11_whole_top)*(norms[0]/_ik_error_pose11_whole_top) + (norms[1]/_ik_error_pose11_whole_top)*(norms[1]/_ik_error_pose11_whole_top)), _ik_error_pose11_whole)
-    norms[2] = np.where(_alive2, _ik_error_pose11_whole, norms[2])
+    _ik_error_pose13_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+    _ik_error_pose13_position = np.where(_m32, _ik_error_pose13_position_top*np.sqrt((e[0]/_ik_error_pose13_position_top)*(e[0]/_ik_error_pose13_position_top) + (e[1]/_ik_error_pose13_position_top)*(e[1]/_ik_error_pose13_position_top) + (e[2]/_ik_error_pose13_position_top)*(e[2]/_ik_error_pose13_position_top)), _ik_error_pose13_position)
+    norms[0] = np.where(_alive2, _ik_error_pose13_position, norms[0])
+    _ik_error_pose13_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    _ik_error_pose13_whole = np.sqrt(_ik_error_pose13_whole_squares)
+    _c33 = ~np.isfinite(_ik_error_pose13_whole_squares)
+    _m34 = _alive2 & _c33
+    _ik_error_pose13_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+    _ik_error_pose13_whole = np.where(_m34, _ik_error_pose13_whole_top*np.sqrt((norms[0]/_ik_error_pose13_whole_top)*(norms[0]/_ik_error_pose13_whole_top) + (norms[1]/_ik_error_pose13_whole_top)*(norms[1]/_ik_error_pose13_whole_top)), _ik_error_pose13_whole)
+    norms[2] = np.where(_alive2, _ik_error_pose13_whole, norms[2])
     pe = np.where(_alive2, norms[0], pe)
     re = np.where(_alive2, norms[1], re)
     en = np.where(_alive2, norms[2], en)
@@ -5089,574 +5111,574 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         best_q[k] = np.where(_alive2, q[k], best_q[k])
     checkpoint = np.where(_alive2, en, checkpoint)
     window_start = np.where(_alive2, en, window_start)
-    _run33 = _alive2
-    while bool(_run33.any()):
-        _c34 = (pe <= tol) & (re <= tol)
-        _m35 = _run33 & _c34
-        error[0] = np.where(_m35, pe, error[0])
-        error[1] = np.where(_m35, re, error[1])
-        iterations[0] = np.where(_m35, it, iterations[0])
-        _status1 = np.where(_m35, IK_CONVERGED, _status1)
-        _alive2 = _alive2 & (~_m35)
-        _run33 = _run33 & (~_m35)
-        _c36 = it == max_iter
-        _m37 = _run33 & _c36
+    _run35 = _alive2
+    while bool(_run35.any()):
+        _c36 = (pe <= tol) & (re <= tol)
+        _m37 = _run35 & _c36
+        error[0] = np.where(_m37, pe, error[0])
+        error[1] = np.where(_m37, re, error[1])
+        iterations[0] = np.where(_m37, it, iterations[0])
+        _status1 = np.where(_m37, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m37)
+        _run35 = _run35 & (~_m37)
+        _c38 = it == max_iter
+        _m39 = _run35 & _c38
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c38 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
-        _m39 = _m37 & _c38
-        best_stalled = np.where(_m39, 1, best_stalled)
-        _run33 = _run33 & (~_m37)
-        mu2 = np.where(_run33, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
-        _c40 = gram_ready == 0
-        _m41 = _run33 & _c40
-        G[0] = np.where(_m41, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5] + J[6]*J[6], G[0])
-        G[1] = np.where(_m41, J[7]*J[0] + J[8]*J[1] + J[9]*J[2] + J[10]*J[3] + J[11]*J[4] + J[12]*J[5] + J[13]*J[6], G[1])
-        G[2] = np.where(_m41, J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11] + J[12]*J[12] + J[13]*J[13], G[2])
-        G[3] = np.where(_m41, J[14]*J[0] + J[15]*J[1] + J[16]*J[2] + J[17]*J[3] + J[18]*J[4] + J[19]*J[5] + J[20]*J[6], G[3])
-        G[4] = np.where(_m41, J[14]*J[7] + J[15]*J[8] + J[16]*J[9] + J[17]*J[10] + J[18]*J[11] + J[19]*J[12] + J[20]*J[13], G[4])
-        G[5] = np.where(_m41, J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17] + J[18]*J[18] + J[19]*J[19] + J[20]*J[20], G[5])
-        G[6] = np.where(_m41, J[21]*J[0] + J[22]*J[1] + J[23]*J[2] + J[24]*J[3] + J[25]*J[4] + J[26]*J[5] + J[27]*J[6], G[6])
-        G[7] = np.where(_m41, J[21]*J[7] + J[22]*J[8] + J[23]*J[9] + J[24]*J[10] + J[25]*J[11] + J[26]*J[12] + J[27]*J[13], G[7])
-        G[8] = np.where(_m41, J[21]*J[14] + J[22]*J[15] + J[23]*J[16] + J[24]*J[17] + J[25]*J[18] + J[26]*J[19] + J[27]*J[20], G[8])
-        G[9] = np.where(_m41, J[21]*J[21] + J[22]*J[22] + J[23]*J[23] + J[24]*J[24] + J[25]*J[25] + J[26]*J[26] + J[27]*J[27], G[9])
-        G[10] = np.where(_m41, J[28]*J[0] + J[29]*J[1] + J[30]*J[2] + J[31]*J[3] + J[32]*J[4] + J[33]*J[5] + J[34]*J[6], G[10])
-        G[11] = np.where(_m41, J[28]*J[7] + J[29]*J[8] + J[30]*J[9] + J[31]*J[10] + J[32]*J[11] + J[33]*J[12] + J[34]*J[13], G[11])
-        G[12] = np.where(_m41, J[28]*J[14] + J[29]*J[15] + J[30]*J[16] + J[31]*J[17] + J[32]*J[18] + J[33]*J[19] + J[34]*J[20], G[12])
-        G[13] = np.where(_m41, J[28]*J[21] + J[29]*J[22] + J[30]*J[23] + J[31]*J[24] + J[32]*J[25] + J[33]*J[26] + J[34]*J[27], G[13])
-        G[14] = np.where(_m41, J[28]*J[28] + J[29]*J[29] + J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34], G[14])
-        G[15] = np.where(_m41, J[35]*J[0] + J[36]*J[1] + J[37]*J[2] + J[38]*J[3] + J[39]*J[4] + J[40]*J[5] + J[41]*J[6], G[15])
-        G[16] = np.where(_m41, J[35]*J[7] + J[36]*J[8] + J[37]*J[9] + J[38]*J[10] + J[39]*J[11] + J[40]*J[12] + J[41]*J[13], G[16])
-        G[17] = np.where(_m41, J[35]*J[14] + J[36]*J[15] + J[37]*J[16] + J[38]*J[17] + J[39]*J[18] + J[40]*J[19] + J[41]*J[20], G[17])
-        G[18] = np.where(_m41, J[35]*J[21] + J[36]*J[22] + J[37]*J[23] + J[38]*J[24] + J[39]*J[25] + J[40]*J[26] + J[41]*J[27], G[18])
-        G[19] = np.where(_m41, J[35]*J[28] + J[36]*J[29] + J[37]*J[30] + J[38]*J[31] + J[39]*J[32] + J[40]*J[33] + J[41]*J[34], G[19])
-        G[20] = np.where(_m41, J[35]*J[35] + J[36]*J[36] + J[37]*J[37] + J[38]*J[38] + J[39]*J[39] + J[40]*J[40] + J[41]*J[41], G[20])
-        gram_ready = np.where(_m41, 1, gram_ready)
-        _ik_damped_pose43_mu2 = mu2
-        _ik_damped_pose43_a00 = G[0] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a10 = G[1]
-        _ik_damped_pose43_a11 = G[2] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a20 = G[3]
-        _ik_damped_pose43_a21 = G[4]
-        _ik_damped_pose43_a22 = G[5] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a30 = G[6]
-        _ik_damped_pose43_a31 = G[7]
-        _ik_damped_pose43_a32 = G[8]
-        _ik_damped_pose43_a33 = G[9] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a40 = G[10]
-        _ik_damped_pose43_a41 = G[11]
-        _ik_damped_pose43_a42 = G[12]
-        _ik_damped_pose43_a43 = G[13]
-        _ik_damped_pose43_a44 = G[14] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a50 = G[15]
-        _ik_damped_pose43_a51 = G[16]
-        _ik_damped_pose43_a52 = G[17]
-        _ik_damped_pose43_a53 = G[18]
-        _ik_damped_pose43_a54 = G[19]
-        _ik_damped_pose43_a55 = G[20] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_cut = np.where(_ik_damped_pose43_a55 > np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))), _ik_damped_pose43_a55, np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))))*1e-13
-        _ik_damped_pose43_s0 = _ik_damped_pose43_a00
-        _ik_damped_pose43_kept0 = _ik_damped_pose43_s0 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i0 = np.where(_ik_damped_pose43_kept0, 1.0/_ik_damped_pose43_s0, 0.0)
-        _ik_damped_pose43_t10 = _ik_damped_pose43_a10
-        _ik_damped_pose43_l10 = _ik_damped_pose43_t10*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld10 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t10, 0.0)
-        _ik_damped_pose43_t20 = _ik_damped_pose43_a20
-        _ik_damped_pose43_l20 = _ik_damped_pose43_t20*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld20 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t20, 0.0)
-        _ik_damped_pose43_t30 = _ik_damped_pose43_a30
-        _ik_damped_pose43_l30 = _ik_damped_pose43_t30*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld30 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t30, 0.0)
-        _ik_damped_pose43_t40 = _ik_damped_pose43_a40
-        _ik_damped_pose43_l40 = _ik_damped_pose43_t40*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld40 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t40, 0.0)
-        _ik_damped_pose43_t50 = _ik_damped_pose43_a50
-        _ik_damped_pose43_l50 = _ik_damped_pose43_t50*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld50 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t50, 0.0)
-        _ik_damped_pose43_s1 = _ik_damped_pose43_a11 - _ik_damped_pose43_l10*_ik_damped_pose43_ld10
-        _ik_damped_pose43_kept1 = _ik_damped_pose43_s1 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i1 = np.where(_ik_damped_pose43_kept1, 1.0/_ik_damped_pose43_s1, 0.0)
-        _ik_damped_pose43_t21 = _ik_damped_pose43_a21 - _ik_damped_pose43_l20*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l21 = _ik_damped_pose43_t21*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld21 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t21, 0.0)
-        _ik_damped_pose43_t31 = _ik_damped_pose43_a31 - _ik_damped_pose43_l30*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l31 = _ik_damped_pose43_t31*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld31 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t31, 0.0)
-        _ik_damped_pose43_t41 = _ik_damped_pose43_a41 - _ik_damped_pose43_l40*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l41 = _ik_damped_pose43_t41*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld41 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t41, 0.0)
-        _ik_damped_pose43_t51 = _ik_damped_pose43_a51 - _ik_damped_pose43_l50*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l51 = _ik_damped_pose43_t51*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld51 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t51, 0.0)
-        _ik_damped_pose43_s2 = (_ik_damped_pose43_a22 - _ik_damped_pose43_l20*_ik_damped_pose43_ld20) - _ik_damped_pose43_l21*_ik_damped_pose43_ld21
-        _ik_damped_pose43_kept2 = _ik_damped_pose43_s2 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i2 = np.where(_ik_damped_pose43_kept2, 1.0/_ik_damped_pose43_s2, 0.0)
-        _ik_damped_pose43_t32 = (_ik_damped_pose43_a32 - _ik_damped_pose43_l30*_ik_damped_pose43_ld20) - _ik_damped_pose43_l31*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l32 = _ik_damped_pose43_t32*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld32 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t32, 0.0)
-        _ik_damped_pose43_t42 = (_ik_damped_pose43_a42 - _ik_damped_pose43_l40*_ik_damped_pose43_ld20) - _ik_damped_pose43_l41*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l42 = _ik_damped_pose43_t42*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld42 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t42, 0.0)
-        _ik_damped_pose43_t52 = (_ik_damped_pose43_a52 - _ik_damped_pose43_l50*_ik_damped_pose43_ld20) - _ik_damped_pose43_l51*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l52 = _ik_damped_pose43_t52*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld52 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t52, 0.0)
-        _ik_damped_pose43_s3 = (_ik_damped_pose43_a33 - (_ik_damped_pose43_l30*_ik_damped_pose43_ld30 + _ik_damped_pose43_l31*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l32*_ik_damped_pose43_ld32
-        _ik_damped_pose43_kept3 = _ik_damped_pose43_s3 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i3 = np.where(_ik_damped_pose43_kept3, 1.0/_ik_damped_pose43_s3, 0.0)
-        _ik_damped_pose43_t43 = (_ik_damped_pose43_a43 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld30 + _ik_damped_pose43_l41*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l42*_ik_damped_pose43_ld32
-        _ik_damped_pose43_l43 = _ik_damped_pose43_t43*_ik_damped_pose43_i3
-        _ik_damped_pose43_ld43 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t43, 0.0)
-        _ik_damped_pose43_t53 = (_ik_damped_pose43_a53 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld30 + _ik_damped_pose43_l51*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l52*_ik_damped_pose43_ld32
-        _ik_damped_pose43_l53 = _ik_damped_pose43_t53*_ik_damped_pose43_i3
-        _ik_damped_pose43_ld53 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t53, 0.0)
-        _ik_damped_pose43_s4 = (_ik_damped_pose43_a44 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l41*_ik_damped_pose43_ld41 + _ik_damped_pose43_l42*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l43*_ik_damped_pose43_ld43
-        _ik_damped_pose43_kept4 = _ik_damped_pose43_s4 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i4 = np.where(_ik_damped_pose43_kept4, 1.0/_ik_damped_pose43_s4, 0.0)
-        _ik_damped_pose43_t54 = (_ik_damped_pose43_a54 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l51*_ik_damped_pose43_ld41 + _ik_damped_pose43_l52*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l53*_ik_damped_pose43_ld43
-        _ik_damped_pose43_l54 = _ik_damped_pose43_t54*_ik_damped_pose43_i4
-        _ik_damped_pose43_ld54 = np.where(_ik_damped_pose43_kept4, _ik_damped_pose43_t54, 0.0)
-        _ik_damped_pose43_s5 = (_ik_damped_pose43_a55 - ((_ik_damped_pose43_l50*_ik_damped_pose43_ld50 + _ik_damped_pose43_l51*_ik_damped_pose43_ld51) + (_ik_damped_pose43_l52*_ik_damped_pose43_ld52 + _ik_damped_pose43_l53*_ik_damped_pose43_ld53))) - _ik_damped_pose43_l54*_ik_damped_pose43_ld54
-        _ik_damped_pose43_kept5 = _ik_damped_pose43_s5 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i5 = np.where(_ik_damped_pose43_kept5, 1.0/_ik_damped_pose43_s5, 0.0)
-        _ik_damped_pose43_y0 = e[0]
-        _ik_damped_pose43_y1 = e[1] - _ik_damped_pose43_l10*_ik_damped_pose43_y0
-        _ik_damped_pose43_y2 = (e[2] - _ik_damped_pose43_l20*_ik_damped_pose43_y0) - _ik_damped_pose43_l21*_ik_damped_pose43_y1
-        _ik_damped_pose43_y3 = (e[3] - (_ik_damped_pose43_l30*_ik_damped_pose43_y0 + _ik_damped_pose43_l31*_ik_damped_pose43_y1)) - _ik_damped_pose43_l32*_ik_damped_pose43_y2
-        _ik_damped_pose43_y4 = (e[4] - (_ik_damped_pose43_l40*_ik_damped_pose43_y0 + (_ik_damped_pose43_l41*_ik_damped_pose43_y1 + _ik_damped_pose43_l42*_ik_damped_pose43_y2))) - _ik_damped_pose43_l43*_ik_damped_pose43_y3
-        _ik_damped_pose43_y5 = (e[5] - ((_ik_damped_pose43_l50*_ik_damped_pose43_y0 + _ik_damped_pose43_l51*_ik_damped_pose43_y1) + (_ik_damped_pose43_l52*_ik_damped_pose43_y2 + _ik_damped_pose43_l53*_ik_damped_pose43_y3))) - _ik_damped_pose43_l54*_ik_damped_pose43_y4
-        _ik_damped_pose43_z5 = _ik_damped_pose43_y5*_ik_damped_pose43_i5
-        _ik_damped_pose43_z4 = _ik_damped_pose43_y4*_ik_damped_pose43_i4 - _ik_damped_pose43_l54*_ik_damped_pose43_z5
-        _ik_damped_pose43_z3 = (_ik_damped_pose43_y3*_ik_damped_pose43_i3 - _ik_damped_pose43_l53*_ik_damped_pose43_z5) - _ik_damped_pose43_l43*_ik_damped_pose43_z4
-        _ik_damped_pose43_z2 = (_ik_damped_pose43_y2*_ik_damped_pose43_i2 - (_ik_damped_pose43_l52*_ik_damped_pose43_z5 + _ik_damped_pose43_l42*_ik_damped_pose43_z4)) - _ik_damped_pose43_l32*_ik_damped_pose43_z3
-        _ik_damped_pose43_z1 = (_ik_damped_pose43_y1*_ik_damped_pose43_i1 - (_ik_damped_pose43_l51*_ik_damped_pose43_z5 + (_ik_damped_pose43_l41*_ik_damped_pose43_z4 + _ik_damped_pose43_l31*_ik_damped_pose43_z3))) - _ik_damped_pose43_l21*_ik_damped_pose43_z2
-        _ik_damped_pose43_z0 = (_ik_damped_pose43_y0*_ik_damped_pose43_i0 - ((_ik_damped_pose43_l50*_ik_damped_pose43_z5 + _ik_damped_pose43_l40*_ik_damped_pose43_z4) + (_ik_damped_pose43_l30*_ik_damped_pose43_z3 + _ik_damped_pose43_l20*_ik_damped_pose43_z2))) - _ik_damped_pose43_l10*_ik_damped_pose43_z1
-        dq[0] = np.where(_run33, (J[0]*_ik_damped_pose43_z0 + (J[7]*_ik_damped_pose43_z1 + J[14]*_ik_damped_pose43_z2)) + (J[21]*_ik_damped_pose43_z3 + (J[28]*_ik_damped_pose43_z4 + J[35]*_ik_damped_pose43_z5)), dq[0])
-        dq[1] = np.where(_run33, (J[1]*_ik_damped_pose43_z0 + (J[8]*_ik_damped_pose43_z1 + J[15]*_ik_damped_pose43_z2)) + (J[22]*_ik_damped_pose43_z3 + (J[29]*_ik_damped_pose43_z4 + J[36]*_ik_damped_pose43_z5)), dq[1])
-        dq[2] = np.where(_run33, (J[2]*_ik_damped_pose43_z0 + (J[9]*_ik_damped_pose43_z1 + J[16]*_ik_damped_pose43_z2)) + (J[23]*_ik_damped_pose43_z3 + (J[30]*_ik_damped_pose43_z4 + J[37]*_ik_damped_pose43_z5)), dq[2])
-        dq[3] = np.where(_run33, (J[3]*_ik_damped_pose43_z0 + (J[10]*_ik_damped_pose43_z1 + J[17]*_ik_damped_pose43_z2)) + (J[24]*_ik_damped_pose43_z3 + (J[31]*_ik_damped_pose43_z4 + J[38]*_ik_damped_pose43_z5)), dq[3])
-        dq[4] = np.where(_run33, (J[4]*_ik_damped_pose43_z0 + (J[11]*_ik_damped_pose43_z1 + J[18]*_ik_damped_pose43_z2)) + (J[25]*_ik_damped_pose43_z3 + (J[32]*_ik_damped_pose43_z4 + J[39]*_ik_damped_pose43_z5)), dq[4])
-        dq[5] = np.where(_run33, (J[5]*_ik_damped_pose43_z0 + (J[12]*_ik_damped_pose43_z1 + J[19]*_ik_damped_pose43_z2)) + (J[26]*_ik_damped_pose43_z3 + (J[33]*_ik_damped_pose43_z4 + J[40]*_ik_damped_pose43_z5)), dq[5])
-        dq[6] = np.where(_run33, (J[6]*_ik_damped_pose43_z0 + (J[13]*_ik_damped_pose43_z1 + J[20]*_ik_damped_pose43_z2)) + (J[27]*_ik_damped_pose43_z3 + (J[34]*_ik_damped_pose43_z4 + J[41]*_ik_damped_pose43_z5)), dq[6])
+        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        _m41 = _m39 & _c40
+        best_stalled = np.where(_m41, 1, best_stalled)
+        _run35 = _run35 & (~_m39)
+        mu2 = np.where(_run35, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+        _c42 = gram_ready == 0
+        _m43 = _run35 & _c42
+        G[0] = np.where(_m43, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5] + J[6]*J[6], G[0])
+        G[1] = np.where(_m43, J[7]*J[0] + J[8]*J[1] + J[9]*J[2] + J[10]*J[3] + J[11]*J[4] + J[12]*J[5] + J[13]*J[6], G[1])
+        G[2] = np.where(_m43, J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11] + J[12]*J[12] + J[13]*J[13], G[2])
+        G[3] = np.where(_m43, J[14]*J[0] + J[15]*J[1] + J[16]*J[2] + J[17]*J[3] + J[18]*J[4] + J[19]*J[5] + J[20]*J[6], G[3])
+        G[4] = np.where(_m43, J[14]*J[7] + J[15]*J[8] + J[16]*J[9] + J[17]*J[10] + J[18]*J[11] + J[19]*J[12] + J[20]*J[13], G[4])
+        G[5] = np.where(_m43, J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17] + J[18]*J[18] + J[19]*J[19] + J[20]*J[20], G[5])
+        G[6] = np.where(_m43, J[21]*J[0] + J[22]*J[1] + J[23]*J[2] + J[24]*J[3] + J[25]*J[4] + J[26]*J[5] + J[27]*J[6], G[6])
+        G[7] = np.where(_m43, J[21]*J[7] + J[22]*J[8] + J[23]*J[9] + J[24]*J[10] + J[25]*J[11] + J[26]*J[12] + J[27]*J[13], G[7])
+        G[8] = np.where(_m43, J[21]*J[14] + J[22]*J[15] + J[23]*J[16] + J[24]*J[17] + J[25]*J[18] + J[26]*J[19] + J[27]*J[20], G[8])
+        G[9] = np.where(_m43, J[21]*J[21] + J[22]*J[22] + J[23]*J[23] + J[24]*J[24] + J[25]*J[25] + J[26]*J[26] + J[27]*J[27], G[9])
+        G[10] = np.where(_m43, J[28]*J[0] + J[29]*J[1] + J[30]*J[2] + J[31]*J[3] + J[32]*J[4] + J[33]*J[5] + J[34]*J[6], G[10])
+        G[11] = np.where(_m43, J[28]*J[7] + J[29]*J[8] + J[30]*J[9] + J[31]*J[10] + J[32]*J[11] + J[33]*J[12] + J[34]*J[13], G[11])
+        G[12] = np.where(_m43, J[28]*J[14] + J[29]*J[15] + J[30]*J[16] + J[31]*J[17] + J[32]*J[18] + J[33]*J[19] + J[34]*J[20], G[12])
+        G[13] = np.where(_m43, J[28]*J[21] + J[29]*J[22] + J[30]*J[23] + J[31]*J[24] + J[32]*J[25] + J[33]*J[26] + J[34]*J[27], G[13])
+        G[14] = np.where(_m43, J[28]*J[28] + J[29]*J[29] + J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34], G[14])
+        G[15] = np.where(_m43, J[35]*J[0] + J[36]*J[1] + J[37]*J[2] + J[38]*J[3] + J[39]*J[4] + J[40]*J[5] + J[41]*J[6], G[15])
+        G[16] = np.where(_m43, J[35]*J[7] + J[36]*J[8] + J[37]*J[9] + J[38]*J[10] + J[39]*J[11] + J[40]*J[12] + J[41]*J[13], G[16])
+        G[17] = np.where(_m43, J[35]*J[14] + J[36]*J[15] + J[37]*J[16] + J[38]*J[17] + J[39]*J[18] + J[40]*J[19] + J[41]*J[20], G[17])
+        G[18] = np.where(_m43, J[35]*J[21] + J[36]*J[22] + J[37]*J[23] + J[38]*J[24] + J[39]*J[25] + J[40]*J[26] + J[41]*J[27], G[18])
+        G[19] = np.where(_m43, J[35]*J[28] + J[36]*J[29] + J[37]*J[30] + J[38]*J[31] + J[39]*J[32] + J[40]*J[33] + J[41]*J[34], G[19])
+        G[20] = np.where(_m43, J[35]*J[35] + J[36]*J[36] + J[37]*J[37] + J[38]*J[38] + J[39]*J[39] + J[40]*J[40] + J[41]*J[41], G[20])
+        gram_ready = np.where(_m43, 1, gram_ready)
+        _ik_damped_pose45_mu2 = mu2
+        _ik_damped_pose45_a00 = G[0] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a10 = G[1]
+        _ik_damped_pose45_a11 = G[2] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a20 = G[3]
+        _ik_damped_pose45_a21 = G[4]
+        _ik_damped_pose45_a22 = G[5] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a30 = G[6]
+        _ik_damped_pose45_a31 = G[7]
+        _ik_damped_pose45_a32 = G[8]
+        _ik_damped_pose45_a33 = G[9] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a40 = G[10]
+        _ik_damped_pose45_a41 = G[11]
+        _ik_damped_pose45_a42 = G[12]
+        _ik_damped_pose45_a43 = G[13]
+        _ik_damped_pose45_a44 = G[14] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a50 = G[15]
+        _ik_damped_pose45_a51 = G[16]
+        _ik_damped_pose45_a52 = G[17]
+        _ik_damped_pose45_a53 = G[18]
+        _ik_damped_pose45_a54 = G[19]
+        _ik_damped_pose45_a55 = G[20] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_cut = np.where(_ik_damped_pose45_a55 > np.where(_ik_damped_pose45_a44 > np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00))), _ik_damped_pose45_a44, np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)))), _ik_damped_pose45_a55, np.where(_ik_damped_pose45_a44 > np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00))), _ik_damped_pose45_a44, np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)))))*1e-13
+        _ik_damped_pose45_s0 = _ik_damped_pose45_a00
+        _ik_damped_pose45_kept0 = _ik_damped_pose45_s0 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i0 = np.where(_ik_damped_pose45_kept0, 1.0/_ik_damped_pose45_s0, 0.0)
+        _ik_damped_pose45_t10 = _ik_damped_pose45_a10
+        _ik_damped_pose45_l10 = _ik_damped_pose45_t10*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld10 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t10, 0.0)
+        _ik_damped_pose45_t20 = _ik_damped_pose45_a20
+        _ik_damped_pose45_l20 = _ik_damped_pose45_t20*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld20 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t20, 0.0)
+        _ik_damped_pose45_t30 = _ik_damped_pose45_a30
+        _ik_damped_pose45_l30 = _ik_damped_pose45_t30*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld30 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t30, 0.0)
+        _ik_damped_pose45_t40 = _ik_damped_pose45_a40
+        _ik_damped_pose45_l40 = _ik_damped_pose45_t40*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld40 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t40, 0.0)
+        _ik_damped_pose45_t50 = _ik_damped_pose45_a50
+        _ik_damped_pose45_l50 = _ik_damped_pose45_t50*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld50 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t50, 0.0)
+        _ik_damped_pose45_s1 = _ik_damped_pose45_a11 - _ik_damped_pose45_l10*_ik_damped_pose45_ld10
+        _ik_damped_pose45_kept1 = _ik_damped_pose45_s1 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i1 = np.where(_ik_damped_pose45_kept1, 1.0/_ik_damped_pose45_s1, 0.0)
+        _ik_damped_pose45_t21 = _ik_damped_pose45_a21 - _ik_damped_pose45_l20*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l21 = _ik_damped_pose45_t21*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld21 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t21, 0.0)
+        _ik_damped_pose45_t31 = _ik_damped_pose45_a31 - _ik_damped_pose45_l30*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l31 = _ik_damped_pose45_t31*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld31 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t31, 0.0)
+        _ik_damped_pose45_t41 = _ik_damped_pose45_a41 - _ik_damped_pose45_l40*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l41 = _ik_damped_pose45_t41*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld41 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t41, 0.0)
+        _ik_damped_pose45_t51 = _ik_damped_pose45_a51 - _ik_damped_pose45_l50*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l51 = _ik_damped_pose45_t51*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld51 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t51, 0.0)
+        _ik_damped_pose45_s2 = (_ik_damped_pose45_a22 - _ik_damped_pose45_l20*_ik_damped_pose45_ld20) - _ik_damped_pose45_l21*_ik_damped_pose45_ld21
+        _ik_damped_pose45_kept2 = _ik_damped_pose45_s2 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i2 = np.where(_ik_damped_pose45_kept2, 1.0/_ik_damped_pose45_s2, 0.0)
+        _ik_damped_pose45_t32 = (_ik_damped_pose45_a32 - _ik_damped_pose45_l30*_ik_damped_pose45_ld20) - _ik_damped_pose45_l31*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l32 = _ik_damped_pose45_t32*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld32 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t32, 0.0)
+        _ik_damped_pose45_t42 = (_ik_damped_pose45_a42 - _ik_damped_pose45_l40*_ik_damped_pose45_ld20) - _ik_damped_pose45_l41*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l42 = _ik_damped_pose45_t42*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld42 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t42, 0.0)
+        _ik_damped_pose45_t52 = (_ik_damped_pose45_a52 - _ik_damped_pose45_l50*_ik_damped_pose45_ld20) - _ik_damped_pose45_l51*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l52 = _ik_damped_pose45_t52*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld52 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t52, 0.0)
+        _ik_damped_pose45_s3 = (_ik_damped_pose45_a33 - (_ik_damped_pose45_l30*_ik_damped_pose45_ld30 + _ik_damped_pose45_l31*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l32*_ik_damped_pose45_ld32
+        _ik_damped_pose45_kept3 = _ik_damped_pose45_s3 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i3 = np.where(_ik_damped_pose45_kept3, 1.0/_ik_damped_pose45_s3, 0.0)
+        _ik_damped_pose45_t43 = (_ik_damped_pose45_a43 - (_ik_damped_pose45_l40*_ik_damped_pose45_ld30 + _ik_damped_pose45_l41*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l42*_ik_damped_pose45_ld32
+        _ik_damped_pose45_l43 = _ik_damped_pose45_t43*_ik_damped_pose45_i3
+        _ik_damped_pose45_ld43 = np.where(_ik_damped_pose45_kept3, _ik_damped_pose45_t43, 0.0)
+        _ik_damped_pose45_t53 = (_ik_damped_pose45_a53 - (_ik_damped_pose45_l50*_ik_damped_pose45_ld30 + _ik_damped_pose45_l51*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l52*_ik_damped_pose45_ld32
+        _ik_damped_pose45_l53 = _ik_damped_pose45_t53*_ik_damped_pose45_i3
+        _ik_damped_pose45_ld53 = np.where(_ik_damped_pose45_kept3, _ik_damped_pose45_t53, 0.0)
+        _ik_damped_pose45_s4 = (_ik_damped_pose45_a44 - (_ik_damped_pose45_l40*_ik_damped_pose45_ld40 + (_ik_damped_pose45_l41*_ik_damped_pose45_ld41 + _ik_damped_pose45_l42*_ik_damped_pose45_ld42))) - _ik_damped_pose45_l43*_ik_damped_pose45_ld43
+        _ik_damped_pose45_kept4 = _ik_damped_pose45_s4 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i4 = np.where(_ik_damped_pose45_kept4, 1.0/_ik_damped_pose45_s4, 0.0)
+        _ik_damped_pose45_t54 = (_ik_damped_pose45_a54 - (_ik_damped_pose45_l50*_ik_damped_pose45_ld40 + (_ik_damped_pose45_l51*_ik_damped_pose45_ld41 + _ik_damped_pose45_l52*_ik_damped_pose45_ld42))) - _ik_damped_pose45_l53*_ik_damped_pose45_ld43
+        _ik_damped_pose45_l54 = _ik_damped_pose45_t54*_ik_damped_pose45_i4
+        _ik_damped_pose45_ld54 = np.where(_ik_damped_pose45_kept4, _ik_damped_pose45_t54, 0.0)
+        _ik_damped_pose45_s5 = (_ik_damped_pose45_a55 - ((_ik_damped_pose45_l50*_ik_damped_pose45_ld50 + _ik_damped_pose45_l51*_ik_damped_pose45_ld51) + (_ik_damped_pose45_l52*_ik_damped_pose45_ld52 + _ik_damped_pose45_l53*_ik_damped_pose45_ld53))) - _ik_damped_pose45_l54*_ik_damped_pose45_ld54
+        _ik_damped_pose45_kept5 = _ik_damped_pose45_s5 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i5 = np.where(_ik_damped_pose45_kept5, 1.0/_ik_damped_pose45_s5, 0.0)
+        _ik_damped_pose45_y0 = e[0]
+        _ik_damped_pose45_y1 = e[1] - _ik_damped_pose45_l10*_ik_damped_pose45_y0
+        _ik_damped_pose45_y2 = (e[2] - _ik_damped_pose45_l20*_ik_damped_pose45_y0) - _ik_damped_pose45_l21*_ik_damped_pose45_y1
+        _ik_damped_pose45_y3 = (e[3] - (_ik_damped_pose45_l30*_ik_damped_pose45_y0 + _ik_damped_pose45_l31*_ik_damped_pose45_y1)) - _ik_damped_pose45_l32*_ik_damped_pose45_y2
+        _ik_damped_pose45_y4 = (e[4] - (_ik_damped_pose45_l40*_ik_damped_pose45_y0 + (_ik_damped_pose45_l41*_ik_damped_pose45_y1 + _ik_damped_pose45_l42*_ik_damped_pose45_y2))) - _ik_damped_pose45_l43*_ik_damped_pose45_y3
+        _ik_damped_pose45_y5 = (e[5] - ((_ik_damped_pose45_l50*_ik_damped_pose45_y0 + _ik_damped_pose45_l51*_ik_damped_pose45_y1) + (_ik_damped_pose45_l52*_ik_damped_pose45_y2 + _ik_damped_pose45_l53*_ik_damped_pose45_y3))) - _ik_damped_pose45_l54*_ik_damped_pose45_y4
+        _ik_damped_pose45_z5 = _ik_damped_pose45_y5*_ik_damped_pose45_i5
+        _ik_damped_pose45_z4 = _ik_damped_pose45_y4*_ik_damped_pose45_i4 - _ik_damped_pose45_l54*_ik_damped_pose45_z5
+        _ik_damped_pose45_z3 = (_ik_damped_pose45_y3*_ik_damped_pose45_i3 - _ik_damped_pose45_l53*_ik_damped_pose45_z5) - _ik_damped_pose45_l43*_ik_damped_pose45_z4
+        _ik_damped_pose45_z2 = (_ik_damped_pose45_y2*_ik_damped_pose45_i2 - (_ik_damped_pose45_l52*_ik_damped_pose45_z5 + _ik_damped_pose45_l42*_ik_damped_pose45_z4)) - _ik_damped_pose45_l32*_ik_damped_pose45_z3
+        _ik_damped_pose45_z1 = (_ik_damped_pose45_y1*_ik_damped_pose45_i1 - (_ik_damped_pose45_l51*_ik_damped_pose45_z5 + (_ik_damped_pose45_l41*_ik_damped_pose45_z4 + _ik_damped_pose45_l31*_ik_damped_pose45_z3))) - _ik_damped_pose45_l21*_ik_damped_pose45_z2
+        _ik_damped_pose45_z0 = (_ik_damped_pose45_y0*_ik_damped_pose45_i0 - ((_ik_damped_pose45_l50*_ik_damped_pose45_z5 + _ik_damped_pose45_l40*_ik_damped_pose45_z4) + (_ik_damped_pose45_l30*_ik_damped_pose45_z3 + _ik_damped_pose45_l20*_ik_damped_pose45_z2))) - _ik_damped_pose45_l10*_ik_damped_pose45_z1
+        dq[0] = np.where(_run35, (J[0]*_ik_damped_pose45_z0 + (J[7]*_ik_damped_pose45_z1 + J[14]*_ik_damped_pose45_z2)) + (J[21]*_ik_damped_pose45_z3 + (J[28]*_ik_damped_pose45_z4 + J[35]*_ik_damped_pose45_z5)), dq[0])
+        dq[1] = np.where(_run35, (J[1]*_ik_damped_pose45_z0 + (J[8]*_ik_damped_pose45_z1 + J[15]*_ik_damped_pose45_z2)) + (J[22]*_ik_damped_pose45_z3 + (J[29]*_ik_damped_pose45_z4 + J[36]*_ik_damped_pose45_z5)), dq[1])
+        dq[2] = np.where(_run35, (J[2]*_ik_damped_pose45_z0 + (J[9]*_ik_damped_pose45_z1 + J[16]*_ik_damped_pose45_z2)) + (J[23]*_ik_damped_pose45_z3 + (J[30]*_ik_damped_pose45_z4 + J[37]*_ik_damped_pose45_z5)), dq[2])
+        dq[3] = np.where(_run35, (J[3]*_ik_damped_pose45_z0 + (J[10]*_ik_damped_pose45_z1 + J[17]*_ik_damped_pose45_z2)) + (J[24]*_ik_damped_pose45_z3 + (J[31]*_ik_damped_pose45_z4 + J[38]*_ik_damped_pose45_z5)), dq[3])
+        dq[4] = np.where(_run35, (J[4]*_ik_damped_pose45_z0 + (J[11]*_ik_damped_pose45_z1 + J[18]*_ik_damped_pose45_z2)) + (J[25]*_ik_damped_pose45_z3 + (J[32]*_ik_damped_pose45_z4 + J[39]*_ik_damped_pose45_z5)), dq[4])
+        dq[5] = np.where(_run35, (J[5]*_ik_damped_pose45_z0 + (J[12]*_ik_damped_pose45_z1 + J[19]*_ik_damped_pose45_z2)) + (J[26]*_ik_damped_pose45_z3 + (J[33]*_ik_damped_pose45_z4 + J[40]*_ik_damped_pose45_z5)), dq[5])
+        dq[6] = np.where(_run35, (J[6]*_ik_damped_pose45_z0 + (J[13]*_ik_damped_pose45_z1 + J[20]*_ik_damped_pose45_z2)) + (J[27]*_ik_damped_pose45_z3 + (J[34]*_ik_damped_pose45_z4 + J[41]*_ik_damped_pose45_z5)), dq[6])
         for k in range(0, 7):
-            blocked[k] = np.where(_run33, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
-        any = np.where(_run33, 0, any)
+            blocked[k] = np.where(_run35, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
+        any = np.where(_run35, 0, any)
         for k in range(0, 7):
-            _c44 = blocked[k] > 0
-            _m45 = _run33 & _c44
-            any = np.where(_m45, 1, any)
-        _c46 = any > 0
-        _m47 = _run33 & _c46
-        _m48 = _run33 & (~_c46)
-        if bool(_m47.any()):
+            _c46 = blocked[k] > 0
+            _m47 = _run35 & _c46
+            any = np.where(_m47, 1, any)
+        _c48 = any > 0
+        _m49 = _run35 & _c48
+        _m50 = _run35 & (~_c48)
+        if bool(_m49.any()):
             # blocked columns zeroed, their outer products taken out of G, the step solved again
             for r in range(0, 6):
                 for k in range(0, 7):
-                    Jf[r*7 + k] = np.where(_m47, np.where(blocked[k] > 0, 0.0, J[r*7 + k]), Jf[r*7 + k])
+                    Jf[r*7 + k] = np.where(_m49, np.where(blocked[k] > 0, 0.0, J[r*7 + k]), Jf[r*7 + k])
             for k in range(0, 21):
-                Gf[k] = np.where(_m47, G[k], Gf[k])
+                Gf[k] = np.where(_m49, G[k], Gf[k])
             for k in range(0, 7):
-                _c49 = blocked[k] > 0
-                _m50 = _m47 & _c49
-                Gf[0] = np.where(_m50, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
-                Gf[1] = np.where(_m50, Gf[1] - J[7 + k]*J[0 + k], Gf[1])
-                Gf[2] = np.where(_m50, Gf[2] - J[7 + k]*J[7 + k], Gf[2])
-                Gf[3] = np.where(_m50, Gf[3] - J[14 + k]*J[0 + k], Gf[3])
-                Gf[4] = np.where(_m50, Gf[4] - J[14 + k]*J[7 + k], Gf[4])
-                Gf[5] = np.where(_m50, Gf[5] - J[14 + k]*J[14 + k], Gf[5])
-                Gf[6] = np.where(_m50, Gf[6] - J[21 + k]*J[0 + k], Gf[6])
-                Gf[7] = np.where(_m50, Gf[7] - J[21 + k]*J[7 + k], Gf[7])
-                Gf[8] = np.where(_m50, Gf[8] - J[21 + k]*J[14 + k], Gf[8])
-                Gf[9] = np.where(_m50, Gf[9] - J[21 + k]*J[21 + k], Gf[9])
-                Gf[10] = np.where(_m50, Gf[10] - J[28 + k]*J[0 + k], Gf[10])
-                Gf[11] = np.where(_m50, Gf[11] - J[28 + k]*J[7 + k], Gf[11])
-                Gf[12] = np.where(_m50, Gf[12] - J[28 + k]*J[14 + k], Gf[12])
-                Gf[13] = np.where(_m50, Gf[13] - J[28 + k]*J[21 + k], Gf[13])
-                Gf[14] = np.where(_m50, Gf[14] - J[28 + k]*J[28 + k], Gf[14])
-                Gf[15] = np.where(_m50, Gf[15] - J[35 + k]*J[0 + k], Gf[15])
-                Gf[16] = np.where(_m50, Gf[16] - J[35 + k]*J[7 + k], Gf[16])
-                Gf[17] = np.where(_m50, Gf[17] - J[35 + k]*J[14 + k], Gf[17])
-                Gf[18] = np.where(_m50, Gf[18] - J[35 + k]*J[21 + k], Gf[18])
-                Gf[19] = np.where(_m50, Gf[19] - J[35 + k]*J[28 + k], Gf[19])
-                Gf[20] = np.where(_m50, Gf[20] - J[35 + k]*J[35 + k], Gf[20])
-            _ik_damped_pose51_mu2 = mu2
-            _ik_damped_pose51_a00 = Gf[0] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a10 = Gf[1]
-            _ik_damped_pose51_a11 = Gf[2] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a20 = Gf[3]
-            _ik_damped_pose51_a21 = Gf[4]
-            _ik_damped_pose51_a22 = Gf[5] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a30 = Gf[6]
-            _ik_damped_pose51_a31 = Gf[7]
-            _ik_damped_pose51_a32 = Gf[8]
-            _ik_damped_pose51_a33 = Gf[9] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a40 = Gf[10]
-            _ik_damped_pose51_a41 = Gf[11]
-            _ik_damped_pose51_a42 = Gf[12]
-            _ik_damped_pose51_a43 = Gf[13]
-            _ik_damped_pose51_a44 = Gf[14] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a50 = Gf[15]
-            _ik_damped_pose51_a51 = Gf[16]
-            _ik_damped_pose51_a52 = Gf[17]
-            _ik_damped_pose51_a53 = Gf[18]
-            _ik_damped_pose51_a54 = Gf[19]
-            _ik_damped_pose51_a55 = Gf[20] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_cut = np.where(_ik_damped_pose51_a55 > np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))), _ik_damped_pose51_a55, np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))))*1e-13
-            _ik_damped_pose51_s0 = _ik_damped_pose51_a00
-            _ik_damped_pose51_kept0 = _ik_damped_pose51_s0 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i0 = np.where(_ik_damped_pose51_kept0, 1.0/_ik_damped_pose51_s0, 0.0)
-            _ik_damped_pose51_t10 = _ik_damped_pose51_a10
-            _ik_damped_pose51_l10 = _ik_damped_pose51_t10*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld10 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t10, 0.0)
-            _ik_damped_pose51_t20 = _ik_damped_pose51_a20
-            _ik_damped_pose51_l20 = _ik_damped_pose51_t20*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld20 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t20, 0.0)
-            _ik_damped_pose51_t30 = _ik_damped_pose51_a30
-            _ik_damped_pose51_l30 = _ik_damped_pose51_t30*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld30 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t30, 0.0)
-            _ik_damped_pose51_t40 = _ik_damped_pose51_a40
-            _ik_damped_pose51_l40 = _ik_damped_pose51_t40*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld40 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t40, 0.0)
-            _ik_damped_pose51_t50 = _ik_damped_pose51_a50
-            _ik_damped_pose51_l50 = _ik_damped_pose51_t50*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld50 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t50, 0.0)
-            _ik_damped_pose51_s1 = _ik_damped_pose51_a11 - _ik_damped_pose51_l10*_ik_damped_pose51_ld10
-            _ik_damped_pose51_kept1 = _ik_damped_pose51_s1 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i1 = np.where(_ik_damped_pose51_kept1, 1.0/_ik_damped_pose51_s1, 0.0)
-            _ik_damped_pose51_t21 = _ik_damped_pose51_a21 - _ik_damped_pose51_l20*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l21 = _ik_damped_pose51_t21*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld21 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t21, 0.0)
-            _ik_damped_pose51_t31 = _ik_damped_pose51_a31 - _ik_damped_pose51_l30*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l31 = _ik_damped_pose51_t31*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld31 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t31, 0.0)
-            _ik_damped_pose51_t41 = _ik_damped_pose51_a41 - _ik_damped_pose51_l40*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l41 = _ik_damped_pose51_t41*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld41 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t41, 0.0)
-            _ik_damped_pose51_t51 = _ik_damped_pose51_a51 - _ik_damped_pose51_l50*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l51 = _ik_damped_pose51_t51*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld51 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t51, 0.0)
-            _ik_damped_pose51_s2 = (_ik_damped_pose51_a22 - _ik_damped_pose51_l20*_ik_damped_pose51_ld20) - _ik_damped_pose51_l21*_ik_damped_pose51_ld21
-            _ik_damped_pose51_kept2 = _ik_damped_pose51_s2 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i2 = np.where(_ik_damped_pose51_kept2, 1.0/_ik_damped_pose51_s2, 0.0)
-            _ik_damped_pose51_t32 = (_ik_damped_pose51_a32 - _ik_damped_pose51_l30*_ik_damped_pose51_ld20) - _ik_damped_pose51_l31*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l32 = _ik_damped_pose51_t32*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld32 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t32, 0.0)
-            _ik_damped_pose51_t42 = (_ik_damped_pose51_a42 - _ik_damped_pose51_l40*_ik_damped_pose51_ld20) - _ik_damped_pose51_l41*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l42 = _ik_damped_pose51_t42*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld42 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t42, 0.0)
-            _ik_damped_pose51_t52 = (_ik_damped_pose51_a52 - _ik_damped_pose51_l50*_ik_damped_pose51_ld20) - _ik_damped_pose51_l51*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l52 = _ik_damped_pose51_t52*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld52 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t52, 0.0)
-            _ik_damped_pose51_s3 = (_ik_damped_pose51_a33 - (_ik_damped_pose51_l30*_ik_damped_pose51_ld30 + _ik_damped_pose51_l31*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l32*_ik_damped_pose51_ld32
-            _ik_damped_pose51_kept3 = _ik_damped_pose51_s3 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i3 = np.where(_ik_damped_pose51_kept3, 1.0/_ik_damped_pose51_s3, 0.0)
-            _ik_damped_pose51_t43 = (_ik_damped_pose51_a43 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld30 + _ik_damped_pose51_l41*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l42*_ik_damped_pose51_ld32
-            _ik_damped_pose51_l43 = _ik_damped_pose51_t43*_ik_damped_pose51_i3
-            _ik_damped_pose51_ld43 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t43, 0.0)
-            _ik_damped_pose51_t53 = (_ik_damped_pose51_a53 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld30 + _ik_damped_pose51_l51*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l52*_ik_damped_pose51_ld32
-            _ik_damped_pose51_l53 = _ik_damped_pose51_t53*_ik_damped_pose51_i3
-            _ik_damped_pose51_ld53 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t53, 0.0)
-            _ik_damped_pose51_s4 = (_ik_damped_pose51_a44 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l41*_ik_damped_pose51_ld41 + _ik_damped_pose51_l42*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l43*_ik_damped_pose51_ld43
-            _ik_damped_pose51_kept4 = _ik_damped_pose51_s4 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i4 = np.where(_ik_damped_pose51_kept4, 1.0/_ik_damped_pose51_s4, 0.0)
-            _ik_damped_pose51_t54 = (_ik_damped_pose51_a54 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l51*_ik_damped_pose51_ld41 + _ik_damped_pose51_l52*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l53*_ik_damped_pose51_ld43
-            _ik_damped_pose51_l54 = _ik_damped_pose51_t54*_ik_damped_pose51_i4
-            _ik_damped_pose51_ld54 = np.where(_ik_damped_pose51_kept4, _ik_damped_pose51_t54, 0.0)
-            _ik_damped_pose51_s5 = (_ik_damped_pose51_a55 - ((_ik_damped_pose51_l50*_ik_damped_pose51_ld50 + _ik_damped_pose51_l51*_ik_damped_pose51_ld51) + (_ik_damped_pose51_l52*_ik_damped_pose51_ld52 + _ik_damped_pose51_l53*_ik_damped_pose51_ld53))) - _ik_damped_pose51_l54*_ik_damped_pose51_ld54
-            _ik_damped_pose51_kept5 = _ik_damped_pose51_s5 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i5 = np.where(_ik_damped_pose51_kept5, 1.0/_ik_damped_pose51_s5, 0.0)
-            _ik_damped_pose51_y0 = e[0]
-            _ik_damped_pose51_y1 = e[1] - _ik_damped_pose51_l10*_ik_damped_pose51_y0
-            _ik_damped_pose51_y2 = (e[2] - _ik_damped_pose51_l20*_ik_damped_pose51_y0) - _ik_damped_pose51_l21*_ik_damped_pose51_y1
-            _ik_damped_pose51_y3 = (e[3] - (_ik_damped_pose51_l30*_ik_damped_pose51_y0 + _ik_damped_pose51_l31*_ik_damped_pose51_y1)) - _ik_damped_pose51_l32*_ik_damped_pose51_y2
-            _ik_damped_pose51_y4 = (e[4] - (_ik_damped_pose51_l40*_ik_damped_pose51_y0 + (_ik_damped_pose51_l41*_ik_damped_pose51_y1 + _ik_damped_pose51_l42*_ik_damped_pose51_y2))) - _ik_damped_pose51_l43*_ik_damped_pose51_y3
-            _ik_damped_pose51_y5 = (e[5] - ((_ik_damped_pose51_l50*_ik_damped_pose51_y0 + _ik_damped_pose51_l51*_ik_damped_pose51_y1) + (_ik_damped_pose51_l52*_ik_damped_pose51_y2 + _ik_damped_pose51_l53*_ik_damped_pose51_y3))) - _ik_damped_pose51_l54*_ik_damped_pose51_y4
-            _ik_damped_pose51_z5 = _ik_damped_pose51_y5*_ik_damped_pose51_i5
-            _ik_damped_pose51_z4 = _ik_damped_pose51_y4*_ik_damped_pose51_i4 - _ik_damped_pose51_l54*_ik_damped_pose51_z5
-            _ik_damped_pose51_z3 = (_ik_damped_pose51_y3*_ik_damped_pose51_i3 - _ik_damped_pose51_l53*_ik_damped_pose51_z5) - _ik_damped_pose51_l43*_ik_damped_pose51_z4
-            _ik_damped_pose51_z2 = (_ik_damped_pose51_y2*_ik_damped_pose51_i2 - (_ik_damped_pose51_l52*_ik_damped_pose51_z5 + _ik_damped_pose51_l42*_ik_damped_pose51_z4)) - _ik_damped_pose51_l32*_ik_damped_pose51_z3
-            _ik_damped_pose51_z1 = (_ik_damped_pose51_y1*_ik_damped_pose51_i1 - (_ik_damped_pose51_l51*_ik_damped_pose51_z5 + (_ik_damped_pose51_l41*_ik_damped_pose51_z4 + _ik_damped_pose51_l31*_ik_damped_pose51_z3))) - _ik_damped_pose51_l21*_ik_damped_pose51_z2
-            _ik_damped_pose51_z0 = (_ik_damped_pose51_y0*_ik_damped_pose51_i0 - ((_ik_damped_pose51_l50*_ik_damped_pose51_z5 + _ik_damped_pose51_l40*_ik_damped_pose51_z4) + (_ik_damped_pose51_l30*_ik_damped_pose51_z3 + _ik_damped_pose51_l20*_ik_damped_pose51_z2))) - _ik_damped_pose51_l10*_ik_damped_pose51_z1
-            dq[0] = np.where(_m47, (Jf[0]*_ik_damped_pose51_z0 + (Jf[7]*_ik_damped_pose51_z1 + Jf[14]*_ik_damped_pose51_z2)) + (Jf[21]*_ik_damped_pose51_z3 + (Jf[28]*_ik_damped_pose51_z4 + Jf[35]*_ik_damped_pose51_z5)), dq[0])
-            dq[1] = np.where(_m47, (Jf[1]*_ik_damped_pose51_z0 + (Jf[8]*_ik_damped_pose51_z1 + Jf[15]*_ik_damped_pose51_z2)) + (Jf[22]*_ik_damped_pose51_z3 + (Jf[29]*_ik_damped_pose51_z4 + Jf[36]*_ik_damped_pose51_z5)), dq[1])
-            dq[2] = np.where(_m47, (Jf[2]*_ik_damped_pose51_z0 + (Jf[9]*_ik_damped_pose51_z1 + Jf[16]*_ik_damped_pose51_z2)) + (Jf[23]*_ik_damped_pose51_z3 + (Jf[30]*_ik_damped_pose51_z4 + Jf[37]*_ik_damped_pose51_z5)), dq[2])
-            dq[3] = np.where(_m47, (Jf[3]*_ik_damped_pose51_z0 + (Jf[10]*_ik_damped_pose51_z1 + Jf[17]*_ik_damped_pose51_z2)) + (Jf[24]*_ik_damped_pose51_z3 + (Jf[31]*_ik_damped_pose51_z4 + Jf[38]*_ik_damped_pose51_z5)), dq[3])
-            dq[4] = np.where(_m47, (Jf[4]*_ik_damped_pose51_z0 + (Jf[11]*_ik_damped_pose51_z1 + Jf[18]*_ik_damped_pose51_z2)) + (Jf[25]*_ik_damped_pose51_z3 + (Jf[32]*_ik_damped_pose51_z4 + Jf[39]*_ik_damped_pose51_z5)), dq[4])
-            dq[5] = np.where(_m47, (Jf[5]*_ik_damped_pose51_z0 + (Jf[12]*_ik_damped_pose51_z1 + Jf[19]*_ik_damped_pose51_z2)) + (Jf[26]*_ik_damped_pose51_z3 + (Jf[33]*_ik_damped_pose51_z4 + Jf[40]*_ik_damped_pose51_z5)), dq[5])
-            dq[6] = np.where(_m47, (Jf[6]*_ik_damped_pose51_z0 + (Jf[13]*_ik_damped_pose51_z1 + Jf[20]*_ik_damped_pose51_z2)) + (Jf[27]*_ik_damped_pose51_z3 + (Jf[34]*_ik_damped_pose51_z4 + Jf[41]*_ik_damped_pose51_z5)), dq[6])
-            ff = np.where(_m47, Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20], ff)
-            gg = np.where(_m47, 0.0, gg)
+                _c51 = blocked[k] > 0
+                _m52 = _m49 & _c51
+                Gf[0] = np.where(_m52, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
+                Gf[1] = np.where(_m52, Gf[1] - J[7 + k]*J[0 + k], Gf[1])
+                Gf[2] = np.where(_m52, Gf[2] - J[7 + k]*J[7 + k], Gf[2])
+                Gf[3] = np.where(_m52, Gf[3] - J[14 + k]*J[0 + k], Gf[3])
+                Gf[4] = np.where(_m52, Gf[4] - J[14 + k]*J[7 + k], Gf[4])
+                Gf[5] = np.where(_m52, Gf[5] - J[14 + k]*J[14 + k], Gf[5])
+                Gf[6] = np.where(_m52, Gf[6] - J[21 + k]*J[0 + k], Gf[6])
+                Gf[7] = np.where(_m52, Gf[7] - J[21 + k]*J[7 + k], Gf[7])
+                Gf[8] = np.where(_m52, Gf[8] - J[21 + k]*J[14 + k], Gf[8])
+                Gf[9] = np.where(_m52, Gf[9] - J[21 + k]*J[21 + k], Gf[9])
+                Gf[10] = np.where(_m52, Gf[10] - J[28 + k]*J[0 + k], Gf[10])
+                Gf[11] = np.where(_m52, Gf[11] - J[28 + k]*J[7 + k], Gf[11])
+                Gf[12] = np.where(_m52, Gf[12] - J[28 + k]*J[14 + k], Gf[12])
+                Gf[13] = np.where(_m52, Gf[13] - J[28 + k]*J[21 + k], Gf[13])
+                Gf[14] = np.where(_m52, Gf[14] - J[28 + k]*J[28 + k], Gf[14])
+                Gf[15] = np.where(_m52, Gf[15] - J[35 + k]*J[0 + k], Gf[15])
+                Gf[16] = np.where(_m52, Gf[16] - J[35 + k]*J[7 + k], Gf[16])
+                Gf[17] = np.where(_m52, Gf[17] - J[35 + k]*J[14 + k], Gf[17])
+                Gf[18] = np.where(_m52, Gf[18] - J[35 + k]*J[21 + k], Gf[18])
+                Gf[19] = np.where(_m52, Gf[19] - J[35 + k]*J[28 + k], Gf[19])
+                Gf[20] = np.where(_m52, Gf[20] - J[35 + k]*J[35 + k], Gf[20])
+            _ik_damped_pose53_mu2 = mu2
+            _ik_damped_pose53_a00 = Gf[0] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a10 = Gf[1]
+            _ik_damped_pose53_a11 = Gf[2] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a20 = Gf[3]
+            _ik_damped_pose53_a21 = Gf[4]
+            _ik_damped_pose53_a22 = Gf[5] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a30 = Gf[6]
+            _ik_damped_pose53_a31 = Gf[7]
+            _ik_damped_pose53_a32 = Gf[8]
+            _ik_damped_pose53_a33 = Gf[9] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a40 = Gf[10]
+            _ik_damped_pose53_a41 = Gf[11]
+            _ik_damped_pose53_a42 = Gf[12]
+            _ik_damped_pose53_a43 = Gf[13]
+            _ik_damped_pose53_a44 = Gf[14] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a50 = Gf[15]
+            _ik_damped_pose53_a51 = Gf[16]
+            _ik_damped_pose53_a52 = Gf[17]
+            _ik_damped_pose53_a53 = Gf[18]
+            _ik_damped_pose53_a54 = Gf[19]
+            _ik_damped_pose53_a55 = Gf[20] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_cut = np.where(_ik_damped_pose53_a55 > np.where(_ik_damped_pose53_a44 > np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00))), _ik_damped_pose53_a44, np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)))), _ik_damped_pose53_a55, np.where(_ik_damped_pose53_a44 > np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00))), _ik_damped_pose53_a44, np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)))))*1e-13
+            _ik_damped_pose53_s0 = _ik_damped_pose53_a00
+            _ik_damped_pose53_kept0 = _ik_damped_pose53_s0 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i0 = np.where(_ik_damped_pose53_kept0, 1.0/_ik_damped_pose53_s0, 0.0)
+            _ik_damped_pose53_t10 = _ik_damped_pose53_a10
+            _ik_damped_pose53_l10 = _ik_damped_pose53_t10*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld10 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t10, 0.0)
+            _ik_damped_pose53_t20 = _ik_damped_pose53_a20
+            _ik_damped_pose53_l20 = _ik_damped_pose53_t20*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld20 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t20, 0.0)
+            _ik_damped_pose53_t30 = _ik_damped_pose53_a30
+            _ik_damped_pose53_l30 = _ik_damped_pose53_t30*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld30 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t30, 0.0)
+            _ik_damped_pose53_t40 = _ik_damped_pose53_a40
+            _ik_damped_pose53_l40 = _ik_damped_pose53_t40*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld40 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t40, 0.0)
+            _ik_damped_pose53_t50 = _ik_damped_pose53_a50
+            _ik_damped_pose53_l50 = _ik_damped_pose53_t50*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld50 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t50, 0.0)
+            _ik_damped_pose53_s1 = _ik_damped_pose53_a11 - _ik_damped_pose53_l10*_ik_damped_pose53_ld10
+            _ik_damped_pose53_kept1 = _ik_damped_pose53_s1 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i1 = np.where(_ik_damped_pose53_kept1, 1.0/_ik_damped_pose53_s1, 0.0)
+            _ik_damped_pose53_t21 = _ik_damped_pose53_a21 - _ik_damped_pose53_l20*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l21 = _ik_damped_pose53_t21*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld21 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t21, 0.0)
+            _ik_damped_pose53_t31 = _ik_damped_pose53_a31 - _ik_damped_pose53_l30*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l31 = _ik_damped_pose53_t31*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld31 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t31, 0.0)
+            _ik_damped_pose53_t41 = _ik_damped_pose53_a41 - _ik_damped_pose53_l40*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l41 = _ik_damped_pose53_t41*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld41 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t41, 0.0)
+            _ik_damped_pose53_t51 = _ik_damped_pose53_a51 - _ik_damped_pose53_l50*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l51 = _ik_damped_pose53_t51*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld51 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t51, 0.0)
+            _ik_damped_pose53_s2 = (_ik_damped_pose53_a22 - _ik_damped_pose53_l20*_ik_damped_pose53_ld20) - _ik_damped_pose53_l21*_ik_damped_pose53_ld21
+            _ik_damped_pose53_kept2 = _ik_damped_pose53_s2 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i2 = np.where(_ik_damped_pose53_kept2, 1.0/_ik_damped_pose53_s2, 0.0)
+            _ik_damped_pose53_t32 = (_ik_damped_pose53_a32 - _ik_damped_pose53_l30*_ik_damped_pose53_ld20) - _ik_damped_pose53_l31*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l32 = _ik_damped_pose53_t32*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld32 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t32, 0.0)
+            _ik_damped_pose53_t42 = (_ik_damped_pose53_a42 - _ik_damped_pose53_l40*_ik_damped_pose53_ld20) - _ik_damped_pose53_l41*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l42 = _ik_damped_pose53_t42*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld42 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t42, 0.0)
+            _ik_damped_pose53_t52 = (_ik_damped_pose53_a52 - _ik_damped_pose53_l50*_ik_damped_pose53_ld20) - _ik_damped_pose53_l51*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l52 = _ik_damped_pose53_t52*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld52 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t52, 0.0)
+            _ik_damped_pose53_s3 = (_ik_damped_pose53_a33 - (_ik_damped_pose53_l30*_ik_damped_pose53_ld30 + _ik_damped_pose53_l31*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l32*_ik_damped_pose53_ld32
+            _ik_damped_pose53_kept3 = _ik_damped_pose53_s3 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i3 = np.where(_ik_damped_pose53_kept3, 1.0/_ik_damped_pose53_s3, 0.0)
+            _ik_damped_pose53_t43 = (_ik_damped_pose53_a43 - (_ik_damped_pose53_l40*_ik_damped_pose53_ld30 + _ik_damped_pose53_l41*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l42*_ik_damped_pose53_ld32
+            _ik_damped_pose53_l43 = _ik_damped_pose53_t43*_ik_damped_pose53_i3
+            _ik_damped_pose53_ld43 = np.where(_ik_damped_pose53_kept3, _ik_damped_pose53_t43, 0.0)
+            _ik_damped_pose53_t53 = (_ik_damped_pose53_a53 - (_ik_damped_pose53_l50*_ik_damped_pose53_ld30 + _ik_damped_pose53_l51*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l52*_ik_damped_pose53_ld32
+            _ik_damped_pose53_l53 = _ik_damped_pose53_t53*_ik_damped_pose53_i3
+            _ik_damped_pose53_ld53 = np.where(_ik_damped_pose53_kept3, _ik_damped_pose53_t53, 0.0)
+            _ik_damped_pose53_s4 = (_ik_damped_pose53_a44 - (_ik_damped_pose53_l40*_ik_damped_pose53_ld40 + (_ik_damped_pose53_l41*_ik_damped_pose53_ld41 + _ik_damped_pose53_l42*_ik_damped_pose53_ld42))) - _ik_damped_pose53_l43*_ik_damped_pose53_ld43
+            _ik_damped_pose53_kept4 = _ik_damped_pose53_s4 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i4 = np.where(_ik_damped_pose53_kept4, 1.0/_ik_damped_pose53_s4, 0.0)
+            _ik_damped_pose53_t54 = (_ik_damped_pose53_a54 - (_ik_damped_pose53_l50*_ik_damped_pose53_ld40 + (_ik_damped_pose53_l51*_ik_damped_pose53_ld41 + _ik_damped_pose53_l52*_ik_damped_pose53_ld42))) - _ik_damped_pose53_l53*_ik_damped_pose53_ld43
+            _ik_damped_pose53_l54 = _ik_damped_pose53_t54*_ik_damped_pose53_i4
+            _ik_damped_pose53_ld54 = np.where(_ik_damped_pose53_kept4, _ik_damped_pose53_t54, 0.0)
+            _ik_damped_pose53_s5 = (_ik_damped_pose53_a55 - ((_ik_damped_pose53_l50*_ik_damped_pose53_ld50 + _ik_damped_pose53_l51*_ik_damped_pose53_ld51) + (_ik_damped_pose53_l52*_ik_damped_pose53_ld52 + _ik_damped_pose53_l53*_ik_damped_pose53_ld53))) - _ik_damped_pose53_l54*_ik_damped_pose53_ld54
+            _ik_damped_pose53_kept5 = _ik_damped_pose53_s5 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i5 = np.where(_ik_damped_pose53_kept5, 1.0/_ik_damped_pose53_s5, 0.0)
+            _ik_damped_pose53_y0 = e[0]
+            _ik_damped_pose53_y1 = e[1] - _ik_damped_pose53_l10*_ik_damped_pose53_y0
+            _ik_damped_pose53_y2 = (e[2] - _ik_damped_pose53_l20*_ik_damped_pose53_y0) - _ik_damped_pose53_l21*_ik_damped_pose53_y1
+            _ik_damped_pose53_y3 = (e[3] - (_ik_damped_pose53_l30*_ik_damped_pose53_y0 + _ik_damped_pose53_l31*_ik_damped_pose53_y1)) - _ik_damped_pose53_l32*_ik_damped_pose53_y2
+            _ik_damped_pose53_y4 = (e[4] - (_ik_damped_pose53_l40*_ik_damped_pose53_y0 + (_ik_damped_pose53_l41*_ik_damped_pose53_y1 + _ik_damped_pose53_l42*_ik_damped_pose53_y2))) - _ik_damped_pose53_l43*_ik_damped_pose53_y3
+            _ik_damped_pose53_y5 = (e[5] - ((_ik_damped_pose53_l50*_ik_damped_pose53_y0 + _ik_damped_pose53_l51*_ik_damped_pose53_y1) + (_ik_damped_pose53_l52*_ik_damped_pose53_y2 + _ik_damped_pose53_l53*_ik_damped_pose53_y3))) - _ik_damped_pose53_l54*_ik_damped_pose53_y4
+            _ik_damped_pose53_z5 = _ik_damped_pose53_y5*_ik_damped_pose53_i5
+            _ik_damped_pose53_z4 = _ik_damped_pose53_y4*_ik_damped_pose53_i4 - _ik_damped_pose53_l54*_ik_damped_pose53_z5
+            _ik_damped_pose53_z3 = (_ik_damped_pose53_y3*_ik_damped_pose53_i3 - _ik_damped_pose53_l53*_ik_damped_pose53_z5) - _ik_damped_pose53_l43*_ik_damped_pose53_z4
+            _ik_damped_pose53_z2 = (_ik_damped_pose53_y2*_ik_damped_pose53_i2 - (_ik_damped_pose53_l52*_ik_damped_pose53_z5 + _ik_damped_pose53_l42*_ik_damped_pose53_z4)) - _ik_damped_pose53_l32*_ik_damped_pose53_z3
+            _ik_damped_pose53_z1 = (_ik_damped_pose53_y1*_ik_damped_pose53_i1 - (_ik_damped_pose53_l51*_ik_damped_pose53_z5 + (_ik_damped_pose53_l41*_ik_damped_pose53_z4 + _ik_damped_pose53_l31*_ik_damped_pose53_z3))) - _ik_damped_pose53_l21*_ik_damped_pose53_z2
+            _ik_damped_pose53_z0 = (_ik_damped_pose53_y0*_ik_damped_pose53_i0 - ((_ik_damped_pose53_l50*_ik_damped_pose53_z5 + _ik_damped_pose53_l40*_ik_damped_pose53_z4) + (_ik_damped_pose53_l30*_ik_damped_pose53_z3 + _ik_damped_pose53_l20*_ik_damped_pose53_z2))) - _ik_damped_pose53_l10*_ik_damped_pose53_z1
+            dq[0] = np.where(_m49, (Jf[0]*_ik_damped_pose53_z0 + (Jf[7]*_ik_damped_pose53_z1 + Jf[14]*_ik_damped_pose53_z2)) + (Jf[21]*_ik_damped_pose53_z3 + (Jf[28]*_ik_damped_pose53_z4 + Jf[35]*_ik_damped_pose53_z5)), dq[0])
+            dq[1] = np.where(_m49, (Jf[1]*_ik_damped_pose53_z0 + (Jf[8]*_ik_damped_pose53_z1 + Jf[15]*_ik_damped_pose53_z2)) + (Jf[22]*_ik_damped_pose53_z3 + (Jf[29]*_ik_damped_pose53_z4 + Jf[36]*_ik_damped_pose53_z5)), dq[1])
+            dq[2] = np.where(_m49, (Jf[2]*_ik_damped_pose53_z0 + (Jf[9]*_ik_damped_pose53_z1 + Jf[16]*_ik_damped_pose53_z2)) + (Jf[23]*_ik_damped_pose53_z3 + (Jf[30]*_ik_damped_pose53_z4 + Jf[37]*_ik_damped_pose53_z5)), dq[2])
+            dq[3] = np.where(_m49, (Jf[3]*_ik_damped_pose53_z0 + (Jf[10]*_ik_damped_pose53_z1 + Jf[17]*_ik_damped_pose53_z2)) + (Jf[24]*_ik_damped_pose53_z3 + (Jf[31]*_ik_damped_pose53_z4 + Jf[38]*_ik_damped_pose53_z5)), dq[3])
+            dq[4] = np.where(_m49, (Jf[4]*_ik_damped_pose53_z0 + (Jf[11]*_ik_damped_pose53_z1 + Jf[18]*_ik_damped_pose53_z2)) + (Jf[25]*_ik_damped_pose53_z3 + (Jf[32]*_ik_damped_pose53_z4 + Jf[39]*_ik_damped_pose53_z5)), dq[4])
+            dq[5] = np.where(_m49, (Jf[5]*_ik_damped_pose53_z0 + (Jf[12]*_ik_damped_pose53_z1 + Jf[19]*_ik_damped_pose53_z2)) + (Jf[26]*_ik_damped_pose53_z3 + (Jf[33]*_ik_damped_pose53_z4 + Jf[40]*_ik_damped_pose53_z5)), dq[5])
+            dq[6] = np.where(_m49, (Jf[6]*_ik_damped_pose53_z0 + (Jf[13]*_ik_damped_pose53_z1 + Jf[20]*_ik_damped_pose53_z2)) + (Jf[27]*_ik_damped_pose53_z3 + (Jf[34]*_ik_damped_pose53_z4 + Jf[41]*_ik_damped_pose53_z5)), dq[6])
+            ff = np.where(_m49, Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20], ff)
+            gg = np.where(_m49, 0.0, gg)
             for k in range(0, 7):
-                gg = np.where(_m47, gg + (Jf[0 + k]*e[0] + Jf[7 + k]*e[1] + Jf[14 + k]*e[2] + Jf[21 + k]*e[3] + Jf[28 + k]*e[4] + Jf[35 + k]*e[5])*(Jf[0 + k]*e[0] + Jf[7 + k]*e[1] + Jf[14 + k]*e[2] + Jf[21 + k]*e[3] + Jf[28 + k]*e[4] + Jf[35 + k]*e[5]), gg)
-        ff = np.where(_m48, G[0] + G[2] + G[5] + G[9] + G[14] + G[20], ff)
-        gg = np.where(_m48, 0.0, gg)
+                gg = np.where(_m49, gg + (Jf[0 + k]*e[0] + Jf[7 + k]*e[1] + Jf[14 + k]*e[2] + Jf[21 + k]*e[3] + Jf[28 + k]*e[4] + Jf[35 + k]*e[5])*(Jf[0 + k]*e[0] + Jf[7 + k]*e[1] + Jf[14 + k]*e[2] + Jf[21 + k]*e[3] + Jf[28 + k]*e[4] + Jf[35 + k]*e[5]), gg)
+        ff = np.where(_m50, G[0] + G[2] + G[5] + G[9] + G[14] + G[20], ff)
+        gg = np.where(_m50, 0.0, gg)
         for k in range(0, 7):
-            gg = np.where(_m48, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5]), gg)
+            gg = np.where(_m50, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
-        stationary = np.where(_run33, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        big = np.where(_run33, 0.0, big)
+        stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        big = np.where(_run35, 0.0, big)
         for k in range(0, 7):
-            big = np.where(_run33, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
-        scale = np.where(_run33, np.where(big > 1.0, 1.0/big, 1.0), scale)
+            big = np.where(_run35, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
+        scale = np.where(_run35, np.where(big > 1.0, 1.0/big, 1.0), scale)
         for k in range(0, 7):
-            trial[k] = np.where(_run33, q[k] + dq[k]*scale, trial[k])
+            trial[k] = np.where(_run35, q[k] + dq[k]*scale, trial[k])
         for k in range(0, 7):
-            trial[k] = np.where(_run33, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
+            trial[k] = np.where(_run35, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
         _o = _ik_terms_on_lanes(_c, trial[0:7])
-        _merge(_run33, _o[0], Tt, 0, _fr)
-        _merge(_run33, _o[1], Jt, 0, _fr)
-        _ik_error_pose52_M = [_fr(0.0)] * 9
-        et[0] = np.where(_run33, target[3] - Tt[3], et[0])
-        et[1] = np.where(_run33, target[7] - Tt[7], et[1])
-        et[2] = np.where(_run33, target[11] - Tt[11], et[2])
-        _ik_error_pose52_M[0] = np.where(_run33, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose52_M[0])
-        _ik_error_pose52_M[1] = np.where(_run33, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose52_M[1])
-        _ik_error_pose52_M[2] = np.where(_run33, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose52_M[2])
-        _ik_error_pose52_M[3] = np.where(_run33, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose52_M[3])
-        _ik_error_pose52_M[4] = np.where(_run33, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose52_M[4])
-        _ik_error_pose52_M[5] = np.where(_run33, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose52_M[5])
-        _ik_error_pose52_M[6] = np.where(_run33, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose52_M[6])
-        _ik_error_pose52_M[7] = np.where(_run33, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose52_M[7])
-        _ik_error_pose52_M[8] = np.where(_run33, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose52_M[8])
-        _alive54 = _run33
-        _ik_log353_v0 = _ik_error_pose52_M[7] - _ik_error_pose52_M[5]
-        _ik_log353_v1 = _ik_error_pose52_M[2] - _ik_error_pose52_M[6]
-        _ik_log353_v2 = _ik_error_pose52_M[3] - _ik_error_pose52_M[1]
-        _ik_log353_c = (((_ik_error_pose52_M[0] + _ik_error_pose52_M[4]) + _ik_error_pose52_M[8]) - 1.0)*0.5
-        _ik_log353_s = np.sqrt((_ik_log353_v0*_ik_log353_v0 + _ik_log353_v1*_ik_log353_v1) + _ik_log353_v2*_ik_log353_v2)*0.5
-        _ik_log353_angle = np.arctan2(_ik_log353_s, _ik_log353_c)
-        _ik_log353_k = _fr(0.0)
-        _c55 = _ik_log353_angle < 0.0001
-        _m56 = _run33 & _c55
-        _ik_log353_k = np.where(_m56, 0.5 + (_ik_log353_angle*_ik_log353_angle)*0.08333333333333333, _ik_log353_k)
-        et[0 + 3] = np.where(_m56, _ik_log353_v0*_ik_log353_k, et[0 + 3])
-        et[1 + 3] = np.where(_m56, _ik_log353_v1*_ik_log353_k, et[1 + 3])
-        et[2 + 3] = np.where(_m56, _ik_log353_v2*_ik_log353_k, et[2 + 3])
-        _alive54 = _alive54 & (~_m56)
-        _c57 = 3.141592653589793 - _ik_log353_angle > 0.001
-        _m58 = _alive54 & _c57
-        _ik_log353_k = np.where(_m58, _ik_log353_angle/(_ik_log353_s + _ik_log353_s), _ik_log353_k)
-        et[0 + 3] = np.where(_m58, _ik_log353_v0*_ik_log353_k, et[0 + 3])
-        et[1 + 3] = np.where(_m58, _ik_log353_v1*_ik_log353_k, et[1 + 3])
-        et[2 + 3] = np.where(_m58, _ik_log353_v2*_ik_log353_k, et[2 + 3])
-        _alive54 = _alive54 & (~_m58)
+        _merge(_run35, _o[0], Tt, 0, _fr)
+        _merge(_run35, _o[1], Jt, 0, _fr)
+        _ik_error_pose54_M = [_fr(0.0)] * 9
+        et[0] = np.where(_run35, target[3] - Tt[3], et[0])
+        et[1] = np.where(_run35, target[7] - Tt[7], et[1])
+        et[2] = np.where(_run35, target[11] - Tt[11], et[2])
+        _ik_error_pose54_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose54_M[0])
+        _ik_error_pose54_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose54_M[1])
+        _ik_error_pose54_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose54_M[2])
+        _ik_error_pose54_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose54_M[3])
+        _ik_error_pose54_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose54_M[4])
+        _ik_error_pose54_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose54_M[5])
+        _ik_error_pose54_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose54_M[6])
+        _ik_error_pose54_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose54_M[7])
+        _ik_error_pose54_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose54_M[8])
+        _alive56 = _run35
+        _ik_log355_v0 = _ik_error_pose54_M[7] - _ik_error_pose54_M[5]
+        _ik_log355_v1 = _ik_error_pose54_M[2] - _ik_error_pose54_M[6]
+        _ik_log355_v2 = _ik_error_pose54_M[3] - _ik_error_pose54_M[1]
+        _ik_log355_c = (((_ik_error_pose54_M[0] + _ik_error_pose54_M[4]) + _ik_error_pose54_M[8]) - 1.0)*0.5
+        _ik_log355_s = np.sqrt((_ik_log355_v0*_ik_log355_v0 + _ik_log355_v1*_ik_log355_v1) + _ik_log355_v2*_ik_log355_v2)*0.5
+        _ik_log355_angle = np.arctan2(_ik_log355_s, _ik_log355_c)
+        _ik_log355_k = _fr(0.0)
+        _c57 = _ik_log355_angle < 0.0001
+        _m58 = _run35 & _c57
+        _ik_log355_k = np.where(_m58, 0.5 + (_ik_log355_angle*_ik_log355_angle)*0.08333333333333333, _ik_log355_k)
+        et[0 + 3] = np.where(_m58, _ik_log355_v0*_ik_log355_k, et[0 + 3])
+        et[1 + 3] = np.where(_m58, _ik_log355_v1*_ik_log355_k, et[1 + 3])
+        et[2 + 3] = np.where(_m58, _ik_log355_v2*_ik_log355_k, et[2 + 3])
+        _alive56 = _alive56 & (~_m58)
+        _c59 = 3.141592653589793 - _ik_log355_angle > 0.001
+        _m60 = _alive56 & _c59
+        _ik_log355_k = np.where(_m60, _ik_log355_angle/(_ik_log355_s + _ik_log355_s), _ik_log355_k)
+        et[0 + 3] = np.where(_m60, _ik_log355_v0*_ik_log355_k, et[0 + 3])
+        et[1 + 3] = np.where(_m60, _ik_log355_v1*_ik_log355_k, et[1 + 3])
+        et[2 + 3] = np.where(_m60, _ik_log355_v2*_ik_log355_k, et[2 + 3])
+        _alive56 = _alive56 & (~_m60)
         # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-        _ik_log353_col = [_fr(0.0)] * 3
-        _ik_log353_i = np.where(_ik_error_pose52_M[0] >= _ik_error_pose52_M[4], np.where(_ik_error_pose52_M[0] >= _ik_error_pose52_M[8], _fi(0), 2), np.where(_ik_error_pose52_M[4] >= _ik_error_pose52_M[8], _fi(1), 2))
-        _i59 = 3*_ik_log353_i
-        _ik_log353_col[0] = np.where(_alive54, (np.where(_ik_log353_i == 0, _ik_error_pose52_M[0], np.where(_ik_log353_i == 1, _ik_error_pose52_M[1], np.where(_ik_log353_i == 2, _ik_error_pose52_M[2], np.where(_ik_log353_i == 3, _ik_error_pose52_M[3], np.where(_ik_log353_i == 4, _ik_error_pose52_M[4], np.where(_ik_log353_i == 5, _ik_error_pose52_M[5], np.where(_ik_log353_i == 6, _ik_error_pose52_M[6], np.where(_ik_log353_i == 7, _ik_error_pose52_M[7], _ik_error_pose52_M[8])))))))) + np.where(_i59 == 0, _ik_error_pose52_M[0], np.where(_i59 == 3, _ik_error_pose52_M[3], _ik_error_pose52_M[6])))*0.5, _ik_log353_col[0])
-        _i60 = 3 + _ik_log353_i
-        _i61 = 3*_ik_log353_i + 1
-        _ik_log353_col[1] = np.where(_alive54, (np.where(_i60 == 0, _ik_error_pose52_M[0], np.where(_i60 == 1, _ik_error_pose52_M[1], np.where(_i60 == 2, _ik_error_pose52_M[2], np.where(_i60 == 3, _ik_error_pose52_M[3], np.where(_i60 == 4, _ik_error_pose52_M[4], np.where(_i60 == 5, _ik_error_pose52_M[5], np.where(_i60 == 6, _ik_error_pose52_M[6], np.where(_i60 == 7, _ik_error_pose52_M[7], _ik_error_pose52_M[8])))))))) + np.where(_i61 == 1, _ik_error_pose52_M[1], np.where(_i61 == 4, _ik_error_pose52_M[4], _ik_error_pose52_M[7])))*0.5, _ik_log353_col[1])
-        _i62 = 6 + _ik_log353_i
-        _i63 = 3*_ik_log353_i + 2
-        _ik_log353_col[2] = np.where(_alive54, (np.where(_i62 == 0, _ik_error_pose52_M[0], np.where(_i62 == 1, _ik_error_pose52_M[1], np.where(_i62 == 2, _ik_error_pose52_M[2], np.where(_i62 == 3, _ik_error_pose52_M[3], np.where(_i62 == 4, _ik_error_pose52_M[4], np.where(_i62 == 5, _ik_error_pose52_M[5], np.where(_i62 == 6, _ik_error_pose52_M[6], np.where(_i62 == 7, _ik_error_pose52_M[7], _ik_error_pose52_M[8])))))))) + np.where(_i63 == 2, _ik_error_pose52_M[2], np.where(_i63 == 5, _ik_error_pose52_M[5], _ik_error_pose52_M[8])))*0.5, _ik_log353_col[2])
-        _v64 = np.where(_ik_log353_i == 0, _ik_log353_col[0], np.where(_ik_log353_i == 1, _ik_log353_col[1], _ik_log353_col[2])) - _ik_log353_c
-        _m65 = _alive54 & (_ik_log353_i == 0)
-        _ik_log353_col[0] = np.where(_m65, _v64, _ik_log353_col[0])
-        _m66 = _alive54 & (_ik_log353_i == 1)
-        _ik_log353_col[1] = np.where(_m66, _v64, _ik_log353_col[1])
-        _m67 = _alive54 & (_ik_log353_i == 2)
-        _ik_log353_col[2] = np.where(_m67, _v64, _ik_log353_col[2])
-        _ik_log353_norm = np.sqrt((_ik_log353_col[0]*_ik_log353_col[0] + _ik_log353_col[1]*_ik_log353_col[1]) + _ik_log353_col[2]*_ik_log353_col[2])
-        _ik_log353_k = np.where(_alive54, np.where((_ik_log353_col[0]*_ik_log353_v0 + _ik_log353_col[1]*_ik_log353_v1) + _ik_log353_col[2]*_ik_log353_v2 < 0.0, -_ik_log353_angle, _ik_log353_angle)/_ik_log353_norm, _ik_log353_k)
-        et[0 + 3] = np.where(_alive54, _ik_log353_col[0]*_ik_log353_k, et[0 + 3])
-        et[1 + 3] = np.where(_alive54, _ik_log353_col[1]*_ik_log353_k, et[1 + 3])
-        et[2 + 3] = np.where(_alive54, _ik_log353_col[2]*_ik_log353_k, et[2 + 3])
-        _ik_error_pose52_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-        _ik_error_pose52_rotation = np.sqrt(_ik_error_pose52_rotation_squares)
-        _c68 = ~np.isfinite(_ik_error_pose52_rotation_squares)
-        _m69 = _run33 & _c68
-        _ik_error_pose52_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-        _ik_error_pose52_rotation = np.where(_m69, _ik_error_pose52_rotation_top*np.sqrt((et[3]/_ik_error_pose52_rotation_top)*(et[3]/_ik_error_pose52_rotation_top) + (et[4]/_ik_error_pose52_rotation_top)*(et[4]/_ik_error_pose52_rotation_top) + (et[5]/_ik_error_pose52_rotation_top)*(et[5]/_ik_error_pose52_rotation_top)), _ik_error_pose52_rotation)
-        norms[1] = np.where(_run33, _ik_error_pose52_rotation, norms[1])
-        _ik_error_pose52_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_pose52_position = np.sqrt(_ik_error_pose52_position_squares)
-        _c70 = ~np.isfinite(_ik_error_pose52_position_squares)
-        _m71 = _run33 & _c70
-        _ik_error_pose52_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_pose52_position = np.where(_m71, _ik_error_pose52_position_top*np.sqrt((et[0]/_ik_error_pose52_position_top)*(et[0]/_ik_error_pose52_position_top) + (et[1]/_ik_error_pose52_position_top)*(et[1]/_ik_error_pose52_position_top) + (et[2]/_ik_error_pose52_position_top)*(et[2]/_ik_error_pose52_position_top)), _ik_error_pose52_position)
-        norms[0] = np.where(_run33, _ik_error_pose52_position, norms[0])
-        _ik_error_pose52_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_pose52_whole = np.sqrt(_ik_error_pose52_whole_squares)
-        _c72 = ~np.isfinite(_ik_error_pose52_whole_squares)
-        _m73 = _run33 & _c72
-        _ik_error_pose52_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_pose52_whole = np.where(_m73, _ik_error_pose52_whole_top*np.sqrt((norms[0]/_ik_error_pose52_whole_top)*(norms[0]/_ik_error_pose52_whole_top) + (norms[1]/_ik_error_pose52_whole_top)*(norms[1]/_ik_error_pose52_whole_top)), _ik_error_pose52_whole)
-        norms[2] = np.where(_run33, _ik_error_pose52_whole, norms[2])
-        pet = np.where(_run33, norms[0], pet)
-        ret = np.where(_run33, norms[1], ret)
-        ent = np.where(_run33, norms[2], ent)
-        it = np.where(_run33, it + 1, it)
-        attempt = np.where(_run33, attempt + 1, attempt)
-        _c74 = ent < en
-        _m75 = _run33 & _c74
-        _m76 = _run33 & (~_c74)
+        _ik_log355_col = [_fr(0.0)] * 3
+        _ik_log355_i = np.where(_ik_error_pose54_M[0] >= _ik_error_pose54_M[4], np.where(_ik_error_pose54_M[0] >= _ik_error_pose54_M[8], _fi(0), 2), np.where(_ik_error_pose54_M[4] >= _ik_error_pose54_M[8], _fi(1), 2))
+        _i61 = 3*_ik_log355_i
+        _ik_log355_col[0] = np.where(_alive56, (np.where(_ik_log355_i == 0, _ik_error_pose54_M[0], np.where(_ik_log355_i == 1, _ik_error_pose54_M[1], np.where(_ik_log355_i == 2, _ik_error_pose54_M[2], np.where(_ik_log355_i == 3, _ik_error_pose54_M[3], np.where(_ik_log355_i == 4, _ik_error_pose54_M[4], np.where(_ik_log355_i == 5, _ik_error_pose54_M[5], np.where(_ik_log355_i == 6, _ik_error_pose54_M[6], np.where(_ik_log355_i == 7, _ik_error_pose54_M[7], _ik_error_pose54_M[8])))))))) + np.where(_i61 == 0, _ik_error_pose54_M[0], np.where(_i61 == 3, _ik_error_pose54_M[3], _ik_error_pose54_M[6])))*0.5, _ik_log355_col[0])
+        _i62 = 3 + _ik_log355_i
+        _i63 = 3*_ik_log355_i + 1
+        _ik_log355_col[1] = np.where(_alive56, (np.where(_i62 == 0, _ik_error_pose54_M[0], np.where(_i62 == 1, _ik_error_pose54_M[1], np.where(_i62 == 2, _ik_error_pose54_M[2], np.where(_i62 == 3, _ik_error_pose54_M[3], np.where(_i62 == 4, _ik_error_pose54_M[4], np.where(_i62 == 5, _ik_error_pose54_M[5], np.where(_i62 == 6, _ik_error_pose54_M[6], np.where(_i62 == 7, _ik_error_pose54_M[7], _ik_error_pose54_M[8])))))))) + np.where(_i63 == 1, _ik_error_pose54_M[1], np.where(_i63 == 4, _ik_error_pose54_M[4], _ik_error_pose54_M[7])))*0.5, _ik_log355_col[1])
+        _i64 = 6 + _ik_log355_i
+        _i65 = 3*_ik_log355_i + 2
+        _ik_log355_col[2] = np.where(_alive56, (np.where(_i64 == 0, _ik_error_pose54_M[0], np.where(_i64 == 1, _ik_error_pose54_M[1], np.where(_i64 == 2, _ik_error_pose54_M[2], np.where(_i64 == 3, _ik_error_pose54_M[3], np.where(_i64 == 4, _ik_error_pose54_M[4], np.where(_i64 == 5, _ik_error_pose54_M[5], np.where(_i64 == 6, _ik_error_pose54_M[6], np.where(_i64 == 7, _ik_error_pose54_M[7], _ik_error_pose54_M[8])))))))) + np.where(_i65 == 2, _ik_error_pose54_M[2], np.where(_i65 == 5, _ik_error_pose54_M[5], _ik_error_pose54_M[8])))*0.5, _ik_log355_col[2])
+        _v66 = np.where(_ik_log355_i == 0, _ik_log355_col[0], np.where(_ik_log355_i == 1, _ik_log355_col[1], _ik_log355_col[2])) - _ik_log355_c
+        _m67 = _alive56 & (_ik_log355_i == 0)
+        _ik_log355_col[0] = np.where(_m67, _v66, _ik_log355_col[0])
+        _m68 = _alive56 & (_ik_log355_i == 1)
+        _ik_log355_col[1] = np.where(_m68, _v66, _ik_log355_col[1])
+        _m69 = _alive56 & (_ik_log355_i == 2)
+        _ik_log355_col[2] = np.where(_m69, _v66, _ik_log355_col[2])
+        _ik_log355_norm = np.sqrt((_ik_log355_col[0]*_ik_log355_col[0] + _ik_log355_col[1]*_ik_log355_col[1]) + _ik_log355_col[2]*_ik_log355_col[2])
+        _ik_log355_k = np.where(_alive56, np.where((_ik_log355_col[0]*_ik_log355_v0 + _ik_log355_col[1]*_ik_log355_v1) + _ik_log355_col[2]*_ik_log355_v2 < 0.0, -_ik_log355_angle, _ik_log355_angle)/_ik_log355_norm, _ik_log355_k)
+        et[0 + 3] = np.where(_alive56, _ik_log355_col[0]*_ik_log355_k, et[0 + 3])
+        et[1 + 3] = np.where(_alive56, _ik_log355_col[1]*_ik_log355_k, et[1 + 3])
+        et[2 + 3] = np.where(_alive56, _ik_log355_col[2]*_ik_log355_k, et[2 + 3])
+        _ik_error_pose54_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+        _ik_error_pose54_rotation = np.sqrt(_ik_error_pose54_rotation_squares)
+        _c70 = ~np.isfinite(_ik_error_pose54_rotation_squares)
+        _m71 = _run35 & _c70
+        _ik_error_pose54_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+        _ik_error_pose54_rotation = np.where(_m71, _ik_error_pose54_rotation_top*np.sqrt((et[3]/_ik_error_pose54_rotation_top)*(et[3]/_ik_error_pose54_rotation_top) + (et[4]/_ik_error_pose54_rotation_top)*(et[4]/_ik_error_pose54_rotation_top) + (et[5]/_ik_error_pose54_rotation_top)*(et[5]/_ik_error_pose54_rotation_top)), _ik_error_pose54_rotation)
+        norms[1] = np.where(_run35, _ik_error_pose54_rotation, norms[1])
+        _ik_error_pose54_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_pose54_position = np.sqrt(_ik_error_pose54_position_squares)
+        _c72 = ~np.isfinite(_ik_error_pose54_position_squares)
+        _m73 = _run35 & _c72
+        _ik_error_pose54_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_pose54_position = np.where(_m73, _ik_error_pose54_position_top*np.sqrt((et[0]/_ik_error_pose54_position_top)*(et[0]/_ik_error_pose54_position_top) + (et[1]/_ik_error_pose54_position_top)*(et[1]/_ik_error_pose54_position_top) + (et[2]/_ik_error_pose54_position_top)*(et[2]/_ik_error_pose54_position_top)), _ik_error_pose54_position)
+        norms[0] = np.where(_run35, _ik_error_pose54_position, norms[0])
+        _ik_error_pose54_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_pose54_whole = np.sqrt(_ik_error_pose54_whole_squares)
+        _c74 = ~np.isfinite(_ik_error_pose54_whole_squares)
+        _m75 = _run35 & _c74
+        _ik_error_pose54_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_pose54_whole = np.where(_m75, _ik_error_pose54_whole_top*np.sqrt((norms[0]/_ik_error_pose54_whole_top)*(norms[0]/_ik_error_pose54_whole_top) + (norms[1]/_ik_error_pose54_whole_top)*(norms[1]/_ik_error_pose54_whole_top)), _ik_error_pose54_whole)
+        norms[2] = np.where(_run35, _ik_error_pose54_whole, norms[2])
+        pet = np.where(_run35, norms[0], pet)
+        ret = np.where(_run35, norms[1], ret)
+        ent = np.where(_run35, norms[2], ent)
+        it = np.where(_run35, it + 1, it)
+        attempt = np.where(_run35, attempt + 1, attempt)
+        _c76 = ent < en
+        _m77 = _run35 & _c76
+        _m78 = _run35 & (~_c76)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m75, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m75, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m77, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m77, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 7):
-            q[k] = np.where(_m75, trial[k], q[k])
+            q[k] = np.where(_m77, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m75, Tt[k], Tm[k])
+            Tm[k] = np.where(_m77, Tt[k], Tm[k])
         for k in range(0, 42):
-            J[k] = np.where(_m75, Jt[k], J[k])
+            J[k] = np.where(_m77, Jt[k], J[k])
         for k in range(0, 6):
-            e[k] = np.where(_m75, et[k], e[k])
-        gram_ready = np.where(_m75, 0, gram_ready)
-        pe = np.where(_m75, pet, pe)
-        re = np.where(_m75, ret, re)
-        en = np.where(_m75, ent, en)
-        c = np.where(_m75, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m76, c*4.0, c)
-        stalled = np.where(_m76, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        _c77 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m78 = _run33 & _c77
-        best_en = np.where(_m78, en, best_en)
-        best_pe = np.where(_m78, pe, best_pe)
-        best_re = np.where(_m78, re, best_re)
-        best_stalled = np.where(_m78, stalled, best_stalled)
-        best_here = np.where(_m78, 1, best_here)
+            e[k] = np.where(_m77, et[k], e[k])
+        gram_ready = np.where(_m77, 0, gram_ready)
+        pe = np.where(_m77, pet, pe)
+        re = np.where(_m77, ret, re)
+        en = np.where(_m77, ent, en)
+        c = np.where(_m77, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m78, c*4.0, c)
+        stalled = np.where(_m78, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        _c79 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m80 = _run35 & _c79
+        best_en = np.where(_m80, en, best_en)
+        best_pe = np.where(_m80, pe, best_pe)
+        best_re = np.where(_m80, re, best_re)
+        best_stalled = np.where(_m80, stalled, best_stalled)
+        best_here = np.where(_m80, 1, best_here)
         for k in range(0, 7):
-            best_q[k] = np.where(_m78, q[k], best_q[k])
-        _c79 = ~((pe <= tol) & (re <= tol))
-        _m80 = _run33 & _c79
-        if bool(_m80.any()):
-            slow = np.where(_m80, stationary, slow)
-            _c81 = attempt % 3 == 0
-            _m82 = _m80 & _c81
-            _c83 = en > checkpoint*0.6
+            best_q[k] = np.where(_m80, q[k], best_q[k])
+        _c81 = ~((pe <= tol) & (re <= tol))
+        _m82 = _run35 & _c81
+        if bool(_m82.any()):
+            slow = np.where(_m82, stationary, slow)
+            _c83 = attempt % 3 == 0
             _m84 = _m82 & _c83
-            slow = np.where(_m84, 1, slow)
-            window_start = np.where(_m82, checkpoint, window_start)
-            checkpoint = np.where(_m82, en, checkpoint)
-            _c85 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m86 = _m80 & _c85
-            if bool(_m86.any()):
-                _c87 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m88 = _m86 & _c87
+            _c85 = en > checkpoint*0.6
+            _m86 = _m84 & _c85
+            slow = np.where(_m86, 1, slow)
+            window_start = np.where(_m84, checkpoint, window_start)
+            checkpoint = np.where(_m84, en, checkpoint)
+            _c87 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m88 = _m82 & _c87
+            if bool(_m88.any()):
+                _c89 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m90 = _m88 & _c89
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m88, 1, best_stalled)
-                best_here = np.where(_m86, 0, best_here)
-                nearest = np.where(_m86, 0.0, nearest)
+                best_stalled = np.where(_m90, 1, best_stalled)
+                best_here = np.where(_m88, 0, best_here)
+                nearest = np.where(_m88, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 7):
-                        _alive90 = _m86
-                        _ik_uniform89_s = state[0]
-                        _ik_uniform89_s = _u64_where(_m86, _u64_xor(_ik_uniform89_s, _u64_shr(_ik_uniform89_s, 12)), _ik_uniform89_s)
-                        _ik_uniform89_s = _u64_where(_m86, _u64_xor(_ik_uniform89_s, _u64_shl(_ik_uniform89_s, 25)), _ik_uniform89_s)
-                        _ik_uniform89_s = _u64_where(_m86, _u64_xor(_ik_uniform89_s, _u64_shr(_ik_uniform89_s, 27)), _ik_uniform89_s)
-                        state[0] = _u64_where(_m86, _ik_uniform89_s, state[0])
-                        u = np.where(_m86, _u64_real(_u64_shr(_u64_mul(_ik_uniform89_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive90 = _alive90 & (~_m86)
-                        trial[k] = np.where(_m86, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive92 = _m88
+                        _ik_uniform91_s = state[0]
+                        _ik_uniform91_s = _u64_where(_m88, _u64_xor(_ik_uniform91_s, _u64_shr(_ik_uniform91_s, 12)), _ik_uniform91_s)
+                        _ik_uniform91_s = _u64_where(_m88, _u64_xor(_ik_uniform91_s, _u64_shl(_ik_uniform91_s, 25)), _ik_uniform91_s)
+                        _ik_uniform91_s = _u64_where(_m88, _u64_xor(_ik_uniform91_s, _u64_shr(_ik_uniform91_s, 27)), _ik_uniform91_s)
+                        state[0] = _u64_where(_m88, _ik_uniform91_s, state[0])
+                        u = np.where(_m88, _u64_real(_u64_shr(_u64_mul(_ik_uniform91_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive92 = _alive92 & (~_m88)
+                        trial[k] = np.where(_m88, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:7])
-                    _merge(_m86, _o[0], Tt, 0, _fr)
-                    _merge(_m86, _o[1], Jt, 0, _fr)
-                    d = np.where(_m86, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
-                    _c91 = (d < nearest) | (m == 0)
-                    _m92 = _m86 & _c91
-                    nearest = np.where(_m92, d, nearest)
+                    _merge(_m88, _o[0], Tt, 0, _fr)
+                    _merge(_m88, _o[1], Jt, 0, _fr)
+                    d = np.where(_m88, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
+                    _c93 = (d < nearest) | (m == 0)
+                    _m94 = _m88 & _c93
+                    nearest = np.where(_m94, d, nearest)
                     for k in range(0, 7):
-                        q[k] = np.where(_m92, trial[k], q[k])
-                restarts = np.where(_m86, restarts + 1, restarts)
-                gram_ready = np.where(_m86, 0, gram_ready)
+                        q[k] = np.where(_m94, trial[k], q[k])
+                restarts = np.where(_m88, restarts + 1, restarts)
+                gram_ready = np.where(_m88, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:7])
-                _merge(_m86, _o[0], Tm, 0, _fr)
-                _merge(_m86, _o[1], J, 0, _fr)
-                _ik_error_pose93_M = [_fr(0.0)] * 9
-                e[0] = np.where(_m86, target[3] - Tm[3], e[0])
-                e[1] = np.where(_m86, target[7] - Tm[7], e[1])
-                e[2] = np.where(_m86, target[11] - Tm[11], e[2])
-                _ik_error_pose93_M[0] = np.where(_m86, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose93_M[0])
-                _ik_error_pose93_M[1] = np.where(_m86, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose93_M[1])
-                _ik_error_pose93_M[2] = np.where(_m86, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose93_M[2])
-                _ik_error_pose93_M[3] = np.where(_m86, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose93_M[3])
-                _ik_error_pose93_M[4] = np.where(_m86, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose93_M[4])
-                _ik_error_pose93_M[5] = np.where(_m86, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose93_M[5])
-                _ik_error_pose93_M[6] = np.where(_m86, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose93_M[6])
-                _ik_error_pose93_M[7] = np.where(_m86, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose93_M[7])
-                _ik_error_pose93_M[8] = np.where(_m86, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose93_M[8])
-                _alive95 = _m86
-                _ik_log394_v0 = _ik_error_pose93_M[7] - _ik_error_pose93_M[5]
-                _ik_log394_v1 = _ik_error_pose93_M[2] - _ik_error_pose93_M[6]
-                _ik_log394_v2 = _ik_error_pose93_M[3] - _ik_error_pose93_M[1]
-                _ik_log394_c = (((_ik_error_pose93_M[0] + _ik_error_pose93_M[4]) + _ik_error_pose93_M[8]) - 1.0)*0.5
-                _ik_log394_s = np.sqrt((_ik_log394_v0*_ik_log394_v0 + _ik_log394_v1*_ik_log394_v1) + _ik_log394_v2*_ik_log394_v2)*0.5
-                _ik_log394_angle = np.arctan2(_ik_log394_s, _ik_log394_c)
-                _ik_log394_k = _fr(0.0)
-                _c96 = _ik_log394_angle < 0.0001
-                _m97 = _m86 & _c96
-                _ik_log394_k = np.where(_m97, 0.5 + (_ik_log394_angle*_ik_log394_angle)*0.08333333333333333, _ik_log394_k)
-                e[0 + 3] = np.where(_m97, _ik_log394_v0*_ik_log394_k, e[0 + 3])
-                e[1 + 3] = np.where(_m97, _ik_log394_v1*_ik_log394_k, e[1 + 3])
-                e[2 + 3] = np.where(_m97, _ik_log394_v2*_ik_log394_k, e[2 + 3])
-                _alive95 = _alive95 & (~_m97)
-                _c98 = 3.141592653589793 - _ik_log394_angle > 0.001
-                _m99 = _alive95 & _c98
-                _ik_log394_k = np.where(_m99, _ik_log394_angle/(_ik_log394_s + _ik_log394_s), _ik_log394_k)
-                e[0 + 3] = np.where(_m99, _ik_log394_v0*_ik_log394_k, e[0 + 3])
-                e[1 + 3] = np.where(_m99, _ik_log394_v1*_ik_log394_k, e[1 + 3])
-                e[2 + 3] = np.where(_m99, _ik_log394_v2*_ik_log394_k, e[2 + 3])
-                _alive95 = _alive95 & (~_m99)
+                _merge(_m88, _o[0], Tm, 0, _fr)
+                _merge(_m88, _o[1], J, 0, _fr)
+                _ik_error_pose95_M = [_fr(0.0)] * 9
+                e[0] = np.where(_m88, target[3] - Tm[3], e[0])
+                e[1] = np.where(_m88, target[7] - Tm[7], e[1])
+                e[2] = np.where(_m88, target[11] - Tm[11], e[2])
+                _ik_error_pose95_M[0] = np.where(_m88, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose95_M[0])
+                _ik_error_pose95_M[1] = np.where(_m88, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose95_M[1])
+                _ik_error_pose95_M[2] = np.where(_m88, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose95_M[2])
+                _ik_error_pose95_M[3] = np.where(_m88, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose95_M[3])
+                _ik_error_pose95_M[4] = np.where(_m88, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose95_M[4])
+                _ik_error_pose95_M[5] = np.where(_m88, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose95_M[5])
+                _ik_error_pose95_M[6] = np.where(_m88, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose95_M[6])
+                _ik_error_pose95_M[7] = np.where(_m88, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose95_M[7])
+                _ik_error_pose95_M[8] = np.where(_m88, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose95_M[8])
+                _alive97 = _m88
+                _ik_log396_v0 = _ik_error_pose95_M[7] - _ik_error_pose95_M[5]
+                _ik_log396_v1 = _ik_error_pose95_M[2] - _ik_error_pose95_M[6]
+                _ik_log396_v2 = _ik_error_pose95_M[3] - _ik_error_pose95_M[1]
+                _ik_log396_c = (((_ik_error_pose95_M[0] + _ik_error_pose95_M[4]) + _ik_error_pose95_M[8]) - 1.0)*0.5
+                _ik_log396_s = np.sqrt((_ik_log396_v0*_ik_log396_v0 + _ik_log396_v1*_ik_log396_v1) + _ik_log396_v2*_ik_log396_v2)*0.5
+                _ik_log396_angle = np.arctan2(_ik_log396_s, _ik_log396_c)
+                _ik_log396_k = _fr(0.0)
+                _c98 = _ik_log396_angle < 0.0001
+                _m99 = _m88 & _c98
+                _ik_log396_k = np.where(_m99, 0.5 + (_ik_log396_angle*_ik_log396_angle)*0.08333333333333333, _ik_log396_k)
+                e[0 + 3] = np.where(_m99, _ik_log396_v0*_ik_log396_k, e[0 + 3])
+                e[1 + 3] = np.where(_m99, _ik_log396_v1*_ik_log396_k, e[1 + 3])
+                e[2 + 3] = np.where(_m99, _ik_log396_v2*_ik_log396_k, e[2 + 3])
+                _alive97 = _alive97 & (~_m99)
+                _c100 = 3.141592653589793 - _ik_log396_angle > 0.001
+                _m101 = _alive97 & _c100
+                _ik_log396_k = np.where(_m101, _ik_log396_angle/(_ik_log396_s + _ik_log396_s), _ik_log396_k)
+                e[0 + 3] = np.where(_m101, _ik_log396_v0*_ik_log396_k, e[0 + 3])
+                e[1 + 3] = np.where(_m101, _ik_log396_v1*_ik_log396_k, e[1 + 3])
+                e[2 + 3] = np.where(_m101, _ik_log396_v2*_ik_log396_k, e[2 + 3])
+                _alive97 = _alive97 & (~_m101)
                 # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-                _ik_log394_col = [_fr(0.0)] * 3
-                _ik_log394_i = np.where(_ik_error_pose93_M[0] >= _ik_error_pose93_M[4], np.where(_ik_error_pose93_M[0] >= _ik_error_pose93_M[8], _fi(0), 2), np.where(_ik_error_pose93_M[4] >= _ik_error_pose93_M[8], _fi(1), 2))
-                _i100 = 3*_ik_log394_i
-                _ik_log394_col[0] = np.where(_alive95, (np.where(_ik_log394_i == 0, _ik_error_pose93_M[0], np.where(_ik_log394_i == 1, _ik_error_pose93_M[1], np.where(_ik_log394_i == 2, _ik_error_pose93_M[2], np.where(_ik_log394_i == 3, _ik_error_pose93_M[3], np.where(_ik_log394_i == 4, _ik_error_pose93_M[4], np.where(_ik_log394_i == 5, _ik_error_pose93_M[5], np.where(_ik_log394_i == 6, _ik_error_pose93_M[6], np.where(_ik_log394_i == 7, _ik_error_pose93_M[7], _ik_error_pose93_M[8])))))))) + np.where(_i100 == 0, _ik_error_pose93_M[0], np.where(_i100 == 3, _ik_error_pose93_M[3], _ik_error_pose93_M[6])))*0.5, _ik_log394_col[0])
-                _i101 = 3 + _ik_log394_i
-                _i102 = 3*_ik_log394_i + 1
-                _ik_log394_col[1] = np.where(_alive95, (np.where(_i101 == 0, _ik_error_pose93_M[0], np.where(_i101 == 1, _ik_error_pose93_M[1], np.where(_i101 == 2, _ik_error_pose93_M[2], np.where(_i101 == 3, _ik_error_pose93_M[3], np.where(_i101 == 4, _ik_error_pose93_M[4], np.where(_i101 == 5, _ik_error_pose93_M[5], np.where(_i101 == 6, _ik_error_pose93_M[6], np.where(_i101 == 7, _ik_error_pose93_M[7], _ik_error_pose93_M[8])))))))) + np.where(_i102 == 1, _ik_error_pose93_M[1], np.where(_i102 == 4, _ik_error_pose93_M[4], _ik_error_pose93_M[7])))*0.5, _ik_log394_col[1])
-                _i103 = 6 + _ik_log394_i
-                _i104 = 3*_ik_log394_i + 2
-                _ik_log394_col[2] = np.where(_alive95, (np.where(_i103 == 0, _ik_error_pose93_M[0], np.where(_i103 == 1, _ik_error_pose93_M[1], np.where(_i103 == 2, _ik_error_pose93_M[2], np.where(_i103 == 3, _ik_error_pose93_M[3], np.where(_i103 == 4, _ik_error_pose93_M[4], np.where(_i103 == 5, _ik_error_pose93_M[5], np.where(_i103 == 6, _ik_error_pose93_M[6], np.where(_i103 == 7, _ik_error_pose93_M[7], _ik_error_pose93_M[8])))))))) + np.where(_i104 == 2, _ik_error_pose93_M[2], np.where(_i104 == 5, _ik_error_pose93_M[5], _ik_error_pose93_M[8])))*0.5, _ik_log394_col[2])
-                _v105 = np.where(_ik_log394_i == 0, _ik_log394_col[0], np.where(_ik_log394_i == 1, _ik_log394_col[1], _ik_log394_col[2])) - _ik_log394_c
-                _m106 = _alive95 & (_ik_log394_i == 0)
-                _ik_log394_col[0] = np.where(_m106, _v105, _ik_log394_col[0])
-                _m107 = _alive95 & (_ik_log394_i == 1)
-                _ik_log394_col[1] = np.where(_m107, _v105, _ik_log394_col[1])
-                _m108 = _alive95 & (_ik_log394_i == 2)
-                _ik_log394_col[2] = np.where(_m108, _v105, _ik_log394_col[2])
-                _ik_log394_norm = np.sqrt((_ik_log394_col[0]*_ik_log394_col[0] + _ik_log394_col[1]*_ik_log394_col[1]) + _ik_log394_col[2]*_ik_log394_col[2])
-                _ik_log394_k = np.where(_alive95, np.where((_ik_log394_col[0]*_ik_log394_v0 + _ik_log394_col[1]*_ik_log394_v1) + _ik_log394_col[2]*_ik_log394_v2 < 0.0, -_ik_log394_angle, _ik_log394_angle)/_ik_log394_norm, _ik_log394_k)
-                e[0 + 3] = np.where(_alive95, _ik_log394_col[0]*_ik_log394_k, e[0 + 3])
-                e[1 + 3] = np.where(_alive95, _ik_log394_col[1]*_ik_log394_k, e[1 + 3])
-                e[2 + 3] = np.where(_alive95, _ik_log394_col[2]*_ik_log394_k, e[2 + 3])
-                _ik_error_pose93_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-                _ik_error_pose93_rotation = np.sqrt(_ik_error_pose93_rotation_squares)
-                _c109 = ~np.isfinite(_ik_error_pose93_rotation_squares)
-                _m110 = _m86 & _c109
-                _ik_error_pose93_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-                _ik_error_pose93_rotation = np.where(_m110, _ik_error_pose93_rotation_top*np.sqrt((e[3]/_ik_error_pose93_rotation_top)*(e[3]/_ik_error_pose93_rotation_top) + (e[4]/_ik_error_pose93_rotation_top)*(e[4]/_ik_error_pose93_rotation_top) + (e[5]/_ik_error_pose93_rotation_top)*(e[5]/_ik_error_pose93_rotation_top)), _ik_error_pose93_rotation)
-                norms[1] = np.where(_m86, _ik_error_pose93_rotation, norms[1])
-                _ik_error_pose93_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_pose93_position = np.sqrt(_ik_error_pose93_position_squares)
-                _c111 = ~np.isfinite(_ik_error_pose93_position_squares)
-                _m112 = _m86 & _c111
-                _ik_error_pose93_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_pose93_position = np.where(_m112, _ik_error_pose93_position_top*np.sqrt((e[0]/_ik_error_pose93_position_top)*(e[0]/_ik_error_pose93_position_top) + (e[1]/_ik_error_pose93_position_top)*(e[1]/_ik_error_pose93_position_top) + (e[2]/_ik_error_pose93_position_top)*(e[2]/_ik_error_pose93_position_top)), _ik_error_pose93_position)
-                norms[0] = np.where(_m86, _ik_error_pose93_position, norms[0])
-                _ik_error_pose93_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_pose93_whole = np.sqrt(_ik_error_pose93_whole_squares)
-                _c113 = ~np.isfinite(_ik_error_pose93_whole_squares)
-                _m114 = _m86 & _c113
-                _ik_error_pose93_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_pose93_whole = np.where(_m114, _ik_error_pose93_whole_top*np.sqrt((norms[0]/_ik_error_pose93_whole_top)*(norms[0]/_ik_error_pose93_whole_top) + (norms[1]/_ik_error_pose93_whole_top)*(norms[1]/_ik_error_pose93_whole_top)), _ik_error_pose93_whole)
-                norms[2] = np.where(_m86, _ik_error_pose93_whole, norms[2])
-                pe = np.where(_m86, norms[0], pe)
-                re = np.where(_m86, norms[1], re)
-                en = np.where(_m86, norms[2], en)
-                c = np.where(_m86, 0.01, c)
-                attempt = np.where(_m86, 0, attempt)
-                checkpoint = np.where(_m86, en, checkpoint)
-                window_start = np.where(_m86, en, window_start)
-                _c115 = en < best_en
-                _m116 = _m86 & _c115
-                best_en = np.where(_m116, en, best_en)
-                best_pe = np.where(_m116, pe, best_pe)
-                best_re = np.where(_m116, re, best_re)
-                best_stalled = np.where(_m116, 0, best_stalled)
-                best_here = np.where(_m116, 1, best_here)
+                _ik_log396_col = [_fr(0.0)] * 3
+                _ik_log396_i = np.where(_ik_error_pose95_M[0] >= _ik_error_pose95_M[4], np.where(_ik_error_pose95_M[0] >= _ik_error_pose95_M[8], _fi(0), 2), np.where(_ik_error_pose95_M[4] >= _ik_error_pose95_M[8], _fi(1), 2))
+                _i102 = 3*_ik_log396_i
+                _ik_log396_col[0] = np.where(_alive97, (np.where(_ik_log396_i == 0, _ik_error_pose95_M[0], np.where(_ik_log396_i == 1, _ik_error_pose95_M[1], np.where(_ik_log396_i == 2, _ik_error_pose95_M[2], np.where(_ik_log396_i == 3, _ik_error_pose95_M[3], np.where(_ik_log396_i == 4, _ik_error_pose95_M[4], np.where(_ik_log396_i == 5, _ik_error_pose95_M[5], np.where(_ik_log396_i == 6, _ik_error_pose95_M[6], np.where(_ik_log396_i == 7, _ik_error_pose95_M[7], _ik_error_pose95_M[8])))))))) + np.where(_i102 == 0, _ik_error_pose95_M[0], np.where(_i102 == 3, _ik_error_pose95_M[3], _ik_error_pose95_M[6])))*0.5, _ik_log396_col[0])
+                _i103 = 3 + _ik_log396_i
+                _i104 = 3*_ik_log396_i + 1
+                _ik_log396_col[1] = np.where(_alive97, (np.where(_i103 == 0, _ik_error_pose95_M[0], np.where(_i103 == 1, _ik_error_pose95_M[1], np.where(_i103 == 2, _ik_error_pose95_M[2], np.where(_i103 == 3, _ik_error_pose95_M[3], np.where(_i103 == 4, _ik_error_pose95_M[4], np.where(_i103 == 5, _ik_error_pose95_M[5], np.where(_i103 == 6, _ik_error_pose95_M[6], np.where(_i103 == 7, _ik_error_pose95_M[7], _ik_error_pose95_M[8])))))))) + np.where(_i104 == 1, _ik_error_pose95_M[1], np.where(_i104 == 4, _ik_error_pose95_M[4], _ik_error_pose95_M[7])))*0.5, _ik_log396_col[1])
+                _i105 = 6 + _ik_log396_i
+                _i106 = 3*_ik_log396_i + 2
+                _ik_log396_col[2] = np.where(_alive97, (np.where(_i105 == 0, _ik_error_pose95_M[0], np.where(_i105 == 1, _ik_error_pose95_M[1], np.where(_i105 == 2, _ik_error_pose95_M[2], np.where(_i105 == 3, _ik_error_pose95_M[3], np.where(_i105 == 4, _ik_error_pose95_M[4], np.where(_i105 == 5, _ik_error_pose95_M[5], np.where(_i105 == 6, _ik_error_pose95_M[6], np.where(_i105 == 7, _ik_error_pose95_M[7], _ik_error_pose95_M[8])))))))) + np.where(_i106 == 2, _ik_error_pose95_M[2], np.where(_i106 == 5, _ik_error_pose95_M[5], _ik_error_pose95_M[8])))*0.5, _ik_log396_col[2])
+                _v107 = np.where(_ik_log396_i == 0, _ik_log396_col[0], np.where(_ik_log396_i == 1, _ik_log396_col[1], _ik_log396_col[2])) - _ik_log396_c
+                _m108 = _alive97 & (_ik_log396_i == 0)
+                _ik_log396_col[0] = np.where(_m108, _v107, _ik_log396_col[0])
+                _m109 = _alive97 & (_ik_log396_i == 1)
+                _ik_log396_col[1] = np.where(_m109, _v107, _ik_log396_col[1])
+                _m110 = _alive97 & (_ik_log396_i == 2)
+                _ik_log396_col[2] = np.where(_m110, _v107, _ik_log396_col[2])
+                _ik_log396_norm = np.sqrt((_ik_log396_col[0]*_ik_log396_col[0] + _ik_log396_col[1]*_ik_log396_col[1]) + _ik_log396_col[2]*_ik_log396_col[2])
+                _ik_log396_k = np.where(_alive97, np.where((_ik_log396_col[0]*_ik_log396_v0 + _ik_log396_col[1]*_ik_log396_v1) + _ik_log396_col[2]*_ik_log396_v2 < 0.0, -_ik_log396_angle, _ik_log396_angle)/_ik_log396_norm, _ik_log396_k)
+                e[0 + 3] = np.where(_alive97, _ik_log396_col[0]*_ik_log396_k, e[0 + 3])
+                e[1 + 3] = np.where(_alive97, _ik_log396_col[1]*_ik_log396_k, e[1 + 3])
+                e[2 + 3] = np.where(_alive97, _ik_log396_col[2]*_ik_log396_k, e[2 + 3])
+                _ik_error_pose95_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+                _ik_error_pose95_rotation = np.sqrt(_ik_error_pose95_rotation_squares)
+                _c111 = ~np.isfinite(_ik_error_pose95_rotation_squares)
+                _m112 = _m88 & _c111
+                _ik_error_pose95_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+                _ik_error_pose95_rotation = np.where(_m112, _ik_error_pose95_rotation_top*np.sqrt((e[3]/_ik_error_pose95_rotation_top)*(e[3]/_ik_error_pose95_rotation_top) + (e[4]/_ik_error_pose95_rotation_top)*(e[4]/_ik_error_pose95_rotation_top) + (e[5]/_ik_error_pose95_rotation_top)*(e[5]/_ik_error_pose95_rotation_top)), _ik_error_pose95_rotation)
+                norms[1] = np.where(_m88, _ik_error_pose95_rotation, norms[1])
+                _ik_error_pose95_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_pose95_position = np.sqrt(_ik_error_pose95_position_squares)
+                _c113 = ~np.isfinite(_ik_error_pose95_position_squares)
+                _m114 = _m88 & _c113
+                _ik_error_pose95_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_pose95_position = np.where(_m114, _ik_error_pose95_position_top*np.sqrt((e[0]/_ik_error_pose95_position_top)*(e[0]/_ik_error_pose95_position_top) + (e[1]/_ik_error_pose95_position_top)*(e[1]/_ik_error_pose95_position_top) + (e[2]/_ik_error_pose95_position_top)*(e[2]/_ik_error_pose95_position_top)), _ik_error_pose95_position)
+                norms[0] = np.where(_m88, _ik_error_pose95_position, norms[0])
+                _ik_error_pose95_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_pose95_whole = np.sqrt(_ik_error_pose95_whole_squares)
+                _c115 = ~np.isfinite(_ik_error_pose95_whole_squares)
+                _m116 = _m88 & _c115
+                _ik_error_pose95_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_pose95_whole = np.where(_m116, _ik_error_pose95_whole_top*np.sqrt((norms[0]/_ik_error_pose95_whole_top)*(norms[0]/_ik_error_pose95_whole_top) + (norms[1]/_ik_error_pose95_whole_top)*(norms[1]/_ik_error_pose95_whole_top)), _ik_error_pose95_whole)
+                norms[2] = np.where(_m88, _ik_error_pose95_whole, norms[2])
+                pe = np.where(_m88, norms[0], pe)
+                re = np.where(_m88, norms[1], re)
+                en = np.where(_m88, norms[2], en)
+                c = np.where(_m88, 0.01, c)
+                attempt = np.where(_m88, 0, attempt)
+                checkpoint = np.where(_m88, en, checkpoint)
+                window_start = np.where(_m88, en, window_start)
+                _c117 = en < best_en
+                _m118 = _m88 & _c117
+                best_en = np.where(_m118, en, best_en)
+                best_pe = np.where(_m118, pe, best_pe)
+                best_re = np.where(_m118, re, best_re)
+                best_stalled = np.where(_m118, 0, best_stalled)
+                best_here = np.where(_m118, 1, best_here)
                 for k in range(0, 7):
-                    best_q[k] = np.where(_m116, q[k], best_q[k])
+                    best_q[k] = np.where(_m118, q[k], best_q[k])
     for k in range(0, 7):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])
@@ -5680,7 +5702,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (7,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
     names = np.array(["converged", "stalled", "max_iter", "invalid"])
     return IKResult(_assembled(q, batch, (7,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([error[1]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 

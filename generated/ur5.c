@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x39fde14fUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3b8719cdUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -5862,6 +5862,16 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
             return UR5_IK_INVALID;
         }
     }
+    const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
+    const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
+    const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
+    const double m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9];
+    const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
+    const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
+    const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
+    if (!UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01) > UR5_IK_ORTHO_TOL || fabs(m02) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+        return UR5_IK_INVALID;
+    }
     for (int k = 0; k < 6; ++k) {
         q[k] = (q[k] < lo[k] ? lo[k] : (q[k] > hi[k] ? hi[k] : q[k]));
     }
@@ -6458,7 +6468,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     const double m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10];
     const double m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10];
     const double det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8]);
-    if (!UR5_FINITE(target[3]) || !UR5_FINITE(target[7]) || !UR5_FINITE(target[11]) || fabs(target[3]) > UR5_IK_TRANSLATION_MAX || fabs(target[7]) > UR5_IK_TRANSLATION_MAX || fabs(target[11]) > UR5_IK_TRANSLATION_MAX || !UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m02 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12 - 0.0) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
+    if (!UR5_FINITE(target[3]) || !UR5_FINITE(target[7]) || !UR5_FINITE(target[11]) || fabs(target[3]) > UR5_IK_TRANSLATION_MAX || fabs(target[7]) > UR5_IK_TRANSLATION_MAX || fabs(target[11]) > UR5_IK_TRANSLATION_MAX || !UR5_FINITE((m00 + m11) + m22) || fabs(m00 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m01) > UR5_IK_ORTHO_TOL || fabs(m02) > UR5_IK_ORTHO_TOL || fabs(m11 - 1.0) > UR5_IK_ORTHO_TOL || fabs(m12) > UR5_IK_ORTHO_TOL || fabs(m22 - 1.0) > UR5_IK_ORTHO_TOL || !(det > 0.0)) {
         count[0] = 0;
         /* rows past count: NaN, flags -1 */
         for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x39fde14fUL
+#define UR5_STAMP 0x3b8719cdUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -78,7 +78,7 @@ extern "C" {
 /* bit of an ik_all flag: a singular row (one member of a continuum, or a double root) */
 #define UR5_IK_FLAG_SINGULAR 2
 
-/* ik_all refuses a target whose |R^T R - I| exceeds this anywhere */
+/* ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0) */
 #define UR5_IK_ORTHO_TOL 1e-06
 
 /* ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it */
@@ -237,7 +237,7 @@ void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define UR5_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
+#define UR5_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed) */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
 #define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit IK_FLAG_LEAST_SQUARES set), possibly none */
 #define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */
@@ -263,7 +263,7 @@ int ur5_ik_solve(const double q0[6], const double target[16], double lambda, dou
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of ur5_ik_solve: the same result bit for bit. Stack: about 3320 bytes. */
+ * Each problem is one call of ur5_ik_solve: the same result bit for bit. Stack: about 3376 bytes. */
 void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* position IK of the tool origin.

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x39fde14f
+STAMP = 0x3b8719cd
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -49,7 +49,7 @@ IK_FLAG_LEAST_SQUARES = 1
 IK_FLAG_SINGULAR = 2
 """bit of an ik_all flag: a singular row (one member of a continuum, or a double root)"""
 IK_ORTHO_TOL = 1e-06
-"""ik_all refuses a target whose |R^T R - I| exceeds this anywhere"""
+"""ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
 IK_TRANSLATION_MAX = 1e+150
 """ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"""
 IK_LIMIT_TOL = 1e-12
@@ -71,7 +71,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)"""
+"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed)"""
 IK_OK = 0
 """at least one exact solution within the joint limits: all of them are returned"""
 IK_UNREACHABLE = 1
@@ -4614,6 +4614,15 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     for k in range(0, 16):
         if not np.isfinite(target[k]):
             return IK_INVALID
+    m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    if not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01) > IK_ORTHO_TOL or np.abs(m02) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
+        return IK_INVALID
     for k in range(0, 6):
         q[k] = lo[k] if q[k] < lo[k] else hi[k] if q[k] > hi[k] else q[k]
     _ik_terms_core(q, Tm, J)
@@ -4861,7 +4870,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     iterations = np.zeros(1, dtype=np.int64)
     status = _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations)
     if status == 3:
-        raise ValueError("ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+        raise ValueError("ik_solve: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
@@ -4962,90 +4971,101 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _status1 = np.where(_m10, IK_INVALID, _status1)
         _alive2 = _alive2 & (~_m10)
         _run8 = _run8 & (~_m10)
+    m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c11 = (~np.isfinite((m00 + m11) + m22)) | (np.abs(m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(m01) > IK_ORTHO_TOL) | (np.abs(m02) > IK_ORTHO_TOL) | (np.abs(m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(m12) > IK_ORTHO_TOL) | (np.abs(m22 - 1.0) > IK_ORTHO_TOL) | (~(det > 0.0))
+    _m12 = _alive2 & _c11
+    _status1 = np.where(_m12, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m12)
     for k in range(0, 6):
         q[k] = np.where(_alive2, np.where(q[k] < lo[k], lo[k], np.where(q[k] > hi[k], hi[k], q[k])), q[k])
     _o = _ik_terms_on_lanes(_c, q[0:6])
     _merge(_alive2, _o[0], Tm, 0, _fr)
     _merge(_alive2, _o[1], J, 0, _fr)
-    _ik_error_pose11_M = [_fr(0.0)] * 9
+    _ik_error_pose13_M = [_fr(0.0)] * 9
     e[0] = np.where(_alive2, target[3] - Tm[3], e[0])
     e[1] = np.where(_alive2, target[7] - Tm[7], e[1])
     e[2] = np.where(_alive2, target[11] - Tm[11], e[2])
-    _ik_error_pose11_M[0] = np.where(_alive2, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose11_M[0])
-    _ik_error_pose11_M[1] = np.where(_alive2, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose11_M[1])
-    _ik_error_pose11_M[2] = np.where(_alive2, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose11_M[2])
-    _ik_error_pose11_M[3] = np.where(_alive2, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose11_M[3])
-    _ik_error_pose11_M[4] = np.where(_alive2, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose11_M[4])
-    _ik_error_pose11_M[5] = np.where(_alive2, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose11_M[5])
-    _ik_error_pose11_M[6] = np.where(_alive2, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose11_M[6])
-    _ik_error_pose11_M[7] = np.where(_alive2, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose11_M[7])
-    _ik_error_pose11_M[8] = np.where(_alive2, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose11_M[8])
-    _alive13 = _alive2
-    _ik_log312_v0 = _ik_error_pose11_M[7] - _ik_error_pose11_M[5]
-    _ik_log312_v1 = _ik_error_pose11_M[2] - _ik_error_pose11_M[6]
-    _ik_log312_v2 = _ik_error_pose11_M[3] - _ik_error_pose11_M[1]
-    _ik_log312_c = (((_ik_error_pose11_M[0] + _ik_error_pose11_M[4]) + _ik_error_pose11_M[8]) - 1.0)*0.5
-    _ik_log312_s = np.sqrt((_ik_log312_v0*_ik_log312_v0 + _ik_log312_v1*_ik_log312_v1) + _ik_log312_v2*_ik_log312_v2)*0.5
-    _ik_log312_angle = np.arctan2(_ik_log312_s, _ik_log312_c)
-    _ik_log312_k = _fr(0.0)
-    _c14 = _ik_log312_angle < 0.0001
-    _m15 = _alive2 & _c14
-    _ik_log312_k = np.where(_m15, 0.5 + (_ik_log312_angle*_ik_log312_angle)*0.08333333333333333, _ik_log312_k)
-    e[0 + 3] = np.where(_m15, _ik_log312_v0*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_m15, _ik_log312_v1*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_m15, _ik_log312_v2*_ik_log312_k, e[2 + 3])
-    _alive13 = _alive13 & (~_m15)
-    _c16 = 3.141592653589793 - _ik_log312_angle > 0.001
-    _m17 = _alive13 & _c16
-    _ik_log312_k = np.where(_m17, _ik_log312_angle/(_ik_log312_s + _ik_log312_s), _ik_log312_k)
-    e[0 + 3] = np.where(_m17, _ik_log312_v0*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_m17, _ik_log312_v1*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_m17, _ik_log312_v2*_ik_log312_k, e[2 + 3])
-    _alive13 = _alive13 & (~_m17)
+    _ik_error_pose13_M[0] = np.where(_alive2, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose13_M[0])
+    _ik_error_pose13_M[1] = np.where(_alive2, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose13_M[1])
+    _ik_error_pose13_M[2] = np.where(_alive2, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose13_M[2])
+    _ik_error_pose13_M[3] = np.where(_alive2, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose13_M[3])
+    _ik_error_pose13_M[4] = np.where(_alive2, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose13_M[4])
+    _ik_error_pose13_M[5] = np.where(_alive2, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose13_M[5])
+    _ik_error_pose13_M[6] = np.where(_alive2, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose13_M[6])
+    _ik_error_pose13_M[7] = np.where(_alive2, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose13_M[7])
+    _ik_error_pose13_M[8] = np.where(_alive2, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose13_M[8])
+    _alive15 = _alive2
+    _ik_log314_v0 = _ik_error_pose13_M[7] - _ik_error_pose13_M[5]
+    _ik_log314_v1 = _ik_error_pose13_M[2] - _ik_error_pose13_M[6]
+    _ik_log314_v2 = _ik_error_pose13_M[3] - _ik_error_pose13_M[1]
+    _ik_log314_c = (((_ik_error_pose13_M[0] + _ik_error_pose13_M[4]) + _ik_error_pose13_M[8]) - 1.0)*0.5
+    _ik_log314_s = np.sqrt((_ik_log314_v0*_ik_log314_v0 + _ik_log314_v1*_ik_log314_v1) + _ik_log314_v2*_ik_log314_v2)*0.5
+    _ik_log314_angle = np.arctan2(_ik_log314_s, _ik_log314_c)
+    _ik_log314_k = _fr(0.0)
+    _c16 = _ik_log314_angle < 0.0001
+    _m17 = _alive2 & _c16
+    _ik_log314_k = np.where(_m17, 0.5 + (_ik_log314_angle*_ik_log314_angle)*0.08333333333333333, _ik_log314_k)
+    e[0 + 3] = np.where(_m17, _ik_log314_v0*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_m17, _ik_log314_v1*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_m17, _ik_log314_v2*_ik_log314_k, e[2 + 3])
+    _alive15 = _alive15 & (~_m17)
+    _c18 = 3.141592653589793 - _ik_log314_angle > 0.001
+    _m19 = _alive15 & _c18
+    _ik_log314_k = np.where(_m19, _ik_log314_angle/(_ik_log314_s + _ik_log314_s), _ik_log314_k)
+    e[0 + 3] = np.where(_m19, _ik_log314_v0*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_m19, _ik_log314_v1*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_m19, _ik_log314_v2*_ik_log314_k, e[2 + 3])
+    _alive15 = _alive15 & (~_m19)
     # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-    _ik_log312_col = [_fr(0.0)] * 3
-    _ik_log312_i = np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[4], np.where(_ik_error_pose11_M[0] >= _ik_error_pose11_M[8], _fi(0), 2), np.where(_ik_error_pose11_M[4] >= _ik_error_pose11_M[8], _fi(1), 2))
-    _i18 = 3*_ik_log312_i
-    _ik_log312_col[0] = np.where(_alive13, (np.where(_ik_log312_i == 0, _ik_error_pose11_M[0], np.where(_ik_log312_i == 1, _ik_error_pose11_M[1], np.where(_ik_log312_i == 2, _ik_error_pose11_M[2], np.where(_ik_log312_i == 3, _ik_error_pose11_M[3], np.where(_ik_log312_i == 4, _ik_error_pose11_M[4], np.where(_ik_log312_i == 5, _ik_error_pose11_M[5], np.where(_ik_log312_i == 6, _ik_error_pose11_M[6], np.where(_ik_log312_i == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i18 == 0, _ik_error_pose11_M[0], np.where(_i18 == 3, _ik_error_pose11_M[3], _ik_error_pose11_M[6])))*0.5, _ik_log312_col[0])
-    _i19 = 3 + _ik_log312_i
-    _i20 = 3*_ik_log312_i + 1
-    _ik_log312_col[1] = np.where(_alive13, (np.where(_i19 == 0, _ik_error_pose11_M[0], np.where(_i19 == 1, _ik_error_pose11_M[1], np.where(_i19 == 2, _ik_error_pose11_M[2], np.where(_i19 == 3, _ik_error_pose11_M[3], np.where(_i19 == 4, _ik_error_pose11_M[4], np.where(_i19 == 5, _ik_error_pose11_M[5], np.where(_i19 == 6, _ik_error_pose11_M[6], np.where(_i19 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i20 == 1, _ik_error_pose11_M[1], np.where(_i20 == 4, _ik_error_pose11_M[4], _ik_error_pose11_M[7])))*0.5, _ik_log312_col[1])
-    _i21 = 6 + _ik_log312_i
-    _i22 = 3*_ik_log312_i + 2
-    _ik_log312_col[2] = np.where(_alive13, (np.where(_i21 == 0, _ik_error_pose11_M[0], np.where(_i21 == 1, _ik_error_pose11_M[1], np.where(_i21 == 2, _ik_error_pose11_M[2], np.where(_i21 == 3, _ik_error_pose11_M[3], np.where(_i21 == 4, _ik_error_pose11_M[4], np.where(_i21 == 5, _ik_error_pose11_M[5], np.where(_i21 == 6, _ik_error_pose11_M[6], np.where(_i21 == 7, _ik_error_pose11_M[7], _ik_error_pose11_M[8])))))))) + np.where(_i22 == 2, _ik_error_pose11_M[2], np.where(_i22 == 5, _ik_error_pose11_M[5], _ik_error_pose11_M[8])))*0.5, _ik_log312_col[2])
-    _v23 = np.where(_ik_log312_i == 0, _ik_log312_col[0], np.where(_ik_log312_i == 1, _ik_log312_col[1], _ik_log312_col[2])) - _ik_log312_c
-    _m24 = _alive13 & (_ik_log312_i == 0)
-    _ik_log312_col[0] = np.where(_m24, _v23, _ik_log312_col[0])
-    _m25 = _alive13 & (_ik_log312_i == 1)
-    _ik_log312_col[1] = np.where(_m25, _v23, _ik_log312_col[1])
-    _m26 = _alive13 & (_ik_log312_i == 2)
-    _ik_log312_col[2] = np.where(_m26, _v23, _ik_log312_col[2])
-    _ik_log312_norm = np.sqrt((_ik_log312_col[0]*_ik_log312_col[0] + _ik_log312_col[1]*_ik_log312_col[1]) + _ik_log312_col[2]*_ik_log312_col[2])
-    _ik_log312_k = np.where(_alive13, np.where((_ik_log312_col[0]*_ik_log312_v0 + _ik_log312_col[1]*_ik_log312_v1) + _ik_log312_col[2]*_ik_log312_v2 < 0.0, -_ik_log312_angle, _ik_log312_angle)/_ik_log312_norm, _ik_log312_k)
-    e[0 + 3] = np.where(_alive13, _ik_log312_col[0]*_ik_log312_k, e[0 + 3])
-    e[1 + 3] = np.where(_alive13, _ik_log312_col[1]*_ik_log312_k, e[1 + 3])
-    e[2 + 3] = np.where(_alive13, _ik_log312_col[2]*_ik_log312_k, e[2 + 3])
-    _ik_error_pose11_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-    _ik_error_pose11_rotation = np.sqrt(_ik_error_pose11_rotation_squares)
-    _c27 = ~np.isfinite(_ik_error_pose11_rotation_squares)
-    _m28 = _alive2 & _c27
-    _ik_error_pose11_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-    _ik_error_pose11_rotation = np.where(_m28, _ik_error_pose11_rotation_top*np.sqrt((e[3]/_ik_error_pose11_rotation_top)*(e[3]/_ik_error_pose11_rotation_top) + (e[4]/_ik_error_pose11_rotation_top)*(e[4]/_ik_error_pose11_rotation_top) + (e[5]/_ik_error_pose11_rotation_top)*(e[5]/_ik_error_pose11_rotation_top)), _ik_error_pose11_rotation)
-    norms[1] = np.where(_alive2, _ik_error_pose11_rotation, norms[1])
-    _ik_error_pose11_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-    _ik_error_pose11_position = np.sqrt(_ik_error_pose11_position_squares)
-    _c29 = ~np.isfinite(_ik_error_pose11_position_squares)
+    _ik_log314_col = [_fr(0.0)] * 3
+    _ik_log314_i = np.where(_ik_error_pose13_M[0] >= _ik_error_pose13_M[4], np.where(_ik_error_pose13_M[0] >= _ik_error_pose13_M[8], _fi(0), 2), np.where(_ik_error_pose13_M[4] >= _ik_error_pose13_M[8], _fi(1), 2))
+    _i20 = 3*_ik_log314_i
+    _ik_log314_col[0] = np.where(_alive15, (np.where(_ik_log314_i == 0, _ik_error_pose13_M[0], np.where(_ik_log314_i == 1, _ik_error_pose13_M[1], np.where(_ik_log314_i == 2, _ik_error_pose13_M[2], np.where(_ik_log314_i == 3, _ik_error_pose13_M[3], np.where(_ik_log314_i == 4, _ik_error_pose13_M[4], np.where(_ik_log314_i == 5, _ik_error_pose13_M[5], np.where(_ik_log314_i == 6, _ik_error_pose13_M[6], np.where(_ik_log314_i == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i20 == 0, _ik_error_pose13_M[0], np.where(_i20 == 3, _ik_error_pose13_M[3], _ik_error_pose13_M[6])))*0.5, _ik_log314_col[0])
+    _i21 = 3 + _ik_log314_i
+    _i22 = 3*_ik_log314_i + 1
+    _ik_log314_col[1] = np.where(_alive15, (np.where(_i21 == 0, _ik_error_pose13_M[0], np.where(_i21 == 1, _ik_error_pose13_M[1], np.where(_i21 == 2, _ik_error_pose13_M[2], np.where(_i21 == 3, _ik_error_pose13_M[3], np.where(_i21 == 4, _ik_error_pose13_M[4], np.where(_i21 == 5, _ik_error_pose13_M[5], np.where(_i21 == 6, _ik_error_pose13_M[6], np.where(_i21 == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i22 == 1, _ik_error_pose13_M[1], np.where(_i22 == 4, _ik_error_pose13_M[4], _ik_error_pose13_M[7])))*0.5, _ik_log314_col[1])
+    _i23 = 6 + _ik_log314_i
+    _i24 = 3*_ik_log314_i + 2
+    _ik_log314_col[2] = np.where(_alive15, (np.where(_i23 == 0, _ik_error_pose13_M[0], np.where(_i23 == 1, _ik_error_pose13_M[1], np.where(_i23 == 2, _ik_error_pose13_M[2], np.where(_i23 == 3, _ik_error_pose13_M[3], np.where(_i23 == 4, _ik_error_pose13_M[4], np.where(_i23 == 5, _ik_error_pose13_M[5], np.where(_i23 == 6, _ik_error_pose13_M[6], np.where(_i23 == 7, _ik_error_pose13_M[7], _ik_error_pose13_M[8])))))))) + np.where(_i24 == 2, _ik_error_pose13_M[2], np.where(_i24 == 5, _ik_error_pose13_M[5], _ik_error_pose13_M[8])))*0.5, _ik_log314_col[2])
+    _v25 = np.where(_ik_log314_i == 0, _ik_log314_col[0], np.where(_ik_log314_i == 1, _ik_log314_col[1], _ik_log314_col[2])) - _ik_log314_c
+    _m26 = _alive15 & (_ik_log314_i == 0)
+    _ik_log314_col[0] = np.where(_m26, _v25, _ik_log314_col[0])
+    _m27 = _alive15 & (_ik_log314_i == 1)
+    _ik_log314_col[1] = np.where(_m27, _v25, _ik_log314_col[1])
+    _m28 = _alive15 & (_ik_log314_i == 2)
+    _ik_log314_col[2] = np.where(_m28, _v25, _ik_log314_col[2])
+    _ik_log314_norm = np.sqrt((_ik_log314_col[0]*_ik_log314_col[0] + _ik_log314_col[1]*_ik_log314_col[1]) + _ik_log314_col[2]*_ik_log314_col[2])
+    _ik_log314_k = np.where(_alive15, np.where((_ik_log314_col[0]*_ik_log314_v0 + _ik_log314_col[1]*_ik_log314_v1) + _ik_log314_col[2]*_ik_log314_v2 < 0.0, -_ik_log314_angle, _ik_log314_angle)/_ik_log314_norm, _ik_log314_k)
+    e[0 + 3] = np.where(_alive15, _ik_log314_col[0]*_ik_log314_k, e[0 + 3])
+    e[1 + 3] = np.where(_alive15, _ik_log314_col[1]*_ik_log314_k, e[1 + 3])
+    e[2 + 3] = np.where(_alive15, _ik_log314_col[2]*_ik_log314_k, e[2 + 3])
+    _ik_error_pose13_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+    _ik_error_pose13_rotation = np.sqrt(_ik_error_pose13_rotation_squares)
+    _c29 = ~np.isfinite(_ik_error_pose13_rotation_squares)
     _m30 = _alive2 & _c29
-    _ik_error_pose11_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-    _ik_error_pose11_position = np.where(_m30, _ik_error_pose11_position_top*np.sqrt((e[0]/_ik_error_pose11_position_top)*(e[0]/_ik_error_pose11_position_top) + (e[1]/_ik_error_pose11_position_top)*(e[1]/_ik_error_pose11_position_top) + (e[2]/_ik_error_pose11_position_top)*(e[2]/_ik_error_pose11_position_top)), _ik_error_pose11_position)
-    norms[0] = np.where(_alive2, _ik_error_pose11_position, norms[0])
-    _ik_error_pose11_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-    _ik_error_pose11_whole = np.sqrt(_ik_error_pose11_whole_squares)
-    _c31 = ~np.isfinite(_ik_error_pose11_whole_squares)
+    _ik_error_pose13_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+    _ik_error_pose13_rotation = np.where(_m30, _ik_error_pose13_rotation_top*np.sqrt((e[3]/_ik_error_pose13_rotation_top)*(e[3]/_ik_error_pose13_rotation_top) + (e[4]/_ik_error_pose13_rotation_top)*(e[4]/_ik_error_pose13_rotation_top) + (e[5]/_ik_error_pose13_rotation_top)*(e[5]/_ik_error_pose13_rotation_top)), _ik_error_pose13_rotation)
+    norms[1] = np.where(_alive2, _ik_error_pose13_rotation, norms[1])
+    _ik_error_pose13_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+    _ik_error_pose13_position = np.sqrt(_ik_error_pose13_position_squares)
+    _c31 = ~np.isfinite(_ik_error_pose13_position_squares)
     _m32 = _alive2 & _c31
-    _ik_error_pose11_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-    _ik_error_pose11_whole = np.where(_m32, _ik_error_pose11_whole_top*np.sqrt((norms[0]/_ik_error_pose11_whole_top)*(norms[0]/_ik_error_pose11_whole_top) + (norms[1]/_ik_error_pose11_whole_top)*(norms[1]/_ik_error_pose11_whole_top)), _ik_error_pose11_whole)
-    norms[2] = np.where(_alive2, _ik_error_pose11_whole, norms[2])
+    _ik_error_pose13_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+    _ik_error_pose13_position = np.where(_m32, _ik_error_pose13_position_top*np.sqrt((e[0]/_ik_error_pose13_position_top)*(e[0]/_ik_error_pose13_position_top) + (e[1]/_ik_error_pose13_position_top)*(e[1]/_ik_error_pose13_position_top) + (e[2]/_ik_error_pose13_position_top)*(e[2]/_ik_error_pose13_position_top)), _ik_error_pose13_position)
+    norms[0] = np.where(_alive2, _ik_error_pose13_position, norms[0])
+    _ik_error_pose13_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+    _ik_error_pose13_whole = np.sqrt(_ik_error_pose13_whole_squares)
+    _c33 = ~np.isfinite(_ik_error_pose13_whole_squares)
+    _m34 = _alive2 & _c33
+    _ik_error_pose13_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+    _ik_error_pose13_whole = np.where(_m34, _ik_error_pose13_whole_top*np.sqrt((norms[0]/_ik_error_pose13_whole_top)*(norms[0]/_ik_error_pose13_whole_top) + (norms[1]/_ik_error_pose13_whole_top)*(norms[1]/_ik_error_pose13_whole_top)), _ik_error_pose13_whole)
+    norms[2] = np.where(_alive2, _ik_error_pose13_whole, norms[2])
     pe = np.where(_alive2, norms[0], pe)
     re = np.where(_alive2, norms[1], re)
     en = np.where(_alive2, norms[2], en)
@@ -5056,620 +5076,620 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         best_q[k] = np.where(_alive2, q[k], best_q[k])
     checkpoint = np.where(_alive2, en, checkpoint)
     window_start = np.where(_alive2, en, window_start)
-    _run33 = _alive2
-    while bool(_run33.any()):
-        _c34 = (pe <= tol) & (re <= tol)
-        _m35 = _run33 & _c34
-        error[0] = np.where(_m35, pe, error[0])
-        error[1] = np.where(_m35, re, error[1])
-        iterations[0] = np.where(_m35, it, iterations[0])
-        _status1 = np.where(_m35, IK_CONVERGED, _status1)
-        _alive2 = _alive2 & (~_m35)
-        _run33 = _run33 & (~_m35)
-        _c36 = it == max_iter
-        _m37 = _run33 & _c36
+    _run35 = _alive2
+    while bool(_run35.any()):
+        _c36 = (pe <= tol) & (re <= tol)
+        _m37 = _run35 & _c36
+        error[0] = np.where(_m37, pe, error[0])
+        error[1] = np.where(_m37, re, error[1])
+        iterations[0] = np.where(_m37, it, iterations[0])
+        _status1 = np.where(_m37, IK_CONVERGED, _status1)
+        _alive2 = _alive2 & (~_m37)
+        _run35 = _run35 & (~_m37)
+        _c38 = it == max_iter
+        _m39 = _run35 & _c38
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c38 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
-        _m39 = _m37 & _c38
-        best_stalled = np.where(_m39, 1, best_stalled)
-        _run33 = _run33 & (~_m37)
-        mu2 = np.where(_run33, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
-        _c40 = gram_ready == 0
-        _m41 = _run33 & _c40
-        G[0] = np.where(_m41, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5], G[0])
-        G[1] = np.where(_m41, J[6]*J[0] + J[7]*J[1] + J[8]*J[2] + J[9]*J[3] + J[10]*J[4] + J[11]*J[5], G[1])
-        G[2] = np.where(_m41, J[6]*J[6] + J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11], G[2])
-        G[3] = np.where(_m41, J[12]*J[0] + J[13]*J[1] + J[14]*J[2] + J[15]*J[3] + J[16]*J[4] + J[17]*J[5], G[3])
-        G[4] = np.where(_m41, J[12]*J[6] + J[13]*J[7] + J[14]*J[8] + J[15]*J[9] + J[16]*J[10] + J[17]*J[11], G[4])
-        G[5] = np.where(_m41, J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17], G[5])
-        G[6] = np.where(_m41, J[18]*J[0] + J[19]*J[1] + J[20]*J[2] + J[21]*J[3] + J[22]*J[4] + J[23]*J[5], G[6])
-        G[7] = np.where(_m41, J[18]*J[6] + J[19]*J[7] + J[20]*J[8] + J[21]*J[9] + J[22]*J[10] + J[23]*J[11], G[7])
-        G[8] = np.where(_m41, J[18]*J[12] + J[19]*J[13] + J[20]*J[14] + J[21]*J[15] + J[22]*J[16] + J[23]*J[17], G[8])
-        G[9] = np.where(_m41, J[18]*J[18] + J[19]*J[19] + J[20]*J[20] + J[21]*J[21] + J[22]*J[22] + J[23]*J[23], G[9])
-        G[10] = np.where(_m41, J[24]*J[0] + J[25]*J[1] + J[26]*J[2] + J[27]*J[3] + J[28]*J[4] + J[29]*J[5], G[10])
-        G[11] = np.where(_m41, J[24]*J[6] + J[25]*J[7] + J[26]*J[8] + J[27]*J[9] + J[28]*J[10] + J[29]*J[11], G[11])
-        G[12] = np.where(_m41, J[24]*J[12] + J[25]*J[13] + J[26]*J[14] + J[27]*J[15] + J[28]*J[16] + J[29]*J[17], G[12])
-        G[13] = np.where(_m41, J[24]*J[18] + J[25]*J[19] + J[26]*J[20] + J[27]*J[21] + J[28]*J[22] + J[29]*J[23], G[13])
-        G[14] = np.where(_m41, J[24]*J[24] + J[25]*J[25] + J[26]*J[26] + J[27]*J[27] + J[28]*J[28] + J[29]*J[29], G[14])
-        G[15] = np.where(_m41, J[30]*J[0] + J[31]*J[1] + J[32]*J[2] + J[33]*J[3] + J[34]*J[4] + J[35]*J[5], G[15])
-        G[16] = np.where(_m41, J[30]*J[6] + J[31]*J[7] + J[32]*J[8] + J[33]*J[9] + J[34]*J[10] + J[35]*J[11], G[16])
-        G[17] = np.where(_m41, J[30]*J[12] + J[31]*J[13] + J[32]*J[14] + J[33]*J[15] + J[34]*J[16] + J[35]*J[17], G[17])
-        G[18] = np.where(_m41, J[30]*J[18] + J[31]*J[19] + J[32]*J[20] + J[33]*J[21] + J[34]*J[22] + J[35]*J[23], G[18])
-        G[19] = np.where(_m41, J[30]*J[24] + J[31]*J[25] + J[32]*J[26] + J[33]*J[27] + J[34]*J[28] + J[35]*J[29], G[19])
-        G[20] = np.where(_m41, J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34] + J[35]*J[35], G[20])
-        gram_ready = np.where(_m41, 1, gram_ready)
-        _ik_damped_pose43_mu2 = mu2
-        _ik_damped_pose43_a00 = G[0] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a10 = G[1]
-        _ik_damped_pose43_a11 = G[2] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a20 = G[3]
-        _ik_damped_pose43_a21 = G[4]
-        _ik_damped_pose43_a22 = G[5] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a30 = G[6]
-        _ik_damped_pose43_a31 = G[7]
-        _ik_damped_pose43_a32 = G[8]
-        _ik_damped_pose43_a33 = G[9] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a40 = G[10]
-        _ik_damped_pose43_a41 = G[11]
-        _ik_damped_pose43_a42 = G[12]
-        _ik_damped_pose43_a43 = G[13]
-        _ik_damped_pose43_a44 = G[14] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_a50 = G[15]
-        _ik_damped_pose43_a51 = G[16]
-        _ik_damped_pose43_a52 = G[17]
-        _ik_damped_pose43_a53 = G[18]
-        _ik_damped_pose43_a54 = G[19]
-        _ik_damped_pose43_a55 = G[20] + _ik_damped_pose43_mu2
-        _ik_damped_pose43_cut = np.where(_ik_damped_pose43_a55 > np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))), _ik_damped_pose43_a55, np.where(_ik_damped_pose43_a44 > np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00))), _ik_damped_pose43_a44, np.where(_ik_damped_pose43_a33 > np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)), _ik_damped_pose43_a33, np.where(_ik_damped_pose43_a22 > np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00), _ik_damped_pose43_a22, np.where(_ik_damped_pose43_a11 > _ik_damped_pose43_a00, _ik_damped_pose43_a11, _ik_damped_pose43_a00)))))*1e-13
-        _ik_damped_pose43_s0 = _ik_damped_pose43_a00
-        _ik_damped_pose43_kept0 = _ik_damped_pose43_s0 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i0 = np.where(_ik_damped_pose43_kept0, 1.0/_ik_damped_pose43_s0, 0.0)
-        _ik_damped_pose43_t10 = _ik_damped_pose43_a10
-        _ik_damped_pose43_l10 = _ik_damped_pose43_t10*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld10 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t10, 0.0)
-        _ik_damped_pose43_t20 = _ik_damped_pose43_a20
-        _ik_damped_pose43_l20 = _ik_damped_pose43_t20*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld20 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t20, 0.0)
-        _ik_damped_pose43_t30 = _ik_damped_pose43_a30
-        _ik_damped_pose43_l30 = _ik_damped_pose43_t30*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld30 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t30, 0.0)
-        _ik_damped_pose43_t40 = _ik_damped_pose43_a40
-        _ik_damped_pose43_l40 = _ik_damped_pose43_t40*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld40 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t40, 0.0)
-        _ik_damped_pose43_t50 = _ik_damped_pose43_a50
-        _ik_damped_pose43_l50 = _ik_damped_pose43_t50*_ik_damped_pose43_i0
-        _ik_damped_pose43_ld50 = np.where(_ik_damped_pose43_kept0, _ik_damped_pose43_t50, 0.0)
-        _ik_damped_pose43_s1 = _ik_damped_pose43_a11 - _ik_damped_pose43_l10*_ik_damped_pose43_ld10
-        _ik_damped_pose43_kept1 = _ik_damped_pose43_s1 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i1 = np.where(_ik_damped_pose43_kept1, 1.0/_ik_damped_pose43_s1, 0.0)
-        _ik_damped_pose43_t21 = _ik_damped_pose43_a21 - _ik_damped_pose43_l20*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l21 = _ik_damped_pose43_t21*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld21 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t21, 0.0)
-        _ik_damped_pose43_t31 = _ik_damped_pose43_a31 - _ik_damped_pose43_l30*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l31 = _ik_damped_pose43_t31*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld31 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t31, 0.0)
-        _ik_damped_pose43_t41 = _ik_damped_pose43_a41 - _ik_damped_pose43_l40*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l41 = _ik_damped_pose43_t41*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld41 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t41, 0.0)
-        _ik_damped_pose43_t51 = _ik_damped_pose43_a51 - _ik_damped_pose43_l50*_ik_damped_pose43_ld10
-        _ik_damped_pose43_l51 = _ik_damped_pose43_t51*_ik_damped_pose43_i1
-        _ik_damped_pose43_ld51 = np.where(_ik_damped_pose43_kept1, _ik_damped_pose43_t51, 0.0)
-        _ik_damped_pose43_s2 = (_ik_damped_pose43_a22 - _ik_damped_pose43_l20*_ik_damped_pose43_ld20) - _ik_damped_pose43_l21*_ik_damped_pose43_ld21
-        _ik_damped_pose43_kept2 = _ik_damped_pose43_s2 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i2 = np.where(_ik_damped_pose43_kept2, 1.0/_ik_damped_pose43_s2, 0.0)
-        _ik_damped_pose43_t32 = (_ik_damped_pose43_a32 - _ik_damped_pose43_l30*_ik_damped_pose43_ld20) - _ik_damped_pose43_l31*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l32 = _ik_damped_pose43_t32*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld32 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t32, 0.0)
-        _ik_damped_pose43_t42 = (_ik_damped_pose43_a42 - _ik_damped_pose43_l40*_ik_damped_pose43_ld20) - _ik_damped_pose43_l41*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l42 = _ik_damped_pose43_t42*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld42 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t42, 0.0)
-        _ik_damped_pose43_t52 = (_ik_damped_pose43_a52 - _ik_damped_pose43_l50*_ik_damped_pose43_ld20) - _ik_damped_pose43_l51*_ik_damped_pose43_ld21
-        _ik_damped_pose43_l52 = _ik_damped_pose43_t52*_ik_damped_pose43_i2
-        _ik_damped_pose43_ld52 = np.where(_ik_damped_pose43_kept2, _ik_damped_pose43_t52, 0.0)
-        _ik_damped_pose43_s3 = (_ik_damped_pose43_a33 - (_ik_damped_pose43_l30*_ik_damped_pose43_ld30 + _ik_damped_pose43_l31*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l32*_ik_damped_pose43_ld32
-        _ik_damped_pose43_kept3 = _ik_damped_pose43_s3 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i3 = np.where(_ik_damped_pose43_kept3, 1.0/_ik_damped_pose43_s3, 0.0)
-        _ik_damped_pose43_t43 = (_ik_damped_pose43_a43 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld30 + _ik_damped_pose43_l41*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l42*_ik_damped_pose43_ld32
-        _ik_damped_pose43_l43 = _ik_damped_pose43_t43*_ik_damped_pose43_i3
-        _ik_damped_pose43_ld43 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t43, 0.0)
-        _ik_damped_pose43_t53 = (_ik_damped_pose43_a53 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld30 + _ik_damped_pose43_l51*_ik_damped_pose43_ld31)) - _ik_damped_pose43_l52*_ik_damped_pose43_ld32
-        _ik_damped_pose43_l53 = _ik_damped_pose43_t53*_ik_damped_pose43_i3
-        _ik_damped_pose43_ld53 = np.where(_ik_damped_pose43_kept3, _ik_damped_pose43_t53, 0.0)
-        _ik_damped_pose43_s4 = (_ik_damped_pose43_a44 - (_ik_damped_pose43_l40*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l41*_ik_damped_pose43_ld41 + _ik_damped_pose43_l42*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l43*_ik_damped_pose43_ld43
-        _ik_damped_pose43_kept4 = _ik_damped_pose43_s4 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i4 = np.where(_ik_damped_pose43_kept4, 1.0/_ik_damped_pose43_s4, 0.0)
-        _ik_damped_pose43_t54 = (_ik_damped_pose43_a54 - (_ik_damped_pose43_l50*_ik_damped_pose43_ld40 + (_ik_damped_pose43_l51*_ik_damped_pose43_ld41 + _ik_damped_pose43_l52*_ik_damped_pose43_ld42))) - _ik_damped_pose43_l53*_ik_damped_pose43_ld43
-        _ik_damped_pose43_l54 = _ik_damped_pose43_t54*_ik_damped_pose43_i4
-        _ik_damped_pose43_ld54 = np.where(_ik_damped_pose43_kept4, _ik_damped_pose43_t54, 0.0)
-        _ik_damped_pose43_s5 = (_ik_damped_pose43_a55 - ((_ik_damped_pose43_l50*_ik_damped_pose43_ld50 + _ik_damped_pose43_l51*_ik_damped_pose43_ld51) + (_ik_damped_pose43_l52*_ik_damped_pose43_ld52 + _ik_damped_pose43_l53*_ik_damped_pose43_ld53))) - _ik_damped_pose43_l54*_ik_damped_pose43_ld54
-        _ik_damped_pose43_kept5 = _ik_damped_pose43_s5 > _ik_damped_pose43_cut
-        _ik_damped_pose43_i5 = np.where(_ik_damped_pose43_kept5, 1.0/_ik_damped_pose43_s5, 0.0)
-        _ik_damped_pose43_y0 = e[0]
-        _ik_damped_pose43_y1 = e[1] - _ik_damped_pose43_l10*_ik_damped_pose43_y0
-        _ik_damped_pose43_y2 = (e[2] - _ik_damped_pose43_l20*_ik_damped_pose43_y0) - _ik_damped_pose43_l21*_ik_damped_pose43_y1
-        _ik_damped_pose43_y3 = (e[3] - (_ik_damped_pose43_l30*_ik_damped_pose43_y0 + _ik_damped_pose43_l31*_ik_damped_pose43_y1)) - _ik_damped_pose43_l32*_ik_damped_pose43_y2
-        _ik_damped_pose43_y4 = (e[4] - (_ik_damped_pose43_l40*_ik_damped_pose43_y0 + (_ik_damped_pose43_l41*_ik_damped_pose43_y1 + _ik_damped_pose43_l42*_ik_damped_pose43_y2))) - _ik_damped_pose43_l43*_ik_damped_pose43_y3
-        _ik_damped_pose43_y5 = (e[5] - ((_ik_damped_pose43_l50*_ik_damped_pose43_y0 + _ik_damped_pose43_l51*_ik_damped_pose43_y1) + (_ik_damped_pose43_l52*_ik_damped_pose43_y2 + _ik_damped_pose43_l53*_ik_damped_pose43_y3))) - _ik_damped_pose43_l54*_ik_damped_pose43_y4
-        _ik_damped_pose43_z5 = _ik_damped_pose43_y5*_ik_damped_pose43_i5
-        _ik_damped_pose43_z4 = _ik_damped_pose43_y4*_ik_damped_pose43_i4 - _ik_damped_pose43_l54*_ik_damped_pose43_z5
-        _ik_damped_pose43_z3 = (_ik_damped_pose43_y3*_ik_damped_pose43_i3 - _ik_damped_pose43_l53*_ik_damped_pose43_z5) - _ik_damped_pose43_l43*_ik_damped_pose43_z4
-        _ik_damped_pose43_z2 = (_ik_damped_pose43_y2*_ik_damped_pose43_i2 - (_ik_damped_pose43_l52*_ik_damped_pose43_z5 + _ik_damped_pose43_l42*_ik_damped_pose43_z4)) - _ik_damped_pose43_l32*_ik_damped_pose43_z3
-        _ik_damped_pose43_z1 = (_ik_damped_pose43_y1*_ik_damped_pose43_i1 - (_ik_damped_pose43_l51*_ik_damped_pose43_z5 + (_ik_damped_pose43_l41*_ik_damped_pose43_z4 + _ik_damped_pose43_l31*_ik_damped_pose43_z3))) - _ik_damped_pose43_l21*_ik_damped_pose43_z2
-        _ik_damped_pose43_z0 = (_ik_damped_pose43_y0*_ik_damped_pose43_i0 - ((_ik_damped_pose43_l50*_ik_damped_pose43_z5 + _ik_damped_pose43_l40*_ik_damped_pose43_z4) + (_ik_damped_pose43_l30*_ik_damped_pose43_z3 + _ik_damped_pose43_l20*_ik_damped_pose43_z2))) - _ik_damped_pose43_l10*_ik_damped_pose43_z1
-        dq[0] = np.where(_run33, (J[0]*_ik_damped_pose43_z0 + (J[6]*_ik_damped_pose43_z1 + J[12]*_ik_damped_pose43_z2)) + (J[18]*_ik_damped_pose43_z3 + (J[24]*_ik_damped_pose43_z4 + J[30]*_ik_damped_pose43_z5)), dq[0])
-        dq[1] = np.where(_run33, (J[1]*_ik_damped_pose43_z0 + (J[7]*_ik_damped_pose43_z1 + J[13]*_ik_damped_pose43_z2)) + (J[19]*_ik_damped_pose43_z3 + (J[25]*_ik_damped_pose43_z4 + J[31]*_ik_damped_pose43_z5)), dq[1])
-        dq[2] = np.where(_run33, (J[2]*_ik_damped_pose43_z0 + (J[8]*_ik_damped_pose43_z1 + J[14]*_ik_damped_pose43_z2)) + (J[20]*_ik_damped_pose43_z3 + (J[26]*_ik_damped_pose43_z4 + J[32]*_ik_damped_pose43_z5)), dq[2])
-        dq[3] = np.where(_run33, (J[3]*_ik_damped_pose43_z0 + (J[9]*_ik_damped_pose43_z1 + J[15]*_ik_damped_pose43_z2)) + (J[21]*_ik_damped_pose43_z3 + (J[27]*_ik_damped_pose43_z4 + J[33]*_ik_damped_pose43_z5)), dq[3])
-        dq[4] = np.where(_run33, (J[4]*_ik_damped_pose43_z0 + (J[10]*_ik_damped_pose43_z1 + J[16]*_ik_damped_pose43_z2)) + (J[22]*_ik_damped_pose43_z3 + (J[28]*_ik_damped_pose43_z4 + J[34]*_ik_damped_pose43_z5)), dq[4])
-        dq[5] = np.where(_run33, (J[5]*_ik_damped_pose43_z0 + (J[11]*_ik_damped_pose43_z1 + J[17]*_ik_damped_pose43_z2)) + (J[23]*_ik_damped_pose43_z3 + (J[29]*_ik_damped_pose43_z4 + J[35]*_ik_damped_pose43_z5)), dq[5])
+        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        _m41 = _m39 & _c40
+        best_stalled = np.where(_m41, 1, best_stalled)
+        _run35 = _run35 & (~_m39)
+        mu2 = np.where(_run35, np.where(c*en > mu2_floor*np.where(en < 1.0, en*1.0, 1.0), c*en, mu2_floor*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+        _c42 = gram_ready == 0
+        _m43 = _run35 & _c42
+        G[0] = np.where(_m43, J[0]*J[0] + J[1]*J[1] + J[2]*J[2] + J[3]*J[3] + J[4]*J[4] + J[5]*J[5], G[0])
+        G[1] = np.where(_m43, J[6]*J[0] + J[7]*J[1] + J[8]*J[2] + J[9]*J[3] + J[10]*J[4] + J[11]*J[5], G[1])
+        G[2] = np.where(_m43, J[6]*J[6] + J[7]*J[7] + J[8]*J[8] + J[9]*J[9] + J[10]*J[10] + J[11]*J[11], G[2])
+        G[3] = np.where(_m43, J[12]*J[0] + J[13]*J[1] + J[14]*J[2] + J[15]*J[3] + J[16]*J[4] + J[17]*J[5], G[3])
+        G[4] = np.where(_m43, J[12]*J[6] + J[13]*J[7] + J[14]*J[8] + J[15]*J[9] + J[16]*J[10] + J[17]*J[11], G[4])
+        G[5] = np.where(_m43, J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17], G[5])
+        G[6] = np.where(_m43, J[18]*J[0] + J[19]*J[1] + J[20]*J[2] + J[21]*J[3] + J[22]*J[4] + J[23]*J[5], G[6])
+        G[7] = np.where(_m43, J[18]*J[6] + J[19]*J[7] + J[20]*J[8] + J[21]*J[9] + J[22]*J[10] + J[23]*J[11], G[7])
+        G[8] = np.where(_m43, J[18]*J[12] + J[19]*J[13] + J[20]*J[14] + J[21]*J[15] + J[22]*J[16] + J[23]*J[17], G[8])
+        G[9] = np.where(_m43, J[18]*J[18] + J[19]*J[19] + J[20]*J[20] + J[21]*J[21] + J[22]*J[22] + J[23]*J[23], G[9])
+        G[10] = np.where(_m43, J[24]*J[0] + J[25]*J[1] + J[26]*J[2] + J[27]*J[3] + J[28]*J[4] + J[29]*J[5], G[10])
+        G[11] = np.where(_m43, J[24]*J[6] + J[25]*J[7] + J[26]*J[8] + J[27]*J[9] + J[28]*J[10] + J[29]*J[11], G[11])
+        G[12] = np.where(_m43, J[24]*J[12] + J[25]*J[13] + J[26]*J[14] + J[27]*J[15] + J[28]*J[16] + J[29]*J[17], G[12])
+        G[13] = np.where(_m43, J[24]*J[18] + J[25]*J[19] + J[26]*J[20] + J[27]*J[21] + J[28]*J[22] + J[29]*J[23], G[13])
+        G[14] = np.where(_m43, J[24]*J[24] + J[25]*J[25] + J[26]*J[26] + J[27]*J[27] + J[28]*J[28] + J[29]*J[29], G[14])
+        G[15] = np.where(_m43, J[30]*J[0] + J[31]*J[1] + J[32]*J[2] + J[33]*J[3] + J[34]*J[4] + J[35]*J[5], G[15])
+        G[16] = np.where(_m43, J[30]*J[6] + J[31]*J[7] + J[32]*J[8] + J[33]*J[9] + J[34]*J[10] + J[35]*J[11], G[16])
+        G[17] = np.where(_m43, J[30]*J[12] + J[31]*J[13] + J[32]*J[14] + J[33]*J[15] + J[34]*J[16] + J[35]*J[17], G[17])
+        G[18] = np.where(_m43, J[30]*J[18] + J[31]*J[19] + J[32]*J[20] + J[33]*J[21] + J[34]*J[22] + J[35]*J[23], G[18])
+        G[19] = np.where(_m43, J[30]*J[24] + J[31]*J[25] + J[32]*J[26] + J[33]*J[27] + J[34]*J[28] + J[35]*J[29], G[19])
+        G[20] = np.where(_m43, J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34] + J[35]*J[35], G[20])
+        gram_ready = np.where(_m43, 1, gram_ready)
+        _ik_damped_pose45_mu2 = mu2
+        _ik_damped_pose45_a00 = G[0] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a10 = G[1]
+        _ik_damped_pose45_a11 = G[2] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a20 = G[3]
+        _ik_damped_pose45_a21 = G[4]
+        _ik_damped_pose45_a22 = G[5] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a30 = G[6]
+        _ik_damped_pose45_a31 = G[7]
+        _ik_damped_pose45_a32 = G[8]
+        _ik_damped_pose45_a33 = G[9] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a40 = G[10]
+        _ik_damped_pose45_a41 = G[11]
+        _ik_damped_pose45_a42 = G[12]
+        _ik_damped_pose45_a43 = G[13]
+        _ik_damped_pose45_a44 = G[14] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_a50 = G[15]
+        _ik_damped_pose45_a51 = G[16]
+        _ik_damped_pose45_a52 = G[17]
+        _ik_damped_pose45_a53 = G[18]
+        _ik_damped_pose45_a54 = G[19]
+        _ik_damped_pose45_a55 = G[20] + _ik_damped_pose45_mu2
+        _ik_damped_pose45_cut = np.where(_ik_damped_pose45_a55 > np.where(_ik_damped_pose45_a44 > np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00))), _ik_damped_pose45_a44, np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)))), _ik_damped_pose45_a55, np.where(_ik_damped_pose45_a44 > np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00))), _ik_damped_pose45_a44, np.where(_ik_damped_pose45_a33 > np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)), _ik_damped_pose45_a33, np.where(_ik_damped_pose45_a22 > np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00), _ik_damped_pose45_a22, np.where(_ik_damped_pose45_a11 > _ik_damped_pose45_a00, _ik_damped_pose45_a11, _ik_damped_pose45_a00)))))*1e-13
+        _ik_damped_pose45_s0 = _ik_damped_pose45_a00
+        _ik_damped_pose45_kept0 = _ik_damped_pose45_s0 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i0 = np.where(_ik_damped_pose45_kept0, 1.0/_ik_damped_pose45_s0, 0.0)
+        _ik_damped_pose45_t10 = _ik_damped_pose45_a10
+        _ik_damped_pose45_l10 = _ik_damped_pose45_t10*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld10 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t10, 0.0)
+        _ik_damped_pose45_t20 = _ik_damped_pose45_a20
+        _ik_damped_pose45_l20 = _ik_damped_pose45_t20*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld20 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t20, 0.0)
+        _ik_damped_pose45_t30 = _ik_damped_pose45_a30
+        _ik_damped_pose45_l30 = _ik_damped_pose45_t30*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld30 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t30, 0.0)
+        _ik_damped_pose45_t40 = _ik_damped_pose45_a40
+        _ik_damped_pose45_l40 = _ik_damped_pose45_t40*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld40 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t40, 0.0)
+        _ik_damped_pose45_t50 = _ik_damped_pose45_a50
+        _ik_damped_pose45_l50 = _ik_damped_pose45_t50*_ik_damped_pose45_i0
+        _ik_damped_pose45_ld50 = np.where(_ik_damped_pose45_kept0, _ik_damped_pose45_t50, 0.0)
+        _ik_damped_pose45_s1 = _ik_damped_pose45_a11 - _ik_damped_pose45_l10*_ik_damped_pose45_ld10
+        _ik_damped_pose45_kept1 = _ik_damped_pose45_s1 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i1 = np.where(_ik_damped_pose45_kept1, 1.0/_ik_damped_pose45_s1, 0.0)
+        _ik_damped_pose45_t21 = _ik_damped_pose45_a21 - _ik_damped_pose45_l20*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l21 = _ik_damped_pose45_t21*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld21 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t21, 0.0)
+        _ik_damped_pose45_t31 = _ik_damped_pose45_a31 - _ik_damped_pose45_l30*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l31 = _ik_damped_pose45_t31*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld31 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t31, 0.0)
+        _ik_damped_pose45_t41 = _ik_damped_pose45_a41 - _ik_damped_pose45_l40*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l41 = _ik_damped_pose45_t41*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld41 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t41, 0.0)
+        _ik_damped_pose45_t51 = _ik_damped_pose45_a51 - _ik_damped_pose45_l50*_ik_damped_pose45_ld10
+        _ik_damped_pose45_l51 = _ik_damped_pose45_t51*_ik_damped_pose45_i1
+        _ik_damped_pose45_ld51 = np.where(_ik_damped_pose45_kept1, _ik_damped_pose45_t51, 0.0)
+        _ik_damped_pose45_s2 = (_ik_damped_pose45_a22 - _ik_damped_pose45_l20*_ik_damped_pose45_ld20) - _ik_damped_pose45_l21*_ik_damped_pose45_ld21
+        _ik_damped_pose45_kept2 = _ik_damped_pose45_s2 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i2 = np.where(_ik_damped_pose45_kept2, 1.0/_ik_damped_pose45_s2, 0.0)
+        _ik_damped_pose45_t32 = (_ik_damped_pose45_a32 - _ik_damped_pose45_l30*_ik_damped_pose45_ld20) - _ik_damped_pose45_l31*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l32 = _ik_damped_pose45_t32*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld32 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t32, 0.0)
+        _ik_damped_pose45_t42 = (_ik_damped_pose45_a42 - _ik_damped_pose45_l40*_ik_damped_pose45_ld20) - _ik_damped_pose45_l41*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l42 = _ik_damped_pose45_t42*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld42 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t42, 0.0)
+        _ik_damped_pose45_t52 = (_ik_damped_pose45_a52 - _ik_damped_pose45_l50*_ik_damped_pose45_ld20) - _ik_damped_pose45_l51*_ik_damped_pose45_ld21
+        _ik_damped_pose45_l52 = _ik_damped_pose45_t52*_ik_damped_pose45_i2
+        _ik_damped_pose45_ld52 = np.where(_ik_damped_pose45_kept2, _ik_damped_pose45_t52, 0.0)
+        _ik_damped_pose45_s3 = (_ik_damped_pose45_a33 - (_ik_damped_pose45_l30*_ik_damped_pose45_ld30 + _ik_damped_pose45_l31*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l32*_ik_damped_pose45_ld32
+        _ik_damped_pose45_kept3 = _ik_damped_pose45_s3 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i3 = np.where(_ik_damped_pose45_kept3, 1.0/_ik_damped_pose45_s3, 0.0)
+        _ik_damped_pose45_t43 = (_ik_damped_pose45_a43 - (_ik_damped_pose45_l40*_ik_damped_pose45_ld30 + _ik_damped_pose45_l41*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l42*_ik_damped_pose45_ld32
+        _ik_damped_pose45_l43 = _ik_damped_pose45_t43*_ik_damped_pose45_i3
+        _ik_damped_pose45_ld43 = np.where(_ik_damped_pose45_kept3, _ik_damped_pose45_t43, 0.0)
+        _ik_damped_pose45_t53 = (_ik_damped_pose45_a53 - (_ik_damped_pose45_l50*_ik_damped_pose45_ld30 + _ik_damped_pose45_l51*_ik_damped_pose45_ld31)) - _ik_damped_pose45_l52*_ik_damped_pose45_ld32
+        _ik_damped_pose45_l53 = _ik_damped_pose45_t53*_ik_damped_pose45_i3
+        _ik_damped_pose45_ld53 = np.where(_ik_damped_pose45_kept3, _ik_damped_pose45_t53, 0.0)
+        _ik_damped_pose45_s4 = (_ik_damped_pose45_a44 - (_ik_damped_pose45_l40*_ik_damped_pose45_ld40 + (_ik_damped_pose45_l41*_ik_damped_pose45_ld41 + _ik_damped_pose45_l42*_ik_damped_pose45_ld42))) - _ik_damped_pose45_l43*_ik_damped_pose45_ld43
+        _ik_damped_pose45_kept4 = _ik_damped_pose45_s4 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i4 = np.where(_ik_damped_pose45_kept4, 1.0/_ik_damped_pose45_s4, 0.0)
+        _ik_damped_pose45_t54 = (_ik_damped_pose45_a54 - (_ik_damped_pose45_l50*_ik_damped_pose45_ld40 + (_ik_damped_pose45_l51*_ik_damped_pose45_ld41 + _ik_damped_pose45_l52*_ik_damped_pose45_ld42))) - _ik_damped_pose45_l53*_ik_damped_pose45_ld43
+        _ik_damped_pose45_l54 = _ik_damped_pose45_t54*_ik_damped_pose45_i4
+        _ik_damped_pose45_ld54 = np.where(_ik_damped_pose45_kept4, _ik_damped_pose45_t54, 0.0)
+        _ik_damped_pose45_s5 = (_ik_damped_pose45_a55 - ((_ik_damped_pose45_l50*_ik_damped_pose45_ld50 + _ik_damped_pose45_l51*_ik_damped_pose45_ld51) + (_ik_damped_pose45_l52*_ik_damped_pose45_ld52 + _ik_damped_pose45_l53*_ik_damped_pose45_ld53))) - _ik_damped_pose45_l54*_ik_damped_pose45_ld54
+        _ik_damped_pose45_kept5 = _ik_damped_pose45_s5 > _ik_damped_pose45_cut
+        _ik_damped_pose45_i5 = np.where(_ik_damped_pose45_kept5, 1.0/_ik_damped_pose45_s5, 0.0)
+        _ik_damped_pose45_y0 = e[0]
+        _ik_damped_pose45_y1 = e[1] - _ik_damped_pose45_l10*_ik_damped_pose45_y0
+        _ik_damped_pose45_y2 = (e[2] - _ik_damped_pose45_l20*_ik_damped_pose45_y0) - _ik_damped_pose45_l21*_ik_damped_pose45_y1
+        _ik_damped_pose45_y3 = (e[3] - (_ik_damped_pose45_l30*_ik_damped_pose45_y0 + _ik_damped_pose45_l31*_ik_damped_pose45_y1)) - _ik_damped_pose45_l32*_ik_damped_pose45_y2
+        _ik_damped_pose45_y4 = (e[4] - (_ik_damped_pose45_l40*_ik_damped_pose45_y0 + (_ik_damped_pose45_l41*_ik_damped_pose45_y1 + _ik_damped_pose45_l42*_ik_damped_pose45_y2))) - _ik_damped_pose45_l43*_ik_damped_pose45_y3
+        _ik_damped_pose45_y5 = (e[5] - ((_ik_damped_pose45_l50*_ik_damped_pose45_y0 + _ik_damped_pose45_l51*_ik_damped_pose45_y1) + (_ik_damped_pose45_l52*_ik_damped_pose45_y2 + _ik_damped_pose45_l53*_ik_damped_pose45_y3))) - _ik_damped_pose45_l54*_ik_damped_pose45_y4
+        _ik_damped_pose45_z5 = _ik_damped_pose45_y5*_ik_damped_pose45_i5
+        _ik_damped_pose45_z4 = _ik_damped_pose45_y4*_ik_damped_pose45_i4 - _ik_damped_pose45_l54*_ik_damped_pose45_z5
+        _ik_damped_pose45_z3 = (_ik_damped_pose45_y3*_ik_damped_pose45_i3 - _ik_damped_pose45_l53*_ik_damped_pose45_z5) - _ik_damped_pose45_l43*_ik_damped_pose45_z4
+        _ik_damped_pose45_z2 = (_ik_damped_pose45_y2*_ik_damped_pose45_i2 - (_ik_damped_pose45_l52*_ik_damped_pose45_z5 + _ik_damped_pose45_l42*_ik_damped_pose45_z4)) - _ik_damped_pose45_l32*_ik_damped_pose45_z3
+        _ik_damped_pose45_z1 = (_ik_damped_pose45_y1*_ik_damped_pose45_i1 - (_ik_damped_pose45_l51*_ik_damped_pose45_z5 + (_ik_damped_pose45_l41*_ik_damped_pose45_z4 + _ik_damped_pose45_l31*_ik_damped_pose45_z3))) - _ik_damped_pose45_l21*_ik_damped_pose45_z2
+        _ik_damped_pose45_z0 = (_ik_damped_pose45_y0*_ik_damped_pose45_i0 - ((_ik_damped_pose45_l50*_ik_damped_pose45_z5 + _ik_damped_pose45_l40*_ik_damped_pose45_z4) + (_ik_damped_pose45_l30*_ik_damped_pose45_z3 + _ik_damped_pose45_l20*_ik_damped_pose45_z2))) - _ik_damped_pose45_l10*_ik_damped_pose45_z1
+        dq[0] = np.where(_run35, (J[0]*_ik_damped_pose45_z0 + (J[6]*_ik_damped_pose45_z1 + J[12]*_ik_damped_pose45_z2)) + (J[18]*_ik_damped_pose45_z3 + (J[24]*_ik_damped_pose45_z4 + J[30]*_ik_damped_pose45_z5)), dq[0])
+        dq[1] = np.where(_run35, (J[1]*_ik_damped_pose45_z0 + (J[7]*_ik_damped_pose45_z1 + J[13]*_ik_damped_pose45_z2)) + (J[19]*_ik_damped_pose45_z3 + (J[25]*_ik_damped_pose45_z4 + J[31]*_ik_damped_pose45_z5)), dq[1])
+        dq[2] = np.where(_run35, (J[2]*_ik_damped_pose45_z0 + (J[8]*_ik_damped_pose45_z1 + J[14]*_ik_damped_pose45_z2)) + (J[20]*_ik_damped_pose45_z3 + (J[26]*_ik_damped_pose45_z4 + J[32]*_ik_damped_pose45_z5)), dq[2])
+        dq[3] = np.where(_run35, (J[3]*_ik_damped_pose45_z0 + (J[9]*_ik_damped_pose45_z1 + J[15]*_ik_damped_pose45_z2)) + (J[21]*_ik_damped_pose45_z3 + (J[27]*_ik_damped_pose45_z4 + J[33]*_ik_damped_pose45_z5)), dq[3])
+        dq[4] = np.where(_run35, (J[4]*_ik_damped_pose45_z0 + (J[10]*_ik_damped_pose45_z1 + J[16]*_ik_damped_pose45_z2)) + (J[22]*_ik_damped_pose45_z3 + (J[28]*_ik_damped_pose45_z4 + J[34]*_ik_damped_pose45_z5)), dq[4])
+        dq[5] = np.where(_run35, (J[5]*_ik_damped_pose45_z0 + (J[11]*_ik_damped_pose45_z1 + J[17]*_ik_damped_pose45_z2)) + (J[23]*_ik_damped_pose45_z3 + (J[29]*_ik_damped_pose45_z4 + J[35]*_ik_damped_pose45_z5)), dq[5])
         for k in range(0, 6):
-            blocked[k] = np.where(_run33, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
-        blocked[0] = np.where(_run33, 0, blocked[0])
-        blocked[1] = np.where(_run33, 0, blocked[1])
-        blocked[2] = np.where(_run33, 0, blocked[2])
-        blocked[3] = np.where(_run33, 0, blocked[3])
-        blocked[4] = np.where(_run33, 0, blocked[4])
-        blocked[5] = np.where(_run33, 0, blocked[5])
-        any = np.where(_run33, 0, any)
+            blocked[k] = np.where(_run35, np.where(((q[k] <= lo[k]) & (dq[k] < 0.0)) | ((q[k] >= hi[k]) & (dq[k] > 0.0)), _fi(1), 0), blocked[k])
+        blocked[0] = np.where(_run35, 0, blocked[0])
+        blocked[1] = np.where(_run35, 0, blocked[1])
+        blocked[2] = np.where(_run35, 0, blocked[2])
+        blocked[3] = np.where(_run35, 0, blocked[3])
+        blocked[4] = np.where(_run35, 0, blocked[4])
+        blocked[5] = np.where(_run35, 0, blocked[5])
+        any = np.where(_run35, 0, any)
         for k in range(0, 6):
-            _c44 = blocked[k] > 0
-            _m45 = _run33 & _c44
-            any = np.where(_m45, 1, any)
-        _c46 = any > 0
-        _m47 = _run33 & _c46
-        _m48 = _run33 & (~_c46)
-        if bool(_m47.any()):
+            _c46 = blocked[k] > 0
+            _m47 = _run35 & _c46
+            any = np.where(_m47, 1, any)
+        _c48 = any > 0
+        _m49 = _run35 & _c48
+        _m50 = _run35 & (~_c48)
+        if bool(_m49.any()):
             # blocked columns zeroed, their outer products taken out of G, the step solved again
             for r in range(0, 6):
                 for k in range(0, 6):
-                    Jf[r*6 + k] = np.where(_m47, np.where(blocked[k] > 0, 0.0, J[r*6 + k]), Jf[r*6 + k])
+                    Jf[r*6 + k] = np.where(_m49, np.where(blocked[k] > 0, 0.0, J[r*6 + k]), Jf[r*6 + k])
             for k in range(0, 21):
-                Gf[k] = np.where(_m47, G[k], Gf[k])
+                Gf[k] = np.where(_m49, G[k], Gf[k])
             for k in range(0, 6):
-                _c49 = blocked[k] > 0
-                _m50 = _m47 & _c49
-                Gf[0] = np.where(_m50, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
-                Gf[1] = np.where(_m50, Gf[1] - J[6 + k]*J[0 + k], Gf[1])
-                Gf[2] = np.where(_m50, Gf[2] - J[6 + k]*J[6 + k], Gf[2])
-                Gf[3] = np.where(_m50, Gf[3] - J[12 + k]*J[0 + k], Gf[3])
-                Gf[4] = np.where(_m50, Gf[4] - J[12 + k]*J[6 + k], Gf[4])
-                Gf[5] = np.where(_m50, Gf[5] - J[12 + k]*J[12 + k], Gf[5])
-                Gf[6] = np.where(_m50, Gf[6] - J[18 + k]*J[0 + k], Gf[6])
-                Gf[7] = np.where(_m50, Gf[7] - J[18 + k]*J[6 + k], Gf[7])
-                Gf[8] = np.where(_m50, Gf[8] - J[18 + k]*J[12 + k], Gf[8])
-                Gf[9] = np.where(_m50, Gf[9] - J[18 + k]*J[18 + k], Gf[9])
-                Gf[10] = np.where(_m50, Gf[10] - J[24 + k]*J[0 + k], Gf[10])
-                Gf[11] = np.where(_m50, Gf[11] - J[24 + k]*J[6 + k], Gf[11])
-                Gf[12] = np.where(_m50, Gf[12] - J[24 + k]*J[12 + k], Gf[12])
-                Gf[13] = np.where(_m50, Gf[13] - J[24 + k]*J[18 + k], Gf[13])
-                Gf[14] = np.where(_m50, Gf[14] - J[24 + k]*J[24 + k], Gf[14])
-                Gf[15] = np.where(_m50, Gf[15] - J[30 + k]*J[0 + k], Gf[15])
-                Gf[16] = np.where(_m50, Gf[16] - J[30 + k]*J[6 + k], Gf[16])
-                Gf[17] = np.where(_m50, Gf[17] - J[30 + k]*J[12 + k], Gf[17])
-                Gf[18] = np.where(_m50, Gf[18] - J[30 + k]*J[18 + k], Gf[18])
-                Gf[19] = np.where(_m50, Gf[19] - J[30 + k]*J[24 + k], Gf[19])
-                Gf[20] = np.where(_m50, Gf[20] - J[30 + k]*J[30 + k], Gf[20])
-            _ik_damped_pose51_mu2 = mu2
-            _ik_damped_pose51_a00 = Gf[0] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a10 = Gf[1]
-            _ik_damped_pose51_a11 = Gf[2] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a20 = Gf[3]
-            _ik_damped_pose51_a21 = Gf[4]
-            _ik_damped_pose51_a22 = Gf[5] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a30 = Gf[6]
-            _ik_damped_pose51_a31 = Gf[7]
-            _ik_damped_pose51_a32 = Gf[8]
-            _ik_damped_pose51_a33 = Gf[9] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a40 = Gf[10]
-            _ik_damped_pose51_a41 = Gf[11]
-            _ik_damped_pose51_a42 = Gf[12]
-            _ik_damped_pose51_a43 = Gf[13]
-            _ik_damped_pose51_a44 = Gf[14] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_a50 = Gf[15]
-            _ik_damped_pose51_a51 = Gf[16]
-            _ik_damped_pose51_a52 = Gf[17]
-            _ik_damped_pose51_a53 = Gf[18]
-            _ik_damped_pose51_a54 = Gf[19]
-            _ik_damped_pose51_a55 = Gf[20] + _ik_damped_pose51_mu2
-            _ik_damped_pose51_cut = np.where(_ik_damped_pose51_a55 > np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))), _ik_damped_pose51_a55, np.where(_ik_damped_pose51_a44 > np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00))), _ik_damped_pose51_a44, np.where(_ik_damped_pose51_a33 > np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)), _ik_damped_pose51_a33, np.where(_ik_damped_pose51_a22 > np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00), _ik_damped_pose51_a22, np.where(_ik_damped_pose51_a11 > _ik_damped_pose51_a00, _ik_damped_pose51_a11, _ik_damped_pose51_a00)))))*1e-13
-            _ik_damped_pose51_s0 = _ik_damped_pose51_a00
-            _ik_damped_pose51_kept0 = _ik_damped_pose51_s0 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i0 = np.where(_ik_damped_pose51_kept0, 1.0/_ik_damped_pose51_s0, 0.0)
-            _ik_damped_pose51_t10 = _ik_damped_pose51_a10
-            _ik_damped_pose51_l10 = _ik_damped_pose51_t10*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld10 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t10, 0.0)
-            _ik_damped_pose51_t20 = _ik_damped_pose51_a20
-            _ik_damped_pose51_l20 = _ik_damped_pose51_t20*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld20 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t20, 0.0)
-            _ik_damped_pose51_t30 = _ik_damped_pose51_a30
-            _ik_damped_pose51_l30 = _ik_damped_pose51_t30*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld30 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t30, 0.0)
-            _ik_damped_pose51_t40 = _ik_damped_pose51_a40
-            _ik_damped_pose51_l40 = _ik_damped_pose51_t40*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld40 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t40, 0.0)
-            _ik_damped_pose51_t50 = _ik_damped_pose51_a50
-            _ik_damped_pose51_l50 = _ik_damped_pose51_t50*_ik_damped_pose51_i0
-            _ik_damped_pose51_ld50 = np.where(_ik_damped_pose51_kept0, _ik_damped_pose51_t50, 0.0)
-            _ik_damped_pose51_s1 = _ik_damped_pose51_a11 - _ik_damped_pose51_l10*_ik_damped_pose51_ld10
-            _ik_damped_pose51_kept1 = _ik_damped_pose51_s1 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i1 = np.where(_ik_damped_pose51_kept1, 1.0/_ik_damped_pose51_s1, 0.0)
-            _ik_damped_pose51_t21 = _ik_damped_pose51_a21 - _ik_damped_pose51_l20*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l21 = _ik_damped_pose51_t21*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld21 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t21, 0.0)
-            _ik_damped_pose51_t31 = _ik_damped_pose51_a31 - _ik_damped_pose51_l30*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l31 = _ik_damped_pose51_t31*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld31 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t31, 0.0)
-            _ik_damped_pose51_t41 = _ik_damped_pose51_a41 - _ik_damped_pose51_l40*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l41 = _ik_damped_pose51_t41*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld41 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t41, 0.0)
-            _ik_damped_pose51_t51 = _ik_damped_pose51_a51 - _ik_damped_pose51_l50*_ik_damped_pose51_ld10
-            _ik_damped_pose51_l51 = _ik_damped_pose51_t51*_ik_damped_pose51_i1
-            _ik_damped_pose51_ld51 = np.where(_ik_damped_pose51_kept1, _ik_damped_pose51_t51, 0.0)
-            _ik_damped_pose51_s2 = (_ik_damped_pose51_a22 - _ik_damped_pose51_l20*_ik_damped_pose51_ld20) - _ik_damped_pose51_l21*_ik_damped_pose51_ld21
-            _ik_damped_pose51_kept2 = _ik_damped_pose51_s2 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i2 = np.where(_ik_damped_pose51_kept2, 1.0/_ik_damped_pose51_s2, 0.0)
-            _ik_damped_pose51_t32 = (_ik_damped_pose51_a32 - _ik_damped_pose51_l30*_ik_damped_pose51_ld20) - _ik_damped_pose51_l31*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l32 = _ik_damped_pose51_t32*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld32 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t32, 0.0)
-            _ik_damped_pose51_t42 = (_ik_damped_pose51_a42 - _ik_damped_pose51_l40*_ik_damped_pose51_ld20) - _ik_damped_pose51_l41*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l42 = _ik_damped_pose51_t42*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld42 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t42, 0.0)
-            _ik_damped_pose51_t52 = (_ik_damped_pose51_a52 - _ik_damped_pose51_l50*_ik_damped_pose51_ld20) - _ik_damped_pose51_l51*_ik_damped_pose51_ld21
-            _ik_damped_pose51_l52 = _ik_damped_pose51_t52*_ik_damped_pose51_i2
-            _ik_damped_pose51_ld52 = np.where(_ik_damped_pose51_kept2, _ik_damped_pose51_t52, 0.0)
-            _ik_damped_pose51_s3 = (_ik_damped_pose51_a33 - (_ik_damped_pose51_l30*_ik_damped_pose51_ld30 + _ik_damped_pose51_l31*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l32*_ik_damped_pose51_ld32
-            _ik_damped_pose51_kept3 = _ik_damped_pose51_s3 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i3 = np.where(_ik_damped_pose51_kept3, 1.0/_ik_damped_pose51_s3, 0.0)
-            _ik_damped_pose51_t43 = (_ik_damped_pose51_a43 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld30 + _ik_damped_pose51_l41*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l42*_ik_damped_pose51_ld32
-            _ik_damped_pose51_l43 = _ik_damped_pose51_t43*_ik_damped_pose51_i3
-            _ik_damped_pose51_ld43 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t43, 0.0)
-            _ik_damped_pose51_t53 = (_ik_damped_pose51_a53 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld30 + _ik_damped_pose51_l51*_ik_damped_pose51_ld31)) - _ik_damped_pose51_l52*_ik_damped_pose51_ld32
-            _ik_damped_pose51_l53 = _ik_damped_pose51_t53*_ik_damped_pose51_i3
-            _ik_damped_pose51_ld53 = np.where(_ik_damped_pose51_kept3, _ik_damped_pose51_t53, 0.0)
-            _ik_damped_pose51_s4 = (_ik_damped_pose51_a44 - (_ik_damped_pose51_l40*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l41*_ik_damped_pose51_ld41 + _ik_damped_pose51_l42*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l43*_ik_damped_pose51_ld43
-            _ik_damped_pose51_kept4 = _ik_damped_pose51_s4 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i4 = np.where(_ik_damped_pose51_kept4, 1.0/_ik_damped_pose51_s4, 0.0)
-            _ik_damped_pose51_t54 = (_ik_damped_pose51_a54 - (_ik_damped_pose51_l50*_ik_damped_pose51_ld40 + (_ik_damped_pose51_l51*_ik_damped_pose51_ld41 + _ik_damped_pose51_l52*_ik_damped_pose51_ld42))) - _ik_damped_pose51_l53*_ik_damped_pose51_ld43
-            _ik_damped_pose51_l54 = _ik_damped_pose51_t54*_ik_damped_pose51_i4
-            _ik_damped_pose51_ld54 = np.where(_ik_damped_pose51_kept4, _ik_damped_pose51_t54, 0.0)
-            _ik_damped_pose51_s5 = (_ik_damped_pose51_a55 - ((_ik_damped_pose51_l50*_ik_damped_pose51_ld50 + _ik_damped_pose51_l51*_ik_damped_pose51_ld51) + (_ik_damped_pose51_l52*_ik_damped_pose51_ld52 + _ik_damped_pose51_l53*_ik_damped_pose51_ld53))) - _ik_damped_pose51_l54*_ik_damped_pose51_ld54
-            _ik_damped_pose51_kept5 = _ik_damped_pose51_s5 > _ik_damped_pose51_cut
-            _ik_damped_pose51_i5 = np.where(_ik_damped_pose51_kept5, 1.0/_ik_damped_pose51_s5, 0.0)
-            _ik_damped_pose51_y0 = e[0]
-            _ik_damped_pose51_y1 = e[1] - _ik_damped_pose51_l10*_ik_damped_pose51_y0
-            _ik_damped_pose51_y2 = (e[2] - _ik_damped_pose51_l20*_ik_damped_pose51_y0) - _ik_damped_pose51_l21*_ik_damped_pose51_y1
-            _ik_damped_pose51_y3 = (e[3] - (_ik_damped_pose51_l30*_ik_damped_pose51_y0 + _ik_damped_pose51_l31*_ik_damped_pose51_y1)) - _ik_damped_pose51_l32*_ik_damped_pose51_y2
-            _ik_damped_pose51_y4 = (e[4] - (_ik_damped_pose51_l40*_ik_damped_pose51_y0 + (_ik_damped_pose51_l41*_ik_damped_pose51_y1 + _ik_damped_pose51_l42*_ik_damped_pose51_y2))) - _ik_damped_pose51_l43*_ik_damped_pose51_y3
-            _ik_damped_pose51_y5 = (e[5] - ((_ik_damped_pose51_l50*_ik_damped_pose51_y0 + _ik_damped_pose51_l51*_ik_damped_pose51_y1) + (_ik_damped_pose51_l52*_ik_damped_pose51_y2 + _ik_damped_pose51_l53*_ik_damped_pose51_y3))) - _ik_damped_pose51_l54*_ik_damped_pose51_y4
-            _ik_damped_pose51_z5 = _ik_damped_pose51_y5*_ik_damped_pose51_i5
-            _ik_damped_pose51_z4 = _ik_damped_pose51_y4*_ik_damped_pose51_i4 - _ik_damped_pose51_l54*_ik_damped_pose51_z5
-            _ik_damped_pose51_z3 = (_ik_damped_pose51_y3*_ik_damped_pose51_i3 - _ik_damped_pose51_l53*_ik_damped_pose51_z5) - _ik_damped_pose51_l43*_ik_damped_pose51_z4
-            _ik_damped_pose51_z2 = (_ik_damped_pose51_y2*_ik_damped_pose51_i2 - (_ik_damped_pose51_l52*_ik_damped_pose51_z5 + _ik_damped_pose51_l42*_ik_damped_pose51_z4)) - _ik_damped_pose51_l32*_ik_damped_pose51_z3
-            _ik_damped_pose51_z1 = (_ik_damped_pose51_y1*_ik_damped_pose51_i1 - (_ik_damped_pose51_l51*_ik_damped_pose51_z5 + (_ik_damped_pose51_l41*_ik_damped_pose51_z4 + _ik_damped_pose51_l31*_ik_damped_pose51_z3))) - _ik_damped_pose51_l21*_ik_damped_pose51_z2
-            _ik_damped_pose51_z0 = (_ik_damped_pose51_y0*_ik_damped_pose51_i0 - ((_ik_damped_pose51_l50*_ik_damped_pose51_z5 + _ik_damped_pose51_l40*_ik_damped_pose51_z4) + (_ik_damped_pose51_l30*_ik_damped_pose51_z3 + _ik_damped_pose51_l20*_ik_damped_pose51_z2))) - _ik_damped_pose51_l10*_ik_damped_pose51_z1
-            dq[0] = np.where(_m47, (Jf[0]*_ik_damped_pose51_z0 + (Jf[6]*_ik_damped_pose51_z1 + Jf[12]*_ik_damped_pose51_z2)) + (Jf[18]*_ik_damped_pose51_z3 + (Jf[24]*_ik_damped_pose51_z4 + Jf[30]*_ik_damped_pose51_z5)), dq[0])
-            dq[1] = np.where(_m47, (Jf[1]*_ik_damped_pose51_z0 + (Jf[7]*_ik_damped_pose51_z1 + Jf[13]*_ik_damped_pose51_z2)) + (Jf[19]*_ik_damped_pose51_z3 + (Jf[25]*_ik_damped_pose51_z4 + Jf[31]*_ik_damped_pose51_z5)), dq[1])
-            dq[2] = np.where(_m47, (Jf[2]*_ik_damped_pose51_z0 + (Jf[8]*_ik_damped_pose51_z1 + Jf[14]*_ik_damped_pose51_z2)) + (Jf[20]*_ik_damped_pose51_z3 + (Jf[26]*_ik_damped_pose51_z4 + Jf[32]*_ik_damped_pose51_z5)), dq[2])
-            dq[3] = np.where(_m47, (Jf[3]*_ik_damped_pose51_z0 + (Jf[9]*_ik_damped_pose51_z1 + Jf[15]*_ik_damped_pose51_z2)) + (Jf[21]*_ik_damped_pose51_z3 + (Jf[27]*_ik_damped_pose51_z4 + Jf[33]*_ik_damped_pose51_z5)), dq[3])
-            dq[4] = np.where(_m47, (Jf[4]*_ik_damped_pose51_z0 + (Jf[10]*_ik_damped_pose51_z1 + Jf[16]*_ik_damped_pose51_z2)) + (Jf[22]*_ik_damped_pose51_z3 + (Jf[28]*_ik_damped_pose51_z4 + Jf[34]*_ik_damped_pose51_z5)), dq[4])
-            dq[5] = np.where(_m47, (Jf[5]*_ik_damped_pose51_z0 + (Jf[11]*_ik_damped_pose51_z1 + Jf[17]*_ik_damped_pose51_z2)) + (Jf[23]*_ik_damped_pose51_z3 + (Jf[29]*_ik_damped_pose51_z4 + Jf[35]*_ik_damped_pose51_z5)), dq[5])
-            ff = np.where(_m47, Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20], ff)
-            gg = np.where(_m47, 0.0, gg)
+                _c51 = blocked[k] > 0
+                _m52 = _m49 & _c51
+                Gf[0] = np.where(_m52, Gf[0] - J[0 + k]*J[0 + k], Gf[0])
+                Gf[1] = np.where(_m52, Gf[1] - J[6 + k]*J[0 + k], Gf[1])
+                Gf[2] = np.where(_m52, Gf[2] - J[6 + k]*J[6 + k], Gf[2])
+                Gf[3] = np.where(_m52, Gf[3] - J[12 + k]*J[0 + k], Gf[3])
+                Gf[4] = np.where(_m52, Gf[4] - J[12 + k]*J[6 + k], Gf[4])
+                Gf[5] = np.where(_m52, Gf[5] - J[12 + k]*J[12 + k], Gf[5])
+                Gf[6] = np.where(_m52, Gf[6] - J[18 + k]*J[0 + k], Gf[6])
+                Gf[7] = np.where(_m52, Gf[7] - J[18 + k]*J[6 + k], Gf[7])
+                Gf[8] = np.where(_m52, Gf[8] - J[18 + k]*J[12 + k], Gf[8])
+                Gf[9] = np.where(_m52, Gf[9] - J[18 + k]*J[18 + k], Gf[9])
+                Gf[10] = np.where(_m52, Gf[10] - J[24 + k]*J[0 + k], Gf[10])
+                Gf[11] = np.where(_m52, Gf[11] - J[24 + k]*J[6 + k], Gf[11])
+                Gf[12] = np.where(_m52, Gf[12] - J[24 + k]*J[12 + k], Gf[12])
+                Gf[13] = np.where(_m52, Gf[13] - J[24 + k]*J[18 + k], Gf[13])
+                Gf[14] = np.where(_m52, Gf[14] - J[24 + k]*J[24 + k], Gf[14])
+                Gf[15] = np.where(_m52, Gf[15] - J[30 + k]*J[0 + k], Gf[15])
+                Gf[16] = np.where(_m52, Gf[16] - J[30 + k]*J[6 + k], Gf[16])
+                Gf[17] = np.where(_m52, Gf[17] - J[30 + k]*J[12 + k], Gf[17])
+                Gf[18] = np.where(_m52, Gf[18] - J[30 + k]*J[18 + k], Gf[18])
+                Gf[19] = np.where(_m52, Gf[19] - J[30 + k]*J[24 + k], Gf[19])
+                Gf[20] = np.where(_m52, Gf[20] - J[30 + k]*J[30 + k], Gf[20])
+            _ik_damped_pose53_mu2 = mu2
+            _ik_damped_pose53_a00 = Gf[0] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a10 = Gf[1]
+            _ik_damped_pose53_a11 = Gf[2] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a20 = Gf[3]
+            _ik_damped_pose53_a21 = Gf[4]
+            _ik_damped_pose53_a22 = Gf[5] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a30 = Gf[6]
+            _ik_damped_pose53_a31 = Gf[7]
+            _ik_damped_pose53_a32 = Gf[8]
+            _ik_damped_pose53_a33 = Gf[9] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a40 = Gf[10]
+            _ik_damped_pose53_a41 = Gf[11]
+            _ik_damped_pose53_a42 = Gf[12]
+            _ik_damped_pose53_a43 = Gf[13]
+            _ik_damped_pose53_a44 = Gf[14] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_a50 = Gf[15]
+            _ik_damped_pose53_a51 = Gf[16]
+            _ik_damped_pose53_a52 = Gf[17]
+            _ik_damped_pose53_a53 = Gf[18]
+            _ik_damped_pose53_a54 = Gf[19]
+            _ik_damped_pose53_a55 = Gf[20] + _ik_damped_pose53_mu2
+            _ik_damped_pose53_cut = np.where(_ik_damped_pose53_a55 > np.where(_ik_damped_pose53_a44 > np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00))), _ik_damped_pose53_a44, np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)))), _ik_damped_pose53_a55, np.where(_ik_damped_pose53_a44 > np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00))), _ik_damped_pose53_a44, np.where(_ik_damped_pose53_a33 > np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)), _ik_damped_pose53_a33, np.where(_ik_damped_pose53_a22 > np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00), _ik_damped_pose53_a22, np.where(_ik_damped_pose53_a11 > _ik_damped_pose53_a00, _ik_damped_pose53_a11, _ik_damped_pose53_a00)))))*1e-13
+            _ik_damped_pose53_s0 = _ik_damped_pose53_a00
+            _ik_damped_pose53_kept0 = _ik_damped_pose53_s0 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i0 = np.where(_ik_damped_pose53_kept0, 1.0/_ik_damped_pose53_s0, 0.0)
+            _ik_damped_pose53_t10 = _ik_damped_pose53_a10
+            _ik_damped_pose53_l10 = _ik_damped_pose53_t10*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld10 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t10, 0.0)
+            _ik_damped_pose53_t20 = _ik_damped_pose53_a20
+            _ik_damped_pose53_l20 = _ik_damped_pose53_t20*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld20 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t20, 0.0)
+            _ik_damped_pose53_t30 = _ik_damped_pose53_a30
+            _ik_damped_pose53_l30 = _ik_damped_pose53_t30*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld30 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t30, 0.0)
+            _ik_damped_pose53_t40 = _ik_damped_pose53_a40
+            _ik_damped_pose53_l40 = _ik_damped_pose53_t40*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld40 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t40, 0.0)
+            _ik_damped_pose53_t50 = _ik_damped_pose53_a50
+            _ik_damped_pose53_l50 = _ik_damped_pose53_t50*_ik_damped_pose53_i0
+            _ik_damped_pose53_ld50 = np.where(_ik_damped_pose53_kept0, _ik_damped_pose53_t50, 0.0)
+            _ik_damped_pose53_s1 = _ik_damped_pose53_a11 - _ik_damped_pose53_l10*_ik_damped_pose53_ld10
+            _ik_damped_pose53_kept1 = _ik_damped_pose53_s1 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i1 = np.where(_ik_damped_pose53_kept1, 1.0/_ik_damped_pose53_s1, 0.0)
+            _ik_damped_pose53_t21 = _ik_damped_pose53_a21 - _ik_damped_pose53_l20*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l21 = _ik_damped_pose53_t21*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld21 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t21, 0.0)
+            _ik_damped_pose53_t31 = _ik_damped_pose53_a31 - _ik_damped_pose53_l30*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l31 = _ik_damped_pose53_t31*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld31 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t31, 0.0)
+            _ik_damped_pose53_t41 = _ik_damped_pose53_a41 - _ik_damped_pose53_l40*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l41 = _ik_damped_pose53_t41*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld41 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t41, 0.0)
+            _ik_damped_pose53_t51 = _ik_damped_pose53_a51 - _ik_damped_pose53_l50*_ik_damped_pose53_ld10
+            _ik_damped_pose53_l51 = _ik_damped_pose53_t51*_ik_damped_pose53_i1
+            _ik_damped_pose53_ld51 = np.where(_ik_damped_pose53_kept1, _ik_damped_pose53_t51, 0.0)
+            _ik_damped_pose53_s2 = (_ik_damped_pose53_a22 - _ik_damped_pose53_l20*_ik_damped_pose53_ld20) - _ik_damped_pose53_l21*_ik_damped_pose53_ld21
+            _ik_damped_pose53_kept2 = _ik_damped_pose53_s2 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i2 = np.where(_ik_damped_pose53_kept2, 1.0/_ik_damped_pose53_s2, 0.0)
+            _ik_damped_pose53_t32 = (_ik_damped_pose53_a32 - _ik_damped_pose53_l30*_ik_damped_pose53_ld20) - _ik_damped_pose53_l31*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l32 = _ik_damped_pose53_t32*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld32 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t32, 0.0)
+            _ik_damped_pose53_t42 = (_ik_damped_pose53_a42 - _ik_damped_pose53_l40*_ik_damped_pose53_ld20) - _ik_damped_pose53_l41*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l42 = _ik_damped_pose53_t42*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld42 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t42, 0.0)
+            _ik_damped_pose53_t52 = (_ik_damped_pose53_a52 - _ik_damped_pose53_l50*_ik_damped_pose53_ld20) - _ik_damped_pose53_l51*_ik_damped_pose53_ld21
+            _ik_damped_pose53_l52 = _ik_damped_pose53_t52*_ik_damped_pose53_i2
+            _ik_damped_pose53_ld52 = np.where(_ik_damped_pose53_kept2, _ik_damped_pose53_t52, 0.0)
+            _ik_damped_pose53_s3 = (_ik_damped_pose53_a33 - (_ik_damped_pose53_l30*_ik_damped_pose53_ld30 + _ik_damped_pose53_l31*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l32*_ik_damped_pose53_ld32
+            _ik_damped_pose53_kept3 = _ik_damped_pose53_s3 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i3 = np.where(_ik_damped_pose53_kept3, 1.0/_ik_damped_pose53_s3, 0.0)
+            _ik_damped_pose53_t43 = (_ik_damped_pose53_a43 - (_ik_damped_pose53_l40*_ik_damped_pose53_ld30 + _ik_damped_pose53_l41*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l42*_ik_damped_pose53_ld32
+            _ik_damped_pose53_l43 = _ik_damped_pose53_t43*_ik_damped_pose53_i3
+            _ik_damped_pose53_ld43 = np.where(_ik_damped_pose53_kept3, _ik_damped_pose53_t43, 0.0)
+            _ik_damped_pose53_t53 = (_ik_damped_pose53_a53 - (_ik_damped_pose53_l50*_ik_damped_pose53_ld30 + _ik_damped_pose53_l51*_ik_damped_pose53_ld31)) - _ik_damped_pose53_l52*_ik_damped_pose53_ld32
+            _ik_damped_pose53_l53 = _ik_damped_pose53_t53*_ik_damped_pose53_i3
+            _ik_damped_pose53_ld53 = np.where(_ik_damped_pose53_kept3, _ik_damped_pose53_t53, 0.0)
+            _ik_damped_pose53_s4 = (_ik_damped_pose53_a44 - (_ik_damped_pose53_l40*_ik_damped_pose53_ld40 + (_ik_damped_pose53_l41*_ik_damped_pose53_ld41 + _ik_damped_pose53_l42*_ik_damped_pose53_ld42))) - _ik_damped_pose53_l43*_ik_damped_pose53_ld43
+            _ik_damped_pose53_kept4 = _ik_damped_pose53_s4 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i4 = np.where(_ik_damped_pose53_kept4, 1.0/_ik_damped_pose53_s4, 0.0)
+            _ik_damped_pose53_t54 = (_ik_damped_pose53_a54 - (_ik_damped_pose53_l50*_ik_damped_pose53_ld40 + (_ik_damped_pose53_l51*_ik_damped_pose53_ld41 + _ik_damped_pose53_l52*_ik_damped_pose53_ld42))) - _ik_damped_pose53_l53*_ik_damped_pose53_ld43
+            _ik_damped_pose53_l54 = _ik_damped_pose53_t54*_ik_damped_pose53_i4
+            _ik_damped_pose53_ld54 = np.where(_ik_damped_pose53_kept4, _ik_damped_pose53_t54, 0.0)
+            _ik_damped_pose53_s5 = (_ik_damped_pose53_a55 - ((_ik_damped_pose53_l50*_ik_damped_pose53_ld50 + _ik_damped_pose53_l51*_ik_damped_pose53_ld51) + (_ik_damped_pose53_l52*_ik_damped_pose53_ld52 + _ik_damped_pose53_l53*_ik_damped_pose53_ld53))) - _ik_damped_pose53_l54*_ik_damped_pose53_ld54
+            _ik_damped_pose53_kept5 = _ik_damped_pose53_s5 > _ik_damped_pose53_cut
+            _ik_damped_pose53_i5 = np.where(_ik_damped_pose53_kept5, 1.0/_ik_damped_pose53_s5, 0.0)
+            _ik_damped_pose53_y0 = e[0]
+            _ik_damped_pose53_y1 = e[1] - _ik_damped_pose53_l10*_ik_damped_pose53_y0
+            _ik_damped_pose53_y2 = (e[2] - _ik_damped_pose53_l20*_ik_damped_pose53_y0) - _ik_damped_pose53_l21*_ik_damped_pose53_y1
+            _ik_damped_pose53_y3 = (e[3] - (_ik_damped_pose53_l30*_ik_damped_pose53_y0 + _ik_damped_pose53_l31*_ik_damped_pose53_y1)) - _ik_damped_pose53_l32*_ik_damped_pose53_y2
+            _ik_damped_pose53_y4 = (e[4] - (_ik_damped_pose53_l40*_ik_damped_pose53_y0 + (_ik_damped_pose53_l41*_ik_damped_pose53_y1 + _ik_damped_pose53_l42*_ik_damped_pose53_y2))) - _ik_damped_pose53_l43*_ik_damped_pose53_y3
+            _ik_damped_pose53_y5 = (e[5] - ((_ik_damped_pose53_l50*_ik_damped_pose53_y0 + _ik_damped_pose53_l51*_ik_damped_pose53_y1) + (_ik_damped_pose53_l52*_ik_damped_pose53_y2 + _ik_damped_pose53_l53*_ik_damped_pose53_y3))) - _ik_damped_pose53_l54*_ik_damped_pose53_y4
+            _ik_damped_pose53_z5 = _ik_damped_pose53_y5*_ik_damped_pose53_i5
+            _ik_damped_pose53_z4 = _ik_damped_pose53_y4*_ik_damped_pose53_i4 - _ik_damped_pose53_l54*_ik_damped_pose53_z5
+            _ik_damped_pose53_z3 = (_ik_damped_pose53_y3*_ik_damped_pose53_i3 - _ik_damped_pose53_l53*_ik_damped_pose53_z5) - _ik_damped_pose53_l43*_ik_damped_pose53_z4
+            _ik_damped_pose53_z2 = (_ik_damped_pose53_y2*_ik_damped_pose53_i2 - (_ik_damped_pose53_l52*_ik_damped_pose53_z5 + _ik_damped_pose53_l42*_ik_damped_pose53_z4)) - _ik_damped_pose53_l32*_ik_damped_pose53_z3
+            _ik_damped_pose53_z1 = (_ik_damped_pose53_y1*_ik_damped_pose53_i1 - (_ik_damped_pose53_l51*_ik_damped_pose53_z5 + (_ik_damped_pose53_l41*_ik_damped_pose53_z4 + _ik_damped_pose53_l31*_ik_damped_pose53_z3))) - _ik_damped_pose53_l21*_ik_damped_pose53_z2
+            _ik_damped_pose53_z0 = (_ik_damped_pose53_y0*_ik_damped_pose53_i0 - ((_ik_damped_pose53_l50*_ik_damped_pose53_z5 + _ik_damped_pose53_l40*_ik_damped_pose53_z4) + (_ik_damped_pose53_l30*_ik_damped_pose53_z3 + _ik_damped_pose53_l20*_ik_damped_pose53_z2))) - _ik_damped_pose53_l10*_ik_damped_pose53_z1
+            dq[0] = np.where(_m49, (Jf[0]*_ik_damped_pose53_z0 + (Jf[6]*_ik_damped_pose53_z1 + Jf[12]*_ik_damped_pose53_z2)) + (Jf[18]*_ik_damped_pose53_z3 + (Jf[24]*_ik_damped_pose53_z4 + Jf[30]*_ik_damped_pose53_z5)), dq[0])
+            dq[1] = np.where(_m49, (Jf[1]*_ik_damped_pose53_z0 + (Jf[7]*_ik_damped_pose53_z1 + Jf[13]*_ik_damped_pose53_z2)) + (Jf[19]*_ik_damped_pose53_z3 + (Jf[25]*_ik_damped_pose53_z4 + Jf[31]*_ik_damped_pose53_z5)), dq[1])
+            dq[2] = np.where(_m49, (Jf[2]*_ik_damped_pose53_z0 + (Jf[8]*_ik_damped_pose53_z1 + Jf[14]*_ik_damped_pose53_z2)) + (Jf[20]*_ik_damped_pose53_z3 + (Jf[26]*_ik_damped_pose53_z4 + Jf[32]*_ik_damped_pose53_z5)), dq[2])
+            dq[3] = np.where(_m49, (Jf[3]*_ik_damped_pose53_z0 + (Jf[9]*_ik_damped_pose53_z1 + Jf[15]*_ik_damped_pose53_z2)) + (Jf[21]*_ik_damped_pose53_z3 + (Jf[27]*_ik_damped_pose53_z4 + Jf[33]*_ik_damped_pose53_z5)), dq[3])
+            dq[4] = np.where(_m49, (Jf[4]*_ik_damped_pose53_z0 + (Jf[10]*_ik_damped_pose53_z1 + Jf[16]*_ik_damped_pose53_z2)) + (Jf[22]*_ik_damped_pose53_z3 + (Jf[28]*_ik_damped_pose53_z4 + Jf[34]*_ik_damped_pose53_z5)), dq[4])
+            dq[5] = np.where(_m49, (Jf[5]*_ik_damped_pose53_z0 + (Jf[11]*_ik_damped_pose53_z1 + Jf[17]*_ik_damped_pose53_z2)) + (Jf[23]*_ik_damped_pose53_z3 + (Jf[29]*_ik_damped_pose53_z4 + Jf[35]*_ik_damped_pose53_z5)), dq[5])
+            ff = np.where(_m49, Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20], ff)
+            gg = np.where(_m49, 0.0, gg)
             for k in range(0, 6):
-                gg = np.where(_m47, gg + (Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5])*(Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5]), gg)
-        ff = np.where(_m48, G[0] + G[2] + G[5] + G[9] + G[14] + G[20], ff)
-        gg = np.where(_m48, 0.0, gg)
+                gg = np.where(_m49, gg + (Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5])*(Jf[0 + k]*e[0] + Jf[6 + k]*e[1] + Jf[12 + k]*e[2] + Jf[18 + k]*e[3] + Jf[24 + k]*e[4] + Jf[30 + k]*e[5]), gg)
+        ff = np.where(_m50, G[0] + G[2] + G[5] + G[9] + G[14] + G[20], ff)
+        gg = np.where(_m50, 0.0, gg)
         for k in range(0, 6):
-            gg = np.where(_m48, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5]), gg)
+            gg = np.where(_m50, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
-        stationary = np.where(_run33, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        big = np.where(_run33, 0.0, big)
+        stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        big = np.where(_run35, 0.0, big)
         for k in range(0, 6):
-            big = np.where(_run33, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
-        scale = np.where(_run33, np.where(big > 1.0, 1.0/big, 1.0), scale)
+            big = np.where(_run35, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
+        scale = np.where(_run35, np.where(big > 1.0, 1.0/big, 1.0), scale)
         for k in range(0, 6):
-            trial[k] = np.where(_run33, q[k] + dq[k]*scale, trial[k])
-        _c52 = trial[0] > hi[0]
-        _m53 = _run33 & _c52
-        _m54 = _run33 & (~_c52)
-        trial[0] = np.where(_m53, trial[0] - 6.283185307179586, trial[0])
-        _c55 = trial[0] < lo[0]
-        _m56 = _m54 & _c55
-        trial[0] = np.where(_m56, trial[0] + 6.283185307179586, trial[0])
-        _c57 = trial[1] > hi[1]
-        _m58 = _run33 & _c57
-        _m59 = _run33 & (~_c57)
-        trial[1] = np.where(_m58, trial[1] - 6.283185307179586, trial[1])
-        _c60 = trial[1] < lo[1]
-        _m61 = _m59 & _c60
-        trial[1] = np.where(_m61, trial[1] + 6.283185307179586, trial[1])
-        _c62 = trial[2] > hi[2]
-        _m63 = _run33 & _c62
-        _m64 = _run33 & (~_c62)
-        trial[2] = np.where(_m63, trial[2] - 6.283185307179586, trial[2])
-        _c65 = trial[2] < lo[2]
-        _m66 = _m64 & _c65
-        trial[2] = np.where(_m66, trial[2] + 6.283185307179586, trial[2])
-        _c67 = trial[3] > hi[3]
-        _m68 = _run33 & _c67
-        _m69 = _run33 & (~_c67)
-        trial[3] = np.where(_m68, trial[3] - 6.283185307179586, trial[3])
-        _c70 = trial[3] < lo[3]
-        _m71 = _m69 & _c70
-        trial[3] = np.where(_m71, trial[3] + 6.283185307179586, trial[3])
-        _c72 = trial[4] > hi[4]
-        _m73 = _run33 & _c72
-        _m74 = _run33 & (~_c72)
-        trial[4] = np.where(_m73, trial[4] - 6.283185307179586, trial[4])
-        _c75 = trial[4] < lo[4]
-        _m76 = _m74 & _c75
-        trial[4] = np.where(_m76, trial[4] + 6.283185307179586, trial[4])
-        _c77 = trial[5] > hi[5]
-        _m78 = _run33 & _c77
-        _m79 = _run33 & (~_c77)
-        trial[5] = np.where(_m78, trial[5] - 6.283185307179586, trial[5])
-        _c80 = trial[5] < lo[5]
-        _m81 = _m79 & _c80
-        trial[5] = np.where(_m81, trial[5] + 6.283185307179586, trial[5])
+            trial[k] = np.where(_run35, q[k] + dq[k]*scale, trial[k])
+        _c54 = trial[0] > hi[0]
+        _m55 = _run35 & _c54
+        _m56 = _run35 & (~_c54)
+        trial[0] = np.where(_m55, trial[0] - 6.283185307179586, trial[0])
+        _c57 = trial[0] < lo[0]
+        _m58 = _m56 & _c57
+        trial[0] = np.where(_m58, trial[0] + 6.283185307179586, trial[0])
+        _c59 = trial[1] > hi[1]
+        _m60 = _run35 & _c59
+        _m61 = _run35 & (~_c59)
+        trial[1] = np.where(_m60, trial[1] - 6.283185307179586, trial[1])
+        _c62 = trial[1] < lo[1]
+        _m63 = _m61 & _c62
+        trial[1] = np.where(_m63, trial[1] + 6.283185307179586, trial[1])
+        _c64 = trial[2] > hi[2]
+        _m65 = _run35 & _c64
+        _m66 = _run35 & (~_c64)
+        trial[2] = np.where(_m65, trial[2] - 6.283185307179586, trial[2])
+        _c67 = trial[2] < lo[2]
+        _m68 = _m66 & _c67
+        trial[2] = np.where(_m68, trial[2] + 6.283185307179586, trial[2])
+        _c69 = trial[3] > hi[3]
+        _m70 = _run35 & _c69
+        _m71 = _run35 & (~_c69)
+        trial[3] = np.where(_m70, trial[3] - 6.283185307179586, trial[3])
+        _c72 = trial[3] < lo[3]
+        _m73 = _m71 & _c72
+        trial[3] = np.where(_m73, trial[3] + 6.283185307179586, trial[3])
+        _c74 = trial[4] > hi[4]
+        _m75 = _run35 & _c74
+        _m76 = _run35 & (~_c74)
+        trial[4] = np.where(_m75, trial[4] - 6.283185307179586, trial[4])
+        _c77 = trial[4] < lo[4]
+        _m78 = _m76 & _c77
+        trial[4] = np.where(_m78, trial[4] + 6.283185307179586, trial[4])
+        _c79 = trial[5] > hi[5]
+        _m80 = _run35 & _c79
+        _m81 = _run35 & (~_c79)
+        trial[5] = np.where(_m80, trial[5] - 6.283185307179586, trial[5])
+        _c82 = trial[5] < lo[5]
+        _m83 = _m81 & _c82
+        trial[5] = np.where(_m83, trial[5] + 6.283185307179586, trial[5])
         for k in range(0, 6):
-            trial[k] = np.where(_run33, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
+            trial[k] = np.where(_run35, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
         _o = _ik_terms_on_lanes(_c, trial[0:6])
-        _merge(_run33, _o[0], Tt, 0, _fr)
-        _merge(_run33, _o[1], Jt, 0, _fr)
-        _ik_error_pose82_M = [_fr(0.0)] * 9
-        et[0] = np.where(_run33, target[3] - Tt[3], et[0])
-        et[1] = np.where(_run33, target[7] - Tt[7], et[1])
-        et[2] = np.where(_run33, target[11] - Tt[11], et[2])
-        _ik_error_pose82_M[0] = np.where(_run33, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose82_M[0])
-        _ik_error_pose82_M[1] = np.where(_run33, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose82_M[1])
-        _ik_error_pose82_M[2] = np.where(_run33, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose82_M[2])
-        _ik_error_pose82_M[3] = np.where(_run33, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose82_M[3])
-        _ik_error_pose82_M[4] = np.where(_run33, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose82_M[4])
-        _ik_error_pose82_M[5] = np.where(_run33, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose82_M[5])
-        _ik_error_pose82_M[6] = np.where(_run33, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose82_M[6])
-        _ik_error_pose82_M[7] = np.where(_run33, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose82_M[7])
-        _ik_error_pose82_M[8] = np.where(_run33, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose82_M[8])
-        _alive84 = _run33
-        _ik_log383_v0 = _ik_error_pose82_M[7] - _ik_error_pose82_M[5]
-        _ik_log383_v1 = _ik_error_pose82_M[2] - _ik_error_pose82_M[6]
-        _ik_log383_v2 = _ik_error_pose82_M[3] - _ik_error_pose82_M[1]
-        _ik_log383_c = (((_ik_error_pose82_M[0] + _ik_error_pose82_M[4]) + _ik_error_pose82_M[8]) - 1.0)*0.5
-        _ik_log383_s = np.sqrt((_ik_log383_v0*_ik_log383_v0 + _ik_log383_v1*_ik_log383_v1) + _ik_log383_v2*_ik_log383_v2)*0.5
-        _ik_log383_angle = np.arctan2(_ik_log383_s, _ik_log383_c)
-        _ik_log383_k = _fr(0.0)
-        _c85 = _ik_log383_angle < 0.0001
-        _m86 = _run33 & _c85
-        _ik_log383_k = np.where(_m86, 0.5 + (_ik_log383_angle*_ik_log383_angle)*0.08333333333333333, _ik_log383_k)
-        et[0 + 3] = np.where(_m86, _ik_log383_v0*_ik_log383_k, et[0 + 3])
-        et[1 + 3] = np.where(_m86, _ik_log383_v1*_ik_log383_k, et[1 + 3])
-        et[2 + 3] = np.where(_m86, _ik_log383_v2*_ik_log383_k, et[2 + 3])
-        _alive84 = _alive84 & (~_m86)
-        _c87 = 3.141592653589793 - _ik_log383_angle > 0.001
-        _m88 = _alive84 & _c87
-        _ik_log383_k = np.where(_m88, _ik_log383_angle/(_ik_log383_s + _ik_log383_s), _ik_log383_k)
-        et[0 + 3] = np.where(_m88, _ik_log383_v0*_ik_log383_k, et[0 + 3])
-        et[1 + 3] = np.where(_m88, _ik_log383_v1*_ik_log383_k, et[1 + 3])
-        et[2 + 3] = np.where(_m88, _ik_log383_v2*_ik_log383_k, et[2 + 3])
-        _alive84 = _alive84 & (~_m88)
+        _merge(_run35, _o[0], Tt, 0, _fr)
+        _merge(_run35, _o[1], Jt, 0, _fr)
+        _ik_error_pose84_M = [_fr(0.0)] * 9
+        et[0] = np.where(_run35, target[3] - Tt[3], et[0])
+        et[1] = np.where(_run35, target[7] - Tt[7], et[1])
+        et[2] = np.where(_run35, target[11] - Tt[11], et[2])
+        _ik_error_pose84_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose84_M[0])
+        _ik_error_pose84_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose84_M[1])
+        _ik_error_pose84_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose84_M[2])
+        _ik_error_pose84_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose84_M[3])
+        _ik_error_pose84_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose84_M[4])
+        _ik_error_pose84_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose84_M[5])
+        _ik_error_pose84_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose84_M[6])
+        _ik_error_pose84_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose84_M[7])
+        _ik_error_pose84_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose84_M[8])
+        _alive86 = _run35
+        _ik_log385_v0 = _ik_error_pose84_M[7] - _ik_error_pose84_M[5]
+        _ik_log385_v1 = _ik_error_pose84_M[2] - _ik_error_pose84_M[6]
+        _ik_log385_v2 = _ik_error_pose84_M[3] - _ik_error_pose84_M[1]
+        _ik_log385_c = (((_ik_error_pose84_M[0] + _ik_error_pose84_M[4]) + _ik_error_pose84_M[8]) - 1.0)*0.5
+        _ik_log385_s = np.sqrt((_ik_log385_v0*_ik_log385_v0 + _ik_log385_v1*_ik_log385_v1) + _ik_log385_v2*_ik_log385_v2)*0.5
+        _ik_log385_angle = np.arctan2(_ik_log385_s, _ik_log385_c)
+        _ik_log385_k = _fr(0.0)
+        _c87 = _ik_log385_angle < 0.0001
+        _m88 = _run35 & _c87
+        _ik_log385_k = np.where(_m88, 0.5 + (_ik_log385_angle*_ik_log385_angle)*0.08333333333333333, _ik_log385_k)
+        et[0 + 3] = np.where(_m88, _ik_log385_v0*_ik_log385_k, et[0 + 3])
+        et[1 + 3] = np.where(_m88, _ik_log385_v1*_ik_log385_k, et[1 + 3])
+        et[2 + 3] = np.where(_m88, _ik_log385_v2*_ik_log385_k, et[2 + 3])
+        _alive86 = _alive86 & (~_m88)
+        _c89 = 3.141592653589793 - _ik_log385_angle > 0.001
+        _m90 = _alive86 & _c89
+        _ik_log385_k = np.where(_m90, _ik_log385_angle/(_ik_log385_s + _ik_log385_s), _ik_log385_k)
+        et[0 + 3] = np.where(_m90, _ik_log385_v0*_ik_log385_k, et[0 + 3])
+        et[1 + 3] = np.where(_m90, _ik_log385_v1*_ik_log385_k, et[1 + 3])
+        et[2 + 3] = np.where(_m90, _ik_log385_v2*_ik_log385_k, et[2 + 3])
+        _alive86 = _alive86 & (~_m90)
         # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-        _ik_log383_col = [_fr(0.0)] * 3
-        _ik_log383_i = np.where(_ik_error_pose82_M[0] >= _ik_error_pose82_M[4], np.where(_ik_error_pose82_M[0] >= _ik_error_pose82_M[8], _fi(0), 2), np.where(_ik_error_pose82_M[4] >= _ik_error_pose82_M[8], _fi(1), 2))
-        _i89 = 3*_ik_log383_i
-        _ik_log383_col[0] = np.where(_alive84, (np.where(_ik_log383_i == 0, _ik_error_pose82_M[0], np.where(_ik_log383_i == 1, _ik_error_pose82_M[1], np.where(_ik_log383_i == 2, _ik_error_pose82_M[2], np.where(_ik_log383_i == 3, _ik_error_pose82_M[3], np.where(_ik_log383_i == 4, _ik_error_pose82_M[4], np.where(_ik_log383_i == 5, _ik_error_pose82_M[5], np.where(_ik_log383_i == 6, _ik_error_pose82_M[6], np.where(_ik_log383_i == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i89 == 0, _ik_error_pose82_M[0], np.where(_i89 == 3, _ik_error_pose82_M[3], _ik_error_pose82_M[6])))*0.5, _ik_log383_col[0])
-        _i90 = 3 + _ik_log383_i
-        _i91 = 3*_ik_log383_i + 1
-        _ik_log383_col[1] = np.where(_alive84, (np.where(_i90 == 0, _ik_error_pose82_M[0], np.where(_i90 == 1, _ik_error_pose82_M[1], np.where(_i90 == 2, _ik_error_pose82_M[2], np.where(_i90 == 3, _ik_error_pose82_M[3], np.where(_i90 == 4, _ik_error_pose82_M[4], np.where(_i90 == 5, _ik_error_pose82_M[5], np.where(_i90 == 6, _ik_error_pose82_M[6], np.where(_i90 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i91 == 1, _ik_error_pose82_M[1], np.where(_i91 == 4, _ik_error_pose82_M[4], _ik_error_pose82_M[7])))*0.5, _ik_log383_col[1])
-        _i92 = 6 + _ik_log383_i
-        _i93 = 3*_ik_log383_i + 2
-        _ik_log383_col[2] = np.where(_alive84, (np.where(_i92 == 0, _ik_error_pose82_M[0], np.where(_i92 == 1, _ik_error_pose82_M[1], np.where(_i92 == 2, _ik_error_pose82_M[2], np.where(_i92 == 3, _ik_error_pose82_M[3], np.where(_i92 == 4, _ik_error_pose82_M[4], np.where(_i92 == 5, _ik_error_pose82_M[5], np.where(_i92 == 6, _ik_error_pose82_M[6], np.where(_i92 == 7, _ik_error_pose82_M[7], _ik_error_pose82_M[8])))))))) + np.where(_i93 == 2, _ik_error_pose82_M[2], np.where(_i93 == 5, _ik_error_pose82_M[5], _ik_error_pose82_M[8])))*0.5, _ik_log383_col[2])
-        _v94 = np.where(_ik_log383_i == 0, _ik_log383_col[0], np.where(_ik_log383_i == 1, _ik_log383_col[1], _ik_log383_col[2])) - _ik_log383_c
-        _m95 = _alive84 & (_ik_log383_i == 0)
-        _ik_log383_col[0] = np.where(_m95, _v94, _ik_log383_col[0])
-        _m96 = _alive84 & (_ik_log383_i == 1)
-        _ik_log383_col[1] = np.where(_m96, _v94, _ik_log383_col[1])
-        _m97 = _alive84 & (_ik_log383_i == 2)
-        _ik_log383_col[2] = np.where(_m97, _v94, _ik_log383_col[2])
-        _ik_log383_norm = np.sqrt((_ik_log383_col[0]*_ik_log383_col[0] + _ik_log383_col[1]*_ik_log383_col[1]) + _ik_log383_col[2]*_ik_log383_col[2])
-        _ik_log383_k = np.where(_alive84, np.where((_ik_log383_col[0]*_ik_log383_v0 + _ik_log383_col[1]*_ik_log383_v1) + _ik_log383_col[2]*_ik_log383_v2 < 0.0, -_ik_log383_angle, _ik_log383_angle)/_ik_log383_norm, _ik_log383_k)
-        et[0 + 3] = np.where(_alive84, _ik_log383_col[0]*_ik_log383_k, et[0 + 3])
-        et[1 + 3] = np.where(_alive84, _ik_log383_col[1]*_ik_log383_k, et[1 + 3])
-        et[2 + 3] = np.where(_alive84, _ik_log383_col[2]*_ik_log383_k, et[2 + 3])
-        _ik_error_pose82_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-        _ik_error_pose82_rotation = np.sqrt(_ik_error_pose82_rotation_squares)
-        _c98 = ~np.isfinite(_ik_error_pose82_rotation_squares)
-        _m99 = _run33 & _c98
-        _ik_error_pose82_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-        _ik_error_pose82_rotation = np.where(_m99, _ik_error_pose82_rotation_top*np.sqrt((et[3]/_ik_error_pose82_rotation_top)*(et[3]/_ik_error_pose82_rotation_top) + (et[4]/_ik_error_pose82_rotation_top)*(et[4]/_ik_error_pose82_rotation_top) + (et[5]/_ik_error_pose82_rotation_top)*(et[5]/_ik_error_pose82_rotation_top)), _ik_error_pose82_rotation)
-        norms[1] = np.where(_run33, _ik_error_pose82_rotation, norms[1])
-        _ik_error_pose82_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_pose82_position = np.sqrt(_ik_error_pose82_position_squares)
-        _c100 = ~np.isfinite(_ik_error_pose82_position_squares)
-        _m101 = _run33 & _c100
-        _ik_error_pose82_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_pose82_position = np.where(_m101, _ik_error_pose82_position_top*np.sqrt((et[0]/_ik_error_pose82_position_top)*(et[0]/_ik_error_pose82_position_top) + (et[1]/_ik_error_pose82_position_top)*(et[1]/_ik_error_pose82_position_top) + (et[2]/_ik_error_pose82_position_top)*(et[2]/_ik_error_pose82_position_top)), _ik_error_pose82_position)
-        norms[0] = np.where(_run33, _ik_error_pose82_position, norms[0])
-        _ik_error_pose82_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_pose82_whole = np.sqrt(_ik_error_pose82_whole_squares)
-        _c102 = ~np.isfinite(_ik_error_pose82_whole_squares)
-        _m103 = _run33 & _c102
-        _ik_error_pose82_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_pose82_whole = np.where(_m103, _ik_error_pose82_whole_top*np.sqrt((norms[0]/_ik_error_pose82_whole_top)*(norms[0]/_ik_error_pose82_whole_top) + (norms[1]/_ik_error_pose82_whole_top)*(norms[1]/_ik_error_pose82_whole_top)), _ik_error_pose82_whole)
-        norms[2] = np.where(_run33, _ik_error_pose82_whole, norms[2])
-        pet = np.where(_run33, norms[0], pet)
-        ret = np.where(_run33, norms[1], ret)
-        ent = np.where(_run33, norms[2], ent)
-        it = np.where(_run33, it + 1, it)
-        attempt = np.where(_run33, attempt + 1, attempt)
-        _c104 = ent < en
-        _m105 = _run33 & _c104
-        _m106 = _run33 & (~_c104)
+        _ik_log385_col = [_fr(0.0)] * 3
+        _ik_log385_i = np.where(_ik_error_pose84_M[0] >= _ik_error_pose84_M[4], np.where(_ik_error_pose84_M[0] >= _ik_error_pose84_M[8], _fi(0), 2), np.where(_ik_error_pose84_M[4] >= _ik_error_pose84_M[8], _fi(1), 2))
+        _i91 = 3*_ik_log385_i
+        _ik_log385_col[0] = np.where(_alive86, (np.where(_ik_log385_i == 0, _ik_error_pose84_M[0], np.where(_ik_log385_i == 1, _ik_error_pose84_M[1], np.where(_ik_log385_i == 2, _ik_error_pose84_M[2], np.where(_ik_log385_i == 3, _ik_error_pose84_M[3], np.where(_ik_log385_i == 4, _ik_error_pose84_M[4], np.where(_ik_log385_i == 5, _ik_error_pose84_M[5], np.where(_ik_log385_i == 6, _ik_error_pose84_M[6], np.where(_ik_log385_i == 7, _ik_error_pose84_M[7], _ik_error_pose84_M[8])))))))) + np.where(_i91 == 0, _ik_error_pose84_M[0], np.where(_i91 == 3, _ik_error_pose84_M[3], _ik_error_pose84_M[6])))*0.5, _ik_log385_col[0])
+        _i92 = 3 + _ik_log385_i
+        _i93 = 3*_ik_log385_i + 1
+        _ik_log385_col[1] = np.where(_alive86, (np.where(_i92 == 0, _ik_error_pose84_M[0], np.where(_i92 == 1, _ik_error_pose84_M[1], np.where(_i92 == 2, _ik_error_pose84_M[2], np.where(_i92 == 3, _ik_error_pose84_M[3], np.where(_i92 == 4, _ik_error_pose84_M[4], np.where(_i92 == 5, _ik_error_pose84_M[5], np.where(_i92 == 6, _ik_error_pose84_M[6], np.where(_i92 == 7, _ik_error_pose84_M[7], _ik_error_pose84_M[8])))))))) + np.where(_i93 == 1, _ik_error_pose84_M[1], np.where(_i93 == 4, _ik_error_pose84_M[4], _ik_error_pose84_M[7])))*0.5, _ik_log385_col[1])
+        _i94 = 6 + _ik_log385_i
+        _i95 = 3*_ik_log385_i + 2
+        _ik_log385_col[2] = np.where(_alive86, (np.where(_i94 == 0, _ik_error_pose84_M[0], np.where(_i94 == 1, _ik_error_pose84_M[1], np.where(_i94 == 2, _ik_error_pose84_M[2], np.where(_i94 == 3, _ik_error_pose84_M[3], np.where(_i94 == 4, _ik_error_pose84_M[4], np.where(_i94 == 5, _ik_error_pose84_M[5], np.where(_i94 == 6, _ik_error_pose84_M[6], np.where(_i94 == 7, _ik_error_pose84_M[7], _ik_error_pose84_M[8])))))))) + np.where(_i95 == 2, _ik_error_pose84_M[2], np.where(_i95 == 5, _ik_error_pose84_M[5], _ik_error_pose84_M[8])))*0.5, _ik_log385_col[2])
+        _v96 = np.where(_ik_log385_i == 0, _ik_log385_col[0], np.where(_ik_log385_i == 1, _ik_log385_col[1], _ik_log385_col[2])) - _ik_log385_c
+        _m97 = _alive86 & (_ik_log385_i == 0)
+        _ik_log385_col[0] = np.where(_m97, _v96, _ik_log385_col[0])
+        _m98 = _alive86 & (_ik_log385_i == 1)
+        _ik_log385_col[1] = np.where(_m98, _v96, _ik_log385_col[1])
+        _m99 = _alive86 & (_ik_log385_i == 2)
+        _ik_log385_col[2] = np.where(_m99, _v96, _ik_log385_col[2])
+        _ik_log385_norm = np.sqrt((_ik_log385_col[0]*_ik_log385_col[0] + _ik_log385_col[1]*_ik_log385_col[1]) + _ik_log385_col[2]*_ik_log385_col[2])
+        _ik_log385_k = np.where(_alive86, np.where((_ik_log385_col[0]*_ik_log385_v0 + _ik_log385_col[1]*_ik_log385_v1) + _ik_log385_col[2]*_ik_log385_v2 < 0.0, -_ik_log385_angle, _ik_log385_angle)/_ik_log385_norm, _ik_log385_k)
+        et[0 + 3] = np.where(_alive86, _ik_log385_col[0]*_ik_log385_k, et[0 + 3])
+        et[1 + 3] = np.where(_alive86, _ik_log385_col[1]*_ik_log385_k, et[1 + 3])
+        et[2 + 3] = np.where(_alive86, _ik_log385_col[2]*_ik_log385_k, et[2 + 3])
+        _ik_error_pose84_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+        _ik_error_pose84_rotation = np.sqrt(_ik_error_pose84_rotation_squares)
+        _c100 = ~np.isfinite(_ik_error_pose84_rotation_squares)
+        _m101 = _run35 & _c100
+        _ik_error_pose84_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+        _ik_error_pose84_rotation = np.where(_m101, _ik_error_pose84_rotation_top*np.sqrt((et[3]/_ik_error_pose84_rotation_top)*(et[3]/_ik_error_pose84_rotation_top) + (et[4]/_ik_error_pose84_rotation_top)*(et[4]/_ik_error_pose84_rotation_top) + (et[5]/_ik_error_pose84_rotation_top)*(et[5]/_ik_error_pose84_rotation_top)), _ik_error_pose84_rotation)
+        norms[1] = np.where(_run35, _ik_error_pose84_rotation, norms[1])
+        _ik_error_pose84_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_pose84_position = np.sqrt(_ik_error_pose84_position_squares)
+        _c102 = ~np.isfinite(_ik_error_pose84_position_squares)
+        _m103 = _run35 & _c102
+        _ik_error_pose84_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_pose84_position = np.where(_m103, _ik_error_pose84_position_top*np.sqrt((et[0]/_ik_error_pose84_position_top)*(et[0]/_ik_error_pose84_position_top) + (et[1]/_ik_error_pose84_position_top)*(et[1]/_ik_error_pose84_position_top) + (et[2]/_ik_error_pose84_position_top)*(et[2]/_ik_error_pose84_position_top)), _ik_error_pose84_position)
+        norms[0] = np.where(_run35, _ik_error_pose84_position, norms[0])
+        _ik_error_pose84_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_pose84_whole = np.sqrt(_ik_error_pose84_whole_squares)
+        _c104 = ~np.isfinite(_ik_error_pose84_whole_squares)
+        _m105 = _run35 & _c104
+        _ik_error_pose84_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_pose84_whole = np.where(_m105, _ik_error_pose84_whole_top*np.sqrt((norms[0]/_ik_error_pose84_whole_top)*(norms[0]/_ik_error_pose84_whole_top) + (norms[1]/_ik_error_pose84_whole_top)*(norms[1]/_ik_error_pose84_whole_top)), _ik_error_pose84_whole)
+        norms[2] = np.where(_run35, _ik_error_pose84_whole, norms[2])
+        pet = np.where(_run35, norms[0], pet)
+        ret = np.where(_run35, norms[1], ret)
+        ent = np.where(_run35, norms[2], ent)
+        it = np.where(_run35, it + 1, it)
+        attempt = np.where(_run35, attempt + 1, attempt)
+        _c106 = ent < en
+        _m107 = _run35 & _c106
+        _m108 = _run35 & (~_c106)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m105, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m105, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m107, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m107, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 6):
-            q[k] = np.where(_m105, trial[k], q[k])
+            q[k] = np.where(_m107, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m105, Tt[k], Tm[k])
+            Tm[k] = np.where(_m107, Tt[k], Tm[k])
         for k in range(0, 36):
-            J[k] = np.where(_m105, Jt[k], J[k])
+            J[k] = np.where(_m107, Jt[k], J[k])
         for k in range(0, 6):
-            e[k] = np.where(_m105, et[k], e[k])
-        gram_ready = np.where(_m105, 0, gram_ready)
-        pe = np.where(_m105, pet, pe)
-        re = np.where(_m105, ret, re)
-        en = np.where(_m105, ent, en)
-        c = np.where(_m105, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m106, c*4.0, c)
-        stalled = np.where(_m106, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        _c107 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m108 = _run33 & _c107
-        best_en = np.where(_m108, en, best_en)
-        best_pe = np.where(_m108, pe, best_pe)
-        best_re = np.where(_m108, re, best_re)
-        best_stalled = np.where(_m108, stalled, best_stalled)
-        best_here = np.where(_m108, 1, best_here)
+            e[k] = np.where(_m107, et[k], e[k])
+        gram_ready = np.where(_m107, 0, gram_ready)
+        pe = np.where(_m107, pet, pe)
+        re = np.where(_m107, ret, re)
+        en = np.where(_m107, ent, en)
+        c = np.where(_m107, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m108, c*4.0, c)
+        stalled = np.where(_m108, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        _c109 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m110 = _run35 & _c109
+        best_en = np.where(_m110, en, best_en)
+        best_pe = np.where(_m110, pe, best_pe)
+        best_re = np.where(_m110, re, best_re)
+        best_stalled = np.where(_m110, stalled, best_stalled)
+        best_here = np.where(_m110, 1, best_here)
         for k in range(0, 6):
-            best_q[k] = np.where(_m108, q[k], best_q[k])
-        _c109 = ~((pe <= tol) & (re <= tol))
-        _m110 = _run33 & _c109
-        if bool(_m110.any()):
-            slow = np.where(_m110, stationary, slow)
-            _c111 = attempt % 3 == 0
-            _m112 = _m110 & _c111
-            _c113 = en > checkpoint*0.6
+            best_q[k] = np.where(_m110, q[k], best_q[k])
+        _c111 = ~((pe <= tol) & (re <= tol))
+        _m112 = _run35 & _c111
+        if bool(_m112.any()):
+            slow = np.where(_m112, stationary, slow)
+            _c113 = attempt % 3 == 0
             _m114 = _m112 & _c113
-            slow = np.where(_m114, 1, slow)
-            window_start = np.where(_m112, checkpoint, window_start)
-            checkpoint = np.where(_m112, en, checkpoint)
-            _c115 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m116 = _m110 & _c115
-            if bool(_m116.any()):
-                _c117 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m118 = _m116 & _c117
+            _c115 = en > checkpoint*0.6
+            _m116 = _m114 & _c115
+            slow = np.where(_m116, 1, slow)
+            window_start = np.where(_m114, checkpoint, window_start)
+            checkpoint = np.where(_m114, en, checkpoint)
+            _c117 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m118 = _m112 & _c117
+            if bool(_m118.any()):
+                _c119 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m120 = _m118 & _c119
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m118, 1, best_stalled)
-                best_here = np.where(_m116, 0, best_here)
-                nearest = np.where(_m116, 0.0, nearest)
+                best_stalled = np.where(_m120, 1, best_stalled)
+                best_here = np.where(_m118, 0, best_here)
+                nearest = np.where(_m118, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 6):
-                        _alive120 = _m116
-                        _ik_uniform119_s = state[0]
-                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shr(_ik_uniform119_s, 12)), _ik_uniform119_s)
-                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shl(_ik_uniform119_s, 25)), _ik_uniform119_s)
-                        _ik_uniform119_s = _u64_where(_m116, _u64_xor(_ik_uniform119_s, _u64_shr(_ik_uniform119_s, 27)), _ik_uniform119_s)
-                        state[0] = _u64_where(_m116, _ik_uniform119_s, state[0])
-                        u = np.where(_m116, _u64_real(_u64_shr(_u64_mul(_ik_uniform119_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive120 = _alive120 & (~_m116)
-                        trial[k] = np.where(_m116, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive122 = _m118
+                        _ik_uniform121_s = state[0]
+                        _ik_uniform121_s = _u64_where(_m118, _u64_xor(_ik_uniform121_s, _u64_shr(_ik_uniform121_s, 12)), _ik_uniform121_s)
+                        _ik_uniform121_s = _u64_where(_m118, _u64_xor(_ik_uniform121_s, _u64_shl(_ik_uniform121_s, 25)), _ik_uniform121_s)
+                        _ik_uniform121_s = _u64_where(_m118, _u64_xor(_ik_uniform121_s, _u64_shr(_ik_uniform121_s, 27)), _ik_uniform121_s)
+                        state[0] = _u64_where(_m118, _ik_uniform121_s, state[0])
+                        u = np.where(_m118, _u64_real(_u64_shr(_u64_mul(_ik_uniform121_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive122 = _alive122 & (~_m118)
+                        trial[k] = np.where(_m118, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:6])
-                    _merge(_m116, _o[0], Tt, 0, _fr)
-                    _merge(_m116, _o[1], Jt, 0, _fr)
-                    d = np.where(_m116, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
-                    _c121 = (d < nearest) | (m == 0)
-                    _m122 = _m116 & _c121
-                    nearest = np.where(_m122, d, nearest)
+                    _merge(_m118, _o[0], Tt, 0, _fr)
+                    _merge(_m118, _o[1], Jt, 0, _fr)
+                    d = np.where(_m118, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
+                    _c123 = (d < nearest) | (m == 0)
+                    _m124 = _m118 & _c123
+                    nearest = np.where(_m124, d, nearest)
                     for k in range(0, 6):
-                        q[k] = np.where(_m122, trial[k], q[k])
-                restarts = np.where(_m116, restarts + 1, restarts)
-                gram_ready = np.where(_m116, 0, gram_ready)
+                        q[k] = np.where(_m124, trial[k], q[k])
+                restarts = np.where(_m118, restarts + 1, restarts)
+                gram_ready = np.where(_m118, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:6])
-                _merge(_m116, _o[0], Tm, 0, _fr)
-                _merge(_m116, _o[1], J, 0, _fr)
-                _ik_error_pose123_M = [_fr(0.0)] * 9
-                e[0] = np.where(_m116, target[3] - Tm[3], e[0])
-                e[1] = np.where(_m116, target[7] - Tm[7], e[1])
-                e[2] = np.where(_m116, target[11] - Tm[11], e[2])
-                _ik_error_pose123_M[0] = np.where(_m116, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose123_M[0])
-                _ik_error_pose123_M[1] = np.where(_m116, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose123_M[1])
-                _ik_error_pose123_M[2] = np.where(_m116, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose123_M[2])
-                _ik_error_pose123_M[3] = np.where(_m116, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose123_M[3])
-                _ik_error_pose123_M[4] = np.where(_m116, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose123_M[4])
-                _ik_error_pose123_M[5] = np.where(_m116, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose123_M[5])
-                _ik_error_pose123_M[6] = np.where(_m116, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose123_M[6])
-                _ik_error_pose123_M[7] = np.where(_m116, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose123_M[7])
-                _ik_error_pose123_M[8] = np.where(_m116, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose123_M[8])
-                _alive125 = _m116
-                _ik_log3124_v0 = _ik_error_pose123_M[7] - _ik_error_pose123_M[5]
-                _ik_log3124_v1 = _ik_error_pose123_M[2] - _ik_error_pose123_M[6]
-                _ik_log3124_v2 = _ik_error_pose123_M[3] - _ik_error_pose123_M[1]
-                _ik_log3124_c = (((_ik_error_pose123_M[0] + _ik_error_pose123_M[4]) + _ik_error_pose123_M[8]) - 1.0)*0.5
-                _ik_log3124_s = np.sqrt((_ik_log3124_v0*_ik_log3124_v0 + _ik_log3124_v1*_ik_log3124_v1) + _ik_log3124_v2*_ik_log3124_v2)*0.5
-                _ik_log3124_angle = np.arctan2(_ik_log3124_s, _ik_log3124_c)
-                _ik_log3124_k = _fr(0.0)
-                _c126 = _ik_log3124_angle < 0.0001
-                _m127 = _m116 & _c126
-                _ik_log3124_k = np.where(_m127, 0.5 + (_ik_log3124_angle*_ik_log3124_angle)*0.08333333333333333, _ik_log3124_k)
-                e[0 + 3] = np.where(_m127, _ik_log3124_v0*_ik_log3124_k, e[0 + 3])
-                e[1 + 3] = np.where(_m127, _ik_log3124_v1*_ik_log3124_k, e[1 + 3])
-                e[2 + 3] = np.where(_m127, _ik_log3124_v2*_ik_log3124_k, e[2 + 3])
-                _alive125 = _alive125 & (~_m127)
-                _c128 = 3.141592653589793 - _ik_log3124_angle > 0.001
-                _m129 = _alive125 & _c128
-                _ik_log3124_k = np.where(_m129, _ik_log3124_angle/(_ik_log3124_s + _ik_log3124_s), _ik_log3124_k)
-                e[0 + 3] = np.where(_m129, _ik_log3124_v0*_ik_log3124_k, e[0 + 3])
-                e[1 + 3] = np.where(_m129, _ik_log3124_v1*_ik_log3124_k, e[1 + 3])
-                e[2 + 3] = np.where(_m129, _ik_log3124_v2*_ik_log3124_k, e[2 + 3])
-                _alive125 = _alive125 & (~_m129)
+                _merge(_m118, _o[0], Tm, 0, _fr)
+                _merge(_m118, _o[1], J, 0, _fr)
+                _ik_error_pose125_M = [_fr(0.0)] * 9
+                e[0] = np.where(_m118, target[3] - Tm[3], e[0])
+                e[1] = np.where(_m118, target[7] - Tm[7], e[1])
+                e[2] = np.where(_m118, target[11] - Tm[11], e[2])
+                _ik_error_pose125_M[0] = np.where(_m118, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose125_M[0])
+                _ik_error_pose125_M[1] = np.where(_m118, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose125_M[1])
+                _ik_error_pose125_M[2] = np.where(_m118, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose125_M[2])
+                _ik_error_pose125_M[3] = np.where(_m118, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose125_M[3])
+                _ik_error_pose125_M[4] = np.where(_m118, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose125_M[4])
+                _ik_error_pose125_M[5] = np.where(_m118, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose125_M[5])
+                _ik_error_pose125_M[6] = np.where(_m118, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose125_M[6])
+                _ik_error_pose125_M[7] = np.where(_m118, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose125_M[7])
+                _ik_error_pose125_M[8] = np.where(_m118, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose125_M[8])
+                _alive127 = _m118
+                _ik_log3126_v0 = _ik_error_pose125_M[7] - _ik_error_pose125_M[5]
+                _ik_log3126_v1 = _ik_error_pose125_M[2] - _ik_error_pose125_M[6]
+                _ik_log3126_v2 = _ik_error_pose125_M[3] - _ik_error_pose125_M[1]
+                _ik_log3126_c = (((_ik_error_pose125_M[0] + _ik_error_pose125_M[4]) + _ik_error_pose125_M[8]) - 1.0)*0.5
+                _ik_log3126_s = np.sqrt((_ik_log3126_v0*_ik_log3126_v0 + _ik_log3126_v1*_ik_log3126_v1) + _ik_log3126_v2*_ik_log3126_v2)*0.5
+                _ik_log3126_angle = np.arctan2(_ik_log3126_s, _ik_log3126_c)
+                _ik_log3126_k = _fr(0.0)
+                _c128 = _ik_log3126_angle < 0.0001
+                _m129 = _m118 & _c128
+                _ik_log3126_k = np.where(_m129, 0.5 + (_ik_log3126_angle*_ik_log3126_angle)*0.08333333333333333, _ik_log3126_k)
+                e[0 + 3] = np.where(_m129, _ik_log3126_v0*_ik_log3126_k, e[0 + 3])
+                e[1 + 3] = np.where(_m129, _ik_log3126_v1*_ik_log3126_k, e[1 + 3])
+                e[2 + 3] = np.where(_m129, _ik_log3126_v2*_ik_log3126_k, e[2 + 3])
+                _alive127 = _alive127 & (~_m129)
+                _c130 = 3.141592653589793 - _ik_log3126_angle > 0.001
+                _m131 = _alive127 & _c130
+                _ik_log3126_k = np.where(_m131, _ik_log3126_angle/(_ik_log3126_s + _ik_log3126_s), _ik_log3126_k)
+                e[0 + 3] = np.where(_m131, _ik_log3126_v0*_ik_log3126_k, e[0 + 3])
+                e[1 + 3] = np.where(_m131, _ik_log3126_v1*_ik_log3126_k, e[1 + 3])
+                e[2 + 3] = np.where(_m131, _ik_log3126_v2*_ik_log3126_k, e[2 + 3])
+                _alive127 = _alive127 & (~_m131)
                 # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-                _ik_log3124_col = [_fr(0.0)] * 3
-                _ik_log3124_i = np.where(_ik_error_pose123_M[0] >= _ik_error_pose123_M[4], np.where(_ik_error_pose123_M[0] >= _ik_error_pose123_M[8], _fi(0), 2), np.where(_ik_error_pose123_M[4] >= _ik_error_pose123_M[8], _fi(1), 2))
-                _i130 = 3*_ik_log3124_i
-                _ik_log3124_col[0] = np.where(_alive125, (np.where(_ik_log3124_i == 0, _ik_error_pose123_M[0], np.where(_ik_log3124_i == 1, _ik_error_pose123_M[1], np.where(_ik_log3124_i == 2, _ik_error_pose123_M[2], np.where(_ik_log3124_i == 3, _ik_error_pose123_M[3], np.where(_ik_log3124_i == 4, _ik_error_pose123_M[4], np.where(_ik_log3124_i == 5, _ik_error_pose123_M[5], np.where(_ik_log3124_i == 6, _ik_error_pose123_M[6], np.where(_ik_log3124_i == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i130 == 0, _ik_error_pose123_M[0], np.where(_i130 == 3, _ik_error_pose123_M[3], _ik_error_pose123_M[6])))*0.5, _ik_log3124_col[0])
-                _i131 = 3 + _ik_log3124_i
-                _i132 = 3*_ik_log3124_i + 1
-                _ik_log3124_col[1] = np.where(_alive125, (np.where(_i131 == 0, _ik_error_pose123_M[0], np.where(_i131 == 1, _ik_error_pose123_M[1], np.where(_i131 == 2, _ik_error_pose123_M[2], np.where(_i131 == 3, _ik_error_pose123_M[3], np.where(_i131 == 4, _ik_error_pose123_M[4], np.where(_i131 == 5, _ik_error_pose123_M[5], np.where(_i131 == 6, _ik_error_pose123_M[6], np.where(_i131 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i132 == 1, _ik_error_pose123_M[1], np.where(_i132 == 4, _ik_error_pose123_M[4], _ik_error_pose123_M[7])))*0.5, _ik_log3124_col[1])
-                _i133 = 6 + _ik_log3124_i
-                _i134 = 3*_ik_log3124_i + 2
-                _ik_log3124_col[2] = np.where(_alive125, (np.where(_i133 == 0, _ik_error_pose123_M[0], np.where(_i133 == 1, _ik_error_pose123_M[1], np.where(_i133 == 2, _ik_error_pose123_M[2], np.where(_i133 == 3, _ik_error_pose123_M[3], np.where(_i133 == 4, _ik_error_pose123_M[4], np.where(_i133 == 5, _ik_error_pose123_M[5], np.where(_i133 == 6, _ik_error_pose123_M[6], np.where(_i133 == 7, _ik_error_pose123_M[7], _ik_error_pose123_M[8])))))))) + np.where(_i134 == 2, _ik_error_pose123_M[2], np.where(_i134 == 5, _ik_error_pose123_M[5], _ik_error_pose123_M[8])))*0.5, _ik_log3124_col[2])
-                _v135 = np.where(_ik_log3124_i == 0, _ik_log3124_col[0], np.where(_ik_log3124_i == 1, _ik_log3124_col[1], _ik_log3124_col[2])) - _ik_log3124_c
-                _m136 = _alive125 & (_ik_log3124_i == 0)
-                _ik_log3124_col[0] = np.where(_m136, _v135, _ik_log3124_col[0])
-                _m137 = _alive125 & (_ik_log3124_i == 1)
-                _ik_log3124_col[1] = np.where(_m137, _v135, _ik_log3124_col[1])
-                _m138 = _alive125 & (_ik_log3124_i == 2)
-                _ik_log3124_col[2] = np.where(_m138, _v135, _ik_log3124_col[2])
-                _ik_log3124_norm = np.sqrt((_ik_log3124_col[0]*_ik_log3124_col[0] + _ik_log3124_col[1]*_ik_log3124_col[1]) + _ik_log3124_col[2]*_ik_log3124_col[2])
-                _ik_log3124_k = np.where(_alive125, np.where((_ik_log3124_col[0]*_ik_log3124_v0 + _ik_log3124_col[1]*_ik_log3124_v1) + _ik_log3124_col[2]*_ik_log3124_v2 < 0.0, -_ik_log3124_angle, _ik_log3124_angle)/_ik_log3124_norm, _ik_log3124_k)
-                e[0 + 3] = np.where(_alive125, _ik_log3124_col[0]*_ik_log3124_k, e[0 + 3])
-                e[1 + 3] = np.where(_alive125, _ik_log3124_col[1]*_ik_log3124_k, e[1 + 3])
-                e[2 + 3] = np.where(_alive125, _ik_log3124_col[2]*_ik_log3124_k, e[2 + 3])
-                _ik_error_pose123_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-                _ik_error_pose123_rotation = np.sqrt(_ik_error_pose123_rotation_squares)
-                _c139 = ~np.isfinite(_ik_error_pose123_rotation_squares)
-                _m140 = _m116 & _c139
-                _ik_error_pose123_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-                _ik_error_pose123_rotation = np.where(_m140, _ik_error_pose123_rotation_top*np.sqrt((e[3]/_ik_error_pose123_rotation_top)*(e[3]/_ik_error_pose123_rotation_top) + (e[4]/_ik_error_pose123_rotation_top)*(e[4]/_ik_error_pose123_rotation_top) + (e[5]/_ik_error_pose123_rotation_top)*(e[5]/_ik_error_pose123_rotation_top)), _ik_error_pose123_rotation)
-                norms[1] = np.where(_m116, _ik_error_pose123_rotation, norms[1])
-                _ik_error_pose123_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_pose123_position = np.sqrt(_ik_error_pose123_position_squares)
-                _c141 = ~np.isfinite(_ik_error_pose123_position_squares)
-                _m142 = _m116 & _c141
-                _ik_error_pose123_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_pose123_position = np.where(_m142, _ik_error_pose123_position_top*np.sqrt((e[0]/_ik_error_pose123_position_top)*(e[0]/_ik_error_pose123_position_top) + (e[1]/_ik_error_pose123_position_top)*(e[1]/_ik_error_pose123_position_top) + (e[2]/_ik_error_pose123_position_top)*(e[2]/_ik_error_pose123_position_top)), _ik_error_pose123_position)
-                norms[0] = np.where(_m116, _ik_error_pose123_position, norms[0])
-                _ik_error_pose123_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_pose123_whole = np.sqrt(_ik_error_pose123_whole_squares)
-                _c143 = ~np.isfinite(_ik_error_pose123_whole_squares)
-                _m144 = _m116 & _c143
-                _ik_error_pose123_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_pose123_whole = np.where(_m144, _ik_error_pose123_whole_top*np.sqrt((norms[0]/_ik_error_pose123_whole_top)*(norms[0]/_ik_error_pose123_whole_top) + (norms[1]/_ik_error_pose123_whole_top)*(norms[1]/_ik_error_pose123_whole_top)), _ik_error_pose123_whole)
-                norms[2] = np.where(_m116, _ik_error_pose123_whole, norms[2])
-                pe = np.where(_m116, norms[0], pe)
-                re = np.where(_m116, norms[1], re)
-                en = np.where(_m116, norms[2], en)
-                c = np.where(_m116, 0.01, c)
-                attempt = np.where(_m116, 0, attempt)
-                checkpoint = np.where(_m116, en, checkpoint)
-                window_start = np.where(_m116, en, window_start)
-                _c145 = en < best_en
-                _m146 = _m116 & _c145
-                best_en = np.where(_m146, en, best_en)
-                best_pe = np.where(_m146, pe, best_pe)
-                best_re = np.where(_m146, re, best_re)
-                best_stalled = np.where(_m146, 0, best_stalled)
-                best_here = np.where(_m146, 1, best_here)
+                _ik_log3126_col = [_fr(0.0)] * 3
+                _ik_log3126_i = np.where(_ik_error_pose125_M[0] >= _ik_error_pose125_M[4], np.where(_ik_error_pose125_M[0] >= _ik_error_pose125_M[8], _fi(0), 2), np.where(_ik_error_pose125_M[4] >= _ik_error_pose125_M[8], _fi(1), 2))
+                _i132 = 3*_ik_log3126_i
+                _ik_log3126_col[0] = np.where(_alive127, (np.where(_ik_log3126_i == 0, _ik_error_pose125_M[0], np.where(_ik_log3126_i == 1, _ik_error_pose125_M[1], np.where(_ik_log3126_i == 2, _ik_error_pose125_M[2], np.where(_ik_log3126_i == 3, _ik_error_pose125_M[3], np.where(_ik_log3126_i == 4, _ik_error_pose125_M[4], np.where(_ik_log3126_i == 5, _ik_error_pose125_M[5], np.where(_ik_log3126_i == 6, _ik_error_pose125_M[6], np.where(_ik_log3126_i == 7, _ik_error_pose125_M[7], _ik_error_pose125_M[8])))))))) + np.where(_i132 == 0, _ik_error_pose125_M[0], np.where(_i132 == 3, _ik_error_pose125_M[3], _ik_error_pose125_M[6])))*0.5, _ik_log3126_col[0])
+                _i133 = 3 + _ik_log3126_i
+                _i134 = 3*_ik_log3126_i + 1
+                _ik_log3126_col[1] = np.where(_alive127, (np.where(_i133 == 0, _ik_error_pose125_M[0], np.where(_i133 == 1, _ik_error_pose125_M[1], np.where(_i133 == 2, _ik_error_pose125_M[2], np.where(_i133 == 3, _ik_error_pose125_M[3], np.where(_i133 == 4, _ik_error_pose125_M[4], np.where(_i133 == 5, _ik_error_pose125_M[5], np.where(_i133 == 6, _ik_error_pose125_M[6], np.where(_i133 == 7, _ik_error_pose125_M[7], _ik_error_pose125_M[8])))))))) + np.where(_i134 == 1, _ik_error_pose125_M[1], np.where(_i134 == 4, _ik_error_pose125_M[4], _ik_error_pose125_M[7])))*0.5, _ik_log3126_col[1])
+                _i135 = 6 + _ik_log3126_i
+                _i136 = 3*_ik_log3126_i + 2
+                _ik_log3126_col[2] = np.where(_alive127, (np.where(_i135 == 0, _ik_error_pose125_M[0], np.where(_i135 == 1, _ik_error_pose125_M[1], np.where(_i135 == 2, _ik_error_pose125_M[2], np.where(_i135 == 3, _ik_error_pose125_M[3], np.where(_i135 == 4, _ik_error_pose125_M[4], np.where(_i135 == 5, _ik_error_pose125_M[5], np.where(_i135 == 6, _ik_error_pose125_M[6], np.where(_i135 == 7, _ik_error_pose125_M[7], _ik_error_pose125_M[8])))))))) + np.where(_i136 == 2, _ik_error_pose125_M[2], np.where(_i136 == 5, _ik_error_pose125_M[5], _ik_error_pose125_M[8])))*0.5, _ik_log3126_col[2])
+                _v137 = np.where(_ik_log3126_i == 0, _ik_log3126_col[0], np.where(_ik_log3126_i == 1, _ik_log3126_col[1], _ik_log3126_col[2])) - _ik_log3126_c
+                _m138 = _alive127 & (_ik_log3126_i == 0)
+                _ik_log3126_col[0] = np.where(_m138, _v137, _ik_log3126_col[0])
+                _m139 = _alive127 & (_ik_log3126_i == 1)
+                _ik_log3126_col[1] = np.where(_m139, _v137, _ik_log3126_col[1])
+                _m140 = _alive127 & (_ik_log3126_i == 2)
+                _ik_log3126_col[2] = np.where(_m140, _v137, _ik_log3126_col[2])
+                _ik_log3126_norm = np.sqrt((_ik_log3126_col[0]*_ik_log3126_col[0] + _ik_log3126_col[1]*_ik_log3126_col[1]) + _ik_log3126_col[2]*_ik_log3126_col[2])
+                _ik_log3126_k = np.where(_alive127, np.where((_ik_log3126_col[0]*_ik_log3126_v0 + _ik_log3126_col[1]*_ik_log3126_v1) + _ik_log3126_col[2]*_ik_log3126_v2 < 0.0, -_ik_log3126_angle, _ik_log3126_angle)/_ik_log3126_norm, _ik_log3126_k)
+                e[0 + 3] = np.where(_alive127, _ik_log3126_col[0]*_ik_log3126_k, e[0 + 3])
+                e[1 + 3] = np.where(_alive127, _ik_log3126_col[1]*_ik_log3126_k, e[1 + 3])
+                e[2 + 3] = np.where(_alive127, _ik_log3126_col[2]*_ik_log3126_k, e[2 + 3])
+                _ik_error_pose125_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+                _ik_error_pose125_rotation = np.sqrt(_ik_error_pose125_rotation_squares)
+                _c141 = ~np.isfinite(_ik_error_pose125_rotation_squares)
+                _m142 = _m118 & _c141
+                _ik_error_pose125_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+                _ik_error_pose125_rotation = np.where(_m142, _ik_error_pose125_rotation_top*np.sqrt((e[3]/_ik_error_pose125_rotation_top)*(e[3]/_ik_error_pose125_rotation_top) + (e[4]/_ik_error_pose125_rotation_top)*(e[4]/_ik_error_pose125_rotation_top) + (e[5]/_ik_error_pose125_rotation_top)*(e[5]/_ik_error_pose125_rotation_top)), _ik_error_pose125_rotation)
+                norms[1] = np.where(_m118, _ik_error_pose125_rotation, norms[1])
+                _ik_error_pose125_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_pose125_position = np.sqrt(_ik_error_pose125_position_squares)
+                _c143 = ~np.isfinite(_ik_error_pose125_position_squares)
+                _m144 = _m118 & _c143
+                _ik_error_pose125_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_pose125_position = np.where(_m144, _ik_error_pose125_position_top*np.sqrt((e[0]/_ik_error_pose125_position_top)*(e[0]/_ik_error_pose125_position_top) + (e[1]/_ik_error_pose125_position_top)*(e[1]/_ik_error_pose125_position_top) + (e[2]/_ik_error_pose125_position_top)*(e[2]/_ik_error_pose125_position_top)), _ik_error_pose125_position)
+                norms[0] = np.where(_m118, _ik_error_pose125_position, norms[0])
+                _ik_error_pose125_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_pose125_whole = np.sqrt(_ik_error_pose125_whole_squares)
+                _c145 = ~np.isfinite(_ik_error_pose125_whole_squares)
+                _m146 = _m118 & _c145
+                _ik_error_pose125_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_pose125_whole = np.where(_m146, _ik_error_pose125_whole_top*np.sqrt((norms[0]/_ik_error_pose125_whole_top)*(norms[0]/_ik_error_pose125_whole_top) + (norms[1]/_ik_error_pose125_whole_top)*(norms[1]/_ik_error_pose125_whole_top)), _ik_error_pose125_whole)
+                norms[2] = np.where(_m118, _ik_error_pose125_whole, norms[2])
+                pe = np.where(_m118, norms[0], pe)
+                re = np.where(_m118, norms[1], re)
+                en = np.where(_m118, norms[2], en)
+                c = np.where(_m118, 0.01, c)
+                attempt = np.where(_m118, 0, attempt)
+                checkpoint = np.where(_m118, en, checkpoint)
+                window_start = np.where(_m118, en, window_start)
+                _c147 = en < best_en
+                _m148 = _m118 & _c147
+                best_en = np.where(_m148, en, best_en)
+                best_pe = np.where(_m148, pe, best_pe)
+                best_re = np.where(_m148, re, best_re)
+                best_stalled = np.where(_m148, 0, best_stalled)
+                best_here = np.where(_m148, 1, best_here)
                 for k in range(0, 6):
-                    best_q[k] = np.where(_m146, q[k], best_q[k])
+                    best_q[k] = np.where(_m148, q[k], best_q[k])
     for k in range(0, 6):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])
@@ -5693,7 +5713,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)")
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
     names = np.array(["converged", "stalled", "max_iter", "invalid"])
     return IKResult(_assembled(q, batch, (6,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([error[1]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 
@@ -6487,7 +6507,7 @@ def _ik_all_rows(target, q, count, flags):
     m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    if not np.isfinite(target[3]) or not np.isfinite(target[7]) or not np.isfinite(target[11]) or np.abs(target[3]) > IK_TRANSLATION_MAX or np.abs(target[7]) > IK_TRANSLATION_MAX or np.abs(target[11]) > IK_TRANSLATION_MAX or not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01 - 0.0) > IK_ORTHO_TOL or np.abs(m02 - 0.0) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12 - 0.0) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
+    if not np.isfinite(target[3]) or not np.isfinite(target[7]) or not np.isfinite(target[11]) or np.abs(target[3]) > IK_TRANSLATION_MAX or np.abs(target[7]) > IK_TRANSLATION_MAX or np.abs(target[11]) > IK_TRANSLATION_MAX or not np.isfinite((m00 + m11) + m22) or np.abs(m00 - 1.0) > IK_ORTHO_TOL or np.abs(m01) > IK_ORTHO_TOL or np.abs(m02) > IK_ORTHO_TOL or np.abs(m11 - 1.0) > IK_ORTHO_TOL or np.abs(m12) > IK_ORTHO_TOL or np.abs(m22 - 1.0) > IK_ORTHO_TOL or not det > 0.0:
         count[0] = 0
         # rows past count: NaN, flags -1
         for k in range(0, IK_MAX_SOLUTIONS):
@@ -6613,7 +6633,7 @@ def ik_all(target):
     flags = np.zeros(8, dtype=np.int64)
     status = _ik_all(target, q, count, flags)
     if status == 3:
-        raise ValueError("ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError("ik_all: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKAllResult(q.reshape(8, 6), names[status], int(count[0]), flags)
 
@@ -6652,7 +6672,7 @@ def _ik_all_lanes(_c, target):
     _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
     _m6 = _c5
     count[0] = np.where(_m6, 0, count[0])
     # rows past count: NaN, flags -1
@@ -6918,7 +6938,7 @@ def _ik_all_batch(target):
     (q, count, flags, ), status = _ik_all_lanes(_c, _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKAllResult(_assembled(q, batch, (8, 6,), DTYPE), names[status], _assembled([count[0]], batch, (), np.int64), _assembled(flags, batch, (8,), np.int64))
 
@@ -7031,7 +7051,7 @@ def ik_nearest(q_ref, target):
     q = np.zeros(6, dtype=DTYPE)
     status = _ik_nearest(q_ref, target, q)
     if status == 3:
-        raise ValueError("ik_nearest: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError("ik_nearest: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKNearestResult(q, names[status])
 
@@ -7077,7 +7097,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
     _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
     _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12 - 0.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
+    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
     _m6 = _c5
     count[0] = np.where(_m6, 0, count[0])
     # rows past count: NaN, flags -1
@@ -7409,6 +7429,6 @@ def _ik_nearest_batch(q_ref, target):
     (q, ), status = _ik_nearest_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0")
+        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])

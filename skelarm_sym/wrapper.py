@@ -206,7 +206,7 @@ class CompiledArm:
             batch.restype = None
         self._c_functions[f.name + "_batch"] = batch
         labels = {value: name.lower().removeprefix("ik_") for name, value, _ in f.statuses}
-        invalid = next(((value, meaning) for name, value, meaning in f.statuses if name.endswith("INVALID")), None)
+        invalid = None if f.invalid_status is None else f.invalid_status[1:]
         self._statuses[f.name] = (labels, invalid)
 
     @property

@@ -182,6 +182,38 @@ def test_non_finite_and_bad_inputs_are_refused(robot):
     assert issubclass(InputError, ValueError)
 
 
+def not_rotations(target):
+    """Targets whose rotation part is no rotation: scaled by 1.01, a reflection (det -1), sheared by 1e-5."""
+    scaled, reflected, sheared = target.copy(), target.copy(), target.copy()
+    scaled[:3, :3] *= 1.01
+    reflected[:3, :3] = target[:3, :3] @ np.diag([1.0, 1.0, -1.0])
+    sheared[:3, :3] = target[:3, :3] @ np.array([[1.0, 1e-5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    return scaled, reflected, sheared
+
+
+def test_a_target_that_is_not_a_rotation_is_refused(robot):
+    """ik_solve refuses a target whose rotation part is not a rotation (the rotation error log3(R_t R^T) means
+    nothing there), as ik_all does, with the reason in the message; a rotation rounded to float32 (|R^T R - I|
+    about 1e-7, within IK_ORTHO_TOL) is solved. Judged by NumPy's R^T R and det."""
+    chain, arm, module, lo, hi = robot
+    q_true = np.clip(np.full(chain.n, 0.4), lo, hi)
+    target = reference_pose(chain, q_true)
+    for T in not_rotations(target):
+        R = T[:3, :3]
+        assert np.max(np.abs(R.T @ R - np.eye(3))) > 1e-6 or np.linalg.det(R) <= 0  # the judge: not a rotation
+        for solve in (arm.ik_solve, module.ik_solve):
+            with pytest.raises(ValueError, match="ik_solve: the target's rotation part is not a rotation"):
+                solve(np.clip(np.zeros(chain.n), lo, hi), T)
+    rounded = target.astype(np.float32).astype(np.float64)
+    R = rounded[:3, :3]
+    assert 0 < np.max(np.abs(R.T @ R - np.eye(3))) < 1e-6
+    q0 = np.clip(q_true + 0.05, lo, hi)
+    for solve in (arm.ik_solve, module.ik_solve):
+        r = solve(q0, rounded)
+        assert r.status in ("converged", "stalled")  # float32 rounding leaves no exact solution in double
+        assert pose_errors(reference_pose(chain, r.q), rounded)[0] < 1e-6
+
+
 def test_c_status_codes_and_null_out_pointers(robot):
     chain, arm, module, lo, hi = robot
     lib = ctypes.CDLL(str(arm.path))
@@ -209,6 +241,10 @@ def test_c_status_codes_and_null_out_pointers(robot):
     assert np.array_equal(q, q0)  # q = q0, nothing computed
     assert np.all(np.isinf(error))  # not 0: nothing was reached
     assert solve(ptr(q0), ptr(target), -1.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]
+    for T in not_rotations(target.reshape(4, 4)):  # the C function itself refuses it (no Python checks in front)
+        q[:] = 7.0
+        assert solve(ptr(q0), ptr(np.ascontiguousarray(T.reshape(-1))), 0.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]
+        assert np.array_equal(q, q0)
     assert solve(ptr(q0), ptr(target), 0.0, 1e-10, -1, ptr(q), None, None) == STATUS["invalid"]
     # q may be q0 itself
     inplace = q0.copy()

@@ -28,8 +28,9 @@ import sympy as sp
 
 from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
+from ..models.chain.target_rotation import ORTHO_CONSTANT
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
-from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, ORTHO_TOL, ORTHO_TOL_FLOAT, TRANSLATION_MAX,
+from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
@@ -247,8 +248,7 @@ EMITTED_CONSTANTS = (
              "bit of an ik_all flag: a least-squares row (the target is out of reach)"),
     Constant(sp.Symbol("IK_FLAG_SINGULAR"), {"double": FLAG_SINGULAR, "float": FLAG_SINGULAR},
              "bit of an ik_all flag: a singular row (one member of a continuum, or a double root)"),
-    Constant(sp.Symbol("IK_ORTHO_TOL"), {"double": ORTHO_TOL, "float": ORTHO_TOL_FLOAT},
-             "ik_all refuses a target whose |R^T R - I| exceeds this anywhere"),
+    ORTHO_CONSTANT,
     Constant(sp.Symbol("IK_TRANSLATION_MAX"), {"double": TRANSLATION_MAX, "float": TRANSLATION_MAX_FLOAT},
              "ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"),
     Constant(sp.Symbol("IK_LIMIT_TOL"), {"double": LIMIT_TOL, "float": LIMIT_TOL_FLOAT},
@@ -259,6 +259,15 @@ EMITTED_CONSTANTS = (
              "ik_all returns rows both flagged singular and closer than this once (a double root's two roots)"),
 )
 """The module constants the emitted ``ik_all`` and ``ik_nearest`` use (integers print as such)."""
+
+
+def _without(constants, others) -> tuple:
+    """``constants`` less those named in ``others`` (the chain's derivation already defines ``IK_ORTHO_TOL`` for
+    ``ik_solve``; it follows the closed form's other constants in the headers)."""
+    names = {c.name for c in others}
+    return tuple(c for c in constants if c.name not in names)
+
+
 WRIST_CONSTANT = Constant(sp.Symbol("IK_WRIST_ALIGNED_TOL"), {"double": WRIST_ALIGNED_TOL, "float": WRIST_ALIGNED_TOL_FLOAT},
                           "a row flagged singular with the wrist angle this close to a multiple of pi (rad) is a member "
                           "of the wrist's continuum, moved along it into the limits (ik_all) or toward q_ref (ik_nearest)")
@@ -295,7 +304,7 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {})},
-        constants=tuple(derivation.constants) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ()),
+        constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ()),
         notes=tuple(derivation.notes) + notes,
         _cache={},
     )

@@ -46,11 +46,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..models.chain.target_rotation import ORTHO_TOL  # one definition, ik_solve's too
+
 STATUS = {"ok": 0, "unreachable": 1, "out_of_limits": 2, "invalid": 3}
 """Status codes (the emitted ``X_ik_all`` returns these numbers: ``X_IK_OK``, ``X_IK_UNREACHABLE``,
 ``X_IK_OUT_OF_LIMITS``, ``X_IK_INVALID``; invalid is 3 as for ``X_ik_solve``, so one ``X_IK_INVALID`` serves both)."""
-ORTHO_TOL = 1e-6
-"""Largest ``|R^T R - I|`` entry accepted as a rotation."""
 LIMIT_TOL = 1e-12
 """Joints this far (rad or m) outside a limit are clipped onto it; further out, the candidate is dropped."""
 DUP_TOL = 1e-9
@@ -68,8 +68,8 @@ TRANSLATION_MAX = 1e150
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
 TRANSLATION_MAX_FLOAT = 1e18
 """The same for code emitted in float (squares overflow a float from about 1.8e19)."""
-ORTHO_TOL_FLOAT, LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT, WRIST_ALIGNED_TOL_FLOAT = 1e-4, 1e-5, 1e-4, 1e-4, 1e-4
-"""The same for code emitted in float: a float rotation is orthonormal to about 1e-7, float candidates carry
+LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT, WRIST_ALIGNED_TOL_FLOAT = 1e-5, 1e-4, 1e-4, 1e-4
+"""The same for code emitted in float: float candidates carry
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9 (singular
 rows keep the same tolerance as the others in float)."""
 TWO_PI = 2.0 * np.pi

@@ -531,6 +531,19 @@ class Function:
     result: str = ""
     """Procedures: the name of the record a Python caller gets (its first output, the status name, then
     the other outputs, small ones split into their ``fields``)."""
+    refused: str = ""
+    """Procedures: why the status ending in ``INVALID`` comes back once every argument has passed its Python
+    checks (domain, shape, integer range), which raise first and name the argument: the ``ValueError`` a Python
+    caller gets for that status. Empty: the status's meaning."""
+
+    @property
+    def invalid_status(self) -> tuple[str, int, str] | None:
+        """``(name, value, message)`` of the status ending in ``INVALID``, the message as Python callers raise
+        it (:attr:`refused`, else the status's meaning); None without one."""
+        for name, value, meaning in self.statuses:
+            if name.endswith("INVALID"):
+                return name, value, self.refused or meaning
+        return None
 
     @property
     def result_fields(self) -> tuple[str, ...]:

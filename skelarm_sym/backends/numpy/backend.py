@@ -99,7 +99,7 @@ def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, st
     outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "shape": list(o.shape), "int": o.type is Type.INT,
                 "fields": list(o.fields), "doc": py_string(o.doc),
                 "reshape": f".reshape({', '.join(map(str, o.shape))})" if len(o.shape) > 1 else ""} for o in f.outputs]
-    invalid = next((meaning for name, _, meaning in f.statuses if name.endswith("INVALID")), None)
+    invalid = f.invalid_status
     return {
         "name": f.name,
         "core": calls[f.name],
@@ -112,8 +112,8 @@ def procedure_context(f: Function, calls: dict[str, str], statuses: dict[int, st
         "outputs": outputs,
         "result": f.result or f"{_camel(f.name)}Result",
         "fields": list(f.result_fields),
-        "invalid": py_string(invalid) if invalid else None,
-        "invalid_value": next((value for name, value, _ in f.statuses if name.endswith("INVALID")), None),
+        "invalid": py_string(invalid[2]) if invalid else None,
+        "invalid_value": invalid[1] if invalid else None,
         "statuses": [{"name": name, "label": name.lower().removeprefix("ik_"), "value": value, "meaning": py_string(meaning)}
                      for name, value, meaning in f.statuses],
         "labels": _labels(f.statuses),

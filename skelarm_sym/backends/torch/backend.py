@@ -98,7 +98,7 @@ def procedure_context(module: Module, f: Function, dialect: Dialect = TORCH, pri
         inputs.append(ctx)
     outputs = [{"name": o.name, "py": identifier(o.name), "size": o.size, "shape": list(o.shape), "int": o.type is Type.INT,
                 "fields": list(o.fields), "doc": py_string(o.doc)} for o in f.outputs]
-    invalid = next(((name, value, meaning) for name, value, meaning in f.statuses if name.endswith("INVALID")), None)
+    invalid = f.invalid_status
     return {
         "name": f.name,
         "core": core_name(f),

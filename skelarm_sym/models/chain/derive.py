@@ -83,6 +83,7 @@ from .model import Chain
 from .price import Pose, _choose
 from .signs import _settle_signs
 from .steps import _Steps
+from .target_rotation import ORTHO_CONSTANT
 from ...derive.core import UNBOUNDED, Derivation, FunctionSpec, Table
 from ...derive.float_facts import float_facts
 
@@ -230,6 +231,7 @@ def _derive_chain(chain: Chain, inverse: bool) -> ChainDerivation:
         notes=_notes(chain) + limit_notes,
         tables=tables,
         variants=variants,
+        constants=(ORTHO_CONSTANT,),  # ik_solve's; emitted only where a function uses it
     )
     if not inverse:
         return derivation

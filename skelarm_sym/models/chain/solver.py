@@ -36,10 +36,13 @@ MAX_ITER (the budget ran out otherwise; ``q`` is the best pose found), INVALID.
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 
 from ...ir.build import Array, Body, atan2, fabs, select, sqrt, total
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq
+from .target_rotation import NOT_A_ROTATION, refusal, rotation_faults
 
 C_START = 0.01
 """Initial damping ``mu2`` per unit of error."""
@@ -77,6 +80,12 @@ STATUSES = (
     ("IK_INVALID", 3, "q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or "
                       "max_iter < 0 (q = q0, nothing computed)"),
 )
+"""Return codes of ``ik_solve_position``; ``ik_solve``'s are :data:`POSE_STATUSES`."""
+POSE_STATUSES = STATUSES[:-1] + (
+    ("IK_INVALID", 3, "q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, "
+                      "or the target's " + NOT_A_ROTATION + " (q = q0, nothing computed)"),
+)
+"""Return codes of ``ik_solve`` (pose targets): the target's rotation part must be a rotation as well."""
 
 
 def _status(name: str) -> NamedConst:
@@ -347,6 +356,9 @@ class _PoseIK:
             with b.for_("k", 0, size) as k:
                 with b.if_(~Call1("isfinite", Array(name, size)[k])):
                     b.return_(_status("IK_INVALID"))
+        if self.rows == 6:
+            with b.if_(functools.reduce(operator.or_, rotation_faults(b, self.target))):
+                b.return_(_status("IK_INVALID"))
         q, lo, hi = self.q, self.lo, self.hi
         with b.for_("k", 0, n) as k:
             b.set(q[k], select(q[k] < lo[k], lo[k], select(q[k] > hi[k], hi[k], q[k])))
@@ -572,8 +584,8 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
     name = "ik_solve" if rows == 6 else "ik_solve_position"
     summary = "pose IK of the tool frame" if rows == 6 else "position IK of the tool origin"
     return Function(name, summary, _solver_arguments(rows, chain.n, params, default_tol), body, kind="procedure",
-                    returns=Type.INT, statuses=STATUSES, doc=_solver_doc(rows, default_tol),
-                    result="IKResult" if rows == 6 else "IKPositionResult")
+                    returns=Type.INT, statuses=POSE_STATUSES if rows == 6 else STATUSES, doc=_solver_doc(rows, default_tol),
+                    result="IKResult" if rows == 6 else "IKPositionResult", refused=refusal(precision) if rows == 6 else "")
 
 
 def _mod(x, m: int) -> Bits:

@@ -26,6 +26,7 @@ from ...closed_ik.postprocess import INV_TWO_PI, STATUS, TWO_PI, centres
 from ...ir.build import Array, Body, fabs, select
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
 from .solver_continuum import Continuum
+from .target_rotation import NOT_A_ROTATION, refusal, rotation_faults
 
 
 STATUSES = (
@@ -35,8 +36,7 @@ STATUSES = (
      "IK_FLAG_LEAST_SQUARES set), possibly none"),
     ("IK_OUT_OF_LIMITS", STATUS["out_of_limits"], "exact solutions exist, none within the joint limits (count 0)"),
     ("IK_INVALID", STATUS["invalid"],
-     "target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a "
-     "rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0"),
+     "target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": count 0"),
 )
 """Return codes of ``ik_all`` and ``ik_nearest`` (``IK_INVALID`` is 3, as for ``ik_solve``)."""
 
@@ -270,27 +270,16 @@ def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
 
 def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Array) -> None:
     """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite,
-    a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation (Gram
-    matrix off the identity by more than IK_ORTHO_TOL, or det R <= 0). R's entries are finite when the trace of its Gram matrix (the sum of their squares) is: one test for nine
-    (an entry above 1e154 makes the sum infinite, and is off the identity anyway)."""
+    a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation
+    (:func:`~.target_rotation.rotation_faults`, which also finds R's entries not finite)."""
     target = data[0]
     b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation")
-    R = [[target[4 * i + j] for j in range(3)] for i in range(3)]
-    gram = {}
-    for i in range(3):
-        for j in range(i, 3):
-            gram[i, j] = b.let(f"m{i}{j}", R[0][i] * R[0][j] + R[1][i] * R[1][j] + R[2][i] * R[2][j])
-    det = b.let("det", R[0][0] * (R[1][1] * R[2][2] - R[1][2] * R[2][1])
-                - R[0][1] * (R[1][0] * R[2][2] - R[1][2] * R[2][0])
-                + R[0][2] * (R[1][0] * R[2][1] - R[1][1] * R[2][0]))
-    tol = NamedConst("IK_ORTHO_TOL")
+    faults = rotation_faults(b, target)
     bad = [~Call1("isfinite", target[k]) for k in (3, 7, 11)]  # from the bits: -ffast-math keeps it
     bad += [fabs(target[k]) > NamedConst("IK_TRANSLATION_MAX") for k in (3, 7, 11)]
     if arm.locked:
         bad.append(~Call1("isfinite", data[1]))
-    bad.append(~Call1("isfinite", gram[0, 0] + gram[1, 1] + gram[2, 2]))
-    bad += [fabs(gram[i, j] - (1.0 if i == j else 0.0)) > tol for i in range(3) for j in range(i, 3)]
-    bad.append(~(det > 0.0))
+    bad += faults
     with b.if_(functools.reduce(operator.or_, bad)):
         b.set(count[0], _int(0))
         _fill_rest(b, arm, q, flags)
@@ -382,7 +371,8 @@ def all_solver(arm: _Arm) -> Function:
         "No iteration: the same time for every target.",
     )
     return Function("ik_all", "every closed-form IK solution within the joint limits", arguments, b.statements,
-                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKAllResult")
+                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKAllResult",
+                    refused=refusal(arm.precision, translation=True))
 
 
 def nearest_solver(arm: _Arm) -> Function:
@@ -454,7 +444,8 @@ def nearest_solver(arm: _Arm) -> Function:
         *_doc_continuum(arm, "the member within the limits nearest q_ref"),
     )
     return Function("ik_nearest", "the closed-form IK solution nearest a configuration", arguments, b.statements,
-                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKNearestResult")
+                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKNearestResult",
+                    refused=refusal(arm.precision, translation=True))
 
 
 def closed_solvers(derivation, names, precision: str) -> list[Function]:
