@@ -17,8 +17,8 @@
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #ifndef ARM2_H
@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x6dc6933cUL
+#define ARM2_STAMP 0x344d2d86UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -17,8 +17,8 @@ pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
-the outputs.
+twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+lock), then the outputs.
 Precision: double.
 """
 
@@ -29,7 +29,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x6dc6933c
+STAMP = 0x344d2d86
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""

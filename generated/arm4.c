@@ -17,15 +17,15 @@
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xaf986388UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x2d4e1909UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

@@ -17,8 +17,8 @@
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #ifndef ARM4_H
@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0xaf986388UL
+#define ARM4_STAMP 0x2d4e1909UL
 
 #ifdef __cplusplus
 extern "C" {

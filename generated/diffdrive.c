@@ -7,15 +7,15 @@
  * speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
  * Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x15e87ec4UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x579702c4UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

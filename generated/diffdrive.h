@@ -7,8 +7,8 @@
  * speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
  * Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #ifndef DIFFDRIVE_H
@@ -41,7 +41,7 @@
  * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x15e87ec4UL
+#define DIFFDRIVE_STAMP 0x579702c4UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -7,8 +7,8 @@ wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omeg
 speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
 Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
 Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
-the outputs.
+twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+lock), then the outputs.
 Precision: double.
 """
 
@@ -18,7 +18,7 @@ import inspect
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x15e87ec4
+STAMP = 0x579702c4
 """The generation stamp: the same number in every file of the set this module was generated with."""
 
 __all__ = ["body_rates", "wheel_speeds", "pose_rate", ]

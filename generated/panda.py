@@ -23,8 +23,8 @@ RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose g
 least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
 where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
 Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
-the outputs.
+twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+lock), then the outputs.
 Precision: double.
 """
 
@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x227e49df
+STAMP = 0x694ee55f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""

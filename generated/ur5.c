@@ -26,15 +26,15 @@
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
  * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x3b8719cdUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x0b0eadeeUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6611,13 +6611,17 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     double dist = 0.0;
     double y = 0.0;
     double x = 0.0;
-    status = ur5_ik_all_rows(target, rows, count, flags);
     q[0] = NAN;
     q[1] = NAN;
     q[2] = NAN;
     q[3] = NAN;
     q[4] = NAN;
     q[5] = NAN;
+    /* q_ref not finite: IK_INVALID, q NaN */
+    if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5])) {
+        return UR5_IK_INVALID;
+    }
+    status = ur5_ik_all_rows(target, rows, count, flags);
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         if (i >= count[0]) {
             break;
@@ -6685,6 +6689,103 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
     size_t j;
     for (j = 0; j < m; ++j) {
         const int s = ur5_ik_nearest(q_ref + j * 6, target + j * 16, q + j * 6);
+        if (status) {
+            status[j] = s;
+        }
+    }
+}
+
+/* ---- ur5_ik_nearest_weighted: the closed-form IK solution nearest a configuration, in a weighted metric ---- */
+int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6])
+{
+    double rows[48];
+    int count[1];
+    int flags[8];
+    double near[6];
+    int status = 0;
+    int best = -1;
+    double best_d = 0.0;
+    double dist = 0.0;
+    double y = 0.0;
+    double x = 0.0;
+    q[0] = NAN;
+    q[1] = NAN;
+    q[2] = NAN;
+    q[3] = NAN;
+    q[4] = NAN;
+    q[5] = NAN;
+    /* q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN */
+    if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5]) || !(weights[0] > 0.0) || !UR5_FINITE(weights[0]) || !(weights[1] > 0.0) || !UR5_FINITE(weights[1]) || !(weights[2] > 0.0) || !UR5_FINITE(weights[2]) || !(weights[3] > 0.0) || !UR5_FINITE(weights[3]) || !(weights[4] > 0.0) || !UR5_FINITE(weights[4]) || !(weights[5] > 0.0) || !UR5_FINITE(weights[5])) {
+        return UR5_IK_INVALID;
+    }
+    status = ur5_ik_all_rows(target, rows, count, flags);
+    for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
+        if (i >= count[0]) {
+            break;
+        }
+        /* each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it) */
+        x = rows[6*i];
+        y = x + 6.283185307179586*nearbyint((q_ref[0] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[0] = y;
+        x = rows[6*i + 1];
+        y = x + 6.283185307179586*nearbyint((q_ref[1] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[1] = y;
+        x = rows[6*i + 2];
+        y = x + 6.283185307179586*nearbyint((q_ref[2] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[2] = y;
+        x = rows[6*i + 3];
+        y = x + 6.283185307179586*nearbyint((q_ref[3] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[3] = y;
+        x = rows[6*i + 4];
+        y = x + 6.283185307179586*nearbyint((q_ref[4] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[4] = y;
+        x = rows[6*i + 5];
+        y = x + 6.283185307179586*nearbyint((q_ref[5] - x)*0.15915494309189535);
+        y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
+        y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
+        y = (y > 6.283185307179586 ? 6.283185307179586 : y);
+        y = (y < -6.283185307179586 ? -6.283185307179586 : y);
+        near[5] = y;
+        dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
+        if (best < 0 || dist < best_d) {
+            best = i;
+            best_d = dist;
+            q[0] = near[0];
+            q[1] = near[1];
+            q[2] = near[2];
+            q[3] = near[3];
+            q[4] = near[4];
+            q[5] = near[5];
+        }
+    }
+    return status;
+}
+
+void ur5_ik_nearest_weighted_batch(size_t m, const double *q_ref, const double *weights, const double *target, double *q, int *status)
+{
+    size_t j;
+    for (j = 0; j < m; ++j) {
+        const int s = ur5_ik_nearest_weighted(q_ref + j * 6, weights + j * 6, target + j * 16, q + j * 6);
         if (status) {
             status[j] = s;
         }

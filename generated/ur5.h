@@ -26,8 +26,8 @@
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
  * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
- * the outputs.
+ * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+ * lock), then the outputs.
  * Precision: double.
  */
 #ifndef UR5_H
@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x3b8719cdUL
+#define UR5_STAMP 0x0b0eadeeUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -310,8 +310,8 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
 /* the closed-form IK solution nearest a configuration.
  * The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
  * within the joint limits nearest q_ref[j], then the row with the
- * least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
- * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
+ * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
+ * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
  */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 
@@ -320,6 +320,20 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
  * status may be NULL.
  * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 7 KB. */
 void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status);
+
+/* the closed-form IK solution nearest a configuration, in a weighted metric.
+ * The ik_all solution nearest q_ref in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0): each revolute joint takes the copy q + 2 pi k
+ * within the joint limits nearest q_ref[j], then the row with the
+ * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
+ * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+ */
+int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6]);
+
+/* The same for m problems stored one after another (element k of problem j at [j*size + k]).
+ * status[j] is problem j's return code.
+ * status may be NULL.
+ * Each problem is one call of ur5_ik_nearest_weighted: the same result bit for bit. Stack: about 7 KB. */
+void ur5_ik_nearest_weighted_batch(size_t m, const double *q_ref, const double *weights, const double *target, double *q, int *status);
 
 #ifdef __cplusplus
 }

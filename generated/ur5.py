@@ -26,8 +26,8 @@ Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2)
 target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
 (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
 Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then
-the outputs.
+twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
+lock), then the outputs.
 Precision: double.
 """
 
@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x3b8719cd
+STAMP = 0x0b0eadee
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -79,7 +79,7 @@ IK_UNREACHABLE = 1
 IK_OUT_OF_LIMITS = 2
 """exact solutions exist, none within the joint limits (count 0)"""
 
-__all__ = ["pose", "jacobian", "jacobian_tool", "jacobian_dot", "twist", "acceleration", "kinematics", "ik_terms", "manipulability", "manipulability_position", "jacobian_hessian", "manipulability_gradient", "inverse_velocity", "inverse_velocity_position", "jacobian_rpy", "ik_candidates", "ik_solve", "IKResult", "ik_solve_position", "IKPositionResult", "ik_all", "IKAllResult", "ik_nearest", "IKNearestResult", ]
+__all__ = ["pose", "jacobian", "jacobian_tool", "jacobian_dot", "twist", "acceleration", "kinematics", "ik_terms", "manipulability", "manipulability_position", "jacobian_hessian", "manipulability_gradient", "inverse_velocity", "inverse_velocity_position", "jacobian_rpy", "ik_candidates", "ik_solve", "IKResult", "ik_solve_position", "IKPositionResult", "ik_all", "IKAllResult", "ik_nearest", "IKNearestResult", "ik_nearest_weighted", "IKNearestResult", ]
 
 
 def _check_domain(array, name, domain):
@@ -6956,13 +6956,16 @@ def _ik_nearest(q_ref, target, q):
     dist = DTYPE(0.0)
     y = DTYPE(0.0)
     x = DTYPE(0.0)
-    status = _ik_all_rows(target, rows, count, flags)
     q[0] = DTYPE(np.nan)
     q[1] = DTYPE(np.nan)
     q[2] = DTYPE(np.nan)
     q[3] = DTYPE(np.nan)
     q[4] = DTYPE(np.nan)
     q[5] = DTYPE(np.nan)
+    # q_ref not finite: IK_INVALID, q NaN
+    if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]):
+        return IK_INVALID
+    status = _ik_all_rows(target, rows, count, flags)
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
             break
@@ -7032,8 +7035,8 @@ def ik_nearest(q_ref, target):
 
     The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
     within the joint limits nearest q_ref[j], then the row with the
-    least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
-    (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).
+    least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
+    (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
 
     q_ref: array of shape (6,), finite: the configuration to be near (rad or m).
     target: array of shape (4, 4), finite: tool pose T (4 x 4, row-major; the last row is not read).
@@ -7085,337 +7088,342 @@ def _ik_nearest_lanes(_c, q_ref, target):
     dist = _fr(0.0)
     y = _fr(0.0)
     x = _fr(0.0)
-    _alive4 = _fb(True)
-    _ik_all_rows3_raw = [_fr(0.0)] * 48
-    _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
-    _ik_all_rows3_cand = [_fr(0.0)] * 6
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
-    _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
-    _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
-    _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
-    _ik_all_rows3_m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
-    _ik_all_rows3_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
-    _ik_all_rows3_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
-    _ik_all_rows3_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
-    _c5 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows3_m00 + _ik_all_rows3_m11) + _ik_all_rows3_m22)) | (np.abs(_ik_all_rows3_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m01) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m02) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m12) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows3_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows3_det > 0.0))
-    _m6 = _c5
-    count[0] = np.where(_m6, 0, count[0])
-    # rows past count: NaN, flags -1
-    for _ik_all_rows3_k in range(0, 8):
-        rows[6*_ik_all_rows3_k] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k])
-        rows[6*_ik_all_rows3_k + 1] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k + 1])
-        rows[6*_ik_all_rows3_k + 2] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k + 2])
-        rows[6*_ik_all_rows3_k + 3] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k + 3])
-        rows[6*_ik_all_rows3_k + 4] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k + 4])
-        rows[6*_ik_all_rows3_k + 5] = np.where(_m6, _NAN, rows[6*_ik_all_rows3_k + 5])
-        flags[_ik_all_rows3_k] = np.where(_m6, -1, flags[_ik_all_rows3_k])
-    status = np.where(_m6, IK_INVALID, status)
-    _alive4 = _alive4 & (~_m6)
-    # the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable
-    _o = _ik_candidates_on_lanes(_c, target[0:16])
-    _merge(_alive4, _o[0], _ik_all_rows3_raw, 0, _fr)
-    _merge(_alive4, _o[1], _ik_all_rows3_raw_flags, 0, _fr)
-    _ik_all_rows3_exact = _fi(0)
-    for _ik_all_rows3_i in range(0, 8):
-        _c7 = _ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
-        _m8 = _alive4 & _c7
-        _ik_all_rows3_exact = np.where(_m8, 1, _ik_all_rows3_exact)
-    _ik_all_rows3_kept = _fi(0)
-    _ik_all_rows3_flag = _fi(0)
-    _ik_all_rows3_dup = _fi(0)
-    _ik_all_rows3_diff = _fr(0.0)
-    _ik_all_rows3_tol = _fr(0.0)
-    for _ik_all_rows3_i in range(0, 8):
-        _ik_all_rows3_flag = np.where(_alive4, _ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64), _ik_all_rows3_flag)
-        _c9 = (_ik_all_rows3_exact == 0) | (_ik_all_rows3_flag % 2 != IK_FLAG_LEAST_SQUARES)
-        _m10 = _alive4 & _c9
-        if bool(_m10.any()):
-            # 3. revolute joints to the copy nearest their range's centre (each range wider than a turn around its centre: 4. no copy is outside the limits)
-            _ik_all_rows3_cand[0] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i], _ik_all_rows3_cand[0])
-            _ik_all_rows3_cand[1] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i + 1], _ik_all_rows3_cand[1])
-            _ik_all_rows3_cand[2] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i + 2], _ik_all_rows3_cand[2])
-            _ik_all_rows3_cand[3] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i + 3] + np.where(0.0 - _ik_all_rows3_raw[6*_ik_all_rows3_i + 3] > 3.141592653589793, 6.283185307179586, np.where(0.0 - _ik_all_rows3_raw[6*_ik_all_rows3_i + 3] < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows3_cand[3])
-            _c11 = np.abs(0.0 - _ik_all_rows3_cand[3]) > 3.141592653589793
-            _m12 = _m10 & _c11
-            _ik_all_rows3_cand[3] = np.where(_m12, _ik_all_rows3_cand[3] + 6.283185307179586*np.rint((0.0 - _ik_all_rows3_cand[3])*0.15915494309189535), _ik_all_rows3_cand[3])
-            _ik_all_rows3_cand[4] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i + 4], _ik_all_rows3_cand[4])
-            _ik_all_rows3_cand[5] = np.where(_m10, _ik_all_rows3_raw[6*_ik_all_rows3_i + 5], _ik_all_rows3_cand[5])
-            # 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped
-            _ik_all_rows3_dup = np.where(_m10, -1, _ik_all_rows3_dup)
-            _c13 = _ik_all_rows3_flag > 0
-            _m14 = _m10 & _c13
-            if bool(_m14.any()):
-                # an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart
-                _r15 = _fi(0)
-                _run16 = _m14 & (_r15 < _ik_all_rows3_kept)
-                while bool(_run16.any()):
-                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
-                    _ik_all_rows3_tol = np.where(_run16, np.where((_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_r15 == 0, flags[0], np.where(_r15 == 1, flags[1], np.where(_r15 == 2, flags[2], np.where(_r15 == 3, flags[3], np.where(_r15 == 4, flags[4], np.where(_r15 == 5, flags[5], np.where(_r15 == 6, flags[6], flags[7]))))))) >= IK_FLAG_SINGULAR), _fr(IK_DUP_TOL_SINGULAR), IK_DUP_TOL), _ik_all_rows3_tol)
-                    _i17 = 6*_r15 + 1
-                    _ik_all_rows3_diff = np.where(_run16, _ik_all_rows3_cand[1] - np.where(_i17 == 1, rows[1], np.where(_i17 == 7, rows[7], np.where(_i17 == 13, rows[13], np.where(_i17 == 19, rows[19], np.where(_i17 == 25, rows[25], np.where(_i17 == 31, rows[31], np.where(_i17 == 37, rows[37], rows[43]))))))), _ik_all_rows3_diff)
-                    _c18 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m19 = _run16 & _c18
-                    _i20 = 6*_r15 + 2
-                    _ik_all_rows3_diff = np.where(_m19, _ik_all_rows3_cand[2] - np.where(_i20 == 2, rows[2], np.where(_i20 == 8, rows[8], np.where(_i20 == 14, rows[14], np.where(_i20 == 20, rows[20], np.where(_i20 == 26, rows[26], np.where(_i20 == 32, rows[32], np.where(_i20 == 38, rows[38], rows[44]))))))), _ik_all_rows3_diff)
-                    _c21 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m22 = _m19 & _c21
-                    _i23 = 6*_r15 + 3
-                    _ik_all_rows3_diff = np.where(_m22, _ik_all_rows3_cand[3] - np.where(_i23 == 3, rows[3], np.where(_i23 == 9, rows[9], np.where(_i23 == 15, rows[15], np.where(_i23 == 21, rows[21], np.where(_i23 == 27, rows[27], np.where(_i23 == 33, rows[33], np.where(_i23 == 39, rows[39], rows[45]))))))), _ik_all_rows3_diff)
-                    _c24 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m25 = _m22 & _c24
-                    _i26 = 6*_r15 + 4
-                    _ik_all_rows3_diff = np.where(_m25, _ik_all_rows3_cand[4] - np.where(_i26 == 4, rows[4], np.where(_i26 == 10, rows[10], np.where(_i26 == 16, rows[16], np.where(_i26 == 22, rows[22], np.where(_i26 == 28, rows[28], np.where(_i26 == 34, rows[34], np.where(_i26 == 40, rows[40], rows[46]))))))), _ik_all_rows3_diff)
-                    _c27 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m28 = _m25 & _c27
-                    _i29 = 6*_r15 + 5
-                    _ik_all_rows3_diff = np.where(_m28, _ik_all_rows3_cand[5] - np.where(_i29 == 5, rows[5], np.where(_i29 == 11, rows[11], np.where(_i29 == 17, rows[17], np.where(_i29 == 23, rows[23], np.where(_i29 == 29, rows[29], np.where(_i29 == 35, rows[35], np.where(_i29 == 41, rows[41], rows[47]))))))), _ik_all_rows3_diff)
-                    _c30 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m31 = _m28 & _c30
-                    _i32 = 6*_r15
-                    _ik_all_rows3_diff = np.where(_m31, _ik_all_rows3_cand[0] - np.where(_i32 == 0, rows[0], np.where(_i32 == 6, rows[6], np.where(_i32 == 12, rows[12], np.where(_i32 == 18, rows[18], np.where(_i32 == 24, rows[24], np.where(_i32 == 30, rows[30], np.where(_i32 == 36, rows[36], rows[42]))))))), _ik_all_rows3_diff)
-                    _c33 = (np.abs(_ik_all_rows3_diff) <= _ik_all_rows3_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows3_diff)) <= _ik_all_rows3_tol)
-                    _m34 = _m31 & _c33
-                    _ik_all_rows3_dup = np.where(_m34, _r15, _ik_all_rows3_dup)
-                    _run16 = _run16 & (~_m34)
-                    _m35 = _m31 & _run16
-                    _m36 = _m28 & _run16
-                    _m37 = _m25 & _run16
-                    _m38 = _m22 & _run16
-                    _m39 = _m19 & _run16
-                    _r15 = np.where(_run16, _r15 + 1, _r15)
-                    _run16 = _run16 & (_r15 < _ik_all_rows3_kept)
-            _c40 = _ik_all_rows3_dup >= 0
-            _m41 = _m10 & _c40
-            _m42 = _m10 & (~_c40)
-            # the kept row takes the duplicate's singular bit
-            _c43 = (_ik_all_rows3_flag >= IK_FLAG_SINGULAR) & (np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) < IK_FLAG_SINGULAR)
-            _m44 = _m41 & _c43
-            _v45 = np.where(_ik_all_rows3_dup == 0, flags[0], np.where(_ik_all_rows3_dup == 1, flags[1], np.where(_ik_all_rows3_dup == 2, flags[2], np.where(_ik_all_rows3_dup == 3, flags[3], np.where(_ik_all_rows3_dup == 4, flags[4], np.where(_ik_all_rows3_dup == 5, flags[5], np.where(_ik_all_rows3_dup == 6, flags[6], flags[7]))))))) + IK_FLAG_SINGULAR
-            _m46 = _m44 & (_ik_all_rows3_dup == 0)
-            flags[0] = np.where(_m46, _v45, flags[0])
-            _m47 = _m44 & (_ik_all_rows3_dup == 1)
-            flags[1] = np.where(_m47, _v45, flags[1])
-            _m48 = _m44 & (_ik_all_rows3_dup == 2)
-            flags[2] = np.where(_m48, _v45, flags[2])
-            _m49 = _m44 & (_ik_all_rows3_dup == 3)
-            flags[3] = np.where(_m49, _v45, flags[3])
-            _m50 = _m44 & (_ik_all_rows3_dup == 4)
-            flags[4] = np.where(_m50, _v45, flags[4])
-            _m51 = _m44 & (_ik_all_rows3_dup == 5)
-            flags[5] = np.where(_m51, _v45, flags[5])
-            _m52 = _m44 & (_ik_all_rows3_dup == 6)
-            flags[6] = np.where(_m52, _v45, flags[6])
-            _m53 = _m44 & (_ik_all_rows3_dup == 7)
-            flags[7] = np.where(_m53, _v45, flags[7])
-            if bool(_m42.any()):
-                # 6. kept, in branch order
-                _i54 = 6*_ik_all_rows3_kept
-                _v55 = _ik_all_rows3_cand[0]
-                _m56 = _m42 & (_i54 == 0)
-                rows[0] = np.where(_m56, _v55, rows[0])
-                _m57 = _m42 & (_i54 == 6)
-                rows[6] = np.where(_m57, _v55, rows[6])
-                _m58 = _m42 & (_i54 == 12)
-                rows[12] = np.where(_m58, _v55, rows[12])
-                _m59 = _m42 & (_i54 == 18)
-                rows[18] = np.where(_m59, _v55, rows[18])
-                _m60 = _m42 & (_i54 == 24)
-                rows[24] = np.where(_m60, _v55, rows[24])
-                _m61 = _m42 & (_i54 == 30)
-                rows[30] = np.where(_m61, _v55, rows[30])
-                _m62 = _m42 & (_i54 == 36)
-                rows[36] = np.where(_m62, _v55, rows[36])
-                _m63 = _m42 & (_i54 == 42)
-                rows[42] = np.where(_m63, _v55, rows[42])
-                _i64 = 6*_ik_all_rows3_kept + 1
-                _v65 = _ik_all_rows3_cand[1]
-                _m66 = _m42 & (_i64 == 1)
-                rows[1] = np.where(_m66, _v65, rows[1])
-                _m67 = _m42 & (_i64 == 7)
-                rows[7] = np.where(_m67, _v65, rows[7])
-                _m68 = _m42 & (_i64 == 13)
-                rows[13] = np.where(_m68, _v65, rows[13])
-                _m69 = _m42 & (_i64 == 19)
-                rows[19] = np.where(_m69, _v65, rows[19])
-                _m70 = _m42 & (_i64 == 25)
-                rows[25] = np.where(_m70, _v65, rows[25])
-                _m71 = _m42 & (_i64 == 31)
-                rows[31] = np.where(_m71, _v65, rows[31])
-                _m72 = _m42 & (_i64 == 37)
-                rows[37] = np.where(_m72, _v65, rows[37])
-                _m73 = _m42 & (_i64 == 43)
-                rows[43] = np.where(_m73, _v65, rows[43])
-                _i74 = 6*_ik_all_rows3_kept + 2
-                _v75 = _ik_all_rows3_cand[2]
-                _m76 = _m42 & (_i74 == 2)
-                rows[2] = np.where(_m76, _v75, rows[2])
-                _m77 = _m42 & (_i74 == 8)
-                rows[8] = np.where(_m77, _v75, rows[8])
-                _m78 = _m42 & (_i74 == 14)
-                rows[14] = np.where(_m78, _v75, rows[14])
-                _m79 = _m42 & (_i74 == 20)
-                rows[20] = np.where(_m79, _v75, rows[20])
-                _m80 = _m42 & (_i74 == 26)
-                rows[26] = np.where(_m80, _v75, rows[26])
-                _m81 = _m42 & (_i74 == 32)
-                rows[32] = np.where(_m81, _v75, rows[32])
-                _m82 = _m42 & (_i74 == 38)
-                rows[38] = np.where(_m82, _v75, rows[38])
-                _m83 = _m42 & (_i74 == 44)
-                rows[44] = np.where(_m83, _v75, rows[44])
-                _i84 = 6*_ik_all_rows3_kept + 3
-                _v85 = _ik_all_rows3_cand[3]
-                _m86 = _m42 & (_i84 == 3)
-                rows[3] = np.where(_m86, _v85, rows[3])
-                _m87 = _m42 & (_i84 == 9)
-                rows[9] = np.where(_m87, _v85, rows[9])
-                _m88 = _m42 & (_i84 == 15)
-                rows[15] = np.where(_m88, _v85, rows[15])
-                _m89 = _m42 & (_i84 == 21)
-                rows[21] = np.where(_m89, _v85, rows[21])
-                _m90 = _m42 & (_i84 == 27)
-                rows[27] = np.where(_m90, _v85, rows[27])
-                _m91 = _m42 & (_i84 == 33)
-                rows[33] = np.where(_m91, _v85, rows[33])
-                _m92 = _m42 & (_i84 == 39)
-                rows[39] = np.where(_m92, _v85, rows[39])
-                _m93 = _m42 & (_i84 == 45)
-                rows[45] = np.where(_m93, _v85, rows[45])
-                _i94 = 6*_ik_all_rows3_kept + 4
-                _v95 = _ik_all_rows3_cand[4]
-                _m96 = _m42 & (_i94 == 4)
-                rows[4] = np.where(_m96, _v95, rows[4])
-                _m97 = _m42 & (_i94 == 10)
-                rows[10] = np.where(_m97, _v95, rows[10])
-                _m98 = _m42 & (_i94 == 16)
-                rows[16] = np.where(_m98, _v95, rows[16])
-                _m99 = _m42 & (_i94 == 22)
-                rows[22] = np.where(_m99, _v95, rows[22])
-                _m100 = _m42 & (_i94 == 28)
-                rows[28] = np.where(_m100, _v95, rows[28])
-                _m101 = _m42 & (_i94 == 34)
-                rows[34] = np.where(_m101, _v95, rows[34])
-                _m102 = _m42 & (_i94 == 40)
-                rows[40] = np.where(_m102, _v95, rows[40])
-                _m103 = _m42 & (_i94 == 46)
-                rows[46] = np.where(_m103, _v95, rows[46])
-                _i104 = 6*_ik_all_rows3_kept + 5
-                _v105 = _ik_all_rows3_cand[5]
-                _m106 = _m42 & (_i104 == 5)
-                rows[5] = np.where(_m106, _v105, rows[5])
-                _m107 = _m42 & (_i104 == 11)
-                rows[11] = np.where(_m107, _v105, rows[11])
-                _m108 = _m42 & (_i104 == 17)
-                rows[17] = np.where(_m108, _v105, rows[17])
-                _m109 = _m42 & (_i104 == 23)
-                rows[23] = np.where(_m109, _v105, rows[23])
-                _m110 = _m42 & (_i104 == 29)
-                rows[29] = np.where(_m110, _v105, rows[29])
-                _m111 = _m42 & (_i104 == 35)
-                rows[35] = np.where(_m111, _v105, rows[35])
-                _m112 = _m42 & (_i104 == 41)
-                rows[41] = np.where(_m112, _v105, rows[41])
-                _m113 = _m42 & (_i104 == 47)
-                rows[47] = np.where(_m113, _v105, rows[47])
-                _m114 = _m42 & (_ik_all_rows3_kept == 0)
-                flags[0] = np.where(_m114, _ik_all_rows3_flag, flags[0])
-                _m115 = _m42 & (_ik_all_rows3_kept == 1)
-                flags[1] = np.where(_m115, _ik_all_rows3_flag, flags[1])
-                _m116 = _m42 & (_ik_all_rows3_kept == 2)
-                flags[2] = np.where(_m116, _ik_all_rows3_flag, flags[2])
-                _m117 = _m42 & (_ik_all_rows3_kept == 3)
-                flags[3] = np.where(_m117, _ik_all_rows3_flag, flags[3])
-                _m118 = _m42 & (_ik_all_rows3_kept == 4)
-                flags[4] = np.where(_m118, _ik_all_rows3_flag, flags[4])
-                _m119 = _m42 & (_ik_all_rows3_kept == 5)
-                flags[5] = np.where(_m119, _ik_all_rows3_flag, flags[5])
-                _m120 = _m42 & (_ik_all_rows3_kept == 6)
-                flags[6] = np.where(_m120, _ik_all_rows3_flag, flags[6])
-                _m121 = _m42 & (_ik_all_rows3_kept == 7)
-                flags[7] = np.where(_m121, _ik_all_rows3_flag, flags[7])
-                _ik_all_rows3_kept = np.where(_m42, _ik_all_rows3_kept + 1, _ik_all_rows3_kept)
-    count[0] = np.where(_alive4, _ik_all_rows3_kept, count[0])
-    # rows past count: NaN, flags -1
-    for _ik_all_rows3_k in range(0, 8):
-        _c122 = _ik_all_rows3_k >= _ik_all_rows3_kept
-        _m123 = _alive4 & _c122
-        rows[6*_ik_all_rows3_k] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k])
-        rows[6*_ik_all_rows3_k + 1] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k + 1])
-        rows[6*_ik_all_rows3_k + 2] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k + 2])
-        rows[6*_ik_all_rows3_k + 3] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k + 3])
-        rows[6*_ik_all_rows3_k + 4] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k + 4])
-        rows[6*_ik_all_rows3_k + 5] = np.where(_m123, _NAN, rows[6*_ik_all_rows3_k + 5])
-        flags[_ik_all_rows3_k] = np.where(_m123, -1, flags[_ik_all_rows3_k])
-    # 7. status
-    status = np.where(_alive4, np.where(_ik_all_rows3_exact == 0, IK_UNREACHABLE, np.where(_ik_all_rows3_kept == 0, _fi(IK_OUT_OF_LIMITS), IK_OK)), status)
-    _alive4 = _alive4 & (~_alive4)
     q[0] = _fr(_NAN)
     q[1] = _fr(_NAN)
     q[2] = _fr(_NAN)
     q[3] = _fr(_NAN)
     q[4] = _fr(_NAN)
     q[5] = _fr(_NAN)
-    _run124 = _fb(True)
+    # q_ref not finite: IK_INVALID, q NaN
+    _c3 = (~np.isfinite(q_ref[0])) | (~np.isfinite(q_ref[1])) | (~np.isfinite(q_ref[2])) | (~np.isfinite(q_ref[3])) | (~np.isfinite(q_ref[4])) | (~np.isfinite(q_ref[5]))
+    _m4 = _c3
+    _status1 = np.where(_m4, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m4)
+    _alive6 = _alive2
+    _ik_all_rows5_raw = [_fr(0.0)] * 48
+    _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
+    _ik_all_rows5_cand = [_fr(0.0)] * 6
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    _ik_all_rows5_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    _ik_all_rows5_m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    _ik_all_rows5_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    _ik_all_rows5_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    _ik_all_rows5_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c7 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows5_m00 + _ik_all_rows5_m11) + _ik_all_rows5_m22)) | (np.abs(_ik_all_rows5_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m01) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m02) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m12) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows5_det > 0.0))
+    _m8 = _alive2 & _c7
+    count[0] = np.where(_m8, 0, count[0])
+    # rows past count: NaN, flags -1
+    for _ik_all_rows5_k in range(0, 8):
+        rows[6*_ik_all_rows5_k] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k])
+        rows[6*_ik_all_rows5_k + 1] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 1])
+        rows[6*_ik_all_rows5_k + 2] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 2])
+        rows[6*_ik_all_rows5_k + 3] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 3])
+        rows[6*_ik_all_rows5_k + 4] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 4])
+        rows[6*_ik_all_rows5_k + 5] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 5])
+        flags[_ik_all_rows5_k] = np.where(_m8, -1, flags[_ik_all_rows5_k])
+    status = np.where(_m8, IK_INVALID, status)
+    _alive6 = _alive6 & (~_m8)
+    # the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable
+    _o = _ik_candidates_on_lanes(_c, target[0:16])
+    _merge(_alive6, _o[0], _ik_all_rows5_raw, 0, _fr)
+    _merge(_alive6, _o[1], _ik_all_rows5_raw_flags, 0, _fr)
+    _ik_all_rows5_exact = _fi(0)
+    for _ik_all_rows5_i in range(0, 8):
+        _c9 = _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
+        _m10 = _alive6 & _c9
+        _ik_all_rows5_exact = np.where(_m10, 1, _ik_all_rows5_exact)
+    _ik_all_rows5_kept = _fi(0)
+    _ik_all_rows5_flag = _fi(0)
+    _ik_all_rows5_dup = _fi(0)
+    _ik_all_rows5_diff = _fr(0.0)
+    _ik_all_rows5_tol = _fr(0.0)
+    for _ik_all_rows5_i in range(0, 8):
+        _ik_all_rows5_flag = np.where(_alive6, _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64), _ik_all_rows5_flag)
+        _c11 = (_ik_all_rows5_exact == 0) | (_ik_all_rows5_flag % 2 != IK_FLAG_LEAST_SQUARES)
+        _m12 = _alive6 & _c11
+        if bool(_m12.any()):
+            # 3. revolute joints to the copy nearest their range's centre (each range wider than a turn around its centre: 4. no copy is outside the limits)
+            _ik_all_rows5_cand[0] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i], _ik_all_rows5_cand[0])
+            _ik_all_rows5_cand[1] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 1], _ik_all_rows5_cand[1])
+            _ik_all_rows5_cand[2] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 2], _ik_all_rows5_cand[2])
+            _ik_all_rows5_cand[3] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] + np.where(0.0 - _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] > 3.141592653589793, 6.283185307179586, np.where(0.0 - _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows5_cand[3])
+            _c13 = np.abs(0.0 - _ik_all_rows5_cand[3]) > 3.141592653589793
+            _m14 = _m12 & _c13
+            _ik_all_rows5_cand[3] = np.where(_m14, _ik_all_rows5_cand[3] + 6.283185307179586*np.rint((0.0 - _ik_all_rows5_cand[3])*0.15915494309189535), _ik_all_rows5_cand[3])
+            _ik_all_rows5_cand[4] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 4], _ik_all_rows5_cand[4])
+            _ik_all_rows5_cand[5] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 5], _ik_all_rows5_cand[5])
+            # 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped
+            _ik_all_rows5_dup = np.where(_m12, -1, _ik_all_rows5_dup)
+            _c15 = _ik_all_rows5_flag > 0
+            _m16 = _m12 & _c15
+            if bool(_m16.any()):
+                # an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart
+                _r17 = _fi(0)
+                _run18 = _m16 & (_r17 < _ik_all_rows5_kept)
+                while bool(_run18.any()):
+                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    _ik_all_rows5_tol = np.where(_run18, np.where((_ik_all_rows5_flag >= IK_FLAG_SINGULAR) & (np.where(_r17 == 0, flags[0], np.where(_r17 == 1, flags[1], np.where(_r17 == 2, flags[2], np.where(_r17 == 3, flags[3], np.where(_r17 == 4, flags[4], np.where(_r17 == 5, flags[5], np.where(_r17 == 6, flags[6], flags[7]))))))) >= IK_FLAG_SINGULAR), _fr(IK_DUP_TOL_SINGULAR), IK_DUP_TOL), _ik_all_rows5_tol)
+                    _i19 = 6*_r17 + 1
+                    _ik_all_rows5_diff = np.where(_run18, _ik_all_rows5_cand[1] - np.where(_i19 == 1, rows[1], np.where(_i19 == 7, rows[7], np.where(_i19 == 13, rows[13], np.where(_i19 == 19, rows[19], np.where(_i19 == 25, rows[25], np.where(_i19 == 31, rows[31], np.where(_i19 == 37, rows[37], rows[43]))))))), _ik_all_rows5_diff)
+                    _c20 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m21 = _run18 & _c20
+                    _i22 = 6*_r17 + 2
+                    _ik_all_rows5_diff = np.where(_m21, _ik_all_rows5_cand[2] - np.where(_i22 == 2, rows[2], np.where(_i22 == 8, rows[8], np.where(_i22 == 14, rows[14], np.where(_i22 == 20, rows[20], np.where(_i22 == 26, rows[26], np.where(_i22 == 32, rows[32], np.where(_i22 == 38, rows[38], rows[44]))))))), _ik_all_rows5_diff)
+                    _c23 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m24 = _m21 & _c23
+                    _i25 = 6*_r17 + 3
+                    _ik_all_rows5_diff = np.where(_m24, _ik_all_rows5_cand[3] - np.where(_i25 == 3, rows[3], np.where(_i25 == 9, rows[9], np.where(_i25 == 15, rows[15], np.where(_i25 == 21, rows[21], np.where(_i25 == 27, rows[27], np.where(_i25 == 33, rows[33], np.where(_i25 == 39, rows[39], rows[45]))))))), _ik_all_rows5_diff)
+                    _c26 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m27 = _m24 & _c26
+                    _i28 = 6*_r17 + 4
+                    _ik_all_rows5_diff = np.where(_m27, _ik_all_rows5_cand[4] - np.where(_i28 == 4, rows[4], np.where(_i28 == 10, rows[10], np.where(_i28 == 16, rows[16], np.where(_i28 == 22, rows[22], np.where(_i28 == 28, rows[28], np.where(_i28 == 34, rows[34], np.where(_i28 == 40, rows[40], rows[46]))))))), _ik_all_rows5_diff)
+                    _c29 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m30 = _m27 & _c29
+                    _i31 = 6*_r17 + 5
+                    _ik_all_rows5_diff = np.where(_m30, _ik_all_rows5_cand[5] - np.where(_i31 == 5, rows[5], np.where(_i31 == 11, rows[11], np.where(_i31 == 17, rows[17], np.where(_i31 == 23, rows[23], np.where(_i31 == 29, rows[29], np.where(_i31 == 35, rows[35], np.where(_i31 == 41, rows[41], rows[47]))))))), _ik_all_rows5_diff)
+                    _c32 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m33 = _m30 & _c32
+                    _i34 = 6*_r17
+                    _ik_all_rows5_diff = np.where(_m33, _ik_all_rows5_cand[0] - np.where(_i34 == 0, rows[0], np.where(_i34 == 6, rows[6], np.where(_i34 == 12, rows[12], np.where(_i34 == 18, rows[18], np.where(_i34 == 24, rows[24], np.where(_i34 == 30, rows[30], np.where(_i34 == 36, rows[36], rows[42]))))))), _ik_all_rows5_diff)
+                    _c35 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m36 = _m33 & _c35
+                    _ik_all_rows5_dup = np.where(_m36, _r17, _ik_all_rows5_dup)
+                    _run18 = _run18 & (~_m36)
+                    _m37 = _m33 & _run18
+                    _m38 = _m30 & _run18
+                    _m39 = _m27 & _run18
+                    _m40 = _m24 & _run18
+                    _m41 = _m21 & _run18
+                    _r17 = np.where(_run18, _r17 + 1, _r17)
+                    _run18 = _run18 & (_r17 < _ik_all_rows5_kept)
+            _c42 = _ik_all_rows5_dup >= 0
+            _m43 = _m12 & _c42
+            _m44 = _m12 & (~_c42)
+            # the kept row takes the duplicate's singular bit
+            _c45 = (_ik_all_rows5_flag >= IK_FLAG_SINGULAR) & (np.where(_ik_all_rows5_dup == 0, flags[0], np.where(_ik_all_rows5_dup == 1, flags[1], np.where(_ik_all_rows5_dup == 2, flags[2], np.where(_ik_all_rows5_dup == 3, flags[3], np.where(_ik_all_rows5_dup == 4, flags[4], np.where(_ik_all_rows5_dup == 5, flags[5], np.where(_ik_all_rows5_dup == 6, flags[6], flags[7]))))))) < IK_FLAG_SINGULAR)
+            _m46 = _m43 & _c45
+            _v47 = np.where(_ik_all_rows5_dup == 0, flags[0], np.where(_ik_all_rows5_dup == 1, flags[1], np.where(_ik_all_rows5_dup == 2, flags[2], np.where(_ik_all_rows5_dup == 3, flags[3], np.where(_ik_all_rows5_dup == 4, flags[4], np.where(_ik_all_rows5_dup == 5, flags[5], np.where(_ik_all_rows5_dup == 6, flags[6], flags[7]))))))) + IK_FLAG_SINGULAR
+            _m48 = _m46 & (_ik_all_rows5_dup == 0)
+            flags[0] = np.where(_m48, _v47, flags[0])
+            _m49 = _m46 & (_ik_all_rows5_dup == 1)
+            flags[1] = np.where(_m49, _v47, flags[1])
+            _m50 = _m46 & (_ik_all_rows5_dup == 2)
+            flags[2] = np.where(_m50, _v47, flags[2])
+            _m51 = _m46 & (_ik_all_rows5_dup == 3)
+            flags[3] = np.where(_m51, _v47, flags[3])
+            _m52 = _m46 & (_ik_all_rows5_dup == 4)
+            flags[4] = np.where(_m52, _v47, flags[4])
+            _m53 = _m46 & (_ik_all_rows5_dup == 5)
+            flags[5] = np.where(_m53, _v47, flags[5])
+            _m54 = _m46 & (_ik_all_rows5_dup == 6)
+            flags[6] = np.where(_m54, _v47, flags[6])
+            _m55 = _m46 & (_ik_all_rows5_dup == 7)
+            flags[7] = np.where(_m55, _v47, flags[7])
+            if bool(_m44.any()):
+                # 6. kept, in branch order
+                _i56 = 6*_ik_all_rows5_kept
+                _v57 = _ik_all_rows5_cand[0]
+                _m58 = _m44 & (_i56 == 0)
+                rows[0] = np.where(_m58, _v57, rows[0])
+                _m59 = _m44 & (_i56 == 6)
+                rows[6] = np.where(_m59, _v57, rows[6])
+                _m60 = _m44 & (_i56 == 12)
+                rows[12] = np.where(_m60, _v57, rows[12])
+                _m61 = _m44 & (_i56 == 18)
+                rows[18] = np.where(_m61, _v57, rows[18])
+                _m62 = _m44 & (_i56 == 24)
+                rows[24] = np.where(_m62, _v57, rows[24])
+                _m63 = _m44 & (_i56 == 30)
+                rows[30] = np.where(_m63, _v57, rows[30])
+                _m64 = _m44 & (_i56 == 36)
+                rows[36] = np.where(_m64, _v57, rows[36])
+                _m65 = _m44 & (_i56 == 42)
+                rows[42] = np.where(_m65, _v57, rows[42])
+                _i66 = 6*_ik_all_rows5_kept + 1
+                _v67 = _ik_all_rows5_cand[1]
+                _m68 = _m44 & (_i66 == 1)
+                rows[1] = np.where(_m68, _v67, rows[1])
+                _m69 = _m44 & (_i66 == 7)
+                rows[7] = np.where(_m69, _v67, rows[7])
+                _m70 = _m44 & (_i66 == 13)
+                rows[13] = np.where(_m70, _v67, rows[13])
+                _m71 = _m44 & (_i66 == 19)
+                rows[19] = np.where(_m71, _v67, rows[19])
+                _m72 = _m44 & (_i66 == 25)
+                rows[25] = np.where(_m72, _v67, rows[25])
+                _m73 = _m44 & (_i66 == 31)
+                rows[31] = np.where(_m73, _v67, rows[31])
+                _m74 = _m44 & (_i66 == 37)
+                rows[37] = np.where(_m74, _v67, rows[37])
+                _m75 = _m44 & (_i66 == 43)
+                rows[43] = np.where(_m75, _v67, rows[43])
+                _i76 = 6*_ik_all_rows5_kept + 2
+                _v77 = _ik_all_rows5_cand[2]
+                _m78 = _m44 & (_i76 == 2)
+                rows[2] = np.where(_m78, _v77, rows[2])
+                _m79 = _m44 & (_i76 == 8)
+                rows[8] = np.where(_m79, _v77, rows[8])
+                _m80 = _m44 & (_i76 == 14)
+                rows[14] = np.where(_m80, _v77, rows[14])
+                _m81 = _m44 & (_i76 == 20)
+                rows[20] = np.where(_m81, _v77, rows[20])
+                _m82 = _m44 & (_i76 == 26)
+                rows[26] = np.where(_m82, _v77, rows[26])
+                _m83 = _m44 & (_i76 == 32)
+                rows[32] = np.where(_m83, _v77, rows[32])
+                _m84 = _m44 & (_i76 == 38)
+                rows[38] = np.where(_m84, _v77, rows[38])
+                _m85 = _m44 & (_i76 == 44)
+                rows[44] = np.where(_m85, _v77, rows[44])
+                _i86 = 6*_ik_all_rows5_kept + 3
+                _v87 = _ik_all_rows5_cand[3]
+                _m88 = _m44 & (_i86 == 3)
+                rows[3] = np.where(_m88, _v87, rows[3])
+                _m89 = _m44 & (_i86 == 9)
+                rows[9] = np.where(_m89, _v87, rows[9])
+                _m90 = _m44 & (_i86 == 15)
+                rows[15] = np.where(_m90, _v87, rows[15])
+                _m91 = _m44 & (_i86 == 21)
+                rows[21] = np.where(_m91, _v87, rows[21])
+                _m92 = _m44 & (_i86 == 27)
+                rows[27] = np.where(_m92, _v87, rows[27])
+                _m93 = _m44 & (_i86 == 33)
+                rows[33] = np.where(_m93, _v87, rows[33])
+                _m94 = _m44 & (_i86 == 39)
+                rows[39] = np.where(_m94, _v87, rows[39])
+                _m95 = _m44 & (_i86 == 45)
+                rows[45] = np.where(_m95, _v87, rows[45])
+                _i96 = 6*_ik_all_rows5_kept + 4
+                _v97 = _ik_all_rows5_cand[4]
+                _m98 = _m44 & (_i96 == 4)
+                rows[4] = np.where(_m98, _v97, rows[4])
+                _m99 = _m44 & (_i96 == 10)
+                rows[10] = np.where(_m99, _v97, rows[10])
+                _m100 = _m44 & (_i96 == 16)
+                rows[16] = np.where(_m100, _v97, rows[16])
+                _m101 = _m44 & (_i96 == 22)
+                rows[22] = np.where(_m101, _v97, rows[22])
+                _m102 = _m44 & (_i96 == 28)
+                rows[28] = np.where(_m102, _v97, rows[28])
+                _m103 = _m44 & (_i96 == 34)
+                rows[34] = np.where(_m103, _v97, rows[34])
+                _m104 = _m44 & (_i96 == 40)
+                rows[40] = np.where(_m104, _v97, rows[40])
+                _m105 = _m44 & (_i96 == 46)
+                rows[46] = np.where(_m105, _v97, rows[46])
+                _i106 = 6*_ik_all_rows5_kept + 5
+                _v107 = _ik_all_rows5_cand[5]
+                _m108 = _m44 & (_i106 == 5)
+                rows[5] = np.where(_m108, _v107, rows[5])
+                _m109 = _m44 & (_i106 == 11)
+                rows[11] = np.where(_m109, _v107, rows[11])
+                _m110 = _m44 & (_i106 == 17)
+                rows[17] = np.where(_m110, _v107, rows[17])
+                _m111 = _m44 & (_i106 == 23)
+                rows[23] = np.where(_m111, _v107, rows[23])
+                _m112 = _m44 & (_i106 == 29)
+                rows[29] = np.where(_m112, _v107, rows[29])
+                _m113 = _m44 & (_i106 == 35)
+                rows[35] = np.where(_m113, _v107, rows[35])
+                _m114 = _m44 & (_i106 == 41)
+                rows[41] = np.where(_m114, _v107, rows[41])
+                _m115 = _m44 & (_i106 == 47)
+                rows[47] = np.where(_m115, _v107, rows[47])
+                _m116 = _m44 & (_ik_all_rows5_kept == 0)
+                flags[0] = np.where(_m116, _ik_all_rows5_flag, flags[0])
+                _m117 = _m44 & (_ik_all_rows5_kept == 1)
+                flags[1] = np.where(_m117, _ik_all_rows5_flag, flags[1])
+                _m118 = _m44 & (_ik_all_rows5_kept == 2)
+                flags[2] = np.where(_m118, _ik_all_rows5_flag, flags[2])
+                _m119 = _m44 & (_ik_all_rows5_kept == 3)
+                flags[3] = np.where(_m119, _ik_all_rows5_flag, flags[3])
+                _m120 = _m44 & (_ik_all_rows5_kept == 4)
+                flags[4] = np.where(_m120, _ik_all_rows5_flag, flags[4])
+                _m121 = _m44 & (_ik_all_rows5_kept == 5)
+                flags[5] = np.where(_m121, _ik_all_rows5_flag, flags[5])
+                _m122 = _m44 & (_ik_all_rows5_kept == 6)
+                flags[6] = np.where(_m122, _ik_all_rows5_flag, flags[6])
+                _m123 = _m44 & (_ik_all_rows5_kept == 7)
+                flags[7] = np.where(_m123, _ik_all_rows5_flag, flags[7])
+                _ik_all_rows5_kept = np.where(_m44, _ik_all_rows5_kept + 1, _ik_all_rows5_kept)
+    count[0] = np.where(_alive6, _ik_all_rows5_kept, count[0])
+    # rows past count: NaN, flags -1
+    for _ik_all_rows5_k in range(0, 8):
+        _c124 = _ik_all_rows5_k >= _ik_all_rows5_kept
+        _m125 = _alive6 & _c124
+        rows[6*_ik_all_rows5_k] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k])
+        rows[6*_ik_all_rows5_k + 1] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 1])
+        rows[6*_ik_all_rows5_k + 2] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 2])
+        rows[6*_ik_all_rows5_k + 3] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 3])
+        rows[6*_ik_all_rows5_k + 4] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 4])
+        rows[6*_ik_all_rows5_k + 5] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 5])
+        flags[_ik_all_rows5_k] = np.where(_m125, -1, flags[_ik_all_rows5_k])
+    # 7. status
+    status = np.where(_alive6, np.where(_ik_all_rows5_exact == 0, IK_UNREACHABLE, np.where(_ik_all_rows5_kept == 0, _fi(IK_OUT_OF_LIMITS), IK_OK)), status)
+    _alive6 = _alive6 & (~_alive6)
+    _run126 = _alive2
     for i in range(0, 8):
-        _c125 = i >= count[0]
-        _m126 = _run124 & _c125
-        _run124 = _run124 & (~_m126)
+        _c127 = i >= count[0]
+        _m128 = _run126 & _c127
+        _run126 = _run126 & (~_m128)
         # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
-        x = np.where(_run124, rows[6*i], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[0] = np.where(_run124, y, near[0])
-        x = np.where(_run124, rows[6*i + 1], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[1] = np.where(_run124, y, near[1])
-        x = np.where(_run124, rows[6*i + 2], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[2] = np.where(_run124, y, near[2])
-        x = np.where(_run124, rows[6*i + 3], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[3] = np.where(_run124, y, near[3])
-        x = np.where(_run124, rows[6*i + 4], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[4] = np.where(_run124, y, near[4])
-        x = np.where(_run124, rows[6*i + 5], x)
-        y = np.where(_run124, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
-        y = np.where(_run124, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
-        y = np.where(_run124, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
-        near[5] = np.where(_run124, y, near[5])
-        dist = np.where(_run124, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
-        _c127 = (best < 0) | (dist < best_d)
-        _m128 = _run124 & _c127
-        best = np.where(_m128, i, best)
-        best_d = np.where(_m128, dist, best_d)
-        q[0] = np.where(_m128, near[0], q[0])
-        q[1] = np.where(_m128, near[1], q[1])
-        q[2] = np.where(_m128, near[2], q[2])
-        q[3] = np.where(_m128, near[3], q[3])
-        q[4] = np.where(_m128, near[4], q[4])
-        q[5] = np.where(_m128, near[5], q[5])
-    _status1 = status
-    _alive2 = _fb(False)
+        x = np.where(_run126, rows[6*i], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[0] = np.where(_run126, y, near[0])
+        x = np.where(_run126, rows[6*i + 1], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[1] = np.where(_run126, y, near[1])
+        x = np.where(_run126, rows[6*i + 2], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[2] = np.where(_run126, y, near[2])
+        x = np.where(_run126, rows[6*i + 3], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[3] = np.where(_run126, y, near[3])
+        x = np.where(_run126, rows[6*i + 4], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[4] = np.where(_run126, y, near[4])
+        x = np.where(_run126, rows[6*i + 5], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[5] = np.where(_run126, y, near[5])
+        dist = np.where(_run126, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
+        _c129 = (best < 0) | (dist < best_d)
+        _m130 = _run126 & _c129
+        best = np.where(_m130, i, best)
+        best_d = np.where(_m130, dist, best_d)
+        q[0] = np.where(_m130, near[0], q[0])
+        q[1] = np.where(_m130, near[1], q[1])
+        q[2] = np.where(_m130, near[2], q[2])
+        q[3] = np.where(_m130, near[3], q[3])
+        q[4] = np.where(_m130, near[4], q[4])
+        q[5] = np.where(_m130, near[5], q[5])
+    _status1 = np.where(_alive2, status, _status1)
+    _alive2 = _alive2 & (~_alive2)
     return (q, ), _status1
 
 
@@ -7430,5 +7438,507 @@ def _ik_nearest_batch(q_ref, target):
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
         raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+    names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
+    return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
+def _ik_nearest_weighted(q_ref, weights, target, q):
+    """the closed-form IK solution nearest a configuration, in a weighted metric (one problem; arrays are 1-D)."""
+    rows = np.zeros(48, dtype=DTYPE)
+    count = np.zeros(1, dtype=np.int64)
+    flags = np.zeros(8, dtype=np.int64)
+    near = np.zeros(6, dtype=DTYPE)
+    status = 0
+    best = -1
+    best_d = DTYPE(0.0)
+    dist = DTYPE(0.0)
+    y = DTYPE(0.0)
+    x = DTYPE(0.0)
+    q[0] = DTYPE(np.nan)
+    q[1] = DTYPE(np.nan)
+    q[2] = DTYPE(np.nan)
+    q[3] = DTYPE(np.nan)
+    q[4] = DTYPE(np.nan)
+    q[5] = DTYPE(np.nan)
+    # q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN
+    if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]) or not weights[0] > 0.0 or not np.isfinite(weights[0]) or not weights[1] > 0.0 or not np.isfinite(weights[1]) or not weights[2] > 0.0 or not np.isfinite(weights[2]) or not weights[3] > 0.0 or not np.isfinite(weights[3]) or not weights[4] > 0.0 or not np.isfinite(weights[4]) or not weights[5] > 0.0 or not np.isfinite(weights[5]):
+        return IK_INVALID
+    status = _ik_all_rows(target, rows, count, flags)
+    for i in range(0, IK_MAX_SOLUTIONS):
+        if i >= count[0]:
+            break
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
+        x = rows[6*i]
+        y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[0] = y
+        x = rows[6*i + 1]
+        y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[1] = y
+        x = rows[6*i + 2]
+        y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[2] = y
+        x = rows[6*i + 3]
+        y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[3] = y
+        x = rows[6*i + 4]
+        y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[4] = y
+        x = rows[6*i + 5]
+        y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
+        y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
+        y = 6.283185307179586 if y > 6.283185307179586 else y
+        y = -6.283185307179586 if y < -6.283185307179586 else y
+        near[5] = y
+        dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
+        if best < 0 or dist < best_d:
+            best = i
+            best_d = dist
+            q[0] = near[0]
+            q[1] = near[1]
+            q[2] = near[2]
+            q[3] = near[3]
+            q[4] = near[4]
+            q[5] = near[5]
+    return status
+
+
+IKNearestResult = namedtuple("IKNearestResult", "q status")
+IKNearestResult.__doc__ = """Outcome of ik_nearest_weighted: q, status; status is one of "ok", "unreachable", "out_of_limits"."""
+
+
+@_signature_errors
+def ik_nearest_weighted(q_ref, weights, target):
+    """the closed-form IK solution nearest a configuration, in a weighted metric.
+
+    The ik_all solution nearest q_ref in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0): each revolute joint takes the copy q + 2 pi k
+    within the joint limits nearest q_ref[j], then the row with the
+    least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
+    (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+
+    q_ref: array of shape (6,), finite: the configuration to be near (rad or m).
+    weights: array of shape (6,), finite and > 0: the metric's weight of each joint (finite, > 0): sum_j weights[j] (q[j] - q_ref[j])^2.
+    target: array of shape (4, 4), finite: tool pose T (4 x 4, row-major; the last row is not read).
+    Returns IKNearestResult(q, status). Raises ValueError for bad input, TypeError for a wrong
+    number of arguments.
+
+    A batch of problems: arrays of shape (..., *shape) (a matrix also (..., size), flat), whose batch
+    shapes broadcast; the record then holds arrays over the batch (q (..., *shape), status an array of
+    the names, numbers as arrays (...)); every problem is solved at once, masked (the C _batch takes one after another).
+    """
+    if _is_batch(((q_ref, (6,)), (weights, (6,)), (target, (4, 4,)), ), ()):
+        return _ik_nearest_weighted_batch(q_ref, weights, target)
+    q_ref = _vector(q_ref, "q_ref", (6,), "finite")
+    weights = _vector(weights, "weights", (6,), "positive")
+    target = _vector(target, "target", (4, 4,), "finite")
+    q = np.zeros(6, dtype=DTYPE)
+    status = _ik_nearest_weighted(q_ref, weights, target, q)
+    if status == 3:
+        raise ValueError("ik_nearest_weighted: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+    names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
+    return IKNearestResult(q, names[status])
+
+
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # lanes a branch does not take compute too
+def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
+    """the closed-form IK solution nearest a configuration, in a weighted metric: every lane (problem) at once, masked (see skelarm_sym.ir.predicate); arrays are lists
+    of per-lane values."""
+    def _fr(v):
+        return np.full(_c.shape, v, dtype=DTYPE)
+
+    def _fi(v):
+        return np.full(_c.shape, v, dtype=np.int64)
+
+    def _fb(v):
+        return np.full(_c.shape, v, dtype=np.bool_)
+
+    def _fu(v):
+        return _fi(v[0]), _fi(v[1])
+
+    q = [_fr(0.0)] * 6
+    _status1 = _fi(0)
+    _alive2 = _fb(True)
+    rows = [_fr(0.0)] * 48
+    count = [_fi(0)] * 1
+    flags = [_fi(0)] * 8
+    near = [_fr(0.0)] * 6
+    status = _fi(0)
+    best = _fi(-1)
+    best_d = _fr(0.0)
+    dist = _fr(0.0)
+    y = _fr(0.0)
+    x = _fr(0.0)
+    q[0] = _fr(_NAN)
+    q[1] = _fr(_NAN)
+    q[2] = _fr(_NAN)
+    q[3] = _fr(_NAN)
+    q[4] = _fr(_NAN)
+    q[5] = _fr(_NAN)
+    # q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN
+    _c3 = (~np.isfinite(q_ref[0])) | (~np.isfinite(q_ref[1])) | (~np.isfinite(q_ref[2])) | (~np.isfinite(q_ref[3])) | (~np.isfinite(q_ref[4])) | (~np.isfinite(q_ref[5])) | (~(weights[0] > 0.0)) | (~np.isfinite(weights[0])) | (~(weights[1] > 0.0)) | (~np.isfinite(weights[1])) | (~(weights[2] > 0.0)) | (~np.isfinite(weights[2])) | (~(weights[3] > 0.0)) | (~np.isfinite(weights[3])) | (~(weights[4] > 0.0)) | (~np.isfinite(weights[4])) | (~(weights[5] > 0.0)) | (~np.isfinite(weights[5]))
+    _m4 = _c3
+    _status1 = np.where(_m4, IK_INVALID, _status1)
+    _alive2 = _alive2 & (~_m4)
+    _alive6 = _alive2
+    _ik_all_rows5_raw = [_fr(0.0)] * 48
+    _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
+    _ik_all_rows5_cand = [_fr(0.0)] * 6
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
+    _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
+    _ik_all_rows5_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
+    _ik_all_rows5_m11 = (target[1]*target[1] + target[5]*target[5]) + target[9]*target[9]
+    _ik_all_rows5_m12 = (target[1]*target[2] + target[5]*target[6]) + target[9]*target[10]
+    _ik_all_rows5_m22 = (target[2]*target[2] + target[6]*target[6]) + target[10]*target[10]
+    _ik_all_rows5_det = (target[0]*(target[5]*target[10] - target[6]*target[9]) - target[1]*(target[4]*target[10] - target[6]*target[8])) + target[2]*(target[4]*target[9] - target[5]*target[8])
+    _c7 = (~np.isfinite(target[3])) | (~np.isfinite(target[7])) | (~np.isfinite(target[11])) | (np.abs(target[3]) > IK_TRANSLATION_MAX) | (np.abs(target[7]) > IK_TRANSLATION_MAX) | (np.abs(target[11]) > IK_TRANSLATION_MAX) | (~np.isfinite((_ik_all_rows5_m00 + _ik_all_rows5_m11) + _ik_all_rows5_m22)) | (np.abs(_ik_all_rows5_m00 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m01) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m02) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m11 - 1.0) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m12) > IK_ORTHO_TOL) | (np.abs(_ik_all_rows5_m22 - 1.0) > IK_ORTHO_TOL) | (~(_ik_all_rows5_det > 0.0))
+    _m8 = _alive2 & _c7
+    count[0] = np.where(_m8, 0, count[0])
+    # rows past count: NaN, flags -1
+    for _ik_all_rows5_k in range(0, 8):
+        rows[6*_ik_all_rows5_k] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k])
+        rows[6*_ik_all_rows5_k + 1] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 1])
+        rows[6*_ik_all_rows5_k + 2] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 2])
+        rows[6*_ik_all_rows5_k + 3] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 3])
+        rows[6*_ik_all_rows5_k + 4] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 4])
+        rows[6*_ik_all_rows5_k + 5] = np.where(_m8, _NAN, rows[6*_ik_all_rows5_k + 5])
+        flags[_ik_all_rows5_k] = np.where(_m8, -1, flags[_ik_all_rows5_k])
+    status = np.where(_m8, IK_INVALID, status)
+    _alive6 = _alive6 & (~_m8)
+    # the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable
+    _o = _ik_candidates_on_lanes(_c, target[0:16])
+    _merge(_alive6, _o[0], _ik_all_rows5_raw, 0, _fr)
+    _merge(_alive6, _o[1], _ik_all_rows5_raw_flags, 0, _fr)
+    _ik_all_rows5_exact = _fi(0)
+    for _ik_all_rows5_i in range(0, 8):
+        _c9 = _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
+        _m10 = _alive6 & _c9
+        _ik_all_rows5_exact = np.where(_m10, 1, _ik_all_rows5_exact)
+    _ik_all_rows5_kept = _fi(0)
+    _ik_all_rows5_flag = _fi(0)
+    _ik_all_rows5_dup = _fi(0)
+    _ik_all_rows5_diff = _fr(0.0)
+    _ik_all_rows5_tol = _fr(0.0)
+    for _ik_all_rows5_i in range(0, 8):
+        _ik_all_rows5_flag = np.where(_alive6, _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64), _ik_all_rows5_flag)
+        _c11 = (_ik_all_rows5_exact == 0) | (_ik_all_rows5_flag % 2 != IK_FLAG_LEAST_SQUARES)
+        _m12 = _alive6 & _c11
+        if bool(_m12.any()):
+            # 3. revolute joints to the copy nearest their range's centre (each range wider than a turn around its centre: 4. no copy is outside the limits)
+            _ik_all_rows5_cand[0] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i], _ik_all_rows5_cand[0])
+            _ik_all_rows5_cand[1] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 1], _ik_all_rows5_cand[1])
+            _ik_all_rows5_cand[2] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 2], _ik_all_rows5_cand[2])
+            _ik_all_rows5_cand[3] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] + np.where(0.0 - _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] > 3.141592653589793, 6.283185307179586, np.where(0.0 - _ik_all_rows5_raw[6*_ik_all_rows5_i + 3] < -3.141592653589793, _fr(-6.283185307179586), 0.0)), _ik_all_rows5_cand[3])
+            _c13 = np.abs(0.0 - _ik_all_rows5_cand[3]) > 3.141592653589793
+            _m14 = _m12 & _c13
+            _ik_all_rows5_cand[3] = np.where(_m14, _ik_all_rows5_cand[3] + 6.283185307179586*np.rint((0.0 - _ik_all_rows5_cand[3])*0.15915494309189535), _ik_all_rows5_cand[3])
+            _ik_all_rows5_cand[4] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 4], _ik_all_rows5_cand[4])
+            _ik_all_rows5_cand[5] = np.where(_m12, _ik_all_rows5_raw[6*_ik_all_rows5_i + 5], _ik_all_rows5_cand[5])
+            # 5. a duplicate of a kept row (max over joints, revolute modulo 2 pi) is dropped
+            _ik_all_rows5_dup = np.where(_m12, -1, _ik_all_rows5_dup)
+            _c15 = _ik_all_rows5_flag > 0
+            _m16 = _m12 & _c15
+            if bool(_m16.any()):
+                # an exact regular row (flag 0) is no other row's duplicate: their branches part at a subproblem that is not singular, 1e-5 rad or more apart
+                _r17 = _fi(0)
+                _run18 = _m16 & (_r17 < _ik_all_rows5_kept)
+                while bool(_run18.any()):
+                    # the same row when every joint is within IK_DUP_TOL (IK_DUP_TOL_SINGULAR where both are flagged singular: a double root's two roots): nested, the joint with the most distinct candidates first, so a row that differs there costs one test
+                    _ik_all_rows5_tol = np.where(_run18, np.where((_ik_all_rows5_flag >= IK_FLAG_SINGULAR) & (np.where(_r17 == 0, flags[0], np.where(_r17 == 1, flags[1], np.where(_r17 == 2, flags[2], np.where(_r17 == 3, flags[3], np.where(_r17 == 4, flags[4], np.where(_r17 == 5, flags[5], np.where(_r17 == 6, flags[6], flags[7]))))))) >= IK_FLAG_SINGULAR), _fr(IK_DUP_TOL_SINGULAR), IK_DUP_TOL), _ik_all_rows5_tol)
+                    _i19 = 6*_r17 + 1
+                    _ik_all_rows5_diff = np.where(_run18, _ik_all_rows5_cand[1] - np.where(_i19 == 1, rows[1], np.where(_i19 == 7, rows[7], np.where(_i19 == 13, rows[13], np.where(_i19 == 19, rows[19], np.where(_i19 == 25, rows[25], np.where(_i19 == 31, rows[31], np.where(_i19 == 37, rows[37], rows[43]))))))), _ik_all_rows5_diff)
+                    _c20 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m21 = _run18 & _c20
+                    _i22 = 6*_r17 + 2
+                    _ik_all_rows5_diff = np.where(_m21, _ik_all_rows5_cand[2] - np.where(_i22 == 2, rows[2], np.where(_i22 == 8, rows[8], np.where(_i22 == 14, rows[14], np.where(_i22 == 20, rows[20], np.where(_i22 == 26, rows[26], np.where(_i22 == 32, rows[32], np.where(_i22 == 38, rows[38], rows[44]))))))), _ik_all_rows5_diff)
+                    _c23 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m24 = _m21 & _c23
+                    _i25 = 6*_r17 + 3
+                    _ik_all_rows5_diff = np.where(_m24, _ik_all_rows5_cand[3] - np.where(_i25 == 3, rows[3], np.where(_i25 == 9, rows[9], np.where(_i25 == 15, rows[15], np.where(_i25 == 21, rows[21], np.where(_i25 == 27, rows[27], np.where(_i25 == 33, rows[33], np.where(_i25 == 39, rows[39], rows[45]))))))), _ik_all_rows5_diff)
+                    _c26 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m27 = _m24 & _c26
+                    _i28 = 6*_r17 + 4
+                    _ik_all_rows5_diff = np.where(_m27, _ik_all_rows5_cand[4] - np.where(_i28 == 4, rows[4], np.where(_i28 == 10, rows[10], np.where(_i28 == 16, rows[16], np.where(_i28 == 22, rows[22], np.where(_i28 == 28, rows[28], np.where(_i28 == 34, rows[34], np.where(_i28 == 40, rows[40], rows[46]))))))), _ik_all_rows5_diff)
+                    _c29 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m30 = _m27 & _c29
+                    _i31 = 6*_r17 + 5
+                    _ik_all_rows5_diff = np.where(_m30, _ik_all_rows5_cand[5] - np.where(_i31 == 5, rows[5], np.where(_i31 == 11, rows[11], np.where(_i31 == 17, rows[17], np.where(_i31 == 23, rows[23], np.where(_i31 == 29, rows[29], np.where(_i31 == 35, rows[35], np.where(_i31 == 41, rows[41], rows[47]))))))), _ik_all_rows5_diff)
+                    _c32 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m33 = _m30 & _c32
+                    _i34 = 6*_r17
+                    _ik_all_rows5_diff = np.where(_m33, _ik_all_rows5_cand[0] - np.where(_i34 == 0, rows[0], np.where(_i34 == 6, rows[6], np.where(_i34 == 12, rows[12], np.where(_i34 == 18, rows[18], np.where(_i34 == 24, rows[24], np.where(_i34 == 30, rows[30], np.where(_i34 == 36, rows[36], rows[42]))))))), _ik_all_rows5_diff)
+                    _c35 = (np.abs(_ik_all_rows5_diff) <= _ik_all_rows5_tol) | (np.abs(6.283185307179586 - np.abs(_ik_all_rows5_diff)) <= _ik_all_rows5_tol)
+                    _m36 = _m33 & _c35
+                    _ik_all_rows5_dup = np.where(_m36, _r17, _ik_all_rows5_dup)
+                    _run18 = _run18 & (~_m36)
+                    _m37 = _m33 & _run18
+                    _m38 = _m30 & _run18
+                    _m39 = _m27 & _run18
+                    _m40 = _m24 & _run18
+                    _m41 = _m21 & _run18
+                    _r17 = np.where(_run18, _r17 + 1, _r17)
+                    _run18 = _run18 & (_r17 < _ik_all_rows5_kept)
+            _c42 = _ik_all_rows5_dup >= 0
+            _m43 = _m12 & _c42
+            _m44 = _m12 & (~_c42)
+            # the kept row takes the duplicate's singular bit
+            _c45 = (_ik_all_rows5_flag >= IK_FLAG_SINGULAR) & (np.where(_ik_all_rows5_dup == 0, flags[0], np.where(_ik_all_rows5_dup == 1, flags[1], np.where(_ik_all_rows5_dup == 2, flags[2], np.where(_ik_all_rows5_dup == 3, flags[3], np.where(_ik_all_rows5_dup == 4, flags[4], np.where(_ik_all_rows5_dup == 5, flags[5], np.where(_ik_all_rows5_dup == 6, flags[6], flags[7]))))))) < IK_FLAG_SINGULAR)
+            _m46 = _m43 & _c45
+            _v47 = np.where(_ik_all_rows5_dup == 0, flags[0], np.where(_ik_all_rows5_dup == 1, flags[1], np.where(_ik_all_rows5_dup == 2, flags[2], np.where(_ik_all_rows5_dup == 3, flags[3], np.where(_ik_all_rows5_dup == 4, flags[4], np.where(_ik_all_rows5_dup == 5, flags[5], np.where(_ik_all_rows5_dup == 6, flags[6], flags[7]))))))) + IK_FLAG_SINGULAR
+            _m48 = _m46 & (_ik_all_rows5_dup == 0)
+            flags[0] = np.where(_m48, _v47, flags[0])
+            _m49 = _m46 & (_ik_all_rows5_dup == 1)
+            flags[1] = np.where(_m49, _v47, flags[1])
+            _m50 = _m46 & (_ik_all_rows5_dup == 2)
+            flags[2] = np.where(_m50, _v47, flags[2])
+            _m51 = _m46 & (_ik_all_rows5_dup == 3)
+            flags[3] = np.where(_m51, _v47, flags[3])
+            _m52 = _m46 & (_ik_all_rows5_dup == 4)
+            flags[4] = np.where(_m52, _v47, flags[4])
+            _m53 = _m46 & (_ik_all_rows5_dup == 5)
+            flags[5] = np.where(_m53, _v47, flags[5])
+            _m54 = _m46 & (_ik_all_rows5_dup == 6)
+            flags[6] = np.where(_m54, _v47, flags[6])
+            _m55 = _m46 & (_ik_all_rows5_dup == 7)
+            flags[7] = np.where(_m55, _v47, flags[7])
+            if bool(_m44.any()):
+                # 6. kept, in branch order
+                _i56 = 6*_ik_all_rows5_kept
+                _v57 = _ik_all_rows5_cand[0]
+                _m58 = _m44 & (_i56 == 0)
+                rows[0] = np.where(_m58, _v57, rows[0])
+                _m59 = _m44 & (_i56 == 6)
+                rows[6] = np.where(_m59, _v57, rows[6])
+                _m60 = _m44 & (_i56 == 12)
+                rows[12] = np.where(_m60, _v57, rows[12])
+                _m61 = _m44 & (_i56 == 18)
+                rows[18] = np.where(_m61, _v57, rows[18])
+                _m62 = _m44 & (_i56 == 24)
+                rows[24] = np.where(_m62, _v57, rows[24])
+                _m63 = _m44 & (_i56 == 30)
+                rows[30] = np.where(_m63, _v57, rows[30])
+                _m64 = _m44 & (_i56 == 36)
+                rows[36] = np.where(_m64, _v57, rows[36])
+                _m65 = _m44 & (_i56 == 42)
+                rows[42] = np.where(_m65, _v57, rows[42])
+                _i66 = 6*_ik_all_rows5_kept + 1
+                _v67 = _ik_all_rows5_cand[1]
+                _m68 = _m44 & (_i66 == 1)
+                rows[1] = np.where(_m68, _v67, rows[1])
+                _m69 = _m44 & (_i66 == 7)
+                rows[7] = np.where(_m69, _v67, rows[7])
+                _m70 = _m44 & (_i66 == 13)
+                rows[13] = np.where(_m70, _v67, rows[13])
+                _m71 = _m44 & (_i66 == 19)
+                rows[19] = np.where(_m71, _v67, rows[19])
+                _m72 = _m44 & (_i66 == 25)
+                rows[25] = np.where(_m72, _v67, rows[25])
+                _m73 = _m44 & (_i66 == 31)
+                rows[31] = np.where(_m73, _v67, rows[31])
+                _m74 = _m44 & (_i66 == 37)
+                rows[37] = np.where(_m74, _v67, rows[37])
+                _m75 = _m44 & (_i66 == 43)
+                rows[43] = np.where(_m75, _v67, rows[43])
+                _i76 = 6*_ik_all_rows5_kept + 2
+                _v77 = _ik_all_rows5_cand[2]
+                _m78 = _m44 & (_i76 == 2)
+                rows[2] = np.where(_m78, _v77, rows[2])
+                _m79 = _m44 & (_i76 == 8)
+                rows[8] = np.where(_m79, _v77, rows[8])
+                _m80 = _m44 & (_i76 == 14)
+                rows[14] = np.where(_m80, _v77, rows[14])
+                _m81 = _m44 & (_i76 == 20)
+                rows[20] = np.where(_m81, _v77, rows[20])
+                _m82 = _m44 & (_i76 == 26)
+                rows[26] = np.where(_m82, _v77, rows[26])
+                _m83 = _m44 & (_i76 == 32)
+                rows[32] = np.where(_m83, _v77, rows[32])
+                _m84 = _m44 & (_i76 == 38)
+                rows[38] = np.where(_m84, _v77, rows[38])
+                _m85 = _m44 & (_i76 == 44)
+                rows[44] = np.where(_m85, _v77, rows[44])
+                _i86 = 6*_ik_all_rows5_kept + 3
+                _v87 = _ik_all_rows5_cand[3]
+                _m88 = _m44 & (_i86 == 3)
+                rows[3] = np.where(_m88, _v87, rows[3])
+                _m89 = _m44 & (_i86 == 9)
+                rows[9] = np.where(_m89, _v87, rows[9])
+                _m90 = _m44 & (_i86 == 15)
+                rows[15] = np.where(_m90, _v87, rows[15])
+                _m91 = _m44 & (_i86 == 21)
+                rows[21] = np.where(_m91, _v87, rows[21])
+                _m92 = _m44 & (_i86 == 27)
+                rows[27] = np.where(_m92, _v87, rows[27])
+                _m93 = _m44 & (_i86 == 33)
+                rows[33] = np.where(_m93, _v87, rows[33])
+                _m94 = _m44 & (_i86 == 39)
+                rows[39] = np.where(_m94, _v87, rows[39])
+                _m95 = _m44 & (_i86 == 45)
+                rows[45] = np.where(_m95, _v87, rows[45])
+                _i96 = 6*_ik_all_rows5_kept + 4
+                _v97 = _ik_all_rows5_cand[4]
+                _m98 = _m44 & (_i96 == 4)
+                rows[4] = np.where(_m98, _v97, rows[4])
+                _m99 = _m44 & (_i96 == 10)
+                rows[10] = np.where(_m99, _v97, rows[10])
+                _m100 = _m44 & (_i96 == 16)
+                rows[16] = np.where(_m100, _v97, rows[16])
+                _m101 = _m44 & (_i96 == 22)
+                rows[22] = np.where(_m101, _v97, rows[22])
+                _m102 = _m44 & (_i96 == 28)
+                rows[28] = np.where(_m102, _v97, rows[28])
+                _m103 = _m44 & (_i96 == 34)
+                rows[34] = np.where(_m103, _v97, rows[34])
+                _m104 = _m44 & (_i96 == 40)
+                rows[40] = np.where(_m104, _v97, rows[40])
+                _m105 = _m44 & (_i96 == 46)
+                rows[46] = np.where(_m105, _v97, rows[46])
+                _i106 = 6*_ik_all_rows5_kept + 5
+                _v107 = _ik_all_rows5_cand[5]
+                _m108 = _m44 & (_i106 == 5)
+                rows[5] = np.where(_m108, _v107, rows[5])
+                _m109 = _m44 & (_i106 == 11)
+                rows[11] = np.where(_m109, _v107, rows[11])
+                _m110 = _m44 & (_i106 == 17)
+                rows[17] = np.where(_m110, _v107, rows[17])
+                _m111 = _m44 & (_i106 == 23)
+                rows[23] = np.where(_m111, _v107, rows[23])
+                _m112 = _m44 & (_i106 == 29)
+                rows[29] = np.where(_m112, _v107, rows[29])
+                _m113 = _m44 & (_i106 == 35)
+                rows[35] = np.where(_m113, _v107, rows[35])
+                _m114 = _m44 & (_i106 == 41)
+                rows[41] = np.where(_m114, _v107, rows[41])
+                _m115 = _m44 & (_i106 == 47)
+                rows[47] = np.where(_m115, _v107, rows[47])
+                _m116 = _m44 & (_ik_all_rows5_kept == 0)
+                flags[0] = np.where(_m116, _ik_all_rows5_flag, flags[0])
+                _m117 = _m44 & (_ik_all_rows5_kept == 1)
+                flags[1] = np.where(_m117, _ik_all_rows5_flag, flags[1])
+                _m118 = _m44 & (_ik_all_rows5_kept == 2)
+                flags[2] = np.where(_m118, _ik_all_rows5_flag, flags[2])
+                _m119 = _m44 & (_ik_all_rows5_kept == 3)
+                flags[3] = np.where(_m119, _ik_all_rows5_flag, flags[3])
+                _m120 = _m44 & (_ik_all_rows5_kept == 4)
+                flags[4] = np.where(_m120, _ik_all_rows5_flag, flags[4])
+                _m121 = _m44 & (_ik_all_rows5_kept == 5)
+                flags[5] = np.where(_m121, _ik_all_rows5_flag, flags[5])
+                _m122 = _m44 & (_ik_all_rows5_kept == 6)
+                flags[6] = np.where(_m122, _ik_all_rows5_flag, flags[6])
+                _m123 = _m44 & (_ik_all_rows5_kept == 7)
+                flags[7] = np.where(_m123, _ik_all_rows5_flag, flags[7])
+                _ik_all_rows5_kept = np.where(_m44, _ik_all_rows5_kept + 1, _ik_all_rows5_kept)
+    count[0] = np.where(_alive6, _ik_all_rows5_kept, count[0])
+    # rows past count: NaN, flags -1
+    for _ik_all_rows5_k in range(0, 8):
+        _c124 = _ik_all_rows5_k >= _ik_all_rows5_kept
+        _m125 = _alive6 & _c124
+        rows[6*_ik_all_rows5_k] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k])
+        rows[6*_ik_all_rows5_k + 1] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 1])
+        rows[6*_ik_all_rows5_k + 2] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 2])
+        rows[6*_ik_all_rows5_k + 3] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 3])
+        rows[6*_ik_all_rows5_k + 4] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 4])
+        rows[6*_ik_all_rows5_k + 5] = np.where(_m125, _NAN, rows[6*_ik_all_rows5_k + 5])
+        flags[_ik_all_rows5_k] = np.where(_m125, -1, flags[_ik_all_rows5_k])
+    # 7. status
+    status = np.where(_alive6, np.where(_ik_all_rows5_exact == 0, IK_UNREACHABLE, np.where(_ik_all_rows5_kept == 0, _fi(IK_OUT_OF_LIMITS), IK_OK)), status)
+    _alive6 = _alive6 & (~_alive6)
+    _run126 = _alive2
+    for i in range(0, 8):
+        _c127 = i >= count[0]
+        _m128 = _run126 & _c127
+        _run126 = _run126 & (~_m128)
+        # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
+        x = np.where(_run126, rows[6*i], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[0] = np.where(_run126, y, near[0])
+        x = np.where(_run126, rows[6*i + 1], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[1] = np.where(_run126, y, near[1])
+        x = np.where(_run126, rows[6*i + 2], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[2] = np.where(_run126, y, near[2])
+        x = np.where(_run126, rows[6*i + 3], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[3] = np.where(_run126, y, near[3])
+        x = np.where(_run126, rows[6*i + 4], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[4] = np.where(_run126, y, near[4])
+        x = np.where(_run126, rows[6*i + 5], x)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
+        y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
+        y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
+        near[5] = np.where(_run126, y, near[5])
+        dist = np.where(_run126, ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
+        _c129 = (best < 0) | (dist < best_d)
+        _m130 = _run126 & _c129
+        best = np.where(_m130, i, best)
+        best_d = np.where(_m130, dist, best_d)
+        q[0] = np.where(_m130, near[0], q[0])
+        q[1] = np.where(_m130, near[1], q[1])
+        q[2] = np.where(_m130, near[2], q[2])
+        q[3] = np.where(_m130, near[3], q[3])
+        q[4] = np.where(_m130, near[4], q[4])
+        q[5] = np.where(_m130, near[5], q[5])
+    _status1 = np.where(_alive2, status, _status1)
+    _alive2 = _alive2 & (~_alive2)
+    return (q, ), _status1
+
+
+def _ik_nearest_weighted_batch(q_ref, weights, target):
+    """ik_nearest_weighted for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
+    q_ref = _problems(q_ref, "q_ref", (6,), "finite")
+    weights = _problems(weights, "weights", (6,), "positive")
+    target = _problems(target, "target", (4, 4,), "finite")
+    batch = _batch_shape("ik_nearest_weighted", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "weights": weights.shape[:weights.ndim - 1], "target": target.shape[:target.ndim - 2]})
+    lanes = int(np.prod(batch))
+    _c = np.zeros(lanes, dtype=DTYPE)
+    (q, ), status = _ik_nearest_weighted_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(weights, batch, (6,)), _lanes(target, batch, (4, 4,)))
+    status = np.broadcast_to(status, (lanes,)).reshape(batch)
+    if np.any(status == 3):
+        raise ValueError(f"ik_nearest_weighted: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])

@@ -56,7 +56,7 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         # a new user's probe: messages that pointed the wrong way or listed too little
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "links"], "--what links lists a URDF file's link tree"),
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "nosuch"], "all, ik, links"),
-        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest"),
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted"),
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "--tip applies to URDF files only"),
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--functions", "ik_all"], "lock one joint, --ik-lock JOINT"),
     ],

@@ -40,13 +40,13 @@ FOUND_TOL = {"double": 1e-7, "float": 3e-3}
 class Built:
     """One arm's emitted IK: the chain (lock recorded), the lock coordinate, C and NumPy, and the spec's answer."""
 
-    def __init__(self, chain, lock: int | None, precision: str = "double") -> None:
+    def __init__(self, chain, lock: int | None, precision: str = "double", functions: str = FUNCTIONS) -> None:
         if lock is not None:
             chain = with_ik_lock(chain, lock + 1)
         self.chain = chain
         self.lock = None if lock is None else chain.joints[lock].coordinate
         self.precision = precision
-        self.generated = generate(chain, out=None, functions=FUNCTIONS, precision=precision)
+        self.generated = generate(chain, out=None, functions=functions, precision=precision)
         self.c = compile_arm(self.generated)
         prefix = self.generated.module.prefix
         self.py = load_python(self.generated.sources[f"{prefix}.py"], prefix)
@@ -606,7 +606,7 @@ def test_wide_limits_need_no_test_and_agree_with_the_spec():
             assert list(np.asarray(r.flags)[: r.count]) == list(np.asarray(want.flags)[: want.count])
 
 
-def narrow_wrist_puma() -> Built:
+def narrow_wrist_puma(functions: str = FUNCTIONS) -> Built:
     """The PUMA 560 with narrow, off-centre limits on joints 4 and 6 and none on joint 5: the aligned wrist's
     representative (q4 = 0, or an angle of rounding noise at q5 = pi) often misses joint 6's range."""
     import dataclasses
@@ -615,7 +615,7 @@ def narrow_wrist_puma() -> Built:
     limits = {3: (-1.0, 2.0), 4: (None, None), 5: (-1.5, 1.0)}
     joints = [dataclasses.replace(j, lower=limits[k][0], upper=limits[k][1]) if k in limits else j
               for k, j in enumerate(chain.joints)]
-    return Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+    return Built(dataclasses.replace(chain, joints=tuple(joints)), None, functions=functions)
 
 
 @pytest.mark.parametrize("name", ["puma_narrow_wrist", pytest.param("stanford", marks=pytest.mark.slow),
@@ -715,6 +715,74 @@ def test_a_far_reference_on_a_joint_wider_than_a_turn_takes_its_nearest_copy():
     assert np.sum((want - ref) ** 2) == pytest.approx(best, rel=1e-12) and best < 300
     for impl in (b.c, b.py):
         np.testing.assert_allclose(impl.ik_nearest(ref, T).q, want, atol=1e-12)
+
+
+def scan_nearest(rows, ref, weights, b: Built) -> float:
+    """The judge of a weighted nearest: the least ``sum_j weights[j] (q[j] - ref[j])^2`` over the rows and every copy
+    ``q[j] + 2 pi k`` within the limits (k within 10 turns), each joint on its own (no continuum)."""
+    best = np.inf
+    for row in rows:
+        d = 0.0
+        for j in range(b.chain.n):
+            copies = row[j] + 2 * np.pi * np.arange(-10, 11) if b.revolute[j] else np.array([row[j]])
+            copies = copies[(copies >= b.lower[j]) & (copies <= b.upper[j])]
+            d += weights[j] * np.min((copies - ref[j]) ** 2)
+        best = min(best, d)
+    return best
+
+
+def test_ik_nearest_weighted_is_the_weighted_nearest():
+    """ik_nearest_weighted(q_ref, weights, target): the ik_all row nearest q_ref in sum_j w_j (q_j - q_ref_j)^2, in C,
+    NumPy (single calls and the masked batch) and PyTorch. On the narrow-limit PUMA from random references with
+    weights from 1e-3 to 1e3: equal to the spec's nearest with those weights; away from the aligned wrist, as near as a
+    scan of every row and copy (an independent judge); with the wrist aligned, the continuum's member is chosen in the
+    weighted metric (the spec's continuum_member, itself judged by sampling in test_closed_ik_postprocess), which
+    differs from the unweighted member; all ones is ik_nearest bit for bit. Weights not finite and > 0 and a q_ref
+    not finite: ValueError in Python, IK_INVALID with q NaN from the C function itself."""
+    b = narrow_wrist_puma(functions="ik_all,ik_nearest,ik_nearest_weighted")
+    a, w, c, _ = b.continuum
+    rng = np.random.default_rng(11)
+    q = inner_configurations(b, 40, rng)
+    q[20:, w] = 0.0
+    T = targets_of(b.chain, q)
+    refs = inner_configurations(b, 40, rng)
+    W = 10.0 ** rng.uniform(-3, 3, size=(40, 6))
+    differs = 0
+    for i in range(40):
+        spec = b.spec(T[i], q[i])
+        want, _ = nearest(spec, refs[i], b.lower, b.upper, b.revolute, weights=W[i], continuum=b.continuum)
+        plain, _ = nearest(spec, refs[i], b.lower, b.upper, b.revolute, continuum=b.continuum)
+        if i < 20:
+            assert np.sum(W[i] * (want - refs[i]) ** 2) == pytest.approx(scan_nearest(spec.solutions, refs[i], W[i], b), rel=1e-12)
+        else:
+            differs += not np.allclose(want[[a, c]], plain[[a, c]], atol=1e-6)
+        for impl in (b.c, b.py):
+            r = impl.ik_nearest_weighted(refs[i], W[i], T[i])
+            assert r.status == "ok"
+            np.testing.assert_allclose(r.q, want, atol=1e-9)
+            assert np.array_equal(np.asarray(impl.ik_nearest_weighted(refs[i], np.ones(6), T[i]).q),
+                                  np.asarray(impl.ik_nearest(refs[i], T[i]).q))
+    assert differs >= 5  # the weights move the continuum's member
+    batch = b.py.ik_nearest_weighted(refs, W, T)
+    np.testing.assert_allclose(batch.q, [b.py.ik_nearest_weighted(refs[i], W[i], T[i]).q for i in range(40)], atol=1e-12, rtol=0)
+    if importlib.util.find_spec("torch"):
+        from skelarm_sym.generate import render_all
+
+        module = load_python(render_all(b.generated.module, ("torch",), False)["puma560_torch.py"], "puma560_torch_w")
+        np.testing.assert_allclose(np.asarray(module.ik_nearest_weighted(refs, W, T).q), batch.q, atol=1e-12, rtol=0)
+    for bad_w, bad_ref in ((np.r_[0.0, np.ones(5)], refs[0]), (np.r_[-1.0, np.ones(5)], refs[0]),
+                           (np.r_[np.nan, np.ones(5)], refs[0]), (np.ones(6), np.r_[np.inf, refs[0][1:]])):
+        for impl in (b.c, b.py):
+            with pytest.raises(ValueError, match="weights|q_ref"):
+                impl.ik_nearest_weighted(bad_ref, bad_w, T[0])
+        lib = ctypes.CDLL(str(b.c.path))
+        fn = getattr(lib, f"{b.generated.module.prefix}_ik_nearest_weighted")
+        P = ctypes.POINTER(ctypes.c_double)
+        fn.argtypes, fn.restype = [P, P, P, P], ctypes.c_int
+        out = np.zeros(6)
+        args = [np.ascontiguousarray(x, dtype=float) for x in (bad_ref, bad_w, T[0].reshape(16))]
+        assert fn(*(x.ctypes.data_as(P) for x in args), out.ctypes.data_as(P)) == STATUS["invalid"]
+        assert np.all(np.isnan(out))
 
 
 def puma_with_limits(limits: dict) -> Built:

@@ -151,7 +151,7 @@ def test_newcomer_path_functions_links_joints_and_prefix_rule(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("skelarm-sym: error: unknown function 'nope'; choose from pose, ")
     # the chain is in a closed-form family: its functions are listed too
-    assert err.endswith("ik_solve, ik_solve_position, ik_all, ik_nearest") and not (tmp_path / "b").exists()
+    assert err.endswith("ik_solve, ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted") and not (tmp_path / "b").exists()
     assert main(["show", "--robot", robot, "--what", "links"]) == 0
     tree = capsys.readouterr().out
     assert "tool0" in tree and "leaf" in tree and "(fixed)" in tree

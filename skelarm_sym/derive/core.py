@@ -39,7 +39,7 @@ ARGUMENT_ROLES: dict[str, int] = {
     # 0: the joint (or body) state
     "q": 0, "q0": 0, "q_ref": 0, "dq": 0, "ddq": 0, "pose": 0,
     # 1: the call's other data
-    "v": 1, "twist": 1, "target": 1, "wheels": 1, "rates": 1,
+    "v": 1, "twist": 1, "target": 1, "weights": 1, "wheels": 1, "rates": 1,
     # 2: the mechanism's parameters
     "l": 2, "params": 2, "track": 2,
     # 3: scalars
@@ -50,7 +50,7 @@ then its outputs (see :data:`ARGUMENT_RULE`)."""
 
 ARGUMENT_RULE = (
     "Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v, twist,"
-    " target), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."
+    " target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."
 )
 
 

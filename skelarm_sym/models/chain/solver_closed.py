@@ -41,6 +41,10 @@ STATUSES = (
 """Return codes of ``ik_all`` and ``ik_nearest`` (``IK_INVALID`` is 3, as for ``ik_solve``)."""
 
 
+NAMES = ("ik_all", "ik_nearest", "ik_nearest_weighted")
+"""The public procedures of the closed-form IK."""
+
+
 def _status(name: str) -> NamedConst:
     return NamedConst(name, Type.INT)
 
@@ -375,12 +379,24 @@ def all_solver(arm: _Arm) -> Function:
                     refused=refusal(arm.precision, translation=True))
 
 
-def nearest_solver(arm: _Arm) -> Function:
-    """``ik_nearest(q_ref, target, [lock], q)``: the solution of ``ik_all`` nearest ``q_ref``."""
+NEAREST_STATUSES = STATUSES[:-1] + (
+    ("IK_INVALID", STATUS["invalid"],
+     "q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond "
+     "IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": q NaN"),
+)
+"""``ik_nearest``'s and ``ik_nearest_weighted``'s return codes: ``ik_all``'s, and the reference (and weights) tested too."""
+
+
+def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
+    """``ik_nearest(q_ref, target, [lock], q)``: the solution of ``ik_all`` nearest ``q_ref``; ``weighted``:
+    ``ik_nearest_weighted(q_ref, weights, target, [lock], q)``, nearest in ``sum_j weights[j] (q[j] - q_ref[j])^2``
+    (the spec's ``nearest`` with ``weights``)."""
     S, N = arm.s, arm.n
+    name = "ik_nearest_weighted" if weighted else "ik_nearest"
     b = Body()
     data_args, data = _inputs(arm)
     q_ref, q = Array("q_ref", N), Array("q", N)
+    weights = Array("weights", N) if weighted else None
     rows, count, flags = b.array("rows", S * N), b.array("count", 1, Type.INT), b.array("flags", S, Type.INT)
     near = b.array("near", N)
     status = b.var("status", _int(0), Type.INT)
@@ -389,10 +405,19 @@ def nearest_solver(arm: _Arm) -> Function:
     dist = b.var("dist", 0.0)
     y = b.var("y", 0.0)
     x = b.var("x", 0.0)
-    continuum = Continuum(b, arm, reference=True) if arm.continuum else None
-    b.call("ik_all_rows", *data, rows, count, flags, result=status)
+    continuum = None
+    if arm.continuum:
+        pair = (weights[arm.continuum[0]], weights[arm.continuum[2]]) if weighted else None
+        continuum = Continuum(b, arm, reference=True, weights=pair)
     for j in range(N):
         b.set(q[j], Const(math.nan))
+    b.comment("q_ref not finite" + (", or a weight not finite and > 0" if weighted else "") + ": IK_INVALID, q NaN")
+    bad = [~Call1("isfinite", q_ref[j]) for j in range(N)]
+    if weighted:
+        bad += [~(weights[j] > 0.0) | ~Call1("isfinite", weights[j]) for j in range(N)]
+    with b.if_(functools.reduce(operator.or_, bad)):
+        b.return_(_status("IK_INVALID"))
+    b.call("ik_all_rows", *data, rows, count, flags, result=status)
     with b.for_("i", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as i:
         # a constant bound and a break, not a bound of count[0]: the row index is then the same for every problem of a
         # batch, and array backends read rows[...] directly instead of through a chain of selects per lane
@@ -420,11 +445,14 @@ def nearest_solver(arm: _Arm) -> Function:
         if continuum is not None:
             a, w, c = continuum.a, continuum.w, continuum.b
             b.comment(f"a row of the wrist's continuum: joints {a + 1} and {c + 1} to the member within their limits "
-                      "nearest q_ref")
+                      "nearest q_ref" + (" (weighted)" if weighted else ""))
             continuum.move(b, rows[_at(N, i, w)], flags[i] >= NamedConst("IK_FLAG_SINGULAR", Type.INT), rows[_at(N, i, a)],
                            rows[_at(N, i, c)], q_ref[a], q_ref[c], near[a], near[c])
-        b.set(dist, sum(((near[j] - q_ref[j]) * (near[j] - q_ref[j]) for j in range(1, N)),
-                        (near[0] - q_ref[0]) * (near[0] - q_ref[0])))
+
+        def term(j):
+            square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
+            return weights[j] * square if weighted else square
+        b.set(dist, sum((term(j) for j in range(1, N)), term(0)))
         with b.if_((best < 0) | (dist < best_d)):
             b.set(best, i)
             b.set(best_d, dist)
@@ -433,18 +461,26 @@ def nearest_solver(arm: _Arm) -> Function:
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
+        *([Argument("weights", Role.DATA, (N,), domain="positive", batched=False,
+                    doc="the metric's weight of each joint (finite, > 0): sum_j weights[j] (q[j] - q_ref[j])^2")]
+          if weighted else []),
         *data_args,
         Argument("q", Role.OUTPUT, (N,), doc="the solution nearest q_ref; NaN when there is none"),
     )
+    metric = ("in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0)" if weighted
+              else "(Euclidean, rad and m alike)")
     doc = (
-        "The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k",
+        f"The ik_all solution nearest q_ref {metric}: each revolute joint takes the copy q + 2 pi k",
         "within the joint limits nearest q_ref[j], then the row with the",
-        "least squared distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row",
-        "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID).",
-        *_doc_continuum(arm, "the member within the limits nearest q_ref"),
+        "least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row",
+        "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite"
+        + (" or a weight not finite and > 0)." if weighted else ")."),
+        *_doc_continuum(arm, "the member within the limits nearest q_ref" + (" in the weighted metric" if weighted else "")),
     )
-    return Function("ik_nearest", "the closed-form IK solution nearest a configuration", arguments, b.statements,
-                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKNearestResult",
+    summary = ("the closed-form IK solution nearest a configuration, in a weighted metric" if weighted
+               else "the closed-form IK solution nearest a configuration")
+    return Function(name, summary, arguments, b.statements,
+                    kind="procedure", returns=Type.INT, statuses=NEAREST_STATUSES, doc=doc, result="IKNearestResult",
                     refused=refusal(arm.precision, translation=True))
 
 
@@ -452,7 +488,7 @@ def closed_solvers(derivation, names, precision: str) -> list[Function]:
     """The helper and the procedures named in ``names`` (``ik_all``, ``ik_nearest``) for a derivation that has
     ``ik_candidates``; ``precision`` decides whether an exact regular row skips the duplicate test (see
     :data:`REGULAR_ROWS_DISTINCT`; the tolerances themselves are module constants)."""
-    wanted = [name for name in ("ik_all", "ik_nearest") if name in names]
+    wanted = [name for name in NAMES if name in names]
     if not wanted:
         return []
     spec = derivation.function("ik_candidates")
@@ -465,4 +501,6 @@ def closed_solvers(derivation, names, precision: str) -> list[Function]:
         out.append(all_solver(arm))
     if "ik_nearest" in wanted:
         out.append(nearest_solver(arm))
+    if "ik_nearest_weighted" in wanted:
+        out.append(nearest_solver(arm, weighted=True))
     return out

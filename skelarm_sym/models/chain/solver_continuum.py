@@ -35,9 +35,11 @@ class Continuum:
     """The locals of the member choice (declared once, before the loops), and the statements that use them.
 
     ``arm``: an object with ``continuum`` (``(a, w, b, s)``), ``lower`` and ``upper`` (per coordinate, ``None``
-    where absent); ``reference``: the member is chosen nearest a reference other than the row (``ik_nearest``)."""
+    where absent); ``reference``: the member is chosen nearest a reference other than the row (``ik_nearest``);
+    ``weights``: joint a's and joint b's metric weights (``ik_nearest_weighted``; None: both 1)."""
 
-    def __init__(self, b: Body, arm, reference: bool) -> None:
+    def __init__(self, b: Body, arm, reference: bool, weights: tuple | None = None) -> None:
+        self.weights = weights
         self.a, self.w, self.b, self.s = arm.continuum
         self.lower = (arm.lower[self.a], arm.lower[self.b])
         self.upper = (arm.upper[self.a], arm.upper[self.b])
@@ -112,9 +114,15 @@ class Continuum:
             b.set(self.e, TWO_PI * (self.first + float(j)) if j else TWO_PI * self.first)
             b.set(self.lo, fmax(ua0, self.e - vb1))
             b.set(self.hi, fmin(ua1, self.e - vb0))
-            b.set(self.u, fmax(0.5 * (da + (self.e - db)), self.lo))
-            b.set(self.u, fmin(self.u, self.hi))
-            b.set(self.d, (self.u - da) * (self.u - da) + ((self.e - self.u) - db) * ((self.e - self.u) - db))
+            if self.weights is None:
+                b.set(self.u, fmax(0.5 * (da + (self.e - db)), self.lo))
+                b.set(self.u, fmin(self.u, self.hi))
+                b.set(self.d, (self.u - da) * (self.u - da) + ((self.e - self.u) - db) * ((self.e - self.u) - db))
+            else:  # the weighted nearest point of the line, as continuum_member computes it
+                wa, wb = self.weights
+                b.set(self.u, fmax((wa * da + wb * (self.e - db)) / (wa + wb), self.lo))
+                b.set(self.u, fmin(self.u, self.hi))
+                b.set(self.d, wa * ((self.u - da) * (self.u - da)) + wb * (((self.e - self.u) - db) * ((self.e - self.u) - db)))
             with b.if_((self.lo <= self.hi) & (eq(self.found, 0) | (self.d < self.best_d))):
                 b.set(self.best_d, self.d)
                 b.set(self.best_u, self.u)
