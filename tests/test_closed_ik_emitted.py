@@ -278,6 +278,38 @@ def test_a_wrist_aligned_to_rounding_keeps_the_source_branch(name, q, pair):
         assert np.min(wrapped_distance(rows[:, other], q[other], b.revolute[other])) <= 1e-7, (rows, q)
 
 
+@pytest.mark.parametrize("name", ["puma560", "ur5", pytest.param("stanford", marks=pytest.mark.slow),
+                                  pytest.param("iiwa14_lock3", marks=pytest.mark.slow),
+                                  pytest.param("panda_lock7", marks=pytest.mark.slow)])
+def test_a_nearly_aligned_wrist_keeps_both_flips(name):
+    """Targets from configurations inside the limits with the wrist 3e-11 to 1e-9 from aligned (q5 = +-eps: no
+    continuum by the tolerances, two distinct exact flips). The candidates copied the first root's row into the flip
+    branch wherever q4's SP1 (UR: q6's) was flagged a continuum, up to about 1e-9, though only within ALIGNED_TOL
+    (UR: SPLIT_TOL) is that row the continuum's representative: the flip, another exact solution, was lost. At 1e-10
+    the source's whole row was missing on 29 of 60 PUMA, 32 of 60 Panda and 29 of 60 UR5 targets (and ik_nearest
+    from the source returned a row pi away in joints 4 and 6), and UR5 targets whose only reachable 2R arm was the
+    flip's came back unreachable, with least-squares rows 0.14 of the reach off. Now, in C and NumPy: status ok,
+    every row exact, the source's whole row among them and ik_nearest from the source returning it, to 1e-7 rad
+    plus what the near-continuum costs: the joints that nearly share one rotation are conditioned as 1 / eps (up to
+    7e-13 / eps seen, on the Panda's shoulder; 3e-14 / eps on the others), far below the flip's pi."""
+    b = built(name)
+    w = b.continuum[1] if b.continuum else 4
+    rng = np.random.default_rng(13)
+    q = inner_configurations(b, 60, rng)
+    eps = np.repeat([3e-11, 1e-10, 1e-9], 20)
+    q[:, w] = eps * rng.choice([-1.0, 1.0], 60)
+    T = targets_of(b.chain, q)
+    for i in range(len(q)):
+        tol = 1e-7 + 2e-12 / eps[i]
+        for impl in (b.c, b.py):
+            r = impl.ik_all(T[i], *b.extra(q[i]))
+            assert r.status == "ok", (i, r.status)
+            rows = check_rows(b, r, T[i])
+            assert np.min(wrapped_distance(rows, q[i], b.revolute)) <= tol, i
+            near = np.asarray(impl.ik_nearest(q[i], T[i], *b.extra(q[i])).q)
+            assert wrapped_distance(near, q[i], b.revolute) <= tol, i
+
+
 def test_a_double_root_gives_one_row():
     """At an elbow double root (det J = 0 in q2) the two roots part by about the square root of rounding: C and
     NumPy returned two pairs of rows 3e-8 rad apart, all flagged singular, where JAX's rounding gave one row each (a

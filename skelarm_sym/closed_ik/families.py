@@ -183,7 +183,11 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
         for b, q5 in enumerate(q5s):
             if flip and b == 1:
                 first = out[-1].angles
-                same = first[3].singular  # q4 a continuum's representative: the original branches coincide
+                # the first root's q4 is the continuum's representative only where aligned (q5 within ALIGNED_TOL of
+                # 0 or +-pi): there the original branches coincide. Where q4's SP1 is merely flagged a continuum (q5 up
+                # to about 1e-9 from it) q4 is the SP1's exact angle and the flip is another exact solution; copying
+                # the first row there lost it (and the source's row with it on 24-39 of 60 targets at q5 = 1e-10)
+                same = first_aligned
                 q5f = Angle(steps(f"q5f_{a}", _select((first[4].theta, same > 0), (-first[4].theta, True))), None, None,
                             q5.ls, q5.singular)
                 out.append(Branch((q1, q2, q3, _half_turn(steps, f"q4f_{a}", first[3], same), q5f,
@@ -196,6 +200,8 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
             # rounding noise, pi as often as 0, another in each language, which may miss the joint's limits)
             q5a = steps(f"q5a_{a}{b}", sp.Abs(q5.theta))
             aligned = sp.And(sp.Or(q5a <= ALIGNED_TOL, q5a >= PI_DOUBLE - ALIGNED_TOL), q4.singular > 0)
+            if flip and b == 0:
+                first_aligned = steps(f"aligned{a}", indicator(aligned))
             q4 = Angle(steps(f"q4r_{a}{b}", _select((sp.S.Zero, aligned), (q4.theta, True))),
                        steps(f"q4rc_{a}{b}", _select((sp.S.One, aligned), (q4.c, True))),
                        steps(f"q4rs_{a}{b}", _select((sp.S.Zero, aligned), (q4.s, True))), q4.ls, q4.singular)
@@ -238,8 +244,12 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
         for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
                                    unit_disc(H[1], H[5], H[4], g))):
             if flip and j == 1:
-                q5_0, q6_0, phi_0 = firsts
-                same = steps(f"same{i}", q6_0.singular)
+                q5_0, q6_0, phi_0, split_0 = firsts
+                # the first root's q6 is the continuum's representative only where split (sine at most SPLIT_TOL);
+                # where q6's SP1 is merely flagged singular (sine up to about 1e-9) the flip is another exact
+                # solution, with its own 2R arm; copying the first root's rows there lost it (and a reachable target
+                # came back unreachable where only the flip's 2R arm reaches)
+                same = steps(f"same{i}", split_0)
                 q5 = Angle(steps(f"q5f_{i}", _select((q5_0.theta, same > 0), (-q5_0.theta, True))), None, None,
                            q5.ls, q5.singular)
                 q6 = _half_turn(steps, f"q6f_{i}", q6_0, same)
@@ -282,7 +292,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
                               (split, True))
             q6 = Angle(steps.principal(f"q6t{i}{j}", _select((wrapped, pick), (t6.theta, True))), None, None,
                        q6r.ls, steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
-            firsts = (q5, q6, phi)
+            firsts = (q5, q6, phi, sel)
             out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
     return out
 
