@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x5d0d26dcUL
+#define UR5_STAMP 0x766e2163UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -232,6 +232,14 @@ void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
  * configuration j at [j*size + k]).
  * Stack: about 6 KB. */
 void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
+
+/* the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always). Stack: about 5 KB. */
+void ur5_ik_continuum_members(const double q_ref[6], const double target[16], double M[24], double mflags[4]);
+
+/* The same for m configurations stored one after another (element k of
+ * configuration j at [j*size + k]).
+ * Stack: about 17 KB. */
+void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double *target, double *M, double *mflags);
 
 /* Return codes of the solvers. */
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */

@@ -28,7 +28,7 @@ def wanted_functions(kind, functions) -> frozenset[str]:
     """The names a ``--functions`` list chooses, known before any derivation: its own and those its solvers need
     (what :func:`select_functions` returns for it when every name exists)."""
     items = function_items(functions)
-    return frozenset(items) | {n for s in items for n in kind.solver_names.get(s, ())}
+    return frozenset(items) | {n for s in items for n in kind.solver_names.get(s, ()) + kind.solver_extras.get(s, ())}
 
 
 def select_functions(kind, derivation, functions) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -46,6 +46,7 @@ def select_functions(kind, derivation, functions) -> tuple[tuple[str, ...], tupl
         raise InputError(f"{what}; choose from {', '.join(valid)}")
     wanted_solvers = [s for s in solvers if s in items]
     wanted = set(items) | {n for s in wanted_solvers for n in kind.solver_names[s]}
+    wanted |= {n for s in wanted_solvers for n in kind.solver_extras.get(s, ()) if n in derived}
     return tuple(n for n in derived if n in wanted), tuple(wanted_solvers)
 
 

@@ -32,7 +32,7 @@ from closed_ik_support import (FAMILY_CONSTRAINTS, ROBOTS, URDF_ARMS, load_arm, 
                                random_family_chain, targets_of, wrapped_distance)
 
 LABELS = {v: k for k, v in STATUS.items()}
-FUNCTIONS = "ik_all,ik_nearest"
+FUNCTIONS = "ik_all,ik_nearest,ik_nearest_weighted"
 POSE_TOL = {"double": 1e-12, "float": 3e-5}
 FOUND_TOL = {"double": 1e-7, "float": 3e-3}
 
@@ -308,6 +308,38 @@ def test_a_nearly_aligned_wrist_keeps_both_flips(name):
             assert np.min(wrapped_distance(rows, q[i], b.revolute)) <= tol, i
             near = np.asarray(impl.ik_nearest(q[i], T[i], *b.extra(q[i])).q)
             assert wrapped_distance(near, q[i], b.revolute) <= tol, i
+
+
+def test_a_ur_aligned_wrist_nearest_is_the_member_at_the_references_phi():
+    """UR5 with the wrist aligned (q5 = 0 or pi): joint 6 and phi = q2 + q3 + q4 share one rotation, a continuum whose
+    members move the 2R arm too; ik_all returns one representative per root of q1, and ik_nearest(q, pose(q))
+    returned it, 1-3 rad from q (every such target). ik_nearest now also weighs the members at q_ref's own phi
+    (ik_continuum_members, derived with the candidates): from a configuration it returns that configuration; from a
+    reference 1e-3 rad off, the spec's answer with the same members (ClosedFormIK, SymPy's steps in NumPy), never
+    farther than the representative; weighted too. C and NumPy; every returned row reproduces the target."""
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+
+    b = built("ur5")
+    spec = ClosedFormIK(b.chain)
+    rng = np.random.default_rng(17)
+    q = inner_configurations(b, 40, rng)
+    q[:, 4] = np.where(np.arange(40) < 20, 0.0, np.pi)
+    T = targets_of(b.chain, q)
+    refs = q + rng.normal(scale=1e-3, size=q.shape)
+    W = 10.0 ** rng.uniform(-1, 1, size=q.shape)
+    for i in range(len(q)):
+        plain, _ = nearest(spec.all(T[i]), refs[i], b.lower, b.upper, b.revolute)  # the representative's rows only
+        want, _ = spec.nearest(refs[i], T[i])
+        want_w, _ = spec.nearest(refs[i], T[i], weights=W[i])
+        assert np.sum((want - refs[i]) ** 2) <= np.sum((plain - refs[i]) ** 2) + 1e-15
+        for impl in (b.c, b.py):
+            np.testing.assert_allclose(impl.ik_nearest(q[i], T[i]).q, q[i], atol=1e-7)
+            for ref, weights, expected in ((refs[i], None, want), (refs[i], W[i], want_w)):
+                got = np.asarray(impl.ik_nearest(ref, T[i]).q if weights is None else
+                                 impl.ik_nearest_weighted(ref, weights, T[i]).q)
+                pos, rot = judge.pose_error(b.numeric, got[None], T[i])
+                assert max(pos.max(), rot.max()) <= 1e-12
+                np.testing.assert_allclose(got, expected, atol=1e-9)
 
 
 def test_a_double_root_gives_one_row():
@@ -707,8 +739,8 @@ def test_the_continuum_with_wide_limits_and_far_references():
     chain, _ = load_arm("puma560")
     joints = [dataclasses.replace(j, lower=-1e12, upper=1e12) if k in (3, 5) else j for k, j in enumerate(chain.joints)]
     wide = Built(dataclasses.replace(chain, joints=tuple(joints)), None)
-    # three lines in ik_nearest (ik_all moves nothing: every copy fits such ranges)
-    assert wide.generated.sources["puma560.c"].count("of the continuum that can cross the windows") == 3
+    # three lines in each of ik_nearest and ik_nearest_weighted (ik_all moves nothing: every copy fits such ranges)
+    assert wide.generated.sources["puma560.c"].count("of the continuum that can cross the windows") == 6
     q = inner_configurations(built("puma560"), 1, np.random.default_rng(8))[0]
     q[4] = 0.0
     for b, far in ((wide, 20.0), (wide, -35.0), (built("puma560"), 1e3), (built("puma560"), 1e9), (built("puma560"), -1e15)):

@@ -34,7 +34,7 @@ from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SING
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
-from .subproblems import Steps
+from .subproblems import Steps, any_of
 
 Step = tuple[sp.Symbol, sp.Expr]
 
@@ -67,6 +67,12 @@ class ClosedIK:
     :meth:`~.subproblems.Steps.is_principal`), so a 2 pi shift toward a centre of 0 leaves it as it is."""
     continuum: tuple[int, ...] = field(default=())
     """The wrist's continuum, ``(a, w, b, sigma)`` (see :func:`wrist_continuum`), or ``()``."""
+    members: sp.Matrix | None = None
+    """Three parallel axes with a wrist flip (UR): the aligned wrist's continuum at the reference configuration's
+    ``phi = q2 + q3 + q4`` (input ``q_ref``), per root of q1 the 2R arm's two branches (4 x N), or None."""
+    member_flags: sp.Matrix | None = None
+    """``members``' flags: bit 2 always; bit 1 where the row is no exact member (the wrist not aligned: no
+    continuum; or the 2R arm does not reach the wrist point that ``phi`` gives)."""
 
     @property
     def max_solutions(self) -> int:
@@ -173,11 +179,48 @@ def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
     prob = Problem(geom.kinds, H, P, RG, tG)
     if family.reversed:
         prob = prob.reversed(steps)
+    n = chain.n
+    members: list | None = None
     if family.name in ("spherical_wrist", "spherical_shoulder"):
         branches = spherical_wrist(steps, prob, family.position, wrist_flips(geom, family.reversed, lock_idx is not None))
     else:
-        branches = three_parallel(steps, prob, wrist_flips(geom, family.reversed, lock_idx is not None, (1, 4, 5)))
+        flip = wrist_flips(geom, family.reversed, lock_idx is not None, (1, 4, 5))
+        s0 = _axes_sign(geom, family.reversed, lock_idx is not None, (1, 5)) if flip else 0
+        if s0:
+            members = []
+            q_ref = sp.symbols(f"q_ref0:{n}", real=True)
+            inputs["q_ref"] = q_ref
+            theta = [q_ref[geom.coordinates[k]] if not family.reversed else -q_ref[geom.coordinates[5 - k]] for k in range(6)]
+            phi_ref = steps("phi_ref", theta[1] + theta[2] + theta[3])
+            branches = three_parallel(steps, prob, flip, members, phi_ref, s0)
+        else:
+            branches = three_parallel(steps, prob, flip)
 
+    rows, flags, principal = _rows(chain, geom, family, steps, inputs, lock_idx, branches)
+    member_rows = member_flags = None
+    if members:
+        member_rows, member_flags, _ = _rows(chain, geom, family, steps, inputs, lock_idx,
+                                             [b for branches_i, _ in members for b in branches_i])
+        exact = [sel for branches_i, sel in members for _ in branches_i]
+        member_flags = [FLAG_LS * any_of(b.ls, 1 - e) + FLAG_SINGULAR for b, e in
+                        zip([b for branches_i, _ in members for b in branches_i], exact)]
+    limits = chain.limits()
+    return ClosedIK(
+        chain, family, inputs, tuple(steps.steps), sp.Matrix(rows), sp.Matrix(flags),
+        tuple(j.kind == "revolute" for j in sorted(chain.joints, key=lambda j: j.coordinate)),
+        limits["lower"], limits["upper"],
+        None if lock_idx is None else chain.joints[lock_idx].coordinate,
+        (family.describe(),),
+        tuple(principal),
+        wrist_continuum(geom, family, lock_idx is not None),
+        None if member_rows is None else sp.Matrix(member_rows),
+        None if member_flags is None else sp.Matrix(member_flags),
+    )
+
+
+def _rows(chain: Chain, geom, family: Family, steps: Steps, inputs: dict, lock_idx: int | None, branches) -> tuple:
+    """The branches as rows of chain coordinates (a reversed family's variables negated, in reverse order; the lock
+    in its coordinate), their flags, and per coordinate whether every row's value is a principal angle."""
     n = chain.n
     rows, flags = [], []
     principal = [True] * n
@@ -194,16 +237,14 @@ def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
             principal[chain.joints[lock_idx].coordinate] = False
         rows.append(row)
         flags.append(FLAG_LS * b.ls + FLAG_SINGULAR * b.singular)
-    limits = chain.limits()
-    return ClosedIK(
-        chain, family, inputs, tuple(steps.steps), sp.Matrix(rows), sp.Matrix(flags),
-        tuple(j.kind == "revolute" for j in sorted(chain.joints, key=lambda j: j.coordinate)),
-        limits["lower"], limits["upper"],
-        None if lock_idx is None else chain.joints[lock_idx].coordinate,
-        (family.describe(),),
-        tuple(principal),
-        wrist_continuum(geom, family, lock_idx is not None),
-    )
+    return rows, flags, principal
+
+
+def _axes_sign(geom, reversed_: bool, locked: bool, pair: tuple[int, int]) -> int:
+    """``h_a . h_b`` (+1 or -1) of two parallel problem axes at ``q = 0``, the same at every sampled lock value; 0 when
+    it is not."""
+    signs = {1 if float(H[pair[0]] @ H[pair[1]]) > 0 else -1 for H in _sampled_axes(geom, reversed_, locked)}
+    return signs.pop() if len(signs) == 1 else 0
 
 
 def operations(ik: ClosedIK) -> set[str]:
@@ -240,6 +281,13 @@ CANDIDATES = CandidatesSpec(
     "every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S)",
 )
 """The straight-line function of the candidates (``lock`` only when the chain has a locked joint)."""
+
+MEMBERS = FunctionSpec(
+    "ik_continuum_members", ("q_ref", "target", "lock"), ("M", "mflags"),
+    "the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, "
+    "per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always)",
+)
+"""The straight-line function of :attr:`ClosedIK.members` (only where it has some): ``ik_nearest``'s more rows."""
 
 EMITTED_CONSTANTS = (
     Constant(sp.Symbol("IK_MAX_SOLUTIONS"), {"double": MAX_SOLUTIONS, "float": MAX_SOLUTIONS},
@@ -294,16 +342,21 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         "(one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.",
         *lock_line,
     )
+    members = ik.members is not None
     return dataclasses.replace(
         derivation,
         inputs={**derivation.inputs, **ik.inputs},
         steps=tuple(derivation.steps) + tuple(ik.steps),
-        compact={**derivation.compact, "Q": ik.Q, "flags": ik.flags},
-        shapes={**derivation.shapes, "Q": (S, N), "flags": (S,)},
-        functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal, continuum=ik.continuum),),
+        compact={**derivation.compact, "Q": ik.Q, "flags": ik.flags,
+                 **({"M": ik.members, "mflags": ik.member_flags} if members else {})},
+        shapes={**derivation.shapes, "Q": (S, N), "flags": (S,), **({"M": ik.members.shape, "mflags": (ik.members.rows,)}
+                                                                    if members else {})},
+        functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal, continuum=ik.continuum),)
+        + ((MEMBERS,) if members else ()),
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
-        domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {})},
+        domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {}),
+                 **({"q_ref": "finite"} if members else {})},
         constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ()),
         notes=tuple(derivation.notes) + notes,
         _cache={},

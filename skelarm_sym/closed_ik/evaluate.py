@@ -31,11 +31,24 @@ def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
         return sp.lambdify(args, outs, modules="numpy", cse=lambda exprs: (steps, exprs), printer=printer)
 
 
+def _needed_steps(steps, outs: list) -> list:
+    """The steps ``outs`` read, directly or through other steps, in their order."""
+    index = {symbol: i for i, (symbol, _) in enumerate(steps)}
+    keep: set[int] = set()
+    todo = [s for e in outs for s in e.free_symbols if s in index]
+    while todo:
+        i = index[todo.pop()]
+        if i not in keep:
+            keep.add(i)
+            todo.extend(s for s in steps[i][1].free_symbols if s in index)
+    return [steps[i] for i in sorted(keep)]
+
+
 def lambdify_ik(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     """``f(target, lock=None) -> (Q (..., S, N), flags (..., S))`` for ``ik`` (see the module docstring)."""
     args = list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
     outs = list(ik.Q) + list(ik.flags)
-    fn = _steps_function(args, list(ik.steps), outs)
+    fn = _steps_function(args, _needed_steps(list(ik.steps), outs), outs)
     S, N = ik.Q.shape
 
     def evaluate(target, lock=None):
@@ -59,6 +72,25 @@ def lambdify_ik(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     return evaluate
 
 
+def lambdify_members(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray]] | None:
+    """``f(q_ref (N), target (16), lock=None) -> (M (R, N), flags (R))`` for :attr:`~.derive.ClosedIK.members`, or
+    None where the IK has none."""
+    if ik.members is None:
+        return None
+    args = list(ik.inputs["q_ref"]) + list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
+    outs = list(ik.members) + list(ik.member_flags)
+    fn = _steps_function(args, _needed_steps(list(ik.steps), outs), outs)
+    R, N = ik.members.shape
+
+    def evaluate(q_ref, target, lock=None):
+        extra = [float(lock)] if "lock" in ik.inputs else []
+        with np.errstate(all="ignore"):
+            values = [float(v) for v in fn(*np.asarray(q_ref, float), *np.asarray(target, float).reshape(16), *extra)]
+        return np.array(values[: R * N]).reshape(R, N), np.array(values[R * N:]).astype(int)
+
+    return evaluate
+
+
 class ClosedFormIK:
     """A chain's closed-form IK in NumPy: raw candidates (``candidates``), ``all`` and ``nearest``.
 
@@ -68,6 +100,7 @@ class ClosedFormIK:
     def __init__(self, chain, lock=None, ik: ClosedIK | None = None) -> None:
         self.ik = ik if ik is not None else derive_ik_all(chain, lock)
         self.candidates = lambdify_ik(self.ik)
+        self.members = lambdify_members(self.ik)
         self.lower = np.array([-np.inf if v is None else v for v in self.ik.lower])
         self.upper = np.array([np.inf if v is None else v for v in self.ik.upper])
         self.revolute = np.array(self.ik.revolute)
@@ -83,8 +116,9 @@ class ClosedFormIK:
 
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
         """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
+        members = None if self.members is None else self.members(q_ref, target, lock)
         return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights,
-                       continuum=self.ik.continuum)
+                       continuum=self.ik.continuum, members=members)
 
 
 def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
@@ -95,15 +129,7 @@ def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarra
     Q, flags = derivation.compact["Q"], derivation.compact["flags"]
     S, N = Q.shape
     outs = list(Q) + list(flags)
-    index = {symbol: i for i, (symbol, _) in enumerate(derivation.steps)}
-    keep: set[int] = set()
-    todo = [s for e in outs for s in e.free_symbols if s in index]
-    while todo:
-        i = index[todo.pop()]
-        if i not in keep:
-            keep.add(i)
-            todo.extend(s for s in derivation.steps[i][1].free_symbols if s in index)
-    steps = [derivation.steps[i] for i in sorted(keep)]
+    steps = _needed_steps(list(derivation.steps), outs)
     args = list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
     fn = _steps_function(args, steps, outs)
     locked = "lock" in derivation.inputs
@@ -116,5 +142,27 @@ def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarra
         values = [np.broadcast_to(np.asarray(v, dtype=float), (len(t),)) for v in values]
         return (np.stack(values[: S * N], axis=-1).reshape(len(t), S, N),
                 np.stack(values[S * N:], axis=-1).reshape(len(t), S))
+
+    return evaluate
+
+
+def lambdify_members_of(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+    """``f(q_ref (m, N), target (m, 16)) -> (M (m, R, N), mflags (m, R))`` from a derivation that has
+    ``ik_continuum_members`` (:func:`~.derive.with_candidates`): its SymPy steps in double, the check's expectation
+    for the emitted function."""
+    M, mflags = derivation.compact["M"], derivation.compact["mflags"]
+    R, N = M.shape
+    outs = list(M) + list(mflags)
+    args = list(derivation.inputs["q_ref"]) + list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
+    fn = _steps_function(args, _needed_steps(list(derivation.steps), outs), outs)
+
+    def evaluate(q_ref, target, lock=None):
+        q_ref, t = np.asarray(q_ref, dtype=float).reshape(-1, N), np.asarray(target, dtype=float).reshape(-1, 16)
+        extra = [np.full(len(t), float(lock))] if "lock" in derivation.inputs else []
+        with np.errstate(all="ignore"):
+            values = fn(*[q_ref[:, j] for j in range(N)], *[t[:, i] for i in range(16)], *extra)
+        values = [np.broadcast_to(np.asarray(v, dtype=float), (len(t),)) for v in values]
+        return (np.stack(values[: R * N], axis=-1).reshape(len(t), R, N),
+                np.stack(values[R * N:], axis=-1).reshape(len(t), R))
 
     return evaluate

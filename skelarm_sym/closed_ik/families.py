@@ -180,6 +180,7 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
         u = steps.vec(f"u{a}", _rot(q3, H[2], steps.vec(f"g2_{a}", _rot(q2, H[1], g1, True)), True))
         w = steps.vec(f"w{a}", _rot(q3, H[2], steps.vec(f"x2_{a}", _rot(q2, H[1], x1, True)), True))
         q5s = sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u), unit_disc(H[3], H[5], H[4], u))
+        first_aligned = sp.S.Zero  # set by the first root, read by its flip
         for b, q5 in enumerate(q5s):
             if flip and b == 1:
                 first = out[-1].angles
@@ -211,14 +212,21 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
     return out
 
 
-def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Branch]:
+def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: list | None = None,
+                   phi_ref: sp.Expr | None = None, s0: int = 1) -> list[Branch]:
     """The eight candidates of a three-parallel-axes problem (h2 || h3 || h4, h5 meets h6).
 
     ``flip``: ``h2 . h5 = 0``, ``h5 . h6 = 0`` and ``h2 || h6`` (UR arms), so the second root of q5 is ``-q5`` and
     ``R(h2, phi + pi) R(h5, -q5) R(h6, q6 + pi) = R(h2, phi) R(h5, q5) R(h6, q6)`` (as for the spherical wrist): q6
     and phi = q2 + q3 + q4 of the second root are half turns of the first's, no subproblem; q3, q2 are solved
     for its own wrist point. Where q6 is a continuum's representative (the wrist aligned) the second root's
-    branches are the first's."""
+    branches are the first's.
+
+    ``members`` (a list, with ``flip``): filled with, per root of q1, ``(branches, exact)``: the aligned wrist's
+    continuum at ``phi = phi_ref`` (an expression of the reference configuration), the 2R arm's two branches for it
+    and ``q6`` moved to keep ``phi + sigma q6`` (``sigma = s0`` where q5 is an even multiple of pi, ``-s0`` where odd;
+    ``s0 = h2 . h6``), and ``exact`` 1 where the first root's q6 is the continuum's representative (split). Those are
+    members of the same continuum as the candidates' representative, the one at the reference's own ``phi``."""
     H, P, RG, tG = prob.H, prob.P, prob.RG, prob.tG
     Q0 = steps.vec("Q0", closest_point(P[4], H[4], P[5], H[5]))
     W = steps.vec("W", add(matvec(RG, Q0), tG))
@@ -294,7 +302,26 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False) -> list[Bran
                        q6r.ls, steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
             firsts = (q5, q6, phi, sel)
             out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
+            if members is not None and flip and j == 0:
+                members.append((_continuum_members(steps, H, P, V, Q0, q1, q5, q6, phi, phi_ref, s0, f"{i}"), sel))
     return out
+
+
+def _continuum_members(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, phi_ref: sp.Expr,
+                       s0: int, label: str) -> list[Branch]:
+    """The aligned wrist's continuum at ``phi_ref``: ``q6`` moved by ``sigma (phi - phi_ref)`` (``phi + sigma q6`` is
+    the rotation about h2 there), the 2R arm's two branches for the wrist point that ``phi_ref`` puts joint 4's point
+    at (see :func:`three_parallel`)."""
+    even = steps(f"mev{label}", indicator(sp.Abs(q5.theta) <= PI_DOUBLE / 2))
+    sigma = s0 * (2 * even - 1)
+    # wrapped into [-pi, pi] by its sine and cosine: phi_ref is any number, and phi at +-pi (atan2 of a signed zero)
+    # would otherwise give q6 a turn's difference between languages
+    moved = steps(f"q6mu{label}", q6.theta + sigma * (phi.theta - phi_ref))
+    q6m = Angle(steps(f"q6m{label}", sp.atan2(steps(f"q6ms{label}", sp.sin(moved)), steps(f"q6mc{label}", sp.cos(moved)))),
+                None, None, q6.ls, sp.S.One)
+    phim = Angle(phi_ref, steps(f"phimc{label}", sp.cos(phi_ref)), steps(f"phims{label}", sp.sin(phi_ref)),
+                 sp.S.Zero, sp.S.One)
+    return _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6m, phim, f"m{label}")
 
 
 def _three_parallel_arm(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, label: str) -> list[Branch]:

@@ -249,11 +249,16 @@ def nearest_copy(x: float, ref: float, lo: float, hi: float, tol: float = LIMIT_
 
 
 def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
-            aligned_tol: float = WRIST_ALIGNED_TOL, limit_tol: float = LIMIT_TOL) -> tuple[np.ndarray | None, int]:
+            aligned_tol: float = WRIST_ALIGNED_TOL, limit_tol: float = LIMIT_TOL,
+            members: tuple | None = None) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
     nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
     (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
-    weights (default 1)."""
+    weights (default 1). ``members``: ``(M (R, N), flags (R))``, more rows to choose from (a UR's aligned-wrist
+    continuum at the reference's own ``phi``, :attr:`~.derive.ClosedIK.members`): those with flag bit 1 clear, each
+    revolute joint moved to its copy within limits nearest ``q_ref``, within the limits (``limit_tol``) as rows are;
+    a member nearer than every row is returned with ``row`` the first row (the continuum's representative's branch
+    is not known here)."""
     if result.count == 0:
         return None, -1
     q_ref = np.asarray(q_ref, float)
@@ -275,4 +280,23 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
         d = float(np.sum(w * (q - q_ref) ** 2))
         if d < best_d:
             best, best_d, best_i = q, d, i
+    if members is not None:
+        M, mflags = np.asarray(members[0], float), np.asarray(members[1], int)
+        for m in range(M.shape[0]):
+            if mflags[m] & 1:
+                continue
+            q, ok = M[m].copy(), True
+            for j in range(q.shape[0]):
+                x = q[j]
+                if rev[j]:  # a copy within the limits: nearest_copy's, unless it clipped a value with none there
+                    q[j] = nearest_copy(x, q_ref[j], lower[j], upper[j], limit_tol)
+                    ok &= bool(abs(q[j] - (x + TWO_PI * np.rint((q[j] - x) * INV_TWO_PI))) <= limit_tol)
+                else:
+                    ok &= bool(lower[j] - limit_tol <= x <= upper[j] + limit_tol)
+                    q[j] = min(max(x, lower[j]), upper[j])
+            if not ok:
+                continue
+            d = float(np.sum(w * (q - q_ref) ** 2))
+            if d < best_d:
+                best, best_d = q, d
     return best, best_i

@@ -26,6 +26,8 @@ class ModelKind:
     scenarios: Callable[..., list] | None = None
     solvers: Callable[..., list] | None = None
     solver_names: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    solver_extras: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """Derived functions a solver calls where the derivation has them (and does without otherwise)."""
     solver_checks: Callable[..., list] | None = None
     show: Callable[..., str] | None = None
     add_options: Callable[[Any], None] | None = None

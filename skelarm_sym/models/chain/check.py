@@ -78,6 +78,8 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     expected.update(forward)
     condition.update(forward_condition)
     closed = [candidates_scenario(derivation, cases, seed, precision)] if "Q" in derivation.compact else []
+    if "M" in derivation.compact:
+        closed.append(members_scenario(derivation, cases, seed, precision))
     return [Scenario("", values, expected, condition, alternatives, size=n)] + [
         Scenario(label, {**values, **extra}, want, cond, size=n) for label, extra, want, cond in solves
     ] + closed
@@ -163,6 +165,35 @@ def _condition(numeric, rows: np.ndarray, free: np.ndarray, length: float) -> fl
     J = np.concatenate([J[..., :3, :] / length, J[..., 3:, :]], axis=-2)
     s = np.linalg.svd(J, compute_uv=False)
     return float(np.max(s[..., 0] / np.maximum(s[..., -1], 1e-300)))
+
+
+def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
+    """``ik_continuum_members`` on poses of random configurations with the wrist aligned (q5 = 0 for the first half,
+    pi for the rest; in double: a float target is aligned only to float's rounding, where the wrist's split test and
+    so the rows depend on that rounding, so float takes the configurations as drawn), ``q_ref`` the configurations
+    themselves; expected: the same steps evaluated by SymPy (lambdify, double). Its condition per case: the Jacobian
+    condition number at the configuration without joint 6, which turns with phi at the aligned wrist (:func:`_condition`)."""
+    from ...closed_ik.evaluate import lambdify_members_of
+
+    chain = derivation.model
+    n = chain.n
+    dtype = np.float64 if precision == "double" else np.float32
+    rng = np.random.default_rng(seed + 4)
+    m = max(1, min(cases, CANDIDATE_CASES))
+    rev = revolute_mask(chain)
+    q = np.where(rev, rng.uniform(-np.pi, np.pi, (m, n)), rng.uniform(-0.5, 0.5, (m, n)))
+    if precision == "double":
+        q[:, 4] = np.where(np.arange(m) < (m + 1) // 2, 0.0, np.pi)
+    q = np.asarray(q, dtype=dtype).astype(np.float64)
+    numeric = chain.numeric()
+    targets = np.asarray(reference.chain_kinematics(numeric, q).T.reshape(m, 16), dtype=dtype).astype(np.float64)
+    M, mflags = lambdify_members_of(derivation)(q, targets)
+    length = float(np.abs(targets[:, [3, 7, 11]]).max()) + 1.0
+    free = np.ones(n, bool)
+    free[derivation.model.joints[-1].coordinate] = False  # joint 6 turns with phi at the aligned wrist: the rest
+    condition = np.array([_condition(numeric, q[i:i + 1], free, length) for i in range(m)])
+    return Scenario("ik continuum members", {"q_ref": q, "target": targets}, {"M": M, "mflags": mflags},
+                    {"M": np.maximum(1.0, condition), "mflags": np.ones(m)}, size=n)
 
 
 def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:

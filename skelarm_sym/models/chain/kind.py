@@ -12,7 +12,7 @@ from .lock import LOCK_OPTION, ik_lock, lock_index, with_ik_lock
 from .model import Chain
 
 SOLVERS = ("ik_solve", "ik_solve_position")
-CLOSED = ("ik_candidates", "ik_all", "ik_nearest", "ik_nearest_weighted")
+CLOSED = ("ik_candidates", "ik_all", "ik_nearest", "ik_nearest_weighted", "ik_continuum_members")
 """The closed-form IK functions: emitted when the chain is in a closed-form family (docs/closed-form-ik.md)."""
 def _derive(model: Chain, wanted):
     """A chain whose wanted functions are all forward or closed-form ones is derived without the inverse
@@ -48,7 +48,7 @@ def _solvers(derivation, names, precision):
     from .solver import chain_solvers
 
     iterative = chain_solvers(derivation, names, precision) if set(names) & set(SOLVERS) else []
-    if not set(names) & set(CLOSED[1:]):  # the closed-form procedures (they import NumPy) are not asked for
+    if not set(names) & {"ik_all", "ik_nearest", "ik_nearest_weighted"}:  # the closed-form procedures (they import NumPy) are not asked for
         return iterative
     from .solver_closed import closed_solvers
 
@@ -118,6 +118,7 @@ KIND = ModelKind(
     "chain", Chain, _derive, scenarios=_scenarios, solvers=_solvers,
     solver_names={"ik_solve": ("ik_terms",), "ik_solve_position": ("ik_terms",), "ik_all": ("ik_candidates",),
                   "ik_nearest": ("ik_candidates",), "ik_nearest_weighted": ("ik_candidates",)},
+    solver_extras={"ik_nearest": ("ik_continuum_members",), "ik_nearest_weighted": ("ik_continuum_members",)},
     solver_checks=_solver_checks, show=_show, add_options=_add_options, from_args=_from_args,
     options=(("--robot", "robot"), ("--base", "base"), ("--tip", "tip"), (LOCK_OPTION, "ik_lock")), title="a robot file's chain",
     preview=_preview, prefix_rule="for a robot file: " + PREFIX_RULE.removeprefix("default prefix: "),

@@ -81,7 +81,9 @@ class _Arm:
     which the duplicate test compares the joints (``order``)."""
 
     def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double",
-                 continuum: tuple = ()) -> None:
+                 continuum: tuple = (), members: int = 0) -> None:
+        self.members = members
+        """Rows of ``ik_continuum_members`` (0: the arm has none)."""
         limits = chain.limits()
         self.n = chain.n
         self.s = 8
@@ -387,6 +389,65 @@ NEAREST_STATUSES = STATUSES[:-1] + (
 """``ik_nearest``'s and ``ik_nearest_weighted``'s return codes: ``ik_all``'s, and the reference (and weights) tested too."""
 
 
+def _nearest_copy(b: Body, arm: _Arm, j: int, x, ref, y) -> None:
+    """``y`` = the copy ``x + 2 pi k`` of revolute joint ``j`` within the limits nearest ``ref`` (the nearest copy,
+    else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit
+    clipped onto it): ``postprocess.nearest_copy``."""
+    b.set(y, x + TWO_PI * Call1("nearbyint", (ref - x) * INV_TWO_PI))
+    lo, hi, tol = arm.lower[j], arm.upper[j], NamedConst("IK_LIMIT_TOL")
+    if hi is not None:
+        b.set(y, select(y > hi + tol, x + TWO_PI * Call1("floor", ((hi + tol) - x) * INV_TWO_PI), y))
+    if lo is not None:
+        b.set(y, select(y < lo - tol, x - TWO_PI * Call1("floor", (x - (lo - tol)) * INV_TWO_PI), y))
+    if hi is not None:
+        b.set(y, select(y > hi, hi, y))
+    if lo is not None:
+        b.set(y, select(y < lo, lo, y))
+
+
+def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, best, best_d, dist, x, y) -> None:
+    """Where ik_all returned rows: the members of the aligned wrist's continuum at q_ref's own phi
+    (``ik_continuum_members``; those with flag bit 1 clear), each revolute joint at its copy within the limits nearest
+    q_ref (none there: not a member within the limits), a prismatic joint within the limits; one nearer than the
+    chosen row replaces it (``postprocess.nearest``'s ``members``)."""
+    N, R = arm.n, arm.members
+    M, mflags = b.array("M", R * N), b.array("mflags", R)
+    ok = b.var("m_ok", _int(0), Type.INT)
+    tol = NamedConst("IK_LIMIT_TOL")
+    with b.if_(best >= 0):
+        b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row")
+        b.call("ik_continuum_members", q_ref, *data, M, mflags)
+        with b.for_("m", 0, _int(R)) as m:
+            with b.if_(ne(Bits("%", Cast(Type.INT, mflags[m]), _int(2)), NamedConst("IK_FLAG_LEAST_SQUARES", Type.INT))):
+                b.set(ok, _int(1))
+                for j in range(N):
+                    b.set(x, M[_at(N, m, j)])
+                    if arm.revolute[j]:
+                        _nearest_copy(b, arm, j, x, q_ref[j], y)
+                        b.set(ok, select(fabs(y - (x + TWO_PI * Call1("nearbyint", (y - x) * INV_TWO_PI))) <= tol, ok, _int(0)))
+                        b.set(near[j], y)
+                        continue
+                    lo, hi = arm.lower[j], arm.upper[j]
+                    clipped = x
+                    if lo is not None:
+                        b.set(ok, select(x < lo - tol, _int(0), ok))
+                    if hi is not None:
+                        b.set(ok, select(x > hi + tol, _int(0), ok))
+                        clipped = select(x > hi, hi, clipped)
+                    if lo is not None:
+                        clipped = select(x < lo, lo, clipped)
+                    b.set(near[j], clipped)
+
+                def term(j):
+                    square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
+                    return weights[j] * square if weights is not None else square
+                b.set(dist, sum((term(j) for j in range(1, N)), term(0)))
+                with b.if_((ok > 0) & (dist < best_d)):
+                    b.set(best_d, dist)
+                    for j in range(N):
+                        b.set(q[j], near[j])
+
+
 def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
     """``ik_nearest(q_ref, target, [lock], q)``: the solution of ``ik_all`` nearest ``q_ref``; ``weighted``:
     ``ik_nearest_weighted(q_ref, weights, target, [lock], q)``, nearest in ``sum_j weights[j] (q[j] - q_ref[j])^2``
@@ -431,16 +492,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             if not arm.revolute[j]:
                 b.set(near[j], x)
                 continue
-            b.set(y, x + TWO_PI * Call1("nearbyint", (q_ref[j] - x) * INV_TWO_PI))
-            lo, hi, tol = arm.lower[j], arm.upper[j], NamedConst("IK_LIMIT_TOL")
-            if hi is not None:
-                b.set(y, select(y > hi + tol, x + TWO_PI * Call1("floor", ((hi + tol) - x) * INV_TWO_PI), y))
-            if lo is not None:
-                b.set(y, select(y < lo - tol, x - TWO_PI * Call1("floor", (x - (lo - tol)) * INV_TWO_PI), y))
-            if hi is not None:
-                b.set(y, select(y > hi, hi, y))
-            if lo is not None:
-                b.set(y, select(y < lo, lo, y))
+            _nearest_copy(b, arm, j, x, q_ref[j], y)
             b.set(near[j], y)
         if continuum is not None:
             a, w, c = continuum.a, continuum.w, continuum.b
@@ -458,6 +510,8 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             b.set(best_d, dist)
             for j in range(N):
                 b.set(q[j], near[j])
+    if arm.members:
+        _nearer_member(b, arm, data, q_ref, weights, q, near, best, best_d, dist, x, y)
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
@@ -494,8 +548,9 @@ def closed_solvers(derivation, names, precision: str) -> list[Function]:
     spec = derivation.function("ik_candidates")
     Q = derivation.compact["Q"]
     columns = tuple(len(set(Q[:, j])) for j in range(Q.cols))
+    members = derivation.compact["M"].rows if any(f.name == "ik_continuum_members" for f in derivation.functions) else 0
     arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision,
-               getattr(spec, "continuum", ()))
+               getattr(spec, "continuum", ()), members)
     out = [rows_helper(arm)]
     if "ik_all" in wanted:
         out.append(all_solver(arm))
