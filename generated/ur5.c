@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x766e2163UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xdb2f4e1cUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7312,7 +7312,11 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     double M[24];
     double mflags[4];
     int m_ok = 0;
-    if (best >= 0) {
+    int m_singular = 0;
+    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
+        m_singular = (flags[k] >= UR5_IK_FLAG_SINGULAR ? 1 : m_singular);
+    }
+    if (m_singular > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
         ur5_ik_continuum_members(q_ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {
@@ -7479,7 +7483,11 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     double M[24];
     double mflags[4];
     int m_ok = 0;
-    if (best >= 0) {
+    int m_singular = 0;
+    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
+        m_singular = (flags[k] >= UR5_IK_FLAG_SINGULAR ? 1 : m_singular);
+    }
+    if (m_singular > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
         ur5_ik_continuum_members(q_ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {

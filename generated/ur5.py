@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x766e2163
+STAMP = 0xdb2f4e1c
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -7516,7 +7516,10 @@ def _ik_nearest(q_ref, target, q):
     M = np.zeros(24, dtype=DTYPE)
     mflags = np.zeros(4, dtype=DTYPE)
     m_ok = 0
-    if best >= 0:
+    m_singular = 0
+    for k in range(0, IK_MAX_SOLUTIONS):
+        m_singular = 1 if flags[k] >= IK_FLAG_SINGULAR else m_singular
+    if m_singular > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
         _ik_continuum_members_core(q_ref, target, M, mflags)
         for m in range(0, 4):
@@ -7982,7 +7985,10 @@ def _ik_nearest_lanes(_c, q_ref, target):
     M = [_fr(0.0)] * 24
     mflags = [_fr(0.0)] * 4
     m_ok = _fi(0)
-    _c131 = best >= 0
+    m_singular = _fi(0)
+    for k in range(0, 8):
+        m_singular = np.where(_alive2, np.where(flags[k] >= IK_FLAG_SINGULAR, 1, m_singular), m_singular)
+    _c131 = m_singular > 0
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
@@ -8153,7 +8159,10 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     M = np.zeros(24, dtype=DTYPE)
     mflags = np.zeros(4, dtype=DTYPE)
     m_ok = 0
-    if best >= 0:
+    m_singular = 0
+    for k in range(0, IK_MAX_SOLUTIONS):
+        m_singular = 1 if flags[k] >= IK_FLAG_SINGULAR else m_singular
+    if m_singular > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
         _ik_continuum_members_core(q_ref, target, M, mflags)
         for m in range(0, 4):
@@ -8621,7 +8630,10 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     M = [_fr(0.0)] * 24
     mflags = [_fr(0.0)] * 4
     m_ok = _fi(0)
-    _c131 = best >= 0
+    m_singular = _fi(0)
+    for k in range(0, 8):
+        m_singular = np.where(_alive2, np.where(flags[k] >= IK_FLAG_SINGULAR, 1, m_singular), m_singular)
+    _c131 = m_singular > 0
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row

@@ -405,8 +405,9 @@ def _nearest_copy(b: Body, arm: _Arm, j: int, x, ref, y) -> None:
         b.set(y, select(y < lo, lo, y))
 
 
-def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, best, best_d, dist, x, y) -> None:
-    """Where ik_all returned rows: the members of the aligned wrist's continuum at q_ref's own phi
+def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, flags: Array, best_d, dist,
+                   x, y) -> None:
+    """Where ik_all returned a row flagged singular (rows past count are flagged -1): the members of the aligned wrist's continuum at q_ref's own phi
     (``ik_continuum_members``; those with flag bit 1 clear), each revolute joint at its copy within the limits nearest
     q_ref (none there: not a member within the limits), a prismatic joint within the limits; one nearer than the
     chosen row replaces it (``postprocess.nearest``'s ``members``)."""
@@ -414,7 +415,10 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
     M, mflags = b.array("M", R * N), b.array("mflags", R)
     ok = b.var("m_ok", _int(0), Type.INT)
     tol = NamedConst("IK_LIMIT_TOL")
-    with b.if_(best >= 0):
+    singular = b.var("m_singular", _int(0), Type.INT)
+    with b.for_("k", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as k:
+        b.set(singular, select(flags[k] >= NamedConst("IK_FLAG_SINGULAR", Type.INT), _int(1), singular))
+    with b.if_(singular > 0):  # a split representative is flagged singular: no singular row, no member
         b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row")
         b.call("ik_continuum_members", q_ref, *data, M, mflags)
         with b.for_("m", 0, _int(R)) as m:
@@ -511,7 +515,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             for j in range(N):
                 b.set(q[j], near[j])
     if arm.members:
-        _nearer_member(b, arm, data, q_ref, weights, q, near, best, best_d, dist, x, y)
+        _nearer_member(b, arm, data, q_ref, weights, q, near, flags, best_d, dist, x, y)
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
