@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x694ee55fUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x6d9e1591UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

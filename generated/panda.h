@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x694ee55fUL
+#define PANDA_STAMP 0x6d9e1591UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -205,7 +205,7 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 #define PANDA_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define PANDA_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define PANDA_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define PANDA_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed) */
+#define PANDA_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
 
 /* pose IK of the tool frame.
  * Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step

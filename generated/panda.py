@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x694ee55f
+STAMP = 0x6d9e1591
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -54,7 +54,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed)"""
+"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed)"""
 
 __all__ = ["pose", "jacobian", "jacobian_tool", "jacobian_dot", "twist", "acceleration", "kinematics", "ik_terms", "manipulability", "manipulability_position", "jacobian_hessian", "manipulability_gradient", "inverse_velocity", "inverse_velocity_position", "jacobian_rpy", "ik_solve", "IKResult", "ik_solve_position", "IKPositionResult", ]
 
@@ -4905,7 +4905,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     iterations = np.zeros(1, dtype=np.int64)
     status = _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations)
     if status == 3:
-        raise ValueError("ik_solve: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
+        raise ValueError("ik_solve: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0)")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
@@ -5702,7 +5702,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (7,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0)")
     names = np.array(["converged", "stalled", "max_iter", "invalid"])
     return IKResult(_assembled(q, batch, (7,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([error[1]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xdb2f4e1cUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x606993e1UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7400,6 +7400,7 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
 /* ---- ur5_ik_nearest_weighted: the closed-form IK solution nearest a configuration, in a weighted metric ---- */
 int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6])
 {
+    double w[6];
     double rows[48];
     int count[1];
     int flags[8];
@@ -7420,6 +7421,13 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5]) || !(weights[0] > 0.0) || !UR5_FINITE(weights[0]) || !(weights[1] > 0.0) || !UR5_FINITE(weights[1]) || !(weights[2] > 0.0) || !UR5_FINITE(weights[2]) || !(weights[3] > 0.0) || !UR5_FINITE(weights[3]) || !(weights[4] > 0.0) || !UR5_FINITE(weights[4]) || !(weights[5] > 0.0) || !UR5_FINITE(weights[5])) {
         return UR5_IK_INVALID;
     }
+    const double w_max = (((((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) > weights[4] ? (((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) : weights[4]) > weights[5] ? ((((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) > weights[4] ? (((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) : weights[4]) : weights[5]);
+    w[0] = weights[0]/w_max;
+    w[1] = weights[1]/w_max;
+    w[2] = weights[2]/w_max;
+    w[3] = weights[3]/w_max;
+    w[4] = weights[4]/w_max;
+    w[5] = weights[5]/w_max;
     status = ur5_ik_all_rows(target, rows, count, flags);
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         if (i >= count[0]) {
@@ -7468,7 +7476,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[5] = y;
-        dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
+        dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
         if (best < 0 || dist < best_d) {
             best = i;
             best_d = dist;
@@ -7541,7 +7549,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 y = (y < -6.283185307179586 ? -6.283185307179586 : y);
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[5] = y;
-                dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
+                dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
                 if (m_ok > 0 && dist < best_d) {
                     best_d = dist;
                     q[0] = near[0];

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xdb2f4e1cUL
+#define UR5_STAMP 0x606993e1UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -245,7 +245,7 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define UR5_IK_INVALID 3 /* q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed) */
+#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
 #define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit IK_FLAG_LEAST_SQUARES set), possibly none */
 #define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xdb2f4e1c
+STAMP = 0x606993e1
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -71,7 +71,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed)"""
+"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN"""
 IK_OK = 0
 """at least one exact solution within the joint limits: all of them are returned"""
 IK_UNREACHABLE = 1
@@ -5361,7 +5361,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     iterations = np.zeros(1, dtype=np.int64)
     status = _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations)
     if status == 3:
-        raise ValueError("ik_solve: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
+        raise ValueError("ik_solve: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0)")
     names = {0: "converged", 1: "stalled", 2: "max_iter", 3: "invalid"}
     return IKResult(q, names[status], float(error[0]), float(error[1]), int(iterations[0]))
 
@@ -6204,7 +6204,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0")
+        raise ValueError(f"ik_solve: problem {_first_problem(status == 3, batch)}: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0)")
     names = np.array(["converged", "stalled", "max_iter", "invalid"])
     return IKResult(_assembled(q, batch, (6,), DTYPE), names[status], _assembled([error[0]], batch, (), DTYPE), _assembled([error[1]], batch, (), DTYPE), _assembled([iterations[0]], batch, (), np.int64))
 
@@ -7124,7 +7124,7 @@ def ik_all(target):
     flags = np.zeros(8, dtype=np.int64)
     status = _ik_all(target, q, count, flags)
     if status == 3:
-        raise ValueError("ik_all: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError("ik_all: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKAllResult(q.reshape(8, 6), names[status], int(count[0]), flags)
 
@@ -7429,7 +7429,7 @@ def _ik_all_batch(target):
     (q, count, flags, ), status = _ik_all_lanes(_c, _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError(f"ik_all: problem {_first_problem(status == 3, batch)}: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKAllResult(_assembled(q, batch, (8, 6,), DTYPE), names[status], _assembled([count[0]], batch, (), np.int64), _assembled(flags, batch, (8,), np.int64))
 
@@ -7614,7 +7614,7 @@ def ik_nearest(q_ref, target):
     q = np.zeros(6, dtype=DTYPE)
     status = _ik_nearest(q_ref, target, q)
     if status == 3:
-        raise ValueError("ik_nearest: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError("ik_nearest: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKNearestResult(q, names[status])
 
@@ -8072,7 +8072,7 @@ def _ik_nearest_batch(q_ref, target):
     (q, ), status = _ik_nearest_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError(f"ik_nearest: problem {_first_problem(status == 3, batch)}: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])
 
@@ -8080,6 +8080,7 @@ def _ik_nearest_batch(q_ref, target):
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_nearest_weighted(q_ref, weights, target, q):
     """the closed-form IK solution nearest a configuration, in a weighted metric (one problem; arrays are 1-D)."""
+    w = np.zeros(6, dtype=DTYPE)
     rows = np.zeros(48, dtype=DTYPE)
     count = np.zeros(1, dtype=np.int64)
     flags = np.zeros(8, dtype=np.int64)
@@ -8099,6 +8100,13 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     # q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN
     if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]) or not weights[0] > 0.0 or not np.isfinite(weights[0]) or not weights[1] > 0.0 or not np.isfinite(weights[1]) or not weights[2] > 0.0 or not np.isfinite(weights[2]) or not weights[3] > 0.0 or not np.isfinite(weights[3]) or not weights[4] > 0.0 or not np.isfinite(weights[4]) or not weights[5] > 0.0 or not np.isfinite(weights[5]):
         return IK_INVALID
+    w_max = ((((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) if (((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) > weights[4] else weights[4]) if ((((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) if (((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) > weights[4] else weights[4]) > weights[5] else weights[5]
+    w[0] = weights[0]/w_max
+    w[1] = weights[1]/w_max
+    w[2] = weights[2]/w_max
+    w[3] = weights[3]/w_max
+    w[4] = weights[4]/w_max
+    w[5] = weights[5]/w_max
     status = _ik_all_rows(target, rows, count, flags)
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
@@ -8146,7 +8154,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[5] = y
-        dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
+        dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
         if best < 0 or dist < best_d:
             best = i
             best_d = dist
@@ -8216,7 +8224,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 y = -6.283185307179586 if y < -6.283185307179586 else y
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[5] = y
-                dist = ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
+                dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
                 if m_ok > 0 and dist < best_d:
                     best_d = dist
                     q[0] = near[0]
@@ -8259,7 +8267,7 @@ def ik_nearest_weighted(q_ref, weights, target):
     q = np.zeros(6, dtype=DTYPE)
     status = _ik_nearest_weighted(q_ref, weights, target, q)
     if status == 3:
-        raise ValueError("ik_nearest_weighted: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError("ik_nearest_weighted: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = {0: "ok", 1: "unreachable", 2: "out_of_limits", 3: "invalid"}
     return IKNearestResult(q, names[status])
 
@@ -8283,6 +8291,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     q = [_fr(0.0)] * 6
     _status1 = _fi(0)
     _alive2 = _fb(True)
+    w = [_fr(0.0)] * 6
     rows = [_fr(0.0)] * 48
     count = [_fi(0)] * 1
     flags = [_fi(0)] * 8
@@ -8304,6 +8313,13 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     _m4 = _c3
     _status1 = np.where(_m4, IK_INVALID, _status1)
     _alive2 = _alive2 & (~_m4)
+    w_max = np.where(np.where(np.where(np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]) > weights[3], np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]), weights[3]) > weights[4], np.where(np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]) > weights[3], np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]), weights[3]), weights[4]) > weights[5], np.where(np.where(np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]) > weights[3], np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]), weights[3]) > weights[4], np.where(np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]) > weights[3], np.where(np.where(weights[0] > weights[1], weights[0], weights[1]) > weights[2], np.where(weights[0] > weights[1], weights[0], weights[1]), weights[2]), weights[3]), weights[4]), weights[5])
+    w[0] = np.where(_alive2, weights[0]/w_max, w[0])
+    w[1] = np.where(_alive2, weights[1]/w_max, w[1])
+    w[2] = np.where(_alive2, weights[2]/w_max, w[2])
+    w[3] = np.where(_alive2, weights[3]/w_max, w[3])
+    w[4] = np.where(_alive2, weights[4]/w_max, w[4])
+    w[5] = np.where(_alive2, weights[5]/w_max, w[5])
     _alive6 = _alive2
     _ik_all_rows5_raw = [_fr(0.0)] * 48
     _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
@@ -8616,7 +8632,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[5] = np.where(_run126, y, near[5])
-        dist = np.where(_run126, ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
+        dist = np.where(_run126, ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
         _c129 = (best < 0) | (dist < best_d)
         _m130 = _run126 & _c129
         best = np.where(_m130, i, best)
@@ -8692,7 +8708,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             y = np.where(_m134, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[5] = np.where(_m134, y, near[5])
-            dist = np.where(_m134, ((((weights[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + weights[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + weights[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + weights[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + weights[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + weights[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
+            dist = np.where(_m134, ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
             _c135 = (m_ok > 0) & (dist < best_d)
             _m136 = _m134 & _c135
             best_d = np.where(_m136, dist, best_d)
@@ -8718,6 +8734,6 @@ def _ik_nearest_weighted_batch(q_ref, weights, target):
     (q, ), status = _ik_nearest_weighted_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(weights, batch, (6,)), _lanes(target, batch, (4, 4,)))
     status = np.broadcast_to(status, (lanes,)).reshape(batch)
     if np.any(status == 3):
-        raise ValueError(f"ik_nearest_weighted: problem {_first_problem(status == 3, batch)}: the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL (1e-06) or det R <= 0 (or a translation entry beyond IK_TRANSLATION_MAX)")
+        raise ValueError(f"ik_nearest_weighted: problem {_first_problem(status == 3, batch)}: the target is refused: its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = 1e-06, or det R <= 0), or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)")
     names = np.array(["ok", "unreachable", "out_of_limits", "invalid"])
     return IKNearestResult(_assembled(q, batch, (6,), DTYPE), names[status])

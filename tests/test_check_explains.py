@@ -12,6 +12,7 @@ from skelarm_sym.check import check_solvers as check_ik
 from skelarm_sym.cli import main
 from skelarm_sym.errors import InputError
 from skelarm_sym.generate import generate
+from skelarm_sym.models.chain.loader import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 ROW = re.compile(r"^(?P<name>.+?)\s{2,}(?P<out>\S+)\s+(?P<abs>\S+)\s+(?P<allowed>\S+)\s+(?P<rel>\S+)\s+(?P<tol>\S+)\s+"
@@ -324,3 +325,32 @@ def test_check_of_one_closed_form_solver_reports_only_that_one(tmp_path, capsys)
         for line in rows:
             assert absent not in line and line.endswith("; ok"), line
             assert ("4/4" in line) and ("0/0" not in line), line
+
+
+def test_check_judges_ik_nearest_weighted(monkeypatch):
+    """``check`` ran ``ik_nearest_weighted`` nowhere, so a copy that returned the farthest row passed (a new user's
+    probe: the emitted distance negated, 120 passed). Its row now asks the weighted nearest, with weights 1e-2 to
+    1e2, for the source from the source configuration, and from a reference that is no solution for a row as near
+    as a scan of ik_all's rows and copies; with weights 1 for ik_nearest's answer: a solver that returns the
+    farthest row, or ignores the weights, fails it."""
+    from skelarm_sym.models.chain.check import closed_rows
+
+    robot = Path(__file__).resolve().parents[1] / "examples" / "robots" / "puma560.toml"
+    generated = generate(load_robot(robot), out=None, langs="python", functions="ik_all,ik_nearest,ik_nearest_weighted")
+    (label, module), = load_implementations(generated)
+    row, = closed_rows(generated.derivation, [(label, module)], cases=4, seed=0, precision="double")
+    assert row.ok and row.weighted == 4 and "ik_nearest_weighted (weights 1e-2 to 1e2)" in row.row()
+    real = module.ik_nearest_weighted
+
+    def farthest(q_ref, weights, target):
+        rows = module.ik_all(target)
+        d = [np.sum(weights * (r - q_ref) ** 2) for r in np.asarray(rows.q)[: rows.count]]
+        return real(np.asarray(rows.q)[int(np.argmax(d))], weights, target)
+
+    def unweighted(q_ref, weights, target):
+        return real(q_ref, np.ones_like(weights), target)  # right from the source and with weights 1
+
+    for fake in (farthest, unweighted):
+        monkeypatch.setattr(module, "ik_nearest_weighted", fake)
+        row, = closed_rows(generated.derivation, [(label, module)], cases=4, seed=0, precision="double")
+        assert not row.ok and row.weighted < 4 and row.row().endswith("FAIL")

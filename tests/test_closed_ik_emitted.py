@@ -801,7 +801,8 @@ def test_ik_nearest_weighted_is_the_weighted_nearest():
     weights from 1e-3 to 1e3: equal to the spec's nearest with those weights; away from the aligned wrist, as near as a
     scan of every row and copy (an independent judge); with the wrist aligned, the continuum's member is chosen in the
     weighted metric (the spec's continuum_member, itself judged by sampling in test_closed_ik_postprocess), which
-    differs from the unweighted member; all ones is ik_nearest bit for bit. Weights not finite and > 0 and a q_ref
+    differs from the unweighted member; all ones is ik_nearest bit for bit, and only the ratios of the weights count
+    (1.7e308 and 1e-300 times them, the same answer: the code divides by the largest). Weights not finite and > 0 and a q_ref
     not finite: ValueError in Python, IK_INVALID with q NaN from the C function itself."""
     b = narrow_wrist_puma(functions="ik_all,ik_nearest,ik_nearest_weighted")
     a, w, c, _ = b.continuum
@@ -827,6 +828,13 @@ def test_ik_nearest_weighted_is_the_weighted_nearest():
             assert np.array_equal(np.asarray(impl.ik_nearest_weighted(refs[i], np.ones(6), T[i]).q),
                                   np.asarray(impl.ik_nearest(refs[i], T[i]).q))
     assert differs >= 5  # the weights move the continuum's member
+    for i in range(0, 40, 4):  # only the ratios count: huge weights overflowed w (q - q_ref)^2 to inf, every row tied
+        for impl in (b.c, b.py):
+            base = np.asarray(impl.ik_nearest_weighted(refs[i], W[i], T[i]).q)
+            np.testing.assert_allclose(impl.ik_nearest_weighted(refs[i], W[i] / W[i].max() * 1.7e308, T[i]).q, base, atol=1e-9)
+            np.testing.assert_allclose(impl.ik_nearest_weighted(refs[i], W[i] / W[i].max() * 1e-300, T[i]).q, base, atol=1e-9)
+            assert np.array_equal(np.asarray(impl.ik_nearest_weighted(refs[i], np.full(6, 1e308), T[i]).q),
+                                  np.asarray(impl.ik_nearest(refs[i], T[i]).q))
     batch = b.py.ik_nearest_weighted(refs, W, T)
     np.testing.assert_allclose(batch.q, [b.py.ik_nearest_weighted(refs[i], W[i], T[i]).q for i in range(40)], atol=1e-12, rtol=0)
     if importlib.util.find_spec("torch"):

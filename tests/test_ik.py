@@ -202,7 +202,7 @@ def test_a_target_that_is_not_a_rotation_is_refused(robot):
         R = T[:3, :3]
         assert np.max(np.abs(R.T @ R - np.eye(3))) > 1e-6 or np.linalg.det(R) <= 0  # the judge: not a rotation
         for solve in (arm.ik_solve, module.ik_solve):
-            with pytest.raises(ValueError, match="ik_solve: the target's rotation part is not a rotation"):
+            with pytest.raises(ValueError, match="ik_solve: the target is refused: its rotation part is not a rotation"):
                 solve(np.clip(np.zeros(chain.n), lo, hi), T)
     rounded = target.astype(np.float32).astype(np.float64)
     R = rounded[:3, :3]

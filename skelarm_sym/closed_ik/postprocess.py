@@ -266,6 +266,7 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     rev = np.asarray(revolute, bool)
     w = np.ones_like(q_ref) if weights is None else np.asarray(weights, float)
+    w = w / np.max(w)  # the same nearest row; no product overflows (the emitted code divides alike)
     best, best_d, best_i = None, np.inf, -1
     for i in range(result.count):
         q = result.q[i].copy()

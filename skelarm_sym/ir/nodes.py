@@ -612,3 +612,29 @@ class Module:
     def public(self) -> tuple[Function, ...]:
         """Functions a user calls (not helpers)."""
         return tuple(f for f in self.functions if f.kind != "helper")
+
+
+def module_statuses(functions) -> list[tuple[str, int, str]]:
+    """The named return values of a module's procedures, once each, in order of first use: ``(name, value,
+    meaning)``. Where public functions give one name different meanings (``IK_INVALID``: ``ik_solve`` leaves ``q =
+    q0``, ``ik_all`` returns count 0), the meaning names each: ``"ik_solve: ...; ik_all, ik_nearest: ..."``; helpers
+    count only for names no public function uses."""
+    order: dict[str, int] = {}
+    meanings: dict[str, dict[str, list[str]]] = {}
+    for public in (True, False):
+        for f in functions:
+            if (f.kind == "helper") == public:
+                continue
+            for name, value, meaning in f.statuses:
+                if not public and name in meanings:
+                    continue
+                order.setdefault(name, value)
+                meanings.setdefault(name, {}).setdefault(meaning, []).append(f.name)
+    first = [name for f in functions for name, _, _ in f.statuses]
+    out = []
+    for name in dict.fromkeys(first):
+        by_meaning = meanings[name]
+        text = next(iter(by_meaning)) if len(by_meaning) == 1 else "; ".join(
+            f"{', '.join(names)}: {meaning}" for meaning, names in by_meaning.items())
+        out.append((name, order[name], text))
+    return out

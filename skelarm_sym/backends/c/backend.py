@@ -11,7 +11,7 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
-from ...ir.nodes import Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Store, TrigBlock, Type, While
+from ...ir.nodes import Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Store, TrigBlock, Type, While, module_statuses
 from ...ir.walk import body_names, called, expr_names, needed_lets
 from ..text import c_comment
 from .printer import _ATOM, PRECISIONS, CPrecision, CPrinter
@@ -402,10 +402,8 @@ def context(module: Module) -> dict:
     stacks = procedure_stacks(module, straight, 8 if precision.ctype == "double" else 4)
     for p in procedures:
         p["stack"] = stack_text(stacks[p["name"]])
-    statuses: dict[str, dict] = {}
-    for p in procedures:
-        for s in p["statuses"]:
-            statuses.setdefault(s["macro"], s)
+    statuses = [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)}
+                for name, value, meaning in module_statuses(module.functions)]
     uses_finite = any("_FINITE(" in line for p in procedures for line in p["body"])
     big = {"double": 1e300, "float": 1e30}[module.precision]
     return {
@@ -417,7 +415,7 @@ def context(module: Module) -> dict:
         "T": precision.ctype,
         "functions": straight,
         "procedures": procedures,
-        "statuses": list(statuses.values()),
+        "statuses": statuses,
         "finite": uses_finite,
         "trig_sizes": trig_helpers(straight),
         "constants": [{"macro": names.macro(c.name), "value": precision.literal(c.value), "doc": c_comment(c.doc)} for c in module.constants],

@@ -24,7 +24,7 @@ machines without a GPU).
 from __future__ import annotations
 
 from ...ir.nodes import (
-    ArrayArg, CallFunction, Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Role, TrigBlock, Type, While,
+    ArrayArg, CallFunction, Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Role, TrigBlock, Type, While, module_statuses,
 )
 from ...ir.walk import body_names, called, expr_names
 from ..c.backend import Names, c_type, parameter
@@ -225,10 +225,8 @@ def context(module: Module) -> dict:
     precision = PRECISIONS[module.precision]
     names = Names(module.prefix)
     functions = [function_context(f, precision, names) for f in module.functions]
-    statuses: dict[str, dict] = {}
-    for f in functions:
-        for s in f["statuses"]:
-            statuses.setdefault(s["macro"], s)
+    statuses = [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)}
+                for name, value, meaning in module_statuses(module.functions)]
     big = {"double": 1e300, "float": 1e30}[module.precision]
     P = module.prefix.upper()
     return {
@@ -246,7 +244,7 @@ def context(module: Module) -> dict:
         "solvers": [f for f in functions if f["kind"] == "procedure"],
         "public": [f for f in functions if not f["helper"]],
         "python": [python_function(f, fc["kernel"]) for f, fc in zip(module.functions, functions) if f.kind != "helper"],
-        "statuses": list(statuses.values()),
+        "statuses": statuses,
         "py_statuses": list({name: {"name": name, "value": value, "meaning": py_string(meaning)}
                              for f in module.functions for name, value, meaning in f.statuses}.values()),
         "finite": any("_FINITE(" in line for f in functions for line in f["body"]),

@@ -14,7 +14,7 @@ functions called on all of them through ``_<name>_on_lanes`` adapters.
 
 from __future__ import annotations
 
-from ...ir.nodes import Function, Let, Module, Store, TrigBlock, Type
+from ...ir.nodes import Function, Let, Module, Store, TrigBlock, Type, module_statuses
 from ...ir.predicate import PCall, PFor, PGuard, PLoop, predicate
 from ..text import py_string
 from ..array_syntax import Dialect, ProcedurePrinter
@@ -182,10 +182,8 @@ def context(module: Module) -> dict:
         if f.kind == "procedure":
             p["lanes"] = lanes_context(module, f)
             called |= set(p["lanes"]["called"])
-    statuses: dict[str, dict] = {}
-    for p in procedures:
-        for s in p["statuses"]:
-            statuses.setdefault(s["name"], s)
+    statuses = [{"name": name, "label": name.lower().removeprefix("ik_"), "value": value, "meaning": py_string(meaning)}
+                for name, value, meaning in module_statuses(module.functions)]
     return {
         "prefix": module.prefix,
         "notes": [py_string(line) for line in module.notes],
@@ -193,7 +191,7 @@ def context(module: Module) -> dict:
         "functions": straight,
         "procedures": procedures,
         "on_lanes": [on_lanes_context(f) for f in module.functions if f.name in called],
-        "statuses": list(statuses.values()),
+        "statuses": statuses,
         **constants_context(module, "np.inf"),
     }
 

@@ -237,9 +237,11 @@ class ClosedCheck:
     fits the limits is among the rows."""
 
     def __init__(self, implementation: str, targets: int, allowed: float, has_all: bool = True,
-                 has_nearest: bool = True) -> None:
+                 has_nearest: bool = True, has_weighted: bool = False) -> None:
         self.implementation = implementation
-        self.has_all, self.has_nearest = has_all, has_nearest  # which of the two the generation emitted
+        self.has_all, self.has_nearest = has_all, has_nearest  # which of them the generation emitted
+        self.has_weighted = has_weighted
+        self.weighted = 0
         self.targets = targets
         self.allowed = allowed
         self.solutions: list[int] = []
@@ -260,7 +262,8 @@ class ClosedCheck:
     @property
     def ok(self) -> bool:
         return (self.targets > 0 and not self.failures and (self.found == self.targets or not self.has_all)
-                and (self.nearest == self.targets or not self.has_nearest) and self.complete == self.compared)
+                and (self.nearest == self.targets or not self.has_nearest)
+                and (self.weighted == self.targets or not self.has_weighted) and self.complete == self.compared)
 
     def row(self) -> str:
         count = f"{np.mean(self.solutions):.2f} ({min(self.solutions)}-{max(self.solutions)})" if self.solutions else "-"
@@ -272,6 +275,10 @@ class ClosedCheck:
                          f"source configuration among them {self.found}/{self.targets}")
         if self.has_nearest:
             parts.append(f"ik_nearest from the source configuration returns it {self.nearest}/{self.targets}")
+        if self.has_weighted:
+            parts.append(f"ik_nearest_weighted (weights 1e-2 to 1e2) from it returns it, from a reference where the "
+                         f"weights decide is as near as a scan of the rows, and with weights 1 equals ik_nearest "
+                         f"{self.weighted}/{self.targets}")
         if self.has_all:
             parts.append(f"complete against the 200-start numeric IK {self.complete}/{self.compared}; statuses: {statuses}")
         return f"{self.implementation}: {self.targets} targets, {'; '.join(parts)}{problems}; {'ok' if self.ok else 'FAIL'}"
@@ -279,8 +286,8 @@ class ClosedCheck:
 
 def closed_rows(derivation, implementations, cases: int, seed: int, precision: str) -> list[ClosedCheck]:
     """``ik_all`` / ``ik_nearest`` rows (see :class:`ClosedCheck`) for the implementations that have them."""
-    solvers = [(label, impl) for label, impl in implementations if getattr(impl, "ik_all", None) is not None
-               or getattr(impl, "ik_nearest", None) is not None]
+    solvers = [(label, impl) for label, impl in implementations
+               if any(getattr(impl, name, None) is not None for name in ("ik_all", "ik_nearest", "ik_nearest_weighted"))]
     if not solvers:
         return []
     chain = derivation.model
@@ -307,8 +314,12 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
     rows = []
     for label, impl in solvers:
         has_all, has_nearest = getattr(impl, "ik_all", None) is not None, getattr(impl, "ik_nearest", None) is not None
-        names = "/".join(name for name, has in (("ik_all", has_all), ("ik_nearest", has_nearest)) if has)
-        check = ClosedCheck(f"{label} {names}", m, allowed, has_all, has_nearest)
+        has_weighted = getattr(impl, "ik_nearest_weighted", None) is not None
+        names = "/".join(name for name, has in (("ik_all", has_all), ("ik_nearest", has_nearest),
+                                                ("ik_nearest_weighted", has_weighted)) if has)
+        check = ClosedCheck(f"{label} {names}", m, allowed, has_all, has_nearest, has_weighted)
+        draws = np.random.default_rng(seed + 5)
+        weights, offsets = 10.0 ** draws.uniform(-2, 2, (m, n)), draws.uniform(-0.5, 0.5, (m, n))
         for k in range(m):
             extra = (float(q_gen[k, lock]),) if lock is not None else ()
             if has_all:
@@ -350,8 +361,58 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
                     check.nearest += 1
                 else:
                     check.fail(f"target {k}: ik_nearest from the source configuration: {r.status}")
+            if has_weighted:
+                r = impl.ik_nearest_weighted(q_gen[k], weights[k], targets[k], *extra)
+                near = r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), found_tol)
+                ref = q_gen[k] + offsets[k]  # no solution
+                if has_all and count:  # one where the weights decide, as near as a scan of ik_all's rows and copies
+                    ref = _deciding_reference(sols, q_gen[k], weights[k], lower, upper, rev, draws)
+                    ref = q_gen[k] + offsets[k] if ref is None else ref
+                    got = np.asarray(impl.ik_nearest_weighted(ref, weights[k], targets[k], *extra).q, dtype=np.float64)
+                    best = float(np.min(_weighted_scan(sols, ref, weights[k], lower, upper, rev)))
+                    near = near and float(np.sum(weights[k] * (got - ref) ** 2)) <= best * (1 + 1e-9) + 1e-12
+                if has_nearest:  # all weights 1: ik_nearest's answer (bit for bit in C and NumPy; XLA may fuse the
+                    # two programs' arithmetic differently)
+                    plain = np.asarray(impl.ik_nearest(ref, targets[k], *extra).q, dtype=np.float64)
+                    ones = np.asarray(impl.ik_nearest_weighted(ref, np.ones(n), targets[k], *extra).q, dtype=np.float64)
+                    near = near and bool(np.allclose(plain, ones, rtol=0.0, atol=found_tol, equal_nan=True))
+                if near:
+                    check.weighted += 1
+                else:
+                    check.fail(f"target {k}: ik_nearest_weighted: {r.status}, not the source, farther than a row of "
+                               "ik_all, or not ik_nearest with weights 1")
         rows.append(check)
     return rows
+
+
+def _weighted_scan(rows: np.ndarray, ref: np.ndarray, weights: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                   revolute: np.ndarray) -> np.ndarray:
+    """Per row, the least ``sum_j w_j (q_j - ref_j)^2`` over, per revolute joint, every copy ``q_j + 2 pi k`` (k
+    within 10 turns) within the limits: the weighted nearest row is the least, judged without the emitted code's
+    rules (a continuum's other members are not scanned: the targets here are no continuum's)."""
+    turns = 2 * np.pi * np.arange(-10, 11)
+    out = np.zeros(len(rows))
+    for i, row in enumerate(rows):
+        for x, r, w, lo, hi, rev in zip(row, ref, weights, lower, upper, revolute):
+            copies = x + turns if rev else np.array([x])
+            copies = copies[(copies >= lo - 1e-12) & (copies <= hi + 1e-12)]
+            out[i] += w * float(np.min((copies - r) ** 2)) if len(copies) else np.inf
+    return out
+
+
+def _deciding_reference(rows: np.ndarray, source: np.ndarray, weights: np.ndarray, lower, upper, revolute, rng):
+    """A reference between the source and another row whose weighted nearest row (:func:`_weighted_scan`) is not its
+    unweighted nearest one, so that only a solver that weighs picks it; None when 40 draws find none."""
+    if len(rows) < 2:
+        return None
+    for _ in range(40):
+        other = rows[rng.integers(len(rows))]
+        ref = source + rng.uniform(0.2, 0.8, source.shape) * (other - source)
+        weighted = _weighted_scan(rows, ref, weights, lower, upper, revolute)
+        plain = _weighted_scan(rows, ref, np.ones_like(weights), lower, upper, revolute)
+        if np.argmin(weighted) != np.argmin(plain) and np.partition(weighted, 1)[1] > np.min(weighted) * (1 + 1e-6):
+            return ref
+    return None
 
 
 def _fits(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, revolute: np.ndarray) -> bool:

@@ -23,7 +23,7 @@ import math
 import operator
 
 from ...closed_ik.postprocess import INV_TWO_PI, STATUS, TWO_PI, centres
-from ...ir.build import Array, Body, fabs, select
+from ...ir.build import Array, Body, fabs, fmax, select
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
 from .solver_continuum import Continuum
 from .target_rotation import NOT_A_ROTATION, refusal, rotation_faults
@@ -461,7 +461,9 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
     b = Body()
     data_args, data = _inputs(arm)
     q_ref, q = Array("q_ref", N), Array("q", N)
-    weights = Array("weights", N) if weighted else None
+    given = Array("weights", N) if weighted else None
+    # the weights divided by the largest: the same nearest row, and no product overflows (1e308 times a square did)
+    weights = b.array("w", N) if weighted else None
     rows, count, flags = b.array("rows", S * N), b.array("count", 1, Type.INT), b.array("flags", S, Type.INT)
     near = b.array("near", N)
     status = b.var("status", _int(0), Type.INT)
@@ -479,9 +481,13 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
     b.comment("q_ref not finite" + (", or a weight not finite and > 0" if weighted else "") + ": IK_INVALID, q NaN")
     bad = [~Call1("isfinite", q_ref[j]) for j in range(N)]
     if weighted:
-        bad += [~(weights[j] > 0.0) | ~Call1("isfinite", weights[j]) for j in range(N)]
+        bad += [~(given[j] > 0.0) | ~Call1("isfinite", given[j]) for j in range(N)]
     with b.if_(functools.reduce(operator.or_, bad)):
         b.return_(_status("IK_INVALID"))
+    if weighted:
+        largest = b.let("w_max", functools.reduce(fmax, [given[j] for j in range(N)]))
+        for j in range(N):
+            b.set(weights[j], given[j] / largest)
     b.call("ik_all_rows", *data, rows, count, flags, result=status)
     with b.for_("i", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as i:
         # a constant bound and a break, not a bound of count[0]: the row index is then the same for every problem of a

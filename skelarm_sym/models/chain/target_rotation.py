@@ -37,10 +37,10 @@ def refusal(precision: str, translation: bool = False) -> str:
     shapes, ranges): the rotation test, and for ``ik_all`` / ``ik_nearest`` (``translation``) the translation's
     bound, which Python does not test first."""
     tol = ORTHO_TOL if precision == "double" else ORTHO_TOL_FLOAT
-    text = f"the target's rotation part is not a rotation: |R^T R - I| above IK_ORTHO_TOL ({tol:g}) or det R <= 0"
+    rotation = f"its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = {tol:g}, or det R <= 0)"
     if translation:
-        text += " (or a translation entry beyond IK_TRANSLATION_MAX)"
-    return text
+        return f"the target is refused: {rotation}, or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)"
+    return f"the target is refused: {rotation}"
 
 
 def rotation_faults(b: Body, target) -> list:
