@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x606993e1UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x28a10510UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7083,11 +7083,12 @@ void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *targe
 }
 
 /* ---- ur5_ik_all_rows: every closed-form solution within the limits, post-processed ---- */
-static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], int flags[8])
+static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], int flags[8], int singular[1])
 {
     double raw[48];
     double raw_flags[8];
     double cand[6];
+    singular[0] = 0;
     /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation */
     const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
     const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
@@ -7117,6 +7118,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
         if ((int)raw_flags[i] % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
             exact = 1;
         }
+        singular[0] = ((int)raw_flags[i] == UR5_IK_FLAG_SINGULAR ? 1 : singular[0]);
     }
     int kept = 0;
     int flag = 0;
@@ -7204,7 +7206,8 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
 static int ur5_ik_all_run(const double target[16], double q[48], int count[1], int flags[8])
 {
     int status = 0;
-    status = ur5_ik_all_rows(target, q, count, flags);
+    int singular[1];
+    status = ur5_ik_all_rows(target, q, count, flags, singular);
     return status;
 }
 
@@ -7249,7 +7252,8 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5])) {
         return UR5_IK_INVALID;
     }
-    status = ur5_ik_all_rows(target, rows, count, flags);
+    int singular[1];
+    status = ur5_ik_all_rows(target, rows, count, flags, singular);
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         if (i >= count[0]) {
             break;
@@ -7312,11 +7316,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     double M[24];
     double mflags[4];
     int m_ok = 0;
-    int m_singular = 0;
-    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
-        m_singular = (flags[k] >= UR5_IK_FLAG_SINGULAR ? 1 : m_singular);
-    }
-    if (m_singular > 0) {
+    if (singular[0] > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
         ur5_ik_continuum_members(q_ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {
@@ -7371,7 +7371,8 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[5] = y;
                 dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]);
-                if (m_ok > 0 && dist < best_d) {
+                if (m_ok > 0 && (best < 0 || dist < best_d)) {
+                    best = 8;
                     best_d = dist;
                     q[0] = near[0];
                     q[1] = near[1];
@@ -7382,6 +7383,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 }
             }
         }
+        status = (best >= 0 && status == UR5_IK_OUT_OF_LIMITS ? UR5_IK_OK : status);
     }
     return status;
 }
@@ -7428,7 +7430,8 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     w[3] = weights[3]/w_max;
     w[4] = weights[4]/w_max;
     w[5] = weights[5]/w_max;
-    status = ur5_ik_all_rows(target, rows, count, flags);
+    int singular[1];
+    status = ur5_ik_all_rows(target, rows, count, flags, singular);
     for (int i = 0; i < UR5_IK_MAX_SOLUTIONS; ++i) {
         if (i >= count[0]) {
             break;
@@ -7491,11 +7494,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     double M[24];
     double mflags[4];
     int m_ok = 0;
-    int m_singular = 0;
-    for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
-        m_singular = (flags[k] >= UR5_IK_FLAG_SINGULAR ? 1 : m_singular);
-    }
-    if (m_singular > 0) {
+    if (singular[0] > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
         ur5_ik_continuum_members(q_ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {
@@ -7550,7 +7549,8 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[5] = y;
                 dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
-                if (m_ok > 0 && dist < best_d) {
+                if (m_ok > 0 && (best < 0 || dist < best_d)) {
+                    best = 8;
                     best_d = dist;
                     q[0] = near[0];
                     q[1] = near[1];
@@ -7561,6 +7561,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 }
             }
         }
+        status = (best >= 0 && status == UR5_IK_OUT_OF_LIMITS ? UR5_IK_OK : status);
     }
     return status;
 }

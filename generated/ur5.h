@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x606993e1UL
+#define UR5_STAMP 0x28a10510UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -320,6 +320,9 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
+ * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+ * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
+ * limits turns IK_OUT_OF_LIMITS into IK_OK.
  */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 
@@ -334,6 +337,9 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+ * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+ * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
+ * limits turns IK_OUT_OF_LIMITS into IK_OK.
  */
 int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6]);
 

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x606993e1
+STAMP = 0x28a10510
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -6985,11 +6985,12 @@ def _ik_solve_position_batch(q0, target, lambda_, tol, max_iter):
 
 
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
-def _ik_all_rows(target, q, count, flags):
+def _ik_all_rows(target, q, count, flags, singular):
     """every closed-form solution within the limits, post-processed (one problem; arrays are 1-D)."""
     raw = np.zeros(48, dtype=DTYPE)
     raw_flags = np.zeros(8, dtype=DTYPE)
     cand = np.zeros(6, dtype=DTYPE)
+    singular[0] = 0
     # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
@@ -7016,6 +7017,7 @@ def _ik_all_rows(target, q, count, flags):
     for i in range(0, IK_MAX_SOLUTIONS):
         if int(raw_flags[i]) % 2 != IK_FLAG_LEAST_SQUARES:
             exact = 1
+        singular[0] = 1 if int(raw_flags[i]) == IK_FLAG_SINGULAR else singular[0]
     kept = 0
     flag = 0
     dup = 0
@@ -7087,7 +7089,8 @@ def _ik_all_rows(target, q, count, flags):
 def _ik_all(target, q, count, flags):
     """every closed-form IK solution within the joint limits (one problem; arrays are 1-D)."""
     status = 0
-    status = _ik_all_rows(target, q, count, flags)
+    singular = np.zeros(1, dtype=np.int64)
+    status = _ik_all_rows(target, q, count, flags, singular)
     return status
 
 
@@ -7151,10 +7154,12 @@ def _ik_all_lanes(_c, target):
     _status1 = _fi(0)
     _alive2 = _fb(True)
     status = _fi(0)
+    singular = [_fi(0)] * 1
     _alive4 = _fb(True)
     _ik_all_rows3_raw = [_fr(0.0)] * 48
     _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows3_cand = [_fr(0.0)] * 6
+    singular[0] = _fi(0)
     # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
@@ -7186,6 +7191,7 @@ def _ik_all_lanes(_c, target):
         _c7 = _ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
         _m8 = _alive4 & _c7
         _ik_all_rows3_exact = np.where(_m8, 1, _ik_all_rows3_exact)
+        singular[0] = np.where(_alive4, np.where(_ik_all_rows3_raw_flags[_ik_all_rows3_i].astype(np.int64) == IK_FLAG_SINGULAR, 1, singular[0]), singular[0])
     _ik_all_rows3_kept = _fi(0)
     _ik_all_rows3_flag = _fi(0)
     _ik_all_rows3_dup = _fi(0)
@@ -7456,7 +7462,8 @@ def _ik_nearest(q_ref, target, q):
     # q_ref not finite: IK_INVALID, q NaN
     if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]):
         return IK_INVALID
-    status = _ik_all_rows(target, rows, count, flags)
+    singular = np.zeros(1, dtype=np.int64)
+    status = _ik_all_rows(target, rows, count, flags, singular)
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
             break
@@ -7516,10 +7523,7 @@ def _ik_nearest(q_ref, target, q):
     M = np.zeros(24, dtype=DTYPE)
     mflags = np.zeros(4, dtype=DTYPE)
     m_ok = 0
-    m_singular = 0
-    for k in range(0, IK_MAX_SOLUTIONS):
-        m_singular = 1 if flags[k] >= IK_FLAG_SINGULAR else m_singular
-    if m_singular > 0:
+    if singular[0] > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
         _ik_continuum_members_core(q_ref, target, M, mflags)
         for m in range(0, 4):
@@ -7574,7 +7578,8 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[5] = y
                 dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5])
-                if m_ok > 0 and dist < best_d:
+                if m_ok > 0 and (best < 0 or dist < best_d):
+                    best = 8
                     best_d = dist
                     q[0] = near[0]
                     q[1] = near[1]
@@ -7582,6 +7587,7 @@ def _ik_nearest(q_ref, target, q):
                     q[3] = near[3]
                     q[4] = near[4]
                     q[5] = near[5]
+        status = IK_OK if best >= 0 and status == IK_OUT_OF_LIMITS else status
     return status
 
 
@@ -7597,6 +7603,9 @@ def ik_nearest(q_ref, target):
     within the joint limits nearest q_ref[j], then the row with the
     least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
     (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
+    An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+    at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
+    limits turns IK_OUT_OF_LIMITS into IK_OK.
 
     q_ref: array of shape (6,), finite: the configuration to be near (rad or m).
     target: array of shape (4, 4), finite: tool pose T (4 x 4, row-major; the last row is not read).
@@ -7659,10 +7668,12 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _m4 = _c3
     _status1 = np.where(_m4, IK_INVALID, _status1)
     _alive2 = _alive2 & (~_m4)
+    singular = [_fi(0)] * 1
     _alive6 = _alive2
     _ik_all_rows5_raw = [_fr(0.0)] * 48
     _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows5_cand = [_fr(0.0)] * 6
+    singular[0] = np.where(_alive2, 0, singular[0])
     # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
@@ -7694,6 +7705,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
         _c9 = _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
         _m10 = _alive6 & _c9
         _ik_all_rows5_exact = np.where(_m10, 1, _ik_all_rows5_exact)
+        singular[0] = np.where(_alive6, np.where(_ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) == IK_FLAG_SINGULAR, 1, singular[0]), singular[0])
     _ik_all_rows5_kept = _fi(0)
     _ik_all_rows5_flag = _fi(0)
     _ik_all_rows5_dup = _fi(0)
@@ -7985,10 +7997,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     M = [_fr(0.0)] * 24
     mflags = [_fr(0.0)] * 4
     m_ok = _fi(0)
-    m_singular = _fi(0)
-    for k in range(0, 8):
-        m_singular = np.where(_alive2, np.where(flags[k] >= IK_FLAG_SINGULAR, 1, m_singular), m_singular)
-    _c131 = m_singular > 0
+    _c131 = singular[0] > 0
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
@@ -8048,8 +8057,9 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[5] = np.where(_m134, y, near[5])
             dist = np.where(_m134, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
-            _c135 = (m_ok > 0) & (dist < best_d)
+            _c135 = (m_ok > 0) & ((best < 0) | (dist < best_d))
             _m136 = _m134 & _c135
+            best = np.where(_m136, 8, best)
             best_d = np.where(_m136, dist, best_d)
             q[0] = np.where(_m136, near[0], q[0])
             q[1] = np.where(_m136, near[1], q[1])
@@ -8057,6 +8067,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             q[3] = np.where(_m136, near[3], q[3])
             q[4] = np.where(_m136, near[4], q[4])
             q[5] = np.where(_m136, near[5], q[5])
+        status = np.where(_m132, np.where((best >= 0) & (status == IK_OUT_OF_LIMITS), IK_OK, status), status)
     _status1 = np.where(_alive2, status, _status1)
     _alive2 = _alive2 & (~_alive2)
     return (q, ), _status1
@@ -8107,7 +8118,8 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     w[3] = weights[3]/w_max
     w[4] = weights[4]/w_max
     w[5] = weights[5]/w_max
-    status = _ik_all_rows(target, rows, count, flags)
+    singular = np.zeros(1, dtype=np.int64)
+    status = _ik_all_rows(target, rows, count, flags, singular)
     for i in range(0, IK_MAX_SOLUTIONS):
         if i >= count[0]:
             break
@@ -8167,10 +8179,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     M = np.zeros(24, dtype=DTYPE)
     mflags = np.zeros(4, dtype=DTYPE)
     m_ok = 0
-    m_singular = 0
-    for k in range(0, IK_MAX_SOLUTIONS):
-        m_singular = 1 if flags[k] >= IK_FLAG_SINGULAR else m_singular
-    if m_singular > 0:
+    if singular[0] > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
         _ik_continuum_members_core(q_ref, target, M, mflags)
         for m in range(0, 4):
@@ -8225,7 +8234,8 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[5] = y
                 dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
-                if m_ok > 0 and dist < best_d:
+                if m_ok > 0 and (best < 0 or dist < best_d):
+                    best = 8
                     best_d = dist
                     q[0] = near[0]
                     q[1] = near[1]
@@ -8233,6 +8243,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                     q[3] = near[3]
                     q[4] = near[4]
                     q[5] = near[5]
+        status = IK_OK if best >= 0 and status == IK_OUT_OF_LIMITS else status
     return status
 
 
@@ -8248,6 +8259,9 @@ def ik_nearest_weighted(q_ref, weights, target):
     within the joint limits nearest q_ref[j], then the row with the
     least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
     (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+    An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+    at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
+    limits turns IK_OUT_OF_LIMITS into IK_OK.
 
     q_ref: array of shape (6,), finite: the configuration to be near (rad or m).
     weights: array of shape (6,), finite and > 0: the metric's weight of each joint (finite, > 0): sum_j weights[j] (q[j] - q_ref[j])^2.
@@ -8320,10 +8334,12 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     w[3] = np.where(_alive2, weights[3]/w_max, w[3])
     w[4] = np.where(_alive2, weights[4]/w_max, w[4])
     w[5] = np.where(_alive2, weights[5]/w_max, w[5])
+    singular = [_fi(0)] * 1
     _alive6 = _alive2
     _ik_all_rows5_raw = [_fr(0.0)] * 48
     _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows5_cand = [_fr(0.0)] * 6
+    singular[0] = np.where(_alive2, 0, singular[0])
     # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
@@ -8355,6 +8371,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
         _c9 = _ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) % 2 != IK_FLAG_LEAST_SQUARES
         _m10 = _alive6 & _c9
         _ik_all_rows5_exact = np.where(_m10, 1, _ik_all_rows5_exact)
+        singular[0] = np.where(_alive6, np.where(_ik_all_rows5_raw_flags[_ik_all_rows5_i].astype(np.int64) == IK_FLAG_SINGULAR, 1, singular[0]), singular[0])
     _ik_all_rows5_kept = _fi(0)
     _ik_all_rows5_flag = _fi(0)
     _ik_all_rows5_dup = _fi(0)
@@ -8646,10 +8663,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     M = [_fr(0.0)] * 24
     mflags = [_fr(0.0)] * 4
     m_ok = _fi(0)
-    m_singular = _fi(0)
-    for k in range(0, 8):
-        m_singular = np.where(_alive2, np.where(flags[k] >= IK_FLAG_SINGULAR, 1, m_singular), m_singular)
-    _c131 = m_singular > 0
+    _c131 = singular[0] > 0
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
@@ -8709,8 +8723,9 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[5] = np.where(_m134, y, near[5])
             dist = np.where(_m134, ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
-            _c135 = (m_ok > 0) & (dist < best_d)
+            _c135 = (m_ok > 0) & ((best < 0) | (dist < best_d))
             _m136 = _m134 & _c135
+            best = np.where(_m136, 8, best)
             best_d = np.where(_m136, dist, best_d)
             q[0] = np.where(_m136, near[0], q[0])
             q[1] = np.where(_m136, near[1], q[1])
@@ -8718,6 +8733,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             q[3] = np.where(_m136, near[3], q[3])
             q[4] = np.where(_m136, near[4], q[4])
             q[5] = np.where(_m136, near[5], q[5])
+        status = np.where(_m132, np.where((best >= 0) & (status == IK_OUT_OF_LIMITS), IK_OK, status), status)
     _status1 = np.where(_alive2, status, _status1)
     _alive2 = _alive2 & (~_alive2)
     return (q, ), _status1

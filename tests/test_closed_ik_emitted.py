@@ -342,6 +342,38 @@ def test_a_ur_aligned_wrist_nearest_is_the_member_at_the_references_phi():
                 np.testing.assert_allclose(got, expected, atol=1e-9)
 
 
+def test_a_ur_aligned_wrist_with_narrow_limits_takes_a_member_where_the_representative_is_dropped():
+    """UR5 with joint 6 limited to [-1.5, 1.5]: at the aligned wrist ik_all's one representative per root of q1 often
+    lies outside the limits and is dropped (ik_all: out_of_limits, or only other branches), and ik_nearest(q,
+    pose(q)) computed no member, since no returned row was flagged singular: 871 of 2000 such configurations came
+    back another solution up to 1.6 rad away or NaN (a new user's probe). The members are now weighed wherever a raw
+    candidate is an exact representative: ik_nearest returns q, status ok, in C and NumPy, as the spec does."""
+    import dataclasses
+
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+
+    chain, _ = load_arm("ur5")
+    joints = [dataclasses.replace(j, lower=-1.5, upper=1.5) if k == 5 else j for k, j in enumerate(chain.joints)]
+    b = Built(dataclasses.replace(chain, joints=tuple(joints)), None)
+    spec = ClosedFormIK(b.chain)
+    rng = np.random.default_rng(19)
+    q = inner_configurations(b, 40, rng)
+    q[:, 4] = np.where(np.arange(40) % 2, 0.0, np.pi)
+    T = targets_of(b.chain, q)
+    dropped = 0
+    for i in range(len(q)):
+        rows = b.c.ik_all(T[i])
+        dropped += rows.status == "out_of_limits" or np.min(wrapped_distance(np.asarray(rows.q)[: rows.count], q[i],
+                                                                              b.revolute), initial=np.inf) > 1e-3
+        want, _ = spec.nearest(q[i], T[i])
+        np.testing.assert_allclose(want, q[i], atol=1e-7)
+        for impl in (b.c, b.py):
+            r = impl.ik_nearest(q[i], T[i])
+            assert r.status == "ok"
+            np.testing.assert_allclose(r.q, q[i], atol=1e-7)
+    assert dropped >= 10
+
+
 def test_a_double_root_gives_one_row():
     """At an elbow double root (det J = 0 in q2) the two roots part by about the square root of rounding: C and
     NumPy returned two pairs of rows 3e-8 rad apart, all flagged singular, where JAX's rounding gave one row each (a

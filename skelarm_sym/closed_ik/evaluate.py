@@ -17,7 +17,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .derive import ClosedIK, derive_ik_all
 from .numpy_source import Unsupported, numpy_function
-from .postprocess import IKAll, nearest, postprocess
+from .postprocess import STATUS, IKAll, nearest, postprocess
 
 
 def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
@@ -116,7 +116,12 @@ class ClosedFormIK:
 
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
         """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
-        members = None if self.members is None else self.members(q_ref, target, lock)
+        members = None
+        if self.members is not None:  # where a raw candidate is exact and flagged singular (a representative)
+            result = self.all(target, lock)
+            if result.status != STATUS["invalid"]:
+                _, flags = self.candidates(np.asarray(target, dtype=float).reshape(16), lock)
+                members = self.members(q_ref, target, lock) if np.any(flags == 2) else None
         return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights,
                        continuum=self.ik.continuum, members=members)
 

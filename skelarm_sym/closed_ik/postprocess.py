@@ -254,13 +254,14 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
     nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
     (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
-    weights (default 1). ``members``: ``(M (R, N), flags (R))``, more rows to choose from where a returned row is
-    flagged singular (a UR's aligned-wrist continuum at the reference's own ``phi``, :attr:`~.derive.ClosedIK.members`;
-    its representative is flagged singular): those with flag bit 1 clear, each
+    weights (default 1). ``members``: ``(M (R, N), flags (R))``, more rows to choose from (a UR's aligned-wrist
+    continuum at the reference's own ``phi``, :attr:`~.derive.ClosedIK.members`; the caller passes them where a raw
+    candidate is exact and flagged singular, as a representative is, even when the limits dropped its row): those
+    with flag bit 1 clear, each
     revolute joint moved to its copy within limits nearest ``q_ref``, within the limits (``limit_tol``) as rows are;
-    a member nearer than every row is returned with ``row`` the first row (the continuum's representative's branch
-    is not known here)."""
-    if result.count == 0:
+    a member nearer than every row is returned with ``row`` -1 (the continuum's representative's branch is not
+    known here), also where ``result`` has no rows."""
+    if result.count == 0 and members is None:
         return None, -1
     q_ref = np.asarray(q_ref, float)
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
@@ -282,7 +283,7 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
         d = float(np.sum(w * (q - q_ref) ** 2))
         if d < best_d:
             best, best_d, best_i = q, d, i
-    if members is not None and np.any(result.flags[: result.count] & 2):  # a split representative is flagged singular
+    if members is not None:
         M, mflags = np.asarray(members[0], float), np.asarray(members[1], int)
         for m in range(M.shape[0]):
             if mflags[m] & 1:
@@ -300,5 +301,5 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
                 continue
             d = float(np.sum(w * (q - q_ref) ** 2))
             if d < best_d:
-                best, best_d = q, d
+                best, best_d, best_i = q, d, -1
     return best, best_i

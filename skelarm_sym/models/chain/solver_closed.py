@@ -178,15 +178,20 @@ def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var,
 
 
 def rows_helper(arm: _Arm) -> Function:
-    """``ik_all_rows(target, [lock], q, count, flags)``: the post-processing (see the module docstring)."""
+    """``ik_all_rows(target, [lock], q, count, flags[, singular])``: the post-processing (see the module docstring);
+    ``singular`` (arms with continuum members: UR): 1 when a raw candidate is exact and flagged singular (a
+    representative, which the limits may have dropped), else 0."""
     S, N = arm.s, arm.n
     b = Body()
     data_args, data = _inputs(arm)
     q, count, flags = Array("q", S * N), Array("count", 1, Type.INT), Array("flags", S, Type.INT)
+    raw_singular = Array("singular", 1, Type.INT) if arm.members else None
     raw, raw_flags, cand = b.array("raw", S * N), b.array("raw_flags", S), b.array("cand", N)
     one, zero = _int(1), _int(0)
 
     rows = NamedConst("IK_MAX_SOLUTIONS", Type.INT)
+    if raw_singular is not None:
+        b.set(raw_singular[0], zero)
     _refuse_invalid(b, arm, data, q, count, flags)
 
     b.comment("the candidates, then 2. exact rows first (flag bit 1 clear), else every row, unreachable")
@@ -196,6 +201,9 @@ def rows_helper(arm: _Arm) -> Function:
     with b.for_("i", 0, rows) as i:
         with b.if_(ne(Bits("%", Cast(Type.INT, raw_flags[i]), _int(2)), least_squares)):
             b.set(exact, one)
+        if raw_singular is not None:
+            b.set(raw_singular[0], select(eq(Cast(Type.INT, raw_flags[i]), NamedConst("IK_FLAG_SINGULAR", Type.INT)), one,
+                                          raw_singular[0]))
 
     kept = b.var("kept", zero, Type.INT)
     flag = b.var("flag", zero, Type.INT)
@@ -259,7 +267,8 @@ def rows_helper(arm: _Arm) -> Function:
     b.comment("7. status")
     b.return_(select(eq(exact, 0), _status("IK_UNREACHABLE"), select(eq(kept, 0), _status("IK_OUT_OF_LIMITS"), _status("IK_OK"))))
     arguments = (*data_args, Argument("q", Role.OUTPUT, (S, N)), Argument("count", Role.OUTPUT, (1,), Type.INT),
-                 Argument("flags", Role.OUTPUT, (S,), Type.INT))
+                 Argument("flags", Role.OUTPUT, (S,), Type.INT),
+                 *([Argument("singular", Role.OUTPUT, (1,), Type.INT)] if raw_singular is not None else []))
     return Function("ik_all_rows", "every closed-form solution within the limits, post-processed", arguments,
                     b.statements, kind="helper", returns=Type.INT, statuses=STATUSES)
 
@@ -355,7 +364,9 @@ def all_solver(arm: _Arm) -> Function:
     b = Body()
     data_args, data = _inputs(arm)
     status = b.var("status", _int(0), Type.INT)
-    b.call("ik_all_rows", *data, Array("q", S * N), Array("count", 1, Type.INT), Array("flags", S, Type.INT), result=status)
+    extra = [b.array("singular", 1, Type.INT)] if arm.members else []
+    b.call("ik_all_rows", *data, Array("q", S * N), Array("count", 1, Type.INT), Array("flags", S, Type.INT), *extra,
+           result=status)
     b.return_(status)
     arguments = (
         *data_args,
@@ -405,9 +416,10 @@ def _nearest_copy(b: Body, arm: _Arm, j: int, x, ref, y) -> None:
         b.set(y, select(y < lo, lo, y))
 
 
-def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, flags: Array, best_d, dist,
-                   x, y) -> None:
-    """Where ik_all returned a row flagged singular (rows past count are flagged -1): the members of the aligned wrist's continuum at q_ref's own phi
+def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, raw_singular: Array, best,
+                   best_d, dist, x, y, status) -> None:
+    """Where a raw candidate is exact and flagged singular (``raw_singular``; its row may have been dropped at the
+    limits, even every row: IK_OUT_OF_LIMITS becomes IK_OK when a member is taken): the members of the aligned wrist's continuum at q_ref's own phi
     (``ik_continuum_members``; those with flag bit 1 clear), each revolute joint at its copy within the limits nearest
     q_ref (none there: not a member within the limits), a prismatic joint within the limits; one nearer than the
     chosen row replaces it (``postprocess.nearest``'s ``members``)."""
@@ -415,10 +427,7 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
     M, mflags = b.array("M", R * N), b.array("mflags", R)
     ok = b.var("m_ok", _int(0), Type.INT)
     tol = NamedConst("IK_LIMIT_TOL")
-    singular = b.var("m_singular", _int(0), Type.INT)
-    with b.for_("k", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as k:
-        b.set(singular, select(flags[k] >= NamedConst("IK_FLAG_SINGULAR", Type.INT), _int(1), singular))
-    with b.if_(singular > 0):  # a split representative is flagged singular: no singular row, no member
+    with b.if_(raw_singular[0] > 0):  # a split representative is flagged singular: none, no member
         b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row")
         b.call("ik_continuum_members", q_ref, *data, M, mflags)
         with b.for_("m", 0, _int(R)) as m:
@@ -446,10 +455,12 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
                     square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
                     return weights[j] * square if weights is not None else square
                 b.set(dist, sum((term(j) for j in range(1, N)), term(0)))
-                with b.if_((ok > 0) & (dist < best_d)):
+                with b.if_((ok > 0) & ((best < 0) | (dist < best_d))):
+                    b.set(best, _int(arm.s))  # a member, no row
                     b.set(best_d, dist)
                     for j in range(N):
                         b.set(q[j], near[j])
+        b.set(status, select((best >= 0) & eq(status, _status("IK_OUT_OF_LIMITS")), _status("IK_OK"), status))
 
 
 def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
@@ -488,7 +499,8 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         largest = b.let("w_max", functools.reduce(fmax, [given[j] for j in range(N)]))
         for j in range(N):
             b.set(weights[j], given[j] / largest)
-    b.call("ik_all_rows", *data, rows, count, flags, result=status)
+    raw_singular = b.array("singular", 1, Type.INT) if arm.members else None
+    b.call("ik_all_rows", *data, rows, count, flags, *([raw_singular] if arm.members else []), result=status)
     with b.for_("i", 0, NamedConst("IK_MAX_SOLUTIONS", Type.INT)) as i:
         # a constant bound and a break, not a bound of count[0]: the row index is then the same for every problem of a
         # batch, and array backends read rows[...] directly instead of through a chain of selects per lane
@@ -521,7 +533,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             for j in range(N):
                 b.set(q[j], near[j])
     if arm.members:
-        _nearer_member(b, arm, data, q_ref, weights, q, near, flags, best_d, dist, x, y)
+        _nearer_member(b, arm, data, q_ref, weights, q, near, raw_singular, best, best_d, dist, x, y, status)
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
@@ -540,6 +552,9 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite"
         + (" or a weight not finite and > 0)." if weighted else ")."),
         *_doc_continuum(arm, "the member within the limits nearest q_ref" + (" in the weighted metric" if weighted else "")),
+        *(("An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members",
+           "at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the",
+           "limits turns IK_OUT_OF_LIMITS into IK_OK.") if arm.members else ()),
     )
     summary = ("the closed-form IK solution nearest a configuration, in a weighted metric" if weighted
                else "the closed-form IK solution nearest a configuration")
