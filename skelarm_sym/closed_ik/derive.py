@@ -198,12 +198,11 @@ def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
 
     rows, flags, principal = _rows(chain, geom, family, steps, inputs, lock_idx, branches)
     member_rows = member_flags = None
-    if members:
-        member_rows, member_flags, _ = _rows(chain, geom, family, steps, inputs, lock_idx,
-                                             [b for branches_i, _ in members for b in branches_i])
-        exact = [sel for branches_i, sel in members for _ in branches_i]
-        member_flags = [FLAG_LS * any_of(b.ls, 1 - e) + FLAG_SINGULAR for b, e in
-                        zip([b for branches_i, _ in members for b in branches_i], exact)]
+    if members:  # flagged least squares also where the root's wrist is not the continuum's (no split)
+        member_branches = [b for group, _ in members for b in group]
+        exact = [split for group, split in members for _ in group]
+        member_rows, _, _ = _rows(chain, geom, family, steps, inputs, lock_idx, member_branches)
+        member_flags = [FLAG_LS * any_of(b.ls, 1 - e) + FLAG_SINGULAR for b, e in zip(member_branches, exact)]
     limits = chain.limits()
     return ClosedIK(
         chain, family, inputs, tuple(steps.steps), sp.Matrix(rows), sp.Matrix(flags),

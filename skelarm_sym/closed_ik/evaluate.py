@@ -77,16 +77,11 @@ def lambdify_members(ik: ClosedIK) -> Callable[..., tuple[np.ndarray, np.ndarray
     None where the IK has none."""
     if ik.members is None:
         return None
-    args = list(ik.inputs["q_ref"]) + list(ik.inputs["target"]) + list(ik.inputs.get("lock", ()))
-    outs = list(ik.members) + list(ik.member_flags)
-    fn = _steps_function(args, _needed_steps(list(ik.steps), outs), outs)
-    R, N = ik.members.shape
+    batched = _members_evaluator(ik.inputs, ik.steps, ik.members, ik.member_flags)
 
     def evaluate(q_ref, target, lock=None):
-        extra = [float(lock)] if "lock" in ik.inputs else []
-        with np.errstate(all="ignore"):
-            values = [float(v) for v in fn(*np.asarray(q_ref, float), *np.asarray(target, float).reshape(16), *extra)]
-        return np.array(values[: R * N]).reshape(R, N), np.array(values[R * N:]).astype(int)
+        M, flags = batched(q_ref, target, lock)
+        return M[0], flags[0].astype(int)
 
     return evaluate
 
@@ -116,14 +111,14 @@ class ClosedFormIK:
 
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
         """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
+        result = self.all(target, lock)
         members = None
-        if self.members is not None:  # where a raw candidate is exact and flagged singular (a representative)
-            result = self.all(target, lock)
-            if result.status != STATUS["invalid"]:
-                _, flags = self.candidates(np.asarray(target, dtype=float).reshape(16), lock)
-                members = self.members(q_ref, target, lock) if np.any(flags == 2) else None
-        return nearest(self.all(target, lock), q_ref, self.lower, self.upper, self.revolute, weights,
-                       continuum=self.ik.continuum, members=members)
+        if self.members is not None and result.status != STATUS["invalid"]:
+            _, flags = self.candidates(np.asarray(target, dtype=float).reshape(16), lock)
+            if np.any(flags == 2):  # a raw candidate exact and flagged singular: a representative
+                members = self.members(q_ref, target, lock)
+        return nearest(result, q_ref, self.lower, self.upper, self.revolute, weights, continuum=self.ik.continuum,
+                       members=members)
 
 
 def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
@@ -152,18 +147,22 @@ def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarra
 
 
 def lambdify_members_of(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
-    """``f(q_ref (m, N), target (m, 16)) -> (M (m, R, N), mflags (m, R))`` from a derivation that has
+    """``f(q_ref (m, N), target (m, 16), lock=None) -> (M (m, R, N), mflags (m, R))`` from a derivation that has
     ``ik_continuum_members`` (:func:`~.derive.with_candidates`): its SymPy steps in double, the check's expectation
     for the emitted function."""
-    M, mflags = derivation.compact["M"], derivation.compact["mflags"]
+    return _members_evaluator(derivation.inputs, derivation.steps, derivation.compact["M"], derivation.compact["mflags"])
+
+
+def _members_evaluator(inputs: dict, steps, M: sp.Matrix, mflags: sp.Matrix) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+    """The continuum members' steps in double, for a batch: ``f(q_ref (m, N), target (m, 16), lock=None)``."""
     R, N = M.shape
     outs = list(M) + list(mflags)
-    args = list(derivation.inputs["q_ref"]) + list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
-    fn = _steps_function(args, _needed_steps(list(derivation.steps), outs), outs)
+    args = list(inputs["q_ref"]) + list(inputs["target"]) + list(inputs.get("lock", ()))
+    fn = _steps_function(args, _needed_steps(list(steps), outs), outs)
 
     def evaluate(q_ref, target, lock=None):
         q_ref, t = np.asarray(q_ref, dtype=float).reshape(-1, N), np.asarray(target, dtype=float).reshape(-1, 16)
-        extra = [np.full(len(t), float(lock))] if "lock" in derivation.inputs else []
+        extra = [np.full(len(t), float(lock))] if "lock" in inputs else []
         with np.errstate(all="ignore"):
             values = fn(*[q_ref[:, j] for j in range(N)], *[t[:, i] for i in range(16)], *extra)
         values = [np.broadcast_to(np.asarray(v, dtype=float), (len(t),)) for v in values]

@@ -167,6 +167,11 @@ def _condition(numeric, rows: np.ndarray, free: np.ndarray, length: float) -> fl
     return float(np.max(s[..., 0] / np.maximum(s[..., -1], 1e-300)))
 
 
+def _drawn(chain, rng, m: int) -> np.ndarray:
+    """``m`` random configurations (m, N): revolute joints in [-pi, pi], prismatic ones in [-0.5, 0.5] m."""
+    return np.where(revolute_mask(chain), rng.uniform(-np.pi, np.pi, (m, chain.n)), rng.uniform(-0.5, 0.5, (m, chain.n)))
+
+
 def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
     """``ik_continuum_members`` on poses of random configurations with the wrist aligned (q5 = 0 for the first half,
     pi for the rest; in double: a float target is aligned only to float's rounding, where the wrist's split test and
@@ -180,8 +185,7 @@ def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scena
     dtype = np.float64 if precision == "double" else np.float32
     rng = np.random.default_rng(seed + 4)
     m = max(1, min(cases, CANDIDATE_CASES))
-    rev = revolute_mask(chain)
-    q = np.where(rev, rng.uniform(-np.pi, np.pi, (m, n)), rng.uniform(-0.5, 0.5, (m, n)))
+    q = _drawn(chain, rng, m)
     if precision == "double":
         q[:, 4] = np.where(np.arange(m) < (m + 1) // 2, 0.0, np.pi)
     q = np.asarray(q, dtype=dtype).astype(np.float64)
@@ -207,8 +211,7 @@ def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Sc
     dtype = np.float64 if precision == "double" else np.float32
     rng = np.random.default_rng(seed + 3)
     m = max(1, min(cases, CANDIDATE_CASES))
-    rev = revolute_mask(chain)
-    q = np.where(rev, rng.uniform(-np.pi, np.pi, (m, n)), rng.uniform(-0.5, 0.5, (m, n)))
+    q = _drawn(chain, rng, m)
     lock = _lock_coordinate(chain)
     values: dict = {}
     lock_value = None

@@ -416,6 +416,14 @@ def _nearest_copy(b: Body, arm: _Arm, j: int, x, ref, y) -> None:
         b.set(y, select(y < lo, lo, y))
 
 
+def _distance(near: Array, q_ref: Array, weights, n: int):
+    """``sum_j w_j (near_j - q_ref_j)^2`` (``weights`` None: every ``w_j`` 1), summed from joint 0 on."""
+    def term(j):
+        square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
+        return weights[j] * square if weights is not None else square
+    return sum((term(j) for j in range(1, n)), term(0))
+
+
 def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, raw_singular: Array, best,
                    best_d, dist, x, y, status) -> None:
     """Where a raw candidate is exact and flagged singular (``raw_singular``; its row may have been dropped at the
@@ -450,11 +458,7 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
                     if lo is not None:
                         clipped = select(x < lo, lo, clipped)
                     b.set(near[j], clipped)
-
-                def term(j):
-                    square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
-                    return weights[j] * square if weights is not None else square
-                b.set(dist, sum((term(j) for j in range(1, N)), term(0)))
+                b.set(dist, _distance(near, q_ref, weights, N))
                 with b.if_((ok > 0) & ((best < 0) | (dist < best_d))):
                     b.set(best, _int(arm.s))  # a member, no row
                     b.set(best_d, dist)
@@ -522,11 +526,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
                       "nearest q_ref" + (" (weighted)" if weighted else ""))
             continuum.move(b, rows[_at(N, i, w)], flags[i] >= NamedConst("IK_FLAG_SINGULAR", Type.INT), rows[_at(N, i, a)],
                            rows[_at(N, i, c)], q_ref[a], q_ref[c], near[a], near[c])
-
-        def term(j):
-            square = (near[j] - q_ref[j]) * (near[j] - q_ref[j])
-            return weights[j] * square if weighted else square
-        b.set(dist, sum((term(j) for j in range(1, N)), term(0)))
+        b.set(dist, _distance(near, q_ref, weights, N))
         with b.if_((best < 0) | (dist < best_d)):
             b.set(best, i)
             b.set(best_d, dist)
