@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x28a10510UL
+#define UR5_STAMP 0x47c3d6e9UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -92,6 +92,9 @@ extern "C" {
 
 /* ik_all returns rows both flagged singular and closer than this once (a double root's two roots) */
 #define UR5_IK_DUP_TOL_SINGULAR 1e-06
+
+/* UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size) */
+#define UR5_IK_SPLIT_TOL 1e-12
 
 /* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */

@@ -32,7 +32,7 @@ from ..models.chain.target_rotation import ORTHO_CONSTANT
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
-from .families import Problem, spherical_wrist, three_parallel
+from .families import SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
 from .subproblems import Steps, any_of
 
@@ -288,6 +288,11 @@ MEMBERS = FunctionSpec(
 )
 """The straight-line function of :attr:`ClosedIK.members` (only where it has some): ``ik_nearest``'s more rows."""
 
+SPLIT_CONSTANT = Constant(SPLIT_SYMBOL, {"double": SPLIT_TOL, "float": SPLIT_TOL_FLOAT},
+                          "UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of "
+                          "q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size)")
+"""The constant of a three-parallel arm's candidates (emitted where they use it)."""
+
 EMITTED_CONSTANTS = (
     Constant(sp.Symbol("IK_MAX_SOLUTIONS"), {"double": MAX_SOLUTIONS, "float": MAX_SOLUTIONS},
              "rows of q in ik_all: the most solutions of this arm's closed-form family"),
@@ -356,7 +361,8 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {}),
                  **({"q_ref": "finite"} if members else {})},
-        constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ()),
+        constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ())
+        + ((SPLIT_CONSTANT,) if ik.family.name.startswith("three_parallel") else ()),
         notes=tuple(derivation.notes) + notes,
         _cache={},
     )

@@ -16,13 +16,16 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from .derive import ClosedIK, derive_ik_all
+from .families import SPLIT_SYMBOL, SPLIT_TOL
 from .numpy_source import Unsupported, numpy_function
 from .postprocess import STATUS, IKAll, nearest, postprocess
 
 
 def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
     """``f(*args) -> outs`` through the steps: :func:`~.numpy_source.numpy_function`, or ``sympy.lambdify`` where
-    the steps hold a node that has no rule there."""
+    the steps hold a node that has no rule there. The module constants in the steps take their double values
+    (``IK_SPLIT_TOL``: :data:`~.families.SPLIT_TOL`)."""
+    steps = [(s, e.xreplace({SPLIT_SYMBOL: SPLIT_TOL}) if e.has(SPLIT_SYMBOL) else e) for s, e in steps]
     try:
         return numpy_function(args, steps, outs)
     except Unsupported:

@@ -58,6 +58,14 @@ SPLIT_TOL = 1e-12
 """UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
 (its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
 1e-16 over the sine in q6, stays within the reach of the 2R arm except at the workspace's edge)."""
+SPLIT_TOL_FLOAT = 1e-5
+"""The same in code emitted in float, whose rounding leaves an aligned wrist's sine at about 1e-7 to 1e-6: with the
+double tolerance the split was never taken there, q6 and phi came from rounding noise, and 23 of 500 reachable
+aligned UR5 targets came back unreachable (least-squares rows 0.14 of the reach off). The split's pose error, at
+most about 1e-5 of the arm's size, is within float's 3e-5."""
+SPLIT_SYMBOL = sp.Symbol("IK_SPLIT_TOL", positive=True)
+"""The split's tolerance in the steps: a module constant of the emitted code (:data:`SPLIT_TOL` in double,
+:data:`SPLIT_TOL_FLOAT` in float); the NumPy spec evaluates the steps with :data:`SPLIT_TOL`."""
 
 
 @dataclass(frozen=True)
@@ -275,7 +283,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
             # (q5 = 1e-16 from an exactly aligned target); above it the regular path is exact to rounding
             bb = cross(H[5], b)
             bb2, b2 = steps(f"bb{i}{j}", dot(bb, bb)), steps(f"b2{i}{j}", dot(b, b))  # named: cheap relational
-            sel = steps(f"split{i}{j}", indicator(bb2 <= SPLIT_TOL**2 * b2))
+            sel = steps(f"split{i}{j}", indicator(bb2 <= SPLIT_SYMBOL**2 * b2))
             pick = sel > 0
             x5 = steps.vec(f"x5_{i}{j}", _rot(q5, H[4], x, True))
             z = _rot(q1, H[0], steps.vec(f"Rx5_{i}{j}", matvec(RG, x5)), True)
