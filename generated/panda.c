@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x6d9e1591UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xd990d3fdUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -5997,7 +5997,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
             return PANDA_IK_INVALID;
         }
     }
-    for (int k = 0; k < 16; ++k) {
+    for (int k = 0; k < 12; ++k) {
         if (!PANDA_FINITE(target[k])) {
             return PANDA_IK_INVALID;
         }

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x6d9e1591
+STAMP = 0xd990d3fd
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -4676,7 +4676,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     for k in range(0, 7):
         if not np.isfinite(q0[k]):
             return IK_INVALID
-    for k in range(0, 16):
+    for k in range(0, 12):
         if not np.isfinite(target[k]):
             return IK_INVALID
     m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
@@ -4882,7 +4882,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
 
     q0: array of shape (7,), finite: start pose (rad or m).
-    target: array of shape (4, 4), finite: tool pose (4 x 4, row-major).
+    target: array of shape (4, 4), finite: tool pose (4 x 4, row-major; the last row is not read).
     lambda_: a number, finite and >= 0: damping floor while the error is large (>= 0) (default 0.0).
     tol: a number, finite and > 0: stop when the position (m) and rotation (rad) errors are <= tol (default 1e-10).
     max_iter: a number: at most this many steps over all attempts (default 100).
@@ -5000,7 +5000,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _alive2 = _alive2 & (~_m7)
         _run5 = _run5 & (~_m7)
     _run8 = _alive2
-    for k in range(0, 16):
+    for k in range(0, 12):
         _c9 = ~np.isfinite(target[k])
         _m10 = _run8 & _c9
         _status1 = np.where(_m10, IK_INVALID, _status1)

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x47c3d6e9UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x67c79f77UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6488,7 +6488,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
             return UR5_IK_INVALID;
         }
     }
-    for (int k = 0; k < 16; ++k) {
+    for (int k = 0; k < 12; ++k) {
         if (!UR5_FINITE(target[k])) {
             return UR5_IK_INVALID;
         }

@@ -241,6 +241,9 @@ def test_c_status_codes_and_null_out_pointers(robot):
     assert np.array_equal(q, q0)  # q = q0, nothing computed
     assert np.all(np.isinf(error))  # not 0: nothing was reached
     assert solve(ptr(q0), ptr(target), -1.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]
+    last_row = target.copy()
+    last_row[12:] = np.nan  # not read, as by ik_all (it was refused by ik_solve alone: a new user's probe)
+    assert solve(ptr(q0), ptr(last_row), 0.0, 1e-10, 100, ptr(q), None, None) == STATUS["converged"]
     for T in not_rotations(target.reshape(4, 4)):  # the C function itself refuses it (no Python checks in front)
         q[:] = 7.0
         assert solve(ptr(q0), ptr(np.ascontiguousarray(T.reshape(-1))), 0.0, 1e-10, 100, ptr(q), None, None) == STATUS["invalid"]

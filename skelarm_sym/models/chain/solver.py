@@ -352,8 +352,9 @@ class _PoseIK:
         lam, tol = self.lam, self.tol
         with b.if_(~Call1("isfinite", lam) | (lam < 0.0) | ~Call1("isfinite", tol) | ~(tol > 0.0) | (self.max_iter < 0)):
             b.return_(_status("IK_INVALID"))
-        for name, size in (("q0", n), ("target", self.tsize)) + ((("params", self.params),) if self.params else ()):
-            with b.for_("k", 0, size) as k:
+        read = 12 if self.rows == 6 else self.tsize  # a pose target's last row is not read
+        for name, size, tested in (("q0", n, n), ("target", self.tsize, read)) + ((("params", self.params, self.params),) if self.params else ()):
+            with b.for_("k", 0, tested) as k:
                 with b.if_(~Call1("isfinite", Array(name, size)[k])):
                     b.return_(_status("IK_INVALID"))
         if self.rows == 6:
@@ -533,7 +534,7 @@ def _solver_arguments(rows: int, n: int, params: int, default_tol: float) -> tup
     return (
         Argument("q0", Role.STATE, (n,), domain="finite", batched=False, doc="start pose (rad or m)"),
         Argument("target", Role.DATA, tsize_shape, domain="finite", batched=False,
-                 doc="tool pose (4 x 4, row-major)" if rows == 6 else "tool origin (3)"),
+                 doc="tool pose (4 x 4, row-major; the last row is not read)" if rows == 6 else "tool origin (3)"),
         *([Argument("params", Role.PARAMETER, (params,), domain="finite", batched=False, doc="named parameters")] if params else []),
         Argument("lambda", Role.SCALAR, (), domain="nonnegative", batched=False, default=Const(0.0),
                  doc="damping floor while the error is large (>= 0)"),
