@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x67c79f77UL
+#define UR5_STAMP 0xfcd59207UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -315,7 +315,7 @@ int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * count, flags and status may be NULL.
- * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 6 KB. */
+ * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 7 KB. */
 void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status);
 
 /* the closed-form IK solution nearest a configuration.

@@ -41,7 +41,7 @@ from typing import Sequence
 import sympy as sp
 
 from .classify import add, closest_point, cross, dot, sub, turn
-from .subproblems import (Angle, Steps, _select, any_of, choose_parts, indicator, sp1, sp1_parts, sp2, sp3, sp3_parts, sp4,
+from .subproblems import (Angle, Steps, _select, any_of, choose_parts, indicator, positive, sp1, sp1_parts, sp2, sp3, sp3_parts, sp4,
                           sp_line, unit_disc)
 
 
@@ -253,9 +253,16 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
         a = steps.vec(f"a{i}", tmatvec(RG, _rot(q1, H[0], H[1])))
         V = steps.vec(f"V{i}", add(_rot(q1, H[0], sub(W, P[0]), True), P[0]))
         u = steps.vec(f"u{i}", sub(V, P[1]))
-        m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * dot(u, H[1]) * dot(H[1], v))
-        # min(max(m, dmin2), dmax2) by selects (fmin and fmax are calls in C: see subproblems.positive)
-        dstar = steps(f"dstar{i}", _select((dmax2, m > dmax2), (dmin2, m < dmin2), (m, True)))
+        uh = steps(f"uh{i}", dot(u, H[1]))
+        m = steps(f"m{i}", _sq(u) + _sq(v) - 2 * uh * dot(H[1], v))
+        # joint 4's point over phi: distance^2 from p2 in [m - s, m + s]; the representative takes the middle of that
+        # range's overlap with the 2R arm's [dmin2, dmax2], away from both edges (their middle clamped onto the arm's
+        # range sat on its stretched or folded edge wherever they barely overlap, a double root that rounding,
+        # float's above all, left least squares); where they do not overlap, the arm's edge nearest m, least squares
+        s = steps(f"ms{i}", 2 * sp.sqrt(positive((_sq(u) - uh * uh) * (_sq(v) - dot(H[1], v) ** 2))))
+        lo = steps(f"mlo{i}", _select((m - s, m - s > dmin2), (dmin2, True)))
+        hi = steps(f"mhi{i}", _select((m + s, m + s < dmax2), (dmax2, True)))
+        dstar = steps(f"dstar{i}", _select((0.5 * (lo + hi), lo <= hi), (dmax2, m > dmax2), (dmin2, m < dmin2), (m, True)))
         firsts: tuple = ()
         for j, q5 in enumerate(sp4(steps, f"q5_{i}", H[1], H[5], H[4], dot(H[1], g),
                                    unit_disc(H[1], H[5], H[4], g))):
