@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xfcd59207UL
+#define UR5_STAMP 0xc6057d9eUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -95,6 +95,12 @@ extern "C" {
 
 /* UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size) */
 #define UR5_IK_SPLIT_TOL 1e-12
+
+/* a subproblem's discriminant below -this times its scale is least squares, within +-this a double root */
+#define UR5_IK_LS_TOL 1e-10
+
+/* a subproblem whose rho is at most this times its scale (a sine) is a continuum */
+#define UR5_IK_SING_TOL 1e-09
 
 /* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */

@@ -34,7 +34,7 @@ from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SING
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
-from .subproblems import Steps, any_of
+from .subproblems import LS_SYMBOL, LS_TOL, LS_TOL_FLOAT, SING_SYMBOL, SING_TOL, SING_TOL_FLOAT, Steps, any_of
 
 Step = tuple[sp.Symbol, sp.Expr]
 
@@ -292,6 +292,13 @@ SPLIT_CONSTANT = Constant(SPLIT_SYMBOL, {"double": SPLIT_TOL, "float": SPLIT_TOL
                           "UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of "
                           "q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size)")
 """The constant of a three-parallel arm's candidates (emitted where they use it)."""
+SUBPROBLEM_CONSTANTS = (
+    Constant(LS_SYMBOL, {"double": LS_TOL, "float": LS_TOL_FLOAT},
+             "a subproblem's discriminant below -this times its scale is least squares, within +-this a double root"),
+    Constant(SING_SYMBOL, {"double": SING_TOL, "float": SING_TOL_FLOAT},
+             "a subproblem whose rho is at most this times its scale (a sine) is a continuum"),
+)
+"""The subproblems' tolerances (emitted where the candidates use them)."""
 
 EMITTED_CONSTANTS = (
     Constant(sp.Symbol("IK_MAX_SOLUTIONS"), {"double": MAX_SOLUTIONS, "float": MAX_SOLUTIONS},
@@ -362,7 +369,7 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {}),
                  **({"q_ref": "finite"} if members else {})},
         constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ())
-        + ((SPLIT_CONSTANT,) if ik.family.name.startswith("three_parallel") else ()),
+        + ((SPLIT_CONSTANT,) if ik.family.name.startswith("three_parallel") else ()) + SUBPROBLEM_CONSTANTS,
         notes=tuple(derivation.notes) + notes,
         _cache={},
     )

@@ -17,6 +17,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .derive import ClosedIK, derive_ik_all
 from .families import SPLIT_SYMBOL, SPLIT_TOL
+from .subproblems import LS_SYMBOL, LS_TOL, SING_SYMBOL, SING_TOL
 from .numpy_source import Unsupported, numpy_function
 from .postprocess import STATUS, IKAll, nearest, postprocess
 
@@ -24,8 +25,10 @@ from .postprocess import STATUS, IKAll, nearest, postprocess
 def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
     """``f(*args) -> outs`` through the steps: :func:`~.numpy_source.numpy_function`, or ``sympy.lambdify`` where
     the steps hold a node that has no rule there. The module constants in the steps take their double values
-    (``IK_SPLIT_TOL``: :data:`~.families.SPLIT_TOL`)."""
-    steps = [(s, e.xreplace({SPLIT_SYMBOL: SPLIT_TOL}) if e.has(SPLIT_SYMBOL) else e) for s, e in steps]
+    (``IK_SPLIT_TOL``, ``IK_LS_TOL``, ``IK_SING_TOL``: :data:`~.families.SPLIT_TOL`, :data:`~.subproblems.LS_TOL`,
+    :data:`~.subproblems.SING_TOL`)."""
+    values = {SPLIT_SYMBOL: SPLIT_TOL, LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL}
+    steps = [(s, e.xreplace(values) if e.has(*values) else e) for s, e in steps]
     try:
         return numpy_function(args, steps, outs)
     except Unsupported:

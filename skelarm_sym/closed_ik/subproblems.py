@@ -45,6 +45,13 @@ LS_TOL = 1e-10
 """A discriminant below ``-LS_TOL`` times its scale marks a least-squares answer; within ``+-LS_TOL`` a double root."""
 SING_TOL = 1e-9
 """An SP1/SP4 whose ``rho`` (or ``sqrt(A^2 + B^2)``) is at most this times its scale is a continuum (singular)."""
+LS_TOL_FLOAT, SING_TOL_FLOAT = 1e-6, 1e-5
+"""The same in code emitted in float, whose rounding of a discriminant is about 1e-8 of its scale (a double root of
+the UR's elbow near stretched came back least squares with the double tolerance) and of a sine about 1e-7."""
+LS_SYMBOL = sp.Symbol("IK_LS_TOL", positive=True)
+SING_SYMBOL = sp.Symbol("IK_SING_TOL", positive=True)
+"""The two tolerances in the steps: module constants of the emitted code (double or float values); the NumPy spec
+evaluates the steps with the double ones."""
 
 
 def _irrational_inside(expr: sp.Basic) -> bool:
@@ -170,7 +177,12 @@ def positive(x: sp.Expr) -> sp.Expr:
 
 
 def indicator(cond) -> sp.Expr:
-    """1 where ``cond`` holds, else 0 (a select)."""
+    """1 where ``cond`` holds, else 0 (a select). A test of numbers and the tolerances alone (a fixed axis against
+    another) is decided here, with the double tolerances, as it was before they became module constants: printed,
+    it would be a comparison of constants, which the array backends cannot select on."""
+    free = getattr(cond, "free_symbols", None)
+    if free and free <= {LS_SYMBOL, SING_SYMBOL}:
+        cond = cond.xreplace({LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL})
     return _select((sp.S.One, cond), (sp.S.Zero, True))
 
 
@@ -252,7 +264,7 @@ def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr
     theta = steps.principal(f"{label}", _select((angle, rho2 > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 everywhere
     c = steps(f"{label}_c", _select((x / rho, rho2 > 0), (sp.S.One, True)))
     s = steps(f"{label}_s", _select((y / rho, rho2 > 0), (sp.S.Zero, True)))
-    singular = steps(f"{label}_rsg", indicator(rho2 <= SING_TOL**2 * scale2))
+    singular = steps(f"{label}_rsg", indicator(rho2 <= SING_SYMBOL**2 * scale2))
     return Angle(theta, c, s, sp.S.Zero, singular)
 
 
@@ -295,7 +307,7 @@ def sp1_parts(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -
     # costs milliseconds on a large expression (and the lowering's CSE builds every relational again)
     uu, pp = steps(f"{label}_uu", dot(u, u)), steps(f"{label}_pp", dot(p, p))
     ww, qq = steps(f"{label}_ww", dot(w, w)), steps(f"{label}_qq", dot(q, q))
-    flat = sp.Or(uu <= SING_TOL**2 * pp, ww <= SING_TOL**2 * qq)
+    flat = sp.Or(uu <= SING_SYMBOL**2 * pp, ww <= SING_SYMBOL**2 * qq)
     return Parts(steps(f"{label}_x", x), steps(f"{label}_y", y), sp.S.Zero, steps(f"{label}_sg", indicator(flat)))
 
 
@@ -318,10 +330,10 @@ def sp4_parts(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d
     r2 = steps(f"{label}_r2", A * A + B * B)
     disc = steps(f"{label}_disc", r2 - C * C if disc is None else disc)
     root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
-    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * r2))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_SYMBOL * r2))
     scale2 = steps(f"{label}_n2", dot(h, h) * dot(p, p))
-    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * r2, disc >= -LS_TOL * r2)))
-    flat = steps(f"{label}_flat", indicator(r2 <= SING_TOL**2 * scale2))
+    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_SYMBOL * r2, disc >= -LS_SYMBOL * r2)))
+    flat = steps(f"{label}_flat", indicator(r2 <= SING_SYMBOL**2 * scale2))
     singular = steps(f"{label}_sg", any_of(double, flat))
     xs = [A * C - sign * B * root for sign in (1, -1)]
     ys = [B * C + sign * A * root for sign in (1, -1)]
@@ -386,8 +398,8 @@ def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: 
     r2 = steps(f"{label}_r2", dot(c2, c2))
     disc = steps(f"{label}_disc", _select((r2 - alpha * alpha * nn, r2 <= r1), (r1 - beta * beta * nn, True)))
     gamma = steps(f"{label}_g", sp.sqrt(positive(disc) * inv))
-    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * norm2))
-    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_TOL * norm2, disc >= -LS_TOL * norm2)))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_SYMBOL * norm2))
+    double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_SYMBOL * norm2, disc >= -LS_SYMBOL * norm2)))
     n = cross(k1, k2)
     out = []
     for b, sign in enumerate((1, -1)):
@@ -407,7 +419,7 @@ def sp_line(steps: Steps, label: str, h: Sequence, x0: Sequence, o: Sequence, d2
     disc = steps(f"{label}_disc", b * b - c)
     root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
     scale2 = steps(f"{label}_n2", dot(r, r) + sp.Abs(d2))
-    ls = steps(f"{label}_ls", indicator(disc < -LS_TOL * scale2))
-    singular = steps(f"{label}_sg", indicator(sp.And(disc <= LS_TOL * scale2, disc >= -LS_TOL * scale2)))
+    ls = steps(f"{label}_ls", indicator(disc < -LS_SYMBOL * scale2))
+    singular = steps(f"{label}_sg", indicator(sp.And(disc <= LS_SYMBOL * scale2, disc >= -LS_SYMBOL * scale2)))
     return (Angle(steps(f"{label}0", -b + root), None, None, ls, singular),
             Angle(steps(f"{label}1", -b - root), None, None, ls, singular))
