@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from skelarm_sym.closed_ik.subproblems import (LS_SYMBOL, LS_TOL, SING_SYMBOL, SING_TOL, Parts, Steps, choose_parts, sp1, sp2, sp3, sp4,
-                                               sp_line, unit_disc)
+from skelarm_sym.closed_ik.subproblems import (DOUBLE_VALUES, Parts, Steps, choose_parts, sp1, sp2, sp3, sp4, sp_line,
+                                               unit_disc)
 
 
 def rot(k, theta):
@@ -26,7 +26,7 @@ def symbols(name):
 
 def run(steps: Steps, inputs: list, outputs: list, values: list) -> list[float]:
     """Evaluate ``outputs`` (written with the steps) at ``values`` of ``inputs``, in step order."""
-    env = {LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL, **dict(zip(inputs, values))}  # the tolerances' double values
+    env = {**DOUBLE_VALUES, **dict(zip(inputs, values))}  # the tolerances at their double values
     for sym, expr in steps.steps:
         env[sym] = expr.xreplace(env)
     return [float(sp.sympify(o).xreplace(env)) for o in outputs]

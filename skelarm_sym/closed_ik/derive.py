@@ -73,6 +73,9 @@ class ClosedIK:
     member_flags: sp.Matrix | None = None
     """``members``' flags: bit 2 always; bit 1 where the row is no exact member (the wrist not aligned: no
     continuum; or the 2R arm does not reach the wrist point that ``phi`` gives)."""
+    member_wrist: tuple[int, ...] = ()
+    """With ``members``: the chain coordinates of joints 5 and 6 (the wrist angle, and the joint that turns with phi
+    at the aligned wrist)."""
 
     @property
     def max_solutions(self) -> int:
@@ -214,6 +217,7 @@ def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
         wrist_continuum(geom, family, lock_idx is not None),
         None if member_rows is None else sp.Matrix(member_rows),
         None if member_flags is None else sp.Matrix(member_flags),
+        tuple(geom.coordinates[5 - k if family.reversed else k] for k in (4, 5)) if members else (),
     )
 
 
@@ -281,7 +285,14 @@ CANDIDATES = CandidatesSpec(
 )
 """The straight-line function of the candidates (``lock`` only when the chain has a locked joint)."""
 
-MEMBERS = FunctionSpec(
+@dataclass(frozen=True)
+class MembersSpec(FunctionSpec):
+    """:data:`MEMBERS` with ``wrist`` (:attr:`ClosedIK.member_wrist`), which the check's aligned targets need."""
+
+    wrist: tuple[int, ...] = ()
+
+
+MEMBERS = MembersSpec(
     "ik_continuum_members", ("q_ref", "target", "lock"), ("M", "mflags"),
     "the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, "
     "per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always)",
@@ -299,6 +310,8 @@ SUBPROBLEM_CONSTANTS = (
              "a subproblem whose rho is at most this times its scale (a sine) is a continuum"),
 )
 """The subproblems' tolerances (emitted where the candidates use them)."""
+STEP_TOLERANCES = (SPLIT_CONSTANT,) + SUBPROBLEM_CONSTANTS
+"""Every module constant that stands in the candidates' steps (the NumPy spec evaluates them at the double values)."""
 
 EMITTED_CONSTANTS = (
     Constant(sp.Symbol("IK_MAX_SOLUTIONS"), {"double": MAX_SOLUTIONS, "float": MAX_SOLUTIONS},
@@ -363,7 +376,7 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         shapes={**derivation.shapes, "Q": (S, N), "flags": (S,), **({"M": ik.members.shape, "mflags": (ik.members.rows,)}
                                                                     if members else {})},
         functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal, continuum=ik.continuum),)
-        + ((MEMBERS,) if members else ()),
+        + ((dataclasses.replace(MEMBERS, wrist=ik.member_wrist),) if members else ()),
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {}),

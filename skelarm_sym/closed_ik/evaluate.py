@@ -15,9 +15,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from .derive import ClosedIK, derive_ik_all
-from .families import SPLIT_SYMBOL, SPLIT_TOL
-from .subproblems import LS_SYMBOL, LS_TOL, SING_SYMBOL, SING_TOL
+from .derive import STEP_TOLERANCES, ClosedIK, derive_ik_all
 from .numpy_source import Unsupported, numpy_function
 from .postprocess import STATUS, IKAll, nearest, postprocess
 
@@ -25,9 +23,8 @@ from .postprocess import STATUS, IKAll, nearest, postprocess
 def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
     """``f(*args) -> outs`` through the steps: :func:`~.numpy_source.numpy_function`, or ``sympy.lambdify`` where
     the steps hold a node that has no rule there. The module constants in the steps take their double values
-    (``IK_SPLIT_TOL``, ``IK_LS_TOL``, ``IK_SING_TOL``: :data:`~.families.SPLIT_TOL`, :data:`~.subproblems.LS_TOL`,
-    :data:`~.subproblems.SING_TOL`)."""
-    values = {SPLIT_SYMBOL: SPLIT_TOL, LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL}
+    (:data:`~.derive.STEP_TOLERANCES`)."""
+    values = {c.symbol: c.values["double"] for c in STEP_TOLERANCES}
     steps = [(s, e.xreplace(values) if e.has(*values) else e) for s, e in steps]
     try:
         return numpy_function(args, steps, outs)
@@ -108,21 +105,24 @@ class ClosedFormIK:
 
     def all(self, target, lock=None, **kwargs) -> IKAll:
         """Every solution of one target (4 x 4 or 16), post-processed (see :func:`~.postprocess.postprocess`)."""
+        return self._all(target, lock, **kwargs)[0]
+
+    def _all(self, target, lock=None, **kwargs) -> tuple[IKAll, np.ndarray | None]:
+        """:meth:`all` and the raw candidates' flags (None for an invalid input)."""
         target = np.asarray(target, dtype=float).reshape(16)
         if not np.all(np.isfinite(target)) or (lock is not None and not np.isfinite(lock)):
-            return postprocess(None, None, self.lower, self.upper, self.revolute, target=target)
+            return postprocess(None, None, self.lower, self.upper, self.revolute, target=target), None
         Q, flags = self.candidates(target, lock)
         return postprocess(Q, flags, self.lower, self.upper, self.revolute, target=target,
-                           continuum=self.ik.continuum, **kwargs)
+                           continuum=self.ik.continuum, **kwargs), flags
 
     def nearest(self, q_ref, target, lock=None, weights=None) -> tuple[np.ndarray | None, int]:
-        """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`)."""
-        result = self.all(target, lock)
+        """The solution nearest ``q_ref`` (see :func:`~.postprocess.nearest`); a UR's continuum members where a raw
+        candidate is exact and flagged singular (a representative)."""
+        result, flags = self._all(target, lock)
         members = None
-        if self.members is not None and result.status != STATUS["invalid"]:
-            _, flags = self.candidates(np.asarray(target, dtype=float).reshape(16), lock)
-            if np.any(flags == 2):  # a raw candidate exact and flagged singular: a representative
-                members = self.members(q_ref, target, lock)
+        if self.members is not None and result.status != STATUS["invalid"] and np.any(flags == 2):
+            members = self.members(q_ref, target, lock)
         return nearest(result, q_ref, self.lower, self.upper, self.revolute, weights, continuum=self.ik.continuum,
                        members=members)
 

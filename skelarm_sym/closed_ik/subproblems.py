@@ -52,6 +52,8 @@ LS_SYMBOL = sp.Symbol("IK_LS_TOL", positive=True)
 SING_SYMBOL = sp.Symbol("IK_SING_TOL", positive=True)
 """The two tolerances in the steps: module constants of the emitted code (double or float values); the NumPy spec
 evaluates the steps with the double ones."""
+DOUBLE_VALUES = {LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL}
+"""The two symbols at their double values."""
 
 
 def _irrational_inside(expr: sp.Basic) -> bool:
@@ -181,8 +183,8 @@ def indicator(cond) -> sp.Expr:
     another) is decided here, with the double tolerances, as it was before they became module constants: printed,
     it would be a comparison of constants, which the array backends cannot select on."""
     free = getattr(cond, "free_symbols", None)
-    if free and free <= {LS_SYMBOL, SING_SYMBOL}:
-        cond = cond.xreplace({LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL})
+    if free and free <= DOUBLE_VALUES.keys():
+        cond = cond.xreplace(DOUBLE_VALUES)
     return _select((sp.S.One, cond), (sp.S.Zero, True))
 
 

@@ -13,6 +13,8 @@ translations and prismatic travel), a rate term ``L |dq|_1``, an acceleration ``
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ... import reference
@@ -167,69 +169,78 @@ def _condition(numeric, rows: np.ndarray, free: np.ndarray, length: float) -> fl
     return float(np.max(s[..., 0] / np.maximum(s[..., -1], 1e-300)))
 
 
-def _drawn(chain, rng, m: int) -> np.ndarray:
-    """``m`` random configurations (m, N): revolute joints in [-pi, pi], prismatic ones in [-0.5, 0.5] m."""
-    return np.where(revolute_mask(chain), rng.uniform(-np.pi, np.pi, (m, chain.n)), rng.uniform(-0.5, 0.5, (m, chain.n)))
+@dataclass
+class _Targets:
+    """Random configurations ``q`` (m, N) and their poses ``targets`` (m, 16) as the code sees them in its precision,
+    the inputs ``values`` (``target``, and ``lock`` for a locked chain), the lock's value, the free coordinates
+    (``free``: all but the lock) and a length scale for :func:`_condition`."""
+
+    q: np.ndarray
+    targets: np.ndarray
+    values: dict
+    lock_value: float | None
+    free: np.ndarray
+    length: float
+
+
+def _targets(chain, seed: int, cases: int, precision: str, aligned: int | None = None) -> _Targets:
+    """At most :data:`CANDIDATE_CASES` random configurations (revolute joints in [-pi, pi], prismatic ones in [-0.5,
+    0.5] m; a locked joint at :data:`LOCK_VALUE`; coordinate ``aligned`` at 0 in the first half, pi in the rest) and
+    their poses, rounded to ``precision``."""
+    n = chain.n
+    dtype = np.float64 if precision == "double" else np.float32
+    rng = np.random.default_rng(seed)
+    m = max(1, min(cases, CANDIDATE_CASES))
+    q = np.where(revolute_mask(chain), rng.uniform(-np.pi, np.pi, (m, n)), rng.uniform(-0.5, 0.5, (m, n)))
+    if aligned is not None:
+        q[:, aligned] = np.where(np.arange(m) < (m + 1) // 2, 0.0, np.pi)
+    lock = _lock_coordinate(chain)
+    values: dict = {}
+    lock_value = None
+    free = np.ones(n, bool)
+    if lock is not None:
+        lock_value = float(np.asarray(LOCK_VALUE, dtype=dtype))
+        q[:, lock] = lock_value
+        values["lock"] = lock_value
+        free[lock] = False
+    targets = np.asarray(reference.chain_kinematics(chain.numeric(), q).T.reshape(m, 16), dtype=dtype).astype(np.float64)
+    values["target"] = targets
+    return _Targets(q, targets, values, lock_value, free, float(np.abs(targets[:, [3, 7, 11]]).max()) + 1.0)
 
 
 def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
-    """``ik_continuum_members`` on poses of random configurations with the wrist aligned (q5 = 0 for the first half,
-    pi for the rest; in double: a float target is aligned only to float's rounding, where the wrist's split test and
-    so the rows depend on that rounding, so float takes the configurations as drawn), ``q_ref`` the configurations
+    """``ik_continuum_members`` on poses of random configurations with the wrist aligned (joint 5 at 0 for the first
+    half, pi for the rest; in double: a float target is aligned only to float's rounding, where the wrist's split test
+    and so the rows depend on that rounding, so float takes the configurations as drawn), ``q_ref`` the configurations
     themselves; expected: the same steps evaluated by SymPy (lambdify, double). Its condition per case: the Jacobian
     condition number at the configuration without joint 6, which turns with phi at the aligned wrist (:func:`_condition`)."""
     from ...closed_ik.evaluate import lambdify_members_of
 
     chain = derivation.model
-    n = chain.n
+    wrist, joint6 = derivation.function("ik_continuum_members").wrist
+    t = _targets(chain, seed + 4, cases, precision, wrist if precision == "double" else None)
     dtype = np.float64 if precision == "double" else np.float32
-    rng = np.random.default_rng(seed + 4)
-    m = max(1, min(cases, CANDIDATE_CASES))
-    q = _drawn(chain, rng, m)
-    if precision == "double":
-        q[:, 4] = np.where(np.arange(m) < (m + 1) // 2, 0.0, np.pi)
-    q = np.asarray(q, dtype=dtype).astype(np.float64)
-    numeric = chain.numeric()
-    targets = np.asarray(reference.chain_kinematics(numeric, q).T.reshape(m, 16), dtype=dtype).astype(np.float64)
-    M, mflags = lambdify_members_of(derivation)(q, targets)
-    length = float(np.abs(targets[:, [3, 7, 11]]).max()) + 1.0
-    free = np.ones(n, bool)
-    free[derivation.model.joints[-1].coordinate] = False  # joint 6 turns with phi at the aligned wrist: the rest
-    condition = np.array([_condition(numeric, q[i:i + 1], free, length) for i in range(m)])
-    return Scenario("ik continuum members", {"q_ref": q, "target": targets}, {"M": M, "mflags": mflags},
-                    {"M": np.maximum(1.0, condition), "mflags": np.ones(m)}, size=n)
+    q = np.asarray(t.q, dtype=dtype).astype(np.float64)
+    M, mflags = lambdify_members_of(derivation)(q, t.targets, t.lock_value)
+    free = t.free.copy()
+    free[joint6] = False
+    condition = np.array([_condition(chain.numeric(), q[i:i + 1], free, t.length) for i in range(len(q))])
+    return Scenario("ik continuum members", {"q_ref": q, **t.values}, {"M": M, "mflags": mflags},
+                    {"M": np.maximum(1.0, condition), "mflags": np.ones(len(q))}, size=chain.n)
 
 
 def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
-    """``ik_candidates`` on poses of random configurations (revolute joints in [-pi, pi], prismatic in [-0.5, 0.5]
-    m; a locked joint at :data:`LOCK_VALUE`), expected: the same steps evaluated by SymPy (lambdify, double). Its
-    condition per case: the largest Jacobian condition number over the exact rows (:func:`_condition`)."""
+    """``ik_candidates`` on poses of random configurations (:func:`_targets`), expected: the same steps evaluated by
+    SymPy (lambdify, double). Its condition per case: the largest Jacobian condition number over the exact rows
+    (:func:`_condition`)."""
     from ...closed_ik.evaluate import lambdify_candidates
 
     chain = derivation.model
-    n = chain.n
-    dtype = np.float64 if precision == "double" else np.float32
-    rng = np.random.default_rng(seed + 3)
-    m = max(1, min(cases, CANDIDATE_CASES))
-    q = _drawn(chain, rng, m)
-    lock = _lock_coordinate(chain)
-    values: dict = {}
-    lock_value = None
-    if lock is not None:
-        lock_value = float(np.asarray(LOCK_VALUE, dtype=dtype))
-        q[:, lock] = lock_value
-        values["lock"] = lock_value
-    numeric = chain.numeric()
-    targets = np.asarray(reference.chain_kinematics(numeric, q).T.reshape(m, 16), dtype=dtype).astype(np.float64)
-    values["target"] = targets
-    Q, flags = lambdify_candidates(derivation)(targets, lock_value)
-    free = np.ones(n, bool)
-    if lock is not None:
-        free[lock] = False
-    length = float(np.abs(targets[:, [3, 7, 11]]).max()) + 1.0
-    condition = np.array([_condition(numeric, Q[i][flags[i] == 0], free, length) for i in range(m)])
-    return Scenario("ik candidates", values, {"Q": Q, "flags": flags},
-                    {"Q": np.maximum(1.0, condition), "flags": np.ones(m)}, size=n)
+    t = _targets(chain, seed + 3, cases, precision)
+    Q, flags = lambdify_candidates(derivation)(t.targets, t.lock_value)
+    condition = np.array([_condition(chain.numeric(), Q[i][flags[i] == 0], t.free, t.length) for i in range(len(Q))])
+    return Scenario("ik candidates", t.values, {"Q": Q, "flags": flags},
+                    {"Q": np.maximum(1.0, condition), "flags": np.ones(len(Q))}, size=chain.n)
 
 
 class ClosedCheck:
