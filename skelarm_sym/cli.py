@@ -93,9 +93,19 @@ def _generate(args, as_program: bool = False) -> int:
 def _generate_files(args) -> int:
     from .generate import generate
 
+    compiled = []
+
+    def compile_first(result) -> None:
+        """Compile before the files are written: a failed compile leaves none behind."""
+        if any(name.endswith(".c") for name in result.sources):
+            from .build import compile_arm  # (and NumPy) only when compiling
+
+            compiled.append(compile_arm(result))
+
     model = model_from_args(args)
     result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
-                      functions=args.functions, cmake=args.cmake, force=args.force)
+                      functions=args.functions, cmake=args.cmake, force=args.force,
+                      before_writing=compile_first if args.compile else None)
     for line in model.summary():
         print(line)
     for path in result.paths:
@@ -104,10 +114,7 @@ def _generate_files(args) -> int:
     if kin is not None:
         o = kin.ops
         print(f"kinematics: {o.sin} sin, {o.cos} cos, {o.arithmetic} add/sub/mul/neg")
-    if args.compile and any(name.endswith(".c") for name in result.sources):
-        from .build import compile_arm  # (and NumPy) only when compiling
-
-        arm = compile_arm(result)
+    for arm in compiled:
         print(f"compiled {arm.path}")
     return 0
 

@@ -1,17 +1,20 @@
 """Writing emitted files: all of a set or none, durable, with the umask's mode.
 
 ``write_atomically`` writes every file of a set to a hidden temporary beside its target
-(``.NAME.PID.RANDOM.tmp``), flushes each to disk (``fsync``) and the folder, and only then
-renames them into place, so a crash leaves either temporaries (removed by the next run: those of
-a process that no longer runs, or older than an hour) or complete new files, never a truncated
-one. Between two renames a crash can still leave a new ``.h`` beside an old ``.c``; the emitted
-C checks a generation stamp so such a pair fails to compile instead of linking wrong code.
-"""
+(``.NAME.PID.RANDOM.tmp``), flushes each to disk (``fsync``) and the folder, keeps a hard link of each
+file it replaces (``.NAME.PID.RANDOM.bak``), and only then renames the new files into place. If a rename
+fails (a file that refuses to be replaced), the files already renamed get their old text back, so an
+error leaves the folder as it was. A crash leaves either temporaries (removed by the next run: those of
+a process that no longer runs, or older than an hour) or complete files, never a truncated one. Between
+two renames a crash can still leave a new ``.h`` beside an old ``.c``; the emitted C checks a generation
+stamp so such a pair fails to compile instead of linking wrong code."""
 
 from __future__ import annotations
 
 import os
 import re
+import secrets
+import shutil
 import tempfile
 import time
 from pathlib import Path
@@ -49,7 +52,7 @@ def remove_stale_temporaries(folder: Path, names) -> list[Path]:
     removed = []
     now = time.time()
     for name in names:
-        pattern = re.compile(r"\." + re.escape(name) + r"\.(?:(\d+)\.)?[^/]*\.tmp\Z")
+        pattern = re.compile(r"\." + re.escape(name) + r"\.(?:(\d+)\.)?[^/]*\.(?:tmp|bak)\Z")
         try:
             entries = list(folder.iterdir())
         except OSError:
@@ -87,11 +90,47 @@ def _fsync_folder(folder: Path) -> None:
         os.close(fd)
 
 
-def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
+def _kept_aside(folder: Path, name: str) -> Path | None:
+    """A hard link (or, where the file system has none, a copy) of ``folder/name`` under a hidden name, to
+    put back if the set cannot be written whole; ``None`` when there is no such file."""
+    final = folder / name
+    if not os.path.lexists(final):
+        return None
+    spare = folder / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.bak"
+    try:
+        os.link(final, spare, follow_symlinks=False)
+    except OSError:  # no hard links here (or the file refuses them): a copy serves as well
+        shutil.copy2(final, spare, follow_symlinks=False)
+    return spare
+
+
+def _put_back(changed: list[tuple[Path, Path | None]]) -> None:
+    """Undo renames and removals, newest first: each target gets its kept-aside file back, or goes when it
+    did not exist before. Best effort: the error being reported matters more than one that happens here."""
+    for final, spare in reversed(changed):
+        try:
+            if spare is not None:
+                os.replace(spare, final)
+            else:
+                os.unlink(final)
+        except OSError:
+            pass
+
+
+def _refuse_folders(folder: Path, names) -> None:
+    for name in names:
+        if (folder / name).is_dir() and not (folder / name).is_symlink():
+            raise InputError(f"cannot write {str(folder / name)!r}: a folder of that name is in the way; no file was changed")
+
+
+def write_atomically(folder: Path, sources: dict[str, str], remove: tuple[str, ...] = ()) -> tuple[Path, ...]:
     """Write every file to a temporary name in ``folder``, flush all, then rename all into place.
 
-    If anything fails before the renames, the temporary files are removed and no target file is
-    touched. Temporaries of earlier, killed runs for the same names are removed first.
+    All or nothing: if anything fails (a file that cannot be replaced, a folder in the way of a name, a full
+    disk), every file is as it was before and no temporary is left; the error names the file that failed.
+    ``remove``: names of files in ``folder`` that the new set no longer has (another language's files of an
+    older set), removed in the same step. Temporaries of earlier, killed runs for the same names are removed
+    first.
     """
     created = [f for f in (folder, *folder.parents) if not os.path.isdir(f)]  # deepest first
     try:
@@ -103,11 +142,17 @@ def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
             except OSError:
                 pass
         raise InputError(f"cannot create output folder {str(folder)!r}: {exc.strerror or exc}") from None
-    remove_stale_temporaries(folder, sources)
+    remove = tuple(name for name in remove if name not in sources)
+    remove_stale_temporaries(folder, [*sources, *remove])
+    _refuse_folders(folder, sources)
     staged: list[tuple[str, Path]] = []
+    spares: list[Path] = []
+    changed: list[tuple[Path, Path | None]] = []
+    current = folder
     try:
         mode = new_file_mode()
         for name, text in sources.items():
+            current = folder / name
             fd, tmp = tempfile.mkstemp(prefix=f".{name}.{os.getpid()}.", suffix=".tmp", dir=folder)
             staged.append((tmp, folder / name))
             with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
@@ -117,13 +162,32 @@ def write_atomically(folder: Path, sources: dict[str, str]) -> tuple[Path, ...]:
                 os.fsync(handle.fileno())
         _fsync_folder(folder)
         for tmp, final in staged:
+            current = final
+            spare = _kept_aside(folder, final.name)
+            if spare is not None:
+                spares.append(spare)
             os.replace(tmp, final)
-        _fsync_folder(folder)
-    except OSError as exc:
-        for tmp, _ in staged:
+            changed.append((final, spare))
+        for name in remove:
+            current = folder / name
+            spare = _kept_aside(folder, name)
+            if spare is None:
+                continue
+            spares.append(spare)
+            os.unlink(current)
+            changed.append((current, spare))
+        for spare in spares:  # the new set is whole: the old files go
             try:
-                os.unlink(tmp)
+                os.unlink(spare)
             except OSError:
                 pass
-        raise InputError(f"cannot write to output folder {str(folder)!r}: {exc.strerror or exc}") from None
+        _fsync_folder(folder)
+    except OSError as exc:
+        _put_back(changed)
+        for leftover in [Path(tmp) for tmp, _ in staged] + spares:
+            try:
+                os.unlink(leftover)
+            except OSError:
+                pass
+        raise InputError(f"cannot write {str(current)!r}: {exc.strerror or exc}; no file was changed") from None
     return tuple(final for _, final in staged)

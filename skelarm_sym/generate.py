@@ -18,7 +18,7 @@ import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, Sequence
 
 from .assemble import build_module, function_items, select_functions, wanted_functions
 from .backends import BACKENDS
@@ -90,13 +90,16 @@ def _shell_word(word: str) -> str:
 
 
 def regenerate_command(model, prefix: str, precision: str, langs: Sequence[str], functions: Sequence[str] | None = None,
-                       folder: str | os.PathLike | None = None) -> str:
+                       folder: str | os.PathLike | None = None, cmake: bool = False) -> str:
     """The command line that emits the same files again when run in ``folder`` (where they are written):
-    every option that shapes them, the robot file relative to that folder, ``--out .``."""
+    every option that shapes them (``--cmake`` too: the set's stamp covers ``CMakeLists.txt``), the robot
+    file relative to that folder, ``--out .``."""
     words = ["skelarm-sym", "generate", *model.command_args(None if folder is None else str(folder))]
     words += ["--lang", ",".join(langs), "--prefix", prefix, "--precision", precision]
     if functions is not None:
         words += ["--functions", ",".join(functions)]
+    if cmake:
+        words += ["--cmake"]
     if folder is not None:
         words += ["--out", "."]
     return " ".join(_shell_word(w) for w in words)
@@ -185,6 +188,50 @@ def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wan
             raise _other_options(path, before)
 
 
+def recorded_prefix(command: str) -> str | None:
+    """The ``--prefix`` value of a recorded command, or ``None``."""
+    words = _words(command)
+    if isinstance(words, str) or "--prefix" not in words:
+        return None
+    i = words.index("--prefix") + 1
+    return words[i] if i < len(words) else None
+
+
+def set_leftovers(target: Path, prefix: str, names: Sequence[str]) -> list[tuple[Path, str]]:
+    """Files in ``target`` of an earlier set of ``prefix`` that the new set (its file ``names``) does not write:
+    another language's files (``{prefix}.py`` beside a new C-only set), or a ``CMakeLists.txt`` the new set has
+    no more; each with the command it records. Only files skelarm-sym wrote for this prefix count (their header
+    records ``--prefix {prefix}``): a file named alike by hand, or another prefix's file whose name happens to
+    end the same way, is left alone. Left in place, such a file would make a mixed set (``check --from``
+    refuses one, and its stamp names another generation)."""
+    candidates = sorted({prefix + suffix for backend in BACKENDS.values() for suffix in backend.FILE_SUFFIXES}
+                        | {"CMakeLists.txt"})
+    found = []
+    for name in candidates:
+        if name in names:
+            continue
+        path = target / name
+        try:
+            if not path.is_file():
+                continue
+            head = path.read_text(encoding="utf-8", errors="replace")[:6000]
+        except OSError:
+            continue
+        before = recorded_command(head)
+        if before is not None and recorded_prefix(before) == prefix:
+            found.append((path, before))
+    return found
+
+
+def refuse_leftovers(leftovers: Sequence[tuple[Path, str]], prefix: str) -> None:
+    """InputError naming the first file of an earlier set that the new one would leave beside it."""
+    if leftovers:
+        path, before = leftovers[0]
+        raise InputError(f"{path} is from an earlier set of {prefix!r} generated with other options ({before}); the new "
+                         "set has no such file: choose another --prefix or --out, or pass --force (force=True) to replace "
+                         "the set (that file is removed)")
+
+
 @dataclass(frozen=True)
 class Generated:
     """Result of :func:`generate`: file name -> text, the IR module, the derivation, and where files went."""
@@ -265,6 +312,7 @@ def generate(
     cmake: bool = False,
     force: bool = False,
     recorded_folder: str | os.PathLike | None = None,
+    before_writing: Callable[[Generated], object] | None = None,
 ) -> Generated:
     """Emit specialised code for a model.
 
@@ -281,9 +329,12 @@ def generate(
         functions: names of the functions to emit (a comma-separated string or a sequence; default all); a
             solver (``ik_solve``) brings the functions it calls.
         cmake: also write ``CMakeLists.txt`` (a library target named ``prefix``; needs lang ``c``).
-        force: replace files that were generated with other options (by default that is refused).
+        force: replace files that were generated with other options (by default that is refused), and remove
+            the files of an earlier set of the same prefix that the new set does not have (another language's).
         recorded_folder: the folder the header's ``regenerate with`` line is written for (its robot path is
             relative to it); default ``out`` (files staged elsewhere before they move to their place).
+        before_writing: called with the result before any file is written (``generate --compile`` compiles
+            there): when it raises, nothing is written.
 
     Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input; on any error no file
     is left behind.
@@ -305,22 +356,28 @@ def generate(
         raise InputError("--cmake builds the C: generate with lang 'c'")
 
     recorded_in = recorded_folder if recorded_folder is not None else target
-    if target is not None and not force:
-        names = [prefix + suffix for lang in langs for suffix in BACKENDS[lang].FILE_SUFFIXES]
-        refuse_before_deriving(target, names + (["CMakeLists.txt"] if cmake else []),
-                               regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"], recorded_in),
-                               None if functions is None else wanted_functions(kind, functions))
+    leftovers: list[tuple[Path, str]] = []
+    if target is not None:
+        names = [prefix + suffix for lang in langs for suffix in BACKENDS[lang].FILE_SUFFIXES] + (["CMakeLists.txt"] if cmake else [])
+        leftovers = set_leftovers(target, prefix, names)
+        if not force:
+            refuse_before_deriving(target, names, regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"],
+                                                                     recorded_in, cmake),
+                                   None if functions is None else wanted_functions(kind, functions))
+            refuse_leftovers(leftovers, prefix)
     derivation = kind.derive(model, None if functions is None else frozenset(function_items(functions)))
     derived, solvers = select_functions(kind, derivation, functions)
     chosen = None if functions is None else derived + solvers
-    command = regenerate_command(model, prefix, precision, langs, chosen, recorded_in)
+    command = regenerate_command(model, prefix, precision, langs, chosen, recorded_in, cmake)
     module = build_module(kind, derivation, derived, solvers, prefix, precision, command)
     sources = render_all(module, langs, cmake)
     paths: tuple[Path, ...] = ()
+    if target is not None and not force:
+        refuse_other_options(target, sources)
+    if before_writing is not None:
+        before_writing(Generated(sources, module, derivation))
     if target is not None:
-        if not force:
-            refuse_other_options(target, sources)
-        paths = write_atomically(target, sources)
+        paths = write_atomically(target, sources, remove=tuple(path.name for path, _ in leftovers))
     return Generated(sources, module, derivation, paths)
 
 

@@ -43,7 +43,7 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
     from pathlib import Path
 
     from ..errors import InputError
-    from ..generate import file_stamp, generate, recorded_command
+    from ..generate import file_stamp, generate, recorded_command, recorded_prefix
     from ..options import generate_parser, model_from_args
 
     root = Path(folder)
@@ -54,8 +54,11 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
 
     suffixes = [suffix for backend in BACKENDS.values() for suffix in backend.FILE_SUFFIXES]
     for path in sorted(root.iterdir()):
-        suffix = next((s for s in sorted(suffixes, key=len, reverse=True) if path.name.endswith(s) and len(path.name) > len(s)), None)
-        if suffix is not None and path.is_file() and _MARK in _read_head(path):
+        matching = [s for s in sorted(suffixes, key=len, reverse=True) if path.name.endswith(s) and len(path.name) > len(s)]
+        head = _read_head(path) if matching and path.is_file() else ""
+        if _MARK in head:  # the prefix its header records, where two readings of the name differ (arm2_torch.py)
+            owner = recorded_prefix(recorded_command(head) or "")
+            suffix = next((s for s in matching if path.name[: -len(s)] == owner), matching[0])
             found.setdefault(path.name[: -len(suffix)], []).append(path.name)
     if prefix is None:
         if not found:
@@ -108,7 +111,7 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
         raise InputError(f"{root / names[0]} records --prefix {args.prefix}, not {prefix}; was it renamed?")
     # every language the command records (its header line names them all), though only some files are here
     fresh = generate(model, langs=args.lang or langs, prefix=args.prefix, precision=args.precision, out=None,
-                     functions=args.functions, recorded_folder=root)
+                     functions=args.functions, cmake=args.cmake, recorded_folder=root)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
     return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited)
 
