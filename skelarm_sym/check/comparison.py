@@ -119,10 +119,20 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
                     axes = tuple(range(1, want.ndim))
                     got = np.asarray(got, dtype=np.float64)
                     abs_err = _worst(got, want, axes)
-                    if arg.name in scenario.alternatives:
-                        abs_err = np.minimum(abs_err, _worst(got, scenario.alternatives[arg.name], axes))
                     size = np.maximum(1.0, np.abs(want).max(axis=axes) if axes else np.abs(want))
                     condition = np.broadcast_to(np.asarray(scenario.condition.get(arg.name, 1.0), dtype=float), size.shape)
+                    if arg.name in scenario.alternatives:
+                        second = scenario.alternatives[arg.name]
+                        second_err = _worst(got, second, axes)
+                        if arg.name in scenario.alternative_condition:  # judged on its own scale
+                            second_size = np.maximum(1.0, np.abs(second).max(axis=axes) if axes else np.abs(second))
+                            second_condition = np.broadcast_to(np.asarray(scenario.alternative_condition[arg.name], dtype=float), size.shape)
+                            closer = second_err / (second_size * second_condition) < abs_err / (size * condition)
+                            size = np.where(closer, second_size, size)
+                            condition = np.where(closer, second_condition, condition)
+                            abs_err = np.where(closer, second_err, abs_err)
+                        else:
+                            abs_err = np.minimum(abs_err, second_err)
                     rel = abs_err / (size * condition)
                     worst = int(np.argmax(np.where(np.isnan(rel), np.inf, rel)))
                     results.append(OutputError(

@@ -112,8 +112,33 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
     # every language the command records (its header line names them all), though only some files are here
     fresh = generate(model, langs=args.lang or langs, prefix=args.prefix, precision=args.precision, out=None,
                      functions=args.functions, cmake=args.cmake, recorded_folder=root)
+    _refuse_another_model(root, sources, fresh, command)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
     return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited)
+
+
+_MODEL = re.compile(r"Model: .*?(\d+ coordinate\(s\), \d+ moving joint\(s\) \([^)]*\))")
+
+
+def _refuse_another_model(root, sources: dict[str, str], fresh: Generated, command: str) -> None:
+    """InputError when the recorded command now gives another model than the one the files were generated for
+    (the robot file was edited or replaced since): other joints (the files' header line ``Model: ... N
+    coordinate(s), M moving joint(s) (kinds)``), or a function the files lack. The values of a chain with the
+    same joints are left to the comparison, which reports them; its note says the files differ."""
+    from ..errors import InputError
+
+    for name, text in sources.items():
+        then, now = _MODEL.search(text[:4000]), _MODEL.search(fresh.sources.get(name, "")[:4000])
+        if then and now and then.group(1) != now.group(1):
+            raise InputError(f"{root / name} was generated for {then.group(1)}; its recorded command ({command}) now "
+                             f"gives {now.group(1)}: the robot file changed since; regenerate the files")
+        fresh_text = fresh.sources.get(name, "")
+        prefix = fresh.module.prefix
+        for function in fresh.module.public:
+            for mark in (f"{prefix}_{function.name}(", f"def {function.name}("):
+                if mark in fresh_text and mark not in text:
+                    raise InputError(f"{root / name} has no {function.name}, which its recorded command ({command}) now "
+                                     "emits: the robot file changed since, or the file was edited; regenerate the files")
 
 
 def _unique(items: list[str]) -> list[str]:

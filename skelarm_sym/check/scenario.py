@@ -39,6 +39,9 @@ class Scenario:
     alternatives: dict[str, np.ndarray] = field(default_factory=dict)
     """Output name -> a second documented answer (``(m, *shape)``): a case passes when it matches either
     (near a documented switch, such as gimbal lock, where the code and the judge may each be right)."""
+    alternative_condition: dict[str, np.ndarray] = field(default_factory=dict)
+    """Output name -> the tolerance factors of its second answer (``(m,)``); absent: the first answer's, and
+    its size too."""
     size: int = 1
     """The model's size for the tolerance (its number of joints; see :func:`tolerance`)."""
 

@@ -83,20 +83,33 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     if "M" in derivation.compact:
         closed.append(members_scenario(derivation, cases, seed, precision))
     return [Scenario("", values, expected, condition, alternatives, size=n)] + [
-        Scenario(label, {**values, **extra}, want, cond, size=n) for label, extra, want, cond in solves
+        Scenario(label, {**values, **extra}, want, cond, second, size=n,
+                 alternative_condition={k: v / tolerance(precision, n) for k, v in second_cond.items()})
+        for label, extra, want, cond, second, second_cond in solves
     ] + closed
 
 
 def chain_ik(derivation, implementations, cases: int, seed: int, precision: str) -> list:
-    """Solver rows of a 3-D chain: ``ik_solve`` (:func:`pose_rows`) and the closed-form IK (:func:`closed_rows`)."""
+    """Solver rows of a 3-D chain: ``ik_solve`` and ``ik_solve_position`` (:func:`pose_rows`) and the
+    closed-form IK (:func:`closed_rows`)."""
     return (pose_rows(derivation, implementations, cases, seed, precision)
             + closed_rows(derivation, implementations, cases, seed, precision))
 
 
+NUMERIC_SOLVERS = (("ik_solve", True), ("ik_solve_position", False))
+"""The iterative solvers :func:`pose_rows` checks, each with whether its target is a whole pose (4 x 4) or
+only the tool origin (3)."""
+
+
 def pose_rows(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
-    """Pose-IK rows of a 3-D chain: for the implementations that have ``ik_solve``."""
-    solvers = [(label, getattr(impl, "ik_solve", None)) for label, impl in implementations]
-    solvers = [(label, s) for label, s in solvers if s is not None]
+    """Rows of the iterative IK of a 3-D chain, for the implementations that have ``ik_solve`` or
+    ``ik_solve_position``: targets are poses of random configurations strictly inside the limits, starts
+    other such configurations; a problem passes when the solver says ``converged`` and the reference's pose
+    of its answer (:func:`reference.chain_kinematics`) is within the allowed distance of the target (and,
+    for ``ik_solve``, its rotation within the allowed angle)."""
+    solvers = [(label, name, whole, getattr(impl, name, None))
+               for name, whole in NUMERIC_SOLVERS for label, impl in implementations]
+    solvers = [(label, name, whole, s) for label, name, whole, s in solvers if s is not None]
     if not solvers:
         return []
 
@@ -125,20 +138,21 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
     rotation_allowed = tol + tolerance(precision, n) + 100 * EPSILONS[precision]
     extra = {"params": params} if chain.parameters else {}
     rows = []
-    for label, solve in solvers:
+    for label, name, whole, solve in solvers:
         outcomes, worst_rotation = [], 0.0
         for q0, target in zip(starts, targets):
-            result = solve(q0, target, lambda_=0.0, tol=tol, max_iter=CHAIN_MAX_ITER, **extra)
+            result = solve(q0, target if whole else target[:3, 3], lambda_=0.0, tol=tol, max_iter=CHAIN_MAX_ITER, **extra)
             q = np.asarray(result.q, dtype=np.float64)
             if np.all(np.isfinite(q)):
                 T = reference.chain_kinematics(numeric, q).T
-                error, rotation = float(np.linalg.norm(target[:3, 3] - T[:3, 3])), rotation_error(T[:3, :3], target[:3, :3])
+                error = float(np.linalg.norm(target[:3, 3] - T[:3, 3]))
+                rotation = rotation_error(T[:3, :3], target[:3, :3]) if whole else 0.0
             else:
                 error = rotation = float("inf")
             worst_rotation = max(worst_rotation, rotation)
             good = result.status == "converged" and error <= allowed and rotation <= rotation_allowed
             outcomes.append((str(result.status), error, good))
-        rows.append(summary(f"{label} ik_solve", outcomes, tol, allowed, worst_rotation, rotation_allowed))
+        rows.append(summary(f"{label} {name}", outcomes, tol, allowed, *((worst_rotation, rotation_allowed) if whole else ())))
     return rows
 
 
