@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xd990d3fdUL
+#define PANDA_STAMP 0xa9e2293cUL
 
 #ifdef __cplusplus
 extern "C" {

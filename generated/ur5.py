@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xc6057d9e
+STAMP = 0x40d2b94e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -6519,7 +6519,7 @@ def ik_solve_position(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     q0: array of shape (6,), finite: start pose (rad or m).
     target: array of shape (3,), finite: tool origin (3).
     lambda_: a number, finite and >= 0: damping floor while the error is large (>= 0) (default 0.0).
-    tol: a number, finite and > 0: stop when the position (m) and rotation (rad) errors are <= tol (default 1e-10).
+    tol: a number, finite and > 0: stop when the position error (m) is <= tol (default 1e-10).
     max_iter: a number: at most this many steps over all attempts (default 100).
     Returns IKPositionResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.

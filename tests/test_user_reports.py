@@ -282,3 +282,17 @@ def test_the_recorded_command_runs_as_printed_with_trigraphs_and_comment_ends_in
         assert {p.name: p.read_text() for p in (folder / "gen").iterdir()} == before
         assert main(["check", "--from", ".", "--cases", "2"]) == 0
         capsys.readouterr()
+
+
+def test_the_solvers_comments_name_the_limit_tables_only_where_the_files_have_them():
+    """A robot file without position limits (kuka_kr6.toml) gets no Q_MIN/Q_MAX, and its solvers' comments
+    said 'Joint limits (Q_MIN/MAX) are kept by clamping' all the same."""
+    for name, limited in (("kuka_kr6", False), ("ur5", True)):
+        sources = generate(load_robot(ROOT / f"examples/robots/{name}.toml"), out=None, functions="ik_solve,ik_solve_position").sources
+        for suffix in (".h", ".py"):
+            text = sources[name + suffix]
+            has_tables = f"{name.upper()}_Q_MIN" in text if suffix == ".h" else "\nQ_MIN = " in text
+            assert has_tables == limited, (name, suffix)
+            assert text.count("Joint limits (Q_MIN/MAX) are kept by clamping") == (2 if limited else 0), (name, suffix)
+            assert text.count("The arm has no position limits (no Q_MIN/Q_MAX): nothing is clamped") == (0 if limited else 2)
+        assert "stop when the position error (m) is <= tol" in sources[name + ".py"]  # ik_solve_position's tol

@@ -539,7 +539,8 @@ def _solver_arguments(rows: int, n: int, params: int, default_tol: float) -> tup
         Argument("lambda", Role.SCALAR, (), domain="nonnegative", batched=False, default=Const(0.0),
                  doc="damping floor while the error is large (>= 0)"),
         Argument("tol", Role.SCALAR, (), domain="positive", batched=False, default=Const(default_tol),
-                 doc="stop when the position (m) and rotation (rad) errors are <= tol"),
+                 doc="stop when the position (m) and rotation (rad) errors are <= tol" if rows == 6 else
+                 "stop when the position error (m) is <= tol"),
         Argument("max_iter", Role.SCALAR, (), Type.INT, batched=False, default=Const(100, Type.INT),
                  doc="at most this many steps over all attempts"),
         Argument("q", Role.OUTPUT, (n,), doc="the solution, or the best pose found"),
@@ -559,7 +560,9 @@ targets and starts drawn within the limits as benchmarks/ik_success.py draws the
 measures UR5's again)."""
 
 
-def _solver_doc(rows: int, default_tol: float) -> tuple[str, ...]:
+def _solver_doc(rows: int, default_tol: float, limited: bool = True) -> tuple[str, ...]:
+    """The solver's documentation lines; ``limited``: some coordinate has a position limit (else the files
+    have no Q_MIN/Q_MAX, and the lines say what happens instead)."""
     return (
         ("Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step" if rows == 6 else
          "Position IK of the tool origin: Levenberg-Marquardt on e = p_target - p with the 3 linear rows of J, step"),
@@ -567,10 +570,15 @@ def _solver_doc(rows: int, default_tol: float) -> tuple[str, ...]:
         f"times {C_UP:g} after a rejected step and {C_DOWN:g} after an accepted one: lambda damps while the error is large",
         "and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.",
         *(SUCCESS_BY_LAMBDA if rows == 6 else ()),
-        "Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
-        "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
-        f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
-        "random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).",
+        *(("Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
+           "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
+           f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
+           "random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).")
+          if limited else
+          ("The arm has no position limits (no Q_MIN/Q_MAX): nothing is clamped, and revolute joints wrap by 2 pi.",
+           f"An attempt ends when it stalls at a stationary point of |e|, makes too little progress or takes {ATTEMPT}",
+           f"steps; the next starts from the best of {CANDIDATES} random configurations, each coordinate drawn from [-pi, pi]",
+           "(xorshift64*, a fixed seed: the same input gives the same result).")),
         f"Steps of all attempts count against max_iter. A tol of {default_tol:g} is reachable in this precision for an",
         "arm of unit size. target: " + ("4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad)."
                                           if rows == 6 else "3 numbers; error[0] = position error (m)."),
@@ -585,8 +593,13 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
     name = "ik_solve" if rows == 6 else "ik_solve_position"
     summary = "pose IK of the tool frame" if rows == 6 else "position IK of the tool origin"
     return Function(name, summary, _solver_arguments(rows, chain.n, params, default_tol), body, kind="procedure",
-                    returns=Type.INT, statuses=POSE_STATUSES if rows == 6 else STATUSES, doc=_solver_doc(rows, default_tol),
+                    returns=Type.INT, statuses=POSE_STATUSES if rows == 6 else STATUSES, doc=_solver_doc(rows, default_tol, _has_position_limits(chain)),
                     result="IKResult" if rows == 6 else "IKPositionResult", refused=refusal(precision) if rows == 6 else "")
+
+
+def _has_position_limits(chain) -> bool:
+    limits = chain.limits()
+    return any(v is not None for v in limits["lower"] + limits["upper"])
 
 
 def _mod(x, m: int) -> Bits:
