@@ -18,9 +18,9 @@
  * panda_joint6 [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq| <= 2.61.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
- * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
- * RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm
- * least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
+ * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0
+ * at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
  * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xa9e2293cUL
+#define PANDA_STAMP 0x1047da93UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -145,7 +145,7 @@ void panda_ik_terms(const double q[7], double T[16], double J[42]);
  * Stack: about 23 KB. */
 void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2872 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2864 bytes. */
 void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -153,7 +153,7 @@ void panda_manipulability(const double q[7], double w[1]);
  * Stack: about 15 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1192 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1184 bytes. */
 void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -177,20 +177,20 @@ void panda_manipulability_gradient(const double q[7], double grad[7]);
  * Stack: about 17 KB. */
 void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
-/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 7 KB. */
+/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 10 KB. */
 void panda_inverse_velocity(const double q[7], const double twist[6], double lambda, double dq[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 19 KB. */
+ * Stack: about 22 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1976 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2504 bytes. */
 void panda_inverse_velocity_position(const double q[7], const double v[3], double lambda, double dq_position[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 14 KB. */
+ * Stack: about 15 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
 /* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1024 bytes. */

@@ -18,9 +18,9 @@
  * [-6.28319, 6.28319] |dq| <= 3.14159.
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
- * stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most
- * RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm
- * least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
+ * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0
+ * at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
  * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x40d2b94eUL
+#define UR5_STAMP 0xca8e8ae1UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -178,7 +178,7 @@ void ur5_ik_terms(const double q[6], double T[16], double J[36]);
  * Stack: about 20 KB. */
 void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2376 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: about 2368 bytes. */
 void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -186,7 +186,7 @@ void ur5_manipulability(const double q[6], double w[1]);
  * Stack: about 15 KB. */
 void ur5_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 896 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 888 bytes. */
 void ur5_manipulability_position(const double q[6], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
@@ -202,7 +202,7 @@ void ur5_jacobian_hessian(const double q[6], double Hs[216]);
  * Stack: about 13 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 3328 bytes. */
+/* gradient dw/dq of the manipulability (N). Stack: about 3320 bytes. */
 void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
@@ -210,15 +210,15 @@ void ur5_manipulability_gradient(const double q[6], double grad[6]);
  * Stack: about 16 KB. */
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
-/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 6 KB. */
+/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 9 KB. */
 void ur5_inverse_velocity(const double q[6], const double twist[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 18 KB. */
+ * Stack: about 21 KB. */
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 1664 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2112 bytes. */
 void ur5_inverse_velocity_position(const double q[6], const double v[3], double lambda, double dq_position[6]);
 
 /* The same for m configurations stored one after another (element k of

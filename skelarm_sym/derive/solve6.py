@@ -1,5 +1,5 @@
-"""Unrolled small factorisations as named steps: Gram-Schmidt QR with re-orthogonalisation,
-adjugates of triangular factors, guarded back substitution.
+"""Unrolled small factorisations as named steps: Gram-Schmidt QR with re-orthogonalisation (and with
+pivoting, for a rank rule), adjugates of triangular factors, guarded back substitution.
 
 Everything is straight-line: a fixed number of vectors of fixed length, no loops at run time,
 no allocation. Divisions are only ever by a ``Piecewise`` that is replaced by 1 where the divisor
@@ -95,6 +95,82 @@ def gram_schmidt(
         Q.append(q)
         keep.append(kept)
     return QR(Q, R, keep)
+
+
+def pivoted_gram_schmidt(
+    step: Recorder,
+    vectors: Sequence[Sequence[sp.Expr]],
+    carried: Sequence[Sequence[sp.Expr]],
+    label: str,
+    threshold: sp.Expr,
+) -> tuple[QR, list[list[sp.Expr]]]:
+    """Gram-Schmidt QR of ``vectors`` taken largest residual first, with a rank rule: rank-revealing.
+
+    Without pivoting a rank rule on the residuals can miss a near-dependency spread over several of them
+    (float Stanford arm: the smallest singular value of its scaled Jacobian 1e-8 of the largest, below
+    float's epsilon, but two residuals of 5e-5 and 6e-4 against a threshold of 3e-5: the direction was
+    kept, and the solve gave |dq| = 1e7). Here step ``k`` takes, of the vectors not yet taken, the one
+    whose residual against ``Q[0..k-1]`` is longest (compared squared; a tie keeps the earlier one), so
+    the residuals decrease and the first at most ``threshold`` ends the rank: it and every later one are
+    dropped (``R[k][k] = 0``, ``Q[k] = 0``). The remaining vectors are projected on each new ``Q[k]`` as it
+    is made (modified Gram-Schmidt); the one taken is projected on all earlier ``Q`` once more ("twice is
+    enough"), both coefficients adding up in ``R``: as many projections as :func:`gram_schmidt`'s.
+
+    The choice is straight-line: at step ``k`` one bubbling pass of compare-and-swap from the last vector
+    to position ``k`` (selects of the residual, the coefficients so far and ``carried``). ``carried[i]``:
+    values that travel with vector ``i`` (a row's scale, its right-hand side); returned in the order
+    taken, beside the QR of the vectors in that order (``R[i][k]``: vector ``k`` taken on ``Q[i]``).
+    """
+    m = len(vectors)
+    slots = [{"v": [sp.sympify(x) for x in vector], "c": [], "x": list(carried[i])} for i, vector in enumerate(vectors)]
+    Q: list[list[sp.Expr]] = []
+    R: list[list[sp.Expr | None]] = [[None] * m for _ in range(m)]
+    keep: list[sp.Expr] = []
+    order: list[list[sp.Expr]] = []
+    for k in range(m):
+        squares = {s: step(f"{label}p{k}_{s}", sp.Add(*[x**2 for x in slots[s]["v"]])) for s in range(k, m)}
+        for s in reversed(range(k + 1, m)):  # one bubbling pass: the longest residual ends at position k
+            longer = step(f"{label}gt{k}_{s}", sp.StrictGreaterThan(squares[s], squares[s - 1]))
+            low, high = slots[s - 1], slots[s]
+            swapped = {}
+            for key in ("v", "c", "x"):
+                pairs = list(zip(low[key], high[key]))
+                swapped[key] = (
+                    [step(f"{label}{key}{k}_{s}_{e}L", select_value(longer, b, a)) for e, (a, b) in enumerate(pairs)],
+                    [step(f"{label}{key}{k}_{s}_{e}H", select_value(longer, a, b)) for e, (a, b) in enumerate(pairs)],
+                )
+            squares[s - 1], squares[s] = (step(f"{label}pp{k}_{s}L", select_value(longer, squares[s], squares[s - 1])),
+                                          step(f"{label}pp{k}_{s}H", select_value(longer, squares[s - 1], squares[s])))
+            slots[s - 1] = {key: swapped[key][0] for key in swapped}
+            slots[s] = {key: swapped[key][1] for key in swapped}
+        taken = slots[k]
+        v, coefficient = taken["v"], list(taken["c"])
+        for i in range(k):  # the second pass of the one taken
+            c = step(f"{label}r{i}_{k}", _dot(Q[i], v))
+            coefficient[i] = coefficient[i] + c
+            v = [step(f"{label}w{i}_{k}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, Q[i]))]
+        norm = step(f"{label}n{k}", sp.sqrt(step(f"{label}nn{k}", sp.Add(*[x**2 for x in v]))))
+        kept = step(f"{label}keep{k}", sp.StrictGreaterThan(norm, threshold))
+        inv = step(f"{label}i{k}", 1 / guarded(norm, kept))
+        q = [step(f"{label}q{k}_{e}", sp.Piecewise((x * inv, kept), (sp.S.Zero, True))) for e, x in enumerate(v)]
+        for i in range(k):
+            R[i][k] = step(f"{label}R{i}_{k}", coefficient[i])
+        R[k][k] = step(f"{label}d{k}", sp.Piecewise((norm, kept), (sp.S.Zero, True)))
+        Q.append(q)
+        keep.append(kept)
+        order.append(taken["x"])
+        for s in range(k + 1, m):  # the vectors left, projected on the new Q[k]
+            c = step(f"{label}c{k}_{s}", _dot(q, slots[s]["v"]))
+            slots[s] = {"v": [step(f"{label}u{k}_{s}_{e}", x - c * y) for e, (x, y) in enumerate(zip(slots[s]["v"], q))],
+                        "c": slots[s]["c"] + [c], "x": slots[s]["x"]}
+    return QR(Q, R, keep), order
+
+
+def select_value(cond: sp.Expr, then: sp.Expr, otherwise: sp.Expr) -> sp.Expr:
+    """``then`` where ``cond`` holds, else ``otherwise`` (one of them when both are the same)."""
+    if then == otherwise:
+        return then
+    return sp.Piecewise((then, cond), (otherwise, True))
 
 
 def adjugate_upper(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], label: str) -> list[list[sp.Expr]]:

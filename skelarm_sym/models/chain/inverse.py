@@ -22,9 +22,14 @@ no loops, no allocation); the small factorisations are those of :mod:`skelarm_sy
   ``|J dq - twist|^2 + lambda^2 |dq|^2`` of least norm, in two QR stages:
   1. Gram-Schmidt on the rows of ``B = S J``, ``S = diag(1/L, 1/L, 1/L, 1, 1, 1)`` with ``L`` the
      chain's reach (sum of its constant translations; 1 if that is zero), so the rank rule does not
-     depend on the unit of length: ``B^T = Q R``; a row whose residual is at most
-     ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero).
-  2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]``,
+     depend on the unit of length, taken largest residual first (rank-revealing, see
+     :func:`~skelarm_sym.derive.solve6.pivoted_gram_schmidt`; rows of J that are identically zero are
+     left out): ``P B^T = Q R``; where ``min(lambda, 1) <= RANK_TOL * |B|_F`` a row whose residual is at
+     most ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero) and so is every
+     later one. With more damping no row is dropped: the damping bounds what a small singular value
+     ``s`` adds (``s / (s^2 + lambda^2)``), and dropping its direction would cost up to
+     ``RANK_TOL |B|_F / lambda^2``.
+  2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]`` (rows in the order taken),
      by a second Gram-Schmidt QR and a guarded back substitution; every row divided by ``max(1, lambda)``
      first (the same solution), so no entry overflows for any finite lambda and the answer tends to 0,
      the limit, as lambda grows.
@@ -48,7 +53,7 @@ from typing import Sequence
 import sympy as sp
 
 from ...derive.core import RANK_TOL, FunctionSpec
-from ...derive.solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded
+from ...derive.solve6 import pivoted_gram_schmidt, adjugate_upper, back_substitute, gram_schmidt, guarded
 
 INVERSE_FUNCTIONS = (
     FunctionSpec("ik_terms", ("q", "params"), ("T", "J"), "tool pose T and Jacobian J at once (the terms of an IK step)"),
@@ -124,20 +129,29 @@ def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.
     finite lambda (``lambda^2`` overflows from 1.8e154 in double, 1.8e19 in float), and whose solution tends
     to 0 as lambda grows (exactly 0 once ``mu`` underflows).
     """
-    m = len(rows)
     n = len(rows[0])
+    live = [r for r, row in enumerate(rows) if any(x != 0 for x in row)]  # a row of J that is zero (a SCARA's
+    rows, scales, rhs = [rows[r] for r in live], [scales[r] for r in live], [rhs[r] for r in live]  # wx, wy) leaves
+    m = len(rows)                                                   # the solution alone: it is not factorised
     scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
     frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
-    first = gram_schmidt(step, scaled, f"{label}A", threshold=tol * frob)
-    damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
     factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
+    # rows taken longest residual first (rank-revealing); each row's factor and right-hand side go with it
+    # (the order of a least-squares problem's rows does not change its solution)
+    damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
+    # the rank rule serves the undamped solve (lambda at most the threshold): with more damping every row is
+    # kept, the damping bounds what a direction of a small singular value s adds (s / (s^2 + lambda^2)), and
+    # dropping it would cost up to threshold / lambda^2 (float, lambda = 0.1: 3e-3)
+    limit = step(f"{label}tau", tol * frob)
+    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(damping, limit)), (sp.S.Zero, True)))
+    first, order = pivoted_gram_schmidt(step, scaled, [(factor[r], rhs[r]) for r in range(m)], f"{label}A", threshold)
     columns = []
     for k in range(m):
-        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] * factor[r]) for r in range(m)]
+        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] * order[r][0]) for r in range(m)]
         bottom = [damping if e == k else sp.S.Zero for e in range(m)]
         columns.append(top + bottom)
     second = gram_schmidt(step, columns, f"{label}B")
-    c = [step(f"{label}c{k}", mu * sp.Add(*[second.Q[k][r] * rhs[r] for r in range(m)])) for k in range(m)]
+    c = [step(f"{label}c{k}", mu * sp.Add(*[second.Q[k][r] * order[r][1] for r in range(m)])) for k in range(m)]
     z = back_substitute(step, second.R, c, f"{label}s")
     return [step(f"{label}x{j}", sp.Add(*[first.Q[k][j] * z[k] for k in range(m)])) for j in range(n)]
 
@@ -209,9 +223,9 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     notes = (
         "Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));",
         f"Hs[(r*{n} + c)*{n} + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR",
-        "stages (rows of J scaled by 1/reach for the rank rule; a row whose Gram-Schmidt residual is at most",
-        "RANK_TOL times the Frobenius norm is dropped, so lambda = 0 at a singular pose gives the minimum-norm",
-        "least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
+        "stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with",
+        "lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0",
+        "at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
         "where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).",
     )
     if not quadratic:
