@@ -29,17 +29,19 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import keyword
 import math
 import operator
 import os
 import re
+import sys
 import tomllib
 from pathlib import Path
 
 import sympy as sp
 
 from ...errors import InputError
-from ...names import IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name
+from ...names import C_RESERVED, IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -218,8 +220,10 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
         if limits["velocity"] is not None and limits["velocity"] <= 0:
             raise InputError(f"{where}.velocity must be positive")
         joints.append(dataclasses.replace(joint, **limits))
-    if len(set(names)) != len(names):
-        raise InputError("joint names must be distinct")
+    twice = next((x for i, x in enumerate(names) if x in names[:i]), None)
+    if twice is not None:
+        raise InputError(f"joint names must be distinct: {quoted(twice)} names joints[{names.index(twice)}] and "
+                         f"joints[{names.index(twice, names.index(twice) + 1)}]")
     tool = _frame(data["tool"], "tool", parameters) if "tool" in data else Transform.identity()
     description = data.get("description", f"{convention} DH")
     if not isinstance(description, str):
@@ -228,7 +232,17 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
     return Chain(
         name, tuple(joints), base, tool, tuple(names), tuple(parameters.values()), source,
         description=f"{convention} DH" if description == f"{convention} DH" else description,
+        prefix=_default_prefix(name),
     )
+
+
+def _default_prefix(name: str) -> str:
+    """The files' default prefix for a robot named ``name``: ``""`` (the name itself) where the name is usable
+    as a prefix, else the name made an identifier (a C or Python keyword, a Python standard module or NumPy:
+    ``long`` gives ``long_robot``), as a URDF's file name is."""
+    unusable = (name in C_RESERVED or keyword.iskeyword(name) or name in sys.stdlib_module_names
+                or name.lower() in ("numpy", "np"))
+    return (identifier_from(name) or "robot") if unusable else ""
 
 
 def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> bytes:

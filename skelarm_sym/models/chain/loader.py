@@ -3,7 +3,8 @@
 The default prefix (the emitted files' names and the C prefix when ``--prefix`` is not given):
 
 * URDF: the file name's stem made an identifier, else the ``<robot name>`` made one, else ``robot``;
-* TOML: the ``name`` key, else the file name's stem made an identifier, else ``robot``.
+* TOML: the ``name`` key made an identifier (``long`` gives ``long_robot``), else the file name's stem made
+  an identifier, else ``robot``.
 
 "Made an identifier" (:func:`~skelarm_sym.names.identifier_from`): case kept as written, every run of
 characters other than ASCII letters and digits becomes one ``_`` (none at either end), ``robot_``

@@ -407,7 +407,15 @@ class Chain:
         """Raise :class:`InputError` (one line naming the value) unless every nonzero constant of the chain
         is a normal finite number of ``precision``, and its reach (the sum of the constant translations'
         lengths) has a normal reciprocal and fourth power (the inverse functions scale by it and form
-        products of four lengths)."""
+        products of four lengths). The message starts with the robot file's path, where there is one."""
+        try:
+            self._check_representable(precision)
+        except InputError as exc:
+            if self.source:
+                raise InputError(f"{self.source}: {exc}") from None
+            raise
+
+    def _check_representable(self, precision: str) -> None:
         from ..numbers import check_number
 
         reach = 0.0

@@ -1,0 +1,49 @@
+"""Errors from a robot file name the file and the culprit, and a robot's name that is a reserved word
+still gives usable files (the default prefix is made an identifier, as a URDF's file name is)."""
+
+from __future__ import annotations
+
+import pytest
+
+from skelarm_sym.cli import main
+from skelarm_sym.generate import generate
+from skelarm_sym.models.chain.loader import load_robot
+
+ONE_JOINT = 'name = "{name}"\nconvention = "standard"\n[[joints]]\nname = "j1"\ntype = "revolute"\na = {a}\n'
+SECOND = '[[joints]]\nname = "{name}"\ntype = "revolute"\na = 0.5\n'
+
+
+@pytest.mark.parametrize("name, prefix", [("long", "long_robot"), ("code", "code_robot"), ("numpy", "numpy_robot"),
+                                          ("arm", "arm"), ("params", "params")])
+def test_a_reserved_robot_name_gets_a_usable_default_prefix(tmp_path, name, prefix):
+    robot = tmp_path / "r.toml"
+    robot.write_text(ONE_JOINT.format(name=name, a=1.0))
+    chain = load_robot(robot)
+    assert chain.name == name and chain.default_prefix == prefix
+    result = generate(chain, out=tmp_path / "out", functions="pose")
+    assert sorted(p.name for p in result.paths) == sorted(prefix + s for s in (".h", ".c", ".py"))
+
+
+def test_an_explicit_reserved_prefix_is_still_refused(tmp_path, capsys):
+    robot = tmp_path / "r.toml"
+    robot.write_text(ONE_JOINT.format(name="arm", a=1.0))
+    assert main(["generate", "--robot", str(robot), "--prefix", "long", "--out", str(tmp_path / "out")]) == 2
+    assert "prefix 'long' is a reserved word" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_repeated_joint_name_is_named_with_both_rows(tmp_path, capsys):
+    robot = tmp_path / "dup.toml"
+    robot.write_text(ONE_JOINT.format(name="arm", a=1.0) + SECOND.format(name="elbow") + SECOND.format(name="j1"))
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"skelarm-sym: error: {robot}: joint names must be distinct: 'j1' names joints[0] and joints[2]"
+
+
+def test_an_unrepresentable_reach_names_the_file(tmp_path, capsys):
+    robot = tmp_path / "big.toml"
+    robot.write_text(ONE_JOINT.format(name="arm", a=1e100))
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"skelarm-sym: error: {robot}: the robot's reach") and "1e+100" in err, err
+    assert not (tmp_path / "out").exists()
