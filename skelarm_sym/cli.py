@@ -125,6 +125,8 @@ def _show(args) -> int:
 
     if args.format not in FORMATS:
         raise InputError(f"unknown --format {args.format!r}; choose from {', '.join(FORMATS)}")
+    if args.pose is not None and args.plot is None:
+        raise InputError("--pose sets the joint angles of --plot: add --plot FILE")
     for kind in kinds():
         text = kind.preview(args) if kind.preview is not None else None
         if text is not None:

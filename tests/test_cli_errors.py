@@ -126,3 +126,11 @@ def test_a_refusal_for_other_options_comes_before_the_derivation(tmp_path, monke
     assert main(["generate", "--links", "3", "--functions", "position,positon", "--out", str(both)]) == 2
     assert "unknown function 'positon'" in capsys.readouterr().err and derived == [1]
     assert main(["generate", "--links", "3", "--functions", "position,jacobian", "--out", str(both)]) == 0
+
+
+def test_pose_without_plot_is_refused_instead_of_ignored(capsys):
+    """``show --links 2 --pose 1,nan`` printed the closed forms and exited 0: the angles (even a NaN) were
+    never read."""
+    line = one_line_error(capsys, ["show", "--links", "2", "--pose", "1,nan"])
+    assert "--pose sets the joint angles of --plot: add --plot FILE" in line
+    assert main(["show", "--links", "2"]) == 0
