@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x0bf2a060UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xb3abe12aUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 

@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x85b5117eUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x104a1fc8UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x579702c4UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xb351fa51UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

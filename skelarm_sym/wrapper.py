@@ -59,10 +59,19 @@ def _check_domain(array: np.ndarray, name: str, domain: str) -> None:
 
 
 def _real(value: object, name: str, dtype) -> np.ndarray:
-    """``value`` as an array of ``dtype``; complex numbers, strings and objects are refused."""
+    """``value`` as an array of ``dtype``; complex numbers, strings and objects are refused, and so are finite
+    numbers beyond ``dtype``'s range (a float64 1e39 for a float library: not "must be finite")."""
     array = np.asarray(value)
     if array.dtype.kind not in "biuf":
         raise InputError(f"{name} must hold real numbers, got {array.dtype}")
+    if array.dtype.kind == "f" and array.dtype.itemsize > np.dtype(dtype).itemsize:
+        with np.errstate(over="ignore"):
+            narrowed = np.asarray(array, dtype=dtype)
+        beyond = np.isinf(narrowed) & np.isfinite(array)
+        if beyond.any():
+            raise InputError(f"{name} holds {array[beyond].flat[0]:g}, beyond the range of {np.dtype(dtype).name} "
+                             f"(|x| <= {np.finfo(dtype).max:g})")
+        return narrowed
     return np.asarray(array, dtype=dtype)
 
 
