@@ -54,7 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
     chk = sub.add_parser("check", help="generate, compile and compare with the independent reference")
     add_model_options(chk)
     chk.add_argument("--precision", help="double (default) or float")
-    chk.add_argument("--lang", help="comma-separated languages (default c,python)")
+    chk.add_argument("--lang", help="comma-separated languages (default c,python); with --from: which of the files to check "
+                     "(default all)")
     chk.add_argument("--from", dest="source", metavar="DIR",
                      help="check the files generated earlier in DIR (their header records the model and options)")
     chk.add_argument("--prefix", help="with --from: the files' prefix (default: the only one in DIR)")
@@ -146,12 +147,13 @@ def _check(args) -> int:
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.source is not None:
-        given = model_given(args) + [flag for flag, dest in (("--precision", "precision"), ("--lang", "lang"))
-                                     if getattr(args, dest, None) is not None]
+        given = model_given(args) + (["--precision"] if args.precision is not None else [])
         if given:
             raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)}")
         loaded = load_generated(args.source, args.prefix)
         generated, precision = loaded.generated, loaded.precision
+        if args.lang is not None:  # only these languages' files (a folder's PyTorch set, and no PyTorch here)
+            generated = _only_languages(generated, validate_langs(args.lang), args.source)
         print(f"checking {', '.join(generated.sources)} in {args.source} ({loaded.command})")
         if loaded.edited:
             verb = "differs" if len(loaded.edited) == 1 else "differ"
@@ -175,6 +177,23 @@ def _check(args) -> int:
     solver_line = f"; ik: {len(solver_rows) - len(solver_failed)} passed, {len(solver_failed)} failed" if solver_rows else ""
     print(f"{len(results) - len(failed)} passed, {len(failed)} failed{solver_line}")
     return 1 if failed or solver_failed else 0
+
+
+def _only_languages(generated, langs, folder):
+    """``generated`` with only the files of ``langs`` (each language's whole set must be there)."""
+    import dataclasses
+
+    from .backends import BACKENDS
+
+    prefix = generated.module.prefix
+    keep = {}
+    for lang in langs:
+        names = [prefix + suffix for suffix in BACKENDS[lang].FILE_SUFFIXES]
+        missing = [name for name in names if name not in generated.sources]
+        if missing:
+            raise InputError(f"--lang {lang}: {', '.join(missing)} not in {folder} (it has {', '.join(generated.sources)})")
+        keep.update((name, generated.sources[name]) for name in names)
+    return dataclasses.replace(generated, sources=keep)
 
 
 _EXIT_FREEZE: list[bool] = []

@@ -162,3 +162,17 @@ def test_every_example_robots_check_of_the_inverse_velocity_passes_at_the_defaul
                              out=None, functions="inverse_velocity,inverse_velocity_position")
         rows = compare(generated, 100, 0, precision)
         assert all(r.ok for r in rows), (name, [(r.output, r.max_rel) for r in rows if not r.ok])
+
+
+def test_check_from_can_check_some_of_the_languages_in_the_folder(tmp_path, capsys):
+    """A folder with a PyTorch set needed PyTorch to be checked at all, and --lang was refused with --from."""
+    generate(load_robot(ROOT / "examples/robots/ur5.toml"), langs="c,python,torch", out=tmp_path, functions="pose")
+    assert main(["check", "--from", str(tmp_path), "--lang", "python", "--cases", "3"]) == 0
+    out = capsys.readouterr().out
+    assert f"checking ur5.py in {tmp_path}" in out
+    assert "Python pose" in out and "C pose" not in out and "PyTorch" not in out
+    assert main(["check", "--from", str(tmp_path), "--lang", "jax"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"skelarm-sym: error: --lang jax: ur5_jax.py not in {tmp_path} (it has ur5.h, ur5.c, ur5.py, ur5_torch.py)"
+    assert main(["check", "--from", str(tmp_path), "--lang", "fortran"]) == 2
+    assert "unknown language 'fortran'" in capsys.readouterr().err
