@@ -787,6 +787,9 @@ def test_prefix_rule_is_stated_for_the_cli():
 
     assert "xarm7.urdf: xarm7" in loader.PREFIX_RULE and "name key" in loader.PREFIX_RULE
     assert "\n" not in loader.PREFIX_RULE
+    # every rule the cases above exercise (runs collapse, code.urdf, a stem without letters)
+    for part in ("becomes one _ (none at either end)", "reserved word _robot after it", "robot name, else robot"):
+        assert part in loader.PREFIX_RULE, part
     assert "the file name's stem made an identifier, else the ``<robot name>``" in loader.__doc__
 
 

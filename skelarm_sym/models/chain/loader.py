@@ -32,7 +32,9 @@ from .urdf import MAX_URDF_BYTES, MAX_URDF_ELEMENTS, UrdfLink, load_urdf, urdf_l
 SUFFIXES = (".urdf", ".toml")
 PREFIX_RULE = (
     "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7), for a TOML file its name key; "
-    "characters other than letters and digits become _, a leading digit gets robot_ before it"
+    "each run of characters other than ASCII letters and digits becomes one _ (none at either end), a leading "
+    "digit gets robot_ before it, a C or Python reserved word _robot after it (long: long_robot), and a name "
+    "with no letter or digit gives the URDF's robot name, else robot"
 )
 """The default-prefix rule in one sentence (for ``generate --help``)."""
 
