@@ -121,6 +121,10 @@ def pivoted_gram_schmidt(
     values that travel with vector ``i`` (a row's scale, its right-hand side); returned in the order
     taken, beside the QR of the vectors in that order (``R[i][k]``: vector ``k`` taken on ``Q[i]``).
     """
+    groups = _orthogonal_groups(vectors)
+    if len(groups) > 1:  # factorised apart: their QR is block diagonal, their rank the sum
+        return _combined([pivoted_gram_schmidt(step, [vectors[i] for i in group], [carried[i] for i in group],
+                                               f"{label}g{g}", threshold) for g, group in enumerate(groups)])
     m = len(vectors)
     slots = [{"v": [sp.sympify(x) for x in vector], "c": [], "x": list(carried[i])} for i, vector in enumerate(vectors)]
     Q: list[list[sp.Expr]] = []
@@ -163,6 +167,50 @@ def pivoted_gram_schmidt(
             c = step(f"{label}c{k}_{s}", _dot(q, slots[s]["v"]))
             slots[s] = {"v": [step(f"{label}u{k}_{s}_{e}", x - c * y) for e, (x, y) in enumerate(zip(slots[s]["v"], q))],
                         "c": slots[s]["c"] + [c], "x": slots[s]["x"]}
+    return QR(Q, R, keep), order
+
+
+def _orthogonal_groups(vectors: Sequence[Sequence[sp.Expr]]) -> list[list[int]]:
+    """The vectors' indices in groups, in order of first index, such that vectors of different groups have no
+    nonzero entry at a common position (they are orthogonal whatever the values): a SCARA's vertical velocity
+    row, which only its prismatic joint moves, apart from its other rows."""
+    support = [{e for e, x in enumerate(vector) if x != 0} for vector in vectors]
+    group_of = list(range(len(vectors)))
+
+    def root(i: int) -> int:
+        while group_of[i] != i:
+            i = group_of[i]
+        return i
+
+    for i in range(len(vectors)):
+        for j in range(i):
+            if support[i] & support[j]:
+                a, b = root(i), root(j)
+                group_of[max(a, b)] = min(a, b)
+    groups: dict[int, list[int]] = {}
+    for i in range(len(vectors)):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
+def _combined(parts: list[tuple[QR, list[list[sp.Expr]]]]) -> tuple[QR, list[list[sp.Expr]]]:
+    """One QR (block diagonal ``R``) and one order from the QRs of groups of mutually orthogonal vectors."""
+    m = sum(len(qr.Q) for qr, _ in parts)
+    Q: list[list[sp.Expr]] = []
+    R: list[list[sp.Expr | None]] = [[None] * m for _ in range(m)]
+    keep: list[sp.Expr] = []
+    order: list[list[sp.Expr]] = []
+    start = 0
+    for qr, taken in parts:
+        size = len(qr.Q)
+        for i in range(size):
+            for k in range(start, m):
+                R[start + i][k] = qr.R[i][k - start] if k - start < size and qr.R[i][k - start] is not None else (
+                    None if k < start + i else sp.S.Zero)
+        Q.extend(qr.Q)
+        keep.extend(qr.keep)
+        order.extend(taken)
+        start += size
     return QR(Q, R, keep), order
 
 
