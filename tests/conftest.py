@@ -109,12 +109,24 @@ def _quick_xla_flags(cache) -> str | None:
     return XLA_QUICK
 
 
+def _hypothesis_profile() -> None:
+    """CI (``CI=true``) draws Hypothesis's examples from a fixed seed: a run judges the commit, not the luck of
+    its draw. Elsewhere each run draws anew (and replays the failures in .hypothesis/): that is how the
+    search keeps finding cases (it found tests/test_ir_constants.py's cancelling literals)."""
+    if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
+        from hypothesis import settings
+
+        settings.register_profile("ci", derandomize=True)
+        settings.load_profile("ci")
+
+
 GC_THRESHOLDS = (50_000, 20, 1000)
 """Python's collector thresholds in every test process (see the module docstring, "Python's cyclic collector")."""
 
 
 def pytest_configure(config):
     gc.set_threshold(*GC_THRESHOLDS)
+    _hypothesis_profile()
     # once, in the process that starts the pytest-xdist workers (they inherit the environment), or in a run without them
     if os.environ.get("PYTEST_XDIST_WORKER") is None:
         flags = _quick_xla_flags(getattr(config, "cache", None))
