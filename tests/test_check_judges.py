@@ -176,3 +176,29 @@ def test_check_from_can_check_some_of_the_languages_in_the_folder(tmp_path, caps
     assert err == f"skelarm-sym: error: --lang jax: ur5_jax.py not in {tmp_path} (it has ur5.h, ur5.c, ur5.py, ur5_torch.py)"
     assert main(["check", "--from", str(tmp_path), "--lang", "fortran"]) == 2
     assert "unknown language 'fortran'" in capsys.readouterr().err
+
+
+def test_float_candidates_are_judged_with_the_float_tolerances():
+    """Stanford arm, float, seed 2, target 5: q1's two roots 1.3e-3 apart, within the float singular tolerance: the
+    float code flags the eight rows singular, as the steps at the float tolerances do; the judge evaluated them
+    at the double tolerances only, and ``check --robot stanford.toml --precision float --seed 2`` failed."""
+    from skelarm_sym.models.chain.check import candidates_scenario
+
+    generated = generate(load_robot(ROOT / "examples/robots/stanford.toml"), langs="python", precision="float",
+                         out=None, functions="ik_candidates")
+    (label, module), = load_implementations(generated)
+    scenario = candidates_scenario(generated.derivation, 100, 2, "float")
+    assert scenario.expected["flags"][5].tolist() == [2.0] * 8 and scenario.alternatives["flags"][5].tolist() == [0.0] * 8
+    assert all(r.ok for r in compare(generated, 100, 2, "float", [(label, module)]))
+
+    def with_flags(value):
+        def ik_candidates(target):
+            Q, flags = module.ik_candidates(target)
+            flags = np.array(flags, dtype=np.float64)
+            flags[5] = value
+            return Q, flags
+        return SimpleNamespace(ik_candidates=ik_candidates)
+
+    assert all(r.ok for r in compare(generated, 100, 2, "float", [("double's", with_flags(0.0))]))
+    wrong = {r.output: r.ok for r in compare(generated, 100, 2, "float", [("least squares", with_flags(1.0))])}
+    assert wrong == {"Q": True, "flags": False}

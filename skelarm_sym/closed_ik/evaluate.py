@@ -20,11 +20,11 @@ from .numpy_source import Unsupported, numpy_function
 from .postprocess import STATUS, IKAll, nearest, postprocess
 
 
-def _steps_function(args: list, steps: list, outs: list) -> Callable[..., list]:
+def _steps_function(args: list, steps: list, outs: list, precision: str = "double") -> Callable[..., list]:
     """``f(*args) -> outs`` through the steps: :func:`~.numpy_source.numpy_function`, or ``sympy.lambdify`` where
-    the steps hold a node that has no rule there. The module constants in the steps take their double values
-    (:data:`~.derive.STEP_TOLERANCES`)."""
-    values = {c.symbol: c.values["double"] for c in STEP_TOLERANCES}
+    the steps hold a node that has no rule there. The module constants in the steps take their values for
+    ``precision`` (:data:`~.derive.STEP_TOLERANCES`; the arithmetic is double either way)."""
+    values = {c.symbol: c.values[precision] for c in STEP_TOLERANCES}
     steps = [(s, e.xreplace(values) if e.has(*values) else e) for s, e in steps]
     try:
         return numpy_function(args, steps, outs)
@@ -127,17 +127,18 @@ class ClosedFormIK:
                        members=members)
 
 
-def lambdify_candidates(derivation) -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+def lambdify_candidates(derivation, precision: str = "double") -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     """``f(target (m, 16), lock=None) -> (Q (m, S, N), flags (m, S))`` from a derivation that has the function
-    ``ik_candidates`` (:func:`~.derive.with_candidates`): its SymPy steps evaluated in double (:func:`_steps_function`), the
-    check's expectation for the emitted ``ik_candidates`` (the emission against SymPy's own evaluation; whether
-    the candidates solve the IK is judged by the reference in the ``ik_all`` rows)."""
+    ``ik_candidates`` (:func:`~.derive.with_candidates`): its SymPy steps evaluated in double (:func:`_steps_function`)
+    with the tolerances of ``precision``, the check's expectation for the emitted ``ik_candidates`` (the emission
+    against SymPy's own evaluation; whether the candidates solve the IK is judged by the reference in the
+    ``ik_all`` rows)."""
     Q, flags = derivation.compact["Q"], derivation.compact["flags"]
     S, N = Q.shape
     outs = list(Q) + list(flags)
     steps = _needed_steps(list(derivation.steps), outs)
     args = list(derivation.inputs["target"]) + list(derivation.inputs.get("lock", ()))
-    fn = _steps_function(args, steps, outs)
+    fn = _steps_function(args, steps, outs, precision)
     locked = "lock" in derivation.inputs
 
     def evaluate(target, lock=None):

@@ -245,16 +245,24 @@ def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scena
 
 def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
     """``ik_candidates`` on poses of random configurations (:func:`_targets`), expected: the same steps evaluated by
-    SymPy (lambdify, double). Its condition per case: the largest Jacobian condition number over the exact rows
+    SymPy (lambdify, double arithmetic) with the tolerances of ``precision``; in float the decisions at the double
+    tolerances are a second answer (a float double root of q1 1.3e-3 apart, Stanford arm, seed 2, is flagged
+    singular, as the float tolerance says, where double's keeps the roots apart). Its condition per case: the largest Jacobian condition number over the exact rows
     (:func:`_condition`)."""
     from ...closed_ik.evaluate import lambdify_candidates
 
     chain = derivation.model
     t = _targets(chain, seed + 3, cases, precision)
-    Q, flags = lambdify_candidates(derivation)(t.targets, t.lock_value)
-    condition = np.array([_condition(chain.numeric(), Q[i][flags[i] == 0], t.free, t.length) for i in range(len(Q))])
+    Q, flags = lambdify_candidates(derivation, precision)(t.targets, t.lock_value)
+    second = {}
+    Q2, flags2 = Q, flags
+    if precision != "double":  # near a tolerance the float code may decide as double would (its rounding either side)
+        Q2, flags2 = lambdify_candidates(derivation)(t.targets, t.lock_value)
+        second = {"Q": Q2, "flags": flags2}
+    # conditioned by the rows double calls regular: a near-double root that float flags is still as ill-conditioned
+    condition = np.array([_condition(chain.numeric(), Q2[i][flags2[i] == 0], t.free, t.length) for i in range(len(Q))])
     return Scenario("ik candidates", t.values, {"Q": Q, "flags": flags},
-                    {"Q": np.maximum(1.0, condition), "flags": np.ones(len(Q))}, size=chain.n)
+                    {"Q": np.maximum(1.0, condition), "flags": np.ones(len(Q))}, second, size=chain.n)
 
 
 class ClosedCheck:
