@@ -158,6 +158,10 @@ def _check(args) -> int:
         if loaded.edited:
             verb = "differs" if len(loaded.edited) == 1 else "differ"
             print(f"note: {', '.join(loaded.edited)} {verb} from what this version generates for that command")
+        if loaded.missing:
+            verb = "is" if len(loaded.missing) == 1 else "are"
+            print(f"note: {', '.join(loaded.missing)} of that command {verb} not in {args.source} (removed, or replaced "
+                  "by another prefix's file): not checked")
     else:
         if args.prefix is not None:
             raise InputError("--prefix chooses files with --from")

@@ -188,7 +188,8 @@ def test_check_from_folder_checks_the_files_there(tmp_path, capsys):
 def test_files_of_one_language_from_a_two_language_generation_are_not_called_edited(tmp_path, capsys):
     """Only the .h and .c of a `--lang c,python` generation copied to a folder: check --from compared them with a
     C-only generation, whose recorded command reads `--lang c`, and noted both as differing (a new user's probe);
-    they are compared with the recorded command's output: no note."""
+    they are compared with the recorded command's output: no such note (only that arm3.py, which the command
+    records, is not there to check)."""
     import shutil
 
     out = _generate(tmp_path, "--links", "3", "--prefix", "arm3")
@@ -199,7 +200,8 @@ def test_files_of_one_language_from_a_two_language_generation_are_not_called_edi
     capsys.readouterr()
     assert main(["check", "--from", str(only_c), "--cases", "4"]) == 0
     text = capsys.readouterr().out
-    assert "note:" not in text and "--lang c,python" in text.splitlines()[0]
+    assert "differ" not in text and "--lang c,python" in text.splitlines()[0]
+    assert text.splitlines()[1] == f"note: arm3.py of that command is not in {only_c} (removed, or replaced by another prefix's file): not checked"
 
 
 def test_a_hand_edited_file_fails_the_check(tmp_path, capsys):

@@ -149,7 +149,32 @@ def test_check_from_refuses_files_without_a_function_their_command_emits(tmp_pat
     source.write_text(source.read_text().replace("def jacobian(", "def jacobian_gone("))
     assert main(["check", "--from", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "arm.py has no jacobian" in err, err
+    assert len(err.splitlines()) == 1 and "arm.py declares `def jacobian_gone(q):` where its recorded command now gives `def jacobian(q):`" in err, err
+
+
+def test_check_from_refuses_a_length_that_became_a_parameter_instead_of_crashing(tmp_path, capsys):
+    """The files' pose(q) was called as pose(q, params), and the compiled library with a params array it does not
+    take: heap corruption, exit 134 ('corrupted double-linked list')."""
+    robot = tmp_path / "arm.toml"
+    robot.write_text(THREE_JOINTS)
+    out = tmp_path / "out"
+    generate(load_robot(robot), out=out, functions="pose")
+    robot.write_text(THREE_JOINTS.replace("a = 0.35", 'a = "reach3"'))
+    assert main(["check", "--from", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "arm.h declares `void arm_pose(const double q[3], double T[16]);` where its recorded command now gives " \
+           "`void arm_pose(const double q[3], const double params[1], double T[16]);`" in err, err
+
+
+def test_check_from_refuses_a_precision_edited_in_the_header_instead_of_crashing(tmp_path, capsys):
+    """The double library driven as float: 'double free or corruption', exit 134."""
+    generate(2, out=tmp_path, functions="position")
+    for path in tmp_path.iterdir():
+        path.write_text(path.read_text().replace("--precision double", "--precision float"))
+    assert main(["check", "--from", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "declares `void arm2_position(const double q[2], const double l[2], double p[2]);`" in err, err
 
 
 @pytest.mark.parametrize("precision", ["double", "float"])
@@ -202,3 +227,17 @@ def test_float_candidates_are_judged_with_the_float_tolerances():
     assert all(r.ok for r in compare(generated, 100, 2, "float", [("double's", with_flags(0.0))]))
     wrong = {r.output: r.ok for r in compare(generated, 100, 2, "float", [("least squares", with_flags(1.0))])}
     assert wrong == {"Q": True, "flags": False}
+
+
+def test_check_from_names_the_recorded_files_that_are_not_there(tmp_path, capsys):
+    """arm's set of c,python,torch after arm_torch's --force took arm_torch.py: the check passed on arm.h, arm.c,
+    arm.py and said nothing of the torch file its command records."""
+    generate(3, prefix="arm", langs="c,python,torch", out=tmp_path, functions="position")
+    generate(3, prefix="arm_torch", langs="python", out=tmp_path, functions="position", force=True)
+    assert main(["check", "--from", str(tmp_path), "--prefix", "arm", "--cases", "3"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith(f"checking arm.h, arm.c, arm.py in {tmp_path} ")
+    assert out[1] == f"note: arm_torch.py of that command is not in {tmp_path} (removed, or replaced by another prefix's file): not checked"
+    (tmp_path / "arm.py").unlink()
+    assert main(["check", "--from", str(tmp_path), "--prefix", "arm", "--cases", "3"]) == 0
+    assert "note: arm.py, arm_torch.py of that command are not in" in capsys.readouterr().out

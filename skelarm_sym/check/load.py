@@ -22,6 +22,8 @@ class LoadedFiles:
     precision: str
     command: str
     edited: tuple[str, ...]
+    missing: tuple[str, ...] = ()
+    """Files of the languages the command records that are not here (checked: the ones that are)."""
 
 
 def _read_head(path) -> str:
@@ -114,31 +116,53 @@ def load_generated(folder, prefix: str | None = None) -> LoadedFiles:
                      functions=args.functions, cmake=args.cmake, recorded_folder=root)
     _refuse_another_model(root, sources, fresh, command)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
-    return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited)
+    missing = tuple(name for name in fresh.sources if name not in sources and name != "CMakeLists.txt")
+    return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited, missing)
 
 
 _MODEL = re.compile(r"Model: .*?(\d+ coordinate\(s\), \d+ moving joint\(s\) \([^)]*\))")
 
 
+_C_PROTOTYPE = re.compile(r"^(?:\w+ )*(?:void|int|float|double) \w+\([^;]*\);$", re.M)
+_PY_INTERFACE = re.compile(r"^(?:def [a-z]\w*\(.*\):|DTYPE = .*)$", re.M)
+
+
+def _interface(name: str, text: str) -> list[str]:
+    """The lines of a file that a caller binds to: a header's prototypes, a Python module's public ``def`` lines
+    and its ``DTYPE``. (Compiled or loaded against other ones, the files would be called with arrays of other
+    sizes or types: memory corruption, not a failed check.)"""
+    if name.endswith((".h", ".cuh")):
+        return _C_PROTOTYPE.findall(text)
+    if name.endswith(".py"):
+        return _PY_INTERFACE.findall(text)
+    return []
+
+
 def _refuse_another_model(root, sources: dict[str, str], fresh: Generated, command: str) -> None:
-    """InputError when the recorded command now gives another model than the one the files were generated for
-    (the robot file was edited or replaced since): other joints (the files' header line ``Model: ... N
-    coordinate(s), M moving joint(s) (kinds)``), or a function the files lack. The values of a chain with the
-    same joints are left to the comparison, which reports them; its note says the files differ."""
+    """InputError when the recorded command now gives another model or other functions than the files have (the
+    robot file was edited or replaced since, or the header's command was): other joints (the files' header line
+    ``Model: ... N coordinate(s), M moving joint(s) (kinds)``), or a prototype, a Python signature or the Python
+    ``DTYPE`` that differs (a length that became a named parameter, a precision edited in the command, a function
+    the files lack). The values of a chain with the same interface are left to the comparison, which reports
+    them; its note says the files differ."""
     from ..errors import InputError
 
     for name, text in sources.items():
-        then, now = _MODEL.search(text[:4000]), _MODEL.search(fresh.sources.get(name, "")[:4000])
+        fresh_text = fresh.sources.get(name, "")
+        then, now = _MODEL.search(text[:4000]), _MODEL.search(fresh_text[:4000])
         if then and now and then.group(1) != now.group(1):
             raise InputError(f"{root / name} was generated for {then.group(1)}; its recorded command ({command}) now "
                              f"gives {now.group(1)}: the robot file changed since; regenerate the files")
-        fresh_text = fresh.sources.get(name, "")
-        prefix = fresh.module.prefix
-        for function in fresh.module.public:
-            for mark in (f"{prefix}_{function.name}(", f"def {function.name}("):
-                if mark in fresh_text and mark not in text:
-                    raise InputError(f"{root / name} has no {function.name}, which its recorded command ({command}) now "
-                                     "emits: the robot file changed since, or the file was edited; regenerate the files")
+        had, has = _interface(name, text), _interface(name, fresh_text)
+        if had != has:
+            gone = next((line for line in has if line not in had), None)
+            extra = next((line for line in had if line not in has), None)
+            what = (f"declares `{extra}` where its recorded command now gives `{gone}`" if gone and extra else
+                    f"has no `{gone}`, which its recorded command now gives" if gone else
+                    f"declares `{extra}`, which its recorded command no longer gives" if extra else
+                    "declares its functions in another order than its recorded command now gives")
+            raise InputError(f"{root / name} {what} ({command}): the robot file or the command changed since, or the "
+                             "file was edited; regenerate the files")
 
 
 def _unique(items: list[str]) -> list[str]:
