@@ -47,3 +47,19 @@ def test_an_unrepresentable_reach_names_the_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"skelarm-sym: error: {robot}: the robot's reach") and "1e+100" in err, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("limit", ["lower = -1e39", "upper = 3.5e38", "velocity = 1e39"])
+def test_a_limit_beyond_float_is_refused_in_float_and_kept_in_double(tmp_path, capsys, limit):
+    """Float files wrote `#define Z_Q_MIN {-inff, ...}` and `const float lo[] = { -inff }` (not C) and exited 0."""
+    robot = tmp_path / "z.toml"
+    robot.write_text(ONE_JOINT.format(name="z", a=1.0) + limit + "\n")
+    assert main(["generate", "--robot", str(robot), "--precision", "float", "--out", str(tmp_path / "f")]) == 2
+    err = capsys.readouterr().err.strip()
+    kind = limit.split()[0]
+    assert err.startswith(f"skelarm-sym: error: {robot}: joint 'j1' {kind} limit = ") and "not representable in float" in err, err
+    assert not (tmp_path / "f").exists()
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "d"), "--functions", "pose"]) == 0
+    header = (tmp_path / "d" / "z.h").read_text()
+    value = float(limit.split("=")[1])
+    assert f"{value:g}" in header, limit  # the limit itself, in double

@@ -432,6 +432,9 @@ class Chain:
                 value = sp.sympify(value)
                 if value.is_number and not value.is_zero:
                     check_number(float(value), f"joint {j.name!r} {what}", precision)
+            for what, value in (("lower limit", j.lower), ("upper limit", j.upper), ("velocity limit", j.velocity)):
+                if value is not None and value != 0:  # the emitted Q_MIN, Q_MAX, DQ_MAX hold them in this precision
+                    check_number(float(value), f"joint {j.name!r} {what}", precision)
         if reach > 0:
             check_number(reach, "the robot's reach (sum of its constant translations)", precision, 4,
                          "the inverse functions use its fourth power")
