@@ -189,5 +189,10 @@ def write_atomically(folder: Path, sources: dict[str, str], remove: tuple[str, .
                 os.unlink(leftover)
             except OSError:
                 pass
+        for made in created:  # the folders this call made, deepest first (empty again)
+            try:
+                os.rmdir(made)
+            except OSError:
+                pass
         raise InputError(f"cannot write {str(current)!r}: {exc.strerror or exc}; no file was changed") from None
     return tuple(final for _, final in staged)

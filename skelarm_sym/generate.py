@@ -139,7 +139,11 @@ def _recorded_before(path: Path) -> str | None:
     return before
 
 
-def _other_options(path: Path, before: str) -> InputError:
+def _other_options(path: Path, before: str, command: str | None = None) -> InputError:
+    owner = recorded_prefix(before)
+    if command is not None and path.name == "CMakeLists.txt" and owner is not None and owner != recorded_prefix(command):
+        return InputError(f"{path} belongs to prefix {owner!r} ({before}): a folder holds one CMakeLists.txt; "
+                          "generate into another --out, or pass --force (force=True) to replace it")
     return InputError(f"{path} was generated with other options ({before}); "
                       "choose another --prefix or --out, or pass --force (force=True) to replace it")
 
@@ -150,7 +154,7 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
         path = target / name
         before, after = _recorded_before(path), recorded_command(text)
         if before is not None and after is not None and _words(before) != _words(after):
-            raise _other_options(path, before)
+            raise _other_options(path, before, after)
 
 
 def _without_functions(words: list[str] | str) -> list[str] | str:
@@ -185,7 +189,7 @@ def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wan
             continue
         recorded = _recorded_functions(_words(before))
         if _without_functions(_words(before)) != new or (wanted is not None and recorded is not None and wanted < recorded):
-            raise _other_options(path, before)
+            raise _other_options(path, before, command)
 
 
 def recorded_prefix(command: str) -> str | None:

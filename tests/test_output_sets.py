@@ -158,3 +158,23 @@ def test_a_failed_compile_writes_no_file(tmp_path, monkeypatch, capsys):
     printed = capsys.readouterr().out.splitlines()
     assert [line for line in printed if line.startswith("wrote")] == [f"wrote {out / n}" for n in ("arm2.h", "arm2.c", "arm2.py")]
     assert printed[-1].startswith("compiled ") and printed[-1].endswith("libarm2.so")
+
+
+def test_a_failed_write_into_new_folders_removes_them(tmp_path, monkeypatch):
+    """A full disk while writing into --out new/deep: the error said no file was changed, but new/deep stayed."""
+    def replace(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(files.os, "replace", replace)
+    with pytest.raises(InputError, match="No space left"):
+        generate(2, out=tmp_path / "new" / "deep")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_another_prefixs_cmake_file_is_named_as_such(tmp_path):
+    """The message said 'CMakeLists.txt was generated with other options': it is another prefix's file."""
+    generate(2, out=tmp_path, langs="c", cmake=True, functions="position")
+    with pytest.raises(InputError, match=r"CMakeLists\.txt belongs to prefix 'arm2' .*: a folder holds one CMakeLists\.txt"):
+        generate(3, out=tmp_path, langs="c", cmake=True, functions="position")
+    with pytest.raises(InputError, match=r"arm2\.h was generated with other options"):  # its own prefix: as before
+        generate(2, out=tmp_path, langs="c", cmake=True, functions="jacobian")
