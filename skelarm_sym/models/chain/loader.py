@@ -31,10 +31,10 @@ from .urdf import MAX_URDF_BYTES, MAX_URDF_ELEMENTS, UrdfLink, load_urdf, urdf_l
 
 SUFFIXES = (".urdf", ".toml")
 PREFIX_RULE = (
-    "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7), for a TOML file its name key; "
-    "each run of characters other than ASCII letters and digits becomes one _ (none at either end), a leading "
-    "digit gets robot_ before it, a C or Python reserved word _robot after it (long: long_robot), and a name "
-    "with no letter or digit gives the URDF's robot name, else robot"
+    "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7) made an identifier: each run of "
+    "characters other than ASCII letters and digits becomes one _ (none at either end), a leading digit gets robot_ "
+    "before it, a name with no letter or digit gives the robot's name, else robot; for a TOML file its name key "
+    "(a C identifier); either gets _robot after a C or Python reserved word (long: long_robot)"
 )
 """The default-prefix rule in one sentence (for ``generate --help``)."""
 
