@@ -25,7 +25,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x36a03c68UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xb33b8a52UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 

@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x36a03c68UL
+#define ARM2_STAMP 0xb33b8a52UL
 
 #ifdef __cplusplus
 extern "C" {

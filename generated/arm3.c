@@ -25,7 +25,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xb3abe12aUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x2c9def03UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 

@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0xb3abe12aUL
+#define ARM3_STAMP 0x2c9def03UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,7 +25,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x0561bcf4UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdbcfdc1fUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 

@@ -47,7 +47,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x0561bcf4UL
+#define ARM3F_STAMP 0xdbcfdc1fUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -25,7 +25,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x4ab89c43UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xc3cb259bUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

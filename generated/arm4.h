@@ -51,7 +51,7 @@
  * angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x4ab89c43UL
+#define ARM4_STAMP 0xc3cb259bUL
 
 #ifdef __cplusplus
 extern "C" {

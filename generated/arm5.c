@@ -25,7 +25,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x104a1fc8UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe217e0e5UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

@@ -25,7 +25,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xb2be9825UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xe71805c1UL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 

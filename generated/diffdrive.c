@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xb351fa51UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x77e78805UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

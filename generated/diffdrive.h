@@ -41,7 +41,7 @@
  * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0xb351fa51UL
+#define DIFFDRIVE_STAMP 0x77e78805UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xed8d9b33UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x1fbcdff0UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

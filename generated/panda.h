@@ -57,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xed8d9b33UL
+#define PANDA_STAMP 0x1fbcdff0UL
 
 #ifdef __cplusplus
 extern "C" {

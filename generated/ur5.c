@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x95791b9aUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xa7114bbfUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -60,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x95791b9aUL
+#define UR5_STAMP 0xa7114bbfUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -62,6 +62,13 @@ def _real(value: object, name: str, dtype) -> np.ndarray:
     """``value`` as an array of ``dtype``; complex numbers, strings and objects are refused, and so are finite
     numbers beyond ``dtype``'s range (a float64 1e39 for a float library: not "must be finite")."""
     array = np.asarray(value)
+    if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
+        try:
+            array = np.asarray(value, dtype=np.float64)
+        except OverflowError:
+            raise InputError(f"{name} holds a number beyond the range of float64") from None
+        except (TypeError, ValueError):
+            pass
     if array.dtype.kind not in "biuf":
         raise InputError(f"{name} must hold real numbers, got {array.dtype}")
     if array.dtype.kind == "f" and array.dtype.itemsize > np.dtype(dtype).itemsize:

@@ -32,3 +32,23 @@ def test_a_float64_beyond_float32_is_refused_by_name(arm_float, label):
     assert np.all(np.isfinite(position(edge)))
     assert np.allclose(position(np.array([0.0, 0.0, 0.0])), [2.3, 0.0])
 
+
+
+@pytest.mark.parametrize("label", ["C", "Python"])
+def test_python_ints_beyond_int64_are_numbers(arm_float, label):
+    """``position([10**40, 0, 0])`` said "q must hold real numbers, got object": they are numbers, out of range here."""
+    position = _implementations(arm_float)[label].position
+    with pytest.raises(ValueError, match=r"q holds 1e\+40, beyond the range of float32"):
+        position([10**40, 0, 0])
+    with pytest.raises(ValueError, match="q holds a number beyond the range of float64"):
+        position([10**400, 0, 0])
+    with pytest.raises(ValueError, match="q must hold real numbers, got object"):
+        position([1.0, None, 0])
+    assert np.allclose(position([2**70 * 0, 0, 0]), [2.3, 0.0])
+
+
+def test_a_double_module_takes_a_huge_python_int_as_its_float():
+    generated = generate(2, lengths=(1.0, 0.5), out=None, langs="c,python", functions="position")
+    for label, implementation in _implementations(generated).items():
+        expected = implementation.position(np.array([float(10**40), 0.0]))
+        np.testing.assert_array_equal(implementation.position([10**40, 0]), expected, err_msg=label)
