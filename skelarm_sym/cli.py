@@ -150,10 +150,9 @@ def _check(args) -> int:
         given = model_given(args) + (["--precision"] if args.precision is not None else [])
         if given:
             raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)}")
-        loaded = load_generated(args.source, args.prefix)
+        # --lang: only these languages' files (a folder's PyTorch set, and no PyTorch here; a stale file of another)
+        loaded = load_generated(args.source, args.prefix, None if args.lang is None else validate_langs(args.lang))
         generated, precision = loaded.generated, loaded.precision
-        if args.lang is not None:  # only these languages' files (a folder's PyTorch set, and no PyTorch here)
-            generated = _only_languages(generated, validate_langs(args.lang), args.source)
         print(f"checking {', '.join(generated.sources)} in {args.source} ({loaded.command})")
         if loaded.edited:
             verb = "differs" if len(loaded.edited) == 1 else "differ"
@@ -181,23 +180,6 @@ def _check(args) -> int:
     solver_line = f"; ik: {len(solver_rows) - len(solver_failed)} passed, {len(solver_failed)} failed" if solver_rows else ""
     print(f"{len(results) - len(failed)} passed, {len(failed)} failed{solver_line}")
     return 1 if failed or solver_failed else 0
-
-
-def _only_languages(generated, langs, folder):
-    """``generated`` with only the files of ``langs`` (each language's whole set must be there)."""
-    import dataclasses
-
-    from .backends import BACKENDS
-
-    prefix = generated.module.prefix
-    keep = {}
-    for lang in langs:
-        names = [prefix + suffix for suffix in BACKENDS[lang].FILE_SUFFIXES]
-        missing = [name for name in names if name not in generated.sources]
-        if missing:
-            raise InputError(f"--lang {lang}: {', '.join(missing)} not in {folder} (it has {', '.join(generated.sources)})")
-        keep.update((name, generated.sources[name]) for name in names)
-    return dataclasses.replace(generated, sources=keep)
 
 
 _EXIT_FREEZE: list[bool] = []

@@ -198,7 +198,7 @@ def test_check_from_can_check_some_of_the_languages_in_the_folder(tmp_path, caps
     assert "Python pose" in out and "C pose" not in out and "PyTorch" not in out
     assert main(["check", "--from", str(tmp_path), "--lang", "jax"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == f"skelarm-sym: error: --lang jax: ur5_jax.py not in {tmp_path} (it has ur5.h, ur5.c, ur5.py, ur5_torch.py)"
+    assert err == f"skelarm-sym: error: --lang jax: ur5_jax.py not in {tmp_path} (it has ur5.h, ur5.c, ur5.py, ur5_torch.py of prefix 'ur5')"
     assert main(["check", "--from", str(tmp_path), "--lang", "fortran"]) == 2
     assert "unknown language 'fortran'" in capsys.readouterr().err
 
@@ -241,3 +241,17 @@ def test_check_from_names_the_recorded_files_that_are_not_there(tmp_path, capsys
     (tmp_path / "arm.py").unlink()
     assert main(["check", "--from", str(tmp_path), "--prefix", "arm", "--cases", "3"]) == 0
     assert "note: arm.py, arm_torch.py of that command are not in" in capsys.readouterr().out
+
+
+def test_check_from_lang_reads_only_that_languages_files(tmp_path, capsys):
+    """A stale arm2.py (another generation) beside a fresh C pair: check --from --lang c refused the folder as a
+    mixed set, though the C pair is whole and consistent."""
+    generate(2, out=tmp_path, langs="c,python", functions="position")
+    stale = (tmp_path / "arm2.py").read_text()
+    generate(2, out=tmp_path, langs="c,python", functions="position,jacobian", force=True)
+    (tmp_path / "arm2.py").write_text(stale)
+    assert main(["check", "--from", str(tmp_path), "--cases", "3"]) == 2
+    assert "the files are from different generations" in capsys.readouterr().err
+    assert main(["check", "--from", str(tmp_path), "--lang", "c", "--cases", "3"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"checking arm2.h, arm2.c in {tmp_path} ") and "C jacobian" in out and "note:" not in out
