@@ -19,8 +19,9 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0
- * at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so
+ * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
+ * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
  * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
  * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
@@ -31,7 +32,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x1fbcdff0UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x96d5af59UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

@@ -19,8 +19,9 @@ panda_joint6 [-0.0175, 3.7525] |dq| <= 2.61, panda_joint7 [-2.8973, 2.8973] |dq|
 Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
 Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
 stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
-lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0
-at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
+lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so
+lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
+JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
 where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
 Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
 twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
@@ -35,7 +36,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1fbcdff0
+STAMP = 0x96d5af59
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""

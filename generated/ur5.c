@@ -19,8 +19,9 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0
- * at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so
+ * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
+ * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
  * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
@@ -34,7 +35,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xa7114bbfUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x08ae03d8UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -28,6 +28,13 @@ _INPUT = re.compile(r"params|d{0,2}q\d*|lambda|xi_\w*|nu_\w*|RANK_TOL")
 the twist's ``xi_vx`` ...): a parameter of the same name would be the same symbol."""
 
 
+def reserved_prefix(name: str) -> bool:
+    """True when ``name`` may not be the files' prefix: a C, C++ or Python keyword or a name the emitted code
+    relies on, or ``numpy``/``np`` (the NumPy module's own import). (A Python standard module's name is refused
+    only where a ``.py`` file is written.)"""
+    return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in ("numpy", "np")
+
+
 def reserved_name(name: str) -> bool:
     """True when ``name`` may not name a robot or a parameter: a keyword (C, C++ or Python), a name the
     emitted code relies on, or the name of an input's symbol (``q``, ``q1``, ``params``, ``lambda``, ...)."""

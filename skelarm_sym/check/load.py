@@ -35,9 +35,9 @@ def _read_head(path) -> str:
 
 
 def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | None = None) -> LoadedFiles:
-    """Read ``folder/prefix.{h,c,py}`` (those present; with ``only``, those languages' files only), rebuild the model and options from the command their
-    header records (run in that folder: a robot file is found relative to it, whatever the current
-    folder), regenerate in memory for the derivation and the IR, and return the files' own text to be
+    """Read ``folder/prefix.{h,c,py}`` (those present; with ``only``, those languages' files only), rebuild
+    the model and options from the command their header records (run in that folder: a robot file is found
+    relative to it, whatever the current folder), regenerate in memory for the derivation and the IR, and return the files' own text to be
     compiled and compared. ``prefix`` defaults to the only one in ``folder``. Raises InputError (one line)
     for a missing folder, no generated files, several prefixes and none chosen, a header without the
     recorded command, or files of different generations (a kill between renames): their stamps differ."""
@@ -130,8 +130,6 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
 
 
 _MODEL = re.compile(r"Model: .*?(\d+ coordinate\(s\), \d+ moving joint\(s\) \([^)]*\))")
-
-
 _C_PROTOTYPE = re.compile(r"^(?:\w+ )*(?:void|int|float|double) \w+\([^;]*\);$", re.M)
 _PY_INTERFACE = re.compile(r"^(?:def [a-z]\w*\(.*\):|DTYPE = .*)$", re.M)
 

@@ -20,6 +20,8 @@ from typing import Callable, Sequence
 
 import sympy as sp
 
+from .linalg import select
+
 Recorder = Callable[[str, sp.Expr], sp.Expr]
 
 
@@ -34,7 +36,7 @@ class QR:
 
     ``Q[k]``: unit vectors (or zero vectors where column ``k`` was dropped or exactly dependent);
     ``R[i][k]``: upper triangular (``None`` below the diagonal); ``keep[k]``: the condition under
-    which column ``k`` counts as independent (``True`` when no rank rule was given).
+    which column ``k`` counts as independent.
     """
 
     Q: list[list[sp.Expr]]
@@ -50,18 +52,20 @@ def _dot(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> sp.Expr:
     return sp.Add(*[x * y for x, y in zip(a, b)])
 
 
-def gram_schmidt(
-    step: Recorder,
-    columns: Sequence[Sequence[sp.Expr]],
-    label: str,
-    threshold: sp.Expr | None = None,
-) -> QR:
-    """Gram-Schmidt QR with re-orthogonalisation of ``columns`` (see the module docstring).
+def _project(step: Recorder, q: Sequence[sp.Expr], v: Sequence[sp.Expr], c_name: str, v_name: str):
+    """``(c, v - c q)`` with ``c = q . v``, each named: one projection of Gram-Schmidt."""
+    c = step(c_name, _dot(q, v))
+    return c, [step(f"{v_name}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, q))]
 
-    ``threshold``: ``None``, or a non-negative expression: column ``k`` is dropped (``R[k][k] = 0``,
-    ``Q[k] = 0``, so row ``k`` of ``R`` is zero) when its residual norm is at most ``threshold``.
-    Without a threshold a residual of exactly zero still gives ``Q[k] = 0`` (no division by zero).
-    """
+
+def _norm(step: Recorder, v: Sequence[sp.Expr], label: str, k: int) -> sp.Expr:
+    """``|v|``, its square named first (``sqrt(x**2)`` alone would be ``Abs(x)``)."""
+    return step(f"{label}n{k}", sp.sqrt(step(f"{label}nn{k}", sp.Add(*[x**2 for x in v]))))
+
+
+def gram_schmidt(step: Recorder, columns: Sequence[Sequence[sp.Expr]], label: str) -> QR:
+    """Gram-Schmidt QR with re-orthogonalisation of ``columns`` (see the module docstring). A residual of
+    exactly zero gives ``Q[k] = 0`` (no division by zero); a rank rule is :func:`pivoted_gram_schmidt`'s."""
     m = len(columns)
     Q: list[list[sp.Expr]] = []
     R: list[list[sp.Expr | None]] = [[None] * m for _ in range(m)]
@@ -73,25 +77,16 @@ def gram_schmidt(
             for i in range(k):
                 if all(x == 0 for x in Q[i]):
                     continue
-                c = step(f"{label}c{sweep}_{i}_{k}", _dot(Q[i], v))
+                c, v = _project(step, Q[i], v, f"{label}c{sweep}_{i}_{k}", f"{label}v{sweep}_{i}_{k}")
                 coefficient[i] = coefficient[i] + c
-                v = [step(f"{label}v{sweep}_{i}_{k}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, Q[i]))]
-        norm = step(f"{label}n{k}", sp.sqrt(step(f"{label}nn{k}", sp.Add(*[x**2 for x in v]))))  # named first: sqrt(x**2) would be Abs(x)
-        if threshold is None:
-            kept = sp.StrictGreaterThan(norm, 0)
-            diag = norm
-        else:
-            kept = step(f"{label}keep{k}", sp.StrictGreaterThan(norm, threshold))
-            diag = step(f"{label}d{k}", sp.Piecewise((norm, kept), (sp.S.Zero, True)))
+        norm = _norm(step, v, label, k)
+        kept = sp.StrictGreaterThan(norm, 0)
         inv = step(f"{label}i{k}", 1 / guarded(norm, kept))
-        if threshold is None:
-            q = [step(f"{label}q{k}_{e}", x * inv) for e, x in enumerate(v)]  # v = 0 exactly where norm = 0
-        else:
-            q = [step(f"{label}q{k}_{e}", sp.Piecewise((x * inv, kept), (sp.S.Zero, True))) for e, x in enumerate(v)]
+        q = [step(f"{label}q{k}_{e}", x * inv) for e, x in enumerate(v)]  # v = 0 exactly where norm = 0
         for i in range(k):
             value = coefficient[i]
             R[i][k] = step(f"{label}R{i}_{k}", value) if value != 0 else sp.S.Zero
-        R[k][k] = diag
+        R[k][k] = norm
         Q.append(q)
         keep.append(kept)
     return QR(Q, R, keep)
@@ -140,20 +135,19 @@ def pivoted_gram_schmidt(
             for key in ("v", "c", "x"):
                 pairs = list(zip(low[key], high[key]))
                 swapped[key] = (
-                    [step(f"{label}{key}{k}_{s}_{e}L", select_value(longer, b, a)) for e, (a, b) in enumerate(pairs)],
-                    [step(f"{label}{key}{k}_{s}_{e}H", select_value(longer, a, b)) for e, (a, b) in enumerate(pairs)],
+                    [step(f"{label}{key}{k}_{s}_{e}L", select(longer, b, a)) for e, (a, b) in enumerate(pairs)],
+                    [step(f"{label}{key}{k}_{s}_{e}H", select(longer, a, b)) for e, (a, b) in enumerate(pairs)],
                 )
-            squares[s - 1], squares[s] = (step(f"{label}pp{k}_{s}L", select_value(longer, squares[s], squares[s - 1])),
-                                          step(f"{label}pp{k}_{s}H", select_value(longer, squares[s - 1], squares[s])))
+            squares[s - 1], squares[s] = (step(f"{label}pp{k}_{s}L", select(longer, squares[s], squares[s - 1])),
+                                          step(f"{label}pp{k}_{s}H", select(longer, squares[s - 1], squares[s])))
             slots[s - 1] = {key: swapped[key][0] for key in swapped}
             slots[s] = {key: swapped[key][1] for key in swapped}
         taken = slots[k]
         v, coefficient = taken["v"], list(taken["c"])
         for i in range(k):  # the second pass of the one taken
-            c = step(f"{label}r{i}_{k}", _dot(Q[i], v))
+            c, v = _project(step, Q[i], v, f"{label}r{i}_{k}", f"{label}w{i}_{k}")
             coefficient[i] = coefficient[i] + c
-            v = [step(f"{label}w{i}_{k}_{e}", x - c * y) for e, (x, y) in enumerate(zip(v, Q[i]))]
-        norm = step(f"{label}n{k}", sp.sqrt(step(f"{label}nn{k}", sp.Add(*[x**2 for x in v]))))
+        norm = _norm(step, v, label, k)
         kept = step(f"{label}keep{k}", sp.StrictGreaterThan(norm, threshold))
         inv = step(f"{label}i{k}", 1 / guarded(norm, kept))
         q = [step(f"{label}q{k}_{e}", sp.Piecewise((x * inv, kept), (sp.S.Zero, True))) for e, x in enumerate(v)]
@@ -164,9 +158,8 @@ def pivoted_gram_schmidt(
         keep.append(kept)
         order.append(taken["x"])
         for s in range(k + 1, m):  # the vectors left, projected on the new Q[k]
-            c = step(f"{label}c{k}_{s}", _dot(q, slots[s]["v"]))
-            slots[s] = {"v": [step(f"{label}u{k}_{s}_{e}", x - c * y) for e, (x, y) in enumerate(zip(slots[s]["v"], q))],
-                        "c": slots[s]["c"] + [c], "x": slots[s]["x"]}
+            c, v_left = _project(step, q, slots[s]["v"], f"{label}c{k}_{s}", f"{label}u{k}_{s}")
+            slots[s] = {"v": v_left, "c": slots[s]["c"] + [c], "x": slots[s]["x"]}
     return QR(Q, R, keep), order
 
 
@@ -212,13 +205,6 @@ def _combined(parts: list[tuple[QR, list[list[sp.Expr]]]]) -> tuple[QR, list[lis
         order.extend(taken)
         start += size
     return QR(Q, R, keep), order
-
-
-def select_value(cond: sp.Expr, then: sp.Expr, otherwise: sp.Expr) -> sp.Expr:
-    """``then`` where ``cond`` holds, else ``otherwise`` (one of them when both are the same)."""
-    if then == otherwise:
-        return then
-    return sp.Piecewise((then, cond), (otherwise, True))
 
 
 def adjugate_upper(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], label: str) -> list[list[sp.Expr]]:

@@ -75,7 +75,7 @@ def chain_scenarios(derivation, cases: int, seed: int, precision: str) -> list[S
     if chain.parameters:
         values["params"] = params
     forward, forward_condition, alternatives, solves = check_expectations(
-        numeric, q, k, solve_cutoff(precision, n), np.random.default_rng(seed + 1), rounded,
+        numeric, q, k, solve_cutoff(precision, n), np.random.default_rng(seed + 1), rounded, EPSILONS[precision],
     )
     expected.update(forward)
     condition.update(forward_condition)
@@ -245,10 +245,10 @@ def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scena
 
 def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
     """``ik_candidates`` on poses of random configurations (:func:`_targets`), expected: the same steps evaluated by
-    SymPy (lambdify, double arithmetic) with the tolerances of ``precision``; in float the decisions at the double
-    tolerances are a second answer (a float double root of q1 1.3e-3 apart, Stanford arm, seed 2, is flagged
-    singular, as the float tolerance says, where double's keeps the roots apart). Its condition per case: the largest Jacobian condition number over the exact rows
-    (:func:`_condition`)."""
+    SymPy (lambdify, double arithmetic) with the tolerances of ``precision``; in float the decisions at the
+    double tolerances are a second answer (a float double root of q1 1.3e-3 apart, Stanford arm, seed 2, is
+    flagged singular, as the float tolerance says, where double's keeps the roots apart). Its condition per
+    case: the largest Jacobian condition number over the rows double calls regular (:func:`_condition`)."""
     from ...closed_ik.evaluate import lambdify_candidates
 
     chain = derivation.model

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-import keyword
 import math
 import operator
 import os
@@ -41,7 +40,7 @@ from pathlib import Path
 import sympy as sp
 
 from ...errors import InputError
-from ...names import C_RESERVED, IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name
+from ...names import IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name, reserved_prefix
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -240,8 +239,7 @@ def _default_prefix(name: str) -> str:
     """The files' default prefix for a robot named ``name``: ``""`` (the name itself) where the name is usable
     as a prefix, else the name made an identifier (a C or Python keyword, a Python standard module or NumPy:
     ``long`` gives ``long_robot``), as a URDF's file name is."""
-    unusable = (name in C_RESERVED or keyword.iskeyword(name) or name in sys.stdlib_module_names
-                or name.lower() in ("numpy", "np"))
+    unusable = reserved_prefix(name) or name in sys.stdlib_module_names
     return (identifier_from(name) or "robot") if unusable else ""
 
 

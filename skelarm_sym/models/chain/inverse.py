@@ -29,8 +29,8 @@ no loops, no allocation); the small factorisations are those of :mod:`skelarm_sy
      later one. With more damping no row is dropped: the damping bounds what a small singular value
      ``s`` adds (``s / (s^2 + lambda^2)``), and dropping its direction would cost up to
      ``RANK_TOL |B|_F / lambda^2``.
-  2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]`` (rows in the order taken),
-     by a second Gram-Schmidt QR and a guarded back substitution; every row divided by ``max(1, lambda)``
+  2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]`` (the
+     rows in the order taken), by a second Gram-Schmidt QR and a guarded back substitution; every row divided by ``max(1, lambda)``
      first (the same solution), so no entry overflows for any finite lambda and the answer tends to 0,
      the limit, as lambda grows.
   With ``lambda = 0`` at a singular pose this is the minimum-norm least-squares solution of the
@@ -53,7 +53,7 @@ from typing import Sequence
 import sympy as sp
 
 from ...derive.core import RANK_TOL, FunctionSpec
-from ...derive.solve6 import pivoted_gram_schmidt, adjugate_upper, back_substitute, gram_schmidt, guarded
+from ...derive.solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded, pivoted_gram_schmidt
 
 INVERSE_FUNCTIONS = (
     FunctionSpec("ik_terms", ("q", "params"), ("T", "J"), "tool pose T and Jacobian J at once (the terms of an IK step)"),
@@ -130,20 +130,21 @@ def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.
     to 0 as lambda grows (exactly 0 once ``mu`` underflows).
     """
     n = len(rows[0])
-    live = [r for r, row in enumerate(rows) if any(x != 0 for x in row)]  # a row of J that is zero (a SCARA's
-    rows, scales, rhs = [rows[r] for r in live], [scales[r] for r in live], [rhs[r] for r in live]  # wx, wy) leaves
-    m = len(rows)                                                   # the solution alone: it is not factorised
+    # a row of J that is identically zero (a SCARA's wx, wy) leaves the solution alone: it is not factorised
+    live = [r for r, row in enumerate(rows) if any(x != 0 for x in row)]
+    rows, scales, rhs = [rows[r] for r in live], [scales[r] for r in live], [rhs[r] for r in live]
+    m = len(rows)
     scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
     frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
     factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
-    # rows taken longest residual first (rank-revealing); each row's factor and right-hand side go with it
-    # (the order of a least-squares problem's rows does not change its solution)
     damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
     # the rank rule serves the undamped solve (lambda at most the threshold): with more damping every row is
     # kept, the damping bounds what a direction of a small singular value s adds (s / (s^2 + lambda^2)), and
     # dropping it would cost up to threshold / lambda^2 (float, lambda = 0.1: 3e-3)
     limit = step(f"{label}tau", tol * frob)
     threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(damping, limit)), (sp.S.Zero, True)))
+    # rows taken longest residual first (rank-revealing); each row's factor and right-hand side go with it
+    # (the order of a least-squares problem's rows does not change its solution)
     first, order = pivoted_gram_schmidt(step, scaled, [(factor[r], rhs[r]) for r in range(m)], f"{label}A", threshold)
     columns = []
     for k in range(m):
@@ -224,8 +225,9 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
         "Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));",
         f"Hs[(r*{n} + c)*{n} + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR",
         "stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with",
-        "lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so lambda = 0",
-        "at a singular pose gives the minimum-norm least-squares rates, finite); JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
+        "lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so",
+        "lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);",
+        "JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
         "where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).",
     )
     if not quadratic:

@@ -146,7 +146,7 @@ LOCKED it is locked (the documented value); between, where the emitted code's ow
 answer is right and the check accepts the one the code gave."""
 
 
-def check_expectations(chain, q, kinematics, rcond: float, rng, rounded):
+def check_expectations(chain, q, kinematics, rcond: float, rng, rounded, floor: float):
     """Expected values for the check of the inverse functions (NumPy only; used by the chain's check).
 
     Returns ``(forward, forward_condition, alternatives, solves)``: outputs computable from ``q`` alone
@@ -155,8 +155,8 @@ def check_expectations(chain, q, kinematics, rcond: float, rng, rounded):
     and damped). ``rcond`` is the judge's relative SVD cut-off (from the working precision, not the
     generator's rank rule); the rows of the 6-row solve are scaled by the judge's own :func:`reach_length`.
 
-    Undamped solves have a second answer: the minimum-norm solution keeping every singular value above one
-    machine epsilon. Where the smallest lies between that and the cut-off, the code's rank rule (a
+    Undamped solves have a second answer: the minimum-norm solution keeping every singular value above
+    ``floor`` (one machine epsilon of the working precision). Where the smallest lies between that and the cut-off, the code's rank rule (a
     Gram-Schmidt residual, which is at least the smallest singular value and may be much larger) can keep
     the direction the judge drops, and then its answer is the exact inverse rounded, not the truncated
     one (seen: float UR5 near the wrist singularity, q5 = -1.7e-4, ratio 3.6e-6, |dq| 1.2e4). Its
@@ -211,7 +211,6 @@ def check_expectations(chain, q, kinematics, rcond: float, rng, rounded):
         cond = {"dq": c6, "dq_position": c3}
         kept, kept_condition = {}, {}
         if lam == 0:  # the code may keep a direction the judge drops: the answer on that rank is right too
-            floor = rcond / (CUTOFF_TO_FLOOR * max(n, 2))  # one machine epsilon of the working precision
             kept = {"dq": damped_least_squares(J, twist, 0.0, floor, scales),
                     "dq_position": damped_least_squares(J[..., :3, :], twist[..., :3], 0.0, floor)}
             bound = max(n, 2) * floor  # n epsilons times the ratio of the kept singular values (times the reach)
@@ -221,7 +220,3 @@ def check_expectations(chain, q, kinematics, rcond: float, rng, rounded):
                        kept, kept_condition))
     return forward, condition, alternatives, solves
 
-
-CUTOFF_TO_FLOOR = 10
-"""The judge's cut-off is ``CUTOFF_TO_FLOOR * max(n, 2)`` machine epsilons (:func:`skelarm_sym.check.scenario.solve_cutoff`);
-the second answer of an undamped solve keeps every singular value above one epsilon."""
