@@ -7,7 +7,7 @@
 // LIBRARY: the emitted C compiled as a shared library with the same flags; PREFIX its function prefix.
 // Both loops: Levenberg-Marquardt on e = [p_t - p; log3(R_t R^T)] (LOCAL_WORLD_ALIGNED J),
 // dq = J^T (J J^T + mu2 I)^-1 e (Eigen LDLT here), mu2 = max(lambda^2, c |e|), the same step cap,
-// clamping, blocked-column removal, 2 pi wraps, stationary-point test, restarts from the best of
+// clamping, blocked-column removal, 2 pi wraps, stationary-point test, geodesic acceleration, restarts from the best of
 // CANDIDATES random configurations by tool position (forwardKinematics + updateFramePlacement each;
 // same xorshift64* seed, same alternation of centred and whole-range draws) and constants.
 // Prints per loop: successes, total iterations, mean microseconds per solve (median of 5 passes).
@@ -33,7 +33,7 @@ static pinocchio::SE3 read_placement(std::ifstream &in) {
 
 // constants of skelarm_sym.ik (checked by benchmarks/ik_success.py, which passes them on the command line)
 static double C_START = 0.01, C_MIN = 1e-8, C_MAX = 1e8, C_UP = 4.0, C_DOWN = 0.5, STEP_MAX = 1.0, STALL = 1e-9, PROGRESS = 0.6;
-static double STATIONARY = 0.02, SHRINK = 0.5;
+static double STATIONARY = 0.02, SHRINK = 0.5, GEO_H = 0.1, GEO_ALPHA = 0.75, GEO_GATE = 0.5, GEO_ERROR = 0.05;
 static int ATTEMPT = 25, WINDOW = 3, CANDIDATES = 8;
 static unsigned long long SEED = 0x5EED5EEDULL;
 
@@ -53,7 +53,15 @@ struct Pin {
     std::vector<int> periodic;
     pinocchio::Data::Matrix6x J, Jt, Jf;
 
-    // e, |dp|, |dr| at q (forwardKinematics + frame placement); J when want_j
+    // e at q (forwardKinematics + frame placement), no Jacobian
+    void error_at(const Eigen::VectorXd &q, const pinocchio::SE3 &target, Eigen::Matrix<double, 6, 1> &e) {
+        pinocchio::forwardKinematics(model, *data, q);
+        const pinocchio::SE3 &M = pinocchio::updateFramePlacement(model, *data, tool);
+        e.head<3>() = target.translation() - M.translation();
+        e.tail<3>() = pinocchio::log3(Eigen::Matrix3d(target.rotation() * M.rotation().transpose()));
+    }
+
+    // e, |dp|, |dr| and J at q
     void evaluate(const Eigen::VectorXd &q, const pinocchio::SE3 &target, Eigen::Matrix<double, 6, 1> &e, double &pe, double &re,
                   pinocchio::Data::Matrix6x &jac) {
         pinocchio::forwardKinematics(model, *data, q);
@@ -68,8 +76,8 @@ struct Pin {
 
     int solve(const Eigen::VectorXd &q0, const pinocchio::SE3 &target, double lambda, double tol, int max_iter, Eigen::VectorXd &out,
               int &iterations) {
-        Eigen::VectorXd q = q0.cwiseMax(lo).cwiseMin(hi), trial(n), dq(n), best_q(n);
-        Eigen::Matrix<double, 6, 1> e, et;
+        Eigen::VectorXd q = q0.cwiseMax(lo).cwiseMin(hi), trial(n), dq(n), best_q(n), acc(n);
+        Eigen::Matrix<double, 6, 1> e, et, r2;
         Eigen::Matrix<double, 6, 6> A, G, Gf;  // G = J J^T, kept while steps are rejected (as the emitted C)
         bool gram = false;
         Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt;
@@ -78,7 +86,7 @@ struct Pin {
         unsigned long long state = SEED ^ 0x9E3779B97F4A7C15ULL;
         evaluate(q, target, e, pe, re, J);
         double en = std::sqrt(pe * pe + re * re), best_en = en, c = C_START, checkpoint = en, window_start = en;
-        int stationary = 0;
+        int stationary = 0, curved = 0;
         int best_stalled = 0, attempt = 0, it = 0, best_here = 1, restarts = 0;
         const double mu2_floor = lambda * lambda;
         best_q = q;
@@ -112,6 +120,12 @@ struct Pin {
                 Jg = &Jf;
             }
             stationary = (Jg->transpose() * e).squaredNorm() <= STATIONARY * STATIONARY * Jg->squaredNorm() * en * en;
+            if (curved && en < GEO_ERROR) {  // geodesic acceleration, the factors reused
+                error_at(q + GEO_H * dq, target, et);
+                r2 = (et - e + GEO_H * (J * dq)) * (2.0 / (GEO_H * GEO_H));
+                acc.noalias() = Jg->transpose() * ldlt.solve(r2);
+                if (acc.squaredNorm() <= GEO_ALPHA * GEO_ALPHA * dq.squaredNorm()) dq += 0.5 * acc;
+            }
             const double big = dq.cwiseAbs().maxCoeff();
             if (big > STEP_MAX) dq *= STEP_MAX / big;
             trial = q + dq;
@@ -126,6 +140,7 @@ struct Pin {
             const double ent = std::sqrt(pet * pet + ret * ret);
             ++it; ++attempt;
             int stalled;
+            curved = ent > GEO_GATE * en;
             if (ent < en) {
                 stalled = en - ent <= STALL * en;
                 q = trial; e = et; J.swap(Jt); pe = pet; re = ret; en = ent; gram = false;
@@ -152,7 +167,7 @@ struct Pin {
                 ++restarts; gram = false;
                 evaluate(q, target, e, pe, re, J);
                 en = std::sqrt(pe * pe + re * re);
-                c = C_START; attempt = 0; checkpoint = window_start = en;
+                c = C_START; curved = 0; attempt = 0; checkpoint = window_start = en;
                 if (en < best_en) { best_en = en; best_q = q; best_stalled = 0; best_here = 1; }
             }
         }
@@ -165,11 +180,12 @@ typedef int (*solve_fn)(const double *, const double *, double, double, int, dou
 
 int main(int argc, char **argv) {
     if (argc < 5) { std::fprintf(stderr, "usage: ik_pinocchio CHAIN TARGETS LIBRARY PREFIX [constants...]\n"); return 2; }
-    if (argc >= 19) {
+    if (argc >= 23) {
         C_START = atof(argv[5]); C_MIN = atof(argv[6]); C_MAX = atof(argv[7]); C_UP = atof(argv[8]); C_DOWN = atof(argv[9]);
         STEP_MAX = atof(argv[10]); STALL = atof(argv[11]); PROGRESS = atof(argv[12]); ATTEMPT = atoi(argv[13]); WINDOW = atoi(argv[14]);
         SEED = std::stoull(argv[15]); STATIONARY = atof(argv[16]); CANDIDATES = atoi(argv[17]); SHRINK = atof(argv[18]);
-    } else if (argc > 5) { std::fprintf(stderr, "expected 14 constants after PREFIX\n"); return 2; }
+        GEO_H = atof(argv[19]); GEO_ALPHA = atof(argv[20]); GEO_GATE = atof(argv[21]); GEO_ERROR = atof(argv[22]);
+    } else if (argc > 5) { std::fprintf(stderr, "expected 18 constants after PREFIX\n"); return 2; }
     std::ifstream chain(argv[1]), targets(argv[2]);
     int joints; chain >> joints;
     Pin pin;

@@ -61,6 +61,10 @@ def pinocchio_program() -> Path | None:
     prefix = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix"
     if not (prefix / "include" / "pinocchio").is_dir():
         return None
+    if not (prefix / "include" / "eigen3" / "Eigen").is_dir():
+        print("the Pinocchio loop is skipped: Eigen's headers are missing (pip install cmeel-eigen, in the oracle extra)",
+              file=sys.stderr)
+        return None
     exe = HERE / "build" / "ik_pinocchio"
     source = HERE / "ik_pinocchio.cpp"
     if exe.exists() and exe.stat().st_mtime > source.stat().st_mtime:
@@ -166,6 +170,7 @@ def pinocchio_row(pin, chain, pairs, work: Path, name: str, prefix: str, cc: str
     constants = [repr(x) for x in (s.C_START, s.C_MIN, s.C_MAX, s.C_UP, s.C_DOWN, s.STEP_MAX, s.SETTINGS["double"]["stall"],
                                    s.PROGRESS)]
     constants += [str(s.ATTEMPT), str(s.WINDOW), str(s.SEED), repr(s.STATIONARY), str(s.CANDIDATES), repr(s.SHRINK)]
+    constants += [repr(s.GEO_H), repr(s.GEO_ALPHA), repr(s.GEO_GATE), repr(s.GEO_ERROR)]
     out = subprocess.run([str(pin), str(work / f"{name}.chain"), str(work / f"{name}.targets"), str(lib), prefix, *constants],
                          capture_output=True, text=True, check=True).stdout.split("\n")
     return {line.split()[0]: line.split()[1:] for line in out if line.strip()}

@@ -35,7 +35,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x08ae03d8UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xfa655599UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6678,8 +6678,8 @@ static void ur5_ik_gram_pose(const double J[36], double G[21])
     G[20] = J[30]*J[30] + J[31]*J[31] + J[32]*J[32] + J[33]*J[33] + J[34]*J[34] + J[35]*J[35];
 }
 
-/* ---- ur5_ik_damped_pose: dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped ---- */
-static void ur5_ik_damped_pose(const double J[36], const double G[21], const double e[6], double mu2, double dq[6])
+/* ---- ur5_ik_ldl_pose: F = the LDL^T of G + mu2 I (1/D on the diagonal, 0 for a dropped pivot; L below) ---- */
+static void ur5_ik_ldl_pose(const double G[21], double mu2, double F[21])
 {
     const double a00 = G[0] + mu2;
     const double a10 = G[1];
@@ -6706,78 +6706,104 @@ static void ur5_ik_damped_pose(const double J[36], const double G[21], const dou
     const double s0 = a00;
     const int kept0 = s0 > cut;
     const double i0 = (kept0 ? 1.0/s0 : 0.0);
+    F[0] = i0;
     const double t10 = a10;
     const double l10 = t10*i0;
+    F[1] = l10;
     const double ld10 = (kept0 ? t10 : 0.0);
     const double t20 = a20;
     const double l20 = t20*i0;
+    F[3] = l20;
     const double ld20 = (kept0 ? t20 : 0.0);
     const double t30 = a30;
     const double l30 = t30*i0;
+    F[6] = l30;
     const double ld30 = (kept0 ? t30 : 0.0);
     const double t40 = a40;
     const double l40 = t40*i0;
+    F[10] = l40;
     const double ld40 = (kept0 ? t40 : 0.0);
     const double t50 = a50;
     const double l50 = t50*i0;
+    F[15] = l50;
     const double ld50 = (kept0 ? t50 : 0.0);
     const double s1 = a11 - l10*ld10;
     const int kept1 = s1 > cut;
     const double i1 = (kept1 ? 1.0/s1 : 0.0);
+    F[2] = i1;
     const double t21 = a21 - l20*ld10;
     const double l21 = t21*i1;
+    F[4] = l21;
     const double ld21 = (kept1 ? t21 : 0.0);
     const double t31 = a31 - l30*ld10;
     const double l31 = t31*i1;
+    F[7] = l31;
     const double ld31 = (kept1 ? t31 : 0.0);
     const double t41 = a41 - l40*ld10;
     const double l41 = t41*i1;
+    F[11] = l41;
     const double ld41 = (kept1 ? t41 : 0.0);
     const double t51 = a51 - l50*ld10;
     const double l51 = t51*i1;
+    F[16] = l51;
     const double ld51 = (kept1 ? t51 : 0.0);
     const double s2 = (a22 - l20*ld20) - l21*ld21;
     const int kept2 = s2 > cut;
     const double i2 = (kept2 ? 1.0/s2 : 0.0);
+    F[5] = i2;
     const double t32 = (a32 - l30*ld20) - l31*ld21;
     const double l32 = t32*i2;
+    F[8] = l32;
     const double ld32 = (kept2 ? t32 : 0.0);
     const double t42 = (a42 - l40*ld20) - l41*ld21;
     const double l42 = t42*i2;
+    F[12] = l42;
     const double ld42 = (kept2 ? t42 : 0.0);
     const double t52 = (a52 - l50*ld20) - l51*ld21;
     const double l52 = t52*i2;
+    F[17] = l52;
     const double ld52 = (kept2 ? t52 : 0.0);
     const double s3 = (a33 - (l30*ld30 + l31*ld31)) - l32*ld32;
     const int kept3 = s3 > cut;
     const double i3 = (kept3 ? 1.0/s3 : 0.0);
+    F[9] = i3;
     const double t43 = (a43 - (l40*ld30 + l41*ld31)) - l42*ld32;
     const double l43 = t43*i3;
+    F[13] = l43;
     const double ld43 = (kept3 ? t43 : 0.0);
     const double t53 = (a53 - (l50*ld30 + l51*ld31)) - l52*ld32;
     const double l53 = t53*i3;
+    F[18] = l53;
     const double ld53 = (kept3 ? t53 : 0.0);
     const double s4 = (a44 - (l40*ld40 + (l41*ld41 + l42*ld42))) - l43*ld43;
     const int kept4 = s4 > cut;
     const double i4 = (kept4 ? 1.0/s4 : 0.0);
+    F[14] = i4;
     const double t54 = (a54 - (l50*ld40 + (l51*ld41 + l52*ld42))) - l53*ld43;
     const double l54 = t54*i4;
+    F[19] = l54;
     const double ld54 = (kept4 ? t54 : 0.0);
     const double s5 = (a55 - ((l50*ld50 + l51*ld51) + (l52*ld52 + l53*ld53))) - l54*ld54;
     const int kept5 = s5 > cut;
     const double i5 = (kept5 ? 1.0/s5 : 0.0);
+    F[20] = i5;
+}
+
+/* ---- ur5_ik_ldl_solve_pose: dq = J^T (G + mu2 I)^-1 e from the LDL^T factors F ---- */
+static void ur5_ik_ldl_solve_pose(const double J[36], const double F[21], const double e[6], double dq[6])
+{
     const double y0 = e[0];
-    const double y1 = e[1] - l10*y0;
-    const double y2 = (e[2] - l20*y0) - l21*y1;
-    const double y3 = (e[3] - (l30*y0 + l31*y1)) - l32*y2;
-    const double y4 = (e[4] - (l40*y0 + (l41*y1 + l42*y2))) - l43*y3;
-    const double y5 = (e[5] - ((l50*y0 + l51*y1) + (l52*y2 + l53*y3))) - l54*y4;
-    const double z5 = y5*i5;
-    const double z4 = y4*i4 - l54*z5;
-    const double z3 = (y3*i3 - l53*z5) - l43*z4;
-    const double z2 = (y2*i2 - (l52*z5 + l42*z4)) - l32*z3;
-    const double z1 = (y1*i1 - (l51*z5 + (l41*z4 + l31*z3))) - l21*z2;
-    const double z0 = (y0*i0 - ((l50*z5 + l40*z4) + (l30*z3 + l20*z2))) - l10*z1;
+    const double y1 = e[1] - F[1]*y0;
+    const double y2 = (e[2] - F[3]*y0) - F[4]*y1;
+    const double y3 = (e[3] - (F[6]*y0 + F[7]*y1)) - F[8]*y2;
+    const double y4 = (e[4] - (F[10]*y0 + (F[11]*y1 + F[12]*y2))) - F[13]*y3;
+    const double y5 = (e[5] - ((F[15]*y0 + F[16]*y1) + (F[17]*y2 + F[18]*y3))) - F[19]*y4;
+    const double z5 = y5*F[20];
+    const double z4 = y4*F[14] - F[19]*z5;
+    const double z3 = (y3*F[9] - F[18]*z5) - F[13]*z4;
+    const double z2 = (y2*F[5] - (F[17]*z5 + F[12]*z4)) - F[8]*z3;
+    const double z1 = (y1*F[2] - (F[16]*z5 + (F[11]*z4 + F[7]*z3))) - F[4]*z2;
+    const double z0 = (y0*F[0] - ((F[15]*z5 + F[10]*z4) + (F[6]*z3 + F[3]*z2))) - F[1]*z1;
     dq[0] = (J[0]*z0 + (J[6]*z1 + J[12]*z2)) + (J[18]*z3 + (J[24]*z4 + J[30]*z5));
     dq[1] = (J[1]*z0 + (J[7]*z1 + J[13]*z2)) + (J[19]*z3 + (J[25]*z4 + J[31]*z5));
     dq[2] = (J[2]*z0 + (J[8]*z1 + J[14]*z2)) + (J[20]*z3 + (J[26]*z4 + J[32]*z5));
@@ -6820,8 +6846,8 @@ static void ur5_ik_gram_position(const double J[36], double G[6])
     G[5] = J[12]*J[12] + J[13]*J[13] + J[14]*J[14] + J[15]*J[15] + J[16]*J[16] + J[17]*J[17];
 }
 
-/* ---- ur5_ik_damped_position: dq = J^T (G + mu2 I)^-1 e by LDL^T, small pivots dropped ---- */
-static void ur5_ik_damped_position(const double J[36], const double G[6], const double e[3], double mu2, double dq[6])
+/* ---- ur5_ik_ldl_position: F = the LDL^T of G + mu2 I (1/D on the diagonal, 0 for a dropped pivot; L below) ---- */
+static void ur5_ik_ldl_position(const double G[6], double mu2, double F[6])
 {
     const double a00 = G[0] + mu2;
     const double a10 = G[1];
@@ -6833,27 +6859,38 @@ static void ur5_ik_damped_position(const double J[36], const double G[6], const 
     const double s0 = a00;
     const int kept0 = s0 > cut;
     const double i0 = (kept0 ? 1.0/s0 : 0.0);
+    F[0] = i0;
     const double t10 = a10;
     const double l10 = t10*i0;
+    F[1] = l10;
     const double ld10 = (kept0 ? t10 : 0.0);
     const double t20 = a20;
     const double l20 = t20*i0;
+    F[3] = l20;
     const double ld20 = (kept0 ? t20 : 0.0);
     const double s1 = a11 - l10*ld10;
     const int kept1 = s1 > cut;
     const double i1 = (kept1 ? 1.0/s1 : 0.0);
+    F[2] = i1;
     const double t21 = a21 - l20*ld10;
     const double l21 = t21*i1;
+    F[4] = l21;
     const double ld21 = (kept1 ? t21 : 0.0);
     const double s2 = (a22 - l20*ld20) - l21*ld21;
     const int kept2 = s2 > cut;
     const double i2 = (kept2 ? 1.0/s2 : 0.0);
+    F[5] = i2;
+}
+
+/* ---- ur5_ik_ldl_solve_position: dq = J^T (G + mu2 I)^-1 e from the LDL^T factors F ---- */
+static void ur5_ik_ldl_solve_position(const double J[36], const double F[6], const double e[3], double dq[6])
+{
     const double y0 = e[0];
-    const double y1 = e[1] - l10*y0;
-    const double y2 = (e[2] - l20*y0) - l21*y1;
-    const double z2 = y2*i2;
-    const double z1 = y1*i1 - l21*z2;
-    const double z0 = (y0*i0 - l20*z2) - l10*z1;
+    const double y1 = e[1] - F[1]*y0;
+    const double y2 = (e[2] - F[3]*y0) - F[4]*y1;
+    const double z2 = y2*F[5];
+    const double z1 = y1*F[2] - F[4]*z2;
+    const double z0 = (y0*F[0] - F[3]*z2) - F[1]*z1;
     dq[0] = J[0]*z0 + (J[6]*z1 + J[12]*z2);
     dq[1] = J[1]*z0 + (J[7]*z1 + J[13]*z2);
     dq[2] = J[2]*z0 + (J[8]*z1 + J[14]*z2);
@@ -6883,7 +6920,10 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     double best_q[6];
     double G[21];
     double Gf[21];
+    double F[21];
     double norms[3];
+    double r2[6];
+    double acc[6];
     int blocked[6];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -6897,6 +6937,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     double scale = 0.0;
     double gg = 0.0;
     double ff = 0.0;
+    double aa = 0.0;
+    double vv = 0.0;
     double c = 0.01;
     double checkpoint = 0.0;
     double window_start = 0.0;
@@ -6910,6 +6952,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     int stalled = 0;
     int slow = 0;
     int stationary = 0;
+    int curved = 0;
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
@@ -6981,7 +7024,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
             ur5_ik_gram_pose(J, G);
             gram_ready = 1;
         }
-        ur5_ik_damped_pose(J, G, e, mu2, dq);
+        ur5_ik_ldl_pose(G, mu2, F);
+        ur5_ik_ldl_solve_pose(J, F, e, dq);
         for (int k = 0; k < 6; ++k) {
             blocked[k] = ((q[k] <= lo[k] && dq[k] < 0.0) || (q[k] >= hi[k] && dq[k] > 0.0) ? 1 : 0);
         }
@@ -7032,7 +7076,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
                     Gf[20] = Gf[20] - J[30 + k]*J[30 + k];
                 }
             }
-            ur5_ik_damped_pose(Jf, Gf, e, mu2, dq);
+            ur5_ik_ldl_pose(Gf, mu2, F);
+            ur5_ik_ldl_solve_pose(Jf, F, e, dq);
             ff = Gf[0] + Gf[2] + Gf[5] + Gf[9] + Gf[14] + Gf[20];
             gg = 0.0;
             for (int k = 0; k < 6; ++k) {
@@ -7047,6 +7092,32 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (curved > 0 && en < 0.05) {
+            for (int k = 0; k < 6; ++k) {
+                trial[k] = q[k] + dq[k]*0.1;
+            }
+            ur5_pose(trial, Tt);
+            ur5_ik_error_pose(Tt, target, et, norms);
+            for (int r = 0; r < 6; ++r) {
+                r2[r] = ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997;
+            }
+            if (any > 0) {
+                ur5_ik_ldl_solve_pose(Jf, F, r2, acc);
+            } else {
+                ur5_ik_ldl_solve_pose(J, F, r2, acc);
+            }
+            aa = 0.0;
+            vv = 0.0;
+            for (int k = 0; k < 6; ++k) {
+                aa = aa + acc[k]*acc[k];
+                vv = vv + dq[k]*dq[k];
+            }
+            if (aa <= vv*0.5625) {
+                for (int k = 0; k < 6; ++k) {
+                    dq[k] = dq[k] + acc[k]*0.5;
+                }
+            }
+        }
         big = 0.0;
         for (int k = 0; k < 6; ++k) {
             big = (fabs(dq[k]) > big ? fabs(dq[k]) : big);
@@ -7095,6 +7166,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
+        curved = (ent > en*0.5 ? 1 : 0);
         if (ent < en) {
             /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
             stationary = (ent <= en*0.6 ? 0 : stationary);
@@ -7168,6 +7240,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
                 re = norms[1];
                 en = norms[2];
                 c = 0.01;
+                curved = 0;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;
@@ -7232,7 +7305,10 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     double best_q[6];
     double G[6];
     double Gf[6];
+    double F[6];
     double norms[3];
+    double r2[3];
+    double acc[6];
     int blocked[6];
     unsigned long long state[1] = { 0x9e3779b921a722f8ULL };
     double pe = 0.0;
@@ -7246,6 +7322,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     double scale = 0.0;
     double gg = 0.0;
     double ff = 0.0;
+    double aa = 0.0;
+    double vv = 0.0;
     double c = 0.01;
     double checkpoint = 0.0;
     double window_start = 0.0;
@@ -7258,6 +7336,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     int stalled = 0;
     int slow = 0;
     int stationary = 0;
+    int curved = 0;
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
@@ -7316,7 +7395,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
             ur5_ik_gram_position(J, G);
             gram_ready = 1;
         }
-        ur5_ik_damped_position(J, G, e, mu2, dq);
+        ur5_ik_ldl_position(G, mu2, F);
+        ur5_ik_ldl_solve_position(J, F, e, dq);
         for (int k = 0; k < 6; ++k) {
             blocked[k] = ((q[k] <= lo[k] && dq[k] < 0.0) || (q[k] >= hi[k] && dq[k] > 0.0) ? 1 : 0);
         }
@@ -7352,7 +7432,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
                     Gf[5] = Gf[5] - J[12 + k]*J[12 + k];
                 }
             }
-            ur5_ik_damped_position(Jf, Gf, e, mu2, dq);
+            ur5_ik_ldl_position(Gf, mu2, F);
+            ur5_ik_ldl_solve_position(Jf, F, e, dq);
             ff = Gf[0] + Gf[2] + Gf[5];
             gg = 0.0;
             for (int k = 0; k < 6; ++k) {
@@ -7367,6 +7448,32 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (curved > 0 && en < 0.05) {
+            for (int k = 0; k < 6; ++k) {
+                trial[k] = q[k] + dq[k]*0.1;
+            }
+            ur5_pose(trial, Tt);
+            ur5_ik_error_position(Tt, target, et, norms);
+            for (int r = 0; r < 3; ++r) {
+                r2[r] = ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997;
+            }
+            if (any > 0) {
+                ur5_ik_ldl_solve_position(Jf, F, r2, acc);
+            } else {
+                ur5_ik_ldl_solve_position(J, F, r2, acc);
+            }
+            aa = 0.0;
+            vv = 0.0;
+            for (int k = 0; k < 6; ++k) {
+                aa = aa + acc[k]*acc[k];
+                vv = vv + dq[k]*dq[k];
+            }
+            if (aa <= vv*0.5625) {
+                for (int k = 0; k < 6; ++k) {
+                    dq[k] = dq[k] + acc[k]*0.5;
+                }
+            }
+        }
         big = 0.0;
         for (int k = 0; k < 6; ++k) {
             big = (fabs(dq[k]) > big ? fabs(dq[k]) : big);
@@ -7415,6 +7522,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         ent = norms[2];
         it = it + 1;
         attempt = attempt + 1;
+        curved = (ent > en*0.5 ? 1 : 0);
         if (ent < en) {
             /* a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow) */
             stationary = (ent <= en*0.6 ? 0 : stationary);
@@ -7487,6 +7595,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
                 re = norms[1];
                 en = norms[2];
                 c = 0.01;
+                curved = 0;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;

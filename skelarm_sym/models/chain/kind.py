@@ -116,7 +116,7 @@ def _show(model: Chain, args) -> str:
 
 KIND = ModelKind(
     "chain", Chain, _derive, scenarios=_scenarios, solvers=_solvers,
-    solver_names={"ik_solve": ("ik_terms",), "ik_solve_position": ("ik_terms",), "ik_all": ("ik_candidates",),
+    solver_names={"ik_solve": ("ik_terms", "pose"), "ik_solve_position": ("ik_terms", "pose"), "ik_all": ("ik_candidates",),
                   "ik_nearest": ("ik_candidates",), "ik_nearest_weighted": ("ik_candidates",)},
     solver_extras={"ik_nearest": ("ik_continuum_members",), "ik_nearest_weighted": ("ik_continuum_members",)},
     solver_checks=_solver_checks, show=_show, add_options=_add_options, from_args=_from_args,
