@@ -32,7 +32,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x9730b532UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xd620c31eUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

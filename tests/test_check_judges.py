@@ -255,3 +255,43 @@ def test_check_from_lang_reads_only_that_languages_files(tmp_path, capsys):
     assert main(["check", "--from", str(tmp_path), "--lang", "c", "--cases", "3"]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"checking arm2.h, arm2.c in {tmp_path} ") and "C jacobian" in out and "note:" not in out
+
+
+ROTOR = """name = "rotor"
+convention = "standard"
+[[joints]]
+type = "revolute"
+d = 0.023
+lower = -1e16
+upper = 1e16
+"""
+
+
+def test_a_rotor_without_limits_passes_its_check(tmp_path, capsys):
+    """example-robot-data's iris rotors (one joint, the tool on its axis, limits +-1e16) failed `check`: the judge's
+    condition of the undamped position solve was 0 / 0 where J's linear rows are zero (relative error nan), and the
+    IK targets and the solver's restarts were drawn from +-1e16 rad (one unit in the last place: 2 rad). Both now
+    draw a revolute joint spanning a turn or more from the turn nearest zero."""
+    from skelarm_sym.models.chain.reference_inverse import solve_condition
+    from skelarm_sym.models.chain.solver import limits_of
+
+    assert solve_condition(np.zeros((3, 1)), 0.0, 1e-12) == 1.0
+    robot = tmp_path / "rotor.toml"
+    robot.write_text(ROTOR)
+    limits = limits_of(load_robot(robot), "double")
+    assert limits["draw_low"] == [-np.pi] and limits["draw_span"] == [2 * np.pi] and limits["near_low"] == [-np.pi]
+    assert main(["check", "--robot", str(robot)]) == 0, capsys.readouterr().out[-2000:]
+    out = capsys.readouterr().out
+    assert "0 failed; ik: 4 passed, 0 failed" in out and "nan" not in out
+
+
+def test_a_limited_wide_joint_draws_its_turn_nearest_zero(tmp_path):
+    """Limits [1, 20] rad: the turn [1, 1 + 2 pi] (zero is outside them); UR5's +-2 pi: [-pi, pi]."""
+    from skelarm_sym.models.chain.solver import limits_of
+
+    lim = limits_of(load_robot(ROOT / "examples/robots/ur5.toml"), "double")
+    assert np.allclose(lim["draw_low"], -np.pi) and np.allclose(lim["draw_span"], 2 * np.pi)
+    robot = tmp_path / "shifted.toml"
+    robot.write_text(ROTOR.replace("lower = -1e16", "lower = 1").replace("upper = 1e16", "upper = 20"))
+    lim = limits_of(load_robot(robot), "double")
+    assert lim["draw_low"] == [1.0] and lim["draw_span"] == [2 * np.pi]

@@ -155,7 +155,7 @@ def test_jax_rounds_draws_to_float32_once_without_x64(tmp_path):
 @pytest.mark.parametrize("lang", ["torch", pytest.param("jax", marks=pytest.mark.slow)])  # XLA compiles ik_solve
 def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     """One call over 12 targets (one start shared): every problem's status, iteration count and pose equal
-    the NumPy module's for that problem alone; restarts included (some problems need them)."""
+    the NumPy module's for that problem alone; restarts included (the last target is out of reach)."""
     _torch() if lang == "torch" else _jax()
     chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
     g = generate(chain, langs=f"python,{lang}", out=None, prefix="batch", functions="ik_solve")
@@ -163,6 +163,7 @@ def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     mod = load_python(g.sources[f"batch_{lang}.py"], f"batch_{lang}")
     rng = np.random.default_rng(11)
     targets = reference.chain_kinematics(chain.numeric(None), rng.uniform(-2.5, 2.5, (12, 6))).T
+    targets[-1, 0, 3] += 5.0  # out of reach: its attempts restart until the budget ends
     q0 = rng.uniform(-2.5, 2.5, 6)
     batch = mod.ik_solve(q0, targets, max_iter=60)
     names = [mod.STATUS_NAMES[int(s)] for s in np.asarray(batch.status)]

@@ -70,7 +70,8 @@ def damped_least_squares(J, rhs, lam: float, rcond: float, scales=None) -> np.nd
 
 
 def solve_condition(J, lam: float, rcond: float, scales=None) -> np.ndarray:
-    """``(s_max^2 + lam^2) / (s_min_kept^2 + lam^2)`` of the scaled ``J``: how much rounding the solve amplifies."""
+    """``(s_max^2 + lam^2) / (s_min_kept^2 + lam^2)`` of the scaled ``J``: how much rounding the solve amplifies;
+    1 (nothing amplified) where ``J`` is zero and ``lam`` is 0 (a rotor's tool origin on its axis)."""
     J = np.asarray(J, dtype=float)
     S = np.ones(J.shape[-2]) if scales is None else np.asarray(scales, dtype=float)
     s = np.linalg.svd(S[:, None] * J, compute_uv=False)
@@ -78,7 +79,7 @@ def solve_condition(J, lam: float, rcond: float, scales=None) -> np.ndarray:
     kept = np.where(s > rcond * top, s, np.inf)
     smallest = kept.min(axis=-1)
     smallest = np.where(np.isfinite(smallest), smallest, top[..., 0])
-    return (top[..., 0] ** 2 + lam**2) / np.maximum(smallest**2 + lam**2, 1e-300)
+    return np.maximum(1.0, (top[..., 0] ** 2 + lam**2) / np.maximum(smallest**2 + lam**2, 1e-300))
 
 
 def rpy(R: np.ndarray) -> np.ndarray:
