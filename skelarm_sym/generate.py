@@ -159,8 +159,18 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
     for name, text in sources.items():
         path = target / name
         before, after = _recorded_before(path), recorded_command(text)
-        if before is not None and after is not None and _words(before) != _words(after):
+        if before is not None and after is not None and _resolved(_words(before), target) != _resolved(_words(after), target):
             raise _other_options(path, before, after)
+
+
+def _resolved(words: list[str] | str, folder: Path) -> list[str] | str:
+    """A recorded command's words with its robot file as the real path it names from ``folder`` (where the
+    command runs): the same robot reached through a symbolic link, or spelled another way, is the same option."""
+    value = _flag_value(words, "--robot")
+    if value is None:
+        return words
+    i = words.index("--robot") + 1
+    return words[:i] + [os.path.realpath(folder / value)] + words[i + 1:]
 
 
 def _without_functions(words: list[str] | str) -> list[str] | str:
@@ -193,14 +203,14 @@ def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wan
     the new one has none, or the reverse, differs already. ``wanted``: the functions the new list asks for with the
     ones its solvers need; fewer than a file records differ already (names the file does not record wait for the
     derivation, which says whether they exist)."""
-    new = _without_functions(_words(command))
+    new = _resolved(_without_functions(_words(command)), target)
     for name in names:
         path = target / name
         before = _recorded_before(path)
         if before is None:
             continue
         recorded = _recorded_functions(_words(before))
-        if _without_functions(_words(before)) != new or (wanted is not None and recorded is not None and wanted < recorded):
+        if _resolved(_without_functions(_words(before)), target) != new or (wanted is not None and recorded is not None and wanted < recorded):
             raise _other_options(path, before, command)
 
 
@@ -354,7 +364,7 @@ def generate(
     kind = kind_of(model)
     prefix = validate_prefix(model.default_prefix if prefix is None else prefix)
     precision = validate_precision(precision)
-    model.check_representable(precision)  # parameters the precision cannot hold
+    model = model.for_precision(precision)  # constants as the precision holds them; what it cannot hold is refused
     langs = validate_langs(langs)
     if "python" in langs:
         validate_module_name(prefix)

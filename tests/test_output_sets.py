@@ -178,3 +178,20 @@ def test_another_prefixs_cmake_file_is_named_as_such(tmp_path):
         generate(3, out=tmp_path, langs="c", cmake=True, functions="position")
     with pytest.raises(InputError, match=r"arm2\.h was generated with other options"):  # its own prefix: as before
         generate(2, out=tmp_path, langs="c", cmake=True, functions="jacobian")
+
+
+def test_the_same_robot_through_a_symbolic_link_is_the_same_option(tmp_path, capsys):
+    """A folder reached through a link made the same robot file count as "other options" (the recorded paths
+    differ as text); a copy of the file elsewhere is still another option."""
+    real = tmp_path / "real"
+    real.mkdir()
+    shutil.copy(Path(__file__).resolve().parents[1] / "examples" / "robots" / "scara.toml", real / "scara.toml")
+    (tmp_path / "link").symlink_to(real, target_is_directory=True)
+    shutil.copy(real / "scara.toml", tmp_path / "copy.toml")
+    out = str(tmp_path / "out")
+    assert main(["generate", "--robot", str(real / "scara.toml"), "--out", out, "--functions", "pose"]) == 0
+    assert main(["generate", "--robot", str(tmp_path / "link" / "scara.toml"), "--out", out, "--functions", "pose"]) == 0
+    capsys.readouterr()
+    assert main(["generate", "--robot", str(tmp_path / "copy.toml"), "--out", out, "--functions", "pose"]) == 2
+    assert "was generated with other options" in capsys.readouterr().err
+    assert main(["check", "--from", out]) == 0

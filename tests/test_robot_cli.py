@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from skelarm_sym.build import compile_shared
@@ -104,7 +105,7 @@ def test_tip_that_is_not_a_link_is_refused(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("value, precision", [(1e39, "float"), (1e-46, "float"), (1e300, "double")])
+@pytest.mark.parametrize("value, precision", [(1e39, "float"), (1e300, "double")])
 def test_robot_constants_the_precision_cannot_hold_are_refused(tmp_path, capsys, value, precision):
     path = tmp_path / "big.toml"
     path.write_text(f'[[joints]]\ntype = "revolute"\na = {value!r}\n[[joints]]\ntype = "prismatic"\nd = 0.5\n')
@@ -158,3 +159,23 @@ def test_newcomer_path_functions_links_joints_and_prefix_rule(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["generate", "--help"])
     assert "xarm7.urdf: xarm7" in " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("value, precision", [(-2.67276e-51, "float"), (1e-46, "float"), (1e-310, "double")])
+def test_robot_constants_below_the_smallest_normal_are_zero(tmp_path, value, precision):
+    """iCub's URDF writes a translation of -2.67276e-51 m: float was refused ("use a value between 1.18e-38 and
+    3.4e+38", a vendor file to edit), though float rounds it to 0 and a C compiler truncates it with a warning.
+    Such constants are now 0 in that precision; the C compiles warning-free and the pose has no trace of them."""
+    from skelarm_sym.build import compile_arm, find_compiler
+
+    path = tmp_path / "tiny.toml"
+    path.write_text(f'[[joints]]\ntype = "revolute"\na = 0.4\nd = {value!r}\n[[joints]]\ntype = "revolute"\na = 0.3\n')
+    chain = load_robot(path)
+    generated = generate(chain, langs="c", precision=precision, out=None, functions="pose")
+    assert generated.derivation.model.joints[0].after.translation[2] == 0
+    if precision == "float":
+        assert chain.joints[0].after.translation[2] != 0  # the file's model is not changed (double holds it)
+    if find_compiler():
+        arm = compile_arm(generated)  # -Werror: "floating constant truncated to zero" would fail it
+        T = arm.pose(np.array([0.3, -0.2]))
+        assert abs(T[2, 3]) == 0.0

@@ -63,3 +63,26 @@ def test_a_limit_beyond_float_is_refused_in_float_and_kept_in_double(tmp_path, c
     header = (tmp_path / "d" / "z.h").read_text()
     value = float(limit.split("=")[1])
     assert f"{value:g}" in header, limit  # the limit itself, in double
+
+
+@pytest.mark.parametrize("limits, precision, bound", [("lower = 1e15\nupper = 2e15", "double", "4.5e+05"),
+                                                       ("lower = -2e15\nupper = -1e15", "double", "4.5e+05"),
+                                                       ("lower = 100\nupper = 110", "float", "84")])
+def test_limits_that_hold_no_resolvable_angle_are_refused(tmp_path, capsys, limits, precision, bound):
+    """A revolute range far from zero (an exponent too many) was generated; its solver drew restarts at 1e15 rad,
+    where one unit in the last place is 0.125 rad, and `check` failed every IK target."""
+    robot = tmp_path / "far.toml"
+    robot.write_text(ONE_JOINT.format(name="far", a=1.0) + limits + "\n")
+    assert main(["generate", "--robot", str(robot), "--precision", precision, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"skelarm-sym: error: {robot}: joint 'j1' limits [") and f"within {bound} rad of zero" in err, err
+    assert precision in err and "\n" not in err
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("limits", ["lower = -1e16\nupper = 1e16", "lower = 100\nupper = 110", "lower = -1e5\nupper = -1e5"])
+def test_wide_or_double_resolvable_limits_are_kept(tmp_path, limits):
+    """URDFs write +-1e16 for a joint without limits (example-robot-data's iris rotors); [100, 110] rad resolves in double."""
+    robot = tmp_path / "wide.toml"
+    robot.write_text(ONE_JOINT.format(name="wide", a=1.0) + limits + "\n")
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "o"), "--functions", "pose"]) == 0

@@ -25,6 +25,7 @@ import math
 import os
 import numbers
 import operator
+import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
@@ -403,6 +404,33 @@ class Chain:
         text = f"serial chain {self.name!r}{origin}: {self.n} coordinate(s), {len(self.joints)} moving joint(s) ({counts})"
         return text + (f"; {self.description}" if self.description else "")
 
+    def for_precision(self, precision: str) -> "Chain":
+        """The chain as ``precision`` holds it: a constant of a transform or an axis below the precision's smallest
+        normal number is 0 (what the precision rounds it to: iCub's URDF writes a translation of 2.67e-51 m, which
+        float cannot hold and a C compiler truncates with a warning), then :meth:`check_representable`."""
+        from ..numbers import FLOAT_RANGES
+
+        tiny = FLOAT_RANGES[precision][0]
+
+        def flushed(entry):
+            return sp.S.Zero if entry.is_number and not entry.is_zero and abs(float(entry)) < tiny else entry
+
+        def transform(t: Transform) -> Transform:
+            rotation, translation = t.rotation.applyfunc(flushed), t.translation.applyfunc(flushed)
+            return t if rotation == t.rotation and translation == t.translation else Transform(rotation, translation)
+
+        joints = []
+        for j in self.joints:
+            axis = tuple(flushed(sp.sympify(a)) for a in j.axis)
+            changed = dataclasses.replace(j, before=transform(j.before), after=transform(j.after), axis=axis)
+            joints.append(j if (changed.before is j.before and changed.after is j.after and axis == tuple(j.axis)) else changed)
+        base, tool = transform(self.base), transform(self.tool)
+        chain = self
+        if base is not self.base or tool is not self.tool or any(a is not b for a, b in zip(joints, self.joints)):
+            chain = dataclasses.replace(self, base=base, tool=tool, joints=tuple(joints))
+        chain.check_representable(precision)
+        return chain
+
     def check_representable(self, precision: str) -> None:
         """Raise :class:`InputError` (one line naming the value) unless every nonzero constant of the chain
         is a normal finite number of ``precision``, and its reach (the sum of the constant translations'
@@ -435,6 +463,7 @@ class Chain:
             for what, value in (("lower limit", j.lower), ("upper limit", j.upper), ("velocity limit", j.velocity)):
                 if value is not None and value != 0:  # the emitted Q_MIN, Q_MAX, DQ_MAX hold them in this precision
                     check_number(float(value), f"joint {j.name!r} {what}", precision)
+            _check_resolved_range(j, precision)
         if reach > 0:
             check_number(reach, "the robot's reach (sum of its constant translations)", precision, 4,
                          "the inverse functions use its fourth power")
@@ -582,3 +611,24 @@ def dh_joint(name: str, kind: str, convention: str, a, alpha, d, theta, coordina
             return Joint(name, kind, head, z, T.translate(z=d), coordinate, offset=theta)
         return Joint(name, kind, head @ T.rotate("z", theta), z, T.identity(), coordinate, offset=d)
     raise InputError(f"convention must be standard or modified, got {convention!r}")
+
+
+def _check_resolved_range(joint: Joint, precision: str) -> None:
+    """Raise :class:`InputError` when a revolute joint's limits hold no angle that ``precision`` resolves to the
+    IK solvers' default tolerance: beyond ``tol / epsilon`` rad (4.5e5 in double, 84 in float) one unit in the last
+    place of the angle exceeds that tolerance, so a range like ``[1e15, 2e15]`` (a typo, or an exponent too many)
+    can be neither drawn from nor solved in. A range that holds small angles passes however wide it is (a URDF's
+    +-1e16 for a joint without limits)."""
+    import numpy as np
+
+    from .solver import SETTINGS
+
+    if joint.kind != "revolute" or joint.lower is None or joint.upper is None:
+        return
+    lower, upper = float(joint.lower), float(joint.upper)
+    nearest = 0.0 if lower <= 0.0 <= upper else min(abs(lower), abs(upper))
+    tol = SETTINGS[precision]["tol"]
+    bound = tol / float(np.finfo(np.float64 if precision == "double" else np.float32).eps)
+    if nearest > bound:
+        raise InputError(f"joint {joint.name!r} limits [{lower:g}, {upper:g}] rad hold no angle within {bound:.2g} rad of zero, "
+                         f"beyond which {precision} cannot resolve an angle to the IK tolerance {tol:g}: check the limits")

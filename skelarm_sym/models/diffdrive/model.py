@@ -47,6 +47,12 @@ class DiffDrive:
         """The ``skelarm-sym generate`` options (words) that describe this model."""
         return ["--model", "diffdrive"] + ([] if self.track is None else ["--track", repr(self.track)])
 
+    def for_precision(self, precision: str) -> "DiffDrive":
+        """The model as ``precision`` holds it: itself, once :meth:`check_representable` passes (its lengths are
+        checked, not rounded)."""
+        self.check_representable(precision)
+        return self
+
     def check_representable(self, precision: str) -> None:
         """Raise :class:`InputError` unless a fixed track suits ``precision``: a normal number whose
         reciprocal (``omega = (v_R - v_L) / track``) is one too."""

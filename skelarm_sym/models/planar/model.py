@@ -96,6 +96,12 @@ class PlanarArm:
             args += ["--lengths", ",".join(repr(x) for x in self.lengths)]
         return args
 
+    def for_precision(self, precision: str) -> "PlanarArm":
+        """The model as ``precision`` holds it: itself, once :meth:`check_representable` passes (its lengths are
+        checked, not rounded)."""
+        self.check_representable(precision)
+        return self
+
     def check_representable(self, precision: str) -> None:
         """Raise :class:`InputError` unless the fixed lengths suit ``precision``: each a normal number, and the
         reach (their sum) such that its reciprocal and its fourth power (the damped solves form
