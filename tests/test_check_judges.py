@@ -295,3 +295,18 @@ def test_a_limited_wide_joint_draws_its_turn_nearest_zero(tmp_path):
     robot.write_text(ROTOR.replace("lower = -1e16", "lower = 1").replace("upper = 1e16", "upper = 20"))
     lim = limits_of(load_robot(robot), "double")
     assert lim["draw_low"] == [1.0] and lim["draw_span"] == [2 * np.pi]
+
+
+@pytest.mark.parametrize("lower, upper", [(-1e16, 1e16), (-1e5, -83.0)])
+def test_an_arm_with_wide_limits_passes_its_closed_form_check(tmp_path, capsys, lower, upper):
+    """UR5 with a URDF's +-1e16 for every joint: check drew the closed-form rows' sources from the whole range
+    (1e15 rad: 0 of 10 found); with [-1e5, -83] ik_all returned the copies nearest the middle of the range,
+    -5e4 rad, where the poses of its rows missed the target by 1e-11. Both now take the turn nearest zero."""
+    from skelarm_sym.closed_ik.postprocess import centres
+
+    text = (ROOT / "examples/robots/ur5.toml").read_text()
+    text = text.replace("lower = -6.283185307179586", f"lower = {lower!r}").replace("upper = 6.283185307179586", f"upper = {upper!r}")
+    robot = tmp_path / "wide.toml"
+    robot.write_text(text)
+    assert main(["check", "--robot", str(robot), "--cases", "6"]) == 0, capsys.readouterr().out[-3000:]
+    assert centres(np.array([lower]), np.array([upper]))[0] == pytest.approx(0.0 if lower < -83 < 0 < upper else -84.0 - np.pi)

@@ -12,10 +12,11 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    kept; otherwise every candidate is kept and the status becomes ``unreachable`` (least-squares poses;
    every returned row has bit 1 set).
 3. **2 pi shifts** (revolute joints only): ``q + 2 pi k`` with ``k = round((c - q) / 2 pi)`` (NumPy rounding,
-   half to even), ``c`` the centre of the joint's range: ``(lower + upper) / 2``; ``lower + pi`` when only
-   the lower limit is finite, ``upper - pi`` when only the upper one is, 0 when none (then the result lies
-   in ``[-pi, pi]``). This is the copy nearest the middle of the range; when several copies fit (a range
-   wider than 2 pi) it is the one returned.
+   half to even), ``c`` the centre of the joint's range (:func:`centres`): ``(lower + upper) / 2`` when it spans
+   at most 2 pi, else the point nearest zero at least ``pi + s`` inside both limits, ``s = min(1, (upper - lower -
+   2 pi) / 2)`` (0 without limits, or for +-2 pi: the result lies in ``[-pi, pi]``). When several copies fit (a range wider than 2 pi) the one returned is the copy nearest
+   zero, not the middle of a range like ``[-1e5, -83]`` (at -5e4 rad one unit in the last place is 7e-12 rad,
+   and the poses of such rows missed the target by 1e-11).
    **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s)`` of :func:`~.derive.wrist_continuum`): a row
    flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of a multiple of pi has joints a
    and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi (``sigma = s`` for an even multiple, ``-s`` for an
@@ -106,15 +107,17 @@ def is_valid_target(target: np.ndarray) -> bool:
 
 
 def centres(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Step 3's centre of each joint's range."""
+    """Step 3's centre of each joint's range: its middle when it spans at most a turn; else the point nearest zero
+    at least ``pi + s`` inside both limits, ``s`` the smaller of 1 rad and half the excess over a turn (so the copies
+    keep some room from the limits, and a range just over a turn keeps its middle); absent limits count as
+    infinite."""
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    lo_f, hi_f = np.isfinite(lower), np.isfinite(upper)
-    c = np.zeros(lower.shape)
-    both = lo_f & hi_f
-    c[both] = 0.5 * (lower[both] + upper[both])
-    c[lo_f & ~hi_f] = lower[lo_f & ~hi_f] + np.pi
-    c[hi_f & ~lo_f] = upper[hi_f & ~lo_f] - np.pi
-    return c
+    with np.errstate(invalid="ignore"):
+        width = upper - lower
+        narrow = width <= TWO_PI
+        middle = np.where(narrow, 0.5 * (lower + upper), 0.0)
+        room = np.where(narrow, 0.0, np.minimum(1.0, 0.5 * (width - TWO_PI)))
+    return np.where(narrow, middle, np.minimum(np.maximum(0.0, lower + np.pi + room), upper - np.pi - room))
 
 
 def shift(q: np.ndarray, lower, upper, revolute) -> np.ndarray:

@@ -125,9 +125,7 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
     span = np.where(prismatic, 0.5, np.pi)
     lower = np.array([-s if v is None else v for v, s in zip(limits["lower"], span)], dtype=float)
     upper = np.array([s if v is None else v for v, s in zip(limits["upper"], span)], dtype=float)
-    wide = ~prismatic & (upper - lower > 2 * np.pi)  # a turn, nearest zero within the limits (a URDF's +-1e16)
-    centre = np.minimum(np.maximum(0.0, lower + np.pi), upper - np.pi)
-    lower, upper = np.where(wide, centre - np.pi, lower), np.where(wide, centre + np.pi, upper)
+    lower, upper = one_turn(lower, upper, ~prismatic)
     params = rounded(rng.uniform(0.2, 1.2, len(chain.parameters)))
     numeric = chain.numeric(params if chain.parameters else None)
     m = max(1, min(cases, IK_TARGETS))
@@ -166,6 +164,15 @@ def _lock_coordinate(chain) -> int | None:
 
     index = lock_index(chain, ik_lock(chain))
     return None if index is None else chain.joints[index].coordinate
+
+
+def one_turn(lower: np.ndarray, upper: np.ndarray, revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The range configurations are drawn from: a revolute joint whose limits span more than a turn gets the turn
+    nearest zero within them (a URDF's +-1e16 for a joint without limits: angles of 1e15 rad carry no digits);
+    the others their limits."""
+    wide = revolute & (upper - lower > 2 * np.pi)
+    centre = np.minimum(np.maximum(0.0, lower + np.pi), upper - np.pi)
+    return np.where(wide, centre - np.pi, lower), np.where(wide, centre + np.pi, upper)
 
 
 def _limits(chain) -> tuple[np.ndarray, np.ndarray]:
@@ -338,8 +345,7 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
     rev = revolute_mask(chain)
     lower, upper = _limits(chain)
     span = np.where(rev, np.pi, 0.5)
-    lo = np.where(np.isfinite(lower), lower, -span)
-    hi = np.where(np.isfinite(upper), upper, span)
+    lo, hi = one_turn(np.where(np.isfinite(lower), lower, -span), np.where(np.isfinite(upper), upper, span), rev)
     m = max(1, min(cases, CLOSED_TARGETS))
     q_gen = rounded(lo + (0.05 + 0.9 * rng.uniform(size=(m, n))) * (hi - lo))
     targets = rounded(reference.chain_kinematics(numeric, q_gen).T)
