@@ -195,3 +195,26 @@ def test_the_same_robot_through_a_symbolic_link_is_the_same_option(tmp_path, cap
     assert main(["generate", "--robot", str(tmp_path / "copy.toml"), "--out", out, "--functions", "pose"]) == 2
     assert "was generated with other options" in capsys.readouterr().err
     assert main(["check", "--from", out]) == 0
+
+
+def test_an_output_folder_through_a_link_records_the_path_the_system_resolves(tmp_path, capsys):
+    """--out through a link to a deeper folder recorded the robot as ../../a/x.toml, counted from where the link
+    sits; the system resolves it from the link's target, so check --from said 'no such file'. And
+    link/../q.toml loaded one file and recorded another (the lexical ..)."""
+    robots = Path(__file__).resolve().parents[1] / "examples" / "robots"
+    (tmp_path / "a").mkdir()
+    (tmp_path / "x" / "y" / "z").mkdir(parents=True)
+    shutil.copy(robots / "scara.toml", tmp_path / "a" / "x.toml")
+    (tmp_path / "deep").symlink_to(tmp_path / "x" / "y" / "z", target_is_directory=True)
+    out = tmp_path / "deep" / "g"
+    assert main(["generate", "--robot", str(tmp_path / "a" / "x.toml"), "--out", str(out), "--functions", "pose"]) == 0
+    assert main(["check", "--from", str(out)]) == 0
+    recorded = recorded_command((out / "scara.h").read_text())
+    robot = recorded.split("--robot ")[1].split()[0]
+    assert (tmp_path / "x" / "y" / "z" / "g" / robot).resolve() == (tmp_path / "a" / "x.toml").resolve()
+    shutil.copy(robots / "ur5.toml", tmp_path / "x" / "y" / "q.toml")  # what deep/../q.toml names
+    shutil.copy(robots / "puma560.toml", tmp_path / "q.toml")  # what it names lexically
+    capsys.readouterr()
+    assert main(["generate", "--robot", str(tmp_path / "deep" / ".." / "q.toml"), "--out", str(tmp_path / "g7"),
+                 "--functions", "pose"]) == 0
+    assert main(["check", "--from", str(tmp_path / "g7")]) == 0, capsys.readouterr()

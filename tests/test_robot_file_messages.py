@@ -65,9 +65,9 @@ def test_a_limit_beyond_float_is_refused_in_float_and_kept_in_double(tmp_path, c
     assert f"{value:g}" in header, limit  # the limit itself, in double
 
 
-@pytest.mark.parametrize("limits, precision, bound", [("lower = 1e15\nupper = 2e15", "double", "4.5e+05"),
-                                                       ("lower = -2e15\nupper = -1e15", "double", "4.5e+05"),
-                                                       ("lower = 100\nupper = 110", "float", "84")])
+@pytest.mark.parametrize("limits, precision, bound", [("lower = 1e15\nupper = 2e15", "double", "4.504e+05"),
+                                                       ("lower = -2e15\nupper = -1e15", "double", "4.504e+05"),
+                                                       ("lower = 100\nupper = 110", "float", "83.89")])
 def test_limits_that_hold_no_resolvable_angle_are_refused(tmp_path, capsys, limits, precision, bound):
     """A revolute range far from zero (an exponent too many) was generated; its solver drew restarts at 1e15 rad,
     where one unit in the last place is 0.125 rad, and `check` failed every IK target."""
@@ -86,3 +86,14 @@ def test_wide_or_double_resolvable_limits_are_kept(tmp_path, limits):
     robot = tmp_path / "wide.toml"
     robot.write_text(ONE_JOINT.format(name="wide", a=1.0) + limits + "\n")
     assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "o"), "--functions", "pose"]) == 0
+
+
+@pytest.mark.parametrize("limit", ["lower = -1e-40", "velocity = 1e-46"])
+def test_a_limit_below_floats_smallest_normal_is_zero_in_float(tmp_path, limit):
+    """A limit of -1e-40 was refused in float with "use a value between 1.18e-38 and 3.4e+38" (a range that leaves
+    out 0 and every negative number); float holds it as 0, as it holds a tiny constant."""
+    robot = tmp_path / "t.toml"
+    robot.write_text(ONE_JOINT.format(name="t", a=1.0) + limit + "\nupper = 1.0\n")
+    assert main(["generate", "--robot", str(robot), "--precision", "float", "--out", str(tmp_path / "f"), "--functions", "pose"]) == 0
+    header = (tmp_path / "f" / "t.h").read_text()
+    assert "e-40" not in header and "e-46" not in header

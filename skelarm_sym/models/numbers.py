@@ -21,4 +21,4 @@ def check_number(value: float, name: str, precision: str, power: int = 1, what: 
         low, high = sorted((tiny ** (1 / power), huge ** (1 / power)))
         low, high = max(low, tiny), min(high, huge)
         reason = f" ({what})" if what else ""
-        raise InputError(f"{name} = {value!r} is not representable in {precision}: use a value between {low:.3g} and {high:.3g}{reason}")
+        raise InputError(f"{name} = {value!r} is not representable in {precision}: use a magnitude between {low:.3g} and {high:.3g}{reason}")

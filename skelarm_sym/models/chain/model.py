@@ -377,8 +377,8 @@ class Chain:
 
     def command_args(self, folder: str | None = None) -> list[str]:
         """The ``skelarm-sym generate`` options (words) that describe this model: the robot file (relative
-        to ``folder`` when given, where the emitted files go, so the record holds no machine path) and the
-        loader's options."""
+        to ``folder`` when given, where the emitted files go, so the record holds no machine path; from real
+        paths, so it names the file from wherever links lead) and the loader's options."""
         if not self.source:
             return []
         import os
@@ -386,7 +386,9 @@ class Chain:
         path = self.source
         if folder is not None:
             try:
-                path = os.path.relpath(os.path.abspath(self.source), os.path.abspath(folder))
+                # real paths: the system resolves a relative path from the folder's real place (through a linked
+                # folder, "../x.toml" leaves the link's target, not the folder the link sits in)
+                path = os.path.relpath(os.path.realpath(self.source), os.path.realpath(folder))
             except ValueError:  # another drive (Windows)
                 path = os.path.abspath(self.source)
         return ["--robot", path] + [word for option in self.load_options for word in option]
@@ -405,9 +407,9 @@ class Chain:
         return text + (f"; {self.description}" if self.description else "")
 
     def for_precision(self, precision: str) -> "Chain":
-        """The chain as ``precision`` holds it: a constant of a transform or an axis below the precision's smallest
-        normal number is 0 (what the precision rounds it to: iCub's URDF writes a translation of 2.67e-51 m, which
-        float cannot hold and a C compiler truncates with a warning), then :meth:`check_representable`."""
+        """The chain as ``precision`` holds it: a constant of a transform or an axis, or a limit, below the precision's
+        smallest normal number is 0 (what the precision rounds it to: iCub's URDF writes a translation of 2.67e-51
+        m, which float cannot hold and a C compiler truncates with a warning), then :meth:`check_representable`."""
         from ..numbers import FLOAT_RANGES
 
         tiny = FLOAT_RANGES[precision][0]
@@ -419,11 +421,17 @@ class Chain:
             rotation, translation = t.rotation.applyfunc(flushed), t.translation.applyfunc(flushed)
             return t if rotation == t.rotation and translation == t.translation else Transform(rotation, translation)
 
+        def limit(value):
+            return 0.0 if value is not None and 0 < abs(float(value)) < tiny else value
+
         joints = []
         for j in self.joints:
             axis = tuple(flushed(sp.sympify(a)) for a in j.axis)
-            changed = dataclasses.replace(j, before=transform(j.before), after=transform(j.after), axis=axis)
-            joints.append(j if (changed.before is j.before and changed.after is j.after and axis == tuple(j.axis)) else changed)
+            bounds = {"lower": limit(j.lower), "upper": limit(j.upper), "velocity": limit(j.velocity)}
+            changed = dataclasses.replace(j, before=transform(j.before), after=transform(j.after), axis=axis, **bounds)
+            same = (changed.before is j.before and changed.after is j.after and axis == tuple(j.axis)
+                    and all(bounds[k] == getattr(j, k) for k in bounds))
+            joints.append(j if same else changed)
         base, tool = transform(self.base), transform(self.tool)
         chain = self
         if base is not self.base or tool is not self.tool or any(a is not b for a, b in zip(joints, self.joints)):
@@ -615,7 +623,7 @@ def dh_joint(name: str, kind: str, convention: str, a, alpha, d, theta, coordina
 
 def _check_resolved_range(joint: Joint, precision: str) -> None:
     """Raise :class:`InputError` when a revolute joint's limits hold no angle that ``precision`` resolves to the
-    IK solvers' default tolerance: beyond ``tol / epsilon`` rad (4.5e5 in double, 84 in float) one unit in the last
+    IK solvers' default tolerance: beyond ``tol / epsilon`` rad (4.5e5 in double, 83.9 in float) one unit in the last
     place of the angle exceeds that tolerance, so a range like ``[1e15, 2e15]`` (a typo, or an exponent too many)
     can be neither drawn from nor solved in. A range that holds small angles passes however wide it is (a URDF's
     +-1e16 for a joint without limits)."""
@@ -630,5 +638,5 @@ def _check_resolved_range(joint: Joint, precision: str) -> None:
     tol = SETTINGS[precision]["tol"]
     bound = tol / float(np.finfo(np.float64 if precision == "double" else np.float32).eps)
     if nearest > bound:
-        raise InputError(f"joint {joint.name!r} limits [{lower:g}, {upper:g}] rad hold no angle within {bound:.2g} rad of zero, "
+        raise InputError(f"joint {joint.name!r} limits [{lower:g}, {upper:g}] rad hold no angle within {bound:.4g} rad of zero, "
                          f"beyond which {precision} cannot resolve an angle to the IK tolerance {tol:g}: check the limits")
