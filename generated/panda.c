@@ -32,7 +32,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xd620c31eUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xfeec429bUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6554,7 +6554,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
             }
             break;
         }
-        mu2 = (c*en > mu2_floor*(en < 1.0 ? en*1.0 : 1.0) ? c*en : mu2_floor*(en < 1.0 ? en*1.0 : 1.0));
+        mu2 = (c*en > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? c*en : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
         if (gram_ready == 0) {
             panda_ik_gram_pose(J, G);
             gram_ready = 1;
@@ -6889,7 +6889,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
             }
             break;
         }
-        mu2 = (c*en > mu2_floor*(en < 1.0 ? en*1.0 : 1.0) ? c*en : mu2_floor*(en < 1.0 ? en*1.0 : 1.0));
+        mu2 = (c*en > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? c*en : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
         if (gram_ready == 0) {
             panda_ik_gram_position(J, G);
             gram_ready = 1;

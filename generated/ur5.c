@@ -35,7 +35,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x3a1f1edaUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3bdbf930UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7019,7 +7019,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
             }
             break;
         }
-        mu2 = (c*en > mu2_floor*(en < 1.0 ? en*1.0 : 1.0) ? c*en : mu2_floor*(en < 1.0 ? en*1.0 : 1.0));
+        mu2 = (c*en > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? c*en : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
         if (gram_ready == 0) {
             ur5_ik_gram_pose(J, G);
             gram_ready = 1;
@@ -7390,7 +7390,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
             }
             break;
         }
-        mu2 = (c*en > mu2_floor*(en < 1.0 ? en*1.0 : 1.0) ? c*en : mu2_floor*(en < 1.0 ? en*1.0 : 1.0));
+        mu2 = (c*en > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? c*en : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
         if (gram_ready == 0) {
             ur5_ik_gram_position(J, G);
             gram_ready = 1;
