@@ -48,7 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "when given), to choose --base and --tip")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
-    show.add_argument("--plot", metavar="FILE", help="draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
+    show.add_argument("--plot", metavar="FILE", help="planar arms: draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
     show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
 
     chk = sub.add_parser("check", help="generate, compile and compare with the independent reference")
@@ -92,8 +92,10 @@ def _generate(args, as_program: bool = False) -> int:
 
 
 def _generate_files(args) -> int:
-    from .generate import generate
+    from .generate import generate, validate_langs
 
+    if args.compile and "c" not in validate_langs(args.lang):
+        raise InputError("--compile builds the C: generate with lang 'c'")
     compiled = []
 
     def compile_first(result) -> None:
@@ -147,11 +149,13 @@ def _check(args) -> int:
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.source is not None:
-        given = model_given(args) + (["--precision"] if args.precision is not None else [])
+        given = [flag for flag in model_given(args) if flag != "--robot"] + (["--precision"] if args.precision is not None else [])
         if given:
-            raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)}")
+            raise InputError(f"--from reads the model and options from the files' header: drop {', '.join(given)} "
+                             "(--robot names the robot file of files that moved)")
         # --lang: only these languages' files (a folder's PyTorch set, and no PyTorch here; a stale file of another)
-        loaded = load_generated(args.source, args.prefix, None if args.lang is None else validate_langs(args.lang))
+        loaded = load_generated(args.source, args.prefix, None if args.lang is None else validate_langs(args.lang),
+                                robot=getattr(args, "robot", None))
         generated, precision = loaded.generated, loaded.precision
         print(f"checking {', '.join(generated.sources)} in {args.source} ({loaded.command})")
         if loaded.edited:
@@ -161,6 +165,10 @@ def _check(args) -> int:
             verb = "is" if len(loaded.missing) == 1 else "are"
             print(f"note: {', '.join(loaded.missing)} of that command {verb} not in {args.source} (removed, or replaced "
                   "by another prefix's file): not checked")
+        if loaded.others:
+            verb = "is" if len(loaded.others) == 1 else "are"
+            print(f"note: {', '.join(loaded.others)} in {args.source} {verb} from another generation than the files "
+                  "checked (a mixed folder): not checked; regenerate the set together")
     else:
         if args.prefix is not None:
             raise InputError("--prefix chooses files with --from")
@@ -175,11 +183,15 @@ def _check(args) -> int:
     solver_rows = check_solvers(generated, implementations, args.cases, args.seed, precision)
     for row in solver_rows:
         print(row.row())
+    constants = loaded.constants if args.source is not None else ()
+    for entry in constants:  # a caller clamps with Q_MIN / Q_MAX: an edited one is a changed result
+        print(f"constant {entry}: differs from what the recorded command gives  FAIL")
     failed = [r for r in results if not r.ok]
     solver_failed = [r for r in solver_rows if not r.ok]
     solver_line = f"; ik: {len(solver_rows) - len(solver_failed)} passed, {len(solver_failed)} failed" if solver_rows else ""
-    print(f"{len(results) - len(failed)} passed, {len(failed)} failed{solver_line}")
-    return 1 if failed or solver_failed else 0
+    constant_line = f"; constants: {len(constants)} differ" if constants else ""
+    print(f"{len(results) - len(failed)} passed, {len(failed)} failed{solver_line}{constant_line}")
+    return 1 if failed or solver_failed or constants else 0
 
 
 _EXIT_FREEZE: list[bool] = []

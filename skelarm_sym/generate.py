@@ -60,7 +60,11 @@ def validate_module_name(prefix: str) -> str:
 
 def validate_langs(langs: str | Iterable[str]) -> tuple[str, ...]:
     """Languages as a tuple in canonical order; raise InputError on an unknown one."""
-    items = [x.strip() for x in langs.split(",")] if isinstance(langs, str) else [str(x).strip() for x in langs]
+    if not isinstance(langs, str):
+        langs = list(langs) if isinstance(langs, Iterable) else langs
+        if not isinstance(langs, list) or not all(isinstance(x, str) for x in langs):
+            raise InputError(f"langs must be a comma-separated string or a sequence of language names, got {langs!r}")
+    items = [x.strip() for x in langs.split(",")] if isinstance(langs, str) else [x.strip() for x in langs]
     items = [LANGUAGE_ALIASES.get(x, x) for x in items if x]
     if not items:
         raise InputError(f"choose at least one language from {', '.join(BACKENDS)}")

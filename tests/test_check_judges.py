@@ -7,6 +7,7 @@ since."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -245,7 +246,7 @@ def test_check_from_names_the_recorded_files_that_are_not_there(tmp_path, capsys
 
 def test_check_from_lang_reads_only_that_languages_files(tmp_path, capsys):
     """A stale arm2.py (another generation) beside a fresh C pair: check --from --lang c refused the folder as a
-    mixed set, though the C pair is whole and consistent."""
+    mixed set, though the C pair is whole and consistent. It checks the pair and names the stale file in a note."""
     generate(2, out=tmp_path, langs="c,python", functions="position")
     stale = (tmp_path / "arm2.py").read_text()
     generate(2, out=tmp_path, langs="c,python", functions="position,jacobian", force=True)
@@ -254,7 +255,8 @@ def test_check_from_lang_reads_only_that_languages_files(tmp_path, capsys):
     assert "the files are from different generations" in capsys.readouterr().err
     assert main(["check", "--from", str(tmp_path), "--lang", "c", "--cases", "3"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith(f"checking arm2.h, arm2.c in {tmp_path} ") and "C jacobian" in out and "note:" not in out
+    assert out.startswith(f"checking arm2.h, arm2.c in {tmp_path} ") and "C jacobian" in out
+    assert out.count("note:") == 1 and "note: arm2.py in" in out  # the stale file is named, not checked
 
 
 ROTOR = """name = "rotor"
@@ -310,3 +312,50 @@ def test_an_arm_with_wide_limits_passes_its_closed_form_check(tmp_path, capsys, 
     robot.write_text(text)
     assert main(["check", "--robot", str(robot), "--cases", "6"]) == 0, capsys.readouterr().out[-3000:]
     assert centres(np.array([lower]), np.array([upper]))[0] == pytest.approx(0.0 if lower < -83 < 0 < upper else -84.0 - np.pi)
+
+
+def test_check_from_fails_an_edited_joint_limit(tmp_path, capsys):
+    """A new user edited Q_MAX in the .py (and PUMA560_Q_MAX in the .h): check --from passed with a note that the
+    file differs, though callers clamp with those constants. Each exported constant is compared now."""
+    out = tmp_path / "pe"
+    assert main(["generate", "--robot", str(ROOT / "examples/robots/scara.toml"), "--out", str(out), "--functions", "pose,ik_solve"]) == 0
+    assert main(["check", "--from", str(out)]) == 0
+    for name, old, new in (("scara.py", "Q_MAX = np.array([", "Q_MAX = np.array([1.0 + "), ("scara.h", "#define SCARA_Q_MAX {", "#define SCARA_Q_MAX {1.0 + ")):
+        text = (out / name).read_text()
+        assert old in text
+        (out / name).write_text(text.replace(old, new, 1))
+        capsys.readouterr()
+        assert main(["check", "--from", str(out)]) == 1
+        printed = capsys.readouterr().out
+        key = "Q_MAX" if name.endswith(".py") else "SCARA_Q_MAX"
+        assert f"constant {name} {key}: differs from what the recorded command gives  FAIL" in printed, printed[-600:]
+        (out / name).write_text(text)
+
+
+def test_check_from_a_moved_folder_takes_the_robot_file_it_is_given(tmp_path, capsys):
+    """Files moved to another depth name their robot file relative to their old place: check --from said 'no such
+    file' and refused --robot. The message now says to name it, and --robot FILE is taken (the loader's other
+    options stay as recorded); other model options are still refused."""
+    robot = tmp_path / "robots" / "scara.toml"
+    robot.parent.mkdir()
+    shutil.copy(ROOT / "examples/robots/scara.toml", robot)
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "dh"), "--functions", "pose"]) == 0
+    moved = tmp_path / "sub" / "deeper" / "dh"
+    shutil.copytree(tmp_path / "dh", moved)
+    capsys.readouterr()
+    assert main(["check", "--from", str(moved)]) == 2
+    assert "name it with --robot FILE" in capsys.readouterr().err
+    assert main(["check", "--from", str(moved), "--robot", str(robot)]) == 0
+    assert main(["check", "--from", str(moved), "--robot", str(robot), "--tip", "x"]) == 2
+    assert "drop --tip" in capsys.readouterr().err
+
+
+def test_check_from_one_language_notes_a_file_of_another_generation(tmp_path, capsys):
+    """--lang python reads only the .py; a .c copied in from another generation was passed over in silence."""
+    scara = str(ROOT / "examples/robots/scara.toml")
+    assert main(["generate", "--robot", scara, "--out", str(tmp_path / "a"), "--functions", "pose,jacobian"]) == 0
+    assert main(["generate", "--robot", scara, "--out", str(tmp_path / "b"), "--functions", "pose"]) == 0
+    shutil.copy(tmp_path / "a" / "scara.c", tmp_path / "b" / "scara.c")
+    capsys.readouterr()
+    assert main(["check", "--from", str(tmp_path / "b"), "--lang", "python"]) == 0
+    assert "note: scara.c in" in capsys.readouterr().out

@@ -3,6 +3,8 @@ still gives usable files (the default prefix is made an identifier, as a URDF's 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from skelarm_sym.cli import main
@@ -97,3 +99,24 @@ def test_a_limit_below_floats_smallest_normal_is_zero_in_float(tmp_path, limit):
     assert main(["generate", "--robot", str(robot), "--precision", "float", "--out", str(tmp_path / "f"), "--functions", "pose"]) == 0
     header = (tmp_path / "f" / "t.h").read_text()
     assert "e-40" not in header and "e-46" not in header
+
+
+def test_compile_without_c_is_refused(tmp_path, capsys):
+    """`generate --lang python --compile` exited 0 and compiled nothing, without a word (--cmake refused alike)."""
+    scara = str(Path(__file__).resolve().parents[1] / "examples" / "robots" / "scara.toml")
+    assert main(["generate", "--robot", scara, "--lang", "python", "--compile", "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err.strip() == "skelarm-sym: error: --compile builds the C: generate with lang 'c'"
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("langs", [None, 5, ["c", 3]])
+def test_langs_of_another_type_is_a_value_error(langs):
+    """generate(chain, langs=None) raised TypeError: 'NoneType' object is not iterable."""
+    chain = load_robot(Path(__file__).resolve().parents[1] / "examples" / "robots" / "scara.toml")
+    with pytest.raises(ValueError, match="langs must be a comma-separated string or a sequence of language names"):
+        generate(chain, out=None, langs=langs, functions="pose")
+
+
+def test_a_folder_given_as_the_robot_file_is_named(tmp_path):
+    with pytest.raises(ValueError, match="a folder, not a robot file"):
+        load_robot(tmp_path)

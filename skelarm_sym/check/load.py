@@ -24,6 +24,11 @@ class LoadedFiles:
     edited: tuple[str, ...]
     missing: tuple[str, ...] = ()
     """Files of the languages the command records that are not here (checked: the ones that are)."""
+    others: tuple[str, ...] = ()
+    """Files of the prefix left unread (``only``) that are from another generation: a mixed folder."""
+    constants: tuple[str, ...] = ()
+    """``file NAME`` of each exported constant (``#define``, a module's upper-case name) whose definition differs
+    from what the recorded command gives: joint limits a caller clamps with, tolerances, status codes."""
 
 
 def _read_head(path) -> str:
@@ -34,13 +39,16 @@ def _read_head(path) -> str:
         return ""
 
 
-def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | None = None) -> LoadedFiles:
+def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | None = None,
+                   robot: str | None = None) -> LoadedFiles:
     """Read ``folder/prefix.{h,c,py}`` (those present; with ``only``, those languages' files only), rebuild
     the model and options from the command their header records (run in that folder: a robot file is found
     relative to it, whatever the current folder), regenerate in memory for the derivation and the IR, and return the files' own text to be
     compiled and compared. ``prefix`` defaults to the only one in ``folder``. Raises InputError (one line)
     for a missing folder, no generated files, several prefixes and none chosen, a header without the
-    recorded command, or files of different generations (a kill between renames): their stamps differ."""
+    recorded command, or files of different generations (a kill between renames): their stamps differ.
+    ``robot``: the robot file to use instead of the recorded one (named from the current folder), for files moved
+    away from it (the record names it relative to the files' folder); the loader's other options stay as recorded."""
     import shlex
     from pathlib import Path
 
@@ -102,7 +110,18 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
         args = generate_parser().parse_args(words[2:])
     except InputError as exc:
         raise InputError(f"{root / names[0]}: cannot read its recorded command ({command}): {exc}") from None
-    model = model_from_args(args, root)  # files named relative to the folder of the files
+    if robot is not None:
+        if getattr(args, "robot", None) is None:
+            raise InputError(f"--robot: {root / names[0]} records no robot file ({command})")
+        args.robot = str(Path(robot).resolve())
+    try:
+        model = model_from_args(args, root)  # files named relative to the folder of the files
+    except InputError as exc:
+        recorded = getattr(args, "robot", None)
+        if robot is None and recorded is not None and not (root / recorded).exists():
+            raise InputError(f"{exc} (the files name their robot file relative to their folder: if they moved, "
+                             "name it with --robot FILE)") from None
+        raise
     from ..backends import BACKENDS
 
     langs = tuple(lang for lang, backend in BACKENDS.items()
@@ -126,12 +145,39 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
     _refuse_another_model(root, sources, fresh, command)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
     missing = () if only is not None else tuple(name for name in fresh.sources if name not in sources and name != "CMakeLists.txt")
-    return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited, missing)
+    constants = tuple(f"{name} {key}" for name in names for key, value in _constants(name, sources[name]).items()
+                      if _constants(name, fresh.sources.get(name, "")).get(key) != value)
+    stamp = next(iter(stamps.values()), None)
+    unread = [name for name in found[prefix] if name not in sources]
+    others = tuple(name for name in unread if file_stamp((root / name).read_text(encoding="utf-8", errors="replace")) != stamp)
+    return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited, missing, others,
+                       constants)
 
 
 _MODEL = re.compile(r"Model: .*?(\d+ coordinate\(s\), \d+ moving joint\(s\) \([^)]*\))")
 _C_PROTOTYPE = re.compile(r"^(?:\w+ )*(?:void|int|float|double) \w+\([^;]*\);$", re.M)
 _PY_INTERFACE = re.compile(r"^(?:def [a-z]\w*\(.*\):|DTYPE = .*)$", re.M)
+
+
+_DEFINE = re.compile(r"^#define (\w+)[ \t]+(.*?)\s*(?:/\*.*)?$", re.M)
+
+
+def _constants(name: str, text: str) -> dict[str, str]:
+    """The constants a file exports, by name, as text: a C header's ``#define``s (not the include guard or the stamp),
+    a Python module's top-level upper-case assignments (``Q_MAX = np.array([...])``, unparsed) but ``STAMP``."""
+    if name.endswith((".h", ".cuh")):
+        return {key: value for key, value in _DEFINE.findall(text) if value and not key.endswith("_STAMP")}
+    if name.endswith(".py"):
+        import ast
+
+        try:
+            tree = ast.parse(text)
+        except SyntaxError:
+            return {}
+        return {node.targets[0].id: ast.unparse(node.value) for node in tree.body
+                if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                and node.targets[0].id.isupper() and node.targets[0].id != "STAMP"}
+    return {}
 
 
 def _interface(name: str, text: str) -> list[str]:

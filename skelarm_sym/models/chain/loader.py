@@ -62,4 +62,6 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
             verb = "apply" if len(given) > 1 else "applies"
             raise InputError(f"{path}: {' and '.join(given)} {verb} to URDF files only (a TOML robot file is one chain)")
         return load_robot_file(path)
+    if path.is_dir():
+        raise InputError(f"{path}: a folder, not a robot file: name a {' or '.join(SUFFIXES)} file in it")
     raise InputError(f"{path}: unknown kind of robot file {path.suffix!r}: expected {' or '.join(SUFFIXES)}")
