@@ -16,9 +16,8 @@
  * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, target), the
+ * mechanism's parameters (l), scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
  */
 #ifndef ARM2_H
@@ -51,7 +50,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0xb33b8a52UL
+#define ARM2_STAMP 0x9e33b901UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -16,9 +16,8 @@
  * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+ * scalars (lambda, tol, max_iter), then the outputs.
  * Precision: float.
  */
 #ifndef ARM3F_H
@@ -47,7 +46,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xdbcfdc1fUL
+#define ARM3F_STAMP 0xebd30e8dUL
 
 #ifdef __cplusplus
 extern "C" {

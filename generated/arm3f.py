@@ -16,9 +16,8 @@ the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lamb
 pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
-Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
-lock), then the outputs.
+Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+scalars (lambda, tol, max_iter), then the outputs.
 Precision: float.
 """
 
@@ -29,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0xdbcfdc1f
+STAMP = 0xebd30e8d
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -72,7 +71,10 @@ def _signature_errors(function):
 def _real_array(value, name):
     """``value`` as an array of DTYPE; complex numbers, strings and objects are refused, and so are finite
     numbers beyond DTYPE's range (a float64 1e39 for a float32 module: not "must be finite")."""
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise ValueError(f"{name} must be a rectangular array of numbers (rows of one length)") from None
     if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
         try:
             array = np.asarray(value, dtype=np.float64)

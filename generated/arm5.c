@@ -16,16 +16,15 @@
  * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+ * the mechanism's parameters (l), scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xe217e0e5UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x9ccacfa0UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

@@ -5,10 +5,10 @@
  * Model: differential-drive robot, track width (distance between the wheels) passed at run time.
  * wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omega): forward
  * speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
- * Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Body frame: x forward, y to the left; the left wheel at y = +track/2, the right one at -track/2.
+ * Rolling without slipping: v_L = v - omega track/2, v_R = v + omega track/2, so omega = (v_R - v_L) / track.
+ * Arguments, in every function: the state (pose), the call's other data (wheels, rates), the
+ * mechanism's parameters (track), then the outputs.
  * Precision: double.
  */
 #ifndef DIFFDRIVE_H
@@ -41,7 +41,7 @@
  * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x77e78805UL
+#define DIFFDRIVE_STAMP 0x6a35015eUL
 
 #ifdef __cplusplus
 extern "C" {

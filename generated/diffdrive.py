@@ -5,10 +5,10 @@ regenerate with (in this folder): skelarm-sym generate --model diffdrive --lang 
 Model: differential-drive robot, track width (distance between the wheels) passed at run time.
 wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omega): forward
 speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.
-Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.
-Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
-lock), then the outputs.
+Body frame: x forward, y to the left; the left wheel at y = +track/2, the right one at -track/2.
+Rolling without slipping: v_L = v - omega track/2, v_R = v + omega track/2, so omega = (v_R - v_L) / track.
+Arguments, in every function: the state (pose), the call's other data (wheels, rates), the
+mechanism's parameters (track), then the outputs.
 Precision: double.
 """
 
@@ -18,7 +18,7 @@ import inspect
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x77e78805
+STAMP = 0x6a35015e
 """The generation stamp: the same number in every file of the set this module was generated with."""
 
 __all__ = ["body_rates", "wheel_speeds", "pose_rate", ]
@@ -51,7 +51,10 @@ def _signature_errors(function):
 def _real_array(value, name):
     """``value`` as an array of DTYPE; complex numbers, strings and objects are refused, and so are finite
     numbers beyond DTYPE's range (a float64 1e39 for a float32 module: not "must be finite")."""
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise ValueError(f"{name} must be a rectangular array of numbers (rows of one length)") from None
     if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
         try:
             array = np.asarray(value, dtype=np.float64)

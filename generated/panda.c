@@ -23,16 +23,15 @@
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+ * scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
  */
 #include <math.h>
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xfeec429bUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x64a9f91fUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

@@ -23,9 +23,8 @@
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+ * scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
  */
 #ifndef PANDA_H
@@ -58,7 +57,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0xfeec429bUL
+#define PANDA_STAMP 0x64a9f91fUL
 
 #ifdef __cplusplus
 extern "C" {

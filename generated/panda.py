@@ -23,9 +23,8 @@ lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most tha
 lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
 JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
 where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
-Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
-lock), then the outputs.
+Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
+scalars (lambda, tol, max_iter), then the outputs.
 Precision: double.
 """
 
@@ -36,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xfeec429b
+STAMP = 0x64a9f91f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -87,7 +86,10 @@ def _signature_errors(function):
 def _real_array(value, name):
     """``value`` as an array of DTYPE; complex numbers, strings and objects are refused, and so are finite
     numbers beyond DTYPE's range (a float64 1e39 for a float32 module: not "must be finite")."""
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise ValueError(f"{name} must be a rectangular array of numbers (rows of one length)") from None
     if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
         try:
             array = np.asarray(value, dtype=np.float64)

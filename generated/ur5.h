@@ -26,9 +26,8 @@
  * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
  * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
- * Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
- * twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
- * lock), then the outputs.
+ * Arguments, in every function: the state (q, q0, q_ref, dq, ddq), the call's other data (v, twist,
+ * target, weights), scalars (lambda, tol, max_iter), then the outputs.
  * Precision: double.
  */
 #ifndef UR5_H
@@ -61,7 +60,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x3bdbf930UL
+#define UR5_STAMP 0x031a3dbcUL
 
 #ifdef __cplusplus
 extern "C" {

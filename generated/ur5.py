@@ -26,9 +26,8 @@ where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at
 Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
 target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
 (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
-Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v,
-twist, target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter,
-lock), then the outputs.
+Arguments, in every function: the state (q, q0, q_ref, dq, ddq), the call's other data (v, twist,
+target, weights), scalars (lambda, tol, max_iter), then the outputs.
 Precision: double.
 """
 
@@ -39,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x3bdbf930
+STAMP = 0x031a3dbc
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -116,7 +115,10 @@ def _signature_errors(function):
 def _real_array(value, name):
     """``value`` as an array of DTYPE; complex numbers, strings and objects are refused, and so are finite
     numbers beyond DTYPE's range (a float64 1e39 for a float32 module: not "must be finite")."""
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise ValueError(f"{name} must be a rectangular array of numbers (rows of one length)") from None
     if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
         try:
             array = np.asarray(value, dtype=np.float64)

@@ -11,6 +11,7 @@ each file goes to a temporary name first and is renamed into place only after ev
 from __future__ import annotations
 
 import hashlib
+import numbers
 import os
 import re
 import shlex
@@ -361,7 +362,7 @@ def generate(
     is left behind.
     """
     model = n
-    if isinstance(n, (int, float)) and not isinstance(n, bool):
+    if isinstance(n, numbers.Real) and not isinstance(n, bool):  # NumPy's integers too (q.shape[-1])
         model = PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))
     elif lengths is not None:
         raise InputError("lengths describe a planar arm given by its number of links; the model has its own")

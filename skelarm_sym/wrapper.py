@@ -61,7 +61,10 @@ def _check_domain(array: np.ndarray, name: str, domain: str) -> None:
 def _real(value: object, name: str, dtype) -> np.ndarray:
     """``value`` as an array of ``dtype``; complex numbers, strings and objects are refused, and so are finite
     numbers beyond ``dtype``'s range (a float64 1e39 for a float library: not "must be finite")."""
-    array = np.asarray(value)
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise InputError(f"{name} must be a rectangular array of numbers (rows of one length)") from None
     if array.dtype.kind == "O" and all(type(x) in (int, float) for x in array.flat):  # ints beyond int64 (10**40)
         try:
             array = np.asarray(value, dtype=np.float64)
@@ -249,14 +252,12 @@ class CompiledArm:
             if a.is_scalar:
                 if array.ndim != 0:
                     raise InputError(f"{a.name} must be a single number, got shape {array.shape}")
-            elif not a.batched:
-                if array.shape != (a.size,):
-                    raise InputError(f"{a.name} must have shape ({a.size},), got {array.shape}")
             elif array.ndim == 0 or array.shape[-1] != a.size:
                 raise InputError(f"{a.name} must have shape (..., {a.size}), got {array.shape}")
             _check_domain(array, a.name, a.domain)
             arrays.append(array)
-        per_config = [i for i, a in enumerate(f.inputs) if a.batched and not a.is_scalar]
+        # lengths and parameters are shared by a batch, or given per configuration as the NumPy module takes them
+        per_config = [i for i, a in enumerate(f.inputs) if not a.is_scalar and (a.batched or arrays[i].ndim > 1)]
         try:
             batch = np.broadcast_shapes(*(arrays[i].shape[:-1] for i in per_config))
         except ValueError:
@@ -271,6 +272,14 @@ class CompiledArm:
         m = int(np.prod(batch)) if batch else 1
         arrays = [x if x.ndim == 0 else np.ascontiguousarray(x) for x in arrays]
         outputs = [np.empty(batch + o.shape, dtype=self.dtype) for o in f.outputs]
+        if any(not f.inputs[i].batched for i in per_config):  # lengths per configuration: the _batch C shares them
+            rows = [x if x.ndim == 0 else x.reshape(m, -1) for x in arrays]
+            flat = [o.reshape(m, -1) for o in outputs]
+            single = self._c_functions[f.name]
+            for j in range(m):
+                single(*[self._ctype(float(x)) if a.is_scalar else x[j].ctypes.data_as(self._pointer) for x, a in zip(rows, f.inputs)],
+                       *[o[j].ctypes.data_as(self._pointer) for o in flat])
+            return outputs[0] if len(outputs) == 1 else tuple(outputs)
         pointers = [
             self._ctype(float(x)) if a.is_scalar else x.ctypes.data_as(self._pointer) for x, a in zip(arrays, f.inputs)
         ] + [o.ctypes.data_as(self._pointer) for o in outputs]

@@ -31,7 +31,7 @@ def _roles(params: list[str]) -> list[int]:
 @pytest.mark.parametrize("header", sorted(GENERATED.glob("*.h")), ids=lambda p: p.name)
 def test_emitted_prototypes_follow_the_argument_order(header):
     text = header.read_text()
-    assert "Arguments, in every function: the joint state" in text
+    assert "Arguments, in every function: the state (" in text
     prototypes = PROTOTYPE.findall(text)
     assert prototypes
     for params in prototypes:
@@ -52,3 +52,13 @@ def test_python_signatures_follow_the_argument_order(model):
         names = [p.rstrip("_") for p in inspect.signature(getattr(module, program.name)).parameters]
         roles = [ARGUMENT_ROLES[n] for n in names]
         assert roles == sorted(roles), (program.name, names)
+
+
+def test_the_argument_rule_names_the_models_own_arguments():
+    """The drive's header listed an arm's arguments (q, q0, twist, lambda, tol, max_iter, lock), none of which it
+    takes (a new user's probe)."""
+    drive = (GENERATED / "diffdrive.h").read_text()
+    assert "the state (pose), the call's other data (wheels, rates), the\n * mechanism's parameters (track)" in drive
+    assert "lambda" not in drive.split("Precision:")[0]
+    arm = (GENERATED / "ur5.h").read_text()
+    assert "scalars (lambda, tol, max_iter)" in arm.replace("\n * ", " ")

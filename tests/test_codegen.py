@@ -104,8 +104,8 @@ def test_wrong_shapes_are_clear_errors():
     py = load_python(g.sources["arm3.py"], "arm3")
     with pytest.raises(InputError, match=r"q must have shape \(\.\.\., 3\)"):
         arm.jacobian(np.zeros(4), np.ones(3))
-    with pytest.raises(InputError, match=r"l must have shape \(3,\)"):
-        arm.jacobian(np.zeros(3), np.ones((2, 3)))
+    with pytest.raises(InputError, match=r"l must have shape \(\.\.\., 3\)"):  # (2, 3): lengths per configuration
+        arm.jacobian(np.zeros(3), np.ones(4))
     with pytest.raises(ValueError, match=r"q must have shape \(\.\.\., 3\)"):
         py.jacobian(np.zeros((5, 2)), np.ones(3))
     with pytest.raises(ValueError, match="do not broadcast"):
@@ -283,3 +283,19 @@ def test_long_closed_forms_compiled_light_or_full_match_the_reference(flags):
     assert {r.output for r in results} >= {"w", "grad", "dq", "JA"}
     bad = [r for r in results if not r.ok]
     assert not bad, bad
+
+
+def test_the_compiled_library_takes_lengths_per_configuration_as_the_numpy_module_does():
+    """A new user's probe: l of shape (5, 3) beside q (5, 3) broadcast in the NumPy module, while the compiled
+    wrapper said "l must have shape (3,)"; the README promises both the same functions and signatures."""
+    from skelarm_sym.build import compile_arm, load_python
+
+    g = generate(3, out=None, langs="c,python", prefix="perl", functions="jacobian,inverse_velocity")
+    arm, mod = compile_arm(g), load_python(g.sources["perl.py"], "perl")
+    rng = np.random.default_rng(5)
+    q, l, v = rng.uniform(-1, 1, (5, 3)), rng.uniform(0.5, 1.5, (5, 3)), rng.uniform(-1, 1, (5, 2))
+    for args in ((q, l), (q[0], l), (q, l[0])):
+        np.testing.assert_allclose(arm.jacobian(*args), mod.jacobian(*args), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(arm.inverse_velocity(q, v, l, 0.1), mod.inverse_velocity(q, v, l, 0.1), rtol=0, atol=1e-13)
+    with pytest.raises(ValueError, match=re.escape("batch shapes do not broadcast: q (5, 3), l (4, 3)")):
+        arm.jacobian(q, np.ones((4, 3)))

@@ -52,6 +52,16 @@ ARGUMENT_RULE = (
     "Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v, twist,"
     " target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."
 )
+ROLE_NAMES = ("the state", "the call's other data", "the mechanism's parameters", "scalars")
+
+
+def argument_rule(names) -> str:
+    """:data:`ARGUMENT_RULE` for the input ``names`` a module's functions take (a differential drive's header names
+    pose, wheels, rates and track, not an arm's q, twist and lambda)."""
+    present = set(names)
+    groups = [f"{label} ({', '.join(n for n, role in ARGUMENT_ROLES.items() if role == k and n in present)})"
+              for k, label in enumerate(ROLE_NAMES) if any(role == k and n in present for n, role in ARGUMENT_ROLES.items())]
+    return "Arguments, in every function: " + ", ".join(groups + ["then the outputs."])
 
 
 @dataclass(frozen=True)

@@ -90,6 +90,7 @@ def derive_diffdrive(model: DiffDrive | float | None = None) -> Derivation:
             f"Model: {model.describe()}.",
             "wheels = (v_L, v_R): ground speeds of the left and right wheel; rates = (v, omega): forward",
             "speed of the axle midpoint and turning rate (counter-clockwise); pose = (x, y, heading), radians.",
-            "Derived from the rolling constraints (9)-(10) of seed 002: omega = (v_R - v_L) / track.",
+            "Body frame: x forward, y to the left; the left wheel at y = +track/2, the right one at -track/2.",
+            "Rolling without slipping: v_L = v - omega track/2, v_R = v + omega track/2, so omega = (v_R - v_L) / track.",
         ),
     )

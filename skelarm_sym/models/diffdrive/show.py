@@ -25,7 +25,7 @@ def show_diffdrive(model, what: str = "all", fmt: str = "pretty") -> str:
         blocks.append(f"[v_L, v_R] = M^-1 [v, omega], M^-1 =\n{render(M_inv, fmt)}")
     if what == "all":
         blocks.append(
-            "Derived from the rolling constraints (9)-(10) of seed 002 with L the distance between the wheels.\n"
-            "The seed's printed (11) has -2/L, 2/L (inverse: L/4); that would need L to be half that distance."
+            "From rolling without slipping, the wheels at y = +-L/2 in the body frame (x forward, y to the left),\n"
+            "L the distance between them. A matrix printed with -2/L, 2/L (inverse: L/4) takes L as half that distance."
         )
     return "\n\n".join(blocks) + "\n"

@@ -110,7 +110,10 @@ class PlanarArm:
             return
         for i, value in enumerate(self.lengths, start=1):
             check_number(value, f"link length l{i}", precision)
-        reach = math.fsum(self.lengths)
+        try:
+            reach = math.fsum(self.lengths)
+        except OverflowError:  # lengths of 1e308 each: a sum beyond every precision
+            reach = math.inf
         check_number(reach, "the sum of the link lengths", precision, 4, "the inverse functions use its fourth power")
         check_number(reach, "the sum of the link lengths", precision, -1)
 
