@@ -50,7 +50,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x9e33b901UL
+#define ARM2_STAMP 0xb7d6cbf4UL
 
 #ifdef __cplusplus
 extern "C" {

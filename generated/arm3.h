@@ -50,7 +50,7 @@
  * angles finite and of sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0x94ceff8bUL
+#define ARM3_STAMP 0x9bafb470UL
 
 #ifdef __cplusplus
 extern "C" {

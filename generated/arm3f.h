@@ -46,7 +46,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xebd30e8dUL
+#define ARM3F_STAMP 0xd31e9940UL
 
 #ifdef __cplusplus
 extern "C" {

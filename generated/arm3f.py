@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0xebd30e8d
+STAMP = 0xd31e9940
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -1006,7 +1006,7 @@ def ik_solve(q0, target, lambda_=0.0, tol=None, max_iter=200):
     q0: array of shape (3,), finite: start pose (rad).
     target: array of shape (2,), finite: endpoint target.
     lambda_: a number, finite and >= 0: damping floor (>= 0) (default 0.0).
-    tol: a number, finite and > 0: stop when |target - p| <= tol (default 0.0001 times the reach, at least 1) (default 0.0001*(2.3 if 2.3 > 1.0 else 1.0)).
+    tol: a number, finite and > 0: stop when |target - p| <= tol (default 0.0001 times the reach, at least 1).
     max_iter: a number: at most this many steps (default 200).
     Returns IKResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.

@@ -50,7 +50,7 @@
  * angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0xe88f7993UL
+#define ARM4_STAMP 0x8efb80d3UL
 
 #ifdef __cplusplus
 extern "C" {

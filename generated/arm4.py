@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xe88f7993
+STAMP = 0x8efb80d3
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -1127,7 +1127,7 @@ def ik_solve(q0, target, l, lambda_=0.0, tol=None, max_iter=200):
     target: array of shape (2,), finite: endpoint target.
     l: array of shape (4,), finite and > 0: .
     lambda_: a number, finite and >= 0: damping floor (>= 0) (default 0.0).
-    tol: a number, finite and > 0: stop when |target - p| <= tol (default 1e-09 times the reach, at least 1) (default 1e-09*(l[0] + l[1] + l[2] + l[3] if l[0] + l[1] + l[2] + l[3] > 1.0 else 1.0)).
+    tol: a number, finite and > 0: stop when |target - p| <= tol (default 1e-09 times the reach, at least 1).
     max_iter: a number: at most this many steps (default 200).
     Returns IKResult(q, status, error, iterations). Raises ValueError for bad input, TypeError for a wrong
     number of arguments.

@@ -50,7 +50,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x9ccacfa0UL
+#define ARM5_STAMP 0x986e29e3UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -80,7 +80,8 @@ def plot_arm(pose: Sequence[float], lengths: Sequence[float], path: str | os.Pat
     ax.plot(*joints[0], "s", color="black", ms=9, zorder=3)
     angle = float(np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1])))
     ax.add_patch(Ellipse(tuple(joints[-1]), 2 * scale * sigma[0], 2 * scale * max(sigma[1], 1e-3 * sigma[0]), angle=angle,
-                         fill=False, color="#c0392b", lw=2, zorder=4, label="velocity ellipse J J^T"))
+                         fill=False, color="#c0392b", lw=2, zorder=4,
+                         label=f"velocity ellipse {{J dq : |dq| <= 1}}, drawn at {scale:.3g} x its size"))
     ax.add_patch(plt.Circle((0, 0), reach, fill=False, ls=":", color="grey", lw=1))
     ax.set_aspect("equal")
     ax.set_xlim(-1.15 * reach, 1.15 * reach)
