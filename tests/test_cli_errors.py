@@ -134,3 +134,11 @@ def test_pose_without_plot_is_refused_instead_of_ignored(capsys):
     line = one_line_error(capsys, ["show", "--links", "2", "--pose", "1,nan"])
     assert "--pose sets the joint angles of --plot: add --plot FILE" in line
     assert main(["show", "--links", "2"]) == 0
+
+
+def test_a_function_the_model_has_not_says_why(tmp_path, capsys):
+    """--links 2 --functions inverse_velocity3 said "unknown function", though the function exists from 3 links."""
+    assert main(["generate", "--links", "2", "--functions", "inverse_velocity3", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("skelarm-sym: error: function 'inverse_velocity3' needs 3 links or more"), err
+    assert not (tmp_path / "o").exists()

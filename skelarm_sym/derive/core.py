@@ -232,6 +232,8 @@ class Derivation:
     constants: tuple[Constant, ...] = ()
     tables: tuple[Table, ...] = ()
     variants: dict[str, dict[str, str]] = field(default_factory=dict)
+    unavailable: dict[str, str] = field(default_factory=dict)
+    """Functions of the kind this model has not, each with why (``inverse_velocity3``: needs n >= 3)."""
     _cache: dict = field(default_factory=dict, repr=False)
 
     # -- symbols --------------------------------------------------------------

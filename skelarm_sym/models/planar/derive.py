@@ -203,6 +203,7 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
         compact=compact,
         shapes=shapes,
         functions=functions,
+        unavailable={} if n >= 3 else {"inverse_velocity3": f"needs 3 links or more (J3 of {n} links has rank {n})"},
         parameters=("l", "lambda"),
         scalars=("lambda",),
         domains={"q": "finite", "dq": "finite", "ddq": "finite", "l": "positive", "lambda": "nonnegative",
