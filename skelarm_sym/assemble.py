@@ -41,7 +41,7 @@ def select_functions(kind, derivation, functions) -> tuple[tuple[str, ...], tupl
     items = function_items(functions)
     valid = derived + solvers
     unknown = [x for x in items if x not in valid]
-    missing = next((x for x in unknown if x in getattr(derivation, "unavailable", {})), None)
+    missing = next((x for x in unknown if x in derivation.unavailable), None)
     if missing is not None:
         raise InputError(f"function {missing!r} {derivation.unavailable[missing]}; choose from {', '.join(valid)}")
     if unknown or not items:

@@ -61,11 +61,10 @@ def validate_module_name(prefix: str) -> str:
 
 def validate_langs(langs: str | Iterable[str]) -> tuple[str, ...]:
     """Languages as a tuple in canonical order; raise InputError on an unknown one."""
-    if not isinstance(langs, str):
-        langs = list(langs) if isinstance(langs, Iterable) else langs
-        if not isinstance(langs, list) or not all(isinstance(x, str) for x in langs):
-            raise InputError(f"langs must be a comma-separated string or a sequence of language names, got {langs!r}")
-    items = [x.strip() for x in langs.split(",")] if isinstance(langs, str) else [x.strip() for x in langs]
+    names = langs.split(",") if isinstance(langs, str) else list(langs) if isinstance(langs, Iterable) else None
+    if names is None or not all(isinstance(x, str) for x in names):
+        raise InputError(f"langs must be a comma-separated string or a sequence of language names, got {langs!r}")
+    items = [x.strip() for x in names]
     items = [LANGUAGE_ALIASES.get(x, x) for x in items if x]
     if not items:
         raise InputError(f"choose at least one language from {', '.join(BACKENDS)}")
@@ -164,18 +163,8 @@ def refuse_other_options(target: Path, sources: dict[str, str]) -> None:
     for name, text in sources.items():
         path = target / name
         before, after = _recorded_before(path), recorded_command(text)
-        if before is not None and after is not None and _resolved(_words(before), target) != _resolved(_words(after), target):
+        if before is not None and after is not None and _words(before) != _words(after):
             raise _other_options(path, before, after)
-
-
-def _resolved(words: list[str] | str, folder: Path) -> list[str] | str:
-    """A recorded command's words with its robot file as the real path it names from ``folder`` (where the
-    command runs): the same robot reached through a symbolic link, or spelled another way, is the same option."""
-    value = _flag_value(words, "--robot")
-    if value is None:
-        return words
-    i = words.index("--robot") + 1
-    return words[:i] + [os.path.realpath(folder / value)] + words[i + 1:]
 
 
 def _without_functions(words: list[str] | str) -> list[str] | str:
@@ -208,14 +197,14 @@ def refuse_before_deriving(target: Path, names: Sequence[str], command: str, wan
     the new one has none, or the reverse, differs already. ``wanted``: the functions the new list asks for with the
     ones its solvers need; fewer than a file records differ already (names the file does not record wait for the
     derivation, which says whether they exist)."""
-    new = _resolved(_without_functions(_words(command)), target)
+    new = _without_functions(_words(command))
     for name in names:
         path = target / name
         before = _recorded_before(path)
         if before is None:
             continue
         recorded = _recorded_functions(_words(before))
-        if _resolved(_without_functions(_words(before)), target) != new or (wanted is not None and recorded is not None and wanted < recorded):
+        if _without_functions(_words(before)) != new or (wanted is not None and recorded is not None and wanted < recorded):
             raise _other_options(path, before, command)
 
 

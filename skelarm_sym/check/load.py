@@ -145,8 +145,7 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
     _refuse_another_model(root, sources, fresh, command)
     edited = tuple(name for name in names if _without_stamp(fresh.sources.get(name, "")) != _without_stamp(sources[name]))
     missing = () if only is not None else tuple(name for name in fresh.sources if name not in sources and name != "CMakeLists.txt")
-    constants = tuple(f"{name} {key}" for name in names for key, value in _constants(name, sources[name]).items()
-                      if _constants(name, fresh.sources.get(name, "")).get(key) != value)
+    constants = tuple(f"{name} {key}" for name in names for key in _changed_constants(name, sources[name], fresh.sources.get(name, "")))
     stamp = next(iter(stamps.values()), None)
     unread = [name for name in found[prefix] if name not in sources]
     others = tuple(name for name in unread if file_stamp((root / name).read_text(encoding="utf-8", errors="replace")) != stamp)
@@ -178,6 +177,12 @@ def _constants(name: str, text: str) -> dict[str, str]:
                 if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
                 and node.targets[0].id.isupper() and node.targets[0].id != "STAMP"}
     return {}
+
+
+def _changed_constants(name: str, text: str, fresh_text: str) -> list[str]:
+    """The names of the constants of ``text`` whose definition ``fresh_text`` does not have (each file parsed once)."""
+    fresh = _constants(name, fresh_text)
+    return [key for key, value in _constants(name, text).items() if fresh.get(key) != value]
 
 
 def _interface(name: str, text: str) -> list[str]:

@@ -417,25 +417,23 @@ class Chain:
         def flushed(entry):
             return sp.S.Zero if entry.is_number and not entry.is_zero and abs(float(entry)) < tiny else entry
 
-        def transform(t: Transform) -> Transform:
-            rotation, translation = t.rotation.applyfunc(flushed), t.translation.applyfunc(flushed)
-            return t if rotation == t.rotation and translation == t.translation else Transform(rotation, translation)
-
         def limit(value):
             return 0.0 if value is not None and 0 < abs(float(value)) < tiny else value
 
-        joints = []
-        for j in self.joints:
-            axis = tuple(flushed(sp.sympify(a)) for a in j.axis)
-            bounds = {"lower": limit(j.lower), "upper": limit(j.upper), "velocity": limit(j.velocity)}
-            changed = dataclasses.replace(j, before=transform(j.before), after=transform(j.after), axis=axis, **bounds)
-            same = (changed.before is j.before and changed.after is j.after and axis == tuple(j.axis)
-                    and all(bounds[k] == getattr(j, k) for k in bounds))
-            joints.append(j if same else changed)
-        base, tool = transform(self.base), transform(self.tool)
+        def transform(t: Transform) -> Transform:
+            return Transform(t.rotation.applyfunc(flushed), t.translation.applyfunc(flushed))
+
+        transforms = [self.base, self.tool] + [t for j in self.joints for t in (j.before, j.after)]
+        entries = [e for t in transforms for m in (t.rotation, t.translation) for e in m.flat()]
+        entries += [sp.sympify(a) for j in self.joints for a in j.axis]
+        limits = [v for j in self.joints for v in (j.lower, j.upper, j.velocity)]
         chain = self
-        if base is not self.base or tool is not self.tool or any(a is not b for a, b in zip(joints, self.joints)):
-            chain = dataclasses.replace(self, base=base, tool=tool, joints=tuple(joints))
+        if any(flushed(e) is not e for e in entries) or any(limit(v) != v for v in limits):  # (a scan: rarely so)
+            joints = tuple(dataclasses.replace(j, before=transform(j.before), after=transform(j.after),
+                                               axis=tuple(flushed(sp.sympify(a)) for a in j.axis),
+                                               lower=limit(j.lower), upper=limit(j.upper), velocity=limit(j.velocity))
+                           for j in self.joints)
+            chain = dataclasses.replace(self, base=transform(self.base), tool=transform(self.tool), joints=joints)
         chain.check_representable(precision)
         return chain
 

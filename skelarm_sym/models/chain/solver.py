@@ -232,21 +232,26 @@ def error_helper(rows: int, suffix: str) -> Function:
                     b.statements, kind="helper")
 
 
-def gram_helper(rows: int, n: int, suffix: str) -> Function:
-    """``ik_gram{suffix}(J, G)``: G = J J^T for J's first rows, lower triangle packed by rows."""
-    b = Body()
-    J, G = Array("J", 6 * n), Array("G", rows * (rows + 1) // 2)
-    for r in range(rows):
-        for c in range(r + 1):
-            b.set(G[r * (r + 1) // 2 + c], total([J[r * n + j] * J[c * n + j] for j in range(n)]))
-    return Function(f"ik_gram{suffix}", f"G = J J^T for the first {rows} rows of J (lower triangle, packed by rows)",
-                    (Argument("J", Role.STATE, (6 * n,)), Argument("G", Role.OUTPUT, (rows * (rows + 1) // 2,))),
-                    b.statements, kind="helper")
-
-
 def _packed(r: int, c: int) -> int:
     """Index of entry (r, c), c <= r, of a lower triangle packed by rows."""
     return r * (r + 1) // 2 + c
+
+
+def _triangle(rows: int) -> int:
+    """Entries of a packed lower triangle of ``rows`` rows."""
+    return rows * (rows + 1) // 2
+
+
+def gram_helper(rows: int, n: int, suffix: str) -> Function:
+    """``ik_gram{suffix}(J, G)``: G = J J^T for J's first rows, lower triangle packed by rows."""
+    b = Body()
+    J, G = Array("J", 6 * n), Array("G", _triangle(rows))
+    for r in range(rows):
+        for c in range(r + 1):
+            b.set(G[_packed(r, c)], total([J[r * n + j] * J[c * n + j] for j in range(n)]))
+    return Function(f"ik_gram{suffix}", f"G = J J^T for the first {rows} rows of J (lower triangle, packed by rows)",
+                    (Argument("J", Role.STATE, (6 * n,)), Argument("G", Role.OUTPUT, (_triangle(rows),))),
+                    b.statements, kind="helper")
 
 
 def ldl_helper(rows: int, suffix: str, precision: str) -> Function:
@@ -254,7 +259,7 @@ def ldl_helper(rows: int, suffix: str, precision: str) -> Function:
     diagonal holds 1 / D, or 0 where a pivot at most ``pivot`` times the largest diagonal entry is dropped,
     below it L), so a rank-deficient J with mu2 = 0 gives a finite step. Straight-line."""
     b = Body()
-    G, F = Array("G", rows * (rows + 1) // 2), Array("F", rows * (rows + 1) // 2)
+    G, F = Array("G", _triangle(rows)), Array("F", _triangle(rows))
     mu2 = Var("mu2")
     a = {}
     for r in range(rows):
@@ -274,8 +279,8 @@ def ldl_helper(rows: int, suffix: str, precision: str) -> Function:
             b.set(F[_packed(r, c)], lower[r, c])
             scaled[r, c] = b.let(f"ld{r}{c}", select(kept, t, 0.0))
     return Function(f"ik_ldl{suffix}", "F = the LDL^T of G + mu2 I (1/D on the diagonal, 0 for a dropped pivot; L below)",
-                    (Argument("G", Role.DATA, (rows * (rows + 1) // 2,)), Argument("mu2", Role.SCALAR, ()),
-                     Argument("F", Role.OUTPUT, (rows * (rows + 1) // 2,))),
+                    (Argument("G", Role.DATA, (_triangle(rows),)), Argument("mu2", Role.SCALAR, ()),
+                     Argument("F", Role.OUTPUT, (_triangle(rows),))),
                     b.statements, kind="helper")
 
 
@@ -283,7 +288,7 @@ def ldl_solve_helper(rows: int, n: int, suffix: str) -> Function:
     """``ik_ldl_solve{suffix}(J, F, e, dq)``: dq = J^T (G + mu2 I)^-1 e from the factors ``F`` of
     :func:`ldl_helper` (a dropped pivot's unknown is 0). Straight-line."""
     b = Body()
-    J, F, e, dq = Array("J", 6 * n), Array("F", rows * (rows + 1) // 2), Array("e", rows), Array("dq", n)
+    J, F, e, dq = Array("J", 6 * n), Array("F", _triangle(rows)), Array("e", rows), Array("dq", n)
     y = {}
     for r in range(rows):
         y[r] = b.let(f"y{r}", _less(e[r], [F[_packed(r, j)] * y[j] for j in range(r)]))
@@ -293,7 +298,7 @@ def ldl_solve_helper(rows: int, n: int, suffix: str) -> Function:
     for j in range(n):
         b.set(dq[j], _tree([J[r * n + j] * z[r] for r in range(rows)]))
     return Function(f"ik_ldl_solve{suffix}", "dq = J^T (G + mu2 I)^-1 e from the LDL^T factors F",
-                    (Argument("J", Role.STATE, (6 * n,)), Argument("F", Role.DATA, (rows * (rows + 1) // 2,)),
+                    (Argument("J", Role.STATE, (6 * n,)), Argument("F", Role.DATA, (_triangle(rows),)),
                      Argument("e", Role.DATA, (rows,)), Argument("dq", Role.OUTPUT, (n,))),
                     b.statements, kind="helper")
 
@@ -317,7 +322,7 @@ class _PoseIK:
         self.n, self.rows, self.params, self.s = chain.n, rows, params, SETTINGS[precision]
         self.tsize = 16 if rows == 6 else 3
         self.suffix = "_pose" if rows == 6 else "_position"
-        self.gsize = rows * (rows + 1) // 2
+        self.gsize = _triangle(rows)
         self.lim = limits_of(chain, precision)
         self.b = Body()
         self.q0, self.target, self.q = Array("q0", self.n), Array("target", self.tsize), Array("q", self.n)
@@ -455,7 +460,7 @@ class _PoseIK:
                 with b.if_(blocked[k] > 0):
                     for r in range(rows):
                         for cc in range(r + 1):
-                            g = self.Gf[r * (r + 1) // 2 + cc]
+                            g = self.Gf[_packed(r, cc)]
                             b.set(g, g - self.J[Const(r * n, Type.INT) + k] * self.J[Const(cc * n, Type.INT) + k])
             self.solve(self.Jf, self.Gf, self.e, dq)
             self.gradient(self.Jf, self.Gf)
@@ -502,7 +507,7 @@ class _PoseIK:
     def gradient(self, JJ: Array, GG: Array) -> None:
         """gg = |J^T e|^2 and ff = |J|_F^2 (the trace of G) over the free joints."""
         b, n, rows = self.b, self.n, self.rows
-        b.set(self.ff, total([GG[r * (r + 1) // 2 + r] for r in range(rows)]))
+        b.set(self.ff, total([GG[_packed(r, r)] for r in range(rows)]))
         b.set(self.gg, 0.0)
         with b.for_("k", 0, n) as k:
             g = total([JJ[Const(r * n, Type.INT) + k] * self.e[r] for r in range(rows)])
