@@ -20,6 +20,7 @@
 #include <dlfcn.h>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -93,7 +94,9 @@ struct Pin {
         for (;;) {
             if (pe <= tol && re <= tol) { out = q; iterations = it; return 0; }
             if (it == max_iter) {
-                if (best_here && attempt > 0 && (stationary || en > PROGRESS * (attempt % WINDOW == 0 ? window_start : checkpoint))) best_stalled = 1;
+                int steps = attempt % WINDOW;  /* the window's steps run so far, judged by their share of PROGRESS */
+                double share = steps == 0 ? PROGRESS : std::pow(PROGRESS, (double)steps / WINDOW);
+                if (best_here && attempt > 0 && (stationary || en > share * (steps == 0 ? window_start : checkpoint))) best_stalled = 1;
                 break;
             }
             const double mu2 = std::max(c * en, mu2_floor);

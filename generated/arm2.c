@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xb7d6cbf4UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x1916d30aUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 

@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x9bafb470UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x68c5c447UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 

@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xd31e9940UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdaf71657UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 

@@ -30,7 +30,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (float).
+ * allocates or keeps state; the stack each needs is stated beside it (float): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -46,7 +48,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xd31e9940UL
+#define ARM3F_STAMP 0xdaf71657UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -55,84 +57,84 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM3F_RANK_TOL 1.1920929e-05f
 
-/* endpoint position p (2). Stack: about 140 bytes. */
+/* endpoint position p (2). Stack: at most 424 bytes. */
 void arm3f_position(const float q[3], float p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 1892 bytes. */
+ * Stack: at most 2416 bytes. */
 void arm3f_position_batch(size_t m, const float *q, float *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 140 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: at most 424 bytes. */
 void arm3f_jacobian(const float q[3], float J[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2420 bytes. */
+ * Stack: at most 3000 bytes. */
 void arm3f_jacobian_batch(size_t m, const float *q, float *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 172 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: at most 472 bytes. */
 void arm3f_coriolis(const float q[3], const float dq[3], float H[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2848 bytes. */
+ * Stack: at most 3488 bytes. */
 void arm3f_coriolis_batch(size_t m, const float *q, const float *dq, float *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 172 bytes. */
+/* endpoint velocity v = J dq (2). Stack: at most 472 bytes. */
 void arm3f_velocity(const float q[3], const float dq[3], float v[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2320 bytes. */
+ * Stack: at most 2904 bytes. */
 void arm3f_velocity_batch(size_t m, const float *q, const float *dq, float *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 188 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: at most 488 bytes. */
 void arm3f_acceleration(const float q[3], const float dq[3], const float ddq[3], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 2732 bytes. */
+ * Stack: at most 3376 bytes. */
 void arm3f_acceleration_batch(size_t m, const float *q, const float *dq, const float *ddq, float *a);
 
-/* p, J, H, v and a at once. Stack: about 188 bytes. */
+/* p, J, H, v and a at once. Stack: at most 528 bytes. */
 void arm3f_kinematics(const float q[3], const float dq[3], const float ddq[3], float p[2], float J[6], float H[6], float v[2], float a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 5 KB. */
+ * Stack: at most 6 KB. */
 void arm3f_kinematics_batch(size_t m, const float *q, const float *dq, const float *ddq, float *p, float *J, float *H, float *v, float *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 192 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: at most 480 bytes. */
 void arm3f_manipulability(const float q[3], float w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 7 KB. */
+ * Stack: at most 8 KB. */
 void arm3f_manipulability_batch(size_t m, const float *q, float *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 276 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 592 bytes. */
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 7 KB. */
+ * Stack: at most 8 KB. */
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 348 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 664 bytes. */
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 7 KB. */
+ * Stack: at most 8 KB. */
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 284 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 600 bytes. */
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 7 KB. */
+ * Stack: at most 8 KB. */
 void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float lambda, float *q_next);
 
 /* Return codes of the solvers. */
@@ -150,13 +152,14 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 0.0001 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 1024 bytes.
  */
 int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: about 512 bytes. */
+ * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: at most 1168 bytes. */
 void arm3f_ik_solve_batch(size_t m, const float *q0, const float *target, float lambda, float tol, int max_iter, float *q, float *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x8efb80d3UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xaa13ca85UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

@@ -30,7 +30,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double).
+ * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -50,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x986e29e3UL
+#define ARM5_STAMP 0x2d026313UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -59,84 +61,84 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM5_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 376 bytes. */
+/* endpoint position p (2). Stack: at most 1120 bytes. */
 void arm5_position(const double q[5], const double l[5], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 6 KB. */
+ * Stack: at most 8 KB. */
 void arm5_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 376 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: at most 1120 bytes. */
 void arm5_jacobian(const double q[5], const double l[5], double J[10]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 8 KB. */
+ * Stack: at most 10 KB. */
 void arm5_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 488 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: at most 1240 bytes. */
 void arm5_coriolis(const double q[5], const double dq[5], const double l[5], double H[10]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 10 KB. */
+ * Stack: at most 12 KB. */
 void arm5_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 488 bytes. */
+/* endpoint velocity v = J dq (2). Stack: at most 1240 bytes. */
 void arm5_velocity(const double q[5], const double dq[5], const double l[5], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 8 KB. */
+ * Stack: at most 9 KB. */
 void arm5_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 552 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: at most 1328 bytes. */
 void arm5_acceleration(const double q[5], const double dq[5], const double ddq[5], const double l[5], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 9 KB. */
+ * Stack: at most 11 KB. */
 void arm5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 552 bytes. */
+/* p, J, H, v and a at once. Stack: at most 1368 bytes. */
 void arm5_kinematics(const double q[5], const double dq[5], const double ddq[5], const double l[5], double p[2], double J[10], double H[10], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 15 KB. */
+ * Stack: at most 18 KB. */
 void arm5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 512 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: at most 1272 bytes. */
 void arm5_manipulability(const double q[5], const double l[5], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 696 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 1488 bytes. */
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 808 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 1616 bytes. */
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 712 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 1504 bytes. */
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm5_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of the solvers. */
@@ -154,13 +156,14 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 1e-09 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 2080 bytes.
  */
 int arm5_ik_solve(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: about 1040 bytes. */
+ * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: at most 2224 bytes. */
 void arm5_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x388db698UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x8204981cUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 

@@ -30,7 +30,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double).
+ * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -50,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0x388db698UL
+#define ARM6_STAMP 0x8204981cUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -59,84 +61,84 @@ extern "C" {
 /* relative rank tolerance of the closed-form solves: 100 machine epsilons */
 #define ARM6_RANK_TOL 2.220446049250313e-14
 
-/* endpoint position p (2). Stack: about 416 bytes. */
+/* endpoint position p (2). Stack: at most 1168 bytes. */
 void arm6_position(const double q[6], const double l[6], double p[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 7 KB. */
+ * Stack: at most 9 KB. */
 void arm6_position_batch(size_t m, const double *q, const double *l, double *p);
 
-/* Jacobian J (2 x N, row-major). Stack: about 416 bytes. */
+/* Jacobian J (2 x N, row-major). Stack: at most 1168 bytes. */
 void arm6_jacobian(const double q[6], const double l[6], double J[12]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 10 KB. */
+ * Stack: at most 12 KB. */
 void arm6_jacobian_batch(size_t m, const double *q, const double *l, double *J);
 
-/* H = dJ/dt (2 x N, row-major). Stack: about 552 bytes. */
+/* H = dJ/dt (2 x N, row-major). Stack: at most 1312 bytes. */
 void arm6_coriolis(const double q[6], const double dq[6], const double l[6], double H[12]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 12 KB. */
+ * Stack: at most 14 KB. */
 void arm6_coriolis_batch(size_t m, const double *q, const double *dq, const double *l, double *H);
 
-/* endpoint velocity v = J dq (2). Stack: about 552 bytes. */
+/* endpoint velocity v = J dq (2). Stack: at most 1312 bytes. */
 void arm6_velocity(const double q[6], const double dq[6], const double l[6], double v[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 9 KB. */
+ * Stack: at most 11 KB. */
 void arm6_velocity_batch(size_t m, const double *q, const double *dq, const double *l, double *v);
 
-/* endpoint acceleration a = J ddq + H dq (2). Stack: about 632 bytes. */
+/* endpoint acceleration a = J ddq + H dq (2). Stack: at most 1416 bytes. */
 void arm6_acceleration(const double q[6], const double dq[6], const double ddq[6], const double l[6], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 11 KB. */
+ * Stack: at most 13 KB. */
 void arm6_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *a);
 
-/* p, J, H, v and a at once. Stack: about 632 bytes. */
+/* p, J, H, v and a at once. Stack: at most 1456 bytes. */
 void arm6_kinematics(const double q[6], const double dq[6], const double ddq[6], const double l[6], double p[2], double J[12], double H[12], double v[2], double a[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 18 KB. */
+ * Stack: at most 21 KB. */
 void arm6_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, const double *l, double *p, double *J, double *H, double *v, double *a);
 
-/* manipulability w = sqrt(det(J J^T)) (1). Stack: about 568 bytes. */
+/* manipulability w = sqrt(det(J J^T)) (1). Stack: at most 1328 bytes. */
 void arm6_manipulability(const double q[6], const double l[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm6_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: about 760 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 1560 bytes. */
 void arm6_inverse_velocity(const double q[6], const double v[2], const double l[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: about 848 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 1656 bytes. */
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: about 776 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 1576 bytes. */
 void arm6_ik_step(const double q[6], const double target[2], const double l[6], double lambda, double q_next[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void arm6_ik_step_batch(size_t m, const double *q, const double *target, const double *l, double lambda, double *q_next);
 
 /* Return codes of the solvers. */
@@ -154,13 +156,14 @@ void arm6_ik_step_batch(size_t m, const double *q, const double *target, const d
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 1e-09 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 2176 bytes.
  */
 int arm6_ik_solve(const double q0[6], const double target[2], const double l[6], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm6_ik_solve: the same result bit for bit. Stack: about 1128 bytes. */
+ * Each problem is one call of arm6_ik_solve: the same result bit for bit. Stack: at most 2320 bytes. */
 void arm6_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x6a35015eUL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x4add09eeUL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

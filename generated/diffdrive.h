@@ -21,7 +21,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double).
+ * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -41,34 +43,34 @@
  * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x6a35015eUL
+#define DIFFDRIVE_STAMP 0x4add09eeUL
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* body rates (v, omega) from wheel speeds (v_L, v_R). Stack: about 24 bytes. */
+/* body rates (v, omega) from wheel speeds (v_L, v_R). Stack: at most 168 bytes. */
 void diffdrive_body_rates(const double wheels[2], double track, double rates[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: track.
- * Stack: about 24 bytes. */
+ * Stack: at most 240 bytes. */
 void diffdrive_body_rates_batch(size_t m, const double *wheels, double track, double *rates);
 
-/* wheel speeds (v_L, v_R) for body rates (v, omega). Stack: about 0 bytes. */
+/* wheel speeds (v_L, v_R) for body rates (v, omega). Stack: at most 144 bytes. */
 void diffdrive_wheel_speeds(const double rates[2], double track, double wheels[2]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: track.
- * Stack: about 1056 bytes. */
+ * Stack: at most 1376 bytes. */
 void diffdrive_wheel_speeds_batch(size_t m, const double *rates, double track, double *wheels);
 
-/* pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R). Stack: about 128 bytes. */
+/* pose rate (dx, dy, dheading) of pose (x, y, heading) for wheel speeds (v_L, v_R). Stack: at most 848 bytes. */
 void diffdrive_pose_rate(const double pose[3], const double wheels[2], double track, double dpose[3]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: track.
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void diffdrive_pose_rate_batch(size_t m, const double *pose, const double *wheels, double track, double *dpose);
 
 #ifdef __cplusplus

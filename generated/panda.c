@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x64a9f91fUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xb5ea8921UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6547,8 +6547,8 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
             return PANDA_IK_CONVERGED;
         }
         if (it == max_iter) {
-            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge) */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*0.6)) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
+            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -6882,8 +6882,8 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
             return PANDA_IK_CONVERGED;
         }
         if (it == max_iter) {
-            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge) */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*0.6)) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
+            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;

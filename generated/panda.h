@@ -37,7 +37,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double).
+ * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -57,7 +59,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x64a9f91fUL
+#define PANDA_STAMP 0xb5ea8921UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -81,124 +83,124 @@ extern "C" {
  * An initializer: static const double x[7] = PANDA_DQ_MAX; */
 #define PANDA_DQ_MAX {2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61}
 
-/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 584 bytes. */
+/* tool pose T (4 x 4 homogeneous, row-major). Stack: at most 1328 bytes. */
 void panda_pose(const double q[7], double T[16]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 12 KB. */
+ * Stack: at most 14 KB. */
 void panda_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 688 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: at most 1448 bytes. */
 void panda_jacobian(const double q[7], double J[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 18 KB. */
+ * Stack: at most 21 KB. */
 void panda_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 800 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: at most 1568 bytes. */
 void panda_jacobian_tool(const double q[7], double J_tool[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 19 KB. */
+ * Stack: at most 22 KB. */
 void panda_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 1192 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: at most 2016 bytes. */
 void panda_jacobian_dot(const double q[7], const double dq[7], double dJ[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 21 KB. */
+ * Stack: at most 23 KB. */
 void panda_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 952 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: at most 1752 bytes. */
 void panda_twist(const double q[7], const double dq[7], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 11 KB. */
+ * Stack: at most 13 KB. */
 void panda_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 1184 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: at most 2008 bytes. */
 void panda_acceleration(const double q[7], const double dq[7], const double ddq[7], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void panda_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 1344 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: at most 2224 bytes. */
 void panda_kinematics(const double q[7], const double dq[7], const double ddq[7], double T[16], double J[42], double dJ[42], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 22 KB. */
+ * Stack: at most 25 KB. */
 void panda_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 792 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: at most 1576 bytes. */
 void panda_ik_terms(const double q[7], double T[16], double J[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 23 KB. */
+ * Stack: at most 26 KB. */
 void panda_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2864 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: at most 3840 bytes. */
 void panda_manipulability(const double q[7], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 15 KB. */
+ * Stack: at most 17 KB. */
 void panda_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 1184 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: at most 1992 bytes. */
 void panda_manipulability_position(const double q[7], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 16 KB. */
 void panda_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 1416 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: at most 2248 bytes. */
 void panda_jacobian_hessian(const double q[7], double Hs[294]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 14 KB. */
+ * Stack: at most 16 KB. */
 void panda_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 5 KB. */
+/* gradient dw/dq of the manipulability (N). Stack: at most 6 KB. */
 void panda_manipulability_gradient(const double q[7], double grad[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 17 KB. */
+ * Stack: at most 19 KB. */
 void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
-/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 10 KB. */
+/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: at most 12 KB. */
 void panda_inverse_velocity(const double q[7], const double twist[6], double lambda, double dq[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 22 KB. */
+ * Stack: at most 25 KB. */
 void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2504 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: at most 3464 bytes. */
 void panda_inverse_velocity_position(const double q[7], const double v[3], double lambda, double dq_position[7]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 15 KB. */
+ * Stack: at most 17 KB. */
 void panda_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 1024 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: at most 1816 bytes. */
 void panda_jacobian_rpy(const double q[7], double JA[42]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
 /* Return codes of the solvers. */
@@ -224,13 +226,14 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
  * arm of unit size. target: 4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 6 KB.
  */
 int panda_ik_solve(const double q0[7], const double target[16], double lambda, double tol, int max_iter, double q[7], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of panda_ik_solve: the same result bit for bit. Stack: about 3944 bytes. */
+ * Each problem is one call of panda_ik_solve: the same result bit for bit. Stack: at most 6 KB. */
 void panda_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* position IK of the tool origin.
@@ -248,13 +251,14 @@ void panda_ik_solve_batch(size_t m, const double *q0, const double *target, doub
  * arm of unit size. target: 3 numbers; error[0] = position error (m).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 5 KB.
  */
 int panda_ik_solve_position(const double q0[7], const double target[3], double lambda, double tol, int max_iter, double q[7], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of panda_ik_solve_position: the same result bit for bit. Stack: about 3440 bytes. */
+ * Each problem is one call of panda_ik_solve_position: the same result bit for bit. Stack: at most 5 KB. */
 void panda_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x64a9f91f
+STAMP = 0xb5ea8921
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -5246,8 +5246,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
             iterations[0] = it
             return IK_CONVERGED
         if it == max_iter:
-            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*0.6):
+            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -5691,8 +5691,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _run35 = _run35 & (~_m37)
         _c38 = it == max_iter
         _m39 = _run35 & _c38
-        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m41 = _m39 & _c40
         best_stalled = np.where(_m41, 1, best_stalled)
         _run35 = _run35 & (~_m39)
@@ -6548,8 +6548,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
             iterations[0] = it
             return IK_CONVERGED
         if it == max_iter:
-            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*0.6):
+            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -6897,8 +6897,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _run16 = _run16 & (~_m18)
         _c19 = it == max_iter
         _m20 = _run16 & _c19
-        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m22 = _m20 & _c21
         best_stalled = np.where(_m22, 1, best_stalled)
         _run16 = _run16 & (~_m20)

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x031a3dbcUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xe18fbd04UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7012,8 +7012,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
             return UR5_IK_CONVERGED;
         }
         if (it == max_iter) {
-            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge) */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*0.6)) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
+            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -7383,8 +7383,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
             return UR5_IK_CONVERGED;
         }
         if (it == max_iter) {
-            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge) */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*0.6)) {
+            /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
+            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -7643,7 +7643,7 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     double raw_flags[8];
     double cand[6];
     singular[0] = 0;
-    /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation */
+    /* 1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond IK_TRANSLATION_MAX; R not a rotation */
     const double m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8];
     const double m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9];
     const double m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10];
@@ -7655,12 +7655,12 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
         count[0] = 0;
         /* rows past count: NaN, flags -1 */
         for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
-            q[6*k] = NAN;
-            q[6*k + 1] = NAN;
-            q[6*k + 2] = NAN;
-            q[6*k + 3] = NAN;
-            q[6*k + 4] = NAN;
-            q[6*k + 5] = NAN;
+            q[6*k] = (double)NAN;
+            q[6*k + 1] = (double)NAN;
+            q[6*k + 2] = (double)NAN;
+            q[6*k + 3] = (double)NAN;
+            q[6*k + 4] = (double)NAN;
+            q[6*k + 5] = (double)NAN;
             flags[k] = -1;
         }
         return UR5_IK_INVALID;
@@ -7743,12 +7743,12 @@ static int ur5_ik_all_rows(const double target[16], double q[48], int count[1], 
     /* rows past count: NaN, flags -1 */
     for (int k = 0; k < UR5_IK_MAX_SOLUTIONS; ++k) {
         if (k >= kept) {
-            q[6*k] = NAN;
-            q[6*k + 1] = NAN;
-            q[6*k + 2] = NAN;
-            q[6*k + 3] = NAN;
-            q[6*k + 4] = NAN;
-            q[6*k + 5] = NAN;
+            q[6*k] = (double)NAN;
+            q[6*k + 1] = (double)NAN;
+            q[6*k + 2] = (double)NAN;
+            q[6*k + 3] = (double)NAN;
+            q[6*k + 4] = (double)NAN;
+            q[6*k + 5] = (double)NAN;
             flags[k] = -1;
         }
     }
@@ -7796,12 +7796,12 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     double dist = 0.0;
     double y = 0.0;
     double x = 0.0;
-    q[0] = NAN;
-    q[1] = NAN;
-    q[2] = NAN;
-    q[3] = NAN;
-    q[4] = NAN;
-    q[5] = NAN;
+    q[0] = (double)NAN;
+    q[1] = (double)NAN;
+    q[2] = (double)NAN;
+    q[3] = (double)NAN;
+    q[4] = (double)NAN;
+    q[5] = (double)NAN;
     /* q_ref not finite: IK_INVALID, q NaN */
     if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5])) {
         return UR5_IK_INVALID;
@@ -7967,12 +7967,12 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     double dist = 0.0;
     double y = 0.0;
     double x = 0.0;
-    q[0] = NAN;
-    q[1] = NAN;
-    q[2] = NAN;
-    q[3] = NAN;
-    q[4] = NAN;
-    q[5] = NAN;
+    q[0] = (double)NAN;
+    q[1] = (double)NAN;
+    q[2] = (double)NAN;
+    q[3] = (double)NAN;
+    q[4] = (double)NAN;
+    q[5] = (double)NAN;
     /* q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN */
     if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5]) || !(weights[0] > 0.0) || !UR5_FINITE(weights[0]) || !(weights[1] > 0.0) || !UR5_FINITE(weights[1]) || !(weights[2] > 0.0) || !UR5_FINITE(weights[2]) || !(weights[3] > 0.0) || !UR5_FINITE(weights[3]) || !(weights[4] > 0.0) || !UR5_FINITE(weights[4]) || !(weights[5] > 0.0) || !UR5_FINITE(weights[5])) {
         return UR5_IK_INVALID;

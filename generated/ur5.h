@@ -40,7 +40,9 @@
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
  * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double).
+ * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
+ * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
+ * sin, cos and sqrt not counted; optimised builds need less.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
@@ -60,7 +62,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x031a3dbcUL
+#define UR5_STAMP 0xe18fbd04UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -114,147 +116,147 @@ extern "C" {
  * An initializer: static const double x[6] = UR5_DQ_MAX; */
 #define UR5_DQ_MAX {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793}
 
-/* tool pose T (4 x 4 homogeneous, row-major). Stack: about 472 bytes. */
+/* tool pose T (4 x 4 homogeneous, row-major). Stack: at most 1208 bytes. */
 void ur5_pose(const double q[6], double T[16]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 11 KB. */
+ * Stack: at most 13 KB. */
 void ur5_pose_batch(size_t m, const double *q, double *T);
 
-/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: about 488 bytes. */
+/* geometric Jacobian J (6 x N row-major: vx vy vz wx wy wz, base axes, tool origin). Stack: at most 1224 bytes. */
 void ur5_jacobian(const double q[6], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 15 KB. */
+ * Stack: at most 18 KB. */
 void ur5_jacobian_batch(size_t m, const double *q, double *J);
 
-/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: about 616 bytes. */
+/* the Jacobian in the tool frame's axes (6 x N row-major). Stack: at most 1368 bytes. */
 void ur5_jacobian_tool(const double q[6], double J_tool[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 16 KB. */
+ * Stack: at most 19 KB. */
 void ur5_jacobian_tool_batch(size_t m, const double *q, double *J_tool);
 
-/* dJ/dt (6 x N row-major, same frame as J). Stack: about 808 bytes. */
+/* dJ/dt (6 x N row-major, same frame as J). Stack: at most 1592 bytes. */
 void ur5_jacobian_dot(const double q[6], const double dq[6], double dJ[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 17 KB. */
+ * Stack: at most 20 KB. */
 void ur5_jacobian_dot_batch(size_t m, const double *q, const double *dq, double *dJ);
 
-/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: about 664 bytes. */
+/* tool twist J dq: (vx, vy, vz, wx, wy, wz) (6). Stack: at most 1440 bytes. */
 void ur5_twist(const double q[6], const double dq[6], double twist[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 9 KB. */
+ * Stack: at most 11 KB. */
 void ur5_twist_batch(size_t m, const double *q, const double *dq, double *twist);
 
-/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: about 800 bytes. */
+/* classical acceleration of the tool origin and angular acceleration J ddq + dJ dq (6). Stack: at most 1584 bytes. */
 void ur5_acceleration(const double q[6], const double dq[6], const double ddq[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 11 KB. */
+ * Stack: at most 13 KB. */
 void ur5_acceleration_batch(size_t m, const double *q, const double *dq, const double *ddq, double *acc);
 
-/* T, J, dJ, twist and acc at once. Stack: about 976 bytes. */
+/* T, J, dJ, twist and acc at once. Stack: at most 1816 bytes. */
 void ur5_kinematics(const double q[6], const double dq[6], const double ddq[6], double T[16], double J[36], double dJ[36], double twist[6], double acc[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 19 KB. */
+ * Stack: at most 22 KB. */
 void ur5_kinematics_batch(size_t m, const double *q, const double *dq, const double *ddq, double *T, double *J, double *dJ, double *twist, double *acc);
 
-/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: about 600 bytes. */
+/* tool pose T and Jacobian J at once (the terms of an IK step). Stack: at most 1368 bytes. */
 void ur5_ik_terms(const double q[6], double T[16], double J[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 20 KB. */
+ * Stack: at most 23 KB. */
 void ur5_ik_terms_batch(size_t m, const double *q, double *T, double *J);
 
-/* manipulability w = product of the singular values of J (1). Stack: about 2368 bytes. */
+/* manipulability w = product of the singular values of J (1). Stack: at most 3296 bytes. */
 void ur5_manipulability(const double q[6], double w[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 15 KB. */
+ * Stack: at most 17 KB. */
 void ur5_manipulability_batch(size_t m, const double *q, double *w);
 
-/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: about 888 bytes. */
+/* position manipulability: product of the singular values of the 3 x N linear rows of J (1). Stack: at most 1664 bytes. */
 void ur5_manipulability_position(const double q[6], double w_position[1]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void ur5_manipulability_position_batch(size_t m, const double *q, double *w_position);
 
-/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: about 664 bytes. */
+/* kinematic Hessian Hs[(r*N + c)*N + j] = dJ[r][c]/dq[j] (6 x N x N). Stack: at most 1416 bytes. */
 void ur5_jacobian_hessian(const double q[6], double Hs[216]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void ur5_jacobian_hessian_batch(size_t m, const double *q, double *Hs);
 
-/* gradient dw/dq of the manipulability (N). Stack: about 3320 bytes. */
+/* gradient dw/dq of the manipulability (N). Stack: at most 5 KB. */
 void ur5_manipulability_gradient(const double q[6], double grad[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 16 KB. */
+ * Stack: at most 18 KB. */
 void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad);
 
-/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: about 9 KB. */
+/* damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N). Stack: at most 11 KB. */
 void ur5_inverse_velocity(const double q[6], const double twist[6], double lambda, double dq[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 21 KB. */
+ * Stack: at most 24 KB. */
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: about 2112 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: at most 3032 bytes. */
 void ur5_inverse_velocity_position(const double q[6], const double v[3], double lambda, double dq_position[6]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: lambda.
- * Stack: about 14 KB. */
+ * Stack: at most 17 KB. */
 void ur5_inverse_velocity_position_batch(size_t m, const double *q, const double *v, double lambda, double *dq_position);
 
-/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: about 752 bytes. */
+/* analytical Jacobian for roll-pitch-yaw rates, blockdiag(I, E(rpy)^-1) J (6 x N row-major). Stack: at most 1520 bytes. */
 void ur5_jacobian_rpy(const double q[6], double JA[36]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 13 KB. */
+ * Stack: at most 15 KB. */
 void ur5_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 
-/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: about 6 KB. */
+/* every closed-form IK candidate, raw: Q (S x N, one per row, branch order, angles not wrapped) and flags (S). Stack: at most 7 KB. */
 void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 6 KB. */
+ * Stack: at most 7 KB. */
 void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
 
-/* the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always). Stack: about 5 KB. */
+/* the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always). Stack: at most 6 KB. */
 void ur5_ik_continuum_members(const double q_ref[6], const double target[16], double M[24], double mflags[4]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]).
- * Stack: about 17 KB. */
+ * Stack: at most 19 KB. */
 void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double *target, double *M, double *mflags);
 
 /* Return codes of the solvers. */
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN */
+#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
 #define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit IK_FLAG_LEAST_SQUARES set), possibly none */
 #define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */
@@ -276,13 +278,14 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
  * arm of unit size. target: 4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 5 KB.
  */
 int ur5_ik_solve(const double q0[6], const double target[16], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of ur5_ik_solve: the same result bit for bit. Stack: about 3600 bytes. */
+ * Each problem is one call of ur5_ik_solve: the same result bit for bit. Stack: at most 5 KB. */
 void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* position IK of the tool origin.
@@ -300,13 +303,14 @@ void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double
  * arm of unit size. target: 3 numbers; error[0] = position error (m).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
  * error and iterations may be NULL.
+ * Stack: at most 5 KB.
  */
 int ur5_ik_solve_position(const double q0[6], const double target[3], double lambda, double tol, int max_iter, double q[6], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of ur5_ik_solve_position: the same result bit for bit. Stack: about 3016 bytes. */
+ * Each problem is one call of ur5_ik_solve_position: the same result bit for bit. Stack: at most 5 KB. */
 void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* every closed-form IK solution within the joint limits.
@@ -319,13 +323,14 @@ void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *targe
  * IK_FLAG_SINGULAR (one member of a continuum, or a double root).
  * No iteration: the same time for every target.
  * count and flags may be NULL.
+ * Stack: at most 8 KB.
  */
 int ur5_ik_all(const double target[16], double q[48], int *count, int *flags);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * count, flags and status may be NULL.
- * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: about 7 KB. */
+ * Each problem is one call of ur5_ik_all: the same result bit for bit. Stack: at most 8 KB. */
 void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int *flags, int *status);
 
 /* the closed-form IK solution nearest a configuration.
@@ -336,13 +341,14 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns IK_OUT_OF_LIMITS into IK_OK.
+ * Stack: at most 8 KB.
  */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * status may be NULL.
- * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: about 7 KB. */
+ * Each problem is one call of ur5_ik_nearest: the same result bit for bit. Stack: at most 8 KB. */
 void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, double *q, int *status);
 
 /* the closed-form IK solution nearest a configuration, in a weighted metric.
@@ -353,13 +359,14 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns IK_OUT_OF_LIMITS into IK_OK.
+ * Stack: at most 8 KB.
  */
 int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6]);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]).
  * status[j] is problem j's return code.
  * status may be NULL.
- * Each problem is one call of ur5_ik_nearest_weighted: the same result bit for bit. Stack: about 7 KB. */
+ * Each problem is one call of ur5_ik_nearest_weighted: the same result bit for bit. Stack: at most 8 KB. */
 void ur5_ik_nearest_weighted_batch(size_t m, const double *q_ref, const double *weights, const double *target, double *q, int *status);
 
 #ifdef __cplusplus

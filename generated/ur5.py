@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x031a3dbc
+STAMP = 0xe18fbd04
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -77,7 +77,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN"""
+"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN"""
 IK_OK = 0
 """at least one exact solution within the joint limits: all of them are returned"""
 IK_UNREACHABLE = 1
@@ -5654,8 +5654,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
             iterations[0] = it
             return IK_CONVERGED
         if it == max_iter:
-            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*0.6):
+            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -6129,8 +6129,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _run35 = _run35 & (~_m37)
         _c38 = it == max_iter
         _m39 = _run35 & _c38
-        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m41 = _m39 & _c40
         best_stalled = np.where(_m41, 1, best_stalled)
         _run35 = _run35 & (~_m39)
@@ -7030,8 +7030,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
             iterations[0] = it
             return IK_CONVERGED
         if it == max_iter:
-            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*0.6):
+            # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -7409,8 +7409,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _run16 = _run16 & (~_m18)
         _c19 = it == max_iter
         _m20 = _run16 & _c19
-        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically (as a window would judge)
-        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*0.6))
+        # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
+        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m22 = _m20 & _c21
         best_stalled = np.where(_m22, 1, best_stalled)
         _run16 = _run16 & (~_m20)
@@ -7835,7 +7835,7 @@ def _ik_all_rows(target, q, count, flags, singular):
     raw_flags = np.zeros(8, dtype=DTYPE)
     cand = np.zeros(6, dtype=DTYPE)
     singular[0] = 0
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond IK_TRANSLATION_MAX; R not a rotation
     m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -8004,7 +8004,7 @@ def _ik_all_lanes(_c, target):
     _ik_all_rows3_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows3_cand = [_fr(0.0)] * 6
     singular[0] = _fi(0)
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows3_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows3_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     _ik_all_rows3_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -8518,7 +8518,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows5_cand = [_fr(0.0)] * 6
     singular[0] = np.where(_alive2, 0, singular[0])
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     _ik_all_rows5_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]
@@ -9184,7 +9184,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     _ik_all_rows5_raw_flags = [_fr(0.0)] * 8
     _ik_all_rows5_cand = [_fr(0.0)] * 6
     singular[0] = np.where(_alive2, 0, singular[0])
-    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation
+    # 1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond IK_TRANSLATION_MAX; R not a rotation
     _ik_all_rows5_m00 = (target[0]*target[0] + target[4]*target[4]) + target[8]*target[8]
     _ik_all_rows5_m01 = (target[0]*target[1] + target[4]*target[5]) + target[8]*target[9]
     _ik_all_rows5_m02 = (target[0]*target[2] + target[4]*target[6]) + target[8]*target[10]

@@ -17,7 +17,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import InputError
-from .options import Parser, add_generate_options, add_model_options, model_from_args, model_given
+from .options import Default, Parser, add_generate_options, add_model_options, model_from_args, model_given
 
 
 def _angles(text: str) -> tuple[float, ...]:
@@ -39,6 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
     gen = sub.add_parser("generate", help="emit C and/or Python for a model")
     add_model_options(gen)
     add_generate_options(gen)
+    gen.add_argument("--from", dest="source", metavar="DIR",
+                     help="write the files in DIR again, with the model and options their header records (after an "
+                     "upgrade, or where that line prints a character of a path escaped); --robot FILE names the robot "
+                     "file of files moved away from it, --prefix chooses among several prefixes")
 
     show = sub.add_parser("show", help="print closed forms (or, for a URDF, its links)")
     add_model_options(show)
@@ -92,9 +96,35 @@ def _generate(args, as_program: bool = False) -> int:
 
 
 def _generate_files(args) -> int:
+    if args.source is not None:
+        return _regenerate_files(args)
+    return _write_files(model_from_args(args), args.lang, args.prefix, args.precision, args.out, args.functions,
+                        args.cmake, args.force, args.compile)
+
+
+def _regenerate_files(args) -> int:
+    """``generate --from DIR``: the files in DIR written again from the command their header records."""
+    from .check.load import read_recorded
+
+    recorded_by_files = [flag for flag in model_given(args) if flag != "--robot"]
+    recorded_by_files += [flag for flag, dest in (("--lang", "lang"), ("--precision", "precision"), ("--out", "out"))
+                          if not isinstance(getattr(args, dest), Default)]
+    recorded_by_files += [flag for flag, given in (("--functions", args.functions is not None), ("--cmake", args.cmake)) if given]
+    if recorded_by_files:
+        raise InputError(f"{', '.join(recorded_by_files)} with --from: the files' header records the options "
+                         "(generate without --from to change them)")
+    recorded = read_recorded(args.source, args.prefix, robot=args.robot, mixed=True)
+    rec = recorded.args
+    # the files replaced are the ones read: another robot file (--robot) changes the command, not what they are
+    return _write_files(recorded.model, rec.lang, rec.prefix, rec.precision, str(recorded.root), rec.functions,
+                        rec.cmake, True, args.compile)
+
+
+def _write_files(model, lang, prefix, precision, out, functions, cmake, force, compile) -> int:
+    """Generate ``model``'s files into ``out`` (compiled first with ``compile``) and report them."""
     from .generate import generate, validate_langs
 
-    if args.compile and "c" not in validate_langs(args.lang):
+    if compile and "c" not in validate_langs(lang):
         raise InputError("--compile builds the C: generate with lang 'c'")
     compiled = []
 
@@ -105,10 +135,8 @@ def _generate_files(args) -> int:
 
             compiled.append(compile_arm(result))
 
-    model = model_from_args(args)
-    result = generate(model, langs=args.lang, prefix=args.prefix, precision=args.precision, out=args.out,
-                      functions=args.functions, cmake=args.cmake, force=args.force,
-                      before_writing=compile_first if args.compile else None)
+    result = generate(model, langs=lang, prefix=prefix, precision=precision, out=out, functions=functions, cmake=cmake,
+                      force=force, before_writing=compile_first if compile else None)
     for line in model.summary():
         print(line)
     for path in result.paths:

@@ -30,7 +30,7 @@ from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
 from .ir.nodes import Function, Module
 from .models.planar import PlanarArm
 from .models.registry import kind_of
-from .names import C_RESERVED, reserved_prefix  # noqa: F401 - C_RESERVED re-exported
+from .names import C_RESERVED, reserved_prefix, standard_header  # noqa: F401 - C_RESERVED re-exported
 
 PRECISIONS = ("double", "float")
 LANGUAGE_ALIASES = {"numpy": "python"}
@@ -56,6 +56,14 @@ def validate_module_name(prefix: str) -> str:
         raise InputError(
             f"prefix {prefix!r} is a Python standard module: {prefix}.py would shadow it; choose another"
         )
+    return prefix
+
+
+def validate_header_name(prefix: str) -> str:
+    """``prefix`` if ``{prefix}.h`` would not be read for a standard C header, else InputError."""
+    if standard_header(prefix):
+        raise InputError(f"prefix {prefix!r} names a C system header: {prefix}.h would be read for "
+                         f"<{prefix.lower()}.h> wherever its folder is on the include path; choose another")
     return prefix
 
 
@@ -362,6 +370,8 @@ def generate(
     langs = validate_langs(langs)
     if "python" in langs:
         validate_module_name(prefix)
+    if any(".h" in BACKENDS[lang].FILE_SUFFIXES for lang in langs):
+        validate_header_name(prefix)
     target = _check_output_folder(out) if out is not None else None
     if cmake and "c" not in langs:
         raise InputError("--cmake builds the C: generate with lang 'c'")
@@ -418,6 +428,8 @@ def parse_lengths(text: str) -> tuple[float, ...]:
 
 
 def _check_output_folder(out: str | os.PathLike) -> Path:
+    if not os.fspath(out):  # Path("") is the current folder: an empty --out is a mistake, not a choice
+        raise InputError("output folder is empty text: name a folder (--out DIR, or out='.' for the current one)")
     target = Path(out)
     try:
         exists, is_folder = target.exists(), target.is_dir()

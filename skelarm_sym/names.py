@@ -23,6 +23,22 @@ C_RESERVED = frozenset(
 )
 """Words a prefix or name may not be: C99 and C++ keywords, and names the emitted code itself relies on."""
 
+C_HEADERS = frozenset(
+    """assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal stdalign stdarg
+    stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath threads time uchar wchar wctype
+    features""".split()
+)
+"""Names of the standard C headers (C99 and C11) and of glibc's ``features.h``, which ``<math.h>`` includes: a
+file ``{name}.h`` in a folder on the include path is read for the system header of its name (``<stddef.h>``, which
+the emitted header includes) or hides it from the user's own code. Compared in lower case (a file system may not
+tell ``Stddef.h`` from ``stddef.h``)."""
+
+
+def standard_header(name: str) -> bool:
+    """True when ``{name}.h`` is, or on a case-insensitive file system would be, a standard C header's file name."""
+    return name.lower() in C_HEADERS
+
+
 _INPUT = re.compile(r"params|d{0,2}q\d*|lambda|xi_\w*|nu_\w*|RANK_TOL")
 """Names of the SymPy symbols the derivations create for their inputs (``q1``, ``dq3``, ``lambda``,
 the twist's ``xi_vx`` ...): a parameter of the same name would be the same symbol."""
@@ -95,8 +111,8 @@ def identifier_from(text: str | None) -> str | None:
     Case is kept as written; every run of characters other than ASCII letters and digits (``_``, ``-``,
     spaces, dots, non-ASCII letters) becomes one ``_``, and ``_`` at either end is dropped; a name that starts with a digit gets
     ``robot_`` before it; the result is cut to :data:`IDENTIFIER_LENGTH` characters; a reserved word
-    (:func:`reserved_name`), a Python standard module (``test``, ``code``) or ``numpy``/``np`` gets
-    ``_robot`` after it. ``"xarm7"`` -> ``xarm7``, ``"ur5 (copy)"`` -> ``ur5_copy``,
+    (:func:`reserved_name`), a Python standard module (``test``, ``code``), a standard C header's name
+    (``stddef``: :data:`C_HEADERS`) or ``numpy``/``np`` gets ``_robot`` after it. ``"xarm7"`` -> ``xarm7``, ``"ur5 (copy)"`` -> ``ur5_copy``,
     ``"2dof"`` -> ``robot_2dof``, ``"double"`` -> ``double_robot``.
     """
     name = re.sub(r"[^A-Za-z0-9]+", "_", text or "").strip("_")
@@ -105,6 +121,6 @@ def identifier_from(text: str | None) -> str | None:
     if name[0].isdigit():
         name = "robot_" + name
     name = name[:IDENTIFIER_LENGTH].rstrip("_")
-    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in ("numpy", "np"):
+    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in ("numpy", "np") or standard_header(name):
         name = name[: IDENTIFIER_LENGTH - len("_robot")].rstrip("_") + "_robot"
     return name

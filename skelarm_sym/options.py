@@ -21,6 +21,11 @@ class Parser(argparse.ArgumentParser):
         raise InputError(message)
 
 
+class Default(str):
+    """An option's default value (a ``str``): tells an option left out from one given with the same text
+    (``generate --from`` refuses every option its files record)."""
+
+
 def add_model_options(parser: argparse.ArgumentParser) -> None:
     """``--model`` and every kind's own options."""
     named = [k.name for k in kinds() if k.model_option]
@@ -57,11 +62,11 @@ def add_generate_options(parser: argparse.ArgumentParser) -> None:
     """The options of ``generate`` besides the model's."""
     from .backends import BACKENDS
 
-    parser.add_argument("--lang", default="c,python", help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python)")
+    parser.add_argument("--lang", default=Default("c,python"), help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python)")
     rules = "; ".join(kind.prefix_rule for kind in kinds() if kind.prefix_rule)
     parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules})")
-    parser.add_argument("--precision", default="double", help="double (default) or float")
-    parser.add_argument("--out", default="generated", help="output folder (default ./generated)")
+    parser.add_argument("--precision", default=Default("double"), help="double (default) or float")
+    parser.add_argument("--out", default=Default("generated"), help="output folder (default ./generated)")
     parser.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
     parser.add_argument("--functions", help="comma-separated functions to emit (default all; a solver such as ik_solve "
                         "brings the functions it calls)")

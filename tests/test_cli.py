@@ -48,6 +48,8 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["generate", "--links", "3", "--lengths", "1,2"], "expected 3 link lengths, got 2"),
         (["generate", "--links", "2", "--lengths", "1,-2"], "finite and positive"),
         (["generate", "--links", "2", "--prefix", "x;y"], "C identifier"),
+        (["generate", "--links", "2", "--prefix", "stddef", "--lang", "c"], "names a C system header: stddef.h would be read"),
+        (["generate", "--links", "2", "--prefix", "STDIO"], "STDIO.h would be read for <stdio.h>"),
         (["generate", "--links", "2", "--lang", "fortran"], "unknown language"),
         (["generate", "--links", "2", "--precision", "half"], "unknown precision"),
         (["show", "--links", "2", "--what", "Q"], "unknown --what"),
@@ -57,7 +59,7 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "links"], "--what links lists a URDF file's link tree"),
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "nosuch"], "all, ik, links"),
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted"),
-        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "--tip applies to URDF files only"),
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "a tip link (tip= / --tip) is chosen in URDF files only"),
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--functions", "ik_all"], "lock one joint, --ik-lock JOINT"),
     ],
 )
@@ -151,3 +153,15 @@ def test_generate_as_the_program_freezes_what_it_built(tmp_path):
         "print(gc.get_freeze_count() > before, gc.isenabled())\n"
     )
     assert _probe(probe).splitlines()[-1] == "True True"
+
+
+def test_an_empty_out_and_a_file_for_from_are_named_in_one_line(tmp_path, monkeypatch):
+    """``--out ""`` wrote into the current folder (Path("") is "."); ``--from FILE`` said "no such folder"."""
+    monkeypatch.chdir(tmp_path)
+    r = run("generate", "--links", "2", "--out", "")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "output folder is empty text" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "arm2.h").write_text("/* not a folder */\n")
+    for command in ("check", "generate"):
+        r = run(command, "--from", str(tmp_path / "arm2.h"))
+        assert r.returncode == 2 and r.stderr.count("\n") == 1 and "arm2.h': a file, not a folder" in r.stderr

@@ -636,7 +636,7 @@ def test_ir_additions_print():
     assert CPrinter(PRECISIONS["float"]).expr(e) == "nearbyintf(x)"
     assert PythonPrinter(False).expr(e) == "np.rint(x)"
     assert evaluate(e, {"x": 2.5}) == 2.0 and evaluate(e, {"x": -3.5}) == -4.0
-    assert CPrinter(PRECISIONS["double"]).expr(Const(math.nan)) == "NAN"
+    assert CPrinter(PRECISIONS["double"]).expr(Const(math.nan)) == "(double)NAN"
     assert PRECISIONS["double"].literal(8) == "8" and PRECISIONS["double"].literal(8.0) == "8.0"
     g = built("puma560").generated
     assert "\nIK_MAX_SOLUTIONS = 8\n" in g.sources["puma560.py"]
@@ -1072,3 +1072,28 @@ def test_regular_rows_skip_the_duplicate_test_only_where_provably_distinct():
             for k in np.nonzero(flags == 0)[0]:
                 others = np.delete(rows, k, axis=0)
                 assert np.min(wrapped_distance(others, rows[k], b.revolute)) > 1e-5
+
+
+def test_a_lock_beyond_ik_lock_max_is_refused_in_every_language():
+    """ik_all took a lock of 1e300 (or 1e16) and answered ok with rows 0.2 to 1.8 off their target: the candidates
+    were solved with the sine and cosine of the huge value, and the row's lock, moved by whole turns toward the
+    limits' centre, was another angle. Beyond IK_LOCK_MAX (1e5 rad in double, where one unit in the last place is
+    1.5e-11) the lock is refused: IK_INVALID, which the Python wrappers of C and NumPy raise as a ValueError naming the bound. Within
+    it, a lock whole turns away from the target's own still gives rows on the target."""
+    from skelarm_sym.closed_ik.postprocess import LOCK_MAX
+
+    b = built("panda_lock7")
+    q = inner_configurations(b, 1, np.random.default_rng(5))[0]
+    T = targets_of(b.chain, q[None])[0]
+    for lock in (1.5 * LOCK_MAX, -1e16, 1e300):
+        for impl in (b.c, b.py):
+            with pytest.raises(ValueError, match=r"or the lock is beyond IK_LOCK_MAX = 100000 in magnitude"):
+                impl.ik_all(T, lock)
+            with pytest.raises(ValueError, match=r"or the lock is beyond IK_LOCK_MAX"):
+                impl.ik_nearest(q, T, lock)
+    turns = q[b.lock] + 2 * math.pi * 15000  # 94248 rad: within the bound
+    for impl in (b.c, b.py):
+        r = impl.ik_all(T, turns)
+        assert r.status == "ok" and r.count >= 1
+        for row in np.asarray(r.q)[: r.count]:
+            assert np.abs(targets_of(b.chain, row[None])[0] - T).max() < 1e-9

@@ -299,3 +299,72 @@ def test_the_compiled_library_takes_lengths_per_configuration_as_the_numpy_modul
     np.testing.assert_allclose(arm.inverse_velocity(q, v, l, 0.1), mod.inverse_velocity(q, v, l, 0.1), rtol=0, atol=1e-13)
     with pytest.raises(ValueError, match=re.escape("batch shapes do not broadcast: q (5, 3), l (4, 3)")):
         arm.jacobian(q, np.ones((4, 3)))
+
+
+@pytest.mark.parametrize("compiler", COMPILERS)
+def test_double_code_is_quiet_under_double_promotion_warnings(tmp_path, compiler):
+    """C99's NAN is a float: the solvers' ``q[k] = NAN`` promoted it to double implicitly (24 clang
+    ``-Wdouble-promotion`` warnings in ur5.c, a flag embedded builds use to catch slow double arithmetic).
+    Double code prints it ``(double)NAN``."""
+    generated = Path(__file__).resolve().parents[1] / "generated"
+    assert "(double)NAN" in (generated / "ur5.c").read_text()
+    for name in ("ur5", "panda"):
+        cmd = [compiler, *STRICT_FLAGS, "-Wdouble-promotion", "-O0", f"-I{generated}", "-c", str(generated / f"{name}.c"),
+               "-o", str(tmp_path / "x.o")]
+        result = subprocess.run(cmd, capture_output=True, text=True)
+        assert result.returncode == 0 and result.stderr == "", result.stderr
+
+
+def _stack_by_gcc(c_file: Path, tmp_path: Path) -> dict[str, int]:
+    """The deepest stack of every function of ``c_file`` at gcc -O0 on this machine: its frame plus the deepest
+    path of frames below it, from gcc's call graph (``-fcallgraph-info=su``); the C library's functions count 0."""
+    obj = tmp_path / (c_file.stem + ".o")
+    subprocess.run(["gcc", *STRICT_FLAGS, "-O0", "-fcallgraph-info=su", f"-I{c_file.parent}", "-c", str(c_file), "-o", str(obj)],
+                   check=True, capture_output=True)
+    graph = obj.with_suffix(".ci").read_text()
+    frames = {title.rsplit(":", 1)[-1]: int(size.group(1)) if (size := re.search(r"\\n(\d+) bytes", label)) else 0
+              for title, label in re.findall(r'node: \{ title: "([^"]+)" label: "([^"]+)"', graph)}
+    calls: dict[str, set[str]] = {}
+    for caller, callee in re.findall(r'edge: \{ sourcename: "([^"]+)" targetname: "([^"]+)"', graph):
+        calls.setdefault(caller.rsplit(":", 1)[-1], set()).add(callee.rsplit(":", 1)[-1])
+    deepest: dict[str, int] = {}
+
+    def depth(name: str) -> int:
+        if name not in deepest:
+            deepest[name] = frames.get(name, 0) + max((depth(g) for g in calls.get(name, ())), default=0)
+        return deepest[name]
+
+    return {name: depth(name) for name in frames}
+
+
+def _stated_stacks(header: str) -> dict[str, int]:
+    """Each declared function's ``Stack: at most N bytes`` (or KB) from the comment above it."""
+    stated = {}
+    for comment, name in re.findall(r"/\*((?:(?!\*/).)*)\*/\s*\n[\w ]+? (\w+)\(", header, re.S):
+        figure = re.search(r"Stack: at most (\d+) (bytes|KB)\.", comment)
+        if figure:
+            stated[name] = int(figure.group(1)) * (1024 if figure.group(2) == "KB" else 1)
+    return stated
+
+
+@pytest.mark.skipif(not shutil.which("gcc"), reason="gcc is not installed")
+def test_every_function_states_a_stack_that_bounds_an_unoptimised_build(tmp_path):
+    """The header's figure for each public function (single call and batch, solvers included) is at least what
+    gcc -O0 uses along the deepest call path. The figures had left out the trigonometry a function calls and
+    the frames' fixed parts (ur5_pose: 488 stated, 984 used), and the solvers' single calls stated none."""
+    from skelarm_sym.models.chain.loader import load_robot
+
+    generated = Path(__file__).resolve().parents[1] / "generated"
+    kr6 = tmp_path / "kr6"
+    generate(load_robot(ROOT / "examples" / "robots" / "kuka_kr6.toml"), langs="c", out=kr6, precision="float")
+    checked = 0
+    for c_file in (generated / "ur5.c", generated / "arm3f.c", generated / "diffdrive.c", kr6 / "kuka_kr6.c"):
+        header = c_file.with_suffix(".h").read_text()
+        declared = re.findall(r"^\w[\w ]*? (\w+)\([^;]*\);$", header, re.M)
+        stated = _stated_stacks(header)
+        assert sorted(stated) == sorted(declared), c_file.name  # a figure for every function
+        used = _stack_by_gcc(c_file, tmp_path)
+        over = {name: (used[name], figure) for name, figure in stated.items() if used[name] > figure}
+        assert not over, (c_file.name, over)
+        checked += len(stated)
+    assert checked > 60

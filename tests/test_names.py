@@ -89,6 +89,8 @@ def test_quoted():
         ("q1", "q1_robot"),  # the name of an input
         ("code", "code_robot"),  # a Python standard module: code.py would shadow it
         ("numpy", "numpy_robot"),
+        ("stddef", "stddef_robot"),  # a C system header: stddef.h would be read for <stddef.h>
+        ("Features", "Features_robot"),  # glibc's <features.h>, which <math.h> includes (any case)
         ("a" * 60, "a" * IDENTIFIER_LENGTH),
         ("ロボット", None),
         ("", None),
@@ -101,3 +103,33 @@ def test_identifier_from(text, expected):
     assert got == expected
     if got is not None:
         assert got.isidentifier() and got[0].isalpha() and len(got) <= IDENTIFIER_LENGTH and not reserved_name(got)
+
+
+@pytest.mark.skipif(not __import__("shutil").which("cc"), reason="no C compiler")
+def test_robots_named_after_c_headers_compile_with_their_folder_on_the_include_path(tmp_path):
+    """A TOML robot named ``stddef`` and a URDF file ``stdio.urdf`` gave ``stddef.h`` and ``stdio.h``: with the
+    folder on the include path (as its CMakeLists.txt and the README's build put it), the header's own
+    ``#include <stddef.h>`` read itself (``unknown type name 'size_t'``), and a caller's ``<stdio.h>`` was the
+    robot's. Their default prefixes now get ``_robot``."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from skelarm_sym.generate import generate
+    from skelarm_sym.models.chain.loader import load_robot
+
+    robots = Path(__file__).resolve().parents[1] / "examples" / "robots"
+    toml = tmp_path / "arm.toml"
+    toml.write_text((robots / "scara.toml").read_text().replace('name = "scara"', 'name = "stddef"'))
+    shutil.copy(robots / "ur5.urdf", tmp_path / "stdio.urdf")
+    caller = tmp_path / "main.c"
+    for chain, prefix in ((load_robot(toml), "stddef_robot"), (load_robot(tmp_path / "stdio.urdf", tip="tool0"), "stdio_robot")):
+        out = tmp_path / prefix
+        generate(chain, langs="c", out=out, functions="pose")
+        assert sorted(p.name for p in out.iterdir()) == [f"{prefix}.c", f"{prefix}.h"]
+        caller.write_text(f'#include <stdio.h>\n#include "{prefix}.h"\nint main(void) {{ double q[8] = {{0}}, T[16];\n'
+                          f'    {prefix}_pose(q, T); printf("%g\\n", T[15]); return 0; }}\n')
+        built = subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", f"-I{out}", str(caller),
+                                str(out / f"{prefix}.c"), "-o", str(tmp_path / "a.out"), "-lm"], capture_output=True, text=True)
+        assert built.returncode == 0, built.stderr
+        assert subprocess.run([str(tmp_path / "a.out")], capture_output=True, text=True).stdout == "1\n"

@@ -341,3 +341,11 @@ def test_panda_flange_and_ur5_parameters_are_exact():
     ur5 = load_robot_file(ROBOTS / "ur5.toml")
     d1 = ur5.joints[0].after.translation[2]
     assert float(d1) == 0.089159
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path):
+    """Windows editors save UTF-8 with a byte order mark: tomllib saw it as 'Invalid statement (line 1, column
+    1)' (a URDF with one was read). Read past it; a mark elsewhere is still not TOML."""
+    assert load_robot_file(write(tmp_path, b"\xef\xbb\xbf" + REV.encode())).n == 1
+    with pytest.raises(InputError, match="not valid TOML"):
+        load_robot_file(write(tmp_path, REV.encode() + b"\xef\xbb\xbf" + REV.encode()))

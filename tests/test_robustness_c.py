@@ -272,9 +272,9 @@ def test_header_states_the_stack_each_function_needs():
 
     header = generate(24, out=None, langs="c").sources["arm24.h"]
     stacks = re.findall(r"void arm24_(\w+)\(", header)
-    sizes = re.findall(r"Stack: about (\d+) (bytes|KB)", header)
+    sizes = re.findall(r"Stack: at most (\d+) (bytes|KB)", header)
     assert len(sizes) >= len(stacks)  # every function (and batch) says it
-    kin = re.search(r"p, J, H, v and a at once\. Stack: about (\d+) (bytes|KB)", header)
+    kin = re.search(r"p, J, H, v and a at once\. Stack: at most (\d+) (bytes|KB)", header)
     kb = int(kin.group(1)) / (1024 if kin.group(2) == "bytes" else 1)
     # 3 arrays of 24 angles (padded to 24) plus about 18 n temporaries of 8 bytes: a few KB
     assert 1.0 < kb < 8.0, kin.group(0)

@@ -175,6 +175,25 @@ def test_a_batch_of_ik_problems_ends_as_the_numpy_solver_ends_each(lang):
     np.testing.assert_allclose(np.asarray(batch.position_error), [r.position_error for r in singles], rtol=0, atol=1e-9)
 
 
+def test_torch_solves_float32_problems_of_an_arm_with_an_unlimited_joint():
+    """The UR5 URDF's wrist 3 is continuous (no limits): the solver's stand-in for its absent bounds, 1e300, was
+    printed as is, and torch.where refused it in a float32 call (``value cannot be converted to type float
+    without overflow``). A literal beyond float32 prints as an infinity, which bounds alike."""
+    torch = _torch()
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.urdf", tip="tool0")
+    assert chain.limits()["upper"][-1] is None
+    g = generate(chain, langs="torch", out=None, prefix="open32", functions="ik_solve")
+    module = load_python(g.sources["open32_torch.py"], "open32_torch")
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-3.0, 3.0, (5, 6))
+    targets = reference.chain_kinematics(chain.numeric(None), q).T
+    start = q + rng.normal(0.0, 0.1, q.shape)
+    for dtype, tol in ((torch.float32, 1e-5), (torch.float64, 1e-10)):
+        r = module.ik_solve(torch.tensor(start, dtype=dtype), torch.tensor(targets, dtype=dtype), tol=tol)
+        assert r.q.dtype == dtype and [module.STATUS_NAMES[int(s)] for s in r.status] == ["converged"] * 5
+        assert float(torch.max(r.position_error)) <= tol
+
+
 _EXAMPLE_RUNS: dict[str, subprocess.CompletedProcess] = {}
 """The run of each example's text: the documents that hold the same example share one run (a new Python process
 importing PyTorch and SymPy: 5 s of CPU)."""

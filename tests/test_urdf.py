@@ -396,7 +396,21 @@ J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axi
         (_arm(J_AB.replace("<axis", '<limit lower="0" upper="1"/><axis'),
               J_BC.replace("<axis", '<limit lower="2" upper="3"/><mimic joint="ab"/><axis')), {},
          "coordinate 'ab': the limits of the joints that follow it ('bc') leave no value within its range"),
-        (_arm(J_AB, J_BC.replace("<axis", '<limit upper="one"/><axis')), {}, "joint 'bc' limit upper must be numbers"),
+        (_arm(J_AB, J_BC.replace("<axis", '<limit upper="one"/><axis')), {}, "joint 'bc' limit upper must be decimal numbers"),
+        (_arm(J_AB.replace("<axis", '<limit lower="-1" upper="1"/><axis'),
+              J_BC.replace("<axis", '<limit lower="3" upper="4"/><mimic joint="ab" multiplier="0"/><axis')), {},
+         "joint 'bc' follows 'ab' with multiplier 0: it is held at 0, outside its limits [3, 4]"),
+        # float() reads these, urdfdom does not: a typo for 0.5 became 5 m, another script's digits a length
+        (_arm(J_AB.replace("<axis", '<origin xyz="0_5 0 0"/><axis'), J_BC), {}, "joint 'ab' origin xyz must be decimal numbers"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="\u0661 0 0"/><axis'), J_BC), {}, "must be decimal numbers (ASCII digits"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="\uff11.5 0 0"/><axis'), J_BC), {}, "must be decimal numbers"),
+        (_arm(J_AB, J_BC.replace("<axis", '<limit upper="1e3_0"/><axis')), {}, "joint 'bc' limit upper must be decimal numbers"),
+        # xacro read as URDF lost the joints its macros and includes expand to, and said nothing
+        (_arm(J_AB, J_BC, '<xacro:wrist parent="c"/>').replace('name="bad"', 'name="bad" xmlns:xacro="http://www.ros.org/wiki/xacro"'),
+         {}, "it holds xacro markup (<xacro:wrist>): a xacro file, not a URDF; expand it first (xacro"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="0 0 ${h}"/><axis'), J_BC), {}, "it holds a xacro expression ('0 0 ${h}' in <origin xyz>)"),
+        (_arm(J_AB, J_BC).replace('<link name="a"/>', '<link name="a"><visual><geometry><mesh filename="$(find pkg)/a.stl"/>'
+                                  '</geometry></visual></link>'), {}, "it holds a xacro expression"),
         (_arm(J_AB.replace("revolute", "fixed"), J_BC.replace("revolute", "fixed")), {}, "no revolute, continuous or prismatic joint"),
         (_arm(J_AB), {}, "2 root links ('a', 'c')"),
         (_arm(J_AB, J_AB), {}, "joint 'ab' is defined twice"),
@@ -462,9 +476,9 @@ def test_load_robot_dispatches_on_suffix(tmp_path):
     assert dh.name == "two"
     T = pose_by_hand(dh, np.array([0.3, -0.4]))
     np.testing.assert_allclose(T[:2, 3], [0.5 * math.cos(0.3) + 0.25 * math.cos(-0.1), 0.5 * math.sin(0.3) + 0.25 * math.sin(-0.1)])
-    with pytest.raises(InputError, match=r"two\.toml: --tip applies to URDF files only"):
+    with pytest.raises(InputError, match=r"two\.toml: a tip link \(tip= / --tip\) is chosen in URDF files only"):
         load_robot(toml_path, tip="x")
-    with pytest.raises(InputError, match=r"two\.toml: --base and --tip apply"):
+    with pytest.raises(InputError, match=r"two\.toml: a base and tip link \(base= / --base, tip= / --tip\) are chosen"):
         load_robot(toml_path, base="a", tip="x")
     with pytest.raises(InputError, match=r"arm\.xml: unknown kind of robot file '\.xml'"):
         load_robot(tmp_path / "arm.xml")

@@ -17,6 +17,7 @@ Each library is a :class:`Dialect`: the names of its functions.
 from __future__ import annotations
 
 import keyword
+import math
 from dataclasses import dataclass
 
 from ..ir.nodes import (
@@ -25,6 +26,9 @@ from ..ir.nodes import (
 from ..ir.predicate import PArray, PCall, PComment, PDef, PFor, PGuard, PLoop, PSet, Predicated, Slice, is_static
 from .python_syntax import PythonArithmetic
 from .text import line_comment
+
+FLOAT32_MAX = 3.4028234663852886e38
+"""The largest finite float32: a literal beyond it prints as an infinity (see ``TensorPrinter._node``)."""
 
 _ATOM, _UNARY, _POW, _MUL, _ADD, _SHIFT, _BITAND, _BITXOR, _BITOR, _REL, _NOT, _AND, _OR, _COND = (
     100, 90, 85, 80, 70, 65, 62, 61, 60, 50, 45, 40, 30, 20)
@@ -91,7 +95,11 @@ class TensorPrinter(PythonArithmetic):
         t = type(e)
         if t is Const:
             if e.type is Type.REAL:
-                text = repr(float(e.value))
+                value = float(e.value)
+                # beyond float32: infinite in the float32 tensors these modules take (torch.where refuses to
+                # convert it); only the solvers' stand-in for an absent limit (1e300) is that large, compared
+                # and clamped with, where an infinity does the same
+                text = repr(value) if not FLOAT32_MAX < abs(value) < math.inf else ("-inf" if value < 0 else "inf")
                 if text in ("inf", "-inf", "nan"):
                     text = {"inf": "_INF", "-inf": "-_INF", "nan": "_NAN"}[text]
                 return text, (_UNARY if text.startswith("-") else _ATOM)

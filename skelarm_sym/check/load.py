@@ -39,26 +39,45 @@ def _read_head(path) -> str:
         return ""
 
 
-def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | None = None,
-                   robot: str | None = None) -> LoadedFiles:
-    """Read ``folder/prefix.{h,c,py}`` (those present; with ``only``, those languages' files only), rebuild
-    the model and options from the command their header records (run in that folder: a robot file is found
-    relative to it, whatever the current folder), regenerate in memory for the derivation and the IR, and return the files' own text to be
-    compiled and compared. ``prefix`` defaults to the only one in ``folder``. Raises InputError (one line)
-    for a missing folder, no generated files, several prefixes and none chosen, a header without the
+@dataclass(frozen=True)
+class Recorded:
+    """Files written earlier and the generation their header records: ``root`` (their folder), ``prefix``,
+    ``found`` (every file of the prefix there), ``sources`` (the text of those read), ``stamps`` (each one's),
+    ``command`` (the recorded ``skelarm-sym generate ...``, unescaped), ``args`` (it parsed) and ``model`` (it
+    rebuilt, files named relative to ``root``)."""
+
+    root: object
+    prefix: str
+    found: tuple[str, ...]
+    sources: dict
+    stamps: dict
+    command: str
+    args: object
+    model: object
+
+
+def read_recorded(folder, prefix: str | None = None, only: tuple[str, ...] | None = None,
+                  robot: str | None = None, mixed: bool = False) -> Recorded:
+    """Read ``folder/prefix.{h,c,py}`` (those present; with ``only``, those languages' files only) and rebuild the
+    model and options from the command their header records (run in that folder: a robot file is found relative
+    to it, whatever the current folder). ``prefix`` defaults to the only one in ``folder``. Raises InputError (one
+    line) for a missing folder, no generated files, several prefixes and none chosen, a header without the
     recorded command, or files of different generations (a kill between renames): their stamps differ.
     ``robot``: the robot file to use instead of the recorded one (named from the current folder), for files moved
-    away from it (the record names it relative to the files' folder); the loader's other options stay as recorded."""
+    away from it (the record names it relative to the files' folder); the loader's other options stay as recorded.
+    ``mixed``: files of different generations are read where they record one command (``generate --from``
+    writes them again together)."""
     import shlex
     from pathlib import Path
 
     from ..errors import InputError
-    from ..generate import file_stamp, generate, recorded_command, recorded_prefix
+    from ..generate import file_stamp, recorded_command, recorded_prefix
     from ..options import generate_parser, model_from_args
 
     root = Path(folder)
     if not root.is_dir():
-        raise InputError(f"--from {str(root)!r}: no such folder")
+        what = "a file, not a folder: name the folder that holds the files" if root.exists() else "no such folder"
+        raise InputError(f"--from {str(root)!r}: {what}")
     found: dict[str, list[str]] = {}
     from ..backends import BACKENDS
 
@@ -94,9 +113,11 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"--from {str(root)!r}: cannot read the files: {exc}") from None
     stamps = {name: file_stamp(text) for name, text in sources.items()}
-    if len(set(stamps.values())) > 1:
+    commands = {recorded_command(text) for text in sources.values()} - {None}
+    if len(set(stamps.values())) > 1 and not (mixed and len(commands) == 1):
         shown = ", ".join(f"{name} {stamp or 'unstamped'}" for name, stamp in stamps.items())
-        raise InputError(f"--from {str(root)!r}: the files are from different generations ({shown}); regenerate them together")
+        raise InputError(f"--from {str(root)!r}: the files are from different generations ({shown}); regenerate them together"
+                         + (": skelarm-sym generate --from DIR does" if len(commands) == 1 else ""))
     command = next((c for c in (recorded_command(sources[name]) for name in names) if c is not None), None)
     if command is None or not command.startswith("skelarm-sym generate"):
         raise InputError(f"{root / names[0]}: no 'regenerate with (in this folder): skelarm-sym generate ...' line in its header")
@@ -122,6 +143,23 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
             raise InputError(f"{exc} (the files name their robot file relative to their folder: if they moved, "
                              "name it with --robot FILE)") from None
         raise
+    if args.prefix != prefix:
+        raise InputError(f"{root / names[0]} records --prefix {args.prefix}, not {prefix}; was it renamed?")
+    return Recorded(root, prefix, tuple(found[prefix]), sources, stamps, command, args, model)
+
+
+def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | None = None,
+                   robot: str | None = None) -> LoadedFiles:
+    """The files of :func:`read_recorded` (same arguments, same errors) with their programs and derivation
+    regenerated in memory from the recorded command, to be compiled and compared: the files' own text is what
+    is checked."""
+    from ..errors import InputError
+    from ..generate import file_stamp, generate
+
+    recorded = read_recorded(folder, prefix, only, robot)
+    root, prefix, sources, stamps = recorded.root, recorded.prefix, recorded.sources, recorded.stamps
+    command, args, model = recorded.command, recorded.args, recorded.model
+    names = list(sources)
     from ..backends import BACKENDS
 
     langs = tuple(lang for lang, backend in BACKENDS.items()
@@ -137,8 +175,6 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
                          and not set(backend.FILE_SUFFIXES) >= {".h", ".c"})
         raise InputError(f"--from {str(root)!r}: no whole set of files for prefix {prefix!r} ({shown}); check needs "
                          f"its .c or .py beside the header, or every file of another language's set ({sets})")
-    if args.prefix != prefix:
-        raise InputError(f"{root / names[0]} records --prefix {args.prefix}, not {prefix}; was it renamed?")
     # every language the command records (its header line names them all), though only some files are here
     fresh = generate(model, langs=args.lang or langs, prefix=args.prefix, precision=args.precision, out=None,
                      functions=args.functions, cmake=args.cmake, recorded_folder=root)
@@ -147,7 +183,7 @@ def load_generated(folder, prefix: str | None = None, only: tuple[str, ...] | No
     missing = () if only is not None else tuple(name for name in fresh.sources if name not in sources and name != "CMakeLists.txt")
     constants = tuple(f"{name} {key}" for name in names for key in _changed_constants(name, sources[name], fresh.sources.get(name, "")))
     stamp = next(iter(stamps.values()), None)
-    unread = [name for name in found[prefix] if name not in sources]
+    unread = [name for name in recorded.found if name not in sources]
     others = tuple(name for name in unread if file_stamp((root / name).read_text(encoding="utf-8", errors="replace")) != stamp)
     return LoadedFiles(Generated(sources, fresh.module, fresh.derivation), args.precision, command, edited, missing, others,
                        constants)

@@ -30,7 +30,8 @@ from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from ..models.chain.target_rotation import ORTHO_CONSTANT
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
-from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, TRANSLATION_MAX,
+from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, LOCK_MAX,
+                          LOCK_MAX_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
@@ -323,6 +324,9 @@ EMITTED_CONSTANTS = (
     ORTHO_CONSTANT,
     Constant(sp.Symbol("IK_TRANSLATION_MAX"), {"double": TRANSLATION_MAX, "float": TRANSLATION_MAX_FLOAT},
              "ik_all refuses a target with a translation entry larger than this in magnitude (m): no arm reaches it"),
+    Constant(sp.Symbol("IK_LOCK_MAX"), {"double": LOCK_MAX, "float": LOCK_MAX_FLOAT},
+             "ik_all refuses a locked joint's value larger than this in magnitude (rad or m): its last digit would "
+             "exceed the tolerance"),
     Constant(sp.Symbol("IK_LIMIT_TOL"), {"double": LIMIT_TOL, "float": LIMIT_TOL_FLOAT},
              "ik_all clips a joint this close outside a limit onto it (rad or m); further out the row is dropped"),
     Constant(sp.Symbol("IK_DUP_TOL"), {"double": DUP_TOL, "float": DUP_TOL_FLOAT},

@@ -17,7 +17,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .derive import STEP_TOLERANCES, ClosedIK, derive_ik_all
 from .numpy_source import Unsupported, numpy_function
-from .postprocess import STATUS, IKAll, nearest, postprocess
+from .postprocess import LOCK_MAX, STATUS, IKAll, nearest, postprocess
 
 
 def _steps_function(args: list, steps: list, outs: list, precision: str = "double") -> Callable[..., list]:
@@ -110,7 +110,7 @@ class ClosedFormIK:
     def _all(self, target, lock=None, **kwargs) -> tuple[IKAll, np.ndarray | None]:
         """:meth:`all` and the raw candidates' flags (None for an invalid input)."""
         target = np.asarray(target, dtype=float).reshape(16)
-        if not np.all(np.isfinite(target)) or (lock is not None and not np.isfinite(lock)):
+        if not np.all(np.isfinite(target)) or (lock is not None and not (np.isfinite(lock) and abs(lock) <= LOCK_MAX)):
             return postprocess(None, None, self.lower, self.upper, self.revolute, target=target), None
         Q, flags = self.candidates(target, lock)
         return postprocess(Q, flags, self.lower, self.upper, self.revolute, target=target,

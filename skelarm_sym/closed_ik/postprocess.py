@@ -4,7 +4,8 @@ Input: ``Q`` (S, N) raw candidates in branch order and ``flags`` (S) from :func:
 (bit 1: least squares, bit 2: singular), the joint limits ``lower``/``upper`` (N, rad or m; +-inf where
 absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and N joints):
 
-1. **Invalid input** (``STATUS["invalid"]``, count 0): a non-finite target entry (or lock value), a
+1. **Invalid input** (``STATUS["invalid"]``, count 0): a non-finite target entry (or lock value, or one beyond
+   ``LOCK_MAX`` in magnitude), a
    translation entry beyond ``TRANSLATION_MAX`` (no arm reaches it, and the candidates' squares of it would
    overflow into NaN rows), or a rotation part that is not a rotation: ``max |R^T R - I| > ORTHO_TOL`` or
    ``det R < 0``.
@@ -69,6 +70,11 @@ TRANSLATION_MAX = 1e150
 double; every arm here gave NaN rows from 1e155 m), and no arm reaches a hundredth of that."""
 TRANSLATION_MAX_FLOAT = 1e18
 """The same for code emitted in float (squares overflow a float from about 1.8e19)."""
+LOCK_MAX, LOCK_MAX_FLOAT = 1e5, 64.0
+"""Largest ``|lock|`` (rad or m) accepted for a locked joint: beyond it one unit in the last place of the value
+exceeds the IK tolerance (1.5e-11 rad at 1e5 in double, 7.6e-6 at 64 in float), and the row's turn nearest the
+limits no longer holds the angle the candidates were solved with (a lock of 1e300 gave status ok with rows 1.6 off
+their target)."""
 LIMIT_TOL_FLOAT, DUP_TOL_FLOAT, DUP_TOL_SINGULAR_FLOAT, WRIST_ALIGNED_TOL_FLOAT = 1e-5, 1e-4, 1e-4, 1e-4
 """The same for code emitted in float: float candidates carry
 about 1e-6 rad of rounding (more near a singular pose), so equal branches differ by more than 1e-9 (singular

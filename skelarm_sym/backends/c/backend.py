@@ -66,10 +66,28 @@ def padded_size(count: int, ctype: str) -> int:
     return SHORT_LOOP[ctype] if count <= SHORT_LOOP[ctype] else pad(count, SIMD_LANES)
 
 
+STACK_HEADROOM = 1.1
+"""The stated stack is the estimate times this (rounded up to 8 bytes): the estimate follows gcc -O0's frames
+closely (within 2 % for the closed-form IK), and another compiler version may lay them out otherwise."""
+
+
 def stack_text(size: int) -> str:
-    """A stack size for the header: bytes, or KB above 4 KB (an estimate from the array sizes and the
-    number of temporaries, all of which an unoptimised build keeps on the stack)."""
+    """A stack size for the header, with :data:`STACK_HEADROOM`: bytes, or KB above 4 KB (rounded up)."""
+    size = -(-int(size * STACK_HEADROOM) // 8) * 8
     return f"{size} bytes" if size < 4096 else f"{-(-size // 1024)} KB"
+
+
+TRIG_CHAIN = {"double": 512, "float": 128}
+"""Stack bytes of the trigonometry a function with angles calls, in an unoptimised build: the ``trigN`` helper, the
+four-angle kernel and its exact reduction for huge angles (double: 64 + 288 + 120 = 472 bytes under gcc -O0 on
+x86-64; float calls libm's ``sinf``/``cosf`` from the helper: 80), the C library's own ``sin`` and ``cos`` not
+counted."""
+
+
+def frame_bytes(parameters: int) -> int:
+    """The fixed part of one call's frame in an unoptimised build: the return address and saved frame pointer
+    (16 bytes) and a copy of each parameter (8 bytes: gcc -O0 spills every one), rounded up to 16."""
+    return -(-(16 + 8 * parameters) // 16) * 16
 
 
 STRIDE = "stride"
@@ -183,7 +201,7 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
             "general": printer.statements(f.body), "angle_count": 0, "padded": 0, "block": 1, "soa": None,
             "pre": [], "post": [], "pre_inputs": [], "post_inputs": [a.name for a in inputs],
             "post_uses": {"ang": False, "cs": False, "sn": False},
-            "stack_bytes": 0, "stack": "a few hundred bytes", "batch_stack": "a few hundred bytes",
+            **_general_stack(f, precision),
         }
     split = blocks[0] if blocks else 0
     trig = f.body[split] if blocks else TrigBlock((), (), ())
@@ -219,8 +237,16 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
     for s in pre:
         pre_read |= common.reads(s)
     temporaries = len(pre) + len(post_all)
-    single_stack = itemsize * (3 * padded + temporaries)
-    batch_stack = itemsize * (soa * per_config + temporaries + per_config) if soa else itemsize * (3 * padded * block + temporaries)
+    # an unoptimised build keeps every temporary and array on the stack: the function's own frame (angle,
+    # cosine and sine slots, a loop counter, and the body functions inlined into it with their parameters and
+    # temporaries), then the trigonometry it calls; a batch's block function holds the block's arrays besides
+    # (see TRIG_CHAIN, frame_bytes)
+    parameters = len(inputs) + len(outputs)
+    own = frame_bytes(parameters + 8) + itemsize * temporaries + 16
+    trig_chain = TRIG_CHAIN[ctype] if count else 0
+    single_stack = own + itemsize * 3 * padded + trig_chain
+    block_arrays = itemsize * (soa * per_config + per_config) if soa else itemsize * 3 * padded * block
+    batch_stack = frame_bytes(parameters + 1) + 16 + own + block_arrays + trig_chain
     return _common(f, precision, names) | {
         "general": None,
         "pre_inputs": [a.name for a in inputs if a.name in pre_read],
@@ -240,6 +266,16 @@ def straight_context(f: Function, precision: CPrecision, names: Names, common: S
         "stack": stack_text(single_stack),
         "batch_stack": stack_text(batch_stack),
     }
+
+
+def _general_stack(f: Function, precision: CPrecision) -> dict:
+    """The stack figures of a straight-line function printed whole (:func:`straight_context`): its frame with a
+    slot for each temporary, one call of the C library's trigonometry (not counted) below it."""
+    itemsize = 8 if precision.ctype == "double" else 4
+    lets = sum(1 for s in f.body if type(s) is Let) + sum(len(s.angles) * 3 for s in f.body if type(s) is TrigBlock)
+    single = frame_bytes(len(f.inputs) + len(f.outputs)) + itemsize * lets
+    return {"stack_bytes": single, "stack": stack_text(single),
+            "batch_stack": stack_text(frame_bytes(len(f.inputs) + len(f.outputs) + 1) + 16 + single)}
 
 
 def interleave(lets: list[Let], stores: list[Store], common: Shared) -> list:
@@ -333,7 +369,10 @@ def procedure_stacks(module: Module, straight: list[dict], itemsize: int) -> dic
         if name not in stacks:
             f = by_name[name]
             lent = sum(a.size * (itemsize if a.type is Type.REAL else 8) for a in f.outputs if a.optional)
-            stacks[name] = local_bytes(f.body, itemsize) + lent + max((stack(g) for g in called(f.body)), default=0)
+            own = frame_bytes(len(f.arguments)) + local_bytes(f.body, itemsize) + lent
+            if lent:  # the public function lends locals to its _run core: two frames
+                own += frame_bytes(len(f.arguments))
+            stacks[name] = own + max((stack(g) for g in called(f.body)), default=0)
         return stacks[name]
 
     return {f.name: stack(f.name) for f in module.functions if f.kind != "straight"}
@@ -402,6 +441,7 @@ def context(module: Module) -> dict:
     stacks = procedure_stacks(module, straight, 8 if precision.ctype == "double" else 4)
     for p in procedures:
         p["stack"] = stack_text(stacks[p["name"]])
+        p["batch_stack"] = stack_text(frame_bytes(len(p["params"]) + 3) + 16 + stacks[p["name"]])
     statuses = [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)}
                 for name, value, meaning in module_statuses(module.functions)]
     uses_finite = any("_FINITE(" in line for p in procedures for line in p["body"])

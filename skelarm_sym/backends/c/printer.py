@@ -5,7 +5,7 @@ parenthesised, never reassociated. Reals print as literals of the module's preci
 ``0.5f``), so no macro such as ``M_PI`` (not C99) and no constant of the standard library reaches
 the output. A guarded division prints as ``x/(d != 0 ? d : 1)`` (see :class:`~skelarm_sym.ir.nodes.Div`).
 Two values have no literal: an infinity prints as ``HUGE_VAL`` and a NaN as C99's ``NAN`` (both from
-``<math.h>``); a Python ``int`` (an integer module constant) prints as a whole number.
+``<math.h>``; ``NAN`` is a float, cast in double code); a Python ``int`` (an integer module constant) prints as a whole number.
 """
 
 from __future__ import annotations
@@ -33,13 +33,13 @@ class CPrecision:
 
     def literal(self, value: float | int) -> str:
         """A C literal of this precision for ``value`` (an infinity prints as ``HUGE_VAL``/``HUGE_VALF``, a NaN
-        as ``NAN``, a Python ``int`` as a whole number)."""
+        as ``NAN``, ``(double)NAN`` in double code, a Python ``int`` as a whole number)."""
         if type(value) is int:
             return str(value)
         if math.isinf(value):
             return ("-" if value < 0 else "") + "HUGE_VAL" + ("F" if self.suffix else "")
-        if math.isnan(value):
-            return "NAN"
+        if math.isnan(value):  # NAN is a float: cast where it meets double (quiet under -Wdouble-promotion)
+            return "NAN" if self.suffix else "(double)NAN"
         if self.ctype == "double":
             text = repr(float(value))
         else:

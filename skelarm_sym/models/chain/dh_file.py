@@ -40,7 +40,8 @@ from pathlib import Path
 import sympy as sp
 
 from ...errors import InputError
-from ...names import IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name, reserved_prefix
+from ...names import (IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name, reserved_prefix,
+                      standard_header)
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -237,9 +238,9 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
 
 def _default_prefix(name: str) -> str:
     """The files' default prefix for a robot named ``name``: ``""`` (the name itself) where the name is usable
-    as a prefix, else the name made an identifier (a C or Python keyword, a Python standard module or NumPy:
-    ``long`` gives ``long_robot``), as a URDF's file name is."""
-    unusable = reserved_prefix(name) or name in sys.stdlib_module_names
+    as a prefix, else the name made an identifier (a C or Python keyword, a Python standard module, a C system
+    header or NumPy: ``long`` gives ``long_robot``, ``stddef`` ``stddef_robot``), as a URDF's file name is."""
+    unusable = reserved_prefix(name) or name in sys.stdlib_module_names or standard_header(name)
     return (identifier_from(name) or "robot") if unusable else ""
 
 
@@ -270,7 +271,7 @@ def load_robot_file(path: str | os.PathLike) -> Chain:
     path = Path(path)
     raw = read_robot_bytes(path, "robot file", MAX_TOML_BYTES)
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte order mark (Windows editors write one) is not TOML
         data = tomllib.loads(text)
     except (ValueError, UnicodeDecodeError) as exc:  # TOMLDecodeError; ValueError: an integer of over 4300 digits
         reason = (str(exc).splitlines() or [""])[0].split("; use sys.set_int_max_str_digits")[0]

@@ -34,7 +34,8 @@ PREFIX_RULE = (
     "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7) made an identifier: each run of "
     "characters other than ASCII letters and digits becomes one _ (none at either end), a leading digit gets robot_ "
     "before it, a name with no letter or digit gives the robot's name, else robot; for a TOML file its name key "
-    "(a C identifier); either gets _robot after a C or Python reserved word (long: long_robot)"
+    "(a C identifier); either gets _robot after a C or Python reserved word or a C system header's name "
+    "(long: long_robot, stddef: stddef_robot)"
 )
 """The default-prefix rule in one sentence (for ``generate --help``)."""
 
@@ -57,10 +58,13 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
         options = tuple((flag, value) for flag, value in (("--base", base), ("--tip", tip)) if value is not None)
         return dataclasses.replace(chain, load_options=options) if options else chain
     if suffix == ".toml":
-        given = [k for k, v in (("--base", base), ("--tip", tip)) if v is not None]
+        given = [k for k, v in (("base", base), ("tip", tip)) if v is not None]
         if given:
-            verb = "apply" if len(given) > 1 else "applies"
-            raise InputError(f"{path}: {' and '.join(given)} {verb} to URDF files only (a TOML robot file is one chain)")
+            links = " and ".join(given)
+            options = ", ".join(f"{k}= / --{k}" for k in given)
+            verb = "are" if len(given) > 1 else "is"
+            raise InputError(f"{path}: a {links} link ({options}) {verb} chosen in URDF files only "
+                             "(a TOML robot file is one chain)")
         return load_robot_file(path)
     if path.is_dir():
         raise InputError(f"{path}: a folder, not a robot file: name a {' or '.join(SUFFIXES)} file in it")

@@ -507,7 +507,14 @@ class Chain:
         followers = self.followers()
         for j in followers:
             m, offset = _fold(j.multiplier), _fold(j.offset)
-            if m.free_symbols or offset.free_symbols or m == 0:
+            if m.free_symbols or offset.free_symbols:
+                continue
+            if m == 0:  # held at its offset whatever the coordinate: the offset must lie within its limits
+                held = float(offset)
+                if (j.lower is not None and held < j.lower) or (j.upper is not None and held > j.upper):
+                    raise InputError(f"joint {j.name!r} follows {self.coordinates[j.coordinate]!r} with multiplier 0: it "
+                                     f"is held at {held:g}, outside its limits [{_bound(j.lower, '-inf')}, "
+                                     f"{_bound(j.upper, 'inf')}]")
                 continue
             m, offset = float(m), float(offset)
             c = j.coordinate
@@ -638,3 +645,8 @@ def _check_resolved_range(joint: Joint, precision: str) -> None:
     if nearest > bound:
         raise InputError(f"joint {joint.name!r} limits [{lower:g}, {upper:g}] rad hold no angle within {bound:.4g} rad of zero, "
                          f"beyond which {precision} cannot resolve an angle to the IK tolerance {tol:g}: check the limits")
+
+
+def _bound(value: float | None, absent: str) -> str:
+    """A limit for a message: the number, or ``absent`` (``-inf``, ``inf``) where there is none."""
+    return absent if value is None else f"{value:g}"

@@ -423,9 +423,13 @@ class _PoseIK:
             b.return_(_status("IK_CONVERGED"))
         with b.if_(eq(self.it, self.max_iter)):
             b.comment("the budget ends inside the attempt holding the best pose: stalled when that attempt is at a "
-                      "stationary point or no longer lowers |e| geometrically (as a window would judge)")
-            previous = select(eq(_mod(self.attempt, WINDOW), 0), self.window_start, self.checkpoint)
-            with b.if_((self.best_here > 0) & (self.attempt > 0) & ((self.stationary > 0) | (self.en > previous * PROGRESS))):
+                      "stationary point or no longer lowers |e| geometrically: the steps of its window run so far by "
+                      f"less than {PROGRESS} to the power of their share of the window")
+            steps = _mod(self.attempt, WINDOW)
+            previous = select(eq(steps, 0), self.window_start, self.checkpoint)
+            share = functools.reduce(lambda rest, k: select(eq(steps, k), PROGRESS ** (k / WINDOW), rest),
+                                     range(1, WINDOW), PROGRESS)
+            with b.if_((self.best_here > 0) & (self.attempt > 0) & ((self.stationary > 0) | (self.en > previous * share))):
                 b.set(self.best_stalled, self.one)
             b.break_()
 
@@ -641,7 +645,16 @@ targets and starts drawn within the limits as benchmarks/ik_success.py draws the
 measures UR5's again)."""
 
 
-def _solver_doc(rows: int, default_tol: float, limited: bool = True) -> tuple[str, ...]:
+def _success_lines(precision: str) -> tuple[str, ...]:
+    """:data:`SUCCESS_BY_LAMBDA`, said to be the double build's where ``precision`` is another (its tol 1e-10 is
+    out of a float's reach: there the figures describe the algorithm, not this build)."""
+    if precision == "double":
+        return SUCCESS_BY_LAMBDA
+    first = SUCCESS_BY_LAMBDA[0].replace("Measured success (", "Measured success of the double-precision build (", 1)
+    return (first, *SUCCESS_BY_LAMBDA[1:])
+
+
+def _solver_doc(rows: int, default_tol: float, limited: bool = True, precision: str = "double") -> tuple[str, ...]:
     """The solver's documentation lines; ``limited``: some coordinate has a position limit (else the files
     have no Q_MIN/Q_MAX, and the lines say what happens instead)."""
     return (
@@ -652,7 +665,7 @@ def _solver_doc(rows: int, default_tol: float, limited: bool = True) -> tuple[st
         "and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.",
         f"After a step that left |e| above {GEO_GATE:g} of its start, while |e| < {GEO_ERROR:g}, the step gets a geodesic",
         "(second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.",
-        *(SUCCESS_BY_LAMBDA if rows == 6 else ()),
+        *(_success_lines(precision) if rows == 6 else ()),
         *(("Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
            "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
            f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
@@ -676,7 +689,7 @@ def solver(chain, rows: int, params: int, precision: str) -> Function:
     name = "ik_solve" if rows == 6 else "ik_solve_position"
     summary = "pose IK of the tool frame" if rows == 6 else "position IK of the tool origin"
     return Function(name, summary, _solver_arguments(rows, chain.n, params, default_tol), body, kind="procedure",
-                    returns=Type.INT, statuses=POSE_STATUSES if rows == 6 else STATUSES, doc=_solver_doc(rows, default_tol, _has_position_limits(chain)),
+                    returns=Type.INT, statuses=POSE_STATUSES if rows == 6 else STATUSES, doc=_solver_doc(rows, default_tol, _has_position_limits(chain), precision),
                     result="IKResult" if rows == 6 else "IKPositionResult", refused=refusal(precision) if rows == 6 else "")
 
 

@@ -22,7 +22,7 @@ import functools
 import math
 import operator
 
-from ...closed_ik.postprocess import INV_TWO_PI, STATUS, TWO_PI, centres
+from ...closed_ik.postprocess import INV_TWO_PI, LOCK_MAX, LOCK_MAX_FLOAT, STATUS, TWO_PI, centres
 from ...ir.build import Array, Body, fabs, fmax, select
 from ...ir.nodes import Argument, Bits, Call1, Cast, Const, Function, NamedConst, Role, Type, Var, eq, ne
 from .solver_continuum import Continuum
@@ -36,7 +36,7 @@ STATUSES = (
      "IK_FLAG_LEAST_SQUARES set), possibly none"),
     ("IK_OUT_OF_LIMITS", STATUS["out_of_limits"], "exact solutions exist, none within the joint limits (count 0)"),
     ("IK_INVALID", STATUS["invalid"],
-     "target (or lock) not finite, a translation entry beyond IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": count 0"),
+     "target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": count 0"),
 )
 """Return codes of ``ik_all`` and ``ik_nearest`` (``IK_INVALID`` is 3, as for ``ik_solve``)."""
 
@@ -283,17 +283,25 @@ def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
             b.set(flags[k], _int(-1))
 
 
+def _lock_max(arm: "_Arm") -> float | None:
+    """IK_LOCK_MAX of ``arm``'s precision where it has a locked joint, else None."""
+    return (LOCK_MAX if arm.precision == "double" else LOCK_MAX_FLOAT) if arm.locked else None
+
+
 def _refuse_invalid(b: Body, arm: _Arm, data, q: Array, count: Array, flags: Array) -> None:
-    """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite,
+    """Step 1: return IK_INVALID (count 0, every row NaN) when a target entry (rows 1-3) or the lock is not finite
+    (or the lock beyond IK_LOCK_MAX),
     a translation entry is beyond IK_TRANSLATION_MAX in magnitude, or the target's R is not a rotation
     (:func:`~.target_rotation.rotation_faults`, which also finds R's entries not finite)."""
     target = data[0]
-    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; t beyond IK_TRANSLATION_MAX; R not a rotation")
+    b.comment("1. invalid input: a target entry (rows 1-3) or the lock not finite; the lock beyond IK_LOCK_MAX; t beyond "
+              "IK_TRANSLATION_MAX; R not a rotation")
     faults = rotation_faults(b, target)
     bad = [~Call1("isfinite", target[k]) for k in (3, 7, 11)]  # from the bits: -ffast-math keeps it
     bad += [fabs(target[k]) > NamedConst("IK_TRANSLATION_MAX") for k in (3, 7, 11)]
     if arm.locked:
         bad.append(~Call1("isfinite", data[1]))
+        bad.append(fabs(data[1]) > NamedConst("IK_LOCK_MAX"))
     bad += faults
     with b.if_(functools.reduce(operator.or_, bad)):
         b.set(count[0], _int(0))
@@ -389,12 +397,13 @@ def all_solver(arm: _Arm) -> Function:
     )
     return Function("ik_all", "every closed-form IK solution within the joint limits", arguments, b.statements,
                     kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKAllResult",
-                    refused=refusal(arm.precision, translation=True))
+                    refused=refusal(arm.precision, translation=True, lock_max=_lock_max(arm)))
 
 
 NEAREST_STATUSES = STATUSES[:-1] + (
     ("IK_INVALID", STATUS["invalid"],
-     "q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, a translation entry beyond "
+     "q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, "
+     "a translation entry beyond "
      "IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": q NaN"),
 )
 """``ik_nearest``'s and ``ik_nearest_weighted``'s return codes: ``ik_all``'s, and the reference (and weights) tested too."""
@@ -560,7 +569,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
                else "the closed-form IK solution nearest a configuration")
     return Function(name, summary, arguments, b.statements,
                     kind="procedure", returns=Type.INT, statuses=NEAREST_STATUSES, doc=doc, result="IKNearestResult",
-                    refused=refusal(arm.precision, translation=True))
+                    refused=refusal(arm.precision, translation=True, lock_max=_lock_max(arm)))
 
 
 def closed_solvers(derivation, names, precision: str) -> list[Function]:

@@ -32,14 +32,16 @@ NOT_A_ROTATION = "rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or de
 """How a status's meaning names the refusal."""
 
 
-def refusal(precision: str, translation: bool = False) -> str:
+def refusal(precision: str, translation: bool = False, lock_max: float | None = None) -> str:
     """The error a Python caller gets for ``IK_INVALID`` once its arguments have passed their checks (finite,
     shapes, ranges): the rotation test, and for ``ik_all`` / ``ik_nearest`` (``translation``) the translation's
-    bound, which Python does not test first."""
+    bound, and (``lock_max``, an arm with a locked joint) the lock's, which Python does not test first."""
     tol = ORTHO_TOL if precision == "double" else ORTHO_TOL_FLOAT
     rotation = f"its rotation part is not a rotation (|R^T R - I| above IK_ORTHO_TOL = {tol:g}, or det R <= 0)"
     if translation:
-        return f"the target is refused: {rotation}, or a translation entry is beyond IK_TRANSLATION_MAX (no arm reaches it)"
+        lock = "" if lock_max is None else f"; or the lock is beyond IK_LOCK_MAX = {lock_max:g} in magnitude"
+        return (f"the target is refused: {rotation}, or a translation entry is beyond IK_TRANSLATION_MAX (no arm "
+                f"reaches it){lock}")
     return f"the target is refused: {rotation}"
 
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,6 +101,11 @@ def _listing(names) -> str:
     return shown + (f", ... ({len(names)} in all)" if len(names) > _LISTED else "")
 
 
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|[+-]?(?:inf|infinity|nan)", re.I)
+"""A number as URDF readers take it (urdfdom reads with the C locale's strtod): no digit group separator, no
+other script's digits (``inf`` and ``nan`` pass here, to be refused as not finite)."""
+
+
 def _numbers(text: str | None, count: int, what: str, default: tuple[float, ...]) -> list[float]:
     """``count`` floats from a space-separated attribute (``default`` when absent)."""
     if text is None:
@@ -107,10 +113,9 @@ def _numbers(text: str | None, count: int, what: str, default: tuple[float, ...]
     parts = text.split()
     if len(parts) != count:
         raise InputError(f"{what} must have {count} numbers, got {quoted(text.strip())}")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        raise InputError(f"{what} must be numbers, got {quoted(text.strip())}") from None
+    if not all(_DECIMAL.fullmatch(p) for p in parts):  # float() takes "1_0" (10), "١" and "infinity" too
+        raise InputError(f"{what} must be decimal numbers (ASCII digits, a point, an exponent), got {quoted(text.strip())}")
+    values = [float(p) for p in parts]
     for v in values:
         if not math.isfinite(v):
             raise InputError(f"{what} must be finite, got {quoted(text.strip())}")
@@ -526,11 +531,40 @@ def _parse(path: Path) -> ET.Element:
     """The ``<robot>`` element of the URDF file ``path`` (at most ``MAX_URDF_BYTES``); InputError naming the file."""
     text = read_robot_bytes(path, "URDF file", MAX_URDF_BYTES)
     try:
-        return ET.fromstring(text)
+        root = ET.fromstring(text)
     except ET.ParseError as exc:
         raise InputError(f"{path}: not valid XML: {str(exc).splitlines()[0]}") from None
     except (RecursionError, MemoryError):
         raise InputError(f"{path}: not valid XML: too deeply nested or too large to read") from None
+    markup = _xacro_markup(root)
+    if markup is not None:
+        raise InputError(f"{path}: {markup}: a xacro file, not a URDF; expand it first (xacro {path.name} > robot.urdf)")
+    return root
+
+
+_XACRO_EXPRESSION = re.compile(r"\$[{(]")
+_NAMES = frozenset({"name", "link", "joint"})
+"""Attributes that hold names: free text (data), where ``${`` is a character pair like any other."""
+
+
+def _xacro_markup(root: ET.Element) -> str | None:
+    """What in the tree is xacro's (an element in its namespace, or an attribute other than a name holding
+    ``${...}`` or ``$(...)``), else None. Read as URDF, such a file loses the joints its macros and includes would expand
+    to: the chain comes out shorter, with nothing said."""
+    for element in root.iter():
+        if not isinstance(element.tag, str):
+            continue
+        if element.tag.startswith("{") and "xacro" in element.tag[1:element.tag.find("}")]:
+            return f"it holds xacro markup (<xacro:{_tag(element)}>)"
+        for key, value in element.attrib.items():
+            if _tag_name(key) not in _NAMES and _XACRO_EXPRESSION.search(value):
+                return f"it holds a xacro expression ({quoted(value, 40)} in <{_tag(element)} {_tag_name(key)}>)"
+    return None
+
+
+def _tag_name(key: str) -> str:
+    """An attribute's name without an XML namespace."""
+    return key if "}" not in key else key.rsplit("}", 1)[-1]
 
 
 def load_urdf(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:

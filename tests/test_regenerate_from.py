@@ -1,0 +1,115 @@
+"""``generate --from DIR``: the files in a folder written again from the command their header records.
+
+The header's ``regenerate with`` line is printable ASCII, so a path with a non-ASCII character or a backslash
+is printed there escaped (``\\u00E4``), which no shell reads back; those headers say so and name
+``generate --from .``, which reads the recorded command exactly. The same command serves files moved away
+from their robot file (``--robot FILE``) and a set of mixed generations that records one command."""
+
+from __future__ import annotations
+
+import shlex
+import shutil
+from pathlib import Path
+
+import pytest
+
+from skelarm_sym.cli import main
+from skelarm_sym.generate import file_stamp, recorded_command
+
+ROOT = Path(__file__).resolve().parents[1]
+SCARA = ROOT / "examples" / "robots" / "scara.toml"
+NAMES = ("scara.h", "scara.c", "scara.py")
+
+
+def _texts(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def _line(text: str) -> str:
+    """The command as printed on the header's ``regenerate with`` line (what a user copies)."""
+    return next(line for line in text.splitlines() if "regenerate with (in this folder):" in line).split(": ", 1)[1]
+
+
+@pytest.mark.parametrize("folder_name", ["rob\u00f6ts", "back\\slash"])
+def test_a_path_the_header_prints_escaped_is_regenerated_from_the_folder(tmp_path, monkeypatch, capsys, folder_name):
+    robot = tmp_path / folder_name / "scara.toml"
+    robot.parent.mkdir()
+    shutil.copy(SCARA, robot)
+    out = tmp_path / "out"
+    assert main(["generate", "--robot", str(robot), "--out", str(out), "--functions", "pose,jacobian"]) == 0
+    first = _texts(out)
+    header = first["scara.h"].decode()
+    printed = shlex.split(_line(header))  # the printed line names another file: the shell keeps the escape
+    assert f"../{folder_name}/scara.toml" not in printed and "skelarm-sym generate --from ." in header
+    assert recorded_command(header).split()[3] == shlex.quote(f"../{folder_name}/scara.toml")
+    (out / "scara.c").write_text("edited\n")  # an edited (or half-written) file is written again
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    capsys.readouterr()
+    assert main(["generate", "--from", str(out)]) == 0
+    assert _texts(out) == first
+    assert f"wrote {out / 'scara.c'}" in capsys.readouterr().out
+    assert main(["check", "--from", str(out), "--cases", "5"]) == 0
+
+
+def test_an_ascii_path_prints_no_note():
+    header = (ROOT / "generated" / "ur5.h").read_text()
+    assert "generate --from" not in header
+    assert shlex.split(_line(header))[:4] == ["skelarm-sym", "generate", "--robot", "../examples/robots/ur5.toml"]
+
+
+def test_a_moved_folder_is_regenerated_with_the_robot_file_it_is_given(tmp_path, capsys):
+    robot = tmp_path / "robots" / "scara.toml"
+    robot.parent.mkdir()
+    shutil.copy(SCARA, robot)
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "dh"), "--functions", "pose"]) == 0
+    moved = tmp_path / "sub" / "deeper" / "dh"
+    shutil.copytree(tmp_path / "dh", moved)
+    before = _texts(moved)
+    capsys.readouterr()
+    assert main(["generate", "--from", str(moved)]) == 2
+    assert "name it with --robot FILE" in capsys.readouterr().err
+    assert _texts(moved) == before
+    assert main(["generate", "--from", str(moved), "--robot", str(robot)]) == 0
+    assert recorded_command((moved / "scara.h").read_text()).split()[3] == "../../../robots/scara.toml"
+    assert main(["check", "--from", str(moved), "--cases", "5"]) == 0  # the record names the robot file again
+
+
+@pytest.mark.parametrize("option", [
+    ["--lang", "c"], ["--lang", "c,python"], ["--precision", "float"], ["--out", "other"], ["--functions", "pose"],
+    ["--cmake"], ["--tip", "x"], ["--links", "3"], ["--model", "diffdrive"],
+])
+def test_options_the_files_record_are_refused_with_from(tmp_path, monkeypatch, capsys, option):
+    out = tmp_path / "out"
+    assert main(["generate", "--robot", str(SCARA), "--out", str(out), "--functions", "pose"]) == 0
+    before = _texts(out)
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["generate", "--from", str(out), *option]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{option[0]} with --from: the files' header records the options" in err
+    assert _texts(out) == before and sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_a_set_of_mixed_generations_of_one_command_is_written_again_together(tmp_path, capsys):
+    """A robot file edited, then a generation killed between renames: scara.py is of the new robot, the C of the
+    old. check --from refuses the set and names generate --from, which writes all of it from the robot file."""
+    robot = tmp_path / "scara.toml"
+    shutil.copy(SCARA, robot)
+    out = tmp_path / "out"
+    assert main(["generate", "--robot", str(robot), "--out", str(out), "--functions", "pose"]) == 0
+    old = _texts(out)
+    robot.write_text(SCARA.read_text().replace("a = 0.325", "a = 0.335"))
+    assert main(["generate", "--robot", str(robot), "--out", str(out), "--functions", "pose"]) == 0
+    new = _texts(out)
+    assert new["scara.py"] != old["scara.py"]
+    for name in ("scara.h", "scara.c"):
+        (out / name).write_bytes(old[name])
+    stamps = {file_stamp((out / name).read_text()) for name in NAMES}
+    assert len(stamps) == 2
+    capsys.readouterr()
+    assert main(["check", "--from", str(out)]) == 2
+    assert "regenerate them together: skelarm-sym generate --from DIR does" in capsys.readouterr().err
+    assert main(["generate", "--from", str(out)]) == 0
+    assert _texts(out) == new
