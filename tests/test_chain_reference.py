@@ -446,3 +446,28 @@ def test_reference_imports_numpy_only():
         elif isinstance(node, ast.ImportFrom):
             imported.add("." * node.level + (node.module or ""))
     assert imported == {"__future__", "dataclasses", "numpy"}, imported
+
+
+def test_an_arm_far_from_the_world_origin_is_judged_as_at_the_origin(tmp_path):
+    """A URDF whose arm hangs from a map frame 4.5e6 m away: the reference took every p_e - o_k between numbers
+    that large and lost their digits, and check FAILed the emitted code (18 rows; it is bit for bit the code of the
+    arm at the origin). The recursion now carries positions from the first joint's origin: every output but T's
+    translation equals the same arm's at the origin to rounding, and T's is that translation moved."""
+    from skelarm_sym.models.chain.urdf import load_urdf
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    links = "".join(f'<link name="l{k}"/>' for k in range(7)) + '<link name="world"/>'
+    joints = "".join(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child link="l{k + 1}"/>'
+                     f'<origin xyz="0.05 0.02 0.3" rpy="{0.3 * k} 0.5 0"/><axis xyz="0 0 1"/></joint>' for k in range(6))
+    far, near = tmp_path / "far.urdf", tmp_path / "near.urdf"
+    for path, offset in ((far, "500000 4500000 120"), (near, "0 0 0")):
+        path.write_text(f'<robot name="r">{links}<joint name="w" type="fixed"><parent link="world"/><child link="l0"/>'
+                        f'<origin xyz="{offset}"/></joint>{joints}</robot>')
+    rng = np.random.default_rng(2)
+    q, dq, ddq = (rng.uniform(-2, 2, (20, 6)) for _ in range(3))
+    a = chain_kinematics(load_urdf(far).numeric(), q, dq, ddq)
+    b = chain_kinematics(load_urdf(near).numeric(), q, dq, ddq)
+    for name in ("J", "J_tool", "dJ", "twist", "acc"):  # (it was 1e-10 off: the digits of 4.5e6 m)
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-13, err_msg=name)
+    np.testing.assert_array_equal(a.T[:, :3, :3], b.T[:, :3, :3])
+    np.testing.assert_allclose(a.T[:, :3, 3] - [500000, 4500000, 120], b.T[:, :3, 3], rtol=0, atol=1e-9)

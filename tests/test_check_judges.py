@@ -359,3 +359,21 @@ def test_check_from_one_language_notes_a_file_of_another_generation(tmp_path, ca
     capsys.readouterr()
     assert main(["check", "--from", str(tmp_path / "b"), "--lang", "python"]) == 0
     assert "note: scara.c in" in capsys.readouterr().out
+
+
+def test_the_manipulability_of_an_arm_in_millimetres_is_judged_at_its_scale(tmp_path, capsys):
+    """The UR5 written in millimetres: at q = 0 (singular) its w is 0 exactly, the judge's product of singular
+    values 5.3e-10 (each one off by eps times the largest, 1e3 here), and check FAILed the emitted code against an
+    allowance of 1e-12 (the rows' product bounds nothing where a row of J is zero). The allowance now holds the
+    judge's own error, eps sigma_1 prod_{i<n} sigma_i."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "examples" / "robots" / "ur5.toml").read_text()
+    scaled = re.sub(r"^(a|d) = (-?[0-9.]+)", lambda m: f"{m.group(1)} = {float(m.group(2)) * 1000!r}", text, flags=re.M)
+    assert scaled != text
+    robot = tmp_path / "ur5_mm.toml"
+    robot.write_text(scaled.replace('name = "ur5"', 'name = "ur5_mm"'))
+    capsys.readouterr()
+    assert main(["check", "--robot", str(robot), "--cases", "5", "--lang", "python"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if re.match(r"Python manipulability(_position)? ", line)]
+    assert len(rows) == 2 and all(line.endswith("ok") for line in rows), rows

@@ -134,7 +134,13 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
         return (R, p, w, dw, v, a)
 
     base = np.asarray(chain.base, dtype=float)
-    state = (np.broadcast_to(base[:3, :3], batch + (3, 3)).copy(), np.broadcast_to(base[:3, 3], batch + (3,)).copy(),
+    # positions are carried relative to the first joint's origin, a point fixed in the base (nothing moves before
+    # the first joint), and the tool's is moved back at the end: every result but T's translation depends on
+    # differences of positions only, which an arm mounted far from the world origin (a map frame's 4.5e6 m) would
+    # otherwise take between large numbers, losing their digits
+    first = np.asarray(chain.joints[0].before, dtype=float) if chain.joints else np.eye(4)
+    anchor = base[:3, 3] + base[:3, :3] @ first[:3, 3]
+    state = (np.broadcast_to(base[:3, :3], batch + (3, 3)).copy(), np.broadcast_to(base[:3, 3] - anchor, batch + (3,)).copy(),
              zero3, zero3, zero3, zero3)
 
     origins, axes, kinds, coords, mults = [], [], [], [], []
@@ -192,7 +198,7 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
 
     T = np.zeros(batch + (4, 4))
     T[..., :3, :3] = R_e
-    T[..., :3, 3] = p_e
+    T[..., :3, 3] = p_e + anchor
     T[..., 3, 3] = 1.0
     Rt = np.swapaxes(R_e, -1, -2)
     J_tool = np.concatenate([Rt @ J[..., :3, :], Rt @ J[..., 3:, :]], axis=-2)
@@ -201,6 +207,6 @@ def chain_kinematics(chain, q, dq=None, ddq=None) -> ChainKinematics:
     m = len(origins)
     return ChainKinematics(
         T, J, J_tool, dJ, twist, acc,
-        np.stack(origins, axis=-2) if m else np.zeros(batch + (0, 3)),
+        np.stack(origins, axis=-2) + anchor if m else np.zeros(batch + (0, 3)),
         np.stack(axes, axis=-2) if m else np.zeros(batch + (0, 3)),
     )
