@@ -183,3 +183,45 @@ def test_jax_jit_and_vmap_give_the_plain_numbers(jax_module):
         np.testing.assert_allclose(np.asarray(mapped), plain, rtol=0, atol=TOL, err_msg=fname)
     mapped = jax.jit(jax.vmap(lambda x: mod.jacobian(x, *extra)))(q)  # the checked function under tracing
     np.testing.assert_allclose(np.asarray(mapped), np.asarray(mod.jacobian(q, *extra)), rtol=0, atol=TOL)
+
+
+# -- singular poses ------------------------------------------------------------------------------------------
+
+
+def _singular_module(lang: str):
+    """The Panda's manipulability, its gradient and the damped inverse velocity in ``lang`` and NumPy."""
+    g = generate(load_robot(ROOT / "examples" / "robots" / "panda.toml"), langs=f"python,{lang}", out=None,
+                 prefix=f"sg_{lang}", functions="manipulability,manipulability_gradient,inverse_velocity")
+    return load_python(g.sources[f"sg_{lang}_{lang}.py"], f"sg_{lang}_{lang}"), load_python(g.sources[f"sg_{lang}.py"], f"sg_{lang}")
+
+
+def test_torch_gradients_at_a_singular_pose_are_finite():
+    """At q = 0 (the Panda stretched: singular) the forward values are finite, but autograd gave NaN for every
+    joint of manipulability and inverse_velocity: sqrt's gradient at 0 is inf, and the branch a where leaves out
+    is multiplied by 0 (0 * inf = NaN), which poisons a training loop started at the home pose. The modules' sqrt
+    has gradient 0 at 0: w's gradient there is the emitted manipulability_gradient's (0), and away from the
+    singular pose it is still that gradient."""
+    torch = pytest.importorskip("torch", reason="PyTorch is not installed: pip install 'skelarm-sym[torch]'")
+    module, numpy_module = _singular_module("torch")
+    for q0 in (np.zeros(7), np.random.default_rng(5).uniform(-1.5, 1.5, 7)):
+        q = torch.tensor(q0, dtype=torch.float64, requires_grad=True)
+        module.manipulability(q).sum().backward()
+        np.testing.assert_allclose(q.grad.numpy(), numpy_module.manipulability_gradient(q0), rtol=0, atol=1e-12)
+        q = torch.tensor(q0, dtype=torch.float64, requires_grad=True)
+        module.inverse_velocity(q, torch.ones(7 - 1, dtype=torch.float64), 0.0).sum().backward()
+        assert bool(torch.all(torch.isfinite(q.grad)))
+
+
+def test_jax_gradients_at_a_singular_pose_are_finite():
+    """The same through jax.grad of the unchecked functions."""
+    pytest.importorskip("jax", reason="JAX is not installed: pip install 'skelarm-sym[jax]'")
+    import jax
+    import jax.numpy as jnp
+
+    jax.config.update("jax_enable_x64", True)
+    module, numpy_module = _singular_module("jax")
+    for q0 in (np.zeros(7), np.random.default_rng(5).uniform(-1.5, 1.5, 7)):
+        grad = jax.grad(lambda q: jnp.sum(module.manipulability_unchecked(q)))(jnp.asarray(q0))
+        np.testing.assert_allclose(np.asarray(grad), numpy_module.manipulability_gradient(q0), rtol=0, atol=1e-12)
+        grad = jax.grad(lambda q: jnp.sum(module.inverse_velocity_unchecked(q, jnp.ones(6), 0.0)))(jnp.asarray(q0))
+        assert bool(jnp.all(jnp.isfinite(grad)))

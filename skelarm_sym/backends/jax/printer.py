@@ -17,7 +17,7 @@ from ..array_syntax import Dialect, ProcedurePrinter, identifier
 
 JAX = Dialect(
     where="jnp.where",
-    calls={"sqrt": "jnp.sqrt", "sin": "jnp.sin", "cos": "jnp.cos", "fabs": "jnp.abs", "floor": "jnp.floor",
+    calls={"sqrt": "_sqrt", "sin": "jnp.sin", "cos": "jnp.cos", "fabs": "jnp.abs", "floor": "jnp.floor",
            "nearbyint": "jnp.rint", "isfinite": "jnp.isfinite", "atan2": "jnp.arctan2", "fmin": "jnp.minimum",
            "fmax": "jnp.maximum"},
     int_dtype="jnp.int32",

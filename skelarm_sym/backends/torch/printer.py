@@ -6,7 +6,7 @@ from ..array_syntax import FULL, Dialect, ProcedurePrinter, TensorPrinter, ident
 
 TORCH = Dialect(
     where="torch.where",
-    calls={"sqrt": "torch.sqrt", "sin": "torch.sin", "cos": "torch.cos", "fabs": "torch.abs", "floor": "torch.floor",
+    calls={"sqrt": "_sqrt", "sin": "torch.sin", "cos": "torch.cos", "fabs": "torch.abs", "floor": "torch.floor",
            "nearbyint": "torch.round", "isfinite": "torch.isfinite", "atan2": "torch.atan2", "fmin": "torch.minimum",
            "fmax": "torch.maximum"},
     int_dtype="torch.int64",
