@@ -55,3 +55,19 @@ def test_reference_is_numpy_pinv_and_lstsq(rng):
     # row scaling changes nothing at full rank, and makes the rank-deficient answer independent of units
     scaled = reference.damped_least_squares(J[10:], rhs[10:], 0.0, cutoff, [1e-3, 1e-3, 1.0])
     np.testing.assert_allclose(scaled.x, s.x[10:], rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"cases": 0}, "cases must be at least 1, got 0"),  # it returned an empty, passing table
+    ({"cases": -1}, "cases must be at least 1"),  # "negative dimensions are not allowed"
+    ({"cases": 2.5}, "cases must be a whole number, got 2.5"),
+    ({"cases": True}, "cases must be a whole number"),
+    ({"seed": "x"}, "seed must be a whole number, got 'x'"),
+    ({"seed": -3}, "seed must be at least 0"),
+])
+def test_run_check_refuses_bad_cases_and_seeds_before_the_work(kwargs, message, monkeypatch):
+    import skelarm_sym.check.comparison as comparison
+
+    monkeypatch.setattr(comparison, "generate", lambda *a, **k: pytest.fail("generated before checking its arguments"))
+    with pytest.raises(ValueError, match=message):
+        run_check(2, **kwargs)

@@ -78,7 +78,7 @@ def test_puma_with_offset_wrist_names_the_wrist(tmp_path):
 
 @pytest.mark.parametrize("file,message", [
     ("scara.toml", "closed-form families here need 6 moving joints, this chain has 4"),
-    ("panda.toml", "a 7-joint arm: lock one joint, --ik-lock JOINT; lock=JOINT from Python"),
+    ("panda.toml", "a 7-joint arm: lock one joint, --ik-lock JOINT; load_robot(path, ik_lock=JOINT) from Python"),
 ])
 def test_joint_counts(file, message):
     assert message in explain(load_robot(ROBOTS / file))

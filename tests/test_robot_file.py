@@ -29,6 +29,8 @@ def write(tmp_path: Path, text: str | bytes, name: str = "robot.toml") -> Path:
 
 BAD = {
     "not_toml": ("name = = 3\n", r"not valid TOML"),
+    "huge_theta": (REV + "theta = 1e20\n", r"joints\[0\]\.theta 1e\+20 rad is beyond \+-100000 rad"),
+    "huge_alpha_expression": (REV + 'alpha = "1e6*pi"\n', r"joints\[0\]\.alpha 3\.14159e\+06 rad is beyond"),
     "not_utf8": (b"\xff\xfe\x00name", r"not valid TOML"),
     "unknown_top_key": (REV + "[extra]\nx = 1\n", r"unknown key 'extra'"),
     "unknown_joint_key": (REV + "length = 1.0\n", r"joints\[0\]: unknown key 'length'"),

@@ -381,6 +381,9 @@ J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axi
         (_arm(J_AB, J_BC), {"base": "b", "tip": "b"}, "tip and base are the same link 'b'"),
         (_arm(J_AB.replace("<axis", '<origin xyz="0 nan 0"/><axis'), J_BC), {}, "joint 'ab' origin xyz must be finite"),
         (_arm(J_AB.replace("<axis", '<origin rpy="0 0 inf"/><axis'), J_BC), {}, "joint 'ab' origin rpy must be finite"),
+        # snapped to a quarter turn: one unit in the last place of 1e20 is more than a turn
+        (_arm(J_AB.replace("<axis", '<origin rpy="1e20 0 3e17"/><axis'), J_BC), {},
+         "joint 'ab' origin rpy 1e+20 rad is beyond +-100000 rad, where a double keeps too few digits below a turn"),
         (_arm(J_AB.replace("<axis", '<origin xyz="0 1"/><axis'), J_BC), {}, "joint 'ab' origin xyz must have 3 numbers"),
         (_arm(J_AB.replace('xyz="0 0 1"', 'xyz="0 0 0"'), J_BC), {}, "joint 'ab' axis has length zero"),
         (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="bc"/></joint>')), {}, "joint 'bc' mimic refers to itself"),
@@ -886,3 +889,21 @@ def test_unknown_links_suggest_close_matches(tmp_path):
     with pytest.raises(InputError) as info:
         load_urdf(path, tip="gripper")
     assert "did you mean" not in str(info.value) and "(links: 'torso'," in str(info.value)
+
+
+def test_load_robot_takes_the_ik_lock_and_refuses_what_is_not_a_path():
+    """The 7-joint arms' hint said "lock=JOINT from Python", an argument no function took (the CLI's --ik-lock had no
+    Python spelling but an internal helper); load_robot(5) raised a TypeError. load_robot takes ik_lock=, and a
+    path that is not one is a ValueError naming it."""
+    from skelarm_sym.generate import generate
+
+    panda = Path(__file__).resolve().parents[1] / "examples" / "robots" / "panda.toml"
+    with pytest.raises(InputError, match=r"load_robot\(path, ik_lock=JOINT\) from Python"):
+        generate(load_robot(panda), functions="ik_all", out=None)
+    locked = load_robot(panda, ik_lock=7)
+    assert "panda_ik_all" in generate(locked, functions="ik_all", out=None, langs="c").sources["panda.h"]
+    assert "panda_ik_all" in generate(load_robot(panda, ik_lock="panda_joint7"), functions="ik_all", out=None,
+                                      langs="c").sources["panda.h"]
+    for wrong in (5, None, ["panda.toml"]):
+        with pytest.raises(InputError, match="load_robot takes the path of a robot file"):
+            load_robot(wrong)

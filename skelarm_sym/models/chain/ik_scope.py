@@ -31,7 +31,7 @@ def joint_count(name: str, n: int, lock: int | None) -> str | None:
             return f"{name}: a locked joint reduces a 7-joint chain to 6; this chain has {n} joints"
         return None
     if n != 6:
-        hint = " (a 7-joint arm: lock one joint, --ik-lock JOINT; lock=JOINT from Python)" if n == 7 else ""
+        hint = " (a 7-joint arm: lock one joint, --ik-lock JOINT; load_robot(path, ik_lock=JOINT) from Python)" if n == 7 else ""
         return f"{name}: closed-form families here need 6 moving joints, this chain has {n}{hint}"
     return None
 

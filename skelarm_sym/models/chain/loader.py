@@ -45,13 +45,26 @@ __all__ = [
 ]
 
 
-def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
+def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None = None,
+               ik_lock: str | int | None = None) -> Chain:
     """The chain described by ``path``: a URDF file (from link ``base`` to link ``tip``) or a TOML robot file.
 
     ``base`` and ``tip`` pick a path in a URDF tree; a TOML file is one chain already, so they are refused there.
-    The chain's ``default_prefix`` follows the rule in the module docstring.
+    ``ik_lock`` (the command line's ``--ik-lock``): a 7-joint arm's joint (number 1..N, base to tip, or name) that
+    its closed-form IK holds at a value given at run time. The chain's ``default_prefix`` follows the rule in the
+    module docstring. InputError (a ValueError) names the problem with any of them.
     """
-    path = Path(path)
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"load_robot takes the path of a robot file (.urdf or .toml), got {type(path).__name__} {path!r:.60}")
+    chain = _load(Path(path), base, tip)
+    if ik_lock is None:
+        return chain
+    from .lock import with_ik_lock
+
+    return with_ik_lock(chain, ik_lock)
+
+
+def _load(path: Path, base: str | None, tip: str | None) -> Chain:
     suffix = path.suffix.lower()
     if suffix == ".urdf":
         chain = load_urdf(path, base=base, tip=tip)

@@ -30,9 +30,9 @@ def lock_index(model: Chain, joint: str | int | None) -> int | None:
         if not 1 <= number <= len(names):
             raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
         return number - 1
-    from ...closed_ik.derive import lock_index as by_index  # here: the closed-form IK imports NumPy
-
-    return by_index(model, text)  # a coordinate name, else a one-line error naming the joints
+    if text in model.coordinates:  # a coordinate's name (a URDF joint that mimic joints follow)
+        return list(model.coordinates).index(text)
+    raise InputError(f"{model.name}: no joint named {text!r} to lock (joints: {', '.join(names)})")
 
 
 def with_ik_lock(model: Chain, joint: str | int | None) -> Chain:

@@ -40,6 +40,10 @@ MAX_JOINTS = 200
 """Largest number of moving joints accepted."""
 ANGLE_SNAP = 1e-12
 """An angle within this of a multiple of pi/2 is taken as that multiple (exact 0, +-1 sines and cosines)."""
+ANGLE_MAX = 1e5
+"""Largest constant angle (rad) of a robot file: one unit in the last place of a double is 1.5e-11 rad there; at
+1e20 it is more than a turn, and such an angle was snapped to a quarter turn (a URDF rpy of 1e20) or kept with its
+sine and cosine meaningless (a TOML theta of 1e20: check FAILed 36 rows)."""
 KINDS = ("revolute", "prismatic")
 
 
@@ -72,6 +76,9 @@ def exact_angle(value: object, what: str = "angle") -> sp.Expr:
     if expr.free_symbols or not expr.is_number:
         return expr
     x = float(expr)
+    if not abs(x) <= ANGLE_MAX:
+        raise InputError(f"{what} {x:g} rad is beyond +-{ANGLE_MAX:g} rad, where a double keeps too few digits below "
+                         "a turn: write the angle reduced to one turn")
     k = round(x / (math.pi / 2))
     if abs(x - k * math.pi / 2) <= ANGLE_SNAP:
         return sp.Integer(k) * sp.pi / 2
