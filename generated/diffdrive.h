@@ -43,7 +43,7 @@
  * angles finite and of sensible size.
  * DIFFDRIVE_STAMP identifies this generation: diffdrive.c refuses to compile (#error) with a
  * diffdrive.h from another generation, and the other files of the set carry the same stamp. */
-#define DIFFDRIVE_STAMP 0x4add09eeUL
+#define DIFFDRIVE_STAMP 0x2c6f6b18UL
 
 #ifdef __cplusplus
 extern "C" {

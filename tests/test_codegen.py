@@ -368,3 +368,18 @@ def test_every_function_states_a_stack_that_bounds_an_unoptimised_build(tmp_path
         assert not over, (c_file.name, over)
         checked += len(stated)
     assert checked > 60
+
+
+@pytest.mark.skipif(not shutil.which("gcc"), reason="gcc is not installed")
+def test_double_code_refuses_to_build_with_single_precision_literals(tmp_path):
+    """gcc's -fsingle-precision-constant (common in Cortex-M builds) made every literal of double code a float:
+    poses and Jacobians drifted by 2.6e-7 with no warning. The double .c now stops the build, naming why; float
+    code builds under it."""
+    generated = Path(__file__).resolve().parents[1] / "generated"
+    for name, builds in (("ur5", False), ("arm3f", True)):
+        cmd = ["gcc", *STRICT_FLAGS, "-fsingle-precision-constant", f"-I{generated}", "-c", str(generated / f"{name}.c"),
+               "-o", str(tmp_path / "x.o")]
+        result = subprocess.run(cmd, capture_output=True, text=True)
+        assert (result.returncode == 0) == builds, result.stderr
+        if not builds:
+            assert "ur5_needs_double_literals_not_fsingle_precision_constant" in result.stderr
