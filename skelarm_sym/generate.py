@@ -242,6 +242,31 @@ def set_leftovers(target: Path, prefix: str, names: Sequence[str]) -> list[tuple
     return found
 
 
+def refuse_case_twins(target: Path, prefix: str) -> None:
+    """InputError when ``target`` holds a file skelarm-sym generated for a prefix that differs from ``prefix`` in case
+    only (``Arm`` beside ``arm``): a case-insensitive file system (macOS, Windows) takes their files for one, and C
+    headers of both would take one include guard and one set of macros (``ARM_H``, ``ARM_Q_MAX``), so a program
+    including both silently loses the second. (``--force`` does not lift it: the files are another set's.)"""
+    if not target.is_dir():
+        return
+    suffixes = sorted({suffix for backend in BACKENDS.values() for suffix in backend.FILE_SUFFIXES}, key=len, reverse=True)
+    try:
+        entries = sorted(target.iterdir())
+    except OSError:
+        return
+    for path in entries:
+        suffix = next((x for x in suffixes if path.name.endswith(x)), None)
+        other = path.name[: -len(suffix)] if suffix else ""
+        if not other or other == prefix or other.lower() != prefix.lower():
+            continue
+        head = _head(path)
+        recorded = None if head is None else recorded_command(head)
+        if recorded is not None and recorded_prefix(recorded) == other:
+            raise InputError(f"{path} is of prefix {other!r}, which differs from {prefix!r} in case only: a "
+                             "case-insensitive file system takes their files for one, and their C headers would share "
+                             f"the guard and macros {prefix.upper()}_...; choose another --prefix or --out")
+
+
 def refuse_leftovers(leftovers: Sequence[tuple[Path, str]], prefix: str) -> None:
     """InputError naming the first file of an earlier set that the new one would leave beside it."""
     if leftovers:
@@ -381,6 +406,7 @@ def generate(
     if target is not None:
         names = [prefix + suffix for lang in langs for suffix in BACKENDS[lang].FILE_SUFFIXES] + (["CMakeLists.txt"] if cmake else [])
         leftovers = set_leftovers(target, prefix, names)
+        refuse_case_twins(target, prefix)
         if not force:
             refuse_before_deriving(target, names, regenerate_command(model, prefix, precision, langs, None if functions is None else ["?"],
                                                                      recorded_in, cmake),

@@ -165,3 +165,22 @@ def test_an_empty_out_and_a_file_for_from_are_named_in_one_line(tmp_path, monkey
     for command in ("check", "generate"):
         r = run(command, "--from", str(tmp_path / "arm2.h"))
         assert r.returncode == 2 and r.stderr.count("\n") == 1 and "arm2.h': a file, not a folder" in r.stderr
+
+
+def test_prefixes_that_differ_in_case_only_are_not_written_side_by_side(tmp_path):
+    """--prefix arm, then Arm, in one folder: both headers took the guard ARM_H and the macros ARM_*, so a program
+    including both silently lost the second (implicit declaration of Arm_pose), and on a case-insensitive file
+    system the files overwrote each other. The second set is refused, in one line, whatever its languages; the
+    first stays as it was; a file named alike by hand is not skelarm-sym's and does not count."""
+    out = tmp_path / "o"
+    assert run("generate", "--links", "2", "--prefix", "arm", "--out", str(out)).returncode == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    for lang in ("c", "python"):
+        r = run("generate", "--links", "2", "--prefix", "Arm", "--lang", lang, "--out", str(out))
+        assert r.returncode == 2 and r.stderr.count("\n") == 1
+        assert "is of prefix 'arm', which differs from 'Arm' in case only" in r.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    other = tmp_path / "p"
+    other.mkdir()
+    (other / "arm.h").write_text("/* the user's own */\n")
+    assert run("generate", "--links", "2", "--prefix", "Arm", "--out", str(other)).returncode == 0
