@@ -205,7 +205,15 @@ def _mimic(joint: _UrdfJoint, joints: dict[str, _UrdfJoint]) -> tuple[str, float
         raise InputError(f"{what} refers to joint {quoted(followed)}, which is not in the file")
     multiplier = _scalar(element, "multiplier", what)
     offset = _scalar(element, "offset", what)
+    if multiplier is not None and not abs(multiplier) <= MIMIC_MULTIPLIER_MAX:
+        raise InputError(f"{what} multiplier {multiplier:g} is beyond +-{MIMIC_MULTIPLIER_MAX:g}: the follower would "
+                         "move that many times its leader")
     return followed, 1.0 if multiplier is None else multiplier, 0.0 if offset is None else offset
+
+
+MIMIC_MULTIPLIER_MAX = 1e3
+"""Largest ``|multiplier|`` of a ``<mimic>`` (grippers and geared joints use 0.5 to a few tens): 1e300 was taken,
+and the follower's angle overflowed (check FAILed with inf and NaN rows)."""
 
 
 def _c_name(text: str | None, fallback: str) -> str:
