@@ -217,3 +217,15 @@ def test_the_documented_pytorch_example_runs(tmp_path, document):
     assert result.returncode == 0, result.stderr[-2000:]
     shape, error = result.stdout.strip().splitlines()[-1].rsplit(" ", 1)
     assert shape == "(4096, 6, 6)" and float(error) < 1e-12
+
+
+def test_each_result_names_its_own_status_codes():
+    """A module with ik_solve and ik_all: STATUS_NAMES maps 0 to "converged" (the first solver's name), but ik_all's
+    0 is "ok"; IKAllResult's documentation pointed to STATUS_NAMES alone. Each result now names its codes."""
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
+    g = generate(chain, langs="torch,jax", out=None, prefix="names", functions="ik_solve,ik_all")
+    for name in ("names_torch.py", "names_jax.py"):
+        text = g.sources[name]
+        assert 'STATUS_NAMES = {0: "converged"' in text
+        assert 'IKAllResult.__doc__ = """Outcome of ik_all' in text and 'IK_OK = 0 "ok", IK_UNREACHABLE = 1 "unreachable"' in text
+        assert 'IK_CONVERGED = 0 "converged", IK_STALLED = 1 "stalled"' in text
