@@ -73,7 +73,12 @@ def _tag(element: ET.Element) -> str:
     tag = element.tag
     if not isinstance(tag, str):  # a comment or processing instruction
         return ""
-    return tag if "}" not in tag else tag.rsplit("}", 1)[-1]
+    return _local(tag)
+
+
+def _local(name: str) -> str:
+    """A tag's or attribute's name without its XML namespace (``{uri}name``)."""
+    return name if "}" not in name else name.rsplit("}", 1)[-1]
 
 
 def _children(element: ET.Element, tag: str) -> list[ET.Element]:
@@ -565,14 +570,9 @@ def _xacro_markup(root: ET.Element) -> str | None:
         if element.tag.startswith("{") and "xacro" in element.tag[1:element.tag.find("}")]:
             return f"it holds xacro markup (<xacro:{_tag(element)}>)"
         for key, value in element.attrib.items():
-            if _tag_name(key) not in _NAMES and _XACRO_EXPRESSION.search(value):
-                return f"it holds a xacro expression ({quoted(value, 40)} in <{_tag(element)} {_tag_name(key)}>)"
+            if _local(key) not in _NAMES and _XACRO_EXPRESSION.search(value):
+                return f"it holds a xacro expression ({quoted(value, 40)} in <{_tag(element)} {_local(key)}>)"
     return None
-
-
-def _tag_name(key: str) -> str:
-    """An attribute's name without an XML namespace."""
-    return key if "}" not in key else key.rsplit("}", 1)[-1]
 
 
 def load_urdf(path: str | os.PathLike, base: str | None = None, tip: str | None = None) -> Chain:
