@@ -51,7 +51,7 @@ struct Pin {
     pinocchio::FrameIndex tool;
     int n;
     Eigen::VectorXd lo, hi, draw_lo, draw_span, near_lo, near_span;
-    std::vector<int> periodic;
+    std::vector<int> periodic, slide;
     pinocchio::Data::Matrix6x J, Jt, Jf;
 
     // e at q (forwardKinematics + frame placement), no Jacobian
@@ -87,7 +87,7 @@ struct Pin {
         unsigned long long state = SEED ^ 0x9E3779B97F4A7C15ULL;
         evaluate(q, target, e, pe, re, J);
         double en = std::sqrt(pe * pe + re * re), best_en = en, c = C_START, checkpoint = en, window_start = en;
-        int stationary = 0, curved = 0;
+        int stationary = 0, curved = 0, damped = 1;  // damped: every step of the window accepted, c |e| above G's mean eigenvalue
         int best_stalled = 0, attempt = 0, it = 0, best_here = 1, restarts = 0;
         const double mu2_floor = lambda * lambda;
         best_q = q;
@@ -96,7 +96,7 @@ struct Pin {
             if (it == max_iter) {
                 int steps = attempt % WINDOW;  /* the window's steps run so far, judged by their share of PROGRESS */
                 double share = steps == 0 ? PROGRESS : std::pow(PROGRESS, (double)steps / WINDOW);
-                if (best_here && attempt > 0 && (stationary || en > share * (steps == 0 ? window_start : checkpoint))) best_stalled = 1;
+                if (best_here && attempt > 0 && !damped && (stationary || en > share * (steps == 0 ? window_start : checkpoint))) best_stalled = 1;
                 break;
             }
             const double mu2 = std::max(c * en, mu2_floor);
@@ -123,13 +123,15 @@ struct Pin {
                 Jg = &Jf;
             }
             stationary = (Jg->transpose() * e).squaredNorm() <= STATIONARY * STATIONARY * Jg->squaredNorm() * en * en;
+            damped = damped && c * en * 6.0 > Jg->squaredNorm();
             if (curved && en < GEO_ERROR) {  // geodesic acceleration, the factors reused
                 error_at(q + GEO_H * dq, target, et);
                 r2 = (et - e + GEO_H * (J * dq)) * (2.0 / (GEO_H * GEO_H));
                 acc.noalias() = Jg->transpose() * ldlt.solve(r2);
                 if (acc.squaredNorm() <= GEO_ALPHA * GEO_ALPHA * dq.squaredNorm()) dq += 0.5 * acc;
             }
-            const double big = dq.cwiseAbs().maxCoeff();
+            double big = 0.0;  // slides are not capped
+            for (int k = 0; k < n; ++k) if (!slide[k]) big = std::max(big, std::abs(dq[k]));
             if (big > STEP_MAX) dq *= STEP_MAX / big;
             trial = q + dq;
             for (int k = 0; k < n; ++k) {
@@ -151,11 +153,15 @@ struct Pin {
             } else {
                 c *= C_UP;
                 stalled = c > C_MAX;
+                damped = 0;
             }
             if (en < best_en || (stalled && en == best_en)) { best_en = en; best_q = q; best_stalled = stalled; best_here = 1; }
             if (pe <= tol && re <= tol) continue;
             int slow = stationary;
-            if (attempt % WINDOW == 0) { slow = slow || en > PROGRESS * checkpoint; window_start = checkpoint; checkpoint = en; }
+            if (attempt % WINDOW == 0) {
+                slow = slow || (en > PROGRESS * checkpoint && !damped);
+                damped = 1; window_start = checkpoint; checkpoint = en;
+            }
             if ((stalled || slow || attempt >= ATTEMPT) && it < max_iter) {
                 if ((stalled || slow) && best_here) best_stalled = 1;
                 best_here = 0;
@@ -170,7 +176,7 @@ struct Pin {
                 ++restarts; gram = false;
                 evaluate(q, target, e, pe, re, J);
                 en = std::sqrt(pe * pe + re * re);
-                c = C_START; curved = 0; attempt = 0; checkpoint = window_start = en;
+                c = C_START; curved = 0; damped = 1; attempt = 0; checkpoint = window_start = en;
                 if (en < best_en) { best_en = en; best_q = q; best_stalled = 0; best_here = 1; }
             }
         }
@@ -195,6 +201,7 @@ int main(int argc, char **argv) {
     pinocchio::JointIndex parent = 0;
     for (int k = 0; k < joints; ++k) {
         int prismatic; chain >> prismatic;
+        pin.slide.push_back(prismatic);
         pinocchio::SE3 M = read_placement(chain);
         if (prismatic) parent = pin.model.addJoint(parent, pinocchio::JointModelPZ(), M, "j" + std::to_string(k));
         else parent = pin.model.addJoint(parent, pinocchio::JointModelRZ(), M, "j" + std::to_string(k));

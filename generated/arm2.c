@@ -24,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x518265f8UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xd8a5d8f0UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 

@@ -52,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0x518265f8UL
+#define ARM2_STAMP 0xd8a5d8f0UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -24,7 +24,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xaf0589fdUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x86bc5cadUL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 

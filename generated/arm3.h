@@ -52,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM3_STAMP identifies this generation: arm3.c refuses to compile (#error) with a
  * arm3.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3_STAMP 0xaf0589fdUL
+#define ARM3_STAMP 0x86bc5cadUL
 
 #ifdef __cplusplus
 extern "C" {

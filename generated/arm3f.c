@@ -24,7 +24,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xdaf71657UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0xb5fca2b9UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 

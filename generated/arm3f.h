@@ -48,7 +48,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0xdaf71657UL
+#define ARM3F_STAMP 0xb5fca2b9UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0xdaf71657
+STAMP = 0xb5fca2b9
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -196,13 +196,21 @@ def _lane_scalar(value, name, domain):
     return array
 
 
-def _batch_shape(name, shapes):
-    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+def _batch_shape(name, shapes, scalars):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``; a scalar's (``scalars``: their names) may
+    not have more dimensions than the arrays' batch (a (m, 1) lambda beside m targets would make m x m problems;
+    beside one target, a (k,) lambda makes k)."""
     try:
-        return np.broadcast_shapes(*shapes.values())
+        batch = np.broadcast_shapes(*shapes.values())
     except ValueError:
         listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
         raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+    arrays = np.broadcast_shapes(*(s for n, s in shapes.items() if n not in scalars))
+    for n in scalars:
+        if 0 < len(arrays) < len(shapes[n]):
+            raise ValueError(f"{name}: {n} has shape {shapes[n]}, more dimensions than the batch {arrays}: give a single "
+                             f"number, or one per problem with shape {arrays}")
+    return batch
 
 
 def _lanes(array, batch, shape):
@@ -1284,7 +1292,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
         tol = 0.0001*np.where(2.3 > 1.0, 2.3, 1.0)
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (3,)), _lanes(target, batch, (2,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))

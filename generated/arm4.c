@@ -24,7 +24,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x28f85c13UL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x84a6733fUL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 

@@ -52,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM4_STAMP identifies this generation: arm4.c refuses to compile (#error) with a
  * arm4.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM4_STAMP 0x28f85c13UL
+#define ARM4_STAMP 0x84a6733fUL
 
 #ifdef __cplusplus
 extern "C" {

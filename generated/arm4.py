@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x28f85c13
+STAMP = 0x84a6733f
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -196,13 +196,21 @@ def _lane_scalar(value, name, domain):
     return array
 
 
-def _batch_shape(name, shapes):
-    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+def _batch_shape(name, shapes, scalars):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``; a scalar's (``scalars``: their names) may
+    not have more dimensions than the arrays' batch (a (m, 1) lambda beside m targets would make m x m problems;
+    beside one target, a (k,) lambda makes k)."""
     try:
-        return np.broadcast_shapes(*shapes.values())
+        batch = np.broadcast_shapes(*shapes.values())
     except ValueError:
         listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
         raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+    arrays = np.broadcast_shapes(*(s for n, s in shapes.items() if n not in scalars))
+    for n in scalars:
+        if 0 < len(arrays) < len(shapes[n]):
+            raise ValueError(f"{name}: {n} has shape {shapes[n]}, more dimensions than the batch {arrays}: give a single "
+                             f"number, or one per problem with shape {arrays}")
+    return batch
 
 
 def _lanes(array, batch, shape):
@@ -1414,7 +1422,7 @@ def _ik_solve_batch(q0, target, l, lambda_, tol, max_iter):
         tol = 1e-09*np.where(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] > 1.0, l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3], 1.0)
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "l": l.shape[:l.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "l": l.shape[:l.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (4,)), _lanes(target, batch, (2,)), _lanes(l, batch, (4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))

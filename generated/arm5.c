@@ -24,7 +24,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x2703ad6aUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xf531f864UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 

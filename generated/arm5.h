@@ -52,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x2703ad6aUL
+#define ARM5_STAMP 0xf531f864UL
 
 #ifdef __cplusplus
 extern "C" {

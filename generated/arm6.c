@@ -24,7 +24,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x6063bb06UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0xf676329bUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 

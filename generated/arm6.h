@@ -52,7 +52,7 @@
  * angles finite and of sensible size.
  * ARM6_STAMP identifies this generation: arm6.c refuses to compile (#error) with a
  * arm6.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM6_STAMP 0x6063bb06UL
+#define ARM6_STAMP 0xf676329bUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x55928162UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x44a42f14UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6494,6 +6494,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
+    int damped = 1;
     double nearest = 0.0;
     double u = 0.0;
     double d = 0.0;
@@ -6552,7 +6553,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         }
         if (it == max_iter) {
             /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
+            if (best_here > 0 && attempt > 0 && damped == 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -6624,6 +6625,8 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
+        damped = ((c*en)*6.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
             for (int k = 0; k < 7; ++k) {
                 trial[k] = q[k] + dq[k]*0.1;
@@ -6693,6 +6696,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         } else {
             c = c*4.0;
             stalled = (c > 100000000.0 ? 1 : 0);
+            damped = 0;
         }
         if (en < best_en || (stalled > 0 && en == best_en)) {
             best_en = en;
@@ -6707,9 +6711,11 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         if (!(pe <= tol && re <= tol)) {
             slow = stationary;
             if (attempt % 3 == 0) {
-                if (en > checkpoint*0.6) {
+                /* a window of accepted, damping-bound steps is not slow: each step halves the damping */
+                if (en > checkpoint*0.6 && damped == 0) {
                     slow = 1;
                 }
+                damped = 1;
                 window_start = checkpoint;
                 checkpoint = en;
             }
@@ -6743,6 +6749,7 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
                 en = norms[2];
                 c = 0.01;
                 curved = 0;
+                damped = 1;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;
@@ -6842,6 +6849,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
+    int damped = 1;
     double nearest = 0.0;
     double u = 0.0;
     double d = 0.0;
@@ -6887,7 +6895,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         }
         if (it == max_iter) {
             /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
+            if (best_here > 0 && attempt > 0 && damped == 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -6944,6 +6952,8 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
+        damped = ((c*en)*3.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
             for (int k = 0; k < 7; ++k) {
                 trial[k] = q[k] + dq[k]*0.1;
@@ -7013,6 +7023,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         } else {
             c = c*4.0;
             stalled = (c > 100000000.0 ? 1 : 0);
+            damped = 0;
         }
         if (en < best_en || (stalled > 0 && en == best_en)) {
             best_en = en;
@@ -7026,9 +7037,11 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         if (!(pe <= tol && re <= tol)) {
             slow = stationary;
             if (attempt % 3 == 0) {
-                if (en > checkpoint*0.6) {
+                /* a window of accepted, damping-bound steps is not slow: each step halves the damping */
+                if (en > checkpoint*0.6 && damped == 0) {
                     slow = 1;
                 }
+                damped = 1;
                 window_start = checkpoint;
                 checkpoint = en;
             }
@@ -7062,6 +7075,7 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
                 en = norms[2];
                 c = 0.01;
                 curved = 0;
+                damped = 1;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;

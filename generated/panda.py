@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x55928162
+STAMP = 0x44a42f14
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -211,13 +211,21 @@ def _lane_scalar(value, name, domain):
     return array
 
 
-def _batch_shape(name, shapes):
-    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+def _batch_shape(name, shapes, scalars):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``; a scalar's (``scalars``: their names) may
+    not have more dimensions than the arrays' batch (a (m, 1) lambda beside m targets would make m x m problems;
+    beside one target, a (k,) lambda makes k)."""
     try:
-        return np.broadcast_shapes(*shapes.values())
+        batch = np.broadcast_shapes(*shapes.values())
     except ValueError:
         listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
         raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+    arrays = np.broadcast_shapes(*(s for n, s in shapes.items() if n not in scalars))
+    for n in scalars:
+        if 0 < len(arrays) < len(shapes[n]):
+            raise ValueError(f"{name}: {n} has shape {shapes[n]}, more dimensions than the batch {arrays}: give a single "
+                             f"number, or one per problem with shape {arrays}")
+    return batch
 
 
 def _lanes(array, batch, shape):
@@ -5199,6 +5207,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     restarts = 0
     best_stalled = 0
     best_here = 1
+    damped = 1
     nearest = DTYPE(0.0)
     u = DTYPE(0.0)
     d = DTYPE(0.0)
@@ -5247,7 +5256,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
             return IK_CONVERGED
         if it == max_iter:
             # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
+            if best_here > 0 and attempt > 0 and damped == 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -5305,6 +5314,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 gg = gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = damped if (c*en)*6.0 > ff else 0
         if curved > 0 and en < 0.05:
             for k in range(0, 7):
                 trial[k] = q[k] + dq[k]*0.1
@@ -5360,6 +5371,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         else:
             c = c*4.0
             stalled = 1 if c > 100000000.0 else 0
+            damped = 0
         if en < best_en or stalled > 0 and en == best_en:
             best_en = en
             best_pe = pe
@@ -5371,8 +5383,10 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         if not (pe <= tol and re <= tol):
             slow = stationary
             if attempt % 3 == 0:
-                if en > checkpoint*0.6:
+                # a window of accepted, damping-bound steps is not slow: each step halves the damping
+                if en > checkpoint*0.6 and damped == 0:
                     slow = 1
+                damped = 1
                 window_start = checkpoint
                 checkpoint = en
             if (stalled > 0 or slow > 0 or attempt >= 25) and it < max_iter:
@@ -5400,6 +5414,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 en = norms[2]
                 c = DTYPE(0.01)
                 curved = 0
+                damped = 1
                 attempt = 0
                 checkpoint = en
                 window_start = en
@@ -5437,8 +5452,10 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     UR5 100.0 / 100.0 / 100.0 / 99.9 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.9 / 99.9 / 99.9 / 99.8 %.
     Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
     revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
-    point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
-    random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+    point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+    the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+    seed: the same input gives the same result). Slides are not capped; other joints move at most
+    1 rad a step.
     Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
     arm of unit size. target: 4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad).
     On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
@@ -5547,6 +5564,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
     restarts = _fi(0)
     best_stalled = _fi(0)
     best_here = _fi(1)
+    damped = _fi(1)
     nearest = _fr(0.0)
     u = _fr(0.0)
     d = _fr(0.0)
@@ -5692,7 +5710,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c38 = it == max_iter
         _m39 = _run35 & _c38
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
+        _c40 = (best_here > 0) & (attempt > 0) & (damped == 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m41 = _m39 & _c40
         best_stalled = np.where(_m41, 1, best_stalled)
         _run35 = _run35 & (~_m39)
@@ -6024,6 +6042,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m51, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
         _c56 = (curved > 0) & (en < 0.05)
         _m57 = _run35 & _c56
         if bool(_m57.any()):
@@ -6279,6 +6299,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         c = np.where(_m110, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
         c = np.where(_m111, c*4.0, c)
         stalled = np.where(_m111, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m111, 0, damped)
         _c112 = (en < best_en) | ((stalled > 0) & (en == best_en))
         _m113 = _run35 & _c112
         best_en = np.where(_m113, en, best_en)
@@ -6294,9 +6315,11 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             slow = np.where(_m115, stationary, slow)
             _c116 = attempt % 3 == 0
             _m117 = _m115 & _c116
-            _c118 = en > checkpoint*0.6
+            # a window of accepted, damping-bound steps is not slow: each step halves the damping
+            _c118 = (en > checkpoint*0.6) & (damped == 0)
             _m119 = _m117 & _c118
             slow = np.where(_m119, 1, slow)
+            damped = np.where(_m117, 1, damped)
             window_start = np.where(_m117, checkpoint, window_start)
             checkpoint = np.where(_m117, en, checkpoint)
             _c120 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
@@ -6417,6 +6440,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
                 en = np.where(_m121, norms[2], en)
                 c = np.where(_m121, 0.01, c)
                 curved = np.where(_m121, 0, curved)
+                damped = np.where(_m121, 1, damped)
                 attempt = np.where(_m121, 0, attempt)
                 checkpoint = np.where(_m121, en, checkpoint)
                 window_start = np.where(_m121, en, window_start)
@@ -6446,7 +6470,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 2], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 2], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (7,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
@@ -6513,6 +6537,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     restarts = 0
     best_stalled = 0
     best_here = 1
+    damped = 1
     nearest = DTYPE(0.0)
     u = DTYPE(0.0)
     d = DTYPE(0.0)
@@ -6549,7 +6574,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
             return IK_CONVERGED
         if it == max_iter:
             # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
+            if best_here > 0 and attempt > 0 and damped == 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -6592,6 +6617,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 gg = gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = damped if (c*en)*3.0 > ff else 0
         if curved > 0 and en < 0.05:
             for k in range(0, 7):
                 trial[k] = q[k] + dq[k]*0.1
@@ -6647,6 +6674,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         else:
             c = c*4.0
             stalled = 1 if c > 100000000.0 else 0
+            damped = 0
         if en < best_en or stalled > 0 and en == best_en:
             best_en = en
             best_pe = pe
@@ -6657,8 +6685,10 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         if not (pe <= tol and re <= tol):
             slow = stationary
             if attempt % 3 == 0:
-                if en > checkpoint*0.6:
+                # a window of accepted, damping-bound steps is not slow: each step halves the damping
+                if en > checkpoint*0.6 and damped == 0:
                     slow = 1
+                damped = 1
                 window_start = checkpoint
                 checkpoint = en
             if (stalled > 0 or slow > 0 or attempt >= 25) and it < max_iter:
@@ -6686,6 +6716,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 en = norms[2]
                 c = DTYPE(0.01)
                 curved = 0
+                damped = 1
                 attempt = 0
                 checkpoint = en
                 window_start = en
@@ -6719,8 +6750,10 @@ def ik_solve_position(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
     Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
     revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
-    point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
-    random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+    point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+    the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+    seed: the same input gives the same result). Slides are not capped; other joints move at most
+    1 rad a step.
     Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
     arm of unit size. target: 3 numbers; error[0] = position error (m).
     On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
@@ -6828,6 +6861,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
     restarts = _fi(0)
     best_stalled = _fi(0)
     best_here = _fi(1)
+    damped = _fi(1)
     nearest = _fr(0.0)
     u = _fr(0.0)
     d = _fr(0.0)
@@ -6898,7 +6932,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c19 = it == max_iter
         _m20 = _run16 & _c19
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
+        _c21 = (best_here > 0) & (attempt > 0) & (damped == 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m22 = _m20 & _c21
         best_stalled = np.where(_m22, 1, best_stalled)
         _run16 = _run16 & (~_m20)
@@ -7037,6 +7071,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m32, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run16, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
         _c37 = (curved > 0) & (en < 0.05)
         _m38 = _run16 & _c37
         if bool(_m38.any()):
@@ -7158,6 +7194,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         c = np.where(_m57, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
         c = np.where(_m58, c*4.0, c)
         stalled = np.where(_m58, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m58, 0, damped)
         _c59 = (en < best_en) | ((stalled > 0) & (en == best_en))
         _m60 = _run16 & _c59
         best_en = np.where(_m60, en, best_en)
@@ -7172,9 +7209,11 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             slow = np.where(_m62, stationary, slow)
             _c63 = attempt % 3 == 0
             _m64 = _m62 & _c63
-            _c65 = en > checkpoint*0.6
+            # a window of accepted, damping-bound steps is not slow: each step halves the damping
+            _c65 = (en > checkpoint*0.6) & (damped == 0)
             _m66 = _m64 & _c65
             slow = np.where(_m66, 1, slow)
+            damped = np.where(_m64, 1, damped)
             window_start = np.where(_m64, checkpoint, window_start)
             checkpoint = np.where(_m64, en, checkpoint)
             _c67 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
@@ -7234,6 +7273,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
                 en = np.where(_m68, norms[2], en)
                 c = np.where(_m68, 0.01, c)
                 curved = np.where(_m68, 0, curved)
+                damped = np.where(_m68, 1, damped)
                 attempt = np.where(_m68, 0, attempt)
                 checkpoint = np.where(_m68, en, checkpoint)
                 window_start = np.where(_m68, en, window_start)
@@ -7261,7 +7301,7 @@ def _ik_solve_position_batch(q0, target, lambda_, tol, max_iter):
     lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve_position", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve_position", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_position_lanes(_c, _lanes(q0, batch, (7,)), _lanes(target, batch, (3,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xda03b609UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x1b983273UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -6959,6 +6959,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
+    int damped = 1;
     double nearest = 0.0;
     double u = 0.0;
     double d = 0.0;
@@ -7017,7 +7018,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         }
         if (it == max_iter) {
             /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
+            if (best_here > 0 && attempt > 0 && damped == 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -7095,6 +7096,8 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
+        damped = ((c*en)*6.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
             for (int k = 0; k < 6; ++k) {
                 trial[k] = q[k] + dq[k]*0.1;
@@ -7194,6 +7197,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         } else {
             c = c*4.0;
             stalled = (c > 100000000.0 ? 1 : 0);
+            damped = 0;
         }
         if (en < best_en || (stalled > 0 && en == best_en)) {
             best_en = en;
@@ -7208,9 +7212,11 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         if (!(pe <= tol && re <= tol)) {
             slow = stationary;
             if (attempt % 3 == 0) {
-                if (en > checkpoint*0.6) {
+                /* a window of accepted, damping-bound steps is not slow: each step halves the damping */
+                if (en > checkpoint*0.6 && damped == 0) {
                     slow = 1;
                 }
+                damped = 1;
                 window_start = checkpoint;
                 checkpoint = en;
             }
@@ -7244,6 +7250,7 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
                 en = norms[2];
                 c = 0.01;
                 curved = 0;
+                damped = 1;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;
@@ -7343,6 +7350,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
     int restarts = 0;
     int best_stalled = 0;
     int best_here = 1;
+    int damped = 1;
     double nearest = 0.0;
     double u = 0.0;
     double d = 0.0;
@@ -7388,7 +7396,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         }
         if (it == max_iter) {
             /* the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window */
-            if (best_here > 0 && attempt > 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
+            if (best_here > 0 && attempt > 0 && damped == 0 && (stationary > 0 || en > (attempt % 3 == 0 ? window_start : checkpoint)*(attempt % 3 == 2 ? 0.7113786608980126 : (attempt % 3 == 1 ? 0.8434326653017492 : 0.6)))) {
                 best_stalled = 1;
             }
             break;
@@ -7451,6 +7459,8 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
+        damped = ((c*en)*3.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
             for (int k = 0; k < 6; ++k) {
                 trial[k] = q[k] + dq[k]*0.1;
@@ -7550,6 +7560,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         } else {
             c = c*4.0;
             stalled = (c > 100000000.0 ? 1 : 0);
+            damped = 0;
         }
         if (en < best_en || (stalled > 0 && en == best_en)) {
             best_en = en;
@@ -7563,9 +7574,11 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         if (!(pe <= tol && re <= tol)) {
             slow = stationary;
             if (attempt % 3 == 0) {
-                if (en > checkpoint*0.6) {
+                /* a window of accepted, damping-bound steps is not slow: each step halves the damping */
+                if (en > checkpoint*0.6 && damped == 0) {
                     slow = 1;
                 }
+                damped = 1;
                 window_start = checkpoint;
                 checkpoint = en;
             }
@@ -7599,6 +7612,7 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
                 en = norms[2];
                 c = 0.01;
                 curved = 0;
+                damped = 1;
                 attempt = 0;
                 checkpoint = en;
                 window_start = en;

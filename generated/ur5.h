@@ -62,7 +62,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xda03b609UL
+#define UR5_STAMP 0x1b983273UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -272,8 +272,10 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
  * UR5 100.0 / 100.0 / 100.0 / 99.9 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.9 / 99.9 / 99.9 / 99.8 %.
  * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
- * point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
- * random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+ * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+ * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+ * seed: the same input gives the same result). Slides are not capped; other joints move at most
+ * 1 rad a step.
  * Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
  * arm of unit size. target: 4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
@@ -297,8 +299,10 @@ void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double
  * (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
  * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
- * point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
- * random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+ * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+ * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+ * seed: the same input gives the same result). Slides are not capped; other joints move at most
+ * 1 rad a step.
  * Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
  * arm of unit size. target: 3 numbers; error[0] = position error (m).
  * On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.

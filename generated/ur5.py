@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xda03b609
+STAMP = 0x1b983273
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -240,13 +240,21 @@ def _lane_scalar(value, name, domain):
     return array
 
 
-def _batch_shape(name, shapes):
-    """The broadcast of the problems' batch shapes ``{argument: shape}``."""
+def _batch_shape(name, shapes, scalars):
+    """The broadcast of the problems' batch shapes ``{argument: shape}``; a scalar's (``scalars``: their names) may
+    not have more dimensions than the arrays' batch (a (m, 1) lambda beside m targets would make m x m problems;
+    beside one target, a (k,) lambda makes k)."""
     try:
-        return np.broadcast_shapes(*shapes.values())
+        batch = np.broadcast_shapes(*shapes.values())
     except ValueError:
         listed = ", ".join(f"{n} {s}" for n, s in shapes.items())
         raise ValueError(f"{name}: batch shapes do not broadcast: {listed}") from None
+    arrays = np.broadcast_shapes(*(s for n, s in shapes.items() if n not in scalars))
+    for n in scalars:
+        if 0 < len(arrays) < len(shapes[n]):
+            raise ValueError(f"{name}: {n} has shape {shapes[n]}, more dimensions than the batch {arrays}: give a single "
+                             f"number, or one per problem with shape {arrays}")
+    return batch
 
 
 def _lanes(array, batch, shape):
@@ -5607,6 +5615,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
     restarts = 0
     best_stalled = 0
     best_here = 1
+    damped = 1
     nearest = DTYPE(0.0)
     u = DTYPE(0.0)
     d = DTYPE(0.0)
@@ -5655,7 +5664,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
             return IK_CONVERGED
         if it == max_iter:
             # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
+            if best_here > 0 and attempt > 0 and damped == 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -5719,6 +5728,8 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 gg = gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = damped if (c*en)*6.0 > ff else 0
         if curved > 0 and en < 0.05:
             for k in range(0, 6):
                 trial[k] = q[k] + dq[k]*0.1
@@ -5798,6 +5809,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         else:
             c = c*4.0
             stalled = 1 if c > 100000000.0 else 0
+            damped = 0
         if en < best_en or stalled > 0 and en == best_en:
             best_en = en
             best_pe = pe
@@ -5809,8 +5821,10 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
         if not (pe <= tol and re <= tol):
             slow = stationary
             if attempt % 3 == 0:
-                if en > checkpoint*0.6:
+                # a window of accepted, damping-bound steps is not slow: each step halves the damping
+                if en > checkpoint*0.6 and damped == 0:
                     slow = 1
+                damped = 1
                 window_start = checkpoint
                 checkpoint = en
             if (stalled > 0 or slow > 0 or attempt >= 25) and it < max_iter:
@@ -5838,6 +5852,7 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 en = norms[2]
                 c = DTYPE(0.01)
                 curved = 0
+                damped = 1
                 attempt = 0
                 checkpoint = en
                 window_start = en
@@ -5875,8 +5890,10 @@ def ik_solve(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     UR5 100.0 / 100.0 / 100.0 / 99.9 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.9 / 99.9 / 99.9 / 99.8 %.
     Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
     revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
-    point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
-    random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+    point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+    the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+    seed: the same input gives the same result). Slides are not capped; other joints move at most
+    1 rad a step.
     Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
     arm of unit size. target: 4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad).
     On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
@@ -5985,6 +6002,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
     restarts = _fi(0)
     best_stalled = _fi(0)
     best_here = _fi(1)
+    damped = _fi(1)
     nearest = _fr(0.0)
     u = _fr(0.0)
     d = _fr(0.0)
@@ -6130,7 +6148,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c38 = it == max_iter
         _m39 = _run35 & _c38
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-        _c40 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
+        _c40 = (best_here > 0) & (attempt > 0) & (damped == 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m41 = _m39 & _c40
         best_stalled = np.where(_m41, 1, best_stalled)
         _run35 = _run35 & (~_m39)
@@ -6466,6 +6484,8 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m51, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
         _c56 = (curved > 0) & (en < 0.05)
         _m57 = _run35 & _c56
         if bool(_m57.any()):
@@ -6761,6 +6781,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         c = np.where(_m140, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
         c = np.where(_m141, c*4.0, c)
         stalled = np.where(_m141, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m141, 0, damped)
         _c142 = (en < best_en) | ((stalled > 0) & (en == best_en))
         _m143 = _run35 & _c142
         best_en = np.where(_m143, en, best_en)
@@ -6776,9 +6797,11 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             slow = np.where(_m145, stationary, slow)
             _c146 = attempt % 3 == 0
             _m147 = _m145 & _c146
-            _c148 = en > checkpoint*0.6
+            # a window of accepted, damping-bound steps is not slow: each step halves the damping
+            _c148 = (en > checkpoint*0.6) & (damped == 0)
             _m149 = _m147 & _c148
             slow = np.where(_m149, 1, slow)
+            damped = np.where(_m147, 1, damped)
             window_start = np.where(_m147, checkpoint, window_start)
             checkpoint = np.where(_m147, en, checkpoint)
             _c150 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
@@ -6899,6 +6922,7 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
                 en = np.where(_m151, norms[2], en)
                 c = np.where(_m151, 0.01, c)
                 curved = np.where(_m151, 0, curved)
+                damped = np.where(_m151, 1, damped)
                 attempt = np.where(_m151, 0, attempt)
                 checkpoint = np.where(_m151, en, checkpoint)
                 window_start = np.where(_m151, en, window_start)
@@ -6928,7 +6952,7 @@ def _ik_solve_batch(q0, target, lambda_, tol, max_iter):
     lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 2], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 2], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (4, 4,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
@@ -6995,6 +7019,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
     restarts = 0
     best_stalled = 0
     best_here = 1
+    damped = 1
     nearest = DTYPE(0.0)
     u = DTYPE(0.0)
     d = DTYPE(0.0)
@@ -7031,7 +7056,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
             return IK_CONVERGED
         if it == max_iter:
             # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-            if best_here > 0 and attempt > 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
+            if best_here > 0 and attempt > 0 and damped == 0 and (stationary > 0 or en > (window_start if attempt % 3 == 0 else checkpoint)*(0.7113786608980126 if attempt % 3 == 2 else 0.8434326653017492 if attempt % 3 == 1 else 0.6)):
                 best_stalled = 1
             break
         mu2 = c*en if c*en > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
@@ -7080,6 +7105,8 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 gg = gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = damped if (c*en)*3.0 > ff else 0
         if curved > 0 and en < 0.05:
             for k in range(0, 6):
                 trial[k] = q[k] + dq[k]*0.1
@@ -7159,6 +7186,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         else:
             c = c*4.0
             stalled = 1 if c > 100000000.0 else 0
+            damped = 0
         if en < best_en or stalled > 0 and en == best_en:
             best_en = en
             best_pe = pe
@@ -7169,8 +7197,10 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
         if not (pe <= tol and re <= tol):
             slow = stationary
             if attempt % 3 == 0:
-                if en > checkpoint*0.6:
+                # a window of accepted, damping-bound steps is not slow: each step halves the damping
+                if en > checkpoint*0.6 and damped == 0:
                     slow = 1
+                damped = 1
                 window_start = checkpoint
                 checkpoint = en
             if (stalled > 0 or slow > 0 or attempt >= 25) and it < max_iter:
@@ -7198,6 +7228,7 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 en = norms[2]
                 c = DTYPE(0.01)
                 curved = 0
+                damped = 1
                 attempt = 0
                 checkpoint = en
                 window_start = en
@@ -7231,8 +7262,10 @@ def ik_solve_position(q0, target, lambda_=0.0, tol=1e-10, max_iter=100):
     (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
     Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
     revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
-    point of |e|, makes too little progress or takes 25 steps; the next starts from the best of 8
-    random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).
+    point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
+    the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
+    seed: the same input gives the same result). Slides are not capped; other joints move at most
+    1 rad a step.
     Steps of all attempts count against max_iter. A tol of 1e-10 is reachable in this precision for an
     arm of unit size. target: 3 numbers; error[0] = position error (m).
     On INVALID, q = q0 and error is HUGE_VAL (infinite). q may be q0 itself.
@@ -7340,6 +7373,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
     restarts = _fi(0)
     best_stalled = _fi(0)
     best_here = _fi(1)
+    damped = _fi(1)
     nearest = _fr(0.0)
     u = _fr(0.0)
     d = _fr(0.0)
@@ -7410,7 +7444,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         _c19 = it == max_iter
         _m20 = _run16 & _c19
         # the budget ends inside the attempt holding the best pose: stalled when that attempt is at a stationary point or no longer lowers |e| geometrically: the steps of its window run so far by less than 0.6 to the power of their share of the window
-        _c21 = (best_here > 0) & (attempt > 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
+        _c21 = (best_here > 0) & (attempt > 0) & (damped == 0) & ((stationary > 0) | (en > np.where(attempt % 3 == 0, window_start, checkpoint)*np.where(attempt % 3 == 2, 0.7113786608980126, np.where(attempt % 3 == 1, _fr(0.8434326653017492), 0.6))))
         _m22 = _m20 & _c21
         best_stalled = np.where(_m22, 1, best_stalled)
         _run16 = _run16 & (~_m20)
@@ -7553,6 +7587,8 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m32, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run16, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
         _c37 = (curved > 0) & (en < 0.05)
         _m38 = _run16 & _c37
         if bool(_m38.any()):
@@ -7714,6 +7750,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         c = np.where(_m87, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
         c = np.where(_m88, c*4.0, c)
         stalled = np.where(_m88, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m88, 0, damped)
         _c89 = (en < best_en) | ((stalled > 0) & (en == best_en))
         _m90 = _run16 & _c89
         best_en = np.where(_m90, en, best_en)
@@ -7728,9 +7765,11 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             slow = np.where(_m92, stationary, slow)
             _c93 = attempt % 3 == 0
             _m94 = _m92 & _c93
-            _c95 = en > checkpoint*0.6
+            # a window of accepted, damping-bound steps is not slow: each step halves the damping
+            _c95 = (en > checkpoint*0.6) & (damped == 0)
             _m96 = _m94 & _c95
             slow = np.where(_m96, 1, slow)
+            damped = np.where(_m94, 1, damped)
             window_start = np.where(_m94, checkpoint, window_start)
             checkpoint = np.where(_m94, en, checkpoint)
             _c97 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
@@ -7790,6 +7829,7 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
                 en = np.where(_m98, norms[2], en)
                 c = np.where(_m98, 0.01, c)
                 curved = np.where(_m98, 0, curved)
+                damped = np.where(_m98, 1, damped)
                 attempt = np.where(_m98, 0, attempt)
                 checkpoint = np.where(_m98, en, checkpoint)
                 window_start = np.where(_m98, en, window_start)
@@ -7817,7 +7857,7 @@ def _ik_solve_position_batch(q0, target, lambda_, tol, max_iter):
     lambda_ = _lane_scalar(lambda_, "lambda", "nonnegative")
     tol = _lane_scalar(tol, "tol", "positive")
     max_iter = _count(max_iter, "max_iter")
-    batch = _batch_shape("ik_solve_position", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape})
+    batch = _batch_shape("ik_solve_position", {"q0": q0.shape[:q0.ndim - 1], "target": target.shape[:target.ndim - 1], "lambda": lambda_.shape, "tol": tol.shape}, ("lambda", "tol", ))
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, error, iterations, ), status = _ik_solve_position_lanes(_c, _lanes(q0, batch, (6,)), _lanes(target, batch, (3,)), np.broadcast_to(lambda_, batch).reshape(lanes), np.broadcast_to(tol, batch).reshape(lanes), np.full(lanes, max_iter, dtype=np.int64))
@@ -8273,7 +8313,7 @@ def _ik_all_lanes(_c, target):
 def _ik_all_batch(target):
     """ik_all for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
     target = _problems(target, "target", (4, 4,), "finite")
-    batch = _batch_shape("ik_all", {"target": target.shape[:target.ndim - 2]})
+    batch = _batch_shape("ik_all", {"target": target.shape[:target.ndim - 2]}, ())
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, count, flags, ), status = _ik_all_lanes(_c, _lanes(target, batch, (4, 4,)))
@@ -8921,7 +8961,7 @@ def _ik_nearest_batch(q_ref, target):
     """ik_nearest for a batch of problems (see its docstring): checks, defaults, the masked program, the record."""
     q_ref = _problems(q_ref, "q_ref", (6,), "finite")
     target = _problems(target, "target", (4, 4,), "finite")
-    batch = _batch_shape("ik_nearest", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "target": target.shape[:target.ndim - 2]})
+    batch = _batch_shape("ik_nearest", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "target": target.shape[:target.ndim - 2]}, ())
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, ), status = _ik_nearest_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(target, batch, (4, 4,)))
@@ -9588,7 +9628,7 @@ def _ik_nearest_weighted_batch(q_ref, weights, target):
     q_ref = _problems(q_ref, "q_ref", (6,), "finite")
     weights = _problems(weights, "weights", (6,), "positive")
     target = _problems(target, "target", (4, 4,), "finite")
-    batch = _batch_shape("ik_nearest_weighted", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "weights": weights.shape[:weights.ndim - 1], "target": target.shape[:target.ndim - 2]})
+    batch = _batch_shape("ik_nearest_weighted", {"q_ref": q_ref.shape[:q_ref.ndim - 1], "weights": weights.shape[:weights.ndim - 1], "target": target.shape[:target.ndim - 2]}, ())
     lanes = int(np.prod(batch))
     _c = np.zeros(lanes, dtype=DTYPE)
     (q, ), status = _ik_nearest_weighted_lanes(_c, _lanes(q_ref, batch, (6,)), _lanes(weights, batch, (6,)), _lanes(target, batch, (4, 4,)))

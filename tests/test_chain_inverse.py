@@ -9,7 +9,7 @@ from skelarm_sym.build import load_python
 from skelarm_sym.generate import generate
 from skelarm_sym.models.chain import reference_inverse as ref
 
-from test_chain import MIMIC, PANDA, PRISMATIC, PUMA, STANFORD, UR5
+from test_chain import MIMIC, PANDA, PRISMATIC, PUMA, STANFORD, UR5, dh_table
 
 
 FUNCTIONS = ("pose,jacobian,jacobian_rpy,manipulability,manipulability_position,jacobian_hessian,manipulability_gradient,"
@@ -187,6 +187,29 @@ def test_ik_converges_and_out_of_reach_stalls_at_closest_reach():
     lower = np.array([-np.inf if x is None else x for x in PUMA.limits()["lower"]])
     upper = np.array([np.inf if x is None else x for x in PUMA.limits()["upper"]])
     assert np.all(far.q >= lower) and np.all(far.q <= upper)
+
+
+def test_slides_reach_far_targets_in_metres_and_millimetres():
+    """A slide's move was capped at 1 m a step, and an attempt whose steps were slowed by the damping (mu2 = c |e|
+    outweighs J J^T where |e| is large and J is a slide's unit column) was restarted as slow: the cartesian chain
+    stalled on a target 10 m away, and in millimetres on one 3 m away."""
+    mm = dh_table("cartesian_mm", "modified", [
+        {"type": "prismatic", "alpha": 0.3, "a": 200, "theta": 0.4},
+        {"type": "prismatic", "alpha": 1.1, "a": 100, "theta": -0.4},
+        {"type": "prismatic", "alpha": -0.7, "d": 200},
+    ])
+    for chain, scale in ((PRISMATIC, 1.0), (mm, 1000.0)):
+        m = module(chain)
+        for far in (3.0, 10.0, 100.0, 1000.0):
+            qt = np.array([1.0, -0.5, 0.8]) * far * scale
+            target = m.pose(qt)[:3, 3]
+            r = m.ik_solve_position(np.zeros(3), target)
+            assert r.status == "converged", (chain.name, far, r.status, r.error)
+            assert np.abs(m.pose(r.q)[:3, 3] - target).max() < 1e-10 * max(1.0, np.abs(target).max())
+    m = module(STANFORD)  # the boom out 40 m: its revolute joints still move at most 1 rad a step
+    qt = np.array([0.3, -0.4, 40.0, 0.2, 0.1, 0.3])
+    r = m.ik_solve(np.zeros(6), m.pose(qt))
+    assert r.status == "converged" and np.abs(m.pose(r.q) - m.pose(qt)).max() < 1e-9
 
 
 def test_one_step_that_lowers_the_error_geometrically_is_not_called_stalled():

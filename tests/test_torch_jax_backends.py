@@ -229,3 +229,32 @@ def test_each_result_names_its_own_status_codes():
         assert 'STATUS_NAMES = {0: "converged"' in text
         assert 'IKAllResult.__doc__ = """Outcome of ik_all' in text and 'IK_OK = 0 "ok", IK_UNREACHABLE = 1 "unreachable"' in text
         assert 'IK_CONVERGED = 0 "converged", IK_STALLED = 1 "stalled"' in text
+
+
+@pytest.mark.parametrize("lang", ["python", "torch", "jax"])
+def test_a_lambda_per_problem_may_not_add_a_dimension_to_the_batch(lang):
+    """A (m, 1) lambda beside m problems broadcast to m x m problems (a (4, 4, 6) result for 4 configurations): a
+    column of lambdas is read as one per problem elsewhere, so it is refused, naming the shape to give. (m,) and a
+    single number are one per problem and one for all; beside one problem, a (k,) lambda still makes k."""
+    if lang == "torch":
+        _torch()
+    elif lang == "jax":
+        _jax()
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
+    g = generate(chain, langs=f"python,{lang}" if lang != "python" else "python", out=None, prefix="lam",
+                 functions="pose,inverse_velocity,ik_solve")
+    npm = load_python(g.sources["lam.py"], "lam")
+    mod = npm if lang == "python" else load_python(g.sources[f"lam_{lang}.py"], f"lam_{lang}")
+    rng = np.random.default_rng(3)
+    q, v = rng.uniform(-2.0, 2.0, (4, 6)), rng.uniform(-1.0, 1.0, (4, 6))
+    targets = npm.pose(q)
+    column = np.full((4, 1), 0.1)
+    calls = [lambda lam: mod.ik_solve(q, targets, lam, max_iter=3).q]
+    if lang != "python":  # the NumPy module's inverse_velocity takes one lambda for the batch
+        calls.append(lambda lam: mod.inverse_velocity(q, v, lam))
+    for call in calls:
+        with pytest.raises(ValueError, match=r"lambda has shape \(4, 1\), more dimensions than the batch \(4,\).*\(4,\)"):
+            call(column)
+        assert np.asarray(call(column[:, 0])).shape == (4, 6)
+        assert np.asarray(call(0.1)).shape == (4, 6)
+    assert np.asarray(mod.ik_solve(q[0], targets[0], np.array([0.0, 0.1, 1.0]), max_iter=3).q).shape == (3, 6)

@@ -21,6 +21,8 @@ derived ``ik_terms`` (tool pose T and Jacobian J at once):
   same factors), which follows a curved valley of ``|e|`` where the straight step overshoots: near a singular
   target (a KUKA KR 6 pose whose smallest singular value is 8e-5) the plain steps crept, the attempts restarted
   and 1000 steps did not converge; with the correction 32 do;
+* step cap: the step is scaled down whole (same direction) where a joint that turns would move more than
+  ``STEP_MAX``; slides are not capped;
 * joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
   outward are removed from it (their columns zeroed, the step solved again), so the free joints still
   make the progress clamping would kill; revolute joints whose range spans 2 pi or more wrap by 2 pi;
@@ -29,7 +31,9 @@ derived ``ik_terms`` (tool pose T and Jacobian J at once):
   joints (``|J_f^T e| <= STATIONARY |J_f|_F |e|``) and does not cut ``|e|`` below ``PROGRESS`` of its start
   (near a stretched elbow the error lies along a weak direction of J and the test alone misjudges it: SCARA's
   attempts restarted at errors of 1e-10), when its error is above ``PROGRESS`` times its error
-  ``WINDOW`` steps earlier, or after ``ATTEMPT`` steps. The next attempt starts from the best of
+  ``WINDOW`` steps earlier (unless every step of that window was accepted with ``c |e|`` above ``J J^T``'s mean
+  eigenvalue: such a window is slow because of the damping, which halves with each step, as for a slide's
+  target metres away or an arm described in millimetres), or after ``ATTEMPT`` steps. The next attempt starts from the best of
   ``CANDIDATES`` random configurations by tool position error, drawn from ``SHRINK`` times the limits'
   range around its centre on even restarts and from the whole range on odd ones (revolute joints whose
   range spans a turn or more: the turn nearest zero within the limits, [-pi, pi] where it fits) by xorshift64* with a fixed seed: the same input gives the
@@ -57,7 +61,9 @@ C_START = 0.01
 C_MIN, C_MAX = 1e-8, 1e8
 C_UP, C_DOWN = 4.0, 0.5
 STEP_MAX = 1.0
-"""Largest joint move of one step (rad or m): longer steps are scaled down whole (same direction)."""
+"""Largest move of a joint that turns in one step (rad): longer steps are scaled down whole (same direction).
+Slides are not capped: the tool moves linearly with a slide, and the damping and the acceptance test bound a
+step that the linear model misjudges (a 1 m cap had stalled a gantry's 10 m move)."""
 ATTEMPT = 25
 """Steps of one attempt before a restart."""
 WINDOW, PROGRESS = 3, 0.6
@@ -144,8 +150,9 @@ def limits_of(chain, precision: str) -> dict:
         draw_low[k], draw_span[k] = centre - math.pi, 2 * math.pi
     near_low = [d if k in wrapped else d + s * ((1.0 - SHRINK) / 2.0) for k, (d, s) in enumerate(zip(draw_low, draw_span))]
     near_span = [s if k in wrapped else s * SHRINK for k, s in enumerate(draw_span)]
+    slides = [k for k in range(chain.n) if all(j.kind == "prismatic" for j in chain.joints if j.coordinate == k)]
     return {"lower": lower, "upper": upper, "draw_low": draw_low, "draw_span": draw_span, "near_low": near_low,
-            "near_span": near_span, "wrapped": wrapped}
+            "near_span": near_span, "wrapped": wrapped, "slides": slides}
 
 
 # -- helpers ------------------------------------------------------------------------------------------------
@@ -353,7 +360,8 @@ class _PoseIK:
         self.best_en, self.best_pe = b.var("best_en", 0.0), b.var("best_pe", 0.0)
         self.best_re = b.var("best_re", 0.0) if rows == 6 else None
         for name, value in (("gram_ready", 0), ("any_", 0), ("it", 0), ("attempt", 0), ("stalled", 0), ("slow", 0),
-                            ("stationary", 0), ("curved", 0), ("restarts", 0), ("best_stalled", 0), ("best_here", 1)):
+                            ("stationary", 0), ("curved", 0), ("restarts", 0), ("best_stalled", 0), ("best_here", 1),
+                            ("damped", 1)):
             setattr(self, name, b.var(name.rstrip("_"), value, Type.INT))
         self.scratch = (b.var("nearest", 0.0), b.var("u", 0.0), b.var("d", 0.0))
         self.mu2_floor = b.let("mu2_floor", self.lam * self.lam)
@@ -429,7 +437,8 @@ class _PoseIK:
             previous = select(eq(steps, 0), self.window_start, self.checkpoint)
             share = functools.reduce(lambda rest, k: select(eq(steps, k), PROGRESS ** (k / WINDOW), rest),
                                      range(1, WINDOW), PROGRESS)
-            with b.if_((self.best_here > 0) & (self.attempt > 0) & ((self.stationary > 0) | (self.en > previous * share))):
+            with b.if_((self.best_here > 0) & (self.attempt > 0) & eq(self.damped, 0)
+                       & ((self.stationary > 0) | (self.en > previous * share))):
                 b.set(self.best_stalled, self.one)
             b.break_()
 
@@ -472,6 +481,9 @@ class _PoseIK:
             self.gradient(self.J, self.G)
         b.comment(f"stationary point of |e| over the free joints: |J_f^T e| <= {STATIONARY} |J_f|_F |e|")
         b.set(self.stationary, select(self.gg <= self.ff * self.en * self.en * (STATIONARY * STATIONARY), self.one, self.zero))
+        b.comment("the window is damping-bound while every step's c |e| (the damping that halves with each accepted "
+                  "step; not lambda's floor) outweighs J J^T's mean eigenvalue")
+        b.set(self.damped, select(self.c * self.en * float(rows) > self.ff, self.damped, self.zero))
         with b.if_((self.curved > 0) & (self.en < GEO_ERROR)):
             self.geodesic()
 
@@ -518,11 +530,19 @@ class _PoseIK:
             b.set(self.gg, self.gg + g * g)
 
     def trial_step(self) -> None:
-        """The trial pose: the step scaled to at most STEP_MAX, wrapped by 2 pi where periodic, clamped."""
+        """The trial pose: the step scaled so that no joint that turns moves more than STEP_MAX rad (slides are not
+        capped), wrapped by 2 pi where periodic, clamped."""
         b, n, trial, lo, hi = self.b, self.n, self.trial, self.lo, self.hi
         b.set(self.big, 0.0)
-        with b.for_("k", 0, n) as k:
-            b.set(self.big, select(fabs(self.dq[k]) > self.big, fabs(self.dq[k]), self.big))
+        slides = self.lim["slides"]
+        if not slides:
+            with b.for_("k", 0, n) as k:
+                b.set(self.big, select(fabs(self.dq[k]) > self.big, fabs(self.dq[k]), self.big))
+        else:
+            b.comment("the slides' moves are not capped: the tool moves linearly with each")
+            for k in range(n):
+                if k not in slides:
+                    b.set(self.big, select(fabs(self.dq[k]) > self.big, fabs(self.dq[k]), self.big))
         b.set(self.scale, select(self.big > STEP_MAX, STEP_MAX / self.big, 1.0))
         with b.for_("k", 0, n) as k:
             b.set(trial[k], self.q[k] + self.dq[k] * self.scale)
@@ -560,6 +580,7 @@ class _PoseIK:
         with b.else_():
             b.set(self.c, self.c * C_UP)
             b.set(self.stalled, select(self.c > C_MAX, one, zero))
+            b.set(self.damped, zero)
         with b.if_((self.en < self.best_en) | ((self.stalled > 0) & eq(self.en, self.best_en))):
             self.remember_best(self.stalled)
 
@@ -569,8 +590,10 @@ class _PoseIK:
         with b.if_(~((self.pe <= self.tol) & (self.re <= self.tol))):
             b.set(self.slow, self.stationary)
             with b.if_(eq(_mod(self.attempt, WINDOW), 0)):
-                with b.if_(self.en > self.checkpoint * PROGRESS):
+                b.comment("a window of accepted, damping-bound steps is not slow: each step halves the damping")
+                with b.if_((self.en > self.checkpoint * PROGRESS) & eq(self.damped, 0)):
                     b.set(self.slow, one)
+                b.set(self.damped, one)
                 b.set(self.window_start, self.checkpoint)
                 b.set(self.checkpoint, self.en)
             with b.if_(((self.stalled > 0) | (self.slow > 0) | (self.attempt >= ATTEMPT)) & (self.it < self.max_iter)):
@@ -586,6 +609,7 @@ class _PoseIK:
                 self.take_norms(self.pe, self.re, self.en)
                 b.set(self.c, C_START)
                 b.set(self.curved, zero)
+                b.set(self.damped, one)
                 b.set(self.attempt, zero)
                 b.set(self.checkpoint, self.en)
                 b.set(self.window_start, self.en)
@@ -668,13 +692,16 @@ def _solver_doc(rows: int, default_tol: float, limited: bool = True, precision: 
         *(_success_lines(precision) if rows == 6 else ()),
         *(("Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;",
            "revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary",
-           f"point of |e|, makes too little progress or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES}",
-           "random configurations within the limits (xorshift64*, a fixed seed: the same input gives the same result).")
+           f"point of |e|, makes too little progress (not counting steps slowed by the damping) or takes {ATTEMPT} steps;",
+           f"the next starts from the best of {CANDIDATES} random configurations within the limits (xorshift64*, a fixed",
+           "seed: the same input gives the same result). Slides are not capped; other joints move at most",
+           f"{STEP_MAX:g} rad a step.")
           if limited else
           ("The arm has no position limits (no Q_MIN/Q_MAX): nothing is clamped, and revolute joints wrap by 2 pi.",
-           f"An attempt ends when it stalls at a stationary point of |e|, makes too little progress or takes {ATTEMPT}",
-           f"steps; the next starts from the best of {CANDIDATES} random configurations, each coordinate drawn from [-pi, pi]",
-           "(xorshift64*, a fixed seed: the same input gives the same result).")),
+           "An attempt ends when it stalls at a stationary point of |e|, makes too little progress (not counting steps",
+           f"slowed by the damping) or takes {ATTEMPT} steps; the next starts from the best of {CANDIDATES} random",
+           "configurations, each coordinate drawn from [-pi, pi] (xorshift64*, a fixed seed: the same input gives the",
+           f"same result). Slides are not capped; other joints move at most {STEP_MAX:g} rad a step.")),
         f"Steps of all attempts count against max_iter. A tol of {default_tol:g} is reachable in this precision for an",
         "arm of unit size. target: " + ("4 x 4 row-major; error[0] = position error (m), error[1] = rotation error (rad)."
                                           if rows == 6 else "3 numbers; error[0] = position error (m)."),
