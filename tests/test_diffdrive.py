@@ -29,11 +29,17 @@ def test_matrix_follows_from_constraints_9_and_10():
     assert sp.simplify(vl / (R - L / 2) - sol[w]) == 0 and sp.simplify(vr / (R + L / 2) - sol[w]) == 0
 
 
-def test_seed_matrix_11_holds_only_for_half_the_track():
+def test_seed_matrix_11_holds_only_with_L_twice_the_track():
+    """The seed's (11) in its own symbol L equals the derived matrix for a track of L/2: it holds where its L is
+    twice the distance between the wheels (the docs had said half). Checked by rigid-body motion too: wheels 0.5 m
+    apart at 0 and 1 m/s turn the robot at 2 rad/s."""
     seed = sp.Matrix([[sp.Rational(1, 2), sp.Rational(1, 2)], [-2 / L, 2 / L]])
     M, _ = wheel_to_body(L)
     assert M != seed
     assert M.subs(L, L / 2) == seed
+    track, wheels = 0.5, sp.Matrix([0, 1])
+    assert (seed.subs(L, 2 * track) * wheels)[1] == 2.0
+    assert (seed.subs(L, track / 2) * wheels)[1] != 2.0
 
 
 @pytest.mark.parametrize("track", [None, 0.45])

@@ -15,8 +15,8 @@ Hence, with ``L`` the distance between the wheels,
     [v_L, v_R]^T = [[1, -L/2], [1, L/2]] [v, omega]^T.
 
 The matrix printed as (11) in the seed has ``-2/L, 2/L`` (and ``L/4`` in its inverse);
-that holds only if ``L`` is half the distance between the wheels, which contradicts
-the ``R -/+ L/2`` of (9). The tests check the result against rigid-body motion.
+that holds only if its ``L`` is twice the distance between the wheels (a factor 2 off), which
+contradicts the ``R -/+ L/2`` of (9). The tests check the result against rigid-body motion.
 Writing ``R`` out (as ``u / omega``) is avoided: it is infinite when driving straight.
 """
 

@@ -26,6 +26,6 @@ def show_diffdrive(model, what: str = "all", fmt: str = "pretty") -> str:
     if what == "all":
         blocks.append(
             "From rolling without slipping, the wheels at y = +-L/2 in the body frame (x forward, y to the left),\n"
-            "L the distance between them. A matrix printed with -2/L, 2/L (inverse: L/4) takes L as half that distance."
+            "L the distance between them. A matrix printed with -2/L, 2/L (inverse: L/4) holds only with L twice that distance."
         )
     return "\n\n".join(blocks) + "\n"
