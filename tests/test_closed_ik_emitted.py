@@ -1097,3 +1097,32 @@ def test_a_lock_beyond_ik_lock_max_is_refused_in_every_language():
         assert r.status == "ok" and r.count >= 1
         for row in np.asarray(r.q)[: r.count]:
             assert np.abs(targets_of(b.chain, row[None])[0] - T).max() < 1e-9
+
+
+def test_show_ik_reads_as_atan2_states_its_tolerances_and_its_rows_solve(capsys):
+    """show --what ik printed each angle as the emitted code's arithmetic atan2 (a dozen lines of polynomials and
+    selects each) and named IK_LS_TOL, IK_SING_TOL and IK_SPLIT_TOL without their values (a new user's report).
+    Now atan2 stays a call and the values are stated; the listing itself, evaluated in order with the double
+    values, gives a row that is the source configuration."""
+    assert main(["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "ik", "--format", "text"]) == 0
+    text = capsys.readouterr().out
+    assert "atan2(" in text and "24.858464901423062" not in text
+    assert "# IK_LS_TOL = 1e-10 (float: 1e-06)" in text and "# IK_SING_TOL = 1e-09" in text and "# IK_SPLIT_TOL = 1e-12" in text
+    chain, _ = load_arm("ur5")
+    q = np.array([0.4, -1.1, 1.3, -0.7, 0.9, 0.2])
+    T = targets_of(chain, q[None]).reshape(16)
+    values = {sp.Symbol(f"target{k}"): sp.Float(T[k]) for k in range(16)}
+    values.update({sp.Symbol("IK_LS_TOL"): sp.Float(1e-10), sp.Symbol("IK_SING_TOL"): sp.Float(1e-9),
+                   sp.Symbol("IK_SPLIT_TOL"): sp.Float(1e-12)})
+    rows = []
+    for line in text.splitlines():
+        if line.startswith("#") or " = " not in line:
+            continue
+        name, expr = line.split(" = ", 1)
+        if name.startswith("Q["):
+            rows.append([float(sp.sympify(x).xreplace(values)) for x in expr.split(";")[0].strip("() ").split(",")])
+        else:
+            values[sp.Symbol(name)] = sp.sympify(expr).xreplace(values)
+    assert len(rows) == 8
+    wrapped = [np.abs((np.array(r) - q + np.pi) % (2 * np.pi) - np.pi).max() for r in rows]
+    assert min(wrapped) < 1e-9

@@ -179,3 +179,48 @@ def test_robot_constants_below_the_smallest_normal_are_zero(tmp_path, value, pre
         arm = compile_arm(generated)  # -Werror: "floating constant truncated to zero" would fail it
         T = arm.pose(np.array([0.3, -0.2]))
         assert abs(T[2, 3]) == 0.0
+
+
+def test_show_explains_every_step_name_and_the_legend_holds():
+    """``show --what all`` lists a legend of the step names it prints: every name of every example robot's
+    listing is explained, and what the legend says of Jv<k>, w<k>, u<k> and dJv<k> holds for UR5's numbers (the
+    steps evaluated in order against the NumPy reference). A new user found the names (G3_00, W5x, u4z) explained
+    nowhere."""
+    import math
+    import re
+
+    from skelarm_sym import reference
+    from skelarm_sym.models.chain.show import LEGEND, show_chain
+    from skelarm_sym.models.chain.derive import derive_chain
+
+    for robot in ROBOTS:
+        text = show_chain(derive_chain(load_robot(robot)), "all", "text")
+        steps = [line.split(" = ", 1) for line in text.splitlines() if " = " in line and not line.startswith("#")]
+        legend = [line for line in text.splitlines() if line.startswith("#   ")]
+        for name, _ in steps:
+            texts = [t for pattern, t in LEGEND if re.match(pattern, name)]
+            assert texts and all(f"#   {t}" in legend for t in texts), (robot.name, name)
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
+    text = show_chain(derive_chain(chain), "all", "text")
+    rng = np.random.default_rng(2)
+    q, dq = rng.uniform(-2, 2, 6), rng.uniform(-1, 1, 6)
+    values = {"cos": math.cos, "sin": math.sin, "sqrt": math.sqrt}
+    values.update({f"q{k + 1}": q[k] for k in range(6)} | {f"dq{k + 1}": dq[k] for k in range(6)})
+    for line in text.splitlines():
+        if " = " in line and not line.startswith("#"):
+            name, expr = line.split(" = ", 1)
+            values[name] = eval(expr, {}, values)  # the listing's own steps, in order
+    ref = reference.chain_kinematics(chain.numeric(None), q[None], dq[None], np.zeros((1, 6)))
+    J, dJ = ref.J[0], ref.dJ[0]
+    checked = 0
+    for k in range(1, 7):
+        for i, axis in enumerate("xyz"):
+            expected = {f"Jv{k}{axis}": J[i, k - 1], f"w{k}{axis}": J[3 + i, :k] @ dq[:k],
+                        f"u{k}{axis}": J[i, k - 1:] @ dq[k - 1:], f"dJv{k}{axis}": dJ[i, k - 1]}
+            for name, value in expected.items():
+                if name in values:
+                    assert abs(values[name] - value) < 1e-12, name
+                    checked += 1
+    assert checked > 40
+    pretty = show_chain(derive_chain(load_robot(ROOT / "examples" / "robots" / "scara.toml")), "T", "pretty")
+    assert "⎡c4  s4" in pretty and "₄" not in pretty  # the matrices name the steps as the listing does (not c₄)

@@ -49,20 +49,24 @@ def test_manipulability_closed_form_matches_numpy(n, rng):
 
 def test_singular_configurations():
     two = singular.singular_configurations(derive(2))
-    assert two.solutions["q2"] == sp.FiniteSet(-sp.pi, 0, sp.pi)
+    assert two.solutions["q2"] == sp.FiniteSet(0, sp.pi)  # one turn, (-pi, pi]: -pi is the pose pi
     three = singular.singular_configurations(derive(3))
-    assert three.solutions["q2"] == sp.FiniteSet(-sp.pi, 0, sp.pi)
+    assert three.solutions["q2"] == sp.FiniteSet(0, sp.pi)
     assert "checked on all 4" in three.statement
     assert "everywhere" in singular.singular_configurations(derive(1)).statement
 
 
 def test_show_det_manipulability_singular(capsys):
     assert main(["show", "--links", "2", "--what", "det", "--format", "text"]) == 0
-    assert capsys.readouterr().out.strip() == "det =\nl1*l2*sin(q2)"
+    assert capsys.readouterr().out.strip() == "det J =\nl1*l2*sin(q2)"
+    assert main(["show", "--links", "3", "--what", "det", "--format", "text"]) == 0
+    assert capsys.readouterr().out.strip() == "det J3 =\nl1*l2*sin(q2)"  # J3: J with the row of ones (phi)
     assert main(["show", "--links", "2", "--what", "manipulability", "--format", "text"]) == 0
-    assert "l1*l2*Abs(sin(q2))" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "w = sqrt(det(J J^T)) =" in out and "l1*l2*Abs(sin(q2))" in out
     assert main(["show", "--links", "2", "--what", "singular"]) == 0
-    assert "q2 in {0, -pi, pi}" in capsys.readouterr().out.replace("{-pi, 0, pi}", "{0, -pi, pi}")
+    out = capsys.readouterr().out
+    assert "q2 in {0, pi}" in out and "q2 each in {0, pi}" in out  # one turn, each pose once, on both lines
 
 
 def test_plot_writes_an_image(tmp_path, capsys):

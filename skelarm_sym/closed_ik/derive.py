@@ -144,20 +144,21 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
     return (*(geom.coordinates[k] for k in wrist), signs.pop())
 
 
-def derive_ik_all(chain: Chain, lock: int | str | None = None) -> ClosedIK:
+def derive_ik_all(chain: Chain, lock: int | str | None = None, atan2: str | None = None) -> ClosedIK:
     """All closed-form IK candidates of ``chain`` (see the module docstring); ``lock``: the joint held at a
-    run-time value (0-based index or name) for 7-joint chains. :class:`ClosedFormError` (one line) when the
-    chain is in no family. Derived with two Float queries answered directly
-    (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
+    run-time value (0-based index or name) for 7-joint chains; ``atan2``: how angles are written (``None``: the
+    emitted code's way, :data:`~skelarm_sym.closed_ik.subproblems.ATAN2`; ``"libm"``: ``atan2`` kept a call, to
+    read). :class:`ClosedFormError` (one line) when the chain is in no family. Derived with two Float queries
+    answered directly (:func:`~skelarm_sym.derive.float_facts.float_facts`)."""
     with float_facts():
-        return _derive_ik_all(chain, lock)
+        return _derive_ik_all(chain, lock, atan2)
 
 
-def _derive_ik_all(chain: Chain, lock: int | str | None) -> ClosedIK:
+def _derive_ik_all(chain: Chain, lock: int | str | None, atan2: str | None = None) -> ClosedIK:
     lock_idx = lock_index(chain, lock)
     family = classify(chain, lock_idx)
     geom = problem_geometry(chain, lock_idx)
-    steps = Steps("ik")
+    steps = Steps("ik", atan2)
     target = sp.symbols("target0:16", real=True)
     inputs: dict[str, tuple[sp.Symbol, ...]] = {"target": target}
     subs: dict = {}

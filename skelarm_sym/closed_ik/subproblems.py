@@ -104,9 +104,12 @@ class Steps(StepRecorder):
     It also records which steps are angles in ``[-pi, pi]`` (:meth:`principal`, :meth:`is_principal`): the
     post-processing skips a 2 pi shift that cannot move such a column (``models/chain/solver_closed.py``)."""
 
-    def __init__(self, tag: str) -> None:
+    def __init__(self, tag: str, atan2: str | None = None) -> None:
         super().__init__(tag)
         self._principal: set = set()
+        self.atan2 = ATAN2 if atan2 is None else atan2
+        """How this recording writes its angles (:data:`ATAN2`'s values; ``"libm"`` keeps ``atan2`` a call, as
+        ``show`` prints it)."""
 
     def symbol(self, label: str) -> sp.Symbol:
         """The symbol of the step called ``label``, without assumptions (see above)."""
@@ -261,7 +264,7 @@ def angle_from(steps: Steps, label: str, x: sp.Expr, y: sp.Expr, scale2: sp.Expr
     x, y = steps(f"{label}_x", x), steps(f"{label}_y", y)
     rho2 = steps(f"{label}_r2", x * x + y * y)
     rho = steps(f"{label}_r", sp.sqrt(rho2))
-    angle = atan2_steps(steps, label, y, x) if ATAN2 == "arithmetic" else sp.atan2(y, x)
+    angle = atan2_steps(steps, label, y, x) if steps.atan2 == "arithmetic" else sp.atan2(y, x)
     # rho2 > 0 (the same test as rho > 0): an angle whose cosine and sine nothing uses (the last joints) needs no sqrt
     theta = steps.principal(f"{label}", _select((angle, rho2 > 0), (sp.S.Zero, True)))  # atan2(0, 0): 0 everywhere
     c = steps(f"{label}_c", _select((x / rho, rho2 > 0), (sp.S.One, True)))

@@ -41,6 +41,8 @@ def _show(model: DiffDrive, args) -> str:
 
     if args.plot:
         raise InputError("--plot draws planar arms")
+    if getattr(args, "expand", False):
+        raise InputError("--expand applies to --robot: the differential drive's matrices are printed in full already")
     return show_diffdrive(model, args.what or "all", args.format)
 
 

@@ -76,6 +76,8 @@ def _show(model: PlanarArm, args) -> str:
     from .show import WHAT, check_show_size, show
 
     what = args.what or "J"
+    if getattr(args, "expand", False):
+        raise InputError("--expand applies to --robot: a planar arm's closed forms are printed in full already")
     if what not in WHAT + ("all",):
         raise InputError(f"unknown --what {what!r}; choose from {', '.join(WHAT + ('all',))}")
     if args.plot:

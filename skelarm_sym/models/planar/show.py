@@ -56,6 +56,6 @@ def show(derivation: Derivation, what: str = "J", fmt: str = "pretty") -> str:
         if isinstance(value, str):
             blocks.append(f"singular configurations:\n{value}")
             continue
-        label = "w" if name == "manipulability" else name
+        label = {"manipulability": "w = sqrt(det(J J^T))", "det": "det J" if derivation.n == 2 else "det J3"}.get(name, name)
         blocks.append(f"{label} =\n{render(value, fmt)}")
     return "\n\n".join(blocks) + "\n"

@@ -66,14 +66,14 @@ def singular_configurations(derivation: Derivation) -> Singularities:
     """Where the Jacobian loses rank, solved by SymPy where it can be.
 
     n = 2 and n = 3: ``det J = 0`` (``det J3 = 0``) solved for each joint angle over
-    ``[-pi, pi]``. Any n >= 2: ``w = 0`` holds on the family ``q2, ..., qn`` in
+    ``(-pi, pi]`` (one turn: ``-pi`` is the pose ``pi``). Any n >= 2: ``w = 0`` holds on the family ``q2, ..., qn`` in
     ``{0, pi}`` (every link on one line), verified here by substituting each member
     into every minor (for n <= 8; 2^(n-1) members). Special length ratios (a link
     folding back onto an equal one) add further singular poses.
     """
     n = derivation.n
     q = derivation.q
-    interval = sp.Interval(-sp.pi, sp.pi)
+    interval = sp.Interval.Lopen(-sp.pi, sp.pi)  # one turn, each pose once (-pi is pi), as the w line lists them
     if n == 1:
         return Singularities("n = 1: J has one column, so rank J < 2 everywhere (w = 0).", {})
     solutions: dict[str, sp.Set] = {}
