@@ -33,8 +33,8 @@ from .models.registry import kind_of
 from .names import C_RESERVED, reserved_prefix, standard_header  # noqa: F401 - C_RESERVED re-exported
 
 PRECISIONS = ("double", "float")
-LANGUAGE_ALIASES = {"numpy": "python"}
-"""Other names of a language (``--lang numpy`` is ``python``)."""
+LANGUAGE_ALIASES = {"numpy": "python", "py": "python"}
+"""Other names of a language (``--lang numpy`` and ``--lang py`` are ``python``)."""
 
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,47}")
 

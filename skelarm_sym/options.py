@@ -9,6 +9,7 @@ another kind.
 from __future__ import annotations
 
 import argparse
+import difflib
 
 from .errors import InputError
 from .models.registry import kinds
@@ -18,7 +19,39 @@ class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one-line :class:`InputError` (status 2, no usage dump)."""
 
     def error(self, message: str) -> None:
+        if message.startswith("unrecognized arguments:"):
+            message += _nearest_options(self, message.split(":", 1)[1].split())
         raise InputError(message)
+
+
+def _option_owners(parser: argparse.ArgumentParser, name: str = "") -> dict[str, set[str]]:
+    """Every ``--option`` of ``parser`` and of its subcommands, with the (sub)commands that take it."""
+    out: dict[str, set[str]] = {o: {name} for o in parser._option_string_actions if o.startswith("--")}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub_name, sub in action.choices.items():
+                for option, owners in _option_owners(sub, sub_name).items():
+                    out.setdefault(option, set()).update(owners)
+    return out
+
+
+def _nearest_options(parser: argparse.ArgumentParser, given: list[str]) -> str:
+    """A hint for the unknown options in ``given``: the known one they are near (``--language``: ``--lang``), or
+    the commands that take an option this command does not; ``""`` when there is none."""
+    owners = _option_owners(parser)
+    known = sorted(owners)
+    hints = []
+    for word in given:
+        flag = word.split("=", 1)[0]
+        if not flag.startswith("--"):
+            continue
+        if flag in owners:
+            hints.append(f"{flag} is an option of {' and '.join(sorted(o for o in owners[flag] if o))}")
+            continue
+        near = [o for o in known if flag.startswith(o) or o.startswith(flag)] or difflib.get_close_matches(flag, known, n=1)
+        if near:
+            hints.append(f"{flag}: did you mean {near[0]}?")
+    return f" ({'; '.join(hints)})" if hints else ""
 
 
 class Default(str):
@@ -62,7 +95,7 @@ def add_generate_options(parser: argparse.ArgumentParser) -> None:
     """The options of ``generate`` besides the model's."""
     from .backends import BACKENDS
 
-    parser.add_argument("--lang", default=Default("c,python"), help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python)")
+    parser.add_argument("--lang", default=Default("c,python"), help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python; numpy or py: python)")
     rules = "; ".join(kind.prefix_rule for kind in kinds() if kind.prefix_rule)
     parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules})")
     parser.add_argument("--precision", default=Default("double"), help="double (default) or float")

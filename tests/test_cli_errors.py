@@ -142,3 +142,24 @@ def test_a_function_the_model_has_not_says_why(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("skelarm-sym: error: function 'inverse_velocity3' needs 3 links or more"), err
     assert not (tmp_path / "o").exists()
+
+
+def test_an_unknown_option_names_the_one_meant(capsys):
+    """``--language c`` said only ``unrecognized arguments``; now the option it is near, or the command that takes
+    it, is named (a new user's report). ``--lang py`` is python, as ``numpy`` is."""
+    line = one_line_error(capsys, ["generate", "--links", "2", "--language", "c", "--out", "x"])
+    assert line.endswith("unrecognized arguments: --language c (--language: did you mean --lang?)")
+    line = one_line_error(capsys, ["generate", "--links", "2", "--seed", "3", "--out", "x"])
+    assert line.endswith("(--seed is an option of check)")
+    assert one_line_error(capsys, ["check", "--links", "2", "--sead", "3"]).endswith("(--sead: did you mean --seed?)")
+
+
+def test_lang_py_is_python(tmp_path, capsys):
+    assert main(["generate", "--links", "2", "--lang", "py", "--out", str(tmp_path)]) == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["arm2.py"]
+
+
+@pytest.mark.parametrize("model", [["--links", "2"], ["--model", "diffdrive"]])
+def test_expand_is_refused_where_nothing_is_abbreviated(model, capsys):
+    """``show --expand`` was accepted silently for a planar arm and the diff drive, whose forms are printed in full."""
+    assert "--expand applies to --robot" in one_line_error(capsys, ["show", *model, "--expand"])

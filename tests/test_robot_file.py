@@ -31,6 +31,11 @@ BAD = {
     "not_toml": ("name = = 3\n", r"not valid TOML"),
     "huge_theta": (REV + "theta = 1e20\n", r"joints\[0\]\.theta 1e\+20 rad is beyond \+-100000 rad"),
     "huge_alpha_expression": (REV + 'alpha = "1e6*pi"\n', r"joints\[0\]\.alpha 3\.14159e\+06 rad is beyond"),
+    # degrees typed where the file reads radians (a new user's report: alpha = 90 was taken as 90 rad)
+    "degrees_alpha": (REV + "alpha = 90\n", r"joints\[0\]\.alpha = '90' is 90 rad, more than a turn: angles are in radians "
+                                           r"\(for 90 degrees write \"90\*pi/180\"\)"),
+    "degrees_theta_expression": (REV + 'theta = "-180"\n', r"joints\[0\]\.theta = '-180' is -180 rad, more than a turn"),
+    "degrees_rpy": (REV + "[base]\nrpy = [0, 0, 45]\n", r"base\.rpy\[2\] = '45' is 45 rad, more than a turn"),
     "not_utf8": (b"\xff\xfe\x00name", r"not valid TOML"),
     "unknown_top_key": (REV + "[extra]\nx = 1\n", r"unknown key 'extra'"),
     "unknown_joint_key": (REV + "length = 1.0\n", r"joints\[0\]: unknown key 'length'"),

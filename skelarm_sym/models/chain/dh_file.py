@@ -7,7 +7,7 @@ convention = "standard"      # standard: A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(al
 [[joints]]
 type = "revolute"            # or "prismatic"
 a = 0.0                      # metres; angles in radians
-alpha = "pi/2"               # a number, or an arithmetic expression of numbers and pi
+alpha = "pi/2"               # radians, within one turn: a number, or an arithmetic expression of numbers and pi
 d = 0.089159
 theta = 0.0                  # revolute: theta_i = q_i + theta; prismatic: d_i = q_i + d
 name = "shoulder_pan"        # optional joint name (default q1, q2, ...)
@@ -111,6 +111,24 @@ def parse_expression(text: str, what: str) -> sp.Expr:
 
 
 def _value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]) -> sp.Expr:
+    """A table value: number, expression string or parameter name; an angle beyond a turn is refused (see
+    :func:`_within_a_turn`)."""
+    value = _table_value(raw, what, angle, parameters)
+    if angle and value.is_number:
+        _within_a_turn(float(value), raw, what)
+    return value
+
+
+def _within_a_turn(x: float, raw: object, what: str) -> None:
+    """InputError for a constant angle of more than a turn: a twist or offset of ``90`` is degrees typed where the
+    file reads radians (a DH table's constant angles lie within one turn)."""
+    if abs(x) > 2 * math.pi * (1 + 1e-12):
+        written = raw.strip() if isinstance(raw, str) else f"{x:g}"
+        raise InputError(f"{what} = {quoted(written, 40)} is {x:g} rad, more than a turn: angles are in radians "
+                         f"(for {x:g} degrees write \"{x:g}*pi/180\")")
+
+
+def _table_value(raw: object, what: str, angle: bool, parameters: dict[str, sp.Symbol]) -> sp.Expr:
     """A table value: number, expression string or parameter name."""
     if isinstance(raw, str):
         text = raw.strip()
