@@ -331,6 +331,20 @@ def test_panda_zero_pose_flange():
     np.testing.assert_allclose(r.T[:3, :3], [[1, 0, 0], [0, -1, 0], [0, 0, -1]], atol=1e-15)
 
 
+def test_ur5_files_differ_by_a_half_turn_of_the_base():
+    """examples/robots/ur5.urdf (ur_description's frames) and ur5.toml (UR's DH table) describe the same arm with
+    bases a half turn apart: T_urdf(q) = Rz(pi) T_toml(q), the tool frames equal. A new user compared the README's
+    quickstart (URDF) with docs/robots.md's demo (TOML) and found x and y negated; the docs now say so."""
+    from skelarm_sym.models.chain.loader import load_robot
+
+    urdf = load_robot(ROBOTS / "ur5.urdf", tip="tool0").numeric()
+    toml = load_robot_file(ROBOTS / "ur5.toml").numeric()
+    q = np.random.default_rng(5).uniform(-3, 3, (20, 6))
+    Rz = np.diag([-1.0, -1.0, 1.0, 1.0])
+    np.testing.assert_allclose(chain_kinematics(urdf, q).T, Rz @ chain_kinematics(toml, q).T, atol=1e-15)
+    assert np.abs(chain_kinematics(urdf, q).T - chain_kinematics(toml, q).T).max() > 0.5
+
+
 def test_puma560_conventions_describe_the_same_arm():
     """Corke's standard table and Craig's modified one (joint 2 offset pi): T_std(q) = Rz(pi) T_mod(q).
 
