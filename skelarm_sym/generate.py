@@ -329,6 +329,11 @@ def render_all(module: Module, langs: Sequence[str], cmake: bool) -> dict[str, s
     the CMake target checks the header)."""
     texts: dict[str, str] = {}
     for lang in langs:
+        unsupported = [f for f in module.functions if f.kind in ("straight", "procedure") and f.kind not in BACKENDS[lang].SUPPORTS]
+        if unsupported:  # never dropped silently
+            kinds = " and ".join(sorted({f.kind for f in unsupported}))
+            raise InputError(f"--lang {lang} does not print {kinds} functions ({', '.join(f.name for f in unsupported)}): "
+                             "leave them out with --functions, or choose another language")
         for suffix, text in BACKENDS[lang].render(module, STAMP_PLACEHOLDER).items():
             texts[module.prefix + suffix] = text
     if cmake:

@@ -64,6 +64,21 @@ def test_every_public_function_is_there(case):
         pytest.skip(f"backend {backend.LANGUAGE} prints no {sorted({f.kind for f in generated.functions if f.name in unsupported})}: {unsupported}")
 
 
+def test_every_file_says_what_wrote_it_and_how_to_write_it_again(case):
+    """What check --from and generate read back from a set's files: the mark of skelarm-sym (else generate refuses to
+    overwrite the file, and check --from finds no set), the command that regenerates it, and the set's stamp."""
+    from skelarm_sym.check.load import _MARK
+    from skelarm_sym.generate import file_stamp
+
+    backend, generated, _ = case
+    stamps = set()
+    for name, text in generated.sources.items():
+        assert _MARK in text, f"{name}: no '{_MARK}' mark"
+        assert "regenerate with (in this folder): skelarm-sym generate " in text, f"{name}: no regenerate line"
+        stamps.add(file_stamp(text))
+    assert len(stamps) == 1 and None not in stamps, stamps
+
+
 def test_outputs_match_the_reference(case):
     backend, generated, impl = case
     results = compare(generated, cases=12, seed=5, implementations=[(backend.LABEL, impl)])
@@ -128,3 +143,17 @@ def test_bad_input_is_refused(case):
             method(*bad)
         with pytest.raises(TypeError, match=f.name):
             method(*args, 1.0)
+
+
+def test_a_kind_of_function_a_backend_does_not_print_is_refused_not_dropped(monkeypatch, tmp_path):
+    """generate wrote a backend's file without the functions of a kind its SUPPORTS leaves out, and said nothing
+    (a contributor's probe: a straight-line-only backend given ik_solve). Now the set is refused, naming them, and
+    nothing is written."""
+    from skelarm_sym.errors import InputError
+
+    monkeypatch.setattr(BACKENDS["python"], "SUPPORTS", ("straight",))
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
+    with pytest.raises(InputError, match=r"^--lang python does not print procedure functions \(ik_solve\): leave them out"):
+        generate(chain, langs="python", out=tmp_path, functions="pose,ik_solve")
+    assert list(tmp_path.iterdir()) == []
+    assert set(generate(chain, langs="python", out=None, functions="pose").sources) == {"ur5.py"}

@@ -53,6 +53,9 @@ def test_every_language_writes_robot_file_text_only_escaped(fixture):
         bad = sorted({ch for ch in text if not (32 <= ord(ch) < 127 or ch == "\n")})
         assert bad == [], (name, bad)
         for foreign in filter(None, texts):
+            assert Path(name).suffix in DANGEROUS, (
+                f"{name}: no escaping rule for {Path(name).suffix!r} files: add to DANGEROUS the sequences that end a "
+                "comment or a string in that language (docs/architecture.md, 'Adding a backend')")
             if any(s in foreign for s in DANGEROUS[Path(name).suffix]) or any(ord(ch) >= 127 for ch in foreign):
                 assert foreign not in text, (name, foreign)
         if Path(name).suffix in (".h", ".c", ".cu", ".cuh"):  # every comment closes where it should

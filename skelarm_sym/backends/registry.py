@@ -1,9 +1,11 @@
 """Every backend, registered in one place: a language name -> its module.
 
 A backend is a folder ``backends/<lang>/`` whose package exposes ``LANGUAGE`` (its ``--lang`` name),
-``FILE_SUFFIXES`` (the files it writes, after the prefix) and ``render(module, stamp) -> {suffix: text}``
-for an IR :class:`~skelarm_sym.ir.nodes.Module`. Adding a language is a new folder and one line here
-(``docs/architecture.md`` says how).
+``LABEL`` (its name in check's tables), ``FILE_SUFFIXES`` (the files it writes, after the prefix),
+``SUPPORTS`` (the kinds of function it prints: ``"straight"``, ``"procedure"``; generate refuses the others),
+``render(module, stamp) -> {suffix: text}`` for an IR :class:`~skelarm_sym.ir.nodes.Module` and ``load(generated)``
+(an object with one method per public function). Adding a language is a new folder and one line here
+(``docs/architecture.md`` says how, and what the tests ask of it).
 
 A backend's package is imported the first time it is looked up, not with this module: a command that
 writes C and NumPy does not pay for the PyTorch, JAX, CUDA and CPython printers (parsing them is a

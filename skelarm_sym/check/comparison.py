@@ -120,7 +120,8 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
         for program in generated.programs:
             covering = [s for s in scenarios if all(o.name in s.expected for o in program.outputs)]
             if not covering:
-                raise InputError(f"internal error: no check scenario covers {program.name}")
+                raise InputError(f"internal error: no check scenario covers {program.name} (its expected value belongs in "
+                                 "the model's check.py: docs/architecture.md, 'Adding an output function')")
             for scenario in covering:
                 allowed = tolerance(precision, scenario.size)
                 args = [scenario.values[a.name] for a in program.inputs]

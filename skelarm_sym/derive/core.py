@@ -2,7 +2,7 @@
 
 A derivation writes a model's kinematics as a short chain of named intermediate
 quantities (*steps*), each a small expression of inputs and earlier steps, plus the
-outputs written with those steps. :mod:`skelarm_sym.program` turns them into a
+outputs written with those steps. :mod:`skelarm_sym.ir.lower` turns them into a
 straight-line program; nothing after this stage knows which model it prints.
 """
 

@@ -525,7 +525,8 @@ class Function:
     body: tuple[Stmt, ...]
     kind: str = "straight"
     returns: Type | None = None
-    statuses: tuple[tuple[str, int], ...] = ()
+    statuses: tuple[tuple[str, int, str], ...] = ()
+    """Procedures' return codes: (name, value, meaning)."""
     doc: tuple[str, ...] = ()
     ops: OpCount = field(default_factory=OpCount)
     result: str = ""
