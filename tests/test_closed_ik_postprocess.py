@@ -237,6 +237,7 @@ def test_continuum_sign_by_the_wrist_angle():
     assert continuum_sign(2 * np.pi + 1e-12, 2, 1) == 1
     assert continuum_sign(1e-12, 0, 1) == 0          # not flagged singular
     assert continuum_sign(1e-9, 2, 1) == 0           # further than WRIST_ALIGNED_TOL from a multiple of pi
+    assert continuum_sign(np.pi - 1e-12, 2, 1, s_odd=0) == 0 and continuum_sign(1e-12, 2, -1, s_odd=0) == -1  # skewed
 
 
 CONTINUUM_ARMS = ["puma560", "stanford", "iiwa14_lock3", "panda_lock7", "kuka_kr6", "abb_irb140", "puma560_modified"]
@@ -244,13 +245,14 @@ CONTINUUM_ARMS = ["puma560", "stanford", "iiwa14_lock3", "panda_lock7", "kuka_kr
 
 @pytest.mark.parametrize("name", CONTINUUM_ARMS)
 def test_wrist_continuum_moves_keep_the_pose(name):
-    """The derivation's ``(a, w, b, s)`` against the forward kinematics: with joint w at 0 (and at pi), every
+    """The derivation's ``(a, w, b, s, s_odd)`` against the forward kinematics: with joint w at 0 (and at pi), every
     ``(q_a + t, q_b - sigma t)`` gives the same pose, sigma = s (-s at pi); turning the other way does not."""
     chain, lock, ik = solver(name)
-    a, w, b, s = ik.ik.continuum
+    a, w, b, s, s_odd = ik.ik.continuum
+    assert s_odd == -s  # every example wrist is at right angles: aligned at odd multiples of pi too
     rng = np.random.default_rng(4)
     q = random_configurations(chain, 5, rng)
-    for value, sigma in ((0.0, s), (np.pi, -s)):
+    for value, sigma in ((0.0, s), (np.pi, s_odd)):
         q[:, w] = value
         moved = q.copy()
         t = rng.uniform(-2, 2, len(q))
@@ -271,7 +273,7 @@ def test_aligned_wrist_rows_fit_the_limits_and_nearest_finds_the_source():
     before), and ik_nearest from the source returns it (the representative before, at any distance)."""
     for name, w, targets in (("stanford", 4, 400), ("iiwa14_lock3", 5, 400), ("panda_lock7", 1, 200)):
         chain, lock, ik = solver(name)
-        a, _, b, _ = ik.ik.continuum
+        a, _, b = ik.ik.continuum[:3]
         num = chain.numeric()
         rng = np.random.default_rng(1)
         q = random_configurations(chain, targets, rng, within_limits=True)

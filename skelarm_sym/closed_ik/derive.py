@@ -67,7 +67,7 @@ class ClosedIK:
     """Per coordinate: every row's value is an angle in ``[-pi, pi]`` (``pi`` the double 3.141592653589793;
     :meth:`~.subproblems.Steps.is_principal`), so a 2 pi shift toward a centre of 0 leaves it as it is."""
     continuum: tuple[int, ...] = field(default=())
-    """The wrist's continuum, ``(a, w, b, sigma)`` (see :func:`wrist_continuum`), or ``()``."""
+    """The wrist's continuum, ``(a, w, b, sigma, sigma_odd)`` (see :func:`wrist_continuum`), or ``()``."""
     members: sp.Matrix | None = None
     """Three parallel axes with a wrist flip (UR): the aligned wrist's continuum at the reference configuration's
     ``phi = q2 + q3 + q4`` (input ``q_ref``), per root of q1 the 2R arm's two branches (4 x N), or None."""
@@ -127,21 +127,27 @@ def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int
 
 
 def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
-    """The continuum of an aligned spherical wrist as ``(a, w, b, sigma)`` (chain coordinates, 0-based), or ``()``.
+    """The continuum of an aligned spherical wrist as ``(a, w, b, sigma, sigma_odd)`` (chain coordinates, 0-based),
+    or ``()``.
 
-    For a wrist that flips (:func:`wrist_flips`: ``h4 . h5 = 0``, ``h5 . h6 = 0``, ``h4 || h6``), ``q5`` at a multiple
-    of pi turns h6 onto the line of h4, and joints 4 and 6 turn about one axis: every ``(q4 + t, q6 - s t)`` is the same
-    pose, ``s = h4 . h6`` (+1 or -1, at ``q = 0``) where ``q5`` is an even multiple of pi and ``-s`` where odd. In chain
+    Where ``h4 || h6`` at ``q = 0``, ``q5 = 0`` (an even multiple of pi) puts h6 on the line of h4 and joints 4 and 6
+    turn about one axis: every ``(q4 + t, q6 - s t)`` is the same pose, ``s = h4 . h6`` (+1 or -1). For a wrist that
+    flips (:func:`wrist_flips`: ``h4 . h5 = 0`` and ``h5 . h6 = 0`` as well) an odd multiple of pi aligns it too, with
+    ``-s``; a wrist whose middle axis is skewed is aligned at even multiples only (``sigma_odd = 0``). In chain
     coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a spherical shoulder:
-    its variables are negated, which keeps the relation) and ``sigma = s``. ``()`` for the other families, or where
-    ``s`` is not the same at every sampled lock value."""
-    if family.name not in ("spherical_wrist", "spherical_shoulder") or not wrist_flips(geom, family.reversed, locked):
+    its variables are negated, which keeps the relation), ``sigma = s``. ``()`` for the other families, where ``h4``
+    and ``h6`` are not parallel at ``q = 0``, or where ``s`` is not the same at every sampled lock value."""
+    if family.name not in ("spherical_wrist", "spherical_shoulder"):
         return ()
-    signs = {1 if float(H[3] @ H[5]) > 0 else -1 for H in _sampled_axes(geom, family.reversed, locked)}
+    samples = list(_sampled_axes(geom, family.reversed, locked))
+    if any(np.linalg.norm(np.cross(H[3], H[5])) > FLIP_TOL for H in samples):
+        return ()
+    signs = {1 if float(H[3] @ H[5]) > 0 else -1 for H in samples}
     wrist = [5 - k if family.reversed else k for k in (3, 4, 5)]  # geometry indices of problem joints 4, 5, 6
     if len(signs) != 1 or any(geom.kinds[k] != "revolute" for k in wrist):
         return ()
-    return (*(geom.coordinates[k] for k in wrist), signs.pop())
+    s = signs.pop()
+    return (*(geom.coordinates[k] for k in wrist), s, -s if wrist_flips(geom, family.reversed, locked) else 0)
 
 
 def derive_ik_all(chain: Chain, lock: int | str | None = None, atan2: str | None = None) -> ClosedIK:

@@ -365,13 +365,28 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
 
 def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
     """SP4's discriminant for ``h . R(k, theta) p = h . g`` with unit ``h``, ``p``, ``k`` and a unit target direction
-    ``g``: ``|h x g|^2 - (hk^2 + pk^2 - 2 (h . g) hk pk)`` (``hk = h . k``, ``pk = p . k``). Where ``h`` and ``p`` are
-    perpendicular to ``k`` (every wrist with right-angle twists: exact zeros) it is ``|h x g|^2``, a sum of squares
-    that keeps its digits as ``theta`` nears the double root (the wrist singularity), where ``1 - (h . g)^2`` loses
-    them (measured: q5 = 1.7e-4 rad gave a 1.3e-12 rad error in q5 before, 1e-16 after)."""
+    ``g``, written to keep its digits at a double root (the wrist singularity).
+
+    It is ``A^2 + B^2 - C^2 = a^2 - C^2`` with ``a = sqrt((1 - hk^2)(1 - pk^2))`` and ``C = d - hk pk``
+    (``hk = h . k``, ``pk = p . k``, ``d = h . g``). Where ``h`` and ``p`` are perpendicular to ``k`` (every wrist with
+    right-angle twists: exact zeros) it is ``|h x g|^2``, a sum of squares, where ``1 - (h . g)^2`` loses digits
+    (measured: q5 = 1.7e-4 rad gave a 1.3e-12 rad error in q5 before, 1e-16 after). Otherwise (a wrist whose
+    middle axis is skewed) it is ``(a - C)(a + C)`` with ``a - C = (hk pk + a - 1) + (1 - d)`` and
+    ``a + C = (1 + d) - (1 + hk pk - a)``: the constants exact, ``1 - d`` as ``|h x g|^2 / (1 + d)`` where ``d > 0``
+    and ``1 + d`` as ``|h x g|^2 / (1 - d)`` where ``d < 0``, so neither factor cancels where it vanishes (the
+    written form ``|h x g|^2 - (hk^2 + pk^2 - 2 d hk pk)`` left the aligned wrist's roots 1e-8 apart: rows 2e-8
+    off in rotation, a new user's arm with axis 5 at 60 degrees to axes 4 and 6)."""
     hk, pk, d = dot(h, k), dot(p, k), dot(h, g)
     hg = cross(h, g)
-    return dot(hg, hg) - (hk * hk + pk * pk - 2 * d * hk * pk)
+    sine2 = dot(hg, hg)
+    if hk == 0 and pk == 0:
+        return sine2
+    hk_x, pk_x = (sp.nsimplify(x, rational=True) if isinstance(x, sp.Float) else x for x in (hk, pk))
+    a = sp.sqrt((1 - hk_x**2) * (1 - pk_x**2))
+    top, bottom = sp.nsimplify(hk_x * pk_x + a - 1), sp.nsimplify(1 + hk_x * pk_x - a)  # exact: 0 where aligned
+    one_minus = _select((sine2 / (1 + d), d > 0), (1 - d, True))
+    one_plus = _select((sine2 / (1 - d), d < 0), (1 + d, True))
+    return (top + one_minus) * (one_plus - bottom)
 
 
 def sp3_parts(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[tuple[Parts, Parts], sp.Expr]:
