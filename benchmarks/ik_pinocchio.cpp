@@ -123,6 +123,12 @@ struct Pin {
                 Jg = &Jf;
             }
             stationary = (Jg->transpose() * e).squaredNorm() <= STATIONARY * STATIONARY * Jg->squaredNorm() * en * en;
+            if (stationary) {  // Gauss-Newton's step at a stationary point (the lightest damping), as the emitted solver
+                A = any ? Gf : G;
+                A.diagonal().array() += std::max(C_MIN * en, mu2_floor);
+                ldlt.compute(A);
+                dq.noalias() = Jg->transpose() * ldlt.solve(e);
+            }
             damped = damped && c * en * 6.0 > Jg->squaredNorm();
             if (curved && en < GEO_ERROR) {  // geodesic acceleration, the factors reused
                 error_at(q + GEO_H * dq, target, et);

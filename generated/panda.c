@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x44a42f14UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xca7051a2UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -6625,6 +6625,17 @@ static int panda_ik_solve_run(const double q0[7], const double target[16], doubl
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (stationary > 0) {
+            /* at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before */
+            mu2 = (en*1e-08 > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? en*1e-08 : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
+            if (any > 0) {
+                panda_ik_ldl_pose(Gf, mu2, F);
+                panda_ik_ldl_solve_pose(Jf, F, e, dq);
+            } else {
+                panda_ik_ldl_pose(G, mu2, F);
+                panda_ik_ldl_solve_pose(J, F, e, dq);
+            }
+        }
         /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
         damped = ((c*en)*6.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
@@ -6952,6 +6963,17 @@ static int panda_ik_solve_position_run(const double q0[7], const double target[3
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (stationary > 0) {
+            /* at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before */
+            mu2 = (en*1e-08 > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? en*1e-08 : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
+            if (any > 0) {
+                panda_ik_ldl_position(Gf, mu2, F);
+                panda_ik_ldl_solve_position(Jf, F, e, dq);
+            } else {
+                panda_ik_ldl_position(G, mu2, F);
+                panda_ik_ldl_solve_position(J, F, e, dq);
+            }
+        }
         /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
         damped = ((c*en)*3.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {

@@ -59,7 +59,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x44a42f14UL
+#define PANDA_STAMP 0xca7051a2UL
 
 #ifdef __cplusplus
 extern "C" {

@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x44a42f14
+STAMP = 0xca7051a2
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""
@@ -5314,6 +5314,15 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 gg = gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        if stationary > 0:
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = en*1e-08 if en*1e-08 > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
+            if any > 0:
+                _ik_ldl_pose(Gf, mu2, F)
+                _ik_ldl_solve_pose(Jf, F, e, dq)
+            else:
+                _ik_ldl_pose(G, mu2, F)
+                _ik_ldl_solve_pose(J, F, e, dq)
         # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
         damped = damped if (c*en)*6.0 > ff else 0
         if curved > 0 and en < 0.05:
@@ -6042,146 +6051,408 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m51, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2] + J[21 + k]*e[3] + J[28 + k]*e[4] + J[35 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
-        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
-        _c56 = (curved > 0) & (en < 0.05)
+        _c56 = stationary > 0
         _m57 = _run35 & _c56
         if bool(_m57.any()):
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = np.where(_m57, np.where(en*1e-08 > (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0), en*1e-08, (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+            _c58 = any > 0
+            _m59 = _m57 & _c58
+            _m60 = _m57 & (~_c58)
+            if bool(_m59.any()):
+                _ik_ldl_pose61_mu2 = mu2
+                _ik_ldl_pose61_a00 = Gf[0] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a10 = Gf[1]
+                _ik_ldl_pose61_a11 = Gf[2] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a20 = Gf[3]
+                _ik_ldl_pose61_a21 = Gf[4]
+                _ik_ldl_pose61_a22 = Gf[5] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a30 = Gf[6]
+                _ik_ldl_pose61_a31 = Gf[7]
+                _ik_ldl_pose61_a32 = Gf[8]
+                _ik_ldl_pose61_a33 = Gf[9] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a40 = Gf[10]
+                _ik_ldl_pose61_a41 = Gf[11]
+                _ik_ldl_pose61_a42 = Gf[12]
+                _ik_ldl_pose61_a43 = Gf[13]
+                _ik_ldl_pose61_a44 = Gf[14] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a50 = Gf[15]
+                _ik_ldl_pose61_a51 = Gf[16]
+                _ik_ldl_pose61_a52 = Gf[17]
+                _ik_ldl_pose61_a53 = Gf[18]
+                _ik_ldl_pose61_a54 = Gf[19]
+                _ik_ldl_pose61_a55 = Gf[20] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_cut = np.where(_ik_ldl_pose61_a55 > np.where(_ik_ldl_pose61_a44 > np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00))), _ik_ldl_pose61_a44, np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)))), _ik_ldl_pose61_a55, np.where(_ik_ldl_pose61_a44 > np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00))), _ik_ldl_pose61_a44, np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)))))*1e-13
+                _ik_ldl_pose61_s0 = _ik_ldl_pose61_a00
+                _ik_ldl_pose61_kept0 = _ik_ldl_pose61_s0 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i0 = np.where(_ik_ldl_pose61_kept0, 1.0/_ik_ldl_pose61_s0, 0.0)
+                F[0] = np.where(_m59, _ik_ldl_pose61_i0, F[0])
+                _ik_ldl_pose61_t10 = _ik_ldl_pose61_a10
+                _ik_ldl_pose61_l10 = _ik_ldl_pose61_t10*_ik_ldl_pose61_i0
+                F[1] = np.where(_m59, _ik_ldl_pose61_l10, F[1])
+                _ik_ldl_pose61_ld10 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t10, 0.0)
+                _ik_ldl_pose61_t20 = _ik_ldl_pose61_a20
+                _ik_ldl_pose61_l20 = _ik_ldl_pose61_t20*_ik_ldl_pose61_i0
+                F[3] = np.where(_m59, _ik_ldl_pose61_l20, F[3])
+                _ik_ldl_pose61_ld20 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t20, 0.0)
+                _ik_ldl_pose61_t30 = _ik_ldl_pose61_a30
+                _ik_ldl_pose61_l30 = _ik_ldl_pose61_t30*_ik_ldl_pose61_i0
+                F[6] = np.where(_m59, _ik_ldl_pose61_l30, F[6])
+                _ik_ldl_pose61_ld30 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t30, 0.0)
+                _ik_ldl_pose61_t40 = _ik_ldl_pose61_a40
+                _ik_ldl_pose61_l40 = _ik_ldl_pose61_t40*_ik_ldl_pose61_i0
+                F[10] = np.where(_m59, _ik_ldl_pose61_l40, F[10])
+                _ik_ldl_pose61_ld40 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t40, 0.0)
+                _ik_ldl_pose61_t50 = _ik_ldl_pose61_a50
+                _ik_ldl_pose61_l50 = _ik_ldl_pose61_t50*_ik_ldl_pose61_i0
+                F[15] = np.where(_m59, _ik_ldl_pose61_l50, F[15])
+                _ik_ldl_pose61_ld50 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t50, 0.0)
+                _ik_ldl_pose61_s1 = _ik_ldl_pose61_a11 - _ik_ldl_pose61_l10*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_kept1 = _ik_ldl_pose61_s1 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i1 = np.where(_ik_ldl_pose61_kept1, 1.0/_ik_ldl_pose61_s1, 0.0)
+                F[2] = np.where(_m59, _ik_ldl_pose61_i1, F[2])
+                _ik_ldl_pose61_t21 = _ik_ldl_pose61_a21 - _ik_ldl_pose61_l20*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l21 = _ik_ldl_pose61_t21*_ik_ldl_pose61_i1
+                F[4] = np.where(_m59, _ik_ldl_pose61_l21, F[4])
+                _ik_ldl_pose61_ld21 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t21, 0.0)
+                _ik_ldl_pose61_t31 = _ik_ldl_pose61_a31 - _ik_ldl_pose61_l30*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l31 = _ik_ldl_pose61_t31*_ik_ldl_pose61_i1
+                F[7] = np.where(_m59, _ik_ldl_pose61_l31, F[7])
+                _ik_ldl_pose61_ld31 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t31, 0.0)
+                _ik_ldl_pose61_t41 = _ik_ldl_pose61_a41 - _ik_ldl_pose61_l40*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l41 = _ik_ldl_pose61_t41*_ik_ldl_pose61_i1
+                F[11] = np.where(_m59, _ik_ldl_pose61_l41, F[11])
+                _ik_ldl_pose61_ld41 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t41, 0.0)
+                _ik_ldl_pose61_t51 = _ik_ldl_pose61_a51 - _ik_ldl_pose61_l50*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l51 = _ik_ldl_pose61_t51*_ik_ldl_pose61_i1
+                F[16] = np.where(_m59, _ik_ldl_pose61_l51, F[16])
+                _ik_ldl_pose61_ld51 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t51, 0.0)
+                _ik_ldl_pose61_s2 = (_ik_ldl_pose61_a22 - _ik_ldl_pose61_l20*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l21*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_kept2 = _ik_ldl_pose61_s2 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i2 = np.where(_ik_ldl_pose61_kept2, 1.0/_ik_ldl_pose61_s2, 0.0)
+                F[5] = np.where(_m59, _ik_ldl_pose61_i2, F[5])
+                _ik_ldl_pose61_t32 = (_ik_ldl_pose61_a32 - _ik_ldl_pose61_l30*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l31*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l32 = _ik_ldl_pose61_t32*_ik_ldl_pose61_i2
+                F[8] = np.where(_m59, _ik_ldl_pose61_l32, F[8])
+                _ik_ldl_pose61_ld32 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t32, 0.0)
+                _ik_ldl_pose61_t42 = (_ik_ldl_pose61_a42 - _ik_ldl_pose61_l40*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l41*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l42 = _ik_ldl_pose61_t42*_ik_ldl_pose61_i2
+                F[12] = np.where(_m59, _ik_ldl_pose61_l42, F[12])
+                _ik_ldl_pose61_ld42 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t42, 0.0)
+                _ik_ldl_pose61_t52 = (_ik_ldl_pose61_a52 - _ik_ldl_pose61_l50*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l51*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l52 = _ik_ldl_pose61_t52*_ik_ldl_pose61_i2
+                F[17] = np.where(_m59, _ik_ldl_pose61_l52, F[17])
+                _ik_ldl_pose61_ld52 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t52, 0.0)
+                _ik_ldl_pose61_s3 = (_ik_ldl_pose61_a33 - (_ik_ldl_pose61_l30*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l31*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l32*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_kept3 = _ik_ldl_pose61_s3 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i3 = np.where(_ik_ldl_pose61_kept3, 1.0/_ik_ldl_pose61_s3, 0.0)
+                F[9] = np.where(_m59, _ik_ldl_pose61_i3, F[9])
+                _ik_ldl_pose61_t43 = (_ik_ldl_pose61_a43 - (_ik_ldl_pose61_l40*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l41*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l42*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_l43 = _ik_ldl_pose61_t43*_ik_ldl_pose61_i3
+                F[13] = np.where(_m59, _ik_ldl_pose61_l43, F[13])
+                _ik_ldl_pose61_ld43 = np.where(_ik_ldl_pose61_kept3, _ik_ldl_pose61_t43, 0.0)
+                _ik_ldl_pose61_t53 = (_ik_ldl_pose61_a53 - (_ik_ldl_pose61_l50*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l51*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l52*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_l53 = _ik_ldl_pose61_t53*_ik_ldl_pose61_i3
+                F[18] = np.where(_m59, _ik_ldl_pose61_l53, F[18])
+                _ik_ldl_pose61_ld53 = np.where(_ik_ldl_pose61_kept3, _ik_ldl_pose61_t53, 0.0)
+                _ik_ldl_pose61_s4 = (_ik_ldl_pose61_a44 - (_ik_ldl_pose61_l40*_ik_ldl_pose61_ld40 + (_ik_ldl_pose61_l41*_ik_ldl_pose61_ld41 + _ik_ldl_pose61_l42*_ik_ldl_pose61_ld42))) - _ik_ldl_pose61_l43*_ik_ldl_pose61_ld43
+                _ik_ldl_pose61_kept4 = _ik_ldl_pose61_s4 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i4 = np.where(_ik_ldl_pose61_kept4, 1.0/_ik_ldl_pose61_s4, 0.0)
+                F[14] = np.where(_m59, _ik_ldl_pose61_i4, F[14])
+                _ik_ldl_pose61_t54 = (_ik_ldl_pose61_a54 - (_ik_ldl_pose61_l50*_ik_ldl_pose61_ld40 + (_ik_ldl_pose61_l51*_ik_ldl_pose61_ld41 + _ik_ldl_pose61_l52*_ik_ldl_pose61_ld42))) - _ik_ldl_pose61_l53*_ik_ldl_pose61_ld43
+                _ik_ldl_pose61_l54 = _ik_ldl_pose61_t54*_ik_ldl_pose61_i4
+                F[19] = np.where(_m59, _ik_ldl_pose61_l54, F[19])
+                _ik_ldl_pose61_ld54 = np.where(_ik_ldl_pose61_kept4, _ik_ldl_pose61_t54, 0.0)
+                _ik_ldl_pose61_s5 = (_ik_ldl_pose61_a55 - ((_ik_ldl_pose61_l50*_ik_ldl_pose61_ld50 + _ik_ldl_pose61_l51*_ik_ldl_pose61_ld51) + (_ik_ldl_pose61_l52*_ik_ldl_pose61_ld52 + _ik_ldl_pose61_l53*_ik_ldl_pose61_ld53))) - _ik_ldl_pose61_l54*_ik_ldl_pose61_ld54
+                _ik_ldl_pose61_kept5 = _ik_ldl_pose61_s5 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i5 = np.where(_ik_ldl_pose61_kept5, 1.0/_ik_ldl_pose61_s5, 0.0)
+                F[20] = np.where(_m59, _ik_ldl_pose61_i5, F[20])
+                _ik_ldl_solve_pose62_y0 = e[0]
+                _ik_ldl_solve_pose62_y1 = e[1] - F[1]*_ik_ldl_solve_pose62_y0
+                _ik_ldl_solve_pose62_y2 = (e[2] - F[3]*_ik_ldl_solve_pose62_y0) - F[4]*_ik_ldl_solve_pose62_y1
+                _ik_ldl_solve_pose62_y3 = (e[3] - (F[6]*_ik_ldl_solve_pose62_y0 + F[7]*_ik_ldl_solve_pose62_y1)) - F[8]*_ik_ldl_solve_pose62_y2
+                _ik_ldl_solve_pose62_y4 = (e[4] - (F[10]*_ik_ldl_solve_pose62_y0 + (F[11]*_ik_ldl_solve_pose62_y1 + F[12]*_ik_ldl_solve_pose62_y2))) - F[13]*_ik_ldl_solve_pose62_y3
+                _ik_ldl_solve_pose62_y5 = (e[5] - ((F[15]*_ik_ldl_solve_pose62_y0 + F[16]*_ik_ldl_solve_pose62_y1) + (F[17]*_ik_ldl_solve_pose62_y2 + F[18]*_ik_ldl_solve_pose62_y3))) - F[19]*_ik_ldl_solve_pose62_y4
+                _ik_ldl_solve_pose62_z5 = _ik_ldl_solve_pose62_y5*F[20]
+                _ik_ldl_solve_pose62_z4 = _ik_ldl_solve_pose62_y4*F[14] - F[19]*_ik_ldl_solve_pose62_z5
+                _ik_ldl_solve_pose62_z3 = (_ik_ldl_solve_pose62_y3*F[9] - F[18]*_ik_ldl_solve_pose62_z5) - F[13]*_ik_ldl_solve_pose62_z4
+                _ik_ldl_solve_pose62_z2 = (_ik_ldl_solve_pose62_y2*F[5] - (F[17]*_ik_ldl_solve_pose62_z5 + F[12]*_ik_ldl_solve_pose62_z4)) - F[8]*_ik_ldl_solve_pose62_z3
+                _ik_ldl_solve_pose62_z1 = (_ik_ldl_solve_pose62_y1*F[2] - (F[16]*_ik_ldl_solve_pose62_z5 + (F[11]*_ik_ldl_solve_pose62_z4 + F[7]*_ik_ldl_solve_pose62_z3))) - F[4]*_ik_ldl_solve_pose62_z2
+                _ik_ldl_solve_pose62_z0 = (_ik_ldl_solve_pose62_y0*F[0] - ((F[15]*_ik_ldl_solve_pose62_z5 + F[10]*_ik_ldl_solve_pose62_z4) + (F[6]*_ik_ldl_solve_pose62_z3 + F[3]*_ik_ldl_solve_pose62_z2))) - F[1]*_ik_ldl_solve_pose62_z1
+                dq[0] = np.where(_m59, (Jf[0]*_ik_ldl_solve_pose62_z0 + (Jf[7]*_ik_ldl_solve_pose62_z1 + Jf[14]*_ik_ldl_solve_pose62_z2)) + (Jf[21]*_ik_ldl_solve_pose62_z3 + (Jf[28]*_ik_ldl_solve_pose62_z4 + Jf[35]*_ik_ldl_solve_pose62_z5)), dq[0])
+                dq[1] = np.where(_m59, (Jf[1]*_ik_ldl_solve_pose62_z0 + (Jf[8]*_ik_ldl_solve_pose62_z1 + Jf[15]*_ik_ldl_solve_pose62_z2)) + (Jf[22]*_ik_ldl_solve_pose62_z3 + (Jf[29]*_ik_ldl_solve_pose62_z4 + Jf[36]*_ik_ldl_solve_pose62_z5)), dq[1])
+                dq[2] = np.where(_m59, (Jf[2]*_ik_ldl_solve_pose62_z0 + (Jf[9]*_ik_ldl_solve_pose62_z1 + Jf[16]*_ik_ldl_solve_pose62_z2)) + (Jf[23]*_ik_ldl_solve_pose62_z3 + (Jf[30]*_ik_ldl_solve_pose62_z4 + Jf[37]*_ik_ldl_solve_pose62_z5)), dq[2])
+                dq[3] = np.where(_m59, (Jf[3]*_ik_ldl_solve_pose62_z0 + (Jf[10]*_ik_ldl_solve_pose62_z1 + Jf[17]*_ik_ldl_solve_pose62_z2)) + (Jf[24]*_ik_ldl_solve_pose62_z3 + (Jf[31]*_ik_ldl_solve_pose62_z4 + Jf[38]*_ik_ldl_solve_pose62_z5)), dq[3])
+                dq[4] = np.where(_m59, (Jf[4]*_ik_ldl_solve_pose62_z0 + (Jf[11]*_ik_ldl_solve_pose62_z1 + Jf[18]*_ik_ldl_solve_pose62_z2)) + (Jf[25]*_ik_ldl_solve_pose62_z3 + (Jf[32]*_ik_ldl_solve_pose62_z4 + Jf[39]*_ik_ldl_solve_pose62_z5)), dq[4])
+                dq[5] = np.where(_m59, (Jf[5]*_ik_ldl_solve_pose62_z0 + (Jf[12]*_ik_ldl_solve_pose62_z1 + Jf[19]*_ik_ldl_solve_pose62_z2)) + (Jf[26]*_ik_ldl_solve_pose62_z3 + (Jf[33]*_ik_ldl_solve_pose62_z4 + Jf[40]*_ik_ldl_solve_pose62_z5)), dq[5])
+                dq[6] = np.where(_m59, (Jf[6]*_ik_ldl_solve_pose62_z0 + (Jf[13]*_ik_ldl_solve_pose62_z1 + Jf[20]*_ik_ldl_solve_pose62_z2)) + (Jf[27]*_ik_ldl_solve_pose62_z3 + (Jf[34]*_ik_ldl_solve_pose62_z4 + Jf[41]*_ik_ldl_solve_pose62_z5)), dq[6])
+            if bool(_m60.any()):
+                _ik_ldl_pose63_mu2 = mu2
+                _ik_ldl_pose63_a00 = G[0] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a10 = G[1]
+                _ik_ldl_pose63_a11 = G[2] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a20 = G[3]
+                _ik_ldl_pose63_a21 = G[4]
+                _ik_ldl_pose63_a22 = G[5] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a30 = G[6]
+                _ik_ldl_pose63_a31 = G[7]
+                _ik_ldl_pose63_a32 = G[8]
+                _ik_ldl_pose63_a33 = G[9] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a40 = G[10]
+                _ik_ldl_pose63_a41 = G[11]
+                _ik_ldl_pose63_a42 = G[12]
+                _ik_ldl_pose63_a43 = G[13]
+                _ik_ldl_pose63_a44 = G[14] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a50 = G[15]
+                _ik_ldl_pose63_a51 = G[16]
+                _ik_ldl_pose63_a52 = G[17]
+                _ik_ldl_pose63_a53 = G[18]
+                _ik_ldl_pose63_a54 = G[19]
+                _ik_ldl_pose63_a55 = G[20] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_cut = np.where(_ik_ldl_pose63_a55 > np.where(_ik_ldl_pose63_a44 > np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00))), _ik_ldl_pose63_a44, np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)))), _ik_ldl_pose63_a55, np.where(_ik_ldl_pose63_a44 > np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00))), _ik_ldl_pose63_a44, np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)))))*1e-13
+                _ik_ldl_pose63_s0 = _ik_ldl_pose63_a00
+                _ik_ldl_pose63_kept0 = _ik_ldl_pose63_s0 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i0 = np.where(_ik_ldl_pose63_kept0, 1.0/_ik_ldl_pose63_s0, 0.0)
+                F[0] = np.where(_m60, _ik_ldl_pose63_i0, F[0])
+                _ik_ldl_pose63_t10 = _ik_ldl_pose63_a10
+                _ik_ldl_pose63_l10 = _ik_ldl_pose63_t10*_ik_ldl_pose63_i0
+                F[1] = np.where(_m60, _ik_ldl_pose63_l10, F[1])
+                _ik_ldl_pose63_ld10 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t10, 0.0)
+                _ik_ldl_pose63_t20 = _ik_ldl_pose63_a20
+                _ik_ldl_pose63_l20 = _ik_ldl_pose63_t20*_ik_ldl_pose63_i0
+                F[3] = np.where(_m60, _ik_ldl_pose63_l20, F[3])
+                _ik_ldl_pose63_ld20 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t20, 0.0)
+                _ik_ldl_pose63_t30 = _ik_ldl_pose63_a30
+                _ik_ldl_pose63_l30 = _ik_ldl_pose63_t30*_ik_ldl_pose63_i0
+                F[6] = np.where(_m60, _ik_ldl_pose63_l30, F[6])
+                _ik_ldl_pose63_ld30 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t30, 0.0)
+                _ik_ldl_pose63_t40 = _ik_ldl_pose63_a40
+                _ik_ldl_pose63_l40 = _ik_ldl_pose63_t40*_ik_ldl_pose63_i0
+                F[10] = np.where(_m60, _ik_ldl_pose63_l40, F[10])
+                _ik_ldl_pose63_ld40 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t40, 0.0)
+                _ik_ldl_pose63_t50 = _ik_ldl_pose63_a50
+                _ik_ldl_pose63_l50 = _ik_ldl_pose63_t50*_ik_ldl_pose63_i0
+                F[15] = np.where(_m60, _ik_ldl_pose63_l50, F[15])
+                _ik_ldl_pose63_ld50 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t50, 0.0)
+                _ik_ldl_pose63_s1 = _ik_ldl_pose63_a11 - _ik_ldl_pose63_l10*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_kept1 = _ik_ldl_pose63_s1 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i1 = np.where(_ik_ldl_pose63_kept1, 1.0/_ik_ldl_pose63_s1, 0.0)
+                F[2] = np.where(_m60, _ik_ldl_pose63_i1, F[2])
+                _ik_ldl_pose63_t21 = _ik_ldl_pose63_a21 - _ik_ldl_pose63_l20*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l21 = _ik_ldl_pose63_t21*_ik_ldl_pose63_i1
+                F[4] = np.where(_m60, _ik_ldl_pose63_l21, F[4])
+                _ik_ldl_pose63_ld21 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t21, 0.0)
+                _ik_ldl_pose63_t31 = _ik_ldl_pose63_a31 - _ik_ldl_pose63_l30*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l31 = _ik_ldl_pose63_t31*_ik_ldl_pose63_i1
+                F[7] = np.where(_m60, _ik_ldl_pose63_l31, F[7])
+                _ik_ldl_pose63_ld31 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t31, 0.0)
+                _ik_ldl_pose63_t41 = _ik_ldl_pose63_a41 - _ik_ldl_pose63_l40*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l41 = _ik_ldl_pose63_t41*_ik_ldl_pose63_i1
+                F[11] = np.where(_m60, _ik_ldl_pose63_l41, F[11])
+                _ik_ldl_pose63_ld41 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t41, 0.0)
+                _ik_ldl_pose63_t51 = _ik_ldl_pose63_a51 - _ik_ldl_pose63_l50*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l51 = _ik_ldl_pose63_t51*_ik_ldl_pose63_i1
+                F[16] = np.where(_m60, _ik_ldl_pose63_l51, F[16])
+                _ik_ldl_pose63_ld51 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t51, 0.0)
+                _ik_ldl_pose63_s2 = (_ik_ldl_pose63_a22 - _ik_ldl_pose63_l20*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l21*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_kept2 = _ik_ldl_pose63_s2 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i2 = np.where(_ik_ldl_pose63_kept2, 1.0/_ik_ldl_pose63_s2, 0.0)
+                F[5] = np.where(_m60, _ik_ldl_pose63_i2, F[5])
+                _ik_ldl_pose63_t32 = (_ik_ldl_pose63_a32 - _ik_ldl_pose63_l30*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l31*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l32 = _ik_ldl_pose63_t32*_ik_ldl_pose63_i2
+                F[8] = np.where(_m60, _ik_ldl_pose63_l32, F[8])
+                _ik_ldl_pose63_ld32 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t32, 0.0)
+                _ik_ldl_pose63_t42 = (_ik_ldl_pose63_a42 - _ik_ldl_pose63_l40*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l41*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l42 = _ik_ldl_pose63_t42*_ik_ldl_pose63_i2
+                F[12] = np.where(_m60, _ik_ldl_pose63_l42, F[12])
+                _ik_ldl_pose63_ld42 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t42, 0.0)
+                _ik_ldl_pose63_t52 = (_ik_ldl_pose63_a52 - _ik_ldl_pose63_l50*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l51*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l52 = _ik_ldl_pose63_t52*_ik_ldl_pose63_i2
+                F[17] = np.where(_m60, _ik_ldl_pose63_l52, F[17])
+                _ik_ldl_pose63_ld52 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t52, 0.0)
+                _ik_ldl_pose63_s3 = (_ik_ldl_pose63_a33 - (_ik_ldl_pose63_l30*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l31*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l32*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_kept3 = _ik_ldl_pose63_s3 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i3 = np.where(_ik_ldl_pose63_kept3, 1.0/_ik_ldl_pose63_s3, 0.0)
+                F[9] = np.where(_m60, _ik_ldl_pose63_i3, F[9])
+                _ik_ldl_pose63_t43 = (_ik_ldl_pose63_a43 - (_ik_ldl_pose63_l40*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l41*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l42*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_l43 = _ik_ldl_pose63_t43*_ik_ldl_pose63_i3
+                F[13] = np.where(_m60, _ik_ldl_pose63_l43, F[13])
+                _ik_ldl_pose63_ld43 = np.where(_ik_ldl_pose63_kept3, _ik_ldl_pose63_t43, 0.0)
+                _ik_ldl_pose63_t53 = (_ik_ldl_pose63_a53 - (_ik_ldl_pose63_l50*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l51*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l52*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_l53 = _ik_ldl_pose63_t53*_ik_ldl_pose63_i3
+                F[18] = np.where(_m60, _ik_ldl_pose63_l53, F[18])
+                _ik_ldl_pose63_ld53 = np.where(_ik_ldl_pose63_kept3, _ik_ldl_pose63_t53, 0.0)
+                _ik_ldl_pose63_s4 = (_ik_ldl_pose63_a44 - (_ik_ldl_pose63_l40*_ik_ldl_pose63_ld40 + (_ik_ldl_pose63_l41*_ik_ldl_pose63_ld41 + _ik_ldl_pose63_l42*_ik_ldl_pose63_ld42))) - _ik_ldl_pose63_l43*_ik_ldl_pose63_ld43
+                _ik_ldl_pose63_kept4 = _ik_ldl_pose63_s4 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i4 = np.where(_ik_ldl_pose63_kept4, 1.0/_ik_ldl_pose63_s4, 0.0)
+                F[14] = np.where(_m60, _ik_ldl_pose63_i4, F[14])
+                _ik_ldl_pose63_t54 = (_ik_ldl_pose63_a54 - (_ik_ldl_pose63_l50*_ik_ldl_pose63_ld40 + (_ik_ldl_pose63_l51*_ik_ldl_pose63_ld41 + _ik_ldl_pose63_l52*_ik_ldl_pose63_ld42))) - _ik_ldl_pose63_l53*_ik_ldl_pose63_ld43
+                _ik_ldl_pose63_l54 = _ik_ldl_pose63_t54*_ik_ldl_pose63_i4
+                F[19] = np.where(_m60, _ik_ldl_pose63_l54, F[19])
+                _ik_ldl_pose63_ld54 = np.where(_ik_ldl_pose63_kept4, _ik_ldl_pose63_t54, 0.0)
+                _ik_ldl_pose63_s5 = (_ik_ldl_pose63_a55 - ((_ik_ldl_pose63_l50*_ik_ldl_pose63_ld50 + _ik_ldl_pose63_l51*_ik_ldl_pose63_ld51) + (_ik_ldl_pose63_l52*_ik_ldl_pose63_ld52 + _ik_ldl_pose63_l53*_ik_ldl_pose63_ld53))) - _ik_ldl_pose63_l54*_ik_ldl_pose63_ld54
+                _ik_ldl_pose63_kept5 = _ik_ldl_pose63_s5 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i5 = np.where(_ik_ldl_pose63_kept5, 1.0/_ik_ldl_pose63_s5, 0.0)
+                F[20] = np.where(_m60, _ik_ldl_pose63_i5, F[20])
+                _ik_ldl_solve_pose64_y0 = e[0]
+                _ik_ldl_solve_pose64_y1 = e[1] - F[1]*_ik_ldl_solve_pose64_y0
+                _ik_ldl_solve_pose64_y2 = (e[2] - F[3]*_ik_ldl_solve_pose64_y0) - F[4]*_ik_ldl_solve_pose64_y1
+                _ik_ldl_solve_pose64_y3 = (e[3] - (F[6]*_ik_ldl_solve_pose64_y0 + F[7]*_ik_ldl_solve_pose64_y1)) - F[8]*_ik_ldl_solve_pose64_y2
+                _ik_ldl_solve_pose64_y4 = (e[4] - (F[10]*_ik_ldl_solve_pose64_y0 + (F[11]*_ik_ldl_solve_pose64_y1 + F[12]*_ik_ldl_solve_pose64_y2))) - F[13]*_ik_ldl_solve_pose64_y3
+                _ik_ldl_solve_pose64_y5 = (e[5] - ((F[15]*_ik_ldl_solve_pose64_y0 + F[16]*_ik_ldl_solve_pose64_y1) + (F[17]*_ik_ldl_solve_pose64_y2 + F[18]*_ik_ldl_solve_pose64_y3))) - F[19]*_ik_ldl_solve_pose64_y4
+                _ik_ldl_solve_pose64_z5 = _ik_ldl_solve_pose64_y5*F[20]
+                _ik_ldl_solve_pose64_z4 = _ik_ldl_solve_pose64_y4*F[14] - F[19]*_ik_ldl_solve_pose64_z5
+                _ik_ldl_solve_pose64_z3 = (_ik_ldl_solve_pose64_y3*F[9] - F[18]*_ik_ldl_solve_pose64_z5) - F[13]*_ik_ldl_solve_pose64_z4
+                _ik_ldl_solve_pose64_z2 = (_ik_ldl_solve_pose64_y2*F[5] - (F[17]*_ik_ldl_solve_pose64_z5 + F[12]*_ik_ldl_solve_pose64_z4)) - F[8]*_ik_ldl_solve_pose64_z3
+                _ik_ldl_solve_pose64_z1 = (_ik_ldl_solve_pose64_y1*F[2] - (F[16]*_ik_ldl_solve_pose64_z5 + (F[11]*_ik_ldl_solve_pose64_z4 + F[7]*_ik_ldl_solve_pose64_z3))) - F[4]*_ik_ldl_solve_pose64_z2
+                _ik_ldl_solve_pose64_z0 = (_ik_ldl_solve_pose64_y0*F[0] - ((F[15]*_ik_ldl_solve_pose64_z5 + F[10]*_ik_ldl_solve_pose64_z4) + (F[6]*_ik_ldl_solve_pose64_z3 + F[3]*_ik_ldl_solve_pose64_z2))) - F[1]*_ik_ldl_solve_pose64_z1
+                dq[0] = np.where(_m60, (J[0]*_ik_ldl_solve_pose64_z0 + (J[7]*_ik_ldl_solve_pose64_z1 + J[14]*_ik_ldl_solve_pose64_z2)) + (J[21]*_ik_ldl_solve_pose64_z3 + (J[28]*_ik_ldl_solve_pose64_z4 + J[35]*_ik_ldl_solve_pose64_z5)), dq[0])
+                dq[1] = np.where(_m60, (J[1]*_ik_ldl_solve_pose64_z0 + (J[8]*_ik_ldl_solve_pose64_z1 + J[15]*_ik_ldl_solve_pose64_z2)) + (J[22]*_ik_ldl_solve_pose64_z3 + (J[29]*_ik_ldl_solve_pose64_z4 + J[36]*_ik_ldl_solve_pose64_z5)), dq[1])
+                dq[2] = np.where(_m60, (J[2]*_ik_ldl_solve_pose64_z0 + (J[9]*_ik_ldl_solve_pose64_z1 + J[16]*_ik_ldl_solve_pose64_z2)) + (J[23]*_ik_ldl_solve_pose64_z3 + (J[30]*_ik_ldl_solve_pose64_z4 + J[37]*_ik_ldl_solve_pose64_z5)), dq[2])
+                dq[3] = np.where(_m60, (J[3]*_ik_ldl_solve_pose64_z0 + (J[10]*_ik_ldl_solve_pose64_z1 + J[17]*_ik_ldl_solve_pose64_z2)) + (J[24]*_ik_ldl_solve_pose64_z3 + (J[31]*_ik_ldl_solve_pose64_z4 + J[38]*_ik_ldl_solve_pose64_z5)), dq[3])
+                dq[4] = np.where(_m60, (J[4]*_ik_ldl_solve_pose64_z0 + (J[11]*_ik_ldl_solve_pose64_z1 + J[18]*_ik_ldl_solve_pose64_z2)) + (J[25]*_ik_ldl_solve_pose64_z3 + (J[32]*_ik_ldl_solve_pose64_z4 + J[39]*_ik_ldl_solve_pose64_z5)), dq[4])
+                dq[5] = np.where(_m60, (J[5]*_ik_ldl_solve_pose64_z0 + (J[12]*_ik_ldl_solve_pose64_z1 + J[19]*_ik_ldl_solve_pose64_z2)) + (J[26]*_ik_ldl_solve_pose64_z3 + (J[33]*_ik_ldl_solve_pose64_z4 + J[40]*_ik_ldl_solve_pose64_z5)), dq[5])
+                dq[6] = np.where(_m60, (J[6]*_ik_ldl_solve_pose64_z0 + (J[13]*_ik_ldl_solve_pose64_z1 + J[20]*_ik_ldl_solve_pose64_z2)) + (J[27]*_ik_ldl_solve_pose64_z3 + (J[34]*_ik_ldl_solve_pose64_z4 + J[41]*_ik_ldl_solve_pose64_z5)), dq[6])
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
+        _c65 = (curved > 0) & (en < 0.05)
+        _m66 = _run35 & _c65
+        if bool(_m66.any()):
             for k in range(0, 7):
-                trial[k] = np.where(_m57, q[k] + dq[k]*0.1, trial[k])
+                trial[k] = np.where(_m66, q[k] + dq[k]*0.1, trial[k])
             _o = _pose_on_lanes(_c, trial[0:7])
-            _merge(_m57, _o[0], Tt, 0, _fr)
-            _ik_error_pose58_M = [_fr(0.0)] * 9
-            et[0] = np.where(_m57, target[3] - Tt[3], et[0])
-            et[1] = np.where(_m57, target[7] - Tt[7], et[1])
-            et[2] = np.where(_m57, target[11] - Tt[11], et[2])
-            _ik_error_pose58_M[0] = np.where(_m57, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose58_M[0])
-            _ik_error_pose58_M[1] = np.where(_m57, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose58_M[1])
-            _ik_error_pose58_M[2] = np.where(_m57, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose58_M[2])
-            _ik_error_pose58_M[3] = np.where(_m57, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose58_M[3])
-            _ik_error_pose58_M[4] = np.where(_m57, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose58_M[4])
-            _ik_error_pose58_M[5] = np.where(_m57, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose58_M[5])
-            _ik_error_pose58_M[6] = np.where(_m57, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose58_M[6])
-            _ik_error_pose58_M[7] = np.where(_m57, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose58_M[7])
-            _ik_error_pose58_M[8] = np.where(_m57, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose58_M[8])
-            _alive60 = _m57
-            _ik_log359_v0 = _ik_error_pose58_M[7] - _ik_error_pose58_M[5]
-            _ik_log359_v1 = _ik_error_pose58_M[2] - _ik_error_pose58_M[6]
-            _ik_log359_v2 = _ik_error_pose58_M[3] - _ik_error_pose58_M[1]
-            _ik_log359_c = (((_ik_error_pose58_M[0] + _ik_error_pose58_M[4]) + _ik_error_pose58_M[8]) - 1.0)*0.5
-            _ik_log359_s = np.sqrt((_ik_log359_v0*_ik_log359_v0 + _ik_log359_v1*_ik_log359_v1) + _ik_log359_v2*_ik_log359_v2)*0.5
-            _ik_log359_angle = np.arctan2(_ik_log359_s, _ik_log359_c)
-            _ik_log359_k = _fr(0.0)
-            _c61 = _ik_log359_angle < 0.0001
-            _m62 = _m57 & _c61
-            _ik_log359_k = np.where(_m62, 0.5 + (_ik_log359_angle*_ik_log359_angle)*0.08333333333333333, _ik_log359_k)
-            et[0 + 3] = np.where(_m62, _ik_log359_v0*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_m62, _ik_log359_v1*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_m62, _ik_log359_v2*_ik_log359_k, et[2 + 3])
-            _alive60 = _alive60 & (~_m62)
-            _c63 = 3.141592653589793 - _ik_log359_angle > 0.001
-            _m64 = _alive60 & _c63
-            _ik_log359_k = np.where(_m64, _ik_log359_angle/(_ik_log359_s + _ik_log359_s), _ik_log359_k)
-            et[0 + 3] = np.where(_m64, _ik_log359_v0*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_m64, _ik_log359_v1*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_m64, _ik_log359_v2*_ik_log359_k, et[2 + 3])
-            _alive60 = _alive60 & (~_m64)
+            _merge(_m66, _o[0], Tt, 0, _fr)
+            _ik_error_pose67_M = [_fr(0.0)] * 9
+            et[0] = np.where(_m66, target[3] - Tt[3], et[0])
+            et[1] = np.where(_m66, target[7] - Tt[7], et[1])
+            et[2] = np.where(_m66, target[11] - Tt[11], et[2])
+            _ik_error_pose67_M[0] = np.where(_m66, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose67_M[0])
+            _ik_error_pose67_M[1] = np.where(_m66, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose67_M[1])
+            _ik_error_pose67_M[2] = np.where(_m66, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose67_M[2])
+            _ik_error_pose67_M[3] = np.where(_m66, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose67_M[3])
+            _ik_error_pose67_M[4] = np.where(_m66, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose67_M[4])
+            _ik_error_pose67_M[5] = np.where(_m66, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose67_M[5])
+            _ik_error_pose67_M[6] = np.where(_m66, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose67_M[6])
+            _ik_error_pose67_M[7] = np.where(_m66, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose67_M[7])
+            _ik_error_pose67_M[8] = np.where(_m66, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose67_M[8])
+            _alive69 = _m66
+            _ik_log368_v0 = _ik_error_pose67_M[7] - _ik_error_pose67_M[5]
+            _ik_log368_v1 = _ik_error_pose67_M[2] - _ik_error_pose67_M[6]
+            _ik_log368_v2 = _ik_error_pose67_M[3] - _ik_error_pose67_M[1]
+            _ik_log368_c = (((_ik_error_pose67_M[0] + _ik_error_pose67_M[4]) + _ik_error_pose67_M[8]) - 1.0)*0.5
+            _ik_log368_s = np.sqrt((_ik_log368_v0*_ik_log368_v0 + _ik_log368_v1*_ik_log368_v1) + _ik_log368_v2*_ik_log368_v2)*0.5
+            _ik_log368_angle = np.arctan2(_ik_log368_s, _ik_log368_c)
+            _ik_log368_k = _fr(0.0)
+            _c70 = _ik_log368_angle < 0.0001
+            _m71 = _m66 & _c70
+            _ik_log368_k = np.where(_m71, 0.5 + (_ik_log368_angle*_ik_log368_angle)*0.08333333333333333, _ik_log368_k)
+            et[0 + 3] = np.where(_m71, _ik_log368_v0*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_m71, _ik_log368_v1*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_m71, _ik_log368_v2*_ik_log368_k, et[2 + 3])
+            _alive69 = _alive69 & (~_m71)
+            _c72 = 3.141592653589793 - _ik_log368_angle > 0.001
+            _m73 = _alive69 & _c72
+            _ik_log368_k = np.where(_m73, _ik_log368_angle/(_ik_log368_s + _ik_log368_s), _ik_log368_k)
+            et[0 + 3] = np.where(_m73, _ik_log368_v0*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_m73, _ik_log368_v1*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_m73, _ik_log368_v2*_ik_log368_k, et[2 + 3])
+            _alive69 = _alive69 & (~_m73)
             # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-            _ik_log359_col = [_fr(0.0)] * 3
-            _ik_log359_i = np.where(_ik_error_pose58_M[0] >= _ik_error_pose58_M[4], np.where(_ik_error_pose58_M[0] >= _ik_error_pose58_M[8], _fi(0), 2), np.where(_ik_error_pose58_M[4] >= _ik_error_pose58_M[8], _fi(1), 2))
-            _i65 = 3*_ik_log359_i
-            _ik_log359_col[0] = np.where(_alive60, (np.where(_ik_log359_i == 0, _ik_error_pose58_M[0], np.where(_ik_log359_i == 1, _ik_error_pose58_M[1], np.where(_ik_log359_i == 2, _ik_error_pose58_M[2], np.where(_ik_log359_i == 3, _ik_error_pose58_M[3], np.where(_ik_log359_i == 4, _ik_error_pose58_M[4], np.where(_ik_log359_i == 5, _ik_error_pose58_M[5], np.where(_ik_log359_i == 6, _ik_error_pose58_M[6], np.where(_ik_log359_i == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i65 == 0, _ik_error_pose58_M[0], np.where(_i65 == 3, _ik_error_pose58_M[3], _ik_error_pose58_M[6])))*0.5, _ik_log359_col[0])
-            _i66 = 3 + _ik_log359_i
-            _i67 = 3*_ik_log359_i + 1
-            _ik_log359_col[1] = np.where(_alive60, (np.where(_i66 == 0, _ik_error_pose58_M[0], np.where(_i66 == 1, _ik_error_pose58_M[1], np.where(_i66 == 2, _ik_error_pose58_M[2], np.where(_i66 == 3, _ik_error_pose58_M[3], np.where(_i66 == 4, _ik_error_pose58_M[4], np.where(_i66 == 5, _ik_error_pose58_M[5], np.where(_i66 == 6, _ik_error_pose58_M[6], np.where(_i66 == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i67 == 1, _ik_error_pose58_M[1], np.where(_i67 == 4, _ik_error_pose58_M[4], _ik_error_pose58_M[7])))*0.5, _ik_log359_col[1])
-            _i68 = 6 + _ik_log359_i
-            _i69 = 3*_ik_log359_i + 2
-            _ik_log359_col[2] = np.where(_alive60, (np.where(_i68 == 0, _ik_error_pose58_M[0], np.where(_i68 == 1, _ik_error_pose58_M[1], np.where(_i68 == 2, _ik_error_pose58_M[2], np.where(_i68 == 3, _ik_error_pose58_M[3], np.where(_i68 == 4, _ik_error_pose58_M[4], np.where(_i68 == 5, _ik_error_pose58_M[5], np.where(_i68 == 6, _ik_error_pose58_M[6], np.where(_i68 == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i69 == 2, _ik_error_pose58_M[2], np.where(_i69 == 5, _ik_error_pose58_M[5], _ik_error_pose58_M[8])))*0.5, _ik_log359_col[2])
-            _v70 = np.where(_ik_log359_i == 0, _ik_log359_col[0], np.where(_ik_log359_i == 1, _ik_log359_col[1], _ik_log359_col[2])) - _ik_log359_c
-            _m71 = _alive60 & (_ik_log359_i == 0)
-            _ik_log359_col[0] = np.where(_m71, _v70, _ik_log359_col[0])
-            _m72 = _alive60 & (_ik_log359_i == 1)
-            _ik_log359_col[1] = np.where(_m72, _v70, _ik_log359_col[1])
-            _m73 = _alive60 & (_ik_log359_i == 2)
-            _ik_log359_col[2] = np.where(_m73, _v70, _ik_log359_col[2])
-            _ik_log359_norm = np.sqrt((_ik_log359_col[0]*_ik_log359_col[0] + _ik_log359_col[1]*_ik_log359_col[1]) + _ik_log359_col[2]*_ik_log359_col[2])
-            _ik_log359_k = np.where(_alive60, np.where((_ik_log359_col[0]*_ik_log359_v0 + _ik_log359_col[1]*_ik_log359_v1) + _ik_log359_col[2]*_ik_log359_v2 < 0.0, -_ik_log359_angle, _ik_log359_angle)/_ik_log359_norm, _ik_log359_k)
-            et[0 + 3] = np.where(_alive60, _ik_log359_col[0]*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_alive60, _ik_log359_col[1]*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_alive60, _ik_log359_col[2]*_ik_log359_k, et[2 + 3])
-            _ik_error_pose58_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-            _ik_error_pose58_rotation = np.sqrt(_ik_error_pose58_rotation_squares)
-            _c74 = ~np.isfinite(_ik_error_pose58_rotation_squares)
-            _m75 = _m57 & _c74
-            _ik_error_pose58_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-            _ik_error_pose58_rotation = np.where(_m75, _ik_error_pose58_rotation_top*np.sqrt((et[3]/_ik_error_pose58_rotation_top)*(et[3]/_ik_error_pose58_rotation_top) + (et[4]/_ik_error_pose58_rotation_top)*(et[4]/_ik_error_pose58_rotation_top) + (et[5]/_ik_error_pose58_rotation_top)*(et[5]/_ik_error_pose58_rotation_top)), _ik_error_pose58_rotation)
-            norms[1] = np.where(_m57, _ik_error_pose58_rotation, norms[1])
-            _ik_error_pose58_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-            _ik_error_pose58_position = np.sqrt(_ik_error_pose58_position_squares)
-            _c76 = ~np.isfinite(_ik_error_pose58_position_squares)
-            _m77 = _m57 & _c76
-            _ik_error_pose58_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-            _ik_error_pose58_position = np.where(_m77, _ik_error_pose58_position_top*np.sqrt((et[0]/_ik_error_pose58_position_top)*(et[0]/_ik_error_pose58_position_top) + (et[1]/_ik_error_pose58_position_top)*(et[1]/_ik_error_pose58_position_top) + (et[2]/_ik_error_pose58_position_top)*(et[2]/_ik_error_pose58_position_top)), _ik_error_pose58_position)
-            norms[0] = np.where(_m57, _ik_error_pose58_position, norms[0])
-            _ik_error_pose58_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-            _ik_error_pose58_whole = np.sqrt(_ik_error_pose58_whole_squares)
-            _c78 = ~np.isfinite(_ik_error_pose58_whole_squares)
-            _m79 = _m57 & _c78
-            _ik_error_pose58_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-            _ik_error_pose58_whole = np.where(_m79, _ik_error_pose58_whole_top*np.sqrt((norms[0]/_ik_error_pose58_whole_top)*(norms[0]/_ik_error_pose58_whole_top) + (norms[1]/_ik_error_pose58_whole_top)*(norms[1]/_ik_error_pose58_whole_top)), _ik_error_pose58_whole)
-            norms[2] = np.where(_m57, _ik_error_pose58_whole, norms[2])
+            _ik_log368_col = [_fr(0.0)] * 3
+            _ik_log368_i = np.where(_ik_error_pose67_M[0] >= _ik_error_pose67_M[4], np.where(_ik_error_pose67_M[0] >= _ik_error_pose67_M[8], _fi(0), 2), np.where(_ik_error_pose67_M[4] >= _ik_error_pose67_M[8], _fi(1), 2))
+            _i74 = 3*_ik_log368_i
+            _ik_log368_col[0] = np.where(_alive69, (np.where(_ik_log368_i == 0, _ik_error_pose67_M[0], np.where(_ik_log368_i == 1, _ik_error_pose67_M[1], np.where(_ik_log368_i == 2, _ik_error_pose67_M[2], np.where(_ik_log368_i == 3, _ik_error_pose67_M[3], np.where(_ik_log368_i == 4, _ik_error_pose67_M[4], np.where(_ik_log368_i == 5, _ik_error_pose67_M[5], np.where(_ik_log368_i == 6, _ik_error_pose67_M[6], np.where(_ik_log368_i == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i74 == 0, _ik_error_pose67_M[0], np.where(_i74 == 3, _ik_error_pose67_M[3], _ik_error_pose67_M[6])))*0.5, _ik_log368_col[0])
+            _i75 = 3 + _ik_log368_i
+            _i76 = 3*_ik_log368_i + 1
+            _ik_log368_col[1] = np.where(_alive69, (np.where(_i75 == 0, _ik_error_pose67_M[0], np.where(_i75 == 1, _ik_error_pose67_M[1], np.where(_i75 == 2, _ik_error_pose67_M[2], np.where(_i75 == 3, _ik_error_pose67_M[3], np.where(_i75 == 4, _ik_error_pose67_M[4], np.where(_i75 == 5, _ik_error_pose67_M[5], np.where(_i75 == 6, _ik_error_pose67_M[6], np.where(_i75 == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i76 == 1, _ik_error_pose67_M[1], np.where(_i76 == 4, _ik_error_pose67_M[4], _ik_error_pose67_M[7])))*0.5, _ik_log368_col[1])
+            _i77 = 6 + _ik_log368_i
+            _i78 = 3*_ik_log368_i + 2
+            _ik_log368_col[2] = np.where(_alive69, (np.where(_i77 == 0, _ik_error_pose67_M[0], np.where(_i77 == 1, _ik_error_pose67_M[1], np.where(_i77 == 2, _ik_error_pose67_M[2], np.where(_i77 == 3, _ik_error_pose67_M[3], np.where(_i77 == 4, _ik_error_pose67_M[4], np.where(_i77 == 5, _ik_error_pose67_M[5], np.where(_i77 == 6, _ik_error_pose67_M[6], np.where(_i77 == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i78 == 2, _ik_error_pose67_M[2], np.where(_i78 == 5, _ik_error_pose67_M[5], _ik_error_pose67_M[8])))*0.5, _ik_log368_col[2])
+            _v79 = np.where(_ik_log368_i == 0, _ik_log368_col[0], np.where(_ik_log368_i == 1, _ik_log368_col[1], _ik_log368_col[2])) - _ik_log368_c
+            _m80 = _alive69 & (_ik_log368_i == 0)
+            _ik_log368_col[0] = np.where(_m80, _v79, _ik_log368_col[0])
+            _m81 = _alive69 & (_ik_log368_i == 1)
+            _ik_log368_col[1] = np.where(_m81, _v79, _ik_log368_col[1])
+            _m82 = _alive69 & (_ik_log368_i == 2)
+            _ik_log368_col[2] = np.where(_m82, _v79, _ik_log368_col[2])
+            _ik_log368_norm = np.sqrt((_ik_log368_col[0]*_ik_log368_col[0] + _ik_log368_col[1]*_ik_log368_col[1]) + _ik_log368_col[2]*_ik_log368_col[2])
+            _ik_log368_k = np.where(_alive69, np.where((_ik_log368_col[0]*_ik_log368_v0 + _ik_log368_col[1]*_ik_log368_v1) + _ik_log368_col[2]*_ik_log368_v2 < 0.0, -_ik_log368_angle, _ik_log368_angle)/_ik_log368_norm, _ik_log368_k)
+            et[0 + 3] = np.where(_alive69, _ik_log368_col[0]*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_alive69, _ik_log368_col[1]*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_alive69, _ik_log368_col[2]*_ik_log368_k, et[2 + 3])
+            _ik_error_pose67_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+            _ik_error_pose67_rotation = np.sqrt(_ik_error_pose67_rotation_squares)
+            _c83 = ~np.isfinite(_ik_error_pose67_rotation_squares)
+            _m84 = _m66 & _c83
+            _ik_error_pose67_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+            _ik_error_pose67_rotation = np.where(_m84, _ik_error_pose67_rotation_top*np.sqrt((et[3]/_ik_error_pose67_rotation_top)*(et[3]/_ik_error_pose67_rotation_top) + (et[4]/_ik_error_pose67_rotation_top)*(et[4]/_ik_error_pose67_rotation_top) + (et[5]/_ik_error_pose67_rotation_top)*(et[5]/_ik_error_pose67_rotation_top)), _ik_error_pose67_rotation)
+            norms[1] = np.where(_m66, _ik_error_pose67_rotation, norms[1])
+            _ik_error_pose67_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+            _ik_error_pose67_position = np.sqrt(_ik_error_pose67_position_squares)
+            _c85 = ~np.isfinite(_ik_error_pose67_position_squares)
+            _m86 = _m66 & _c85
+            _ik_error_pose67_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+            _ik_error_pose67_position = np.where(_m86, _ik_error_pose67_position_top*np.sqrt((et[0]/_ik_error_pose67_position_top)*(et[0]/_ik_error_pose67_position_top) + (et[1]/_ik_error_pose67_position_top)*(et[1]/_ik_error_pose67_position_top) + (et[2]/_ik_error_pose67_position_top)*(et[2]/_ik_error_pose67_position_top)), _ik_error_pose67_position)
+            norms[0] = np.where(_m66, _ik_error_pose67_position, norms[0])
+            _ik_error_pose67_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+            _ik_error_pose67_whole = np.sqrt(_ik_error_pose67_whole_squares)
+            _c87 = ~np.isfinite(_ik_error_pose67_whole_squares)
+            _m88 = _m66 & _c87
+            _ik_error_pose67_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+            _ik_error_pose67_whole = np.where(_m88, _ik_error_pose67_whole_top*np.sqrt((norms[0]/_ik_error_pose67_whole_top)*(norms[0]/_ik_error_pose67_whole_top) + (norms[1]/_ik_error_pose67_whole_top)*(norms[1]/_ik_error_pose67_whole_top)), _ik_error_pose67_whole)
+            norms[2] = np.where(_m66, _ik_error_pose67_whole, norms[2])
             for r in range(0, 6):
-                r2[r] = np.where(_m57, ((et[r] - e[r]) + (J[r*7 + 0]*dq[0] + J[r*7 + 1]*dq[1] + J[r*7 + 2]*dq[2] + J[r*7 + 3]*dq[3] + J[r*7 + 4]*dq[4] + J[r*7 + 5]*dq[5] + J[r*7 + 6]*dq[6])*0.1)*199.99999999999997, r2[r])
-            _c80 = any > 0
-            _m81 = _m57 & _c80
-            _m82 = _m57 & (~_c80)
-            _ik_ldl_solve_pose83_y0 = r2[0]
-            _ik_ldl_solve_pose83_y1 = r2[1] - F[1]*_ik_ldl_solve_pose83_y0
-            _ik_ldl_solve_pose83_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose83_y0) - F[4]*_ik_ldl_solve_pose83_y1
-            _ik_ldl_solve_pose83_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose83_y0 + F[7]*_ik_ldl_solve_pose83_y1)) - F[8]*_ik_ldl_solve_pose83_y2
-            _ik_ldl_solve_pose83_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose83_y0 + (F[11]*_ik_ldl_solve_pose83_y1 + F[12]*_ik_ldl_solve_pose83_y2))) - F[13]*_ik_ldl_solve_pose83_y3
-            _ik_ldl_solve_pose83_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose83_y0 + F[16]*_ik_ldl_solve_pose83_y1) + (F[17]*_ik_ldl_solve_pose83_y2 + F[18]*_ik_ldl_solve_pose83_y3))) - F[19]*_ik_ldl_solve_pose83_y4
-            _ik_ldl_solve_pose83_z5 = _ik_ldl_solve_pose83_y5*F[20]
-            _ik_ldl_solve_pose83_z4 = _ik_ldl_solve_pose83_y4*F[14] - F[19]*_ik_ldl_solve_pose83_z5
-            _ik_ldl_solve_pose83_z3 = (_ik_ldl_solve_pose83_y3*F[9] - F[18]*_ik_ldl_solve_pose83_z5) - F[13]*_ik_ldl_solve_pose83_z4
-            _ik_ldl_solve_pose83_z2 = (_ik_ldl_solve_pose83_y2*F[5] - (F[17]*_ik_ldl_solve_pose83_z5 + F[12]*_ik_ldl_solve_pose83_z4)) - F[8]*_ik_ldl_solve_pose83_z3
-            _ik_ldl_solve_pose83_z1 = (_ik_ldl_solve_pose83_y1*F[2] - (F[16]*_ik_ldl_solve_pose83_z5 + (F[11]*_ik_ldl_solve_pose83_z4 + F[7]*_ik_ldl_solve_pose83_z3))) - F[4]*_ik_ldl_solve_pose83_z2
-            _ik_ldl_solve_pose83_z0 = (_ik_ldl_solve_pose83_y0*F[0] - ((F[15]*_ik_ldl_solve_pose83_z5 + F[10]*_ik_ldl_solve_pose83_z4) + (F[6]*_ik_ldl_solve_pose83_z3 + F[3]*_ik_ldl_solve_pose83_z2))) - F[1]*_ik_ldl_solve_pose83_z1
-            acc[0] = np.where(_m81, (Jf[0]*_ik_ldl_solve_pose83_z0 + (Jf[7]*_ik_ldl_solve_pose83_z1 + Jf[14]*_ik_ldl_solve_pose83_z2)) + (Jf[21]*_ik_ldl_solve_pose83_z3 + (Jf[28]*_ik_ldl_solve_pose83_z4 + Jf[35]*_ik_ldl_solve_pose83_z5)), acc[0])
-            acc[1] = np.where(_m81, (Jf[1]*_ik_ldl_solve_pose83_z0 + (Jf[8]*_ik_ldl_solve_pose83_z1 + Jf[15]*_ik_ldl_solve_pose83_z2)) + (Jf[22]*_ik_ldl_solve_pose83_z3 + (Jf[29]*_ik_ldl_solve_pose83_z4 + Jf[36]*_ik_ldl_solve_pose83_z5)), acc[1])
-            acc[2] = np.where(_m81, (Jf[2]*_ik_ldl_solve_pose83_z0 + (Jf[9]*_ik_ldl_solve_pose83_z1 + Jf[16]*_ik_ldl_solve_pose83_z2)) + (Jf[23]*_ik_ldl_solve_pose83_z3 + (Jf[30]*_ik_ldl_solve_pose83_z4 + Jf[37]*_ik_ldl_solve_pose83_z5)), acc[2])
-            acc[3] = np.where(_m81, (Jf[3]*_ik_ldl_solve_pose83_z0 + (Jf[10]*_ik_ldl_solve_pose83_z1 + Jf[17]*_ik_ldl_solve_pose83_z2)) + (Jf[24]*_ik_ldl_solve_pose83_z3 + (Jf[31]*_ik_ldl_solve_pose83_z4 + Jf[38]*_ik_ldl_solve_pose83_z5)), acc[3])
-            acc[4] = np.where(_m81, (Jf[4]*_ik_ldl_solve_pose83_z0 + (Jf[11]*_ik_ldl_solve_pose83_z1 + Jf[18]*_ik_ldl_solve_pose83_z2)) + (Jf[25]*_ik_ldl_solve_pose83_z3 + (Jf[32]*_ik_ldl_solve_pose83_z4 + Jf[39]*_ik_ldl_solve_pose83_z5)), acc[4])
-            acc[5] = np.where(_m81, (Jf[5]*_ik_ldl_solve_pose83_z0 + (Jf[12]*_ik_ldl_solve_pose83_z1 + Jf[19]*_ik_ldl_solve_pose83_z2)) + (Jf[26]*_ik_ldl_solve_pose83_z3 + (Jf[33]*_ik_ldl_solve_pose83_z4 + Jf[40]*_ik_ldl_solve_pose83_z5)), acc[5])
-            acc[6] = np.where(_m81, (Jf[6]*_ik_ldl_solve_pose83_z0 + (Jf[13]*_ik_ldl_solve_pose83_z1 + Jf[20]*_ik_ldl_solve_pose83_z2)) + (Jf[27]*_ik_ldl_solve_pose83_z3 + (Jf[34]*_ik_ldl_solve_pose83_z4 + Jf[41]*_ik_ldl_solve_pose83_z5)), acc[6])
-            _ik_ldl_solve_pose84_y0 = r2[0]
-            _ik_ldl_solve_pose84_y1 = r2[1] - F[1]*_ik_ldl_solve_pose84_y0
-            _ik_ldl_solve_pose84_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose84_y0) - F[4]*_ik_ldl_solve_pose84_y1
-            _ik_ldl_solve_pose84_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose84_y0 + F[7]*_ik_ldl_solve_pose84_y1)) - F[8]*_ik_ldl_solve_pose84_y2
-            _ik_ldl_solve_pose84_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose84_y0 + (F[11]*_ik_ldl_solve_pose84_y1 + F[12]*_ik_ldl_solve_pose84_y2))) - F[13]*_ik_ldl_solve_pose84_y3
-            _ik_ldl_solve_pose84_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose84_y0 + F[16]*_ik_ldl_solve_pose84_y1) + (F[17]*_ik_ldl_solve_pose84_y2 + F[18]*_ik_ldl_solve_pose84_y3))) - F[19]*_ik_ldl_solve_pose84_y4
-            _ik_ldl_solve_pose84_z5 = _ik_ldl_solve_pose84_y5*F[20]
-            _ik_ldl_solve_pose84_z4 = _ik_ldl_solve_pose84_y4*F[14] - F[19]*_ik_ldl_solve_pose84_z5
-            _ik_ldl_solve_pose84_z3 = (_ik_ldl_solve_pose84_y3*F[9] - F[18]*_ik_ldl_solve_pose84_z5) - F[13]*_ik_ldl_solve_pose84_z4
-            _ik_ldl_solve_pose84_z2 = (_ik_ldl_solve_pose84_y2*F[5] - (F[17]*_ik_ldl_solve_pose84_z5 + F[12]*_ik_ldl_solve_pose84_z4)) - F[8]*_ik_ldl_solve_pose84_z3
-            _ik_ldl_solve_pose84_z1 = (_ik_ldl_solve_pose84_y1*F[2] - (F[16]*_ik_ldl_solve_pose84_z5 + (F[11]*_ik_ldl_solve_pose84_z4 + F[7]*_ik_ldl_solve_pose84_z3))) - F[4]*_ik_ldl_solve_pose84_z2
-            _ik_ldl_solve_pose84_z0 = (_ik_ldl_solve_pose84_y0*F[0] - ((F[15]*_ik_ldl_solve_pose84_z5 + F[10]*_ik_ldl_solve_pose84_z4) + (F[6]*_ik_ldl_solve_pose84_z3 + F[3]*_ik_ldl_solve_pose84_z2))) - F[1]*_ik_ldl_solve_pose84_z1
-            acc[0] = np.where(_m82, (J[0]*_ik_ldl_solve_pose84_z0 + (J[7]*_ik_ldl_solve_pose84_z1 + J[14]*_ik_ldl_solve_pose84_z2)) + (J[21]*_ik_ldl_solve_pose84_z3 + (J[28]*_ik_ldl_solve_pose84_z4 + J[35]*_ik_ldl_solve_pose84_z5)), acc[0])
-            acc[1] = np.where(_m82, (J[1]*_ik_ldl_solve_pose84_z0 + (J[8]*_ik_ldl_solve_pose84_z1 + J[15]*_ik_ldl_solve_pose84_z2)) + (J[22]*_ik_ldl_solve_pose84_z3 + (J[29]*_ik_ldl_solve_pose84_z4 + J[36]*_ik_ldl_solve_pose84_z5)), acc[1])
-            acc[2] = np.where(_m82, (J[2]*_ik_ldl_solve_pose84_z0 + (J[9]*_ik_ldl_solve_pose84_z1 + J[16]*_ik_ldl_solve_pose84_z2)) + (J[23]*_ik_ldl_solve_pose84_z3 + (J[30]*_ik_ldl_solve_pose84_z4 + J[37]*_ik_ldl_solve_pose84_z5)), acc[2])
-            acc[3] = np.where(_m82, (J[3]*_ik_ldl_solve_pose84_z0 + (J[10]*_ik_ldl_solve_pose84_z1 + J[17]*_ik_ldl_solve_pose84_z2)) + (J[24]*_ik_ldl_solve_pose84_z3 + (J[31]*_ik_ldl_solve_pose84_z4 + J[38]*_ik_ldl_solve_pose84_z5)), acc[3])
-            acc[4] = np.where(_m82, (J[4]*_ik_ldl_solve_pose84_z0 + (J[11]*_ik_ldl_solve_pose84_z1 + J[18]*_ik_ldl_solve_pose84_z2)) + (J[25]*_ik_ldl_solve_pose84_z3 + (J[32]*_ik_ldl_solve_pose84_z4 + J[39]*_ik_ldl_solve_pose84_z5)), acc[4])
-            acc[5] = np.where(_m82, (J[5]*_ik_ldl_solve_pose84_z0 + (J[12]*_ik_ldl_solve_pose84_z1 + J[19]*_ik_ldl_solve_pose84_z2)) + (J[26]*_ik_ldl_solve_pose84_z3 + (J[33]*_ik_ldl_solve_pose84_z4 + J[40]*_ik_ldl_solve_pose84_z5)), acc[5])
-            acc[6] = np.where(_m82, (J[6]*_ik_ldl_solve_pose84_z0 + (J[13]*_ik_ldl_solve_pose84_z1 + J[20]*_ik_ldl_solve_pose84_z2)) + (J[27]*_ik_ldl_solve_pose84_z3 + (J[34]*_ik_ldl_solve_pose84_z4 + J[41]*_ik_ldl_solve_pose84_z5)), acc[6])
-            aa = np.where(_m57, 0.0, aa)
-            vv = np.where(_m57, 0.0, vv)
+                r2[r] = np.where(_m66, ((et[r] - e[r]) + (J[r*7 + 0]*dq[0] + J[r*7 + 1]*dq[1] + J[r*7 + 2]*dq[2] + J[r*7 + 3]*dq[3] + J[r*7 + 4]*dq[4] + J[r*7 + 5]*dq[5] + J[r*7 + 6]*dq[6])*0.1)*199.99999999999997, r2[r])
+            _c89 = any > 0
+            _m90 = _m66 & _c89
+            _m91 = _m66 & (~_c89)
+            _ik_ldl_solve_pose92_y0 = r2[0]
+            _ik_ldl_solve_pose92_y1 = r2[1] - F[1]*_ik_ldl_solve_pose92_y0
+            _ik_ldl_solve_pose92_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose92_y0) - F[4]*_ik_ldl_solve_pose92_y1
+            _ik_ldl_solve_pose92_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose92_y0 + F[7]*_ik_ldl_solve_pose92_y1)) - F[8]*_ik_ldl_solve_pose92_y2
+            _ik_ldl_solve_pose92_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose92_y0 + (F[11]*_ik_ldl_solve_pose92_y1 + F[12]*_ik_ldl_solve_pose92_y2))) - F[13]*_ik_ldl_solve_pose92_y3
+            _ik_ldl_solve_pose92_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose92_y0 + F[16]*_ik_ldl_solve_pose92_y1) + (F[17]*_ik_ldl_solve_pose92_y2 + F[18]*_ik_ldl_solve_pose92_y3))) - F[19]*_ik_ldl_solve_pose92_y4
+            _ik_ldl_solve_pose92_z5 = _ik_ldl_solve_pose92_y5*F[20]
+            _ik_ldl_solve_pose92_z4 = _ik_ldl_solve_pose92_y4*F[14] - F[19]*_ik_ldl_solve_pose92_z5
+            _ik_ldl_solve_pose92_z3 = (_ik_ldl_solve_pose92_y3*F[9] - F[18]*_ik_ldl_solve_pose92_z5) - F[13]*_ik_ldl_solve_pose92_z4
+            _ik_ldl_solve_pose92_z2 = (_ik_ldl_solve_pose92_y2*F[5] - (F[17]*_ik_ldl_solve_pose92_z5 + F[12]*_ik_ldl_solve_pose92_z4)) - F[8]*_ik_ldl_solve_pose92_z3
+            _ik_ldl_solve_pose92_z1 = (_ik_ldl_solve_pose92_y1*F[2] - (F[16]*_ik_ldl_solve_pose92_z5 + (F[11]*_ik_ldl_solve_pose92_z4 + F[7]*_ik_ldl_solve_pose92_z3))) - F[4]*_ik_ldl_solve_pose92_z2
+            _ik_ldl_solve_pose92_z0 = (_ik_ldl_solve_pose92_y0*F[0] - ((F[15]*_ik_ldl_solve_pose92_z5 + F[10]*_ik_ldl_solve_pose92_z4) + (F[6]*_ik_ldl_solve_pose92_z3 + F[3]*_ik_ldl_solve_pose92_z2))) - F[1]*_ik_ldl_solve_pose92_z1
+            acc[0] = np.where(_m90, (Jf[0]*_ik_ldl_solve_pose92_z0 + (Jf[7]*_ik_ldl_solve_pose92_z1 + Jf[14]*_ik_ldl_solve_pose92_z2)) + (Jf[21]*_ik_ldl_solve_pose92_z3 + (Jf[28]*_ik_ldl_solve_pose92_z4 + Jf[35]*_ik_ldl_solve_pose92_z5)), acc[0])
+            acc[1] = np.where(_m90, (Jf[1]*_ik_ldl_solve_pose92_z0 + (Jf[8]*_ik_ldl_solve_pose92_z1 + Jf[15]*_ik_ldl_solve_pose92_z2)) + (Jf[22]*_ik_ldl_solve_pose92_z3 + (Jf[29]*_ik_ldl_solve_pose92_z4 + Jf[36]*_ik_ldl_solve_pose92_z5)), acc[1])
+            acc[2] = np.where(_m90, (Jf[2]*_ik_ldl_solve_pose92_z0 + (Jf[9]*_ik_ldl_solve_pose92_z1 + Jf[16]*_ik_ldl_solve_pose92_z2)) + (Jf[23]*_ik_ldl_solve_pose92_z3 + (Jf[30]*_ik_ldl_solve_pose92_z4 + Jf[37]*_ik_ldl_solve_pose92_z5)), acc[2])
+            acc[3] = np.where(_m90, (Jf[3]*_ik_ldl_solve_pose92_z0 + (Jf[10]*_ik_ldl_solve_pose92_z1 + Jf[17]*_ik_ldl_solve_pose92_z2)) + (Jf[24]*_ik_ldl_solve_pose92_z3 + (Jf[31]*_ik_ldl_solve_pose92_z4 + Jf[38]*_ik_ldl_solve_pose92_z5)), acc[3])
+            acc[4] = np.where(_m90, (Jf[4]*_ik_ldl_solve_pose92_z0 + (Jf[11]*_ik_ldl_solve_pose92_z1 + Jf[18]*_ik_ldl_solve_pose92_z2)) + (Jf[25]*_ik_ldl_solve_pose92_z3 + (Jf[32]*_ik_ldl_solve_pose92_z4 + Jf[39]*_ik_ldl_solve_pose92_z5)), acc[4])
+            acc[5] = np.where(_m90, (Jf[5]*_ik_ldl_solve_pose92_z0 + (Jf[12]*_ik_ldl_solve_pose92_z1 + Jf[19]*_ik_ldl_solve_pose92_z2)) + (Jf[26]*_ik_ldl_solve_pose92_z3 + (Jf[33]*_ik_ldl_solve_pose92_z4 + Jf[40]*_ik_ldl_solve_pose92_z5)), acc[5])
+            acc[6] = np.where(_m90, (Jf[6]*_ik_ldl_solve_pose92_z0 + (Jf[13]*_ik_ldl_solve_pose92_z1 + Jf[20]*_ik_ldl_solve_pose92_z2)) + (Jf[27]*_ik_ldl_solve_pose92_z3 + (Jf[34]*_ik_ldl_solve_pose92_z4 + Jf[41]*_ik_ldl_solve_pose92_z5)), acc[6])
+            _ik_ldl_solve_pose93_y0 = r2[0]
+            _ik_ldl_solve_pose93_y1 = r2[1] - F[1]*_ik_ldl_solve_pose93_y0
+            _ik_ldl_solve_pose93_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose93_y0) - F[4]*_ik_ldl_solve_pose93_y1
+            _ik_ldl_solve_pose93_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose93_y0 + F[7]*_ik_ldl_solve_pose93_y1)) - F[8]*_ik_ldl_solve_pose93_y2
+            _ik_ldl_solve_pose93_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose93_y0 + (F[11]*_ik_ldl_solve_pose93_y1 + F[12]*_ik_ldl_solve_pose93_y2))) - F[13]*_ik_ldl_solve_pose93_y3
+            _ik_ldl_solve_pose93_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose93_y0 + F[16]*_ik_ldl_solve_pose93_y1) + (F[17]*_ik_ldl_solve_pose93_y2 + F[18]*_ik_ldl_solve_pose93_y3))) - F[19]*_ik_ldl_solve_pose93_y4
+            _ik_ldl_solve_pose93_z5 = _ik_ldl_solve_pose93_y5*F[20]
+            _ik_ldl_solve_pose93_z4 = _ik_ldl_solve_pose93_y4*F[14] - F[19]*_ik_ldl_solve_pose93_z5
+            _ik_ldl_solve_pose93_z3 = (_ik_ldl_solve_pose93_y3*F[9] - F[18]*_ik_ldl_solve_pose93_z5) - F[13]*_ik_ldl_solve_pose93_z4
+            _ik_ldl_solve_pose93_z2 = (_ik_ldl_solve_pose93_y2*F[5] - (F[17]*_ik_ldl_solve_pose93_z5 + F[12]*_ik_ldl_solve_pose93_z4)) - F[8]*_ik_ldl_solve_pose93_z3
+            _ik_ldl_solve_pose93_z1 = (_ik_ldl_solve_pose93_y1*F[2] - (F[16]*_ik_ldl_solve_pose93_z5 + (F[11]*_ik_ldl_solve_pose93_z4 + F[7]*_ik_ldl_solve_pose93_z3))) - F[4]*_ik_ldl_solve_pose93_z2
+            _ik_ldl_solve_pose93_z0 = (_ik_ldl_solve_pose93_y0*F[0] - ((F[15]*_ik_ldl_solve_pose93_z5 + F[10]*_ik_ldl_solve_pose93_z4) + (F[6]*_ik_ldl_solve_pose93_z3 + F[3]*_ik_ldl_solve_pose93_z2))) - F[1]*_ik_ldl_solve_pose93_z1
+            acc[0] = np.where(_m91, (J[0]*_ik_ldl_solve_pose93_z0 + (J[7]*_ik_ldl_solve_pose93_z1 + J[14]*_ik_ldl_solve_pose93_z2)) + (J[21]*_ik_ldl_solve_pose93_z3 + (J[28]*_ik_ldl_solve_pose93_z4 + J[35]*_ik_ldl_solve_pose93_z5)), acc[0])
+            acc[1] = np.where(_m91, (J[1]*_ik_ldl_solve_pose93_z0 + (J[8]*_ik_ldl_solve_pose93_z1 + J[15]*_ik_ldl_solve_pose93_z2)) + (J[22]*_ik_ldl_solve_pose93_z3 + (J[29]*_ik_ldl_solve_pose93_z4 + J[36]*_ik_ldl_solve_pose93_z5)), acc[1])
+            acc[2] = np.where(_m91, (J[2]*_ik_ldl_solve_pose93_z0 + (J[9]*_ik_ldl_solve_pose93_z1 + J[16]*_ik_ldl_solve_pose93_z2)) + (J[23]*_ik_ldl_solve_pose93_z3 + (J[30]*_ik_ldl_solve_pose93_z4 + J[37]*_ik_ldl_solve_pose93_z5)), acc[2])
+            acc[3] = np.where(_m91, (J[3]*_ik_ldl_solve_pose93_z0 + (J[10]*_ik_ldl_solve_pose93_z1 + J[17]*_ik_ldl_solve_pose93_z2)) + (J[24]*_ik_ldl_solve_pose93_z3 + (J[31]*_ik_ldl_solve_pose93_z4 + J[38]*_ik_ldl_solve_pose93_z5)), acc[3])
+            acc[4] = np.where(_m91, (J[4]*_ik_ldl_solve_pose93_z0 + (J[11]*_ik_ldl_solve_pose93_z1 + J[18]*_ik_ldl_solve_pose93_z2)) + (J[25]*_ik_ldl_solve_pose93_z3 + (J[32]*_ik_ldl_solve_pose93_z4 + J[39]*_ik_ldl_solve_pose93_z5)), acc[4])
+            acc[5] = np.where(_m91, (J[5]*_ik_ldl_solve_pose93_z0 + (J[12]*_ik_ldl_solve_pose93_z1 + J[19]*_ik_ldl_solve_pose93_z2)) + (J[26]*_ik_ldl_solve_pose93_z3 + (J[33]*_ik_ldl_solve_pose93_z4 + J[40]*_ik_ldl_solve_pose93_z5)), acc[5])
+            acc[6] = np.where(_m91, (J[6]*_ik_ldl_solve_pose93_z0 + (J[13]*_ik_ldl_solve_pose93_z1 + J[20]*_ik_ldl_solve_pose93_z2)) + (J[27]*_ik_ldl_solve_pose93_z3 + (J[34]*_ik_ldl_solve_pose93_z4 + J[41]*_ik_ldl_solve_pose93_z5)), acc[6])
+            aa = np.where(_m66, 0.0, aa)
+            vv = np.where(_m66, 0.0, vv)
             for k in range(0, 7):
-                aa = np.where(_m57, aa + acc[k]*acc[k], aa)
-                vv = np.where(_m57, vv + dq[k]*dq[k], vv)
-            _c85 = aa <= vv*0.5625
-            _m86 = _m57 & _c85
+                aa = np.where(_m66, aa + acc[k]*acc[k], aa)
+                vv = np.where(_m66, vv + dq[k]*dq[k], vv)
+            _c94 = aa <= vv*0.5625
+            _m95 = _m66 & _c94
             for k in range(0, 7):
-                dq[k] = np.where(_m86, dq[k] + acc[k]*0.5, dq[k])
+                dq[k] = np.where(_m95, dq[k] + acc[k]*0.5, dq[k])
         big = np.where(_run35, 0.0, big)
         for k in range(0, 7):
             big = np.where(_run35, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
@@ -6193,266 +6464,266 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
         _o = _ik_terms_on_lanes(_c, trial[0:7])
         _merge(_run35, _o[0], Tt, 0, _fr)
         _merge(_run35, _o[1], Jt, 0, _fr)
-        _ik_error_pose87_M = [_fr(0.0)] * 9
+        _ik_error_pose96_M = [_fr(0.0)] * 9
         et[0] = np.where(_run35, target[3] - Tt[3], et[0])
         et[1] = np.where(_run35, target[7] - Tt[7], et[1])
         et[2] = np.where(_run35, target[11] - Tt[11], et[2])
-        _ik_error_pose87_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose87_M[0])
-        _ik_error_pose87_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose87_M[1])
-        _ik_error_pose87_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose87_M[2])
-        _ik_error_pose87_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose87_M[3])
-        _ik_error_pose87_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose87_M[4])
-        _ik_error_pose87_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose87_M[5])
-        _ik_error_pose87_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose87_M[6])
-        _ik_error_pose87_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose87_M[7])
-        _ik_error_pose87_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose87_M[8])
-        _alive89 = _run35
-        _ik_log388_v0 = _ik_error_pose87_M[7] - _ik_error_pose87_M[5]
-        _ik_log388_v1 = _ik_error_pose87_M[2] - _ik_error_pose87_M[6]
-        _ik_log388_v2 = _ik_error_pose87_M[3] - _ik_error_pose87_M[1]
-        _ik_log388_c = (((_ik_error_pose87_M[0] + _ik_error_pose87_M[4]) + _ik_error_pose87_M[8]) - 1.0)*0.5
-        _ik_log388_s = np.sqrt((_ik_log388_v0*_ik_log388_v0 + _ik_log388_v1*_ik_log388_v1) + _ik_log388_v2*_ik_log388_v2)*0.5
-        _ik_log388_angle = np.arctan2(_ik_log388_s, _ik_log388_c)
-        _ik_log388_k = _fr(0.0)
-        _c90 = _ik_log388_angle < 0.0001
-        _m91 = _run35 & _c90
-        _ik_log388_k = np.where(_m91, 0.5 + (_ik_log388_angle*_ik_log388_angle)*0.08333333333333333, _ik_log388_k)
-        et[0 + 3] = np.where(_m91, _ik_log388_v0*_ik_log388_k, et[0 + 3])
-        et[1 + 3] = np.where(_m91, _ik_log388_v1*_ik_log388_k, et[1 + 3])
-        et[2 + 3] = np.where(_m91, _ik_log388_v2*_ik_log388_k, et[2 + 3])
-        _alive89 = _alive89 & (~_m91)
-        _c92 = 3.141592653589793 - _ik_log388_angle > 0.001
-        _m93 = _alive89 & _c92
-        _ik_log388_k = np.where(_m93, _ik_log388_angle/(_ik_log388_s + _ik_log388_s), _ik_log388_k)
-        et[0 + 3] = np.where(_m93, _ik_log388_v0*_ik_log388_k, et[0 + 3])
-        et[1 + 3] = np.where(_m93, _ik_log388_v1*_ik_log388_k, et[1 + 3])
-        et[2 + 3] = np.where(_m93, _ik_log388_v2*_ik_log388_k, et[2 + 3])
-        _alive89 = _alive89 & (~_m93)
+        _ik_error_pose96_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose96_M[0])
+        _ik_error_pose96_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose96_M[1])
+        _ik_error_pose96_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose96_M[2])
+        _ik_error_pose96_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose96_M[3])
+        _ik_error_pose96_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose96_M[4])
+        _ik_error_pose96_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose96_M[5])
+        _ik_error_pose96_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose96_M[6])
+        _ik_error_pose96_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose96_M[7])
+        _ik_error_pose96_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose96_M[8])
+        _alive98 = _run35
+        _ik_log397_v0 = _ik_error_pose96_M[7] - _ik_error_pose96_M[5]
+        _ik_log397_v1 = _ik_error_pose96_M[2] - _ik_error_pose96_M[6]
+        _ik_log397_v2 = _ik_error_pose96_M[3] - _ik_error_pose96_M[1]
+        _ik_log397_c = (((_ik_error_pose96_M[0] + _ik_error_pose96_M[4]) + _ik_error_pose96_M[8]) - 1.0)*0.5
+        _ik_log397_s = np.sqrt((_ik_log397_v0*_ik_log397_v0 + _ik_log397_v1*_ik_log397_v1) + _ik_log397_v2*_ik_log397_v2)*0.5
+        _ik_log397_angle = np.arctan2(_ik_log397_s, _ik_log397_c)
+        _ik_log397_k = _fr(0.0)
+        _c99 = _ik_log397_angle < 0.0001
+        _m100 = _run35 & _c99
+        _ik_log397_k = np.where(_m100, 0.5 + (_ik_log397_angle*_ik_log397_angle)*0.08333333333333333, _ik_log397_k)
+        et[0 + 3] = np.where(_m100, _ik_log397_v0*_ik_log397_k, et[0 + 3])
+        et[1 + 3] = np.where(_m100, _ik_log397_v1*_ik_log397_k, et[1 + 3])
+        et[2 + 3] = np.where(_m100, _ik_log397_v2*_ik_log397_k, et[2 + 3])
+        _alive98 = _alive98 & (~_m100)
+        _c101 = 3.141592653589793 - _ik_log397_angle > 0.001
+        _m102 = _alive98 & _c101
+        _ik_log397_k = np.where(_m102, _ik_log397_angle/(_ik_log397_s + _ik_log397_s), _ik_log397_k)
+        et[0 + 3] = np.where(_m102, _ik_log397_v0*_ik_log397_k, et[0 + 3])
+        et[1 + 3] = np.where(_m102, _ik_log397_v1*_ik_log397_k, et[1 + 3])
+        et[2 + 3] = np.where(_m102, _ik_log397_v2*_ik_log397_k, et[2 + 3])
+        _alive98 = _alive98 & (~_m102)
         # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-        _ik_log388_col = [_fr(0.0)] * 3
-        _ik_log388_i = np.where(_ik_error_pose87_M[0] >= _ik_error_pose87_M[4], np.where(_ik_error_pose87_M[0] >= _ik_error_pose87_M[8], _fi(0), 2), np.where(_ik_error_pose87_M[4] >= _ik_error_pose87_M[8], _fi(1), 2))
-        _i94 = 3*_ik_log388_i
-        _ik_log388_col[0] = np.where(_alive89, (np.where(_ik_log388_i == 0, _ik_error_pose87_M[0], np.where(_ik_log388_i == 1, _ik_error_pose87_M[1], np.where(_ik_log388_i == 2, _ik_error_pose87_M[2], np.where(_ik_log388_i == 3, _ik_error_pose87_M[3], np.where(_ik_log388_i == 4, _ik_error_pose87_M[4], np.where(_ik_log388_i == 5, _ik_error_pose87_M[5], np.where(_ik_log388_i == 6, _ik_error_pose87_M[6], np.where(_ik_log388_i == 7, _ik_error_pose87_M[7], _ik_error_pose87_M[8])))))))) + np.where(_i94 == 0, _ik_error_pose87_M[0], np.where(_i94 == 3, _ik_error_pose87_M[3], _ik_error_pose87_M[6])))*0.5, _ik_log388_col[0])
-        _i95 = 3 + _ik_log388_i
-        _i96 = 3*_ik_log388_i + 1
-        _ik_log388_col[1] = np.where(_alive89, (np.where(_i95 == 0, _ik_error_pose87_M[0], np.where(_i95 == 1, _ik_error_pose87_M[1], np.where(_i95 == 2, _ik_error_pose87_M[2], np.where(_i95 == 3, _ik_error_pose87_M[3], np.where(_i95 == 4, _ik_error_pose87_M[4], np.where(_i95 == 5, _ik_error_pose87_M[5], np.where(_i95 == 6, _ik_error_pose87_M[6], np.where(_i95 == 7, _ik_error_pose87_M[7], _ik_error_pose87_M[8])))))))) + np.where(_i96 == 1, _ik_error_pose87_M[1], np.where(_i96 == 4, _ik_error_pose87_M[4], _ik_error_pose87_M[7])))*0.5, _ik_log388_col[1])
-        _i97 = 6 + _ik_log388_i
-        _i98 = 3*_ik_log388_i + 2
-        _ik_log388_col[2] = np.where(_alive89, (np.where(_i97 == 0, _ik_error_pose87_M[0], np.where(_i97 == 1, _ik_error_pose87_M[1], np.where(_i97 == 2, _ik_error_pose87_M[2], np.where(_i97 == 3, _ik_error_pose87_M[3], np.where(_i97 == 4, _ik_error_pose87_M[4], np.where(_i97 == 5, _ik_error_pose87_M[5], np.where(_i97 == 6, _ik_error_pose87_M[6], np.where(_i97 == 7, _ik_error_pose87_M[7], _ik_error_pose87_M[8])))))))) + np.where(_i98 == 2, _ik_error_pose87_M[2], np.where(_i98 == 5, _ik_error_pose87_M[5], _ik_error_pose87_M[8])))*0.5, _ik_log388_col[2])
-        _v99 = np.where(_ik_log388_i == 0, _ik_log388_col[0], np.where(_ik_log388_i == 1, _ik_log388_col[1], _ik_log388_col[2])) - _ik_log388_c
-        _m100 = _alive89 & (_ik_log388_i == 0)
-        _ik_log388_col[0] = np.where(_m100, _v99, _ik_log388_col[0])
-        _m101 = _alive89 & (_ik_log388_i == 1)
-        _ik_log388_col[1] = np.where(_m101, _v99, _ik_log388_col[1])
-        _m102 = _alive89 & (_ik_log388_i == 2)
-        _ik_log388_col[2] = np.where(_m102, _v99, _ik_log388_col[2])
-        _ik_log388_norm = np.sqrt((_ik_log388_col[0]*_ik_log388_col[0] + _ik_log388_col[1]*_ik_log388_col[1]) + _ik_log388_col[2]*_ik_log388_col[2])
-        _ik_log388_k = np.where(_alive89, np.where((_ik_log388_col[0]*_ik_log388_v0 + _ik_log388_col[1]*_ik_log388_v1) + _ik_log388_col[2]*_ik_log388_v2 < 0.0, -_ik_log388_angle, _ik_log388_angle)/_ik_log388_norm, _ik_log388_k)
-        et[0 + 3] = np.where(_alive89, _ik_log388_col[0]*_ik_log388_k, et[0 + 3])
-        et[1 + 3] = np.where(_alive89, _ik_log388_col[1]*_ik_log388_k, et[1 + 3])
-        et[2 + 3] = np.where(_alive89, _ik_log388_col[2]*_ik_log388_k, et[2 + 3])
-        _ik_error_pose87_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-        _ik_error_pose87_rotation = np.sqrt(_ik_error_pose87_rotation_squares)
-        _c103 = ~np.isfinite(_ik_error_pose87_rotation_squares)
-        _m104 = _run35 & _c103
-        _ik_error_pose87_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-        _ik_error_pose87_rotation = np.where(_m104, _ik_error_pose87_rotation_top*np.sqrt((et[3]/_ik_error_pose87_rotation_top)*(et[3]/_ik_error_pose87_rotation_top) + (et[4]/_ik_error_pose87_rotation_top)*(et[4]/_ik_error_pose87_rotation_top) + (et[5]/_ik_error_pose87_rotation_top)*(et[5]/_ik_error_pose87_rotation_top)), _ik_error_pose87_rotation)
-        norms[1] = np.where(_run35, _ik_error_pose87_rotation, norms[1])
-        _ik_error_pose87_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_pose87_position = np.sqrt(_ik_error_pose87_position_squares)
-        _c105 = ~np.isfinite(_ik_error_pose87_position_squares)
-        _m106 = _run35 & _c105
-        _ik_error_pose87_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_pose87_position = np.where(_m106, _ik_error_pose87_position_top*np.sqrt((et[0]/_ik_error_pose87_position_top)*(et[0]/_ik_error_pose87_position_top) + (et[1]/_ik_error_pose87_position_top)*(et[1]/_ik_error_pose87_position_top) + (et[2]/_ik_error_pose87_position_top)*(et[2]/_ik_error_pose87_position_top)), _ik_error_pose87_position)
-        norms[0] = np.where(_run35, _ik_error_pose87_position, norms[0])
-        _ik_error_pose87_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_pose87_whole = np.sqrt(_ik_error_pose87_whole_squares)
-        _c107 = ~np.isfinite(_ik_error_pose87_whole_squares)
-        _m108 = _run35 & _c107
-        _ik_error_pose87_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_pose87_whole = np.where(_m108, _ik_error_pose87_whole_top*np.sqrt((norms[0]/_ik_error_pose87_whole_top)*(norms[0]/_ik_error_pose87_whole_top) + (norms[1]/_ik_error_pose87_whole_top)*(norms[1]/_ik_error_pose87_whole_top)), _ik_error_pose87_whole)
-        norms[2] = np.where(_run35, _ik_error_pose87_whole, norms[2])
+        _ik_log397_col = [_fr(0.0)] * 3
+        _ik_log397_i = np.where(_ik_error_pose96_M[0] >= _ik_error_pose96_M[4], np.where(_ik_error_pose96_M[0] >= _ik_error_pose96_M[8], _fi(0), 2), np.where(_ik_error_pose96_M[4] >= _ik_error_pose96_M[8], _fi(1), 2))
+        _i103 = 3*_ik_log397_i
+        _ik_log397_col[0] = np.where(_alive98, (np.where(_ik_log397_i == 0, _ik_error_pose96_M[0], np.where(_ik_log397_i == 1, _ik_error_pose96_M[1], np.where(_ik_log397_i == 2, _ik_error_pose96_M[2], np.where(_ik_log397_i == 3, _ik_error_pose96_M[3], np.where(_ik_log397_i == 4, _ik_error_pose96_M[4], np.where(_ik_log397_i == 5, _ik_error_pose96_M[5], np.where(_ik_log397_i == 6, _ik_error_pose96_M[6], np.where(_ik_log397_i == 7, _ik_error_pose96_M[7], _ik_error_pose96_M[8])))))))) + np.where(_i103 == 0, _ik_error_pose96_M[0], np.where(_i103 == 3, _ik_error_pose96_M[3], _ik_error_pose96_M[6])))*0.5, _ik_log397_col[0])
+        _i104 = 3 + _ik_log397_i
+        _i105 = 3*_ik_log397_i + 1
+        _ik_log397_col[1] = np.where(_alive98, (np.where(_i104 == 0, _ik_error_pose96_M[0], np.where(_i104 == 1, _ik_error_pose96_M[1], np.where(_i104 == 2, _ik_error_pose96_M[2], np.where(_i104 == 3, _ik_error_pose96_M[3], np.where(_i104 == 4, _ik_error_pose96_M[4], np.where(_i104 == 5, _ik_error_pose96_M[5], np.where(_i104 == 6, _ik_error_pose96_M[6], np.where(_i104 == 7, _ik_error_pose96_M[7], _ik_error_pose96_M[8])))))))) + np.where(_i105 == 1, _ik_error_pose96_M[1], np.where(_i105 == 4, _ik_error_pose96_M[4], _ik_error_pose96_M[7])))*0.5, _ik_log397_col[1])
+        _i106 = 6 + _ik_log397_i
+        _i107 = 3*_ik_log397_i + 2
+        _ik_log397_col[2] = np.where(_alive98, (np.where(_i106 == 0, _ik_error_pose96_M[0], np.where(_i106 == 1, _ik_error_pose96_M[1], np.where(_i106 == 2, _ik_error_pose96_M[2], np.where(_i106 == 3, _ik_error_pose96_M[3], np.where(_i106 == 4, _ik_error_pose96_M[4], np.where(_i106 == 5, _ik_error_pose96_M[5], np.where(_i106 == 6, _ik_error_pose96_M[6], np.where(_i106 == 7, _ik_error_pose96_M[7], _ik_error_pose96_M[8])))))))) + np.where(_i107 == 2, _ik_error_pose96_M[2], np.where(_i107 == 5, _ik_error_pose96_M[5], _ik_error_pose96_M[8])))*0.5, _ik_log397_col[2])
+        _v108 = np.where(_ik_log397_i == 0, _ik_log397_col[0], np.where(_ik_log397_i == 1, _ik_log397_col[1], _ik_log397_col[2])) - _ik_log397_c
+        _m109 = _alive98 & (_ik_log397_i == 0)
+        _ik_log397_col[0] = np.where(_m109, _v108, _ik_log397_col[0])
+        _m110 = _alive98 & (_ik_log397_i == 1)
+        _ik_log397_col[1] = np.where(_m110, _v108, _ik_log397_col[1])
+        _m111 = _alive98 & (_ik_log397_i == 2)
+        _ik_log397_col[2] = np.where(_m111, _v108, _ik_log397_col[2])
+        _ik_log397_norm = np.sqrt((_ik_log397_col[0]*_ik_log397_col[0] + _ik_log397_col[1]*_ik_log397_col[1]) + _ik_log397_col[2]*_ik_log397_col[2])
+        _ik_log397_k = np.where(_alive98, np.where((_ik_log397_col[0]*_ik_log397_v0 + _ik_log397_col[1]*_ik_log397_v1) + _ik_log397_col[2]*_ik_log397_v2 < 0.0, -_ik_log397_angle, _ik_log397_angle)/_ik_log397_norm, _ik_log397_k)
+        et[0 + 3] = np.where(_alive98, _ik_log397_col[0]*_ik_log397_k, et[0 + 3])
+        et[1 + 3] = np.where(_alive98, _ik_log397_col[1]*_ik_log397_k, et[1 + 3])
+        et[2 + 3] = np.where(_alive98, _ik_log397_col[2]*_ik_log397_k, et[2 + 3])
+        _ik_error_pose96_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+        _ik_error_pose96_rotation = np.sqrt(_ik_error_pose96_rotation_squares)
+        _c112 = ~np.isfinite(_ik_error_pose96_rotation_squares)
+        _m113 = _run35 & _c112
+        _ik_error_pose96_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+        _ik_error_pose96_rotation = np.where(_m113, _ik_error_pose96_rotation_top*np.sqrt((et[3]/_ik_error_pose96_rotation_top)*(et[3]/_ik_error_pose96_rotation_top) + (et[4]/_ik_error_pose96_rotation_top)*(et[4]/_ik_error_pose96_rotation_top) + (et[5]/_ik_error_pose96_rotation_top)*(et[5]/_ik_error_pose96_rotation_top)), _ik_error_pose96_rotation)
+        norms[1] = np.where(_run35, _ik_error_pose96_rotation, norms[1])
+        _ik_error_pose96_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_pose96_position = np.sqrt(_ik_error_pose96_position_squares)
+        _c114 = ~np.isfinite(_ik_error_pose96_position_squares)
+        _m115 = _run35 & _c114
+        _ik_error_pose96_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_pose96_position = np.where(_m115, _ik_error_pose96_position_top*np.sqrt((et[0]/_ik_error_pose96_position_top)*(et[0]/_ik_error_pose96_position_top) + (et[1]/_ik_error_pose96_position_top)*(et[1]/_ik_error_pose96_position_top) + (et[2]/_ik_error_pose96_position_top)*(et[2]/_ik_error_pose96_position_top)), _ik_error_pose96_position)
+        norms[0] = np.where(_run35, _ik_error_pose96_position, norms[0])
+        _ik_error_pose96_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_pose96_whole = np.sqrt(_ik_error_pose96_whole_squares)
+        _c116 = ~np.isfinite(_ik_error_pose96_whole_squares)
+        _m117 = _run35 & _c116
+        _ik_error_pose96_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_pose96_whole = np.where(_m117, _ik_error_pose96_whole_top*np.sqrt((norms[0]/_ik_error_pose96_whole_top)*(norms[0]/_ik_error_pose96_whole_top) + (norms[1]/_ik_error_pose96_whole_top)*(norms[1]/_ik_error_pose96_whole_top)), _ik_error_pose96_whole)
+        norms[2] = np.where(_run35, _ik_error_pose96_whole, norms[2])
         pet = np.where(_run35, norms[0], pet)
         ret = np.where(_run35, norms[1], ret)
         ent = np.where(_run35, norms[2], ent)
         it = np.where(_run35, it + 1, it)
         attempt = np.where(_run35, attempt + 1, attempt)
         curved = np.where(_run35, np.where(ent > en*0.5, _fi(1), 0), curved)
-        _c109 = ent < en
-        _m110 = _run35 & _c109
-        _m111 = _run35 & (~_c109)
+        _c118 = ent < en
+        _m119 = _run35 & _c118
+        _m120 = _run35 & (~_c118)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m110, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m110, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m119, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m119, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 7):
-            q[k] = np.where(_m110, trial[k], q[k])
+            q[k] = np.where(_m119, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m110, Tt[k], Tm[k])
+            Tm[k] = np.where(_m119, Tt[k], Tm[k])
         for k in range(0, 42):
-            J[k] = np.where(_m110, Jt[k], J[k])
+            J[k] = np.where(_m119, Jt[k], J[k])
         for k in range(0, 6):
-            e[k] = np.where(_m110, et[k], e[k])
-        gram_ready = np.where(_m110, 0, gram_ready)
-        pe = np.where(_m110, pet, pe)
-        re = np.where(_m110, ret, re)
-        en = np.where(_m110, ent, en)
-        c = np.where(_m110, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m111, c*4.0, c)
-        stalled = np.where(_m111, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        damped = np.where(_m111, 0, damped)
-        _c112 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m113 = _run35 & _c112
-        best_en = np.where(_m113, en, best_en)
-        best_pe = np.where(_m113, pe, best_pe)
-        best_re = np.where(_m113, re, best_re)
-        best_stalled = np.where(_m113, stalled, best_stalled)
-        best_here = np.where(_m113, 1, best_here)
+            e[k] = np.where(_m119, et[k], e[k])
+        gram_ready = np.where(_m119, 0, gram_ready)
+        pe = np.where(_m119, pet, pe)
+        re = np.where(_m119, ret, re)
+        en = np.where(_m119, ent, en)
+        c = np.where(_m119, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m120, c*4.0, c)
+        stalled = np.where(_m120, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m120, 0, damped)
+        _c121 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m122 = _run35 & _c121
+        best_en = np.where(_m122, en, best_en)
+        best_pe = np.where(_m122, pe, best_pe)
+        best_re = np.where(_m122, re, best_re)
+        best_stalled = np.where(_m122, stalled, best_stalled)
+        best_here = np.where(_m122, 1, best_here)
         for k in range(0, 7):
-            best_q[k] = np.where(_m113, q[k], best_q[k])
-        _c114 = ~((pe <= tol) & (re <= tol))
-        _m115 = _run35 & _c114
-        if bool(_m115.any()):
-            slow = np.where(_m115, stationary, slow)
-            _c116 = attempt % 3 == 0
-            _m117 = _m115 & _c116
+            best_q[k] = np.where(_m122, q[k], best_q[k])
+        _c123 = ~((pe <= tol) & (re <= tol))
+        _m124 = _run35 & _c123
+        if bool(_m124.any()):
+            slow = np.where(_m124, stationary, slow)
+            _c125 = attempt % 3 == 0
+            _m126 = _m124 & _c125
             # a window of accepted, damping-bound steps is not slow: each step halves the damping
-            _c118 = (en > checkpoint*0.6) & (damped == 0)
-            _m119 = _m117 & _c118
-            slow = np.where(_m119, 1, slow)
-            damped = np.where(_m117, 1, damped)
-            window_start = np.where(_m117, checkpoint, window_start)
-            checkpoint = np.where(_m117, en, checkpoint)
-            _c120 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m121 = _m115 & _c120
-            if bool(_m121.any()):
-                _c122 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m123 = _m121 & _c122
+            _c127 = (en > checkpoint*0.6) & (damped == 0)
+            _m128 = _m126 & _c127
+            slow = np.where(_m128, 1, slow)
+            damped = np.where(_m126, 1, damped)
+            window_start = np.where(_m126, checkpoint, window_start)
+            checkpoint = np.where(_m126, en, checkpoint)
+            _c129 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m130 = _m124 & _c129
+            if bool(_m130.any()):
+                _c131 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m132 = _m130 & _c131
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m123, 1, best_stalled)
-                best_here = np.where(_m121, 0, best_here)
-                nearest = np.where(_m121, 0.0, nearest)
+                best_stalled = np.where(_m132, 1, best_stalled)
+                best_here = np.where(_m130, 0, best_here)
+                nearest = np.where(_m130, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 7):
-                        _alive125 = _m121
-                        _ik_uniform124_s = state[0]
-                        _ik_uniform124_s = _u64_where(_m121, _u64_xor(_ik_uniform124_s, _u64_shr(_ik_uniform124_s, 12)), _ik_uniform124_s)
-                        _ik_uniform124_s = _u64_where(_m121, _u64_xor(_ik_uniform124_s, _u64_shl(_ik_uniform124_s, 25)), _ik_uniform124_s)
-                        _ik_uniform124_s = _u64_where(_m121, _u64_xor(_ik_uniform124_s, _u64_shr(_ik_uniform124_s, 27)), _ik_uniform124_s)
-                        state[0] = _u64_where(_m121, _ik_uniform124_s, state[0])
-                        u = np.where(_m121, _u64_real(_u64_shr(_u64_mul(_ik_uniform124_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive125 = _alive125 & (~_m121)
-                        trial[k] = np.where(_m121, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive134 = _m130
+                        _ik_uniform133_s = state[0]
+                        _ik_uniform133_s = _u64_where(_m130, _u64_xor(_ik_uniform133_s, _u64_shr(_ik_uniform133_s, 12)), _ik_uniform133_s)
+                        _ik_uniform133_s = _u64_where(_m130, _u64_xor(_ik_uniform133_s, _u64_shl(_ik_uniform133_s, 25)), _ik_uniform133_s)
+                        _ik_uniform133_s = _u64_where(_m130, _u64_xor(_ik_uniform133_s, _u64_shr(_ik_uniform133_s, 27)), _ik_uniform133_s)
+                        state[0] = _u64_where(_m130, _ik_uniform133_s, state[0])
+                        u = np.where(_m130, _u64_real(_u64_shr(_u64_mul(_ik_uniform133_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive134 = _alive134 & (~_m130)
+                        trial[k] = np.where(_m130, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:7])
-                    _merge(_m121, _o[0], Tt, 0, _fr)
-                    _merge(_m121, _o[1], Jt, 0, _fr)
-                    d = np.where(_m121, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
-                    _c126 = (d < nearest) | (m == 0)
-                    _m127 = _m121 & _c126
-                    nearest = np.where(_m127, d, nearest)
+                    _merge(_m130, _o[0], Tt, 0, _fr)
+                    _merge(_m130, _o[1], Jt, 0, _fr)
+                    d = np.where(_m130, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
+                    _c135 = (d < nearest) | (m == 0)
+                    _m136 = _m130 & _c135
+                    nearest = np.where(_m136, d, nearest)
                     for k in range(0, 7):
-                        q[k] = np.where(_m127, trial[k], q[k])
-                restarts = np.where(_m121, restarts + 1, restarts)
-                gram_ready = np.where(_m121, 0, gram_ready)
+                        q[k] = np.where(_m136, trial[k], q[k])
+                restarts = np.where(_m130, restarts + 1, restarts)
+                gram_ready = np.where(_m130, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:7])
-                _merge(_m121, _o[0], Tm, 0, _fr)
-                _merge(_m121, _o[1], J, 0, _fr)
-                _ik_error_pose128_M = [_fr(0.0)] * 9
-                e[0] = np.where(_m121, target[3] - Tm[3], e[0])
-                e[1] = np.where(_m121, target[7] - Tm[7], e[1])
-                e[2] = np.where(_m121, target[11] - Tm[11], e[2])
-                _ik_error_pose128_M[0] = np.where(_m121, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose128_M[0])
-                _ik_error_pose128_M[1] = np.where(_m121, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose128_M[1])
-                _ik_error_pose128_M[2] = np.where(_m121, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose128_M[2])
-                _ik_error_pose128_M[3] = np.where(_m121, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose128_M[3])
-                _ik_error_pose128_M[4] = np.where(_m121, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose128_M[4])
-                _ik_error_pose128_M[5] = np.where(_m121, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose128_M[5])
-                _ik_error_pose128_M[6] = np.where(_m121, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose128_M[6])
-                _ik_error_pose128_M[7] = np.where(_m121, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose128_M[7])
-                _ik_error_pose128_M[8] = np.where(_m121, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose128_M[8])
-                _alive130 = _m121
-                _ik_log3129_v0 = _ik_error_pose128_M[7] - _ik_error_pose128_M[5]
-                _ik_log3129_v1 = _ik_error_pose128_M[2] - _ik_error_pose128_M[6]
-                _ik_log3129_v2 = _ik_error_pose128_M[3] - _ik_error_pose128_M[1]
-                _ik_log3129_c = (((_ik_error_pose128_M[0] + _ik_error_pose128_M[4]) + _ik_error_pose128_M[8]) - 1.0)*0.5
-                _ik_log3129_s = np.sqrt((_ik_log3129_v0*_ik_log3129_v0 + _ik_log3129_v1*_ik_log3129_v1) + _ik_log3129_v2*_ik_log3129_v2)*0.5
-                _ik_log3129_angle = np.arctan2(_ik_log3129_s, _ik_log3129_c)
-                _ik_log3129_k = _fr(0.0)
-                _c131 = _ik_log3129_angle < 0.0001
-                _m132 = _m121 & _c131
-                _ik_log3129_k = np.where(_m132, 0.5 + (_ik_log3129_angle*_ik_log3129_angle)*0.08333333333333333, _ik_log3129_k)
-                e[0 + 3] = np.where(_m132, _ik_log3129_v0*_ik_log3129_k, e[0 + 3])
-                e[1 + 3] = np.where(_m132, _ik_log3129_v1*_ik_log3129_k, e[1 + 3])
-                e[2 + 3] = np.where(_m132, _ik_log3129_v2*_ik_log3129_k, e[2 + 3])
-                _alive130 = _alive130 & (~_m132)
-                _c133 = 3.141592653589793 - _ik_log3129_angle > 0.001
-                _m134 = _alive130 & _c133
-                _ik_log3129_k = np.where(_m134, _ik_log3129_angle/(_ik_log3129_s + _ik_log3129_s), _ik_log3129_k)
-                e[0 + 3] = np.where(_m134, _ik_log3129_v0*_ik_log3129_k, e[0 + 3])
-                e[1 + 3] = np.where(_m134, _ik_log3129_v1*_ik_log3129_k, e[1 + 3])
-                e[2 + 3] = np.where(_m134, _ik_log3129_v2*_ik_log3129_k, e[2 + 3])
-                _alive130 = _alive130 & (~_m134)
+                _merge(_m130, _o[0], Tm, 0, _fr)
+                _merge(_m130, _o[1], J, 0, _fr)
+                _ik_error_pose137_M = [_fr(0.0)] * 9
+                e[0] = np.where(_m130, target[3] - Tm[3], e[0])
+                e[1] = np.where(_m130, target[7] - Tm[7], e[1])
+                e[2] = np.where(_m130, target[11] - Tm[11], e[2])
+                _ik_error_pose137_M[0] = np.where(_m130, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose137_M[0])
+                _ik_error_pose137_M[1] = np.where(_m130, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose137_M[1])
+                _ik_error_pose137_M[2] = np.where(_m130, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose137_M[2])
+                _ik_error_pose137_M[3] = np.where(_m130, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose137_M[3])
+                _ik_error_pose137_M[4] = np.where(_m130, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose137_M[4])
+                _ik_error_pose137_M[5] = np.where(_m130, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose137_M[5])
+                _ik_error_pose137_M[6] = np.where(_m130, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose137_M[6])
+                _ik_error_pose137_M[7] = np.where(_m130, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose137_M[7])
+                _ik_error_pose137_M[8] = np.where(_m130, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose137_M[8])
+                _alive139 = _m130
+                _ik_log3138_v0 = _ik_error_pose137_M[7] - _ik_error_pose137_M[5]
+                _ik_log3138_v1 = _ik_error_pose137_M[2] - _ik_error_pose137_M[6]
+                _ik_log3138_v2 = _ik_error_pose137_M[3] - _ik_error_pose137_M[1]
+                _ik_log3138_c = (((_ik_error_pose137_M[0] + _ik_error_pose137_M[4]) + _ik_error_pose137_M[8]) - 1.0)*0.5
+                _ik_log3138_s = np.sqrt((_ik_log3138_v0*_ik_log3138_v0 + _ik_log3138_v1*_ik_log3138_v1) + _ik_log3138_v2*_ik_log3138_v2)*0.5
+                _ik_log3138_angle = np.arctan2(_ik_log3138_s, _ik_log3138_c)
+                _ik_log3138_k = _fr(0.0)
+                _c140 = _ik_log3138_angle < 0.0001
+                _m141 = _m130 & _c140
+                _ik_log3138_k = np.where(_m141, 0.5 + (_ik_log3138_angle*_ik_log3138_angle)*0.08333333333333333, _ik_log3138_k)
+                e[0 + 3] = np.where(_m141, _ik_log3138_v0*_ik_log3138_k, e[0 + 3])
+                e[1 + 3] = np.where(_m141, _ik_log3138_v1*_ik_log3138_k, e[1 + 3])
+                e[2 + 3] = np.where(_m141, _ik_log3138_v2*_ik_log3138_k, e[2 + 3])
+                _alive139 = _alive139 & (~_m141)
+                _c142 = 3.141592653589793 - _ik_log3138_angle > 0.001
+                _m143 = _alive139 & _c142
+                _ik_log3138_k = np.where(_m143, _ik_log3138_angle/(_ik_log3138_s + _ik_log3138_s), _ik_log3138_k)
+                e[0 + 3] = np.where(_m143, _ik_log3138_v0*_ik_log3138_k, e[0 + 3])
+                e[1 + 3] = np.where(_m143, _ik_log3138_v1*_ik_log3138_k, e[1 + 3])
+                e[2 + 3] = np.where(_m143, _ik_log3138_v2*_ik_log3138_k, e[2 + 3])
+                _alive139 = _alive139 & (~_m143)
                 # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-                _ik_log3129_col = [_fr(0.0)] * 3
-                _ik_log3129_i = np.where(_ik_error_pose128_M[0] >= _ik_error_pose128_M[4], np.where(_ik_error_pose128_M[0] >= _ik_error_pose128_M[8], _fi(0), 2), np.where(_ik_error_pose128_M[4] >= _ik_error_pose128_M[8], _fi(1), 2))
-                _i135 = 3*_ik_log3129_i
-                _ik_log3129_col[0] = np.where(_alive130, (np.where(_ik_log3129_i == 0, _ik_error_pose128_M[0], np.where(_ik_log3129_i == 1, _ik_error_pose128_M[1], np.where(_ik_log3129_i == 2, _ik_error_pose128_M[2], np.where(_ik_log3129_i == 3, _ik_error_pose128_M[3], np.where(_ik_log3129_i == 4, _ik_error_pose128_M[4], np.where(_ik_log3129_i == 5, _ik_error_pose128_M[5], np.where(_ik_log3129_i == 6, _ik_error_pose128_M[6], np.where(_ik_log3129_i == 7, _ik_error_pose128_M[7], _ik_error_pose128_M[8])))))))) + np.where(_i135 == 0, _ik_error_pose128_M[0], np.where(_i135 == 3, _ik_error_pose128_M[3], _ik_error_pose128_M[6])))*0.5, _ik_log3129_col[0])
-                _i136 = 3 + _ik_log3129_i
-                _i137 = 3*_ik_log3129_i + 1
-                _ik_log3129_col[1] = np.where(_alive130, (np.where(_i136 == 0, _ik_error_pose128_M[0], np.where(_i136 == 1, _ik_error_pose128_M[1], np.where(_i136 == 2, _ik_error_pose128_M[2], np.where(_i136 == 3, _ik_error_pose128_M[3], np.where(_i136 == 4, _ik_error_pose128_M[4], np.where(_i136 == 5, _ik_error_pose128_M[5], np.where(_i136 == 6, _ik_error_pose128_M[6], np.where(_i136 == 7, _ik_error_pose128_M[7], _ik_error_pose128_M[8])))))))) + np.where(_i137 == 1, _ik_error_pose128_M[1], np.where(_i137 == 4, _ik_error_pose128_M[4], _ik_error_pose128_M[7])))*0.5, _ik_log3129_col[1])
-                _i138 = 6 + _ik_log3129_i
-                _i139 = 3*_ik_log3129_i + 2
-                _ik_log3129_col[2] = np.where(_alive130, (np.where(_i138 == 0, _ik_error_pose128_M[0], np.where(_i138 == 1, _ik_error_pose128_M[1], np.where(_i138 == 2, _ik_error_pose128_M[2], np.where(_i138 == 3, _ik_error_pose128_M[3], np.where(_i138 == 4, _ik_error_pose128_M[4], np.where(_i138 == 5, _ik_error_pose128_M[5], np.where(_i138 == 6, _ik_error_pose128_M[6], np.where(_i138 == 7, _ik_error_pose128_M[7], _ik_error_pose128_M[8])))))))) + np.where(_i139 == 2, _ik_error_pose128_M[2], np.where(_i139 == 5, _ik_error_pose128_M[5], _ik_error_pose128_M[8])))*0.5, _ik_log3129_col[2])
-                _v140 = np.where(_ik_log3129_i == 0, _ik_log3129_col[0], np.where(_ik_log3129_i == 1, _ik_log3129_col[1], _ik_log3129_col[2])) - _ik_log3129_c
-                _m141 = _alive130 & (_ik_log3129_i == 0)
-                _ik_log3129_col[0] = np.where(_m141, _v140, _ik_log3129_col[0])
-                _m142 = _alive130 & (_ik_log3129_i == 1)
-                _ik_log3129_col[1] = np.where(_m142, _v140, _ik_log3129_col[1])
-                _m143 = _alive130 & (_ik_log3129_i == 2)
-                _ik_log3129_col[2] = np.where(_m143, _v140, _ik_log3129_col[2])
-                _ik_log3129_norm = np.sqrt((_ik_log3129_col[0]*_ik_log3129_col[0] + _ik_log3129_col[1]*_ik_log3129_col[1]) + _ik_log3129_col[2]*_ik_log3129_col[2])
-                _ik_log3129_k = np.where(_alive130, np.where((_ik_log3129_col[0]*_ik_log3129_v0 + _ik_log3129_col[1]*_ik_log3129_v1) + _ik_log3129_col[2]*_ik_log3129_v2 < 0.0, -_ik_log3129_angle, _ik_log3129_angle)/_ik_log3129_norm, _ik_log3129_k)
-                e[0 + 3] = np.where(_alive130, _ik_log3129_col[0]*_ik_log3129_k, e[0 + 3])
-                e[1 + 3] = np.where(_alive130, _ik_log3129_col[1]*_ik_log3129_k, e[1 + 3])
-                e[2 + 3] = np.where(_alive130, _ik_log3129_col[2]*_ik_log3129_k, e[2 + 3])
-                _ik_error_pose128_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-                _ik_error_pose128_rotation = np.sqrt(_ik_error_pose128_rotation_squares)
-                _c144 = ~np.isfinite(_ik_error_pose128_rotation_squares)
-                _m145 = _m121 & _c144
-                _ik_error_pose128_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-                _ik_error_pose128_rotation = np.where(_m145, _ik_error_pose128_rotation_top*np.sqrt((e[3]/_ik_error_pose128_rotation_top)*(e[3]/_ik_error_pose128_rotation_top) + (e[4]/_ik_error_pose128_rotation_top)*(e[4]/_ik_error_pose128_rotation_top) + (e[5]/_ik_error_pose128_rotation_top)*(e[5]/_ik_error_pose128_rotation_top)), _ik_error_pose128_rotation)
-                norms[1] = np.where(_m121, _ik_error_pose128_rotation, norms[1])
-                _ik_error_pose128_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_pose128_position = np.sqrt(_ik_error_pose128_position_squares)
-                _c146 = ~np.isfinite(_ik_error_pose128_position_squares)
-                _m147 = _m121 & _c146
-                _ik_error_pose128_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_pose128_position = np.where(_m147, _ik_error_pose128_position_top*np.sqrt((e[0]/_ik_error_pose128_position_top)*(e[0]/_ik_error_pose128_position_top) + (e[1]/_ik_error_pose128_position_top)*(e[1]/_ik_error_pose128_position_top) + (e[2]/_ik_error_pose128_position_top)*(e[2]/_ik_error_pose128_position_top)), _ik_error_pose128_position)
-                norms[0] = np.where(_m121, _ik_error_pose128_position, norms[0])
-                _ik_error_pose128_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_pose128_whole = np.sqrt(_ik_error_pose128_whole_squares)
-                _c148 = ~np.isfinite(_ik_error_pose128_whole_squares)
-                _m149 = _m121 & _c148
-                _ik_error_pose128_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_pose128_whole = np.where(_m149, _ik_error_pose128_whole_top*np.sqrt((norms[0]/_ik_error_pose128_whole_top)*(norms[0]/_ik_error_pose128_whole_top) + (norms[1]/_ik_error_pose128_whole_top)*(norms[1]/_ik_error_pose128_whole_top)), _ik_error_pose128_whole)
-                norms[2] = np.where(_m121, _ik_error_pose128_whole, norms[2])
-                pe = np.where(_m121, norms[0], pe)
-                re = np.where(_m121, norms[1], re)
-                en = np.where(_m121, norms[2], en)
-                c = np.where(_m121, 0.01, c)
-                curved = np.where(_m121, 0, curved)
-                damped = np.where(_m121, 1, damped)
-                attempt = np.where(_m121, 0, attempt)
-                checkpoint = np.where(_m121, en, checkpoint)
-                window_start = np.where(_m121, en, window_start)
-                _c150 = en < best_en
-                _m151 = _m121 & _c150
-                best_en = np.where(_m151, en, best_en)
-                best_pe = np.where(_m151, pe, best_pe)
-                best_re = np.where(_m151, re, best_re)
-                best_stalled = np.where(_m151, 0, best_stalled)
-                best_here = np.where(_m151, 1, best_here)
+                _ik_log3138_col = [_fr(0.0)] * 3
+                _ik_log3138_i = np.where(_ik_error_pose137_M[0] >= _ik_error_pose137_M[4], np.where(_ik_error_pose137_M[0] >= _ik_error_pose137_M[8], _fi(0), 2), np.where(_ik_error_pose137_M[4] >= _ik_error_pose137_M[8], _fi(1), 2))
+                _i144 = 3*_ik_log3138_i
+                _ik_log3138_col[0] = np.where(_alive139, (np.where(_ik_log3138_i == 0, _ik_error_pose137_M[0], np.where(_ik_log3138_i == 1, _ik_error_pose137_M[1], np.where(_ik_log3138_i == 2, _ik_error_pose137_M[2], np.where(_ik_log3138_i == 3, _ik_error_pose137_M[3], np.where(_ik_log3138_i == 4, _ik_error_pose137_M[4], np.where(_ik_log3138_i == 5, _ik_error_pose137_M[5], np.where(_ik_log3138_i == 6, _ik_error_pose137_M[6], np.where(_ik_log3138_i == 7, _ik_error_pose137_M[7], _ik_error_pose137_M[8])))))))) + np.where(_i144 == 0, _ik_error_pose137_M[0], np.where(_i144 == 3, _ik_error_pose137_M[3], _ik_error_pose137_M[6])))*0.5, _ik_log3138_col[0])
+                _i145 = 3 + _ik_log3138_i
+                _i146 = 3*_ik_log3138_i + 1
+                _ik_log3138_col[1] = np.where(_alive139, (np.where(_i145 == 0, _ik_error_pose137_M[0], np.where(_i145 == 1, _ik_error_pose137_M[1], np.where(_i145 == 2, _ik_error_pose137_M[2], np.where(_i145 == 3, _ik_error_pose137_M[3], np.where(_i145 == 4, _ik_error_pose137_M[4], np.where(_i145 == 5, _ik_error_pose137_M[5], np.where(_i145 == 6, _ik_error_pose137_M[6], np.where(_i145 == 7, _ik_error_pose137_M[7], _ik_error_pose137_M[8])))))))) + np.where(_i146 == 1, _ik_error_pose137_M[1], np.where(_i146 == 4, _ik_error_pose137_M[4], _ik_error_pose137_M[7])))*0.5, _ik_log3138_col[1])
+                _i147 = 6 + _ik_log3138_i
+                _i148 = 3*_ik_log3138_i + 2
+                _ik_log3138_col[2] = np.where(_alive139, (np.where(_i147 == 0, _ik_error_pose137_M[0], np.where(_i147 == 1, _ik_error_pose137_M[1], np.where(_i147 == 2, _ik_error_pose137_M[2], np.where(_i147 == 3, _ik_error_pose137_M[3], np.where(_i147 == 4, _ik_error_pose137_M[4], np.where(_i147 == 5, _ik_error_pose137_M[5], np.where(_i147 == 6, _ik_error_pose137_M[6], np.where(_i147 == 7, _ik_error_pose137_M[7], _ik_error_pose137_M[8])))))))) + np.where(_i148 == 2, _ik_error_pose137_M[2], np.where(_i148 == 5, _ik_error_pose137_M[5], _ik_error_pose137_M[8])))*0.5, _ik_log3138_col[2])
+                _v149 = np.where(_ik_log3138_i == 0, _ik_log3138_col[0], np.where(_ik_log3138_i == 1, _ik_log3138_col[1], _ik_log3138_col[2])) - _ik_log3138_c
+                _m150 = _alive139 & (_ik_log3138_i == 0)
+                _ik_log3138_col[0] = np.where(_m150, _v149, _ik_log3138_col[0])
+                _m151 = _alive139 & (_ik_log3138_i == 1)
+                _ik_log3138_col[1] = np.where(_m151, _v149, _ik_log3138_col[1])
+                _m152 = _alive139 & (_ik_log3138_i == 2)
+                _ik_log3138_col[2] = np.where(_m152, _v149, _ik_log3138_col[2])
+                _ik_log3138_norm = np.sqrt((_ik_log3138_col[0]*_ik_log3138_col[0] + _ik_log3138_col[1]*_ik_log3138_col[1]) + _ik_log3138_col[2]*_ik_log3138_col[2])
+                _ik_log3138_k = np.where(_alive139, np.where((_ik_log3138_col[0]*_ik_log3138_v0 + _ik_log3138_col[1]*_ik_log3138_v1) + _ik_log3138_col[2]*_ik_log3138_v2 < 0.0, -_ik_log3138_angle, _ik_log3138_angle)/_ik_log3138_norm, _ik_log3138_k)
+                e[0 + 3] = np.where(_alive139, _ik_log3138_col[0]*_ik_log3138_k, e[0 + 3])
+                e[1 + 3] = np.where(_alive139, _ik_log3138_col[1]*_ik_log3138_k, e[1 + 3])
+                e[2 + 3] = np.where(_alive139, _ik_log3138_col[2]*_ik_log3138_k, e[2 + 3])
+                _ik_error_pose137_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+                _ik_error_pose137_rotation = np.sqrt(_ik_error_pose137_rotation_squares)
+                _c153 = ~np.isfinite(_ik_error_pose137_rotation_squares)
+                _m154 = _m130 & _c153
+                _ik_error_pose137_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+                _ik_error_pose137_rotation = np.where(_m154, _ik_error_pose137_rotation_top*np.sqrt((e[3]/_ik_error_pose137_rotation_top)*(e[3]/_ik_error_pose137_rotation_top) + (e[4]/_ik_error_pose137_rotation_top)*(e[4]/_ik_error_pose137_rotation_top) + (e[5]/_ik_error_pose137_rotation_top)*(e[5]/_ik_error_pose137_rotation_top)), _ik_error_pose137_rotation)
+                norms[1] = np.where(_m130, _ik_error_pose137_rotation, norms[1])
+                _ik_error_pose137_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_pose137_position = np.sqrt(_ik_error_pose137_position_squares)
+                _c155 = ~np.isfinite(_ik_error_pose137_position_squares)
+                _m156 = _m130 & _c155
+                _ik_error_pose137_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_pose137_position = np.where(_m156, _ik_error_pose137_position_top*np.sqrt((e[0]/_ik_error_pose137_position_top)*(e[0]/_ik_error_pose137_position_top) + (e[1]/_ik_error_pose137_position_top)*(e[1]/_ik_error_pose137_position_top) + (e[2]/_ik_error_pose137_position_top)*(e[2]/_ik_error_pose137_position_top)), _ik_error_pose137_position)
+                norms[0] = np.where(_m130, _ik_error_pose137_position, norms[0])
+                _ik_error_pose137_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_pose137_whole = np.sqrt(_ik_error_pose137_whole_squares)
+                _c157 = ~np.isfinite(_ik_error_pose137_whole_squares)
+                _m158 = _m130 & _c157
+                _ik_error_pose137_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_pose137_whole = np.where(_m158, _ik_error_pose137_whole_top*np.sqrt((norms[0]/_ik_error_pose137_whole_top)*(norms[0]/_ik_error_pose137_whole_top) + (norms[1]/_ik_error_pose137_whole_top)*(norms[1]/_ik_error_pose137_whole_top)), _ik_error_pose137_whole)
+                norms[2] = np.where(_m130, _ik_error_pose137_whole, norms[2])
+                pe = np.where(_m130, norms[0], pe)
+                re = np.where(_m130, norms[1], re)
+                en = np.where(_m130, norms[2], en)
+                c = np.where(_m130, 0.01, c)
+                curved = np.where(_m130, 0, curved)
+                damped = np.where(_m130, 1, damped)
+                attempt = np.where(_m130, 0, attempt)
+                checkpoint = np.where(_m130, en, checkpoint)
+                window_start = np.where(_m130, en, window_start)
+                _c159 = en < best_en
+                _m160 = _m130 & _c159
+                best_en = np.where(_m160, en, best_en)
+                best_pe = np.where(_m160, pe, best_pe)
+                best_re = np.where(_m160, re, best_re)
+                best_stalled = np.where(_m160, 0, best_stalled)
+                best_here = np.where(_m160, 1, best_here)
                 for k in range(0, 7):
-                    best_q[k] = np.where(_m151, q[k], best_q[k])
+                    best_q[k] = np.where(_m160, q[k], best_q[k])
     for k in range(0, 7):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])
@@ -6617,6 +6888,15 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 gg = gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        if stationary > 0:
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = en*1e-08 if en*1e-08 > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
+            if any > 0:
+                _ik_ldl_position(Gf, mu2, F)
+                _ik_ldl_solve_position(Jf, F, e, dq)
+            else:
+                _ik_ldl_position(G, mu2, F)
+                _ik_ldl_solve_position(J, F, e, dq)
         # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
         damped = damped if (c*en)*3.0 > ff else 0
         if curved > 0 and en < 0.05:
@@ -7071,73 +7351,171 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m32, gg + (J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2])*(J[0 + k]*e[0] + J[7 + k]*e[1] + J[14 + k]*e[2]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run16, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
-        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
-        _c37 = (curved > 0) & (en < 0.05)
+        _c37 = stationary > 0
         _m38 = _run16 & _c37
         if bool(_m38.any()):
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = np.where(_m38, np.where(en*1e-08 > (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0), en*1e-08, (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+            _c39 = any > 0
+            _m40 = _m38 & _c39
+            _m41 = _m38 & (~_c39)
+            _ik_ldl_position42_mu2 = mu2
+            _ik_ldl_position42_a00 = Gf[0] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_a10 = Gf[1]
+            _ik_ldl_position42_a11 = Gf[2] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_a20 = Gf[3]
+            _ik_ldl_position42_a21 = Gf[4]
+            _ik_ldl_position42_a22 = Gf[5] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_cut = np.where(_ik_ldl_position42_a22 > np.where(_ik_ldl_position42_a11 > _ik_ldl_position42_a00, _ik_ldl_position42_a11, _ik_ldl_position42_a00), _ik_ldl_position42_a22, np.where(_ik_ldl_position42_a11 > _ik_ldl_position42_a00, _ik_ldl_position42_a11, _ik_ldl_position42_a00))*1e-13
+            _ik_ldl_position42_s0 = _ik_ldl_position42_a00
+            _ik_ldl_position42_kept0 = _ik_ldl_position42_s0 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i0 = np.where(_ik_ldl_position42_kept0, 1.0/_ik_ldl_position42_s0, 0.0)
+            F[0] = np.where(_m40, _ik_ldl_position42_i0, F[0])
+            _ik_ldl_position42_t10 = _ik_ldl_position42_a10
+            _ik_ldl_position42_l10 = _ik_ldl_position42_t10*_ik_ldl_position42_i0
+            F[1] = np.where(_m40, _ik_ldl_position42_l10, F[1])
+            _ik_ldl_position42_ld10 = np.where(_ik_ldl_position42_kept0, _ik_ldl_position42_t10, 0.0)
+            _ik_ldl_position42_t20 = _ik_ldl_position42_a20
+            _ik_ldl_position42_l20 = _ik_ldl_position42_t20*_ik_ldl_position42_i0
+            F[3] = np.where(_m40, _ik_ldl_position42_l20, F[3])
+            _ik_ldl_position42_ld20 = np.where(_ik_ldl_position42_kept0, _ik_ldl_position42_t20, 0.0)
+            _ik_ldl_position42_s1 = _ik_ldl_position42_a11 - _ik_ldl_position42_l10*_ik_ldl_position42_ld10
+            _ik_ldl_position42_kept1 = _ik_ldl_position42_s1 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i1 = np.where(_ik_ldl_position42_kept1, 1.0/_ik_ldl_position42_s1, 0.0)
+            F[2] = np.where(_m40, _ik_ldl_position42_i1, F[2])
+            _ik_ldl_position42_t21 = _ik_ldl_position42_a21 - _ik_ldl_position42_l20*_ik_ldl_position42_ld10
+            _ik_ldl_position42_l21 = _ik_ldl_position42_t21*_ik_ldl_position42_i1
+            F[4] = np.where(_m40, _ik_ldl_position42_l21, F[4])
+            _ik_ldl_position42_ld21 = np.where(_ik_ldl_position42_kept1, _ik_ldl_position42_t21, 0.0)
+            _ik_ldl_position42_s2 = (_ik_ldl_position42_a22 - _ik_ldl_position42_l20*_ik_ldl_position42_ld20) - _ik_ldl_position42_l21*_ik_ldl_position42_ld21
+            _ik_ldl_position42_kept2 = _ik_ldl_position42_s2 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i2 = np.where(_ik_ldl_position42_kept2, 1.0/_ik_ldl_position42_s2, 0.0)
+            F[5] = np.where(_m40, _ik_ldl_position42_i2, F[5])
+            _ik_ldl_solve_position43_y0 = e[0]
+            _ik_ldl_solve_position43_y1 = e[1] - F[1]*_ik_ldl_solve_position43_y0
+            _ik_ldl_solve_position43_y2 = (e[2] - F[3]*_ik_ldl_solve_position43_y0) - F[4]*_ik_ldl_solve_position43_y1
+            _ik_ldl_solve_position43_z2 = _ik_ldl_solve_position43_y2*F[5]
+            _ik_ldl_solve_position43_z1 = _ik_ldl_solve_position43_y1*F[2] - F[4]*_ik_ldl_solve_position43_z2
+            _ik_ldl_solve_position43_z0 = (_ik_ldl_solve_position43_y0*F[0] - F[3]*_ik_ldl_solve_position43_z2) - F[1]*_ik_ldl_solve_position43_z1
+            dq[0] = np.where(_m40, Jf[0]*_ik_ldl_solve_position43_z0 + (Jf[7]*_ik_ldl_solve_position43_z1 + Jf[14]*_ik_ldl_solve_position43_z2), dq[0])
+            dq[1] = np.where(_m40, Jf[1]*_ik_ldl_solve_position43_z0 + (Jf[8]*_ik_ldl_solve_position43_z1 + Jf[15]*_ik_ldl_solve_position43_z2), dq[1])
+            dq[2] = np.where(_m40, Jf[2]*_ik_ldl_solve_position43_z0 + (Jf[9]*_ik_ldl_solve_position43_z1 + Jf[16]*_ik_ldl_solve_position43_z2), dq[2])
+            dq[3] = np.where(_m40, Jf[3]*_ik_ldl_solve_position43_z0 + (Jf[10]*_ik_ldl_solve_position43_z1 + Jf[17]*_ik_ldl_solve_position43_z2), dq[3])
+            dq[4] = np.where(_m40, Jf[4]*_ik_ldl_solve_position43_z0 + (Jf[11]*_ik_ldl_solve_position43_z1 + Jf[18]*_ik_ldl_solve_position43_z2), dq[4])
+            dq[5] = np.where(_m40, Jf[5]*_ik_ldl_solve_position43_z0 + (Jf[12]*_ik_ldl_solve_position43_z1 + Jf[19]*_ik_ldl_solve_position43_z2), dq[5])
+            dq[6] = np.where(_m40, Jf[6]*_ik_ldl_solve_position43_z0 + (Jf[13]*_ik_ldl_solve_position43_z1 + Jf[20]*_ik_ldl_solve_position43_z2), dq[6])
+            _ik_ldl_position44_mu2 = mu2
+            _ik_ldl_position44_a00 = G[0] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_a10 = G[1]
+            _ik_ldl_position44_a11 = G[2] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_a20 = G[3]
+            _ik_ldl_position44_a21 = G[4]
+            _ik_ldl_position44_a22 = G[5] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_cut = np.where(_ik_ldl_position44_a22 > np.where(_ik_ldl_position44_a11 > _ik_ldl_position44_a00, _ik_ldl_position44_a11, _ik_ldl_position44_a00), _ik_ldl_position44_a22, np.where(_ik_ldl_position44_a11 > _ik_ldl_position44_a00, _ik_ldl_position44_a11, _ik_ldl_position44_a00))*1e-13
+            _ik_ldl_position44_s0 = _ik_ldl_position44_a00
+            _ik_ldl_position44_kept0 = _ik_ldl_position44_s0 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i0 = np.where(_ik_ldl_position44_kept0, 1.0/_ik_ldl_position44_s0, 0.0)
+            F[0] = np.where(_m41, _ik_ldl_position44_i0, F[0])
+            _ik_ldl_position44_t10 = _ik_ldl_position44_a10
+            _ik_ldl_position44_l10 = _ik_ldl_position44_t10*_ik_ldl_position44_i0
+            F[1] = np.where(_m41, _ik_ldl_position44_l10, F[1])
+            _ik_ldl_position44_ld10 = np.where(_ik_ldl_position44_kept0, _ik_ldl_position44_t10, 0.0)
+            _ik_ldl_position44_t20 = _ik_ldl_position44_a20
+            _ik_ldl_position44_l20 = _ik_ldl_position44_t20*_ik_ldl_position44_i0
+            F[3] = np.where(_m41, _ik_ldl_position44_l20, F[3])
+            _ik_ldl_position44_ld20 = np.where(_ik_ldl_position44_kept0, _ik_ldl_position44_t20, 0.0)
+            _ik_ldl_position44_s1 = _ik_ldl_position44_a11 - _ik_ldl_position44_l10*_ik_ldl_position44_ld10
+            _ik_ldl_position44_kept1 = _ik_ldl_position44_s1 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i1 = np.where(_ik_ldl_position44_kept1, 1.0/_ik_ldl_position44_s1, 0.0)
+            F[2] = np.where(_m41, _ik_ldl_position44_i1, F[2])
+            _ik_ldl_position44_t21 = _ik_ldl_position44_a21 - _ik_ldl_position44_l20*_ik_ldl_position44_ld10
+            _ik_ldl_position44_l21 = _ik_ldl_position44_t21*_ik_ldl_position44_i1
+            F[4] = np.where(_m41, _ik_ldl_position44_l21, F[4])
+            _ik_ldl_position44_ld21 = np.where(_ik_ldl_position44_kept1, _ik_ldl_position44_t21, 0.0)
+            _ik_ldl_position44_s2 = (_ik_ldl_position44_a22 - _ik_ldl_position44_l20*_ik_ldl_position44_ld20) - _ik_ldl_position44_l21*_ik_ldl_position44_ld21
+            _ik_ldl_position44_kept2 = _ik_ldl_position44_s2 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i2 = np.where(_ik_ldl_position44_kept2, 1.0/_ik_ldl_position44_s2, 0.0)
+            F[5] = np.where(_m41, _ik_ldl_position44_i2, F[5])
+            _ik_ldl_solve_position45_y0 = e[0]
+            _ik_ldl_solve_position45_y1 = e[1] - F[1]*_ik_ldl_solve_position45_y0
+            _ik_ldl_solve_position45_y2 = (e[2] - F[3]*_ik_ldl_solve_position45_y0) - F[4]*_ik_ldl_solve_position45_y1
+            _ik_ldl_solve_position45_z2 = _ik_ldl_solve_position45_y2*F[5]
+            _ik_ldl_solve_position45_z1 = _ik_ldl_solve_position45_y1*F[2] - F[4]*_ik_ldl_solve_position45_z2
+            _ik_ldl_solve_position45_z0 = (_ik_ldl_solve_position45_y0*F[0] - F[3]*_ik_ldl_solve_position45_z2) - F[1]*_ik_ldl_solve_position45_z1
+            dq[0] = np.where(_m41, J[0]*_ik_ldl_solve_position45_z0 + (J[7]*_ik_ldl_solve_position45_z1 + J[14]*_ik_ldl_solve_position45_z2), dq[0])
+            dq[1] = np.where(_m41, J[1]*_ik_ldl_solve_position45_z0 + (J[8]*_ik_ldl_solve_position45_z1 + J[15]*_ik_ldl_solve_position45_z2), dq[1])
+            dq[2] = np.where(_m41, J[2]*_ik_ldl_solve_position45_z0 + (J[9]*_ik_ldl_solve_position45_z1 + J[16]*_ik_ldl_solve_position45_z2), dq[2])
+            dq[3] = np.where(_m41, J[3]*_ik_ldl_solve_position45_z0 + (J[10]*_ik_ldl_solve_position45_z1 + J[17]*_ik_ldl_solve_position45_z2), dq[3])
+            dq[4] = np.where(_m41, J[4]*_ik_ldl_solve_position45_z0 + (J[11]*_ik_ldl_solve_position45_z1 + J[18]*_ik_ldl_solve_position45_z2), dq[4])
+            dq[5] = np.where(_m41, J[5]*_ik_ldl_solve_position45_z0 + (J[12]*_ik_ldl_solve_position45_z1 + J[19]*_ik_ldl_solve_position45_z2), dq[5])
+            dq[6] = np.where(_m41, J[6]*_ik_ldl_solve_position45_z0 + (J[13]*_ik_ldl_solve_position45_z1 + J[20]*_ik_ldl_solve_position45_z2), dq[6])
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
+        _c46 = (curved > 0) & (en < 0.05)
+        _m47 = _run16 & _c46
+        if bool(_m47.any()):
             for k in range(0, 7):
-                trial[k] = np.where(_m38, q[k] + dq[k]*0.1, trial[k])
+                trial[k] = np.where(_m47, q[k] + dq[k]*0.1, trial[k])
             _o = _pose_on_lanes(_c, trial[0:7])
-            _merge(_m38, _o[0], Tt, 0, _fr)
-            et[0] = np.where(_m38, target[0] - Tt[3], et[0])
-            et[1] = np.where(_m38, target[1] - Tt[7], et[1])
-            et[2] = np.where(_m38, target[2] - Tt[11], et[2])
-            norms[1] = np.where(_m38, 0.0, norms[1])
-            _ik_error_position39_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-            _ik_error_position39_position = np.sqrt(_ik_error_position39_position_squares)
-            _c40 = ~np.isfinite(_ik_error_position39_position_squares)
-            _m41 = _m38 & _c40
-            _ik_error_position39_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-            _ik_error_position39_position = np.where(_m41, _ik_error_position39_position_top*np.sqrt((et[0]/_ik_error_position39_position_top)*(et[0]/_ik_error_position39_position_top) + (et[1]/_ik_error_position39_position_top)*(et[1]/_ik_error_position39_position_top) + (et[2]/_ik_error_position39_position_top)*(et[2]/_ik_error_position39_position_top)), _ik_error_position39_position)
-            norms[0] = np.where(_m38, _ik_error_position39_position, norms[0])
-            _ik_error_position39_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-            _ik_error_position39_whole = np.sqrt(_ik_error_position39_whole_squares)
-            _c42 = ~np.isfinite(_ik_error_position39_whole_squares)
-            _m43 = _m38 & _c42
-            _ik_error_position39_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-            _ik_error_position39_whole = np.where(_m43, _ik_error_position39_whole_top*np.sqrt((norms[0]/_ik_error_position39_whole_top)*(norms[0]/_ik_error_position39_whole_top) + (norms[1]/_ik_error_position39_whole_top)*(norms[1]/_ik_error_position39_whole_top)), _ik_error_position39_whole)
-            norms[2] = np.where(_m38, _ik_error_position39_whole, norms[2])
+            _merge(_m47, _o[0], Tt, 0, _fr)
+            et[0] = np.where(_m47, target[0] - Tt[3], et[0])
+            et[1] = np.where(_m47, target[1] - Tt[7], et[1])
+            et[2] = np.where(_m47, target[2] - Tt[11], et[2])
+            norms[1] = np.where(_m47, 0.0, norms[1])
+            _ik_error_position48_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+            _ik_error_position48_position = np.sqrt(_ik_error_position48_position_squares)
+            _c49 = ~np.isfinite(_ik_error_position48_position_squares)
+            _m50 = _m47 & _c49
+            _ik_error_position48_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+            _ik_error_position48_position = np.where(_m50, _ik_error_position48_position_top*np.sqrt((et[0]/_ik_error_position48_position_top)*(et[0]/_ik_error_position48_position_top) + (et[1]/_ik_error_position48_position_top)*(et[1]/_ik_error_position48_position_top) + (et[2]/_ik_error_position48_position_top)*(et[2]/_ik_error_position48_position_top)), _ik_error_position48_position)
+            norms[0] = np.where(_m47, _ik_error_position48_position, norms[0])
+            _ik_error_position48_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+            _ik_error_position48_whole = np.sqrt(_ik_error_position48_whole_squares)
+            _c51 = ~np.isfinite(_ik_error_position48_whole_squares)
+            _m52 = _m47 & _c51
+            _ik_error_position48_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+            _ik_error_position48_whole = np.where(_m52, _ik_error_position48_whole_top*np.sqrt((norms[0]/_ik_error_position48_whole_top)*(norms[0]/_ik_error_position48_whole_top) + (norms[1]/_ik_error_position48_whole_top)*(norms[1]/_ik_error_position48_whole_top)), _ik_error_position48_whole)
+            norms[2] = np.where(_m47, _ik_error_position48_whole, norms[2])
             for r in range(0, 3):
-                r2[r] = np.where(_m38, ((et[r] - e[r]) + (J[r*7 + 0]*dq[0] + J[r*7 + 1]*dq[1] + J[r*7 + 2]*dq[2] + J[r*7 + 3]*dq[3] + J[r*7 + 4]*dq[4] + J[r*7 + 5]*dq[5] + J[r*7 + 6]*dq[6])*0.1)*199.99999999999997, r2[r])
-            _c44 = any > 0
-            _m45 = _m38 & _c44
-            _m46 = _m38 & (~_c44)
-            _ik_ldl_solve_position47_y0 = r2[0]
-            _ik_ldl_solve_position47_y1 = r2[1] - F[1]*_ik_ldl_solve_position47_y0
-            _ik_ldl_solve_position47_y2 = (r2[2] - F[3]*_ik_ldl_solve_position47_y0) - F[4]*_ik_ldl_solve_position47_y1
-            _ik_ldl_solve_position47_z2 = _ik_ldl_solve_position47_y2*F[5]
-            _ik_ldl_solve_position47_z1 = _ik_ldl_solve_position47_y1*F[2] - F[4]*_ik_ldl_solve_position47_z2
-            _ik_ldl_solve_position47_z0 = (_ik_ldl_solve_position47_y0*F[0] - F[3]*_ik_ldl_solve_position47_z2) - F[1]*_ik_ldl_solve_position47_z1
-            acc[0] = np.where(_m45, Jf[0]*_ik_ldl_solve_position47_z0 + (Jf[7]*_ik_ldl_solve_position47_z1 + Jf[14]*_ik_ldl_solve_position47_z2), acc[0])
-            acc[1] = np.where(_m45, Jf[1]*_ik_ldl_solve_position47_z0 + (Jf[8]*_ik_ldl_solve_position47_z1 + Jf[15]*_ik_ldl_solve_position47_z2), acc[1])
-            acc[2] = np.where(_m45, Jf[2]*_ik_ldl_solve_position47_z0 + (Jf[9]*_ik_ldl_solve_position47_z1 + Jf[16]*_ik_ldl_solve_position47_z2), acc[2])
-            acc[3] = np.where(_m45, Jf[3]*_ik_ldl_solve_position47_z0 + (Jf[10]*_ik_ldl_solve_position47_z1 + Jf[17]*_ik_ldl_solve_position47_z2), acc[3])
-            acc[4] = np.where(_m45, Jf[4]*_ik_ldl_solve_position47_z0 + (Jf[11]*_ik_ldl_solve_position47_z1 + Jf[18]*_ik_ldl_solve_position47_z2), acc[4])
-            acc[5] = np.where(_m45, Jf[5]*_ik_ldl_solve_position47_z0 + (Jf[12]*_ik_ldl_solve_position47_z1 + Jf[19]*_ik_ldl_solve_position47_z2), acc[5])
-            acc[6] = np.where(_m45, Jf[6]*_ik_ldl_solve_position47_z0 + (Jf[13]*_ik_ldl_solve_position47_z1 + Jf[20]*_ik_ldl_solve_position47_z2), acc[6])
-            _ik_ldl_solve_position48_y0 = r2[0]
-            _ik_ldl_solve_position48_y1 = r2[1] - F[1]*_ik_ldl_solve_position48_y0
-            _ik_ldl_solve_position48_y2 = (r2[2] - F[3]*_ik_ldl_solve_position48_y0) - F[4]*_ik_ldl_solve_position48_y1
-            _ik_ldl_solve_position48_z2 = _ik_ldl_solve_position48_y2*F[5]
-            _ik_ldl_solve_position48_z1 = _ik_ldl_solve_position48_y1*F[2] - F[4]*_ik_ldl_solve_position48_z2
-            _ik_ldl_solve_position48_z0 = (_ik_ldl_solve_position48_y0*F[0] - F[3]*_ik_ldl_solve_position48_z2) - F[1]*_ik_ldl_solve_position48_z1
-            acc[0] = np.where(_m46, J[0]*_ik_ldl_solve_position48_z0 + (J[7]*_ik_ldl_solve_position48_z1 + J[14]*_ik_ldl_solve_position48_z2), acc[0])
-            acc[1] = np.where(_m46, J[1]*_ik_ldl_solve_position48_z0 + (J[8]*_ik_ldl_solve_position48_z1 + J[15]*_ik_ldl_solve_position48_z2), acc[1])
-            acc[2] = np.where(_m46, J[2]*_ik_ldl_solve_position48_z0 + (J[9]*_ik_ldl_solve_position48_z1 + J[16]*_ik_ldl_solve_position48_z2), acc[2])
-            acc[3] = np.where(_m46, J[3]*_ik_ldl_solve_position48_z0 + (J[10]*_ik_ldl_solve_position48_z1 + J[17]*_ik_ldl_solve_position48_z2), acc[3])
-            acc[4] = np.where(_m46, J[4]*_ik_ldl_solve_position48_z0 + (J[11]*_ik_ldl_solve_position48_z1 + J[18]*_ik_ldl_solve_position48_z2), acc[4])
-            acc[5] = np.where(_m46, J[5]*_ik_ldl_solve_position48_z0 + (J[12]*_ik_ldl_solve_position48_z1 + J[19]*_ik_ldl_solve_position48_z2), acc[5])
-            acc[6] = np.where(_m46, J[6]*_ik_ldl_solve_position48_z0 + (J[13]*_ik_ldl_solve_position48_z1 + J[20]*_ik_ldl_solve_position48_z2), acc[6])
-            aa = np.where(_m38, 0.0, aa)
-            vv = np.where(_m38, 0.0, vv)
+                r2[r] = np.where(_m47, ((et[r] - e[r]) + (J[r*7 + 0]*dq[0] + J[r*7 + 1]*dq[1] + J[r*7 + 2]*dq[2] + J[r*7 + 3]*dq[3] + J[r*7 + 4]*dq[4] + J[r*7 + 5]*dq[5] + J[r*7 + 6]*dq[6])*0.1)*199.99999999999997, r2[r])
+            _c53 = any > 0
+            _m54 = _m47 & _c53
+            _m55 = _m47 & (~_c53)
+            _ik_ldl_solve_position56_y0 = r2[0]
+            _ik_ldl_solve_position56_y1 = r2[1] - F[1]*_ik_ldl_solve_position56_y0
+            _ik_ldl_solve_position56_y2 = (r2[2] - F[3]*_ik_ldl_solve_position56_y0) - F[4]*_ik_ldl_solve_position56_y1
+            _ik_ldl_solve_position56_z2 = _ik_ldl_solve_position56_y2*F[5]
+            _ik_ldl_solve_position56_z1 = _ik_ldl_solve_position56_y1*F[2] - F[4]*_ik_ldl_solve_position56_z2
+            _ik_ldl_solve_position56_z0 = (_ik_ldl_solve_position56_y0*F[0] - F[3]*_ik_ldl_solve_position56_z2) - F[1]*_ik_ldl_solve_position56_z1
+            acc[0] = np.where(_m54, Jf[0]*_ik_ldl_solve_position56_z0 + (Jf[7]*_ik_ldl_solve_position56_z1 + Jf[14]*_ik_ldl_solve_position56_z2), acc[0])
+            acc[1] = np.where(_m54, Jf[1]*_ik_ldl_solve_position56_z0 + (Jf[8]*_ik_ldl_solve_position56_z1 + Jf[15]*_ik_ldl_solve_position56_z2), acc[1])
+            acc[2] = np.where(_m54, Jf[2]*_ik_ldl_solve_position56_z0 + (Jf[9]*_ik_ldl_solve_position56_z1 + Jf[16]*_ik_ldl_solve_position56_z2), acc[2])
+            acc[3] = np.where(_m54, Jf[3]*_ik_ldl_solve_position56_z0 + (Jf[10]*_ik_ldl_solve_position56_z1 + Jf[17]*_ik_ldl_solve_position56_z2), acc[3])
+            acc[4] = np.where(_m54, Jf[4]*_ik_ldl_solve_position56_z0 + (Jf[11]*_ik_ldl_solve_position56_z1 + Jf[18]*_ik_ldl_solve_position56_z2), acc[4])
+            acc[5] = np.where(_m54, Jf[5]*_ik_ldl_solve_position56_z0 + (Jf[12]*_ik_ldl_solve_position56_z1 + Jf[19]*_ik_ldl_solve_position56_z2), acc[5])
+            acc[6] = np.where(_m54, Jf[6]*_ik_ldl_solve_position56_z0 + (Jf[13]*_ik_ldl_solve_position56_z1 + Jf[20]*_ik_ldl_solve_position56_z2), acc[6])
+            _ik_ldl_solve_position57_y0 = r2[0]
+            _ik_ldl_solve_position57_y1 = r2[1] - F[1]*_ik_ldl_solve_position57_y0
+            _ik_ldl_solve_position57_y2 = (r2[2] - F[3]*_ik_ldl_solve_position57_y0) - F[4]*_ik_ldl_solve_position57_y1
+            _ik_ldl_solve_position57_z2 = _ik_ldl_solve_position57_y2*F[5]
+            _ik_ldl_solve_position57_z1 = _ik_ldl_solve_position57_y1*F[2] - F[4]*_ik_ldl_solve_position57_z2
+            _ik_ldl_solve_position57_z0 = (_ik_ldl_solve_position57_y0*F[0] - F[3]*_ik_ldl_solve_position57_z2) - F[1]*_ik_ldl_solve_position57_z1
+            acc[0] = np.where(_m55, J[0]*_ik_ldl_solve_position57_z0 + (J[7]*_ik_ldl_solve_position57_z1 + J[14]*_ik_ldl_solve_position57_z2), acc[0])
+            acc[1] = np.where(_m55, J[1]*_ik_ldl_solve_position57_z0 + (J[8]*_ik_ldl_solve_position57_z1 + J[15]*_ik_ldl_solve_position57_z2), acc[1])
+            acc[2] = np.where(_m55, J[2]*_ik_ldl_solve_position57_z0 + (J[9]*_ik_ldl_solve_position57_z1 + J[16]*_ik_ldl_solve_position57_z2), acc[2])
+            acc[3] = np.where(_m55, J[3]*_ik_ldl_solve_position57_z0 + (J[10]*_ik_ldl_solve_position57_z1 + J[17]*_ik_ldl_solve_position57_z2), acc[3])
+            acc[4] = np.where(_m55, J[4]*_ik_ldl_solve_position57_z0 + (J[11]*_ik_ldl_solve_position57_z1 + J[18]*_ik_ldl_solve_position57_z2), acc[4])
+            acc[5] = np.where(_m55, J[5]*_ik_ldl_solve_position57_z0 + (J[12]*_ik_ldl_solve_position57_z1 + J[19]*_ik_ldl_solve_position57_z2), acc[5])
+            acc[6] = np.where(_m55, J[6]*_ik_ldl_solve_position57_z0 + (J[13]*_ik_ldl_solve_position57_z1 + J[20]*_ik_ldl_solve_position57_z2), acc[6])
+            aa = np.where(_m47, 0.0, aa)
+            vv = np.where(_m47, 0.0, vv)
             for k in range(0, 7):
-                aa = np.where(_m38, aa + acc[k]*acc[k], aa)
-                vv = np.where(_m38, vv + dq[k]*dq[k], vv)
-            _c49 = aa <= vv*0.5625
-            _m50 = _m38 & _c49
+                aa = np.where(_m47, aa + acc[k]*acc[k], aa)
+                vv = np.where(_m47, vv + dq[k]*dq[k], vv)
+            _c58 = aa <= vv*0.5625
+            _m59 = _m47 & _c58
             for k in range(0, 7):
-                dq[k] = np.where(_m50, dq[k] + acc[k]*0.5, dq[k])
+                dq[k] = np.where(_m59, dq[k] + acc[k]*0.5, dq[k])
         big = np.where(_run16, 0.0, big)
         for k in range(0, 7):
             big = np.where(_run16, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
@@ -7153,138 +7531,138 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         et[1] = np.where(_run16, target[1] - Tt[7], et[1])
         et[2] = np.where(_run16, target[2] - Tt[11], et[2])
         norms[1] = np.where(_run16, 0.0, norms[1])
-        _ik_error_position51_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_position51_position = np.sqrt(_ik_error_position51_position_squares)
-        _c52 = ~np.isfinite(_ik_error_position51_position_squares)
-        _m53 = _run16 & _c52
-        _ik_error_position51_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_position51_position = np.where(_m53, _ik_error_position51_position_top*np.sqrt((et[0]/_ik_error_position51_position_top)*(et[0]/_ik_error_position51_position_top) + (et[1]/_ik_error_position51_position_top)*(et[1]/_ik_error_position51_position_top) + (et[2]/_ik_error_position51_position_top)*(et[2]/_ik_error_position51_position_top)), _ik_error_position51_position)
-        norms[0] = np.where(_run16, _ik_error_position51_position, norms[0])
-        _ik_error_position51_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_position51_whole = np.sqrt(_ik_error_position51_whole_squares)
-        _c54 = ~np.isfinite(_ik_error_position51_whole_squares)
-        _m55 = _run16 & _c54
-        _ik_error_position51_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_position51_whole = np.where(_m55, _ik_error_position51_whole_top*np.sqrt((norms[0]/_ik_error_position51_whole_top)*(norms[0]/_ik_error_position51_whole_top) + (norms[1]/_ik_error_position51_whole_top)*(norms[1]/_ik_error_position51_whole_top)), _ik_error_position51_whole)
-        norms[2] = np.where(_run16, _ik_error_position51_whole, norms[2])
+        _ik_error_position60_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_position60_position = np.sqrt(_ik_error_position60_position_squares)
+        _c61 = ~np.isfinite(_ik_error_position60_position_squares)
+        _m62 = _run16 & _c61
+        _ik_error_position60_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_position60_position = np.where(_m62, _ik_error_position60_position_top*np.sqrt((et[0]/_ik_error_position60_position_top)*(et[0]/_ik_error_position60_position_top) + (et[1]/_ik_error_position60_position_top)*(et[1]/_ik_error_position60_position_top) + (et[2]/_ik_error_position60_position_top)*(et[2]/_ik_error_position60_position_top)), _ik_error_position60_position)
+        norms[0] = np.where(_run16, _ik_error_position60_position, norms[0])
+        _ik_error_position60_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_position60_whole = np.sqrt(_ik_error_position60_whole_squares)
+        _c63 = ~np.isfinite(_ik_error_position60_whole_squares)
+        _m64 = _run16 & _c63
+        _ik_error_position60_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_position60_whole = np.where(_m64, _ik_error_position60_whole_top*np.sqrt((norms[0]/_ik_error_position60_whole_top)*(norms[0]/_ik_error_position60_whole_top) + (norms[1]/_ik_error_position60_whole_top)*(norms[1]/_ik_error_position60_whole_top)), _ik_error_position60_whole)
+        norms[2] = np.where(_run16, _ik_error_position60_whole, norms[2])
         pet = np.where(_run16, norms[0], pet)
         ret = np.where(_run16, norms[1], ret)
         ent = np.where(_run16, norms[2], ent)
         it = np.where(_run16, it + 1, it)
         attempt = np.where(_run16, attempt + 1, attempt)
         curved = np.where(_run16, np.where(ent > en*0.5, _fi(1), 0), curved)
-        _c56 = ent < en
-        _m57 = _run16 & _c56
-        _m58 = _run16 & (~_c56)
+        _c65 = ent < en
+        _m66 = _run16 & _c65
+        _m67 = _run16 & (~_c65)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m57, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m57, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m66, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m66, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 7):
-            q[k] = np.where(_m57, trial[k], q[k])
+            q[k] = np.where(_m66, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m57, Tt[k], Tm[k])
+            Tm[k] = np.where(_m66, Tt[k], Tm[k])
         for k in range(0, 42):
-            J[k] = np.where(_m57, Jt[k], J[k])
+            J[k] = np.where(_m66, Jt[k], J[k])
         for k in range(0, 3):
-            e[k] = np.where(_m57, et[k], e[k])
-        gram_ready = np.where(_m57, 0, gram_ready)
-        pe = np.where(_m57, pet, pe)
-        re = np.where(_m57, ret, re)
-        en = np.where(_m57, ent, en)
-        c = np.where(_m57, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m58, c*4.0, c)
-        stalled = np.where(_m58, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        damped = np.where(_m58, 0, damped)
-        _c59 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m60 = _run16 & _c59
-        best_en = np.where(_m60, en, best_en)
-        best_pe = np.where(_m60, pe, best_pe)
-        best_stalled = np.where(_m60, stalled, best_stalled)
-        best_here = np.where(_m60, 1, best_here)
+            e[k] = np.where(_m66, et[k], e[k])
+        gram_ready = np.where(_m66, 0, gram_ready)
+        pe = np.where(_m66, pet, pe)
+        re = np.where(_m66, ret, re)
+        en = np.where(_m66, ent, en)
+        c = np.where(_m66, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m67, c*4.0, c)
+        stalled = np.where(_m67, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m67, 0, damped)
+        _c68 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m69 = _run16 & _c68
+        best_en = np.where(_m69, en, best_en)
+        best_pe = np.where(_m69, pe, best_pe)
+        best_stalled = np.where(_m69, stalled, best_stalled)
+        best_here = np.where(_m69, 1, best_here)
         for k in range(0, 7):
-            best_q[k] = np.where(_m60, q[k], best_q[k])
-        _c61 = ~((pe <= tol) & (re <= tol))
-        _m62 = _run16 & _c61
-        if bool(_m62.any()):
-            slow = np.where(_m62, stationary, slow)
-            _c63 = attempt % 3 == 0
-            _m64 = _m62 & _c63
+            best_q[k] = np.where(_m69, q[k], best_q[k])
+        _c70 = ~((pe <= tol) & (re <= tol))
+        _m71 = _run16 & _c70
+        if bool(_m71.any()):
+            slow = np.where(_m71, stationary, slow)
+            _c72 = attempt % 3 == 0
+            _m73 = _m71 & _c72
             # a window of accepted, damping-bound steps is not slow: each step halves the damping
-            _c65 = (en > checkpoint*0.6) & (damped == 0)
-            _m66 = _m64 & _c65
-            slow = np.where(_m66, 1, slow)
-            damped = np.where(_m64, 1, damped)
-            window_start = np.where(_m64, checkpoint, window_start)
-            checkpoint = np.where(_m64, en, checkpoint)
-            _c67 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m68 = _m62 & _c67
-            if bool(_m68.any()):
-                _c69 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m70 = _m68 & _c69
+            _c74 = (en > checkpoint*0.6) & (damped == 0)
+            _m75 = _m73 & _c74
+            slow = np.where(_m75, 1, slow)
+            damped = np.where(_m73, 1, damped)
+            window_start = np.where(_m73, checkpoint, window_start)
+            checkpoint = np.where(_m73, en, checkpoint)
+            _c76 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m77 = _m71 & _c76
+            if bool(_m77.any()):
+                _c78 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m79 = _m77 & _c78
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m70, 1, best_stalled)
-                best_here = np.where(_m68, 0, best_here)
-                nearest = np.where(_m68, 0.0, nearest)
+                best_stalled = np.where(_m79, 1, best_stalled)
+                best_here = np.where(_m77, 0, best_here)
+                nearest = np.where(_m77, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 7):
-                        _alive72 = _m68
-                        _ik_uniform71_s = state[0]
-                        _ik_uniform71_s = _u64_where(_m68, _u64_xor(_ik_uniform71_s, _u64_shr(_ik_uniform71_s, 12)), _ik_uniform71_s)
-                        _ik_uniform71_s = _u64_where(_m68, _u64_xor(_ik_uniform71_s, _u64_shl(_ik_uniform71_s, 25)), _ik_uniform71_s)
-                        _ik_uniform71_s = _u64_where(_m68, _u64_xor(_ik_uniform71_s, _u64_shr(_ik_uniform71_s, 27)), _ik_uniform71_s)
-                        state[0] = _u64_where(_m68, _ik_uniform71_s, state[0])
-                        u = np.where(_m68, _u64_real(_u64_shr(_u64_mul(_ik_uniform71_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive72 = _alive72 & (~_m68)
-                        trial[k] = np.where(_m68, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive81 = _m77
+                        _ik_uniform80_s = state[0]
+                        _ik_uniform80_s = _u64_where(_m77, _u64_xor(_ik_uniform80_s, _u64_shr(_ik_uniform80_s, 12)), _ik_uniform80_s)
+                        _ik_uniform80_s = _u64_where(_m77, _u64_xor(_ik_uniform80_s, _u64_shl(_ik_uniform80_s, 25)), _ik_uniform80_s)
+                        _ik_uniform80_s = _u64_where(_m77, _u64_xor(_ik_uniform80_s, _u64_shr(_ik_uniform80_s, 27)), _ik_uniform80_s)
+                        state[0] = _u64_where(_m77, _ik_uniform80_s, state[0])
+                        u = np.where(_m77, _u64_real(_u64_shr(_u64_mul(_ik_uniform80_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive81 = _alive81 & (~_m77)
+                        trial[k] = np.where(_m77, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:7])
-                    _merge(_m68, _o[0], Tt, 0, _fr)
-                    _merge(_m68, _o[1], Jt, 0, _fr)
-                    d = np.where(_m68, np.sqrt(((target[0] - Tt[3])*(target[0] - Tt[3]) + (target[1] - Tt[7])*(target[1] - Tt[7])) + (target[2] - Tt[11])*(target[2] - Tt[11])), d)
-                    _c73 = (d < nearest) | (m == 0)
-                    _m74 = _m68 & _c73
-                    nearest = np.where(_m74, d, nearest)
+                    _merge(_m77, _o[0], Tt, 0, _fr)
+                    _merge(_m77, _o[1], Jt, 0, _fr)
+                    d = np.where(_m77, np.sqrt(((target[0] - Tt[3])*(target[0] - Tt[3]) + (target[1] - Tt[7])*(target[1] - Tt[7])) + (target[2] - Tt[11])*(target[2] - Tt[11])), d)
+                    _c82 = (d < nearest) | (m == 0)
+                    _m83 = _m77 & _c82
+                    nearest = np.where(_m83, d, nearest)
                     for k in range(0, 7):
-                        q[k] = np.where(_m74, trial[k], q[k])
-                restarts = np.where(_m68, restarts + 1, restarts)
-                gram_ready = np.where(_m68, 0, gram_ready)
+                        q[k] = np.where(_m83, trial[k], q[k])
+                restarts = np.where(_m77, restarts + 1, restarts)
+                gram_ready = np.where(_m77, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:7])
-                _merge(_m68, _o[0], Tm, 0, _fr)
-                _merge(_m68, _o[1], J, 0, _fr)
-                e[0] = np.where(_m68, target[0] - Tm[3], e[0])
-                e[1] = np.where(_m68, target[1] - Tm[7], e[1])
-                e[2] = np.where(_m68, target[2] - Tm[11], e[2])
-                norms[1] = np.where(_m68, 0.0, norms[1])
-                _ik_error_position75_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_position75_position = np.sqrt(_ik_error_position75_position_squares)
-                _c76 = ~np.isfinite(_ik_error_position75_position_squares)
-                _m77 = _m68 & _c76
-                _ik_error_position75_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_position75_position = np.where(_m77, _ik_error_position75_position_top*np.sqrt((e[0]/_ik_error_position75_position_top)*(e[0]/_ik_error_position75_position_top) + (e[1]/_ik_error_position75_position_top)*(e[1]/_ik_error_position75_position_top) + (e[2]/_ik_error_position75_position_top)*(e[2]/_ik_error_position75_position_top)), _ik_error_position75_position)
-                norms[0] = np.where(_m68, _ik_error_position75_position, norms[0])
-                _ik_error_position75_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_position75_whole = np.sqrt(_ik_error_position75_whole_squares)
-                _c78 = ~np.isfinite(_ik_error_position75_whole_squares)
-                _m79 = _m68 & _c78
-                _ik_error_position75_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_position75_whole = np.where(_m79, _ik_error_position75_whole_top*np.sqrt((norms[0]/_ik_error_position75_whole_top)*(norms[0]/_ik_error_position75_whole_top) + (norms[1]/_ik_error_position75_whole_top)*(norms[1]/_ik_error_position75_whole_top)), _ik_error_position75_whole)
-                norms[2] = np.where(_m68, _ik_error_position75_whole, norms[2])
-                pe = np.where(_m68, norms[0], pe)
-                re = np.where(_m68, norms[1], re)
-                en = np.where(_m68, norms[2], en)
-                c = np.where(_m68, 0.01, c)
-                curved = np.where(_m68, 0, curved)
-                damped = np.where(_m68, 1, damped)
-                attempt = np.where(_m68, 0, attempt)
-                checkpoint = np.where(_m68, en, checkpoint)
-                window_start = np.where(_m68, en, window_start)
-                _c80 = en < best_en
-                _m81 = _m68 & _c80
-                best_en = np.where(_m81, en, best_en)
-                best_pe = np.where(_m81, pe, best_pe)
-                best_stalled = np.where(_m81, 0, best_stalled)
-                best_here = np.where(_m81, 1, best_here)
+                _merge(_m77, _o[0], Tm, 0, _fr)
+                _merge(_m77, _o[1], J, 0, _fr)
+                e[0] = np.where(_m77, target[0] - Tm[3], e[0])
+                e[1] = np.where(_m77, target[1] - Tm[7], e[1])
+                e[2] = np.where(_m77, target[2] - Tm[11], e[2])
+                norms[1] = np.where(_m77, 0.0, norms[1])
+                _ik_error_position84_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_position84_position = np.sqrt(_ik_error_position84_position_squares)
+                _c85 = ~np.isfinite(_ik_error_position84_position_squares)
+                _m86 = _m77 & _c85
+                _ik_error_position84_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_position84_position = np.where(_m86, _ik_error_position84_position_top*np.sqrt((e[0]/_ik_error_position84_position_top)*(e[0]/_ik_error_position84_position_top) + (e[1]/_ik_error_position84_position_top)*(e[1]/_ik_error_position84_position_top) + (e[2]/_ik_error_position84_position_top)*(e[2]/_ik_error_position84_position_top)), _ik_error_position84_position)
+                norms[0] = np.where(_m77, _ik_error_position84_position, norms[0])
+                _ik_error_position84_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_position84_whole = np.sqrt(_ik_error_position84_whole_squares)
+                _c87 = ~np.isfinite(_ik_error_position84_whole_squares)
+                _m88 = _m77 & _c87
+                _ik_error_position84_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_position84_whole = np.where(_m88, _ik_error_position84_whole_top*np.sqrt((norms[0]/_ik_error_position84_whole_top)*(norms[0]/_ik_error_position84_whole_top) + (norms[1]/_ik_error_position84_whole_top)*(norms[1]/_ik_error_position84_whole_top)), _ik_error_position84_whole)
+                norms[2] = np.where(_m77, _ik_error_position84_whole, norms[2])
+                pe = np.where(_m77, norms[0], pe)
+                re = np.where(_m77, norms[1], re)
+                en = np.where(_m77, norms[2], en)
+                c = np.where(_m77, 0.01, c)
+                curved = np.where(_m77, 0, curved)
+                damped = np.where(_m77, 1, damped)
+                attempt = np.where(_m77, 0, attempt)
+                checkpoint = np.where(_m77, en, checkpoint)
+                window_start = np.where(_m77, en, window_start)
+                _c89 = en < best_en
+                _m90 = _m77 & _c89
+                best_en = np.where(_m90, en, best_en)
+                best_pe = np.where(_m90, pe, best_pe)
+                best_stalled = np.where(_m90, 0, best_stalled)
+                best_here = np.where(_m90, 1, best_here)
                 for k in range(0, 7):
-                    best_q[k] = np.where(_m81, q[k], best_q[k])
+                    best_q[k] = np.where(_m90, q[k], best_q[k])
     for k in range(0, 7):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])

@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x1b983273UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x3fc0d0d6UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -7096,6 +7096,17 @@ static int ur5_ik_solve_run(const double q0[6], const double target[16], double 
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (stationary > 0) {
+            /* at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before */
+            mu2 = (en*1e-08 > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? en*1e-08 : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
+            if (any > 0) {
+                ur5_ik_ldl_pose(Gf, mu2, F);
+                ur5_ik_ldl_solve_pose(Jf, F, e, dq);
+            } else {
+                ur5_ik_ldl_pose(G, mu2, F);
+                ur5_ik_ldl_solve_pose(J, F, e, dq);
+            }
+        }
         /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
         damped = ((c*en)*6.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {
@@ -7459,6 +7470,17 @@ static int ur5_ik_solve_position_run(const double q0[6], const double target[3],
         }
         /* stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e| */
         stationary = (gg <= ((ff*en)*en)*0.0004 ? 1 : 0);
+        if (stationary > 0) {
+            /* at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before */
+            mu2 = (en*1e-08 > (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0) ? en*1e-08 : (mu2_floor*(en < 1.0 ? en*1.0 : 1.0))*(en < 1.0 ? en*1.0 : 1.0));
+            if (any > 0) {
+                ur5_ik_ldl_position(Gf, mu2, F);
+                ur5_ik_ldl_solve_position(Jf, F, e, dq);
+            } else {
+                ur5_ik_ldl_position(G, mu2, F);
+                ur5_ik_ldl_solve_position(J, F, e, dq);
+            }
+        }
         /* the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue */
         damped = ((c*en)*3.0 > ff ? damped : 0);
         if (curved > 0 && en < 0.05) {

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x1b983273
+STAMP = 0x3fc0d0d6
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -5728,6 +5728,15 @@ def _ik_solve(q0, target, lambda_, tol, max_iter, q, error, iterations):
                 gg = gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        if stationary > 0:
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = en*1e-08 if en*1e-08 > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
+            if any > 0:
+                _ik_ldl_pose(Gf, mu2, F)
+                _ik_ldl_solve_pose(Jf, F, e, dq)
+            else:
+                _ik_ldl_pose(G, mu2, F)
+                _ik_ldl_solve_pose(J, F, e, dq)
         # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
         damped = damped if (c*en)*6.0 > ff else 0
         if curved > 0 and en < 0.05:
@@ -6484,457 +6493,717 @@ def _ik_solve_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m51, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2] + J[18 + k]*e[3] + J[24 + k]*e[4] + J[30 + k]*e[5]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run35, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
-        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
-        _c56 = (curved > 0) & (en < 0.05)
+        _c56 = stationary > 0
         _m57 = _run35 & _c56
         if bool(_m57.any()):
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = np.where(_m57, np.where(en*1e-08 > (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0), en*1e-08, (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+            _c58 = any > 0
+            _m59 = _m57 & _c58
+            _m60 = _m57 & (~_c58)
+            if bool(_m59.any()):
+                _ik_ldl_pose61_mu2 = mu2
+                _ik_ldl_pose61_a00 = Gf[0] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a10 = Gf[1]
+                _ik_ldl_pose61_a11 = Gf[2] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a20 = Gf[3]
+                _ik_ldl_pose61_a21 = Gf[4]
+                _ik_ldl_pose61_a22 = Gf[5] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a30 = Gf[6]
+                _ik_ldl_pose61_a31 = Gf[7]
+                _ik_ldl_pose61_a32 = Gf[8]
+                _ik_ldl_pose61_a33 = Gf[9] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a40 = Gf[10]
+                _ik_ldl_pose61_a41 = Gf[11]
+                _ik_ldl_pose61_a42 = Gf[12]
+                _ik_ldl_pose61_a43 = Gf[13]
+                _ik_ldl_pose61_a44 = Gf[14] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_a50 = Gf[15]
+                _ik_ldl_pose61_a51 = Gf[16]
+                _ik_ldl_pose61_a52 = Gf[17]
+                _ik_ldl_pose61_a53 = Gf[18]
+                _ik_ldl_pose61_a54 = Gf[19]
+                _ik_ldl_pose61_a55 = Gf[20] + _ik_ldl_pose61_mu2
+                _ik_ldl_pose61_cut = np.where(_ik_ldl_pose61_a55 > np.where(_ik_ldl_pose61_a44 > np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00))), _ik_ldl_pose61_a44, np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)))), _ik_ldl_pose61_a55, np.where(_ik_ldl_pose61_a44 > np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00))), _ik_ldl_pose61_a44, np.where(_ik_ldl_pose61_a33 > np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)), _ik_ldl_pose61_a33, np.where(_ik_ldl_pose61_a22 > np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00), _ik_ldl_pose61_a22, np.where(_ik_ldl_pose61_a11 > _ik_ldl_pose61_a00, _ik_ldl_pose61_a11, _ik_ldl_pose61_a00)))))*1e-13
+                _ik_ldl_pose61_s0 = _ik_ldl_pose61_a00
+                _ik_ldl_pose61_kept0 = _ik_ldl_pose61_s0 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i0 = np.where(_ik_ldl_pose61_kept0, 1.0/_ik_ldl_pose61_s0, 0.0)
+                F[0] = np.where(_m59, _ik_ldl_pose61_i0, F[0])
+                _ik_ldl_pose61_t10 = _ik_ldl_pose61_a10
+                _ik_ldl_pose61_l10 = _ik_ldl_pose61_t10*_ik_ldl_pose61_i0
+                F[1] = np.where(_m59, _ik_ldl_pose61_l10, F[1])
+                _ik_ldl_pose61_ld10 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t10, 0.0)
+                _ik_ldl_pose61_t20 = _ik_ldl_pose61_a20
+                _ik_ldl_pose61_l20 = _ik_ldl_pose61_t20*_ik_ldl_pose61_i0
+                F[3] = np.where(_m59, _ik_ldl_pose61_l20, F[3])
+                _ik_ldl_pose61_ld20 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t20, 0.0)
+                _ik_ldl_pose61_t30 = _ik_ldl_pose61_a30
+                _ik_ldl_pose61_l30 = _ik_ldl_pose61_t30*_ik_ldl_pose61_i0
+                F[6] = np.where(_m59, _ik_ldl_pose61_l30, F[6])
+                _ik_ldl_pose61_ld30 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t30, 0.0)
+                _ik_ldl_pose61_t40 = _ik_ldl_pose61_a40
+                _ik_ldl_pose61_l40 = _ik_ldl_pose61_t40*_ik_ldl_pose61_i0
+                F[10] = np.where(_m59, _ik_ldl_pose61_l40, F[10])
+                _ik_ldl_pose61_ld40 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t40, 0.0)
+                _ik_ldl_pose61_t50 = _ik_ldl_pose61_a50
+                _ik_ldl_pose61_l50 = _ik_ldl_pose61_t50*_ik_ldl_pose61_i0
+                F[15] = np.where(_m59, _ik_ldl_pose61_l50, F[15])
+                _ik_ldl_pose61_ld50 = np.where(_ik_ldl_pose61_kept0, _ik_ldl_pose61_t50, 0.0)
+                _ik_ldl_pose61_s1 = _ik_ldl_pose61_a11 - _ik_ldl_pose61_l10*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_kept1 = _ik_ldl_pose61_s1 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i1 = np.where(_ik_ldl_pose61_kept1, 1.0/_ik_ldl_pose61_s1, 0.0)
+                F[2] = np.where(_m59, _ik_ldl_pose61_i1, F[2])
+                _ik_ldl_pose61_t21 = _ik_ldl_pose61_a21 - _ik_ldl_pose61_l20*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l21 = _ik_ldl_pose61_t21*_ik_ldl_pose61_i1
+                F[4] = np.where(_m59, _ik_ldl_pose61_l21, F[4])
+                _ik_ldl_pose61_ld21 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t21, 0.0)
+                _ik_ldl_pose61_t31 = _ik_ldl_pose61_a31 - _ik_ldl_pose61_l30*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l31 = _ik_ldl_pose61_t31*_ik_ldl_pose61_i1
+                F[7] = np.where(_m59, _ik_ldl_pose61_l31, F[7])
+                _ik_ldl_pose61_ld31 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t31, 0.0)
+                _ik_ldl_pose61_t41 = _ik_ldl_pose61_a41 - _ik_ldl_pose61_l40*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l41 = _ik_ldl_pose61_t41*_ik_ldl_pose61_i1
+                F[11] = np.where(_m59, _ik_ldl_pose61_l41, F[11])
+                _ik_ldl_pose61_ld41 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t41, 0.0)
+                _ik_ldl_pose61_t51 = _ik_ldl_pose61_a51 - _ik_ldl_pose61_l50*_ik_ldl_pose61_ld10
+                _ik_ldl_pose61_l51 = _ik_ldl_pose61_t51*_ik_ldl_pose61_i1
+                F[16] = np.where(_m59, _ik_ldl_pose61_l51, F[16])
+                _ik_ldl_pose61_ld51 = np.where(_ik_ldl_pose61_kept1, _ik_ldl_pose61_t51, 0.0)
+                _ik_ldl_pose61_s2 = (_ik_ldl_pose61_a22 - _ik_ldl_pose61_l20*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l21*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_kept2 = _ik_ldl_pose61_s2 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i2 = np.where(_ik_ldl_pose61_kept2, 1.0/_ik_ldl_pose61_s2, 0.0)
+                F[5] = np.where(_m59, _ik_ldl_pose61_i2, F[5])
+                _ik_ldl_pose61_t32 = (_ik_ldl_pose61_a32 - _ik_ldl_pose61_l30*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l31*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l32 = _ik_ldl_pose61_t32*_ik_ldl_pose61_i2
+                F[8] = np.where(_m59, _ik_ldl_pose61_l32, F[8])
+                _ik_ldl_pose61_ld32 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t32, 0.0)
+                _ik_ldl_pose61_t42 = (_ik_ldl_pose61_a42 - _ik_ldl_pose61_l40*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l41*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l42 = _ik_ldl_pose61_t42*_ik_ldl_pose61_i2
+                F[12] = np.where(_m59, _ik_ldl_pose61_l42, F[12])
+                _ik_ldl_pose61_ld42 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t42, 0.0)
+                _ik_ldl_pose61_t52 = (_ik_ldl_pose61_a52 - _ik_ldl_pose61_l50*_ik_ldl_pose61_ld20) - _ik_ldl_pose61_l51*_ik_ldl_pose61_ld21
+                _ik_ldl_pose61_l52 = _ik_ldl_pose61_t52*_ik_ldl_pose61_i2
+                F[17] = np.where(_m59, _ik_ldl_pose61_l52, F[17])
+                _ik_ldl_pose61_ld52 = np.where(_ik_ldl_pose61_kept2, _ik_ldl_pose61_t52, 0.0)
+                _ik_ldl_pose61_s3 = (_ik_ldl_pose61_a33 - (_ik_ldl_pose61_l30*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l31*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l32*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_kept3 = _ik_ldl_pose61_s3 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i3 = np.where(_ik_ldl_pose61_kept3, 1.0/_ik_ldl_pose61_s3, 0.0)
+                F[9] = np.where(_m59, _ik_ldl_pose61_i3, F[9])
+                _ik_ldl_pose61_t43 = (_ik_ldl_pose61_a43 - (_ik_ldl_pose61_l40*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l41*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l42*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_l43 = _ik_ldl_pose61_t43*_ik_ldl_pose61_i3
+                F[13] = np.where(_m59, _ik_ldl_pose61_l43, F[13])
+                _ik_ldl_pose61_ld43 = np.where(_ik_ldl_pose61_kept3, _ik_ldl_pose61_t43, 0.0)
+                _ik_ldl_pose61_t53 = (_ik_ldl_pose61_a53 - (_ik_ldl_pose61_l50*_ik_ldl_pose61_ld30 + _ik_ldl_pose61_l51*_ik_ldl_pose61_ld31)) - _ik_ldl_pose61_l52*_ik_ldl_pose61_ld32
+                _ik_ldl_pose61_l53 = _ik_ldl_pose61_t53*_ik_ldl_pose61_i3
+                F[18] = np.where(_m59, _ik_ldl_pose61_l53, F[18])
+                _ik_ldl_pose61_ld53 = np.where(_ik_ldl_pose61_kept3, _ik_ldl_pose61_t53, 0.0)
+                _ik_ldl_pose61_s4 = (_ik_ldl_pose61_a44 - (_ik_ldl_pose61_l40*_ik_ldl_pose61_ld40 + (_ik_ldl_pose61_l41*_ik_ldl_pose61_ld41 + _ik_ldl_pose61_l42*_ik_ldl_pose61_ld42))) - _ik_ldl_pose61_l43*_ik_ldl_pose61_ld43
+                _ik_ldl_pose61_kept4 = _ik_ldl_pose61_s4 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i4 = np.where(_ik_ldl_pose61_kept4, 1.0/_ik_ldl_pose61_s4, 0.0)
+                F[14] = np.where(_m59, _ik_ldl_pose61_i4, F[14])
+                _ik_ldl_pose61_t54 = (_ik_ldl_pose61_a54 - (_ik_ldl_pose61_l50*_ik_ldl_pose61_ld40 + (_ik_ldl_pose61_l51*_ik_ldl_pose61_ld41 + _ik_ldl_pose61_l52*_ik_ldl_pose61_ld42))) - _ik_ldl_pose61_l53*_ik_ldl_pose61_ld43
+                _ik_ldl_pose61_l54 = _ik_ldl_pose61_t54*_ik_ldl_pose61_i4
+                F[19] = np.where(_m59, _ik_ldl_pose61_l54, F[19])
+                _ik_ldl_pose61_ld54 = np.where(_ik_ldl_pose61_kept4, _ik_ldl_pose61_t54, 0.0)
+                _ik_ldl_pose61_s5 = (_ik_ldl_pose61_a55 - ((_ik_ldl_pose61_l50*_ik_ldl_pose61_ld50 + _ik_ldl_pose61_l51*_ik_ldl_pose61_ld51) + (_ik_ldl_pose61_l52*_ik_ldl_pose61_ld52 + _ik_ldl_pose61_l53*_ik_ldl_pose61_ld53))) - _ik_ldl_pose61_l54*_ik_ldl_pose61_ld54
+                _ik_ldl_pose61_kept5 = _ik_ldl_pose61_s5 > _ik_ldl_pose61_cut
+                _ik_ldl_pose61_i5 = np.where(_ik_ldl_pose61_kept5, 1.0/_ik_ldl_pose61_s5, 0.0)
+                F[20] = np.where(_m59, _ik_ldl_pose61_i5, F[20])
+                _ik_ldl_solve_pose62_y0 = e[0]
+                _ik_ldl_solve_pose62_y1 = e[1] - F[1]*_ik_ldl_solve_pose62_y0
+                _ik_ldl_solve_pose62_y2 = (e[2] - F[3]*_ik_ldl_solve_pose62_y0) - F[4]*_ik_ldl_solve_pose62_y1
+                _ik_ldl_solve_pose62_y3 = (e[3] - (F[6]*_ik_ldl_solve_pose62_y0 + F[7]*_ik_ldl_solve_pose62_y1)) - F[8]*_ik_ldl_solve_pose62_y2
+                _ik_ldl_solve_pose62_y4 = (e[4] - (F[10]*_ik_ldl_solve_pose62_y0 + (F[11]*_ik_ldl_solve_pose62_y1 + F[12]*_ik_ldl_solve_pose62_y2))) - F[13]*_ik_ldl_solve_pose62_y3
+                _ik_ldl_solve_pose62_y5 = (e[5] - ((F[15]*_ik_ldl_solve_pose62_y0 + F[16]*_ik_ldl_solve_pose62_y1) + (F[17]*_ik_ldl_solve_pose62_y2 + F[18]*_ik_ldl_solve_pose62_y3))) - F[19]*_ik_ldl_solve_pose62_y4
+                _ik_ldl_solve_pose62_z5 = _ik_ldl_solve_pose62_y5*F[20]
+                _ik_ldl_solve_pose62_z4 = _ik_ldl_solve_pose62_y4*F[14] - F[19]*_ik_ldl_solve_pose62_z5
+                _ik_ldl_solve_pose62_z3 = (_ik_ldl_solve_pose62_y3*F[9] - F[18]*_ik_ldl_solve_pose62_z5) - F[13]*_ik_ldl_solve_pose62_z4
+                _ik_ldl_solve_pose62_z2 = (_ik_ldl_solve_pose62_y2*F[5] - (F[17]*_ik_ldl_solve_pose62_z5 + F[12]*_ik_ldl_solve_pose62_z4)) - F[8]*_ik_ldl_solve_pose62_z3
+                _ik_ldl_solve_pose62_z1 = (_ik_ldl_solve_pose62_y1*F[2] - (F[16]*_ik_ldl_solve_pose62_z5 + (F[11]*_ik_ldl_solve_pose62_z4 + F[7]*_ik_ldl_solve_pose62_z3))) - F[4]*_ik_ldl_solve_pose62_z2
+                _ik_ldl_solve_pose62_z0 = (_ik_ldl_solve_pose62_y0*F[0] - ((F[15]*_ik_ldl_solve_pose62_z5 + F[10]*_ik_ldl_solve_pose62_z4) + (F[6]*_ik_ldl_solve_pose62_z3 + F[3]*_ik_ldl_solve_pose62_z2))) - F[1]*_ik_ldl_solve_pose62_z1
+                dq[0] = np.where(_m59, (Jf[0]*_ik_ldl_solve_pose62_z0 + (Jf[6]*_ik_ldl_solve_pose62_z1 + Jf[12]*_ik_ldl_solve_pose62_z2)) + (Jf[18]*_ik_ldl_solve_pose62_z3 + (Jf[24]*_ik_ldl_solve_pose62_z4 + Jf[30]*_ik_ldl_solve_pose62_z5)), dq[0])
+                dq[1] = np.where(_m59, (Jf[1]*_ik_ldl_solve_pose62_z0 + (Jf[7]*_ik_ldl_solve_pose62_z1 + Jf[13]*_ik_ldl_solve_pose62_z2)) + (Jf[19]*_ik_ldl_solve_pose62_z3 + (Jf[25]*_ik_ldl_solve_pose62_z4 + Jf[31]*_ik_ldl_solve_pose62_z5)), dq[1])
+                dq[2] = np.where(_m59, (Jf[2]*_ik_ldl_solve_pose62_z0 + (Jf[8]*_ik_ldl_solve_pose62_z1 + Jf[14]*_ik_ldl_solve_pose62_z2)) + (Jf[20]*_ik_ldl_solve_pose62_z3 + (Jf[26]*_ik_ldl_solve_pose62_z4 + Jf[32]*_ik_ldl_solve_pose62_z5)), dq[2])
+                dq[3] = np.where(_m59, (Jf[3]*_ik_ldl_solve_pose62_z0 + (Jf[9]*_ik_ldl_solve_pose62_z1 + Jf[15]*_ik_ldl_solve_pose62_z2)) + (Jf[21]*_ik_ldl_solve_pose62_z3 + (Jf[27]*_ik_ldl_solve_pose62_z4 + Jf[33]*_ik_ldl_solve_pose62_z5)), dq[3])
+                dq[4] = np.where(_m59, (Jf[4]*_ik_ldl_solve_pose62_z0 + (Jf[10]*_ik_ldl_solve_pose62_z1 + Jf[16]*_ik_ldl_solve_pose62_z2)) + (Jf[22]*_ik_ldl_solve_pose62_z3 + (Jf[28]*_ik_ldl_solve_pose62_z4 + Jf[34]*_ik_ldl_solve_pose62_z5)), dq[4])
+                dq[5] = np.where(_m59, (Jf[5]*_ik_ldl_solve_pose62_z0 + (Jf[11]*_ik_ldl_solve_pose62_z1 + Jf[17]*_ik_ldl_solve_pose62_z2)) + (Jf[23]*_ik_ldl_solve_pose62_z3 + (Jf[29]*_ik_ldl_solve_pose62_z4 + Jf[35]*_ik_ldl_solve_pose62_z5)), dq[5])
+            if bool(_m60.any()):
+                _ik_ldl_pose63_mu2 = mu2
+                _ik_ldl_pose63_a00 = G[0] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a10 = G[1]
+                _ik_ldl_pose63_a11 = G[2] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a20 = G[3]
+                _ik_ldl_pose63_a21 = G[4]
+                _ik_ldl_pose63_a22 = G[5] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a30 = G[6]
+                _ik_ldl_pose63_a31 = G[7]
+                _ik_ldl_pose63_a32 = G[8]
+                _ik_ldl_pose63_a33 = G[9] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a40 = G[10]
+                _ik_ldl_pose63_a41 = G[11]
+                _ik_ldl_pose63_a42 = G[12]
+                _ik_ldl_pose63_a43 = G[13]
+                _ik_ldl_pose63_a44 = G[14] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_a50 = G[15]
+                _ik_ldl_pose63_a51 = G[16]
+                _ik_ldl_pose63_a52 = G[17]
+                _ik_ldl_pose63_a53 = G[18]
+                _ik_ldl_pose63_a54 = G[19]
+                _ik_ldl_pose63_a55 = G[20] + _ik_ldl_pose63_mu2
+                _ik_ldl_pose63_cut = np.where(_ik_ldl_pose63_a55 > np.where(_ik_ldl_pose63_a44 > np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00))), _ik_ldl_pose63_a44, np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)))), _ik_ldl_pose63_a55, np.where(_ik_ldl_pose63_a44 > np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00))), _ik_ldl_pose63_a44, np.where(_ik_ldl_pose63_a33 > np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)), _ik_ldl_pose63_a33, np.where(_ik_ldl_pose63_a22 > np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00), _ik_ldl_pose63_a22, np.where(_ik_ldl_pose63_a11 > _ik_ldl_pose63_a00, _ik_ldl_pose63_a11, _ik_ldl_pose63_a00)))))*1e-13
+                _ik_ldl_pose63_s0 = _ik_ldl_pose63_a00
+                _ik_ldl_pose63_kept0 = _ik_ldl_pose63_s0 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i0 = np.where(_ik_ldl_pose63_kept0, 1.0/_ik_ldl_pose63_s0, 0.0)
+                F[0] = np.where(_m60, _ik_ldl_pose63_i0, F[0])
+                _ik_ldl_pose63_t10 = _ik_ldl_pose63_a10
+                _ik_ldl_pose63_l10 = _ik_ldl_pose63_t10*_ik_ldl_pose63_i0
+                F[1] = np.where(_m60, _ik_ldl_pose63_l10, F[1])
+                _ik_ldl_pose63_ld10 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t10, 0.0)
+                _ik_ldl_pose63_t20 = _ik_ldl_pose63_a20
+                _ik_ldl_pose63_l20 = _ik_ldl_pose63_t20*_ik_ldl_pose63_i0
+                F[3] = np.where(_m60, _ik_ldl_pose63_l20, F[3])
+                _ik_ldl_pose63_ld20 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t20, 0.0)
+                _ik_ldl_pose63_t30 = _ik_ldl_pose63_a30
+                _ik_ldl_pose63_l30 = _ik_ldl_pose63_t30*_ik_ldl_pose63_i0
+                F[6] = np.where(_m60, _ik_ldl_pose63_l30, F[6])
+                _ik_ldl_pose63_ld30 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t30, 0.0)
+                _ik_ldl_pose63_t40 = _ik_ldl_pose63_a40
+                _ik_ldl_pose63_l40 = _ik_ldl_pose63_t40*_ik_ldl_pose63_i0
+                F[10] = np.where(_m60, _ik_ldl_pose63_l40, F[10])
+                _ik_ldl_pose63_ld40 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t40, 0.0)
+                _ik_ldl_pose63_t50 = _ik_ldl_pose63_a50
+                _ik_ldl_pose63_l50 = _ik_ldl_pose63_t50*_ik_ldl_pose63_i0
+                F[15] = np.where(_m60, _ik_ldl_pose63_l50, F[15])
+                _ik_ldl_pose63_ld50 = np.where(_ik_ldl_pose63_kept0, _ik_ldl_pose63_t50, 0.0)
+                _ik_ldl_pose63_s1 = _ik_ldl_pose63_a11 - _ik_ldl_pose63_l10*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_kept1 = _ik_ldl_pose63_s1 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i1 = np.where(_ik_ldl_pose63_kept1, 1.0/_ik_ldl_pose63_s1, 0.0)
+                F[2] = np.where(_m60, _ik_ldl_pose63_i1, F[2])
+                _ik_ldl_pose63_t21 = _ik_ldl_pose63_a21 - _ik_ldl_pose63_l20*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l21 = _ik_ldl_pose63_t21*_ik_ldl_pose63_i1
+                F[4] = np.where(_m60, _ik_ldl_pose63_l21, F[4])
+                _ik_ldl_pose63_ld21 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t21, 0.0)
+                _ik_ldl_pose63_t31 = _ik_ldl_pose63_a31 - _ik_ldl_pose63_l30*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l31 = _ik_ldl_pose63_t31*_ik_ldl_pose63_i1
+                F[7] = np.where(_m60, _ik_ldl_pose63_l31, F[7])
+                _ik_ldl_pose63_ld31 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t31, 0.0)
+                _ik_ldl_pose63_t41 = _ik_ldl_pose63_a41 - _ik_ldl_pose63_l40*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l41 = _ik_ldl_pose63_t41*_ik_ldl_pose63_i1
+                F[11] = np.where(_m60, _ik_ldl_pose63_l41, F[11])
+                _ik_ldl_pose63_ld41 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t41, 0.0)
+                _ik_ldl_pose63_t51 = _ik_ldl_pose63_a51 - _ik_ldl_pose63_l50*_ik_ldl_pose63_ld10
+                _ik_ldl_pose63_l51 = _ik_ldl_pose63_t51*_ik_ldl_pose63_i1
+                F[16] = np.where(_m60, _ik_ldl_pose63_l51, F[16])
+                _ik_ldl_pose63_ld51 = np.where(_ik_ldl_pose63_kept1, _ik_ldl_pose63_t51, 0.0)
+                _ik_ldl_pose63_s2 = (_ik_ldl_pose63_a22 - _ik_ldl_pose63_l20*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l21*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_kept2 = _ik_ldl_pose63_s2 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i2 = np.where(_ik_ldl_pose63_kept2, 1.0/_ik_ldl_pose63_s2, 0.0)
+                F[5] = np.where(_m60, _ik_ldl_pose63_i2, F[5])
+                _ik_ldl_pose63_t32 = (_ik_ldl_pose63_a32 - _ik_ldl_pose63_l30*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l31*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l32 = _ik_ldl_pose63_t32*_ik_ldl_pose63_i2
+                F[8] = np.where(_m60, _ik_ldl_pose63_l32, F[8])
+                _ik_ldl_pose63_ld32 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t32, 0.0)
+                _ik_ldl_pose63_t42 = (_ik_ldl_pose63_a42 - _ik_ldl_pose63_l40*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l41*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l42 = _ik_ldl_pose63_t42*_ik_ldl_pose63_i2
+                F[12] = np.where(_m60, _ik_ldl_pose63_l42, F[12])
+                _ik_ldl_pose63_ld42 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t42, 0.0)
+                _ik_ldl_pose63_t52 = (_ik_ldl_pose63_a52 - _ik_ldl_pose63_l50*_ik_ldl_pose63_ld20) - _ik_ldl_pose63_l51*_ik_ldl_pose63_ld21
+                _ik_ldl_pose63_l52 = _ik_ldl_pose63_t52*_ik_ldl_pose63_i2
+                F[17] = np.where(_m60, _ik_ldl_pose63_l52, F[17])
+                _ik_ldl_pose63_ld52 = np.where(_ik_ldl_pose63_kept2, _ik_ldl_pose63_t52, 0.0)
+                _ik_ldl_pose63_s3 = (_ik_ldl_pose63_a33 - (_ik_ldl_pose63_l30*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l31*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l32*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_kept3 = _ik_ldl_pose63_s3 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i3 = np.where(_ik_ldl_pose63_kept3, 1.0/_ik_ldl_pose63_s3, 0.0)
+                F[9] = np.where(_m60, _ik_ldl_pose63_i3, F[9])
+                _ik_ldl_pose63_t43 = (_ik_ldl_pose63_a43 - (_ik_ldl_pose63_l40*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l41*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l42*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_l43 = _ik_ldl_pose63_t43*_ik_ldl_pose63_i3
+                F[13] = np.where(_m60, _ik_ldl_pose63_l43, F[13])
+                _ik_ldl_pose63_ld43 = np.where(_ik_ldl_pose63_kept3, _ik_ldl_pose63_t43, 0.0)
+                _ik_ldl_pose63_t53 = (_ik_ldl_pose63_a53 - (_ik_ldl_pose63_l50*_ik_ldl_pose63_ld30 + _ik_ldl_pose63_l51*_ik_ldl_pose63_ld31)) - _ik_ldl_pose63_l52*_ik_ldl_pose63_ld32
+                _ik_ldl_pose63_l53 = _ik_ldl_pose63_t53*_ik_ldl_pose63_i3
+                F[18] = np.where(_m60, _ik_ldl_pose63_l53, F[18])
+                _ik_ldl_pose63_ld53 = np.where(_ik_ldl_pose63_kept3, _ik_ldl_pose63_t53, 0.0)
+                _ik_ldl_pose63_s4 = (_ik_ldl_pose63_a44 - (_ik_ldl_pose63_l40*_ik_ldl_pose63_ld40 + (_ik_ldl_pose63_l41*_ik_ldl_pose63_ld41 + _ik_ldl_pose63_l42*_ik_ldl_pose63_ld42))) - _ik_ldl_pose63_l43*_ik_ldl_pose63_ld43
+                _ik_ldl_pose63_kept4 = _ik_ldl_pose63_s4 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i4 = np.where(_ik_ldl_pose63_kept4, 1.0/_ik_ldl_pose63_s4, 0.0)
+                F[14] = np.where(_m60, _ik_ldl_pose63_i4, F[14])
+                _ik_ldl_pose63_t54 = (_ik_ldl_pose63_a54 - (_ik_ldl_pose63_l50*_ik_ldl_pose63_ld40 + (_ik_ldl_pose63_l51*_ik_ldl_pose63_ld41 + _ik_ldl_pose63_l52*_ik_ldl_pose63_ld42))) - _ik_ldl_pose63_l53*_ik_ldl_pose63_ld43
+                _ik_ldl_pose63_l54 = _ik_ldl_pose63_t54*_ik_ldl_pose63_i4
+                F[19] = np.where(_m60, _ik_ldl_pose63_l54, F[19])
+                _ik_ldl_pose63_ld54 = np.where(_ik_ldl_pose63_kept4, _ik_ldl_pose63_t54, 0.0)
+                _ik_ldl_pose63_s5 = (_ik_ldl_pose63_a55 - ((_ik_ldl_pose63_l50*_ik_ldl_pose63_ld50 + _ik_ldl_pose63_l51*_ik_ldl_pose63_ld51) + (_ik_ldl_pose63_l52*_ik_ldl_pose63_ld52 + _ik_ldl_pose63_l53*_ik_ldl_pose63_ld53))) - _ik_ldl_pose63_l54*_ik_ldl_pose63_ld54
+                _ik_ldl_pose63_kept5 = _ik_ldl_pose63_s5 > _ik_ldl_pose63_cut
+                _ik_ldl_pose63_i5 = np.where(_ik_ldl_pose63_kept5, 1.0/_ik_ldl_pose63_s5, 0.0)
+                F[20] = np.where(_m60, _ik_ldl_pose63_i5, F[20])
+                _ik_ldl_solve_pose64_y0 = e[0]
+                _ik_ldl_solve_pose64_y1 = e[1] - F[1]*_ik_ldl_solve_pose64_y0
+                _ik_ldl_solve_pose64_y2 = (e[2] - F[3]*_ik_ldl_solve_pose64_y0) - F[4]*_ik_ldl_solve_pose64_y1
+                _ik_ldl_solve_pose64_y3 = (e[3] - (F[6]*_ik_ldl_solve_pose64_y0 + F[7]*_ik_ldl_solve_pose64_y1)) - F[8]*_ik_ldl_solve_pose64_y2
+                _ik_ldl_solve_pose64_y4 = (e[4] - (F[10]*_ik_ldl_solve_pose64_y0 + (F[11]*_ik_ldl_solve_pose64_y1 + F[12]*_ik_ldl_solve_pose64_y2))) - F[13]*_ik_ldl_solve_pose64_y3
+                _ik_ldl_solve_pose64_y5 = (e[5] - ((F[15]*_ik_ldl_solve_pose64_y0 + F[16]*_ik_ldl_solve_pose64_y1) + (F[17]*_ik_ldl_solve_pose64_y2 + F[18]*_ik_ldl_solve_pose64_y3))) - F[19]*_ik_ldl_solve_pose64_y4
+                _ik_ldl_solve_pose64_z5 = _ik_ldl_solve_pose64_y5*F[20]
+                _ik_ldl_solve_pose64_z4 = _ik_ldl_solve_pose64_y4*F[14] - F[19]*_ik_ldl_solve_pose64_z5
+                _ik_ldl_solve_pose64_z3 = (_ik_ldl_solve_pose64_y3*F[9] - F[18]*_ik_ldl_solve_pose64_z5) - F[13]*_ik_ldl_solve_pose64_z4
+                _ik_ldl_solve_pose64_z2 = (_ik_ldl_solve_pose64_y2*F[5] - (F[17]*_ik_ldl_solve_pose64_z5 + F[12]*_ik_ldl_solve_pose64_z4)) - F[8]*_ik_ldl_solve_pose64_z3
+                _ik_ldl_solve_pose64_z1 = (_ik_ldl_solve_pose64_y1*F[2] - (F[16]*_ik_ldl_solve_pose64_z5 + (F[11]*_ik_ldl_solve_pose64_z4 + F[7]*_ik_ldl_solve_pose64_z3))) - F[4]*_ik_ldl_solve_pose64_z2
+                _ik_ldl_solve_pose64_z0 = (_ik_ldl_solve_pose64_y0*F[0] - ((F[15]*_ik_ldl_solve_pose64_z5 + F[10]*_ik_ldl_solve_pose64_z4) + (F[6]*_ik_ldl_solve_pose64_z3 + F[3]*_ik_ldl_solve_pose64_z2))) - F[1]*_ik_ldl_solve_pose64_z1
+                dq[0] = np.where(_m60, (J[0]*_ik_ldl_solve_pose64_z0 + (J[6]*_ik_ldl_solve_pose64_z1 + J[12]*_ik_ldl_solve_pose64_z2)) + (J[18]*_ik_ldl_solve_pose64_z3 + (J[24]*_ik_ldl_solve_pose64_z4 + J[30]*_ik_ldl_solve_pose64_z5)), dq[0])
+                dq[1] = np.where(_m60, (J[1]*_ik_ldl_solve_pose64_z0 + (J[7]*_ik_ldl_solve_pose64_z1 + J[13]*_ik_ldl_solve_pose64_z2)) + (J[19]*_ik_ldl_solve_pose64_z3 + (J[25]*_ik_ldl_solve_pose64_z4 + J[31]*_ik_ldl_solve_pose64_z5)), dq[1])
+                dq[2] = np.where(_m60, (J[2]*_ik_ldl_solve_pose64_z0 + (J[8]*_ik_ldl_solve_pose64_z1 + J[14]*_ik_ldl_solve_pose64_z2)) + (J[20]*_ik_ldl_solve_pose64_z3 + (J[26]*_ik_ldl_solve_pose64_z4 + J[32]*_ik_ldl_solve_pose64_z5)), dq[2])
+                dq[3] = np.where(_m60, (J[3]*_ik_ldl_solve_pose64_z0 + (J[9]*_ik_ldl_solve_pose64_z1 + J[15]*_ik_ldl_solve_pose64_z2)) + (J[21]*_ik_ldl_solve_pose64_z3 + (J[27]*_ik_ldl_solve_pose64_z4 + J[33]*_ik_ldl_solve_pose64_z5)), dq[3])
+                dq[4] = np.where(_m60, (J[4]*_ik_ldl_solve_pose64_z0 + (J[10]*_ik_ldl_solve_pose64_z1 + J[16]*_ik_ldl_solve_pose64_z2)) + (J[22]*_ik_ldl_solve_pose64_z3 + (J[28]*_ik_ldl_solve_pose64_z4 + J[34]*_ik_ldl_solve_pose64_z5)), dq[4])
+                dq[5] = np.where(_m60, (J[5]*_ik_ldl_solve_pose64_z0 + (J[11]*_ik_ldl_solve_pose64_z1 + J[17]*_ik_ldl_solve_pose64_z2)) + (J[23]*_ik_ldl_solve_pose64_z3 + (J[29]*_ik_ldl_solve_pose64_z4 + J[35]*_ik_ldl_solve_pose64_z5)), dq[5])
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run35, np.where((c*en)*6.0 > ff, damped, 0), damped)
+        _c65 = (curved > 0) & (en < 0.05)
+        _m66 = _run35 & _c65
+        if bool(_m66.any()):
             for k in range(0, 6):
-                trial[k] = np.where(_m57, q[k] + dq[k]*0.1, trial[k])
+                trial[k] = np.where(_m66, q[k] + dq[k]*0.1, trial[k])
             _o = _pose_on_lanes(_c, trial[0:6])
-            _merge(_m57, _o[0], Tt, 0, _fr)
-            _ik_error_pose58_M = [_fr(0.0)] * 9
-            et[0] = np.where(_m57, target[3] - Tt[3], et[0])
-            et[1] = np.where(_m57, target[7] - Tt[7], et[1])
-            et[2] = np.where(_m57, target[11] - Tt[11], et[2])
-            _ik_error_pose58_M[0] = np.where(_m57, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose58_M[0])
-            _ik_error_pose58_M[1] = np.where(_m57, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose58_M[1])
-            _ik_error_pose58_M[2] = np.where(_m57, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose58_M[2])
-            _ik_error_pose58_M[3] = np.where(_m57, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose58_M[3])
-            _ik_error_pose58_M[4] = np.where(_m57, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose58_M[4])
-            _ik_error_pose58_M[5] = np.where(_m57, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose58_M[5])
-            _ik_error_pose58_M[6] = np.where(_m57, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose58_M[6])
-            _ik_error_pose58_M[7] = np.where(_m57, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose58_M[7])
-            _ik_error_pose58_M[8] = np.where(_m57, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose58_M[8])
-            _alive60 = _m57
-            _ik_log359_v0 = _ik_error_pose58_M[7] - _ik_error_pose58_M[5]
-            _ik_log359_v1 = _ik_error_pose58_M[2] - _ik_error_pose58_M[6]
-            _ik_log359_v2 = _ik_error_pose58_M[3] - _ik_error_pose58_M[1]
-            _ik_log359_c = (((_ik_error_pose58_M[0] + _ik_error_pose58_M[4]) + _ik_error_pose58_M[8]) - 1.0)*0.5
-            _ik_log359_s = np.sqrt((_ik_log359_v0*_ik_log359_v0 + _ik_log359_v1*_ik_log359_v1) + _ik_log359_v2*_ik_log359_v2)*0.5
-            _ik_log359_angle = np.arctan2(_ik_log359_s, _ik_log359_c)
-            _ik_log359_k = _fr(0.0)
-            _c61 = _ik_log359_angle < 0.0001
-            _m62 = _m57 & _c61
-            _ik_log359_k = np.where(_m62, 0.5 + (_ik_log359_angle*_ik_log359_angle)*0.08333333333333333, _ik_log359_k)
-            et[0 + 3] = np.where(_m62, _ik_log359_v0*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_m62, _ik_log359_v1*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_m62, _ik_log359_v2*_ik_log359_k, et[2 + 3])
-            _alive60 = _alive60 & (~_m62)
-            _c63 = 3.141592653589793 - _ik_log359_angle > 0.001
-            _m64 = _alive60 & _c63
-            _ik_log359_k = np.where(_m64, _ik_log359_angle/(_ik_log359_s + _ik_log359_s), _ik_log359_k)
-            et[0 + 3] = np.where(_m64, _ik_log359_v0*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_m64, _ik_log359_v1*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_m64, _ik_log359_v2*_ik_log359_k, et[2 + 3])
-            _alive60 = _alive60 & (~_m64)
+            _merge(_m66, _o[0], Tt, 0, _fr)
+            _ik_error_pose67_M = [_fr(0.0)] * 9
+            et[0] = np.where(_m66, target[3] - Tt[3], et[0])
+            et[1] = np.where(_m66, target[7] - Tt[7], et[1])
+            et[2] = np.where(_m66, target[11] - Tt[11], et[2])
+            _ik_error_pose67_M[0] = np.where(_m66, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose67_M[0])
+            _ik_error_pose67_M[1] = np.where(_m66, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose67_M[1])
+            _ik_error_pose67_M[2] = np.where(_m66, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose67_M[2])
+            _ik_error_pose67_M[3] = np.where(_m66, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose67_M[3])
+            _ik_error_pose67_M[4] = np.where(_m66, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose67_M[4])
+            _ik_error_pose67_M[5] = np.where(_m66, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose67_M[5])
+            _ik_error_pose67_M[6] = np.where(_m66, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose67_M[6])
+            _ik_error_pose67_M[7] = np.where(_m66, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose67_M[7])
+            _ik_error_pose67_M[8] = np.where(_m66, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose67_M[8])
+            _alive69 = _m66
+            _ik_log368_v0 = _ik_error_pose67_M[7] - _ik_error_pose67_M[5]
+            _ik_log368_v1 = _ik_error_pose67_M[2] - _ik_error_pose67_M[6]
+            _ik_log368_v2 = _ik_error_pose67_M[3] - _ik_error_pose67_M[1]
+            _ik_log368_c = (((_ik_error_pose67_M[0] + _ik_error_pose67_M[4]) + _ik_error_pose67_M[8]) - 1.0)*0.5
+            _ik_log368_s = np.sqrt((_ik_log368_v0*_ik_log368_v0 + _ik_log368_v1*_ik_log368_v1) + _ik_log368_v2*_ik_log368_v2)*0.5
+            _ik_log368_angle = np.arctan2(_ik_log368_s, _ik_log368_c)
+            _ik_log368_k = _fr(0.0)
+            _c70 = _ik_log368_angle < 0.0001
+            _m71 = _m66 & _c70
+            _ik_log368_k = np.where(_m71, 0.5 + (_ik_log368_angle*_ik_log368_angle)*0.08333333333333333, _ik_log368_k)
+            et[0 + 3] = np.where(_m71, _ik_log368_v0*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_m71, _ik_log368_v1*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_m71, _ik_log368_v2*_ik_log368_k, et[2 + 3])
+            _alive69 = _alive69 & (~_m71)
+            _c72 = 3.141592653589793 - _ik_log368_angle > 0.001
+            _m73 = _alive69 & _c72
+            _ik_log368_k = np.where(_m73, _ik_log368_angle/(_ik_log368_s + _ik_log368_s), _ik_log368_k)
+            et[0 + 3] = np.where(_m73, _ik_log368_v0*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_m73, _ik_log368_v1*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_m73, _ik_log368_v2*_ik_log368_k, et[2 + 3])
+            _alive69 = _alive69 & (~_m73)
             # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-            _ik_log359_col = [_fr(0.0)] * 3
-            _ik_log359_i = np.where(_ik_error_pose58_M[0] >= _ik_error_pose58_M[4], np.where(_ik_error_pose58_M[0] >= _ik_error_pose58_M[8], _fi(0), 2), np.where(_ik_error_pose58_M[4] >= _ik_error_pose58_M[8], _fi(1), 2))
-            _i65 = 3*_ik_log359_i
-            _ik_log359_col[0] = np.where(_alive60, (np.where(_ik_log359_i == 0, _ik_error_pose58_M[0], np.where(_ik_log359_i == 1, _ik_error_pose58_M[1], np.where(_ik_log359_i == 2, _ik_error_pose58_M[2], np.where(_ik_log359_i == 3, _ik_error_pose58_M[3], np.where(_ik_log359_i == 4, _ik_error_pose58_M[4], np.where(_ik_log359_i == 5, _ik_error_pose58_M[5], np.where(_ik_log359_i == 6, _ik_error_pose58_M[6], np.where(_ik_log359_i == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i65 == 0, _ik_error_pose58_M[0], np.where(_i65 == 3, _ik_error_pose58_M[3], _ik_error_pose58_M[6])))*0.5, _ik_log359_col[0])
-            _i66 = 3 + _ik_log359_i
-            _i67 = 3*_ik_log359_i + 1
-            _ik_log359_col[1] = np.where(_alive60, (np.where(_i66 == 0, _ik_error_pose58_M[0], np.where(_i66 == 1, _ik_error_pose58_M[1], np.where(_i66 == 2, _ik_error_pose58_M[2], np.where(_i66 == 3, _ik_error_pose58_M[3], np.where(_i66 == 4, _ik_error_pose58_M[4], np.where(_i66 == 5, _ik_error_pose58_M[5], np.where(_i66 == 6, _ik_error_pose58_M[6], np.where(_i66 == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i67 == 1, _ik_error_pose58_M[1], np.where(_i67 == 4, _ik_error_pose58_M[4], _ik_error_pose58_M[7])))*0.5, _ik_log359_col[1])
-            _i68 = 6 + _ik_log359_i
-            _i69 = 3*_ik_log359_i + 2
-            _ik_log359_col[2] = np.where(_alive60, (np.where(_i68 == 0, _ik_error_pose58_M[0], np.where(_i68 == 1, _ik_error_pose58_M[1], np.where(_i68 == 2, _ik_error_pose58_M[2], np.where(_i68 == 3, _ik_error_pose58_M[3], np.where(_i68 == 4, _ik_error_pose58_M[4], np.where(_i68 == 5, _ik_error_pose58_M[5], np.where(_i68 == 6, _ik_error_pose58_M[6], np.where(_i68 == 7, _ik_error_pose58_M[7], _ik_error_pose58_M[8])))))))) + np.where(_i69 == 2, _ik_error_pose58_M[2], np.where(_i69 == 5, _ik_error_pose58_M[5], _ik_error_pose58_M[8])))*0.5, _ik_log359_col[2])
-            _v70 = np.where(_ik_log359_i == 0, _ik_log359_col[0], np.where(_ik_log359_i == 1, _ik_log359_col[1], _ik_log359_col[2])) - _ik_log359_c
-            _m71 = _alive60 & (_ik_log359_i == 0)
-            _ik_log359_col[0] = np.where(_m71, _v70, _ik_log359_col[0])
-            _m72 = _alive60 & (_ik_log359_i == 1)
-            _ik_log359_col[1] = np.where(_m72, _v70, _ik_log359_col[1])
-            _m73 = _alive60 & (_ik_log359_i == 2)
-            _ik_log359_col[2] = np.where(_m73, _v70, _ik_log359_col[2])
-            _ik_log359_norm = np.sqrt((_ik_log359_col[0]*_ik_log359_col[0] + _ik_log359_col[1]*_ik_log359_col[1]) + _ik_log359_col[2]*_ik_log359_col[2])
-            _ik_log359_k = np.where(_alive60, np.where((_ik_log359_col[0]*_ik_log359_v0 + _ik_log359_col[1]*_ik_log359_v1) + _ik_log359_col[2]*_ik_log359_v2 < 0.0, -_ik_log359_angle, _ik_log359_angle)/_ik_log359_norm, _ik_log359_k)
-            et[0 + 3] = np.where(_alive60, _ik_log359_col[0]*_ik_log359_k, et[0 + 3])
-            et[1 + 3] = np.where(_alive60, _ik_log359_col[1]*_ik_log359_k, et[1 + 3])
-            et[2 + 3] = np.where(_alive60, _ik_log359_col[2]*_ik_log359_k, et[2 + 3])
-            _ik_error_pose58_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-            _ik_error_pose58_rotation = np.sqrt(_ik_error_pose58_rotation_squares)
-            _c74 = ~np.isfinite(_ik_error_pose58_rotation_squares)
-            _m75 = _m57 & _c74
-            _ik_error_pose58_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-            _ik_error_pose58_rotation = np.where(_m75, _ik_error_pose58_rotation_top*np.sqrt((et[3]/_ik_error_pose58_rotation_top)*(et[3]/_ik_error_pose58_rotation_top) + (et[4]/_ik_error_pose58_rotation_top)*(et[4]/_ik_error_pose58_rotation_top) + (et[5]/_ik_error_pose58_rotation_top)*(et[5]/_ik_error_pose58_rotation_top)), _ik_error_pose58_rotation)
-            norms[1] = np.where(_m57, _ik_error_pose58_rotation, norms[1])
-            _ik_error_pose58_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-            _ik_error_pose58_position = np.sqrt(_ik_error_pose58_position_squares)
-            _c76 = ~np.isfinite(_ik_error_pose58_position_squares)
-            _m77 = _m57 & _c76
-            _ik_error_pose58_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-            _ik_error_pose58_position = np.where(_m77, _ik_error_pose58_position_top*np.sqrt((et[0]/_ik_error_pose58_position_top)*(et[0]/_ik_error_pose58_position_top) + (et[1]/_ik_error_pose58_position_top)*(et[1]/_ik_error_pose58_position_top) + (et[2]/_ik_error_pose58_position_top)*(et[2]/_ik_error_pose58_position_top)), _ik_error_pose58_position)
-            norms[0] = np.where(_m57, _ik_error_pose58_position, norms[0])
-            _ik_error_pose58_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-            _ik_error_pose58_whole = np.sqrt(_ik_error_pose58_whole_squares)
-            _c78 = ~np.isfinite(_ik_error_pose58_whole_squares)
-            _m79 = _m57 & _c78
-            _ik_error_pose58_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-            _ik_error_pose58_whole = np.where(_m79, _ik_error_pose58_whole_top*np.sqrt((norms[0]/_ik_error_pose58_whole_top)*(norms[0]/_ik_error_pose58_whole_top) + (norms[1]/_ik_error_pose58_whole_top)*(norms[1]/_ik_error_pose58_whole_top)), _ik_error_pose58_whole)
-            norms[2] = np.where(_m57, _ik_error_pose58_whole, norms[2])
+            _ik_log368_col = [_fr(0.0)] * 3
+            _ik_log368_i = np.where(_ik_error_pose67_M[0] >= _ik_error_pose67_M[4], np.where(_ik_error_pose67_M[0] >= _ik_error_pose67_M[8], _fi(0), 2), np.where(_ik_error_pose67_M[4] >= _ik_error_pose67_M[8], _fi(1), 2))
+            _i74 = 3*_ik_log368_i
+            _ik_log368_col[0] = np.where(_alive69, (np.where(_ik_log368_i == 0, _ik_error_pose67_M[0], np.where(_ik_log368_i == 1, _ik_error_pose67_M[1], np.where(_ik_log368_i == 2, _ik_error_pose67_M[2], np.where(_ik_log368_i == 3, _ik_error_pose67_M[3], np.where(_ik_log368_i == 4, _ik_error_pose67_M[4], np.where(_ik_log368_i == 5, _ik_error_pose67_M[5], np.where(_ik_log368_i == 6, _ik_error_pose67_M[6], np.where(_ik_log368_i == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i74 == 0, _ik_error_pose67_M[0], np.where(_i74 == 3, _ik_error_pose67_M[3], _ik_error_pose67_M[6])))*0.5, _ik_log368_col[0])
+            _i75 = 3 + _ik_log368_i
+            _i76 = 3*_ik_log368_i + 1
+            _ik_log368_col[1] = np.where(_alive69, (np.where(_i75 == 0, _ik_error_pose67_M[0], np.where(_i75 == 1, _ik_error_pose67_M[1], np.where(_i75 == 2, _ik_error_pose67_M[2], np.where(_i75 == 3, _ik_error_pose67_M[3], np.where(_i75 == 4, _ik_error_pose67_M[4], np.where(_i75 == 5, _ik_error_pose67_M[5], np.where(_i75 == 6, _ik_error_pose67_M[6], np.where(_i75 == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i76 == 1, _ik_error_pose67_M[1], np.where(_i76 == 4, _ik_error_pose67_M[4], _ik_error_pose67_M[7])))*0.5, _ik_log368_col[1])
+            _i77 = 6 + _ik_log368_i
+            _i78 = 3*_ik_log368_i + 2
+            _ik_log368_col[2] = np.where(_alive69, (np.where(_i77 == 0, _ik_error_pose67_M[0], np.where(_i77 == 1, _ik_error_pose67_M[1], np.where(_i77 == 2, _ik_error_pose67_M[2], np.where(_i77 == 3, _ik_error_pose67_M[3], np.where(_i77 == 4, _ik_error_pose67_M[4], np.where(_i77 == 5, _ik_error_pose67_M[5], np.where(_i77 == 6, _ik_error_pose67_M[6], np.where(_i77 == 7, _ik_error_pose67_M[7], _ik_error_pose67_M[8])))))))) + np.where(_i78 == 2, _ik_error_pose67_M[2], np.where(_i78 == 5, _ik_error_pose67_M[5], _ik_error_pose67_M[8])))*0.5, _ik_log368_col[2])
+            _v79 = np.where(_ik_log368_i == 0, _ik_log368_col[0], np.where(_ik_log368_i == 1, _ik_log368_col[1], _ik_log368_col[2])) - _ik_log368_c
+            _m80 = _alive69 & (_ik_log368_i == 0)
+            _ik_log368_col[0] = np.where(_m80, _v79, _ik_log368_col[0])
+            _m81 = _alive69 & (_ik_log368_i == 1)
+            _ik_log368_col[1] = np.where(_m81, _v79, _ik_log368_col[1])
+            _m82 = _alive69 & (_ik_log368_i == 2)
+            _ik_log368_col[2] = np.where(_m82, _v79, _ik_log368_col[2])
+            _ik_log368_norm = np.sqrt((_ik_log368_col[0]*_ik_log368_col[0] + _ik_log368_col[1]*_ik_log368_col[1]) + _ik_log368_col[2]*_ik_log368_col[2])
+            _ik_log368_k = np.where(_alive69, np.where((_ik_log368_col[0]*_ik_log368_v0 + _ik_log368_col[1]*_ik_log368_v1) + _ik_log368_col[2]*_ik_log368_v2 < 0.0, -_ik_log368_angle, _ik_log368_angle)/_ik_log368_norm, _ik_log368_k)
+            et[0 + 3] = np.where(_alive69, _ik_log368_col[0]*_ik_log368_k, et[0 + 3])
+            et[1 + 3] = np.where(_alive69, _ik_log368_col[1]*_ik_log368_k, et[1 + 3])
+            et[2 + 3] = np.where(_alive69, _ik_log368_col[2]*_ik_log368_k, et[2 + 3])
+            _ik_error_pose67_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+            _ik_error_pose67_rotation = np.sqrt(_ik_error_pose67_rotation_squares)
+            _c83 = ~np.isfinite(_ik_error_pose67_rotation_squares)
+            _m84 = _m66 & _c83
+            _ik_error_pose67_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+            _ik_error_pose67_rotation = np.where(_m84, _ik_error_pose67_rotation_top*np.sqrt((et[3]/_ik_error_pose67_rotation_top)*(et[3]/_ik_error_pose67_rotation_top) + (et[4]/_ik_error_pose67_rotation_top)*(et[4]/_ik_error_pose67_rotation_top) + (et[5]/_ik_error_pose67_rotation_top)*(et[5]/_ik_error_pose67_rotation_top)), _ik_error_pose67_rotation)
+            norms[1] = np.where(_m66, _ik_error_pose67_rotation, norms[1])
+            _ik_error_pose67_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+            _ik_error_pose67_position = np.sqrt(_ik_error_pose67_position_squares)
+            _c85 = ~np.isfinite(_ik_error_pose67_position_squares)
+            _m86 = _m66 & _c85
+            _ik_error_pose67_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+            _ik_error_pose67_position = np.where(_m86, _ik_error_pose67_position_top*np.sqrt((et[0]/_ik_error_pose67_position_top)*(et[0]/_ik_error_pose67_position_top) + (et[1]/_ik_error_pose67_position_top)*(et[1]/_ik_error_pose67_position_top) + (et[2]/_ik_error_pose67_position_top)*(et[2]/_ik_error_pose67_position_top)), _ik_error_pose67_position)
+            norms[0] = np.where(_m66, _ik_error_pose67_position, norms[0])
+            _ik_error_pose67_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+            _ik_error_pose67_whole = np.sqrt(_ik_error_pose67_whole_squares)
+            _c87 = ~np.isfinite(_ik_error_pose67_whole_squares)
+            _m88 = _m66 & _c87
+            _ik_error_pose67_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+            _ik_error_pose67_whole = np.where(_m88, _ik_error_pose67_whole_top*np.sqrt((norms[0]/_ik_error_pose67_whole_top)*(norms[0]/_ik_error_pose67_whole_top) + (norms[1]/_ik_error_pose67_whole_top)*(norms[1]/_ik_error_pose67_whole_top)), _ik_error_pose67_whole)
+            norms[2] = np.where(_m66, _ik_error_pose67_whole, norms[2])
             for r in range(0, 6):
-                r2[r] = np.where(_m57, ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997, r2[r])
-            _c80 = any > 0
-            _m81 = _m57 & _c80
-            _m82 = _m57 & (~_c80)
-            _ik_ldl_solve_pose83_y0 = r2[0]
-            _ik_ldl_solve_pose83_y1 = r2[1] - F[1]*_ik_ldl_solve_pose83_y0
-            _ik_ldl_solve_pose83_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose83_y0) - F[4]*_ik_ldl_solve_pose83_y1
-            _ik_ldl_solve_pose83_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose83_y0 + F[7]*_ik_ldl_solve_pose83_y1)) - F[8]*_ik_ldl_solve_pose83_y2
-            _ik_ldl_solve_pose83_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose83_y0 + (F[11]*_ik_ldl_solve_pose83_y1 + F[12]*_ik_ldl_solve_pose83_y2))) - F[13]*_ik_ldl_solve_pose83_y3
-            _ik_ldl_solve_pose83_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose83_y0 + F[16]*_ik_ldl_solve_pose83_y1) + (F[17]*_ik_ldl_solve_pose83_y2 + F[18]*_ik_ldl_solve_pose83_y3))) - F[19]*_ik_ldl_solve_pose83_y4
-            _ik_ldl_solve_pose83_z5 = _ik_ldl_solve_pose83_y5*F[20]
-            _ik_ldl_solve_pose83_z4 = _ik_ldl_solve_pose83_y4*F[14] - F[19]*_ik_ldl_solve_pose83_z5
-            _ik_ldl_solve_pose83_z3 = (_ik_ldl_solve_pose83_y3*F[9] - F[18]*_ik_ldl_solve_pose83_z5) - F[13]*_ik_ldl_solve_pose83_z4
-            _ik_ldl_solve_pose83_z2 = (_ik_ldl_solve_pose83_y2*F[5] - (F[17]*_ik_ldl_solve_pose83_z5 + F[12]*_ik_ldl_solve_pose83_z4)) - F[8]*_ik_ldl_solve_pose83_z3
-            _ik_ldl_solve_pose83_z1 = (_ik_ldl_solve_pose83_y1*F[2] - (F[16]*_ik_ldl_solve_pose83_z5 + (F[11]*_ik_ldl_solve_pose83_z4 + F[7]*_ik_ldl_solve_pose83_z3))) - F[4]*_ik_ldl_solve_pose83_z2
-            _ik_ldl_solve_pose83_z0 = (_ik_ldl_solve_pose83_y0*F[0] - ((F[15]*_ik_ldl_solve_pose83_z5 + F[10]*_ik_ldl_solve_pose83_z4) + (F[6]*_ik_ldl_solve_pose83_z3 + F[3]*_ik_ldl_solve_pose83_z2))) - F[1]*_ik_ldl_solve_pose83_z1
-            acc[0] = np.where(_m81, (Jf[0]*_ik_ldl_solve_pose83_z0 + (Jf[6]*_ik_ldl_solve_pose83_z1 + Jf[12]*_ik_ldl_solve_pose83_z2)) + (Jf[18]*_ik_ldl_solve_pose83_z3 + (Jf[24]*_ik_ldl_solve_pose83_z4 + Jf[30]*_ik_ldl_solve_pose83_z5)), acc[0])
-            acc[1] = np.where(_m81, (Jf[1]*_ik_ldl_solve_pose83_z0 + (Jf[7]*_ik_ldl_solve_pose83_z1 + Jf[13]*_ik_ldl_solve_pose83_z2)) + (Jf[19]*_ik_ldl_solve_pose83_z3 + (Jf[25]*_ik_ldl_solve_pose83_z4 + Jf[31]*_ik_ldl_solve_pose83_z5)), acc[1])
-            acc[2] = np.where(_m81, (Jf[2]*_ik_ldl_solve_pose83_z0 + (Jf[8]*_ik_ldl_solve_pose83_z1 + Jf[14]*_ik_ldl_solve_pose83_z2)) + (Jf[20]*_ik_ldl_solve_pose83_z3 + (Jf[26]*_ik_ldl_solve_pose83_z4 + Jf[32]*_ik_ldl_solve_pose83_z5)), acc[2])
-            acc[3] = np.where(_m81, (Jf[3]*_ik_ldl_solve_pose83_z0 + (Jf[9]*_ik_ldl_solve_pose83_z1 + Jf[15]*_ik_ldl_solve_pose83_z2)) + (Jf[21]*_ik_ldl_solve_pose83_z3 + (Jf[27]*_ik_ldl_solve_pose83_z4 + Jf[33]*_ik_ldl_solve_pose83_z5)), acc[3])
-            acc[4] = np.where(_m81, (Jf[4]*_ik_ldl_solve_pose83_z0 + (Jf[10]*_ik_ldl_solve_pose83_z1 + Jf[16]*_ik_ldl_solve_pose83_z2)) + (Jf[22]*_ik_ldl_solve_pose83_z3 + (Jf[28]*_ik_ldl_solve_pose83_z4 + Jf[34]*_ik_ldl_solve_pose83_z5)), acc[4])
-            acc[5] = np.where(_m81, (Jf[5]*_ik_ldl_solve_pose83_z0 + (Jf[11]*_ik_ldl_solve_pose83_z1 + Jf[17]*_ik_ldl_solve_pose83_z2)) + (Jf[23]*_ik_ldl_solve_pose83_z3 + (Jf[29]*_ik_ldl_solve_pose83_z4 + Jf[35]*_ik_ldl_solve_pose83_z5)), acc[5])
-            _ik_ldl_solve_pose84_y0 = r2[0]
-            _ik_ldl_solve_pose84_y1 = r2[1] - F[1]*_ik_ldl_solve_pose84_y0
-            _ik_ldl_solve_pose84_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose84_y0) - F[4]*_ik_ldl_solve_pose84_y1
-            _ik_ldl_solve_pose84_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose84_y0 + F[7]*_ik_ldl_solve_pose84_y1)) - F[8]*_ik_ldl_solve_pose84_y2
-            _ik_ldl_solve_pose84_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose84_y0 + (F[11]*_ik_ldl_solve_pose84_y1 + F[12]*_ik_ldl_solve_pose84_y2))) - F[13]*_ik_ldl_solve_pose84_y3
-            _ik_ldl_solve_pose84_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose84_y0 + F[16]*_ik_ldl_solve_pose84_y1) + (F[17]*_ik_ldl_solve_pose84_y2 + F[18]*_ik_ldl_solve_pose84_y3))) - F[19]*_ik_ldl_solve_pose84_y4
-            _ik_ldl_solve_pose84_z5 = _ik_ldl_solve_pose84_y5*F[20]
-            _ik_ldl_solve_pose84_z4 = _ik_ldl_solve_pose84_y4*F[14] - F[19]*_ik_ldl_solve_pose84_z5
-            _ik_ldl_solve_pose84_z3 = (_ik_ldl_solve_pose84_y3*F[9] - F[18]*_ik_ldl_solve_pose84_z5) - F[13]*_ik_ldl_solve_pose84_z4
-            _ik_ldl_solve_pose84_z2 = (_ik_ldl_solve_pose84_y2*F[5] - (F[17]*_ik_ldl_solve_pose84_z5 + F[12]*_ik_ldl_solve_pose84_z4)) - F[8]*_ik_ldl_solve_pose84_z3
-            _ik_ldl_solve_pose84_z1 = (_ik_ldl_solve_pose84_y1*F[2] - (F[16]*_ik_ldl_solve_pose84_z5 + (F[11]*_ik_ldl_solve_pose84_z4 + F[7]*_ik_ldl_solve_pose84_z3))) - F[4]*_ik_ldl_solve_pose84_z2
-            _ik_ldl_solve_pose84_z0 = (_ik_ldl_solve_pose84_y0*F[0] - ((F[15]*_ik_ldl_solve_pose84_z5 + F[10]*_ik_ldl_solve_pose84_z4) + (F[6]*_ik_ldl_solve_pose84_z3 + F[3]*_ik_ldl_solve_pose84_z2))) - F[1]*_ik_ldl_solve_pose84_z1
-            acc[0] = np.where(_m82, (J[0]*_ik_ldl_solve_pose84_z0 + (J[6]*_ik_ldl_solve_pose84_z1 + J[12]*_ik_ldl_solve_pose84_z2)) + (J[18]*_ik_ldl_solve_pose84_z3 + (J[24]*_ik_ldl_solve_pose84_z4 + J[30]*_ik_ldl_solve_pose84_z5)), acc[0])
-            acc[1] = np.where(_m82, (J[1]*_ik_ldl_solve_pose84_z0 + (J[7]*_ik_ldl_solve_pose84_z1 + J[13]*_ik_ldl_solve_pose84_z2)) + (J[19]*_ik_ldl_solve_pose84_z3 + (J[25]*_ik_ldl_solve_pose84_z4 + J[31]*_ik_ldl_solve_pose84_z5)), acc[1])
-            acc[2] = np.where(_m82, (J[2]*_ik_ldl_solve_pose84_z0 + (J[8]*_ik_ldl_solve_pose84_z1 + J[14]*_ik_ldl_solve_pose84_z2)) + (J[20]*_ik_ldl_solve_pose84_z3 + (J[26]*_ik_ldl_solve_pose84_z4 + J[32]*_ik_ldl_solve_pose84_z5)), acc[2])
-            acc[3] = np.where(_m82, (J[3]*_ik_ldl_solve_pose84_z0 + (J[9]*_ik_ldl_solve_pose84_z1 + J[15]*_ik_ldl_solve_pose84_z2)) + (J[21]*_ik_ldl_solve_pose84_z3 + (J[27]*_ik_ldl_solve_pose84_z4 + J[33]*_ik_ldl_solve_pose84_z5)), acc[3])
-            acc[4] = np.where(_m82, (J[4]*_ik_ldl_solve_pose84_z0 + (J[10]*_ik_ldl_solve_pose84_z1 + J[16]*_ik_ldl_solve_pose84_z2)) + (J[22]*_ik_ldl_solve_pose84_z3 + (J[28]*_ik_ldl_solve_pose84_z4 + J[34]*_ik_ldl_solve_pose84_z5)), acc[4])
-            acc[5] = np.where(_m82, (J[5]*_ik_ldl_solve_pose84_z0 + (J[11]*_ik_ldl_solve_pose84_z1 + J[17]*_ik_ldl_solve_pose84_z2)) + (J[23]*_ik_ldl_solve_pose84_z3 + (J[29]*_ik_ldl_solve_pose84_z4 + J[35]*_ik_ldl_solve_pose84_z5)), acc[5])
-            aa = np.where(_m57, 0.0, aa)
-            vv = np.where(_m57, 0.0, vv)
+                r2[r] = np.where(_m66, ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997, r2[r])
+            _c89 = any > 0
+            _m90 = _m66 & _c89
+            _m91 = _m66 & (~_c89)
+            _ik_ldl_solve_pose92_y0 = r2[0]
+            _ik_ldl_solve_pose92_y1 = r2[1] - F[1]*_ik_ldl_solve_pose92_y0
+            _ik_ldl_solve_pose92_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose92_y0) - F[4]*_ik_ldl_solve_pose92_y1
+            _ik_ldl_solve_pose92_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose92_y0 + F[7]*_ik_ldl_solve_pose92_y1)) - F[8]*_ik_ldl_solve_pose92_y2
+            _ik_ldl_solve_pose92_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose92_y0 + (F[11]*_ik_ldl_solve_pose92_y1 + F[12]*_ik_ldl_solve_pose92_y2))) - F[13]*_ik_ldl_solve_pose92_y3
+            _ik_ldl_solve_pose92_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose92_y0 + F[16]*_ik_ldl_solve_pose92_y1) + (F[17]*_ik_ldl_solve_pose92_y2 + F[18]*_ik_ldl_solve_pose92_y3))) - F[19]*_ik_ldl_solve_pose92_y4
+            _ik_ldl_solve_pose92_z5 = _ik_ldl_solve_pose92_y5*F[20]
+            _ik_ldl_solve_pose92_z4 = _ik_ldl_solve_pose92_y4*F[14] - F[19]*_ik_ldl_solve_pose92_z5
+            _ik_ldl_solve_pose92_z3 = (_ik_ldl_solve_pose92_y3*F[9] - F[18]*_ik_ldl_solve_pose92_z5) - F[13]*_ik_ldl_solve_pose92_z4
+            _ik_ldl_solve_pose92_z2 = (_ik_ldl_solve_pose92_y2*F[5] - (F[17]*_ik_ldl_solve_pose92_z5 + F[12]*_ik_ldl_solve_pose92_z4)) - F[8]*_ik_ldl_solve_pose92_z3
+            _ik_ldl_solve_pose92_z1 = (_ik_ldl_solve_pose92_y1*F[2] - (F[16]*_ik_ldl_solve_pose92_z5 + (F[11]*_ik_ldl_solve_pose92_z4 + F[7]*_ik_ldl_solve_pose92_z3))) - F[4]*_ik_ldl_solve_pose92_z2
+            _ik_ldl_solve_pose92_z0 = (_ik_ldl_solve_pose92_y0*F[0] - ((F[15]*_ik_ldl_solve_pose92_z5 + F[10]*_ik_ldl_solve_pose92_z4) + (F[6]*_ik_ldl_solve_pose92_z3 + F[3]*_ik_ldl_solve_pose92_z2))) - F[1]*_ik_ldl_solve_pose92_z1
+            acc[0] = np.where(_m90, (Jf[0]*_ik_ldl_solve_pose92_z0 + (Jf[6]*_ik_ldl_solve_pose92_z1 + Jf[12]*_ik_ldl_solve_pose92_z2)) + (Jf[18]*_ik_ldl_solve_pose92_z3 + (Jf[24]*_ik_ldl_solve_pose92_z4 + Jf[30]*_ik_ldl_solve_pose92_z5)), acc[0])
+            acc[1] = np.where(_m90, (Jf[1]*_ik_ldl_solve_pose92_z0 + (Jf[7]*_ik_ldl_solve_pose92_z1 + Jf[13]*_ik_ldl_solve_pose92_z2)) + (Jf[19]*_ik_ldl_solve_pose92_z3 + (Jf[25]*_ik_ldl_solve_pose92_z4 + Jf[31]*_ik_ldl_solve_pose92_z5)), acc[1])
+            acc[2] = np.where(_m90, (Jf[2]*_ik_ldl_solve_pose92_z0 + (Jf[8]*_ik_ldl_solve_pose92_z1 + Jf[14]*_ik_ldl_solve_pose92_z2)) + (Jf[20]*_ik_ldl_solve_pose92_z3 + (Jf[26]*_ik_ldl_solve_pose92_z4 + Jf[32]*_ik_ldl_solve_pose92_z5)), acc[2])
+            acc[3] = np.where(_m90, (Jf[3]*_ik_ldl_solve_pose92_z0 + (Jf[9]*_ik_ldl_solve_pose92_z1 + Jf[15]*_ik_ldl_solve_pose92_z2)) + (Jf[21]*_ik_ldl_solve_pose92_z3 + (Jf[27]*_ik_ldl_solve_pose92_z4 + Jf[33]*_ik_ldl_solve_pose92_z5)), acc[3])
+            acc[4] = np.where(_m90, (Jf[4]*_ik_ldl_solve_pose92_z0 + (Jf[10]*_ik_ldl_solve_pose92_z1 + Jf[16]*_ik_ldl_solve_pose92_z2)) + (Jf[22]*_ik_ldl_solve_pose92_z3 + (Jf[28]*_ik_ldl_solve_pose92_z4 + Jf[34]*_ik_ldl_solve_pose92_z5)), acc[4])
+            acc[5] = np.where(_m90, (Jf[5]*_ik_ldl_solve_pose92_z0 + (Jf[11]*_ik_ldl_solve_pose92_z1 + Jf[17]*_ik_ldl_solve_pose92_z2)) + (Jf[23]*_ik_ldl_solve_pose92_z3 + (Jf[29]*_ik_ldl_solve_pose92_z4 + Jf[35]*_ik_ldl_solve_pose92_z5)), acc[5])
+            _ik_ldl_solve_pose93_y0 = r2[0]
+            _ik_ldl_solve_pose93_y1 = r2[1] - F[1]*_ik_ldl_solve_pose93_y0
+            _ik_ldl_solve_pose93_y2 = (r2[2] - F[3]*_ik_ldl_solve_pose93_y0) - F[4]*_ik_ldl_solve_pose93_y1
+            _ik_ldl_solve_pose93_y3 = (r2[3] - (F[6]*_ik_ldl_solve_pose93_y0 + F[7]*_ik_ldl_solve_pose93_y1)) - F[8]*_ik_ldl_solve_pose93_y2
+            _ik_ldl_solve_pose93_y4 = (r2[4] - (F[10]*_ik_ldl_solve_pose93_y0 + (F[11]*_ik_ldl_solve_pose93_y1 + F[12]*_ik_ldl_solve_pose93_y2))) - F[13]*_ik_ldl_solve_pose93_y3
+            _ik_ldl_solve_pose93_y5 = (r2[5] - ((F[15]*_ik_ldl_solve_pose93_y0 + F[16]*_ik_ldl_solve_pose93_y1) + (F[17]*_ik_ldl_solve_pose93_y2 + F[18]*_ik_ldl_solve_pose93_y3))) - F[19]*_ik_ldl_solve_pose93_y4
+            _ik_ldl_solve_pose93_z5 = _ik_ldl_solve_pose93_y5*F[20]
+            _ik_ldl_solve_pose93_z4 = _ik_ldl_solve_pose93_y4*F[14] - F[19]*_ik_ldl_solve_pose93_z5
+            _ik_ldl_solve_pose93_z3 = (_ik_ldl_solve_pose93_y3*F[9] - F[18]*_ik_ldl_solve_pose93_z5) - F[13]*_ik_ldl_solve_pose93_z4
+            _ik_ldl_solve_pose93_z2 = (_ik_ldl_solve_pose93_y2*F[5] - (F[17]*_ik_ldl_solve_pose93_z5 + F[12]*_ik_ldl_solve_pose93_z4)) - F[8]*_ik_ldl_solve_pose93_z3
+            _ik_ldl_solve_pose93_z1 = (_ik_ldl_solve_pose93_y1*F[2] - (F[16]*_ik_ldl_solve_pose93_z5 + (F[11]*_ik_ldl_solve_pose93_z4 + F[7]*_ik_ldl_solve_pose93_z3))) - F[4]*_ik_ldl_solve_pose93_z2
+            _ik_ldl_solve_pose93_z0 = (_ik_ldl_solve_pose93_y0*F[0] - ((F[15]*_ik_ldl_solve_pose93_z5 + F[10]*_ik_ldl_solve_pose93_z4) + (F[6]*_ik_ldl_solve_pose93_z3 + F[3]*_ik_ldl_solve_pose93_z2))) - F[1]*_ik_ldl_solve_pose93_z1
+            acc[0] = np.where(_m91, (J[0]*_ik_ldl_solve_pose93_z0 + (J[6]*_ik_ldl_solve_pose93_z1 + J[12]*_ik_ldl_solve_pose93_z2)) + (J[18]*_ik_ldl_solve_pose93_z3 + (J[24]*_ik_ldl_solve_pose93_z4 + J[30]*_ik_ldl_solve_pose93_z5)), acc[0])
+            acc[1] = np.where(_m91, (J[1]*_ik_ldl_solve_pose93_z0 + (J[7]*_ik_ldl_solve_pose93_z1 + J[13]*_ik_ldl_solve_pose93_z2)) + (J[19]*_ik_ldl_solve_pose93_z3 + (J[25]*_ik_ldl_solve_pose93_z4 + J[31]*_ik_ldl_solve_pose93_z5)), acc[1])
+            acc[2] = np.where(_m91, (J[2]*_ik_ldl_solve_pose93_z0 + (J[8]*_ik_ldl_solve_pose93_z1 + J[14]*_ik_ldl_solve_pose93_z2)) + (J[20]*_ik_ldl_solve_pose93_z3 + (J[26]*_ik_ldl_solve_pose93_z4 + J[32]*_ik_ldl_solve_pose93_z5)), acc[2])
+            acc[3] = np.where(_m91, (J[3]*_ik_ldl_solve_pose93_z0 + (J[9]*_ik_ldl_solve_pose93_z1 + J[15]*_ik_ldl_solve_pose93_z2)) + (J[21]*_ik_ldl_solve_pose93_z3 + (J[27]*_ik_ldl_solve_pose93_z4 + J[33]*_ik_ldl_solve_pose93_z5)), acc[3])
+            acc[4] = np.where(_m91, (J[4]*_ik_ldl_solve_pose93_z0 + (J[10]*_ik_ldl_solve_pose93_z1 + J[16]*_ik_ldl_solve_pose93_z2)) + (J[22]*_ik_ldl_solve_pose93_z3 + (J[28]*_ik_ldl_solve_pose93_z4 + J[34]*_ik_ldl_solve_pose93_z5)), acc[4])
+            acc[5] = np.where(_m91, (J[5]*_ik_ldl_solve_pose93_z0 + (J[11]*_ik_ldl_solve_pose93_z1 + J[17]*_ik_ldl_solve_pose93_z2)) + (J[23]*_ik_ldl_solve_pose93_z3 + (J[29]*_ik_ldl_solve_pose93_z4 + J[35]*_ik_ldl_solve_pose93_z5)), acc[5])
+            aa = np.where(_m66, 0.0, aa)
+            vv = np.where(_m66, 0.0, vv)
             for k in range(0, 6):
-                aa = np.where(_m57, aa + acc[k]*acc[k], aa)
-                vv = np.where(_m57, vv + dq[k]*dq[k], vv)
-            _c85 = aa <= vv*0.5625
-            _m86 = _m57 & _c85
+                aa = np.where(_m66, aa + acc[k]*acc[k], aa)
+                vv = np.where(_m66, vv + dq[k]*dq[k], vv)
+            _c94 = aa <= vv*0.5625
+            _m95 = _m66 & _c94
             for k in range(0, 6):
-                dq[k] = np.where(_m86, dq[k] + acc[k]*0.5, dq[k])
+                dq[k] = np.where(_m95, dq[k] + acc[k]*0.5, dq[k])
         big = np.where(_run35, 0.0, big)
         for k in range(0, 6):
             big = np.where(_run35, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
         scale = np.where(_run35, np.where(big > 1.0, 1.0/big, 1.0), scale)
         for k in range(0, 6):
             trial[k] = np.where(_run35, q[k] + dq[k]*scale, trial[k])
-        _c87 = trial[0] > hi[0]
-        _m88 = _run35 & _c87
-        _m89 = _run35 & (~_c87)
-        trial[0] = np.where(_m88, trial[0] - 6.283185307179586, trial[0])
-        _c90 = trial[0] < lo[0]
-        _m91 = _m89 & _c90
-        trial[0] = np.where(_m91, trial[0] + 6.283185307179586, trial[0])
-        _c92 = trial[1] > hi[1]
-        _m93 = _run35 & _c92
-        _m94 = _run35 & (~_c92)
-        trial[1] = np.where(_m93, trial[1] - 6.283185307179586, trial[1])
-        _c95 = trial[1] < lo[1]
-        _m96 = _m94 & _c95
-        trial[1] = np.where(_m96, trial[1] + 6.283185307179586, trial[1])
-        _c97 = trial[2] > hi[2]
-        _m98 = _run35 & _c97
-        _m99 = _run35 & (~_c97)
-        trial[2] = np.where(_m98, trial[2] - 6.283185307179586, trial[2])
-        _c100 = trial[2] < lo[2]
-        _m101 = _m99 & _c100
-        trial[2] = np.where(_m101, trial[2] + 6.283185307179586, trial[2])
-        _c102 = trial[3] > hi[3]
-        _m103 = _run35 & _c102
-        _m104 = _run35 & (~_c102)
-        trial[3] = np.where(_m103, trial[3] - 6.283185307179586, trial[3])
-        _c105 = trial[3] < lo[3]
-        _m106 = _m104 & _c105
-        trial[3] = np.where(_m106, trial[3] + 6.283185307179586, trial[3])
-        _c107 = trial[4] > hi[4]
-        _m108 = _run35 & _c107
-        _m109 = _run35 & (~_c107)
-        trial[4] = np.where(_m108, trial[4] - 6.283185307179586, trial[4])
-        _c110 = trial[4] < lo[4]
-        _m111 = _m109 & _c110
-        trial[4] = np.where(_m111, trial[4] + 6.283185307179586, trial[4])
-        _c112 = trial[5] > hi[5]
-        _m113 = _run35 & _c112
-        _m114 = _run35 & (~_c112)
-        trial[5] = np.where(_m113, trial[5] - 6.283185307179586, trial[5])
-        _c115 = trial[5] < lo[5]
-        _m116 = _m114 & _c115
-        trial[5] = np.where(_m116, trial[5] + 6.283185307179586, trial[5])
+        _c96 = trial[0] > hi[0]
+        _m97 = _run35 & _c96
+        _m98 = _run35 & (~_c96)
+        trial[0] = np.where(_m97, trial[0] - 6.283185307179586, trial[0])
+        _c99 = trial[0] < lo[0]
+        _m100 = _m98 & _c99
+        trial[0] = np.where(_m100, trial[0] + 6.283185307179586, trial[0])
+        _c101 = trial[1] > hi[1]
+        _m102 = _run35 & _c101
+        _m103 = _run35 & (~_c101)
+        trial[1] = np.where(_m102, trial[1] - 6.283185307179586, trial[1])
+        _c104 = trial[1] < lo[1]
+        _m105 = _m103 & _c104
+        trial[1] = np.where(_m105, trial[1] + 6.283185307179586, trial[1])
+        _c106 = trial[2] > hi[2]
+        _m107 = _run35 & _c106
+        _m108 = _run35 & (~_c106)
+        trial[2] = np.where(_m107, trial[2] - 6.283185307179586, trial[2])
+        _c109 = trial[2] < lo[2]
+        _m110 = _m108 & _c109
+        trial[2] = np.where(_m110, trial[2] + 6.283185307179586, trial[2])
+        _c111 = trial[3] > hi[3]
+        _m112 = _run35 & _c111
+        _m113 = _run35 & (~_c111)
+        trial[3] = np.where(_m112, trial[3] - 6.283185307179586, trial[3])
+        _c114 = trial[3] < lo[3]
+        _m115 = _m113 & _c114
+        trial[3] = np.where(_m115, trial[3] + 6.283185307179586, trial[3])
+        _c116 = trial[4] > hi[4]
+        _m117 = _run35 & _c116
+        _m118 = _run35 & (~_c116)
+        trial[4] = np.where(_m117, trial[4] - 6.283185307179586, trial[4])
+        _c119 = trial[4] < lo[4]
+        _m120 = _m118 & _c119
+        trial[4] = np.where(_m120, trial[4] + 6.283185307179586, trial[4])
+        _c121 = trial[5] > hi[5]
+        _m122 = _run35 & _c121
+        _m123 = _run35 & (~_c121)
+        trial[5] = np.where(_m122, trial[5] - 6.283185307179586, trial[5])
+        _c124 = trial[5] < lo[5]
+        _m125 = _m123 & _c124
+        trial[5] = np.where(_m125, trial[5] + 6.283185307179586, trial[5])
         for k in range(0, 6):
             trial[k] = np.where(_run35, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
         _o = _ik_terms_on_lanes(_c, trial[0:6])
         _merge(_run35, _o[0], Tt, 0, _fr)
         _merge(_run35, _o[1], Jt, 0, _fr)
-        _ik_error_pose117_M = [_fr(0.0)] * 9
+        _ik_error_pose126_M = [_fr(0.0)] * 9
         et[0] = np.where(_run35, target[3] - Tt[3], et[0])
         et[1] = np.where(_run35, target[7] - Tt[7], et[1])
         et[2] = np.where(_run35, target[11] - Tt[11], et[2])
-        _ik_error_pose117_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose117_M[0])
-        _ik_error_pose117_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose117_M[1])
-        _ik_error_pose117_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose117_M[2])
-        _ik_error_pose117_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose117_M[3])
-        _ik_error_pose117_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose117_M[4])
-        _ik_error_pose117_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose117_M[5])
-        _ik_error_pose117_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose117_M[6])
-        _ik_error_pose117_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose117_M[7])
-        _ik_error_pose117_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose117_M[8])
-        _alive119 = _run35
-        _ik_log3118_v0 = _ik_error_pose117_M[7] - _ik_error_pose117_M[5]
-        _ik_log3118_v1 = _ik_error_pose117_M[2] - _ik_error_pose117_M[6]
-        _ik_log3118_v2 = _ik_error_pose117_M[3] - _ik_error_pose117_M[1]
-        _ik_log3118_c = (((_ik_error_pose117_M[0] + _ik_error_pose117_M[4]) + _ik_error_pose117_M[8]) - 1.0)*0.5
-        _ik_log3118_s = np.sqrt((_ik_log3118_v0*_ik_log3118_v0 + _ik_log3118_v1*_ik_log3118_v1) + _ik_log3118_v2*_ik_log3118_v2)*0.5
-        _ik_log3118_angle = np.arctan2(_ik_log3118_s, _ik_log3118_c)
-        _ik_log3118_k = _fr(0.0)
-        _c120 = _ik_log3118_angle < 0.0001
-        _m121 = _run35 & _c120
-        _ik_log3118_k = np.where(_m121, 0.5 + (_ik_log3118_angle*_ik_log3118_angle)*0.08333333333333333, _ik_log3118_k)
-        et[0 + 3] = np.where(_m121, _ik_log3118_v0*_ik_log3118_k, et[0 + 3])
-        et[1 + 3] = np.where(_m121, _ik_log3118_v1*_ik_log3118_k, et[1 + 3])
-        et[2 + 3] = np.where(_m121, _ik_log3118_v2*_ik_log3118_k, et[2 + 3])
-        _alive119 = _alive119 & (~_m121)
-        _c122 = 3.141592653589793 - _ik_log3118_angle > 0.001
-        _m123 = _alive119 & _c122
-        _ik_log3118_k = np.where(_m123, _ik_log3118_angle/(_ik_log3118_s + _ik_log3118_s), _ik_log3118_k)
-        et[0 + 3] = np.where(_m123, _ik_log3118_v0*_ik_log3118_k, et[0 + 3])
-        et[1 + 3] = np.where(_m123, _ik_log3118_v1*_ik_log3118_k, et[1 + 3])
-        et[2 + 3] = np.where(_m123, _ik_log3118_v2*_ik_log3118_k, et[2 + 3])
-        _alive119 = _alive119 & (~_m123)
+        _ik_error_pose126_M[0] = np.where(_run35, (target[0]*Tt[0] + target[1]*Tt[1]) + target[2]*Tt[2], _ik_error_pose126_M[0])
+        _ik_error_pose126_M[1] = np.where(_run35, (target[0]*Tt[4] + target[1]*Tt[5]) + target[2]*Tt[6], _ik_error_pose126_M[1])
+        _ik_error_pose126_M[2] = np.where(_run35, (target[0]*Tt[8] + target[1]*Tt[9]) + target[2]*Tt[10], _ik_error_pose126_M[2])
+        _ik_error_pose126_M[3] = np.where(_run35, (target[4]*Tt[0] + target[5]*Tt[1]) + target[6]*Tt[2], _ik_error_pose126_M[3])
+        _ik_error_pose126_M[4] = np.where(_run35, (target[4]*Tt[4] + target[5]*Tt[5]) + target[6]*Tt[6], _ik_error_pose126_M[4])
+        _ik_error_pose126_M[5] = np.where(_run35, (target[4]*Tt[8] + target[5]*Tt[9]) + target[6]*Tt[10], _ik_error_pose126_M[5])
+        _ik_error_pose126_M[6] = np.where(_run35, (target[8]*Tt[0] + target[9]*Tt[1]) + target[10]*Tt[2], _ik_error_pose126_M[6])
+        _ik_error_pose126_M[7] = np.where(_run35, (target[8]*Tt[4] + target[9]*Tt[5]) + target[10]*Tt[6], _ik_error_pose126_M[7])
+        _ik_error_pose126_M[8] = np.where(_run35, (target[8]*Tt[8] + target[9]*Tt[9]) + target[10]*Tt[10], _ik_error_pose126_M[8])
+        _alive128 = _run35
+        _ik_log3127_v0 = _ik_error_pose126_M[7] - _ik_error_pose126_M[5]
+        _ik_log3127_v1 = _ik_error_pose126_M[2] - _ik_error_pose126_M[6]
+        _ik_log3127_v2 = _ik_error_pose126_M[3] - _ik_error_pose126_M[1]
+        _ik_log3127_c = (((_ik_error_pose126_M[0] + _ik_error_pose126_M[4]) + _ik_error_pose126_M[8]) - 1.0)*0.5
+        _ik_log3127_s = np.sqrt((_ik_log3127_v0*_ik_log3127_v0 + _ik_log3127_v1*_ik_log3127_v1) + _ik_log3127_v2*_ik_log3127_v2)*0.5
+        _ik_log3127_angle = np.arctan2(_ik_log3127_s, _ik_log3127_c)
+        _ik_log3127_k = _fr(0.0)
+        _c129 = _ik_log3127_angle < 0.0001
+        _m130 = _run35 & _c129
+        _ik_log3127_k = np.where(_m130, 0.5 + (_ik_log3127_angle*_ik_log3127_angle)*0.08333333333333333, _ik_log3127_k)
+        et[0 + 3] = np.where(_m130, _ik_log3127_v0*_ik_log3127_k, et[0 + 3])
+        et[1 + 3] = np.where(_m130, _ik_log3127_v1*_ik_log3127_k, et[1 + 3])
+        et[2 + 3] = np.where(_m130, _ik_log3127_v2*_ik_log3127_k, et[2 + 3])
+        _alive128 = _alive128 & (~_m130)
+        _c131 = 3.141592653589793 - _ik_log3127_angle > 0.001
+        _m132 = _alive128 & _c131
+        _ik_log3127_k = np.where(_m132, _ik_log3127_angle/(_ik_log3127_s + _ik_log3127_s), _ik_log3127_k)
+        et[0 + 3] = np.where(_m132, _ik_log3127_v0*_ik_log3127_k, et[0 + 3])
+        et[1 + 3] = np.where(_m132, _ik_log3127_v1*_ik_log3127_k, et[1 + 3])
+        et[2 + 3] = np.where(_m132, _ik_log3127_v2*_ik_log3127_k, et[2 + 3])
+        _alive128 = _alive128 & (~_m132)
         # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-        _ik_log3118_col = [_fr(0.0)] * 3
-        _ik_log3118_i = np.where(_ik_error_pose117_M[0] >= _ik_error_pose117_M[4], np.where(_ik_error_pose117_M[0] >= _ik_error_pose117_M[8], _fi(0), 2), np.where(_ik_error_pose117_M[4] >= _ik_error_pose117_M[8], _fi(1), 2))
-        _i124 = 3*_ik_log3118_i
-        _ik_log3118_col[0] = np.where(_alive119, (np.where(_ik_log3118_i == 0, _ik_error_pose117_M[0], np.where(_ik_log3118_i == 1, _ik_error_pose117_M[1], np.where(_ik_log3118_i == 2, _ik_error_pose117_M[2], np.where(_ik_log3118_i == 3, _ik_error_pose117_M[3], np.where(_ik_log3118_i == 4, _ik_error_pose117_M[4], np.where(_ik_log3118_i == 5, _ik_error_pose117_M[5], np.where(_ik_log3118_i == 6, _ik_error_pose117_M[6], np.where(_ik_log3118_i == 7, _ik_error_pose117_M[7], _ik_error_pose117_M[8])))))))) + np.where(_i124 == 0, _ik_error_pose117_M[0], np.where(_i124 == 3, _ik_error_pose117_M[3], _ik_error_pose117_M[6])))*0.5, _ik_log3118_col[0])
-        _i125 = 3 + _ik_log3118_i
-        _i126 = 3*_ik_log3118_i + 1
-        _ik_log3118_col[1] = np.where(_alive119, (np.where(_i125 == 0, _ik_error_pose117_M[0], np.where(_i125 == 1, _ik_error_pose117_M[1], np.where(_i125 == 2, _ik_error_pose117_M[2], np.where(_i125 == 3, _ik_error_pose117_M[3], np.where(_i125 == 4, _ik_error_pose117_M[4], np.where(_i125 == 5, _ik_error_pose117_M[5], np.where(_i125 == 6, _ik_error_pose117_M[6], np.where(_i125 == 7, _ik_error_pose117_M[7], _ik_error_pose117_M[8])))))))) + np.where(_i126 == 1, _ik_error_pose117_M[1], np.where(_i126 == 4, _ik_error_pose117_M[4], _ik_error_pose117_M[7])))*0.5, _ik_log3118_col[1])
-        _i127 = 6 + _ik_log3118_i
-        _i128 = 3*_ik_log3118_i + 2
-        _ik_log3118_col[2] = np.where(_alive119, (np.where(_i127 == 0, _ik_error_pose117_M[0], np.where(_i127 == 1, _ik_error_pose117_M[1], np.where(_i127 == 2, _ik_error_pose117_M[2], np.where(_i127 == 3, _ik_error_pose117_M[3], np.where(_i127 == 4, _ik_error_pose117_M[4], np.where(_i127 == 5, _ik_error_pose117_M[5], np.where(_i127 == 6, _ik_error_pose117_M[6], np.where(_i127 == 7, _ik_error_pose117_M[7], _ik_error_pose117_M[8])))))))) + np.where(_i128 == 2, _ik_error_pose117_M[2], np.where(_i128 == 5, _ik_error_pose117_M[5], _ik_error_pose117_M[8])))*0.5, _ik_log3118_col[2])
-        _v129 = np.where(_ik_log3118_i == 0, _ik_log3118_col[0], np.where(_ik_log3118_i == 1, _ik_log3118_col[1], _ik_log3118_col[2])) - _ik_log3118_c
-        _m130 = _alive119 & (_ik_log3118_i == 0)
-        _ik_log3118_col[0] = np.where(_m130, _v129, _ik_log3118_col[0])
-        _m131 = _alive119 & (_ik_log3118_i == 1)
-        _ik_log3118_col[1] = np.where(_m131, _v129, _ik_log3118_col[1])
-        _m132 = _alive119 & (_ik_log3118_i == 2)
-        _ik_log3118_col[2] = np.where(_m132, _v129, _ik_log3118_col[2])
-        _ik_log3118_norm = np.sqrt((_ik_log3118_col[0]*_ik_log3118_col[0] + _ik_log3118_col[1]*_ik_log3118_col[1]) + _ik_log3118_col[2]*_ik_log3118_col[2])
-        _ik_log3118_k = np.where(_alive119, np.where((_ik_log3118_col[0]*_ik_log3118_v0 + _ik_log3118_col[1]*_ik_log3118_v1) + _ik_log3118_col[2]*_ik_log3118_v2 < 0.0, -_ik_log3118_angle, _ik_log3118_angle)/_ik_log3118_norm, _ik_log3118_k)
-        et[0 + 3] = np.where(_alive119, _ik_log3118_col[0]*_ik_log3118_k, et[0 + 3])
-        et[1 + 3] = np.where(_alive119, _ik_log3118_col[1]*_ik_log3118_k, et[1 + 3])
-        et[2 + 3] = np.where(_alive119, _ik_log3118_col[2]*_ik_log3118_k, et[2 + 3])
-        _ik_error_pose117_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
-        _ik_error_pose117_rotation = np.sqrt(_ik_error_pose117_rotation_squares)
-        _c133 = ~np.isfinite(_ik_error_pose117_rotation_squares)
-        _m134 = _run35 & _c133
-        _ik_error_pose117_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
-        _ik_error_pose117_rotation = np.where(_m134, _ik_error_pose117_rotation_top*np.sqrt((et[3]/_ik_error_pose117_rotation_top)*(et[3]/_ik_error_pose117_rotation_top) + (et[4]/_ik_error_pose117_rotation_top)*(et[4]/_ik_error_pose117_rotation_top) + (et[5]/_ik_error_pose117_rotation_top)*(et[5]/_ik_error_pose117_rotation_top)), _ik_error_pose117_rotation)
-        norms[1] = np.where(_run35, _ik_error_pose117_rotation, norms[1])
-        _ik_error_pose117_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_pose117_position = np.sqrt(_ik_error_pose117_position_squares)
-        _c135 = ~np.isfinite(_ik_error_pose117_position_squares)
-        _m136 = _run35 & _c135
-        _ik_error_pose117_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_pose117_position = np.where(_m136, _ik_error_pose117_position_top*np.sqrt((et[0]/_ik_error_pose117_position_top)*(et[0]/_ik_error_pose117_position_top) + (et[1]/_ik_error_pose117_position_top)*(et[1]/_ik_error_pose117_position_top) + (et[2]/_ik_error_pose117_position_top)*(et[2]/_ik_error_pose117_position_top)), _ik_error_pose117_position)
-        norms[0] = np.where(_run35, _ik_error_pose117_position, norms[0])
-        _ik_error_pose117_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_pose117_whole = np.sqrt(_ik_error_pose117_whole_squares)
-        _c137 = ~np.isfinite(_ik_error_pose117_whole_squares)
-        _m138 = _run35 & _c137
-        _ik_error_pose117_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_pose117_whole = np.where(_m138, _ik_error_pose117_whole_top*np.sqrt((norms[0]/_ik_error_pose117_whole_top)*(norms[0]/_ik_error_pose117_whole_top) + (norms[1]/_ik_error_pose117_whole_top)*(norms[1]/_ik_error_pose117_whole_top)), _ik_error_pose117_whole)
-        norms[2] = np.where(_run35, _ik_error_pose117_whole, norms[2])
+        _ik_log3127_col = [_fr(0.0)] * 3
+        _ik_log3127_i = np.where(_ik_error_pose126_M[0] >= _ik_error_pose126_M[4], np.where(_ik_error_pose126_M[0] >= _ik_error_pose126_M[8], _fi(0), 2), np.where(_ik_error_pose126_M[4] >= _ik_error_pose126_M[8], _fi(1), 2))
+        _i133 = 3*_ik_log3127_i
+        _ik_log3127_col[0] = np.where(_alive128, (np.where(_ik_log3127_i == 0, _ik_error_pose126_M[0], np.where(_ik_log3127_i == 1, _ik_error_pose126_M[1], np.where(_ik_log3127_i == 2, _ik_error_pose126_M[2], np.where(_ik_log3127_i == 3, _ik_error_pose126_M[3], np.where(_ik_log3127_i == 4, _ik_error_pose126_M[4], np.where(_ik_log3127_i == 5, _ik_error_pose126_M[5], np.where(_ik_log3127_i == 6, _ik_error_pose126_M[6], np.where(_ik_log3127_i == 7, _ik_error_pose126_M[7], _ik_error_pose126_M[8])))))))) + np.where(_i133 == 0, _ik_error_pose126_M[0], np.where(_i133 == 3, _ik_error_pose126_M[3], _ik_error_pose126_M[6])))*0.5, _ik_log3127_col[0])
+        _i134 = 3 + _ik_log3127_i
+        _i135 = 3*_ik_log3127_i + 1
+        _ik_log3127_col[1] = np.where(_alive128, (np.where(_i134 == 0, _ik_error_pose126_M[0], np.where(_i134 == 1, _ik_error_pose126_M[1], np.where(_i134 == 2, _ik_error_pose126_M[2], np.where(_i134 == 3, _ik_error_pose126_M[3], np.where(_i134 == 4, _ik_error_pose126_M[4], np.where(_i134 == 5, _ik_error_pose126_M[5], np.where(_i134 == 6, _ik_error_pose126_M[6], np.where(_i134 == 7, _ik_error_pose126_M[7], _ik_error_pose126_M[8])))))))) + np.where(_i135 == 1, _ik_error_pose126_M[1], np.where(_i135 == 4, _ik_error_pose126_M[4], _ik_error_pose126_M[7])))*0.5, _ik_log3127_col[1])
+        _i136 = 6 + _ik_log3127_i
+        _i137 = 3*_ik_log3127_i + 2
+        _ik_log3127_col[2] = np.where(_alive128, (np.where(_i136 == 0, _ik_error_pose126_M[0], np.where(_i136 == 1, _ik_error_pose126_M[1], np.where(_i136 == 2, _ik_error_pose126_M[2], np.where(_i136 == 3, _ik_error_pose126_M[3], np.where(_i136 == 4, _ik_error_pose126_M[4], np.where(_i136 == 5, _ik_error_pose126_M[5], np.where(_i136 == 6, _ik_error_pose126_M[6], np.where(_i136 == 7, _ik_error_pose126_M[7], _ik_error_pose126_M[8])))))))) + np.where(_i137 == 2, _ik_error_pose126_M[2], np.where(_i137 == 5, _ik_error_pose126_M[5], _ik_error_pose126_M[8])))*0.5, _ik_log3127_col[2])
+        _v138 = np.where(_ik_log3127_i == 0, _ik_log3127_col[0], np.where(_ik_log3127_i == 1, _ik_log3127_col[1], _ik_log3127_col[2])) - _ik_log3127_c
+        _m139 = _alive128 & (_ik_log3127_i == 0)
+        _ik_log3127_col[0] = np.where(_m139, _v138, _ik_log3127_col[0])
+        _m140 = _alive128 & (_ik_log3127_i == 1)
+        _ik_log3127_col[1] = np.where(_m140, _v138, _ik_log3127_col[1])
+        _m141 = _alive128 & (_ik_log3127_i == 2)
+        _ik_log3127_col[2] = np.where(_m141, _v138, _ik_log3127_col[2])
+        _ik_log3127_norm = np.sqrt((_ik_log3127_col[0]*_ik_log3127_col[0] + _ik_log3127_col[1]*_ik_log3127_col[1]) + _ik_log3127_col[2]*_ik_log3127_col[2])
+        _ik_log3127_k = np.where(_alive128, np.where((_ik_log3127_col[0]*_ik_log3127_v0 + _ik_log3127_col[1]*_ik_log3127_v1) + _ik_log3127_col[2]*_ik_log3127_v2 < 0.0, -_ik_log3127_angle, _ik_log3127_angle)/_ik_log3127_norm, _ik_log3127_k)
+        et[0 + 3] = np.where(_alive128, _ik_log3127_col[0]*_ik_log3127_k, et[0 + 3])
+        et[1 + 3] = np.where(_alive128, _ik_log3127_col[1]*_ik_log3127_k, et[1 + 3])
+        et[2 + 3] = np.where(_alive128, _ik_log3127_col[2]*_ik_log3127_k, et[2 + 3])
+        _ik_error_pose126_rotation_squares = et[3]*et[3] + et[4]*et[4] + et[5]*et[5]
+        _ik_error_pose126_rotation = np.sqrt(_ik_error_pose126_rotation_squares)
+        _c142 = ~np.isfinite(_ik_error_pose126_rotation_squares)
+        _m143 = _run35 & _c142
+        _ik_error_pose126_rotation_top = np.where(np.abs(et[5]) > np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])), np.abs(et[5]), np.where(np.abs(et[4]) > np.abs(et[3]), np.abs(et[4]), np.abs(et[3])))
+        _ik_error_pose126_rotation = np.where(_m143, _ik_error_pose126_rotation_top*np.sqrt((et[3]/_ik_error_pose126_rotation_top)*(et[3]/_ik_error_pose126_rotation_top) + (et[4]/_ik_error_pose126_rotation_top)*(et[4]/_ik_error_pose126_rotation_top) + (et[5]/_ik_error_pose126_rotation_top)*(et[5]/_ik_error_pose126_rotation_top)), _ik_error_pose126_rotation)
+        norms[1] = np.where(_run35, _ik_error_pose126_rotation, norms[1])
+        _ik_error_pose126_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_pose126_position = np.sqrt(_ik_error_pose126_position_squares)
+        _c144 = ~np.isfinite(_ik_error_pose126_position_squares)
+        _m145 = _run35 & _c144
+        _ik_error_pose126_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_pose126_position = np.where(_m145, _ik_error_pose126_position_top*np.sqrt((et[0]/_ik_error_pose126_position_top)*(et[0]/_ik_error_pose126_position_top) + (et[1]/_ik_error_pose126_position_top)*(et[1]/_ik_error_pose126_position_top) + (et[2]/_ik_error_pose126_position_top)*(et[2]/_ik_error_pose126_position_top)), _ik_error_pose126_position)
+        norms[0] = np.where(_run35, _ik_error_pose126_position, norms[0])
+        _ik_error_pose126_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_pose126_whole = np.sqrt(_ik_error_pose126_whole_squares)
+        _c146 = ~np.isfinite(_ik_error_pose126_whole_squares)
+        _m147 = _run35 & _c146
+        _ik_error_pose126_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_pose126_whole = np.where(_m147, _ik_error_pose126_whole_top*np.sqrt((norms[0]/_ik_error_pose126_whole_top)*(norms[0]/_ik_error_pose126_whole_top) + (norms[1]/_ik_error_pose126_whole_top)*(norms[1]/_ik_error_pose126_whole_top)), _ik_error_pose126_whole)
+        norms[2] = np.where(_run35, _ik_error_pose126_whole, norms[2])
         pet = np.where(_run35, norms[0], pet)
         ret = np.where(_run35, norms[1], ret)
         ent = np.where(_run35, norms[2], ent)
         it = np.where(_run35, it + 1, it)
         attempt = np.where(_run35, attempt + 1, attempt)
         curved = np.where(_run35, np.where(ent > en*0.5, _fi(1), 0), curved)
-        _c139 = ent < en
-        _m140 = _run35 & _c139
-        _m141 = _run35 & (~_c139)
+        _c148 = ent < en
+        _m149 = _run35 & _c148
+        _m150 = _run35 & (~_c148)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m140, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m140, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m149, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m149, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 6):
-            q[k] = np.where(_m140, trial[k], q[k])
+            q[k] = np.where(_m149, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m140, Tt[k], Tm[k])
+            Tm[k] = np.where(_m149, Tt[k], Tm[k])
         for k in range(0, 36):
-            J[k] = np.where(_m140, Jt[k], J[k])
+            J[k] = np.where(_m149, Jt[k], J[k])
         for k in range(0, 6):
-            e[k] = np.where(_m140, et[k], e[k])
-        gram_ready = np.where(_m140, 0, gram_ready)
-        pe = np.where(_m140, pet, pe)
-        re = np.where(_m140, ret, re)
-        en = np.where(_m140, ent, en)
-        c = np.where(_m140, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m141, c*4.0, c)
-        stalled = np.where(_m141, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        damped = np.where(_m141, 0, damped)
-        _c142 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m143 = _run35 & _c142
-        best_en = np.where(_m143, en, best_en)
-        best_pe = np.where(_m143, pe, best_pe)
-        best_re = np.where(_m143, re, best_re)
-        best_stalled = np.where(_m143, stalled, best_stalled)
-        best_here = np.where(_m143, 1, best_here)
+            e[k] = np.where(_m149, et[k], e[k])
+        gram_ready = np.where(_m149, 0, gram_ready)
+        pe = np.where(_m149, pet, pe)
+        re = np.where(_m149, ret, re)
+        en = np.where(_m149, ent, en)
+        c = np.where(_m149, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m150, c*4.0, c)
+        stalled = np.where(_m150, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m150, 0, damped)
+        _c151 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m152 = _run35 & _c151
+        best_en = np.where(_m152, en, best_en)
+        best_pe = np.where(_m152, pe, best_pe)
+        best_re = np.where(_m152, re, best_re)
+        best_stalled = np.where(_m152, stalled, best_stalled)
+        best_here = np.where(_m152, 1, best_here)
         for k in range(0, 6):
-            best_q[k] = np.where(_m143, q[k], best_q[k])
-        _c144 = ~((pe <= tol) & (re <= tol))
-        _m145 = _run35 & _c144
-        if bool(_m145.any()):
-            slow = np.where(_m145, stationary, slow)
-            _c146 = attempt % 3 == 0
-            _m147 = _m145 & _c146
+            best_q[k] = np.where(_m152, q[k], best_q[k])
+        _c153 = ~((pe <= tol) & (re <= tol))
+        _m154 = _run35 & _c153
+        if bool(_m154.any()):
+            slow = np.where(_m154, stationary, slow)
+            _c155 = attempt % 3 == 0
+            _m156 = _m154 & _c155
             # a window of accepted, damping-bound steps is not slow: each step halves the damping
-            _c148 = (en > checkpoint*0.6) & (damped == 0)
-            _m149 = _m147 & _c148
-            slow = np.where(_m149, 1, slow)
-            damped = np.where(_m147, 1, damped)
-            window_start = np.where(_m147, checkpoint, window_start)
-            checkpoint = np.where(_m147, en, checkpoint)
-            _c150 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m151 = _m145 & _c150
-            if bool(_m151.any()):
-                _c152 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m153 = _m151 & _c152
+            _c157 = (en > checkpoint*0.6) & (damped == 0)
+            _m158 = _m156 & _c157
+            slow = np.where(_m158, 1, slow)
+            damped = np.where(_m156, 1, damped)
+            window_start = np.where(_m156, checkpoint, window_start)
+            checkpoint = np.where(_m156, en, checkpoint)
+            _c159 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m160 = _m154 & _c159
+            if bool(_m160.any()):
+                _c161 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m162 = _m160 & _c161
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m153, 1, best_stalled)
-                best_here = np.where(_m151, 0, best_here)
-                nearest = np.where(_m151, 0.0, nearest)
+                best_stalled = np.where(_m162, 1, best_stalled)
+                best_here = np.where(_m160, 0, best_here)
+                nearest = np.where(_m160, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 6):
-                        _alive155 = _m151
-                        _ik_uniform154_s = state[0]
-                        _ik_uniform154_s = _u64_where(_m151, _u64_xor(_ik_uniform154_s, _u64_shr(_ik_uniform154_s, 12)), _ik_uniform154_s)
-                        _ik_uniform154_s = _u64_where(_m151, _u64_xor(_ik_uniform154_s, _u64_shl(_ik_uniform154_s, 25)), _ik_uniform154_s)
-                        _ik_uniform154_s = _u64_where(_m151, _u64_xor(_ik_uniform154_s, _u64_shr(_ik_uniform154_s, 27)), _ik_uniform154_s)
-                        state[0] = _u64_where(_m151, _ik_uniform154_s, state[0])
-                        u = np.where(_m151, _u64_real(_u64_shr(_u64_mul(_ik_uniform154_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive155 = _alive155 & (~_m151)
-                        trial[k] = np.where(_m151, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive164 = _m160
+                        _ik_uniform163_s = state[0]
+                        _ik_uniform163_s = _u64_where(_m160, _u64_xor(_ik_uniform163_s, _u64_shr(_ik_uniform163_s, 12)), _ik_uniform163_s)
+                        _ik_uniform163_s = _u64_where(_m160, _u64_xor(_ik_uniform163_s, _u64_shl(_ik_uniform163_s, 25)), _ik_uniform163_s)
+                        _ik_uniform163_s = _u64_where(_m160, _u64_xor(_ik_uniform163_s, _u64_shr(_ik_uniform163_s, 27)), _ik_uniform163_s)
+                        state[0] = _u64_where(_m160, _ik_uniform163_s, state[0])
+                        u = np.where(_m160, _u64_real(_u64_shr(_u64_mul(_ik_uniform163_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive164 = _alive164 & (~_m160)
+                        trial[k] = np.where(_m160, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:6])
-                    _merge(_m151, _o[0], Tt, 0, _fr)
-                    _merge(_m151, _o[1], Jt, 0, _fr)
-                    d = np.where(_m151, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
-                    _c156 = (d < nearest) | (m == 0)
-                    _m157 = _m151 & _c156
-                    nearest = np.where(_m157, d, nearest)
+                    _merge(_m160, _o[0], Tt, 0, _fr)
+                    _merge(_m160, _o[1], Jt, 0, _fr)
+                    d = np.where(_m160, np.sqrt(((target[3] - Tt[3])*(target[3] - Tt[3]) + (target[7] - Tt[7])*(target[7] - Tt[7])) + (target[11] - Tt[11])*(target[11] - Tt[11])), d)
+                    _c165 = (d < nearest) | (m == 0)
+                    _m166 = _m160 & _c165
+                    nearest = np.where(_m166, d, nearest)
                     for k in range(0, 6):
-                        q[k] = np.where(_m157, trial[k], q[k])
-                restarts = np.where(_m151, restarts + 1, restarts)
-                gram_ready = np.where(_m151, 0, gram_ready)
+                        q[k] = np.where(_m166, trial[k], q[k])
+                restarts = np.where(_m160, restarts + 1, restarts)
+                gram_ready = np.where(_m160, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:6])
-                _merge(_m151, _o[0], Tm, 0, _fr)
-                _merge(_m151, _o[1], J, 0, _fr)
-                _ik_error_pose158_M = [_fr(0.0)] * 9
-                e[0] = np.where(_m151, target[3] - Tm[3], e[0])
-                e[1] = np.where(_m151, target[7] - Tm[7], e[1])
-                e[2] = np.where(_m151, target[11] - Tm[11], e[2])
-                _ik_error_pose158_M[0] = np.where(_m151, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose158_M[0])
-                _ik_error_pose158_M[1] = np.where(_m151, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose158_M[1])
-                _ik_error_pose158_M[2] = np.where(_m151, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose158_M[2])
-                _ik_error_pose158_M[3] = np.where(_m151, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose158_M[3])
-                _ik_error_pose158_M[4] = np.where(_m151, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose158_M[4])
-                _ik_error_pose158_M[5] = np.where(_m151, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose158_M[5])
-                _ik_error_pose158_M[6] = np.where(_m151, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose158_M[6])
-                _ik_error_pose158_M[7] = np.where(_m151, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose158_M[7])
-                _ik_error_pose158_M[8] = np.where(_m151, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose158_M[8])
-                _alive160 = _m151
-                _ik_log3159_v0 = _ik_error_pose158_M[7] - _ik_error_pose158_M[5]
-                _ik_log3159_v1 = _ik_error_pose158_M[2] - _ik_error_pose158_M[6]
-                _ik_log3159_v2 = _ik_error_pose158_M[3] - _ik_error_pose158_M[1]
-                _ik_log3159_c = (((_ik_error_pose158_M[0] + _ik_error_pose158_M[4]) + _ik_error_pose158_M[8]) - 1.0)*0.5
-                _ik_log3159_s = np.sqrt((_ik_log3159_v0*_ik_log3159_v0 + _ik_log3159_v1*_ik_log3159_v1) + _ik_log3159_v2*_ik_log3159_v2)*0.5
-                _ik_log3159_angle = np.arctan2(_ik_log3159_s, _ik_log3159_c)
-                _ik_log3159_k = _fr(0.0)
-                _c161 = _ik_log3159_angle < 0.0001
-                _m162 = _m151 & _c161
-                _ik_log3159_k = np.where(_m162, 0.5 + (_ik_log3159_angle*_ik_log3159_angle)*0.08333333333333333, _ik_log3159_k)
-                e[0 + 3] = np.where(_m162, _ik_log3159_v0*_ik_log3159_k, e[0 + 3])
-                e[1 + 3] = np.where(_m162, _ik_log3159_v1*_ik_log3159_k, e[1 + 3])
-                e[2 + 3] = np.where(_m162, _ik_log3159_v2*_ik_log3159_k, e[2 + 3])
-                _alive160 = _alive160 & (~_m162)
-                _c163 = 3.141592653589793 - _ik_log3159_angle > 0.001
-                _m164 = _alive160 & _c163
-                _ik_log3159_k = np.where(_m164, _ik_log3159_angle/(_ik_log3159_s + _ik_log3159_s), _ik_log3159_k)
-                e[0 + 3] = np.where(_m164, _ik_log3159_v0*_ik_log3159_k, e[0 + 3])
-                e[1 + 3] = np.where(_m164, _ik_log3159_v1*_ik_log3159_k, e[1 + 3])
-                e[2 + 3] = np.where(_m164, _ik_log3159_v2*_ik_log3159_k, e[2 + 3])
-                _alive160 = _alive160 & (~_m164)
+                _merge(_m160, _o[0], Tm, 0, _fr)
+                _merge(_m160, _o[1], J, 0, _fr)
+                _ik_error_pose167_M = [_fr(0.0)] * 9
+                e[0] = np.where(_m160, target[3] - Tm[3], e[0])
+                e[1] = np.where(_m160, target[7] - Tm[7], e[1])
+                e[2] = np.where(_m160, target[11] - Tm[11], e[2])
+                _ik_error_pose167_M[0] = np.where(_m160, (target[0]*Tm[0] + target[1]*Tm[1]) + target[2]*Tm[2], _ik_error_pose167_M[0])
+                _ik_error_pose167_M[1] = np.where(_m160, (target[0]*Tm[4] + target[1]*Tm[5]) + target[2]*Tm[6], _ik_error_pose167_M[1])
+                _ik_error_pose167_M[2] = np.where(_m160, (target[0]*Tm[8] + target[1]*Tm[9]) + target[2]*Tm[10], _ik_error_pose167_M[2])
+                _ik_error_pose167_M[3] = np.where(_m160, (target[4]*Tm[0] + target[5]*Tm[1]) + target[6]*Tm[2], _ik_error_pose167_M[3])
+                _ik_error_pose167_M[4] = np.where(_m160, (target[4]*Tm[4] + target[5]*Tm[5]) + target[6]*Tm[6], _ik_error_pose167_M[4])
+                _ik_error_pose167_M[5] = np.where(_m160, (target[4]*Tm[8] + target[5]*Tm[9]) + target[6]*Tm[10], _ik_error_pose167_M[5])
+                _ik_error_pose167_M[6] = np.where(_m160, (target[8]*Tm[0] + target[9]*Tm[1]) + target[10]*Tm[2], _ik_error_pose167_M[6])
+                _ik_error_pose167_M[7] = np.where(_m160, (target[8]*Tm[4] + target[9]*Tm[5]) + target[10]*Tm[6], _ik_error_pose167_M[7])
+                _ik_error_pose167_M[8] = np.where(_m160, (target[8]*Tm[8] + target[9]*Tm[9]) + target[10]*Tm[10], _ik_error_pose167_M[8])
+                _alive169 = _m160
+                _ik_log3168_v0 = _ik_error_pose167_M[7] - _ik_error_pose167_M[5]
+                _ik_log3168_v1 = _ik_error_pose167_M[2] - _ik_error_pose167_M[6]
+                _ik_log3168_v2 = _ik_error_pose167_M[3] - _ik_error_pose167_M[1]
+                _ik_log3168_c = (((_ik_error_pose167_M[0] + _ik_error_pose167_M[4]) + _ik_error_pose167_M[8]) - 1.0)*0.5
+                _ik_log3168_s = np.sqrt((_ik_log3168_v0*_ik_log3168_v0 + _ik_log3168_v1*_ik_log3168_v1) + _ik_log3168_v2*_ik_log3168_v2)*0.5
+                _ik_log3168_angle = np.arctan2(_ik_log3168_s, _ik_log3168_c)
+                _ik_log3168_k = _fr(0.0)
+                _c170 = _ik_log3168_angle < 0.0001
+                _m171 = _m160 & _c170
+                _ik_log3168_k = np.where(_m171, 0.5 + (_ik_log3168_angle*_ik_log3168_angle)*0.08333333333333333, _ik_log3168_k)
+                e[0 + 3] = np.where(_m171, _ik_log3168_v0*_ik_log3168_k, e[0 + 3])
+                e[1 + 3] = np.where(_m171, _ik_log3168_v1*_ik_log3168_k, e[1 + 3])
+                e[2 + 3] = np.where(_m171, _ik_log3168_v2*_ik_log3168_k, e[2 + 3])
+                _alive169 = _alive169 & (~_m171)
+                _c172 = 3.141592653589793 - _ik_log3168_angle > 0.001
+                _m173 = _alive169 & _c172
+                _ik_log3168_k = np.where(_m173, _ik_log3168_angle/(_ik_log3168_s + _ik_log3168_s), _ik_log3168_k)
+                e[0 + 3] = np.where(_m173, _ik_log3168_v0*_ik_log3168_k, e[0 + 3])
+                e[1 + 3] = np.where(_m173, _ik_log3168_v1*_ik_log3168_k, e[1 + 3])
+                e[2 + 3] = np.where(_m173, _ik_log3168_v2*_ik_log3168_k, e[2 + 3])
+                _alive169 = _alive169 & (~_m173)
                 # near pi: (M + M^T)/2 - cos(angle) I = (1 - cos) a a^T; its column of the largest diagonal entry
-                _ik_log3159_col = [_fr(0.0)] * 3
-                _ik_log3159_i = np.where(_ik_error_pose158_M[0] >= _ik_error_pose158_M[4], np.where(_ik_error_pose158_M[0] >= _ik_error_pose158_M[8], _fi(0), 2), np.where(_ik_error_pose158_M[4] >= _ik_error_pose158_M[8], _fi(1), 2))
-                _i165 = 3*_ik_log3159_i
-                _ik_log3159_col[0] = np.where(_alive160, (np.where(_ik_log3159_i == 0, _ik_error_pose158_M[0], np.where(_ik_log3159_i == 1, _ik_error_pose158_M[1], np.where(_ik_log3159_i == 2, _ik_error_pose158_M[2], np.where(_ik_log3159_i == 3, _ik_error_pose158_M[3], np.where(_ik_log3159_i == 4, _ik_error_pose158_M[4], np.where(_ik_log3159_i == 5, _ik_error_pose158_M[5], np.where(_ik_log3159_i == 6, _ik_error_pose158_M[6], np.where(_ik_log3159_i == 7, _ik_error_pose158_M[7], _ik_error_pose158_M[8])))))))) + np.where(_i165 == 0, _ik_error_pose158_M[0], np.where(_i165 == 3, _ik_error_pose158_M[3], _ik_error_pose158_M[6])))*0.5, _ik_log3159_col[0])
-                _i166 = 3 + _ik_log3159_i
-                _i167 = 3*_ik_log3159_i + 1
-                _ik_log3159_col[1] = np.where(_alive160, (np.where(_i166 == 0, _ik_error_pose158_M[0], np.where(_i166 == 1, _ik_error_pose158_M[1], np.where(_i166 == 2, _ik_error_pose158_M[2], np.where(_i166 == 3, _ik_error_pose158_M[3], np.where(_i166 == 4, _ik_error_pose158_M[4], np.where(_i166 == 5, _ik_error_pose158_M[5], np.where(_i166 == 6, _ik_error_pose158_M[6], np.where(_i166 == 7, _ik_error_pose158_M[7], _ik_error_pose158_M[8])))))))) + np.where(_i167 == 1, _ik_error_pose158_M[1], np.where(_i167 == 4, _ik_error_pose158_M[4], _ik_error_pose158_M[7])))*0.5, _ik_log3159_col[1])
-                _i168 = 6 + _ik_log3159_i
-                _i169 = 3*_ik_log3159_i + 2
-                _ik_log3159_col[2] = np.where(_alive160, (np.where(_i168 == 0, _ik_error_pose158_M[0], np.where(_i168 == 1, _ik_error_pose158_M[1], np.where(_i168 == 2, _ik_error_pose158_M[2], np.where(_i168 == 3, _ik_error_pose158_M[3], np.where(_i168 == 4, _ik_error_pose158_M[4], np.where(_i168 == 5, _ik_error_pose158_M[5], np.where(_i168 == 6, _ik_error_pose158_M[6], np.where(_i168 == 7, _ik_error_pose158_M[7], _ik_error_pose158_M[8])))))))) + np.where(_i169 == 2, _ik_error_pose158_M[2], np.where(_i169 == 5, _ik_error_pose158_M[5], _ik_error_pose158_M[8])))*0.5, _ik_log3159_col[2])
-                _v170 = np.where(_ik_log3159_i == 0, _ik_log3159_col[0], np.where(_ik_log3159_i == 1, _ik_log3159_col[1], _ik_log3159_col[2])) - _ik_log3159_c
-                _m171 = _alive160 & (_ik_log3159_i == 0)
-                _ik_log3159_col[0] = np.where(_m171, _v170, _ik_log3159_col[0])
-                _m172 = _alive160 & (_ik_log3159_i == 1)
-                _ik_log3159_col[1] = np.where(_m172, _v170, _ik_log3159_col[1])
-                _m173 = _alive160 & (_ik_log3159_i == 2)
-                _ik_log3159_col[2] = np.where(_m173, _v170, _ik_log3159_col[2])
-                _ik_log3159_norm = np.sqrt((_ik_log3159_col[0]*_ik_log3159_col[0] + _ik_log3159_col[1]*_ik_log3159_col[1]) + _ik_log3159_col[2]*_ik_log3159_col[2])
-                _ik_log3159_k = np.where(_alive160, np.where((_ik_log3159_col[0]*_ik_log3159_v0 + _ik_log3159_col[1]*_ik_log3159_v1) + _ik_log3159_col[2]*_ik_log3159_v2 < 0.0, -_ik_log3159_angle, _ik_log3159_angle)/_ik_log3159_norm, _ik_log3159_k)
-                e[0 + 3] = np.where(_alive160, _ik_log3159_col[0]*_ik_log3159_k, e[0 + 3])
-                e[1 + 3] = np.where(_alive160, _ik_log3159_col[1]*_ik_log3159_k, e[1 + 3])
-                e[2 + 3] = np.where(_alive160, _ik_log3159_col[2]*_ik_log3159_k, e[2 + 3])
-                _ik_error_pose158_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
-                _ik_error_pose158_rotation = np.sqrt(_ik_error_pose158_rotation_squares)
-                _c174 = ~np.isfinite(_ik_error_pose158_rotation_squares)
-                _m175 = _m151 & _c174
-                _ik_error_pose158_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
-                _ik_error_pose158_rotation = np.where(_m175, _ik_error_pose158_rotation_top*np.sqrt((e[3]/_ik_error_pose158_rotation_top)*(e[3]/_ik_error_pose158_rotation_top) + (e[4]/_ik_error_pose158_rotation_top)*(e[4]/_ik_error_pose158_rotation_top) + (e[5]/_ik_error_pose158_rotation_top)*(e[5]/_ik_error_pose158_rotation_top)), _ik_error_pose158_rotation)
-                norms[1] = np.where(_m151, _ik_error_pose158_rotation, norms[1])
-                _ik_error_pose158_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_pose158_position = np.sqrt(_ik_error_pose158_position_squares)
-                _c176 = ~np.isfinite(_ik_error_pose158_position_squares)
-                _m177 = _m151 & _c176
-                _ik_error_pose158_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_pose158_position = np.where(_m177, _ik_error_pose158_position_top*np.sqrt((e[0]/_ik_error_pose158_position_top)*(e[0]/_ik_error_pose158_position_top) + (e[1]/_ik_error_pose158_position_top)*(e[1]/_ik_error_pose158_position_top) + (e[2]/_ik_error_pose158_position_top)*(e[2]/_ik_error_pose158_position_top)), _ik_error_pose158_position)
-                norms[0] = np.where(_m151, _ik_error_pose158_position, norms[0])
-                _ik_error_pose158_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_pose158_whole = np.sqrt(_ik_error_pose158_whole_squares)
-                _c178 = ~np.isfinite(_ik_error_pose158_whole_squares)
-                _m179 = _m151 & _c178
-                _ik_error_pose158_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_pose158_whole = np.where(_m179, _ik_error_pose158_whole_top*np.sqrt((norms[0]/_ik_error_pose158_whole_top)*(norms[0]/_ik_error_pose158_whole_top) + (norms[1]/_ik_error_pose158_whole_top)*(norms[1]/_ik_error_pose158_whole_top)), _ik_error_pose158_whole)
-                norms[2] = np.where(_m151, _ik_error_pose158_whole, norms[2])
-                pe = np.where(_m151, norms[0], pe)
-                re = np.where(_m151, norms[1], re)
-                en = np.where(_m151, norms[2], en)
-                c = np.where(_m151, 0.01, c)
-                curved = np.where(_m151, 0, curved)
-                damped = np.where(_m151, 1, damped)
-                attempt = np.where(_m151, 0, attempt)
-                checkpoint = np.where(_m151, en, checkpoint)
-                window_start = np.where(_m151, en, window_start)
-                _c180 = en < best_en
-                _m181 = _m151 & _c180
-                best_en = np.where(_m181, en, best_en)
-                best_pe = np.where(_m181, pe, best_pe)
-                best_re = np.where(_m181, re, best_re)
-                best_stalled = np.where(_m181, 0, best_stalled)
-                best_here = np.where(_m181, 1, best_here)
+                _ik_log3168_col = [_fr(0.0)] * 3
+                _ik_log3168_i = np.where(_ik_error_pose167_M[0] >= _ik_error_pose167_M[4], np.where(_ik_error_pose167_M[0] >= _ik_error_pose167_M[8], _fi(0), 2), np.where(_ik_error_pose167_M[4] >= _ik_error_pose167_M[8], _fi(1), 2))
+                _i174 = 3*_ik_log3168_i
+                _ik_log3168_col[0] = np.where(_alive169, (np.where(_ik_log3168_i == 0, _ik_error_pose167_M[0], np.where(_ik_log3168_i == 1, _ik_error_pose167_M[1], np.where(_ik_log3168_i == 2, _ik_error_pose167_M[2], np.where(_ik_log3168_i == 3, _ik_error_pose167_M[3], np.where(_ik_log3168_i == 4, _ik_error_pose167_M[4], np.where(_ik_log3168_i == 5, _ik_error_pose167_M[5], np.where(_ik_log3168_i == 6, _ik_error_pose167_M[6], np.where(_ik_log3168_i == 7, _ik_error_pose167_M[7], _ik_error_pose167_M[8])))))))) + np.where(_i174 == 0, _ik_error_pose167_M[0], np.where(_i174 == 3, _ik_error_pose167_M[3], _ik_error_pose167_M[6])))*0.5, _ik_log3168_col[0])
+                _i175 = 3 + _ik_log3168_i
+                _i176 = 3*_ik_log3168_i + 1
+                _ik_log3168_col[1] = np.where(_alive169, (np.where(_i175 == 0, _ik_error_pose167_M[0], np.where(_i175 == 1, _ik_error_pose167_M[1], np.where(_i175 == 2, _ik_error_pose167_M[2], np.where(_i175 == 3, _ik_error_pose167_M[3], np.where(_i175 == 4, _ik_error_pose167_M[4], np.where(_i175 == 5, _ik_error_pose167_M[5], np.where(_i175 == 6, _ik_error_pose167_M[6], np.where(_i175 == 7, _ik_error_pose167_M[7], _ik_error_pose167_M[8])))))))) + np.where(_i176 == 1, _ik_error_pose167_M[1], np.where(_i176 == 4, _ik_error_pose167_M[4], _ik_error_pose167_M[7])))*0.5, _ik_log3168_col[1])
+                _i177 = 6 + _ik_log3168_i
+                _i178 = 3*_ik_log3168_i + 2
+                _ik_log3168_col[2] = np.where(_alive169, (np.where(_i177 == 0, _ik_error_pose167_M[0], np.where(_i177 == 1, _ik_error_pose167_M[1], np.where(_i177 == 2, _ik_error_pose167_M[2], np.where(_i177 == 3, _ik_error_pose167_M[3], np.where(_i177 == 4, _ik_error_pose167_M[4], np.where(_i177 == 5, _ik_error_pose167_M[5], np.where(_i177 == 6, _ik_error_pose167_M[6], np.where(_i177 == 7, _ik_error_pose167_M[7], _ik_error_pose167_M[8])))))))) + np.where(_i178 == 2, _ik_error_pose167_M[2], np.where(_i178 == 5, _ik_error_pose167_M[5], _ik_error_pose167_M[8])))*0.5, _ik_log3168_col[2])
+                _v179 = np.where(_ik_log3168_i == 0, _ik_log3168_col[0], np.where(_ik_log3168_i == 1, _ik_log3168_col[1], _ik_log3168_col[2])) - _ik_log3168_c
+                _m180 = _alive169 & (_ik_log3168_i == 0)
+                _ik_log3168_col[0] = np.where(_m180, _v179, _ik_log3168_col[0])
+                _m181 = _alive169 & (_ik_log3168_i == 1)
+                _ik_log3168_col[1] = np.where(_m181, _v179, _ik_log3168_col[1])
+                _m182 = _alive169 & (_ik_log3168_i == 2)
+                _ik_log3168_col[2] = np.where(_m182, _v179, _ik_log3168_col[2])
+                _ik_log3168_norm = np.sqrt((_ik_log3168_col[0]*_ik_log3168_col[0] + _ik_log3168_col[1]*_ik_log3168_col[1]) + _ik_log3168_col[2]*_ik_log3168_col[2])
+                _ik_log3168_k = np.where(_alive169, np.where((_ik_log3168_col[0]*_ik_log3168_v0 + _ik_log3168_col[1]*_ik_log3168_v1) + _ik_log3168_col[2]*_ik_log3168_v2 < 0.0, -_ik_log3168_angle, _ik_log3168_angle)/_ik_log3168_norm, _ik_log3168_k)
+                e[0 + 3] = np.where(_alive169, _ik_log3168_col[0]*_ik_log3168_k, e[0 + 3])
+                e[1 + 3] = np.where(_alive169, _ik_log3168_col[1]*_ik_log3168_k, e[1 + 3])
+                e[2 + 3] = np.where(_alive169, _ik_log3168_col[2]*_ik_log3168_k, e[2 + 3])
+                _ik_error_pose167_rotation_squares = e[3]*e[3] + e[4]*e[4] + e[5]*e[5]
+                _ik_error_pose167_rotation = np.sqrt(_ik_error_pose167_rotation_squares)
+                _c183 = ~np.isfinite(_ik_error_pose167_rotation_squares)
+                _m184 = _m160 & _c183
+                _ik_error_pose167_rotation_top = np.where(np.abs(e[5]) > np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])), np.abs(e[5]), np.where(np.abs(e[4]) > np.abs(e[3]), np.abs(e[4]), np.abs(e[3])))
+                _ik_error_pose167_rotation = np.where(_m184, _ik_error_pose167_rotation_top*np.sqrt((e[3]/_ik_error_pose167_rotation_top)*(e[3]/_ik_error_pose167_rotation_top) + (e[4]/_ik_error_pose167_rotation_top)*(e[4]/_ik_error_pose167_rotation_top) + (e[5]/_ik_error_pose167_rotation_top)*(e[5]/_ik_error_pose167_rotation_top)), _ik_error_pose167_rotation)
+                norms[1] = np.where(_m160, _ik_error_pose167_rotation, norms[1])
+                _ik_error_pose167_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_pose167_position = np.sqrt(_ik_error_pose167_position_squares)
+                _c185 = ~np.isfinite(_ik_error_pose167_position_squares)
+                _m186 = _m160 & _c185
+                _ik_error_pose167_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_pose167_position = np.where(_m186, _ik_error_pose167_position_top*np.sqrt((e[0]/_ik_error_pose167_position_top)*(e[0]/_ik_error_pose167_position_top) + (e[1]/_ik_error_pose167_position_top)*(e[1]/_ik_error_pose167_position_top) + (e[2]/_ik_error_pose167_position_top)*(e[2]/_ik_error_pose167_position_top)), _ik_error_pose167_position)
+                norms[0] = np.where(_m160, _ik_error_pose167_position, norms[0])
+                _ik_error_pose167_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_pose167_whole = np.sqrt(_ik_error_pose167_whole_squares)
+                _c187 = ~np.isfinite(_ik_error_pose167_whole_squares)
+                _m188 = _m160 & _c187
+                _ik_error_pose167_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_pose167_whole = np.where(_m188, _ik_error_pose167_whole_top*np.sqrt((norms[0]/_ik_error_pose167_whole_top)*(norms[0]/_ik_error_pose167_whole_top) + (norms[1]/_ik_error_pose167_whole_top)*(norms[1]/_ik_error_pose167_whole_top)), _ik_error_pose167_whole)
+                norms[2] = np.where(_m160, _ik_error_pose167_whole, norms[2])
+                pe = np.where(_m160, norms[0], pe)
+                re = np.where(_m160, norms[1], re)
+                en = np.where(_m160, norms[2], en)
+                c = np.where(_m160, 0.01, c)
+                curved = np.where(_m160, 0, curved)
+                damped = np.where(_m160, 1, damped)
+                attempt = np.where(_m160, 0, attempt)
+                checkpoint = np.where(_m160, en, checkpoint)
+                window_start = np.where(_m160, en, window_start)
+                _c189 = en < best_en
+                _m190 = _m160 & _c189
+                best_en = np.where(_m190, en, best_en)
+                best_pe = np.where(_m190, pe, best_pe)
+                best_re = np.where(_m190, re, best_re)
+                best_stalled = np.where(_m190, 0, best_stalled)
+                best_here = np.where(_m190, 1, best_here)
                 for k in range(0, 6):
-                    best_q[k] = np.where(_m181, q[k], best_q[k])
+                    best_q[k] = np.where(_m190, q[k], best_q[k])
     for k in range(0, 6):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])
@@ -7105,6 +7374,15 @@ def _ik_solve_position(q0, target, lambda_, tol, max_iter, q, error, iterations)
                 gg = gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = 1 if gg <= ((ff*en)*en)*0.0004 else 0
+        if stationary > 0:
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = en*1e-08 if en*1e-08 > (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0) else (mu2_floor*(en*1.0 if en < 1.0 else 1.0))*(en*1.0 if en < 1.0 else 1.0)
+            if any > 0:
+                _ik_ldl_position(Gf, mu2, F)
+                _ik_ldl_solve_position(Jf, F, e, dq)
+            else:
+                _ik_ldl_position(G, mu2, F)
+                _ik_ldl_solve_position(J, F, e, dq)
         # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
         damped = damped if (c*en)*3.0 > ff else 0
         if curved > 0 and en < 0.05:
@@ -7587,119 +7865,215 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
             gg = np.where(_m32, gg + (J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2])*(J[0 + k]*e[0] + J[6 + k]*e[1] + J[12 + k]*e[2]), gg)
         # stationary point of |e| over the free joints: |J_f^T e| <= 0.02 |J_f|_F |e|
         stationary = np.where(_run16, np.where(gg <= ((ff*en)*en)*0.0004, _fi(1), 0), stationary)
-        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
-        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
-        _c37 = (curved > 0) & (en < 0.05)
+        _c37 = stationary > 0
         _m38 = _run16 & _c37
         if bool(_m38.any()):
+            # at a stationary point the step is Gauss-Newton's (mu2 = 1e-08 |e|, or lambda's floor): along a weak direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a true stationary point it is rejected, and the attempt ends as before
+            mu2 = np.where(_m38, np.where(en*1e-08 > (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0), en*1e-08, (mu2_floor*np.where(en < 1.0, en*1.0, 1.0))*np.where(en < 1.0, en*1.0, 1.0)), mu2)
+            _c39 = any > 0
+            _m40 = _m38 & _c39
+            _m41 = _m38 & (~_c39)
+            _ik_ldl_position42_mu2 = mu2
+            _ik_ldl_position42_a00 = Gf[0] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_a10 = Gf[1]
+            _ik_ldl_position42_a11 = Gf[2] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_a20 = Gf[3]
+            _ik_ldl_position42_a21 = Gf[4]
+            _ik_ldl_position42_a22 = Gf[5] + _ik_ldl_position42_mu2
+            _ik_ldl_position42_cut = np.where(_ik_ldl_position42_a22 > np.where(_ik_ldl_position42_a11 > _ik_ldl_position42_a00, _ik_ldl_position42_a11, _ik_ldl_position42_a00), _ik_ldl_position42_a22, np.where(_ik_ldl_position42_a11 > _ik_ldl_position42_a00, _ik_ldl_position42_a11, _ik_ldl_position42_a00))*1e-13
+            _ik_ldl_position42_s0 = _ik_ldl_position42_a00
+            _ik_ldl_position42_kept0 = _ik_ldl_position42_s0 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i0 = np.where(_ik_ldl_position42_kept0, 1.0/_ik_ldl_position42_s0, 0.0)
+            F[0] = np.where(_m40, _ik_ldl_position42_i0, F[0])
+            _ik_ldl_position42_t10 = _ik_ldl_position42_a10
+            _ik_ldl_position42_l10 = _ik_ldl_position42_t10*_ik_ldl_position42_i0
+            F[1] = np.where(_m40, _ik_ldl_position42_l10, F[1])
+            _ik_ldl_position42_ld10 = np.where(_ik_ldl_position42_kept0, _ik_ldl_position42_t10, 0.0)
+            _ik_ldl_position42_t20 = _ik_ldl_position42_a20
+            _ik_ldl_position42_l20 = _ik_ldl_position42_t20*_ik_ldl_position42_i0
+            F[3] = np.where(_m40, _ik_ldl_position42_l20, F[3])
+            _ik_ldl_position42_ld20 = np.where(_ik_ldl_position42_kept0, _ik_ldl_position42_t20, 0.0)
+            _ik_ldl_position42_s1 = _ik_ldl_position42_a11 - _ik_ldl_position42_l10*_ik_ldl_position42_ld10
+            _ik_ldl_position42_kept1 = _ik_ldl_position42_s1 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i1 = np.where(_ik_ldl_position42_kept1, 1.0/_ik_ldl_position42_s1, 0.0)
+            F[2] = np.where(_m40, _ik_ldl_position42_i1, F[2])
+            _ik_ldl_position42_t21 = _ik_ldl_position42_a21 - _ik_ldl_position42_l20*_ik_ldl_position42_ld10
+            _ik_ldl_position42_l21 = _ik_ldl_position42_t21*_ik_ldl_position42_i1
+            F[4] = np.where(_m40, _ik_ldl_position42_l21, F[4])
+            _ik_ldl_position42_ld21 = np.where(_ik_ldl_position42_kept1, _ik_ldl_position42_t21, 0.0)
+            _ik_ldl_position42_s2 = (_ik_ldl_position42_a22 - _ik_ldl_position42_l20*_ik_ldl_position42_ld20) - _ik_ldl_position42_l21*_ik_ldl_position42_ld21
+            _ik_ldl_position42_kept2 = _ik_ldl_position42_s2 > _ik_ldl_position42_cut
+            _ik_ldl_position42_i2 = np.where(_ik_ldl_position42_kept2, 1.0/_ik_ldl_position42_s2, 0.0)
+            F[5] = np.where(_m40, _ik_ldl_position42_i2, F[5])
+            _ik_ldl_solve_position43_y0 = e[0]
+            _ik_ldl_solve_position43_y1 = e[1] - F[1]*_ik_ldl_solve_position43_y0
+            _ik_ldl_solve_position43_y2 = (e[2] - F[3]*_ik_ldl_solve_position43_y0) - F[4]*_ik_ldl_solve_position43_y1
+            _ik_ldl_solve_position43_z2 = _ik_ldl_solve_position43_y2*F[5]
+            _ik_ldl_solve_position43_z1 = _ik_ldl_solve_position43_y1*F[2] - F[4]*_ik_ldl_solve_position43_z2
+            _ik_ldl_solve_position43_z0 = (_ik_ldl_solve_position43_y0*F[0] - F[3]*_ik_ldl_solve_position43_z2) - F[1]*_ik_ldl_solve_position43_z1
+            dq[0] = np.where(_m40, Jf[0]*_ik_ldl_solve_position43_z0 + (Jf[6]*_ik_ldl_solve_position43_z1 + Jf[12]*_ik_ldl_solve_position43_z2), dq[0])
+            dq[1] = np.where(_m40, Jf[1]*_ik_ldl_solve_position43_z0 + (Jf[7]*_ik_ldl_solve_position43_z1 + Jf[13]*_ik_ldl_solve_position43_z2), dq[1])
+            dq[2] = np.where(_m40, Jf[2]*_ik_ldl_solve_position43_z0 + (Jf[8]*_ik_ldl_solve_position43_z1 + Jf[14]*_ik_ldl_solve_position43_z2), dq[2])
+            dq[3] = np.where(_m40, Jf[3]*_ik_ldl_solve_position43_z0 + (Jf[9]*_ik_ldl_solve_position43_z1 + Jf[15]*_ik_ldl_solve_position43_z2), dq[3])
+            dq[4] = np.where(_m40, Jf[4]*_ik_ldl_solve_position43_z0 + (Jf[10]*_ik_ldl_solve_position43_z1 + Jf[16]*_ik_ldl_solve_position43_z2), dq[4])
+            dq[5] = np.where(_m40, Jf[5]*_ik_ldl_solve_position43_z0 + (Jf[11]*_ik_ldl_solve_position43_z1 + Jf[17]*_ik_ldl_solve_position43_z2), dq[5])
+            _ik_ldl_position44_mu2 = mu2
+            _ik_ldl_position44_a00 = G[0] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_a10 = G[1]
+            _ik_ldl_position44_a11 = G[2] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_a20 = G[3]
+            _ik_ldl_position44_a21 = G[4]
+            _ik_ldl_position44_a22 = G[5] + _ik_ldl_position44_mu2
+            _ik_ldl_position44_cut = np.where(_ik_ldl_position44_a22 > np.where(_ik_ldl_position44_a11 > _ik_ldl_position44_a00, _ik_ldl_position44_a11, _ik_ldl_position44_a00), _ik_ldl_position44_a22, np.where(_ik_ldl_position44_a11 > _ik_ldl_position44_a00, _ik_ldl_position44_a11, _ik_ldl_position44_a00))*1e-13
+            _ik_ldl_position44_s0 = _ik_ldl_position44_a00
+            _ik_ldl_position44_kept0 = _ik_ldl_position44_s0 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i0 = np.where(_ik_ldl_position44_kept0, 1.0/_ik_ldl_position44_s0, 0.0)
+            F[0] = np.where(_m41, _ik_ldl_position44_i0, F[0])
+            _ik_ldl_position44_t10 = _ik_ldl_position44_a10
+            _ik_ldl_position44_l10 = _ik_ldl_position44_t10*_ik_ldl_position44_i0
+            F[1] = np.where(_m41, _ik_ldl_position44_l10, F[1])
+            _ik_ldl_position44_ld10 = np.where(_ik_ldl_position44_kept0, _ik_ldl_position44_t10, 0.0)
+            _ik_ldl_position44_t20 = _ik_ldl_position44_a20
+            _ik_ldl_position44_l20 = _ik_ldl_position44_t20*_ik_ldl_position44_i0
+            F[3] = np.where(_m41, _ik_ldl_position44_l20, F[3])
+            _ik_ldl_position44_ld20 = np.where(_ik_ldl_position44_kept0, _ik_ldl_position44_t20, 0.0)
+            _ik_ldl_position44_s1 = _ik_ldl_position44_a11 - _ik_ldl_position44_l10*_ik_ldl_position44_ld10
+            _ik_ldl_position44_kept1 = _ik_ldl_position44_s1 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i1 = np.where(_ik_ldl_position44_kept1, 1.0/_ik_ldl_position44_s1, 0.0)
+            F[2] = np.where(_m41, _ik_ldl_position44_i1, F[2])
+            _ik_ldl_position44_t21 = _ik_ldl_position44_a21 - _ik_ldl_position44_l20*_ik_ldl_position44_ld10
+            _ik_ldl_position44_l21 = _ik_ldl_position44_t21*_ik_ldl_position44_i1
+            F[4] = np.where(_m41, _ik_ldl_position44_l21, F[4])
+            _ik_ldl_position44_ld21 = np.where(_ik_ldl_position44_kept1, _ik_ldl_position44_t21, 0.0)
+            _ik_ldl_position44_s2 = (_ik_ldl_position44_a22 - _ik_ldl_position44_l20*_ik_ldl_position44_ld20) - _ik_ldl_position44_l21*_ik_ldl_position44_ld21
+            _ik_ldl_position44_kept2 = _ik_ldl_position44_s2 > _ik_ldl_position44_cut
+            _ik_ldl_position44_i2 = np.where(_ik_ldl_position44_kept2, 1.0/_ik_ldl_position44_s2, 0.0)
+            F[5] = np.where(_m41, _ik_ldl_position44_i2, F[5])
+            _ik_ldl_solve_position45_y0 = e[0]
+            _ik_ldl_solve_position45_y1 = e[1] - F[1]*_ik_ldl_solve_position45_y0
+            _ik_ldl_solve_position45_y2 = (e[2] - F[3]*_ik_ldl_solve_position45_y0) - F[4]*_ik_ldl_solve_position45_y1
+            _ik_ldl_solve_position45_z2 = _ik_ldl_solve_position45_y2*F[5]
+            _ik_ldl_solve_position45_z1 = _ik_ldl_solve_position45_y1*F[2] - F[4]*_ik_ldl_solve_position45_z2
+            _ik_ldl_solve_position45_z0 = (_ik_ldl_solve_position45_y0*F[0] - F[3]*_ik_ldl_solve_position45_z2) - F[1]*_ik_ldl_solve_position45_z1
+            dq[0] = np.where(_m41, J[0]*_ik_ldl_solve_position45_z0 + (J[6]*_ik_ldl_solve_position45_z1 + J[12]*_ik_ldl_solve_position45_z2), dq[0])
+            dq[1] = np.where(_m41, J[1]*_ik_ldl_solve_position45_z0 + (J[7]*_ik_ldl_solve_position45_z1 + J[13]*_ik_ldl_solve_position45_z2), dq[1])
+            dq[2] = np.where(_m41, J[2]*_ik_ldl_solve_position45_z0 + (J[8]*_ik_ldl_solve_position45_z1 + J[14]*_ik_ldl_solve_position45_z2), dq[2])
+            dq[3] = np.where(_m41, J[3]*_ik_ldl_solve_position45_z0 + (J[9]*_ik_ldl_solve_position45_z1 + J[15]*_ik_ldl_solve_position45_z2), dq[3])
+            dq[4] = np.where(_m41, J[4]*_ik_ldl_solve_position45_z0 + (J[10]*_ik_ldl_solve_position45_z1 + J[16]*_ik_ldl_solve_position45_z2), dq[4])
+            dq[5] = np.where(_m41, J[5]*_ik_ldl_solve_position45_z0 + (J[11]*_ik_ldl_solve_position45_z1 + J[17]*_ik_ldl_solve_position45_z2), dq[5])
+        # the window is damping-bound while every step's c |e| (the damping that halves with each accepted step; not lambda's floor) outweighs J J^T's mean eigenvalue
+        damped = np.where(_run16, np.where((c*en)*3.0 > ff, damped, 0), damped)
+        _c46 = (curved > 0) & (en < 0.05)
+        _m47 = _run16 & _c46
+        if bool(_m47.any()):
             for k in range(0, 6):
-                trial[k] = np.where(_m38, q[k] + dq[k]*0.1, trial[k])
+                trial[k] = np.where(_m47, q[k] + dq[k]*0.1, trial[k])
             _o = _pose_on_lanes(_c, trial[0:6])
-            _merge(_m38, _o[0], Tt, 0, _fr)
-            et[0] = np.where(_m38, target[0] - Tt[3], et[0])
-            et[1] = np.where(_m38, target[1] - Tt[7], et[1])
-            et[2] = np.where(_m38, target[2] - Tt[11], et[2])
-            norms[1] = np.where(_m38, 0.0, norms[1])
-            _ik_error_position39_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-            _ik_error_position39_position = np.sqrt(_ik_error_position39_position_squares)
-            _c40 = ~np.isfinite(_ik_error_position39_position_squares)
-            _m41 = _m38 & _c40
-            _ik_error_position39_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-            _ik_error_position39_position = np.where(_m41, _ik_error_position39_position_top*np.sqrt((et[0]/_ik_error_position39_position_top)*(et[0]/_ik_error_position39_position_top) + (et[1]/_ik_error_position39_position_top)*(et[1]/_ik_error_position39_position_top) + (et[2]/_ik_error_position39_position_top)*(et[2]/_ik_error_position39_position_top)), _ik_error_position39_position)
-            norms[0] = np.where(_m38, _ik_error_position39_position, norms[0])
-            _ik_error_position39_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-            _ik_error_position39_whole = np.sqrt(_ik_error_position39_whole_squares)
-            _c42 = ~np.isfinite(_ik_error_position39_whole_squares)
-            _m43 = _m38 & _c42
-            _ik_error_position39_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-            _ik_error_position39_whole = np.where(_m43, _ik_error_position39_whole_top*np.sqrt((norms[0]/_ik_error_position39_whole_top)*(norms[0]/_ik_error_position39_whole_top) + (norms[1]/_ik_error_position39_whole_top)*(norms[1]/_ik_error_position39_whole_top)), _ik_error_position39_whole)
-            norms[2] = np.where(_m38, _ik_error_position39_whole, norms[2])
+            _merge(_m47, _o[0], Tt, 0, _fr)
+            et[0] = np.where(_m47, target[0] - Tt[3], et[0])
+            et[1] = np.where(_m47, target[1] - Tt[7], et[1])
+            et[2] = np.where(_m47, target[2] - Tt[11], et[2])
+            norms[1] = np.where(_m47, 0.0, norms[1])
+            _ik_error_position48_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+            _ik_error_position48_position = np.sqrt(_ik_error_position48_position_squares)
+            _c49 = ~np.isfinite(_ik_error_position48_position_squares)
+            _m50 = _m47 & _c49
+            _ik_error_position48_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+            _ik_error_position48_position = np.where(_m50, _ik_error_position48_position_top*np.sqrt((et[0]/_ik_error_position48_position_top)*(et[0]/_ik_error_position48_position_top) + (et[1]/_ik_error_position48_position_top)*(et[1]/_ik_error_position48_position_top) + (et[2]/_ik_error_position48_position_top)*(et[2]/_ik_error_position48_position_top)), _ik_error_position48_position)
+            norms[0] = np.where(_m47, _ik_error_position48_position, norms[0])
+            _ik_error_position48_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+            _ik_error_position48_whole = np.sqrt(_ik_error_position48_whole_squares)
+            _c51 = ~np.isfinite(_ik_error_position48_whole_squares)
+            _m52 = _m47 & _c51
+            _ik_error_position48_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+            _ik_error_position48_whole = np.where(_m52, _ik_error_position48_whole_top*np.sqrt((norms[0]/_ik_error_position48_whole_top)*(norms[0]/_ik_error_position48_whole_top) + (norms[1]/_ik_error_position48_whole_top)*(norms[1]/_ik_error_position48_whole_top)), _ik_error_position48_whole)
+            norms[2] = np.where(_m47, _ik_error_position48_whole, norms[2])
             for r in range(0, 3):
-                r2[r] = np.where(_m38, ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997, r2[r])
-            _c44 = any > 0
-            _m45 = _m38 & _c44
-            _m46 = _m38 & (~_c44)
-            _ik_ldl_solve_position47_y0 = r2[0]
-            _ik_ldl_solve_position47_y1 = r2[1] - F[1]*_ik_ldl_solve_position47_y0
-            _ik_ldl_solve_position47_y2 = (r2[2] - F[3]*_ik_ldl_solve_position47_y0) - F[4]*_ik_ldl_solve_position47_y1
-            _ik_ldl_solve_position47_z2 = _ik_ldl_solve_position47_y2*F[5]
-            _ik_ldl_solve_position47_z1 = _ik_ldl_solve_position47_y1*F[2] - F[4]*_ik_ldl_solve_position47_z2
-            _ik_ldl_solve_position47_z0 = (_ik_ldl_solve_position47_y0*F[0] - F[3]*_ik_ldl_solve_position47_z2) - F[1]*_ik_ldl_solve_position47_z1
-            acc[0] = np.where(_m45, Jf[0]*_ik_ldl_solve_position47_z0 + (Jf[6]*_ik_ldl_solve_position47_z1 + Jf[12]*_ik_ldl_solve_position47_z2), acc[0])
-            acc[1] = np.where(_m45, Jf[1]*_ik_ldl_solve_position47_z0 + (Jf[7]*_ik_ldl_solve_position47_z1 + Jf[13]*_ik_ldl_solve_position47_z2), acc[1])
-            acc[2] = np.where(_m45, Jf[2]*_ik_ldl_solve_position47_z0 + (Jf[8]*_ik_ldl_solve_position47_z1 + Jf[14]*_ik_ldl_solve_position47_z2), acc[2])
-            acc[3] = np.where(_m45, Jf[3]*_ik_ldl_solve_position47_z0 + (Jf[9]*_ik_ldl_solve_position47_z1 + Jf[15]*_ik_ldl_solve_position47_z2), acc[3])
-            acc[4] = np.where(_m45, Jf[4]*_ik_ldl_solve_position47_z0 + (Jf[10]*_ik_ldl_solve_position47_z1 + Jf[16]*_ik_ldl_solve_position47_z2), acc[4])
-            acc[5] = np.where(_m45, Jf[5]*_ik_ldl_solve_position47_z0 + (Jf[11]*_ik_ldl_solve_position47_z1 + Jf[17]*_ik_ldl_solve_position47_z2), acc[5])
-            _ik_ldl_solve_position48_y0 = r2[0]
-            _ik_ldl_solve_position48_y1 = r2[1] - F[1]*_ik_ldl_solve_position48_y0
-            _ik_ldl_solve_position48_y2 = (r2[2] - F[3]*_ik_ldl_solve_position48_y0) - F[4]*_ik_ldl_solve_position48_y1
-            _ik_ldl_solve_position48_z2 = _ik_ldl_solve_position48_y2*F[5]
-            _ik_ldl_solve_position48_z1 = _ik_ldl_solve_position48_y1*F[2] - F[4]*_ik_ldl_solve_position48_z2
-            _ik_ldl_solve_position48_z0 = (_ik_ldl_solve_position48_y0*F[0] - F[3]*_ik_ldl_solve_position48_z2) - F[1]*_ik_ldl_solve_position48_z1
-            acc[0] = np.where(_m46, J[0]*_ik_ldl_solve_position48_z0 + (J[6]*_ik_ldl_solve_position48_z1 + J[12]*_ik_ldl_solve_position48_z2), acc[0])
-            acc[1] = np.where(_m46, J[1]*_ik_ldl_solve_position48_z0 + (J[7]*_ik_ldl_solve_position48_z1 + J[13]*_ik_ldl_solve_position48_z2), acc[1])
-            acc[2] = np.where(_m46, J[2]*_ik_ldl_solve_position48_z0 + (J[8]*_ik_ldl_solve_position48_z1 + J[14]*_ik_ldl_solve_position48_z2), acc[2])
-            acc[3] = np.where(_m46, J[3]*_ik_ldl_solve_position48_z0 + (J[9]*_ik_ldl_solve_position48_z1 + J[15]*_ik_ldl_solve_position48_z2), acc[3])
-            acc[4] = np.where(_m46, J[4]*_ik_ldl_solve_position48_z0 + (J[10]*_ik_ldl_solve_position48_z1 + J[16]*_ik_ldl_solve_position48_z2), acc[4])
-            acc[5] = np.where(_m46, J[5]*_ik_ldl_solve_position48_z0 + (J[11]*_ik_ldl_solve_position48_z1 + J[17]*_ik_ldl_solve_position48_z2), acc[5])
-            aa = np.where(_m38, 0.0, aa)
-            vv = np.where(_m38, 0.0, vv)
+                r2[r] = np.where(_m47, ((et[r] - e[r]) + (J[r*6 + 0]*dq[0] + J[r*6 + 1]*dq[1] + J[r*6 + 2]*dq[2] + J[r*6 + 3]*dq[3] + J[r*6 + 4]*dq[4] + J[r*6 + 5]*dq[5])*0.1)*199.99999999999997, r2[r])
+            _c53 = any > 0
+            _m54 = _m47 & _c53
+            _m55 = _m47 & (~_c53)
+            _ik_ldl_solve_position56_y0 = r2[0]
+            _ik_ldl_solve_position56_y1 = r2[1] - F[1]*_ik_ldl_solve_position56_y0
+            _ik_ldl_solve_position56_y2 = (r2[2] - F[3]*_ik_ldl_solve_position56_y0) - F[4]*_ik_ldl_solve_position56_y1
+            _ik_ldl_solve_position56_z2 = _ik_ldl_solve_position56_y2*F[5]
+            _ik_ldl_solve_position56_z1 = _ik_ldl_solve_position56_y1*F[2] - F[4]*_ik_ldl_solve_position56_z2
+            _ik_ldl_solve_position56_z0 = (_ik_ldl_solve_position56_y0*F[0] - F[3]*_ik_ldl_solve_position56_z2) - F[1]*_ik_ldl_solve_position56_z1
+            acc[0] = np.where(_m54, Jf[0]*_ik_ldl_solve_position56_z0 + (Jf[6]*_ik_ldl_solve_position56_z1 + Jf[12]*_ik_ldl_solve_position56_z2), acc[0])
+            acc[1] = np.where(_m54, Jf[1]*_ik_ldl_solve_position56_z0 + (Jf[7]*_ik_ldl_solve_position56_z1 + Jf[13]*_ik_ldl_solve_position56_z2), acc[1])
+            acc[2] = np.where(_m54, Jf[2]*_ik_ldl_solve_position56_z0 + (Jf[8]*_ik_ldl_solve_position56_z1 + Jf[14]*_ik_ldl_solve_position56_z2), acc[2])
+            acc[3] = np.where(_m54, Jf[3]*_ik_ldl_solve_position56_z0 + (Jf[9]*_ik_ldl_solve_position56_z1 + Jf[15]*_ik_ldl_solve_position56_z2), acc[3])
+            acc[4] = np.where(_m54, Jf[4]*_ik_ldl_solve_position56_z0 + (Jf[10]*_ik_ldl_solve_position56_z1 + Jf[16]*_ik_ldl_solve_position56_z2), acc[4])
+            acc[5] = np.where(_m54, Jf[5]*_ik_ldl_solve_position56_z0 + (Jf[11]*_ik_ldl_solve_position56_z1 + Jf[17]*_ik_ldl_solve_position56_z2), acc[5])
+            _ik_ldl_solve_position57_y0 = r2[0]
+            _ik_ldl_solve_position57_y1 = r2[1] - F[1]*_ik_ldl_solve_position57_y0
+            _ik_ldl_solve_position57_y2 = (r2[2] - F[3]*_ik_ldl_solve_position57_y0) - F[4]*_ik_ldl_solve_position57_y1
+            _ik_ldl_solve_position57_z2 = _ik_ldl_solve_position57_y2*F[5]
+            _ik_ldl_solve_position57_z1 = _ik_ldl_solve_position57_y1*F[2] - F[4]*_ik_ldl_solve_position57_z2
+            _ik_ldl_solve_position57_z0 = (_ik_ldl_solve_position57_y0*F[0] - F[3]*_ik_ldl_solve_position57_z2) - F[1]*_ik_ldl_solve_position57_z1
+            acc[0] = np.where(_m55, J[0]*_ik_ldl_solve_position57_z0 + (J[6]*_ik_ldl_solve_position57_z1 + J[12]*_ik_ldl_solve_position57_z2), acc[0])
+            acc[1] = np.where(_m55, J[1]*_ik_ldl_solve_position57_z0 + (J[7]*_ik_ldl_solve_position57_z1 + J[13]*_ik_ldl_solve_position57_z2), acc[1])
+            acc[2] = np.where(_m55, J[2]*_ik_ldl_solve_position57_z0 + (J[8]*_ik_ldl_solve_position57_z1 + J[14]*_ik_ldl_solve_position57_z2), acc[2])
+            acc[3] = np.where(_m55, J[3]*_ik_ldl_solve_position57_z0 + (J[9]*_ik_ldl_solve_position57_z1 + J[15]*_ik_ldl_solve_position57_z2), acc[3])
+            acc[4] = np.where(_m55, J[4]*_ik_ldl_solve_position57_z0 + (J[10]*_ik_ldl_solve_position57_z1 + J[16]*_ik_ldl_solve_position57_z2), acc[4])
+            acc[5] = np.where(_m55, J[5]*_ik_ldl_solve_position57_z0 + (J[11]*_ik_ldl_solve_position57_z1 + J[17]*_ik_ldl_solve_position57_z2), acc[5])
+            aa = np.where(_m47, 0.0, aa)
+            vv = np.where(_m47, 0.0, vv)
             for k in range(0, 6):
-                aa = np.where(_m38, aa + acc[k]*acc[k], aa)
-                vv = np.where(_m38, vv + dq[k]*dq[k], vv)
-            _c49 = aa <= vv*0.5625
-            _m50 = _m38 & _c49
+                aa = np.where(_m47, aa + acc[k]*acc[k], aa)
+                vv = np.where(_m47, vv + dq[k]*dq[k], vv)
+            _c58 = aa <= vv*0.5625
+            _m59 = _m47 & _c58
             for k in range(0, 6):
-                dq[k] = np.where(_m50, dq[k] + acc[k]*0.5, dq[k])
+                dq[k] = np.where(_m59, dq[k] + acc[k]*0.5, dq[k])
         big = np.where(_run16, 0.0, big)
         for k in range(0, 6):
             big = np.where(_run16, np.where(np.abs(dq[k]) > big, np.abs(dq[k]), big), big)
         scale = np.where(_run16, np.where(big > 1.0, 1.0/big, 1.0), scale)
         for k in range(0, 6):
             trial[k] = np.where(_run16, q[k] + dq[k]*scale, trial[k])
-        _c51 = trial[0] > hi[0]
-        _m52 = _run16 & _c51
-        _m53 = _run16 & (~_c51)
-        trial[0] = np.where(_m52, trial[0] - 6.283185307179586, trial[0])
-        _c54 = trial[0] < lo[0]
-        _m55 = _m53 & _c54
-        trial[0] = np.where(_m55, trial[0] + 6.283185307179586, trial[0])
-        _c56 = trial[1] > hi[1]
-        _m57 = _run16 & _c56
-        _m58 = _run16 & (~_c56)
-        trial[1] = np.where(_m57, trial[1] - 6.283185307179586, trial[1])
-        _c59 = trial[1] < lo[1]
-        _m60 = _m58 & _c59
-        trial[1] = np.where(_m60, trial[1] + 6.283185307179586, trial[1])
-        _c61 = trial[2] > hi[2]
-        _m62 = _run16 & _c61
-        _m63 = _run16 & (~_c61)
-        trial[2] = np.where(_m62, trial[2] - 6.283185307179586, trial[2])
-        _c64 = trial[2] < lo[2]
-        _m65 = _m63 & _c64
-        trial[2] = np.where(_m65, trial[2] + 6.283185307179586, trial[2])
-        _c66 = trial[3] > hi[3]
-        _m67 = _run16 & _c66
-        _m68 = _run16 & (~_c66)
-        trial[3] = np.where(_m67, trial[3] - 6.283185307179586, trial[3])
-        _c69 = trial[3] < lo[3]
-        _m70 = _m68 & _c69
-        trial[3] = np.where(_m70, trial[3] + 6.283185307179586, trial[3])
-        _c71 = trial[4] > hi[4]
-        _m72 = _run16 & _c71
-        _m73 = _run16 & (~_c71)
-        trial[4] = np.where(_m72, trial[4] - 6.283185307179586, trial[4])
-        _c74 = trial[4] < lo[4]
-        _m75 = _m73 & _c74
-        trial[4] = np.where(_m75, trial[4] + 6.283185307179586, trial[4])
-        _c76 = trial[5] > hi[5]
-        _m77 = _run16 & _c76
-        _m78 = _run16 & (~_c76)
-        trial[5] = np.where(_m77, trial[5] - 6.283185307179586, trial[5])
-        _c79 = trial[5] < lo[5]
-        _m80 = _m78 & _c79
-        trial[5] = np.where(_m80, trial[5] + 6.283185307179586, trial[5])
+        _c60 = trial[0] > hi[0]
+        _m61 = _run16 & _c60
+        _m62 = _run16 & (~_c60)
+        trial[0] = np.where(_m61, trial[0] - 6.283185307179586, trial[0])
+        _c63 = trial[0] < lo[0]
+        _m64 = _m62 & _c63
+        trial[0] = np.where(_m64, trial[0] + 6.283185307179586, trial[0])
+        _c65 = trial[1] > hi[1]
+        _m66 = _run16 & _c65
+        _m67 = _run16 & (~_c65)
+        trial[1] = np.where(_m66, trial[1] - 6.283185307179586, trial[1])
+        _c68 = trial[1] < lo[1]
+        _m69 = _m67 & _c68
+        trial[1] = np.where(_m69, trial[1] + 6.283185307179586, trial[1])
+        _c70 = trial[2] > hi[2]
+        _m71 = _run16 & _c70
+        _m72 = _run16 & (~_c70)
+        trial[2] = np.where(_m71, trial[2] - 6.283185307179586, trial[2])
+        _c73 = trial[2] < lo[2]
+        _m74 = _m72 & _c73
+        trial[2] = np.where(_m74, trial[2] + 6.283185307179586, trial[2])
+        _c75 = trial[3] > hi[3]
+        _m76 = _run16 & _c75
+        _m77 = _run16 & (~_c75)
+        trial[3] = np.where(_m76, trial[3] - 6.283185307179586, trial[3])
+        _c78 = trial[3] < lo[3]
+        _m79 = _m77 & _c78
+        trial[3] = np.where(_m79, trial[3] + 6.283185307179586, trial[3])
+        _c80 = trial[4] > hi[4]
+        _m81 = _run16 & _c80
+        _m82 = _run16 & (~_c80)
+        trial[4] = np.where(_m81, trial[4] - 6.283185307179586, trial[4])
+        _c83 = trial[4] < lo[4]
+        _m84 = _m82 & _c83
+        trial[4] = np.where(_m84, trial[4] + 6.283185307179586, trial[4])
+        _c85 = trial[5] > hi[5]
+        _m86 = _run16 & _c85
+        _m87 = _run16 & (~_c85)
+        trial[5] = np.where(_m86, trial[5] - 6.283185307179586, trial[5])
+        _c88 = trial[5] < lo[5]
+        _m89 = _m87 & _c88
+        trial[5] = np.where(_m89, trial[5] + 6.283185307179586, trial[5])
         for k in range(0, 6):
             trial[k] = np.where(_run16, np.where(trial[k] < lo[k], lo[k], np.where(trial[k] > hi[k], hi[k], trial[k])), trial[k])
         _o = _ik_terms_on_lanes(_c, trial[0:6])
@@ -7709,138 +8083,138 @@ def _ik_solve_position_lanes(_c, q0, target, lambda_, tol, max_iter):
         et[1] = np.where(_run16, target[1] - Tt[7], et[1])
         et[2] = np.where(_run16, target[2] - Tt[11], et[2])
         norms[1] = np.where(_run16, 0.0, norms[1])
-        _ik_error_position81_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
-        _ik_error_position81_position = np.sqrt(_ik_error_position81_position_squares)
-        _c82 = ~np.isfinite(_ik_error_position81_position_squares)
-        _m83 = _run16 & _c82
-        _ik_error_position81_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
-        _ik_error_position81_position = np.where(_m83, _ik_error_position81_position_top*np.sqrt((et[0]/_ik_error_position81_position_top)*(et[0]/_ik_error_position81_position_top) + (et[1]/_ik_error_position81_position_top)*(et[1]/_ik_error_position81_position_top) + (et[2]/_ik_error_position81_position_top)*(et[2]/_ik_error_position81_position_top)), _ik_error_position81_position)
-        norms[0] = np.where(_run16, _ik_error_position81_position, norms[0])
-        _ik_error_position81_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-        _ik_error_position81_whole = np.sqrt(_ik_error_position81_whole_squares)
-        _c84 = ~np.isfinite(_ik_error_position81_whole_squares)
-        _m85 = _run16 & _c84
-        _ik_error_position81_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-        _ik_error_position81_whole = np.where(_m85, _ik_error_position81_whole_top*np.sqrt((norms[0]/_ik_error_position81_whole_top)*(norms[0]/_ik_error_position81_whole_top) + (norms[1]/_ik_error_position81_whole_top)*(norms[1]/_ik_error_position81_whole_top)), _ik_error_position81_whole)
-        norms[2] = np.where(_run16, _ik_error_position81_whole, norms[2])
+        _ik_error_position90_position_squares = et[0]*et[0] + et[1]*et[1] + et[2]*et[2]
+        _ik_error_position90_position = np.sqrt(_ik_error_position90_position_squares)
+        _c91 = ~np.isfinite(_ik_error_position90_position_squares)
+        _m92 = _run16 & _c91
+        _ik_error_position90_position_top = np.where(np.abs(et[2]) > np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])), np.abs(et[2]), np.where(np.abs(et[1]) > np.abs(et[0]), np.abs(et[1]), np.abs(et[0])))
+        _ik_error_position90_position = np.where(_m92, _ik_error_position90_position_top*np.sqrt((et[0]/_ik_error_position90_position_top)*(et[0]/_ik_error_position90_position_top) + (et[1]/_ik_error_position90_position_top)*(et[1]/_ik_error_position90_position_top) + (et[2]/_ik_error_position90_position_top)*(et[2]/_ik_error_position90_position_top)), _ik_error_position90_position)
+        norms[0] = np.where(_run16, _ik_error_position90_position, norms[0])
+        _ik_error_position90_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+        _ik_error_position90_whole = np.sqrt(_ik_error_position90_whole_squares)
+        _c93 = ~np.isfinite(_ik_error_position90_whole_squares)
+        _m94 = _run16 & _c93
+        _ik_error_position90_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+        _ik_error_position90_whole = np.where(_m94, _ik_error_position90_whole_top*np.sqrt((norms[0]/_ik_error_position90_whole_top)*(norms[0]/_ik_error_position90_whole_top) + (norms[1]/_ik_error_position90_whole_top)*(norms[1]/_ik_error_position90_whole_top)), _ik_error_position90_whole)
+        norms[2] = np.where(_run16, _ik_error_position90_whole, norms[2])
         pet = np.where(_run16, norms[0], pet)
         ret = np.where(_run16, norms[1], ret)
         ent = np.where(_run16, norms[2], ent)
         it = np.where(_run16, it + 1, it)
         attempt = np.where(_run16, attempt + 1, attempt)
         curved = np.where(_run16, np.where(ent > en*0.5, _fi(1), 0), curved)
-        _c86 = ent < en
-        _m87 = _run16 & _c86
-        _m88 = _run16 & (~_c86)
+        _c95 = ent < en
+        _m96 = _run16 & _c95
+        _m97 = _run16 & (~_c95)
         # a step that cut |e| below 0.6 of its start was not taken at a stationary point (the error lay along a weak direction of J, as near a stretched elbow)
-        stationary = np.where(_m87, np.where(ent <= en*0.6, 0, stationary), stationary)
-        stalled = np.where(_m87, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
+        stationary = np.where(_m96, np.where(ent <= en*0.6, 0, stationary), stationary)
+        stalled = np.where(_m96, np.where(en - ent <= en*1e-09, _fi(1), 0), stalled)
         for k in range(0, 6):
-            q[k] = np.where(_m87, trial[k], q[k])
+            q[k] = np.where(_m96, trial[k], q[k])
         for k in range(0, 16):
-            Tm[k] = np.where(_m87, Tt[k], Tm[k])
+            Tm[k] = np.where(_m96, Tt[k], Tm[k])
         for k in range(0, 36):
-            J[k] = np.where(_m87, Jt[k], J[k])
+            J[k] = np.where(_m96, Jt[k], J[k])
         for k in range(0, 3):
-            e[k] = np.where(_m87, et[k], e[k])
-        gram_ready = np.where(_m87, 0, gram_ready)
-        pe = np.where(_m87, pet, pe)
-        re = np.where(_m87, ret, re)
-        en = np.where(_m87, ent, en)
-        c = np.where(_m87, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
-        c = np.where(_m88, c*4.0, c)
-        stalled = np.where(_m88, np.where(c > 100000000.0, _fi(1), 0), stalled)
-        damped = np.where(_m88, 0, damped)
-        _c89 = (en < best_en) | ((stalled > 0) & (en == best_en))
-        _m90 = _run16 & _c89
-        best_en = np.where(_m90, en, best_en)
-        best_pe = np.where(_m90, pe, best_pe)
-        best_stalled = np.where(_m90, stalled, best_stalled)
-        best_here = np.where(_m90, 1, best_here)
+            e[k] = np.where(_m96, et[k], e[k])
+        gram_ready = np.where(_m96, 0, gram_ready)
+        pe = np.where(_m96, pet, pe)
+        re = np.where(_m96, ret, re)
+        en = np.where(_m96, ent, en)
+        c = np.where(_m96, np.where(c*0.5 > 1e-08, c*0.5, 1e-08), c)
+        c = np.where(_m97, c*4.0, c)
+        stalled = np.where(_m97, np.where(c > 100000000.0, _fi(1), 0), stalled)
+        damped = np.where(_m97, 0, damped)
+        _c98 = (en < best_en) | ((stalled > 0) & (en == best_en))
+        _m99 = _run16 & _c98
+        best_en = np.where(_m99, en, best_en)
+        best_pe = np.where(_m99, pe, best_pe)
+        best_stalled = np.where(_m99, stalled, best_stalled)
+        best_here = np.where(_m99, 1, best_here)
         for k in range(0, 6):
-            best_q[k] = np.where(_m90, q[k], best_q[k])
-        _c91 = ~((pe <= tol) & (re <= tol))
-        _m92 = _run16 & _c91
-        if bool(_m92.any()):
-            slow = np.where(_m92, stationary, slow)
-            _c93 = attempt % 3 == 0
-            _m94 = _m92 & _c93
+            best_q[k] = np.where(_m99, q[k], best_q[k])
+        _c100 = ~((pe <= tol) & (re <= tol))
+        _m101 = _run16 & _c100
+        if bool(_m101.any()):
+            slow = np.where(_m101, stationary, slow)
+            _c102 = attempt % 3 == 0
+            _m103 = _m101 & _c102
             # a window of accepted, damping-bound steps is not slow: each step halves the damping
-            _c95 = (en > checkpoint*0.6) & (damped == 0)
-            _m96 = _m94 & _c95
-            slow = np.where(_m96, 1, slow)
-            damped = np.where(_m94, 1, damped)
-            window_start = np.where(_m94, checkpoint, window_start)
-            checkpoint = np.where(_m94, en, checkpoint)
-            _c97 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
-            _m98 = _m92 & _c97
-            if bool(_m98.any()):
-                _c99 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
-                _m100 = _m98 & _c99
+            _c104 = (en > checkpoint*0.6) & (damped == 0)
+            _m105 = _m103 & _c104
+            slow = np.where(_m105, 1, slow)
+            damped = np.where(_m103, 1, damped)
+            window_start = np.where(_m103, checkpoint, window_start)
+            checkpoint = np.where(_m103, en, checkpoint)
+            _c106 = ((stalled > 0) | (slow > 0) | (attempt >= 25)) & (it < max_iter)
+            _m107 = _m101 & _c106
+            if bool(_m107.any()):
+                _c108 = ((stalled > 0) | (slow > 0)) & (best_here > 0)
+                _m109 = _m107 & _c108
                 # this attempt's best is (near) a stationary point
-                best_stalled = np.where(_m100, 1, best_stalled)
-                best_here = np.where(_m98, 0, best_here)
-                nearest = np.where(_m98, 0.0, nearest)
+                best_stalled = np.where(_m109, 1, best_stalled)
+                best_here = np.where(_m107, 0, best_here)
+                nearest = np.where(_m107, 0.0, nearest)
                 for m in range(0, 8):
                     for k in range(0, 6):
-                        _alive102 = _m98
-                        _ik_uniform101_s = state[0]
-                        _ik_uniform101_s = _u64_where(_m98, _u64_xor(_ik_uniform101_s, _u64_shr(_ik_uniform101_s, 12)), _ik_uniform101_s)
-                        _ik_uniform101_s = _u64_where(_m98, _u64_xor(_ik_uniform101_s, _u64_shl(_ik_uniform101_s, 25)), _ik_uniform101_s)
-                        _ik_uniform101_s = _u64_where(_m98, _u64_xor(_ik_uniform101_s, _u64_shr(_ik_uniform101_s, 27)), _ik_uniform101_s)
-                        state[0] = _u64_where(_m98, _ik_uniform101_s, state[0])
-                        u = np.where(_m98, _u64_real(_u64_shr(_u64_mul(_ik_uniform101_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
-                        _alive102 = _alive102 & (~_m98)
-                        trial[k] = np.where(_m98, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
+                        _alive111 = _m107
+                        _ik_uniform110_s = state[0]
+                        _ik_uniform110_s = _u64_where(_m107, _u64_xor(_ik_uniform110_s, _u64_shr(_ik_uniform110_s, 12)), _ik_uniform110_s)
+                        _ik_uniform110_s = _u64_where(_m107, _u64_xor(_ik_uniform110_s, _u64_shl(_ik_uniform110_s, 25)), _ik_uniform110_s)
+                        _ik_uniform110_s = _u64_where(_m107, _u64_xor(_ik_uniform110_s, _u64_shr(_ik_uniform110_s, 27)), _ik_uniform110_s)
+                        state[0] = _u64_where(_m107, _ik_uniform110_s, state[0])
+                        u = np.where(_m107, _u64_real(_u64_shr(_u64_mul(_ik_uniform110_s, (0x2545f491, 0x4f6cdd1d)), 11), _c.dtype)*1.1102230246251565e-16, u)
+                        _alive111 = _alive111 & (~_m107)
+                        trial[k] = np.where(_m107, np.where(restarts % 2 == 0, _fr(near_lo[k]), draw_lo[k]) + np.where(restarts % 2 == 0, _fr(near_span[k]), draw_span[k])*u, trial[k])
                     _o = _ik_terms_on_lanes(_c, trial[0:6])
-                    _merge(_m98, _o[0], Tt, 0, _fr)
-                    _merge(_m98, _o[1], Jt, 0, _fr)
-                    d = np.where(_m98, np.sqrt(((target[0] - Tt[3])*(target[0] - Tt[3]) + (target[1] - Tt[7])*(target[1] - Tt[7])) + (target[2] - Tt[11])*(target[2] - Tt[11])), d)
-                    _c103 = (d < nearest) | (m == 0)
-                    _m104 = _m98 & _c103
-                    nearest = np.where(_m104, d, nearest)
+                    _merge(_m107, _o[0], Tt, 0, _fr)
+                    _merge(_m107, _o[1], Jt, 0, _fr)
+                    d = np.where(_m107, np.sqrt(((target[0] - Tt[3])*(target[0] - Tt[3]) + (target[1] - Tt[7])*(target[1] - Tt[7])) + (target[2] - Tt[11])*(target[2] - Tt[11])), d)
+                    _c112 = (d < nearest) | (m == 0)
+                    _m113 = _m107 & _c112
+                    nearest = np.where(_m113, d, nearest)
                     for k in range(0, 6):
-                        q[k] = np.where(_m104, trial[k], q[k])
-                restarts = np.where(_m98, restarts + 1, restarts)
-                gram_ready = np.where(_m98, 0, gram_ready)
+                        q[k] = np.where(_m113, trial[k], q[k])
+                restarts = np.where(_m107, restarts + 1, restarts)
+                gram_ready = np.where(_m107, 0, gram_ready)
                 _o = _ik_terms_on_lanes(_c, q[0:6])
-                _merge(_m98, _o[0], Tm, 0, _fr)
-                _merge(_m98, _o[1], J, 0, _fr)
-                e[0] = np.where(_m98, target[0] - Tm[3], e[0])
-                e[1] = np.where(_m98, target[1] - Tm[7], e[1])
-                e[2] = np.where(_m98, target[2] - Tm[11], e[2])
-                norms[1] = np.where(_m98, 0.0, norms[1])
-                _ik_error_position105_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
-                _ik_error_position105_position = np.sqrt(_ik_error_position105_position_squares)
-                _c106 = ~np.isfinite(_ik_error_position105_position_squares)
-                _m107 = _m98 & _c106
-                _ik_error_position105_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
-                _ik_error_position105_position = np.where(_m107, _ik_error_position105_position_top*np.sqrt((e[0]/_ik_error_position105_position_top)*(e[0]/_ik_error_position105_position_top) + (e[1]/_ik_error_position105_position_top)*(e[1]/_ik_error_position105_position_top) + (e[2]/_ik_error_position105_position_top)*(e[2]/_ik_error_position105_position_top)), _ik_error_position105_position)
-                norms[0] = np.where(_m98, _ik_error_position105_position, norms[0])
-                _ik_error_position105_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
-                _ik_error_position105_whole = np.sqrt(_ik_error_position105_whole_squares)
-                _c108 = ~np.isfinite(_ik_error_position105_whole_squares)
-                _m109 = _m98 & _c108
-                _ik_error_position105_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
-                _ik_error_position105_whole = np.where(_m109, _ik_error_position105_whole_top*np.sqrt((norms[0]/_ik_error_position105_whole_top)*(norms[0]/_ik_error_position105_whole_top) + (norms[1]/_ik_error_position105_whole_top)*(norms[1]/_ik_error_position105_whole_top)), _ik_error_position105_whole)
-                norms[2] = np.where(_m98, _ik_error_position105_whole, norms[2])
-                pe = np.where(_m98, norms[0], pe)
-                re = np.where(_m98, norms[1], re)
-                en = np.where(_m98, norms[2], en)
-                c = np.where(_m98, 0.01, c)
-                curved = np.where(_m98, 0, curved)
-                damped = np.where(_m98, 1, damped)
-                attempt = np.where(_m98, 0, attempt)
-                checkpoint = np.where(_m98, en, checkpoint)
-                window_start = np.where(_m98, en, window_start)
-                _c110 = en < best_en
-                _m111 = _m98 & _c110
-                best_en = np.where(_m111, en, best_en)
-                best_pe = np.where(_m111, pe, best_pe)
-                best_stalled = np.where(_m111, 0, best_stalled)
-                best_here = np.where(_m111, 1, best_here)
+                _merge(_m107, _o[0], Tm, 0, _fr)
+                _merge(_m107, _o[1], J, 0, _fr)
+                e[0] = np.where(_m107, target[0] - Tm[3], e[0])
+                e[1] = np.where(_m107, target[1] - Tm[7], e[1])
+                e[2] = np.where(_m107, target[2] - Tm[11], e[2])
+                norms[1] = np.where(_m107, 0.0, norms[1])
+                _ik_error_position114_position_squares = e[0]*e[0] + e[1]*e[1] + e[2]*e[2]
+                _ik_error_position114_position = np.sqrt(_ik_error_position114_position_squares)
+                _c115 = ~np.isfinite(_ik_error_position114_position_squares)
+                _m116 = _m107 & _c115
+                _ik_error_position114_position_top = np.where(np.abs(e[2]) > np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])), np.abs(e[2]), np.where(np.abs(e[1]) > np.abs(e[0]), np.abs(e[1]), np.abs(e[0])))
+                _ik_error_position114_position = np.where(_m116, _ik_error_position114_position_top*np.sqrt((e[0]/_ik_error_position114_position_top)*(e[0]/_ik_error_position114_position_top) + (e[1]/_ik_error_position114_position_top)*(e[1]/_ik_error_position114_position_top) + (e[2]/_ik_error_position114_position_top)*(e[2]/_ik_error_position114_position_top)), _ik_error_position114_position)
+                norms[0] = np.where(_m107, _ik_error_position114_position, norms[0])
+                _ik_error_position114_whole_squares = norms[0]*norms[0] + norms[1]*norms[1]
+                _ik_error_position114_whole = np.sqrt(_ik_error_position114_whole_squares)
+                _c117 = ~np.isfinite(_ik_error_position114_whole_squares)
+                _m118 = _m107 & _c117
+                _ik_error_position114_whole_top = np.where(np.abs(norms[1]) > np.abs(norms[0]), np.abs(norms[1]), np.abs(norms[0]))
+                _ik_error_position114_whole = np.where(_m118, _ik_error_position114_whole_top*np.sqrt((norms[0]/_ik_error_position114_whole_top)*(norms[0]/_ik_error_position114_whole_top) + (norms[1]/_ik_error_position114_whole_top)*(norms[1]/_ik_error_position114_whole_top)), _ik_error_position114_whole)
+                norms[2] = np.where(_m107, _ik_error_position114_whole, norms[2])
+                pe = np.where(_m107, norms[0], pe)
+                re = np.where(_m107, norms[1], re)
+                en = np.where(_m107, norms[2], en)
+                c = np.where(_m107, 0.01, c)
+                curved = np.where(_m107, 0, curved)
+                damped = np.where(_m107, 1, damped)
+                attempt = np.where(_m107, 0, attempt)
+                checkpoint = np.where(_m107, en, checkpoint)
+                window_start = np.where(_m107, en, window_start)
+                _c119 = en < best_en
+                _m120 = _m107 & _c119
+                best_en = np.where(_m120, en, best_en)
+                best_pe = np.where(_m120, pe, best_pe)
+                best_stalled = np.where(_m120, 0, best_stalled)
+                best_here = np.where(_m120, 1, best_here)
                 for k in range(0, 6):
-                    best_q[k] = np.where(_m111, q[k], best_q[k])
+                    best_q[k] = np.where(_m120, q[k], best_q[k])
     for k in range(0, 6):
         q[k] = np.where(_alive2, best_q[k], q[k])
     error[0] = np.where(_alive2, best_pe, error[0])

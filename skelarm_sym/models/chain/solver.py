@@ -21,6 +21,11 @@ derived ``ik_terms`` (tool pose T and Jacobian J at once):
   same factors), which follows a curved valley of ``|e|`` where the straight step overshoots: near a singular
   target (a KUKA KR 6 pose whose smallest singular value is 8e-5) the plain steps crept, the attempts restarted
   and 1000 steps did not converge; with the correction 32 do;
+* stationary points: where ``|J_f^T e| <= STATIONARY |J_f|_F |e|`` the step is Gauss-Newton's (``mu2 = C_MIN |e|``,
+  or lambda's floor) instead of the damped one. Near a nearly aligned wrist the error left lies along J's weak
+  direction; the damped step crept there while the test ended each attempt (Stanford, ``q5 = 1e-6``: 67 of 80
+  targets converged in 100 steps, now 80), and at a true stationary point the longer step is rejected as the
+  damped one made no progress;
 * step cap: the step is scaled down whole (same direction) where a joint that turns would move more than
   ``STEP_MAX``; slides are not capped;
 * joint limits: a step is clamped into ``[lower, upper]``; joints on a bound that the step pushes
@@ -481,6 +486,15 @@ class _PoseIK:
             self.gradient(self.J, self.G)
         b.comment(f"stationary point of |e| over the free joints: |J_f^T e| <= {STATIONARY} |J_f|_F |e|")
         b.set(self.stationary, select(self.gg <= self.ff * self.en * self.en * (STATIONARY * STATIONARY), self.one, self.zero))
+        with b.if_(self.stationary > 0):
+            b.comment(f"at a stationary point the step is Gauss-Newton's (mu2 = {C_MIN:g} |e|, or lambda's floor): along a weak "
+                      "direction of J (a nearly aligned wrist) it reaches the solution the damped step creeps toward; at a "
+                      "true stationary point it is rejected, and the attempt ends as before")
+            b.set(self.mu2, select(self.en * C_MIN > floor, self.en * C_MIN, floor))
+            with b.if_(self.any_ > 0):
+                self.solve(self.Jf, self.Gf, self.e, dq)
+            with b.else_():
+                self.solve(self.J, self.G, self.e, dq)
         b.comment("the window is damping-bound while every step's c |e| (the damping that halves with each accepted "
                   "step; not lambda's floor) outweighs J J^T's mean eigenvalue")
         b.set(self.damped, select(self.c * self.en * float(rows) > self.ff, self.damped, self.zero))
