@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x3fc0d0d6UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x7e61707cUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -62,7 +62,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x3fc0d0d6UL
+#define UR5_STAMP 0x7e61707cUL
 
 #ifdef __cplusplus
 extern "C" {

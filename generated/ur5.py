@@ -38,8 +38,10 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x3fc0d0d6
+STAMP = 0x7e61707c
 """The generation stamp: the same number in every file of the set this module was generated with."""
+_MATRIX_INPUTS = {'target': (4, 4)}
+"""Inputs of the straight-line functions that may come as a matrix, (..., 4, 4) for (..., 16) (row-major)."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
 IK_MAX_SOLUTIONS = 8
@@ -153,6 +155,8 @@ def _inputs(values, names, sizes, domains):
     arrays = []
     for value, name, size, domain in zip(values, names, sizes, domains):
         array = _real_array(value, name)
+        if name in _MATRIX_INPUTS and array.shape[array.ndim - 2:] == _MATRIX_INPUTS[name]:
+            array = array.reshape(array.shape[:-2] + (size,))
         if array.ndim == 0 or array.shape[-1] != size:  # the shape given (a contiguous copy of a number has shape (1,))
             raise ValueError(f"{name} must have shape (..., {size}), got {array.shape}")
         array = np.ascontiguousarray(array)

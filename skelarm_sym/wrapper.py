@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .derive.core import MATRIX_INPUTS
 from .errors import InputError
 from .ir.evaluate import evaluate
 from .ir.nodes import Argument, Function, Module, Type
@@ -249,6 +250,9 @@ class CompiledArm:
         arrays = []
         for value, a in zip(args, f.inputs):
             array = _real(value, a.name, self.dtype)
+            matrix = MATRIX_INPUTS.get(a.name)
+            if matrix is not None and array.ndim >= 2 and array.shape[-2:] == matrix and a.size == matrix[0] * matrix[1]:
+                array = array.reshape(array.shape[:-2] + (a.size,))  # a pose as 4 x 4, as the solvers take it
             if a.is_scalar:
                 if array.ndim != 0:
                     raise InputError(f"{a.name} must be a single number, got shape {array.shape}")

@@ -1171,3 +1171,26 @@ def test_a_skewed_spherical_wrist_is_exact_at_and_near_alignment(tmp_path):
                 assert np.abs(reference.chain_kinematics(numeric, row[None]).T[0] - T).max() < 1e-12, (q5, row)
             near = arm.ik_nearest(q, T)
             assert np.abs(near.q - q).max() < (1e-9 if q5 == 0.0 else 1e-6), (q5, near.q, q)
+
+
+def test_continuum_members_take_the_target_as_4_x_4_as_the_other_entries_do():
+    """ik_continuum_members (a straight-line function) refused a (4, 4) target (``target must have shape (..., 16)``)
+    where ik_all and ik_nearest take it (a new user's report). Every Python entry now reads (..., 4, 4) as the 16
+    entries, row-major: NumPy, the compiled C through ctypes and the CPython extension, PyTorch and JAX."""
+    b = built("ur5")
+    q = np.array([[0.3, -1.2, 1.4, -1.8, 0.0, 0.7], [0.1, -0.9, 1.1, -1.5, 0.0, -0.4]])
+    T = targets_of(b.chain, q)
+    entries = [("numpy", b.py), ("c", b.c), ("cpython", compile_arm(b.generated, extension=True))]
+    for lang, name in (("torch", "torch"), ("jax", "jax")):
+        if importlib.util.find_spec(name) is not None:
+            if name == "jax":
+                import jax
+                jax.config.update("jax_enable_x64", True)
+            g = generate(b.chain, langs=lang, out=None, prefix="members44", functions="ik_continuum_members")
+            entries.append((lang, load_python(g.sources[f"members44_{lang}.py"], f"members44_{lang}")))
+    for lang, impl in entries:
+        for single in (0, 1):
+            qq, TT = (q[single], T[single]) if single else (q, T)
+            flat = np.asarray(impl.ik_continuum_members(qq, TT.reshape(*TT.shape[:-2], 16))[0])
+            square = np.asarray(impl.ik_continuum_members(qq, TT)[0])
+            assert flat.shape == square.shape and np.array_equal(flat, square, equal_nan=True), lang

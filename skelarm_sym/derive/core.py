@@ -48,6 +48,10 @@ ARGUMENT_ROLES: dict[str, int] = {
 """The role of each input name; every emitted function takes its inputs in increasing role,
 then its outputs (see :data:`ARGUMENT_RULE`)."""
 
+MATRIX_INPUTS: dict[str, tuple[int, int]] = {"target": (4, 4)}
+"""Inputs a caller may give as a matrix: a straight-line function reads ``target`` as its 16 entries, row-major, and
+every Python entry takes ``(..., 4, 4)`` for ``(..., 16)``, as the solvers' entries do."""
+
 ARGUMENT_RULE = (
     "Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v, twist,"
     " target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."

@@ -196,10 +196,24 @@ def context(module: Module) -> dict:
     }
 
 
+def matrix_inputs(module: Module) -> str:
+    """The :data:`~skelarm_sym.derive.core.MATRIX_INPUTS` the module's straight-line functions take, as a Python
+    literal (``""`` where none: the module then has no such table)."""
+    from ...derive.core import MATRIX_INPUTS
+
+    sizes: dict[str, set[int]] = {}
+    for f in module.functions:
+        for a in f.inputs if f.kind == "straight" else ():
+            sizes.setdefault(a.name, set()).add(a.size)
+    used = {name: shape for name, shape in MATRIX_INPUTS.items() if sizes.get(name) == {shape[0] * shape[1]}}
+    return repr(used) if used else ""
+
+
 def constants_context(module: Module, inf: str) -> dict:
     """The module's named constants and constant tables as Python literals (``inf``: how the module names
     infinity, for the limits a table leaves open)."""
     return {
+        "matrix_inputs": matrix_inputs(module),
         "constants": [{"name": c.name, "value": repr(c.value if type(c.value) is int else float(c.value)), "doc": py_string(c.doc)}
                       for c in module.constants],
         "tables": [
