@@ -517,3 +517,19 @@ def test_on_a_real_gpu_every_kernel_agrees_with_the_host_build(panda_every, rng)
     status, q = cp.asnumpy(result.status), cp.asnumpy(result.q)
     assert (status == entry.IK_CONVERGED).all()
     np.testing.assert_allclose(reference.chain_kinematics(chain, q).T, targets, rtol=0, atol=1e-9)
+
+
+def test_the_entry_takes_a_pose_target_as_4_x_4(monkeypatch):
+    """A straight-line function's pose target (ik_continuum_members) may come as (..., 4, 4), as the other Python
+    entries take it (docs/closed-form-ik.md), batch-first or with soa batch-last."""
+    chain = load_robot(ROOT / "examples" / "robots" / "ur5.toml")
+    generated = generate(chain, langs="cuda", out=None, prefix="ur5m", functions="pose,ik_continuum_members")
+    monkeypatch.setitem(sys.modules, "cupy", cupy_standin.make())
+    entry = load_python(generated.sources["ur5m_cuda.py"], "ur5m_cuda")
+    kernels = entry.load(code=entry.source_text(generated.sources["ur5m.cuh"], generated.sources["ur5m.cu"]))
+    q = np.array([[0.3, -1.2, 1.4, -1.8, 0.0, 0.7], [0.1, -0.9, 1.1, -1.5, 0.0, -0.4]])
+    T = reference.chain_kinematics(chain.numeric(), q).T
+    flat, square = kernels.ik_continuum_members(q, T.reshape(2, 16))[0], kernels.ik_continuum_members(q, T)[0]
+    assert flat.shape == square.shape == (2, 4, 6) and np.array_equal(flat, square, equal_nan=True)
+    soa = kernels.ik_continuum_members(q.T.copy(), np.moveaxis(T, 0, -1).copy(), soa=True)[0]
+    assert np.array_equal(np.moveaxis(soa, -1, 0), flat, equal_nan=True)
