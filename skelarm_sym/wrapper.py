@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .derive.core import MATRIX_INPUTS
+from .derive.core import matrix_shape
 from .errors import InputError
 from .ir.evaluate import evaluate
 from .ir.nodes import Argument, Function, Module, Type
@@ -250,8 +250,8 @@ class CompiledArm:
         arrays = []
         for value, a in zip(args, f.inputs):
             array = _real(value, a.name, self.dtype)
-            matrix = MATRIX_INPUTS.get(a.name)
-            if matrix is not None and array.ndim >= 2 and array.shape[-2:] == matrix and a.size == matrix[0] * matrix[1]:
+            matrix = matrix_shape(a.name, a.size)
+            if matrix is not None and array.ndim >= 2 and array.shape[-2:] == matrix:
                 array = array.reshape(array.shape[:-2] + (a.size,))  # a pose as 4 x 4, as the solvers take it
             if a.is_scalar:
                 if array.ndim != 0:

@@ -231,7 +231,7 @@ def test_each_result_names_its_own_status_codes():
         assert 'IK_CONVERGED = 0 "converged", IK_STALLED = 1 "stalled"' in text
 
 
-@pytest.mark.parametrize("lang", ["python", "torch", "jax"])
+@pytest.mark.parametrize("lang", ["python", "torch", pytest.param("jax", marks=pytest.mark.slow)])  # XLA compiles ik_solve
 def test_a_lambda_per_problem_may_not_add_a_dimension_to_the_batch(lang):
     """A (m, 1) lambda beside m problems broadcast to m x m problems (a (4, 4, 6) result for 4 configurations): a
     column of lambdas is read as one per problem elsewhere, so it is refused, naming the shape to give. (m,) and a

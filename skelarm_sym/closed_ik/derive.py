@@ -28,6 +28,7 @@ import sympy as sp
 
 from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
+from ..models.chain.lock import named_joint
 from ..models.chain.target_rotation import ORTHO_CONSTANT
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, LOCK_MAX,
@@ -89,12 +90,7 @@ def lock_index(chain: Chain, lock: int | str | None) -> int | None:
     if lock is None:
         return None
     if isinstance(lock, str):
-        names = [j.name for j in chain.joints]
-        if lock in names:
-            return names.index(lock)
-        if lock in chain.coordinates:
-            return list(chain.coordinates).index(lock)
-        raise ClosedFormError(f"{chain.name}: no joint named {lock!r} to lock (joints: {', '.join(names)})")
+        return named_joint(chain, lock, ClosedFormError)
     if isinstance(lock, bool) or not isinstance(lock, int) or not 0 <= lock < len(chain.joints):
         raise ClosedFormError(f"{chain.name}: lock must be a joint index 0..{len(chain.joints) - 1} or a joint name, got {lock!r}")
     return lock

@@ -18,7 +18,7 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    2 pi) / 2)`` (0 without limits, or for +-2 pi: the result lies in ``[-pi, pi]``). When several copies fit (a range wider than 2 pi) the one returned is the copy nearest
    zero, not the middle of a range like ``[-1e5, -83]`` (at -5e4 rad one unit in the last place is 7e-12 rad,
    and the poses of such rows missed the target by 1e-11).
-   **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s)`` of :func:`~.derive.wrist_continuum`): a row
+   **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s, s_odd)`` of :func:`~.derive.wrist_continuum`): a row
    flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of a multiple of pi has joints a
    and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi (``sigma = s`` for an even multiple, ``-s`` for an
    odd one; a skewed wrist, ``continuum = (a, w, b, s, 0)``, is aligned at even multiples only). Its ``q[a]``, ``q[b]`` become the member within both joints' limits nearest the row's own values

@@ -52,6 +52,12 @@ MATRIX_INPUTS: dict[str, tuple[int, int]] = {"target": (4, 4)}
 """Inputs a caller may give as a matrix: a straight-line function reads ``target`` as its 16 entries, row-major, and
 every Python entry takes ``(..., 4, 4)`` for ``(..., 16)``, as the solvers' entries do."""
 
+
+def matrix_shape(name: str, size: int) -> tuple[int, int] | None:
+    """The matrix shape an input ``name`` of ``size`` entries may come in (:data:`MATRIX_INPUTS`), else None."""
+    shape = MATRIX_INPUTS.get(name)
+    return shape if shape is not None and shape[0] * shape[1] == size else None
+
 ARGUMENT_RULE = (
     "Arguments, in every function: the joint state (q, q0 or q_ref, dq, ddq), the call's other data (v, twist,"
     " target, weights), the mechanism's parameters (l, params), scalars (lambda, tol, max_iter, lock), then the outputs."

@@ -54,13 +54,13 @@ def _outputs(f: Function, split: bool = False) -> list[dict]:
 def function_context(f: Function) -> dict:
     """A straight-line function's entry: arrays (1-D, or a pose 4 x 4: :data:`~skelarm_sym.derive.core.MATRIX_INPUTS`)
     and real scalars in; real arrays out."""
-    from ...derive.core import MATRIX_INPUTS
+    from ...derive.core import matrix_shape
 
     arrays = [a for a in f.inputs if not a.is_scalar]
     inputs = []
     for position, a in enumerate(f.inputs):
-        matrix = MATRIX_INPUTS.get(a.name)
-        rows = matrix[0] if matrix is not None and not a.is_scalar and a.size == matrix[0] * matrix[1] else 0
+        matrix = None if a.is_scalar else matrix_shape(a.name, a.size)
+        rows = matrix[0] if matrix is not None else 0
         inputs.append({
             "name": a.name, "position": position, "size": a.size, "scalar": a.is_scalar, "rows": rows,
             "domain": DOMAINS[a.domain], "buffer": None if a.is_scalar else arrays.index(a),

@@ -120,14 +120,14 @@ def _batched(f: Function, a) -> bool:
 def kernel_arguments(f: Function, precision: CPrecision) -> list[dict]:
     """Every argument of ``f``'s kernel, in order: ``how`` is ``soa`` (one column per configuration),
     ``shared`` (one array for the batch), ``scalar`` (by value) or ``status`` (the solver's return value)."""
-    from ...derive.core import MATRIX_INPUTS
+    from ...derive.core import matrix_shape
 
     out = []
     for a in f.arguments:
         t = c_type(precision, a.type)
         how = "scalar" if a.is_scalar and not a.is_output else ("soa" if _batched(f, a) else "shared")
-        matrix = MATRIX_INPUTS.get(a.name) if f.kind == "straight" and how == "soa" and not a.is_output else None
-        shape = list(matrix) if matrix is not None and a.size == matrix[0] * matrix[1] else (list(a.shape) or [1])
+        matrix = matrix_shape(a.name, a.size) if f.kind == "straight" and how == "soa" and not a.is_output else None
+        shape = list(matrix) if matrix is not None else (list(a.shape) or [1])
         out.append({"name": a.name, "type": t, "size": a.size, "how": how, "output": a.is_output,
                     "role": a.role.name.lower(), "domain": a.domain, "shape": shape,
                     "int": a.type is not Type.REAL})

@@ -199,13 +199,11 @@ def context(module: Module) -> dict:
 def matrix_inputs(module: Module) -> str:
     """The :data:`~skelarm_sym.derive.core.MATRIX_INPUTS` the module's straight-line functions take, as a Python
     literal (``""`` where none: the module then has no such table)."""
-    from ...derive.core import MATRIX_INPUTS
+    from ...derive.core import MATRIX_INPUTS, matrix_shape
 
-    sizes: dict[str, set[int]] = {}
-    for f in module.functions:
-        for a in f.inputs if f.kind == "straight" else ():
-            sizes.setdefault(a.name, set()).add(a.size)
-    used = {name: shape for name, shape in MATRIX_INPUTS.items() if sizes.get(name) == {shape[0] * shape[1]}}
+    inputs = [a for f in module.functions if f.kind == "straight" for a in f.inputs]
+    used = {name: shape for name, shape in MATRIX_INPUTS.items()
+            if any(a.name == name for a in inputs) and all(matrix_shape(a.name, a.size) for a in inputs if a.name == name)}
     return repr(used) if used else ""
 
 

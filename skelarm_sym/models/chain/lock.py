@@ -16,6 +16,17 @@ def ik_lock(model: Chain) -> str | None:
     return dict(model.load_options).get(LOCK_OPTION)
 
 
+def named_joint(model: Chain, name: str, error: type[InputError] = InputError) -> int:
+    """The 0-based index of the joint (or coordinate: a URDF joint that mimic joints follow) called ``name``;
+    ``error`` (one line, naming the joints) where there is none."""
+    names = [j.name for j in model.joints]
+    if name in names:
+        return names.index(name)
+    if name in model.coordinates:
+        return list(model.coordinates).index(name)
+    raise error(f"{model.name}: no joint named {name!r} to lock (joints: {', '.join(names)})")
+
+
 def lock_index(model: Chain, joint: str | int | None) -> int | None:
     """The 0-based index of the locked joint: ``joint`` is a joint number 1..N (base to tip) or a joint name;
     InputError (one line) for anything else."""
@@ -23,16 +34,12 @@ def lock_index(model: Chain, joint: str | int | None) -> int | None:
         return None
     text = str(joint).strip()
     names = [j.name for j in model.joints]
-    if text in names:
-        return names.index(text)
-    if text.isdigit():
+    if text.isdigit() and text not in names:
         number = int(text)
         if not 1 <= number <= len(names):
             raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
         return number - 1
-    if text in model.coordinates:  # a coordinate's name (a URDF joint that mimic joints follow)
-        return list(model.coordinates).index(text)
-    raise InputError(f"{model.name}: no joint named {text!r} to lock (joints: {', '.join(names)})")
+    return named_joint(model, text)
 
 
 def with_ik_lock(model: Chain, joint: str | int | None) -> Chain:
