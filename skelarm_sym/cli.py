@@ -11,6 +11,7 @@ import argparse
 import atexit
 import contextlib
 import gc
+import math
 import sys
 import textwrap
 from typing import Sequence
@@ -21,12 +22,25 @@ from .options import Default, Parser, add_generate_options, add_model_options, m
 
 
 def _angles(text: str) -> tuple[float, ...]:
+    """``--pose``: comma-separated radians, or degrees with a ``deg`` suffix (``30deg``); finite, within a turn.
+
+    A plot draws the same arm for ``q`` and ``q + 2 pi``, so a value beyond a turn is degrees typed for radians."""
     values = []
     for item in text.split(","):
+        written = item.strip()
+        degrees = written.lower().endswith("deg")
         try:
-            values.append(float(item))
+            value = float(written[:-3] if degrees else written)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"joint angles must be comma-separated numbers, got {item.strip()!r}") from None
+            raise argparse.ArgumentTypeError(f"joint angles must be comma-separated numbers (radians, or degrees as "
+                                             f"30deg), got {written!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"joint angle {written!r} is not finite")
+        value = math.radians(value) if degrees else value
+        if abs(value) > 2 * math.pi * (1 + 1e-12):
+            hint = "" if degrees else f": angles are in radians (for degrees write {written}deg)"
+            raise argparse.ArgumentTypeError(f"joint angle {written!r} is more than a turn{hint}")
+        values.append(value)
     return tuple(values)
 
 
@@ -53,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
     show.add_argument("--plot", metavar="FILE", help="planar arms: draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
-    show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN in radians for --plot (default pi/6 each)")
+    show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN for --plot, in radians or with a deg suffix (30deg); default pi/6 each")
 
     chk = sub.add_parser("check", help="generate, compile and compare with the independent reference")
     add_model_options(chk)

@@ -1,13 +1,14 @@
 """No tracebacks: file-system trouble and bad options end in one line and a non-zero exit (issue 12, part 3)."""
 
 import errno
+import math
 import subprocess
 import sys
 import time
 
 import pytest
 
-from skelarm_sym.cli import main
+from skelarm_sym.cli import build_parser, main
 from skelarm_sym.models.planar.show import SHOW_MAX_LINKS
 
 
@@ -131,9 +132,20 @@ def test_a_refusal_for_other_options_comes_before_the_derivation(tmp_path, monke
 def test_pose_without_plot_is_refused_instead_of_ignored(capsys):
     """``show --links 2 --pose 1,nan`` printed the closed forms and exited 0: the angles (even a NaN) were
     never read."""
-    line = one_line_error(capsys, ["show", "--links", "2", "--pose", "1,nan"])
+    line = one_line_error(capsys, ["show", "--links", "2", "--pose", "1,0.5"])
     assert "--pose sets the joint angles of --plot: add --plot FILE" in line
     assert main(["show", "--links", "2"]) == 0
+
+
+def test_pose_in_degrees_is_caught_and_can_be_written(tmp_path, capsys):
+    """``--pose 90,45`` drew an arm at 90 and 45 rad, silently: degrees typed for radians. A value beyond a turn is
+    refused with the spelling that works (``90deg``), and that spelling gives the degrees' radians."""
+    line = one_line_error(capsys, ["show", "--links", "2", "--pose", "90,45", "--plot", str(tmp_path / "a.png")])
+    assert "joint angle '90' is more than a turn: angles are in radians (for degrees write 90deg)" in line
+    assert "not finite" in one_line_error(capsys, ["show", "--links", "2", "--pose", "1,inf", "--plot", "a.png"])
+    assert list(tmp_path.iterdir()) == []
+    args = build_parser().parse_args(["show", "--links", "2", "--pose", "30deg, -45DEG,0.5", "--plot", "a.png"])
+    assert args.pose == pytest.approx((math.pi / 6, -math.pi / 4, 0.5), rel=1e-15)
 
 
 def test_a_function_the_model_has_not_says_why(tmp_path, capsys):
