@@ -1173,6 +1173,34 @@ def test_a_skewed_spherical_wrist_is_exact_at_and_near_alignment(tmp_path):
             assert np.abs(near.q - q).max() < (1e-9 if q5 == 0.0 else 1e-6), (q5, near.q, q)
 
 
+def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
+    """A skewed wrist whose sixth axis meets the fourth only with q5 at +-pi (two equal skew twists, DH alpha4 = alpha5)
+    got no continuum: the rows at q5 = pi were exact, but ik_nearest from the source landed
+    up to 1.9 rad away (30 of 30 aligned targets). Its continuum is now found with h6 turned half a turn about h5,
+    aligned at odd multiples of pi only, in NumPy and in C."""
+    from skelarm_sym import reference
+    from skelarm_sym.models.chain import load_robot
+
+    path = tmp_path / "half_turn.urdf"
+    path.write_text(SKEWED_WRIST.replace('<axis xyz="1 0 0"/></joint>\n  <joint name="jt"',
+                                         '<axis xyz="-0.5 0 0.8660254037844386"/></joint>\n  <joint name="jt"')
+                    .replace('lower="-1.2" upper="1.2"', 'lower="-3.5" upper="3.5"'))
+    b = Built(load_robot(path, tip="tool"), None, functions="ik_all,ik_nearest")
+    rng = np.random.default_rng(11)
+    lower, upper = np.array([-3.0, -2.0, -0.5, -2.0, -3.5, -np.pi]), np.array([3.0, 2.5, 2.0, 2.0, 3.5, np.pi])
+    for q5 in (np.pi, -np.pi):
+        for _ in range(10):
+            q = rng.uniform(lower, upper)
+            q[4] = q5
+            T = reference.chain_kinematics(b.numeric, q[None]).T[0]
+            for impl in (b.c, b.py):
+                r = impl.ik_all(T)
+                assert r.status == "ok" and r.count >= 1
+                for row in r.q[:r.count]:
+                    assert np.abs(reference.chain_kinematics(b.numeric, row[None]).T[0] - T).max() < 1e-12
+                assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, (q5, q)
+
+
 def test_continuum_members_take_the_target_as_4_x_4_as_the_other_entries_do():
     """ik_continuum_members (a straight-line function) refused a (4, 4) target (``target must have shape (..., 16)``)
     where ik_all and ik_nearest take it (a new user's report). Every Python entry now reads (..., 4, 4) as the 16

@@ -129,21 +129,31 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
     Where ``h4 || h6`` at ``q = 0``, ``q5 = 0`` (an even multiple of pi) puts h6 on the line of h4 and joints 4 and 6
     turn about one axis: every ``(q4 + t, q6 - s t)`` is the same pose, ``s = h4 . h6`` (+1 or -1). For a wrist that
     flips (:func:`wrist_flips`: ``h4 . h5 = 0`` and ``h5 . h6 = 0`` as well) an odd multiple of pi aligns it too, with
-    ``-s``; a wrist whose middle axis is skewed is aligned at even multiples only (``sigma_odd = 0``). In chain
-    coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a spherical shoulder:
-    its variables are negated, which keeps the relation), ``sigma = s``. ``()`` for the other families, where ``h4``
-    and ``h6`` are not parallel at ``q = 0``, or where ``s`` is not the same at every sampled lock value."""
+    ``-s``; a wrist whose middle axis is skewed is aligned at even multiples only (``sigma_odd = 0``). A skewed wrist
+    whose h6 meets h4 only when turned half a turn about h5 (``h6' = 2 (h5 . h6) h5 - h6 || h4``: two equal skew
+    twists, DH alpha4 = alpha5) is aligned at odd multiples only: ``sigma = 0``, ``sigma_odd = h4 .
+    h6'``. In chain coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a
+    spherical shoulder: its variables are negated, which keeps the relation). ``()`` for the other families, where
+    neither ``h6`` nor ``h6'`` is parallel to ``h4``, or where the sign is not the same at every sampled lock value."""
     if family.name not in ("spherical_wrist", "spherical_shoulder"):
         return ()
-    samples = list(_sampled_axes(geom, family.reversed, locked))
-    if any(np.linalg.norm(np.cross(H[3], H[5])) > FLIP_TOL for H in samples):
-        return ()
-    signs = {1 if float(H[3] @ H[5]) > 0 else -1 for H in samples}
     wrist = [5 - k if family.reversed else k for k in (3, 4, 5)]  # geometry indices of problem joints 4, 5, 6
-    if len(signs) != 1 or any(geom.kinds[k] != "revolute" for k in wrist):
+    if any(geom.kinds[k] != "revolute" for k in wrist):
         return ()
-    s = signs.pop()
-    return (*(geom.coordinates[k] for k in wrist), s, -s if wrist_flips(geom, family.reversed, locked) else 0)
+    samples = list(_sampled_axes(geom, family.reversed, locked))
+    coordinates = tuple(geom.coordinates[k] for k in wrist)
+    for half_turn in (False, True):
+        ends = [(H[3], 2.0 * float(H[4] @ H[5]) * H[4] - H[5] if half_turn else H[5]) for H in samples]
+        if any(np.linalg.norm(np.cross(h4, h6)) > FLIP_TOL for h4, h6 in ends):
+            continue
+        signs = {1 if float(h4 @ h6) > 0 else -1 for h4, h6 in ends}
+        if len(signs) != 1:
+            return ()
+        s = signs.pop()
+        if half_turn:
+            return (*coordinates, 0, s)
+        return (*coordinates, s, -s if wrist_flips(geom, family.reversed, locked) else 0)
+    return ()
 
 
 def derive_ik_all(chain: Chain, lock: int | str | None = None, atan2: str | None = None) -> ClosedIK:

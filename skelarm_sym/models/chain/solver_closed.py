@@ -360,8 +360,8 @@ def _doc_continuum(arm: _Arm, choice: str) -> tuple[str, ...]:
     """The doc line on the wrist's continuum (none for an arm without one)."""
     if not arm.continuum:
         return ()
-    a, w, b, _, s_odd = arm.continuum
-    multiple = "multiple" if s_odd else "even multiple"
+    a, w, b, s, s_odd = arm.continuum
+    multiple = "multiple" if s and s_odd else "even multiple" if s else "odd multiple"
     return (f"An aligned wrist (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of a "
             f"{multiple} of pi) turns joints {a + 1} and {b + 1}",
             f"about one axis: such a row takes {choice}.")
