@@ -29,18 +29,20 @@
  * (without -lm the link fails: undefined reference to sincos or sqrt, or to a vector routine of glibc's
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
- * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
- * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
- * sin, cos and sqrt not counted; optimised builds need less.
+ * pointers, so an in-place call is undefined (the iterative solvers' q may be their q0, and
+ * ik_nearest's q its q_ref). No function allocates or keeps state; the stack each needs is stated
+ * beside it (double): a bound on its frames under gcc -O0 on x86-64 (every temporary in memory; measured
+ * by the tests), the C library's sin, cos and sqrt not counted. Other compilers and options differ
+ * (clang -O0 has taken up to 1.5 times the figure, gcc -O2 up to 1.05 times, and a first call into a
+ * shared libm adds the dynamic linker's frames): allow twice the figure.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
  * contraction off). Otherwise, with FMA available (-march=native on most CPUs since 2013), the compiler
  * may contract a*b + c differently in the two, and -ffast-math reorders sums: the results may then differ
  * in the last bits.
- * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
- * other functions check nothing in any mode.
+ * -ffast-math, -ffinite-math-only: the solvers' finiteness checks test the bits of each number, so they
+ * still work; the other functions check nothing in any mode.
  * Sines and cosines: the source's own kernel (at most 1 ulp from libm; libm's sin and cos for
  * |angle| > 1e5), but glibc's vector math (libmvec) where GCC targets x86-64 glibc with AVX2
  * (-march=native, -mavx2). Under -ffast-math or with -DSKELARM_LIBM_TRIG, where the kernel cannot or
@@ -52,7 +54,7 @@
  * angles finite and of sensible size.
  * ARM2_STAMP identifies this generation: arm2.c refuses to compile (#error) with a
  * arm2.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM2_STAMP 0xd8a5d8f0UL
+#define ARM2_STAMP 0x7ca64abeUL
 
 #ifdef __cplusplus
 extern "C" {

@@ -15,7 +15,7 @@
 
 #include "diffdrive.h"
 
-#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0x2c6f6b18UL
+#if !defined(DIFFDRIVE_STAMP) || DIFFDRIVE_STAMP != 0xc3f48f27UL
 #error "diffdrive.h is not the header generated with this diffdrive.c: regenerate both together"
 #endif
 

@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xca7051a2UL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x695f07fdUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -451,9 +451,9 @@ static PANDA_VECTORIZE void panda_trig512(const double *restrict ang, double *re
 #endif
 }
 
-/* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
- * isfinite) cannot remove: integer tests on the exponent bits. */
-#ifdef __FAST_MATH__
+/* Finiteness tests that no floating-point option can remove: integer tests on the exponent bits
+ * (-ffast-math, -ffinite-math-only and clang's -fno-honor-nans let the compiler assume no NaN or
+ * infinity and so fold isfinite to 1; the last sets no macro a test could see). */
 static int panda_finite(double x)
 {
     union { double f; unsigned long long u; } bits;
@@ -461,9 +461,6 @@ static int panda_finite(double x)
     return (bits.u & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;
 }
 #define PANDA_FINITE(x) panda_finite(x)
-#else
-#define PANDA_FINITE(x) isfinite(x)
-#endif
 
 /* ---- panda_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 7 sin, 7 cos, 36 add/sub, 68 mul, 0 neg */

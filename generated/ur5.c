@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x7e61707cUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x89cea5a6UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -486,9 +486,9 @@ static UR5_VECTORIZE void ur5_trig512(const double *restrict ang, double *restri
 #endif
 }
 
-/* Finiteness tests that -ffast-math (which lets the compiler assume no NaN or infinity and so removes
- * isfinite) cannot remove: integer tests on the exponent bits. */
-#ifdef __FAST_MATH__
+/* Finiteness tests that no floating-point option can remove: integer tests on the exponent bits
+ * (-ffast-math, -ffinite-math-only and clang's -fno-honor-nans let the compiler assume no NaN or
+ * infinity and so fold isfinite to 1; the last sets no macro a test could see). */
 static int ur5_finite(double x)
 {
     union { double f; unsigned long long u; } bits;
@@ -496,9 +496,6 @@ static int ur5_finite(double x)
     return (bits.u & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;
 }
 #define UR5_FINITE(x) ur5_finite(x)
-#else
-#define UR5_FINITE(x) isfinite(x)
-#endif
 
 /* ---- ur5_pose: tool pose T (4 x 4 homogeneous, row-major) ---- */
 /* operations: 6 sin, 6 cos, 21 add/sub, 36 mul, 2 neg */
@@ -7826,6 +7823,13 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
 /* ---- ur5_ik_nearest: the closed-form IK solution nearest a configuration ---- */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
 {
+    double ref[6];
+    ref[0] = q_ref[0];
+    ref[1] = q_ref[1];
+    ref[2] = q_ref[2];
+    ref[3] = q_ref[3];
+    ref[4] = q_ref[4];
+    ref[5] = q_ref[5];
     double rows[48];
     int count[1];
     int flags[8];
@@ -7843,7 +7847,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     q[4] = (double)NAN;
     q[5] = (double)NAN;
     /* q_ref not finite: IK_INVALID, q NaN */
-    if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5])) {
+    if (!UR5_FINITE(ref[0]) || !UR5_FINITE(ref[1]) || !UR5_FINITE(ref[2]) || !UR5_FINITE(ref[3]) || !UR5_FINITE(ref[4]) || !UR5_FINITE(ref[5])) {
         return UR5_IK_INVALID;
     }
     int singular[1];
@@ -7854,48 +7858,48 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
         }
         /* each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it) */
         x = rows[6*i];
-        y = x + 6.283185307179586*nearbyint((q_ref[0] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[0] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[0] = y;
         x = rows[6*i + 1];
-        y = x + 6.283185307179586*nearbyint((q_ref[1] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[1] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[1] = y;
         x = rows[6*i + 2];
-        y = x + 6.283185307179586*nearbyint((q_ref[2] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[2] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[2] = y;
         x = rows[6*i + 3];
-        y = x + 6.283185307179586*nearbyint((q_ref[3] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[3] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[3] = y;
         x = rows[6*i + 4];
-        y = x + 6.283185307179586*nearbyint((q_ref[4] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[4] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[4] = y;
         x = rows[6*i + 5];
-        y = x + 6.283185307179586*nearbyint((q_ref[5] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[5] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[5] = y;
-        dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]);
+        dist = (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5]);
         if (best < 0 || dist < best_d) {
             best = i;
             best_d = dist;
@@ -7912,12 +7916,12 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
     int m_ok = 0;
     if (singular[0] > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
-        ur5_ik_continuum_members(q_ref, target, M, mflags);
+        ur5_ik_continuum_members(ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {
             if ((int)mflags[m] % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
                 m_ok = 1;
                 x = M[6*m];
-                y = x + 6.283185307179586*nearbyint((q_ref[0] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[0] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -7925,7 +7929,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[0] = y;
                 x = M[6*m + 1];
-                y = x + 6.283185307179586*nearbyint((q_ref[1] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[1] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -7933,7 +7937,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[1] = y;
                 x = M[6*m + 2];
-                y = x + 6.283185307179586*nearbyint((q_ref[2] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[2] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -7941,7 +7945,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[2] = y;
                 x = M[6*m + 3];
-                y = x + 6.283185307179586*nearbyint((q_ref[3] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[3] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -7949,7 +7953,7 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[3] = y;
                 x = M[6*m + 4];
-                y = x + 6.283185307179586*nearbyint((q_ref[4] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[4] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -7957,14 +7961,14 @@ int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6])
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[4] = y;
                 x = M[6*m + 5];
-                y = x + 6.283185307179586*nearbyint((q_ref[5] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[5] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
                 y = (y < -6.283185307179586 ? -6.283185307179586 : y);
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[5] = y;
-                dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]);
+                dist = (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5]);
                 if (m_ok > 0 && (best < 0 || dist < best_d)) {
                     best = 8;
                     best_d = dist;
@@ -7996,6 +8000,13 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
 /* ---- ur5_ik_nearest_weighted: the closed-form IK solution nearest a configuration, in a weighted metric ---- */
 int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6])
 {
+    double ref[6];
+    ref[0] = q_ref[0];
+    ref[1] = q_ref[1];
+    ref[2] = q_ref[2];
+    ref[3] = q_ref[3];
+    ref[4] = q_ref[4];
+    ref[5] = q_ref[5];
     double w[6];
     double rows[48];
     int count[1];
@@ -8013,8 +8024,8 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     q[3] = (double)NAN;
     q[4] = (double)NAN;
     q[5] = (double)NAN;
-    /* q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN */
-    if (!UR5_FINITE(q_ref[0]) || !UR5_FINITE(q_ref[1]) || !UR5_FINITE(q_ref[2]) || !UR5_FINITE(q_ref[3]) || !UR5_FINITE(q_ref[4]) || !UR5_FINITE(q_ref[5]) || !(weights[0] > 0.0) || !UR5_FINITE(weights[0]) || !(weights[1] > 0.0) || !UR5_FINITE(weights[1]) || !(weights[2] > 0.0) || !UR5_FINITE(weights[2]) || !(weights[3] > 0.0) || !UR5_FINITE(weights[3]) || !(weights[4] > 0.0) || !UR5_FINITE(weights[4]) || !(weights[5] > 0.0) || !UR5_FINITE(weights[5])) {
+    /* q_ref not finite, or a weight not finite or not > 0: IK_INVALID, q NaN */
+    if (!UR5_FINITE(ref[0]) || !UR5_FINITE(ref[1]) || !UR5_FINITE(ref[2]) || !UR5_FINITE(ref[3]) || !UR5_FINITE(ref[4]) || !UR5_FINITE(ref[5]) || !(weights[0] > 0.0) || !UR5_FINITE(weights[0]) || !(weights[1] > 0.0) || !UR5_FINITE(weights[1]) || !(weights[2] > 0.0) || !UR5_FINITE(weights[2]) || !(weights[3] > 0.0) || !UR5_FINITE(weights[3]) || !(weights[4] > 0.0) || !UR5_FINITE(weights[4]) || !(weights[5] > 0.0) || !UR5_FINITE(weights[5])) {
         return UR5_IK_INVALID;
     }
     const double w_max = (((((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) > weights[4] ? (((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) : weights[4]) > weights[5] ? ((((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) > weights[4] ? (((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) > weights[3] ? ((weights[0] > weights[1] ? weights[0] : weights[1]) > weights[2] ? (weights[0] > weights[1] ? weights[0] : weights[1]) : weights[2]) : weights[3]) : weights[4]) : weights[5]);
@@ -8032,48 +8043,48 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
         }
         /* each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it) */
         x = rows[6*i];
-        y = x + 6.283185307179586*nearbyint((q_ref[0] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[0] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[0] = y;
         x = rows[6*i + 1];
-        y = x + 6.283185307179586*nearbyint((q_ref[1] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[1] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[1] = y;
         x = rows[6*i + 2];
-        y = x + 6.283185307179586*nearbyint((q_ref[2] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[2] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[2] = y;
         x = rows[6*i + 3];
-        y = x + 6.283185307179586*nearbyint((q_ref[3] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[3] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[3] = y;
         x = rows[6*i + 4];
-        y = x + 6.283185307179586*nearbyint((q_ref[4] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[4] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[4] = y;
         x = rows[6*i + 5];
-        y = x + 6.283185307179586*nearbyint((q_ref[5] - x)*0.15915494309189535);
+        y = x + 6.283185307179586*nearbyint((ref[5] - x)*0.15915494309189535);
         y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
         y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
         y = (y > 6.283185307179586 ? 6.283185307179586 : y);
         y = (y < -6.283185307179586 ? -6.283185307179586 : y);
         near[5] = y;
-        dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
+        dist = ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5]));
         if (best < 0 || dist < best_d) {
             best = i;
             best_d = dist;
@@ -8090,12 +8101,12 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
     int m_ok = 0;
     if (singular[0] > 0) {
         /* a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row */
-        ur5_ik_continuum_members(q_ref, target, M, mflags);
+        ur5_ik_continuum_members(ref, target, M, mflags);
         for (int m = 0; m < 4; ++m) {
             if ((int)mflags[m] % 2 != UR5_IK_FLAG_LEAST_SQUARES) {
                 m_ok = 1;
                 x = M[6*m];
-                y = x + 6.283185307179586*nearbyint((q_ref[0] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[0] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -8103,7 +8114,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[0] = y;
                 x = M[6*m + 1];
-                y = x + 6.283185307179586*nearbyint((q_ref[1] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[1] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -8111,7 +8122,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[1] = y;
                 x = M[6*m + 2];
-                y = x + 6.283185307179586*nearbyint((q_ref[2] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[2] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -8119,7 +8130,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[2] = y;
                 x = M[6*m + 3];
-                y = x + 6.283185307179586*nearbyint((q_ref[3] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[3] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -8127,7 +8138,7 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[3] = y;
                 x = M[6*m + 4];
-                y = x + 6.283185307179586*nearbyint((q_ref[4] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[4] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
@@ -8135,14 +8146,14 @@ int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], cons
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[4] = y;
                 x = M[6*m + 5];
-                y = x + 6.283185307179586*nearbyint((q_ref[5] - x)*0.15915494309189535);
+                y = x + 6.283185307179586*nearbyint((ref[5] - x)*0.15915494309189535);
                 y = (y > 6.283185307179586 + UR5_IK_LIMIT_TOL ? x + 6.283185307179586*floor(((6.283185307179586 + UR5_IK_LIMIT_TOL) - x)*0.15915494309189535) : y);
                 y = (y < -6.283185307179586 - UR5_IK_LIMIT_TOL ? x - 6.283185307179586*floor((x - (-6.283185307179586 - UR5_IK_LIMIT_TOL))*0.15915494309189535) : y);
                 y = (y > 6.283185307179586 ? 6.283185307179586 : y);
                 y = (y < -6.283185307179586 ? -6.283185307179586 : y);
                 m_ok = (fabs(y - (x + 6.283185307179586*nearbyint((y - x)*0.15915494309189535))) <= UR5_IK_LIMIT_TOL ? m_ok : 0);
                 near[5] = y;
-                dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]));
+                dist = ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5]));
                 if (m_ok > 0 && (best < 0 || dist < best_d)) {
                     best = 8;
                     best_d = dist;

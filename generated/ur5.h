@@ -39,18 +39,20 @@
  * (without -lm the link fails: undefined reference to sincos or sqrt, or to a vector routine of glibc's
  * such as _ZGVbN2v_sin or _ZGVdN4v_sin).
  * Outputs must not alias inputs or each other: the functions are compiled with restrict
- * pointers, so an in-place call is undefined (the solvers' q may be their q0). No function
- * allocates or keeps state; the stack each needs is stated beside it (double): at most that in an
- * unoptimised build (gcc -O0 on x86-64, every temporary in memory; measured by the tests), the C library's
- * sin, cos and sqrt not counted; optimised builds need less.
+ * pointers, so an in-place call is undefined (the iterative solvers' q may be their q0, and
+ * ik_nearest's q its q_ref). No function allocates or keeps state; the stack each needs is stated
+ * beside it (double): a bound on its frames under gcc -O0 on x86-64 (every temporary in memory; measured
+ * by the tests), the C library's sin, cos and sqrt not counted. Other compilers and options differ
+ * (clang -O0 has taken up to 1.5 times the figure, gcc -O2 up to 1.05 times, and a first call into a
+ * shared libm adds the dynamic linker's frames): allow twice the figure.
  * Single calls equal their batch results bit for bit when both are built without FMA contraction
  * or value-changing options: -O0 to -O3 for plain x86-64, or a target with FMA built with
  * -ffp-contract=off -fno-tree-slp-vectorize (GCC's vectoriser fuses some a*b +- c pairs even with
  * contraction off). Otherwise, with FMA available (-march=native on most CPUs since 2013), the compiler
  * may contract a*b + c differently in the two, and -ffast-math reorders sums: the results may then differ
  * in the last bits.
- * -ffast-math: the solvers' finiteness checks test the bits of each number, so they still work; the
- * other functions check nothing in any mode.
+ * -ffast-math, -ffinite-math-only: the solvers' finiteness checks test the bits of each number, so they
+ * still work; the other functions check nothing in any mode.
  * Sines and cosines: the source's own kernel (at most 1 ulp from libm; libm's sin and cos for
  * |angle| > 1e5), but glibc's vector math (libmvec) where GCC targets x86-64 glibc with AVX2
  * (-march=native, -mavx2). Under -ffast-math or with -DSKELARM_LIBM_TRIG, where the kernel cannot or
@@ -62,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x7e61707cUL
+#define UR5_STAMP 0x89cea5a6UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -342,6 +344,7 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
+ * q may be q_ref (an in-place call).
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns IK_OUT_OF_LIMITS into IK_OK.
@@ -359,7 +362,8 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
  * The ik_all solution nearest q_ref in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0): each revolute joint takes the copy q + 2 pi k
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
- * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+ * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight that is not finite or not > 0).
+ * q may be q_ref (an in-place call).
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns IK_OUT_OF_LIMITS into IK_OK.

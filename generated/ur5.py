@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x7e61707c
+STAMP = 0x89cea5a6
 """The generation stamp: the same number in every file of the set this module was generated with."""
 _MATRIX_INPUTS = {'target': (4, 4)}
 """Inputs of the straight-line functions that may come as a matrix, (..., 4, 4) for (..., 16) (row-major)."""
@@ -8705,6 +8705,13 @@ def _ik_all_batch(target):
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_nearest(q_ref, target, q):
     """the closed-form IK solution nearest a configuration (one problem; arrays are 1-D)."""
+    ref = np.zeros(6, dtype=DTYPE)
+    ref[0] = q_ref[0]
+    ref[1] = q_ref[1]
+    ref[2] = q_ref[2]
+    ref[3] = q_ref[3]
+    ref[4] = q_ref[4]
+    ref[5] = q_ref[5]
     rows = np.zeros(48, dtype=DTYPE)
     count = np.zeros(1, dtype=np.int64)
     flags = np.zeros(8, dtype=np.int64)
@@ -8722,7 +8729,7 @@ def _ik_nearest(q_ref, target, q):
     q[4] = DTYPE(np.nan)
     q[5] = DTYPE(np.nan)
     # q_ref not finite: IK_INVALID, q NaN
-    if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]):
+    if not np.isfinite(ref[0]) or not np.isfinite(ref[1]) or not np.isfinite(ref[2]) or not np.isfinite(ref[3]) or not np.isfinite(ref[4]) or not np.isfinite(ref[5]):
         return IK_INVALID
     singular = np.zeros(1, dtype=np.int64)
     status = _ik_all_rows(target, rows, count, flags, singular)
@@ -8731,48 +8738,48 @@ def _ik_nearest(q_ref, target, q):
             break
         # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = rows[6*i]
-        y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[0] = y
         x = rows[6*i + 1]
-        y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[1] = y
         x = rows[6*i + 2]
-        y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[2] = y
         x = rows[6*i + 3]
-        y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[3] = y
         x = rows[6*i + 4]
-        y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[4] = y
         x = rows[6*i + 5]
-        y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[5] = y
-        dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5])
+        dist = (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5])
         if best < 0 or dist < best_d:
             best = i
             best_d = dist
@@ -8787,12 +8794,12 @@ def _ik_nearest(q_ref, target, q):
     m_ok = 0
     if singular[0] > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
-        _ik_continuum_members_core(q_ref, target, M, mflags)
+        _ik_continuum_members_core(ref, target, M, mflags)
         for m in range(0, 4):
             if int(mflags[m]) % 2 != IK_FLAG_LEAST_SQUARES:
                 m_ok = 1
                 x = M[6*m]
-                y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -8800,7 +8807,7 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[0] = y
                 x = M[6*m + 1]
-                y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -8808,7 +8815,7 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[1] = y
                 x = M[6*m + 2]
-                y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -8816,7 +8823,7 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[2] = y
                 x = M[6*m + 3]
-                y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -8824,7 +8831,7 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[3] = y
                 x = M[6*m + 4]
-                y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -8832,14 +8839,14 @@ def _ik_nearest(q_ref, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[4] = y
                 x = M[6*m + 5]
-                y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
                 y = -6.283185307179586 if y < -6.283185307179586 else y
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[5] = y
-                dist = (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5])
+                dist = (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5])
                 if m_ok > 0 and (best < 0 or dist < best_d):
                     best = 8
                     best_d = dist
@@ -8865,6 +8872,7 @@ def ik_nearest(q_ref, target):
     within the joint limits nearest q_ref[j], then the row with the
     least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
     (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
+    q may be q_ref (an in-place call).
     An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
     at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
     limits turns IK_OUT_OF_LIMITS into IK_OK.
@@ -8909,6 +8917,13 @@ def _ik_nearest_lanes(_c, q_ref, target):
     q = [_fr(0.0)] * 6
     _status1 = _fi(0)
     _alive2 = _fb(True)
+    ref = [_fr(0.0)] * 6
+    ref[0] = q_ref[0]
+    ref[1] = q_ref[1]
+    ref[2] = q_ref[2]
+    ref[3] = q_ref[3]
+    ref[4] = q_ref[4]
+    ref[5] = q_ref[5]
     rows = [_fr(0.0)] * 48
     count = [_fi(0)] * 1
     flags = [_fi(0)] * 8
@@ -8926,7 +8941,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     q[4] = _fr(_NAN)
     q[5] = _fr(_NAN)
     # q_ref not finite: IK_INVALID, q NaN
-    _c3 = (~np.isfinite(q_ref[0])) | (~np.isfinite(q_ref[1])) | (~np.isfinite(q_ref[2])) | (~np.isfinite(q_ref[3])) | (~np.isfinite(q_ref[4])) | (~np.isfinite(q_ref[5]))
+    _c3 = (~np.isfinite(ref[0])) | (~np.isfinite(ref[1])) | (~np.isfinite(ref[2])) | (~np.isfinite(ref[3])) | (~np.isfinite(ref[4])) | (~np.isfinite(ref[5]))
     _m4 = _c3
     _status1 = np.where(_m4, IK_INVALID, _status1)
     _alive2 = _alive2 & (~_m4)
@@ -9204,48 +9219,48 @@ def _ik_nearest_lanes(_c, q_ref, target):
         _run126 = _run126 & (~_m128)
         # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = np.where(_run126, rows[6*i], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[0] = np.where(_run126, y, near[0])
         x = np.where(_run126, rows[6*i + 1], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[1] = np.where(_run126, y, near[1])
         x = np.where(_run126, rows[6*i + 2], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[2] = np.where(_run126, y, near[2])
         x = np.where(_run126, rows[6*i + 3], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[3] = np.where(_run126, y, near[3])
         x = np.where(_run126, rows[6*i + 4], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[4] = np.where(_run126, y, near[4])
         x = np.where(_run126, rows[6*i + 5], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[5] = np.where(_run126, y, near[5])
-        dist = np.where(_run126, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
+        dist = np.where(_run126, (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5]), dist)
         _c129 = (best < 0) | (dist < best_d)
         _m130 = _run126 & _c129
         best = np.where(_m130, i, best)
@@ -9263,7 +9278,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
-        _o = _ik_continuum_members_on_lanes(_c, q_ref[0:6], target[0:16])
+        _o = _ik_continuum_members_on_lanes(_c, ref[0:6], target[0:16])
         _merge(_m132, _o[0], M, 0, _fr)
         _merge(_m132, _o[1], mflags, 0, _fr)
         for m in range(0, 4):
@@ -9271,7 +9286,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             _m134 = _m132 & _c133
             m_ok = np.where(_m134, 1, m_ok)
             x = np.where(_m134, M[6*m], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9279,7 +9294,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[0] = np.where(_m134, y, near[0])
             x = np.where(_m134, M[6*m + 1], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9287,7 +9302,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[1] = np.where(_m134, y, near[1])
             x = np.where(_m134, M[6*m + 2], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9295,7 +9310,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[2] = np.where(_m134, y, near[2])
             x = np.where(_m134, M[6*m + 3], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9303,7 +9318,7 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[3] = np.where(_m134, y, near[3])
             x = np.where(_m134, M[6*m + 4], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9311,14 +9326,14 @@ def _ik_nearest_lanes(_c, q_ref, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[4] = np.where(_m134, y, near[4])
             x = np.where(_m134, M[6*m + 5], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[5] = np.where(_m134, y, near[5])
-            dist = np.where(_m134, (((((near[0] - q_ref[0])*(near[0] - q_ref[0]) + (near[1] - q_ref[1])*(near[1] - q_ref[1])) + (near[2] - q_ref[2])*(near[2] - q_ref[2])) + (near[3] - q_ref[3])*(near[3] - q_ref[3])) + (near[4] - q_ref[4])*(near[4] - q_ref[4])) + (near[5] - q_ref[5])*(near[5] - q_ref[5]), dist)
+            dist = np.where(_m134, (((((near[0] - ref[0])*(near[0] - ref[0]) + (near[1] - ref[1])*(near[1] - ref[1])) + (near[2] - ref[2])*(near[2] - ref[2])) + (near[3] - ref[3])*(near[3] - ref[3])) + (near[4] - ref[4])*(near[4] - ref[4])) + (near[5] - ref[5])*(near[5] - ref[5]), dist)
             _c135 = (m_ok > 0) & ((best < 0) | (dist < best_d))
             _m136 = _m134 & _c135
             best = np.where(_m136, 8, best)
@@ -9353,6 +9368,13 @@ def _ik_nearest_batch(q_ref, target):
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # overflow is handled (rescaled norms); C raises nothing either
 def _ik_nearest_weighted(q_ref, weights, target, q):
     """the closed-form IK solution nearest a configuration, in a weighted metric (one problem; arrays are 1-D)."""
+    ref = np.zeros(6, dtype=DTYPE)
+    ref[0] = q_ref[0]
+    ref[1] = q_ref[1]
+    ref[2] = q_ref[2]
+    ref[3] = q_ref[3]
+    ref[4] = q_ref[4]
+    ref[5] = q_ref[5]
     w = np.zeros(6, dtype=DTYPE)
     rows = np.zeros(48, dtype=DTYPE)
     count = np.zeros(1, dtype=np.int64)
@@ -9370,8 +9392,8 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     q[3] = DTYPE(np.nan)
     q[4] = DTYPE(np.nan)
     q[5] = DTYPE(np.nan)
-    # q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN
-    if not np.isfinite(q_ref[0]) or not np.isfinite(q_ref[1]) or not np.isfinite(q_ref[2]) or not np.isfinite(q_ref[3]) or not np.isfinite(q_ref[4]) or not np.isfinite(q_ref[5]) or not weights[0] > 0.0 or not np.isfinite(weights[0]) or not weights[1] > 0.0 or not np.isfinite(weights[1]) or not weights[2] > 0.0 or not np.isfinite(weights[2]) or not weights[3] > 0.0 or not np.isfinite(weights[3]) or not weights[4] > 0.0 or not np.isfinite(weights[4]) or not weights[5] > 0.0 or not np.isfinite(weights[5]):
+    # q_ref not finite, or a weight not finite or not > 0: IK_INVALID, q NaN
+    if not np.isfinite(ref[0]) or not np.isfinite(ref[1]) or not np.isfinite(ref[2]) or not np.isfinite(ref[3]) or not np.isfinite(ref[4]) or not np.isfinite(ref[5]) or not weights[0] > 0.0 or not np.isfinite(weights[0]) or not weights[1] > 0.0 or not np.isfinite(weights[1]) or not weights[2] > 0.0 or not np.isfinite(weights[2]) or not weights[3] > 0.0 or not np.isfinite(weights[3]) or not weights[4] > 0.0 or not np.isfinite(weights[4]) or not weights[5] > 0.0 or not np.isfinite(weights[5]):
         return IK_INVALID
     w_max = ((((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) if (((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) > weights[4] else weights[4]) if ((((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) if (((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) if ((weights[0] if weights[0] > weights[1] else weights[1]) if (weights[0] if weights[0] > weights[1] else weights[1]) > weights[2] else weights[2]) > weights[3] else weights[3]) > weights[4] else weights[4]) > weights[5] else weights[5]
     w[0] = weights[0]/w_max
@@ -9387,48 +9409,48 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
             break
         # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = rows[6*i]
-        y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[0] = y
         x = rows[6*i + 1]
-        y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[1] = y
         x = rows[6*i + 2]
-        y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[2] = y
         x = rows[6*i + 3]
-        y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[3] = y
         x = rows[6*i + 4]
-        y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[4] = y
         x = rows[6*i + 5]
-        y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+        y = x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535)
         y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
         y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
         y = 6.283185307179586 if y > 6.283185307179586 else y
         y = -6.283185307179586 if y < -6.283185307179586 else y
         near[5] = y
-        dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
+        dist = ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5]))
         if best < 0 or dist < best_d:
             best = i
             best_d = dist
@@ -9443,12 +9465,12 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
     m_ok = 0
     if singular[0] > 0:
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
-        _ik_continuum_members_core(q_ref, target, M, mflags)
+        _ik_continuum_members_core(ref, target, M, mflags)
         for m in range(0, 4):
             if int(mflags[m]) % 2 != IK_FLAG_LEAST_SQUARES:
                 m_ok = 1
                 x = M[6*m]
-                y = x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -9456,7 +9478,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[0] = y
                 x = M[6*m + 1]
-                y = x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -9464,7 +9486,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[1] = y
                 x = M[6*m + 2]
-                y = x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -9472,7 +9494,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[2] = y
                 x = M[6*m + 3]
-                y = x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -9480,7 +9502,7 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[3] = y
                 x = M[6*m + 4]
-                y = x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
@@ -9488,14 +9510,14 @@ def _ik_nearest_weighted(q_ref, weights, target, q):
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[4] = y
                 x = M[6*m + 5]
-                y = x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535)
+                y = x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535)
                 y = x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535) if y > 6.283185307179586 + IK_LIMIT_TOL else y
                 y = x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535) if y < -6.283185307179586 - IK_LIMIT_TOL else y
                 y = 6.283185307179586 if y > 6.283185307179586 else y
                 y = -6.283185307179586 if y < -6.283185307179586 else y
                 m_ok = m_ok if np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL else 0
                 near[5] = y
-                dist = ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5]))
+                dist = ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5]))
                 if m_ok > 0 and (best < 0 or dist < best_d):
                     best = 8
                     best_d = dist
@@ -9520,7 +9542,8 @@ def ik_nearest_weighted(q_ref, weights, target):
     The ik_all solution nearest q_ref in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0): each revolute joint takes the copy q + 2 pi k
     within the joint limits nearest q_ref[j], then the row with the
     least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
-    (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight not finite and > 0).
+    (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight that is not finite or not > 0).
+    q may be q_ref (an in-place call).
     An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
     at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
     limits turns IK_OUT_OF_LIMITS into IK_OK.
@@ -9567,6 +9590,13 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     q = [_fr(0.0)] * 6
     _status1 = _fi(0)
     _alive2 = _fb(True)
+    ref = [_fr(0.0)] * 6
+    ref[0] = q_ref[0]
+    ref[1] = q_ref[1]
+    ref[2] = q_ref[2]
+    ref[3] = q_ref[3]
+    ref[4] = q_ref[4]
+    ref[5] = q_ref[5]
     w = [_fr(0.0)] * 6
     rows = [_fr(0.0)] * 48
     count = [_fi(0)] * 1
@@ -9584,8 +9614,8 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     q[3] = _fr(_NAN)
     q[4] = _fr(_NAN)
     q[5] = _fr(_NAN)
-    # q_ref not finite, or a weight not finite and > 0: IK_INVALID, q NaN
-    _c3 = (~np.isfinite(q_ref[0])) | (~np.isfinite(q_ref[1])) | (~np.isfinite(q_ref[2])) | (~np.isfinite(q_ref[3])) | (~np.isfinite(q_ref[4])) | (~np.isfinite(q_ref[5])) | (~(weights[0] > 0.0)) | (~np.isfinite(weights[0])) | (~(weights[1] > 0.0)) | (~np.isfinite(weights[1])) | (~(weights[2] > 0.0)) | (~np.isfinite(weights[2])) | (~(weights[3] > 0.0)) | (~np.isfinite(weights[3])) | (~(weights[4] > 0.0)) | (~np.isfinite(weights[4])) | (~(weights[5] > 0.0)) | (~np.isfinite(weights[5]))
+    # q_ref not finite, or a weight not finite or not > 0: IK_INVALID, q NaN
+    _c3 = (~np.isfinite(ref[0])) | (~np.isfinite(ref[1])) | (~np.isfinite(ref[2])) | (~np.isfinite(ref[3])) | (~np.isfinite(ref[4])) | (~np.isfinite(ref[5])) | (~(weights[0] > 0.0)) | (~np.isfinite(weights[0])) | (~(weights[1] > 0.0)) | (~np.isfinite(weights[1])) | (~(weights[2] > 0.0)) | (~np.isfinite(weights[2])) | (~(weights[3] > 0.0)) | (~np.isfinite(weights[3])) | (~(weights[4] > 0.0)) | (~np.isfinite(weights[4])) | (~(weights[5] > 0.0)) | (~np.isfinite(weights[5]))
     _m4 = _c3
     _status1 = np.where(_m4, IK_INVALID, _status1)
     _alive2 = _alive2 & (~_m4)
@@ -9870,48 +9900,48 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
         _run126 = _run126 & (~_m128)
         # each revolute joint: the copy q + 2 pi k within the limits nearest q_ref (the nearest copy, else the last one below the upper limit or the first one above the lower limit; within IK_LIMIT_TOL of a limit clipped onto it)
         x = np.where(_run126, rows[6*i], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[0] = np.where(_run126, y, near[0])
         x = np.where(_run126, rows[6*i + 1], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[1] = np.where(_run126, y, near[1])
         x = np.where(_run126, rows[6*i + 2], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[2] = np.where(_run126, y, near[2])
         x = np.where(_run126, rows[6*i + 3], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[3] = np.where(_run126, y, near[3])
         x = np.where(_run126, rows[6*i + 4], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[4] = np.where(_run126, y, near[4])
         x = np.where(_run126, rows[6*i + 5], x)
-        y = np.where(_run126, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+        y = np.where(_run126, x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535), y)
         y = np.where(_run126, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
         y = np.where(_run126, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
         y = np.where(_run126, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
         near[5] = np.where(_run126, y, near[5])
-        dist = np.where(_run126, ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
+        dist = np.where(_run126, ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5])), dist)
         _c129 = (best < 0) | (dist < best_d)
         _m130 = _run126 & _c129
         best = np.where(_m130, i, best)
@@ -9929,7 +9959,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
     _m132 = _alive2 & _c131
     if bool(_m132.any()):
         # a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row
-        _o = _ik_continuum_members_on_lanes(_c, q_ref[0:6], target[0:16])
+        _o = _ik_continuum_members_on_lanes(_c, ref[0:6], target[0:16])
         _merge(_m132, _o[0], M, 0, _fr)
         _merge(_m132, _o[1], mflags, 0, _fr)
         for m in range(0, 4):
@@ -9937,7 +9967,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             _m134 = _m132 & _c133
             m_ok = np.where(_m134, 1, m_ok)
             x = np.where(_m134, M[6*m], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[0] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[0] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9945,7 +9975,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[0] = np.where(_m134, y, near[0])
             x = np.where(_m134, M[6*m + 1], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[1] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[1] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9953,7 +9983,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[1] = np.where(_m134, y, near[1])
             x = np.where(_m134, M[6*m + 2], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[2] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[2] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9961,7 +9991,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[2] = np.where(_m134, y, near[2])
             x = np.where(_m134, M[6*m + 3], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[3] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[3] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9969,7 +9999,7 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[3] = np.where(_m134, y, near[3])
             x = np.where(_m134, M[6*m + 4], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[4] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[4] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
@@ -9977,14 +10007,14 @@ def _ik_nearest_weighted_lanes(_c, q_ref, weights, target):
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[4] = np.where(_m134, y, near[4])
             x = np.where(_m134, M[6*m + 5], x)
-            y = np.where(_m134, x + 6.283185307179586*np.rint((q_ref[5] - x)*0.15915494309189535), y)
+            y = np.where(_m134, x + 6.283185307179586*np.rint((ref[5] - x)*0.15915494309189535), y)
             y = np.where(_m134, np.where(y > 6.283185307179586 + IK_LIMIT_TOL, x + 6.283185307179586*np.floor(((6.283185307179586 + IK_LIMIT_TOL) - x)*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586 - IK_LIMIT_TOL, x - 6.283185307179586*np.floor((x - (-6.283185307179586 - IK_LIMIT_TOL))*0.15915494309189535), y), y)
             y = np.where(_m134, np.where(y > 6.283185307179586, 6.283185307179586, y), y)
             y = np.where(_m134, np.where(y < -6.283185307179586, -6.283185307179586, y), y)
             m_ok = np.where(_m134, np.where(np.abs(y - (x + 6.283185307179586*np.rint((y - x)*0.15915494309189535))) <= IK_LIMIT_TOL, m_ok, 0), m_ok)
             near[5] = np.where(_m134, y, near[5])
-            dist = np.where(_m134, ((((w[0]*((near[0] - q_ref[0])*(near[0] - q_ref[0])) + w[1]*((near[1] - q_ref[1])*(near[1] - q_ref[1]))) + w[2]*((near[2] - q_ref[2])*(near[2] - q_ref[2]))) + w[3]*((near[3] - q_ref[3])*(near[3] - q_ref[3]))) + w[4]*((near[4] - q_ref[4])*(near[4] - q_ref[4]))) + w[5]*((near[5] - q_ref[5])*(near[5] - q_ref[5])), dist)
+            dist = np.where(_m134, ((((w[0]*((near[0] - ref[0])*(near[0] - ref[0])) + w[1]*((near[1] - ref[1])*(near[1] - ref[1]))) + w[2]*((near[2] - ref[2])*(near[2] - ref[2]))) + w[3]*((near[3] - ref[3])*(near[3] - ref[3]))) + w[4]*((near[4] - ref[4])*(near[4] - ref[4]))) + w[5]*((near[5] - ref[5])*(near[5] - ref[5])), dist)
             _c135 = (m_ok > 0) & ((best < 0) | (dist < best_d))
             _m136 = _m134 & _c135
             best = np.where(_m136, 8, best)

@@ -1201,6 +1201,32 @@ def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
                 assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, (q5, q)
 
 
+def test_ik_nearest_may_write_its_answer_over_q_ref():
+    """A controller's in-place call ``ur5_ik_nearest(q, T, q)`` returned IK_INVALID with q NaN: the function set q to
+    NaN before it read q_ref. It reads q_ref first now, and the in-place answer is the out-of-place one, for the
+    weighted variant too (the header allows it)."""
+    b = built("ur5")
+    lib, prefix = b.c._lib, b.generated.module.prefix
+    pointer = ctypes.POINTER(ctypes.c_double)
+    plain, weighted = getattr(lib, f"{prefix}_ik_nearest"), getattr(lib, f"{prefix}_ik_nearest_weighted")
+    plain.argtypes, plain.restype = [pointer] * 3, ctypes.c_int
+    weighted.argtypes, weighted.restype = [pointer] * 4, ctypes.c_int
+    q = np.array([[0.3, -1.2, 1.4, -1.8, 0.9, 0.7], [-2.0, -0.4, -1.9, 0.6, -1.1, 2.5]])
+    T = targets_of(b.chain, q)
+    weights = np.array([1.0, 2.0, 0.5, 1.0, 3.0, 1.0])
+    for i in range(q.shape[0]):
+        start = q[i] + 0.05  # near the source, not on it: the answer differs from the reference it overwrites
+        target = np.ascontiguousarray(T[i].reshape(16))
+        buf = start.copy()
+        assert plain(buf.ctypes.data_as(pointer), target.ctypes.data_as(pointer), buf.ctypes.data_as(pointer)) == 0
+        np.testing.assert_array_equal(buf, b.c.ik_nearest(start, T[i]).q)
+        assert np.abs(buf - q[i]).max() < 1e-9
+        buf = start.copy()
+        assert weighted(buf.ctypes.data_as(pointer), weights.ctypes.data_as(pointer), target.ctypes.data_as(pointer),
+                        buf.ctypes.data_as(pointer)) == 0
+        np.testing.assert_array_equal(buf, b.c.ik_nearest_weighted(start, weights, T[i]).q)
+
+
 def test_continuum_members_take_the_target_as_4_x_4_as_the_other_entries_do():
     """ik_continuum_members (a straight-line function) refused a (4, 4) target (``target must have shape (..., 16)``)
     where ik_all and ik_nearest take it (a new user's report). Every Python entry now reads (..., 4, 4) as the 16

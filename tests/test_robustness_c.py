@@ -228,7 +228,11 @@ def test_ik_solve_accepts_null_outputs_and_keeps_nan_checks_under_fast_math(tmp_
     q[0] = 0.0; q[1] = 0.0;
     printf("inplace %d\\n", arm_ik_solve(q, target, l, 0.0, 1e-9, 100, q, NULL, NULL));
     """
-    for flags in (("-O2",), ("-O2", "-ffast-math"), ("-O0",)):
+    # -ffinite-math-only alone (no __FAST_MATH__) folded isfinite while the bit tests waited for __FAST_MATH__: a NaN
+    # q0 came back "converged"; clang's -fno-honor-nans sets no macro at all
+    finite_only = [("-O2", "-ffinite-math-only")] + ([("-O2", "-fno-honor-nans", "-fno-honor-infinities")]
+                                                     if compiler == "clang" else [])
+    for flags in (("-O2",), ("-O2", "-ffast-math"), ("-O0",), *finite_only):
         run = _driver(tmp_path, "arm", body, flags=flags, compiler=compiler)
         assert run.returncode == 0, (flags, run.returncode, run.stderr)
         got = {line.split()[0]: line.split()[1:] for line in run.stdout.splitlines()}

@@ -362,7 +362,8 @@ def _doc_continuum(arm: _Arm, choice: str) -> tuple[str, ...]:
         return ()
     a, w, b, s, s_odd = arm.continuum
     multiple = "multiple" if s and s_odd else "even multiple" if s else "odd multiple"
-    return (f"An aligned wrist (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of a "
+    part = "shoulder" if a > b else "wrist"  # a spherical shoulder's continuum is of the reversed chain's joints 3, 2, 1
+    return (f"An aligned {part} (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of a "
             f"{multiple} of pi) turns joints {a + 1} and {b + 1}",
             f"about one axis: such a row takes {choice}.")
 
@@ -485,7 +486,11 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
     name = "ik_nearest_weighted" if weighted else "ik_nearest"
     b = Body()
     data_args, data = _inputs(arm)
-    q_ref, q = Array("q_ref", N), Array("q", N)
+    q = Array("q", N)
+    # q_ref read into a local first: q may be q_ref (a controller's in-place call), and q is set to NaN below
+    q_ref = b.array("ref", N)
+    for j in range(N):
+        b.set(q_ref[j], Array("q_ref", N)[j])
     given = Array("weights", N) if weighted else None
     # the weights divided by the largest: the same nearest row, and no product overflows (1e308 times a square did)
     weights = b.array("w", N) if weighted else None
@@ -503,7 +508,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         continuum = Continuum(b, arm, reference=True, weights=pair)
     for j in range(N):
         b.set(q[j], Const(math.nan))
-    b.comment("q_ref not finite" + (", or a weight not finite and > 0" if weighted else "") + ": IK_INVALID, q NaN")
+    b.comment("q_ref not finite" + (", or a weight not finite or not > 0" if weighted else "") + ": IK_INVALID, q NaN")
     bad = [~Call1("isfinite", q_ref[j]) for j in range(N)]
     if weighted:
         bad += [~(given[j] > 0.0) | ~Call1("isfinite", given[j]) for j in range(N)]
@@ -560,7 +565,8 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         "within the joint limits nearest q_ref[j], then the row with the",
         "least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row",
         "(IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite"
-        + (" or a weight not finite and > 0)." if weighted else ")."),
+        + (" or a weight that is not finite or not > 0)." if weighted else ")."),
+        "q may be q_ref (an in-place call).",
         *_doc_continuum(arm, "the member within the limits nearest q_ref" + (" in the weighted metric" if weighted else "")),
         *(("An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members",
            "at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the",
