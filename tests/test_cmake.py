@@ -53,6 +53,57 @@ def test_add_subdirectory_and_link_the_prefix_target(tmp_path, capsys):
     np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
 
 
+def _cmake(*args, cwd=None):
+    r = subprocess.run(["cmake", *args], capture_output=True, text=True, cwd=cwd)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return r
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake not installed")
+def test_a_parent_project_chooses_shared_on_the_first_configure(tmp_path):
+    """``set(ARM3_SHARED ON)`` before add_subdirectory built a static library on the first configure and a shared one
+    on the second: cmake_minimum_required(VERSION 3.10) left policy CMP0077 unset, so option() cleared the parent's
+    variable once (a C++ integrator's report)."""
+    generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=tmp_path / "arm3", cmake=True)
+    (tmp_path / "app.c").write_text(APP)
+    (tmp_path / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.10)\nproject(app C)\nset(ARM3_SHARED ON)\nadd_subdirectory(arm3)\n"
+        "add_executable(app app.c)\ntarget_link_libraries(app PRIVATE arm3::arm3)\n")
+    r = _cmake("-S", str(tmp_path), "-B", str(tmp_path / "build"))
+    assert "CMP0077" not in r.stderr, r.stderr
+    _cmake("--build", str(tmp_path / "build"))
+    assert list((tmp_path / "build").rglob("libarm3.so*")) and not list((tmp_path / "build").rglob("libarm3.a"))
+    run = subprocess.run([str(tmp_path / "build" / "app")], capture_output=True, text=True, check=True)
+    np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake not installed")
+def test_install_and_find_package(tmp_path):
+    """The emitted CMakeLists.txt had no install rules: ``cmake --install`` installed nothing, ``find_package(arm3)``
+    failed, and a shared library linked into an installed plugin was not found at run time. It installs the library,
+    the header and arm3Config.cmake (target arm3::arm3), with libm by name rather than this machine's path."""
+    generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=tmp_path / "arm3", cmake=True)
+    prefix = tmp_path / "prefix"
+    _cmake("-S", str(tmp_path / "arm3"), "-B", str(tmp_path / "lib_build"))
+    _cmake("--build", str(tmp_path / "lib_build"))
+    _cmake("--install", str(tmp_path / "lib_build"), "--prefix", str(prefix))
+    assert list(prefix.rglob("arm3.h")) and list(prefix.rglob("libarm3.a"))
+    configs = list(prefix.rglob("arm3Config.cmake"))
+    assert configs
+    exported = "".join(p.read_text() for p in configs[0].parent.glob("*.cmake"))
+    assert "libm" not in exported and str(tmp_path / "arm3") not in exported  # no path of the build machine
+    consumer = tmp_path / "consumer"
+    consumer.mkdir()
+    (consumer / "app.c").write_text(APP)
+    (consumer / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.10)\nproject(consumer C)\nfind_package(arm3 REQUIRED)\n"
+        "add_executable(app app.c)\ntarget_link_libraries(app PRIVATE arm3::arm3)\n")
+    _cmake("-S", str(consumer), "-B", str(consumer / "build"), f"-DCMAKE_PREFIX_PATH={prefix}")
+    _cmake("--build", str(consumer / "build"))
+    run = subprocess.run([str(consumer / "build" / "app")], capture_output=True, text=True, check=True)
+    np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
+
+
 def test_plain_cc_line(tmp_path):
     from skelarm_sym.build import find_compiler
 
