@@ -17,7 +17,8 @@ beside each library a sidecar ``.sha256`` records the cache key and the SHA-256
 of the library as built, both flushed to disk before their renames. A library
 whose sidecar is missing or does not match its key or its content (truncated by
 a power cut, copied from another arm, planted) is rebuilt, never loaded. Build
-folders of killed compiles (``.build-PID-*``) are removed by later compiles.
+folders of killed compiles (``.build-PID-*``) are removed by later compiles, and so are libraries that
+no call has built or loaded for :data:`UNUSED_LIBRARY_DAYS` days (the cache would otherwise only grow).
 
 A compiler that refuses the sources raises :class:`CompileError`: its first line
 names the file and the compiler's first error, the next lines give the command
@@ -26,6 +27,7 @@ and the first ``COMPILER_LINES`` lines of the compiler's output.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
@@ -72,6 +74,10 @@ warning flags (:data:`STRICT_FLAGS`) are used at every level."""
 OPT_LEVELS = ("0", "1", "2", "3", "s", "g")
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 STALE_BUILD_SECONDS = 3600
+UNUSED_LIBRARY_DAYS = 30
+"""A compile removes the cached libraries that no call has built or loaded for this many days (a library's
+modification time is renewed each time it is reused)."""
+_KEY_FOLDER = re.compile(r"[0-9a-f]{24}")
 """A build folder whose process cannot be identified is removed when older than this."""
 
 
@@ -227,6 +233,34 @@ def remove_stale_builds(root: Path) -> list[Path]:
     return removed
 
 
+def remove_unused_libraries(root: Path, days: float = UNUSED_LIBRARY_DAYS) -> list[Path]:
+    """Remove the key folders of ``root`` (24 hexadecimal digits, as :func:`compile_shared` names them) whose
+    libraries were all last built or reused more than ``days`` days ago; other folders are left alone."""
+    removed = []
+    now = time.time()
+    for folder in root.iterdir():
+        if not _KEY_FOLDER.fullmatch(folder.name) or folder.is_symlink() or not folder.is_dir():
+            continue
+        try:
+            libraries = [path.lstat().st_mtime for path in folder.glob("lib*") if not path.name.endswith(".sha256")]
+        except OSError:
+            continue
+        if libraries and now - max(libraries) > days * 86400:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
+
+
+def reusable(target: Path, key: str) -> bool:
+    """Whether the cached library ``target`` is the one built for ``key`` (:func:`verified`); if so it is marked
+    used now, which keeps :func:`remove_unused_libraries` from it."""
+    if not (target.exists() and verified(target, key)):
+        return False
+    with contextlib.suppress(OSError):
+        os.utime(target)
+    return True
+
+
 def compile_shared(
     sources: dict[str, str],
     flags: Sequence[str] | None = None,
@@ -267,9 +301,10 @@ def compile_shared(
     # the key folder is checked before anything in it is trusted: made group-writable after the
     # build, the library beside the sidecar could have been swapped between the check and the load
     private_folder(target.parent)
-    if target.exists() and verified(target, full_key):
+    if reusable(target, full_key):
         return target
     remove_stale_builds(root)
+    remove_unused_libraries(root)
     work = Path(tempfile.mkdtemp(prefix=f".build-{os.getpid()}-", dir=target.parent))
     try:
         for name, text in sources.items():

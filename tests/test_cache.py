@@ -140,6 +140,28 @@ def test_build_folders_of_killed_compiles_are_removed(cache):
     assert not dead.exists() and not old.exists() and alive.exists()
 
 
+@needs_cc
+def test_libraries_unused_for_a_month_are_removed_and_a_reused_one_is_kept(cache):
+    """The cache only grew (a new user's held 1195 libraries, 234 MB). A compile now removes the libraries no call has
+    built or loaded for UNUSED_LIBRARY_DAYS days; reusing one renews it; folders of other shapes are not touched."""
+    _, sources = _sources(1)
+    kept = build.compile_shared(sources)
+    _, stale_sources = _sources(2)
+    stale = build.compile_shared(stale_sources)
+    month = time.time() - (build.UNUSED_LIBRARY_DAYS + 1) * 86400
+    for path in (kept, stale):
+        os.utime(path, (month, month))
+    other = cache / "templates"  # not a key folder: the template cache's
+    other.mkdir()
+    (other / "libold.so").write_bytes(b"x")
+    os.utime(other / "libold.so", (month, month))
+    assert build.compile_shared(sources) == kept  # reused: marked used now
+    assert time.time() - kept.stat().st_mtime < 3600
+    _, new_sources = _sources(3)
+    build.compile_shared(new_sources)  # a build prunes
+    assert kept.exists() and not stale.parent.exists() and (other / "libold.so").exists()
+
+
 def test_missing_or_malformed_compilers_are_named(monkeypatch):
     monkeypatch.delenv("CC", raising=False)
     with pytest.raises(build.CompilerNotFound, match="no-such-cc-4711"):

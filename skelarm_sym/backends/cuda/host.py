@@ -27,7 +27,7 @@ import numpy as np
 
 from ...build import (
     CompilerNotFound, _durable_replace, _split_command, cache_folder, compile_failure, default_flags, file_sha256,
-    private_folder, remove_stale_builds, verified,
+    private_folder, remove_stale_builds, remove_unused_libraries, reusable,
 )
 from ...errors import InputError
 from ...ir.nodes import Function
@@ -86,9 +86,10 @@ def compile_host_library(sources: dict[str, str], flags: Sequence[str] | None = 
     root = private_folder(cache_folder())
     target = root / full_key[:24] / f"lib{cu[:-3]}_cuda_host.so"
     private_folder(target.parent)
-    if target.exists() and verified(target, full_key):
+    if reusable(target, full_key):
         return target
     remove_stale_builds(root)
+    remove_unused_libraries(root)
     work = Path(tempfile.mkdtemp(prefix=f".build-{os.getpid()}-", dir=target.parent))
     try:
         for name, text in sources.items():
