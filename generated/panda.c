@@ -31,7 +31,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x695f07fdUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xd30d256cUL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 

@@ -61,7 +61,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x695f07fdUL
+#define PANDA_STAMP 0xd30d256cUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -209,7 +209,7 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
 #define PANDA_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define PANDA_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define PANDA_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define PANDA_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
+#define PANDA_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > PANDA_IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed) */
 
 /* pose IK of the tool frame.
  * Pose IK: Levenberg-Marquardt on e = [p_target - p; log3(R_target R^T)] (base axes), step
@@ -220,7 +220,7 @@ void panda_jacobian_rpy_batch(size_t m, const double *q, double *JA);
  * (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
  * Measured success (1000 random reachable poses and starts, tol 1e-10, 100 steps) for lambda = 0 / 1e-3 / 1e-2 / 0.1:
  * UR5 100.0 / 100.0 / 100.0 / 99.9 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.9 / 99.9 / 99.9 / 99.8 %.
- * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
+ * Joint limits (PANDA_Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
  * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
  * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
@@ -247,7 +247,7 @@ void panda_ik_solve_batch(size_t m, const double *q0, const double *target, doub
  * and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.
  * After a step that left |e| above 0.5 of its start, while |e| < 0.05, the step gets a geodesic
  * (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
- * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
+ * Joint limits (PANDA_Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
  * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
  * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed

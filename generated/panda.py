@@ -35,7 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x695f07fd
+STAMP = 0xd30d256c
 """The generation stamp: the same number in every file of the set this module was generated with."""
 IK_ORTHO_TOL = 1e-06
 """ik_solve and ik_all refuse a target whose |R^T R - I| exceeds this anywhere (or whose det R <= 0)"""

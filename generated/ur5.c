@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x89cea5a6UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0x4577623fUL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

@@ -64,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x89cea5a6UL
+#define UR5_STAMP 0x4577623fUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -258,9 +258,9 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN */
+#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite or not > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): q NaN */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
-#define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit IK_FLAG_LEAST_SQUARES set), possibly none */
+#define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit UR5_IK_FLAG_LEAST_SQUARES set), possibly none */
 #define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */
 
 /* pose IK of the tool frame.
@@ -272,7 +272,7 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
  * (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
  * Measured success (1000 random reachable poses and starts, tol 1e-10, 100 steps) for lambda = 0 / 1e-3 / 1e-2 / 0.1:
  * UR5 100.0 / 100.0 / 100.0 / 99.9 %, Panda 99.3 / 99.3 / 99.3 / 99.4 %, PUMA 560 99.9 / 99.9 / 99.9 / 99.8 %.
- * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
+ * Joint limits (UR5_Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
  * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
  * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
@@ -299,7 +299,7 @@ void ur5_ik_solve_batch(size_t m, const double *q0, const double *target, double
  * and fades as it vanishes, so it shapes the path near singular poses and never stops the convergence.
  * After a step that left |e| above 0.5 of its start, while |e| < 0.05, the step gets a geodesic
  * (second-order) correction from one more pose evaluation: it follows curved valleys near singular targets.
- * Joint limits (Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
+ * Joint limits (UR5_Q_MIN/MAX) are kept by clamping; joints a step pushes past a bound are removed from it;
  * revolute joints with a range of 2 pi or more wrap by 2 pi. An attempt ends when it stalls at a stationary
  * point of |e|, makes too little progress (not counting steps slowed by the damping) or takes 25 steps;
  * the next starts from the best of 8 random configurations within the limits (xorshift64*, a fixed
@@ -320,13 +320,13 @@ int ur5_ik_solve_position(const double q0[6], const double target[3], double lam
 void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *target, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 /* every closed-form IK solution within the joint limits.
- * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
+ * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most UR5_IK_MAX_SOLUTIONS = 8,
  * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
  * multiples of 2 pi to the copy nearest the middle of their range,
- * every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide), duplicates (IK_DUP_TOL) dropped, in the
+ * every row within the joint limits (UR5_Q_MIN/UR5_Q_MAX: each range is more than a turn wide), duplicates (UR5_IK_DUP_TOL) dropped, in the
  * derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
- * NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
- * IK_FLAG_SINGULAR (one member of a continuum, or a double root).
+ * NaN, their flags -1. flags: UR5_IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
+ * UR5_IK_FLAG_SINGULAR (one member of a continuum, or a double root).
  * No iteration: the same time for every target.
  * count and flags may be NULL.
  * Stack: at most 8 KB.
@@ -343,11 +343,11 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
  * The ik_all solution nearest q_ref (Euclidean, rad and m alike): each revolute joint takes the copy q + 2 pi k
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
- * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite).
+ * (UR5_IK_OUT_OF_LIMITS, UR5_IK_UNREACHABLE with no row within the limits, UR5_IK_INVALID; also UR5_IK_INVALID for q_ref not finite).
  * q may be q_ref (an in-place call).
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
- * limits turns IK_OUT_OF_LIMITS into IK_OK.
+ * limits turns UR5_IK_OUT_OF_LIMITS into UR5_IK_OK.
  * Stack: at most 8 KB.
  */
 int ur5_ik_nearest(const double q_ref[6], const double target[16], double q[6]);
@@ -362,11 +362,11 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
  * The ik_all solution nearest q_ref in sum_j weights[j] (q[j] - q_ref[j])^2 (rad and m alike; weights finite and > 0): each revolute joint takes the copy q + 2 pi k
  * within the joint limits nearest q_ref[j], then the row with the
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
- * (IK_OUT_OF_LIMITS, IK_UNREACHABLE with no row within the limits, IK_INVALID; also IK_INVALID for q_ref not finite or a weight that is not finite or not > 0).
+ * (UR5_IK_OUT_OF_LIMITS, UR5_IK_UNREACHABLE with no row within the limits, UR5_IK_INVALID; also UR5_IK_INVALID for q_ref not finite or a weight that is not finite or not > 0).
  * q may be q_ref (an in-place call).
  * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
- * limits turns IK_OUT_OF_LIMITS into IK_OK.
+ * limits turns UR5_IK_OUT_OF_LIMITS into UR5_IK_OK.
  * Stack: at most 8 KB.
  */
 int ur5_ik_nearest_weighted(const double q_ref[6], const double weights[6], const double target[16], double q[6]);

@@ -76,7 +76,7 @@ STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 STALE_BUILD_SECONDS = 3600
 UNUSED_LIBRARY_DAYS = 30
 """A compile removes the cached libraries that no call has built or loaded for this many days (a library's
-modification time is renewed each time it is reused)."""
+sidecar's modification time is renewed each time it is reused)."""
 _KEY_FOLDER = re.compile(r"[0-9a-f]{24}")
 """A build folder whose process cannot be identified is removed when older than this."""
 
@@ -242,7 +242,7 @@ def remove_unused_libraries(root: Path, days: float = UNUSED_LIBRARY_DAYS) -> li
         if not _KEY_FOLDER.fullmatch(folder.name) or folder.is_symlink() or not folder.is_dir():
             continue
         try:
-            libraries = [path.lstat().st_mtime for path in folder.glob("lib*") if not path.name.endswith(".sha256")]
+            libraries = [path.lstat().st_mtime for path in folder.glob("lib*")]  # the libraries and their sidecars
         except OSError:
             continue
         if libraries and now - max(libraries) > days * 86400:
@@ -253,11 +253,12 @@ def remove_unused_libraries(root: Path, days: float = UNUSED_LIBRARY_DAYS) -> li
 
 def reusable(target: Path, key: str) -> bool:
     """Whether the cached library ``target`` is the one built for ``key`` (:func:`verified`); if so it is marked
-    used now, which keeps :func:`remove_unused_libraries` from it."""
+    used now (its sidecar's time: the library itself stays as built), which keeps :func:`remove_unused_libraries`
+    from it."""
     if not (target.exists() and verified(target, key)):
         return False
     with contextlib.suppress(OSError):
-        os.utime(target)
+        os.utime(_sidecar(target))
     return True
 
 

@@ -296,6 +296,7 @@ def test_the_solvers_comments_name_the_limit_tables_only_where_the_files_have_th
             text = sources[name + suffix]
             has_tables = f"{name.upper()}_Q_MIN" in text if suffix == ".h" else "\nQ_MIN = " in text
             assert has_tables == limited, (name, suffix)
-            assert text.count("Joint limits (Q_MIN/MAX) are kept by clamping") == (2 if limited else 0), (name, suffix)
+            named = f"{name.upper()}_Q_MIN" if suffix == ".h" else "Q_MIN"  # the header names its macros
+            assert text.count(f"Joint limits ({named}/MAX) are kept by clamping") == (2 if limited else 0), (name, suffix)
             assert text.count("The arm has no position limits (no Q_MIN/Q_MAX): nothing is clamped") == (0 if limited else 2)
         assert "stop when the position error (m) is <= tol" in sources[name + ".py"]  # ik_solve_position's tol

@@ -11,6 +11,9 @@ variant. Procedures (the iterative solvers) and their helpers are printed statem
 
 from __future__ import annotations
 
+import re
+from typing import Sequence
+
 from ...ir.nodes import Const, Declare, DeclareArray, Elem, For, Function, If, Let, Module, Store, TrigBlock, Type, While, module_statuses
 from ...ir.walk import body_names, called, expr_names, needed_lets
 from ..text import c_comment
@@ -129,11 +132,22 @@ class Names:
     """How module-level names print: constants and statuses as ``PREFIX_NAME`` macros, functions as
     ``prefix_name``."""
 
-    def __init__(self, prefix: str) -> None:
+    def __init__(self, prefix: str, known: Sequence[str] = ()) -> None:
         self.prefix = prefix
+        # the module's macro names as the tool's docs write them (IK_OK, Q_MIN): prefixed in the header's comments
+        self._known = re.compile(r"(?<![A-Za-z0-9_])(" + "|".join(sorted(map(re.escape, known), key=len, reverse=True))
+                                 + r")(?![A-Za-z0-9_])") if known else None
 
     def macro(self, name: str) -> str:
         return f"{self.prefix.upper()}_{name}"
+
+    def doc(self, text: str) -> str:
+        """A line of the tool's own documentation (a function's doc, a status's meaning, a constant's or table's doc;
+        never the header notes, which carry the robot file's names and the command line) for a C comment, each
+        macro it names spelt as the header defines it (``IK_OK``: ``UR5_IK_OK``)."""
+        if self._known is not None:
+            text = self._known.sub(lambda m: self.macro(m.group(1)), text)
+        return c_comment(text)
 
     def function(self, name: str) -> str:
         return f"{self.prefix}_{name}"
@@ -333,8 +347,8 @@ def procedure_context(f: Function, precision: CPrecision, names: Names) -> dict:
         "run": run,
         "locals": [{"name": a.name, "type": c_type(precision, a.type), "size": a.size} for a in optional],
         "run_args": [f"{a.name} ? {a.name} : {a.name}_local" if a.optional and a.is_output else a.name for a in f.arguments],
-        "doc": [c_comment(line) for line in f.doc],
-        "statuses": [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)} for name, value, meaning in f.statuses],
+        "doc": [names.doc(line) for line in f.doc],
+        "statuses": [{"macro": names.macro(name), "value": value, "meaning": names.doc(meaning)} for name, value, meaning in f.statuses],
         "calls": sorted(called(f.body)),
         "batch": None if f.kind == "helper" else procedure_batch(f, precision),
     }
@@ -434,7 +448,8 @@ def trig_helpers(functions: list[dict]) -> list[dict]:
 def context(module: Module) -> dict:
     """Everything both templates print."""
     precision = PRECISIONS[module.precision]
-    names = Names(module.prefix)
+    known = [c.name for c in module.constants] + [t.name for t in module.tables]
+    names = Names(module.prefix, known + [name for name, _, _ in module_statuses(module.functions)])
     shared = Shared()
     straight = [straight_context(f, precision, names, shared) for f in module.functions if f.kind == "straight"]
     procedures = [procedure_context(f, precision, names) for f in module.functions if f.kind != "straight"]
@@ -442,7 +457,7 @@ def context(module: Module) -> dict:
     for p in procedures:
         p["stack"] = stack_text(stacks[p["name"]])
         p["batch_stack"] = stack_text(frame_bytes(len(p["params"]) + 3) + 16 + stacks[p["name"]])
-    statuses = [{"macro": names.macro(name), "value": value, "meaning": c_comment(meaning)}
+    statuses = [{"macro": names.macro(name), "value": value, "meaning": names.doc(meaning)}
                 for name, value, meaning in module_statuses(module.functions)]
     uses_finite = any("_FINITE(" in line for p in procedures for line in p["body"])
     big = {"double": 1e300, "float": 1e30}[module.precision]
@@ -458,9 +473,9 @@ def context(module: Module) -> dict:
         "statuses": statuses,
         "finite": uses_finite,
         "trig_sizes": trig_helpers(straight),
-        "constants": [{"macro": names.macro(c.name), "value": precision.literal(c.value), "doc": c_comment(c.doc)} for c in module.constants],
+        "constants": [{"macro": names.macro(c.name), "value": precision.literal(c.value), "doc": names.doc(c.doc)} for c in module.constants],
         "tables": [
-            {"macro": names.macro(t.name), "doc": c_comment(t.doc),
+            {"macro": names.macro(t.name), "doc": names.doc(t.doc),
              "values": [precision.literal(v if v is not None else t.sign * big) for v in t.values]}
             for t in module.tables
         ],

@@ -404,7 +404,7 @@ def all_solver(arm: _Arm) -> Function:
 
 NEAREST_STATUSES = STATUSES[:-1] + (
     ("IK_INVALID", STATUS["invalid"],
-     "q_ref not finite (or a weight not finite and > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, "
+     "q_ref not finite (or a weight not finite or not > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, "
      "a translation entry beyond "
      "IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": q NaN"),
 )
