@@ -26,12 +26,18 @@ C_RESERVED = frozenset(
 C_HEADERS = frozenset(
     """assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal stdalign stdarg
     stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath threads time uchar wchar wctype
-    features""".split()
+    features
+    aio alloca arpa byteswap cpio dirent dlfcn endian err error execinfo fcntl fnmatch ftw getopt glob grp iconv
+    langinfo libgen link malloc memory monetary mqueue ndbm netdb nl_types poll pthread pwd regex sched search
+    semaphore spawn strings stropts syslog tar termios ucontext ulimit unistd utime utmpx values wordexp
+    immintrin x86intrin xmmintrin emmintrin pmmintrin tmmintrin smmintrin nmmintrin wmmintrin ammintrin avxintrin
+    avx2intrin intrin arm_neon arm_sve omp python pyconfig windows cuda cuda_runtime""".split()
 )
-"""Names of the standard C headers (C99 and C11) and of glibc's ``features.h``, which ``<math.h>`` includes: a
-file ``{name}.h`` in a folder on the include path is read for the system header of its name (``<stddef.h>``, which
-the emitted header includes) or hides it from the user's own code. Compared in lower case (a file system may not
-tell ``Stddef.h`` from ``stddef.h``)."""
+"""Names of system headers: the standard C headers (C99 and C11), glibc's ``features.h`` (which ``<math.h>``
+includes), POSIX's and glibc's, the compilers' intrinsics, Python's, OpenMP's, Windows' and CUDA's main ones. A file
+``{name}.h`` in a folder on the include path is read for the system header of its name (``<stddef.h>``, which the
+emitted header includes) or hides it from the user's own code (``-Ibuild`` and the CMake target's include folder put
+it there). Compared in lower case (a file system may not tell ``Stddef.h`` from ``stddef.h``)."""
 
 
 def standard_header(name: str) -> bool:
@@ -42,6 +48,16 @@ def standard_header(name: str) -> bool:
 _INPUT = re.compile(r"params|d{0,2}q\d*|lambda|xi_\w*|nu_\w*|RANK_TOL")
 """Names of the SymPy symbols the derivations create for their inputs (``q1``, ``dq3``, ``lambda``,
 the twist's ``xi_vx`` ...): a parameter of the same name would be the same symbol."""
+
+_DERIVATION_SYMBOL = re.compile(r"target\d*|lock(_[cs])?|_\w*")
+"""More names of SymPy symbols a chain's derivations create: the closed-form IK's target entries (``target0`` to
+``target15``) and lock (``lock``, ``lock_c``, ``lock_s``), and every intermediate step (``_ch_c1``, ``_angle_0``:
+all start with ``_``). A parameter of the same name would be the same symbol, and the code built from it wrong."""
+
+
+def derivation_symbol(name: str) -> bool:
+    """True when ``name`` is (or has the form of) a symbol a chain's derivation makes itself: not a parameter's name."""
+    return bool(_DERIVATION_SYMBOL.fullmatch(name))
 
 
 def reserved_prefix(name: str) -> bool:

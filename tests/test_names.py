@@ -91,6 +91,9 @@ def test_quoted():
         ("numpy", "numpy_robot"),
         ("stddef", "stddef_robot"),  # a C system header: stddef.h would be read for <stddef.h>
         ("Features", "Features_robot"),  # glibc's <features.h>, which <math.h> includes (any case)
+        ("unistd", "unistd_robot"),  # POSIX: -Ibuild made <unistd.h> the robot's header (a security review)
+        ("immintrin", "immintrin_robot"),  # the compiler's intrinsics
+        ("Python", "Python_robot"),  # Python.h, which the CPython extension includes
         ("a" * 60, "a" * IDENTIFIER_LENGTH),
         ("ロボット", None),
         ("", None),

@@ -64,6 +64,10 @@ BAD = {
     "parameter_not_ascii": (REV + 'a = "länge"\n', r"joints\[0\]\.a: cannot parse"),
     "parameter_c_keyword": (REV + 'a = "double"\n', r"parameter name 'double' is a reserved word"),
     "parameter_clashes_with_argument": (REV + 'a = "q"\n', r"parameter name 'q' is a reserved word"),
+    # a derivation's own symbols (a security review): "_ch_c1" made wrong code with exit 0, "_ch_W2z" hung generate
+    "parameter_is_a_step_name": (REV + 'a = "_ch_c1"\n', r"parameter name '_ch_c1' starts with _, as the derivation's own"),
+    "parameter_is_an_ik_target_entry": (REV + 'a = "target3"\n', r"parameter name 'target3' is a reserved word"),
+    "parameter_is_the_lock": (REV + 'a = "lock_c"\n', r"parameter name 'lock_c' is a reserved word"),
     "boolean_value": (REV + "a = true\n", r"joints\[0\]\.a must be a number or a string expression, got bool"),
     "short_rpy": (REV + "[base]\nrpy = [0.0, 0.0]\n", r"base\.rpy must be a list of three numbers"),
     "robot_name_not_identifier": ('name = "3d-arm"\n' + REV, r"name must be a C identifier"),

@@ -40,7 +40,7 @@ from pathlib import Path
 import sympy as sp
 
 from ...errors import InputError
-from ...names import (IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, reserved_name, reserved_prefix,
+from ...names import (IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, derivation_symbol, reserved_name, reserved_prefix,
                       standard_header)
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
@@ -137,7 +137,10 @@ def _table_value(raw: object, what: str, angle: bool, parameters: dict[str, sp.S
                 raise InputError(f"{what}: {quoted(raw)} is not finite")
             if len(text) > IDENTIFIER_LENGTH:
                 raise InputError(f"{what}: parameter name {quoted(text, 40)} is longer than {IDENTIFIER_LENGTH} characters")
-            if reserved_name(text):
+            if text.startswith("_"):
+                raise InputError(f"{what}: parameter name {text!r} starts with _, as the derivation's own names do: "
+                                 "start it with a letter")
+            if reserved_name(text) or derivation_symbol(text):
                 raise InputError(f"{what}: parameter name {text!r} is a reserved word")
             return parameters.setdefault(text, sp.Symbol(text, real=True))
         return _expression_value(text, what, angle)
