@@ -52,7 +52,9 @@ def remove_stale_temporaries(folder: Path, names) -> list[Path]:
     removed = []
     now = time.time()
     for name in names:
-        pattern = re.compile(r"\." + re.escape(name) + r"\.(?:(\d+)\.)?[^/]*\.(?:tmp|bak)\Z")
+        # exactly the names this module makes (mkstemp's 8 characters, token_hex(4)'s 8 digits): a user's own
+        # ".arm.h.orig.bak" or ".arm.h.20240101.mine.bak" is not ours to remove
+        pattern = re.compile(r"\." + re.escape(name) + r"\.(?:(\d+)\.)?(?:[a-z0-9_]{8}\.tmp|[0-9a-f]{8}\.bak)\Z")
         try:
             entries = list(folder.iterdir())
         except OSError:

@@ -200,17 +200,21 @@ def test_files_are_flushed_then_renamed_as_a_set(tmp_path, monkeypatch):
 
 def test_stale_temporaries_of_killed_runs_are_removed(tmp_path):
     tmp_path.mkdir(exist_ok=True)
-    dead = tmp_path / f".arm2.c.{DEAD_PID}.k3j.tmp"
-    old = tmp_path / ".arm2.h.x8z2.tmp"  # no pid (an older version): removed when old
-    recent = tmp_path / ".arm2.py.q1w2.tmp"
-    alive = tmp_path / f".arm2.h.{os.getppid()}.zz.tmp"  # a running writer
-    other = tmp_path / f".other.c.{DEAD_PID}.k.tmp"  # another prefix: not ours to remove
-    for path in (dead, old, recent, alive, other):
+    dead = tmp_path / f".arm2.c.{DEAD_PID}.k3j_x9ab.tmp"
+    old = tmp_path / ".arm2.h.x8z2ab_9.tmp"  # no pid (an older version): removed when old
+    recent = tmp_path / ".arm2.py.q1w2e3r4.tmp"
+    alive = tmp_path / f".arm2.h.{os.getppid()}.zzzzzzzz.tmp"  # a running writer
+    other = tmp_path / f".other.c.{DEAD_PID}.kkkkkkkk.tmp"  # another prefix: not ours to remove
+    spare = tmp_path / f".arm2.c.{DEAD_PID}.0badc0de.bak"  # a killed run's hard link of a replaced file
+    # a user's own backups, which the pattern took for ours (a security review): kept however old
+    mine = [tmp_path / ".arm2.h.orig.bak", tmp_path / f".arm2.h.{DEAD_PID}.mine.bak", tmp_path / ".arm2.c.20240101.my.tmp"]
+    for path in (dead, old, recent, alive, other, spare, *mine):
         path.write_text("partial")
-    os.utime(old, (time.time() - 2 * files.STALE_SECONDS,) * 2)
+    for path in (old, *mine):
+        os.utime(path, (time.time() - 2 * files.STALE_SECONDS,) * 2)
     generate(2, out=tmp_path)
     left = sorted(p.name for p in tmp_path.iterdir())
-    assert left == sorted([recent.name, alive.name, other.name, "arm2.c", "arm2.h", "arm2.py"])
+    assert left == sorted([recent.name, alive.name, other.name, *(p.name for p in mine), "arm2.c", "arm2.h", "arm2.py"])
 
 
 # -- a refused compile says why on its first line --------------------------------------------------------
