@@ -19,8 +19,14 @@ from .ir.walk import named_constants
 
 
 def function_items(functions) -> list[str]:
-    """The names of a ``--functions`` list (a comma-separated string or a sequence), blanks dropped."""
-    items = [x.strip() for x in functions.split(",")] if isinstance(functions, str) else [str(x).strip() for x in functions]
+    """The names of a ``--functions`` list (a comma-separated string or a sequence of names), blanks dropped;
+    InputError for anything else."""
+    if isinstance(functions, str):
+        items = [x.strip() for x in functions.split(",")]
+    elif isinstance(functions, (list, tuple, set, frozenset)) and all(isinstance(x, str) for x in functions):
+        items = [x.strip() for x in functions]
+    else:
+        raise InputError(f"functions must be a comma-separated string or a sequence of function names, got {functions!r:.80}")
     return [x for x in items if x]
 
 

@@ -220,7 +220,7 @@ def remove_stale_builds(root: Path) -> list[Path]:
     now = time.time()
     for work in root.glob("*/.build-*"):
         parts = work.name.split("-")
-        pid = int(parts[1]) if len(parts) > 2 and parts[1].isdigit() else None
+        pid = int(parts[1]) if len(parts) > 2 and parts[1].isascii() and parts[1].isdigit() else None
         try:
             old = now - work.lstat().st_mtime > STALE_BUILD_SECONDS
         except OSError:

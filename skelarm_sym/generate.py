@@ -67,6 +67,25 @@ def validate_header_name(prefix: str) -> str:
     return prefix
 
 
+CMAKE_RESERVED = frozenset(
+    """all clean help install install_local install_strip list_install_components test package package_source depend
+    edit_cache rebuild_cache all_build zero_check run_tests m""".split()
+)
+"""Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
+``INSTALL``), and ``m``, the math library the target links."""
+
+
+def validate_cmake_target(prefix: str) -> str:
+    """``prefix`` if CMake takes it as the name of the library target ``CMakeLists.txt`` defines, else InputError."""
+    if prefix.lower() in CMAKE_RESERVED:
+        raise InputError(f"prefix {prefix!r} with --cmake: CMake reserves the target name {prefix!r} (or it is the math "
+                         "library the target links); choose another --prefix")
+    if prefix.upper() == "CMAKE" or prefix.upper().startswith("CMAKE_"):
+        raise InputError(f"prefix {prefix!r} with --cmake: its variables ({prefix.upper()}_SHARED) would be CMake's own "
+                         "(CMAKE_*); choose another --prefix")
+    return prefix
+
+
 def validate_langs(langs: str | Iterable[str]) -> tuple[str, ...]:
     """Languages as a tuple in canonical order; raise InputError on an unknown one."""
     names = langs.split(",") if isinstance(langs, str) else list(langs) if isinstance(langs, Iterable) else None
@@ -113,7 +132,27 @@ def regenerate_command(model, prefix: str, precision: str, langs: Sequence[str],
         words += ["--cmake"]
     if folder is not None:
         words += ["--out", "."]
-    return " ".join(_shell_word(w) for w in words)
+    return " ".join(_shell_word(w) for w in _joined_values(words))
+
+
+_SWITCHES = frozenset({"--cmake"})
+"""The recorded options that take no value."""
+
+
+def _joined_values(words: Sequence[str]) -> list[str]:
+    """``words`` with each option whose value starts with ``-`` written ``--option=value``: a link named ``--base``
+    or a robot file ``--cmake.toml`` would otherwise be read back as an option (``expected one argument``)."""
+    out: list[str] = []
+    i = 0
+    while i < len(words):
+        word = words[i]
+        if word.startswith("--") and word not in _SWITCHES and i + 1 < len(words) and words[i + 1].startswith("-"):
+            out.append(f"{word}={words[i + 1]}")
+            i += 2
+        else:
+            out.append(word)
+            i += 1
+    return out
 
 
 _RECORDED = re.compile(r"regenerate with \(in this folder\): (.*?)\s*$", re.M)
@@ -409,6 +448,8 @@ def generate(
     target = _check_output_folder(out) if out is not None else None
     if cmake and "c" not in langs:
         raise InputError("--cmake builds the C: generate with lang 'c'")
+    if cmake:
+        validate_cmake_target(prefix)
 
     recorded_in = recorded_folder if recorded_folder is not None else target
     leftovers: list[tuple[Path, str]] = []
@@ -463,6 +504,8 @@ def parse_lengths(text: str) -> tuple[float, ...]:
 
 
 def _check_output_folder(out: str | os.PathLike) -> Path:
+    if not isinstance(out, (str, os.PathLike)):
+        raise InputError(f"out must be a folder's path (str or os.PathLike) or None, got {type(out).__name__} {out!r:.60}")
     if not os.fspath(out):  # Path("") is the current folder: an empty --out is a mistake, not a choice
         raise InputError("output folder is empty text: name a folder (--out DIR, or out='.' for the current one)")
     target = Path(out)

@@ -62,3 +62,21 @@ def test_the_argument_rule_names_the_models_own_arguments():
     assert "lambda" not in drive.split("Precision:")[0]
     arm = (GENERATED / "ur5.h").read_text()
     assert "scalars (lambda, tol, max_iter)" in arm.replace("\n * ", " ")
+
+
+def test_arguments_of_the_wrong_type_are_a_value_error():
+    """A security review: ``load_robot(..., tip=5)`` raised AttributeError, ``generate(out=123)`` and
+    ``generate(functions=5)`` TypeError; bad input from Python is a ValueError that names the argument."""
+    from pathlib import Path
+
+    from skelarm_sym.generate import generate
+    from skelarm_sym.models.chain import load_robot
+
+    urdf = Path(__file__).parent.parent / "examples" / "robots" / "ur5.urdf"
+    for call, message in ((lambda: load_robot(urdf, tip=5), "tip must be a link's name"),
+                          (lambda: load_robot(urdf, base=b"base"), "base must be a link's name"),
+                          (lambda: generate(2, out=123), "out must be a folder's path"),
+                          (lambda: generate(2, out=None, functions=5), "functions must be a comma-separated string"),
+                          (lambda: generate(2, out=None, functions=["position", 3]), "functions must be")):
+        with pytest.raises(ValueError, match=message):
+            call()

@@ -61,6 +61,14 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted"),
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "a tip link (tip= / --tip) is chosen in URDF files only"),
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--functions", "ik_all"], "lock one joint, --ik-lock JOINT"),
+        # a security review: CMake refused these target names only when the user ran it
+        (["generate", "--links", "2", "--prefix", "all", "--cmake", "--lang", "c"], "CMake reserves the target name 'all'"),
+        (["generate", "--links", "2", "--prefix", "ZERO_CHECK", "--cmake", "--lang", "c"], "CMake reserves the target name"),
+        (["generate", "--links", "2", "--prefix", "m", "--cmake", "--lang", "c"], "the math library the target links"),
+        (["generate", "--links", "2", "--prefix", "cmake_arm", "--cmake", "--lang", "c"], "would be CMake's own"),
+        # a security review: a superscript three is a digit to str.isdigit, not to int (a traceback)
+        (["generate", "--robot", str(ROBOTS / "panda.toml"), "--ik-lock", "\u00b3"], "no joint named '\u00b3' to lock"),
+        (["generate", "--robot", str(ROBOTS / "panda.toml"), "--ik-lock", "\u0663"], "no joint named '\u0663' to lock"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(args, message, tmp_path):

@@ -113,3 +113,31 @@ def test_a_set_of_mixed_generations_of_one_command_is_written_again_together(tmp
     assert "regenerate them together: skelarm-sym generate --from DIR does" in capsys.readouterr().err
     assert main(["generate", "--from", str(out)]) == 0
     assert _texts(out) == new
+
+
+DASHED = """<robot name="d"><link name="--base"/><link name="--out=elsewhere"/><link name="--tip"/>
+<joint name="j" type="revolute"><parent link="--base"/><child link="--out=elsewhere"/><origin xyz="0 0 0.1"/>
+<axis xyz="0 0 1"/></joint>
+<joint name="k" type="revolute"><parent link="--out=elsewhere"/><child link="--tip"/><origin xyz="0.2 0 0"/>
+<axis xyz="0 1 0"/></joint></robot>
+"""
+
+
+def test_names_that_start_with_a_dash_are_recorded_so_that_they_read_back(tmp_path, monkeypatch, capsys):
+    """A security review: links named ``--base`` and ``--out=...`` (and a robot file named ``--cmake.urdf``) were
+    recorded as ``--base --base``, which ``generate --from`` and ``check --from`` then refused (``--base: expected one
+    argument``). An option whose value starts with ``-`` is recorded ``--base=--base``."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "--cmake.urdf").write_text(DASHED)
+    assert main(["generate", "--robot=--cmake.urdf", "--base=--base", "--tip=--tip", "--lang", "c", "--prefix", "d", "--out", "gen"]) == 0
+    command = recorded_command((tmp_path / "gen" / "d.h").read_text())
+    assert "--robot=../--cmake.urdf" not in command  # relative to gen/: starts with '..', no '=' needed
+    assert "--base=--base" in command and "--tip=--tip" in command, command
+    capsys.readouterr()
+    assert main(["generate", "--from", "gen"]) == 0
+    assert main(["check", "--from", "gen", "--cases", "2"]) == 0
+    (tmp_path / "gen" / "--cmake.urdf").write_text(DASHED)  # the robot file beside the files: recorded --robot=--cmake.urdf
+    assert main(["generate", "--robot=gen/--cmake.urdf", "--base=--base", "--tip=--tip", "--lang", "c", "--prefix", "d", "--out", "gen",
+                 "--force"]) == 0
+    assert "--robot=--cmake.urdf" in recorded_command((tmp_path / "gen" / "d.h").read_text())
+    assert main(["generate", "--from", "gen"]) == 0

@@ -56,6 +56,9 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
     """
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"load_robot takes the path of a robot file (.urdf or .toml), got {type(path).__name__} {path!r:.60}")
+    for what, value in (("base", base), ("tip", tip)):
+        if value is not None and not isinstance(value, str):
+            raise InputError(f"{what} must be a link's name (str), got {type(value).__name__} {value!r:.60}")
     chain = _load(Path(path), base, tip)
     if ik_lock is None:
         return chain

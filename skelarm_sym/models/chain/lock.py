@@ -34,7 +34,7 @@ def lock_index(model: Chain, joint: str | int | None) -> int | None:
         return None
     text = str(joint).strip()
     names = [j.name for j in model.joints]
-    if text.isdigit() and text not in names:
+    if text.isascii() and text.isdigit() and text not in names:  # "³" and "٣" are digits to isdigit, not to int
         number = int(text)
         if not 1 <= number <= len(names):
             raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")
