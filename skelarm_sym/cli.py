@@ -12,6 +12,7 @@ import atexit
 import contextlib
 import gc
 import math
+import re
 import sys
 import textwrap
 from typing import Sequence
@@ -75,7 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
     chk.add_argument("--lang", help="comma-separated languages (default c,python); with --from: which of the files to check "
                      "(default all)")
     chk.add_argument("--from", dest="source", metavar="DIR",
-                     help="check the files generated earlier in DIR (their header records the model and options)")
+                     help="check the files generated earlier in DIR (their header records the model and options); "
+                     "this runs their code (imports the .py files, compiles and loads the C): use it on folders you trust")
     chk.add_argument("--prefix", help="with --from: the files' prefix (default: the only one in DIR)")
     chk.add_argument("--cases", type=int, default=100, help="random configurations (default 100), plus singular and zero-velocity "
                      "poses; the IK rows solve at most 20 targets of them")
@@ -254,8 +256,51 @@ def _freeze_at_exit() -> None:
         atexit.register(gc.freeze)
 
 
+_UNPRINTABLE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\ud800-\udfff]")
+
+
+def _escaped(text: str) -> str:
+    """``text`` with what a terminal would act on or cannot print written as escapes: control characters other than
+    newline and tab (a file name's ESC sequence retitled the terminal) as ``\\x1b``, a file name's undecodable byte
+    (Python's surrogate escape) as ``\\xff``."""
+    def escape(match: re.Match) -> str:
+        code = ord(match.group())
+        return f"\\x{code - 0xDC00:02x}" if 0xDC80 <= code <= 0xDCFF else match.group().encode("unicode_escape",
+                                                                                                "backslashreplace").decode()
+    return _UNPRINTABLE.sub(escape, text)
+
+
+class _EscapedStream:
+    """``stream`` (stdout or stderr) writing :func:`_escaped` text, and characters its encoding lacks as escapes
+    instead of failing (a file name that is not UTF-8 ended the command with a traceback after its files were
+    written)."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        text = _escaped(text)
+        try:
+            return self._stream.write(text)
+        except UnicodeEncodeError:
+            encoding = getattr(self._stream, "encoding", None) or "ascii"
+            return self._stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``skelarm-sym`` command; returns the exit status."""
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _EscapedStream(sys.stdout), _EscapedStream(sys.stderr)
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout, sys.stderr = streams
+
+
+def _main(argv: Sequence[str] | None) -> int:
     _freeze_at_exit()
     parser = build_parser()
     try:

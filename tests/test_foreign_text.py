@@ -106,3 +106,22 @@ def test_the_cmake_file_is_comments_and_commands_only(emitted):
             for line in text.splitlines():
                 if foreign in line:
                     assert line.lstrip().startswith("# "), line
+
+
+def test_a_file_name_reaches_the_terminal_escaped(tmp_path):
+    """A security review: a robot file named with an ESC sequence (``\\x1b]0;PWNED\\x07`` retitles a terminal) reached
+    stdout raw, and one with a byte that is not UTF-8 ended ``generate`` with a UnicodeEncodeError traceback after the
+    files were written (exit 1). Both print as escapes now, and the command succeeds."""
+    import os
+    import sys
+
+    robot = (Path(__file__).parent.parent / "examples" / "robots" / "scara.toml").read_bytes()
+    for raw, shown in ((b"sc\xffara.toml", "sc\\xffara.toml"), (b"x\x1b]0;PWNED\x07.toml", "x\\x1b]0;PWNED\\x07.toml")):
+        path = os.path.join(os.fsencode(tmp_path), raw)
+        with open(path, "wb") as handle:
+            handle.write(robot)
+        r = subprocess.run([sys.executable, "-m", "skelarm_sym", "generate", "--robot", path, "--lang", "c", "--out",
+                            str(tmp_path / "out"), "--force"], capture_output=True, env={**os.environ, "PYTHONIOENCODING": "utf-8"})
+        assert r.returncode == 0, r.stderr.decode(errors="replace")
+        out = r.stdout.decode("utf-8")
+        assert shown in out and "\x1b" not in out and "\x07" not in out, out
