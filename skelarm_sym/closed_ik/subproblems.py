@@ -363,6 +363,20 @@ def sp4(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.E
     return parts[0].angle(steps, f"{label}0", scale2), parts[1].angle(steps, f"{label}1", scale2)
 
 
+ROUNDING_ZERO = 1e-14
+"""A constant of a wrist's geometry (a unit-vector expression) at most this in magnitude is taken as exactly 0: the
+rounding of axes read from a file (``0.8660254037844386`` for ``sqrt(3)/2``)."""
+
+
+def _zero_to_rounding(x: sp.Expr) -> sp.Expr:
+    """``x``, or exactly 0 where it is a constant within :data:`ROUNDING_ZERO` of 0. (Not ``nsimplify``: it replaced
+    such constants by a nearby closed form it recognised, a wrong one for a random arm with a prismatic third joint,
+    whose rows then missed their targets by up to 0.17 m.)"""
+    if x.free_symbols:
+        return x
+    return sp.S.Zero if abs(float(sp.N(x, 30))) <= ROUNDING_ZERO else x
+
+
 def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
     """SP4's discriminant for ``h . R(k, theta) p = h . g`` with unit ``h``, ``p``, ``k`` and a unit target direction
     ``g``, written to keep its digits at a double root (the wrist singularity).
@@ -383,7 +397,7 @@ def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
         return sine2
     hk_x, pk_x = (sp.nsimplify(x, rational=True) if isinstance(x, sp.Float) else x for x in (hk, pk))
     a = sp.sqrt((1 - hk_x**2) * (1 - pk_x**2))
-    top, bottom = sp.nsimplify(hk_x * pk_x + a - 1), sp.nsimplify(1 + hk_x * pk_x - a)  # exact: 0 where aligned
+    top, bottom = _zero_to_rounding(hk_x * pk_x + a - 1), _zero_to_rounding(1 + hk_x * pk_x - a)  # exact 0 where aligned
     one_minus = _select((sine2 / (1 + d), d > 0), (1 - d, True))
     one_plus = _select((sine2 / (1 - d), d < 0), (1 + d, True))
     return (top + one_minus) * (one_plus - bottom)
