@@ -221,7 +221,20 @@ def _check(args) -> int:
         precision = validate_precision(args.precision or "double")
         langs = validate_langs(args.lang or "c,python")
         generated = generate(model_from_args(args), langs=langs, precision=precision, out=None)
-    implementations = load_implementations(generated)
+    try:
+        implementations = load_implementations(generated)
+    except InputError as exc:
+        if args.source is None or "is not installed" not in str(exc):
+            raise
+        # a folder's set for a library this environment lacks: name the languages that can be checked here
+        from .backends import BACKENDS
+
+        prefix = generated.module.prefix
+        held = [lang for lang, backend in BACKENDS.items() if all(prefix + s in generated.sources for s in backend.FILE_SUFFIXES)]
+        library = str(exc).split(" ", 1)[0]
+        others = [lang for lang in held if lang != library]
+        hint = f"; or check the folder's other languages: --lang {','.join(others)}" if others else ""
+        raise InputError(f"{exc}{hint}") from None
     results = compare(generated, args.cases, args.seed, precision, implementations)
     for line in table(results):
         print(line)

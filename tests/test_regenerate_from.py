@@ -141,3 +141,18 @@ def test_names_that_start_with_a_dash_are_recorded_so_that_they_read_back(tmp_pa
                  "--force"]) == 0
     assert "--robot=--cmake.urdf" in recorded_command((tmp_path / "gen" / "d.h").read_text())
     assert main(["generate", "--from", "gen"]) == 0
+
+
+def test_check_from_a_folder_for_a_missing_library_names_the_languages_it_can_check(tmp_path, monkeypatch, capsys):
+    """A new user's ``check --from`` on a folder holding PyTorch files, without PyTorch, stopped at "torch is not
+    installed" and checked nothing; the message now names the --lang that checks the rest."""
+    import sys
+
+    assert main(["generate", "--links", "2", "--lang", "c,python,torch", "--out", str(tmp_path / "gen")]) == 0
+    capsys.readouterr()
+    monkeypatch.setitem(sys.modules, "torch", None)  # import torch raises ImportError
+    monkeypatch.delenv("PYTEST_CURRENT_TEST")  # else the backend skips the test instead of refusing
+    assert main(["check", "--from", str(tmp_path / "gen"), "--cases", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "torch is not installed" in err and "or check the folder's other languages: --lang c,python" in err, err
+    assert main(["check", "--from", str(tmp_path / "gen"), "--cases", "2", "--lang", "c,python"]) == 0
