@@ -97,7 +97,7 @@ def add_generate_options(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--lang", default=Default("c,python"), help=f"comma-separated languages: {', '.join(BACKENDS)} (default c,python; numpy or py: python)")
     rules = "; ".join(kind.prefix_rule for kind in kinds() if kind.prefix_rule)
-    parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules})")
+    parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules}); robots linked into one program need prefixes that differ in more than case (their macros are the prefix in upper case)")
     parser.add_argument("--precision", default=Default("double"), help="double (default) or float")
     parser.add_argument("--out", default=Default("generated"), help="output folder (default ./generated)")
     parser.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
