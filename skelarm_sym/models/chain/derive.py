@@ -265,7 +265,8 @@ def _notes(chain: Chain) -> tuple[str, ...]:
 
 _URDF_ANGLES = (
     "URDF angles within 1e-12 of a multiple of pi/2, or written as its rounded decimal with 8 or more decimals",
-    "(1.57079632679), are taken as that multiple exactly: a tool that reads the decimals differs by up to ~1e-10.",
+    "(1.57079632679), are taken as that multiple exactly: a tool that reads the decimals as written differs by",
+    "their rounding (half a unit in the last decimal, rad) times the reach (3.7e-10 m: ur_description's UR5, 1.570796327).",
 )
 """Header lines of a chain from a URDF: the rule of :func:`~.urdf.written_angle`, which explains a difference
 from a library that reads the decimals as written (Pinocchio on Kinova's URDF: 1e-11 to 2e-10)."""
