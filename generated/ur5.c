@@ -34,7 +34,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0x4577623fUL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xa395faf8UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 

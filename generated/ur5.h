@@ -64,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x4577623fUL
+#define UR5_STAMP 0xa395faf8UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -258,7 +258,7 @@ void ur5_ik_continuum_members_batch(size_t m, const double *q_ref, const double 
 #define UR5_IK_CONVERGED 0 /* position error and rotation error are both <= tol */
 #define UR5_IK_STALLED 1 /* max_iter ran out and the best pose found is a stationary point of |e| (an unreachable target: q is its closest reach found; or a local minimum: more steps or another q0 may converge) */
 #define UR5_IK_MAX_ITER 2 /* max_iter ran out otherwise (q: the best pose found) */
-#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite or not > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): q NaN */
+#define UR5_IK_INVALID 3 /* ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target not finite, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite or not > 0), the target not finite, a translation entry beyond UR5_IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > UR5_IK_ORTHO_TOL or det R <= 0): q NaN */
 #define UR5_IK_OK 0 /* at least one exact solution within the joint limits: all of them are returned */
 #define UR5_IK_UNREACHABLE 1 /* the target is out of reach: the rows are the least-squares candidates within the limits (flag bit UR5_IK_FLAG_LEAST_SQUARES set), possibly none */
 #define UR5_IK_OUT_OF_LIMITS 2 /* exact solutions exist, none within the joint limits (count 0) */
@@ -323,7 +323,7 @@ void ur5_ik_solve_position_batch(size_t m, const double *q0, const double *targe
  * Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most UR5_IK_MAX_SOLUTIONS = 8,
  * one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
  * multiples of 2 pi to the copy nearest the middle of their range,
- * every row within the joint limits (UR5_Q_MIN/UR5_Q_MAX: each range is more than a turn wide), duplicates (UR5_IK_DUP_TOL) dropped, in the
+ * every row within the joint limits (UR5_Q_MIN/UR5_Q_MAX: each range holds a whole turn about its centre), duplicates (UR5_IK_DUP_TOL) dropped, in the
  * derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
  * NaN, their flags -1. flags: UR5_IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
  * UR5_IK_FLAG_SINGULAR (one member of a continuum, or a double root).

@@ -38,7 +38,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x4577623f
+STAMP = 0xa395faf8
 """The generation stamp: the same number in every file of the set this module was generated with."""
 _MATRIX_INPUTS = {'target': (4, 4)}
 """Inputs of the straight-line functions that may come as a matrix, (..., 4, 4) for (..., 16) (row-major)."""
@@ -79,7 +79,7 @@ IK_STALLED = 1
 IK_MAX_ITER = 2
 """max_iter ran out otherwise (q: the best pose found)"""
 IK_INVALID = 3
-"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite or not > 0), the target (or lock) not finite, the lock beyond IK_LOCK_MAX, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN"""
+"""ik_solve: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, max_iter < 0, or the target's rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0) (q = q0, nothing computed); ik_solve_position: q0, target, params or lambda not finite, lambda < 0, tol <= 0 or not finite, or max_iter < 0 (q = q0, nothing computed); ik_all: target not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): count 0; ik_nearest, ik_nearest_weighted: q_ref not finite (or a weight not finite or not > 0), the target not finite, a translation entry beyond IK_TRANSLATION_MAX, or its rotation part not a rotation (|R^T R - I| > IK_ORTHO_TOL or det R <= 0): q NaN"""
 IK_OK = 0
 """at least one exact solution within the joint limits: all of them are returned"""
 IK_UNREACHABLE = 1
@@ -8367,7 +8367,7 @@ def ik_all(target):
     Every closed-form IK solution of the tool pose target (4 x 4 row-major), at most IK_MAX_SOLUTIONS = 8,
     one per row of q (8 x 6, row-major): exact candidates only when any exists, revolute joints shifted by
     multiples of 2 pi to the copy nearest the middle of their range,
-    every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide), duplicates (IK_DUP_TOL) dropped, in the
+    every row within the joint limits (Q_MIN/Q_MAX: each range holds a whole turn about its centre), duplicates (IK_DUP_TOL) dropped, in the
     derivation's branch order (deterministic: a branch keeps its row as the target moves). Rows past count are
     NaN, their flags -1. flags: IK_FLAG_LEAST_SQUARES (the target is out of reach: a least-squares pose),
     IK_FLAG_SINGULAR (one member of a continuum, or a double root).

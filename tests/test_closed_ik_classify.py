@@ -100,3 +100,16 @@ def test_parameters_are_refused(tmp_path):
     text = UR5_BODY.replace("a = -0.425", 'a = "a2"')
     with pytest.raises(ClosedFormError, match="named parameters"):
         classify(write(tmp_path, text))
+
+
+def test_explain_reads_the_lock_load_robot_recorded():
+    """A docs review: ``explain(load_robot("iiwa14.toml", ik_lock=3))`` said the chain needs 6 moving joints; the lock
+    given to load_robot (counted from 1) is the one explain uses when it is given none."""
+    from pathlib import Path
+
+    from skelarm_sym.closed_ik.classify import explain
+    from skelarm_sym.models.chain import load_robot
+
+    robots = Path(__file__).parent.parent / "examples" / "robots"
+    assert explain(load_robot(robots / "iiwa14.toml", ik_lock=3)).startswith("spherical_wrist (intersect_12), joint 3 locked")
+    assert "this chain has 7 (a 7-joint arm: lock one joint" in explain(load_robot(robots / "iiwa14.toml"))

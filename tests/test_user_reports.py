@@ -300,3 +300,14 @@ def test_the_solvers_comments_name_the_limit_tables_only_where_the_files_have_th
             assert text.count(f"Joint limits ({named}/MAX) are kept by clamping") == (2 if limited else 0), (name, suffix)
             assert text.count("The arm has no position limits (no Q_MIN/Q_MAX): nothing is clamped") == (0 if limited else 2)
         assert "stop when the position error (m) is <= tol" in sources[name + ".py"]  # ik_solve_position's tol
+
+
+def test_the_status_comments_name_a_lock_only_for_an_arm_that_has_one():
+    """A C++ integrator's report: ur5.h's UR5_IK_INVALID comment said "target (or lock) not finite, the lock beyond
+    IK_LOCK_MAX", for an arm with no lock and a macro the header does not define."""
+    ur5 = generate(load_robot(ROOT / "examples/robots/ur5.toml"), out=None, langs="c", functions="ik_all,ik_nearest").sources["ur5.h"]
+    invalid = [line for line in ur5.splitlines() if line.startswith("#define UR5_IK_INVALID")]
+    assert invalid and "lock" not in invalid[0] and "target not finite" in invalid[0], invalid
+    panda = generate(load_robot(ROOT / "examples/robots/panda.toml", ik_lock=7), out=None, langs="c",
+                     functions="ik_all").sources["panda.h"]
+    assert "the lock beyond PANDA_IK_LOCK_MAX" in panda

@@ -285,7 +285,7 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[list[tuple[str, str | None]], st
                 return False, f"{label}: axes {nums[i]}, {nums[j]} are parallel"
         d = _line_distance(Pp[4], Hh[4], Pp[5], Hh[5])
         if d > tol:
-            return False, f"{label}: axes {nums[4]}, {nums[5]} do not meet: closest distance {d:.4g} m (offset wrist: needs SP6, not in phase 1)"
+            return False, f"{label}: axes {nums[4]}, {nums[5]} do not meet: closest distance {d:.4g} m (offset wrist: needs SP6, not covered)"
         return True, ""
 
     found: list[tuple[str, str | None]] = []
@@ -420,7 +420,12 @@ def classify(chain: Chain, lock: int | None = None) -> Family:
 
 
 def explain(chain: Chain, lock: int | None = None) -> str:
-    """One line: the family and its subproblems, or which condition fails and by how much."""
+    """One line: the family and its subproblems, or which condition fails and by how much. ``lock``: the locked
+    joint's 0-based index; ``None``: the lock ``load_robot(..., ik_lock=)`` recorded in ``chain``, if any."""
+    if lock is None:
+        from ..models.chain.lock import ik_lock, lock_index
+
+        lock = lock_index(chain, ik_lock(chain))
     try:
         return classify(chain, lock).describe()
     except ClosedFormError as exc:

@@ -270,7 +270,7 @@ def rows_helper(arm: _Arm) -> Function:
                  Argument("flags", Role.OUTPUT, (S,), Type.INT),
                  *([Argument("singular", Role.OUTPUT, (1,), Type.INT)] if raw_singular is not None else []))
     return Function("ik_all_rows", "every closed-form solution within the limits, post-processed", arguments,
-                    b.statements, kind="helper", returns=Type.INT, statuses=STATUSES)
+                    b.statements, kind="helper", returns=Type.INT, statuses=_statuses(arm, STATUSES))
 
 
 def _fill_rest(b: Body, arm: _Arm, q: Array, flags: Array, kept=None) -> None:
@@ -350,9 +350,9 @@ def _joint_limits(b: Body, arm: _Arm, j: int, cand_j, inside) -> None:
 
 def _doc_limits(arm: _Arm) -> str:
     if not any(x is not None for x in arm.lower + arm.upper):
-        return "rows outside the joint limits (none (the arm has no limits)) dropped (within IK_LIMIT_TOL: clipped)"
+        return "every row (the arm has no joint limits)"
     if all(arm.always_inside(j) for j in range(arm.n)):
-        return "every row within the joint limits (Q_MIN/Q_MAX: each range is more than a turn wide)"
+        return "every row within the joint limits (Q_MIN/Q_MAX: each range holds a whole turn about its centre)"
     return "rows outside the joint limits (Q_MIN/Q_MAX) dropped (within IK_LIMIT_TOL: clipped)"
 
 
@@ -398,7 +398,7 @@ def all_solver(arm: _Arm) -> Function:
         "No iteration: the same time for every target.",
     )
     return Function("ik_all", "every closed-form IK solution within the joint limits", arguments, b.statements,
-                    kind="procedure", returns=Type.INT, statuses=STATUSES, doc=doc, result="IKAllResult",
+                    kind="procedure", returns=Type.INT, statuses=_statuses(arm, STATUSES), doc=doc, result="IKAllResult",
                     refused=refusal(arm.precision, translation=True, lock_max=_lock_max(arm)))
 
 
@@ -409,6 +409,14 @@ NEAREST_STATUSES = STATUSES[:-1] + (
      "IK_TRANSLATION_MAX, or its " + NOT_A_ROTATION + ": q NaN"),
 )
 """``ik_nearest``'s and ``ik_nearest_weighted``'s return codes: ``ik_all``'s, and the reference (and weights) tested too."""
+
+
+def _statuses(arm: "_Arm", statuses: tuple) -> tuple:
+    """``statuses`` as ``arm`` meets them: an arm without a locked joint has no lock to test (nor IK_LOCK_MAX)."""
+    if arm.locked:
+        return statuses
+    return tuple((name, value, meaning.replace("target (or lock) not finite, the lock beyond IK_LOCK_MAX", "target not finite"))
+                 for name, value, meaning in statuses)
 
 
 def _nearest_copy(b: Body, arm: _Arm, j: int, x, ref, y) -> None:
@@ -575,7 +583,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
     summary = ("the closed-form IK solution nearest a configuration, in a weighted metric" if weighted
                else "the closed-form IK solution nearest a configuration")
     return Function(name, summary, arguments, b.statements,
-                    kind="procedure", returns=Type.INT, statuses=NEAREST_STATUSES, doc=doc, result="IKNearestResult",
+                    kind="procedure", returns=Type.INT, statuses=_statuses(arm, NEAREST_STATUSES), doc=doc, result="IKNearestResult",
                     refused=refusal(arm.precision, translation=True, lock_max=_lock_max(arm)))
 
 
