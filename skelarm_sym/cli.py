@@ -133,7 +133,19 @@ def _regenerate_files(args) -> int:
                          "(generate without --from to change them)")
     recorded = read_recorded(args.source, args.prefix, robot=args.robot, mixed=True)
     rec = recorded.args
-    # the files replaced are the ones read: another robot file (--robot) changes the command, not what they are
+    # the files replaced are the ones read: another robot file (--robot) changes the command, not what they are.
+    # A file of the set that is damaged (no header: edited, half-written) is written again; but the command (which
+    # anyone may have edited) may name a language none of whose files skelarm-sym wrote here, or --cmake: a file of
+    # those that skelarm-sym did not write (a hand-written .py or CMakeLists.txt beside the set) is refused.
+    from .backends import BACKENDS
+    from .generate import refuse_foreign_files, validate_langs, written_by_skelarm_sym
+
+    outside = ["CMakeLists.txt"] if rec.cmake else []
+    for lang in validate_langs(rec.lang):
+        names = [rec.prefix + suffix for suffix in BACKENDS[lang].FILE_SUFFIXES]
+        if not any(written_by_skelarm_sym(recorded.root / name) for name in names):
+            outside += names
+    refuse_foreign_files(recorded.root, outside)
     return _write_files(recorded.model, rec.lang, rec.prefix, rec.precision, str(recorded.root), rec.functions,
                         rec.cmake, True, args.compile)
 

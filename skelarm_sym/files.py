@@ -22,6 +22,9 @@ from pathlib import Path
 from .errors import InputError
 
 STALE_SECONDS = 3600
+MARK = "skelarm-"
+"""In the name of every temporary and spare this module makes (``.NAME.PID.skelarm-xxxxxxxx.tmp``), so that the
+cleanup of a killed run's leftovers can tell them from a user's own backups."""
 """A temporary whose writer cannot be identified is removed when older than this."""
 
 
@@ -45,16 +48,17 @@ def _pid_alive(pid: int) -> bool:
 
 
 def remove_stale_temporaries(folder: Path, names) -> list[Path]:
-    """Remove ``.NAME.PID.*.tmp`` left in ``folder`` by killed runs for the files ``names``.
+    """Remove ``.NAME.PID.skelarm-*.tmp`` (and ``.bak``) left in ``folder`` by killed runs for the files ``names``.
 
-    A temporary is stale when its process no longer runs, or (no pid in its name, or the pid
-    was reused) when it is older than ``STALE_SECONDS``. Returns the paths removed."""
+    A temporary is stale when its process no longer runs, or (the pid was reused) when it is older than
+    ``STALE_SECONDS``. Returns the paths removed."""
     removed = []
     now = time.time()
     for name in names:
-        # exactly the names this module makes (mkstemp's 8 characters, token_hex(4)'s 8 digits): a user's own
-        # ".arm.h.orig.bak" or ".arm.h.20240101.mine.bak" is not ours to remove
-        pattern = re.compile(r"\." + re.escape(name) + r"\.(?:(\d+)\.)?(?:[a-z0-9_]{8}\.tmp|[0-9a-f]{8}\.bak)\Z")
+        # exactly the names this module makes (a pid, the mark, mkstemp's 8 characters or token_hex(4)'s 8 digits):
+        # a user's own ".arm.h.orig.bak", ".arm.h.20240101.bak" or ".arm.h.1.20240101.bak" is not ours to remove
+        pattern = re.compile(r"\." + re.escape(name) + r"\.(\d+)\." + re.escape(MARK)
+                             + r"(?:[a-z0-9_]{8}\.tmp|[0-9a-f]{8}\.bak)\Z")
         try:
             entries = list(folder.iterdir())
         except OSError:
@@ -63,7 +67,7 @@ def remove_stale_temporaries(folder: Path, names) -> list[Path]:
             match = pattern.match(entry.name)
             if not match:
                 continue
-            pid = int(match.group(1)) if match.group(1) else None
+            pid = int(match.group(1))
             try:
                 old = now - entry.lstat().st_mtime > STALE_SECONDS
             except OSError:
@@ -98,7 +102,7 @@ def _kept_aside(folder: Path, name: str) -> Path | None:
     final = folder / name
     if not os.path.lexists(final):
         return None
-    spare = folder / f".{name}.{os.getpid()}.{secrets.token_hex(4)}.bak"
+    spare = folder / f".{name}.{os.getpid()}.{MARK}{secrets.token_hex(4)}.bak"
     try:
         os.link(final, spare, follow_symlinks=False)
     except OSError:  # no hard links here (or the file refuses them): a copy serves as well
@@ -155,7 +159,7 @@ def write_atomically(folder: Path, sources: dict[str, str], remove: tuple[str, .
         mode = new_file_mode()
         for name, text in sources.items():
             current = folder / name
-            fd, tmp = tempfile.mkstemp(prefix=f".{name}.{os.getpid()}.", suffix=".tmp", dir=folder)
+            fd, tmp = tempfile.mkstemp(prefix=f".{name}.{os.getpid()}.{MARK}", suffix=".tmp", dir=folder)
             staged.append((tmp, folder / name))
             with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
                 handle.write(text)

@@ -202,6 +202,19 @@ def _recorded_before(path: Path) -> str | None:
     return before
 
 
+def written_by_skelarm_sym(path: Path) -> bool:
+    """Whether the file ``path`` exists and its header records the command that made it."""
+    head = _head(path)
+    return head is not None and recorded_command(head) is not None
+
+
+def refuse_foreign_files(target: Path, names: Sequence[str]) -> None:
+    """InputError for the first file of ``names`` in ``target`` that skelarm-sym did not write (``--force`` aside,
+    generate replaces only its own files)."""
+    for name in names:
+        _recorded_before(target / name)
+
+
 def _other_options(path: Path, before: str, command: str | None = None) -> InputError:
     owner = recorded_prefix(before)
     if command is not None and path.name == "CMakeLists.txt" and owner is not None and owner != recorded_prefix(command):

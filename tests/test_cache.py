@@ -200,14 +200,16 @@ def test_files_are_flushed_then_renamed_as_a_set(tmp_path, monkeypatch):
 
 def test_stale_temporaries_of_killed_runs_are_removed(tmp_path):
     tmp_path.mkdir(exist_ok=True)
-    dead = tmp_path / f".arm2.c.{DEAD_PID}.k3j_x9ab.tmp"
-    old = tmp_path / ".arm2.h.x8z2ab_9.tmp"  # no pid (an older version): removed when old
-    recent = tmp_path / ".arm2.py.q1w2e3r4.tmp"
-    alive = tmp_path / f".arm2.h.{os.getppid()}.zzzzzzzz.tmp"  # a running writer
-    other = tmp_path / f".other.c.{DEAD_PID}.kkkkkkkk.tmp"  # another prefix: not ours to remove
-    spare = tmp_path / f".arm2.c.{DEAD_PID}.0badc0de.bak"  # a killed run's hard link of a replaced file
-    # a user's own backups, which the pattern took for ours (a security review): kept however old
-    mine = [tmp_path / ".arm2.h.orig.bak", tmp_path / f".arm2.h.{DEAD_PID}.mine.bak", tmp_path / ".arm2.c.20240101.my.tmp"]
+    dead = tmp_path / f".arm2.c.{DEAD_PID}.skelarm-k3j_x9ab.tmp"
+    old = tmp_path / f".arm2.h.{os.getppid()}.skelarm-x8z2ab_9.tmp"  # a live pid, but old: the pid was reused
+    recent = tmp_path / f".arm2.py.{os.getppid()}.skelarm-q1w2e3r4.tmp"
+    alive = tmp_path / f".arm2.h.{os.getppid()}.skelarm-zzzzzzzz.tmp"  # a running writer
+    other = tmp_path / f".other.c.{DEAD_PID}.skelarm-kkkkkkkk.tmp"  # another prefix: not ours to remove
+    spare = tmp_path / f".arm2.c.{DEAD_PID}.skelarm-0badc0de.bak"  # a killed run's hard link of a replaced file
+    # a user's own backups, which a looser pattern took for ours (two security reviews): kept however old
+    mine = [tmp_path / ".arm2.h.orig.bak", tmp_path / f".arm2.h.{DEAD_PID}.mine.bak", tmp_path / ".arm2.c.20240101.my.tmp",
+            tmp_path / ".arm2.h.20240101.bak", tmp_path / ".arm2.c.original.tmp", tmp_path / ".arm2.h.backup01.tmp",
+            tmp_path / ".arm2.h.1.20240101.bak"]
     for path in (dead, old, recent, alive, other, spare, *mine):
         path.write_text("partial")
     for path in (old, *mine):
