@@ -278,6 +278,10 @@ def compile_shared(
     ``$SKELARM_SYM_OPT``)."""
     if flags is None:
         flags = default_flags()
+    if isinstance(flags, str) or not all(isinstance(flag, str) for flag in flags):
+        raise InputError(f"flags must be a sequence of strings (['-O2']), got {flags!r:.60}")
+    if compiler is not None and not isinstance(compiler, str):
+        raise InputError(f"compiler must be a command (str) or None, got {compiler!r:.60}")
     cc = find_compiler(compiler)
     cc_words = _split_command(cc, "compiler")
     all_flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), *flags, "-fPIC", "-shared"]
@@ -372,8 +376,11 @@ def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | N
     interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
     where it cannot be built); ``False``: never, the ctypes library alone. Batches go through ctypes
     either way (single solver problems take the extension too). ``flags``: as :func:`compile_shared`'s (``None``: :func:`default_flags`)."""
+    from .generate import Generated
     from .wrapper import CompiledArm
 
+    if not isinstance(generated, Generated):
+        raise InputError(f"compile_arm takes what generate() returns, got {type(generated).__name__} {generated!r:.60}")
     if flags is None:
         flags = default_flags()
     EXT = EXTENSION_SUFFIX

@@ -19,7 +19,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import InputError
-from .options import Default, Parser, add_generate_options, add_model_options, model_from_args, model_given
+from .options import Default, Parser, add_generate_options, add_model_options, model_from_args, model_given, path_option
 
 
 def _angles(text: str) -> tuple[float, ...]:
@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen = sub.add_parser("generate", help="emit C and/or Python for a model")
     add_model_options(gen)
     add_generate_options(gen)
-    gen.add_argument("--from", dest="source", metavar="DIR",
+    gen.add_argument("--from", dest="source", metavar="DIR", type=path_option,
                      help="write the files in DIR again, with the model and options their header records (after an "
                      "upgrade, or where that line prints a character of a path escaped); --robot FILE names the robot "
                      "file of files moved away from it, --prefix chooses among several prefixes")
@@ -67,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "when given), to choose --base and --tip")
     show.add_argument("--format", default="pretty", help="pretty (default), latex or text")
     show.add_argument("--expand", action="store_true", help="robots: print the fully expanded closed form instead of the steps")
-    show.add_argument("--plot", metavar="FILE", help="planar arms: draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
+    show.add_argument("--plot", metavar="FILE", type=path_option, help="planar arms: draw the arm and its velocity ellipse to FILE (.png, .svg, .pdf; needs matplotlib)")
     show.add_argument("--pose", type=_angles, help="joint angles q1,...,qN for --plot, in radians or with a deg suffix (30deg); default pi/6 each")
 
     chk = sub.add_parser("check", help="generate, compile and compare with the independent reference")
@@ -75,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
     chk.add_argument("--precision", help="double (default) or float")
     chk.add_argument("--lang", help="comma-separated languages (default c,python); with --from: which of the files to check "
                      "(default all)")
-    chk.add_argument("--from", dest="source", metavar="DIR",
+    chk.add_argument("--from", dest="source", metavar="DIR", type=path_option,
                      help="check the files generated earlier in DIR (their header records the model and options); "
                      "this runs their code (imports the .py files, compiles and loads the C): use it on folders you trust")
     chk.add_argument("--prefix", help="with --from: the files' prefix (default: the only one in DIR)")
@@ -281,7 +281,7 @@ def _freeze_at_exit() -> None:
         atexit.register(gc.freeze)
 
 
-_UNPRINTABLE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\ud800-\udfff]")
+_UNPRINTABLE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\ud800-\udfff\u00ad\u061c\u200b-\u200f\u2028-\u202e\u2060-\u2064\u2066-\u206f\ufeff]")
 
 
 def _escaped(text: str) -> str:

@@ -444,6 +444,11 @@ def generate(
     Raises :class:`~skelarm_sym.errors.InputError` (a ``ValueError``) on bad input; on any error no file
     is left behind.
     """
+    for name, value in (("cmake", cmake), ("force", force)):
+        if not isinstance(value, bool):  # force="no" is true: it replaced a user's file
+            raise InputError(f"{name} must be True or False, got {value!r:.60}")
+    if before_writing is not None and not callable(before_writing):
+        raise InputError(f"before_writing must be a function of the result or None, got {before_writing!r:.60}")
     model = n
     if isinstance(n, numbers.Real) and not isinstance(n, bool):  # NumPy's integers too (q.shape[-1])
         model = PlanarArm(n, None if lengths is None else _lengths_tuple(lengths))

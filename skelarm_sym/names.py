@@ -60,11 +60,16 @@ def derivation_symbol(name: str) -> bool:
     return bool(_DERIVATION_SYMBOL.fullmatch(name))
 
 
+IMPORTED_MODULES = ("numpy", "np", "torch", "jax", "jaxlib", "cupy")
+"""Modules the emitted Python imports (NumPy as ``np``; PyTorch, JAX, CuPy): a ``{prefix}.py`` of one of these names
+beside the others would be imported in its place (``torch.py`` made ``torch_torch.py`` fail: no ``torch.float64``)."""
+
+
 def reserved_prefix(name: str) -> bool:
     """True when ``name`` may not be the files' prefix: a C, C++ or Python keyword or a name the emitted code
-    relies on, or ``numpy``/``np`` (the NumPy module's own import). (A Python standard module's name is refused
+    relies on, or a module the emitted Python imports (:data:`IMPORTED_MODULES`). (A Python standard module's name is refused
     only where a ``.py`` file is written.)"""
-    return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in ("numpy", "np")
+    return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in IMPORTED_MODULES
 
 
 def reserved_name(name: str) -> bool:
@@ -78,6 +83,27 @@ REFUSED_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
 characters (Cf: the bidi controls U+202A-202E and U+2066-2069, U+200E/F, zero-width characters, the
 BOM...), surrogates (Cs) and the line and paragraph separators U+2028/9 (Zl, Zp). Everything else is
 printable data."""
+
+def path_argument(text: str) -> str:
+    """A file or folder named on the command line, unchanged; InputError where it holds a character of
+    :data:`REFUSED_CATEGORIES` other than a surrogate (a newline in a file name forged output lines, an ESC sequence
+    drove the terminal; a byte that is not UTF-8, which Python keeps as a surrogate, is printed as an escape)."""
+    for ch in text:
+        if unicodedata.category(ch) in REFUSED_CATEGORIES - {"Cs"}:
+            raise InputError(f"{quoted(text)} holds a control or format character ({ch!r}): name a file without one")
+    return text
+
+
+def path_option(text: str) -> str:
+    """argparse ``type`` of the options that name a file or folder: :func:`path_argument`'s check, its message as
+    the option's error."""
+    import argparse
+
+    try:
+        return path_argument(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
 
 QUOTED_LENGTH = 80
 """Foreign text longer than this is shortened (with its length) when an error message quotes it."""
@@ -137,6 +163,6 @@ def identifier_from(text: str | None) -> str | None:
     if name[0].isdigit():
         name = "robot_" + name
     name = name[:IDENTIFIER_LENGTH].rstrip("_")
-    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in ("numpy", "np") or standard_header(name):
+    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in IMPORTED_MODULES or standard_header(name):
         name = name[: IDENTIFIER_LENGTH - len("_robot")].rstrip("_") + "_robot"
     return name

@@ -12,6 +12,7 @@ import argparse
 import difflib
 
 from .errors import InputError
+from .names import path_option
 from .models.registry import kinds
 
 
@@ -99,7 +100,7 @@ def add_generate_options(parser: argparse.ArgumentParser) -> None:
     rules = "; ".join(kind.prefix_rule for kind in kinds() if kind.prefix_rule)
     parser.add_argument("--prefix", help=f"file name and C function prefix (default: {rules}); robots linked into one program need prefixes that differ in more than case (their macros are the prefix in upper case)")
     parser.add_argument("--precision", default=Default("double"), help="double (default) or float")
-    parser.add_argument("--out", default=Default("generated"), help="output folder (default ./generated)")
+    parser.add_argument("--out", default=Default("generated"), type=path_option, help="output folder (default ./generated)")
     parser.add_argument("--compile", action="store_true", help="also compile the C with the strict flags and report the library path")
     parser.add_argument("--functions", help="comma-separated functions to emit (default all; a solver such as ik_solve "
                         "brings the functions it calls)")

@@ -72,11 +72,22 @@ def test_arguments_of_the_wrong_type_are_a_value_error():
     from skelarm_sym.generate import generate
     from skelarm_sym.models.chain import load_robot
 
+    from skelarm_sym.build import compile_arm
+
     urdf = Path(__file__).parent.parent / "examples" / "robots" / "ur5.urdf"
+    generated = generate(2, out=None, langs="c", functions="position")
     for call, message in ((lambda: load_robot(urdf, tip=5), "tip must be a link's name"),
                           (lambda: load_robot(urdf, base=b"base"), "base must be a link's name"),
                           (lambda: generate(2, out=123), "out must be a folder's path"),
                           (lambda: generate(2, out=None, functions=5), "functions must be a comma-separated string"),
-                          (lambda: generate(2, out=None, functions=["position", 3]), "functions must be")):
+                          (lambda: generate(2, out=None, functions=["position", 3]), "functions must be"),
+                          # a second review: force="no" is true, and replaced a user's file
+                          (lambda: generate(2, out=None, force="no"), "force must be True or False"),
+                          (lambda: generate(2, out=None, cmake="false", langs="c"), "cmake must be True or False"),
+                          (lambda: generate(2, out=None, before_writing=3), "before_writing must be a function"),
+                          (lambda: compile_arm(None), "compile_arm takes what generate"),
+                          (lambda: compile_arm(generated, compiler=5), "compiler must be a command"),
+                          (lambda: compile_arm(generated, flags="-O2"), "flags must be a sequence of strings"),
+                          (lambda: compile_arm(generated, flags=[1]), "flags must be a sequence of strings")):
         with pytest.raises(ValueError, match=message):
             call()

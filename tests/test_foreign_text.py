@@ -108,20 +108,26 @@ def test_the_cmake_file_is_comments_and_commands_only(emitted):
                     assert line.lstrip().startswith("# "), line
 
 
-def test_a_file_name_reaches_the_terminal_escaped(tmp_path):
-    """A security review: a robot file named with an ESC sequence (``\\x1b]0;PWNED\\x07`` retitles a terminal) reached
-    stdout raw, and one with a byte that is not UTF-8 ended ``generate`` with a UnicodeEncodeError traceback after the
-    files were written (exit 1). Both print as escapes now, and the command succeeds."""
+def test_a_file_name_reaches_the_terminal_escaped_or_is_refused(tmp_path):
+    """Security reviews: a robot file named with an ESC sequence (``\\x1b]0;PWNED\\x07`` retitles a terminal) reached
+    stdout raw, a newline in a name forged output lines, and a byte that is not UTF-8 ended ``generate`` with a
+    UnicodeEncodeError traceback after the files were written (exit 1). A path with a control or format character is
+    refused in one line (nothing written); an undecodable byte is printed as an escape and the command succeeds."""
     import os
     import sys
 
     robot = (Path(__file__).parent.parent / "examples" / "robots" / "scara.toml").read_bytes()
-    for raw, shown in ((b"sc\xffara.toml", "sc\\xffara.toml"), (b"x\x1b]0;PWNED\x07.toml", "x\\x1b]0;PWNED\\x07.toml")):
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
+    for raw, shown, status in ((b"sc\xffara.toml", "sc\\xffara.toml", 0), (b"x\x1b]0;PWNED\x07.toml", "('\\x1b')", 2),
+                               (b"d\nwrote pwned\n\xe2\x80\xae.toml", "('\\n')", 2)):
         path = os.path.join(os.fsencode(tmp_path), raw)
         with open(path, "wb") as handle:
             handle.write(robot)
+        out = tmp_path / f"out{status}"
         r = subprocess.run([sys.executable, "-m", "skelarm_sym", "generate", "--robot", path, "--lang", "c", "--out",
-                            str(tmp_path / "out"), "--force"], capture_output=True, env={**os.environ, "PYTHONIOENCODING": "utf-8"})
-        assert r.returncode == 0, r.stderr.decode(errors="replace")
-        out = r.stdout.decode("utf-8")
-        assert shown in out and "\x1b" not in out and "\x07" not in out, out
+                            str(out), "--force"], capture_output=True, env=env)
+        text = (r.stdout + r.stderr).decode("utf-8")
+        assert r.returncode == status, text
+        assert shown in text and "\x1b" not in text and "\x07" not in text and "\u202e" not in text, text
+        if status:
+            assert len(r.stderr.splitlines()) == 1 and "holds a control or format character" in text and not out.exists()

@@ -89,6 +89,8 @@ def test_quoted():
         ("q1", "q1_robot"),  # the name of an input
         ("code", "code_robot"),  # a Python standard module: code.py would shadow it
         ("numpy", "numpy_robot"),
+        ("torch", "torch_robot"),  # torch.py beside torch_torch.py was imported for PyTorch (a security review)
+        ("JAX", "JAX_robot"),
         ("stddef", "stddef_robot"),  # a C system header: stddef.h would be read for <stddef.h>
         ("Features", "Features_robot"),  # glibc's <features.h>, which <math.h> includes (any case)
         ("unistd", "unistd_robot"),  # POSIX: -Ibuild made <unistd.h> the robot's header (a security review)

@@ -6,6 +6,7 @@ import os
 
 from ...errors import InputError
 from ..kind import ModelKind
+from ...names import path_option
 from .loader import PREFIX_RULE
 from .ik_scope import refusal
 from .lock import LOCK_OPTION, ik_lock, lock_index, with_ik_lock
@@ -68,7 +69,7 @@ def _solver_checks(generated, implementations, cases, seed, precision):
 
 
 def _add_options(parser) -> None:
-    parser.add_argument("--robot", metavar="FILE", help="a 3-D serial chain: a TOML DH robot file or a URDF")
+    parser.add_argument("--robot", metavar="FILE", type=path_option, help="a 3-D serial chain: a TOML DH robot file or a URDF")
     parser.add_argument("--base", metavar="LINK", help="URDF: the chain's first link (default: the root link)")
     parser.add_argument("--tip", metavar="LINK", help="URDF: the chain's last link (default: the only leaf below --base)")
     parser.add_argument(LOCK_OPTION, dest="ik_lock", metavar="JOINT",
