@@ -69,8 +69,16 @@ def validate_header_name(prefix: str) -> str:
 
 CMAKE_RESERVED = frozenset(
     """all clean help install install_local install_strip list_install_components test package package_source depend
-    edit_cache rebuild_cache all_build zero_check run_tests m""".split()
+    edit_cache rebuild_cache all_build zero_check run_tests preinstall m""".split()
 )
+CMAKE_KEYWORDS = frozenset(
+    """SHARED STATIC MODULE OBJECT INTERFACE ALIAS IMPORTED GLOBAL UNKNOWN EXCLUDE_FROM_ALL PROPERTIES PUBLIC PRIVATE
+    BEFORE AFTER SYSTEM EXPORT ARCHIVE LIBRARY RUNTIME OBJECTS FRAMEWORK BUNDLE PRIVATE_HEADER PUBLIC_HEADER RESOURCE
+    INCLUDES FILE_SET CXX_MODULES_BMI DESTINATION PERMISSIONS CONFIGURATIONS COMPONENT NAMELINK_ONLY NAMELINK_SKIP
+    OPTIONAL LINK_PRIVATE LINK_PUBLIC LINK_INTERFACE_LIBRARIES""".split()
+)
+"""Keywords of the commands the CMakeLists.txt passes the target to (add_library, set_target_properties,
+target_include_directories, target_link_libraries, install): a target of that name is read as the keyword."""
 """Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
 ``INSTALL``), and ``m``, the math library the target links."""
 
@@ -80,6 +88,9 @@ def validate_cmake_target(prefix: str) -> str:
     if prefix.lower() in CMAKE_RESERVED:
         raise InputError(f"prefix {prefix!r} with --cmake: CMake reserves the target name {prefix!r} (or it is the math "
                          "library the target links); choose another --prefix")
+    if prefix in CMAKE_KEYWORDS:
+        raise InputError(f"prefix {prefix!r} with --cmake: it is a keyword of the CMake commands the target is passed "
+                         "to; choose another --prefix")
     if prefix.upper() == "CMAKE" or prefix.upper().startswith("CMAKE_"):
         raise InputError(f"prefix {prefix!r} with --cmake: its variables ({prefix.upper()}_SHARED) would be CMake's own "
                          "(CMAKE_*); choose another --prefix")

@@ -31,7 +31,8 @@ C_HEADERS = frozenset(
     langinfo libgen link malloc memory monetary mqueue ndbm netdb nl_types poll pthread pwd regex sched search
     semaphore spawn strings stropts syslog tar termios ucontext ulimit unistd utime utmpx values wordexp
     immintrin x86intrin xmmintrin emmintrin pmmintrin tmmintrin smmintrin nmmintrin wmmintrin ammintrin avxintrin
-    avx2intrin intrin arm_neon arm_sve omp python pyconfig windows cuda cuda_runtime""".split()
+    avx2intrin intrin arm_neon arm_sve omp python pyconfig windows cuda cuda_runtime
+    mm_malloc mm3dnow cpuid arm_acle arm_fp16 arm_bf16 winsock2 io process mpi zlib cuda_fp16 vector_types""".split()
 )
 """Names of system headers: the standard C headers (C99 and C11), glibc's ``features.h`` (which ``<math.h>``
 includes), POSIX's and glibc's, the compilers' intrinsics, Python's, OpenMP's, Windows' and CUDA's main ones. A file
@@ -41,8 +42,9 @@ it there). Compared in lower case (a file system may not tell ``Stddef.h`` from 
 
 
 def standard_header(name: str) -> bool:
-    """True when ``{name}.h`` is, or on a case-insensitive file system would be, a standard C header's file name."""
-    return name.lower() in C_HEADERS
+    """True when ``{name}.h`` is, or on a case-insensitive file system would be, a system header's file name
+    (:data:`C_HEADERS`, or a compiler's ``*intrin.h``, which ``<immintrin.h>`` and its kin include)."""
+    return name.lower() in C_HEADERS or name.lower().endswith("intrin")
 
 
 _INPUT = re.compile(r"params|d{0,2}q\d*|lambda|xi_\w*|nu_\w*|RANK_TOL")
@@ -91,6 +93,14 @@ def path_argument(text: str) -> str:
     for ch in text:
         if unicodedata.category(ch) in REFUSED_CATEGORIES - {"Cs"}:
             raise InputError(f"{quoted(text)} holds a control or format character ({ch!r}): name a file without one")
+    return text
+
+
+def ascii_number(text: str) -> str:
+    """``text`` for ``int``/``float`` where it is written in ASCII without ``_``; ValueError otherwise (Python reads
+    ``"٢"`` as 2 and ``"1_0"`` as 10, which a command line recorded as ``--lengths 10.0,2.0`` from ``1_0,٢``)."""
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"not a plain number: {text!r}")
     return text
 
 

@@ -66,6 +66,14 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["generate", "--links", "2", "--prefix", "ZERO_CHECK", "--cmake", "--lang", "c"], "CMake reserves the target name"),
         (["generate", "--links", "2", "--prefix", "m", "--cmake", "--lang", "c"], "the math library the target links"),
         (["generate", "--links", "2", "--prefix", "cmake_arm", "--cmake", "--lang", "c"], "would be CMake's own"),
+        # a second review: Python reads "\u0662" as 2 and "1_0" as 10 (recorded --lengths 10.0,2.0)
+        (["generate", "--links", "\u0662"], "must be a whole number, got '\u0662'"),
+        (["generate", "--links", "2", "--lengths", "1_0,2"], "link lengths must be comma-separated numbers, got '1_0'"),
+        (["generate", "--model", "diffdrive", "--track", "\u0660.\u0665"], "must be a positive number"),
+        # a second review: a keyword of the commands the target is passed to, and headers <immintrin.h> includes
+        (["generate", "--links", "2", "--prefix", "PROPERTIES", "--cmake", "--lang", "c"], "a keyword of the CMake commands"),
+        (["generate", "--links", "2", "--prefix", "mmintrin", "--lang", "c"], "mmintrin.h would be read for <mmintrin.h>"),
+        (["generate", "--links", "2", "--prefix", "mm_malloc", "--lang", "c"], "mm_malloc.h would be read"),
         # a security review: a superscript three is a digit to str.isdigit, not to int (a traceback)
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--ik-lock", "\u00b3"], "no joint named '\u00b3' to lock"),
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--ik-lock", "\u0663"], "no joint named '\u0663' to lock"),
@@ -192,3 +200,13 @@ def test_prefixes_that_differ_in_case_only_are_not_written_side_by_side(tmp_path
     other.mkdir()
     (other / "arm.h").write_text("/* the user's own */\n")
     assert run("generate", "--links", "2", "--prefix", "Arm", "--out", str(other)).returncode == 0
+
+
+def test_an_ik_lock_number_that_is_another_joints_name_is_ambiguous(tmp_path):
+    """A security review: in a Panda file whose joint 2 is named "3", ``--ik-lock 3`` locked joint 2, without a word."""
+    robot = tmp_path / "panda3.toml"
+    robot.write_text((ROBOTS / "panda.toml").read_text().replace('name = "panda_joint2"', 'name = "3"', 1))
+    r = run("generate", "--robot", str(robot), "--ik-lock", "3", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2 and not (tmp_path / "o").exists()
+    assert ("--ik-lock 3 is ambiguous: joint number 3 is 'panda_joint3', and joint 2 is named '3'; lock the first by "
+            "its name (panda_joint3) or the second by its number (2)") in r.stderr, r.stderr

@@ -175,3 +175,16 @@ def test_lang_py_is_python(tmp_path, capsys):
 def test_expand_is_refused_where_nothing_is_abbreviated(model, capsys):
     """``show --expand`` was accepted silently for a planar arm and the diff drive, whose forms are printed in full."""
     assert "--expand applies to --robot" in one_line_error(capsys, ["show", *model, "--expand"])
+
+
+def test_a_robot_file_that_is_a_pipe_is_refused_not_waited_on(tmp_path):
+    """A security review: ``--robot fifo.toml`` (a named pipe; a tarball can carry one) waited for a writer forever,
+    also through ``check --from``'s recorded robot file. A robot file must be a regular file."""
+    import os
+
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)
+    r = subprocess.run([sys.executable, "-m", "skelarm_sym", "show", "--robot", str(fifo)], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 2 and "not a regular file (a pipe or a device)" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1

@@ -911,3 +911,20 @@ def test_load_robot_takes_the_ik_lock_and_refuses_what_is_not_a_path():
     for wrong in (5, None, ["panda.toml"]):
         with pytest.raises(InputError, match="load_robot takes the path of a robot file"):
             load_robot(wrong)
+
+
+def test_a_slides_mimic_offset_counts_toward_the_reach(tmp_path):
+    """A security review: a prismatic ``<mimic offset="1e200">`` was accepted (exit 0) and ``check`` then failed
+    with infinities, while ``xyz="1e200 0 0"`` is refused: a slide's constant offset is a translation too."""
+    from skelarm_sym.errors import InputError
+    from skelarm_sym.generate import generate
+    from skelarm_sym.models.chain import load_robot
+
+    path = tmp_path / "m.urdf"
+    path.write_text('<robot name="m"><link name="a"/><link name="b"/><link name="c"/>'
+                    '<joint name="j1" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 0.1"/>'
+                    '<axis xyz="0 0 1"/></joint><joint name="j2" type="prismatic"><parent link="b"/><child link="c"/>'
+                    '<origin xyz="0.2 0 0"/><axis xyz="1 0 0"/><mimic joint="j1" multiplier="1" offset="1e200"/></joint>'
+                    '</robot>')
+    with pytest.raises(InputError, match=r"reach \(sum of its constant translations and slide offsets\) = 1e\+200"):
+        generate(load_robot(path), out=None, functions="pose")

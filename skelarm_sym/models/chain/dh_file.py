@@ -33,6 +33,7 @@ import math
 import operator
 import os
 import re
+import stat
 import sys
 import tomllib
 from pathlib import Path
@@ -267,9 +268,25 @@ def _default_prefix(name: str) -> str:
 
 def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> bytes:
     """The bytes of a robot description of at most ``max_bytes``; InputError naming the file when it
-    cannot be read or is larger."""
+    cannot be read, is larger, or is no regular file (a FIFO's open waited for a writer forever; a device)."""
     try:
-        with open(path, "rb") as handle:
+        # O_NONBLOCK: opening a FIFO does not wait for a writer; the check below refuses it before any read
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, not a {what}") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    try:
+        if stat.S_ISDIR(os.fstat(fd).st_mode):
+            raise InputError(f"{path}: is a folder, not a {what}")
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise InputError(f"{path}: not a regular file (a pipe or a device): a {what} is read from a file")
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        with os.fdopen(fd, "rb") as handle:
+            fd = -1
             data = handle.read(max_bytes + 1)
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
@@ -277,6 +294,9 @@ def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> 
         raise InputError(f"{path}: is a folder, not a {what}") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
     if len(data) > max_bytes:
         raise InputError(f"{path}: larger than {_size(max_bytes)}: a {what} is read only up to that size")
     return data

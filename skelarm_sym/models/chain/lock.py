@@ -34,7 +34,12 @@ def lock_index(model: Chain, joint: str | int | None) -> int | None:
         return None
     text = str(joint).strip()
     names = [j.name for j in model.joints]
-    if text.isascii() and text.isdigit() and text not in names:  # "³" and "٣" are digits to isdigit, not to int
+    numeral = text.isascii() and text.isdigit()  # "³" and "٣" are digits to isdigit, not to int
+    if numeral and text in names and 1 <= int(text) <= len(names) and names[int(text) - 1] != text:
+        raise InputError(f"{LOCK_OPTION} {text} is ambiguous: joint number {text} is {names[int(text) - 1]!r}, and joint "
+                         f"{names.index(text) + 1} is named {text!r}; lock the first by its name ({names[int(text) - 1]}) "
+                         f"or the second by its number ({names.index(text) + 1})")
+    if numeral and text not in names:
         number = int(text)
         if not 1 <= number <= len(names):
             raise InputError(f"{LOCK_OPTION} {text}: the chain has joints 1..{len(names)} ({', '.join(names)})")

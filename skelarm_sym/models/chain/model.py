@@ -473,14 +473,16 @@ class Chain:
                 value = sp.sympify(value)
                 if value.is_number and not value.is_zero:
                     check_number(float(value), f"joint {j.name!r} {what}", precision)
+                    if what == "offset" and j.kind == "prismatic":  # a slide's constant offset is a translation too
+                        reach += abs(float(value))
             for what, value in (("lower limit", j.lower), ("upper limit", j.upper), ("velocity limit", j.velocity)):
                 if value is not None and value != 0:  # the emitted Q_MIN, Q_MAX, DQ_MAX hold them in this precision
                     check_number(float(value), f"joint {j.name!r} {what}", precision)
             _check_resolved_range(j, precision)
         if reach > 0:
-            check_number(reach, "the robot's reach (sum of its constant translations)", precision, 4,
+            check_number(reach, "the robot's reach (sum of its constant translations and slide offsets)", precision, 4,
                          "the inverse functions use its fourth power")
-            check_number(reach, "the robot's reach (sum of its constant translations)", precision, -1)
+            check_number(reach, "the robot's reach (sum of its constant translations and slide offsets)", precision, -1)
 
     def _own_joints(self) -> dict[int, Joint]:
         """Per coordinate, its own joint: the one it is named after, else the first that follows it with multiplier 1

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ...errors import InputError
+from ...names import ascii_number
 from ..kind import ModelKind
 from .model import DiffDrive, validate_track
 
@@ -23,7 +24,7 @@ def _scenarios(derivation, cases, seed, precision):
 
 def _track(text: str) -> float:
     try:
-        return validate_track(float(text))
+        return validate_track(float(ascii_number(text)))
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}") from None
 

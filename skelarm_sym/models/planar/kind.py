@@ -6,6 +6,7 @@ import argparse
 import math
 
 from ...errors import InputError
+from ...names import ascii_number
 from ..kind import ModelKind
 from .model import PlanarArm, validate_links
 
@@ -36,7 +37,7 @@ def _solver_checks(generated, implementations, cases, seed, precision):
 
 def _links(text: str) -> int:
     try:
-        value = int(text)
+        value = int(ascii_number(text))
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
     try:
@@ -50,7 +51,7 @@ def _numbers(what: str):
         values = []
         for item in text.split(","):
             try:
-                values.append(float(item))
+                values.append(float(ascii_number(item)))
             except ValueError:
                 raise argparse.ArgumentTypeError(f"{what} must be comma-separated numbers, got {item.strip()!r}") from None
         return tuple(values)
