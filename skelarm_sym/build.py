@@ -376,10 +376,10 @@ def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | N
     interpreter's headers are installed (:func:`python_headers`); ``True``: always (an :class:`InputError`
     where it cannot be built); ``False``: never, the ctypes library alone. Batches go through ctypes
     either way (single solver problems take the extension too). ``flags``: as :func:`compile_shared`'s (``None``: :func:`default_flags`)."""
-    from .generate import Generated
     from .wrapper import CompiledArm
 
-    if not isinstance(generated, Generated):
+    # what generate() returns (not imported: generate imports this module's backends)
+    if not (isinstance(getattr(generated, "sources", None), dict) and hasattr(generated, "module")):
         raise InputError(f"compile_arm takes what generate() returns, got {type(generated).__name__} {generated!r:.60}")
     if flags is None:
         flags = default_flags()
