@@ -1201,6 +1201,35 @@ def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
                 assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, (q5, q)
 
 
+def test_a_wrist_aligned_at_another_turn_has_its_continuum(tmp_path):
+    """A wrist whose sixth axis meets the fourth's line with q5 at 1 rad (a file whose zero pose bends joint 5): the rows
+    were exact but ik_nearest from the source landed up to 2.5 rad away on 30 of 30 aligned targets (a previous stop's
+    leftover). The continuum is found at that turn, ``(a, w, b, s, 0, w0 = 1)``, in NumPy and in C."""
+    from skelarm_sym import reference
+    from skelarm_sym.models.chain import load_robot
+
+    h4, h5 = np.array([1.0, 0.0, 0.0]), np.array([0.5, 0.0, math.sqrt(3) / 2])
+    h6 = h4 * math.cos(-1.0) + np.cross(h5, h4) * math.sin(-1.0) + h5 * (h5 @ h4) * (1 - math.cos(-1.0))  # turned back 1 rad
+    path = tmp_path / "bent.urdf"
+    path.write_text(SKEWED_WRIST.replace('<axis xyz="1 0 0"/></joint>\n  <joint name="jt"',
+                                         '<axis xyz="%.17g %.17g %.17g"/></joint>\n  <joint name="jt"' % tuple(h6))
+                    .replace('lower="-1.2" upper="1.2"', 'lower="-3.5" upper="3.5"'))
+    b = Built(load_robot(path, tip="tool"), None, functions="ik_all,ik_nearest")
+    assert b.continuum[:5] == (3, 4, 5, 1, 0) and abs(b.continuum[5] - 1.0) < 1e-12
+    rng = np.random.default_rng(12)
+    lower, upper = np.array([-3.0, -2.0, -0.5, -2.0, -3.5, -np.pi]), np.array([3.0, 2.5, 2.0, 2.0, 3.5, np.pi])
+    for _ in range(12):
+        q = rng.uniform(lower, upper)
+        q[4] = 1.0
+        T = reference.chain_kinematics(b.numeric, q[None]).T[0]
+        for impl in (b.c, b.py):
+            r = impl.ik_all(T)
+            assert r.status == "ok" and r.count >= 1
+            for row in r.q[:r.count]:
+                assert np.abs(reference.chain_kinematics(b.numeric, row[None]).T[0] - T).max() < 1e-12
+            assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, q
+
+
 def test_ik_nearest_may_write_its_answer_over_q_ref():
     """A controller's in-place call ``ur5_ik_nearest(q, T, q)`` returned IK_INVALID with q NaN: the function set q to
     NaN before it read q_ref. It reads q_ref first now, and the in-place answer is the out-of-place one, for the

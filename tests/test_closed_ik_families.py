@@ -77,3 +77,32 @@ def test_pose_errors_are_the_judges():
         assert want[0].min() > 1e-3 and want[1].min() > 1e-3
         np.testing.assert_allclose(pos[i], want[0], rtol=1e-12, atol=0)
         np.testing.assert_allclose(rot[i], want[1], rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("family, alphas", [(("spherical_shoulder", "intersect_12"), {0: 1.1, 1: 1.1}),
+                                            (("spherical_wrist", "parallel_23"), {3: 0.9, 4: 0.9})])
+def test_equal_skew_twists_with_a_bent_zero_pose_have_their_continuum(family, alphas, monkeypatch):
+    """Random arms whose two skew twists are equal align at a turn of the middle joint that their random DH offsets
+    make any angle ``w0``: the continuum is found there, for the wrist and for the shoulder (a reversed chain, whose
+    variables are negated: ``-w0``), and ik_nearest from a configuration on it returns that configuration."""
+    import closed_ik_support
+    from closed_ik_support import random_family_chain
+    from skelarm_sym import reference
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+
+    constraints = {k: dict(v) for k, v in FAMILY_CONSTRAINTS[family].items()}
+    for row, alpha in alphas.items():
+        constraints.setdefault(row, {})["alpha"] = alpha
+    monkeypatch.setitem(closed_ik_support.FAMILY_CONSTRAINTS, family, constraints)
+    rng = np.random.default_rng(0)
+    chain = random_family_chain(family, rng)
+    ik = ClosedFormIK(chain)
+    a, w, b, s, s_odd, w0 = ik.ik.continuum
+    assert abs(w0) > 0.1 and abs(abs(w0) - np.pi) > 0.1  # not a multiple of pi
+    num = chain.numeric()
+    for _ in range(8):
+        q = rng.uniform(-2.5, 2.5, 6)
+        q[w] = w0
+        T = reference.chain_kinematics(num, q[None]).T[0]
+        near, _ = ik.nearest(q, T.reshape(16))
+        assert np.abs(near - q).max() < 1e-9, (q, near)

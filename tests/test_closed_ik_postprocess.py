@@ -248,7 +248,8 @@ def test_wrist_continuum_moves_keep_the_pose(name):
     """The derivation's ``(a, w, b, s, s_odd)`` against the forward kinematics: with joint w at 0 (and at pi), every
     ``(q_a + t, q_b - sigma t)`` gives the same pose, sigma = s (-s at pi); turning the other way does not."""
     chain, lock, ik = solver(name)
-    a, w, b, s, s_odd = ik.ik.continuum
+    a, w, b, s, s_odd, w0 = ik.ik.continuum
+    assert w0 == 0.0  # the example arms align at multiples of pi
     assert s_odd == -s  # every example wrist is at right angles: aligned at odd multiples of pi too
     rng = np.random.default_rng(4)
     q = random_configurations(chain, 5, rng)

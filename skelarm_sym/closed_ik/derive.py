@@ -21,6 +21,7 @@ and 1/2), sin, cos (of the lock only), atan2, Max, Min, Piecewise, relationals `
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,8 +68,8 @@ class ClosedIK:
     principal: tuple[bool, ...] = field(default=())
     """Per coordinate: every row's value is an angle in ``[-pi, pi]`` (``pi`` the double 3.141592653589793;
     :meth:`~.subproblems.Steps.is_principal`), so a 2 pi shift toward a centre of 0 leaves it as it is."""
-    continuum: tuple[int, ...] = field(default=())
-    """The wrist's continuum, ``(a, w, b, sigma, sigma_odd)`` (see :func:`wrist_continuum`), or ``()``."""
+    continuum: tuple = field(default=())
+    """The wrist's continuum, ``(a, w, b, sigma, sigma_odd, w0)`` (see :func:`wrist_continuum`), or ``()``."""
     members: sp.Matrix | None = None
     """Three parallel axes with a wrist flip (UR): the aligned wrist's continuum at the reference configuration's
     ``phi = q2 + q3 + q4`` (input ``q_ref``), per root of q1 the 2R arm's two branches (4 x N), or None."""
@@ -122,19 +123,26 @@ def wrist_flips(geom, reversed_: bool, locked: bool, joints: tuple[int, int, int
     return True
 
 
-def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
-    """The continuum of an aligned spherical wrist as ``(a, w, b, sigma, sigma_odd)`` (chain coordinates, 0-based),
-    or ``()``.
+ALIGNMENT_TOL = 1e-12
+"""A wrist aligned at a ``q5`` other than a multiple of pi: h6 turned by it must meet h4's line within this (sine)."""
+
+
+def wrist_continuum(geom, family: Family, locked: bool) -> tuple:
+    """The continuum of an aligned spherical wrist as ``(a, w, b, sigma, sigma_odd, w0)`` (chain coordinates,
+    0-based; ``w0`` rad), or ``()``: joint w at ``w0 + k pi`` puts h6 on the line of h4, with ``sigma`` for even
+    ``k`` and ``sigma_odd`` for odd ``k`` (0: not aligned there), and joints a and b turn about one axis there.
 
     Where ``h4 || h6`` at ``q = 0``, ``q5 = 0`` (an even multiple of pi) puts h6 on the line of h4 and joints 4 and 6
     turn about one axis: every ``(q4 + t, q6 - s t)`` is the same pose, ``s = h4 . h6`` (+1 or -1). For a wrist that
     flips (:func:`wrist_flips`: ``h4 . h5 = 0`` and ``h5 . h6 = 0`` as well) an odd multiple of pi aligns it too, with
     ``-s``; a wrist whose middle axis is skewed is aligned at even multiples only (``sigma_odd = 0``). A skewed wrist
     whose h6 meets h4 only when turned half a turn about h5 (``h6' = 2 (h5 . h6) h5 - h6 || h4``: two equal skew
-    twists, DH alpha4 = alpha5) is aligned at odd multiples only: ``sigma = 0``, ``sigma_odd = h4 .
-    h6'``. In chain coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the reversed chain for a
-    spherical shoulder: its variables are negated, which keeps the relation). ``()`` for the other families, where
-    neither ``h6`` nor ``h6'`` is parallel to ``h4``, or where the sign is not the same at every sampled lock value."""
+    twists, DH alpha4 = alpha5) is aligned at odd multiples only: ``sigma = 0``, ``sigma_odd = h4 . h6'``. Those have
+    ``w0 = 0``. A wrist whose h6 meets h4's line at another turn ``w0`` (a file whose zero pose bends joint 5) has
+    ``(s, -s or 0, w0)`` alike. In chain coordinates: ``a``, ``w``, ``b`` the coordinates of joints 4, 5, 6 (of the
+    reversed chain for a spherical shoulder: its variables are negated, which keeps the relation with ``-w0``).
+    ``()`` for the other families, where no turn of h6 about h5 meets h4's line, or where the sign or the turn is not
+    the same at every sampled lock value."""
     if family.name not in ("spherical_wrist", "spherical_shoulder"):
         return ()
     wrist = [5 - k if family.reversed else k for k in (3, 4, 5)]  # geometry indices of problem joints 4, 5, 6
@@ -151,9 +159,33 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple[int, ...]:
             return ()
         s = signs.pop()
         if half_turn:
-            return (*coordinates, 0, s)
-        return (*coordinates, s, -s if wrist_flips(geom, family.reversed, locked) else 0)
-    return ()
+            return (*coordinates, 0, s, 0.0)
+        return (*coordinates, s, -s if wrist_flips(geom, family.reversed, locked) else 0, 0.0)
+    turns = [_aligning_turn(H[3], H[4], H[5]) for H in samples]
+    if any(t is None for t in turns):
+        return ()
+    if len({sign for _, sign in turns}) != 1 or max(abs(math.remainder(t - turns[0][0], 2 * math.pi)) for t, _ in turns) > 1e-12:
+        return ()
+    w0, s = turns[0]
+    flips = all(abs(float(H[3] @ H[4])) <= FLIP_TOL and abs(float(H[4] @ H[5])) <= FLIP_TOL for H in samples)
+    return (*coordinates, s, -s if flips else 0, -w0 if family.reversed else w0)
+
+
+def _aligning_turn(h4: np.ndarray, h5: np.ndarray, h6: np.ndarray) -> tuple[float, int] | None:
+    """``(phi, s)``: h6 turned by ``phi`` (rad, in ``(-pi, pi]``) about h5 is ``s h4`` (``s`` +1 or -1), or None where
+    no turn brings it onto h4's line (within :data:`ALIGNMENT_TOL`)."""
+    for s in (1, -1):
+        target = s * h4
+        if abs(float(h5 @ h6) - float(h5 @ target)) > ALIGNMENT_TOL:  # not on the same cone about h5
+            continue
+        p, t = h6 - float(h5 @ h6) * h5, target - float(h5 @ target) * h5
+        if np.linalg.norm(p) <= ALIGNMENT_TOL or np.linalg.norm(t) <= ALIGNMENT_TOL:
+            continue  # on h5's line: no turn moves it
+        phi = math.atan2(float(h5 @ np.cross(p, t)), float(p @ t))
+        turned = h6 * math.cos(phi) + np.cross(h5, h6) * math.sin(phi) + h5 * float(h5 @ h6) * (1 - math.cos(phi))
+        if np.linalg.norm(np.cross(turned, h4)) <= ALIGNMENT_TOL:
+            return phi, s
+    return None
 
 
 def derive_ik_all(chain: Chain, lock: int | str | None = None, atan2: str | None = None) -> ClosedIK:
@@ -289,7 +321,7 @@ class CandidatesSpec(FunctionSpec):
     :attr:`ClosedIK.principal`; empty: nothing known)."""
 
     principal: tuple[bool, ...] = ()
-    continuum: tuple[int, ...] = ()
+    continuum: tuple = ()
     """The wrist's continuum (:attr:`ClosedIK.continuum`), which the post-processing moves along; ``()``: none."""
 
 

@@ -18,7 +18,7 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    2 pi) / 2)`` (0 without limits, or for +-2 pi: the result lies in ``[-pi, pi]``). When several copies fit (a range wider than 2 pi) the one returned is the copy nearest
    zero, not the middle of a range like ``[-1e5, -83]`` (at -5e4 rad one unit in the last place is 7e-12 rad,
    and the poses of such rows missed the target by 1e-11).
-   **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s, s_odd)`` of :func:`~.derive.wrist_continuum`): a row
+   **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s, s_odd, w0)`` of :func:`~.derive.wrist_continuum`): a row
    flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of a multiple of pi has joints a
    and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi (``sigma = s`` for an even multiple, ``-s`` for an
    odd one; a skewed wrist, ``continuum = (a, w, b, s, 0)``, is aligned at even multiples only). Its ``q[a]``, ``q[b]`` become the member within both joints' limits nearest the row's own values
@@ -135,12 +135,14 @@ def shift(q: np.ndarray, lower, upper, revolute) -> np.ndarray:
     return np.where(rev, q + TWO_PI * k, q)
 
 
-def continuum_sign(q_w: float, flag: int, s: int, tol: float = WRIST_ALIGNED_TOL, s_odd: int | None = None) -> int:
+def continuum_sign(q_w: float, flag: int, s: int, tol: float = WRIST_ALIGNED_TOL, s_odd: int | None = None,
+                   w0: float = 0.0) -> int:
     """``sigma`` of a row's continuum (``q[a] + sigma q[b]`` fixed), or 0 when the row is not a member of one: its flag
-    has the singular bit and its wrist angle ``q_w`` is within ``tol`` of ``k pi``; ``sigma = s`` for even ``k``,
+    has the singular bit and its wrist angle ``q_w`` is within ``tol`` of ``w0 + k pi``; ``sigma = s`` for even ``k``,
     ``s_odd`` for odd ``k`` (``-s`` by default: a wrist that flips; 0: a skewed wrist, aligned at even ``k`` only)."""
-    k = np.rint(q_w / np.pi)
-    if not flag & 2 or abs(q_w - np.pi * k) > tol:
+    shifted = q_w - w0 if w0 else q_w
+    k = np.rint(shifted / np.pi)
+    if not flag & 2 or abs(shifted - np.pi * k) > tol:
         return 0
     return s if k % 2 == 0 else (-s if s_odd is None else s_odd)
 
@@ -194,7 +196,7 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
                 aligned_tol: float = WRIST_ALIGNED_TOL) -> IKAll:
     """Steps 1-7 of the module docstring for one target. ``Q`` (S, N), ``flags`` (S); ``Q = None`` means the
     caller found the input invalid; ``target`` (16) enables step 1's rotation check; ``continuum``: the wrist's
-    ``(a, w, b, s, s_odd)`` (:func:`~.derive.wrist_continuum`) or ``()``."""
+    ``(a, w, b, s, s_odd, w0)`` (:func:`~.derive.wrist_continuum`) or ``()``."""
     lower = np.asarray(lower, float)
     upper = np.asarray(upper, float)
     revolute = np.asarray(revolute, bool)
@@ -215,8 +217,8 @@ def postprocess(Q, flags, lower, upper, revolute, target=None, dup_tol: float = 
             continue
         q = shift(Q[i], lower, upper, revolute)
         if continuum:
-            a, w, b, s, s_odd = continuum
-            sigma = continuum_sign(q[w], flags[i], s, aligned_tol, s_odd)
+            a, w, b, s, s_odd, w0 = continuum
+            sigma = continuum_sign(q[w], flags[i], s, aligned_tol, s_odd, w0)
             member = sigma and continuum_member(q[a], q[b], (q[a], q[b]), sigma, (lower[a], lower[b]), (upper[a], upper[b]),
                                                 tol=limit_tol)
             if member:
@@ -283,8 +285,8 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
         for j in np.nonzero(rev)[0]:
             q[j] = nearest_copy(q[j], q_ref[j], lower[j], upper[j], limit_tol)
         if continuum:
-            a, wj, b, s, s_odd = continuum
-            sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol, s_odd)
+            a, wj, b, s, s_odd, w0 = continuum
+            sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol, s_odd, w0)
             member = sigma and continuum_member(result.q[i, a], result.q[i, b], (q_ref[a], q_ref[b]), sigma,
                                                 (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]), limit_tol)
             if member:

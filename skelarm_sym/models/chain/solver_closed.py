@@ -360,11 +360,12 @@ def _doc_continuum(arm: _Arm, choice: str) -> tuple[str, ...]:
     """The doc line on the wrist's continuum (none for an arm without one)."""
     if not arm.continuum:
         return ()
-    a, w, b, s, s_odd = arm.continuum
+    a, w, b, s, s_odd, w0 = arm.continuum
     multiple = "multiple" if s and s_odd else "even multiple" if s else "odd multiple"
     part = "shoulder" if a > b else "wrist"  # a spherical shoulder's continuum is of the reversed chain's joints 3, 2, 1
-    return (f"An aligned {part} (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of a "
-            f"{multiple} of pi) turns joints {a + 1} and {b + 1}",
+    where = f"a {multiple} of pi" if not w0 else f"{w0:.17g} plus a {multiple} of pi"
+    return (f"An aligned {part} (a row flagged singular, joint {w + 1} within IK_WRIST_ALIGNED_TOL of "
+            f"{where}) turns joints {a + 1} and {b + 1}",
             f"about one axis: such a row takes {choice}.")
 
 

@@ -34,13 +34,13 @@ def _width(lo: float | None, hi: float | None) -> float:
 class Continuum:
     """The locals of the member choice (declared once, before the loops), and the statements that use them.
 
-    ``arm``: an object with ``continuum`` (``(a, w, b, s, s_odd)``), ``lower`` and ``upper`` (per coordinate, ``None``
+    ``arm``: an object with ``continuum`` (``(a, w, b, s, s_odd, w0)``), ``lower`` and ``upper`` (per coordinate, ``None``
     where absent); ``reference``: the member is chosen nearest a reference other than the row (``ik_nearest``);
     ``weights``: joint a's and joint b's metric weights (``ik_nearest_weighted``; None: both 1)."""
 
     def __init__(self, b: Body, arm, reference: bool, weights: tuple | None = None) -> None:
         self.weights = weights
-        self.a, self.w, self.b, self.s, self.s_odd = arm.continuum
+        self.a, self.w, self.b, self.s, self.s_odd, self.w0 = arm.continuum
         self.lower = (arm.lower[self.a], arm.lower[self.b])
         self.upper = (arm.upper[self.a], arm.upper[self.b])
         # the windows take the limits widened by IK_LIMIT_TOL (at most 1e-5, in float): a margin above that keeps
@@ -71,6 +71,8 @@ class Continuum:
         = the member within the limits nearest ``(ref_a, ref_b)`` of the continuum through ``(x, y)`` (see
         :meth:`_member`); a regular row costs one test."""
         with (b.if_(singular) if singular is not None else contextlib.nullcontext()):
+            if self.w0:  # aligned at w0 + k pi (a file whose zero pose bends the wrist)
+                q_w = q_w - self.w0
             b.set(self.k, Call1("nearbyint", q_w * (1.0 / math.pi)))
             odd = fabs(self.k - 2.0 * Call1("nearbyint", 0.5 * self.k)) > 0.5
             b.set(self.sigma, select(fabs(q_w - math.pi * self.k) <= NamedConst("IK_WRIST_ALIGNED_TOL"),
