@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING, Sequence
 
 from .errors import InputError
 from .compile_cache import cache_folder, private_folder  # noqa: F401 - part of this module's interface
+from .files import _pid_alive
 
 if TYPE_CHECKING:
     from .wrapper import CompiledArm
@@ -74,11 +75,11 @@ warning flags (:data:`STRICT_FLAGS`) are used at every level."""
 OPT_LEVELS = ("0", "1", "2", "3", "s", "g")
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 STALE_BUILD_SECONDS = 3600
+"""A build folder whose process cannot be identified is removed when older than this."""
 UNUSED_LIBRARY_DAYS = 30
 """A compile removes the cached libraries that no call has built or loaded for this many days (a library's
 sidecar's modification time is renewed each time it is reused)."""
 _KEY_FOLDER = re.compile(r"[0-9a-f]{24}")
-"""A build folder whose process cannot be identified is removed when older than this."""
 
 
 class CompilerNotFound(InputError):
@@ -204,16 +205,6 @@ def _durable_replace(source: Path, target: Path) -> None:
         pass
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True
-    return True
-
-
 def remove_stale_builds(root: Path) -> list[Path]:
     """Remove ``root/*/.build-PID-*`` folders of compiles whose process is gone or that are old."""
     removed = []
@@ -239,15 +230,29 @@ def remove_unused_libraries(root: Path, days: float = UNUSED_LIBRARY_DAYS) -> li
     removed = []
     now = time.time()
     for folder in root.iterdir():
+        parts = folder.name.split("-", 2)
+        if parts[0] == ".unused" and len(parts) == 3 and parts[1].isascii() and parts[1].isdigit() and not _pid_alive(int(parts[1])):
+            shutil.rmtree(folder, ignore_errors=True)  # left by a process killed while it removed it
+            continue
         if not _KEY_FOLDER.fullmatch(folder.name) or folder.is_symlink() or not folder.is_dir():
             continue
         try:
+            if any(folder.glob(".build-*")):  # a compile is writing here now
+                continue
             libraries = [path.lstat().st_mtime for path in folder.glob("lib*")]  # the libraries and their sidecars
         except OSError:
             continue
-        if libraries and now - max(libraries) > days * 86400:
-            shutil.rmtree(folder, ignore_errors=True)
-            removed.append(folder)
+        if not libraries or now - max(libraries) <= days * 86400:
+            continue
+        # renamed first (atomic): a process that reuses the library from now on rebuilds it rather than losing it
+        # half-way; one that verified it just before keeps its mapping of the file it loaded
+        doomed = folder.with_name(f".unused-{os.getpid()}-{folder.name}")
+        try:
+            os.rename(folder, doomed)
+        except OSError:
+            continue
+        shutil.rmtree(doomed, ignore_errors=True)
+        removed.append(folder)
     return removed
 
 
@@ -381,6 +386,8 @@ def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | N
     # what generate() returns (not imported: generate imports this module's backends)
     if not (isinstance(getattr(generated, "sources", None), dict) and hasattr(generated, "module")):
         raise InputError(f"compile_arm takes what generate() returns, got {type(generated).__name__} {generated!r:.60}")
+    if flags is not None and (isinstance(flags, str) or not all(isinstance(flag, str) for flag in flags)):
+        raise InputError(f"flags must be a sequence of strings (['-O2']), got {flags!r:.60}")
     if flags is None:
         flags = default_flags()
     EXT = EXTENSION_SUFFIX

@@ -12,13 +12,14 @@ import atexit
 import contextlib
 import gc
 import math
-import re
 import sys
+import unicodedata
 import textwrap
 from typing import Sequence
 
 from . import __version__
 from .errors import InputError
+from .names import REFUSED_CATEGORIES
 from .options import Default, Parser, add_generate_options, add_model_options, model_from_args, model_given, path_option
 
 
@@ -145,7 +146,8 @@ def _regenerate_files(args) -> int:
         names = [rec.prefix + suffix for suffix in BACKENDS[lang].FILE_SUFFIXES]
         if not any(written_by_skelarm_sym(recorded.root / name) for name in names):
             outside += names
-    refuse_foreign_files(recorded.root, outside)
+    if not args.force:  # --force: replace them too, as a plain generate --force does
+        refuse_foreign_files(recorded.root, outside)
     return _write_files(recorded.model, rec.lang, rec.prefix, rec.precision, str(recorded.root), rec.functions,
                         rec.cmake, True, args.compile)
 
@@ -281,18 +283,22 @@ def _freeze_at_exit() -> None:
         atexit.register(gc.freeze)
 
 
-_UNPRINTABLE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\ud800-\udfff\u00ad\u061c\u200b-\u200f\u2028-\u202e\u2060-\u2064\u2066-\u206f\ufeff]")
-
-
 def _escaped(text: str) -> str:
-    """``text`` with what a terminal would act on or cannot print written as escapes: control characters other than
-    newline and tab (a file name's ESC sequence retitled the terminal) as ``\\x1b``, a file name's undecodable byte
-    (Python's surrogate escape) as ``\\xff``."""
-    def escape(match: re.Match) -> str:
-        code = ord(match.group())
-        return f"\\x{code - 0xDC00:02x}" if 0xDC80 <= code <= 0xDCFF else match.group().encode("unicode_escape",
-                                                                                                "backslashreplace").decode()
-    return _UNPRINTABLE.sub(escape, text)
+    """``text`` with what a terminal would act on or cannot print written as escapes: every character of
+    :data:`~.names.REFUSED_CATEGORIES` (controls other than newline and tab, format characters such as the bidi
+    controls, line separators; a file name's ESC sequence retitled the terminal) as ``\\x1b`` or ``\\u202e``, a file
+    name's undecodable byte (Python's surrogate escape) as ``\\xff``."""
+    if text.isascii() and text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        if ch in "\n\t" or unicodedata.category(ch) not in REFUSED_CATEGORIES:
+            out.append(ch)
+        elif 0xDC80 <= ord(ch) <= 0xDCFF:
+            out.append(f"\\x{ord(ch) - 0xDC00:02x}")
+        else:
+            out.append(ch.encode("unicode_escape", "backslashreplace").decode())
+    return "".join(out)
 
 
 class _EscapedStream:

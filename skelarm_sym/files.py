@@ -22,10 +22,10 @@ from pathlib import Path
 from .errors import InputError
 
 STALE_SECONDS = 3600
+"""A temporary whose writer cannot be identified is removed when older than this."""
 MARK = "skelarm-"
 """In the name of every temporary and spare this module makes (``.NAME.PID.skelarm-xxxxxxxx.tmp``), so that the
 cleanup of a killed run's leftovers can tell them from a user's own backups."""
-"""A temporary whose writer cannot be identified is removed when older than this."""
 
 
 def new_file_mode() -> int:
@@ -36,11 +36,12 @@ def new_file_mode() -> int:
 
 
 def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (True where that cannot be told: another user's)."""
     if pid <= 0:
         return False
     try:
         os.kill(pid, 0)
-    except ProcessLookupError:
+    except (ProcessLookupError, OverflowError):  # OverflowError: no pid is that large (a junk file's name)
         return False
     except (PermissionError, OSError):
         return True  # exists, owned by someone else
@@ -57,7 +58,7 @@ def remove_stale_temporaries(folder: Path, names) -> list[Path]:
     for name in names:
         # exactly the names this module makes (a pid, the mark, mkstemp's 8 characters or token_hex(4)'s 8 digits):
         # a user's own ".arm.h.orig.bak", ".arm.h.20240101.bak" or ".arm.h.1.20240101.bak" is not ours to remove
-        pattern = re.compile(r"\." + re.escape(name) + r"\.(\d+)\." + re.escape(MARK)
+        pattern = re.compile(r"\." + re.escape(name) + r"\.([0-9]{1,10})\." + re.escape(MARK)
                              + r"(?:[a-z0-9_]{8}\.tmp|[0-9a-f]{8}\.bak)\Z")
         try:
             entries = list(folder.iterdir())
@@ -74,7 +75,7 @@ def remove_stale_temporaries(folder: Path, names) -> list[Path]:
                 continue
             if pid == os.getpid() and not old:
                 continue
-            if (pid is not None and not _pid_alive(pid)) or old:
+            if not _pid_alive(pid) or old:
                 try:
                     entry.unlink()
                     removed.append(entry)

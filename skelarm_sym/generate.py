@@ -30,7 +30,7 @@ from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
 from .ir.nodes import Function, Module
 from .models.planar import PlanarArm
 from .models.registry import kind_of
-from .names import C_RESERVED, reserved_prefix, standard_header  # noqa: F401 - C_RESERVED re-exported
+from .names import C_RESERVED, IMPORTED_MODULES, reserved_prefix, standard_header  # noqa: F401 - C_RESERVED re-exported
 
 PRECISIONS = ("double", "float")
 LANGUAGE_ALIASES = {"numpy": "python", "py": "python"}
@@ -51,11 +51,15 @@ def validate_prefix(prefix: object) -> str:
 
 
 def validate_module_name(prefix: str) -> str:
-    """``prefix`` if ``{prefix}.py`` would not shadow a Python standard module, else InputError."""
+    """``prefix`` if ``{prefix}.py`` would not shadow a Python standard module or a module the emitted Python imports
+    (:data:`~.names.IMPORTED_MODULES`: ``torch.py`` beside ``torch_torch.py``), else InputError."""
     if prefix in sys.stdlib_module_names:
         raise InputError(
             f"prefix {prefix!r} is a Python standard module: {prefix}.py would shadow it; choose another"
         )
+    if prefix.lower() in IMPORTED_MODULES:
+        raise InputError(f"prefix {prefix!r} is a module the emitted Python imports: {prefix}.py would shadow it; "
+                         "choose another")
     return prefix
 
 
@@ -71,6 +75,8 @@ CMAKE_RESERVED = frozenset(
     """all clean help install install_local install_strip list_install_components test package package_source depend
     edit_cache rebuild_cache all_build zero_check run_tests preinstall m""".split()
 )
+"""Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
+``INSTALL``), and ``m``, the math library the target links."""
 CMAKE_KEYWORDS = frozenset(
     """SHARED STATIC MODULE OBJECT INTERFACE ALIAS IMPORTED GLOBAL UNKNOWN EXCLUDE_FROM_ALL PROPERTIES PUBLIC PRIVATE
     BEFORE AFTER SYSTEM EXPORT ARCHIVE LIBRARY RUNTIME OBJECTS FRAMEWORK BUNDLE PRIVATE_HEADER PUBLIC_HEADER RESOURCE
@@ -79,8 +85,6 @@ CMAKE_KEYWORDS = frozenset(
 )
 """Keywords of the commands the CMakeLists.txt passes the target to (add_library, set_target_properties,
 target_include_directories, target_link_libraries, install): a target of that name is read as the keyword."""
-"""Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
-``INSTALL``), and ``m``, the math library the target links."""
 
 
 def validate_cmake_target(prefix: str) -> str:

@@ -69,9 +69,9 @@ beside the others would be imported in its place (``torch.py`` made ``torch_torc
 
 def reserved_prefix(name: str) -> bool:
     """True when ``name`` may not be the files' prefix: a C, C++ or Python keyword or a name the emitted code
-    relies on, or a module the emitted Python imports (:data:`IMPORTED_MODULES`). (A Python standard module's name is refused
-    only where a ``.py`` file is written.)"""
-    return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in IMPORTED_MODULES
+    relies on, or ``numpy``/``np`` (the NumPy module's own import). (A Python standard module's name, or another
+    module the emitted Python imports, :data:`IMPORTED_MODULES`, is refused only where a ``.py`` file is written.)"""
+    return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in ("numpy", "np")
 
 
 def reserved_name(name: str) -> bool:
@@ -86,12 +86,18 @@ characters (Cf: the bidi controls U+202A-202E and U+2066-2069, U+200E/F, zero-wi
 BOM...), surrogates (Cs) and the line and paragraph separators U+2028/9 (Zl, Zp). Everything else is
 printable data."""
 
+BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+"""The characters that reorder displayed text (Trojan Source): refused in paths, where other format characters
+(U+200C and U+200D, which Persian and emoji need) are not."""
+
+
 def path_argument(text: str) -> str:
-    """A file or folder named on the command line, unchanged; InputError where it holds a character of
-    :data:`REFUSED_CATEGORIES` other than a surrogate (a newline in a file name forged output lines, an ESC sequence
-    drove the terminal; a byte that is not UTF-8, which Python keeps as a surrogate, is printed as an escape)."""
+    """A file or folder named on the command line, unchanged; InputError where it holds a control character (a
+    newline in a file name forged output lines, an ESC sequence drove the terminal), a line or paragraph separator or
+    a bidirectional control. A byte that is not UTF-8 (kept by Python as a surrogate) is accepted and printed as an
+    escape; other format characters are printed as escapes."""
     for ch in text:
-        if unicodedata.category(ch) in REFUSED_CATEGORIES - {"Cs"}:
+        if unicodedata.category(ch) in ("Cc", "Zl", "Zp") or ch in BIDI_CONTROLS:
             raise InputError(f"{quoted(text)} holds a control or format character ({ch!r}): name a file without one")
     return text
 

@@ -209,7 +209,8 @@ def test_stale_temporaries_of_killed_runs_are_removed(tmp_path):
     # a user's own backups, which a looser pattern took for ours (two security reviews): kept however old
     mine = [tmp_path / ".arm2.h.orig.bak", tmp_path / f".arm2.h.{DEAD_PID}.mine.bak", tmp_path / ".arm2.c.20240101.my.tmp",
             tmp_path / ".arm2.h.20240101.bak", tmp_path / ".arm2.c.original.tmp", tmp_path / ".arm2.h.backup01.tmp",
-            tmp_path / ".arm2.h.1.20240101.bak"]
+            tmp_path / ".arm2.h.1.20240101.bak",
+            tmp_path / ".arm2.h.99999999999999999999.skelarm-abcdefgh.tmp"]  # a pid beyond any: os.kill overflowed
     for path in (dead, old, recent, alive, other, spare, *mine):
         path.write_text("partial")
     for path in (old, *mine):

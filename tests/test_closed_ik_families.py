@@ -104,5 +104,14 @@ def test_equal_skew_twists_with_a_bent_zero_pose_have_their_continuum(family, al
         q = rng.uniform(-2.5, 2.5, 6)
         q[w] = w0
         T = reference.chain_kinematics(num, q[None]).T[0]
+        # the continuum by the forward kinematics, not by the solver: at w0 joints a and b turn about one axis
+        # (q[a] + t, q[b] - s t keep the pose); at -w0 (the other sign of the turn) they do not
+        for turn, still in ((w0, True), (-w0, False)):
+            moved = q.copy()
+            moved[w], moved[a], moved[b] = turn, q[a] + 0.7, q[b] - s * 0.7
+            base = q.copy()
+            base[w] = turn
+            change = np.abs(reference.chain_kinematics(num, moved[None]).T[0] - reference.chain_kinematics(num, base[None]).T[0]).max()
+            assert (change < 1e-12) == still, (turn, change)
         near, _ = ik.nearest(q, T.reshape(16))
         assert np.abs(near - q).max() < 1e-9, (q, near)

@@ -164,11 +164,18 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple:
     turns = [_aligning_turn(H[3], H[4], H[5]) for H in samples]
     if any(t is None for t in turns):
         return ()
-    if len({sign for _, sign in turns}) != 1 or max(abs(math.remainder(t - turns[0][0], 2 * math.pi)) for t, _ in turns) > 1e-12:
+    if len({sign for _, sign in turns}) != 1 or max(abs(math.remainder(t - turns[0][0], 2 * math.pi))
+                                                   for t, _ in turns) > ALIGNMENT_TOL:
         return ()
     w0, s = turns[0]
-    flips = all(abs(float(H[3] @ H[4])) <= FLIP_TOL and abs(float(H[4] @ H[5])) <= FLIP_TOL for H in samples)
+    # half a turn further: on h4's line again (a wrist that flips), with the other sign
+    flips = all(np.linalg.norm(np.cross(_turned(H[5], H[4], w0 + math.pi), H[3])) <= ALIGNMENT_TOL for H in samples)
     return (*coordinates, s, -s if flips else 0, -w0 if family.reversed else w0)
+
+
+def _turned(v: np.ndarray, k: np.ndarray, phi: float) -> np.ndarray:
+    """``v`` turned by ``phi`` (rad) about the unit axis ``k`` (Rodrigues)."""
+    return v * math.cos(phi) + np.cross(k, v) * math.sin(phi) + k * float(k @ v) * (1 - math.cos(phi))
 
 
 def _aligning_turn(h4: np.ndarray, h5: np.ndarray, h6: np.ndarray) -> tuple[float, int] | None:
@@ -182,8 +189,7 @@ def _aligning_turn(h4: np.ndarray, h5: np.ndarray, h6: np.ndarray) -> tuple[floa
         if np.linalg.norm(p) <= ALIGNMENT_TOL or np.linalg.norm(t) <= ALIGNMENT_TOL:
             continue  # on h5's line: no turn moves it
         phi = math.atan2(float(h5 @ np.cross(p, t)), float(p @ t))
-        turned = h6 * math.cos(phi) + np.cross(h5, h6) * math.sin(phi) + h5 * float(h5 @ h6) * (1 - math.cos(phi))
-        if np.linalg.norm(np.cross(turned, h4)) <= ALIGNMENT_TOL:
+        if np.linalg.norm(np.cross(_turned(h6, h5, phi), h4)) <= ALIGNMENT_TOL:
             return phi, s
     return None
 
@@ -390,7 +396,8 @@ def _without(constants, others) -> tuple:
 
 
 WRIST_CONSTANT = Constant(sp.Symbol("IK_WRIST_ALIGNED_TOL"), {"double": WRIST_ALIGNED_TOL, "float": WRIST_ALIGNED_TOL_FLOAT},
-                          "a row flagged singular with the wrist angle this close to a multiple of pi (rad) is a member "
+                          "a row flagged singular with the wrist angle this close to an angle that aligns the wrist (k pi; "
+                          "w0 + k pi where the zero pose bends it) (rad) is a member "
                           "of the wrist's continuum, moved along it into the limits (ik_all) or toward q_ref (ik_nearest)")
 """The constant of an arm with a wrist continuum (:attr:`ClosedIK.continuum`)."""
 

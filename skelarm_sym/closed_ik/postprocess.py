@@ -19,9 +19,10 @@ absent) and ``revolute`` (N, bool). Steps, each a loop over at most S rows (and 
    zero, not the middle of a range like ``[-1e5, -83]`` (at -5e4 rad one unit in the last place is 7e-12 rad,
    and the poses of such rows missed the target by 1e-11).
    **A continuum** (a spherical wrist's, ``continuum = (a, w, b, s, s_odd, w0)`` of :func:`~.derive.wrist_continuum`): a row
-   flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of a multiple of pi has joints a
-   and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi (``sigma = s`` for an even multiple, ``-s`` for an
-   odd one; a skewed wrist, ``continuum = (a, w, b, s, 0)``, is aligned at even multiples only). Its ``q[a]``, ``q[b]`` become the member within both joints' limits nearest the row's own values
+   flagged singular whose wrist angle ``q[w]`` is within ``WRIST_ALIGNED_TOL`` of ``w0 + k pi`` (``w0 = 0`` unless
+   the zero pose bends the wrist) has joints a and b on one axis, ``q[a] + sigma q[b]`` fixed modulo 2 pi
+   (``sigma = s`` for even ``k``, ``s_odd`` for odd ``k``: ``-s`` for a wrist that flips, 0 for a skewed one, aligned
+   at even ``k`` only). Its ``q[a]``, ``q[b]`` become the member within both joints' limits nearest the row's own values
    (:func:`continuum_member`): the row itself when it fits; when it does not, the member the least turn
    away, which step 4 then keeps. (Moving along the line changes the pose by at most twice the wrist's distance
    from the multiple of pi, in rotation-matrix entries.)

@@ -269,9 +269,10 @@ def _default_prefix(name: str) -> str:
 def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> bytes:
     """The bytes of a robot description of at most ``max_bytes``; InputError naming the file when it
     cannot be read, is larger, or is no regular file (a FIFO's open waited for a writer forever; a device)."""
+    nonblocking = getattr(os, "O_NONBLOCK", 0)
     try:
         # O_NONBLOCK: opening a FIFO does not wait for a writer; the check below refuses it before any read
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        fd = os.open(path, os.O_RDONLY | nonblocking)
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except IsADirectoryError:
@@ -283,15 +284,11 @@ def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> 
             raise InputError(f"{path}: is a folder, not a {what}")
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             raise InputError(f"{path}: not a regular file (a pipe or a device): a {what} is read from a file")
-        if hasattr(os, "set_blocking"):
+        if nonblocking:
             os.set_blocking(fd, True)
         with os.fdopen(fd, "rb") as handle:
             fd = -1
             data = handle.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a {what}") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
     finally:

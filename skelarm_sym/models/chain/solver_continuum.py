@@ -67,7 +67,7 @@ class Continuum:
 
     def move(self, b: Body, q_w, singular, x, y, ref_a, ref_b, out_a, out_b, through_ref: bool = False) -> None:
         """Where the row is a continuum's member (``singular``: its flag's singular bit is set, ``None`` where the
-        caller has tested it; ``q_w``: its wrist angle within IK_WRIST_ALIGNED_TOL of ``k pi``), ``out_a``, ``out_b``
+        caller has tested it; ``q_w``: its wrist angle within IK_WRIST_ALIGNED_TOL of ``w0 + k pi``), ``out_a``, ``out_b``
         = the member within the limits nearest ``(ref_a, ref_b)`` of the continuum through ``(x, y)`` (see
         :meth:`_member`); a regular row costs one test."""
         with (b.if_(singular) if singular is not None else contextlib.nullcontext()):
