@@ -352,6 +352,14 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
     lock = _lock_coordinate(chain)
     allowed = tolerance(precision, n)
     found_tol = FOUND_TOL[precision]
+    # the rows reproduce the target; how near the source configuration they can lie is the target's rounding amplified
+    # by the Jacobian's condition there (a random float arm near a singular configuration, condition 2.5e6: 0.25 rad)
+    free = np.ones(n, bool)
+    if lock is not None:
+        free[lock] = False
+    length = float(np.abs(np.asarray(targets).reshape(m, 16)[:, [3, 7, 11]]).max()) + 1.0
+    source_tol = [max(found_tol, 10.0 * float(np.finfo(dtype).eps) * _condition(numeric, q_gen[k:k + 1], free, length))
+                  for k in range(m)]
     complete = min(m, COMPLETE_TARGETS)
     each = multistart_ik_each(numeric, targets[:complete], starts=200, seeds=[seed + k for k in range(complete)],
                               fixed={lock: q_gen[:complete, lock]} if lock is not None else None)
@@ -391,7 +399,7 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
                     for b in range(a):
                         if same(sols[a], sols[b], rev, 1e-9 if precision == "double" else 1e-4):
                             check.fail(f"target {k}: rows {b} and {a} are one solution")
-                if len(missing(sols, q_gen[k:k + 1], rev, found_tol)) == 0:
+                if len(missing(sols, q_gen[k:k + 1], rev, source_tol[k])) == 0:
                     check.found += 1
                 if k < len(judged):
                     check.compared += 1
@@ -402,13 +410,13 @@ def closed_rows(derivation, implementations, cases: int, seed: int, precision: s
                         check.fail(f"target {k}: {len(lost)} of the numeric IK's {len(judged[k])} solutions missing")
             if has_nearest:
                 r = impl.ik_nearest(q_gen[k], targets[k], *extra)
-                if r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), found_tol):
+                if r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), source_tol[k]):
                     check.nearest += 1
                 else:
                     check.fail(f"target {k}: ik_nearest from the source configuration: {r.status}")
             if has_weighted:
                 r = impl.ik_nearest_weighted(q_gen[k], weights[k], targets[k], *extra)
-                near = r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), found_tol)
+                near = r.status == "ok" and same(np.asarray(r.q, dtype=np.float64), q_gen[k], np.zeros(n, bool), source_tol[k])
                 ref = q_gen[k] + offsets[k]  # no solution
                 if has_all and count:  # one where the weights decide, as near as a scan of ik_all's rows and copies
                     ref = _deciding_reference(sols, q_gen[k], weights[k], lower, upper, rev, draws)
