@@ -19,7 +19,7 @@ from typing import Sequence
 
 from . import __version__
 from .errors import InputError
-from .names import REFUSED_CATEGORIES
+from .names import REFUSED_CATEGORIES, ascii_number
 from .options import Default, Parser, add_generate_options, add_model_options, model_from_args, model_given, path_option
 
 
@@ -32,7 +32,7 @@ def _angles(text: str) -> tuple[float, ...]:
         written = item.strip()
         degrees = written.lower().endswith("deg")
         try:
-            value = float(written[:-3] if degrees else written)
+            value = float(ascii_number(written[:-3] if degrees else written))
         except ValueError:
             raise argparse.ArgumentTypeError(f"joint angles must be comma-separated numbers (radians, or degrees as "
                                              f"30deg), got {written!r}") from None

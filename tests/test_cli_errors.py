@@ -143,6 +143,8 @@ def test_pose_in_degrees_is_caught_and_can_be_written(tmp_path, capsys):
     line = one_line_error(capsys, ["show", "--links", "2", "--pose", "90,45", "--plot", str(tmp_path / "a.png")])
     assert "joint angle '90' is more than a turn: angles are in radians (for degrees write 90deg)" in line
     assert "not finite" in one_line_error(capsys, ["show", "--links", "2", "--pose", "1,inf", "--plot", "a.png"])
+    # as the other numbers of the command line: ASCII, no _ (Python reads "\u0663" as 3)
+    assert "got '\u0663'" in one_line_error(capsys, ["show", "--links", "2", "--pose", "1,\u0663", "--plot", "a.png"])
     assert list(tmp_path.iterdir()) == []
     args = build_parser().parse_args(["show", "--links", "2", "--pose", "30deg, -45DEG,0.5", "--plot", "a.png"])
     assert args.pose == pytest.approx((math.pi / 6, -math.pi / 4, 0.5), rel=1e-15)

@@ -1173,23 +1173,27 @@ def test_a_skewed_spherical_wrist_is_exact_at_and_near_alignment(tmp_path):
             assert np.abs(near.q - q).max() < (1e-9 if q5 == 0.0 else 1e-6), (q5, near.q, q)
 
 
-def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
-    """A skewed wrist whose sixth axis meets the fourth only with q5 at +-pi (two equal skew twists, DH alpha4 = alpha5)
-    got no continuum: the rows at q5 = pi were exact, but ik_nearest from the source landed
-    up to 1.9 rad away (30 of 30 aligned targets). Its continuum is now found with h6 turned half a turn about h5,
-    aligned at odd multiples of pi only, in NumPy and in C."""
-    from skelarm_sym import reference
+def _wrist_with_axis6(tmp_path, h6) -> Built:
+    """SKEWED_WRIST's arm with joint 6's axis ``h6`` (its axis 5 at 60 degrees to axis 4) and joint 5 free over
+    [-3.5, 3.5], built for ik_all and ik_nearest."""
     from skelarm_sym.models.chain import load_robot
 
-    path = tmp_path / "half_turn.urdf"
+    path = tmp_path / "wrist.urdf"
     path.write_text(SKEWED_WRIST.replace('<axis xyz="1 0 0"/></joint>\n  <joint name="jt"',
-                                         '<axis xyz="-0.5 0 0.8660254037844386"/></joint>\n  <joint name="jt"')
+                                         '<axis xyz="%.17g %.17g %.17g"/></joint>\n  <joint name="jt"' % tuple(h6))
                     .replace('lower="-1.2" upper="1.2"', 'lower="-3.5" upper="3.5"'))
-    b = Built(load_robot(path, tip="tool"), None, functions="ik_all,ik_nearest")
-    rng = np.random.default_rng(11)
+    return Built(load_robot(path, tip="tool"), None, functions="ik_all,ik_nearest")
+
+
+def _aligned_targets_return_their_source(b: Built, q5_values, per_value: int, seed: int) -> None:
+    """For random configurations with joint 5 at each of ``q5_values`` (the wrist aligned): every ik_all row of C
+    and NumPy reproduces the target, and ik_nearest from the configuration returns it."""
+    from skelarm_sym import reference
+
+    rng = np.random.default_rng(seed)
     lower, upper = np.array([-3.0, -2.0, -0.5, -2.0, -3.5, -np.pi]), np.array([3.0, 2.5, 2.0, 2.0, 3.5, np.pi])
-    for q5 in (np.pi, -np.pi):
-        for _ in range(10):
+    for q5 in q5_values:
+        for _ in range(per_value):
             q = rng.uniform(lower, upper)
             q[4] = q5
             T = reference.chain_kinematics(b.numeric, q[None]).T[0]
@@ -1201,33 +1205,24 @@ def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
                 assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, (q5, q)
 
 
+def test_a_wrist_aligned_at_a_half_turn_only_has_its_continuum(tmp_path):
+    """A skewed wrist whose sixth axis meets the fourth only with q5 at +-pi (two equal skew twists, DH alpha4 = alpha5)
+    got no continuum: the rows at q5 = pi were exact, but ik_nearest from the source landed
+    up to 1.9 rad away (30 of 30 aligned targets). Its continuum is now found with h6 turned half a turn about h5,
+    aligned at odd multiples of pi only, in NumPy and in C."""
+    b = _wrist_with_axis6(tmp_path, (-0.5, 0.0, 0.8660254037844386))
+    _aligned_targets_return_their_source(b, (np.pi, -np.pi), 10, seed=11)
+
+
 def test_a_wrist_aligned_at_another_turn_has_its_continuum(tmp_path):
     """A wrist whose sixth axis meets the fourth's line with q5 at 1 rad (a file whose zero pose bends joint 5): the rows
     were exact but ik_nearest from the source landed up to 2.5 rad away on 30 of 30 aligned targets (a previous stop's
     leftover). The continuum is found at that turn, ``(a, w, b, s, 0, w0 = 1)``, in NumPy and in C."""
-    from skelarm_sym import reference
-    from skelarm_sym.models.chain import load_robot
-
     h4, h5 = np.array([1.0, 0.0, 0.0]), np.array([0.5, 0.0, math.sqrt(3) / 2])
     h6 = h4 * math.cos(-1.0) + np.cross(h5, h4) * math.sin(-1.0) + h5 * (h5 @ h4) * (1 - math.cos(-1.0))  # turned back 1 rad
-    path = tmp_path / "bent.urdf"
-    path.write_text(SKEWED_WRIST.replace('<axis xyz="1 0 0"/></joint>\n  <joint name="jt"',
-                                         '<axis xyz="%.17g %.17g %.17g"/></joint>\n  <joint name="jt"' % tuple(h6))
-                    .replace('lower="-1.2" upper="1.2"', 'lower="-3.5" upper="3.5"'))
-    b = Built(load_robot(path, tip="tool"), None, functions="ik_all,ik_nearest")
+    b = _wrist_with_axis6(tmp_path, h6)
     assert b.continuum[:5] == (3, 4, 5, 1, 0) and abs(b.continuum[5] - 1.0) < 1e-12
-    rng = np.random.default_rng(12)
-    lower, upper = np.array([-3.0, -2.0, -0.5, -2.0, -3.5, -np.pi]), np.array([3.0, 2.5, 2.0, 2.0, 3.5, np.pi])
-    for _ in range(12):
-        q = rng.uniform(lower, upper)
-        q[4] = 1.0
-        T = reference.chain_kinematics(b.numeric, q[None]).T[0]
-        for impl in (b.c, b.py):
-            r = impl.ik_all(T)
-            assert r.status == "ok" and r.count >= 1
-            for row in r.q[:r.count]:
-                assert np.abs(reference.chain_kinematics(b.numeric, row[None]).T[0] - T).max() < 1e-12
-            assert np.abs(impl.ik_nearest(q, T).q - q).max() < 1e-9, q
+    _aligned_targets_return_their_source(b, (1.0,), 12, seed=12)
 
 
 def test_ik_nearest_may_write_its_answer_over_q_ref():

@@ -31,7 +31,8 @@ from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from ..models.chain.lock import named_joint
 from ..models.chain.target_rotation import ORTHO_CONSTANT
-from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry)
+from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry,
+                       rotate)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, LOCK_MAX,
                           LOCK_MAX_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
@@ -174,8 +175,8 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple:
 
 
 def _turned(v: np.ndarray, k: np.ndarray, phi: float) -> np.ndarray:
-    """``v`` turned by ``phi`` (rad) about the unit axis ``k`` (Rodrigues)."""
-    return v * math.cos(phi) + np.cross(k, v) * math.sin(phi) + k * float(k @ v) * (1 - math.cos(phi))
+    """``v`` turned by ``phi`` (rad) about the unit axis ``k``: :func:`~.classify.rotate` in floats."""
+    return np.array(rotate(k, math.cos(phi), math.sin(phi), v), dtype=float)
 
 
 def _aligning_turn(h4: np.ndarray, h5: np.ndarray, h6: np.ndarray) -> tuple[float, int] | None:
