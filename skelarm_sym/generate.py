@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
+from . import __version__
 from .assemble import build_module, function_items, select_functions, wanted_functions
 from .backends import BACKENDS
 from .backends.templating import render_template
@@ -394,6 +395,14 @@ def file_stamp(text: str) -> str | None:
     return match.group(1) if match else None
 
 
+def cmake_version(version: str) -> str:
+    """The numeric ``major.minor.patch`` CMake's ``project(VERSION)`` accepts, from a Python package version
+    (``0.4.0``, ``0.5.0.dev3+g1234``, ``1.0rc1`` -> ``0.4.0``, ``0.5.0``, ``1.0.0``)."""
+    leading = re.match(r"\d+(?:\.\d+){0,2}", version)
+    parts = leading.group(0).split(".") if leading else ["0"]
+    return ".".join(parts + ["0"] * (3 - len(parts)))
+
+
 def render_all(module: Module, langs: Sequence[str], cmake: bool) -> dict[str, str]:
     """Every file of the set, stamped: the stamp is a hash of all their texts, so each file names the
     set it belongs to (C refuses to compile a mismatched pair; ``check --from`` refuses a mixed set;
@@ -408,8 +417,10 @@ def render_all(module: Module, langs: Sequence[str], cmake: bool) -> dict[str, s
         for suffix, text in BACKENDS[lang].render(module, STAMP_PLACEHOLDER).items():
             texts[module.prefix + suffix] = text
     if cmake:
+        version = cmake_version(__version__)
         texts["CMakeLists.txt"] = render_template("cmake/CMakeLists.txt.j2", prefix=module.prefix, P=module.prefix.upper(),
-                                                  command=module.command, stamp=STAMP_PLACEHOLDER)
+                                                  command=module.command, stamp=STAMP_PLACEHOLDER, version=version,
+                                                  version_mm=".".join(version.split(".")[:2]))
     digest = hashlib.sha256()
     for name in sorted(texts):
         digest.update(name.encode() + b"\0" + texts[name].encode() + b"\0")

@@ -105,6 +105,39 @@ def test_install_and_find_package(tmp_path):
     np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
 
 
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake not installed")
+def test_find_package_with_a_version(tmp_path):
+    """``find_package(arm3 0.4 REQUIRED)`` failed: no arm3ConfigVersion.cmake was installed (a ROS 2 integrator's
+    report). The package's version is skelarm-sym's; any patch of the same minor version is accepted, another minor
+    version is not (the interface can change between minor versions before 1.0)."""
+    from skelarm_sym import __version__
+
+    major, minor = (int(x) for x in __version__.split(".")[:2])
+    generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=tmp_path / "arm3", cmake=True)
+    prefix = tmp_path / "prefix"
+    _cmake("-S", str(tmp_path / "arm3"), "-B", str(tmp_path / "lib_build"))
+    _cmake("--build", str(tmp_path / "lib_build"))
+    _cmake("--install", str(tmp_path / "lib_build"), "--prefix", str(prefix))
+    consumer = tmp_path / "consumer"
+    consumer.mkdir()
+
+    def configure(requested):
+        (consumer / "CMakeLists.txt").write_text(
+            f"cmake_minimum_required(VERSION 3.11)\nproject(consumer C)\nfind_package(arm3 {requested} REQUIRED)\n"
+            "message(STATUS \"arm3 version ${arm3_VERSION}\")\n")
+        shutil.rmtree(consumer / "build", ignore_errors=True)
+        return subprocess.run(["cmake", "-S", str(consumer), "-B", str(consumer / "build"), f"-DCMAKE_PREFIX_PATH={prefix}"],
+                              capture_output=True, text=True)
+
+    ok = configure(f"{major}.{minor}")
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert f"arm3 version {major}.{minor}." in ok.stdout
+    for other in (f"{major}.{minor + 1}", f"{major + 1}.{minor}"):
+        refused = configure(other)
+        assert refused.returncode != 0, refused.stdout
+        assert re.search(rf'compatible\s+with\s+requested\s+version\s+"{re.escape(other)}"', refused.stderr), refused.stderr
+
+
 def test_plain_cc_line(tmp_path):
     from skelarm_sym.build import find_compiler
 
