@@ -133,9 +133,11 @@ FAMILY_CONSTRAINTS = {
 
 def random_family_chain(family: tuple[str, str | None], rng: np.random.Generator) -> Chain:
     """A random 6-joint standard-DH arm of ``family`` with a random base and tool (lengths in [-0.5, 0.5] m,
-    twists at least 0.3 rad away from 0 and pi so only the family's own axes are parallel)."""
+    twists at least 0.3 rad away from 0 and pi so only the family's own axes are parallel). The family's parallel
+    axes point the same way or opposite ways (a twist of 0 or pi, each with probability 1/2: a URDF's half-turn
+    reverses an axis), drawn after everything else so the other parameters of a seed do not depend on them."""
     cons = FAMILY_CONSTRAINTS[family]
-    joints = []
+    rows = []
     for i in range(6):
         row = {
             "kind": "revolute",
@@ -145,9 +147,14 @@ def random_family_chain(family: tuple[str, str | None], rng: np.random.Generator
             "theta": rng.uniform(-math.pi, math.pi),
         }
         row.update(cons.get(i, {}))
-        joints.append(dh_joint(f"j{i + 1}", row["kind"], "standard", sp.Float(row["a"]) if row["a"] else sp.S.Zero,
-                               sp.Float(row["alpha"]) if row["alpha"] else sp.S.Zero,
-                               sp.Float(row["d"]) if row["d"] else sp.S.Zero, sp.Float(row["theta"]), i))
+        rows.append(row)
     base = Transform.from_xyz_rpy([sp.Float(x) for x in rng.uniform(-0.3, 0.3, 3)], [sp.Float(x) for x in rng.uniform(-1, 1, 3)])
     tool = Transform.from_xyz_rpy([sp.Float(x) for x in rng.uniform(-0.2, 0.2, 3)], [sp.Float(x) for x in rng.uniform(-1, 1, 3)])
+    joints = []
+    for i, row in enumerate(rows):
+        alpha = sp.Float(row["alpha"]) if row["alpha"] else sp.S.Zero
+        if row["alpha"] == math.pi or (cons.get(i, {}).get("alpha") == 0.0 and rng.random() < 0.5):
+            alpha = sp.pi
+        joints.append(dh_joint(f"j{i + 1}", row["kind"], "standard", sp.Float(row["a"]) if row["a"] else sp.S.Zero,
+                               alpha, sp.Float(row["d"]) if row["d"] else sp.S.Zero, sp.Float(row["theta"]), i))
     return Chain("random_" + family[0], tuple(joints), base=base, tool=tool)

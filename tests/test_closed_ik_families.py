@@ -79,6 +79,49 @@ def test_pose_errors_are_the_judges():
         np.testing.assert_allclose(rot[i], want[1], rtol=1e-12, atol=0)
 
 
+@pytest.mark.parametrize("family, rows", [(("three_parallel", None), (1,)), (("three_parallel", None), (2,)),
+                                          (("three_parallel", None), (1, 2)), (("three_parallel_reversed", None), (2,)),
+                                          (("three_parallel_reversed", None), (3,)), (("spherical_wrist", "parallel_23"), (1,))])
+def test_parallel_axes_pointing_opposite_ways(family, rows, monkeypatch):
+    """Parallel axes that point opposite ways (a twist of pi; a URDF's half-turn: centauro's wheel legs): three
+    parallel axes took ``q4 = phi - q2 - q3`` as if they pointed the same way, every row's q4 wrong (poses 2 m off,
+    flagged exact). ``phi = q2 + s3 q3 + s4 q4`` with ``s_k = h2 . h_k``."""
+    import closed_ik_support
+
+    constraints = {k: dict(v) for k, v in FAMILY_CONSTRAINTS[family].items()}
+    for row in rows:
+        constraints[row]["alpha"] = np.pi
+    monkeypatch.setitem(closed_ik_support.FAMILY_CONSTRAINTS, family, constraints)
+    for seed in (1, 2):
+        check_family(family, seed)
+
+
+def test_an_aligned_ur_wrist_with_a_reversed_elbow_keeps_its_continuum():
+    """A UR5 whose elbow axis is reversed (DH twist pi before it): at an aligned wrist (q5 = 0) ``ik_nearest`` from a
+    configuration returns it; the continuum's ``phi`` of the reference is ``q2 - q3 + q4`` there."""
+    import sympy as sp
+
+    from skelarm_sym import reference
+    from skelarm_sym.models.chain import Chain
+    from skelarm_sym.models.chain.dh_file import dh_joint
+
+    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.pi, 0.0), (-0.39225, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
+            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
+    chain = Chain("ur5_reversed_elbow", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero,
+                                                       alpha, sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i)
+                                              for i, (a, alpha, d) in enumerate(rows)))
+    assert classify(chain).name == "three_parallel"
+    ik = ClosedFormIK(chain)
+    num = chain.numeric()
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        q = rng.uniform(-2.5, 2.5, 6)
+        q[4] = 0.0
+        T = reference.chain_kinematics(num, q[None]).T[0]
+        near, _ = ik.nearest(q, T.reshape(16))
+        assert np.abs(near - q).max() < 1e-9, (q, near)
+
+
 @pytest.mark.parametrize("family, alphas", [(("spherical_shoulder", "intersect_12"), {0: 1.1, 1: 1.1}),
                                             (("spherical_wrist", "parallel_23"), {3: 0.9, 4: 0.9})])
 def test_equal_skew_twists_with_a_bent_zero_pose_have_their_continuum(family, alphas, monkeypatch):

@@ -73,7 +73,7 @@ class ClosedIK:
     """The wrist's continuum, ``(a, w, b, sigma, sigma_odd, w0)`` (see :func:`wrist_continuum`), or ``()``."""
     members: sp.Matrix | None = None
     """Three parallel axes with a wrist flip (UR): the aligned wrist's continuum at the reference configuration's
-    ``phi = q2 + q3 + q4`` (input ``q_ref``), per root of q1 the 2R arm's two branches (4 x N), or None."""
+    ``phi = q2 + s3 q3 + s4 q4`` (input ``q_ref``; ``s_k = h2 . h_k``), per root of q1 the 2R arm's two branches (4 x N), or None."""
     member_flags: sp.Matrix | None = None
     """``members``' flags: bit 2 always; bit 1 where the row is no exact member (the wrist not aligned: no
     continuum; or the 2R arm does not reach the wrist point that ``phi`` gives)."""
@@ -242,15 +242,19 @@ def _derive_ik_all(chain: Chain, lock: int | str | None, atan2: str | None = Non
     else:
         flip = wrist_flips(geom, family.reversed, lock_idx is not None, (1, 4, 5))
         s0 = _axes_sign(geom, family.reversed, lock_idx is not None, (1, 5)) if flip else 0
+        signs = (_axes_sign(geom, family.reversed, lock_idx is not None, (1, 2)),
+                 _axes_sign(geom, family.reversed, lock_idx is not None, (1, 3)))
+        if 0 in signs:  # parallel at every lock value: the sign of a unit dot product of +-1 cannot change
+            raise ValueError(f"internal error: the parallel axes' signs {signs} differ between lock values")
         if s0:
             members = []
             q_ref = sp.symbols(f"q_ref0:{n}", real=True)
             inputs["q_ref"] = q_ref
             theta = [q_ref[geom.coordinates[k]] if not family.reversed else -q_ref[geom.coordinates[5 - k]] for k in range(6)]
-            phi_ref = steps("phi_ref", theta[1] + theta[2] + theta[3])
-            branches = three_parallel(steps, prob, flip, members, phi_ref, s0)
+            phi_ref = steps("phi_ref", theta[1] + signs[0] * theta[2] + signs[1] * theta[3])
+            branches = three_parallel(steps, prob, flip, members, phi_ref, s0, signs)
         else:
-            branches = three_parallel(steps, prob, flip)
+            branches = three_parallel(steps, prob, flip, signs=signs)
 
     rows, flags, principal = _rows(chain, geom, family, steps, inputs, lock_idx, branches)
     member_rows = member_flags = None

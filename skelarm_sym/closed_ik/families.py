@@ -24,9 +24,9 @@ finite when the wrist is aligned, where q4 takes the representative 0 and q6 the
 
 Three parallel axes (h2 || h3 || h4, h5 meets h6 at ``Q0``; the UR family): ``W = RG Q0 + tG``;
 ``(W - p1) . R(h1, q1) h2 = h2 . (Q0 - p1)`` (SP4 q1); ``h2 . R(h5, q5) h6 = h2 . R1^T RG h6`` (SP4 q5);
-``R(h6, q6) (RG^T R1 h2) = R5^T h2`` (SP1 q6); ``phi = q2 + q3 + q4`` from
+``R(h6, q6) (RG^T R1 h2) = R5^T h2`` (SP1 q6); ``phi = q2 + s3 q3 + s4 q4`` (``s_k = h2 . h_k``, +-1) from
 ``R(h2, phi) x = R1^T RG R6^T R5^T x``, ``x = h2 x h5`` (SP1); ``P4 = e2 e3 p4 = V - R(h2, phi)(Q0 - p4)``;
-``|R(h3, q3)(p4 - p3) - (p2 - p3)|^2 = |P4 - p2|^2`` (SP3 q3); SP1 q2; ``q4 = phi - q2 - q3``. 8 branches.
+``|R(h3, q3)(p4 - p3) - (p2 - p3)|^2 = |P4 - p2|^2`` (SP3 q3); SP1 q2; ``q4 = s4 (phi - q2 - s3 q3)``. 8 branches.
 At the wrist singularity (h6 turned by q5 parallel to h2: q6's SP1 is a continuum) only ``sigma = phi +- q6`` is
 fixed; the representative takes ``phi`` from an SP3 that puts joint 4's point at the distance from p2 nearest the
 middle of the 2R arm's range (so the arm reaches it whenever the target is reachable), and ``q6 = +-(sigma - phi)``.
@@ -221,8 +221,11 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
 
 
 def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: list | None = None,
-                   phi_ref: sp.Expr | None = None, s0: int = 1) -> list[Branch]:
+                   phi_ref: sp.Expr | None = None, s0: int = 1, signs: tuple[int, int] = (1, 1)) -> list[Branch]:
     """The eight candidates of a three-parallel-axes problem (h2 || h3 || h4, h5 meets h6).
+
+    ``signs``: ``(h2 . h3, h2 . h4)``, each +1 or -1: the three joints turn about h2 by
+    ``phi = q2 + s3 q3 + s4 q4`` (an axis reversed by a URDF's half-turn turns the other way).
 
     ``flip``: ``h2 . h5 = 0``, ``h5 . h6 = 0`` and ``h2 || h6`` (UR arms), so the second root of q5 is ``-q5`` and
     ``R(h2, phi + pi) R(h5, -q5) R(h6, q6 + pi) = R(h2, phi) R(h5, q5) R(h6, q6)`` (as for the spherical wrist): q6
@@ -279,7 +282,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
                 turned = _half_turn(steps, f"phif_{i}", phi_0, same)
                 phi = Angle(turned.theta, steps(f"phifc_{i}", _select((phi_0.c, same > 0), (-phi_0.c, True))),
                             steps(f"phifs_{i}", _select((phi_0.s, same > 0), (-phi_0.s, True))), phi_0.ls, phi_0.singular)
-                out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
+                out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}", signs)
                 continue
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
             q6r = sp1_parts(steps, f"q6_{i}{j}", H[5], a, b)
@@ -316,14 +319,14 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
             q6 = Angle(steps.principal(f"q6t{i}{j}", _select((wrapped, pick), (t6.theta, True))), None, None,
                        q6r.ls, steps(f"q6sg{i}{j}", any_of(sel, q6r.singular)))
             firsts = (q5, q6, phi, sel)
-            out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}")
+            out += _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6, phi, f"{i}{j}", signs)
             if members is not None and flip and j == 0:
-                members.append((_continuum_members(steps, H, P, V, Q0, q1, q5, q6, phi, phi_ref, s0, f"{i}"), sel))
+                members.append((_continuum_members(steps, H, P, V, Q0, q1, q5, q6, phi, phi_ref, s0, f"{i}", signs), sel))
     return out
 
 
 def _continuum_members(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, phi_ref: sp.Expr,
-                       s0: int, label: str) -> list[Branch]:
+                       s0: int, label: str, signs: tuple[int, int]) -> list[Branch]:
     """The aligned wrist's continuum at ``phi_ref``: ``q6`` moved by ``sigma (phi - phi_ref)`` (``phi + sigma q6`` is
     the rotation about h2 there), the 2R arm's two branches for the wrist point that ``phi_ref`` puts joint 4's point
     at (see :func:`three_parallel`)."""
@@ -336,16 +339,19 @@ def _continuum_members(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angl
                 None, None, q6.ls, sp.S.One)
     phim = Angle(phi_ref, steps(f"phimc{label}", sp.cos(phi_ref)), steps(f"phims{label}", sp.sin(phi_ref)),
                  sp.S.Zero, sp.S.One)
-    return _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6m, phim, f"m{label}")
+    return _three_parallel_arm(steps, H, P, V, Q0, q1, q5, q6m, phim, f"m{label}", signs)
 
 
-def _three_parallel_arm(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, label: str) -> list[Branch]:
-    """The two branches of the 2R arm (q2, q3; q4 = phi - q2 - q3) for the wrist angles q1, q5, q6, phi."""
+def _three_parallel_arm(steps: Steps, H, P, V, Q0, q1: Angle, q5: Angle, q6: Angle, phi: Angle, label: str,
+                        signs: tuple[int, int]) -> list[Branch]:
+    """The two branches of the 2R arm (q2, q3; ``q4 = s4 (phi - q2 - s3 q3)``, ``(s3, s4) = signs``: see
+    :func:`three_parallel`) for the wrist angles q1, q5, q6, phi."""
+    s3, s4 = signs
     out = []
     P4 = steps.vec(f"P4_{label}", sub(V, _rot(phi, H[1], sub(Q0, P[3]))))
     for k, q3 in enumerate(sp3(steps, f"q3_{label}", H[2], sub(P[3], P[2]), sub(P[1], P[2]), _sq(sub(P4, P[1])))):
         X = add(_rot(q3, H[2], sub(P[3], P[2])), P[2])
         q2 = sp1(steps, f"q2_{label}{k}", H[1], steps.vec(f"X{label}{k}", sub(X, P[1])), sub(P4, P[1]))
-        q4 = Angle(steps(f"q4_{label}{k}", phi.theta - q2.theta - q3.theta), None, None, phi.ls, phi.singular)
+        q4 = Angle(steps(f"q4_{label}{k}", s4 * (phi.theta - q2.theta - s3 * q3.theta)), None, None, phi.ls, phi.singular)
         out.append(Branch((q1, q2, q3, q4, q5, q6)))
     return out
