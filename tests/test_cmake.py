@@ -1,12 +1,15 @@
 """A C user's build (issue 12, part 5): CMakeLists.txt, a plain cc line, --functions, no silent overwrites."""
 
+import os
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from skelarm_sym import load_robot
 from skelarm_sym.cli import main
 from skelarm_sym.errors import InputError
 from skelarm_sym.generate import generate
@@ -136,6 +139,46 @@ def test_find_package_with_a_version(tmp_path):
         refused = configure(other)
         assert refused.returncode != 0, refused.stdout
         assert re.search(rf'compatible\s+with\s+requested\s+version\s+"{re.escape(other)}"', refused.stderr), refused.stderr
+
+
+MINGW = shutil.which("x86_64-w64-mingw32-gcc")
+WINE = shutil.which("wine64") or ("/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").exists() else None)
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None or MINGW is None,
+                    reason="cmake and MinGW-w64 (apt-get install gcc-mingw-w64-x86-64) for a Windows build")
+def test_a_windows_dll_exports_every_function(tmp_path):
+    """The CMake target builds as a Windows DLL (MinGW-w64, cross-compiled; a parent hiding symbols by default): the
+    program links against its import library and, under Wine when installed (apt-get install wine64), prints what the
+    reference computes. A robot's whole C compiles strictly for Windows as well. (MinGW's linker exports every
+    function of a DLL without dllexport; MSVC, for which the target sets WINDOWS_EXPORT_ALL_SYMBOLS, is not tried.)"""
+    generate(3, lengths=(1.0, 0.8, 0.5), prefix="arm3", langs="c", out=tmp_path / "arm3", cmake=True)
+    (tmp_path / "app.c").write_text(APP)
+    (tmp_path / "toolchain.cmake").write_text(
+        "set(CMAKE_SYSTEM_NAME Windows)\nset(CMAKE_C_COMPILER x86_64-w64-mingw32-gcc)\n"
+        "set(CMAKE_FIND_ROOT_PATH /usr/x86_64-w64-mingw32)\nset(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)\n"
+        "set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)\nset(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)\n")
+    (tmp_path / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.11)\nproject(app C)\nset(ARM3_SHARED ON)\nadd_subdirectory(arm3)\n"
+        "add_executable(app app.c)\ntarget_link_libraries(app PRIVATE arm3::arm3)\n")
+    build = tmp_path / "build"
+    _cmake("-S", str(tmp_path), "-B", str(build), f"-DCMAKE_TOOLCHAIN_FILE={tmp_path / 'toolchain.cmake'}",
+           "-DCMAKE_C_VISIBILITY_PRESET=hidden")
+    _cmake("--build", str(build))
+    dll = next(build.rglob("libarm3.dll"))
+    assert (build / "app.exe").exists()
+    generate(load_robot(Path(__file__).resolve().parent.parent / "examples" / "robots" / "ur5.toml"), langs="c",
+             out=tmp_path / "ur5")
+    r = subprocess.run([MINGW, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-c", str(tmp_path / "ur5" / "ur5.c"),
+                        "-o", str(tmp_path / "ur5.o")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    if WINE is None:
+        return
+    shutil.copy(dll, build / "libarm3.dll")
+    run = subprocess.run([WINE, str(build / "app.exe")], capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "WINEDEBUG": "-all"})
+    assert run.returncode == 0, run.stderr
+    np.testing.assert_allclose(_printed(run.stdout), EXPECTED, atol=1e-14)
 
 
 def test_plain_cc_line(tmp_path):
