@@ -64,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0xa395faf8UL
+#define UR5_STAMP 0x65950cfdUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -105,6 +105,9 @@ extern "C" {
 
 /* a subproblem whose rho is at most this times its scale (a sine) is a continuum */
 #define UR5_IK_SING_TOL 1e-09
+
+/* a discriminant within +-this times its scale is an exact double root's rounding: its root is taken as 0 */
+#define UR5_IK_ROOT_TOL 1e-13
 
 /* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */

@@ -38,7 +38,8 @@ from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SING
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
 from .families import SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist, three_parallel
 from ..derive.float_facts import float_facts
-from .subproblems import LS_SYMBOL, LS_TOL, LS_TOL_FLOAT, SING_SYMBOL, SING_TOL, SING_TOL_FLOAT, Steps, any_of
+from .subproblems import (LS_SYMBOL, LS_TOL, LS_TOL_FLOAT, ROOT_SYMBOL, ROOT_TOL, ROOT_TOL_FLOAT, SING_SYMBOL, SING_TOL,
+                          SING_TOL_FLOAT, Steps, any_of)
 
 Step = tuple[sp.Symbol, sp.Expr]
 
@@ -365,6 +366,8 @@ SUBPROBLEM_CONSTANTS = (
              "a subproblem's discriminant below -this times its scale is least squares, within +-this a double root"),
     Constant(SING_SYMBOL, {"double": SING_TOL, "float": SING_TOL_FLOAT},
              "a subproblem whose rho is at most this times its scale (a sine) is a continuum"),
+    Constant(ROOT_SYMBOL, {"double": ROOT_TOL, "float": ROOT_TOL_FLOAT},
+             "a discriminant within +-this times its scale is an exact double root's rounding: its root is taken as 0"),
 )
 """The subproblems' tolerances (emitted where the candidates use them)."""
 STEP_TOLERANCES = (SPLIT_CONSTANT,) + SUBPROBLEM_CONSTANTS

@@ -48,12 +48,19 @@ SING_TOL = 1e-9
 LS_TOL_FLOAT, SING_TOL_FLOAT = 1e-6, 1e-5
 """The same in code emitted in float, whose rounding of a discriminant is about 1e-8 of its scale (a double root of
 the UR's elbow near stretched came back least squares with the double tolerance) and of a sine about 1e-7."""
+ROOT_TOL, ROOT_TOL_FLOAT = 1e-13, 1e-6
+"""An SP3/SP4 discriminant within +-this times its scale is rounding of an exact double root: its square root is
+taken as 0, both branches the middle angle. Rounding left ``sqrt(eps)``, 4e-8 rad: an iiwa (joint 3 locked) stretched
+straight up had its elbow bent that much, which moved the wrist off the shoulder's axis where joint 2 cannot bring it
+back (rows 1e-8 m off, and an aligned wrist missed by its 1e-11 test). Taking the root as 0 moves the equation by at
+most half this tolerance relative to its scale (5e-14 of the arm's size in double)."""
 LS_SYMBOL = sp.Symbol("IK_LS_TOL", positive=True)
 SING_SYMBOL = sp.Symbol("IK_SING_TOL", positive=True)
-"""The two tolerances in the steps: module constants of the emitted code (double or float values); the NumPy spec
+ROOT_SYMBOL = sp.Symbol("IK_ROOT_TOL", positive=True)
+"""The tolerances in the steps: module constants of the emitted code (double or float values); the NumPy spec
 evaluates the steps with the double ones."""
-DOUBLE_VALUES = {LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL}
-"""The two symbols at their double values."""
+DOUBLE_VALUES = {LS_SYMBOL: LS_TOL, SING_SYMBOL: SING_TOL, ROOT_SYMBOL: ROOT_TOL}
+"""The symbols at their double values."""
 
 
 def _irrational_inside(expr: sp.Basic) -> bool:
@@ -333,8 +340,13 @@ def sp4_parts(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d
     B = steps(f"{label}_B", dot(h, cross(k, p)))
     C = steps(f"{label}_C", d - hk * kp)
     r2 = steps(f"{label}_r2", A * A + B * B)
-    disc = steps(f"{label}_disc", r2 - C * C if disc is None else disc)
-    root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
+    if disc is None:  # r2 - C^2 cancels at a double root: its rounding, not the geometry, makes a small root
+        disc = steps(f"{label}_disc", r2 - C * C)
+        exact_double = sp.And(disc <= ROOT_SYMBOL * r2, disc >= -ROOT_SYMBOL * r2)
+        root = steps(f"{label}_sq", _select((sp.S.Zero, exact_double), (sp.sqrt(positive(disc)), True)))
+    else:  # written without cancellation (unit_disc): a small discriminant is a small root
+        disc = steps(f"{label}_disc", disc)
+        root = steps(f"{label}_sq", sp.sqrt(positive(disc)))
     ls = steps(f"{label}_ls", indicator(disc < -LS_SYMBOL * r2))
     scale2 = steps(f"{label}_n2", dot(h, h) * dot(p, p))
     double = steps(f"{label}_dbl", indicator(sp.And(disc <= LS_SYMBOL * r2, disc >= -LS_SYMBOL * r2)))
