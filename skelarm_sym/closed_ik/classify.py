@@ -244,6 +244,13 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[list[tuple[str, str | None]], st
         if c > tol:
             return [], f"{label}: axes {_names(w, nums)} do not meet: closest distance {c:.4g} m"
         r = [offset_kinds[i] == "revolute" for i in range(3)]
+        if all(r) and _concurrency(Pp[:3], Hh[:3]) <= tol:
+            # two spherical triples a fixed distance apart: the wrist centre stays on a sphere about the other
+            # point (its position has two degrees of freedom, not three), and every target reached has a
+            # one-parameter family of solutions (an iiwa with its elbow, joint 4, locked)
+            return [], (f"{label}: axes {_names(range(3), nums)} meet at one point as well: the wrist centre keeps its "
+                        "distance from it (two spherical joints; a locked elbow), so targets have a continuum of solutions "
+                        "or none")
 
         def par(i, j):
             return _sine(Hh[i], Hh[j]) <= ANGLE_TOL
