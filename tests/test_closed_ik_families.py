@@ -184,6 +184,30 @@ def test_check_judges_the_source_configuration_by_its_condition():
     assert rows and all(row.ok for row in rows), [row.row() for row in rows]
 
 
+def test_check_takes_a_float_decision_at_a_reach_limit():
+    """The float sweep's last failure (seed 31011, a spherical shoulder): one target lies at a branch's reach limit,
+    and the float C flags all 8 rows least squares where the steps evaluated in double keep 4 exact, at either
+    precision's tolerances. Evaluated from the float32 target (float arithmetic where NumPy keeps it) they decide as
+    the C does: a third answer of the candidates' check. The emitted candidates against the double evaluations
+    alone still differ there (so the third answer is what passes it)."""
+    from closed_ik_support import random_family_chain
+    from skelarm_sym.check import compare, load_implementations
+    from skelarm_sym.closed_ik.evaluate import lambdify_candidates
+    from skelarm_sym.generate import generate
+    from skelarm_sym.models.chain.check import _targets
+
+    chain = random_family_chain(("spherical_shoulder", "intersect_12"), np.random.default_rng(31011))
+    generated = generate(chain, langs="c,python", out=None, precision="float",
+                         functions="pose,jacobian,ik_all,ik_nearest,ik_nearest_weighted")
+    implementations = load_implementations(generated)
+    rows = [r for r in compare(generated, 5, 31011, "float", implementations) if "ik_candidates" in r.implementation]
+    assert rows and all(r.ok for r in rows), [(r.implementation, r.output, r.abs_error) for r in rows if not r.ok]
+    t = _targets(chain, 31011 + 3, 5, "float")
+    in_double = [lambdify_candidates(generated.derivation, p)(t.targets, t.lock_value)[1] for p in ("float", "double")]
+    in_float = lambdify_candidates(generated.derivation, "float")(t.targets, t.lock_value, dtype=np.float32)[1]
+    assert all((flags != in_float).any() for flags in in_double)
+
+
 def test_a_stretched_elbow_over_the_shoulder_is_exact():
     """The iiwa with joint 3 locked, stretched straight up (q2 = q4 = 0: KUKA's zero pose has it), or nearly: the
     elbow's double root came back +-4e-8 rad from rounding of its discriminant, which bent the wrist off the first

@@ -135,7 +135,10 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
                     abs_err = _worst(got, want, axes)
                     size = np.maximum(1.0, np.abs(want).max(axis=axes) if axes else np.abs(want))
                     condition = np.broadcast_to(np.asarray(scenario.condition.get(arg.name, 1.0), dtype=float), size.shape)
-                    if arg.name in scenario.alternatives:
+                    if isinstance(scenario.alternatives.get(arg.name), tuple):  # several answers, one scale
+                        for other in scenario.alternatives[arg.name]:
+                            abs_err = np.minimum(abs_err, _worst(got, other, axes))
+                    elif arg.name in scenario.alternatives:
                         second = scenario.alternatives[arg.name]
                         second_err = _worst(got, second, axes)
                         if arg.name in scenario.alternative_condition:  # judged on its own scale

@@ -36,9 +36,10 @@ class Scenario:
     values: dict[str, object]
     expected: dict[str, np.ndarray]
     condition: dict[str, np.ndarray]
-    alternatives: dict[str, np.ndarray] = field(default_factory=dict)
-    """Output name -> a second documented answer (``(m, *shape)``): a case passes when it matches either
-    (near a documented switch, such as gimbal lock, where the code and the judge may each be right)."""
+    alternatives: dict[str, np.ndarray | tuple[np.ndarray, ...]] = field(default_factory=dict)
+    """Output name -> a second documented answer (``(m, *shape)``), or a tuple of such answers: a case passes
+    when it matches any (near a documented switch, such as gimbal lock, where the code and the judge may each be
+    right). A tuple is judged on the first answer's size and condition."""
     alternative_condition: dict[str, np.ndarray] = field(default_factory=dict)
     """Output name -> the tolerance factors of its second answer (``(m,)``); absent: the first answer's, and
     its size too."""

@@ -141,9 +141,12 @@ def lambdify_candidates(derivation, precision: str = "double") -> Callable[..., 
     fn = _steps_function(args, steps, outs, precision)
     locked = "lock" in derivation.inputs
 
-    def evaluate(target, lock=None):
-        t = np.asarray(target, dtype=float).reshape(-1, 16)
-        extra = [np.full(len(t), float(lock))] if locked else []
+    def evaluate(target, lock=None, dtype=np.float64):
+        """``dtype`` ``np.float32``: the target's entries go in as float32, and the steps keep float32 wherever
+        NumPy's promotion does (constants are float64 arrays in places): decisions near a tolerance as float
+        arithmetic may take them."""
+        t = np.asarray(target, dtype=dtype).reshape(-1, 16)
+        extra = [np.full(len(t), float(lock), dtype=dtype)] if locked else []
         with np.errstate(all="ignore"):
             values = fn(*[t[:, i] for i in range(16)], *extra)
         values = [np.broadcast_to(np.asarray(v, dtype=float), (len(t),)) for v in values]

@@ -260,18 +260,24 @@ def candidates_scenario(derivation, cases: int, seed: int, precision: str) -> Sc
     """``ik_candidates`` on poses of random configurations (:func:`_targets`), expected: the same steps evaluated by
     SymPy (lambdify, double arithmetic) with the tolerances of ``precision``; in float the decisions at the
     double tolerances are a second answer (a float double root of q1 1.3e-3 apart, Stanford arm, seed 2, is
-    flagged singular, as the float tolerance says, where double's keeps the roots apart). Its condition per
+    flagged singular, as the float tolerance says, where double's keeps the roots apart), and the steps from
+    the target in float32 a third (decisions at a branch's reach limit as float arithmetic takes them). Its condition per
     case: the largest Jacobian condition number over the rows double calls regular (:func:`_condition`)."""
     from ...closed_ik.evaluate import lambdify_candidates
 
     chain = derivation.model
     t = _targets(chain, seed + 3, cases, precision)
-    Q, flags = lambdify_candidates(derivation, precision)(t.targets, t.lock_value)
+    candidates = lambdify_candidates(derivation, precision)
+    Q, flags = candidates(t.targets, t.lock_value)
     second = {}
     Q2, flags2 = Q, flags
     if precision != "double":  # near a tolerance the float code may decide as double would (its rounding either side)
         Q2, flags2 = lambdify_candidates(derivation)(t.targets, t.lock_value)
-        second = {"Q": Q2, "flags": flags2}
+        # or as float arithmetic does: a target at a branch's reach limit that float's rounding puts beyond it
+        # (a random spherical shoulder, seed 31011: the C flagged all 8 rows least squares where both double
+        # evaluations keep 4 exact)
+        Q3, flags3 = candidates(t.targets, t.lock_value, dtype=np.float32)
+        second = {"Q": (Q2, Q3), "flags": (flags2, flags3)}
     # conditioned by the rows double calls regular: a near-double root that float flags is still as ill-conditioned
     condition = np.array([_condition(chain.numeric(), Q2[i][flags2[i] == 0], t.free, t.length) for i in range(len(Q))])
     return Scenario("ik candidates", t.values, {"Q": Q, "flags": flags},
