@@ -81,7 +81,7 @@ def _urdf_sweep(targets: int) -> int:
     from test_closed_ik_families import check_chain
 
     from skelarm_sym import load_robot
-    from skelarm_sym.closed_ik import classify
+    from skelarm_sym.closed_ik import ClosedFormError, classify
     from skelarm_sym.errors import InputError
 
     robots = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
@@ -119,11 +119,11 @@ def _urdf_sweep(targets: int) -> int:
             seen.add(key)
             try:
                 family = classify(chain).name
-            except Exception:  # not in a closed-form family: the classifier says why
+            except ClosedFormError:  # not in a closed-form family: the classifier says why
                 continue
             checked += 1
             try:
-                check_chain(chain, np.random.default_rng(0), targets)
+                check_chain(chain, np.random.default_rng(0), targets, f"{path.name} {base} -> {leaf}")
                 verdict = "ok"
             except AssertionError as exc:
                 failed += 1

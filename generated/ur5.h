@@ -23,7 +23,7 @@
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
- * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 q2+q3+q4; SP3 q3; SP1 q2; q4 by subtraction.
+ * Closed-form IK: three_parallel: SP4 q1 (height of the 5-6 intersection along h2); SP4 q5; SP1 q6; SP1 phi = q2+-q3+-q4; SP3 q3; SP1 q2; q4 by subtraction.
  * target: the tool pose T (4 x 4 row-major, 16 numbers; the last row is not read). Q: 8 x 6 candidates
  * (one per row, in a fixed branch order); flags: bit 1 least squares (unreachable), bit 2 singular.
  * Arguments, in every function: the state (q, q0, q_ref, dq, ddq), the call's other data (v, twist,
@@ -64,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x65950cfdUL
+#define UR5_STAMP 0x18a7e656UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -97,7 +97,7 @@ extern "C" {
 /* ik_all returns rows both flagged singular and closer than this once (a double root's two roots) */
 #define UR5_IK_DUP_TOL_SINGULAR 1e-06
 
-/* UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size) */
+/* UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of q6 and phi = q2 +- q3 +- q4 is taken (its pose error is about the sine times the arm's size) */
 #define UR5_IK_SPLIT_TOL 1e-12
 
 /* a subproblem's discriminant below -this times its scale is least squares, within +-this a double root */
@@ -106,8 +106,8 @@ extern "C" {
 /* a subproblem whose rho is at most this times its scale (a sine) is a continuum */
 #define UR5_IK_SING_TOL 1e-09
 
-/* a discriminant within +-this times its scale is an exact double root's rounding: its root is taken as 0 */
-#define UR5_IK_ROOT_TOL 1e-13
+/* a double root's discriminant kept from 0 by rounding alone (10 times this of its scale, and for a distance a move of at most this times the lengths) gives the double root */
+#define UR5_IK_ROOT_TOL 2e-15
 
 /* lower joint limits in input order (rad or m); unbounded: -inf in NumPy, -1e+300 in C (-1e+30 in float)
  * An initializer: static const double x[6] = UR5_Q_MIN; */
@@ -249,7 +249,7 @@ void ur5_ik_candidates(const double target[16], double Q[48], double flags[8]);
  * Stack: at most 7 KB. */
 void ur5_ik_candidates_batch(size_t m, const double *target, double *Q, double *flags);
 
-/* the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always). Stack: at most 6 KB. */
+/* the aligned wrist's continuum at q_ref's phi = q2 +- q3 +- q4 (signs of h2 . h3, h2 . h4; three parallel axes with a wrist flip: UR): M (4 x N, per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always). Stack: at most 6 KB. */
 void ur5_ik_continuum_members(const double q_ref[6], const double target[16], double M[24], double mflags[4]);
 
 /* The same for m configurations stored one after another (element k of
@@ -348,7 +348,7 @@ void ur5_ik_all_batch(size_t m, const double *target, double *q, int *count, int
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (UR5_IK_OUT_OF_LIMITS, UR5_IK_UNREACHABLE with no row within the limits, UR5_IK_INVALID; also UR5_IK_INVALID for q_ref not finite).
  * q may be q_ref (an in-place call).
- * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+ * An aligned UR wrist (a continuum of joint 6 and phi = q2 +- q3 +- q4, signs of h2 . h3 and h2 . h4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns UR5_IK_OUT_OF_LIMITS into UR5_IK_OK.
  * Stack: at most 8 KB.
@@ -367,7 +367,7 @@ void ur5_ik_nearest_batch(size_t m, const double *q_ref, const double *target, d
  * least distance (ties: the lower row). Returns ik_all's status; q is NaN when ik_all returns no row
  * (UR5_IK_OUT_OF_LIMITS, UR5_IK_UNREACHABLE with no row within the limits, UR5_IK_INVALID; also UR5_IK_INVALID for q_ref not finite or a weight that is not finite or not > 0).
  * q may be q_ref (an in-place call).
- * An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members
+ * An aligned UR wrist (a continuum of joint 6 and phi = q2 +- q3 +- q4, signs of h2 . h3 and h2 . h4, one representative in ik_all): the members
  * at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the
  * limits turns UR5_IK_OUT_OF_LIMITS into UR5_IK_OK.
  * Stack: at most 8 KB.

@@ -121,6 +121,43 @@ def test_two_spherical_triples_are_refused():
     solutions. It was classified (``intersect_23``) and its rows came back least squares on 193 of 200 reachable
     targets, the source missing on all (a probe on pybullet's iiwa). Refused with the reason; other locks solve."""
     iiwa = load_robot(ROBOTS / "iiwa14.toml")
-    with pytest.raises(ClosedFormError, match=r"axes 1, 2, 3 meet at one point as well"):
+    with pytest.raises(ClosedFormError, match=r"axes 1, 2, 3 meet at one point and so do axes 5, 6, 7"):
         classify(iiwa, 3)
     assert classify(iiwa, 2).name == "spherical_wrist"
+
+
+OFFSET_SEVEN = """<robot name="offset7">
+  <link name="base"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="l4"/><link name="l5"/><link name="l6"/>
+  <link name="l7"/><link name="tool"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.3"/><axis xyz="0 1 0"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.1 0 0.1"/><axis xyz="0 0 1"/></joint>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0.1 0 -0.1"/><axis xyz="1 0 0"/></joint>
+  <joint name="j5" type="revolute"><parent link="l4"/><child link="l5"/><origin xyz="0.3 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="j6" type="revolute"><parent link="l5"/><child link="l6"/><origin xyz="0 0 0.2"/><axis xyz="0 1 0"/></joint>
+  <joint name="j7" type="revolute"><parent link="l6"/><child link="l7"/><origin xyz="0.1 0 0"/><axis xyz="1 0 0"/></joint>
+  <joint name="jt" type="fixed"><parent link="l7"/><child link="tool"/><origin xyz="0.05 0.02 0.01" rpy="0.1 0.2 0.3"/></joint>
+</robot>
+"""
+
+
+def test_positioning_axes_that_meet_at_one_lock_value_only_are_not_refused(tmp_path):
+    """A 7-joint arm with joint 3 locked whose axes 1, 2 and 4 meet at one point only where the lock is 0 or pi (a
+    reviewer's arm): the refusal of two spherical triples fired at the lock sample 0 and refused the arm at every
+    lock value; only triples that meet at every lock value are refused. Its IK is exact at other lock values."""
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    (tmp_path / "offset7.urdf").write_text(OFFSET_SEVEN)
+    chain = load_robot(tmp_path / "offset7.urdf", ik_lock=3)
+    assert (classify(chain, 2).name, classify(chain, 2).position) == ("spherical_wrist", "intersect_12")
+    ik, num, rng = ClosedFormIK(chain, lock=2), chain.numeric(), np.random.default_rng(0)
+    for lock in (0.7, -1.9):
+        q = rng.uniform(-2.5, 2.5, (20, 7))
+        q[:, 2] = lock
+        T = chain_kinematics(num, q).T
+        Q, flags = ik.candidates(T.reshape(-1, 16), lock=lock)
+        for k in range(len(q)):
+            exact = (flags[k] & 1) == 0
+            errors = [np.abs(chain_kinematics(num, row[None]).T[0] - T[k]).max() for row in Q[k][exact]]
+            assert exact.any() and max(errors) < 1e-12

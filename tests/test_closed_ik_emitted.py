@@ -1108,13 +1108,13 @@ def test_show_ik_reads_as_atan2_states_its_tolerances_and_its_rows_solve(capsys)
     text = capsys.readouterr().out
     assert "atan2(" in text and "24.858464901423062" not in text
     assert "# IK_LS_TOL = 1e-10 (float: 1e-06)" in text and "# IK_SING_TOL = 1e-09" in text and "# IK_SPLIT_TOL = 1e-12" in text
-    assert "# IK_ROOT_TOL = 1e-13 (float: 1e-06)" in text
+    assert "# IK_ROOT_TOL = 2e-15 (float: 1e-07)" in text
     chain, _ = load_arm("ur5")
     q = np.array([0.4, -1.1, 1.3, -0.7, 0.9, 0.2])
     T = targets_of(chain, q[None]).reshape(16)
     values = {sp.Symbol(f"target{k}"): sp.Float(T[k]) for k in range(16)}
     values.update({sp.Symbol("IK_LS_TOL"): sp.Float(1e-10), sp.Symbol("IK_SING_TOL"): sp.Float(1e-9),
-                   sp.Symbol("IK_SPLIT_TOL"): sp.Float(1e-12), sp.Symbol("IK_ROOT_TOL"): sp.Float(1e-13)})
+                   sp.Symbol("IK_SPLIT_TOL"): sp.Float(1e-12), sp.Symbol("IK_ROOT_TOL"): sp.Float(2e-15)})
     rows = []
     for line in text.splitlines():
         if line.startswith("#") or " = " not in line:

@@ -106,7 +106,7 @@ def test_parallel_axes_pointing_opposite_ways(family, rows, monkeypatch):
 
 def test_an_aligned_ur_wrist_with_a_reversed_elbow_keeps_its_continuum():
     """A UR5 whose elbow axis is reversed (DH twist pi before it): at an aligned wrist (q5 = 0) ``ik_nearest`` from a
-    configuration returns it; the continuum's ``phi`` of the reference is ``q2 - q3 + q4`` there."""
+    configuration returns it; the continuum's ``phi`` of the reference is ``q2 - q3 - q4`` there (twist pi before joint 3: h3 and h4 both point against h2)."""
     import sympy as sp
 
     from skelarm_sym import reference
@@ -235,3 +235,29 @@ def test_a_stretched_elbow_over_the_shoulder_is_exact():
             if zeroed == (3, 5):
                 near, _ = ik.nearest(q, T.reshape(16), lock=q[2])
                 assert np.abs(near - q).max() < 1e-9, (q, near)
+
+
+def test_a_folded_arm_with_equal_links_stays_exact():
+    """Taking a double root's rounding as the root moves the elbow angle by up to ``sqrt`` of the band and the
+    shoulder-wrist distance by that over the distance, which grows as an arm folds: a band of 1e-13 of the scale put a
+    UR-like arm whose forearm is 1e-4 m shorter than its upper arm, folded to 2e-7 rad of pi, 3e-11 off its targets
+    (a review of the change). The band now bounds the distance's move as well."""
+    import sympy as sp
+
+    from skelarm_sym.models.chain import Chain
+    from skelarm_sym.models.chain.dh_file import dh_joint
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.S.Zero, 0.0), (-0.4249, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
+            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
+    chain = Chain("fold", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero, alpha,
+                                         sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i) for i, (a, alpha, d) in enumerate(rows)))
+    ik, num, rng = ClosedFormIK(chain), chain.numeric(), np.random.default_rng(0)
+    for delta in (3e-7, 2e-7):
+        q = rng.uniform(-2.5, 2.5, (20, 6))
+        q[:, 2] = np.pi - delta
+        T = chain_kinematics(num, q).T
+        Q, flags = ik.candidates(T.reshape(-1, 16))
+        pos, rot = pose_errors(num, Q, T)
+        exact = (flags & 1) == 0
+        assert exact.any(axis=1).all() and np.where(exact, np.maximum(pos, rot), 0.0).max() <= 1e-12

@@ -57,7 +57,9 @@ class IKCheck:
         statuses = ", ".join(f"{k} {v}" for k, v in sorted(self.statuses.items()))
         rotation = "" if self.worst_rotation is None else (
             f", rotation {self.worst_rotation:.2e} rad (allowed {self.rotation_allowed:.2e})")
-        within = (f" (and {self.stalled_within} stalled within the allowance: the precision's floor near tol)"
+        capped = self.stalled_within > self.targets // 4
+        within = (f" (and {self.stalled_within} stalled within the allowance: the precision's floor near tol"
+                  + (f"; more than a quarter of the targets, {self.targets // 4}, may not" if capped else "") + ")"
                   if self.stalled_within else "")
         return (f"{self.implementation}: converged {self.converged}/{self.targets}{within}; worst error {self.worst_error:.2e}"
                 f" (allowed {self.allowed:.2e}: tol {self.tol:g} + rounding){rotation}; statuses: {statuses}; "

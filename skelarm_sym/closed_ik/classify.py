@@ -244,13 +244,6 @@ def _detect(kinds, H, P, tol, numbers) -> tuple[list[tuple[str, str | None]], st
         if c > tol:
             return [], f"{label}: axes {_names(w, nums)} do not meet: closest distance {c:.4g} m"
         r = [offset_kinds[i] == "revolute" for i in range(3)]
-        if all(r) and _concurrency(Pp[:3], Hh[:3]) <= tol:
-            # two spherical triples a fixed distance apart: the wrist centre stays on a sphere about the other
-            # point (its position has two degrees of freedom, not three), and every target reached has a
-            # one-parameter family of solutions (an iiwa with its elbow, joint 4, locked)
-            return [], (f"{label}: axes {_names(range(3), nums)} meet at one point as well: the wrist centre keeps its "
-                        "distance from it (two spherical joints; a locked elbow), so targets have a continuum of solutions "
-                        "or none")
 
         def par(i, j):
             return _sine(Hh[i], Hh[j]) <= ANGLE_TOL
@@ -339,7 +332,7 @@ SUBPROBLEM_CHAINS = {
     ("spherical_wrist", "intersect_23"): ("SP3 q1 (distance from the 2-3 intersection)", "SP2 q2, q3",
                                           "SP4 q5", "SP1 q4", "SP1 q6"),
     ("three_parallel", None): ("SP4 q1 (height of the 5-6 intersection along h2)", "SP4 q5", "SP1 q6",
-                               "SP1 q2+q3+q4", "SP3 q3", "SP1 q2", "q4 by subtraction"),
+                               "SP1 phi = q2+-q3+-q4", "SP3 q3", "SP1 q2", "q4 by subtraction"),
 }
 
 
@@ -395,9 +388,12 @@ def classify(chain: Chain, lock: int | None = None) -> Family:
     numbers = [j + 1 for j in geom.joints]
     samples = LOCK_SAMPLES if lock is not None else (0.0,)
     common = None
+    triples = [True, True]  # joints 1-3 and 4-6 of the problem meet at one point at every sampled lock value
     for value in samples:
         kinds, H, P = geom.numeric(_lock_subs(geom, value))
         found, reasons = _detect(kinds, H, P, tol, numbers)
+        for k, idx in enumerate(([0, 1, 2], [3, 4, 5])):
+            triples[k] &= all(kinds[i] == "revolute" for i in idx) and _concurrency(P[idx], H[idx]) <= tol
         lockinfo = f" (joint {lock + 1} locked at {value:g})" if lock is not None else ""
         if not found:
             raise ClosedFormError(f"{chain.name}{lockinfo}: no closed-form family: {reasons}")
@@ -406,6 +402,15 @@ def classify(chain: Chain, lock: int | None = None) -> Family:
             raise ClosedFormError(f"{chain.name}: no family holds at every value of the locked joint {lock + 1}")
     found = common[0]
     name, position = found
+    if all(triples):
+        # two spherical triples a fixed distance apart (an iiwa with its elbow, joint 4, locked): one centre stays
+        # on a sphere about the other, so the tool's position has two degrees of freedom, not three, and a target
+        # reached has a one-parameter family of solutions. Where they meet only at some lock values, those values
+        # are singular and the others solve: not refused
+        lockinfo = f" (joint {lock + 1} locked)" if lock is not None else ""
+        raise ClosedFormError(f"{chain.name}{lockinfo}: no closed-form family: axes {_names(range(3), numbers)} meet at one "
+                              f"point and so do axes {_names(range(3, 6), numbers)}: the two points keep their distance, so "
+                              "a target has a continuum of solutions or none")
     rev = name in ("spherical_shoulder", "three_parallel_reversed")
     base_name = {"spherical_shoulder": "spherical_wrist", "three_parallel_reversed": "three_parallel"}.get(name, name)
     at_zero = {LOCK_C: sp.S.One, LOCK_S: sp.S.Zero}

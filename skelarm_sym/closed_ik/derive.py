@@ -352,14 +352,14 @@ class MembersSpec(FunctionSpec):
 
 MEMBERS = MembersSpec(
     "ik_continuum_members", ("q_ref", "target", "lock"), ("M", "mflags"),
-    "the aligned wrist's continuum at q_ref's phi = q2 + q3 + q4 (three parallel axes with a wrist flip: UR): M (4 x N, "
+    "the aligned wrist's continuum at q_ref's phi = q2 +- q3 +- q4 (signs of h2 . h3, h2 . h4; three parallel axes with a wrist flip: UR): M (4 x N, "
     "per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always)",
 )
 """The straight-line function of :attr:`ClosedIK.members` (only where it has some): ``ik_nearest``'s more rows."""
 
 SPLIT_CONSTANT = Constant(SPLIT_SYMBOL, {"double": SPLIT_TOL, "float": SPLIT_TOL_FLOAT},
                           "UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of "
-                          "q6 and q2 + q3 + q4 is taken (its pose error is about the sine times the arm's size)")
+                          "q6 and phi = q2 +- q3 +- q4 is taken (its pose error is about the sine times the arm's size)")
 """The constant of a three-parallel arm's candidates (emitted where they use it)."""
 SUBPROBLEM_CONSTANTS = (
     Constant(LS_SYMBOL, {"double": LS_TOL, "float": LS_TOL_FLOAT},
@@ -367,7 +367,8 @@ SUBPROBLEM_CONSTANTS = (
     Constant(SING_SYMBOL, {"double": SING_TOL, "float": SING_TOL_FLOAT},
              "a subproblem whose rho is at most this times its scale (a sine) is a continuum"),
     Constant(ROOT_SYMBOL, {"double": ROOT_TOL, "float": ROOT_TOL_FLOAT},
-             "a discriminant within +-this times its scale is an exact double root's rounding: its root is taken as 0"),
+             "a double root's discriminant kept from 0 by rounding alone (10 times this of its scale, and for a distance "
+             "a move of at most this times the lengths) gives the double root"),
 )
 """The subproblems' tolerances (emitted where the candidates use them)."""
 STEP_TOLERANCES = (SPLIT_CONSTANT,) + SUBPROBLEM_CONSTANTS

@@ -55,7 +55,7 @@ cost twice that distance in every row."""
 PI_DOUBLE = sp.Float(math.pi, 17)
 """pi as the emitted code has it (3.141592653589793)."""
 SPLIT_TOL = 1e-12
-"""UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and q2 + q3 + q4 is used
+"""UR wrist: below this sine between h6 and ``R5^T h2`` the representative split of q6 and phi (``q2 + s3 q3 + s4 q4``) is used
 (its pose error is about the sine times the arm's size; above it the regular path's rounding noise, about
 1e-16 over the sine in q6, stays within the reach of the 2R arm except at the workspace's edge)."""
 SPLIT_TOL_FLOAT = 1e-5
@@ -229,7 +229,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
 
     ``flip``: ``h2 . h5 = 0``, ``h5 . h6 = 0`` and ``h2 || h6`` (UR arms), so the second root of q5 is ``-q5`` and
     ``R(h2, phi + pi) R(h5, -q5) R(h6, q6 + pi) = R(h2, phi) R(h5, q5) R(h6, q6)`` (as for the spherical wrist): q6
-    and phi = q2 + q3 + q4 of the second root are half turns of the first's, no subproblem; q3, q2 are solved
+    and phi = q2 + s3 q3 + s4 q4 of the second root are half turns of the first's, no subproblem; q3, q2 are solved
     for its own wrist point. Where q6 is a continuum's representative (the wrist aligned) the second root's
     branches are the first's.
 
@@ -286,7 +286,7 @@ def three_parallel(steps: Steps, prob: Problem, flip: bool = False, members: lis
                 continue
             b = steps.vec(f"b{i}{j}", _rot(q5, H[4], H[1], True))
             q6r = sp1_parts(steps, f"q6_{i}{j}", H[5], a, b)
-            # wrist aligned (h6 after q5 parallel to h2): q6 and q2 + q3 + q4 share one rotation angle sigma and
+            # wrist aligned (h6 after q5 parallel to h2): q6 and phi share one rotation angle sigma and
             # the split is free; the representative puts joint 4's point at the distance from p2 nearest the
             # middle of both its range over phi and the 2R arm's range [dmin, dmax], so the 2R arm reaches it.
             # the split is taken where h6 and R5^T h2 are within SPLIT_TOL (sine): below it q6's SP1 is noise

@@ -48,12 +48,15 @@ SING_TOL = 1e-9
 LS_TOL_FLOAT, SING_TOL_FLOAT = 1e-6, 1e-5
 """The same in code emitted in float, whose rounding of a discriminant is about 1e-8 of its scale (a double root of
 the UR's elbow near stretched came back least squares with the double tolerance) and of a sine about 1e-7."""
-ROOT_TOL, ROOT_TOL_FLOAT = 1e-13, 1e-6
-"""An SP3/SP4 discriminant within +-this times its scale is rounding of an exact double root: its square root is
-taken as 0, both branches the middle angle. Rounding left ``sqrt(eps)``, 4e-8 rad: an iiwa (joint 3 locked) stretched
-straight up had its elbow bent that much, which moved the wrist off the shoulder's axis where joint 2 cannot bring it
-back (rows 1e-8 m off, and an aligned wrist missed by its 1e-11 test). Taking the root as 0 moves the equation by at
-most half this tolerance relative to its scale (5e-14 of the arm's size in double)."""
+ROOT_TOL, ROOT_TOL_FLOAT = 2e-15, 1e-7
+"""A double root's discriminant computed with cancellation (``r2 - C^2``) that rounding alone keeps from 0 gives the
+double root itself (its square root taken as 0, both branches the middle angle); rounding left ``sqrt(eps)``, 4e-8
+rad: an iiwa (joint 3 locked) stretched straight up had its elbow bent that much, which moved the wrist off the
+shoulder's axis where joint 2 cannot bring it back (rows 1e-8 m off, and an aligned wrist missed by its 1e-11 test;
+its discriminants there reach 1e-14 of ``r2``). Taken as 0 where ``|disc| <= 10 ROOT_TOL r2`` (SP4) and, for SP3's
+distance ``D`` between points at ``|p1|``, ``|p2|``, where that moves ``D`` by at most ``ROOT_TOL (|p1| + |p2|)``:
+``disc^2 <= 8 ROOT_TOL^2 r2 D^2 (|p1|^2 + |p2|^2)``. The second bound keeps a folded arm exact (``D`` small: a
+relative bound of 1e-13 put a review's arm with equal links, 3e-7 rad from folded, 7e-11 off its target)."""
 LS_SYMBOL = sp.Symbol("IK_LS_TOL", positive=True)
 SING_SYMBOL = sp.Symbol("IK_SING_TOL", positive=True)
 ROOT_SYMBOL = sp.Symbol("IK_ROOT_TOL", positive=True)
@@ -330,7 +333,7 @@ def sp1(steps: Steps, label: str, k: Sequence, p: Sequence, q: Sequence) -> Angl
 
 
 def sp4_parts(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d: sp.Expr,
-              disc: sp.Expr | None = None) -> tuple[tuple[Parts, Parts], sp.Expr]:
+              disc: sp.Expr | None = None, snap_scale: sp.Expr | None = None) -> tuple[tuple[Parts, Parts], sp.Expr]:
     """:func:`sp4` before its ``atan2`` s: both branches' parts and the scale of their singular test (``r2^2``).
 
     Where ``B`` is 0 (or ``A``), the second branch's ``y`` (or ``x``) is written as the negation of the first's,
@@ -342,7 +345,9 @@ def sp4_parts(steps: Steps, label: str, h: Sequence, p: Sequence, k: Sequence, d
     r2 = steps(f"{label}_r2", A * A + B * B)
     if disc is None:  # r2 - C^2 cancels at a double root: its rounding, not the geometry, makes a small root
         disc = steps(f"{label}_disc", r2 - C * C)
-        exact_double = sp.And(disc <= ROOT_SYMBOL * r2, disc >= -ROOT_SYMBOL * r2)
+        exact_double = sp.And(disc <= 10 * ROOT_SYMBOL * r2, disc >= -10 * ROOT_SYMBOL * r2)
+        if snap_scale is not None:  # SP3: and the distance moves by at most ROOT_TOL (|p1| + |p2|) (see ROOT_TOL)
+            exact_double = sp.And(exact_double, disc * disc <= 8 * ROOT_SYMBOL**2 * r2 * snap_scale)
         root = steps(f"{label}_sq", _select((sp.S.Zero, exact_double), (sp.sqrt(positive(disc)), True)))
     else:  # written without cancellation (unit_disc): a small discriminant is a small root
         disc = steps(f"{label}_disc", disc)
@@ -418,13 +423,13 @@ def unit_disc(h: Sequence, p: Sequence, k: Sequence, g: Sequence) -> sp.Expr:
 def sp3_parts(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[tuple[Parts, Parts], sp.Expr]:
     """:func:`sp3` before its ``atan2`` s (see :func:`sp4_parts`)."""
     d = (dot(p1, p1) + dot(p2, p2) - d2) / 2
-    return sp4_parts(steps, label, p2, p1, k, d)
+    return sp4_parts(steps, label, p2, p1, k, d, snap_scale=d2 * (dot(p1, p1) + dot(p2, p2)))
 
 
 def sp3(steps: Steps, label: str, k: Sequence, p1: Sequence, p2: Sequence, d2: sp.Expr) -> tuple[Angle, Angle]:
     """SP3: both ``theta`` with ``|R(k, theta) p1 - p2|^2 = d2`` (``d2`` a squared distance)."""
-    d = (dot(p1, p1) + dot(p2, p2) - d2) / 2
-    return sp4(steps, label, p2, p1, k, d)
+    parts, scale2 = sp3_parts(steps, label, k, p1, p2, d2)
+    return parts[0].angle(steps, f"{label}0", scale2), parts[1].angle(steps, f"{label}1", scale2)
 
 
 def sp2(steps: Steps, label: str, k1: Sequence, p1: Sequence, k2: Sequence, p2: Sequence) -> tuple[tuple[Angle, Angle], tuple[Angle, Angle]]:

@@ -456,7 +456,7 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
     ok = b.var("m_ok", _int(0), Type.INT)
     tol = NamedConst("IK_LIMIT_TOL")
     with b.if_(raw_singular[0] > 0):  # a split representative is flagged singular: none, no member
-        b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 + q3 + q4, where nearer than the row")
+        b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 +- q3 +- q4, where nearer than the row")
         b.call("ik_continuum_members", q_ref, *data, M, mflags)
         with b.for_("m", 0, _int(R)) as m:
             with b.if_(ne(Bits("%", Cast(Type.INT, mflags[m]), _int(2)), NamedConst("IK_FLAG_LEAST_SQUARES", Type.INT))):
@@ -577,7 +577,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         + (" or a weight that is not finite or not > 0)." if weighted else ")."),
         "q may be q_ref (an in-place call).",
         *_doc_continuum(arm, "the member within the limits nearest q_ref" + (" in the weighted metric" if weighted else "")),
-        *(("An aligned UR wrist (a continuum of joint 6 and phi = q2 + q3 + q4, one representative in ik_all): the members",
+        *(("An aligned UR wrist (a continuum of joint 6 and phi = q2 +- q3 +- q4, signs of h2 . h3 and h2 . h4, one representative in ik_all): the members",
            "at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the",
            "limits turns IK_OUT_OF_LIMITS into IK_OK.") if arm.members else ()),
     )
