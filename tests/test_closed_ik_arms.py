@@ -123,3 +123,28 @@ def test_near_singular_targets_keep_their_digits(name, joint):
             assert len(exact) >= 1
             pos, rot = judge.pose_error(num, exact, T[i])
             assert max(pos.max(), rot.max()) <= 1e-12, (eps, i)
+
+
+def test_eaik_oracle_on_parallel_axes_pointing_opposite_ways():
+    """EAIK 1.2's HPRobot answers a UR5 whose elbow axis is reversed (DH twist pi before joint 3) with eight rows,
+    none reproducing the target (a probe of reversed URDF axes); the oracle turns such axes to point the same way
+    and negates their joints' values, and its rows reproduce the targets."""
+    pytest.importorskip("eaik", reason="EAIK is optional (pip install eaik): the oracle of exact solution sets")
+    import sympy as sp
+
+    from skelarm_sym.models.chain import Chain
+    from skelarm_sym.models.chain.dh_file import dh_joint
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.pi, 0.0), (-0.39225, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
+            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
+    chain = Chain("ur5_reversed_elbow", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero,
+                                                       alpha, sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i)
+                                              for i, (a, alpha, d) in enumerate(rows)))
+    num, rng = chain.numeric(), np.random.default_rng(0)
+    for _ in range(5):
+        q = rng.uniform(-2.5, 2.5, 6)
+        T = chain_kinematics(num, q[None]).T[0]
+        Q, ls = judge.eaik_solutions(num, T)
+        assert (~ls).sum() >= 1
+        assert max(np.abs(chain_kinematics(num, row[None]).T[0] - T).max() for row in Q[~ls]) < 1e-12

@@ -194,11 +194,22 @@ def eaik_solutions(chain, target, fixed: dict[int, float] | None = None) -> tupl
     except ImportError:
         return None
     H, P, R0 = hp_data(chain)
-    robot = HPRobot(H, P, fixed_axes=sorted((fixed or {}).items()))
+    # an axis parallel to an earlier one but pointing the other way is turned to point the same way (its joint's
+    # value negated): EAIK 1.2's HPRobot answered a UR-like arm whose parallel axes point opposite ways with eight
+    # solutions, none reproducing the target (a probe of reversed URDF axes)
+    sign = np.ones(len(H))
+    for i in range(len(H)):
+        for j in range(i):
+            if abs(abs(H[i] @ H[j]) - 1.0) <= 1e-12:
+                sign[i] = sign[j] * np.sign(H[i] @ H[j])
+                break
+    H = H * sign[:, None]
+    robot = HPRobot(H, P, fixed_axes=sorted((k, sign[k] * v) for k, v in (fixed or {}).items()))
     target = np.asarray(target, float).reshape(4, 4)
     pose = np.eye(4)
     pose[:3, :3] = target[:3, :3] @ R0.T
     pose[:3, 3] = target[:3, 3]
     sol = robot.IK(pose)
     Q = np.asarray(sol.Q, float)
-    return Q.reshape(len(Q), -1) if Q.size else Q.reshape(0, len(H)), np.asarray(sol.is_LS, bool).reshape(-1)
+    Q = Q.reshape(len(Q), -1) if Q.size else Q.reshape(0, len(H))
+    return Q * sign[None, :], np.asarray(sol.is_LS, bool).reshape(-1)
