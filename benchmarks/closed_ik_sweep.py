@@ -74,39 +74,33 @@ def main(argv: list[str] | None = None) -> int:
 def _urdf_sweep(targets: int) -> int:
     """:func:`check_chain` on the last six coordinates above every leaf of every example-robot-data URDF that is in a
     closed-form family; 1 when any failed."""
-    import sysconfig
-    import xml.etree.ElementTree as ET
-
     import numpy as np
+    from casadi_compare import robots_folder
     from test_closed_ik_families import check_chain
 
     from skelarm_sym import load_robot
     from skelarm_sym.closed_ik import ClosedFormError, classify
     from skelarm_sym.errors import InputError
+    from skelarm_sym.models.chain.urdf import urdf_links
 
-    robots = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+    robots = robots_folder()
     if not robots.is_dir():
         raise SystemExit(f"example-robot-data's robots are not at {robots}: pip install example-robot-data")
     checked = failed = 0
     seen: set[tuple] = set()
     for path in sorted(robots.glob("*/urdf/*.urdf")):
         try:
-            root = ET.parse(path).getroot()
-        except ET.ParseError:
+            links = urdf_links(path)
+        except InputError:  # a file the loader refuses (every refusal is tested in test_example_robot_data.py)
             continue
-        parent = {j.find("child").get("link"): (j.find("parent").get("link"), j.get("type"))
-                  for j in root.iter("joint") if j.find("child") is not None and j.find("parent") is not None}
-        parents = {p for p, _ in parent.values()}
-        for leaf in sorted(set(parent) - parents):
-            links, link = [leaf], leaf  # leaf first, up to the root
-            while link in parent:
-                link = parent[link][0]
-                links.append(link)
-            chain = None
-            for base in links[1:]:  # the nearest base above which the chain has six coordinates
+        parent = {link.name: link.parent for link in links}
+        for leaf in sorted(link.name for link in links if link.leaf and link.coordinates >= 6 and not link.stray_mimic):
+            base, chain = leaf, None
+            while parent[base] is not None:  # the nearest base above which the chain has six coordinates
+                base = parent[base]
                 try:
                     chain = load_robot(path, base=base, tip=leaf)
-                except InputError:  # no moving joint yet, a mimic leader above the base, a refused joint
+                except InputError:  # no moving joint yet, a refused joint
                     chain = None
                     continue
                 if chain.n >= 6:

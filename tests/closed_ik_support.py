@@ -131,6 +131,15 @@ FAMILY_CONSTRAINTS = {
 }
 
 
+def ur_like_chain(name: str, twist2=sp.S.Zero, a3: float = -0.39225) -> Chain:
+    """A standard-DH UR5 (examples/robots/ur5.toml's lengths, no limits) with the twist before joint 3 set to
+    ``twist2`` (``sp.pi``: axes 3 and 4 point against axis 2) and the forearm length ``a3`` (m)."""
+    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, twist2, 0.0), (a3, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
+            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
+    return Chain(name, tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero, alpha,
+                                      sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i) for i, (a, alpha, d) in enumerate(rows)))
+
+
 def random_family_chain(family: tuple[str, str | None], rng: np.random.Generator) -> Chain:
     """A random 6-joint standard-DH arm of ``family`` with a random base and tool (lengths in [-0.5, 0.5] m,
     twists at least 0.3 rad away from 0 and pi so only the family's own axes are parallel). The family's parallel

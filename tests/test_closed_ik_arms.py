@@ -132,15 +132,10 @@ def test_eaik_oracle_on_parallel_axes_pointing_opposite_ways():
     pytest.importorskip("eaik", reason="EAIK is optional (pip install eaik): the oracle of exact solution sets")
     import sympy as sp
 
-    from skelarm_sym.models.chain import Chain
-    from skelarm_sym.models.chain.dh_file import dh_joint
+    from closed_ik_support import ur_like_chain
     from skelarm_sym.models.chain.reference import chain_kinematics
 
-    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.pi, 0.0), (-0.39225, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
-            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
-    chain = Chain("ur5_reversed_elbow", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero,
-                                                       alpha, sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i)
-                                              for i, (a, alpha, d) in enumerate(rows)))
+    chain = ur_like_chain("ur5_reversed_elbow", twist2=sp.pi)
     num, rng = chain.numeric(), np.random.default_rng(0)
     for _ in range(5):
         q = rng.uniform(-2.5, 2.5, 6)

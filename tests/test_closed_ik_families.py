@@ -109,15 +109,10 @@ def test_an_aligned_ur_wrist_with_a_reversed_elbow_keeps_its_continuum():
     configuration returns it; the continuum's ``phi`` of the reference is ``q2 - q3 - q4`` there (twist pi before joint 3: h3 and h4 both point against h2)."""
     import sympy as sp
 
+    from closed_ik_support import ur_like_chain
     from skelarm_sym import reference
-    from skelarm_sym.models.chain import Chain
-    from skelarm_sym.models.chain.dh_file import dh_joint
 
-    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.pi, 0.0), (-0.39225, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
-            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
-    chain = Chain("ur5_reversed_elbow", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero,
-                                                       alpha, sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i)
-                                              for i, (a, alpha, d) in enumerate(rows)))
+    chain = ur_like_chain("ur5_reversed_elbow", twist2=sp.pi)
     assert classify(chain).name == "three_parallel"
     ik = ClosedFormIK(chain)
     num = chain.numeric()
@@ -242,16 +237,10 @@ def test_a_folded_arm_with_equal_links_stays_exact():
     shoulder-wrist distance by that over the distance, which grows as an arm folds: a band of 1e-13 of the scale put a
     UR-like arm whose forearm is 1e-4 m shorter than its upper arm, folded to 2e-7 rad of pi, 3e-11 off its targets
     (a review of the change). The band now bounds the distance's move as well."""
-    import sympy as sp
-
-    from skelarm_sym.models.chain import Chain
-    from skelarm_sym.models.chain.dh_file import dh_joint
+    from closed_ik_support import ur_like_chain
     from skelarm_sym.models.chain.reference import chain_kinematics
 
-    rows = [(0.0, sp.pi / 2, 0.089159), (-0.425, sp.S.Zero, 0.0), (-0.4249, sp.S.Zero, 0.0), (0.0, sp.pi / 2, 0.10915),
-            (0.0, -sp.pi / 2, 0.09465), (0.0, sp.S.Zero, 0.0823)]
-    chain = Chain("fold", tuple(dh_joint(f"j{i + 1}", "revolute", "standard", sp.Float(a) if a else sp.S.Zero, alpha,
-                                         sp.Float(d) if d else sp.S.Zero, sp.S.Zero, i) for i, (a, alpha, d) in enumerate(rows)))
+    chain = ur_like_chain("fold", a3=-0.4249)
     ik, num, rng = ClosedFormIK(chain), chain.numeric(), np.random.default_rng(0)
     for delta in (3e-7, 2e-7):
         q = rng.uniform(-2.5, 2.5, (20, 6))

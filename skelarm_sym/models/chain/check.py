@@ -155,8 +155,8 @@ def pose_rows(derivation, implementations, cases: int, seed: int, precision: str
             within = error <= allowed and rotation <= rotation_allowed
             stalled_within += str(result.status) == "stalled" and within
             outcomes.append((str(result.status), error, result.status == "converged" and within))
-        rows.append(summary(f"{label} {name}", outcomes, tol, allowed, *((worst_rotation, rotation_allowed) if whole else (None, None)),
-                            stalled_within=stalled_within))
+        rows.append(summary(f"{label} {name}", outcomes, tol, allowed, worst_rotation if whole else None,
+                            rotation_allowed if whole else None, stalled_within=stalled_within))
     return rows
 
 
