@@ -342,6 +342,87 @@ def test_a_ur_aligned_wrist_nearest_is_the_member_at_the_references_phi():
                 np.testing.assert_allclose(got, expected, atol=1e-9)
 
 
+def wrist_centre_on_axis_1(b: Built, q: np.ndarray, pair: tuple[int, int]) -> np.ndarray | None:
+    """``q`` with joints ``pair`` (shoulder, elbow) moved by Newton's method (central differences) until the wrist centre
+    (where the last three axes meet, by the NumPy reference's axes) lies on axis 1; None where it does not converge to
+    1e-13 m or leaves the limits."""
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    def residual(x):
+        y = q.copy()
+        y[list(pair)] = x
+        k = chain_kinematics(b.numeric, y)
+        (p4, h4), (p5, h5) = (k.origins[-3], k.axes[-3]), (k.origins[-2], k.axes[-2])
+        n = np.cross(h4, h5)
+        w = p4 + (np.cross(p5 - p4, h5) @ n) / (n @ n) * h4
+        h1 = k.axes[0]
+        e1 = np.cross(h1, [1.0, 0.0, 0.0] if abs(h1[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        return np.array([(w - k.origins[0]) @ e1, (w - k.origins[0]) @ np.cross(h1, e1)])
+
+    x = q[list(pair)].astype(float)
+    for _ in range(40):
+        r = residual(x)
+        if np.max(np.abs(r)) <= 1e-13:
+            break
+        J = np.column_stack([(residual(x + d) - residual(x - d)) / 2e-7 for d in np.eye(2) * 1e-7])
+        x = x - np.linalg.lstsq(J, r, rcond=None)[0]
+    out = q.copy()
+    out[list(pair)] = x
+    if np.max(np.abs(residual(x))) > 1e-13 or np.any(out < b.lower) or np.any(out > b.upper):
+        return None
+    return out
+
+
+@pytest.mark.parametrize("name, pair", [("iiwa14_lock3", (1, 3)), pytest.param("kuka_kr6", (1, 2), marks=pytest.mark.slow),
+                                        pytest.param("abb_irb140", (1, 2), marks=pytest.mark.slow)])
+def test_a_wrist_centre_on_axis_1_nearest_keeps_joint_1(name, pair):
+    """The wrist centre on axis 1 (the iiwa stretched straight up, or bent back over its base; KR 6 and IRB 140 reaching
+    over theirs): joint 1 turns the wrist centre about itself, a continuum of q1 with the wrist taking the rest, and
+    ik_all holds one representative (q1 from rounding, or 0). ik_nearest(q, pose(q)) returned it: q1 = pi/2 and q5 a
+    turn of 1.07 rad from q = (0.5, 0, 0, 0, 0.3, 0.4, 0.2) on the iiwa, a probe found. It now also weighs the rows at
+    q_ref's own q1 (ik_continuum_members, each branch with its own wrist): from a configuration it returns that
+    configuration (also with the wrist aligned, where joints 5 and 7 move along their own continuum toward q_ref);
+    from a reference 1e-3 rad off, the spec's answer (ClosedFormIK with the same members, SymPy's steps in NumPy),
+    never farther than the representative's; weighted too. C and NumPy; every answer reproduces the target."""
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+
+    b = built(name)
+    spec = ClosedFormIK(b.chain, None if b.lock is None else b.lock)
+    rng = np.random.default_rng(23)
+    found = []
+    for q in inner_configurations(b, 60, rng):
+        if len(found) < 6:  # stretched straight along axis 1 (the iiwa's zero, turned about joint 1)
+            q[list(pair)] = 0.0
+        on_axis = wrist_centre_on_axis_1(b, q, pair)
+        if on_axis is not None:
+            found.append(on_axis)
+    q = np.array(found[:24])
+    assert len(q) >= 12
+    q[::4, -2] = 0.0  # the wrist aligned too
+    T = targets_of(b.chain, q)
+    refs = q + rng.normal(scale=1e-3, size=q.shape)
+    W = 10.0 ** rng.uniform(-1, 1, size=q.shape)
+    for i in range(len(q)):
+        extra = b.extra(q[i])
+        assert np.any(spec.candidates(T[i], *extra)[1] & 2)  # a singular representative
+        plain, _ = nearest(spec.all(T[i], *extra), refs[i], b.lower, b.upper, b.revolute, continuum=b.continuum)
+        want, _ = spec.nearest(refs[i], T[i], *extra)
+        want_w, _ = spec.nearest(refs[i], T[i], *extra, weights=W[i])
+        np.testing.assert_allclose(spec.nearest(q[i], T[i], *extra)[0], q[i], atol=1e-7)
+        assert np.sum((want - refs[i]) ** 2) <= np.sum((plain - refs[i]) ** 2) + 1e-15
+        for impl in (b.c, b.py):
+            got = impl.ik_nearest(q[i], T[i], *extra)
+            assert got.status == "ok"
+            np.testing.assert_allclose(got.q, q[i], atol=1e-7)
+            for ref, weights, expected in ((refs[i], None, want), (refs[i], W[i], want_w)):
+                got = np.asarray(impl.ik_nearest(ref, T[i], *extra).q if weights is None else
+                                 impl.ik_nearest_weighted(ref, weights, T[i], *extra).q)
+                pos, rot = judge.pose_error(b.numeric, got[None], T[i])
+                assert max(pos.max(), rot.max()) <= 1e-12
+                np.testing.assert_allclose(got, expected, atol=1e-9)
+
+
 def test_a_ur_aligned_wrist_with_narrow_limits_takes_a_member_where_the_representative_is_dropped():
     """UR5 with joint 6 limited to [-1.5, 1.5]: at the aligned wrist ik_all's one representative per root of q1 often
     lies outside the limits and is dropped (ik_all: out_of_limits, or only other branches), and ik_nearest(q,

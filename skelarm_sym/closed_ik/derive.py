@@ -31,12 +31,13 @@ from ..derive.core import Constant, Derivation, FunctionSpec
 from ..models.chain import Chain
 from ..models.chain.lock import named_joint
 from ..models.chain.target_rotation import ORTHO_CONSTANT
-from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, problem_geometry,
-                       rotate)
+from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, closest_point,
+                       problem_geometry, rotate)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, LOCK_MAX,
                           LOCK_MAX_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
-from .families import SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist, three_parallel
+from .families import (AXIS_SYMBOL, AXIS_TOL, AXIS_TOL_FLOAT, SPLIT_SYMBOL, SPLIT_TOL, SPLIT_TOL_FLOAT, Problem, spherical_wrist,
+                       three_parallel)
 from ..derive.float_facts import float_facts
 from .subproblems import (LS_SYMBOL, LS_TOL, LS_TOL_FLOAT, ROOT_SYMBOL, ROOT_TOL, ROOT_TOL_FLOAT, SING_SYMBOL, SING_TOL,
                           SING_TOL_FLOAT, Steps, any_of)
@@ -73,14 +74,17 @@ class ClosedIK:
     continuum: tuple = field(default=())
     """The wrist's continuum, ``(a, w, b, sigma, sigma_odd, w0)`` (see :func:`wrist_continuum`), or ``()``."""
     members: sp.Matrix | None = None
-    """Three parallel axes with a wrist flip (UR): the aligned wrist's continuum at the reference configuration's
-    ``phi = q2 + s3 q3 + s4 q4`` (input ``q_ref``; ``s_k = h2 . h_k``), per root of q1 the 2R arm's two branches (4 x N), or None."""
+    """Rows of a continuum at the reference configuration (input ``q_ref``), or None. Three parallel axes with a
+    wrist flip (UR): the aligned wrist's continuum at the reference's ``phi = q2 + s3 q3 + s4 q4`` (``s_k = h2 .
+    h_k``), per root of q1 the 2R arm's two branches (4 x N). A spherical wrist whose wrist centre can lie on axis 1:
+    that continuum at the reference's ``q1``, the candidates' eight branches with their own wrist (8 x N)."""
     member_flags: sp.Matrix | None = None
-    """``members``' flags: bit 2 always; bit 1 where the row is no exact member (the wrist not aligned: no
-    continuum; or the 2R arm does not reach the wrist point that ``phi`` gives)."""
+    """``members``' flags: bit 2 always; bit 1 where the row is no exact member (no continuum: the wrist not aligned,
+    the wrist centre off axis 1; or the branch does not reach: UR's 2R arm the wrist point that ``phi`` gives, a
+    least-squares branch)."""
     member_wrist: tuple[int, ...] = ()
-    """With ``members``: the chain coordinates of joints 5 and 6 (the wrist angle, and the joint that turns with phi
-    at the aligned wrist)."""
+    """With a UR's ``members``: the chain coordinates of joints 5 and 6 (the wrist angle, and the joint that turns
+    with phi at the aligned wrist); ``()`` for a spherical wrist's."""
 
     @property
     def max_solutions(self) -> int:
@@ -238,8 +242,20 @@ def _derive_ik_all(chain: Chain, lock: int | str | None, atan2: str | None = Non
         prob = prob.reversed(steps)
     n = chain.n
     members: list | None = None
+
+    def reference_angles() -> list:
+        """The problem's joint variables in the reference configuration (input ``q_ref``)."""
+        q_ref = sp.symbols(f"q_ref0:{n}", real=True)
+        inputs["q_ref"] = q_ref
+        return [q_ref[geom.coordinates[k]] if not family.reversed else -q_ref[geom.coordinates[5 - k]] for k in range(6)]
+
     if family.name in ("spherical_wrist", "spherical_shoulder"):
-        branches = spherical_wrist(steps, prob, family.position, wrist_flips(geom, family.reversed, lock_idx is not None))
+        flips = wrist_flips(geom, family.reversed, lock_idx is not None)
+        if _axis_continuum(geom, family, lock_idx is not None):
+            members = []
+            branches = spherical_wrist(steps, prob, family.position, flips, members, reference_angles()[0], geom.reach())
+        else:
+            branches = spherical_wrist(steps, prob, family.position, flips)
     else:
         flip = wrist_flips(geom, family.reversed, lock_idx is not None, (1, 4, 5))
         s0 = _axes_sign(geom, family.reversed, lock_idx is not None, (1, 5)) if flip else 0
@@ -249,9 +265,7 @@ def _derive_ik_all(chain: Chain, lock: int | str | None, atan2: str | None = Non
             raise ValueError(f"internal error: the parallel axes' signs {signs} differ between lock values")
         if s0:
             members = []
-            q_ref = sp.symbols(f"q_ref0:{n}", real=True)
-            inputs["q_ref"] = q_ref
-            theta = [q_ref[geom.coordinates[k]] if not family.reversed else -q_ref[geom.coordinates[5 - k]] for k in range(6)]
+            theta = reference_angles()
             phi_ref = steps("phi_ref", theta[1] + signs[0] * theta[2] + signs[1] * theta[3])
             branches = three_parallel(steps, prob, flip, members, phi_ref, s0, signs)
         else:
@@ -275,7 +289,8 @@ def _derive_ik_all(chain: Chain, lock: int | str | None, atan2: str | None = Non
         wrist_continuum(geom, family, lock_idx is not None),
         None if member_rows is None else sp.Matrix(member_rows),
         None if member_flags is None else sp.Matrix(member_flags),
-        tuple(geom.coordinates[5 - k if family.reversed else k] for k in (4, 5)) if members else (),
+        tuple(geom.coordinates[5 - k if family.reversed else k] for k in (4, 5)) if members and family.name.startswith("three_parallel")
+        else (),
     )
 
 
@@ -299,6 +314,37 @@ def _rows(chain: Chain, geom, family: Family, steps: Steps, inputs: dict, lock_i
         rows.append(row)
         flags.append(FLAG_LS * b.ls + FLAG_SINGULAR * b.singular)
     return rows, flags, principal
+
+
+AXIS_OFFSET_TOL = 1e-9
+"""A shoulder offset (m, relative to the arm's reach) below this is none, for :func:`_axis_continuum`."""
+
+
+def _axis_continuum(geom, family: Family, locked: bool) -> bool:
+    """Whether a spherical-wrist arm may have its wrist centre on axis 1 in a solution (a continuum of ``q1``:
+    :func:`~.families.spherical_wrist`'s ``members``). Not where h2 is perpendicular to h1 and the wrist centre keeps
+    an offset along h2 from axis 1 whatever joints 2 and 3 do, at every sampled lock value: ``parallel_23``, whose
+    rotations about h2 and h3 keep the offset from p1 (PUMA 560's shoulder offset); ``intersect_12`` with h3 parallel
+    to h2, and ``prismatic_3`` sliding across h2, which keep it from the shoulder point (the Stanford arm's)."""
+    if family.position == "intersect_23":
+        return True
+    from .classify import LOCK_SAMPLES, _lock_subs
+
+    scale = geom.reach()
+    for value in (LOCK_SAMPLES if locked else (0.0,)):
+        kinds, H, P = geom.numeric(_lock_subs(geom, value))
+        if family.reversed:
+            kinds, H, P = kinds[::-1], H[::-1], P[::-1]
+        W0 = np.array([float(x) for x in closest_point(P[3], H[3], P[4], H[4])])
+        if family.position == "parallel_23":
+            centre, keeps = P[0], True
+        else:
+            centre = np.array([float(x) for x in closest_point(P[0], H[0], P[1], H[1])])
+            keeps = (abs(H[1] @ H[2]) <= FLIP_TOL if kinds[2] == "prismatic"
+                     else np.linalg.norm(np.cross(H[1], H[2])) <= FLIP_TOL)
+        if not keeps or abs(H[0] @ H[1]) > FLIP_TOL or abs(H[1] @ (W0 - centre)) <= AXIS_OFFSET_TOL * scale:
+            return True
+    return False
 
 
 def _axes_sign(geom, reversed_: bool, locked: bool, pair: tuple[int, int]) -> int:
@@ -356,6 +402,17 @@ MEMBERS = MembersSpec(
     "per root of q1 the 2R arm's two branches), mflags (4: bit 1 where no exact member, bit 2 always)",
 )
 """The straight-line function of :attr:`ClosedIK.members` (only where it has some): ``ik_nearest``'s more rows."""
+AXIS_MEMBERS = MembersSpec(
+    "ik_continuum_members", ("q_ref", "target", "lock"), ("M", "mflags"),
+    "the continuum of a wrist centre on axis 1 at q_ref's q1 (joint 1 then turns the wrist centre about itself; "
+    "spherical wrist): M (8 x N, the candidates' branches with q_ref's q1 and their own wrist), mflags (8: bit 1 where "
+    "no exact member: the wrist centre off axis 1 by more than IK_AXIS_TOL times the arm's size, or the branch least squares; bit 2 always)",
+)
+"""The same for a spherical wrist (:func:`~.families.spherical_wrist`'s ``members``)."""
+AXIS_CONSTANT = Constant(AXIS_SYMBOL, {"double": AXIS_TOL, "float": AXIS_TOL_FLOAT},
+                         "spherical wrist: the wrist centre within this times the arm's size of axis 1 is on joint 1's continuum, and "
+                         "ik_continuum_members' rows at q_ref's q1 are exact (ik_nearest weighs them)")
+"""The constant of a spherical-wrist arm's members (emitted where they use it)."""
 
 SPLIT_CONSTANT = Constant(SPLIT_SYMBOL, {"double": SPLIT_TOL, "float": SPLIT_TOL_FLOAT},
                           "UR wrist: below this sine between h6 and R5^T h2 the aligned wrist's representative split of "
@@ -371,7 +428,7 @@ SUBPROBLEM_CONSTANTS = (
              "a move of at most this times the lengths) gives the double root"),
 )
 """The subproblems' tolerances (emitted where the candidates use them)."""
-STEP_TOLERANCES = (SPLIT_CONSTANT,) + SUBPROBLEM_CONSTANTS
+STEP_TOLERANCES = (SPLIT_CONSTANT, AXIS_CONSTANT) + SUBPROBLEM_CONSTANTS
 """Every module constant that stands in the candidates' steps (the NumPy spec evaluates them at the double values)."""
 
 EMITTED_CONSTANTS = (
@@ -441,13 +498,14 @@ def with_candidates(derivation: Derivation, ik: ClosedIK) -> Derivation:
         shapes={**derivation.shapes, "Q": (S, N), "flags": (S,), **({"M": ik.members.shape, "mflags": (ik.members.rows,)}
                                                                     if members else {})},
         functions=tuple(derivation.functions) + (dataclasses.replace(CANDIDATES, principal=ik.principal, continuum=ik.continuum),)
-        + ((dataclasses.replace(MEMBERS, wrist=ik.member_wrist),) if members else ()),
+        + ((dataclasses.replace(MEMBERS if ik.member_wrist else AXIS_MEMBERS, wrist=ik.member_wrist),) if members else ()),
         parameters=tuple(derivation.parameters) + (("lock",) if locked else ()),
         scalars=tuple(derivation.scalars) + (("lock",) if locked else ()),
         domains={**derivation.domains, "target": "finite", **({"lock": "finite"} if locked else {}),
                  **({"q_ref": "finite"} if members else {})},
         constants=_without(derivation.constants, EMITTED_CONSTANTS) + EMITTED_CONSTANTS + ((WRIST_CONSTANT,) if ik.continuum else ())
-        + ((SPLIT_CONSTANT,) if ik.family.name.startswith("three_parallel") else ()) + SUBPROBLEM_CONSTANTS,
+        + ((SPLIT_CONSTANT,) if ik.family.name.startswith("three_parallel") else ())
+        + ((AXIS_CONSTANT,) if members and not ik.member_wrist else ()) + SUBPROBLEM_CONSTANTS,
         notes=tuple(derivation.notes) + notes,
         _cache={},
     )

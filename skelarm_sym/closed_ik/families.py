@@ -68,6 +68,17 @@ SPLIT_SYMBOL = sp.Symbol("IK_SPLIT_TOL", positive=True)
 :data:`SPLIT_TOL_FLOAT` in float); the NumPy spec evaluates the steps with :data:`SPLIT_TOL`."""
 
 
+AXIS_TOL = 1e-12
+"""Spherical wrist: the wrist centre this close to axis 1 (``|h1 x (W - p1)|^2 <= AXIS_TOL^2 (|W - p1|^2 + L^2)``, ``L``
+the arm's size in m) is on joint 1's continuum, and ``ik_continuum_members``' rows at the reference's ``q1`` are exact
+(their pose error is about that distance; rounding leaves a target built on the axis at about 1e-16 of it)."""
+AXIS_TOL_FLOAT = 1e-5
+"""The same in code emitted in float, whose rounding leaves such a wrist centre about 1e-7 off the axis."""
+AXIS_SYMBOL = sp.Symbol("IK_AXIS_TOL", positive=True)
+"""The axis test's tolerance in the steps: a module constant of the emitted code (:data:`AXIS_TOL` in double,
+:data:`AXIS_TOL_FLOAT` in float); the NumPy spec evaluates the steps with :data:`AXIS_TOL`."""
+
+
 @dataclass(frozen=True)
 class Branch:
     """One candidate: ``angles[k]`` the joint variables of problem joints 0..5 (rad or m)."""
@@ -130,8 +141,16 @@ def _half_turn(steps: Steps, label: str, a: Angle, same: sp.Expr) -> Angle:
     return Angle((steps.principal if steps.is_principal(a.theta) else steps)(label, out), None, None, a.ls, a.singular)
 
 
-def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = False) -> list[Branch]:
+def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = False, members: list | None = None,
+                    ref: sp.Expr | None = None, reach: float = 1.0) -> list[Branch]:
     """The eight candidates of a spherical-wrist problem with positioning structure ``position``.
+
+    ``members`` (a list, with ``ref``, joint 1's variable in the reference configuration): filled with one
+    ``(branches, exact)``: the wrist centre on axis 1's continuum at ``q1 = ref``. There joint 1 turns the wrist
+    centre about itself, so every ``q1`` keeps the positioning's ``q2``, ``q3`` (the candidates hold a
+    representative, rounding noise or 0) and the wrist takes the rest: the eight branches with ``q1 = ref`` and
+    their own wrist, and ``exact`` 1 where ``W`` is within ``IK_AXIS_TOL`` times ``reach`` (the arm's size, m) and its
+    distance from ``p1`` of axis 1 (the rows' pose error is about that distance).
 
     ``flip``: the wrist's axes satisfy ``h4 . h5 = 0``, ``h5 . h6 = 0`` and ``h4 || h6`` (every arm here), so the
     second root of q5 is ``-q5`` and its branch is ``(q4 + pi, -q5, q6 + pi)``: ``R(h4, q4 + pi) R(h5, -q5)
@@ -181,42 +200,63 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
     gx = steps.vec("gx", matvec(RG, x6))
     out = []
     for a, (q1, q2, q3) in enumerate(arms):
-        # each rotation's result named: nested, SymPy builds products of large sums (seconds for a locked arm),
-        # and the lowering's CSE finds the same shared terms anyway
-        g1 = steps.vec(f"g1_{a}", _rot(q1, H[0], g6, True))
-        x1 = steps.vec(f"x1_{a}", _rot(q1, H[0], gx, True))
-        u = steps.vec(f"u{a}", _rot(q3, H[2], steps.vec(f"g2_{a}", _rot(q2, H[1], g1, True)), True))
-        w = steps.vec(f"w{a}", _rot(q3, H[2], steps.vec(f"x2_{a}", _rot(q2, H[1], x1, True)), True))
-        q5s = sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u), unit_disc(H[3], H[5], H[4], u))
-        first_aligned = sp.S.Zero  # set by the first root, read by its flip
-        for b, q5 in enumerate(q5s):
-            if flip and b == 1:
-                first = out[-1].angles
-                # the first root's q4 is the continuum's representative only where aligned (q5 within ALIGNED_TOL of
-                # 0 or +-pi): there the original branches coincide. Where q4's SP1 is merely flagged a continuum (q5 up
-                # to about 1e-9 from it) q4 is the SP1's exact angle and the flip is another exact solution; copying
-                # the first row there lost it (and the source's row with it on 24-39 of 60 targets at q5 = 1e-10)
-                same = first_aligned
-                q5f = Angle(steps(f"q5f_{a}", _select((first[4].theta, same > 0), (-first[4].theta, True))), None, None,
-                            q5.ls, q5.singular)
-                out.append(Branch((q1, q2, q3, _half_turn(steps, f"q4f_{a}", first[3], same), q5f,
-                                   _half_turn(steps, f"q6f_{a}", first[5], same))))
-                continue
-            r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
-            q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
-            # the wrist aligned to rounding (q5 within ALIGNED_TOL of 0 or +-pi and q4's SP1 a continuum): q4 = 0 and
-            # q6 takes the whole rotation (off by at most that distance there; the SP1 would return an angle of
-            # rounding noise, pi as often as 0, another in each language, which may miss the joint's limits)
-            q5a = steps(f"q5a_{a}{b}", sp.Abs(q5.theta))
-            aligned = sp.And(sp.Or(q5a <= ALIGNED_TOL, q5a >= PI_DOUBLE - ALIGNED_TOL), q4.singular > 0)
-            if flip and b == 0:
-                first_aligned = steps(f"aligned{a}", indicator(aligned))
-            q4 = Angle(steps(f"q4r_{a}{b}", _select((sp.S.Zero, aligned), (q4.theta, True))),
-                       steps(f"q4rc_{a}{b}", _select((sp.S.One, aligned), (q4.c, True))),
-                       steps(f"q4rs_{a}{b}", _select((sp.S.Zero, aligned), (q4.s, True))), q4.ls, q4.singular)
-            y = steps.vec(f"y{a}{b}", _rot(q5, H[4], steps.vec(f"w4_{a}{b}", _rot(q4, H[3], w, True)), True))
-            q6 = sp1(steps, f"q6_{a}{b}", H[5], x6, y)
-            out.append(Branch((q1, q2, q3, q4, q5, q6)))
+        out += _spherical_wrist_branches(steps, H, x6, g6, gx, q1, q2, q3, f"{a}", flip)
+    if members is not None:
+        # the wrist centre on axis 1: at most IK_AXIS_TOL times the arm's size and its distance from p1 off it (a
+        # wrist centre near p1 has its direction from rounding, its distance from the axis is still that small)
+        d = sub(W, P[0])
+        off = steps.vec("Wa", cross(H[0], d))
+        on_axis = steps("onaxis", indicator(_sq(off) <= AXIS_SYMBOL**2 * (steps("Wd2", _sq(d)) + sp.Float(reach, 17)**2)))
+        q1m = Angle(ref, steps("q1mc", sp.cos(ref)), steps("q1ms", sp.sin(ref)), sp.S.Zero, sp.S.One)
+        group = []
+        for a, (q1, q2, q3) in enumerate(arms):
+            group += _spherical_wrist_branches(steps, H, x6, g6, gx, Angle(q1m.theta, q1m.c, q1m.s, q1.ls, sp.S.One), q2, q3,
+                                               f"m{a}", flip)
+        members.append((group, on_axis))
+    return out
+
+
+def _spherical_wrist_branches(steps: Steps, H, x6, g6, gx, q1: Angle, q2: Angle, q3: Angle, a: str,
+                              flip: bool) -> list[Branch]:
+    """The wrist's two branches (two roots of q5, q4 and q6 for each) for the positioning ``q1, q2, q3``
+    (see :func:`spherical_wrist`); ``a`` labels the steps."""
+    out: list[Branch] = []
+    # each rotation's result named: nested, SymPy builds products of large sums (seconds for a locked arm),
+    # and the lowering's CSE finds the same shared terms anyway
+    g1 = steps.vec(f"g1_{a}", _rot(q1, H[0], g6, True))
+    x1 = steps.vec(f"x1_{a}", _rot(q1, H[0], gx, True))
+    u = steps.vec(f"u{a}", _rot(q3, H[2], steps.vec(f"g2_{a}", _rot(q2, H[1], g1, True)), True))
+    w = steps.vec(f"w{a}", _rot(q3, H[2], steps.vec(f"x2_{a}", _rot(q2, H[1], x1, True)), True))
+    q5s = sp4(steps, f"q5_{a}", H[3], H[5], H[4], dot(H[3], u), unit_disc(H[3], H[5], H[4], u))
+    first_aligned = sp.S.Zero  # set by the first root, read by its flip
+    for b, q5 in enumerate(q5s):
+        if flip and b == 1:
+            first = out[-1].angles
+            # the first root's q4 is the continuum's representative only where aligned (q5 within ALIGNED_TOL of
+            # 0 or +-pi): there the original branches coincide. Where q4's SP1 is merely flagged a continuum (q5 up
+            # to about 1e-9 from it) q4 is the SP1's exact angle and the flip is another exact solution; copying
+            # the first row there lost it (and the source's row with it on 24-39 of 60 targets at q5 = 1e-10)
+            same = first_aligned
+            q5f = Angle(steps(f"q5f_{a}", _select((first[4].theta, same > 0), (-first[4].theta, True))), None, None,
+                        q5.ls, q5.singular)
+            out.append(Branch((q1, q2, q3, _half_turn(steps, f"q4f_{a}", first[3], same), q5f,
+                               _half_turn(steps, f"q6f_{a}", first[5], same))))
+            continue
+        r5 = steps.vec(f"r5_{a}{b}", _rot(q5, H[4], H[5]))
+        q4 = sp1(steps, f"q4_{a}{b}", H[3], r5, u)
+        # the wrist aligned to rounding (q5 within ALIGNED_TOL of 0 or +-pi and q4's SP1 a continuum): q4 = 0 and
+        # q6 takes the whole rotation (off by at most that distance there; the SP1 would return an angle of
+        # rounding noise, pi as often as 0, another in each language, which may miss the joint's limits)
+        q5a = steps(f"q5a_{a}{b}", sp.Abs(q5.theta))
+        aligned = sp.And(sp.Or(q5a <= ALIGNED_TOL, q5a >= PI_DOUBLE - ALIGNED_TOL), q4.singular > 0)
+        if flip and b == 0:
+            first_aligned = steps(f"aligned{a}", indicator(aligned))
+        q4 = Angle(steps(f"q4r_{a}{b}", _select((sp.S.Zero, aligned), (q4.theta, True))),
+                   steps(f"q4rc_{a}{b}", _select((sp.S.One, aligned), (q4.c, True))),
+                   steps(f"q4rs_{a}{b}", _select((sp.S.Zero, aligned), (q4.s, True))), q4.ls, q4.singular)
+        y = steps.vec(f"y{a}{b}", _rot(q5, H[4], steps.vec(f"w4_{a}{b}", _rot(q4, H[3], w, True)), True))
+        q6 = sp1(steps, f"q6_{a}{b}", H[5], x6, y)
+        out.append(Branch((q1, q2, q3, q4, q5, q6)))
     return out
 
 

@@ -281,17 +281,21 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     w = np.ones_like(q_ref) if weights is None else np.asarray(weights, float)
     w = w / np.max(w)  # the same nearest row; no product overflows (the emitted code divides alike)
     best, best_d, best_i = None, np.inf, -1
+    def along_continuum(q: np.ndarray, row: np.ndarray, flag: int) -> None:
+        """A row of the wrist's continuum: joints a and b to the member within the limits nearest q_ref."""
+        if continuum:
+            a, wj, b, s, s_odd, w0 = continuum
+            sigma = continuum_sign(row[wj], flag, s, aligned_tol, s_odd, w0)
+            member = sigma and continuum_member(row[a], row[b], (q_ref[a], q_ref[b]), sigma,
+                                                (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]), limit_tol)
+            if member:
+                q[a], q[b] = member
+
     for i in range(result.count):
         q = result.q[i].copy()
         for j in np.nonzero(rev)[0]:
             q[j] = nearest_copy(q[j], q_ref[j], lower[j], upper[j], limit_tol)
-        if continuum:
-            a, wj, b, s, s_odd, w0 = continuum
-            sigma = continuum_sign(result.q[i, wj], result.flags[i], s, aligned_tol, s_odd, w0)
-            member = sigma and continuum_member(result.q[i, a], result.q[i, b], (q_ref[a], q_ref[b]), sigma,
-                                                (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]), limit_tol)
-            if member:
-                q[a], q[b] = member
+        along_continuum(q, result.q[i], result.flags[i])
         d = float(np.sum(w * (q - q_ref) ** 2))
         if d < best_d:
             best, best_d, best_i = q, d, i
@@ -311,6 +315,7 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
                     q[j] = min(max(x, lower[j]), upper[j])
             if not ok:
                 continue
+            along_continuum(q, M[m], int(mflags[m]))  # a spherical wrist's member with the wrist aligned too
             d = float(np.sum(w * (q - q_ref) ** 2))
             if d < best_d:
                 best, best_d, best_i = q, d, -1

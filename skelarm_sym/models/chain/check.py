@@ -236,21 +236,24 @@ def _targets(chain, seed: int, cases: int, precision: str, aligned: int | None =
 
 
 def members_scenario(derivation, cases: int, seed: int, precision: str) -> Scenario:
-    """``ik_continuum_members`` on poses of random configurations with the wrist aligned (joint 5 at 0 for the first
-    half, pi for the rest; in double: a float target is aligned only to float's rounding, where the wrist's split test
-    and so the rows depend on that rounding, so float takes the configurations as drawn), ``q_ref`` the configurations
-    themselves; expected: the same steps evaluated by SymPy (lambdify, double). Its condition per case: the Jacobian
-    condition number at the configuration without joint 6, which turns with phi at the aligned wrist (:func:`_condition`)."""
+    """``ik_continuum_members`` on poses of random configurations, ``q_ref`` the configurations themselves;
+    expected: the same steps evaluated by SymPy (lambdify, double). A UR's (the aligned wrist's members): the wrist
+    aligned (joint 5 at 0 for the first half, pi for the rest; in double: a float target is aligned only to float's
+    rounding, where the wrist's split test and so the rows depend on that rounding, so float takes the configurations
+    as drawn), its condition per case the Jacobian condition number at the configuration without joint 6, which turns
+    with phi at the aligned wrist (:func:`_condition`). A spherical wrist's (the wrist centre on axis 1 at q_ref's
+    q1): the configurations as drawn, the rows at the reference's own q1, its condition the whole Jacobian's."""
     from ...closed_ik.evaluate import lambdify_members_of
 
     chain = derivation.model
-    wrist, joint6 = derivation.function("ik_continuum_members").wrist
-    t = _targets(chain, seed + 4, cases, precision, wrist if precision == "double" else None)
+    wrist = derivation.function("ik_continuum_members").wrist
+    t = _targets(chain, seed + 4, cases, precision, wrist[0] if wrist and precision == "double" else None)
     dtype = np.float64 if precision == "double" else np.float32
     q = np.asarray(t.q, dtype=dtype).astype(np.float64)
     M, mflags = lambdify_members_of(derivation)(q, t.targets, t.lock_value)
     free = t.free.copy()
-    free[joint6] = False
+    if wrist:
+        free[wrist[1]] = False
     condition = np.array([_condition(chain.numeric(), q[i:i + 1], free, t.length) for i in range(len(q))])
     return Scenario("ik continuum members", {"q_ref": q, **t.values}, {"M": M, "mflags": mflags},
                     {"M": np.maximum(1.0, condition), "mflags": np.ones(len(q))}, size=chain.n)

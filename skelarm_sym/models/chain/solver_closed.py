@@ -81,9 +81,11 @@ class _Arm:
     which the duplicate test compares the joints (``order``)."""
 
     def __init__(self, chain, locked: bool, principal: tuple = (), columns: tuple = (), precision: str = "double",
-                 continuum: tuple = (), members: int = 0) -> None:
+                 continuum: tuple = (), members: int = 0, member_kind: str = "") -> None:
         self.members = members
         """Rows of ``ik_continuum_members`` (0: the arm has none)."""
+        self.member_kind = member_kind
+        """``"aligned"``: a UR's aligned wrist at q_ref's phi; ``"axis"``: a spherical wrist's centre on axis 1 at q_ref's q1."""
         limits = chain.limits()
         self.n = chain.n
         self.s = 8
@@ -179,7 +181,7 @@ def _same_row(b: Body, arm: _Arm, cand: Array, q: Array, r, diff: Var, dup: Var,
 
 def rows_helper(arm: _Arm) -> Function:
     """``ik_all_rows(target, [lock], q, count, flags[, singular])``: the post-processing (see the module docstring);
-    ``singular`` (arms with continuum members: UR): 1 when a raw candidate is exact and flagged singular (a
+    ``singular`` (arms with continuum members: UR, spherical wrists whose centre can lie on axis 1): 1 when a raw candidate is exact and flagged singular (a
     representative, which the limits may have dropped), else 0."""
     S, N = arm.s, arm.n
     b = Body()
@@ -445,18 +447,22 @@ def _distance(near: Array, q_ref: Array, weights, n: int):
 
 
 def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, near: Array, raw_singular: Array, best,
-                   best_d, dist, x, y, status) -> None:
+                   best_d, dist, x, y, status, continuum: Continuum | None) -> None:
     """Where a raw candidate is exact and flagged singular (``raw_singular``; its row may have been dropped at the
-    limits, even every row: IK_OUT_OF_LIMITS becomes IK_OK when a member is taken): the members of the aligned wrist's continuum at q_ref's own phi
-    (``ik_continuum_members``; those with flag bit 1 clear), each revolute joint at its copy within the limits nearest
-    q_ref (none there: not a member within the limits), a prismatic joint within the limits; one nearer than the
-    chosen row replaces it (``postprocess.nearest``'s ``members``)."""
+    limits, even every row: IK_OUT_OF_LIMITS becomes IK_OK when a member is taken): the members of the continuum at
+    q_ref (``ik_continuum_members``, those with flag bit 1 clear: a UR's aligned wrist at q_ref's own phi, a spherical
+    wrist's centre on axis 1 at q_ref's q1), each revolute joint at its copy within the limits nearest q_ref (none
+    there: not a member within the limits), a prismatic joint within the limits, a member with the wrist aligned too
+    moved along that continuum (``continuum``); one nearer than the chosen row replaces it
+    (``postprocess.nearest``'s ``members``)."""
     N, R = arm.n, arm.members
     M, mflags = b.array("M", R * N), b.array("mflags", R)
     ok = b.var("m_ok", _int(0), Type.INT)
     tol = NamedConst("IK_LIMIT_TOL")
     with b.if_(raw_singular[0] > 0):  # a split representative is flagged singular: none, no member
-        b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 +- q3 +- q4, where nearer than the row")
+        b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 +- q3 +- q4, where nearer than the row"
+                  if arm.member_kind == "aligned" else
+                  "the wrist centre on axis 1: the continuum's members at q_ref's joint 1, where nearer than the row")
         b.call("ik_continuum_members", q_ref, *data, M, mflags)
         with b.for_("m", 0, _int(R)) as m:
             with b.if_(ne(Bits("%", Cast(Type.INT, mflags[m]), _int(2)), NamedConst("IK_FLAG_LEAST_SQUARES", Type.INT))):
@@ -478,6 +484,12 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
                     if lo is not None:
                         clipped = select(x < lo, lo, clipped)
                     b.set(near[j], clipped)
+                if continuum is not None:
+                    a, w, c = continuum.a, continuum.w, continuum.b
+                    b.comment(f"a member with the wrist aligned too: joints {a + 1} and {c + 1} to the member within their "
+                              "limits nearest q_ref")
+                    continuum.move(b, M[_at(N, m, w)], None, M[_at(N, m, a)], M[_at(N, m, c)], q_ref[a], q_ref[c],
+                                   near[a], near[c])
                 b.set(dist, _distance(near, q_ref, weights, N))
                 with b.if_((ok > 0) & ((best < 0) | (dist < best_d))):
                     b.set(best, _int(arm.s))  # a member, no row
@@ -485,6 +497,17 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
                     for j in range(N):
                         b.set(q[j], near[j])
         b.set(status, select((best >= 0) & eq(status, _status("IK_OUT_OF_LIMITS")), _status("IK_OK"), status))
+
+
+def _doc_members(arm: _Arm) -> tuple[str, ...]:
+    """The lines of ``ik_nearest``'s documentation on ``ik_continuum_members``."""
+    if arm.member_kind == "aligned":
+        return ("An aligned UR wrist (a continuum of joint 6 and phi = q2 +- q3 +- q4, signs of h2 . h3 and h2 . h4, one representative in ik_all): the members",
+                "at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the",
+                "limits turns IK_OUT_OF_LIMITS into IK_OK.")
+    return ("The wrist centre on axis 1 (joint 1 turns it about itself: a continuum of joint 1, one representative in ik_all): the",
+            "rows at q_ref's own joint 1 (ik_continuum_members, each with its own wrist) count as rows too; one taken where every",
+            "ik_all row is outside the limits turns IK_OUT_OF_LIMITS into IK_OK.")
 
 
 def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
@@ -557,7 +580,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             for j in range(N):
                 b.set(q[j], near[j])
     if arm.members:
-        _nearer_member(b, arm, data, q_ref, weights, q, near, raw_singular, best, best_d, dist, x, y, status)
+        _nearer_member(b, arm, data, q_ref, weights, q, near, raw_singular, best, best_d, dist, x, y, status, continuum)
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
@@ -577,9 +600,7 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
         + (" or a weight that is not finite or not > 0)." if weighted else ")."),
         "q may be q_ref (an in-place call).",
         *_doc_continuum(arm, "the member within the limits nearest q_ref" + (" in the weighted metric" if weighted else "")),
-        *(("An aligned UR wrist (a continuum of joint 6 and phi = q2 +- q3 +- q4, signs of h2 . h3 and h2 . h4, one representative in ik_all): the members",
-           "at q_ref's own phi (ik_continuum_members) count as rows too; one taken where every ik_all row is outside the",
-           "limits turns IK_OUT_OF_LIMITS into IK_OK.") if arm.members else ()),
+        *(_doc_members(arm) if arm.members else ()),
     )
     summary = ("the closed-form IK solution nearest a configuration, in a weighted metric" if weighted
                else "the closed-form IK solution nearest a configuration")
@@ -599,8 +620,9 @@ def closed_solvers(derivation, names, precision: str) -> list[Function]:
     Q = derivation.compact["Q"]
     columns = tuple(len(set(Q[:, j])) for j in range(Q.cols))
     members = derivation.compact["M"].rows if any(f.name == "ik_continuum_members" for f in derivation.functions) else 0
+    kind = ("aligned" if derivation.function("ik_continuum_members").wrist else "axis") if members else ""
     arm = _Arm(derivation.model, "lock" in derivation.inputs, getattr(spec, "principal", ()), columns, precision,
-               getattr(spec, "continuum", ()), members)
+               getattr(spec, "continuum", ()), members, kind)
     out = [rows_helper(arm)]
     if "ik_all" in wanted:
         out.append(all_solver(arm))
