@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, target), the
@@ -24,7 +26,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x7ca64abeUL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x62123357UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1176,7 +1178,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 22 add/sub, 43 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 22 add/sub, 44 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1214,7 +1216,7 @@ static ARM2_LIGHT void arm2_inverse_velocity_finish(const double *restrict v, co
     const double t36 = (t20 ? v[1] : v[0]);
     const double t37 = t32*(t17 + t19);
     const double t38 = t33*t34 + t31*(t37 + t31);
-    const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+    const int t39 = t38 > (ARM2_RANK_TOL*ARM2_RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31));
     const double t40 = t35 + t36*t22;
     const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
     const double t42 = t31 + t33*(1.0 + t22*t22);
@@ -1260,7 +1262,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 26 add/sub, 43 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 26 add/sub, 44 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1296,7 +1298,7 @@ static ARM2_LIGHT void arm2_ik_step_finish(const double *restrict q, const doubl
     const double t34 = t32*t27;
     const double t37 = t32*(t17 + t19);
     const double t38 = t33*t34 + t31*(t37 + t31);
-    const int t39 = t38 > ARM2_RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31));
+    const int t39 = t38 > (ARM2_RANK_TOL*ARM2_RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31));
     const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
     const double t42 = t31 + t33*(1.0 + t22*t22);
     const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);

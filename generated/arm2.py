@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[2 + i] = j_y(i) for joint i = 0..1; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, target), the
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x7ca64abe
+STAMP = 0x62123357
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -616,7 +618,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t36 = np.where(t20, v[..., 1], v[..., 0])
     t37 = t32*(t17 + t19)
     t38 = t33*t34 + t31*(t37 + t31)
-    t39 = t38 > RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31))
+    t39 = t38 > (RANK_TOL*RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31))
     t40 = t35 + t36*t22
     t41 = t32*np.where(t39, 1.0/t38, 1.0)
     t42 = t31 + t33*(1.0 + t22*t22)
@@ -638,7 +640,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 66 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 67 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -681,7 +683,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t34 = t32*t27
     t37 = t32*(t17 + t19)
     t38 = t33*t34 + t31*(t37 + t31)
-    t39 = t38 > RANK_TOL*((t37 + 2.0*t31)*(t37 + 2.0*t31))
+    t39 = t38 > (RANK_TOL*RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31))
     t41 = t32*np.where(t39, 1.0/t38, 1.0)
     t42 = t31 + t33*(1.0 + t22*t22)
     t43 = t32*np.where(t42 > 0.0, 1.0/t42, 1.0)
@@ -707,7 +709,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 70 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 71 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

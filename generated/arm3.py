@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xf27b1932
+STAMP = 0xc26c844b
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -683,7 +685,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t48 = np.where(t30, v[..., 1], v[..., 0])
     t49 = t44*(t27 + t29)
     t50 = t45*t46 + t43*(t49 + t43)
-    t51 = t50 > RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43))
+    t51 = t50 > (RANK_TOL*RANK_TOL)*((t49 + 2.0*t43)*(t49 + 2.0*t43))
     t52 = t47 + t48*t32
     t53 = t44*np.where(t51, 1.0/t50, 1.0)
     t54 = t43 + t45*(1.0 + t32*t32)
@@ -707,7 +709,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 84 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 85 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -730,68 +732,205 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t4 = cs[..., 2]*l[..., 2]
     t5 = sn[..., 0]*l[..., 0]
     t6 = sn[..., 1]*l[..., 1]
-    t7 = sn[..., 2]*l[..., 2]
-    t9 = -t7 - t6
+    t7 = -sn[..., 2]*l[..., 2]
+    t9 = t7 - t6
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t27 = t11*t11 + t9*t9 + t7*t7
-    t28 = t11*t12 - t4*t7 + t9*t10
-    t29 = t4*t4 + t12*t12 + t10*t10
-    t40 = lambda_ > 1.0
-    t41 = np.where(t40, 1.0/lambda_, 1.0)
-    t42 = np.where(t40, 1.0, lambda_)
-    t43 = t42*t42
-    t44 = t41*t41
     t71 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
-    t72 = t71*t71
-    t73 = t11 + t9 - t7
-    t74 = t4 + t12 + t10
-    t75 = t72*t44
-    t76 = t71*t44
-    t77 = t72*t43
-    t78 = t27*t75 + t77
-    t79 = t28*t75
-    t80 = t73*t76
-    t81 = t29*t75 + t77
-    t82 = t74*t76
-    t83 = t43 + 3.0*t44
-    t84 = t76*twist[..., 0]
-    t85 = t76*twist[..., 1]
-    t86 = t44*twist[..., 2]
-    t87 = t78 + t81 + t83
-    t88 = t78*t84 + t79*t85 + t80*t86
-    t89 = t79*t84 + t81*t85 + t82*t86
-    t90 = t80*t84 + t82*t85 + t83*t86
-    t91 = np.where(t87 > 0.0, 1.0/(t87*t87), 1.0)
-    t92 = t88*t91
-    t93 = t89*t91
-    t94 = t90*t91
-    t95 = t81*t83 - t82*t82
-    t96 = t80*t82 - t79*t83
-    t97 = t79*t82 - t80*t81
-    t98 = t78*t83 - t80*t80
-    t99 = t79*t80 - t78*t82
-    t100 = t78*t81 - t79*t79
-    t101 = t78*t95 + t79*t96 + t80*t97
-    t102 = t95 + t98 + t100
-    t103 = t101 > t102*t87*RANK_TOL
-    t104 = t87*t87
-    t105 = t102 > RANK_TOL*t104
-    t106 = np.where(t101 > 0.0, 1.0/t101, 1.0)
-    t107 = t78*t88 + t79*t89 + t80*t90
-    t108 = t79*t88 + t81*t89 + t82*t90
-    t109 = t80*t88 + t82*t89 + t83*t90
-    t110 = np.where(t102 > 0.0, 1.0/(t102*t102), 1.0)
-    t111 = t104 - t102
-    t112 = np.where(t105, np.where(t103, t106*(t95*t84 + t96*t85 + t97*t86), t110*(t88*t111 - t107*t87)), t92)
-    t113 = np.where(t105, np.where(t103, t106*(t96*t84 + t98*t85 + t99*t86), t110*(t89*t111 - t108*t87)), t93)
-    t114 = np.where(t105, np.where(t103, t106*(t97*t84 + t99*t85 + t100*t86), t110*(t90*t111 - t109*t87)), t94)
-    t115 = t71*t112
-    t116 = t71*t113
-    dq3[..., 0] = t114 + t115*t11 + t116*t12
-    dq3[..., 1] = t114 + t115*t9 + t116*t10
-    dq3[..., 2] = t114 + t4*t116 - t115*t7
+    t72 = np.abs(lambda_)
+    t73 = np.where(t72 > 1.0, 1.0/t72, 1.0)
+    t74 = t71*t11
+    t75 = t71*t9
+    t76 = t71*t7
+    t77 = t71*t12
+    t78 = t71*t10
+    t79 = t4*t71
+    t80 = t74*t74
+    t81 = t75*t75
+    t82 = t76*t76
+    t83 = t77*t77
+    t84 = t78*t78
+    t85 = t79*t79
+    t86 = 3.0 + t80 + t81 + t82 + t83 + t84 + t85
+    t87 = np.sqrt(t86)
+    t88 = t73/t71
+    t89 = t72*t73
+    t90 = t87*RANK_TOL
+    t91 = t89 <= t90
+    t92 = np.where(t91, t90, 0.0)
+    t93 = np.where(t91, t73, t88)
+    t94 = np.where(t91, t71*twist[..., 0], twist[..., 0])
+    t95 = np.where(t91, t71*twist[..., 1], twist[..., 1])
+    t96 = t80 + t81 + t82
+    t97 = t83 + t84 + t85
+    t98 = 3.0 > t97
+    t99 = np.where(t98, 1.0, t77)
+    t100 = np.where(t98, 1.0, t78)
+    t101 = np.where(t98, 1.0, t79)
+    t102 = np.where(t98, t77, 1.0)
+    t103 = np.where(t98, t78, 1.0)
+    t104 = np.where(t98, t79, 1.0)
+    t105 = np.where(t98, t73, t93)
+    t106 = np.where(t98, twist[..., 2], t95)
+    t107 = np.where(t98, t93, t73)
+    t108 = np.where(t98, t95, twist[..., 2])
+    t109 = np.where(t98, 3.0, t97)
+    t110 = t109 > t96
+    t111 = np.where(t110, t99, t74)
+    t112 = np.where(t110, t100, t75)
+    t113 = np.where(t110, t101, t76)
+    t114 = np.where(t110, t74, t99)
+    t115 = np.where(t110, t75, t100)
+    t116 = np.where(t110, t76, t101)
+    t117 = np.where(t110, t105, t93)
+    t118 = np.where(t110, t106, t94)
+    t119 = np.where(t110, t93, t105)
+    t120 = np.where(t110, t94, t106)
+    t121 = t111*t111 + t112*t112 + t113*t113
+    t122 = np.sqrt(t121)
+    t123 = t122 > t92
+    t124 = np.where(t123, 1.0/t122, 1.0)
+    t125 = np.where(t123, t124*t111, 0.0)
+    t126 = np.where(t123, t124*t112, 0.0)
+    t127 = np.where(t123, t124*t113, 0.0)
+    t128 = np.where(t123, t122, 0.0)
+    t129 = t125*t114 + t126*t115 + t127*t116
+    t130 = t114 - t129*t125
+    t131 = t115 - t129*t126
+    t132 = t116 - t129*t127
+    t133 = t125*t102 + t126*t103 + t127*t104
+    t134 = t102 - t133*t125
+    t135 = t103 - t133*t126
+    t136 = t104 - t133*t127
+    t137 = t130*t130 + t131*t131 + t132*t132
+    t138 = t134*t134 + t135*t135 + t136*t136
+    t139 = t138 > t137
+    t140 = np.where(t139, t134, t130)
+    t141 = np.where(t139, t135, t131)
+    t142 = np.where(t139, t136, t132)
+    t143 = np.where(t139, t130, t134)
+    t144 = np.where(t139, t131, t135)
+    t145 = np.where(t139, t132, t136)
+    t146 = np.where(t139, t133, t129)
+    t147 = np.where(t139, t129, t133)
+    t148 = np.where(t139, t107, t119)
+    t149 = np.where(t139, t108, t120)
+    t150 = np.where(t139, t119, t107)
+    t151 = np.where(t139, t120, t108)
+    t152 = t125*t140 + t126*t141 + t127*t142
+    t153 = t140 - t125*t152
+    t154 = t141 - t126*t152
+    t155 = t142 - t127*t152
+    t156 = t153*t153 + t154*t154 + t155*t155
+    t157 = np.sqrt(t156)
+    t158 = t157 > t92
+    t159 = np.where(t158, 1.0/t157, 1.0)
+    t160 = np.where(t158, t159*t153, 0.0)
+    t161 = np.where(t158, t159*t154, 0.0)
+    t162 = np.where(t158, t159*t155, 0.0)
+    t163 = t146 + t152
+    t164 = np.where(t158, t157, 0.0)
+    t165 = t160*t143 + t161*t144 + t162*t145
+    t166 = t143 - t165*t160
+    t167 = t144 - t165*t161
+    t168 = t145 - t165*t162
+    t169 = t125*t166 + t126*t167 + t127*t168
+    t170 = t166 - t125*t169
+    t171 = t167 - t126*t169
+    t172 = t168 - t127*t169
+    t173 = t160*t170 + t161*t171 + t162*t172
+    t174 = t170 - t160*t173
+    t175 = t171 - t161*t173
+    t176 = t172 - t162*t173
+    t177 = t174*t174 + t175*t175 + t176*t176
+    t178 = np.sqrt(t177)
+    t179 = t178 > t92
+    t180 = np.where(t179, 1.0/t178, 1.0)
+    t181 = np.where(t179, t180*t174, 0.0)
+    t182 = np.where(t179, t180*t175, 0.0)
+    t183 = np.where(t179, t180*t176, 0.0)
+    t184 = t147 + t169
+    t185 = t165 + t173
+    t186 = np.where(t179, t178, 0.0)
+    t187 = t128*t117
+    t188 = t163*t148
+    t189 = t184*t150
+    t190 = t164*t148
+    t191 = t185*t150
+    t192 = t186*t150
+    t193 = t89*t89
+    t194 = t187*t187 + t188*t188 + t189*t189 + t193
+    t195 = np.sqrt(t194)
+    t196 = t195 > 0.0
+    t197 = np.where(t196, 1.0/t195, 1.0)
+    t198 = t197*t187
+    t199 = t197*t188
+    t200 = -t197*t189
+    t201 = t197*t89
+    t202 = t200*t191 - t199*t190
+    t203 = t202*t198
+    t204 = t190 + t202*t199
+    t205 = t191 - t202*t200
+    t206 = t202*t201
+    t207 = t198*t203 + t199*t204 - t200*t205 + t201*t206
+    t208 = t203 - t207*t198
+    t209 = t204 - t207*t199
+    t210 = t205 + t207*t200
+    t211 = t206 - t207*t201
+    t212 = t208*t208 + t209*t209 + t210*t210 + t211*t211 + t193
+    t213 = np.sqrt(t212)
+    t214 = t213 > 0.0
+    t215 = np.where(t214, 1.0/t213, 1.0)
+    t216 = t215*t208
+    t217 = t215*t209
+    t218 = t215*t210
+    t219 = t215*t211
+    t220 = t215*t89
+    t221 = t207 - t202
+    t222 = t200*t192
+    t223 = t222*t198
+    t224 = t222*t199
+    t225 = t192 - t222*t200
+    t226 = t222*t201
+    t227 = t216*t223 + t217*t224 + t218*t225 + t219*t226
+    t228 = t223 - t227*t216
+    t229 = t224 - t227*t217
+    t230 = t225 - t227*t218
+    t231 = t226 - t227*t219
+    t232 = t227*t220
+    t233 = t198*t228 + t199*t229 - t200*t230 + t201*t231
+    t234 = t228 - t233*t198
+    t235 = t229 - t233*t199
+    t236 = t230 + t233*t200
+    t237 = t231 - t233*t201
+    t238 = t216*t234 + t217*t235 + t218*t236 + t219*t237 - t220*t232
+    t239 = t234 - t238*t216
+    t240 = t235 - t238*t217
+    t241 = t236 - t238*t218
+    t242 = t237 - t238*t219
+    t243 = t232 + t238*t220
+    t244 = t239*t239 + t240*t240 + t241*t241 + t242*t242 + t243*t243 + t193
+    t245 = np.sqrt(t244)
+    t246 = t245 > 0.0
+    t247 = np.where(t246, 1.0/t245, 1.0)
+    t248 = t247*t239
+    t249 = t247*t240
+    t250 = t247*t241
+    t251 = t233 - t222
+    t252 = t227 + t238
+    t253 = t73*(t118*t198 - t151*t200 + t149*t199)
+    t254 = t73*(t118*t216 + t151*t218 + t149*t217)
+    t255 = t73*(t118*t248 + t151*t250 + t149*t249)
+    t256 = np.where(t246, t247*t255, 0.0)
+    t257 = np.where(t214, t215*(t254 - t252*t256), 0.0)
+    t258 = np.where(t196, t197*(t253 - t221*t257 - t251*t256), 0.0)
+    t259 = t125*t258 + t160*t257 + t181*t256
+    t260 = t126*t258 + t161*t257 + t182*t256
+    t261 = t127*t258 + t162*t257 + t183*t256
+    dq3[..., 0] = t259
+    dq3[..., 1] = t260
+    dq3[..., 2] = t261
 
 
 @_signature_errors
@@ -803,7 +942,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 163 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 313 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -853,7 +992,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t46 = t44*t39
     t49 = t44*(t27 + t29)
     t50 = t45*t46 + t43*(t49 + t43)
-    t51 = t50 > RANK_TOL*((t49 + 2.0*t43)*(t49 + 2.0*t43))
+    t51 = t50 > (RANK_TOL*RANK_TOL)*((t49 + 2.0*t43)*(t49 + 2.0*t43))
     t53 = t44*np.where(t51, 1.0/t50, 1.0)
     t54 = t43 + t45*(1.0 + t32*t32)
     t55 = t44*np.where(t54 > 0.0, 1.0/t54, 1.0)
@@ -881,7 +1020,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 89 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 90 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

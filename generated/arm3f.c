@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -24,7 +26,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x824ebe04UL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x0244d16bUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1059,7 +1061,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 50 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 31 add/sub, 51 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float *restrict q, float *restrict ang)
 {
@@ -1102,7 +1104,7 @@ static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float *restrict v, f
     const float t46 = (t28 ? v[1] : v[0]);
     const float t47 = t42*(t25 + t27);
     const float t48 = t43*t44 + t41*(t47 + t41);
-    const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+    const int t49 = t48 > (ARM3F_RANK_TOL*ARM3F_RANK_TOL)*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
     const float t50 = t45 + t46*t30;
     const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
     const float t52 = t41 + t43*(1.0f + t30*t30);
@@ -1150,7 +1152,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 59 add/sub, 98 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 123 add/sub, 185 mul, 1 neg, 7 div, 7 sqrt */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float *restrict q, float *restrict ang)
 {
@@ -1169,61 +1171,199 @@ static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float *restrict twi
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t25 = t9*t9 + t7*t7 + t5*t5;
-    const float t26 = t3*t5 + t9*t10 + t7*t8;
-    const float t27 = t3*t3 + t10*t10 + t8*t8;
-    const int t38 = lambda > 1.0f;
-    const float t39 = (t38 ? 1.0f/(lambda != 0.0f ? lambda : 1.0f) : 1.0f);
-    const float t40 = (t38 ? 1.0f : lambda);
-    const float t41 = t40*t40;
-    const float t42 = t39*t39;
-    const float t69 = t9 + t7 + t5;
-    const float t70 = t3 + t10 + t8;
-    const float t71 = 0.18903592f*t42;
-    const float t72 = 0.4347826f*t42;
-    const float t73 = 0.18903592f*t41;
-    const float t74 = t73 + t25*t71;
-    const float t75 = t26*t71;
-    const float t76 = t69*t72;
-    const float t77 = t73 + t27*t71;
-    const float t78 = t70*t72;
-    const float t79 = t41 + 3.0f*t42;
-    const float t80 = t72*twist[0];
-    const float t81 = t72*twist[1];
-    const float t82 = t42*twist[2];
-    const float t83 = t74 + t77 + t79;
-    const float t84 = t74*t80 + t75*t81 + t76*t82;
-    const float t85 = t75*t80 + t77*t81 + t78*t82;
-    const float t86 = t76*t80 + t78*t81 + t79*t82;
-    const float t87 = (t83 > 0.0f ? 1.0f/(t83*t83 != 0.0f ? t83*t83 : 1.0f) : 1.0f);
-    const float t88 = t84*t87;
-    const float t89 = t85*t87;
-    const float t90 = t86*t87;
-    const float t91 = t77*t79 - t78*t78;
-    const float t92 = t76*t78 - t75*t79;
-    const float t93 = t75*t78 - t76*t77;
-    const float t94 = t74*t79 - t76*t76;
-    const float t95 = t75*t76 - t74*t78;
-    const float t96 = t74*t77 - t75*t75;
-    const float t97 = t74*t91 + t75*t92 + t76*t93;
-    const float t98 = t91 + t94 + t96;
-    const int t99 = t97 > t98*t83*ARM3F_RANK_TOL;
-    const float t100 = t83*t83;
-    const int t101 = t98 > ARM3F_RANK_TOL*t100;
-    const float t102 = (t97 > 0.0f ? 1.0f/(t97 != 0.0f ? t97 : 1.0f) : 1.0f);
-    const float t103 = t74*t84 + t75*t85 + t76*t86;
-    const float t104 = t75*t84 + t77*t85 + t78*t86;
-    const float t105 = t76*t84 + t78*t85 + t79*t86;
-    const float t106 = (t98 > 0.0f ? 1.0f/(t98*t98 != 0.0f ? t98*t98 : 1.0f) : 1.0f);
-    const float t107 = t100 - t98;
-    const float t108 = (t101 ? (t99 ? t102*(t91*t80 + t92*t81 + t93*t82) : t106*(t84*t107 - t103*t83)) : t88);
-    const float t109 = (t101 ? (t99 ? t102*(t92*t80 + t94*t81 + t95*t82) : t106*(t85*t107 - t104*t83)) : t89);
-    const float t110 = (t101 ? (t99 ? t102*(t93*t80 + t95*t81 + t96*t82) : t106*(t86*t107 - t105*t83)) : t90);
-    const float t111 = 0.4347826f*t108;
-    const float t112 = 0.4347826f*t109;
-    dq3[0] = t110 + t111*t9 + t112*t10;
-    dq3[1] = t110 + t111*t7 + t112*t8;
-    dq3[2] = t110 + t3*t112 + t111*t5;
+    const float t69 = fabsf(lambda);
+    const float t70 = (t69 > 1.0f ? 1.0f/(t69 != 0.0f ? t69 : 1.0f) : 1.0f);
+    const float t71 = 0.4347826f*t9;
+    const float t72 = 0.4347826f*t7;
+    const float t73 = 0.4347826f*t5;
+    const float t74 = 0.4347826f*t10;
+    const float t75 = 0.4347826f*t8;
+    const float t76 = 0.4347826f*t3;
+    const float t77 = t71*t71;
+    const float t78 = t72*t72;
+    const float t79 = t73*t73;
+    const float t80 = t74*t74;
+    const float t81 = t75*t75;
+    const float t82 = t76*t76;
+    const float t83 = 3.0f + t77 + t78 + t79 + t80 + t81 + t82;
+    const float t84 = sqrtf(t83);
+    const float t85 = 2.3f*t70;
+    const float t86 = t69*t70;
+    const float t87 = t84*ARM3F_RANK_TOL;
+    const int t88 = t86 <= t87;
+    const float t89 = (t88 ? t87 : 0.0f);
+    const float t90 = (t88 ? t70 : t85);
+    const float t91 = (t88 ? 0.4347826f*twist[0] : twist[0]);
+    const float t92 = (t88 ? 0.4347826f*twist[1] : twist[1]);
+    const float t93 = t77 + t78 + t79;
+    const float t94 = t80 + t81 + t82;
+    const int t95 = 3.0f > t94;
+    const float t96 = (t95 ? 1.0f : t74);
+    const float t97 = (t95 ? 1.0f : t75);
+    const float t98 = (t95 ? 1.0f : t76);
+    const float t99 = (t95 ? t74 : 1.0f);
+    const float t100 = (t95 ? t75 : 1.0f);
+    const float t101 = (t95 ? t76 : 1.0f);
+    const float t102 = (t95 ? t70 : t90);
+    const float t103 = (t95 ? twist[2] : t92);
+    const float t104 = (t95 ? t90 : t70);
+    const float t105 = (t95 ? t92 : twist[2]);
+    const float t106 = (t95 ? 3.0f : t94);
+    const int t107 = t106 > t93;
+    const float t108 = (t107 ? t96 : t71);
+    const float t109 = (t107 ? t97 : t72);
+    const float t110 = (t107 ? t98 : t73);
+    const float t111 = (t107 ? t71 : t96);
+    const float t112 = (t107 ? t72 : t97);
+    const float t113 = (t107 ? t73 : t98);
+    const float t114 = (t107 ? t102 : t90);
+    const float t115 = (t107 ? t103 : t91);
+    const float t116 = (t107 ? t90 : t102);
+    const float t117 = (t107 ? t91 : t103);
+    const float t118 = t108*t108 + t109*t109 + t110*t110;
+    const float t119 = sqrtf(t118);
+    const int t120 = t119 > t89;
+    const float t121 = (t120 ? 1.0f/(t119 != 0.0f ? t119 : 1.0f) : 1.0f);
+    const float t122 = (t120 ? t121*t108 : 0.0f);
+    const float t123 = (t120 ? t121*t109 : 0.0f);
+    const float t124 = (t120 ? t121*t110 : 0.0f);
+    const float t125 = (t120 ? t119 : 0.0f);
+    const float t126 = t122*t111 + t123*t112 + t124*t113;
+    const float t127 = t111 - t126*t122;
+    const float t128 = t112 - t126*t123;
+    const float t129 = t113 - t126*t124;
+    const float t130 = t122*t99 + t123*t100 + t124*t101;
+    const float t131 = t99 - t130*t122;
+    const float t132 = t100 - t130*t123;
+    const float t133 = t101 - t130*t124;
+    const float t134 = t127*t127 + t128*t128 + t129*t129;
+    const float t135 = t131*t131 + t132*t132 + t133*t133;
+    const int t136 = t135 > t134;
+    const float t137 = (t136 ? t131 : t127);
+    const float t138 = (t136 ? t132 : t128);
+    const float t139 = (t136 ? t133 : t129);
+    const float t140 = (t136 ? t127 : t131);
+    const float t141 = (t136 ? t128 : t132);
+    const float t142 = (t136 ? t129 : t133);
+    const float t143 = (t136 ? t130 : t126);
+    const float t144 = (t136 ? t126 : t130);
+    const float t145 = (t136 ? t104 : t116);
+    const float t146 = (t136 ? t105 : t117);
+    const float t147 = (t136 ? t116 : t104);
+    const float t148 = (t136 ? t117 : t105);
+    const float t149 = t122*t137 + t123*t138 + t124*t139;
+    const float t150 = t137 - t122*t149;
+    const float t151 = t138 - t123*t149;
+    const float t152 = t139 - t124*t149;
+    const float t153 = t150*t150 + t151*t151 + t152*t152;
+    const float t154 = sqrtf(t153);
+    const int t155 = t154 > t89;
+    const float t156 = (t155 ? 1.0f/(t154 != 0.0f ? t154 : 1.0f) : 1.0f);
+    const float t157 = (t155 ? t156*t150 : 0.0f);
+    const float t158 = (t155 ? t156*t151 : 0.0f);
+    const float t159 = (t155 ? t156*t152 : 0.0f);
+    const float t160 = t143 + t149;
+    const float t161 = (t155 ? t154 : 0.0f);
+    const float t162 = t157*t140 + t158*t141 + t159*t142;
+    const float t163 = t140 - t162*t157;
+    const float t164 = t141 - t162*t158;
+    const float t165 = t142 - t162*t159;
+    const float t166 = t122*t163 + t123*t164 + t124*t165;
+    const float t167 = t163 - t122*t166;
+    const float t168 = t164 - t123*t166;
+    const float t169 = t165 - t124*t166;
+    const float t170 = t157*t167 + t158*t168 + t159*t169;
+    const float t171 = t167 - t157*t170;
+    const float t172 = t168 - t158*t170;
+    const float t173 = t169 - t159*t170;
+    const float t174 = t171*t171 + t172*t172 + t173*t173;
+    const float t175 = sqrtf(t174);
+    const int t176 = t175 > t89;
+    const float t177 = (t176 ? 1.0f/(t175 != 0.0f ? t175 : 1.0f) : 1.0f);
+    const float t178 = (t176 ? t177*t171 : 0.0f);
+    const float t179 = (t176 ? t177*t172 : 0.0f);
+    const float t180 = (t176 ? t177*t173 : 0.0f);
+    const float t181 = t144 + t166;
+    const float t182 = t162 + t170;
+    const float t183 = (t176 ? t175 : 0.0f);
+    const float t184 = t125*t114;
+    const float t185 = t160*t145;
+    const float t186 = t181*t147;
+    const float t187 = t161*t145;
+    const float t188 = t182*t147;
+    const float t189 = t183*t147;
+    const float t190 = t86*t86;
+    const float t191 = t184*t184 + t185*t185 + t186*t186 + t190;
+    const float t192 = sqrtf(t191);
+    const int t193 = t192 > 0.0f;
+    const float t194 = (t193 ? 1.0f/(t192 != 0.0f ? t192 : 1.0f) : 1.0f);
+    const float t195 = t194*t184;
+    const float t196 = t194*t185;
+    const float t197 = -t194*t186;
+    const float t198 = t194*t86;
+    const float t199 = t197*t188 - t196*t187;
+    const float t200 = t199*t195;
+    const float t201 = t187 + t199*t196;
+    const float t202 = t188 - t199*t197;
+    const float t203 = t199*t198;
+    const float t204 = t195*t200 + t196*t201 - t197*t202 + t198*t203;
+    const float t205 = t200 - t204*t195;
+    const float t206 = t201 - t204*t196;
+    const float t207 = t202 + t204*t197;
+    const float t208 = t203 - t204*t198;
+    const float t209 = t205*t205 + t206*t206 + t207*t207 + t208*t208 + t190;
+    const float t210 = sqrtf(t209);
+    const int t211 = t210 > 0.0f;
+    const float t212 = (t211 ? 1.0f/(t210 != 0.0f ? t210 : 1.0f) : 1.0f);
+    const float t213 = t212*t205;
+    const float t214 = t212*t206;
+    const float t215 = t212*t207;
+    const float t216 = t212*t208;
+    const float t217 = t212*t86;
+    const float t218 = t204 - t199;
+    const float t219 = t197*t189;
+    const float t220 = t219*t195;
+    const float t221 = t219*t196;
+    const float t222 = t189 - t219*t197;
+    const float t223 = t219*t198;
+    const float t224 = t213*t220 + t214*t221 + t215*t222 + t216*t223;
+    const float t225 = t220 - t224*t213;
+    const float t226 = t221 - t224*t214;
+    const float t227 = t222 - t224*t215;
+    const float t228 = t223 - t224*t216;
+    const float t229 = t224*t217;
+    const float t230 = t195*t225 + t196*t226 - t197*t227 + t198*t228;
+    const float t231 = t225 - t230*t195;
+    const float t232 = t226 - t230*t196;
+    const float t233 = t227 + t230*t197;
+    const float t234 = t228 - t230*t198;
+    const float t235 = t213*t231 + t214*t232 + t215*t233 + t216*t234 - t217*t229;
+    const float t236 = t231 - t235*t213;
+    const float t237 = t232 - t235*t214;
+    const float t238 = t233 - t235*t215;
+    const float t239 = t234 - t235*t216;
+    const float t240 = t229 + t235*t217;
+    const float t241 = t236*t236 + t237*t237 + t238*t238 + t239*t239 + t240*t240 + t190;
+    const float t242 = sqrtf(t241);
+    const int t243 = t242 > 0.0f;
+    const float t244 = (t243 ? 1.0f/(t242 != 0.0f ? t242 : 1.0f) : 1.0f);
+    const float t245 = t244*t236;
+    const float t246 = t244*t237;
+    const float t247 = t244*t238;
+    const float t248 = t230 - t219;
+    const float t249 = t224 + t235;
+    const float t250 = t70*(t115*t195 - t148*t197 + t146*t196);
+    const float t251 = t70*(t115*t213 + t148*t215 + t146*t214);
+    const float t252 = t70*(t115*t245 + t148*t247 + t146*t246);
+    const float t253 = (t243 ? t244*t252 : 0.0f);
+    const float t254 = (t211 ? t212*(t251 - t249*t253) : 0.0f);
+    const float t255 = (t193 ? t194*(t250 - t218*t254 - t248*t253) : 0.0f);
+    const float t256 = t122*t255 + t157*t254 + t178*t253;
+    dq3[0] = t256;
+    const float t257 = t123*t255 + t158*t254 + t179*t253;
+    dq3[1] = t257;
+    const float t258 = t124*t255 + t159*t254 + t180*t253;
+    dq3[2] = t258;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1259,7 +1399,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 50 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 36 add/sub, 51 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_ik_step_angles(const float *restrict q, float *restrict ang)
 {
@@ -1300,7 +1440,7 @@ static ARM3F_LIGHT void arm3f_ik_step_finish(const float *restrict q, const floa
     const float t44 = t42*t37;
     const float t47 = t42*(t25 + t27);
     const float t48 = t43*t44 + t41*(t47 + t41);
-    const int t49 = t48 > ARM3F_RANK_TOL*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
+    const int t49 = t48 > (ARM3F_RANK_TOL*ARM3F_RANK_TOL)*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
     const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
     const float t52 = t41 + t43*(1.0f + t30*t30);
     const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);

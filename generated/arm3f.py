@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[3 + i] = j_y(i) for joint i = 0..2; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0x824ebe04
+STAMP = 0x0244d16b
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -660,7 +662,7 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t46 = np.where(t28, v[..., 1], v[..., 0])
     t47 = t42*(t25 + t27)
     t48 = t43*t44 + t41*(t47 + t41)
-    t49 = t48 > RANK_TOL*((t47 + 2.0*t41)*(t47 + 2.0*t41))
+    t49 = t48 > (RANK_TOL*RANK_TOL)*((t47 + 2.0*t41)*(t47 + 2.0*t41))
     t50 = t45 + t46*t30
     t51 = t42*np.where(t49, 1.0/t48, 1.0)
     t52 = t41 + t43*(1.0 + t30*t30)
@@ -683,7 +685,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 82 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -709,61 +711,199 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t25 = t9*t9 + t7*t7 + t5*t5
-    t26 = t3*t5 + t9*t10 + t7*t8
-    t27 = t3*t3 + t10*t10 + t8*t8
-    t38 = lambda_ > 1.0
-    t39 = np.where(t38, 1.0/lambda_, 1.0)
-    t40 = np.where(t38, 1.0, lambda_)
-    t41 = t40*t40
-    t42 = t39*t39
-    t69 = t9 + t7 + t5
-    t70 = t3 + t10 + t8
-    t71 = 0.18903591682419663*t42
-    t72 = 0.4347826086956522*t42
-    t73 = 0.18903591682419663*t41
-    t74 = t73 + t25*t71
-    t75 = t26*t71
-    t76 = t69*t72
-    t77 = t73 + t27*t71
-    t78 = t70*t72
-    t79 = t41 + 3.0*t42
-    t80 = t72*twist[..., 0]
-    t81 = t72*twist[..., 1]
-    t82 = t42*twist[..., 2]
-    t83 = t74 + t77 + t79
-    t84 = t74*t80 + t75*t81 + t76*t82
-    t85 = t75*t80 + t77*t81 + t78*t82
-    t86 = t76*t80 + t78*t81 + t79*t82
-    t87 = np.where(t83 > 0.0, 1.0/(t83*t83), 1.0)
-    t88 = t84*t87
-    t89 = t85*t87
-    t90 = t86*t87
-    t91 = t77*t79 - t78*t78
-    t92 = t76*t78 - t75*t79
-    t93 = t75*t78 - t76*t77
-    t94 = t74*t79 - t76*t76
-    t95 = t75*t76 - t74*t78
-    t96 = t74*t77 - t75*t75
-    t97 = t74*t91 + t75*t92 + t76*t93
-    t98 = t91 + t94 + t96
-    t99 = t97 > t98*t83*RANK_TOL
-    t100 = t83*t83
-    t101 = t98 > RANK_TOL*t100
-    t102 = np.where(t97 > 0.0, 1.0/t97, 1.0)
-    t103 = t74*t84 + t75*t85 + t76*t86
-    t104 = t75*t84 + t77*t85 + t78*t86
-    t105 = t76*t84 + t78*t85 + t79*t86
-    t106 = np.where(t98 > 0.0, 1.0/(t98*t98), 1.0)
-    t107 = t100 - t98
-    t108 = np.where(t101, np.where(t99, t102*(t91*t80 + t92*t81 + t93*t82), t106*(t84*t107 - t103*t83)), t88)
-    t109 = np.where(t101, np.where(t99, t102*(t92*t80 + t94*t81 + t95*t82), t106*(t85*t107 - t104*t83)), t89)
-    t110 = np.where(t101, np.where(t99, t102*(t93*t80 + t95*t81 + t96*t82), t106*(t86*t107 - t105*t83)), t90)
-    t111 = 0.4347826086956522*t108
-    t112 = 0.4347826086956522*t109
-    dq3[..., 0] = t110 + t111*t9 + t112*t10
-    dq3[..., 1] = t110 + t111*t7 + t112*t8
-    dq3[..., 2] = t110 + t3*t112 + t111*t5
+    t69 = np.abs(lambda_)
+    t70 = np.where(t69 > 1.0, 1.0/t69, 1.0)
+    t71 = 0.4347826086956522*t9
+    t72 = 0.4347826086956522*t7
+    t73 = 0.4347826086956522*t5
+    t74 = 0.4347826086956522*t10
+    t75 = 0.4347826086956522*t8
+    t76 = 0.4347826086956522*t3
+    t77 = t71*t71
+    t78 = t72*t72
+    t79 = t73*t73
+    t80 = t74*t74
+    t81 = t75*t75
+    t82 = t76*t76
+    t83 = 3.0 + t77 + t78 + t79 + t80 + t81 + t82
+    t84 = np.sqrt(t83)
+    t85 = 2.3*t70
+    t86 = t69*t70
+    t87 = t84*RANK_TOL
+    t88 = t86 <= t87
+    t89 = np.where(t88, t87, 0.0)
+    t90 = np.where(t88, t70, t85)
+    t91 = np.where(t88, 0.4347826086956522*twist[..., 0], twist[..., 0])
+    t92 = np.where(t88, 0.4347826086956522*twist[..., 1], twist[..., 1])
+    t93 = t77 + t78 + t79
+    t94 = t80 + t81 + t82
+    t95 = 3.0 > t94
+    t96 = np.where(t95, 1.0, t74)
+    t97 = np.where(t95, 1.0, t75)
+    t98 = np.where(t95, 1.0, t76)
+    t99 = np.where(t95, t74, 1.0)
+    t100 = np.where(t95, t75, 1.0)
+    t101 = np.where(t95, t76, 1.0)
+    t102 = np.where(t95, t70, t90)
+    t103 = np.where(t95, twist[..., 2], t92)
+    t104 = np.where(t95, t90, t70)
+    t105 = np.where(t95, t92, twist[..., 2])
+    t106 = np.where(t95, 3.0, t94)
+    t107 = t106 > t93
+    t108 = np.where(t107, t96, t71)
+    t109 = np.where(t107, t97, t72)
+    t110 = np.where(t107, t98, t73)
+    t111 = np.where(t107, t71, t96)
+    t112 = np.where(t107, t72, t97)
+    t113 = np.where(t107, t73, t98)
+    t114 = np.where(t107, t102, t90)
+    t115 = np.where(t107, t103, t91)
+    t116 = np.where(t107, t90, t102)
+    t117 = np.where(t107, t91, t103)
+    t118 = t108*t108 + t109*t109 + t110*t110
+    t119 = np.sqrt(t118)
+    t120 = t119 > t89
+    t121 = np.where(t120, 1.0/t119, 1.0)
+    t122 = np.where(t120, t121*t108, 0.0)
+    t123 = np.where(t120, t121*t109, 0.0)
+    t124 = np.where(t120, t121*t110, 0.0)
+    t125 = np.where(t120, t119, 0.0)
+    t126 = t122*t111 + t123*t112 + t124*t113
+    t127 = t111 - t126*t122
+    t128 = t112 - t126*t123
+    t129 = t113 - t126*t124
+    t130 = t122*t99 + t123*t100 + t124*t101
+    t131 = t99 - t130*t122
+    t132 = t100 - t130*t123
+    t133 = t101 - t130*t124
+    t134 = t127*t127 + t128*t128 + t129*t129
+    t135 = t131*t131 + t132*t132 + t133*t133
+    t136 = t135 > t134
+    t137 = np.where(t136, t131, t127)
+    t138 = np.where(t136, t132, t128)
+    t139 = np.where(t136, t133, t129)
+    t140 = np.where(t136, t127, t131)
+    t141 = np.where(t136, t128, t132)
+    t142 = np.where(t136, t129, t133)
+    t143 = np.where(t136, t130, t126)
+    t144 = np.where(t136, t126, t130)
+    t145 = np.where(t136, t104, t116)
+    t146 = np.where(t136, t105, t117)
+    t147 = np.where(t136, t116, t104)
+    t148 = np.where(t136, t117, t105)
+    t149 = t122*t137 + t123*t138 + t124*t139
+    t150 = t137 - t122*t149
+    t151 = t138 - t123*t149
+    t152 = t139 - t124*t149
+    t153 = t150*t150 + t151*t151 + t152*t152
+    t154 = np.sqrt(t153)
+    t155 = t154 > t89
+    t156 = np.where(t155, 1.0/t154, 1.0)
+    t157 = np.where(t155, t156*t150, 0.0)
+    t158 = np.where(t155, t156*t151, 0.0)
+    t159 = np.where(t155, t156*t152, 0.0)
+    t160 = t143 + t149
+    t161 = np.where(t155, t154, 0.0)
+    t162 = t157*t140 + t158*t141 + t159*t142
+    t163 = t140 - t162*t157
+    t164 = t141 - t162*t158
+    t165 = t142 - t162*t159
+    t166 = t122*t163 + t123*t164 + t124*t165
+    t167 = t163 - t122*t166
+    t168 = t164 - t123*t166
+    t169 = t165 - t124*t166
+    t170 = t157*t167 + t158*t168 + t159*t169
+    t171 = t167 - t157*t170
+    t172 = t168 - t158*t170
+    t173 = t169 - t159*t170
+    t174 = t171*t171 + t172*t172 + t173*t173
+    t175 = np.sqrt(t174)
+    t176 = t175 > t89
+    t177 = np.where(t176, 1.0/t175, 1.0)
+    t178 = np.where(t176, t177*t171, 0.0)
+    t179 = np.where(t176, t177*t172, 0.0)
+    t180 = np.where(t176, t177*t173, 0.0)
+    t181 = t144 + t166
+    t182 = t162 + t170
+    t183 = np.where(t176, t175, 0.0)
+    t184 = t125*t114
+    t185 = t160*t145
+    t186 = t181*t147
+    t187 = t161*t145
+    t188 = t182*t147
+    t189 = t183*t147
+    t190 = t86*t86
+    t191 = t184*t184 + t185*t185 + t186*t186 + t190
+    t192 = np.sqrt(t191)
+    t193 = t192 > 0.0
+    t194 = np.where(t193, 1.0/t192, 1.0)
+    t195 = t194*t184
+    t196 = t194*t185
+    t197 = -t194*t186
+    t198 = t194*t86
+    t199 = t197*t188 - t196*t187
+    t200 = t199*t195
+    t201 = t187 + t199*t196
+    t202 = t188 - t199*t197
+    t203 = t199*t198
+    t204 = t195*t200 + t196*t201 - t197*t202 + t198*t203
+    t205 = t200 - t204*t195
+    t206 = t201 - t204*t196
+    t207 = t202 + t204*t197
+    t208 = t203 - t204*t198
+    t209 = t205*t205 + t206*t206 + t207*t207 + t208*t208 + t190
+    t210 = np.sqrt(t209)
+    t211 = t210 > 0.0
+    t212 = np.where(t211, 1.0/t210, 1.0)
+    t213 = t212*t205
+    t214 = t212*t206
+    t215 = t212*t207
+    t216 = t212*t208
+    t217 = t212*t86
+    t218 = t204 - t199
+    t219 = t197*t189
+    t220 = t219*t195
+    t221 = t219*t196
+    t222 = t189 - t219*t197
+    t223 = t219*t198
+    t224 = t213*t220 + t214*t221 + t215*t222 + t216*t223
+    t225 = t220 - t224*t213
+    t226 = t221 - t224*t214
+    t227 = t222 - t224*t215
+    t228 = t223 - t224*t216
+    t229 = t224*t217
+    t230 = t195*t225 + t196*t226 - t197*t227 + t198*t228
+    t231 = t225 - t230*t195
+    t232 = t226 - t230*t196
+    t233 = t227 + t230*t197
+    t234 = t228 - t230*t198
+    t235 = t213*t231 + t214*t232 + t215*t233 + t216*t234 - t217*t229
+    t236 = t231 - t235*t213
+    t237 = t232 - t235*t214
+    t238 = t233 - t235*t215
+    t239 = t234 - t235*t216
+    t240 = t229 + t235*t217
+    t241 = t236*t236 + t237*t237 + t238*t238 + t239*t239 + t240*t240 + t190
+    t242 = np.sqrt(t241)
+    t243 = t242 > 0.0
+    t244 = np.where(t243, 1.0/t242, 1.0)
+    t245 = t244*t236
+    t246 = t244*t237
+    t247 = t244*t238
+    t248 = t230 - t219
+    t249 = t224 + t235
+    t250 = t70*(t115*t195 - t148*t197 + t146*t196)
+    t251 = t70*(t115*t213 + t148*t215 + t146*t214)
+    t252 = t70*(t115*t245 + t148*t247 + t146*t246)
+    t253 = np.where(t243, t244*t252, 0.0)
+    t254 = np.where(t211, t212*(t251 - t249*t253), 0.0)
+    t255 = np.where(t193, t194*(t250 - t218*t254 - t248*t253), 0.0)
+    t256 = t122*t255 + t157*t254 + t178*t253
+    t257 = t123*t255 + t158*t254 + t179*t253
+    t258 = t124*t255 + t159*t254 + t180*t253
+    dq3[..., 0] = t256
+    dq3[..., 1] = t257
+    dq3[..., 2] = t258
 
 
 @_signature_errors
@@ -774,7 +914,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 157 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 309 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -822,7 +962,7 @@ def _ik_step_core(q, target, lambda_, q_next):
     t44 = t42*t37
     t47 = t42*(t25 + t27)
     t48 = t43*t44 + t41*(t47 + t41)
-    t49 = t48 > RANK_TOL*((t47 + 2.0*t41)*(t47 + 2.0*t41))
+    t49 = t48 > (RANK_TOL*RANK_TOL)*((t47 + 2.0*t41)*(t47 + 2.0*t41))
     t51 = t42*np.where(t49, 1.0/t48, 1.0)
     t52 = t41 + t43*(1.0 + t30*t30)
     t53 = t42*np.where(t52 > 0.0, 1.0/t52, 1.0)
@@ -849,7 +989,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 86 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 87 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

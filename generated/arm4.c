@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -24,7 +26,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xdc1dd18eUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0xf68829d5UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1309,7 +1311,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 40 add/sub, 61 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 40 add/sub, 62 mul, 1 neg, 4 div */
 
 static ARM4_LIGHT void arm4_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1361,7 +1363,7 @@ static ARM4_LIGHT void arm4_inverse_velocity_finish(const double *restrict v, co
     const double t60 = (t40 ? v[1] : v[0]);
     const double t61 = t56*(t37 + t39);
     const double t62 = t57*t58 + t55*(t61 + t55);
-    const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+    const int t63 = t62 > (ARM4_RANK_TOL*ARM4_RANK_TOL)*((t61 + 2.0*t55)*(t61 + 2.0*t55));
     const double t64 = t59 + t60*t42;
     const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
     const double t66 = t55 + t57*(1.0 + t42*t42);
@@ -1407,7 +1409,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 72 add/sub, 108 mul, 1 neg, 5 div */
+/* operations: 4 sin, 4 cos, 152 add/sub, 215 mul, 2 neg, 9 div, 7 sqrt */
 
 static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1426,71 +1428,228 @@ static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double *restrict twis
     const double t7 = sn[0]*l[0];
     const double t8 = sn[1]*l[1];
     const double t9 = sn[2]*l[2];
-    const double t10 = sn[3]*l[3];
-    const double t12 = -t10 - t9;
+    const double t10 = -sn[3]*l[3];
+    const double t12 = t10 - t9;
     const double t13 = t5 + t6;
     const double t14 = t12 - t8;
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10;
-    const double t38 = t16*t17 - t6*t10 + t14*t15 + t12*t13;
-    const double t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13;
-    const int t52 = lambda > 1.0;
-    const double t53 = (t52 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-    const double t54 = (t52 ? 1.0 : lambda);
-    const double t55 = t54*t54;
-    const double t56 = t53*t53;
     const double t85 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-    const double t86 = t85*t85;
-    const double t87 = t16 + t14 + t12 - t10;
-    const double t88 = t6 + t17 + t15 + t13;
-    const double t89 = t86*t56;
-    const double t90 = t85*t56;
-    const double t91 = t86*t55;
-    const double t92 = t37*t89 + t91;
-    const double t93 = t38*t89;
-    const double t94 = t87*t90;
-    const double t95 = t39*t89 + t91;
-    const double t96 = t88*t90;
-    const double t97 = t55 + 4.0*t56;
-    const double t98 = t90*twist[0];
-    const double t99 = t90*twist[1];
-    const double t100 = t56*twist[2];
-    const double t101 = t92 + t95 + t97;
-    const double t102 = t92*t98 + t93*t99 + t94*t100;
-    const double t103 = t93*t98 + t95*t99 + t96*t100;
-    const double t104 = t94*t98 + t96*t99 + t97*t100;
-    const double t105 = (t101 > 0.0 ? 1.0/(t101*t101 != 0.0 ? t101*t101 : 1.0) : 1.0);
-    const double t106 = t102*t105;
-    const double t107 = t103*t105;
-    const double t108 = t104*t105;
-    const double t109 = t95*t97 - t96*t96;
-    const double t110 = t94*t96 - t93*t97;
-    const double t111 = t93*t96 - t94*t95;
-    const double t112 = t92*t97 - t94*t94;
-    const double t113 = t93*t94 - t92*t96;
-    const double t114 = t92*t95 - t93*t93;
-    const double t115 = t92*t109 + t93*t110 + t94*t111;
-    const double t116 = t109 + t112 + t114;
-    const int t117 = t115 > t116*t101*ARM4_RANK_TOL;
-    const double t118 = t101*t101;
-    const int t119 = t116 > ARM4_RANK_TOL*t118;
-    const double t120 = (t115 > 0.0 ? 1.0/(t115 != 0.0 ? t115 : 1.0) : 1.0);
-    const double t121 = t92*t102 + t93*t103 + t94*t104;
-    const double t122 = t93*t102 + t95*t103 + t96*t104;
-    const double t123 = t94*t102 + t96*t103 + t97*t104;
-    const double t124 = (t116 > 0.0 ? 1.0/(t116*t116 != 0.0 ? t116*t116 : 1.0) : 1.0);
-    const double t125 = t118 - t116;
-    const double t126 = (t119 ? (t117 ? t120*(t109*t98 + t110*t99 + t111*t100) : t124*(t102*t125 - t121*t101)) : t106);
-    const double t127 = (t119 ? (t117 ? t120*(t110*t98 + t112*t99 + t113*t100) : t124*(t103*t125 - t122*t101)) : t107);
-    const double t128 = (t119 ? (t117 ? t120*(t111*t98 + t113*t99 + t114*t100) : t124*(t104*t125 - t123*t101)) : t108);
-    const double t129 = t85*t126;
-    const double t130 = t85*t127;
-    dq3[0] = t128 + t129*t16 + t130*t17;
-    dq3[1] = t128 + t129*t14 + t130*t15;
-    dq3[2] = t128 + t129*t12 + t130*t13;
-    dq3[3] = t128 + t6*t130 - t129*t10;
+    const double t86 = fabs(lambda);
+    const double t87 = (t86 > 1.0 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
+    const double t88 = t85*t16;
+    const double t89 = t85*t14;
+    const double t90 = t85*t12;
+    const double t91 = t85*t10;
+    const double t92 = t85*t17;
+    const double t93 = t85*t15;
+    const double t94 = t85*t13;
+    const double t95 = t6*t85;
+    const double t96 = t88*t88;
+    const double t97 = t89*t89;
+    const double t98 = t90*t90;
+    const double t99 = t91*t91;
+    const double t100 = t92*t92;
+    const double t101 = t93*t93;
+    const double t102 = t94*t94;
+    const double t103 = t95*t95;
+    const double t104 = ((4.0 + t96) + (t97 + t98)) + ((t99 + t100) + (t101 + (t102 + t103)));
+    const double t105 = sqrt(t104);
+    const double t106 = t87/(t85 != 0.0 ? t85 : 1.0);
+    const double t107 = t86*t87;
+    const double t108 = t105*ARM4_RANK_TOL;
+    const int t109 = t107 <= t108;
+    const double t110 = (t109 ? t108 : 0.0);
+    const double t111 = (t109 ? t87 : t106);
+    const double t112 = (t109 ? t85*twist[0] : twist[0]);
+    const double t113 = (t109 ? t85*twist[1] : twist[1]);
+    const double t114 = t96 + t97 + t98 + t99;
+    const double t115 = t100 + t101 + t102 + t103;
+    const int t116 = 4.0 > t115;
+    const double t117 = (t116 ? 1.0 : t92);
+    const double t118 = (t116 ? 1.0 : t93);
+    const double t119 = (t116 ? 1.0 : t94);
+    const double t120 = (t116 ? 1.0 : t95);
+    const double t121 = (t116 ? t92 : 1.0);
+    const double t122 = (t116 ? t93 : 1.0);
+    const double t123 = (t116 ? t94 : 1.0);
+    const double t124 = (t116 ? t95 : 1.0);
+    const double t125 = (t116 ? t87 : t111);
+    const double t126 = (t116 ? twist[2] : t113);
+    const double t127 = (t116 ? t111 : t87);
+    const double t128 = (t116 ? t113 : twist[2]);
+    const double t129 = (t116 ? 4.0 : t115);
+    const int t130 = t129 > t114;
+    const double t131 = (t130 ? t117 : t88);
+    const double t132 = (t130 ? t118 : t89);
+    const double t133 = (t130 ? t119 : t90);
+    const double t134 = (t130 ? t120 : t91);
+    const double t135 = (t130 ? t88 : t117);
+    const double t136 = (t130 ? t89 : t118);
+    const double t137 = (t130 ? t90 : t119);
+    const double t138 = (t130 ? t91 : t120);
+    const double t139 = (t130 ? t125 : t111);
+    const double t140 = (t130 ? t126 : t112);
+    const double t141 = (t130 ? t111 : t125);
+    const double t142 = (t130 ? t112 : t126);
+    const double t143 = t131*t131 + t132*t132 + t133*t133 + t134*t134;
+    const double t144 = sqrt(t143);
+    const int t145 = t144 > t110;
+    const double t146 = (t145 ? 1.0/(t144 != 0.0 ? t144 : 1.0) : 1.0);
+    const double t147 = (t145 ? t146*t131 : 0.0);
+    const double t148 = (t145 ? t146*t132 : 0.0);
+    const double t149 = (t145 ? t146*t133 : 0.0);
+    const double t150 = (t145 ? t146*t134 : 0.0);
+    const double t151 = (t145 ? t144 : 0.0);
+    const double t152 = t147*t135 + t148*t136 + t149*t137 + t150*t138;
+    const double t153 = t135 - t152*t147;
+    const double t154 = t136 - t152*t148;
+    const double t155 = t137 - t152*t149;
+    const double t156 = t138 - t152*t150;
+    const double t157 = t147*t121 + t148*t122 + t149*t123 + t150*t124;
+    const double t158 = t121 - t157*t147;
+    const double t159 = t122 - t157*t148;
+    const double t160 = t123 - t157*t149;
+    const double t161 = t124 - t157*t150;
+    const double t162 = t153*t153 + t154*t154 + t155*t155 + t156*t156;
+    const double t163 = t158*t158 + t159*t159 + t160*t160 + t161*t161;
+    const int t164 = t163 > t162;
+    const double t165 = (t164 ? t158 : t153);
+    const double t166 = (t164 ? t159 : t154);
+    const double t167 = (t164 ? t160 : t155);
+    const double t168 = (t164 ? t161 : t156);
+    const double t169 = (t164 ? t153 : t158);
+    const double t170 = (t164 ? t154 : t159);
+    const double t171 = (t164 ? t155 : t160);
+    const double t172 = (t164 ? t156 : t161);
+    const double t173 = (t164 ? t157 : t152);
+    const double t174 = (t164 ? t152 : t157);
+    const double t175 = (t164 ? t127 : t141);
+    const double t176 = (t164 ? t128 : t142);
+    const double t177 = (t164 ? t141 : t127);
+    const double t178 = (t164 ? t142 : t128);
+    const double t179 = t147*t165 + t148*t166 + t149*t167 + t150*t168;
+    const double t180 = t165 - t147*t179;
+    const double t181 = t166 - t148*t179;
+    const double t182 = t167 - t149*t179;
+    const double t183 = t168 - t150*t179;
+    const double t184 = t180*t180 + t181*t181 + t182*t182 + t183*t183;
+    const double t185 = sqrt(t184);
+    const int t186 = t185 > t110;
+    const double t187 = (t186 ? 1.0/(t185 != 0.0 ? t185 : 1.0) : 1.0);
+    const double t188 = (t186 ? t187*t180 : 0.0);
+    const double t189 = (t186 ? t187*t181 : 0.0);
+    const double t190 = (t186 ? t187*t182 : 0.0);
+    const double t191 = (t186 ? t187*t183 : 0.0);
+    const double t192 = t173 + t179;
+    const double t193 = (t186 ? t185 : 0.0);
+    const double t194 = t188*t169 + t189*t170 + t190*t171 + t191*t172;
+    const double t195 = t169 - t194*t188;
+    const double t196 = t170 - t194*t189;
+    const double t197 = t171 - t194*t190;
+    const double t198 = t172 - t194*t191;
+    const double t199 = t147*t195 + t148*t196 + t149*t197 + t150*t198;
+    const double t200 = t195 - t147*t199;
+    const double t201 = t196 - t148*t199;
+    const double t202 = t197 - t149*t199;
+    const double t203 = t198 - t150*t199;
+    const double t204 = t188*t200 + t189*t201 + t190*t202 + t191*t203;
+    const double t205 = t200 - t188*t204;
+    const double t206 = t201 - t189*t204;
+    const double t207 = t202 - t190*t204;
+    const double t208 = t203 - t191*t204;
+    const double t209 = t205*t205 + t206*t206 + t207*t207 + t208*t208;
+    const double t210 = sqrt(t209);
+    const int t211 = t210 > t110;
+    const double t212 = (t211 ? 1.0/(t210 != 0.0 ? t210 : 1.0) : 1.0);
+    const double t213 = (t211 ? t212*t205 : 0.0);
+    const double t214 = (t211 ? t212*t206 : 0.0);
+    const double t215 = (t211 ? t212*t207 : 0.0);
+    const double t216 = (t211 ? t212*t208 : 0.0);
+    const double t217 = t174 + t199;
+    const double t218 = t194 + t204;
+    const double t219 = (t211 ? t210 : 0.0);
+    const double t220 = t151*t139;
+    const double t221 = t192*t175;
+    const double t222 = t217*t177;
+    const double t223 = t193*t175;
+    const double t224 = t218*t177;
+    const double t225 = t219*t177;
+    const double t226 = t107*t107;
+    const double t227 = t220*t220 + t221*t221 + t222*t222 + t226;
+    const double t228 = sqrt(t227);
+    const int t229 = t228 > 0.0;
+    const double t230 = (t229 ? 1.0/(t228 != 0.0 ? t228 : 1.0) : 1.0);
+    const double t231 = t230*t220;
+    const double t232 = t230*t221;
+    const double t233 = -t230*t222;
+    const double t234 = t230*t107;
+    const double t235 = t233*t224 - t232*t223;
+    const double t236 = t235*t231;
+    const double t237 = t223 + t235*t232;
+    const double t238 = t224 - t235*t233;
+    const double t239 = t235*t234;
+    const double t240 = t231*t236 + t232*t237 - t233*t238 + t234*t239;
+    const double t241 = t236 - t240*t231;
+    const double t242 = t237 - t240*t232;
+    const double t243 = t238 + t240*t233;
+    const double t244 = t239 - t240*t234;
+    const double t245 = t241*t241 + t242*t242 + t243*t243 + t244*t244 + t226;
+    const double t246 = sqrt(t245);
+    const int t247 = t246 > 0.0;
+    const double t248 = (t247 ? 1.0/(t246 != 0.0 ? t246 : 1.0) : 1.0);
+    const double t249 = t248*t241;
+    const double t250 = t248*t242;
+    const double t251 = t248*t243;
+    const double t252 = t248*t244;
+    const double t253 = t248*t107;
+    const double t254 = t240 - t235;
+    const double t255 = t233*t225;
+    const double t256 = t255*t231;
+    const double t257 = t255*t232;
+    const double t258 = t225 - t255*t233;
+    const double t259 = t255*t234;
+    const double t260 = t249*t256 + t250*t257 + t251*t258 + t252*t259;
+    const double t261 = t256 - t260*t249;
+    const double t262 = t257 - t260*t250;
+    const double t263 = t258 - t260*t251;
+    const double t264 = t259 - t260*t252;
+    const double t265 = t260*t253;
+    const double t266 = t231*t261 + t232*t262 - t233*t263 + t234*t264;
+    const double t267 = t261 - t266*t231;
+    const double t268 = t262 - t266*t232;
+    const double t269 = t263 + t266*t233;
+    const double t270 = t264 - t266*t234;
+    const double t271 = t249*t267 + t250*t268 + t251*t269 + t252*t270 - t253*t265;
+    const double t272 = t267 - t271*t249;
+    const double t273 = t268 - t271*t250;
+    const double t274 = t269 - t271*t251;
+    const double t275 = t270 - t271*t252;
+    const double t276 = t265 + t271*t253;
+    const double t277 = t272*t272 + t273*t273 + t274*t274 + t275*t275 + t276*t276 + t226;
+    const double t278 = sqrt(t277);
+    const int t279 = t278 > 0.0;
+    const double t280 = (t279 ? 1.0/(t278 != 0.0 ? t278 : 1.0) : 1.0);
+    const double t281 = t280*t272;
+    const double t282 = t280*t273;
+    const double t283 = t280*t274;
+    const double t284 = t266 - t255;
+    const double t285 = t260 + t271;
+    const double t286 = t87*(t140*t231 - t178*t233 + t176*t232);
+    const double t287 = t87*(t140*t249 + t178*t251 + t176*t250);
+    const double t288 = t87*(t140*t281 + t178*t283 + t176*t282);
+    const double t289 = (t279 ? t280*t288 : 0.0);
+    const double t290 = (t247 ? t248*(t287 - t285*t289) : 0.0);
+    const double t291 = (t229 ? t230*(t286 - t254*t290 - t284*t289) : 0.0);
+    const double t292 = t147*t291 + t188*t290 + t213*t289;
+    dq3[0] = t292;
+    const double t293 = t148*t291 + t189*t290 + t214*t289;
+    dq3[1] = t293;
+    const double t294 = t149*t291 + t190*t290 + t215*t289;
+    dq3[2] = t294;
+    const double t295 = t150*t291 + t191*t290 + t216*t289;
+    dq3[3] = t295;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
@@ -1522,7 +1681,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 46 add/sub, 61 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 46 add/sub, 62 mul, 1 neg, 4 div */
 
 static ARM4_LIGHT void arm4_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1572,7 +1731,7 @@ static ARM4_LIGHT void arm4_ik_step_finish(const double *restrict q, const doubl
     const double t58 = t56*t51;
     const double t61 = t56*(t37 + t39);
     const double t62 = t57*t58 + t55*(t61 + t55);
-    const int t63 = t62 > ARM4_RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55));
+    const int t63 = t62 > (ARM4_RANK_TOL*ARM4_RANK_TOL)*((t61 + 2.0*t55)*(t61 + 2.0*t55));
     const double t65 = t56*(t63 ? 1.0/(t62 != 0.0 ? t62 : 1.0) : 1.0);
     const double t66 = t55 + t57*(1.0 + t42*t42);
     const double t67 = t56*(t66 > 0.0 ? 1.0/(t66 != 0.0 ? t66 : 1.0) : 1.0);

@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[4 + i] = j_y(i) for joint i = 0..3; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xdc1dd18e
+STAMP = 0xf68829d5
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -751,7 +753,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t60 = np.where(t40, v[..., 1], v[..., 0])
     t61 = t56*(t37 + t39)
     t62 = t57*t58 + t55*(t61 + t55)
-    t63 = t62 > RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55))
+    t63 = t62 > (RANK_TOL*RANK_TOL)*((t61 + 2.0*t55)*(t61 + 2.0*t55))
     t64 = t59 + t60*t42
     t65 = t56*np.where(t63, 1.0/t62, 1.0)
     t66 = t55 + t57*(1.0 + t42*t42)
@@ -777,7 +779,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 4).
-    Operations: 4 sin, 4 cos, 102 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 103 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -803,71 +805,228 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t7 = sn[..., 0]*l[..., 0]
     t8 = sn[..., 1]*l[..., 1]
     t9 = sn[..., 2]*l[..., 2]
-    t10 = sn[..., 3]*l[..., 3]
-    t12 = -t10 - t9
+    t10 = -sn[..., 3]*l[..., 3]
+    t12 = t10 - t9
     t13 = t5 + t6
     t14 = t12 - t8
     t15 = t4 + t13
     t16 = t14 - t7
     t17 = t3 + t15
-    t37 = t16*t16 + t14*t14 + t12*t12 + t10*t10
-    t38 = t16*t17 - t6*t10 + t14*t15 + t12*t13
-    t39 = t6*t6 + t17*t17 + t15*t15 + t13*t13
-    t52 = lambda_ > 1.0
-    t53 = np.where(t52, 1.0/lambda_, 1.0)
-    t54 = np.where(t52, 1.0, lambda_)
-    t55 = t54*t54
-    t56 = t53*t53
     t85 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3])
-    t86 = t85*t85
-    t87 = t16 + t14 + t12 - t10
-    t88 = t6 + t17 + t15 + t13
-    t89 = t86*t56
-    t90 = t85*t56
-    t91 = t86*t55
-    t92 = t37*t89 + t91
-    t93 = t38*t89
-    t94 = t87*t90
-    t95 = t39*t89 + t91
-    t96 = t88*t90
-    t97 = t55 + 4.0*t56
-    t98 = t90*twist[..., 0]
-    t99 = t90*twist[..., 1]
-    t100 = t56*twist[..., 2]
-    t101 = t92 + t95 + t97
-    t102 = t92*t98 + t93*t99 + t94*t100
-    t103 = t93*t98 + t95*t99 + t96*t100
-    t104 = t94*t98 + t96*t99 + t97*t100
-    t105 = np.where(t101 > 0.0, 1.0/(t101*t101), 1.0)
-    t106 = t102*t105
-    t107 = t103*t105
-    t108 = t104*t105
-    t109 = t95*t97 - t96*t96
-    t110 = t94*t96 - t93*t97
-    t111 = t93*t96 - t94*t95
-    t112 = t92*t97 - t94*t94
-    t113 = t93*t94 - t92*t96
-    t114 = t92*t95 - t93*t93
-    t115 = t92*t109 + t93*t110 + t94*t111
-    t116 = t109 + t112 + t114
-    t117 = t115 > t116*t101*RANK_TOL
-    t118 = t101*t101
-    t119 = t116 > RANK_TOL*t118
-    t120 = np.where(t115 > 0.0, 1.0/t115, 1.0)
-    t121 = t92*t102 + t93*t103 + t94*t104
-    t122 = t93*t102 + t95*t103 + t96*t104
-    t123 = t94*t102 + t96*t103 + t97*t104
-    t124 = np.where(t116 > 0.0, 1.0/(t116*t116), 1.0)
-    t125 = t118 - t116
-    t126 = np.where(t119, np.where(t117, t120*(t109*t98 + t110*t99 + t111*t100), t124*(t102*t125 - t121*t101)), t106)
-    t127 = np.where(t119, np.where(t117, t120*(t110*t98 + t112*t99 + t113*t100), t124*(t103*t125 - t122*t101)), t107)
-    t128 = np.where(t119, np.where(t117, t120*(t111*t98 + t113*t99 + t114*t100), t124*(t104*t125 - t123*t101)), t108)
-    t129 = t85*t126
-    t130 = t85*t127
-    dq3[..., 0] = t128 + t129*t16 + t130*t17
-    dq3[..., 1] = t128 + t129*t14 + t130*t15
-    dq3[..., 2] = t128 + t129*t12 + t130*t13
-    dq3[..., 3] = t128 + t6*t130 - t129*t10
+    t86 = np.abs(lambda_)
+    t87 = np.where(t86 > 1.0, 1.0/t86, 1.0)
+    t88 = t85*t16
+    t89 = t85*t14
+    t90 = t85*t12
+    t91 = t85*t10
+    t92 = t85*t17
+    t93 = t85*t15
+    t94 = t85*t13
+    t95 = t6*t85
+    t96 = t88*t88
+    t97 = t89*t89
+    t98 = t90*t90
+    t99 = t91*t91
+    t100 = t92*t92
+    t101 = t93*t93
+    t102 = t94*t94
+    t103 = t95*t95
+    t104 = ((4.0 + t96) + (t97 + t98)) + ((t99 + t100) + (t101 + (t102 + t103)))
+    t105 = np.sqrt(t104)
+    t106 = t87/t85
+    t107 = t86*t87
+    t108 = t105*RANK_TOL
+    t109 = t107 <= t108
+    t110 = np.where(t109, t108, 0.0)
+    t111 = np.where(t109, t87, t106)
+    t112 = np.where(t109, t85*twist[..., 0], twist[..., 0])
+    t113 = np.where(t109, t85*twist[..., 1], twist[..., 1])
+    t114 = t96 + t97 + t98 + t99
+    t115 = t100 + t101 + t102 + t103
+    t116 = 4.0 > t115
+    t117 = np.where(t116, 1.0, t92)
+    t118 = np.where(t116, 1.0, t93)
+    t119 = np.where(t116, 1.0, t94)
+    t120 = np.where(t116, 1.0, t95)
+    t121 = np.where(t116, t92, 1.0)
+    t122 = np.where(t116, t93, 1.0)
+    t123 = np.where(t116, t94, 1.0)
+    t124 = np.where(t116, t95, 1.0)
+    t125 = np.where(t116, t87, t111)
+    t126 = np.where(t116, twist[..., 2], t113)
+    t127 = np.where(t116, t111, t87)
+    t128 = np.where(t116, t113, twist[..., 2])
+    t129 = np.where(t116, 4.0, t115)
+    t130 = t129 > t114
+    t131 = np.where(t130, t117, t88)
+    t132 = np.where(t130, t118, t89)
+    t133 = np.where(t130, t119, t90)
+    t134 = np.where(t130, t120, t91)
+    t135 = np.where(t130, t88, t117)
+    t136 = np.where(t130, t89, t118)
+    t137 = np.where(t130, t90, t119)
+    t138 = np.where(t130, t91, t120)
+    t139 = np.where(t130, t125, t111)
+    t140 = np.where(t130, t126, t112)
+    t141 = np.where(t130, t111, t125)
+    t142 = np.where(t130, t112, t126)
+    t143 = t131*t131 + t132*t132 + t133*t133 + t134*t134
+    t144 = np.sqrt(t143)
+    t145 = t144 > t110
+    t146 = np.where(t145, 1.0/t144, 1.0)
+    t147 = np.where(t145, t146*t131, 0.0)
+    t148 = np.where(t145, t146*t132, 0.0)
+    t149 = np.where(t145, t146*t133, 0.0)
+    t150 = np.where(t145, t146*t134, 0.0)
+    t151 = np.where(t145, t144, 0.0)
+    t152 = t147*t135 + t148*t136 + t149*t137 + t150*t138
+    t153 = t135 - t152*t147
+    t154 = t136 - t152*t148
+    t155 = t137 - t152*t149
+    t156 = t138 - t152*t150
+    t157 = t147*t121 + t148*t122 + t149*t123 + t150*t124
+    t158 = t121 - t157*t147
+    t159 = t122 - t157*t148
+    t160 = t123 - t157*t149
+    t161 = t124 - t157*t150
+    t162 = t153*t153 + t154*t154 + t155*t155 + t156*t156
+    t163 = t158*t158 + t159*t159 + t160*t160 + t161*t161
+    t164 = t163 > t162
+    t165 = np.where(t164, t158, t153)
+    t166 = np.where(t164, t159, t154)
+    t167 = np.where(t164, t160, t155)
+    t168 = np.where(t164, t161, t156)
+    t169 = np.where(t164, t153, t158)
+    t170 = np.where(t164, t154, t159)
+    t171 = np.where(t164, t155, t160)
+    t172 = np.where(t164, t156, t161)
+    t173 = np.where(t164, t157, t152)
+    t174 = np.where(t164, t152, t157)
+    t175 = np.where(t164, t127, t141)
+    t176 = np.where(t164, t128, t142)
+    t177 = np.where(t164, t141, t127)
+    t178 = np.where(t164, t142, t128)
+    t179 = t147*t165 + t148*t166 + t149*t167 + t150*t168
+    t180 = t165 - t147*t179
+    t181 = t166 - t148*t179
+    t182 = t167 - t149*t179
+    t183 = t168 - t150*t179
+    t184 = t180*t180 + t181*t181 + t182*t182 + t183*t183
+    t185 = np.sqrt(t184)
+    t186 = t185 > t110
+    t187 = np.where(t186, 1.0/t185, 1.0)
+    t188 = np.where(t186, t187*t180, 0.0)
+    t189 = np.where(t186, t187*t181, 0.0)
+    t190 = np.where(t186, t187*t182, 0.0)
+    t191 = np.where(t186, t187*t183, 0.0)
+    t192 = t173 + t179
+    t193 = np.where(t186, t185, 0.0)
+    t194 = t188*t169 + t189*t170 + t190*t171 + t191*t172
+    t195 = t169 - t194*t188
+    t196 = t170 - t194*t189
+    t197 = t171 - t194*t190
+    t198 = t172 - t194*t191
+    t199 = t147*t195 + t148*t196 + t149*t197 + t150*t198
+    t200 = t195 - t147*t199
+    t201 = t196 - t148*t199
+    t202 = t197 - t149*t199
+    t203 = t198 - t150*t199
+    t204 = t188*t200 + t189*t201 + t190*t202 + t191*t203
+    t205 = t200 - t188*t204
+    t206 = t201 - t189*t204
+    t207 = t202 - t190*t204
+    t208 = t203 - t191*t204
+    t209 = t205*t205 + t206*t206 + t207*t207 + t208*t208
+    t210 = np.sqrt(t209)
+    t211 = t210 > t110
+    t212 = np.where(t211, 1.0/t210, 1.0)
+    t213 = np.where(t211, t212*t205, 0.0)
+    t214 = np.where(t211, t212*t206, 0.0)
+    t215 = np.where(t211, t212*t207, 0.0)
+    t216 = np.where(t211, t212*t208, 0.0)
+    t217 = t174 + t199
+    t218 = t194 + t204
+    t219 = np.where(t211, t210, 0.0)
+    t220 = t151*t139
+    t221 = t192*t175
+    t222 = t217*t177
+    t223 = t193*t175
+    t224 = t218*t177
+    t225 = t219*t177
+    t226 = t107*t107
+    t227 = t220*t220 + t221*t221 + t222*t222 + t226
+    t228 = np.sqrt(t227)
+    t229 = t228 > 0.0
+    t230 = np.where(t229, 1.0/t228, 1.0)
+    t231 = t230*t220
+    t232 = t230*t221
+    t233 = -t230*t222
+    t234 = t230*t107
+    t235 = t233*t224 - t232*t223
+    t236 = t235*t231
+    t237 = t223 + t235*t232
+    t238 = t224 - t235*t233
+    t239 = t235*t234
+    t240 = t231*t236 + t232*t237 - t233*t238 + t234*t239
+    t241 = t236 - t240*t231
+    t242 = t237 - t240*t232
+    t243 = t238 + t240*t233
+    t244 = t239 - t240*t234
+    t245 = t241*t241 + t242*t242 + t243*t243 + t244*t244 + t226
+    t246 = np.sqrt(t245)
+    t247 = t246 > 0.0
+    t248 = np.where(t247, 1.0/t246, 1.0)
+    t249 = t248*t241
+    t250 = t248*t242
+    t251 = t248*t243
+    t252 = t248*t244
+    t253 = t248*t107
+    t254 = t240 - t235
+    t255 = t233*t225
+    t256 = t255*t231
+    t257 = t255*t232
+    t258 = t225 - t255*t233
+    t259 = t255*t234
+    t260 = t249*t256 + t250*t257 + t251*t258 + t252*t259
+    t261 = t256 - t260*t249
+    t262 = t257 - t260*t250
+    t263 = t258 - t260*t251
+    t264 = t259 - t260*t252
+    t265 = t260*t253
+    t266 = t231*t261 + t232*t262 - t233*t263 + t234*t264
+    t267 = t261 - t266*t231
+    t268 = t262 - t266*t232
+    t269 = t263 + t266*t233
+    t270 = t264 - t266*t234
+    t271 = t249*t267 + t250*t268 + t251*t269 + t252*t270 - t253*t265
+    t272 = t267 - t271*t249
+    t273 = t268 - t271*t250
+    t274 = t269 - t271*t251
+    t275 = t270 - t271*t252
+    t276 = t265 + t271*t253
+    t277 = t272*t272 + t273*t273 + t274*t274 + t275*t275 + t276*t276 + t226
+    t278 = np.sqrt(t277)
+    t279 = t278 > 0.0
+    t280 = np.where(t279, 1.0/t278, 1.0)
+    t281 = t280*t272
+    t282 = t280*t273
+    t283 = t280*t274
+    t284 = t266 - t255
+    t285 = t260 + t271
+    t286 = t87*(t140*t231 - t178*t233 + t176*t232)
+    t287 = t87*(t140*t249 + t178*t251 + t176*t250)
+    t288 = t87*(t140*t281 + t178*t283 + t176*t282)
+    t289 = np.where(t279, t280*t288, 0.0)
+    t290 = np.where(t247, t248*(t287 - t285*t289), 0.0)
+    t291 = np.where(t229, t230*(t286 - t254*t290 - t284*t289), 0.0)
+    t292 = t147*t291 + t188*t290 + t213*t289
+    t293 = t148*t291 + t189*t290 + t214*t289
+    t294 = t149*t291 + t190*t290 + t215*t289
+    t295 = t150*t291 + t191*t290 + t216*t289
+    dq3[..., 0] = t292
+    dq3[..., 1] = t293
+    dq3[..., 2] = t294
+    dq3[..., 3] = t295
 
 
 @_signature_errors
@@ -879,7 +1038,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 4).
-    Operations: 4 sin, 4 cos, 181 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 369 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (4, 3, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -936,7 +1095,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t58 = t56*t51
     t61 = t56*(t37 + t39)
     t62 = t57*t58 + t55*(t61 + t55)
-    t63 = t62 > RANK_TOL*((t61 + 2.0*t55)*(t61 + 2.0*t55))
+    t63 = t62 > (RANK_TOL*RANK_TOL)*((t61 + 2.0*t55)*(t61 + 2.0*t55))
     t65 = t56*np.where(t63, 1.0/t62, 1.0)
     t66 = t55 + t57*(1.0 + t42*t42)
     t67 = t56*np.where(t66 > 0.0, 1.0/t66, 1.0)
@@ -966,7 +1125,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 4), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 4).
-    Operations: 4 sin, 4 cos, 108 add/sub/mul/neg.
+    Operations: 4 sin, 4 cos, 109 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (4, 2, 4, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

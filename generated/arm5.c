@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -24,7 +26,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xd414e9f5UL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xd1480dcaUL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -1418,7 +1420,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 5 sin, 5 cos, 49 add/sub, 70 mul, 1 neg, 4 div */
+/* operations: 5 sin, 5 cos, 49 add/sub, 71 mul, 1 neg, 4 div */
 
 static ARM5_LIGHT void arm5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1477,7 +1479,7 @@ static ARM5_LIGHT void arm5_inverse_velocity_finish(const double *restrict v, co
     const double t72 = (t50 ? v[1] : v[0]);
     const double t73 = t68*(t47 + t49);
     const double t74 = t69*t70 + t67*(t73 + t67);
-    const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+    const int t75 = t74 > (ARM5_RANK_TOL*ARM5_RANK_TOL)*((t73 + 2.0*t67)*(t73 + 2.0*t67));
     const double t76 = t71 + t72*t52;
     const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
     const double t78 = t67 + t69*(1.0 + t52*t52);
@@ -1529,7 +1531,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 5 sin, 5 cos, 83 add/sub, 115 mul, 1 neg, 5 div */
+/* operations: 5 sin, 5 cos, 179 add/sub, 244 mul, 2 neg, 9 div, 7 sqrt */
 
 static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1551,8 +1553,8 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double *restrict twis
     const double t10 = sn[1]*l[1];
     const double t11 = sn[2]*l[2];
     const double t12 = sn[3]*l[3];
-    const double t13 = sn[4]*l[4];
-    const double t15 = -t13 - t12;
+    const double t13 = -sn[4]*l[4];
+    const double t15 = t13 - t12;
     const double t16 = t7 + t8;
     const double t17 = t15 - t11;
     const double t18 = t6 + t16;
@@ -1560,65 +1562,242 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double *restrict twis
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13;
-    const double t48 = t21*t22 - t8*t13 + t19*t20 + t17*t18 + t15*t16;
-    const double t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const int t64 = lambda > 1.0;
-    const double t65 = (t64 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-    const double t66 = (t64 ? 1.0 : lambda);
-    const double t67 = t66*t66;
-    const double t68 = t65*t65;
     const double t99 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
-    const double t100 = t99*t99;
-    const double t101 = t21 + t19 + t17 + t15 - t13;
-    const double t102 = t8 + t22 + t20 + t18 + t16;
-    const double t103 = t100*t68;
-    const double t104 = t99*t68;
-    const double t105 = t100*t67;
-    const double t106 = t47*t103 + t105;
-    const double t107 = t48*t103;
-    const double t108 = t101*t104;
-    const double t109 = t49*t103 + t105;
-    const double t110 = t102*t104;
-    const double t111 = t67 + 5.0*t68;
-    const double t112 = t104*twist[0];
-    const double t113 = t104*twist[1];
-    const double t114 = t68*twist[2];
-    const double t115 = t106 + t109 + t111;
-    const double t116 = t106*t112 + t107*t113 + t108*t114;
-    const double t117 = t107*t112 + t109*t113 + t110*t114;
-    const double t118 = t108*t112 + t110*t113 + t111*t114;
-    const double t119 = (t115 > 0.0 ? 1.0/(t115*t115 != 0.0 ? t115*t115 : 1.0) : 1.0);
-    const double t120 = t116*t119;
-    const double t121 = t117*t119;
-    const double t122 = t118*t119;
-    const double t123 = t109*t111 - t110*t110;
-    const double t124 = t108*t110 - t107*t111;
-    const double t125 = t107*t110 - t108*t109;
-    const double t126 = t106*t111 - t108*t108;
-    const double t127 = t107*t108 - t106*t110;
-    const double t128 = t106*t109 - t107*t107;
-    const double t129 = t106*t123 + t107*t124 + t108*t125;
-    const double t130 = t123 + t126 + t128;
-    const int t131 = t129 > t130*t115*ARM5_RANK_TOL;
-    const double t132 = t115*t115;
-    const int t133 = t130 > ARM5_RANK_TOL*t132;
-    const double t134 = (t129 > 0.0 ? 1.0/(t129 != 0.0 ? t129 : 1.0) : 1.0);
-    const double t135 = t106*t116 + t107*t117 + t108*t118;
-    const double t136 = t107*t116 + t109*t117 + t110*t118;
-    const double t137 = t108*t116 + t110*t117 + t111*t118;
-    const double t138 = (t130 > 0.0 ? 1.0/(t130*t130 != 0.0 ? t130*t130 : 1.0) : 1.0);
-    const double t139 = t132 - t130;
-    const double t140 = (t133 ? (t131 ? t134*(t123*t112 + t124*t113 + t125*t114) : t138*(t116*t139 - t135*t115)) : t120);
-    const double t141 = (t133 ? (t131 ? t134*(t124*t112 + t126*t113 + t127*t114) : t138*(t117*t139 - t136*t115)) : t121);
-    const double t142 = (t133 ? (t131 ? t134*(t125*t112 + t127*t113 + t128*t114) : t138*(t118*t139 - t137*t115)) : t122);
-    const double t143 = t99*t140;
-    const double t144 = t99*t141;
-    dq3[0] = t142 + t143*t21 + t144*t22;
-    dq3[1] = t142 + t143*t19 + t144*t20;
-    dq3[2] = t142 + t143*t17 + t144*t18;
-    dq3[3] = t142 + t143*t15 + t144*t16;
-    dq3[4] = t142 + t8*t144 - t143*t13;
+    const double t100 = fabs(lambda);
+    const double t101 = (t100 > 1.0 ? 1.0/(t100 != 0.0 ? t100 : 1.0) : 1.0);
+    const double t102 = t99*t21;
+    const double t103 = t99*t19;
+    const double t104 = t99*t17;
+    const double t105 = t99*t15;
+    const double t106 = t99*t13;
+    const double t107 = t99*t22;
+    const double t108 = t99*t20;
+    const double t109 = t99*t18;
+    const double t110 = t99*t16;
+    const double t111 = t8*t99;
+    const double t112 = t102*t102;
+    const double t113 = t103*t103;
+    const double t114 = t104*t104;
+    const double t115 = t105*t105;
+    const double t116 = t106*t106;
+    const double t117 = t107*t107;
+    const double t118 = t108*t108;
+    const double t119 = t109*t109;
+    const double t120 = t110*t110;
+    const double t121 = t111*t111;
+    const double t122 = ((5.0 + t112) + (t113 + (t114 + t115))) + ((t116 + (t117 + t118)) + (t119 + (t120 + t121)));
+    const double t123 = sqrt(t122);
+    const double t124 = t101/(t99 != 0.0 ? t99 : 1.0);
+    const double t125 = t100*t101;
+    const double t126 = t123*ARM5_RANK_TOL;
+    const int t127 = t125 <= t126;
+    const double t128 = (t127 ? t126 : 0.0);
+    const double t129 = (t127 ? t101 : t124);
+    const double t130 = (t127 ? t99*twist[0] : twist[0]);
+    const double t131 = (t127 ? t99*twist[1] : twist[1]);
+    const double t132 = t112 + t113 + t114 + t115 + t116;
+    const double t133 = t117 + t118 + t119 + t120 + t121;
+    const int t134 = 5.0 > t133;
+    const double t135 = (t134 ? 1.0 : t107);
+    const double t136 = (t134 ? 1.0 : t108);
+    const double t137 = (t134 ? 1.0 : t109);
+    const double t138 = (t134 ? 1.0 : t110);
+    const double t139 = (t134 ? 1.0 : t111);
+    const double t140 = (t134 ? t107 : 1.0);
+    const double t141 = (t134 ? t108 : 1.0);
+    const double t142 = (t134 ? t109 : 1.0);
+    const double t143 = (t134 ? t110 : 1.0);
+    const double t144 = (t134 ? t111 : 1.0);
+    const double t145 = (t134 ? t101 : t129);
+    const double t146 = (t134 ? twist[2] : t131);
+    const double t147 = (t134 ? t129 : t101);
+    const double t148 = (t134 ? t131 : twist[2]);
+    const double t149 = (t134 ? 5.0 : t133);
+    const int t150 = t149 > t132;
+    const double t151 = (t150 ? t135 : t102);
+    const double t152 = (t150 ? t136 : t103);
+    const double t153 = (t150 ? t137 : t104);
+    const double t154 = (t150 ? t138 : t105);
+    const double t155 = (t150 ? t139 : t106);
+    const double t156 = (t150 ? t102 : t135);
+    const double t157 = (t150 ? t103 : t136);
+    const double t158 = (t150 ? t104 : t137);
+    const double t159 = (t150 ? t105 : t138);
+    const double t160 = (t150 ? t106 : t139);
+    const double t161 = (t150 ? t145 : t129);
+    const double t162 = (t150 ? t146 : t130);
+    const double t163 = (t150 ? t129 : t145);
+    const double t164 = (t150 ? t130 : t146);
+    const double t165 = t151*t151 + t152*t152 + t153*t153 + t154*t154 + t155*t155;
+    const double t166 = sqrt(t165);
+    const int t167 = t166 > t128;
+    const double t168 = (t167 ? 1.0/(t166 != 0.0 ? t166 : 1.0) : 1.0);
+    const double t169 = (t167 ? t168*t151 : 0.0);
+    const double t170 = (t167 ? t168*t152 : 0.0);
+    const double t171 = (t167 ? t168*t153 : 0.0);
+    const double t172 = (t167 ? t168*t154 : 0.0);
+    const double t173 = (t167 ? t168*t155 : 0.0);
+    const double t174 = (t167 ? t166 : 0.0);
+    const double t175 = t169*t156 + t170*t157 + t171*t158 + t172*t159 + t173*t160;
+    const double t176 = t156 - t175*t169;
+    const double t177 = t157 - t175*t170;
+    const double t178 = t158 - t175*t171;
+    const double t179 = t159 - t175*t172;
+    const double t180 = t160 - t175*t173;
+    const double t181 = t169*t140 + t170*t141 + t171*t142 + t172*t143 + t173*t144;
+    const double t182 = t140 - t181*t169;
+    const double t183 = t141 - t181*t170;
+    const double t184 = t142 - t181*t171;
+    const double t185 = t143 - t181*t172;
+    const double t186 = t144 - t181*t173;
+    const double t187 = t176*t176 + t177*t177 + t178*t178 + t179*t179 + t180*t180;
+    const double t188 = t182*t182 + t183*t183 + t184*t184 + t185*t185 + t186*t186;
+    const int t189 = t188 > t187;
+    const double t190 = (t189 ? t182 : t176);
+    const double t191 = (t189 ? t183 : t177);
+    const double t192 = (t189 ? t184 : t178);
+    const double t193 = (t189 ? t185 : t179);
+    const double t194 = (t189 ? t186 : t180);
+    const double t195 = (t189 ? t176 : t182);
+    const double t196 = (t189 ? t177 : t183);
+    const double t197 = (t189 ? t178 : t184);
+    const double t198 = (t189 ? t179 : t185);
+    const double t199 = (t189 ? t180 : t186);
+    const double t200 = (t189 ? t181 : t175);
+    const double t201 = (t189 ? t175 : t181);
+    const double t202 = (t189 ? t147 : t163);
+    const double t203 = (t189 ? t148 : t164);
+    const double t204 = (t189 ? t163 : t147);
+    const double t205 = (t189 ? t164 : t148);
+    const double t206 = t169*t190 + t170*t191 + t171*t192 + t172*t193 + t173*t194;
+    const double t207 = t190 - t169*t206;
+    const double t208 = t191 - t170*t206;
+    const double t209 = t192 - t171*t206;
+    const double t210 = t193 - t172*t206;
+    const double t211 = t194 - t173*t206;
+    const double t212 = t207*t207 + t208*t208 + t209*t209 + t210*t210 + t211*t211;
+    const double t213 = sqrt(t212);
+    const int t214 = t213 > t128;
+    const double t215 = (t214 ? 1.0/(t213 != 0.0 ? t213 : 1.0) : 1.0);
+    const double t216 = (t214 ? t215*t207 : 0.0);
+    const double t217 = (t214 ? t215*t208 : 0.0);
+    const double t218 = (t214 ? t215*t209 : 0.0);
+    const double t219 = (t214 ? t215*t210 : 0.0);
+    const double t220 = (t214 ? t215*t211 : 0.0);
+    const double t221 = t200 + t206;
+    const double t222 = (t214 ? t213 : 0.0);
+    const double t223 = t216*t195 + t217*t196 + t218*t197 + t219*t198 + t220*t199;
+    const double t224 = t195 - t223*t216;
+    const double t225 = t196 - t223*t217;
+    const double t226 = t197 - t223*t218;
+    const double t227 = t198 - t223*t219;
+    const double t228 = t199 - t223*t220;
+    const double t229 = t169*t224 + t170*t225 + t171*t226 + t172*t227 + t173*t228;
+    const double t230 = t224 - t169*t229;
+    const double t231 = t225 - t170*t229;
+    const double t232 = t226 - t171*t229;
+    const double t233 = t227 - t172*t229;
+    const double t234 = t228 - t173*t229;
+    const double t235 = t216*t230 + t217*t231 + t218*t232 + t219*t233 + t220*t234;
+    const double t236 = t230 - t216*t235;
+    const double t237 = t231 - t217*t235;
+    const double t238 = t232 - t218*t235;
+    const double t239 = t233 - t219*t235;
+    const double t240 = t234 - t220*t235;
+    const double t241 = t236*t236 + t237*t237 + t238*t238 + t239*t239 + t240*t240;
+    const double t242 = sqrt(t241);
+    const int t243 = t242 > t128;
+    const double t244 = (t243 ? 1.0/(t242 != 0.0 ? t242 : 1.0) : 1.0);
+    const double t245 = (t243 ? t244*t236 : 0.0);
+    const double t246 = (t243 ? t244*t237 : 0.0);
+    const double t247 = (t243 ? t244*t238 : 0.0);
+    const double t248 = (t243 ? t244*t239 : 0.0);
+    const double t249 = (t243 ? t244*t240 : 0.0);
+    const double t250 = t201 + t229;
+    const double t251 = t223 + t235;
+    const double t252 = (t243 ? t242 : 0.0);
+    const double t253 = t174*t161;
+    const double t254 = t221*t202;
+    const double t255 = t250*t204;
+    const double t256 = t222*t202;
+    const double t257 = t251*t204;
+    const double t258 = t252*t204;
+    const double t259 = t125*t125;
+    const double t260 = t253*t253 + t254*t254 + t255*t255 + t259;
+    const double t261 = sqrt(t260);
+    const int t262 = t261 > 0.0;
+    const double t263 = (t262 ? 1.0/(t261 != 0.0 ? t261 : 1.0) : 1.0);
+    const double t264 = t263*t253;
+    const double t265 = t263*t254;
+    const double t266 = -t263*t255;
+    const double t267 = t263*t125;
+    const double t268 = t266*t257 - t265*t256;
+    const double t269 = t268*t264;
+    const double t270 = t256 + t268*t265;
+    const double t271 = t257 - t268*t266;
+    const double t272 = t268*t267;
+    const double t273 = t264*t269 + t265*t270 - t266*t271 + t267*t272;
+    const double t274 = t269 - t273*t264;
+    const double t275 = t270 - t273*t265;
+    const double t276 = t271 + t273*t266;
+    const double t277 = t272 - t273*t267;
+    const double t278 = t274*t274 + t275*t275 + t276*t276 + t277*t277 + t259;
+    const double t279 = sqrt(t278);
+    const int t280 = t279 > 0.0;
+    const double t281 = (t280 ? 1.0/(t279 != 0.0 ? t279 : 1.0) : 1.0);
+    const double t282 = t281*t274;
+    const double t283 = t281*t275;
+    const double t284 = t281*t276;
+    const double t285 = t281*t277;
+    const double t286 = t281*t125;
+    const double t287 = t273 - t268;
+    const double t288 = t266*t258;
+    const double t289 = t288*t264;
+    const double t290 = t288*t265;
+    const double t291 = t258 - t288*t266;
+    const double t292 = t288*t267;
+    const double t293 = t282*t289 + t283*t290 + t284*t291 + t285*t292;
+    const double t294 = t289 - t293*t282;
+    const double t295 = t290 - t293*t283;
+    const double t296 = t291 - t293*t284;
+    const double t297 = t292 - t293*t285;
+    const double t298 = t293*t286;
+    const double t299 = t264*t294 + t265*t295 - t266*t296 + t267*t297;
+    const double t300 = t294 - t299*t264;
+    const double t301 = t295 - t299*t265;
+    const double t302 = t296 + t299*t266;
+    const double t303 = t297 - t299*t267;
+    const double t304 = t282*t300 + t283*t301 + t284*t302 + t285*t303 - t286*t298;
+    const double t305 = t300 - t304*t282;
+    const double t306 = t301 - t304*t283;
+    const double t307 = t302 - t304*t284;
+    const double t308 = t303 - t304*t285;
+    const double t309 = t298 + t304*t286;
+    const double t310 = t305*t305 + t306*t306 + t307*t307 + t308*t308 + t309*t309 + t259;
+    const double t311 = sqrt(t310);
+    const int t312 = t311 > 0.0;
+    const double t313 = (t312 ? 1.0/(t311 != 0.0 ? t311 : 1.0) : 1.0);
+    const double t314 = t313*t305;
+    const double t315 = t313*t306;
+    const double t316 = t313*t307;
+    const double t317 = t299 - t288;
+    const double t318 = t293 + t304;
+    const double t319 = t101*(t162*t264 - t205*t266 + t203*t265);
+    const double t320 = t101*(t162*t282 + t205*t284 + t203*t283);
+    const double t321 = t101*(t162*t314 + t205*t316 + t203*t315);
+    const double t322 = (t312 ? t313*t321 : 0.0);
+    const double t323 = (t280 ? t281*(t320 - t318*t322) : 0.0);
+    const double t324 = (t262 ? t263*(t319 - t287*t323 - t317*t322) : 0.0);
+    const double t325 = t169*t324 + t216*t323 + t245*t322;
+    dq3[0] = t325;
+    const double t326 = t170*t324 + t217*t323 + t246*t322;
+    dq3[1] = t326;
+    const double t327 = t171*t324 + t218*t323 + t247*t322;
+    dq3[2] = t327;
+    const double t328 = t172*t324 + t219*t323 + t248*t322;
+    dq3[3] = t328;
+    const double t329 = t173*t324 + t220*t323 + t249*t322;
+    dq3[4] = t329;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5])
@@ -1654,7 +1833,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 5 sin, 5 cos, 56 add/sub, 70 mul, 1 neg, 4 div */
+/* operations: 5 sin, 5 cos, 56 add/sub, 71 mul, 1 neg, 4 div */
 
 static ARM5_LIGHT void arm5_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1711,7 +1890,7 @@ static ARM5_LIGHT void arm5_ik_step_finish(const double *restrict q, const doubl
     const double t70 = t68*t63;
     const double t73 = t68*(t47 + t49);
     const double t74 = t69*t70 + t67*(t73 + t67);
-    const int t75 = t74 > ARM5_RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67));
+    const int t75 = t74 > (ARM5_RANK_TOL*ARM5_RANK_TOL)*((t73 + 2.0*t67)*(t73 + 2.0*t67));
     const double t77 = t68*(t75 ? 1.0/(t74 != 0.0 ? t74 : 1.0) : 1.0);
     const double t78 = t67 + t69*(1.0 + t52*t52);
     const double t79 = t68*(t78 > 0.0 ? 1.0/(t78 != 0.0 ? t78 : 1.0) : 1.0);

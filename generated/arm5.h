@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -54,7 +56,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0xd414e9f5UL
+#define ARM5_STAMP 0xd1480dcaUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -127,12 +129,12 @@ void arm5_inverse_velocity(const double q[5], const double v[2], const double l[
  * Stack: at most 15 KB. */
 void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, const double *l, double lambda, double *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 1616 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 3168 bytes. */
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5]);
 
 /* The same for m configurations stored one after another (element k of
  * configuration j at [j*size + k]); shared by all: l, lambda.
- * Stack: at most 15 KB. */
+ * Stack: at most 17 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
 /* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 1504 bytes. */

@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[5 + i] = j_y(i) for joint i = 0..4; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xd414e9f5
+STAMP = 0xd1480dca
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -819,7 +821,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t72 = np.where(t50, v[..., 1], v[..., 0])
     t73 = t68*(t47 + t49)
     t74 = t69*t70 + t67*(t73 + t67)
-    t75 = t74 > RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67))
+    t75 = t74 > (RANK_TOL*RANK_TOL)*((t73 + 2.0*t67)*(t73 + 2.0*t67))
     t76 = t71 + t72*t52
     t77 = t68*np.where(t75, 1.0/t74, 1.0)
     t78 = t67 + t69*(1.0 + t52*t52)
@@ -847,7 +849,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 5).
-    Operations: 5 sin, 5 cos, 120 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 121 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -876,8 +878,8 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t10 = sn[..., 1]*l[..., 1]
     t11 = sn[..., 2]*l[..., 2]
     t12 = sn[..., 3]*l[..., 3]
-    t13 = sn[..., 4]*l[..., 4]
-    t15 = -t13 - t12
+    t13 = -sn[..., 4]*l[..., 4]
+    t15 = t13 - t12
     t16 = t7 + t8
     t17 = t15 - t11
     t18 = t6 + t16
@@ -885,65 +887,242 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t20 = t5 + t18
     t21 = t19 - t9
     t22 = t4 + t20
-    t47 = t21*t21 + t19*t19 + t17*t17 + t15*t15 + t13*t13
-    t48 = t21*t22 - t8*t13 + t19*t20 + t17*t18 + t15*t16
-    t49 = t8*t8 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t64 = lambda_ > 1.0
-    t65 = np.where(t64, 1.0/lambda_, 1.0)
-    t66 = np.where(t64, 1.0, lambda_)
-    t67 = t66*t66
-    t68 = t65*t65
     t99 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4])
-    t100 = t99*t99
-    t101 = t21 + t19 + t17 + t15 - t13
-    t102 = t8 + t22 + t20 + t18 + t16
-    t103 = t100*t68
-    t104 = t99*t68
-    t105 = t100*t67
-    t106 = t47*t103 + t105
-    t107 = t48*t103
-    t108 = t101*t104
-    t109 = t49*t103 + t105
-    t110 = t102*t104
-    t111 = t67 + 5.0*t68
-    t112 = t104*twist[..., 0]
-    t113 = t104*twist[..., 1]
-    t114 = t68*twist[..., 2]
-    t115 = t106 + t109 + t111
-    t116 = t106*t112 + t107*t113 + t108*t114
-    t117 = t107*t112 + t109*t113 + t110*t114
-    t118 = t108*t112 + t110*t113 + t111*t114
-    t119 = np.where(t115 > 0.0, 1.0/(t115*t115), 1.0)
-    t120 = t116*t119
-    t121 = t117*t119
-    t122 = t118*t119
-    t123 = t109*t111 - t110*t110
-    t124 = t108*t110 - t107*t111
-    t125 = t107*t110 - t108*t109
-    t126 = t106*t111 - t108*t108
-    t127 = t107*t108 - t106*t110
-    t128 = t106*t109 - t107*t107
-    t129 = t106*t123 + t107*t124 + t108*t125
-    t130 = t123 + t126 + t128
-    t131 = t129 > t130*t115*RANK_TOL
-    t132 = t115*t115
-    t133 = t130 > RANK_TOL*t132
-    t134 = np.where(t129 > 0.0, 1.0/t129, 1.0)
-    t135 = t106*t116 + t107*t117 + t108*t118
-    t136 = t107*t116 + t109*t117 + t110*t118
-    t137 = t108*t116 + t110*t117 + t111*t118
-    t138 = np.where(t130 > 0.0, 1.0/(t130*t130), 1.0)
-    t139 = t132 - t130
-    t140 = np.where(t133, np.where(t131, t134*(t123*t112 + t124*t113 + t125*t114), t138*(t116*t139 - t135*t115)), t120)
-    t141 = np.where(t133, np.where(t131, t134*(t124*t112 + t126*t113 + t127*t114), t138*(t117*t139 - t136*t115)), t121)
-    t142 = np.where(t133, np.where(t131, t134*(t125*t112 + t127*t113 + t128*t114), t138*(t118*t139 - t137*t115)), t122)
-    t143 = t99*t140
-    t144 = t99*t141
-    dq3[..., 0] = t142 + t143*t21 + t144*t22
-    dq3[..., 1] = t142 + t143*t19 + t144*t20
-    dq3[..., 2] = t142 + t143*t17 + t144*t18
-    dq3[..., 3] = t142 + t143*t15 + t144*t16
-    dq3[..., 4] = t142 + t8*t144 - t143*t13
+    t100 = np.abs(lambda_)
+    t101 = np.where(t100 > 1.0, 1.0/t100, 1.0)
+    t102 = t99*t21
+    t103 = t99*t19
+    t104 = t99*t17
+    t105 = t99*t15
+    t106 = t99*t13
+    t107 = t99*t22
+    t108 = t99*t20
+    t109 = t99*t18
+    t110 = t99*t16
+    t111 = t8*t99
+    t112 = t102*t102
+    t113 = t103*t103
+    t114 = t104*t104
+    t115 = t105*t105
+    t116 = t106*t106
+    t117 = t107*t107
+    t118 = t108*t108
+    t119 = t109*t109
+    t120 = t110*t110
+    t121 = t111*t111
+    t122 = ((5.0 + t112) + (t113 + (t114 + t115))) + ((t116 + (t117 + t118)) + (t119 + (t120 + t121)))
+    t123 = np.sqrt(t122)
+    t124 = t101/t99
+    t125 = t100*t101
+    t126 = t123*RANK_TOL
+    t127 = t125 <= t126
+    t128 = np.where(t127, t126, 0.0)
+    t129 = np.where(t127, t101, t124)
+    t130 = np.where(t127, t99*twist[..., 0], twist[..., 0])
+    t131 = np.where(t127, t99*twist[..., 1], twist[..., 1])
+    t132 = t112 + t113 + t114 + t115 + t116
+    t133 = t117 + t118 + t119 + t120 + t121
+    t134 = 5.0 > t133
+    t135 = np.where(t134, 1.0, t107)
+    t136 = np.where(t134, 1.0, t108)
+    t137 = np.where(t134, 1.0, t109)
+    t138 = np.where(t134, 1.0, t110)
+    t139 = np.where(t134, 1.0, t111)
+    t140 = np.where(t134, t107, 1.0)
+    t141 = np.where(t134, t108, 1.0)
+    t142 = np.where(t134, t109, 1.0)
+    t143 = np.where(t134, t110, 1.0)
+    t144 = np.where(t134, t111, 1.0)
+    t145 = np.where(t134, t101, t129)
+    t146 = np.where(t134, twist[..., 2], t131)
+    t147 = np.where(t134, t129, t101)
+    t148 = np.where(t134, t131, twist[..., 2])
+    t149 = np.where(t134, 5.0, t133)
+    t150 = t149 > t132
+    t151 = np.where(t150, t135, t102)
+    t152 = np.where(t150, t136, t103)
+    t153 = np.where(t150, t137, t104)
+    t154 = np.where(t150, t138, t105)
+    t155 = np.where(t150, t139, t106)
+    t156 = np.where(t150, t102, t135)
+    t157 = np.where(t150, t103, t136)
+    t158 = np.where(t150, t104, t137)
+    t159 = np.where(t150, t105, t138)
+    t160 = np.where(t150, t106, t139)
+    t161 = np.where(t150, t145, t129)
+    t162 = np.where(t150, t146, t130)
+    t163 = np.where(t150, t129, t145)
+    t164 = np.where(t150, t130, t146)
+    t165 = t151*t151 + t152*t152 + t153*t153 + t154*t154 + t155*t155
+    t166 = np.sqrt(t165)
+    t167 = t166 > t128
+    t168 = np.where(t167, 1.0/t166, 1.0)
+    t169 = np.where(t167, t168*t151, 0.0)
+    t170 = np.where(t167, t168*t152, 0.0)
+    t171 = np.where(t167, t168*t153, 0.0)
+    t172 = np.where(t167, t168*t154, 0.0)
+    t173 = np.where(t167, t168*t155, 0.0)
+    t174 = np.where(t167, t166, 0.0)
+    t175 = t169*t156 + t170*t157 + t171*t158 + t172*t159 + t173*t160
+    t176 = t156 - t175*t169
+    t177 = t157 - t175*t170
+    t178 = t158 - t175*t171
+    t179 = t159 - t175*t172
+    t180 = t160 - t175*t173
+    t181 = t169*t140 + t170*t141 + t171*t142 + t172*t143 + t173*t144
+    t182 = t140 - t181*t169
+    t183 = t141 - t181*t170
+    t184 = t142 - t181*t171
+    t185 = t143 - t181*t172
+    t186 = t144 - t181*t173
+    t187 = t176*t176 + t177*t177 + t178*t178 + t179*t179 + t180*t180
+    t188 = t182*t182 + t183*t183 + t184*t184 + t185*t185 + t186*t186
+    t189 = t188 > t187
+    t190 = np.where(t189, t182, t176)
+    t191 = np.where(t189, t183, t177)
+    t192 = np.where(t189, t184, t178)
+    t193 = np.where(t189, t185, t179)
+    t194 = np.where(t189, t186, t180)
+    t195 = np.where(t189, t176, t182)
+    t196 = np.where(t189, t177, t183)
+    t197 = np.where(t189, t178, t184)
+    t198 = np.where(t189, t179, t185)
+    t199 = np.where(t189, t180, t186)
+    t200 = np.where(t189, t181, t175)
+    t201 = np.where(t189, t175, t181)
+    t202 = np.where(t189, t147, t163)
+    t203 = np.where(t189, t148, t164)
+    t204 = np.where(t189, t163, t147)
+    t205 = np.where(t189, t164, t148)
+    t206 = t169*t190 + t170*t191 + t171*t192 + t172*t193 + t173*t194
+    t207 = t190 - t169*t206
+    t208 = t191 - t170*t206
+    t209 = t192 - t171*t206
+    t210 = t193 - t172*t206
+    t211 = t194 - t173*t206
+    t212 = t207*t207 + t208*t208 + t209*t209 + t210*t210 + t211*t211
+    t213 = np.sqrt(t212)
+    t214 = t213 > t128
+    t215 = np.where(t214, 1.0/t213, 1.0)
+    t216 = np.where(t214, t215*t207, 0.0)
+    t217 = np.where(t214, t215*t208, 0.0)
+    t218 = np.where(t214, t215*t209, 0.0)
+    t219 = np.where(t214, t215*t210, 0.0)
+    t220 = np.where(t214, t215*t211, 0.0)
+    t221 = t200 + t206
+    t222 = np.where(t214, t213, 0.0)
+    t223 = t216*t195 + t217*t196 + t218*t197 + t219*t198 + t220*t199
+    t224 = t195 - t223*t216
+    t225 = t196 - t223*t217
+    t226 = t197 - t223*t218
+    t227 = t198 - t223*t219
+    t228 = t199 - t223*t220
+    t229 = t169*t224 + t170*t225 + t171*t226 + t172*t227 + t173*t228
+    t230 = t224 - t169*t229
+    t231 = t225 - t170*t229
+    t232 = t226 - t171*t229
+    t233 = t227 - t172*t229
+    t234 = t228 - t173*t229
+    t235 = t216*t230 + t217*t231 + t218*t232 + t219*t233 + t220*t234
+    t236 = t230 - t216*t235
+    t237 = t231 - t217*t235
+    t238 = t232 - t218*t235
+    t239 = t233 - t219*t235
+    t240 = t234 - t220*t235
+    t241 = t236*t236 + t237*t237 + t238*t238 + t239*t239 + t240*t240
+    t242 = np.sqrt(t241)
+    t243 = t242 > t128
+    t244 = np.where(t243, 1.0/t242, 1.0)
+    t245 = np.where(t243, t244*t236, 0.0)
+    t246 = np.where(t243, t244*t237, 0.0)
+    t247 = np.where(t243, t244*t238, 0.0)
+    t248 = np.where(t243, t244*t239, 0.0)
+    t249 = np.where(t243, t244*t240, 0.0)
+    t250 = t201 + t229
+    t251 = t223 + t235
+    t252 = np.where(t243, t242, 0.0)
+    t253 = t174*t161
+    t254 = t221*t202
+    t255 = t250*t204
+    t256 = t222*t202
+    t257 = t251*t204
+    t258 = t252*t204
+    t259 = t125*t125
+    t260 = t253*t253 + t254*t254 + t255*t255 + t259
+    t261 = np.sqrt(t260)
+    t262 = t261 > 0.0
+    t263 = np.where(t262, 1.0/t261, 1.0)
+    t264 = t263*t253
+    t265 = t263*t254
+    t266 = -t263*t255
+    t267 = t263*t125
+    t268 = t266*t257 - t265*t256
+    t269 = t268*t264
+    t270 = t256 + t268*t265
+    t271 = t257 - t268*t266
+    t272 = t268*t267
+    t273 = t264*t269 + t265*t270 - t266*t271 + t267*t272
+    t274 = t269 - t273*t264
+    t275 = t270 - t273*t265
+    t276 = t271 + t273*t266
+    t277 = t272 - t273*t267
+    t278 = t274*t274 + t275*t275 + t276*t276 + t277*t277 + t259
+    t279 = np.sqrt(t278)
+    t280 = t279 > 0.0
+    t281 = np.where(t280, 1.0/t279, 1.0)
+    t282 = t281*t274
+    t283 = t281*t275
+    t284 = t281*t276
+    t285 = t281*t277
+    t286 = t281*t125
+    t287 = t273 - t268
+    t288 = t266*t258
+    t289 = t288*t264
+    t290 = t288*t265
+    t291 = t258 - t288*t266
+    t292 = t288*t267
+    t293 = t282*t289 + t283*t290 + t284*t291 + t285*t292
+    t294 = t289 - t293*t282
+    t295 = t290 - t293*t283
+    t296 = t291 - t293*t284
+    t297 = t292 - t293*t285
+    t298 = t293*t286
+    t299 = t264*t294 + t265*t295 - t266*t296 + t267*t297
+    t300 = t294 - t299*t264
+    t301 = t295 - t299*t265
+    t302 = t296 + t299*t266
+    t303 = t297 - t299*t267
+    t304 = t282*t300 + t283*t301 + t284*t302 + t285*t303 - t286*t298
+    t305 = t300 - t304*t282
+    t306 = t301 - t304*t283
+    t307 = t302 - t304*t284
+    t308 = t303 - t304*t285
+    t309 = t298 + t304*t286
+    t310 = t305*t305 + t306*t306 + t307*t307 + t308*t308 + t309*t309 + t259
+    t311 = np.sqrt(t310)
+    t312 = t311 > 0.0
+    t313 = np.where(t312, 1.0/t311, 1.0)
+    t314 = t313*t305
+    t315 = t313*t306
+    t316 = t313*t307
+    t317 = t299 - t288
+    t318 = t293 + t304
+    t319 = t101*(t162*t264 - t205*t266 + t203*t265)
+    t320 = t101*(t162*t282 + t205*t284 + t203*t283)
+    t321 = t101*(t162*t314 + t205*t316 + t203*t315)
+    t322 = np.where(t312, t313*t321, 0.0)
+    t323 = np.where(t280, t281*(t320 - t318*t322), 0.0)
+    t324 = np.where(t262, t263*(t319 - t287*t323 - t317*t322), 0.0)
+    t325 = t169*t324 + t216*t323 + t245*t322
+    t326 = t170*t324 + t217*t323 + t246*t322
+    t327 = t171*t324 + t218*t323 + t247*t322
+    t328 = t172*t324 + t219*t323 + t248*t322
+    t329 = t173*t324 + t220*t323 + t249*t322
+    dq3[..., 0] = t325
+    dq3[..., 1] = t326
+    dq3[..., 2] = t327
+    dq3[..., 3] = t328
+    dq3[..., 4] = t329
 
 
 @_signature_errors
@@ -955,7 +1134,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 5).
-    Operations: 5 sin, 5 cos, 199 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 425 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (5, 3, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -1019,7 +1198,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t70 = t68*t63
     t73 = t68*(t47 + t49)
     t74 = t69*t70 + t67*(t73 + t67)
-    t75 = t74 > RANK_TOL*((t73 + 2.0*t67)*(t73 + 2.0*t67))
+    t75 = t74 > (RANK_TOL*RANK_TOL)*((t73 + 2.0*t67)*(t73 + 2.0*t67))
     t77 = t68*np.where(t75, 1.0/t74, 1.0)
     t78 = t67 + t69*(1.0 + t52*t52)
     t79 = t68*np.where(t78 > 0.0, 1.0/t78, 1.0)
@@ -1051,7 +1230,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 5), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 5).
-    Operations: 5 sin, 5 cos, 127 add/sub/mul/neg.
+    Operations: 5 sin, 5 cos, 128 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (5, 2, 5, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

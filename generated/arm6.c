@@ -9,11 +9,13 @@
  * p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
- * lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
- * when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
- * trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
- * the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
- * pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+ * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+ * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+ * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+ * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+ * errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -24,7 +26,7 @@
 
 #include "arm6.h"
 
-#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x5cd9e308UL
+#if !defined(ARM6_STAMP) || ARM6_STAMP != 0x94724bffUL
 #error "arm6.h is not the header generated with this arm6.c: regenerate both together"
 #endif
 
@@ -1499,7 +1501,7 @@ void arm6_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm6_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 6 sin, 6 cos, 58 add/sub, 79 mul, 1 neg, 4 div */
+/* operations: 6 sin, 6 cos, 58 add/sub, 81 mul, 1 neg, 4 div */
 
 static ARM6_LIGHT void arm6_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1565,7 +1567,7 @@ static ARM6_LIGHT void arm6_inverse_velocity_finish(const double *restrict v, co
     const double t84 = (t60 ? v[1] : v[0]);
     const double t85 = t80*(t57 + t59);
     const double t86 = t81*t82 + t79*(t85 + t79);
-    const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+    const int t87 = t86 > 1.44*(ARM6_RANK_TOL*ARM6_RANK_TOL)*((t85 + 2.0*t79)*(t85 + 2.0*t79));
     const double t88 = t83 + t84*t62;
     const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
     const double t90 = t79 + t81*(1.0 + t62*t62);
@@ -1619,7 +1621,7 @@ void arm6_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm6_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 6 sin, 6 cos, 94 add/sub, 122 mul, 1 neg, 5 div */
+/* operations: 6 sin, 6 cos, 206 add/sub, 274 mul, 2 neg, 9 div, 7 sqrt */
 
 static ARM6_LIGHT void arm6_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1644,8 +1646,8 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double *restrict twis
     const double t13 = sn[2]*l[2];
     const double t14 = sn[3]*l[3];
     const double t15 = sn[4]*l[4];
-    const double t16 = sn[5]*l[5];
-    const double t18 = -t16 - t15;
+    const double t16 = -sn[5]*l[5];
+    const double t18 = t16 - t15;
     const double t19 = t9 + t10;
     const double t20 = t18 - t14;
     const double t21 = t8 + t19;
@@ -1655,66 +1657,263 @@ static ARM6_LIGHT void arm6_inverse_velocity3_finish(const double *restrict twis
     const double t25 = t6 + t23;
     const double t26 = t24 - t11;
     const double t27 = t5 + t25;
-    const double t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16;
-    const double t58 = t26*t27 - t10*t16 + t24*t25 + t22*t23 + t20*t21 + t18*t19;
-    const double t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19;
-    const int t76 = lambda > 1.0;
-    const double t77 = (t76 ? 1.0/(lambda != 0.0 ? lambda : 1.0) : 1.0);
-    const double t78 = (t76 ? 1.0 : lambda);
-    const double t79 = t78*t78;
-    const double t80 = t77*t77;
     const double t113 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] + l[5] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] + l[5] : 1.0);
-    const double t114 = t113*t113;
-    const double t115 = t26 + t24 + t22 + t20 + t18 - t16;
-    const double t116 = t10 + t27 + t25 + t23 + t21 + t19;
-    const double t117 = t114*t80;
-    const double t118 = t113*t80;
-    const double t119 = t114*t79;
-    const double t120 = t57*t117 + t119;
-    const double t121 = t58*t117;
-    const double t122 = t115*t118;
-    const double t123 = t59*t117 + t119;
-    const double t124 = t116*t118;
-    const double t125 = t79 + 6.0*t80;
-    const double t126 = t118*twist[0];
-    const double t127 = t118*twist[1];
-    const double t128 = t80*twist[2];
-    const double t129 = t120 + t123 + t125;
-    const double t130 = t120*t126 + t121*t127 + t122*t128;
-    const double t131 = t121*t126 + t123*t127 + t124*t128;
-    const double t132 = t122*t126 + t124*t127 + t125*t128;
-    const double t133 = (t129 > 0.0 ? 1.0/(t129*t129 != 0.0 ? t129*t129 : 1.0) : 1.0);
-    const double t134 = t130*t133;
-    const double t135 = t131*t133;
-    const double t136 = t132*t133;
-    const double t137 = t123*t125 - t124*t124;
-    const double t138 = t122*t124 - t121*t125;
-    const double t139 = t121*t124 - t122*t123;
-    const double t140 = t120*t125 - t122*t122;
-    const double t141 = t121*t122 - t120*t124;
-    const double t142 = t120*t123 - t121*t121;
-    const double t143 = t120*t137 + t121*t138 + t122*t139;
-    const double t144 = t137 + t140 + t142;
-    const int t145 = t143 > t144*t129*ARM6_RANK_TOL;
-    const double t146 = t129*t129;
-    const int t147 = t144 > ARM6_RANK_TOL*t146;
-    const double t148 = (t143 > 0.0 ? 1.0/(t143 != 0.0 ? t143 : 1.0) : 1.0);
-    const double t149 = t120*t130 + t121*t131 + t122*t132;
-    const double t150 = t121*t130 + t123*t131 + t124*t132;
-    const double t151 = t122*t130 + t124*t131 + t125*t132;
-    const double t152 = (t144 > 0.0 ? 1.0/(t144*t144 != 0.0 ? t144*t144 : 1.0) : 1.0);
-    const double t153 = t146 - t144;
-    const double t154 = (t147 ? (t145 ? t148*(t137*t126 + t138*t127 + t139*t128) : t152*(t130*t153 - t149*t129)) : t134);
-    const double t155 = (t147 ? (t145 ? t148*(t138*t126 + t140*t127 + t141*t128) : t152*(t131*t153 - t150*t129)) : t135);
-    const double t156 = (t147 ? (t145 ? t148*(t139*t126 + t141*t127 + t142*t128) : t152*(t132*t153 - t151*t129)) : t136);
-    const double t157 = t113*t154;
-    const double t158 = t113*t155;
-    dq3[0] = t156 + t157*t26 + t158*t27;
-    dq3[1] = t156 + t157*t24 + t158*t25;
-    dq3[2] = t156 + t157*t22 + t158*t23;
-    dq3[3] = t156 + t157*t20 + t158*t21;
-    dq3[4] = t156 + t157*t18 + t158*t19;
-    dq3[5] = t156 + t10*t158 - t157*t16;
+    const double t114 = fabs(lambda);
+    const double t115 = (t114 > 1.0 ? 1.0/(t114 != 0.0 ? t114 : 1.0) : 1.0);
+    const double t116 = t113*t26;
+    const double t117 = t113*t24;
+    const double t118 = t113*t22;
+    const double t119 = t113*t20;
+    const double t120 = t113*t18;
+    const double t121 = t113*t16;
+    const double t122 = t113*t27;
+    const double t123 = t113*t25;
+    const double t124 = t113*t23;
+    const double t125 = t113*t21;
+    const double t126 = t113*t19;
+    const double t127 = t10*t113;
+    const double t128 = t116*t116;
+    const double t129 = t117*t117;
+    const double t130 = t118*t118;
+    const double t131 = t119*t119;
+    const double t132 = t120*t120;
+    const double t133 = t121*t121;
+    const double t134 = t122*t122;
+    const double t135 = t123*t123;
+    const double t136 = t124*t124;
+    const double t137 = t125*t125;
+    const double t138 = t126*t126;
+    const double t139 = t127*t127;
+    const double t140 = ((6.0 + (t128 + t129)) + (t130 + (t131 + t132))) + ((t133 + (t134 + t135)) + ((t136 + t137) + (t138 + t139)));
+    const double t141 = sqrt(t140);
+    const double t142 = t115/(t113 != 0.0 ? t113 : 1.0);
+    const double t143 = t114*t115;
+    const double t144 = 1.2*t141*ARM6_RANK_TOL;
+    const int t145 = t143 <= t144;
+    const double t146 = (t145 ? t144 : 0.0);
+    const double t147 = (t145 ? t115 : t142);
+    const double t148 = (t145 ? t113*twist[0] : twist[0]);
+    const double t149 = (t145 ? t113*twist[1] : twist[1]);
+    const double t150 = t128 + t129 + t130 + t131 + t132 + t133;
+    const double t151 = t134 + t135 + t136 + t137 + t138 + t139;
+    const int t152 = 6.0 > t151;
+    const double t153 = (t152 ? 1.0 : t122);
+    const double t154 = (t152 ? 1.0 : t123);
+    const double t155 = (t152 ? 1.0 : t124);
+    const double t156 = (t152 ? 1.0 : t125);
+    const double t157 = (t152 ? 1.0 : t126);
+    const double t158 = (t152 ? 1.0 : t127);
+    const double t159 = (t152 ? t122 : 1.0);
+    const double t160 = (t152 ? t123 : 1.0);
+    const double t161 = (t152 ? t124 : 1.0);
+    const double t162 = (t152 ? t125 : 1.0);
+    const double t163 = (t152 ? t126 : 1.0);
+    const double t164 = (t152 ? t127 : 1.0);
+    const double t165 = (t152 ? t115 : t147);
+    const double t166 = (t152 ? twist[2] : t149);
+    const double t167 = (t152 ? t147 : t115);
+    const double t168 = (t152 ? t149 : twist[2]);
+    const double t169 = (t152 ? 6.0 : t151);
+    const int t170 = t169 > t150;
+    const double t171 = (t170 ? t153 : t116);
+    const double t172 = (t170 ? t154 : t117);
+    const double t173 = (t170 ? t155 : t118);
+    const double t174 = (t170 ? t156 : t119);
+    const double t175 = (t170 ? t157 : t120);
+    const double t176 = (t170 ? t158 : t121);
+    const double t177 = (t170 ? t116 : t153);
+    const double t178 = (t170 ? t117 : t154);
+    const double t179 = (t170 ? t118 : t155);
+    const double t180 = (t170 ? t119 : t156);
+    const double t181 = (t170 ? t120 : t157);
+    const double t182 = (t170 ? t121 : t158);
+    const double t183 = (t170 ? t165 : t147);
+    const double t184 = (t170 ? t166 : t148);
+    const double t185 = (t170 ? t147 : t165);
+    const double t186 = (t170 ? t148 : t166);
+    const double t187 = t171*t171 + t172*t172 + t173*t173 + t174*t174 + t175*t175 + t176*t176;
+    const double t188 = sqrt(t187);
+    const int t189 = t188 > t146;
+    const double t190 = (t189 ? 1.0/(t188 != 0.0 ? t188 : 1.0) : 1.0);
+    const double t191 = (t189 ? t190*t171 : 0.0);
+    const double t192 = (t189 ? t190*t172 : 0.0);
+    const double t193 = (t189 ? t190*t173 : 0.0);
+    const double t194 = (t189 ? t190*t174 : 0.0);
+    const double t195 = (t189 ? t190*t175 : 0.0);
+    const double t196 = (t189 ? t190*t176 : 0.0);
+    const double t197 = (t189 ? t188 : 0.0);
+    const double t198 = t191*t177 + t192*t178 + t193*t179 + t194*t180 + t195*t181 + t196*t182;
+    const double t199 = t177 - t198*t191;
+    const double t200 = t178 - t198*t192;
+    const double t201 = t179 - t198*t193;
+    const double t202 = t180 - t198*t194;
+    const double t203 = t181 - t198*t195;
+    const double t204 = t182 - t198*t196;
+    const double t205 = t191*t159 + t192*t160 + t193*t161 + t194*t162 + t195*t163 + t196*t164;
+    const double t206 = t159 - t205*t191;
+    const double t207 = t160 - t205*t192;
+    const double t208 = t161 - t205*t193;
+    const double t209 = t162 - t205*t194;
+    const double t210 = t163 - t205*t195;
+    const double t211 = t164 - t205*t196;
+    const double t212 = t199*t199 + t200*t200 + t201*t201 + t202*t202 + t203*t203 + t204*t204;
+    const double t213 = t206*t206 + t207*t207 + t208*t208 + t209*t209 + t210*t210 + t211*t211;
+    const int t214 = t213 > t212;
+    const double t215 = (t214 ? t206 : t199);
+    const double t216 = (t214 ? t207 : t200);
+    const double t217 = (t214 ? t208 : t201);
+    const double t218 = (t214 ? t209 : t202);
+    const double t219 = (t214 ? t210 : t203);
+    const double t220 = (t214 ? t211 : t204);
+    const double t221 = (t214 ? t199 : t206);
+    const double t222 = (t214 ? t200 : t207);
+    const double t223 = (t214 ? t201 : t208);
+    const double t224 = (t214 ? t202 : t209);
+    const double t225 = (t214 ? t203 : t210);
+    const double t226 = (t214 ? t204 : t211);
+    const double t227 = (t214 ? t205 : t198);
+    const double t228 = (t214 ? t198 : t205);
+    const double t229 = (t214 ? t167 : t185);
+    const double t230 = (t214 ? t168 : t186);
+    const double t231 = (t214 ? t185 : t167);
+    const double t232 = (t214 ? t186 : t168);
+    const double t233 = t191*t215 + t192*t216 + t193*t217 + t194*t218 + t195*t219 + t196*t220;
+    const double t234 = t215 - t191*t233;
+    const double t235 = t216 - t192*t233;
+    const double t236 = t217 - t193*t233;
+    const double t237 = t218 - t194*t233;
+    const double t238 = t219 - t195*t233;
+    const double t239 = t220 - t196*t233;
+    const double t240 = t234*t234 + t235*t235 + t236*t236 + t237*t237 + t238*t238 + t239*t239;
+    const double t241 = sqrt(t240);
+    const int t242 = t241 > t146;
+    const double t243 = (t242 ? 1.0/(t241 != 0.0 ? t241 : 1.0) : 1.0);
+    const double t244 = (t242 ? t243*t234 : 0.0);
+    const double t245 = (t242 ? t243*t235 : 0.0);
+    const double t246 = (t242 ? t243*t236 : 0.0);
+    const double t247 = (t242 ? t243*t237 : 0.0);
+    const double t248 = (t242 ? t243*t238 : 0.0);
+    const double t249 = (t242 ? t243*t239 : 0.0);
+    const double t250 = t227 + t233;
+    const double t251 = (t242 ? t241 : 0.0);
+    const double t252 = t244*t221 + t245*t222 + t246*t223 + t247*t224 + t248*t225 + t249*t226;
+    const double t253 = t221 - t252*t244;
+    const double t254 = t222 - t252*t245;
+    const double t255 = t223 - t252*t246;
+    const double t256 = t224 - t252*t247;
+    const double t257 = t225 - t252*t248;
+    const double t258 = t226 - t252*t249;
+    const double t259 = t191*t253 + t192*t254 + t193*t255 + t194*t256 + t195*t257 + t196*t258;
+    const double t260 = t253 - t191*t259;
+    const double t261 = t254 - t192*t259;
+    const double t262 = t255 - t193*t259;
+    const double t263 = t256 - t194*t259;
+    const double t264 = t257 - t195*t259;
+    const double t265 = t258 - t196*t259;
+    const double t266 = t244*t260 + t245*t261 + t246*t262 + t247*t263 + t248*t264 + t249*t265;
+    const double t267 = t260 - t244*t266;
+    const double t268 = t261 - t245*t266;
+    const double t269 = t262 - t246*t266;
+    const double t270 = t263 - t247*t266;
+    const double t271 = t264 - t248*t266;
+    const double t272 = t265 - t249*t266;
+    const double t273 = t267*t267 + t268*t268 + t269*t269 + t270*t270 + t271*t271 + t272*t272;
+    const double t274 = sqrt(t273);
+    const int t275 = t274 > t146;
+    const double t276 = (t275 ? 1.0/(t274 != 0.0 ? t274 : 1.0) : 1.0);
+    const double t277 = (t275 ? t276*t267 : 0.0);
+    const double t278 = (t275 ? t276*t268 : 0.0);
+    const double t279 = (t275 ? t276*t269 : 0.0);
+    const double t280 = (t275 ? t276*t270 : 0.0);
+    const double t281 = (t275 ? t276*t271 : 0.0);
+    const double t282 = (t275 ? t276*t272 : 0.0);
+    const double t283 = t228 + t259;
+    const double t284 = t252 + t266;
+    const double t285 = (t275 ? t274 : 0.0);
+    const double t286 = t197*t183;
+    const double t287 = t250*t229;
+    const double t288 = t283*t231;
+    const double t289 = t251*t229;
+    const double t290 = t284*t231;
+    const double t291 = t285*t231;
+    const double t292 = t143*t143;
+    const double t293 = t286*t286 + t287*t287 + t288*t288 + t292;
+    const double t294 = sqrt(t293);
+    const int t295 = t294 > 0.0;
+    const double t296 = (t295 ? 1.0/(t294 != 0.0 ? t294 : 1.0) : 1.0);
+    const double t297 = t296*t286;
+    const double t298 = t296*t287;
+    const double t299 = -t296*t288;
+    const double t300 = t296*t143;
+    const double t301 = t299*t290 - t298*t289;
+    const double t302 = t301*t297;
+    const double t303 = t289 + t301*t298;
+    const double t304 = t290 - t301*t299;
+    const double t305 = t301*t300;
+    const double t306 = t297*t302 + t298*t303 - t299*t304 + t300*t305;
+    const double t307 = t302 - t306*t297;
+    const double t308 = t303 - t306*t298;
+    const double t309 = t304 + t306*t299;
+    const double t310 = t305 - t306*t300;
+    const double t311 = t307*t307 + t308*t308 + t309*t309 + t310*t310 + t292;
+    const double t312 = sqrt(t311);
+    const int t313 = t312 > 0.0;
+    const double t314 = (t313 ? 1.0/(t312 != 0.0 ? t312 : 1.0) : 1.0);
+    const double t315 = t314*t307;
+    const double t316 = t314*t308;
+    const double t317 = t314*t309;
+    const double t318 = t314*t310;
+    const double t319 = t314*t143;
+    const double t320 = t306 - t301;
+    const double t321 = t299*t291;
+    const double t322 = t321*t297;
+    const double t323 = t321*t298;
+    const double t324 = t291 - t321*t299;
+    const double t325 = t321*t300;
+    const double t326 = t315*t322 + t316*t323 + t317*t324 + t318*t325;
+    const double t327 = t322 - t326*t315;
+    const double t328 = t323 - t326*t316;
+    const double t329 = t324 - t326*t317;
+    const double t330 = t325 - t326*t318;
+    const double t331 = t326*t319;
+    const double t332 = t297*t327 + t298*t328 - t299*t329 + t300*t330;
+    const double t333 = t327 - t332*t297;
+    const double t334 = t328 - t332*t298;
+    const double t335 = t329 + t332*t299;
+    const double t336 = t330 - t332*t300;
+    const double t337 = t315*t333 + t316*t334 + t317*t335 + t318*t336 - t319*t331;
+    const double t338 = t333 - t337*t315;
+    const double t339 = t334 - t337*t316;
+    const double t340 = t335 - t337*t317;
+    const double t341 = t336 - t337*t318;
+    const double t342 = t331 + t337*t319;
+    const double t343 = t338*t338 + t339*t339 + t340*t340 + t341*t341 + t342*t342 + t292;
+    const double t344 = sqrt(t343);
+    const int t345 = t344 > 0.0;
+    const double t346 = (t345 ? 1.0/(t344 != 0.0 ? t344 : 1.0) : 1.0);
+    const double t347 = t346*t338;
+    const double t348 = t346*t339;
+    const double t349 = t346*t340;
+    const double t350 = t332 - t321;
+    const double t351 = t326 + t337;
+    const double t352 = t115*(t184*t297 - t232*t299 + t230*t298);
+    const double t353 = t115*(t184*t315 + t232*t317 + t230*t316);
+    const double t354 = t115*(t184*t347 + t232*t349 + t230*t348);
+    const double t355 = (t345 ? t346*t354 : 0.0);
+    const double t356 = (t313 ? t314*(t353 - t351*t355) : 0.0);
+    const double t357 = (t295 ? t296*(t352 - t320*t356 - t350*t355) : 0.0);
+    const double t358 = t191*t357 + t244*t356 + t277*t355;
+    dq3[0] = t358;
+    const double t359 = t192*t357 + t245*t356 + t278*t355;
+    dq3[1] = t359;
+    const double t360 = t193*t357 + t246*t356 + t279*t355;
+    dq3[2] = t360;
+    const double t361 = t194*t357 + t247*t356 + t280*t355;
+    dq3[3] = t361;
+    const double t362 = t195*t357 + t248*t356 + t281*t355;
+    dq3[4] = t362;
+    const double t363 = t196*t357 + t249*t356 + t282*t355;
+    dq3[5] = t363;
 }
 
 void arm6_inverse_velocity3(const double q[6], const double twist[3], const double l[6], double lambda, double dq3[6])
@@ -1750,7 +1949,7 @@ void arm6_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm6_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 6 sin, 6 cos, 66 add/sub, 79 mul, 1 neg, 4 div */
+/* operations: 6 sin, 6 cos, 66 add/sub, 81 mul, 1 neg, 4 div */
 
 static ARM6_LIGHT void arm6_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1814,7 +2013,7 @@ static ARM6_LIGHT void arm6_ik_step_finish(const double *restrict q, const doubl
     const double t82 = t80*t75;
     const double t85 = t80*(t57 + t59);
     const double t86 = t81*t82 + t79*(t85 + t79);
-    const int t87 = t86 > ARM6_RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79));
+    const int t87 = t86 > 1.44*(ARM6_RANK_TOL*ARM6_RANK_TOL)*((t85 + 2.0*t79)*(t85 + 2.0*t79));
     const double t89 = t80*(t87 ? 1.0/(t86 != 0.0 ? t86 : 1.0) : 1.0);
     const double t90 = t79 + t81*(1.0 + t62*t62);
     const double t91 = t80*(t90 > 0.0 ? 1.0/(t90 != 0.0 ? t90 : 1.0) : 1.0);

@@ -9,11 +9,13 @@ Layout: row-major. J[i] = j_x(i), J[6 + i] = j_y(i) for joint i = 0..5; H likewi
 p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
-lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular
-when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *
-trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by
-the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular
-pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
+lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
+J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
+beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
+residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
+errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x5cd9e308
+STAMP = 0x94724bff
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -887,7 +889,7 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t84 = np.where(t60, v[..., 1], v[..., 0])
     t85 = t80*(t57 + t59)
     t86 = t81*t82 + t79*(t85 + t79)
-    t87 = t86 > RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79))
+    t87 = t86 > 1.44*(RANK_TOL*RANK_TOL)*((t85 + 2.0*t79)*(t85 + 2.0*t79))
     t88 = t83 + t84*t62
     t89 = t80*np.where(t87, 1.0/t86, 1.0)
     t90 = t79 + t81*(1.0 + t62*t62)
@@ -917,7 +919,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 6).
-    Operations: 6 sin, 6 cos, 138 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 140 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -949,8 +951,8 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t13 = sn[..., 2]*l[..., 2]
     t14 = sn[..., 3]*l[..., 3]
     t15 = sn[..., 4]*l[..., 4]
-    t16 = sn[..., 5]*l[..., 5]
-    t18 = -t16 - t15
+    t16 = -sn[..., 5]*l[..., 5]
+    t18 = t16 - t15
     t19 = t9 + t10
     t20 = t18 - t14
     t21 = t8 + t19
@@ -960,66 +962,263 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t25 = t6 + t23
     t26 = t24 - t11
     t27 = t5 + t25
-    t57 = t26*t26 + t24*t24 + t22*t22 + t20*t20 + t18*t18 + t16*t16
-    t58 = t26*t27 - t10*t16 + t24*t25 + t22*t23 + t20*t21 + t18*t19
-    t59 = t10*t10 + t27*t27 + t25*t25 + t23*t23 + t21*t21 + t19*t19
-    t76 = lambda_ > 1.0
-    t77 = np.where(t76, 1.0/lambda_, 1.0)
-    t78 = np.where(t76, 1.0, lambda_)
-    t79 = t78*t78
-    t80 = t77*t77
     t113 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2] + l[..., 3] + l[..., 4] + l[..., 5])
-    t114 = t113*t113
-    t115 = t26 + t24 + t22 + t20 + t18 - t16
-    t116 = t10 + t27 + t25 + t23 + t21 + t19
-    t117 = t114*t80
-    t118 = t113*t80
-    t119 = t114*t79
-    t120 = t57*t117 + t119
-    t121 = t58*t117
-    t122 = t115*t118
-    t123 = t59*t117 + t119
-    t124 = t116*t118
-    t125 = t79 + 6.0*t80
-    t126 = t118*twist[..., 0]
-    t127 = t118*twist[..., 1]
-    t128 = t80*twist[..., 2]
-    t129 = t120 + t123 + t125
-    t130 = t120*t126 + t121*t127 + t122*t128
-    t131 = t121*t126 + t123*t127 + t124*t128
-    t132 = t122*t126 + t124*t127 + t125*t128
-    t133 = np.where(t129 > 0.0, 1.0/(t129*t129), 1.0)
-    t134 = t130*t133
-    t135 = t131*t133
-    t136 = t132*t133
-    t137 = t123*t125 - t124*t124
-    t138 = t122*t124 - t121*t125
-    t139 = t121*t124 - t122*t123
-    t140 = t120*t125 - t122*t122
-    t141 = t121*t122 - t120*t124
-    t142 = t120*t123 - t121*t121
-    t143 = t120*t137 + t121*t138 + t122*t139
-    t144 = t137 + t140 + t142
-    t145 = t143 > t144*t129*RANK_TOL
-    t146 = t129*t129
-    t147 = t144 > RANK_TOL*t146
-    t148 = np.where(t143 > 0.0, 1.0/t143, 1.0)
-    t149 = t120*t130 + t121*t131 + t122*t132
-    t150 = t121*t130 + t123*t131 + t124*t132
-    t151 = t122*t130 + t124*t131 + t125*t132
-    t152 = np.where(t144 > 0.0, 1.0/(t144*t144), 1.0)
-    t153 = t146 - t144
-    t154 = np.where(t147, np.where(t145, t148*(t137*t126 + t138*t127 + t139*t128), t152*(t130*t153 - t149*t129)), t134)
-    t155 = np.where(t147, np.where(t145, t148*(t138*t126 + t140*t127 + t141*t128), t152*(t131*t153 - t150*t129)), t135)
-    t156 = np.where(t147, np.where(t145, t148*(t139*t126 + t141*t127 + t142*t128), t152*(t132*t153 - t151*t129)), t136)
-    t157 = t113*t154
-    t158 = t113*t155
-    dq3[..., 0] = t156 + t157*t26 + t158*t27
-    dq3[..., 1] = t156 + t157*t24 + t158*t25
-    dq3[..., 2] = t156 + t157*t22 + t158*t23
-    dq3[..., 3] = t156 + t157*t20 + t158*t21
-    dq3[..., 4] = t156 + t157*t18 + t158*t19
-    dq3[..., 5] = t156 + t10*t158 - t157*t16
+    t114 = np.abs(lambda_)
+    t115 = np.where(t114 > 1.0, 1.0/t114, 1.0)
+    t116 = t113*t26
+    t117 = t113*t24
+    t118 = t113*t22
+    t119 = t113*t20
+    t120 = t113*t18
+    t121 = t113*t16
+    t122 = t113*t27
+    t123 = t113*t25
+    t124 = t113*t23
+    t125 = t113*t21
+    t126 = t113*t19
+    t127 = t10*t113
+    t128 = t116*t116
+    t129 = t117*t117
+    t130 = t118*t118
+    t131 = t119*t119
+    t132 = t120*t120
+    t133 = t121*t121
+    t134 = t122*t122
+    t135 = t123*t123
+    t136 = t124*t124
+    t137 = t125*t125
+    t138 = t126*t126
+    t139 = t127*t127
+    t140 = ((6.0 + (t128 + t129)) + (t130 + (t131 + t132))) + ((t133 + (t134 + t135)) + ((t136 + t137) + (t138 + t139)))
+    t141 = np.sqrt(t140)
+    t142 = t115/t113
+    t143 = t114*t115
+    t144 = 1.2*t141*RANK_TOL
+    t145 = t143 <= t144
+    t146 = np.where(t145, t144, 0.0)
+    t147 = np.where(t145, t115, t142)
+    t148 = np.where(t145, t113*twist[..., 0], twist[..., 0])
+    t149 = np.where(t145, t113*twist[..., 1], twist[..., 1])
+    t150 = t128 + t129 + t130 + t131 + t132 + t133
+    t151 = t134 + t135 + t136 + t137 + t138 + t139
+    t152 = 6.0 > t151
+    t153 = np.where(t152, 1.0, t122)
+    t154 = np.where(t152, 1.0, t123)
+    t155 = np.where(t152, 1.0, t124)
+    t156 = np.where(t152, 1.0, t125)
+    t157 = np.where(t152, 1.0, t126)
+    t158 = np.where(t152, 1.0, t127)
+    t159 = np.where(t152, t122, 1.0)
+    t160 = np.where(t152, t123, 1.0)
+    t161 = np.where(t152, t124, 1.0)
+    t162 = np.where(t152, t125, 1.0)
+    t163 = np.where(t152, t126, 1.0)
+    t164 = np.where(t152, t127, 1.0)
+    t165 = np.where(t152, t115, t147)
+    t166 = np.where(t152, twist[..., 2], t149)
+    t167 = np.where(t152, t147, t115)
+    t168 = np.where(t152, t149, twist[..., 2])
+    t169 = np.where(t152, 6.0, t151)
+    t170 = t169 > t150
+    t171 = np.where(t170, t153, t116)
+    t172 = np.where(t170, t154, t117)
+    t173 = np.where(t170, t155, t118)
+    t174 = np.where(t170, t156, t119)
+    t175 = np.where(t170, t157, t120)
+    t176 = np.where(t170, t158, t121)
+    t177 = np.where(t170, t116, t153)
+    t178 = np.where(t170, t117, t154)
+    t179 = np.where(t170, t118, t155)
+    t180 = np.where(t170, t119, t156)
+    t181 = np.where(t170, t120, t157)
+    t182 = np.where(t170, t121, t158)
+    t183 = np.where(t170, t165, t147)
+    t184 = np.where(t170, t166, t148)
+    t185 = np.where(t170, t147, t165)
+    t186 = np.where(t170, t148, t166)
+    t187 = t171*t171 + t172*t172 + t173*t173 + t174*t174 + t175*t175 + t176*t176
+    t188 = np.sqrt(t187)
+    t189 = t188 > t146
+    t190 = np.where(t189, 1.0/t188, 1.0)
+    t191 = np.where(t189, t190*t171, 0.0)
+    t192 = np.where(t189, t190*t172, 0.0)
+    t193 = np.where(t189, t190*t173, 0.0)
+    t194 = np.where(t189, t190*t174, 0.0)
+    t195 = np.where(t189, t190*t175, 0.0)
+    t196 = np.where(t189, t190*t176, 0.0)
+    t197 = np.where(t189, t188, 0.0)
+    t198 = t191*t177 + t192*t178 + t193*t179 + t194*t180 + t195*t181 + t196*t182
+    t199 = t177 - t198*t191
+    t200 = t178 - t198*t192
+    t201 = t179 - t198*t193
+    t202 = t180 - t198*t194
+    t203 = t181 - t198*t195
+    t204 = t182 - t198*t196
+    t205 = t191*t159 + t192*t160 + t193*t161 + t194*t162 + t195*t163 + t196*t164
+    t206 = t159 - t205*t191
+    t207 = t160 - t205*t192
+    t208 = t161 - t205*t193
+    t209 = t162 - t205*t194
+    t210 = t163 - t205*t195
+    t211 = t164 - t205*t196
+    t212 = t199*t199 + t200*t200 + t201*t201 + t202*t202 + t203*t203 + t204*t204
+    t213 = t206*t206 + t207*t207 + t208*t208 + t209*t209 + t210*t210 + t211*t211
+    t214 = t213 > t212
+    t215 = np.where(t214, t206, t199)
+    t216 = np.where(t214, t207, t200)
+    t217 = np.where(t214, t208, t201)
+    t218 = np.where(t214, t209, t202)
+    t219 = np.where(t214, t210, t203)
+    t220 = np.where(t214, t211, t204)
+    t221 = np.where(t214, t199, t206)
+    t222 = np.where(t214, t200, t207)
+    t223 = np.where(t214, t201, t208)
+    t224 = np.where(t214, t202, t209)
+    t225 = np.where(t214, t203, t210)
+    t226 = np.where(t214, t204, t211)
+    t227 = np.where(t214, t205, t198)
+    t228 = np.where(t214, t198, t205)
+    t229 = np.where(t214, t167, t185)
+    t230 = np.where(t214, t168, t186)
+    t231 = np.where(t214, t185, t167)
+    t232 = np.where(t214, t186, t168)
+    t233 = t191*t215 + t192*t216 + t193*t217 + t194*t218 + t195*t219 + t196*t220
+    t234 = t215 - t191*t233
+    t235 = t216 - t192*t233
+    t236 = t217 - t193*t233
+    t237 = t218 - t194*t233
+    t238 = t219 - t195*t233
+    t239 = t220 - t196*t233
+    t240 = t234*t234 + t235*t235 + t236*t236 + t237*t237 + t238*t238 + t239*t239
+    t241 = np.sqrt(t240)
+    t242 = t241 > t146
+    t243 = np.where(t242, 1.0/t241, 1.0)
+    t244 = np.where(t242, t243*t234, 0.0)
+    t245 = np.where(t242, t243*t235, 0.0)
+    t246 = np.where(t242, t243*t236, 0.0)
+    t247 = np.where(t242, t243*t237, 0.0)
+    t248 = np.where(t242, t243*t238, 0.0)
+    t249 = np.where(t242, t243*t239, 0.0)
+    t250 = t227 + t233
+    t251 = np.where(t242, t241, 0.0)
+    t252 = t244*t221 + t245*t222 + t246*t223 + t247*t224 + t248*t225 + t249*t226
+    t253 = t221 - t252*t244
+    t254 = t222 - t252*t245
+    t255 = t223 - t252*t246
+    t256 = t224 - t252*t247
+    t257 = t225 - t252*t248
+    t258 = t226 - t252*t249
+    t259 = t191*t253 + t192*t254 + t193*t255 + t194*t256 + t195*t257 + t196*t258
+    t260 = t253 - t191*t259
+    t261 = t254 - t192*t259
+    t262 = t255 - t193*t259
+    t263 = t256 - t194*t259
+    t264 = t257 - t195*t259
+    t265 = t258 - t196*t259
+    t266 = t244*t260 + t245*t261 + t246*t262 + t247*t263 + t248*t264 + t249*t265
+    t267 = t260 - t244*t266
+    t268 = t261 - t245*t266
+    t269 = t262 - t246*t266
+    t270 = t263 - t247*t266
+    t271 = t264 - t248*t266
+    t272 = t265 - t249*t266
+    t273 = t267*t267 + t268*t268 + t269*t269 + t270*t270 + t271*t271 + t272*t272
+    t274 = np.sqrt(t273)
+    t275 = t274 > t146
+    t276 = np.where(t275, 1.0/t274, 1.0)
+    t277 = np.where(t275, t276*t267, 0.0)
+    t278 = np.where(t275, t276*t268, 0.0)
+    t279 = np.where(t275, t276*t269, 0.0)
+    t280 = np.where(t275, t276*t270, 0.0)
+    t281 = np.where(t275, t276*t271, 0.0)
+    t282 = np.where(t275, t276*t272, 0.0)
+    t283 = t228 + t259
+    t284 = t252 + t266
+    t285 = np.where(t275, t274, 0.0)
+    t286 = t197*t183
+    t287 = t250*t229
+    t288 = t283*t231
+    t289 = t251*t229
+    t290 = t284*t231
+    t291 = t285*t231
+    t292 = t143*t143
+    t293 = t286*t286 + t287*t287 + t288*t288 + t292
+    t294 = np.sqrt(t293)
+    t295 = t294 > 0.0
+    t296 = np.where(t295, 1.0/t294, 1.0)
+    t297 = t296*t286
+    t298 = t296*t287
+    t299 = -t296*t288
+    t300 = t296*t143
+    t301 = t299*t290 - t298*t289
+    t302 = t301*t297
+    t303 = t289 + t301*t298
+    t304 = t290 - t301*t299
+    t305 = t301*t300
+    t306 = t297*t302 + t298*t303 - t299*t304 + t300*t305
+    t307 = t302 - t306*t297
+    t308 = t303 - t306*t298
+    t309 = t304 + t306*t299
+    t310 = t305 - t306*t300
+    t311 = t307*t307 + t308*t308 + t309*t309 + t310*t310 + t292
+    t312 = np.sqrt(t311)
+    t313 = t312 > 0.0
+    t314 = np.where(t313, 1.0/t312, 1.0)
+    t315 = t314*t307
+    t316 = t314*t308
+    t317 = t314*t309
+    t318 = t314*t310
+    t319 = t314*t143
+    t320 = t306 - t301
+    t321 = t299*t291
+    t322 = t321*t297
+    t323 = t321*t298
+    t324 = t291 - t321*t299
+    t325 = t321*t300
+    t326 = t315*t322 + t316*t323 + t317*t324 + t318*t325
+    t327 = t322 - t326*t315
+    t328 = t323 - t326*t316
+    t329 = t324 - t326*t317
+    t330 = t325 - t326*t318
+    t331 = t326*t319
+    t332 = t297*t327 + t298*t328 - t299*t329 + t300*t330
+    t333 = t327 - t332*t297
+    t334 = t328 - t332*t298
+    t335 = t329 + t332*t299
+    t336 = t330 - t332*t300
+    t337 = t315*t333 + t316*t334 + t317*t335 + t318*t336 - t319*t331
+    t338 = t333 - t337*t315
+    t339 = t334 - t337*t316
+    t340 = t335 - t337*t317
+    t341 = t336 - t337*t318
+    t342 = t331 + t337*t319
+    t343 = t338*t338 + t339*t339 + t340*t340 + t341*t341 + t342*t342 + t292
+    t344 = np.sqrt(t343)
+    t345 = t344 > 0.0
+    t346 = np.where(t345, 1.0/t344, 1.0)
+    t347 = t346*t338
+    t348 = t346*t339
+    t349 = t346*t340
+    t350 = t332 - t321
+    t351 = t326 + t337
+    t352 = t115*(t184*t297 - t232*t299 + t230*t298)
+    t353 = t115*(t184*t315 + t232*t317 + t230*t316)
+    t354 = t115*(t184*t347 + t232*t349 + t230*t348)
+    t355 = np.where(t345, t346*t354, 0.0)
+    t356 = np.where(t313, t314*(t353 - t351*t355), 0.0)
+    t357 = np.where(t295, t296*(t352 - t320*t356 - t350*t355), 0.0)
+    t358 = t191*t357 + t244*t356 + t277*t355
+    t359 = t192*t357 + t245*t356 + t278*t355
+    t360 = t193*t357 + t246*t356 + t279*t355
+    t361 = t194*t357 + t247*t356 + t280*t355
+    t362 = t195*t357 + t248*t356 + t281*t355
+    t363 = t196*t357 + t249*t356 + t282*t355
+    dq3[..., 0] = t358
+    dq3[..., 1] = t359
+    dq3[..., 2] = t360
+    dq3[..., 3] = t361
+    dq3[..., 4] = t362
+    dq3[..., 5] = t363
 
 
 @_signature_errors
@@ -1031,7 +1230,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 6).
-    Operations: 6 sin, 6 cos, 217 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 482 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (6, 3, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -1102,7 +1301,7 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t82 = t80*t75
     t85 = t80*(t57 + t59)
     t86 = t81*t82 + t79*(t85 + t79)
-    t87 = t86 > RANK_TOL*((t85 + 2.0*t79)*(t85 + 2.0*t79))
+    t87 = t86 > 1.44*(RANK_TOL*RANK_TOL)*((t85 + 2.0*t79)*(t85 + 2.0*t79))
     t89 = t80*np.where(t87, 1.0/t86, 1.0)
     t90 = t79 + t81*(1.0 + t62*t62)
     t91 = t80*np.where(t90 > 0.0, 1.0/t90, 1.0)
@@ -1136,7 +1335,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 6), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 6).
-    Operations: 6 sin, 6 cos, 146 add/sub/mul/neg.
+    Operations: 6 sin, 6 cos, 148 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (6, 2, 6, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

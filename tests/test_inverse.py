@@ -2,13 +2,10 @@
 
 import numpy as np
 import pytest
-import sympy as sp
 
 from skelarm_sym import InputError, reference
-from skelarm_sym.derive import linalg
 from skelarm_sym.build import compile_arm, load_python
 from skelarm_sym import derive
-from skelarm_sym.derive import StepRecorder, expand_steps
 from skelarm_sym.generate import generate
 from skelarm_sym.ir.lower import lower as build_programs
 
@@ -26,36 +23,6 @@ def impls(request):
 def _both(impls):
     n, c, py = impls
     return n, (("C", c), ("Python", py))
-
-
-# -- the closed-form solves themselves ------------------------------------------------
-
-def _solve_numeric(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Evaluate linalg.sym_solve symbolically built for A's size, at the numbers A, b."""
-    k = A.shape[0]
-    a = sp.symbols(f"a:{k}:{k}", real=True)
-    M = [[a[i * k + j] if j >= i else a[j * k + i] for j in range(k)] for i in range(k)]
-    r = sp.symbols(f"r:{k}", real=True)
-    tol = sp.Symbol("tol", positive=True)
-    step = StepRecorder("t")
-    x = expand_steps(step.steps, linalg.sym_solve(step, M, r, tol, "s"))
-    fn = sp.lambdify([*a, *r, tol], x, "numpy")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.array(fn(*A.ravel(), *b, 1e-12), dtype=float)
-
-
-@pytest.mark.parametrize("k, rank", [(2, 2), (2, 1), (3, 3), (3, 2), (3, 1)])
-def test_sym_solve_is_the_pseudo_inverse_in_every_branch(k, rank, rng):
-    for _ in range(5):
-        B = rng.normal(size=(k, rank))
-        A = B @ B.T
-        b = rng.normal(size=k)
-        np.testing.assert_allclose(_solve_numeric(A, b), np.linalg.pinv(A, rcond=1e-10, hermitian=True) @ b, rtol=1e-8, atol=1e-10)
-
-
-def test_sym_solve_refuses_other_sizes():
-    with pytest.raises(ValueError):
-        linalg.sym_solve(StepRecorder("t"), [[sp.S.One]], [sp.S.One], sp.Symbol("tol"), "x")
 
 
 # -- manipulability --------------------------------------------------------------------

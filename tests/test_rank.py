@@ -133,3 +133,31 @@ def test_two_link_undamped_solve_error_follows_cond_J_not_its_square(rng):
         for impl in (c, py):
             got = impl.inverse_velocity(q, v, l, 0.0)
             assert np.linalg.norm(got - want) / np.linalg.norm(want) < 50 * 2.2e-16 * s[0] / s[1]
+
+
+@pytest.mark.parametrize("n, function", [(2, "inverse_velocity"), (3, "inverse_velocity3")])
+def test_a_well_posed_solve_keeps_every_direction_in_float(n, function, rng):
+    """A probe found float inverse_velocity with l = (1, 1) at q = (0.3, 0.01) (cond(J) 500) returning the rank-one
+    answer (0.38, 0.19) for the exact (30.5, -60.1), lambda = 1e-3 too, and inverse_velocity3 at cond(J3) 542 alike: the
+    2 x 2 rule compared J J^T's eigenvalues with RANK_TOL (J's singular values at sqrt(RANK_TOL), 3.5e-3 in float),
+    the 3 x 3 solve used the normal equations. Now a direction is dropped only where J's singular-value ratio and
+    lambda are both below about RANK_TOL, as for 3-D chains, and the three-row solve is their two-stage QR: the error
+    follows cond(J). Against NumPy's SVD (lstsq of the damped problem), C and NumPy, lambda = 0 and damped."""
+    impls = _impls(n, "float", function)
+    l = np.ones(n, dtype=np.float32)
+    eps = float(np.finfo(np.float32).eps)
+    cases = 0
+    for bend in (3e-2, 1e-2, 3e-3, 1e-3):
+        for _ in range(4):
+            q = np.r_[rng.uniform(-np.pi, np.pi), np.full(n - 1, bend) * rng.choice([-1, 1], n - 1)].astype(np.float32)
+            rates = rng.uniform(-1, 1, 2 if n == 2 else 3).astype(np.float32)
+            k = reference.kinematics(q.astype(float), lengths=l.astype(float))
+            J = k.J if n == 2 else k.J3
+            s = np.linalg.svd(J, compute_uv=False)
+            for lam in (0.0, 1e-3):
+                want = _damped(J, rates.astype(float), lam) if lam else np.linalg.lstsq(J, rates.astype(float), rcond=None)[0]
+                for impl in impls:
+                    got = np.asarray(getattr(impl, function)(q, rates, l, lam), dtype=float)
+                    assert np.linalg.norm(got - want) <= 50 * eps * (s[0] / s[-1]) * np.linalg.norm(want), (q, lam, got, want)
+                cases += 1
+    assert cases == 32

@@ -1,25 +1,14 @@
-"""Closed-form small linear algebra for derivations: Gram sums, determinants, symmetric solves.
+"""Closed-form small linear algebra for derivations: Gram sums, the two-row damped solve.
 
 Every helper takes a ``step`` recorder (see :class:`skelarm_sym.derive.StepRecorder`)
 and names its intermediate quantities with it, so the expressions handed to CSE
 stay small and the cost stays linear in the number of columns.
 
-Symmetric positive semi-definite solves (``sym_solve``) pick, at run time, the
-exact inverse when the matrix is regular and its Moore-Penrose pseudo-inverse
-when it is (numerically) rank deficient, using closed forms only:
-
-* 2 x 2, ``s = tr A``, ``d = det A``: if ``d > tol * s**2`` then ``A^-1 = (s I - A) / d``
-  (Cayley-Hamilton), else ``A`` has rank one and ``A^+ = A / s**2``.
-* 3 x 3, ``c = `` sum of the principal 2 x 2 minors: if ``c <= tol * s**2`` the rank
-  is one and ``A^+ = A / s**2``; else if ``d > tol * s * c`` then ``A^-1 = adj(A) / d``;
-  else the rank is two and ``A^+ = ((s**2 - c) A - s A**2) / c**2``.
-
-In eigenvalues ``e1 >= e2 >= e3``: ``d / c`` is about ``e3`` and ``c / s`` about ``e2``,
-so each test asks whether the next eigenvalue is above ``tol`` times the largest.
-
-(For a rank-two ``A = a u u' + b w w'``: ``s A - A**2 = ab P`` with ``P`` the
-projector onto its range, so ``A^+ = (s P - A) / (ab)`` and ``ab = c``.)
-The tests check each branch against ``numpy.linalg.pinv``.
+``damped_solve2`` solves ``M^T (M M^T + lambda^2 I)^+ rhs`` for a two-row ``M`` through one
+Gram-Schmidt step on its rows, choosing at run time between the regular closed form and the
+rank-one pseudo-inverse (its docstring states the rule); more rows go through
+:func:`skelarm_sym.derive.solve6.damped_least_squares`. The tests check both branches against
+NumPy's SVD.
 """
 
 from __future__ import annotations
@@ -142,8 +131,10 @@ def damped_solve2(
     ``1 / (rr + lam2)``; the normal-equations form ``M^T adj(A) rhs / det A`` loses a further factor
     ``cond(A)`` to cancellation (``M^T adj(A)`` is nearly zero in the directions that ``det A``
     makes small). Rank rule (homogeneous in ``M`` and ``lam2``, so independent of the unit of length
-    when lambda has the unit of ``M``): ``A`` counts as rank one when ``det <= tol tr(A)^2``
-    (smallest eigenvalue below about ``tol`` times the largest), and then ``r`` is dropped:
+    when lambda has the unit of ``M``): ``A`` counts as rank one when ``det <= tol^2 tr(A)^2``
+    (smallest eigenvalue below about ``tol^2`` times the largest: ``M``'s smallest singular value, and
+    lambda, below about ``tol`` times its largest, as a 3-D chain's rule; the error of the regular form
+    follows ``cond(M)``, so it holds there), and then ``r`` is dropped:
     ``dq = p (v1 + ratio v2) / (pp (1 + ratio^2) + lam2)``, the damped (lambda = 0: minimum-norm
     least-squares) solution of ``[p; ratio p] dq = rhs'``. Divisors are never zero: a zero
     matrix gives ``dq = 0``.
@@ -156,7 +147,7 @@ def damped_solve2(
     v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
     trace = step(f"{label}tr", (G[0][0] + G[1][1]) * kappa)
     det = step(f"{label}det", pp * rr + lam2 * (trace + lam2))
-    regular = step(f"{label}regular", sp.StrictGreaterThan(det, tol * (trace + 2 * lam2) ** 2))
+    regular = step(f"{label}regular", sp.StrictGreaterThan(det, tol**2 * (trace + 2 * lam2) ** 2))
     along = step(f"{label}along", v1 + gs.ratio * v2)
     inv_det = step(f"{label}idet", kappa / sp.Piecewise((det, regular), (sp.S.One, True)))
     one = step(f"{label}one", pp * (1 + gs.ratio**2) + lam2)
@@ -166,71 +157,3 @@ def damped_solve2(
         return [step(f"{label}x{i}", p * alpha) for i, p in enumerate(gs.p)]
     beta = step(f"{label}beta", sp.Piecewise(((pp * (v2 - gs.ratio * v1) + lam2 * v2) * inv_det, regular), (sp.S.Zero, True)))
     return [step(f"{label}x{i}", p * alpha + r * beta) for i, (p, r) in enumerate(zip(gs.p, gs.r))]
-
-
-def _cofactor_det(m: Sequence[Sequence[sp.Expr]]) -> sp.Expr:
-    if len(m) == 1:
-        return m[0][0]
-    if len(m) == 2:
-        return m[0][0] * m[1][1] - m[0][1] * m[1][0]
-    return (
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    )
-
-
-def _matvec(step: Recorder, matrix: Sequence[Sequence[sp.Expr]], vector: Sequence[sp.Expr], label: str) -> list[sp.Expr]:
-    return [step(f"{label}{i}", sp.Add(*[a * x for a, x in zip(row, vector)])) for i, row in enumerate(matrix)]
-
-
-def sym_solve(
-    step: Recorder,
-    matrix: Sequence[Sequence[sp.Expr]],
-    rhs: Sequence[sp.Expr],
-    tol: sp.Symbol,
-    label: str,
-) -> list[sp.Expr]:
-    """``A^+ rhs`` for a symmetric positive semi-definite 2 x 2 or 3 x 3 ``A`` (see the module docstring).
-
-    ``tol`` is the relative rank tolerance (a symbol the backends print as a
-    precision-dependent constant). The result is finite whenever ``A != 0``.
-    """
-    size = len(matrix)
-    A = [list(row) for row in matrix]
-    s = step(f"{label}tr", sp.Add(*[A[i][i] for i in range(size)]))
-    Ar = _matvec(step, A, rhs, f"{label}Ar")
-    inv_s2 = step(f"{label}is2", 1 / nonzero(s) ** 2)
-    rank_one = [step(f"{label}r1_{i}", x * inv_s2) for i, x in enumerate(Ar)]
-    if size == 2:
-        d = step(f"{label}det", _cofactor_det(A))
-        regular = step(f"{label}regular", sp.StrictGreaterThan(d, tol * s**2))
-        inv_d = step(f"{label}idet", 1 / nonzero(d))
-        exact = [(s * r - x) * inv_d for r, x in zip(rhs, Ar)]
-        return [step(f"{label}x{i}", sp.Piecewise((e, regular), (o, True))) for i, (e, o) in enumerate(zip(exact, rank_one))]
-    if size == 3:
-        cof = [[_cofactor(A, i, j) for j in range(3)] for i in range(3)]
-        cof = [[step(f"{label}C{i}{j}", cof[i][j]) if j >= i else None for j in range(3)] for i in range(3)]
-        adj = [[cof[min(i, j)][max(i, j)] for j in range(3)] for i in range(3)]  # symmetric A: adj symmetric
-        d = step(f"{label}det", sp.Add(*[A[0][j] * adj[0][j] for j in range(3)]))
-        c2 = step(f"{label}c2", adj[0][0] + adj[1][1] + adj[2][2])
-        regular = step(f"{label}regular", sp.StrictGreaterThan(d, tol * s * c2))
-        rank_two = step(f"{label}rank2", sp.StrictGreaterThan(c2, tol * s**2))
-        inv_d = step(f"{label}idet", 1 / nonzero(d))
-        exact = [sp.Add(*[a * r for a, r in zip(row, rhs)]) * inv_d for row in adj]
-        AAr = _matvec(step, A, Ar, f"{label}AAr")
-        inv_c2 = step(f"{label}ic2", 1 / nonzero(c2) ** 2)
-        k = step(f"{label}k", s**2 - c2)
-        two = [(k * x - s * y) * inv_c2 for x, y in zip(Ar, AAr)]
-        return [  # regular is only trusted where rank_two holds (rounding can make c2 and d slightly negative)
-            step(f"{label}x{i}", sp.Piecewise((sp.Piecewise((e, regular), (t, True)), rank_two), (o, True)))
-            for i, (e, t, o) in enumerate(zip(exact, two, rank_one))
-        ]
-    raise ValueError(f"sym_solve handles 2 x 2 and 3 x 3 matrices, got {size} x {size}")
-
-
-def _cofactor(m: Sequence[Sequence[sp.Expr]], i: int, j: int) -> sp.Expr:
-    rows = [r for r in range(3) if r != i]
-    cols = [c for c in range(3) if c != j]
-    minor = m[rows[0]][cols[0]] * m[rows[1]][cols[1]] - m[rows[0]][cols[1]] * m[rows[1]][cols[0]]
-    return minor if (i + j) % 2 == 0 else -minor

@@ -245,3 +245,66 @@ def back_substitute(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], rhs: 
         value = rhs[k] - sp.Add(*[R[k][j] * z[j] for j in range(k + 1, m)])
         z[k] = step(f"{label}z{k}", sp.Piecewise((value * inv, kept), (sp.S.Zero, True)))
     return z
+
+
+def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs: Sequence[sp.Expr],
+                         lam: sp.Expr, mu: sp.Expr, tol: sp.Expr, label: str, scaled_when_dropping: bool = False) -> list[sp.Expr]:
+    """``dq = M^T (M M^T + lambda^2 I)^+ rhs`` (n entries), ``M = rows`` (m rows of n), the minimiser of
+    ``|M dq - rhs|^2 + lambda^2 |dq|^2`` of least norm, in two QR stages:
+
+    1. Gram-Schmidt on the rows of ``B = diag(scales) M`` taken largest residual first (rank-revealing,
+       :func:`pivoted_gram_schmidt`; rows that are identically zero are left out): ``P B^T = Q R``; where
+       ``min(lambda, 1) <= tol |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every later
+       one). With more damping no row is dropped: the damping bounds what a small singular value ``s`` adds
+       (``s / (s^2 + lambda^2)``), and dropping its direction would cost up to ``tol |B|_F / lambda^2``.
+    2. ``dq = Q z`` with ``z`` the least-squares solution of ``[diag(scales)^-1 R^T; lambda I] z = [rhs; 0]``, by
+       a second Gram-Schmidt QR and a guarded back substitution.
+
+    With ``lambda = 0`` at a singular pose: the minimum-norm least-squares solution with the dropped rows'
+    residuals removed (``numpy.linalg.pinv`` with a relative cut-off near ``tol``); finite always. Its error follows
+    ``cond(B)``, not its square.
+
+    ``scaled_when_dropping``: where the rank rule applies (``min(lambda, 1) <= tol |B|_F``: the damping is negligible)
+    the second stage solves the scaled problem ``min |B dq - diag(scales) rhs|^2``: the same solution where the rows are
+    consistent, and where they are not (a singular pose) the least-squares compromise between rows of different units
+    measured in scaled units, which no unit of length changes (and whose rounding does not grow with the scales'
+    spread, as the unscaled rows' does: about eps / min(scales)^2 relative).
+
+    ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1). ``mu = 1/max(1, lambda)``:
+    the second stage solves the same least-squares problem with every row divided by ``max(1, lambda)``,
+    ``min |mu M dq - mu rhs|^2 + (mu lambda)^2 |dq|^2``, whose entries stay below ``|M|`` and 1 for every
+    finite lambda (``lambda^2`` overflows from 1.8e154 in double, 1.8e19 in float), and whose solution tends
+    to 0 as lambda grows (exactly 0 once ``mu`` underflows).
+    """
+    n = len(rows[0])
+    # a row of J that is identically zero (a SCARA's wx, wy) leaves the solution alone: it is not factorised
+    live = [r for r, row in enumerate(rows) if any(x != 0 for x in row)]
+    rows, scales, rhs = [rows[r] for r in live], [scales[r] for r in live], [rhs[r] for r in live]
+    m = len(rows)
+    scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
+    frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
+    factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
+    damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
+    # the rank rule serves the undamped solve (lambda at most the threshold): with more damping every row is
+    # kept, the damping bounds what a direction of a small singular value s adds (s / (s^2 + lambda^2)), and
+    # dropping it would cost up to threshold / lambda^2 (float, lambda = 0.1: 3e-3)
+    limit = step(f"{label}tau", tol * frob)
+    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(damping, limit)), (sp.S.Zero, True)))
+    if scaled_when_dropping:
+        dropping = sp.LessThan(damping, limit)
+        factor = [step(f"{label}g{r}", sp.Piecewise((mu, dropping), (factor[r], True))) if scales[r] != 1 else factor[r]
+                  for r in range(m)]
+        rhs = [step(f"{label}t{r}", sp.Piecewise((rhs[r] * scales[r], dropping), (rhs[r], True))) if scales[r] != 1 else rhs[r]
+               for r in range(m)]
+    # rows taken longest residual first (rank-revealing); each row's factor and right-hand side go with it
+    # (the order of a least-squares problem's rows does not change its solution)
+    first, order = pivoted_gram_schmidt(step, scaled, [(factor[r], rhs[r]) for r in range(m)], f"{label}A", threshold)
+    columns = []
+    for k in range(m):
+        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] * order[r][0]) for r in range(m)]
+        bottom = [damping if e == k else sp.S.Zero for e in range(m)]
+        columns.append(top + bottom)
+    second = gram_schmidt(step, columns, f"{label}B")
+    c = [step(f"{label}c{k}", mu * sp.Add(*[second.Q[k][r] * order[r][1] for r in range(m)])) for k in range(m)]
+    z = back_substitute(step, second.R, c, f"{label}s")
+    return [step(f"{label}x{j}", sp.Add(*[first.Q[k][j] * z[k] for k in range(m)])) for j in range(n)]

@@ -53,7 +53,7 @@ from typing import Sequence
 import sympy as sp
 
 from ...derive.core import RANK_TOL, FunctionSpec
-from ...derive.solve6 import adjugate_upper, back_substitute, gram_schmidt, guarded, pivoted_gram_schmidt
+from ...derive.solve6 import adjugate_upper, damped_least_squares, gram_schmidt, guarded
 
 INVERSE_FUNCTIONS = (
     FunctionSpec("ik_terms", ("q", "params"), ("T", "J"), "tool pose T and Jacobian J at once (the terms of an IK step)"),
@@ -120,43 +120,6 @@ def _hessian(step, joints, axes, linear, angular, n) -> list[list[list[sp.Expr]]
     return [[[step(f"H{r}_{c}_{j}", H[r][c][j]) for j in range(n)] for c in range(n)] for r in range(6)]
 
 
-def _least_squares(step, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs, lam, mu, tol, label):
-    """Two-stage QR solve of ``min |M dq - rhs|^2 + lambda^2 |dq|^2``, ``M = rows`` (see the module docstring).
-
-    ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1). ``mu = 1/max(1, lambda)``:
-    the second stage solves the same least-squares problem with every row divided by ``max(1, lambda)``,
-    ``min |mu M dq - mu rhs|^2 + (mu lambda)^2 |dq|^2``, whose entries stay below ``|M|`` and 1 for every
-    finite lambda (``lambda^2`` overflows from 1.8e154 in double, 1.8e19 in float), and whose solution tends
-    to 0 as lambda grows (exactly 0 once ``mu`` underflows).
-    """
-    n = len(rows[0])
-    # a row of J that is identically zero (a SCARA's wx, wy) leaves the solution alone: it is not factorised
-    live = [r for r, row in enumerate(rows) if any(x != 0 for x in row)]
-    rows, scales, rhs = [rows[r] for r in live], [scales[r] for r in live], [rhs[r] for r in live]
-    m = len(rows)
-    scaled = [[step(f"{label}b{r}_{c}", x * scales[r]) for c, x in enumerate(row)] for r, row in enumerate(rows)]
-    frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
-    factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
-    damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
-    # the rank rule serves the undamped solve (lambda at most the threshold): with more damping every row is
-    # kept, the damping bounds what a direction of a small singular value s adds (s / (s^2 + lambda^2)), and
-    # dropping it would cost up to threshold / lambda^2 (float, lambda = 0.1: 3e-3)
-    limit = step(f"{label}tau", tol * frob)
-    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(damping, limit)), (sp.S.Zero, True)))
-    # rows taken longest residual first (rank-revealing); each row's factor and right-hand side go with it
-    # (the order of a least-squares problem's rows does not change its solution)
-    first, order = pivoted_gram_schmidt(step, scaled, [(factor[r], rhs[r]) for r in range(m)], f"{label}A", threshold)
-    columns = []
-    for k in range(m):
-        top = [sp.S.Zero if r < k else step(f"{label}M{r}_{k}", first.R[k][r] * order[r][0]) for r in range(m)]
-        bottom = [damping if e == k else sp.S.Zero for e in range(m)]
-        columns.append(top + bottom)
-    second = gram_schmidt(step, columns, f"{label}B")
-    c = [step(f"{label}c{k}", mu * sp.Add(*[second.Q[k][r] * order[r][1] for r in range(m)])) for k in range(m)]
-    z = back_substitute(step, second.R, c, f"{label}s")
-    return [step(f"{label}x{j}", sp.Add(*[first.Q[k][j] * z[k] for k in range(m)])) for j in range(n)]
-
-
 def _manipulability(step, rows: Sequence[Sequence[sp.Expr]], label: str):
     """``(w, qr, by_rows)``: QR of the rows (when there are no more rows than columns) or columns."""
     m, n = len(rows), len(rows[0])
@@ -206,8 +169,8 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
     if reach.free_symbols:
         reach = step("reach", guarded(reach, sp.StrictGreaterThan(reach, 0)))
     ireach = step("ireach", 1 / reach) if reach.free_symbols else sp.Float(1 / float(reach), 17) if reach != 1 else sp.S.One
-    dq = _least_squares(step, rows, [ireach] * 3 + [sp.S.One] * 3, twist, lam, mu, tol, "iv")
-    dq_position = _least_squares(step, rows[:3], [sp.S.One] * 3, velocity, lam, mu, tol, "ip")
+    dq = damped_least_squares(step, rows, [ireach] * 3 + [sp.S.One] * 3, twist, lam, mu, tol, "iv")
+    dq_position = damped_least_squares(step, rows[:3], [sp.S.One] * 3, velocity, lam, mu, tol, "ip")
 
     JA = _jacobian_rpy(step, rows, tool_rotation, tol)
 

@@ -28,6 +28,7 @@ import sympy as sp
 from .model import PlanarArm
 from ...derive import linalg
 from ...derive.core import RANK_TOL, Derivation, FunctionSpec, StepRecorder, exact_number
+from ...derive.solve6 import damped_least_squares, guarded
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,15 +218,22 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             "p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.",
             "Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,",
             "solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).",
-            "lambda is a length. Rank rule, independent of the unit of length: the matrix counts as singular",
-            "when its smallest eigenvalue is below about RANK_TOL times its largest (2 x 2: det <= RANK_TOL *",
-            "trace^2, det = Cauchy-Binet sum without cancellation); for J3 the rows x, y are first divided by",
-            "the reach l1 + ... + ln. Then the pseudo-inverse is used in closed form, so lambda = 0 at a singular",
-            "pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).",
+            "lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where",
+            "J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5",
+            "beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves",
+            "with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose",
+            "residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).",
+            "So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y",
+            "errors in reach units).",
             "lambda enters squared (its sign does not matter). The C functions do not check their inputs:",
             "a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.",
         ),
     )
+
+
+def rank_spread(n: int) -> sp.Expr:
+    """The factor of a planar arm's rank tolerance over RANK_TOL: ``n / 5`` (n links, more than 5)."""
+    return sp.Rational(n, 5)
 
 
 def _unevaluated(func, angle: sp.Symbol) -> sp.Expr:
@@ -246,15 +254,19 @@ class _Inverse:
 def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
     """Manipulability, damped inverse velocity (2 and 3 rows) and the damped IK step, as steps.
 
-    ``J J^T`` is three sums over the columns (linear in n); every solve is the
-    closed form of :func:`skelarm_sym.derive.linalg.sym_solve`.
+    ``J J^T`` is three sums over the columns (linear in n); the two-row solves are
+    :func:`skelarm_sym.derive.linalg.damped_solve2`, the three-row one (``J3``, rows x, y in reach units)
+    :func:`skelarm_sym.derive.solve6.damped_least_squares`.
     """
     n = len(q)
     lam = sp.Symbol("lambda", real=True)
     v_in = sp.symbols("v_x v_y", real=True)
     twist = sp.symbols("t_x t_y t_w", real=True)
     target = sp.symbols("target_x target_y", real=True)
-    tol = RANK_TOL.symbol
+    # J's entries are sums of up to n rounded terms, so its singular values below about n eps of the largest are
+    # rounding: the rank rule's tolerance grows with n beyond 5 links (the check's SVD cuts at 10 n eps; at 64
+    # links RANK_TOL alone kept a rounding direction of a stretched arm: |dq| 1.6e13)
+    tol = RANK_TOL.symbol * rank_spread(n) if n > 5 else RANK_TOL.symbol
 
     G = linalg.gram(step, [jx, jy], "G")
     gs = linalg.gram_schmidt2(step, [jx, jy], G, "w")
@@ -268,29 +280,16 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
 
     inputs = {"v": v_in, "target": target, "lambda": (lam,)}
     outputs = {"w": sp.Matrix([w]), "dq": sp.Matrix(dq), "q_next": sp.Matrix(q_next)}
-    if n >= 3:  # with the orientation row (all ones): J3 J3^T + lambda^2 I, 3 x 3
-        # Rows x, y are lengths and the orientation row is a number: solve S y = D twist with
-        # S = D A D, D = diag(1/reach, 1/reach, 1), reach = l1 + ... + ln, so that the rank rule
-        # compares dimensionless eigenvalues (A^-1 = D S^-1 D where A is regular).
+    if n >= 3:  # with the orientation row (all ones): J3^T (J3 J3^T + lambda^2 I)^+ twist
+        # Rows x, y are lengths and the orientation row is a number: the rank rule compares the rows scaled by
+        # 1/reach (reach = l1 + ... + ln), dimensionless, as a 3-D chain's does (solve6.damped_least_squares:
+        # its error follows cond(J3), and a direction is dropped only where the damping is negligible too)
         reach = sp.Add(*lengths)
         ireach = step("ireach", 1 / linalg.nonzero(reach)) if not reach.is_number else sp.S.One / reach
-        ireach2 = step("ireach2", ireach**2)
-        sx = step("Gsx", sp.Add(*jx))
-        sy = step("Gsy", sp.Add(*jy))
-        # kappa S y = kappa D twist (see linalg.damping_scale): the same y, no overflow for a huge lambda
-        k2 = step("kireach2", kappa * ireach2)
-        k1 = step("kireach", kappa * ireach)
-        S = [
-            [step("S00", G[0][0] * k2 + lam2 * ireach2), step("S01", G[0][1] * k2), step("S02", sx * k1)],
-            [None, step("S11", G[1][1] * k2 + lam2 * ireach2), step("S12", sy * k1)],
-            [None, None, step("S22", sp.Integer(n) * kappa + lam2)],
-        ]
-        for i in range(3):
-            for j in range(i):
-                S[i][j] = S[j][i]
-        scaled = [step("tsx", twist[0] * k1), step("tsy", twist[1] * k1), step("tsw", twist[2] * kappa)]
-        y = linalg.sym_solve(step, S, scaled, tol, "iv3")
-        u = [step("iv3u0", y[0] * ireach), step("iv3u1", y[1] * ireach), y[2]]
+        size = step("lamabs", sp.Abs(lam))  # lambda enters squared: its sign does not matter
+        mu = step("mu3", 1 / guarded(size, sp.StrictGreaterThan(size, 1)))  # 1 / max(1, |lambda|)
         inputs["twist"] = twist
-        outputs["dq3"] = sp.Matrix([jx[i] * u[0] + jy[i] * u[1] + u[2] for i in range(n)])
+        dq3 = damped_least_squares(step, [jx, jy, [sp.S.One] * n], [ireach, ireach, sp.S.One], twist, size, mu, tol, "iv3",
+                                   scaled_when_dropping=True)
+        outputs["dq3"] = sp.Matrix(dq3)
     return _Inverse(inputs, outputs)
