@@ -328,6 +328,9 @@ def compile_shared(
             raise CompilerNotFound(f"cannot run the C compiler {cc!r}: {exc.strerror or exc}") from None
         if result.returncode != 0:
             raise compile_failure(c_files[0], command, result.returncode, result.stderr + result.stdout, str(work))
+        if not tmp_lib.is_file():  # CC=true: nothing to load, and "No such file" named no culprit
+            raise CompileError(f"compiling {c_files[0]} failed: the compiler {cc!r} exited 0 but wrote no library",
+                               command, result.stderr + result.stdout)
         tmp_sidecar = Path(work, "sidecar")
         tmp_sidecar.write_text(f"{full_key} {file_sha256(tmp_lib)}\n", encoding="ascii")
         # the library first, then the sidecar that vouches for it: a crash between leaves a
@@ -388,6 +391,8 @@ def compile_arm(generated, flags: Sequence[str] | None = None, compiler: str | N
         raise InputError(f"compile_arm takes what generate() returns, got {type(generated).__name__} {generated!r:.60}")
     if flags is not None and (isinstance(flags, str) or not all(isinstance(flag, str) for flag in flags)):
         raise InputError(f"flags must be a sequence of strings (['-O2']), got {flags!r:.60}")
+    if extension not in (None, True, False):  # "yes" (and "no") was taken as true
+        raise InputError(f"extension must be True, False or None, got {extension!r:.60}")
     if flags is None:
         flags = default_flags()
     EXT = EXTENSION_SUFFIX

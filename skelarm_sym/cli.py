@@ -156,8 +156,8 @@ def _write_files(model, lang, prefix, precision, out, functions, cmake, force, c
     """Generate ``model``'s files into ``out`` (compiled first with ``compile``) and report them."""
     from .generate import generate, validate_langs
 
-    if compile and "c" not in validate_langs(lang):
-        raise InputError("--compile builds the C: generate with lang 'c'")
+    if compile and not {"c", "cpython"} & set(validate_langs(lang)):  # cpython writes the C it includes
+        raise InputError("--compile builds the C: generate with lang 'c' (or 'cpython', which writes it too)")
     compiled = []
 
     def compile_first(result) -> None:
@@ -202,10 +202,11 @@ def _show(args) -> int:
 
 def _check(args) -> int:
     from .check import TABLE_NOTE, check_solvers, compare, load_generated, load_implementations, table
+    from .check.comparison import MAX_CASES
     from .generate import generate, validate_langs, validate_precision
 
-    if args.cases < 1:
-        raise InputError(f"--cases must be at least 1, got {args.cases}")
+    if not 1 <= args.cases <= MAX_CASES:
+        raise InputError(f"--cases must be between 1 and {MAX_CASES}, got {args.cases}")
     if args.seed < 0:
         raise InputError(f"--seed must be a whole number >= 0, got {args.seed}")
     if args.source is not None:

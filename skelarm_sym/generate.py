@@ -15,7 +15,6 @@ import numbers
 import os
 import re
 import shlex
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
@@ -31,7 +30,8 @@ from .files import new_file_mode, write_atomically  # noqa: F401 - re-exported
 from .ir.nodes import Function, Module
 from .models.planar import PlanarArm
 from .models.registry import kind_of
-from .names import C_RESERVED, IMPORTED_MODULES, reserved_prefix, standard_header  # noqa: F401 - C_RESERVED re-exported
+from .names import (C_RESERVED, CMAKE_KEYWORDS, CMAKE_RESERVED, IMPORTED_MODULES, PYTHON_MODULES,  # noqa: F401 - re-exported
+                    reserved_prefix, standard_header)
 
 PRECISIONS = ("double", "float")
 LANGUAGE_ALIASES = {"numpy": "python", "py": "python"}
@@ -54,7 +54,7 @@ def validate_prefix(prefix: object) -> str:
 def validate_module_name(prefix: str) -> str:
     """``prefix`` if ``{prefix}.py`` would not shadow a Python standard module or a module the emitted Python imports
     (:data:`~.names.IMPORTED_MODULES`: ``torch.py`` beside ``torch_torch.py``), else InputError."""
-    if prefix in sys.stdlib_module_names:
+    if prefix in PYTHON_MODULES:
         raise InputError(
             f"prefix {prefix!r} is a Python standard module: {prefix}.py would shadow it; choose another"
         )
@@ -70,22 +70,6 @@ def validate_header_name(prefix: str) -> str:
         raise InputError(f"prefix {prefix!r} names a C system header: {prefix}.h would be read for "
                          f"<{prefix.lower()}.h> wherever its folder is on the include path; choose another")
     return prefix
-
-
-CMAKE_RESERVED = frozenset(
-    """all clean help install install_local install_strip list_install_components test package package_source depend
-    edit_cache rebuild_cache all_build zero_check run_tests preinstall m""".split()
-)
-"""Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
-``INSTALL``), and ``m``, the math library the target links."""
-CMAKE_KEYWORDS = frozenset(
-    """SHARED STATIC MODULE OBJECT INTERFACE ALIAS IMPORTED GLOBAL UNKNOWN EXCLUDE_FROM_ALL PROPERTIES PUBLIC PRIVATE
-    BEFORE AFTER SYSTEM EXPORT ARCHIVE LIBRARY RUNTIME OBJECTS FRAMEWORK BUNDLE PRIVATE_HEADER PUBLIC_HEADER RESOURCE
-    INCLUDES FILE_SET CXX_MODULES_BMI DESTINATION PERMISSIONS CONFIGURATIONS COMPONENT NAMELINK_ONLY NAMELINK_SKIP
-    OPTIONAL LINK_PRIVATE LINK_PUBLIC LINK_INTERFACE_LIBRARIES""".split()
-)
-"""Keywords of the commands the CMakeLists.txt passes the target to (add_library, set_target_properties,
-target_include_directories, target_link_libraries, install): a target of that name is read as the keyword."""
 
 
 def validate_cmake_target(prefix: str) -> str:
@@ -490,8 +474,8 @@ def generate(
     if any(".h" in BACKENDS[lang].FILE_SUFFIXES for lang in langs):
         validate_header_name(prefix)
     target = _check_output_folder(out) if out is not None else None
-    if cmake and "c" not in langs:
-        raise InputError("--cmake builds the C: generate with lang 'c'")
+    if cmake and not {"c", "cpython"} & set(langs):  # cpython writes the C it includes
+        raise InputError("--cmake builds the C: generate with lang 'c' (or 'cpython', which writes it too)")
     if cmake:
         validate_cmake_target(prefix)
 
@@ -506,7 +490,10 @@ def generate(
                                                                      recorded_in, cmake),
                                    None if functions is None else wanted_functions(kind, functions))
             refuse_leftovers(leftovers, prefix)
-    derivation = kind.derive(model, None if functions is None else frozenset(function_items(functions)))
+    items = None if functions is None else frozenset(function_items(functions))
+    # no name at all: everything is derived, so that the error lists every function there is (not the few an empty
+    # selection derives)
+    derivation = kind.derive(model, items or None)
     derived, solvers = select_functions(kind, derivation, functions)
     chosen = None if functions is None else derived + solvers
     command = regenerate_command(model, prefix, precision, langs, chosen, recorded_in, cmake)

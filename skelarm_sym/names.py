@@ -74,6 +74,44 @@ def reserved_prefix(name: str) -> bool:
     return name in C_RESERVED or keyword.iskeyword(name) or name.lower() in ("numpy", "np")
 
 
+CMAKE_RESERVED = frozenset(
+    """all clean help install install_local install_strip list_install_components test package package_source depend
+    edit_cache rebuild_cache all_build zero_check run_tests preinstall m""".split()
+)
+"""Target names CMake reserves or its generators make (compared in lower case: Visual Studio's ``ALL_BUILD`` and
+``INSTALL``), and ``m``, the math library the target links."""
+CMAKE_KEYWORDS = frozenset(
+    """SHARED STATIC MODULE OBJECT INTERFACE ALIAS IMPORTED GLOBAL UNKNOWN EXCLUDE_FROM_ALL PROPERTIES PUBLIC PRIVATE
+    BEFORE AFTER SYSTEM EXPORT ARCHIVE LIBRARY RUNTIME OBJECTS FRAMEWORK BUNDLE PRIVATE_HEADER PUBLIC_HEADER RESOURCE
+    INCLUDES FILE_SET CXX_MODULES_BMI DESTINATION PERMISSIONS CONFIGURATIONS COMPONENT NAMELINK_ONLY NAMELINK_SKIP
+    OPTIONAL LINK_PRIVATE LINK_PUBLIC LINK_INTERFACE_LIBRARIES""".split()
+)
+"""Keywords of the commands the CMakeLists.txt passes the target to (add_library, set_target_properties,
+target_include_directories, target_link_libraries, install): a target of that name is read as the keyword."""
+
+
+def cmake_reserved(name: str) -> bool:
+    """True when CMake cannot take ``name`` as the library target's name: a target it reserves or makes
+    (:data:`CMAKE_RESERVED`, any case), a keyword of the commands the target is passed to (:data:`CMAKE_KEYWORDS`), or
+    ``CMAKE``/``CMAKE_*`` (its variables would be CMake's own)."""
+    upper = name.upper()
+    return name.lower() in CMAKE_RESERVED or name in CMAKE_KEYWORDS or upper == "CMAKE" or upper.startswith("CMAKE_")
+
+
+PYTHON_MODULES = frozenset(sys.stdlib_module_names) | {"test"}
+"""Python's standard modules (``sys.stdlib_module_names``, which leaves out the regression-test package ``test``
+that CPython installs): a ``{prefix}.py`` of one of these names would shadow it."""
+
+
+def unusable_default(name: str) -> bool:
+    """True when a robot's name or file name cannot be its files' default prefix in some output: a reserved
+    prefix (:func:`reserved_prefix`), a Python standard module, a module the emitted Python imports, a C system
+    header, or a name CMake reserves (:func:`cmake_reserved`). Such a name gets ``_robot`` after it
+    (:func:`identifier_from`), so that every language and ``--cmake`` take the default."""
+    return (reserved_prefix(name) or name in PYTHON_MODULES or name.lower() in IMPORTED_MODULES or standard_header(name)
+            or cmake_reserved(name))
+
+
 def reserved_name(name: str) -> bool:
     """True when ``name`` may not name a robot or a parameter: a keyword (C, C++ or Python), a name the
     emitted code relies on, or the name of an input's symbol (``q``, ``q1``, ``params``, ``lambda``, ...)."""
@@ -151,6 +189,9 @@ def check_printable(text: str, what: str, kind: str = "names") -> str:
             label = unicodedata.name(char, "")
             named = f" ({label})" if label else ""
             at = f" at character {position + 1}" if len(text) > QUOTED_LENGTH else ""
+            if 0xDC80 <= ord(char) <= 0xDCFF:  # a byte that is not UTF-8, as Python keeps it from a command line
+                raise InputError(f"{what} {quoted(text)} holds the byte 0x{ord(char) - 0xDC00:02X}{at}, which is not "
+                                 f"UTF-8; robot-file {kind} must be UTF-8 text")
             raise InputError(
                 f"{what} {quoted(text)} holds the control character U+{ord(char):04X}{named}{at}; "
                 f"robot-file {kind} must be printable text"
@@ -169,8 +210,9 @@ def identifier_from(text: str | None) -> str | None:
     Case is kept as written; every run of characters other than ASCII letters and digits (``_``, ``-``,
     spaces, dots, non-ASCII letters) becomes one ``_``, and ``_`` at either end is dropped; a name that starts with a digit gets
     ``robot_`` before it; the result is cut to :data:`IDENTIFIER_LENGTH` characters; a reserved word
-    (:func:`reserved_name`), a Python standard module (``test``, ``code``), a standard C header's name
-    (``stddef``: :data:`C_HEADERS`) or ``numpy``/``np`` gets ``_robot`` after it. ``"xarm7"`` -> ``xarm7``, ``"ur5 (copy)"`` -> ``ur5_copy``,
+    (:func:`reserved_name`) or a name no output can take as a prefix (:func:`unusable_default`: a Python standard
+    module such as ``test`` or ``code``, ``numpy``, ``torch``, a standard C header's name such as ``stddef``, a CMake
+    target name such as ``install``) gets ``_robot`` after it. ``"xarm7"`` -> ``xarm7``, ``"ur5 (copy)"`` -> ``ur5_copy``,
     ``"2dof"`` -> ``robot_2dof``, ``"double"`` -> ``double_robot``.
     """
     name = re.sub(r"[^A-Za-z0-9]+", "_", text or "").strip("_")
@@ -179,6 +221,8 @@ def identifier_from(text: str | None) -> str | None:
     if name[0].isdigit():
         name = "robot_" + name
     name = name[:IDENTIFIER_LENGTH].rstrip("_")
-    if reserved_name(name) or name in sys.stdlib_module_names or name.lower() in IMPORTED_MODULES or standard_header(name):
+    if reserved_name(name) or unusable_default(name):
         name = name[: IDENTIFIER_LENGTH - len("_robot")].rstrip("_") + "_robot"
+        if cmake_reserved(name):  # CMAKE_*: still CMake's own variables
+            name = "robot_" + name[: IDENTIFIER_LENGTH - len("robot_")]
     return name

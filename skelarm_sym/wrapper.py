@@ -332,8 +332,10 @@ class CompiledArm:
 
     def _solver_input(self, a: Argument, value, values: dict):
         """A solver's argument as an array of the library's type (its default, from the arguments before it in
-        ``values``, when it is None); a count goes into ``values`` checked, and gives None."""
-        if value is None and a.default is not None:
+        ``values``, when it is None and the signature's default is None: a default computed from them); a count goes
+        into ``values`` checked, and gives None. A None where the signature shows a number is refused, as the
+        emitted modules refuse it."""
+        if value is None and a.default is not None and type(a.default).__name__ != "Const":
             value = evaluate(a.default, values)
         if a.type is Type.INT:
             values[a.name] = iteration_count(value, a.name)

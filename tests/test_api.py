@@ -88,6 +88,32 @@ def test_arguments_of_the_wrong_type_are_a_value_error():
                           (lambda: compile_arm(None), "compile_arm takes what generate"),
                           (lambda: compile_arm(generated, compiler=5), "compiler must be a command"),
                           (lambda: compile_arm(generated, flags="-O2"), "flags must be a sequence of strings"),
-                          (lambda: compile_arm(generated, flags=[1]), "flags must be a sequence of strings")):
+                          (lambda: compile_arm(generated, flags=[1]), "flags must be a sequence of strings"),
+                          # a probe: extension="yes" was taken as true; an empty path was "a folder", a NUL one a bare
+                          # "embedded null byte"
+                          (lambda: compile_arm(generated, extension="yes"), "extension must be True, False or None"),
+                          (lambda: load_robot(""), "load_robot: the robot file's path is empty"),
+                          (lambda: load_robot("/tmp/a\0b.urdf"), r"the robot file's path '/tmp/a\\x00b\.urdf' holds a NUL")):
         with pytest.raises(ValueError, match=message):
             call()
+
+
+def test_none_for_a_solver_number_is_refused_alike_by_every_module():
+    """A probe: the compiled wrapper (ctypes and extension) took ``ik_solve(q0, target, l, None)`` as the default lambda,
+    where the emitted NumPy module (and PyTorch, JAX) refuse None; the README promises the same signatures. A None is
+    now taken only where the signature's default is None (a default computed from the other arguments: a planar arm's
+    tol), and refused with the same message elsewhere."""
+    import numpy as np
+
+    from skelarm_sym.build import compile_arm, load_python
+    from skelarm_sym.generate import generate
+
+    generated = generate(2, out=None, langs="c,python", functions="ik_solve")
+    modules = (compile_arm(generated), load_python(generated.sources["arm2.py"], "arm2"))
+    q0, target, l = np.array([0.3, 0.4]), np.array([1.2, 0.6]), np.ones(2)
+    for module in modules:
+        for args, message in (((None,), "lambda must hold real numbers, got object"),
+                              ((0.0, 1e-9, None), "max_iter must be a whole number")):
+            with pytest.raises(ValueError, match=message):
+                module.ik_solve(q0, target, l, *args)
+        assert module.ik_solve(q0, target, l, 0.0, None).status == "converged"

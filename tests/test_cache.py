@@ -187,6 +187,21 @@ def test_cli_reports_a_missing_compiler_in_one_line(tmp_path):
     assert run.returncode != 0 and "no-such-cc-4713" in run.stderr and "Traceback" not in run.stderr
 
 
+def test_a_compiler_that_writes_no_library_is_named(cache, tmp_path):
+    """A probe: ``CC=true`` (exit 0, no output) gave "No such file or directory: .../libur5.so" from the CLI and a bare
+    FileNotFoundError from ``compile_arm``; the compile error now says the compiler wrote no library."""
+    if not shutil.which("true"):
+        pytest.skip("no `true` program")
+    _, sources = _sources(2)
+    with pytest.raises(build.CompileError, match="the compiler 'true' exited 0 but wrote no library"):
+        build.compile_shared(sources, compiler="true")
+    env = {**os.environ, "CC": "true", "SKELARM_SYM_CACHE": str(cache), "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    run = subprocess.run([sys.executable, "-m", "skelarm_sym", "generate", "--links", "2", "--out", str(tmp_path / "o"),
+                          "--compile", "--functions", "position"], capture_output=True, text=True, env=env, timeout=300)
+    assert run.returncode != 0 and "exited 0 but wrote no library" in run.stderr.splitlines()[0]
+    assert not (tmp_path / "o").exists()
+
+
 def test_files_are_flushed_then_renamed_as_a_set(tmp_path, monkeypatch):
     events = []
     real_fsync, real_replace = os.fsync, os.replace

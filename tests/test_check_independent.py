@@ -61,6 +61,7 @@ def test_reference_is_numpy_pinv_and_lstsq(rng):
     ({"cases": 0}, "cases must be at least 1, got 0"),  # it returned an empty, passing table
     ({"cases": -1}, "cases must be at least 1"),  # "negative dimensions are not allowed"
     ({"cases": 2.5}, "cases must be a whole number, got 2.5"),
+    ({"cases": 10**11}, "cases must be at most 100000, got 100000000000"),  # a traceback: 4.37 TiB
     ({"cases": True}, "cases must be a whole number"),
     ({"seed": "x"}, "seed must be a whole number, got 'x'"),
     ({"seed": -3}, "seed must be at least 0"),

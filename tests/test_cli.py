@@ -53,12 +53,17 @@ def test_generate_writes_and_check_passes(tmp_path, capsys):
         (["generate", "--links", "2", "--lang", "fortran"], "unknown language"),
         (["generate", "--links", "2", "--precision", "half"], "unknown precision"),
         (["show", "--links", "2", "--what", "Q"], "unknown --what"),
-        (["check", "--links", "2", "--cases", "0"], "at least 1"),
+        (["check", "--links", "2", "--cases", "0"], "--cases must be between 1 and 100000, got 0"),
+        # a probe: 10^11 cases asked NumPy for 4.37 TiB (a traceback), 10^8 had the process killed
+        (["check", "--links", "2", "--cases", "100000000000"], "--cases must be between 1 and 100000, got 100000000000"),
         ([], "required"),
         # a new user's probe: messages that pointed the wrong way or listed too little
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "links"], "--what links lists a URDF file's link tree"),
         (["show", "--robot", str(ROBOTS / "ur5.toml"), "--what", "nosuch"], "all, ik, links"),
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", "nosuch"], "ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted"),
+        # a probe: an empty list named only the seven functions an empty selection derives
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", ""], "no function named; choose from pose, jacobian"),
+        (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--functions", " , "], "ik_solve_position, ik_all, ik_nearest, ik_nearest_weighted"),
         (["generate", "--robot", str(ROBOTS / "ur5.toml"), "--tip", "tool0"], "a tip link (tip= / --tip) is chosen in URDF files only"),
         (["generate", "--robot", str(ROBOTS / "panda.toml"), "--functions", "ik_all"], "lock one joint, --ik-lock JOINT"),
         # a security review: CMake refused these target names only when the user ran it

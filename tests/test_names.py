@@ -3,6 +3,8 @@ identifier made from a file name or robot name (identifier_from)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from skelarm_sym.errors import InputError
@@ -52,6 +54,24 @@ def test_control_format_and_separator_characters_are_refused(text, code, label):
     message = str(info.value)
     assert message == f"link name {text!r} holds the control character {code}{label}; robot-file names must be printable text"
     assert message.isprintable()  # one line, and no refused character reaches the terminal
+
+
+def test_a_byte_that_is_not_utf8_is_named_as_such(tmp_path, capsys):
+    """A probe: ``--tip $'\\xff\\xfe'`` said the tip "holds the control character U+DCFF" (Python keeps an undecodable
+    byte of a command line as a surrogate); it is a byte that is not UTF-8, and the message now says so."""
+    import os
+
+    from skelarm_sym.cli import main
+
+    with pytest.raises(InputError) as info:
+        check_printable("ab\udcff", "tip link")
+    assert str(info.value) == "tip link 'ab\\udcff' holds the byte 0xFF, which is not UTF-8; robot-file names must be UTF-8 text"
+    tip = os.fsdecode(b"\xff\xfe")
+    robot = Path(__file__).resolve().parents[1] / "examples" / "robots" / "ur5.urdf"
+    assert main(["generate", "--robot", str(robot), "--tip", tip, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "holds the byte 0xFF, which is not UTF-8" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
 
 
 def test_the_kind_of_text_ends_the_message_and_long_text_is_shortened():

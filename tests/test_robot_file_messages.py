@@ -26,6 +26,22 @@ def test_a_reserved_robot_name_gets_a_usable_default_prefix(tmp_path, name, pref
     assert sorted(p.name for p in result.paths) == sorted(prefix + s for s in (".h", ".c", ".py"))
 
 
+@pytest.mark.parametrize("name, prefix", [("torch", "torch_robot"), ("jax", "jax_robot"), ("cupy", "cupy_robot"),
+                                          ("test", "test_robot"), ("install", "install_robot"), ("m", "m_robot"),
+                                          ("PUBLIC", "PUBLIC_robot"), ("CMAKE_arm", "robot_CMAKE_arm_robot")])
+def test_a_robot_named_as_a_module_or_a_cmake_target_gets_a_prefix_every_output_takes(tmp_path, name, prefix):
+    """A probe: a TOML robot named ``torch`` (``jax``, ``cupy``) was refused with "prefix 'torch' is a module the emitted
+    Python imports" for a --prefix it never gave, and ``test``/``m`` with --cmake ("CMake reserves the target name"),
+    where a reserved word gets ``_robot``; ``test.py`` (not in sys.stdlib_module_names) could shadow Python's ``test``
+    package. Every such name now gets a default prefix that every language and --cmake take."""
+    robot = tmp_path / "r.toml"
+    robot.write_text(ONE_JOINT.format(name=name, a=1.0))
+    chain = load_robot(robot)
+    assert chain.name == name and chain.default_prefix == prefix
+    result = generate(chain, out=tmp_path / "out", functions="pose", langs="c,python,torch,jax", cmake=True)
+    assert {prefix + ".h", prefix + ".py", prefix + "_torch.py", "CMakeLists.txt"} <= {p.name for p in result.paths}
+
+
 def test_an_explicit_reserved_prefix_is_still_refused(tmp_path, capsys):
     robot = tmp_path / "r.toml"
     robot.write_text(ONE_JOINT.format(name="arm", a=1.0))
@@ -105,8 +121,20 @@ def test_compile_without_c_is_refused(tmp_path, capsys):
     """`generate --lang python --compile` exited 0 and compiled nothing, without a word (--cmake refused alike)."""
     scara = str(Path(__file__).resolve().parents[1] / "examples" / "robots" / "scara.toml")
     assert main(["generate", "--robot", scara, "--lang", "python", "--compile", "--out", str(tmp_path / "o")]) == 2
-    assert capsys.readouterr().err.strip() == "skelarm-sym: error: --compile builds the C: generate with lang 'c'"
+    assert capsys.readouterr().err.strip() == ("skelarm-sym: error: --compile builds the C: generate with lang 'c' (or "
+                                               "'cpython', which writes it too)")
     assert not (tmp_path / "o").exists()
+
+
+def test_compile_and_cmake_take_the_c_that_cpython_writes(tmp_path, capsys):
+    """A probe: `--lang cpython` writes the C its extension includes, yet `--lang cpython --compile` was refused with
+    "generate with lang 'c'". It compiles now, and --cmake takes that C too."""
+    scara = str(Path(__file__).resolve().parents[1] / "examples" / "robots" / "scara.toml")
+    out = tmp_path / "o"
+    assert main(["generate", "--robot", scara, "--lang", "cpython", "--compile", "--cmake", "--functions", "pose",
+                 "--out", str(out)]) == 0
+    assert "compiled " in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} == {"scara.h", "scara.c", "scara.ext.c", "CMakeLists.txt"}
 
 
 @pytest.mark.parametrize("langs", [None, 5, ["c", 3]])
@@ -120,3 +148,19 @@ def test_langs_of_another_type_is_a_value_error(langs):
 def test_a_folder_given_as_the_robot_file_is_named(tmp_path):
     with pytest.raises(ValueError, match="a folder, not a robot file"):
         load_robot(tmp_path)
+
+
+@pytest.mark.parametrize("text", ["1_0", "0x1", "0o7", "0b1", "\uff50\uff49/8", "1e1_0", "pi\u00a0/2"])
+def test_an_expression_takes_decimal_numbers_only(tmp_path, capsys, text):
+    """A probe: TOML expression strings took Python's spellings, ``a = "1_0"`` as 10, ``theta = "0x1"`` as 1 and a
+    full-width ``pi`` (Python folds it) as pi, where a URDF refuses ``0_5`` and the command line non-ASCII digits.
+    Now one line naming the value, exit 2, no files."""
+    robot = tmp_path / "r.toml"
+    robot.write_text(ONE_JOINT.format(name="arm", a=f'"{text}"'), encoding="utf-8")
+    assert main(["generate", "--robot", str(robot), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "joints[0].a: cannot parse" in err, err
+    assert not (tmp_path / "out").exists()
+    for fine, value in (("1e1", 10.0), ("0.5 + pi/2", 2.0707963267948966), (" 2 * (1 + 1) ", 4.0)):
+        robot.write_text(ONE_JOINT.format(name="arm", a=f'"{fine}"'))
+        assert float(load_robot(robot).joints[0].after.translation[0]) == pytest.approx(value, rel=1e-15)

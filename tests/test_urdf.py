@@ -384,7 +384,9 @@ J_BC = '<joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axi
         # snapped to a quarter turn: one unit in the last place of 1e20 is more than a turn
         (_arm(J_AB.replace("<axis", '<origin rpy="1e20 0 3e17"/><axis'), J_BC), {},
          "joint 'ab' origin rpy 1e+20 rad is beyond +-100000 rad, where a double keeps too few digits below a turn"),
-        (_arm(J_AB.replace("<axis", '<origin xyz="0 1"/><axis'), J_BC), {}, "joint 'ab' origin xyz must have 3 numbers"),
+        (_arm(J_AB.replace("<axis", '<origin xyz="0 1"/><axis'), J_BC), {}, "joint 'ab' origin xyz must be 3 numbers"),
+        (_arm(J_AB.replace("<axis", '<limit lower="" upper="1" effort="1" velocity="1"/><axis'), J_BC), {},
+         "joint 'ab' limit lower must be a number, got ''"),  # was "must have 1 numbers"
         (_arm(J_AB.replace('xyz="0 0 1"', 'xyz="0 0 0"'), J_BC), {}, "joint 'ab' axis has length zero"),
         (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="bc"/></joint>')), {}, "joint 'bc' mimic refers to itself"),
         (_arm(J_AB, J_BC.replace("</joint>", '<mimic joint="ab" multiplier="1e300"/></joint>')), {},
@@ -788,6 +790,9 @@ def test_a_cycle_is_named_in_one_pass(tmp_path):
         ("panda arm (copy).urdf", "panda", "panda_arm_copy", "panda"),
         ("2-link.urdf", "planar", "robot_2_link", "planar"),
         ("code.urdf", "x", "code_robot", "x"),
+        ("test.urdf", "x", "test_robot", "x"),  # not in sys.stdlib_module_names, yet Python's own test package
+        ("m.urdf", "x", "m_robot", "x"),  # the math library a --cmake target links
+        ("torch.urdf", "x", "torch_robot", "x"),
         ("ロボット.urdf", "UF_ROBOT", "UF_ROBOT", "UF_ROBOT"),  # no ASCII letter in the stem: the robot's name
         ("ロボット.urdf", "ロボット", "robot", "robot"),
     ],
@@ -928,3 +933,19 @@ def test_a_slides_mimic_offset_counts_toward_the_reach(tmp_path):
                     '</robot>')
     with pytest.raises(InputError, match=r"reach \(sum of its constant translations and slide offsets\) = 1e\+200"):
         generate(load_robot(path), out=None, functions="pose")
+
+
+def test_a_long_joint_name_stays_whole_in_the_header_notes(tmp_path):
+    """A probe: the header's "Joint limits" note was wrapped by textwrap's default, which cuts a word longer than the
+    line, so a joint name of 130 characters was split across two comment lines (the lists of joints keep names whole).
+    Every note now keeps a name on one line."""
+    from skelarm_sym.generate import generate
+
+    name = "shoulder_" + "x" * 121
+    limited = J_AB.replace('name="ab"', f'name="{name}"').replace(
+        "<axis", '<limit lower="-1" upper="1" effort="1" velocity="1"/><axis')
+    generated = generate(load_robot(write(tmp_path, _arm(limited, J_BC))), out=None, langs="c", functions="pose")
+    header = next(text for file, text in generated.sources.items() if file.endswith(".h"))
+    lines = header.splitlines()
+    start = next(i for i, line in enumerate(lines) if "Joint limits" in line)
+    assert any(line.endswith(" " + name) or f" {name} " in line for line in lines[start:start + 3])

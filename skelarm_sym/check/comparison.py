@@ -95,12 +95,20 @@ def load_implementations(generated: Generated) -> list[tuple[str, object]]:
             if all(prefix + suffix in generated.sources for suffix in backend.FILE_SUFFIXES)]
 
 
-def _check_whole(value: object, name: str, least: int | None) -> None:
-    """InputError unless ``value`` is a whole number (an int, NumPy's too; not a bool), at least ``least``."""
+MAX_CASES = 100_000
+"""Most random configurations a check takes (a seven-joint arm's Jacobians of 100,000 cases hold 34 MB an array;
+10^8 asked for terabytes)."""
+
+
+def _check_whole(value: object, name: str, least: int | None, most: int | None = None) -> None:
+    """InputError unless ``value`` is a whole number (an int, NumPy's too; not a bool), at least ``least`` and at
+    most ``most``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise InputError(f"{name} must be a whole number, got {value!r:.60}")
     if least is not None and value < least:
         raise InputError(f"{name} must be at least {least}, got {value}")
+    if most is not None and value > most:
+        raise InputError(f"{name} must be at most {most}, got {value}")
 
 
 def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: str = "double",
@@ -109,7 +117,7 @@ def compare(generated: Generated, cases: int = 100, seed: int = 0, precision: st
     ``implementations``, ``[(label, module)]``) against the reference. ``cases``: random configurations, a whole
     number of at least 1 (the judged poses add to them); ``seed``: a whole number, at least 0. InputError (a ValueError) for
     others."""
-    _check_whole(cases, "cases", 1)
+    _check_whole(cases, "cases", 1, MAX_CASES)
     _check_whole(seed, "seed", 0)
     derivation = generated.derivation
     scenarios = kind_of(derivation.model).scenarios(derivation, cases, seed, precision)
@@ -168,7 +176,7 @@ def _worst(got: np.ndarray, want: np.ndarray, axes: tuple[int, ...]) -> np.ndarr
 
 def run_check(n, lengths: Sequence[float] | None = None, precision: str = "double", cases: int = 100, seed: int = 0, langs=("c", "python")) -> list[OutputError]:
     """Generate (in memory), compile, and compare; see :func:`compare` (its arguments checked before the work)."""
-    _check_whole(cases, "cases", 1)
+    _check_whole(cases, "cases", 1, MAX_CASES)
     _check_whole(seed, "seed", 0)
     generated = generate(n, lengths=lengths, langs=langs, precision=precision, out=None)
     return compare(generated, cases=cases, seed=seed, precision=precision)

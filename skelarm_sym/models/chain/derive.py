@@ -249,7 +249,7 @@ def _notes(chain: Chain) -> tuple[str, ...]:
     return (
         f"Model: {chain.describe()}.",
         f"Joints (base to tip): {kinds}.",
-        *(textwrap.wrap(f"Mimic joints (moved by another joint's coordinate): {'; '.join(mimics)}.", 100) if mimics else ()),
+        *(_wrap(f"Mimic joints (moved by another joint's coordinate): {'; '.join(mimics)}.") if mimics else ()),
         f"Coordinates q[0..{n - 1}]: {', '.join(chain.coordinates)}; radians (revolute) or metres (prismatic);",
         "dq, ddq are their first and second time derivatives.",
         *(_URDF_ANGLES if (chain.source or "").lower().endswith(".urdf") else ()),
@@ -318,4 +318,10 @@ def _limit_tables(chain: Chain) -> tuple[tuple[Table, ...], tuple[str, ...]]:
     )
     limited = [j for j in chain.followers() if j.lower is not None or j.upper is not None or j.velocity is not None]
     narrowed = " Each coordinate's range keeps the mimic joints that follow it within their own limits." if limited else ""
-    return tuple(tables), tuple(textwrap.wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.{narrowed}", 100))
+    return tuple(tables), tuple(_wrap(f"Joint limits (Q_MIN, Q_MAX, DQ_MAX; -: none): {rows}.{narrowed}"))
+
+
+def _wrap(text: str) -> list[str]:
+    """``text`` in lines of at most 100 characters, a word longer than that (a joint's name) on a line of its own,
+    never cut: a note names joints whole, as the header's lists of joints do."""
+    return textwrap.wrap(text, 100, break_long_words=False, break_on_hyphens=False)

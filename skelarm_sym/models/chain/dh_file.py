@@ -34,15 +34,14 @@ import operator
 import os
 import re
 import stat
-import sys
 import tomllib
 from pathlib import Path
 
 import sympy as sp
 
 from ...errors import InputError
-from ...names import (IDENTIFIER_LENGTH, check_printable, identifier_from, quoted, derivation_symbol, reserved_name, reserved_prefix,
-                      standard_header)
+from ...names import (IDENTIFIER_LENGTH, check_printable, derivation_symbol, identifier_from, quoted, reserved_name,
+                      unusable_default)
 from .model import CONVENTIONS, KINDS, Chain, Transform, dh_joint, exact_angle, exact_number
 
 TOP_KEYS = {"name", "convention", "joints", "tool", "base", "description"}
@@ -55,6 +54,8 @@ MAX_TOML_BYTES = 1024 * 1024
 """Largest robot file read (1 MiB; a DH table of 200 joints has about 30 KiB)."""
 MAX_EXPRESSION_LENGTH = 256
 """Longest expression string (``"-155*pi/180"``) read as a value."""
+_EXPRESSION_TEXT = re.compile(r"(?:pi|[0-9.eE+\-*/() \t])*")
+"""The characters an expression may hold: decimal numbers (with an exponent), ``pi``, ``+ - * /``, parentheses, blanks."""
 MAX_EXPRESSION_DEPTH = 64
 """Deepest nesting of operators and parentheses in an expression (``"1+1+...+1"`` nests once per ``+``)."""
 
@@ -69,6 +70,10 @@ def parse_expression(text: str, what: str) -> sp.Expr:
             f"{what}: the expression {quoted(text, 40)} is longer than {MAX_EXPRESSION_LENGTH} characters"
         )
     cannot = f"{what}: cannot parse {quoted(text)} (numbers, pi, + - * / and parentheses)"
+    if not text.isascii() or not _EXPRESSION_TEXT.fullmatch(text):
+        # Python's own number spellings (1_0, 0x1, 0o7, 0b1) and the letters it folds (full-width pi) are not the
+        # decimal numbers a robot file holds: a URDF refuses them, and so does this
+        raise InputError(cannot)
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except (SyntaxError, ValueError):  # ValueError: a NUL byte
@@ -260,10 +265,11 @@ def chain_from_table(data: dict, source: str | None = None, default_name: str = 
 
 def _default_prefix(name: str) -> str:
     """The files' default prefix for a robot named ``name``: ``""`` (the name itself) where the name is usable
-    as a prefix, else the name made an identifier (a C or Python keyword, a Python standard module, a C system
-    header or NumPy: ``long`` gives ``long_robot``, ``stddef`` ``stddef_robot``), as a URDF's file name is."""
-    unusable = reserved_prefix(name) or name in sys.stdlib_module_names or standard_header(name)
-    return (identifier_from(name) or "robot") if unusable else ""
+    as a prefix in every output, else the name made an identifier (:func:`~skelarm_sym.names.unusable_default`: a C or
+    Python keyword, a Python standard module, a module the emitted Python imports, a C system header, a CMake target
+    name: ``long`` gives ``long_robot``, ``torch`` ``torch_robot``, ``install`` ``install_robot``), as a URDF's file
+    name is."""
+    return (identifier_from(name) or "robot") if unusable_default(name) else ""
 
 
 def read_robot_bytes(path: Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> bytes:

@@ -25,6 +25,7 @@ import os
 from pathlib import Path
 
 from ...errors import InputError
+from ...names import quoted
 from .model import Chain
 from .dh_file import MAX_TOML_BYTES, load_robot_file
 from .urdf import MAX_URDF_BYTES, MAX_URDF_ELEMENTS, UrdfLink, load_urdf, urdf_links, urdf_tree
@@ -59,7 +60,14 @@ def load_robot(path: str | os.PathLike, base: str | None = None, tip: str | None
     for what, value in (("base", base), ("tip", tip)):
         if value is not None and not isinstance(value, str):
             raise InputError(f"{what} must be a link's name (str), got {type(value).__name__} {value!r:.60}")
-    chain = _load(Path(path), base, tip)
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        text = os.fsdecode(text)
+    if not text:  # Path("") is the current folder: "a folder, not a robot file" named none
+        raise InputError("load_robot: the robot file's path is empty")
+    if "\0" in text:  # open() said only "embedded null byte"
+        raise InputError(f"load_robot: the robot file's path {quoted(text)} holds a NUL character")
+    chain = _load(Path(text), base, tip)
     if ik_lock is None:
         return chain
     from .lock import with_ik_lock

@@ -117,7 +117,7 @@ def _numbers(text: str | None, count: int, what: str, default: tuple[float, ...]
         return list(default)
     parts = text.split()
     if len(parts) != count:
-        raise InputError(f"{what} must have {count} numbers, got {quoted(text.strip())}")
+        raise InputError(f"{what} must be {'a number' if count == 1 else f'{count} numbers'}, got {quoted(text.strip())}")
     if not all(_DECIMAL.fullmatch(p) for p in parts):  # float() takes "1_0" (10), "١" and "infinity" too
         raise InputError(f"{what} must be decimal numbers (ASCII digits, a point, an exponent), got {quoted(text.strip())}")
     values = [float(p) for p in parts]
