@@ -10,8 +10,9 @@
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
- * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
- * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;
+ * inverse_velocity3 solves
  * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
  * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
  * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
@@ -26,7 +27,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x62123357UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0xe6e03996UL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1178,7 +1179,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 22 add/sub, 44 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 20 add/sub, 43 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1215,18 +1216,19 @@ static ARM2_LIGHT void arm2_inverse_velocity_finish(const double *restrict v, co
     const double t35 = (t20 ? v[0] : v[1]);
     const double t36 = (t20 ? v[1] : v[0]);
     const double t37 = t32*(t17 + t19);
-    const double t38 = t33*t34 + t31*(t37 + t31);
-    const int t39 = t38 > (ARM2_RANK_TOL*ARM2_RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31));
-    const double t40 = t35 + t36*t22;
-    const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
-    const double t42 = t31 + t33*(1.0 + t22*t22);
-    const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
-    const double t44 = (t39 ? t41*(t40*t31 + t34*t35) : t40*t43);
-    const double t45 = (t39 ? t41*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
-    const double t46 = t44*t23 + t45*t25;
-    dq[0] = t46;
-    const double t47 = t44*t24 + t45*t26;
-    dq[1] = t47;
+    const double t38 = t33*t34;
+    const double t39 = t38 + t31*(t37 + t31);
+    const int t40 = t31 > t37*ARM2_RANK_TOL || t38 > (t37*t37)*(ARM2_RANK_TOL*ARM2_RANK_TOL);
+    const double t41 = t35 + t36*t22;
+    const double t42 = t32*(t40 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
+    const double t43 = t31 + t33*(1.0 + t22*t22);
+    const double t44 = t32*(t43 > 0.0 ? 1.0/(t43 != 0.0 ? t43 : 1.0) : 1.0);
+    const double t45 = (t40 ? t42*(t41*t31 + t34*t35) : t41*t44);
+    const double t46 = (t40 ? t42*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
+    const double t47 = t45*t23 + t46*t25;
+    dq[0] = t47;
+    const double t48 = t45*t24 + t46*t26;
+    dq[1] = t48;
 }
 
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2])
@@ -1262,7 +1264,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 26 add/sub, 44 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 24 add/sub, 43 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1297,22 +1299,23 @@ static ARM2_LIGHT void arm2_ik_step_finish(const double *restrict q, const doubl
     const double t33 = t32*t21;
     const double t34 = t32*t27;
     const double t37 = t32*(t17 + t19);
-    const double t38 = t33*t34 + t31*(t37 + t31);
-    const int t39 = t38 > (ARM2_RANK_TOL*ARM2_RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31));
-    const double t41 = t32*(t39 ? 1.0/(t38 != 0.0 ? t38 : 1.0) : 1.0);
-    const double t42 = t31 + t33*(1.0 + t22*t22);
-    const double t43 = t32*(t42 > 0.0 ? 1.0/(t42 != 0.0 ? t42 : 1.0) : 1.0);
-    const double t48 = target[0] - t7;
-    const double t49 = t6 + target[1];
-    const double t50 = (t20 ? t48 : t49);
-    const double t51 = (t20 ? t49 : t48);
-    const double t52 = t50 + t51*t22;
-    const double t53 = (t39 ? t41*(t52*t31 + t50*t34) : t52*t43);
-    const double t54 = (t39 ? t41*(t51*t31 + t33*(t51 - t50*t22)) : 0.0);
-    const double t55 = t53*t23 + t54*t25;
-    q_next[0] = t55 + q[0];
-    const double t56 = t53*t24 + t54*t26;
-    q_next[1] = t56 + q[1];
+    const double t38 = t33*t34;
+    const double t39 = t38 + t31*(t37 + t31);
+    const int t40 = t31 > t37*ARM2_RANK_TOL || t38 > (t37*t37)*(ARM2_RANK_TOL*ARM2_RANK_TOL);
+    const double t42 = t32*(t40 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
+    const double t43 = t31 + t33*(1.0 + t22*t22);
+    const double t44 = t32*(t43 > 0.0 ? 1.0/(t43 != 0.0 ? t43 : 1.0) : 1.0);
+    const double t49 = target[0] - t7;
+    const double t50 = t6 + target[1];
+    const double t51 = (t20 ? t49 : t50);
+    const double t52 = (t20 ? t50 : t49);
+    const double t53 = t51 + t52*t22;
+    const double t54 = (t40 ? t42*(t53*t31 + t51*t34) : t53*t44);
+    const double t55 = (t40 ? t42*(t52*t31 + t33*(t52 - t51*t22)) : 0.0);
+    const double t56 = t54*t23 + t55*t25;
+    q_next[0] = t56 + q[0];
+    const double t57 = t54*t24 + t55*t26;
+    q_next[1] = t57 + q[1];
 }
 
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2])

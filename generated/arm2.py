@@ -10,8 +10,9 @@ p, v, a are (x, y) of the endpoint; H = dJ/dt, so a = J ddq + H dq.
 Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
 lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
-J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
-beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
+2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;
+inverse_velocity3 solves
 with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
 residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
 So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
@@ -30,7 +31,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x62123357
+STAMP = 0xe6e03996
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -617,18 +618,19 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t35 = np.where(t20, v[..., 0], v[..., 1])
     t36 = np.where(t20, v[..., 1], v[..., 0])
     t37 = t32*(t17 + t19)
-    t38 = t33*t34 + t31*(t37 + t31)
-    t39 = t38 > (RANK_TOL*RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31))
-    t40 = t35 + t36*t22
-    t41 = t32*np.where(t39, 1.0/t38, 1.0)
-    t42 = t31 + t33*(1.0 + t22*t22)
-    t43 = t32*np.where(t42 > 0.0, 1.0/t42, 1.0)
-    t44 = np.where(t39, t41*(t40*t31 + t34*t35), t40*t43)
-    t45 = np.where(t39, t41*(t33*(t36 - t35*t22) + t36*t31), 0.0)
-    t46 = t44*t23 + t45*t25
-    t47 = t44*t24 + t45*t26
-    dq[..., 0] = t46
-    dq[..., 1] = t47
+    t38 = t33*t34
+    t39 = t38 + t31*(t37 + t31)
+    t40 = (t31 > t37*RANK_TOL) | (t38 > (t37*t37)*(RANK_TOL*RANK_TOL))
+    t41 = t35 + t36*t22
+    t42 = t32*np.where(t40, 1.0/t39, 1.0)
+    t43 = t31 + t33*(1.0 + t22*t22)
+    t44 = t32*np.where(t43 > 0.0, 1.0/t43, 1.0)
+    t45 = np.where(t40, t42*(t41*t31 + t34*t35), t41*t44)
+    t46 = np.where(t40, t42*(t33*(t36 - t35*t22) + t36*t31), 0.0)
+    t47 = t45*t23 + t46*t25
+    t48 = t45*t24 + t46*t26
+    dq[..., 0] = t47
+    dq[..., 1] = t48
 
 
 @_signature_errors
@@ -640,7 +642,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 67 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 64 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -682,22 +684,23 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t33 = t32*t21
     t34 = t32*t27
     t37 = t32*(t17 + t19)
-    t38 = t33*t34 + t31*(t37 + t31)
-    t39 = t38 > (RANK_TOL*RANK_TOL)*((t37 + 2.0*t31)*(t37 + 2.0*t31))
-    t41 = t32*np.where(t39, 1.0/t38, 1.0)
-    t42 = t31 + t33*(1.0 + t22*t22)
-    t43 = t32*np.where(t42 > 0.0, 1.0/t42, 1.0)
-    t48 = target[..., 0] - t7
-    t49 = t6 + target[..., 1]
-    t50 = np.where(t20, t48, t49)
-    t51 = np.where(t20, t49, t48)
-    t52 = t50 + t51*t22
-    t53 = np.where(t39, t41*(t52*t31 + t50*t34), t52*t43)
-    t54 = np.where(t39, t41*(t51*t31 + t33*(t51 - t50*t22)), 0.0)
-    t55 = t53*t23 + t54*t25
-    t56 = t53*t24 + t54*t26
-    q_next[..., 0] = t55 + q[..., 0]
-    q_next[..., 1] = t56 + q[..., 1]
+    t38 = t33*t34
+    t39 = t38 + t31*(t37 + t31)
+    t40 = (t31 > t37*RANK_TOL) | (t38 > (t37*t37)*(RANK_TOL*RANK_TOL))
+    t42 = t32*np.where(t40, 1.0/t39, 1.0)
+    t43 = t31 + t33*(1.0 + t22*t22)
+    t44 = t32*np.where(t43 > 0.0, 1.0/t43, 1.0)
+    t49 = target[..., 0] - t7
+    t50 = t6 + target[..., 1]
+    t51 = np.where(t20, t49, t50)
+    t52 = np.where(t20, t50, t49)
+    t53 = t51 + t52*t22
+    t54 = np.where(t40, t42*(t53*t31 + t51*t34), t53*t44)
+    t55 = np.where(t40, t42*(t52*t31 + t33*(t52 - t51*t22)), 0.0)
+    t56 = t54*t23 + t55*t25
+    t57 = t54*t24 + t55*t26
+    q_next[..., 0] = t56 + q[..., 0]
+    q_next[..., 1] = t57 + q[..., 1]
 
 
 @_signature_errors
@@ -709,7 +712,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 71 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 68 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

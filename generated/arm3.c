@@ -10,8 +10,9 @@
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
- * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
- * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;
+ * inverse_velocity3 solves
  * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
  * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
  * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
@@ -26,7 +27,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xc26c844bUL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0x7e6fb179UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1258,7 +1259,7 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 53 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 29 add/sub, 52 mul, 1 neg, 4 div */
 
 static ARM3_LIGHT void arm3_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1302,20 +1303,21 @@ static ARM3_LIGHT void arm3_inverse_velocity_finish(const double *restrict v, co
     const double t47 = (t30 ? v[0] : v[1]);
     const double t48 = (t30 ? v[1] : v[0]);
     const double t49 = t44*(t27 + t29);
-    const double t50 = t45*t46 + t43*(t49 + t43);
-    const int t51 = t50 > (ARM3_RANK_TOL*ARM3_RANK_TOL)*((t49 + 2.0*t43)*(t49 + 2.0*t43));
-    const double t52 = t47 + t48*t32;
-    const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
-    const double t54 = t43 + t45*(1.0 + t32*t32);
-    const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
-    const double t56 = (t51 ? t53*(t52*t43 + t46*t47) : t52*t55);
-    const double t57 = (t51 ? t53*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
-    const double t58 = t56*t33 + t57*t36;
-    dq[0] = t58;
-    const double t59 = t56*t34 + t57*t37;
-    dq[1] = t59;
-    const double t60 = t56*t35 + t57*t38;
-    dq[2] = t60;
+    const double t50 = t45*t46;
+    const double t51 = t50 + t43*(t49 + t43);
+    const int t52 = t43 > t49*ARM3_RANK_TOL || t50 > (t49*t49)*(ARM3_RANK_TOL*ARM3_RANK_TOL);
+    const double t53 = t47 + t48*t32;
+    const double t54 = t44*(t52 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t55 = t43 + t45*(1.0 + t32*t32);
+    const double t56 = t44*(t55 > 0.0 ? 1.0/(t55 != 0.0 ? t55 : 1.0) : 1.0);
+    const double t57 = (t52 ? t54*(t53*t43 + t46*t47) : t53*t56);
+    const double t58 = (t52 ? t54*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
+    const double t59 = t57*t33 + t58*t36;
+    dq[0] = t59;
+    const double t60 = t57*t34 + t58*t37;
+    dq[1] = t60;
+    const double t61 = t57*t35 + t58*t38;
+    dq[2] = t61;
 }
 
 void arm3_inverse_velocity(const double q[3], const double v[2], const double l[3], double lambda, double dq[3])
@@ -1351,7 +1353,7 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 125 add/sub, 186 mul, 2 neg, 9 div, 7 sqrt */
+/* operations: 3 sin, 3 cos, 125 add/sub, 188 mul, 2 neg, 9 div, 8 sqrt */
 
 static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1372,200 +1374,203 @@ static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double *restrict twis
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t71 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
-    const double t72 = fabs(lambda);
-    const double t73 = (t72 > 1.0 ? 1.0/(t72 != 0.0 ? t72 : 1.0) : 1.0);
-    const double t74 = t71*t11;
-    const double t75 = t71*t9;
-    const double t76 = t71*t7;
-    const double t77 = t71*t12;
-    const double t78 = t71*t10;
-    const double t79 = t4*t71;
-    const double t80 = t74*t74;
-    const double t81 = t75*t75;
+    const double t72 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+    const double t73 = fabs(lambda);
+    const double t74 = (t73 > 1.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+    const double t75 = (t72 > 1.0 ? t72 : 1.0);
+    const double t76 = t72*t11;
+    const double t77 = t72*t9;
+    const double t78 = t72*t7;
+    const double t79 = t72*t12;
+    const double t80 = t72*t10;
+    const double t81 = t4*t72;
     const double t82 = t76*t76;
     const double t83 = t77*t77;
     const double t84 = t78*t78;
     const double t85 = t79*t79;
-    const double t86 = 3.0 + t80 + t81 + t82 + t83 + t84 + t85;
-    const double t87 = sqrt(t86);
-    const double t88 = t73/(t71 != 0.0 ? t71 : 1.0);
-    const double t89 = t72*t73;
-    const double t90 = t87*ARM3_RANK_TOL;
-    const int t91 = t89 <= t90;
-    const double t92 = (t91 ? t90 : 0.0);
-    const double t93 = (t91 ? t73 : t88);
-    const double t94 = (t91 ? t71*twist[0] : twist[0]);
-    const double t95 = (t91 ? t71*twist[1] : twist[1]);
-    const double t96 = t80 + t81 + t82;
-    const double t97 = t83 + t84 + t85;
-    const int t98 = 3.0 > t97;
-    const double t99 = (t98 ? 1.0 : t77);
-    const double t100 = (t98 ? 1.0 : t78);
-    const double t101 = (t98 ? 1.0 : t79);
-    const double t102 = (t98 ? t77 : 1.0);
-    const double t103 = (t98 ? t78 : 1.0);
-    const double t104 = (t98 ? t79 : 1.0);
-    const double t105 = (t98 ? t73 : t93);
-    const double t106 = (t98 ? twist[2] : t95);
-    const double t107 = (t98 ? t93 : t73);
-    const double t108 = (t98 ? t95 : twist[2]);
-    const double t109 = (t98 ? 3.0 : t97);
-    const int t110 = t109 > t96;
-    const double t111 = (t110 ? t99 : t74);
-    const double t112 = (t110 ? t100 : t75);
-    const double t113 = (t110 ? t101 : t76);
-    const double t114 = (t110 ? t74 : t99);
-    const double t115 = (t110 ? t75 : t100);
-    const double t116 = (t110 ? t76 : t101);
-    const double t117 = (t110 ? t105 : t93);
-    const double t118 = (t110 ? t106 : t94);
-    const double t119 = (t110 ? t93 : t105);
-    const double t120 = (t110 ? t94 : t106);
-    const double t121 = t111*t111 + t112*t112 + t113*t113;
-    const double t122 = sqrt(t121);
-    const int t123 = t122 > t92;
-    const double t124 = (t123 ? 1.0/(t122 != 0.0 ? t122 : 1.0) : 1.0);
-    const double t125 = (t123 ? t124*t111 : 0.0);
-    const double t126 = (t123 ? t124*t112 : 0.0);
-    const double t127 = (t123 ? t124*t113 : 0.0);
-    const double t128 = (t123 ? t122 : 0.0);
-    const double t129 = t125*t114 + t126*t115 + t127*t116;
-    const double t130 = t114 - t129*t125;
-    const double t131 = t115 - t129*t126;
-    const double t132 = t116 - t129*t127;
-    const double t133 = t125*t102 + t126*t103 + t127*t104;
-    const double t134 = t102 - t133*t125;
-    const double t135 = t103 - t133*t126;
-    const double t136 = t104 - t133*t127;
-    const double t137 = t130*t130 + t131*t131 + t132*t132;
-    const double t138 = t134*t134 + t135*t135 + t136*t136;
-    const int t139 = t138 > t137;
-    const double t140 = (t139 ? t134 : t130);
-    const double t141 = (t139 ? t135 : t131);
-    const double t142 = (t139 ? t136 : t132);
-    const double t143 = (t139 ? t130 : t134);
-    const double t144 = (t139 ? t131 : t135);
-    const double t145 = (t139 ? t132 : t136);
-    const double t146 = (t139 ? t133 : t129);
-    const double t147 = (t139 ? t129 : t133);
-    const double t148 = (t139 ? t107 : t119);
-    const double t149 = (t139 ? t108 : t120);
-    const double t150 = (t139 ? t119 : t107);
-    const double t151 = (t139 ? t120 : t108);
-    const double t152 = t125*t140 + t126*t141 + t127*t142;
-    const double t153 = t140 - t125*t152;
-    const double t154 = t141 - t126*t152;
-    const double t155 = t142 - t127*t152;
-    const double t156 = t153*t153 + t154*t154 + t155*t155;
-    const double t157 = sqrt(t156);
-    const int t158 = t157 > t92;
-    const double t159 = (t158 ? 1.0/(t157 != 0.0 ? t157 : 1.0) : 1.0);
-    const double t160 = (t158 ? t159*t153 : 0.0);
-    const double t161 = (t158 ? t159*t154 : 0.0);
-    const double t162 = (t158 ? t159*t155 : 0.0);
-    const double t163 = t146 + t152;
-    const double t164 = (t158 ? t157 : 0.0);
-    const double t165 = t160*t143 + t161*t144 + t162*t145;
-    const double t166 = t143 - t165*t160;
-    const double t167 = t144 - t165*t161;
-    const double t168 = t145 - t165*t162;
-    const double t169 = t125*t166 + t126*t167 + t127*t168;
-    const double t170 = t166 - t125*t169;
-    const double t171 = t167 - t126*t169;
-    const double t172 = t168 - t127*t169;
-    const double t173 = t160*t170 + t161*t171 + t162*t172;
-    const double t174 = t170 - t160*t173;
-    const double t175 = t171 - t161*t173;
-    const double t176 = t172 - t162*t173;
-    const double t177 = t174*t174 + t175*t175 + t176*t176;
-    const double t178 = sqrt(t177);
-    const int t179 = t178 > t92;
-    const double t180 = (t179 ? 1.0/(t178 != 0.0 ? t178 : 1.0) : 1.0);
-    const double t181 = (t179 ? t180*t174 : 0.0);
-    const double t182 = (t179 ? t180*t175 : 0.0);
-    const double t183 = (t179 ? t180*t176 : 0.0);
-    const double t184 = t147 + t169;
-    const double t185 = t165 + t173;
-    const double t186 = (t179 ? t178 : 0.0);
-    const double t187 = t128*t117;
-    const double t188 = t163*t148;
-    const double t189 = t184*t150;
-    const double t190 = t164*t148;
-    const double t191 = t185*t150;
-    const double t192 = t186*t150;
-    const double t193 = t89*t89;
-    const double t194 = t187*t187 + t188*t188 + t189*t189 + t193;
-    const double t195 = sqrt(t194);
-    const int t196 = t195 > 0.0;
-    const double t197 = (t196 ? 1.0/(t195 != 0.0 ? t195 : 1.0) : 1.0);
-    const double t198 = t197*t187;
-    const double t199 = t197*t188;
-    const double t200 = -t197*t189;
-    const double t201 = t197*t89;
-    const double t202 = t200*t191 - t199*t190;
-    const double t203 = t202*t198;
-    const double t204 = t190 + t202*t199;
-    const double t205 = t191 - t202*t200;
-    const double t206 = t202*t201;
-    const double t207 = t198*t203 + t199*t204 - t200*t205 + t201*t206;
-    const double t208 = t203 - t207*t198;
-    const double t209 = t204 - t207*t199;
-    const double t210 = t205 + t207*t200;
-    const double t211 = t206 - t207*t201;
-    const double t212 = t208*t208 + t209*t209 + t210*t210 + t211*t211 + t193;
-    const double t213 = sqrt(t212);
-    const int t214 = t213 > 0.0;
-    const double t215 = (t214 ? 1.0/(t213 != 0.0 ? t213 : 1.0) : 1.0);
-    const double t216 = t215*t208;
-    const double t217 = t215*t209;
-    const double t218 = t215*t210;
-    const double t219 = t215*t211;
-    const double t220 = t215*t89;
-    const double t221 = t207 - t202;
-    const double t222 = t200*t192;
-    const double t223 = t222*t198;
-    const double t224 = t222*t199;
-    const double t225 = t192 - t222*t200;
-    const double t226 = t222*t201;
-    const double t227 = t216*t223 + t217*t224 + t218*t225 + t219*t226;
-    const double t228 = t223 - t227*t216;
-    const double t229 = t224 - t227*t217;
-    const double t230 = t225 - t227*t218;
-    const double t231 = t226 - t227*t219;
-    const double t232 = t227*t220;
-    const double t233 = t198*t228 + t199*t229 - t200*t230 + t201*t231;
-    const double t234 = t228 - t233*t198;
-    const double t235 = t229 - t233*t199;
-    const double t236 = t230 + t233*t200;
-    const double t237 = t231 - t233*t201;
-    const double t238 = t216*t234 + t217*t235 + t218*t236 + t219*t237 - t220*t232;
-    const double t239 = t234 - t238*t216;
-    const double t240 = t235 - t238*t217;
-    const double t241 = t236 - t238*t218;
-    const double t242 = t237 - t238*t219;
-    const double t243 = t232 + t238*t220;
-    const double t244 = t239*t239 + t240*t240 + t241*t241 + t242*t242 + t243*t243 + t193;
-    const double t245 = sqrt(t244);
-    const int t246 = t245 > 0.0;
-    const double t247 = (t246 ? 1.0/(t245 != 0.0 ? t245 : 1.0) : 1.0);
-    const double t248 = t247*t239;
-    const double t249 = t247*t240;
-    const double t250 = t247*t241;
-    const double t251 = t233 - t222;
-    const double t252 = t227 + t238;
-    const double t253 = t73*(t118*t198 - t151*t200 + t149*t199);
-    const double t254 = t73*(t118*t216 + t151*t218 + t149*t217);
-    const double t255 = t73*(t118*t248 + t151*t250 + t149*t249);
-    const double t256 = (t246 ? t247*t255 : 0.0);
-    const double t257 = (t214 ? t215*(t254 - t252*t256) : 0.0);
-    const double t258 = (t196 ? t197*(t253 - t221*t257 - t251*t256) : 0.0);
-    const double t259 = t125*t258 + t160*t257 + t181*t256;
-    dq3[0] = t259;
-    const double t260 = t126*t258 + t161*t257 + t182*t256;
-    dq3[1] = t260;
-    const double t261 = t127*t258 + t162*t257 + t183*t256;
-    dq3[2] = t261;
+    const double t86 = t80*t80;
+    const double t87 = t81*t81;
+    const double t88 = 3.0 + t82 + t83 + t84 + t85 + t86 + t87;
+    const double t89 = sqrt(t88);
+    const double t90 = t74/(t72 != 0.0 ? t72 : 1.0);
+    const double t91 = t73*t74;
+    const double t92 = t89*ARM3_RANK_TOL;
+    const double t93 = t91*t75;
+    const double t94 = t89*sqrt(ARM3_RANK_TOL);
+    const double t95 = (t94 >= t93 ? t92 : 0.0);
+    const int t96 = t93 <= t92;
+    const double t97 = (t96 ? t74 : t90);
+    const double t98 = (t96 ? t72*twist[0] : twist[0]);
+    const double t99 = (t96 ? t72*twist[1] : twist[1]);
+    const double t100 = t82 + t83 + t84;
+    const double t101 = t85 + t86 + t87;
+    const int t102 = 3.0 > t101;
+    const double t103 = (t102 ? 1.0 : t79);
+    const double t104 = (t102 ? 1.0 : t80);
+    const double t105 = (t102 ? 1.0 : t81);
+    const double t106 = (t102 ? t79 : 1.0);
+    const double t107 = (t102 ? t80 : 1.0);
+    const double t108 = (t102 ? t81 : 1.0);
+    const double t109 = (t102 ? t74 : t97);
+    const double t110 = (t102 ? twist[2] : t99);
+    const double t111 = (t102 ? t97 : t74);
+    const double t112 = (t102 ? t99 : twist[2]);
+    const double t113 = (t102 ? 3.0 : t101);
+    const int t114 = t113 > t100;
+    const double t115 = (t114 ? t103 : t76);
+    const double t116 = (t114 ? t104 : t77);
+    const double t117 = (t114 ? t105 : t78);
+    const double t118 = (t114 ? t76 : t103);
+    const double t119 = (t114 ? t77 : t104);
+    const double t120 = (t114 ? t78 : t105);
+    const double t121 = (t114 ? t109 : t97);
+    const double t122 = (t114 ? t110 : t98);
+    const double t123 = (t114 ? t97 : t109);
+    const double t124 = (t114 ? t98 : t110);
+    const double t125 = t115*t115 + t116*t116 + t117*t117;
+    const double t126 = sqrt(t125);
+    const int t127 = t126 > t95;
+    const double t128 = (t127 ? 1.0/(t126 != 0.0 ? t126 : 1.0) : 1.0);
+    const double t129 = (t127 ? t128*t115 : 0.0);
+    const double t130 = (t127 ? t128*t116 : 0.0);
+    const double t131 = (t127 ? t128*t117 : 0.0);
+    const double t132 = (t127 ? t126 : 0.0);
+    const double t133 = t129*t118 + t130*t119 + t131*t120;
+    const double t134 = t118 - t133*t129;
+    const double t135 = t119 - t133*t130;
+    const double t136 = t120 - t133*t131;
+    const double t137 = t129*t106 + t130*t107 + t131*t108;
+    const double t138 = t106 - t137*t129;
+    const double t139 = t107 - t137*t130;
+    const double t140 = t108 - t137*t131;
+    const double t141 = t134*t134 + t135*t135 + t136*t136;
+    const double t142 = t138*t138 + t139*t139 + t140*t140;
+    const int t143 = t142 > t141;
+    const double t144 = (t143 ? t138 : t134);
+    const double t145 = (t143 ? t139 : t135);
+    const double t146 = (t143 ? t140 : t136);
+    const double t147 = (t143 ? t134 : t138);
+    const double t148 = (t143 ? t135 : t139);
+    const double t149 = (t143 ? t136 : t140);
+    const double t150 = (t143 ? t137 : t133);
+    const double t151 = (t143 ? t133 : t137);
+    const double t152 = (t143 ? t111 : t123);
+    const double t153 = (t143 ? t112 : t124);
+    const double t154 = (t143 ? t123 : t111);
+    const double t155 = (t143 ? t124 : t112);
+    const double t156 = t129*t144 + t130*t145 + t131*t146;
+    const double t157 = t144 - t129*t156;
+    const double t158 = t145 - t130*t156;
+    const double t159 = t146 - t131*t156;
+    const double t160 = t157*t157 + t158*t158 + t159*t159;
+    const double t161 = sqrt(t160);
+    const int t162 = t161 > t95;
+    const double t163 = (t162 ? 1.0/(t161 != 0.0 ? t161 : 1.0) : 1.0);
+    const double t164 = (t162 ? t163*t157 : 0.0);
+    const double t165 = (t162 ? t163*t158 : 0.0);
+    const double t166 = (t162 ? t163*t159 : 0.0);
+    const double t167 = t150 + t156;
+    const double t168 = (t162 ? t161 : 0.0);
+    const double t169 = t164*t147 + t165*t148 + t166*t149;
+    const double t170 = t147 - t169*t164;
+    const double t171 = t148 - t169*t165;
+    const double t172 = t149 - t169*t166;
+    const double t173 = t129*t170 + t130*t171 + t131*t172;
+    const double t174 = t170 - t129*t173;
+    const double t175 = t171 - t130*t173;
+    const double t176 = t172 - t131*t173;
+    const double t177 = t164*t174 + t165*t175 + t166*t176;
+    const double t178 = t174 - t164*t177;
+    const double t179 = t175 - t165*t177;
+    const double t180 = t176 - t166*t177;
+    const double t181 = t178*t178 + t179*t179 + t180*t180;
+    const double t182 = sqrt(t181);
+    const int t183 = t182 > t95;
+    const double t184 = (t183 ? 1.0/(t182 != 0.0 ? t182 : 1.0) : 1.0);
+    const double t185 = (t183 ? t184*t178 : 0.0);
+    const double t186 = (t183 ? t184*t179 : 0.0);
+    const double t187 = (t183 ? t184*t180 : 0.0);
+    const double t188 = t151 + t173;
+    const double t189 = t169 + t177;
+    const double t190 = (t183 ? t182 : 0.0);
+    const double t191 = t132*t121;
+    const double t192 = t167*t152;
+    const double t193 = t188*t154;
+    const double t194 = t168*t152;
+    const double t195 = t189*t154;
+    const double t196 = t190*t154;
+    const double t197 = t91*t91;
+    const double t198 = t191*t191 + t192*t192 + t193*t193 + t197;
+    const double t199 = sqrt(t198);
+    const int t200 = t199 > 0.0;
+    const double t201 = (t200 ? 1.0/(t199 != 0.0 ? t199 : 1.0) : 1.0);
+    const double t202 = t201*t191;
+    const double t203 = t201*t192;
+    const double t204 = -t201*t193;
+    const double t205 = t201*t91;
+    const double t206 = t204*t195 - t203*t194;
+    const double t207 = t206*t202;
+    const double t208 = t194 + t206*t203;
+    const double t209 = t195 - t206*t204;
+    const double t210 = t206*t205;
+    const double t211 = t202*t207 + t203*t208 - t204*t209 + t205*t210;
+    const double t212 = t207 - t211*t202;
+    const double t213 = t208 - t211*t203;
+    const double t214 = t209 + t211*t204;
+    const double t215 = t210 - t211*t205;
+    const double t216 = t212*t212 + t213*t213 + t214*t214 + t215*t215 + t197;
+    const double t217 = sqrt(t216);
+    const int t218 = t217 > 0.0;
+    const double t219 = (t218 ? 1.0/(t217 != 0.0 ? t217 : 1.0) : 1.0);
+    const double t220 = t219*t212;
+    const double t221 = t219*t213;
+    const double t222 = t219*t214;
+    const double t223 = t219*t215;
+    const double t224 = t219*t91;
+    const double t225 = t211 - t206;
+    const double t226 = t204*t196;
+    const double t227 = t226*t202;
+    const double t228 = t226*t203;
+    const double t229 = t196 - t226*t204;
+    const double t230 = t226*t205;
+    const double t231 = t220*t227 + t221*t228 + t222*t229 + t223*t230;
+    const double t232 = t227 - t231*t220;
+    const double t233 = t228 - t231*t221;
+    const double t234 = t229 - t231*t222;
+    const double t235 = t230 - t231*t223;
+    const double t236 = t231*t224;
+    const double t237 = t202*t232 + t203*t233 - t204*t234 + t205*t235;
+    const double t238 = t232 - t237*t202;
+    const double t239 = t233 - t237*t203;
+    const double t240 = t234 + t237*t204;
+    const double t241 = t235 - t237*t205;
+    const double t242 = t220*t238 + t221*t239 + t222*t240 + t223*t241 - t224*t236;
+    const double t243 = t238 - t242*t220;
+    const double t244 = t239 - t242*t221;
+    const double t245 = t240 - t242*t222;
+    const double t246 = t241 - t242*t223;
+    const double t247 = t236 + t242*t224;
+    const double t248 = t243*t243 + t244*t244 + t245*t245 + t246*t246 + t247*t247 + t197;
+    const double t249 = sqrt(t248);
+    const int t250 = t249 > 0.0;
+    const double t251 = (t250 ? 1.0/(t249 != 0.0 ? t249 : 1.0) : 1.0);
+    const double t252 = t251*t243;
+    const double t253 = t251*t244;
+    const double t254 = t251*t245;
+    const double t255 = t237 - t226;
+    const double t256 = t231 + t242;
+    const double t257 = t74*(t122*t202 - t155*t204 + t153*t203);
+    const double t258 = t74*(t122*t220 + t155*t222 + t153*t221);
+    const double t259 = t74*(t122*t252 + t155*t254 + t153*t253);
+    const double t260 = (t250 ? t251*t259 : 0.0);
+    const double t261 = (t218 ? t219*(t258 - t256*t260) : 0.0);
+    const double t262 = (t200 ? t201*(t257 - t225*t261 - t255*t260) : 0.0);
+    const double t263 = t129*t262 + t164*t261 + t185*t260;
+    dq3[0] = t263;
+    const double t264 = t130*t262 + t165*t261 + t186*t260;
+    dq3[1] = t264;
+    const double t265 = t131*t262 + t166*t261 + t187*t260;
+    dq3[2] = t265;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3])
@@ -1601,7 +1606,7 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 53 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 34 add/sub, 52 mul, 1 neg, 4 div */
 
 static ARM3_LIGHT void arm3_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1643,24 +1648,25 @@ static ARM3_LIGHT void arm3_ik_step_finish(const double *restrict q, const doubl
     const double t45 = t44*t31;
     const double t46 = t44*t39;
     const double t49 = t44*(t27 + t29);
-    const double t50 = t45*t46 + t43*(t49 + t43);
-    const int t51 = t50 > (ARM3_RANK_TOL*ARM3_RANK_TOL)*((t49 + 2.0*t43)*(t49 + 2.0*t43));
-    const double t53 = t44*(t51 ? 1.0/(t50 != 0.0 ? t50 : 1.0) : 1.0);
-    const double t54 = t43 + t45*(1.0 + t32*t32);
-    const double t55 = t44*(t54 > 0.0 ? 1.0/(t54 != 0.0 ? t54 : 1.0) : 1.0);
-    const double t61 = target[0] - t12;
-    const double t62 = t11 + target[1];
-    const double t63 = (t30 ? t61 : t62);
-    const double t64 = (t30 ? t62 : t61);
-    const double t65 = t63 + t64*t32;
-    const double t66 = (t51 ? t53*(t65*t43 + t63*t46) : t65*t55);
-    const double t67 = (t51 ? t53*(t64*t43 + t45*(t64 - t63*t32)) : 0.0);
-    const double t68 = t66*t33 + t67*t36;
-    q_next[0] = t68 + q[0];
-    const double t69 = t66*t34 + t67*t37;
-    q_next[1] = t69 + q[1];
-    const double t70 = t66*t35 + t67*t38;
-    q_next[2] = t70 + q[2];
+    const double t50 = t45*t46;
+    const double t51 = t50 + t43*(t49 + t43);
+    const int t52 = t43 > t49*ARM3_RANK_TOL || t50 > (t49*t49)*(ARM3_RANK_TOL*ARM3_RANK_TOL);
+    const double t54 = t44*(t52 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t55 = t43 + t45*(1.0 + t32*t32);
+    const double t56 = t44*(t55 > 0.0 ? 1.0/(t55 != 0.0 ? t55 : 1.0) : 1.0);
+    const double t62 = target[0] - t12;
+    const double t63 = t11 + target[1];
+    const double t64 = (t30 ? t62 : t63);
+    const double t65 = (t30 ? t63 : t62);
+    const double t66 = t64 + t65*t32;
+    const double t67 = (t52 ? t54*(t66*t43 + t64*t46) : t66*t56);
+    const double t68 = (t52 ? t54*(t65*t43 + t45*(t65 - t64*t32)) : 0.0);
+    const double t69 = t67*t33 + t68*t36;
+    q_next[0] = t69 + q[0];
+    const double t70 = t67*t34 + t68*t37;
+    q_next[1] = t70 + q[1];
+    const double t71 = t67*t35 + t68*t38;
+    q_next[2] = t71 + q[2];
 }
 
 void arm3_ik_step(const double q[3], const double target[2], const double l[3], double lambda, double q_next[3])

@@ -10,8 +10,9 @@
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
- * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
- * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;
+ * inverse_velocity3 solves
  * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
  * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
  * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
@@ -26,7 +27,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x0244d16bUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x56743feaUL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1061,7 +1062,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 31 add/sub, 51 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 29 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float *restrict q, float *restrict ang)
 {
@@ -1103,20 +1104,21 @@ static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float *restrict v, f
     const float t45 = (t28 ? v[0] : v[1]);
     const float t46 = (t28 ? v[1] : v[0]);
     const float t47 = t42*(t25 + t27);
-    const float t48 = t43*t44 + t41*(t47 + t41);
-    const int t49 = t48 > (ARM3F_RANK_TOL*ARM3F_RANK_TOL)*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
-    const float t50 = t45 + t46*t30;
-    const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
-    const float t52 = t41 + t43*(1.0f + t30*t30);
-    const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
-    const float t54 = (t49 ? t51*(t50*t41 + t44*t45) : t50*t53);
-    const float t55 = (t49 ? t51*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
-    const float t56 = t54*t31 + t55*t34;
-    dq[0] = t56;
-    const float t57 = t54*t32 + t55*t35;
-    dq[1] = t57;
-    const float t58 = t54*t33 + t55*t36;
-    dq[2] = t58;
+    const float t48 = t43*t44;
+    const float t49 = t48 + t41*(t47 + t41);
+    const int t50 = t41 > t47*ARM3F_RANK_TOL || t48 > (t47*t47)*(ARM3F_RANK_TOL*ARM3F_RANK_TOL);
+    const float t51 = t45 + t46*t30;
+    const float t52 = t42*(t50 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
+    const float t53 = t41 + t43*(1.0f + t30*t30);
+    const float t54 = t42*(t53 > 0.0f ? 1.0f/(t53 != 0.0f ? t53 : 1.0f) : 1.0f);
+    const float t55 = (t50 ? t52*(t51*t41 + t44*t45) : t51*t54);
+    const float t56 = (t50 ? t52*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
+    const float t57 = t55*t31 + t56*t34;
+    dq[0] = t57;
+    const float t58 = t55*t32 + t56*t35;
+    dq[1] = t58;
+    const float t59 = t55*t33 + t56*t36;
+    dq[2] = t59;
 }
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
@@ -1152,7 +1154,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 123 add/sub, 185 mul, 1 neg, 7 div, 7 sqrt */
+/* operations: 3 sin, 3 cos, 123 add/sub, 186 mul, 1 neg, 7 div, 8 sqrt */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float *restrict q, float *restrict ang)
 {
@@ -1171,199 +1173,200 @@ static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float *restrict twi
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t69 = fabsf(lambda);
-    const float t70 = (t69 > 1.0f ? 1.0f/(t69 != 0.0f ? t69 : 1.0f) : 1.0f);
-    const float t71 = 0.4347826f*t9;
-    const float t72 = 0.4347826f*t7;
-    const float t73 = 0.4347826f*t5;
-    const float t74 = 0.4347826f*t10;
-    const float t75 = 0.4347826f*t8;
-    const float t76 = 0.4347826f*t3;
-    const float t77 = t71*t71;
+    const float t70 = fabsf(lambda);
+    const float t71 = (t70 > 1.0f ? 1.0f/(t70 != 0.0f ? t70 : 1.0f) : 1.0f);
+    const float t72 = 0.4347826f*t9;
+    const float t73 = 0.4347826f*t7;
+    const float t74 = 0.4347826f*t5;
+    const float t75 = 0.4347826f*t10;
+    const float t76 = 0.4347826f*t8;
+    const float t77 = 0.4347826f*t3;
     const float t78 = t72*t72;
     const float t79 = t73*t73;
     const float t80 = t74*t74;
     const float t81 = t75*t75;
     const float t82 = t76*t76;
-    const float t83 = 3.0f + t77 + t78 + t79 + t80 + t81 + t82;
-    const float t84 = sqrtf(t83);
-    const float t85 = 2.3f*t70;
-    const float t86 = t69*t70;
-    const float t87 = t84*ARM3F_RANK_TOL;
-    const int t88 = t86 <= t87;
-    const float t89 = (t88 ? t87 : 0.0f);
-    const float t90 = (t88 ? t70 : t85);
-    const float t91 = (t88 ? 0.4347826f*twist[0] : twist[0]);
-    const float t92 = (t88 ? 0.4347826f*twist[1] : twist[1]);
-    const float t93 = t77 + t78 + t79;
-    const float t94 = t80 + t81 + t82;
-    const int t95 = 3.0f > t94;
-    const float t96 = (t95 ? 1.0f : t74);
-    const float t97 = (t95 ? 1.0f : t75);
-    const float t98 = (t95 ? 1.0f : t76);
-    const float t99 = (t95 ? t74 : 1.0f);
-    const float t100 = (t95 ? t75 : 1.0f);
-    const float t101 = (t95 ? t76 : 1.0f);
-    const float t102 = (t95 ? t70 : t90);
-    const float t103 = (t95 ? twist[2] : t92);
-    const float t104 = (t95 ? t90 : t70);
-    const float t105 = (t95 ? t92 : twist[2]);
-    const float t106 = (t95 ? 3.0f : t94);
-    const int t107 = t106 > t93;
-    const float t108 = (t107 ? t96 : t71);
-    const float t109 = (t107 ? t97 : t72);
-    const float t110 = (t107 ? t98 : t73);
-    const float t111 = (t107 ? t71 : t96);
-    const float t112 = (t107 ? t72 : t97);
-    const float t113 = (t107 ? t73 : t98);
-    const float t114 = (t107 ? t102 : t90);
-    const float t115 = (t107 ? t103 : t91);
-    const float t116 = (t107 ? t90 : t102);
-    const float t117 = (t107 ? t91 : t103);
-    const float t118 = t108*t108 + t109*t109 + t110*t110;
-    const float t119 = sqrtf(t118);
-    const int t120 = t119 > t89;
-    const float t121 = (t120 ? 1.0f/(t119 != 0.0f ? t119 : 1.0f) : 1.0f);
-    const float t122 = (t120 ? t121*t108 : 0.0f);
-    const float t123 = (t120 ? t121*t109 : 0.0f);
-    const float t124 = (t120 ? t121*t110 : 0.0f);
-    const float t125 = (t120 ? t119 : 0.0f);
-    const float t126 = t122*t111 + t123*t112 + t124*t113;
-    const float t127 = t111 - t126*t122;
-    const float t128 = t112 - t126*t123;
-    const float t129 = t113 - t126*t124;
-    const float t130 = t122*t99 + t123*t100 + t124*t101;
-    const float t131 = t99 - t130*t122;
-    const float t132 = t100 - t130*t123;
-    const float t133 = t101 - t130*t124;
-    const float t134 = t127*t127 + t128*t128 + t129*t129;
-    const float t135 = t131*t131 + t132*t132 + t133*t133;
-    const int t136 = t135 > t134;
-    const float t137 = (t136 ? t131 : t127);
-    const float t138 = (t136 ? t132 : t128);
-    const float t139 = (t136 ? t133 : t129);
-    const float t140 = (t136 ? t127 : t131);
-    const float t141 = (t136 ? t128 : t132);
-    const float t142 = (t136 ? t129 : t133);
-    const float t143 = (t136 ? t130 : t126);
-    const float t144 = (t136 ? t126 : t130);
-    const float t145 = (t136 ? t104 : t116);
-    const float t146 = (t136 ? t105 : t117);
-    const float t147 = (t136 ? t116 : t104);
-    const float t148 = (t136 ? t117 : t105);
-    const float t149 = t122*t137 + t123*t138 + t124*t139;
-    const float t150 = t137 - t122*t149;
-    const float t151 = t138 - t123*t149;
-    const float t152 = t139 - t124*t149;
-    const float t153 = t150*t150 + t151*t151 + t152*t152;
-    const float t154 = sqrtf(t153);
-    const int t155 = t154 > t89;
-    const float t156 = (t155 ? 1.0f/(t154 != 0.0f ? t154 : 1.0f) : 1.0f);
-    const float t157 = (t155 ? t156*t150 : 0.0f);
-    const float t158 = (t155 ? t156*t151 : 0.0f);
-    const float t159 = (t155 ? t156*t152 : 0.0f);
-    const float t160 = t143 + t149;
-    const float t161 = (t155 ? t154 : 0.0f);
-    const float t162 = t157*t140 + t158*t141 + t159*t142;
-    const float t163 = t140 - t162*t157;
-    const float t164 = t141 - t162*t158;
-    const float t165 = t142 - t162*t159;
-    const float t166 = t122*t163 + t123*t164 + t124*t165;
-    const float t167 = t163 - t122*t166;
-    const float t168 = t164 - t123*t166;
-    const float t169 = t165 - t124*t166;
-    const float t170 = t157*t167 + t158*t168 + t159*t169;
-    const float t171 = t167 - t157*t170;
-    const float t172 = t168 - t158*t170;
-    const float t173 = t169 - t159*t170;
-    const float t174 = t171*t171 + t172*t172 + t173*t173;
-    const float t175 = sqrtf(t174);
-    const int t176 = t175 > t89;
-    const float t177 = (t176 ? 1.0f/(t175 != 0.0f ? t175 : 1.0f) : 1.0f);
-    const float t178 = (t176 ? t177*t171 : 0.0f);
-    const float t179 = (t176 ? t177*t172 : 0.0f);
-    const float t180 = (t176 ? t177*t173 : 0.0f);
-    const float t181 = t144 + t166;
-    const float t182 = t162 + t170;
-    const float t183 = (t176 ? t175 : 0.0f);
-    const float t184 = t125*t114;
-    const float t185 = t160*t145;
-    const float t186 = t181*t147;
-    const float t187 = t161*t145;
-    const float t188 = t182*t147;
-    const float t189 = t183*t147;
-    const float t190 = t86*t86;
-    const float t191 = t184*t184 + t185*t185 + t186*t186 + t190;
-    const float t192 = sqrtf(t191);
-    const int t193 = t192 > 0.0f;
-    const float t194 = (t193 ? 1.0f/(t192 != 0.0f ? t192 : 1.0f) : 1.0f);
-    const float t195 = t194*t184;
-    const float t196 = t194*t185;
-    const float t197 = -t194*t186;
-    const float t198 = t194*t86;
-    const float t199 = t197*t188 - t196*t187;
-    const float t200 = t199*t195;
-    const float t201 = t187 + t199*t196;
-    const float t202 = t188 - t199*t197;
-    const float t203 = t199*t198;
-    const float t204 = t195*t200 + t196*t201 - t197*t202 + t198*t203;
-    const float t205 = t200 - t204*t195;
-    const float t206 = t201 - t204*t196;
-    const float t207 = t202 + t204*t197;
-    const float t208 = t203 - t204*t198;
-    const float t209 = t205*t205 + t206*t206 + t207*t207 + t208*t208 + t190;
-    const float t210 = sqrtf(t209);
-    const int t211 = t210 > 0.0f;
-    const float t212 = (t211 ? 1.0f/(t210 != 0.0f ? t210 : 1.0f) : 1.0f);
-    const float t213 = t212*t205;
-    const float t214 = t212*t206;
-    const float t215 = t212*t207;
-    const float t216 = t212*t208;
-    const float t217 = t212*t86;
-    const float t218 = t204 - t199;
-    const float t219 = t197*t189;
-    const float t220 = t219*t195;
-    const float t221 = t219*t196;
-    const float t222 = t189 - t219*t197;
-    const float t223 = t219*t198;
-    const float t224 = t213*t220 + t214*t221 + t215*t222 + t216*t223;
-    const float t225 = t220 - t224*t213;
-    const float t226 = t221 - t224*t214;
-    const float t227 = t222 - t224*t215;
-    const float t228 = t223 - t224*t216;
-    const float t229 = t224*t217;
-    const float t230 = t195*t225 + t196*t226 - t197*t227 + t198*t228;
-    const float t231 = t225 - t230*t195;
-    const float t232 = t226 - t230*t196;
-    const float t233 = t227 + t230*t197;
-    const float t234 = t228 - t230*t198;
-    const float t235 = t213*t231 + t214*t232 + t215*t233 + t216*t234 - t217*t229;
-    const float t236 = t231 - t235*t213;
-    const float t237 = t232 - t235*t214;
-    const float t238 = t233 - t235*t215;
-    const float t239 = t234 - t235*t216;
-    const float t240 = t229 + t235*t217;
-    const float t241 = t236*t236 + t237*t237 + t238*t238 + t239*t239 + t240*t240 + t190;
-    const float t242 = sqrtf(t241);
-    const int t243 = t242 > 0.0f;
-    const float t244 = (t243 ? 1.0f/(t242 != 0.0f ? t242 : 1.0f) : 1.0f);
-    const float t245 = t244*t236;
-    const float t246 = t244*t237;
-    const float t247 = t244*t238;
-    const float t248 = t230 - t219;
-    const float t249 = t224 + t235;
-    const float t250 = t70*(t115*t195 - t148*t197 + t146*t196);
-    const float t251 = t70*(t115*t213 + t148*t215 + t146*t214);
-    const float t252 = t70*(t115*t245 + t148*t247 + t146*t246);
-    const float t253 = (t243 ? t244*t252 : 0.0f);
-    const float t254 = (t211 ? t212*(t251 - t249*t253) : 0.0f);
-    const float t255 = (t193 ? t194*(t250 - t218*t254 - t248*t253) : 0.0f);
-    const float t256 = t122*t255 + t157*t254 + t178*t253;
-    dq3[0] = t256;
-    const float t257 = t123*t255 + t158*t254 + t179*t253;
-    dq3[1] = t257;
-    const float t258 = t124*t255 + t159*t254 + t180*t253;
-    dq3[2] = t258;
+    const float t83 = t77*t77;
+    const float t84 = 3.0f + t78 + t79 + t80 + t81 + t82 + t83;
+    const float t85 = sqrtf(t84);
+    const float t86 = 2.3f*t71;
+    const float t87 = t70*t71;
+    const float t88 = t85*ARM3F_RANK_TOL;
+    const float t89 = t85*sqrtf(ARM3F_RANK_TOL);
+    const float t90 = (t89 >= t87 ? t88 : 0.0f);
+    const int t91 = t87 <= t88;
+    const float t92 = (t91 ? t71 : t86);
+    const float t93 = (t91 ? 0.4347826f*twist[0] : twist[0]);
+    const float t94 = (t91 ? 0.4347826f*twist[1] : twist[1]);
+    const float t95 = t78 + t79 + t80;
+    const float t96 = t81 + t82 + t83;
+    const int t97 = 3.0f > t96;
+    const float t98 = (t97 ? 1.0f : t75);
+    const float t99 = (t97 ? 1.0f : t76);
+    const float t100 = (t97 ? 1.0f : t77);
+    const float t101 = (t97 ? t75 : 1.0f);
+    const float t102 = (t97 ? t76 : 1.0f);
+    const float t103 = (t97 ? t77 : 1.0f);
+    const float t104 = (t97 ? t71 : t92);
+    const float t105 = (t97 ? twist[2] : t94);
+    const float t106 = (t97 ? t92 : t71);
+    const float t107 = (t97 ? t94 : twist[2]);
+    const float t108 = (t97 ? 3.0f : t96);
+    const int t109 = t108 > t95;
+    const float t110 = (t109 ? t98 : t72);
+    const float t111 = (t109 ? t99 : t73);
+    const float t112 = (t109 ? t100 : t74);
+    const float t113 = (t109 ? t72 : t98);
+    const float t114 = (t109 ? t73 : t99);
+    const float t115 = (t109 ? t74 : t100);
+    const float t116 = (t109 ? t104 : t92);
+    const float t117 = (t109 ? t105 : t93);
+    const float t118 = (t109 ? t92 : t104);
+    const float t119 = (t109 ? t93 : t105);
+    const float t120 = t110*t110 + t111*t111 + t112*t112;
+    const float t121 = sqrtf(t120);
+    const int t122 = t121 > t90;
+    const float t123 = (t122 ? 1.0f/(t121 != 0.0f ? t121 : 1.0f) : 1.0f);
+    const float t124 = (t122 ? t123*t110 : 0.0f);
+    const float t125 = (t122 ? t123*t111 : 0.0f);
+    const float t126 = (t122 ? t123*t112 : 0.0f);
+    const float t127 = (t122 ? t121 : 0.0f);
+    const float t128 = t124*t113 + t125*t114 + t126*t115;
+    const float t129 = t113 - t128*t124;
+    const float t130 = t114 - t128*t125;
+    const float t131 = t115 - t128*t126;
+    const float t132 = t124*t101 + t125*t102 + t126*t103;
+    const float t133 = t101 - t132*t124;
+    const float t134 = t102 - t132*t125;
+    const float t135 = t103 - t132*t126;
+    const float t136 = t129*t129 + t130*t130 + t131*t131;
+    const float t137 = t133*t133 + t134*t134 + t135*t135;
+    const int t138 = t137 > t136;
+    const float t139 = (t138 ? t133 : t129);
+    const float t140 = (t138 ? t134 : t130);
+    const float t141 = (t138 ? t135 : t131);
+    const float t142 = (t138 ? t129 : t133);
+    const float t143 = (t138 ? t130 : t134);
+    const float t144 = (t138 ? t131 : t135);
+    const float t145 = (t138 ? t132 : t128);
+    const float t146 = (t138 ? t128 : t132);
+    const float t147 = (t138 ? t106 : t118);
+    const float t148 = (t138 ? t107 : t119);
+    const float t149 = (t138 ? t118 : t106);
+    const float t150 = (t138 ? t119 : t107);
+    const float t151 = t124*t139 + t125*t140 + t126*t141;
+    const float t152 = t139 - t124*t151;
+    const float t153 = t140 - t125*t151;
+    const float t154 = t141 - t126*t151;
+    const float t155 = t152*t152 + t153*t153 + t154*t154;
+    const float t156 = sqrtf(t155);
+    const int t157 = t156 > t90;
+    const float t158 = (t157 ? 1.0f/(t156 != 0.0f ? t156 : 1.0f) : 1.0f);
+    const float t159 = (t157 ? t158*t152 : 0.0f);
+    const float t160 = (t157 ? t158*t153 : 0.0f);
+    const float t161 = (t157 ? t158*t154 : 0.0f);
+    const float t162 = t145 + t151;
+    const float t163 = (t157 ? t156 : 0.0f);
+    const float t164 = t159*t142 + t160*t143 + t161*t144;
+    const float t165 = t142 - t164*t159;
+    const float t166 = t143 - t164*t160;
+    const float t167 = t144 - t164*t161;
+    const float t168 = t124*t165 + t125*t166 + t126*t167;
+    const float t169 = t165 - t124*t168;
+    const float t170 = t166 - t125*t168;
+    const float t171 = t167 - t126*t168;
+    const float t172 = t159*t169 + t160*t170 + t161*t171;
+    const float t173 = t169 - t159*t172;
+    const float t174 = t170 - t160*t172;
+    const float t175 = t171 - t161*t172;
+    const float t176 = t173*t173 + t174*t174 + t175*t175;
+    const float t177 = sqrtf(t176);
+    const int t178 = t177 > t90;
+    const float t179 = (t178 ? 1.0f/(t177 != 0.0f ? t177 : 1.0f) : 1.0f);
+    const float t180 = (t178 ? t179*t173 : 0.0f);
+    const float t181 = (t178 ? t179*t174 : 0.0f);
+    const float t182 = (t178 ? t179*t175 : 0.0f);
+    const float t183 = t146 + t168;
+    const float t184 = t164 + t172;
+    const float t185 = (t178 ? t177 : 0.0f);
+    const float t186 = t127*t116;
+    const float t187 = t162*t147;
+    const float t188 = t183*t149;
+    const float t189 = t163*t147;
+    const float t190 = t184*t149;
+    const float t191 = t185*t149;
+    const float t192 = t87*t87;
+    const float t193 = t186*t186 + t187*t187 + t188*t188 + t192;
+    const float t194 = sqrtf(t193);
+    const int t195 = t194 > 0.0f;
+    const float t196 = (t195 ? 1.0f/(t194 != 0.0f ? t194 : 1.0f) : 1.0f);
+    const float t197 = t196*t186;
+    const float t198 = t196*t187;
+    const float t199 = -t196*t188;
+    const float t200 = t196*t87;
+    const float t201 = t199*t190 - t198*t189;
+    const float t202 = t201*t197;
+    const float t203 = t189 + t201*t198;
+    const float t204 = t190 - t201*t199;
+    const float t205 = t201*t200;
+    const float t206 = t197*t202 + t198*t203 - t199*t204 + t200*t205;
+    const float t207 = t202 - t206*t197;
+    const float t208 = t203 - t206*t198;
+    const float t209 = t204 + t206*t199;
+    const float t210 = t205 - t206*t200;
+    const float t211 = t207*t207 + t208*t208 + t209*t209 + t210*t210 + t192;
+    const float t212 = sqrtf(t211);
+    const int t213 = t212 > 0.0f;
+    const float t214 = (t213 ? 1.0f/(t212 != 0.0f ? t212 : 1.0f) : 1.0f);
+    const float t215 = t214*t207;
+    const float t216 = t214*t208;
+    const float t217 = t214*t209;
+    const float t218 = t214*t210;
+    const float t219 = t214*t87;
+    const float t220 = t206 - t201;
+    const float t221 = t199*t191;
+    const float t222 = t221*t197;
+    const float t223 = t221*t198;
+    const float t224 = t191 - t221*t199;
+    const float t225 = t221*t200;
+    const float t226 = t215*t222 + t216*t223 + t217*t224 + t218*t225;
+    const float t227 = t222 - t226*t215;
+    const float t228 = t223 - t226*t216;
+    const float t229 = t224 - t226*t217;
+    const float t230 = t225 - t226*t218;
+    const float t231 = t226*t219;
+    const float t232 = t197*t227 + t198*t228 - t199*t229 + t200*t230;
+    const float t233 = t227 - t232*t197;
+    const float t234 = t228 - t232*t198;
+    const float t235 = t229 + t232*t199;
+    const float t236 = t230 - t232*t200;
+    const float t237 = t215*t233 + t216*t234 + t217*t235 + t218*t236 - t219*t231;
+    const float t238 = t233 - t237*t215;
+    const float t239 = t234 - t237*t216;
+    const float t240 = t235 - t237*t217;
+    const float t241 = t236 - t237*t218;
+    const float t242 = t231 + t237*t219;
+    const float t243 = t238*t238 + t239*t239 + t240*t240 + t241*t241 + t242*t242 + t192;
+    const float t244 = sqrtf(t243);
+    const int t245 = t244 > 0.0f;
+    const float t246 = (t245 ? 1.0f/(t244 != 0.0f ? t244 : 1.0f) : 1.0f);
+    const float t247 = t246*t238;
+    const float t248 = t246*t239;
+    const float t249 = t246*t240;
+    const float t250 = t232 - t221;
+    const float t251 = t226 + t237;
+    const float t252 = t71*(t117*t197 - t150*t199 + t148*t198);
+    const float t253 = t71*(t117*t215 + t150*t217 + t148*t216);
+    const float t254 = t71*(t117*t247 + t150*t249 + t148*t248);
+    const float t255 = (t245 ? t246*t254 : 0.0f);
+    const float t256 = (t213 ? t214*(t253 - t251*t255) : 0.0f);
+    const float t257 = (t195 ? t196*(t252 - t220*t256 - t250*t255) : 0.0f);
+    const float t258 = t124*t257 + t159*t256 + t180*t255;
+    dq3[0] = t258;
+    const float t259 = t125*t257 + t160*t256 + t181*t255;
+    dq3[1] = t259;
+    const float t260 = t126*t257 + t161*t256 + t182*t255;
+    dq3[2] = t260;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1399,7 +1402,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 36 add/sub, 51 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 34 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_ik_step_angles(const float *restrict q, float *restrict ang)
 {
@@ -1439,24 +1442,25 @@ static ARM3F_LIGHT void arm3f_ik_step_finish(const float *restrict q, const floa
     const float t43 = t42*t29;
     const float t44 = t42*t37;
     const float t47 = t42*(t25 + t27);
-    const float t48 = t43*t44 + t41*(t47 + t41);
-    const int t49 = t48 > (ARM3F_RANK_TOL*ARM3F_RANK_TOL)*((t47 + 2.0f*t41)*(t47 + 2.0f*t41));
-    const float t51 = t42*(t49 ? 1.0f/(t48 != 0.0f ? t48 : 1.0f) : 1.0f);
-    const float t52 = t41 + t43*(1.0f + t30*t30);
-    const float t53 = t42*(t52 > 0.0f ? 1.0f/(t52 != 0.0f ? t52 : 1.0f) : 1.0f);
-    const float t59 = target[0] - t10;
-    const float t60 = t9 + target[1];
-    const float t61 = (t28 ? t59 : t60);
-    const float t62 = (t28 ? t60 : t59);
-    const float t63 = t61 + t62*t30;
-    const float t64 = (t49 ? t51*(t63*t41 + t61*t44) : t63*t53);
-    const float t65 = (t49 ? t51*(t62*t41 + t43*(t62 - t61*t30)) : 0.0f);
-    const float t66 = t64*t31 + t65*t34;
-    q_next[0] = t66 + q[0];
-    const float t67 = t64*t32 + t65*t35;
-    q_next[1] = t67 + q[1];
-    const float t68 = t64*t33 + t65*t36;
-    q_next[2] = t68 + q[2];
+    const float t48 = t43*t44;
+    const float t49 = t48 + t41*(t47 + t41);
+    const int t50 = t41 > t47*ARM3F_RANK_TOL || t48 > (t47*t47)*(ARM3F_RANK_TOL*ARM3F_RANK_TOL);
+    const float t52 = t42*(t50 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
+    const float t53 = t41 + t43*(1.0f + t30*t30);
+    const float t54 = t42*(t53 > 0.0f ? 1.0f/(t53 != 0.0f ? t53 : 1.0f) : 1.0f);
+    const float t60 = target[0] - t10;
+    const float t61 = t9 + target[1];
+    const float t62 = (t28 ? t60 : t61);
+    const float t63 = (t28 ? t61 : t60);
+    const float t64 = t62 + t63*t30;
+    const float t65 = (t50 ? t52*(t64*t41 + t62*t44) : t64*t54);
+    const float t66 = (t50 ? t52*(t63*t41 + t43*(t63 - t62*t30)) : 0.0f);
+    const float t67 = t65*t31 + t66*t34;
+    q_next[0] = t67 + q[0];
+    const float t68 = t65*t32 + t66*t35;
+    q_next[1] = t68 + q[1];
+    const float t69 = t65*t33 + t66*t36;
+    q_next[2] = t69 + q[2];
 }
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])

@@ -10,8 +10,9 @@
  * Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
- * J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5
- * beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves
+ * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;
+ * inverse_velocity3 solves
  * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
  * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
  * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
@@ -52,7 +53,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x0244d16bUL
+#define ARM3F_STAMP 0x56743feaUL
 
 #ifdef __cplusplus
 extern "C" {
@@ -125,7 +126,7 @@ void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, fl
  * Stack: at most 8 KB. */
 void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, float lambda, float *dq);
 
-/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 1272 bytes. */
+/* joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N). Stack: at most 1280 bytes. */
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -156,7 +157,7 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 0.0001 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
- * Stack: at most 1024 bytes.
+ * Stack: at most 1032 bytes.
  */
 int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations);
 

@@ -19,7 +19,7 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, so
+ * lambda <= sqrt(RANK_TOL) times the Frobenius norm, a row whose residual is at most RANK_TOL times it is dropped, so
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
@@ -64,7 +64,7 @@
  * angles finite and of sensible size.
  * UR5_STAMP identifies this generation: ur5.c refuses to compile (#error) with a
  * ur5.h from another generation, and the other files of the set carry the same stamp. */
-#define UR5_STAMP 0x18a7e656UL
+#define UR5_STAMP 0xe48d5c70UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -225,7 +225,7 @@ void ur5_inverse_velocity(const double q[6], const double twist[6], double lambd
  * Stack: at most 24 KB. */
 void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, double lambda, double *dq);
 
-/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: at most 3032 bytes. */
+/* damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N). Stack: at most 3048 bytes. */
 void ur5_inverse_velocity_position(const double q[6], const double v[3], double lambda, double dq_position[6]);
 
 /* The same for m configurations stored one after another (element k of

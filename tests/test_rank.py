@@ -161,3 +161,61 @@ def test_a_well_posed_solve_keeps_every_direction_in_float(n, function, rng):
                     assert np.linalg.norm(got - want) <= 50 * eps * (s[0] / s[-1]) * np.linalg.norm(want), (q, lam, got, want)
                 cases += 1
     assert cases == 32
+
+
+def _truncated_damped(J, rhs, lam, cut):
+    """The damped solution over the singular triplets above ``cut`` times the largest (the rounding ones dropped)."""
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    keep = s > cut * s[0]
+    return Vt[keep].T @ (s[keep] / (s[keep] ** 2 + lam**2) * (U[:, keep].T @ rhs))
+
+
+@pytest.mark.parametrize("scale", [1e-12, 1e-10, 1e-8])
+def test_a_small_damping_does_not_amplify_a_rounding_direction(scale, rng):
+    """A probe: at an exactly singular pose a damping just above the rank rule's threshold kept the rounding direction
+    (singular value about eps |J|), which it turned into eps |J| / lambda^2: the UR5 at q5 = 0 with lambda = 1e-12 gave
+    |dq| 6698 for 2.97 (22 % off at 1e-10), the stretched planar arm 2e8 times its answer. A row of rounding is now
+    dropped while lambda is at most sqrt(RANK_TOL) |J|: C and NumPy equal the damped solution without it."""
+    from skelarm_sym.models.chain import load_robot
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    chain = load_robot(root / "examples" / "robots" / "ur5.toml")
+    g = generate(chain, out=None, langs="c,python", functions="inverse_velocity")
+    q = np.array([0.3, -1.2, 1.4, -1.8, 0.0, 0.7])  # the wrist aligned: rank 5
+    J = chain_kinematics(chain.numeric(), q).J
+    twist = rng.uniform(-1, 1, 6)
+    lam = scale * np.linalg.norm(J, 2)
+    want = _truncated_damped(J, twist, lam, 1e-12)
+    for impl in (compile_arm(g), load_python(g.sources["ur5.py"], "ur5")):
+        np.testing.assert_allclose(impl.inverse_velocity(q, twist, lam), want, rtol=1e-9, atol=1e-9 * np.linalg.norm(want))
+    l = np.array([1.0, 0.75, 0.5])
+    q3 = np.array([0.4, 0.0, 0.0])  # stretched: J has rank 1, J3 rank 2
+    k = reference.kinematics(q3, lengths=l)
+    v, twist3 = rng.uniform(-1, 1, 2), rng.uniform(-1, 1, 3) * [l.sum(), l.sum(), 1.0]
+    lam = scale * l.sum()
+    for impl in _impls(3, "double", "inverse_velocity,inverse_velocity3"):
+        want = _truncated_damped(k.J, v, lam, 1e-12)
+        np.testing.assert_allclose(impl.inverse_velocity(q3, v, l, lam), want, rtol=1e-9, atol=1e-9 * np.linalg.norm(want))
+        want3 = _truncated_damped(k.J3, twist3, lam, 1e-12)
+        np.testing.assert_allclose(impl.inverse_velocity3(q3, twist3, l, lam), want3, rtol=1e-8, atol=1e-8 * np.linalg.norm(want3))
+
+
+def test_inverse_velocity3_damped_in_any_unit_is_the_damped_solution(rng):
+    """A probe: float inverse_velocity3 with links of a micrometre and lambda = the reach (a damping as large as the arm)
+    answered (-0.55, -0.69, 1.54) for (-0.056, 0.094, 0.261): the test that the damping is negligible compared a
+    length with a number, and then solved the scaled problem. The damping is now read in the scaled rows' units."""
+    for precision, tol in (("float", 2e-5), ("double", 1e-9)):  # the rows' spread of units costs digits (1e6: 2e-10)
+        dtype = np.float32 if precision == "float" else np.float64
+        impls = _impls(3, precision, "inverse_velocity3")
+        for length in (1e-6, 1.0, 1e3):
+            l = (np.array([1.0, 0.8, 0.6]) * length).astype(dtype)
+            for _ in range(5):
+                q = rng.uniform(-np.pi, np.pi, 3).astype(dtype)
+                twist = (rng.uniform(-1, 1, 3) * [length, length, 1.0]).astype(dtype)
+                J3 = reference.kinematics(q.astype(float), lengths=l.astype(float)).J3
+                lam = float(dtype(l.sum()))
+                want = _damped(J3, twist.astype(float), lam)
+                for impl in impls:
+                    got = np.asarray(impl.inverse_velocity3(q, twist, l, lam), dtype=float)
+                    assert np.linalg.norm(got - want) <= tol * np.linalg.norm(want), (precision, length, got, want)

@@ -131,10 +131,10 @@ def damped_solve2(
     ``1 / (rr + lam2)``; the normal-equations form ``M^T adj(A) rhs / det A`` loses a further factor
     ``cond(A)`` to cancellation (``M^T adj(A)`` is nearly zero in the directions that ``det A``
     makes small). Rank rule (homogeneous in ``M`` and ``lam2``, so independent of the unit of length
-    when lambda has the unit of ``M``): ``A`` counts as rank one when ``det <= tol^2 tr(A)^2``
-    (smallest eigenvalue below about ``tol^2`` times the largest: ``M``'s smallest singular value, and
-    lambda, below about ``tol`` times its largest, as a 3-D chain's rule; the error of the regular form
-    follows ``cond(M)``, so it holds there), and then ``r`` is dropped:
+    when lambda has the unit of ``M``): ``M`` counts as rank one when ``pp rr <= tol^2 tr(M M^T)^2``
+    (its smallest singular value below about ``tol`` times its largest: rounding; the error of the
+    regular form follows ``cond(M)``, so it holds up to there) and ``lam2 <= tol tr(M M^T)`` (damping
+    at most ``sqrt(tol) |M|_F``, the 3-D chains' bound), and then ``r`` is dropped:
     ``dq = p (v1 + ratio v2) / (pp (1 + ratio^2) + lam2)``, the damped (lambda = 0: minimum-norm
     least-squares) solution of ``[p; ratio p] dq = rhs'``. Divisors are never zero: a zero
     matrix gives ``dq = 0``.
@@ -147,7 +147,11 @@ def damped_solve2(
     v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
     trace = step(f"{label}tr", (G[0][0] + G[1][1]) * kappa)
     det = step(f"{label}det", pp * rr + lam2 * (trace + lam2))
-    regular = step(f"{label}regular", sp.StrictGreaterThan(det, tol**2 * (trace + 2 * lam2) ** 2))
+    # J's second singular value at most tol times the largest is rounding (a stretched arm): dropped while the damping
+    # is at most sqrt(tol) |M|_F (lam2 <= tol tr), as solve6.damped_least_squares does; kept with a smaller damping it
+    # added s / lambda^2 to the answer (2e8 times it at lambda = 1e-12 of the arm's size)
+    regular = step(f"{label}regular", sp.Or(sp.StrictGreaterThan(pp * rr, tol**2 * trace**2),
+                                           sp.StrictGreaterThan(lam2, tol * trace)))
     along = step(f"{label}along", v1 + gs.ratio * v2)
     inv_det = step(f"{label}idet", kappa / sp.Piecewise((det, regular), (sp.S.One, True)))
     one = step(f"{label}one", pp * (1 + gs.ratio**2) + lam2)

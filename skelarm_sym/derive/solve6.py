@@ -248,15 +248,16 @@ def back_substitute(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], rhs: 
 
 
 def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs: Sequence[sp.Expr],
-                         lam: sp.Expr, mu: sp.Expr, tol: sp.Expr, label: str, scaled_when_dropping: bool = False) -> list[sp.Expr]:
+                         lam: sp.Expr, mu: sp.Expr, tol: sp.Expr, label: str, scaled_when_dropping: bool = False,
+                         lam_scale: sp.Expr | None = None) -> list[sp.Expr]:
     """``dq = M^T (M M^T + lambda^2 I)^+ rhs`` (n entries), ``M = rows`` (m rows of n), the minimiser of
     ``|M dq - rhs|^2 + lambda^2 |dq|^2`` of least norm, in two QR stages:
 
     1. Gram-Schmidt on the rows of ``B = diag(scales) M`` taken largest residual first (rank-revealing,
        :func:`pivoted_gram_schmidt`; rows that are identically zero are left out): ``P B^T = Q R``; where
-       ``min(lambda, 1) <= tol |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every later
-       one). With more damping no row is dropped: the damping bounds what a small singular value ``s`` adds
-       (``s / (s^2 + lambda^2)``), and dropping its direction would cost up to ``tol |B|_F / lambda^2``.
+       ``min(lambda, 1) <= sqrt(tol) |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every
+       later one): rounding, which damping would turn into ``s / lambda^2``. With more damping no row is dropped:
+       the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
     2. ``dq = Q z`` with ``z`` the least-squares solution of ``[diag(scales)^-1 R^T; lambda I] z = [rhs; 0]``, by
        a second Gram-Schmidt QR and a guarded back substitution.
 
@@ -264,11 +265,12 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
     residuals removed (``numpy.linalg.pinv`` with a relative cut-off near ``tol``); finite always. Its error follows
     ``cond(B)``, not its square.
 
-    ``scaled_when_dropping``: where the rank rule applies (``min(lambda, 1) <= tol |B|_F``: the damping is negligible)
-    the second stage solves the scaled problem ``min |B dq - diag(scales) rhs|^2``: the same solution where the rows are
-    consistent, and where they are not (a singular pose) the least-squares compromise between rows of different units
-    measured in scaled units, which no unit of length changes (and whose rounding does not grow with the scales'
-    spread, as the unscaled rows' does: about eps / min(scales)^2 relative).
+    ``lam_scale``: ``lambda`` times it is the damping in the scaled rows' units, which the rule reads (None: 1).
+    ``scaled_when_dropping`` (a planar arm's ``inverse_velocity3``): where the damping is negligible (that product at
+    most ``tol |B|_F``) the second stage solves the scaled problem ``min |B dq - diag(scales) rhs|^2``: the same
+    solution where the rows are consistent, and where they are not (a singular pose) the least-squares compromise
+    between rows of different units measured in scaled units, which no unit of length changes (and whose rounding
+    does not grow with the scales' spread, as the unscaled rows' does: about eps / min(scales)^2 relative).
 
     ``scales[r]``: the factor row ``r`` is multiplied by for the rank rule (1/L or 1). ``mu = 1/max(1, lambda)``:
     the second stage solves the same least-squares problem with every row divided by ``max(1, lambda)``,
@@ -285,13 +287,16 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
     frob = step(f"{label}F", sp.sqrt(step(f"{label}FF", sp.Add(*[x**2 for row in scaled for x in row]))))
     factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
     damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
-    # the rank rule serves the undamped solve (lambda at most the threshold): with more damping every row is
-    # kept, the damping bounds what a direction of a small singular value s adds (s / (s^2 + lambda^2)), and
-    # dropping it would cost up to threshold / lambda^2 (float, lambda = 0.1: 3e-3)
     limit = step(f"{label}tau", tol * frob)
-    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(damping, limit)), (sp.S.Zero, True)))
+    # a row whose residual is at most the limit is rounding (a stretched arm's, an aligned wrist's): dropped while the
+    # damping is at most sqrt(tol) |B|_F, the geometric mean of the limit and the matrix. A kept rounding direction of
+    # singular value s adds s / lambda^2 (UR5 at q5 = 0, lambda = 1e-12: |dq| 6698 for 2.97); above the bound that is
+    # below the answer's own size |rhs| / |B| and falls as 1 / lambda^2
+    rule = step(f"{label}lams", damping * lam_scale) if lam_scale is not None else damping
+    kept_from = step(f"{label}kf", sp.sqrt(tol) * frob)
+    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(rule, kept_from)), (sp.S.Zero, True)))
     if scaled_when_dropping:
-        dropping = sp.LessThan(damping, limit)
+        dropping = sp.LessThan(rule, limit)  # and the damping negligible: the scaled problem's answer
         factor = [step(f"{label}g{r}", sp.Piecewise((mu, dropping), (factor[r], True))) if scales[r] != 1 else factor[r]
                   for r in range(m)]
         rhs = [step(f"{label}t{r}", sp.Piecewise((rhs[r] * scales[r], dropping), (rhs[r], True))) if scales[r] != 1 else rhs[r]

@@ -219,8 +219,9 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             "Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T + lambda^2 I)^+,",
             "solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).",
             "lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where",
-            "J's smallest singular value and lambda are both below about RANK_TOL times its largest (RANK_TOL n/5",
-            "beyond 5 links; 2 x 2: det <= that^2 * trace^2, det = Cauchy-Binet sum without cancellation); inverse_velocity3 solves",
+            "J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;",
+            "2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda at most sqrt of that times it;",
+            "inverse_velocity3 solves",
             "with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose",
             "residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).",
             "So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y",
@@ -289,7 +290,10 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
         size = step("lamabs", sp.Abs(lam))  # lambda enters squared: its sign does not matter
         mu = step("mu3", 1 / guarded(size, sp.StrictGreaterThan(size, 1)))  # 1 / max(1, |lambda|)
         inputs["twist"] = twist
+        # the damping in the scaled rows' units is lambda / reach on the position rows and lambda on the orientation
+        # row: negligible where the larger of them is
+        larger = step("iv3ls", guarded(ireach, sp.StrictGreaterThan(ireach, 1)))  # max(1 / reach, 1)
         dq3 = damped_least_squares(step, [jx, jy, [sp.S.One] * n], [ireach, ireach, sp.S.One], twist, size, mu, tol, "iv3",
-                                   scaled_when_dropping=True)
+                                   scaled_when_dropping=True, lam_scale=larger)
         outputs["dq3"] = sp.Matrix(dq3)
     return _Inverse(inputs, outputs)
