@@ -423,6 +423,46 @@ def test_a_wrist_centre_on_axis_1_nearest_keeps_joint_1(name, pair):
                 np.testing.assert_allclose(got, expected, atol=1e-9)
 
 
+def test_an_axis_member_with_the_wrist_aligned_moves_into_the_limits_and_only_reachable_axes_get_members():
+    """A probe of the members: (1) the iiwa at q = (0.5, 0, lock 0.3, 0, 1.6, 0, 1.55), its wrist centre on axis 1 and
+    its wrist aligned: the member puts q5 = 0 and q7 = 3.15 (beyond +-3.054), and was dropped for that before it moved
+    along the wrist's continuum, so ik_nearest(q, pose(q)) returned q1 = 0; the pair is now judged after the move
+    (C, NumPy and the spec). (2) The Panda with joint 7 locked got members that were never exact: its shoulder centre
+    stays 0.057 m off joint 6's axis; which arms get them is now a search for the least distance. (3) Float members
+    are not moved along the wrist's continuum (their wrist angle carries float's rounding; the move made pose errors
+    of 1e-4): KR 6 on the axis, the wrist aligned, from nearby references, within float's tolerance."""
+    from skelarm_sym.closed_ik.derive import derive_ik_all
+    from skelarm_sym.closed_ik.evaluate import ClosedFormIK
+
+    b = built("iiwa14_lock3")
+    q = np.array([0.5, 0.0, 0.3, 0.0, 1.6, 0.0, 1.55])
+    T = targets_of(b.chain, q[None])[0]
+    spec = ClosedFormIK(b.chain, b.lock)
+    np.testing.assert_allclose(spec.nearest(q, T, 0.3)[0], q, atol=1e-9)
+    for impl in (b.c, b.py):
+        got = impl.ik_nearest(q, T, 0.3)
+        assert got.status == "ok"
+        np.testing.assert_allclose(got.q, q, atol=1e-9)
+    panda, lock = load_arm("panda_lock7")
+    assert derive_ik_all(panda, lock).members is None
+    kr6 = Built(*load_arm("kuka_kr6"), precision="float")
+    rng = np.random.default_rng(31)
+    checked = 0
+    for source in inner_configurations(kr6, 40, rng):
+        on_axis = wrist_centre_on_axis_1(kr6, source, (1, 2))
+        if on_axis is None:
+            continue
+        on_axis[4] = 0.0
+        target = targets_of(kr6.chain, on_axis[None])[0]
+        ref = on_axis + rng.normal(scale=1e-3, size=on_axis.shape)
+        for impl in (kr6.c, kr6.py):
+            got = np.asarray(impl.ik_nearest(ref, target).q, dtype=float)
+            pos, rot = judge.pose_error(kr6.numeric, got[None], target)
+            assert max(pos.max(), rot.max()) <= POSE_TOL["float"], (on_axis, got)
+        checked += 1
+    assert checked >= 10
+
+
 def test_a_ur_aligned_wrist_with_narrow_limits_takes_a_member_where_the_representative_is_dropped():
     """UR5 with joint 6 limited to [-1.5, 1.5]: at the aligned wrist ik_all's one representative per root of q1 often
     lies outside the limits and is dropped (ik_all: out_of_limits, or only other branches), and ik_nearest(q,

@@ -316,18 +316,24 @@ def _rows(chain: Chain, geom, family: Family, steps: Steps, inputs: dict, lock_i
     return rows, flags, principal
 
 
-AXIS_OFFSET_TOL = 1e-9
-"""A shoulder offset (m, relative to the arm's reach) below this is none, for :func:`_axis_continuum`."""
+AXIS_REACH_TOL = 1e-9
+"""The wrist centre reaches axis 1 (:func:`_axis_continuum`) where its least distance from it is at most this times the
+arm's size."""
+
+
+def _rotated(k: np.ndarray, p: np.ndarray, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Points ``x`` (..., 3) turned by ``theta`` (...) about the line through ``p`` along unit ``k`` (Rodrigues)."""
+    v = x - p
+    c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
+    return p + v * c + np.cross(k, v) * s + k * (v @ k)[..., None] * (1.0 - c)
 
 
 def _axis_continuum(geom, family: Family, locked: bool) -> bool:
-    """Whether a spherical-wrist arm may have its wrist centre on axis 1 in a solution (a continuum of ``q1``:
-    :func:`~.families.spherical_wrist`'s ``members``). Not where h2 is perpendicular to h1 and the wrist centre keeps
-    an offset along h2 from axis 1 whatever joints 2 and 3 do, at every sampled lock value: ``parallel_23``, whose
-    rotations about h2 and h3 keep the offset from p1 (PUMA 560's shoulder offset); ``intersect_12`` with h3 parallel
-    to h2, and ``prismatic_3`` sliding across h2, which keep it from the shoulder point (the Stanford arm's)."""
-    if family.position == "intersect_23":
-        return True
+    """Whether a spherical-wrist arm's wrist centre can lie on axis 1 in a solution (a continuum of ``q1``:
+    :func:`~.families.spherical_wrist`'s ``members``): its least distance from axis 1 over joints 2 and 3 (joint 1
+    keeps it; a grid of their values, the nearest points refined by Gauss-Newton) is at most :data:`AXIS_REACH_TOL`
+    times the arm's size at some sampled lock value. Not the PUMA 560 nor the Stanford arm (an offset along h2 that
+    joints 2 and 3 keep), nor the Panda with joint 7 locked, whose shoulder centre stays 0.057 m from joint 6's axis."""
     from .classify import LOCK_SAMPLES, _lock_subs
 
     scale = geom.reach()
@@ -335,15 +341,37 @@ def _axis_continuum(geom, family: Family, locked: bool) -> bool:
         kinds, H, P = geom.numeric(_lock_subs(geom, value))
         if family.reversed:
             kinds, H, P = kinds[::-1], H[::-1], P[::-1]
+        if kinds[0] != "revolute" or kinds[1] != "revolute":
+            return True  # no family here: kept as before the test existed
         W0 = np.array([float(x) for x in closest_point(P[3], H[3], P[4], H[4])])
-        if family.position == "parallel_23":
-            centre, keeps = P[0], True
-        else:
-            centre = np.array([float(x) for x in closest_point(P[0], H[0], P[1], H[1])])
-            keeps = (abs(H[1] @ H[2]) <= FLIP_TOL if kinds[2] == "prismatic"
-                     else np.linalg.norm(np.cross(H[1], H[2])) <= FLIP_TOL)
-        if not keeps or abs(H[0] @ H[1]) > FLIP_TOL or abs(H[1] @ (W0 - centre)) <= AXIS_OFFSET_TOL * scale:
-            return True
+        e1 = np.cross(H[0], [1.0, 0.0, 0.0] if abs(H[0][0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(H[0], e1)
+        span = np.pi if kinds[2] == "revolute" else 2.0 * scale
+
+        def offsets(q2, q3):
+            """The wrist centre's offset from axis 1 in the plane across it (..., 2)."""
+            X = W0 + q3[..., None] * H[2] if kinds[2] == "prismatic" else _rotated(H[2], P[2], np.broadcast_to(W0, q3.shape + (3,)), q3)
+            d = _rotated(H[1], P[1], X, q2) - P[0]
+            return np.stack([d @ e1, d @ e2], axis=-1)
+
+        g2, g3 = np.meshgrid(np.linspace(-np.pi, np.pi, 97), np.linspace(-span, span, 97), indexing="ij")
+        distance = np.linalg.norm(offsets(g2, g3), axis=-1).ravel()
+        for start in np.argsort(distance)[:6]:
+            x, last = np.array([g2.ravel()[start], g3.ravel()[start]]), np.inf
+            for _ in range(40):
+                r = offsets(np.array(x[0]), np.array(x[1]))
+                size = np.linalg.norm(r)
+                if size <= AXIS_REACH_TOL * scale:
+                    return True
+                if size > 0.9 * last:  # stalled at a least distance above zero (Gauss-Newton converges fast to a zero)
+                    break
+                last = size
+                step = 1e-7 * np.array([1.0, 1.0 if kinds[2] == "revolute" else scale])
+                J = np.column_stack([(offsets(np.array(x[0] + d[0]), np.array(x[1] + d[1])) -
+                                      offsets(np.array(x[0] - d[0]), np.array(x[1] - d[1]))) / (2 * np.max(d))
+                                     for d in (np.array([step[0], 0.0]), np.array([0.0, step[1]]))])
+                x = x - np.linalg.lstsq(J, r, rcond=None)[0]
     return False
 
 

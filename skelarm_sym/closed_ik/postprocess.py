@@ -262,7 +262,7 @@ def nearest_copy(x: float, ref: float, lo: float, hi: float, tol: float = LIMIT_
 
 def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
             aligned_tol: float = WRIST_ALIGNED_TOL, limit_tol: float = LIMIT_TOL,
-            members: tuple | None = None) -> tuple[np.ndarray | None, int]:
+            members: tuple | None = None, move_members: bool = True) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
     nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
     (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
@@ -272,7 +272,9 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     with flag bit 1 clear, each
     revolute joint moved to its copy within limits nearest ``q_ref``, within the limits (``limit_tol``) as rows are;
     a member nearer than every row is returned with ``row`` -1 (the continuum's representative's branch is not
-    known here), also where ``result`` has no rows."""
+    known here), also where ``result`` has no rows. ``move_members``: a member with the wrist aligned too is moved
+    along the wrist's continuum (``continuum``) like a row, its wrist pair judged within the limits after the move
+    (code emitted in float does not move members: False)."""
     if result.count == 0 and members is None:
         return None, -1
     q_ref = np.asarray(q_ref, float)
@@ -281,8 +283,9 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     w = np.ones_like(q_ref) if weights is None else np.asarray(weights, float)
     w = w / np.max(w)  # the same nearest row; no product overflows (the emitted code divides alike)
     best, best_d, best_i = None, np.inf, -1
-    def along_continuum(q: np.ndarray, row: np.ndarray, flag: int) -> None:
-        """A row of the wrist's continuum: joints a and b to the member within the limits nearest q_ref."""
+    def along_continuum(q: np.ndarray, row: np.ndarray, flag: int) -> bool:
+        """A row of the wrist's continuum: joints a and b to the member within the limits nearest q_ref; whether
+        there is one."""
         if continuum:
             a, wj, b, s, s_odd, w0 = continuum
             sigma = continuum_sign(row[wj], flag, s, aligned_tol, s_odd, w0)
@@ -290,6 +293,8 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
                                                 (lower[a], lower[b]), (upper[a], upper[b]), (w[a], w[b]), limit_tol)
             if member:
                 q[a], q[b] = member
+                return True
+        return False
 
     for i in range(result.count):
         q = result.q[i].copy()
@@ -301,21 +306,27 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
             best, best_d, best_i = q, d, i
     if members is not None:
         M, mflags = np.asarray(members[0], float), np.asarray(members[1], int)
+        pair = (continuum[0], continuum[2]) if continuum and move_members else ()
         for m in range(M.shape[0]):
             if mflags[m] & 1:
                 continue
-            q, ok = M[m].copy(), True
+            q, ok, pair_ok = M[m].copy(), True, True
             for j in range(q.shape[0]):
                 x = q[j]
                 if rev[j]:  # a copy within the limits: nearest_copy's, unless it clipped a value with none there
                     q[j] = nearest_copy(x, q_ref[j], lower[j], upper[j], limit_tol)
-                    ok &= bool(abs(q[j] - (x + TWO_PI * np.rint((q[j] - x) * INV_TWO_PI))) <= limit_tol)
+                    fits = bool(abs(q[j] - (x + TWO_PI * np.rint((q[j] - x) * INV_TWO_PI))) <= limit_tol)
+                    if j in pair:  # the wrist's pair: judged after its move below
+                        pair_ok &= fits
+                    else:
+                        ok &= fits
                 else:
                     ok &= bool(lower[j] - limit_tol <= x <= upper[j] + limit_tol)
                     q[j] = min(max(x, lower[j]), upper[j])
+            if pair:  # a spherical wrist's member with the wrist aligned too, moved into the limits where it must
+                ok &= along_continuum(q, M[m], int(mflags[m])) or pair_ok
             if not ok:
                 continue
-            along_continuum(q, M[m], int(mflags[m]))  # a spherical wrist's member with the wrist aligned too
             d = float(np.sum(w * (q - q_ref) ** 2))
             if d < best_d:
                 best, best_d, best_i = q, d, -1

@@ -458,6 +458,8 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
     N, R = arm.n, arm.members
     M, mflags = b.array("M", R * N), b.array("mflags", R)
     ok = b.var("m_ok", _int(0), Type.INT)
+    pair = (continuum.a, continuum.b) if continuum is not None else ()
+    pair_ok = b.var("m_pair", _int(0), Type.INT) if pair else None
     tol = NamedConst("IK_LIMIT_TOL")
     with b.if_(raw_singular[0] > 0):  # a split representative is flagged singular: none, no member
         b.comment("a UR's aligned wrist: the continuum's members at q_ref's phi = q2 +- q3 +- q4, where nearer than the row"
@@ -467,11 +469,15 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
         with b.for_("m", 0, _int(R)) as m:
             with b.if_(ne(Bits("%", Cast(Type.INT, mflags[m]), _int(2)), NamedConst("IK_FLAG_LEAST_SQUARES", Type.INT))):
                 b.set(ok, _int(1))
+                if pair:
+                    b.set(pair_ok, _int(1))
                 for j in range(N):
                     b.set(x, M[_at(N, m, j)])
                     if arm.revolute[j]:
                         _nearest_copy(b, arm, j, x, q_ref[j], y)
-                        b.set(ok, select(fabs(y - (x + TWO_PI * Call1("nearbyint", (y - x) * INV_TWO_PI))) <= tol, ok, _int(0)))
+                        within = ok if j not in pair else pair_ok  # the wrist's pair: judged after its move below
+                        b.set(within, select(fabs(y - (x + TWO_PI * Call1("nearbyint", (y - x) * INV_TWO_PI))) <= tol, within,
+                                             _int(0)))
                         b.set(near[j], y)
                         continue
                     lo, hi = arm.lower[j], arm.upper[j]
@@ -487,9 +493,11 @@ def _nearer_member(b: Body, arm: _Arm, data, q_ref: Array, weights, q: Array, ne
                 if continuum is not None:
                     a, w, c = continuum.a, continuum.w, continuum.b
                     b.comment(f"a member with the wrist aligned too: joints {a + 1} and {c + 1} to the member within their "
-                              "limits nearest q_ref")
+                              "limits nearest q_ref (within them where the representative's own copies are not)")
+                    b.set(continuum.found, _int(0))
                     continuum.move(b, M[_at(N, m, w)], None, M[_at(N, m, a)], M[_at(N, m, c)], q_ref[a], q_ref[c],
                                    near[a], near[c])
+                    b.set(ok, select((continuum.found > 0) | (pair_ok > 0), ok, _int(0)))
                 b.set(dist, _distance(near, q_ref, weights, N))
                 with b.if_((ok > 0) & ((best < 0) | (dist < best_d))):
                     b.set(best, _int(arm.s))  # a member, no row
@@ -580,7 +588,10 @@ def nearest_solver(arm: _Arm, weighted: bool = False) -> Function:
             for j in range(N):
                 b.set(q[j], near[j])
     if arm.members:
-        _nearer_member(b, arm, data, q_ref, weights, q, near, raw_singular, best, best_d, dist, x, y, status, continuum)
+        # float members are not moved along the wrist's continuum: their wrist angle carries float's rounding (4e-5
+        # rad), which the move turned into pose errors of 1e-4
+        _nearer_member(b, arm, data, q_ref, weights, q, near, raw_singular, best, best_d, dist, x, y, status,
+                       continuum if arm.precision == "double" else None)
     b.return_(status)
     arguments = (
         Argument("q_ref", Role.STATE, (N,), domain="finite", batched=False, doc="the configuration to be near (rad or m)"),
