@@ -19,7 +19,8 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= sqrt(RANK_TOL) times the Frobenius norm, a row whose residual is at most RANK_TOL times it is dropped, so
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, a row of rounding
+ * (RANK_TOL/25 of it) while lambda <= sqrt(RANK_TOL) times it, so
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
@@ -31,7 +32,7 @@
 
 #include "panda.h"
 
-#if !defined(PANDA_STAMP) || PANDA_STAMP != 0x2bc6b26dUL
+#if !defined(PANDA_STAMP) || PANDA_STAMP != 0xf87926b9UL
 #error "panda.h is not the header generated with this panda.c: regenerate both together"
 #endif
 
@@ -4312,7 +4313,7 @@ void panda_manipulability_gradient_batch(size_t m, const double *q, double *grad
 }
 
 /* ---- panda_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 6 sin, 6 cos, 1188 add/sub, 1447 mul, 5 neg, 13 div, 14 sqrt */
+/* operations: 6 sin, 6 cos, 1188 add/sub, 1448 mul, 5 neg, 13 div, 14 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -4441,7 +4442,7 @@ static PANDA_LIGHT void panda_inverse_velocity_finish(const double *restrict twi
     const double t699 = t696*PANDA_RANK_TOL;
     const double t700 = sqrt(PANDA_RANK_TOL);
     const double t701 = t696*t700;
-    const double t702 = (t701 >= t698 ? t699 : 0.0);
+    const double t702 = (t698 <= t699 ? t699 : (t701 >= t698 ? 0.04*t699 : 0.0));
     const double t703 = t677 + t678 + t679 + t680 + t681 + t682;
     const double t704 = t683 + t684 + t685 + t686 + t687 + t688;
     const double t705 = t689 + t690 + t691 + t692 + t693;
@@ -5571,7 +5572,7 @@ void panda_inverse_velocity_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- panda_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 6 sin, 6 cos, 232 add/sub, 332 mul, 4 neg, 7 div, 8 sqrt */
+/* operations: 6 sin, 6 cos, 232 add/sub, 333 mul, 4 neg, 7 div, 8 sqrt */
 
 static PANDA_LIGHT void panda_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -5662,7 +5663,7 @@ static PANDA_LIGHT void panda_inverse_velocity_position_finish(const double *res
     const double t1802 = sqrt(t1801);
     const double t1803 = t1802*PANDA_RANK_TOL;
     const double t1804 = t1802*t700;
-    const double t1805 = (t1804 >= t698 ? t1803 : 0.0);
+    const double t1805 = (t1803 >= t698 ? t1803 : (t1804 >= t698 ? 0.04*t1803 : 0.0));
     const double t1806 = t1790 + t1791 + t1793 + t1795 + t1797 + t1799;
     const double t1807 = t1792 + t1794 + t1796 + t1798 + t1800;
     const int t1808 = t1807 > t1806;

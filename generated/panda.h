@@ -19,7 +19,8 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*7 + c)*7 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= sqrt(RANK_TOL) times the Frobenius norm, a row whose residual is at most RANK_TOL times it is dropped, so
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, a row of rounding
+ * (RANK_TOL/25 of it) while lambda <= sqrt(RANK_TOL) times it, so
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
@@ -61,7 +62,7 @@
  * angles finite and of sensible size.
  * PANDA_STAMP identifies this generation: panda.c refuses to compile (#error) with a
  * panda.h from another generation, and the other files of the set carry the same stamp. */
-#define PANDA_STAMP 0x2bc6b26dUL
+#define PANDA_STAMP 0xf87926b9UL
 
 #ifdef __cplusplus
 extern "C" {

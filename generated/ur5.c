@@ -19,7 +19,8 @@
  * Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));
  * Hs[(r*6 + c)*6 + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR
  * stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with
- * lambda <= sqrt(RANK_TOL) times the Frobenius norm, a row whose residual is at most RANK_TOL times it is dropped, so
+ * lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, a row of rounding
+ * (RANK_TOL/25 of it) while lambda <= sqrt(RANK_TOL) times it, so
  * lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);
  * JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):
  * where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).
@@ -34,7 +35,7 @@
 
 #include "ur5.h"
 
-#if !defined(UR5_STAMP) || UR5_STAMP != 0xe48d5c70UL
+#if !defined(UR5_STAMP) || UR5_STAMP != 0xfdb42f33UL
 #error "ur5.h is not the header generated with this ur5.c: regenerate both together"
 #endif
 
@@ -3601,7 +3602,7 @@ void ur5_manipulability_gradient_batch(size_t m, const double *q, double *grad)
 }
 
 /* ---- ur5_inverse_velocity: damped least-squares joint rates dq = J^T (J J^T + lambda^2 I)^+ twist (N) ---- */
-/* operations: 5 sin, 5 cos, 1050 add/sub, 1281 mul, 7 neg, 13 div, 14 sqrt */
+/* operations: 5 sin, 5 cos, 1050 add/sub, 1282 mul, 7 neg, 13 div, 14 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -3690,7 +3691,7 @@ static UR5_LIGHT void ur5_inverse_velocity_finish(const double *restrict twist, 
     const double t521 = t518*UR5_RANK_TOL;
     const double t522 = sqrt(UR5_RANK_TOL);
     const double t523 = t518*t522;
-    const double t524 = (t523 >= t520 ? t521 : 0.0);
+    const double t524 = (t520 <= t521 ? t521 : (t523 >= t520 ? 0.04*t521 : 0.0));
     const double t525 = t501 + t502 + t503 + t504 + t505;
     const double t526 = t506 + t507 + t508 + t509 + t510;
     const double t527 = t511 + t512 + t513 + t514;
@@ -4744,7 +4745,7 @@ void ur5_inverse_velocity_batch(size_t m, const double *q, const double *twist, 
 }
 
 /* ---- ur5_inverse_velocity_position: damped least-squares joint rates for a tool-origin velocity v (3 linear rows of J) (N) ---- */
-/* operations: 5 sin, 5 cos, 182 add/sub, 254 mul, 1 neg, 7 div, 8 sqrt */
+/* operations: 5 sin, 5 cos, 182 add/sub, 255 mul, 1 neg, 7 div, 8 sqrt */
 
 static UR5_LIGHT void ur5_inverse_velocity_position_angles(const double *restrict q, double *restrict ang)
 {
@@ -4803,7 +4804,7 @@ static UR5_LIGHT void ur5_inverse_velocity_position_finish(const double *restric
     const double t1547 = sqrt(t1546);
     const double t1548 = t1547*UR5_RANK_TOL;
     const double t1549 = t1547*t522;
-    const double t1550 = (t1549 >= t520 ? t1548 : 0.0);
+    const double t1550 = (t1548 >= t520 ? t1548 : (t1549 >= t520 ? 0.04*t1548 : 0.0));
     const double t1551 = t1537 + t1538 + t1539 + t1540 + t1542;
     const double t1552 = t1541 + t1543 + t1544 + t1545;
     const int t1553 = t1552 > t1551;

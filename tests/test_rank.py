@@ -219,3 +219,24 @@ def test_inverse_velocity3_damped_in_any_unit_is_the_damped_solution(rng):
                 for impl in impls:
                     got = np.asarray(impl.inverse_velocity3(q, twist, l, lam), dtype=float)
                     assert np.linalg.norm(got - want) <= tol * np.linalg.norm(want), (precision, length, got, want)
+
+
+def test_a_small_damping_keeps_a_real_direction_in_float():
+    """A probe of the rule above in its first form (a row of the rank tolerance's size dropped up to the wider damping
+    bound): float UR5 near its wrist singularity (q5 = 1e-4: the smallest singular value 77 eps of |J|, resolved to a
+    percent) answered |dq| 6.1 for 229 at lambda = 1e-4, 100 % off, where the damping carries that direction. Only a
+    row of rounding itself (a few eps) goes under a small damping now; C and NumPy against the SVD."""
+    from skelarm_sym.models.chain import load_robot
+    from skelarm_sym.models.chain.reference import chain_kinematics
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    chain = load_robot(root / "examples" / "robots" / "ur5.toml")
+    g = generate(chain, out=None, langs="c,python", precision="float", functions="inverse_velocity")
+    q = np.array([0.07092975, 2.70278215, -2.13504243, 2.69189668, 1e-4, -0.46004131], dtype=np.float32)
+    twist = np.array([-0.13865532, 0.0330001, -1.425349, 0.33281362, -0.651281, 0.86244482], dtype=np.float32)
+    J = chain_kinematics(chain.numeric(), q.astype(float)).J
+    for lam in (1e-4, 1e-3, 1e-2):
+        want = _truncated_damped(J, twist.astype(float), lam, 0.0)
+        for impl in (compile_arm(g), load_python(g.sources["ur5.py"], "ur5")):
+            got = np.asarray(impl.inverse_velocity(q, twist, np.float32(lam)), dtype=float)
+            assert np.linalg.norm(got - want) <= 1e-3 * np.linalg.norm(want), (lam, np.linalg.norm(got), np.linalg.norm(want))

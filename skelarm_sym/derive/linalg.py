@@ -20,6 +20,11 @@ import sympy as sp
 
 Recorder = Callable[[str, sp.Expr], sp.Expr]
 
+ROUNDING_SHARE = sp.Rational(1, 25)
+"""The part of the rank tolerance (100 eps: 4 eps) below which a singular value, or a Gram-Schmidt residual, is
+rounding itself, dropped under a small damping (:func:`damped_solve2`,
+:func:`skelarm_sym.derive.solve6.damped_least_squares`)."""
+
 
 def gram(step: Recorder, rows: Sequence[Sequence[sp.Expr]], label: str) -> list[list[sp.Expr]]:
     """``M M^T`` for the matrix with ``rows`` (each a sequence of column entries); symmetric, named by ``step``."""
@@ -131,10 +136,11 @@ def damped_solve2(
     ``1 / (rr + lam2)``; the normal-equations form ``M^T adj(A) rhs / det A`` loses a further factor
     ``cond(A)`` to cancellation (``M^T adj(A)`` is nearly zero in the directions that ``det A``
     makes small). Rank rule (homogeneous in ``M`` and ``lam2``, so independent of the unit of length
-    when lambda has the unit of ``M``): ``M`` counts as rank one when ``pp rr <= tol^2 tr(M M^T)^2``
-    (its smallest singular value below about ``tol`` times its largest: rounding; the error of the
-    regular form follows ``cond(M)``, so it holds up to there) and ``lam2 <= tol tr(M M^T)`` (damping
-    at most ``sqrt(tol) |M|_F``, the 3-D chains' bound), and then ``r`` is dropped:
+    when lambda has the unit of ``M``): ``M`` counts as rank one when its smallest singular value is
+    below about ``tol`` times its largest (``pp rr <= tol^2 tr(M M^T)^2``; the error of the regular form
+    follows ``cond(M)``, so it holds up to there) and lambda too; or when it is rounding itself
+    (``ROUNDING_SHARE`` of that) and lambda at most ``sqrt(tol) |M|_F`` (the 3-D chains' rule), and then
+    ``r`` is dropped:
     ``dq = p (v1 + ratio v2) / (pp (1 + ratio^2) + lam2)``, the damped (lambda = 0: minimum-norm
     least-squares) solution of ``[p; ratio p] dq = rhs'``. Divisors are never zero: a zero
     matrix gives ``dq = 0``.
@@ -147,11 +153,13 @@ def damped_solve2(
     v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
     trace = step(f"{label}tr", (G[0][0] + G[1][1]) * kappa)
     det = step(f"{label}det", pp * rr + lam2 * (trace + lam2))
-    # J's second singular value at most tol times the largest is rounding (a stretched arm): dropped while the damping
-    # is at most sqrt(tol) |M|_F (lam2 <= tol tr), as solve6.damped_least_squares does; kept with a smaller damping it
-    # added s / lambda^2 to the answer (2e8 times it at lambda = 1e-12 of the arm's size)
-    regular = step(f"{label}regular", sp.Or(sp.StrictGreaterThan(pp * rr, tol**2 * trace**2),
-                                           sp.StrictGreaterThan(lam2, tol * trace)))
+    # as solve6.damped_least_squares: J's second singular value at most tol times the largest is dropped while the
+    # damping is at most tol |M|_F too; one of rounding itself (ROUNDING_SHARE of that) while the damping is at most
+    # sqrt(tol) |M|_F (kept, it added s / lambda^2: 2e8 times the answer at lambda = 1e-12 of a stretched arm's size)
+    share = tol * ROUNDING_SHARE
+    cut = step(f"{label}cut", sp.Piecewise((tol**2, sp.LessThan(lam2, tol**2 * trace)),
+                                           (share**2, sp.LessThan(lam2, tol * trace)), (sp.S.Zero, True)))
+    regular = step(f"{label}regular", sp.StrictGreaterThan(pp * rr, cut * trace**2))
     along = step(f"{label}along", v1 + gs.ratio * v2)
     inv_det = step(f"{label}idet", kappa / sp.Piecewise((det, regular), (sp.S.One, True)))
     one = step(f"{label}one", pp * (1 + gs.ratio**2) + lam2)

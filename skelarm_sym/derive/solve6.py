@@ -20,7 +20,7 @@ from typing import Callable, Sequence
 
 import sympy as sp
 
-from .linalg import select
+from .linalg import ROUNDING_SHARE, select
 
 Recorder = Callable[[str, sp.Expr], sp.Expr]
 
@@ -255,9 +255,10 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
 
     1. Gram-Schmidt on the rows of ``B = diag(scales) M`` taken largest residual first (rank-revealing,
        :func:`pivoted_gram_schmidt`; rows that are identically zero are left out): ``P B^T = Q R``; where
-       ``min(lambda, 1) <= sqrt(tol) |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every
-       later one): rounding, which damping would turn into ``s / lambda^2``. With more damping no row is dropped:
-       the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
+       ``min(lambda, 1) <= tol |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every later
+       one); with a damping up to ``sqrt(tol) |B|_F`` a row of rounding itself (a residual at most
+       :data:`ROUNDING_SHARE` of that), which the damping would turn into ``s / lambda^2``. With more damping no row
+       is dropped: the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
     2. ``dq = Q z`` with ``z`` the least-squares solution of ``[diag(scales)^-1 R^T; lambda I] z = [rhs; 0]``, by
        a second Gram-Schmidt QR and a guarded back substitution.
 
@@ -288,13 +289,16 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
     factor = [step(f"{label}f{r}", mu / scales[r]) for r in range(m)]
     damping = step(f"{label}lam", lam * mu)  # min(lambda, 1)
     limit = step(f"{label}tau", tol * frob)
-    # a row whose residual is at most the limit is rounding (a stretched arm's, an aligned wrist's): dropped while the
-    # damping is at most sqrt(tol) |B|_F, the geometric mean of the limit and the matrix. A kept rounding direction of
-    # singular value s adds s / lambda^2 (UR5 at q5 = 0, lambda = 1e-12: |dq| 6698 for 2.97); above the bound that is
-    # below the answer's own size |rhs| / |B| and falls as 1 / lambda^2
+    # the rank rule serves the undamped solve: a row whose residual is at most the limit is dropped while the damping
+    # is at most the limit too. A row of rounding (a stretched arm's, an aligned wrist's) is dropped while the damping
+    # is at most sqrt(tol) |B|_F, the geometric mean of the limit and the matrix: kept, a rounding direction of singular
+    # value s adds s / lambda^2 (UR5 at q5 = 0, lambda = 1e-12: |dq| 6698 for 2.97)
     rule = step(f"{label}lams", damping * lam_scale) if lam_scale is not None else damping
     kept_from = step(f"{label}kf", sp.sqrt(tol) * frob)
-    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(rule, kept_from)), (sp.S.Zero, True)))
+    # between the limit and that bound only rounding itself goes (ROUNDING_SHARE of the limit, a few eps): a real
+    # direction resolved to a percent (float UR5 at q5 = 1e-4: 77 eps of |B|) carries the damped answer there
+    threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(rule, limit)),
+                                                (limit * ROUNDING_SHARE, sp.LessThan(rule, kept_from)), (sp.S.Zero, True)))
     if scaled_when_dropping:
         dropping = sp.LessThan(rule, limit)  # and the damping negligible: the scaled problem's answer
         factor = [step(f"{label}g{r}", sp.Piecewise((mu, dropping), (factor[r], True))) if scales[r] != 1 else factor[r]

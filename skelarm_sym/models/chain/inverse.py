@@ -24,10 +24,11 @@ no loops, no allocation); the small factorisations are those of :mod:`skelarm_sy
      chain's reach (sum of its constant translations; 1 if that is zero), so the rank rule does not
      depend on the unit of length, taken largest residual first (rank-revealing, see
      :func:`~skelarm_sym.derive.solve6.pivoted_gram_schmidt`; rows of J that are identically zero are
-     left out): ``P B^T = Q R``; where ``min(lambda, 1) <= sqrt(RANK_TOL) * |B|_F`` a row whose residual is
-     at most ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero) and so is every
-     later one: rounding, which a small damping would turn into ``s / lambda^2``. With more damping no row
-     is dropped: the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
+     left out): ``P B^T = Q R``; where ``min(lambda, 1) <= RANK_TOL * |B|_F`` a row whose residual is at
+     most ``RANK_TOL * |B|_F`` is dropped (row ``k`` of ``R`` and ``Q[k]`` set to zero) and so is every
+     later one; up to ``sqrt(RANK_TOL) * |B|_F`` a row of rounding itself (a 25th of that: 4 eps), which a
+     small damping would turn into ``s / lambda^2``. With more damping no row is dropped: the damping
+     bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
   2. ``dq = Q z`` with ``z`` the least-squares solution of ``[S^-1 R^T; lambda I] z = [twist; 0]`` (the
      rows in the order taken), by a second Gram-Schmidt QR and a guarded back substitution; every row divided by ``max(1, lambda)``
      first (the same solution), so no entry overflows for any finite lambda and the answer tends to 0,
@@ -187,7 +188,8 @@ def extend(derivation, step, joints, axes, linear, angular, tool_rotation):
         "Inverse functions: w = product of J's singular values (sqrt(det(J J^T)) for N >= 6, else sqrt(det(J^T J)));",
         f"Hs[(r*{n} + c)*{n} + j] = dJ[r][c]/dq[j]; grad = dw/dq; dq = J^T (J J^T + lambda^2 I)^-1 twist by two QR",
         "stages (rows of J scaled by 1/reach for the rank rule, taken largest Gram-Schmidt residual first; with",
-        "lambda <= sqrt(RANK_TOL) times the Frobenius norm, a row whose residual is at most RANK_TOL times it is dropped, so",
+        "lambda <= RANK_TOL times the Frobenius norm, a row whose residual is at most that is dropped, a row of rounding",
+        "(RANK_TOL/25 of it) while lambda <= sqrt(RANK_TOL) times it, so",
         "lambda = 0 at a singular pose gives the minimum-norm least-squares rates, finite);",
         "JA = blockdiag(I, E(rpy)^-1) J with R = Rz(yaw) Ry(pitch) Rx(roll):",
         "where cos(pitch)^2 <= RANK_TOL the roll and yaw rows of E^-1 are zero (finite at gimbal lock).",
