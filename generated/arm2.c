@@ -11,13 +11,9 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, target), the
@@ -28,7 +24,7 @@
 
 #include "arm2.h"
 
-#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x47fddaf4UL
+#if !defined(ARM2_STAMP) || ARM2_STAMP != 0x56be7d6aUL
 #error "arm2.h is not the header generated with this arm2.c: regenerate both together"
 #endif
 
@@ -1180,7 +1176,7 @@ void arm2_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm2_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 2 sin, 2 cos, 20 add/sub, 45 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 20 add/sub, 43 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1219,19 +1215,17 @@ static ARM2_LIGHT void arm2_inverse_velocity_finish(const double *restrict v, co
     const double t37 = t32*(t17 + t19);
     const double t38 = t33*t34;
     const double t39 = t38 + t31*(t37 + t31);
-    const double t40 = ARM2_RANK_TOL*ARM2_RANK_TOL;
-    const double t41 = (t31 <= t37*t40 ? t40 : (t31 <= t37*ARM2_RANK_TOL ? 0.0016*t40 : 0.0));
-    const int t42 = t38 > t41*(t37*t37);
-    const double t43 = t35 + t36*t22;
-    const double t44 = t32*(t42 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
-    const double t45 = t31 + t33*(1.0 + t22*t22);
-    const double t46 = t32*(t45 > 0.0 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-    const double t47 = (t42 ? t44*(t43*t31 + t34*t35) : t43*t46);
-    const double t48 = (t42 ? t44*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
-    const double t49 = t47*t23 + t48*t25;
-    dq[0] = t49;
-    const double t50 = t47*t24 + t48*t26;
-    dq[1] = t50;
+    const int t40 = t31 > t37*ARM2_RANK_TOL || t38 > (t37*t37)*(ARM2_RANK_TOL*ARM2_RANK_TOL);
+    const double t41 = t35 + t36*t22;
+    const double t42 = t32*(t40 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
+    const double t43 = t31 + t33*(1.0 + t22*t22);
+    const double t44 = t32*(t43 > 0.0 ? 1.0/(t43 != 0.0 ? t43 : 1.0) : 1.0);
+    const double t45 = (t40 ? t42*(t41*t31 + t34*t35) : t41*t44);
+    const double t46 = (t40 ? t42*(t33*(t36 - t35*t22) + t36*t31) : 0.0);
+    const double t47 = t45*t23 + t46*t25;
+    dq[0] = t47;
+    const double t48 = t45*t24 + t46*t26;
+    dq[1] = t48;
 }
 
 void arm2_inverse_velocity(const double q[2], const double v[2], const double l[2], double lambda, double dq[2])
@@ -1267,7 +1261,7 @@ void arm2_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm2_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 2 sin, 2 cos, 24 add/sub, 45 mul, 1 neg, 4 div */
+/* operations: 2 sin, 2 cos, 24 add/sub, 43 mul, 1 neg, 4 div */
 
 static ARM2_LIGHT void arm2_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1304,23 +1298,21 @@ static ARM2_LIGHT void arm2_ik_step_finish(const double *restrict q, const doubl
     const double t37 = t32*(t17 + t19);
     const double t38 = t33*t34;
     const double t39 = t38 + t31*(t37 + t31);
-    const double t40 = ARM2_RANK_TOL*ARM2_RANK_TOL;
-    const double t41 = (t31 <= t37*t40 ? t40 : (t31 <= t37*ARM2_RANK_TOL ? 0.0016*t40 : 0.0));
-    const int t42 = t38 > t41*(t37*t37);
-    const double t44 = t32*(t42 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
-    const double t45 = t31 + t33*(1.0 + t22*t22);
-    const double t46 = t32*(t45 > 0.0 ? 1.0/(t45 != 0.0 ? t45 : 1.0) : 1.0);
-    const double t51 = target[0] - t7;
-    const double t52 = t6 + target[1];
-    const double t53 = (t20 ? t51 : t52);
-    const double t54 = (t20 ? t52 : t51);
-    const double t55 = t53 + t54*t22;
-    const double t56 = (t42 ? t44*(t55*t31 + t53*t34) : t55*t46);
-    const double t57 = (t42 ? t44*(t54*t31 + t33*(t54 - t53*t22)) : 0.0);
-    const double t58 = t56*t23 + t57*t25;
-    q_next[0] = t58 + q[0];
-    const double t59 = t56*t24 + t57*t26;
-    q_next[1] = t59 + q[1];
+    const int t40 = t31 > t37*ARM2_RANK_TOL || t38 > (t37*t37)*(ARM2_RANK_TOL*ARM2_RANK_TOL);
+    const double t42 = t32*(t40 ? 1.0/(t39 != 0.0 ? t39 : 1.0) : 1.0);
+    const double t43 = t31 + t33*(1.0 + t22*t22);
+    const double t44 = t32*(t43 > 0.0 ? 1.0/(t43 != 0.0 ? t43 : 1.0) : 1.0);
+    const double t49 = target[0] - t7;
+    const double t50 = t6 + target[1];
+    const double t51 = (t20 ? t49 : t50);
+    const double t52 = (t20 ? t50 : t49);
+    const double t53 = t51 + t52*t22;
+    const double t54 = (t40 ? t42*(t53*t31 + t51*t34) : t53*t44);
+    const double t55 = (t40 ? t42*(t52*t31 + t33*(t52 - t51*t22)) : 0.0);
+    const double t56 = t54*t23 + t55*t25;
+    q_next[0] = t56 + q[0];
+    const double t57 = t54*t24 + t55*t26;
+    q_next[1] = t57 + q[1];
 }
 
 void arm2_ik_step(const double q[2], const double target[2], const double l[2], double lambda, double q_next[2])

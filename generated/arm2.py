@@ -11,13 +11,9 @@ Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T +
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
 lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
 J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
-2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
-(rounding) and lambda at most sqrt(RANK_TOL) times the largest;
-inverse_velocity3 solves
-with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
-residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
-So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
-errors in reach units).
+2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+sqrt(RANK_TOL) times its largest.
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, target), the
@@ -32,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0x47fddaf4
+STAMP = 0x56be7d6a
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -621,19 +617,17 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t37 = t32*(t17 + t19)
     t38 = t33*t34
     t39 = t38 + t31*(t37 + t31)
-    t40 = RANK_TOL*RANK_TOL
-    t41 = np.where(t31 <= t37*t40, t40, np.where(t31 <= t37*RANK_TOL, 0.0016*t40, 0.0))
-    t42 = t38 > t41*(t37*t37)
-    t43 = t35 + t36*t22
-    t44 = t32*np.where(t42, 1.0/t39, 1.0)
-    t45 = t31 + t33*(1.0 + t22*t22)
-    t46 = t32*np.where(t45 > 0.0, 1.0/t45, 1.0)
-    t47 = np.where(t42, t44*(t43*t31 + t34*t35), t43*t46)
-    t48 = np.where(t42, t44*(t33*(t36 - t35*t22) + t36*t31), 0.0)
-    t49 = t47*t23 + t48*t25
-    t50 = t47*t24 + t48*t26
-    dq[..., 0] = t49
-    dq[..., 1] = t50
+    t40 = (t31 > t37*RANK_TOL) | (t38 > (t37*t37)*(RANK_TOL*RANK_TOL))
+    t41 = t35 + t36*t22
+    t42 = t32*np.where(t40, 1.0/t39, 1.0)
+    t43 = t31 + t33*(1.0 + t22*t22)
+    t44 = t32*np.where(t43 > 0.0, 1.0/t43, 1.0)
+    t45 = np.where(t40, t42*(t41*t31 + t34*t35), t41*t44)
+    t46 = np.where(t40, t42*(t33*(t36 - t35*t22) + t36*t31), 0.0)
+    t47 = t45*t23 + t46*t25
+    t48 = t45*t24 + t46*t26
+    dq[..., 0] = t47
+    dq[..., 1] = t48
 
 
 @_signature_errors
@@ -645,7 +639,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 2).
-    Operations: 2 sin, 2 cos, 66 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 64 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -689,23 +683,21 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t37 = t32*(t17 + t19)
     t38 = t33*t34
     t39 = t38 + t31*(t37 + t31)
-    t40 = RANK_TOL*RANK_TOL
-    t41 = np.where(t31 <= t37*t40, t40, np.where(t31 <= t37*RANK_TOL, 0.0016*t40, 0.0))
-    t42 = t38 > t41*(t37*t37)
-    t44 = t32*np.where(t42, 1.0/t39, 1.0)
-    t45 = t31 + t33*(1.0 + t22*t22)
-    t46 = t32*np.where(t45 > 0.0, 1.0/t45, 1.0)
-    t51 = target[..., 0] - t7
-    t52 = t6 + target[..., 1]
-    t53 = np.where(t20, t51, t52)
-    t54 = np.where(t20, t52, t51)
-    t55 = t53 + t54*t22
-    t56 = np.where(t42, t44*(t55*t31 + t53*t34), t55*t46)
-    t57 = np.where(t42, t44*(t54*t31 + t33*(t54 - t53*t22)), 0.0)
-    t58 = t56*t23 + t57*t25
-    t59 = t56*t24 + t57*t26
-    q_next[..., 0] = t58 + q[..., 0]
-    q_next[..., 1] = t59 + q[..., 1]
+    t40 = (t31 > t37*RANK_TOL) | (t38 > (t37*t37)*(RANK_TOL*RANK_TOL))
+    t42 = t32*np.where(t40, 1.0/t39, 1.0)
+    t43 = t31 + t33*(1.0 + t22*t22)
+    t44 = t32*np.where(t43 > 0.0, 1.0/t43, 1.0)
+    t49 = target[..., 0] - t7
+    t50 = t6 + target[..., 1]
+    t51 = np.where(t20, t49, t50)
+    t52 = np.where(t20, t50, t49)
+    t53 = t51 + t52*t22
+    t54 = np.where(t40, t42*(t53*t31 + t51*t34), t53*t44)
+    t55 = np.where(t40, t42*(t52*t31 + t33*(t52 - t51*t22)), 0.0)
+    t56 = t54*t23 + t55*t25
+    t57 = t54*t24 + t55*t26
+    q_next[..., 0] = t56 + q[..., 0]
+    q_next[..., 1] = t57 + q[..., 1]
 
 
 @_signature_errors
@@ -717,7 +709,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 2), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 2).
-    Operations: 2 sin, 2 cos, 70 add/sub/mul/neg.
+    Operations: 2 sin, 2 cos, 68 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (2, 2, 2, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

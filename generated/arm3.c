@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +26,7 @@
 
 #include "arm3.h"
 
-#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xdc4add70UL
+#if !defined(ARM3_STAMP) || ARM3_STAMP != 0xde4df264UL
 #error "arm3.h is not the header generated with this arm3.c: regenerate both together"
 #endif
 
@@ -1260,7 +1258,7 @@ void arm3_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm3_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 29 add/sub, 54 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 29 add/sub, 52 mul, 1 neg, 4 div */
 
 static ARM3_LIGHT void arm3_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1306,21 +1304,19 @@ static ARM3_LIGHT void arm3_inverse_velocity_finish(const double *restrict v, co
     const double t49 = t44*(t27 + t29);
     const double t50 = t45*t46;
     const double t51 = t50 + t43*(t49 + t43);
-    const double t52 = ARM3_RANK_TOL*ARM3_RANK_TOL;
-    const double t53 = (t43 <= t49*t52 ? t52 : (t43 <= t49*ARM3_RANK_TOL ? 0.0016*t52 : 0.0));
-    const int t54 = t50 > t53*(t49*t49);
-    const double t55 = t47 + t48*t32;
-    const double t56 = t44*(t54 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
-    const double t57 = t43 + t45*(1.0 + t32*t32);
-    const double t58 = t44*(t57 > 0.0 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t59 = (t54 ? t56*(t55*t43 + t46*t47) : t55*t58);
-    const double t60 = (t54 ? t56*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
-    const double t61 = t59*t33 + t60*t36;
-    dq[0] = t61;
-    const double t62 = t59*t34 + t60*t37;
-    dq[1] = t62;
-    const double t63 = t59*t35 + t60*t38;
-    dq[2] = t63;
+    const int t52 = t43 > t49*ARM3_RANK_TOL || t50 > (t49*t49)*(ARM3_RANK_TOL*ARM3_RANK_TOL);
+    const double t53 = t47 + t48*t32;
+    const double t54 = t44*(t52 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t55 = t43 + t45*(1.0 + t32*t32);
+    const double t56 = t44*(t55 > 0.0 ? 1.0/(t55 != 0.0 ? t55 : 1.0) : 1.0);
+    const double t57 = (t52 ? t54*(t53*t43 + t46*t47) : t53*t56);
+    const double t58 = (t52 ? t54*(t45*(t48 - t47*t32) + t48*t43) : 0.0);
+    const double t59 = t57*t33 + t58*t36;
+    dq[0] = t59;
+    const double t60 = t57*t34 + t58*t37;
+    dq[1] = t60;
+    const double t61 = t57*t35 + t58*t38;
+    dq[2] = t61;
 }
 
 void arm3_inverse_velocity(const double q[3], const double v[2], const double l[3], double lambda, double dq[3])
@@ -1356,7 +1352,7 @@ void arm3_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm3_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 125 add/sub, 189 mul, 2 neg, 9 div, 8 sqrt */
+/* operations: 3 sin, 3 cos, 125 add/sub, 188 mul, 2 neg, 9 div, 8 sqrt */
 
 static ARM3_LIGHT void arm3_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1377,203 +1373,203 @@ static ARM3_LIGHT void arm3_inverse_velocity3_finish(const double *restrict twis
     const double t10 = t3 + t4;
     const double t11 = t9 - t5;
     const double t12 = t2 + t10;
-    const double t74 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
-    const double t75 = fabs(lambda);
-    const double t76 = (t75 > 1.0 ? 1.0/(t75 != 0.0 ? t75 : 1.0) : 1.0);
-    const double t77 = (t74 > 1.0 ? t74 : 1.0);
-    const double t78 = t74*t11;
-    const double t79 = t74*t9;
-    const double t80 = t74*t7;
-    const double t81 = t74*t12;
-    const double t82 = t74*t10;
-    const double t83 = t4*t74;
+    const double t72 = 1.0/(l[0] + l[1] + l[2] != 0.0 ? l[0] + l[1] + l[2] : 1.0);
+    const double t73 = fabs(lambda);
+    const double t74 = (t73 > 1.0 ? 1.0/(t73 != 0.0 ? t73 : 1.0) : 1.0);
+    const double t75 = (t72 > 1.0 ? t72 : 1.0);
+    const double t76 = t72*t11;
+    const double t77 = t72*t9;
+    const double t78 = t72*t7;
+    const double t79 = t72*t12;
+    const double t80 = t72*t10;
+    const double t81 = t4*t72;
+    const double t82 = t76*t76;
+    const double t83 = t77*t77;
     const double t84 = t78*t78;
     const double t85 = t79*t79;
     const double t86 = t80*t80;
     const double t87 = t81*t81;
-    const double t88 = t82*t82;
-    const double t89 = t83*t83;
-    const double t90 = 3.0 + t84 + t85 + t86 + t87 + t88 + t89;
-    const double t91 = sqrt(t90);
-    const double t92 = t76/(t74 != 0.0 ? t74 : 1.0);
-    const double t93 = t75*t76;
-    const double t94 = t91*ARM3_RANK_TOL;
-    const double t95 = t93*t77;
-    const double t96 = t91*sqrt(ARM3_RANK_TOL);
-    const int t97 = t95 <= t94;
-    const double t98 = (t97 ? t94 : (t96 >= t95 ? 0.04*t94 : 0.0));
-    const double t99 = (t97 ? t76 : t92);
-    const double t100 = (t97 ? t74*twist[0] : twist[0]);
-    const double t101 = (t97 ? t74*twist[1] : twist[1]);
-    const double t102 = t84 + t85 + t86;
-    const double t103 = t87 + t88 + t89;
-    const int t104 = 3.0 > t103;
-    const double t105 = (t104 ? 1.0 : t81);
-    const double t106 = (t104 ? 1.0 : t82);
-    const double t107 = (t104 ? 1.0 : t83);
-    const double t108 = (t104 ? t81 : 1.0);
-    const double t109 = (t104 ? t82 : 1.0);
-    const double t110 = (t104 ? t83 : 1.0);
-    const double t111 = (t104 ? t76 : t99);
-    const double t112 = (t104 ? twist[2] : t101);
-    const double t113 = (t104 ? t99 : t76);
-    const double t114 = (t104 ? t101 : twist[2]);
-    const double t115 = (t104 ? 3.0 : t103);
-    const int t116 = t115 > t102;
-    const double t117 = (t116 ? t105 : t78);
-    const double t118 = (t116 ? t106 : t79);
-    const double t119 = (t116 ? t107 : t80);
-    const double t120 = (t116 ? t78 : t105);
-    const double t121 = (t116 ? t79 : t106);
-    const double t122 = (t116 ? t80 : t107);
-    const double t123 = (t116 ? t111 : t99);
-    const double t124 = (t116 ? t112 : t100);
-    const double t125 = (t116 ? t99 : t111);
-    const double t126 = (t116 ? t100 : t112);
-    const double t127 = t117*t117 + t118*t118 + t119*t119;
-    const double t128 = sqrt(t127);
-    const int t129 = t128 > t98;
-    const double t130 = (t129 ? 1.0/(t128 != 0.0 ? t128 : 1.0) : 1.0);
-    const double t131 = (t129 ? t130*t117 : 0.0);
-    const double t132 = (t129 ? t130*t118 : 0.0);
-    const double t133 = (t129 ? t130*t119 : 0.0);
-    const double t134 = (t129 ? t128 : 0.0);
-    const double t135 = t131*t120 + t132*t121 + t133*t122;
-    const double t136 = t120 - t135*t131;
-    const double t137 = t121 - t135*t132;
-    const double t138 = t122 - t135*t133;
-    const double t139 = t131*t108 + t132*t109 + t133*t110;
-    const double t140 = t108 - t139*t131;
-    const double t141 = t109 - t139*t132;
-    const double t142 = t110 - t139*t133;
-    const double t143 = t136*t136 + t137*t137 + t138*t138;
-    const double t144 = t140*t140 + t141*t141 + t142*t142;
-    const int t145 = t144 > t143;
-    const double t146 = (t145 ? t140 : t136);
-    const double t147 = (t145 ? t141 : t137);
-    const double t148 = (t145 ? t142 : t138);
-    const double t149 = (t145 ? t136 : t140);
-    const double t150 = (t145 ? t137 : t141);
-    const double t151 = (t145 ? t138 : t142);
-    const double t152 = (t145 ? t139 : t135);
-    const double t153 = (t145 ? t135 : t139);
-    const double t154 = (t145 ? t113 : t125);
-    const double t155 = (t145 ? t114 : t126);
-    const double t156 = (t145 ? t125 : t113);
-    const double t157 = (t145 ? t126 : t114);
-    const double t158 = t131*t146 + t132*t147 + t133*t148;
-    const double t159 = t146 - t131*t158;
-    const double t160 = t147 - t132*t158;
-    const double t161 = t148 - t133*t158;
-    const double t162 = t159*t159 + t160*t160 + t161*t161;
-    const double t163 = sqrt(t162);
-    const int t164 = t163 > t98;
-    const double t165 = (t164 ? 1.0/(t163 != 0.0 ? t163 : 1.0) : 1.0);
-    const double t166 = (t164 ? t165*t159 : 0.0);
-    const double t167 = (t164 ? t165*t160 : 0.0);
-    const double t168 = (t164 ? t165*t161 : 0.0);
-    const double t169 = t152 + t158;
-    const double t170 = (t164 ? t163 : 0.0);
-    const double t171 = t166*t149 + t167*t150 + t168*t151;
-    const double t172 = t149 - t171*t166;
-    const double t173 = t150 - t171*t167;
-    const double t174 = t151 - t171*t168;
-    const double t175 = t131*t172 + t132*t173 + t133*t174;
-    const double t176 = t172 - t131*t175;
-    const double t177 = t173 - t132*t175;
-    const double t178 = t174 - t133*t175;
-    const double t179 = t166*t176 + t167*t177 + t168*t178;
-    const double t180 = t176 - t166*t179;
-    const double t181 = t177 - t167*t179;
-    const double t182 = t178 - t168*t179;
-    const double t183 = t180*t180 + t181*t181 + t182*t182;
-    const double t184 = sqrt(t183);
-    const int t185 = t184 > t98;
-    const double t186 = (t185 ? 1.0/(t184 != 0.0 ? t184 : 1.0) : 1.0);
-    const double t187 = (t185 ? t186*t180 : 0.0);
-    const double t188 = (t185 ? t186*t181 : 0.0);
-    const double t189 = (t185 ? t186*t182 : 0.0);
-    const double t190 = t153 + t175;
-    const double t191 = t171 + t179;
-    const double t192 = (t185 ? t184 : 0.0);
-    const double t193 = t134*t123;
-    const double t194 = t169*t154;
-    const double t195 = t190*t156;
-    const double t196 = t170*t154;
-    const double t197 = t191*t156;
-    const double t198 = t192*t156;
-    const double t199 = t93*t93;
-    const double t200 = t193*t193 + t194*t194 + t195*t195 + t199;
-    const double t201 = sqrt(t200);
-    const int t202 = t201 > 0.0;
-    const double t203 = (t202 ? 1.0/(t201 != 0.0 ? t201 : 1.0) : 1.0);
-    const double t204 = t203*t193;
-    const double t205 = t203*t194;
-    const double t206 = -t203*t195;
-    const double t207 = t203*t93;
-    const double t208 = t206*t197 - t205*t196;
-    const double t209 = t208*t204;
-    const double t210 = t196 + t208*t205;
-    const double t211 = t197 - t208*t206;
-    const double t212 = t208*t207;
-    const double t213 = t204*t209 + t205*t210 - t206*t211 + t207*t212;
-    const double t214 = t209 - t213*t204;
-    const double t215 = t210 - t213*t205;
-    const double t216 = t211 + t213*t206;
-    const double t217 = t212 - t213*t207;
-    const double t218 = t214*t214 + t215*t215 + t216*t216 + t217*t217 + t199;
-    const double t219 = sqrt(t218);
-    const int t220 = t219 > 0.0;
-    const double t221 = (t220 ? 1.0/(t219 != 0.0 ? t219 : 1.0) : 1.0);
-    const double t222 = t221*t214;
-    const double t223 = t221*t215;
-    const double t224 = t221*t216;
-    const double t225 = t221*t217;
-    const double t226 = t221*t93;
-    const double t227 = t213 - t208;
-    const double t228 = t206*t198;
-    const double t229 = t228*t204;
-    const double t230 = t228*t205;
-    const double t231 = t198 - t228*t206;
-    const double t232 = t228*t207;
-    const double t233 = t222*t229 + t223*t230 + t224*t231 + t225*t232;
-    const double t234 = t229 - t233*t222;
-    const double t235 = t230 - t233*t223;
-    const double t236 = t231 - t233*t224;
-    const double t237 = t232 - t233*t225;
-    const double t238 = t233*t226;
-    const double t239 = t204*t234 + t205*t235 - t206*t236 + t207*t237;
-    const double t240 = t234 - t239*t204;
-    const double t241 = t235 - t239*t205;
-    const double t242 = t236 + t239*t206;
-    const double t243 = t237 - t239*t207;
-    const double t244 = t222*t240 + t223*t241 + t224*t242 + t225*t243 - t226*t238;
-    const double t245 = t240 - t244*t222;
-    const double t246 = t241 - t244*t223;
-    const double t247 = t242 - t244*t224;
-    const double t248 = t243 - t244*t225;
-    const double t249 = t238 + t244*t226;
-    const double t250 = t245*t245 + t246*t246 + t247*t247 + t248*t248 + t249*t249 + t199;
-    const double t251 = sqrt(t250);
-    const int t252 = t251 > 0.0;
-    const double t253 = (t252 ? 1.0/(t251 != 0.0 ? t251 : 1.0) : 1.0);
-    const double t254 = t253*t245;
-    const double t255 = t253*t246;
-    const double t256 = t253*t247;
-    const double t257 = t239 - t228;
-    const double t258 = t233 + t244;
-    const double t259 = t76*(t124*t204 - t157*t206 + t155*t205);
-    const double t260 = t76*(t124*t222 + t157*t224 + t155*t223);
-    const double t261 = t76*(t124*t254 + t157*t256 + t155*t255);
-    const double t262 = (t252 ? t253*t261 : 0.0);
-    const double t263 = (t220 ? t221*(t260 - t258*t262) : 0.0);
-    const double t264 = (t202 ? t203*(t259 - t227*t263 - t257*t262) : 0.0);
-    const double t265 = t131*t264 + t166*t263 + t187*t262;
-    dq3[0] = t265;
-    const double t266 = t132*t264 + t167*t263 + t188*t262;
-    dq3[1] = t266;
-    const double t267 = t133*t264 + t168*t263 + t189*t262;
-    dq3[2] = t267;
+    const double t88 = 3.0 + t82 + t83 + t84 + t85 + t86 + t87;
+    const double t89 = sqrt(t88);
+    const double t90 = t74/(t72 != 0.0 ? t72 : 1.0);
+    const double t91 = t73*t74;
+    const double t92 = t89*ARM3_RANK_TOL;
+    const double t93 = t91*t75;
+    const double t94 = t89*sqrt(ARM3_RANK_TOL);
+    const int t95 = t93 <= t92;
+    const double t96 = (t94 >= t93 || t95 ? t92 : 0.0);
+    const double t97 = (t95 ? t74 : t90);
+    const double t98 = (t95 ? t72*twist[0] : twist[0]);
+    const double t99 = (t95 ? t72*twist[1] : twist[1]);
+    const double t100 = t82 + t83 + t84;
+    const double t101 = t85 + t86 + t87;
+    const int t102 = 3.0 > t101;
+    const double t103 = (t102 ? 1.0 : t79);
+    const double t104 = (t102 ? 1.0 : t80);
+    const double t105 = (t102 ? 1.0 : t81);
+    const double t106 = (t102 ? t79 : 1.0);
+    const double t107 = (t102 ? t80 : 1.0);
+    const double t108 = (t102 ? t81 : 1.0);
+    const double t109 = (t102 ? t74 : t97);
+    const double t110 = (t102 ? twist[2] : t99);
+    const double t111 = (t102 ? t97 : t74);
+    const double t112 = (t102 ? t99 : twist[2]);
+    const double t113 = (t102 ? 3.0 : t101);
+    const int t114 = t113 > t100;
+    const double t115 = (t114 ? t103 : t76);
+    const double t116 = (t114 ? t104 : t77);
+    const double t117 = (t114 ? t105 : t78);
+    const double t118 = (t114 ? t76 : t103);
+    const double t119 = (t114 ? t77 : t104);
+    const double t120 = (t114 ? t78 : t105);
+    const double t121 = (t114 ? t109 : t97);
+    const double t122 = (t114 ? t110 : t98);
+    const double t123 = (t114 ? t97 : t109);
+    const double t124 = (t114 ? t98 : t110);
+    const double t125 = t115*t115 + t116*t116 + t117*t117;
+    const double t126 = sqrt(t125);
+    const int t127 = t126 > t96;
+    const double t128 = (t127 ? 1.0/(t126 != 0.0 ? t126 : 1.0) : 1.0);
+    const double t129 = (t127 ? t128*t115 : 0.0);
+    const double t130 = (t127 ? t128*t116 : 0.0);
+    const double t131 = (t127 ? t128*t117 : 0.0);
+    const double t132 = (t127 ? t126 : 0.0);
+    const double t133 = t129*t118 + t130*t119 + t131*t120;
+    const double t134 = t118 - t133*t129;
+    const double t135 = t119 - t133*t130;
+    const double t136 = t120 - t133*t131;
+    const double t137 = t129*t106 + t130*t107 + t131*t108;
+    const double t138 = t106 - t137*t129;
+    const double t139 = t107 - t137*t130;
+    const double t140 = t108 - t137*t131;
+    const double t141 = t134*t134 + t135*t135 + t136*t136;
+    const double t142 = t138*t138 + t139*t139 + t140*t140;
+    const int t143 = t142 > t141;
+    const double t144 = (t143 ? t138 : t134);
+    const double t145 = (t143 ? t139 : t135);
+    const double t146 = (t143 ? t140 : t136);
+    const double t147 = (t143 ? t134 : t138);
+    const double t148 = (t143 ? t135 : t139);
+    const double t149 = (t143 ? t136 : t140);
+    const double t150 = (t143 ? t137 : t133);
+    const double t151 = (t143 ? t133 : t137);
+    const double t152 = (t143 ? t111 : t123);
+    const double t153 = (t143 ? t112 : t124);
+    const double t154 = (t143 ? t123 : t111);
+    const double t155 = (t143 ? t124 : t112);
+    const double t156 = t129*t144 + t130*t145 + t131*t146;
+    const double t157 = t144 - t129*t156;
+    const double t158 = t145 - t130*t156;
+    const double t159 = t146 - t131*t156;
+    const double t160 = t157*t157 + t158*t158 + t159*t159;
+    const double t161 = sqrt(t160);
+    const int t162 = t161 > t96;
+    const double t163 = (t162 ? 1.0/(t161 != 0.0 ? t161 : 1.0) : 1.0);
+    const double t164 = (t162 ? t163*t157 : 0.0);
+    const double t165 = (t162 ? t163*t158 : 0.0);
+    const double t166 = (t162 ? t163*t159 : 0.0);
+    const double t167 = t150 + t156;
+    const double t168 = (t162 ? t161 : 0.0);
+    const double t169 = t164*t147 + t165*t148 + t166*t149;
+    const double t170 = t147 - t169*t164;
+    const double t171 = t148 - t169*t165;
+    const double t172 = t149 - t169*t166;
+    const double t173 = t129*t170 + t130*t171 + t131*t172;
+    const double t174 = t170 - t129*t173;
+    const double t175 = t171 - t130*t173;
+    const double t176 = t172 - t131*t173;
+    const double t177 = t164*t174 + t165*t175 + t166*t176;
+    const double t178 = t174 - t164*t177;
+    const double t179 = t175 - t165*t177;
+    const double t180 = t176 - t166*t177;
+    const double t181 = t178*t178 + t179*t179 + t180*t180;
+    const double t182 = sqrt(t181);
+    const int t183 = t182 > t96;
+    const double t184 = (t183 ? 1.0/(t182 != 0.0 ? t182 : 1.0) : 1.0);
+    const double t185 = (t183 ? t184*t178 : 0.0);
+    const double t186 = (t183 ? t184*t179 : 0.0);
+    const double t187 = (t183 ? t184*t180 : 0.0);
+    const double t188 = t151 + t173;
+    const double t189 = t169 + t177;
+    const double t190 = (t183 ? t182 : 0.0);
+    const double t191 = t132*t121;
+    const double t192 = t167*t152;
+    const double t193 = t188*t154;
+    const double t194 = t168*t152;
+    const double t195 = t189*t154;
+    const double t196 = t190*t154;
+    const double t197 = t91*t91;
+    const double t198 = t191*t191 + t192*t192 + t193*t193 + t197;
+    const double t199 = sqrt(t198);
+    const int t200 = t199 > 0.0;
+    const double t201 = (t200 ? 1.0/(t199 != 0.0 ? t199 : 1.0) : 1.0);
+    const double t202 = t201*t191;
+    const double t203 = t201*t192;
+    const double t204 = -t201*t193;
+    const double t205 = t201*t91;
+    const double t206 = t204*t195 - t203*t194;
+    const double t207 = t206*t202;
+    const double t208 = t194 + t206*t203;
+    const double t209 = t195 - t206*t204;
+    const double t210 = t206*t205;
+    const double t211 = t202*t207 + t203*t208 - t204*t209 + t205*t210;
+    const double t212 = t207 - t211*t202;
+    const double t213 = t208 - t211*t203;
+    const double t214 = t209 + t211*t204;
+    const double t215 = t210 - t211*t205;
+    const double t216 = t212*t212 + t213*t213 + t214*t214 + t215*t215 + t197;
+    const double t217 = sqrt(t216);
+    const int t218 = t217 > 0.0;
+    const double t219 = (t218 ? 1.0/(t217 != 0.0 ? t217 : 1.0) : 1.0);
+    const double t220 = t219*t212;
+    const double t221 = t219*t213;
+    const double t222 = t219*t214;
+    const double t223 = t219*t215;
+    const double t224 = t219*t91;
+    const double t225 = t211 - t206;
+    const double t226 = t204*t196;
+    const double t227 = t226*t202;
+    const double t228 = t226*t203;
+    const double t229 = t196 - t226*t204;
+    const double t230 = t226*t205;
+    const double t231 = t220*t227 + t221*t228 + t222*t229 + t223*t230;
+    const double t232 = t227 - t231*t220;
+    const double t233 = t228 - t231*t221;
+    const double t234 = t229 - t231*t222;
+    const double t235 = t230 - t231*t223;
+    const double t236 = t231*t224;
+    const double t237 = t202*t232 + t203*t233 - t204*t234 + t205*t235;
+    const double t238 = t232 - t237*t202;
+    const double t239 = t233 - t237*t203;
+    const double t240 = t234 + t237*t204;
+    const double t241 = t235 - t237*t205;
+    const double t242 = t220*t238 + t221*t239 + t222*t240 + t223*t241 - t224*t236;
+    const double t243 = t238 - t242*t220;
+    const double t244 = t239 - t242*t221;
+    const double t245 = t240 - t242*t222;
+    const double t246 = t241 - t242*t223;
+    const double t247 = t236 + t242*t224;
+    const double t248 = t243*t243 + t244*t244 + t245*t245 + t246*t246 + t247*t247 + t197;
+    const double t249 = sqrt(t248);
+    const int t250 = t249 > 0.0;
+    const double t251 = (t250 ? 1.0/(t249 != 0.0 ? t249 : 1.0) : 1.0);
+    const double t252 = t251*t243;
+    const double t253 = t251*t244;
+    const double t254 = t251*t245;
+    const double t255 = t237 - t226;
+    const double t256 = t231 + t242;
+    const double t257 = t74*(t122*t202 - t155*t204 + t153*t203);
+    const double t258 = t74*(t122*t220 + t155*t222 + t153*t221);
+    const double t259 = t74*(t122*t252 + t155*t254 + t153*t253);
+    const double t260 = (t250 ? t251*t259 : 0.0);
+    const double t261 = (t218 ? t219*(t258 - t256*t260) : 0.0);
+    const double t262 = (t200 ? t201*(t257 - t225*t261 - t255*t260) : 0.0);
+    const double t263 = t129*t262 + t164*t261 + t185*t260;
+    dq3[0] = t263;
+    const double t264 = t130*t262 + t165*t261 + t186*t260;
+    dq3[1] = t264;
+    const double t265 = t131*t262 + t166*t261 + t187*t260;
+    dq3[2] = t265;
 }
 
 void arm3_inverse_velocity3(const double q[3], const double twist[3], const double l[3], double lambda, double dq3[3])
@@ -1609,7 +1605,7 @@ void arm3_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm3_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 34 add/sub, 54 mul, 1 neg, 4 div */
+/* operations: 3 sin, 3 cos, 34 add/sub, 52 mul, 1 neg, 4 div */
 
 static ARM3_LIGHT void arm3_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1653,25 +1649,23 @@ static ARM3_LIGHT void arm3_ik_step_finish(const double *restrict q, const doubl
     const double t49 = t44*(t27 + t29);
     const double t50 = t45*t46;
     const double t51 = t50 + t43*(t49 + t43);
-    const double t52 = ARM3_RANK_TOL*ARM3_RANK_TOL;
-    const double t53 = (t43 <= t49*t52 ? t52 : (t43 <= t49*ARM3_RANK_TOL ? 0.0016*t52 : 0.0));
-    const int t54 = t50 > t53*(t49*t49);
-    const double t56 = t44*(t54 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
-    const double t57 = t43 + t45*(1.0 + t32*t32);
-    const double t58 = t44*(t57 > 0.0 ? 1.0/(t57 != 0.0 ? t57 : 1.0) : 1.0);
-    const double t64 = target[0] - t12;
-    const double t65 = t11 + target[1];
-    const double t66 = (t30 ? t64 : t65);
-    const double t67 = (t30 ? t65 : t64);
-    const double t68 = t66 + t67*t32;
-    const double t69 = (t54 ? t56*(t68*t43 + t66*t46) : t68*t58);
-    const double t70 = (t54 ? t56*(t67*t43 + t45*(t67 - t66*t32)) : 0.0);
-    const double t71 = t69*t33 + t70*t36;
-    q_next[0] = t71 + q[0];
-    const double t72 = t69*t34 + t70*t37;
-    q_next[1] = t72 + q[1];
-    const double t73 = t69*t35 + t70*t38;
-    q_next[2] = t73 + q[2];
+    const int t52 = t43 > t49*ARM3_RANK_TOL || t50 > (t49*t49)*(ARM3_RANK_TOL*ARM3_RANK_TOL);
+    const double t54 = t44*(t52 ? 1.0/(t51 != 0.0 ? t51 : 1.0) : 1.0);
+    const double t55 = t43 + t45*(1.0 + t32*t32);
+    const double t56 = t44*(t55 > 0.0 ? 1.0/(t55 != 0.0 ? t55 : 1.0) : 1.0);
+    const double t62 = target[0] - t12;
+    const double t63 = t11 + target[1];
+    const double t64 = (t30 ? t62 : t63);
+    const double t65 = (t30 ? t63 : t62);
+    const double t66 = t64 + t65*t32;
+    const double t67 = (t52 ? t54*(t66*t43 + t64*t46) : t66*t56);
+    const double t68 = (t52 ? t54*(t65*t43 + t45*(t65 - t64*t32)) : 0.0);
+    const double t69 = t67*t33 + t68*t36;
+    q_next[0] = t69 + q[0];
+    const double t70 = t67*t34 + t68*t37;
+    q_next[1] = t70 + q[1];
+    const double t71 = t67*t35 + t68*t38;
+    q_next[2] = t71 + q[2];
 }
 
 void arm3_ik_step(const double q[3], const double target[2], const double l[3], double lambda, double q_next[3])

@@ -11,13 +11,11 @@ Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T +
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
 lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
 J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
-2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
-(rounding) and lambda at most sqrt(RANK_TOL) times the largest;
-inverse_velocity3 solves
-with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
-residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
-So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
-errors in reach units).
+2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+sqrt(RANK_TOL) times its largest.
+inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+QR stages, the same rule on their residuals and the Frobenius norm.
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -32,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float64
-STAMP = 0xdc4add70
+STAMP = 0xde4df264
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 2.220446049250313e-14
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -688,21 +686,19 @@ def _inverse_velocity_core(q, v, l, lambda_, dq):
     t49 = t44*(t27 + t29)
     t50 = t45*t46
     t51 = t50 + t43*(t49 + t43)
-    t52 = RANK_TOL*RANK_TOL
-    t53 = np.where(t43 <= t49*t52, t52, np.where(t43 <= t49*RANK_TOL, 0.0016*t52, 0.0))
-    t54 = t50 > t53*(t49*t49)
-    t55 = t47 + t48*t32
-    t56 = t44*np.where(t54, 1.0/t51, 1.0)
-    t57 = t43 + t45*(1.0 + t32*t32)
-    t58 = t44*np.where(t57 > 0.0, 1.0/t57, 1.0)
-    t59 = np.where(t54, t56*(t55*t43 + t46*t47), t55*t58)
-    t60 = np.where(t54, t56*(t45*(t48 - t47*t32) + t48*t43), 0.0)
-    t61 = t59*t33 + t60*t36
-    t62 = t59*t34 + t60*t37
-    t63 = t59*t35 + t60*t38
-    dq[..., 0] = t61
-    dq[..., 1] = t62
-    dq[..., 2] = t63
+    t52 = (t43 > t49*RANK_TOL) | (t50 > (t49*t49)*(RANK_TOL*RANK_TOL))
+    t53 = t47 + t48*t32
+    t54 = t44*np.where(t52, 1.0/t51, 1.0)
+    t55 = t43 + t45*(1.0 + t32*t32)
+    t56 = t44*np.where(t55 > 0.0, 1.0/t55, 1.0)
+    t57 = np.where(t52, t54*(t53*t43 + t46*t47), t53*t56)
+    t58 = np.where(t52, t54*(t45*(t48 - t47*t32) + t48*t43), 0.0)
+    t59 = t57*t33 + t58*t36
+    t60 = t57*t34 + t58*t37
+    t61 = t57*t35 + t58*t38
+    dq[..., 0] = t59
+    dq[..., 1] = t60
+    dq[..., 2] = t61
 
 
 @_signature_errors
@@ -714,7 +710,7 @@ def inverse_velocity(q, v, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 84 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 82 add/sub/mul/neg.
     """
     batch, (q, v, l,) = _inputs((q, v, l,), ("q", "v", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -742,203 +738,203 @@ def _inverse_velocity3_core(q, twist, l, lambda_, dq3):
     t10 = t3 + t4
     t11 = t9 - t5
     t12 = t2 + t10
-    t74 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
-    t75 = np.abs(lambda_)
-    t76 = np.where(t75 > 1.0, 1.0/t75, 1.0)
-    t77 = np.where(t74 > 1.0, t74, 1.0)
-    t78 = t74*t11
-    t79 = t74*t9
-    t80 = t74*t7
-    t81 = t74*t12
-    t82 = t74*t10
-    t83 = t4*t74
+    t72 = 1.0/(l[..., 0] + l[..., 1] + l[..., 2])
+    t73 = np.abs(lambda_)
+    t74 = np.where(t73 > 1.0, 1.0/t73, 1.0)
+    t75 = np.where(t72 > 1.0, t72, 1.0)
+    t76 = t72*t11
+    t77 = t72*t9
+    t78 = t72*t7
+    t79 = t72*t12
+    t80 = t72*t10
+    t81 = t4*t72
+    t82 = t76*t76
+    t83 = t77*t77
     t84 = t78*t78
     t85 = t79*t79
     t86 = t80*t80
     t87 = t81*t81
-    t88 = t82*t82
-    t89 = t83*t83
-    t90 = 3.0 + t84 + t85 + t86 + t87 + t88 + t89
-    t91 = np.sqrt(t90)
-    t92 = t76/t74
-    t93 = t75*t76
-    t94 = t91*RANK_TOL
-    t95 = t93*t77
-    t96 = t91*np.sqrt(RANK_TOL)
-    t97 = t95 <= t94
-    t98 = np.where(t97, t94, np.where(t96 >= t95, 0.04*t94, 0.0))
-    t99 = np.where(t97, t76, t92)
-    t100 = np.where(t97, t74*twist[..., 0], twist[..., 0])
-    t101 = np.where(t97, t74*twist[..., 1], twist[..., 1])
-    t102 = t84 + t85 + t86
-    t103 = t87 + t88 + t89
-    t104 = 3.0 > t103
-    t105 = np.where(t104, 1.0, t81)
-    t106 = np.where(t104, 1.0, t82)
-    t107 = np.where(t104, 1.0, t83)
-    t108 = np.where(t104, t81, 1.0)
-    t109 = np.where(t104, t82, 1.0)
-    t110 = np.where(t104, t83, 1.0)
-    t111 = np.where(t104, t76, t99)
-    t112 = np.where(t104, twist[..., 2], t101)
-    t113 = np.where(t104, t99, t76)
-    t114 = np.where(t104, t101, twist[..., 2])
-    t115 = np.where(t104, 3.0, t103)
-    t116 = t115 > t102
-    t117 = np.where(t116, t105, t78)
-    t118 = np.where(t116, t106, t79)
-    t119 = np.where(t116, t107, t80)
-    t120 = np.where(t116, t78, t105)
-    t121 = np.where(t116, t79, t106)
-    t122 = np.where(t116, t80, t107)
-    t123 = np.where(t116, t111, t99)
-    t124 = np.where(t116, t112, t100)
-    t125 = np.where(t116, t99, t111)
-    t126 = np.where(t116, t100, t112)
-    t127 = t117*t117 + t118*t118 + t119*t119
-    t128 = np.sqrt(t127)
-    t129 = t128 > t98
-    t130 = np.where(t129, 1.0/t128, 1.0)
-    t131 = np.where(t129, t130*t117, 0.0)
-    t132 = np.where(t129, t130*t118, 0.0)
-    t133 = np.where(t129, t130*t119, 0.0)
-    t134 = np.where(t129, t128, 0.0)
-    t135 = t131*t120 + t132*t121 + t133*t122
-    t136 = t120 - t135*t131
-    t137 = t121 - t135*t132
-    t138 = t122 - t135*t133
-    t139 = t131*t108 + t132*t109 + t133*t110
-    t140 = t108 - t139*t131
-    t141 = t109 - t139*t132
-    t142 = t110 - t139*t133
-    t143 = t136*t136 + t137*t137 + t138*t138
-    t144 = t140*t140 + t141*t141 + t142*t142
-    t145 = t144 > t143
-    t146 = np.where(t145, t140, t136)
-    t147 = np.where(t145, t141, t137)
-    t148 = np.where(t145, t142, t138)
-    t149 = np.where(t145, t136, t140)
-    t150 = np.where(t145, t137, t141)
-    t151 = np.where(t145, t138, t142)
-    t152 = np.where(t145, t139, t135)
-    t153 = np.where(t145, t135, t139)
-    t154 = np.where(t145, t113, t125)
-    t155 = np.where(t145, t114, t126)
-    t156 = np.where(t145, t125, t113)
-    t157 = np.where(t145, t126, t114)
-    t158 = t131*t146 + t132*t147 + t133*t148
-    t159 = t146 - t131*t158
-    t160 = t147 - t132*t158
-    t161 = t148 - t133*t158
-    t162 = t159*t159 + t160*t160 + t161*t161
-    t163 = np.sqrt(t162)
-    t164 = t163 > t98
-    t165 = np.where(t164, 1.0/t163, 1.0)
-    t166 = np.where(t164, t165*t159, 0.0)
-    t167 = np.where(t164, t165*t160, 0.0)
-    t168 = np.where(t164, t165*t161, 0.0)
-    t169 = t152 + t158
-    t170 = np.where(t164, t163, 0.0)
-    t171 = t166*t149 + t167*t150 + t168*t151
-    t172 = t149 - t171*t166
-    t173 = t150 - t171*t167
-    t174 = t151 - t171*t168
-    t175 = t131*t172 + t132*t173 + t133*t174
-    t176 = t172 - t131*t175
-    t177 = t173 - t132*t175
-    t178 = t174 - t133*t175
-    t179 = t166*t176 + t167*t177 + t168*t178
-    t180 = t176 - t166*t179
-    t181 = t177 - t167*t179
-    t182 = t178 - t168*t179
-    t183 = t180*t180 + t181*t181 + t182*t182
-    t184 = np.sqrt(t183)
-    t185 = t184 > t98
-    t186 = np.where(t185, 1.0/t184, 1.0)
-    t187 = np.where(t185, t186*t180, 0.0)
-    t188 = np.where(t185, t186*t181, 0.0)
-    t189 = np.where(t185, t186*t182, 0.0)
-    t190 = t153 + t175
-    t191 = t171 + t179
-    t192 = np.where(t185, t184, 0.0)
-    t193 = t134*t123
-    t194 = t169*t154
-    t195 = t190*t156
-    t196 = t170*t154
-    t197 = t191*t156
-    t198 = t192*t156
-    t199 = t93*t93
-    t200 = t193*t193 + t194*t194 + t195*t195 + t199
-    t201 = np.sqrt(t200)
-    t202 = t201 > 0.0
-    t203 = np.where(t202, 1.0/t201, 1.0)
-    t204 = t203*t193
-    t205 = t203*t194
-    t206 = -t203*t195
-    t207 = t203*t93
-    t208 = t206*t197 - t205*t196
-    t209 = t208*t204
-    t210 = t196 + t208*t205
-    t211 = t197 - t208*t206
-    t212 = t208*t207
-    t213 = t204*t209 + t205*t210 - t206*t211 + t207*t212
-    t214 = t209 - t213*t204
-    t215 = t210 - t213*t205
-    t216 = t211 + t213*t206
-    t217 = t212 - t213*t207
-    t218 = t214*t214 + t215*t215 + t216*t216 + t217*t217 + t199
-    t219 = np.sqrt(t218)
-    t220 = t219 > 0.0
-    t221 = np.where(t220, 1.0/t219, 1.0)
-    t222 = t221*t214
-    t223 = t221*t215
-    t224 = t221*t216
-    t225 = t221*t217
-    t226 = t221*t93
-    t227 = t213 - t208
-    t228 = t206*t198
-    t229 = t228*t204
-    t230 = t228*t205
-    t231 = t198 - t228*t206
-    t232 = t228*t207
-    t233 = t222*t229 + t223*t230 + t224*t231 + t225*t232
-    t234 = t229 - t233*t222
-    t235 = t230 - t233*t223
-    t236 = t231 - t233*t224
-    t237 = t232 - t233*t225
-    t238 = t233*t226
-    t239 = t204*t234 + t205*t235 - t206*t236 + t207*t237
-    t240 = t234 - t239*t204
-    t241 = t235 - t239*t205
-    t242 = t236 + t239*t206
-    t243 = t237 - t239*t207
-    t244 = t222*t240 + t223*t241 + t224*t242 + t225*t243 - t226*t238
-    t245 = t240 - t244*t222
-    t246 = t241 - t244*t223
-    t247 = t242 - t244*t224
-    t248 = t243 - t244*t225
-    t249 = t238 + t244*t226
-    t250 = t245*t245 + t246*t246 + t247*t247 + t248*t248 + t249*t249 + t199
-    t251 = np.sqrt(t250)
-    t252 = t251 > 0.0
-    t253 = np.where(t252, 1.0/t251, 1.0)
-    t254 = t253*t245
-    t255 = t253*t246
-    t256 = t253*t247
-    t257 = t239 - t228
-    t258 = t233 + t244
-    t259 = t76*(t124*t204 - t157*t206 + t155*t205)
-    t260 = t76*(t124*t222 + t157*t224 + t155*t223)
-    t261 = t76*(t124*t254 + t157*t256 + t155*t255)
-    t262 = np.where(t252, t253*t261, 0.0)
-    t263 = np.where(t220, t221*(t260 - t258*t262), 0.0)
-    t264 = np.where(t202, t203*(t259 - t227*t263 - t257*t262), 0.0)
-    t265 = t131*t264 + t166*t263 + t187*t262
-    t266 = t132*t264 + t167*t263 + t188*t262
-    t267 = t133*t264 + t168*t263 + t189*t262
-    dq3[..., 0] = t265
-    dq3[..., 1] = t266
-    dq3[..., 2] = t267
+    t88 = 3.0 + t82 + t83 + t84 + t85 + t86 + t87
+    t89 = np.sqrt(t88)
+    t90 = t74/t72
+    t91 = t73*t74
+    t92 = t89*RANK_TOL
+    t93 = t91*t75
+    t94 = t89*np.sqrt(RANK_TOL)
+    t95 = t93 <= t92
+    t96 = np.where((t94 >= t93) | (t95), t92, 0.0)
+    t97 = np.where(t95, t74, t90)
+    t98 = np.where(t95, t72*twist[..., 0], twist[..., 0])
+    t99 = np.where(t95, t72*twist[..., 1], twist[..., 1])
+    t100 = t82 + t83 + t84
+    t101 = t85 + t86 + t87
+    t102 = 3.0 > t101
+    t103 = np.where(t102, 1.0, t79)
+    t104 = np.where(t102, 1.0, t80)
+    t105 = np.where(t102, 1.0, t81)
+    t106 = np.where(t102, t79, 1.0)
+    t107 = np.where(t102, t80, 1.0)
+    t108 = np.where(t102, t81, 1.0)
+    t109 = np.where(t102, t74, t97)
+    t110 = np.where(t102, twist[..., 2], t99)
+    t111 = np.where(t102, t97, t74)
+    t112 = np.where(t102, t99, twist[..., 2])
+    t113 = np.where(t102, 3.0, t101)
+    t114 = t113 > t100
+    t115 = np.where(t114, t103, t76)
+    t116 = np.where(t114, t104, t77)
+    t117 = np.where(t114, t105, t78)
+    t118 = np.where(t114, t76, t103)
+    t119 = np.where(t114, t77, t104)
+    t120 = np.where(t114, t78, t105)
+    t121 = np.where(t114, t109, t97)
+    t122 = np.where(t114, t110, t98)
+    t123 = np.where(t114, t97, t109)
+    t124 = np.where(t114, t98, t110)
+    t125 = t115*t115 + t116*t116 + t117*t117
+    t126 = np.sqrt(t125)
+    t127 = t126 > t96
+    t128 = np.where(t127, 1.0/t126, 1.0)
+    t129 = np.where(t127, t128*t115, 0.0)
+    t130 = np.where(t127, t128*t116, 0.0)
+    t131 = np.where(t127, t128*t117, 0.0)
+    t132 = np.where(t127, t126, 0.0)
+    t133 = t129*t118 + t130*t119 + t131*t120
+    t134 = t118 - t133*t129
+    t135 = t119 - t133*t130
+    t136 = t120 - t133*t131
+    t137 = t129*t106 + t130*t107 + t131*t108
+    t138 = t106 - t137*t129
+    t139 = t107 - t137*t130
+    t140 = t108 - t137*t131
+    t141 = t134*t134 + t135*t135 + t136*t136
+    t142 = t138*t138 + t139*t139 + t140*t140
+    t143 = t142 > t141
+    t144 = np.where(t143, t138, t134)
+    t145 = np.where(t143, t139, t135)
+    t146 = np.where(t143, t140, t136)
+    t147 = np.where(t143, t134, t138)
+    t148 = np.where(t143, t135, t139)
+    t149 = np.where(t143, t136, t140)
+    t150 = np.where(t143, t137, t133)
+    t151 = np.where(t143, t133, t137)
+    t152 = np.where(t143, t111, t123)
+    t153 = np.where(t143, t112, t124)
+    t154 = np.where(t143, t123, t111)
+    t155 = np.where(t143, t124, t112)
+    t156 = t129*t144 + t130*t145 + t131*t146
+    t157 = t144 - t129*t156
+    t158 = t145 - t130*t156
+    t159 = t146 - t131*t156
+    t160 = t157*t157 + t158*t158 + t159*t159
+    t161 = np.sqrt(t160)
+    t162 = t161 > t96
+    t163 = np.where(t162, 1.0/t161, 1.0)
+    t164 = np.where(t162, t163*t157, 0.0)
+    t165 = np.where(t162, t163*t158, 0.0)
+    t166 = np.where(t162, t163*t159, 0.0)
+    t167 = t150 + t156
+    t168 = np.where(t162, t161, 0.0)
+    t169 = t164*t147 + t165*t148 + t166*t149
+    t170 = t147 - t169*t164
+    t171 = t148 - t169*t165
+    t172 = t149 - t169*t166
+    t173 = t129*t170 + t130*t171 + t131*t172
+    t174 = t170 - t129*t173
+    t175 = t171 - t130*t173
+    t176 = t172 - t131*t173
+    t177 = t164*t174 + t165*t175 + t166*t176
+    t178 = t174 - t164*t177
+    t179 = t175 - t165*t177
+    t180 = t176 - t166*t177
+    t181 = t178*t178 + t179*t179 + t180*t180
+    t182 = np.sqrt(t181)
+    t183 = t182 > t96
+    t184 = np.where(t183, 1.0/t182, 1.0)
+    t185 = np.where(t183, t184*t178, 0.0)
+    t186 = np.where(t183, t184*t179, 0.0)
+    t187 = np.where(t183, t184*t180, 0.0)
+    t188 = t151 + t173
+    t189 = t169 + t177
+    t190 = np.where(t183, t182, 0.0)
+    t191 = t132*t121
+    t192 = t167*t152
+    t193 = t188*t154
+    t194 = t168*t152
+    t195 = t189*t154
+    t196 = t190*t154
+    t197 = t91*t91
+    t198 = t191*t191 + t192*t192 + t193*t193 + t197
+    t199 = np.sqrt(t198)
+    t200 = t199 > 0.0
+    t201 = np.where(t200, 1.0/t199, 1.0)
+    t202 = t201*t191
+    t203 = t201*t192
+    t204 = -t201*t193
+    t205 = t201*t91
+    t206 = t204*t195 - t203*t194
+    t207 = t206*t202
+    t208 = t194 + t206*t203
+    t209 = t195 - t206*t204
+    t210 = t206*t205
+    t211 = t202*t207 + t203*t208 - t204*t209 + t205*t210
+    t212 = t207 - t211*t202
+    t213 = t208 - t211*t203
+    t214 = t209 + t211*t204
+    t215 = t210 - t211*t205
+    t216 = t212*t212 + t213*t213 + t214*t214 + t215*t215 + t197
+    t217 = np.sqrt(t216)
+    t218 = t217 > 0.0
+    t219 = np.where(t218, 1.0/t217, 1.0)
+    t220 = t219*t212
+    t221 = t219*t213
+    t222 = t219*t214
+    t223 = t219*t215
+    t224 = t219*t91
+    t225 = t211 - t206
+    t226 = t204*t196
+    t227 = t226*t202
+    t228 = t226*t203
+    t229 = t196 - t226*t204
+    t230 = t226*t205
+    t231 = t220*t227 + t221*t228 + t222*t229 + t223*t230
+    t232 = t227 - t231*t220
+    t233 = t228 - t231*t221
+    t234 = t229 - t231*t222
+    t235 = t230 - t231*t223
+    t236 = t231*t224
+    t237 = t202*t232 + t203*t233 - t204*t234 + t205*t235
+    t238 = t232 - t237*t202
+    t239 = t233 - t237*t203
+    t240 = t234 + t237*t204
+    t241 = t235 - t237*t205
+    t242 = t220*t238 + t221*t239 + t222*t240 + t223*t241 - t224*t236
+    t243 = t238 - t242*t220
+    t244 = t239 - t242*t221
+    t245 = t240 - t242*t222
+    t246 = t241 - t242*t223
+    t247 = t236 + t242*t224
+    t248 = t243*t243 + t244*t244 + t245*t245 + t246*t246 + t247*t247 + t197
+    t249 = np.sqrt(t248)
+    t250 = t249 > 0.0
+    t251 = np.where(t250, 1.0/t249, 1.0)
+    t252 = t251*t243
+    t253 = t251*t244
+    t254 = t251*t245
+    t255 = t237 - t226
+    t256 = t231 + t242
+    t257 = t74*(t122*t202 - t155*t204 + t153*t203)
+    t258 = t74*(t122*t220 + t155*t222 + t153*t221)
+    t259 = t74*(t122*t252 + t155*t254 + t153*t253)
+    t260 = np.where(t250, t251*t259, 0.0)
+    t261 = np.where(t218, t219*(t258 - t256*t260), 0.0)
+    t262 = np.where(t200, t201*(t257 - t225*t261 - t255*t260), 0.0)
+    t263 = t129*t262 + t164*t261 + t185*t260
+    t264 = t130*t262 + t165*t261 + t186*t260
+    t265 = t131*t262 + t166*t261 + t187*t260
+    dq3[..., 0] = t263
+    dq3[..., 1] = t264
+    dq3[..., 2] = t265
 
 
 @_signature_errors
@@ -950,7 +946,7 @@ def inverse_velocity3(q, twist, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 316 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 315 add/sub/mul/neg.
     """
     batch, (q, twist, l,) = _inputs((q, twist, l,), ("q", "twist", "l", ), (3, 3, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -1001,25 +997,23 @@ def _ik_step_core(q, target, l, lambda_, q_next):
     t49 = t44*(t27 + t29)
     t50 = t45*t46
     t51 = t50 + t43*(t49 + t43)
-    t52 = RANK_TOL*RANK_TOL
-    t53 = np.where(t43 <= t49*t52, t52, np.where(t43 <= t49*RANK_TOL, 0.0016*t52, 0.0))
-    t54 = t50 > t53*(t49*t49)
-    t56 = t44*np.where(t54, 1.0/t51, 1.0)
-    t57 = t43 + t45*(1.0 + t32*t32)
-    t58 = t44*np.where(t57 > 0.0, 1.0/t57, 1.0)
-    t64 = target[..., 0] - t12
-    t65 = t11 + target[..., 1]
-    t66 = np.where(t30, t64, t65)
-    t67 = np.where(t30, t65, t64)
-    t68 = t66 + t67*t32
-    t69 = np.where(t54, t56*(t68*t43 + t66*t46), t68*t58)
-    t70 = np.where(t54, t56*(t67*t43 + t45*(t67 - t66*t32)), 0.0)
-    t71 = t69*t33 + t70*t36
-    t72 = t69*t34 + t70*t37
-    t73 = t69*t35 + t70*t38
-    q_next[..., 0] = t71 + q[..., 0]
-    q_next[..., 1] = t72 + q[..., 1]
-    q_next[..., 2] = t73 + q[..., 2]
+    t52 = (t43 > t49*RANK_TOL) | (t50 > (t49*t49)*(RANK_TOL*RANK_TOL))
+    t54 = t44*np.where(t52, 1.0/t51, 1.0)
+    t55 = t43 + t45*(1.0 + t32*t32)
+    t56 = t44*np.where(t55 > 0.0, 1.0/t55, 1.0)
+    t62 = target[..., 0] - t12
+    t63 = t11 + target[..., 1]
+    t64 = np.where(t30, t62, t63)
+    t65 = np.where(t30, t63, t62)
+    t66 = t64 + t65*t32
+    t67 = np.where(t52, t54*(t66*t43 + t64*t46), t66*t56)
+    t68 = np.where(t52, t54*(t65*t43 + t45*(t65 - t64*t32)), 0.0)
+    t69 = t67*t33 + t68*t36
+    t70 = t67*t34 + t68*t37
+    t71 = t67*t35 + t68*t38
+    q_next[..., 0] = t69 + q[..., 0]
+    q_next[..., 1] = t70 + q[..., 1]
+    q_next[..., 2] = t71 + q[..., 2]
 
 
 @_signature_errors
@@ -1031,7 +1025,7 @@ def ik_step(q, target, l, lambda_):
     l: array of shape (..., 3), finite and > 0.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 89 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 87 add/sub/mul/neg.
     """
     batch, (q, target, l,) = _inputs((q, target, l,), ("q", "target", "l", ), (3, 2, 3, ), ("finite", "finite", "positive", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

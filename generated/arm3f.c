@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +26,7 @@
 
 #include "arm3f.h"
 
-#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x4446bb5fUL
+#if !defined(ARM3F_STAMP) || ARM3F_STAMP != 0x3a1edb73UL
 #error "arm3f.h is not the header generated with this arm3f.c: regenerate both together"
 #endif
 
@@ -1063,7 +1061,7 @@ void arm3f_manipulability_batch(size_t m, const float *q, float *w)
 }
 
 /* ---- arm3f_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 3 sin, 3 cos, 29 add/sub, 52 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 29 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity_angles(const float *restrict q, float *restrict ang)
 {
@@ -1107,21 +1105,19 @@ static ARM3F_LIGHT void arm3f_inverse_velocity_finish(const float *restrict v, f
     const float t47 = t42*(t25 + t27);
     const float t48 = t43*t44;
     const float t49 = t48 + t41*(t47 + t41);
-    const float t50 = ARM3F_RANK_TOL*ARM3F_RANK_TOL;
-    const float t51 = (t41 <= t47*t50 ? t50 : (t41 <= t47*ARM3F_RANK_TOL ? 0.0016f*t50 : 0.0f));
-    const int t52 = t48 > t51*(t47*t47);
-    const float t53 = t45 + t46*t30;
-    const float t54 = t42*(t52 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
-    const float t55 = t41 + t43*(1.0f + t30*t30);
-    const float t56 = t42*(t55 > 0.0f ? 1.0f/(t55 != 0.0f ? t55 : 1.0f) : 1.0f);
-    const float t57 = (t52 ? t54*(t53*t41 + t44*t45) : t53*t56);
-    const float t58 = (t52 ? t54*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
-    const float t59 = t57*t31 + t58*t34;
-    dq[0] = t59;
-    const float t60 = t57*t32 + t58*t35;
-    dq[1] = t60;
-    const float t61 = t57*t33 + t58*t36;
-    dq[2] = t61;
+    const int t50 = t41 > t47*ARM3F_RANK_TOL || t48 > (t47*t47)*(ARM3F_RANK_TOL*ARM3F_RANK_TOL);
+    const float t51 = t45 + t46*t30;
+    const float t52 = t42*(t50 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
+    const float t53 = t41 + t43*(1.0f + t30*t30);
+    const float t54 = t42*(t53 > 0.0f ? 1.0f/(t53 != 0.0f ? t53 : 1.0f) : 1.0f);
+    const float t55 = (t50 ? t52*(t51*t41 + t44*t45) : t51*t54);
+    const float t56 = (t50 ? t52*(t43*(t46 - t45*t30) + t46*t41) : 0.0f);
+    const float t57 = t55*t31 + t56*t34;
+    dq[0] = t57;
+    const float t58 = t55*t32 + t56*t35;
+    dq[1] = t58;
+    const float t59 = t55*t33 + t56*t36;
+    dq[2] = t59;
 }
 
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3])
@@ -1157,7 +1153,7 @@ void arm3f_inverse_velocity_batch(size_t m, const float *q, const float *v, floa
 }
 
 /* ---- arm3f_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 3 sin, 3 cos, 123 add/sub, 187 mul, 1 neg, 7 div, 8 sqrt */
+/* operations: 3 sin, 3 cos, 123 add/sub, 186 mul, 1 neg, 7 div, 8 sqrt */
 
 static ARM3F_LIGHT void arm3f_inverse_velocity3_angles(const float *restrict q, float *restrict ang)
 {
@@ -1176,200 +1172,200 @@ static ARM3F_LIGHT void arm3f_inverse_velocity3_finish(const float *restrict twi
     const float t8 = t2 + t3;
     const float t9 = t7 - sn[0];
     const float t10 = cs[0] + t8;
-    const float t72 = fabsf(lambda);
-    const float t73 = (t72 > 1.0f ? 1.0f/(t72 != 0.0f ? t72 : 1.0f) : 1.0f);
-    const float t74 = 0.4347826f*t9;
-    const float t75 = 0.4347826f*t7;
-    const float t76 = 0.4347826f*t5;
-    const float t77 = 0.4347826f*t10;
-    const float t78 = 0.4347826f*t8;
-    const float t79 = 0.4347826f*t3;
+    const float t70 = fabsf(lambda);
+    const float t71 = (t70 > 1.0f ? 1.0f/(t70 != 0.0f ? t70 : 1.0f) : 1.0f);
+    const float t72 = 0.4347826f*t9;
+    const float t73 = 0.4347826f*t7;
+    const float t74 = 0.4347826f*t5;
+    const float t75 = 0.4347826f*t10;
+    const float t76 = 0.4347826f*t8;
+    const float t77 = 0.4347826f*t3;
+    const float t78 = t72*t72;
+    const float t79 = t73*t73;
     const float t80 = t74*t74;
     const float t81 = t75*t75;
     const float t82 = t76*t76;
     const float t83 = t77*t77;
-    const float t84 = t78*t78;
-    const float t85 = t79*t79;
-    const float t86 = 3.0f + t80 + t81 + t82 + t83 + t84 + t85;
-    const float t87 = sqrtf(t86);
-    const float t88 = 2.3f*t73;
-    const float t89 = t72*t73;
-    const float t90 = t87*ARM3F_RANK_TOL;
-    const float t91 = t87*sqrtf(ARM3F_RANK_TOL);
-    const int t92 = t89 <= t90;
-    const float t93 = (t92 ? t90 : (t91 >= t89 ? 0.04f*t90 : 0.0f));
-    const float t94 = (t92 ? t73 : t88);
-    const float t95 = (t92 ? 0.4347826f*twist[0] : twist[0]);
-    const float t96 = (t92 ? 0.4347826f*twist[1] : twist[1]);
-    const float t97 = t80 + t81 + t82;
-    const float t98 = t83 + t84 + t85;
-    const int t99 = 3.0f > t98;
-    const float t100 = (t99 ? 1.0f : t77);
-    const float t101 = (t99 ? 1.0f : t78);
-    const float t102 = (t99 ? 1.0f : t79);
-    const float t103 = (t99 ? t77 : 1.0f);
-    const float t104 = (t99 ? t78 : 1.0f);
-    const float t105 = (t99 ? t79 : 1.0f);
-    const float t106 = (t99 ? t73 : t94);
-    const float t107 = (t99 ? twist[2] : t96);
-    const float t108 = (t99 ? t94 : t73);
-    const float t109 = (t99 ? t96 : twist[2]);
-    const float t110 = (t99 ? 3.0f : t98);
-    const int t111 = t110 > t97;
-    const float t112 = (t111 ? t100 : t74);
-    const float t113 = (t111 ? t101 : t75);
-    const float t114 = (t111 ? t102 : t76);
-    const float t115 = (t111 ? t74 : t100);
-    const float t116 = (t111 ? t75 : t101);
-    const float t117 = (t111 ? t76 : t102);
-    const float t118 = (t111 ? t106 : t94);
-    const float t119 = (t111 ? t107 : t95);
-    const float t120 = (t111 ? t94 : t106);
-    const float t121 = (t111 ? t95 : t107);
-    const float t122 = t112*t112 + t113*t113 + t114*t114;
-    const float t123 = sqrtf(t122);
-    const int t124 = t123 > t93;
-    const float t125 = (t124 ? 1.0f/(t123 != 0.0f ? t123 : 1.0f) : 1.0f);
-    const float t126 = (t124 ? t125*t112 : 0.0f);
-    const float t127 = (t124 ? t125*t113 : 0.0f);
-    const float t128 = (t124 ? t125*t114 : 0.0f);
-    const float t129 = (t124 ? t123 : 0.0f);
-    const float t130 = t126*t115 + t127*t116 + t128*t117;
-    const float t131 = t115 - t130*t126;
-    const float t132 = t116 - t130*t127;
-    const float t133 = t117 - t130*t128;
-    const float t134 = t126*t103 + t127*t104 + t128*t105;
-    const float t135 = t103 - t134*t126;
-    const float t136 = t104 - t134*t127;
-    const float t137 = t105 - t134*t128;
-    const float t138 = t131*t131 + t132*t132 + t133*t133;
-    const float t139 = t135*t135 + t136*t136 + t137*t137;
-    const int t140 = t139 > t138;
-    const float t141 = (t140 ? t135 : t131);
-    const float t142 = (t140 ? t136 : t132);
-    const float t143 = (t140 ? t137 : t133);
-    const float t144 = (t140 ? t131 : t135);
-    const float t145 = (t140 ? t132 : t136);
-    const float t146 = (t140 ? t133 : t137);
-    const float t147 = (t140 ? t134 : t130);
-    const float t148 = (t140 ? t130 : t134);
-    const float t149 = (t140 ? t108 : t120);
-    const float t150 = (t140 ? t109 : t121);
-    const float t151 = (t140 ? t120 : t108);
-    const float t152 = (t140 ? t121 : t109);
-    const float t153 = t126*t141 + t127*t142 + t128*t143;
-    const float t154 = t141 - t126*t153;
-    const float t155 = t142 - t127*t153;
-    const float t156 = t143 - t128*t153;
-    const float t157 = t154*t154 + t155*t155 + t156*t156;
-    const float t158 = sqrtf(t157);
-    const int t159 = t158 > t93;
-    const float t160 = (t159 ? 1.0f/(t158 != 0.0f ? t158 : 1.0f) : 1.0f);
-    const float t161 = (t159 ? t160*t154 : 0.0f);
-    const float t162 = (t159 ? t160*t155 : 0.0f);
-    const float t163 = (t159 ? t160*t156 : 0.0f);
-    const float t164 = t147 + t153;
-    const float t165 = (t159 ? t158 : 0.0f);
-    const float t166 = t161*t144 + t162*t145 + t163*t146;
-    const float t167 = t144 - t166*t161;
-    const float t168 = t145 - t166*t162;
-    const float t169 = t146 - t166*t163;
-    const float t170 = t126*t167 + t127*t168 + t128*t169;
-    const float t171 = t167 - t126*t170;
-    const float t172 = t168 - t127*t170;
-    const float t173 = t169 - t128*t170;
-    const float t174 = t161*t171 + t162*t172 + t163*t173;
-    const float t175 = t171 - t161*t174;
-    const float t176 = t172 - t162*t174;
-    const float t177 = t173 - t163*t174;
-    const float t178 = t175*t175 + t176*t176 + t177*t177;
-    const float t179 = sqrtf(t178);
-    const int t180 = t179 > t93;
-    const float t181 = (t180 ? 1.0f/(t179 != 0.0f ? t179 : 1.0f) : 1.0f);
-    const float t182 = (t180 ? t181*t175 : 0.0f);
-    const float t183 = (t180 ? t181*t176 : 0.0f);
-    const float t184 = (t180 ? t181*t177 : 0.0f);
-    const float t185 = t148 + t170;
-    const float t186 = t166 + t174;
-    const float t187 = (t180 ? t179 : 0.0f);
-    const float t188 = t129*t118;
-    const float t189 = t164*t149;
-    const float t190 = t185*t151;
-    const float t191 = t165*t149;
-    const float t192 = t186*t151;
-    const float t193 = t187*t151;
-    const float t194 = t89*t89;
-    const float t195 = t188*t188 + t189*t189 + t190*t190 + t194;
-    const float t196 = sqrtf(t195);
-    const int t197 = t196 > 0.0f;
-    const float t198 = (t197 ? 1.0f/(t196 != 0.0f ? t196 : 1.0f) : 1.0f);
-    const float t199 = t198*t188;
-    const float t200 = t198*t189;
-    const float t201 = -t198*t190;
-    const float t202 = t198*t89;
-    const float t203 = t201*t192 - t200*t191;
-    const float t204 = t203*t199;
-    const float t205 = t191 + t203*t200;
-    const float t206 = t192 - t203*t201;
-    const float t207 = t203*t202;
-    const float t208 = t199*t204 + t200*t205 - t201*t206 + t202*t207;
-    const float t209 = t204 - t208*t199;
-    const float t210 = t205 - t208*t200;
-    const float t211 = t206 + t208*t201;
-    const float t212 = t207 - t208*t202;
-    const float t213 = t209*t209 + t210*t210 + t211*t211 + t212*t212 + t194;
-    const float t214 = sqrtf(t213);
-    const int t215 = t214 > 0.0f;
-    const float t216 = (t215 ? 1.0f/(t214 != 0.0f ? t214 : 1.0f) : 1.0f);
-    const float t217 = t216*t209;
-    const float t218 = t216*t210;
-    const float t219 = t216*t211;
-    const float t220 = t216*t212;
-    const float t221 = t216*t89;
-    const float t222 = t208 - t203;
-    const float t223 = t201*t193;
-    const float t224 = t223*t199;
-    const float t225 = t223*t200;
-    const float t226 = t193 - t223*t201;
-    const float t227 = t223*t202;
-    const float t228 = t217*t224 + t218*t225 + t219*t226 + t220*t227;
-    const float t229 = t224 - t228*t217;
-    const float t230 = t225 - t228*t218;
-    const float t231 = t226 - t228*t219;
-    const float t232 = t227 - t228*t220;
-    const float t233 = t228*t221;
-    const float t234 = t199*t229 + t200*t230 - t201*t231 + t202*t232;
-    const float t235 = t229 - t234*t199;
-    const float t236 = t230 - t234*t200;
-    const float t237 = t231 + t234*t201;
-    const float t238 = t232 - t234*t202;
-    const float t239 = t217*t235 + t218*t236 + t219*t237 + t220*t238 - t221*t233;
-    const float t240 = t235 - t239*t217;
-    const float t241 = t236 - t239*t218;
-    const float t242 = t237 - t239*t219;
-    const float t243 = t238 - t239*t220;
-    const float t244 = t233 + t239*t221;
-    const float t245 = t240*t240 + t241*t241 + t242*t242 + t243*t243 + t244*t244 + t194;
-    const float t246 = sqrtf(t245);
-    const int t247 = t246 > 0.0f;
-    const float t248 = (t247 ? 1.0f/(t246 != 0.0f ? t246 : 1.0f) : 1.0f);
-    const float t249 = t248*t240;
-    const float t250 = t248*t241;
-    const float t251 = t248*t242;
-    const float t252 = t234 - t223;
-    const float t253 = t228 + t239;
-    const float t254 = t73*(t119*t199 - t152*t201 + t150*t200);
-    const float t255 = t73*(t119*t217 + t152*t219 + t150*t218);
-    const float t256 = t73*(t119*t249 + t152*t251 + t150*t250);
-    const float t257 = (t247 ? t248*t256 : 0.0f);
-    const float t258 = (t215 ? t216*(t255 - t253*t257) : 0.0f);
-    const float t259 = (t197 ? t198*(t254 - t222*t258 - t252*t257) : 0.0f);
-    const float t260 = t126*t259 + t161*t258 + t182*t257;
-    dq3[0] = t260;
-    const float t261 = t127*t259 + t162*t258 + t183*t257;
-    dq3[1] = t261;
-    const float t262 = t128*t259 + t163*t258 + t184*t257;
-    dq3[2] = t262;
+    const float t84 = 3.0f + t78 + t79 + t80 + t81 + t82 + t83;
+    const float t85 = sqrtf(t84);
+    const float t86 = 2.3f*t71;
+    const float t87 = t70*t71;
+    const float t88 = t85*ARM3F_RANK_TOL;
+    const float t89 = t85*sqrtf(ARM3F_RANK_TOL);
+    const int t90 = t87 <= t88;
+    const float t91 = (t89 >= t87 || t90 ? t88 : 0.0f);
+    const float t92 = (t90 ? t71 : t86);
+    const float t93 = (t90 ? 0.4347826f*twist[0] : twist[0]);
+    const float t94 = (t90 ? 0.4347826f*twist[1] : twist[1]);
+    const float t95 = t78 + t79 + t80;
+    const float t96 = t81 + t82 + t83;
+    const int t97 = 3.0f > t96;
+    const float t98 = (t97 ? 1.0f : t75);
+    const float t99 = (t97 ? 1.0f : t76);
+    const float t100 = (t97 ? 1.0f : t77);
+    const float t101 = (t97 ? t75 : 1.0f);
+    const float t102 = (t97 ? t76 : 1.0f);
+    const float t103 = (t97 ? t77 : 1.0f);
+    const float t104 = (t97 ? t71 : t92);
+    const float t105 = (t97 ? twist[2] : t94);
+    const float t106 = (t97 ? t92 : t71);
+    const float t107 = (t97 ? t94 : twist[2]);
+    const float t108 = (t97 ? 3.0f : t96);
+    const int t109 = t108 > t95;
+    const float t110 = (t109 ? t98 : t72);
+    const float t111 = (t109 ? t99 : t73);
+    const float t112 = (t109 ? t100 : t74);
+    const float t113 = (t109 ? t72 : t98);
+    const float t114 = (t109 ? t73 : t99);
+    const float t115 = (t109 ? t74 : t100);
+    const float t116 = (t109 ? t104 : t92);
+    const float t117 = (t109 ? t105 : t93);
+    const float t118 = (t109 ? t92 : t104);
+    const float t119 = (t109 ? t93 : t105);
+    const float t120 = t110*t110 + t111*t111 + t112*t112;
+    const float t121 = sqrtf(t120);
+    const int t122 = t121 > t91;
+    const float t123 = (t122 ? 1.0f/(t121 != 0.0f ? t121 : 1.0f) : 1.0f);
+    const float t124 = (t122 ? t123*t110 : 0.0f);
+    const float t125 = (t122 ? t123*t111 : 0.0f);
+    const float t126 = (t122 ? t123*t112 : 0.0f);
+    const float t127 = (t122 ? t121 : 0.0f);
+    const float t128 = t124*t113 + t125*t114 + t126*t115;
+    const float t129 = t113 - t128*t124;
+    const float t130 = t114 - t128*t125;
+    const float t131 = t115 - t128*t126;
+    const float t132 = t124*t101 + t125*t102 + t126*t103;
+    const float t133 = t101 - t132*t124;
+    const float t134 = t102 - t132*t125;
+    const float t135 = t103 - t132*t126;
+    const float t136 = t129*t129 + t130*t130 + t131*t131;
+    const float t137 = t133*t133 + t134*t134 + t135*t135;
+    const int t138 = t137 > t136;
+    const float t139 = (t138 ? t133 : t129);
+    const float t140 = (t138 ? t134 : t130);
+    const float t141 = (t138 ? t135 : t131);
+    const float t142 = (t138 ? t129 : t133);
+    const float t143 = (t138 ? t130 : t134);
+    const float t144 = (t138 ? t131 : t135);
+    const float t145 = (t138 ? t132 : t128);
+    const float t146 = (t138 ? t128 : t132);
+    const float t147 = (t138 ? t106 : t118);
+    const float t148 = (t138 ? t107 : t119);
+    const float t149 = (t138 ? t118 : t106);
+    const float t150 = (t138 ? t119 : t107);
+    const float t151 = t124*t139 + t125*t140 + t126*t141;
+    const float t152 = t139 - t124*t151;
+    const float t153 = t140 - t125*t151;
+    const float t154 = t141 - t126*t151;
+    const float t155 = t152*t152 + t153*t153 + t154*t154;
+    const float t156 = sqrtf(t155);
+    const int t157 = t156 > t91;
+    const float t158 = (t157 ? 1.0f/(t156 != 0.0f ? t156 : 1.0f) : 1.0f);
+    const float t159 = (t157 ? t158*t152 : 0.0f);
+    const float t160 = (t157 ? t158*t153 : 0.0f);
+    const float t161 = (t157 ? t158*t154 : 0.0f);
+    const float t162 = t145 + t151;
+    const float t163 = (t157 ? t156 : 0.0f);
+    const float t164 = t159*t142 + t160*t143 + t161*t144;
+    const float t165 = t142 - t164*t159;
+    const float t166 = t143 - t164*t160;
+    const float t167 = t144 - t164*t161;
+    const float t168 = t124*t165 + t125*t166 + t126*t167;
+    const float t169 = t165 - t124*t168;
+    const float t170 = t166 - t125*t168;
+    const float t171 = t167 - t126*t168;
+    const float t172 = t159*t169 + t160*t170 + t161*t171;
+    const float t173 = t169 - t159*t172;
+    const float t174 = t170 - t160*t172;
+    const float t175 = t171 - t161*t172;
+    const float t176 = t173*t173 + t174*t174 + t175*t175;
+    const float t177 = sqrtf(t176);
+    const int t178 = t177 > t91;
+    const float t179 = (t178 ? 1.0f/(t177 != 0.0f ? t177 : 1.0f) : 1.0f);
+    const float t180 = (t178 ? t179*t173 : 0.0f);
+    const float t181 = (t178 ? t179*t174 : 0.0f);
+    const float t182 = (t178 ? t179*t175 : 0.0f);
+    const float t183 = t146 + t168;
+    const float t184 = t164 + t172;
+    const float t185 = (t178 ? t177 : 0.0f);
+    const float t186 = t127*t116;
+    const float t187 = t162*t147;
+    const float t188 = t183*t149;
+    const float t189 = t163*t147;
+    const float t190 = t184*t149;
+    const float t191 = t185*t149;
+    const float t192 = t87*t87;
+    const float t193 = t186*t186 + t187*t187 + t188*t188 + t192;
+    const float t194 = sqrtf(t193);
+    const int t195 = t194 > 0.0f;
+    const float t196 = (t195 ? 1.0f/(t194 != 0.0f ? t194 : 1.0f) : 1.0f);
+    const float t197 = t196*t186;
+    const float t198 = t196*t187;
+    const float t199 = -t196*t188;
+    const float t200 = t196*t87;
+    const float t201 = t199*t190 - t198*t189;
+    const float t202 = t201*t197;
+    const float t203 = t189 + t201*t198;
+    const float t204 = t190 - t201*t199;
+    const float t205 = t201*t200;
+    const float t206 = t197*t202 + t198*t203 - t199*t204 + t200*t205;
+    const float t207 = t202 - t206*t197;
+    const float t208 = t203 - t206*t198;
+    const float t209 = t204 + t206*t199;
+    const float t210 = t205 - t206*t200;
+    const float t211 = t207*t207 + t208*t208 + t209*t209 + t210*t210 + t192;
+    const float t212 = sqrtf(t211);
+    const int t213 = t212 > 0.0f;
+    const float t214 = (t213 ? 1.0f/(t212 != 0.0f ? t212 : 1.0f) : 1.0f);
+    const float t215 = t214*t207;
+    const float t216 = t214*t208;
+    const float t217 = t214*t209;
+    const float t218 = t214*t210;
+    const float t219 = t214*t87;
+    const float t220 = t206 - t201;
+    const float t221 = t199*t191;
+    const float t222 = t221*t197;
+    const float t223 = t221*t198;
+    const float t224 = t191 - t221*t199;
+    const float t225 = t221*t200;
+    const float t226 = t215*t222 + t216*t223 + t217*t224 + t218*t225;
+    const float t227 = t222 - t226*t215;
+    const float t228 = t223 - t226*t216;
+    const float t229 = t224 - t226*t217;
+    const float t230 = t225 - t226*t218;
+    const float t231 = t226*t219;
+    const float t232 = t197*t227 + t198*t228 - t199*t229 + t200*t230;
+    const float t233 = t227 - t232*t197;
+    const float t234 = t228 - t232*t198;
+    const float t235 = t229 + t232*t199;
+    const float t236 = t230 - t232*t200;
+    const float t237 = t215*t233 + t216*t234 + t217*t235 + t218*t236 - t219*t231;
+    const float t238 = t233 - t237*t215;
+    const float t239 = t234 - t237*t216;
+    const float t240 = t235 - t237*t217;
+    const float t241 = t236 - t237*t218;
+    const float t242 = t231 + t237*t219;
+    const float t243 = t238*t238 + t239*t239 + t240*t240 + t241*t241 + t242*t242 + t192;
+    const float t244 = sqrtf(t243);
+    const int t245 = t244 > 0.0f;
+    const float t246 = (t245 ? 1.0f/(t244 != 0.0f ? t244 : 1.0f) : 1.0f);
+    const float t247 = t246*t238;
+    const float t248 = t246*t239;
+    const float t249 = t246*t240;
+    const float t250 = t232 - t221;
+    const float t251 = t226 + t237;
+    const float t252 = t71*(t117*t197 - t150*t199 + t148*t198);
+    const float t253 = t71*(t117*t215 + t150*t217 + t148*t216);
+    const float t254 = t71*(t117*t247 + t150*t249 + t148*t248);
+    const float t255 = (t245 ? t246*t254 : 0.0f);
+    const float t256 = (t213 ? t214*(t253 - t251*t255) : 0.0f);
+    const float t257 = (t195 ? t196*(t252 - t220*t256 - t250*t255) : 0.0f);
+    const float t258 = t124*t257 + t159*t256 + t180*t255;
+    dq3[0] = t258;
+    const float t259 = t125*t257 + t160*t256 + t181*t255;
+    dq3[1] = t259;
+    const float t260 = t126*t257 + t161*t256 + t182*t255;
+    dq3[2] = t260;
 }
 
 void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambda, float dq3[3])
@@ -1405,7 +1401,7 @@ void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist,
 }
 
 /* ---- arm3f_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 3 sin, 3 cos, 34 add/sub, 52 mul, 0 neg, 4 div */
+/* operations: 3 sin, 3 cos, 34 add/sub, 50 mul, 0 neg, 4 div */
 
 static ARM3F_LIGHT void arm3f_ik_step_angles(const float *restrict q, float *restrict ang)
 {
@@ -1447,25 +1443,23 @@ static ARM3F_LIGHT void arm3f_ik_step_finish(const float *restrict q, const floa
     const float t47 = t42*(t25 + t27);
     const float t48 = t43*t44;
     const float t49 = t48 + t41*(t47 + t41);
-    const float t50 = ARM3F_RANK_TOL*ARM3F_RANK_TOL;
-    const float t51 = (t41 <= t47*t50 ? t50 : (t41 <= t47*ARM3F_RANK_TOL ? 0.0016f*t50 : 0.0f));
-    const int t52 = t48 > t51*(t47*t47);
-    const float t54 = t42*(t52 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
-    const float t55 = t41 + t43*(1.0f + t30*t30);
-    const float t56 = t42*(t55 > 0.0f ? 1.0f/(t55 != 0.0f ? t55 : 1.0f) : 1.0f);
-    const float t62 = target[0] - t10;
-    const float t63 = t9 + target[1];
-    const float t64 = (t28 ? t62 : t63);
-    const float t65 = (t28 ? t63 : t62);
-    const float t66 = t64 + t65*t30;
-    const float t67 = (t52 ? t54*(t66*t41 + t64*t44) : t66*t56);
-    const float t68 = (t52 ? t54*(t65*t41 + t43*(t65 - t64*t30)) : 0.0f);
-    const float t69 = t67*t31 + t68*t34;
-    q_next[0] = t69 + q[0];
-    const float t70 = t67*t32 + t68*t35;
-    q_next[1] = t70 + q[1];
-    const float t71 = t67*t33 + t68*t36;
-    q_next[2] = t71 + q[2];
+    const int t50 = t41 > t47*ARM3F_RANK_TOL || t48 > (t47*t47)*(ARM3F_RANK_TOL*ARM3F_RANK_TOL);
+    const float t52 = t42*(t50 ? 1.0f/(t49 != 0.0f ? t49 : 1.0f) : 1.0f);
+    const float t53 = t41 + t43*(1.0f + t30*t30);
+    const float t54 = t42*(t53 > 0.0f ? 1.0f/(t53 != 0.0f ? t53 : 1.0f) : 1.0f);
+    const float t60 = target[0] - t10;
+    const float t61 = t9 + target[1];
+    const float t62 = (t28 ? t60 : t61);
+    const float t63 = (t28 ? t61 : t60);
+    const float t64 = t62 + t63*t30;
+    const float t65 = (t50 ? t52*(t64*t41 + t62*t44) : t64*t54);
+    const float t66 = (t50 ? t52*(t63*t41 + t43*(t63 - t62*t30)) : 0.0f);
+    const float t67 = t65*t31 + t66*t34;
+    q_next[0] = t67 + q[0];
+    const float t68 = t65*t32 + t66*t35;
+    q_next[1] = t68 + q[1];
+    const float t69 = t65*t33 + t66*t36;
+    q_next[2] = t69 + q[2];
 }
 
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3])

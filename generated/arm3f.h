@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -54,7 +52,7 @@
  * sensible size.
  * ARM3F_STAMP identifies this generation: arm3f.c refuses to compile (#error) with a
  * arm3f.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM3F_STAMP 0x4446bb5fUL
+#define ARM3F_STAMP 0x3a1edb73UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -119,7 +117,7 @@ void arm3f_manipulability(const float q[3], float w[1]);
  * Stack: at most 8 KB. */
 void arm3f_manipulability_batch(size_t m, const float *q, float *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 600 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 592 bytes. */
 void arm3f_inverse_velocity(const float q[3], const float v[2], float lambda, float dq[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -135,7 +133,7 @@ void arm3f_inverse_velocity3(const float q[3], const float twist[3], float lambd
  * Stack: at most 8 KB. */
 void arm3f_inverse_velocity3_batch(size_t m, const float *q, const float *twist, float lambda, float *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 608 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 600 bytes. */
 void arm3f_ik_step(const float q[3], const float target[2], float lambda, float q_next[3]);
 
 /* The same for m configurations stored one after another (element k of
@@ -158,14 +156,14 @@ void arm3f_ik_step_batch(size_t m, const float *q, const float *target, float la
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 0.0001 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
- * Stack: at most 1040 bytes.
+ * Stack: at most 1032 bytes.
  */
 int arm3f_ik_solve(const float q0[3], const float target[2], float lambda, float tol, int max_iter, float q[3], float *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: at most 1176 bytes. */
+ * Each problem is one call of arm3f_ik_solve: the same result bit for bit. Stack: at most 1168 bytes. */
 void arm3f_ik_solve_batch(size_t m, const float *q0, const float *target, float lambda, float tol, int max_iter, float *q, float *error, int *iterations, int *status);
 
 #ifdef __cplusplus

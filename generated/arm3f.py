@@ -11,13 +11,11 @@ Inverse velocity and IK steps use the damped least-squares solution J^T (J J^T +
 solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
 lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
 J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
-2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
-(rounding) and lambda at most sqrt(RANK_TOL) times the largest;
-inverse_velocity3 solves
-with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
-residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
-So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
-errors in reach units).
+2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+sqrt(RANK_TOL) times its largest.
+inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+QR stages, the same rule on their residuals and the Frobenius norm.
+So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
 lambda enters squared (its sign does not matter). The C functions do not check their inputs:
 a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
 Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -32,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 
 DTYPE = np.float32
-STAMP = 0x4446bb5f
+STAMP = 0x3a1edb73
 """The generation stamp: the same number in every file of the set this module was generated with."""
 RANK_TOL = 1.1920928955078125e-05
 """relative rank tolerance of the closed-form solves: 100 machine epsilons"""
@@ -665,21 +663,19 @@ def _inverse_velocity_core(q, v, lambda_, dq):
     t47 = t42*(t25 + t27)
     t48 = t43*t44
     t49 = t48 + t41*(t47 + t41)
-    t50 = RANK_TOL*RANK_TOL
-    t51 = np.where(t41 <= t47*t50, t50, np.where(t41 <= t47*RANK_TOL, 0.0016*t50, 0.0))
-    t52 = t48 > t51*(t47*t47)
-    t53 = t45 + t46*t30
-    t54 = t42*np.where(t52, 1.0/t49, 1.0)
-    t55 = t41 + t43*(1.0 + t30*t30)
-    t56 = t42*np.where(t55 > 0.0, 1.0/t55, 1.0)
-    t57 = np.where(t52, t54*(t53*t41 + t44*t45), t53*t56)
-    t58 = np.where(t52, t54*(t43*(t46 - t45*t30) + t46*t41), 0.0)
-    t59 = t57*t31 + t58*t34
-    t60 = t57*t32 + t58*t35
-    t61 = t57*t33 + t58*t36
-    dq[..., 0] = t59
-    dq[..., 1] = t60
-    dq[..., 2] = t61
+    t50 = (t41 > t47*RANK_TOL) | (t48 > (t47*t47)*(RANK_TOL*RANK_TOL))
+    t51 = t45 + t46*t30
+    t52 = t42*np.where(t50, 1.0/t49, 1.0)
+    t53 = t41 + t43*(1.0 + t30*t30)
+    t54 = t42*np.where(t53 > 0.0, 1.0/t53, 1.0)
+    t55 = np.where(t50, t52*(t51*t41 + t44*t45), t51*t54)
+    t56 = np.where(t50, t52*(t43*(t46 - t45*t30) + t46*t41), 0.0)
+    t57 = t55*t31 + t56*t34
+    t58 = t55*t32 + t56*t35
+    t59 = t55*t33 + t56*t36
+    dq[..., 0] = t57
+    dq[..., 1] = t58
+    dq[..., 2] = t59
 
 
 @_signature_errors
@@ -690,7 +686,7 @@ def inverse_velocity(q, v, lambda_):
     v: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq of shape (..., 3).
-    Operations: 3 sin, 3 cos, 81 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 79 add/sub/mul/neg.
     """
     batch, (q, v,) = _inputs((q, v,), ("q", "v", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -716,200 +712,200 @@ def _inverse_velocity3_core(q, twist, lambda_, dq3):
     t8 = t2 + t3
     t9 = t7 - sn[..., 0]
     t10 = cs[..., 0] + t8
-    t72 = np.abs(lambda_)
-    t73 = np.where(t72 > 1.0, 1.0/t72, 1.0)
-    t74 = 0.4347826086956522*t9
-    t75 = 0.4347826086956522*t7
-    t76 = 0.4347826086956522*t5
-    t77 = 0.4347826086956522*t10
-    t78 = 0.4347826086956522*t8
-    t79 = 0.4347826086956522*t3
+    t70 = np.abs(lambda_)
+    t71 = np.where(t70 > 1.0, 1.0/t70, 1.0)
+    t72 = 0.4347826086956522*t9
+    t73 = 0.4347826086956522*t7
+    t74 = 0.4347826086956522*t5
+    t75 = 0.4347826086956522*t10
+    t76 = 0.4347826086956522*t8
+    t77 = 0.4347826086956522*t3
+    t78 = t72*t72
+    t79 = t73*t73
     t80 = t74*t74
     t81 = t75*t75
     t82 = t76*t76
     t83 = t77*t77
-    t84 = t78*t78
-    t85 = t79*t79
-    t86 = 3.0 + t80 + t81 + t82 + t83 + t84 + t85
-    t87 = np.sqrt(t86)
-    t88 = 2.3*t73
-    t89 = t72*t73
-    t90 = t87*RANK_TOL
-    t91 = t87*np.sqrt(RANK_TOL)
-    t92 = t89 <= t90
-    t93 = np.where(t92, t90, np.where(t91 >= t89, 0.04*t90, 0.0))
-    t94 = np.where(t92, t73, t88)
-    t95 = np.where(t92, 0.4347826086956522*twist[..., 0], twist[..., 0])
-    t96 = np.where(t92, 0.4347826086956522*twist[..., 1], twist[..., 1])
-    t97 = t80 + t81 + t82
-    t98 = t83 + t84 + t85
-    t99 = 3.0 > t98
-    t100 = np.where(t99, 1.0, t77)
-    t101 = np.where(t99, 1.0, t78)
-    t102 = np.where(t99, 1.0, t79)
-    t103 = np.where(t99, t77, 1.0)
-    t104 = np.where(t99, t78, 1.0)
-    t105 = np.where(t99, t79, 1.0)
-    t106 = np.where(t99, t73, t94)
-    t107 = np.where(t99, twist[..., 2], t96)
-    t108 = np.where(t99, t94, t73)
-    t109 = np.where(t99, t96, twist[..., 2])
-    t110 = np.where(t99, 3.0, t98)
-    t111 = t110 > t97
-    t112 = np.where(t111, t100, t74)
-    t113 = np.where(t111, t101, t75)
-    t114 = np.where(t111, t102, t76)
-    t115 = np.where(t111, t74, t100)
-    t116 = np.where(t111, t75, t101)
-    t117 = np.where(t111, t76, t102)
-    t118 = np.where(t111, t106, t94)
-    t119 = np.where(t111, t107, t95)
-    t120 = np.where(t111, t94, t106)
-    t121 = np.where(t111, t95, t107)
-    t122 = t112*t112 + t113*t113 + t114*t114
-    t123 = np.sqrt(t122)
-    t124 = t123 > t93
-    t125 = np.where(t124, 1.0/t123, 1.0)
-    t126 = np.where(t124, t125*t112, 0.0)
-    t127 = np.where(t124, t125*t113, 0.0)
-    t128 = np.where(t124, t125*t114, 0.0)
-    t129 = np.where(t124, t123, 0.0)
-    t130 = t126*t115 + t127*t116 + t128*t117
-    t131 = t115 - t130*t126
-    t132 = t116 - t130*t127
-    t133 = t117 - t130*t128
-    t134 = t126*t103 + t127*t104 + t128*t105
-    t135 = t103 - t134*t126
-    t136 = t104 - t134*t127
-    t137 = t105 - t134*t128
-    t138 = t131*t131 + t132*t132 + t133*t133
-    t139 = t135*t135 + t136*t136 + t137*t137
-    t140 = t139 > t138
-    t141 = np.where(t140, t135, t131)
-    t142 = np.where(t140, t136, t132)
-    t143 = np.where(t140, t137, t133)
-    t144 = np.where(t140, t131, t135)
-    t145 = np.where(t140, t132, t136)
-    t146 = np.where(t140, t133, t137)
-    t147 = np.where(t140, t134, t130)
-    t148 = np.where(t140, t130, t134)
-    t149 = np.where(t140, t108, t120)
-    t150 = np.where(t140, t109, t121)
-    t151 = np.where(t140, t120, t108)
-    t152 = np.where(t140, t121, t109)
-    t153 = t126*t141 + t127*t142 + t128*t143
-    t154 = t141 - t126*t153
-    t155 = t142 - t127*t153
-    t156 = t143 - t128*t153
-    t157 = t154*t154 + t155*t155 + t156*t156
-    t158 = np.sqrt(t157)
-    t159 = t158 > t93
-    t160 = np.where(t159, 1.0/t158, 1.0)
-    t161 = np.where(t159, t160*t154, 0.0)
-    t162 = np.where(t159, t160*t155, 0.0)
-    t163 = np.where(t159, t160*t156, 0.0)
-    t164 = t147 + t153
-    t165 = np.where(t159, t158, 0.0)
-    t166 = t161*t144 + t162*t145 + t163*t146
-    t167 = t144 - t166*t161
-    t168 = t145 - t166*t162
-    t169 = t146 - t166*t163
-    t170 = t126*t167 + t127*t168 + t128*t169
-    t171 = t167 - t126*t170
-    t172 = t168 - t127*t170
-    t173 = t169 - t128*t170
-    t174 = t161*t171 + t162*t172 + t163*t173
-    t175 = t171 - t161*t174
-    t176 = t172 - t162*t174
-    t177 = t173 - t163*t174
-    t178 = t175*t175 + t176*t176 + t177*t177
-    t179 = np.sqrt(t178)
-    t180 = t179 > t93
-    t181 = np.where(t180, 1.0/t179, 1.0)
-    t182 = np.where(t180, t181*t175, 0.0)
-    t183 = np.where(t180, t181*t176, 0.0)
-    t184 = np.where(t180, t181*t177, 0.0)
-    t185 = t148 + t170
-    t186 = t166 + t174
-    t187 = np.where(t180, t179, 0.0)
-    t188 = t129*t118
-    t189 = t164*t149
-    t190 = t185*t151
-    t191 = t165*t149
-    t192 = t186*t151
-    t193 = t187*t151
-    t194 = t89*t89
-    t195 = t188*t188 + t189*t189 + t190*t190 + t194
-    t196 = np.sqrt(t195)
-    t197 = t196 > 0.0
-    t198 = np.where(t197, 1.0/t196, 1.0)
-    t199 = t198*t188
-    t200 = t198*t189
-    t201 = -t198*t190
-    t202 = t198*t89
-    t203 = t201*t192 - t200*t191
-    t204 = t203*t199
-    t205 = t191 + t203*t200
-    t206 = t192 - t203*t201
-    t207 = t203*t202
-    t208 = t199*t204 + t200*t205 - t201*t206 + t202*t207
-    t209 = t204 - t208*t199
-    t210 = t205 - t208*t200
-    t211 = t206 + t208*t201
-    t212 = t207 - t208*t202
-    t213 = t209*t209 + t210*t210 + t211*t211 + t212*t212 + t194
-    t214 = np.sqrt(t213)
-    t215 = t214 > 0.0
-    t216 = np.where(t215, 1.0/t214, 1.0)
-    t217 = t216*t209
-    t218 = t216*t210
-    t219 = t216*t211
-    t220 = t216*t212
-    t221 = t216*t89
-    t222 = t208 - t203
-    t223 = t201*t193
-    t224 = t223*t199
-    t225 = t223*t200
-    t226 = t193 - t223*t201
-    t227 = t223*t202
-    t228 = t217*t224 + t218*t225 + t219*t226 + t220*t227
-    t229 = t224 - t228*t217
-    t230 = t225 - t228*t218
-    t231 = t226 - t228*t219
-    t232 = t227 - t228*t220
-    t233 = t228*t221
-    t234 = t199*t229 + t200*t230 - t201*t231 + t202*t232
-    t235 = t229 - t234*t199
-    t236 = t230 - t234*t200
-    t237 = t231 + t234*t201
-    t238 = t232 - t234*t202
-    t239 = t217*t235 + t218*t236 + t219*t237 + t220*t238 - t221*t233
-    t240 = t235 - t239*t217
-    t241 = t236 - t239*t218
-    t242 = t237 - t239*t219
-    t243 = t238 - t239*t220
-    t244 = t233 + t239*t221
-    t245 = t240*t240 + t241*t241 + t242*t242 + t243*t243 + t244*t244 + t194
-    t246 = np.sqrt(t245)
-    t247 = t246 > 0.0
-    t248 = np.where(t247, 1.0/t246, 1.0)
-    t249 = t248*t240
-    t250 = t248*t241
-    t251 = t248*t242
-    t252 = t234 - t223
-    t253 = t228 + t239
-    t254 = t73*(t119*t199 - t152*t201 + t150*t200)
-    t255 = t73*(t119*t217 + t152*t219 + t150*t218)
-    t256 = t73*(t119*t249 + t152*t251 + t150*t250)
-    t257 = np.where(t247, t248*t256, 0.0)
-    t258 = np.where(t215, t216*(t255 - t253*t257), 0.0)
-    t259 = np.where(t197, t198*(t254 - t222*t258 - t252*t257), 0.0)
-    t260 = t126*t259 + t161*t258 + t182*t257
-    t261 = t127*t259 + t162*t258 + t183*t257
-    t262 = t128*t259 + t163*t258 + t184*t257
-    dq3[..., 0] = t260
-    dq3[..., 1] = t261
-    dq3[..., 2] = t262
+    t84 = 3.0 + t78 + t79 + t80 + t81 + t82 + t83
+    t85 = np.sqrt(t84)
+    t86 = 2.3*t71
+    t87 = t70*t71
+    t88 = t85*RANK_TOL
+    t89 = t85*np.sqrt(RANK_TOL)
+    t90 = t87 <= t88
+    t91 = np.where((t89 >= t87) | (t90), t88, 0.0)
+    t92 = np.where(t90, t71, t86)
+    t93 = np.where(t90, 0.4347826086956522*twist[..., 0], twist[..., 0])
+    t94 = np.where(t90, 0.4347826086956522*twist[..., 1], twist[..., 1])
+    t95 = t78 + t79 + t80
+    t96 = t81 + t82 + t83
+    t97 = 3.0 > t96
+    t98 = np.where(t97, 1.0, t75)
+    t99 = np.where(t97, 1.0, t76)
+    t100 = np.where(t97, 1.0, t77)
+    t101 = np.where(t97, t75, 1.0)
+    t102 = np.where(t97, t76, 1.0)
+    t103 = np.where(t97, t77, 1.0)
+    t104 = np.where(t97, t71, t92)
+    t105 = np.where(t97, twist[..., 2], t94)
+    t106 = np.where(t97, t92, t71)
+    t107 = np.where(t97, t94, twist[..., 2])
+    t108 = np.where(t97, 3.0, t96)
+    t109 = t108 > t95
+    t110 = np.where(t109, t98, t72)
+    t111 = np.where(t109, t99, t73)
+    t112 = np.where(t109, t100, t74)
+    t113 = np.where(t109, t72, t98)
+    t114 = np.where(t109, t73, t99)
+    t115 = np.where(t109, t74, t100)
+    t116 = np.where(t109, t104, t92)
+    t117 = np.where(t109, t105, t93)
+    t118 = np.where(t109, t92, t104)
+    t119 = np.where(t109, t93, t105)
+    t120 = t110*t110 + t111*t111 + t112*t112
+    t121 = np.sqrt(t120)
+    t122 = t121 > t91
+    t123 = np.where(t122, 1.0/t121, 1.0)
+    t124 = np.where(t122, t123*t110, 0.0)
+    t125 = np.where(t122, t123*t111, 0.0)
+    t126 = np.where(t122, t123*t112, 0.0)
+    t127 = np.where(t122, t121, 0.0)
+    t128 = t124*t113 + t125*t114 + t126*t115
+    t129 = t113 - t128*t124
+    t130 = t114 - t128*t125
+    t131 = t115 - t128*t126
+    t132 = t124*t101 + t125*t102 + t126*t103
+    t133 = t101 - t132*t124
+    t134 = t102 - t132*t125
+    t135 = t103 - t132*t126
+    t136 = t129*t129 + t130*t130 + t131*t131
+    t137 = t133*t133 + t134*t134 + t135*t135
+    t138 = t137 > t136
+    t139 = np.where(t138, t133, t129)
+    t140 = np.where(t138, t134, t130)
+    t141 = np.where(t138, t135, t131)
+    t142 = np.where(t138, t129, t133)
+    t143 = np.where(t138, t130, t134)
+    t144 = np.where(t138, t131, t135)
+    t145 = np.where(t138, t132, t128)
+    t146 = np.where(t138, t128, t132)
+    t147 = np.where(t138, t106, t118)
+    t148 = np.where(t138, t107, t119)
+    t149 = np.where(t138, t118, t106)
+    t150 = np.where(t138, t119, t107)
+    t151 = t124*t139 + t125*t140 + t126*t141
+    t152 = t139 - t124*t151
+    t153 = t140 - t125*t151
+    t154 = t141 - t126*t151
+    t155 = t152*t152 + t153*t153 + t154*t154
+    t156 = np.sqrt(t155)
+    t157 = t156 > t91
+    t158 = np.where(t157, 1.0/t156, 1.0)
+    t159 = np.where(t157, t158*t152, 0.0)
+    t160 = np.where(t157, t158*t153, 0.0)
+    t161 = np.where(t157, t158*t154, 0.0)
+    t162 = t145 + t151
+    t163 = np.where(t157, t156, 0.0)
+    t164 = t159*t142 + t160*t143 + t161*t144
+    t165 = t142 - t164*t159
+    t166 = t143 - t164*t160
+    t167 = t144 - t164*t161
+    t168 = t124*t165 + t125*t166 + t126*t167
+    t169 = t165 - t124*t168
+    t170 = t166 - t125*t168
+    t171 = t167 - t126*t168
+    t172 = t159*t169 + t160*t170 + t161*t171
+    t173 = t169 - t159*t172
+    t174 = t170 - t160*t172
+    t175 = t171 - t161*t172
+    t176 = t173*t173 + t174*t174 + t175*t175
+    t177 = np.sqrt(t176)
+    t178 = t177 > t91
+    t179 = np.where(t178, 1.0/t177, 1.0)
+    t180 = np.where(t178, t179*t173, 0.0)
+    t181 = np.where(t178, t179*t174, 0.0)
+    t182 = np.where(t178, t179*t175, 0.0)
+    t183 = t146 + t168
+    t184 = t164 + t172
+    t185 = np.where(t178, t177, 0.0)
+    t186 = t127*t116
+    t187 = t162*t147
+    t188 = t183*t149
+    t189 = t163*t147
+    t190 = t184*t149
+    t191 = t185*t149
+    t192 = t87*t87
+    t193 = t186*t186 + t187*t187 + t188*t188 + t192
+    t194 = np.sqrt(t193)
+    t195 = t194 > 0.0
+    t196 = np.where(t195, 1.0/t194, 1.0)
+    t197 = t196*t186
+    t198 = t196*t187
+    t199 = -t196*t188
+    t200 = t196*t87
+    t201 = t199*t190 - t198*t189
+    t202 = t201*t197
+    t203 = t189 + t201*t198
+    t204 = t190 - t201*t199
+    t205 = t201*t200
+    t206 = t197*t202 + t198*t203 - t199*t204 + t200*t205
+    t207 = t202 - t206*t197
+    t208 = t203 - t206*t198
+    t209 = t204 + t206*t199
+    t210 = t205 - t206*t200
+    t211 = t207*t207 + t208*t208 + t209*t209 + t210*t210 + t192
+    t212 = np.sqrt(t211)
+    t213 = t212 > 0.0
+    t214 = np.where(t213, 1.0/t212, 1.0)
+    t215 = t214*t207
+    t216 = t214*t208
+    t217 = t214*t209
+    t218 = t214*t210
+    t219 = t214*t87
+    t220 = t206 - t201
+    t221 = t199*t191
+    t222 = t221*t197
+    t223 = t221*t198
+    t224 = t191 - t221*t199
+    t225 = t221*t200
+    t226 = t215*t222 + t216*t223 + t217*t224 + t218*t225
+    t227 = t222 - t226*t215
+    t228 = t223 - t226*t216
+    t229 = t224 - t226*t217
+    t230 = t225 - t226*t218
+    t231 = t226*t219
+    t232 = t197*t227 + t198*t228 - t199*t229 + t200*t230
+    t233 = t227 - t232*t197
+    t234 = t228 - t232*t198
+    t235 = t229 + t232*t199
+    t236 = t230 - t232*t200
+    t237 = t215*t233 + t216*t234 + t217*t235 + t218*t236 - t219*t231
+    t238 = t233 - t237*t215
+    t239 = t234 - t237*t216
+    t240 = t235 - t237*t217
+    t241 = t236 - t237*t218
+    t242 = t231 + t237*t219
+    t243 = t238*t238 + t239*t239 + t240*t240 + t241*t241 + t242*t242 + t192
+    t244 = np.sqrt(t243)
+    t245 = t244 > 0.0
+    t246 = np.where(t245, 1.0/t244, 1.0)
+    t247 = t246*t238
+    t248 = t246*t239
+    t249 = t246*t240
+    t250 = t232 - t221
+    t251 = t226 + t237
+    t252 = t71*(t117*t197 - t150*t199 + t148*t198)
+    t253 = t71*(t117*t215 + t150*t217 + t148*t216)
+    t254 = t71*(t117*t247 + t150*t249 + t148*t248)
+    t255 = np.where(t245, t246*t254, 0.0)
+    t256 = np.where(t213, t214*(t253 - t251*t255), 0.0)
+    t257 = np.where(t195, t196*(t252 - t220*t256 - t250*t255), 0.0)
+    t258 = t124*t257 + t159*t256 + t180*t255
+    t259 = t125*t257 + t160*t256 + t181*t255
+    t260 = t126*t257 + t161*t256 + t182*t255
+    dq3[..., 0] = t258
+    dq3[..., 1] = t259
+    dq3[..., 2] = t260
 
 
 @_signature_errors
@@ -920,7 +916,7 @@ def inverse_velocity3(q, twist, lambda_):
     twist: array of shape (..., 3), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns dq3 of shape (..., 3).
-    Operations: 3 sin, 3 cos, 311 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 310 add/sub/mul/neg.
     """
     batch, (q, twist,) = _inputs((q, twist,), ("q", "twist", ), (3, 3, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")
@@ -969,25 +965,23 @@ def _ik_step_core(q, target, lambda_, q_next):
     t47 = t42*(t25 + t27)
     t48 = t43*t44
     t49 = t48 + t41*(t47 + t41)
-    t50 = RANK_TOL*RANK_TOL
-    t51 = np.where(t41 <= t47*t50, t50, np.where(t41 <= t47*RANK_TOL, 0.0016*t50, 0.0))
-    t52 = t48 > t51*(t47*t47)
-    t54 = t42*np.where(t52, 1.0/t49, 1.0)
-    t55 = t41 + t43*(1.0 + t30*t30)
-    t56 = t42*np.where(t55 > 0.0, 1.0/t55, 1.0)
-    t62 = target[..., 0] - t10
-    t63 = t9 + target[..., 1]
-    t64 = np.where(t28, t62, t63)
-    t65 = np.where(t28, t63, t62)
-    t66 = t64 + t65*t30
-    t67 = np.where(t52, t54*(t66*t41 + t64*t44), t66*t56)
-    t68 = np.where(t52, t54*(t65*t41 + t43*(t65 - t64*t30)), 0.0)
-    t69 = t67*t31 + t68*t34
-    t70 = t67*t32 + t68*t35
-    t71 = t67*t33 + t68*t36
-    q_next[..., 0] = t69 + q[..., 0]
-    q_next[..., 1] = t70 + q[..., 1]
-    q_next[..., 2] = t71 + q[..., 2]
+    t50 = (t41 > t47*RANK_TOL) | (t48 > (t47*t47)*(RANK_TOL*RANK_TOL))
+    t52 = t42*np.where(t50, 1.0/t49, 1.0)
+    t53 = t41 + t43*(1.0 + t30*t30)
+    t54 = t42*np.where(t53 > 0.0, 1.0/t53, 1.0)
+    t60 = target[..., 0] - t10
+    t61 = t9 + target[..., 1]
+    t62 = np.where(t28, t60, t61)
+    t63 = np.where(t28, t61, t60)
+    t64 = t62 + t63*t30
+    t65 = np.where(t50, t52*(t64*t41 + t62*t44), t64*t54)
+    t66 = np.where(t50, t52*(t63*t41 + t43*(t63 - t62*t30)), 0.0)
+    t67 = t65*t31 + t66*t34
+    t68 = t65*t32 + t66*t35
+    t69 = t65*t33 + t66*t36
+    q_next[..., 0] = t67 + q[..., 0]
+    q_next[..., 1] = t68 + q[..., 1]
+    q_next[..., 2] = t69 + q[..., 2]
 
 
 @_signature_errors
@@ -998,7 +992,7 @@ def ik_step(q, target, lambda_):
     target: array of shape (..., 2), finite.
     lambda_: a number, finite and >= 0, shared by the batch.
     Returns q_next of shape (..., 3).
-    Operations: 3 sin, 3 cos, 86 add/sub/mul/neg.
+    Operations: 3 sin, 3 cos, 84 add/sub/mul/neg.
     """
     batch, (q, target,) = _inputs((q, target,), ("q", "target", ), (3, 2, ), ("finite", "finite", ))
     lambda_ = _scalar(lambda_, "lambda", "nonnegative")

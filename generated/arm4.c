@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +26,7 @@
 
 #include "arm4.h"
 
-#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x8a208c4dUL
+#if !defined(ARM4_STAMP) || ARM4_STAMP != 0x07f70231UL
 #error "arm4.h is not the header generated with this arm4.c: regenerate both together"
 #endif
 
@@ -1313,7 +1311,7 @@ void arm4_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm4_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 4 sin, 4 cos, 38 add/sub, 63 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 38 add/sub, 61 mul, 1 neg, 4 div */
 
 static ARM4_LIGHT void arm4_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1366,23 +1364,21 @@ static ARM4_LIGHT void arm4_inverse_velocity_finish(const double *restrict v, co
     const double t61 = t56*(t37 + t39);
     const double t62 = t57*t58;
     const double t63 = t62 + t55*(t61 + t55);
-    const double t64 = ARM4_RANK_TOL*ARM4_RANK_TOL;
-    const double t65 = (t55 <= t61*t64 ? t64 : (t55 <= t61*ARM4_RANK_TOL ? 0.0016*t64 : 0.0));
-    const int t66 = t62 > t65*(t61*t61);
-    const double t67 = t59 + t60*t42;
-    const double t68 = t56*(t66 ? 1.0/(t63 != 0.0 ? t63 : 1.0) : 1.0);
-    const double t69 = t55 + t57*(1.0 + t42*t42);
-    const double t70 = t56*(t69 > 0.0 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-    const double t71 = (t66 ? t68*(t67*t55 + t58*t59) : t67*t70);
-    const double t72 = (t66 ? t68*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
-    const double t73 = t71*t43 + t72*t47;
-    dq[0] = t73;
-    const double t74 = t71*t44 + t72*t48;
-    dq[1] = t74;
-    const double t75 = t71*t45 + t72*t49;
-    dq[2] = t75;
-    const double t76 = t71*t46 + t72*t50;
-    dq[3] = t76;
+    const int t64 = t55 > t61*ARM4_RANK_TOL || t62 > (t61*t61)*(ARM4_RANK_TOL*ARM4_RANK_TOL);
+    const double t65 = t59 + t60*t42;
+    const double t66 = t56*(t64 ? 1.0/(t63 != 0.0 ? t63 : 1.0) : 1.0);
+    const double t67 = t55 + t57*(1.0 + t42*t42);
+    const double t68 = t56*(t67 > 0.0 ? 1.0/(t67 != 0.0 ? t67 : 1.0) : 1.0);
+    const double t69 = (t64 ? t66*(t65*t55 + t58*t59) : t65*t68);
+    const double t70 = (t64 ? t66*(t57*(t60 - t59*t42) + t60*t55) : 0.0);
+    const double t71 = t69*t43 + t70*t47;
+    dq[0] = t71;
+    const double t72 = t69*t44 + t70*t48;
+    dq[1] = t72;
+    const double t73 = t69*t45 + t70*t49;
+    dq[2] = t73;
+    const double t74 = t69*t46 + t70*t50;
+    dq[3] = t74;
 }
 
 void arm4_inverse_velocity(const double q[4], const double v[2], const double l[4], double lambda, double dq[4])
@@ -1414,7 +1410,7 @@ void arm4_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm4_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 4 sin, 4 cos, 152 add/sub, 218 mul, 2 neg, 9 div, 8 sqrt */
+/* operations: 4 sin, 4 cos, 152 add/sub, 217 mul, 2 neg, 9 div, 8 sqrt */
 
 static ARM4_LIGHT void arm4_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1440,224 +1436,224 @@ static ARM4_LIGHT void arm4_inverse_velocity3_finish(const double *restrict twis
     const double t15 = t4 + t13;
     const double t16 = t14 - t7;
     const double t17 = t3 + t15;
-    const double t88 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
-    const double t89 = fabs(lambda);
-    const double t90 = (t89 > 1.0 ? 1.0/(t89 != 0.0 ? t89 : 1.0) : 1.0);
-    const double t91 = (t88 > 1.0 ? t88 : 1.0);
-    const double t92 = t88*t16;
-    const double t93 = t88*t14;
-    const double t94 = t88*t12;
-    const double t95 = t88*t10;
-    const double t96 = t88*t17;
-    const double t97 = t88*t15;
-    const double t98 = t88*t13;
-    const double t99 = t6*t88;
+    const double t86 = 1.0/(l[0] + l[1] + l[2] + l[3] != 0.0 ? l[0] + l[1] + l[2] + l[3] : 1.0);
+    const double t87 = fabs(lambda);
+    const double t88 = (t87 > 1.0 ? 1.0/(t87 != 0.0 ? t87 : 1.0) : 1.0);
+    const double t89 = (t86 > 1.0 ? t86 : 1.0);
+    const double t90 = t86*t16;
+    const double t91 = t86*t14;
+    const double t92 = t86*t12;
+    const double t93 = t86*t10;
+    const double t94 = t86*t17;
+    const double t95 = t86*t15;
+    const double t96 = t86*t13;
+    const double t97 = t6*t86;
+    const double t98 = t90*t90;
+    const double t99 = t91*t91;
     const double t100 = t92*t92;
     const double t101 = t93*t93;
     const double t102 = t94*t94;
     const double t103 = t95*t95;
     const double t104 = t96*t96;
     const double t105 = t97*t97;
-    const double t106 = t98*t98;
-    const double t107 = t99*t99;
-    const double t108 = ((4.0 + t100) + (t101 + t102)) + ((t103 + t104) + (t105 + (t106 + t107)));
-    const double t109 = sqrt(t108);
-    const double t110 = t90/(t88 != 0.0 ? t88 : 1.0);
-    const double t111 = t89*t90;
-    const double t112 = t109*ARM4_RANK_TOL;
-    const double t113 = t111*t91;
-    const double t114 = t109*sqrt(ARM4_RANK_TOL);
-    const int t115 = t113 <= t112;
-    const double t116 = (t115 ? t112 : (t114 >= t113 ? 0.04*t112 : 0.0));
-    const double t117 = (t115 ? t90 : t110);
-    const double t118 = (t115 ? t88*twist[0] : twist[0]);
-    const double t119 = (t115 ? t88*twist[1] : twist[1]);
-    const double t120 = t100 + t101 + t102 + t103;
-    const double t121 = t104 + t105 + t106 + t107;
-    const int t122 = 4.0 > t121;
-    const double t123 = (t122 ? 1.0 : t96);
-    const double t124 = (t122 ? 1.0 : t97);
-    const double t125 = (t122 ? 1.0 : t98);
-    const double t126 = (t122 ? 1.0 : t99);
-    const double t127 = (t122 ? t96 : 1.0);
-    const double t128 = (t122 ? t97 : 1.0);
-    const double t129 = (t122 ? t98 : 1.0);
-    const double t130 = (t122 ? t99 : 1.0);
-    const double t131 = (t122 ? t90 : t117);
-    const double t132 = (t122 ? twist[2] : t119);
-    const double t133 = (t122 ? t117 : t90);
-    const double t134 = (t122 ? t119 : twist[2]);
-    const double t135 = (t122 ? 4.0 : t121);
-    const int t136 = t135 > t120;
-    const double t137 = (t136 ? t123 : t92);
-    const double t138 = (t136 ? t124 : t93);
-    const double t139 = (t136 ? t125 : t94);
-    const double t140 = (t136 ? t126 : t95);
-    const double t141 = (t136 ? t92 : t123);
-    const double t142 = (t136 ? t93 : t124);
-    const double t143 = (t136 ? t94 : t125);
-    const double t144 = (t136 ? t95 : t126);
-    const double t145 = (t136 ? t131 : t117);
-    const double t146 = (t136 ? t132 : t118);
-    const double t147 = (t136 ? t117 : t131);
-    const double t148 = (t136 ? t118 : t132);
-    const double t149 = t137*t137 + t138*t138 + t139*t139 + t140*t140;
-    const double t150 = sqrt(t149);
-    const int t151 = t150 > t116;
-    const double t152 = (t151 ? 1.0/(t150 != 0.0 ? t150 : 1.0) : 1.0);
-    const double t153 = (t151 ? t152*t137 : 0.0);
-    const double t154 = (t151 ? t152*t138 : 0.0);
-    const double t155 = (t151 ? t152*t139 : 0.0);
-    const double t156 = (t151 ? t152*t140 : 0.0);
-    const double t157 = (t151 ? t150 : 0.0);
-    const double t158 = t153*t141 + t154*t142 + t155*t143 + t156*t144;
-    const double t159 = t141 - t158*t153;
-    const double t160 = t142 - t158*t154;
-    const double t161 = t143 - t158*t155;
-    const double t162 = t144 - t158*t156;
-    const double t163 = t153*t127 + t154*t128 + t155*t129 + t156*t130;
-    const double t164 = t127 - t163*t153;
-    const double t165 = t128 - t163*t154;
-    const double t166 = t129 - t163*t155;
-    const double t167 = t130 - t163*t156;
-    const double t168 = t159*t159 + t160*t160 + t161*t161 + t162*t162;
-    const double t169 = t164*t164 + t165*t165 + t166*t166 + t167*t167;
-    const int t170 = t169 > t168;
-    const double t171 = (t170 ? t164 : t159);
-    const double t172 = (t170 ? t165 : t160);
-    const double t173 = (t170 ? t166 : t161);
-    const double t174 = (t170 ? t167 : t162);
-    const double t175 = (t170 ? t159 : t164);
-    const double t176 = (t170 ? t160 : t165);
-    const double t177 = (t170 ? t161 : t166);
-    const double t178 = (t170 ? t162 : t167);
-    const double t179 = (t170 ? t163 : t158);
-    const double t180 = (t170 ? t158 : t163);
-    const double t181 = (t170 ? t133 : t147);
-    const double t182 = (t170 ? t134 : t148);
-    const double t183 = (t170 ? t147 : t133);
-    const double t184 = (t170 ? t148 : t134);
-    const double t185 = t153*t171 + t154*t172 + t155*t173 + t156*t174;
-    const double t186 = t171 - t153*t185;
-    const double t187 = t172 - t154*t185;
-    const double t188 = t173 - t155*t185;
-    const double t189 = t174 - t156*t185;
-    const double t190 = t186*t186 + t187*t187 + t188*t188 + t189*t189;
-    const double t191 = sqrt(t190);
-    const int t192 = t191 > t116;
-    const double t193 = (t192 ? 1.0/(t191 != 0.0 ? t191 : 1.0) : 1.0);
-    const double t194 = (t192 ? t193*t186 : 0.0);
-    const double t195 = (t192 ? t193*t187 : 0.0);
-    const double t196 = (t192 ? t193*t188 : 0.0);
-    const double t197 = (t192 ? t193*t189 : 0.0);
-    const double t198 = t179 + t185;
-    const double t199 = (t192 ? t191 : 0.0);
-    const double t200 = t194*t175 + t195*t176 + t196*t177 + t197*t178;
-    const double t201 = t175 - t200*t194;
-    const double t202 = t176 - t200*t195;
-    const double t203 = t177 - t200*t196;
-    const double t204 = t178 - t200*t197;
-    const double t205 = t153*t201 + t154*t202 + t155*t203 + t156*t204;
-    const double t206 = t201 - t153*t205;
-    const double t207 = t202 - t154*t205;
-    const double t208 = t203 - t155*t205;
-    const double t209 = t204 - t156*t205;
-    const double t210 = t194*t206 + t195*t207 + t196*t208 + t197*t209;
-    const double t211 = t206 - t194*t210;
-    const double t212 = t207 - t195*t210;
-    const double t213 = t208 - t196*t210;
-    const double t214 = t209 - t197*t210;
-    const double t215 = t211*t211 + t212*t212 + t213*t213 + t214*t214;
-    const double t216 = sqrt(t215);
-    const int t217 = t216 > t116;
-    const double t218 = (t217 ? 1.0/(t216 != 0.0 ? t216 : 1.0) : 1.0);
-    const double t219 = (t217 ? t218*t211 : 0.0);
-    const double t220 = (t217 ? t218*t212 : 0.0);
-    const double t221 = (t217 ? t218*t213 : 0.0);
-    const double t222 = (t217 ? t218*t214 : 0.0);
-    const double t223 = t180 + t205;
-    const double t224 = t200 + t210;
-    const double t225 = (t217 ? t216 : 0.0);
-    const double t226 = t157*t145;
-    const double t227 = t198*t181;
-    const double t228 = t223*t183;
-    const double t229 = t199*t181;
-    const double t230 = t224*t183;
-    const double t231 = t225*t183;
-    const double t232 = t111*t111;
-    const double t233 = t226*t226 + t227*t227 + t228*t228 + t232;
-    const double t234 = sqrt(t233);
-    const int t235 = t234 > 0.0;
-    const double t236 = (t235 ? 1.0/(t234 != 0.0 ? t234 : 1.0) : 1.0);
-    const double t237 = t236*t226;
-    const double t238 = t236*t227;
-    const double t239 = -t236*t228;
-    const double t240 = t236*t111;
-    const double t241 = t239*t230 - t238*t229;
-    const double t242 = t241*t237;
-    const double t243 = t229 + t241*t238;
-    const double t244 = t230 - t241*t239;
-    const double t245 = t241*t240;
-    const double t246 = t237*t242 + t238*t243 - t239*t244 + t240*t245;
-    const double t247 = t242 - t246*t237;
-    const double t248 = t243 - t246*t238;
-    const double t249 = t244 + t246*t239;
-    const double t250 = t245 - t246*t240;
-    const double t251 = t247*t247 + t248*t248 + t249*t249 + t250*t250 + t232;
-    const double t252 = sqrt(t251);
-    const int t253 = t252 > 0.0;
-    const double t254 = (t253 ? 1.0/(t252 != 0.0 ? t252 : 1.0) : 1.0);
-    const double t255 = t254*t247;
-    const double t256 = t254*t248;
-    const double t257 = t254*t249;
-    const double t258 = t254*t250;
-    const double t259 = t254*t111;
-    const double t260 = t246 - t241;
-    const double t261 = t239*t231;
-    const double t262 = t261*t237;
-    const double t263 = t261*t238;
-    const double t264 = t231 - t261*t239;
-    const double t265 = t261*t240;
-    const double t266 = t255*t262 + t256*t263 + t257*t264 + t258*t265;
-    const double t267 = t262 - t266*t255;
-    const double t268 = t263 - t266*t256;
-    const double t269 = t264 - t266*t257;
-    const double t270 = t265 - t266*t258;
-    const double t271 = t266*t259;
-    const double t272 = t237*t267 + t238*t268 - t239*t269 + t240*t270;
-    const double t273 = t267 - t272*t237;
-    const double t274 = t268 - t272*t238;
-    const double t275 = t269 + t272*t239;
-    const double t276 = t270 - t272*t240;
-    const double t277 = t255*t273 + t256*t274 + t257*t275 + t258*t276 - t259*t271;
-    const double t278 = t273 - t277*t255;
-    const double t279 = t274 - t277*t256;
-    const double t280 = t275 - t277*t257;
-    const double t281 = t276 - t277*t258;
-    const double t282 = t271 + t277*t259;
-    const double t283 = t278*t278 + t279*t279 + t280*t280 + t281*t281 + t282*t282 + t232;
-    const double t284 = sqrt(t283);
-    const int t285 = t284 > 0.0;
-    const double t286 = (t285 ? 1.0/(t284 != 0.0 ? t284 : 1.0) : 1.0);
-    const double t287 = t286*t278;
-    const double t288 = t286*t279;
-    const double t289 = t286*t280;
-    const double t290 = t272 - t261;
-    const double t291 = t266 + t277;
-    const double t292 = t90*(t146*t237 - t184*t239 + t182*t238);
-    const double t293 = t90*(t146*t255 + t184*t257 + t182*t256);
-    const double t294 = t90*(t146*t287 + t184*t289 + t182*t288);
-    const double t295 = (t285 ? t286*t294 : 0.0);
-    const double t296 = (t253 ? t254*(t293 - t291*t295) : 0.0);
-    const double t297 = (t235 ? t236*(t292 - t260*t296 - t290*t295) : 0.0);
-    const double t298 = t153*t297 + t194*t296 + t219*t295;
-    dq3[0] = t298;
-    const double t299 = t154*t297 + t195*t296 + t220*t295;
-    dq3[1] = t299;
-    const double t300 = t155*t297 + t196*t296 + t221*t295;
-    dq3[2] = t300;
-    const double t301 = t156*t297 + t197*t296 + t222*t295;
-    dq3[3] = t301;
+    const double t106 = ((4.0 + t98) + (t99 + t100)) + ((t101 + t102) + (t103 + (t104 + t105)));
+    const double t107 = sqrt(t106);
+    const double t108 = t88/(t86 != 0.0 ? t86 : 1.0);
+    const double t109 = t87*t88;
+    const double t110 = t107*ARM4_RANK_TOL;
+    const double t111 = t109*t89;
+    const double t112 = t107*sqrt(ARM4_RANK_TOL);
+    const int t113 = t111 <= t110;
+    const double t114 = (t112 >= t111 || t113 ? t110 : 0.0);
+    const double t115 = (t113 ? t88 : t108);
+    const double t116 = (t113 ? t86*twist[0] : twist[0]);
+    const double t117 = (t113 ? t86*twist[1] : twist[1]);
+    const double t118 = t98 + t99 + t100 + t101;
+    const double t119 = t102 + t103 + t104 + t105;
+    const int t120 = 4.0 > t119;
+    const double t121 = (t120 ? 1.0 : t94);
+    const double t122 = (t120 ? 1.0 : t95);
+    const double t123 = (t120 ? 1.0 : t96);
+    const double t124 = (t120 ? 1.0 : t97);
+    const double t125 = (t120 ? t94 : 1.0);
+    const double t126 = (t120 ? t95 : 1.0);
+    const double t127 = (t120 ? t96 : 1.0);
+    const double t128 = (t120 ? t97 : 1.0);
+    const double t129 = (t120 ? t88 : t115);
+    const double t130 = (t120 ? twist[2] : t117);
+    const double t131 = (t120 ? t115 : t88);
+    const double t132 = (t120 ? t117 : twist[2]);
+    const double t133 = (t120 ? 4.0 : t119);
+    const int t134 = t133 > t118;
+    const double t135 = (t134 ? t121 : t90);
+    const double t136 = (t134 ? t122 : t91);
+    const double t137 = (t134 ? t123 : t92);
+    const double t138 = (t134 ? t124 : t93);
+    const double t139 = (t134 ? t90 : t121);
+    const double t140 = (t134 ? t91 : t122);
+    const double t141 = (t134 ? t92 : t123);
+    const double t142 = (t134 ? t93 : t124);
+    const double t143 = (t134 ? t129 : t115);
+    const double t144 = (t134 ? t130 : t116);
+    const double t145 = (t134 ? t115 : t129);
+    const double t146 = (t134 ? t116 : t130);
+    const double t147 = t135*t135 + t136*t136 + t137*t137 + t138*t138;
+    const double t148 = sqrt(t147);
+    const int t149 = t148 > t114;
+    const double t150 = (t149 ? 1.0/(t148 != 0.0 ? t148 : 1.0) : 1.0);
+    const double t151 = (t149 ? t150*t135 : 0.0);
+    const double t152 = (t149 ? t150*t136 : 0.0);
+    const double t153 = (t149 ? t150*t137 : 0.0);
+    const double t154 = (t149 ? t150*t138 : 0.0);
+    const double t155 = (t149 ? t148 : 0.0);
+    const double t156 = t151*t139 + t152*t140 + t153*t141 + t154*t142;
+    const double t157 = t139 - t156*t151;
+    const double t158 = t140 - t156*t152;
+    const double t159 = t141 - t156*t153;
+    const double t160 = t142 - t156*t154;
+    const double t161 = t151*t125 + t152*t126 + t153*t127 + t154*t128;
+    const double t162 = t125 - t161*t151;
+    const double t163 = t126 - t161*t152;
+    const double t164 = t127 - t161*t153;
+    const double t165 = t128 - t161*t154;
+    const double t166 = t157*t157 + t158*t158 + t159*t159 + t160*t160;
+    const double t167 = t162*t162 + t163*t163 + t164*t164 + t165*t165;
+    const int t168 = t167 > t166;
+    const double t169 = (t168 ? t162 : t157);
+    const double t170 = (t168 ? t163 : t158);
+    const double t171 = (t168 ? t164 : t159);
+    const double t172 = (t168 ? t165 : t160);
+    const double t173 = (t168 ? t157 : t162);
+    const double t174 = (t168 ? t158 : t163);
+    const double t175 = (t168 ? t159 : t164);
+    const double t176 = (t168 ? t160 : t165);
+    const double t177 = (t168 ? t161 : t156);
+    const double t178 = (t168 ? t156 : t161);
+    const double t179 = (t168 ? t131 : t145);
+    const double t180 = (t168 ? t132 : t146);
+    const double t181 = (t168 ? t145 : t131);
+    const double t182 = (t168 ? t146 : t132);
+    const double t183 = t151*t169 + t152*t170 + t153*t171 + t154*t172;
+    const double t184 = t169 - t151*t183;
+    const double t185 = t170 - t152*t183;
+    const double t186 = t171 - t153*t183;
+    const double t187 = t172 - t154*t183;
+    const double t188 = t184*t184 + t185*t185 + t186*t186 + t187*t187;
+    const double t189 = sqrt(t188);
+    const int t190 = t189 > t114;
+    const double t191 = (t190 ? 1.0/(t189 != 0.0 ? t189 : 1.0) : 1.0);
+    const double t192 = (t190 ? t191*t184 : 0.0);
+    const double t193 = (t190 ? t191*t185 : 0.0);
+    const double t194 = (t190 ? t191*t186 : 0.0);
+    const double t195 = (t190 ? t191*t187 : 0.0);
+    const double t196 = t177 + t183;
+    const double t197 = (t190 ? t189 : 0.0);
+    const double t198 = t192*t173 + t193*t174 + t194*t175 + t195*t176;
+    const double t199 = t173 - t198*t192;
+    const double t200 = t174 - t198*t193;
+    const double t201 = t175 - t198*t194;
+    const double t202 = t176 - t198*t195;
+    const double t203 = t151*t199 + t152*t200 + t153*t201 + t154*t202;
+    const double t204 = t199 - t151*t203;
+    const double t205 = t200 - t152*t203;
+    const double t206 = t201 - t153*t203;
+    const double t207 = t202 - t154*t203;
+    const double t208 = t192*t204 + t193*t205 + t194*t206 + t195*t207;
+    const double t209 = t204 - t192*t208;
+    const double t210 = t205 - t193*t208;
+    const double t211 = t206 - t194*t208;
+    const double t212 = t207 - t195*t208;
+    const double t213 = t209*t209 + t210*t210 + t211*t211 + t212*t212;
+    const double t214 = sqrt(t213);
+    const int t215 = t214 > t114;
+    const double t216 = (t215 ? 1.0/(t214 != 0.0 ? t214 : 1.0) : 1.0);
+    const double t217 = (t215 ? t216*t209 : 0.0);
+    const double t218 = (t215 ? t216*t210 : 0.0);
+    const double t219 = (t215 ? t216*t211 : 0.0);
+    const double t220 = (t215 ? t216*t212 : 0.0);
+    const double t221 = t178 + t203;
+    const double t222 = t198 + t208;
+    const double t223 = (t215 ? t214 : 0.0);
+    const double t224 = t155*t143;
+    const double t225 = t196*t179;
+    const double t226 = t221*t181;
+    const double t227 = t197*t179;
+    const double t228 = t222*t181;
+    const double t229 = t223*t181;
+    const double t230 = t109*t109;
+    const double t231 = t224*t224 + t225*t225 + t226*t226 + t230;
+    const double t232 = sqrt(t231);
+    const int t233 = t232 > 0.0;
+    const double t234 = (t233 ? 1.0/(t232 != 0.0 ? t232 : 1.0) : 1.0);
+    const double t235 = t234*t224;
+    const double t236 = t234*t225;
+    const double t237 = -t234*t226;
+    const double t238 = t234*t109;
+    const double t239 = t237*t228 - t236*t227;
+    const double t240 = t239*t235;
+    const double t241 = t227 + t239*t236;
+    const double t242 = t228 - t239*t237;
+    const double t243 = t239*t238;
+    const double t244 = t235*t240 + t236*t241 - t237*t242 + t238*t243;
+    const double t245 = t240 - t244*t235;
+    const double t246 = t241 - t244*t236;
+    const double t247 = t242 + t244*t237;
+    const double t248 = t243 - t244*t238;
+    const double t249 = t245*t245 + t246*t246 + t247*t247 + t248*t248 + t230;
+    const double t250 = sqrt(t249);
+    const int t251 = t250 > 0.0;
+    const double t252 = (t251 ? 1.0/(t250 != 0.0 ? t250 : 1.0) : 1.0);
+    const double t253 = t252*t245;
+    const double t254 = t252*t246;
+    const double t255 = t252*t247;
+    const double t256 = t252*t248;
+    const double t257 = t252*t109;
+    const double t258 = t244 - t239;
+    const double t259 = t237*t229;
+    const double t260 = t259*t235;
+    const double t261 = t259*t236;
+    const double t262 = t229 - t259*t237;
+    const double t263 = t259*t238;
+    const double t264 = t253*t260 + t254*t261 + t255*t262 + t256*t263;
+    const double t265 = t260 - t264*t253;
+    const double t266 = t261 - t264*t254;
+    const double t267 = t262 - t264*t255;
+    const double t268 = t263 - t264*t256;
+    const double t269 = t264*t257;
+    const double t270 = t235*t265 + t236*t266 - t237*t267 + t238*t268;
+    const double t271 = t265 - t270*t235;
+    const double t272 = t266 - t270*t236;
+    const double t273 = t267 + t270*t237;
+    const double t274 = t268 - t270*t238;
+    const double t275 = t253*t271 + t254*t272 + t255*t273 + t256*t274 - t257*t269;
+    const double t276 = t271 - t275*t253;
+    const double t277 = t272 - t275*t254;
+    const double t278 = t273 - t275*t255;
+    const double t279 = t274 - t275*t256;
+    const double t280 = t269 + t275*t257;
+    const double t281 = t276*t276 + t277*t277 + t278*t278 + t279*t279 + t280*t280 + t230;
+    const double t282 = sqrt(t281);
+    const int t283 = t282 > 0.0;
+    const double t284 = (t283 ? 1.0/(t282 != 0.0 ? t282 : 1.0) : 1.0);
+    const double t285 = t284*t276;
+    const double t286 = t284*t277;
+    const double t287 = t284*t278;
+    const double t288 = t270 - t259;
+    const double t289 = t264 + t275;
+    const double t290 = t88*(t144*t235 - t182*t237 + t180*t236);
+    const double t291 = t88*(t144*t253 + t182*t255 + t180*t254);
+    const double t292 = t88*(t144*t285 + t182*t287 + t180*t286);
+    const double t293 = (t283 ? t284*t292 : 0.0);
+    const double t294 = (t251 ? t252*(t291 - t289*t293) : 0.0);
+    const double t295 = (t233 ? t234*(t290 - t258*t294 - t288*t293) : 0.0);
+    const double t296 = t151*t295 + t192*t294 + t217*t293;
+    dq3[0] = t296;
+    const double t297 = t152*t295 + t193*t294 + t218*t293;
+    dq3[1] = t297;
+    const double t298 = t153*t295 + t194*t294 + t219*t293;
+    dq3[2] = t298;
+    const double t299 = t154*t295 + t195*t294 + t220*t293;
+    dq3[3] = t299;
 }
 
 void arm4_inverse_velocity3(const double q[4], const double twist[3], const double l[4], double lambda, double dq3[4])
@@ -1689,7 +1685,7 @@ void arm4_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm4_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 4 sin, 4 cos, 44 add/sub, 63 mul, 1 neg, 4 div */
+/* operations: 4 sin, 4 cos, 44 add/sub, 61 mul, 1 neg, 4 div */
 
 static ARM4_LIGHT void arm4_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1740,27 +1736,25 @@ static ARM4_LIGHT void arm4_ik_step_finish(const double *restrict q, const doubl
     const double t61 = t56*(t37 + t39);
     const double t62 = t57*t58;
     const double t63 = t62 + t55*(t61 + t55);
-    const double t64 = ARM4_RANK_TOL*ARM4_RANK_TOL;
-    const double t65 = (t55 <= t61*t64 ? t64 : (t55 <= t61*ARM4_RANK_TOL ? 0.0016*t64 : 0.0));
-    const int t66 = t62 > t65*(t61*t61);
-    const double t68 = t56*(t66 ? 1.0/(t63 != 0.0 ? t63 : 1.0) : 1.0);
-    const double t69 = t55 + t57*(1.0 + t42*t42);
-    const double t70 = t56*(t69 > 0.0 ? 1.0/(t69 != 0.0 ? t69 : 1.0) : 1.0);
-    const double t77 = target[0] - t17;
-    const double t78 = t16 + target[1];
-    const double t79 = (t40 ? t77 : t78);
-    const double t80 = (t40 ? t78 : t77);
-    const double t81 = t79 + t80*t42;
-    const double t82 = (t66 ? t68*(t81*t55 + t79*t58) : t81*t70);
-    const double t83 = (t66 ? t68*(t80*t55 + t57*(t80 - t79*t42)) : 0.0);
-    const double t84 = t82*t43 + t83*t47;
-    q_next[0] = t84 + q[0];
-    const double t85 = t82*t44 + t83*t48;
-    q_next[1] = t85 + q[1];
-    const double t86 = t82*t45 + t83*t49;
-    q_next[2] = t86 + q[2];
-    const double t87 = t82*t46 + t83*t50;
-    q_next[3] = t87 + q[3];
+    const int t64 = t55 > t61*ARM4_RANK_TOL || t62 > (t61*t61)*(ARM4_RANK_TOL*ARM4_RANK_TOL);
+    const double t66 = t56*(t64 ? 1.0/(t63 != 0.0 ? t63 : 1.0) : 1.0);
+    const double t67 = t55 + t57*(1.0 + t42*t42);
+    const double t68 = t56*(t67 > 0.0 ? 1.0/(t67 != 0.0 ? t67 : 1.0) : 1.0);
+    const double t75 = target[0] - t17;
+    const double t76 = t16 + target[1];
+    const double t77 = (t40 ? t75 : t76);
+    const double t78 = (t40 ? t76 : t75);
+    const double t79 = t77 + t78*t42;
+    const double t80 = (t64 ? t66*(t79*t55 + t77*t58) : t79*t68);
+    const double t81 = (t64 ? t66*(t78*t55 + t57*(t78 - t77*t42)) : 0.0);
+    const double t82 = t80*t43 + t81*t47;
+    q_next[0] = t82 + q[0];
+    const double t83 = t80*t44 + t81*t48;
+    q_next[1] = t83 + q[1];
+    const double t84 = t80*t45 + t81*t49;
+    q_next[2] = t84 + q[2];
+    const double t85 = t80*t46 + t81*t50;
+    q_next[3] = t85 + q[3];
 }
 
 void arm4_ik_step(const double q[4], const double target[2], const double l[4], double lambda, double q_next[4])

@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -28,7 +26,7 @@
 
 #include "arm5.h"
 
-#if !defined(ARM5_STAMP) || ARM5_STAMP != 0x969d8d7bUL
+#if !defined(ARM5_STAMP) || ARM5_STAMP != 0xa4799365UL
 #error "arm5.h is not the header generated with this arm5.c: regenerate both together"
 #endif
 
@@ -1422,7 +1420,7 @@ void arm5_manipulability_batch(size_t m, const double *q, const double *l, doubl
 }
 
 /* ---- arm5_inverse_velocity: joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N) ---- */
-/* operations: 5 sin, 5 cos, 47 add/sub, 72 mul, 1 neg, 4 div */
+/* operations: 5 sin, 5 cos, 47 add/sub, 70 mul, 1 neg, 4 div */
 
 static ARM5_LIGHT void arm5_inverse_velocity_angles(const double *restrict q, double *restrict ang)
 {
@@ -1482,25 +1480,23 @@ static ARM5_LIGHT void arm5_inverse_velocity_finish(const double *restrict v, co
     const double t73 = t68*(t47 + t49);
     const double t74 = t69*t70;
     const double t75 = t74 + t67*(t73 + t67);
-    const double t76 = ARM5_RANK_TOL*ARM5_RANK_TOL;
-    const double t77 = (t67 <= t73*t76 ? t76 : (t67 <= t73*ARM5_RANK_TOL ? 0.0016*t76 : 0.0));
-    const int t78 = t74 > t77*(t73*t73);
-    const double t79 = t71 + t72*t52;
-    const double t80 = t68*(t78 ? 1.0/(t75 != 0.0 ? t75 : 1.0) : 1.0);
-    const double t81 = t67 + t69*(1.0 + t52*t52);
-    const double t82 = t68*(t81 > 0.0 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-    const double t83 = (t78 ? t80*(t79*t67 + t70*t71) : t79*t82);
-    const double t84 = (t78 ? t80*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
-    const double t85 = t83*t53 + t84*t58;
-    dq[0] = t85;
-    const double t86 = t83*t54 + t84*t59;
-    dq[1] = t86;
-    const double t87 = t83*t55 + t84*t60;
-    dq[2] = t87;
-    const double t88 = t83*t56 + t84*t61;
-    dq[3] = t88;
-    const double t89 = t83*t57 + t84*t62;
-    dq[4] = t89;
+    const int t76 = t67 > t73*ARM5_RANK_TOL || t74 > (t73*t73)*(ARM5_RANK_TOL*ARM5_RANK_TOL);
+    const double t77 = t71 + t72*t52;
+    const double t78 = t68*(t76 ? 1.0/(t75 != 0.0 ? t75 : 1.0) : 1.0);
+    const double t79 = t67 + t69*(1.0 + t52*t52);
+    const double t80 = t68*(t79 > 0.0 ? 1.0/(t79 != 0.0 ? t79 : 1.0) : 1.0);
+    const double t81 = (t76 ? t78*(t77*t67 + t70*t71) : t77*t80);
+    const double t82 = (t76 ? t78*(t69*(t72 - t71*t52) + t72*t67) : 0.0);
+    const double t83 = t81*t53 + t82*t58;
+    dq[0] = t83;
+    const double t84 = t81*t54 + t82*t59;
+    dq[1] = t84;
+    const double t85 = t81*t55 + t82*t60;
+    dq[2] = t85;
+    const double t86 = t81*t56 + t82*t61;
+    dq[3] = t86;
+    const double t87 = t81*t57 + t82*t62;
+    dq[4] = t87;
 }
 
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5])
@@ -1536,7 +1532,7 @@ void arm5_inverse_velocity_batch(size_t m, const double *q, const double *v, con
 }
 
 /* ---- arm5_inverse_velocity3: joint rates dq3 = J3^T (J3 J3^T + lambda^2 I)^+ twist for twist = (vx, vy, omega) (N) ---- */
-/* operations: 5 sin, 5 cos, 179 add/sub, 247 mul, 2 neg, 9 div, 8 sqrt */
+/* operations: 5 sin, 5 cos, 179 add/sub, 246 mul, 2 neg, 9 div, 8 sqrt */
 
 static ARM5_LIGHT void arm5_inverse_velocity3_angles(const double *restrict q, double *restrict ang)
 {
@@ -1567,20 +1563,22 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double *restrict twis
     const double t20 = t5 + t18;
     const double t21 = t19 - t9;
     const double t22 = t4 + t20;
-    const double t102 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
-    const double t103 = fabs(lambda);
-    const double t104 = (t103 > 1.0 ? 1.0/(t103 != 0.0 ? t103 : 1.0) : 1.0);
-    const double t105 = (t102 > 1.0 ? t102 : 1.0);
-    const double t106 = t102*t21;
-    const double t107 = t102*t19;
-    const double t108 = t102*t17;
-    const double t109 = t102*t15;
-    const double t110 = t102*t13;
-    const double t111 = t102*t22;
-    const double t112 = t102*t20;
-    const double t113 = t102*t18;
-    const double t114 = t102*t16;
-    const double t115 = t8*t102;
+    const double t100 = 1.0/(l[0] + l[1] + l[2] + l[3] + l[4] != 0.0 ? l[0] + l[1] + l[2] + l[3] + l[4] : 1.0);
+    const double t101 = fabs(lambda);
+    const double t102 = (t101 > 1.0 ? 1.0/(t101 != 0.0 ? t101 : 1.0) : 1.0);
+    const double t103 = (t100 > 1.0 ? t100 : 1.0);
+    const double t104 = t100*t21;
+    const double t105 = t100*t19;
+    const double t106 = t100*t17;
+    const double t107 = t100*t15;
+    const double t108 = t100*t13;
+    const double t109 = t100*t22;
+    const double t110 = t100*t20;
+    const double t111 = t100*t18;
+    const double t112 = t100*t16;
+    const double t113 = t8*t100;
+    const double t114 = t104*t104;
+    const double t115 = t105*t105;
     const double t116 = t106*t106;
     const double t117 = t107*t107;
     const double t118 = t108*t108;
@@ -1589,223 +1587,221 @@ static ARM5_LIGHT void arm5_inverse_velocity3_finish(const double *restrict twis
     const double t121 = t111*t111;
     const double t122 = t112*t112;
     const double t123 = t113*t113;
-    const double t124 = t114*t114;
-    const double t125 = t115*t115;
-    const double t126 = ((5.0 + t116) + (t117 + (t118 + t119))) + ((t120 + (t121 + t122)) + (t123 + (t124 + t125)));
-    const double t127 = sqrt(t126);
-    const double t128 = t104/(t102 != 0.0 ? t102 : 1.0);
-    const double t129 = t103*t104;
-    const double t130 = t127*ARM5_RANK_TOL;
-    const double t131 = t129*t105;
-    const double t132 = t127*sqrt(ARM5_RANK_TOL);
-    const int t133 = t131 <= t130;
-    const double t134 = (t133 ? t130 : (t132 >= t131 ? 0.04*t130 : 0.0));
-    const double t135 = (t133 ? t104 : t128);
-    const double t136 = (t133 ? t102*twist[0] : twist[0]);
-    const double t137 = (t133 ? t102*twist[1] : twist[1]);
-    const double t138 = t116 + t117 + t118 + t119 + t120;
-    const double t139 = t121 + t122 + t123 + t124 + t125;
-    const int t140 = 5.0 > t139;
-    const double t141 = (t140 ? 1.0 : t111);
-    const double t142 = (t140 ? 1.0 : t112);
-    const double t143 = (t140 ? 1.0 : t113);
-    const double t144 = (t140 ? 1.0 : t114);
-    const double t145 = (t140 ? 1.0 : t115);
-    const double t146 = (t140 ? t111 : 1.0);
-    const double t147 = (t140 ? t112 : 1.0);
-    const double t148 = (t140 ? t113 : 1.0);
-    const double t149 = (t140 ? t114 : 1.0);
-    const double t150 = (t140 ? t115 : 1.0);
-    const double t151 = (t140 ? t104 : t135);
-    const double t152 = (t140 ? twist[2] : t137);
-    const double t153 = (t140 ? t135 : t104);
-    const double t154 = (t140 ? t137 : twist[2]);
-    const double t155 = (t140 ? 5.0 : t139);
-    const int t156 = t155 > t138;
-    const double t157 = (t156 ? t141 : t106);
-    const double t158 = (t156 ? t142 : t107);
-    const double t159 = (t156 ? t143 : t108);
-    const double t160 = (t156 ? t144 : t109);
-    const double t161 = (t156 ? t145 : t110);
-    const double t162 = (t156 ? t106 : t141);
-    const double t163 = (t156 ? t107 : t142);
-    const double t164 = (t156 ? t108 : t143);
-    const double t165 = (t156 ? t109 : t144);
-    const double t166 = (t156 ? t110 : t145);
-    const double t167 = (t156 ? t151 : t135);
-    const double t168 = (t156 ? t152 : t136);
-    const double t169 = (t156 ? t135 : t151);
-    const double t170 = (t156 ? t136 : t152);
-    const double t171 = t157*t157 + t158*t158 + t159*t159 + t160*t160 + t161*t161;
-    const double t172 = sqrt(t171);
-    const int t173 = t172 > t134;
-    const double t174 = (t173 ? 1.0/(t172 != 0.0 ? t172 : 1.0) : 1.0);
-    const double t175 = (t173 ? t174*t157 : 0.0);
-    const double t176 = (t173 ? t174*t158 : 0.0);
-    const double t177 = (t173 ? t174*t159 : 0.0);
-    const double t178 = (t173 ? t174*t160 : 0.0);
-    const double t179 = (t173 ? t174*t161 : 0.0);
-    const double t180 = (t173 ? t172 : 0.0);
-    const double t181 = t175*t162 + t176*t163 + t177*t164 + t178*t165 + t179*t166;
-    const double t182 = t162 - t181*t175;
-    const double t183 = t163 - t181*t176;
-    const double t184 = t164 - t181*t177;
-    const double t185 = t165 - t181*t178;
-    const double t186 = t166 - t181*t179;
-    const double t187 = t175*t146 + t176*t147 + t177*t148 + t178*t149 + t179*t150;
-    const double t188 = t146 - t187*t175;
-    const double t189 = t147 - t187*t176;
-    const double t190 = t148 - t187*t177;
-    const double t191 = t149 - t187*t178;
-    const double t192 = t150 - t187*t179;
-    const double t193 = t182*t182 + t183*t183 + t184*t184 + t185*t185 + t186*t186;
-    const double t194 = t188*t188 + t189*t189 + t190*t190 + t191*t191 + t192*t192;
-    const int t195 = t194 > t193;
-    const double t196 = (t195 ? t188 : t182);
-    const double t197 = (t195 ? t189 : t183);
-    const double t198 = (t195 ? t190 : t184);
-    const double t199 = (t195 ? t191 : t185);
-    const double t200 = (t195 ? t192 : t186);
-    const double t201 = (t195 ? t182 : t188);
-    const double t202 = (t195 ? t183 : t189);
-    const double t203 = (t195 ? t184 : t190);
-    const double t204 = (t195 ? t185 : t191);
-    const double t205 = (t195 ? t186 : t192);
-    const double t206 = (t195 ? t187 : t181);
-    const double t207 = (t195 ? t181 : t187);
-    const double t208 = (t195 ? t153 : t169);
-    const double t209 = (t195 ? t154 : t170);
-    const double t210 = (t195 ? t169 : t153);
-    const double t211 = (t195 ? t170 : t154);
-    const double t212 = t175*t196 + t176*t197 + t177*t198 + t178*t199 + t179*t200;
-    const double t213 = t196 - t175*t212;
-    const double t214 = t197 - t176*t212;
-    const double t215 = t198 - t177*t212;
-    const double t216 = t199 - t178*t212;
-    const double t217 = t200 - t179*t212;
-    const double t218 = t213*t213 + t214*t214 + t215*t215 + t216*t216 + t217*t217;
-    const double t219 = sqrt(t218);
-    const int t220 = t219 > t134;
-    const double t221 = (t220 ? 1.0/(t219 != 0.0 ? t219 : 1.0) : 1.0);
-    const double t222 = (t220 ? t221*t213 : 0.0);
-    const double t223 = (t220 ? t221*t214 : 0.0);
-    const double t224 = (t220 ? t221*t215 : 0.0);
-    const double t225 = (t220 ? t221*t216 : 0.0);
-    const double t226 = (t220 ? t221*t217 : 0.0);
-    const double t227 = t206 + t212;
-    const double t228 = (t220 ? t219 : 0.0);
-    const double t229 = t222*t201 + t223*t202 + t224*t203 + t225*t204 + t226*t205;
-    const double t230 = t201 - t229*t222;
-    const double t231 = t202 - t229*t223;
-    const double t232 = t203 - t229*t224;
-    const double t233 = t204 - t229*t225;
-    const double t234 = t205 - t229*t226;
-    const double t235 = t175*t230 + t176*t231 + t177*t232 + t178*t233 + t179*t234;
-    const double t236 = t230 - t175*t235;
-    const double t237 = t231 - t176*t235;
-    const double t238 = t232 - t177*t235;
-    const double t239 = t233 - t178*t235;
-    const double t240 = t234 - t179*t235;
-    const double t241 = t222*t236 + t223*t237 + t224*t238 + t225*t239 + t226*t240;
-    const double t242 = t236 - t222*t241;
-    const double t243 = t237 - t223*t241;
-    const double t244 = t238 - t224*t241;
-    const double t245 = t239 - t225*t241;
-    const double t246 = t240 - t226*t241;
-    const double t247 = t242*t242 + t243*t243 + t244*t244 + t245*t245 + t246*t246;
-    const double t248 = sqrt(t247);
-    const int t249 = t248 > t134;
-    const double t250 = (t249 ? 1.0/(t248 != 0.0 ? t248 : 1.0) : 1.0);
-    const double t251 = (t249 ? t250*t242 : 0.0);
-    const double t252 = (t249 ? t250*t243 : 0.0);
-    const double t253 = (t249 ? t250*t244 : 0.0);
-    const double t254 = (t249 ? t250*t245 : 0.0);
-    const double t255 = (t249 ? t250*t246 : 0.0);
-    const double t256 = t207 + t235;
-    const double t257 = t229 + t241;
-    const double t258 = (t249 ? t248 : 0.0);
-    const double t259 = t180*t167;
-    const double t260 = t227*t208;
-    const double t261 = t256*t210;
-    const double t262 = t228*t208;
-    const double t263 = t257*t210;
-    const double t264 = t258*t210;
-    const double t265 = t129*t129;
-    const double t266 = t259*t259 + t260*t260 + t261*t261 + t265;
-    const double t267 = sqrt(t266);
-    const int t268 = t267 > 0.0;
-    const double t269 = (t268 ? 1.0/(t267 != 0.0 ? t267 : 1.0) : 1.0);
-    const double t270 = t269*t259;
-    const double t271 = t269*t260;
-    const double t272 = -t269*t261;
-    const double t273 = t269*t129;
-    const double t274 = t272*t263 - t271*t262;
-    const double t275 = t274*t270;
-    const double t276 = t262 + t274*t271;
-    const double t277 = t263 - t274*t272;
-    const double t278 = t274*t273;
-    const double t279 = t270*t275 + t271*t276 - t272*t277 + t273*t278;
-    const double t280 = t275 - t279*t270;
-    const double t281 = t276 - t279*t271;
-    const double t282 = t277 + t279*t272;
-    const double t283 = t278 - t279*t273;
-    const double t284 = t280*t280 + t281*t281 + t282*t282 + t283*t283 + t265;
-    const double t285 = sqrt(t284);
-    const int t286 = t285 > 0.0;
-    const double t287 = (t286 ? 1.0/(t285 != 0.0 ? t285 : 1.0) : 1.0);
-    const double t288 = t287*t280;
-    const double t289 = t287*t281;
-    const double t290 = t287*t282;
-    const double t291 = t287*t283;
-    const double t292 = t287*t129;
-    const double t293 = t279 - t274;
-    const double t294 = t272*t264;
-    const double t295 = t294*t270;
-    const double t296 = t294*t271;
-    const double t297 = t264 - t294*t272;
-    const double t298 = t294*t273;
-    const double t299 = t288*t295 + t289*t296 + t290*t297 + t291*t298;
-    const double t300 = t295 - t299*t288;
-    const double t301 = t296 - t299*t289;
-    const double t302 = t297 - t299*t290;
-    const double t303 = t298 - t299*t291;
-    const double t304 = t299*t292;
-    const double t305 = t270*t300 + t271*t301 - t272*t302 + t273*t303;
-    const double t306 = t300 - t305*t270;
-    const double t307 = t301 - t305*t271;
-    const double t308 = t302 + t305*t272;
-    const double t309 = t303 - t305*t273;
-    const double t310 = t288*t306 + t289*t307 + t290*t308 + t291*t309 - t292*t304;
-    const double t311 = t306 - t310*t288;
-    const double t312 = t307 - t310*t289;
-    const double t313 = t308 - t310*t290;
-    const double t314 = t309 - t310*t291;
-    const double t315 = t304 + t310*t292;
-    const double t316 = t311*t311 + t312*t312 + t313*t313 + t314*t314 + t315*t315 + t265;
-    const double t317 = sqrt(t316);
-    const int t318 = t317 > 0.0;
-    const double t319 = (t318 ? 1.0/(t317 != 0.0 ? t317 : 1.0) : 1.0);
-    const double t320 = t319*t311;
-    const double t321 = t319*t312;
-    const double t322 = t319*t313;
-    const double t323 = t305 - t294;
-    const double t324 = t299 + t310;
-    const double t325 = t104*(t168*t270 - t211*t272 + t209*t271);
-    const double t326 = t104*(t168*t288 + t211*t290 + t209*t289);
-    const double t327 = t104*(t168*t320 + t211*t322 + t209*t321);
-    const double t328 = (t318 ? t319*t327 : 0.0);
-    const double t329 = (t286 ? t287*(t326 - t324*t328) : 0.0);
-    const double t330 = (t268 ? t269*(t325 - t293*t329 - t323*t328) : 0.0);
-    const double t331 = t175*t330 + t222*t329 + t251*t328;
-    dq3[0] = t331;
-    const double t332 = t176*t330 + t223*t329 + t252*t328;
-    dq3[1] = t332;
-    const double t333 = t177*t330 + t224*t329 + t253*t328;
-    dq3[2] = t333;
-    const double t334 = t178*t330 + t225*t329 + t254*t328;
-    dq3[3] = t334;
-    const double t335 = t179*t330 + t226*t329 + t255*t328;
-    dq3[4] = t335;
+    const double t124 = ((5.0 + t114) + (t115 + (t116 + t117))) + ((t118 + (t119 + t120)) + (t121 + (t122 + t123)));
+    const double t125 = sqrt(t124);
+    const double t126 = t102/(t100 != 0.0 ? t100 : 1.0);
+    const double t127 = t101*t102;
+    const double t128 = t125*ARM5_RANK_TOL;
+    const double t129 = t127*t103;
+    const double t130 = t125*sqrt(ARM5_RANK_TOL);
+    const int t131 = t129 <= t128;
+    const double t132 = (t130 >= t129 || t131 ? t128 : 0.0);
+    const double t133 = (t131 ? t102 : t126);
+    const double t134 = (t131 ? t100*twist[0] : twist[0]);
+    const double t135 = (t131 ? t100*twist[1] : twist[1]);
+    const double t136 = t114 + t115 + t116 + t117 + t118;
+    const double t137 = t119 + t120 + t121 + t122 + t123;
+    const int t138 = 5.0 > t137;
+    const double t139 = (t138 ? 1.0 : t109);
+    const double t140 = (t138 ? 1.0 : t110);
+    const double t141 = (t138 ? 1.0 : t111);
+    const double t142 = (t138 ? 1.0 : t112);
+    const double t143 = (t138 ? 1.0 : t113);
+    const double t144 = (t138 ? t109 : 1.0);
+    const double t145 = (t138 ? t110 : 1.0);
+    const double t146 = (t138 ? t111 : 1.0);
+    const double t147 = (t138 ? t112 : 1.0);
+    const double t148 = (t138 ? t113 : 1.0);
+    const double t149 = (t138 ? t102 : t133);
+    const double t150 = (t138 ? twist[2] : t135);
+    const double t151 = (t138 ? t133 : t102);
+    const double t152 = (t138 ? t135 : twist[2]);
+    const double t153 = (t138 ? 5.0 : t137);
+    const int t154 = t153 > t136;
+    const double t155 = (t154 ? t139 : t104);
+    const double t156 = (t154 ? t140 : t105);
+    const double t157 = (t154 ? t141 : t106);
+    const double t158 = (t154 ? t142 : t107);
+    const double t159 = (t154 ? t143 : t108);
+    const double t160 = (t154 ? t104 : t139);
+    const double t161 = (t154 ? t105 : t140);
+    const double t162 = (t154 ? t106 : t141);
+    const double t163 = (t154 ? t107 : t142);
+    const double t164 = (t154 ? t108 : t143);
+    const double t165 = (t154 ? t149 : t133);
+    const double t166 = (t154 ? t150 : t134);
+    const double t167 = (t154 ? t133 : t149);
+    const double t168 = (t154 ? t134 : t150);
+    const double t169 = t155*t155 + t156*t156 + t157*t157 + t158*t158 + t159*t159;
+    const double t170 = sqrt(t169);
+    const int t171 = t170 > t132;
+    const double t172 = (t171 ? 1.0/(t170 != 0.0 ? t170 : 1.0) : 1.0);
+    const double t173 = (t171 ? t172*t155 : 0.0);
+    const double t174 = (t171 ? t172*t156 : 0.0);
+    const double t175 = (t171 ? t172*t157 : 0.0);
+    const double t176 = (t171 ? t172*t158 : 0.0);
+    const double t177 = (t171 ? t172*t159 : 0.0);
+    const double t178 = (t171 ? t170 : 0.0);
+    const double t179 = t173*t160 + t174*t161 + t175*t162 + t176*t163 + t177*t164;
+    const double t180 = t160 - t179*t173;
+    const double t181 = t161 - t179*t174;
+    const double t182 = t162 - t179*t175;
+    const double t183 = t163 - t179*t176;
+    const double t184 = t164 - t179*t177;
+    const double t185 = t173*t144 + t174*t145 + t175*t146 + t176*t147 + t177*t148;
+    const double t186 = t144 - t185*t173;
+    const double t187 = t145 - t185*t174;
+    const double t188 = t146 - t185*t175;
+    const double t189 = t147 - t185*t176;
+    const double t190 = t148 - t185*t177;
+    const double t191 = t180*t180 + t181*t181 + t182*t182 + t183*t183 + t184*t184;
+    const double t192 = t186*t186 + t187*t187 + t188*t188 + t189*t189 + t190*t190;
+    const int t193 = t192 > t191;
+    const double t194 = (t193 ? t186 : t180);
+    const double t195 = (t193 ? t187 : t181);
+    const double t196 = (t193 ? t188 : t182);
+    const double t197 = (t193 ? t189 : t183);
+    const double t198 = (t193 ? t190 : t184);
+    const double t199 = (t193 ? t180 : t186);
+    const double t200 = (t193 ? t181 : t187);
+    const double t201 = (t193 ? t182 : t188);
+    const double t202 = (t193 ? t183 : t189);
+    const double t203 = (t193 ? t184 : t190);
+    const double t204 = (t193 ? t185 : t179);
+    const double t205 = (t193 ? t179 : t185);
+    const double t206 = (t193 ? t151 : t167);
+    const double t207 = (t193 ? t152 : t168);
+    const double t208 = (t193 ? t167 : t151);
+    const double t209 = (t193 ? t168 : t152);
+    const double t210 = t173*t194 + t174*t195 + t175*t196 + t176*t197 + t177*t198;
+    const double t211 = t194 - t173*t210;
+    const double t212 = t195 - t174*t210;
+    const double t213 = t196 - t175*t210;
+    const double t214 = t197 - t176*t210;
+    const double t215 = t198 - t177*t210;
+    const double t216 = t211*t211 + t212*t212 + t213*t213 + t214*t214 + t215*t215;
+    const double t217 = sqrt(t216);
+    const int t218 = t217 > t132;
+    const double t219 = (t218 ? 1.0/(t217 != 0.0 ? t217 : 1.0) : 1.0);
+    const double t220 = (t218 ? t219*t211 : 0.0);
+    const double t221 = (t218 ? t219*t212 : 0.0);
+    const double t222 = (t218 ? t219*t213 : 0.0);
+    const double t223 = (t218 ? t219*t214 : 0.0);
+    const double t224 = (t218 ? t219*t215 : 0.0);
+    const double t225 = t204 + t210;
+    const double t226 = (t218 ? t217 : 0.0);
+    const double t227 = t220*t199 + t221*t200 + t222*t201 + t223*t202 + t224*t203;
+    const double t228 = t199 - t227*t220;
+    const double t229 = t200 - t227*t221;
+    const double t230 = t201 - t227*t222;
+    const double t231 = t202 - t227*t223;
+    const double t232 = t203 - t227*t224;
+    const double t233 = t173*t228 + t174*t229 + t175*t230 + t176*t231 + t177*t232;
+    const double t234 = t228 - t173*t233;
+    const double t235 = t229 - t174*t233;
+    const double t236 = t230 - t175*t233;
+    const double t237 = t231 - t176*t233;
+    const double t238 = t232 - t177*t233;
+    const double t239 = t220*t234 + t221*t235 + t222*t236 + t223*t237 + t224*t238;
+    const double t240 = t234 - t220*t239;
+    const double t241 = t235 - t221*t239;
+    const double t242 = t236 - t222*t239;
+    const double t243 = t237 - t223*t239;
+    const double t244 = t238 - t224*t239;
+    const double t245 = t240*t240 + t241*t241 + t242*t242 + t243*t243 + t244*t244;
+    const double t246 = sqrt(t245);
+    const int t247 = t246 > t132;
+    const double t248 = (t247 ? 1.0/(t246 != 0.0 ? t246 : 1.0) : 1.0);
+    const double t249 = (t247 ? t248*t240 : 0.0);
+    const double t250 = (t247 ? t248*t241 : 0.0);
+    const double t251 = (t247 ? t248*t242 : 0.0);
+    const double t252 = (t247 ? t248*t243 : 0.0);
+    const double t253 = (t247 ? t248*t244 : 0.0);
+    const double t254 = t205 + t233;
+    const double t255 = t227 + t239;
+    const double t256 = (t247 ? t246 : 0.0);
+    const double t257 = t178*t165;
+    const double t258 = t225*t206;
+    const double t259 = t254*t208;
+    const double t260 = t226*t206;
+    const double t261 = t255*t208;
+    const double t262 = t256*t208;
+    const double t263 = t127*t127;
+    const double t264 = t257*t257 + t258*t258 + t259*t259 + t263;
+    const double t265 = sqrt(t264);
+    const int t266 = t265 > 0.0;
+    const double t267 = (t266 ? 1.0/(t265 != 0.0 ? t265 : 1.0) : 1.0);
+    const double t268 = t267*t257;
+    const double t269 = t267*t258;
+    const double t270 = -t267*t259;
+    const double t271 = t267*t127;
+    const double t272 = t270*t261 - t269*t260;
+    const double t273 = t272*t268;
+    const double t274 = t260 + t272*t269;
+    const double t275 = t261 - t272*t270;
+    const double t276 = t272*t271;
+    const double t277 = t268*t273 + t269*t274 - t270*t275 + t271*t276;
+    const double t278 = t273 - t277*t268;
+    const double t279 = t274 - t277*t269;
+    const double t280 = t275 + t277*t270;
+    const double t281 = t276 - t277*t271;
+    const double t282 = t278*t278 + t279*t279 + t280*t280 + t281*t281 + t263;
+    const double t283 = sqrt(t282);
+    const int t284 = t283 > 0.0;
+    const double t285 = (t284 ? 1.0/(t283 != 0.0 ? t283 : 1.0) : 1.0);
+    const double t286 = t285*t278;
+    const double t287 = t285*t279;
+    const double t288 = t285*t280;
+    const double t289 = t285*t281;
+    const double t290 = t285*t127;
+    const double t291 = t277 - t272;
+    const double t292 = t270*t262;
+    const double t293 = t292*t268;
+    const double t294 = t292*t269;
+    const double t295 = t262 - t292*t270;
+    const double t296 = t292*t271;
+    const double t297 = t286*t293 + t287*t294 + t288*t295 + t289*t296;
+    const double t298 = t293 - t297*t286;
+    const double t299 = t294 - t297*t287;
+    const double t300 = t295 - t297*t288;
+    const double t301 = t296 - t297*t289;
+    const double t302 = t297*t290;
+    const double t303 = t268*t298 + t269*t299 - t270*t300 + t271*t301;
+    const double t304 = t298 - t303*t268;
+    const double t305 = t299 - t303*t269;
+    const double t306 = t300 + t303*t270;
+    const double t307 = t301 - t303*t271;
+    const double t308 = t286*t304 + t287*t305 + t288*t306 + t289*t307 - t290*t302;
+    const double t309 = t304 - t308*t286;
+    const double t310 = t305 - t308*t287;
+    const double t311 = t306 - t308*t288;
+    const double t312 = t307 - t308*t289;
+    const double t313 = t302 + t308*t290;
+    const double t314 = t309*t309 + t310*t310 + t311*t311 + t312*t312 + t313*t313 + t263;
+    const double t315 = sqrt(t314);
+    const int t316 = t315 > 0.0;
+    const double t317 = (t316 ? 1.0/(t315 != 0.0 ? t315 : 1.0) : 1.0);
+    const double t318 = t317*t309;
+    const double t319 = t317*t310;
+    const double t320 = t317*t311;
+    const double t321 = t303 - t292;
+    const double t322 = t297 + t308;
+    const double t323 = t102*(t166*t268 - t209*t270 + t207*t269);
+    const double t324 = t102*(t166*t286 + t209*t288 + t207*t287);
+    const double t325 = t102*(t166*t318 + t209*t320 + t207*t319);
+    const double t326 = (t316 ? t317*t325 : 0.0);
+    const double t327 = (t284 ? t285*(t324 - t322*t326) : 0.0);
+    const double t328 = (t266 ? t267*(t323 - t291*t327 - t321*t326) : 0.0);
+    const double t329 = t173*t328 + t220*t327 + t249*t326;
+    dq3[0] = t329;
+    const double t330 = t174*t328 + t221*t327 + t250*t326;
+    dq3[1] = t330;
+    const double t331 = t175*t328 + t222*t327 + t251*t326;
+    dq3[2] = t331;
+    const double t332 = t176*t328 + t223*t327 + t252*t326;
+    dq3[3] = t332;
+    const double t333 = t177*t328 + t224*t327 + t253*t326;
+    dq3[4] = t333;
 }
 
 void arm5_inverse_velocity3(const double q[5], const double twist[3], const double l[5], double lambda, double dq3[5])
@@ -1841,7 +1837,7 @@ void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist
 }
 
 /* ---- arm5_ik_step: one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N) ---- */
-/* operations: 5 sin, 5 cos, 54 add/sub, 72 mul, 1 neg, 4 div */
+/* operations: 5 sin, 5 cos, 54 add/sub, 70 mul, 1 neg, 4 div */
 
 static ARM5_LIGHT void arm5_ik_step_angles(const double *restrict q, double *restrict ang)
 {
@@ -1899,29 +1895,27 @@ static ARM5_LIGHT void arm5_ik_step_finish(const double *restrict q, const doubl
     const double t73 = t68*(t47 + t49);
     const double t74 = t69*t70;
     const double t75 = t74 + t67*(t73 + t67);
-    const double t76 = ARM5_RANK_TOL*ARM5_RANK_TOL;
-    const double t77 = (t67 <= t73*t76 ? t76 : (t67 <= t73*ARM5_RANK_TOL ? 0.0016*t76 : 0.0));
-    const int t78 = t74 > t77*(t73*t73);
-    const double t80 = t68*(t78 ? 1.0/(t75 != 0.0 ? t75 : 1.0) : 1.0);
-    const double t81 = t67 + t69*(1.0 + t52*t52);
-    const double t82 = t68*(t81 > 0.0 ? 1.0/(t81 != 0.0 ? t81 : 1.0) : 1.0);
-    const double t90 = target[0] - t22;
-    const double t91 = t21 + target[1];
-    const double t92 = (t50 ? t90 : t91);
-    const double t93 = (t50 ? t91 : t90);
-    const double t94 = t92 + t93*t52;
-    const double t95 = (t78 ? t80*(t94*t67 + t92*t70) : t94*t82);
-    const double t96 = (t78 ? t80*(t93*t67 + t69*(t93 - t92*t52)) : 0.0);
-    const double t97 = t95*t53 + t96*t58;
-    q_next[0] = t97 + q[0];
-    const double t98 = t95*t54 + t96*t59;
-    q_next[1] = t98 + q[1];
-    const double t99 = t95*t55 + t96*t60;
-    q_next[2] = t99 + q[2];
-    const double t100 = t95*t56 + t96*t61;
-    q_next[3] = t100 + q[3];
-    const double t101 = t95*t57 + t96*t62;
-    q_next[4] = t101 + q[4];
+    const int t76 = t67 > t73*ARM5_RANK_TOL || t74 > (t73*t73)*(ARM5_RANK_TOL*ARM5_RANK_TOL);
+    const double t78 = t68*(t76 ? 1.0/(t75 != 0.0 ? t75 : 1.0) : 1.0);
+    const double t79 = t67 + t69*(1.0 + t52*t52);
+    const double t80 = t68*(t79 > 0.0 ? 1.0/(t79 != 0.0 ? t79 : 1.0) : 1.0);
+    const double t88 = target[0] - t22;
+    const double t89 = t21 + target[1];
+    const double t90 = (t50 ? t88 : t89);
+    const double t91 = (t50 ? t89 : t88);
+    const double t92 = t90 + t91*t52;
+    const double t93 = (t76 ? t78*(t92*t67 + t90*t70) : t92*t80);
+    const double t94 = (t76 ? t78*(t91*t67 + t69*(t91 - t90*t52)) : 0.0);
+    const double t95 = t93*t53 + t94*t58;
+    q_next[0] = t95 + q[0];
+    const double t96 = t93*t54 + t94*t59;
+    q_next[1] = t96 + q[1];
+    const double t97 = t93*t55 + t94*t60;
+    q_next[2] = t97 + q[2];
+    const double t98 = t93*t56 + t94*t61;
+    q_next[3] = t98 + q[3];
+    const double t99 = t93*t57 + t94*t62;
+    q_next[4] = t99 + q[4];
 }
 
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5])

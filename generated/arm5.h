@@ -11,13 +11,11 @@
  * solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).
  * lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where
  * J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;
- * 2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that
- * (rounding) and lambda at most sqrt(RANK_TOL) times the largest;
- * inverse_velocity3 solves
- * with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose
- * residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).
- * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y
- * errors in reach units).
+ * 2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most
+ * sqrt(RANK_TOL) times its largest.
+ * inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt
+ * QR stages, the same rule on their residuals and the Frobenius norm.
+ * So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y errors in reach units).
  * lambda enters squared (its sign does not matter). The C functions do not check their inputs:
  * a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.
  * Arguments, in every function: the state (q, q0, dq, ddq), the call's other data (v, twist, target),
@@ -58,7 +56,7 @@
  * angles finite and of sensible size.
  * ARM5_STAMP identifies this generation: arm5.c refuses to compile (#error) with a
  * arm5.h from another generation, and the other files of the set carry the same stamp. */
-#define ARM5_STAMP 0x969d8d7bUL
+#define ARM5_STAMP 0xa4799365UL
 
 #ifdef __cplusplus
 extern "C" {
@@ -123,7 +121,7 @@ void arm5_manipulability(const double q[5], const double l[5], double w[1]);
  * Stack: at most 15 KB. */
 void arm5_manipulability_batch(size_t m, const double *q, const double *l, double *w);
 
-/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 1520 bytes. */
+/* joint rates dq = J^T (J J^T + lambda^2 I)^+ v for endpoint velocity v (N). Stack: at most 1496 bytes. */
 void arm5_inverse_velocity(const double q[5], const double v[2], const double l[5], double lambda, double dq[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -139,7 +137,7 @@ void arm5_inverse_velocity3(const double q[5], const double twist[3], const doub
  * Stack: at most 17 KB. */
 void arm5_inverse_velocity3_batch(size_t m, const double *q, const double *twist, const double *l, double lambda, double *dq3);
 
-/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 1536 bytes. */
+/* one damped least-squares step q_next = q + J^T (J J^T + lambda^2 I)^+ (target - p) (N). Stack: at most 1520 bytes. */
 void arm5_ik_step(const double q[5], const double target[2], const double l[5], double lambda, double q_next[5]);
 
 /* The same for m configurations stored one after another (element k of
@@ -162,14 +160,14 @@ void arm5_ik_step_batch(size_t m, const double *q, const double *target, const d
  * taken from each probe; the lowest of these poses is taken if it lowers the error, else STALLED.
  * A tol of 1e-09 times the reach is reachable in this precision. q may be q0 itself.
  * error and iterations may be NULL.
- * Stack: at most 2104 bytes.
+ * Stack: at most 2088 bytes.
  */
 int arm5_ik_solve(const double q0[5], const double target[2], const double l[5], double lambda, double tol, int max_iter, double q[5], double *error, int *iterations);
 
 /* The same for m problems stored one after another (element k of problem j at [j*size + k]); shared by all: lambda, tol, max_iter.
  * status[j] is problem j's return code.
  * error, iterations and status may be NULL.
- * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: at most 2248 bytes. */
+ * Each problem is one call of arm5_ik_solve: the same result bit for bit. Stack: at most 2232 bytes. */
 void arm5_ik_solve_batch(size_t m, const double *q0, const double *target, const double *l, double lambda, double tol, int max_iter, double *q, double *error, int *iterations, int *status);
 
 #ifdef __cplusplus

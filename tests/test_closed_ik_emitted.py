@@ -327,11 +327,13 @@ def test_a_ur_aligned_wrist_nearest_is_the_member_at_the_references_phi():
     T = targets_of(b.chain, q)
     refs = q + rng.normal(scale=1e-3, size=q.shape)
     W = 10.0 ** rng.uniform(-1, 1, size=q.shape)
+    far = 0.0
     for i in range(len(q)):
         plain, _ = nearest(spec.all(T[i]), refs[i], b.lower, b.upper, b.revolute)  # the representative's rows only
         want, _ = spec.nearest(refs[i], T[i])
         want_w, _ = spec.nearest(refs[i], T[i], weights=W[i])
-        assert np.sum((want - refs[i]) ** 2) <= np.sum((plain - refs[i]) ** 2) + 1e-15
+        far = max(far, float(wrapped_distance(plain[None], q[i], b.revolute)[0]))  # the representative's answer
+        assert wrapped_distance(want[None], q[i], b.revolute)[0] <= 0.05  # a member near the source, from 1e-3 off
         for impl in (b.c, b.py):
             np.testing.assert_allclose(impl.ik_nearest(q[i], T[i]).q, q[i], atol=1e-7)
             for ref, weights, expected in ((refs[i], None, want), (refs[i], W[i], want_w)):
@@ -340,6 +342,7 @@ def test_a_ur_aligned_wrist_nearest_is_the_member_at_the_references_phi():
                 pos, rot = judge.pose_error(b.numeric, got[None], T[i])
                 assert max(pos.max(), rot.max()) <= 1e-12
                 np.testing.assert_allclose(got, expected, atol=1e-9)
+    assert far >= 0.5  # the representative alone was far from the source: the members carry the answer
 
 
 def wrist_centre_on_axis_1(b: Built, q: np.ndarray, pair: tuple[int, int]) -> np.ndarray | None:
@@ -403,6 +406,7 @@ def test_a_wrist_centre_on_axis_1_nearest_keeps_joint_1(name, pair):
     T = targets_of(b.chain, q)
     refs = q + rng.normal(scale=1e-3, size=q.shape)
     W = 10.0 ** rng.uniform(-1, 1, size=q.shape)
+    far = 0.0
     for i in range(len(q)):
         extra = b.extra(q[i])
         assert np.any(spec.candidates(T[i], *extra)[1] & 2)  # a singular representative
@@ -410,7 +414,10 @@ def test_a_wrist_centre_on_axis_1_nearest_keeps_joint_1(name, pair):
         want, _ = spec.nearest(refs[i], T[i], *extra)
         want_w, _ = spec.nearest(refs[i], T[i], *extra, weights=W[i])
         np.testing.assert_allclose(spec.nearest(q[i], T[i], *extra)[0], q[i], atol=1e-7)
-        assert np.sum((want - refs[i]) ** 2) <= np.sum((plain - refs[i]) ** 2) + 1e-15
+        far = max(far, float(wrapped_distance(plain[None], q[i], b.revolute)[0]))  # the representative's answer
+        if abs(np.sin(q[i, -2])) > 0.1:  # a member near the source, from 1e-3 off (with the wrist near aligned, q1 moved
+            # by 1e-3 turns joints 4 and 6 by 1e-3 over the wrist's sine: the member takes that near-continuum's end)
+            assert wrapped_distance(want[None], q[i], b.revolute)[0] <= 0.05
         for impl in (b.c, b.py):
             got = impl.ik_nearest(q[i], T[i], *extra)
             assert got.status == "ok"
@@ -421,6 +428,7 @@ def test_a_wrist_centre_on_axis_1_nearest_keeps_joint_1(name, pair):
                 pos, rot = judge.pose_error(b.numeric, got[None], T[i])
                 assert max(pos.max(), rot.max()) <= 1e-12
                 np.testing.assert_allclose(got, expected, atol=1e-9)
+    assert far >= 0.5  # the representative alone was far from the source: the members carry the answer
 
 
 def test_an_axis_member_with_the_wrist_aligned_moves_into_the_limits_and_only_reachable_axes_get_members():

@@ -199,6 +199,17 @@ def test_a_small_damping_does_not_amplify_a_rounding_direction(scale, rng):
         np.testing.assert_allclose(impl.inverse_velocity(q3, v, l, lam), want, rtol=1e-9, atol=1e-9 * np.linalg.norm(want))
         want3 = _truncated_damped(k.J3, twist3, lam, 1e-12)
         np.testing.assert_allclose(impl.inverse_velocity3(q3, twist3, l, lam), want3, rtol=1e-8, atol=1e-8 * np.linalg.norm(want3))
+    # folded: angles of whole turns round (sin(pi) = 1.2e-16), and 64 links' sums leave J's rounding at about 150 eps
+    # (a re-run of the probe: |dq| 7.1e6 for 4.71 at lambda = 1e-11 of the largest singular value)
+    n = 64
+    l = np.random.default_rng(0).uniform(0.3, 1.5, n)
+    q64 = np.r_[0.4, np.pi * (np.arange(n - 1) % 2)]
+    v = np.array([0.3, -0.7]) * l.sum()
+    J = reference.kinematics(q64, lengths=l).J
+    lam = scale * np.linalg.norm(J, 2)
+    want = _truncated_damped(J, v, lam, 1e-12)
+    for impl in _impls(n, "double", "inverse_velocity"):
+        np.testing.assert_allclose(impl.inverse_velocity(q64, v, l, lam), want, rtol=1e-8, atol=1e-8 * np.linalg.norm(want))
 
 
 def test_inverse_velocity3_damped_in_any_unit_is_the_damped_solution(rng):

@@ -814,7 +814,7 @@ def test_prefix_rule_is_stated_for_the_cli():
     assert "xarm7.urdf: xarm7" in loader.PREFIX_RULE and "name key" in loader.PREFIX_RULE
     assert "\n" not in loader.PREFIX_RULE
     # every rule the cases above exercise (runs collapse, code.urdf, a stem without letters)
-    for part in ("becomes one _ (none at either end)", "_robot after a C or Python reserved word", "robot's name, else robot",
+    for part in ("becomes one _ (none at either end)", "_robot after a name some output cannot take: a C or Python reserved word", "torch: torch_robot", "robot's name, else robot",
                  "TOML file its name key (a C identifier)"):
         assert part in loader.PREFIX_RULE, part
     assert "the file name's stem made an identifier, else the ``<robot name>``" in loader.__doc__

@@ -316,9 +316,9 @@ def _rows(chain: Chain, geom, family: Family, steps: Steps, inputs: dict, lock_i
     return rows, flags, principal
 
 
-AXIS_REACH_TOL = 1e-9
+AXIS_REACH_TOL = AXIS_TOL
 """The wrist centre reaches axis 1 (:func:`_axis_continuum`) where its least distance from it is at most this times the
-arm's size."""
+arm's size: ``IK_AXIS_TOL``, within which a member is exact (Gauss-Newton reaches a zero to rounding)."""
 
 
 def _rotated(k: np.ndarray, p: np.ndarray, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -342,7 +342,7 @@ def _axis_continuum(geom, family: Family, locked: bool) -> bool:
         if family.reversed:
             kinds, H, P = kinds[::-1], H[::-1], P[::-1]
         if kinds[0] != "revolute" or kinds[1] != "revolute":
-            return True  # no family here: kept as before the test existed
+            raise ValueError("internal error: a spherical-wrist family with a prismatic joint 1 or 2")
         W0 = np.array([float(x) for x in closest_point(P[3], H[3], P[4], H[4])])
         e1 = np.cross(H[0], [1.0, 0.0, 0.0] if abs(H[0][0]) < 0.9 else [0.0, 1.0, 0.0])
         e1 /= np.linalg.norm(e1)

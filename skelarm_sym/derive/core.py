@@ -115,11 +115,9 @@ RANK_TOL = Constant(
     {"double": 100 * 2.220446049250313e-16, "float": 100 * 1.1920928955078125e-07},
     "relative rank tolerance of the closed-form solves: 100 machine epsilons",
 )
-"""The damped solves drop a direction where the Jacobian's smallest singular value and the damping are both below
-about RANK_TOL times its largest: two rows (:func:`skelarm_sym.derive.linalg.damped_solve2`) when
-``det A <= RANK_TOL**2 * tr(A)**2`` (``A = J J^T + lambda^2 I``), more rows
-(:func:`skelarm_sym.derive.solve6.damped_least_squares`) where a Gram-Schmidt residual is at most RANK_TOL times the
-Frobenius norm; ``jacobian_rpy``'s gimbal test is ``cos(pitch)^2 <= RANK_TOL``."""
+"""The relative rank tolerance of the damped solves; their rules are stated once, in
+:func:`skelarm_sym.derive.linalg.damped_solve2` (two rows) and :func:`skelarm_sym.derive.solve6.damped_least_squares`
+(more rows). ``jacobian_rpy``'s gimbal test is ``cos(pitch)^2 <= RANK_TOL``."""
 
 
 @dataclass(frozen=True)

@@ -20,10 +20,7 @@ import sympy as sp
 
 Recorder = Callable[[str, sp.Expr], sp.Expr]
 
-ROUNDING_SHARE = sp.Rational(1, 25)
-"""The part of the rank tolerance (100 eps: 4 eps) below which a singular value, or a Gram-Schmidt residual, is
-rounding itself, dropped under a small damping (:func:`damped_solve2`,
-:func:`skelarm_sym.derive.solve6.damped_least_squares`)."""
+
 
 
 def gram(step: Recorder, rows: Sequence[Sequence[sp.Expr]], label: str) -> list[list[sp.Expr]]:
@@ -138,9 +135,8 @@ def damped_solve2(
     makes small). Rank rule (homogeneous in ``M`` and ``lam2``, so independent of the unit of length
     when lambda has the unit of ``M``): ``M`` counts as rank one when its smallest singular value is
     below about ``tol`` times its largest (``pp rr <= tol^2 tr(M M^T)^2``; the error of the regular form
-    follows ``cond(M)``, so it holds up to there) and lambda too; or when it is rounding itself
-    (``ROUNDING_SHARE`` of that) and lambda at most ``sqrt(tol) |M|_F`` (the 3-D chains' rule), and then
-    ``r`` is dropped:
+    follows ``cond(M)``, so it holds up to there) and lambda at most ``sqrt(tol) |M|_F``
+    (``lam2 <= tol tr``), and then ``r`` is dropped:
     ``dq = p (v1 + ratio v2) / (pp (1 + ratio^2) + lam2)``, the damped (lambda = 0: minimum-norm
     least-squares) solution of ``[p; ratio p] dq = rhs'``. Divisors are never zero: a zero
     matrix gives ``dq = 0``.
@@ -153,13 +149,12 @@ def damped_solve2(
     v2 = step(f"{label}v2", sp.Piecewise((rhs[1], first), (rhs[0], True)))
     trace = step(f"{label}tr", (G[0][0] + G[1][1]) * kappa)
     det = step(f"{label}det", pp * rr + lam2 * (trace + lam2))
-    # as solve6.damped_least_squares: J's second singular value at most tol times the largest is dropped while the
-    # damping is at most tol |M|_F too; one of rounding itself (ROUNDING_SHARE of that) while the damping is at most
-    # sqrt(tol) |M|_F (kept, it added s / lambda^2: 2e8 times the answer at lambda = 1e-12 of a stretched arm's size)
-    share = tol * ROUNDING_SHARE
-    cut = step(f"{label}cut", sp.Piecewise((tol**2, sp.LessThan(lam2, tol**2 * trace)),
-                                           (share**2, sp.LessThan(lam2, tol * trace)), (sp.S.Zero, True)))
-    regular = step(f"{label}regular", sp.StrictGreaterThan(pp * rr, cut * trace**2))
+    # J's second singular value at most tol times the largest is rounding for a planar arm (tol grows with its links:
+    # its sums of n terms, and angles of whole turns, round to a few n eps): dropped while the damping is at most
+    # sqrt(tol) |M|_F (kept, it added s / lambda^2: 2e8 times the answer at lambda = 1e-12 of a stretched arm's size,
+    # 1.5e6 times a folded 64-link arm's)
+    regular = step(f"{label}regular", sp.Or(sp.StrictGreaterThan(pp * rr, tol**2 * trace**2),
+                                           sp.StrictGreaterThan(lam2, tol * trace)))
     along = step(f"{label}along", v1 + gs.ratio * v2)
     inv_det = step(f"{label}idet", kappa / sp.Piecewise((det, regular), (sp.S.One, True)))
     one = step(f"{label}one", pp * (1 + gs.ratio**2) + lam2)

@@ -20,7 +20,7 @@ from typing import Callable, Sequence
 
 import sympy as sp
 
-from .linalg import ROUNDING_SHARE, select
+from .linalg import select
 
 Recorder = Callable[[str, sp.Expr], sp.Expr]
 
@@ -247,9 +247,15 @@ def back_substitute(step: Recorder, R: Sequence[Sequence[sp.Expr | None]], rhs: 
     return z
 
 
+ROUNDING_SHARE = sp.Rational(1, 25)
+"""The part of the rank tolerance (100 eps: 4 eps) below which a Gram-Schmidt residual of a 3-D chain's Jacobian is
+rounding itself, dropped under a small damping (:func:`damped_least_squares`; a planar arm's, whose tolerance grows
+with its links, takes the whole tolerance)."""
+
+
 def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scales: Sequence[sp.Expr], rhs: Sequence[sp.Expr],
                          lam: sp.Expr, mu: sp.Expr, tol: sp.Expr, label: str, scaled_when_dropping: bool = False,
-                         lam_scale: sp.Expr | None = None) -> list[sp.Expr]:
+                         lam_scale: sp.Expr | None = None, rounding_share: sp.Expr = ROUNDING_SHARE) -> list[sp.Expr]:
     """``dq = M^T (M M^T + lambda^2 I)^+ rhs`` (n entries), ``M = rows`` (m rows of n), the minimiser of
     ``|M dq - rhs|^2 + lambda^2 |dq|^2`` of least norm, in two QR stages:
 
@@ -257,7 +263,8 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
        :func:`pivoted_gram_schmidt`; rows that are identically zero are left out): ``P B^T = Q R``; where
        ``min(lambda, 1) <= tol |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every later
        one); with a damping up to ``sqrt(tol) |B|_F`` a row of rounding itself (a residual at most
-       :data:`ROUNDING_SHARE` of that), which the damping would turn into ``s / lambda^2``. With more damping no row
+       ``rounding_share`` of that, :data:`ROUNDING_SHARE` by default), which the damping would turn into
+       ``s / lambda^2``. With more damping no row
        is dropped: the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
     2. ``dq = Q z`` with ``z`` the least-squares solution of ``[diag(scales)^-1 R^T; lambda I] z = [rhs; 0]``, by
        a second Gram-Schmidt QR and a guarded back substitution.
@@ -298,7 +305,7 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
     # between the limit and that bound only rounding itself goes (ROUNDING_SHARE of the limit, a few eps): a real
     # direction resolved to a percent (float UR5 at q5 = 1e-4: 77 eps of |B|) carries the damped answer there
     threshold = step(f"{label}th", sp.Piecewise((limit, sp.LessThan(rule, limit)),
-                                                (limit * ROUNDING_SHARE, sp.LessThan(rule, kept_from)), (sp.S.Zero, True)))
+                                                (limit * rounding_share, sp.LessThan(rule, kept_from)), (sp.S.Zero, True)))
     if scaled_when_dropping:
         dropping = sp.LessThan(rule, limit)  # and the damping negligible: the scaled problem's answer
         factor = [step(f"{label}g{r}", sp.Piecewise((mu, dropping), (factor[r], True))) if scales[r] != 1 else factor[r]

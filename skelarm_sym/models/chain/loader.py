@@ -8,8 +8,9 @@ The default prefix (the emitted files' names and the C prefix when ``--prefix`` 
 
 "Made an identifier" (:func:`~skelarm_sym.names.identifier_from`): case kept as written, every run of
 characters other than ASCII letters and digits becomes one ``_`` (none at either end), ``robot_``
-before a leading digit, at most 48 characters, ``_robot`` after a reserved word or a Python standard
-module name: ``xarm7.urdf`` gives ``xarm7``, ``ur5 (copy).urdf`` ``ur5_copy``, ``2dof.urdf``
+before a leading digit, at most 48 characters, ``_robot`` after a name some output cannot take
+(:func:`~skelarm_sym.names.unusable_default`: a reserved word, a Python standard module, ``torch``, a C system
+header's name, a CMake target name): ``xarm7.urdf`` gives ``xarm7``, ``ur5 (copy).urdf`` ``ur5_copy``, ``2dof.urdf``
 ``robot_2dof``. :data:`PREFIX_RULE` says it in one sentence for ``--help``.
 
 Robot-file text (names, descriptions, the ``base`` and ``tip`` link names) must be printable: a control,
@@ -35,8 +36,9 @@ PREFIX_RULE = (
     "default prefix: for a URDF the file name without .urdf (xarm7.urdf: xarm7) made an identifier: each run of "
     "characters other than ASCII letters and digits becomes one _ (none at either end), a leading digit gets robot_ "
     "before it, a name with no letter or digit gives the robot's name, else robot; for a TOML file its name key "
-    "(a C identifier); either gets _robot after a C or Python reserved word or a C system header's name "
-    "(long: long_robot, stddef: stddef_robot)"
+    "(a C identifier); either gets _robot after a name some output cannot take: a C or Python reserved word, a "
+    "Python standard module, a module the emitted Python imports, a C system header's name, a CMake target name "
+    "(long: long_robot, stddef: stddef_robot, torch: torch_robot, install: install_robot)"
 )
 """The default-prefix rule in one sentence (for ``generate --help``)."""
 

@@ -220,13 +220,12 @@ def derive(n: int | PlanarArm, lengths: Sequence[float] | None = None) -> Planar
             "solved through one Gram-Schmidt step on the rows of J (error follows cond(J), not its square).",
             "lambda is a length. Rank rule, independent of the unit of length: a direction is dropped where",
             "J's smallest singular value is below about RANK_TOL times its largest (RANK_TOL n/5 beyond 5 links;",
-            "2 x 2: pp rr <= that^2 * trace^2, without cancellation) and lambda too, or below a 25th of that",
-            "(rounding) and lambda at most sqrt(RANK_TOL) times the largest;",
-            "inverse_velocity3 solves",
-            "with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt QR stages (a row whose",
-            "residual is at most RANK_TOL times the Frobenius norm is dropped while lambda is below that too).",
-            "So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite; for J3 with x, y",
-            "errors in reach units).",
+            "2 x 2: pp rr <= that^2 * trace^2, without cancellation: rounding of J's sums) and lambda at most",
+            "sqrt(RANK_TOL) times its largest.",
+            *(("inverse_velocity3 solves with J3's rows x, y divided by the reach l1 + ... + ln, by two Gram-Schmidt",
+               "QR stages, the same rule on their residuals and the Frobenius norm.") if n >= 3 else ()),
+            "So lambda = 0 at a singular pose gives the minimum-norm least-squares rates (finite"
+            + ("; for J3 with x, y errors in reach units)." if n >= 3 else ")."),
             "lambda enters squared (its sign does not matter). The C functions do not check their inputs:",
             "a NaN or infinity in gives one out; ik_solve and the Python wrappers refuse such inputs.",
         ),
@@ -295,6 +294,6 @@ def _inverse_kinematics(step: StepRecorder, q, jx, jy, lengths) -> _Inverse:
         # row: negligible where the larger of them is
         larger = step("iv3ls", guarded(ireach, sp.StrictGreaterThan(ireach, 1)))  # max(1 / reach, 1)
         dq3 = damped_least_squares(step, [jx, jy, [sp.S.One] * n], [ireach, ireach, sp.S.One], twist, size, mu, tol, "iv3",
-                                   scaled_when_dropping=True, lam_scale=larger)
+                                   scaled_when_dropping=True, lam_scale=larger, rounding_share=sp.S.One)
         outputs["dq3"] = sp.Matrix(dq3)
     return _Inverse(inputs, outputs)
