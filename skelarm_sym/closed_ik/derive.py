@@ -32,7 +32,7 @@ from ..models.chain import Chain
 from ..models.chain.lock import named_joint
 from ..models.chain.target_rotation import ORTHO_CONSTANT
 from .classify import (LOCK_C, LOCK_S, MAX_SOLUTIONS, ClosedFormError, Family, chain_geometry, classify, closest_point,
-                       problem_geometry, rotate)
+                       problem_geometry)
 from .postprocess import (DUP_TOL, DUP_TOL_FLOAT, DUP_TOL_SINGULAR, DUP_TOL_SINGULAR_FLOAT, LIMIT_TOL, LIMIT_TOL_FLOAT, LOCK_MAX,
                           LOCK_MAX_FLOAT, TRANSLATION_MAX,
                           TRANSLATION_MAX_FLOAT, WRIST_ALIGNED_TOL, WRIST_ALIGNED_TOL_FLOAT)
@@ -179,9 +179,13 @@ def wrist_continuum(geom, family: Family, locked: bool) -> tuple:
     return (*coordinates, s, -s if flips else 0, -w0 if family.reversed else w0)
 
 
-def _turned(v: np.ndarray, k: np.ndarray, phi: float) -> np.ndarray:
-    """``v`` turned by ``phi`` (rad) about the unit axis ``k``: :func:`~.classify.rotate` in floats."""
-    return np.array(rotate(k, math.cos(phi), math.sin(phi), v), dtype=float)
+def _turned(v: np.ndarray, k: np.ndarray, phi) -> np.ndarray:
+    """Vectors ``v`` (..., 3) turned by ``phi`` (rad; a number, or one per vector) about the unit axis ``k``:
+    :func:`~.classify.rotate` (Rodrigues) in NumPy."""
+    v = np.asarray(v, dtype=float)
+    c, s = np.cos(phi), np.sin(phi)
+    c, s = (np.asarray(c)[..., None], np.asarray(s)[..., None]) if np.ndim(phi) else (c, s)
+    return v * c + np.cross(k, v) * s + np.multiply.outer(v @ k, k) * (1.0 - c)
 
 
 def _aligning_turn(h4: np.ndarray, h5: np.ndarray, h6: np.ndarray) -> tuple[float, int] | None:
@@ -321,13 +325,6 @@ AXIS_REACH_TOL = AXIS_TOL
 arm's size: ``IK_AXIS_TOL``, within which a member is exact (Gauss-Newton reaches a zero to rounding)."""
 
 
-def _rotated(k: np.ndarray, p: np.ndarray, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Points ``x`` (..., 3) turned by ``theta`` (...) about the line through ``p`` along unit ``k`` (Rodrigues)."""
-    v = x - p
-    c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
-    return p + v * c + np.cross(k, v) * s + k * (v @ k)[..., None] * (1.0 - c)
-
-
 def _axis_continuum(geom, family: Family, locked: bool) -> bool:
     """Whether a spherical-wrist arm's wrist centre can lie on axis 1 in a solution (a continuum of ``q1``:
     :func:`~.families.spherical_wrist`'s ``members``): its least distance from axis 1 over joints 2 and 3 (joint 1
@@ -351,8 +348,8 @@ def _axis_continuum(geom, family: Family, locked: bool) -> bool:
 
         def offsets(q2, q3):
             """The wrist centre's offset from axis 1 in the plane across it (..., 2)."""
-            X = W0 + q3[..., None] * H[2] if kinds[2] == "prismatic" else _rotated(H[2], P[2], np.broadcast_to(W0, q3.shape + (3,)), q3)
-            d = _rotated(H[1], P[1], X, q2) - P[0]
+            X = W0 + q3[..., None] * H[2] if kinds[2] == "prismatic" else P[2] + _turned(W0 - P[2], H[2], q3)
+            d = P[1] - P[0] + _turned(X - P[1], H[1], q2)
             return np.stack([d @ e1, d @ e2], axis=-1)
 
         g2, g3 = np.meshgrid(np.linspace(-np.pi, np.pi, 97), np.linspace(-span, span, 97), indexing="ij")

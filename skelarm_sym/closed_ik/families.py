@@ -208,11 +208,10 @@ def spherical_wrist(steps: Steps, prob: Problem, position: str, flip: bool = Fal
         d = sub(W, P[0])
         off = steps.vec("Wa", cross(H[0], d))
         on_axis = steps("onaxis", indicator(_sq(off) <= AXIS_SYMBOL**2 * (steps("Wd2", _sq(d)) + sp.Float(reach, 17)**2)))
-        q1m = Angle(ref, steps("q1mc", sp.cos(ref)), steps("q1ms", sp.sin(ref)), sp.S.Zero, sp.S.One)
+        c, s = steps("q1mc", sp.cos(ref)), steps("q1ms", sp.sin(ref))
         group = []
-        for a, (q1, q2, q3) in enumerate(arms):
-            group += _spherical_wrist_branches(steps, H, x6, g6, gx, Angle(q1m.theta, q1m.c, q1m.s, q1.ls, sp.S.One), q2, q3,
-                                               f"m{a}", flip)
+        for a, (q1, q2, q3) in enumerate(arms):  # each arm's positioning, joint 1 at the reference's angle
+            group += _spherical_wrist_branches(steps, H, x6, g6, gx, Angle(ref, c, s, q1.ls, sp.S.One), q2, q3, f"m{a}", flip)
         members.append((group, on_axis))
     return out
 

@@ -262,7 +262,7 @@ def nearest_copy(x: float, ref: float, lo: float, hi: float, tol: float = LIMIT_
 
 def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuum: tuple = (),
             aligned_tol: float = WRIST_ALIGNED_TOL, limit_tol: float = LIMIT_TOL,
-            members: tuple | None = None, move_members: bool = True) -> tuple[np.ndarray | None, int]:
+            members: tuple | None = None) -> tuple[np.ndarray | None, int]:
     """The returned row nearest ``q_ref`` (N): ``(q, row)``, each revolute joint moved to its copy within limits
     nearest ``q_ref``, a continuum row's joints a and b to the member within limits nearest ``q_ref``
     (``continuum``: see :func:`postprocess`); ``(None, -1)`` when ``result`` has no rows. ``weights`` (N): metric
@@ -272,9 +272,9 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     with flag bit 1 clear, each
     revolute joint moved to its copy within limits nearest ``q_ref``, within the limits (``limit_tol``) as rows are;
     a member nearer than every row is returned with ``row`` -1 (the continuum's representative's branch is not
-    known here), also where ``result`` has no rows. ``move_members``: a member with the wrist aligned too is moved
-    along the wrist's continuum (``continuum``) like a row, its wrist pair judged within the limits after the move
-    (code emitted in float does not move members: False)."""
+    known here), also where ``result`` has no rows. A member with the wrist aligned too is moved along the wrist's
+    continuum (``continuum``) like a row, its wrist pair judged within the limits after the move (code emitted in
+    double; float code does not move members, whose wrist angle carries float's rounding)."""
     if result.count == 0 and members is None:
         return None, -1
     q_ref = np.asarray(q_ref, float)
@@ -283,6 +283,7 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
     w = np.ones_like(q_ref) if weights is None else np.asarray(weights, float)
     w = w / np.max(w)  # the same nearest row; no product overflows (the emitted code divides alike)
     best, best_d, best_i = None, np.inf, -1
+
     def along_continuum(q: np.ndarray, row: np.ndarray, flag: int) -> bool:
         """A row of the wrist's continuum: joints a and b to the member within the limits nearest q_ref; whether
         there is one."""
@@ -306,7 +307,7 @@ def nearest(result: IKAll, q_ref, lower, upper, revolute, weights=None, continuu
             best, best_d, best_i = q, d, i
     if members is not None:
         M, mflags = np.asarray(members[0], float), np.asarray(members[1], int)
-        pair = (continuum[0], continuum[2]) if continuum and move_members else ()
+        pair = (continuum[0], continuum[2]) if continuum else ()
         for m in range(M.shape[0]):
             if mflags[m] & 1:
                 continue

@@ -264,8 +264,8 @@ def damped_least_squares(step: Recorder, rows: Sequence[Sequence[sp.Expr]], scal
        ``min(lambda, 1) <= tol |B|_F`` a row whose residual is at most ``tol |B|_F`` is dropped (and every later
        one); with a damping up to ``sqrt(tol) |B|_F`` a row of rounding itself (a residual at most
        ``rounding_share`` of that, :data:`ROUNDING_SHARE` by default), which the damping would turn into
-       ``s / lambda^2``. With more damping no row
-       is dropped: the damping bounds what a small singular value ``s`` adds (``s / (s^2 + lambda^2)``).
+       ``s / lambda^2``. With more damping no row is dropped: the damping bounds what a small singular value
+       ``s`` adds (``s / (s^2 + lambda^2)``).
     2. ``dq = Q z`` with ``z`` the least-squares solution of ``[diag(scales)^-1 R^T; lambda I] z = [rhs; 0]``, by
        a second Gram-Schmidt QR and a guarded back substitution.
 
